@@ -1,0 +1,520 @@
+"""Compiled adaptive explicit Runge-Kutta integration with event location (numba kernels).
+
+The model is passed as four first-class compiled functions with fixed signatures
+(``numba.types.FunctionType``, so the kernels are cached on disk and not recompiled per model):
+
+- ``rhs(t, y, p, dydt)``: right-hand side; ``p`` holds parameters and, at its end, the
+  model's memory variables (contact mode, impact velocity, ...);
+- ``event(t, y, p) -> g``: switching function, negative in the current mode; a crossing to
+  positive inside a step is an event;
+- ``on_event(t, y, p)``: applied exactly at a located event (updates the memory in ``p``);
+- ``monitor(t, y, p) -> m``: scalar whose maximum is tracked per time window (the peak).
+
+Events are located on the step's dense output (plus interior samples, so that a crossing and
+return inside one step is not missed), then the step is redone with the located size and
+refined by secant iterations on the real step map until |g| <= event_tol: the memory is set at
+the landed state, never at the first state found inside the wall. The integration also lands
+exactly on the window edges, and the maximum of ``monitor`` in each window is refined between
+accepted steps by golden-section search on re-taken steps.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba as nb
+import numpy as np
+from numba import types
+
+__all__ = [
+    "RHS_SIG", "SCALAR_SIG", "ACTION_SIG", "METHODS", "Tableau", "integrate",
+    "STATUS_MESSAGES",
+]
+
+_vec = types.float64[::1]
+RHS_SIG = types.void(types.float64, _vec, _vec, _vec)
+SCALAR_SIG = types.float64(types.float64, _vec, _vec)
+ACTION_SIG = types.void(types.float64, _vec, _vec)
+
+
+class Tableau:
+    """Coefficients of an embedded explicit RK pair in the layout of scipy's ``rk_step``.
+
+    A (s, s), B (s,), C (s,), E (s+1,) = b - b_hat (the last entry weights the FSAL stage),
+    P (s+1, k) dense-output polynomial coefficients, order = order of the error estimator + 1.
+    """
+
+    def __init__(self, name, A, B, C, E, P, order, error_order):
+        self.name = name
+        self.A = np.ascontiguousarray(A, dtype=float)
+        self.B = np.ascontiguousarray(B, dtype=float)
+        self.C = np.ascontiguousarray(C, dtype=float)
+        self.E = np.ascontiguousarray(E, dtype=float)
+        self.P = np.ascontiguousarray(P, dtype=float)
+        self.order = order
+        self.error_order = error_order
+
+
+# Dormand & Prince (1980) 5(4) pair with Shampine's 4th-order continuous extension.
+_DP_A = [
+    [0, 0, 0, 0, 0, 0],
+    [1 / 5, 0, 0, 0, 0, 0],
+    [3 / 40, 9 / 40, 0, 0, 0, 0],
+    [44 / 45, -56 / 15, 32 / 9, 0, 0, 0],
+    [19372 / 6561, -25360 / 2187, 64448 / 6561, -212 / 729, 0, 0],
+    [9017 / 3168, -355 / 33, 46732 / 5247, 49 / 176, -5103 / 18656, 0],
+]
+_DP_B = [35 / 384, 0, 500 / 1113, 125 / 192, -2187 / 6784, 11 / 84]
+_DP_C = [0, 1 / 5, 3 / 10, 4 / 5, 8 / 9, 1]
+_DP_E = [-71 / 57600, 0, 71 / 16695, -71 / 1920, 17253 / 339200, -22 / 525, 1 / 40]
+_DP_P = [
+    [1, -8048581381 / 2820520608, 8663915743 / 2820520608, -12715105075 / 11282082432],
+    [0, 0, 0, 0],
+    [0, 131558114200 / 32700410799, -68118460800 / 10900136933, 87487479700 / 32700410799],
+    [0, -1754552775 / 470086768, 14199869525 / 1410260304, -10690763975 / 1880347072],
+    [0, 127303824393 / 49829197408, -318862633887 / 49829197408,
+     701980252875 / 199316789632],
+    [0, -282668133 / 205662961, 2019193451 / 616988883, -1453857185 / 822651844],
+    [0, 40617522 / 29380423, -110615467 / 29380423, 69997945 / 29380423],
+]
+
+# Bogacki & Shampine (1989) 3(2) pair with its cubic Hermite continuous extension.
+_BS_A = [[0, 0, 0], [1 / 2, 0, 0], [0, 3 / 4, 0]]
+_BS_B = [2 / 9, 1 / 3, 4 / 9]
+_BS_C = [0, 1 / 2, 3 / 4]
+_BS_E = [5 / 72, -1 / 12, -1 / 9, 1 / 8]
+_BS_P = [[1, -4 / 3, 5 / 9], [0, 1, -2 / 3], [0, 4 / 3, -8 / 9], [0, -1, 1]]
+
+#: name -> Tableau; the registry of integration methods of the compiled integrator
+METHODS: dict[str, Tableau] = {
+    "dopri5": Tableau("dopri5", _DP_A, _DP_B, _DP_C, _DP_E, _DP_P, 5, 4),
+    "bs3": Tableau("bs3", _BS_A, _BS_B, _BS_C, _BS_E, _BS_P, 3, 2),
+}
+
+STATUS_MESSAGES = {
+    0: "success",
+    1: "maximum number of steps reached: raise max_steps or loosen rtol/atol",
+    2: "step size underflow: the problem is too stiff for this tolerance; loosen rtol/atol "
+       "or reduce the contact stiffness",
+    3: "events chatter (repeated zero-length events): the contact is grazing at machine "
+       "precision; raise impact_velocity_floor or change the initial state",
+}
+
+
+@nb.njit(cache=True)
+def rk_step(rhs, t, y, f, h, A, B, C, K, p, y_new, f_new, ytmp):
+    """One explicit RK step of size h; fills K (stages, last row FSAL), y_new and f_new."""
+    n = y.shape[0]
+    s = B.shape[0]
+    K[0, :] = f
+    for i in range(1, s):
+        for k in range(n):
+            acc = 0.0
+            for j in range(i):
+                acc += A[i, j] * K[j, k]
+            ytmp[k] = y[k] + h * acc
+        rhs(t + C[i] * h, ytmp, p, K[i])
+    for k in range(n):
+        acc = 0.0
+        for j in range(s):
+            acc += B[j] * K[j, k]
+        y_new[k] = y[k] + h * acc
+    rhs(t + h, y_new, p, f_new)
+    K[s, :] = f_new
+
+
+@nb.njit(cache=True)
+def error_norm(K, E, h, y, y_new, rtol, atol, n_err):
+    """RMS of the embedded error estimate over the first n_err components, scaled."""
+    acc = 0.0
+    for k in range(n_err):
+        err = 0.0
+        for j in range(E.shape[0]):
+            err += E[j] * K[j, k]
+        scale = atol[k] + rtol * max(abs(y[k]), abs(y_new[k]))
+        acc += (h * err / scale) ** 2
+    return math.sqrt(acc / n_err)
+
+
+@nb.njit(cache=True)
+def dense_eval(y, h, K, P, theta, out, wts):
+    """State at t + theta*h from the step's continuous extension (wts: work array)."""
+    n = y.shape[0]
+    ns = P.shape[0]
+    for j in range(ns):
+        poly = 0.0
+        tp = theta
+        for m in range(P.shape[1]):
+            poly += P[j, m] * tp
+            tp *= theta
+        wts[j] = h * poly
+    for k in range(n):
+        acc = y[k]
+        for j in range(ns):
+            acc += K[j, k] * wts[j]
+        out[k] = acc
+
+
+@nb.njit(cache=True)
+def initial_step(rhs, t, y, f, p, rtol, atol, order, direction_span, ytmp, ftmp):
+    """Hairer-Norsett-Wanner starting step size."""
+    n = y.shape[0]
+    d0 = 0.0
+    d1 = 0.0
+    for k in range(n):
+        sc = atol[k] + rtol * abs(y[k])
+        d0 += (y[k] / sc) ** 2
+        d1 += (f[k] / sc) ** 2
+    d0 = math.sqrt(d0 / n)
+    d1 = math.sqrt(d1 / n)
+    h0 = 1e-6 if (d0 < 1e-5 or d1 < 1e-5) else 0.01 * d0 / d1
+    h0 = min(h0, direction_span)
+    for k in range(n):
+        ytmp[k] = y[k] + h0 * f[k]
+    rhs(t + h0, ytmp, p, ftmp)
+    d2 = 0.0
+    for k in range(n):
+        sc = atol[k] + rtol * abs(y[k])
+        d2 += ((ftmp[k] - f[k]) / sc) ** 2
+    d2 = math.sqrt(d2 / n) / h0
+    if max(d1, d2) <= 1e-15:
+        h1 = max(1e-6, h0 * 1e-3)
+    else:
+        h1 = (0.01 / max(d1, d2)) ** (1.0 / order)
+    return min(100.0 * h0, h1, direction_span)
+
+
+@nb.njit(cache=True)
+def _golden_max(rhs, monitor, t0, y0, f0, p, h_max, A, B, C, K, y_new, f_new, ytmp, iters):
+    """Maximise monitor(t0 + h, step(y0, h)) over h in [0, h_max]; return (value, t)."""
+    invphi = 0.6180339887498949
+    a = 0.0
+    b = h_max
+    c = b - invphi * (b - a)
+    d = a + invphi * (b - a)
+    rk_step(rhs, t0, y0, f0, c, A, B, C, K, p, y_new, f_new, ytmp)
+    fc = monitor(t0 + c, y_new, p)
+    rk_step(rhs, t0, y0, f0, d, A, B, C, K, p, y_new, f_new, ytmp)
+    fd = monitor(t0 + d, y_new, p)
+    for _ in range(iters):
+        if fc > fd:
+            b = d
+            d = c
+            fd = fc
+            c = b - invphi * (b - a)
+            rk_step(rhs, t0, y0, f0, c, A, B, C, K, p, y_new, f_new, ytmp)
+            fc = monitor(t0 + c, y_new, p)
+        else:
+            a = c
+            c = d
+            fc = fd
+            d = a + invphi * (b - a)
+            rk_step(rhs, t0, y0, f0, d, A, B, C, K, p, y_new, f_new, ytmp)
+            fd = monitor(t0 + d, y_new, p)
+    if fc > fd:
+        return fc, t0 + c
+    return fd, t0 + d
+
+
+_OUT_SIG = types.Tuple((
+    types.float64[::1],        # t of recorded steps
+    types.float64[:, ::1],     # y of recorded steps
+    types.float64[:, ::1],     # memory part of p at recorded steps
+    types.float64[::1],        # refined maximum of monitor per window
+    types.float64[::1],        # time of that maximum
+    types.int64[::1],          # counters: nfev, naccept, nreject, nevent, status, nrefine
+))
+
+_FT_RHS = types.FunctionType(RHS_SIG)
+_FT_SCALAR = types.FunctionType(SCALAR_SIG)
+_FT_ACTION = types.FunctionType(ACTION_SIG)
+_ARR2 = types.float64[:, ::1]
+
+_INTEGRATE_SIG = _OUT_SIG(
+    _FT_RHS, _FT_SCALAR, _FT_ACTION, _FT_SCALAR,
+    types.float64[::1],            # y0
+    types.float64[::1],            # p (parameters + memory, modified in place)
+    types.int64,                   # n_mem: number of memory entries at the end of p
+    types.float64[::1],            # edges: window edges, edges[0] = t0, edges[-1] = t_end
+    types.float64,                 # rtol
+    types.float64[::1],            # atol (per component)
+    types.int64,                   # n_err: components under error control
+    types.float64,                 # h0 (<= 0: automatic)
+    types.float64,                 # h_max
+    types.int64,                   # max_steps
+    types.boolean,                 # record
+    types.float64,                 # event_tol
+    types.int64,                   # n_samples: interior event samples per step
+    _ARR2, types.float64[::1], types.float64[::1], types.float64[::1], _ARR2,  # A B C E P
+    types.int64,                   # error_order (exponent of the step-size controller)
+)
+
+
+@nb.njit(_INTEGRATE_SIG, cache=True)
+def integrate(rhs, event, on_event, monitor, y0, p, n_mem, edges, rtol, atol, n_err, h0,
+              h_max, max_steps, record, event_tol, n_samples, A, B, C, E, P, error_order):
+    """Integrate from edges[0] to edges[-1]; see the module docstring for the protocol."""
+    n = y0.shape[0]
+    s = B.shape[0]
+    np_ = p.shape[0]
+    K = np.zeros((s + 1, n))
+    y = y0.copy()
+    f = np.empty(n)
+    y_new = np.empty(n)
+    f_new = np.empty(n)
+    ytmp = np.empty(n)
+    ftmp = np.empty(n)
+    p_prev = p.copy()
+    wts = np.empty(P.shape[0])
+    n_win = edges.shape[0] - 1
+    peaks = np.full(n_win, -np.inf)
+    peak_t = np.zeros(n_win)
+    counters = np.zeros(6, dtype=np.int64)
+    # candidate of the current window's maximum: the step before it and the step after it
+    cand_prev_y = y.copy()
+    cand_prev_t = 0.0
+    cand_prev_h = 0.0
+    cand_prev_p = p.copy()
+    cand_y = y.copy()
+    cand_t = 0.0
+    cand_p = p.copy()
+    cand_next_h = 0.0
+    cand_fresh = False  # True right after the candidate was set (next step gives next_h)
+
+    cap = 1024 if record else 1
+    ts = np.empty(cap)
+    ys = np.empty((cap, n))
+    ms = np.empty((cap, max(n_mem, 1)))
+    nrec = 0
+
+    t = edges[0]
+    t_end = edges[-1]
+    rhs(t, y, p, f)
+    counters[0] += 1
+    if h0 <= 0.0:
+        h = initial_step(rhs, t, y, f, p, rtol, atol, error_order + 1, min(h_max, t_end - t),
+                         ytmp, ftmp)
+        counters[0] += 1
+    else:
+        h = min(h0, h_max)
+    win = 0
+    m0 = monitor(t, y, p)
+    peaks[0] = m0
+    peak_t[0] = t
+    cand_t = t
+    cand_y[:] = y
+    cand_p[:] = p
+    if record:
+        ts[0] = t
+        ys[0, :] = y
+        for k in range(n_mem):
+            ms[0, k] = p[np_ - n_mem + k]
+        nrec = 1
+    zero_events = 0
+    g_start = 0.0
+    g_start_valid = False
+    inv_order = 1.0 / (error_order + 1)
+    nstep = 0
+    while win < n_win:
+        if nstep >= max_steps:
+            counters[4] = 1
+            break
+        nstep += 1
+        t_target = edges[win + 1]
+        land = False
+        h_try = h
+        if t + h_try >= t_target - 1e-13 * max(1.0, abs(t_target)):
+            h_try = t_target - t
+            land = True
+        if h_try <= 1e-15 * max(1.0, abs(t)):
+            if land:
+                h_try = t_target - t
+            else:
+                counters[4] = 2
+                break
+        rk_step(rhs, t, y, f, h_try, A, B, C, K, p, y_new, f_new, ytmp)
+        counters[0] += s
+        err = error_norm(K, E, h_try, y, y_new, rtol, atol, n_err)
+        if not (err <= 1.0):
+            counters[2] += 1
+            if err != err:  # NaN from the model: shrink hard
+                h = 0.1 * h_try
+            else:
+                h = h_try * max(0.2, 0.9 * err ** (-inv_order))
+            continue
+        factor = 10.0 if err == 0.0 else min(10.0, 0.9 * err ** (-inv_order))
+        h_next = min(h_try * factor, h_max)
+        if land:
+            h_next = max(h_next, h)  # a short landing step says nothing about the scale
+
+        # ---- event search: end point, then interior samples of the dense output
+        theta_hi = -1.0
+        theta_lo = 0.0
+        if not g_start_valid:
+            g_start = event(t, y, p)
+        g_lo = g_start
+        g_start_valid = False
+        for i in range(1, n_samples + 1):
+            th = i / (n_samples + 1.0)
+            dense_eval(y, h_try, K, P, th, ytmp, wts)
+            g = event(t + th * h_try, ytmp, p)
+            if g > 0.0:
+                theta_hi = th
+                break
+            theta_lo = th
+            g_lo = g
+        if theta_hi < 0.0:
+            g_end = event(t + h_try, y_new, p)
+            if g_end > 0.0:
+                theta_hi = 1.0
+            else:
+                g_start = g_end       # valid for the next step if no event intervenes
+                g_start_valid = True
+        p_prev[:] = p
+        if theta_hi > 0.0:
+            counters[3] += 1
+            if g_lo > 0.0:
+                theta_star = 0.0   # already past the switching surface at the step start
+            else:
+                # Illinois root finding of g on the dense output in [theta_lo, theta_hi]
+                a = theta_lo
+                b = theta_hi
+                ga = g_lo
+                dense_eval(y, h_try, K, P, b, ytmp, wts)
+                gb = event(t + b * h_try, ytmp, p)
+                side = 0
+                theta_star = b
+                for _ in range(60):
+                    c = (a * gb - b * ga) / (gb - ga)
+                    dense_eval(y, h_try, K, P, c, ytmp, wts)
+                    gc = event(t + c * h_try, ytmp, p)
+                    theta_star = c
+                    if abs(gc) <= event_tol or (b - a) < 1e-15:
+                        break
+                    if gc > 0.0:
+                        b = c
+                        gb = gc
+                        if side == -1:
+                            ga *= 0.5
+                        side = -1
+                    else:
+                        a = c
+                        ga = gc
+                        if side == 1:
+                            gb *= 0.5
+                        side = 1
+            h_ev = theta_star * h_try
+            if h_ev <= 1e-14 * max(1.0, abs(t)):
+                zero_events += 1
+                if zero_events > 20:
+                    counters[4] = 3
+                    break
+                on_event(t, y, p)
+                rhs(t, y, p, f)
+                counters[0] += 1
+                continue
+            zero_events = 0
+            # land on the event with the real step map; secant iterations on h
+            rk_step(rhs, t, y, f, h_ev, A, B, C, K, p, y_new, f_new, ytmp)
+            counters[0] += s
+            g_ev = event(t + h_ev, y_new, p)
+            h_a = theta_lo * h_try
+            g_a = g_lo
+            for _ in range(8):
+                if abs(g_ev) <= event_tol or g_ev == g_a:
+                    break
+                h_c = h_ev - g_ev * (h_ev - h_a) / (g_ev - g_a)
+                if not (0.0 < h_c <= h_try):
+                    break
+                h_a = h_ev
+                g_a = g_ev
+                h_ev = h_c
+                rk_step(rhs, t, y, f, h_ev, A, B, C, K, p, y_new, f_new, ytmp)
+                counters[0] += s
+                g_ev = event(t + h_ev, y_new, p)
+            t_old = t
+            t = t + h_ev
+            land = False
+            h_step = h_ev
+            ftmp[:] = y  # the pre-step state, kept for the peak candidate
+            y[:] = y_new
+            on_event(t, y, p)
+            rhs(t, y, p, f)
+            counters[0] += 1
+            h = h_next
+        else:
+            zero_events = 0
+            t_old = t
+            h_step = h_try
+            ftmp[:] = y
+            t = t_target if land else t + h_try
+            y[:] = y_new
+            f[:] = f_new
+            h = h_next
+        counters[1] += 1
+
+        # ---- peak tracking in the current window
+        m = monitor(t, y, p)
+        if cand_fresh:
+            cand_next_h = h_step
+            cand_fresh = False
+        if m > peaks[win]:
+            peaks[win] = m
+            peak_t[win] = t
+            cand_prev_y[:] = ftmp
+            cand_prev_t = t_old
+            cand_prev_h = h_step
+            cand_prev_p[:] = p_prev
+            cand_y[:] = y
+            cand_t = t
+            cand_p[:] = p
+            cand_next_h = 0.0
+            cand_fresh = not land
+
+        if record:
+            if nrec == ts.shape[0]:
+                ts2 = np.empty(2 * nrec)
+                ys2 = np.empty((2 * nrec, n))
+                ms2 = np.empty((2 * nrec, ms.shape[1]))
+                ts2[:nrec] = ts
+                ys2[:nrec] = ys
+                ms2[:nrec] = ms
+                ts = ts2
+                ys = ys2
+                ms = ms2
+            ts[nrec] = t
+            ys[nrec, :] = y
+            for k in range(n_mem):
+                ms[nrec, k] = p[np_ - n_mem + k]
+            nrec += 1
+
+        if land:
+            # window closed: refine its maximum between the neighbouring steps
+            if cand_prev_h > 0.0:
+                rhs(cand_prev_t, cand_prev_y, cand_prev_p, ftmp)
+                v, tv = _golden_max(rhs, monitor, cand_prev_t, cand_prev_y, ftmp, cand_prev_p,
+                                    cand_prev_h, A, B, C, K, y_new, f_new, ytmp, 40)
+                counters[5] += 1
+                if v > peaks[win]:
+                    peaks[win] = v
+                    peak_t[win] = tv
+            if cand_next_h > 0.0:
+                rhs(cand_t, cand_y, cand_p, ftmp)
+                v, tv = _golden_max(rhs, monitor, cand_t, cand_y, ftmp, cand_p, cand_next_h,
+                                    A, B, C, K, y_new, f_new, ytmp, 40)
+                counters[5] += 1
+                if v > peaks[win]:
+                    peaks[win] = v
+                    peak_t[win] = tv
+            win += 1
+            if win < n_win:
+                m0 = monitor(t, y, p)
+                peaks[win] = m0
+                peak_t[win] = t
+                cand_y[:] = y
+                cand_t = t
+                cand_p[:] = p
+                cand_prev_h = 0.0
+                cand_next_h = 0.0
+                cand_fresh = True
+    return ts[:nrec].copy(), ys[:nrec].copy(), ms[:nrec].copy(), peaks, peak_t, counters

@@ -1,0 +1,336 @@
+"""The paper's reduced Lagrange model (Eqs. 1-8) as compiled kernels, and its driver.
+
+Generalized coordinates theta3 (coupler angle) and x4 (slider position); the crank angle is
+prescribed, theta2 = omega2 t + theta20. State y = [theta3, x4, theta3dot, x4dot, W] where W is
+the work done by the crank drive (a quadrature, kept out of error control).
+
+Memory variables at the end of the parameter array: the contact mode (0 free flight,
+1 contact) and the impact velocity deltadot_minus, set exactly at the located onset.
+
+See docs/derivations.md for the equations, including the base force F12.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba as nb
+import numpy as np
+
+from .contact import CONTACT_MODELS, contact_force
+from .integrator import ACTION_SIG, METHODS, RHS_SIG, SCALAR_SIG, STATUS_MESSAGES, integrate
+from .mechanism import SliderCrank
+
+# ---- layout of the parameter vector p (indices are part of the kernels' contract)
+P_L2, P_L3, P_M2, P_M3, P_M4, P_J2, P_J3, P_W, P_TH0, P_C, P_K, P_E, P_G, P_MODEL, \
+    P_VFLOOR, P_MODE, P_DMIN = range(17)
+N_PARAMS = 17
+N_MEM = 2          # P_MODE, P_DMIN
+N_STATE = 5        # theta3, x4, theta3dot, x4dot, W
+N_ERR = 4          # W is a quadrature, not under error control
+
+#: columns of `outputs`
+OUT_COLUMNS = ("theta3dd", "x4dd", "contact_force", "penetration", "penetration_rate",
+               "ecc_x", "ecc_y", "crank_moment", "base_force_x", "base_force_y")
+
+
+def pack_parameters(mech: SliderCrank) -> np.ndarray:
+    """Parameter vector p of the kernels for `mech` (memory initialised to free flight)."""
+    p = np.zeros(N_PARAMS)
+    p[P_L2] = mech.crank_length
+    p[P_L3] = mech.coupler_length
+    p[P_M2] = mech.crank_mass
+    p[P_M3] = mech.coupler_mass
+    p[P_M4] = mech.slider_mass
+    p[P_J2] = mech.crank_inertia_value
+    p[P_J3] = mech.coupler_inertia_value
+    p[P_W] = mech.crank_speed
+    p[P_TH0] = mech.initial_crank_angle
+    p[P_C] = mech.clearance
+    p[P_K] = mech.stiffness
+    p[P_E] = mech.restitution
+    p[P_G] = mech.gravity
+    p[P_MODEL] = CONTACT_MODELS[mech.contact_model]
+    p[P_VFLOOR] = mech.impact_velocity_floor
+    p[P_MODE] = 0.0
+    p[P_DMIN] = mech.impact_velocity_floor
+    return p
+
+
+def initial_state(mech: SliderCrank) -> np.ndarray:
+    """Journal centred in the bearing with the ideal-joint velocities (state y0)."""
+    L2, L3, w = mech.crank_length, mech.coupler_length, mech.crank_speed
+    th2 = mech.initial_crank_angle
+    s3 = -L2 * math.sin(th2) / L3
+    th3 = math.asin(s3)
+    c3 = math.cos(th3)
+    th3d = -L2 * w * math.cos(th2) / (L3 * c3)
+    x4 = L2 * math.cos(th2) + L3 * c3
+    x4d = -L2 * w * math.sin(th2) - L3 * th3d * s3
+    return np.array([th3, x4, th3d, x4d, 0.0])
+
+
+@nb.njit(cache=True)
+def _geometry_trig(y, p, c2, s2, c3, s3):
+    L2 = p[P_L2]
+    L3 = p[P_L3]
+    w = p[P_W]
+    ex = y[1] - L2 * c2 - L3 * c3
+    ey = -L2 * s2 - L3 * s3
+    exd = y[3] + L2 * w * s2 + L3 * y[2] * s3
+    eyd = -L2 * w * c2 - L3 * y[2] * c3
+    r = math.sqrt(ex * ex + ey * ey)
+    if r > 1e-300:
+        nx = ex / r
+        ny = ey / r
+    else:
+        nx = 1.0
+        ny = 0.0
+    deltadot = nx * exd + ny * eyd
+    return ex, ey, r, r - p[P_C], deltadot, nx, ny
+
+
+@nb.njit(cache=True)
+def geometry(t, y, p):
+    """Clearance-joint kinematics (Eqs. 1-3, 10-11).
+
+    Returns (ex, ey, r, delta, deltadot, nx, ny): the vector from journal centre to bearing
+    centre, its length, penetration, penetration rate and the unit vector n = e / r
+    (n = (1, 0) when the journal is exactly centred).
+    """
+    th2 = p[P_W] * t + p[P_TH0]
+    return _geometry_trig(y, p, math.cos(th2), math.sin(th2), math.cos(y[0]), math.sin(y[0]))
+
+
+@nb.njit(cache=True)
+def dynamics(t, y, p):
+    """Accelerations, contact force, crank moment (Eq. 8) and base force F12.
+
+    Returns (theta3dd, x4dd, F, delta, deltadot, ex, ey, M2, F12x, F12y); (ex, ey) is the
+    journal centre relative to the bearing centre.
+    """
+    L2 = p[P_L2]
+    L3 = p[P_L3]
+    m2 = p[P_M2]
+    m3 = p[P_M3]
+    m4 = p[P_M4]
+    w = p[P_W]
+    g = p[P_G]
+    th2 = w * t + p[P_TH0]
+    c2 = math.cos(th2)
+    s2 = math.sin(th2)
+    th3d = y[2]
+    c3 = math.cos(y[0])
+    s3 = math.sin(y[0])
+    ex, ey, r, delta, deltadot, nx, ny = _geometry_trig(y, p, c2, s2, c3, s3)
+    F = 0.0
+    if p[P_MODE] > 0.5:
+        F = contact_force(delta, deltadot, p[P_DMIN], p[P_K], p[P_E], int(p[P_MODEL]))
+    sin32 = s3 * c2 - c3 * s2          # sin(theta3 - theta2)
+    cos23 = c2 * c3 + s2 * s3          # cos(theta2 - theta3)
+    inertia = p[P_J3] + 0.25 * m3 * L3 * L3
+    # Eq. 6: sin(theta3 - alpha) = s3 cos(alpha) - c3 sin(alpha)
+    th3dd = -(0.5 * m3 * L2 * L3 * w * w * sin32 + 0.5 * m3 * g * L3 * c3
+              + L3 * F * (s3 * nx - c3 * ny)) / inertia
+    # Eq. 7
+    x4dd = -F * nx / m4
+    # Eq. 8
+    M2 = (0.5 * m3 * L2 * L3 * (th3dd * cos23 - th3d * th3d * sin32)
+          + (m3 + 0.5 * m2) * g * L2 * c2 + L2 * F * (s2 * nx - c2 * ny))
+    # Newton for crank + coupler: R = m2 aG2 + m3 aG3 + (m2 + m3) g ey - F n, F12 = -R
+    w2 = w * w
+    ag2x = -0.5 * L2 * w2 * c2
+    ag2y = -0.5 * L2 * w2 * s2
+    ag3x = -L2 * w2 * c2 + 0.5 * L3 * (-th3dd * s3 - th3d * th3d * c3)
+    ag3y = -L2 * w2 * s2 + 0.5 * L3 * (th3dd * c3 - th3d * th3d * s3)
+    F12x = -(m2 * ag2x + m3 * ag3x - F * nx)
+    F12y = -(m2 * ag2y + m3 * ag3y + (m2 + m3) * g - F * ny)
+    return th3dd, x4dd, F, delta, deltadot, -ex, -ey, M2, F12x, F12y
+
+
+@nb.njit(RHS_SIG, cache=True)
+def rhs(t, y, p, dydt):
+    """State derivative [theta3dot, x4dot, theta3dd, x4dd, M2*omega2]."""
+    th3dd, x4dd, F, delta, deltadot, ex, ey, M2, F12x, F12y = dynamics(t, y, p)
+    dydt[0] = y[2]
+    dydt[1] = y[3]
+    dydt[2] = th3dd
+    dydt[3] = x4dd
+    dydt[4] = M2 * p[P_W]
+
+
+@nb.njit(SCALAR_SIG, cache=True)
+def event(t, y, p):
+    """Switching function: penetration in free flight, minus penetration in contact."""
+    ex, ey, r, delta, deltadot, nx, ny = geometry(t, y, p)
+    if p[P_MODE] > 0.5:
+        return -delta
+    return delta
+
+
+@nb.njit(ACTION_SIG, cache=True)
+def on_event(t, y, p):
+    """Switch the contact mode; at onset store the impact velocity (floored, see docs)."""
+    if p[P_MODE] > 0.5:
+        p[P_MODE] = 0.0
+    else:
+        ex, ey, r, delta, deltadot, nx, ny = geometry(t, y, p)
+        p[P_MODE] = 1.0
+        p[P_DMIN] = max(deltadot, p[P_VFLOOR])
+
+
+@nb.njit(SCALAR_SIG, cache=True)
+def monitor(t, y, p):
+    """|F12|, the magnitude of the base reaction force."""
+    th3dd, x4dd, F, delta, deltadot, ex, ey, M2, F12x, F12y = dynamics(t, y, p)
+    return math.sqrt(F12x * F12x + F12y * F12y)
+
+
+@nb.njit(cache=True)
+def outputs(ts, ys, ms, p):
+    """Evaluate `dynamics` at recorded steps; returns (m, len(OUT_COLUMNS))."""
+    q = p.copy()
+    out = np.empty((ts.shape[0], 10))
+    for i in range(ts.shape[0]):
+        q[P_MODE] = ms[i, 0]
+        q[P_DMIN] = ms[i, 1]
+        res = dynamics(ts[i], ys[i], q)
+        for k in range(10):
+            out[i, k] = res[k]
+    return out
+
+
+@nb.njit(cache=True)
+def mechanical_energy(t, y, p):
+    """Kinetic + gravitational + contact-spring energy of the mechanism in J.
+
+    The contact spring energy K delta^2.5 / 2.5 is counted only in contact mode (where the
+    force acts). With e = 1 its change equals the crank drive's work W.
+    """
+    L2 = p[P_L2]
+    L3 = p[P_L3]
+    m2 = p[P_M2]
+    m3 = p[P_M3]
+    m4 = p[P_M4]
+    w = p[P_W]
+    g = p[P_G]
+    th2 = w * t + p[P_TH0]
+    th3 = y[0]
+    th3d = y[2]
+    vg3x = -L2 * w * math.sin(th2) - 0.5 * L3 * th3d * math.sin(th3)
+    vg3y = L2 * w * math.cos(th2) + 0.5 * L3 * th3d * math.cos(th3)
+    kin = (0.5 * (p[P_J2] + 0.25 * m2 * L2 * L2) * w * w
+           + 0.5 * m3 * (vg3x * vg3x + vg3y * vg3y) + 0.5 * p[P_J3] * th3d * th3d
+           + 0.5 * m4 * y[3] * y[3])
+    pot = g * (0.5 * m2 * L2 * math.sin(th2) + m3 * (L2 * math.sin(th2)
+                                                     + 0.5 * L3 * math.sin(th3)))
+    ex, ey, r, delta, deltadot, nx, ny = geometry(t, y, p)
+    spring = 0.0
+    if p[P_MODE] > 0.5 and delta > 0.0:
+        spring = p[P_K] * delta**2.5 / 2.5
+    return kin + pot + spring
+
+
+# ---------------------------------------------------------------------------- driver
+
+#: default relative tolerance of the compiled integrator (chosen by the work-precision
+#: benchmark, see docs/performance.md)
+DEFAULT_RTOL = 1e-8
+
+
+def default_atol(mech: SliderCrank, rtol: float) -> np.ndarray:
+    """Absolute tolerances per state component from the mechanism's natural scales."""
+    L = mech.crank_length + mech.coupler_length
+    w = mech.crank_speed
+    return rtol * np.array([1.0, L, w, w * mech.crank_length, 1.0])
+
+
+def window_edges(mech: SliderCrank, revolutions: int) -> np.ndarray:
+    """Times of the crank revolution boundaries 0, T, ..., revolutions*T."""
+    return np.arange(revolutions + 1) * mech.period
+
+
+def run(mech: SliderCrank, revolutions: int = 4, *, rtol: float | None = None,
+        atol: float | np.ndarray | None = None, method: str = "dopri5", record: bool = True,
+        max_steps: int = 5_000_000, n_samples: int = 3, h_max: float | None = None,
+        h0: float = 0.0, event_tol: float | None = None):
+    """Integrate the reduced model; returns (ts, ys, ms, peaks, peak_times, counters, p).
+
+    Raises RuntimeError with advice when the integrator cannot finish.
+    """
+    rtol, atol_arr = _tolerances(mech, rtol, atol)
+    if method not in METHODS:
+        raise ValueError(f"method must be one of {sorted(METHODS)}; got {method!r}")
+    if not isinstance(revolutions, (int, np.integer)) or revolutions < 1:
+        raise ValueError(f"revolutions must be an integer >= 1; got {revolutions!r}")
+    tab = METHODS[method]
+    p = pack_parameters(mech)
+    y0 = initial_state(mech)
+    edges = window_edges(mech, int(revolutions))
+    h_max = mech.period / 8 if h_max is None else float(h_max)
+    event_tol = 1e-12 * mech.clearance if event_tol is None else float(event_tol)
+    ts, ys, ms, peaks, peak_t, counters = integrate(
+        rhs, event, on_event, monitor, y0, p, N_MEM, edges, rtol, atol_arr, N_ERR,
+        float(h0), h_max, int(max_steps), bool(record), event_tol, int(n_samples),
+        tab.A, tab.B, tab.C, tab.E, tab.P, tab.error_order)
+    status = int(counters[4])
+    if status != 0:
+        raise RuntimeError(f"reduced model integration failed at about t = "
+                           f"{ts[-1] if len(ts) else float('nan'):.6g} s: "
+                           f"{STATUS_MESSAGES[status]}")
+    return ts, ys, ms, peaks, peak_t, counters, p
+
+
+def _tolerances(mech, rtol, atol):
+    rtol = DEFAULT_RTOL if rtol is None else rtol
+    if not isinstance(rtol, (int, float)) or not (1e-14 <= rtol <= 1e-2):
+        raise ValueError(f"rtol must be a number in [1e-14, 1e-2]; got {rtol!r}")
+    if atol is None:
+        atol_arr = default_atol(mech, rtol)
+    else:
+        atol_arr = np.broadcast_to(np.asarray(atol, dtype=float), (N_STATE,)).copy()
+        if not np.all(np.isfinite(atol_arr)) or np.any(atol_arr <= 0):
+            raise ValueError(f"atol must be finite and > 0; got {atol!r}")
+    return float(rtol), atol_arr
+
+
+def counters_dict(counters) -> dict:
+    """Solver counters as a dict."""
+    names = ("nfev", "naccept", "nreject", "nevent", "status", "nrefine")
+    return {k: int(v) for k, v in zip(names, counters)}
+
+
+def simulate_reduced(mech: SliderCrank, revolutions: int = 4, **options):
+    """Simulate with the reduced model and return a `Trajectory` (all accepted steps)."""
+    from .trajectory import Trajectory
+
+    ts, ys, ms, peaks, peak_t, counters, p = run(mech, revolutions, record=True, **options)
+    out = outputs(ts, ys, ms, p)
+    stats = counters_dict(counters)
+    stats.update(method=options.get("method", "dopri5"),
+                 rtol=float(options.get("rtol") or DEFAULT_RTOL))
+    return Trajectory(
+        t=ts,
+        base_force=np.ascontiguousarray(out[:, 8:10]),
+        crank_moment=out[:, 7].copy(),
+        contact_force=out[:, 2].copy(),
+        penetration=out[:, 3].copy(),
+        eccentricity=np.ascontiguousarray(out[:, 5:7]),
+        slider_position=ys[:, 1].copy(),
+        slider_velocity=ys[:, 3].copy(),
+        slider_acceleration=out[:, 1].copy(),
+        coupler_angle=ys[:, 0].copy(),
+        coupler_rate=ys[:, 2].copy(),
+        contact_phase=(ms[:, 0] > 0.5).astype(np.int8),
+        crank_work=ys[:, 4].copy(),
+        mechanism=mech,
+        backend="reduced",
+        stats=stats,
+        peaks=peaks,
+    )
+
+
+def peak_reduced(mech: SliderCrank, revolution: int = 4, **options) -> float:
+    """Max |F12| in N over revolution `revolution`, recording nothing but running maxima."""
+    *_, peaks, _, _, _ = run(mech, revolution, record=False, **options)
+    return float(peaks[revolution - 1])

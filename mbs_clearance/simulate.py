@@ -1,0 +1,93 @@
+"""`simulate(mech, backend=...)`: one entry point for every model, one `Trajectory` result."""
+
+from __future__ import annotations
+
+import importlib
+from dataclasses import dataclass
+
+from .mechanism import SliderCrank
+from .trajectory import Trajectory
+
+__all__ = ["simulate", "peak_base_force", "BACKENDS", "Backend"]
+
+
+@dataclass(frozen=True)
+class Backend:
+    """A model: module and the names of its simulate and peak-only functions."""
+
+    module: str
+    simulate: str
+    peak: str
+    description: str
+
+    def load(self, attr: str):
+        return getattr(importlib.import_module(self.module), getattr(self, attr))
+
+
+#: name -> Backend; the registry of models (imported lazily: Exudyn only when asked for)
+BACKENDS: dict[str, Backend] = {
+    "reduced": Backend("mbs_clearance.reduced", "simulate_reduced", "peak_reduced",
+                       "the paper's reduced Lagrange model, compiled (numba)"),
+    "exudyn": Backend("mbs_clearance.exudyn_model", "simulate_exudyn", "peak_exudyn",
+                      "the same mechanism in the multibody engine Exudyn"),
+    "ideal": Backend("mbs_clearance.ideal", "simulate_ideal", "peak_ideal",
+                     "closed-form slider-crank with ideal joints (no clearance)"),
+}
+
+
+def _backend(name: str) -> Backend:
+    if name not in BACKENDS:
+        raise ValueError(f"backend must be one of {sorted(BACKENDS)}; got {name!r}")
+    return BACKENDS[name]
+
+
+def _check(mech, revolutions):
+    if not isinstance(mech, SliderCrank):
+        raise ValueError(f"mech must be a SliderCrank; got {type(mech).__name__}")
+    if not isinstance(revolutions, int) or isinstance(revolutions, bool) or revolutions < 1:
+        raise ValueError(f"revolutions must be an integer >= 1; got {revolutions!r}")
+
+
+def simulate(mech: SliderCrank, revolutions: int = 4, backend: str = "reduced",
+             **options) -> Trajectory:
+    """Simulate `revolutions` crank revolutions from t = 0.
+
+    Parameters
+    ----------
+    mech : SliderCrank
+    revolutions : int
+        Number of full crank revolutions (>= 1).
+    backend : str
+        A key of `BACKENDS`: "reduced" (default), "exudyn" or "ideal".
+    **options
+        Backend settings, e.g. ``rtol``, ``atol``, ``method`` for "reduced"; ``step_size``,
+        ``contact`` for "exudyn". Unknown options raise ValueError.
+
+    Returns
+    -------
+    Trajectory
+    """
+    be = _backend(backend)
+    _check(mech, revolutions)
+    try:
+        return be.load("simulate")(mech, revolutions, **options)
+    except TypeError as exc:
+        if "unexpected keyword" in str(exc):
+            raise ValueError(f"unknown option for backend {backend!r}: {exc}") from exc
+        raise
+
+
+def peak_base_force(mech: SliderCrank, revolution: int = 4, backend: str = "reduced",
+                    **options) -> float:
+    """Max |F12| in N over crank revolution `revolution` (1-based), the GA's objective.
+
+    Records no time series: only running maxima are kept.
+    """
+    be = _backend(backend)
+    _check(mech, revolution)
+    try:
+        return be.load("peak")(mech, revolution, **options)
+    except TypeError as exc:
+        if "unexpected keyword" in str(exc):
+            raise ValueError(f"unknown option for backend {backend!r}: {exc}") from exc
+        raise
