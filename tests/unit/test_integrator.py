@@ -1,0 +1,157 @@
+"""The compiled integrator on problems with closed-form solutions."""
+
+import math
+
+import numba as nb
+import numpy as np
+import pytest
+
+from mbs_clearance.integrator import (
+    ACTION_SIG,
+    METHODS,
+    RHS_SIG,
+    SCALAR_SIG,
+    dense_eval,
+    integrate,
+    rk_step,
+)
+
+
+@nb.njit(RHS_SIG)
+def osc_rhs(t, y, p, d):
+    d[0] = y[1]
+    d[1] = -p[0] * p[0] * y[0]
+
+
+@nb.njit(SCALAR_SIG)
+def never(t, y, p):
+    return -1.0
+
+
+@nb.njit(ACTION_SIG)
+def nothing(t, y, p):
+    pass
+
+
+@nb.njit(SCALAR_SIG)
+def minus_x(t, y, p):
+    return -y[0]
+
+
+def run(rhs, event, action, monitor, y0, p, edges, rtol, method="dopri5", record=True,
+        n_samples=3, h_max=10.0, n_mem=1):
+    tab = METHODS[method]
+    return integrate(rhs, event, action, monitor, np.asarray(y0, float), np.asarray(p, float),
+                     n_mem, np.asarray(edges, float), rtol, np.full(len(y0), rtol), len(y0),
+                     0.0, h_max, 10**6, record, 1e-14, n_samples, tab.A, tab.B, tab.C, tab.E,
+                     tab.P, tab.error_order)
+
+
+@pytest.mark.parametrize("method", sorted(METHODS))
+def test_oscillator_error_decreases_with_rtol_at_the_expected_rate(method):
+    errors, nfevs = [], []
+    for rtol in (1e-5, 1e-7, 1e-9):
+        ts, ys, *_ , counters = run(osc_rhs, never, nothing, minus_x, [1.0, 0.0], [2.0, 0.0],
+                                    [0.0, 10.0], rtol, method)
+        errors.append(np.max(np.abs(ys[:, 0] - np.cos(2.0 * ts))))
+        nfevs.append(counters[0])
+        assert counters[4] == 0
+    assert errors[0] > errors[1] > errors[2]
+    # error per function evaluation follows the order of the method: nfev ~ err^(-1/order)
+    order = METHODS[method].order
+    slope = -np.log(errors[2] / errors[0]) / np.log(nfevs[2] / nfevs[0])
+    assert order - 1.5 < slope < order + 1.0
+
+
+@pytest.mark.parametrize("method", sorted(METHODS))
+def test_dense_output_interpolates_to_its_order(method):
+    tab = METHODS[method]
+    K = np.zeros((len(tab.B) + 1, 2))
+    y0 = np.array([1.0, 0.0])
+    f0 = np.array([0.0, -1.0])
+    p = np.array([1.0, 0.0])
+    errs = []
+    for h in (0.1, 0.05):
+        y1, f1, tmp = np.empty(2), np.empty(2), np.empty(2)
+        rk_step(osc_rhs, 0.0, y0, f0 * 0 + np.array([0.0, -1.0]), h, tab.A, tab.B, tab.C, K,
+                p, y1, f1, tmp)
+        out = np.empty(2)
+        dense_eval(y0, h, K, tab.P, 1.0, out, np.empty(tab.P.shape[0]))
+        assert np.allclose(out, y1, rtol=0, atol=1e-15)  # the interpolant ends at the step
+        dense_eval(y0, h, K, tab.P, 0.37, out, np.empty(tab.P.shape[0]))
+        errs.append(abs(out[0] - math.cos(0.37 * h)))
+    # local interpolation error O(h^(q+1)) with q = order of the continuous extension
+    q = tab.P.shape[1]
+    assert errs[0] / errs[1] > 2 ** (q + 1) * 0.6
+
+
+@nb.njit(RHS_SIG)
+def ball_rhs(t, y, p, d):
+    d[0] = y[1]
+    d[1] = -9.81
+
+
+@nb.njit(SCALAR_SIG)
+def ball_event(t, y, p):
+    return -y[0]
+
+
+@nb.njit(ACTION_SIG)
+def ball_bounce(t, y, p):
+    y[1] = -p[0] * y[1]
+    p[1] += 1.0
+
+
+def test_bouncing_ball_impact_times_are_located_exactly():
+    """Ball dropped from 1 m, restitution 0.8: impact times t1 = sqrt(2/g), t_(k+1) = t_k +
+    2 e^k v1 / g. The integrator must land on each of them (not the next step inside)."""
+    g, e = 9.81, 0.8
+    ts, ys, ms, _, _, counters = run(ball_rhs, ball_event, ball_bounce, minus_x, [1.0, 0.0],
+                                     [e, 0.0], [0.0, 2.0], 1e-10, h_max=0.05)
+    v1 = math.sqrt(2 * g)
+    expected = [math.sqrt(2 / g)]
+    for k in range(1, 6):
+        expected.append(expected[-1] + 2 * e**k * v1 / g)
+    expected = [t for t in expected if t < 2.0]
+    assert counters[3] == len(expected)
+    for t_imp in expected:
+        assert np.min(np.abs(ts - t_imp)) < 1e-11
+    assert ms[-1, 0] == len(expected)  # memory (bounce count) recorded with the steps
+
+
+@nb.njit(RHS_SIG)
+def still(t, y, p, d):
+    d[0] = 0.0
+
+
+@nb.njit(SCALAR_SIG)
+def bump(t, y, p):
+    # positive only for |t - 1| < 0.01: an excursion much shorter than the steps taken
+    return 1e-4 - (t - 1.0) ** 2 if p[0] < 0.5 else -1.0
+
+
+@nb.njit(ACTION_SIG)
+def flag(t, y, p):
+    p[0] = 1.0
+
+
+def test_interior_samples_catch_a_crossing_and_return_inside_one_step():
+    # With no dynamics the step grows to h_max = 0.4 and step ends never see g > 0.
+    *_, counters = run(still, bump, flag, minus_x, [0.0], [0.0], [0.0, 3.0], 1e-8,
+                       n_samples=0, h_max=0.4)
+    assert counters[3] == 0   # missed without interior samples: this is what they are for
+    *_, counters = run(still, bump, flag, minus_x, [0.0], [0.0], [0.0, 3.0], 1e-8,
+                       n_samples=39, h_max=0.4)
+    assert counters[3] == 1
+
+
+def test_window_peaks_are_refined_between_steps():
+    # x = cos(2t): max of -x over [0, 3] is 1 at t = pi/2, in general between two steps
+    ts, ys, _, peaks, peak_t, counters = run(osc_rhs, never, nothing, minus_x, [1.0, 0.0],
+                                             [2.0, 0.0], [0.0, 3.0], 1e-10)
+    sampled = np.max(-ys[:, 0])
+    # the refined peak is limited only by the global error of the solution (~1e-9 here) ...
+    assert peaks[0] == pytest.approx(1.0, abs=1e-8)
+    assert peak_t[0] == pytest.approx(math.pi / 2, abs=1e-4)
+    # ... while the best step point misses it by the curvature times the step squared
+    assert 1.0 - sampled > 100 * abs(1.0 - peaks[0])
