@@ -1,0 +1,87 @@
+"""All figures of mbs-clearance (the only module that imports matplotlib).
+
+Figures are built with the object-oriented API (`matplotlib.figure.Figure`), so no GUI
+backend is ever needed; every function returns the Figure and saves it when given a path.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+from matplotlib.figure import Figure
+
+from .trajectory import Trajectory
+
+__all__ = ["plot_trajectory", "plot_overlay", "save"]
+
+COLORS = ["C0", "C3", "C2", "C1", "C4", "C5"]
+
+
+def save(fig: Figure, path: str | Path | None, dpi: int = 120) -> Figure:
+    """Save `fig` to `path` (format from the suffix) if a path is given; return `fig`."""
+    if path is not None:
+        path = Path(path)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fig.savefig(path, dpi=dpi, bbox_inches="tight")
+    return fig
+
+
+def _crank_deg(traj: Trajectory) -> np.ndarray:
+    return np.degrees(traj.crank_angle)
+
+
+def plot_overlay(trajs: Sequence[Trajectory], labels: Sequence[str] | None = None,
+                 revolution: int | None = None, path: str | Path | None = None,
+                 title: str | None = None) -> Figure:
+    """Four panels like the paper's Fig. 3 for one or more trajectories.
+
+    (a) |F12| and (b) crank moment versus crank angle over `revolution` (default: the last
+    full one), (c) slider acceleration versus velocity, (d) journal-centre orbit inside the
+    clearance circle (in units of the clearance).
+    """
+    labels = list(labels) if labels is not None else [t.backend for t in trajs]
+    fig = Figure(figsize=(11, 8), layout="constrained")
+    axes = fig.subplots(2, 2)
+    ax_f, ax_m, ax_ph, ax_orb = axes.ravel()
+    for k, (traj, label) in enumerate(zip(trajs, labels)):
+        rev = revolution or traj.revolutions
+        mask = traj.revolution_mask(rev)
+        ang = _crank_deg(traj)[mask] - 360.0 * (rev - 1)
+        col = COLORS[k % len(COLORS)]
+        lw = 1.2 if k == 0 else 0.9
+        ax_f.plot(ang, traj.base_force_magnitude[mask], color=col, lw=lw, label=label)
+        ax_m.plot(ang, traj.crank_moment[mask], color=col, lw=lw, label=label)
+        ax_ph.plot(traj.slider_velocity[mask], traj.slider_acceleration[mask], color=col,
+                   lw=0.7, label=label)
+        c = traj.mechanism.clearance
+        ecc = traj.eccentricity / c
+        ax_orb.plot(ecc[:, 0], ecc[:, 1], color=col, lw=0.6, label=label)
+    phi = np.linspace(0, 2 * np.pi, 361)
+    ax_orb.plot(np.cos(phi), np.sin(phi), "k--", lw=0.8, label="clearance circle")
+    ax_orb.set_aspect("equal")
+    ax_f.set(xlabel="crank angle in revolution (deg)", ylabel="|F12| (N)",
+             title="(a) base reaction force")
+    ax_m.set(xlabel="crank angle in revolution (deg)", ylabel="crank moment M2 (N m)",
+             title="(b) crank driving moment")
+    ax_ph.set(xlabel="slider velocity (m/s)", ylabel="slider acceleration (m/s$^2$)",
+              title="(c) slider phase plot")
+    ax_orb.set(xlabel="journal x / clearance (-)", ylabel="journal y / clearance (-)",
+               title="(d) journal centre orbit (all revolutions)")
+    for ax in axes.ravel():
+        ax.grid(alpha=0.3)
+    ax_f.legend(loc="best", fontsize=8)
+    ax_orb.legend(loc="upper right", fontsize=7)
+    if title:
+        fig.suptitle(title)
+    return save(fig, path)
+
+
+def plot_trajectory(traj: Trajectory, path: str | Path | None = None,
+                    revolution: int | None = None) -> Figure:
+    """The paper's Fig. 3 panels for one trajectory (see `plot_overlay`)."""
+    m = traj.mechanism
+    title = (f"{traj.backend}: clearance {m.clearance * 1e3:.3g} mm, "
+             f"{m.crank_speed_rpm:.0f} rpm, e = {m.restitution:g}")
+    return plot_overlay([traj], [traj.backend], revolution=revolution, path=path, title=title)
