@@ -48,6 +48,8 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     from .simulate import simulate
 
     mech = mechanism_from_args(args)
+    if args.out and args.out.suffix not in (".csv", ".npz"):
+        raise ValueError(f"--out must end in .npz or .csv; got {str(args.out)!r}")
     options = {}
     if args.rtol is not None:
         options["rtol"] = args.rtol

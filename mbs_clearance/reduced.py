@@ -235,7 +235,7 @@ def mechanical_energy(t, y, p):
 
 #: default relative tolerance of the compiled integrator (chosen by the work-precision
 #: benchmark, see docs/performance.md)
-DEFAULT_RTOL = 1e-8
+DEFAULT_RTOL = 1e-7
 
 
 def default_atol(mech: SliderCrank, rtol: float) -> np.ndarray:

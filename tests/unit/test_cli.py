@@ -35,7 +35,7 @@ def test_config_file_and_override(tmp_path, capsys):
     (["simulate", "--restitution", "0"], "restitution must be in the interval (0, 1]"),
     (["simulate", "--journal-radius", "0.02"], "journal_radius must be smaller"),
     (["simulate", "--config", "/nonexistent.json"], "cannot read mechanism file"),
-    (["simulate", "--out", "x.txt", "--revolutions", "1"], "must end in .npz or .csv"),
+    (["simulate", "--out", "x.txt", "--revolutions", "1"], "--out must end in .npz or .csv"),
 ])
 def test_bad_input_exits_with_message(argv, message, capsys):
     with pytest.raises(SystemExit) as exc:

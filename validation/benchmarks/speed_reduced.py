@@ -1,0 +1,107 @@
+"""Speed of the compiled reduced model against scipy solve_ivp on the same equations.
+
+Paper case, 4 revolutions. The error measure is the relative error of the 4th-revolution
+peak |F12| against a tight reference (compiled integrator at rtol 1e-12, checked against
+scipy DOP853 at rtol 1e-12). scipy is timed at the loosest tolerance whose error is not worse
+than ours, so the ratio compares equal accuracy. Medians over repeats, after JIT warm-up,
+all in one run.
+
+    python -m validation.benchmarks.speed_reduced [--repeats 20]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import subprocess
+import sys
+import time
+
+import numpy as np
+
+from mbs_clearance import SliderCrank, peak_base_force, simulate
+from mbs_clearance.reduced import DEFAULT_RTOL
+from validation.benchmarks.machine import machine_summary
+from validation.scipy_reference import solve_scipy
+
+FIRST_CALL = """
+import time
+t0 = time.perf_counter()
+from mbs_clearance import SliderCrank, simulate
+from mbs_clearance import integrator
+t1 = time.perf_counter()
+simulate(SliderCrank(), 4)
+t2 = time.perf_counter()
+print(t1 - t0, t2 - t1, sum(integrator.integrate.stats.cache_misses.values()))
+"""
+
+
+def median_time(fn, repeats):
+    times = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t0)
+    return float(np.median(times))
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--repeats", type=int, default=20)
+    ap.add_argument("--scipy-repeats", type=int, default=3)
+    ap.add_argument("--json", help="also write the results to this JSON file")
+    args = ap.parse_args(argv)
+    mech = SliderCrank()
+
+    ref = peak_base_force(mech, 4, rtol=1e-12)
+    ref_scipy = solve_scipy(mech, revolutions=4, rtol=1e-12).peaks[3]
+    print(f"reference peak (ours, rtol 1e-12) = {ref:.6f} N; scipy DOP853 rtol 1e-12: "
+          f"{ref_scipy:.6f} N (rel. diff {abs(ref_scipy / ref - 1):.1e})")
+
+    simulate(mech, 4)  # warm-up (loads the cache or compiles)
+    ours_err = abs(peak_base_force(mech, 4) / ref - 1)
+    t_sim = median_time(lambda: simulate(mech, 4), args.repeats)
+    t_peak = median_time(lambda: peak_base_force(mech, 4), args.repeats)
+
+    rows = []
+    chosen = None
+    for rtol in (1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11):
+        res = solve_scipy(mech, revolutions=4, rtol=rtol)
+        err = abs(res.peaks[3] / ref - 1)
+        t = median_time(lambda r=rtol: solve_scipy(mech, revolutions=4, rtol=r),
+                        args.scipy_repeats)
+        rows.append((rtol, err, t, res.nfev))
+        if chosen is None and err <= ours_err:
+            chosen = (rtol, err, t)
+            break
+
+    out = subprocess.run([sys.executable, "-c", FIRST_CALL], capture_output=True, text=True,
+                         check=True).stdout.split()
+    t_import, t_first, misses = float(out[0]), float(out[1]), int(out[2])
+
+    print()
+    print(f"Machine: {machine_summary()}")
+    print()
+    print(f"| run (paper case, 4 revolutions) | rtol | peak rel. error | median time (ms) |")
+    print("|---|---|---|---|")
+    print(f"| ours, simulate (full trajectory) | {DEFAULT_RTOL:g} | {ours_err:.1e} | "
+          f"{t_sim * 1e3:.2f} |")
+    print(f"| ours, peak only | {DEFAULT_RTOL:g} | {ours_err:.1e} | {t_peak * 1e3:.2f} |")
+    for rtol, err, t, nfev in rows:
+        print(f"| scipy DOP853 (nfev {nfev}) | {rtol:g} | {err:.1e} | {t * 1e3:.1f} |")
+    print()
+    if chosen:
+        print(f"scipy at equal or better error (rtol {chosen[0]:g}): {chosen[2] * 1e3:.1f} ms "
+              f"-> ours is {chosen[2] / t_sim:.0f} x faster (simulate), "
+              f"{chosen[2] / t_peak:.0f} x faster (peak only)")
+    print(f"new process: import {t_import:.2f} s, first simulate {t_first * 1e3:.1f} ms, "
+          f"numba cache misses {misses} (0 = nothing recompiled)")
+    if args.json:
+        with open(args.json, "w") as fh:
+            json.dump({"ours_error": ours_err, "t_simulate": t_sim, "t_peak": t_peak,
+                       "scipy": rows, "chosen": chosen, "first_call": [t_import, t_first,
+                                                                      misses]}, fh, indent=1)
+
+
+if __name__ == "__main__":
+    main()
