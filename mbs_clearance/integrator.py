@@ -3,8 +3,9 @@
 The model is passed as four first-class compiled functions with fixed signatures
 (``numba.types.FunctionType``, so the kernels are cached on disk and not recompiled per model):
 
-- ``rhs(t, y, p, dydt)``: right-hand side; ``p`` holds parameters and, at its end, the
-  model's memory variables (contact mode, impact velocity, ...);
+- ``rhs(t, y, p, dydt)``: right-hand side; ``p`` holds parameters and the model's memory
+  variables (contact mode, impact velocity, ...), ``p[mem_start:mem_start + n_mem]``, which
+  are recorded with every step;
 - ``event(t, y, p) -> g``: switching function, negative in the current mode; a crossing to
   positive inside a step is an event;
 - ``on_event(t, y, p)``: applied exactly at a located event (updates the memory in ``p``);
@@ -234,7 +235,8 @@ _INTEGRATE_SIG = _OUT_SIG(
     _FT_RHS, _FT_SCALAR, _FT_ACTION, _FT_SCALAR,
     types.float64[::1],            # y0
     types.float64[::1],            # p (parameters + memory, modified in place)
-    types.int64,                   # n_mem: number of memory entries at the end of p
+    types.int64,                   # mem_start: first memory entry of p (recorded)
+    types.int64,                   # n_mem: number of memory entries recorded
     types.float64[::1],            # edges: window edges, edges[0] = t0, edges[-1] = t_end
     types.float64,                 # rtol
     types.float64[::1],            # atol (per component)
@@ -245,18 +247,19 @@ _INTEGRATE_SIG = _OUT_SIG(
     types.boolean,                 # record
     types.float64,                 # event_tol
     types.int64,                   # n_samples: interior event samples per step
+    types.int64,                   # refine_iters: golden-section iterations per window peak
     _ARR2, types.float64[::1], types.float64[::1], types.float64[::1], _ARR2,  # A B C E P
     types.int64,                   # error_order (exponent of the step-size controller)
 )
 
 
 @nb.njit(_INTEGRATE_SIG, cache=True)
-def integrate(rhs, event, on_event, monitor, y0, p, n_mem, edges, rtol, atol, n_err, h0,
-              h_max, max_steps, record, event_tol, n_samples, A, B, C, E, P, error_order):
+def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rtol, atol, n_err,
+              h0, h_max, max_steps, record, event_tol, n_samples, refine_iters, A, B, C, E, P,
+              error_order):
     """Integrate from edges[0] to edges[-1]; see the module docstring for the protocol."""
     n = y0.shape[0]
     s = B.shape[0]
-    np_ = p.shape[0]
     K = np.zeros((s + 1, n))
     y = y0.copy()
     f = np.empty(n)
@@ -308,7 +311,7 @@ def integrate(rhs, event, on_event, monitor, y0, p, n_mem, edges, rtol, atol, n_
         ts[0] = t
         ys[0, :] = y
         for k in range(n_mem):
-            ms[0, k] = p[np_ - n_mem + k]
+            ms[0, k] = p[mem_start + k]
         nrec = 1
     zero_events = 0
     g_start = 0.0
@@ -485,23 +488,24 @@ def integrate(rhs, event, on_event, monitor, y0, p, n_mem, edges, rtol, atol, n_
             ts[nrec] = t
             ys[nrec, :] = y
             for k in range(n_mem):
-                ms[nrec, k] = p[np_ - n_mem + k]
+                ms[nrec, k] = p[mem_start + k]
             nrec += 1
 
         if land:
             # window closed: refine its maximum between the neighbouring steps
-            if cand_prev_h > 0.0:
+            if cand_prev_h > 0.0 and refine_iters > 0:
                 rhs(cand_prev_t, cand_prev_y, cand_prev_p, ftmp)
                 v, tv = _golden_max(rhs, monitor, cand_prev_t, cand_prev_y, ftmp, cand_prev_p,
-                                    cand_prev_h, A, B, C, K, y_new, f_new, ytmp, 40)
+                                    cand_prev_h, A, B, C, K, y_new, f_new, ytmp,
+                                    refine_iters)
                 counters[5] += 1
                 if v > peaks[win]:
                     peaks[win] = v
                     peak_t[win] = tv
-            if cand_next_h > 0.0:
+            if cand_next_h > 0.0 and refine_iters > 0:
                 rhs(cand_t, cand_y, cand_p, ftmp)
                 v, tv = _golden_max(rhs, monitor, cand_t, cand_y, ftmp, cand_p, cand_next_h,
-                                    A, B, C, K, y_new, f_new, ytmp, 40)
+                                    A, B, C, K, y_new, f_new, ytmp, refine_iters)
                 counters[5] += 1
                 if v > peaks[win]:
                     peaks[win] = v

@@ -13,6 +13,7 @@ See docs/derivations.md for the equations, including the base force F12.
 from __future__ import annotations
 
 import math
+from typing import Any, NamedTuple
 
 import numba as nb
 import numpy as np
@@ -250,16 +251,33 @@ def window_edges(mech: SliderCrank, revolutions: int) -> np.ndarray:
     return np.arange(revolutions + 1) * mech.period
 
 
+class System(NamedTuple):
+    """An ODE system for the integrator: the plain model or one augmented with more states
+    (the sensitivity equations); the event function and monitor are the plain model's."""
+
+    rhs: Any
+    y0: np.ndarray
+    p: np.ndarray
+    mem_start: int
+    n_mem: int
+    n_err: int
+    atol: np.ndarray
+    on_event: Any
+
+
 def run(mech: SliderCrank, revolutions: int = 4, *, rtol: float | None = None,
         atol: float | np.ndarray | None = None, method: str = "dopri5", record: bool = True,
         max_steps: int = 5_000_000, n_samples: int = 3, h_max: float | None = None,
-        h0: float = 0.0, event_tol: float | None = None, edges: np.ndarray | None = None):
+        h0: float = 0.0, event_tol: float | None = None, edges: np.ndarray | None = None,
+        t_eval: np.ndarray | None = None, system=None, select: bool = True):
     """Integrate the reduced model; returns (ts, ys, ms, peaks, peak_times, counters, p).
 
     The integration runs over the crank revolutions 1..`revolutions`, or over the windows
-    given by `edges` (times, increasing, from 0); `peaks` holds max |F12| per window.
-
-    Raises RuntimeError with advice when the integrator cannot finish.
+    given by `edges` (times, increasing, from 0); `peaks` holds max |F12| per window, refined
+    between steps. With `t_eval` the integrator also lands exactly on those times and only
+    they are returned (peaks are then maxima over the returned samples, not refined;
+    ``select=False`` returns all steps, which include the times `t_eval`).
+    `system` (a `System`) replaces the plain model (used by the sensitivity equations). Raises RuntimeError with advice when it cannot finish.
     """
     rtol, atol_arr = _tolerances(mech, rtol, atol)
     if method not in METHODS:
@@ -267,26 +285,53 @@ def run(mech: SliderCrank, revolutions: int = 4, *, rtol: float | None = None,
     if not isinstance(revolutions, (int, np.integer)) or revolutions < 1:
         raise ValueError(f"revolutions must be an integer >= 1; got {revolutions!r}")
     tab = METHODS[method]
-    p = pack_parameters(mech)
-    y0 = initial_state(mech)
     if edges is None:
         edges = window_edges(mech, int(revolutions))
     else:
         edges = np.ascontiguousarray(edges, dtype=float)
         if edges.ndim != 1 or len(edges) < 2 or edges[0] != 0.0 or np.any(np.diff(edges) <= 0):
             raise ValueError("edges must be increasing times starting at 0.0")
+    win_edges = edges
+    refine = 40
+    if t_eval is not None:
+        t_eval = np.asarray(t_eval, dtype=float)
+        if t_eval.ndim != 1 or np.any(np.diff(t_eval) <= 0) or t_eval[0] < 0 \
+                or t_eval[-1] > edges[-1] * (1 + 1e-12):
+            raise ValueError(f"t_eval must be increasing times within [0, {edges[-1]:.6g}] s")
+        edges = np.union1d(edges, t_eval)
+        edges = edges[np.concatenate([[True], np.diff(edges) > 1e-12 * edges[-1]])]
+        record = True
+        refine = 0
+    if system is None:
+        system = System(rhs, initial_state(mech), pack_parameters(mech), P_MODE, N_MEM, N_ERR,
+                        atol_arr, on_event)
+    fun, y0, p, mem_start, n_mem, n_err, atol_arr, action = system
     h_max = mech.period / 8 if h_max is None else float(h_max)
     event_tol = 1e-12 * mech.clearance if event_tol is None else float(event_tol)
     ts, ys, ms, peaks, peak_t, counters = integrate(
-        rhs, event, on_event, monitor, y0, p, N_MEM, edges, rtol, atol_arr, N_ERR,
-        float(h0), h_max, int(max_steps), bool(record), event_tol, int(n_samples),
-        tab.A, tab.B, tab.C, tab.E, tab.P, tab.error_order)
+        fun, event, action, monitor, y0, p, mem_start, n_mem, edges, rtol,
+        atol_arr, n_err, float(h0), h_max, int(max_steps), bool(record), event_tol,
+        int(n_samples), refine, tab.A, tab.B, tab.C, tab.E, tab.P, tab.error_order)
     status = int(counters[4])
     if status != 0:
         raise RuntimeError(f"reduced model integration failed at about t = "
                            f"{ts[-1] if len(ts) else float('nan'):.6g} s: "
                            f"{STATUS_MESSAGES[status]}")
+    if t_eval is not None and select:
+        keep = np.searchsorted(ts, t_eval)
+        keep = np.minimum(keep, len(ts) - 1)
+        ts, ys, ms = ts[keep], ys[keep], ms[keep]
+        mags = np.array([monitor(ts[i], ys[i], _with_memory(p, mem_start, ms[i]))
+                         for i in range(len(ts))])
+        peaks = np.array([mags[(ts >= a) & (ts <= b)].max(initial=0.0)
+                          for a, b in zip(win_edges[:-1], win_edges[1:])])
     return ts, ys, ms, peaks, peak_t, counters, p
+
+
+def _with_memory(p, mem_start, mem):
+    q = p.copy()
+    q[mem_start:mem_start + len(mem)] = mem
+    return q
 
 
 def _tolerances(mech, rtol, atol):
@@ -309,14 +354,24 @@ def counters_dict(counters) -> dict:
 
 
 def simulate_reduced(mech: SliderCrank, revolutions: int = 4, **options):
-    """Simulate with the reduced model and return a `Trajectory` (all accepted steps)."""
-    from .trajectory import Trajectory
-
+    """Simulate with the reduced model and return a `Trajectory` (all accepted steps, or the
+    times `t_eval` if given)."""
     ts, ys, ms, peaks, peak_t, counters, p = run(mech, revolutions, record=True, **options)
-    out = outputs(ts, ys, ms, p)
     stats = counters_dict(counters)
     stats.update(method=options.get("method", "dopri5"),
                  rtol=float(options.get("rtol") or DEFAULT_RTOL))
+    return trajectory_from_states(mech, ts, ys, ms, p, stats,
+                                  None if options.get("t_eval") is not None else peaks)
+
+
+def trajectory_from_states(mech, ts, ys, ms, p, stats, peaks):
+    """Build a `Trajectory` from recorded states [theta3, x4, theta3dot, x4dot, ..., W] and
+    memories [mode, dmin, ...]."""
+    from .trajectory import Trajectory
+
+    ys = np.ascontiguousarray(ys)
+    ms = np.ascontiguousarray(ms[:, :N_MEM])
+    out = outputs(ts, ys, ms, p)
     return Trajectory(
         t=ts,
         base_force=np.ascontiguousarray(out[:, 8:10]),
@@ -330,7 +385,7 @@ def simulate_reduced(mech: SliderCrank, revolutions: int = 4, **options):
         coupler_angle=ys[:, 0].copy(),
         coupler_rate=ys[:, 2].copy(),
         contact_phase=(ms[:, 0] > 0.5).astype(np.int8),
-        crank_work=ys[:, 4].copy(),
+        crank_work=ys[:, -1].copy(),
         mechanism=mech,
         backend="reduced",
         stats=stats,

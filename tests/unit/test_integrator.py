@@ -41,10 +41,11 @@ def minus_x(t, y, p):
 def run(rhs, event, action, monitor, y0, p, edges, rtol, method="dopri5", record=True,
         n_samples=3, h_max=10.0, n_mem=1):
     tab = METHODS[method]
-    return integrate(rhs, event, action, monitor, np.asarray(y0, float), np.asarray(p, float),
+    p = np.asarray(p, float)
+    return integrate(rhs, event, action, monitor, np.asarray(y0, float), p, len(p) - n_mem,
                      n_mem, np.asarray(edges, float), rtol, np.full(len(y0), rtol), len(y0),
-                     0.0, h_max, 10**6, record, 1e-14, n_samples, tab.A, tab.B, tab.C, tab.E,
-                     tab.P, tab.error_order)
+                     0.0, h_max, 10**6, record, 1e-14, n_samples, 40, tab.A, tab.B, tab.C,
+                     tab.E, tab.P, tab.error_order)
 
 
 @pytest.mark.parametrize("method", sorted(METHODS))

@@ -1,0 +1,204 @@
+"""Direct differentiation (paper Eqs. 16-17) of the reduced model: compiled kernels.
+
+The state y = [theta3, x4, theta3dot, x4dot] is augmented with its sensitivities
+s_k = dy/db_k for each requested design parameter b_k, integrated together with the state by
+the same compiled integrator (error control on state and sensitivities):
+
+    d/dt s_k = (df/dy) s_k + (df/dbeta) D[:, k] + (df/ddeltadot_minus) sigma_k,
+
+where beta are the kernel parameters (L2, L3, m2, m3, m4, J3, omega2, theta20, c, K, e, g,
+v_min), D = dbeta/db the chain-rule matrix of derived values (E and R_J into K and c, m3 and
+L3 into the uniform-rod J3, ...) and sigma_k = d(deltadot_minus)/db_k the sensitivity of the
+impact-velocity memory. The partial derivatives are exact: generated once with sympy
+(tools/generate_jacobians.py -> _jacobians.py).
+
+The state sensitivities do not jump at contact onset or separation because the force is zero
+at delta = 0 on both sides. The memory does: at an onset at time t_e, deltadot_minus =
+deltadot(t_e), so
+
+    sigma_k = d(deltadot)/db_k + deltadotdot * dt_e/db_k,   dt_e/db_k = -(d delta/db_k) / deltadot,
+
+the event-time term (switchable, to show that it matters). See docs/sensitivity.md.
+
+Layout of p: the reduced model's 17 entries (reduced.P_*), then P_NPAR, P_EVTERM, the
+memory sensitivities sigma (npar) and the chain matrix D (13 x npar, row-major). The
+recorded memory is p[P_MODE : P_SIGMA + npar]. y = [4 states, 4 npar sensitivities, W].
+"""
+
+from __future__ import annotations
+
+import numba as nb
+import numpy as np
+
+from ._jacobians import contact_branch, free_branch
+from .contact import hysteresis_factor
+from .integrator import ACTION_SIG, RHS_SIG
+from .reduced import (
+    P_C,
+    P_DMIN,
+    P_E,
+    P_G,
+    P_J3,
+    P_K,
+    P_L2,
+    P_L3,
+    P_M2,
+    P_M3,
+    P_M4,
+    P_MODE,
+    P_MODEL,
+    P_TH0,
+    P_VFLOOR,
+    P_W,
+    geometry,
+)
+
+P_NPAR = 17
+P_EVTERM = 18
+P_SIGMA = 19
+N_BETA = 13
+#: kernel parameters beta, in the row order of the chain matrix D
+BETA_NAMES = ("L2", "L3", "m2", "m3", "m4", "J3", "omega2", "theta20", "c", "K", "e", "g",
+              "v_min")
+B_L2, B_L3, B_M2, B_M3, B_M4, B_J3, B_W, B_TH0, B_C, B_K, B_E, B_G, B_VMIN = range(N_BETA)
+# column of beta in the generated Jacobian's input vector z (-1: not an input)
+_Z_COL = np.array([6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, -1])
+Z_DMIN = 5
+# rows of the generated outputs
+O_TH3DD, O_X4DD, O_F12X, O_F12Y, O_M2, O_F, O_DELTA, O_DELTADOT = range(8)
+
+
+def d_offset(npar: int) -> int:
+    """Index in p where the chain matrix D starts."""
+    return P_SIGMA + npar
+
+
+@nb.njit(cache=True)
+def _evaluate(t, y, p, o, jac):
+    """Outputs and Jacobian at (t, y) in the branch of the current contact mode."""
+    xi, _ = hysteresis_factor(p[P_E], int(p[P_MODEL]))
+    z = np.empty(18)
+    z[0] = t
+    z[1] = y[0]
+    z[2] = y[1]
+    z[3] = y[2]
+    z[4] = y[3]
+    z[5] = p[P_DMIN]
+    z[6] = p[P_L2]
+    z[7] = p[P_L3]
+    z[8] = p[P_M2]
+    z[9] = p[P_M3]
+    z[10] = p[P_M4]
+    z[11] = p[P_J3]
+    z[12] = p[P_W]
+    z[13] = p[P_TH0]
+    z[14] = p[P_C]
+    z[15] = p[P_K]
+    z[16] = xi
+    z[17] = p[P_G]
+    in_contact = False
+    if p[P_MODE] > 0.5:
+        # the contact branch is only valid (real) for delta > 0
+        delta = geometry(t, y, p)[3]
+        if delta > 0.0:
+            contact_branch(z, o, jac)
+            in_contact = o[O_F] > 0.0   # else clamped: force and derivatives are zero
+    if not in_contact:
+        free_branch(z, o, jac)
+
+
+@nb.njit(cache=True)
+def _directional(jac, row, y, p, k, npar, dxi):
+    """Total derivative of output `row` along parameter k at fixed time."""
+    base = 4 + 4 * k
+    acc = (jac[row, 1] * y[base] + jac[row, 2] * y[base + 1] + jac[row, 3] * y[base + 2]
+           + jac[row, 4] * y[base + 3] + jac[row, Z_DMIN] * p[P_SIGMA + k])
+    d0 = P_SIGMA + npar
+    for b in range(N_BETA):
+        dk = p[d0 + b * npar + k]
+        if dk != 0.0:
+            col = _Z_COL[b]
+            if b == B_E:
+                acc += jac[row, col] * dxi * dk
+            elif col >= 0:
+                acc += jac[row, col] * dk
+    return acc
+
+
+@nb.njit(RHS_SIG, cache=True)
+def rhs_sens(t, y, p, dydt):
+    """State, sensitivity and work derivatives."""
+    npar = int(p[P_NPAR])
+    o = np.empty(8)
+    jac = np.empty((8, 18))
+    _evaluate(t, y, p, o, jac)
+    _, dxi = hysteresis_factor(p[P_E], int(p[P_MODEL]))
+    dydt[0] = y[2]
+    dydt[1] = y[3]
+    dydt[2] = o[O_TH3DD]
+    dydt[3] = o[O_X4DD]
+    for k in range(npar):
+        base = 4 + 4 * k
+        dydt[base] = y[base + 2]
+        dydt[base + 1] = y[base + 3]
+        dydt[base + 2] = _directional(jac, O_TH3DD, y, p, k, npar, dxi)
+        dydt[base + 3] = _directional(jac, O_X4DD, y, p, k, npar, dxi)
+    dydt[4 + 4 * npar] = o[O_M2] * p[P_W]
+
+
+@nb.njit(ACTION_SIG, cache=True)
+def on_event_sens(t, y, p):
+    """Contact switch with the impact-velocity memory and its sensitivity (event-time term)."""
+    if p[P_MODE] > 0.5:
+        p[P_MODE] = 0.0
+        return
+    npar = int(p[P_NPAR])
+    o = np.empty(8)
+    jac = np.empty((8, 18))
+    _evaluate(t, y, p, o, jac)          # free branch: F = 0 at the onset
+    _, dxi = hysteresis_factor(p[P_E], int(p[P_MODEL]))
+    rate = o[O_DELTADOT]
+    p[P_MODE] = 1.0
+    if rate > p[P_VFLOOR]:
+        p[P_DMIN] = rate
+        # d(deltadot)/dt along the motion
+        accel = (jac[O_DELTADOT, 0] + jac[O_DELTADOT, 1] * y[2] + jac[O_DELTADOT, 2] * y[3]
+                 + jac[O_DELTADOT, 3] * o[O_TH3DD] + jac[O_DELTADOT, 4] * o[O_X4DD])
+        for k in range(npar):
+            d_rate = _directional(jac, O_DELTADOT, y, p, k, npar, dxi)
+            if p[P_EVTERM] > 0.5:
+                d_pen = _directional(jac, O_DELTA, y, p, k, npar, dxi)
+                d_rate += accel * (-d_pen / rate)
+            p[P_SIGMA + k] = d_rate
+    else:
+        p[P_DMIN] = p[P_VFLOOR]
+        d0 = P_SIGMA + npar
+        for k in range(npar):
+            p[P_SIGMA + k] = p[d0 + B_VMIN * npar + k]
+
+
+@nb.njit(cache=True)
+def sens_outputs(ts, ys, ms, p):
+    """Outputs (F12x, F12y, M2, F) and their sensitivities at recorded steps.
+
+    ms are the recorded memories p[P_MODE : P_SIGMA + npar]. Returns (values (n, 4),
+    sensitivities (n, 4, npar)).
+    """
+    npar = int(p[P_NPAR])
+    q = p.copy()
+    o = np.empty(8)
+    jac = np.empty((8, 18))
+    vals = np.empty((ts.shape[0], 4))
+    sens = np.empty((ts.shape[0], 4, npar))
+    rows = (O_F12X, O_F12Y, O_M2, O_F)
+    for i in range(ts.shape[0]):
+        for m in range(ms.shape[1]):
+            q[P_MODE + m] = ms[i, m]
+        _evaluate(ts[i], ys[i], q, o, jac)
+        _, dxi = hysteresis_factor(q[P_E], int(q[P_MODEL]))
+        for r in range(4):
+            vals[i, r] = o[rows[r]]
+            for k in range(npar):
+                sens[i, r, k] = _directional(jac, rows[r], ys[i], q, k, npar, dxi)
+    return vals, sens
+

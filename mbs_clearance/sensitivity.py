@@ -1,0 +1,410 @@
+"""Design sensitivities of the base reaction force (paper Section 3, Figs. 4-6).
+
+`sensitivities(mech, parameters, method="ddm")` integrates the direct-differentiation
+equations of the reduced model (kernels in `ddm.py`); ``method="fd"`` takes central finite
+differences through any backend, with the runs in parallel.
+"""
+
+from __future__ import annotations
+
+import time
+from concurrent.futures import Executor, ProcessPoolExecutor
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from . import ddm, reduced
+from .contact import stiffness_eq9_partials
+from .mechanism import CONTINUOUS_FIELDS, SliderCrank, check_field_names
+from .trajectory import Trajectory
+
+__all__ = ["Sensitivities", "sensitivities", "DEFAULT_PARAMETERS", "chain_matrix",
+           "reference_value", "fd_step"]
+
+#: the paper's set of design parameters (Figs. 4-6)
+DEFAULT_PARAMETERS = ("crank_length", "coupler_length", "coupler_mass", "slider_mass",
+                      "contact_stiffness", "youngs_modulus", "journal_radius", "restitution")
+
+#: relative floor of the normalization of Eq. 15: |F12| is replaced by
+#: max(|F12|, NORMALIZATION_FLOOR * max_t |F12|) so the ratio stays finite near |F12| = 0
+NORMALIZATION_FLOOR = 0.01
+
+#: relative finite-difference step (central differences, error O(h^2) against the
+#: integration noise rtol / h; see docs/sensitivity.md)
+FD_RELATIVE_STEP = 3e-5
+
+
+@dataclass(frozen=True)
+class Sensitivities:
+    """Derivatives of the outputs with respect to named SliderCrank fields.
+
+    Attributes
+    ----------
+    t : (n,) s
+    parameters : tuple of p field names
+    reference : (p,) the parameter values b0 (derived values where the field is None)
+    base_force : (n, 2, p) dF12/db
+    base_force_magnitude : (n, p) d|F12|/db
+    crank_moment : (n, p) dM2/db
+    contact_force : (n, p) dF/db
+    trajectory : the nominal Trajectory on the same time grid
+    method, backend : how they were computed
+    growth : (revolutions, p) max over each revolution of the normalized state-sensitivity
+        norm; it stays bounded in periodic motion and grows without bound in chaotic motion
+    stats : solver counters and settings
+    """
+
+    t: np.ndarray
+    parameters: tuple[str, ...]
+    reference: np.ndarray
+    base_force: np.ndarray
+    base_force_magnitude: np.ndarray
+    crank_moment: np.ndarray
+    contact_force: np.ndarray
+    trajectory: Trajectory
+    method: str
+    backend: str
+    growth: np.ndarray | None = None
+    stats: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def normalized(self) -> np.ndarray:
+        """Eq. 15 for |F12|: (d|F12|/db) b0 / |F12|, shape (n, p).
+
+        |F12| in the denominator is floored at NORMALIZATION_FLOOR times its maximum over
+        the trajectory, so the ratio stays finite where the force passes near zero.
+        """
+        mag = self.trajectory.base_force_magnitude
+        denom = np.maximum(mag, NORMALIZATION_FLOOR * mag.max())
+        return self.base_force_magnitude * self.reference[None, :] / denom[:, None]
+
+    def revolution_mask(self, revolution: int) -> np.ndarray:
+        """Boolean mask of the samples in crank revolution `revolution` (1-based)."""
+        return self.trajectory.revolution_mask(revolution)
+
+    @property
+    def growth_rate(self) -> np.ndarray:
+        """Per parameter, the factor by which the sensitivity norm grows per revolution over
+        the last two revolutions (about 1 for periodic motion, >> 1 for chaotic motion)."""
+        if self.growth is None or len(self.growth) < 3:
+            return np.full(len(self.parameters), np.nan)
+        return np.sqrt(self.growth[-1] / np.maximum(self.growth[-3], 1e-300))
+
+    @property
+    def chaotic(self) -> bool:
+        """True when the sensitivities grow by more than 10 times per revolution: the motion
+        is not periodic and trajectory derivatives are meaningless (see docs)."""
+        rate = self.growth_rate
+        return bool(np.any(np.isfinite(rate) & (rate > 10.0)))
+
+    def column(self, name: str) -> int:
+        """Index of parameter `name`."""
+        if name not in self.parameters:
+            raise ValueError(f"parameter {name!r} not computed; have {list(self.parameters)}")
+        return self.parameters.index(name)
+
+
+def _check_parameters(parameters) -> tuple[str, ...]:
+    names = tuple(DEFAULT_PARAMETERS if parameters is None else parameters)
+    if isinstance(parameters, str):
+        names = (parameters,)
+    if not names:
+        raise ValueError("parameters must name at least one SliderCrank field")
+    check_field_names(names, CONTINUOUS_FIELDS)
+    if len(set(names)) != len(names):
+        raise ValueError(f"parameters must not repeat a name; got {list(names)}")
+    return names
+
+
+def reference_value(mech: SliderCrank, name: str) -> float:
+    """Value b0 of a design parameter (the derived value where the field is None)."""
+    derived = {"contact_stiffness": mech.stiffness,
+               "crank_inertia": mech.crank_inertia_value,
+               "coupler_inertia": mech.coupler_inertia_value}
+    if name in derived:
+        return float(derived[name])
+    return float(getattr(mech, name))
+
+
+def chain_matrix(mech: SliderCrank, names: tuple[str, ...]) -> np.ndarray:
+    """D[beta, k] = d beta / d b_k: kernel parameters beta (ddm.BETA_NAMES) against the
+    named SliderCrank fields, with the chain rule of derived values."""
+    D = np.zeros((ddm.N_BETA, len(names)))
+    K_derived = mech.contact_stiffness is None
+    J3_derived = mech.coupler_inertia is None
+    _, dK_drj, dK_drb, dK_dE, dK_dnu = stiffness_eq9_partials(
+        mech.journal_radius, mech.bearing_radius, mech.youngs_modulus, mech.poisson_ratio)
+    L3, m3 = mech.coupler_length, mech.coupler_mass
+    for k, name in enumerate(names):
+        col = D[:, k]
+        if name == "crank_length":
+            col[ddm.B_L2] = 1.0
+        elif name == "coupler_length":
+            col[ddm.B_L3] = 1.0
+            if J3_derived:
+                col[ddm.B_J3] = m3 * L3 / 6.0
+        elif name == "crank_mass":
+            col[ddm.B_M2] = 1.0
+        elif name == "coupler_mass":
+            col[ddm.B_M3] = 1.0
+            if J3_derived:
+                col[ddm.B_J3] = L3**2 / 12.0
+        elif name == "slider_mass":
+            col[ddm.B_M4] = 1.0
+        elif name == "coupler_inertia":
+            col[ddm.B_J3] = 1.0
+        elif name == "crank_inertia":
+            pass  # no effect at constant crank speed
+        elif name == "crank_speed":
+            col[ddm.B_W] = 1.0
+        elif name == "initial_crank_angle":
+            col[ddm.B_TH0] = 1.0
+        elif name == "bearing_radius":
+            col[ddm.B_C] = 1.0
+            if K_derived:
+                col[ddm.B_K] = dK_drb
+        elif name == "journal_radius":
+            col[ddm.B_C] = -1.0
+            if K_derived:
+                col[ddm.B_K] = dK_drj
+        elif name == "youngs_modulus":
+            col[ddm.B_K] = dK_dE if K_derived else 0.0
+        elif name == "poisson_ratio":
+            col[ddm.B_K] = dK_dnu if K_derived else 0.0
+        elif name == "restitution":
+            col[ddm.B_E] = 1.0
+        elif name == "contact_stiffness":
+            col[ddm.B_K] = 1.0
+        elif name == "gravity":
+            col[ddm.B_G] = 1.0
+        elif name == "impact_velocity_floor":
+            col[ddm.B_VMIN] = 1.0
+        else:  # pragma: no cover - guarded by _check_parameters
+            raise ValueError(f"no sensitivity for {name!r}")
+    return D
+
+
+def _initial_state_beta(L2, L3, w, th0):
+    s3 = -L2 * np.sin(th0) / L3
+    th3 = np.arcsin(s3)
+    c3 = np.cos(th3)
+    th3d = -L2 * w * np.cos(th0) / (L3 * c3)
+    x4 = L2 * np.cos(th0) + L3 * c3
+    x4d = -L2 * w * np.sin(th0) - L3 * th3d * s3
+    return np.array([th3, x4, th3d, x4d])
+
+
+def _initial_sensitivities(mech: SliderCrank, D: np.ndarray) -> np.ndarray:
+    """ds(0)/db (4, p) by complex step on the initial state (exact to rounding)."""
+    args = [mech.crank_length, mech.coupler_length, mech.crank_speed,
+            mech.initial_crank_angle]
+    rows = [ddm.B_L2, ddm.B_L3, ddm.B_W, ddm.B_TH0]
+    dy_dbeta = np.zeros((4, ddm.N_BETA))
+    h = 1e-30
+    for j, row in enumerate(rows):
+        a = [complex(v) for v in args]
+        a[j] += 1j * h
+        dy_dbeta[:, row] = np.imag(_initial_state_beta(*a)) / h
+    return dy_dbeta @ D
+
+
+def _ddm(mech, names, revolutions, rtol, t_eval, event_time_term, method):
+    npar = len(names)
+    D = chain_matrix(mech, names)
+    ref = np.array([reference_value(mech, n) for n in names])
+    base = reduced.pack_parameters(mech)
+    sigma0 = D[ddm.B_VMIN].copy()
+    p = np.concatenate([base, [npar, 1.0 if event_time_term else 0.0], sigma0, D.ravel()])
+    y_state = reduced.initial_state(mech)
+    s0 = _initial_sensitivities(mech, D)
+    y0 = np.concatenate([y_state[:4], s0.T.ravel(), [0.0]])
+    rtol_v = reduced.DEFAULT_RTOL if rtol is None else rtol
+    atol_state = reduced.default_atol(mech, rtol_v)[:4]
+    scale = np.where(ref != 0.0, np.abs(ref), 1.0)
+    atol = np.concatenate([atol_state] + [atol_state / s for s in scale] + [[1.0]])
+    n_err = 4 + 4 * npar
+    system = reduced.System(ddm.rhs_sens, y0, p, reduced.P_MODE, 4 + npar, n_err, atol,
+                            ddm.on_event_sens)
+    t0 = time.perf_counter()
+    ts, ys, ms, peaks, _, counters, p = reduced.run(
+        mech, revolutions, rtol=rtol_v, method=method, t_eval=t_eval, system=system,
+        select=False)
+    # growth diagnostic on all steps: normalized state sensitivities per revolution
+    ref_scale = np.where(ref != 0.0, ref, 1.0)
+    s = ys[:, 4:4 + 4 * npar].reshape(len(ts), npar, 4)
+    state_scale = np.array([1.0, mech.clearance, mech.crank_speed,
+                            mech.crank_speed * mech.clearance / mech.crank_length])
+    norm = np.sqrt(np.sum((s * ref_scale[None, :, None] / state_scale[None, None, :]) ** 2,
+                          axis=2))
+    period = mech.period
+    growth = np.array([norm[(ts >= (k - 1) * period) & (ts <= k * period)].max(axis=0)
+                       for k in range(1, revolutions + 1)])
+    if t_eval is not None:
+        keep = np.minimum(np.searchsorted(ts, t_eval), len(ts) - 1)
+        ts, ys, ms = ts[keep], ys[keep], ms[keep]
+    vals, sens = ddm.sens_outputs(ts, np.ascontiguousarray(ys), np.ascontiguousarray(ms), p)
+    stats = reduced.counters_dict(counters)
+    stats.update(rtol=rtol_v, method=method, wall_time=time.perf_counter() - t0,
+                 event_time_term=event_time_term)
+    traj = reduced.trajectory_from_states(
+        mech, ts, np.ascontiguousarray(ys[:, [0, 1, 2, 3, -1]]), ms, base, stats,
+        None if t_eval is not None else peaks)
+    fx, fy = vals[:, 0], vals[:, 1]
+    mag = np.hypot(fx, fy)
+    dmag = (fx[:, None] * sens[:, 0, :] + fy[:, None] * sens[:, 1, :]) / np.maximum(
+        mag, 1e-300)[:, None]
+    return Sensitivities(
+        t=ts, parameters=names, reference=ref, base_force=np.ascontiguousarray(sens[:, :2, :]),
+        base_force_magnitude=dmag, crank_moment=sens[:, 2, :].copy(),
+        contact_force=sens[:, 3, :].copy(), trajectory=traj, method="ddm", backend="reduced",
+        growth=growth, stats=stats)
+
+
+def fd_step(mech: SliderCrank, name: str, relative: float = FD_RELATIVE_STEP) -> float:
+    """Central-difference step for parameter `name`.
+
+    `relative` times the parameter value, except for the radii, whose step is relative to
+    the clearance (they enter through R_B - R_J), and for zero-valued angles (1 rad scale)
+    and gravity (9.81 m/s^2 scale).
+    """
+    if name in ("journal_radius", "bearing_radius"):
+        return relative * mech.clearance
+    value = abs(reference_value(mech, name))
+    if value == 0.0:
+        return relative * (9.81 if name == "gravity" else 1.0)
+    return relative * value
+
+
+def _fd_run(args):
+    """One perturbed simulation (module level: picklable for process pools)."""
+    from .simulate import simulate
+
+    mech, revolutions, backend, options = args
+    traj = simulate(mech, revolutions, backend=backend, **options)
+    return (traj.t, traj.base_force, traj.crank_moment, traj.contact_force)
+
+
+def _fd(mech, names, revolutions, backend, t_eval, rtol, fd_relative_step, executor, n_jobs,
+        options):
+    from .simulate import simulate
+
+    options = dict(options)
+    if backend == "reduced":
+        options["rtol"] = 1e-11 if rtol is None else rtol
+        if t_eval is None:
+            t_eval = np.linspace(0.0, revolutions * mech.period, 720 * revolutions + 1)
+        options["t_eval"] = t_eval
+    elif t_eval is not None:
+        raise ValueError("t_eval is only supported by the reduced backend; the exudyn "
+                         "backend reports its own fixed time steps")
+    steps = [fd_step(mech, n, fd_relative_step) for n in names]
+    jobs = []
+    for name, h in zip(names, steps):
+        b0 = reference_value(mech, name)
+        for sign in (1.0, -1.0):
+            try:
+                jobs.append((mech.replace(**{name: b0 + sign * h}), revolutions, backend,
+                             options))
+            except ValueError as exc:
+                raise ValueError(f"the finite-difference step of {name} ({h:.3g}) leaves its "
+                                 f"valid range: {exc}; pass a smaller fd_relative_step") from exc
+    t0 = time.perf_counter()
+    nominal = simulate(mech, revolutions, backend=backend, **options)
+    if executor is not None:
+        results = list(executor.map(_fd_run, jobs))
+    elif n_jobs == 1 or backend == "reduced":
+        results = [_fd_run(j) for j in jobs]
+    else:
+        with ProcessPoolExecutor(max_workers=n_jobs or 2) as pool:
+            results = list(pool.map(_fd_run, jobs))
+    n = len(nominal.t)
+    d_force = np.empty((n, 2, len(names)))
+    d_mag = np.empty((n, len(names)))
+    d_moment = np.empty((n, len(names)))
+    d_contact = np.empty((n, len(names)))
+    for k, h in enumerate(steps):
+        (t_p, f_p, m_p, c_p), (t_m, f_m, m_m, c_m) = results[2 * k], results[2 * k + 1]
+        if len(t_p) != n or len(t_m) != n or not (np.allclose(t_p, nominal.t, rtol=0,
+                                                              atol=1e-12)
+                                                  and np.allclose(t_m, nominal.t, rtol=0,
+                                                                  atol=1e-12)):
+            raise RuntimeError("perturbed runs returned different time grids")
+        d_force[:, :, k] = (f_p - f_m) / (2 * h)
+        d_mag[:, k] = (np.hypot(*f_p.T) - np.hypot(*f_m.T)) / (2 * h)
+        d_moment[:, k] = (m_p - m_m) / (2 * h)
+        d_contact[:, k] = (c_p - c_m) / (2 * h)
+    stats = {"fd_steps": steps, "runs": 2 * len(names) + 1,
+             "wall_time": time.perf_counter() - t0}
+    return Sensitivities(
+        t=nominal.t, parameters=names,
+        reference=np.array([reference_value(mech, n) for n in names]),
+        base_force=d_force, base_force_magnitude=d_mag, crank_moment=d_moment,
+        contact_force=d_contact, trajectory=nominal, method="fd", backend=backend, stats=stats)
+
+
+def sensitivities(mech: SliderCrank, parameters=None, revolutions: int = 4,
+                  method: str = "ddm", backend: str = "reduced", *,
+                  t_eval: np.ndarray | None = None, rtol: float | None = None,
+                  event_time_term: bool = True, fd_relative_step: float = FD_RELATIVE_STEP,
+                  executor: Executor | None = None, n_jobs: int | None = None,
+                  integrator: str = "dopri5", **options) -> Sensitivities:
+    """Sensitivities of the outputs to named SliderCrank fields.
+
+    Parameters
+    ----------
+    mech : SliderCrank
+    parameters : sequence of str, optional
+        Continuous SliderCrank fields; default `DEFAULT_PARAMETERS` (the paper's set).
+    revolutions : int
+        Crank revolutions simulated from t = 0.
+    method : {"ddm", "fd"}
+        Direct differentiation (reduced model only) or central finite differences (any
+        backend; 2 p + 1 runs, in parallel).
+    backend : str
+        Model for ``method="fd"``: "reduced" or "exudyn".
+    t_eval : (m,) array, optional
+        Times (s) at which to report (reduced backend; the integrator lands on them).
+    rtol : float, optional
+        Relative tolerance of the reduced model (DDM: default 1e-7; FD: default 1e-11).
+    event_time_term : bool
+        DDM only: include the event-time term of the impact-velocity sensitivity. Only for
+        demonstrating that it matters; leave it True.
+    fd_relative_step : float
+        FD only: relative step, see `fd_step`.
+    executor, n_jobs :
+        FD only: a concurrent.futures-style executor for the perturbed runs, or the number
+        of local worker processes (Exudyn runs default to 2; reduced runs run serially).
+    integrator : str
+        Method of the compiled integrator for the reduced model ("dopri5", "bs3").
+    **options :
+        Backend options passed to `simulate` (FD), e.g. ``step_size`` for Exudyn.
+
+    Returns
+    -------
+    Sensitivities
+    """
+    names = _check_parameters(parameters)
+    if method not in ("ddm", "fd"):
+        raise ValueError(f"method must be 'ddm' or 'fd'; got {method!r}")
+    if not isinstance(revolutions, int) or revolutions < 1:
+        raise ValueError(f"revolutions must be an integer >= 1; got {revolutions!r}")
+    if not (isinstance(fd_relative_step, float) and 0 < fd_relative_step < 0.1):
+        raise ValueError(f"fd_relative_step must be in (0, 0.1); got {fd_relative_step!r}")
+    from .simulate import BACKENDS
+
+    if backend not in BACKENDS:
+        raise ValueError(f"backend must be one of {sorted(BACKENDS)}; got {backend!r}")
+    if method == "ddm":
+        if backend != "reduced":
+            raise ValueError("method='ddm' needs backend='reduced' (the direct "
+                             "differentiation equations are those of the reduced model); use "
+                             "method='fd' for other backends")
+        if options:
+            raise ValueError(f"unknown option(s) for method='ddm': {sorted(options)}")
+        return _ddm(mech, names, revolutions, rtol, t_eval, event_time_term, integrator)
+    if integrator != "dopri5" and backend == "reduced":
+        options["method"] = integrator
+    return _fd(mech, names, revolutions, backend, t_eval, rtol, fd_relative_step, executor,
+               n_jobs, options)
+
