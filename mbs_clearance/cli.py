@@ -80,6 +80,42 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_sensitivity(args: argparse.Namespace) -> int:
+    from .sensitivity import DEFAULT_PARAMETERS, sensitivities
+
+    mech = mechanism_from_args(args)
+    names = tuple(args.parameters.split(",")) if args.parameters else DEFAULT_PARAMETERS
+    options = {}
+    if args.step_size is not None:
+        options["step_size"] = args.step_size
+    print(f"sensitivities of |F12| to {len(names)} parameters by {args.method} "
+          f"({args.backend}), {args.revolutions} revolutions ...", file=sys.stderr, flush=True)
+    t0 = time.perf_counter()
+    sens = sensitivities(mech, names, args.revolutions, method=args.method,
+                         backend=args.backend, rtol=args.rtol, **options)
+    print(f"done in {time.perf_counter() - t0:.3g} s", file=sys.stderr)
+    print(f"{'parameter':<22} {'b0':>12} {'mean |S|':>10} {'max |S|':>10} {'growth/rev':>10}")
+    for row in sens.summary():
+        print(f"{row['parameter']:<22} {row['reference']:>12.5g} "
+              f"{row['mean_abs_normalized']:>10.4g} {row['max_abs_normalized']:>10.4g} "
+              f"{row['growth_per_revolution']:>10.3g}")
+    if sens.chaotic:
+        print("WARNING: the sensitivities grow from revolution to revolution: the motion is "
+              "not periodic (chaotic or transient) and these derivatives are not meaningful; "
+              "reduce the clearance or the speed.", file=sys.stderr)
+    if args.out:
+        from .plotting import SENSITIVITY_FIGURES, plot_sensitivities
+
+        args.out.mkdir(parents=True, exist_ok=True)
+        sens.save(args.out / "sensitivities.npz")
+        for stem, (title, group) in SENSITIVITY_FIGURES.items():
+            group = [g for g in group if g in sens.parameters]
+            if group:
+                plot_sensitivities(sens, group, title, path=args.out / f"{stem}.png")
+        print(f"sensitivities.npz and figures written to {args.out}", file=sys.stderr)
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="mbs-clearance",
@@ -100,6 +136,22 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--plot", type=Path, help="figure file, e.g. simulate.png")
     add_mechanism_options(p)
     p.set_defaults(func=_cmd_simulate)
+
+    p = sub.add_parser("sensitivity", help="design sensitivities of the base force (Figs. 4-6)",
+                       description="Sensitivities of |F12| by direct differentiation (reduced "
+                                   "model) or finite differences (any backend); prints mean "
+                                   "and max normalized sensitivity (Eq. 15) over the last "
+                                   "revolution and writes Fig. 4-6-like plots.")
+    p.add_argument("--parameters", help="comma-separated SliderCrank fields "
+                                        "(default: the paper's eight)")
+    p.add_argument("--method", choices=("ddm", "fd"), default="ddm")
+    p.add_argument("--backend", choices=sorted(BACKENDS), default="reduced")
+    p.add_argument("--revolutions", type=int, default=4)
+    p.add_argument("--rtol", type=float, help="relative tolerance (reduced backend)")
+    p.add_argument("--step-size", type=float, help="time step in s (exudyn backend)")
+    p.add_argument("--out", type=Path, help="folder for sensitivities.npz and figures")
+    add_mechanism_options(p)
+    p.set_defaults(func=_cmd_sensitivity)
     return parser
 
 

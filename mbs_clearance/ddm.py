@@ -30,8 +30,8 @@ from __future__ import annotations
 import numba as nb
 import numpy as np
 
-from ._jacobians import contact_branch, free_branch
-from .contact import hysteresis_factor
+from ._jacobians import contact_accel, contact_branch, free_accel, free_branch
+from .contact import contact_force, hysteresis_factor
 from .integrator import ACTION_SIG, RHS_SIG
 from .reduced import (
     P_C,
@@ -74,8 +74,11 @@ def d_offset(npar: int) -> int:
 
 
 @nb.njit(cache=True)
-def _evaluate(t, y, p, o, jac):
-    """Outputs and Jacobian at (t, y) in the branch of the current contact mode."""
+def _evaluate(t, y, p, o, jac, full):
+    """Outputs and Jacobian at (t, y) in the branch of the current contact mode.
+
+    full=False computes only the rows theta3dd and x4dd (all the right-hand side needs).
+    """
     xi, _ = hysteresis_factor(p[P_E], int(p[P_MODEL]))
     z = np.empty(18)
     z[0] = t
@@ -98,13 +101,20 @@ def _evaluate(t, y, p, o, jac):
     z[17] = p[P_G]
     in_contact = False
     if p[P_MODE] > 0.5:
-        # the contact branch is only valid (real) for delta > 0
-        delta = geometry(t, y, p)[3]
-        if delta > 0.0:
+        # the contact branch is only valid (real) for delta > 0 and F > 0 (else clamped:
+        # force and derivatives are zero)
+        _, _, _, delta, rate, _, _ = geometry(t, y, p)
+        in_contact = contact_force(delta, rate, p[P_DMIN], p[P_K], p[P_E],
+                                   int(p[P_MODEL])) > 0.0
+    if in_contact:
+        if full:
             contact_branch(z, o, jac)
-            in_contact = o[O_F] > 0.0   # else clamped: force and derivatives are zero
-    if not in_contact:
+        else:
+            contact_accel(z, o, jac)
+    elif full:
         free_branch(z, o, jac)
+    else:
+        free_accel(z, o, jac)
 
 
 @nb.njit(cache=True)
@@ -131,7 +141,7 @@ def rhs_sens(t, y, p, dydt):
     npar = int(p[P_NPAR])
     o = np.empty(8)
     jac = np.empty((8, 18))
-    _evaluate(t, y, p, o, jac)
+    _evaluate(t, y, p, o, jac, False)
     _, dxi = hysteresis_factor(p[P_E], int(p[P_MODEL]))
     dydt[0] = y[2]
     dydt[1] = y[3]
@@ -143,7 +153,9 @@ def rhs_sens(t, y, p, dydt):
         dydt[base + 1] = y[base + 3]
         dydt[base + 2] = _directional(jac, O_TH3DD, y, p, k, npar, dxi)
         dydt[base + 3] = _directional(jac, O_X4DD, y, p, k, npar, dxi)
-    dydt[4 + 4 * npar] = o[O_M2] * p[P_W]
+    # the work quadrature is not needed for sensitivities; M2 is not computed by the
+    # acceleration-only Jacobian
+    dydt[4 + 4 * npar] = 0.0
 
 
 @nb.njit(ACTION_SIG, cache=True)
@@ -155,7 +167,7 @@ def on_event_sens(t, y, p):
     npar = int(p[P_NPAR])
     o = np.empty(8)
     jac = np.empty((8, 18))
-    _evaluate(t, y, p, o, jac)          # free branch: F = 0 at the onset
+    _evaluate(t, y, p, o, jac, True)    # free branch: F = 0 at the onset
     _, dxi = hysteresis_factor(p[P_E], int(p[P_MODEL]))
     rate = o[O_DELTADOT]
     p[P_MODE] = 1.0
@@ -194,7 +206,7 @@ def sens_outputs(ts, ys, ms, p):
     for i in range(ts.shape[0]):
         for m in range(ms.shape[1]):
             q[P_MODE + m] = ms[i, m]
-        _evaluate(ts[i], ys[i], q, o, jac)
+        _evaluate(ts[i], ys[i], q, o, jac, True)
         _, dxi = hysteresis_factor(q[P_E], int(q[P_MODEL]))
         for r in range(4):
             vals[i, r] = o[rows[r]]

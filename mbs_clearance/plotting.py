@@ -14,7 +14,7 @@ from matplotlib.figure import Figure
 
 from .trajectory import Trajectory
 
-__all__ = ["plot_trajectory", "plot_overlay", "save"]
+__all__ = ["plot_trajectory", "plot_overlay", "plot_sensitivities", "SENSITIVITY_FIGURES", "save"]
 
 COLORS = ["C0", "C3", "C2", "C1", "C4", "C5"]
 
@@ -85,3 +85,50 @@ def plot_trajectory(traj: Trajectory, path: str | Path | None = None,
     title = (f"{traj.backend}: clearance {m.clearance * 1e3:.3g} mm, "
              f"{m.crank_speed_rpm:.0f} rpm, e = {m.restitution:g}")
     return plot_overlay([traj], [traj.backend], revolution=revolution, path=path, title=title)
+
+
+#: the paper's grouping of the sensitivity figures
+SENSITIVITY_FIGURES = {
+    "fig4_kinematic": ("Fig. 4: kinematic properties",
+                       ("crank_length", "coupler_length", "coupler_mass", "slider_mass")),
+    "fig5_contact": ("Fig. 5: contact properties",
+                     ("contact_stiffness", "youngs_modulus", "restitution")),
+    "fig6_journal": ("Fig. 6: journal radius (clearance)", ("journal_radius",)),
+}
+
+
+def plot_sensitivities(sens, parameters: Sequence[str], title: str = "",
+                       revolution: int | None = None,
+                       zooms: Sequence[tuple[float, float]] = ((50, 70), (170, 190),
+                                                                (290, 310)),
+                       path: str | Path | None = None) -> Figure:
+    """Normalized sensitivity of |F12| (Eq. 15) over one crank revolution and zoomed windows,
+    like the paper's Figs. 4-6. `sens` is a `Sensitivities`; `zooms` are crank-angle windows
+    in degrees."""
+    rev = revolution or sens.trajectory.revolutions
+    mask = sens.revolution_mask(rev)
+    ang = np.degrees(sens.trajectory.crank_angle[mask]) - 360.0 * (rev - 1)
+    fig = Figure(figsize=(11, 7), layout="constrained")
+    grid = fig.add_gridspec(2, len(zooms))
+    main = fig.add_subplot(grid[0, :])
+    zoom_axes = [fig.add_subplot(grid[1, i]) for i in range(len(zooms))]
+    for i, name in enumerate(parameters):
+        k = sens.column(name)
+        y = sens.normalized[mask, k]
+        col = COLORS[i % len(COLORS)]
+        main.plot(ang, y, color=col, lw=1.0, label=name)
+        for ax, (a, b) in zip(zoom_axes, zooms):
+            sel = (ang >= a) & (ang <= b)
+            ax.plot(ang[sel], y[sel], color=col, lw=1.0)
+    for a, b in zooms:
+        main.axvspan(a, b, color="0.85", zorder=0)
+    main.set(xlabel="crank angle in revolution (deg)",
+             ylabel="normalized sensitivity of |F12| (-)",
+             title=f"{title} ({sens.method}, revolution {rev})")
+    main.legend(fontsize=8, ncol=len(parameters))
+    for ax, (a, b) in zip(zoom_axes, zooms):
+        ax.set(xlabel="crank angle (deg)", ylabel="normalized sensitivity (-)",
+               title=f"zoom {a:g}-{b:g} deg")
+    for ax in [main, *zoom_axes]:
+        ax.grid(alpha=0.3)
+    return save(fig, path)

@@ -52,12 +52,14 @@ def derive(contact: bool):
 class _Printer(PythonCodePrinter):
     def _print_Pow(self, expr, rational=False):
         base, exp = expr.as_base_exp()
+        # max(., 0): the branch is chosen with the same penetration computed elsewhere, and
+        # rounding may leave delta a few ulps below zero here; the force is then ~0, not NaN
         if exp == sp.Rational(1, 2):
-            return f"math.sqrt({self._print(base)})"
+            return f"math.sqrt(max({self._print(base)}, 0.0))"
         if exp == sp.Rational(-1, 2):
             return f"(1.0 / math.sqrt({self._print(base)}))"
         if exp == sp.Rational(3, 2):
-            b = self._print(base)
+            b = f"max({self._print(base)}, 0.0)"
             return f"({b} * math.sqrt({b}))"
         if exp.is_Integer and 1 < abs(int(exp)) <= 4:
             b = self._print(base)
@@ -66,7 +68,7 @@ class _Printer(PythonCodePrinter):
         return super()._print_Pow(expr, rational=rational)
 
 
-def emit(name, z, out, jac):
+def emit(name, z, out, jac, doc):
     printer = _Printer({"fully_qualified_modules": True})
     exprs = list(out) + [jac[i, j] for i in range(jac.rows) for j in range(jac.cols)]
     reps, reduced_exprs = sp.cse(exprs, symbols=sp.numbered_symbols("x"), optimizations="basic")
@@ -75,7 +77,7 @@ def emit(name, z, out, jac):
     lines = [
         '@nb.njit(cache=True, error_model="numpy")',
         f"def {name}(z, o, jac):",
-        f'    """{name.split("_")[0]} branch: outputs o (8,) and Jacobian jac (8, 18)."""',
+        f'    """{doc}"""',
     ]
     for i, s in enumerate(z):
         lines.append(f"    {s} = z[{i}]")
@@ -108,7 +110,13 @@ O_NAMES = {tuple(OUTPUTS)!r}
     body = []
     for contact in (True, False):
         z, out, jac = derive(contact)
-        body.append(emit("contact_branch" if contact else "free_branch", z, out, jac))
+        branch = "contact" if contact else "free"
+        body.append(emit(f"{branch}_branch", z, out, jac,
+                         f"{branch.capitalize()} branch: outputs o (8,), Jacobian jac (8, 18)."))
+        # the right-hand side of the sensitivity equations needs only the accelerations
+        body.append(emit(f"{branch}_accel", z, out[:2, :], jac[:2, :],
+                         f"{branch.capitalize()} branch, rows theta3dd and x4dd only: "
+                         "o (2,), jac (2, 18)."))
     path = Path(__file__).resolve().parents[1] / "mbs_clearance" / "_jacobians.py"
     path.write_text(header + "\n\n\n".join(body) + "\n")
     print(f"wrote {path}")

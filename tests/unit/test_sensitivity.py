@@ -1,0 +1,140 @@
+"""Direct differentiation against finite differences, identities and the paper's findings."""
+
+import numpy as np
+import pytest
+
+from mbs_clearance import SliderCrank, reduced
+from mbs_clearance._jacobians import contact_branch, free_branch
+from mbs_clearance.contact import hysteresis_factor
+from mbs_clearance.sensitivity import DEFAULT_PARAMETERS, sensitivities
+
+
+@pytest.fixture(scope="module")
+def rev4(paper):
+    return np.linspace(3 * paper.period, 4 * paper.period, 721)
+
+
+@pytest.fixture(scope="module")
+def ddm(paper, rev4):
+    return sensitivities(paper, t_eval=rev4, rtol=1e-10)
+
+
+@pytest.fixture(scope="module")
+def fd(paper, rev4):
+    return sensitivities(paper, method="fd", t_eval=rev4)
+
+
+def _z(mech, t, y, dmin):
+    xi, _ = hysteresis_factor(mech.restitution, 0)
+    return np.array([t, y[0], y[1], y[2], y[3], dmin, mech.crank_length, mech.coupler_length,
+                     mech.crank_mass, mech.coupler_mass, mech.slider_mass,
+                     mech.coupler_inertia_value, mech.crank_speed, mech.initial_crank_angle,
+                     mech.clearance, mech.stiffness, xi, mech.gravity])
+
+
+@pytest.mark.parametrize("branch", [contact_branch, free_branch])
+def test_generated_jacobian_matches_hand_written_model_and_finite_differences(paper, branch):
+    """The sympy-generated outputs equal reduced.dynamics (written by hand) and every partial
+    derivative equals central differences (best of several steps: delta is ~1e-6 m)."""
+    ts, ys, ms, *_, p = reduced.run(paper, 2)
+    i = 3 * len(ts) // 4
+    assert ms[i, 0] == 1.0  # a state in contact
+    z = _z(paper, ts[i], ys[i], ms[i, 1])
+    o, jac = np.zeros(8), np.zeros((8, 18))
+    branch(z, o, jac)
+    if branch is contact_branch:
+        q = p.copy()
+        q[reduced.P_MODE], q[reduced.P_DMIN] = ms[i]
+        ref = np.array(reduced.dynamics(ts[i], ys[i], q))[[0, 1, 8, 9, 7, 2, 3, 4]]
+        np.testing.assert_allclose(o, ref, rtol=1e-12, atol=1e-12 * np.abs(ref).max())
+    for j in range(18):
+        best = np.inf
+        for rel in (1e-5, 1e-6, 1e-7, 1e-8, 1e-9):
+            h = rel * max(abs(z[j]), 1e-3)
+            zp, zm = z.copy(), z.copy()
+            zp[j] += h
+            zm[j] -= h
+            op, om = np.zeros(8), np.zeros(8)
+            branch(zp, op, np.zeros((8, 18)))
+            branch(zm, om, np.zeros((8, 18)))
+            err = np.max(np.abs((op - om) / (2 * h) - jac[:, j]))
+            best = min(best, err / (np.abs(jac[:, j]).max() + 1e-300))
+        assert best < 1e-6, (j, best)
+
+
+def test_ddm_equals_central_differences_for_every_default_parameter(ddm, fd):
+    """d|F12|/db over revolution 4: DDM (rtol 1e-10) vs central differences (step 3e-5 b0,
+    rtol 1e-11). FD's own error is ~1e-5 at this step (h^2 truncation vs integration noise),
+    so 1e-4 of the series' maximum tests DDM to the accuracy FD can resolve."""
+    assert ddm.parameters == DEFAULT_PARAMETERS
+    for k, name in enumerate(ddm.parameters):
+        a, b = ddm.base_force_magnitude[:, k], fd.base_force_magnitude[:, k]
+        assert np.max(np.abs(a - b)) < 1e-4 * np.max(np.abs(a)), name
+        for series in ("crank_moment", "contact_force"):
+            a, b = getattr(ddm, series)[:, k], getattr(fd, series)[:, k]
+            assert np.max(np.abs(a - b)) < 1e-4 * np.max(np.abs(a)), (name, series)
+
+
+def test_event_time_term_is_needed(paper, rev4, fd):
+    """Without the event-time term of the impact-velocity sensitivity DDM misses by percents
+    (the memory set at the last onset persists through the steady contact)."""
+    wrong = sensitivities(paper, t_eval=rev4, rtol=1e-10, event_time_term=False)
+    errors = [np.max(np.abs(wrong.base_force_magnitude[:, k] - fd.base_force_magnitude[:, k]))
+              / np.max(np.abs(fd.base_force_magnitude[:, k])) for k in range(8)]
+    assert min(errors) > 1e-3 and max(errors) > 0.1
+
+
+def test_youngs_modulus_and_contact_stiffness_normalized_sensitivities_are_equal(ddm):
+    """K is proportional to E (Eq. 9), so (dJ/dE) E = (dJ/dK) K exactly (paper, Fig. 5)."""
+    e = ddm.normalized[:, ddm.column("youngs_modulus")]
+    k = ddm.normalized[:, ddm.column("contact_stiffness")]
+    assert np.max(np.abs(e - k)) < 1e-10 * np.max(np.abs(k))
+
+
+def test_paper_findings(ddm):
+    """Paper: |F12| is more sensitive to link lengths and masses than to the contact
+    properties over most of the cycle, and the journal radius dominates all."""
+    n = np.abs(ddm.normalized)
+    kin = [ddm.column(p) for p in ("crank_length", "coupler_length", "coupler_mass",
+                                   "slider_mass")]
+    con = [ddm.column(p) for p in ("contact_stiffness", "youngs_modulus", "restitution")]
+    assert np.mean(n[:, kin].min(axis=1) > n[:, con].max(axis=1)) > 0.5
+    assert np.all(n[:, kin].max(axis=1) > n[:, con].max(axis=1))
+    j = ddm.column("journal_radius")
+    others = np.delete(n, j, axis=1).max(axis=1)
+    assert np.all(n[:, j] > others)
+    assert np.median(n[:, j] / others) > 100
+
+
+def test_periodic_case_is_not_flagged_but_large_clearances_are(paper, ddm):
+    assert not ddm.chaotic
+    assert np.all(np.abs(ddm.growth_rate - 1.0) < 0.3)
+    for c in (1e-4, 5e-4):
+        s = sensitivities(paper.replace(journal_radius=0.01 - c), ["slider_mass"], rtol=1e-8)
+        assert s.chaotic, c
+
+
+def test_fd_and_ddm_on_default_grid_and_normalization_floor(paper):
+    s = sensitivities(paper, ["slider_mass"], revolutions=1)
+    assert np.all(np.isfinite(s.normalized))
+    assert s.base_force.shape == (len(s.t), 2, 1)
+
+
+@pytest.mark.parametrize("kwargs,message", [
+    ({"parameters": ["crank_lenght"]}, "unknown parameter name"),
+    ({"parameters": ["contact_model"]}, "unknown parameter name"),
+    ({"method": "adjoint"}, "method must be 'ddm' or 'fd'"),
+    ({"backend": "exudyn"}, "method='ddm' needs backend='reduced'"),
+    ({"backend": "adams", "method": "fd"}, "backend must be one of"),
+    ({"fd_relative_step": 0.5, "method": "fd"}, "fd_relative_step must be in"),
+    ({"parameters": ["slider_mass", "slider_mass"]}, "must not repeat"),
+])
+def test_bad_input(paper, kwargs, message):
+    with pytest.raises(ValueError, match=message):
+        sensitivities(paper, **kwargs)
+
+
+def test_fd_step_leaving_valid_range_is_reported():
+    with pytest.raises(ValueError, match="leaves its valid range"):
+        sensitivities(SliderCrank(restitution=1.0), ["restitution"], method="fd",
+                      revolutions=1)
