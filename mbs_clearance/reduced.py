@@ -277,7 +277,8 @@ def run(mech: SliderCrank, revolutions: int = 4, *, rtol: float | None = None,
     between steps. With `t_eval` the integrator also lands exactly on those times and only
     they are returned (peaks are then maxima over the returned samples, not refined;
     ``select=False`` returns all steps, which include the times `t_eval`).
-    `system` (a `System`) replaces the plain model (used by the sensitivity equations). Raises RuntimeError with advice when it cannot finish.
+    `system` (a `System`) replaces the plain model (used by the sensitivity equations).
+    Raises RuntimeError with advice when it cannot finish.
     """
     rtol, atol_arr = _tolerances(mech, rtol, atol)
     if method not in METHODS:

@@ -82,7 +82,7 @@ def main(argv=None):
     print()
     print(f"Machine: {machine_summary()}")
     print()
-    print(f"| run (paper case, 4 revolutions) | rtol | peak rel. error | median time (ms) |")
+    print("| run (paper case, 4 revolutions) | rtol | peak rel. error | median time (ms) |")
     print("|---|---|---|---|")
     print(f"| ours, simulate (full trajectory) | {DEFAULT_RTOL:g} | {ours_err:.1e} | "
           f"{t_sim * 1e3:.2f} |")
