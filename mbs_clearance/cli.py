@@ -152,7 +152,25 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", type=Path, help="folder for sensitivities.npz and figures")
     add_mechanism_options(p)
     p.set_defaults(func=_cmd_sensitivity)
+    _add_plugins(sub)
     return parser
+
+
+#: entry-point group through which other packages (this project's `validation`) add
+#: subcommands: each entry is a function register(subparsers). The library itself never
+#: imports `validation`.
+PLUGIN_GROUP = "mbs_clearance.commands"
+
+
+def _add_plugins(sub) -> None:
+    from importlib.metadata import entry_points
+
+    for ep in sorted(entry_points(group=PLUGIN_GROUP), key=lambda e: e.name):
+        try:
+            register = ep.load()
+        except ImportError:  # a plugin whose dependencies are missing is left out
+            continue
+        register(sub)
 
 
 def main(argv: list[str] | None = None) -> int:

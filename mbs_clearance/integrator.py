@@ -357,8 +357,14 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
             g_start = event(t, y, p)
         g_lo = g_start
         g_start_valid = False
-        for i in range(1, n_samples + 1):
-            th = i / (n_samples + 1.0)
+        # a step that starts on the switching surface (after an event, or a grazing start)
+        # is also sampled close to its start, where a short excursion would hide
+        n_near = 3 if g_start > -100.0 * event_tol else 0
+        for i in range(1 - n_near, n_samples + 1):
+            if i <= 0:
+                th = 10.0 ** (i - 4) * (n_samples + 1.0) ** -1.0 * 10.0 ** n_near
+            else:
+                th = i / (n_samples + 1.0)
             dense_eval(y, h_try, K, P, th, ytmp, wts)
             g = event(t + th * h_try, ytmp, p)
             if g > 0.0:
@@ -415,6 +421,10 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
                 on_event(t, y, p)
                 rhs(t, y, p, f)
                 counters[0] += 1
+                if record and nrec > 0 and ts[nrec - 1] == t:
+                    # the memory recorded at t is the one used by the step that follows it
+                    for k in range(n_mem):
+                        ms[nrec - 1, k] = p[mem_start + k]
                 continue
             zero_events = 0
             # land on the event with the real step map; secant iterations on h

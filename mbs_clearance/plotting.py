@@ -14,7 +14,8 @@ from matplotlib.figure import Figure
 
 from .trajectory import Trajectory
 
-__all__ = ["plot_trajectory", "plot_overlay", "plot_sensitivities", "SENSITIVITY_FIGURES", "save"]
+__all__ = ["plot_trajectory", "plot_overlay", "plot_comparison", "plot_sensitivities",
+           "SENSITIVITY_FIGURES", "save"]
 
 COLORS = ["C0", "C3", "C2", "C1", "C4", "C5"]
 
@@ -131,4 +132,51 @@ def plot_sensitivities(sens, parameters: Sequence[str], title: str = "",
                title=f"zoom {a:g}-{b:g} deg")
     for ax in [main, *zoom_axes]:
         ax.grid(alpha=0.3)
+    return save(fig, path)
+
+
+def plot_comparison(a: Trajectory, b: Trajectory, path: str | Path | None = None,
+                    revolution: int | None = None) -> Figure:
+    """Overlay |F12|, the crank moment and the journal orbit of two trajectories.
+
+    Parameters
+    ----------
+    a, b : Trajectory
+        Same mechanism, e.g. the reduced and the Exudyn model.
+    path : str or Path or None
+        File to write; None returns the figure without saving.
+    revolution : int or None
+        Revolution shown in the time plots (default: the last one both cover); the orbit
+        shows the whole common time span.
+    """
+    mech = a.mechanism
+    n = min(a.revolutions, b.revolutions)
+    k = n if revolution is None else revolution
+    if not isinstance(k, (int, np.integer)) or not 1 <= k <= n:
+        raise ValueError(f"revolution must be between 1 and {n}; got {revolution!r}")
+    c = mech.clearance
+    fig = Figure(figsize=(15, 4.5), layout="constrained")
+    axes = fig.subplots(1, 3)
+    for tr, style in ((a, dict(color="C0", lw=1.6)), (b, dict(color="C3", lw=1.0, ls="--"))):
+        m = tr.revolution_mask(k)
+        angle = np.degrees(tr.crank_angle[m] - 2 * np.pi * (k - 1))
+        label = tr.backend + (f" ({tr.stats['contact']})" if "contact" in tr.stats else "")
+        axes[0].plot(angle, tr.base_force_magnitude[m], label=label, **style)
+        axes[1].plot(angle, tr.crank_moment[m], label=label, **style)
+        mo = tr.t <= n * mech.period * (1 + 1e-12)
+        axes[2].plot(tr.eccentricity[mo, 0] / c, tr.eccentricity[mo, 1] / c, label=label,
+                     **{**style, "lw": 0.6})
+    axes[0].set(xlabel=f"crank angle in revolution {k} (deg)", ylabel="|F12| (N)",
+                title="base force magnitude")
+    axes[1].set(xlabel=f"crank angle in revolution {k} (deg)", ylabel="M2 (N m)",
+                title="crank driving moment")
+    phi = np.linspace(0.0, 2 * np.pi, 361)
+    axes[2].plot(np.cos(phi), np.sin(phi), color="0.5", lw=0.8, label="clearance circle")
+    axes[2].set(xlabel="journal x / clearance (-)", ylabel="journal y / clearance (-)",
+                title="journal centre orbit", aspect="equal")
+    for ax in axes:
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8)
+    fig.suptitle(f"{a.backend} vs {b.backend}: c = {c * 1e3:.4g} mm, "
+                 f"{mech.crank_speed_rpm:.0f} rpm")
     return save(fig, path)

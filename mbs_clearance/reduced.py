@@ -58,8 +58,13 @@ def pack_parameters(mech: SliderCrank) -> np.ndarray:
     return p
 
 
-def initial_state(mech: SliderCrank) -> np.ndarray:
-    """Journal centred in the bearing with the ideal-joint velocities (state y0)."""
+def initial_state(mech: SliderCrank, offset: float = 0.0) -> np.ndarray:
+    """Ideal-joint positions and velocities (state y0), journal centred in the bearing.
+
+    `offset` in [-1, 1] moves the slider so that the journal centre starts at
+    offset * clearance along x from the bearing centre (+-1: touching the wall, a grazing
+    start), used by the stress tests.
+    """
     L2, L3, w = mech.crank_length, mech.coupler_length, mech.crank_speed
     th2 = mech.initial_crank_angle
     s3 = -L2 * math.sin(th2) / L3
@@ -68,7 +73,7 @@ def initial_state(mech: SliderCrank) -> np.ndarray:
     th3d = -L2 * w * math.cos(th2) / (L3 * c3)
     x4 = L2 * math.cos(th2) + L3 * c3
     x4d = -L2 * w * math.sin(th2) - L3 * th3d * s3
-    return np.array([th3, x4, th3d, x4d, 0.0])
+    return np.array([th3, x4 - offset * mech.clearance, th3d, x4d, 0.0])
 
 
 @nb.njit(cache=True)
@@ -269,7 +274,8 @@ def run(mech: SliderCrank, revolutions: int = 4, *, rtol: float | None = None,
         atol: float | np.ndarray | None = None, method: str = "dopri5", record: bool = True,
         max_steps: int = 5_000_000, n_samples: int = 3, h_max: float | None = None,
         h0: float = 0.0, event_tol: float | None = None, edges: np.ndarray | None = None,
-        t_eval: np.ndarray | None = None, system=None, select: bool = True):
+        t_eval: np.ndarray | None = None, system=None, select: bool = True,
+        initial_offset: float = 0.0):
     """Integrate the reduced model; returns (ts, ys, ms, peaks, peak_times, counters, p).
 
     The integration runs over the crank revolutions 1..`revolutions`, or over the windows
@@ -304,7 +310,11 @@ def run(mech: SliderCrank, revolutions: int = 4, *, rtol: float | None = None,
         record = True
         refine = 0
     if system is None:
-        system = System(rhs, initial_state(mech), pack_parameters(mech), P_MODE, N_MEM, N_ERR,
+        if not (isinstance(initial_offset, (int, float)) and -1.0 <= initial_offset <= 1.0):
+            raise ValueError(f"initial_offset must be in [-1, 1] (fraction of the clearance); "
+                             f"got {initial_offset!r}")
+        system = System(rhs, initial_state(mech, initial_offset), pack_parameters(mech),
+                        P_MODE, N_MEM, N_ERR,
                         atol_arr, on_event)
     fun, y0, p, mem_start, n_mem, n_err, atol_arr, action = system
     h_max = mech.period / 8 if h_max is None else float(h_max)

@@ -64,7 +64,7 @@ def main(argv=None):
     for name, rtol, err, t, ratio, steps in rows + fd_rows:
         print(f"| {name} | {rtol:g} | {err:.1e} | {t:.3f} | {ratio:.1f} | {steps or '-'} |")
     best_fd = min(fd_rows, key=lambda r: r[2])
-    for name, rtol, err, t, *_ in rows:
+    for _, rtol, err, t, *_ in rows:
         if err <= best_fd[2] * 1.5:
             print(f"\nDDM at rtol {rtol:g} ({err:.1e}) vs FD at rtol {best_fd[1]:g} "
                   f"({best_fd[2]:.1e}): DDM is {best_fd[3] / t:.1f} x faster")

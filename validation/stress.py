@@ -1,0 +1,244 @@
+"""Numerical stress tests: where do the models break, and do they say so clearly?
+
+A sweep over clearance (0.001-1 mm), crank speed (100-10000 rpm), restitution (0.05-1),
+contact stiffness (x0.01-x100), initial crank angle, zero gravity, 100-revolution runs, the
+journal starting against the wall and grazing contacts. Every case checks:
+
+- the run succeeds, or fails with a clear error that says what to change (RuntimeError or
+  ValueError from our code; a NaN or a traceback from deep inside is a failure);
+- every output is finite;
+- no missed contact: no free-flight sample inside the wall, and none inside any free-flight
+  step either: every free-flight step is re-taken from its start to 19 interior times with
+  the same Runge-Kutta map, and the penetration there must stay <= 0 (comparing runs with
+  smaller steps is no check here: chaotic cases diverge);
+- with e = 1, the energy balance closes (crank work = change of mechanical energy).
+
+    python -m validation.stress [--quick] [--backend reduced exudyn] [--json out.json]
+    mbs-clearance stress [--quick]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import time
+from dataclasses import dataclass, field
+from typing import Any
+
+import numba as nb
+import numpy as np
+
+from mbs_clearance import SliderCrank, reduced, simulate
+from mbs_clearance.integrator import METHODS, rk_step
+
+RPM = 2 * math.pi / 60
+
+
+@dataclass
+class StressCase:
+    """One configuration of the sweep."""
+
+    name: str
+    mech: SliderCrank
+    revolutions: int = 4
+    options: dict[str, Any] = field(default_factory=dict)
+
+
+def stress_cases(quick: bool = False) -> list[StressCase]:
+    """The sweep; `quick` keeps one case per axis and shorter runs (for tests and CI)."""
+    base = SliderCrank()
+    k0 = base.stiffness
+    cases = [StressCase("paper case", base)]
+    for c_mm in (0.001, 0.1, 1.0):
+        cases.append(StressCase(f"clearance {c_mm:g} mm",
+                                base.replace(journal_radius=0.01 - c_mm * 1e-3)))
+    for rpm in (100, 1000, 10000):
+        cases.append(StressCase(f"speed {rpm} rpm", base.replace(crank_speed=rpm * RPM),
+                                revolutions=2 if rpm <= 100 else 4))
+    for e in (0.05, 0.3, 1.0):
+        cases.append(StressCase(f"restitution {e:g}", base.replace(restitution=e)))
+    for f in (0.01, 100.0):
+        cases.append(StressCase(f"stiffness x{f:g}", base.replace(contact_stiffness=f * k0)))
+    for deg in (90, 180, 270):
+        cases.append(StressCase(f"initial crank angle {deg} deg",
+                                base.replace(initial_crank_angle=math.radians(deg))))
+    cases.append(StressCase("zero gravity", base.replace(gravity=0.0)))
+    cases.append(StressCase("100 revolutions", base, revolutions=100))
+    for off in (1.0, -1.0):
+        cases.append(StressCase(f"journal starts against the wall ({off:+g} c)", base,
+                                options={"initial_offset": off}))
+    cases.append(StressCase("grazing: 100 rpm, 1 mm, e = 1, journal on the wall",
+                            base.replace(crank_speed=100 * RPM, journal_radius=0.009,
+                                         restitution=1.0),
+                            revolutions=1, options={"initial_offset": 1.0}))
+    for model in ("hunt_crossley", "flores"):
+        cases.append(StressCase(f"{model} law, restitution 0.05",
+                                base.replace(contact_model=model, restitution=0.05)))
+    cases.append(StressCase("clearance 0.5 mm, e = 1 (chaotic, energy)",
+                            base.replace(journal_radius=0.0095, restitution=1.0)))
+    if quick:
+        keep = ("paper case", "clearance 1 mm", "speed 10000 rpm", "restitution 0.05",
+                "restitution 1", "stiffness x100", "journal starts against the wall (+1 c)")
+        cases = [c for c in cases if c.name in keep]
+        for c in cases:
+            c.revolutions = min(c.revolutions, 2)
+    return cases
+
+
+def _energy_error(case: StressCase) -> float:
+    """max |W - (E - E0)| / max |W| with e = 1 (rtol 1e-10)."""
+    ts, ys, ms, *_, p = reduced.run(case.mech, case.revolutions, rtol=1e-10, **case.options)
+    q = p.copy()
+    energy = np.empty(len(ts))
+    for i in range(len(ts)):
+        q[reduced.P_MODE], q[reduced.P_DMIN] = ms[i]
+        energy[i] = reduced.mechanical_energy(ts[i], ys[i], q)
+    work = ys[:, -1]
+    return float(np.max(np.abs(work - (energy - energy[0]))) / max(np.max(np.abs(work)), 1e-12))
+
+
+@nb.njit(cache=True)
+def _free_step_excursion(ts, ys, ms, p, A, B, C, n_sub):
+    """max over free-flight steps and n_sub - 1 interior times of delta / c (re-taken steps)."""
+    n = ys.shape[1]
+    K = np.zeros((B.shape[0] + 1, n))
+    f = np.empty(n)
+    y_new = np.empty(n)
+    f_new = np.empty(n)
+    tmp = np.empty(n)
+    q = p.copy()
+    worst = -np.inf
+    for k in range(ts.shape[0] - 1):
+        if ms[k, 0] > 0.5:
+            continue
+        q[reduced.P_MODE] = ms[k, 0]
+        q[reduced.P_DMIN] = ms[k, 1]
+        y0 = ys[k].copy()
+        reduced.rhs(ts[k], y0, q, f)
+        h = ts[k + 1] - ts[k]
+        for j in range(1, n_sub):
+            rk_step(reduced.rhs, ts[k], y0, f, h * j / n_sub, A, B, C, K, q, y_new, f_new, tmp)
+            d = reduced.geometry(ts[k] + h * j / n_sub, y_new, q)[3] / q[reduced.P_C]
+            if d > worst:
+                worst = d
+    return worst
+
+
+def free_step_excursion(case: StressCase, n_sub: int = 20) -> float:
+    """Largest penetration (in clearances) inside any free-flight step of the reduced run."""
+    ts, ys, ms, *_, p = reduced.run(case.mech, case.revolutions, **case.options)
+    tab = METHODS["dopri5"]
+    return float(_free_step_excursion(ts, ys, ms, p, tab.A, tab.B, tab.C, n_sub))
+
+
+def run_case(case: StressCase, backend: str = "reduced") -> dict[str, Any]:
+    """Run one case and check the invariants; returns a result row."""
+    row: dict[str, Any] = {"case": case.name, "backend": backend, "status": "pass",
+                           "reasons": [], "revolutions": case.revolutions}
+    t0 = time.perf_counter()
+    options = dict(case.options) if backend == "reduced" else {}
+    if backend != "reduced" and case.options:
+        row.update(status="skipped", reasons=["option only in the reduced model"])
+        return row
+    try:
+        traj = simulate(case.mech, case.revolutions, backend=backend, **options)
+    except (RuntimeError, ValueError) as exc:
+        row.update(status="clear error", reasons=[str(exc)],
+                   seconds=time.perf_counter() - t0)
+        return row
+    row["seconds"] = time.perf_counter() - t0
+    bad = [name for name in ("base_force", "crank_moment", "contact_force", "penetration",
+                             "eccentricity", "slider_acceleration")
+           if not np.all(np.isfinite(getattr(traj, name)))]
+    if bad:
+        row["reasons"].append(f"non-finite outputs: {bad}")
+    free = traj.contact_phase == 0
+    worst = float(traj.penetration[free].max(initial=-np.inf)) / case.mech.clearance
+    row["max_free_penetration_over_c"] = worst
+    tolerance = 1e-9 if backend == "reduced" else 0.05
+    if worst > tolerance:
+        row["reasons"].append(f"free-flight sample inside the wall ({worst:.2g} c)")
+    row["peak_last_revolution"] = traj.max_base_force(case.revolutions)
+    row["contact_switches"] = int(np.count_nonzero(np.diff(traj.contact_phase)))
+    if backend == "reduced":
+        inside = free_step_excursion(case)
+        row["max_inside_free_steps_over_c"] = inside
+        if inside > 1e-9:
+            row["reasons"].append(f"the journal enters the wall inside a free-flight step "
+                                  f"({inside:.2g} c): a missed contact")
+        if case.mech.restitution == 1.0:
+            err = _energy_error(case)
+            row["energy_error"] = err
+            if not err < 1e-6:
+                row["reasons"].append(f"energy balance off by {err:.2g} of the crank work")
+    if row["reasons"]:
+        row["status"] = "fail"
+    return row
+
+
+def run_sweep(cases: list[StressCase], backends=("reduced",), progress: bool = True):
+    """Run every case on every backend (with a progress bar)."""
+    from tqdm import tqdm
+
+    jobs = [(c, b) for b in backends for c in cases]
+    rows = []
+    for case, backend in tqdm(jobs, desc="stress", disable=not progress):
+        rows.append(run_case(case, backend))
+    return rows
+
+
+def summary(rows) -> dict[str, Any]:
+    """Counts of cases run, passed, clear errors, failures (with reasons)."""
+    counts = {s: sum(r["status"] == s for r in rows)
+              for s in ("pass", "clear error", "fail", "skipped")}
+    return {"cases": len(rows), **counts,
+            "failures": [(r["case"], r["backend"], r["reasons"]) for r in rows
+                         if r["status"] == "fail"]}
+
+
+def markdown_table(rows) -> str:
+    """The results as a markdown table."""
+    lines = ["| case | backend | status | s | last-rev. peak \\|F12\\| (N) | switches "
+             "| energy error | notes |", "|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        peak = r.get("peak_last_revolution")
+        lines.append(
+            f"| {r['case']} | {r['backend']} | {r['status']} | {r.get('seconds', 0):.2f} | "
+            f"{'' if peak is None else f'{peak:.1f}'} | {r.get('contact_switches', '')} | "
+            f"{'' if 'energy_error' not in r else format(r['energy_error'], '.1e')} | "
+            f"{'; '.join(r['reasons'])[:160]} |")
+    return "\n".join(lines)
+
+
+def _main(args) -> int:
+    rows = run_sweep(stress_cases(args.quick), tuple(args.backend), progress=True)
+    print(markdown_table(rows))
+    s = summary(rows)
+    print(f"\n{s['cases']} runs: {s['pass']} passed, {s['clear error']} clear errors, "
+          f"{s['fail']} failed, {s['skipped']} skipped")
+    if args.json:
+        with open(args.json, "w") as fh:
+            json.dump({"rows": rows, "summary": s}, fh, indent=1, default=str)
+    return 1 if s["fail"] else 0
+
+
+def _add_arguments(p):
+    p.add_argument("--quick", action="store_true", help="one case per axis, short runs")
+    p.add_argument("--backend", nargs="+", default=["reduced"],
+                   help="backends to sweep (reduced, exudyn)")
+    p.add_argument("--json", help="write rows and summary to this JSON file")
+
+
+def register(subparsers) -> None:
+    """CLI plugin: `mbs-clearance stress`."""
+    p = subparsers.add_parser("stress", help="numerical stress sweep (validation)",
+                              description=__doc__.splitlines()[0])
+    _add_arguments(p)
+    p.set_defaults(func=_main)
+
+
+if __name__ == "__main__":
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    _add_arguments(ap)
+    raise SystemExit(_main(ap.parse_args()))
