@@ -15,6 +15,7 @@ from matplotlib.figure import Figure
 from .trajectory import Trajectory
 
 __all__ = ["plot_trajectory", "plot_overlay", "plot_comparison", "plot_sensitivities",
+           "plot_work_precision",
            "SENSITIVITY_FIGURES", "save"]
 
 COLORS = ["C0", "C3", "C2", "C1", "C4", "C5"]
@@ -179,4 +180,33 @@ def plot_comparison(a: Trajectory, b: Trajectory, path: str | Path | None = None
         ax.legend(fontsize=8)
     fig.suptitle(f"{a.backend} vs {b.backend}: c = {c * 1e3:.4g} mm, "
                  f"{mech.crank_speed_rpm:.0f} rpm")
+    return save(fig, path)
+
+
+def plot_work_precision(rows: Sequence[dict], path: str | Path | None = None,
+                        error: str = "peak_error") -> Figure:
+    """Run time against error (log-log), one panel per case, one line per backend/method.
+
+    `rows` are dicts with keys case, backend, method, time (s) and `error`.
+    """
+    cases = list(dict.fromkeys(r["case"] for r in rows))
+    fig = Figure(figsize=(6.5 * len(cases), 5), layout="constrained")
+    axes = np.atleast_1d(fig.subplots(1, len(cases)))
+    markers = {"reduced (ours)": "o", "scipy": "s", "exudyn": "^"}
+    for ax, case in zip(axes, cases):
+        groups = dict.fromkeys((r["backend"], r["method"]) for r in rows if r["case"] == case)
+        for i, key in enumerate(groups):
+            pts = sorted((r[error], r["time"]) for r in rows
+                         if r["case"] == case and (r["backend"], r["method"]) == key
+                         and np.isfinite(r[error]) and r[error] > 0)
+            if pts:
+                e, t = np.array(pts).T
+                ax.loglog(e, t, marker=markers.get(key[0], "x"), color=COLORS[i % 6] if i < 6
+                          else f"C{i}", label=f"{key[0]}: {key[1]}")
+        ax.set(xlabel="relative error of the peak |F12| (-)" if error == "peak_error"
+               else "max base-force error / peak (-)", ylabel="median run time (s)",
+               title=case)
+        ax.invert_xaxis()
+        ax.grid(alpha=0.3, which="both")
+        ax.legend(fontsize=7)
     return save(fig, path)
