@@ -18,6 +18,7 @@ from __future__ import annotations
 import argparse
 import json
 import time
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -87,8 +88,7 @@ def run(quick: bool = False, repeats: int = 5, exudyn: bool = True):
             steps = steps[1:2]
         for method, rtols in ours.items():
             for rtol in rtols:
-                t = _median(lambda r=rtol, m=method: simulate(mech, rev, rtol=r, method=m),
-                            repeats)
+                t = _median(partial(simulate, mech, rev, rtol=rtol, method=method), repeats)
                 peak = simulate(mech, rev, rtol=rtol, method=method).max_base_force(rev)
                 force = simulate(mech, rev, rtol=rtol, method=method, t_eval=grid).base_force
                 rows.append(dict(case=case, backend="reduced (ours)", method=method,
@@ -108,8 +108,8 @@ def run(quick: bool = False, repeats: int = 5, exudyn: bool = True):
                     continue
                 first = time.perf_counter() - t0
                 t = first if method != "DOP853" or quick else _median(
-                    lambda r=rtol, m=method: solve_scipy(mech, revolutions=rev, method=m,
-                                                         rtol=r), max(1, repeats // 2))
+                    partial(solve_scipy, mech, revolutions=rev, method=method, rtol=rtol),
+                    max(1, repeats // 2))
                 rows.append(dict(case=case, backend="scipy", method=method,
                                  setting=f"rtol {rtol:g}", time=t,
                                  **dict(zip(("peak_error", "series_error"),
@@ -121,9 +121,8 @@ def run(quick: bool = False, repeats: int = 5, exudyn: bool = True):
         variants = ("symbolic", "sphere") if not quick else ("symbolic",)
         for variant in variants:
             for h in steps:
-                t = _median(lambda s=h, v=variant: simulate(mech, rev, backend="exudyn",
-                                                            step_size=s, contact=v),
-                            max(1, repeats // 2))
+                t = _median(partial(simulate, mech, rev, backend="exudyn", step_size=h,
+                                    contact=variant), max(1, repeats // 2))
                 traj = simulate(mech, rev, backend="exudyn", step_size=h, contact=variant)
                 force = np.column_stack([np.interp(grid, traj.t, traj.base_force[:, j])
                                          for j in range(2)])
