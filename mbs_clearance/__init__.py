@@ -7,6 +7,7 @@ Public API::
 """
 
 from .mechanism import CONTINUOUS_FIELDS, PARAMETER_INFO, SliderCrank
+from .sensitivity import DEFAULT_PARAMETERS, Sensitivities, sensitivities
 from .simulate import BACKENDS, peak_base_force, simulate
 from .trajectory import Trajectory, load_trajectory
 
@@ -14,6 +15,7 @@ __all__ = [
     "SliderCrank", "PARAMETER_INFO", "CONTINUOUS_FIELDS",
     "simulate", "peak_base_force", "BACKENDS",
     "Trajectory", "load_trajectory",
+    "sensitivities", "Sensitivities", "DEFAULT_PARAMETERS",
 ]
 
 __version__ = "0.1.0"

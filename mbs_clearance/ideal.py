@@ -15,6 +15,9 @@ from .trajectory import Trajectory
 
 __all__ = ["ideal_outputs", "simulate_ideal", "peak_ideal"]
 
+#: options of `simulate(..., backend="ideal")`
+OPTION_NAMES = ("samples_per_revolution",)
+
 
 def ideal_outputs(mech: SliderCrank, t: np.ndarray) -> dict[str, np.ndarray]:
     """All outputs of the ideal mechanism at times `t` (s), as a dict of arrays.

@@ -58,6 +58,21 @@ def pack_parameters(mech: SliderCrank) -> np.ndarray:
     return p
 
 
+def ideal_kinematics(L2, L3, w, th2):
+    """[theta3, x4, theta3dot, x4dot] of the ideal mechanism at crank angle th2.
+
+    Written with numpy functions so that it also takes complex arguments (complex-step
+    derivatives of the initial state in `sensitivity`).
+    """
+    s3 = -L2 * np.sin(th2) / L3
+    th3 = np.arcsin(s3)
+    c3 = np.cos(th3)
+    th3d = -L2 * w * np.cos(th2) / (L3 * c3)
+    x4 = L2 * np.cos(th2) + L3 * c3
+    x4d = -L2 * w * np.sin(th2) - L3 * th3d * s3
+    return np.array([th3, x4, th3d, x4d])
+
+
 def initial_state(mech: SliderCrank, offset: float = 0.0) -> np.ndarray:
     """Ideal-joint positions and velocities (state y0), journal centred in the bearing.
 
@@ -65,15 +80,10 @@ def initial_state(mech: SliderCrank, offset: float = 0.0) -> np.ndarray:
     offset * clearance along x from the bearing centre (+-1: touching the wall, a grazing
     start), used by the stress tests.
     """
-    L2, L3, w = mech.crank_length, mech.coupler_length, mech.crank_speed
-    th2 = mech.initial_crank_angle
-    s3 = -L2 * math.sin(th2) / L3
-    th3 = math.asin(s3)
-    c3 = math.cos(th3)
-    th3d = -L2 * w * math.cos(th2) / (L3 * c3)
-    x4 = L2 * math.cos(th2) + L3 * c3
-    x4d = -L2 * w * math.sin(th2) - L3 * th3d * s3
-    return np.array([th3, x4 - offset * mech.clearance, th3d, x4d, 0.0])
+    q = ideal_kinematics(mech.crank_length, mech.coupler_length, mech.crank_speed,
+                         mech.initial_crank_angle)
+    q[1] -= offset * mech.clearance
+    return np.append(q, 0.0)
 
 
 @nb.njit(cache=True)
@@ -362,6 +372,11 @@ def counters_dict(counters) -> dict:
     """Solver counters as a dict."""
     names = ("nfev", "naccept", "nreject", "nevent", "status", "nrefine")
     return {k: int(v) for k, v in zip(names, counters)}
+
+
+#: options of `simulate(..., backend="reduced")` (keywords of `run` meant for users)
+OPTION_NAMES = ("rtol", "atol", "method", "max_steps", "n_samples", "h_max", "h0",
+                "event_tol", "t_eval", "initial_offset")
 
 
 def simulate_reduced(mech: SliderCrank, revolutions: int = 4, **options):

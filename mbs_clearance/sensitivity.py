@@ -215,16 +215,6 @@ def chain_matrix(mech: SliderCrank, names: tuple[str, ...]) -> np.ndarray:
     return D
 
 
-def _initial_state_beta(L2, L3, w, th0):
-    s3 = -L2 * np.sin(th0) / L3
-    th3 = np.arcsin(s3)
-    c3 = np.cos(th3)
-    th3d = -L2 * w * np.cos(th0) / (L3 * c3)
-    x4 = L2 * np.cos(th0) + L3 * c3
-    x4d = -L2 * w * np.sin(th0) - L3 * th3d * s3
-    return np.array([th3, x4, th3d, x4d])
-
-
 def _initial_sensitivities(mech: SliderCrank, D: np.ndarray) -> np.ndarray:
     """ds(0)/db (4, p) by complex step on the initial state (exact to rounding)."""
     args = [mech.crank_length, mech.coupler_length, mech.crank_speed,
@@ -235,7 +225,7 @@ def _initial_sensitivities(mech: SliderCrank, D: np.ndarray) -> np.ndarray:
     for j, row in enumerate(rows):
         a = [complex(v) for v in args]
         a[j] += 1j * h
-        dy_dbeta[:, row] = np.imag(_initial_state_beta(*a)) / h
+        dy_dbeta[:, row] = np.imag(reduced.ideal_kinematics(*a)) / h
     return dy_dbeta @ D
 
 

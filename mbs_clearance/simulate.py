@@ -67,14 +67,7 @@ def simulate(mech: SliderCrank, revolutions: int = 4, backend: str = "reduced",
     -------
     Trajectory
     """
-    be = _backend(backend)
-    _check(mech, revolutions)
-    try:
-        return be.load("simulate")(mech, revolutions, **options)
-    except TypeError as exc:
-        if "unexpected keyword" in str(exc):
-            raise ValueError(f"unknown option for backend {backend!r}: {exc}") from exc
-        raise
+    return _call(backend, "simulate", mech, revolutions, options)
 
 
 def peak_base_force(mech: SliderCrank, revolution: int = 4, backend: str = "reduced",
@@ -83,11 +76,18 @@ def peak_base_force(mech: SliderCrank, revolution: int = 4, backend: str = "redu
 
     Records no time series: only running maxima are kept.
     """
+    return _call(backend, "peak", mech, revolution, options)
+
+
+def _call(backend: str, attr: str, mech, revolutions, options: dict):
+    """Validate backend, mechanism, count and option names, then call the backend."""
     be = _backend(backend)
-    _check(mech, revolution)
-    try:
-        return be.load("peak")(mech, revolution, **options)
-    except TypeError as exc:
-        if "unexpected keyword" in str(exc):
-            raise ValueError(f"unknown option for backend {backend!r}: {exc}") from exc
-        raise
+    _check(mech, revolutions)
+    module = importlib.import_module(be.module)
+    allowed = getattr(module, "OPTION_NAMES", None)
+    if allowed is not None:
+        unknown = sorted(set(options) - set(allowed))
+        if unknown:
+            raise ValueError(f"unknown option(s) {unknown} for backend {backend!r}; "
+                             f"allowed: {sorted(allowed)}")
+    return be.load(attr)(mech, revolutions, **options)

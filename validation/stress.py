@@ -19,7 +19,6 @@ journal starting against the wall and grazing contacts. Every case checks:
 
 from __future__ import annotations
 
-import argparse
 import json
 import math
 import time
@@ -31,6 +30,7 @@ import numpy as np
 
 from mbs_clearance import SliderCrank, reduced, simulate
 from mbs_clearance.integrator import METHODS, rk_step
+from validation.plugin import make_register, run_script
 
 RPM = 2 * math.pi / 60
 
@@ -230,15 +230,9 @@ def _add_arguments(p):
     p.add_argument("--json", help="write rows and summary to this JSON file")
 
 
-def register(subparsers) -> None:
-    """CLI plugin: `mbs-clearance stress`."""
-    p = subparsers.add_parser("stress", help="numerical stress sweep (validation)",
-                              description=__doc__.splitlines()[0])
-    _add_arguments(p)
-    p.set_defaults(func=_main)
+register = make_register("stress", "numerical stress sweep (validation)",
+                         __doc__.splitlines()[0], _add_arguments, _main)
 
 
 if __name__ == "__main__":
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    _add_arguments(ap)
-    raise SystemExit(_main(ap.parse_args()))
+    run_script(__doc__.splitlines()[0], _add_arguments, _main)

@@ -15,7 +15,6 @@ Timing: median over repeats after warm-up (full trajectory runs, `simulate`).
 
 from __future__ import annotations
 
-import argparse
 import json
 import time
 from functools import partial
@@ -25,6 +24,7 @@ import numpy as np
 
 from mbs_clearance import SliderCrank, reduced, simulate
 from validation.benchmarks.machine import machine_summary
+from validation.plugin import make_register, run_script
 from validation.scipy_reference import solve_scipy
 
 CASES = {
@@ -199,15 +199,9 @@ def _add_arguments(p):
     p.add_argument("--out", help="folder for work_precision.json/.md/.png")
 
 
-def register(subparsers) -> None:
-    """CLI plugin: `mbs-clearance bench`."""
-    p = subparsers.add_parser("bench", help="work-precision benchmark (validation)",
-                              description=__doc__.splitlines()[0])
-    _add_arguments(p)
-    p.set_defaults(func=_main)
+register = make_register("bench", "work-precision benchmark (validation)",
+                         __doc__.splitlines()[0], _add_arguments, _main)
 
 
 if __name__ == "__main__":
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    _add_arguments(ap)
-    raise SystemExit(_main(ap.parse_args()))
+    run_script(__doc__.splitlines()[0], _add_arguments, _main)
