@@ -2,11 +2,14 @@
 
 Public API::
 
-    from mbs_clearance import SliderCrank, simulate
+    from mbs_clearance import SliderCrank, simulate, sensitivities, optimize_link_lengths
     traj = simulate(SliderCrank(), revolutions=4, backend="reduced")
+    sens = sensitivities(SliderCrank(), ["crank_length", "slider_mass"], method="ddm")
+    opt = optimize_link_lengths(SliderCrank(), seed=1)
 """
 
 from .mechanism import CONTINUOUS_FIELDS, PARAMETER_INFO, SliderCrank
+from .optimize import OptimizationResult, optimize_link_lengths
 from .sensitivity import DEFAULT_PARAMETERS, Sensitivities, sensitivities
 from .simulate import BACKENDS, peak_base_force, simulate
 from .trajectory import Trajectory, load_trajectory
@@ -16,6 +19,7 @@ __all__ = [
     "simulate", "peak_base_force", "BACKENDS",
     "Trajectory", "load_trajectory",
     "sensitivities", "Sensitivities", "DEFAULT_PARAMETERS",
+    "optimize_link_lengths", "OptimizationResult",
 ]
 
 __version__ = "0.1.0"

@@ -9,9 +9,11 @@ import time
 from pathlib import Path
 
 from .mechanism import PARAMETER_INFO, SliderCrank
-from .simulate import BACKENDS
+from .optimize import MASS_SCALINGS, PAPER_TABLE3, design_mechanism, optimize_link_lengths
+from .simulate import BACKENDS, peak_base_force, simulate
 
-__all__ = ["main", "build_parser", "mechanism_from_args"]
+__all__ = ["main", "build_parser", "mechanism_from_args", "add_mechanism_options",
+           "format_table3"]
 
 
 def _optional_float(text: str) -> float | None:
@@ -45,8 +47,6 @@ def mechanism_from_args(args: argparse.Namespace) -> SliderCrank:
 
 
 def _cmd_simulate(args: argparse.Namespace) -> int:
-    from .simulate import simulate
-
     mech = mechanism_from_args(args)
     if args.out and args.out.suffix not in (".csv", ".npz"):
         raise ValueError(f"--out must end in .npz or .csv; got {str(args.out)!r}")
@@ -152,8 +152,136 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", type=Path, help="folder for sensitivities.npz and figures")
     add_mechanism_options(p)
     p.set_defaults(func=_cmd_sensitivity)
+
+    _add_optimize_parser(sub)
     _add_plugins(sub)
     return parser
+
+
+def _add_optimize_parser(subparsers) -> argparse.ArgumentParser:
+    """The ``optimize`` subcommand: GA over the link lengths (paper Section 4, Table 3)."""
+    p = subparsers.add_parser(
+        "optimize", help="GA optimisation of the link lengths (paper Table 3)",
+        description="Minimise the peak base force max |F12| over a crank revolution by "
+                    "choosing L2 and L3 with a genetic algorithm (pygad), refine the GA's "
+                    "best point locally, print a Table 3-like comparison with the paper and "
+                    "write result.json and two figures into --out.")
+    p.add_argument("--seed", type=int, default=1, help="GA seed (default 1)")
+    p.add_argument("--population", type=int, default=20, help="population size (default 20)")
+    p.add_argument("--generations", type=int, default=30,
+                   help="maximum number of generations (default 30)")
+    p.add_argument("--saturation", type=int, default=10,
+                   help="stop after this many generations without improvement (default 10;"
+                        " 0 disables)")
+    p.add_argument("--mass-scaling", choices=MASS_SCALINGS, default="fixed",
+                   help="fixed: link masses fixed (paper); uniform: crank and coupler masses "
+                        "proportional to their lengths")
+    p.add_argument("--crank-bounds", type=float, nargs=2, metavar=("LO", "HI"),
+                   default=(0.04, 0.06), help="bounds of L2 in m (default 0.04 0.06)")
+    p.add_argument("--coupler-bounds", type=float, nargs=2, metavar=("LO", "HI"),
+                   default=(0.10, 0.14), help="bounds of L3 in m (default 0.10 0.14)")
+    p.add_argument("--revolution", type=int, default=4,
+                   help="crank revolution whose peak is minimised (default 4)")
+    p.add_argument("--rtol", type=float, help="relative tolerance of the reduced model")
+    p.add_argument("--scheduler", metavar="tcp://HOST:PORT",
+                   help="evaluate on this dask.distributed scheduler")
+    p.add_argument("--workers", type=int, default=2,
+                   help="local worker processes when no --scheduler (1 = this process)")
+    p.add_argument("--out", type=Path, default=Path("optimize"),
+                   help="output directory (default ./optimize)")
+    p.add_argument("--no-refine", action="store_true", help="skip the local refinement")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    add_mechanism_options(p)
+    p.set_defaults(func=_cmd_optimize)
+    return p
+
+
+def format_table3(result, paper_in_model: float, ideal: dict[str, float]) -> str:
+    """Markdown table: the paper's Table 3 beside our optimum and the paper's optimum.
+
+    `paper_in_model` is max |F12| of the paper's published optimum in our model, `ideal` the
+    ideal-joint (closed form) peaks keyed "original", "optimum", "paper optimum".
+    """
+    po, pp = PAPER_TABLE3["original"], PAPER_TABLE3["optimum"]
+    orig, best = result.original, result.best
+    f0 = result.original_peak_force
+
+    def red(f):
+        return f"{100.0 * (f0 - f) / f0:.2f}"
+
+    rows = [
+        ("original (paper)", po["crank_length"], po["coupler_length"], po["peak_force"], "-",
+         "-"),
+        ("original (ours)", orig.crank_length, orig.coupler_length, f0, ideal["original"], "-"),
+        ("optimum (paper)", pp["crank_length"], pp["coupler_length"], pp["peak_force"], "-",
+         f"{PAPER_TABLE3['reduction_percent']:.2f}"),
+        ("optimum (ours)", best.crank_length, best.coupler_length, result.best_peak_force,
+         ideal["optimum"], red(result.best_peak_force)),
+        ("paper's optimum in our model", pp["crank_length"], pp["coupler_length"],
+         paper_in_model, ideal["paper optimum"], red(paper_in_model)),
+    ]
+    lines = ["| design | L2 (cm) | L3 (cm) | max abs(F12) (N) | ideal joints (N) "
+             "| reduction (%) |", "|---|---|---|---|---|---|"]
+    for name, l2, l3, f, fi, r in rows:
+        fi = fi if isinstance(fi, str) else f"{fi:.2f}"
+        lines.append(f"| {name} | {l2 * 100:.4f} | {l3 * 100:.4f} | {f:.2f} | {fi} | {r} |")
+    return "\n".join(lines)
+
+
+def _cmd_optimize(args: argparse.Namespace) -> int:
+    mech = mechanism_from_args(args)
+    options = {} if args.rtol is None else {"rtol": args.rtol}
+    common = dict(crank_length=tuple(args.crank_bounds), coupler_length=tuple(args.coupler_bounds),
+                  revolution=args.revolution, seed=args.seed, population=args.population,
+                  generations=args.generations, saturation=args.saturation or None,
+                  mass_scaling=args.mass_scaling, refine=not args.no_refine,
+                  progress=not args.no_progress, **options)
+    if args.scheduler:
+        try:
+            from dask.distributed import Client
+        except ImportError as exc:
+            raise ValueError("--scheduler needs dask.distributed: "
+                             "pip install 'mbs-clearance[dask]'") from exc
+        with Client(args.scheduler) as client:
+            print(f"evaluating on the dask cluster at {args.scheduler}", file=sys.stderr)
+            result = optimize_link_lengths(mech, executor=client, **common)
+    elif args.workers == 1:
+        result = optimize_link_lengths(mech, executor="serial", **common)
+    else:
+        result = optimize_link_lengths(mech, workers=args.workers, **common)
+
+    pp = PAPER_TABLE3["optimum"]
+    paper_mech = design_mechanism(mech, {"crank_length": pp["crank_length"],
+                                         "coupler_length": pp["coupler_length"]},
+                                  args.mass_scaling)
+    paper_in_model = peak_base_force(paper_mech, args.revolution, **options)
+    ideal = {k: peak_base_force(m, args.revolution, backend="ideal")
+             for k, m in (("original", mech), ("optimum", result.best),
+                          ("paper optimum", paper_mech))}
+    table = format_table3(result, paper_in_model, ideal)
+    print(table)
+    print(f"\nmasses: {args.mass_scaling}; seed {result.settings['seed']}; "
+          f"{result.generations_completed} generations, {result.n_evaluations} designs "
+          f"simulated in {result.elapsed:.1f} s on {result.settings['executor']}; "
+          f"GA best before refinement {result.ga_best_peak_force:.2f} N")
+    if mech != type(mech)() or args.mass_scaling != "fixed" or args.revolution != 4:
+        print("note: the paper's rows refer to its own case (paper mechanism, fixed masses, "
+              "4th revolution)")
+
+    from .plotting import plot_fitness_history, plot_force_comparison
+
+    out = args.out
+    out.mkdir(parents=True, exist_ok=True)
+    result.to_json(out / "result.json")
+    (out / "table3.md").write_text(table + "\n")
+    plot_fitness_history(result, out / "fitness_history.png")
+    designs = {"original": mech, "optimum": result.best, "paper's optimum": paper_mech}
+    plot_force_comparison({k: simulate(m, args.revolution, **options)
+                           for k, m in designs.items()},
+                          out / "force_comparison.png", revolution=args.revolution)
+    print(f"result.json, table3.md, fitness_history.png and force_comparison.png written to "
+          f"{out}", file=sys.stderr)
+    return 0
 
 
 #: entry-point group through which other packages (this project's `validation`) add

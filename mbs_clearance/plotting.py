@@ -6,7 +6,7 @@ backend is ever needed; every function returns the Figure and saves it when give
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 
 import numpy as np
@@ -15,7 +15,7 @@ from matplotlib.figure import Figure
 from .trajectory import Trajectory
 
 __all__ = ["plot_trajectory", "plot_overlay", "plot_comparison", "plot_sensitivities",
-           "plot_work_precision",
+           "plot_work_precision", "plot_fitness_history", "plot_force_comparison",
            "SENSITIVITY_FIGURES", "save"]
 
 COLORS = ["C0", "C3", "C2", "C1", "C4", "C5"]
@@ -209,4 +209,62 @@ def plot_work_precision(rows: Sequence[dict], path: str | Path | None = None,
         ax.invert_xaxis()
         ax.grid(alpha=0.3, which="both")
         ax.legend(fontsize=7)
+    return save(fig, path)
+
+
+def plot_fitness_history(result, path: str | Path | None = None) -> Figure:
+    """Best max |F12| of the population versus generation (paper Fig. 7a).
+
+    Parameters
+    ----------
+    result : OptimizationResult
+        ``result.history`` (generations_completed + 1,) N is plotted; the original design's
+        peak and the refined optimum are drawn as horizontal lines.
+    path : str or Path, optional
+        Where to save the figure (format from the suffix).
+    """
+    history = np.asarray(result.history, dtype=float)
+    fig = Figure(figsize=(6.5, 4.2), layout="constrained")
+    ax = fig.subplots()
+    ax.plot(np.arange(len(history)), history, "o-", color="C0", ms=3, lw=1.2,
+            label="GA: best of population")
+    ax.axhline(result.original_peak_force, color="C3", ls="--", lw=1.0,
+               label=f"original design ({result.original_peak_force:.0f} N)")
+    ax.axhline(result.best_peak_force, color="C2", ls=":", lw=1.2,
+               label=f"after refinement ({result.best_peak_force:.1f} N)")
+    settings = result.settings
+    ax.set(xlabel="generation", ylabel="max |F12| over revolution "
+           f"{settings.get('revolution', 4)} (N)",
+           title=f"GA fitness history (population {settings.get('population')}, seed "
+                 f"{settings.get('seed')}, masses {settings.get('mass_scaling')})")
+    ax.grid(alpha=0.3)
+    ax.legend(loc="best", fontsize=8)
+    return save(fig, path)
+
+
+def plot_force_comparison(trajectories: Mapping[str, Trajectory],
+                          path: str | Path | None = None, revolution: int = 4) -> Figure:
+    """|F12| versus crank angle over revolution `revolution` for several designs (paper
+    Fig. 7b). `trajectories` maps a label ("original", "optimum", ...) to its Trajectory; the
+    first two are drawn solid, the others dashed."""
+    fig = Figure(figsize=(7.5, 4.5), layout="constrained")
+    ax = fig.subplots()
+    colors = ["C3", "C0", "C2", "C1", "C4"]
+    backends = set()
+    for k, (label, traj) in enumerate(trajectories.items()):
+        mech = traj.mechanism
+        backends.add(traj.backend)
+        mask = traj.revolution_mask(revolution)
+        angle = np.degrees(traj.crank_angle[mask]) - 360.0 * (revolution - 1)
+        peak = traj.max_base_force(revolution)
+        ax.plot(angle, traj.base_force_magnitude[mask], color=colors[k % len(colors)],
+                lw=1.2 if k < 2 else 1.0, ls="-" if k < 2 else "--",
+                label=f"{label}: L2 = {mech.crank_length * 100:.4g} cm, "
+                      f"L3 = {mech.coupler_length * 100:.4g} cm, max {peak:.0f} N")
+    ax.set(xlabel="crank angle in revolution (deg)", ylabel="|F12| (N)",
+           title=f"base reaction force, revolution {revolution} "
+                 f"({', '.join(sorted(backends))} model)", xlim=(0.0, 360.0))
+    ax.set_xticks(np.arange(0, 361, 45))
+    ax.grid(alpha=0.3)
+    ax.legend(loc="best", fontsize=8)
     return save(fig, path)

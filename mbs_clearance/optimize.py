@@ -1,0 +1,608 @@
+"""Genetic-algorithm optimisation of design fields (the paper's Section 4, Eq. 18).
+
+`optimize_link_lengths` minimises the peak base reaction force max |F12| over one crank
+revolution (the 4th by default) over a box of `SliderCrank` fields (by default the paper's
+crank length L2 in [4, 6] cm and coupler length L3 in [10, 14] cm) with pygad's GA, then
+polishes the GA's best point with a bounded local search (scipy Nelder-Mead) on the same objective.
+
+Parallelism: each generation's new designs are evaluated as one batch on an executor, a local
+process pool by default, or any `concurrent.futures`-style executor, or a
+`dask.distributed.Client` for scale-out. The executor and the progress bar live in a
+module-level registry for the duration of the run, never inside the `pygad.GA` object, which
+therefore stays picklable. Each evaluation is a deterministic simulation, so the result for a
+given seed does not depend on the executor.
+
+The GA works on genes normalised to [0, 1] (u = (x - lo) / (hi - lo)), so that its operators
+(tournament selection, simulated binary crossover, polynomial mutation, all bounded) behave
+the same whatever the units and widths of the design variables.
+"""
+
+from __future__ import annotations
+
+import itertools
+import json
+import math
+import multiprocessing
+import numbers
+import os
+import time
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .mechanism import CONTINUOUS_FIELDS, SliderCrank
+from .simulate import BACKENDS, peak_base_force
+
+__all__ = ["optimize_link_lengths", "OptimizationResult", "MASS_SCALINGS", "PAPER_TABLE3",
+           "design_mechanism"]
+
+#: how link masses follow the link lengths: "fixed" (the paper's wording: only the lengths
+#: change) or "uniform" (uniform-density links: mass proportional to length)
+MASS_SCALINGS = ("fixed", "uniform")
+
+#: the paper's Table 3 and Section 5 (Ebrahimi, Salahshoor & Nouri 2018); lengths in m, N
+PAPER_TABLE3: dict[str, Any] = {
+    "original": {"crank_length": 0.05, "coupler_length": 0.12, "peak_force": 8311.0},
+    "optimum": {"crank_length": 0.040733, "coupler_length": 0.137468, "peak_force": 4667.0},
+    "reduction_percent": 43.85,
+}
+
+#: fields scaled with the lengths under mass_scaling="uniform" (they cannot also be genes)
+_SCALED_FIELDS = ("crank_mass", "coupler_mass", "crank_inertia", "coupler_inertia")
+
+_FORMAT = "mbs_clearance.optimize/1"
+
+#: GA operators and their settings (recorded in `OptimizationResult.settings`)
+_GA_OPERATORS: dict[str, Any] = {
+    "parent_selection_type": "tournament",
+    "K_tournament": 3,
+    "crossover_type": "sbx",
+    "crossover_probability": 0.9,
+    "sbx_crossover_eta": 15,
+    "mutation_type": "polynomial",
+    "polynomial_mutation_eta": 20,
+}
+
+
+# ----------------------------------------------------------------------------- the problem
+
+def design_mechanism(base: SliderCrank, values: dict[str, float],
+                     mass_scaling: str = "fixed") -> SliderCrank:
+    """`base` with the design `values` applied (SI units) under the mass assumption.
+
+    With ``mass_scaling="uniform"`` the crank and coupler masses scale with their lengths
+    relative to `base` (uniform density, fixed cross-section); explicit inertias scale with
+    the cube of the length (m L^2), and inertias left as None follow as uniform rods.
+    """
+    changes = {k: float(v) for k, v in values.items()}
+    if mass_scaling == "uniform":
+        s2 = changes.get("crank_length", base.crank_length) / base.crank_length
+        s3 = changes.get("coupler_length", base.coupler_length) / base.coupler_length
+        changes["crank_mass"] = base.crank_mass * s2
+        changes["coupler_mass"] = base.coupler_mass * s3
+        if base.crank_inertia is not None:
+            changes["crank_inertia"] = base.crank_inertia * s2**3
+        if base.coupler_inertia is not None:
+            changes["coupler_inertia"] = base.coupler_inertia * s3**3
+    elif mass_scaling != "fixed":
+        raise ValueError(f"mass_scaling must be one of {list(MASS_SCALINGS)}; "
+                         f"got {mass_scaling!r}")
+    return base.replace(**changes)
+
+
+@dataclass(frozen=True)
+class _Problem:
+    """Picklable description of the objective: design box, mapping, model settings."""
+
+    base: SliderCrank
+    names: tuple[str, ...]
+    lo: tuple[float, ...]
+    hi: tuple[float, ...]
+    mass_scaling: str
+    revolution: int
+    backend: str
+    options: dict
+
+    def physical(self, u) -> np.ndarray:
+        """Genes in [0, 1] -> field values in SI units."""
+        lo, hi = np.asarray(self.lo), np.asarray(self.hi)
+        u = np.clip(np.asarray(u, dtype=float), 0.0, 1.0)
+        return lo * (1.0 - u) + hi * u      # exact at both bounds (lo + u (hi - lo) is not)
+
+    def unit(self, x) -> np.ndarray:
+        lo, hi = np.asarray(self.lo), np.asarray(self.hi)
+        return (np.asarray(x, dtype=float) - lo) / (hi - lo)
+
+    def mechanism(self, u) -> SliderCrank:
+        return design_mechanism(self.base, dict(zip(self.names, self.physical(u))),
+                                self.mass_scaling)
+
+
+def _peak_chunk(mechs: list[SliderCrank], revolution: int, backend: str,
+                options: dict) -> list[float]:
+    """Worker: peak |F12| of each mechanism (inf where the integration fails)."""
+    out = []
+    for mech in mechs:
+        try:
+            out.append(float(peak_base_force(mech, revolution, backend, **options)))
+        except RuntimeError:
+            out.append(math.inf)
+    return out
+
+
+def _peak_chunk_packed(args: tuple) -> list[float]:
+    """`_peak_chunk` with its arguments in one tuple (for map-only executors)."""
+    return _peak_chunk(*args)
+
+
+def _init_worker() -> None:
+    """Process-pool initializer: one thread per worker process.
+
+    The numba kernels are serial (no parallel=True), so numba never starts its thread pool;
+    these variables keep any OpenMP/BLAS library loaded later from starting one thread per
+    core in each of the worker processes.
+    """
+    for name in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS",
+                 "NUMBA_NUM_THREADS"):
+        os.environ.setdefault(name, "1")
+
+
+# ----------------------------------------------------------------------------- executors
+
+class _Dispatcher:
+    """Uniform `map` over a process pool, a concurrent.futures executor or a dask Client."""
+
+    def __init__(self, executor, n_workers: int | None):
+        self.executor = executor
+        self.is_dask = _is_dask_client(executor)
+        if n_workers is None and executor is not None:
+            if self.is_dask:
+                n_workers = max(1, sum(executor.nthreads().values()))
+            else:
+                n_workers = getattr(executor, "_max_workers", None)
+        self.n_workers = n_workers
+
+    def map(self, mechs: list[SliderCrank], problem: _Problem) -> list[float]:
+        args = (problem.revolution, problem.backend, problem.options)
+        if self.executor is None or len(mechs) <= 1:
+            return _peak_chunk(mechs, *args)
+        n_chunks = len(mechs) if self.n_workers is None else min(len(mechs), self.n_workers)
+        bounds = np.linspace(0, len(mechs), n_chunks + 1).round().astype(int)
+        chunks = [mechs[a:b] for a, b in zip(bounds[:-1], bounds[1:])]
+        if self.is_dask:
+            futures = [self.executor.submit(_peak_chunk, c, *args, pure=False) for c in chunks]
+            results = self.executor.gather(futures)
+        elif hasattr(self.executor, "submit"):
+            futures = [self.executor.submit(_peak_chunk, c, *args) for c in chunks]
+            results = [f.result() for f in futures]
+        else:  # map-only executors, e.g. multiprocessing.Pool: one iterable of tuples
+            results = list(self.executor.map(_peak_chunk_packed, [(c, *args) for c in chunks]))
+        return [p for chunk in results for p in chunk]
+
+
+def _is_dask_client(executor) -> bool:
+    return (type(executor).__module__.startswith("distributed")
+            and hasattr(executor, "gather") and hasattr(executor, "nthreads"))
+
+
+def _describe_executor(executor, workers) -> str:
+    if executor is None:
+        return "serial (this process)"
+    if _is_dask_client(executor):
+        return f"dask.distributed.Client({executor.scheduler.address}, {workers} threads)"
+    return f"{type(executor).__name__}({workers} workers)"
+
+
+def local_process_pool(workers: int = 2) -> ProcessPoolExecutor:
+    """A process pool suited to the GA: forkserver (spawn where unavailable), one thread each.
+
+    Forkserver/spawn rather than fork because the parent may run threads (progress bar,
+    dask client) that fork would copy mid-operation.
+    """
+    method = "forkserver" if "forkserver" in multiprocessing.get_all_start_methods() \
+        else "spawn"
+    return ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context(method),
+                               initializer=_init_worker)
+
+
+#: run id -> (dispatcher, progress bar) while a run is active; kept out of the GA object
+_ACTIVE: dict[int, tuple[_Dispatcher, Any]] = {}
+_RUN_IDS = itertools.count()
+
+
+class _Objective:
+    """Batch fitness for pygad (fitness = -peak) with a cache of every evaluated design.
+
+    Holds only picklable data; the executor is looked up by run id in `_ACTIVE`, and a copy
+    unpickled elsewhere (no entry) evaluates in its own process.
+    """
+
+    def __init__(self, problem: _Problem, run_id: int):
+        self.problem = problem
+        self.run_id = run_id
+        self.cache: dict[tuple[float, ...], float] = {}
+
+    def peaks(self, U, serial: bool = False) -> np.ndarray:
+        """Peak |F12| in N for each row of genes `U` (k, n), evaluating only new designs."""
+        U = np.atleast_2d(np.asarray(U, dtype=float))
+        keys = [tuple(float(v) for v in row) for row in U]
+        new = list(dict.fromkeys(k for k in keys if k not in self.cache))
+        if new:
+            mechs = [self.problem.mechanism(k) for k in new]
+            active = _ACTIVE.get(self.run_id)
+            dispatcher = active[0] if active is not None and not serial \
+                else _Dispatcher(None, None)
+            for k, p in zip(new, dispatcher.map(mechs, self.problem)):
+                self.cache[k] = p
+        return np.array([self.cache[k] for k in keys])
+
+    def __call__(self, ga, solutions, indices):
+        return [-p for p in self.peaks(solutions)]
+
+
+class _OnGeneration:
+    """pygad callback: advance the progress bar (looked up by run id) with the best so far."""
+
+    def __init__(self, run_id: int):
+        self.run_id = run_id
+
+    def __call__(self, ga) -> None:
+        active = _ACTIVE.get(self.run_id)
+        if active is not None and active[1] is not None:
+            bar = active[1]
+            bar.set_postfix_str(f"best max|F12| = {-np.max(ga.last_generation_fitness):.2f} N",
+                                refresh=False)
+            bar.update(1)
+
+
+# ----------------------------------------------------------------------------- the result
+
+@dataclass(frozen=True, eq=False)
+class OptimizationResult:
+    """Outcome of `optimize_link_lengths`; forces in N, mechanisms in SI units.
+
+    Attributes
+    ----------
+    best : SliderCrank
+        Optimal design (GA, then local refinement where that improved it).
+    best_peak_force : float
+        Its max |F12| over the chosen revolution, N.
+    original : SliderCrank
+        The design the optimisation started from (`mech`).
+    original_peak_force : float
+        max |F12| of `original`, N.
+    history : (generations_completed + 1,) array
+        Best max |F12| in the population, N: initial population, then after each generation.
+    genes : dict
+        Design field -> (lower, upper) bound in SI units.
+    settings : dict
+        Everything needed to repeat the run (seed, sizes, operators, model, mass scaling).
+    n_evaluations : int
+        Distinct designs simulated (GA, refinement and the original).
+    ga_best, ga_best_peak_force : SliderCrank, float
+        The GA's best design before refinement and its peak force.
+    generations_completed : int
+        Generations run before a stopping criterion (limit or saturation) held.
+    n_failed : int
+        Designs whose integration failed (ranked last, peak = inf).
+    """
+
+    best: SliderCrank
+    best_peak_force: float
+    original: SliderCrank
+    original_peak_force: float
+    history: np.ndarray
+    genes: dict[str, tuple[float, float]]
+    settings: dict[str, Any]
+    n_evaluations: int
+    ga_best: SliderCrank
+    ga_best_peak_force: float
+    generations_completed: int
+    n_failed: int = 0
+    elapsed: float = field(default=0.0)
+
+    @property
+    def reduction_percent(self) -> float:
+        """Reduction of the peak force from the original design, %."""
+        return 100.0 * (self.original_peak_force - self.best_peak_force) \
+            / self.original_peak_force
+
+    @property
+    def best_genes(self) -> dict[str, float]:
+        """Design field -> optimal value (SI units)."""
+        return {name: getattr(self.best, name) for name in self.genes}
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain JSON-serialisable dict (mechanisms as field dicts)."""
+        return {
+            "format": _FORMAT,
+            "best": self.best.to_dict(),
+            "best_genes": self.best_genes,
+            "best_peak_force": self.best_peak_force,
+            "original": self.original.to_dict(),
+            "original_peak_force": self.original_peak_force,
+            "reduction_percent": self.reduction_percent,
+            "history": [float(v) for v in self.history],
+            "genes": {k: [float(a), float(b)] for k, (a, b) in self.genes.items()},
+            "settings": self.settings,
+            "n_evaluations": self.n_evaluations,
+            "ga_best": self.ga_best.to_dict(),
+            "ga_best_peak_force": self.ga_best_peak_force,
+            "generations_completed": self.generations_completed,
+            "n_failed": self.n_failed,
+            "elapsed": self.elapsed,
+        }
+
+    def to_json(self, path: str | Path) -> Path:
+        """Write the result with the settings used to `path` (JSON); returns the path."""
+        path = Path(path)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(json.dumps(self.to_dict(), indent=2))
+        return path
+
+    @classmethod
+    def from_json(cls, path: str | Path) -> OptimizationResult:
+        """Read a result written by `to_json`."""
+        try:
+            data = json.loads(Path(path).read_text())
+        except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+            raise ValueError(f"cannot read optimisation result {str(path)!r}: {exc}") from exc
+        if not isinstance(data, dict) or data.get("format") != _FORMAT:
+            raise ValueError(f"{str(path)!r} is not an optimisation result ({_FORMAT})")
+        return cls(
+            best=SliderCrank.from_dict(data["best"]),
+            best_peak_force=float(data["best_peak_force"]),
+            original=SliderCrank.from_dict(data["original"]),
+            original_peak_force=float(data["original_peak_force"]),
+            history=np.asarray(data["history"], dtype=float),
+            genes={k: (float(a), float(b)) for k, (a, b) in data["genes"].items()},
+            settings=data["settings"],
+            n_evaluations=int(data["n_evaluations"]),
+            ga_best=SliderCrank.from_dict(data["ga_best"]),
+            ga_best_peak_force=float(data["ga_best_peak_force"]),
+            generations_completed=int(data["generations_completed"]),
+            n_failed=int(data.get("n_failed", 0)),
+            elapsed=float(data.get("elapsed", 0.0)),
+        )
+
+
+# ----------------------------------------------------------------------------- validation
+
+def _is_int(value) -> bool:
+    return isinstance(value, numbers.Integral) and not isinstance(value, bool)
+
+
+def _check_int(name: str, value, minimum: int) -> int:
+    if not _is_int(value) or value < minimum:
+        raise ValueError(f"{name} must be an integer >= {minimum}; got {value!r}")
+    return int(value)
+
+
+def _check_genes(base: SliderCrank, genes: dict, mass_scaling: str) -> dict:
+    if not isinstance(genes, dict) or not genes:
+        raise ValueError("genes must be a non-empty dict {field: (lower, upper)}; "
+                         f"got {genes!r}")
+    unknown = [n for n in genes if n not in CONTINUOUS_FIELDS]
+    if unknown:
+        raise ValueError(f"unknown gene name(s) {unknown}; allowed: {list(CONTINUOUS_FIELDS)}")
+    if mass_scaling == "uniform":
+        clash = [n for n in genes if n in _SCALED_FIELDS]
+        if clash:
+            raise ValueError(f"gene(s) {clash} cannot be optimised with mass_scaling='uniform'"
+                             " (they follow the lengths); use mass_scaling='fixed'")
+    out = {}
+    for name, bounds in genes.items():
+        try:
+            lo, hi = bounds
+            ok = all(isinstance(v, numbers.Real) and not isinstance(v, bool)
+                     and math.isfinite(v) for v in (lo, hi))
+        except (TypeError, ValueError):
+            ok = False
+        if not ok:
+            raise ValueError(f"bounds of gene {name!r} must be two finite numbers "
+                             f"(lower, upper); got {bounds!r}")
+        if not lo < hi:
+            raise ValueError(f"bounds of gene {name!r} must satisfy lower < upper; "
+                             f"got ({lo!r}, {hi!r})")
+        out[name] = (float(lo), float(hi))
+    # every constraint of SliderCrank is linear in the fields (L3 > L2, R_J < R_B, ranges),
+    # so the box is feasible when all its corners are
+    names = list(out)
+    for corner in itertools.product(*(out[n] for n in names)):
+        try:
+            design_mechanism(base, dict(zip(names, corner)), mass_scaling)
+        except ValueError as exc:
+            raise ValueError(
+                f"the gene bounds {out} contain an invalid mechanism at "
+                f"{dict(zip(names, corner))}: {exc}") from exc
+    return out
+
+
+# ----------------------------------------------------------------------------- the driver
+
+_DEFAULT_CRANK = (0.04, 0.06)
+_DEFAULT_COUPLER = (0.10, 0.14)
+
+
+def optimize_link_lengths(mech: SliderCrank | None = None,
+                          crank_length: tuple[float, float] = _DEFAULT_CRANK,
+                          coupler_length: tuple[float, float] = _DEFAULT_COUPLER,
+                          revolution: int = 4, backend: str = "reduced",
+                          seed: int | None = None, executor=None, population: int = 20,
+                          generations: int = 30, saturation: int | None = 10,
+                          genes: dict[str, tuple[float, float]] | None = None,
+                          mass_scaling: str = "fixed", refine: bool = True,
+                          progress: bool = True, workers: int = 2,
+                          **backend_options) -> OptimizationResult:
+    """Minimise max |F12| over crank revolution `revolution` with a GA (paper Eq. 18).
+
+    Parameters
+    ----------
+    mech : SliderCrank, optional
+        Starting design; every field that is not a gene keeps its value (default: the paper's
+        case).
+    crank_length, coupler_length : (float, float)
+        Bounds in m of L2 and L3, the default genes (paper: [0.04, 0.06] and [0.10, 0.14]).
+    revolution : int
+        Crank revolution (1-based) whose peak |F12| is minimised (paper: 4).
+    backend : str
+        Model, a key of `BACKENDS` ("reduced" default; "ideal" for rigid joints).
+    seed : int, optional
+        Seed of the GA in [0, 2**32 - 1]; the same seed gives the same result on every
+        executor. None draws one, which is recorded in ``settings["seed"]``.
+    executor : optional
+        Where the designs of a generation are simulated: None (a local process pool of
+        `workers` processes, created and shut down here), "serial" (this process), any
+        `concurrent.futures`-style executor (``submit`` or ``map``), or a
+        `dask.distributed.Client`.
+    population, generations : int
+        Population size (>= 4) and maximum number of generations (>= 1).
+    saturation : int or None
+        Stop when the best value has not changed for this many generations (pygad
+        ``"saturate_N"``); None disables it.
+    genes : dict, optional
+        ``{field: (lower, upper)}`` of any continuous `SliderCrank` fields (SI units);
+        replaces the two default genes.
+    mass_scaling : {"fixed", "uniform"}
+        "fixed": link masses stay as in `mech` (the paper's wording); "uniform": crank and
+        coupler masses scale with their lengths (uniform density), see `design_mechanism`.
+    refine : bool
+        Polish the GA's best point with bounded Nelder-Mead on the same objective.
+    progress : bool
+        Show a tqdm progress bar with the best value so far.
+    workers : int
+        Size of the local process pool when `executor` is None.
+    **backend_options
+        Passed to `peak_base_force` (e.g. ``rtol``).
+
+    Returns
+    -------
+    OptimizationResult
+    """
+    import pygad
+    from tqdm.auto import tqdm
+
+    t_start = time.perf_counter()
+    mech = SliderCrank() if mech is None else mech
+    if not isinstance(mech, SliderCrank):
+        raise ValueError(f"mech must be a SliderCrank; got {type(mech).__name__}")
+    if mass_scaling not in MASS_SCALINGS:
+        raise ValueError(f"mass_scaling must be one of {list(MASS_SCALINGS)}; "
+                         f"got {mass_scaling!r}")
+    if backend not in BACKENDS:
+        raise ValueError(f"backend must be one of {sorted(BACKENDS)}; got {backend!r}")
+    revolution = _check_int("revolution", revolution, 1)
+    population = _check_int("population", population, 4)
+    generations = _check_int("generations", generations, 1)
+    if saturation is not None:
+        saturation = _check_int("saturation", saturation, 1)
+    if seed is None:
+        seed = int(np.random.SeedSequence().generate_state(1)[0])
+    elif not _is_int(seed) or not 0 <= seed < 2**32:
+        raise ValueError(f"seed must be None or an integer in [0, 2**32 - 1]; got {seed!r}")
+    if genes is None:
+        genes = {"crank_length": crank_length, "coupler_length": coupler_length}
+    elif crank_length != _DEFAULT_CRANK or coupler_length != _DEFAULT_COUPLER:
+        raise ValueError("pass either genes=... or crank_length/coupler_length bounds, "
+                         "not both (put all bounds in genes)")
+    genes = _check_genes(mech, genes, mass_scaling)
+    if isinstance(executor, str) and executor != "serial":
+        raise ValueError(f"executor must be None, 'serial', a concurrent.futures executor or "
+                         f"a dask.distributed.Client; got {executor!r}")
+    if executor is None:
+        _check_int("workers", workers, 1)
+
+    names = tuple(genes)
+    problem = _Problem(base=mech, names=names, lo=tuple(genes[n][0] for n in names),
+                       hi=tuple(genes[n][1] for n in names), mass_scaling=mass_scaling,
+                       revolution=revolution, backend=backend, options=dict(backend_options))
+    # the original design, in this process: checks the options and warms the compiled model
+    original_peak = float(peak_base_force(mech, revolution, backend, **backend_options))
+
+    run_id = next(_RUN_IDS)
+    objective = _Objective(problem, run_id)
+    n_genes = len(names)
+    n_elite = max(1, population // 10)
+    ga_settings = dict(_GA_OPERATORS, num_parents_mating=max(2, population // 2),
+                       keep_elitism=n_elite, mutation_probability=1.0 / n_genes)
+    settings = {
+        "revolution": revolution, "backend": backend, "backend_options": dict(backend_options),
+        "seed": seed, "population": population, "generations": generations,
+        "saturation": saturation, "mass_scaling": mass_scaling, "refine": refine,
+        "ga": ga_settings, "pygad_version": pygad.__version__,
+    }
+    ga = pygad.GA(
+        num_generations=generations, fitness_func=objective, fitness_batch_size=population,
+        sol_per_pop=population, num_genes=n_genes, gene_type=float,
+        init_range_low=0.0, init_range_high=1.0,
+        gene_space=[{"low": 0.0, "high": 1.0}] * n_genes,
+        on_generation=_OnGeneration(run_id), random_seed=seed,
+        stop_criteria=None if saturation is None else f"saturate_{saturation}",
+        **ga_settings)
+
+    own_pool = None
+    if executor is None:
+        own_pool = executor = local_process_pool(workers) if workers > 1 else None
+    elif executor == "serial":
+        executor = None
+    dispatcher = _Dispatcher(executor, workers if own_pool is not None else None)
+    settings["executor"] = _describe_executor(executor, dispatcher.n_workers)
+    bar = tqdm(total=generations, desc="GA", unit="gen", disable=not progress, leave=True)
+    _ACTIVE[run_id] = (dispatcher, bar)
+    try:
+        ga.run()
+    finally:
+        _ACTIVE.pop(run_id, None)
+        bar.close()
+        if own_pool is not None:
+            own_pool.shutdown(wait=True)
+
+    history = -np.asarray(ga.best_solutions_fitness, dtype=float)
+    u_ga, fit_ga, _ = ga.best_solution(pop_fitness=ga.last_generation_fitness)
+    ga_peak = float(-fit_ga)
+    u_best, best_peak = np.asarray(u_ga, dtype=float), ga_peak
+    if refine:
+        u_best, best_peak = _refine(objective, u_best, best_peak, progress)
+    n_failed = sum(1 for p in objective.cache.values() if not math.isfinite(p))
+    return OptimizationResult(
+        best=problem.mechanism(u_best), best_peak_force=float(best_peak), original=mech,
+        original_peak_force=original_peak, history=history, genes=genes, settings=settings,
+        n_evaluations=len(objective.cache) + 1, ga_best=problem.mechanism(u_ga),
+        ga_best_peak_force=ga_peak, generations_completed=int(ga.generations_completed),
+        n_failed=n_failed, elapsed=time.perf_counter() - t_start)
+
+
+#: local refinement: Nelder-Mead with bounds (scipy clips to the box, so it lands exactly on
+#: a bound where the optimum is one, which Powell's bounded line search does not), started
+#: from a simplex spanning 5 % of the box; the peak is accurate to about 1e-6 relative at
+#: the default rtol, so a tighter fatol buys nothing
+_REFINE_STEP = 0.05
+_REFINE_OPTIONS = {"xatol": 1e-6, "fatol_rel": 1e-6, "maxfev": 400}
+
+
+def _refine(objective: _Objective, u0: np.ndarray, f0: float, progress: bool):
+    """Bounded Nelder-Mead from the GA's best point; returns the better of (start, refined)."""
+    from scipy.optimize import minimize
+    from tqdm.auto import tqdm
+
+    n = len(u0)
+    simplex = [u0]
+    for i in range(n):
+        step = np.zeros(n)
+        step[i] = _REFINE_STEP if u0[i] + _REFINE_STEP <= 1.0 else -_REFINE_STEP
+        simplex.append(u0 + step)
+    opts = {"xatol": _REFINE_OPTIONS["xatol"], "maxfev": _REFINE_OPTIONS["maxfev"],
+            "fatol": _REFINE_OPTIONS["fatol_rel"] * abs(f0), "initial_simplex": simplex}
+    with tqdm(desc="refine", unit="eval", disable=not progress, leave=True) as bar:
+        def fun(u):
+            bar.update(1)
+            return float(objective.peaks(np.clip(u, 0.0, 1.0), serial=True)[0])
+
+        res = minimize(fun, u0, method="Nelder-Mead", bounds=[(0.0, 1.0)] * n, options=opts)
+        bar.set_postfix_str(f"best max|F12| = {min(res.fun, f0):.2f} N", refresh=True)
+    u = np.clip(res.x, 0.0, 1.0)
+    f = float(objective.peaks(u, serial=True)[0])
+    return (u, f) if f < f0 else (u0, f0)

@@ -1,0 +1,558 @@
+"""The validation report: the paper reproduced and cross-checked, in one command.
+
+    mbs-clearance report [--out report/] [--quick] [--replot]
+
+Writes ``report.html`` (self-contained: figures embedded), ``report.json`` (every number in
+the report), ``figures/*.png`` and ``data/`` (what each section computed). Each section
+computes its data once and saves it; the figures and the HTML are drawn from the saved data,
+so ``--replot`` redraws everything without recomputing.
+"""
+
+from __future__ import annotations
+
+import base64
+import json
+import math
+import platform
+import time
+from importlib import metadata
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from mbs_clearance import PARAMETER_INFO, SliderCrank, load_trajectory, simulate
+from validation.plugin import make_register, run_script
+
+#: the paper's published numbers (Ebrahimi, Salahshoor & Nouri 2018)
+PAPER = {
+    "peak_original": 8311.0,
+    "peak_optimum": 4667.0,
+    "reduction_percent": 43.85,
+    "optimum_crank_length": 0.040733,
+    "optimum_coupler_length": 0.137468,
+}
+
+SECTIONS = ("mechanism", "response", "agreement", "sensitivity", "optimization",
+            "paper", "performance", "environment")
+
+TITLES = {
+    "mechanism": "1. Mechanism and parameters",
+    "response": "2. Dynamic response (paper Fig. 3)",
+    "agreement": "3. Cross-model agreement: reduced model vs Exudyn",
+    "sensitivity": "4. Design sensitivities (paper Figs. 4-6)",
+    "optimization": "5. Optimisation of the link lengths (paper Fig. 7, Table 3)",
+    "paper": "6. Comparison with the paper's numbers",
+    "performance": "7. Accuracy and speed",
+    "environment": "8. Environment",
+}
+
+
+def _settings(quick: bool) -> dict[str, Any]:
+    return {
+        "quick": quick,
+        "revolutions": 4,
+        "exudyn_step": 4e-6 if quick else 2e-6,
+        "exudyn_variants": ("symbolic", "sphere") if quick else ("symbolic", "python",
+                                                                 "sphere"),
+        "ga_population": 8 if quick else 20,
+        "ga_generations": 4 if quick else 30,
+        "ga_seed": 1,
+        "fd_check_parameters": ("crank_length", "slider_mass", "journal_radius")
+        if quick else None,
+    }
+
+
+# ------------------------------------------------------------------------------ sections
+def section_mechanism(out: Path, s: dict) -> dict:
+    mech = SliderCrank()
+    rows = []
+    for name, (symbol, unit, source) in PARAMETER_INFO.items():
+        value = getattr(mech, name)
+        derived = {"coupler_inertia": mech.coupler_inertia_value,
+                   "contact_stiffness": mech.stiffness}.get(name)
+        rows.append({"field": name, "symbol": symbol, "unit": unit, "source": source,
+                     "value": value if value is not None else f"None -> {derived:.6g}"})
+    rows.append({"field": "clearance (derived)", "symbol": "c = R_B - R_J", "unit": "m",
+                 "source": "paper Table 2", "value": mech.clearance})
+    return {"parameters": rows}
+
+
+def section_response(out: Path, s: dict) -> dict:
+    mech = SliderCrank()
+    n = s["revolutions"]
+    trajs = {
+        "reduced": simulate(mech, n),
+        "exudyn": simulate(mech, n, backend="exudyn", step_size=s["exudyn_step"]),
+        "ideal": simulate(mech, n, backend="ideal"),
+    }
+    for name, tr in trajs.items():
+        tr.save(out / "data" / f"response_{name}.npz")
+    numbers = {}
+    for name, tr in trajs.items():
+        mask = tr.revolution_mask(n)
+        numbers[name] = {
+            "peak_base_force": [tr.max_base_force(k) for k in range(1, n + 1)],
+            "max_abs_crank_moment_last_revolution": float(np.abs(tr.crank_moment[mask]).max()),
+            "max_slider_acceleration_last_revolution":
+                float(np.abs(tr.slider_acceleration[mask]).max()),
+            "max_eccentricity_over_clearance":
+                float(np.hypot(*tr.eccentricity.T).max() / mech.clearance)
+                if name != "ideal" else 0.0,
+        }
+    return numbers
+
+
+def section_agreement(out: Path, s: dict) -> dict:
+    from validation.compare import compare
+
+    rows = []
+    n = s["revolutions"]
+    for c in (1e-5, 1e-7, 1e-4):
+        mech = SliderCrank(journal_radius=0.01 - c)
+        ref = simulate(mech, n, rtol=1e-10, h_max=s["exudyn_step"])
+        for variant in s["exudyn_variants"]:
+            if c != 1e-5 and variant != "symbolic":
+                continue
+            ex = simulate(mech, n, backend="exudyn", step_size=s["exudyn_step"],
+                          contact=variant)
+            res = compare(ref, ex)
+            per = res.revolutions
+            fa, fb = res.first_impact_a, res.first_impact_b
+            rows.append({
+                "clearance_mm": c * 1e3, "variant": variant,
+                "peak_diff_percent": [100 * r.peak_rel_diff for r in per],
+                "rms_base_force_percent_last": 100 * per[-1].base_force_rel_rms,
+                "rms_crank_moment_percent_last": 100 * per[-1].crank_moment_rel_rms,
+                "orbit_rms_over_c_last": per[-1].orbit_rms_rel,
+                "first_impact_dt_us": None if fa is None or fb is None
+                else 1e6 * (fb.time - fa.time),
+                "periodic": c <= 1e-5,
+            })
+    return {"rows": rows, "exudyn_step": s["exudyn_step"]}
+
+
+def section_sensitivity(out: Path, s: dict) -> dict:
+    from mbs_clearance.sensitivity import DEFAULT_PARAMETERS, sensitivities
+
+    mech = SliderCrank()
+    n = s["revolutions"]
+    T = mech.period
+    t_eval = np.linspace((n - 1) * T, n * T, 1441)
+    ddm = sensitivities(mech, revolutions=n, t_eval=t_eval, rtol=1e-9)
+    _save_sens(ddm, out / "data" / "sensitivity_ddm")
+    names = s["fd_check_parameters"] or DEFAULT_PARAMETERS
+    fd = sensitivities(mech, names, revolutions=n, method="fd", t_eval=t_eval)
+    check = []
+    for k, name in enumerate(names):
+        a = ddm.base_force_magnitude[:, ddm.column(name)]
+        b = fd.base_force_magnitude[:, k]
+        check.append({"parameter": name,
+                      "max_diff_over_max": float(np.max(np.abs(a - b)) / np.max(np.abs(a)))})
+    return {"summary": ddm.summary(), "fd_check": check, "chaotic": ddm.chaotic,
+            "ddm_seconds": ddm.stats["wall_time"], "fd_seconds": fd.stats["wall_time"],
+            "ddm_steps": ddm.stats["naccept"]}
+
+
+def _save_sens(sens, stem: Path) -> None:
+    sens.trajectory.save(stem.with_suffix(".trajectory.npz"))
+    np.savez_compressed(stem.with_suffix(".npz"), t=sens.t,
+                        parameters=np.array(sens.parameters), reference=sens.reference,
+                        base_force=sens.base_force,
+                        base_force_magnitude=sens.base_force_magnitude,
+                        crank_moment=sens.crank_moment, contact_force=sens.contact_force,
+                        growth=sens.growth)
+
+
+def _load_sens(stem: Path):
+    from mbs_clearance.sensitivity import Sensitivities
+
+    traj = load_trajectory(stem.with_suffix(".trajectory.npz"))
+    with np.load(stem.with_suffix(".npz")) as d:
+        return Sensitivities(t=d["t"], parameters=tuple(str(p) for p in d["parameters"]),
+                             reference=d["reference"], base_force=d["base_force"],
+                             base_force_magnitude=d["base_force_magnitude"],
+                             crank_moment=d["crank_moment"], contact_force=d["contact_force"],
+                             trajectory=traj, method="ddm", backend="reduced",
+                             growth=d["growth"])
+
+
+def section_optimization(out: Path, s: dict) -> dict:
+    from mbs_clearance.optimize import design_mechanism, optimize_link_lengths
+    from mbs_clearance.simulate import peak_base_force
+
+    results, evals = {}, {}
+    paper_lengths = {"crank_length": PAPER["optimum_crank_length"],
+                     "coupler_length": PAPER["optimum_coupler_length"]}
+    for scaling in ("fixed", "uniform"):
+        res = optimize_link_lengths(SliderCrank(), seed=s["ga_seed"],
+                                    population=s["ga_population"],
+                                    generations=s["ga_generations"], mass_scaling=scaling,
+                                    progress=False)
+        res.to_json(out / "data" / f"optimization_{scaling}.json")
+        paper_mech = design_mechanism(SliderCrank(), paper_lengths, scaling)
+        for label, m in (("original", res.original), ("optimum", res.best),
+                         ("paper_optimum", paper_mech)):
+            traj = simulate(m, 4)
+            traj.save(out / "data" / f"optimization_{scaling}_{label}.npz")
+        results[scaling] = {
+            "crank_length": res.best.crank_length, "coupler_length": res.best.coupler_length,
+            "best_peak_force": res.best_peak_force,
+            "original_peak_force": res.original_peak_force,
+            "reduction_percent": res.reduction_percent,
+            "generations": res.generations_completed, "evaluations": res.n_evaluations,
+        }
+        evals[scaling] = {"reduced": traj.max_base_force(4),
+                          "ideal": peak_base_force(paper_mech, 4, backend="ideal")}
+    paper_mech = design_mechanism(SliderCrank(), paper_lengths, "fixed")
+    evals["fixed"]["exudyn"] = simulate(paper_mech, 4, backend="exudyn",
+                                        step_size=s["exudyn_step"]).max_base_force(4)
+    return {"results": results, "paper_optimum_in_our_models": evals}
+
+
+def section_paper(out: Path, s: dict, numbers: dict) -> dict:
+    resp = numbers["response"]
+    opt = numbers["optimization"]
+    ours_orig = resp["reduced"]["peak_base_force"][3]
+    ideal_orig = resp["ideal"]["peak_base_force"][3]
+    p_opt = opt["paper_optimum_in_our_models"]["fixed"]
+    fixed = opt["results"]["fixed"]
+    rows = [
+        {"quantity": "max |F12|, 4th revolution, original design (N)",
+         "paper": PAPER["peak_original"], "ours": ours_orig,
+         "explanation": "Reduced model, the paper's own equations. The paper's integrator and "
+                        "contact-onset detection are not published; the difference is of "
+                        "the size of the clearance effect itself (ideal joint: "
+                        f"{ideal_orig:.0f} N)."},
+        {"quantity": "same, Exudyn model (N)", "paper": PAPER["peak_original"],
+         "ours": resp["exudyn"]["peak_base_force"][3],
+         "explanation": "Independent multibody model with the same contact law, step "
+                        f"{s['exudyn_step']:g} s."},
+        {"quantity": "same, ideal joint (N)", "paper": None, "ours": ideal_orig,
+         "explanation": f"The clearance adds {100 * (ours_orig / ideal_orig - 1):.2f} % to the "
+                        "peak in this periodic case."},
+        {"quantity": "paper's optimum (4.0733 cm, 13.7468 cm): max |F12| (N)",
+         "paper": PAPER["peak_optimum"], "ours": p_opt["reduced"],
+         "explanation": f"Reduced {p_opt['reduced']:.0f} N and Exudyn {p_opt['exudyn']:.0f} N "
+                        f"agree; the ideal joint alone gives {p_opt['ideal']:.0f} N at these "
+                        "lengths, so the inertia forces already exceed the paper's 4667 N and "
+                        "no clearance effect can bring the peak down to it "
+                        "(docs/optimization.md)."},
+        {"quantity": "GA optimum, fixed masses: max |F12| (N)", "paper": PAPER["peak_optimum"],
+         "ours": fixed["best_peak_force"],
+         "explanation": "Our GA + refinement over the paper's box."},
+        {"quantity": "GA optimum, fixed masses: reduction (%)",
+         "paper": PAPER["reduction_percent"], "ours": fixed["reduction_percent"],
+         "explanation": "The paper's 43.85 % follows from its 4667 N, which our models do not "
+                        "reproduce at its own optimum (row above)."},
+        {"quantity": "GA optimum crank length (cm)",
+         "paper": 100 * PAPER["optimum_crank_length"], "ours": 100 * fixed["crank_length"],
+         "explanation": "Lower bound of the box is 4 cm: the inertia forces grow with L2."},
+        {"quantity": "GA optimum coupler length (cm)",
+         "paper": 100 * PAPER["optimum_coupler_length"], "ours": 100 * fixed["coupler_length"],
+         "explanation": "Upper bound of the box is 14 cm."},
+    ]
+    for r in rows:
+        if r["paper"] is not None:
+            r["difference_percent"] = 100 * (r["ours"] / r["paper"] - 1)
+    return {"rows": rows}
+
+
+def section_performance(out: Path, s: dict) -> dict:
+    from validation.benchmarks.work_precision import run, speed_ratios
+    from validation.stress import run_sweep, stress_cases, summary
+
+    rows, refs = run(quick=s["quick"], repeats=3 if s["quick"] else 5)
+    ratios = {case: {str(t): speed_ratios(rows, case, t) for t in (1e-2, 1e-3, 1e-5)}
+              for case in refs}
+    stress = run_sweep(stress_cases(s["quick"]), progress=False)
+    return {"work_precision": rows, "references": refs, "ratios": ratios,
+            "stress_rows": stress, "stress_summary": summary(stress)}
+
+
+def section_environment(out: Path, s: dict, timings: dict) -> dict:
+    from validation.benchmarks.machine import machine_summary
+
+    versions = {}
+    for pkg in ("mbs-clearance", "numpy", "scipy", "numba", "exudyn", "pygad", "matplotlib",
+                "jinja2", "dask"):
+        try:
+            versions[pkg] = metadata.version(pkg)
+        except metadata.PackageNotFoundError:
+            versions[pkg] = "not installed"
+    return {"machine": machine_summary(), "python": platform.python_version(),
+            "versions": versions, "section_seconds": timings, "settings": s}
+
+
+# ------------------------------------------------------------------------------ figures
+def draw_figures(out: Path, numbers: dict) -> dict[str, list[str]]:
+    """All figures from the saved data; returns section -> figure file names."""
+    from mbs_clearance.plotting import (
+        SENSITIVITY_FIGURES,
+        plot_overlay,
+        plot_sensitivities,
+        plot_work_precision,
+    )
+
+    fig_dir = out / "figures"
+    fig_dir.mkdir(parents=True, exist_ok=True)
+    data = out / "data"
+    figs: dict[str, list[str]] = {k: [] for k in SECTIONS}
+    if (data / "response_reduced.npz").exists():
+        trajs = [load_trajectory(data / f"response_{n}.npz")
+                 for n in ("reduced", "exudyn", "ideal")]
+        plot_overlay(trajs, ["reduced model (clearance)", "Exudyn (clearance)",
+                             "ideal joint"], path=fig_dir / "fig3_response.png",
+                     title="Paper's case, revolution 4: clearance 0.01 mm vs ideal joint")
+        figs["response"].append("fig3_response.png")
+    if (data / "sensitivity_ddm.npz").exists():
+        sens = _load_sens(data / "sensitivity_ddm")
+        for stem, (title, group) in SENSITIVITY_FIGURES.items():
+            plot_sensitivities(sens, group, title, path=fig_dir / f"{stem}.png")
+            figs["sensitivity"].append(f"{stem}.png")
+    if (data / "optimization_fixed.json").exists():
+        from mbs_clearance.optimize import OptimizationResult
+        from mbs_clearance.plotting import plot_fitness_history, plot_force_comparison
+
+        for scaling in ("fixed", "uniform"):
+            res = OptimizationResult.from_json(data / f"optimization_{scaling}.json")
+            plot_fitness_history(res, path=fig_dir / f"fig7a_fitness_{scaling}.png")
+            trajs = {label.replace("_", "'s "): load_trajectory(
+                data / f"optimization_{scaling}_{label}.npz")
+                for label in ("original", "optimum", "paper_optimum")}
+            plot_force_comparison(trajs, path=fig_dir / f"fig7b_force_{scaling}.png")
+            figs["optimization"] += [f"fig7a_fitness_{scaling}.png",
+                                     f"fig7b_force_{scaling}.png"]
+    if "performance" in numbers:
+        rows = numbers["performance"]["work_precision"]
+        plot_work_precision(rows, path=fig_dir / "work_precision.png")
+        plot_work_precision(rows, path=fig_dir / "work_precision_series.png",
+                            error="series_error")
+        figs["performance"] += ["work_precision.png", "work_precision_series.png"]
+    return figs
+
+
+# ------------------------------------------------------------------------------ HTML
+TEMPLATE = """<!DOCTYPE html>
+<html lang="en"><head><meta charset="utf-8">
+<title>mbs-clearance validation report</title>
+<style>
+body { font-family: sans-serif; max-width: 1200px; margin: 2em auto; color: #222; }
+table { border-collapse: collapse; margin: 1em 0; font-size: 0.9em; }
+th, td { border: 1px solid #bbb; padding: 3px 8px; text-align: left; vertical-align: top; }
+th { background: #eee; }
+img { max-width: 100%; border: 1px solid #ddd; margin: 0.5em 0; }
+.note { color: #555; font-size: 0.9em; }
+.pass { color: #060; } .fail { color: #a00; }
+</style></head><body>
+<h1>mbs-clearance validation report</h1>
+<p>Slider-crank with a revolute clearance joint between coupler and slider, reproducing
+Ebrahimi, Salahshoor &amp; Nouri (2018), <i>Sensitivity Analysis for Optimal Design of
+Multibody Systems with Clearance Joint</i>. Two independent models: the paper's reduced
+Lagrange model (compiled, event-exact contact) and the multibody engine Exudyn with a custom
+contact force. {% if quick %}<b>Quick report</b> (coarser Exudyn step, small GA, quick
+benchmarks).{% endif %} Generated by <code>mbs-clearance report</code>; every number is in
+report.json.</p>
+<ul>{% for key in sections %}<li><a href="#{{ key }}">{{ titles[key] }}</a></li>{% endfor %}</ul>
+
+<h2 id="mechanism">{{ titles.mechanism }}</h2>
+<table><tr><th>field</th><th>symbol</th><th>value</th><th>unit</th><th>source</th></tr>
+{% for r in n.mechanism.parameters %}<tr><td>{{ r.field }}</td><td>{{ r.symbol }}</td>
+<td>{{ r.value }}</td><td>{{ r.unit }}</td><td>{{ r.source }}</td></tr>{% endfor %}</table>
+
+<h2 id="response">{{ titles.response }}</h2>
+<p>Paper's case, 4 crank revolutions from the journal centred with ideal-joint velocities.
+Panels: (a) base force magnitude, (b) crank moment, (c) slider acceleration vs velocity,
+(d) journal-centre orbit in units of the clearance.</p>
+{% for f in figs.response %}<img src="{{ img[f] }}" alt="{{ f }}">{% endfor %}
+<table><tr><th>model</th><th>max |F12| per revolution 1..4 (N)</th>
+<th>max |M2|, rev. 4 (N m)</th><th>max slider acc., rev. 4 (m/s&sup2;)</th>
+<th>max eccentricity / c</th></tr>
+{% for name, r in n.response.items() %}<tr><td>{{ name }}</td>
+<td>{{ r.peak_base_force | map('round', 1) | join(', ') }}</td>
+<td>{{ '%.2f' % r.max_abs_crank_moment_last_revolution }}</td>
+<td>{{ '%.0f' % r.max_slider_acceleration_last_revolution }}</td>
+<td>{{ '%.3f' % r.max_eccentricity_over_clearance }}</td></tr>{% endfor %}</table>
+
+<h2 id="agreement">{{ titles.agreement }}</h2>
+<p>Reduced model (rtol 1e-10) against Exudyn (generalized-alpha, step
+{{ n.agreement.exudyn_step }} s). Periodic cases: peak difference per revolution and relative
+RMS of F12 and M2 over the last revolution. c = 0.1 mm is not periodic: trajectories diverge,
+only the first impact and statistics are comparable (see tests/integration/test_exudyn.py).</p>
+<table><tr><th>clearance (mm)</th><th>Exudyn contact</th><th>peak diff. per rev. (%)</th>
+<th>RMS F12 rev. 4 (%)</th><th>RMS M2 rev. 4 (%)</th><th>orbit RMS / c</th>
+<th>first impact &Delta;t (&micro;s)</th></tr>
+{% for r in n.agreement.rows %}<tr><td>{{ '%.4g' % r.clearance_mm }}</td><td>{{ r.variant }}</td>
+<td>{{ r.peak_diff_percent | map('round', 3) | join(', ') }}</td>
+<td>{{ '%.3f' % r.rms_base_force_percent_last }}{% if not r.periodic %} (not periodic){% endif %}</td>
+<td>{{ '%.3f' % r.rms_crank_moment_percent_last }}</td>
+<td>{{ '%.4f' % r.orbit_rms_over_c_last }}</td>
+<td>{{ '%.4f' % r.first_impact_dt_us if r.first_impact_dt_us is not none else '-' }}</td></tr>
+{% endfor %}</table>
+
+<h2 id="sensitivity">{{ titles.sensitivity }}</h2>
+<p>Normalized sensitivity (Eq. 15) of |F12| over revolution 4 by direct differentiation of
+the reduced model (rtol 1e-9, {{ n.sensitivity.ddm_steps }} steps,
+{{ '%.2f' % n.sensitivity.ddm_seconds }} s), checked against central differences
+({{ '%.2f' % n.sensitivity.fd_seconds }} s). Motion flagged as non-periodic:
+{{ n.sensitivity.chaotic }}.</p>
+<table><tr><th>parameter</th><th>b0</th><th>mean |S|</th><th>max |S|</th>
+<th>growth per revolution</th></tr>
+{% for r in n.sensitivity.summary %}<tr><td>{{ r.parameter }}</td>
+<td>{{ '%.5g' % r.reference }}</td><td>{{ '%.4g' % r.mean_abs_normalized }}</td>
+<td>{{ '%.4g' % r.max_abs_normalized }}</td><td>{{ '%.3f' % r.growth_per_revolution }}</td>
+</tr>{% endfor %}</table>
+<p class="note">In Fig. 5 the curves of contact_stiffness and youngs_modulus coincide
+exactly: K is proportional to E (Eq. 9), so their normalized sensitivities are identical.</p>
+<table><tr><th>FD check: parameter</th><th>max |DDM - FD| / max |DDM|</th></tr>
+{% for r in n.sensitivity.fd_check %}<tr><td>{{ r.parameter }}</td>
+<td>{{ '%.1e' % r.max_diff_over_max }}</td></tr>{% endfor %}</table>
+{% for f in figs.sensitivity %}<img src="{{ img[f] }}" alt="{{ f }}">{% endfor %}
+
+<h2 id="optimization">{{ titles.optimization }}</h2>
+<p>pygad GA over L2 in [4, 6] cm and L3 in [10, 14] cm minimising max |F12| over revolution
+4, then a bounded local refinement. Two design assumptions: link masses fixed (the paper's
+wording) or scaled with length (uniform density).</p>
+<table><tr><th></th><th>L2 (cm)</th><th>L3 (cm)</th><th>max |F12| (N)</th>
+<th>reduction (%)</th></tr>
+<tr><td>paper: original</td><td>5</td><td>12</td><td>8311</td><td></td></tr>
+<tr><td>paper: optimum</td><td>4.0733</td><td>13.7468</td><td>4667</td><td>43.85</td></tr>
+{% for k, r in n.optimization.results.items() %}<tr><td>ours: optimum, masses {{ k }}</td>
+<td>{{ '%.4f' % (100 * r.crank_length) }}</td><td>{{ '%.4f' % (100 * r.coupler_length) }}</td>
+<td>{{ '%.1f' % r.best_peak_force }} (original {{ '%.1f' % r.original_peak_force }})</td>
+<td>{{ '%.2f' % r.reduction_percent }}</td></tr>{% endfor %}
+{% for k, r in n.optimization.paper_optimum_in_our_models.items() %}<tr>
+<td>paper's optimum in our models, masses {{ k }}</td><td>4.0733</td><td>13.7468</td>
+<td>{% for m, v in r.items() %}{{ m }}: {{ '%.1f' % v }}{% if not loop.last %}; {% endif %}{% endfor %}</td><td></td></tr>{% endfor %}
+</table>
+{% for f in figs.optimization %}<img src="{{ img[f] }}" alt="{{ f }}">{% endfor %}
+
+<h2 id="paper">{{ titles.paper }}</h2>
+<table><tr><th>quantity</th><th>paper</th><th>ours</th><th>difference</th><th>explanation</th></tr>
+{% for r in n.paper.rows %}<tr><td>{{ r.quantity }}</td>
+<td>{{ r.paper if r.paper is not none else '-' }}</td><td>{{ '%.4g' % r.ours }}</td>
+<td>{{ '%+.2f %%' % r.difference_percent if r.difference_percent is defined else '-' }}</td>
+<td class="note">{{ r.explanation }}</td></tr>{% endfor %}</table>
+
+<h2 id="performance">{{ titles.performance }}</h2>
+<p>Work-precision (median run times, one run, {{ n.environment.machine }}): error of the
+peak |F12| (first figure) and max error of the base-force series (second) against the
+reduced model at rtol 1e-12, for our compiled integrator, scipy solve_ivp on the same
+equations and events, and Exudyn.</p>
+{% for f in figs.performance %}<img src="{{ img[f] }}" alt="{{ f }}">{% endfor %}
+{% for case, by_target in n.performance.ratios.items() %}<h3>{{ case }}</h3>
+{% for target, rows in by_target.items() %}<p>Fastest setting with peak and series errors
+&le; {{ target }}:</p><table><tr><th>backend</th><th>method</th><th>setting</th>
+<th>time (ms)</th><th>x ours</th></tr>{% for r in rows %}<tr><td>{{ r.backend }}</td>
+<td>{{ r.method }}</td><td>{{ r.setting }}</td><td>{{ '%.1f' % (1000 * r.time) }}</td>
+<td>{{ '%.1f' % r.ratio }}</td></tr>{% endfor %}</table>{% endfor %}{% endfor %}
+<h3>Stress test</h3>
+<p>{{ n.performance.stress_summary.cases }} cases: {{ n.performance.stress_summary.pass }}
+passed, {{ n.performance.stress_summary['clear error'] }} stopped with a clear error,
+{{ n.performance.stress_summary.fail }} failed.</p>
+<table><tr><th>case</th><th>status</th><th>peak |F12| last rev. (N)</th><th>switches</th>
+<th>notes</th></tr>{% for r in n.performance.stress_rows %}<tr><td>{{ r.case }}</td>
+<td class="{{ 'pass' if r.status == 'pass' else 'fail' }}">{{ r.status }}</td>
+<td>{{ '%.1f' % r.peak_last_revolution if r.peak_last_revolution is defined else '' }}</td>
+<td>{{ r.contact_switches if r.contact_switches is defined else '' }}</td>
+<td class="note">{{ r.reasons | join('; ') }}</td></tr>{% endfor %}</table>
+
+<h2 id="environment">{{ titles.environment }}</h2>
+<p>{{ n.environment.machine }}, Python {{ n.environment.python }}.</p>
+<table><tr><th>package</th><th>version</th></tr>{% for k, v in n.environment.versions.items() %}
+<tr><td>{{ k }}</td><td>{{ v }}</td></tr>{% endfor %}</table>
+<table><tr><th>section</th><th>run time (s)</th></tr>
+{% for k, v in n.environment.section_seconds.items() %}<tr><td>{{ k }}</td>
+<td>{{ '%.1f' % v }}</td></tr>{% endfor %}</table>
+</body></html>
+"""
+
+
+def _jsonable(obj):
+    if isinstance(obj, dict):
+        return {str(k): _jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_jsonable(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return _jsonable(obj.tolist())
+    if isinstance(obj, np.generic):
+        return obj.item()
+    if isinstance(obj, float) and not math.isfinite(obj):
+        return None
+    return obj
+
+
+def render(out: Path, numbers: dict, figs: dict) -> Path:
+    """Write report.html from the numbers and the figure files (embedded as data URIs)."""
+    import jinja2
+
+    img = {}
+    for names in figs.values():
+        for f in names:
+            data = base64.b64encode((out / "figures" / f).read_bytes()).decode()
+            img[f] = f"data:image/png;base64,{data}"
+    env = jinja2.Environment(autoescape=True, undefined=jinja2.StrictUndefined)
+    html = env.from_string(TEMPLATE).render(
+        n=numbers, figs=figs, img=img, titles=TITLES, sections=SECTIONS,
+        quick=numbers["environment"]["settings"]["quick"])
+    path = out / "report.html"
+    path.write_text(html)
+    return path
+
+
+def build_report(out: str | Path = "report", quick: bool = False, progress: bool = True,
+                 replot: bool = False) -> Path:
+    """Compute every section (or reuse the saved data with `replot`), draw, write HTML."""
+    from tqdm import tqdm
+
+    out = Path(out)
+    (out / "data").mkdir(parents=True, exist_ok=True)
+    json_path = out / "report.json"
+    if replot:
+        if not json_path.exists():
+            raise ValueError(f"--replot needs a previous report in {str(out)!r} "
+                             f"(report.json not found)")
+        numbers = json.loads(json_path.read_text())
+    else:
+        s = _settings(quick)
+        numbers: dict[str, Any] = {}
+        timings: dict[str, float] = {}
+        bar = tqdm(SECTIONS, desc="report", disable=not progress)
+        for key in bar:
+            bar.set_postfix_str(key)
+            t0 = time.perf_counter()
+            if key == "paper":
+                numbers[key] = section_paper(out, s, numbers)
+            elif key == "environment":
+                numbers[key] = section_environment(out, s, timings)
+            else:
+                numbers[key] = globals()[f"section_{key}"](out, s)
+            timings[key] = time.perf_counter() - t0
+        numbers = _jsonable(numbers)
+        json_path.write_text(json.dumps(numbers, indent=1))
+    figs = draw_figures(out, numbers)
+    return render(out, numbers, figs)
+
+
+def _main(args) -> int:
+    t0 = time.perf_counter()
+    path = build_report(args.out, quick=args.quick, replot=args.replot)
+    print(f"report written to {path} ({time.perf_counter() - t0:.0f} s); numbers in "
+          f"{path.with_name('report.json')}")
+    return 0
+
+
+def _add_arguments(p):
+    p.add_argument("--out", type=Path, default=Path("report"), help="output folder")
+    p.add_argument("--quick", action="store_true",
+                   help="smaller but complete report (coarser Exudyn step, small GA)")
+    p.add_argument("--replot", action="store_true",
+                   help="redraw figures and HTML from the saved data, no recomputation")
+
+
+register = make_register("report", "build the validation report (HTML + JSON)",
+                         __doc__.splitlines()[0], _add_arguments, _main)
+
+
+if __name__ == "__main__":
+    run_script(__doc__.splitlines()[0], _add_arguments, _main)
