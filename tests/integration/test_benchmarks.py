@@ -1,0 +1,53 @@
+"""Small versions of the work-precision benchmark and the stress sweep, with invariants."""
+
+import pytest
+
+from validation.benchmarks.work_precision import run, speed_ratios
+from validation.stress import (
+    backend_differences,
+    free_step_excursion,
+    run_case,
+    stress_cases,
+    summary,
+)
+
+
+def test_work_precision_quick_invariants():
+    rows, refs = run(quick=True, repeats=1, exudyn=False)
+    for ref in refs.values():
+        assert ref["scipy_dop853_rel_diff"] < 1e-8  # the reference agrees with scipy
+    for case in refs:
+        ours = {r["setting"]: r for r in rows
+                if r["case"] == case and r["backend"] == "reduced (ours)"}
+        # error falls with the tolerance, and reaches what was asked for
+        assert ours["rtol 1e-09"]["peak_error"] < ours["rtol 1e-06"]["peak_error"]
+        assert ours["rtol 1e-09"]["peak_error"] < 1e-6
+        assert all(r["time"] > 0 for r in rows)
+    ratios = speed_ratios(rows, "paper (c = 0.01 mm)", 1e-3)
+    assert ratios[0]["backend"] == "reduced (ours)"  # fastest at equal accuracy
+
+
+def test_stress_quick_all_pass():
+    rows = [run_case(c) for c in stress_cases(quick=True)]
+    s = summary(rows)
+    assert s["fail"] == 0, s["failures"]
+    assert s["cases"] == len(rows) >= 7
+    energy = [r["energy_error"] for r in rows if "energy_error" in r]
+    assert energy and max(energy) < 1e-6  # e = 1 case closes the energy balance
+
+
+def test_free_step_check_sees_penetration_inside_steps():
+    """The missed-contact check re-takes free-flight steps at interior times: the paper case
+    stays outside the wall everywhere (by a margin), so the check is not trivially zero."""
+    case = stress_cases(quick=True)[0]
+    inside = free_step_excursion(case)
+    assert -0.1 < inside < 0.0
+
+
+@pytest.mark.exudyn
+def test_stress_case_on_both_backends():
+    case = stress_cases(quick=True)[0]
+    rows = [run_case(case, "reduced"), run_case(case, "exudyn")]
+    assert [r["status"] for r in rows] == ["pass", "pass"]
+    (diff,) = backend_differences(rows)
+    assert abs(diff["difference_percent"]) < 0.1  # same periodic peak (2 revolutions)
