@@ -271,7 +271,7 @@ def section_performance(out: Path, s: dict) -> dict:
 
 
 def section_environment(out: Path, s: dict, timings: dict) -> dict:
-    from validation.benchmarks.machine import machine_summary
+    from validation.benchmarks.common import machine_summary
 
     versions = {}
     for pkg in ("mbs-clearance", "numpy", "scipy", "numba", "exudyn", "pygad", "matplotlib",

@@ -10,22 +10,12 @@ DDM at rtol 1e-11. Medians over repeats after warm-up, in one run.
 from __future__ import annotations
 
 import argparse
-import time
 
 import numpy as np
 
 from mbs_clearance import SliderCrank, simulate
 from mbs_clearance.sensitivity import sensitivities
-from validation.benchmarks.machine import machine_summary
-
-
-def median_time(fn, repeats):
-    out, times = None, []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        out = fn()
-        times.append(time.perf_counter() - t0)
-    return float(np.median(times)), out
+from validation.benchmarks.common import machine_summary, timed
 
 
 def error(s, ref):
@@ -46,16 +36,16 @@ def main(argv=None):
     for rtol in (1e-7, 1e-8, 1e-9):
         sensitivities(mech, t_eval=t_eval, rtol=rtol)
         simulate(mech, 4, rtol=rtol)
-        t_ddm, s = median_time(lambda r=rtol: sensitivities(mech, t_eval=t_eval, rtol=r),
+        t_ddm, s = timed(lambda r=rtol: sensitivities(mech, t_eval=t_eval, rtol=r),
                                args.repeats)
-        t_sim, _ = median_time(lambda r=rtol: simulate(mech, 4, rtol=r), args.repeats)
+        t_sim, _ = timed(lambda r=rtol: simulate(mech, 4, rtol=r), args.repeats)
         rows.append(("DDM", rtol, error(s, ref), t_ddm, t_ddm / t_sim, s.stats["naccept"]))
     fd_rows = []
     for rtol in (1e-9, 1e-11):
-        t_fd, s = median_time(
+        t_fd, s = timed(
             lambda r=rtol: sensitivities(mech, method="fd", t_eval=t_eval, rtol=r),
             max(1, args.repeats // 2))
-        t_sim, _ = median_time(lambda r=rtol: simulate(mech, 4, rtol=r), args.repeats)
+        t_sim, _ = timed(lambda r=rtol: simulate(mech, 4, rtol=r), args.repeats)
         fd_rows.append(("FD (17 runs)", rtol, error(s, ref), t_fd, t_fd / t_sim, None))
     print(f"Machine: {machine_summary()}\n")
     print("| method | rtol | max rel. error of d\\|F12\\|/db | median time (s) "

@@ -13,24 +13,12 @@ from __future__ import annotations
 
 import argparse
 import json
-import time
-
-import numpy as np
 
 from mbs_clearance import SliderCrank, simulate
 from mbs_clearance.exudyn_model import CONTACT_VARIANTS, DEFAULT_STEP_SIZE
 from mbs_clearance.reduced import DEFAULT_RTOL
-from validation.benchmarks.machine import machine_summary
+from validation.benchmarks.common import machine_summary, timed
 from validation.compare import compare
-
-
-def median_time(fn, repeats):
-    times, result = [], None
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        result = fn()
-        times.append(time.perf_counter() - t0)
-    return float(np.median(times)), result
 
 
 def main(argv=None):
@@ -57,7 +45,7 @@ def main(argv=None):
     rows = []
     for backend, label, options, repeats in runs:
         simulate(mech, rev, backend=backend, **options)          # warm-up
-        t, traj = median_time(lambda b=backend, o=options: simulate(mech, rev, backend=b, **o),
+        t, traj = timed(lambda b=backend, o=options: simulate(mech, rev, backend=b, **o),
                               repeats)
         m = compare(ref, traj, revolutions=(rev,)).revolution(rev)
         rows.append(dict(backend=backend, setting=label, time=t, repeats=repeats,

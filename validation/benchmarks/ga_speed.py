@@ -19,16 +19,7 @@ import numpy as np
 
 from mbs_clearance import SliderCrank, peak_base_force
 from mbs_clearance.optimize import local_process_pool, optimize_link_lengths
-from validation.benchmarks.machine import machine_summary
-
-
-def timed(fn, repeats):
-    times, result = [], None
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        result = fn()
-        times.append(time.perf_counter() - t0)
-    return float(np.median(times)), result
+from validation.benchmarks.common import machine_summary, timed
 
 
 def warm(executor, n=4):

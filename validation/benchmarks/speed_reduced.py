@@ -15,13 +15,10 @@ import argparse
 import json
 import subprocess
 import sys
-import time
-
-import numpy as np
 
 from mbs_clearance import SliderCrank, peak_base_force, simulate
 from mbs_clearance.reduced import DEFAULT_RTOL
-from validation.benchmarks.machine import machine_summary
+from validation.benchmarks.common import machine_summary, timed
 from validation.scipy_reference import solve_scipy
 
 FIRST_CALL = """
@@ -34,15 +31,6 @@ simulate(SliderCrank(), 4)
 t2 = time.perf_counter()
 print(t1 - t0, t2 - t1, sum(integrator.integrate.stats.cache_misses.values()))
 """
-
-
-def median_time(fn, repeats):
-    times = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return float(np.median(times))
 
 
 def main(argv=None):
@@ -60,16 +48,16 @@ def main(argv=None):
 
     simulate(mech, 4)  # warm-up (loads the cache or compiles)
     ours_err = abs(peak_base_force(mech, 4) / ref - 1)
-    t_sim = median_time(lambda: simulate(mech, 4), args.repeats)
-    t_peak = median_time(lambda: peak_base_force(mech, 4), args.repeats)
+    t_sim = timed(lambda: simulate(mech, 4), args.repeats)[0]
+    t_peak = timed(lambda: peak_base_force(mech, 4), args.repeats)[0]
 
     rows = []
     chosen = None
     for rtol in (1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11):
         res = solve_scipy(mech, revolutions=4, rtol=rtol)
         err = abs(res.peaks[3] / ref - 1)
-        t = median_time(lambda r=rtol: solve_scipy(mech, revolutions=4, rtol=r),
-                        args.scipy_repeats)
+        t = timed(lambda r=rtol: solve_scipy(mech, revolutions=4, rtol=r),
+                  args.scipy_repeats)[0]
         rows.append((rtol, err, t, res.nfev))
         if chosen is None and err <= ours_err:
             chosen = (rtol, err, t)

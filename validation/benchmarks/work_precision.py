@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from mbs_clearance import SliderCrank, reduced, simulate
-from validation.benchmarks.machine import machine_summary
+from validation.benchmarks.common import machine_summary, timed
 from validation.plugin import make_register, run_script
 from validation.scipy_reference import solve_scipy
 
@@ -35,16 +35,6 @@ CASES = {
 
 def _grid(mech, rev, n=721):
     return np.linspace((rev - 1) * mech.period, rev * mech.period, n)
-
-
-def _median(fn, repeats):
-    fn()
-    times = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return float(np.median(times))
 
 
 def _reference(mech, rev):
@@ -88,7 +78,7 @@ def run(quick: bool = False, repeats: int = 5, exudyn: bool = True):
             steps = steps[1:2]
         for method, rtols in ours.items():
             for rtol in rtols:
-                t = _median(partial(simulate, mech, rev, rtol=rtol, method=method), repeats)
+                t = timed(partial(simulate, mech, rev, rtol=rtol, method=method), repeats, True)[0]
                 peak = simulate(mech, rev, rtol=rtol, method=method).max_base_force(rev)
                 force = simulate(mech, rev, rtol=rtol, method=method, t_eval=grid).base_force
                 rows.append(dict(case=case, backend="reduced (ours)", method=method,
@@ -107,9 +97,9 @@ def run(quick: bool = False, repeats: int = 5, exudyn: bool = True):
                                      note=str(exc)[:80]))
                     continue
                 first = time.perf_counter() - t0
-                t = first if method != "DOP853" or quick else _median(
+                t = first if method != "DOP853" or quick else timed(
                     partial(solve_scipy, mech, revolutions=rev, method=method, rtol=rtol),
-                    max(1, repeats // 2))
+                    max(1, repeats // 2), True)[0]
                 rows.append(dict(case=case, backend="scipy", method=method,
                                  setting=f"rtol {rtol:g}", time=t,
                                  **dict(zip(("peak_error", "series_error"),
@@ -118,11 +108,15 @@ def run(quick: bool = False, repeats: int = 5, exudyn: bool = True):
                                                     ref_peak)))))
         if not exudyn:
             continue
-        variants = ("symbolic", "sphere") if not quick else ("symbolic",)
-        for variant in variants:
-            for h in steps:
-                t = _median(partial(simulate, mech, rev, backend="exudyn", step_size=h,
-                                    contact=variant), max(1, repeats // 2))
+        # the Python user force computes the same force as the symbolic one (it differs only
+        # in speed), so it gets the two middle step sizes
+        variants = {"symbolic": steps, "sphere": steps, "python": steps[1:3]}
+        if quick:
+            variants = {"symbolic": steps}
+        for variant, variant_steps in variants.items():
+            for h in variant_steps:
+                t = timed(partial(simulate, mech, rev, backend="exudyn", step_size=h,
+                                  contact=variant), max(1, repeats // 2), True)[0]
                 traj = simulate(mech, rev, backend="exudyn", step_size=h, contact=variant)
                 force = np.column_stack([np.interp(grid, traj.t, traj.base_force[:, j])
                                          for j in range(2)])

@@ -1,0 +1,45 @@
+"""Shared by the benchmark scripts: the machine description and median timing."""
+
+from __future__ import annotations
+
+import os
+import platform
+import time
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+
+def machine_summary() -> str:
+    """A one-line description of the machine a benchmark ran on."""
+    cpu = platform.processor() or "unknown CPU"
+    try:
+        with open("/proc/cpuinfo") as fh:
+            for line in fh:
+                if line.startswith("model name"):
+                    cpu = line.split(":", 1)[1].strip()
+                    break
+    except OSError:
+        pass
+    mem = ""
+    try:
+        with open("/proc/meminfo") as fh:
+            kb = int(fh.readline().split()[1])
+            mem = f", {kb / 2**20:.0f} GiB"
+    except (OSError, ValueError, IndexError):
+        pass
+    return (f"{cpu}, {os.cpu_count()} cores{mem}, {platform.system()} "
+            f"{platform.machine()}, Python {platform.python_version()}")
+
+
+def timed(fn: Callable[[], Any], repeats: int, warmup: bool = False) -> tuple[float, Any]:
+    """Median wall time in s of `repeats` calls of fn (after one untimed call if `warmup`),
+    and the result of the last call."""
+    result = fn() if warmup else None
+    times = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        result = fn()
+        times.append(time.perf_counter() - t0)
+    return float(np.median(times)), result
