@@ -442,10 +442,11 @@ equations and events, and Exudyn.</p>
 {% for f in figs.performance %}<img src="{{ img[f] }}" alt="{{ f }}">{% endfor %}
 {% for case, by_target in n.performance.ratios.items() %}<h3>{{ case }}</h3>
 {% for target, rows in by_target.items() %}<p>Fastest setting with peak and series errors
-&le; {{ target }}:</p><table><tr><th>backend</th><th>method</th><th>setting</th>
+&le; {{ target }}{% if not rows %}: no run reached this accuracy{% endif %}:</p>
+{% if rows %}<table><tr><th>backend</th><th>method</th><th>setting</th>
 <th>time (ms)</th><th>x ours</th></tr>{% for r in rows %}<tr><td>{{ r.backend }}</td>
 <td>{{ r.method }}</td><td>{{ r.setting }}</td><td>{{ '%.1f' % (1000 * r.time) }}</td>
-<td>{{ '%.1f' % r.ratio }}</td></tr>{% endfor %}</table>{% endfor %}{% endfor %}
+<td>{{ '%.1f' % r.ratio }}</td></tr>{% endfor %}</table>{% endif %}{% endfor %}{% endfor %}
 <h3>Stress test</h3>
 <p>{{ n.performance.stress_summary.cases }} cases: {{ n.performance.stress_summary.pass }}
 passed, {{ n.performance.stress_summary['clear error'] }} stopped with a clear error,
@@ -458,7 +459,7 @@ passed, {{ n.performance.stress_summary['clear error'] }} stopped with a clear e
 <td class="note">{{ r.reasons | join('; ') }}</td></tr>{% endfor %}</table>
 
 <h2 id="environment">{{ titles.environment }}</h2>
-<p>{{ n.environment.machine }}, Python {{ n.environment.python }}.</p>
+<p>{{ n.environment.machine }}.</p>
 <table><tr><th>package</th><th>version</th></tr>{% for k, v in n.environment.versions.items() %}
 <tr><td>{{ k }}</td><td>{{ v }}</td></tr>{% endfor %}</table>
 <table><tr><th>section</th><th>run time (s)</th></tr>

@@ -2,6 +2,7 @@
 
 import json
 import re
+import shutil
 import time
 
 import numpy as np
@@ -85,3 +86,20 @@ def test_replot_without_a_report_is_a_clear_error(tmp_path, capsys):
     with pytest.raises(SystemExit):
         main(["report", "--replot", "--out", str(tmp_path)])
     assert "needs a previous report" in capsys.readouterr().err
+
+
+@pytest.mark.skipif(shutil.which("chromium") is None,
+                    reason="Debian's chromium is not installed (apt-get install chromium)")
+def test_rendered_report_pages_are_not_blank(report, tmp_path):
+    """Render the HTML in headless Chromium (validation/render_report.py): every page has
+    content, and the whole report spans several pages of figures and tables."""
+    from PIL import Image
+
+    from validation.render_report import render
+
+    out, _ = report
+    pages = render(out / "report.html", tmp_path)
+    assert len(pages) >= 5
+    for page in pages:
+        pixels = np.asarray(Image.open(page).convert("L"), dtype=float)
+        assert pixels.std() > 5, page  # not a uniform (empty) page

@@ -1,0 +1,76 @@
+"""Render report.html to PNG pages with headless Chromium, to look at it as a reader would.
+
+    apt-get install chromium            # Debian's package; not a Python dependency
+    python -m validation.render_report report/report.html [--out report/pages] [--height 1500]
+
+Writes one full-page screenshot and its slices page_00.png, page_01.png, ... (1300 px wide).
+"""
+
+from __future__ import annotations
+
+import argparse
+import shutil
+import subprocess
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+         "--disable-background-networking", "--disable-component-update", "--disable-sync",
+         "--hide-scrollbars"]
+
+
+def find_chromium() -> str:
+    for name in ("chromium", "chromium-browser", "google-chrome"):
+        path = shutil.which(name)
+        if path:
+            return path
+    raise ValueError("no Chromium found: install Debian's package (apt-get install chromium)")
+
+
+def render(html: str | Path, out: str | Path, width: int = 1300, height: int = 20000,
+           page_height: int = 1500) -> list[Path]:
+    """Screenshot `html` at width x height and cut it into pages; returns the page files."""
+    from PIL import Image
+
+    html = Path(html).resolve()
+    if not html.is_file():
+        raise ValueError(f"cannot read report file {str(html)!r}")
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    full = out / "full.png"
+    with tempfile.TemporaryDirectory() as profile:
+        subprocess.run([find_chromium(), *FLAGS, f"--user-data-dir={profile}",
+                        f"--window-size={width},{height}", f"--screenshot={full}",
+                        html.as_uri()], check=True, capture_output=True, timeout=180)
+    image = Image.open(full).convert("RGB")
+    # drop the blank tail below the content: last pixel row that is not uniform
+    pixels = np.asarray(image)
+    busy = np.flatnonzero((pixels != pixels[:, :1]).any(axis=(1, 2)))
+    bottom = min(image.height, int(busy[-1]) + 40) if busy.size else image.height
+    pages = []
+    for k, top in enumerate(range(0, bottom, page_height)):
+        page = out / f"page_{k:02d}.png"
+        image.crop((0, top, width, min(top + page_height, bottom))).save(page)
+        pages.append(page)
+    return pages
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("html", type=Path)
+    ap.add_argument("--out", type=Path, help="folder for the PNG pages (default: beside it)")
+    ap.add_argument("--height", type=int, default=1500, help="page height in px")
+    args = ap.parse_args(argv)
+    try:
+        pages = render(args.html, args.out or args.html.parent / "pages",
+                       page_height=args.height)
+    except ValueError as exc:
+        ap.exit(2, f"render_report: error: {exc}\n")
+    print(f"{len(pages)} pages written to {pages[0].parent}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
