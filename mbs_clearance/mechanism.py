@@ -9,13 +9,13 @@ fails early with a message naming the field and its allowed range.
 from __future__ import annotations
 
 import dataclasses
-import json
 import math
 import numbers
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from ._io import read_json_object
 from .contact import CONTACT_MODELS, stiffness_eq9
 
 __all__ = ["SliderCrank", "PARAMETER_INFO", "CONTINUOUS_FIELDS"]
@@ -202,13 +202,7 @@ class SliderCrank:
     @classmethod
     def from_json(cls, path: str | Path) -> SliderCrank:
         """Read field values from a JSON file (an object of field: value)."""
-        try:
-            data = json.loads(Path(path).read_text())
-        except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
-            raise ValueError(f"cannot read mechanism file {str(path)!r}: {exc}") from exc
-        if not isinstance(data, dict):
-            raise ValueError(f"mechanism file {str(path)!r} must hold a JSON object")
-        return cls.from_dict(data)
+        return cls.from_dict(read_json_object(path, "mechanism file"))
 
 
 def field_names() -> tuple[str, ...]:

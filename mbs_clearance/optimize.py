@@ -33,6 +33,7 @@ from typing import Any
 
 import numpy as np
 
+from ._io import read_json_object
 from .mechanism import CONTINUOUS_FIELDS, SliderCrank
 from .simulate import BACKENDS, peak_base_force
 
@@ -346,11 +347,8 @@ class OptimizationResult:
     @classmethod
     def from_json(cls, path: str | Path) -> OptimizationResult:
         """Read a result written by `to_json`."""
-        try:
-            data = json.loads(Path(path).read_text())
-        except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
-            raise ValueError(f"cannot read optimisation result {str(path)!r}: {exc}") from exc
-        if not isinstance(data, dict) or data.get("format") != _FORMAT:
+        data = read_json_object(path, "optimisation result")
+        if data.get("format") != _FORMAT:
             raise ValueError(f"{str(path)!r} is not an optimisation result ({_FORMAT})")
         return cls(
             best=SliderCrank.from_dict(data["best"]),
