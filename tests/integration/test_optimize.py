@@ -238,3 +238,24 @@ def test_cli_rejects_bad_bounds(capsys):
         main(["optimize", "--crank-bounds", "0.06", "0.04", "--no-progress"])
     assert exc.value.code == 2
     assert "must satisfy lower < upper" in capsys.readouterr().err
+
+
+def test_cli_scheduler_option_runs_on_a_dask_cluster(tmp_path, capsys):
+    """`mbs-clearance optimize --scheduler tcp://...` against a LocalCluster gives the same
+    result as the local run with the same seed."""
+    distributed = pytest.importorskip("dask.distributed")
+    from mbs_clearance.cli import main
+
+    args = ["optimize", "--seed", "3", "--population", "6", "--generations", "2",
+            "--no-refine", "--no-progress"]
+    assert main(args + ["--workers", "1", "--out", str(tmp_path / "local")]) == 0
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  dashboard_address=None) as cluster:
+        assert main(args + ["--scheduler", cluster.scheduler_address,
+                            "--out", str(tmp_path / "dask")]) == 0
+    assert "evaluating on the dask cluster" in capsys.readouterr().err
+    local = OptimizationResult.from_json(tmp_path / "local" / "result.json")
+    remote = OptimizationResult.from_json(tmp_path / "dask" / "result.json")
+    assert remote.settings["executor"].startswith("dask.distributed.Client(")
+    assert remote.best == local.best
+    np.testing.assert_array_equal(remote.history, local.history)
