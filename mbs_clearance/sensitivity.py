@@ -7,9 +7,11 @@ differences through any backend, with the runs in parallel.
 
 from __future__ import annotations
 
+import json
 import time
 from concurrent.futures import Executor, ProcessPoolExecutor
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -17,10 +19,10 @@ import numpy as np
 from . import ddm, reduced
 from .contact import stiffness_eq9_partials
 from .mechanism import CONTINUOUS_FIELDS, SliderCrank, check_field_names
-from .trajectory import Trajectory
+from .trajectory import Trajectory, load_trajectory
 
-__all__ = ["Sensitivities", "sensitivities", "DEFAULT_PARAMETERS", "chain_matrix",
-           "reference_value", "fd_step"]
+__all__ = ["Sensitivities", "sensitivities", "load_sensitivities", "DEFAULT_PARAMETERS",
+           "chain_matrix", "reference_value", "fd_step"]
 
 #: the paper's set of design parameters (Figs. 4-6)
 DEFAULT_PARAMETERS = ("crank_length", "coupler_length", "coupler_mass", "slider_mass",
@@ -118,21 +120,51 @@ class Sensitivities:
                  "growth_per_revolution": float(rate[k])}
                 for k, n in enumerate(self.parameters)]
 
-    def save(self, path) -> None:
-        """Write t, parameters, reference values and all sensitivity arrays to .npz."""
+    def save(self, path: str | Path) -> Path:
+        """Write to `path` (.npz: every array, `normalized` included for other tools) and the
+        nominal trajectory beside it (``<stem>.trajectory.npz``); `load_sensitivities` reads
+        both back."""
+        path = Path(path)
+        if path.suffix != ".npz":
+            raise ValueError(f"sensitivities file must end in .npz; got {str(path)!r}")
+        self.trajectory.save(_trajectory_path(path))
         np.savez_compressed(
             path, t=self.t, parameters=np.array(self.parameters), reference=self.reference,
             base_force=self.base_force, base_force_magnitude=self.base_force_magnitude,
             crank_moment=self.crank_moment, contact_force=self.contact_force,
-            normalized=self.normalized, nominal_base_force=self.trajectory.base_force,
+            normalized=self.normalized,
             growth=self.growth if self.growth is not None else np.zeros((0, 0)),
-            method=self.method, backend=self.backend)
+            method=self.method, backend=self.backend,
+            stats=json.dumps(self.stats, default=float))
+        return path
 
     def column(self, name: str) -> int:
         """Index of parameter `name`."""
         if name not in self.parameters:
             raise ValueError(f"parameter {name!r} not computed; have {list(self.parameters)}")
         return self.parameters.index(name)
+
+
+def _trajectory_path(path: Path) -> Path:
+    return path.with_name(path.stem + ".trajectory.npz")
+
+
+def load_sensitivities(path: str | Path) -> Sensitivities:
+    """Read sensitivities written by `Sensitivities.save`."""
+    path = Path(path)
+    try:
+        with np.load(path) as d:
+            growth = d["growth"]
+            return Sensitivities(
+                t=d["t"], parameters=tuple(str(p) for p in d["parameters"]),
+                reference=d["reference"], base_force=d["base_force"],
+                base_force_magnitude=d["base_force_magnitude"],
+                crank_moment=d["crank_moment"], contact_force=d["contact_force"],
+                trajectory=load_trajectory(_trajectory_path(path)), method=str(d["method"]),
+                backend=str(d["backend"]), growth=growth if growth.size else None,
+                stats=json.loads(str(d["stats"])))
+    except (OSError, KeyError) as exc:
+        raise ValueError(f"cannot read sensitivities file {str(path)!r}: {exc}") from exc
 
 
 def _check_parameters(parameters) -> tuple[str, ...]:

@@ -140,7 +140,7 @@ def section_sensitivity(out: Path, s: dict) -> dict:
     T = mech.period
     t_eval = np.linspace((n - 1) * T, n * T, 1441)
     ddm = sensitivities(mech, revolutions=n, t_eval=t_eval, rtol=1e-9)
-    _save_sens(ddm, out / "data" / "sensitivity_ddm")
+    ddm.save(out / "data" / "sensitivity_ddm.npz")
     names = s["fd_check_parameters"] or DEFAULT_PARAMETERS
     fd = sensitivities(mech, names, revolutions=n, method="fd", t_eval=t_eval)
     check = []
@@ -152,29 +152,6 @@ def section_sensitivity(out: Path, s: dict) -> dict:
     return {"summary": ddm.summary(), "fd_check": check, "chaotic": ddm.chaotic,
             "ddm_seconds": ddm.stats["wall_time"], "fd_seconds": fd.stats["wall_time"],
             "ddm_steps": ddm.stats["naccept"]}
-
-
-def _save_sens(sens, stem: Path) -> None:
-    sens.trajectory.save(stem.with_suffix(".trajectory.npz"))
-    np.savez_compressed(stem.with_suffix(".npz"), t=sens.t,
-                        parameters=np.array(sens.parameters), reference=sens.reference,
-                        base_force=sens.base_force,
-                        base_force_magnitude=sens.base_force_magnitude,
-                        crank_moment=sens.crank_moment, contact_force=sens.contact_force,
-                        growth=sens.growth)
-
-
-def _load_sens(stem: Path):
-    from mbs_clearance.sensitivity import Sensitivities
-
-    traj = load_trajectory(stem.with_suffix(".trajectory.npz"))
-    with np.load(stem.with_suffix(".npz")) as d:
-        return Sensitivities(t=d["t"], parameters=tuple(str(p) for p in d["parameters"]),
-                             reference=d["reference"], base_force=d["base_force"],
-                             base_force_magnitude=d["base_force_magnitude"],
-                             crank_moment=d["crank_moment"], contact_force=d["contact_force"],
-                             trajectory=traj, method="ddm", backend="reduced",
-                             growth=d["growth"])
 
 
 def section_optimization(out: Path, s: dict) -> dict:
@@ -306,7 +283,9 @@ def draw_figures(out: Path, numbers: dict) -> dict[str, list[str]]:
                      title="Paper's case, revolution 4: clearance 0.01 mm vs ideal joint")
         figs["response"].append("fig3_response.png")
     if (data / "sensitivity_ddm.npz").exists():
-        sens = _load_sens(data / "sensitivity_ddm")
+        from mbs_clearance.sensitivity import load_sensitivities
+
+        sens = load_sensitivities(data / "sensitivity_ddm.npz")
         for stem, (title, group) in SENSITIVITY_FIGURES.items():
             plot_sensitivities(sens, group, title, path=fig_dir / f"{stem}.png")
             figs["sensitivity"].append(f"{stem}.png")

@@ -138,3 +138,14 @@ def test_fd_step_leaving_valid_range_is_reported():
     with pytest.raises(ValueError, match="leaves its valid range"):
         sensitivities(SliderCrank(restitution=1.0), ["restitution"], method="fd",
                       revolutions=1)
+
+
+def test_save_load_roundtrip(ddm, tmp_path):
+    from mbs_clearance.sensitivity import load_sensitivities
+
+    back = load_sensitivities(ddm.save(tmp_path / "s.npz"))
+    assert back.parameters == ddm.parameters and back.method == "ddm"
+    np.testing.assert_array_equal(back.normalized, ddm.normalized)
+    np.testing.assert_array_equal(back.growth, ddm.growth)
+    with pytest.raises(ValueError, match="cannot read sensitivities file"):
+        load_sensitivities(tmp_path / "missing.npz")
