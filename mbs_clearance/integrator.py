@@ -282,7 +282,6 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
     cand_t = 0.0
     cand_p = p.copy()
     cand_next_h = 0.0
-    cand_fresh = False  # True right after the candidate was set (next step gives next_h)
 
     cap = 1024 if record else 1
     ts = np.empty(cap)
@@ -307,6 +306,7 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
     cand_t = t
     cand_y[:] = y
     cand_p[:] = p
+    cand_fresh = True   # the first step gives the right-hand interval of the start point
     if record:
         ts[0] = t
         ys[0, :] = y

@@ -328,7 +328,12 @@ def run(mech: SliderCrank, revolutions: int = 4, *, rtol: float | None = None,
                         atol_arr, on_event)
     fun, y0, p, mem_start, n_mem, n_err, atol_arr, action = system
     h_max = mech.period / 8 if h_max is None else float(h_max)
-    event_tol = 1e-12 * mech.clearance if event_tol is None else float(event_tol)
+    if event_tol is None:
+        # 1e-12 of the clearance, but not below the round-off of the journal position
+        # (delta is a difference of coordinates of size L2 + L3)
+        event_tol = max(1e-12 * mech.clearance,
+                        8 * np.finfo(float).eps * (mech.crank_length + mech.coupler_length))
+    event_tol = float(event_tol)
     ts, ys, ms, peaks, peak_t, counters = integrate(
         fun, event, action, monitor, y0, p, mem_start, n_mem, edges, rtol,
         atol_arr, n_err, float(h0), h_max, int(max_steps), bool(record), event_tol,
