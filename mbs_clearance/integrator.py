@@ -6,7 +6,8 @@ The model is passed as four first-class compiled functions with fixed signatures
 - ``rhs(t, y, p, dydt)``: right-hand side; ``p`` holds parameters and the model's memory
   variables (contact mode, impact velocity, ...), ``p[mem_start:mem_start + n_mem]``, which
   are recorded with every step;
-- ``event(t, y, p) -> g``: switching function, negative in the current mode; a crossing to
+- ``event(t, y, p) -> (g, gdot)``: switching function, negative in the current mode, and its
+  time derivative along the motion (used to look for excursions between samples); a crossing to
   positive inside a step is an event;
 - ``on_event(t, y, p)``: applied exactly at a located event (updates the memory in ``p``);
 - ``monitor(t, y, p) -> m``: scalar whose maximum is tracked per time window (the peak).
@@ -28,13 +29,14 @@ import numpy as np
 from numba import types
 
 __all__ = [
-    "RHS_SIG", "SCALAR_SIG", "ACTION_SIG", "METHODS", "Tableau", "integrate",
+    "RHS_SIG", "SCALAR_SIG", "EVENT_SIG", "ACTION_SIG", "METHODS", "Tableau", "integrate",
     "STATUS_MESSAGES",
 ]
 
 _vec = types.float64[::1]
 RHS_SIG = types.void(types.float64, _vec, _vec, _vec)
 SCALAR_SIG = types.float64(types.float64, _vec, _vec)
+EVENT_SIG = types.UniTuple(types.float64, 2)(types.float64, _vec, _vec)
 ACTION_SIG = types.void(types.float64, _vec, _vec)
 
 
@@ -217,6 +219,112 @@ def _golden_max(rhs, monitor, t0, y0, f0, p, h_max, A, B, C, K, y_new, f_new, yt
     return fd, t0 + d
 
 
+@nb.njit(cache=True)
+def _hermite_max(g_a, d_a, g_b, d_b):
+    """Maximum over [0, 1] of the cubic Hermite interpolant with values g_a, g_b and
+    end slopes d_a, d_b (derivatives times the interval length), and where it is."""
+    best = g_a
+    where = 0.0
+    if g_b > best:
+        best = g_b
+        where = 1.0
+    qa = 6.0 * g_a + 3.0 * d_a - 6.0 * g_b + 3.0 * d_b
+    qb = -6.0 * g_a - 4.0 * d_a + 6.0 * g_b - 2.0 * d_b
+    qc = d_a
+    # roots of qa u^2 + qb u + qc, in the cancellation-free form (qa may be ~0: the
+    # interpolant of a quadratic is quadratic)
+    disc = qb * qb - 4.0 * qa * qc
+    if disc < 0.0:
+        return best, where
+    q = -0.5 * (qb + math.copysign(math.sqrt(disc), qb))
+    for k in range(2):
+        if k == 0:
+            if q == 0.0:
+                continue
+            u = qc / q
+        else:
+            if qa == 0.0:
+                continue
+            u = q / qa
+        if 0.0 < u < 1.0:
+            u2 = u * u
+            u3 = u2 * u
+            val = (g_a * (2.0 * u3 - 3.0 * u2 + 1.0) + d_a * (u3 - 2.0 * u2 + u)
+                   + g_b * (-2.0 * u3 + 3.0 * u2) + d_b * (u3 - u2))
+            if val > best:
+                best = val
+                where = u
+    return best, where
+
+
+@nb.njit(cache=True)
+def _search_event(event, t, y, y_new, h, K, P, p, g_start, gd_start, n_samples, event_tol,
+                  event_margin, ytmp, wts, fine):
+    """First sign change of g (from <= 0 to > 0) inside a step of size h.
+
+    g and its rate are sampled at n_samples interior points of the dense output and at the
+    end (the real step); a step that starts on the surface is also sampled close to its
+    start. Between two samples where the cubic Hermite interpolant of g (values and rates)
+    comes within `event_margin` of the surface, 7 more points are sampled: an excursion
+    through the surface shorter than the sample spacing would hide there.
+    Returns (theta_lo, g_lo, theta_hi, g_hi, g_end, gd_end); theta_hi = -1: no crossing.
+    `fine` is a work array of 8 entries.
+    """
+    theta_a = 0.0
+    g_a = g_start
+    gd_a = gd_start
+    n_near = 3 if g_start > -100.0 * event_tol else 0
+    g_end = 0.0
+    gd_end = 0.0
+    for i in range(1 - n_near, n_samples + 2):
+        if i <= 0:
+            theta_b = 10.0 ** (i - 1) / (n_samples + 1.0)
+        else:
+            theta_b = min(i / (n_samples + 1.0), 1.0)
+        if i == n_samples + 1:
+            g_b, gd_b = event(t + h, y_new, p)
+            g_end = g_b
+            gd_end = gd_b
+        else:
+            dense_eval(y, h, K, P, theta_b, ytmp, wts)
+            g_b, gd_b = event(t + theta_b * h, ytmp, p)
+        span = (theta_b - theta_a) * h
+        d_a = gd_a * span
+        d_b = gd_b * span
+        # cheap upper bound of the Hermite interpolant (|h00 - (1 - u)| <= 0.097,
+        # |h10|, |h11| <= 4/27) before its exact maximum
+        bound = max(g_a, g_b) + 0.097 * abs(g_a - g_b) + 0.149 * (abs(d_a) + abs(d_b))
+        peak = bound
+        where = -1.0
+        if g_b <= 0.0 and bound > -event_margin:
+            peak, where = _hermite_max(g_a, d_a, g_b, d_b)
+        if g_b <= 0.0 and peak > -event_margin:
+            # 7 equally spaced points and the interpolant's maximum, in time order
+            n_fine = 7
+            for j in range(7):
+                fine[j] = (j + 1) / 8.0
+            if 0.0 < where < 1.0:
+                fine[7] = where
+                n_fine = 8
+                fine[:8].sort()
+            span_theta = theta_b - theta_a
+            base = theta_a
+            for j in range(n_fine):
+                theta_f = base + fine[j] * span_theta
+                dense_eval(y, h, K, P, theta_f, ytmp, wts)
+                g_f, gd_f = event(t + theta_f * h, ytmp, p)
+                if g_f > 0.0:
+                    return theta_a, g_a, theta_f, g_f, g_end, gd_end
+                theta_a = theta_f
+                g_a = g_f
+        if g_b > 0.0:
+            return theta_a, g_a, theta_b, g_b, g_end, gd_end
+        theta_a = theta_b
+        g_a = g_b
+        gd_a = gd_b
+    return theta_a, g_a, -1.0, 0.0, g_end, gd_end
+
+
 _OUT_SIG = types.Tuple((
     types.float64[::1],        # t of recorded steps
     types.float64[:, ::1],     # y of recorded steps
@@ -228,11 +336,12 @@ _OUT_SIG = types.Tuple((
 
 _FT_RHS = types.FunctionType(RHS_SIG)
 _FT_SCALAR = types.FunctionType(SCALAR_SIG)
+_FT_EVENT = types.FunctionType(EVENT_SIG)
 _FT_ACTION = types.FunctionType(ACTION_SIG)
 _ARR2 = types.float64[:, ::1]
 
 _INTEGRATE_SIG = _OUT_SIG(
-    _FT_RHS, _FT_SCALAR, _FT_ACTION, _FT_SCALAR,
+    _FT_RHS, _FT_EVENT, _FT_ACTION, _FT_SCALAR,
     types.float64[::1],            # y0
     types.float64[::1],            # p (parameters + memory, modified in place)
     types.int64,                   # mem_start: first memory entry of p (recorded)
@@ -246,6 +355,7 @@ _INTEGRATE_SIG = _OUT_SIG(
     types.int64,                   # max_steps
     types.boolean,                 # record
     types.float64,                 # event_tol
+    types.float64,                 # event_margin: look closer between samples this near
     types.int64,                   # n_samples: interior event samples per step
     types.int64,                   # refine_iters: golden-section iterations per window peak
     _ARR2, types.float64[::1], types.float64[::1], types.float64[::1], _ARR2,  # A B C E P
@@ -255,8 +365,8 @@ _INTEGRATE_SIG = _OUT_SIG(
 
 @nb.njit(_INTEGRATE_SIG, cache=True)
 def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rtol, atol, n_err,
-              h0, h_max, max_steps, record, event_tol, n_samples, refine_iters, A, B, C, E, P,
-              error_order):
+              h0, h_max, max_steps, record, event_tol, event_margin, n_samples, refine_iters,
+              A, B, C, E, P, error_order):
     """Integrate from edges[0] to edges[-1]; see the module docstring for the protocol."""
     n = y0.shape[0]
     s = B.shape[0]
@@ -269,6 +379,7 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
     ftmp = np.empty(n)
     p_prev = p.copy()
     wts = np.empty(P.shape[0])
+    fine = np.empty(8)
     n_win = edges.shape[0] - 1
     peaks = np.full(n_win, -np.inf)
     peak_t = np.zeros(n_win)
@@ -315,6 +426,7 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
         nrec = 1
     zero_events = 0
     g_start = 0.0
+    gd_start = 0.0
     g_start_valid = False
     inv_order = 1.0 / (error_order + 1)
     nstep = 0
@@ -326,6 +438,14 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
         t_target = edges[win + 1]
         land = False
         h_try = h
+        # approaching the surface: do not step far past the linear prediction of the
+        # crossing, so that the samples of the event search resolve the approach
+        if not g_start_valid:
+            g_start, gd_start = event(t, y, p)
+            g_start_valid = True
+        if gd_start > 0.0:
+            h_try = min(h_try, (2.0 * abs(g_start) + (n_samples + 1) * event_margin)
+                        / gd_start)
         if t + h_try >= t_target - 1e-13 * max(1.0, abs(t_target)):
             h_try = t_target - t
             land = True
@@ -350,35 +470,15 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
         if land:
             h_next = max(h_next, h)  # a short landing step says nothing about the scale
 
-        # ---- event search: end point, then interior samples of the dense output
-        theta_hi = -1.0
-        theta_lo = 0.0
-        if not g_start_valid:
-            g_start = event(t, y, p)
-        g_lo = g_start
+        # ---- event search on the dense output (interior samples), then the end point
         g_start_valid = False
-        # a step that starts on the switching surface (after an event, or a grazing start)
-        # is also sampled close to its start, where a short excursion would hide
-        n_near = 3 if g_start > -100.0 * event_tol else 0
-        for i in range(1 - n_near, n_samples + 1):
-            if i <= 0:
-                th = 10.0 ** (i - 4) * (n_samples + 1.0) ** -1.0 * 10.0 ** n_near
-            else:
-                th = i / (n_samples + 1.0)
-            dense_eval(y, h_try, K, P, th, ytmp, wts)
-            g = event(t + th * h_try, ytmp, p)
-            if g > 0.0:
-                theta_hi = th
-                break
-            theta_lo = th
-            g_lo = g
+        theta_lo, g_lo, theta_hi, g_hi, g_end, gd_end = _search_event(
+            event, t, y, y_new, h_try, K, P, p, g_start, gd_start, n_samples, event_tol,
+            event_margin, ytmp, wts, fine)
         if theta_hi < 0.0:
-            g_end = event(t + h_try, y_new, p)
-            if g_end > 0.0:
-                theta_hi = 1.0
-            else:
-                g_start = g_end       # valid for the next step if no event intervenes
-                g_start_valid = True
+            g_start = g_end       # valid for the next step if no event intervenes
+            gd_start = gd_end
+            g_start_valid = True
         p_prev[:] = p
         if theta_hi > 0.0:
             counters[3] += 1
@@ -389,14 +489,13 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
                 a = theta_lo
                 b = theta_hi
                 ga = g_lo
-                dense_eval(y, h_try, K, P, b, ytmp, wts)
-                gb = event(t + b * h_try, ytmp, p)
+                gb = g_hi
                 side = 0
                 theta_star = b
                 for _ in range(60):
                     c = (a * gb - b * ga) / (gb - ga)
                     dense_eval(y, h_try, K, P, c, ytmp, wts)
-                    gc = event(t + c * h_try, ytmp, p)
+                    gc = event(t + c * h_try, ytmp, p)[0]
                     theta_star = c
                     if abs(gc) <= event_tol or (b - a) < 1e-15:
                         break
@@ -427,24 +526,39 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
                         ms[nrec - 1, k] = p[mem_start + k]
                 continue
             zero_events = 0
-            # land on the event with the real step map; secant iterations on h
+            # land on the event with the real step map: Illinois iterations on h inside the
+            # bracket of the search, so that the root found is the first crossing (an open
+            # secant could jump to a later crossing of a non-monotone g)
             rk_step(rhs, t, y, f, h_ev, A, B, C, K, p, y_new, f_new, ytmp)
             counters[0] += s
-            g_ev = event(t + h_ev, y_new, p)
+            g_ev = event(t + h_ev, y_new, p)[0]
             h_a = theta_lo * h_try
-            g_a = g_lo
-            for _ in range(8):
-                if abs(g_ev) <= event_tol or g_ev == g_a:
+            g_a = min(g_lo, 0.0)
+            h_b = theta_hi * h_try
+            g_b = max(g_hi, 1e-300)
+            side = 0
+            for _ in range(16):
+                if abs(g_ev) <= event_tol or h_b - h_a <= 1e-15 * max(1.0, abs(t)):
                     break
-                h_c = h_ev - g_ev * (h_ev - h_a) / (g_ev - g_a)
-                if not (0.0 < h_c <= h_try):
-                    break
-                h_a = h_ev
-                g_a = g_ev
+                if g_ev > 0.0:
+                    h_b = h_ev
+                    g_b = g_ev
+                    if side == -1:
+                        g_a *= 0.5
+                    side = -1
+                else:
+                    h_a = h_ev
+                    g_a = g_ev
+                    if side == 1:
+                        g_b *= 0.5
+                    side = 1
+                h_c = (h_a * g_b - h_b * g_a) / (g_b - g_a)
+                if not (h_a < h_c < h_b):
+                    h_c = 0.5 * (h_a + h_b)
                 h_ev = h_c
                 rk_step(rhs, t, y, f, h_ev, A, B, C, K, p, y_new, f_new, ytmp)
                 counters[0] += s
-                g_ev = event(t + h_ev, y_new, p)
+                g_ev = event(t + h_ev, y_new, p)[0]
             t_old = t
             t = t + h_ev
             land = False

@@ -19,7 +19,15 @@ import numba as nb
 import numpy as np
 
 from .contact import CONTACT_MODELS, contact_force
-from .integrator import ACTION_SIG, METHODS, RHS_SIG, SCALAR_SIG, STATUS_MESSAGES, integrate
+from .integrator import (
+    ACTION_SIG,
+    EVENT_SIG,
+    METHODS,
+    RHS_SIG,
+    SCALAR_SIG,
+    STATUS_MESSAGES,
+    integrate,
+)
 from .mechanism import SliderCrank
 
 # ---- layout of the parameter vector p (indices are part of the kernels' contract)
@@ -175,13 +183,14 @@ def rhs(t, y, p, dydt):
     dydt[4] = M2 * p[P_W]
 
 
-@nb.njit(SCALAR_SIG, cache=True)
+@nb.njit(EVENT_SIG, cache=True)
 def event(t, y, p):
-    """Switching function: penetration in free flight, minus penetration in contact."""
+    """Switching function and its rate: penetration (and its rate) in free flight, minus
+    them in contact."""
     ex, ey, r, delta, deltadot, nx, ny = geometry(t, y, p)
     if p[P_MODE] > 0.5:
-        return -delta
-    return delta
+        return -delta, -deltadot
+    return delta, deltadot
 
 
 @nb.njit(ACTION_SIG, cache=True)
@@ -248,6 +257,10 @@ def mechanical_energy(t, y, p):
 
 
 # ---------------------------------------------------------------------------- driver
+
+#: the event search looks closer (7 more samples) between two samples of a step that are
+#: both within this fraction of the clearance from the wall (see integrator._search_event)
+EVENT_MARGIN = 0.05
 
 #: default relative tolerance of the compiled integrator (chosen by the work-precision
 #: benchmark, see docs/performance.md)
@@ -337,7 +350,8 @@ def run(mech: SliderCrank, revolutions: int = 4, *, rtol: float | None = None,
     ts, ys, ms, peaks, peak_t, counters = integrate(
         fun, event, action, monitor, y0, p, mem_start, n_mem, edges, rtol,
         atol_arr, n_err, float(h0), h_max, int(max_steps), bool(record), event_tol,
-        int(n_samples), refine, tab.A, tab.B, tab.C, tab.E, tab.P, tab.error_order)
+        EVENT_MARGIN * mech.clearance, int(n_samples), refine, tab.A, tab.B, tab.C, tab.E,
+        tab.P, tab.error_order)
     status = int(counters[4])
     if status != 0:
         raise RuntimeError(f"reduced model integration failed at about t = "

@@ -62,7 +62,7 @@ def solve_scipy(mech: SliderCrank, edges: np.ndarray | None = None, revolutions:
         return out
 
     def ev(tt, yy):
-        return reduced.event(tt, np.ascontiguousarray(yy), p)
+        return reduced.event(tt, np.ascontiguousarray(yy), p)[0]
 
     ev.terminal = True
     ev.direction = 1

@@ -8,6 +8,7 @@ import pytest
 
 from mbs_clearance.integrator import (
     ACTION_SIG,
+    EVENT_SIG,
     METHODS,
     RHS_SIG,
     SCALAR_SIG,
@@ -23,9 +24,9 @@ def osc_rhs(t, y, p, d):
     d[1] = -p[0] * p[0] * y[0]
 
 
-@nb.njit(SCALAR_SIG)
+@nb.njit(EVENT_SIG)
 def never(t, y, p):
-    return -1.0
+    return -1.0, 0.0
 
 
 @nb.njit(ACTION_SIG)
@@ -39,12 +40,12 @@ def minus_x(t, y, p):
 
 
 def run(rhs, event, action, monitor, y0, p, edges, rtol, method="dopri5", record=True,
-        n_samples=3, h_max=10.0, n_mem=1):
+        n_samples=3, h_max=10.0, n_mem=1, margin=0.0):
     tab = METHODS[method]
     p = np.asarray(p, float)
     return integrate(rhs, event, action, monitor, np.asarray(y0, float), p, len(p) - n_mem,
                      n_mem, np.asarray(edges, float), rtol, np.full(len(y0), rtol), len(y0),
-                     0.0, h_max, 10**6, record, 1e-14, n_samples, 40, tab.A, tab.B, tab.C,
+                     0.0, h_max, 10**6, record, 1e-14, margin, n_samples, 40, tab.A, tab.B, tab.C,
                      tab.E, tab.P, tab.error_order)
 
 
@@ -92,9 +93,9 @@ def ball_rhs(t, y, p, d):
     d[1] = -9.81
 
 
-@nb.njit(SCALAR_SIG)
+@nb.njit(EVENT_SIG)
 def ball_event(t, y, p):
-    return -y[0]
+    return -y[0], -y[1]
 
 
 @nb.njit(ACTION_SIG)
@@ -125,10 +126,18 @@ def still(t, y, p, d):
     d[0] = 0.0
 
 
-@nb.njit(SCALAR_SIG)
+@nb.njit(EVENT_SIG)
 def bump(t, y, p):
     # positive only for |t - 1| < 0.01: an excursion much shorter than the steps taken
-    return 1e-4 - (t - 1.0) ** 2 if p[0] < 0.5 else -1.0
+    if p[0] < 0.5:
+        return 1e-4 - (t - 1.0) ** 2, -2.0 * (t - 1.0)
+    return -1.0, 0.0
+
+
+@nb.njit(EVENT_SIG)
+def bump_without_rate(t, y, p):
+    # the same excursion, but the model reports no rate: only samples can find it
+    return bump(t, y, p)[0], 0.0
 
 
 @nb.njit(ACTION_SIG)
@@ -138,11 +147,16 @@ def flag(t, y, p):
 
 def test_interior_samples_catch_a_crossing_and_return_inside_one_step():
     # With no dynamics the step grows to h_max = 0.4 and step ends never see g > 0.
-    *_, counters = run(still, bump, flag, minus_x, [0.0], [0.0], [0.0, 3.0], 1e-8,
-                       n_samples=0, h_max=0.4)
+    *_, counters = run(still, bump_without_rate, flag, minus_x, [0.0], [0.0], [0.0, 3.0],
+                       1e-8, n_samples=0, h_max=0.4)
     assert counters[3] == 0   # missed without interior samples: this is what they are for
+    *_, counters = run(still, bump_without_rate, flag, minus_x, [0.0], [0.0], [0.0, 3.0],
+                       1e-8, n_samples=39, h_max=0.4)
+    assert counters[3] == 1
+    # with no interior samples at all, the rates at the step ends reveal the excursion: the
+    # cubic Hermite interpolant of g rises to the surface, so the step is sampled finer
     *_, counters = run(still, bump, flag, minus_x, [0.0], [0.0], [0.0, 3.0], 1e-8,
-                       n_samples=39, h_max=0.4)
+                       n_samples=0, h_max=0.4, margin=1e-3)
     assert counters[3] == 1
 
 
