@@ -126,7 +126,7 @@ def rk_step(rhs, t, y, f, h, A, B, C, K, p, y_new, f_new, ytmp):
     K[s, :] = f_new
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def error_norm(K, E, h, y, y_new, rtol, atol, n_err):
     """RMS of the embedded error estimate over the first n_err components, scaled."""
     acc = 0.0
@@ -139,7 +139,7 @@ def error_norm(K, E, h, y, y_new, rtol, atol, n_err):
     return math.sqrt(acc / n_err)
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def dense_eval(y, h, K, P, theta, out, wts):
     """State at t + theta*h from the step's continuous extension (wts: work array)."""
     n = y.shape[0]
@@ -219,7 +219,7 @@ def _golden_max(rhs, monitor, t0, y0, f0, p, h_max, A, B, C, K, y_new, f_new, yt
     return fd, t0 + d
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def _hermite_max(g_a, d_a, g_b, d_b):
     """Maximum over [0, 1] of the cubic Hermite interpolant with values g_a, g_b and
     end slopes d_a, d_b (derivatives times the interval length), and where it is."""
@@ -257,7 +257,7 @@ def _hermite_max(g_a, d_a, g_b, d_b):
     return best, where
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def _search_event(event, t, y, y_new, h, K, P, p, g_start, gd_start, n_samples, event_tol,
                   event_margin, ytmp, wts, fine):
     """First sign change of g (from <= 0 to > 0) inside a step of size h.
