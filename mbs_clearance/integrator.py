@@ -12,12 +12,15 @@ The model is passed as four first-class compiled functions with fixed signatures
 - ``on_event(t, y, p)``: applied exactly at a located event (updates the memory in ``p``);
 - ``monitor(t, y, p) -> m``: scalar whose maximum is tracked per time window (the peak).
 
-Events are located on the step's dense output (plus interior samples, so that a crossing and
-return inside one step is not missed), then the step is redone with the located size and
-refined by secant iterations on the real step map until |g| <= event_tol: the memory is set at
-the landed state, never at the first state found inside the wall. The integration also lands
-exactly on the window edges, and the maximum of ``monitor`` in each window is refined between
-accepted steps by golden-section search on re-taken steps.
+Events are searched on the step's dense output (`_search_event`: interior samples, a closer
+look wherever the cubic Hermite interpolant of g and its rate comes within `event_margin` of
+the surface, and steps limited while approaching it), so that a crossing and return inside one
+step is not missed. The first crossing is located on the dense output, then the step is redone
+with the located size and refined by Illinois iterations on the real step map, inside the
+search's bracket, until |g| <= event_tol: the memory is set at the landed state, never at the
+first state found inside the wall. The integration also lands exactly on the window edges, and
+the maximum of ``monitor`` in each window is refined between accepted steps by golden-section
+search on re-taken steps.
 """
 
 from __future__ import annotations
