@@ -295,7 +295,7 @@ class System(NamedTuple):
 
 def run(mech: SliderCrank, revolutions: int = 4, *, rtol: float | None = None,
         atol: float | np.ndarray | None = None, method: str = "dopri5", record: bool = True,
-        max_steps: int = 5_000_000, n_samples: int = 3, h_max: float | None = None,
+        max_steps: int = 5_000_000, n_samples: int = 2, h_max: float | None = None,
         h0: float = 0.0, event_tol: float | None = None, edges: np.ndarray | None = None,
         t_eval: np.ndarray | None = None, system=None, select: bool = True,
         initial_offset: float = 0.0):
