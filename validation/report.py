@@ -296,9 +296,10 @@ def draw_figures(out: Path, numbers: dict) -> dict[str, list[str]]:
         for scaling in ("fixed", "uniform"):
             res = OptimizationResult.from_json(data / f"optimization_{scaling}.json")
             plot_fitness_history(res, path=fig_dir / f"fig7a_fitness_{scaling}.png")
-            trajs = {label.replace("_", "'s "): load_trajectory(
-                data / f"optimization_{scaling}_{label}.npz")
-                for label in ("original", "optimum", "paper_optimum")}
+            labels = {"original": "original", "optimum": "optimum",
+                      "paper_optimum": "paper's optimum"}
+            trajs = {text: load_trajectory(data / f"optimization_{scaling}_{key}.npz")
+                     for key, text in labels.items()}
             plot_force_comparison(trajs, path=fig_dir / f"fig7b_force_{scaling}.png")
             figs["optimization"] += [f"fig7a_fitness_{scaling}.png",
                                      f"fig7b_force_{scaling}.png"]

@@ -23,11 +23,11 @@ FIGURES = ["fig3_response.png", "fig4_kinematic.png", "fig5_contact.png", "fig6_
 def report(tmp_path_factory):
     out = tmp_path_factory.mktemp("report")
     assert main(["report", "--quick", "--out", str(out)]) == 0
-    return out, None
+    return out
 
 
 def test_files_sections_and_figures(report):
-    out, seconds = report
+    out = report
     html = (out / "report.html").read_text()
     numbers = json.loads((out / "report.json").read_text())
     assert list(numbers) == list(SECTIONS)
@@ -43,7 +43,7 @@ def test_files_sections_and_figures(report):
 
 
 def test_json_numbers_agree_with_the_python_api(report):
-    out, _ = report
+    out = report
     n = json.loads((out / "report.json").read_text())
     mech = SliderCrank()
     assert n["response"]["reduced"]["peak_base_force"][3] == pytest.approx(
@@ -73,7 +73,7 @@ def test_json_numbers_agree_with_the_python_api(report):
 def test_replot_redraws_without_recomputing(report, monkeypatch):
     import validation.report as rep
 
-    out, _ = report
+    out = report
     before = (out / "report.json").read_text()
     (out / "figures" / "fig3_response.png").unlink()
 
@@ -103,7 +103,7 @@ def test_rendered_report_pages_are_not_blank(report, tmp_path):
 
     from validation.render_report import render
 
-    out, _ = report
+    out = report
     pages = render(out / "report.html", tmp_path)
     assert len(pages) >= 5
     for page in pages:
