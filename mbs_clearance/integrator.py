@@ -223,6 +223,19 @@ def _golden_max(rhs, monitor, t0, y0, f0, p, h_max, A, B, C, K, y_new, f_new, yt
 
 
 @nb.njit(cache=True, inline="always")
+def _illinois_update(x, gx, a, ga, b, gb, side):
+    """Shrink the bracket [a, b] (g(a) <= 0 < g(b)) to the new point x; the Illinois rule
+    halves the value kept at the end that stays, when that end stays twice in a row."""
+    if gx > 0.0:
+        if side == -1:
+            ga *= 0.5
+        return a, ga, x, gx, -1
+    if side == 1:
+        gb *= 0.5
+    return x, gx, b, gb, 1
+
+
+@nb.njit(cache=True, inline="always")
 def _hermite_max(g_a, d_a, g_b, d_b):
     """Maximum over [0, 1] of the cubic Hermite interpolant with values g_a, g_b and
     end slopes d_a, d_b (derivatives times the interval length), and where it is."""
@@ -502,18 +515,7 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
                     theta_star = c
                     if abs(gc) <= event_tol or (b - a) < 1e-15:
                         break
-                    if gc > 0.0:
-                        b = c
-                        gb = gc
-                        if side == -1:
-                            ga *= 0.5
-                        side = -1
-                    else:
-                        a = c
-                        ga = gc
-                        if side == 1:
-                            gb *= 0.5
-                        side = 1
+                    a, ga, b, gb, side = _illinois_update(c, gc, a, ga, b, gb, side)
             h_ev = theta_star * h_try
             if h_ev <= 1e-14 * max(1.0, abs(t)):
                 zero_events += 1
@@ -543,18 +545,8 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
             for _ in range(16):
                 if abs(g_ev) <= event_tol or h_b - h_a <= 1e-15 * max(1.0, abs(t)):
                     break
-                if g_ev > 0.0:
-                    h_b = h_ev
-                    g_b = g_ev
-                    if side == -1:
-                        g_a *= 0.5
-                    side = -1
-                else:
-                    h_a = h_ev
-                    g_a = g_ev
-                    if side == 1:
-                        g_b *= 0.5
-                    side = 1
+                h_a, g_a, h_b, g_b, side = _illinois_update(h_ev, g_ev, h_a, g_a, h_b, g_b,
+                                                            side)
                 h_c = (h_a * g_b - h_b * g_a) / (g_b - g_a)
                 if not (h_a < h_c < h_b):
                     h_c = 0.5 * (h_a + h_b)
