@@ -72,7 +72,8 @@ def simulate_ideal(mech: SliderCrank, revolutions: int = 4, *,
     zeros = np.zeros(n)
     power = o["crank_moment"] * mech.crank_speed
     work = np.concatenate([[0.0], np.cumsum(0.5 * (power[1:] + power[:-1]) * np.diff(t))])
-    peaks = np.array([_refined_peak(mech, k) for k in range(1, revolutions + 1)])
+    # the ideal mechanism is periodic in the crank revolution: one refined peak serves all
+    peaks = np.full(revolutions, _refined_peak(mech, 1))
     return Trajectory(
         t=t, base_force=o["base_force"], crank_moment=o["crank_moment"],
         contact_force=np.hypot(o["joint_force"][:, 0], o["joint_force"][:, 1]),
@@ -103,5 +104,6 @@ def _refined_peak(mech: SliderCrank, revolution: int) -> float:
 
 
 def peak_ideal(mech: SliderCrank, revolution: int = 4) -> float:
-    """Max |F12| in N over a revolution of the ideal mechanism (periodic: any revolution)."""
-    return _refined_peak(mech, revolution)
+    """Max |F12| in N over a revolution of the ideal mechanism (periodic: the same for every
+    revolution, computed over the first)."""
+    return _refined_peak(mech, 1)

@@ -406,7 +406,7 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
     cand_prev_h = 0.0
     cand_prev_p = p.copy()
     cand_y = y.copy()
-    cand_t = 0.0
+    cand_t = edges[0]
     cand_p = p.copy()
     cand_next_h = 0.0
 
@@ -430,9 +430,6 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
     m0 = monitor(t, y, p)
     peaks[0] = m0
     peak_t[0] = t
-    cand_t = t
-    cand_y[:] = y
-    cand_p[:] = p
     cand_fresh = True   # the first step gives the right-hand interval of the start point
     if record:
         ts[0] = t

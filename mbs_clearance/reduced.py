@@ -258,8 +258,9 @@ def mechanical_energy(t, y, p):
 
 # ---------------------------------------------------------------------------- driver
 
-#: the event search looks closer (7 more samples) between two samples of a step that are
-#: both within this fraction of the clearance from the wall (see integrator._search_event)
+#: the event search looks closer (7 more samples and the interpolant's maximum) between two
+#: samples of a step where the cubic Hermite interpolant of the penetration comes within this
+#: fraction of the clearance of the wall (see integrator._search_event)
 EVENT_MARGIN = 0.05
 
 #: default relative tolerance of the compiled integrator (chosen by the work-precision
@@ -358,14 +359,18 @@ def run(mech: SliderCrank, revolutions: int = 4, *, rtol: float | None = None,
                            f"{ts[-1] if len(ts) else float('nan'):.6g} s: "
                            f"{STATUS_MESSAGES[status]}")
     if t_eval is not None and select:
-        keep = np.searchsorted(ts, t_eval)
-        keep = np.minimum(keep, len(ts) - 1)
+        keep = landed_indices(ts, t_eval)
         ts, ys, ms = ts[keep], ys[keep], ms[keep]
         mags = np.array([monitor(ts[i], ys[i], _with_memory(p, mem_start, ms[i]))
                          for i in range(len(ts))])
         peaks = np.array([mags[(ts >= a) & (ts <= b)].max(initial=0.0)
                           for a, b in zip(win_edges[:-1], win_edges[1:])])
     return ts, ys, ms, peaks, peak_t, counters, p
+
+
+def landed_indices(ts: np.ndarray, t_eval: np.ndarray) -> np.ndarray:
+    """Indices of the recorded steps that landed on the times `t_eval`."""
+    return np.minimum(np.searchsorted(ts, t_eval), len(ts) - 1)
 
 
 def _with_memory(p, mem_start, mem):

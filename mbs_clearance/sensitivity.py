@@ -283,17 +283,16 @@ def _ddm(mech, names, revolutions, rtol, t_eval, event_time_term, method):
         mech, revolutions, rtol=rtol_v, method=method, t_eval=t_eval, system=system,
         select=False)
     # growth diagnostic on all steps: normalized state sensitivities per revolution
-    ref_scale = np.where(ref != 0.0, ref, 1.0)
     s = ys[:, 4:4 + 4 * npar].reshape(len(ts), npar, 4)
     state_scale = np.array([1.0, mech.clearance, mech.crank_speed,
                             mech.crank_speed * mech.clearance / mech.crank_length])
-    norm = np.sqrt(np.sum((s * ref_scale[None, :, None] / state_scale[None, None, :]) ** 2,
+    norm = np.sqrt(np.sum((s * scale[None, :, None] / state_scale[None, None, :]) ** 2,
                           axis=2))
     period = mech.period
     growth = np.array([norm[(ts >= (k - 1) * period) & (ts <= k * period)].max(axis=0)
                        for k in range(1, revolutions + 1)])
     if t_eval is not None:
-        keep = np.minimum(np.searchsorted(ts, t_eval), len(ts) - 1)
+        keep = reduced.landed_indices(ts, t_eval)
         ts, ys, ms = ts[keep], ys[keep], ms[keep]
     vals, sens = ddm.sens_outputs(ts, np.ascontiguousarray(ys), np.ascontiguousarray(ms), p)
     stats = reduced.counters_dict(counters)
