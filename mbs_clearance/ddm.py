@@ -21,18 +21,22 @@ deltadot(t_e), so
 the event-time term (switchable, to show that it matters). See docs/sensitivity.md.
 
 Layout of p: the reduced model's 17 entries (reduced.P_*), then P_NPAR, P_EVTERM, the
-memory sensitivities sigma (npar) and the chain matrix D (13 x npar, row-major). The
-recorded memory is p[P_MODE : P_SIGMA + npar]. y = [4 states, 4 npar sensitivities, W].
+memory sensitivities sigma (npar), the chain matrix D (13 x npar, row-major) and N_WORK
+entries of work space. The recorded memory is p[P_MODE : P_SIGMA + npar].
+y = [4 states, 4 npar sensitivities, W].
 """
 
 from __future__ import annotations
 
+import sys
+
 import numba as nb
 import numpy as np
 
+from . import reduced
 from ._jacobians import contact_accel, contact_branch, free_accel, free_branch
 from .contact import contact_force, hysteresis_factor
-from .integrator import ACTION_SIG, RHS_SIG
+from .integrator import ACTION_SIG, RHS_SIG, integrate
 from .reduced import (
     P_C,
     P_DMIN,
@@ -53,6 +57,7 @@ from .reduced import (
     geometry,
 )
 
+_THIS = sys.modules[__name__]
 P_NPAR = 17
 P_EVTERM = 18
 P_SIGMA = 19
@@ -68,19 +73,30 @@ Z_DMIN = 5
 O_TH3DD, O_X4DD, O_F12X, O_F12Y, O_M2, O_F, O_DELTA, O_DELTADOT = range(8)
 
 
+#: work space at the end of p for the right-hand side: z (18), outputs (8), Jacobian (8 x 18)
+N_WORK = 18 + 8 + 8 * 18
+
+
 def d_offset(npar: int) -> int:
     """Index in p where the chain matrix D starts."""
     return P_SIGMA + npar
 
 
+@nb.njit(cache=True, inline="always")
+def _work(p, npar):
+    """Views of the work space of p (no allocation in the right-hand side)."""
+    w0 = P_SIGMA + (1 + N_BETA) * npar
+    return (p[w0:w0 + 18], p[w0 + 18:w0 + 26], p[w0 + 26:w0 + N_WORK].reshape((8, 18)))
+
+
 @nb.njit(cache=True)
-def _evaluate(t, y, p, o, jac, full):
-    """Outputs and Jacobian at (t, y) in the branch of the current contact mode.
+def _evaluate(t, y, p, z, o, jac, full):
+    """Outputs and Jacobian at (t, y) in the branch of the current contact mode (z: work
+    array of 18 entries).
 
     full=False computes only the rows theta3dd and x4dd (all the right-hand side needs).
     """
     xi, _ = hysteresis_factor(p[P_E], int(p[P_MODEL]))
-    z = np.empty(18)
     z[0] = t
     z[1] = y[0]
     z[2] = y[1]
@@ -139,9 +155,8 @@ def _directional(jac, row, y, p, k, npar, dxi):
 def rhs_sens(t, y, p, dydt):
     """State, sensitivity and work derivatives."""
     npar = int(p[P_NPAR])
-    o = np.empty(8)
-    jac = np.empty((8, 18))
-    _evaluate(t, y, p, o, jac, False)
+    z, o, jac = _work(p, npar)
+    _evaluate(t, y, p, z, o, jac, False)
     _, dxi = hysteresis_factor(p[P_E], int(p[P_MODEL]))
     dydt[0] = y[2]
     dydt[1] = y[3]
@@ -165,9 +180,8 @@ def on_event_sens(t, y, p):
         p[P_MODE] = 0.0
         return
     npar = int(p[P_NPAR])
-    o = np.empty(8)
-    jac = np.empty((8, 18))
-    _evaluate(t, y, p, o, jac, True)    # free branch: F = 0 at the onset
+    z, o, jac = _work(p, npar)
+    _evaluate(t, y, p, z, o, jac, True)    # free branch: F = 0 at the onset
     _, dxi = hysteresis_factor(p[P_E], int(p[P_MODEL]))
     rate = o[O_DELTADOT]
     p[P_MODE] = 1.0
@@ -198,15 +212,14 @@ def sens_outputs(ts, ys, ms, p):
     """
     npar = int(p[P_NPAR])
     q = p.copy()
-    o = np.empty(8)
-    jac = np.empty((8, 18))
+    z, o, jac = _work(q, npar)
     vals = np.empty((ts.shape[0], 4))
     sens = np.empty((ts.shape[0], 4, npar))
     rows = (O_F12X, O_F12Y, O_M2, O_F)
     for i in range(ts.shape[0]):
         for m in range(ms.shape[1]):
             q[P_MODE + m] = ms[i, m]
-        _evaluate(ts[i], ys[i], q, o, jac, True)
+        _evaluate(ts[i], ys[i], q, z, o, jac, True)
         _, dxi = hysteresis_factor(q[P_E], int(q[P_MODEL]))
         for r in range(4):
             vals[i, r] = o[rows[r]]
@@ -214,3 +227,16 @@ def sens_outputs(ts, ys, ms, p):
                 sens[i, r, k] = _directional(jac, rows[r], ys[i], q, k, npar, dxi)
     return vals, sens
 
+
+
+@nb.njit(cache=True)
+def integrate_sens(y0, p, mem_start, n_mem, edges, rtol, atol, n_err, h0, h_max, max_steps,
+                   record, event_tol, event_margin, n_samples, refine_iters, A, B, C, E, E2, P,
+                   A_extra, C_extra, error_order):
+    """`integrator.integrate` bound to the sensitivity equations (compiled once, cached);
+    events and monitor are the plain model's."""
+    # module attributes, not plain globals: see reduced.integrate_plain
+    return integrate(_THIS.rhs_sens, reduced.event, _THIS.on_event_sens, reduced.monitor, y0,
+                     p, mem_start, n_mem, edges, rtol, atol, n_err, h0, h_max, max_steps,
+                     record, event_tol, event_margin, n_samples, refine_iters, A, B, C, E, E2,
+                     P, A_extra, C_extra, error_order)

@@ -1,7 +1,7 @@
 """Compiled adaptive explicit Runge-Kutta integration with event location (numba kernels).
 
-The model is passed as four first-class compiled functions with fixed signatures
-(``numba.types.FunctionType``, so the kernels are cached on disk and not recompiled per model):
+The model is passed as four compiled functions with fixed signatures (numba specialises the
+integrator for them, so the calls are direct and can be inlined):
 
 - ``rhs(t, y, p, dydt)``: right-hand side; ``p`` holds parameters and the model's memory
   variables (contact mode, impact velocity, ...), ``p[mem_start:mem_start + n_mem]``, which
@@ -47,10 +47,15 @@ class Tableau:
     """Coefficients of an embedded explicit RK pair in the layout of scipy's ``rk_step``.
 
     A (s, s), B (s,), C (s,), E (s+1,) = b - b_hat (the last entry weights the FSAL stage),
-    P (s+1, k) dense-output polynomial coefficients, order = order of the error estimator + 1.
+    P (s+1+x, k) dense-output polynomial coefficients (y(t + theta h) = y + h sum_j K_j
+    sum_m P[j, m] theta^(m+1)), order = order of the error estimator + 1.
+    Two-estimator pairs (DOP853) give a second error vector E2 (empty otherwise); the
+    continuous extension may need x extra stages, A_extra (x, s+1+x) and C_extra (x,),
+    evaluated only for accepted steps.
     """
 
-    def __init__(self, name, A, B, C, E, P, order, error_order):
+    def __init__(self, name, A, B, C, E, P, order, error_order, E2=(), A_extra=None,
+                 C_extra=()):
         self.name = name
         self.A = np.ascontiguousarray(A, dtype=float)
         self.B = np.ascontiguousarray(B, dtype=float)
@@ -59,6 +64,16 @@ class Tableau:
         self.P = np.ascontiguousarray(P, dtype=float)
         self.order = order
         self.error_order = error_order
+        self.E2 = np.ascontiguousarray(E2, dtype=float)
+        self.C_extra = np.ascontiguousarray(C_extra, dtype=float)
+        if A_extra is None:
+            A_extra = np.zeros((0, len(self.B) + 1))
+        self.A_extra = np.ascontiguousarray(A_extra, dtype=float)
+
+    def arrays(self):
+        """The coefficient arguments of `integrate`, in its order."""
+        return (self.A, self.B, self.C, self.E, self.E2, self.P, self.A_extra, self.C_extra,
+                self.error_order)
 
 
 # Dormand & Prince (1980) 5(4) pair with Shampine's 4th-order continuous extension.
@@ -91,8 +106,45 @@ _BS_C = [0, 1 / 2, 3 / 4]
 _BS_E = [5 / 72, -1 / 12, -1 / 9, 1 / 8]
 _BS_P = [[1, -4 / 3, 5 / 9], [0, 1, -2 / 3], [0, 4 / 3, -8 / 9], [0, -1, 1]]
 
+
+
+def _dop853() -> Tableau:
+    """Dormand & Prince's 8(5,3) pair (Hairer, Norsett & Wanner, Solving ODEs I, Sec. II.10),
+    coefficients taken from scipy's DOP853 class, with Hairer's 7th-order continuous
+    extension (3 extra stages) rewritten as polynomials in theta for `dense_eval`.
+
+    The extension is y(theta) = y0 + theta (F0 + (1 - theta) (F1 + theta (F2 + (1 - theta)
+    (F3 + ...)))), F0 = dy, F1 = h f0 - dy, F2 = 2 dy - h (f0 + f1), F3..F6 = h D K: term i
+    carries the weight theta^(i//2 + 1) (1 - theta)^((i + 1)//2).
+    """
+    from numpy.polynomial import polynomial as npoly
+    from scipy.integrate import DOP853 as ref
+
+    s = ref.n_stages
+    n_all = s + 1 + len(ref.C_EXTRA)
+    b = np.zeros(n_all)
+    b[:s] = ref.B
+    F = np.zeros((7, n_all))
+    F[0] = b
+    F[1] = -b
+    F[1, 0] += 1.0
+    F[2] = 2.0 * b
+    F[2, 0] -= 1.0
+    F[2, s] -= 1.0
+    F[3:] = ref.D
+    P = np.zeros((n_all, 7))
+    for i in range(7):
+        w = npoly.polymul(npoly.polypow([0.0, 1.0], i // 2 + 1),
+                          npoly.polypow([1.0, -1.0], (i + 1) // 2))
+        w = np.pad(w, (0, 8 - len(w)))
+        P += np.outer(F[i], w[1:])
+    return Tableau("dop853", ref.A, ref.B, ref.C, ref.E5, P, 8, 7, E2=ref.E3,
+                   A_extra=ref.A_EXTRA, C_extra=ref.C_EXTRA)
+
+
 #: name -> Tableau; the registry of integration methods of the compiled integrator
 METHODS: dict[str, Tableau] = {
+    "dop853": _dop853(),
     "dopri5": Tableau("dopri5", _DP_A, _DP_B, _DP_C, _DP_E, _DP_P, 5, 4),
     "bs3": Tableau("bs3", _BS_A, _BS_B, _BS_C, _BS_E, _BS_P, 3, 2),
 }
@@ -129,17 +181,45 @@ def rk_step(rhs, t, y, f, h, A, B, C, K, p, y_new, f_new, ytmp):
     K[s, :] = f_new
 
 
+@nb.njit(cache=True)
+def extra_stages(rhs, t, y, h, K, A_extra, C_extra, p, ytmp):
+    """Stages s+1.. of a continuous extension that needs more than the step's stages."""
+    n = y.shape[0]
+    first = K.shape[0] - A_extra.shape[0]
+    for r in range(A_extra.shape[0]):
+        row = first + r
+        for k in range(n):
+            acc = 0.0
+            for j in range(row):
+                acc += A_extra[r, j] * K[j, k]
+            ytmp[k] = y[k] + h * acc
+        rhs(t + C_extra[r] * h, ytmp, p, K[row])
+
+
 @nb.njit(cache=True, inline="always")
-def error_norm(K, E, h, y, y_new, rtol, atol, n_err):
-    """RMS of the embedded error estimate over the first n_err components, scaled."""
+def error_norm(K, E, E2, h, y, y_new, rtol, atol, n_err):
+    """Scaled error estimate over the first n_err components: the RMS of E.K, or with a
+    second estimator E2 (DOP853) Hairer's combination |E.K|^2 / sqrt(|E.K|^2 + 0.01
+    |E2.K|^2), which is smaller than either when the higher-order one is."""
     acc = 0.0
+    acc2 = 0.0
+    two = E2.shape[0] > 0
     for k in range(n_err):
         err = 0.0
         for j in range(E.shape[0]):
             err += E[j] * K[j, k]
         scale = atol[k] + rtol * max(abs(y[k]), abs(y_new[k]))
-        acc += (h * err / scale) ** 2
-    return math.sqrt(acc / n_err)
+        acc += (err / scale) ** 2
+        if two:
+            err2 = 0.0
+            for j in range(E2.shape[0]):
+                err2 += E2[j] * K[j, k]
+            acc2 += (err2 / scale) ** 2
+    if not two:
+        return abs(h) * math.sqrt(acc / n_err)
+    if acc == 0.0:
+        return 0.0
+    return abs(h) * acc / math.sqrt((acc + 0.01 * acc2) * n_err)
 
 
 @nb.njit(cache=True, inline="always")
@@ -191,8 +271,10 @@ def initial_step(rhs, t, y, f, p, rtol, atol, order, direction_span, ytmp, ftmp)
 
 
 @nb.njit(cache=True)
-def _golden_max(rhs, monitor, t0, y0, f0, p, h_max, A, B, C, K, y_new, f_new, ytmp, iters):
-    """Maximise monitor(t0 + h, step(y0, h)) over h in [0, h_max]; return (value, t)."""
+def _golden_max(rhs, monitor, t0, y0, p, h_max, A, B, C, K, y_new, f_new, ytmp, f0, iters):
+    """Maximise monitor(t0 + h, step(y0, h)) over h in [0, h_max]; return (value, t).
+    f0 is a work array (the derivative at t0)."""
+    rhs(t0, y0, p, f0)
     invphi = 0.6180339887498949
     a = 0.0
     b = h_max
@@ -273,7 +355,7 @@ def _hermite_max(g_a, d_a, g_b, d_b):
     return best, where
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True)
 def _search_event(event, t, y, y_new, h, K, P, p, g_start, gd_start, n_samples, event_tol,
                   event_margin, ytmp, wts, fine):
     """First sign change of g (from <= 0 to > 0) inside a step of size h.
@@ -341,52 +423,33 @@ def _search_event(event, t, y, y_new, h, K, P, p, g_start, gd_start, n_samples, 
     return theta_a, g_a, -1.0, 0.0, g_end, gd_end
 
 
-_OUT_SIG = types.Tuple((
-    types.float64[::1],        # t of recorded steps
-    types.float64[:, ::1],     # y of recorded steps
-    types.float64[:, ::1],     # memory part of p at recorded steps
-    types.float64[::1],        # refined maximum of monitor per window
-    types.float64[::1],        # time of that maximum
-    types.int64[::1],          # counters: nfev, naccept, nreject, nevent, status, nrefine
-))
 
-_FT_RHS = types.FunctionType(RHS_SIG)
-_FT_SCALAR = types.FunctionType(SCALAR_SIG)
-_FT_EVENT = types.FunctionType(EVENT_SIG)
-_FT_ACTION = types.FunctionType(ACTION_SIG)
-_ARR2 = types.float64[:, ::1]
-
-_INTEGRATE_SIG = _OUT_SIG(
-    _FT_RHS, _FT_EVENT, _FT_ACTION, _FT_SCALAR,
-    types.float64[::1],            # y0
-    types.float64[::1],            # p (parameters + memory, modified in place)
-    types.int64,                   # mem_start: first memory entry of p (recorded)
-    types.int64,                   # n_mem: number of memory entries recorded
-    types.float64[::1],            # edges: window edges, edges[0] = t0, edges[-1] = t_end
-    types.float64,                 # rtol
-    types.float64[::1],            # atol (per component)
-    types.int64,                   # n_err: components under error control
-    types.float64,                 # h0 (<= 0: automatic)
-    types.float64,                 # h_max
-    types.int64,                   # max_steps
-    types.boolean,                 # record
-    types.float64,                 # event_tol
-    types.float64,                 # event_margin: look closer between samples this near
-    types.int64,                   # n_samples: interior event samples per step
-    types.int64,                   # refine_iters: golden-section iterations per window peak
-    _ARR2, types.float64[::1], types.float64[::1], types.float64[::1], _ARR2,  # A B C E P
-    types.int64,                   # error_order (exponent of the step-size controller)
-)
-
-
-@nb.njit(_INTEGRATE_SIG, cache=True)
+@nb.njit(cache=True)
 def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rtol, atol, n_err,
               h0, h_max, max_steps, record, event_tol, event_margin, n_samples, refine_iters,
-              A, B, C, E, P, error_order):
-    """Integrate from edges[0] to edges[-1]; see the module docstring for the protocol."""
+              A, B, C, E, E2, P, A_extra, C_extra, error_order):
+    """Integrate from edges[0] to edges[-1]; see the module docstring for the protocol.
+
+    Arguments: the four model kernels (compiled functions with the signatures RHS_SIG,
+    EVENT_SIG, ACTION_SIG, SCALAR_SIG); y0; p (parameters + memory, modified in place);
+    mem_start, n_mem (the memory entries of p, recorded); edges (window edges, edges[0] =
+    t0, edges[-1] = t_end); rtol; atol (per component); n_err (components under error
+    control); h0 (<= 0: automatic); h_max; max_steps; record; event_tol; event_margin (look
+    closer between samples this near the surface); n_samples (interior event samples per
+    step); refine_iters (golden-section iterations per peak candidate); then
+    `Tableau.arrays()`.
+
+    Returns (t (m,), y (m, n), memory (m, n_mem) of the recorded steps, the refined maximum
+    of monitor per window and its time, counters [nfev, naccept, nreject, nevent, status,
+    nrefine]).
+
+    numba compiles one specialisation per set of model kernels. Called from Python with
+    the kernels as arguments it is compiled in every new process; bind the kernels in a
+    cached wrapper instead (`reduced.integrate_plain`) to load it from the disk cache."""
     n = y0.shape[0]
     s = B.shape[0]
-    K = np.zeros((s + 1, n))
+    n_extra = A_extra.shape[0]
+    K = np.zeros((s + 1 + n_extra, n))
     y = y0.copy()
     f = np.empty(n)
     y_new = np.empty(n)
@@ -409,6 +472,13 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
     cand_t = edges[0]
     cand_p = p.copy()
     cand_next_h = 0.0
+    # the window's start (its first step is refined too)
+    ws_y = y.copy()
+    ws_t = edges[0]
+    ws_p = p.copy()
+    ws_h = 0.0
+    last_y = np.empty(n)
+    f_ref = np.empty(n)
 
     cap = 1024 if record else 1
     ts = np.empty(cap)
@@ -442,6 +512,7 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
     gd_start = 0.0
     g_start_valid = False
     inv_order = 1.0 / (error_order + 1)
+    last_rejected = False
     nstep = 0
     while win < n_win:
         if nstep >= max_steps:
@@ -470,20 +541,29 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
                 break
         rk_step(rhs, t, y, f, h_try, A, B, C, K, p, y_new, f_new, ytmp)
         counters[0] += s
-        err = error_norm(K, E, h_try, y, y_new, rtol, atol, n_err)
+        err = error_norm(K, E, E2, h_try, y, y_new, rtol, atol, n_err)
         if not (err <= 1.0):
             counters[2] += 1
             if err != err:  # NaN from the model: shrink hard
                 h = 0.1 * h_try
             else:
                 h = h_try * max(0.2, 0.9 * err ** (-inv_order))
+            last_rejected = True
             continue
         factor = 10.0 if err == 0.0 else min(10.0, 0.9 * err ** (-inv_order))
+        if last_rejected:
+            # no growth right after a rejection (Hairer, Norsett & Wanner II.4): where the
+            # step size is limited by stability this halves the number of rejections
+            factor = min(factor, 1.0)
+            last_rejected = False
         h_next = min(h_try * factor, h_max)
         if land:
             h_next = max(h_next, h)  # a short landing step says nothing about the scale
 
         # ---- event search on the dense output (interior samples), then the end point
+        if n_extra > 0:
+            extra_stages(rhs, t, y, h_try, K, A_extra, C_extra, p, ytmp)
+            counters[0] += n_extra
         g_start_valid = False
         theta_lo, g_lo, theta_hi, g_hi, g_end, gd_end = _search_event(
             event, t, y, y_new, h_try, K, P, p, g_start, gd_start, n_samples, event_tol,
@@ -492,8 +572,9 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
             g_start = g_end       # valid for the next step if no event intervenes
             gd_start = gd_end
             g_start_valid = True
-        p_prev[:] = p
-        if theta_hi > 0.0:
+        ev_step = theta_hi > 0.0
+        if ev_step:
+            p_prev[:] = p    # the step before the event ran with this memory
             counters[3] += 1
             if g_lo > 0.0:
                 theta_star = 0.0   # already past the switching surface at the step start
@@ -577,13 +658,18 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
         if cand_fresh:
             cand_next_h = h_step
             cand_fresh = False
+        if ws_h == 0.0:
+            ws_h = h_step
         if m > peaks[win]:
             peaks[win] = m
             peak_t[win] = t
             cand_prev_y[:] = ftmp
             cand_prev_t = t_old
             cand_prev_h = h_step
-            cand_prev_p[:] = p_prev
+            if ev_step:
+                cand_prev_p[:] = p_prev
+            else:
+                cand_prev_p[:] = p
             cand_y[:] = y
             cand_t = t
             cand_p[:] = p
@@ -608,24 +694,42 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
             nrec += 1
 
         if land:
-            # window closed: refine its maximum between the neighbouring steps
-            if cand_prev_h > 0.0 and refine_iters > 0:
-                rhs(cand_prev_t, cand_prev_y, cand_prev_p, ftmp)
-                v, tv = _golden_max(rhs, monitor, cand_prev_t, cand_prev_y, ftmp, cand_prev_p,
-                                    cand_prev_h, A, B, C, K, y_new, f_new, ytmp,
-                                    refine_iters)
-                counters[5] += 1
-                if v > peaks[win]:
-                    peaks[win] = v
-                    peak_t[win] = tv
-            if cand_next_h > 0.0 and refine_iters > 0:
-                rhs(cand_t, cand_y, cand_p, ftmp)
-                v, tv = _golden_max(rhs, monitor, cand_t, cand_y, ftmp, cand_p, cand_next_h,
-                                    A, B, C, K, y_new, f_new, ytmp, refine_iters)
-                counters[5] += 1
-                if v > peaks[win]:
-                    peaks[win] = v
-                    peak_t[win] = tv
+            # window closed: refine its maximum inside the steps on both sides of the best
+            # sample, and inside the window's first and last steps (a maximum just inside an
+            # edge is invisible to the samples when the best sample is elsewhere, e.g. at
+            # the other edge of a periodic window)
+            if refine_iters > 0:
+                last_y[:] = ftmp
+                n_cand = 0
+                for which in range(4):
+                    if which == 0:
+                        if cand_prev_h <= 0.0:
+                            continue
+                        v, tv = _golden_max(rhs, monitor, cand_prev_t, cand_prev_y,
+                                            cand_prev_p, cand_prev_h, A, B, C, K, y_new,
+                                            f_new, ytmp, f_ref, refine_iters)
+                    elif which == 1:
+                        if cand_next_h <= 0.0:
+                            continue
+                        v, tv = _golden_max(rhs, monitor, cand_t, cand_y, cand_p, cand_next_h,
+                                            A, B, C, K, y_new, f_new, ytmp, f_ref,
+                                            refine_iters)
+                    elif which == 2:
+                        if ws_h <= 0.0 or cand_t == ws_t:
+                            continue
+                        v, tv = _golden_max(rhs, monitor, ws_t, ws_y, ws_p, ws_h, A, B, C, K,
+                                            y_new, f_new, ytmp, f_ref, refine_iters)
+                    else:
+                        if cand_t == t:
+                            continue
+                        # (a step that lands on an edge is never an event step: p is its memory)
+                        v, tv = _golden_max(rhs, monitor, t_old, last_y, p, h_step, A,
+                                            B, C, K, y_new, f_new, ytmp, f_ref, refine_iters)
+                    n_cand += 1
+                    if v > peaks[win]:
+                        peaks[win] = v
+                        peak_t[win] = tv
+                counters[5] += n_cand
             win += 1
             if win < n_win:
                 m0 = monitor(t, y, p)
@@ -637,4 +741,8 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
                 cand_prev_h = 0.0
                 cand_next_h = 0.0
                 cand_fresh = True
+                ws_y[:] = y
+                ws_t = t
+                ws_p[:] = p
+                ws_h = 0.0
     return ts[:nrec].copy(), ys[:nrec].copy(), ms[:nrec].copy(), peaks, peak_t, counters

@@ -13,6 +13,7 @@ See docs/derivations.md for the equations, including the base force F12.
 from __future__ import annotations
 
 import math
+import sys
 from typing import Any, NamedTuple
 
 import numba as nb
@@ -33,6 +34,7 @@ from .mechanism import SliderCrank
 # ---- layout of the parameter vector p (indices are part of the kernels' contract)
 P_L2, P_L3, P_M2, P_M3, P_M4, P_J2, P_J3, P_W, P_TH0, P_C, P_K, P_E, P_G, P_MODEL, \
     P_VFLOOR, P_MODE, P_DMIN = range(17)
+_THIS = sys.modules[__name__]
 N_PARAMS = 17
 N_MEM = 2          # P_MODE, P_DMIN
 N_STATE = 5        # theta3, x4, theta3dot, x4dot, W
@@ -282,21 +284,34 @@ def window_edges(mech: SliderCrank, revolutions: int) -> np.ndarray:
 
 class System(NamedTuple):
     """An ODE system for the integrator: the plain model or one augmented with more states
-    (the sensitivity equations); the event function and monitor are the plain model's."""
+    (the sensitivity equations). `kernel` is `integrator.integrate` bound to the system's
+    right-hand side and event action (a cached wrapper such as `integrate_plain`)."""
 
-    rhs: Any
+    kernel: Any
     y0: np.ndarray
     p: np.ndarray
     mem_start: int
     n_mem: int
     n_err: int
     atol: np.ndarray
-    on_event: Any
+
+
+@nb.njit(cache=True)
+def integrate_plain(y0, p, mem_start, n_mem, edges, rtol, atol, n_err, h0, h_max, max_steps,
+                    record, event_tol, event_margin, n_samples, refine_iters, A, B, C, E, E2,
+                    P, A_extra, C_extra, error_order):
+    """`integrate` bound to the reduced model's kernels (compiled once, cached)."""
+    # the kernels are looked up as module attributes: numba then binds them as constants;
+    # passed as plain globals they would be runtime values and the function not cacheable
+    return integrate(_THIS.rhs, _THIS.event, _THIS.on_event, _THIS.monitor, y0, p, mem_start,
+                     n_mem, edges, rtol, atol, n_err, h0, h_max, max_steps, record, event_tol,
+                     event_margin, n_samples, refine_iters, A, B, C, E, E2, P, A_extra,
+                     C_extra, error_order)
 
 
 def run(mech: SliderCrank, revolutions: int = 4, *, rtol: float | None = None,
         atol: float | np.ndarray | None = None, method: str = "dopri5", record: bool = True,
-        max_steps: int = 5_000_000, n_samples: int = 2, h_max: float | None = None,
+        max_steps: int = 5_000_000, n_samples: int = 1, h_max: float | None = None,
         h0: float = 0.0, event_tol: float | None = None, edges: np.ndarray | None = None,
         t_eval: np.ndarray | None = None, system=None, select: bool = True,
         initial_offset: float = 0.0):
@@ -337,10 +352,9 @@ def run(mech: SliderCrank, revolutions: int = 4, *, rtol: float | None = None,
         if not (isinstance(initial_offset, (int, float)) and -1.0 <= initial_offset <= 1.0):
             raise ValueError(f"initial_offset must be in [-1, 1] (fraction of the clearance); "
                              f"got {initial_offset!r}")
-        system = System(rhs, initial_state(mech, initial_offset), pack_parameters(mech),
-                        P_MODE, N_MEM, N_ERR,
-                        atol_arr, on_event)
-    fun, y0, p, mem_start, n_mem, n_err, atol_arr, action = system
+        system = System(integrate_plain, initial_state(mech, initial_offset),
+                        pack_parameters(mech), P_MODE, N_MEM, N_ERR, atol_arr)
+    kernel, y0, p, mem_start, n_mem, n_err, atol_arr = system
     h_max = mech.period / 8 if h_max is None else float(h_max)
     if event_tol is None:
         # 1e-12 of the clearance, but not below the round-off of the journal position
@@ -348,11 +362,10 @@ def run(mech: SliderCrank, revolutions: int = 4, *, rtol: float | None = None,
         event_tol = max(1e-12 * mech.clearance,
                         8 * np.finfo(float).eps * (mech.crank_length + mech.coupler_length))
     event_tol = float(event_tol)
-    ts, ys, ms, peaks, peak_t, counters = integrate(
-        fun, event, action, monitor, y0, p, mem_start, n_mem, edges, rtol,
+    ts, ys, ms, peaks, peak_t, counters = kernel(
+        y0, p, mem_start, n_mem, edges, rtol,
         atol_arr, n_err, float(h0), h_max, int(max_steps), bool(record), event_tol,
-        EVENT_MARGIN * mech.clearance, int(n_samples), refine, tab.A, tab.B, tab.C, tab.E,
-        tab.P, tab.error_order)
+        EVENT_MARGIN * mech.clearance, int(n_samples), refine, *tab.arrays())
     status = int(counters[4])
     if status != 0:
         raise RuntimeError(f"reduced model integration failed at about t = "

@@ -267,7 +267,8 @@ def _ddm(mech, names, revolutions, rtol, t_eval, event_time_term, method):
     ref = np.array([reference_value(mech, n) for n in names])
     base = reduced.pack_parameters(mech)
     sigma0 = D[ddm.B_VMIN].copy()
-    p = np.concatenate([base, [npar, 1.0 if event_time_term else 0.0], sigma0, D.ravel()])
+    p = np.concatenate([base, [npar, 1.0 if event_time_term else 0.0], sigma0, D.ravel(),
+                        np.zeros(ddm.N_WORK)])
     y_state = reduced.initial_state(mech)
     s0 = _initial_sensitivities(mech, D)
     y0 = np.concatenate([y_state[:4], s0.T.ravel(), [0.0]])
@@ -276,8 +277,8 @@ def _ddm(mech, names, revolutions, rtol, t_eval, event_time_term, method):
     scale = np.where(ref != 0.0, np.abs(ref), 1.0)
     atol = np.concatenate([atol_state] + [atol_state / s for s in scale] + [[1.0]])
     n_err = 4 + 4 * npar
-    system = reduced.System(ddm.rhs_sens, y0, p, reduced.P_MODE, 4 + npar, n_err, atol,
-                            ddm.on_event_sens)
+    system = reduced.System(ddm.integrate_sens, y0, p, reduced.P_MODE, 4 + npar, n_err,
+                            atol)
     t0 = time.perf_counter()
     ts, ys, ms, peaks, _, counters, p = reduced.run(
         mech, revolutions, rtol=rtol_v, method=method, t_eval=t_eval, system=system,

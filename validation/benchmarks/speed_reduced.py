@@ -25,11 +25,11 @@ FIRST_CALL = """
 import time
 t0 = time.perf_counter()
 from mbs_clearance import SliderCrank, simulate
-from mbs_clearance import integrator
+from mbs_clearance import reduced
 t1 = time.perf_counter()
 simulate(SliderCrank(), 4)
 t2 = time.perf_counter()
-print(t1 - t0, t2 - t1, sum(integrator.integrate.stats.cache_misses.values()))
+print(t1 - t0, t2 - t1, sum(reduced.integrate_plain.stats.cache_misses.values()))
 """
 
 

@@ -67,6 +67,7 @@ def run(quick: bool = False, repeats: int = 5, exudyn: bool = True):
         grid, ref_force, ref_peak, scipy_check = _reference(mech, rev)
         refs[case] = {"peak": ref_peak, "scipy_dop853_rel_diff": scipy_check}
         ours = {"dopri5": (1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11),
+                "dop853": (1e-6, 1e-7, 1e-8, 1e-9, 1e-10),
                 "bs3": (1e-4, 1e-5, 1e-6, 1e-7, 1e-8)}
         scipy_methods = {"DOP853": (1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11),
                          "LSODA": (1e-6, 1e-7, 1e-8, 1e-9, 1e-10),
