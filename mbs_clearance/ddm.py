@@ -115,6 +115,15 @@ def _evaluate(t, y, p, z, o, jac, full):
     z[15] = p[P_K]
     z[16] = xi
     z[17] = p[P_G]
+    if not full:
+        # accelerations only (the right-hand side): the contact branch's unclamped force
+        # (third output) tells whether it applies; F > 0 exactly when contact_force > 0
+        if p[P_MODE] > 0.5:
+            contact_accel(z, o, jac)
+            if o[2] > 0.0:
+                return
+        free_accel(z, o, jac)
+        return
     in_contact = False
     if p[P_MODE] > 0.5:
         # the contact branch is only valid (real) for delta > 0 and F > 0 (else clamped:
@@ -123,14 +132,9 @@ def _evaluate(t, y, p, z, o, jac, full):
         in_contact = contact_force(delta, rate, p[P_DMIN], p[P_K], p[P_E],
                                    int(p[P_MODEL])) > 0.0
     if in_contact:
-        if full:
-            contact_branch(z, o, jac)
-        else:
-            contact_accel(z, o, jac)
-    elif full:
-        free_branch(z, o, jac)
+        contact_branch(z, o, jac)
     else:
-        free_accel(z, o, jac)
+        free_branch(z, o, jac)
 
 
 @nb.njit(cache=True)
@@ -151,6 +155,28 @@ def _directional(jac, row, y, p, k, npar, dxi):
     return acc
 
 
+@nb.njit(cache=True, inline="always")
+def _directional_all(jac, row, y, p, npar, dxi, dydt, slot):
+    """`_directional` for all parameters at once, into dydt[4 + 4 k + slot]: the state part
+    per parameter, then the parameter part row by row of D (contiguous in k)."""
+    for k in range(npar):
+        base = 4 + 4 * k
+        dydt[base + slot] = (jac[row, 1] * y[base] + jac[row, 2] * y[base + 1]
+                             + jac[row, 3] * y[base + 2] + jac[row, 4] * y[base + 3]
+                             + jac[row, Z_DMIN] * p[P_SIGMA + k])
+    d0 = P_SIGMA + npar
+    for b in range(N_BETA):
+        col = _Z_COL[b]
+        if col < 0:
+            continue
+        jb = jac[row, col] * dxi if b == B_E else jac[row, col]
+        if jb == 0.0:
+            continue
+        off = d0 + b * npar
+        for k in range(npar):
+            dydt[4 + 4 * k + slot] += jb * p[off + k]
+
+
 @nb.njit(RHS_SIG, cache=True)
 def rhs_sens(t, y, p, dydt):
     """State, sensitivity and work derivatives."""
@@ -166,8 +192,8 @@ def rhs_sens(t, y, p, dydt):
         base = 4 + 4 * k
         dydt[base] = y[base + 2]
         dydt[base + 1] = y[base + 3]
-        dydt[base + 2] = _directional(jac, O_TH3DD, y, p, k, npar, dxi)
-        dydt[base + 3] = _directional(jac, O_X4DD, y, p, k, npar, dxi)
+    _directional_all(jac, O_TH3DD, y, p, npar, dxi, dydt, 2)
+    _directional_all(jac, O_X4DD, y, p, npar, dxi, dydt, 3)
     # the work quadrature is not needed for sensitivities; M2 is not computed by the
     # acceleration-only Jacobian
     dydt[4 + 4 * npar] = 0.0

@@ -159,24 +159,28 @@ STATUS_MESSAGES = {
 }
 
 
+@nb.njit(cache=True, inline="always")
+def _combine(y, h, K, coef, n_terms, out):
+    """out = y + h * sum_{j < n_terms} coef[j] K[j] (rows of K outer: contiguous inner loop)."""
+    n = y.shape[0]
+    for k in range(n):
+        out[k] = y[k]
+    for j in range(n_terms):
+        c = h * coef[j]
+        if c != 0.0:
+            for k in range(n):
+                out[k] += c * K[j, k]
+
+
 @nb.njit(cache=True)
 def rk_step(rhs, t, y, f, h, A, B, C, K, p, y_new, f_new, ytmp):
     """One explicit RK step of size h; fills K (stages, last row FSAL), y_new and f_new."""
-    n = y.shape[0]
     s = B.shape[0]
     K[0, :] = f
     for i in range(1, s):
-        for k in range(n):
-            acc = 0.0
-            for j in range(i):
-                acc += A[i, j] * K[j, k]
-            ytmp[k] = y[k] + h * acc
+        _combine(y, h, K, A[i], i, ytmp)
         rhs(t + C[i] * h, ytmp, p, K[i])
-    for k in range(n):
-        acc = 0.0
-        for j in range(s):
-            acc += B[j] * K[j, k]
-        y_new[k] = y[k] + h * acc
+    _combine(y, h, K, B, s, y_new)
     rhs(t + h, y_new, p, f_new)
     K[s, :] = f_new
 
@@ -184,37 +188,41 @@ def rk_step(rhs, t, y, f, h, A, B, C, K, p, y_new, f_new, ytmp):
 @nb.njit(cache=True)
 def extra_stages(rhs, t, y, h, K, A_extra, C_extra, p, ytmp):
     """Stages s+1.. of a continuous extension that needs more than the step's stages."""
-    n = y.shape[0]
     first = K.shape[0] - A_extra.shape[0]
     for r in range(A_extra.shape[0]):
-        row = first + r
-        for k in range(n):
-            acc = 0.0
-            for j in range(row):
-                acc += A_extra[r, j] * K[j, k]
-            ytmp[k] = y[k] + h * acc
-        rhs(t + C_extra[r] * h, ytmp, p, K[row])
+        _combine(y, h, K, A_extra[r], first + r, ytmp)
+        rhs(t + C_extra[r] * h, ytmp, p, K[first + r])
 
 
 @nb.njit(cache=True, inline="always")
-def error_norm(K, E, E2, h, y, y_new, rtol, atol, n_err):
+def _weighted_rows(K, E, n, out):
+    """out[:n] = sum_j E[j] K[j, :n] (rows of K outer: contiguous inner loop)."""
+    for k in range(n):
+        out[k] = 0.0
+    for j in range(E.shape[0]):
+        c = E[j]
+        if c != 0.0:
+            for k in range(n):
+                out[k] += c * K[j, k]
+
+
+@nb.njit(cache=True, inline="always")
+def error_norm(K, E, E2, h, y, y_new, rtol, atol, n_err, work, work2):
     """Scaled error estimate over the first n_err components: the RMS of E.K, or with a
     second estimator E2 (DOP853) Hairer's combination |E.K|^2 / sqrt(|E.K|^2 + 0.01
-    |E2.K|^2), which is smaller than either when the higher-order one is."""
+    |E2.K|^2), which is smaller than either when the higher-order one is. work, work2:
+    work arrays of n_err entries."""
+    two = E2.shape[0] > 0
+    _weighted_rows(K, E, n_err, work)
+    if two:
+        _weighted_rows(K, E2, n_err, work2)
     acc = 0.0
     acc2 = 0.0
-    two = E2.shape[0] > 0
     for k in range(n_err):
-        err = 0.0
-        for j in range(E.shape[0]):
-            err += E[j] * K[j, k]
         scale = atol[k] + rtol * max(abs(y[k]), abs(y_new[k]))
-        acc += (err / scale) ** 2
+        acc += (work[k] / scale) ** 2
         if two:
-            err2 = 0.0
-            for j in range(E2.shape[0]):
-                err2 += E2[j] * K[j, k]
-            acc2 += (err2 / scale) ** 2
+            acc2 += (work2[k] / scale) ** 2
     if not two:
         return abs(h) * math.sqrt(acc / n_err)
     if acc == 0.0:
@@ -225,7 +233,6 @@ def error_norm(K, E, E2, h, y, y_new, rtol, atol, n_err):
 @nb.njit(cache=True, inline="always")
 def dense_eval(y, h, K, P, theta, out, wts):
     """State at t + theta*h from the step's continuous extension (wts: work array)."""
-    n = y.shape[0]
     ns = P.shape[0]
     for j in range(ns):
         poly = 0.0
@@ -234,11 +241,7 @@ def dense_eval(y, h, K, P, theta, out, wts):
             poly += P[j, m] * tp
             tp *= theta
         wts[j] = h * poly
-    for k in range(n):
-        acc = y[k]
-        for j in range(ns):
-            acc += K[j, k] * wts[j]
-        out[k] = acc
+    _combine(y, 1.0, K, wts, ns, out)
 
 
 @nb.njit(cache=True)
@@ -480,7 +483,7 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
     last_y = np.empty(n)
     f_ref = np.empty(n)
 
-    cap = 1024 if record else 1
+    cap = 4096 if record else 1
     ts = np.empty(cap)
     ys = np.empty((cap, n))
     ms = np.empty((cap, max(n_mem, 1)))
@@ -541,7 +544,7 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
                 break
         rk_step(rhs, t, y, f, h_try, A, B, C, K, p, y_new, f_new, ytmp)
         counters[0] += s
-        err = error_norm(K, E, E2, h_try, y, y_new, rtol, atol, n_err)
+        err = error_norm(K, E, E2, h_try, y, y_new, rtol, atol, n_err, ytmp, ftmp)
         if not (err <= 1.0):
             counters[2] += 1
             if err != err:  # NaN from the model: shrink hard
@@ -688,7 +691,8 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
                 ys = ys2
                 ms = ms2
             ts[nrec] = t
-            ys[nrec, :] = y
+            for k in range(n):
+                ys[nrec, k] = y[k]
             for k in range(n_mem):
                 ms[nrec, k] = p[mem_start + k]
             nrec += 1
@@ -745,4 +749,4 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
                 ws_t = t
                 ws_p[:] = p
                 ws_h = 0.0
-    return ts[:nrec].copy(), ys[:nrec].copy(), ms[:nrec].copy(), peaks, peak_t, counters
+    return ts[:nrec], ys[:nrec], ms[:nrec], peaks, peak_t, counters

@@ -113,10 +113,12 @@ O_NAMES = {tuple(OUTPUTS)!r}
         branch = "contact" if contact else "free"
         body.append(emit(f"{branch}_branch", z, out, jac,
                          f"{branch.capitalize()} branch: outputs o (8,), Jacobian jac (8, 18)."))
-        # the right-hand side of the sensitivity equations needs only the accelerations
-        body.append(emit(f"{branch}_accel", z, out[:2, :], jac[:2, :],
+        # the right-hand side of the sensitivity equations needs only the accelerations (and
+        # the contact force, to tell whether the contact branch applies)
+        rows = [0, 1, OUTPUTS.index("F")]
+        body.append(emit(f"{branch}_accel", z, out.extract(rows, [0]), jac[:2, :],
                          f"{branch.capitalize()} branch, rows theta3dd and x4dd only: "
-                         "o (2,), jac (2, 18)."))
+                         "o (3,) = (theta3dd, x4dd, F), jac (2, 18)."))
     path = Path(__file__).resolve().parents[1] / "mbs_clearance" / "_jacobians.py"
     path.write_text(header + "\n\n\n".join(body) + "\n")
     print(f"wrote {path}")
