@@ -258,11 +258,11 @@ def sens_outputs(ts, ys, ms, p):
 @nb.njit(cache=True)
 def integrate_sens(y0, p, mem_start, n_mem, edges, rtol, atol, n_err, h0, h_max, max_steps,
                    record, event_tol, event_margin, n_samples, refine_iters, A, B, C, E, E2, P,
-                   A_extra, C_extra, error_order):
+                   A_extra, C_extra, error_order, n_out):
     """`integrator.integrate` bound to the sensitivity equations (compiled once, cached);
     events and monitor are the plain model's."""
     # module attributes, not plain globals: see reduced.integrate_plain
-    return integrate(_THIS.rhs_sens, reduced.event, _THIS.on_event_sens, reduced.monitor, y0,
-                     p, mem_start, n_mem, edges, rtol, atol, n_err, h0, h_max, max_steps,
+    return integrate(_THIS.rhs_sens, reduced.event, _THIS.on_event_sens, reduced.monitor_out,
+                     y0, p, mem_start, n_mem, edges, rtol, atol, n_err, h0, h_max, max_steps,
                      record, event_tol, event_margin, n_samples, refine_iters, A, B, C, E, E2,
-                     P, A_extra, C_extra, error_order)
+                     P, A_extra, C_extra, error_order, n_out)

@@ -10,7 +10,9 @@ integrator for them, so the calls are direct and can be inlined):
   time derivative along the motion (used to look for excursions between samples); a crossing to
   positive inside a step is an event;
 - ``on_event(t, y, p)``: applied exactly at a located event (updates the memory in ``p``);
-- ``monitor(t, y, p) -> m``: scalar whose maximum is tracked per time window (the peak).
+- ``monitor(t, y, p, out) -> m``: scalar whose maximum is tracked per time window (the
+  peak); it may also write model outputs into ``out`` (n_out entries), which are recorded
+  with every step, so that a model computes its outputs once per step.
 
 Events are searched on the step's dense output (`_search_event`: interior samples, a closer
 look wherever the cubic Hermite interpolant of g and its rate comes within `event_margin` of
@@ -32,13 +34,15 @@ import numpy as np
 from numba import types
 
 __all__ = [
-    "RHS_SIG", "SCALAR_SIG", "EVENT_SIG", "ACTION_SIG", "METHODS", "Tableau", "integrate",
+    "RHS_SIG", "SCALAR_SIG", "MONITOR_SIG", "EVENT_SIG", "ACTION_SIG", "METHODS", "Tableau",
+    "integrate",
     "STATUS_MESSAGES",
 ]
 
 _vec = types.float64[::1]
 RHS_SIG = types.void(types.float64, _vec, _vec, _vec)
 SCALAR_SIG = types.float64(types.float64, _vec, _vec)
+MONITOR_SIG = types.float64(types.float64, _vec, _vec, _vec)
 EVENT_SIG = types.UniTuple(types.float64, 2)(types.float64, _vec, _vec)
 ACTION_SIG = types.void(types.float64, _vec, _vec)
 
@@ -274,9 +278,10 @@ def initial_step(rhs, t, y, f, p, rtol, atol, order, direction_span, ytmp, ftmp)
 
 
 @nb.njit(cache=True)
-def _golden_max(rhs, monitor, t0, y0, p, h_max, A, B, C, K, y_new, f_new, ytmp, f0, iters):
+def _golden_max(rhs, monitor, t0, y0, p, h_max, A, B, C, K, y_new, f_new, ytmp, f0, iters,
+                out):
     """Maximise monitor(t0 + h, step(y0, h)) over h in [0, h_max]; return (value, t).
-    f0 is a work array (the derivative at t0)."""
+    f0 and out (the monitor's outputs) are work arrays."""
     rhs(t0, y0, p, f0)
     invphi = 0.6180339887498949
     a = 0.0
@@ -284,9 +289,9 @@ def _golden_max(rhs, monitor, t0, y0, p, h_max, A, B, C, K, y_new, f_new, ytmp, 
     c = b - invphi * (b - a)
     d = a + invphi * (b - a)
     rk_step(rhs, t0, y0, f0, c, A, B, C, K, p, y_new, f_new, ytmp)
-    fc = monitor(t0 + c, y_new, p)
+    fc = monitor(t0 + c, y_new, p, out)
     rk_step(rhs, t0, y0, f0, d, A, B, C, K, p, y_new, f_new, ytmp)
-    fd = monitor(t0 + d, y_new, p)
+    fd = monitor(t0 + d, y_new, p, out)
     for _ in range(iters):
         if fc > fd:
             b = d
@@ -294,14 +299,14 @@ def _golden_max(rhs, monitor, t0, y0, p, h_max, A, B, C, K, y_new, f_new, ytmp, 
             fd = fc
             c = b - invphi * (b - a)
             rk_step(rhs, t0, y0, f0, c, A, B, C, K, p, y_new, f_new, ytmp)
-            fc = monitor(t0 + c, y_new, p)
+            fc = monitor(t0 + c, y_new, p, out)
         else:
             a = c
             c = d
             fc = fd
             d = a + invphi * (b - a)
             rk_step(rhs, t0, y0, f0, d, A, B, C, K, p, y_new, f_new, ytmp)
-            fd = monitor(t0 + d, y_new, p)
+            fd = monitor(t0 + d, y_new, p, out)
     if fc > fd:
         return fc, t0 + c
     return fd, t0 + d
@@ -430,21 +435,21 @@ def _search_event(event, t, y, y_new, h, K, P, p, g_start, gd_start, n_samples, 
 @nb.njit(cache=True)
 def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rtol, atol, n_err,
               h0, h_max, max_steps, record, event_tol, event_margin, n_samples, refine_iters,
-              A, B, C, E, E2, P, A_extra, C_extra, error_order):
+              A, B, C, E, E2, P, A_extra, C_extra, error_order, n_out):
     """Integrate from edges[0] to edges[-1]; see the module docstring for the protocol.
 
     Arguments: the four model kernels (compiled functions with the signatures RHS_SIG,
-    EVENT_SIG, ACTION_SIG, SCALAR_SIG); y0; p (parameters + memory, modified in place);
+    EVENT_SIG, ACTION_SIG, MONITOR_SIG); y0; p (parameters + memory, modified in place);
     mem_start, n_mem (the memory entries of p, recorded); edges (window edges, edges[0] =
     t0, edges[-1] = t_end); rtol; atol (per component); n_err (components under error
     control); h0 (<= 0: automatic); h_max; max_steps; record; event_tol; event_margin (look
     closer between samples this near the surface); n_samples (interior event samples per
     step); refine_iters (golden-section iterations per peak candidate); then
-    `Tableau.arrays()`.
+    `Tableau.arrays()`; n_out (outputs written by monitor, recorded).
 
     Returns (t (m,), y (m, n), memory (m, n_mem) of the recorded steps, the refined maximum
     of monitor per window and its time, counters [nfev, naccept, nreject, nevent, status,
-    nrefine]).
+    nrefine], outputs (m, n_out) of the recorded steps).
 
     numba compiles one specialisation per set of model kernels. Called from Python with
     the kernels as arguments it is compiled in every new process; bind the kernels in a
@@ -482,11 +487,14 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
     ws_h = 0.0
     last_y = np.empty(n)
     f_ref = np.empty(n)
+    obuf = np.zeros(n_out)       # outputs at the current step (written by monitor)
+    oscr = np.zeros(n_out)       # outputs of the refinement (not recorded)
 
     cap = 4096 if record else 1
     ts = np.empty(cap)
     ys = np.empty((cap, n))
     ms = np.empty((cap, max(n_mem, 1)))
+    os_ = np.empty((cap, n_out))
     nrec = 0
 
     t = edges[0]
@@ -500,7 +508,7 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
     else:
         h = min(h0, h_max)
     win = 0
-    m0 = monitor(t, y, p)
+    m0 = monitor(t, y, p, obuf)
     peaks[0] = m0
     peak_t[0] = t
     cand_fresh = True   # the first step gives the right-hand interval of the start point
@@ -509,6 +517,8 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
         ys[0, :] = y
         for k in range(n_mem):
             ms[0, k] = p[mem_start + k]
+        for k in range(n_out):
+            os_[0, k] = obuf[k]
         nrec = 1
     zero_events = 0
     g_start = 0.0
@@ -657,7 +667,7 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
         counters[1] += 1
 
         # ---- peak tracking in the current window
-        m = monitor(t, y, p)
+        m = monitor(t, y, p, obuf)
         if cand_fresh:
             cand_next_h = h_step
             cand_fresh = False
@@ -684,17 +694,22 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
                 ts2 = np.empty(2 * nrec)
                 ys2 = np.empty((2 * nrec, n))
                 ms2 = np.empty((2 * nrec, ms.shape[1]))
+                os2 = np.empty((2 * nrec, n_out))
                 ts2[:nrec] = ts
                 ys2[:nrec] = ys
                 ms2[:nrec] = ms
+                os2[:nrec] = os_
                 ts = ts2
                 ys = ys2
                 ms = ms2
+                os_ = os2
             ts[nrec] = t
             for k in range(n):
                 ys[nrec, k] = y[k]
             for k in range(n_mem):
                 ms[nrec, k] = p[mem_start + k]
+            for k in range(n_out):
+                os_[nrec, k] = obuf[k]
             nrec += 1
 
         if land:
@@ -711,24 +726,24 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
                             continue
                         v, tv = _golden_max(rhs, monitor, cand_prev_t, cand_prev_y,
                                             cand_prev_p, cand_prev_h, A, B, C, K, y_new,
-                                            f_new, ytmp, f_ref, refine_iters)
+                                            f_new, ytmp, f_ref, refine_iters, oscr)
                     elif which == 1:
                         if cand_next_h <= 0.0:
                             continue
                         v, tv = _golden_max(rhs, monitor, cand_t, cand_y, cand_p, cand_next_h,
                                             A, B, C, K, y_new, f_new, ytmp, f_ref,
-                                            refine_iters)
+                                            refine_iters, oscr)
                     elif which == 2:
                         if ws_h <= 0.0 or cand_t == ws_t:
                             continue
                         v, tv = _golden_max(rhs, monitor, ws_t, ws_y, ws_p, ws_h, A, B, C, K,
-                                            y_new, f_new, ytmp, f_ref, refine_iters)
+                                            y_new, f_new, ytmp, f_ref, refine_iters, oscr)
                     else:
                         if cand_t == t:
                             continue
                         # (a step that lands on an edge is never an event step: p is its memory)
                         v, tv = _golden_max(rhs, monitor, t_old, last_y, p, h_step, A,
-                                            B, C, K, y_new, f_new, ytmp, f_ref, refine_iters)
+                                            B, C, K, y_new, f_new, ytmp, f_ref, refine_iters, oscr)
                     n_cand += 1
                     if v > peaks[win]:
                         peaks[win] = v
@@ -736,7 +751,7 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
                 counters[5] += n_cand
             win += 1
             if win < n_win:
-                m0 = monitor(t, y, p)
+                m0 = monitor(t, y, p, oscr)
                 peaks[win] = m0
                 peak_t[win] = t
                 cand_y[:] = y
@@ -749,4 +764,4 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
                 ws_t = t
                 ws_p[:] = p
                 ws_h = 0.0
-    return ts[:nrec], ys[:nrec], ms[:nrec], peaks, peak_t, counters
+    return ts[:nrec], ys[:nrec], ms[:nrec], peaks, peak_t, counters, os_[:nrec]

@@ -280,7 +280,7 @@ def _ddm(mech, names, revolutions, rtol, t_eval, event_time_term, method):
     system = reduced.System(ddm.integrate_sens, y0, p, reduced.P_MODE, 4 + npar, n_err,
                             atol)
     t0 = time.perf_counter()
-    ts, ys, ms, peaks, _, counters, p = reduced.run(
+    ts, ys, ms, peaks, _, counters, _, p = reduced.run(
         mech, revolutions, rtol=rtol_v, method=method, t_eval=t_eval, system=system,
         select=False)
     # growth diagnostic on all steps: normalized state sensitivities per revolution

@@ -10,8 +10,8 @@ from mbs_clearance.integrator import (
     ACTION_SIG,
     EVENT_SIG,
     METHODS,
+    MONITOR_SIG,
     RHS_SIG,
-    SCALAR_SIG,
     dense_eval,
     extra_stages,
     integrate,
@@ -35,8 +35,8 @@ def nothing(t, y, p):
     pass
 
 
-@nb.njit(SCALAR_SIG)
-def minus_x(t, y, p):
+@nb.njit(MONITOR_SIG)
+def minus_x(t, y, p, out):
     return -y[0]
 
 
@@ -46,7 +46,8 @@ def run(rhs, event, action, monitor, y0, p, edges, rtol, method="dopri5", record
     p = np.asarray(p, float)
     return integrate(rhs, event, action, monitor, np.asarray(y0, float), p, len(p) - n_mem,
                      n_mem, np.asarray(edges, float), rtol, np.full(len(y0), rtol), len(y0),
-                     0.0, h_max, 10**6, record, 1e-14, margin, n_samples, 40, *tab.arrays())
+                     0.0, h_max, 10**6, record, 1e-14, margin, n_samples, 40, *tab.arrays(),
+                     0)[:6]
 
 
 @pytest.mark.parametrize("method", sorted(METHODS))
