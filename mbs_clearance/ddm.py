@@ -179,7 +179,11 @@ def _directional_all(jac, row, y, p, npar, dxi, dydt, slot):
 
 @nb.njit(RHS_SIG, cache=True)
 def rhs_sens(t, y, p, dydt):
-    """State, sensitivity and work derivatives."""
+    """State, sensitivity and work derivatives; for the truncated state y[:N_EVENT] (the
+    integrator's continuous extension) only the state derivatives, by the plain model."""
+    if y.shape[0] < 4 + 4 * int(p[P_NPAR]):
+        reduced.rhs(t, y, p, dydt)
+        return
     npar = int(p[P_NPAR])
     z, o, jac = _work(p, npar)
     _evaluate(t, y, p, z, o, jac, False)
@@ -257,12 +261,12 @@ def sens_outputs(ts, ys, ms, p):
 
 @nb.njit(cache=True)
 def integrate_sens(y0, p, mem_start, n_mem, edges, rtol, atol, n_err, h0, h_max, max_steps,
-                   record, event_tol, event_margin, n_samples, refine_iters, A, B, C, E, E2, P,
-                   A_extra, C_extra, error_order, n_out):
+                   record, event_tol, event_margin, n_samples, refine_iters, coefficients, n_out,
+                   n_dense):
     """`integrator.integrate` bound to the sensitivity equations (compiled once, cached);
     events and monitor are the plain model's."""
     # module attributes, not plain globals: see reduced.integrate_plain
     return integrate(_THIS.rhs_sens, reduced.event, _THIS.on_event_sens, reduced.monitor_out,
-                     y0, p, mem_start, n_mem, edges, rtol, atol, n_err, h0, h_max, max_steps,
-                     record, event_tol, event_margin, n_samples, refine_iters, A, B, C, E, E2,
-                     P, A_extra, C_extra, error_order, n_out)
+                     y0, p, mem_start, n_mem, edges, rtol, atol, n_err, h0, h_max,
+                     max_steps, record, event_tol, event_margin, n_samples, refine_iters,
+                     coefficients, n_out, n_dense)

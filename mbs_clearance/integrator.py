@@ -59,7 +59,7 @@ class Tableau:
     """
 
     def __init__(self, name, A, B, C, E, P, order, error_order, E2=(), A_extra=None,
-                 C_extra=()):
+                 C_extra=(), pi_beta=0.0, pi_gain=0.75):
         self.name = name
         self.A = np.ascontiguousarray(A, dtype=float)
         self.B = np.ascontiguousarray(B, dtype=float)
@@ -73,11 +73,15 @@ class Tableau:
         if A_extra is None:
             A_extra = np.zeros((0, len(self.B) + 1))
         self.A_extra = np.ascontiguousarray(A_extra, dtype=float)
+        # step-size controller: h_new = h 0.9 err^-alpha err_prev^beta, alpha = 1/(q+1) -
+        # pi_gain beta (Hairer's DOPRI5 and DOP853 codes: gain 0.75 and 0.2)
+        self.pi_beta = float(pi_beta)
+        self.pi_alpha = 1.0 / (error_order + 1) - pi_gain * self.pi_beta
 
     def arrays(self):
-        """The coefficient arguments of `integrate`, in its order."""
+        """The coefficient and controller arguments of `integrate`, in its order."""
         return (self.A, self.B, self.C, self.E, self.E2, self.P, self.A_extra, self.C_extra,
-                self.error_order)
+                self.error_order, self.pi_alpha, self.pi_beta)
 
 
 # Dormand & Prince (1980) 5(4) pair with Shampine's 4th-order continuous extension.
@@ -142,8 +146,10 @@ def _dop853() -> Tableau:
                           npoly.polypow([1.0, -1.0], (i + 1) // 2))
         w = np.pad(w, (0, 8 - len(w)))
         P += np.outer(F[i], w[1:])
+    # beta = 0.06: where stability limits the step (the stiff contact) the I controller
+    # rejects ~30 % of the steps; measured on the sensitivity equations (docs/performance.md)
     return Tableau("dop853", ref.A, ref.B, ref.C, ref.E5, P, 8, 7, E2=ref.E3,
-                   A_extra=ref.A_EXTRA, C_extra=ref.C_EXTRA)
+                   A_extra=ref.A_EXTRA, C_extra=ref.C_EXTRA, pi_beta=0.06, pi_gain=0.2)
 
 
 #: name -> Tableau; the registry of integration methods of the compiled integrator
@@ -435,7 +441,7 @@ def _search_event(event, t, y, y_new, h, K, P, p, g_start, gd_start, n_samples, 
 @nb.njit(cache=True)
 def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rtol, atol, n_err,
               h0, h_max, max_steps, record, event_tol, event_margin, n_samples, refine_iters,
-              A, B, C, E, E2, P, A_extra, C_extra, error_order, n_out):
+              coefficients, n_out, n_dense):
     """Integrate from edges[0] to edges[-1]; see the module docstring for the protocol.
 
     Arguments: the four model kernels (compiled functions with the signatures RHS_SIG,
@@ -445,7 +451,13 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
     control); h0 (<= 0: automatic); h_max; max_steps; record; event_tol; event_margin (look
     closer between samples this near the surface); n_samples (interior event samples per
     step); refine_iters (golden-section iterations per peak candidate); then
-    `Tableau.arrays()`; n_out (outputs written by monitor, recorded).
+    coefficients = `Tableau.arrays()` (one tuple: numba types the kernels of calls with 30 or
+    more arguments as experimental first-class functions); n_out (outputs written by
+    monitor, recorded); n_dense: the event
+    function reads only y[:n_dense], so the continuous extension is formed for those
+    components only, and its extra stages (DOP853) call `rhs` with the truncated state
+    y[:n_dense]: the model must then give those derivatives (entries beyond are not used),
+    which lets an augmented system skip its extra equations there.
 
     Returns (t (m,), y (m, n), memory (m, n_mem) of the recorded steps, the refined maximum
     of monitor per window and its time, counters [nfev, naccept, nreject, nevent, status,
@@ -454,6 +466,7 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
     numba compiles one specialisation per set of model kernels. Called from Python with
     the kernels as arguments it is compiled in every new process; bind the kernels in a
     cached wrapper instead (`reduced.integrate_plain`) to load it from the disk cache."""
+    A, B, C, E, E2, P, A_extra, C_extra, error_order, pi_alpha, pi_beta = coefficients
     n = y0.shape[0]
     s = B.shape[0]
     n_extra = A_extra.shape[0]
@@ -487,6 +500,9 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
     ws_h = 0.0
     last_y = np.empty(n)
     f_ref = np.empty(n)
+    # the part of the state the continuous extension is formed for (views, no copies)
+    y_d = y[:n_dense]
+    ytmp_d = ytmp[:n_dense]
     obuf = np.zeros(n_out)       # outputs at the current step (written by monitor)
     oscr = np.zeros(n_out)       # outputs of the refinement (not recorded)
 
@@ -526,6 +542,7 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
     g_start_valid = False
     inv_order = 1.0 / (error_order + 1)
     last_rejected = False
+    err_prev = 1e-4
     nstep = 0
     while win < n_win:
         if nstep >= max_steps:
@@ -563,7 +580,11 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
                 h = h_try * max(0.2, 0.9 * err ** (-inv_order))
             last_rejected = True
             continue
-        factor = 10.0 if err == 0.0 else min(10.0, 0.9 * err ** (-inv_order))
+        # PI step-size control (Gustafsson): the previous error damps the step-size sequence
+        # where stability limits the step (pi_beta = 0: the classical I controller)
+        err_c = max(err, 1e-10)
+        factor = min(10.0, 0.9 * err_c ** (-pi_alpha) * err_prev ** pi_beta)
+        err_prev = max(err_c, 1e-4)
         if last_rejected:
             # no growth right after a rejection (Hairer, Norsett & Wanner II.4): where the
             # step size is limited by stability this halves the number of rejections
@@ -575,11 +596,11 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
 
         # ---- event search on the dense output (interior samples), then the end point
         if n_extra > 0:
-            extra_stages(rhs, t, y, h_try, K, A_extra, C_extra, p, ytmp)
+            extra_stages(rhs, t, y_d, h_try, K, A_extra, C_extra, p, ytmp_d)
             counters[0] += n_extra
         g_start_valid = False
         theta_lo, g_lo, theta_hi, g_hi, g_end, gd_end = _search_event(
-            event, t, y, y_new, h_try, K, P, p, g_start, gd_start, n_samples, event_tol,
+            event, t, y_d, y_new, h_try, K, P, p, g_start, gd_start, n_samples, event_tol,
             event_margin, ytmp, wts, fine)
         if theta_hi < 0.0:
             g_start = g_end       # valid for the next step if no event intervenes
@@ -601,7 +622,7 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
                 theta_star = b
                 for _ in range(60):
                     c = (a * gb - b * ga) / (gb - ga)
-                    dense_eval(y, h_try, K, P, c, ytmp, wts)
+                    dense_eval(y_d, h_try, K, P, c, ytmp_d, wts)
                     gc = event(t + c * h_try, ytmp, p)[0]
                     theta_star = c
                     if abs(gc) <= event_tol or (b - a) < 1e-15:

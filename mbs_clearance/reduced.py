@@ -40,6 +40,8 @@ N_PARAMS = 17
 N_MEM = 2          # P_MODE, P_DMIN
 N_STATE = 5        # theta3, x4, theta3dot, x4dot, W
 N_ERR = 4          # W is a quadrature, not under error control
+N_EVENT = 4        # the event function reads theta3, x4 and their rates only (rhs needs
+                   # no more: the integrator's continuous extension is formed for these)
 
 #: columns of `outputs`
 OUT_COLUMNS = ("theta3dd", "x4dd", "contact_force", "penetration", "penetration_rate",
@@ -310,15 +312,15 @@ class System(NamedTuple):
 
 @nb.njit(cache=True)
 def integrate_plain(y0, p, mem_start, n_mem, edges, rtol, atol, n_err, h0, h_max, max_steps,
-                    record, event_tol, event_margin, n_samples, refine_iters, A, B, C, E, E2,
-                    P, A_extra, C_extra, error_order, n_out):
+                    record, event_tol, event_margin, n_samples, refine_iters, coefficients,
+                    n_out, n_dense):
     """`integrate` bound to the reduced model's kernels (compiled once, cached)."""
     # the kernels are looked up as module attributes: numba then binds them as constants;
     # passed as plain globals they would be runtime values and the function not cacheable
     return integrate(_THIS.rhs, _THIS.event, _THIS.on_event, _THIS.monitor_out, y0, p,
                      mem_start, n_mem, edges, rtol, atol, n_err, h0, h_max, max_steps, record,
-                     event_tol, event_margin, n_samples, refine_iters, A, B, C, E, E2, P,
-                     A_extra, C_extra, error_order, n_out)
+                     event_tol, event_margin, n_samples, refine_iters, coefficients, n_out,
+                     n_dense)
 
 
 def run(mech: SliderCrank, revolutions: int = 4, *, rtol: float | None = None,
@@ -382,7 +384,7 @@ def run(mech: SliderCrank, revolutions: int = 4, *, rtol: float | None = None,
     ts, ys, ms, peaks, peak_t, counters, outs = kernel(
         y0, p, mem_start, n_mem, edges, rtol,
         atol_arr, n_err, float(h0), h_max, int(max_steps), bool(record), event_tol,
-        EVENT_MARGIN * mech.clearance, int(n_samples), refine, *tab.arrays(), n_out)
+        EVENT_MARGIN * mech.clearance, int(n_samples), refine, tab.arrays(), n_out, N_EVENT)
     status = int(counters[4])
     if status != 0:
         raise RuntimeError(f"reduced model integration failed at about t = "

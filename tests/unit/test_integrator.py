@@ -46,8 +46,8 @@ def run(rhs, event, action, monitor, y0, p, edges, rtol, method="dopri5", record
     p = np.asarray(p, float)
     return integrate(rhs, event, action, monitor, np.asarray(y0, float), p, len(p) - n_mem,
                      n_mem, np.asarray(edges, float), rtol, np.full(len(y0), rtol), len(y0),
-                     0.0, h_max, 10**6, record, 1e-14, margin, n_samples, 40, *tab.arrays(),
-                     0)[:6]
+                     0.0, h_max, 10**6, record, 1e-14, margin, n_samples, 40, tab.arrays(),
+                     0, len(y0))[:6]
 
 
 @pytest.mark.parametrize("method", sorted(METHODS))
@@ -211,3 +211,24 @@ def test_window_peaks_are_refined_between_steps():
     assert peak_t[0] == pytest.approx(math.pi / 2, abs=1e-4)
     # ... while the best step point misses it by the curvature times the step squared
     assert 1.0 - sampled > 100 * abs(1.0 - peaks[0])
+
+
+@nb.njit(MONITOR_SIG)
+def two_bumps(t, y, p, out):
+    # the maximum (1.0 at t = 0.1) sits inside the window's first step (0 to 0.25), while
+    # the best step point is the window's end (0.9 at t = 1)
+    return math.exp(-((t - 0.1) / 0.15) ** 2) + 0.9 * math.exp(-((t - 1.0) / 0.3) ** 2)
+
+
+def test_a_peak_inside_the_first_step_of_a_window_is_found():
+    tab = METHODS["dopri5"]
+    ts, _, _, peaks, peak_t, counters, _ = integrate(
+        still, never, nothing, two_bumps, np.zeros(1), np.zeros(1), 0, 1, np.array([0.0, 1.0]),
+        1e-8, np.full(1, 1e-8), 1, 0.25, 0.25, 1000, True, 1e-14, 0.0, 1, 40, tab.arrays(), 0,
+        1)
+    samples = [two_bumps(t, np.zeros(1), np.zeros(1), np.zeros(0)) for t in ts]
+    assert max(samples) < 0.95 and ts[1] >= 0.25   # no step point near the true peak
+    grid = np.linspace(0.05, 0.15, 200001)     # the true maximum, on a fine grid
+    values = [two_bumps(t, np.zeros(1), np.zeros(1), np.zeros(0)) for t in grid]
+    assert peaks[0] == pytest.approx(max(values), abs=1e-9)
+    assert peak_t[0] == pytest.approx(grid[int(np.argmax(values))], abs=1e-5)
