@@ -288,14 +288,17 @@ def _ddm(mech, names, revolutions, rtol, t_eval, event_time_term, method):
         mech, revolutions, rtol=rtol_v, method=method, t_eval=t_eval, system=system,
         select=False)
     # growth diagnostic on all steps: normalized state sensitivities per revolution
-    s = ys[:, 4:4 + 4 * npar].reshape(len(ts), npar, 4)
     state_scale = np.array([1.0, mech.clearance, mech.crank_speed,
                             mech.crank_speed * mech.clearance / mech.crank_length])
-    norm = np.sqrt(np.sum((s * scale[None, :, None] / state_scale[None, None, :]) ** 2,
-                          axis=2))
-    period = mech.period
-    growth = np.array([norm[(ts >= (k - 1) * period) & (ts <= k * period)].max(axis=0)
-                       for k in range(1, revolutions + 1)])
+    weights = ((scale[:, None] / state_scale[None, :]) ** 2).ravel()
+    sq = np.square(ys[:, 4:4 + 4 * npar])
+    sq *= weights
+    norm = np.sqrt(sq.reshape(len(ts), npar, 4).sum(axis=2))
+    # maxima per revolution (the steps are sorted; a step on an edge counts for both sides)
+    edges = np.arange(revolutions + 1) * mech.period
+    lo = np.searchsorted(ts, edges[:-1], side="left")
+    hi = np.searchsorted(ts, edges[1:], side="right")
+    growth = np.array([norm[a:b].max(axis=0) for a, b in zip(lo, hi)])
     if t_eval is not None:
         keep = reduced.landed_indices(ts, t_eval)
         ts, ys, ms = ts[keep], ys[keep], ms[keep]
