@@ -8,6 +8,7 @@ import sys
 import time
 from pathlib import Path
 
+from .integrator import METHODS
 from .mechanism import PARAMETER_INFO, SliderCrank
 from .optimize import MASS_SCALINGS, PAPER_TABLE3, design_mechanism, optimize_link_lengths
 from .simulate import BACKENDS, peak_base_force, simulate
@@ -57,6 +58,8 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
         options["step_size"] = args.step_size
     if args.contact is not None:
         options["contact"] = args.contact
+    if args.integrator is not None:
+        options["method"] = args.integrator
     print(f"simulating {args.revolutions} revolutions with backend {args.backend!r} ...",
           file=sys.stderr, flush=True)
     t0 = time.perf_counter()
@@ -92,7 +95,8 @@ def _cmd_sensitivity(args: argparse.Namespace) -> int:
           f"({args.backend}), {args.revolutions} revolutions ...", file=sys.stderr, flush=True)
     t0 = time.perf_counter()
     sens = sensitivities(mech, names, args.revolutions, method=args.method,
-                         backend=args.backend, rtol=args.rtol, **options)
+                         backend=args.backend, rtol=args.rtol, integrator=args.integrator,
+                         **options)
     print(f"done in {time.perf_counter() - t0:.3g} s", file=sys.stderr)
     print(f"{'parameter':<22} {'b0':>12} {'mean |S|':>10} {'max |S|':>10} {'growth/rev':>10}")
     for row in sens.summary():
@@ -132,6 +136,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--rtol", type=float, help="relative tolerance (reduced backend)")
     p.add_argument("--step-size", type=float, help="time step in s (exudyn backend)")
     p.add_argument("--contact", help="contact variant (exudyn backend)")
+    p.add_argument("--integrator", choices=sorted(METHODS),
+                   help="method of the compiled integrator (reduced backend; default dopri5)")
     p.add_argument("--out", type=Path, help="trajectory file, .csv or .npz")
     p.add_argument("--plot", type=Path, help="figure file, e.g. simulate.png")
     add_mechanism_options(p)
@@ -149,6 +155,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--revolutions", type=int, default=4)
     p.add_argument("--rtol", type=float, help="relative tolerance (reduced backend)")
     p.add_argument("--step-size", type=float, help="time step in s (exudyn backend)")
+    p.add_argument("--integrator", choices=sorted(METHODS),
+                   help="method of the compiled integrator (reduced backend; default dop853 "
+                        "for DDM, dopri5 for FD)")
     p.add_argument("--out", type=Path, help="folder for sensitivities.npz and figures")
     add_mechanism_options(p)
     p.set_defaults(func=_cmd_sensitivity)

@@ -466,7 +466,10 @@ def sensitivities(mech: SliderCrank, parameters=None, revolutions: int = 4,
             raise ValueError(f"unknown option(s) for method='ddm': {sorted(options)}")
         return _ddm(mech, names, revolutions, rtol, t_eval, event_time_term,
                     integrator or DDM_INTEGRATOR)
-    if integrator is not None and backend == "reduced":
+    if integrator is not None:
+        if backend != "reduced":
+            raise ValueError(f"integrator applies to the reduced backend only; got "
+                             f"backend={backend!r}")
         options["method"] = integrator
     return _fd(mech, names, revolutions, backend, t_eval, rtol, fd_relative_step, executor,
                n_jobs, options)

@@ -22,6 +22,14 @@ def test_simulate_writes_trajectory_and_figure(tmp_path, capsys):
     np.testing.assert_allclose(traj.max_base_force(2), peak2, atol=0.01)
 
 
+def test_simulate_with_another_integrator(capsys):
+    assert main(["simulate", "--revolutions", "1", "--integrator", "dop853", "--rtol",
+                 "1e-9"]) == 0
+    peak1 = float(capsys.readouterr().out.splitlines()[1].split()[1])
+    # the same peak as the default integrator, to the accuracy of both at rtol 1e-9
+    assert peak1 == pytest.approx(peak_base_force(SliderCrank(), 1, rtol=1e-9), rel=1e-6)
+
+
 def test_config_file_and_override(tmp_path, capsys):
     cfg = tmp_path / "m.json"
     cfg.write_text(json.dumps({"restitution": 0.5, "crank_length": 0.04}))
@@ -36,6 +44,8 @@ def test_config_file_and_override(tmp_path, capsys):
     (["simulate", "--journal-radius", "0.02"], "journal_radius must be smaller"),
     (["simulate", "--config", "/nonexistent.json"], "cannot read mechanism file"),
     (["simulate", "--out", "x.txt", "--revolutions", "1"], "--out must end in .npz or .csv"),
+    (["sensitivity", "--method", "fd", "--backend", "exudyn", "--integrator", "dop853"],
+     "integrator applies to the reduced backend only"),
 ])
 def test_bad_input_exits_with_message(argv, message, capsys):
     with pytest.raises(SystemExit) as exc:
