@@ -131,7 +131,7 @@ def _free_step_excursion(ts, ys, ms, p, A, B, C, n_sub):
 def free_step_excursion(case: StressCase, n_sub: int = 20) -> float:
     """Largest penetration (in clearances) inside any free-flight step of the reduced run."""
     ts, ys, ms, *_, p = reduced.run(case.mech, case.revolutions, **case.options)
-    tab = METHODS["dopri5"]
+    tab = METHODS[case.options.get("method", "dopri5")]   # re-take with the run's method
     return float(_free_step_excursion(ts, ys, ms, p, tab.A, tab.B, tab.C, n_sub))
 
 
