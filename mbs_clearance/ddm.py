@@ -137,33 +137,16 @@ def _evaluate(t, y, p, z, o, jac, full):
         free_branch(z, o, jac)
 
 
-@nb.njit(cache=True)
-def _directional(jac, row, y, p, k, npar, dxi):
-    """Total derivative of output `row` along parameter k at fixed time."""
-    base = 4 + 4 * k
-    acc = (jac[row, 1] * y[base] + jac[row, 2] * y[base + 1] + jac[row, 3] * y[base + 2]
-           + jac[row, 4] * y[base + 3] + jac[row, Z_DMIN] * p[P_SIGMA + k])
-    d0 = P_SIGMA + npar
-    for b in range(N_BETA):
-        dk = p[d0 + b * npar + k]
-        if dk != 0.0:
-            col = _Z_COL[b]
-            if b == B_E:
-                acc += jac[row, col] * dxi * dk
-            elif col >= 0:
-                acc += jac[row, col] * dk
-    return acc
-
-
 @nb.njit(cache=True, inline="always")
-def _directional_all(jac, row, y, p, npar, dxi, dydt, slot):
-    """`_directional` for all parameters at once, into dydt[4 + 4 k + slot]: the state part
-    per parameter, then the parameter part row by row of D (contiguous in k)."""
+def _directional(jac, row, y, p, npar, dxi, out, first, stride):
+    """Total derivative of output `row` along each parameter k at fixed time, into
+    out[first + stride * k]: the state part per parameter, then the parameter part row by
+    row of D (contiguous in k)."""
     for k in range(npar):
         base = 4 + 4 * k
-        dydt[base + slot] = (jac[row, 1] * y[base] + jac[row, 2] * y[base + 1]
-                             + jac[row, 3] * y[base + 2] + jac[row, 4] * y[base + 3]
-                             + jac[row, Z_DMIN] * p[P_SIGMA + k])
+        out[first + stride * k] = (jac[row, 1] * y[base] + jac[row, 2] * y[base + 1]
+                                   + jac[row, 3] * y[base + 2] + jac[row, 4] * y[base + 3]
+                                   + jac[row, Z_DMIN] * p[P_SIGMA + k])
     d0 = P_SIGMA + npar
     for b in range(N_BETA):
         col = _Z_COL[b]
@@ -174,7 +157,7 @@ def _directional_all(jac, row, y, p, npar, dxi, dydt, slot):
             continue
         off = d0 + b * npar
         for k in range(npar):
-            dydt[4 + 4 * k + slot] += jb * p[off + k]
+            out[first + stride * k] += jb * p[off + k]
 
 
 @nb.njit(RHS_SIG, cache=True)
@@ -196,8 +179,8 @@ def rhs_sens(t, y, p, dydt):
         base = 4 + 4 * k
         dydt[base] = y[base + 2]
         dydt[base + 1] = y[base + 3]
-    _directional_all(jac, O_TH3DD, y, p, npar, dxi, dydt, 2)
-    _directional_all(jac, O_X4DD, y, p, npar, dxi, dydt, 3)
+    _directional(jac, O_TH3DD, y, p, npar, dxi, dydt, 6, 4)
+    _directional(jac, O_X4DD, y, p, npar, dxi, dydt, 7, 4)
     # the work quadrature is not needed for sensitivities; M2 is not computed by the
     # acceleration-only Jacobian
     dydt[4 + 4 * npar] = 0.0
@@ -220,12 +203,14 @@ def on_event_sens(t, y, p):
         # d(deltadot)/dt along the motion
         accel = (jac[O_DELTADOT, 0] + jac[O_DELTADOT, 1] * y[2] + jac[O_DELTADOT, 2] * y[3]
                  + jac[O_DELTADOT, 3] * o[O_TH3DD] + jac[O_DELTADOT, 4] * o[O_X4DD])
+        d_rate = np.empty(npar)
+        d_pen = np.empty(npar)
+        _directional(jac, O_DELTADOT, y, p, npar, dxi, d_rate, 0, 1)
+        _directional(jac, O_DELTA, y, p, npar, dxi, d_pen, 0, 1)
         for k in range(npar):
-            d_rate = _directional(jac, O_DELTADOT, y, p, k, npar, dxi)
             if p[P_EVTERM] > 0.5:
-                d_pen = _directional(jac, O_DELTA, y, p, k, npar, dxi)
-                d_rate += accel * (-d_pen / rate)
-            p[P_SIGMA + k] = d_rate
+                d_rate[k] += accel * (-d_pen[k] / rate)
+            p[P_SIGMA + k] = d_rate[k]
     else:
         p[P_DMIN] = p[P_VFLOOR]
         d0 = P_SIGMA + npar
@@ -253,8 +238,7 @@ def sens_outputs(ts, ys, ms, p):
         _, dxi = hysteresis_factor(q[P_E], int(q[P_MODEL]))
         for r in range(4):
             vals[i, r] = o[rows[r]]
-            for k in range(npar):
-                sens[i, r, k] = _directional(jac, rows[r], ys[i], q, k, npar, dxi)
+            _directional(jac, rows[r], ys[i], q, npar, dxi, sens[i, r], 0, 1)
     return vals, sens
 
 

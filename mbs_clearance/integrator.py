@@ -453,11 +453,11 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
     step); refine_iters (golden-section iterations per peak candidate); then
     coefficients = `Tableau.arrays()` (one tuple: numba types the kernels of calls with 30 or
     more arguments as experimental first-class functions); n_out (outputs written by
-    monitor, recorded); n_dense: the event
-    function reads only y[:n_dense], so the continuous extension is formed for those
-    components only, and its extra stages (DOP853) call `rhs` with the truncated state
-    y[:n_dense]: the model must then give those derivatives (entries beyond are not used),
-    which lets an augmented system skip its extra equations there.
+    monitor, recorded); n_dense: the event function reads only y[:n_dense], so the
+    continuous extension is formed for those components only, and its extra stages
+    (DOP853) call `rhs` with the truncated state y[:n_dense]: the model must then give those
+    derivatives (entries beyond are not used), which lets an augmented system skip its
+    extra equations there.
 
     Returns (t (m,), y (m, n), memory (m, n_mem) of the recorded steps, the refined maximum
     of monitor per window and its time, counters [nfev, naccept, nreject, nevent, status,
