@@ -18,6 +18,7 @@ import numpy as np
 
 from . import ddm, reduced
 from .contact import stiffness_eq9_partials
+from .integrator import METHODS
 from .mechanism import CONTINUOUS_FIELDS, SliderCrank, check_field_names
 from .trajectory import Trajectory, load_trajectory
 
@@ -457,6 +458,8 @@ def sensitivities(mech: SliderCrank, parameters=None, revolutions: int = 4,
 
     if backend not in BACKENDS:
         raise ValueError(f"backend must be one of {sorted(BACKENDS)}; got {backend!r}")
+    if integrator is not None and integrator not in METHODS:
+        raise ValueError(f"integrator must be one of {sorted(METHODS)}; got {integrator!r}")
     if method == "ddm":
         if backend != "reduced":
             raise ValueError("method='ddm' needs backend='reduced' (the direct "

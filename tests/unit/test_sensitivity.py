@@ -130,6 +130,7 @@ def test_fd_and_ddm_on_default_grid_and_normalization_floor(paper):
     ({"backend": "adams", "method": "fd"}, "backend must be one of"),
     ({"fd_relative_step": 0.5, "method": "fd"}, "fd_relative_step must be in"),
     ({"parameters": ["slider_mass", "slider_mass"]}, "must not repeat"),
+    ({"integrator": "rk4"}, "integrator must be one of"),
 ])
 def test_bad_input(paper, kwargs, message):
     with pytest.raises(ValueError, match=message):
