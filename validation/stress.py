@@ -102,8 +102,11 @@ def _energy_error(case: StressCase) -> float:
 
 
 @nb.njit(cache=True)
-def _free_step_excursion(ts, ys, ms, p, A, B, C, n_sub):
-    """max over free-flight steps and n_sub - 1 interior times of delta / c (re-taken steps)."""
+def _step_excursion(ts, ys, ms, p, A, B, C, n_sub, mode):
+    """Re-taken steps of one contact mode (0: free flight, 1: contact) at n_sub - 1 interior
+    times: the largest excursion to the wrong side of the wall, in clearances (delta / c in
+    free flight, -delta / c in contact; > 0 means a missed contact or separation)."""
+    sign = 1.0 if mode == 0 else -1.0
     n = ys.shape[1]
     K = np.zeros((B.shape[0] + 1, n))
     f = np.empty(n)
@@ -113,7 +116,7 @@ def _free_step_excursion(ts, ys, ms, p, A, B, C, n_sub):
     q = p.copy()
     worst = -np.inf
     for k in range(ts.shape[0] - 1):
-        if ms[k, 0] > 0.5:
+        if (ms[k, 0] > 0.5) != (mode == 1):
             continue
         q[reduced.P_MODE] = ms[k, 0]
         q[reduced.P_DMIN] = ms[k, 1]
@@ -122,7 +125,7 @@ def _free_step_excursion(ts, ys, ms, p, A, B, C, n_sub):
         h = ts[k + 1] - ts[k]
         for j in range(1, n_sub):
             rk_step(reduced.rhs, ts[k], y0, f, h * j / n_sub, A, B, C, K, q, y_new, f_new, tmp)
-            d = reduced.geometry(ts[k] + h * j / n_sub, y_new, q)[3] / q[reduced.P_C]
+            d = sign * reduced.geometry(ts[k] + h * j / n_sub, y_new, q)[3] / q[reduced.P_C]
             if d > worst:
                 worst = d
     return worst
@@ -130,9 +133,17 @@ def _free_step_excursion(ts, ys, ms, p, A, B, C, n_sub):
 
 def free_step_excursion(case: StressCase, n_sub: int = 20) -> float:
     """Largest penetration (in clearances) inside any free-flight step of the reduced run."""
+    return step_excursions(case, n_sub)[0]
+
+
+def step_excursions(case: StressCase, n_sub: int = 20) -> tuple[float, float]:
+    """Largest excursion (in clearances) to the wrong side of the wall inside any free-flight
+    step (a missed contact) and inside any contact step (a missed separation: the journal
+    leaves and comes back within one step, keeping a stale impact velocity)."""
     ts, ys, ms, *_, p = reduced.run(case.mech, case.revolutions, **case.options)
     tab = METHODS[case.options.get("method", "dopri5")]   # re-take with the run's method
-    return float(_free_step_excursion(ts, ys, ms, p, tab.A, tab.B, tab.C, n_sub))
+    return tuple(float(_step_excursion(ts, ys, ms, p, tab.A, tab.B, tab.C, n_sub, mode))
+                 for mode in (0, 1))
 
 
 def run_case(case: StressCase, backend: str = "reduced") -> dict[str, Any]:
@@ -173,11 +184,15 @@ def run_case(case: StressCase, backend: str = "reduced") -> dict[str, Any]:
     row["peak_last_revolution"] = traj.max_base_force(case.revolutions)
     row["contact_switches"] = int(np.count_nonzero(np.diff(traj.contact_phase)))
     if backend == "reduced":
-        inside = free_step_excursion(case)
+        inside, outside = step_excursions(case)
         row["max_inside_free_steps_over_c"] = inside
+        row["max_outside_contact_steps_over_c"] = outside
         if inside > 1e-9:
             row["reasons"].append(f"the journal enters the wall inside a free-flight step "
                                   f"({inside:.2g} c): a missed contact")
+        if outside > 1e-9:
+            row["reasons"].append(f"the journal leaves the wall inside a contact step "
+                                  f"({outside:.2g} c): a missed separation")
         if case.mech.restitution == 1.0:
             err = _energy_error(case)
             row["energy_error"] = err
