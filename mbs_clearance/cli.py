@@ -73,6 +73,11 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
         print(f"{k:>10}  {traj.max_base_force(k):>14.2f}  "
               f"{abs(traj.crank_moment[mask]).max():>14.3f}  "
               f"{traj.contact_force[mask].max():>22.2f}")
+    floored = traj.stats.get("floored_impacts") if traj.stats else None
+    if floored:
+        print(f"note: {floored} contact onset(s) at the impact-velocity floor (grazing); the "
+              f"damping they set is sensitive to the tolerance: compare with a tighter --rtol",
+              file=sys.stderr)
     if args.out:
         print(f"trajectory written to {traj.save(args.out)}", file=sys.stderr)
     if args.plot:

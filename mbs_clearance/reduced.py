@@ -443,8 +443,19 @@ def simulate_reduced(mech: SliderCrank, revolutions: int = 4, **options):
     stats = counters_dict(counters)
     stats.update(method=options.get("method", "dopri5"),
                  rtol=float(options.get("rtol") or DEFAULT_RTOL))
+    if options.get("t_eval") is None:
+        stats["floored_impacts"] = floored_impacts(ms, p[P_VFLOOR])
     return trajectory_from_states(mech, ts, ys, ms, p, stats,
                                   None if options.get("t_eval") is not None else peaks, outs)
+
+
+def floored_impacts(ms: np.ndarray, floor: float) -> int:
+    """Contact onsets whose impact velocity was raised to the floor, from the memories of all
+    recorded steps: grazing onsets, whose stored velocity (and with it the damping of the
+    whole contact) is ill-conditioned at loose tolerances (docs/performance.md)."""
+    mode = ms[:, 0] > 0.5
+    onsets = np.flatnonzero(mode[1:] & ~mode[:-1]) + 1
+    return int(np.count_nonzero(ms[onsets, 1] <= floor))
 
 
 def trajectory_from_states(mech, ts, ys, ms, p, stats, peaks, outs=None):
