@@ -131,11 +131,6 @@ def _step_excursion(ts, ys, ms, p, A, B, C, n_sub, mode):
     return worst
 
 
-def free_step_excursion(case: StressCase, n_sub: int = 20) -> float:
-    """Largest penetration (in clearances) inside any free-flight step of the reduced run."""
-    return step_excursions(case, n_sub)[0]
-
-
 def step_excursions(case: StressCase, n_sub: int = 20) -> tuple[float, float]:
     """Largest excursion (in clearances) to the wrong side of the wall inside any free-flight
     step (a missed contact) and inside any contact step (a missed separation: the journal
