@@ -24,6 +24,8 @@ import math
 
 import numba as nb
 
+from .integrator import KERNEL
+
 __all__ = [
     "CONTACT_MODELS", "hysteresis_factor", "contact_force", "contact_force_partials",
     "stiffness_eq9", "stiffness_eq9_partials",
@@ -35,7 +37,7 @@ CONTACT_MODELS: dict[str, int] = {"lankarani_nikravesh": 0, "hunt_crossley": 1, 
 EXPONENT = 1.5
 
 
-@nb.njit(cache=True)
+@nb.njit(**KERNEL)
 def hysteresis_factor(e, model):
     """Return (xi, dxi/de) for restitution `e` and contact model id `model`."""
     if model == 0:
@@ -45,7 +47,7 @@ def hysteresis_factor(e, model):
     return 1.6 * (1.0 - e) / e, -1.6 / (e * e)
 
 
-@nb.njit(cache=True)
+@nb.njit(**KERNEL)
 def contact_force(delta, deltadot, deltadot_minus, K, e, model):
     """Normal contact force in N (>= 0; zero for delta <= 0)."""
     if delta <= 0.0:
@@ -55,7 +57,7 @@ def contact_force(delta, deltadot, deltadot_minus, K, e, model):
     return f if f > 0.0 else 0.0
 
 
-@nb.njit(cache=True)
+@nb.njit(**KERNEL)
 def contact_force_partials(delta, deltadot, deltadot_minus, K, e, model):
     """Force and its partial derivatives.
 
@@ -78,7 +80,7 @@ def contact_force_partials(delta, deltadot, deltadot_minus, K, e, model):
     return f, d_delta, d_rate, d_rate_minus, d_k, d_e
 
 
-@nb.njit(cache=True)
+@nb.njit(**KERNEL)
 def stiffness_eq9(journal_radius, bearing_radius, youngs_modulus, poisson_ratio):
     """Generalized contact stiffness K of the paper's Eq. 9 in N/m^1.5.
 
@@ -90,7 +92,7 @@ def stiffness_eq9(journal_radius, bearing_radius, youngs_modulus, poisson_ratio)
         journal_radius * bearing_radius / (bearing_radius - journal_radius))
 
 
-@nb.njit(cache=True)
+@nb.njit(**KERNEL)
 def stiffness_eq9_partials(journal_radius, bearing_radius, youngs_modulus, poisson_ratio):
     """Return (K, dK/dR_J, dK/dR_B, dK/dE, dK/dnu) of Eq. 9."""
     k = stiffness_eq9(journal_radius, bearing_radius, youngs_modulus, poisson_ratio)

@@ -34,9 +34,9 @@ import numba as nb
 import numpy as np
 
 from . import reduced
-from ._jacobians import contact_accel, contact_branch, free_accel, free_branch
+from ._jacobians import N_Z, contact_accel, contact_branch, free_accel, free_branch
 from .contact import contact_force, hysteresis_factor
-from .integrator import ACTION_SIG, RHS_SIG, integrate
+from .integrator import ACTION_SIG, KERNEL, RHS_SIG, integrate
 from .reduced import (
     P_C,
     P_DMIN,
@@ -73,8 +73,9 @@ Z_DMIN = 5
 O_TH3DD, O_X4DD, O_F12X, O_F12Y, O_M2, O_F, O_DELTA, O_DELTADOT = range(8)
 
 
-#: work space at the end of p for the right-hand side: z (18), outputs (8), Jacobian (8 x 18)
-N_WORK = 18 + 8 + 8 * 18
+#: work space at the end of p for the right-hand side: z (N_Z), outputs (8), Jacobian
+#: (8 x N_Z, flat row-major)
+N_WORK = N_Z + 8 + 8 * N_Z
 
 
 def d_offset(npar: int) -> int:
@@ -82,17 +83,17 @@ def d_offset(npar: int) -> int:
     return P_SIGMA + npar
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(**KERNEL, inline="always")
 def _work(p, npar):
     """Views of the work space of p (no allocation in the right-hand side)."""
     w0 = P_SIGMA + (1 + N_BETA) * npar
-    return (p[w0:w0 + 18], p[w0 + 18:w0 + 26], p[w0 + 26:w0 + N_WORK].reshape((8, 18)))
+    return p[w0:w0 + N_Z], p[w0 + N_Z:w0 + N_Z + 8], p[w0 + N_Z + 8:w0 + N_WORK]
 
 
-@nb.njit(cache=True)
+@nb.njit(**KERNEL)
 def _evaluate(t, y, p, z, o, jac, full):
     """Outputs and Jacobian at (t, y) in the branch of the current contact mode (z: work
-    array of 18 entries).
+    array of N_Z entries).
 
     full=False computes only the rows theta3dd and x4dd (all the right-hand side needs).
     """
@@ -137,22 +138,23 @@ def _evaluate(t, y, p, z, o, jac, full):
         free_branch(z, o, jac)
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(**KERNEL, inline="always")
 def _directional(jac, row, y, p, npar, dxi, out, first, stride):
     """Total derivative of output `row` along each parameter k at fixed time, into
     out[first + stride * k]: the state part per parameter, then the parameter part row by
     row of D (contiguous in k)."""
+    r0 = row * N_Z      # the row's first entry in the flat Jacobian
     for k in range(npar):
         base = 4 + 4 * k
-        out[first + stride * k] = (jac[row, 1] * y[base] + jac[row, 2] * y[base + 1]
-                                   + jac[row, 3] * y[base + 2] + jac[row, 4] * y[base + 3]
-                                   + jac[row, Z_DMIN] * p[P_SIGMA + k])
+        out[first + stride * k] = (jac[r0 + 1] * y[base] + jac[r0 + 2] * y[base + 1]
+                                   + jac[r0 + 3] * y[base + 2] + jac[r0 + 4] * y[base + 3]
+                                   + jac[r0 + Z_DMIN] * p[P_SIGMA + k])
     d0 = P_SIGMA + npar
     for b in range(N_BETA):
         col = _Z_COL[b]
         if col < 0:
             continue
-        jb = jac[row, col] * dxi if b == B_E else jac[row, col]
+        jb = jac[r0 + col] * dxi if b == B_E else jac[r0 + col]
         if jb == 0.0:
             continue
         off = d0 + b * npar
@@ -160,7 +162,7 @@ def _directional(jac, row, y, p, npar, dxi, out, first, stride):
             out[first + stride * k] += jb * p[off + k]
 
 
-@nb.njit(RHS_SIG, cache=True)
+@nb.njit(RHS_SIG, **KERNEL)
 def rhs_sens(t, y, p, dydt):
     """State, sensitivity and work derivatives; for the truncated state y[:N_EVENT] (the
     integrator's continuous extension) only the state derivatives, by the plain model."""
@@ -186,7 +188,7 @@ def rhs_sens(t, y, p, dydt):
     dydt[4 + 4 * npar] = 0.0
 
 
-@nb.njit(ACTION_SIG, cache=True)
+@nb.njit(ACTION_SIG, cache=True, error_model="numpy")
 def on_event_sens(t, y, p):
     """Contact switch with the impact-velocity memory and its sensitivity (event-time term)."""
     if p[P_MODE] > 0.5:
@@ -201,8 +203,9 @@ def on_event_sens(t, y, p):
     if rate > p[P_VFLOOR]:
         p[P_DMIN] = rate
         # d(deltadot)/dt along the motion
-        accel = (jac[O_DELTADOT, 0] + jac[O_DELTADOT, 1] * y[2] + jac[O_DELTADOT, 2] * y[3]
-                 + jac[O_DELTADOT, 3] * o[O_TH3DD] + jac[O_DELTADOT, 4] * o[O_X4DD])
+        r0 = O_DELTADOT * N_Z
+        accel = (jac[r0] + jac[r0 + 1] * y[2] + jac[r0 + 2] * y[3]
+                 + jac[r0 + 3] * o[O_TH3DD] + jac[r0 + 4] * o[O_X4DD])
         d_rate = np.empty(npar)
         d_pen = np.empty(npar)
         _directional(jac, O_DELTADOT, y, p, npar, dxi, d_rate, 0, 1)
@@ -218,7 +221,7 @@ def on_event_sens(t, y, p):
             p[P_SIGMA + k] = p[d0 + B_VMIN * npar + k]
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def sens_outputs(ts, ys, ms, p):
     """Outputs (F12x, F12y, M2, F) and their sensitivities at recorded steps.
 
@@ -243,7 +246,7 @@ def sens_outputs(ts, ys, ms, p):
 
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def integrate_sens(y0, p, mem_start, n_mem, edges, rtol, atol, n_err, h0, h_max, max_steps,
                    record, event_tol, event_margin, n_samples, refine_iters, coefficients, n_out,
                    n_dense):

@@ -34,10 +34,18 @@ import numpy as np
 from numba import types
 
 __all__ = [
-    "RHS_SIG", "SCALAR_SIG", "MONITOR_SIG", "EVENT_SIG", "ACTION_SIG", "METHODS", "Tableau",
-    "integrate",
+    "KERNEL", "RHS_SIG", "SCALAR_SIG", "MONITOR_SIG", "EVENT_SIG", "ACTION_SIG", "METHODS",
+    "Tableau", "integrate",
     "STATUS_MESSAGES",
 ]
+
+#: numba options of the kernels (model functions and the integrator's helpers, everything
+#: that runs per stage or per step and allocates nothing): error_model="numpy" drops the
+#: zero-division checks of every float division (the kernels guard their divisors), and
+#: without numba's runtime (_nrt=False) passing arrays to a compiled function costs no
+#: atomic reference counting (it was 22 % of a simulation, measured with perf). Such
+#: functions cannot allocate arrays; `integrate` itself allocates and keeps the runtime.
+KERNEL = {"cache": True, "error_model": "numpy", "_nrt": False}
 
 _vec = types.float64[::1]
 RHS_SIG = types.void(types.float64, _vec, _vec, _vec)
@@ -169,7 +177,7 @@ STATUS_MESSAGES = {
 }
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(**KERNEL, inline="always")
 def _combine(y, h, K, coef, n_terms, out):
     """out = y + h * sum_{j < n_terms} coef[j] K[j] (rows of K outer: contiguous inner loop)."""
     n = y.shape[0]
@@ -182,20 +190,23 @@ def _combine(y, h, K, coef, n_terms, out):
                 out[k] += c * K[j, k]
 
 
-@nb.njit(cache=True)
+@nb.njit(**KERNEL)
 def rk_step(rhs, t, y, f, h, A, B, C, K, p, y_new, f_new, ytmp):
     """One explicit RK step of size h; fills K (stages, last row FSAL), y_new and f_new."""
     s = B.shape[0]
-    K[0, :] = f
+    n = y.shape[0]
+    for k in range(n):
+        K[0, k] = f[k]
     for i in range(1, s):
         _combine(y, h, K, A[i], i, ytmp)
         rhs(t + C[i] * h, ytmp, p, K[i])
     _combine(y, h, K, B, s, y_new)
     rhs(t + h, y_new, p, f_new)
-    K[s, :] = f_new
+    for k in range(n):
+        K[s, k] = f_new[k]
 
 
-@nb.njit(cache=True)
+@nb.njit(**KERNEL)
 def extra_stages(rhs, t, y, h, K, A_extra, C_extra, p, ytmp):
     """Stages s+1.. of a continuous extension that needs more than the step's stages."""
     first = K.shape[0] - A_extra.shape[0]
@@ -204,7 +215,7 @@ def extra_stages(rhs, t, y, h, K, A_extra, C_extra, p, ytmp):
         rhs(t + C_extra[r] * h, ytmp, p, K[first + r])
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(**KERNEL, inline="always")
 def _weighted_rows(K, E, n, out):
     """out[:n] = sum_j E[j] K[j, :n] (rows of K outer: contiguous inner loop)."""
     for k in range(n):
@@ -216,7 +227,7 @@ def _weighted_rows(K, E, n, out):
                 out[k] += c * K[j, k]
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(**KERNEL)
 def error_norm(K, E, E2, h, y, y_new, rtol, atol, n_err, work, work2):
     """Scaled error estimate over the first n_err components: the RMS of E.K, or with a
     second estimator E2 (DOP853) Hairer's combination |E.K|^2 / sqrt(|E.K|^2 + 0.01
@@ -240,7 +251,7 @@ def error_norm(K, E, E2, h, y, y_new, rtol, atol, n_err, work, work2):
     return abs(h) * acc / math.sqrt((acc + 0.01 * acc2) * n_err)
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(**KERNEL)
 def dense_eval(y, h, K, P, theta, out, wts):
     """State at t + theta*h from the step's continuous extension (wts: work array)."""
     ns = P.shape[0]
@@ -254,7 +265,7 @@ def dense_eval(y, h, K, P, theta, out, wts):
     _combine(y, 1.0, K, wts, ns, out)
 
 
-@nb.njit(cache=True)
+@nb.njit(**KERNEL)
 def initial_step(rhs, t, y, f, p, rtol, atol, order, direction_span, ytmp, ftmp):
     """Hairer-Norsett-Wanner starting step size."""
     n = y.shape[0]
@@ -283,7 +294,7 @@ def initial_step(rhs, t, y, f, p, rtol, atol, order, direction_span, ytmp, ftmp)
     return min(100.0 * h0, h1, direction_span)
 
 
-@nb.njit(cache=True)
+@nb.njit(**KERNEL)
 def _golden_max(rhs, monitor, t0, y0, p, h_max, A, B, C, K, y_new, f_new, ytmp, f0, iters,
                 out):
     """Maximise monitor(t0 + h, step(y0, h)) over h in [0, h_max]; return (value, t).
@@ -318,7 +329,7 @@ def _golden_max(rhs, monitor, t0, y0, p, h_max, A, B, C, K, y_new, f_new, ytmp, 
     return fd, t0 + d
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(**KERNEL, inline="always")
 def _illinois_update(x, gx, a, ga, b, gb, side):
     """Shrink the bracket [a, b] (g(a) <= 0 < g(b)) to the new point x; the Illinois rule
     halves the value kept at the end that stays, when that end stays twice in a row."""
@@ -331,7 +342,7 @@ def _illinois_update(x, gx, a, ga, b, gb, side):
     return x, gx, b, gb, 1
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(**KERNEL, inline="always")
 def _hermite_max(g_a, d_a, g_b, d_b):
     """Maximum over [0, 1] of the cubic Hermite interpolant with values g_a, g_b and
     end slopes d_a, d_b (derivatives times the interval length), and where it is."""
@@ -369,7 +380,7 @@ def _hermite_max(g_a, d_a, g_b, d_b):
     return best, where
 
 
-@nb.njit(cache=True)
+@nb.njit(**KERNEL)
 def _search_event(event, t, y, y_new, h, K, P, p, g_start, gd_start, n_samples, event_tol,
                   event_margin, ytmp, wts, fine):
     """First sign change of g (from <= 0 to > 0) inside a step of size h.
@@ -416,9 +427,13 @@ def _search_event(event, t, y, y_new, h, K, P, p, g_start, gd_start, n_samples, 
             for j in range(7):
                 fine[j] = (j + 1) / 8.0
             if 0.0 < where < 1.0:
-                fine[7] = where
+                # insert the interpolant's maximum in order (the 7 points are sorted)
+                j = 7
+                while j > 0 and fine[j - 1] > where:
+                    fine[j] = fine[j - 1]
+                    j -= 1
+                fine[j] = where
                 n_fine = 8
-                fine[:8].sort()
             span_theta = theta_b - theta_a
             base = theta_a
             for j in range(n_fine):
@@ -438,7 +453,14 @@ def _search_event(event, t, y, y_new, h, K, P, p, g_start, gd_start, n_samples, 
 
 
 
-@nb.njit(cache=True)
+@nb.njit(**KERNEL)
+def _copy(src, dst):
+    """dst[:] = src without the temporary that a slice assignment may allocate."""
+    for k in range(src.shape[0]):
+        dst[k] = src[k]
+
+
+@nb.njit(cache=True, error_model="numpy")
 def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rtol, atol, n_err,
               h0, h_max, max_steps, record, event_tol, event_margin, n_samples, refine_iters,
               coefficients, n_out, n_dense):
@@ -608,7 +630,7 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
             g_start_valid = True
         ev_step = theta_hi > 0.0
         if ev_step:
-            p_prev[:] = p    # the step before the event ran with this memory
+            _copy(p, p_prev)    # the step before the event ran with this memory
             counters[3] += 1
             if g_lo > 0.0:
                 theta_star = 0.0   # already past the switching surface at the step start
@@ -670,8 +692,8 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
             t = t + h_ev
             land = False
             h_step = h_ev
-            ftmp[:] = y  # the pre-step state, kept for the peak candidate
-            y[:] = y_new
+            _copy(y, ftmp)  # the pre-step state, kept for the peak candidate
+            _copy(y_new, y)
             on_event(t, y, p)
             rhs(t, y, p, f)
             counters[0] += 1
@@ -680,10 +702,10 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
             zero_events = 0
             t_old = t
             h_step = h_try
-            ftmp[:] = y
+            _copy(y, ftmp)
             t = t_target if land else t + h_try
-            y[:] = y_new
-            f[:] = f_new
+            _copy(y_new, y)
+            _copy(f_new, f)
             h = h_next
         counters[1] += 1
 
@@ -697,16 +719,16 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
         if m > peaks[win]:
             peaks[win] = m
             peak_t[win] = t
-            cand_prev_y[:] = ftmp
+            _copy(ftmp, cand_prev_y)
             cand_prev_t = t_old
             cand_prev_h = h_step
             if ev_step:
-                cand_prev_p[:] = p_prev
+                _copy(p_prev, cand_prev_p)
             else:
-                cand_prev_p[:] = p
-            cand_y[:] = y
+                _copy(p, cand_prev_p)
+            _copy(y, cand_y)
             cand_t = t
-            cand_p[:] = p
+            _copy(p, cand_p)
             cand_next_h = 0.0
             cand_fresh = not land
 
@@ -739,7 +761,7 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
             # edge is invisible to the samples when the best sample is elsewhere, e.g. at
             # the other edge of a periodic window)
             if refine_iters > 0:
-                last_y[:] = ftmp
+                _copy(ftmp, last_y)
                 n_cand = 0
                 for which in range(4):
                     if which == 0:
@@ -775,14 +797,14 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
                 m0 = monitor(t, y, p, oscr)
                 peaks[win] = m0
                 peak_t[win] = t
-                cand_y[:] = y
+                _copy(y, cand_y)
                 cand_t = t
-                cand_p[:] = p
+                _copy(p, cand_p)
                 cand_prev_h = 0.0
                 cand_next_h = 0.0
                 cand_fresh = True
-                ws_y[:] = y
+                _copy(y, ws_y)
                 ws_t = t
-                ws_p[:] = p
+                _copy(p, ws_p)
                 ws_h = 0.0
     return ts[:nrec], ys[:nrec], ms[:nrec], peaks, peak_t, counters, os_[:nrec]

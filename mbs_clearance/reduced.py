@@ -23,6 +23,7 @@ from .contact import CONTACT_MODELS, contact_force
 from .integrator import (
     ACTION_SIG,
     EVENT_SIG,
+    KERNEL,
     METHODS,
     MONITOR_SIG,
     RHS_SIG,
@@ -99,7 +100,7 @@ def initial_state(mech: SliderCrank, offset: float = 0.0) -> np.ndarray:
     return np.append(q, 0.0)
 
 
-@nb.njit(cache=True)
+@nb.njit(**KERNEL)
 def _geometry_trig(y, p, c2, s2, c3, s3):
     L2 = p[P_L2]
     L3 = p[P_L3]
@@ -119,7 +120,7 @@ def _geometry_trig(y, p, c2, s2, c3, s3):
     return ex, ey, r, r - p[P_C], deltadot, nx, ny
 
 
-@nb.njit(cache=True)
+@nb.njit(**KERNEL)
 def geometry(t, y, p):
     """Clearance-joint kinematics (Eqs. 1-3, 10-11).
 
@@ -131,7 +132,7 @@ def geometry(t, y, p):
     return _geometry_trig(y, p, math.cos(th2), math.sin(th2), math.cos(y[0]), math.sin(y[0]))
 
 
-@nb.njit(cache=True)
+@nb.njit(**KERNEL)
 def dynamics(t, y, p):
     """Accelerations, contact force, crank moment (Eq. 8) and base force F12.
 
@@ -177,7 +178,7 @@ def dynamics(t, y, p):
     return th3dd, x4dd, F, delta, deltadot, -ex, -ey, M2, F12x, F12y
 
 
-@nb.njit(RHS_SIG, cache=True)
+@nb.njit(RHS_SIG, **KERNEL)
 def rhs(t, y, p, dydt):
     """State derivative [theta3dot, x4dot, theta3dd, x4dd, M2*omega2]."""
     th3dd, x4dd, F, delta, deltadot, ex, ey, M2, F12x, F12y = dynamics(t, y, p)
@@ -188,7 +189,7 @@ def rhs(t, y, p, dydt):
     dydt[4] = M2 * p[P_W]
 
 
-@nb.njit(EVENT_SIG, cache=True)
+@nb.njit(EVENT_SIG, **KERNEL)
 def event(t, y, p):
     """Switching function and its rate: penetration (and its rate) in free flight, minus
     them in contact."""
@@ -198,7 +199,7 @@ def event(t, y, p):
     return delta, deltadot
 
 
-@nb.njit(ACTION_SIG, cache=True)
+@nb.njit(ACTION_SIG, **KERNEL)
 def on_event(t, y, p):
     """Switch the contact mode; at onset store the impact velocity (floored, see docs)."""
     if p[P_MODE] > 0.5:
@@ -209,14 +210,14 @@ def on_event(t, y, p):
         p[P_DMIN] = max(deltadot, p[P_VFLOOR])
 
 
-@nb.njit(SCALAR_SIG, cache=True)
+@nb.njit(SCALAR_SIG, **KERNEL)
 def monitor(t, y, p):
     """|F12|, the magnitude of the base reaction force."""
     th3dd, x4dd, F, delta, deltadot, ex, ey, M2, F12x, F12y = dynamics(t, y, p)
     return math.sqrt(F12x * F12x + F12y * F12y)
 
 
-@nb.njit(MONITOR_SIG, cache=True)
+@nb.njit(MONITOR_SIG, **KERNEL)
 def monitor_out(t, y, p, out):
     """|F12| for the integrator, which records the outputs of `dynamics` written into out
     (len(OUT_COLUMNS) entries, or none): the model is evaluated once per step."""
@@ -227,7 +228,7 @@ def monitor_out(t, y, p, out):
     return math.sqrt(res[8] * res[8] + res[9] * res[9])
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def outputs(ts, ys, ms, p):
     """Evaluate `dynamics` at recorded steps; returns (m, len(OUT_COLUMNS))."""
     q = p.copy()
@@ -241,7 +242,7 @@ def outputs(ts, ys, ms, p):
     return out
 
 
-@nb.njit(cache=True)
+@nb.njit(**KERNEL)
 def mechanical_energy(t, y, p):
     """Kinetic + gravitational + contact-spring energy of the mechanism in J.
 
@@ -310,7 +311,7 @@ class System(NamedTuple):
     atol: np.ndarray
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def integrate_plain(y0, p, mem_start, n_mem, edges, rtol, atol, n_err, h0, h_max, max_steps,
                     record, event_tol, event_margin, n_samples, refine_iters, coefficients,
                     n_out, n_dense):

@@ -61,6 +61,9 @@ class _Printer(PythonCodePrinter):
         if exp == sp.Rational(3, 2):
             b = f"max({self._print(base)}, 0.0)"
             return f"({b} * math.sqrt({b}))"
+        if exp == sp.Rational(-3, 2):     # (no pow call in the right-hand side)
+            b = self._print(base)
+            return f"(1.0 / (({b}) * math.sqrt({b})))"
         if exp.is_Integer and 1 < abs(int(exp)) <= 4:
             b = self._print(base)
             prod = " * ".join([f"({b})"] * abs(int(exp)))
@@ -75,7 +78,7 @@ def emit(name, z, out, jac, doc):
     # error_model="numpy": at r = 0 (journal centred) the penetration-rate rows divide by
     # zero; they are only used at contact onsets (r = c), the other rows stay finite
     lines = [
-        '@nb.njit(cache=True, error_model="numpy")',
+        '@nb.njit(cache=True, error_model="numpy", _nrt=False)',
         f"def {name}(z, o, jac):",
         f'    """{doc}"""',
     ]
@@ -87,8 +90,9 @@ def emit(name, z, out, jac, doc):
     for i in range(n_out):
         lines.append(f"    o[{i}] = {printer.doprint(reduced_exprs[i])}")
     for k, e in enumerate(reduced_exprs[n_out:]):
-        i, j = divmod(k, jac.cols)
-        lines.append(f"    jac[{i}, {j}] = {printer.doprint(e)}")
+        # flat row-major (jac[i * N_Z + j]): a 2-D view of the caller's work space would
+        # need a reshape per call
+        lines.append(f"    jac[{k}] = {printer.doprint(e)}")
     return "\n".join(lines).replace("math.math.", "math.")
 
 
@@ -105,6 +109,8 @@ import numba as nb
 
 Z_NAMES = {tuple(NAMES)!r}
 O_NAMES = {tuple(OUTPUTS)!r}
+#: columns of the Jacobian, stored flat row-major: d o[i] / d z[j] = jac[i * N_Z + j]
+N_Z = {len(NAMES)}
 
 '''
     body = []
@@ -112,13 +118,13 @@ O_NAMES = {tuple(OUTPUTS)!r}
         z, out, jac = derive(contact)
         branch = "contact" if contact else "free"
         body.append(emit(f"{branch}_branch", z, out, jac,
-                         f"{branch.capitalize()} branch: outputs o (8,), Jacobian jac (8, 18)."))
+                         f"{branch.capitalize()} branch: outputs o (8,), Jacobian jac (8 * 18,)."))
         # the right-hand side of the sensitivity equations needs only the accelerations (and
         # the contact force, to tell whether the contact branch applies)
         rows = [0, 1, OUTPUTS.index("F")]
         body.append(emit(f"{branch}_accel", z, out.extract(rows, [0]), jac[:2, :],
                          f"{branch.capitalize()} branch, rows theta3dd and x4dd only: "
-                         "o (3,) = (theta3dd, x4dd, F), jac (2, 18)."))
+                         "o (3,) = (theta3dd, x4dd, F), jac (2 * 18,)."))
     path = Path(__file__).resolve().parents[1] / "mbs_clearance" / "_jacobians.py"
     path.write_text(header + "\n\n\n".join(body) + "\n")
     print(f"wrote {path}")

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from mbs_clearance import SliderCrank, reduced
-from mbs_clearance._jacobians import contact_branch, free_branch
+from mbs_clearance._jacobians import N_Z, contact_branch, free_branch
 from mbs_clearance.contact import hysteresis_factor
 from mbs_clearance.sensitivity import DEFAULT_PARAMETERS, sensitivities
 
@@ -40,8 +40,9 @@ def test_generated_jacobian_matches_hand_written_model_and_finite_differences(pa
     i = 3 * len(ts) // 4
     assert ms[i, 0] == 1.0  # a state in contact
     z = _z(paper, ts[i], ys[i], ms[i, 1])
-    o, jac = np.zeros(8), np.zeros((8, 18))
-    branch(z, o, jac)
+    o, flat = np.zeros(8), np.zeros(8 * N_Z)
+    branch(z, o, flat)
+    jac = flat.reshape(8, N_Z)
     if branch is contact_branch:
         q = p.copy()
         q[reduced.P_MODE], q[reduced.P_DMIN] = ms[i]
@@ -49,7 +50,7 @@ def test_generated_jacobian_matches_hand_written_model_and_finite_differences(pa
         # the two codes round differently: delta (~1e-6 m) is a difference of coordinates of
         # size L2 + L3, so its relative round-off is ~eps (L2 + L3) / delta ~ 4e-11
         np.testing.assert_allclose(o, ref, rtol=1e-9, atol=1e-12 * np.abs(ref).max())
-    for j in range(18):
+    for j in range(N_Z):
         best = np.inf
         for rel in (1e-5, 1e-6, 1e-7, 1e-8, 1e-9):
             h = rel * max(abs(z[j]), 1e-3)
@@ -57,8 +58,8 @@ def test_generated_jacobian_matches_hand_written_model_and_finite_differences(pa
             zp[j] += h
             zm[j] -= h
             op, om = np.zeros(8), np.zeros(8)
-            branch(zp, op, np.zeros((8, 18)))
-            branch(zm, om, np.zeros((8, 18)))
+            branch(zp, op, np.zeros(8 * N_Z))
+            branch(zm, om, np.zeros(8 * N_Z))
             err = np.max(np.abs((op - om) / (2 * h) - jac[:, j]))
             best = min(best, err / (np.abs(jac[:, j]).max() + 1e-300))
         assert best < 1e-6, (j, best)
