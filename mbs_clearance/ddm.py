@@ -36,7 +36,7 @@ import numpy as np
 from . import reduced
 from ._jacobians import N_Z, contact_accel, contact_branch, free_accel, free_branch
 from .contact import contact_force, hysteresis_factor
-from .integrator import ACTION_SIG, KERNEL, RHS_SIG, integrate
+from .integrator import ACTION_SIG, KERNEL, MONITOR_SIG, RHS_SIG, integrate
 from .reduced import (
     P_C,
     P_DMIN,
@@ -246,6 +246,13 @@ def sens_outputs(ts, ys, ms, p):
 
 
 
+@nb.njit(MONITOR_SIG, **KERNEL)
+def monitor_sens(t, y, p, dydt, out):
+    """The integrator's last stage of a step: `rhs_sens` and the plain model's |F12|."""
+    rhs_sens(t, y, p, dydt)
+    return reduced.monitor(t, y, p)
+
+
 @nb.njit(cache=True, error_model="numpy")
 def integrate_sens(y0, p, mem_start, n_mem, edges, rtol, atol, n_err, h0, h_max, max_steps,
                    record, event_tol, event_margin, n_samples, refine_iters, coefficients, n_out,
@@ -253,7 +260,7 @@ def integrate_sens(y0, p, mem_start, n_mem, edges, rtol, atol, n_err, h0, h_max,
     """`integrator.integrate` bound to the sensitivity equations (compiled once, cached);
     events and monitor are the plain model's."""
     # module attributes, not plain globals: see reduced.integrate_plain
-    return integrate(_THIS.rhs_sens, reduced.event, _THIS.on_event_sens, reduced.monitor_out,
+    return integrate(_THIS.rhs_sens, reduced.event, _THIS.on_event_sens, _THIS.monitor_sens,
                      y0, p, mem_start, n_mem, edges, rtol, atol, n_err, h0, h_max,
                      max_steps, record, event_tol, event_margin, n_samples, refine_iters,
                      coefficients, n_out, n_dense)

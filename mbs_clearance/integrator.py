@@ -10,9 +10,11 @@ integrator for them, so the calls are direct and can be inlined):
   time derivative along the motion (used to look for excursions between samples); a crossing to
   positive inside a step is an event;
 - ``on_event(t, y, p)``: applied exactly at a located event (updates the memory in ``p``);
-- ``monitor(t, y, p, out) -> m``: scalar whose maximum is tracked per time window (the
-  peak); it may also write model outputs into ``out`` (n_out entries), which are recorded
-  with every step, so that a model computes its outputs once per step.
+- ``monitor(t, y, p, dydt, out) -> m``: the right-hand side (into ``dydt``, as ``rhs``) and a
+  scalar whose maximum is tracked per time window (the peak); it may also write model
+  outputs into ``out`` (n_out entries), which are recorded with every step. It is called for
+  the last (FSAL) stage of every step, at the step's end, so that a model evaluates itself
+  once there for the derivative, the peak and the outputs.
 
 Events are searched on the step's dense output (`_search_event`: interior samples, a closer
 look wherever the cubic Hermite interpolant of g and its rate comes within `event_margin` of
@@ -50,7 +52,7 @@ KERNEL = {"cache": True, "error_model": "numpy", "_nrt": False}
 _vec = types.float64[::1]
 RHS_SIG = types.void(types.float64, _vec, _vec, _vec)
 SCALAR_SIG = types.float64(types.float64, _vec, _vec)
-MONITOR_SIG = types.float64(types.float64, _vec, _vec, _vec)
+MONITOR_SIG = types.float64(types.float64, _vec, _vec, _vec, _vec)
 EVENT_SIG = types.UniTuple(types.float64, 2)(types.float64, _vec, _vec)
 ACTION_SIG = types.void(types.float64, _vec, _vec)
 
@@ -191,8 +193,15 @@ def _combine(y, h, K, coef, n_terms, out):
 
 
 @nb.njit(**KERNEL)
-def rk_step(rhs, t, y, f, h, A, B, C, K, p, y_new, f_new, ytmp):
-    """One explicit RK step of size h; fills K (stages, last row FSAL), y_new and f_new."""
+def _copy(src, dst):
+    """dst[:] = src without the temporary that a slice assignment may allocate."""
+    for k in range(src.shape[0]):
+        dst[k] = src[k]
+
+
+@nb.njit(**KERNEL)
+def rk_stages(rhs, t, y, f, h, A, B, C, K, p, y_new, ytmp):
+    """The stages of one explicit RK step of size h but the last: fills K[:s] and y_new."""
     s = B.shape[0]
     n = y.shape[0]
     for k in range(n):
@@ -201,9 +210,24 @@ def rk_step(rhs, t, y, f, h, A, B, C, K, p, y_new, f_new, ytmp):
         _combine(y, h, K, A[i], i, ytmp)
         rhs(t + C[i] * h, ytmp, p, K[i])
     _combine(y, h, K, B, s, y_new)
+
+
+@nb.njit(**KERNEL)
+def rk_step(rhs, t, y, f, h, A, B, C, K, p, y_new, f_new, ytmp):
+    """One explicit RK step of size h; fills K (stages, last row FSAL), y_new and f_new."""
+    rk_stages(rhs, t, y, f, h, A, B, C, K, p, y_new, ytmp)
     rhs(t + h, y_new, p, f_new)
-    for k in range(n):
-        K[s, k] = f_new[k]
+    _copy(f_new, K[B.shape[0]])
+
+
+@nb.njit(**KERNEL)
+def _step_monitor(rhs, monitor, t, y, f, h, A, B, C, K, p, y_new, f_new, ytmp, out):
+    """`rk_step` with the monitor as its last stage: returns the monitor at the step's end
+    (its outputs into out)."""
+    rk_stages(rhs, t, y, f, h, A, B, C, K, p, y_new, ytmp)
+    m = monitor(t + h, y_new, p, f_new, out)
+    _copy(f_new, K[B.shape[0]])
+    return m
 
 
 @nb.njit(**KERNEL)
@@ -305,25 +329,25 @@ def _golden_max(rhs, monitor, t0, y0, p, h_max, A, B, C, K, y_new, f_new, ytmp, 
     b = h_max
     c = b - invphi * (b - a)
     d = a + invphi * (b - a)
-    rk_step(rhs, t0, y0, f0, c, A, B, C, K, p, y_new, f_new, ytmp)
-    fc = monitor(t0 + c, y_new, p, out)
-    rk_step(rhs, t0, y0, f0, d, A, B, C, K, p, y_new, f_new, ytmp)
-    fd = monitor(t0 + d, y_new, p, out)
+    fc = _step_monitor(rhs, monitor, t0, y0, f0, c, A, B, C, K, p, y_new, f_new, ytmp,
+                       out)
+    fd = _step_monitor(rhs, monitor, t0, y0, f0, d, A, B, C, K, p, y_new, f_new, ytmp,
+                       out)
     for _ in range(iters):
         if fc > fd:
             b = d
             d = c
             fd = fc
             c = b - invphi * (b - a)
-            rk_step(rhs, t0, y0, f0, c, A, B, C, K, p, y_new, f_new, ytmp)
-            fc = monitor(t0 + c, y_new, p, out)
+            fc = _step_monitor(rhs, monitor, t0, y0, f0, c, A, B, C, K, p, y_new, f_new, ytmp,
+                               out)
         else:
             a = c
             c = d
             fc = fd
             d = a + invphi * (b - a)
-            rk_step(rhs, t0, y0, f0, d, A, B, C, K, p, y_new, f_new, ytmp)
-            fd = monitor(t0 + d, y_new, p, out)
+            fd = _step_monitor(rhs, monitor, t0, y0, f0, d, A, B, C, K, p, y_new, f_new, ytmp,
+                               out)
     if fc > fd:
         return fc, t0 + c
     return fd, t0 + d
@@ -453,13 +477,6 @@ def _search_event(event, t, y, y_new, h, K, P, p, g_start, gd_start, n_samples, 
 
 
 
-@nb.njit(**KERNEL)
-def _copy(src, dst):
-    """dst[:] = src without the temporary that a slice assignment may allocate."""
-    for k in range(src.shape[0]):
-        dst[k] = src[k]
-
-
 @nb.njit(cache=True, error_model="numpy")
 def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rtol, atol, n_err,
               h0, h_max, max_steps, record, event_tol, event_margin, n_samples, refine_iters,
@@ -537,7 +554,7 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
 
     t = edges[0]
     t_end = edges[-1]
-    rhs(t, y, p, f)
+    m0 = monitor(t, y, p, f, obuf)
     counters[0] += 1
     if h0 <= 0.0:
         h = initial_step(rhs, t, y, f, p, rtol, atol, error_order + 1, min(h_max, t_end - t),
@@ -546,7 +563,6 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
     else:
         h = min(h0, h_max)
     win = 0
-    m0 = monitor(t, y, p, obuf)
     peaks[0] = m0
     peak_t[0] = t
     cand_fresh = True   # the first step gives the right-hand interval of the start point
@@ -591,7 +607,8 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
             else:
                 counters[4] = 2
                 break
-        rk_step(rhs, t, y, f, h_try, A, B, C, K, p, y_new, f_new, ytmp)
+        m_new = _step_monitor(rhs, monitor, t, y, f, h_try, A, B, C, K, p, y_new, f_new, ytmp,
+                              obuf)
         counters[0] += s
         err = error_norm(K, E, E2, h_try, y, y_new, rtol, atol, n_err, ytmp, ftmp)
         if not (err <= 1.0):
@@ -657,12 +674,14 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
                     counters[4] = 3
                     break
                 on_event(t, y, p)
-                rhs(t, y, p, f)
+                monitor(t, y, p, f, obuf)
                 counters[0] += 1
                 if record and nrec > 0 and ts[nrec - 1] == t:
                     # the memory recorded at t is the one used by the step that follows it
                     for k in range(n_mem):
                         ms[nrec - 1, k] = p[mem_start + k]
+                    for k in range(n_out):
+                        os_[nrec - 1, k] = obuf[k]
                 continue
             zero_events = 0
             # land on the event with the real step map: Illinois iterations on h inside the
@@ -695,7 +714,7 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
             _copy(y, ftmp)  # the pre-step state, kept for the peak candidate
             _copy(y_new, y)
             on_event(t, y, p)
-            rhs(t, y, p, f)
+            m = monitor(t, y, p, f, obuf)    # with the new memory
             counters[0] += 1
             h = h_next
         else:
@@ -706,11 +725,11 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
             t = t_target if land else t + h_try
             _copy(y_new, y)
             _copy(f_new, f)
+            m = m_new
             h = h_next
         counters[1] += 1
 
-        # ---- peak tracking in the current window
-        m = monitor(t, y, p, obuf)
+        # ---- peak tracking in the current window (m: the monitor at the step's end)
         if cand_fresh:
             cand_next_h = h_step
             cand_fresh = False
@@ -794,8 +813,9 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
                 counters[5] += n_cand
             win += 1
             if win < n_win:
-                m0 = monitor(t, y, p, oscr)
-                peaks[win] = m0
+                # the landed step's end is the next window's start (not an event step: m
+                # and its outputs are for the memory p)
+                peaks[win] = m
                 peak_t[win] = t
                 _copy(y, cand_y)
                 cand_t = t

@@ -218,10 +218,16 @@ def monitor(t, y, p):
 
 
 @nb.njit(MONITOR_SIG, **KERNEL)
-def monitor_out(t, y, p, out):
-    """|F12| for the integrator, which records the outputs of `dynamics` written into out
-    (len(OUT_COLUMNS) entries, or none): the model is evaluated once per step."""
+def monitor_out(t, y, p, dydt, out):
+    """The integrator's last stage of a step: the state derivative (as `rhs`), the outputs of
+    `dynamics` into out (len(OUT_COLUMNS) entries, or none) and |F12|, from one evaluation
+    of the model."""
     res = dynamics(t, y, p)
+    dydt[0] = y[2]
+    dydt[1] = y[3]
+    dydt[2] = res[0]
+    dydt[3] = res[1]
+    dydt[4] = res[7] * p[P_W]
     if out.shape[0] >= 10:
         for k in range(10):
             out[k] = res[k]

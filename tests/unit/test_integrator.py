@@ -35,9 +35,16 @@ def nothing(t, y, p):
     pass
 
 
-@nb.njit(MONITOR_SIG)
-def minus_x(t, y, p, out):
-    return -y[0]
+def minus_x(rhs):
+    """The monitor -y[0] as the last stage of a step of `rhs`."""
+    @nb.njit(MONITOR_SIG)
+    def monitor(t, y, p, d, out):
+        rhs(t, y, p, d)
+        return -y[0]
+    return monitor
+
+
+osc_minus_x = minus_x(osc_rhs)
 
 
 def run(rhs, event, action, monitor, y0, p, edges, rtol, method="dopri5", record=True,
@@ -54,7 +61,7 @@ def run(rhs, event, action, monitor, y0, p, edges, rtol, method="dopri5", record
 def test_oscillator_error_decreases_with_rtol_at_the_expected_rate(method):
     errors, nfevs = [], []
     for rtol in (1e-5, 1e-7, 1e-9):
-        ts, ys, *_ , counters = run(osc_rhs, never, nothing, minus_x, [1.0, 0.0], [2.0, 0.0],
+        ts, ys, *_ , counters = run(osc_rhs, never, nothing, osc_minus_x, [1.0, 0.0], [2.0, 0.0],
                                     [0.0, 10.0], rtol, method)
         errors.append(np.max(np.abs(ys[:, 0] - np.cos(2.0 * ts))))
         nfevs.append(counters[0])
@@ -134,6 +141,9 @@ def ball_rhs(t, y, p, d):
     d[1] = -9.81
 
 
+ball_minus_x = minus_x(ball_rhs)
+
+
 @nb.njit(EVENT_SIG)
 def ball_event(t, y, p):
     return -y[0], -y[1]
@@ -149,7 +159,7 @@ def test_bouncing_ball_impact_times_are_located_exactly():
     """Ball dropped from 1 m, restitution 0.8: impact times t1 = sqrt(2/g), t_(k+1) = t_k +
     2 e^k v1 / g. The integrator must land on each of them (not the next step inside)."""
     g, e = 9.81, 0.8
-    ts, ys, ms, _, _, counters = run(ball_rhs, ball_event, ball_bounce, minus_x, [1.0, 0.0],
+    ts, ys, ms, _, _, counters = run(ball_rhs, ball_event, ball_bounce, ball_minus_x, [1.0, 0.0],
                                      [e, 0.0], [0.0, 2.0], 1e-10, h_max=0.05)
     v1 = math.sqrt(2 * g)
     expected = [math.sqrt(2 / g)]
@@ -165,6 +175,9 @@ def test_bouncing_ball_impact_times_are_located_exactly():
 @nb.njit(RHS_SIG)
 def still(t, y, p, d):
     d[0] = 0.0
+
+
+still_minus_x = minus_x(still)
 
 
 @nb.njit(EVENT_SIG)
@@ -188,22 +201,22 @@ def flag(t, y, p):
 
 def test_interior_samples_catch_a_crossing_and_return_inside_one_step():
     # With no dynamics the step grows to h_max = 0.4 and step ends never see g > 0.
-    *_, counters = run(still, bump_without_rate, flag, minus_x, [0.0], [0.0], [0.0, 3.0],
+    *_, counters = run(still, bump_without_rate, flag, still_minus_x, [0.0], [0.0], [0.0, 3.0],
                        1e-8, n_samples=0, h_max=0.4)
     assert counters[3] == 0   # missed without interior samples: this is what they are for
-    *_, counters = run(still, bump_without_rate, flag, minus_x, [0.0], [0.0], [0.0, 3.0],
+    *_, counters = run(still, bump_without_rate, flag, still_minus_x, [0.0], [0.0], [0.0, 3.0],
                        1e-8, n_samples=39, h_max=0.4)
     assert counters[3] == 1
     # with no interior samples at all, the rates at the step ends reveal the excursion: the
     # cubic Hermite interpolant of g rises to the surface, so the step is sampled finer
-    *_, counters = run(still, bump, flag, minus_x, [0.0], [0.0], [0.0, 3.0], 1e-8,
+    *_, counters = run(still, bump, flag, still_minus_x, [0.0], [0.0], [0.0, 3.0], 1e-8,
                        n_samples=0, h_max=0.4, margin=1e-3)
     assert counters[3] == 1
 
 
 def test_window_peaks_are_refined_between_steps():
     # x = cos(2t): max of -x over [0, 3] is 1 at t = pi/2, in general between two steps
-    ts, ys, _, peaks, peak_t, counters = run(osc_rhs, never, nothing, minus_x, [1.0, 0.0],
+    ts, ys, _, peaks, peak_t, counters = run(osc_rhs, never, nothing, osc_minus_x, [1.0, 0.0],
                                              [2.0, 0.0], [0.0, 3.0], 1e-10)
     sampled = np.max(-ys[:, 0])
     # the refined peak is limited only by the global error of the solution (~1e-9 here) ...
@@ -214,7 +227,8 @@ def test_window_peaks_are_refined_between_steps():
 
 
 @nb.njit(MONITOR_SIG)
-def two_bumps(t, y, p, out):
+def two_bumps(t, y, p, d, out):
+    d[0] = 0.0
     # the maximum (1.0 at t = 0.1) sits inside the window's first step (0 to 0.25), while
     # the best step point is the window's end (0.9 at t = 1)
     return math.exp(-((t - 0.1) / 0.15) ** 2) + 0.9 * math.exp(-((t - 1.0) / 0.3) ** 2)
@@ -226,9 +240,9 @@ def test_a_peak_inside_the_first_step_of_a_window_is_found():
         still, never, nothing, two_bumps, np.zeros(1), np.zeros(1), 0, 1, np.array([0.0, 1.0]),
         1e-8, np.full(1, 1e-8), 1, 0.25, 0.25, 1000, True, 1e-14, 0.0, 1, 40, tab.arrays(), 0,
         1)
-    samples = [two_bumps(t, np.zeros(1), np.zeros(1), np.zeros(0)) for t in ts]
+    samples = [two_bumps(t, np.zeros(1), np.zeros(1), np.zeros(1), np.zeros(0)) for t in ts]
     assert max(samples) < 0.95 and ts[1] >= 0.25   # no step point near the true peak
     grid = np.linspace(0.05, 0.15, 200001)     # the true maximum, on a fine grid
-    values = [two_bumps(t, np.zeros(1), np.zeros(1), np.zeros(0)) for t in grid]
+    values = [two_bumps(t, np.zeros(1), np.zeros(1), np.zeros(1), np.zeros(0)) for t in grid]
     assert peaks[0] == pytest.approx(max(values), abs=1e-9)
     assert peak_t[0] == pytest.approx(grid[int(np.argmax(values))], abs=1e-5)
