@@ -53,7 +53,8 @@ def contact_force(delta, deltadot, deltadot_minus, K, e, model):
     if delta <= 0.0:
         return 0.0
     xi, _ = hysteresis_factor(e, model)
-    f = K * delta * math.sqrt(delta) * (1.0 + xi * deltadot / deltadot_minus)
+    # xi / deltadot_minus does not depend on the state: off the critical path
+    f = K * delta * math.sqrt(delta) * (1.0 + deltadot * (xi / deltadot_minus))
     return f if f > 0.0 else 0.0
 
 

@@ -248,9 +248,11 @@ def sens_outputs(ts, ys, ms, p):
 
 @nb.njit(MONITOR_SIG, **KERNEL)
 def monitor_sens(t, y, p, dydt, out):
-    """The integrator's last stage of a step: `rhs_sens` and the plain model's |F12|."""
+    """The integrator's last stage of a step: `rhs_sens`, the plain model's |F12| and its
+    event function."""
     rhs_sens(t, y, p, dydt)
-    return reduced.monitor(t, y, p)
+    g, gd = reduced.event(t, y, p)
+    return reduced.monitor(t, y, p), g, gd
 
 
 @nb.njit(cache=True, error_model="numpy")

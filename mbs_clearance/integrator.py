@@ -10,11 +10,12 @@ integrator for them, so the calls are direct and can be inlined):
   time derivative along the motion (used to look for excursions between samples); a crossing to
   positive inside a step is an event;
 - ``on_event(t, y, p)``: applied exactly at a located event (updates the memory in ``p``);
-- ``monitor(t, y, p, dydt, out) -> m``: the right-hand side (into ``dydt``, as ``rhs``) and a
-  scalar whose maximum is tracked per time window (the peak); it may also write model
-  outputs into ``out`` (n_out entries), which are recorded with every step. It is called for
-  the last (FSAL) stage of every step, at the step's end, so that a model evaluates itself
-  once there for the derivative, the peak and the outputs.
+- ``monitor(t, y, p, dydt, out) -> (m, g, gdot)``: the right-hand side (into ``dydt``, as
+  ``rhs``), a scalar m whose maximum is tracked per time window (the peak) and the event
+  function (the same values as ``event(t, y, p)``); it may also write model outputs into
+  ``out`` (n_out entries), which are recorded with every step. It is called for the last
+  (FSAL) stage of every step, at the step's end, so that a model evaluates itself once
+  there for the derivative, the peak, the event search and the outputs.
 
 Events are searched on the step's dense output (`_search_event`: interior samples, a closer
 look wherever the cubic Hermite interpolant of g and its rate comes within `event_margin` of
@@ -52,7 +53,7 @@ KERNEL = {"cache": True, "error_model": "numpy", "_nrt": False}
 _vec = types.float64[::1]
 RHS_SIG = types.void(types.float64, _vec, _vec, _vec)
 SCALAR_SIG = types.float64(types.float64, _vec, _vec)
-MONITOR_SIG = types.float64(types.float64, _vec, _vec, _vec, _vec)
+MONITOR_SIG = types.UniTuple(types.float64, 3)(types.float64, _vec, _vec, _vec, _vec)
 EVENT_SIG = types.UniTuple(types.float64, 2)(types.float64, _vec, _vec)
 ACTION_SIG = types.void(types.float64, _vec, _vec)
 
@@ -199,7 +200,7 @@ def _copy(src, dst):
         dst[k] = src[k]
 
 
-@nb.njit(**KERNEL)
+@nb.njit(**KERNEL, inline="always")
 def rk_stages(rhs, t, y, f, h, A, B, C, K, p, y_new, ytmp):
     """The stages of one explicit RK step of size h but the last: fills K[:s] and y_new."""
     s = B.shape[0]
@@ -220,14 +221,25 @@ def rk_step(rhs, t, y, f, h, A, B, C, K, p, y_new, f_new, ytmp):
     _copy(f_new, K[B.shape[0]])
 
 
-@nb.njit(**KERNEL)
+@nb.njit(**KERNEL, inline="always")
 def _step_monitor(rhs, monitor, t, y, f, h, A, B, C, K, p, y_new, f_new, ytmp, out):
-    """`rk_step` with the monitor as its last stage: returns the monitor at the step's end
-    (its outputs into out)."""
+    """`rk_step` with the monitor as its last stage: returns the monitor and the event
+    function at the step's end (its outputs into out)."""
     rk_stages(rhs, t, y, f, h, A, B, C, K, p, y_new, ytmp)
-    m = monitor(t + h, y_new, p, f_new, out)
+    res = monitor(t + h, y_new, p, f_new, out)
     _copy(f_new, K[B.shape[0]])
-    return m
+    return res
+
+
+@nb.njit(**KERNEL)
+def _attempt(rhs, monitor, t, y, f, h, A, B, C, E, E2, K, p, y_new, f_new, ytmp, work, work2,
+             out, rtol, atol, n_err):
+    """An attempted step of `integrate`: its stages, the monitor at its end (outputs into
+    out), the event function there and its scaled error; returns (monitor, g, gdot,
+    error). One call of a function without numba's runtime, into which the helpers are
+    inlined (inlined into `integrate` they would reference-count their arrays)."""
+    m, g, gd = _step_monitor(rhs, monitor, t, y, f, h, A, B, C, K, p, y_new, f_new, ytmp, out)
+    return m, g, gd, error_norm(K, E, E2, h, y, y_new, rtol, atol, n_err, work, work2)
 
 
 @nb.njit(**KERNEL)
@@ -251,7 +263,7 @@ def _weighted_rows(K, E, n, out):
                 out[k] += c * K[j, k]
 
 
-@nb.njit(**KERNEL)
+@nb.njit(**KERNEL, inline="always")
 def error_norm(K, E, E2, h, y, y_new, rtol, atol, n_err, work, work2):
     """Scaled error estimate over the first n_err components: the RMS of E.K, or with a
     second estimator E2 (DOP853) Hairer's combination |E.K|^2 / sqrt(|E.K|^2 + 0.01
@@ -275,7 +287,7 @@ def error_norm(K, E, E2, h, y, y_new, rtol, atol, n_err, work, work2):
     return abs(h) * acc / math.sqrt((acc + 0.01 * acc2) * n_err)
 
 
-@nb.njit(**KERNEL)
+@nb.njit(**KERNEL, inline="always")
 def dense_eval(y, h, K, P, theta, out, wts):
     """State at t + theta*h from the step's continuous extension (wts: work array)."""
     ns = P.shape[0]
@@ -330,9 +342,9 @@ def _golden_max(rhs, monitor, t0, y0, p, h_max, A, B, C, K, y_new, f_new, ytmp, 
     c = b - invphi * (b - a)
     d = a + invphi * (b - a)
     fc = _step_monitor(rhs, monitor, t0, y0, f0, c, A, B, C, K, p, y_new, f_new, ytmp,
-                       out)
+                       out)[0]
     fd = _step_monitor(rhs, monitor, t0, y0, f0, d, A, B, C, K, p, y_new, f_new, ytmp,
-                       out)
+                       out)[0]
     for _ in range(iters):
         if fc > fd:
             b = d
@@ -340,14 +352,14 @@ def _golden_max(rhs, monitor, t0, y0, p, h_max, A, B, C, K, y_new, f_new, ytmp, 
             fd = fc
             c = b - invphi * (b - a)
             fc = _step_monitor(rhs, monitor, t0, y0, f0, c, A, B, C, K, p, y_new, f_new, ytmp,
-                               out)
+                               out)[0]
         else:
             a = c
             c = d
             fc = fd
             d = a + invphi * (b - a)
             fd = _step_monitor(rhs, monitor, t0, y0, f0, d, A, B, C, K, p, y_new, f_new, ytmp,
-                               out)
+                               out)[0]
     if fc > fd:
         return fc, t0 + c
     return fd, t0 + d
@@ -405,33 +417,31 @@ def _hermite_max(g_a, d_a, g_b, d_b):
 
 
 @nb.njit(**KERNEL)
-def _search_event(event, t, y, y_new, h, K, P, p, g_start, gd_start, n_samples, event_tol,
-                  event_margin, ytmp, wts, fine):
+def _search_event(event, t, y, h, K, P, p, g_start, gd_start, g_end, gd_end, n_samples,
+                  event_tol, event_margin, ytmp, wts, fine):
     """First sign change of g (from <= 0 to > 0) inside a step of size h.
 
-    g and its rate are sampled at n_samples interior points of the dense output and at the
-    end (the real step); a step that starts on the surface is also sampled close to its
-    start. Between two samples where the cubic Hermite interpolant of g (values and rates)
-    comes within `event_margin` of the surface, 7 more points are sampled: an excursion
-    through the surface shorter than the sample spacing would hide there.
-    Returns (theta_lo, g_lo, theta_hi, g_hi, g_end, gd_end); theta_hi = -1: no crossing.
+    g and its rate are sampled at n_samples interior points of the dense output; at the
+    end (the real step) they are g_end, gd_end (from the monitor); a step that starts on
+    the surface is also sampled close to its start. Between two samples where the cubic
+    Hermite interpolant of g (values and rates) comes within `event_margin` of the surface,
+    7 more points are sampled: an excursion through the surface shorter than the sample
+    spacing would hide there.
+    Returns (theta_lo, g_lo, theta_hi, g_hi); theta_hi = -1: no crossing.
     `fine` is a work array of 8 entries.
     """
     theta_a = 0.0
     g_a = g_start
     gd_a = gd_start
     n_near = 3 if g_start > -100.0 * event_tol else 0
-    g_end = 0.0
-    gd_end = 0.0
     for i in range(1 - n_near, n_samples + 2):
         if i <= 0:
             theta_b = 10.0 ** (i - 1) / (n_samples + 1.0)
         else:
             theta_b = min(i / (n_samples + 1.0), 1.0)
         if i == n_samples + 1:
-            g_b, gd_b = event(t + h, y_new, p)
-            g_end = g_b
-            gd_end = gd_b
+            g_b = g_end
+            gd_b = gd_end
         else:
             dense_eval(y, h, K, P, theta_b, ytmp, wts)
             g_b, gd_b = event(t + theta_b * h, ytmp, p)
@@ -465,15 +475,15 @@ def _search_event(event, t, y, y_new, h, K, P, p, g_start, gd_start, n_samples, 
                 dense_eval(y, h, K, P, theta_f, ytmp, wts)
                 g_f, gd_f = event(t + theta_f * h, ytmp, p)
                 if g_f > 0.0:
-                    return theta_a, g_a, theta_f, g_f, g_end, gd_end
+                    return theta_a, g_a, theta_f, g_f
                 theta_a = theta_f
                 g_a = g_f
         if g_b > 0.0:
-            return theta_a, g_a, theta_b, g_b, g_end, gd_end
+            return theta_a, g_a, theta_b, g_b
         theta_a = theta_b
         g_a = g_b
         gd_a = gd_b
-    return theta_a, g_a, -1.0, 0.0, g_end, gd_end
+    return theta_a, g_a, -1.0, 0.0
 
 
 
@@ -554,7 +564,7 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
 
     t = edges[0]
     t_end = edges[-1]
-    m0 = monitor(t, y, p, f, obuf)
+    m0, g_start, gd_start = monitor(t, y, p, f, obuf)
     counters[0] += 1
     if h0 <= 0.0:
         h = initial_step(rhs, t, y, f, p, rtol, atol, error_order + 1, min(h_max, t_end - t),
@@ -575,9 +585,7 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
             os_[0, k] = obuf[k]
         nrec = 1
     zero_events = 0
-    g_start = 0.0
-    gd_start = 0.0
-    g_start_valid = False
+    g_start_valid = True
     inv_order = 1.0 / (error_order + 1)
     last_rejected = False
     err_prev = 1e-4
@@ -607,10 +615,10 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
             else:
                 counters[4] = 2
                 break
-        m_new = _step_monitor(rhs, monitor, t, y, f, h_try, A, B, C, K, p, y_new, f_new, ytmp,
-                              obuf)
+        m_new, g_end, gd_end, err = _attempt(rhs, monitor, t, y, f, h_try, A, B, C, E, E2, K,
+                                             p, y_new, f_new, ytmp, ytmp, ftmp, obuf, rtol,
+                                             atol, n_err)
         counters[0] += s
-        err = error_norm(K, E, E2, h_try, y, y_new, rtol, atol, n_err, ytmp, ftmp)
         if not (err <= 1.0):
             counters[2] += 1
             if err != err:  # NaN from the model: shrink hard
@@ -638,9 +646,9 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
             extra_stages(rhs, t, y_d, h_try, K, A_extra, C_extra, p, ytmp_d)
             counters[0] += n_extra
         g_start_valid = False
-        theta_lo, g_lo, theta_hi, g_hi, g_end, gd_end = _search_event(
-            event, t, y_d, y_new, h_try, K, P, p, g_start, gd_start, n_samples, event_tol,
-            event_margin, ytmp, wts, fine)
+        theta_lo, g_lo, theta_hi, g_hi = _search_event(
+            event, t, y_d, h_try, K, P, p, g_start, gd_start, g_end, gd_end, n_samples,
+            event_tol, event_margin, ytmp, wts, fine)
         if theta_hi < 0.0:
             g_start = g_end       # valid for the next step if no event intervenes
             gd_start = gd_end
@@ -674,7 +682,8 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
                     counters[4] = 3
                     break
                 on_event(t, y, p)
-                monitor(t, y, p, f, obuf)
+                _, g_start, gd_start = monitor(t, y, p, f, obuf)
+                g_start_valid = True
                 counters[0] += 1
                 if record and nrec > 0 and ts[nrec - 1] == t:
                     # the memory recorded at t is the one used by the step that follows it
@@ -714,7 +723,8 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
             _copy(y, ftmp)  # the pre-step state, kept for the peak candidate
             _copy(y_new, y)
             on_event(t, y, p)
-            m = monitor(t, y, p, f, obuf)    # with the new memory
+            m, g_start, gd_start = monitor(t, y, p, f, obuf)    # with the new memory
+            g_start_valid = True
             counters[0] += 1
             h = h_next
         else:

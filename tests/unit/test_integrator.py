@@ -35,16 +35,17 @@ def nothing(t, y, p):
     pass
 
 
-def minus_x(rhs):
-    """The monitor -y[0] as the last stage of a step of `rhs`."""
+def minus_x(rhs, event):
+    """The monitor -y[0] as the last stage of a step of `rhs` with `event`."""
     @nb.njit(MONITOR_SIG)
     def monitor(t, y, p, d, out):
         rhs(t, y, p, d)
-        return -y[0]
+        g, gd = event(t, y, p)
+        return -y[0], g, gd
     return monitor
 
 
-osc_minus_x = minus_x(osc_rhs)
+osc_minus_x = minus_x(osc_rhs, never)
 
 
 def run(rhs, event, action, monitor, y0, p, edges, rtol, method="dopri5", record=True,
@@ -141,12 +142,12 @@ def ball_rhs(t, y, p, d):
     d[1] = -9.81
 
 
-ball_minus_x = minus_x(ball_rhs)
-
-
 @nb.njit(EVENT_SIG)
 def ball_event(t, y, p):
     return -y[0], -y[1]
+
+
+ball_minus_x = minus_x(ball_rhs, ball_event)
 
 
 @nb.njit(ACTION_SIG)
@@ -177,9 +178,6 @@ def still(t, y, p, d):
     d[0] = 0.0
 
 
-still_minus_x = minus_x(still)
-
-
 @nb.njit(EVENT_SIG)
 def bump(t, y, p):
     # positive only for |t - 1| < 0.01: an excursion much shorter than the steps taken
@@ -194,6 +192,10 @@ def bump_without_rate(t, y, p):
     return bump(t, y, p)[0], 0.0
 
 
+bump_minus_x = minus_x(still, bump)
+bump_only_minus_x = minus_x(still, bump_without_rate)
+
+
 @nb.njit(ACTION_SIG)
 def flag(t, y, p):
     p[0] = 1.0
@@ -201,15 +203,15 @@ def flag(t, y, p):
 
 def test_interior_samples_catch_a_crossing_and_return_inside_one_step():
     # With no dynamics the step grows to h_max = 0.4 and step ends never see g > 0.
-    *_, counters = run(still, bump_without_rate, flag, still_minus_x, [0.0], [0.0], [0.0, 3.0],
+    *_, counters = run(still, bump_without_rate, flag, bump_only_minus_x, [0.0], [0.0], [0.0, 3.0],
                        1e-8, n_samples=0, h_max=0.4)
     assert counters[3] == 0   # missed without interior samples: this is what they are for
-    *_, counters = run(still, bump_without_rate, flag, still_minus_x, [0.0], [0.0], [0.0, 3.0],
+    *_, counters = run(still, bump_without_rate, flag, bump_only_minus_x, [0.0], [0.0], [0.0, 3.0],
                        1e-8, n_samples=39, h_max=0.4)
     assert counters[3] == 1
     # with no interior samples at all, the rates at the step ends reveal the excursion: the
     # cubic Hermite interpolant of g rises to the surface, so the step is sampled finer
-    *_, counters = run(still, bump, flag, still_minus_x, [0.0], [0.0], [0.0, 3.0], 1e-8,
+    *_, counters = run(still, bump, flag, bump_minus_x, [0.0], [0.0], [0.0, 3.0], 1e-8,
                        n_samples=0, h_max=0.4, margin=1e-3)
     assert counters[3] == 1
 
@@ -231,7 +233,8 @@ def two_bumps(t, y, p, d, out):
     d[0] = 0.0
     # the maximum (1.0 at t = 0.1) sits inside the window's first step (0 to 0.25), while
     # the best step point is the window's end (0.9 at t = 1)
-    return math.exp(-((t - 0.1) / 0.15) ** 2) + 0.9 * math.exp(-((t - 1.0) / 0.3) ** 2)
+    m = math.exp(-((t - 0.1) / 0.15) ** 2) + 0.9 * math.exp(-((t - 1.0) / 0.3) ** 2)
+    return m, -1.0, 0.0      # the event function `never`
 
 
 def test_a_peak_inside_the_first_step_of_a_window_is_found():
@@ -240,9 +243,9 @@ def test_a_peak_inside_the_first_step_of_a_window_is_found():
         still, never, nothing, two_bumps, np.zeros(1), np.zeros(1), 0, 1, np.array([0.0, 1.0]),
         1e-8, np.full(1, 1e-8), 1, 0.25, 0.25, 1000, True, 1e-14, 0.0, 1, 40, tab.arrays(), 0,
         1)
-    samples = [two_bumps(t, np.zeros(1), np.zeros(1), np.zeros(1), np.zeros(0)) for t in ts]
+    samples = [two_bumps(t, np.zeros(1), np.zeros(1), np.zeros(1), np.zeros(0))[0] for t in ts]
     assert max(samples) < 0.95 and ts[1] >= 0.25   # no step point near the true peak
     grid = np.linspace(0.05, 0.15, 200001)     # the true maximum, on a fine grid
-    values = [two_bumps(t, np.zeros(1), np.zeros(1), np.zeros(1), np.zeros(0)) for t in grid]
+    values = [two_bumps(t, np.zeros(1), np.zeros(1), np.zeros(1), np.zeros(0))[0] for t in grid]
     assert peaks[0] == pytest.approx(max(values), abs=1e-9)
     assert peak_t[0] == pytest.approx(grid[int(np.argmax(values))], abs=1e-5)
