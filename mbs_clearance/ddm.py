@@ -20,9 +20,11 @@ deltadot(t_e), so
 
 the event-time term (switchable, to show that it matters). See docs/sensitivity.md.
 
-Layout of p: the reduced model's 17 entries (reduced.P_*), then P_NPAR, P_EVTERM, the
-memory sensitivities sigma (npar), the chain matrix D (13 x npar, row-major) and N_WORK
-entries of work space. The recorded memory is p[P_MODE : P_SIGMA + npar].
+Layout of p (built by `pack`): the reduced model's 17 entries (reduced.P_*), then P_NPAR,
+P_EVTERM, the memory sensitivities sigma (npar), the chain matrix D (13 x npar, row-major),
+its nonzero entries as a list (`sparse_chain`: count, then Jacobian columns, parameter
+indices and values, each in a slot of 13 npar entries) and N_WORK entries of work space.
+The recorded memory is p[P_MODE : P_SIGMA + npar].
 y = [4 states, 4 npar sensitivities, W].
 """
 
@@ -83,39 +85,66 @@ def d_offset(npar: int) -> int:
     return P_SIGMA + npar
 
 
+def sparse_chain(D: np.ndarray, dxi: float) -> np.ndarray:
+    """The nonzero entries of the chain matrix D (13 x npar) as the list the kernels read:
+    [count, Jacobian columns (slot of 13 npar), parameter indices (slot), values (slot)].
+    The value of the restitution row is multiplied by dxi = d(xi)/de, constant in a run, as
+    the generated Jacobian is with respect to the hysteresis factor xi; v_min (the
+    impact-velocity floor) is not a Jacobian input and is left out."""
+    npar = D.shape[1]
+    slot = N_BETA * npar
+    block = np.zeros(1 + 3 * slot)
+    n = 0
+    for b in range(N_BETA):
+        if _Z_COL[b] < 0:
+            continue
+        for k in range(npar):
+            if D[b, k] != 0.0:
+                block[1 + n] = _Z_COL[b]
+                block[1 + slot + n] = k
+                block[1 + 2 * slot + n] = D[b, k] * (dxi if b == B_E else 1.0)
+                n += 1
+    block[0] = n
+    return block
+
+
+def pack(base: np.ndarray, D: np.ndarray, sigma0: np.ndarray,
+         event_time_term: bool) -> np.ndarray:
+    """Parameter vector of the sensitivity kernels (layout in the module docstring) from the
+    reduced model's `base` = reduced.pack_parameters(mech)."""
+    npar = D.shape[1]
+    xi, dxi = hysteresis_factor(base[P_E], int(base[P_MODEL]))
+    p = np.concatenate([base, [npar, 1.0 if event_time_term else 0.0], sigma0, D.ravel(),
+                        sparse_chain(D, dxi), np.zeros(N_WORK)])
+    # the parameter entries of the Jacobian's inputs z (constant during a run; the kernels
+    # refresh only time, state and impact velocity)
+    z = p[len(p) - N_WORK:len(p) - N_WORK + N_Z]
+    z[6:16] = base[[P_L2, P_L3, P_M2, P_M3, P_M4, P_J3, P_W, P_TH0, P_C, P_K]]
+    z[16] = xi
+    z[17] = base[P_G]
+    return p
+
+
 @nb.njit(**KERNEL, inline="always")
 def _work(p, npar):
     """Views of the work space of p (no allocation in the right-hand side)."""
-    w0 = P_SIGMA + (1 + N_BETA) * npar
+    w0 = P_SIGMA + (1 + N_BETA) * npar + 1 + 3 * N_BETA * npar
     return p[w0:w0 + N_Z], p[w0 + N_Z:w0 + N_Z + 8], p[w0 + N_Z + 8:w0 + N_WORK]
 
 
 @nb.njit(**KERNEL)
 def _evaluate(t, y, p, z, o, jac, full):
-    """Outputs and Jacobian at (t, y) in the branch of the current contact mode (z: work
-    array of N_Z entries).
+    """Outputs and Jacobian at (t, y) in the branch of the current contact mode (z: the
+    Jacobian's input vector in the work space, its parameter entries filled by `pack`).
 
     full=False computes only the rows theta3dd and x4dd (all the right-hand side needs).
     """
-    xi, _ = hysteresis_factor(p[P_E], int(p[P_MODEL]))
     z[0] = t
     z[1] = y[0]
     z[2] = y[1]
     z[3] = y[2]
     z[4] = y[3]
     z[5] = p[P_DMIN]
-    z[6] = p[P_L2]
-    z[7] = p[P_L3]
-    z[8] = p[P_M2]
-    z[9] = p[P_M3]
-    z[10] = p[P_M4]
-    z[11] = p[P_J3]
-    z[12] = p[P_W]
-    z[13] = p[P_TH0]
-    z[14] = p[P_C]
-    z[15] = p[P_K]
-    z[16] = xi
-    z[17] = p[P_G]
     if not full:
         # accelerations only (the right-hand side): the contact branch's unclamped force
         # (third output) tells whether it applies; F > 0 exactly when contact_force > 0
@@ -139,27 +168,23 @@ def _evaluate(t, y, p, z, o, jac, full):
 
 
 @nb.njit(**KERNEL, inline="always")
-def _directional(jac, row, y, p, npar, dxi, out, first, stride):
+def _directional(jac, row, y, p, npar, out, first, stride):
     """Total derivative of output `row` along each parameter k at fixed time, into
-    out[first + stride * k]: the state part per parameter, then the parameter part row by
-    row of D (contiguous in k)."""
+    out[first + stride * k]: the state part per parameter, then the parameter part over
+    the nonzero entries of D (a handful: each parameter enters one to three kernel
+    parameters)."""
     r0 = row * N_Z      # the row's first entry in the flat Jacobian
     for k in range(npar):
         base = 4 + 4 * k
         out[first + stride * k] = (jac[r0 + 1] * y[base] + jac[r0 + 2] * y[base + 1]
                                    + jac[r0 + 3] * y[base + 2] + jac[r0 + 4] * y[base + 3]
                                    + jac[r0 + Z_DMIN] * p[P_SIGMA + k])
-    d0 = P_SIGMA + npar
-    for b in range(N_BETA):
-        col = _Z_COL[b]
-        if col < 0:
-            continue
-        jb = jac[r0 + col] * dxi if b == B_E else jac[r0 + col]
-        if jb == 0.0:
-            continue
-        off = d0 + b * npar
-        for k in range(npar):
-            out[first + stride * k] += jb * p[off + k]
+    s0 = P_SIGMA + (1 + N_BETA) * npar
+    slot = N_BETA * npar
+    for i in range(int(p[s0])):
+        col = int(p[s0 + 1 + i])
+        k = int(p[s0 + 1 + slot + i])
+        out[first + stride * k] += jac[r0 + col] * p[s0 + 1 + 2 * slot + i]
 
 
 @nb.njit(RHS_SIG, **KERNEL)
@@ -172,17 +197,35 @@ def rhs_sens(t, y, p, dydt):
     npar = int(p[P_NPAR])
     z, o, jac = _work(p, npar)
     _evaluate(t, y, p, z, o, jac, False)
-    _, dxi = hysteresis_factor(p[P_E], int(p[P_MODEL]))
     dydt[0] = y[2]
     dydt[1] = y[3]
     dydt[2] = o[O_TH3DD]
     dydt[3] = o[O_X4DD]
+    # both acceleration rows in one pass (the rows of _directional, fused): per parameter
+    # the state part, then the nonzero entries of D
+    a0 = O_TH3DD * N_Z
+    b0 = O_X4DD * N_Z
+    ja1, ja2, ja3, ja4, ja5 = jac[a0 + 1], jac[a0 + 2], jac[a0 + 3], jac[a0 + 4], jac[a0 + 5]
+    jb1, jb2, jb3, jb4, jb5 = jac[b0 + 1], jac[b0 + 2], jac[b0 + 3], jac[b0 + 4], jac[b0 + 5]
     for k in range(npar):
         base = 4 + 4 * k
-        dydt[base] = y[base + 2]
-        dydt[base + 1] = y[base + 3]
-    _directional(jac, O_TH3DD, y, p, npar, dxi, dydt, 6, 4)
-    _directional(jac, O_X4DD, y, p, npar, dxi, dydt, 7, 4)
+        s1 = y[base]
+        s2 = y[base + 1]
+        s3 = y[base + 2]
+        s4 = y[base + 3]
+        sg = p[P_SIGMA + k]
+        dydt[base] = s3
+        dydt[base + 1] = s4
+        dydt[base + 2] = ja1 * s1 + ja2 * s2 + ja3 * s3 + ja4 * s4 + ja5 * sg
+        dydt[base + 3] = jb1 * s1 + jb2 * s2 + jb3 * s3 + jb4 * s4 + jb5 * sg
+    s0 = P_SIGMA + (1 + N_BETA) * npar
+    slot = N_BETA * npar
+    for i in range(int(p[s0])):
+        col = int(p[s0 + 1 + i])
+        base = 6 + 4 * int(p[s0 + 1 + slot + i])
+        v = p[s0 + 1 + 2 * slot + i]
+        dydt[base] += jac[a0 + col] * v
+        dydt[base + 1] += jac[b0 + col] * v
     # the work quadrature is not needed for sensitivities; M2 is not computed by the
     # acceleration-only Jacobian
     dydt[4 + 4 * npar] = 0.0
@@ -197,7 +240,6 @@ def on_event_sens(t, y, p):
     npar = int(p[P_NPAR])
     z, o, jac = _work(p, npar)
     _evaluate(t, y, p, z, o, jac, True)    # free branch: F = 0 at the onset
-    _, dxi = hysteresis_factor(p[P_E], int(p[P_MODEL]))
     rate = o[O_DELTADOT]
     p[P_MODE] = 1.0
     if rate > p[P_VFLOOR]:
@@ -208,8 +250,8 @@ def on_event_sens(t, y, p):
                  + jac[r0 + 3] * o[O_TH3DD] + jac[r0 + 4] * o[O_X4DD])
         d_rate = np.empty(npar)
         d_pen = np.empty(npar)
-        _directional(jac, O_DELTADOT, y, p, npar, dxi, d_rate, 0, 1)
-        _directional(jac, O_DELTA, y, p, npar, dxi, d_pen, 0, 1)
+        _directional(jac, O_DELTADOT, y, p, npar, d_rate, 0, 1)
+        _directional(jac, O_DELTA, y, p, npar, d_pen, 0, 1)
         for k in range(npar):
             if p[P_EVTERM] > 0.5:
                 d_rate[k] += accel * (-d_pen[k] / rate)
@@ -238,10 +280,9 @@ def sens_outputs(ts, ys, ms, p):
         for m in range(ms.shape[1]):
             q[P_MODE + m] = ms[i, m]
         _evaluate(ts[i], ys[i], q, z, o, jac, True)
-        _, dxi = hysteresis_factor(q[P_E], int(q[P_MODEL]))
         for r in range(4):
             vals[i, r] = o[rows[r]]
-            _directional(jac, rows[r], ys[i], q, npar, dxi, sens[i, r], 0, 1)
+            _directional(jac, rows[r], ys[i], q, npar, sens[i, r], 0, 1)
     return vals, sens
 
 

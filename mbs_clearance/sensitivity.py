@@ -272,8 +272,7 @@ def _ddm(mech, names, revolutions, rtol, t_eval, event_time_term, method):
     ref = np.array([reference_value(mech, n) for n in names])
     base = reduced.pack_parameters(mech)
     sigma0 = D[ddm.B_VMIN].copy()
-    p = np.concatenate([base, [npar, 1.0 if event_time_term else 0.0], sigma0, D.ravel(),
-                        np.zeros(ddm.N_WORK)])
+    p = ddm.pack(base, D, sigma0, event_time_term)
     y_state = reduced.initial_state(mech)
     s0 = _initial_sensitivities(mech, D)
     y0 = np.concatenate([y_state[:4], s0.T.ravel(), [0.0]])
