@@ -297,6 +297,24 @@ def monitor_sens(t, y, p, dydt, out):
 
 
 @nb.njit(cache=True, error_model="numpy")
+def norm_maxima(ys, weights, npar, lo, hi):
+    """Per window [lo[w], hi[w]) of recorded steps and per parameter k, the maximum over the
+    steps of the weighted norm sqrt(sum_j weights[4k + j] s_kj^2) of the state sensitivity
+    s_k = ys[:, 4 + 4k : 8 + 4k]; returns (windows, npar)."""
+    out = np.zeros((lo.shape[0], npar))
+    for w in range(lo.shape[0]):
+        for i in range(lo[w], hi[w]):
+            for k in range(npar):
+                acc = 0.0
+                for j in range(4):
+                    v = ys[i, 4 + 4 * k + j]
+                    acc += weights[4 * k + j] * v * v
+                if acc > out[w, k]:
+                    out[w, k] = acc
+    return np.sqrt(out)
+
+
+@nb.njit(cache=True, error_model="numpy")
 def integrate_sens(y0, p, mem_start, n_mem, edges, rtol, atol, n_err, h0, h_max, max_steps,
                    record, event_tol, event_margin, n_samples, refine_iters, coefficients, n_out,
                    n_dense):

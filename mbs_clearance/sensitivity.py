@@ -291,14 +291,11 @@ def _ddm(mech, names, revolutions, rtol, t_eval, event_time_term, method):
     state_scale = np.array([1.0, mech.clearance, mech.crank_speed,
                             mech.crank_speed * mech.clearance / mech.crank_length])
     weights = ((scale[:, None] / state_scale[None, :]) ** 2).ravel()
-    sq = np.square(ys[:, 4:4 + 4 * npar])
-    sq *= weights
-    norm = np.sqrt(sq.reshape(len(ts), npar, 4).sum(axis=2))
     # maxima per revolution (the steps are sorted; a step on an edge counts for both sides)
     edges = np.arange(revolutions + 1) * mech.period
     lo = np.searchsorted(ts, edges[:-1], side="left")
     hi = np.searchsorted(ts, edges[1:], side="right")
-    growth = np.array([norm[a:b].max(axis=0) for a, b in zip(lo, hi)])
+    growth = ddm.norm_maxima(ys, weights, npar, lo, hi)
     if t_eval is not None:
         keep = reduced.landed_indices(ts, t_eval)
         ts, ys, ms = ts[keep], ys[keep], ms[keep]
