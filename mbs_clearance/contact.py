@@ -37,7 +37,7 @@ CONTACT_MODELS: dict[str, int] = {"lankarani_nikravesh": 0, "hunt_crossley": 1, 
 EXPONENT = 1.5
 
 
-@nb.njit(**KERNEL)
+@nb.njit(**KERNEL, inline="always")
 def hysteresis_factor(e, model):
     """Return (xi, dxi/de) for restitution `e` and contact model id `model`."""
     if model == 0:
@@ -47,7 +47,7 @@ def hysteresis_factor(e, model):
     return 1.6 * (1.0 - e) / e, -1.6 / (e * e)
 
 
-@nb.njit(**KERNEL)
+@nb.njit(**KERNEL, inline="always")
 def contact_force(delta, deltadot, deltadot_minus, K, e, model):
     """Normal contact force in N (>= 0; zero for delta <= 0)."""
     if delta <= 0.0:

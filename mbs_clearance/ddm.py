@@ -132,7 +132,7 @@ def _work(p, npar):
     return p[w0:w0 + N_Z], p[w0 + N_Z:w0 + N_Z + 8], p[w0 + N_Z + 8:w0 + N_WORK]
 
 
-@nb.njit(**KERNEL)
+@nb.njit(**KERNEL, inline="always")
 def _evaluate(t, y, p, z, o, jac, full):
     """Outputs and Jacobian at (t, y) in the branch of the current contact mode (z: the
     Jacobian's input vector in the work space, its parameter entries filled by `pack`).

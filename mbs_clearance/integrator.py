@@ -555,7 +555,8 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
     obuf = np.zeros(n_out)       # outputs at the current step (written by monitor)
     oscr = np.zeros(n_out)       # outputs of the refinement (not recorded)
 
-    cap = 4096 if record else 1
+    # untouched pages of np.empty cost nothing: room for typical runs without regrowing
+    cap = 16384 if record else 1
     ts = np.empty(cap)
     ys = np.empty((cap, n))
     ms = np.empty((cap, max(n_mem, 1)))

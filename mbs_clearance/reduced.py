@@ -100,7 +100,7 @@ def initial_state(mech: SliderCrank, offset: float = 0.0) -> np.ndarray:
     return np.append(q, 0.0)
 
 
-@nb.njit(**KERNEL)
+@nb.njit(**KERNEL, inline="always")
 def _geometry_trig(y, p, c2, s2, c3, s3):
     L2 = p[P_L2]
     L3 = p[P_L3]
@@ -121,7 +121,7 @@ def _geometry_trig(y, p, c2, s2, c3, s3):
     return ex, ey, r, r - p[P_C], deltadot, nx, ny
 
 
-@nb.njit(**KERNEL)
+@nb.njit(**KERNEL, inline="always")
 def geometry(t, y, p):
     """Clearance-joint kinematics (Eqs. 1-3, 10-11).
 
@@ -133,7 +133,7 @@ def geometry(t, y, p):
     return _geometry_trig(y, p, math.cos(th2), math.sin(th2), math.cos(y[0]), math.sin(y[0]))
 
 
-@nb.njit(**KERNEL)
+@nb.njit(**KERNEL, inline="always")
 def dynamics(t, y, p):
     """Accelerations, contact force, crank moment (Eq. 8) and base force F12.
 
