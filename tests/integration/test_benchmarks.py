@@ -54,3 +54,15 @@ def test_stress_case_on_both_backends():
     assert [r["status"] for r in rows] == ["pass", "pass"]
     (diff,) = backend_differences(rows)
     assert abs(diff["difference_percent"]) < 0.1  # same periodic peak (2 revolutions)
+
+
+def test_equal_error_time_interpolates_in_log_log():
+    from validation.benchmarks.speed_reduced import equal_error_time
+
+    # time ~ error^(-1/2) between the rows: at error 1e-6 (geometric midpoint of 1e-5 and
+    # 1e-7) the interpolated time is the geometric midpoint of 1 and 100
+    rows = [(1e-5, 1e-3, 0.5, 0), (1e-6, 1e-5, 1.0, 0), (1e-7, 1e-7, 100.0, 0)]
+    assert equal_error_time(rows, 1e-6) == pytest.approx(10.0)
+    assert equal_error_time(rows, 1e-7) == pytest.approx(100.0)
+    assert equal_error_time(rows, 1e-9) is None           # never reached
+    assert equal_error_time(rows[1:], 1e-2) == 1.0        # the first row is already better
