@@ -11,6 +11,7 @@ law's force, delta > 0 and F > 0) and "free" (F = 0). The equations are the pape
 and the base force of docs/derivations.md, written here independently of reduced.py.
 """
 
+import re
 from pathlib import Path
 
 import sympy as sp
@@ -36,10 +37,14 @@ def derive(contact: bool):
     deltadot = nx * exd + ny * eyd
     F = K * delta ** sp.Rational(3, 2) * (1 + xi * deltadot / dmin) if contact else sp.S(0)
     inertia = J3 + m3 * L3**2 / 4
-    th3dd = -(m3 * L2 * L3 * w**2 * sp.sin(th3 - th2) / 2 + m3 * g * L3 * c3 / 2
+    # angle differences written out (sin(theta3 - theta2) = s3 c2 - c3 s2, ...): the code
+    # then needs sin and cos of theta2 and theta3 only
+    sin32 = s3 * c2 - c3 * s2
+    cos23 = c2 * c3 + s2 * s3
+    th3dd = -(m3 * L2 * L3 * w**2 * sin32 / 2 + m3 * g * L3 * c3 / 2
               + L3 * F * (s3 * nx - c3 * ny)) / inertia
     x4dd = -F * nx / m4
-    M2 = (m3 * L2 * L3 * (th3dd * sp.cos(th2 - th3) + th3d**2 * sp.sin(th2 - th3)) / 2
+    M2 = (m3 * L2 * L3 * (th3dd * cos23 - th3d**2 * sin32) / 2
           + (m3 + m2 / 2) * g * L2 * c2 + L2 * F * (s2 * nx - c2 * ny))
     ag2 = sp.Matrix([-L2 * w**2 * c2 / 2, -L2 * w**2 * s2 / 2])
     ag3 = (sp.Matrix([-L2 * w**2 * c2, -L2 * w**2 * s2])
@@ -50,6 +55,14 @@ def derive(contact: bool):
 
 
 class _Printer(PythonCodePrinter):
+    # sin and cos through the kernels' inlined sincos (mbs_clearance/_trig.py): the two
+    # calls of one angle compile to one evaluation
+    def _print_sin(self, expr):
+        return f"sincos({self._print(expr.args[0])})[0]"
+
+    def _print_cos(self, expr):
+        return f"sincos({self._print(expr.args[0])})[1]"
+
     def _print_Pow(self, expr, rational=False):
         base, exp = expr.as_base_exp()
         # max(., 0): the branch is chosen with the same penetration computed elsewhere, and
@@ -69,6 +82,23 @@ class _Printer(PythonCodePrinter):
             prod = " * ".join([f"({b})"] * abs(int(exp)))
             return f"({prod})" if exp > 0 else f"(1.0 / ({prod}))"
         return super()._print_Pow(expr, rational=rational)
+
+
+def _one_sincos_per_angle(lines):
+    """Evaluate sincos once per angle: before the first line that uses an angle, a line
+    `sN, cN = sincos(angle)`, and the uses replaced by sN, cN."""
+    names = {}
+    out = []
+    for line in lines:
+        for arg in re.findall(r"sincos\(([^()]*)\)\[[01]\]", line):
+            if arg not in names:
+                names[arg] = len(names)
+                out.append(f"    s{names[arg]}, c{names[arg]} = sincos({arg})")
+            k = names[arg]
+            line = line.replace(f"sincos({arg})[0]", f"s{k}").replace(f"sincos({arg})[1]",
+                                                                      f"c{k}")
+        out.append(line)
+    return out
 
 
 def emit(name, z, out, jac, doc):
@@ -93,7 +123,7 @@ def emit(name, z, out, jac, doc):
         # flat row-major (jac[i * N_Z + j]): a 2-D view of the caller's work space would
         # need a reshape per call
         lines.append(f"    jac[{k}] = {printer.doprint(e)}")
-    return "\n".join(lines).replace("math.math.", "math.")
+    return "\n".join(_one_sincos_per_angle(lines)).replace("math.math.", "math.")
 
 
 def main():
@@ -106,6 +136,8 @@ z = {NAMES}.
 import math
 
 import numba as nb
+
+from ._trig import sincos
 
 Z_NAMES = {tuple(NAMES)!r}
 O_NAMES = {tuple(OUTPUTS)!r}
