@@ -591,251 +591,265 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
     last_rejected = False
     err_prev = 1e-4
     nstep = 0
-    while win < n_win:
-        if nstep >= max_steps:
-            counters[4] = 1
-            break
-        nstep += 1
-        t_target = edges[win + 1]
-        land = False
-        h_try = h
-        # approaching the surface: do not step far past the linear prediction of the
-        # crossing, so that the samples of the event search resolve the approach
-        if not g_start_valid:
-            g_start, gd_start = event(t, y, p)
-            g_start_valid = True
-        if gd_start > 0.0:
-            h_try = min(h_try, (2.0 * abs(g_start) + (n_samples + 1) * event_margin)
-                        / gd_start)
-        if t + h_try >= t_target - 1e-13 * max(1.0, abs(t_target)):
-            h_try = t_target - t
-            land = True
-        if h_try <= 1e-15 * max(1.0, abs(t)):
-            if land:
-                h_try = t_target - t
-            else:
-                counters[4] = 2
+    need_room = False
+    while True:
+        while win < n_win:
+            if record and nrec == ts.shape[0]:
+                # the record is full: it grows outside this loop, so that the arrays are
+                # rebound there only (rebound inside, numba reference-counts them at every
+                # step: 4 % of a simulation)
+                need_room = True
                 break
-        m_new, g_end, gd_end, err = _attempt(rhs, monitor, t, y, f, h_try, A, B, C, E, E2, K,
-                                             p, y_new, f_new, ytmp, ytmp, ftmp, obuf, rtol,
-                                             atol, n_err)
-        counters[0] += s
-        if not (err <= 1.0):
-            counters[2] += 1
-            if err != err:  # NaN from the model: shrink hard
-                h = 0.1 * h_try
-            else:
-                h = h_try * max(0.2, 0.9 * err ** (-inv_order))
-            last_rejected = True
-            continue
-        # PI step-size control (Gustafsson): the previous error damps the step-size sequence
-        # where stability limits the step (pi_beta = 0: the classical I controller)
-        err_c = max(err, 1e-10)
-        factor = min(10.0, 0.9 * err_c ** (-pi_alpha) * err_prev ** pi_beta)
-        err_prev = max(err_c, 1e-4)
-        if last_rejected:
-            # no growth right after a rejection (Hairer, Norsett & Wanner II.4): where the
-            # step size is limited by stability this halves the number of rejections
-            factor = min(factor, 1.0)
-            last_rejected = False
-        h_next = min(h_try * factor, h_max)
-        if land:
-            h_next = max(h_next, h)  # a short landing step says nothing about the scale
-
-        # ---- event search on the dense output (interior samples), then the end point
-        if n_extra > 0:
-            extra_stages(rhs, t, y_d, h_try, K, A_extra, C_extra, p, ytmp_d)
-            counters[0] += n_extra
-        g_start_valid = False
-        theta_lo, g_lo, theta_hi, g_hi = _search_event(
-            event, t, y_d, h_try, K, P, p, g_start, gd_start, g_end, gd_end, n_samples,
-            event_tol, event_margin, ytmp, wts, fine)
-        if theta_hi < 0.0:
-            g_start = g_end       # valid for the next step if no event intervenes
-            gd_start = gd_end
-            g_start_valid = True
-        ev_step = theta_hi > 0.0
-        if ev_step:
-            _copy(p, p_prev)    # the step before the event ran with this memory
-            counters[3] += 1
-            if g_lo > 0.0:
-                theta_star = 0.0   # already past the switching surface at the step start
-            else:
-                # Illinois root finding of g on the dense output in [theta_lo, theta_hi]
-                a = theta_lo
-                b = theta_hi
-                ga = g_lo
-                gb = g_hi
-                side = 0
-                theta_star = b
-                for _ in range(60):
-                    c = (a * gb - b * ga) / (gb - ga)
-                    dense_eval(y_d, h_try, K, P, c, ytmp_d, wts)
-                    gc = event(t + c * h_try, ytmp, p)[0]
-                    theta_star = c
-                    if abs(gc) <= event_tol or (b - a) < 1e-15:
-                        break
-                    a, ga, b, gb, side = _illinois_update(c, gc, a, ga, b, gb, side)
-            h_ev = theta_star * h_try
-            if h_ev <= 1e-14 * max(1.0, abs(t)):
-                zero_events += 1
-                if zero_events > 20:
-                    counters[4] = 3
-                    break
-                on_event(t, y, p)
-                _, g_start, gd_start = monitor(t, y, p, f, obuf)
+            if nstep >= max_steps:
+                counters[4] = 1
+                break
+            nstep += 1
+            t_target = edges[win + 1]
+            land = False
+            h_try = h
+            # approaching the surface: do not step far past the linear prediction of the
+            # crossing, so that the samples of the event search resolve the approach
+            if not g_start_valid:
+                g_start, gd_start = event(t, y, p)
                 g_start_valid = True
-                counters[0] += 1
-                if record and nrec > 0 and ts[nrec - 1] == t:
-                    # the memory recorded at t is the one used by the step that follows it
-                    for k in range(n_mem):
-                        ms[nrec - 1, k] = p[mem_start + k]
-                    for k in range(n_out):
-                        os_[nrec - 1, k] = obuf[k]
-                continue
-            zero_events = 0
-            # land on the event with the real step map: Illinois iterations on h inside the
-            # bracket of the search, so that the root found is the first crossing (an open
-            # secant could jump to a later crossing of a non-monotone g)
-            rk_step(rhs, t, y, f, h_ev, A, B, C, K, p, y_new, f_new, ytmp)
-            counters[0] += s
-            g_ev = event(t + h_ev, y_new, p)[0]
-            h_a = theta_lo * h_try
-            g_a = min(g_lo, 0.0)
-            h_b = theta_hi * h_try
-            g_b = max(g_hi, 1e-300)
-            side = 0
-            for _ in range(16):
-                if abs(g_ev) <= event_tol or h_b - h_a <= 1e-15 * max(1.0, abs(t)):
+            if gd_start > 0.0:
+                h_try = min(h_try, (2.0 * abs(g_start) + (n_samples + 1) * event_margin)
+                            / gd_start)
+            if t + h_try >= t_target - 1e-13 * max(1.0, abs(t_target)):
+                h_try = t_target - t
+                land = True
+            if h_try <= 1e-15 * max(1.0, abs(t)):
+                if land:
+                    h_try = t_target - t
+                else:
+                    counters[4] = 2
                     break
-                h_a, g_a, h_b, g_b, side = _illinois_update(h_ev, g_ev, h_a, g_a, h_b, g_b,
-                                                            side)
-                h_c = (h_a * g_b - h_b * g_a) / (g_b - g_a)
-                if not (h_a < h_c < h_b):
-                    h_c = 0.5 * (h_a + h_b)
-                h_ev = h_c
+            m_new, g_end, gd_end, err = _attempt(rhs, monitor, t, y, f, h_try, A, B, C, E, E2, K,
+                                                 p, y_new, f_new, ytmp, ytmp, ftmp, obuf, rtol,
+                                                 atol, n_err)
+            counters[0] += s
+            if not (err <= 1.0):
+                counters[2] += 1
+                if err != err:  # NaN from the model: shrink hard
+                    h = 0.1 * h_try
+                else:
+                    h = h_try * max(0.2, 0.9 * err ** (-inv_order))
+                last_rejected = True
+                continue
+            # PI step-size control (Gustafsson): the previous error damps the step-size sequence
+            # where stability limits the step (pi_beta = 0: the classical I controller)
+            err_c = max(err, 1e-10)
+            factor = 0.9 * err_c ** (-pi_alpha)
+            if pi_beta != 0.0:       # (a pow less per step for the I controller)
+                factor *= err_prev ** pi_beta
+            factor = min(10.0, factor)
+            err_prev = max(err_c, 1e-4)
+            if last_rejected:
+                # no growth right after a rejection (Hairer, Norsett & Wanner II.4): where the
+                # step size is limited by stability this halves the number of rejections
+                factor = min(factor, 1.0)
+                last_rejected = False
+            h_next = min(h_try * factor, h_max)
+            if land:
+                h_next = max(h_next, h)  # a short landing step says nothing about the scale
+
+            # ---- event search on the dense output (interior samples), then the end point
+            if n_extra > 0:
+                extra_stages(rhs, t, y_d, h_try, K, A_extra, C_extra, p, ytmp_d)
+                counters[0] += n_extra
+            g_start_valid = False
+            theta_lo, g_lo, theta_hi, g_hi = _search_event(
+                event, t, y_d, h_try, K, P, p, g_start, gd_start, g_end, gd_end, n_samples,
+                event_tol, event_margin, ytmp, wts, fine)
+            if theta_hi < 0.0:
+                g_start = g_end       # valid for the next step if no event intervenes
+                gd_start = gd_end
+                g_start_valid = True
+            ev_step = theta_hi > 0.0
+            if ev_step:
+                _copy(p, p_prev)    # the step before the event ran with this memory
+                counters[3] += 1
+                if g_lo > 0.0:
+                    theta_star = 0.0   # already past the switching surface at the step start
+                else:
+                    # Illinois root finding of g on the dense output in [theta_lo, theta_hi]
+                    a = theta_lo
+                    b = theta_hi
+                    ga = g_lo
+                    gb = g_hi
+                    side = 0
+                    theta_star = b
+                    for _ in range(60):
+                        c = (a * gb - b * ga) / (gb - ga)
+                        dense_eval(y_d, h_try, K, P, c, ytmp_d, wts)
+                        gc = event(t + c * h_try, ytmp, p)[0]
+                        theta_star = c
+                        if abs(gc) <= event_tol or (b - a) < 1e-15:
+                            break
+                        a, ga, b, gb, side = _illinois_update(c, gc, a, ga, b, gb, side)
+                h_ev = theta_star * h_try
+                if h_ev <= 1e-14 * max(1.0, abs(t)):
+                    zero_events += 1
+                    if zero_events > 20:
+                        counters[4] = 3
+                        break
+                    on_event(t, y, p)
+                    _, g_start, gd_start = monitor(t, y, p, f, obuf)
+                    g_start_valid = True
+                    counters[0] += 1
+                    if record and nrec > 0 and ts[nrec - 1] == t:
+                        # the memory recorded at t is the one used by the step that follows it
+                        for k in range(n_mem):
+                            ms[nrec - 1, k] = p[mem_start + k]
+                        for k in range(n_out):
+                            os_[nrec - 1, k] = obuf[k]
+                    continue
+                zero_events = 0
+                # land on the event with the real step map: Illinois iterations on h inside the
+                # bracket of the search, so that the root found is the first crossing (an open
+                # secant could jump to a later crossing of a non-monotone g)
                 rk_step(rhs, t, y, f, h_ev, A, B, C, K, p, y_new, f_new, ytmp)
                 counters[0] += s
                 g_ev = event(t + h_ev, y_new, p)[0]
-            t_old = t
-            t = t + h_ev
-            land = False
-            h_step = h_ev
-            _copy(y, ftmp)  # the pre-step state, kept for the peak candidate
-            _copy(y_new, y)
-            on_event(t, y, p)
-            m, g_start, gd_start = monitor(t, y, p, f, obuf)    # with the new memory
-            g_start_valid = True
-            counters[0] += 1
-            h = h_next
-        else:
-            zero_events = 0
-            t_old = t
-            h_step = h_try
-            _copy(y, ftmp)
-            t = t_target if land else t + h_try
-            _copy(y_new, y)
-            _copy(f_new, f)
-            m = m_new
-            h = h_next
-        counters[1] += 1
-
-        # ---- peak tracking in the current window (m: the monitor at the step's end)
-        if cand_fresh:
-            cand_next_h = h_step
-            cand_fresh = False
-        if ws_h == 0.0:
-            ws_h = h_step
-        if m > peaks[win]:
-            peaks[win] = m
-            peak_t[win] = t
-            _copy(ftmp, cand_prev_y)
-            cand_prev_t = t_old
-            cand_prev_h = h_step
-            if ev_step:
-                _copy(p_prev, cand_prev_p)
+                h_a = theta_lo * h_try
+                g_a = min(g_lo, 0.0)
+                h_b = theta_hi * h_try
+                g_b = max(g_hi, 1e-300)
+                side = 0
+                for _ in range(16):
+                    if abs(g_ev) <= event_tol or h_b - h_a <= 1e-15 * max(1.0, abs(t)):
+                        break
+                    h_a, g_a, h_b, g_b, side = _illinois_update(h_ev, g_ev, h_a, g_a, h_b, g_b,
+                                                                side)
+                    h_c = (h_a * g_b - h_b * g_a) / (g_b - g_a)
+                    if not (h_a < h_c < h_b):
+                        h_c = 0.5 * (h_a + h_b)
+                    h_ev = h_c
+                    rk_step(rhs, t, y, f, h_ev, A, B, C, K, p, y_new, f_new, ytmp)
+                    counters[0] += s
+                    g_ev = event(t + h_ev, y_new, p)[0]
+                t_old = t
+                t = t + h_ev
+                land = False
+                h_step = h_ev
+                _copy(y, ftmp)  # the pre-step state, kept for the peak candidate
+                _copy(y_new, y)
+                on_event(t, y, p)
+                m, g_start, gd_start = monitor(t, y, p, f, obuf)    # with the new memory
+                g_start_valid = True
+                counters[0] += 1
+                h = h_next
             else:
-                _copy(p, cand_prev_p)
-            _copy(y, cand_y)
-            cand_t = t
-            _copy(p, cand_p)
-            cand_next_h = 0.0
-            cand_fresh = not land
+                zero_events = 0
+                t_old = t
+                h_step = h_try
+                _copy(y, ftmp)
+                t = t_target if land else t + h_try
+                _copy(y_new, y)
+                _copy(f_new, f)
+                m = m_new
+                h = h_next
+            counters[1] += 1
 
-        if record:
-            if nrec == ts.shape[0]:
-                ts2 = np.empty(2 * nrec)
-                ys2 = np.empty((2 * nrec, n))
-                ms2 = np.empty((2 * nrec, ms.shape[1]))
-                os2 = np.empty((2 * nrec, n_out))
-                ts2[:nrec] = ts
-                ys2[:nrec] = ys
-                ms2[:nrec] = ms
-                os2[:nrec] = os_
-                ts = ts2
-                ys = ys2
-                ms = ms2
-                os_ = os2
-            ts[nrec] = t
-            for k in range(n):
-                ys[nrec, k] = y[k]
-            for k in range(n_mem):
-                ms[nrec, k] = p[mem_start + k]
-            for k in range(n_out):
-                os_[nrec, k] = obuf[k]
-            nrec += 1
-
-        if land:
-            # window closed: refine its maximum inside the steps on both sides of the best
-            # sample, and inside the window's first and last steps (a maximum just inside an
-            # edge is invisible to the samples when the best sample is elsewhere, e.g. at
-            # the other edge of a periodic window)
-            if refine_iters > 0:
-                _copy(ftmp, last_y)
-                n_cand = 0
-                for which in range(4):
-                    if which == 0:
-                        if cand_prev_h <= 0.0:
-                            continue
-                        v, tv = _golden_max(rhs, monitor, cand_prev_t, cand_prev_y,
-                                            cand_prev_p, cand_prev_h, A, B, C, K, y_new,
-                                            f_new, ytmp, f_ref, refine_iters, oscr)
-                    elif which == 1:
-                        if cand_next_h <= 0.0:
-                            continue
-                        v, tv = _golden_max(rhs, monitor, cand_t, cand_y, cand_p, cand_next_h,
-                                            A, B, C, K, y_new, f_new, ytmp, f_ref,
-                                            refine_iters, oscr)
-                    elif which == 2:
-                        if ws_h <= 0.0 or cand_t == ws_t:
-                            continue
-                        v, tv = _golden_max(rhs, monitor, ws_t, ws_y, ws_p, ws_h, A, B, C, K,
-                                            y_new, f_new, ytmp, f_ref, refine_iters, oscr)
-                    else:
-                        if cand_t == t:
-                            continue
-                        # (a step that lands on an edge is never an event step: p is its memory)
-                        v, tv = _golden_max(rhs, monitor, t_old, last_y, p, h_step, A,
-                                            B, C, K, y_new, f_new, ytmp, f_ref, refine_iters, oscr)
-                    n_cand += 1
-                    if v > peaks[win]:
-                        peaks[win] = v
-                        peak_t[win] = tv
-                counters[5] += n_cand
-            win += 1
-            if win < n_win:
-                # the landed step's end is the next window's start (not an event step: m
-                # and its outputs are for the memory p)
+            # ---- peak tracking in the current window (m: the monitor at the step's end)
+            if cand_fresh:
+                cand_next_h = h_step
+                cand_fresh = False
+            if ws_h == 0.0:
+                ws_h = h_step
+            if m > peaks[win]:
                 peaks[win] = m
                 peak_t[win] = t
+                _copy(ftmp, cand_prev_y)
+                cand_prev_t = t_old
+                cand_prev_h = h_step
+                if ev_step:
+                    _copy(p_prev, cand_prev_p)
+                else:
+                    _copy(p, cand_prev_p)
                 _copy(y, cand_y)
                 cand_t = t
                 _copy(p, cand_p)
-                cand_prev_h = 0.0
                 cand_next_h = 0.0
-                cand_fresh = True
-                _copy(y, ws_y)
-                ws_t = t
-                _copy(p, ws_p)
-                ws_h = 0.0
+                cand_fresh = not land
+
+            if record:
+                ts[nrec] = t
+                for k in range(n):
+                    ys[nrec, k] = y[k]
+                for k in range(n_mem):
+                    ms[nrec, k] = p[mem_start + k]
+                for k in range(n_out):
+                    os_[nrec, k] = obuf[k]
+                nrec += 1
+
+            if land:
+                # window closed: refine its maximum inside the steps on both sides of the best
+                # sample, and inside the window's first and last steps (a maximum just inside an
+                # edge is invisible to the samples when the best sample is elsewhere, e.g. at
+                # the other edge of a periodic window)
+                if refine_iters > 0:
+                    _copy(ftmp, last_y)
+                    n_cand = 0
+                    for which in range(4):
+                        if which == 0:
+                            if cand_prev_h <= 0.0:
+                                continue
+                            v, tv = _golden_max(rhs, monitor, cand_prev_t, cand_prev_y,
+                                                cand_prev_p, cand_prev_h, A, B, C, K, y_new,
+                                                f_new, ytmp, f_ref, refine_iters, oscr)
+                        elif which == 1:
+                            if cand_next_h <= 0.0:
+                                continue
+                            v, tv = _golden_max(rhs, monitor, cand_t, cand_y, cand_p, cand_next_h,
+                                                A, B, C, K, y_new, f_new, ytmp, f_ref,
+                                                refine_iters, oscr)
+                        elif which == 2:
+                            if ws_h <= 0.0 or cand_t == ws_t:
+                                continue
+                            v, tv = _golden_max(rhs, monitor, ws_t, ws_y, ws_p, ws_h, A, B, C, K,
+                                                y_new, f_new, ytmp, f_ref, refine_iters, oscr)
+                        else:
+                            if cand_t == t:
+                                continue
+                            # (a step that lands on an edge is never an event step: p is its memory)
+                            v, tv = _golden_max(rhs, monitor, t_old, last_y, p, h_step, A,
+                                                B, C, K, y_new, f_new, ytmp, f_ref,
+                                                refine_iters, oscr)
+                        n_cand += 1
+                        if v > peaks[win]:
+                            peaks[win] = v
+                            peak_t[win] = tv
+                    counters[5] += n_cand
+                win += 1
+                if win < n_win:
+                    # the landed step's end is the next window's start (not an event step: m
+                    # and its outputs are for the memory p)
+                    peaks[win] = m
+                    peak_t[win] = t
+                    _copy(y, cand_y)
+                    cand_t = t
+                    _copy(p, cand_p)
+                    cand_prev_h = 0.0
+                    cand_next_h = 0.0
+                    cand_fresh = True
+                    _copy(y, ws_y)
+                    ws_t = t
+                    _copy(p, ws_p)
+                    ws_h = 0.0
+        if not need_room:
+            break
+        need_room = False
+        ts2 = np.empty(2 * nrec)
+        ys2 = np.empty((2 * nrec, n))
+        ms2 = np.empty((2 * nrec, ms.shape[1]))
+        os2 = np.empty((2 * nrec, n_out))
+        ts2[:nrec] = ts
+        ys2[:nrec] = ys
+        ms2[:nrec] = ms
+        os2[:nrec] = os_
+        ts = ts2
+        ys = ys2
+        ms = ms2
+        os_ = os2
     return ts[:nrec], ys[:nrec], ms[:nrec], peaks, peak_t, counters, os_[:nrec]
