@@ -12,7 +12,6 @@ outputs of the benchmark commands (run them first, with nothing else running):
 from __future__ import annotations
 
 import json
-import re
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -31,29 +30,6 @@ def _table(text: str, first_header: str) -> str:
 def _replace_table(doc: str, first_header: str, new: str) -> str:
     old = _table(doc, first_header)
     return doc.replace(old, new)
-
-
-def target_table(wp: str) -> str:
-    """Fastest setting per method within each target (paper case), from the bullet lists
-    "At peak and series errors <= target" of the work-precision output."""
-    paper = wp.split("### c =")[0]
-    cols = [("reduced (ours) dop853", "ours (dop853)"), ("scipy LSODA", "scipy LSODA"),
-            ("scipy DOP853", "scipy DOP853"), ("scipy Radau", "scipy Radau"),
-            ("exudyn sphere", "Exudyn sphere"), ("exudyn symbolic", "Exudyn symbolic"),
-            ("exudyn python", "Exudyn python")]
-    out = ["| target | ours (dopri5) | " + " | ".join(c[1] for c in cols) + " |",
-           "|---" * (len(cols) + 2) + "|"]
-    for block in paper.split("At peak and series errors <= ")[1:]:
-        target = block.split(":")[0]
-        found = {k: v for k, _, v in re.findall(
-            r"- (.+) \((rtol|h) [^)]*\): ([0-9.]+ ms = [0-9.]+ x) ours", block)}
-        ours = re.search(r"- reduced \(ours\) dopri5 \((rtol [^)]*)\): ([0-9.]+ ms)", block)
-        cells = [f"{ours.group(2)} ({ours.group(1)})" if ours else "-"]
-        for key, _ in cols:
-            v = found.get(key)
-            cells.append(v.split("= ")[1] if v else "-")
-        out.append(f"| {target} | " + " | ".join(cells) + " |")
-    return "\n".join(out)
 
 
 def stress_table(path: Path) -> str:
@@ -88,7 +64,7 @@ def main() -> None:
                           _table(speed, "| run (paper case, 4 revolutions)"))
     wp = (res / "work_precision.md").read_text()
     perf = _replace_table(perf, "| backend | method | setting", _table(wp, "| backend | method"))
-    perf = _replace_table(perf, "| target |", target_table(wp))
+    perf = _replace_table(perf, "| target |", _table(wp, "| target |"))   # the paper case's
     perf = _replace_table(perf, "| case | reduced: status", stress_table(res / "stress.json"))
     (ROOT / "docs" / "performance.md").write_text(perf)
     sens = (ROOT / "docs" / "sensitivity.md").read_text()

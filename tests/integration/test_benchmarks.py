@@ -2,7 +2,7 @@
 
 import pytest
 
-from validation.benchmarks.work_precision import run, speed_ratios
+from validation.benchmarks.work_precision import run, speed_ratios, target_table
 from validation.stress import (
     backend_differences,
     run_case,
@@ -25,6 +25,12 @@ def test_work_precision_quick_invariants():
         assert all(r["time"] > 0 for r in rows)
     ratios = speed_ratios(rows, "paper (c = 0.01 mm)", 1e-3)
     assert ratios[0]["backend"] == "reduced (ours)"  # fastest at equal accuracy
+    # the docs' target table: one row per target, ours in ms, scipy DOP853 as a ratio > 1
+    table = target_table(rows, "paper (c = 0.01 mm)").splitlines()
+    assert len(table) == 2 + 3
+    row = dict(zip(table[0].split("|")[1:-1], table[3].split("|")[1:-1]))
+    assert row[" ours (dopri5) "].strip().split()[1] == "ms"
+    assert float(row[" scipy DOP853 "].split()[0]) > 1.0
 
 
 def test_stress_quick_all_pass():

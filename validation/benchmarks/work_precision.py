@@ -148,6 +148,30 @@ def speed_ratios(rows, case, target=1e-6):
     return sorted(out, key=lambda d: d["time"])
 
 
+#: the columns of `target_table` after ours (dopri5): (backend, method, heading)
+TARGET_COLUMNS = (("reduced (ours)", "dop853", "ours (dop853)"), ("scipy", "LSODA", "scipy LSODA"),
+                  ("scipy", "DOP853", "scipy DOP853"), ("scipy", "Radau", "scipy Radau"),
+                  ("exudyn", "sphere", "Exudyn sphere"),
+                  ("exudyn", "symbolic", "Exudyn symbolic"), ("exudyn", "python", "Exudyn python"))
+TARGETS = (1e-2, 1e-3, 1e-5)
+
+
+def target_table(rows, case) -> str:
+    """Markdown table: per target, our time (dopri5) and each method's time relative to it,
+    at each one's fastest setting within the target (`speed_ratios`)."""
+    out = ["| target | ours (dopri5) | " + " | ".join(c[2] for c in TARGET_COLUMNS) + " |",
+           "|---" * (len(TARGET_COLUMNS) + 2) + "|"]
+    for target in TARGETS:
+        best = {(s["backend"], s["method"]): s for s in speed_ratios(rows, case, target)}
+        ours = best.get(("reduced (ours)", "dopri5"))
+        cells = [f"{ours['time'] * 1e3:.1f} ms ({ours['setting']})" if ours else "-"]
+        for backend, method, _ in TARGET_COLUMNS:
+            s = best.get((backend, method))
+            cells.append(f"{s['ratio']:.1f} x" if s else "-")
+        out.append(f"| {target:g} | " + " | ".join(cells) + " |")
+    return "\n".join(out)
+
+
 def markdown(rows, refs) -> str:
     lines = []
     for case in CASES:
@@ -162,11 +186,13 @@ def markdown(rows, refs) -> str:
                 lines.append(f"| {r['backend']} | {r['method']} | {r['setting']} | "
                              f"{r['time'] * 1e3:.1f} | {r['peak_error']:.1e} | "
                              f"{r['series_error']:.1e} |")
-        for target in (1e-2, 1e-3, 1e-5):
+        for target in TARGETS:
             lines.append(f"\nAt peak and series errors <= {target:g}:")
             for s in speed_ratios(rows, case, target):
                 lines.append(f"- {s['backend']} {s['method']} ({s['setting']}): "
                              f"{s['time'] * 1e3:.1f} ms = {s['ratio']:.1f} x ours")
+        lines.append("\nFastest setting of each method within each target, relative to ours:\n")
+        lines.append(target_table(rows, case))
     return "\n".join(lines)
 
 
