@@ -285,10 +285,9 @@ def sens_outputs(ts, ys, ms, p):
 @nb.njit(MONITOR_SIG, **KERNEL)
 def monitor_sens(t, y, p, dydt, out):
     """The integrator's last stage of a step: `rhs_sens`, the plain model's |F12| and its
-    event function."""
+    event function (from one evaluation of the plain model)."""
     rhs_sens(t, y, p, dydt)
-    g, gd = reduced.event(t, y, p)
-    return reduced.monitor(t, y, p), g, gd
+    return reduced.peak_and_event(p, reduced.dynamics(t, y, p))
 
 
 @nb.njit(cache=True, error_model="numpy")
