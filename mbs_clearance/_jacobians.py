@@ -14,6 +14,11 @@ Z_NAMES = ('t', 'th3', 'x4', 'th3d', 'x4d', 'dmin', 'L2', 'L3', 'm2', 'm3', 'm4'
 O_NAMES = ('th3dd', 'x4dd', 'F12x', 'F12y', 'M2', 'F', 'delta', 'deltadot')
 #: columns of the Jacobian, stored flat row-major: d o[i] / d z[j] = jac[i * N_Z + j]
 N_Z = 18
+#: length of z with the parameter-only temporaries of the *_accel functions after the
+#: inputs (`accel_constants`)
+N_ZW = 62
+#: columns that the *_accel_nc variants leave out (t, omega2, theta20)
+CRANK_COLUMNS = (0, 12, 13)
 
 @nb.njit(cache=True, error_model="numpy", _nrt=False)
 def contact_branch(z, o, jac):
@@ -504,7 +509,7 @@ def contact_branch(z, o, jac):
 
 @nb.njit(cache=True, error_model="numpy", _nrt=False)
 def contact_accel(z, o, jac):
-    """Contact branch, rows theta3dd and x4dd only: o (3,) = (theta3dd, x4dd, F), jac (2 * 18,)."""
+    """Contact branch, rows theta3dd and x4dd only: o (3,) = (theta3dd, x4dd, F), jac (2 * 18,); z[N_Z:N_ZW] filled by `accel_constants`."""
     t = z[0]
     th3 = z[1]
     x4 = z[2]
@@ -527,7 +532,7 @@ def contact_accel(z, o, jac):
     x0 = c0
     x1 = g*x0
     x2 = m3*x1
-    x3 = ((w) * (w))
+    x3 = z[18]
     x5 = s0
     x6 = t*w
     x7 = th0 + x6
@@ -537,7 +542,7 @@ def contact_accel(z, o, jac):
     x10 = x0*x9
     x11 = -x10 + x5*x8
     x12 = L2*x11*x3
-    x13 = (1/2)*m3
+    x13 = z[19]
     x14 = L3*x5
     x15 = L2*x9
     x16 = x14 + x15
@@ -570,13 +575,13 @@ def contact_accel(z, o, jac):
     x43 = x41 + x42
     x44 = x40*x43
     x45 = x12*x13 + (1/2)*x2 + x39*x44
-    x46 = ((L3) * (L3))
-    x47 = m3*x46
-    x48 = J3 + (1/4)*x47
-    x49 = 1/x48
-    x50 = L3*x49
+    x46 = z[20]
+    x47 = z[21]
+    x48 = z[22]
+    x49 = z[23]
+    x50 = z[24]
     x51 = x33*x39
-    x52 = 1/m4
+    x52 = z[25]
     x53 = x20*x52
     x54 = x0*x8 + x5*x9
     x55 = x13*x3*x54
@@ -600,7 +605,7 @@ def contact_accel(z, o, jac):
     x73 = K*x25
     x74 = x44*x73
     x75 = x36*x74
-    x76 = L2*x50
+    x76 = z[26]
     x77 = x76*(-x55 + x64 + x68 + x72*x75)
     x78 = x16*x5
     x79 = x0*x20
@@ -626,7 +631,7 @@ def contact_accel(z, o, jac):
     x99 = -w*x56 - w*x57 - x26*x9 - x27*x97 + x28*x8 - x97*x98
     x100 = x43*x96
     x101 = x100*x91
-    x102 = 1/(4*J3 + x47)
+    x102 = z[27]
     x103 = x88*(x27 + x98) + 1
     x104 = 2*x103
     x105 = m3*x12 + x104*x74 + x2
@@ -634,7 +639,7 @@ def contact_accel(z, o, jac):
     x107 = -x106
     x108 = x107*x96
     x109 = th3d*x41 + th3d*x42 - x0*x28 + x108*x27 + x108*x98 + x26*x5
-    x110 = 2*x102
+    x110 = z[28]
     x111 = t*x26*x8 + t*x27*x67 + t*x28*x9 - t*x71 - x16*(x6*x9 - x8) - x20*(x6*x8 + x9)
     x112 = x33*x38
     x113 = x34*x93
@@ -691,6 +696,269 @@ def contact_accel(z, o, jac):
     jac[33] = x112*x53
     jac[34] = x113*x126
     jac[35] = 0
+
+
+@nb.njit(cache=True, error_model="numpy", _nrt=False)
+def contact_accel_constants(z):
+    """The parameter-only temporaries of `contact_accel` into z[18:29]."""
+    L2 = z[6]
+    L3 = z[7]
+    m2 = z[8]
+    m3 = z[9]
+    m4 = z[10]
+    J3 = z[11]
+    w = z[12]
+    th0 = z[13]
+    c = z[14]
+    K = z[15]
+    xi = z[16]
+    g = z[17]
+    x3 = ((w) * (w))
+    z[18] = x3
+    x13 = (1/2)*m3
+    z[19] = x13
+    x46 = ((L3) * (L3))
+    z[20] = x46
+    x47 = m3*x46
+    z[21] = x47
+    x48 = J3 + (1/4)*x47
+    z[22] = x48
+    x49 = 1/x48
+    z[23] = x49
+    x50 = L3*x49
+    z[24] = x50
+    x52 = 1/m4
+    z[25] = x52
+    x76 = L2*x50
+    z[26] = x76
+    x102 = 1/(4*J3 + x47)
+    z[27] = x102
+    x110 = 2*x102
+    z[28] = x110
+
+
+@nb.njit(cache=True, error_model="numpy", _nrt=False)
+def contact_accel_nc(z, o, jac):
+    """Contact branch, rows theta3dd and x4dd only: o (3,) = (theta3dd, x4dd, F), jac (2 * 18,); z[N_Z:N_ZW] filled by `accel_constants`. Without the columns (0, 12, 13) (t, omega2, theta20), which it leaves as they were."""
+    t = z[0]
+    th3 = z[1]
+    x4 = z[2]
+    th3d = z[3]
+    x4d = z[4]
+    dmin = z[5]
+    L2 = z[6]
+    L3 = z[7]
+    m2 = z[8]
+    m3 = z[9]
+    m4 = z[10]
+    J3 = z[11]
+    w = z[12]
+    th0 = z[13]
+    c = z[14]
+    K = z[15]
+    xi = z[16]
+    g = z[17]
+    s0, c0 = sincos(th3)
+    x0 = c0
+    x1 = g*x0
+    x2 = m3*x1
+    x3 = z[29]
+    x5 = s0
+    x6 = t*w
+    x7 = th0 + x6
+    s1, c1 = sincos(x7)
+    x8 = c1
+    x9 = s1
+    x10 = x0*x9
+    x11 = -x10 + x5*x8
+    x12 = L2*x11*x3
+    x13 = z[30]
+    x14 = L3*x5
+    x15 = L2*x9
+    x16 = x14 + x15
+    x17 = ((x16) * (x16))
+    x18 = L3*x0
+    x19 = L2*x8
+    x20 = x18 + x19 - x4
+    x21 = -x20
+    x22 = x17 + ((x21) * (x21))
+    x23 = math.sqrt(max(x22, 0.0))
+    x24 = -c + x23
+    x25 = (max(x24, 0.0) * math.sqrt(max(x24, 0.0)))
+    x26 = th3d*x18 + w*x19
+    x27 = x16*x26
+    x28 = th3d*x14 + w*x15 + x4d
+    x29 = x20*x28
+    x30 = x27 - x29
+    x31 = ((x20) * (x20))
+    x32 = x17 + x31
+    x33 = (1.0 / math.sqrt(x32))
+    x34 = 1/dmin
+    x35 = x34*xi
+    x36 = x33*x35
+    x37 = x30*x36 + 1
+    x38 = x25*x37
+    x39 = K*x38
+    x40 = 1/x23
+    x41 = x0*x16
+    x42 = x21*x5
+    x43 = x41 + x42
+    x44 = x40*x43
+    x45 = x12*x13 + (1/2)*x2 + x39*x44
+    x46 = z[31]
+    x47 = z[32]
+    x48 = z[33]
+    x49 = z[34]
+    x50 = z[35]
+    x51 = x33*x39
+    x52 = z[36]
+    x53 = x20*x52
+    x54 = x0*x8 + x5*x9
+    x55 = x13*x3*x54
+    x56 = x16*x8
+    x57 = x21*x9
+    x58 = x56 + x57
+    x59 = (3/2)*x37
+    x60 = K*math.sqrt(max(x24, 0.0))
+    x61 = x33*x60
+    x62 = x59*x61
+    x63 = x44*x62
+    x64 = x58*x63
+    x65 = 1/x32
+    x66 = x20*x9 - x56
+    x67 = x65*x66
+    x68 = x51*(-x20*x5*x67 + x41*x67 + x54)
+    x69 = x16*x9
+    x70 = x20*x8
+    x71 = x29*x67
+    x72 = -w*x69 - w*x70 + x16*x26*x65*x66 + x26*x8 + x28*x9 - x71
+    x73 = K*x25
+    x74 = x44*x73
+    x75 = x36*x74
+    x76 = z[37]
+    x77 = x76*(-x55 + x64 + x68 + x72*x75)
+    x78 = x16*x5
+    x79 = x0*x20
+    x80 = x20*x5 - x41
+    x81 = x65*x80
+    x82 = x20*x81
+    x83 = -th3d*x78 - th3d*x79 + x0*x26 + x16*x26*x65*x80 + x28*x5 - x29*x81
+    x84 = x20*x59
+    x85 = x31*x65
+    x86 = x20*x65
+    x87 = x24*x37
+    x88 = x35*x40
+    x89 = x27*x86 - x28*x85 + x28
+    x90 = x50*x61
+    x91 = x35*x73
+    x92 = x50*x81
+    x93 = x30*x73
+    x94 = x93*xi/((dmin) * (dmin))
+    x95 = x21*x8 - x69
+    x96 = 1/x22
+    x97 = x95*x96
+    x98 = x21*x28
+    x99 = -w*x56 - w*x57 - x26*x9 - x27*x97 + x28*x8 - x97*x98
+    x100 = x43*x96
+    x101 = x100*x91
+    x102 = z[38]
+    x103 = x88*(x27 + x98) + 1
+    x104 = 2*x103
+    x105 = m3*x12 + x104*x74 + x2
+    x106 = -x0*x21 + x78
+    x107 = -x106
+    x108 = x107*x96
+    x109 = th3d*x41 + th3d*x42 - x0*x28 + x108*x27 + x108*x98 + x26*x5
+    x110 = z[39]
+    x111 = t*x26*x8 + t*x27*x67 + t*x28*x9 - t*x71 - x16*(x6*x9 - x8) - x20*(x6*x8 + x9)
+    x112 = x33*x38
+    x113 = x34*x93
+    x114 = x33*x87
+    x115 = x114*x9
+    x116 = x59*x86
+    x117 = x116*x58
+    x118 = (1.0 / ((x32) * math.sqrt(x32)))
+    x119 = x118*x20*x87
+    x120 = x119*x66
+    x121 = x24*x35*x86
+    x122 = x52*x60
+    x123 = L2*x122
+    x124 = x123*(-x115 + x117 + x120 + x121*x72)
+    x125 = x52*x91
+    x126 = x52*x86
+    x127 = x20*x24*x36*x40
+    o[0] = -x45*x50
+    o[1] = x51*x53
+    o[2] = x39
+    jac[1] = -x50*(L2*x55 + L3*x40*((x43) * (x43))*x62 + L3*x75*x83 - g*x13*x5 + x51*(L3*((x0) * (x0)) + L3*((x5) * (x5)) - x14*x82 + x16*x18*x81 - x78 - x79))
+    jac[2] = -x90*(x24*x43*x88*x89 - x44*x84 + x87*(x41*x86 - x5*x85 + x5))
+    jac[3] = -x46*x49*x65*((x80) * (x80))*x91
+    jac[4] = -x50*x82*x91
+    jac[5] = -x92*x94
+    jac[6] = -x50*((1/2)*m3*x11*x3 - x101*x99 - x39*x40*(-x10 - x41*x97 - x42*x97 + x5*x8) - x63*x95)
+    jac[7] = x110*(-3*L3*x100*x103*x106*x60 - 2*L3*x101*x109 - L3*x104*x107*x43*x73/(max(x22, 0.0) * math.sqrt(max(x22, 0.0))) + 2*m3*x102*x105*x46 - x105)
+    jac[8] = 0
+    jac[9] = L3*x110*(-x1 + x102*x105*x46 - x12)
+    jac[10] = 0
+    jac[11] = L3*x45/((x48) * (x48))
+    jac[14] = -x59*x80*x90
+    jac[15] = x112*x50*x80
+    jac[16] = x113*x92
+    jac[17] = -x13*x18*x49
+    jac[19] = L3*x122*(-x114*x5 + x116*x43 + x119*x80 + x121*x83)
+    jac[20] = x122*(-x114 + x118*x24*x31*x37 + x20*x24*x34*x65*x89*xi - x59*x85)
+    jac[21] = -L3*x125*x82
+    jac[22] = -x125*x85
+    jac[23] = -x126*x94
+    jac[24] = x122*(-x116*x95 - x119*(x69 + x70) - x127*x99 + x24*x33*x37*x8)
+    jac[25] = x122*(x0*x24*x33*x37 - x107*x116 + x109*x127 - x119*(x78 + x79))
+    jac[26] = 0
+    jac[27] = 0
+    jac[28] = -x20*x51/((m4) * (m4))
+    jac[29] = 0
+    jac[32] = -x122*x33*x84
+    jac[33] = x112*x53
+    jac[34] = x113*x126
+    jac[35] = 0
+
+
+@nb.njit(cache=True, error_model="numpy", _nrt=False)
+def contact_accel_nc_constants(z):
+    """The parameter-only temporaries of `contact_accel_nc` into z[29:40]."""
+    L2 = z[6]
+    L3 = z[7]
+    m2 = z[8]
+    m3 = z[9]
+    m4 = z[10]
+    J3 = z[11]
+    w = z[12]
+    th0 = z[13]
+    c = z[14]
+    K = z[15]
+    xi = z[16]
+    g = z[17]
+    x3 = ((w) * (w))
+    z[29] = x3
+    x13 = (1/2)*m3
+    z[30] = x13
+    x46 = ((L3) * (L3))
+    z[31] = x46
+    x47 = m3*x46
+    z[32] = x47
+    x48 = J3 + (1/4)*x47
+    z[33] = x48
+    x49 = 1/x48
+    z[34] = x49
+    x50 = L3*x49
+    z[35] = x50
+    x52 = 1/m4
+    z[36] = x52
+    x76 = L2*x50
+    z[37] = x76
+    x102 = 1/(4*J3 + x47)
+    z[38] = x102
+    x110 = 2*x102
+    z[39] = x110
 
 
 @nb.njit(cache=True, error_model="numpy", _nrt=False)
@@ -990,7 +1258,7 @@ def free_branch(z, o, jac):
 
 @nb.njit(cache=True, error_model="numpy", _nrt=False)
 def free_accel(z, o, jac):
-    """Free branch, rows theta3dd and x4dd only: o (3,) = (theta3dd, x4dd, F), jac (2 * 18,)."""
+    """Free branch, rows theta3dd and x4dd only: o (3,) = (theta3dd, x4dd, F), jac (2 * 18,); z[N_Z:N_ZW] filled by `accel_constants`."""
     t = z[0]
     th3 = z[1]
     x4 = z[2]
@@ -1019,22 +1287,22 @@ def free_accel(z, o, jac):
     x5 = s1
     x6 = x0*x5
     x7 = x1*x4 - x6
-    x8 = ((w) * (w))
-    x9 = L2*x8
+    x8 = z[40]
+    x9 = z[41]
     x10 = g*x0 + x7*x9
     x11 = m3*x10
-    x12 = ((L3) * (L3))*m3
-    x13 = J3 + (1/4)*x12
-    x14 = L3/x13
-    x15 = (1/2)*x14
+    x12 = z[42]
+    x13 = z[43]
+    x14 = z[44]
+    x15 = z[45]
     x16 = x0*x4 + x1*x5
     x17 = (1/2)*x16
-    x18 = L2*m3*x14
+    x18 = z[46]
     x19 = x16*x9
-    x20 = m3*x15
-    x21 = 1/(4*J3 + x12)
-    x22 = x12*x21
-    x23 = 2*x21
+    x20 = z[47]
+    x21 = z[48]
+    x22 = z[49]
+    x23 = z[50]
     o[0] = -x11*x15
     o[1] = 0
     o[2] = 0
@@ -1074,3 +1342,173 @@ def free_accel(z, o, jac):
     jac[33] = 0
     jac[34] = 0
     jac[35] = 0
+
+
+@nb.njit(cache=True, error_model="numpy", _nrt=False)
+def free_accel_constants(z):
+    """The parameter-only temporaries of `free_accel` into z[40:51]."""
+    L2 = z[6]
+    L3 = z[7]
+    m2 = z[8]
+    m3 = z[9]
+    m4 = z[10]
+    J3 = z[11]
+    w = z[12]
+    th0 = z[13]
+    c = z[14]
+    K = z[15]
+    xi = z[16]
+    g = z[17]
+    x8 = ((w) * (w))
+    z[40] = x8
+    x9 = L2*x8
+    z[41] = x9
+    x12 = ((L3) * (L3))*m3
+    z[42] = x12
+    x13 = J3 + (1/4)*x12
+    z[43] = x13
+    x14 = L3/x13
+    z[44] = x14
+    x15 = (1/2)*x14
+    z[45] = x15
+    x18 = L2*m3*x14
+    z[46] = x18
+    x20 = m3*x15
+    z[47] = x20
+    x21 = 1/(4*J3 + x12)
+    z[48] = x21
+    x22 = x12*x21
+    z[49] = x22
+    x23 = 2*x21
+    z[50] = x23
+
+
+@nb.njit(cache=True, error_model="numpy", _nrt=False)
+def free_accel_nc(z, o, jac):
+    """Free branch, rows theta3dd and x4dd only: o (3,) = (theta3dd, x4dd, F), jac (2 * 18,); z[N_Z:N_ZW] filled by `accel_constants`. Without the columns (0, 12, 13) (t, omega2, theta20), which it leaves as they were."""
+    t = z[0]
+    th3 = z[1]
+    x4 = z[2]
+    th3d = z[3]
+    x4d = z[4]
+    dmin = z[5]
+    L2 = z[6]
+    L3 = z[7]
+    m2 = z[8]
+    m3 = z[9]
+    m4 = z[10]
+    J3 = z[11]
+    w = z[12]
+    th0 = z[13]
+    c = z[14]
+    K = z[15]
+    xi = z[16]
+    g = z[17]
+    s0, c0 = sincos(th3)
+    x0 = c0
+    x1 = s0
+    x2 = t*w
+    x3 = th0 + x2
+    s1, c1 = sincos(x3)
+    x4 = c1
+    x5 = s1
+    x6 = x0*x5
+    x7 = x1*x4 - x6
+    x8 = z[51]
+    x9 = z[52]
+    x10 = g*x0 + x7*x9
+    x11 = m3*x10
+    x12 = z[53]
+    x13 = z[54]
+    x14 = z[55]
+    x15 = z[56]
+    x16 = x0*x4 + x1*x5
+    x17 = (1/2)*x16
+    x18 = z[57]
+    x19 = x16*x9
+    x20 = z[58]
+    x21 = z[59]
+    x22 = z[60]
+    x23 = z[61]
+    o[0] = -x11*x15
+    o[1] = 0
+    o[2] = 0
+    jac[1] = -x20*(-g*x1 + x19)
+    jac[2] = 0
+    jac[3] = 0
+    jac[4] = 0
+    jac[5] = 0
+    jac[6] = -x20*x7*x8
+    jac[7] = x11*x23*(2*x22 - 1)
+    jac[8] = 0
+    jac[9] = L3*x10*x23*(x22 - 1)
+    jac[10] = 0
+    jac[11] = (1/2)*L3*x11/((x13) * (x13))
+    jac[14] = 0
+    jac[15] = 0
+    jac[16] = 0
+    jac[17] = -x0*x20
+    jac[19] = 0
+    jac[20] = 0
+    jac[21] = 0
+    jac[22] = 0
+    jac[23] = 0
+    jac[24] = 0
+    jac[25] = 0
+    jac[26] = 0
+    jac[27] = 0
+    jac[28] = 0
+    jac[29] = 0
+    jac[32] = 0
+    jac[33] = 0
+    jac[34] = 0
+    jac[35] = 0
+
+
+@nb.njit(cache=True, error_model="numpy", _nrt=False)
+def free_accel_nc_constants(z):
+    """The parameter-only temporaries of `free_accel_nc` into z[51:62]."""
+    L2 = z[6]
+    L3 = z[7]
+    m2 = z[8]
+    m3 = z[9]
+    m4 = z[10]
+    J3 = z[11]
+    w = z[12]
+    th0 = z[13]
+    c = z[14]
+    K = z[15]
+    xi = z[16]
+    g = z[17]
+    x8 = ((w) * (w))
+    z[51] = x8
+    x9 = L2*x8
+    z[52] = x9
+    x12 = ((L3) * (L3))*m3
+    z[53] = x12
+    x13 = J3 + (1/4)*x12
+    z[54] = x13
+    x14 = L3/x13
+    z[55] = x14
+    x15 = (1/2)*x14
+    z[56] = x15
+    x18 = L2*m3*x14
+    z[57] = x18
+    x20 = m3*x15
+    z[58] = x20
+    x21 = 1/(4*J3 + x12)
+    z[59] = x21
+    x22 = x12*x21
+    z[60] = x22
+    x23 = 2*x21
+    z[61] = x23
+
+
+@nb.njit(cache=True, error_model="numpy", _nrt=False)
+def accel_constants(z):
+    """Fill z[N_Z:N_ZW], the parameter-only temporaries of the *_accel functions, from the
+    parameters z[6:N_Z]; once per run (they are constant while the parameters are)."""
+    contact_accel_constants(z)
+    contact_accel_nc_constants(z)
+    free_accel_constants(z)
+    free_accel_nc_constants(z)

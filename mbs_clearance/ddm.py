@@ -21,9 +21,12 @@ deltadot(t_e), so
 the event-time term (switchable, to show that it matters). See docs/sensitivity.md.
 
 Layout of p (built by `pack`): the reduced model's 17 entries (reduced.P_*), then P_NPAR,
-P_EVTERM, the memory sensitivities sigma (npar), the chain matrix D (13 x npar, row-major),
-its nonzero entries as a list (`sparse_chain`: count, then Jacobian columns, parameter
-indices and values, each in a slot of 13 npar entries) and N_WORK entries of work space.
+P_EVTERM, P_NC (1: no parameter needs the Jacobian's crank-angle columns, so the
+right-hand side uses the generated *_accel_nc functions), the memory sensitivities sigma
+(npar), the chain matrix D (13 x npar, row-major), its nonzero entries as a list
+(`sparse_chain`: count, then Jacobian columns, parameter indices and values, each in a slot
+of 13 npar entries) and N_WORK entries of work space (z with the parameter-only
+temporaries of the *_accel functions, filled once by `pack`).
 The recorded memory is p[P_MODE : P_SIGMA + npar].
 y = [4 states, 4 npar sensitivities, W].
 """
@@ -36,7 +39,18 @@ import numba as nb
 import numpy as np
 
 from . import reduced
-from ._jacobians import N_Z, contact_accel, contact_branch, free_accel, free_branch
+from ._jacobians import (
+    CRANK_COLUMNS,
+    N_Z,
+    N_ZW,
+    accel_constants,
+    contact_accel,
+    contact_accel_nc,
+    contact_branch,
+    free_accel,
+    free_accel_nc,
+    free_branch,
+)
 from .contact import contact_force, hysteresis_factor
 from .integrator import ACTION_SIG, KERNEL, MONITOR_SIG, RHS_SIG, integrate
 from .reduced import (
@@ -62,12 +76,16 @@ from .reduced import (
 _THIS = sys.modules[__name__]
 P_NPAR = 17
 P_EVTERM = 18
-P_SIGMA = 19
+P_NC = 19
+P_SIGMA = 20
 N_BETA = 13
 #: kernel parameters beta, in the row order of the chain matrix D
 BETA_NAMES = ("L2", "L3", "m2", "m3", "m4", "J3", "omega2", "theta20", "c", "K", "e", "g",
               "v_min")
 B_L2, B_L3, B_M2, B_M3, B_M4, B_J3, B_W, B_TH0, B_C, B_K, B_E, B_G, B_VMIN = range(N_BETA)
+#: slots of beta in the reduced model's parameter vector (reduced.pack_parameters)
+BETA_SLOTS = np.array([P_L2, P_L3, P_M2, P_M3, P_M4, P_J3, P_W, P_TH0, P_C, P_K, P_E, P_G,
+                       P_VFLOOR])
 # column of beta in the generated Jacobian's input vector z (-1: not an input)
 _Z_COL = np.array([6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, -1])
 Z_DMIN = 5
@@ -75,9 +93,10 @@ Z_DMIN = 5
 O_TH3DD, O_X4DD, O_F12X, O_F12Y, O_M2, O_F, O_DELTA, O_DELTADOT = range(8)
 
 
-#: work space at the end of p for the right-hand side: z (N_Z), outputs (8), Jacobian
+#: work space at the end of p for the right-hand side: z (N_ZW: the Jacobian's inputs, then
+#: the parameter-only temporaries of the generated *_accel functions), outputs (8), Jacobian
 #: (8 x N_Z, flat row-major)
-N_WORK = N_Z + 8 + 8 * N_Z
+N_WORK = N_ZW + 8 + 8 * N_Z
 
 
 def sparse_chain(D: np.ndarray, dxi: float) -> np.ndarray:
@@ -109,14 +128,17 @@ def pack(base: np.ndarray, D: np.ndarray, sigma0: np.ndarray,
     reduced model's `base` = reduced.pack_parameters(mech)."""
     npar = D.shape[1]
     xi, dxi = hysteresis_factor(base[P_E], int(base[P_MODEL]))
-    p = np.concatenate([base, [npar, 1.0 if event_time_term else 0.0], sigma0, D.ravel(),
-                        sparse_chain(D, dxi), np.zeros(N_WORK)])
+    chain = sparse_chain(D, dxi)
+    no_crank = not np.isin(chain[1:1 + int(chain[0])], CRANK_COLUMNS).any()
+    p = np.concatenate([base, [npar, 1.0 if event_time_term else 0.0, float(no_crank)],
+                        sigma0, D.ravel(), chain, np.zeros(N_WORK)])
     # the parameter entries of the Jacobian's inputs z (constant during a run; the kernels
     # refresh only time, state and impact velocity)
-    z = p[len(p) - N_WORK:len(p) - N_WORK + N_Z]
+    z = p[len(p) - N_WORK:len(p) - N_WORK + N_ZW]
     z[6:16] = base[[P_L2, P_L3, P_M2, P_M3, P_M4, P_J3, P_W, P_TH0, P_C, P_K]]
     z[16] = xi
     z[17] = base[P_G]
+    accel_constants(z)
     return p
 
 
@@ -124,7 +146,7 @@ def pack(base: np.ndarray, D: np.ndarray, sigma0: np.ndarray,
 def _work(p, npar):
     """Views of the work space of p (no allocation in the right-hand side)."""
     w0 = P_SIGMA + (1 + N_BETA) * npar + 1 + 3 * N_BETA * npar
-    return p[w0:w0 + N_Z], p[w0 + N_Z:w0 + N_Z + 8], p[w0 + N_Z + 8:w0 + N_WORK]
+    return p[w0:w0 + N_ZW], p[w0 + N_ZW:w0 + N_ZW + 8], p[w0 + N_ZW + 8:w0 + N_WORK]
 
 
 @nb.njit(**KERNEL, inline="always")
@@ -143,11 +165,19 @@ def _evaluate(t, y, p, z, o, jac, full):
     if not full:
         # accelerations only (the right-hand side): the contact branch's unclamped force
         # (third output) tells whether it applies; F > 0 exactly when contact_force > 0
+        # (without the crank-angle columns where no parameter needs them: P_NC)
+        nc = p[P_NC] > 0.5
         if p[P_MODE] > 0.5:
-            contact_accel(z, o, jac)
+            if nc:
+                contact_accel_nc(z, o, jac)
+            else:
+                contact_accel(z, o, jac)
             if o[2] > 0.0:
                 return
-        free_accel(z, o, jac)
+        if nc:
+            free_accel_nc(z, o, jac)
+        else:
+            free_accel(z, o, jac)
         return
     in_contact = False
     if p[P_MODE] > 0.5:
@@ -291,18 +321,27 @@ def monitor_sens(t, y, p, dydt, out):
 
 
 @nb.njit(cache=True, error_model="numpy")
-def norm_maxima(ys, weights, npar, lo, hi):
+def norm_maxima(ys, coeffs, weights, lo, hi):
     """Per window [lo[w], hi[w]) of recorded steps and per parameter k, the maximum over the
     steps of the weighted norm sqrt(sum_j weights[4k + j] s_kj^2) of the state sensitivity
-    s_k = ys[:, 4 + 4k : 8 + 4k]; returns (windows, npar)."""
+    s_k = sum_b coeffs[b, k] ys[:, 4 + 4b : 8 + 4b] (b over the integrated directions,
+    `sensitivity.independent_directions`); returns (windows, npar)."""
+    nb, npar = coeffs.shape
     out = np.zeros((lo.shape[0], npar))
+    s = np.empty(4)
     for w in range(lo.shape[0]):
         for i in range(lo[w], hi[w]):
             for k in range(npar):
+                for j in range(4):
+                    s[j] = 0.0
+                for b in range(nb):
+                    c = coeffs[b, k]
+                    if c != 0.0:
+                        for j in range(4):
+                            s[j] += c * ys[i, 4 + 4 * b + j]
                 acc = 0.0
                 for j in range(4):
-                    v = ys[i, 4 + 4 * k + j]
-                    acc += weights[4 * k + j] * v * v
+                    acc += weights[4 * k + j] * s[j] * s[j]
                 if acc > out[w, k]:
                     out[w, k] = acc
     return np.sqrt(out)

@@ -266,22 +266,67 @@ def _initial_sensitivities(mech: SliderCrank, D: np.ndarray) -> np.ndarray:
 DDM_INTEGRATOR = "dop853"
 
 
+#: relative tolerance of `independent_directions` on the row-equilibrated directions
+DIRECTION_TOL = 1e-12
+
+
+def independent_directions(M: np.ndarray, tol: float = DIRECTION_TOL):
+    """A basis of the columns of M (the parameters' directions) and the coefficients C with
+    M = M[:, basis] @ C.
+
+    The sensitivity equations are linear in the direction of a parameter (its initial
+    sensitivity, its column of the chain matrix D and its memory term), so parameters whose
+    directions are linearly dependent need not be integrated separately: youngs_modulus,
+    poisson_ratio and contact_stiffness all enter through K alone, and a parameter with no
+    effect (crank_inertia at constant crank speed) has a zero direction. M must be
+    dimensionless (rows and columns scaled by their reference values, see `_ddm`); a column
+    joins the basis when its least-squares residual on the basis so far exceeds tol times
+    its norm. Greedy in the given order, so the first of two proportional parameters is the
+    one integrated. At least one column is kept.
+    """
+    M = np.asarray(M, dtype=float)
+    npar = M.shape[1]
+    basis: list[int] = []
+    q = np.zeros((M.shape[0], 0))      # orthonormal basis of the columns kept so far
+    for k in range(npar):
+        col = M[:, k]
+        r = col - q @ (q.T @ col)
+        r = r - q @ (q.T @ r)           # Gram-Schmidt twice (re-orthogonalized)
+        rn = np.linalg.norm(r)
+        if rn > tol * np.linalg.norm(col) or (not basis and k == npar - 1):
+            basis.append(k)
+            q = np.column_stack([q, r / rn]) if rn > 0.0 else q
+    coeffs = np.linalg.lstsq(M[:, basis], M, rcond=None)[0]
+    return np.array(basis), coeffs
+
+
 def _ddm(mech, names, revolutions, rtol, t_eval, event_time_term, method):
     npar = len(names)
-    D = chain_matrix(mech, names)
+    D_all = chain_matrix(mech, names)
     ref = np.array([reference_value(mech, n) for n in names])
+    s0_all = _initial_sensitivities(mech, D_all)
+    # integrate one sensitivity per independent direction: its initial value and its column
+    # of D (which holds the memory's initial sensitivity in row B_VMIN), made dimensionless
+    # by the parameters' values (columns), the states' and kernel parameters' scales (rows)
+    scale_all = np.where(ref != 0.0, np.abs(ref), 1.0)
     base = reduced.pack_parameters(mech)
+    beta = np.abs(base[ddm.BETA_SLOTS])
+    L2, w = mech.crank_length, mech.crank_speed
+    row_scale = np.concatenate([[1.0, L2, w, w * L2], np.where(beta > 0.0, beta, 1.0)])
+    basis, coeffs = independent_directions(
+        np.vstack([s0_all, D_all]) * scale_all[None, :] / row_scale[:, None])
+    coeffs = coeffs * scale_all[basis, None] / scale_all[None, :]   # back to units
+    D, s0, nb = D_all[:, basis], s0_all[:, basis], len(basis)
     sigma0 = D[ddm.B_VMIN].copy()
     p = ddm.pack(base, D, sigma0, event_time_term)
     y_state = reduced.initial_state(mech)
-    s0 = _initial_sensitivities(mech, D)
     y0 = np.concatenate([y_state[:4], s0.T.ravel(), [0.0]])
     rtol_v = reduced.DEFAULT_RTOL if rtol is None else rtol
     atol_state = reduced.default_atol(mech, rtol_v)[:4]
-    scale = np.where(ref != 0.0, np.abs(ref), 1.0)
+    scale = scale_all[basis]
     atol = np.concatenate([atol_state] + [atol_state / s for s in scale] + [[1.0]])
-    n_err = 4 + 4 * npar
-    system = reduced.System(ddm.integrate_sens, y0, p, reduced.P_MODE, 4 + npar, n_err,
+    n_err = 4 + 4 * nb
+    system = reduced.System(ddm.integrate_sens, y0, p, reduced.P_MODE, 4 + nb, n_err,
                             atol)
     t0 = time.perf_counter()
     ts, ys, ms, peaks, _, counters, _, p = reduced.run(
@@ -290,19 +335,22 @@ def _ddm(mech, names, revolutions, rtol, t_eval, event_time_term, method):
     # growth diagnostic on all steps: normalized state sensitivities per revolution
     state_scale = np.array([1.0, mech.clearance, mech.crank_speed,
                             mech.crank_speed * mech.clearance / mech.crank_length])
-    weights = ((scale[:, None] / state_scale[None, :]) ** 2).ravel()
+    weights = ((scale_all[:, None] / state_scale[None, :]) ** 2).ravel()
     # maxima per revolution (the steps are sorted; a step on an edge counts for both sides)
     edges = np.arange(revolutions + 1) * mech.period
     lo = np.searchsorted(ts, edges[:-1], side="left")
     hi = np.searchsorted(ts, edges[1:], side="right")
-    growth = ddm.norm_maxima(ys, weights, npar, lo, hi)
+    growth = ddm.norm_maxima(ys, coeffs, weights, lo, hi)
     if t_eval is not None:
         keep = reduced.landed_indices(ts, t_eval)
         ts, ys, ms = ts[keep], ys[keep], ms[keep]
     vals, sens = ddm.sens_outputs(ts, np.ascontiguousarray(ys), np.ascontiguousarray(ms), p)
+    if nb != npar:
+        n = sens.shape[0]
+        sens = (sens.reshape(4 * n, nb) @ coeffs).reshape(n, 4, npar)
     stats = reduced.counters_dict(counters)
     stats.update(rtol=rtol_v, method=method, wall_time=time.perf_counter() - t0,
-                 event_time_term=event_time_term)
+                 event_time_term=event_time_term, directions=nb)
     traj = reduced.trajectory_from_states(
         mech, ts, np.ascontiguousarray(ys[:, [0, 1, 2, 3, -1]]), ms, base, stats,
         None if t_eval is not None else peaks)

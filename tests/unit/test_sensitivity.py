@@ -4,9 +4,21 @@ import numpy as np
 import pytest
 
 from mbs_clearance import SliderCrank, reduced
-from mbs_clearance._jacobians import N_Z, contact_branch, free_branch
+from mbs_clearance import sensitivity as sens_module
+from mbs_clearance._jacobians import (
+    CRANK_COLUMNS,
+    N_Z,
+    N_ZW,
+    accel_constants,
+    contact_accel,
+    contact_accel_nc,
+    contact_branch,
+    free_accel,
+    free_accel_nc,
+    free_branch,
+)
 from mbs_clearance.contact import hysteresis_factor
-from mbs_clearance.sensitivity import DEFAULT_PARAMETERS, sensitivities
+from mbs_clearance.sensitivity import DEFAULT_PARAMETERS, independent_directions, sensitivities
 
 
 @pytest.fixture(scope="module")
@@ -65,6 +77,81 @@ def test_generated_jacobian_matches_hand_written_model_and_finite_differences(pa
         assert best < 1e-6, (j, best)
 
 
+@pytest.mark.parametrize("branch,accel,accel_nc", [
+    (contact_branch, contact_accel, contact_accel_nc), (free_branch, free_accel, free_accel_nc)])
+def test_acceleration_only_variants_equal_the_full_branch(paper, branch, accel, accel_nc):
+    """The right-hand side's *_accel functions (their parameter-only temporaries computed once
+    by accel_constants; the _nc variants without the crank-angle columns) give the full
+    branch's first two rows."""
+    ts, ys, ms, *_ = reduced.run(paper, 2)
+    i = 3 * len(ts) // 4
+    z = _z(paper, ts[i], ys[i], ms[i, 1])
+    o, flat = np.zeros(8), np.zeros(8 * N_Z)
+    branch(z, o, flat)
+    zw = np.zeros(N_ZW)
+    zw[:N_Z] = z
+    accel_constants(zw)
+    for f, skip in ((accel, ()), (accel_nc, CRANK_COLUMNS)):
+        oa, ja = np.zeros(3), np.full(2 * N_Z, np.nan)
+        f(zw, oa, ja)
+        np.testing.assert_allclose(oa, o[[0, 1, 5]], rtol=1e-13, atol=1e-13 * abs(o).max())
+        keep = [j for j in range(N_Z) if j not in skip]
+        ref = flat.reshape(8, N_Z)[:2, keep]
+        np.testing.assert_allclose(ja.reshape(2, N_Z)[:, keep], ref, rtol=1e-12,
+                                   atol=1e-13 * np.abs(ref).max())
+        assert np.isnan(ja.reshape(2, N_Z)[:, list(skip)]).all()   # left as they were
+
+
+def test_independent_directions():
+    a, b = np.array([1.0, -2.0, 0.5, 0.0]), np.array([0.0, 1.0, 3.0, 1e-3])
+    c = np.array([0.0, 0.0, 0.0, 1.0])
+    # proportional, zero, combinations, and one off the span by 1e-9 (kept: tol is 1e-12)
+    M = np.column_stack([np.zeros(4), a, 2.5 * a, b, a - 4 * b, b + 1e-9 * c])
+    basis, C = independent_directions(M)
+    assert list(basis) == [1, 3, 5]      # the zero column needs no integration
+    np.testing.assert_allclose(M[:, basis] @ C, M, atol=1e-14)
+    assert np.all(C[:, 0] == 0.0)
+    basis, C = independent_directions(np.zeros((3, 1)))    # at least one column is kept
+    assert list(basis) == [0]
+
+
+def test_dependent_parameters_share_one_integration(paper, rev4, ddm, monkeypatch):
+    """youngs_modulus, poisson_ratio and contact_stiffness enter through K alone: one
+    integrated direction; crank_inertia (no effect at constant crank speed) none. The
+    compressed result equals a run that integrates every parameter separately."""
+    assert ddm.stats["directions"] == 7
+    names = ["youngs_modulus", "crank_inertia", "poisson_ratio", "contact_stiffness",
+             "journal_radius", "bearing_radius"]
+    s = sensitivities(paper, names, t_eval=rev4, rtol=1e-10)
+    # K alone; c and K by R_J; R_B moves c and K too: a combination of the two
+    assert s.stats["directions"] == 2
+    assert np.all(s.base_force_magnitude[:, 1] == 0.0)
+    monkeypatch.setattr(sens_module, "independent_directions",
+                        lambda M, tol=0.0: (np.arange(M.shape[1]), np.eye(M.shape[1])))
+    full = sensitivities(paper, names, t_eval=rev4, rtol=1e-10)
+    assert full.stats["directions"] == len(names)
+    for k, name in enumerate(names):
+        a, b = s.base_force_magnitude[:, k], full.base_force_magnitude[:, k]
+        # two runs with different step sequences (the error norm sees different
+        # components): they agree to the integration error at rtol 1e-10
+        assert np.max(np.abs(a - b)) <= 1e-6 * np.max(np.abs(b)), name
+
+
+def test_crank_speed_and_initial_angle_ddm_equals_finite_differences(paper):
+    """The parameters that need the Jacobian's crank-angle columns (t, omega2, theta20), which
+    the default set's right-hand side leaves out."""
+    names = ["crank_speed", "initial_crank_angle"]
+    # (a faster crank ends 4 revolutions earlier: the grid stops short of 4 T)
+    t = np.linspace(3 * paper.period, 3.99 * paper.period, 721)
+    d = sensitivities(paper, names, t_eval=t, rtol=1e-10)
+    # a smaller step than the default 3e-5: the crank speed moves the phase by omega t
+    # (25 rad by revolution 4), so FD's h^2 truncation error is 2e-3 at 3e-5, 2e-4 at 1e-5
+    f = sensitivities(paper, names, t_eval=t, method="fd", fd_relative_step=3e-6)
+    for k, name in enumerate(names):
+        a, b = d.base_force_magnitude[:, k], f.base_force_magnitude[:, k]
+        assert np.max(np.abs(a - b)) < 1e-4 * np.max(np.abs(a)), name
+
+
 def test_ddm_equals_central_differences_for_every_default_parameter(ddm, fd):
     """d|F12|/db over revolution 4: DDM (rtol 1e-10) vs central differences (step 3e-5 b0,
     rtol 1e-11). FD's own error is ~1e-5 at this step (h^2 truncation vs integration noise),
@@ -87,10 +174,16 @@ def test_event_time_term_is_needed(paper, rev4, fd):
     assert min(errors) > 1e-3 and max(errors) > 0.1
 
 
-def test_youngs_modulus_and_contact_stiffness_normalized_sensitivities_are_equal(ddm):
-    """K is proportional to E (Eq. 9), so (dJ/dE) E = (dJ/dK) K exactly (paper, Fig. 5)."""
-    e = ddm.normalized[:, ddm.column("youngs_modulus")]
-    k = ddm.normalized[:, ddm.column("contact_stiffness")]
+def test_youngs_modulus_and_contact_stiffness_normalized_sensitivities_are_equal(
+        paper, rev4, monkeypatch):
+    """K is proportional to E (Eq. 9), so (dJ/dE) E = (dJ/dK) K exactly (paper, Fig. 5).
+    Checked with both integrated (the default shares one integration between them), through
+    the chain matrix and the Jacobian's K column."""
+    monkeypatch.setattr(sens_module, "independent_directions",
+                        lambda M, tol=0.0: (np.arange(M.shape[1]), np.eye(M.shape[1])))
+    s = sensitivities(paper, ["youngs_modulus", "contact_stiffness"], t_eval=rev4, rtol=1e-10)
+    assert s.stats["directions"] == 2
+    e, k = s.normalized[:, 0], s.normalized[:, 1]
     assert np.max(np.abs(e - k)) < 1e-10 * np.max(np.abs(k))
 
 
