@@ -17,6 +17,7 @@ from __future__ import annotations
 from fractions import Fraction
 
 import numba as nb
+import numpy as np
 
 from .integrator import KERNEL
 
@@ -29,6 +30,7 @@ _SCALE = 2.0 ** 32          # pi/2 < 2: 33 significant bits
 PIO2_HI = float(Fraction(int(_PIO2 * int(_SCALE)), int(_SCALE)))
 PIO2_LO = float(_PIO2 - Fraction(PIO2_HI))
 TWO_OVER_PI = float(1 / _PIO2)
+_TWO63 = 2.0 ** 63
 
 # Taylor coefficients (-1)^n / (2n+1)! and (-1)^n / (2n)!, from r^3 and r^2 on
 _S3, _S5, _S7, _S9, _S11, _S13, _S15, _S17 = (
@@ -44,7 +46,15 @@ _C2, _C4, _C6, _C8, _C10, _C12, _C14, _C16, _C18 = (
 @nb.njit(**KERNEL, inline="always")
 def sincos(x):
     """(sin x, cos x) to about 1e-16 absolute for |x| < 1e5 (see the module docstring)."""
-    k = round(x * TWO_OVER_PI)
+    # np.rint keeps k a float (the value of round(), which returns an int): the reduction
+    # then does not wait for a conversion to int and back (about 10 cycles on the chain of
+    # every model evaluation; the int is needed only for the quadrant, off that chain).
+    # Beyond the int64 range (a diverging trial step) k is what that conversion gave,
+    # x86's -2^63, so that such a step gives the same nonsense as before: NaN or not
+    # decides how much the integrator shrinks the rejected step
+    k = np.rint(x * TWO_OVER_PI)
+    if not abs(k) < _TWO63:
+        k = -_TWO63
     r = (x - k * PIO2_HI) - k * PIO2_LO
     r2 = r * r
     r4 = r2 * r2

@@ -180,10 +180,32 @@ STATUS_MESSAGES = {
 }
 
 
+#: state length up to which `_combine` runs scalar code (unrolled loops with guards)
+SMALL = 8
+
+
 @nb.njit(**KERNEL, inline="always")
 def _combine(y, h, K, coef, n_terms, out):
-    """out = y + h * sum_{j < n_terms} coef[j] K[j] (rows of K outer: contiguous inner loop)."""
+    """out = y + h * sum_{j < n_terms} coef[j] K[j] (rows of K outer: contiguous inner loop).
+
+    A short state (n <= SMALL, the plain model) takes loops of constant length with a guard
+    per component, which the compiler unrolls instead of vectorising: a vector load of the
+    row that the model has just written component by component cannot take the values from
+    the pending stores and waits until they are written to the cache, at every stage
+    (measured: 3 % of a simulation). The same operations in the same order either way; the
+    same scalar form for `_copy` and `_weighted_rows` measured 1 and 4 % slower."""
     n = y.shape[0]
+    if n <= SMALL:
+        for k in range(SMALL):
+            if k < n:
+                out[k] = y[k]
+        for j in range(n_terms):
+            c = h * coef[j]
+            if c != 0.0:
+                for k in range(SMALL):
+                    if k < n:
+                        out[k] += c * K[j, k]
+        return
     for k in range(n):
         out[k] = y[k]
     for j in range(n_terms):
@@ -288,16 +310,32 @@ def error_norm(K, E, E2, h, y, y_new, rtol, atol, n_err, work, work2):
 
 
 @nb.njit(**KERNEL, inline="always")
+def _dense_poly(P, j, theta):
+    """sum_m P[j, m] theta^(m+1): the weight of stage j at theta, per unit step size."""
+    poly = 0.0
+    tp = theta
+    for m in range(P.shape[1]):
+        poly += P[j, m] * tp
+        tp *= theta
+    return poly
+
+
+@nb.njit(**KERNEL, inline="always")
+def _dense_combine(y, h, K, polys, out, wts):
+    """State at theta of the continuous extension from the weights polys[j] =
+    _dense_poly(P, j, theta) (wts: work array)."""
+    ns = polys.shape[0]
+    for j in range(ns):
+        wts[j] = h * polys[j]
+    _combine(y, 1.0, K, wts, ns, out)
+
+
+@nb.njit(**KERNEL, inline="always")
 def dense_eval(y, h, K, P, theta, out, wts):
     """State at t + theta*h from the step's continuous extension (wts: work array)."""
     ns = P.shape[0]
     for j in range(ns):
-        poly = 0.0
-        tp = theta
-        for m in range(P.shape[1]):
-            poly += P[j, m] * tp
-            tp *= theta
-        wts[j] = h * poly
+        wts[j] = h * _dense_poly(P, j, theta)
     _combine(y, 1.0, K, wts, ns, out)
 
 
@@ -418,7 +456,7 @@ def _hermite_max(g_a, d_a, g_b, d_b):
 
 @nb.njit(**KERNEL)
 def _search_event(event, t, y, h, K, P, p, g_start, gd_start, g_end, gd_end, n_samples,
-                  event_tol, event_margin, ytmp, wts, fine):
+                  event_tol, event_margin, ytmp, wts, fine, sample_polys):
     """First sign change of g (from <= 0 to > 0) inside a step of size h.
 
     g and its rate are sampled at n_samples interior points of the dense output; at the
@@ -428,7 +466,8 @@ def _search_event(event, t, y, h, K, P, p, g_start, gd_start, g_end, gd_end, n_s
     7 more points are sampled: an excursion through the surface shorter than the sample
     spacing would hide there.
     Returns (theta_lo, g_lo, theta_hi, g_hi); theta_hi = -1: no crossing.
-    `fine` is a work array of 8 entries.
+    `fine` is a work array of 8 entries; sample_polys[i - 1] the weights `_dense_poly` of
+    the interior sample i (the same every step: computed once per run).
     """
     theta_a = 0.0
     g_a = g_start
@@ -443,7 +482,10 @@ def _search_event(event, t, y, h, K, P, p, g_start, gd_start, g_end, gd_end, n_s
             g_b = g_end
             gd_b = gd_end
         else:
-            dense_eval(y, h, K, P, theta_b, ytmp, wts)
+            if i <= 0:
+                dense_eval(y, h, K, P, theta_b, ytmp, wts)
+            else:
+                _dense_combine(y, h, K, sample_polys[i - 1], ytmp, wts)
             g_b, gd_b = event(t + theta_b * h, ytmp, p)
         span = (theta_b - theta_a) * h
         d_a = gd_a * span
@@ -528,6 +570,12 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
     ftmp = np.empty(n)
     p_prev = p.copy()
     wts = np.empty(P.shape[0])
+    # the continuous extension's weights at the interior samples of the event search (the
+    # same thetas every step; the same arithmetic as dense_eval, evaluated once)
+    sample_polys = np.empty((n_samples, P.shape[0]))
+    for i in range(1, n_samples + 1):
+        for j in range(P.shape[0]):
+            sample_polys[i - 1, j] = _dense_poly(P, j, min(i / (n_samples + 1.0), 1.0))
     fine = np.empty(8)
     n_win = edges.shape[0] - 1
     peaks = np.full(n_win, -np.inf)
@@ -660,7 +708,7 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
             g_start_valid = False
             theta_lo, g_lo, theta_hi, g_hi = _search_event(
                 event, t, y_d, h_try, K, P, p, g_start, gd_start, g_end, gd_end, n_samples,
-                event_tol, event_margin, ytmp, wts, fine)
+                event_tol, event_margin, ytmp, wts, fine, sample_polys)
             if theta_hi < 0.0:
                 g_start = g_end       # valid for the next step if no event intervenes
                 gd_start = gd_end

@@ -1,9 +1,12 @@
 """Cost of direct differentiation against plain simulation and central differences.
 
-Paper case, the 8 default parameters, 4 revolutions, reported on revolution 4 (721 points),
-with the default integrator of the sensitivity equations (dop853) and with dopri5.
+Paper case, the 8 default parameters, 4 revolutions, reported on revolution 4 (721 points,
+`t_eval`), with the default integrator of the sensitivity equations (dop853) and with dopri5.
 Accuracy = max over parameters of max|S - S_ref| / max|S_ref| of d|F12|/db, with S_ref the
-DDM (dopri5) at rtol 1e-11. Medians over repeats after warm-up, in one run.
+DDM (dopri5) at rtol 1e-11. The plain simulation is `simulate(mech, 4)` (every step
+recorded), and also with the same 721 output times as the DDM run (`t_eval`: both land on
+them); the default call `sensitivities(mech)` (every step, no t_eval) is timed too. Medians
+over repeats after warm-up, in one run.
 
     python -m validation.benchmarks.ddm_speed [--repeats 5]
 """
@@ -36,7 +39,9 @@ def main(argv=None):
     ref = sensitivities(mech, t_eval=t_eval, rtol=1e-11, integrator="dopri5")
     rows = []
     simulate(mech, 4)
+    simulate(mech, 4, t_eval=t_eval)
     t_default = timed(lambda: simulate(mech, 4), 4 * args.repeats)[0]
+    t_default_te = timed(lambda: simulate(mech, 4, t_eval=t_eval), 4 * args.repeats)[0]
     for method in ("dop853", "dopri5"):
         for rtol in (1e-6, 1e-7, 1e-8, 1e-9):
             sensitivities(mech, t_eval=t_eval, rtol=rtol, integrator=method)
@@ -46,7 +51,12 @@ def main(argv=None):
                                                        integrator=m), args.repeats)
             t_sim, _ = timed(lambda r=rtol: simulate(mech, 4, rtol=r), args.repeats)
             rows.append((f"DDM {method}", rtol, error(s, ref), t_ddm, t_ddm / t_sim,
-                         s.stats["naccept"], t_ddm / t_default))
+                         s.stats["naccept"], t_ddm / t_default, t_ddm / t_default_te))
+    # the default call: every step recorded (no t_eval), against simulate(mech, 4)
+    sensitivities(mech)
+    t_all, s_all = timed(lambda: sensitivities(mech), args.repeats)
+    all_row = ("DDM dop853, every step (default call)", DEFAULT_RTOL, None, t_all,
+               t_all / t_default, s_all.stats["naccept"], t_all / t_default, None)
     fd_rows = []
     for rtol in (1e-9, 1e-11):
         t_fd, s = timed(
@@ -54,15 +64,19 @@ def main(argv=None):
             max(1, args.repeats // 2))
         t_sim, _ = timed(lambda r=rtol: simulate(mech, 4, rtol=r), args.repeats)
         fd_rows.append(("FD (17 runs)", rtol, error(s, ref), t_fd, t_fd / t_sim, None,
-                        t_fd / t_default))
+                        t_fd / t_default, t_fd / t_default_te))
     print(f"Machine: {machine_summary()}\n")
-    print(f"One plain simulation at the default rtol {DEFAULT_RTOL:g}: {t_default * 1e3:.2f} ms\n")
+    print(f"One plain simulation at the default rtol {DEFAULT_RTOL:g}: {t_default * 1e3:.2f} ms "
+          f"(every step), {t_default_te * 1e3:.2f} ms (landing on the 721 output times)\n")
     print("| method | rtol | max rel. error of d\\|F12\\|/db | median time (ms) "
-          "| x plain simulation at same rtol | x plain simulation at default rtol | steps |")
-    print("|---|---|---|---|---|---|---|")
-    for name, rtol, err, t, ratio, steps, ratio_default in rows + fd_rows:
-        print(f"| {name} | {rtol:g} | {err:.1e} | {t * 1e3:.1f} | {ratio:.1f} "
-              f"| {ratio_default:.1f} | {steps or '-'} |")
+          "| x plain simulation at same rtol | x plain simulation at default rtol "
+          "| x plain simulation at default rtol, same output times | steps |")
+    print("|---|---|---|---|---|---|---|---|")
+    for name, rtol, err, t, ratio, steps, ratio_default, ratio_te in rows + [all_row] + fd_rows:
+        err_s = "-" if err is None else f"{err:.1e}"
+        te_s = "-" if ratio_te is None else f"{ratio_te:.1f}"
+        print(f"| {name} | {rtol:g} | {err_s} | {t * 1e3:.1f} | {ratio:.1f} "
+              f"| {ratio_default:.1f} | {te_s} | {steps or '-'} |")
     print()
     for _, f_rtol, f_err, f_t, *_ in fd_rows:
         # the cheapest default-method DDM run at least as accurate as this FD run
