@@ -8,11 +8,17 @@ Public API::
     opt = optimize_link_lengths(SliderCrank(), seed=1)
 """
 
-from .mechanism import CONTINUOUS_FIELDS, PARAMETER_INFO, SliderCrank
-from .optimize import OptimizationResult, optimize_link_lengths
-from .sensitivity import DEFAULT_PARAMETERS, Sensitivities, sensitivities
-from .simulate import BACKENDS, peak_base_force, simulate
-from .trajectory import Trajectory, load_trajectory
+from ._cache import refresh_stale_cache
+
+# before any kernel is compiled or loaded: numba's cache does not notice edits of the files a
+# kernel calls into (see _cache.py)
+refresh_stale_cache()
+
+from .mechanism import CONTINUOUS_FIELDS, PARAMETER_INFO, SliderCrank  # noqa: E402
+from .optimize import OptimizationResult, optimize_link_lengths  # noqa: E402
+from .sensitivity import DEFAULT_PARAMETERS, Sensitivities, sensitivities  # noqa: E402
+from .simulate import BACKENDS, peak_base_force, simulate  # noqa: E402
+from .trajectory import Trajectory, load_trajectory  # noqa: E402
 
 __all__ = [
     "SliderCrank", "PARAMETER_INFO", "CONTINUOUS_FIELDS",
