@@ -266,7 +266,7 @@ def _initial_sensitivities(mech: SliderCrank, D: np.ndarray) -> np.ndarray:
 DDM_INTEGRATOR = "dop853"
 
 
-#: relative tolerance of `independent_directions` on the row-equilibrated directions
+#: relative tolerance of `independent_directions` on the dimensionless directions
 DIRECTION_TOL = 1e-12
 
 
