@@ -16,7 +16,7 @@ O_NAMES = ('th3dd', 'x4dd', 'F12x', 'F12y', 'M2', 'F', 'delta', 'deltadot')
 N_Z = 18
 #: length of z with the parameter-only temporaries of the *_accel functions after the
 #: inputs (`accel_constants`)
-N_ZW = 62
+N_ZW = 40
 #: columns that the *_accel_nc variants leave out (t, omega2, theta20)
 CRANK_COLUMNS = (0, 12, 13)
 
@@ -762,7 +762,7 @@ def contact_accel_nc(z, o, jac):
     x0 = c0
     x1 = g*x0
     x2 = m3*x1
-    x3 = z[29]
+    x3 = z[18]
     x5 = s0
     x6 = t*w
     x7 = th0 + x6
@@ -772,7 +772,7 @@ def contact_accel_nc(z, o, jac):
     x10 = x0*x9
     x11 = -x10 + x5*x8
     x12 = L2*x11*x3
-    x13 = z[30]
+    x13 = z[19]
     x14 = L3*x5
     x15 = L2*x9
     x16 = x14 + x15
@@ -805,13 +805,13 @@ def contact_accel_nc(z, o, jac):
     x43 = x41 + x42
     x44 = x40*x43
     x45 = x12*x13 + (1/2)*x2 + x39*x44
-    x46 = z[31]
-    x47 = z[32]
-    x48 = z[33]
-    x49 = z[34]
-    x50 = z[35]
+    x46 = z[20]
+    x47 = z[21]
+    x48 = z[22]
+    x49 = z[23]
+    x50 = z[24]
     x51 = x33*x39
-    x52 = z[36]
+    x52 = z[25]
     x53 = x20*x52
     x54 = x0*x8 + x5*x9
     x55 = x13*x3*x54
@@ -835,7 +835,7 @@ def contact_accel_nc(z, o, jac):
     x73 = K*x25
     x74 = x44*x73
     x75 = x36*x74
-    x76 = z[37]
+    x76 = z[26]
     x77 = x76*(-x55 + x64 + x68 + x72*x75)
     x78 = x16*x5
     x79 = x0*x20
@@ -861,7 +861,7 @@ def contact_accel_nc(z, o, jac):
     x99 = -w*x56 - w*x57 - x26*x9 - x27*x97 + x28*x8 - x97*x98
     x100 = x43*x96
     x101 = x100*x91
-    x102 = z[38]
+    x102 = z[27]
     x103 = x88*(x27 + x98) + 1
     x104 = 2*x103
     x105 = m3*x12 + x104*x74 + x2
@@ -869,7 +869,7 @@ def contact_accel_nc(z, o, jac):
     x107 = -x106
     x108 = x107*x96
     x109 = th3d*x41 + th3d*x42 - x0*x28 + x108*x27 + x108*x98 + x26*x5
-    x110 = z[39]
+    x110 = z[28]
     x111 = t*x26*x8 + t*x27*x67 + t*x28*x9 - t*x71 - x16*(x6*x9 - x8) - x20*(x6*x8 + x9)
     x112 = x33*x38
     x113 = x34*x93
@@ -920,45 +920,6 @@ def contact_accel_nc(z, o, jac):
     jac[33] = x112*x53
     jac[34] = x113*x126
     jac[35] = 0
-
-
-@nb.njit(cache=True, error_model="numpy", _nrt=False)
-def contact_accel_nc_constants(z):
-    """The parameter-only temporaries of `contact_accel_nc` into z[29:40]."""
-    L2 = z[6]
-    L3 = z[7]
-    m2 = z[8]
-    m3 = z[9]
-    m4 = z[10]
-    J3 = z[11]
-    w = z[12]
-    th0 = z[13]
-    c = z[14]
-    K = z[15]
-    xi = z[16]
-    g = z[17]
-    x3 = ((w) * (w))
-    z[29] = x3
-    x13 = (1/2)*m3
-    z[30] = x13
-    x46 = ((L3) * (L3))
-    z[31] = x46
-    x47 = m3*x46
-    z[32] = x47
-    x48 = J3 + (1/4)*x47
-    z[33] = x48
-    x49 = 1/x48
-    z[34] = x49
-    x50 = L3*x49
-    z[35] = x50
-    x52 = 1/m4
-    z[36] = x52
-    x76 = L2*x50
-    z[37] = x76
-    x102 = 1/(4*J3 + x47)
-    z[38] = x102
-    x110 = 2*x102
-    z[39] = x110
 
 
 @nb.njit(cache=True, error_model="numpy", _nrt=False)
@@ -1287,22 +1248,22 @@ def free_accel(z, o, jac):
     x5 = s1
     x6 = x0*x5
     x7 = x1*x4 - x6
-    x8 = z[40]
-    x9 = z[41]
+    x8 = z[29]
+    x9 = z[30]
     x10 = g*x0 + x7*x9
     x11 = m3*x10
-    x12 = z[42]
-    x13 = z[43]
-    x14 = z[44]
-    x15 = z[45]
+    x12 = z[31]
+    x13 = z[32]
+    x14 = z[33]
+    x15 = z[34]
     x16 = x0*x4 + x1*x5
     x17 = (1/2)*x16
-    x18 = z[46]
+    x18 = z[35]
     x19 = x16*x9
-    x20 = z[47]
-    x21 = z[48]
-    x22 = z[49]
-    x23 = z[50]
+    x20 = z[36]
+    x21 = z[37]
+    x22 = z[38]
+    x23 = z[39]
     o[0] = -x11*x15
     o[1] = 0
     o[2] = 0
@@ -1346,7 +1307,7 @@ def free_accel(z, o, jac):
 
 @nb.njit(cache=True, error_model="numpy", _nrt=False)
 def free_accel_constants(z):
-    """The parameter-only temporaries of `free_accel` into z[40:51]."""
+    """The parameter-only temporaries of `free_accel` into z[29:40]."""
     L2 = z[6]
     L3 = z[7]
     m2 = z[8]
@@ -1360,27 +1321,27 @@ def free_accel_constants(z):
     xi = z[16]
     g = z[17]
     x8 = ((w) * (w))
-    z[40] = x8
+    z[29] = x8
     x9 = L2*x8
-    z[41] = x9
+    z[30] = x9
     x12 = ((L3) * (L3))*m3
-    z[42] = x12
+    z[31] = x12
     x13 = J3 + (1/4)*x12
-    z[43] = x13
+    z[32] = x13
     x14 = L3/x13
-    z[44] = x14
+    z[33] = x14
     x15 = (1/2)*x14
-    z[45] = x15
+    z[34] = x15
     x18 = L2*m3*x14
-    z[46] = x18
+    z[35] = x18
     x20 = m3*x15
-    z[47] = x20
+    z[36] = x20
     x21 = 1/(4*J3 + x12)
-    z[48] = x21
+    z[37] = x21
     x22 = x12*x21
-    z[49] = x22
+    z[38] = x22
     x23 = 2*x21
-    z[50] = x23
+    z[39] = x23
 
 
 @nb.njit(cache=True, error_model="numpy", _nrt=False)
@@ -1414,22 +1375,22 @@ def free_accel_nc(z, o, jac):
     x5 = s1
     x6 = x0*x5
     x7 = x1*x4 - x6
-    x8 = z[51]
-    x9 = z[52]
+    x8 = z[29]
+    x9 = z[30]
     x10 = g*x0 + x7*x9
     x11 = m3*x10
-    x12 = z[53]
-    x13 = z[54]
-    x14 = z[55]
-    x15 = z[56]
+    x12 = z[31]
+    x13 = z[32]
+    x14 = z[33]
+    x15 = z[34]
     x16 = x0*x4 + x1*x5
     x17 = (1/2)*x16
-    x18 = z[57]
+    x18 = z[35]
     x19 = x16*x9
-    x20 = z[58]
-    x21 = z[59]
-    x22 = z[60]
-    x23 = z[61]
+    x20 = z[36]
+    x21 = z[37]
+    x22 = z[38]
+    x23 = z[39]
     o[0] = -x11*x15
     o[1] = 0
     o[2] = 0
@@ -1466,49 +1427,8 @@ def free_accel_nc(z, o, jac):
 
 
 @nb.njit(cache=True, error_model="numpy", _nrt=False)
-def free_accel_nc_constants(z):
-    """The parameter-only temporaries of `free_accel_nc` into z[51:62]."""
-    L2 = z[6]
-    L3 = z[7]
-    m2 = z[8]
-    m3 = z[9]
-    m4 = z[10]
-    J3 = z[11]
-    w = z[12]
-    th0 = z[13]
-    c = z[14]
-    K = z[15]
-    xi = z[16]
-    g = z[17]
-    x8 = ((w) * (w))
-    z[51] = x8
-    x9 = L2*x8
-    z[52] = x9
-    x12 = ((L3) * (L3))*m3
-    z[53] = x12
-    x13 = J3 + (1/4)*x12
-    z[54] = x13
-    x14 = L3/x13
-    z[55] = x14
-    x15 = (1/2)*x14
-    z[56] = x15
-    x18 = L2*m3*x14
-    z[57] = x18
-    x20 = m3*x15
-    z[58] = x20
-    x21 = 1/(4*J3 + x12)
-    z[59] = x21
-    x22 = x12*x21
-    z[60] = x22
-    x23 = 2*x21
-    z[61] = x23
-
-
-@nb.njit(cache=True, error_model="numpy", _nrt=False)
 def accel_constants(z):
     """Fill z[N_Z:N_ZW], the parameter-only temporaries of the *_accel functions, from the
     parameters z[6:N_Z]; once per run (they are constant while the parameters are)."""
     contact_accel_constants(z)
-    contact_accel_nc_constants(z)
     free_accel_constants(z)
-    free_accel_nc_constants(z)

@@ -177,17 +177,20 @@ def main():
         rows = [0, 1, OUTPUTS.index("F")]
         doc = (f"{branch.capitalize()} branch, rows theta3dd and x4dd only: o (3,) = (theta3dd, "
                "x4dd, F), jac (2 * 18,); z[N_Z:N_ZW] filled by `accel_constants`.")
-        for suffix, omit, extra in (
-                ("", (), ""),
-                # without the columns of t, omega2 and theta20 (the crank angle's), which only
-                # sensitivities to the crank speed or initial angle need: 13 % less time
-                ("_nc", CRANK_COLUMNS, f" Without the columns {CRANK_COLUMNS} (t, omega2, "
-                                       "theta20), which it leaves as they were.")):
-            code, const, n = emit(f"{branch}_accel{suffix}", z, out.extract(rows, [0]),
-                                  jac[:2, :], doc + extra, omit=omit, hoist=offset)
-            body += [code, const]
-            const_names.append(f"{branch}_accel{suffix}_constants")
-            offset += n
+        # the full variant, then one without the columns of t, omega2 and theta20 (the crank
+        # angle's), which only sensitivities to the crank speed or initial angle need (13 %
+        # less time); both have the same subexpressions, so the second reads the first's
+        # constants
+        code, const, n = emit(f"{branch}_accel", z, out.extract(rows, [0]), jac[:2, :], doc,
+                              hoist=offset)
+        code_nc, const_nc, _ = emit(
+            f"{branch}_accel_nc", z, out.extract(rows, [0]), jac[:2, :],
+            doc + f" Without the columns {CRANK_COLUMNS} (t, omega2, theta20), which it leaves "
+            "as they were.", omit=CRANK_COLUMNS, hoist=offset)
+        assert const_nc == const.replace(f"{branch}_accel", f"{branch}_accel_nc")
+        body += [code, const, code_nc]
+        const_names.append(f"{branch}_accel_constants")
+        offset += n
     calls = "\n".join(f"    {c}(z)" for c in const_names)
     body.append(f'''@nb.njit(cache=True, error_model="numpy", _nrt=False)
 def accel_constants(z):
