@@ -25,7 +25,7 @@ P_EVTERM, P_NC (1: no parameter needs the Jacobian's crank-angle columns, so the
 right-hand side uses the generated *_accel_nc functions), the memory sensitivities sigma
 (npar), the chain matrix D (13 x npar, row-major), its nonzero entries by parameter
 (`sparse_chain`: entries per parameter, then Jacobian columns and values, each in a slot of
-13 npar entries, and a spare slot) and N_WORK entries of work space (z with the
+13 npar entries) and N_WORK entries of work space (z with the
 parameter-only temporaries of the *_accel functions, filled once by `pack`).
 The recorded memory is p[P_MODE : P_SIGMA + npar].
 y = [4 states, 4 npar sensitivities, W].
@@ -102,7 +102,7 @@ N_WORK = N_ZW + 8 + 8 * N_Z
 def sparse_chain(D: np.ndarray, dxi: float) -> np.ndarray:
     """The nonzero entries of the chain matrix D (13 x npar) by parameter, as the kernels
     read them: [m, Jacobian columns (m per parameter, in a slot of 13 npar), values (m per
-    parameter, slot), unused slot], m the largest number of entries of a parameter (at
+    parameter, slot)], m the largest number of entries of a parameter (at
     least 1; shorter lists are padded with value 0 on column 1). Grouped by parameter, the
     right-hand side sums each parameter's few terms in registers and stores once.
     The value of the restitution row is multiplied by dxi = d(xi)/de, constant in a run, as
@@ -113,7 +113,7 @@ def sparse_chain(D: np.ndarray, dxi: float) -> np.ndarray:
     entries = [[(_Z_COL[b], D[b, k] * (dxi if b == B_E else 1.0)) for b in range(N_BETA)
                 if _Z_COL[b] >= 0 and D[b, k] != 0.0] for k in range(npar)]
     m = max([1] + [len(e) for e in entries])
-    block = np.zeros(1 + 3 * slot)
+    block = np.zeros(1 + 2 * slot)
     block[0] = m
     block[1:1 + npar * m] = 1.0       # padding: column 1 (theta3), value 0
     for k, ek in enumerate(entries):
@@ -146,7 +146,7 @@ def pack(base: np.ndarray, D: np.ndarray, sigma0: np.ndarray,
 @nb.njit(**KERNEL, inline="always")
 def _work(p, npar):
     """Views of the work space of p (no allocation in the right-hand side)."""
-    w0 = P_SIGMA + (1 + N_BETA) * npar + 1 + 3 * N_BETA * npar
+    w0 = P_SIGMA + (1 + N_BETA) * npar + 1 + 2 * N_BETA * npar
     return p[w0:w0 + N_ZW], p[w0 + N_ZW:w0 + N_ZW + 8], p[w0 + N_ZW + 8:w0 + N_WORK]
 
 
