@@ -33,6 +33,7 @@ y = [4 states, 4 npar sensitivities, W].
 
 from __future__ import annotations
 
+import math
 import sys
 
 import numba as nb
@@ -42,14 +43,17 @@ from . import reduced
 from ._jacobians import (
     CRANK_COLUMNS,
     N_Z,
+    N_ZO,
     N_ZW,
     accel_constants,
     contact_accel,
     contact_accel_nc,
     contact_branch,
+    contact_outputs,
     free_accel,
     free_accel_nc,
     free_branch,
+    free_outputs,
 )
 from .contact import contact_force, hysteresis_factor
 from .integrator import ACTION_SIG, KERNEL, MONITOR_SIG, RHS_SIG, integrate
@@ -91,6 +95,11 @@ _Z_COL = np.array([6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, -1])
 Z_DMIN = 5
 # rows of the generated outputs
 O_TH3DD, O_X4DD, O_F12X, O_F12Y, O_M2, O_F, O_DELTA, O_DELTADOT = range(8)
+# the *_accel functions' fourth output: M2 (value only)
+O_M2_ACCEL = 3
+#: outputs recorded at every step by `monitor_sens`: the plain model's (reduced.OUT_COLUMNS),
+#: then d(theta3dd)/db per integrated direction
+N_OUT_PLAIN = len(reduced.OUT_COLUMNS)
 
 
 #: work space at the end of p for the right-hand side: z (N_ZW: the Jacobian's inputs, then
@@ -256,9 +265,8 @@ def rhs_sens(t, y, p, dydt):
         dydt[base + 1] = s4
         dydt[base + 2] = ja1 * s1 + ja2 * s2 + ja3 * s3 + ja4 * s4 + ja5 * sg + pa
         dydt[base + 3] = jb1 * s1 + jb2 * s2 + jb3 * s3 + jb4 * s4 + jb5 * sg + pb
-    # the work quadrature is not needed for sensitivities; M2 is not computed by the
-    # acceleration-only Jacobian
-    dydt[4 + 4 * npar] = 0.0
+    # the crank's work (the trajectory's crank_work; not under error control)
+    dydt[4 + 4 * npar] = o[O_M2_ACCEL] * p[P_W]
 
 
 @nb.njit(ACTION_SIG, cache=True, error_model="numpy")
@@ -294,35 +302,118 @@ def on_event_sens(t, y, p):
 
 
 @nb.njit(cache=True, error_model="numpy")
-def sens_outputs(ts, ys, ms, p):
-    """Outputs (F12x, F12y, M2, F) and their sensitivities at recorded steps.
+def sens_outputs(ts, ys, ms, outs, p, coeffs):
+    """Sensitivities of the outputs (F12x, F12y, M2, F) at recorded steps.
 
-    ms are the recorded memories p[P_MODE : P_SIGMA + npar]. Returns (values (n, 4),
-    sensitivities (n, 4, npar)).
+    ms are the recorded memories p[P_MODE : P_SIGMA + nb], outs the outputs recorded by
+    `monitor_sens` (the plain model's, then d(theta3dd)/db per integrated direction), coeffs
+    (nb, npar) the parameters' sensitivities as combinations of the integrated directions
+    (`sensitivity.independent_directions`). theta3dd is an input of the generated
+    *_outputs functions, and its total derivatives are the recorded ones, so each step
+    needs the Jacobian of the outputs at given accelerations only.
+    Returns dF12/db (n, 2, npar), d|F12|/db, dM2/db and dF/db (n, npar) each.
     """
-    npar = int(p[P_NPAR])
+    nb_ = int(p[P_NPAR])
+    npar = coeffs.shape[1]
+    n = ts.shape[0]
     q = p.copy()
-    z, o, jac = _work(q, npar)
-    vals = np.empty((ts.shape[0], 4))
-    sens = np.empty((ts.shape[0], 4, npar))
-    rows = (O_F12X, O_F12Y, O_M2, O_F)
-    for i in range(ts.shape[0]):
-        for m in range(ms.shape[1]):
-            q[P_MODE + m] = ms[i, m]
-        _evaluate(ts[i], ys[i], q, z, o, jac, True)
-        for r in range(4):
-            vals[i, r] = o[rows[r]]
-            _directional(jac, rows[r], ys[i], q, npar, sens[i, r], 0, 1)
-    return vals, sens
-
+    zw, _, _ = _work(q, nb_)
+    z = np.empty(N_ZO)
+    o = np.empty(4)
+    jac = np.zeros(4 * N_ZO)
+    # the chain terms per direction (`sparse_chain`) with integer columns, and the nonzero
+    # coefficients, once
+    s0 = P_SIGMA + (1 + N_BETA) * nb_
+    slot = N_BETA * nb_
+    m = int(q[s0])
+    cols = np.empty((nb_, m), dtype=np.int64)
+    vals = np.empty((nb_, m))
+    for b in range(nb_):
+        for e in range(m):
+            cols[b, e] = int(q[s0 + 1 + b * m + e])
+            vals[b, e] = q[s0 + 1 + b * m + e + slot]
+    nnz = 0
+    for b in range(nb_):
+        for k in range(npar):
+            if coeffs[b, k] != 0.0:
+                nnz += 1
+    nz_b = np.empty(nnz, dtype=np.int64)
+    nz_k = np.empty(nnz, dtype=np.int64)
+    nz_c = np.empty(nnz)
+    nnz = 0
+    for b in range(nb_):
+        for k in range(npar):
+            if coeffs[b, k] != 0.0:
+                nz_b[nnz] = b
+                nz_k[nnz] = k
+                nz_c[nnz] = coeffs[b, k]
+                nnz += 1
+    d = np.empty((nb_, 4))
+    d_force = np.zeros((n, 2, npar))
+    d_mag = np.empty((n, npar))
+    d_moment = np.zeros((n, npar))
+    d_contact = np.zeros((n, npar))
+    for j in range(6, N_Z):
+        z[j] = zw[j]
+    for i in range(n):
+        z[0] = ts[i]
+        for j in range(4):
+            z[1 + j] = ys[i, j]
+        z[5] = ms[i, 1]                 # the impact-velocity memory (P_DMIN)
+        z[N_Z] = outs[i, 0]             # theta3dd
+        # the branch as in the right-hand side: contact while the law's force is positive
+        in_contact = False
+        if ms[i, 0] > 0.5:              # the contact mode (P_MODE)
+            contact_outputs(z, o, jac)
+            in_contact = o[3] > 0.0
+        if not in_contact:
+            free_outputs(z, o, jac)
+        for b in range(nb_):
+            base = 4 + 4 * b
+            s1 = ys[i, base]
+            s2 = ys[i, base + 1]
+            s3 = ys[i, base + 2]
+            s4 = ys[i, base + 3]
+            sg = ms[i, P_SIGMA - P_MODE + b]
+            a3 = outs[i, N_OUT_PLAIN + b]
+            for r in range(4):
+                r0 = r * N_ZO
+                acc = (jac[r0 + 1] * s1 + jac[r0 + 2] * s2 + jac[r0 + 3] * s3
+                       + jac[r0 + 4] * s4 + jac[r0 + Z_DMIN] * sg + jac[r0 + N_Z] * a3)
+                for e in range(m):
+                    acc += jac[r0 + cols[b, e]] * vals[b, e]
+                d[b, r] = acc
+        for t in range(nnz):
+            b = nz_b[t]
+            k = nz_k[t]
+            c = nz_c[t]
+            d_force[i, 0, k] += c * d[b, 0]
+            d_force[i, 1, k] += c * d[b, 1]
+            d_moment[i, k] += c * d[b, 2]
+            d_contact[i, k] += c * d[b, 3]
+        fx = o[0]
+        fy = o[1]
+        inv = 1.0 / max(math.sqrt(fx * fx + fy * fy), 1e-300)
+        for k in range(npar):
+            d_mag[i, k] = (fx * d_force[i, 0, k] + fy * d_force[i, 1, k]) * inv
+    return d_force, d_mag, d_moment, d_contact
 
 
 @nb.njit(MONITOR_SIG, **KERNEL)
 def monitor_sens(t, y, p, dydt, out):
     """The integrator's last stage of a step: `rhs_sens`, the plain model's |F12| and its
-    event function (from one evaluation of the plain model)."""
+    event function (from one evaluation of the plain model). When the integrator records
+    outputs (out of N_OUT_PLAIN + npar entries): the plain model's outputs, then the total
+    derivatives of theta3dd along each direction, which `sens_outputs` needs at the
+    recorded steps (the right-hand side computed them already)."""
     rhs_sens(t, y, p, dydt)
-    return reduced.peak_and_event(p, reduced.dynamics(t, y, p))
+    res = reduced.dynamics(t, y, p)
+    if out.shape[0] > N_OUT_PLAIN:
+        for k in range(N_OUT_PLAIN):
+            out[k] = res[k]
+        for k in range(out.shape[0] - N_OUT_PLAIN):
+            out[N_OUT_PLAIN + k] = dydt[6 + 4 * k]
+    return reduced.peak_and_event(p, res)
 
 
 @nb.njit(cache=True, error_model="numpy")

@@ -337,6 +337,8 @@ class System(NamedTuple):
     n_mem: int
     n_err: int
     atol: np.ndarray
+    #: outputs its monitor writes at each step, recorded (0: none)
+    n_out: int = 0
 
 
 @nb.njit(cache=True, error_model="numpy")
@@ -400,8 +402,9 @@ def run(mech: SliderCrank, revolutions: int = 4, *, rtol: float | None = None,
             raise ValueError(f"initial_offset must be in [-1, 1] (fraction of the clearance); "
                              f"got {initial_offset!r}")
         system = System(integrate_plain, initial_state(mech, initial_offset),
-                        pack_parameters(mech), P_MODE, N_MEM, N_ERR, atol_arr)
-    kernel, y0, p, mem_start, n_mem, n_err, atol_arr = system
+                        pack_parameters(mech), P_MODE, N_MEM, N_ERR, atol_arr,
+                        len(OUT_COLUMNS))
+    kernel, y0, p, mem_start, n_mem, n_err, atol_arr, n_out = system
     h_max = mech.period / 8 if h_max is None else float(h_max)
     if event_tol is None:
         # 1e-12 of the clearance, but not below the round-off of the journal position
@@ -409,7 +412,8 @@ def run(mech: SliderCrank, revolutions: int = 4, *, rtol: float | None = None,
         event_tol = max(1e-12 * mech.clearance,
                         8 * np.finfo(float).eps * (mech.crank_length + mech.coupler_length))
     event_tol = float(event_tol)
-    n_out = len(OUT_COLUMNS) if (record and kernel is integrate_plain) else 0
+    if not record:
+        n_out = 0
     ts, ys, ms, peaks, peak_t, counters, outs = kernel(
         y0, p, mem_start, n_mem, edges, rtol,
         atol_arr, n_err, float(h0), h_max, int(max_steps), bool(record), event_tol,
@@ -422,7 +426,7 @@ def run(mech: SliderCrank, revolutions: int = 4, *, rtol: float | None = None,
     if t_eval is not None and select:
         keep = landed_indices(ts, t_eval)
         ts, ys, ms, outs = ts[keep], ys[keep], ms[keep], outs[keep]
-        if outs.shape[1] == len(OUT_COLUMNS):   # |F12| recorded by the integrator
+        if outs.shape[1] >= len(OUT_COLUMNS):   # |F12| recorded by the integrator
             mags = np.hypot(outs[:, 8], outs[:, 9])
         else:
             mags = np.array([monitor(ts[i], ys[i], _with_memory(p, mem_start, ms[i]))

@@ -301,7 +301,6 @@ def independent_directions(M: np.ndarray, tol: float = DIRECTION_TOL):
 
 
 def _ddm(mech, names, revolutions, rtol, t_eval, event_time_term, method):
-    npar = len(names)
     D_all = chain_matrix(mech, names)
     ref = np.array([reference_value(mech, n) for n in names])
     s0_all = _initial_sensitivities(mech, D_all)
@@ -326,10 +325,13 @@ def _ddm(mech, names, revolutions, rtol, t_eval, event_time_term, method):
     scale = scale_all[basis]
     atol = np.concatenate([atol_state] + [atol_state / s for s in scale] + [[1.0]])
     n_err = 4 + 4 * nb
-    system = reduced.System(ddm.integrate_sens, y0, p, reduced.P_MODE, 4 + nb, n_err,
-                            atol)
+    # the recorded memory: p[P_MODE : P_SIGMA + nb] (mode, impact velocity, the flags, the
+    # memory's sensitivities)
+    system = reduced.System(ddm.integrate_sens, y0, p, reduced.P_MODE,
+                            ddm.P_SIGMA - reduced.P_MODE + nb, n_err, atol,
+                            ddm.N_OUT_PLAIN + nb)
     t0 = time.perf_counter()
-    ts, ys, ms, peaks, _, counters, _, p = reduced.run(
+    ts, ys, ms, peaks, _, counters, outs, p = reduced.run(
         mech, revolutions, rtol=rtol_v, method=method, t_eval=t_eval, system=system,
         select=False)
     # growth diagnostic on all steps: normalized state sensitivities per revolution
@@ -343,26 +345,19 @@ def _ddm(mech, names, revolutions, rtol, t_eval, event_time_term, method):
     growth = ddm.norm_maxima(ys, coeffs, weights, lo, hi)
     if t_eval is not None:
         keep = reduced.landed_indices(ts, t_eval)
-        ts, ys, ms = ts[keep], ys[keep], ms[keep]
-    vals, sens = ddm.sens_outputs(ts, np.ascontiguousarray(ys), np.ascontiguousarray(ms), p)
-    if nb != npar:
-        n = sens.shape[0]
-        sens = (sens.reshape(4 * n, nb) @ coeffs).reshape(n, 4, npar)
+        ts, ys, ms, outs = ts[keep], ys[keep], ms[keep], outs[keep]
+    ys, ms, outs = (np.ascontiguousarray(a) for a in (ys, ms, outs))
+    d_force, d_mag, d_moment, d_contact = ddm.sens_outputs(ts, ys, ms, outs, p, coeffs)
     stats = reduced.counters_dict(counters)
     stats.update(rtol=rtol_v, method=method, wall_time=time.perf_counter() - t0,
                  event_time_term=event_time_term, directions=nb)
     traj = reduced.trajectory_from_states(
-        mech, ts, np.ascontiguousarray(ys[:, [0, 1, 2, 3, -1]]), ms, base, stats,
-        None if t_eval is not None else peaks)
-    fx, fy = vals[:, 0], vals[:, 1]
-    mag = np.hypot(fx, fy)
-    dmag = (fx[:, None] * sens[:, 0, :] + fy[:, None] * sens[:, 1, :]) / np.maximum(
-        mag, 1e-300)[:, None]
+        mech, ts, ys[:, [0, 1, 2, 3, -1]], ms, base, stats,
+        None if t_eval is not None else peaks, outs[:, :ddm.N_OUT_PLAIN])
     return Sensitivities(
-        t=ts, parameters=names, reference=ref, base_force=np.ascontiguousarray(sens[:, :2, :]),
-        base_force_magnitude=dmag, crank_moment=sens[:, 2, :].copy(),
-        contact_force=sens[:, 3, :].copy(), trajectory=traj, method="ddm", backend="reduced",
-        growth=growth, stats=stats)
+        t=ts, parameters=names, reference=ref, base_force=d_force, base_force_magnitude=d_mag,
+        crank_moment=d_moment, contact_force=d_contact, trajectory=traj, method="ddm",
+        backend="reduced", growth=growth, stats=stats)
 
 
 def fd_step(mech: SliderCrank, name: str, relative: float = FD_RELATIVE_STEP) -> float:

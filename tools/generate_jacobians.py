@@ -24,7 +24,9 @@ OUTPUTS = ["th3dd", "x4dd", "F12x", "F12y", "M2", "F", "delta", "deltadot"]
 CRANK_COLUMNS = (0, 12, 13)
 
 
-def derive(contact: bool):
+def derive(contact: bool, accel_input: bool = False):
+    """Inputs z, outputs and their Jacobian of one branch. With accel_input, theta3dd is an
+    input (the last of z) and the outputs are F12x, F12y, M2 and F only."""
     z = sp.symbols(NAMES, real=True)
     t, th3, x4, th3d, x4d, dmin, L2, L3, m2, m3, m4, J3, w, th0, c, K, xi, g = z
     th2 = w * t + th0
@@ -46,13 +48,19 @@ def derive(contact: bool):
     th3dd = -(m3 * L2 * L3 * w**2 * sin32 / 2 + m3 * g * L3 * c3 / 2
               + L3 * F * (s3 * nx - c3 * ny)) / inertia
     x4dd = -F * nx / m4
+    if accel_input:
+        z = z + [sp.Symbol("th3dd", real=True)]
+        th3dd = z[-1]
     M2 = (m3 * L2 * L3 * (th3dd * cos23 - th3d**2 * sin32) / 2
           + (m3 + m2 / 2) * g * L2 * c2 + L2 * F * (s2 * nx - c2 * ny))
     ag2 = sp.Matrix([-L2 * w**2 * c2 / 2, -L2 * w**2 * s2 / 2])
     ag3 = (sp.Matrix([-L2 * w**2 * c2, -L2 * w**2 * s2])
            + L3 / 2 * (th3dd * sp.Matrix([-s3, c3]) - th3d**2 * sp.Matrix([c3, s3])))
     R = m2 * ag2 + m3 * ag3 + sp.Matrix([0, (m2 + m3) * g]) - F * sp.Matrix([nx, ny])
-    out = sp.Matrix([th3dd, x4dd, -R[0], -R[1], M2, F, delta, deltadot])
+    if accel_input:
+        out = sp.Matrix([-R[0], -R[1], M2, F])
+    else:
+        out = sp.Matrix([th3dd, x4dd, -R[0], -R[1], M2, F, delta, deltadot])
     return z, out, out.jacobian(sp.Matrix(z))
 
 
@@ -174,9 +182,10 @@ def main():
         # the right-hand side of the sensitivity equations needs only the accelerations (and
         # the contact force, to tell whether the contact branch applies); their
         # parameter-only temporaries are computed once per run (`accel_constants`)
-        rows = [0, 1, OUTPUTS.index("F")]
-        doc = (f"{branch.capitalize()} branch, rows theta3dd and x4dd only: o (3,) = (theta3dd, "
-               "x4dd, F), jac (2 * 18,); z[N_Z:N_ZW] filled by `accel_constants`.")
+        # (and M2's value, without its Jacobian: the crank's work quadrature)
+        rows = [0, 1, OUTPUTS.index("F"), OUTPUTS.index("M2")]
+        doc = (f"{branch.capitalize()} branch, rows theta3dd and x4dd only: o (4,) = (theta3dd, "
+               "x4dd, F, M2), jac (2 * 18,); z[N_Z:N_ZW] filled by `accel_constants`.")
         # the full variant, then one without the columns of t, omega2 and theta20 (the crank
         # angle's), which only sensitivities to the crank speed or initial angle need (13 %
         # less time); both have the same subexpressions, so the second reads the first's
@@ -191,6 +200,14 @@ def main():
         body += [code, const, code_nc]
         const_names.append(f"{branch}_accel_constants")
         offset += n
+        # the outputs at recorded steps, with theta3dd an input: its sensitivities are the
+        # sensitivity equations' own right-hand side, recorded by the integrator, so the
+        # output sensitivities need no second Jacobian of the accelerations
+        zo, out_o, jac_o = derive(contact, accel_input=True)
+        body.append(emit(f"{branch}_outputs", zo, out_o, jac_o,
+                         f"{branch.capitalize()} branch, outputs at a given theta3dd: z (19,) = "
+                         "the inputs, then theta3dd; o (4,) = (F12x, F12y, M2, F), jac "
+                         "(4 * 19,)."))
     calls = "\n".join(f"    {c}(z)" for c in const_names)
     body.append(f'''@nb.njit(cache=True, error_model="numpy", _nrt=False)
 def accel_constants(z):
@@ -216,6 +233,8 @@ N_Z = {len(NAMES)}
 #: length of z with the parameter-only temporaries of the *_accel functions after the
 #: inputs (`accel_constants`)
 N_ZW = {offset}
+#: inputs of the *_outputs functions: z[:N_Z], then theta3dd
+N_ZO = {len(NAMES) + 1}
 #: columns that the *_accel_nc variants leave out (t, omega2, theta20)
 CRANK_COLUMNS = {CRANK_COLUMNS!r}
 
