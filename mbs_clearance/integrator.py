@@ -455,6 +455,57 @@ def _hermite_max(g_a, d_a, g_b, d_b):
 
 
 @nb.njit(**KERNEL)
+def _clear_of_surface(event, t, y, y_new, f0, f1, h, p, g_start, gd_start, g_end, gd_end,
+                      n_samples, event_tol, event_margin, ytmp):
+    """Whether a step is certainly clear of the switching surface, from the cubic Hermite
+    interpolant of the state (its values and derivatives at both ends, no extra stages):
+    the test of `_search_event` at the same interior samples, with twice the margin, and
+    the interpolant's g checked against the Hermite interpolant of g itself (two cubic
+    approximations of different functions; where they differ by more than a tenth of the
+    margin, the interpolation error is not small against it). False sends the step to
+    `_search_event` on the continuous extension.
+
+    Where the steps resolve the motion the cubic's error is far below the margin: in the
+    paper's case at most 1.3e-9 m at mid-step against the margin of 5e-7 m (0.05 c)."""
+    if g_start > -100.0 * event_tol:
+        return False               # starts on the surface: `_search_event` looks closer
+    margin = 2.0 * event_margin
+    n = y.shape[0]
+    theta_a = 0.0
+    g_a = g_start
+    gd_a = gd_start
+    for i in range(1, n_samples + 2):
+        theta_b = min(i / (n_samples + 1.0), 1.0)
+        if i == n_samples + 1:
+            g_b = g_end
+            gd_b = gd_end
+        else:
+            u = theta_b
+            u2 = u * u
+            u3 = u2 * u
+            h00 = 2.0 * u3 - 3.0 * u2 + 1.0
+            h10 = (u3 - 2.0 * u2 + u) * h
+            h01 = -2.0 * u3 + 3.0 * u2
+            h11 = (u3 - u2) * h
+            for k in range(n):
+                ytmp[k] = h00 * y[k] + h10 * f0[k] + h01 * y_new[k] + h11 * f1[k]
+            g_b, gd_b = event(t + theta_b * h, ytmp, p)
+            # the Hermite interpolant of g over the whole step, at the same point
+            g_h = (h00 * g_start + h10 * gd_start + h01 * g_end + h11 * gd_end)
+            if abs(g_b - g_h) > 0.1 * event_margin:
+                return False
+        span = (theta_b - theta_a) * h
+        bound = max(g_a, g_b) + 0.097 * abs(g_a - g_b) + 0.149 * (abs(gd_a * span)
+                                                                 + abs(gd_b * span))
+        if g_b > -margin or bound > -margin:
+            return False
+        theta_a = theta_b
+        g_a = g_b
+        gd_a = gd_b
+    return True
+
+
+@nb.njit(**KERNEL)
 def _search_event(event, t, y, h, K, P, p, g_start, gd_start, g_end, gd_end, n_samples,
                   event_tol, event_margin, ytmp, wts, fine, sample_polys):
     """First sign change of g (from <= 0 to > 0) inside a step of size h.
@@ -527,6 +578,22 @@ def _search_event(event, t, y, h, K, P, p, g_start, gd_start, g_end, gd_end, n_s
         gd_a = gd_b
     return theta_a, g_a, -1.0, 0.0
 
+
+
+@nb.njit(cache=True, error_model="numpy")
+def _record_arrays(cap, n, n_mem, n_out):
+    """The records (times, states, memories, outputs) for cap steps, as views of one
+    allocation. One block rather than four: glibc raises its trim threshold to twice the
+    largest block freed, so with one large block it keeps the heap between runs, where
+    four smaller ones, freed together with a sensitivity run's results, were returned to
+    the system and faulted back in at every call (1000 page faults, 3.3 ms of a 23 ms
+    sensitivity run; no change for plain simulations)."""
+    block = np.empty(cap * (1 + n + n_mem + n_out))
+    a = cap
+    b = a + cap * n
+    c = b + cap * n_mem
+    return (block[:a], block[a:b].reshape((cap, n)), block[b:c].reshape((cap, n_mem)),
+            block[c:].reshape((cap, n_out)))
 
 
 @nb.njit(cache=True, error_model="numpy")
@@ -605,10 +672,7 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
 
     # untouched pages of np.empty cost nothing: room for typical runs without regrowing
     cap = 16384 if record else 1
-    ts = np.empty(cap)
-    ys = np.empty((cap, n))
-    ms = np.empty((cap, max(n_mem, 1)))
-    os_ = np.empty((cap, n_out))
+    ts, ys, ms, os_ = _record_arrays(cap, n, max(n_mem, 1), n_out)
     nrec = 0
 
     t = edges[0]
@@ -701,14 +765,21 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
             if land:
                 h_next = max(h_next, h)  # a short landing step says nothing about the scale
 
-            # ---- event search on the dense output (interior samples), then the end point
-            if n_extra > 0:
-                extra_stages(rhs, t, y_d, h_try, K, A_extra, C_extra, p, ytmp_d)
-                counters[0] += n_extra
+            # ---- event search on the dense output (interior samples), then the end point;
+            # a continuous extension with extra stages (DOP853) is formed only where a look
+            # with the cubic Hermite interpolant does not show the step clear of the surface
             g_start_valid = False
-            theta_lo, g_lo, theta_hi, g_hi = _search_event(
-                event, t, y_d, h_try, K, P, p, g_start, gd_start, g_end, gd_end, n_samples,
-                event_tol, event_margin, ytmp, wts, fine, sample_polys)
+            if n_extra > 0 and _clear_of_surface(event, t, y_d, y_new, K[0], K[s], h_try, p,
+                                                 g_start, gd_start, g_end, gd_end, n_samples,
+                                                 event_tol, event_margin, ytmp):
+                theta_lo, g_lo, theta_hi, g_hi = 1.0, g_end, -1.0, 0.0
+            else:
+                if n_extra > 0:
+                    extra_stages(rhs, t, y_d, h_try, K, A_extra, C_extra, p, ytmp_d)
+                    counters[0] += n_extra
+                theta_lo, g_lo, theta_hi, g_hi = _search_event(
+                    event, t, y_d, h_try, K, P, p, g_start, gd_start, g_end, gd_end,
+                    n_samples, event_tol, event_margin, ytmp, wts, fine, sample_polys)
             if theta_hi < 0.0:
                 g_start = g_end       # valid for the next step if no event intervenes
                 gd_start = gd_end
@@ -888,10 +959,7 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
         if not need_room:
             break
         need_room = False
-        ts2 = np.empty(2 * nrec)
-        ys2 = np.empty((2 * nrec, n))
-        ms2 = np.empty((2 * nrec, ms.shape[1]))
-        os2 = np.empty((2 * nrec, n_out))
+        ts2, ys2, ms2, os2 = _record_arrays(2 * nrec, n, ms.shape[1], n_out)
         ts2[:nrec] = ts
         ys2[:nrec] = ys
         ms2[:nrec] = ms
@@ -900,4 +968,6 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
         ys = ys2
         ms = ms2
         os_ = os2
-    return ts[:nrec], ys[:nrec], ms[:nrec], peaks, peak_t, counters, os_[:nrec]
+    # the times are a copy (they become a Trajectory's t; a view would keep the whole
+    # block alive), the other records views (the callers take what they keep from them)
+    return ts[:nrec].copy(), ys[:nrec], ms[:nrec], peaks, peak_t, counters, os_[:nrec]

@@ -546,13 +546,17 @@ def _columns(ys, ms, out):
 
 def trajectory_from_states(mech, ts, ys, ms, p, stats, peaks, outs=None):
     """Build a `Trajectory` from recorded states [theta3, x4, theta3dot, x4dot, ..., W],
-    memories [mode, dmin, ...] and, if recorded by the integrator, outputs (OUT_COLUMNS;
-    else they are evaluated here)."""
+    memories [mode, dmin, ...] and, if recorded by the integrator, outputs (OUT_COLUMNS
+    first, more columns allowed; else they are evaluated here). Wider records (a
+    sensitivity run's) are read in place, not copied."""
     from .trajectory import Trajectory
 
     ys = np.ascontiguousarray(ys)
-    ms = np.ascontiguousarray(ms[:, :N_MEM])
-    out = outputs(ts, ys, ms, p) if outs is None or outs.shape[1] == 0 else outs
+    ms = np.ascontiguousarray(ms)
+    if outs is None or outs.shape[1] == 0:
+        out = outputs(ts, ys, np.ascontiguousarray(ms[:, :N_MEM]), p)
+    else:
+        out = outs
     (base_force, crank_moment, contact_force, penetration, eccentricity, slider_position,
      slider_velocity, slider_acceleration, coupler_angle, coupler_rate, contact_phase,
      crank_work) = _columns(ys, ms, np.ascontiguousarray(out))

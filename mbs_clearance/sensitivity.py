@@ -351,9 +351,9 @@ def _ddm(mech, names, revolutions, rtol, t_eval, event_time_term, method):
     stats = reduced.counters_dict(counters)
     stats.update(rtol=rtol_v, method=method, wall_time=time.perf_counter() - t0,
                  event_time_term=event_time_term, directions=nb)
-    traj = reduced.trajectory_from_states(
-        mech, ts, ys[:, [0, 1, 2, 3, -1]], ms, base, stats,
-        None if t_eval is not None else peaks, outs[:, :ddm.N_OUT_PLAIN])
+    # (the states are ys[:, :4], the crank work the last column, as in a plain run)
+    traj = reduced.trajectory_from_states(mech, ts, ys, ms, base, stats,
+                                          None if t_eval is not None else peaks, outs)
     return Sensitivities(
         t=ts, parameters=names, reference=ref, base_force=d_force, base_force_magnitude=d_mag,
         crank_moment=d_moment, contact_force=d_contact, trajectory=traj, method="ddm",

@@ -12,6 +12,7 @@ from mbs_clearance.integrator import (
     METHODS,
     MONITOR_SIG,
     RHS_SIG,
+    _clear_of_surface,
     dense_eval,
     extra_stages,
     integrate,
@@ -201,19 +202,49 @@ def flag(t, y, p):
     p[0] = 1.0
 
 
-def test_interior_samples_catch_a_crossing_and_return_inside_one_step():
+@pytest.mark.parametrize("method", ["dopri5", "dop853"])
+def test_interior_samples_catch_a_crossing_and_return_inside_one_step(method):
     # With no dynamics the step grows to h_max = 0.4 and step ends never see g > 0.
+    # (dop853: its first look is the cubic Hermite one of `_clear_of_surface`, which must
+    # send these steps to the full search)
     *_, counters = run(still, bump_without_rate, flag, bump_only_minus_x, [0.0], [0.0], [0.0, 3.0],
-                       1e-8, n_samples=0, h_max=0.4)
+                       1e-8, n_samples=0, h_max=0.4, method=method)
     assert counters[3] == 0   # missed without interior samples: this is what they are for
     *_, counters = run(still, bump_without_rate, flag, bump_only_minus_x, [0.0], [0.0], [0.0, 3.0],
-                       1e-8, n_samples=39, h_max=0.4)
+                       1e-8, n_samples=39, h_max=0.4, method=method)
     assert counters[3] == 1
     # with no interior samples at all, the rates at the step ends reveal the excursion: the
     # cubic Hermite interpolant of g rises to the surface, so the step is sampled finer
     *_, counters = run(still, bump, flag, bump_minus_x, [0.0], [0.0], [0.0, 3.0], 1e-8,
-                       n_samples=0, h_max=0.4, margin=1e-3)
+                       n_samples=0, h_max=0.4, margin=1e-3, method=method)
     assert counters[3] == 1
+
+
+@nb.njit(EVENT_SIG)
+def osc_above(t, y, p):
+    # g = y0 - level: the oscillator's position rising above a level
+    return y[0] - p[1], y[1]
+
+
+def test_cubic_look_declares_a_step_clear_only_far_from_the_surface():
+    """`_clear_of_surface` on one resolved oscillator step (omega h = 0.2, y0 from its
+    maximum 1 down to cos 0.2): clear when the level is far above the motion; not clear
+    when the motion comes within twice the margin of it, nor when the step starts on it."""
+    A, B, C, *_ = METHODS["dop853"].arrays()
+    h, t = 0.2, 0.0
+    y = np.array([1.0, 0.0])
+    K = np.zeros((B.shape[0] + 4, 2))
+    f = np.array([0.0, -1.0])
+    y_new, f_new, ytmp = np.empty(2), np.empty(2), np.empty(2)
+    margin = 1e-3
+    for level, clear in ((2.0, True), (1.0 + 1.5 * margin, False), (1.0, False)):
+        p = np.array([1.0, level])
+        rk_step(osc_rhs, t, y, f, h, A, B, C, K, p, y_new, f_new, ytmp)
+        g0, gd0 = osc_above(t, y, p)
+        g1, gd1 = osc_above(t + h, y_new, p)
+        got = _clear_of_surface(osc_above, t, y, y_new, K[0], K[B.shape[0]], h, p, g0, gd0,
+                                g1, gd1, 1, 1e-14, margin, ytmp)
+        assert got == clear, level
 
 
 def test_window_peaks_are_refined_between_steps():
