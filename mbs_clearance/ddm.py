@@ -50,10 +50,12 @@ from ._jacobians import (
     contact_accel_nc,
     contact_branch,
     contact_outputs,
+    contact_outputs_nc,
     free_accel,
     free_accel_nc,
     free_branch,
     free_outputs,
+    free_outputs_nc,
 )
 from .contact import contact_force, hysteresis_factor
 from .integrator import ACTION_SIG, KERNEL, MONITOR_SIG, RHS_SIG, integrate
@@ -359,6 +361,7 @@ def sens_outputs(ts, ys, ms, outs, p, coeffs):
     d_contact = np.zeros((n, npar))
     for j in range(6, N_Z):
         z[j] = zw[j]
+    nc = q[P_NC] > 0.5
     for i in range(n):
         z[0] = ts[i]
         for j in range(4):
@@ -366,12 +369,19 @@ def sens_outputs(ts, ys, ms, outs, p, coeffs):
         z[5] = ms[i, 1]                 # the impact-velocity memory (P_DMIN)
         z[N_Z] = outs[i, 0]             # theta3dd
         # the branch as in the right-hand side: contact while the law's force is positive
+        # (without the crank-angle columns where no parameter needs them, as there)
         in_contact = False
         if ms[i, 0] > 0.5:              # the contact mode (P_MODE)
-            contact_outputs(z, o, jac)
+            if nc:
+                contact_outputs_nc(z, o, jac)
+            else:
+                contact_outputs(z, o, jac)
             in_contact = o[3] > 0.0
         if not in_contact:
-            free_outputs(z, o, jac)
+            if nc:
+                free_outputs_nc(z, o, jac)
+            else:
+                free_outputs(z, o, jac)
         for b in range(nb_):
             base = 4 + 4 * b
             s1 = ys[i, base]
@@ -426,22 +436,34 @@ def norm_maxima(ys, coeffs, weights, lo, hi):
     steps of the weighted norm sqrt(sum_j weights[4k + j] s_kj^2) of the state sensitivity
     s_k = sum_b coeffs[b, k] ys[:, 4 + 4b : 8 + 4b] (b over the integrated directions,
     `sensitivity.independent_directions`); returns (windows, npar)."""
-    nb, npar = coeffs.shape
+    nb_, npar = coeffs.shape
     out = np.zeros((lo.shape[0], npar))
-    s = np.empty(4)
+    # the nonzero coefficients per parameter (most parameters are one direction)
+    cnt = np.zeros(npar, dtype=np.int64)
+    idx = np.zeros((npar, nb_), dtype=np.int64)
+    val = np.zeros((npar, nb_))
+    for k in range(npar):
+        for b in range(nb_):
+            if coeffs[b, k] != 0.0:
+                idx[k, cnt[k]] = 4 + 4 * b
+                val[k, cnt[k]] = coeffs[b, k]
+                cnt[k] += 1
     for w in range(lo.shape[0]):
         for i in range(lo[w], hi[w]):
             for k in range(npar):
-                for j in range(4):
-                    s[j] = 0.0
-                for b in range(nb):
-                    c = coeffs[b, k]
-                    if c != 0.0:
-                        for j in range(4):
-                            s[j] += c * ys[i, 4 + 4 * b + j]
-                acc = 0.0
-                for j in range(4):
-                    acc += weights[4 * k + j] * s[j] * s[j]
+                s0 = 0.0
+                s1 = 0.0
+                s2 = 0.0
+                s3 = 0.0
+                for e in range(cnt[k]):
+                    c = val[k, e]
+                    j = idx[k, e]
+                    s0 += c * ys[i, j]
+                    s1 += c * ys[i, j + 1]
+                    s2 += c * ys[i, j + 2]
+                    s3 += c * ys[i, j + 3]
+                acc = (weights[4 * k] * s0 * s0 + weights[4 * k + 1] * s1 * s1
+                       + weights[4 * k + 2] * s2 * s2 + weights[4 * k + 3] * s3 * s3)
                 if acc > out[w, k]:
                     out[w, k] = acc
     return np.sqrt(out)

@@ -8,6 +8,7 @@ differences through any backend, with the runs in parallel.
 from __future__ import annotations
 
 import json
+import math
 import time
 from concurrent.futures import Executor, ProcessPoolExecutor
 from dataclasses import dataclass, field
@@ -287,15 +288,19 @@ def independent_directions(M: np.ndarray, tol: float = DIRECTION_TOL):
     M = np.asarray(M, dtype=float)
     npar = M.shape[1]
     basis: list[int] = []
-    q = np.zeros((M.shape[0], 0))      # orthonormal basis of the columns kept so far
+    q = np.zeros((M.shape[0], npar))   # orthonormal basis of the columns kept so far
+    nq = 0
     for k in range(npar):
         col = M[:, k]
-        r = col - q @ (q.T @ col)
-        r = r - q @ (q.T @ r)           # Gram-Schmidt twice (re-orthogonalized)
-        rn = np.linalg.norm(r)
-        if rn > tol * np.linalg.norm(col) or (not basis and k == npar - 1):
+        qk = q[:, :nq]
+        r = col - qk @ (qk.T @ col)
+        r = r - qk @ (qk.T @ r)         # Gram-Schmidt twice (re-orthogonalized)
+        rn = math.sqrt(r @ r)
+        if rn > tol * math.sqrt(col @ col) or (not basis and k == npar - 1):
             basis.append(k)
-            q = np.column_stack([q, r / rn]) if rn > 0.0 else q
+            if rn > 0.0:
+                q[:, nq] = r / rn
+                nq += 1
     coeffs = np.linalg.lstsq(M[:, basis], M, rcond=None)[0]
     return np.array(basis), coeffs
 

@@ -204,10 +204,12 @@ def main():
         # sensitivity equations' own right-hand side, recorded by the integrator, so the
         # output sensitivities need no second Jacobian of the accelerations
         zo, out_o, jac_o = derive(contact, accel_input=True)
-        body.append(emit(f"{branch}_outputs", zo, out_o, jac_o,
-                         f"{branch.capitalize()} branch, outputs at a given theta3dd: z (19,) = "
-                         "the inputs, then theta3dd; o (4,) = (F12x, F12y, M2, F), jac "
-                         "(4 * 19,)."))
+        doc_o = (f"{branch.capitalize()} branch, outputs at a given theta3dd: z (19,) = the "
+                 "inputs, then theta3dd; o (4,) = (F12x, F12y, M2, F), jac (4 * 19,).")
+        body.append(emit(f"{branch}_outputs", zo, out_o, jac_o, doc_o))
+        body.append(emit(f"{branch}_outputs_nc", zo, out_o, jac_o,
+                         doc_o + f" Without the columns {CRANK_COLUMNS} (as the _accel_nc "
+                         "functions).", omit=CRANK_COLUMNS))
     calls = "\n".join(f"    {c}(z)" for c in const_names)
     body.append(f'''@nb.njit(cache=True, error_model="numpy", _nrt=False)
 def accel_constants(z):

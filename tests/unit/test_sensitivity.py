@@ -15,10 +15,12 @@ from mbs_clearance._jacobians import (
     contact_accel_nc,
     contact_branch,
     contact_outputs,
+    contact_outputs_nc,
     free_accel,
     free_accel_nc,
     free_branch,
     free_outputs,
+    free_outputs_nc,
 )
 from mbs_clearance.contact import hysteresis_factor
 from mbs_clearance.sensitivity import DEFAULT_PARAMETERS, independent_directions, sensitivities
@@ -106,9 +108,11 @@ def test_acceleration_only_variants_equal_the_full_branch(paper, branch, accel, 
         assert np.isnan(ja.reshape(2, N_Z)[:, list(skip)]).all()   # left as they were
 
 
-@pytest.mark.parametrize("branch,outputs", [(contact_branch, contact_outputs),
-                                            (free_branch, free_outputs)])
-def test_outputs_at_given_acceleration_chain_to_the_full_branch(paper, branch, outputs):
+@pytest.mark.parametrize("branch,outputs,outputs_nc", [
+    (contact_branch, contact_outputs, contact_outputs_nc),
+    (free_branch, free_outputs, free_outputs_nc)])
+def test_outputs_at_given_acceleration_chain_to_the_full_branch(paper, branch, outputs,
+                                                                outputs_nc):
     """The *_outputs functions (theta3dd an input) give the full branch's F12x, F12y, M2 and
     F, and their Jacobian chained through theta3dd's row gives the full branch's rows:
     d o/d z_j = (d o/d z_j)|theta3dd + (d o/d theta3dd) (d theta3dd/d z_j)."""
@@ -123,6 +127,14 @@ def test_outputs_at_given_acceleration_chain_to_the_full_branch(paper, branch, o
     oo, jo = np.zeros(4), np.zeros(4 * N_ZO)
     outputs(zo, oo, jo)
     jo = jo.reshape(4, N_ZO)
+    # the _nc variant: the same, without the crank-angle columns (left as they were)
+    oo_nc, jo_nc = np.zeros(4), np.full(4 * N_ZO, np.nan)
+    outputs_nc(zo, oo_nc, jo_nc)
+    jo_nc = jo_nc.reshape(4, N_ZO)
+    keep = [j for j in range(N_ZO) if j not in CRANK_COLUMNS]
+    np.testing.assert_array_equal(oo_nc, oo)
+    np.testing.assert_array_equal(jo_nc[:, keep], jo[:, keep])
+    assert np.isnan(jo_nc[:, list(CRANK_COLUMNS)]).all()
     rows = [2, 3, 4, 5]    # F12x, F12y, M2, F of the full branch
     # different expressions round differently: the penetration (~1e-6 m) is a difference of
     # coordinates of size L2 + L3, relative round-off ~4e-11 (as in the test above)
@@ -146,6 +158,25 @@ def test_ddm_trajectory_equals_the_plain_simulation(paper, rev4, ddm):
         err = np.max(np.abs(a - b)) / np.max(np.abs(b))
         assert err < 1e-6, (name, err)
     np.testing.assert_array_equal(tr.contact_phase, plain.contact_phase)
+
+
+def test_norm_maxima_equals_numpy():
+    """The compiled growth diagnostic against the same maxima written with numpy, with a
+    parameter that combines two directions and one with no direction."""
+    from mbs_clearance.ddm import norm_maxima
+
+    rng = np.random.default_rng(1)
+    nb, npar, n = 3, 5, 40
+    ys = rng.normal(size=(n, 4 + 4 * nb + 1))
+    coeffs = np.zeros((nb, npar))
+    coeffs[0, 0] = coeffs[1, 1] = coeffs[2, 2] = 1.0
+    coeffs[:2, 3] = [0.5, -2.0]          # parameter 4 zero: no direction
+    weights = rng.uniform(0.5, 2.0, 4 * npar)
+    lo, hi = np.array([0, 10, 25]), np.array([11, 25, 40])
+    s = np.einsum("nbj,bk->nkj", ys[:, 4:4 + 4 * nb].reshape(n, nb, 4), coeffs)
+    norms = np.sqrt((weights.reshape(npar, 4)[None] * s**2).sum(axis=2))
+    ref = np.array([norms[a:b].max(axis=0) for a, b in zip(lo, hi)])
+    np.testing.assert_allclose(norm_maxima(ys, coeffs, weights, lo, hi), ref, rtol=1e-13)
 
 
 def test_independent_directions():
