@@ -417,6 +417,22 @@ def _illinois_update(x, gx, a, ga, b, gb, side):
 
 
 @nb.njit(**KERNEL, inline="always")
+def _hermite_weights(u):
+    """The cubic Hermite basis at u in [0, 1]: weights of the start value, start slope, end
+    value and end slope (slopes times the interval length)."""
+    u2 = u * u
+    u3 = u2 * u
+    return 2.0 * u3 - 3.0 * u2 + 1.0, u3 - 2.0 * u2 + u, -2.0 * u3 + 3.0 * u2, u3 - u2
+
+
+@nb.njit(**KERNEL, inline="always")
+def _hermite_bound(g_a, d_a, g_b, d_b):
+    """A cheap upper bound of the cubic Hermite interpolant over [0, 1] (|h00 - (1 - u)| <=
+    0.097, |h10|, |h11| <= 4/27), checked before its exact maximum."""
+    return max(g_a, g_b) + 0.097 * abs(g_a - g_b) + 0.149 * (abs(d_a) + abs(d_b))
+
+
+@nb.njit(**KERNEL, inline="always")
 def _hermite_max(g_a, d_a, g_b, d_b):
     """Maximum over [0, 1] of the cubic Hermite interpolant with values g_a, g_b and
     end slopes d_a, d_b (derivatives times the interval length), and where it is."""
@@ -444,10 +460,8 @@ def _hermite_max(g_a, d_a, g_b, d_b):
                 continue
             u = q / qa
         if 0.0 < u < 1.0:
-            u2 = u * u
-            u3 = u2 * u
-            val = (g_a * (2.0 * u3 - 3.0 * u2 + 1.0) + d_a * (u3 - 2.0 * u2 + u)
-                   + g_b * (-2.0 * u3 + 3.0 * u2) + d_b * (u3 - u2))
+            w00, w10, w01, w11 = _hermite_weights(u)
+            val = g_a * w00 + d_a * w10 + g_b * w01 + d_b * w11
             if val > best:
                 best = val
                 where = u
@@ -480,13 +494,9 @@ def _clear_of_surface(event, t, y, y_new, f0, f1, h, p, g_start, gd_start, g_end
             g_b = g_end
             gd_b = gd_end
         else:
-            u = theta_b
-            u2 = u * u
-            u3 = u2 * u
-            h00 = 2.0 * u3 - 3.0 * u2 + 1.0
-            h10 = (u3 - 2.0 * u2 + u) * h
-            h01 = -2.0 * u3 + 3.0 * u2
-            h11 = (u3 - u2) * h
+            h00, w10, h01, w11 = _hermite_weights(theta_b)
+            h10 = w10 * h
+            h11 = w11 * h
             for k in range(n):
                 ytmp[k] = h00 * y[k] + h10 * f0[k] + h01 * y_new[k] + h11 * f1[k]
             g_b, gd_b = event(t + theta_b * h, ytmp, p)
@@ -495,8 +505,7 @@ def _clear_of_surface(event, t, y, y_new, f0, f1, h, p, g_start, gd_start, g_end
             if abs(g_b - g_h) > 0.1 * event_margin:
                 return False
         span = (theta_b - theta_a) * h
-        bound = max(g_a, g_b) + 0.097 * abs(g_a - g_b) + 0.149 * (abs(gd_a * span)
-                                                                 + abs(gd_b * span))
+        bound = _hermite_bound(g_a, gd_a * span, g_b, gd_b * span)
         if g_b > -margin or bound > -margin:
             return False
         theta_a = theta_b
@@ -541,9 +550,7 @@ def _search_event(event, t, y, h, K, P, p, g_start, gd_start, g_end, gd_end, n_s
         span = (theta_b - theta_a) * h
         d_a = gd_a * span
         d_b = gd_b * span
-        # cheap upper bound of the Hermite interpolant (|h00 - (1 - u)| <= 0.097,
-        # |h10|, |h11| <= 4/27) before its exact maximum
-        bound = max(g_a, g_b) + 0.097 * abs(g_a - g_b) + 0.149 * (abs(d_a) + abs(d_b))
+        bound = _hermite_bound(g_a, d_a, g_b, d_b)
         peak = bound
         where = -1.0
         if g_b <= 0.0 and bound > -event_margin:
