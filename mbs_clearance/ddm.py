@@ -308,6 +308,24 @@ def on_event_sens(t, y, p):
 
 
 @nb.njit(cache=True, error_model="numpy")
+def _nonzero_by_parameter(coeffs):
+    """The nonzero coefficients (nb, npar) per parameter k: their number cnt[k], the
+    directions dirs[k, :cnt[k]] and the values vals[k, :cnt[k]] (most parameters are one
+    direction)."""
+    nb_, npar = coeffs.shape
+    cnt = np.zeros(npar, dtype=np.int64)
+    dirs = np.zeros((npar, nb_), dtype=np.int64)
+    vals = np.zeros((npar, nb_))
+    for k in range(npar):
+        for b in range(nb_):
+            if coeffs[b, k] != 0.0:
+                dirs[k, cnt[k]] = b
+                vals[k, cnt[k]] = coeffs[b, k]
+                cnt[k] += 1
+    return cnt, dirs, vals
+
+
+@nb.njit(cache=True, error_model="numpy")
 def sens_outputs(ts, ys, ms, outs, p, coeffs):
     """Sensitivities of the outputs (F12x, F12y, M2, F) at recorded steps.
 
@@ -338,27 +356,12 @@ def sens_outputs(ts, ys, ms, outs, p, coeffs):
         for e in range(m):
             cols[b, e] = int(q[s0 + 1 + b * m + e])
             vals[b, e] = q[s0 + 1 + b * m + e + slot]
-    nnz = 0
-    for b in range(nb_):
-        for k in range(npar):
-            if coeffs[b, k] != 0.0:
-                nnz += 1
-    nz_b = np.empty(nnz, dtype=np.int64)
-    nz_k = np.empty(nnz, dtype=np.int64)
-    nz_c = np.empty(nnz)
-    nnz = 0
-    for b in range(nb_):
-        for k in range(npar):
-            if coeffs[b, k] != 0.0:
-                nz_b[nnz] = b
-                nz_k[nnz] = k
-                nz_c[nnz] = coeffs[b, k]
-                nnz += 1
+    cnt, dirs, cvals = _nonzero_by_parameter(coeffs)
     d = np.empty((nb_, 4))
-    d_force = np.zeros((n, 2, npar))
+    d_force = np.empty((n, 2, npar))
     d_mag = np.empty((n, npar))
-    d_moment = np.zeros((n, npar))
-    d_contact = np.zeros((n, npar))
+    d_moment = np.empty((n, npar))
+    d_contact = np.empty((n, npar))
     for j in range(6, N_Z):
         z[j] = zw[j]
     nc = q[P_NC] > 0.5
@@ -397,19 +400,26 @@ def sens_outputs(ts, ys, ms, outs, p, coeffs):
                 for e in range(m):
                     acc += jac[r0 + cols[b, e]] * vals[b, e]
                 d[b, r] = acc
-        for t in range(nnz):
-            b = nz_b[t]
-            k = nz_k[t]
-            c = nz_c[t]
-            d_force[i, 0, k] += c * d[b, 0]
-            d_force[i, 1, k] += c * d[b, 1]
-            d_moment[i, k] += c * d[b, 2]
-            d_contact[i, k] += c * d[b, 3]
         fx = o[0]
         fy = o[1]
         inv = 1.0 / max(math.sqrt(fx * fx + fy * fy), 1e-300)
         for k in range(npar):
-            d_mag[i, k] = (fx * d_force[i, 0, k] + fy * d_force[i, 1, k]) * inv
+            dfx = 0.0
+            dfy = 0.0
+            dm2 = 0.0
+            dfc = 0.0
+            for e in range(cnt[k]):
+                b = dirs[k, e]
+                c = cvals[k, e]
+                dfx += c * d[b, 0]
+                dfy += c * d[b, 1]
+                dm2 += c * d[b, 2]
+                dfc += c * d[b, 3]
+            d_force[i, 0, k] = dfx
+            d_force[i, 1, k] = dfy
+            d_moment[i, k] = dm2
+            d_contact[i, k] = dfc
+            d_mag[i, k] = (fx * dfx + fy * dfy) * inv
     return d_force, d_mag, d_moment, d_contact
 
 
@@ -436,18 +446,9 @@ def norm_maxima(ys, coeffs, weights, lo, hi):
     steps of the weighted norm sqrt(sum_j weights[4k + j] s_kj^2) of the state sensitivity
     s_k = sum_b coeffs[b, k] ys[:, 4 + 4b : 8 + 4b] (b over the integrated directions,
     `sensitivity.independent_directions`); returns (windows, npar)."""
-    nb_, npar = coeffs.shape
+    npar = coeffs.shape[1]
     out = np.zeros((lo.shape[0], npar))
-    # the nonzero coefficients per parameter (most parameters are one direction)
-    cnt = np.zeros(npar, dtype=np.int64)
-    idx = np.zeros((npar, nb_), dtype=np.int64)
-    val = np.zeros((npar, nb_))
-    for k in range(npar):
-        for b in range(nb_):
-            if coeffs[b, k] != 0.0:
-                idx[k, cnt[k]] = 4 + 4 * b
-                val[k, cnt[k]] = coeffs[b, k]
-                cnt[k] += 1
+    cnt, dirs, val = _nonzero_by_parameter(coeffs)
     for w in range(lo.shape[0]):
         for i in range(lo[w], hi[w]):
             for k in range(npar):
@@ -457,7 +458,7 @@ def norm_maxima(ys, coeffs, weights, lo, hi):
                 s3 = 0.0
                 for e in range(cnt[k]):
                     c = val[k, e]
-                    j = idx[k, e]
+                    j = 4 + 4 * dirs[k, e]
                     s0 += c * ys[i, j]
                     s1 += c * ys[i, j + 1]
                     s2 += c * ys[i, j + 2]
