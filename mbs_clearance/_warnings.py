@@ -1,0 +1,29 @@
+"""Warning categories of the package: users filter them by class.
+
+- `AccuracyWarning`: the result may miss the accuracy the docs state (loose tolerance, a
+  grazing contact the integrator cannot resolve, a peak with a rival within the error).
+- `PhysicsWarning`: the result is computed as asked but is physically meaningless (penetration
+  far beyond the clearance, motion whose periodicity cannot be judged).
+- `CacheWarning`: the compiled-kernel cache cannot be used (read-only install); the package
+  works without it but compiles on every import.
+"""
+
+from __future__ import annotations
+
+__all__ = ["MbsClearanceWarning", "AccuracyWarning", "PhysicsWarning", "CacheWarning"]
+
+
+class MbsClearanceWarning(UserWarning):
+    """Base class of the package's warnings."""
+
+
+class AccuracyWarning(MbsClearanceWarning):
+    """The result may miss its stated accuracy; the message says what to change."""
+
+
+class PhysicsWarning(MbsClearanceWarning):
+    """The result is physically meaningless or cannot be judged; the message says why."""
+
+
+class CacheWarning(MbsClearanceWarning):
+    """The compiled-kernel cache is unavailable; kernels compile in memory instead."""
