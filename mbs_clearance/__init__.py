@@ -8,11 +8,11 @@ Public API::
     opt = optimize_link_lengths(SliderCrank(), seed=1)
 """
 
-from ._cache import refresh_stale_cache
+from ._cache import register_package
 
-# before any kernel is compiled or loaded: numba's cache does not notice edits of the files a
-# kernel calls into (see _cache.py)
-refresh_stale_cache()
+# before any kernel is defined: cache the kernels under a digest of all the package's sources
+# as imported (numba alone does not notice edits of the files a kernel calls into; _cache.py)
+register_package(__name__)
 
 from .mechanism import CONTINUOUS_FIELDS, PARAMETER_INFO, SliderCrank  # noqa: E402
 from .optimize import OptimizationResult, optimize_link_lengths  # noqa: E402

@@ -1,58 +1,267 @@
 """Keep numba's on-disk cache of the compiled kernels consistent with their sources.
 
-numba keys a cached function by the timestamp of its *own* source file only. The compiled
-integrator of the reduced model (`reduced.integrate_plain`, in reduced.py) contains code
-from integrator.py, _trig.py and the model's kernels, so after an edit of one of those
-files numba would keep loading the old machine code and the package would silently compute
-with the old kernels (it happened during development). On import, `refresh_stale_cache`
-compares a digest of all the package's sources with the one stored beside the cache and
-removes the package's cache files when they differ; the kernels are then compiled once
-more. An installed release whose files do not change never pays for it.
+numba checks a cached kernel against its *own* source file only, but a kernel contains the
+code of every function it calls: `reduced.rhs` inlines contact.py and _trig.py,
+`validation.stress._step_excursion` inlines reduced.py and integrator.py. After an edit of
+such a helper numba would go on loading the old machine code. And a process that imported
+the old sources but compiles after the edit would write old code into the cache for everyone.
 
-Where the package directory is not writable, numba caches elsewhere (or not at all; see
-NUMBA_CACHE_DIR) and this check does nothing.
+A package that calls `register_package` in its ``__init__`` (mbs_clearance; validation with
+``depends_on=("mbs_clearance",)``) gets a cache locator of its own, tried before numba's:
+
+- the digest of the package's sources (every ``*.py`` under it, plus the digests of the
+  packages it depends on) is taken once, when the process imports the package;
+- the kernels of the package are cached under ``__pycache__/nb-<digest[:12]>/`` beside
+  their file, and the full digest is their source stamp. A process compiling code it
+  imported before an edit writes under the old key, which no process with the new sources
+  looks at. If the sources change while the package is being imported (the process then
+  holds a mix), the kernels still defined after that change get a stamp no other process
+  can match, so nothing of that mix is ever loaded elsewhere;
+- cache directories of other digests (and numba's own cache files of the package, from
+  before this scheme) that were not written to for `PRUNE_AGE` seconds are removed;
+- where ``__pycache__`` is not writable: under ``NUMBA_CACHE_DIR`` if set (it is tried
+  first), else numba's user-wide cache directory, else a directory of the user's own in the
+  temporary directory, with one `CacheWarning` per process.
 """
 
 from __future__ import annotations
 
+import atexit
 import hashlib
+import importlib
+import os
+import shutil
+import stat
+import sys
+import tempfile
+import time
+import uuid
+import warnings
+from dataclasses import dataclass
 from pathlib import Path
 
-_PACKAGE = Path(__file__).resolve().parent
-#: file beside numba's cache files holding the digest of the sources they were compiled from
-STAMP = "mbs_clearance_sources.sha256"
+import numba
+from numba.core import config
+from numba.core.caching import CacheImpl, _CacheLocator
+from numba.misc.appdirs import AppDirs
+
+from ._warnings import CacheWarning
+
+__all__ = ["register_package", "sources_digest", "PREFIX", "PRUNE_AGE"]
+
+#: name prefix of the cache directories, followed by the first 12 hex digits of the digest
+PREFIX = "nb-"
+#: cache directories of other digests unused for this many seconds are removed
+PRUNE_AGE = 600.0
+#: numba's cache files in the default places and the digest file of the scheme before this one
+_LEGACY = (".nbi", ".nbc", "mbs_clearance_sources.sha256")
+_NUMBA_DIR = os.path.dirname(os.path.abspath(numba.__file__)) + os.sep
 
 
-def sources_digest(package: Path = _PACKAGE) -> str:
-    """SHA-256 over the package's Python sources (names and contents, sorted by name)."""
+def _source_files(root: Path) -> list[Path]:
+    return sorted(p for p in root.rglob("*.py") if "__pycache__" not in p.parts)
+
+
+def _stat_signature(files: list[Path]) -> tuple:
+    sig = []
+    for path in files:
+        try:
+            st = path.stat()
+            sig.append((st.st_mtime_ns, st.st_size))
+        except OSError:
+            sig.append(None)
+    return tuple(sig)
+
+
+def sources_digest(root: Path, extra: tuple[str, ...] = ()) -> str:
+    """SHA-256 over the package's Python sources (relative paths and contents, sorted by
+    path, subpackages included) followed by the digests `extra` of its dependencies."""
     h = hashlib.sha256()
-    for path in sorted(package.glob("*.py")):
-        h.update(path.name.encode())
-        h.update(path.read_bytes())
+    for path in _source_files(root):
+        h.update(path.relative_to(root).as_posix().encode() + b"\0")
+        h.update(path.read_bytes() + b"\0")
+    for digest in extra:
+        h.update(digest.encode())
     return h.hexdigest()
 
 
-def refresh_stale_cache(package: Path = _PACKAGE) -> bool:
-    """Remove numba's cache files (*.nbi, *.nbc in package/__pycache__) if they may have been
-    compiled from other sources than the current ones; returns True if it removed any."""
-    cache = package / "__pycache__"
-    digest = sources_digest(package)
-    stamp = cache / STAMP
+@dataclass
+class _Package:
+    name: str
+    root: str                       # realpath of the package directory
+    digest: str                     # at import
+    depends_on: tuple[_Package, ...]
+    files: list[Path]
+    signature: tuple                # stat signature of `files` at import
+
+    def unchanged(self) -> bool:
+        """True while the sources are the ones the digest was taken from."""
+        if _stat_signature(self.files) != self.signature or _source_files(
+                Path(self.root)) != self.files:
+            try:
+                now = sources_digest(Path(self.root), tuple(d.digest for d in self.depends_on))
+            except OSError:
+                return False
+            if now != self.digest:
+                return False
+            self.signature = _stat_signature(self.files)
+        return all(d.unchanged() for d in self.depends_on)
+
+
+_PACKAGES: dict[str, _Package] = {}     # realpath of root -> package
+_DIRS: dict[str, str | None] = {}       # realpath of a source directory -> cache directory
+_WARNED = False
+
+
+def register_package(name: str, depends_on: tuple[str, ...] = ()) -> str | None:
+    """Key the numba cache of the kernels defined in package `name` (and its subpackages) by
+    the digest of its sources now and of the packages `depends_on`, whose functions its
+    kernels compile in; call it in the package's ``__init__`` before any kernel is defined.
+    Returns the digest (None for a package that is not a directory, e.g. in a zip file:
+    numba's own locators then apply)."""
+    root = Path(sys.modules[name].__file__).resolve().parent
+    if not root.is_dir():
+        return None
+    deps = []
+    for dep in depends_on:
+        importlib.import_module(dep)            # registers it
+        deps.append(_PACKAGES[str(Path(sys.modules[dep].__file__).resolve().parent)])
+    files = _source_files(root)
+    signature = _stat_signature(files)
+    digest = sources_digest(root, tuple(d.digest for d in deps))
+    _PACKAGES[str(root)] = _Package(name, str(root), digest, tuple(deps), files, signature)
+    if DigestLocator not in CacheImpl._locator_classes:
+        CacheImpl._locator_classes.insert(0, DigestLocator)
+    return digest
+
+
+def _package_of(py_file: str) -> _Package | None:
+    path = os.path.realpath(py_file)
+    for root, package in _PACKAGES.items():
+        if path.startswith(root + os.sep):
+            return package
+    return None
+
+
+def _writable(path: str) -> bool:
     try:
-        if stamp.read_text() == digest:
-            return False
+        os.makedirs(path, exist_ok=True)
+        tempfile.TemporaryFile(dir=path).close()
+        return True
     except OSError:
-        pass            # no stamp yet: the cache's origin is unknown
-    removed = False
-    for path in list(cache.glob("*.nbi")) + list(cache.glob("*.nbc")):
+        return False
+
+
+def _private_temp_root() -> str:
+    """A directory of this user's own in the temporary directory: mode 0700 and owned by the
+    user, else (someone else made it) a new one for this process, removed at exit. The
+    cache holds pickles: a directory others can write to must never be read."""
+    base = tempfile.gettempdir()
+    uid = getattr(os, "getuid", lambda: None)()
+    if uid is not None:
+        path = os.path.join(base, f"mbs_clearance-numba-{uid}")
         try:
-            path.unlink()
-            removed = True
+            os.makedirs(path, mode=0o700, exist_ok=True)
+            st = os.lstat(path)
+            if (stat.S_ISDIR(st.st_mode) and st.st_uid == uid
+                    and not st.st_mode & (stat.S_IWGRP | stat.S_IWOTH)):
+                return path
+        except OSError:
+            pass
+    path = tempfile.mkdtemp(prefix="mbs_clearance-numba-")
+    atexit.register(shutil.rmtree, path, True)
+    return path
+
+
+def _prune(parent: str, keep: str) -> None:
+    """Remove from `parent` the cache directories of other digests and the legacy files
+    (numba's own *.nbi, *.nbc) unused for PRUNE_AGE seconds."""
+    old = time.time() - PRUNE_AGE
+    try:
+        entries = list(os.scandir(parent))
+    except OSError:
+        return
+    for entry in entries:
+        try:
+            if entry.name != keep and entry.stat(follow_symlinks=False).st_mtime < old:
+                if entry.name.startswith(PREFIX) and entry.is_dir(follow_symlinks=False):
+                    shutil.rmtree(entry.path, ignore_errors=True)
+                elif entry.name.endswith(_LEGACY) and entry.is_file():
+                    os.unlink(entry.path)
         except OSError:
             pass        # removed by a concurrent import, or read-only
-    try:
-        cache.mkdir(exist_ok=True)
-        stamp.write_text(digest)
-    except OSError:
-        pass
-    return removed
+
+
+def _warn_once(message: str) -> None:
+    """`message` as a CacheWarning attributed to the first frame outside numba and this
+    module (the kernel's definition), once per process."""
+    global _WARNED
+    if _WARNED:
+        return
+    _WARNED = True
+    level, frame = 1, sys._getframe(1)
+    while frame is not None and (frame.f_code.co_filename.startswith(_NUMBA_DIR)
+                                 or frame.f_code.co_filename == __file__):
+        level, frame = level + 1, frame.f_back
+    warnings.warn(message, CacheWarning, stacklevel=level)
+
+
+def _cache_dir(package: _Package, py_file: str) -> str | None:
+    """The cache directory of the kernels in `py_file`, chosen once per source directory."""
+    source_dir = os.path.dirname(os.path.realpath(py_file))
+    if source_dir in _DIRS:
+        return _DIRS[source_dir]
+    name = PREFIX + package.digest[:12]
+    subpath = _CacheLocator.get_suitable_cache_subpath(py_file)
+    candidates = [os.path.join(source_dir, "__pycache__", name),
+                  os.path.join(AppDirs(appname="numba", appauthor=False).user_cache_dir,
+                               subpath, name)]
+    if config.CACHE_DIR:
+        candidates.insert(0, os.path.join(config.CACHE_DIR, subpath, name))
+    chosen = next((path for path in candidates if _writable(path)), None)
+    if chosen is None:
+        try:
+            chosen = os.path.join(_private_temp_root(), subpath, name)
+            os.makedirs(chosen, exist_ok=True)
+            _warn_once(f"no writable cache directory for the compiled kernels of "
+                       f"{package.name} (read-only install and home); caching them in "
+                       f"{os.path.dirname(os.path.dirname(chosen))} (set NUMBA_CACHE_DIR to "
+                       f"choose the place)")
+        except OSError as err:  # no temporary directory either: numba's error follows
+            _warn_once(f"no writable directory for the compiled kernels of {package.name} "
+                       f"({err}); set NUMBA_CACHE_DIR to a writable directory")
+            chosen = None
+    if chosen is not None:
+        _prune(os.path.dirname(chosen), name)
+    _DIRS[source_dir] = chosen
+    return chosen
+
+
+class DigestLocator(_CacheLocator):
+    """numba cache locator for the kernels of the registered packages (module docstring)."""
+
+    def __init__(self, py_func, py_file, path, stamp):
+        self._py_file = py_file
+        self._lineno = py_func.__code__.co_firstlineno
+        self._path = path
+        self._stamp = stamp
+
+    def get_cache_path(self):
+        return self._path
+
+    def get_source_stamp(self):
+        return self._stamp
+
+    def get_disambiguator(self):
+        return str(self._lineno)
+
+    @classmethod
+    def from_function(cls, py_func, py_file):
+        package = _package_of(py_file)
+        if package is None:
+            return None             # not ours: numba's locators
+        path = _cache_dir(package, py_file)
+        if path is None:
+            return None
+        stamp = package.digest if package.unchanged() else f"changed-{uuid.uuid4().hex}"
+        return cls(py_func, py_file, path, stamp)

@@ -280,28 +280,3 @@ def test_a_peak_inside_the_first_step_of_a_window_is_found():
     values = [two_bumps(t, np.zeros(1), np.zeros(1), np.zeros(1), np.zeros(0))[0] for t in grid]
     assert peaks[0] == pytest.approx(max(values), abs=1e-9)
     assert peak_t[0] == pytest.approx(grid[int(np.argmax(values))], abs=1e-5)
-
-
-def test_stale_numba_cache_is_removed_when_any_source_changes(tmp_path):
-    """numba keys a cached kernel by its own file only; the package removes its cache files
-    when any of its sources changed since they were written (mbs_clearance/_cache.py)."""
-    from mbs_clearance._cache import STAMP, refresh_stale_cache
-
-    pkg = tmp_path / "pkg"
-    cache = pkg / "__pycache__"
-    cache.mkdir(parents=True)
-    (pkg / "a.py").write_text("x = 1\n")
-    (pkg / "b.py").write_text("y = 2\n")
-    cached = [cache / "a.f-1.py311.nbi", cache / "a.f-1.py311.1.nbc"]
-    for path in cached:
-        path.write_text("old machine code")
-    assert refresh_stale_cache(pkg)                 # no stamp: origin unknown, removed
-    assert not any(path.exists() for path in cached) and (cache / STAMP).exists()
-    for path in cached:
-        path.write_text("new machine code")
-    assert not refresh_stale_cache(pkg)             # same sources: kept
-    assert all(path.exists() for path in cached)
-    (pkg / "b.py").write_text("y = 3\n")            # an edit of another file
-    assert refresh_stale_cache(pkg)
-    assert not any(path.exists() for path in cached)
-    assert not refresh_stale_cache(pkg)
