@@ -41,8 +41,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numba
-from numba.core import config
-from numba.core.caching import CacheImpl, _CacheLocator
+from numba.core import caching, config
+from numba.core.caching import _CacheLocator
 from numba.misc.appdirs import AppDirs
 
 from ._warnings import CacheWarning
@@ -54,6 +54,8 @@ PREFIX = "nb-"
 #: cache directories of other digests unused for this many seconds are removed
 PRUNE_AGE = 600.0
 #: numba's cache files in the default places and the digest file of the scheme before this one
+# the base of numba's cache implementations, whose list of locators is tried in order
+CacheImpl = getattr(caching, "CacheImpl", None) or caching._CacheImpl   # before numba 0.57
 _LEGACY = (".nbi", ".nbc", "mbs_clearance_sources.sha256")
 _NUMBA_DIR = os.path.dirname(os.path.abspath(numba.__file__)) + os.sep
 
