@@ -195,16 +195,23 @@ def _prune(parent: str, keep: str) -> None:
 
 
 def _warn_once(message: str) -> None:
-    """`message` as a CacheWarning attributed to the first frame outside numba and this
-    module (the kernel's definition), once per process."""
+    """`message` as a CacheWarning, once per process, attributed to the first frame outside
+    numba, importlib and the registered packages (the user's import)."""
     global _WARNED
     if _WARNED:
         return
     _WARNED = True
-    level, frame = 1, sys._getframe(1)
-    while frame is not None and (frame.f_code.co_filename.startswith(_NUMBA_DIR)
-                                 or frame.f_code.co_filename == __file__):
-        level, frame = level + 1, frame.f_back
+    inside = (_NUMBA_DIR, *(root + os.sep for root in _PACKAGES))
+    level, frame = 2, sys._getframe(1)      # stacklevel 2: the caller of this function
+    while frame is not None:
+        name = frame.f_code.co_filename
+        if "importlib" in name and "_bootstrap" in name:
+            pass                            # warnings does not count these frames
+        elif name.startswith(inside):
+            level += 1
+        else:
+            break
+        frame = frame.f_back
     warnings.warn(message, CacheWarning, stacklevel=level)
 
 

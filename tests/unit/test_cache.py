@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import shlex
 import shutil
 import subprocess
@@ -278,7 +279,9 @@ def test_a_read_only_install_caches_in_a_private_temporary_directory(small, tmp_
     again, err2 = run(code, env, prefix)
     assert first["value"] == again["value"] == 10.0 * 2.0
     assert len(cache_warnings(err1)) == 1 and len(cache_warnings(err2)) == 1, err1 + err2
-    assert "NUMBA_CACHE_DIR" in cache_warnings(err1)[0]
+    # one line, naming the place and the remedy, attributed to the import (`python -c`)
+    assert re.match(r"<string>:3: CacheWarning: ", cache_warnings(err1)[0])  # from kcon.outer
+    assert str(tmp) in cache_warnings(err1)[0] and "NUMBA_CACHE_DIR" in cache_warnings(err1)[0]
     private = tmp / f"mbs_clearance-numba-{os.geteuid()}"
     assert Path(first["path"]).is_relative_to(private) and first["misses"] == 1
     assert again["hits"] == 1 and again["misses"] == 0                  # reused
