@@ -111,7 +111,7 @@ class _Package:
 
 
 _PACKAGES: dict[str, _Package] = {}     # realpath of root -> package
-_DIRS: dict[str, str | None] = {}       # realpath of a source directory -> cache directory
+_DIRS: dict[tuple[str, str], str | None] = {}  # (source directory, name) -> cache directory
 _WARNED = False
 
 
@@ -218,9 +218,9 @@ def _warn_once(message: str) -> None:
 def _cache_dir(package: _Package, py_file: str) -> str | None:
     """The cache directory of the kernels in `py_file`, chosen once per source directory."""
     source_dir = os.path.dirname(os.path.realpath(py_file))
-    if source_dir in _DIRS:
-        return _DIRS[source_dir]
     name = PREFIX + package.digest[:12]
+    if (source_dir, name) in _DIRS:
+        return _DIRS[source_dir, name]
     subpath = _CacheLocator.get_suitable_cache_subpath(py_file)
     candidates = [os.path.join(source_dir, "__pycache__", name),
                   os.path.join(AppDirs(appname="numba", appauthor=False).user_cache_dir,
@@ -242,7 +242,7 @@ def _cache_dir(package: _Package, py_file: str) -> str | None:
             chosen = None
     if chosen is not None:
         _prune(os.path.dirname(chosen), name)
-    _DIRS[source_dir] = chosen
+    _DIRS[source_dir, name] = chosen
     return chosen
 
 

@@ -154,13 +154,15 @@ def test_an_edit_of_an_inlined_helper_is_computed_by_the_next_process(small, tmp
     the same package unregistered) goes on returning the old one."""
     src, env = small
     write_package(tmp_path / "raw", "kpkg", KRAW)
-    raw_env = clean_env([tmp_path / "raw"])
-    expected = {KERNEL_RUN: 2.0 * 1.0 + 1.0, OUTER_RUN: 10.0 * 2.0}
-    for code, e in ((KERNEL_RUN, env), (OUTER_RUN, env), (KERNEL_RUN, raw_env)):
+    raw_env = clean_env([tmp_path / "raw", REPO])
+    raw_run = "import mbs_clearance\n" + KERNEL_RUN      # locator installed, not for kpkg
+    expected = {KERNEL_RUN: 2.0 * 1.0 + 1.0, OUTER_RUN: 10.0 * 2.0, raw_run: 2.0 * 1.0 + 1.0}
+    for code, e in ((KERNEL_RUN, env), (OUTER_RUN, env), (raw_run, raw_env)):
         first, _ = run(code, e)
         again, _ = run(code, e)
         assert first["misses"] == 1 and again["hits"] == 1 and again["misses"] == 0
         assert first["value"] == again["value"] == expected[code]
+    assert Path(first["path"]) == tmp_path / "raw" / "kpkg" / "__pycache__"   # numba's place
     edit(src / "kpkg" / "helper.py", "SCALE = 2.0", "SCALE = 3.0")
     edit(tmp_path / "raw" / "kpkg" / "helper.py", "SCALE = 2.0", "SCALE = 3.0")
     kernel, _ = run(KERNEL_RUN, env)
@@ -171,7 +173,7 @@ def test_an_edit_of_an_inlined_helper_is_computed_by_the_next_process(small, tmp
     assert Path(kernel["path"]) == src / "kpkg" / "__pycache__" / (_cache.PREFIX + digest[:12])
     assert Path(outer["path"]).name == _cache.PREFIX + _cache.sources_digest(
         src / "kcon", (digest,))[:12]
-    assert run(KERNEL_RUN, raw_env)[0]["value"] == 2.0 * 1.0 + 1.0     # numba alone: stale
+    assert run(raw_run, raw_env)[0]["value"] == 2.0 * 1.0 + 1.0        # numba alone: stale
 
 
 # ---------------------------------------------------------------- (ii) the race
