@@ -53,10 +53,10 @@ __all__ = ["register_package", "sources_digest", "PREFIX", "PRUNE_AGE"]
 PREFIX = "nb-"
 #: cache directories of other digests unused for this many seconds are removed
 PRUNE_AGE = 600.0
-#: numba's cache files in the default places and the digest file of the scheme before this one
-# the base of numba's cache implementations, whose list of locators is tried in order
-CacheImpl = getattr(caching, "CacheImpl", None) or caching._CacheImpl   # before numba 0.57
+# numba's cache files in the default places and the digest file of the scheme before this one
 _LEGACY = (".nbi", ".nbc", "mbs_clearance_sources.sha256")
+# the base of numba's cache implementations, whose list of locators is tried in order
+CacheImpl = getattr(caching, "CacheImpl", None) or caching._CacheImpl   # older numba
 _NUMBA_DIR = os.path.dirname(os.path.abspath(numba.__file__)) + os.sep
 
 
@@ -216,7 +216,9 @@ def _warn_once(message: str) -> None:
 
 
 def _cache_dir(package: _Package, py_file: str) -> str | None:
-    """The cache directory of the kernels in `py_file`, chosen once per source directory."""
+    """The cache directory of the kernels in `py_file`, chosen once per source directory and
+    digest: the first writable of NUMBA_CACHE_DIR, __pycache__, numba's user cache, else a
+    private temporary directory (with the warning)."""
     source_dir = os.path.dirname(os.path.realpath(py_file))
     name = PREFIX + package.digest[:12]
     if (source_dir, name) in _DIRS:
