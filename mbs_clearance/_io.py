@@ -62,15 +62,16 @@ def run_stamp(command: str, run_id: str | None = None) -> dict[str, str]:
 
 # ------------------------------------------------------------------ checks before computing
 def _nearest_existing(path: Path) -> Path:
-    p = path.absolute()
-    while not os.path.lexists(p):
+    """The nearest existing ancestor of `path`, spelled as the user gave it."""
+    p = path
+    while not os.path.lexists(p) and p != p.parent:
         p = p.parent
     return p
 
 
 def _check_can_create_in(path: Path, option: str, what: str) -> None:
     """The folder that will hold `path` exists or can be created, and is writable."""
-    anchor = _nearest_existing(path.absolute().parent)
+    anchor = _nearest_existing(path.parent)
     if not anchor.is_dir():
         raise ValueError(f"{option}: cannot create {what} {str(path)!r}: {str(anchor)!r} is a "
                          f"file, not a folder")

@@ -14,6 +14,7 @@ import argparse
 import dataclasses
 import math
 import os
+import re
 import sys
 import time
 import traceback
@@ -34,7 +35,14 @@ DEBUG_ENV = "MBS_CLEARANCE_DEBUG"
 
 
 class Parser(argparse.ArgumentParser):
-    """ArgumentParser whose usage errors are one line: ``PROG: error: MESSAGE`` (status 2)."""
+    """ArgumentParser whose usage errors are one line: ``PROG: error: MESSAGE`` (status 2),
+    and that reads ``--rtol -1e-8`` as a (negative) value, not as an option."""
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        # argparse's own pattern misses exponents (-1e-8) and would report "expected one
+        # argument"; the value then reaches the option's check and its clear message
+        self._negative_number_matcher = re.compile(r"^-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$")
 
     def error(self, message: str):
         self.exit(2, f"{self.prog}: error: {_one_line(message)}\n")
@@ -180,14 +188,19 @@ def mechanism_from_args(args: argparse.Namespace) -> SliderCrank:
     return base.replace(**changes)
 
 
+def _progress(message: str) -> None:
+    """A note that work starts, on an interactive terminal only (so that an error raised by
+    the work stays the only line a failed run prints)."""
+    if sys.stderr.isatty():
+        print(message, file=sys.stderr, flush=True)
+
+
 def _cmd_simulate(args: argparse.Namespace) -> int:
     mech = mechanism_from_args(args)
     if args.out:
         check_output_file(args.out, "--out", args.force, suffixes=(".npz", ".csv"))
     if args.plot:
         check_output_file(args.plot, "--plot", args.force, suffixes=figure_suffixes())
-    if args.out and args.plot and args.out.absolute() == args.plot.absolute():
-        raise ValueError("--out and --plot name the same file")
     options = {}
     if args.rtol is not None:
         options["rtol"] = args.rtol
@@ -197,8 +210,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
         options["contact"] = args.contact
     if args.integrator is not None:
         options["method"] = args.integrator
-    print(f"simulating {args.revolutions} revolutions with backend {args.backend!r} ...",
-          file=sys.stderr, flush=True)
+    _progress(f"simulating {args.revolutions} revolutions with backend {args.backend!r} ...")
     t0 = time.perf_counter()
     traj = simulate(mech, args.revolutions, backend=args.backend, **options)
     elapsed = time.perf_counter() - t0
@@ -259,8 +271,8 @@ def _cmd_sensitivity(args: argparse.Namespace) -> int:
     options = {}
     if args.step_size is not None:
         options["step_size"] = args.step_size
-    print(f"sensitivities of |F12| to {len(names)} parameters by {args.method} "
-          f"({args.backend}), {args.revolutions} revolutions ...", file=sys.stderr, flush=True)
+    _progress(f"sensitivities of |F12| to {len(names)} parameters by {args.method} "
+              f"({args.backend}), {args.revolutions} revolutions ...")
     t0 = time.perf_counter()
     sens = sensitivities(mech, names, args.revolutions, method=args.method,
                          backend=args.backend, rtol=args.rtol, integrator=args.integrator,
