@@ -62,24 +62,30 @@ def run_command(prog: str, func, args: argparse.Namespace) -> int:
     debug = os.environ.get(DEBUG_ENV, "") not in ("", "0")
     try:
         return func(args)
-    except KeyboardInterrupt:
+    except BaseException as exc:  # noqa: BLE001 - sorted below; SystemExit passes through
+        if isinstance(exc, SystemExit):
+            raise
+        error = exc
+    if isinstance(error, KeyboardInterrupt):
         code, message = 130, "interrupted"
-    except ValueError as exc:
-        code, message = 2, _one_line(exc)
-    except (RuntimeError, OSError, MemoryError) as exc:
+    elif isinstance(error, ValueError):
+        code, message = 2, _one_line(error)
+    elif isinstance(error, OSError) and error.strerror:
         code = 1
-        message = _one_line(exc) or type(exc).__name__
-        if isinstance(exc, OSError) and exc.filename is not None and \
-                str(exc.filename) not in message:
-            message += f": {exc.filename}"
-        if isinstance(exc, MemoryError):
-            message = f"out of memory {message}".strip()
-    except Exception as exc:  # noqa: BLE001 - a bug: say so in one line, traceback on demand
+        message = error.strerror + ("" if error.filename is None
+                                    else f": {str(error.filename)!r}")
+    elif isinstance(error, MemoryError):
+        code, message = 1, f"out of memory {_one_line(error)}".strip()
+    elif isinstance(error, (RuntimeError, OSError)):
+        code, message = 1, _one_line(error) or type(error).__name__
+    elif isinstance(error, Exception):   # a bug: say so in one line, traceback on demand
         code = 1
-        message = (f"internal error {type(exc).__name__}: {_one_line(exc)} (a bug; rerun with "
-                   f"{DEBUG_ENV}=1 for the traceback and report it)")
+        message = (f"internal error {type(error).__name__}: {_one_line(error)} (a bug; rerun "
+                   f"with {DEBUG_ENV}=1 for the traceback and report it)")
+    else:                                # GeneratorExit and the like: not ours to handle
+        raise error
     if debug:
-        traceback.print_exc()
+        traceback.print_exception(error)
     sys.stderr.write(f"{prog}: error: {message}\n")
     sys.stderr.flush()
     raise SystemExit(code)

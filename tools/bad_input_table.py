@@ -282,7 +282,9 @@ def _library_namespace(tmp: Path) -> dict:
             return path
         elif kind == "result_missing_key":
             path = tmp / "result.json"
-            path.write_text(json.dumps({"format": "mbs-clearance optimisation result 1"}))
+            full = json.loads(json.dumps(_small_result().to_dict()))
+            del full["history"]
+            path.write_text(json.dumps(full))
             return path
         elif kind == "list_json":
             path = tmp / "list.json"
@@ -291,6 +293,12 @@ def _library_namespace(tmp: Path) -> dict:
         path = tmp / f"crafted_{kind}.npz"
         np.savez(path, **data)
         return path
+
+    def _small_result():
+        from mbs_clearance.optimize import optimize_link_lengths
+
+        return optimize_link_lengths(SliderCrank(), population=4, generations=1, seed=1,
+                                     executor="serial", refine=False, progress=False)
 
     return {"np": np, "Fraction": Fraction, "SliderCrank": SliderCrank, "M": SliderCrank(),
             "simulate": simulate, "peak_base_force": peak_base_force,
@@ -313,7 +321,10 @@ def run_library_case(expr: str, namespace: dict) -> dict:
         except Exception as exc:  # noqa: BLE001 - recorded
             outcome = {"raises": type(exc).__name__, "message": _first_line(exc)}
         else:
-            text = repr(value)
+            if hasattr(value, "t") and hasattr(value, "mechanism"):
+                text = f"a {type(value).__name__} ({len(value.t)} samples)"
+            else:
+                text = repr(value)
             outcome = {"returns": text if len(text) <= 60 else text[:57] + "..."}
     outcome["warnings"] = sorted({f"{w.category.__name__}: {_first_line(w.message)}"
                                   for w in caught})
@@ -325,7 +336,8 @@ def _worker() -> None:
     channel = os.fdopen(os.dup(1), "w")
     os.dup2(2, 1)   # anything the library prints goes to stderr, not into the channel
     with tempfile.TemporaryDirectory() as tmp:
-        namespace = _library_namespace(Path(tmp))
+        os.chdir(tmp)   # files by relative names: messages free of the temporary path
+        namespace = _library_namespace(Path("."))
         for line in sys.stdin:
             expr = LIBRARY_CASES[int(line)][0]
             channel.write(json.dumps(run_library_case(expr, namespace)) + "\n")
