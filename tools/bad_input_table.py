@@ -322,7 +322,8 @@ def run_library_case(expr: str, namespace: dict) -> dict:
             outcome = {"raises": type(exc).__name__, "message": _first_line(exc)}
         else:
             if hasattr(value, "t") and hasattr(value, "mechanism"):
-                text = f"a {type(value).__name__} ({len(value.t)} samples)"
+                n = len(value.t)
+                text = f"a {type(value).__name__} ({n} sample{'' if n == 1 else 's'})"
             else:
                 text = repr(value)
             outcome = {"returns": text if len(text) <= 60 else text[:57] + "..."}
