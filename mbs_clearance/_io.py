@@ -123,6 +123,7 @@ def check_output_file(path: str | Path, option: str, force: bool = False,
     cannot be written, is a folder, has a wrong suffix or would overwrite a file this program
     did not write (unless `force`)."""
     path = Path(path)
+    recover(path)
     if suffixes is not None and path.suffix.lower() not in suffixes:
         allowed = (" or ".join(suffixes) if len(suffixes) <= 3 else
                    f"a known format ({', '.join(suffixes[:3])}, ...; {len(suffixes)} in all)")
@@ -241,19 +242,27 @@ def _siblings(target: Path, kind: str) -> list[tuple[Path, int]]:
 
 
 def recover(target: str | Path) -> None:
-    """Clean up after runs that were killed: delete their partial folders and, if a kill
-    came between the two renames of `OutputDir.commit`, put the previous run back."""
+    """Clean up after runs that were killed: delete their partial files and folders and, if
+    a kill came between the two renames of `OutputDir.commit`, put the previous run back."""
     target = Path(target)
     for p, pid in _siblings(target, "partial"):
         if not _pid_alive(pid):
-            shutil.rmtree(p, ignore_errors=True)
+            _remove(p)
     for p, pid in _siblings(target, "old"):
         if _pid_alive(pid):
             continue
         if not os.path.lexists(target):
             os.rename(p, target)
         else:
-            shutil.rmtree(p, ignore_errors=True)
+            _remove(p)
+
+
+def _remove(path: Path) -> None:
+    if path.is_dir() and not path.is_symlink():
+        shutil.rmtree(path, ignore_errors=True)
+    else:
+        with contextlib.suppress(OSError):
+            path.unlink()
 
 
 class OutputDir:
@@ -293,10 +302,7 @@ class OutputDir:
         os.rename(self.path, self.target)
         self.path = None
         if old is not None:
-            if old.is_dir() and not old.is_symlink():
-                shutil.rmtree(old, ignore_errors=True)
-            else:
-                old.unlink()
+            _remove(old)
         return self.target
 
 
@@ -305,8 +311,8 @@ def atomic_file(path: str | Path) -> Iterator[Path]:
     """Yield a temporary path beside `path` (same suffix); on success it replaces `path`."""
     path = Path(path)
     path.absolute().parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.partial-", suffix=path.suffix,
-                               dir=path.absolute().parent)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.partial-{os.getpid()}-",
+                               suffix=path.suffix, dir=path.absolute().parent)
     os.close(fd)
     tmp = Path(tmp)
     umask = os.umask(0)

@@ -265,6 +265,32 @@ def test_read_only_folder_is_refused(tmp_path, monkeypatch, capsys):
     assert "is not writable" in capsys.readouterr().err
 
 
+def test_read_only_mount_is_refused(tmp_path, monkeypatch, capsys):
+    """A real read-only file system (refused even for root, unlike chmod)."""
+    import shutil
+    import subprocess
+
+    ro = tmp_path / "ro"
+    ro.mkdir()
+    if shutil.which("mount") is None or subprocess.run(
+            ["mount", "-t", "tmpfs", "-o", "ro,size=64k", "tmpfs", str(ro)],
+            capture_output=True).returncode != 0:
+        pytest.skip("cannot mount a read-only tmpfs here (needs root / CAP_SYS_ADMIN)")
+    try:
+        _forbid_computing(monkeypatch)
+        for argv in (["simulate", "--out", str(ro / "t.npz")],
+                     ["sensitivity", "--out", str(ro / "sens")],
+                     ["report", "--out", str(ro / "report")]):
+            with pytest.raises(SystemExit) as exc:
+                main(argv)
+            err = capsys.readouterr().err
+            assert exc.value.code == 2
+            assert err.endswith("is not writable (creating a file there fails: Read-only file "
+                                "system)\n"), err
+    finally:
+        subprocess.run(["umount", str(ro)], check=True)
+
+
 def test_own_files_are_replaced_user_files_need_force(tmp_path, capsys):
     out, fig = tmp_path / "t.npz", tmp_path / "t.png"
     argv = ["simulate", "--revolutions", "1", "--out", str(out), "--plot", str(fig)]
@@ -396,3 +422,29 @@ def test_every_cli_bad_input_case_is_one_line_and_the_doc_is_current():
     library = doc[doc.index(table.LIBRARY_HEADING):]
     for expr, _ in table.LIBRARY_CASES:
         assert f"`{table._cell(expr)}`" in library, expr
+
+
+def test_kill_between_the_two_renames_is_recovered(tmp_path):
+    """A run killed after moving the previous folder aside and before moving its own into
+    place: the next check puts the previous folder back; leftovers of dead runs go."""
+    import subprocess
+    import sys
+
+    from mbs_clearance._io import OutputDir, check_output_dir, verify_run_folder
+
+    target = tmp_path / "out"
+    with OutputDir(target, "test") as staged:
+        (staged.path / "a.txt").write_text("previous run")
+        staged.commit()
+    before = verify_run_folder(target)
+    dead = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
+                          capture_output=True, text=True).stdout.strip()
+    target.rename(tmp_path / f".out.old-{dead}-abcdef")
+    (tmp_path / f".out.partial-{dead}-abcdef").mkdir()
+    (tmp_path / f".t.npz.partial-{dead}-xyz.npz").write_bytes(b"half")
+    check_output_dir(target, "--out")
+    from mbs_clearance._io import check_output_file
+
+    check_output_file(tmp_path / "t.npz", "--out")
+    assert verify_run_folder(target) == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out"]
