@@ -23,6 +23,7 @@ import json
 import os
 import secrets
 import shutil
+import sys
 import tempfile
 import time
 from collections.abc import Iterator
@@ -69,8 +70,9 @@ def _nearest_existing(path: Path) -> Path:
     return p
 
 
-def _check_can_create_in(path: Path, option: str, what: str) -> None:
-    """The folder that will hold `path` exists or can be created, and is writable."""
+def check_can_create_in(path: Path, option: str, what: str) -> None:
+    """ValueError naming `option` unless the folder that will hold `path` exists or can be
+    created, and is writable (a real probe: a temporary folder is made and removed)."""
     anchor = _nearest_existing(path.parent)
     if not anchor.is_dir():
         raise ValueError(f"{option}: cannot create {what} {str(path)!r}: {str(anchor)!r} is a "
@@ -130,17 +132,24 @@ def check_output_file(path: str | Path, option: str, force: bool = False,
         raise ValueError(f"{option} must end in {allowed}; got {str(path)!r}")
     if path.is_dir():
         raise ValueError(f"{option} {str(path)!r} is a folder; expected a file name")
-    _check_can_create_in(path, option, "file")
+    check_can_create_in(path, option, "file")
     if os.path.lexists(path):
         if not path.is_file():
             raise ValueError(f"{option} {str(path)!r} exists and is not a regular file")
         if not os.access(path, os.W_OK):
             raise ValueError(f"{option}: file {str(path)!r} is not writable")
-        if not force and not file_is_ours(path):
-            raise ValueError(f"{option} {str(path)!r} exists and was not written by "
-                             f"mbs-clearance; choose another name or pass --force to "
-                             f"overwrite it")
+        if not file_is_ours(path):
+            if not force:
+                raise ValueError(f"{option} {str(path)!r} exists and was not written by "
+                                 f"mbs-clearance; choose another name or pass --force to "
+                                 f"overwrite it")
+            _note(f"{option}: {str(path)!r} was not written by mbs-clearance; it will be "
+                  f"overwritten (--force)")
     return path
+
+
+def _note(message: str) -> None:
+    print(f"note: {message}", file=sys.stderr, flush=True)
 
 
 def read_manifest(folder: Path) -> dict[str, Any] | None:
@@ -168,11 +177,16 @@ def check_output_dir(path: str | Path, option: str, force: bool = False) -> Path
     recover(path)
     if os.path.lexists(path) and not path.is_dir():
         raise ValueError(f"{option} {str(path)!r} is a file; expected a folder")
-    _check_can_create_in(path, option, "folder")
-    if path.is_dir() and not force:
+    check_can_create_in(path, option, "folder")
+    if path.is_dir():
         files = _listing(path)
-        if files:
-            manifest = read_manifest(path)
+        manifest = read_manifest(path) if files else None
+        foreign = [f for f in files if manifest is None or
+                   (f != MANIFEST and f not in manifest["files"])]
+        if foreign and force:
+            _note(f"{option}: folder {str(path)!r} holds files mbs-clearance did not write "
+                  f"(e.g. {foreign[0]!r}); it will be replaced (--force)")
+        elif files:
             if manifest is None:
                 raise ValueError(f"{option} {str(path)!r} is a non-empty folder that "
                                  f"mbs-clearance did not write (no {MANIFEST}); choose "

@@ -75,10 +75,12 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
 
     def run(args) -> int:
-        from mbs_clearance._io import check_output_dir
+        from mbs_clearance._io import check_can_create_in
 
-        out = check_output_dir(args.out or default_pages_folder(args.html), "--out",
-                               force=True)
+        out = args.out or default_pages_folder(args.html)
+        if out.exists() and not out.is_dir():
+            raise ValueError(f"--out {str(out)!r} is a file; expected a folder")
+        check_can_create_in(out, "--out", "folder")
         pages = render(args.html, out, page_height=args.height)
         print(f"{len(pages)} pages written to {pages[0].parent}")
         return 0

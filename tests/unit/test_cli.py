@@ -448,3 +448,33 @@ def test_kill_between_the_two_renames_is_recovered(tmp_path):
     check_output_file(tmp_path / "t.npz", "--out")
     assert verify_run_folder(target) == before
     assert sorted(p.name for p in tmp_path.iterdir()) == ["out"]
+
+
+def test_stress_json_is_stamped_checked_first_and_replaced_only_if_ours(tmp_path, monkeypatch,
+                                                                      capsys):
+    """`stress --json` on one real (short) case: the file holds the run's rows under a run
+    stamp; a second run replaces it; a user's JSON file is refused unless --force."""
+    import validation.stress as stress
+    from mbs_clearance._io import RUN_KEY
+
+    case = stress.StressCase("paper case, 1 revolution", SliderCrank(), revolutions=1)
+    monkeypatch.setattr(stress, "stress_cases", lambda quick: [case])
+    out = tmp_path / "s.json"
+    assert main(["stress", "--json", str(out)]) == 0
+    first = json.loads(out.read_text())
+    assert first[RUN_KEY]["command"] == "stress"
+    reference = stress.run_case(case)
+    assert [r["case"] for r in first["rows"]] == [reference["case"]]
+    assert first["rows"][0]["peak_last_revolution"] == pytest.approx(
+        reference["peak_last_revolution"], rel=1e-12)
+    assert main(["stress", "--json", str(out)]) == 0
+    assert json.loads(out.read_text())[RUN_KEY]["run_id"] != first[RUN_KEY]["run_id"]
+    user = tmp_path / "mine.json"
+    user.write_text("{}")
+    with pytest.raises(SystemExit) as exc:
+        main(["stress", "--json", str(user)])
+    assert exc.value.code == 2 and "pass --force" in capsys.readouterr().err
+    assert user.read_text() == "{}"
+    assert main(["stress", "--json", str(user), "--force"]) == 0
+    assert "will be overwritten (--force)" in capsys.readouterr().err
+    assert RUN_KEY in json.loads(user.read_text())
