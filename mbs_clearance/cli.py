@@ -18,6 +18,7 @@ import re
 import sys
 import time
 import traceback
+import warnings
 from pathlib import Path
 
 from ._io import OutputDir, atomic_file, check_output_dir, check_output_file
@@ -57,15 +58,22 @@ def run_command(prog: str, func, args: argparse.Namespace) -> int:
 
     ValueError (bad input) gives status 2, RuntimeError and OSError (failures while running)
     status 1, KeyboardInterrupt 130; anything else is reported as an internal error (status
-    1), with the traceback when the environment variable MBS_CLEARANCE_DEBUG is set.
+    1), with the traceback when the environment variable MBS_CLEARANCE_DEBUG is set. Warnings
+    shown while it runs are one line as well, ``PROG: warning: MESSAGE``.
     """
     debug = os.environ.get(DEBUG_ENV, "") not in ("", "0")
+    formatwarning = warnings.formatwarning
+    if not debug:   # warnings as one line too: "PROG: warning: MESSAGE"
+        warnings.formatwarning = lambda message, category, *rest, **kw: (
+            f"{prog}: warning: {_one_line(message)}\n")
     try:
         return func(args)
     except BaseException as exc:  # noqa: BLE001 - sorted below; SystemExit passes through
         if isinstance(exc, SystemExit):
             raise
         error = exc
+    finally:
+        warnings.formatwarning = formatwarning
     if isinstance(error, KeyboardInterrupt):
         code, message = 130, "interrupted"
     elif isinstance(error, ValueError):

@@ -478,3 +478,22 @@ def test_stress_json_is_stamped_checked_first_and_replaced_only_if_ours(tmp_path
     assert main(["stress", "--json", str(user), "--force"]) == 0
     assert "will be overwritten (--force)" in capsys.readouterr().err
     assert RUN_KEY in json.loads(user.read_text())
+
+
+def test_warnings_during_a_command_are_one_line(tmp_path):
+    """A warning raised while a command runs is shown as `PROG: warning: MESSAGE` (a real
+    interpreter: pytest records warnings itself)."""
+    import subprocess
+    import sys
+
+    code = ("import warnings\n"
+            "from mbs_clearance.cli import run_command\n"
+            "def work(args):\n"
+            "    warnings.warn('penetration 9212 x the clearance\\nreduce the speed')\n"
+            "    return 0\n"
+            "raise SystemExit(run_command('mbs-clearance simulate', work, None))\n")
+    proc = subprocess.run([sys.executable, "-W", "always", "-c", code], capture_output=True,
+                          text=True, cwd=tmp_path, env=_env())
+    assert proc.returncode == 0
+    assert proc.stderr == ("mbs-clearance simulate: warning: penetration 9212 x the "
+                           "clearance; reduce the speed\n")
