@@ -1,26 +1,173 @@
-"""Command line: `mbs-clearance SUBCOMMAND ...`; each subcommand calls a public function."""
+"""Command line: `mbs-clearance SUBCOMMAND ...`; each subcommand calls a public function.
+
+Errors: every failure a user can cause ends with one line ``mbs-clearance CMD: error: CAUSE``
+on stderr and a non-zero exit status: 2 for bad input (argparse's usage errors, ValueError:
+bad values, unusable output paths), 1 for failures while running (RuntimeError, OSError),
+130 after Ctrl-C. Any other exception is a bug: one line saying so, and the traceback with
+``MBS_CLEARANCE_DEBUG=1``. Output paths are checked before any computation and results are
+written atomically (see `mbs_clearance._io`).
+"""
 
 from __future__ import annotations
 
 import argparse
 import dataclasses
+import math
+import os
+import re
 import sys
 import time
+import traceback
+import warnings
 from pathlib import Path
 
+from ._io import OutputDir, atomic_file, check_output_dir, check_output_file
 from .integrator import METHODS
 from .mechanism import PARAMETER_INFO, SliderCrank
 from .optimize import MASS_SCALINGS, PAPER_TABLE3, design_mechanism, optimize_link_lengths
 from .simulate import BACKENDS, peak_base_force, simulate
 
 __all__ = ["main", "build_parser", "mechanism_from_args", "add_mechanism_options",
-           "format_table3"]
+           "format_table3", "run_command", "Parser", "int_at_least", "positive_float",
+           "finite_float", "add_force_option"]
+
+#: environment variable that makes unexpected errors show their traceback
+DEBUG_ENV = "MBS_CLEARANCE_DEBUG"
 
 
-def _optional_float(text: str) -> float | None:
-    if text.lower() == "none":
-        return None
-    return float(text)
+class Parser(argparse.ArgumentParser):
+    """ArgumentParser whose usage errors are one line: ``PROG: error: MESSAGE`` (status 2),
+    and that reads ``--rtol -1e-8`` as a (negative) value, not as an option."""
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        # argparse's own pattern misses exponents (-1e-8) and would report "expected one
+        # argument"; the value then reaches the option's check and its clear message
+        self._negative_number_matcher = re.compile(r"^-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$")
+
+    def error(self, message: str):
+        self.exit(2, f"{self.prog}: error: {_one_line(message)}\n")
+
+
+def _one_line(text: str) -> str:
+    return "; ".join(line.strip() for line in str(text).splitlines() if line.strip())
+
+
+def run_command(prog: str, func, args: argparse.Namespace) -> int:
+    """Run a subcommand; a failure ends the process (SystemExit) after one line on stderr.
+
+    ValueError (bad input) gives status 2, RuntimeError and OSError (failures while running)
+    status 1, KeyboardInterrupt 130; anything else is reported as an internal error (status
+    1), with the traceback when the environment variable MBS_CLEARANCE_DEBUG is set. Warnings
+    shown while it runs are one line as well, ``PROG: warning: MESSAGE``.
+    """
+    debug = os.environ.get(DEBUG_ENV, "") not in ("", "0")
+    formatwarning = warnings.formatwarning
+    if not debug:   # warnings as one line too: "PROG: warning: MESSAGE"
+        warnings.formatwarning = lambda message, category, *rest, **kw: (
+            f"{prog}: warning: {_one_line(message)}\n")
+    try:
+        return func(args)
+    except BaseException as exc:  # noqa: BLE001 - sorted below; SystemExit passes through
+        if isinstance(exc, SystemExit):
+            raise
+        error = exc
+    finally:
+        warnings.formatwarning = formatwarning
+    if isinstance(error, KeyboardInterrupt):
+        code, message = 130, "interrupted"
+    elif isinstance(error, ValueError):
+        code, message = 2, _one_line(error)
+    elif isinstance(error, OSError) and error.strerror:
+        code = 1
+        message = error.strerror + ("" if error.filename is None
+                                    else f": {str(error.filename)!r}")
+    elif isinstance(error, MemoryError):
+        code, message = 1, f"out of memory {_one_line(error)}".strip()
+    elif isinstance(error, (RuntimeError, OSError)):
+        code, message = 1, _one_line(error) or type(error).__name__
+    elif isinstance(error, Exception):   # a bug: say so in one line, traceback on demand
+        code = 1
+        message = (f"internal error {type(error).__name__}: {_one_line(error)} (a bug; rerun "
+                   f"with {DEBUG_ENV}=1 for the traceback and report it)")
+    else:                                # GeneratorExit and the like: not ours to handle
+        raise error
+    if debug:
+        traceback.print_exception(error)
+    sys.stderr.write(f"{prog}: error: {message}\n")
+    sys.stderr.flush()
+    raise SystemExit(code)
+
+
+def int_at_least(low: int):
+    """argparse type: an integer >= `low`."""
+
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(
+                f"must be an integer >= {low}; got {text!r}") from None
+        if value < low:
+            raise argparse.ArgumentTypeError(f"must be an integer >= {low}; got {value}")
+        return value
+
+    parse.__name__ = f"integer >= {low}"
+    return parse
+
+
+def finite_float(text: str) -> float:
+    """argparse type: a finite number."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be a finite number; got {text!r}") from None
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"must be a finite number; got {text!r}")
+    return value
+
+
+def positive_float(text: str) -> float:
+    """argparse type: a finite number > 0."""
+    value = finite_float(text)
+    if value <= 0:
+        raise argparse.ArgumentTypeError(f"must be a finite number > 0; got {text!r}")
+    return value
+
+
+def add_force_option(parser: argparse.ArgumentParser) -> None:
+    """--force: overwrite output files or folders that mbs-clearance did not write."""
+    parser.add_argument("--force", action="store_true",
+                        help="overwrite an existing output that mbs-clearance did not write "
+                             "(by default only files and folders of earlier runs are "
+                             "replaced)")
+
+
+class _Derived:
+    """Value of a mechanism option given as ``none``: the field's derived value (None)."""
+
+    def __repr__(self) -> str:
+        return "none"
+
+
+DERIVED = _Derived()
+
+
+def _optional_float(text: str):
+    if text.strip().lower() == "none":
+        return DERIVED
+    try:
+        return float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"must be a number or 'none' (derived value); got {text!r}") from None
+
+
+def _float(text: str) -> float:
+    try:
+        return float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be a number; got {text!r}") from None
 
 
 def add_mechanism_options(parser: argparse.ArgumentParser) -> None:
@@ -32,25 +179,42 @@ def add_mechanism_options(parser: argparse.ArgumentParser) -> None:
     for f in dataclasses.fields(SliderCrank):
         symbol, unit, _ = PARAMETER_INFO[f.name]
         default = getattr(defaults, f.name)
-        kind = str if f.name == "contact_model" else (
-            _optional_float if default is None or f.name.endswith("inertia") else float)
+        optional = default is None or f.name.endswith("inertia")
+        kind = str if f.name == "contact_model" else (_optional_float if optional else _float)
+        extra = "; 'none': derived value" if optional else ""
         group.add_argument("--" + f.name.replace("_", "-"), dest=f.name, type=kind,
                            default=None, metavar="X",
-                           help=f"{symbol} [{unit}] (default {default})")
+                           help=f"{symbol} [{unit}] (default {default}{extra})")
 
 
 def mechanism_from_args(args: argparse.Namespace) -> SliderCrank:
-    """SliderCrank from --config and the per-field options (ValueError on bad values)."""
+    """SliderCrank from --config and the per-field options (ValueError on bad values).
+
+    An option given as ``none`` sets its field to None (the derived value), also over a value
+    from the config file.
+    """
     base = SliderCrank.from_json(args.config) if args.config else SliderCrank()
-    changes = {f.name: getattr(args, f.name) for f in dataclasses.fields(SliderCrank)
-               if getattr(args, f.name) is not None}
+    changes = {}
+    for f in dataclasses.fields(SliderCrank):
+        value = getattr(args, f.name)
+        if value is not None:
+            changes[f.name] = None if value is DERIVED else value
     return base.replace(**changes)
+
+
+def _progress(message: str) -> None:
+    """A note that work starts, on an interactive terminal only (so that an error raised by
+    the work stays the only line a failed run prints)."""
+    if sys.stderr.isatty():
+        print(message, file=sys.stderr, flush=True)
 
 
 def _cmd_simulate(args: argparse.Namespace) -> int:
     mech = mechanism_from_args(args)
-    if args.out and args.out.suffix not in (".csv", ".npz"):
-        raise ValueError(f"--out must end in .npz or .csv; got {str(args.out)!r}")
+    if args.out:
+        check_output_file(args.out, "--out", args.force, suffixes=(".npz", ".csv"))
+    if args.plot:
+        check_output_file(args.plot, "--plot", args.force, suffixes=figure_suffixes())
     options = {}
     if args.rtol is not None:
         options["rtol"] = args.rtol
@@ -60,8 +224,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
         options["contact"] = args.contact
     if args.integrator is not None:
         options["method"] = args.integrator
-    print(f"simulating {args.revolutions} revolutions with backend {args.backend!r} ...",
-          file=sys.stderr, flush=True)
+    _progress(f"simulating {args.revolutions} revolutions with backend {args.backend!r} ...")
     t0 = time.perf_counter()
     traj = simulate(mech, args.revolutions, backend=args.backend, **options)
     elapsed = time.perf_counter() - t0
@@ -79,25 +242,51 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
               f"damping they set is sensitive to the tolerance: compare with a tighter --rtol",
               file=sys.stderr)
     if args.out:
-        print(f"trajectory written to {traj.save(args.out)}", file=sys.stderr)
+        with atomic_file(args.out) as tmp:
+            traj.save(tmp)
+        print(f"trajectory written to {args.out}", file=sys.stderr)
     if args.plot:
         from .plotting import plot_trajectory
 
-        plot_trajectory(traj, path=args.plot)
+        with atomic_file(args.plot) as tmp:
+            plot_trajectory(traj, path=tmp)
         print(f"figure written to {args.plot}", file=sys.stderr)
     return 0
+
+
+def figure_suffixes() -> tuple[str, ...]:
+    """File name endings matplotlib can write (.png, .pdf, .svg, ...)."""
+    from matplotlib.backend_bases import FigureCanvasBase
+
+    common = (".png", ".pdf", ".svg")
+    others = sorted("." + k for k in FigureCanvasBase.get_supported_filetypes())
+    return common + tuple(k for k in others if k not in common)
+
+
+def parameter_list(text: str) -> tuple[str, ...]:
+    """argparse type: comma-separated names (spaces around them allowed), none empty."""
+    names = tuple(n.strip() for n in text.split(","))
+    if not any(names):
+        raise argparse.ArgumentTypeError("needs at least one SliderCrank field, e.g. "
+                                         "crank_length,slider_mass; got an empty list")
+    if not all(names):
+        raise argparse.ArgumentTypeError(f"has an empty name in {text!r} (comma-separated "
+                                         f"SliderCrank fields)")
+    return names
 
 
 def _cmd_sensitivity(args: argparse.Namespace) -> int:
     from .sensitivity import DEFAULT_PARAMETERS, sensitivities
 
     mech = mechanism_from_args(args)
-    names = tuple(args.parameters.split(",")) if args.parameters else DEFAULT_PARAMETERS
+    names = args.parameters if args.parameters is not None else DEFAULT_PARAMETERS
+    if args.out:
+        check_output_dir(args.out, "--out", args.force)
     options = {}
     if args.step_size is not None:
         options["step_size"] = args.step_size
-    print(f"sensitivities of |F12| to {len(names)} parameters by {args.method} "
-          f"({args.backend}), {args.revolutions} revolutions ...", file=sys.stderr, flush=True)
+    _progress(f"sensitivities of |F12| to {len(names)} parameters by {args.method} "
+              f"({args.backend}), {args.revolutions} revolutions ...")
     t0 = time.perf_counter()
     sens = sensitivities(mech, names, args.revolutions, method=args.method,
                          backend=args.backend, rtol=args.rtol, integrator=args.integrator,
@@ -115,18 +304,19 @@ def _cmd_sensitivity(args: argparse.Namespace) -> int:
     if args.out:
         from .plotting import SENSITIVITY_FIGURES, plot_sensitivities
 
-        args.out.mkdir(parents=True, exist_ok=True)
-        sens.save(args.out / "sensitivities.npz")
-        for stem, (title, group) in SENSITIVITY_FIGURES.items():
-            group = [g for g in group if g in sens.parameters]
-            if group:
-                plot_sensitivities(sens, group, title, path=args.out / f"{stem}.png")
+        with OutputDir(args.out, "sensitivity") as staged:
+            sens.save(staged.path / "sensitivities.npz")
+            for stem, (title, group) in SENSITIVITY_FIGURES.items():
+                group = [g for g in group if g in sens.parameters]
+                if group:
+                    plot_sensitivities(sens, group, title, path=staged.path / f"{stem}.png")
+            staged.commit()
         print(f"sensitivities.npz and figures written to {args.out}", file=sys.stderr)
     return 0
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = Parser(
         prog="mbs-clearance",
         description="Slider-crank mechanism with a revolute clearance joint: simulate, "
                     "compare models, sensitivities, optimisation, validation report.")
@@ -136,15 +326,16 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("simulate", help="simulate and write the trajectory and a figure",
                        description="Simulate the slider-crank; print the peak per revolution, "
                                    "write the trajectory (csv/npz) and a Fig. 3-like PNG.")
-    p.add_argument("--revolutions", type=int, default=4)
+    p.add_argument("--revolutions", type=int_at_least(1), default=4)
     p.add_argument("--backend", choices=sorted(BACKENDS), default="reduced")
-    p.add_argument("--rtol", type=float, help="relative tolerance (reduced backend)")
-    p.add_argument("--step-size", type=float, help="time step in s (exudyn backend)")
+    p.add_argument("--rtol", type=positive_float, help="relative tolerance (reduced backend)")
+    p.add_argument("--step-size", type=positive_float, help="time step in s (exudyn backend)")
     p.add_argument("--contact", help="contact variant (exudyn backend)")
     p.add_argument("--integrator", choices=sorted(METHODS),
                    help="method of the compiled integrator (reduced backend; default dopri5)")
     p.add_argument("--out", type=Path, help="trajectory file, .csv or .npz")
     p.add_argument("--plot", type=Path, help="figure file, e.g. simulate.png")
+    add_force_option(p)
     add_mechanism_options(p)
     p.set_defaults(func=_cmd_simulate)
 
@@ -153,17 +344,18 @@ def build_parser() -> argparse.ArgumentParser:
                                    "model) or finite differences (any backend); prints mean "
                                    "and max normalized sensitivity (Eq. 15) over the last "
                                    "revolution and writes Fig. 4-6-like plots.")
-    p.add_argument("--parameters", help="comma-separated SliderCrank fields "
-                                        "(default: the paper's eight)")
+    p.add_argument("--parameters", type=parameter_list,
+                   help="comma-separated SliderCrank fields (default: the paper's eight)")
     p.add_argument("--method", choices=("ddm", "fd"), default="ddm")
     p.add_argument("--backend", choices=sorted(BACKENDS), default="reduced")
-    p.add_argument("--revolutions", type=int, default=4)
-    p.add_argument("--rtol", type=float, help="relative tolerance (reduced backend)")
-    p.add_argument("--step-size", type=float, help="time step in s (exudyn backend)")
+    p.add_argument("--revolutions", type=int_at_least(1), default=4)
+    p.add_argument("--rtol", type=positive_float, help="relative tolerance (reduced backend)")
+    p.add_argument("--step-size", type=positive_float, help="time step in s (exudyn backend)")
     p.add_argument("--integrator", choices=sorted(METHODS),
                    help="method of the compiled integrator (reduced backend; default dop853 "
                         "for DDM, dopri5 for FD)")
     p.add_argument("--out", type=Path, help="folder for sensitivities.npz and figures")
+    add_force_option(p)
     add_mechanism_options(p)
     p.set_defaults(func=_cmd_sensitivity)
 
@@ -180,31 +372,33 @@ def _add_optimize_parser(subparsers) -> argparse.ArgumentParser:
                     "choosing L2 and L3 with a genetic algorithm (pygad), refine the GA's "
                     "best point locally, print a Table 3-like comparison with the paper and "
                     "write result.json and two figures into --out.")
-    p.add_argument("--seed", type=int, default=1, help="GA seed (default 1)")
-    p.add_argument("--population", type=int, default=20, help="population size (default 20)")
-    p.add_argument("--generations", type=int, default=30,
+    p.add_argument("--seed", type=int_at_least(0), default=1, help="GA seed (default 1)")
+    p.add_argument("--population", type=int_at_least(4), default=20,
+                   help="population size (>= 4, default 20)")
+    p.add_argument("--generations", type=int_at_least(1), default=30,
                    help="maximum number of generations (default 30)")
-    p.add_argument("--saturation", type=int, default=10,
+    p.add_argument("--saturation", type=int_at_least(0), default=10,
                    help="stop after this many generations without improvement (default 10;"
                         " 0 disables)")
     p.add_argument("--mass-scaling", choices=MASS_SCALINGS, default="fixed",
                    help="fixed: link masses fixed (paper); uniform: crank and coupler masses "
                         "proportional to their lengths")
-    p.add_argument("--crank-bounds", type=float, nargs=2, metavar=("LO", "HI"),
+    p.add_argument("--crank-bounds", type=finite_float, nargs=2, metavar=("LO", "HI"),
                    default=(0.04, 0.06), help="bounds of L2 in m (default 0.04 0.06)")
-    p.add_argument("--coupler-bounds", type=float, nargs=2, metavar=("LO", "HI"),
+    p.add_argument("--coupler-bounds", type=finite_float, nargs=2, metavar=("LO", "HI"),
                    default=(0.10, 0.14), help="bounds of L3 in m (default 0.10 0.14)")
-    p.add_argument("--revolution", type=int, default=4,
+    p.add_argument("--revolution", type=int_at_least(1), default=4,
                    help="crank revolution whose peak is minimised (default 4)")
-    p.add_argument("--rtol", type=float, help="relative tolerance of the reduced model")
+    p.add_argument("--rtol", type=positive_float, help="relative tolerance of the reduced model")
     p.add_argument("--scheduler", metavar="tcp://HOST:PORT",
                    help="evaluate on this dask.distributed scheduler")
-    p.add_argument("--workers", type=int, default=2,
+    p.add_argument("--workers", type=int_at_least(1), default=2,
                    help="local worker processes when no --scheduler (1 = this process)")
     p.add_argument("--out", type=Path, default=Path("optimize"),
                    help="output directory (default ./optimize)")
     p.add_argument("--no-refine", action="store_true", help="skip the local refinement")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    add_force_option(p)
     add_mechanism_options(p)
     p.set_defaults(func=_cmd_optimize)
     return p
@@ -244,6 +438,7 @@ def format_table3(result, paper_in_model: float, ideal: dict[str, float]) -> str
 
 def _cmd_optimize(args: argparse.Namespace) -> int:
     mech = mechanism_from_args(args)
+    check_output_dir(args.out, "--out", args.force)
     options = {} if args.rtol is None else {"rtol": args.rtol}
     common = dict(crank_length=tuple(args.crank_bounds), coupler_length=tuple(args.coupler_bounds),
                   revolution=args.revolution, seed=args.seed, population=args.population,
@@ -284,17 +479,18 @@ def _cmd_optimize(args: argparse.Namespace) -> int:
 
     from .plotting import plot_fitness_history, plot_force_comparison
 
-    out = args.out
-    out.mkdir(parents=True, exist_ok=True)
-    result.to_json(out / "result.json")
-    (out / "table3.md").write_text(table + "\n")
-    plot_fitness_history(result, out / "fitness_history.png")
     designs = {"original": mech, "optimum": result.best, "paper's optimum": paper_mech}
-    plot_force_comparison({k: simulate(m, args.revolution, **options)
-                           for k, m in designs.items()},
-                          out / "force_comparison.png", revolution=args.revolution)
+    trajectories = {k: simulate(m, args.revolution, **options) for k, m in designs.items()}
+    with OutputDir(args.out, "optimize") as staged:
+        out = staged.path
+        result.to_json(out / "result.json")
+        (out / "table3.md").write_text(table + "\n")
+        plot_fitness_history(result, out / "fitness_history.png")
+        plot_force_comparison(trajectories, out / "force_comparison.png",
+                              revolution=args.revolution)
+        staged.commit()
     print(f"result.json, table3.md, fitness_history.png and force_comparison.png written to "
-          f"{out}", file=sys.stderr)
+          f"{args.out}", file=sys.stderr)
     return 0
 
 
@@ -319,11 +515,7 @@ def main(argv: list[str] | None = None) -> int:
     """Entry point of the `mbs-clearance` console script."""
     parser = build_parser()
     args = parser.parse_args(argv)
-    try:
-        return args.func(args)
-    except ValueError as exc:
-        parser.exit(2, f"mbs-clearance {args.command}: error: {exc}\n")
-    return 0
+    return run_command(f"mbs-clearance {args.command}", args.func, args)
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
+from ._io import PNG_SOFTWARE
 from .trajectory import Trajectory
 
 __all__ = ["plot_trajectory", "plot_overlay", "plot_comparison", "plot_sensitivities",
@@ -26,7 +27,9 @@ def save(fig: Figure, path: str | Path | None, dpi: int = 120) -> Figure:
     if path is not None:
         path = Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
-        fig.savefig(path, dpi=dpi, bbox_inches="tight")
+        # the Software field marks the figure as ours (the CLI overwrites only such files)
+        metadata = {"Software": PNG_SOFTWARE} if path.suffix.lower() == ".png" else None
+        fig.savefig(path, dpi=dpi, bbox_inches="tight", metadata=metadata)
     return fig
 
 

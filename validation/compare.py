@@ -299,11 +299,17 @@ def _exudyn_default_step() -> float:
 
 def build_parser(parser: argparse.ArgumentParser | None = None) -> argparse.ArgumentParser:
     """Arguments of ``mbs-clearance compare`` (added to `parser` if given)."""
-    from mbs_clearance.cli import add_mechanism_options
+    from mbs_clearance.cli import (
+        Parser,
+        add_force_option,
+        add_mechanism_options,
+        int_at_least,
+        positive_float,
+    )
     from mbs_clearance.simulate import BACKENDS
 
     if parser is None:
-        parser = argparse.ArgumentParser(
+        parser = Parser(
             prog="mbs-clearance compare",
             description="Simulate one mechanism with two backends, print per-revolution "
                         "differences (peak |F12|, RMS of F12 and M2, orbit distance) and "
@@ -312,29 +318,35 @@ def build_parser(parser: argparse.ArgumentParser | None = None) -> argparse.Argu
                         help="reference backend (default: reduced)")
     parser.add_argument("--backend-b", choices=sorted(BACKENDS), default="exudyn",
                         help="compared backend (default: exudyn)")
-    parser.add_argument("--revolutions", type=int, default=4)
-    parser.add_argument("--rtol", type=float, help="relative tolerance (reduced backend)")
-    parser.add_argument("--h-max", type=float,
+    parser.add_argument("--revolutions", type=int_at_least(1), default=4)
+    parser.add_argument("--rtol", type=positive_float,
+                        help="relative tolerance (reduced backend)")
+    parser.add_argument("--h-max", type=positive_float,
                         help="largest step in s (reduced backend); default: the Exudyn step "
                              "size when compared with exudyn")
-    parser.add_argument("--step-size", type=float, help="time step in s (exudyn backend)")
+    parser.add_argument("--step-size", type=positive_float,
+                        help="time step in s (exudyn backend)")
     parser.add_argument("--contact", help="contact variant (exudyn backend): symbolic, "
                                           "python or sphere")
     parser.add_argument("--out", type=Path, default=Path("compare_overlay.png"),
                         help="overlay figure (PNG); default compare_overlay.png")
     parser.add_argument("--no-plot", action="store_true", help="do not write the figure")
+    add_force_option(parser)
     add_mechanism_options(parser)
     return parser
 
 
 def run_compare(args: argparse.Namespace) -> int:
     """Body of ``mbs-clearance compare`` for parsed arguments; returns the exit code."""
-    from mbs_clearance.cli import mechanism_from_args
+    from mbs_clearance._io import atomic_file, check_output_file
+    from mbs_clearance.cli import figure_suffixes, mechanism_from_args
     from mbs_clearance.simulate import simulate
 
     mech = mechanism_from_args(args)
     if args.revolutions < 1:
         raise ValueError(f"--revolutions must be >= 1; got {args.revolutions}")
+    if not args.no_plot:
+        check_output_file(args.out, "--out", args.force, suffixes=figure_suffixes())
     pair = (args.backend_a, args.backend_b)
     all_options = [_backend_options(be, other, args) for be, other in (pair, pair[::-1])]
     trajectories = []
@@ -347,7 +359,8 @@ def run_compare(args: argparse.Namespace) -> int:
     if not args.no_plot:
         from mbs_clearance.plotting import plot_comparison
 
-        plot_comparison(*trajectories, path=args.out)
+        with atomic_file(args.out) as tmp:
+            plot_comparison(*trajectories, path=tmp)
         print(f"figure written to {args.out}", file=sys.stderr)
     return 0
 
@@ -355,15 +368,14 @@ def run_compare(args: argparse.Namespace) -> int:
 def compare_command(argv: list[str] | None = None) -> int:
     """``mbs-clearance compare``: simulate with two backends, print the table, plot.
 
-    Bad values (mechanism fields, options) end with exit status 2 and a one-line message.
+    Failures end with a one-line message: exit status 2 for bad values (mechanism fields,
+    options, output path), 1 for failures while running (`mbs_clearance.cli.run_command`).
     """
+    from mbs_clearance.cli import run_command
+
     parser = build_parser()
     args = parser.parse_args(argv)
-    try:
-        return run_compare(args)
-    except ValueError as exc:
-        parser.exit(2, f"mbs-clearance compare: error: {exc}\n")
-    return 0
+    return run_command(parser.prog, run_compare, args)
 
 
 if __name__ == "__main__":  # pragma: no cover

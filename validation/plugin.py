@@ -19,8 +19,10 @@ def make_register(name: str, help: str, description: str,
     return register
 
 
-def run_script(description: str, add_arguments, main) -> None:
-    """Run a plugin's main as `python -m validation....`."""
-    ap = argparse.ArgumentParser(description=description)
+def run_script(description: str, add_arguments, main, prog: str | None = None) -> None:
+    """Run a plugin's main as `python -m validation....` (errors as one line, as in the CLI)."""
+    from mbs_clearance.cli import Parser, run_command
+
+    ap = Parser(prog=prog, description=description)
     add_arguments(ap)
-    raise SystemExit(main(ap.parse_args()))
+    raise SystemExit(run_command(ap.prog, main, ap.parse_args()))

@@ -1,14 +1,15 @@
 """Render report.html to PNG pages with headless Chromium, to look at it as a reader would.
 
     apt-get install chromium            # Debian's package; not a Python dependency
-    python -m validation.render_report report/report.html [--out report/pages] [--height 1500]
+    python -m validation.render_report report/report.html [--out report_pages] [--height 1500]
 
-Writes one full-page screenshot and its slices page_00.png, page_01.png, ... (1300 px wide).
+Writes one full-page screenshot and its slices page_00.png, page_01.png, ... (1300 px wide)
+into a folder beside the report's (default ``<report folder>_pages``: a file inside the
+report folder would make the next ``mbs-clearance report`` refuse to replace it).
 """
 
 from __future__ import annotations
 
-import argparse
 import shutil
 import subprocess
 import tempfile
@@ -57,19 +58,34 @@ def render(html: str | Path, out: str | Path, width: int = 1300, height: int = 2
     return pages
 
 
+def default_pages_folder(html: Path) -> Path:
+    """``<report folder>_pages`` beside the report folder."""
+    folder = html.absolute().parent
+    return folder.with_name(folder.name + "_pages")
+
+
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    from mbs_clearance.cli import Parser, int_at_least, run_command
+
+    ap = Parser(prog="render_report", description=__doc__.splitlines()[0])
     ap.add_argument("html", type=Path)
-    ap.add_argument("--out", type=Path, help="folder for the PNG pages (default: beside it)")
-    ap.add_argument("--height", type=int, default=1500, help="page height in px")
+    ap.add_argument("--out", type=Path,
+                    help="folder for the PNG pages (default: <report folder>_pages)")
+    ap.add_argument("--height", type=int_at_least(1), default=1500, help="page height in px")
     args = ap.parse_args(argv)
-    try:
-        pages = render(args.html, args.out or args.html.parent / "pages",
-                       page_height=args.height)
-    except ValueError as exc:
-        ap.exit(2, f"render_report: error: {exc}\n")
-    print(f"{len(pages)} pages written to {pages[0].parent}")
-    return 0
+
+    def run(args) -> int:
+        from mbs_clearance._io import check_can_create_in
+
+        out = args.out or default_pages_folder(args.html)
+        if out.exists() and not out.is_dir():
+            raise ValueError(f"--out {str(out)!r} is a file; expected a folder")
+        check_can_create_in(out, "--out", "folder")
+        pages = render(args.html, out, page_height=args.height)
+        print(f"{len(pages)} pages written to {pages[0].parent}")
+        return 0
+
+    return run_command(ap.prog, run, args)
 
 
 if __name__ == "__main__":

@@ -3,9 +3,12 @@
     mbs-clearance report [--out report/] [--quick] [--replot]
 
 Writes ``report.html`` (self-contained: figures embedded), ``report.json`` (every number in
-the report), ``figures/*.png`` and ``data/`` (what each section computed). Each section
-computes its data once and saves it; the figures and the HTML are drawn from the saved data,
-so ``--replot`` redraws everything without recomputing.
+the report), ``figures/*.png``, ``data/`` (what each section computed) and ``manifest.json``
+(the run id and the SHA-256 of every file). Each section computes its data once and saves
+it; the figures and the HTML are drawn from the saved data, so ``--replot`` redraws
+everything without recomputing, and refuses a folder whose files come from different runs.
+The folder is built beside ``--out`` and moved into place at the end: an interrupted run
+leaves the previous report untouched.
 """
 
 from __future__ import annotations
@@ -14,6 +17,7 @@ import base64
 import json
 import math
 import platform
+import shutil
 import time
 from importlib import metadata
 from pathlib import Path
@@ -482,20 +486,38 @@ def render(out: Path, numbers: dict, figs: dict) -> Path:
 
 
 def build_report(out: str | Path = "report", quick: bool = False, progress: bool = True,
-                 replot: bool = False) -> Path:
-    """Compute every section (or reuse the saved data with `replot`), draw, write HTML."""
+                 replot: bool = False, force: bool = False) -> Path:
+    """Compute every section (or reuse the saved data with `replot`), draw, write HTML.
+
+    The report is built in a hidden folder beside `out` and moved into place at the end with
+    a manifest (run id and SHA-256 of every file), so an interrupted run leaves `out` as it
+    was. `replot` redraws from a folder whose report.json and data/ are those of one complete
+    run (ValueError otherwise). An existing `out` that is not an earlier report is replaced
+    only with `force`.
+    """
     from tqdm import tqdm
 
+    from mbs_clearance._io import OutputDir, check_output_dir, recover
+
     out = Path(out)
-    (out / "data").mkdir(parents=True, exist_ok=True)
-    json_path = out / "report.json"
     if replot:
-        if not json_path.exists():
-            raise ValueError(f"--replot needs a previous report in {str(out)!r} "
-                             f"(report.json not found)")
-        numbers = json.loads(json_path.read_text())
-    else:
-        s = _settings(quick)
+        recover(out)
+        manifest = _verify_for_replot(out)
+        numbers = json.loads((out / "report.json").read_text())
+        with OutputDir(out, "report", run_id=manifest["run_id"]) as staged:
+            shutil.copy2(out / "report.json", staged.path / "report.json")
+            shutil.copytree(out / "data", staged.path / "data")
+            figs = draw_figures(staged.path, numbers)
+            render(staged.path, numbers, figs)
+            staged.commit(created=manifest["created"],
+                          replotted=time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()))
+        return out / "report.html"
+
+    check_output_dir(out, "--out", force)
+    s = _settings(quick)
+    with OutputDir(out, "report") as staged:
+        work = staged.path
+        (work / "data").mkdir()
         numbers: dict[str, Any] = {}
         timings: dict[str, float] = {}
         bar = tqdm(SECTIONS, desc="report", disable=not progress)
@@ -503,32 +525,75 @@ def build_report(out: str | Path = "report", quick: bool = False, progress: bool
             bar.set_postfix_str(key)
             t0 = time.perf_counter()
             if key == "paper":
-                numbers[key] = section_paper(out, s, numbers)
+                numbers[key] = section_paper(work, s, numbers)
             elif key == "environment":
-                numbers[key] = section_environment(out, s, timings)
+                numbers[key] = section_environment(work, s, timings)
             else:
-                numbers[key] = globals()[f"section_{key}"](out, s)
+                numbers[key] = globals()[f"section_{key}"](work, s)
             timings[key] = time.perf_counter() - t0
+        numbers["environment"]["run_id"] = staged.run_id
         numbers = _jsonable(numbers)
-        json_path.write_text(json.dumps(numbers, indent=1))
-    figs = draw_figures(out, numbers)
-    return render(out, numbers, figs)
+        (work / "report.json").write_text(json.dumps(numbers, indent=1))
+        figs = draw_figures(work, numbers)
+        render(work, numbers, figs)
+        staged.commit()
+    return out / "report.html"
+
+
+#: files that --replot rebuilds (may be missing or changed); all others are its input
+_REBUILT = ("report.html", "figures/")
+
+
+def _verify_for_replot(out: Path) -> dict:
+    """The manifest of the report in `out`; ValueError unless report.json and data/ are
+    exactly the files of the run it describes and no other files are present."""
+    from mbs_clearance._io import MANIFEST, read_manifest, sha256
+
+    manifest = read_manifest(out)
+    if manifest is None or not (out / "report.json").is_file():
+        raise ValueError(f"--replot needs a previous report in {str(out)!r} (no complete "
+                         f"run: {MANIFEST} or report.json missing)")
+    run = manifest["run_id"]
+    for name, digest in manifest["files"].items():
+        if name.startswith(_REBUILT):
+            continue
+        f = out / name
+        if not f.is_file():
+            raise ValueError(f"--replot: report {str(out)!r} is incomplete: {name} of run "
+                             f"{run} is missing")
+        if sha256(f) != digest:
+            raise ValueError(f"--replot: report {str(out)!r} mixes runs: {name} is not the "
+                             f"file of run {run}")
+    present = sorted(p.relative_to(out).as_posix() for p in out.rglob("*") if not p.is_dir())
+    extra = [f for f in present if f != MANIFEST and f not in manifest["files"]
+             and not f.startswith(_REBUILT)]
+    if extra:
+        raise ValueError(f"--replot: report {str(out)!r} mixes runs: {extra[0]} is not part "
+                         f"of run {run}")
+    stored = json.loads((out / "report.json").read_text()).get("environment", {})
+    if stored.get("run_id") != run:
+        raise ValueError(f"--replot: report {str(out)!r} mixes runs: report.json is from run "
+                         f"{stored.get('run_id')}, the folder from run {run}")
+    return manifest
 
 
 def _main(args) -> int:
     t0 = time.perf_counter()
-    path = build_report(args.out, quick=args.quick, replot=args.replot)
+    path = build_report(args.out, quick=args.quick, replot=args.replot, force=args.force)
     print(f"report written to {path} ({time.perf_counter() - t0:.0f} s); numbers in "
           f"{path.with_name('report.json')}")
     return 0
 
 
 def _add_arguments(p):
+    from mbs_clearance.cli import add_force_option
+
     p.add_argument("--out", type=Path, default=Path("report"), help="output folder")
     p.add_argument("--quick", action="store_true",
                    help="smaller but complete report (coarser Exudyn step, small GA)")
     p.add_argument("--replot", action="store_true",
                    help="redraw figures and HTML from the saved data, no recomputation")
+    add_force_option(p)
 
 
 register = make_register("report", "build the validation report (HTML + JSON)",

@@ -244,6 +244,10 @@ def markdown_table(rows) -> str:
 
 
 def _main(args) -> int:
+    from mbs_clearance._io import RUN_KEY, atomic_file, check_output_file, run_stamp
+
+    if args.json:
+        check_output_file(args.json, "--json", args.force, suffixes=(".json",))
     rows = run_sweep(stress_cases(args.quick), tuple(args.backend), progress=True)
     print(markdown_table(rows))
     s = summary(rows)
@@ -256,16 +260,22 @@ def _main(args) -> int:
             print(f"| {d['case']} | {d['reduced']:.1f} | {d['exudyn']:.1f} | "
                   f"{d['difference_percent']:+.2f} % |")
     if args.json:
-        with open(args.json, "w") as fh:
-            json.dump({"rows": rows, "summary": s}, fh, indent=1, default=str)
+        with atomic_file(args.json) as tmp, open(tmp, "w") as fh:
+            json.dump({RUN_KEY: run_stamp("stress"), "rows": rows, "summary": s}, fh,
+                      indent=1, default=str)
     return 1 if s["fail"] else 0
 
 
 def _add_arguments(p):
+    from pathlib import Path
+
+    from mbs_clearance.cli import add_force_option
+
     p.add_argument("--quick", action="store_true", help="one case per axis, short runs")
-    p.add_argument("--backend", nargs="+", default=["reduced"],
+    p.add_argument("--backend", nargs="+", default=["reduced"], choices=("reduced", "exudyn"),
                    help="backends to sweep (reduced, exudyn)")
-    p.add_argument("--json", help="write rows and summary to this JSON file")
+    p.add_argument("--json", type=Path, help="write rows and summary to this JSON file")
+    add_force_option(p)
 
 
 register = make_register("stress", "numerical stress sweep (validation)",

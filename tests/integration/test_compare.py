@@ -81,7 +81,7 @@ def test_command_rejects_bad_values_before_simulating(capsys):
         compare_command(["--step-size", "-1", "--no-plot"])
     assert exc.value.code == 2
     err = capsys.readouterr()
-    assert "step_size" in err.err and "reduced:" not in err.err
+    assert "--step-size: must be a finite number > 0" in err.err and "reduced:" not in err.err
 
 
 def test_format_table_lists_every_revolution(reduced_paper):

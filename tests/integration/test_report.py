@@ -83,9 +83,13 @@ def test_replot_redraws_without_recomputing(report, monkeypatch):
     for key in SECTIONS:
         monkeypatch.setattr(rep, f"section_{key}", forbidden)
     monkeypatch.setattr(rep, "simulate", forbidden)
+    from mbs_clearance._io import read_manifest, verify_run_folder
+
+    run = read_manifest(out)["run_id"]
     assert main(["report", "--replot", "--out", str(out)]) == 0
     assert (out / "figures" / "fig3_response.png").exists()
     assert (out / "report.json").read_text() == before
+    assert verify_run_folder(out)["run_id"] == run      # still the same run
 
 
 def test_replot_without_a_report_is_a_clear_error(tmp_path, capsys):
@@ -109,3 +113,81 @@ def test_rendered_report_pages_are_not_blank(report, tmp_path):
     for page in pages:
         pixels = np.asarray(Image.open(page).convert("L"), dtype=float)
         assert pixels.std() > 5, page  # not a uniform (empty) page
+
+
+def _copy(report, tmp_path):
+    target = tmp_path / "copy"
+    shutil.copytree(report, target)
+    return target
+
+
+def test_report_folder_is_one_stamped_run(report):
+    from mbs_clearance._io import verify_run_folder
+
+    manifest = verify_run_folder(report)
+    numbers = json.loads((report / "report.json").read_text())
+    assert numbers["environment"]["run_id"] == manifest["run_id"]
+    listed = set(manifest["files"])
+    assert {"report.json", "report.html", "data/response_reduced.npz",
+            "figures/fig3_response.png"} <= listed
+    assert not list(report.parent.glob(f".{report.name}.*"))   # no partial folder left
+
+
+def test_replot_refuses_a_folder_mixing_two_runs(report, tmp_path, capsys):
+    """Data of another run in the folder (what a killed run plus a copy leave): --replot
+    stops with one line and leaves the folder as it was."""
+    out = _copy(report, tmp_path)
+    html = (out / "report.html").read_bytes()
+    simulate(SliderCrank(restitution=0.5), 1).save(out / "data" / "response_reduced.npz")
+    with pytest.raises(SystemExit) as exc:
+        main(["report", "--replot", "--out", str(out)])
+    err = capsys.readouterr().err
+    assert exc.value.code == 2
+    assert err.count("\n") == 1
+    assert err.startswith("mbs-clearance report: error: --replot: report ")
+    assert "mixes runs: data/response_reduced.npz is not the file of run" in err
+    assert (out / "report.html").read_bytes() == html
+    # a file that is not part of the run is refused too
+    out2 = _copy(report, tmp_path / "b")
+    (out2 / "data" / "extra.npz").write_bytes(b"x")
+    with pytest.raises(SystemExit):
+        main(["report", "--replot", "--out", str(out2)])
+    assert "mixes runs: data/extra.npz is not part of run" in capsys.readouterr().err
+
+
+@pytest.mark.slow
+def test_killed_report_leaves_the_previous_report(report, tmp_path):
+    """SIGKILL a real `report --quick` after its first section has written data: the target
+    still holds the previous complete report, and --replot on it works (and cleans up)."""
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+    from pathlib import Path
+
+    from mbs_clearance._io import verify_run_folder
+
+    out = _copy(report, tmp_path)
+    before = verify_run_folder(out)
+    root = Path(__file__).resolve().parents[2]
+    proc = subprocess.Popen([sys.executable, "-m", "mbs_clearance.cli", "report", "--quick",
+                             "--out", str(out)], cwd=tmp_path, stdout=subprocess.DEVNULL,
+                            stderr=subprocess.DEVNULL,
+                            env={**os.environ, "PYTHONPATH": str(root)})
+    partial = None
+    deadline = time.monotonic() + 600
+    while proc.poll() is None and time.monotonic() < deadline:
+        found = list(tmp_path.glob(".copy.partial-*/data/response_reduced.npz"))
+        if found:
+            partial = found[0].parents[1]
+            break
+        time.sleep(0.05)
+    proc.send_signal(signal.SIGKILL)
+    proc.wait()
+    assert partial is not None, "the report ended before it could be killed midway"
+    assert verify_run_folder(out) == before
+    assert not (partial / "report.json").exists()     # killed midway indeed
+    assert main(["report", "--replot", "--out", str(out)]) == 0
+    assert verify_run_folder(out)["run_id"] == before["run_id"]
+    assert not partial.exists()

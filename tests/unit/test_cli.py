@@ -52,3 +52,448 @@ def test_bad_input_exits_with_message(argv, message, capsys):
         main(argv)
     assert exc.value.code == 2
     assert message in capsys.readouterr().err
+
+
+# ------------------------------------------------------------------ options and parsing
+def _table():
+    """tools/bad_input_table.py as a module (tools/ is not a package)."""
+    import importlib.util
+    import sys
+    from pathlib import Path
+
+    if "bad_input_table" not in sys.modules:
+        path = Path(__file__).resolve().parents[2] / "tools" / "bad_input_table.py"
+        spec = importlib.util.spec_from_file_location("bad_input_table", path)
+        module = importlib.util.module_from_spec(spec)
+        sys.modules["bad_input_table"] = module
+        spec.loader.exec_module(module)
+    return sys.modules["bad_input_table"]
+
+
+def _parse(argv):
+    from mbs_clearance.cli import build_parser, mechanism_from_args
+
+    return mechanism_from_args(build_parser().parse_args(argv))
+
+
+def test_none_sets_the_derived_value_over_the_config_file(tmp_path):
+    cfg = tmp_path / "m.json"
+    cfg.write_text(json.dumps({"crank_inertia": 2e-4, "coupler_inertia": 1e-3,
+                               "contact_stiffness": 1e9}))
+    from_file = _parse(["simulate", "--config", str(cfg)])
+    assert (from_file.crank_inertia, from_file.coupler_inertia,
+            from_file.contact_stiffness) == (2e-4, 1e-3, 1e9)
+    m = _parse(["simulate", "--config", str(cfg), "--crank-inertia", "none",
+                "--coupler-inertia", "None", "--contact-stiffness", " NONE "])
+    assert (m.crank_inertia, m.coupler_inertia, m.contact_stiffness) == (None, None, None)
+    # the derived values: uniform thin rods m L^2 / 12 and the paper's Eq. 9 stiffness
+    assert m.crank_inertia_value == pytest.approx(m.crank_mass * m.crank_length ** 2 / 12)
+    assert m.coupler_inertia_value == pytest.approx(m.coupler_mass * m.coupler_length ** 2 / 12)
+    assert m.stiffness == SliderCrank().stiffness != 1e9
+
+
+def test_parameter_list_accepts_spaces_and_runs(capsys):
+    from mbs_clearance.sensitivity import sensitivities
+
+    assert main(["sensitivity", "--parameters", "crank_length, slider_mass ",
+                 "--revolutions", "1"]) == 0
+    rows = capsys.readouterr().out.splitlines()[1:]
+    ref = sensitivities(SliderCrank(), ("crank_length", "slider_mass"), 1)
+    assert [r.split()[0] for r in rows] == ["crank_length", "slider_mass"]
+    for row, r in zip(rows, ref.summary()):
+        assert float(row.split()[2]) == pytest.approx(r["mean_abs_normalized"], rel=1e-3)
+
+
+@pytest.mark.parametrize("argv,message", [
+    (["sensitivity", "--parameters", ""], "needs at least one SliderCrank field"),
+    (["sensitivity", "--parameters", "a,,b"], "has an empty name"),
+    (["bench", "--repeats", "0"], "--repeats: must be an integer >= 1; got 0"),
+    (["stress", "--backend", "nope"], "invalid choice: 'nope' (choose from 'reduced', "
+                                      "'exudyn')"),
+    (["simulate", "--rtol", "-1e-8"], "--rtol: must be a finite number > 0; got '-1e-8'"),
+    (["simulate", "--revolutions", "0"], "--revolutions: must be an integer >= 1"),
+    (["optimize", "--population", "3"], "--population: must be an integer >= 4"),
+    (["optimize", "--crank-bounds", "nan", "0.06"], "--crank-bounds: must be a finite"),
+    (["compare", "--h-max", "-1"], "--h-max: must be a finite number > 0"),
+    (["compare", "--step-size", "0"], "--step-size: must be a finite number > 0"),
+])
+def test_bad_option_values_are_one_line_usage_errors(argv, message, capsys):
+    with pytest.raises(SystemExit) as exc:
+        main(argv)
+    assert exc.value.code == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith(f"mbs-clearance {argv[0]}: error: ")
+    assert message in err
+
+
+def test_work_precision_rejects_zero_repeats():
+    from validation.benchmarks.work_precision import run
+
+    with pytest.raises(ValueError, match="repeats must be an integer >= 1; got 0"):
+        run(quick=True, repeats=0)
+
+
+# ------------------------------------------------------------------ errors: one line, codes
+def _fail_with(monkeypatch, exc):
+    import mbs_clearance.cli as cli
+
+    def boom(*args, **kwargs):
+        raise exc
+
+    monkeypatch.setattr(cli, "simulate", boom)
+
+
+@pytest.mark.parametrize("exc,code,shown", [
+    (RuntimeError("integration failed: step size underflow"), 1,
+     "integration failed: step size underflow"),
+    (OSError(28, "No space left on device"), 1, "No space left on device"),
+    (ValueError("h_max must be > 0\nsecond line"), 2, "h_max must be > 0; second line"),
+    (KeyboardInterrupt(), 130, "interrupted"),
+    (TypeError("unsupported operand"), 1, "internal error TypeError: unsupported operand"),
+])
+def test_failures_are_one_line_with_status(exc, code, shown, monkeypatch, capsys):
+    monkeypatch.delenv("MBS_CLEARANCE_DEBUG", raising=False)
+    _fail_with(monkeypatch, exc)
+    with pytest.raises(SystemExit) as info:
+        main(["simulate", "--revolutions", "1"])
+    assert info.value.code == code
+    err = capsys.readouterr().err
+    assert err == f"mbs-clearance simulate: error: {shown}" + (
+        " (a bug; rerun with MBS_CLEARANCE_DEBUG=1 for the traceback and report it)\n"
+        if isinstance(exc, TypeError) else "\n")
+
+
+def test_debug_variable_shows_the_traceback(monkeypatch, capsys):
+    monkeypatch.setenv("MBS_CLEARANCE_DEBUG", "1")
+    _fail_with(monkeypatch, TypeError("unsupported operand"))
+    with pytest.raises(SystemExit):
+        main(["simulate", "--revolutions", "1"])
+    err = capsys.readouterr().err
+    assert err.startswith("Traceback (most recent call last):")
+    assert "TypeError: unsupported operand" in err
+    assert err.splitlines()[-1].startswith("mbs-clearance simulate: error: internal error")
+
+
+def test_console_script_in_a_real_process_prints_one_line(tmp_path):
+    """The same through the interpreter (sys.exit(main())): a runtime failure."""
+    import subprocess
+    import sys
+
+    proc = subprocess.run([sys.executable, "-m", "mbs_clearance.cli", "compare",
+                           "--backend-b", "ideal", "--h-max", "1e-300", "--revolutions", "1",
+                           "--no-plot"], capture_output=True, text=True, cwd=tmp_path,
+                          env=_env())
+    assert proc.returncode == 1
+    assert proc.stderr.count("\n") == 1, proc.stderr
+    assert proc.stderr.startswith("mbs-clearance compare: error: reduced model integration "
+                                  "failed")
+
+
+def _env():
+    import os
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[2]
+    return {**os.environ, "PYTHONPATH": str(root), "MBS_CLEARANCE_DEBUG": ""}
+
+
+# ------------------------------------------------------------------ outputs
+def _forbid_computing(monkeypatch):
+    """Every entry point that computes raises: output checks must come first."""
+    import mbs_clearance.cli as cli
+    import mbs_clearance.sensitivity as sens_mod
+    import validation.benchmarks.work_precision as wp
+    import validation.compare as cmp
+    import validation.report as rep
+    import validation.stress as stress
+
+    def forbidden(*args, **kwargs):
+        raise AssertionError("computation started before the output path was checked")
+
+    for module, name in ((cli, "simulate"), (cli, "optimize_link_lengths"),
+                         (sens_mod, "sensitivities"), (wp, "run"), (stress, "run_sweep"),
+                         (rep, "section_mechanism"), (rep, "section_response")):
+        monkeypatch.setattr(module, name, forbidden)
+    import sys
+
+    monkeypatch.setattr(sys.modules["mbs_clearance.simulate"], "simulate", forbidden)
+    assert cmp  # compare imports simulate from mbs_clearance.simulate at call time
+
+
+def _output_cases():
+    marks = ("--out", "--plot", "--json")
+    return [c for c, _ in _table().CLI_CASES if any(m in c for m in marks)
+            and "--replot" not in c]
+
+
+@pytest.fixture
+def user_folder(tmp_path, monkeypatch):
+    _table()._make_user_files(tmp_path)
+    monkeypatch.chdir(tmp_path)
+    return tmp_path
+
+
+def test_output_paths_are_checked_before_computing(user_folder, monkeypatch, capsys):
+    import shlex
+
+    _forbid_computing(monkeypatch)
+    cases = _output_cases()
+    assert len(cases) >= 25
+    before = sorted(p.relative_to(user_folder) for p in user_folder.rglob("*"))
+    for command in cases:
+        with pytest.raises(SystemExit) as exc:
+            main(shlex.split(command))
+        err = capsys.readouterr().err
+        assert exc.value.code == 2, (command, err)
+        assert err.count("\n") == 1 and "error: --" in err, (command, err)
+        assert "AssertionError" not in err
+    # nothing created, nothing changed (no partial folders or files left)
+    assert sorted(p.relative_to(user_folder) for p in user_folder.rglob("*")) == before
+    assert (user_folder / "user.txt").read_text() == "my notes\n"
+
+
+@pytest.mark.skipif(__import__("os").geteuid() == 0,
+                    reason="root writes into read-only folders; /proc covers it for root")
+def test_read_only_folder_is_refused(tmp_path, monkeypatch, capsys):
+    ro = tmp_path / "ro"
+    ro.mkdir()
+    ro.chmod(0o555)
+    _forbid_computing(monkeypatch)
+    with pytest.raises(SystemExit) as exc:
+        main(["simulate", "--out", str(ro / "t.npz")])
+    assert exc.value.code == 2
+    assert "is not writable" in capsys.readouterr().err
+
+
+def test_read_only_mount_is_refused(tmp_path, monkeypatch, capsys):
+    """A real read-only file system (refused even for root, unlike chmod)."""
+    import shutil
+    import subprocess
+
+    ro = tmp_path / "ro"
+    ro.mkdir()
+    if shutil.which("mount") is None or subprocess.run(
+            ["mount", "-t", "tmpfs", "-o", "ro,size=64k", "tmpfs", str(ro)],
+            capture_output=True).returncode != 0:
+        pytest.skip("cannot mount a read-only tmpfs here (needs root / CAP_SYS_ADMIN)")
+    try:
+        _forbid_computing(monkeypatch)
+        for argv in (["simulate", "--out", str(ro / "t.npz")],
+                     ["sensitivity", "--out", str(ro / "sens")],
+                     ["report", "--out", str(ro / "report")]):
+            with pytest.raises(SystemExit) as exc:
+                main(argv)
+            err = capsys.readouterr().err
+            assert exc.value.code == 2
+            assert err.endswith("is not writable (creating a file there fails: Read-only file "
+                                "system)\n"), err
+    finally:
+        subprocess.run(["umount", str(ro)], check=True)
+
+
+def test_own_files_are_replaced_user_files_need_force(tmp_path, capsys):
+    out, fig = tmp_path / "t.npz", tmp_path / "t.png"
+    argv = ["simulate", "--revolutions", "1", "--out", str(out), "--plot", str(fig)]
+    assert main(argv) == 0
+    assert main(argv + ["--restitution", "0.5"]) == 0     # ours: replaced without asking
+    assert load_trajectory(out).mechanism.restitution == 0.5
+    user = tmp_path / "mine.npz"
+    user.write_bytes(b"my data")
+    with pytest.raises(SystemExit) as exc:
+        main(["simulate", "--revolutions", "1", "--out", str(user)])
+    assert exc.value.code == 2 and "pass --force" in capsys.readouterr().err
+    assert user.read_bytes() == b"my data"
+    assert main(["simulate", "--revolutions", "1", "--out", str(user), "--force"]) == 0
+    assert load_trajectory(user).mechanism == SliderCrank()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["mine.npz", "t.npz", "t.png"]
+
+
+def test_failed_write_leaves_the_old_file(tmp_path, monkeypatch, capsys):
+    from mbs_clearance.trajectory import Trajectory
+
+    out = tmp_path / "t.npz"
+    assert main(["simulate", "--revolutions", "1", "--out", str(out)]) == 0
+    old = out.read_bytes()
+
+    def disk_full(self, path):
+        Path(path).write_bytes(b"half")
+        raise OSError(28, "No space left on device")
+
+    from pathlib import Path
+
+    monkeypatch.setattr(Trajectory, "save", disk_full)
+    capsys.readouterr()
+    with pytest.raises(SystemExit) as exc:
+        main(["simulate", "--revolutions", "1", "--out", str(out), "--restitution", "0.5"])
+    assert exc.value.code == 1
+    # the run's note "done in ..." then the error, one line
+    assert capsys.readouterr().err.splitlines()[-1] == ("mbs-clearance simulate: error: No "
+                                                        "space left on device")
+    assert out.read_bytes() == old
+    assert [p.name for p in tmp_path.iterdir()] == ["t.npz"]
+
+
+def test_output_folder_manifest_replace_and_force(tmp_path, capsys):
+    from mbs_clearance._io import MANIFEST, verify_run_folder
+
+    out = tmp_path / "sens"
+    argv = ["sensitivity", "--parameters", "crank_length", "--revolutions", "1",
+            "--out", str(out)]
+    assert main(argv) == 0
+    first = verify_run_folder(out)
+    assert sorted(first["files"]) == sorted(p.name for p in out.iterdir()
+                                            if p.name != MANIFEST)
+    assert {"fig4_kinematic.png", "sensitivities.npz"} <= set(first["files"])
+    assert main(argv) == 0                               # our folder: replaced
+    second = verify_run_folder(out)
+    assert second["run_id"] != first["run_id"]
+    (out / "my_notes.txt").write_text("mine")            # a user's file inside: refused
+    capsys.readouterr()
+    with pytest.raises(SystemExit):
+        main(argv)
+    assert "holds 'my_notes.txt'" in capsys.readouterr().err
+    assert (out / "my_notes.txt").read_text() == "mine"
+    assert json.loads((out / MANIFEST).read_text())["run_id"] == second["run_id"]
+    assert main(argv + ["--force"]) == 0
+    assert not (out / "my_notes.txt").exists()
+    assert [p.name for p in tmp_path.iterdir()] == ["sens"]   # no partial folder left
+
+
+def test_killed_run_leaves_the_previous_folder(tmp_path):
+    """SIGKILL a real `sensitivity --out` while it writes its folder: the folder still holds
+    the previous complete run, and the next run cleans up the partial folder."""
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    from mbs_clearance._io import sha256, verify_run_folder
+
+    out = tmp_path / "sens"
+    argv = ["sensitivity", "--parameters", "crank_length", "--revolutions", "1",
+            "--out", str(out)]
+    assert main(argv) == 0
+    before = verify_run_folder(out)
+    digest = sha256(out / "sensitivities.npz")
+    proc = subprocess.Popen([sys.executable, "-m", "mbs_clearance.cli", *argv,
+                             "--restitution", "0.5"], env=_env(), cwd=tmp_path,
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    partial = None
+    deadline = time.monotonic() + 300
+    while proc.poll() is None and time.monotonic() < deadline:
+        found = list(tmp_path.glob(".sens.partial-*/sensitivities.npz"))
+        if found:
+            partial = found[0].parent
+            break
+        time.sleep(0.002)
+    proc.send_signal(signal.SIGKILL)
+    proc.wait()
+    assert partial is not None, "the run ended before it could be killed while writing"
+    assert proc.returncode == -signal.SIGKILL
+    assert verify_run_folder(out) == before
+    assert sha256(out / "sensitivities.npz") == digest
+    assert partial.exists()                      # the killed run's leftovers ...
+    assert main(argv) == 0
+    assert not partial.exists()                  # ... removed by the next run
+    assert [p.name for p in tmp_path.iterdir()] == ["sens"]
+
+
+# ------------------------------------------------------------------ the bad-input table
+def test_every_cli_bad_input_case_is_one_line_and_the_doc_is_current():
+    """tools/bad_input_table.py's command-line cases: none prints a traceback or an internal
+    error, each exits non-zero with exactly one line; docs/bad_input.md holds this table
+    (regenerate with `python tools/bad_input_table.py`)."""
+    from pathlib import Path
+
+    table = _table()
+    rows = table.run_cli_cases()
+    assert len(rows) == len(table.CLI_CASES) >= 70
+    for r in rows:
+        err = r["stderr"]
+        assert isinstance(r["status"], int) and r["status"] in (1, 2), r
+        assert "Traceback" not in err and "internal error" not in err, r
+        assert err.count("\n") == 1 and err.endswith("\n"), r
+        first = r["command"].split()[:1]
+        prog = " ".join(["mbs-clearance", *first]) if first != ["nope"] else "mbs-clearance"
+        assert err.startswith(f"{prog}: error: "), r
+    doc = (Path(__file__).resolve().parents[2] / "docs" / "bad_input.md").read_text()
+    assert table.cli_section(doc) == table.cli_section(table.document(rows, []))
+    # the library section lists every library case of the script
+    library = doc[doc.index(table.LIBRARY_HEADING):]
+    for expr, _ in table.LIBRARY_CASES:
+        assert f"`{table._cell(expr)}`" in library, expr
+
+
+def test_kill_between_the_two_renames_is_recovered(tmp_path):
+    """A run killed after moving the previous folder aside and before moving its own into
+    place: the next check puts the previous folder back; leftovers of dead runs go."""
+    import subprocess
+    import sys
+
+    from mbs_clearance._io import OutputDir, check_output_dir, verify_run_folder
+
+    target = tmp_path / "out"
+    with OutputDir(target, "test") as staged:
+        (staged.path / "a.txt").write_text("previous run")
+        staged.commit()
+    before = verify_run_folder(target)
+    dead = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
+                          capture_output=True, text=True).stdout.strip()
+    target.rename(tmp_path / f".out.old-{dead}-abcdef")
+    (tmp_path / f".out.partial-{dead}-abcdef").mkdir()
+    (tmp_path / f".t.npz.partial-{dead}-xyz.npz").write_bytes(b"half")
+    check_output_dir(target, "--out")
+    from mbs_clearance._io import check_output_file
+
+    check_output_file(tmp_path / "t.npz", "--out")
+    assert verify_run_folder(target) == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out"]
+
+
+def test_stress_json_is_stamped_checked_first_and_replaced_only_if_ours(tmp_path, monkeypatch,
+                                                                      capsys):
+    """`stress --json` on one real (short) case: the file holds the run's rows under a run
+    stamp; a second run replaces it; a user's JSON file is refused unless --force."""
+    import validation.stress as stress
+    from mbs_clearance._io import RUN_KEY
+
+    case = stress.StressCase("paper case, 1 revolution", SliderCrank(), revolutions=1)
+    monkeypatch.setattr(stress, "stress_cases", lambda quick: [case])
+    out = tmp_path / "s.json"
+    assert main(["stress", "--json", str(out)]) == 0
+    first = json.loads(out.read_text())
+    assert first[RUN_KEY]["command"] == "stress"
+    reference = stress.run_case(case)
+    assert [r["case"] for r in first["rows"]] == [reference["case"]]
+    assert first["rows"][0]["peak_last_revolution"] == pytest.approx(
+        reference["peak_last_revolution"], rel=1e-12)
+    assert main(["stress", "--json", str(out)]) == 0
+    assert json.loads(out.read_text())[RUN_KEY]["run_id"] != first[RUN_KEY]["run_id"]
+    user = tmp_path / "mine.json"
+    user.write_text("{}")
+    with pytest.raises(SystemExit) as exc:
+        main(["stress", "--json", str(user)])
+    assert exc.value.code == 2 and "pass --force" in capsys.readouterr().err
+    assert user.read_text() == "{}"
+    assert main(["stress", "--json", str(user), "--force"]) == 0
+    assert "will be overwritten (--force)" in capsys.readouterr().err
+    assert RUN_KEY in json.loads(user.read_text())
+
+
+def test_warnings_during_a_command_are_one_line(tmp_path):
+    """A warning raised while a command runs is shown as `PROG: warning: MESSAGE` (a real
+    interpreter: pytest records warnings itself)."""
+    import subprocess
+    import sys
+
+    code = ("import warnings\n"
+            "from mbs_clearance.cli import run_command\n"
+            "def work(args):\n"
+            "    warnings.warn('penetration 9212 x the clearance\\nreduce the speed')\n"
+            "    return 0\n"
+            "raise SystemExit(run_command('mbs-clearance simulate', work, None))\n")
+    proc = subprocess.run([sys.executable, "-W", "always", "-c", code], capture_output=True,
+                          text=True, cwd=tmp_path, env=_env())
+    assert proc.returncode == 0
+    assert proc.stderr == ("mbs-clearance simulate: warning: penetration 9212 x the "
+                           "clearance; reduce the speed\n")

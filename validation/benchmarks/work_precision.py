@@ -61,6 +61,8 @@ def _scipy_force(res, grid):
 
 def run(quick: bool = False, repeats: int = 5, exudyn: bool = True):
     """All rows: case, backend, method, setting, time (s), peak error, series error."""
+    if isinstance(repeats, bool) or not isinstance(repeats, int) or repeats < 1:
+        raise ValueError(f"repeats must be an integer >= 1; got {repeats!r}")
     rows = []
     refs = {}
     for case, (mech, rev) in CASES.items():
@@ -197,27 +199,36 @@ def markdown(rows, refs) -> str:
 
 
 def _main(args) -> int:
+    from mbs_clearance._io import OutputDir, check_output_dir
+
+    if args.out:
+        check_output_dir(args.out, "--out", args.force)
     rows, refs = run(quick=args.quick, repeats=args.repeats, exudyn=not args.no_exudyn)
     text = f"Machine: {machine_summary()}\n" + markdown(rows, refs)
     print(text)
     if args.out:
-        out = Path(args.out)
-        out.mkdir(parents=True, exist_ok=True)
-        (out / "work_precision.json").write_text(json.dumps(
-            {"rows": rows, "references": refs, "machine": machine_summary()}, indent=1))
-        (out / "work_precision.md").write_text(text)
         from mbs_clearance.plotting import plot_work_precision
 
-        plot_work_precision(rows, path=out / "work_precision.png")
-        print(f"\nwritten to {out}/work_precision.(json|md|png)")
+        with OutputDir(args.out, "bench") as staged:
+            out = staged.path
+            (out / "work_precision.json").write_text(json.dumps(
+                {"rows": rows, "references": refs, "machine": machine_summary()}, indent=1))
+            (out / "work_precision.md").write_text(text)
+            plot_work_precision(rows, path=out / "work_precision.png")
+            staged.commit()
+        print(f"\nwritten to {args.out}/work_precision.(json|md|png)")
     return 0
 
 
 def _add_arguments(p):
+    from mbs_clearance.cli import add_force_option, int_at_least
+
     p.add_argument("--quick", action="store_true", help="a few settings only")
-    p.add_argument("--repeats", type=int, default=5)
+    p.add_argument("--repeats", type=int_at_least(1), default=5,
+                   help="timed runs per setting (median; >= 1, default 5)")
     p.add_argument("--no-exudyn", action="store_true")
-    p.add_argument("--out", help="folder for work_precision.json/.md/.png")
+    p.add_argument("--out", type=Path, help="folder for work_precision.json/.md/.png")
+    add_force_option(p)
 
 
 register = make_register("bench", "work-precision benchmark (validation)",
