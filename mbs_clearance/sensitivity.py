@@ -40,9 +40,10 @@ NORMALIZATION_FLOOR = 0.01
 #: through the per-revolution maxima (`growth`) from revolution 2 on (revolution 1 holds the
 #: start's transient), divided by the revolution-2 value. A line, not the ratio of the
 #: last two revolutions, so that steady algebraic growth is caught too: 100 rpm grows
-#: linearly, by 0.43 of its revolution-2 value per revolution (ratio of the last two only
-#: 1.15); the paper case's largest is 0.044 at 4 revolutions and falls with more (bounded);
-#: c = 0.1 mm and 0.5 mm grow 10 to 2500 times per revolution (docs/sensitivity.md)
+#: linearly, by 0.43 of its revolution-2 value per revolution over 4 revolutions (the ratio
+#: of the last two only 1.15); the paper case's largest is 0.031 (eight parameters, 4
+#: revolutions) and falls with more (bounded);
+#: 1000 rpm 22, c = 0.1 mm 263, c = 0.5 mm 1.2e5 (8 and 5 revolutions, docs/sensitivity.md)
 GROWTH_TREND_LIMIT = 0.1
 
 #: revolutions the growth diagnostic needs: revolution 1 is the transient, and a trend
