@@ -523,8 +523,8 @@ def run(mech: SliderCrank, revolutions: int = 4, *, rtol: float | None = None,
     est = estimate_run(mech, len(edges) - 1, window_time=float(edges[-1]), record=record,
                  row=_record_row(system), max_steps=max_steps, h_max=h_max,
                  max_memory=max_memory,
-                 pilot=None if system is not None else dict(rtol=rtol, atol=atol_arr,
-                                                            method=method))
+                 pilot=dict(rtol=rtol, atol=None if system is not None else atol_arr,
+                            method=method))
     # the record never outgrows max_memory: a run that would stops there (and says so)
     step_limit = max_steps if est["step_cap"] is None else min(max_steps, est["step_cap"])
     if system is None:
