@@ -326,3 +326,16 @@ def test_sensitivity_periodicity_undetermined_and_slow_growth(paper):
     assert slow.periodic is False and slow.chaotic
     g = slow.growth[1:, 0]
     assert np.all(np.diff(g) > 0.2 * g[0])      # steady growth, checked on the raw maxima
+
+
+def test_periodicity_and_penetration_stats_with_exudyn(paper):
+    """The independent Exudyn model gives the same verdicts as the reduced one: the paper
+    case periodic, c = 0.1 mm not; and the same penetration ratio (first impact, 0.89 c)."""
+    pytest.importorskip("exudyn")
+    traj = simulate(paper, 4, backend="exudyn")
+    ref = simulate(paper, 4)
+    assert traj.stats["periodic"] is True
+    assert traj.stats["max_penetration_clearance"] == pytest.approx(
+        ref.stats["max_penetration_clearance"], rel=0.01)
+    chaotic = simulate(paper.replace(journal_radius=0.0099), 4, backend="exudyn")
+    assert chaotic.stats["periodic"] is False
