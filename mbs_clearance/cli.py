@@ -301,6 +301,8 @@ def _cmd_sensitivity(args: argparse.Namespace) -> int:
         print("WARNING: the sensitivities grow from revolution to revolution: the motion is "
               "not periodic (chaotic or transient) and these derivatives are not meaningful; "
               "reduce the clearance or the speed.", file=sys.stderr)
+    elif sens.periodic is None:
+        print(f"NOTE: periodicity {sens.periodicity_note}", file=sys.stderr)
     if args.out:
         from .plotting import SENSITIVITY_FIGURES, plot_sensitivities
 

@@ -75,10 +75,19 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
+from ._checks import (
+    MemoryLimitError,
+    check_bool,
+    check_choice,
+    check_int,
+    check_max_memory,
+    check_real,
+    format_bytes,
+)
 from .contact import CONTACT_MODELS, contact_force, hysteresis_factor
 from .mechanism import SliderCrank
 from .reduced import initial_state
-from .trajectory import Trajectory
+from .trajectory import Trajectory, annotate
 
 __all__ = [
     "simulate_exudyn", "peak_exudyn", "build_model", "ExudynSettings", "ExudynModel",
@@ -130,48 +139,67 @@ class ExudynSettings:
     newton_tolerance: float = 1e-8
 
 
-#: option names accepted by simulate_exudyn / peak_exudyn
-OPTION_NAMES: tuple[str, ...] = tuple(ExudynSettings.__dataclass_fields__)
+#: option names accepted by simulate_exudyn / peak_exudyn: the settings and ``max_memory``
+OPTION_NAMES: tuple[str, ...] = (*ExudynSettings.__dataclass_fields__, "max_memory")
 
-
-def _real(value) -> bool:
-    return (isinstance(value, (int, float, np.floating, np.integer))
-            and not isinstance(value, bool) and math.isfinite(float(value)))
+#: floats Exudyn stores per time step for each output group (the time and the components of
+#: each sensor: forces, displacements, positions, velocities, accelerations and
+#: coordinates are 3-vectors, the drive's multiplier a scalar)
+SENSOR_FLOATS: dict[str, int] = {"base_force": 4, "crank_moment": 2, "contact": 8,
+                                 "slider": 12, "coupler": 8}
 
 
 def make_settings(options: dict) -> ExudynSettings:
-    """Validate backend options and return them as `ExudynSettings` (ValueError if bad)."""
+    """Validate backend options and return them as `ExudynSettings` (ValueError naming the
+    option and its range if bad); ``max_memory`` is accepted and checked by the runs."""
     unknown = sorted(set(options) - set(OPTION_NAMES))
     if unknown:
         raise ValueError(f"unknown option(s) {unknown} for backend 'exudyn'; "
                          f"allowed: {list(OPTION_NAMES)}")
-    s = ExudynSettings(**options)
-    if not _real(s.step_size) or s.step_size <= 0:
-        raise ValueError(f"step_size must be a finite number > 0 (s); got {s.step_size!r}")
-    if s.contact not in CONTACT_VARIANTS:
-        raise ValueError(f"contact must be one of {list(CONTACT_VARIANTS)}; got {s.contact!r}")
-    if not _real(s.spectral_radius) or not 0.0 <= s.spectral_radius <= 1.0:
-        raise ValueError(f"spectral_radius must be in [0, 1]; got {s.spectral_radius!r}")
-    if not isinstance(s.modified_newton, bool):
-        raise ValueError(f"modified_newton must be True or False; got {s.modified_newton!r}")
-    if s.onset not in ONSET_MODES:
-        raise ValueError(f"onset must be one of {list(ONSET_MODES)}; got {s.onset!r}")
-    if not _real(s.newton_tolerance) or s.newton_tolerance <= 0:
-        raise ValueError(f"newton_tolerance must be a number > 0; got {s.newton_tolerance!r}")
-    return s
+    s = ExudynSettings(**{k: v for k, v in options.items() if k != "max_memory"})
+    return ExudynSettings(
+        step_size=check_real("step_size", s.step_size, 0.0, low_open=True, unit="s"),
+        contact=check_choice("contact", s.contact, CONTACT_VARIANTS),
+        spectral_radius=check_real("spectral_radius", s.spectral_radius, 0.0, 1.0),
+        modified_newton=check_bool("modified_newton", s.modified_newton),
+        onset=check_choice("onset", s.onset, ONSET_MODES),
+        newton_tolerance=check_real("newton_tolerance", s.newton_tolerance, 0.0,
+                                    low_open=True))
 
 
-def _check_run(mech, revolutions, settings: ExudynSettings) -> None:
+def estimate_memory(mech: SliderCrank, revolutions: int, settings: ExudynSettings,
+                    outputs: tuple[str, ...] = ("all",)) -> tuple[int, int]:
+    """(time steps, peak bytes) of a run: Exudyn stores every step of every sensor
+    (SENSOR_FLOATS), the arrays are copied out of it, and a Trajectory holds 16 floats
+    per step; so 2 copies of the sensors plus 16 floats (peak-only: the base force only)."""
+    groups = OUTPUT_GROUPS if "all" in outputs else outputs
+    floats = sum(SENSOR_FLOATS[g] for g in groups)
+    steps = max(1, int(round(revolutions * mech.period / settings.step_size)))
+    per_step = 8 * (2 * floats + (16 if "all" in outputs else 0))
+    return steps, (steps + 1) * per_step
+
+
+def _check_memory(mech, revolutions, settings, outputs, max_memory) -> None:
+    max_memory = check_max_memory(max_memory)
+    steps, need = estimate_memory(mech, revolutions, settings, outputs)
+    if need > max_memory:
+        raise MemoryLimitError(
+            f"the Exudyn run of {revolutions} revolutions takes {steps:.3g} fixed steps of "
+            f"{settings.step_size:g} s and needs about {format_bytes(need)} for its records, "
+            f"more than max_memory={max_memory} bytes ({format_bytes(max_memory)}); raise "
+            "step_size or max_memory, or run fewer revolutions")
+
+
+def _check_run(mech, revolutions, settings: ExudynSettings, name="revolutions") -> int:
     if not isinstance(mech, SliderCrank):
         raise ValueError(f"mech must be a SliderCrank; got {type(mech).__name__}")
-    if (not isinstance(revolutions, (int, np.integer)) or isinstance(revolutions, bool)
-            or revolutions < 1):
-        raise ValueError(f"revolutions must be an integer >= 1; got {revolutions!r}")
+    revolutions = check_int(name, revolutions, 1)
     if settings.contact == "sphere" and sphere_restitution(mech) <= 0.0:
         raise ValueError(
             f"contact='sphere' cannot represent contact_model={mech.contact_model!r} with "
             f"restitution {mech.restitution!r}: Exudyn's restitution 1 - xi/1.5 = "
             f"{sphere_restitution(mech):.3g} must be > 0; use contact='symbolic'")
+    return revolutions
 
 
 def sphere_restitution(mech: SliderCrank) -> float:
@@ -528,7 +556,8 @@ def simulate_exudyn(mech: SliderCrank, revolutions: int = 4, **options) -> Traje
     **options
         `ExudynSettings` fields: ``step_size`` (s, default `DEFAULT_STEP_SIZE`),
         ``contact`` ("symbolic", "python", "sphere"), ``spectral_radius``,
-        ``modified_newton``, ``onset``, ``newton_tolerance``. Unknown names or
+        ``modified_newton``, ``onset``, ``newton_tolerance``, and ``max_memory`` (bytes;
+        a run whose records `estimate_memory` puts above it is refused). Unknown names or
         bad values raise ValueError before anything is computed.
 
     Returns
@@ -542,8 +571,10 @@ def simulate_exudyn(mech: SliderCrank, revolutions: int = 4, **options) -> Traje
         size (``uniform_steps``; False if Exudyn had to cut a step after a Newton failure),
         Newton counters and the wall time in s.
     """
+    max_memory = options.pop("max_memory", None)
     settings = make_settings(options)
-    _check_run(mech, revolutions, settings)
+    revolutions = _check_run(mech, revolutions, settings)
+    _check_memory(mech, revolutions, settings, ("all",), max_memory)
     model = build_model(mech, settings)
     stats = solve(model, revolutions * mech.period)
 
@@ -564,7 +595,7 @@ def simulate_exudyn(mech: SliderCrank, revolutions: int = 4, **options) -> Traje
     stats["uniform_steps"] = bool(len(t) == stats["n_steps"] + 1 and np.allclose(
         np.diff(t), stats["step_size_used"], rtol=1e-6, atol=0.0))
     theta3 = _stored(model, "coupler_angle")[:, 3] + model.items["coupler_reference_angle"]
-    return Trajectory(
+    return annotate(Trajectory(
         t=t,
         base_force=base_force,
         crank_moment=moment,
@@ -582,7 +613,7 @@ def simulate_exudyn(mech: SliderCrank, revolutions: int = 4, **options) -> Traje
         backend="exudyn",
         stats=stats,
         peaks=None,
-    )
+    ))
 
 
 def peak_exudyn(mech: SliderCrank, revolution: int = 4, **options) -> float:
@@ -591,8 +622,10 @@ def peak_exudyn(mech: SliderCrank, revolution: int = 4, **options) -> float:
     Integrates only up to the end of that revolution and records only the base force.
     Options as `simulate_exudyn`.
     """
+    max_memory = options.pop("max_memory", None)
     settings = make_settings(options)
-    _check_run(mech, revolution, settings)
+    revolution = _check_run(mech, revolution, settings, "revolution")
+    _check_memory(mech, revolution, settings, ("base_force",), max_memory)
     model = build_model(mech, settings, outputs=("base_force",))
     solve(model, revolution * mech.period)
     F = _stored(model, "base_force")

@@ -10,13 +10,18 @@ from __future__ import annotations
 
 import numpy as np
 
+from ._checks import MemoryLimitError, check_int, check_max_memory, format_bytes
 from .mechanism import SliderCrank
-from .trajectory import Trajectory
+from .trajectory import Trajectory, annotate
 
 __all__ = ["ideal_outputs", "simulate_ideal", "peak_ideal"]
 
 #: options of `simulate(..., backend="ideal")`
-OPTION_NAMES = ("samples_per_revolution",)
+OPTION_NAMES = ("samples_per_revolution", "max_memory")
+
+#: peak bytes per sample of `simulate_ideal`: the closed form's temporaries and the
+#: Trajectory (measured with tracemalloc: 232 bytes per sample), with a margin
+BYTES_PER_SAMPLE = 8 * 40
 
 
 def ideal_outputs(mech: SliderCrank, t: np.ndarray) -> dict[str, np.ndarray]:
@@ -61,12 +66,23 @@ def ideal_outputs(mech: SliderCrank, t: np.ndarray) -> dict[str, np.ndarray]:
 
 
 def simulate_ideal(mech: SliderCrank, revolutions: int = 4, *,
-                   samples_per_revolution: int = 3600) -> Trajectory:
-    """Ideal-joint trajectory sampled uniformly (closed form, no integration)."""
-    if not isinstance(samples_per_revolution, int) or samples_per_revolution < 8:
-        raise ValueError("samples_per_revolution must be an integer >= 8; "
-                         f"got {samples_per_revolution!r}")
+                   samples_per_revolution: int = 3600, max_memory: int | None = None
+                   ) -> Trajectory:
+    """Ideal-joint trajectory sampled uniformly (closed form, no integration).
+
+    A run whose samples would need more than ``max_memory`` bytes (default
+    `_checks.default_max_memory`; BYTES_PER_SAMPLE per sample) is refused before it starts.
+    """
+    revolutions = check_int("revolutions", revolutions, 1)
+    samples_per_revolution = check_int("samples_per_revolution", samples_per_revolution, 8)
+    max_memory = check_max_memory(max_memory)
     n = revolutions * samples_per_revolution + 1
+    if n * BYTES_PER_SAMPLE > max_memory:
+        raise MemoryLimitError(
+            f"{revolutions} revolutions of {samples_per_revolution} samples need about "
+            f"{format_bytes(n * BYTES_PER_SAMPLE)}, more than max_memory={max_memory} bytes "
+            f"({format_bytes(max_memory)}); use fewer samples or revolutions, or raise "
+            "max_memory")
     t = np.linspace(0.0, revolutions * mech.period, n)
     o = ideal_outputs(mech, t)
     zeros = np.zeros(n)
@@ -74,7 +90,7 @@ def simulate_ideal(mech: SliderCrank, revolutions: int = 4, *,
     work = np.concatenate([[0.0], np.cumsum(0.5 * (power[1:] + power[:-1]) * np.diff(t))])
     # the ideal mechanism is periodic in the crank revolution: one refined peak serves all
     peaks = np.full(revolutions, _refined_peak(mech, 1))
-    return Trajectory(
+    return annotate(Trajectory(
         t=t, base_force=o["base_force"], crank_moment=o["crank_moment"],
         contact_force=np.hypot(o["joint_force"][:, 0], o["joint_force"][:, 1]),
         penetration=zeros.copy(), eccentricity=np.zeros((n, 2)),
@@ -83,7 +99,7 @@ def simulate_ideal(mech: SliderCrank, revolutions: int = 4, *,
         contact_phase=np.ones(n, dtype=np.int8), crank_work=work,
         mechanism=mech, backend="ideal",
         stats={"samples_per_revolution": samples_per_revolution}, peaks=peaks,
-    )
+    ))
 
 
 def _refined_peak(mech: SliderCrank, revolution: int) -> float:
@@ -103,7 +119,10 @@ def _refined_peak(mech: SliderCrank, revolution: int) -> float:
     return max(-res.fun, float(mag[i]))
 
 
-def peak_ideal(mech: SliderCrank, revolution: int = 4) -> float:
+def peak_ideal(mech: SliderCrank, revolution: int = 4, *, max_memory: int | None = None
+               ) -> float:
     """Max |F12| in N over a revolution of the ideal mechanism (periodic: the same for every
-    revolution, computed over the first)."""
+    revolution, computed over the first; O(1) memory, `max_memory` is only checked)."""
+    check_int("revolution", revolution, 1)
+    check_max_memory(max_memory)
     return _refined_peak(mech, 1)

@@ -110,6 +110,16 @@ class SliderCrank:
     impact_velocity_floor: float = 1.0e-3
 
     def __post_init__(self) -> None:
+        # numbers of any numeric type (numpy scalars, Fraction, int) are stored as Python
+        # floats, so that every value is JSON-serialisable and behaves as a float
+        for f in dataclasses.fields(self):
+            value = getattr(self, f.name)
+            if f.name != "contact_model" and _is_real(value):
+                try:
+                    as_float = float(value)
+                except OverflowError:
+                    raise ValueError(f"{f.name} must be a finite number; got {value!r}") from None
+                object.__setattr__(self, f.name, as_float)
         positive = (
             "crank_length", "coupler_length", "crank_mass", "coupler_mass", "slider_mass",
             "crank_speed", "bearing_radius", "journal_radius", "youngs_modulus",

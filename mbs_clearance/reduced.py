@@ -19,6 +19,16 @@ from typing import Any, NamedTuple
 import numba as nb
 import numpy as np
 
+from ._checks import (
+    MemoryLimitError,
+    check_bool,
+    check_choice,
+    check_int,
+    check_max_memory,
+    check_real,
+    check_times,
+    format_bytes,
+)
 from ._trig import sincos
 from .contact import CONTACT_MODELS, contact_force
 from .integrator import (
@@ -320,9 +330,103 @@ def default_atol(mech: SliderCrank, rtol: float) -> np.ndarray:
     return rtol * np.array([1.0, L, w, w * mech.crank_length, 1.0])
 
 
-def window_edges(mech: SliderCrank, revolutions: int) -> np.ndarray:
-    """Times of the crank revolution boundaries 0, T, ..., revolutions*T."""
+def window_edges(mech: SliderCrank, revolutions: int, max_memory: int | None = None
+                 ) -> np.ndarray:
+    """Times of the crank revolution boundaries 0, T, ..., revolutions*T (refused with
+    `MemoryLimitError` if the per-revolution arrays alone exceed `max_memory` bytes)."""
+    need = WINDOW_BYTES * (revolutions + 1)
+    if max_memory is not None and need > max_memory:
+        raise MemoryLimitError(
+            f"{revolutions} revolutions need {format_bytes(need)} for the per-revolution "
+            f"arrays alone, more than max_memory={max_memory} bytes "
+            f"({format_bytes(max_memory)}); run fewer revolutions or raise max_memory")
     return np.arange(revolutions + 1) * mech.period
+
+
+#: bytes per revolution window held during a run: its edge, refined peak and peak time
+WINDOW_BYTES = 24
+
+#: largest `n_samples` (interior event samples per step) accepted
+MAX_SAMPLES = 1000
+
+#: default `max_steps` (step attempts) of a run
+DEFAULT_MAX_STEPS = 5_000_000
+
+#: runs of at least this many revolutions are preceded by a one-revolution pilot (no
+#: record) whose step count estimates the run's steps and memory; it costs at most 1/16
+#: of the run and turns a run that would stop at max_steps or max_memory into an
+#: immediate refusal
+PILOT_MIN_REVOLUTIONS = 16
+
+#: the sensitivity system's steps per plain step at the same tolerance (measured on the
+#: paper case, 4 revolutions, eight parameters, dop853: 5823 / 2534 = 2.3, rounded up; used
+#: only by the pilot's estimate)
+SYSTEM_STEP_FACTOR = 2.5
+
+
+def _record_row(system) -> int:
+    """Floats recorded per step: time, state, memory and outputs."""
+    if system is None:
+        return 1 + N_STATE + N_MEM + len(OUT_COLUMNS)
+    return 1 + len(system.y0) + max(system.n_mem, 1) + system.n_out
+
+
+def bytes_per_step(row: int) -> int:
+    """Peak bytes per recorded step: the record (row floats) grows by doubling, so up to
+    3 rows are alive while it is copied; the Trajectory's 15 columns and the times' copy
+    (16 floats) are built while the record is alive."""
+    return 8 * (3 * row + 16)
+
+
+def estimate_run(mech: SliderCrank, windows: int, *, window_time: float, record: bool,
+                 row: int, max_steps: int, h_max: float, max_memory: int,
+                 pilot: dict | None = None) -> dict:
+    """Estimated steps and peak memory (bytes) of a run over `windows` windows up to
+    `window_time` s; raises `MemoryLimitError` before the run if it cannot fit.
+
+    Checks, cheapest first: the per-window arrays; the steps that h_max alone forces
+    (window_time / h_max) against max_steps; then, for runs of `PILOT_MIN_REVOLUTIONS` or
+    more, a one-revolution pilot without record (`pilot`: its rtol, atol, method; the
+    sensitivity system's steps are taken as SYSTEM_STEP_FACTOR plain steps) gives the
+    steps per revolution, and the estimated steps and memory are checked against max_steps
+    and max_memory. Returns dict(steps=estimate or None, bytes=estimate, step_cap=the
+    largest number of recorded steps that fits in max_memory, or None without record).
+    """
+    window_bytes = WINDOW_BYTES * (windows + 1)
+    if window_bytes > max_memory:
+        window_edges(mech, windows, max_memory)       # raises with the message
+    revolutions = window_time / mech.period
+    forced = math.ceil(window_time / h_max)
+    if forced > max_steps:
+        raise MemoryLimitError(
+            f"a run of {revolutions:.6g} revolutions with h_max = {h_max:.3g} s takes at least "
+            f"{forced:.3g} steps, more than max_steps={max_steps}; raise h_max or max_steps, "
+            "or run fewer revolutions")
+    per_step = bytes_per_step(row) if record else 0
+    steps = None
+    if pilot is not None and revolutions >= PILOT_MIN_REVOLUTIONS:
+        factor = 1.0 if row == _record_row(None) else SYSTEM_STEP_FACTOR
+        try:
+            counters = run(mech, 1, record=False, max_steps=max_steps, h_max=h_max,
+                           **pilot)[5]
+            per_rev = factor * (int(counters[1]) + int(counters[2]))
+        except RuntimeError:
+            per_rev = float(max_steps)
+        steps = int(math.ceil(per_rev * revolutions))
+        if steps > max_steps:
+            raise MemoryLimitError(
+                f"a run of {revolutions:.6g} revolutions needs about {steps:.3g} steps "
+                f"({per_rev:.4g} in the first revolution), more than max_steps={max_steps}; "
+                "raise max_steps or run fewer revolutions")
+    need = window_bytes + per_step * (steps if steps is not None else 0)
+    if need > max_memory:
+        raise MemoryLimitError(
+            f"a run of {revolutions:.6g} revolutions needs about {format_bytes(need)} "
+            f"({steps:.3g} recorded steps of {per_step} bytes), more than max_memory="
+            f"{max_memory} bytes ({format_bytes(max_memory)}); raise max_memory, run fewer "
+            "revolutions, or use peak_base_force (records nothing)")
+    cap = (max_memory - window_bytes) // per_step if record else None
+    return {"steps": steps, "bytes": need, "step_cap": cap}
 
 
 class System(NamedTuple):
@@ -356,10 +460,10 @@ def integrate_plain(y0, p, mem_start, n_mem, edges, rtol, atol, n_err, h0, h_max
 
 def run(mech: SliderCrank, revolutions: int = 4, *, rtol: float | None = None,
         atol: float | np.ndarray | None = None, method: str = "dopri5", record: bool = True,
-        max_steps: int = 5_000_000, n_samples: int = 1, h_max: float | None = None,
+        max_steps: int = DEFAULT_MAX_STEPS, n_samples: int = 1, h_max: float | None = None,
         h0: float = 0.0, event_tol: float | None = None, edges: np.ndarray | None = None,
         t_eval: np.ndarray | None = None, system=None, select: bool = True,
-        initial_offset: float = 0.0):
+        initial_offset: float = 0.0, max_memory: int | None = None):
     """Integrate the reduced model; returns (ts, ys, ms, peaks, peak_times, counters, outs, p)
     with outs the outputs of `dynamics` (OUT_COLUMNS) at the recorded steps (plain model;
     no columns for an augmented `system`).
@@ -370,55 +474,76 @@ def run(mech: SliderCrank, revolutions: int = 4, *, rtol: float | None = None,
     they are returned (peaks are then maxima over the returned samples, not refined;
     ``select=False`` returns all steps, which include the times `t_eval`).
     `system` (a `System`) replaces the plain model (used by the sensitivity equations).
+    Every option is checked first (ValueError naming it and its range); then the run's
+    memory and steps are estimated (`estimate_run`) and a run above ``max_memory`` bytes
+    (default `_checks.default_max_memory`) or ``max_steps`` is refused with
+    `_checks.MemoryLimitError` (a ValueError) before anything is allocated.
     Raises RuntimeError with advice when it cannot finish.
     """
+    revolutions = check_int("revolutions", revolutions, 1)
     rtol, atol_arr = _tolerances(mech, rtol, atol)
-    if method not in METHODS:
-        raise ValueError(f"method must be one of {sorted(METHODS)}; got {method!r}")
-    if not isinstance(revolutions, (int, np.integer)) or revolutions < 1:
-        raise ValueError(f"revolutions must be an integer >= 1; got {revolutions!r}")
+    check_choice("method", method, METHODS)
+    record = check_bool("record", record)
+    max_steps = check_int("max_steps", max_steps, 1)
+    n_samples = check_int("n_samples (interior event samples per step)", n_samples, 0,
+                          MAX_SAMPLES)
+    h0 = check_real("h0 (initial step; 0: automatic)", h0, 0.0, unit="s")
+    max_memory = check_max_memory(max_memory)
     tab = METHODS[method]
     if edges is None:
-        edges = window_edges(mech, int(revolutions))
+        edges = window_edges(mech, revolutions, max_memory)
     else:
         edges = np.ascontiguousarray(edges, dtype=float)
-        if edges.ndim != 1 or len(edges) < 2 or edges[0] != 0.0 or np.any(np.diff(edges) <= 0):
-            raise ValueError("edges must be increasing times starting at 0.0")
-    win_edges = edges
-    # golden-section iterations per peak candidate: the bracket shrinks to 0.618^24 = 1e-5 of
-    # a step (~1e-10 s here), where the peak's quadratic error is ~1e-12 of its value
-    refine = 24
-    if t_eval is not None:
-        t_eval = np.asarray(t_eval, dtype=float)
-        if t_eval.ndim != 1 or np.any(np.diff(t_eval) <= 0) or t_eval[0] < 0 \
-                or t_eval[-1] > edges[-1] * (1 + 1e-12):
-            raise ValueError(f"t_eval must be increasing times within [0, {edges[-1]:.6g}] s")
-        edges = np.union1d(edges, t_eval)
-        edges = edges[np.concatenate([[True], np.diff(edges) > 1e-12 * edges[-1]])]
-        record = True
-        refine = 0
-    if system is None:
-        if not (isinstance(initial_offset, (int, float)) and -1.0 <= initial_offset <= 1.0):
-            raise ValueError(f"initial_offset must be in [-1, 1] (fraction of the clearance); "
-                             f"got {initial_offset!r}")
-        system = System(integrate_plain, initial_state(mech, initial_offset),
-                        pack_parameters(mech), P_MODE, N_MEM, N_ERR, atol_arr,
-                        len(OUT_COLUMNS))
-    kernel, y0, p, mem_start, n_mem, n_err, atol_arr, n_out = system
-    h_max = mech.period / 8 if h_max is None else float(h_max)
+        if (edges.ndim != 1 or len(edges) < 2 or edges[0] != 0.0
+                or not np.all(np.isfinite(edges)) or np.any(np.diff(edges) <= 0)):
+            raise ValueError("edges must be increasing finite times starting at 0.0")
+    h_max = mech.period / 8 if h_max is None else check_real(
+        "h_max (largest step)", h_max, 0.0, low_open=True, unit="s")
     if event_tol is None:
         # 1e-12 of the clearance, but not below the round-off of the journal position
         # (delta is a difference of coordinates of size L2 + L3)
         event_tol = max(1e-12 * mech.clearance,
                         8 * np.finfo(float).eps * (mech.crank_length + mech.coupler_length))
-    event_tol = float(event_tol)
+    else:
+        event_tol = check_real("event_tol (penetration tolerance of events)", event_tol, 0.0,
+                               low_open=True, unit="m")
+    if system is None:
+        initial_offset = check_real("initial_offset (fraction of the clearance)",
+                                    initial_offset, -1.0, 1.0)
+    win_edges = edges
+    # golden-section iterations per peak candidate: the bracket shrinks to 0.618^24 = 1e-5 of
+    # a step (~1e-10 s here), where the peak's quadratic error is ~1e-12 of its value
+    refine = 24
+    if t_eval is not None:
+        t_eval = check_times("t_eval", t_eval, float(edges[-1]))
+        edges = np.union1d(edges, t_eval)
+        edges = edges[np.concatenate([[True], np.diff(edges) > 1e-12 * edges[-1]])]
+        record = True
+        refine = 0
+    est = estimate_run(mech, len(edges) - 1, window_time=float(edges[-1]), record=record,
+                 row=_record_row(system), max_steps=max_steps, h_max=h_max,
+                 max_memory=max_memory,
+                 pilot=dict(rtol=rtol, atol=None if system is not None else atol_arr,
+                            method=method))
+    # the record never outgrows max_memory: a run that would stops there (and says so)
+    step_limit = max_steps if est["step_cap"] is None else min(max_steps, est["step_cap"])
+    if system is None:
+        system = System(integrate_plain, initial_state(mech, initial_offset),
+                        pack_parameters(mech), P_MODE, N_MEM, N_ERR, atol_arr,
+                        len(OUT_COLUMNS))
+    kernel, y0, p, mem_start, n_mem, n_err, atol_arr, n_out = system
     if not record:
         n_out = 0
     ts, ys, ms, peaks, peak_t, counters, outs = kernel(
         y0, p, mem_start, n_mem, edges, rtol,
-        atol_arr, n_err, float(h0), h_max, int(max_steps), bool(record), event_tol,
-        EVENT_MARGIN * mech.clearance, int(n_samples), refine, tab.arrays(), n_out, N_EVENT)
+        atol_arr, n_err, h0, h_max, step_limit, record, event_tol,
+        EVENT_MARGIN * mech.clearance, n_samples, refine, tab.arrays(), n_out, N_EVENT)
     status = int(counters[4])
+    if status == 1 and step_limit < max_steps:
+        raise MemoryLimitError(
+            f"the reduced model's record reached max_memory={max_memory} bytes "
+            f"({format_bytes(max_memory)}) at t = {ts[-1]:.6g} s, after {step_limit} steps; "
+            "raise max_memory, run fewer revolutions, or use peak_base_force")
     if status != 0:
         raise RuntimeError(f"reduced model integration failed at about t = "
                            f"{ts[-1] if len(ts) else float('nan'):.6g} s: "
@@ -448,16 +573,19 @@ def _with_memory(p, mem_start, mem):
 
 
 def _tolerances(mech, rtol, atol):
-    rtol = DEFAULT_RTOL if rtol is None else rtol
-    if not isinstance(rtol, (int, float)) or not (1e-14 <= rtol <= 1e-2):
-        raise ValueError(f"rtol must be a number in [1e-14, 1e-2]; got {rtol!r}")
+    rtol = DEFAULT_RTOL if rtol is None else check_real("rtol", rtol, 1e-14, 1e-2)
     if atol is None:
         atol_arr = default_atol(mech, rtol)
     else:
-        atol_arr = np.broadcast_to(np.asarray(atol, dtype=float), (N_STATE,)).copy()
-        if not np.all(np.isfinite(atol_arr)) or np.any(atol_arr <= 0):
-            raise ValueError(f"atol must be finite and > 0; got {atol!r}")
-    return float(rtol), atol_arr
+        try:
+            atol_arr = np.broadcast_to(np.asarray(atol, dtype=float), (N_STATE,)).copy()
+        except (TypeError, ValueError):
+            atol_arr = None
+        if (atol_arr is None or not np.all(np.isfinite(atol_arr)) or np.any(atol_arr <= 0)
+                or isinstance(atol, (bool, np.bool_))):
+            raise ValueError(f"atol must be a finite number > 0 or {N_STATE} of them (one per "
+                             f"state component); got {atol!r}")
+    return rtol, atol_arr
 
 
 def counters_dict(counters) -> dict:
@@ -468,7 +596,7 @@ def counters_dict(counters) -> dict:
 
 #: options of `simulate(..., backend="reduced")` (keywords of `run` meant for users)
 OPTION_NAMES = ("rtol", "atol", "method", "max_steps", "n_samples", "h_max", "h0",
-                "event_tol", "t_eval", "initial_offset")
+                "event_tol", "t_eval", "initial_offset", "max_memory")
 
 
 def simulate_reduced(mech: SliderCrank, revolutions: int = 4, **options):
@@ -477,12 +605,14 @@ def simulate_reduced(mech: SliderCrank, revolutions: int = 4, **options):
     ts, ys, ms, peaks, peak_t, counters, outs, p = run(mech, revolutions, record=True,
                                                        **options)
     stats = counters_dict(counters)
+    rtol = options.get("rtol")
     stats.update(method=options.get("method", "dopri5"),
-                 rtol=float(options.get("rtol") or DEFAULT_RTOL))
+                 rtol=DEFAULT_RTOL if rtol is None else float(rtol))
     if options.get("t_eval") is None:
         stats["floored_impacts"] = floored_impacts(ms, p[P_VFLOOR])
-    return trajectory_from_states(mech, ts, ys, ms, p, stats,
+    traj = trajectory_from_states(mech, ts, ys, ms, p, stats,
                                   None if options.get("t_eval") is not None else peaks, outs)
+    return annotate(traj)
 
 
 def floored_impacts(ms: np.ndarray, floor: float) -> int:
@@ -579,6 +709,13 @@ def trajectory_from_states(mech, ts, ys, ms, p, stats, peaks, outs=None):
         stats=stats,
         peaks=peaks,
     )
+
+
+def annotate(traj):
+    """`trajectory.annotate` (imported late: trajectory imports this module's users)."""
+    from .trajectory import annotate as _annotate
+
+    return _annotate(traj)
 
 
 def peak_reduced(mech: SliderCrank, revolution: int = 4, **options) -> float:

@@ -18,10 +18,11 @@ from typing import Any
 import numpy as np
 
 from . import ddm, reduced
+from ._checks import check_bool, check_choice, check_int, check_real, check_times
 from .contact import stiffness_eq9_partials
 from .integrator import METHODS
 from .mechanism import CONTINUOUS_FIELDS, SliderCrank, check_field_names
-from .trajectory import Trajectory, load_trajectory
+from .trajectory import Trajectory, annotate, load_trajectory
 
 __all__ = ["Sensitivities", "sensitivities", "load_sensitivities", "DEFAULT_PARAMETERS",
            "chain_matrix", "reference_value", "fd_step"]
@@ -34,10 +35,20 @@ DEFAULT_PARAMETERS = ("crank_length", "coupler_length", "coupler_mass", "slider_
 #: max(|F12|, NORMALIZATION_FLOOR * max_t |F12|) so the ratio stays finite near |F12| = 0
 NORMALIZATION_FLOOR = 0.01
 
-#: growth factor of the sensitivity norm per revolution above which the motion is declared
-#: not periodic; periodic motion of the paper's case stays within 1 +- 0.03, c = 0.1 mm grows
-#: about 4 times and c = 0.5 mm about 2500 times per revolution (docs/sensitivity.md)
-GROWTH_LIMIT = 2.0
+#: growth of the sensitivity norm per revolution, relative to its value in revolution 2,
+#: above which the motion is declared not periodic: the slope of a least-squares line
+#: through the per-revolution maxima (`growth`) from revolution 2 on (revolution 1 holds the
+#: start's transient), divided by the revolution-2 value. A line, not the ratio of the
+#: last two revolutions, so that steady algebraic growth is caught too: 100 rpm grows
+#: linearly, by 0.43 of its revolution-2 value per revolution over 4 revolutions (the ratio
+#: of the last two only 1.15); the paper case's largest is 0.031 (eight parameters, 4
+#: revolutions) and falls with more (bounded);
+#: 1000 rpm 22, c = 0.1 mm 263, c = 0.5 mm 1.2e5 (8 and 5 revolutions, docs/sensitivity.md)
+GROWTH_TREND_LIMIT = 0.1
+
+#: revolutions the growth diagnostic needs: revolution 1 is the transient, and a trend
+#: needs two more
+MIN_JUDGED_REVOLUTIONS = 3
 
 #: relative finite-difference step: central differences have error O(h^2) against the
 #: integration noise rtol / h; measured against DDM in the paper's case, 3e-5 is the best
@@ -96,30 +107,79 @@ class Sensitivities:
     @property
     def growth_rate(self) -> np.ndarray:
         """Per parameter, the factor by which the sensitivity norm grows per revolution over
-        the last two revolutions (about 1 for periodic motion, >> 1 for chaotic motion)."""
+        the last two revolutions (about 1 for periodic motion, >> 1 for chaotic motion; NaN
+        with fewer than 3 revolutions)."""
         if self.growth is None or len(self.growth) < 3:
             return np.full(len(self.parameters), np.nan)
         return np.sqrt(self.growth[-1] / np.maximum(self.growth[-3], 1e-300))
 
     @property
+    def growth_trend(self) -> np.ndarray:
+        """Per parameter, the growth of the sensitivity norm per revolution relative to its
+        revolution-2 value: the slope of a least-squares line through `growth` from
+        revolution 2 on, over the revolution-2 value (about 0 for periodic motion; NaN with
+        fewer than MIN_JUDGED_REVOLUTIONS revolutions)."""
+        if self.growth is None or len(self.growth) < MIN_JUDGED_REVOLUTIONS:
+            return np.full(len(self.parameters), np.nan)
+        g = np.asarray(self.growth[1:], dtype=float)
+        k = np.arange(len(g), dtype=float)
+        slope = np.polyfit(k, g, 1)[0]
+        return slope / np.maximum(g[0], 1e-300)
+
+    @property
+    def periodic(self) -> bool | None:
+        """True when the sensitivities stay bounded (periodic motion), False when they grow
+        by more than GROWTH_TREND_LIMIT of their revolution-2 value per revolution (chaotic,
+        a slow drift, or a long transient), None when it cannot be judged (fewer than
+        MIN_JUDGED_REVOLUTIONS revolutions, or no growth diagnostic: finite differences)."""
+        trend = self.growth_trend
+        if not np.all(np.isfinite(trend)):
+            return None
+        return bool(np.all(trend <= GROWTH_TREND_LIMIT))
+
+    @property
+    def periodicity_note(self) -> str:
+        """A sentence on `periodic`: why it cannot be judged, or the largest growth."""
+        if self.growth is None:
+            return ("undetermined: no growth diagnostic (finite differences); see "
+                    "trajectory.stats['periodic']")
+        if len(self.growth) < MIN_JUDGED_REVOLUTIONS:
+            return (f"undetermined: {len(self.growth)} revolution(s); the growth diagnostic "
+                    f"needs at least {MIN_JUDGED_REVOLUTIONS} (revolution 1 is the start's "
+                    "transient): the sensitivities' values cannot be trusted to be bounded")
+        trend = self.growth_trend
+        k = int(np.argmax(trend))
+        if self.periodic:
+            return (f"periodic: the sensitivity norms stay bounded (largest growth "
+                    f"{trend[k]:.2g} of the revolution-2 value per revolution, "
+                    f"{self.parameters[k]}; limit {GROWTH_TREND_LIMIT:g})")
+        return (f"not periodic: the sensitivity norm of {self.parameters[k]} grows by "
+                f"{trend[k]:.3g} times its revolution-2 value per revolution (limit "
+                f"{GROWTH_TREND_LIMIT:g}): the motion is chaotic or drifts, and these "
+                "derivatives are not meaningful")
+
+    @property
     def chaotic(self) -> bool:
-        """True when the sensitivities grow by more than GROWTH_LIMIT times per revolution
-        over the last revolutions: the motion is not periodic (chaotic, or still in its
-        transient) and derivatives of the trajectory are meaningless there (docs)."""
-        rate = self.growth_rate
-        return bool(np.any(np.isfinite(rate) & (rate > GROWTH_LIMIT)))
+        """True when `periodic` is False: the sensitivities grow from revolution to
+        revolution, the motion is not periodic (chaotic, drifting, or still in its
+        transient) and derivatives of the trajectory are meaningless there (docs). False
+        also when it cannot be judged: check `periodic` is not None."""
+        return self.periodic is False
 
     def summary(self, revolution: int | None = None) -> list[dict[str, float]]:
         """Per parameter: b0, mean and max |normalized sensitivity| over `revolution`
-        (default: the last), and the growth rate per revolution."""
+        (default: the last), the growth rate per revolution over the last two and the
+        growth trend (`growth_trend`)."""
         rev = revolution or self.trajectory.revolutions
         mask = self.revolution_mask(rev)
         norm = np.abs(self.normalized[mask])
         rate = self.growth_rate
+        trend = self.growth_trend
         return [{"parameter": n, "reference": float(self.reference[k]),
                  "mean_abs_normalized": float(norm[:, k].mean()),
                  "max_abs_normalized": float(norm[:, k].max()),
-                 "growth_per_revolution": float(rate[k])}
+                 "growth_per_revolution": float(rate[k]),
+                 "growth_trend": float(trend[k])}
                 for k, n in enumerate(self.parameters)]
 
     def save(self, path: str | Path) -> Path:
@@ -152,21 +212,66 @@ def _trajectory_path(path: Path) -> Path:
 
 
 def load_sensitivities(path: str | Path) -> Sensitivities:
-    """Read sensitivities written by `Sensitivities.save`."""
+    """Read sensitivities written by `Sensitivities.save` (and the trajectory beside them).
+
+    The file is checked against itself and its trajectory (shapes, parameter names, finite
+    values, the same time grid); a bad file raises ValueError naming it and the problem.
+    The stored `normalized` array is not read: it is recomputed from the rest.
+    """
     path = Path(path)
     try:
-        with np.load(path) as d:
-            growth = d["growth"]
-            return Sensitivities(
-                t=d["t"], parameters=tuple(str(p) for p in d["parameters"]),
-                reference=d["reference"], base_force=d["base_force"],
-                base_force_magnitude=d["base_force_magnitude"],
-                crank_moment=d["crank_moment"], contact_force=d["contact_force"],
-                trajectory=load_trajectory(_trajectory_path(path)), method=str(d["method"]),
-                backend=str(d["backend"]), growth=growth if growth.size else None,
-                stats=json.loads(str(d["stats"])))
-    except (OSError, KeyError) as exc:
+        with np.load(path, allow_pickle=False) as d:
+            arrays = {k: np.asarray(d[k]) for k in (
+                "t", "parameters", "reference", "base_force", "base_force_magnitude",
+                "crank_moment", "contact_force", "growth", "method", "backend", "stats")}
+        stats = json.loads(str(arrays["stats"]))
+    except (OSError, KeyError, ValueError, EOFError, json.JSONDecodeError) as exc:
         raise ValueError(f"cannot read sensitivities file {str(path)!r}: {exc}") from exc
+    traj = load_trajectory(_trajectory_path(path))
+    _check_loaded(path, arrays, stats, traj)
+    growth = arrays["growth"].astype(float)
+    return Sensitivities(
+        t=arrays["t"].astype(float), parameters=tuple(str(p) for p in arrays["parameters"]),
+        reference=arrays["reference"].astype(float), base_force=arrays["base_force"],
+        base_force_magnitude=arrays["base_force_magnitude"],
+        crank_moment=arrays["crank_moment"], contact_force=arrays["contact_force"],
+        trajectory=traj, method=str(arrays["method"]), backend=str(arrays["backend"]),
+        growth=growth if growth.size else None, stats=stats)
+
+
+def _check_loaded(path: Path, a: dict, stats: Any, traj: Trajectory) -> None:
+    def fail(problem):
+        return ValueError(f"inconsistent sensitivities file {str(path)!r}: {problem}")
+
+    names = a["parameters"]
+    if names.ndim != 1 or names.size == 0 or names.dtype.kind not in "US":
+        raise fail("'parameters' must be a non-empty list of names")
+    try:
+        _check_parameters(tuple(str(x) for x in names))
+    except ValueError as exc:
+        raise fail(str(exc)) from exc
+    n, p = a["t"].shape[0] if a["t"].ndim == 1 else -1, names.size
+    shapes = {"t": (n,), "reference": (p,), "base_force": (n, 2, p),
+              "base_force_magnitude": (n, p), "crank_moment": (n, p), "contact_force": (n, p)}
+    for key, shape in shapes.items():
+        arr = a[key]
+        if arr.shape != shape or n < 1:
+            raise fail(f"{key!r} has shape {arr.shape}, expected {shape} (n = len(t), "
+                       f"p = {p} parameters)")
+        if arr.dtype.kind not in "fi" or not np.all(np.isfinite(arr)):
+            raise fail(f"{key!r} holds non-finite or non-numeric values")
+    g = a["growth"]
+    if g.size and (g.ndim != 2 or g.shape[1] != p or g.dtype.kind not in "fi"
+                   or not np.all(np.isfinite(g)) or np.any(g < 0)):
+        raise fail(f"'growth' must be (revolutions, {p}) finite numbers >= 0; got shape "
+                   f"{g.shape}")
+    if str(a["method"]) not in ("ddm", "fd"):
+        raise fail(f"method must be 'ddm' or 'fd'; got {str(a['method'])!r}")
+    if not isinstance(stats, dict):
+        raise fail("'stats' must be a JSON object")
+    if len(traj.t) != n or not np.array_equal(traj.t, a["t"]):
+        raise fail(f"its time grid ({n} samples) differs from the trajectory file's "
+                   f"({len(traj.t)} samples)")
 
 
 def _check_parameters(parameters) -> tuple[str, ...]:
@@ -357,8 +462,9 @@ def _ddm(mech, names, revolutions, rtol, t_eval, event_time_term, method):
     stats.update(rtol=rtol_v, method=method, wall_time=time.perf_counter() - t0,
                  event_time_term=event_time_term, directions=nb)
     # (the states are ys[:, :4], the crank work the last column, as in a plain run)
-    traj = reduced.trajectory_from_states(mech, ts, ys, ms, base, stats,
-                                          None if t_eval is not None else peaks, outs)
+    traj = annotate(reduced.trajectory_from_states(mech, ts, ys, ms, base, stats,
+                                                   None if t_eval is not None else peaks,
+                                                   outs))
     return Sensitivities(
         t=ts, parameters=names, reference=ref, base_force=d_force, base_force_magnitude=d_mag,
         crank_moment=d_moment, contact_force=d_contact, trajectory=traj, method="ddm",
@@ -491,13 +597,20 @@ def sensitivities(mech: SliderCrank, parameters=None, revolutions: int = 4,
     -------
     Sensitivities
     """
+    if not isinstance(mech, SliderCrank):
+        raise ValueError(f"mech must be a SliderCrank; got {type(mech).__name__}")
     names = _check_parameters(parameters)
-    if method not in ("ddm", "fd"):
-        raise ValueError(f"method must be 'ddm' or 'fd'; got {method!r}")
-    if not isinstance(revolutions, int) or revolutions < 1:
-        raise ValueError(f"revolutions must be an integer >= 1; got {revolutions!r}")
-    if not (isinstance(fd_relative_step, float) and 0 < fd_relative_step < 0.1):
-        raise ValueError(f"fd_relative_step must be in (0, 0.1); got {fd_relative_step!r}")
+    check_choice("method", method, ("ddm", "fd"))
+    revolutions = check_int("revolutions", revolutions, 1)
+    fd_relative_step = check_real("fd_relative_step", fd_relative_step, 0.0, 0.1,
+                                  low_open=True, high_open=True)
+    if rtol is not None:
+        rtol = check_real("rtol", rtol, 1e-14, 1e-2)
+    if t_eval is not None:
+        t_eval = check_times("t_eval", t_eval, revolutions * mech.period)
+    event_time_term = check_bool("event_time_term", event_time_term)
+    if n_jobs is not None:
+        n_jobs = check_int("n_jobs", n_jobs, 1)
     from .simulate import BACKENDS
 
     if backend not in BACKENDS:

@@ -5,6 +5,7 @@ from __future__ import annotations
 import importlib
 from dataclasses import dataclass
 
+from ._checks import check_int
 from .mechanism import SliderCrank
 from .trajectory import Trajectory
 
@@ -41,11 +42,10 @@ def _backend(name: str) -> Backend:
     return BACKENDS[name]
 
 
-def _check(mech, revolutions):
+def _check(mech, revolutions, name="revolutions") -> int:
     if not isinstance(mech, SliderCrank):
         raise ValueError(f"mech must be a SliderCrank; got {type(mech).__name__}")
-    if not isinstance(revolutions, int) or isinstance(revolutions, bool) or revolutions < 1:
-        raise ValueError(f"revolutions must be an integer >= 1; got {revolutions!r}")
+    return check_int(name, revolutions, 1)
 
 
 def simulate(mech: SliderCrank, revolutions: int = 4, backend: str = "reduced",
@@ -61,11 +61,18 @@ def simulate(mech: SliderCrank, revolutions: int = 4, backend: str = "reduced",
         A key of `BACKENDS`: "reduced" (default), "exudyn" or "ideal".
     **options
         Backend settings, e.g. ``rtol``, ``atol``, ``method`` for "reduced"; ``step_size``,
-        ``contact`` for "exudyn". Unknown options raise ValueError.
+        ``contact`` for "exudyn". Unknown options or values out of range raise ValueError
+        before any computation. Every backend takes ``max_memory`` (bytes; default
+        min(4 GiB, half the RAM)): a run estimated to need more is refused with
+        `MemoryLimitError` (a ValueError) before it allocates.
 
     Returns
     -------
     Trajectory
+        ``stats`` holds, besides the solver counters, ``max_penetration_clearance``,
+        ``max_penetration_radius``, ``penetration_meaningless`` (a `PhysicsWarning` is
+        emitted when True) and ``periodic`` (True, False or None) with
+        ``periodicity_note``; see `trajectory.annotate`.
     """
     return _call(backend, "simulate", mech, revolutions, options)
 
@@ -76,13 +83,15 @@ def peak_base_force(mech: SliderCrank, revolution: int = 4, backend: str = "redu
 
     Records no time series: only running maxima are kept.
     """
-    return _call(backend, "peak", mech, revolution, options)
+    return _call(backend, "peak", mech, revolution, options, "revolution")
 
 
-def _call(backend: str, attr: str, mech, revolutions, options: dict):
-    """Validate backend, mechanism, count and option names, then call the backend."""
+def _call(backend: str, attr: str, mech, revolutions, options: dict,
+          name: str = "revolutions"):
+    """Validate backend, mechanism, count and option names, then call the backend (which
+    validates the options' values)."""
     be = _backend(backend)
-    _check(mech, revolutions)
+    revolutions = _check(mech, revolutions, name)
     module = importlib.import_module(be.module)
     allowed = getattr(module, "OPTION_NAMES", None)
     if allowed is not None:

@@ -3,15 +3,43 @@
 from __future__ import annotations
 
 import json
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from ._checks import check_int
+from ._warnings import PhysicsWarning
 from .mechanism import SliderCrank
 
-__all__ = ["Trajectory", "load_trajectory"]
+__all__ = ["Trajectory", "load_trajectory", "annotate", "periodicity", "PENETRATION_LIMIT",
+           "PERIODIC_TOL"]
+
+#: largest physically meaningful penetration, as a fraction of the journal radius. The
+#: contact laws (K delta^1.5, Hertz-type) assume a contact zone small against the radii; a
+#: journal that sinks by 5 % of its own radius into the bearing overlaps it grossly and the
+#: result is meaningless. Measured maxima (all revolutions, docs/user_guide.md): the paper
+#: case 9e-4 R_J (0.89 c), every case of validation/stress.py at most 0.013 R_J (c = 1 mm;
+#: 11.6 c with the stiffness divided by 100), 1e5 rpm 0.027 R_J; 3e5 rpm 0.10 R_J and
+#: omega2 = 1e6 rad/s 7.6 R_J (7567 c) are flagged. Not a fraction of the clearance: a
+#: 1 um clearance legitimately sees 3 c.
+PENETRATION_LIMIT = 0.05
+
+#: the state at the revolution boundaries repeats within this distance (units: clearance
+#: for the eccentricity, omega2 * clearance for the velocities) for the motion to count as
+#: periodic; at the default rtol the paper case's return distance falls by about 5 times
+#: per revolution, to 3e-3 at revolution 4 and 1e-9 at revolution 12, while c = 0.1 mm,
+#: c = 0.5 mm and 100 rpm stay at 1 to 80 (docs/user_guide.md)
+PERIODIC_TOL = 1e-2
+
+#: periods (in revolutions) the return map checks
+MAX_PERIOD = 4
+
+#: above this tolerance (clearance units) the integration noise hides the return map: the
+#: periodicity is then undetermined (rtol above about 3e-6 in the paper case)
+NOISE_LIMIT = 0.5
 
 #: name -> (unit, number of columns); the time series every backend fills
 SERIES: dict[str, tuple[str, int]] = {
@@ -91,8 +119,7 @@ class Trajectory:
 
     def revolution_window(self, revolution: int) -> tuple[float, float]:
         """Time interval [t_a, t_b] of crank revolution `revolution` (1-based) in s."""
-        if not isinstance(revolution, (int, np.integer)) or revolution < 1:
-            raise ValueError(f"revolution must be an integer >= 1; got {revolution!r}")
+        revolution = check_int("revolution", revolution, 1)
         if revolution > self.revolutions:
             raise ValueError(
                 f"revolution must be between 1 and {self.revolutions} (the trajectory covers"
@@ -113,6 +140,7 @@ class Trajectory:
         Uses the peak refined between samples where the backend provides it (reduced model),
         otherwise the maximum over the samples.
         """
+        revolution = check_int("revolution", revolution, 1)
         mask = self.revolution_mask(revolution)
         if self.peaks is not None and len(self.peaks) >= revolution:
             return float(self.peaks[revolution - 1])
@@ -157,14 +185,176 @@ class Trajectory:
         return np.column_stack(cols), header
 
 
+def annotate(traj: Trajectory) -> Trajectory:
+    """Add the physics diagnostics to `traj.stats` (in place) and return `traj`.
+
+    - ``max_penetration_clearance``, ``max_penetration_radius``: the largest penetration over
+      the run divided by the clearance and by the journal radius;
+    - ``penetration_meaningless``: True when it exceeds `PENETRATION_LIMIT` times the journal
+      radius; a `PhysicsWarning` then says so;
+    - ``periodic`` (True, False or None) and ``periodicity_note``: see `periodicity`.
+    """
+    m = traj.mechanism
+    pen = float(np.max(traj.penetration, initial=-np.inf)) if len(traj.t) else -np.inf
+    pen = max(pen, 0.0)
+    ratio = pen / m.journal_radius
+    traj.stats["max_penetration_clearance"] = pen / m.clearance
+    traj.stats["max_penetration_radius"] = ratio
+    traj.stats["penetration_meaningless"] = bool(ratio > PENETRATION_LIMIT)
+    if ratio > PENETRATION_LIMIT:
+        warnings.warn(
+            f"the journal penetrates the bearing by {pen:.3g} m = {ratio:.3g} journal radii "
+            f"({pen / m.clearance:.4g} clearances), more than {PENETRATION_LIMIT:g} R_J: the "
+            "contact law does not hold there and the result is physically meaningless "
+            "(lower the crank speed or raise the contact stiffness)", PhysicsWarning,
+            stacklevel=3)
+    periodic, note = periodicity(traj)
+    traj.stats["periodic"] = periodic
+    traj.stats["periodicity_note"] = note
+    return traj
+
+
+def boundary_states(traj: Trajectory) -> np.ndarray | None:
+    """The dimensionless state at the revolution boundaries t = T, 2T, ... (Poincare
+    section, t = 0 excluded: the journal starts centred): rows [e_x / c, e_y / c,
+    x4dot / (omega2 c), theta3dot L3 / (omega2 c)], interpolated linearly between samples.
+    None when a boundary is not resolved (no sample within 1e-3 T)."""
+    m = traj.mechanism
+    k = traj.revolutions
+    if k < 1:
+        return np.zeros((0, 4))
+    times = np.arange(1, k + 1) * m.period
+    near = np.abs(traj.t[np.clip(np.searchsorted(traj.t, times), 0, len(traj.t) - 1)] - times)
+    near = np.minimum(near, np.abs(traj.t[np.clip(np.searchsorted(traj.t, times) - 1, 0,
+                                                  len(traj.t) - 1)] - times))
+    if np.any(near > 1e-3 * m.period):
+        return None
+    c, w = m.clearance, m.crank_speed
+    cols = (traj.eccentricity[:, 0] / c, traj.eccentricity[:, 1] / c,
+            traj.slider_velocity / (w * c), traj.coupler_rate * m.coupler_length / (w * c))
+    return np.column_stack([np.interp(times, traj.t, col) for col in cols])
+
+
+def periodicity(traj: Trajectory) -> tuple[bool | None, str]:
+    """Is the motion periodic? (True, False or None: cannot be judged) and a sentence why.
+
+    The return map of the state at the revolution boundaries (`boundary_states`): periodic
+    with period n (n <= MAX_PERIOD revolutions) when the last state is within
+    `PERIODIC_TOL` (or 10 times the integration noise rtol (L2 + L3) / c if larger) of the
+    state n revolutions before. Otherwise undetermined (None) when
+    fewer than 3 boundaries are available, the integration tolerance is too loose for the
+    distance to mean anything (`NOISE_LIMIT`), or the return distance is still falling fast
+    (by more than half per revolution over the last two: a transient that has not
+    settled), else not periodic (False: chaotic, quasi-periodic or a transient longer than
+    the run).
+    """
+    x = boundary_states(traj)
+    if x is None:
+        return None, ("undetermined: the samples do not resolve the revolution boundaries "
+                      "(t_eval without them)")
+    if len(x) < 3:
+        return None, (f"undetermined: {len(x)} revolution(s); the return map needs at least "
+                      "3 revolutions")
+    # the integration noise of the positions in clearance units (atol = rtol (L2 + L3)),
+    # with a margin of 10: the return distance cannot be judged below it
+    m = traj.mechanism
+    rtol = traj.stats.get("rtol") if traj.backend != "exudyn" else None
+    rtol = rtol if isinstance(rtol, float) else 0.0
+    tol = max(PERIODIC_TOL, 10 * rtol * (m.crank_length + m.coupler_length) / m.clearance)
+    if tol > NOISE_LIMIT:
+        return None, (f"undetermined: at rtol {rtol:g} the integration noise of the journal "
+                      f"position ({tol / 10:.2g} clearances) is too large to tell a periodic "
+                      "motion; use a smaller rtol")
+    last = [float(np.linalg.norm(x[-1] - x[-1 - n])) for n in range(1, min(MAX_PERIOD,
+                                                                         len(x) - 1) + 1)]
+    for n, d in enumerate(last, start=1):
+        if d <= tol:
+            return True, (f"periodic (period-{n}): the state at the last revolution boundary "
+                          f"repeats within {d:.2g} clearance units (tolerance {tol:.2g})")
+    d1 = np.linalg.norm(np.diff(x, axis=0), axis=1)
+    if len(d1) >= 2 and d1[-1] < 0.5 * d1[-2] and (len(d1) < 3 or d1[-2] < 0.5 * d1[-3]):
+        return None, (f"undetermined: the return distance is still falling ({d1[-2]:.2g} -> "
+                      f"{d1[-1]:.2g} clearance units per revolution); run more revolutions")
+    return False, (f"not periodic: the state at the revolution boundaries does not repeat "
+                   f"with a period of up to {min(MAX_PERIOD, len(x) - 1)} revolutions "
+                   f"(smallest return distance {min(last):.2g} clearance units, tolerance "
+                   f"{tol:.2g}): chaotic, quasi-periodic or a long transient")
+
+
+def _fail(path: Path, problem: str) -> ValueError:
+    return ValueError(f"inconsistent trajectory file {str(path)!r}: {problem}")
+
+
+def check_consistency(path: Path, series: dict[str, np.ndarray], meta: Any,
+                      peaks: np.ndarray | None) -> None:
+    """Check a loaded trajectory: metadata types, equal lengths, column counts, finite
+    values, increasing times, and stored peaks against the stored series (ValueError naming
+    the file and the problem)."""
+    if not isinstance(meta, dict) or not isinstance(meta.get("mechanism"), dict):
+        raise _fail(path, "metadata must be an object with a 'mechanism' object")
+    if not isinstance(meta.get("backend"), str):
+        raise _fail(path, "metadata 'backend' must be a string")
+    if not isinstance(meta.get("stats", {}), dict):
+        raise _fail(path, "metadata 'stats' must be an object")
+    n = None
+    for name, (_, ncol) in SERIES.items():
+        a = series[name]
+        shape = (a.shape[0],) if ncol == 1 else (a.shape[0], ncol)
+        if a.ndim != len(shape) or a.shape != shape or a.shape[0] < 1:
+            raise _fail(path, f"series {name!r} has shape {a.shape}, expected (n,)"
+                        f"{'' if ncol == 1 else f' x {ncol}'} with n >= 1")
+        if n is None:
+            n = a.shape[0]
+        elif a.shape[0] != n:
+            raise _fail(path, f"series {name!r} has {a.shape[0]} samples, 't' has {n}")
+        if not np.issubdtype(a.dtype, np.number) or not np.all(np.isfinite(a)):
+            raise _fail(path, f"series {name!r} holds non-finite or non-numeric values")
+    if np.any(np.diff(series["t"]) <= 0):
+        raise _fail(path, "times 't' are not strictly increasing")
+    if not np.all(np.isin(series["contact_phase"], (0, 1))):
+        raise _fail(path, "contact_phase must hold 0 or 1 only")
+    if peaks is not None:
+        if peaks.ndim != 1 or not np.all(np.isfinite(peaks)) or np.any(peaks < 0):
+            raise _fail(path, "peaks must be a list of finite numbers >= 0")
+
+
+def _check_peaks(path: Path, traj: Trajectory) -> None:
+    """The stored refined peaks must agree with the stored series: each at least the largest
+    sample of its revolution (within 1e-9) and at most PEAK_EXCESS above it."""
+    if traj.peaks is None:
+        return
+    if len(traj.peaks) != traj.revolutions:
+        raise _fail(path, f"{len(traj.peaks)} peaks for {traj.revolutions} revolutions")
+    mag = traj.base_force_magnitude
+    for k in range(1, len(traj.peaks) + 1):
+        sampled = float(mag[traj.revolution_mask(k)].max())
+        peak = float(traj.peaks[k - 1])
+        if not (sampled * (1 - 1e-9) <= peak <= sampled * (1 + PEAK_EXCESS) + 1e-9):
+            raise _fail(path, f"stored peak of revolution {k} ({peak:.9g} N) disagrees with "
+                        f"the stored series (sampled maximum {sampled:.9g} N; a refined peak "
+                        f"lies within {PEAK_EXCESS:g} above it)")
+
+
+#: the refined peak between samples exceeds the largest sample by at most this fraction in
+#: a loaded file (measured over the paper case, c = 0.1 and 0.5 mm, 100 and 10000 rpm and
+#: e = 0.05, 4 revolutions: at most 0.007 at the default rtol, 0.17 at rtol 1e-4, where the
+#: steps are long); a peak below the largest sample is always refused
+PEAK_EXCESS = 0.25
+
+
 def load_trajectory(path: str | Path) -> Trajectory:
-    """Read a trajectory written by `Trajectory.save` (``.npz`` or ``.csv``)."""
+    """Read a trajectory written by `Trajectory.save` (``.npz`` or ``.csv``).
+
+    The file is checked (equal lengths, column counts, finite values, increasing times,
+    metadata types, peaks consistent with the stored series); a bad file raises ValueError
+    naming it and the problem.
+    """
     path = Path(path)
     try:
         if path.suffix == ".npz":
-            with np.load(path) as data:
+            with np.load(path, allow_pickle=False) as data:
                 meta = json.loads(str(data["meta"]))
-                series = {name: data[name] for name in SERIES}
+                series = {name: np.asarray(data[name]) for name in SERIES}
         elif path.suffix == ".csv":
             with open(path) as fh:
                 meta = json.loads(fh.readline()[1:].strip())
@@ -179,17 +369,26 @@ def load_trajectory(path: str | Path) -> Trajectory:
                     series[name] = table[:, idx]
         else:
             raise ValueError(f"trajectory file must end in .npz or .csv; got {str(path)!r}")
-    except (OSError, KeyError, json.JSONDecodeError, UnicodeDecodeError) as exc:
+    except (OSError, KeyError, json.JSONDecodeError, UnicodeDecodeError, EOFError,
+            ValueError) as exc:
+        if isinstance(exc, ValueError) and "must end in" in str(exc):
+            raise
         raise ValueError(f"cannot read trajectory file {str(path)!r}: {exc}") from exc
+    peaks = meta.get("peaks") if isinstance(meta, dict) else None
+    try:
+        peaks = None if peaks is None else np.asarray(peaks, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise _fail(path, f"peaks must be a list of numbers: {exc}") from exc
+    check_consistency(path, series, meta, peaks)
     series["contact_phase"] = series["contact_phase"].astype(np.int8)
-    peaks = meta.get("peaks")
-    return Trajectory(
-        **series,
-        mechanism=SliderCrank.from_dict(meta["mechanism"]),
-        backend=meta["backend"],
-        stats=meta.get("stats", {}),
-        peaks=None if peaks is None else np.asarray(peaks, dtype=float),
-    )
+    try:
+        mech = SliderCrank.from_dict(meta["mechanism"])
+    except (TypeError, ValueError) as exc:
+        raise _fail(path, f"bad mechanism: {exc}") from exc
+    traj = Trajectory(**series, mechanism=mech, backend=meta["backend"],
+                      stats=meta.get("stats", {}), peaks=peaks)
+    _check_peaks(path, traj)
+    return traj
 
 
 Trajectory.load = staticmethod(load_trajectory)  # type: ignore[attr-defined]

@@ -311,10 +311,11 @@ def test_fd_and_ddm_on_default_grid_and_normalization_floor(paper):
 @pytest.mark.parametrize("kwargs,message", [
     ({"parameters": ["crank_lenght"]}, "unknown parameter name"),
     ({"parameters": ["contact_model"]}, "unknown parameter name"),
-    ({"method": "adjoint"}, "method must be 'ddm' or 'fd'"),
+    ({"method": "adjoint"}, r"method must be one of \['ddm', 'fd'\]"),
     ({"backend": "exudyn"}, "method='ddm' needs backend='reduced'"),
     ({"backend": "adams", "method": "fd"}, "backend must be one of"),
-    ({"fd_relative_step": 0.5, "method": "fd"}, "fd_relative_step must be in"),
+    ({"fd_relative_step": 0.5, "method": "fd"},
+     r"fd_relative_step must be a finite number in \(0, 0.1\)"),
     ({"parameters": ["slider_mass", "slider_mass"]}, "must not repeat"),
     ({"integrator": "rk4"}, "integrator must be one of"),
 ])
