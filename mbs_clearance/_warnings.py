@@ -5,7 +5,7 @@
 - `PhysicsWarning`: the result is computed as asked but is physically meaningless (penetration
   far beyond the clearance, motion whose periodicity cannot be judged).
 - `CacheWarning`: the compiled-kernel cache cannot be used (read-only install); the package
-  works without it but compiles on every import.
+  works without it, caching in a private temporary directory.
 """
 
 from __future__ import annotations
@@ -26,4 +26,5 @@ class PhysicsWarning(MbsClearanceWarning):
 
 
 class CacheWarning(MbsClearanceWarning):
-    """The compiled-kernel cache is unavailable; kernels compile in memory instead."""
+    """The compiled-kernel cache is unavailable; kernels are cached in a private
+    temporary directory instead (see the user guide)."""
