@@ -131,14 +131,13 @@ def test_cost_in_function_evaluations(paper):
     ratio = res.stats["nfev"] / plain[0]
     assert ratio < 1.75          # measured 1.68 (dop853 on the augmented system)
     extra = res.stats["post_fev_plain"] + res.stats["post_fev_sens"]
-    assert extra < 0.15 * plain[0]
+    assert extra < 0.12 * plain[0]      # measured 0.10
     assert res.stats["post_refined_steps"] <= 2 * RIVAL_CANDIDATES + 2
 
 
 def test_fd_through_other_backends(paper):
-    """method='fd' runs through any backend: the ideal mechanism's peak gradient against the
-    reduced model's at a tiny clearance is not the point; here only that it is finite and
-    its central difference matches its own one-sided ones (a smooth closed form)."""
+    """method='fd' runs through any backend: for the ideal mechanism (a smooth closed form)
+    its central difference agrees with its one-sided ones, and its peak is the backend's."""
     res = peak_gradient(paper, ["crank_length", "coupler_length"], backend="ideal",
                         method="fd")
     assert res.backend == "ideal" and np.all(np.isfinite(res.gradient))
