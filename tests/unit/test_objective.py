@@ -78,6 +78,13 @@ def test_peak_at_the_window_edge_is_flagged_and_its_gradient_right():
     assert ddm.at_edge and ddm.kink and "edge" in ddm.message
     assert ddm.time == pytest.approx(4 * mech.period, abs=1e-12)
     assert np.max(_error(ddm, _fd(mech))) < 1e-3
+    # the edge moves with the crank speed (t = 4 T, T = 2 pi / omega): d|F12|/dt times
+    # d(edge)/d omega joins the partial derivative; not so for the initial crank angle.
+    # Central differences with the crank speed's smaller step (see docs)
+    names = ("crank_speed", "initial_crank_angle")
+    ddm = peak_gradient(mech, names)
+    fd = peak_gradient(mech, names, method="fd", rtol=1e-12, fd_relative_step=3e-6)
+    np.testing.assert_allclose(ddm.gradient, fd.gradient, rtol=1e-3)
 
 
 def test_kink_one_sided_gradients_match_one_sided_differences():
