@@ -382,9 +382,15 @@ def _edge_slope(run, t):
 
 # ------------------------------------------------------------------ finite differences
 
-def _fd_gradient(mech, names, revolution, backend, fd_relative_step, executor, options):
+def _fd_peak(args):
+    """One perturbed peak (module level: picklable for process pools)."""
     from .simulate import peak_base_force
 
+    mech, revolution, backend, options = args
+    return float(peak_base_force(mech, revolution, backend, **options))
+
+
+def _fd_gradient(mech, names, revolution, backend, fd_relative_step, executor, options):
     t_wall = time.perf_counter()
     options = dict(options)
     if backend == "reduced":
@@ -400,11 +406,9 @@ def _fd_gradient(mech, names, revolution, backend, fd_relative_step, executor, o
                 raise ValueError(f"the finite-difference step of {name} ({h:.3g}) leaves its "
                                  f"valid range: {exc}; pass a smaller fd_relative_step") from exc
 
-    def one(m):
-        return float(peak_base_force(m, revolution, backend, **options))
-
-    values = list(executor.map(one, mechs)) if executor is not None else [one(m)
-                                                                           for m in mechs]
+    jobs = [(m, revolution, backend, options) for m in mechs]
+    values = (list(executor.map(_fd_peak, jobs)) if executor is not None
+              else [_fd_peak(j) for j in jobs])
     peak = values[0]
     plus = np.array(values[1::2])
     minus = np.array(values[2::2])
