@@ -15,6 +15,7 @@ from ._cache import refresh_stale_cache
 refresh_stale_cache()
 
 from .mechanism import CONTINUOUS_FIELDS, PARAMETER_INFO, SliderCrank  # noqa: E402
+from .objective import PeakGradient, peak_gradient  # noqa: E402
 from .optimize import OptimizationResult, optimize_link_lengths  # noqa: E402
 from .sensitivity import DEFAULT_PARAMETERS, Sensitivities, sensitivities  # noqa: E402
 from .simulate import BACKENDS, peak_base_force, simulate  # noqa: E402
@@ -26,6 +27,7 @@ __all__ = [
     "Trajectory", "load_trajectory",
     "sensitivities", "Sensitivities", "DEFAULT_PARAMETERS",
     "optimize_link_lengths", "OptimizationResult",
+    "peak_gradient", "PeakGradient",
 ]
 
 __version__ = "0.1.0"

@@ -58,7 +58,7 @@ from ._jacobians import (
     free_outputs_nc,
 )
 from .contact import contact_force, hysteresis_factor
-from .integrator import ACTION_SIG, KERNEL, MONITOR_SIG, RHS_SIG, integrate
+from .integrator import ACTION_SIG, KERNEL, MONITOR_SIG, RHS_SIG, _step_monitor, integrate
 from .reduced import (
     P_C,
     P_DMIN,
@@ -481,3 +481,25 @@ def integrate_sens(y0, p, mem_start, n_mem, edges, rtol, atol, n_err, h0, h_max,
                      y0, p, mem_start, n_mem, edges, rtol, atol, n_err, h0, h_max,
                      max_steps, record, event_tol, event_margin, n_samples, refine_iters,
                      coefficients, n_out, n_dense)
+
+
+@nb.njit(cache=True, error_model="numpy")
+def step_sens(t0, y0, p, hs, coefficients, n_out):
+    """Steps of the sizes hs of the sensitivity equations from (t0, y0), with the memory in
+    p and the method's `coefficients` (`Tableau.arrays()`): the states (sensitivities
+    included) at t0 + hs (len(hs), n) and the outputs of `monitor_sens` there (len(hs),
+    n_out). The integrator's peak refinement maximises |F12| over exactly this step map,
+    so this gives the state at a refined peak time."""
+    A, B, C, E, E2, P, A_extra, C_extra, error_order, pi_alpha, pi_beta = coefficients
+    n = y0.shape[0]
+    K = np.zeros((B.shape[0] + 1 + A_extra.shape[0], n))
+    f0 = np.empty(n)
+    f_new = np.empty(n)
+    ytmp = np.empty(n)
+    ys = np.empty((hs.shape[0], n))
+    outs = np.zeros((hs.shape[0], n_out))
+    _THIS.rhs_sens(t0, y0, p, f0)
+    for k in range(hs.shape[0]):
+        _step_monitor(_THIS.rhs_sens, _THIS.monitor_sens, t0, y0, f0, hs[k], A, B, C, K, p,
+                      ys[k], f_new, ytmp, outs[k])
+    return ys, outs

@@ -13,7 +13,7 @@ import time
 from concurrent.futures import Executor, ProcessPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -305,7 +305,21 @@ def independent_directions(M: np.ndarray, tol: float = DIRECTION_TOL):
     return np.array(basis), coeffs
 
 
-def _ddm(mech, names, revolutions, rtol, t_eval, event_time_term, method):
+class DdmSetup(NamedTuple):
+    """The sensitivity system of a DDM run (`ddm_setup`): the `reduced.System` to integrate,
+    the parameters' values `ref` (b0), their column scales and the coefficients (nb, npar)
+    that combine the integrated directions into the parameters' sensitivities."""
+
+    system: reduced.System
+    rtol: float
+    ref: np.ndarray
+    scale: np.ndarray
+    coeffs: np.ndarray
+
+
+def ddm_setup(mech, names, rtol, event_time_term=True) -> DdmSetup:
+    """The augmented system of the DDM for the named parameters (one integration per
+    independent direction, `independent_directions`), ready for `reduced.run`."""
     D_all = chain_matrix(mech, names)
     ref = np.array([reference_value(mech, n) for n in names])
     s0_all = _initial_sensitivities(mech, D_all)
@@ -335,6 +349,12 @@ def _ddm(mech, names, revolutions, rtol, t_eval, event_time_term, method):
     system = reduced.System(ddm.integrate_sens, y0, p, reduced.P_MODE,
                             ddm.P_SIGMA - reduced.P_MODE + nb, n_err, atol,
                             ddm.N_OUT_PLAIN + nb)
+    return DdmSetup(system, rtol_v, ref, scale_all, coeffs)
+
+
+def _ddm(mech, names, revolutions, rtol, t_eval, event_time_term, method):
+    system, rtol_v, ref, scale_all, coeffs = ddm_setup(mech, names, rtol, event_time_term)
+    nb = coeffs.shape[0]
     t0 = time.perf_counter()
     ts, ys, ms, peaks, _, counters, outs, p = reduced.run(
         mech, revolutions, rtol=rtol_v, method=method, t_eval=t_eval, system=system,
@@ -357,7 +377,8 @@ def _ddm(mech, names, revolutions, rtol, t_eval, event_time_term, method):
     stats.update(rtol=rtol_v, method=method, wall_time=time.perf_counter() - t0,
                  event_time_term=event_time_term, directions=nb)
     # (the states are ys[:, :4], the crank work the last column, as in a plain run)
-    traj = reduced.trajectory_from_states(mech, ts, ys, ms, base, stats,
+    traj = reduced.trajectory_from_states(mech, ts, ys, ms, reduced.pack_parameters(mech),
+                                          stats,
                                           None if t_eval is not None else peaks, outs)
     return Sensitivities(
         t=ts, parameters=names, reference=ref, base_force=d_force, base_force_magnitude=d_mag,

@@ -1,0 +1,508 @@
+"""The gradient of the design objective: the peak of |F12| over one crank revolution.
+
+`peak_gradient(mech, parameters)` returns d(peak)/db for named SliderCrank fields. The peak
+is max_t |F12|(t, b) over the revolution's window; where its maximum is an interior, isolated
+local maximum, d|F12|/dt = 0 there and the envelope theorem gives
+
+    d(peak)/db = (partial d|F12|/db)(t*, b),
+
+the DDM sensitivity of |F12| at the refined peak time t*. One DDM run gives both: its
+integrator refines the window's maximum of |F12| by golden section on re-taken steps (the
+step map), and the state and its sensitivities at t* are that step map's value at t*, taken
+again from the recorded step that contains it (`ddm.step_sens`). Reading the sensitivities
+at the largest *recorded* sample instead is wrong by tens of percent: they oscillate with the
+contact vibration (~13 kHz) between samples.
+
+Where a second local maximum of the window comes within the integration accuracy of the
+peak, the objective is the maximum of two smooth branches and has a kink: the result says so
+(`kink`), with the rival's time, value and gradient (the two one-sided values). A peak at the
+window's edge is flagged too. See docs/sensitivity.md, "Gradient of the design objective".
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+import time
+from dataclasses import dataclass, field
+from typing import Any
+
+import numba as nb
+import numpy as np
+
+from . import ddm, reduced
+from .integrator import METHODS, _golden_max, _step_monitor
+from .mechanism import SliderCrank
+from .sensitivity import (
+    DDM_INTEGRATOR,
+    FD_RELATIVE_STEP,
+    _check_parameters,
+    ddm_setup,
+    fd_step,
+    reference_value,
+)
+
+__all__ = ["PeakGradient", "peak_gradient", "KINK_RTOL", "RIVAL_CANDIDATES"]
+
+_THIS = sys.modules[__name__]
+
+#: relative gap (peak - rival) / peak below which two local maxima of the window count as
+#: tied within the integration accuracy (the kink tolerance is max(KINK_RTOL, 100 rtol)):
+#: the accuracy target of the default settings on every per-revolution peak
+KINK_RTOL = 1e-5
+
+#: local maxima of the recorded samples (largest first) refined as rivals of the peak
+RIVAL_CANDIDATES = 8
+
+#: golden-section iterations per rival's step: the bracket shrinks to 0.618^18 = 1.7e-4 of a
+#: step, where the value's error is below 1e-7 of the peak even at the contact vibration's
+#: ~2 rad per step (the kink tolerance is 1e-5)
+_REFINE_ITERS = 18
+
+
+@dataclass(frozen=True)
+class PeakGradient:
+    """The peak of |F12| over a crank revolution and its gradient.
+
+    Attributes
+    ----------
+    peak : float
+        max |F12| over the revolution, N.
+    time : float
+        Where it is, s (NaN for backends that do not report it).
+    parameters : tuple of str
+        The SliderCrank fields b.
+    reference : (p,) their values b0 (derived values where the field is None).
+    gradient : (p,) d(peak)/db, N per SI unit of each parameter.
+    kink : bool
+        The objective is not differentiable here: a second local maximum (the rival) comes
+        within `kink_tol` of the peak, or the peak sits at the window's edge. `gradient`
+        and `rival_gradient` are then the two one-sided values (the objective is the
+        maximum of the two smooth branches).
+    rival_time, rival_peak : float
+        The largest other local maximum of |F12| in the window (s, N); NaN if none.
+    rival_gradient : (p,) its gradient (N per unit), NaN if none.
+    at_edge : bool
+        The peak sits at the window's edge.
+    message : str
+        What the flags mean for this result ("" when differentiable).
+    method, backend : how it was computed.
+    revolution : the crank revolution (1-based).
+    stats : solver counters (nfev, naccept, ...) and settings.
+    """
+
+    peak: float
+    time: float
+    parameters: tuple[str, ...]
+    reference: np.ndarray
+    gradient: np.ndarray
+    kink: bool = False
+    rival_time: float = math.nan
+    rival_peak: float = math.nan
+    rival_gradient: np.ndarray | None = None
+    at_edge: bool = False
+    message: str = ""
+    method: str = "ddm"
+    backend: str = "reduced"
+    revolution: int = 4
+    kink_tol: float = KINK_RTOL
+    stats: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def normalized(self) -> np.ndarray:
+        """Eq. 15 at the peak: gradient * b0 / peak, shape (p,) (0 where b0 = 0)."""
+        return self.gradient * self.reference / self.peak
+
+    @property
+    def rival_normalized(self) -> np.ndarray:
+        """Eq. 15 of the rival's branch: rival_gradient * b0 / peak."""
+        if self.rival_gradient is None:
+            return np.full(len(self.parameters), np.nan)
+        return self.rival_gradient * self.reference / self.peak
+
+    @property
+    def gap(self) -> float:
+        """(peak - rival_peak) / peak: how far the rival is below the peak (NaN if none)."""
+        return (self.peak - self.rival_peak) / self.peak
+
+    def as_dict(self) -> dict[str, float]:
+        """The gradient as {parameter: d(peak)/db}."""
+        return {n: float(g) for n, g in zip(self.parameters, self.gradient)}
+
+
+# ------------------------------------------------------------------ compiled helpers
+
+@nb.njit(cache=True, error_model="numpy")
+def _refine_steps(t0s, y0s, mems, p, hs, coefficients, iters):
+    """The maximum of |F12| over the step map of each step k of the plain model (start
+    t0s[k], state y0s[k] (5,), memory mems[k] (mode, impact velocity), size hs[k]), by
+    golden section as the integrator's peak refinement; returns values and times."""
+    A, B, C, E, E2, P, A_extra, C_extra, error_order, pi_alpha, pi_beta = coefficients
+    n = y0s.shape[1]
+    K = np.zeros((B.shape[0] + 1 + A_extra.shape[0], n))
+    y_new = np.empty(n)
+    f_new = np.empty(n)
+    ytmp = np.empty(n)
+    f0 = np.empty(n)
+    y0 = np.empty(n)
+    out = np.zeros(0)
+    q = p.copy()
+    vals = np.empty(t0s.shape[0])
+    times = np.empty(t0s.shape[0])
+    for k in range(t0s.shape[0]):
+        for j in range(n):
+            y0[j] = y0s[k, j]
+        q[reduced.P_MODE] = mems[k, 0]
+        q[reduced.P_DMIN] = mems[k, 1]
+        vals[k], times[k] = _golden_max(reduced.rhs, reduced.monitor_out, t0s[k], y0, q, hs[k],
+                                        A, B, C, K, y_new, f_new, ytmp, f0, iters, out)
+    return vals, times
+
+
+@nb.njit(cache=True, error_model="numpy")
+def _step_value(t0, y0, mem, p, h, coefficients):
+    """|F12| of the plain model's step map at t0 + h (state y0 (5,), memory mem)."""
+    A, B, C, E, E2, P, A_extra, C_extra, error_order, pi_alpha, pi_beta = coefficients
+    n = y0.shape[0]
+    K = np.zeros((B.shape[0] + 1 + A_extra.shape[0], n))
+    y_new = np.empty(n)
+    f_new = np.empty(n)
+    ytmp = np.empty(n)
+    f0 = np.empty(n)
+    q = p.copy()
+    q[reduced.P_MODE] = mem[0]
+    q[reduced.P_DMIN] = mem[1]
+    reduced.rhs(t0, y0, q, f0)
+    return _step_monitor(reduced.rhs, reduced.monitor_out, t0, y0, f0, h, A, B, C, K, q,
+                         y_new, f_new, ytmp, np.zeros(0))[0]
+
+
+# ------------------------------------------------------------------ DDM at the peak
+
+class _Run:
+    """A recorded DDM run and what is needed to evaluate the step map inside it."""
+
+    def __init__(self, mech, names, revolution, rtol, integrator):
+        self.setup = ddm_setup(mech, names, rtol)
+        self.coefficients = METHODS[integrator].arrays()
+        system = self.setup.system
+        (self.ts, self.ys, self.ms, self.peaks, self.peak_t, counters, self.outs,
+         self.p) = reduced.run(mech, revolution, rtol=self.setup.rtol, method=integrator,
+                               system=system, record=True)
+        self.counters = reduced.counters_dict(counters)
+        self.n_mem = system.n_mem
+        self.n_out = system.n_out
+        self.plain_p = reduced.pack_parameters(mech)
+        self.stages = self.coefficients[1].shape[0]
+        # function evaluations after the run: plain (rival refinement), augmented (steps
+        # to the peak and the rival)
+        self.post_plain = 0
+        self.post_sens = 0
+        self.post_steps = 0
+
+    def magnitudes(self, lo, hi):
+        return np.hypot(self.outs[lo:hi, 8], self.outs[lo:hi, 9])
+
+    def step_start(self, t):
+        """Index of the recorded step whose end or interior holds t: i with ts[i] < t <=
+        ts[i + 1] (or t == ts[0])."""
+        return max(int(np.searchsorted(self.ts, t, side="left")) - 1, 0)
+
+    def gradient_at(self, t, newton=True):
+        """|F12| at time t and d|F12|/db (all parameters) at the maximum of |F12| next to
+        t, from the step map of the recorded step that holds t (or the recorded sample at
+        t). Returns (value at t, gradient, time of the gradient).
+
+        The golden-section refinement places t within ~1e-5 of a step of the maximum t**;
+        the sensitivities of parameters that carry the contact vibration at full weight
+        (the journal radius) change by percent over that (d/dt of S_k is large where
+        d|F12|/dt = 0). With ``newton``, |F12| and d|F12|/db are evaluated at t - delta,
+        t, t + delta (delta = 1e-4 of the step), t** = t - f'/f'' from their parabola (one
+        Newton step for d|F12|/dt = 0) and the gradient interpolated to t**."""
+        i = self.step_start(t)
+        if self.ts[i + 1] == t:
+            i += 1
+        if self.ts[i] == t:
+            ys, mems, outs = (a[i:i + 1] for a in (self.ys, self.ms, self.outs))
+            hs = np.zeros(1)
+        else:
+            q = self.p.copy()
+            q[reduced.P_MODE:reduced.P_MODE + self.n_mem] = self.ms[i]
+            h = t - self.ts[i]
+            delta = 1e-4 * (self.ts[i + 1] - self.ts[i])
+            hs = np.array([h, h - delta, h + delta]) if newton else np.array([h])
+            ys, outs = ddm.step_sens(self.ts[i], np.ascontiguousarray(self.ys[i]), q, hs,
+                                     self.coefficients, self.n_out)
+            self.post_sens += 1 + len(hs) * self.stages
+            mems = np.repeat(self.ms[i:i + 1], len(hs), axis=0)
+        _, d_mag, _, _ = ddm.sens_outputs(
+            self.ts[i] + hs, np.ascontiguousarray(ys), np.ascontiguousarray(mems),
+            np.ascontiguousarray(outs), self.p, self.setup.coeffs)
+        f = np.hypot(outs[:, 8], outs[:, 9])
+        if len(hs) == 1:
+            return float(f[0]), d_mag[0], float(t)
+        d = hs[2] - hs[0]
+        curv = (f[2] - 2.0 * f[0] + f[1]) / (0.25 * d * d)      # f''
+        slope = (f[2] - f[1]) / d                                # f'
+        s = -slope / curv if curv < 0.0 else 0.0
+        s = min(max(s, -0.5 * d), 0.5 * d)
+        g = (d_mag[0] + s * (d_mag[2] - d_mag[1]) / d
+             + 0.5 * s * s * (d_mag[2] - 2.0 * d_mag[0] + d_mag[1]) / (0.25 * d * d))
+        return float(f[0]), g, float(t + s)
+
+    def plain_rows(self, idx):
+        """States (plain model: 4 states and the work) and memories of recorded rows."""
+        y = np.zeros((len(idx), reduced.N_STATE))
+        y[:, :4] = self.ys[idx, :4]
+        return y, np.ascontiguousarray(self.ms[idx, :2])
+
+
+def _local_maxima(run, lo, hi, period):
+    """The window's local maxima of |F12| (value, time), largest first.
+
+    Candidates: the RIVAL_CANDIDATES largest local maxima of the recorded samples, each
+    refined over the steps on both sides (golden section on the step map, as the
+    integrator's refinement), and the window's first and last steps. A refined maximum is a
+    local maximum of the window where it lies inside its step, at a sample that both steps
+    beside it converge to, or at the window's edge (a boundary maximum: |F12| falls into the
+    window); a refinement that runs into the far end of its step is not (|F12| rises beyond
+    it, to a maximum found from the other side). Maxima closer than 1e-6 of a period are
+    one."""
+    mags = run.magnitudes(lo, hi)
+    m = len(mags)
+    is_max = np.zeros(m, dtype=bool)
+    if m >= 3:
+        is_max[1:-1] = (mags[1:-1] >= mags[:-2]) & (mags[1:-1] >= mags[2:])
+    cand = np.flatnonzero(is_max)
+    cand = cand[np.argsort(-mags[cand], kind="stable")][:RIVAL_CANDIDATES]
+    # steps (by their start row, absolute) to refine: both sides of each candidate sample,
+    # and the window's first and last steps
+    starts = {lo, hi - 2}
+    for j in cand:
+        starts.update((lo + j - 1, lo + j))
+    starts = np.array(sorted(s for s in starts if lo <= s < hi - 1), dtype=np.int64)
+    y0s, mems = run.plain_rows(starts)
+    t0s = run.ts[starts]
+    hs = run.ts[starts + 1] - t0s
+    vals, times = _refine_steps(t0s, y0s, mems, run.plain_p, hs, run.coefficients,
+                                _REFINE_ITERS)
+    run.post_steps += len(starts)
+    run.post_plain += len(starts) * (1 + (_REFINE_ITERS + 2) * run.stages)
+    # where each refinement ended: inside its step, or at its start or end sample
+    end_tol = 2.0 * 0.6180339887498949 ** _REFINE_ITERS * hs
+    at_start = times - t0s <= end_tol
+    at_end = t0s + hs - times <= end_tol
+    ends_at = {int(s) + 1 for s, e in zip(starts, at_end) if e}
+    starts_at = {int(s) for s, b in zip(starts, at_start) if b}
+    maxima = []
+    for s, v, t, b, e in zip(starts, vals, times, at_start, at_end):
+        s = int(s)
+        if not (b or e) or (b and s == lo) or (e and s + 1 == hi - 1) \
+                or (e and s + 1 in starts_at) or (b and s in ends_at):
+            maxima.append((float(v), float(t)))
+    # merge: largest first, a maximum closer than `eps` to a kept one is the same
+    eps = 1e-6 * period
+    maxima.sort(key=lambda vt: -vt[0])
+    kept: list[tuple[float, float]] = []
+    for v, t in maxima:
+        if all(abs(t - tk) > eps for _, tk in kept):
+            kept.append((v, t))
+    return kept, eps
+
+
+def _ddm_gradient(mech, names, revolution, rtol, integrator, kink_tol):
+    t_wall = time.perf_counter()
+    run = _Run(mech, names, revolution, rtol, integrator)
+    edges = reduced.window_edges(mech, revolution)
+    t_lo, t_hi = float(edges[-2]), float(edges[-1])
+    lo = int(np.searchsorted(run.ts, t_lo, side="left"))
+    hi = int(np.searchsorted(run.ts, t_hi, side="right"))
+    peak_int, t_int = float(run.peaks[-1]), float(run.peak_t[-1])
+    kept, eps = _local_maxima(run, lo, hi, mech.period)
+    # the integrator's peak among them (it replaces a candidate at the same time)
+    kept = [(v, t) for v, t in kept if abs(t - t_int) > eps] + [(peak_int, t_int)]
+    kept.sort(key=lambda vt: -vt[0])
+    (_, t_peak) = kept[0]
+    tol = max(kink_tol, 100.0 * run.setup.rtol)
+    at_edge = min(t_peak - t_lo, t_hi - t_peak) <= eps
+    peak, grad, _ = run.gradient_at(t_peak, newton=not at_edge)
+    rival_t = rival_v = math.nan
+    rival_g = np.full(len(names), np.nan)
+    if len(kept) > 1:
+        rival_t = kept[1][1]
+        rival_v, rival_g, _ = run.gradient_at(
+            rival_t, newton=min(rival_t - t_lo, t_hi - rival_t) > eps)
+    if at_edge and "crank_speed" in names:
+        # the window's edges move with the crank speed: d(edge)/d omega = -edge / omega
+        t_edge = t_lo if t_peak - t_lo <= eps else t_hi
+        slope = _edge_slope(run, t_peak)
+        k = names.index("crank_speed")
+        grad = grad.copy()
+        grad[k] += slope * (-t_edge / mech.crank_speed)
+    near = np.isfinite(rival_v) and (peak - rival_v) <= tol * peak
+    kink = bool(near or at_edge)
+    message = ""
+    if near:
+        message = (f"kink: a second local maximum of |F12| at t = {rival_t:.9g} s "
+                   f"({rival_v:.9g} N) is within {tol:.1e} of the peak at t = {t_peak:.9g} s "
+                   f"({peak:.9g} N); the objective is the larger of two smooth branches: "
+                   f"gradient and rival_gradient are its one-sided derivatives")
+    if at_edge:
+        message += ("; " if message else "") + (
+            f"the peak sits at the window's edge (t = {t_peak:.9g} s in [{t_lo:.9g}, "
+            f"{t_hi:.9g}] s): gradient is the derivative of |F12| at the edge, valid while "
+            f"the maximum stays there")
+    stats = dict(run.counters, rtol=run.setup.rtol, method=integrator,
+                 directions=int(run.setup.coeffs.shape[0]), integrator_peak=peak_int,
+                 integrator_peak_time=t_int, local_maxima=len(kept),
+                 post_fev_plain=run.post_plain, post_fev_sens=run.post_sens,
+                 post_refined_steps=run.post_steps,
+                 wall_time=time.perf_counter() - t_wall)
+    return PeakGradient(
+        peak=peak, time=t_peak, parameters=names, reference=run.setup.ref, gradient=grad,
+        kink=kink, rival_time=rival_t, rival_peak=rival_v, rival_gradient=rival_g,
+        at_edge=bool(at_edge), message=message, method="ddm", backend="reduced",
+        revolution=revolution, kink_tol=tol, stats=stats)
+
+
+def _edge_slope(run, t):
+    """d|F12|/dt at t from the plain step map of the step that holds t: a central difference
+    over +-1e-3 of the step (the map is smooth past the step's end; much shorter
+    differences are dominated by the rounding of the penetration, a difference of
+    coordinates of size L2 + L3)."""
+    i = run.step_start(t)
+    y0s, mems = run.plain_rows(np.array([i]))
+    h = t - run.ts[i]
+    d = 1e-3 * (run.ts[i + 1] - run.ts[i])
+    v0 = _step_value(run.ts[i], y0s[0], mems[0], run.plain_p, h - d, run.coefficients)
+    v1 = _step_value(run.ts[i], y0s[0], mems[0], run.plain_p, h + d, run.coefficients)
+    run.post_plain += 2 * (1 + run.stages)
+    return (v1 - v0) / (2.0 * d)
+
+
+# ------------------------------------------------------------------ finite differences
+
+def _fd_gradient(mech, names, revolution, backend, fd_relative_step, executor, options):
+    from .simulate import peak_base_force
+
+    t_wall = time.perf_counter()
+    options = dict(options)
+    if backend == "reduced":
+        options.setdefault("rtol", 1e-11)
+    steps = [fd_step(mech, n, fd_relative_step) for n in names]
+    mechs = [mech]
+    for name, h in zip(names, steps):
+        b0 = reference_value(mech, name)
+        for sign in (1.0, -1.0):
+            try:
+                mechs.append(mech.replace(**{name: b0 + sign * h}))
+            except ValueError as exc:
+                raise ValueError(f"the finite-difference step of {name} ({h:.3g}) leaves its "
+                                 f"valid range: {exc}; pass a smaller fd_relative_step") from exc
+
+    def one(m):
+        return float(peak_base_force(m, revolution, backend, **options))
+
+    values = list(executor.map(one, mechs)) if executor is not None else [one(m)
+                                                                           for m in mechs]
+    peak = values[0]
+    plus = np.array(values[1::2])
+    minus = np.array(values[2::2])
+    h = np.array(steps)
+    t_peak = math.nan
+    if backend == "reduced":
+        run_opts = {k: v for k, v in options.items() if k != "t_eval"}
+        t_peak = float(reduced.run(mech, revolution, record=False, **run_opts)[4][-1])
+    stats = {"fd_steps": steps, "runs": len(mechs), "forward": (plus - peak) / h,
+             "backward": (peak - minus) / h, "wall_time": time.perf_counter() - t_wall,
+             **{k: v for k, v in options.items() if k in ("rtol", "method")}}
+    return PeakGradient(
+        peak=peak, time=t_peak, parameters=names,
+        reference=np.array([reference_value(mech, n) for n in names]),
+        gradient=(plus - minus) / (2.0 * h), method="fd", backend=backend,
+        revolution=revolution,
+        message="central differences: no kink detection (stats['forward'] and "
+                "stats['backward'] hold the one-sided differences)", stats=stats)
+
+
+# ------------------------------------------------------------------ entry point
+
+def peak_gradient(mech: SliderCrank, parameters=None, revolution: int = 4,
+                  backend: str = "reduced", method: str = "ddm", *, rtol: float | None = None,
+                  integrator: str | None = None, kink_tol: float = KINK_RTOL,
+                  fd_relative_step: float = FD_RELATIVE_STEP, executor=None,
+                  **options) -> PeakGradient:
+    """The peak of |F12| over crank revolution `revolution` (the GA's objective,
+    `peak_base_force`) and its gradient with respect to named SliderCrank fields.
+
+    Parameters
+    ----------
+    mech : SliderCrank
+    parameters : sequence of str, optional
+        Continuous SliderCrank fields; default `sensitivity.DEFAULT_PARAMETERS`.
+    revolution : int
+        Crank revolution (1-based) whose peak is the objective (paper: 4).
+    backend : str
+        "reduced" for DDM; any backend of `simulate` for ``method="fd"``.
+    method : {"ddm", "fd"}
+        "ddm": the DDM sensitivity of |F12| at the refined peak time (envelope theorem),
+        one run of the sensitivity equations. "fd": central differences of the refined peak
+        (`peak_base_force`), 2 p + 1 runs, for checking.
+    rtol : float, optional
+        Relative tolerance of the reduced model (DDM: default 1e-7; FD: default 1e-11).
+    integrator : str, optional
+        Method of the compiled integrator (DDM default "dop853"; FD: the plain default).
+    kink_tol : float
+        Relative gap below which a second local maximum ties with the peak (the tolerance
+        used is max(kink_tol, 100 rtol)).
+    fd_relative_step : float
+        FD only: relative step, see `sensitivity.fd_step`.
+    executor :
+        FD only: a concurrent.futures-style executor for the 2 p + 1 runs.
+    **options :
+        FD only: backend options passed to `peak_base_force` (e.g. ``step_size``).
+
+    Returns
+    -------
+    PeakGradient
+    """
+    from .simulate import BACKENDS
+
+    if not isinstance(mech, SliderCrank):
+        raise ValueError(f"mech must be a SliderCrank; got {type(mech).__name__}")
+    names = _check_parameters(parameters)
+    if not isinstance(revolution, int) or isinstance(revolution, bool) or revolution < 1:
+        raise ValueError(f"revolution must be an integer >= 1; got {revolution!r}")
+    if method not in ("ddm", "fd"):
+        raise ValueError(f"method must be 'ddm' or 'fd'; got {method!r}")
+    if backend not in BACKENDS:
+        raise ValueError(f"backend must be one of {sorted(BACKENDS)}; got {backend!r}")
+    if integrator is not None and integrator not in METHODS:
+        raise ValueError(f"integrator must be one of {sorted(METHODS)}; got {integrator!r}")
+    if rtol is not None and not (isinstance(rtol, (int, float)) and 1e-14 <= rtol <= 1e-2):
+        raise ValueError(f"rtol must be a number in [1e-14, 1e-2]; got {rtol!r}")
+    if not (isinstance(kink_tol, float) and 0.0 <= kink_tol < 1.0):
+        raise ValueError(f"kink_tol must be a float in [0, 1); got {kink_tol!r}")
+    if not (isinstance(fd_relative_step, float) and 0 < fd_relative_step < 0.1):
+        raise ValueError(f"fd_relative_step must be in (0, 0.1); got {fd_relative_step!r}")
+    if method == "ddm":
+        if backend != "reduced":
+            raise ValueError("method='ddm' needs backend='reduced' (the direct "
+                             "differentiation equations are those of the reduced model); use "
+                             "method='fd' for other backends")
+        if options or executor is not None:
+            extra = sorted(options) + (["executor"] if executor is not None else [])
+            raise ValueError(f"unknown option(s) for method='ddm': {extra}")
+        return _ddm_gradient(mech, names, revolution, rtol, integrator or DDM_INTEGRATOR,
+                             kink_tol)
+    if rtol is not None:
+        if backend != "reduced":
+            raise ValueError(f"rtol applies to the reduced backend only; got "
+                             f"backend={backend!r}")
+        options["rtol"] = rtol
+    if integrator is not None:
+        if backend != "reduced":
+            raise ValueError(f"integrator applies to the reduced backend only; got "
+                             f"backend={backend!r}")
+        options["method"] = integrator
+    return _fd_gradient(mech, names, revolution, backend, fd_relative_step, executor, options)

@@ -1,0 +1,66 @@
+"""Cost of `peak_gradient` (DDM at the refined peak) against the peak-only simulation.
+
+Paper case and two designs of the GA's box, the 8 default parameters, revolution 4, default
+settings: the ratio of the median time of `peak_gradient(mech)` to the median time of
+`peak_base_force(mech)` (the GA's objective, nothing recorded), measured in the same run
+(medians over interleaved repeats after warm-up). Target: at most 4. Also the ratio of function
+evaluations (a DDM evaluation costs more than a plain one) and of `sensitivities(mech)` (the
+default call, every step) for context.
+
+    python -m validation.benchmarks.peak_gradient_speed [--repeats 21]
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+import numpy as np
+
+from mbs_clearance import SliderCrank, peak_base_force, peak_gradient
+from mbs_clearance.reduced import run
+from mbs_clearance.sensitivity import sensitivities
+from validation.benchmarks.common import machine_summary
+
+DESIGNS = {
+    "paper": {},
+    "L2 = 4.5 cm, L3 = 13 cm": {"crank_length": 0.045, "coupler_length": 0.13},
+    "L2 = 5.5 cm, L3 = 11 cm": {"crank_length": 0.055, "coupler_length": 0.11},
+}
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--repeats", type=int, default=21)
+    args = ap.parse_args(argv)
+    rows = []
+    for name, values in DESIGNS.items():
+        mech = SliderCrank().replace(**values) if values else SliderCrank()
+        calls = {"peak": lambda m=mech: peak_base_force(m),
+                 "grad": lambda m=mech: peak_gradient(m),
+                 "sens": lambda m=mech: sensitivities(m)}
+        for fn in calls.values():       # warm-up (caches, allocator)
+            fn()
+        # interleaved: a change of the machine's load hits all three alike
+        times = {k: [] for k in calls}
+        for _ in range(args.repeats):
+            for k, fn in calls.items():
+                t0 = time.perf_counter()
+                fn()
+                times[k].append(time.perf_counter() - t0)
+        t_peak, t_grad, t_sens = (float(np.median(times[k])) for k in calls)
+        g = peak_gradient(mech)
+        nfev_plain = int(run(mech, 4, record=False)[5][0])
+        rows.append((name, t_peak, t_grad, t_sens, g.stats["nfev"] / nfev_plain, g.kink))
+    print(f"Machine: {machine_summary()}\n")
+    print("| design | peak_base_force (ms) | peak_gradient (ms) | ratio (target <= 4) "
+          "| sensitivities() / peak_base_force | nfev ratio | kink |")
+    print("|---|---|---|---|---|---|---|")
+    for name, t_peak, t_grad, t_sens, nfev_ratio, kink in rows:
+        print(f"| {name} | {t_peak * 1e3:.2f} | {t_grad * 1e3:.2f} | {t_grad / t_peak:.2f} "
+              f"| {t_sens / t_peak:.2f} | {nfev_ratio:.2f} | {kink} |")
+    print()
+
+
+if __name__ == "__main__":
+    main()
