@@ -672,7 +672,10 @@ def optimize_link_lengths(mech: SliderCrank | None = None,
         coupler masses scale with their lengths (uniform density), see `design_mechanism`.
     refine : bool or str
         Polish the GA's best point with a bounded local search on the same objective:
-        True or "nelder-mead" (bounded Nelder-Mead); False for none.
+        True or "l-bfgs-b" (bounded quasi-Newton with the exact gradient of the peak, see
+        `REFINE_METHODS`), "nelder-mead" (bounded, derivative-free); False for none. The
+        result's `refinement` says whether it ended on a bound and whether the KKT
+        conditions hold there.
     progress : bool
         Show a tqdm progress bar with the best value so far.
     workers : int
@@ -830,8 +833,19 @@ def _periodicity(best: SliderCrank, problem: _Problem) -> tuple[bool | None, str
         (None if note is None else str(note))
 
 
-#: refinement methods (`refine=`); True selects the first
-REFINE_METHODS = ("nelder-mead",)
+#: refinement methods (`refine=`); True selects the first: "l-bfgs-b" (scipy's bounded
+#: quasi-Newton method with the exact gradient of the peak, `objective.peak_gradient`: DDM
+#: for the reduced model, central differences for the other backends) or "nelder-mead"
+REFINE_METHODS = ("l-bfgs-b", "nelder-mead")
+
+#: L-BFGS-B settings: at most this many objective (value and gradient) calls; stop when the
+#: peak changes by less than `ftol` relative (the default integration accuracy is ~1e-6) or
+#: the projected gradient in the unit box is below `gtol_rel` of the peak
+_LBFGSB = {"maxfun": 60, "ftol": 1e-10, "gtol_rel": 1e-7}
+
+#: KKT check at the refined point, gradient in the unit box (N per box width): at a lower
+#: bound dF/du >= -tol, at an upper bound <= tol, inside |dF/du| <= tol, tol = this * peak
+KKT_RTOL = 1e-4
 
 
 def _check_refine(refine) -> str | None:
@@ -860,12 +874,21 @@ def _refine(objective: _Objective, u0: np.ndarray, f0: float, progress: bool, me
 
     calls = [0]
     with tqdm(desc="refine", unit="eval", disable=not progress, leave=True) as bar:
-        def fun(u):
-            calls[0] += 1
-            bar.update(1)
-            return float(objective.peaks(np.clip(u, 0.0, 1.0), serial=True)[0])
+        if method == "l-bfgs-b":
+            def fun_grad(u):
+                calls[0] += 1
+                bar.update(1)
+                peak, grad, _ = _peak_and_gradient(objective.problem, np.clip(u, 0.0, 1.0))
+                return peak, grad
 
-        u, record = _nelder_mead(fun, u0, f0)
+            u, record = _lbfgsb(fun_grad, u0, f0)
+        else:
+            def fun(u):
+                calls[0] += 1
+                bar.update(1)
+                return float(objective.peaks(np.clip(u, 0.0, 1.0), serial=True)[0])
+
+            u, record = _nelder_mead(fun, u0, f0)
         f = float(objective.peaks(u, serial=True)[0])
         bar.set_postfix_str(f"best max|F12| = {min(f, f0):.2f} N", refresh=True)
     improved = f < f0
@@ -873,7 +896,84 @@ def _refine(objective: _Objective, u0: np.ndarray, f0: float, progress: bool, me
     record.update(method=method, objective_calls=calls[0], improved=bool(improved),
                   start_peak_force=float(f0), end_peak_force=float(f_out),
                   **_bounds_record(objective.problem, u_out))
+    if method == "l-bfgs-b":
+        record.update(_kkt_record(objective.problem, u_out, record["on_bounds"]))
     return u_out, f_out, record
+
+
+def _gradient_parameters(problem: _Problem) -> list[str]:
+    """Fields whose derivatives the genes' gradient needs: the genes and, with uniform mass
+    scaling, the masses and explicit inertias that follow the lengths."""
+    params = list(problem.names)
+    if problem.mass_scaling == "uniform":
+        for length, mass, inertia in _SCALED_LINKS:
+            if length in params:
+                params.append(mass)
+                if getattr(problem.base, inertia) is not None:
+                    params.append(inertia)
+    return params
+
+
+#: (length, mass, inertia) of the links whose mass follows the length (uniform scaling)
+_SCALED_LINKS = (("crank_length", "crank_mass", "crank_inertia"),
+                 ("coupler_length", "coupler_mass", "coupler_inertia"))
+
+
+def _peak_and_gradient(problem: _Problem, u: np.ndarray):
+    """Peak |F12| (N) at genes `u` and its gradient in the unit box (N per box width):
+    `objective.peak_gradient` (DDM for the reduced model, central differences otherwise),
+    chained through the mass scaling: with uniform density m = m0 L / L0 and an explicit
+    J = J0 (L / L0)^3, so d/dL = dF/dL + (m/L) dF/dm + 3 (J/L) dF/dJ; then times (hi - lo)."""
+    from .objective import peak_gradient
+
+    mech = problem.mechanism(u)
+    params = _gradient_parameters(problem)
+    options = dict(problem.options)
+    if problem.backend == "reduced":
+        kwargs = {"method": "ddm", "rtol": options.get("rtol")}
+    else:
+        kwargs = {"method": "fd", **options}
+    pg = peak_gradient(mech, parameters=params, revolution=problem.revolution,
+                       backend=problem.backend, **kwargs)
+    g = dict(zip(params, np.asarray(pg.gradient, dtype=float)))
+    grad = []
+    for name in problem.names:
+        d = g[name]
+        for length, mass, inertia in _SCALED_LINKS:
+            if name == length and mass in g:
+                L = getattr(mech, length)
+                d += getattr(mech, mass) / L * g[mass]
+                if inertia in g:
+                    d += 3.0 * getattr(mech, inertia) / L * g[inertia]
+        grad.append(d)
+    width = np.asarray(problem.hi) - np.asarray(problem.lo)
+    return float(pg.peak), np.asarray(grad) * width, pg
+
+
+def _lbfgsb(fun_grad, u0: np.ndarray, f0: float):
+    """scipy L-BFGS-B on the unit box with the exact gradient."""
+    from scipy.optimize import minimize
+
+    n = len(u0)
+    opts = {"maxfun": _LBFGSB["maxfun"], "ftol": _LBFGSB["ftol"],
+            "gtol": _LBFGSB["gtol_rel"] * abs(f0)}
+    res = minimize(fun_grad, np.asarray(u0, dtype=float), jac=True, method="L-BFGS-B",
+                   bounds=[(0.0, 1.0)] * n, options=opts)
+    return np.clip(res.x, 0.0, 1.0), {"message": str(res.message)}
+
+
+def _kkt_record(problem: _Problem, u: np.ndarray, on_bounds: dict) -> dict[str, Any]:
+    """Gradient at the final point and the KKT check: at a lower bound dF/du >= -tol, at an
+    upper bound <= tol, inside |dF/du| <= tol (tol = KKT_RTOL * peak, unit box)."""
+    peak, grad, pg = _peak_and_gradient(problem, u)
+    tol = KKT_RTOL * abs(peak)
+    ok = []
+    for name, g in zip(problem.names, grad):
+        side = on_bounds.get(name)
+        ok.append(g >= -tol if side == "lower" else g <= tol if side == "upper"
+                  else abs(g) <= tol)
+    return {"gradient": {n: float(g) for n, g in zip(problem.names, grad)},
+            "kkt": bool(all(ok)), "kkt_tol": float(tol), "kink": bool(pg.kink)}
 
 
 def _nelder_mead(fun, u0: np.ndarray, f0: float):
