@@ -587,3 +587,59 @@ def test_best_design_periodicity_is_reported_and_saved(tmp_path):
     assert back.best_periodic == res.best_periodic
     assert back.best_periodicity_note == res.best_periodicity_note
     assert back.stop_reason == res.stop_reason == "generations"
+
+
+# ------------------------------------------------------------------ gradient refinement
+
+def test_gene_gradient_matches_central_differences_under_uniform_scaling():
+    """The unit-box gradient the refinement uses (DDM, chained through the uniform mass
+    scaling, explicit crank inertia) against central differences of the peak of the
+    rebuilt design, at tight rtol."""
+    from mbs_clearance.optimize import _peak_and_gradient, _Problem
+
+    base = SliderCrank(crank_inertia=1e-4)
+    problem = _Problem(base=base, names=("crank_length", "coupler_length"), lo=L2_BOX[:1] +
+                       L3_BOX[:1], hi=L2_BOX[1:] + L3_BOX[1:], mass_scaling="uniform",
+                       revolution=4, backend="reduced", options={"rtol": 1e-11})
+    u = np.array([0.3, 0.6])
+    _, grad, pg = _peak_and_gradient(problem, u)
+    assert not pg.kink
+    h = 1e-4
+    for i in range(2):
+        e = np.zeros(2)
+        e[i] = h
+        fp = peak_base_force(problem.mechanism(u + e), 4, rtol=1e-11)
+        fm = peak_base_force(problem.mechanism(u - e), 4, rtol=1e-11)
+        assert grad[i] == pytest.approx((fp - fm) / (2 * h), rel=2e-3)
+
+
+@pytest.mark.parametrize("mass_scaling,build,corner", [
+    ("fixed", fixed_masses, (0.04, 0.14)), ("uniform", uniform_density, (0.04, 0.10))])
+def test_gradient_refinement_reaches_the_grid_minimum_with_fewer_calls(mass_scaling, build,
+                                                                       corner):
+    """L-BFGS-B from the GA's best point ends at the minimum of a brute-force grid of the
+    box at tight rtol (a corner: both genes on a bound, KKT signs hold) with fewer
+    objective calls than Nelder-Mead from the same point."""
+    L2, L3 = np.linspace(*L2_BOX, 5), np.linspace(*L3_BOX, 5)
+    grid = np.array([[peak_base_force(build(a, b), 4, rtol=1e-10) for b in L3] for a in L2])
+    i, j = np.unravel_index(grid.argmin(), grid.shape)
+    assert (L2[i], L3[j]) == corner
+    kw = dict(seed=0, population=8, generations=3, progress=False, executor="serial",
+              mass_scaling=mass_scaling)
+    grad = optimize_link_lengths(PAPER, refine=True, **kw)
+    nm = optimize_link_lengths(PAPER, refine="nelder-mead", **kw)
+    assert grad.ga_best == nm.ga_best and grad.ga_best != grad.best
+    assert (grad.best.crank_length, grad.best.coupler_length) == corner
+    rec = grad.refinement
+    assert rec["method"] == "l-bfgs-b" and rec["improved"] and rec["kkt"]
+    sides = {"crank_length": "lower",
+             "coupler_length": "upper" if corner[1] == L3_BOX[1] else "lower"}
+    assert rec["on_bounds"] == sides
+    for name, side in sides.items():      # the gradient points out of the box
+        assert (rec["gradient"][name] > 0) == (side == "lower")
+    # the value is the default-rtol objective at the corner: within the default accuracy
+    # target (1e-5 relative, docs/accuracy) of the tight-rtol grid minimum
+    assert grad.best_peak_force == pytest.approx(peak_base_force(build(*corner), 4), rel=1e-9)
+    assert grad.best_peak_force == pytest.approx(grid.min(), rel=1e-5)
+    assert rec["objective_calls"] < nm.refinement["objective_calls"]
+    assert grad.best_peak_force <= nm.best_peak_force * (1 + 1e-9)
