@@ -24,7 +24,13 @@ from pathlib import Path
 from ._io import OutputDir, atomic_file, check_output_dir, check_output_file
 from .integrator import METHODS
 from .mechanism import PARAMETER_INFO, SliderCrank
-from .optimize import MASS_SCALINGS, PAPER_TABLE3, design_mechanism, optimize_link_lengths
+from .optimize import (
+    MASS_SCALINGS,
+    PAPER_TABLE3,
+    connect_dask,
+    design_mechanism,
+    optimize_link_lengths,
+)
 from .simulate import BACKENDS, peak_base_force, simulate
 
 __all__ = ["main", "build_parser", "mechanism_from_args", "add_mechanism_options",
@@ -449,11 +455,11 @@ def _cmd_optimize(args: argparse.Namespace) -> int:
                   progress=not args.no_progress, **options)
     if args.scheduler:
         try:
-            from dask.distributed import Client
+            import dask.distributed  # noqa: F401
         except ImportError as exc:
             raise ValueError("--scheduler needs dask.distributed: "
                              "pip install 'mbs-clearance[dask]'") from exc
-        with Client(args.scheduler) as client:
+        with connect_dask(args.scheduler) as client:
             print(f"evaluating on the dask cluster at {args.scheduler}", file=sys.stderr)
             result = optimize_link_lengths(mech, executor=client, **common)
     elif args.workers == 1:

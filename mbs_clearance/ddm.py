@@ -470,7 +470,7 @@ def norm_maxima(ys, coeffs, weights, lo, hi):
     return np.sqrt(out)
 
 
-@nb.njit(cache=True, error_model="numpy")
+@nb.njit(cache=True, error_model="numpy", nogil=True)
 def integrate_sens(y0, p, mem_start, n_mem, edges, rtol, atol, n_err, h0, h_max, max_steps,
                    record, event_tol, event_margin, n_samples, refine_iters, coefficients, n_out,
                    n_dense):

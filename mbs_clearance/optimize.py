@@ -5,12 +5,16 @@ revolution (the 4th by default) over a box of `SliderCrank` fields (by default t
 crank length L2 in [4, 6] cm and coupler length L3 in [10, 14] cm) with pygad's GA, then
 polishes the GA's best point with a bounded local search (scipy Nelder-Mead) on the same objective.
 
-Parallelism: each generation's new designs are evaluated as one batch on an executor, a local
-process pool by default, or any `concurrent.futures`-style executor, or a
+Parallelism: each generation's new designs are evaluated as one batch on an executor: by
+default a local pool of `workers` threads (the compiled reduced model releases the GIL, so the
+threads run in parallel with no pickling and no start method: the call works from a script
+without a main guard, a notebook, ``python -`` and ``python -c``), a local process pool for
+the Exudyn backend (not thread-safe), any `concurrent.futures`-style executor, or a
 `dask.distributed.Client` for scale-out. The executor and the progress bar live in a
 module-level registry for the duration of the run, never inside the `pygad.GA` object, which
 therefore stays picklable. Each evaluation is a deterministic simulation, so the result for a
-given seed does not depend on the executor.
+given seed does not depend on the executor. Ctrl-C and SIGTERM stop the workers of a pool the
+call created within about one design's simulation time and leave no process behind.
 
 The GA works on genes normalised to [0, 1] (u = (x - lo) / (hi - lo)), so that its operators
 (tournament selection, simulated binary crossover, polynomial mutation, all bounded) behave
@@ -19,14 +23,19 @@ the same whatever the units and widths of the design variables.
 
 from __future__ import annotations
 
+import contextlib
 import itertools
 import json
+import logging
 import math
 import multiprocessing
 import numbers
 import os
+import signal
+import threading
 import time
-from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures import ProcessPoolExecutor, ThreadPoolExecutor
+from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -35,10 +44,33 @@ import numpy as np
 
 from ._io import read_json_object
 from .mechanism import CONTINUOUS_FIELDS, SliderCrank
-from .simulate import BACKENDS, peak_base_force
+from .simulate import BACKENDS, peak_base_force, simulate
 
 __all__ = ["optimize_link_lengths", "OptimizationResult", "MASS_SCALINGS", "PAPER_TABLE3",
-           "design_mechanism"]
+           "design_mechanism", "connect_dask", "LOCAL_EXECUTORS", "SATURATION_RTOL",
+           "DASK_CONNECT_TIMEOUT", "DASK_WORKER_TIMEOUT"]
+
+#: the executors the call can create itself: "serial" (this process), "threads" (a pool of
+#: `workers` threads; the default for the compiled backends), "processes" (a pool of
+#: `workers` processes; the default for backend="exudyn", whose engine is not thread-safe)
+LOCAL_EXECUTORS = ("serial", "threads", "processes")
+
+#: backends evaluated in threads by default (their kernels release the GIL or are numpy)
+_THREAD_SAFE_BACKENDS = ("reduced", "ideal")
+
+#: saturation: the best value counts as unchanged over the last N generations when it moved
+#: by at most this fraction of its value
+SATURATION_RTOL = 1e-9
+
+#: seconds to wait for a dask scheduler to answer, and for its first worker to join
+DASK_CONNECT_TIMEOUT = 10.0
+DASK_WORKER_TIMEOUT = 60.0
+
+#: what to do when worker processes re-import a script without a main guard
+_MAIN_GUARD_ADVICE = (
+    "worker processes (backend='exudyn' or executor='processes') re-import the main script: "
+    "a script that calls optimize_link_lengths at its top level needs the call under "
+    "`if __name__ == '__main__':`, or pass executor='serial'")
 
 #: how link masses follow the link lengths: "fixed" (the paper's wording: only the lengths
 #: change) or "uniform" (uniform-density links: mass proportional to length)
@@ -123,10 +155,16 @@ class _Problem:
 
 
 def _peak_chunk(mechs: list[SliderCrank], revolution: int, backend: str,
-                options: dict) -> list[float]:
-    """Worker: peak |F12| of each mechanism (inf where the integration fails)."""
+                options: dict, stop: threading.Event | None = None) -> list[float]:
+    """Worker: peak |F12| of each mechanism (inf where the integration fails).
+
+    `stop` (thread pools only) is checked between designs: once set, the chunk returns
+    at once (its result is then discarded).
+    """
     out = []
     for mech in mechs:
+        if stop is not None and stop.is_set():
+            break
         try:
             out.append(float(peak_base_force(mech, revolution, backend, **options)))
         except RuntimeError:
@@ -140,12 +178,15 @@ def _peak_chunk_packed(args: tuple) -> list[float]:
 
 
 def _init_worker() -> None:
-    """Process-pool initializer: one thread per worker process.
+    """Process-pool initializer: one thread per worker process, SIGINT left to the parent.
 
     The numba kernels are serial (no parallel=True), so numba never starts its thread pool;
     these variables keep any OpenMP/BLAS library loaded later from starting one thread per
-    core in each of the worker processes.
+    core in each of the worker processes. Ctrl-C at a terminal reaches the whole process
+    group: the workers ignore it and the parent, which gets it too, terminates them (a
+    KeyboardInterrupt inside a worker would break the pool while it shuts down).
     """
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
     for name in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS",
                  "NUMBA_NUM_THREADS"):
         os.environ.setdefault(name, "1")
@@ -154,11 +195,13 @@ def _init_worker() -> None:
 # ----------------------------------------------------------------------------- executors
 
 class _Dispatcher:
-    """Uniform `map` over a process pool, a concurrent.futures executor or a dask Client."""
+    """Uniform `map` over a thread or process pool, a concurrent.futures executor or a dask
+    Client. `stop` (set on an interrupt) makes thread-pool chunks return between designs."""
 
     def __init__(self, executor, n_workers: int | None):
         self.executor = executor
         self.is_dask = _is_dask_client(executor)
+        self.stop = threading.Event() if isinstance(executor, ThreadPoolExecutor) else None
         if n_workers is None and executor is not None:
             if self.is_dask:
                 n_workers = max(1, sum(executor.nthreads().values()))
@@ -177,8 +220,16 @@ class _Dispatcher:
             futures = [self.executor.submit(_peak_chunk, c, *args, pure=False) for c in chunks]
             results = self.executor.gather(futures)
         elif hasattr(self.executor, "submit"):
-            futures = [self.executor.submit(_peak_chunk, c, *args) for c in chunks]
-            results = [f.result() for f in futures]
+            extra = () if self.stop is None else (self.stop,)
+            futures = [self.executor.submit(_peak_chunk, c, *args, *extra) for c in chunks]
+            try:
+                results = [f.result() for f in futures]
+            except BaseException:
+                for f in futures:
+                    f.cancel()
+                if self.stop is not None:
+                    self.stop.set()
+                raise
         else:  # map-only executors, e.g. multiprocessing.Pool: one iterable of tuples
             results = list(self.executor.map(_peak_chunk_packed, [(c, *args) for c in chunks]))
         return [p for chunk in results for p in chunk]
@@ -198,15 +249,102 @@ def _describe_executor(executor, workers) -> str:
 
 
 def local_process_pool(workers: int = 2) -> ProcessPoolExecutor:
-    """A process pool suited to the GA: forkserver (spawn where unavailable), one thread each.
+    """A process pool suited to the GA: forkserver (spawn where unavailable), one thread
+    each, SIGINT ignored in the workers (the parent stops them, see `_stop_pool`).
 
     Forkserver/spawn rather than fork because the parent may run threads (progress bar,
-    dask client) that fork would copy mid-operation.
+    dask client) that fork would copy mid-operation. Both re-import the main script in each
+    worker: a script that calls the GA at its top level needs a main guard (the call then
+    fails with that advice in one line); thread pools have no such requirement.
     """
     method = "forkserver" if "forkserver" in multiprocessing.get_all_start_methods() \
         else "spawn"
     return ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context(method),
                                initializer=_init_worker)
+
+
+def _stop_pool(pool, dispatcher: _Dispatcher, interrupted: bool) -> None:
+    """Shut a pool the call created down; after an interrupt, without waiting for queued
+    designs: threads stop between designs, processes are terminated and reaped."""
+    if not interrupted:
+        pool.shutdown(wait=True)
+        return
+    if dispatcher.stop is not None:
+        dispatcher.stop.set()
+    if isinstance(pool, ProcessPoolExecutor):
+        processes = list((getattr(pool, "_processes", None) or {}).values())
+        for proc in processes:
+            with contextlib.suppress(Exception):
+                proc.terminate()
+        pool.shutdown(wait=False, cancel_futures=True)
+        for proc in processes:
+            with contextlib.suppress(Exception):
+                proc.join(5.0)
+                if proc.is_alive():
+                    proc.kill()
+                    proc.join(1.0)
+    else:
+        pool.shutdown(wait=True, cancel_futures=True)
+
+
+class _Terminated(SystemExit):
+    """Raised in the main thread by SIGTERM during a run, so that the pool is cleaned up."""
+
+
+@contextlib.contextmanager
+def _sigterm_raises():
+    """For the duration of a run in the main thread, turn SIGTERM (whose default action
+    would kill this process at once and orphan pool workers) into `_Terminated` (exit code
+    143); a handler installed by the caller is left alone."""
+    if threading.current_thread() is not threading.main_thread() \
+            or signal.getsignal(signal.SIGTERM) is not signal.SIG_DFL:
+        yield
+        return
+
+    def handler(signum, frame):
+        raise _Terminated(128 + signum)
+
+    signal.signal(signal.SIGTERM, handler)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, signal.SIG_DFL)
+
+
+def connect_dask(address: str, timeout: float = DASK_CONNECT_TIMEOUT):
+    """A `dask.distributed.Client` connected to the scheduler at `address`, or TimeoutError
+    with one line (how long it waited, what to check) after `timeout` seconds."""
+    from dask.distributed import Client
+
+    timeout = _check_timeout("timeout", timeout)
+    try:
+        return Client(address, timeout=timeout)
+    except (OSError, TimeoutError) as exc:
+        reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        raise TimeoutError(
+            f"could not connect to the dask scheduler at {address!r} within {timeout:g} s "
+            f"({reason}); check that the scheduler runs (dask scheduler) and that the "
+            "address and port are reachable from here") from None
+
+
+def _wait_for_dask_workers(client, timeout: float) -> None:
+    """Wait up to `timeout` seconds for the first worker of a dask cluster (submitted tasks
+    would otherwise wait forever); TimeoutError with one line."""
+    try:
+        client.wait_for_workers(1, timeout=timeout)
+    except (OSError, TimeoutError) as exc:
+        address = getattr(client.scheduler, "address", "?")
+        raise TimeoutError(
+            f"no dask worker joined the scheduler at {address} within {timeout:g} s; start "
+            f"workers (dask worker {address}) or check that they can reach the scheduler "
+            "and import mbs_clearance") from exc
+
+
+def _check_timeout(name: str, value) -> float:
+    if not isinstance(value, numbers.Real) or isinstance(value, bool) \
+            or not math.isfinite(value) or value <= 0:
+        raise ValueError(f"{name} must be a finite number of seconds > 0; got {value!r}")
+    return float(value)
 
 
 #: run id -> (dispatcher, progress bar) while a run is active; kept out of the GA object
@@ -245,18 +383,36 @@ class _Objective:
 
 
 class _OnGeneration:
-    """pygad callback: advance the progress bar (looked up by run id) with the best so far."""
+    """pygad callback: advance the progress bar (looked up by run id) with the best so far,
+    and stop the run ("stop") once the best value has moved by at most `rtol` of its value
+    over the last `saturation` generations."""
 
-    def __init__(self, run_id: int):
+    def __init__(self, run_id: int, saturation: int | None, rtol: float):
         self.run_id = run_id
+        self.saturation = saturation
+        self.rtol = rtol
+        self.bests: list[float] = []    # best peak after each generation, N
 
-    def __call__(self, ga) -> None:
+    def __call__(self, ga):
+        best = float(-np.max(ga.last_generation_fitness))
+        if not self.bests:   # the initial population's best
+            self.bests.append(float(-np.max(ga.best_solutions_fitness[0])))
+        self.bests.append(best)
         active = _ACTIVE.get(self.run_id)
         if active is not None and active[1] is not None:
             bar = active[1]
-            bar.set_postfix_str(f"best max|F12| = {-np.max(ga.last_generation_fitness):.2f} N",
-                                refresh=False)
+            bar.set_postfix_str(f"best max|F12| = {best:.2f} N", refresh=False)
             bar.update(1)
+        if self.saturated():
+            return "stop"
+        return None
+
+    def saturated(self) -> bool:
+        n = self.saturation
+        if n is None or len(self.bests) <= n:
+            return False
+        old, new = self.bests[-1 - n], self.bests[-1]
+        return abs(old - new) <= self.rtol * abs(old)
 
 
 # ----------------------------------------------------------------------------- the result
@@ -289,6 +445,21 @@ class OptimizationResult:
         Generations run before a stopping criterion (limit or saturation) held.
     n_failed : int
         Designs whose integration failed (ranked last, peak = inf).
+    elapsed : float
+        Wall time of the call, s.
+    best_periodic : bool or None
+        ``simulate(best).stats["periodic"]``: whether the best design's motion settled into a
+        periodic regime (None where the model does not judge it).
+    best_periodicity_note : str or None
+        ``simulate(best).stats["periodicity_note"]``: why periodicity could not be judged or
+        was not found (None when the model gives none).
+    stop_reason : str
+        "generations" (the limit) or "saturation" (the best value moved by at most
+        ``settings["saturation_rtol"]`` of its value over ``settings["saturation"]``
+        generations).
+    refinement : dict
+        The local refinement's record (empty without one): method, objective calls, whether
+        it improved the GA's point, the bounds it ended on and the KKT check there.
     """
 
     best: SliderCrank
@@ -304,6 +475,10 @@ class OptimizationResult:
     generations_completed: int
     n_failed: int = 0
     elapsed: float = field(default=0.0)
+    best_periodic: bool | None = None
+    best_periodicity_note: str | None = None
+    stop_reason: str = "generations"
+    refinement: dict[str, Any] = field(default_factory=dict)
 
     @property
     def reduction_percent(self) -> float:
@@ -335,6 +510,10 @@ class OptimizationResult:
             "generations_completed": self.generations_completed,
             "n_failed": self.n_failed,
             "elapsed": self.elapsed,
+            "best_periodic": self.best_periodic,
+            "best_periodicity_note": self.best_periodicity_note,
+            "stop_reason": self.stop_reason,
+            "refinement": self.refinement,
         }
 
     def to_json(self, path: str | Path) -> Path:
@@ -364,7 +543,28 @@ class OptimizationResult:
             generations_completed=int(data["generations_completed"]),
             n_failed=int(data.get("n_failed", 0)),
             elapsed=float(data.get("elapsed", 0.0)),
+            best_periodic=_optional_bool(data.get("best_periodic")),
+            best_periodicity_note=data.get("best_periodicity_note"),
+            stop_reason=str(data.get("stop_reason", "generations")),
+            refinement=dict(data.get("refinement") or {}),
         )
+
+
+def _optional_bool(value) -> bool | None:
+    return None if value is None else bool(value)
+
+
+def _pygad_logger() -> logging.Logger:
+    """pygad's messages: its warnings on stderr; its ERROR records (it logs the traceback
+    of every exception before re-raising it) dropped, the exception itself propagates."""
+    logger = logging.getLogger("mbs_clearance.optimize.pygad")
+    if not logger.handlers:
+        handler = logging.StreamHandler()
+        handler.addFilter(lambda record: record.levelno < logging.ERROR)
+        logger.addHandler(handler)
+        logger.setLevel(logging.WARNING)
+        logger.propagate = False
+    return logger
 
 
 # ----------------------------------------------------------------------------- validation
@@ -432,8 +632,10 @@ def optimize_link_lengths(mech: SliderCrank | None = None,
                           seed: int | None = None, executor=None, population: int = 20,
                           generations: int = 30, saturation: int | None = 10,
                           genes: dict[str, tuple[float, float]] | None = None,
-                          mass_scaling: str = "fixed", refine: bool = True,
+                          mass_scaling: str = "fixed", refine: bool | str = True,
                           progress: bool = True, workers: int = 2,
+                          saturation_rtol: float = SATURATION_RTOL,
+                          dask_timeout: float = DASK_WORKER_TIMEOUT,
                           **backend_options) -> OptimizationResult:
     """Minimise max |F12| over crank revolution `revolution` with a GA (paper Eq. 18).
 
@@ -452,37 +654,54 @@ def optimize_link_lengths(mech: SliderCrank | None = None,
         Seed of the GA in [0, 2**32 - 1]; the same seed gives the same result on every
         executor. None draws one, which is recorded in ``settings["seed"]``.
     executor : optional
-        Where the designs of a generation are simulated: None (a local process pool of
-        `workers` processes, created and shut down here), "serial" (this process), any
-        `concurrent.futures`-style executor (``submit`` or ``map``), or a
-        `dask.distributed.Client`.
+        Where the designs of a generation are simulated: None (the default local pool of
+        `workers`: threads for "reduced" and "ideal", processes for "exudyn"), "serial"
+        (this process), "threads" or "processes" (a local pool of `workers`, created and
+        shut down here), any `concurrent.futures`-style executor (``submit`` or ``map``),
+        or a `dask.distributed.Client` (see `connect_dask`).
     population, generations : int
         Population size (>= 4) and maximum number of generations (>= 1).
     saturation : int or None
-        Stop when the best value has not changed for this many generations (pygad
-        ``"saturate_N"``); None disables it.
+        Stop when the best value has moved by at most `saturation_rtol` of its value over
+        the last `saturation` generations; None disables it.
     genes : dict, optional
         ``{field: (lower, upper)}`` of any continuous `SliderCrank` fields (SI units);
         replaces the two default genes.
     mass_scaling : {"fixed", "uniform"}
         "fixed": link masses stay as in `mech` (the paper's wording); "uniform": crank and
         coupler masses scale with their lengths (uniform density), see `design_mechanism`.
-    refine : bool
-        Polish the GA's best point with bounded Nelder-Mead on the same objective.
+    refine : bool or str
+        Polish the GA's best point with a bounded local search on the same objective:
+        True or "l-bfgs-b" (bounded quasi-Newton with the exact gradient of the peak, see
+        `REFINE_METHODS`), "nelder-mead" (bounded, derivative-free); False for none. The
+        result's `refinement` says whether it ended on a bound and whether the KKT
+        conditions hold there.
     progress : bool
         Show a tqdm progress bar with the best value so far.
     workers : int
-        Size of the local process pool when `executor` is None.
+        Size of the local pool (threads or processes) when `executor` is None, "threads" or
+        "processes"; 1 evaluates in this process.
+    saturation_rtol : float
+        Relative tolerance of the saturation test, in [0, 1) (default 1e-9).
+    dask_timeout : float
+        Seconds to wait for the first worker of a dask Client before giving up (> 0).
     **backend_options
         Passed to `peak_base_force` (e.g. ``rtol``).
 
     Returns
     -------
     OptimizationResult
+
+    Ctrl-C (KeyboardInterrupt) and SIGTERM stop a pool the call created within about one
+    design's simulation and leave no worker behind (SIGTERM then exits with code 143).
     """
     import pygad
     from tqdm.auto import tqdm
 
+    if getattr(multiprocessing.current_process(), "_inheriting", False):
+        # a forkserver/spawn worker re-importing a script without a main guard: stop it
+        # with one line (the parent reports the same advice) instead of a recursive GA
+        raise SystemExit(_MAIN_GUARD_ADVICE)
     t_start = time.perf_counter()
     mech = SliderCrank() if mech is None else mech
     if not isinstance(mech, SliderCrank):
@@ -497,6 +716,11 @@ def optimize_link_lengths(mech: SliderCrank | None = None,
     generations = _check_int("generations", generations, 1)
     if saturation is not None:
         saturation = _check_int("saturation", saturation, 1)
+    if not isinstance(saturation_rtol, numbers.Real) or isinstance(saturation_rtol, bool) \
+            or not 0.0 <= saturation_rtol < 1.0:
+        raise ValueError(f"saturation_rtol must be a number in [0, 1); got {saturation_rtol!r}")
+    dask_timeout = _check_timeout("dask_timeout", dask_timeout)
+    refine_method = _check_refine(refine)
     if seed is None:
         seed = int(np.random.SeedSequence().generate_state(1)[0])
     elif not _is_int(seed) or not 0 <= seed < 2**32:
@@ -507,11 +731,14 @@ def optimize_link_lengths(mech: SliderCrank | None = None,
         raise ValueError("pass either genes=... or crank_length/coupler_length bounds, "
                          "not both (put all bounds in genes)")
     genes = _check_genes(mech, genes, mass_scaling)
-    if isinstance(executor, str) and executor != "serial":
-        raise ValueError(f"executor must be None, 'serial', a concurrent.futures executor or "
-                         f"a dask.distributed.Client; got {executor!r}")
-    if executor is None:
+    if isinstance(executor, str) and executor not in LOCAL_EXECUTORS:
+        raise ValueError(f"executor must be None, one of {list(LOCAL_EXECUTORS)}, a "
+                         f"concurrent.futures executor or a dask.distributed.Client; "
+                         f"got {executor!r}")
+    if executor is None or executor in ("threads", "processes"):
         _check_int("workers", workers, 1)
+    if executor is None:
+        executor = "threads" if backend in _THREAD_SAFE_BACKENDS else "processes"
 
     names = tuple(genes)
     problem = _Problem(base=mech, names=names, lo=tuple(genes[n][0] for n in names),
@@ -529,48 +756,107 @@ def optimize_link_lengths(mech: SliderCrank | None = None,
     settings = {
         "revolution": revolution, "backend": backend, "backend_options": dict(backend_options),
         "seed": seed, "population": population, "generations": generations,
-        "saturation": saturation, "mass_scaling": mass_scaling, "refine": refine,
+        "saturation": saturation, "saturation_rtol": float(saturation_rtol),
+        "mass_scaling": mass_scaling, "refine": refine_method or False,
         "ga": ga_settings, "pygad_version": pygad.__version__,
     }
+    on_generation = _OnGeneration(run_id, saturation, float(saturation_rtol))
     ga = pygad.GA(
         num_generations=generations, fitness_func=objective, fitness_batch_size=population,
         sol_per_pop=population, num_genes=n_genes, gene_type=float,
         init_range_low=0.0, init_range_high=1.0,
         gene_space=[{"low": 0.0, "high": 1.0}] * n_genes,
-        on_generation=_OnGeneration(run_id), random_seed=seed,
-        stop_criteria=None if saturation is None else f"saturate_{saturation}",
+        on_generation=on_generation, random_seed=seed, logger=_pygad_logger(),
         **ga_settings)
 
     own_pool = None
-    if executor is None:
-        own_pool = executor = local_process_pool(workers) if workers > 1 else None
-    elif executor == "serial":
-        executor = None
+    if executor == "threads" and workers > 1:
+        own_pool = ThreadPoolExecutor(workers, thread_name_prefix="mbs-ga")
+    elif executor == "processes" and workers > 1:
+        own_pool = local_process_pool(workers)
+    executor = own_pool if isinstance(executor, str) else executor
     dispatcher = _Dispatcher(executor, workers if own_pool is not None else None)
     settings["executor"] = _describe_executor(executor, dispatcher.n_workers)
-    bar = tqdm(total=generations, desc="GA", unit="gen", disable=not progress, leave=True)
-    _ACTIVE[run_id] = (dispatcher, bar)
-    try:
-        ga.run()
-    finally:
-        _ACTIVE.pop(run_id, None)
-        bar.close()
-        if own_pool is not None:
-            own_pool.shutdown(wait=True)
+    interrupted = True
+    with _sigterm_raises():
+        try:
+            if dispatcher.is_dask:
+                _wait_for_dask_workers(executor, dask_timeout)
+            bar = tqdm(total=generations, desc="GA", unit="gen", disable=not progress,
+                       leave=True)
+            _ACTIVE[run_id] = (dispatcher, bar)
+            try:
+                ga.run()
+            finally:
+                _ACTIVE.pop(run_id, None)
+                bar.close()
+            interrupted = False
+        except BrokenProcessPool as exc:
+            raise RuntimeError(f"the GA's worker processes stopped ({exc}); "
+                               f"{_MAIN_GUARD_ADVICE}") from None
+        finally:
+            if own_pool is not None:
+                _stop_pool(own_pool, dispatcher, interrupted)
 
-    history = -np.asarray(ga.best_solutions_fitness, dtype=float)
-    u_ga, fit_ga, _ = ga.best_solution(pop_fitness=ga.last_generation_fitness)
-    ga_peak = float(-fit_ga)
-    u_best, best_peak = np.asarray(u_ga, dtype=float), ga_peak
-    if refine:
-        u_best, best_peak = _refine(objective, u_best, best_peak, progress)
+        history = -np.asarray(ga.best_solutions_fitness, dtype=float)
+        u_ga, fit_ga, _ = ga.best_solution(pop_fitness=ga.last_generation_fitness)
+        ga_peak = float(-fit_ga)
+        u_best, best_peak = np.asarray(u_ga, dtype=float), ga_peak
+        refinement: dict[str, Any] = {}
+        if refine_method:
+            u_best, best_peak, refinement = _refine(objective, u_best, best_peak, progress,
+                                                    refine_method)
+        best = problem.mechanism(u_best)
+        periodic, note = _periodicity(best, problem)
     n_failed = sum(1 for p in objective.cache.values() if not math.isfinite(p))
     return OptimizationResult(
-        best=problem.mechanism(u_best), best_peak_force=float(best_peak), original=mech,
+        best=best, best_peak_force=float(best_peak), original=mech,
         original_peak_force=original_peak, history=history, genes=genes, settings=settings,
         n_evaluations=len(objective.cache) + 1, ga_best=problem.mechanism(u_ga),
         ga_best_peak_force=ga_peak, generations_completed=int(ga.generations_completed),
-        n_failed=n_failed, elapsed=time.perf_counter() - t_start)
+        n_failed=n_failed, elapsed=time.perf_counter() - t_start,
+        best_periodic=periodic, best_periodicity_note=note,
+        stop_reason="saturation" if on_generation.saturated() else "generations",
+        refinement=refinement)
+
+
+def _periodicity(best: SliderCrank, problem: _Problem) -> tuple[bool | None, str | None]:
+    """Simulate the best design once; its periodicity flag and note from the stats (None
+    where the backend does not report them or the integration fails)."""
+    try:
+        traj = simulate(best, problem.revolution, problem.backend, **problem.options)
+    except RuntimeError as exc:
+        return None, f"the best design could not be simulated again: {exc}"
+    periodic = traj.stats.get("periodic")
+    note = traj.stats.get("periodicity_note")
+    return (None if periodic is None else bool(periodic)), \
+        (None if note is None else str(note))
+
+
+#: refinement methods (`refine=`); True selects the first: "l-bfgs-b" (scipy's bounded
+#: quasi-Newton method with the exact gradient of the peak, `objective.peak_gradient`: DDM
+#: for the reduced model, central differences for the other backends) or "nelder-mead"
+REFINE_METHODS = ("l-bfgs-b", "nelder-mead")
+
+#: L-BFGS-B settings: at most this many objective (value and gradient) calls; stop when the
+#: peak changes by less than `ftol` relative (the default integration accuracy is ~1e-6) or
+#: the projected gradient in the unit box is below `gtol_rel` of the peak
+_LBFGSB = {"maxfun": 60, "ftol": 1e-10, "gtol_rel": 1e-7}
+
+#: KKT check at the refined point, gradient in the unit box (N per box width): at a lower
+#: bound dF/du >= -tol, at an upper bound <= tol, inside |dF/du| <= tol, tol = this * peak
+KKT_RTOL = 1e-4
+
+
+def _check_refine(refine) -> str | None:
+    if refine is False or refine is None:
+        return None
+    if refine is True:
+        return REFINE_METHODS[0]
+    if isinstance(refine, str) and refine in REFINE_METHODS:
+        return refine
+    raise ValueError(f"refine must be True, False or one of {list(REFINE_METHODS)}; "
+                     f"got {refine!r}")
 
 
 #: local refinement: Nelder-Mead with bounds (scipy clips to the box, so it lands exactly on
@@ -581,10 +867,118 @@ _REFINE_STEP = 0.05
 _REFINE_OPTIONS = {"xatol": 1e-6, "fatol_rel": 1e-6, "maxfev": 400}
 
 
-def _refine(objective: _Objective, u0: np.ndarray, f0: float, progress: bool):
-    """Bounded Nelder-Mead from the GA's best point; returns the better of (start, refined)."""
-    from scipy.optimize import minimize
+def _refine(objective: _Objective, u0: np.ndarray, f0: float, progress: bool, method: str):
+    """Bounded local search from the GA's best point; returns the better of (start, refined)
+    and the refinement's record (see `OptimizationResult.refinement`)."""
     from tqdm.auto import tqdm
+
+    calls = [0]
+    with tqdm(desc="refine", unit="eval", disable=not progress, leave=True) as bar:
+        if method == "l-bfgs-b":
+            def fun_grad(u):
+                calls[0] += 1
+                bar.update(1)
+                peak, grad, _ = _peak_and_gradient(objective.problem, np.clip(u, 0.0, 1.0))
+                return peak, grad
+
+            u, record = _lbfgsb(fun_grad, u0, f0)
+        else:
+            def fun(u):
+                calls[0] += 1
+                bar.update(1)
+                return float(objective.peaks(np.clip(u, 0.0, 1.0), serial=True)[0])
+
+            u, record = _nelder_mead(fun, u0, f0)
+        f = float(objective.peaks(u, serial=True)[0])
+        bar.set_postfix_str(f"best max|F12| = {min(f, f0):.2f} N", refresh=True)
+    improved = f < f0
+    u_out, f_out = (u, f) if improved else (u0, f0)
+    record.update(method=method, objective_calls=calls[0], improved=bool(improved),
+                  start_peak_force=float(f0), end_peak_force=float(f_out),
+                  **_bounds_record(objective.problem, u_out))
+    if method == "l-bfgs-b":
+        record.update(_kkt_record(objective.problem, u_out, record["on_bounds"]))
+    return u_out, f_out, record
+
+
+def _gradient_parameters(problem: _Problem) -> list[str]:
+    """Fields whose derivatives the genes' gradient needs: the genes and, with uniform mass
+    scaling, the masses and explicit inertias that follow the lengths."""
+    params = list(problem.names)
+    if problem.mass_scaling == "uniform":
+        for length, mass, inertia in _SCALED_LINKS:
+            if length in params:
+                params.append(mass)
+                if getattr(problem.base, inertia) is not None:
+                    params.append(inertia)
+    return params
+
+
+#: (length, mass, inertia) of the links whose mass follows the length (uniform scaling)
+_SCALED_LINKS = (("crank_length", "crank_mass", "crank_inertia"),
+                 ("coupler_length", "coupler_mass", "coupler_inertia"))
+
+
+def _peak_and_gradient(problem: _Problem, u: np.ndarray):
+    """Peak |F12| (N) at genes `u` and its gradient in the unit box (N per box width):
+    `objective.peak_gradient` (DDM for the reduced model, central differences otherwise),
+    chained through the mass scaling: with uniform density m = m0 L / L0 and an explicit
+    J = J0 (L / L0)^3, so d/dL = dF/dL + (m/L) dF/dm + 3 (J/L) dF/dJ; then times (hi - lo)."""
+    from .objective import peak_gradient
+
+    mech = problem.mechanism(u)
+    params = _gradient_parameters(problem)
+    options = dict(problem.options)
+    if problem.backend == "reduced":
+        kwargs = {"method": "ddm", "rtol": options.get("rtol")}
+    else:
+        kwargs = {"method": "fd", **options}
+    pg = peak_gradient(mech, parameters=params, revolution=problem.revolution,
+                       backend=problem.backend, **kwargs)
+    g = dict(zip(params, np.asarray(pg.gradient, dtype=float)))
+    grad = []
+    for name in problem.names:
+        d = g[name]
+        for length, mass, inertia in _SCALED_LINKS:
+            if name == length and mass in g:
+                L = getattr(mech, length)
+                d += getattr(mech, mass) / L * g[mass]
+                if inertia in g:
+                    d += 3.0 * getattr(mech, inertia) / L * g[inertia]
+        grad.append(d)
+    width = np.asarray(problem.hi) - np.asarray(problem.lo)
+    return float(pg.peak), np.asarray(grad) * width, pg
+
+
+def _lbfgsb(fun_grad, u0: np.ndarray, f0: float):
+    """scipy L-BFGS-B on the unit box with the exact gradient."""
+    from scipy.optimize import minimize
+
+    n = len(u0)
+    opts = {"maxfun": _LBFGSB["maxfun"], "ftol": _LBFGSB["ftol"],
+            "gtol": _LBFGSB["gtol_rel"] * abs(f0)}
+    res = minimize(fun_grad, np.asarray(u0, dtype=float), jac=True, method="L-BFGS-B",
+                   bounds=[(0.0, 1.0)] * n, options=opts)
+    return np.clip(res.x, 0.0, 1.0), {"message": str(res.message)}
+
+
+def _kkt_record(problem: _Problem, u: np.ndarray, on_bounds: dict) -> dict[str, Any]:
+    """Gradient at the final point and the KKT check: at a lower bound dF/du >= -tol, at an
+    upper bound <= tol, inside |dF/du| <= tol (tol = KKT_RTOL * peak, unit box)."""
+    peak, grad, pg = _peak_and_gradient(problem, u)
+    tol = KKT_RTOL * abs(peak)
+    ok = []
+    for name, g in zip(problem.names, grad):
+        side = on_bounds.get(name)
+        ok.append(g >= -tol if side == "lower" else g <= tol if side == "upper"
+                  else abs(g) <= tol)
+    return {"gradient": {n: float(g) for n, g in zip(problem.names, grad)},
+            "kkt": bool(all(ok)), "kkt_tol": float(tol), "kink": bool(pg.kink)}
+
+
+def _nelder_mead(fun, u0: np.ndarray, f0: float):
+    """Bounded Nelder-Mead from a simplex spanning `_REFINE_STEP` of the box."""
+    from scipy.optimize import minimize
 
     n = len(u0)
     simplex = [u0]
@@ -594,13 +988,16 @@ def _refine(objective: _Objective, u0: np.ndarray, f0: float, progress: bool):
         simplex.append(u0 + step)
     opts = {"xatol": _REFINE_OPTIONS["xatol"], "maxfev": _REFINE_OPTIONS["maxfev"],
             "fatol": _REFINE_OPTIONS["fatol_rel"] * abs(f0), "initial_simplex": simplex}
-    with tqdm(desc="refine", unit="eval", disable=not progress, leave=True) as bar:
-        def fun(u):
-            bar.update(1)
-            return float(objective.peaks(np.clip(u, 0.0, 1.0), serial=True)[0])
+    res = minimize(fun, u0, method="Nelder-Mead", bounds=[(0.0, 1.0)] * n, options=opts)
+    return np.clip(res.x, 0.0, 1.0), {"message": str(res.message)}
 
-        res = minimize(fun, u0, method="Nelder-Mead", bounds=[(0.0, 1.0)] * n, options=opts)
-        bar.set_postfix_str(f"best max|F12| = {min(res.fun, f0):.2f} N", refresh=True)
-    u = np.clip(res.x, 0.0, 1.0)
-    f = float(objective.peaks(u, serial=True)[0])
-    return (u, f) if f < f0 else (u0, f0)
+
+def _bounds_record(problem: _Problem, u: np.ndarray) -> dict[str, Any]:
+    """The genes of `u` that sit on a bound: {name: "lower" | "upper"}."""
+    on = {}
+    for name, ui in zip(problem.names, np.asarray(u, dtype=float)):
+        if ui <= 0.0:
+            on[name] = "lower"
+        elif ui >= 1.0:
+            on[name] = "upper"
+    return {"on_bounds": on}

@@ -113,15 +113,29 @@ def test_ga_stays_picklable_with_an_executor(monkeypatch):
     assert res.settings["executor"] == "ThreadPoolExecutor(2 workers)"
 
 
-def test_saturation_stops_early():
-    # the ideal-joint objective is smooth and monotone here: the best design saturates
+@pytest.mark.parametrize("backend", ["ideal", "reduced"])
+def test_saturation_stops_early(backend):
+    # the best design saturates; the stop is the relative test over the last 3 generations
     res = optimize_link_lengths(PAPER, seed=2, population=6, generations=200, saturation=3,
-                                backend="ideal", refine=False, progress=False,
+                                backend=backend, refine=False, progress=False,
                                 executor="serial")
-    assert res.generations_completed < 200
-    # stopped exactly when the best had not changed for 3 generations
-    assert res.history[-1] == res.history[-4]
-    assert res.history[-4] < res.history[-5] or len(res.history) == 4
+    assert res.generations_completed < 200 and res.stop_reason == "saturation"
+    assert len(res.history) == res.generations_completed + 1
+    rtol = res.settings["saturation_rtol"]
+    assert rtol == 1e-9
+    # stopped when the best had moved by at most rtol over 3 generations, not before
+    h = res.history
+    assert abs(h[-1] - h[-4]) <= rtol * h[-4]
+    moved = [abs(h[i] - h[i - 3]) > rtol * h[i - 3] for i in range(3, len(h) - 1)]
+    assert all(moved)
+    # without saturation the same seed runs to the limit
+    full = optimize_link_lengths(PAPER, seed=2, population=6,
+                                 generations=res.generations_completed + 2, saturation=None,
+                                 backend=backend, refine=False, progress=False,
+                                 executor="serial")
+    assert full.generations_completed == res.generations_completed + 2
+    assert full.stop_reason == "generations"
+    np.testing.assert_array_equal(full.history[:len(h)], h)
 
 
 def test_progress_bar_shows_best_value(capsys):
@@ -137,8 +151,8 @@ def test_progress_bar_shows_best_value(capsys):
 def test_dask_cluster_gives_the_same_result_as_local_processes():
     distributed = pytest.importorskip("dask.distributed")
     kw = dict(seed=7, population=8, generations=4, refine=False, progress=False)
-    local = optimize_link_lengths(PAPER, **kw)          # default: local process pool
-    assert local.settings["executor"] == "ProcessPoolExecutor(2 workers)"
+    local = optimize_link_lengths(PAPER, **kw)          # default: local thread pool
+    assert local.settings["executor"] == "ThreadPoolExecutor(2 workers)"
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
                                   dashboard_address=None) as cluster, \
             distributed.Client(cluster) as client:
@@ -172,7 +186,10 @@ def test_dask_cluster_gives_the_same_result_as_local_processes():
     (dict(saturation=0), "saturation must be an integer >= 1"),
     (dict(seed=-1), "seed must be None or an integer"),
     (dict(backend="abaqus"), "backend must be one of"),
-    (dict(executor="dask"), "executor must be None, 'serial'"),
+    (dict(executor="dask"), "executor must be None, one of ['serial', 'threads', 'processes']"),
+    (dict(saturation_rtol=-1e-9), "saturation_rtol must be a number in [0, 1)"),
+    (dict(dask_timeout=0), "dask_timeout must be a finite number of seconds > 0"),
+    (dict(refine="bfgs"), "refine must be True, False or one of"),
     (dict(workers=0), "workers must be an integer >= 1"),
 ])
 def test_bad_input_raises_value_error(kwargs, message):
@@ -259,3 +276,370 @@ def test_cli_scheduler_option_runs_on_a_dask_cluster(tmp_path, capsys):
     assert remote.settings["executor"].startswith("dask.distributed.Client(")
     assert remote.best == local.best
     np.testing.assert_array_equal(remote.history, local.history)
+
+
+# ------------------------------------------------------------------ parallel execution
+
+def _main_thread_progress_during(call) -> int:
+    """Loop iterations the main thread makes while `call(mark)` runs in another thread and
+    brackets its compiled call with mark() before and after (switch interval 10 us: with the
+    GIL held, the main thread gets at most a few iterations at the brackets)."""
+    import sys
+    import threading
+
+    counter, marks = [0], []
+    worker = threading.Thread(target=call, args=(lambda: marks.append(counter[0]),))
+    old = sys.getswitchinterval()
+    sys.setswitchinterval(1e-5)
+    try:
+        worker.start()
+        while worker.is_alive():
+            counter[0] += 1
+        worker.join()
+    finally:
+        sys.setswitchinterval(old)
+    assert len(marks) % 2 == 0 and marks
+    return min(b - a for a, b in zip(marks[::2], marks[1::2]))
+
+
+def test_threads_release_the_gil_inside_the_compiled_model(monkeypatch):
+    """While a worker thread is inside the compiled reduced model, the main thread keeps
+    running Python: the kernel releases the GIL (nogil=True), so a thread pool runs designs
+    in parallel. Counted, not timed; the same count for a compiled loop without nogil is the
+    control that shows the count can tell the two apart."""
+    import math
+
+    import numba
+
+    from mbs_clearance import reduced
+
+    def spin(n):
+        s = 0.0
+        for i in range(n):
+            s += math.sin(i * 1e-3)
+        return s
+
+    held, released = numba.njit(spin), numba.njit(nogil=True)(spin)
+    held(10), released(10)                          # compile outside the measurement
+
+    def bracket(f, *args):
+        def call(mark):
+            for _ in range(3):
+                mark()
+                f(*args)
+                mark()
+        return call
+
+    n_held = _main_thread_progress_during(bracket(held, 10_000_000))
+    n_released = _main_thread_progress_during(bracket(released, 10_000_000))
+    assert n_released > 5 * n_held             # the control separates held and released
+
+    mech = SliderCrank()
+    peak_base_force(mech, 1)                    # compiled / loaded from the cache
+    kernel, state = reduced.integrate_plain, {}
+
+    def bracketed(*args):
+        state["mark"]()
+        try:
+            return kernel(*args)
+        finally:
+            state["mark"]()
+
+    monkeypatch.setattr(reduced, "integrate_plain", bracketed)
+
+    def call(mark):
+        state["mark"] = mark
+        for _ in range(3):
+            peak_base_force(mech, 40)
+
+    n_kernel = _main_thread_progress_during(call)
+    assert n_kernel > 5 * n_held
+
+
+# ------------------------------------------------------------------ from any script
+
+ROOT = __import__("pathlib").Path(__file__).resolve().parents[2]
+SCRIPT_RUN = dict(seed=5, population=6, generations=2, refine=False, progress=False)
+GA_CALL = ("from mbs_clearance import SliderCrank\n"
+           "from mbs_clearance.optimize import optimize_link_lengths\n"
+           "r = optimize_link_lengths(SliderCrank(), seed=5, population=6, generations=2,\n"
+           "                          refine=False, progress=False{extra})\n"
+           "print('BEST', r.best.crank_length.hex(), r.best.coupler_length.hex(),\n"
+           "      r.best_peak_force.hex(), r.settings['executor'])\n")
+
+
+def _python(args, *, stdin=None, timeout=600, cwd=None):
+    import os
+    import subprocess
+    import sys
+
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    return subprocess.run([sys.executable, *args], input=stdin, capture_output=True,
+                          text=True, timeout=timeout, env=env, cwd=cwd)
+
+
+def _best_line(res):
+    line = [ln for ln in res.stdout.splitlines() if ln.startswith("BEST")]
+    assert res.returncode == 0 and line, res.stderr[-2000:]
+    return line[0].split(maxsplit=4)
+
+
+@pytest.mark.parametrize("how", ["script", "stdin", "dash_c"])
+def test_ga_runs_at_the_top_level_of_any_script(how, tmp_path):
+    """The README's top-level call, with no main guard, from a script file, `python -` and
+    `python -c`, on the default executor (2 threads): the same best design as this
+    process's serial run with the same seed."""
+    ref = optimize_link_lengths(PAPER, executor="serial", **SCRIPT_RUN)
+    code = GA_CALL.format(extra="")
+    if how == "script":
+        path = tmp_path / "plain.py"
+        path.write_text(code)
+        res = _python([str(path)], cwd=tmp_path)
+    elif how == "stdin":
+        res = _python(["-"], stdin=code, cwd=tmp_path)
+    else:
+        res = _python(["-c", code], cwd=tmp_path)
+    _, l2, l3, peak, executor = _best_line(res)
+    assert executor == "ThreadPoolExecutor(2 workers)"
+    assert (float.fromhex(l2), float.fromhex(l3), float.fromhex(peak)) == (
+        ref.best.crank_length, ref.best.coupler_length, ref.best_peak_force)
+
+
+def test_process_pool_without_main_guard_fails_with_one_clear_line(tmp_path):
+    """Process pools (backend='exudyn' by default, or executor='processes') re-import the
+    script: without a main guard the call fails fast with what to do, no recursion, no
+    hang; with the guard the same script gives the serial run's design."""
+    path = tmp_path / "noguard.py"
+    path.write_text(GA_CALL.format(extra=", executor='processes'"))
+    res = _python([str(path)], cwd=tmp_path, timeout=300)
+    assert res.returncode != 0
+    last = res.stderr.strip().splitlines()[-1]
+    assert last.startswith("RuntimeError: the GA's worker processes stopped")
+    assert "if __name__ == '__main__':" in last and "executor='serial'" in last
+    assert "BEST" not in res.stdout
+    guarded = tmp_path / "guarded.py"
+    body = GA_CALL.format(extra=", executor='processes'").replace("\n", "\n    ")
+    guarded.write_text("if __name__ == '__main__':\n    " + body)
+    _, l2, l3, peak, executor = _best_line(_python([str(guarded)], cwd=tmp_path))
+    assert executor == "ProcessPoolExecutor(2 workers)"
+    ref = optimize_link_lengths(PAPER, executor="serial", **SCRIPT_RUN)
+    assert (float.fromhex(l2), float.fromhex(l3), float.fromhex(peak)) == (
+        ref.best.crank_length, ref.best.coupler_length, ref.best_peak_force)
+
+
+# ------------------------------------------------------------------ interrupting
+
+LONG_GA = ("import sys\n"
+           "from mbs_clearance import SliderCrank\n"
+           "from mbs_clearance.optimize import optimize_link_lengths\n"
+           "def main():\n"
+           "    optimize_link_lengths(SliderCrank(), seed=1, population=8, generations=10**6,\n"
+           "                          saturation=None, refine=False, progress=True,\n"
+           "                          executor={executor!r}, workers=2)\n"
+           "if __name__ == '__main__':\n"
+           "    main()\n")
+
+
+def _session(sid: int) -> list[int]:
+    """Processes of session `sid` still alive (from /proc: no psutil needed)."""
+    import os
+
+    alive = []
+    for entry in os.listdir("/proc"):
+        if entry.isdigit():
+            try:
+                with open(f"/proc/{entry}/stat") as f:
+                    fields = f.read().rsplit(")", 1)[1].split()
+            except (OSError, IndexError):
+                continue
+            if fields[0] != "Z" and int(fields[3]) == sid:
+                alive.append(int(entry))
+    return alive
+
+
+def _interrupt_run(tmp_path, executor, sig, to_group, as_script):
+    """Start a long GA in its own session, signal it after 3 generations; returns
+    (exit code, seconds to exit, processes of the session before the signal, processes
+    left 5 s after the exit)."""
+    import os
+    import subprocess
+    import sys
+    import time
+
+    code = LONG_GA.format(executor=executor)
+    if as_script:
+        path = tmp_path / "long.py"
+        path.write_text(code)
+        args = [str(path)]
+    else:
+        args = ["-c", code]
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    proc = subprocess.Popen([sys.executable, *args], stdout=subprocess.DEVNULL,
+                            stderr=subprocess.PIPE, env=env, cwd=tmp_path,
+                            start_new_session=True)
+    try:
+        os.set_blocking(proc.stderr.fileno(), False)
+        seen, t0 = b"", time.monotonic()
+        while b" 3/" not in seen and proc.poll() is None and time.monotonic() - t0 < 300:
+            time.sleep(0.05)
+            seen += proc.stderr.read() or b""
+        assert proc.poll() is None, seen.decode()[-2000:]
+        before = _session(proc.pid)
+        t_sig = time.monotonic()
+        (os.killpg if to_group else os.kill)(proc.pid, sig)
+        rc = proc.wait(30)
+        t_exit = time.monotonic() - t_sig
+        left = _session(proc.pid)
+        t1 = time.monotonic()
+        while left and time.monotonic() - t1 < 5:
+            time.sleep(0.1)
+            left = _session(proc.pid)
+        return rc, t_exit, before, left
+    finally:
+        for pid in _session(proc.pid):
+            os.kill(pid, 9)
+        proc.stderr.close()
+
+
+@pytest.mark.parametrize("executor,sig,to_group,as_script", [
+    ("processes", "SIGTERM", False, True),
+    ("threads", "SIGINT", True, False),
+    pytest.param("processes", "SIGINT", True, False, marks=pytest.mark.slow),
+    pytest.param("processes", "SIGINT", False, True, marks=pytest.mark.slow),
+    pytest.param("threads", "SIGTERM", False, True, marks=pytest.mark.slow),
+])
+def test_signal_stops_the_run_and_leaves_no_process(tmp_path, executor, sig, to_group,
+                                                    as_script):
+    """SIGTERM to the main process, or SIGINT (Ctrl-C: to the whole process group, or to
+    the main process alone), during a GA on a pool: the run exits within seconds and no
+    process of its session (forkserver, workers, resource tracker) is left."""
+    import signal
+
+    signum = getattr(signal, sig)
+    rc, t_exit, before, left = _interrupt_run(tmp_path, executor, signum, to_group,
+                                              as_script)
+    if executor == "processes":
+        assert len(before) >= 3        # main, forkserver and workers were running
+    assert rc == (143 if signum == signal.SIGTERM else -signal.SIGINT)
+    assert t_exit < 10
+    assert left == []
+
+
+# ------------------------------------------------------------------ dask failures
+
+def test_dask_cluster_without_workers_fails_in_bounded_time():
+    distributed = pytest.importorskip("dask.distributed")
+    import time
+
+    with distributed.LocalCluster(n_workers=0, processes=False,
+                                  dashboard_address=":0") as cluster, \
+            distributed.Client(cluster) as client:
+        t0 = time.monotonic()
+        with pytest.raises(TimeoutError) as exc:
+            optimize_link_lengths(PAPER, executor=client, dask_timeout=2.0, **SCRIPT_RUN)
+        waited = time.monotonic() - t0
+    message = str(exc.value)
+    assert waited < 30
+    assert "\n" not in message and exc.value.__suppress_context__
+    assert "no dask worker joined the scheduler" in message and "within 2 s" in message
+    assert "start workers (dask worker inproc://" in message
+
+
+def test_unreachable_dask_scheduler_fails_with_one_line(capsys):
+    pytest.importorskip("dask.distributed")
+    import socket
+    import time
+
+    from mbs_clearance.cli import main
+    from mbs_clearance.optimize import connect_dask
+
+    with socket.socket() as s:                 # a port nobody listens on
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    address = f"tcp://127.0.0.1:{port}"
+    t0 = time.monotonic()
+    with pytest.raises(TimeoutError) as exc:
+        connect_dask(address, timeout=1.0)
+    assert time.monotonic() - t0 < 30
+    message = str(exc.value)
+    assert "\n" not in message and exc.value.__cause__ is None
+    assert message.startswith(f"could not connect to the dask scheduler at {address!r} "
+                              "within 1 s")
+    assert "check that the scheduler runs" in message
+    with pytest.raises(ValueError, match="timeout must be a finite number of seconds > 0"):
+        connect_dask(address, timeout=0)
+    # the CLI goes through the same connection (default timeout)
+    with pytest.raises(TimeoutError, match="could not connect to the dask scheduler"):
+        main(["optimize", "--scheduler", address, "--no-progress", "--population", "4",
+              "--generations", "1"])
+
+
+# ------------------------------------------------------------------ the best design's regime
+
+def test_best_design_periodicity_is_reported_and_saved(tmp_path):
+    from mbs_clearance import simulate
+
+    res = optimize_link_lengths(PAPER, executor="serial", **SCRIPT_RUN)
+    stats = simulate(res.best, 4).stats
+    assert res.best_periodic == stats.get("periodic")
+    assert res.best_periodicity_note == stats.get("periodicity_note")
+    back = OptimizationResult.from_json(res.to_json(tmp_path / "r.json"))
+    assert back.best_periodic == res.best_periodic
+    assert back.best_periodicity_note == res.best_periodicity_note
+    assert back.stop_reason == res.stop_reason == "generations"
+
+
+# ------------------------------------------------------------------ gradient refinement
+
+def test_gene_gradient_matches_central_differences_under_uniform_scaling():
+    """The unit-box gradient the refinement uses (DDM, chained through the uniform mass
+    scaling, explicit crank inertia) against central differences of the peak of the
+    rebuilt design, at tight rtol."""
+    from mbs_clearance.optimize import _peak_and_gradient, _Problem
+
+    base = SliderCrank(crank_inertia=1e-4)
+    problem = _Problem(base=base, names=("crank_length", "coupler_length"), lo=L2_BOX[:1] +
+                       L3_BOX[:1], hi=L2_BOX[1:] + L3_BOX[1:], mass_scaling="uniform",
+                       revolution=4, backend="reduced", options={"rtol": 1e-11})
+    u = np.array([0.3, 0.6])
+    _, grad, pg = _peak_and_gradient(problem, u)
+    assert not pg.kink
+    h = 1e-4
+    for i in range(2):
+        e = np.zeros(2)
+        e[i] = h
+        fp = peak_base_force(problem.mechanism(u + e), 4, rtol=1e-11)
+        fm = peak_base_force(problem.mechanism(u - e), 4, rtol=1e-11)
+        assert grad[i] == pytest.approx((fp - fm) / (2 * h), rel=2e-3)
+
+
+@pytest.mark.parametrize("mass_scaling,build,corner", [
+    ("fixed", fixed_masses, (0.04, 0.14)), ("uniform", uniform_density, (0.04, 0.10))])
+def test_gradient_refinement_reaches_the_grid_minimum_with_fewer_calls(mass_scaling, build,
+                                                                       corner):
+    """L-BFGS-B from the GA's best point ends at the minimum of a brute-force grid of the
+    box at tight rtol (a corner: both genes on a bound, KKT signs hold) with fewer
+    objective calls than Nelder-Mead from the same point."""
+    L2, L3 = np.linspace(*L2_BOX, 5), np.linspace(*L3_BOX, 5)
+    grid = np.array([[peak_base_force(build(a, b), 4, rtol=1e-10) for b in L3] for a in L2])
+    i, j = np.unravel_index(grid.argmin(), grid.shape)
+    assert (L2[i], L3[j]) == corner
+    kw = dict(seed=0, population=8, generations=3, progress=False, executor="serial",
+              mass_scaling=mass_scaling)
+    grad = optimize_link_lengths(PAPER, refine=True, **kw)
+    nm = optimize_link_lengths(PAPER, refine="nelder-mead", **kw)
+    assert grad.ga_best == nm.ga_best and grad.ga_best != grad.best
+    assert (grad.best.crank_length, grad.best.coupler_length) == corner
+    rec = grad.refinement
+    assert rec["method"] == "l-bfgs-b" and rec["improved"] and rec["kkt"]
+    sides = {"crank_length": "lower",
+             "coupler_length": "upper" if corner[1] == L3_BOX[1] else "lower"}
+    assert rec["on_bounds"] == sides
+    for name, side in sides.items():      # the gradient points out of the box
+        assert (rec["gradient"][name] > 0) == (side == "lower")
+    # the value is the default-rtol objective at the corner: within the default accuracy
+    # target (1e-5 relative, docs/accuracy) of the tight-rtol grid minimum
+    assert grad.best_peak_force == pytest.approx(peak_base_force(build(*corner), 4), rel=1e-9)
+    assert grad.best_peak_force == pytest.approx(grid.min(), rel=1e-5)
+    assert rec["objective_calls"] < nm.refinement["objective_calls"]
+    assert grad.best_peak_force <= nm.best_peak_force * (1 + 1e-9)

@@ -1,11 +1,17 @@
 """Wall time of a GA run (population x generations) on different executors, in one run.
 
 Paper case, reduced model, GA only (no refinement, no saturation stop, so every run does the
-same generations and simulates the same designs). Executors: this process (serial), a local
-process pool of 2 workers created by the run itself (start-up included) and one started
-beforehand (warm), and a dask LocalCluster of 2 single-threaded worker processes (started
-and warmed beforehand; cluster start-up reported separately). Times are medians over repeats.
-Every run must find the same optimum (same seed); the script checks it.
+same generations and simulates the same designs). Executors: this process (serial), the
+default pool of 2 threads (the compiled model releases the GIL), a local process pool of 2
+workers created by the run itself (start-up included) and one started beforehand (warm), and
+a dask LocalCluster of 2 single-threaded worker processes (started and warmed beforehand;
+cluster start-up reported separately). Times are medians over repeats. Every run must find
+the same optimum (same seed); the script checks it.
+
+Then the issue-15 target: the default call `optimize_link_lengths(seed=...)` (20 x 30, 2
+threads, saturation 10, gradient refinement), median wall time against 10 s, with the
+refinement's objective calls; and the thread capacity of the machine (the same simulations in
+one thread and split over two).
 
     python -m validation.benchmarks.ga_speed [--population 20] [--generations 30] [--repeats 3]
 """
@@ -68,7 +74,8 @@ def main(argv=None):
         print(f"  {label:40s} {t:7.2f} s  best {res.best_peak_force:.4f} N", flush=True)
 
     run("serial (this process)", "serial", "")
-    run("2 local processes, pool started by the run", None, "includes pool start-up")
+    run("2 threads (default), pool started by the run", None, "includes pool start-up")
+    run("2 local processes, pool started by the run", "processes", "includes pool start-up")
     with local_process_pool(2) as pool:
         t0 = time.perf_counter()
         warm(pool)
@@ -86,6 +93,9 @@ def main(argv=None):
             run("dask LocalCluster, 2 workers x 1 thread", client,
                 "cluster started beforehand", setup)
 
+    t_full, full = timed(lambda: optimize_link_lengths(mech, seed=args.seed, progress=False),
+                         args.repeats)
+    thread_ratio = thread_capacity()
     ref = rows[0]["res"]
     same = all(np.array_equal(r["res"].history, ref.history) and r["res"].best == ref.best
                for r in rows)
@@ -112,7 +122,26 @@ def main(argv=None):
     print(f"same result on every executor: {'yes' if same else 'NO'} "
           f"(best max|F12| {ref.best_peak_force:.4f} N at L2 = "
           f"{ref.best.crank_length * 100:.4f} cm, L3 = {ref.best.coupler_length * 100:.4f} cm)")
+    print(f"thread capacity: {thread_ratio[0]:.2f} (time of 40 simulations in one thread / "
+          f"split over 2 threads; 2 = the GIL is released and two cores are free)")
+    print()
+    print(f"default call, 20 x 30 GA with gradient refinement (2 threads, saturation 10): "
+          f"median {t_full:.2f} s (target < 10 s on 2 cores); {full.generations_completed} "
+          f"generations ({full.stop_reason}), {full.n_evaluations} designs, refinement "
+          f"{full.refinement.get('method')} with {full.refinement.get('objective_calls')} "
+          f"objective calls, KKT {full.refinement.get('kkt')}, best "
+          f"{full.best_peak_force:.4f} N")
     return 0 if same else 1
+
+
+def thread_capacity(n=40, repeats=3):
+    """Time of n simulations in this thread / time of the same n split over 2 threads."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    t_one, _ = timed(lambda: evaluate(n), repeats)
+    with ThreadPoolExecutor(2) as pool:
+        t_two, _ = timed(lambda: list(pool.map(evaluate, [n // 2, n - n // 2])), repeats)
+    return t_one / t_two, t_one, t_two
 
 
 if __name__ == "__main__":
