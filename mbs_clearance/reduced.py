@@ -319,7 +319,7 @@ DEFAULT_RTOL = 1e-7
 #: (`integrator._attempt`). The state's own scales (the slider's position ~L2 + L3, its
 #: speed ~omega2 L2) are 1e4 times coarser than the penetration that sets the contact force
 #: and the stored impact velocity; see docs/performance.md (the accuracy map)
-EVENT_ATOL = 1.0
+EVENT_ATOL = 1.5
 
 #: rtol above which a run warns (AccuracyWarning): the contacts are not resolved (measured,
 #: paper case: peak error 0.5 % at rtol 1e-3, spurious events and a 1e12 N peak at 1e-2)
