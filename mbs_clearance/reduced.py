@@ -325,6 +325,9 @@ EVENT_ATOL = 1.5
 #: paper case: peak error 0.5 % at rtol 1e-3, spurious events and a 1e12 N peak at 1e-2)
 LOOSE_RTOL = 1e-4
 
+#: contact switches per revolution above which a run counts as rattling (not periodic)
+RATTLING = 4
+
 #: a contact onset slower than this many times clearance x crank speed is a grazing onset:
 #: its stored impact velocity sets the damping of the whole contact and is ill-conditioned,
 #: and the accuracy target (1e-5 on the per-revolution peaks) is not met there at the default
@@ -516,7 +519,11 @@ def simulate_reduced(mech: SliderCrank, revolutions: int = 4, **options):
     stats["grazing_onsets"] = grazing_onsets(mech, ms)
     stats["accuracy_ok"] = not (stats["grazing_onsets"] and stats["rtol"] > 1e-9) \
         and stats["rtol"] <= LOOSE_RTOL
-    if stats["grazing_onsets"] and stats["rtol"] > 1e-9:
+    # a rattling run (more than RATTLING contact switches per revolution) is not periodic:
+    # its late peaks depend on every digit and no tolerance makes them accurate; its
+    # grazing onsets are counted in the stats (accuracy_ok False) without a warning
+    rattling = stats["nevent"] > RATTLING * revolutions
+    if stats["grazing_onsets"] and stats["rtol"] > 1e-9 and not rattling:
         warnings.warn(f"{stats['grazing_onsets']} grazing contact onset(s) (impact velocity "
                       f"below {GRAZING_ONSET:g} x clearance x crank speed): the damping of "
                       f"the contact that follows depends on the onset's ill-conditioned "

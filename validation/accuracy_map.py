@@ -3,7 +3,7 @@
 box (L2 in [0.04, 0.06] m, L3 in [0.10, 0.14] m) and over the stress cases of
 `validation/stress.py` that are in a periodic regime.
 
-    python -m validation.accuracy_map [--n 9] [--no-stress] [--markdown]
+    python -m validation.accuracy_map [--n 9] [--no-stress] [--before]
 """
 
 from __future__ import annotations
@@ -52,11 +52,26 @@ def reference_peaks(mech: SliderCrank, revolutions: int = REVOLUTIONS,
                        **dict(options))[3]
 
 
+def state_error_only(mech: SliderCrank, rtol: float = reduced.DEFAULT_RTOL,
+                     initial_offset: float = 0.0) -> reduced.System:
+    """The plain model's system with the state's atol only: the error control before the
+    penetration was put under it (for before/after comparisons)."""
+    return reduced.System(reduced.integrate_plain, reduced.initial_state(mech, initial_offset),
+                          reduced.pack_parameters(mech), reduced.P_MODE, reduced.N_MEM,
+                          reduced.N_ERR, reduced.default_atol(mech, rtol),
+                          len(reduced.OUT_COLUMNS))
+
+
 def peak_errors(mech: SliderCrank, revolutions: int = REVOLUTIONS, options: tuple = (),
-                **settings) -> tuple[np.ndarray, dict]:
+                before: bool = False, **settings) -> tuple[np.ndarray, dict]:
     """Relative errors of the per-revolution peaks of a run with `settings` (default: the
-    defaults of `peak_base_force`), and the run's counters."""
+    defaults of `peak_base_force`; `before`: without the error control of the
+    penetration), and the run's counters."""
     ref = reference_peaks(mech, revolutions, options)
+    if before:
+        settings["system"] = state_error_only(mech, settings.get("rtol") or
+                                              reduced.DEFAULT_RTOL,
+                                              dict(options).get("initial_offset", 0.0))
     out = reduced.run(mech, revolutions, record=False, **dict(options), **settings)
     return np.abs(out[3] / ref - 1.0), reduced.counters_dict(out[5])
 
@@ -101,8 +116,10 @@ def _main(argv=None) -> int:
     ap.add_argument("--no-stress", action="store_true", help="skip the stress cases")
     ap.add_argument("--rtol", type=float, default=None, help="rtol of the runs measured")
     ap.add_argument("--method", default="dopri5")
+    ap.add_argument("--before", action="store_true",
+                    help="without the error control of the penetration (state only)")
     args = ap.parse_args(argv)
-    settings = {"method": args.method}
+    settings = {"method": args.method, "before": args.before}
     if args.rtol is not None:
         settings["rtol"] = args.rtol
     rows = grid_map(args.n, **settings)

@@ -23,16 +23,8 @@ from validation import accuracy_map as am
 from validation.benchmarks.common import machine_summary
 
 
-def _before(mech: SliderCrank) -> reduced.System:
-    """The plain model's system with the state's atol only (no error control of g)."""
-    return reduced.System(reduced.integrate_plain, reduced.initial_state(mech),
-                          reduced.pack_parameters(mech), reduced.P_MODE, reduced.N_MEM,
-                          reduced.N_ERR, reduced.default_atol(mech, reduced.DEFAULT_RTOL),
-                          len(reduced.OUT_COLUMNS))
-
-
 def _run(mech, fixed: bool, record: bool):
-    system = None if fixed else _before(mech)
+    system = None if fixed else am.state_error_only(mech)
     return reduced.run(mech, 4, record=record, system=system)
 
 
