@@ -148,7 +148,7 @@ def test_solver_failure_is_a_clear_error(paper):
 def test_grazing_onsets_are_flagged():
     """A design whose journal re-touches the wall at a grazing speed in revolution 1: its
     stored impact velocity (0.0058 m/s at rtol 1e-12) fell to the floor at rtol 1e-7 before
-    the penetration was under error control; now it is 0.0055 m/s, and the run says that the
+    the penetration was under error control; now it is 0.0054 m/s, and the run says that the
     peaks after it may miss the stated accuracy (docs/performance.md); the paper case has no
     grazing onset."""
     from mbs_clearance._warnings import AccuracyWarning
