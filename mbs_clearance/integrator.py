@@ -17,6 +17,13 @@ integrator for them, so the calls are direct and can be inlined):
   (FSAL) stage of every step, at the step's end, so that a model evaluates itself once
   there for the derivative, the peak, the event search and the outputs.
 
+Error control: the scaled RMS of the embedded error estimate over the first n_err state
+components, and optionally (two more entries in ``atol``) the change of the switching
+function g and of its rate between the step's solution and the embedded one: a model whose
+events hinge on a small difference of large state components (a penetration of
+micrometres in coordinates of decimetres) gets its error controlled at the scale of the
+difference.
+
 Events are searched on the step's dense output (`_search_event`: interior samples, a closer
 look wherever the cubic Hermite interpolant of g and its rate comes within `event_margin` of
 the surface, and steps limited while approaching it), so that a crossing and return inside one
@@ -642,7 +649,9 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
     Arguments: the four model kernels (compiled functions with the signatures RHS_SIG,
     EVENT_SIG, ACTION_SIG, MONITOR_SIG); y0; p (parameters + memory, modified in place);
     mem_start, n_mem (the memory entries of p, recorded); edges (window edges, edges[0] =
-    t0, edges[-1] = t_end); rtol; atol (per component); n_err (components under error
+    t0, edges[-1] = t_end); rtol; atol (per component; with len(y0) + 2 entries the last
+    two are the absolute tolerances of the switching function g and its rate, which are
+    then under error control too, see `_attempt`); n_err (components under error
     control); h0 (<= 0: automatic); h_max; max_steps; record; event_tol; event_margin (look
     closer between samples this near the surface); n_samples (interior event samples per
     step); refine_iters (golden-section iterations per peak candidate); then
