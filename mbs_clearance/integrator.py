@@ -17,6 +17,13 @@ integrator for them, so the calls are direct and can be inlined):
   (FSAL) stage of every step, at the step's end, so that a model evaluates itself once
   there for the derivative, the peak, the event search and the outputs.
 
+Error control: the scaled RMS of the embedded error estimate over the first n_err state
+components, and optionally (two more entries in ``atol``) the change of the switching
+function g and of its rate between the step's solution and the embedded one: a model whose
+events hinge on a small difference of large state components (a penetration of
+micrometres in coordinates of decimetres) gets its error controlled at the scale of the
+difference.
+
 Events are searched on the step's dense output (`_search_event`: interior samples, a closer
 look wherever the cubic Hermite interpolant of g and its rate comes within `event_margin` of
 the surface, and steps limited while approaching it), so that a crossing and return inside one
@@ -253,15 +260,45 @@ def _step_monitor(rhs, monitor, t, y, f, h, A, B, C, K, p, y_new, f_new, ytmp, o
     return res
 
 
+@nb.njit(**KERNEL, inline="always")
+def _event_error_sq(event, t, h, y_new, p, work, g, gd, rtol, atol_g, atol_gd, n_err, yhat):
+    """Squared scaled differences, summed, of the switching function and its rate between
+    the step's solution y_new (where they are g, gd) and the embedded solution
+    y_new - h work (work: the error combination of the stages, first n_err components)."""
+    n = y_new.shape[0]
+    for k in range(n):
+        yhat[k] = y_new[k] - h * work[k] if k < n_err else y_new[k]
+    gh, gdh = event(t, yhat, p)
+    eg = (g - gh) / (atol_g + rtol * abs(g))
+    egd = (gd - gdh) / (atol_gd + rtol * abs(gd))
+    return eg * eg + egd * egd
+
+
 @nb.njit(**KERNEL)
-def _attempt(rhs, monitor, t, y, f, h, A, B, C, E, E2, K, p, y_new, f_new, ytmp, work, work2,
-             out, rtol, atol, n_err):
+def _attempt(rhs, event, monitor, t, y, f, h, A, B, C, E, E2, K, p, y_new, f_new, ytmp, work,
+             work2, out, rtol, atol, n_err, yhat):
     """An attempted step of `integrate`: its stages, the monitor at its end (outputs into
     out), the event function there and its scaled error; returns (monitor, g, gdot,
     error). One call of a function without numba's runtime, into which the helpers are
-    inlined (inlined into `integrate` they would reference-count their arrays)."""
+    inlined (inlined into `integrate` they would reference-count their arrays).
+
+    With two more entries in atol than states, the switching function g and its rate are
+    under error control too, with those absolute tolerances (`integrate`)."""
     m, g, gd = _step_monitor(rhs, monitor, t, y, f, h, A, B, C, K, p, y_new, f_new, ytmp, out)
-    return m, g, gd, error_norm(K, E, E2, h, y, y_new, rtol, atol, n_err, work, work2)
+    err = error_norm(K, E, E2, h, y, y_new, rtol, atol, n_err, work, work2)
+    n = y.shape[0]
+    if atol.shape[0] < n + 2:
+        return m, g, gd, err
+    # error_norm left E.K in work (and E2.K in work2): the embedded solutions' g, gdot
+    e1 = _event_error_sq(event, t + h, h, y_new, p, work, g, gd, rtol, atol[n], atol[n + 1],
+                         n_err, yhat)
+    if E2.shape[0] == 0:
+        err_ev = math.sqrt(0.5 * e1)
+    else:
+        e2 = _event_error_sq(event, t + h, h, y_new, p, work2, g, gd, rtol, atol[n],
+                             atol[n + 1], n_err, yhat)
+        err_ev = 0.0 if e1 == 0.0 else e1 / math.sqrt((e1 + 0.01 * e2) * 2.0)
+    return m, g, gd, max(err, err_ev)
 
 
 @nb.njit(**KERNEL)
@@ -612,7 +649,9 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
     Arguments: the four model kernels (compiled functions with the signatures RHS_SIG,
     EVENT_SIG, ACTION_SIG, MONITOR_SIG); y0; p (parameters + memory, modified in place);
     mem_start, n_mem (the memory entries of p, recorded); edges (window edges, edges[0] =
-    t0, edges[-1] = t_end); rtol; atol (per component); n_err (components under error
+    t0, edges[-1] = t_end); rtol; atol (per component; with len(y0) + 2 entries the last
+    two are the absolute tolerances of the switching function g and its rate, which are
+    then under error control too, see `_attempt`); n_err (components under error
     control); h0 (<= 0: automatic); h_max; max_steps; record; event_tol; event_margin (look
     closer between samples this near the surface); n_samples (interior event samples per
     step); refine_iters (golden-section iterations per peak candidate); then
@@ -670,6 +709,7 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
     ws_p = p.copy()
     ws_h = 0.0
     last_y = np.empty(n)
+    yhat = np.empty(n)       # the embedded solution (error control of g)
     f_ref = np.empty(n)
     # the part of the state the continuous extension is formed for (views, no copies)
     y_d = y[:n_dense]
@@ -743,9 +783,9 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
                 else:
                     counters[4] = 2
                     break
-            m_new, g_end, gd_end, err = _attempt(rhs, monitor, t, y, f, h_try, A, B, C, E, E2, K,
-                                                 p, y_new, f_new, ytmp, ytmp, ftmp, obuf, rtol,
-                                                 atol, n_err)
+            m_new, g_end, gd_end, err = _attempt(rhs, event, monitor, t, y, f, h_try, A, B, C,
+                                                 E, E2, K, p, y_new, f_new, ytmp, ytmp, ftmp,
+                                                 obuf, rtol, atol, n_err, yhat)
             counters[0] += s
             if not (err <= 1.0):
                 counters[2] += 1

@@ -48,7 +48,10 @@ def test_optimum_not_worse_than_brute_force_grid(mass_scaling, build):
     rebuilt = build(best.crank_length, best.coupler_length)
     assert (best.crank_mass, best.coupler_mass) == pytest.approx(
         (rebuilt.crank_mass, rebuilt.coupler_mass), rel=1e-12)
-    assert res.best_peak_force == pytest.approx(peak_base_force(rebuilt, 4), rel=1e-9)
+    # rel 1e-6: the masses agree to 1e-12, not bit for bit, and a last-bit change of an
+    # input may change the step sequence (measured 5e-8 with the uniform masses); the peak
+    # itself is accurate to ~3e-6 (docs/performance.md, accuracy map)
+    assert res.best_peak_force == pytest.approx(peak_base_force(rebuilt, 4), rel=1e-6)
     assert res.original_peak_force == pytest.approx(peak_base_force(PAPER, 4), rel=1e-12)
     assert res.reduction_percent == pytest.approx(
         100 * (1 - res.best_peak_force / peak_base_force(PAPER, 4)), rel=1e-9)

@@ -145,15 +145,19 @@ def test_solver_failure_is_a_clear_error(paper):
         simulate(paper, max_steps=100)
 
 
-def test_grazing_onsets_at_the_velocity_floor_are_counted():
-    """A design whose journal re-touches the wall at a grazing speed in revolution 1: at rtol
-    1e-7 the stored impact velocity falls to the floor (and the revolution-4 peak is 1.5 %
-    off), at rtol 1e-9 it converges above it (docs/performance.md); the paper case has
-    none."""
+def test_grazing_onsets_are_flagged():
+    """A design whose journal re-touches the wall at a grazing speed in revolution 1: its
+    stored impact velocity (0.0058 m/s at rtol 1e-12) fell to the floor at rtol 1e-7 before
+    the penetration was under error control; now it is 0.0054 m/s, and the run says that the
+    peaks after it may miss the stated accuracy (docs/performance.md); the paper case has no
+    grazing onset."""
+    from mbs_clearance._warnings import AccuracyWarning
     from mbs_clearance.optimize import design_mechanism
 
     grazing = design_mechanism(SliderCrank(), {"crank_length": 0.045, "coupler_length": 0.125})
-    loose, tight = simulate(grazing, rtol=1e-7), simulate(grazing, rtol=1e-9)
-    assert loose.stats["floored_impacts"] >= 1
-    assert tight.stats["floored_impacts"] == 0
-    assert simulate(SliderCrank()).stats["floored_impacts"] == 0
+    with pytest.warns(AccuracyWarning, match="grazing contact onset"):
+        loose = simulate(grazing)
+    assert loose.stats["grazing_onsets"] == 1 and not loose.stats["accuracy_ok"]
+    assert loose.stats["floored_impacts"] == 0
+    paper = simulate(SliderCrank()).stats
+    assert paper["grazing_onsets"] == 0 and paper["floored_impacts"] == 0 and paper["accuracy_ok"]
