@@ -224,6 +224,9 @@ def test_default_run_reaches_the_documented_optimum(mass_scaling, corner):
     at_corner = peak_base_force(build(*corner), 4)
     assert (res.best.crank_length, res.best.coupler_length) == pytest.approx(corner, abs=1e-6)
     assert res.best_peak_force <= at_corner * (1 + 1e-6)
+    # the gradient refinement puts the design on the corner and checks KKT there
+    assert (res.best.crank_length, res.best.coupler_length) == corner
+    assert res.refinement["kkt"] and len(res.refinement["on_bounds"]) == 2
 
 
 def test_cli_prints_table3_and_writes_result_and_figures(tmp_path, capsys):
