@@ -481,6 +481,15 @@ def _cmd_optimize(args: argparse.Namespace) -> int:
           f"{result.generations_completed} generations, {result.n_evaluations} designs "
           f"simulated in {result.elapsed:.1f} s on {result.settings['executor']}; "
           f"GA best before refinement {result.ga_best_peak_force:.2f} N")
+    periodic = {True: "periodic", False: "NOT periodic", None: "periodicity not judged"}
+    print(f"best design: {periodic[result.best_periodic]}"
+          + (f" ({result.best_periodicity_note})" if result.best_periodicity_note else ""))
+    if result.best_accuracy_note:
+        print(f"note: best design: {result.best_accuracy_note}")
+    if result.refinement:
+        r = result.refinement
+        print(f"refinement: {r.get('method')}, {r.get('objective_calls', '?')} objective calls; "
+              f"on bounds: {r.get('on_bounds') or 'none'}; KKT: {r.get('kkt', 'n/a')}")
     if mech != type(mech)() or args.mass_scaling != "fixed" or args.revolution != 4:
         print("note: the paper's rows refer to its own case (paper mechanism, fixed masses, "
               "4th revolution)")

@@ -34,6 +34,7 @@ import os
 import signal
 import threading
 import time
+import warnings
 from concurrent.futures import ProcessPoolExecutor, ThreadPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass, field
@@ -43,6 +44,7 @@ from typing import Any
 import numpy as np
 
 from ._io import read_json_object
+from ._warnings import AccuracyWarning
 from .mechanism import CONTINUOUS_FIELDS, SliderCrank
 from .simulate import BACKENDS, peak_base_force, simulate
 
@@ -453,6 +455,9 @@ class OptimizationResult:
     best_periodicity_note : str or None
         ``simulate(best).stats["periodicity_note"]``: why periodicity could not be judged or
         was not found (None when the model gives none).
+    best_accuracy_note : str or None
+        ``simulate(best).stats["accuracy_note"]``: where the best design's run may miss the
+        stated accuracy (grazing onsets, slow settling; docs/performance.md), else None.
     stop_reason : str
         "generations" (the limit) or "saturation" (the best value moved by at most
         ``settings["saturation_rtol"]`` of its value over ``settings["saturation"]``
@@ -477,6 +482,7 @@ class OptimizationResult:
     elapsed: float = field(default=0.0)
     best_periodic: bool | None = None
     best_periodicity_note: str | None = None
+    best_accuracy_note: str | None = None
     stop_reason: str = "generations"
     refinement: dict[str, Any] = field(default_factory=dict)
 
@@ -512,6 +518,7 @@ class OptimizationResult:
             "elapsed": self.elapsed,
             "best_periodic": self.best_periodic,
             "best_periodicity_note": self.best_periodicity_note,
+            "best_accuracy_note": self.best_accuracy_note,
             "stop_reason": self.stop_reason,
             "refinement": self.refinement,
         }
@@ -545,6 +552,7 @@ class OptimizationResult:
             elapsed=float(data.get("elapsed", 0.0)),
             best_periodic=_optional_bool(data.get("best_periodic")),
             best_periodicity_note=data.get("best_periodicity_note"),
+            best_accuracy_note=data.get("best_accuracy_note"),
             stop_reason=str(data.get("stop_reason", "generations")),
             refinement=dict(data.get("refinement") or {}),
         )
@@ -807,7 +815,7 @@ def optimize_link_lengths(mech: SliderCrank | None = None,
             u_best, best_peak, refinement = _refine(objective, u_best, best_peak, progress,
                                                     refine_method)
         best = problem.mechanism(u_best)
-        periodic, note = _periodicity(best, problem)
+        periodic, note, accuracy_note = _periodicity(best, problem)
     n_failed = sum(1 for p in objective.cache.values() if not math.isfinite(p))
     return OptimizationResult(
         best=best, best_peak_force=float(best_peak), original=mech,
@@ -816,21 +824,26 @@ def optimize_link_lengths(mech: SliderCrank | None = None,
         ga_best_peak_force=ga_peak, generations_completed=int(ga.generations_completed),
         n_failed=n_failed, elapsed=time.perf_counter() - t_start,
         best_periodic=periodic, best_periodicity_note=note,
+        best_accuracy_note=accuracy_note,
         stop_reason="saturation" if on_generation.saturated() else "generations",
         refinement=refinement)
 
 
-def _periodicity(best: SliderCrank, problem: _Problem) -> tuple[bool | None, str | None]:
+def _periodicity(best: SliderCrank, problem: _Problem):
     """Simulate the best design once; its periodicity flag and note from the stats (None
-    where the backend does not report them or the integration fails)."""
+    where the backend does not report them or the integration fails), and the accuracy note
+    of that run (its AccuracyWarning's text, kept in the result instead of warned)."""
     try:
-        traj = simulate(best, problem.revolution, problem.backend, **problem.options)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", AccuracyWarning)
+            traj = simulate(best, problem.revolution, problem.backend, **problem.options)
     except RuntimeError as exc:
-        return None, f"the best design could not be simulated again: {exc}"
+        return None, f"the best design could not be simulated again: {exc}", None
     periodic = traj.stats.get("periodic")
     note = traj.stats.get("periodicity_note")
+    accuracy = traj.stats.get("accuracy_note") or None
     return (None if periodic is None else bool(periodic)), \
-        (None if note is None else str(note))
+        (None if note is None else str(note)), accuracy
 
 
 #: refinement methods (`refine=`); True selects the first: "l-bfgs-b" (scipy's bounded

@@ -574,24 +574,40 @@ def test_unreachable_dask_scheduler_fails_with_one_line(capsys):
     assert "check that the scheduler runs" in message
     with pytest.raises(ValueError, match="timeout must be a finite number of seconds > 0"):
         connect_dask(address, timeout=0)
-    # the CLI goes through the same connection (default timeout)
-    with pytest.raises(TimeoutError, match="could not connect to the dask scheduler"):
+    # the CLI goes through the same connection (default timeout) and ends in one line,
+    # status 1 (a failure while running, not bad input)
+    with pytest.raises(SystemExit) as stop:
         main(["optimize", "--scheduler", address, "--no-progress", "--population", "4",
               "--generations", "1"])
+    assert stop.value.code == 1
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1
+    assert err.startswith("mbs-clearance optimize: error: could not connect to the dask "
+                          "scheduler")
 
 
 # ------------------------------------------------------------------ the best design's regime
 
 def test_best_design_periodicity_is_reported_and_saved(tmp_path):
+    import warnings
+
     from mbs_clearance import simulate
+    from mbs_clearance._warnings import AccuracyWarning
 
     res = optimize_link_lengths(PAPER, executor="serial", **SCRIPT_RUN)
-    stats = simulate(res.best, 4).stats
+    # the direct run warns where the GA's result keeps the note instead
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", AccuracyWarning)
+        stats = simulate(res.best, 4).stats
     assert res.best_periodic == stats.get("periodic")
     assert res.best_periodicity_note == stats.get("periodicity_note")
+    assert res.best_accuracy_note == (stats.get("accuracy_note") or None)
+    assert [str(w.message) for w in caught] == ([res.best_accuracy_note]
+                                                if res.best_accuracy_note else [])
     back = OptimizationResult.from_json(res.to_json(tmp_path / "r.json"))
     assert back.best_periodic == res.best_periodic
     assert back.best_periodicity_note == res.best_periodicity_note
+    assert back.best_accuracy_note == res.best_accuracy_note
     assert back.stop_reason == res.stop_reason == "generations"
 
 
@@ -645,7 +661,10 @@ def test_gradient_refinement_reaches_the_grid_minimum_with_fewer_calls(mass_scal
         assert (rec["gradient"][name] > 0) == (side == "lower")
     # the value is the default-rtol objective at the corner: within the default accuracy
     # target (1e-5 relative, docs/accuracy) of the tight-rtol grid minimum
-    assert grad.best_peak_force == pytest.approx(peak_base_force(build(*corner), 4), rel=1e-9)
+    # rel 1e-6, not 1e-9: `build` and the GA's design_mechanism give masses equal to 1e-12,
+    # not bit for bit, and since the penetration is under error control a last-bit change
+    # can change the step sequence (measured 5e-8 with uniform masses, as above)
+    assert grad.best_peak_force == pytest.approx(peak_base_force(build(*corner), 4), rel=1e-6)
     assert grad.best_peak_force == pytest.approx(grid.min(), rel=1e-5)
     assert rec["objective_calls"] < nm.refinement["objective_calls"]
     assert grad.best_peak_force <= nm.best_peak_force * (1 + 1e-9)

@@ -175,7 +175,8 @@ def test_debug_variable_shows_the_traceback(monkeypatch, capsys):
 
 
 def test_console_script_in_a_real_process_prints_one_line(tmp_path):
-    """The same through the interpreter (sys.exit(main())): a runtime failure."""
+    """The same through the interpreter (sys.exit(main())): a run refused before it starts
+    (the step count h_max forces is estimated first) is one line with status 2."""
     import subprocess
     import sys
 
@@ -183,10 +184,10 @@ def test_console_script_in_a_real_process_prints_one_line(tmp_path):
                            "--backend-b", "ideal", "--h-max", "1e-300", "--revolutions", "1",
                            "--no-plot"], capture_output=True, text=True, cwd=tmp_path,
                           env=_env())
-    assert proc.returncode == 1
+    assert proc.returncode == 2
     assert proc.stderr.count("\n") == 1, proc.stderr
-    assert proc.stderr.startswith("mbs-clearance compare: error: reduced model integration "
-                                  "failed")
+    assert proc.stderr.startswith("mbs-clearance compare: error: a run of 1 revolutions with "
+                                  "h_max = 1e-300 s takes at least")
 
 
 def _env():
