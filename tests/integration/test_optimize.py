@@ -356,7 +356,10 @@ def test_threads_release_the_gil_inside_the_compiled_model(monkeypatch):
     def call(mark):
         state["mark"] = mark
         for _ in range(3):
-            peak_base_force(mech, 40)
+            # 12 revolutions: from 16 on a one-revolution pilot run (the memory estimate)
+            # is a second, millisecond-short kernel call, in which a loaded machine may not
+            # schedule the main thread at all (seen: 0 iterations)
+            peak_base_force(mech, 12)
 
     n_kernel = _main_thread_progress_during(call)
     assert n_kernel > 5 * n_held
