@@ -9,6 +9,12 @@ Public API::
 """
 
 from ._cache import register_package
+from ._warnings import (  # noqa: F401 - public warning classes, users filter by them
+    AccuracyWarning,
+    CacheWarning,
+    MbsClearanceWarning,
+    PhysicsWarning,
+)
 
 # before any kernel is defined: cache the kernels under a digest of all the package's sources
 # as imported (numba alone does not notice edits of the files a kernel calls into; _cache.py)
@@ -28,6 +34,7 @@ __all__ = [
     "sensitivities", "Sensitivities", "DEFAULT_PARAMETERS",
     "optimize_link_lengths", "OptimizationResult",
     "peak_gradient", "PeakGradient",
+    "MbsClearanceWarning", "AccuracyWarning", "PhysicsWarning", "CacheWarning",
 ]
 
 __version__ = "0.1.0"
