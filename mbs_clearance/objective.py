@@ -31,6 +31,7 @@ import numba as nb
 import numpy as np
 
 from . import ddm, reduced
+from ._checks import check_choice, check_int, check_real
 from .integrator import METHODS, _golden_max, _step_monitor
 from .mechanism import SliderCrank
 from .sensitivity import (
@@ -475,20 +476,16 @@ def peak_gradient(mech: SliderCrank, parameters=None, revolution: int = 4,
     if not isinstance(mech, SliderCrank):
         raise ValueError(f"mech must be a SliderCrank; got {type(mech).__name__}")
     names = _check_parameters(parameters)
-    if not isinstance(revolution, int) or isinstance(revolution, bool) or revolution < 1:
-        raise ValueError(f"revolution must be an integer >= 1; got {revolution!r}")
-    if method not in ("ddm", "fd"):
-        raise ValueError(f"method must be 'ddm' or 'fd'; got {method!r}")
-    if backend not in BACKENDS:
-        raise ValueError(f"backend must be one of {sorted(BACKENDS)}; got {backend!r}")
-    if integrator is not None and integrator not in METHODS:
-        raise ValueError(f"integrator must be one of {sorted(METHODS)}; got {integrator!r}")
-    if rtol is not None and not (isinstance(rtol, (int, float)) and 1e-14 <= rtol <= 1e-2):
-        raise ValueError(f"rtol must be a number in [1e-14, 1e-2]; got {rtol!r}")
-    if not (isinstance(kink_tol, float) and 0.0 <= kink_tol < 1.0):
-        raise ValueError(f"kink_tol must be a float in [0, 1); got {kink_tol!r}")
-    if not (isinstance(fd_relative_step, float) and 0 < fd_relative_step < 0.1):
-        raise ValueError(f"fd_relative_step must be in (0, 0.1); got {fd_relative_step!r}")
+    revolution = check_int("revolution", revolution, 1)
+    check_choice("method", method, ("ddm", "fd"))
+    check_choice("backend", backend, BACKENDS)
+    if integrator is not None:
+        check_choice("integrator", integrator, METHODS)
+    if rtol is not None:
+        rtol = check_real("rtol", rtol, 1e-14, 1e-2)
+    kink_tol = check_real("kink_tol", kink_tol, 0.0, 1.0, high_open=True)
+    fd_relative_step = check_real("fd_relative_step", fd_relative_step, 0.0, 0.1,
+                                  low_open=True, high_open=True)
     if method == "ddm":
         if backend != "reduced":
             raise ValueError("method='ddm' needs backend='reduced' (the direct "
