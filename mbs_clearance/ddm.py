@@ -58,7 +58,15 @@ from ._jacobians import (
     free_outputs_nc,
 )
 from .contact import contact_force, hysteresis_factor
-from .integrator import ACTION_SIG, KERNEL, MONITOR_SIG, RHS_SIG, _step_monitor, integrate
+from .integrator import (
+    ACTION_SIG,
+    KERNEL,
+    MONITOR_SIG,
+    RHS_SIG,
+    _step_monitor,
+    integrate,
+    step_workspace,
+)
 from .reduced import (
     P_C,
     P_DMIN,
@@ -490,12 +498,9 @@ def step_sens(t0, y0, p, hs, coefficients, n_out):
     included) at t0 + hs (len(hs), n) and the outputs of `monitor_sens` there (len(hs),
     n_out). The integrator's peak refinement maximises |F12| over exactly this step map,
     so this gives the state at a refined peak time."""
-    A, B, C, E, E2, P, A_extra, C_extra, error_order, pi_alpha, pi_beta = coefficients
+    A, B, C = coefficients[0], coefficients[1], coefficients[2]
     n = y0.shape[0]
-    K = np.zeros((B.shape[0] + 1 + A_extra.shape[0], n))
-    f0 = np.empty(n)
-    f_new = np.empty(n)
-    ytmp = np.empty(n)
+    K, _, f_new, ytmp, f0 = step_workspace(coefficients, n)
     ys = np.empty((hs.shape[0], n))
     outs = np.zeros((hs.shape[0], n_out))
     _THIS.rhs_sens(t0, y0, p, f0)

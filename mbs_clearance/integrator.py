@@ -251,6 +251,16 @@ def rk_step(rhs, t, y, f, h, A, B, C, K, p, y_new, f_new, ytmp):
 
 
 @nb.njit(**KERNEL, inline="always")
+def step_workspace(coefficients, n):
+    """Work arrays of one step of `n` states with the method's `coefficients`: the stage
+    derivatives K and the vectors y_new, f_new, ytmp, f0 (for `_step_monitor` callers
+    outside the integrator)."""
+    B, A_extra = coefficients[1], coefficients[6]
+    return (np.zeros((B.shape[0] + 1 + A_extra.shape[0], n)), np.empty(n), np.empty(n),
+            np.empty(n), np.empty(n))
+
+
+@nb.njit(**KERNEL, inline="always")
 def _step_monitor(rhs, monitor, t, y, f, h, A, B, C, K, p, y_new, f_new, ytmp, out):
     """`rk_step` with the monitor as its last stage: returns the monitor and the event
     function at the step's end (its outputs into out)."""

@@ -32,7 +32,7 @@ import numpy as np
 
 from . import ddm, reduced
 from ._checks import check_choice, check_int, check_real
-from .integrator import METHODS, _golden_max, _step_monitor
+from .integrator import METHODS, _golden_max, _step_monitor, step_workspace
 from .mechanism import SliderCrank
 from .sensitivity import (
     DDM_INTEGRATOR,
@@ -138,13 +138,9 @@ def _refine_steps(t0s, y0s, mems, p, hs, coefficients, iters):
     """The maximum of |F12| over the step map of each step k of the plain model (start
     t0s[k], state y0s[k] (5,), memory mems[k] (mode, impact velocity), size hs[k]), by
     golden section as the integrator's peak refinement; returns values and times."""
-    A, B, C, E, E2, P, A_extra, C_extra, error_order, pi_alpha, pi_beta = coefficients
+    A, B, C = coefficients[0], coefficients[1], coefficients[2]
     n = y0s.shape[1]
-    K = np.zeros((B.shape[0] + 1 + A_extra.shape[0], n))
-    y_new = np.empty(n)
-    f_new = np.empty(n)
-    ytmp = np.empty(n)
-    f0 = np.empty(n)
+    K, y_new, f_new, ytmp, f0 = step_workspace(coefficients, n)
     y0 = np.empty(n)
     out = np.zeros(0)
     q = p.copy()
@@ -163,13 +159,8 @@ def _refine_steps(t0s, y0s, mems, p, hs, coefficients, iters):
 @nb.njit(cache=True, error_model="numpy")
 def _step_value(t0, y0, mem, p, h, coefficients):
     """|F12| of the plain model's step map at t0 + h (state y0 (5,), memory mem)."""
-    A, B, C, E, E2, P, A_extra, C_extra, error_order, pi_alpha, pi_beta = coefficients
-    n = y0.shape[0]
-    K = np.zeros((B.shape[0] + 1 + A_extra.shape[0], n))
-    y_new = np.empty(n)
-    f_new = np.empty(n)
-    ytmp = np.empty(n)
-    f0 = np.empty(n)
+    A, B, C = coefficients[0], coefficients[1], coefficients[2]
+    K, y_new, f_new, ytmp, f0 = step_workspace(coefficients, y0.shape[0])
     q = p.copy()
     q[reduced.P_MODE] = mem[0]
     q[reduced.P_DMIN] = mem[1]
