@@ -466,6 +466,14 @@ def _session(sid: int) -> list[int]:
     return alive
 
 
+def _generations_done(progress: bytes) -> int:
+    """The largest generation count in tqdm's progress output so far (0: none yet)."""
+    import re
+
+    counts = re.findall(rb" (\d+)/\d+ ", progress)
+    return max((int(c) for c in counts), default=0)
+
+
 def _interrupt_run(tmp_path, executor, sig, to_group, as_script):
     """Start a long GA in its own session, signal it after 3 generations; returns
     (exit code, seconds to exit, processes of the session before the signal, processes
@@ -489,7 +497,10 @@ def _interrupt_run(tmp_path, executor, sig, to_group, as_script):
     try:
         os.set_blocking(proc.stderr.fileno(), False)
         seen, t0 = b"", time.monotonic()
-        while b" 3/" not in seen and proc.poll() is None and time.monotonic() - t0 < 300:
+        # tqdm redraws at most every 0.1 s: fast generations may skip " 3/", so wait for
+        # any count from 3 on
+        while (_generations_done(seen) < 3 and proc.poll() is None
+               and time.monotonic() - t0 < 300):
             time.sleep(0.05)
             seen += proc.stderr.read() or b""
         assert proc.poll() is None, seen.decode()[-2000:]
