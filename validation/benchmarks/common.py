@@ -43,3 +43,23 @@ def timed(fn: Callable[[], Any], repeats: int, warmup: bool = False) -> tuple[fl
         result = fn()
         times.append(time.perf_counter() - t0)
     return float(np.median(times)), result
+
+
+def paired(fn_a: Callable[[], Any], fn_b: Callable[[], Any], pairs: int) -> dict[str, float]:
+    """Time a and b in alternating pairs (a, b, a, b, ...) in this process; returns the
+    median of the per-pair ratios t_b / t_a ("ratio") and the two medians ("a", "b").
+
+    The ratio of each pair is taken under the same machine load, so a noisy machine moves
+    its spread, not its median; two separate medians are not compared that way."""
+    ta, tb = [], []
+    for _ in range(pairs):
+        t0 = time.perf_counter()
+        fn_a()
+        t1 = time.perf_counter()
+        fn_b()
+        t2 = time.perf_counter()
+        ta.append(t1 - t0)
+        tb.append(t2 - t1)
+    ta_, tb_ = np.asarray(ta), np.asarray(tb)
+    return {"ratio": float(np.median(tb_ / ta_)), "a": float(np.median(ta_)),
+            "b": float(np.median(tb_))}
