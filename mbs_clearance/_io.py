@@ -26,7 +26,7 @@ import shutil
 import sys
 import tempfile
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
@@ -96,17 +96,19 @@ def _png_is_ours(path: Path) -> bool:
     return head.startswith(b"\x89PNG") and b"Software\x00" + PNG_SOFTWARE.encode() in head
 
 
-def file_is_ours(path: str | Path) -> bool:
-    """True if `path` was written by this program (see the module docstring)."""
+def file_is_ours(path: str | Path, reader: Callable[[Path], Any] | None = None) -> bool:
+    """True if `path` was written by this program (see the module docstring). A data file
+    (``.npz``, ``.csv``) is ours when `reader`, the loader of the result type it holds,
+    reads it without error (no reader: not ours)."""
     path = Path(path)
     suffix = path.suffix.lower()
     if suffix == ".png":
         return _png_is_ours(path)
     if suffix in (".npz", ".csv"):
-        from .trajectory import load_trajectory
-
+        if reader is None:
+            return False
         try:
-            load_trajectory(path)
+            reader(path)
         except Exception:  # noqa: BLE001 - anything unreadable is not ours
             return False
         return True
@@ -120,10 +122,12 @@ def file_is_ours(path: str | Path) -> bool:
 
 
 def check_output_file(path: str | Path, option: str, force: bool = False,
-                      suffixes: tuple[str, ...] | None = None) -> Path:
+                      suffixes: tuple[str, ...] | None = None,
+                      reader: Callable[[Path], Any] | None = None) -> Path:
     """Check an output file before computing: ValueError naming `option` and the file if it
     cannot be written, is a folder, has a wrong suffix or would overwrite a file this program
-    did not write (unless `force`)."""
+    did not write (unless `force`; `reader`: the loader that recognises our data files, see
+    `file_is_ours`)."""
     path = Path(path)
     recover(path)
     if suffixes is not None and path.suffix.lower() not in suffixes:
@@ -138,7 +142,7 @@ def check_output_file(path: str | Path, option: str, force: bool = False,
             raise ValueError(f"{option} {str(path)!r} exists and is not a regular file")
         if not os.access(path, os.W_OK):
             raise ValueError(f"{option}: file {str(path)!r} is not writable")
-        if not file_is_ours(path):
+        if not file_is_ours(path, reader):
             if not force:
                 raise ValueError(f"{option} {str(path)!r} exists and was not written by "
                                  f"mbs-clearance; choose another name or pass --force to "

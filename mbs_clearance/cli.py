@@ -32,6 +32,7 @@ from .optimize import (
     optimize_link_lengths,
 )
 from .simulate import BACKENDS, peak_base_force, simulate
+from .trajectory import load_trajectory
 
 __all__ = ["main", "build_parser", "mechanism_from_args", "add_mechanism_options",
            "format_table3", "run_command", "Parser", "int_at_least", "positive_float",
@@ -218,7 +219,8 @@ def _progress(message: str) -> None:
 def _cmd_simulate(args: argparse.Namespace) -> int:
     mech = mechanism_from_args(args)
     if args.out:
-        check_output_file(args.out, "--out", args.force, suffixes=(".npz", ".csv"))
+        check_output_file(args.out, "--out", args.force, suffixes=(".npz", ".csv"),
+                          reader=load_trajectory)
     if args.plot:
         check_output_file(args.plot, "--plot", args.force, suffixes=figure_suffixes())
     options = {}
