@@ -56,19 +56,68 @@ def test_every_peak_within_1e_5_on_the_9_by_9_grid():
     assert outcome.count("ok") >= 76 and outcome.count("rival crest") <= 3
 
 
-#: periodic stress cases that miss 1e-5 at the default settings (measured, worst revolution):
-#: the journal starting on the far wall (its reference separates and re-touches four
-#: times at grazing speed, the default run stays in contact) and Flores' law at e = 0.05
-#: (xi = 30: a heavily damped, stiff contact)
-STRESS_MISSES = {"journal starts against the wall (-1 c)": 3.4e-5,
-                 "flores law, restitution 0.05": 1.4e-5}
+#: periodic stress cases flagged by the run (stats["accuracy_ok"] False, AccuracyWarning):
+#: the journal placed on the far wall starts in contact at the floor impact velocity, whose
+#: damping (xi / floor times the penetration rate) is ill-conditioned: 3.4e-5 at the
+#: default rtol, 5e-8 at rtol 1e-10
+STRESS_FLAGGED = {"journal starts against the wall (-1 c)"}
 
 
 @pytest.mark.slow
-def test_periodic_stress_cases_within_1e_5():
+def test_periodic_stress_cases_within_1e_5_or_flagged():
+    from validation.stress import stress_cases
+
+    cases = {c.name: c for c in stress_cases()}
     for row in am.stress_map():
-        bound = 1.5 * STRESS_MISSES.get(row["case"], am.TARGET / 1.5)
-        assert row["errors"].max() < bound, row
+        case = cases[row["case"]]
+        if row["case"] in STRESS_FLAGGED:
+            assert row["errors"].max() < 1e-4, row
+            with pytest.warns(AccuracyWarning, match="grazing contact onset"):
+                assert not simulate(case.mech, case.revolutions,
+                                    **case.options).stats["accuracy_ok"]
+        else:
+            assert row["errors"].max() < am.TARGET, row
+
+
+def _errors_without_rate_control(mech, revolutions):
+    """Peak errors with the penetration rate's atol removed (as before DAMPED_XI)."""
+    atol = np.append(reduced.default_atol(mech, reduced.DEFAULT_RTOL),
+                     [reduced.event_atol(mech, reduced.DEFAULT_RTOL)[0], np.inf])
+    system = reduced.System(reduced.integrate_plain, reduced.initial_state(mech, 0.0),
+                            reduced.pack_parameters(mech), reduced.P_MODE, reduced.N_MEM,
+                            reduced.N_ERR, atol, len(reduced.OUT_COLUMNS))
+    out = reduced.run(mech, revolutions, record=False, system=system)
+    return np.abs(out[3] / am.reference_peaks(mech, revolutions) - 1.0)
+
+
+@pytest.mark.parametrize("e", [0.05, 0.1])
+def test_damping_dominated_contact_law_meets_1e_5_on_the_first_impact(e):
+    """Flores' law at low restitution (xi = 30, 14: the damping term dominates the spring
+    term at the impact speed) follows the penetration rate, which the state's error control
+    resolved only to 1.4e-5 and 1.2e-5 on the first impact's peak; with the rate under
+    error control (reduced.DAMPED_XI) every peak is within 1e-5 of rtol 1e-12."""
+    mech = SliderCrank(contact_model="flores", restitution=e)
+    assert np.isfinite(reduced.event_atol(mech, 1e-7)[1])
+    err, _ = am.peak_errors(mech, 1)
+    assert err.max() < am.TARGET, err
+    assert _errors_without_rate_control(mech, 1).max() > am.TARGET   # the control is needed
+    # the laws with xi <= 1.5 keep the rate under the state's control alone (the map's cost)
+    for law in ("lankarani_nikravesh", "hunt_crossley"):
+        assert np.isinf(reduced.event_atol(mech.replace(contact_model=law), 1e-7)[1])
+
+
+def test_journal_starting_on_the_far_wall_is_flagged_and_resolved_at_rtol_1e_10():
+    """The journal placed on the far wall (initial_offset -1) starts in contact at the floor
+    impact velocity: the run says so (a grazing onset), and the rtol the note recommends
+    (1e-10) meets 1e-5 against rtol 1e-12 (the default misses it by 3.4e-5 from the 2nd
+    revolution on)."""
+    mech, options = SliderCrank(), (("initial_offset", -1.0),)
+    with pytest.warns(AccuracyWarning, match="grazing contact onset.*rtol 1e-10"):
+        traj = simulate(mech, 2, initial_offset=-1.0)
+    assert not traj.stats["accuracy_ok"] and traj.stats["grazing_onsets"] == 1
+    assert am.peak_errors(mech, 2, options)[0].max() > am.TARGET     # the flag was deserved
+    assert am.peak_errors(mech, 2, options, rtol=1e-10)[0].max() < am.TARGET
+    assert simulate(mech, 2, initial_offset=-1.0, rtol=1e-10).stats["accuracy_ok"]
 
 
 def test_paper_case_error_and_cost_pinned_by_function_evaluations():
