@@ -31,8 +31,10 @@ step is not missed. The first crossing is located on the dense output, then the 
 with the located size and refined by Illinois iterations on the real step map, inside the
 search's bracket, until |g| <= event_tol: the memory is set at the landed state, never at the
 first state found inside the wall. The integration also lands exactly on the window edges, and
-the maximum of ``monitor`` in each window is refined between accepted steps by golden-section
-search on re-taken steps.
+the maximum of ``monitor`` in each window is refined by golden-section search on re-taken
+steps: inside the steps on both sides of each of the window's best `N_CRESTS` crests (local
+maxima of the sampled monitor: two crests within the integration accuracy of each other are
+both refined) and inside the window's first and last steps.
 """
 
 from __future__ import annotations
@@ -45,7 +47,7 @@ from numba import types
 
 __all__ = [
     "KERNEL", "RHS_SIG", "SCALAR_SIG", "MONITOR_SIG", "EVENT_SIG", "ACTION_SIG", "METHODS",
-    "Tableau", "integrate",
+    "Tableau", "integrate", "N_CRESTS",
     "STATUS_MESSAGES",
 ]
 
@@ -450,6 +452,69 @@ def _golden_max(rhs, monitor, t0, y0, p, h_max, A, B, C, K, y_new, f_new, ytmp, 
     return fd, t0 + d
 
 
+#: crests (distinct local maxima of the sampled monitor) per window whose neighbouring steps
+#: are refined at the window's close: two crests within the integration accuracy of each
+#: other are both refined, and the best refined value is the window's peak
+N_CRESTS = 3
+
+
+@nb.njit(**KERNEL)
+def _crest_store(row, cr_prev_y, cr_prev_p, cr_y, cr_p, cr_sc, y_prev, p_prev, t_prev, h_prev,
+                 y, p, t, m):
+    """Store a (pending) crest in `row`: the step before it (state y_prev at t_prev, size
+    h_prev, memory p_prev; h_prev = 0: none) and the sample itself (y, memory p, t, m)."""
+    if h_prev > 0.0:
+        for k in range(y.shape[0]):
+            cr_prev_y[row, k] = y_prev[k]
+        for k in range(p.shape[0]):
+            cr_prev_p[row, k] = p_prev[k]
+    for k in range(y.shape[0]):
+        cr_y[row, k] = y[k]
+    for k in range(p.shape[0]):
+        cr_p[row, k] = p[k]
+    cr_sc[row, 0] = t_prev
+    cr_sc[row, 1] = h_prev
+    cr_sc[row, 2] = t
+    cr_sc[row, 3] = 0.0
+    cr_sc[row, 4] = m
+
+
+@nb.njit(**KERNEL)
+def _crest_confirm(crest_rows, n_cr, cr_sc, next_h):
+    """Confirm the pending crest (row crest_rows[n_cr]; the step after it has size next_h,
+    0: none) among the window's best ones, crest_rows[:n_cr]: kept while fewer than
+    len(crest_rows) - 1 are, else in place of the smallest if larger. Returns the new count
+    and the value a sample must exceed to become a crest (-inf until the rows are full)."""
+    n_top = crest_rows.shape[0] - 1
+    row = crest_rows[n_cr]
+    cr_sc[row, 3] = next_h
+    if n_cr < n_top:
+        n_cr += 1
+    else:
+        i_min = 0
+        for i in range(1, n_top):
+            if cr_sc[crest_rows[i], 4] < cr_sc[crest_rows[i_min], 4]:
+                i_min = i
+        if cr_sc[row, 4] > cr_sc[crest_rows[i_min], 4]:
+            crest_rows[n_top] = crest_rows[i_min]
+            crest_rows[i_min] = row
+    if n_cr < n_top:
+        return n_cr, -np.inf
+    low = np.inf
+    for i in range(n_top):
+        low = min(low, cr_sc[crest_rows[i], 4])
+    return n_cr, low
+
+
+@nb.njit(**KERNEL, inline="always")
+def _seen(done_t, n_done, t0):
+    """Whether a step starting at t0 is among done_t[:n_done]."""
+    for i in range(n_done):
+        if done_t[i] == t0:
+            return True
+    return False
+
+
 @nb.njit(**KERNEL, inline="always")
 def _illinois_update(x, gx, a, ga, b, gb, side):
     """Shrink the bracket [a, b] (g(a) <= 0 < g(b)) to the new point x; the Illinois rule
@@ -704,15 +769,21 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
     peaks = np.full(n_win, -np.inf)
     peak_t = np.zeros(n_win)
     counters = np.zeros(6, dtype=np.int64)
-    # candidate of the current window's maximum: the step before it and the step after it
-    cand_prev_y = y.copy()
-    cand_prev_t = 0.0
-    cand_prev_h = 0.0
-    cand_prev_p = p.copy()
-    cand_y = y.copy()
-    cand_t = edges[0]
-    cand_p = p.copy()
-    cand_next_h = 0.0
+    # the window's best crests (distinct local maxima of the sampled monitor), each with the
+    # step before it and the step after it: rows of the crest arrays; crest_rows[:n_cr] are
+    # the confirmed crests, the pending crest (the last sample, while it rises) takes the
+    # free row `_pending_row`
+    n_top = N_CRESTS
+    n_p = p.shape[0]
+    cr_prev_y = np.empty((n_top + 1, n))
+    cr_prev_p = np.empty((n_top + 1, n_p))
+    cr_y = np.empty((n_top + 1, n))
+    cr_p = np.empty((n_top + 1, n_p))
+    cr_sc = np.zeros((n_top + 1, 5))    # prev_t, prev_h, t, next_h, value
+    crest_rows = np.arange(n_top + 1)
+    n_cr = 0
+    pend = False
+    thresh = -np.inf                    # the smallest confirmed crest once n_top are kept
     # the window's start (its first step is refined too)
     ws_y = y.copy()
     ws_t = edges[0]
@@ -745,7 +816,12 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
     win = 0
     peaks[0] = m0
     peak_t[0] = t
-    cand_fresh = True   # the first step gives the right-hand interval of the start point
+    # the window's start is its first pending crest (the first step is the one after it)
+    _crest_store(crest_rows[0], cr_prev_y, cr_prev_p, cr_y, cr_p, cr_sc, y, p, t, 0.0, y, p,
+                 t, m0)
+    pend = True
+    m_last = m0
+    done_t = np.empty(2 * n_top + 2)     # start times of the steps refined at a window's close
     if record:
         ts[0] = t
         ys[0, :] = y
@@ -927,27 +1003,22 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
                 h = h_next
             counters[1] += 1
 
-            # ---- peak tracking in the current window (m: the monitor at the step's end)
-            if cand_fresh:
-                cand_next_h = h_step
-                cand_fresh = False
+            # ---- peak tracking in the current window (m: the monitor at the step's end):
+            # the best sample, and the best crests of the samples with their steps
             if ws_h == 0.0:
                 ws_h = h_step
             if m > peaks[win]:
                 peaks[win] = m
                 peak_t[win] = t
-                _copy(ftmp, cand_prev_y)
-                cand_prev_t = t_old
-                cand_prev_h = h_step
-                if ev_step:
-                    _copy(p_prev, cand_prev_p)
-                else:
-                    _copy(p, cand_prev_p)
-                _copy(y, cand_y)
-                cand_t = t
-                _copy(p, cand_p)
-                cand_next_h = 0.0
-                cand_fresh = not land
+            if pend:
+                if not (m > cr_sc[crest_rows[n_cr], 4]):
+                    n_cr, thresh = _crest_confirm(crest_rows, n_cr, cr_sc, h_step)
+                pend = False
+            if m > m_last and m > thresh:
+                _crest_store(crest_rows[n_cr], cr_prev_y, cr_prev_p, cr_y, cr_p, cr_sc, ftmp,
+                             p_prev if ev_step else p, t_old, h_step, y, p, t, m)
+                pend = True
+            m_last = m
 
             if record:
                 ts[nrec] = t
@@ -960,55 +1031,67 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
                 nrec += 1
 
             if land:
-                # window closed: refine its maximum inside the steps on both sides of the best
-                # sample, and inside the window's first and last steps (a maximum just inside an
-                # edge is invisible to the samples when the best sample is elsewhere, e.g. at
-                # the other edge of a periodic window)
+                # window closed: refine its maximum inside the steps on both sides of each of
+                # its best crests, and inside the window's first and last steps (a maximum just
+                # inside an edge is invisible to the samples)
                 if refine_iters > 0:
+                    if pend:
+                        n_cr, thresh = _crest_confirm(crest_rows, n_cr, cr_sc, 0.0)
+                    pend = False
                     _copy(ftmp, last_y)
-                    n_cand = 0
-                    for which in range(4):
+                    n_done = 0
+                    for i in range(n_cr):
+                        row = crest_rows[i]
+                        for side in range(2):
+                            t0 = cr_sc[row, 2 * side]
+                            hh = cr_sc[row, 2 * side + 1]
+                            if hh <= 0.0 or _seen(done_t, n_done, t0):
+                                continue
+                            if side == 0:
+                                v, tv = _golden_max(rhs, monitor, t0, cr_prev_y[row],
+                                                    cr_prev_p[row], hh, A, B, C, K, y_new,
+                                                    f_new, ytmp, f_ref, refine_iters, oscr)
+                            else:
+                                v, tv = _golden_max(rhs, monitor, t0, cr_y[row], cr_p[row], hh,
+                                                    A, B, C, K, y_new, f_new, ytmp, f_ref,
+                                                    refine_iters, oscr)
+                            done_t[n_done] = t0
+                            n_done += 1
+                            if v > peaks[win]:
+                                peaks[win] = v
+                                peak_t[win] = tv
+                    for which in range(2):
                         if which == 0:
-                            if cand_prev_h <= 0.0:
-                                continue
-                            v, tv = _golden_max(rhs, monitor, cand_prev_t, cand_prev_y,
-                                                cand_prev_p, cand_prev_h, A, B, C, K, y_new,
-                                                f_new, ytmp, f_ref, refine_iters, oscr)
-                        elif which == 1:
-                            if cand_next_h <= 0.0:
-                                continue
-                            v, tv = _golden_max(rhs, monitor, cand_t, cand_y, cand_p, cand_next_h,
-                                                A, B, C, K, y_new, f_new, ytmp, f_ref,
-                                                refine_iters, oscr)
-                        elif which == 2:
-                            if ws_h <= 0.0 or cand_t == ws_t:
+                            if ws_h <= 0.0 or _seen(done_t, n_done, ws_t):
                                 continue
                             v, tv = _golden_max(rhs, monitor, ws_t, ws_y, ws_p, ws_h, A, B, C, K,
                                                 y_new, f_new, ytmp, f_ref, refine_iters, oscr)
                         else:
-                            if cand_t == t:
+                            if _seen(done_t, n_done, t_old):
                                 continue
-                            # (a step that lands on an edge is never an event step: p is its memory)
+                            # (a step that lands on an edge is never an event step: p is its
+                            # memory)
                             v, tv = _golden_max(rhs, monitor, t_old, last_y, p, h_step, A,
                                                 B, C, K, y_new, f_new, ytmp, f_ref,
                                                 refine_iters, oscr)
-                        n_cand += 1
+                        done_t[n_done] = t_old if which else ws_t
+                        n_done += 1
                         if v > peaks[win]:
                             peaks[win] = v
                             peak_t[win] = tv
-                    counters[5] += n_cand
+                    counters[5] += n_done
                 win += 1
                 if win < n_win:
                     # the landed step's end is the next window's start (not an event step: m
-                    # and its outputs are for the memory p)
+                    # and its outputs are for the memory p), its first pending crest
                     peaks[win] = m
                     peak_t[win] = t
-                    _copy(y, cand_y)
-                    cand_t = t
-                    _copy(p, cand_p)
-                    cand_prev_h = 0.0
-                    cand_next_h = 0.0
-                    cand_fresh = True
+                    n_cr = 0
+                    thresh = -np.inf
+                    _crest_store(crest_rows[0], cr_prev_y, cr_prev_p, cr_y, cr_p, cr_sc, y, p,
+                                 t, 0.0, y, p, t, m)
+                    pend = True
+                    m_last = m
                     _copy(y, ws_y)
                     ws_t = t
                     _copy(p, ws_p)

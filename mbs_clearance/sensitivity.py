@@ -422,9 +422,11 @@ class DdmSetup(NamedTuple):
     coeffs: np.ndarray
 
 
-def ddm_setup(mech, names, rtol, event_time_term=True) -> DdmSetup:
+def ddm_setup(mech, names, rtol, event_time_term=True, event_control=True) -> DdmSetup:
     """The augmented system of the DDM for the named parameters (one integration per
-    independent direction, `independent_directions`), ready for `reduced.run`."""
+    independent direction, `independent_directions`), ready for `reduced.run`. With
+    `event_control` the penetration (and for a damping-dominated law its rate) is under
+    error control beside the state, as in the plain run (`reduced.event_atol`)."""
     D_all = chain_matrix(mech, names)
     ref = np.array([reference_value(mech, n) for n in names])
     s0_all = _initial_sensitivities(mech, D_all)
@@ -447,7 +449,8 @@ def ddm_setup(mech, names, rtol, event_time_term=True) -> DdmSetup:
     rtol_v = reduced.DEFAULT_RTOL if rtol is None else rtol
     atol_state = reduced.default_atol(mech, rtol_v)[:4]
     scale = scale_all[basis]
-    atol = np.concatenate([atol_state] + [atol_state / s for s in scale] + [[1.0]])
+    atol = np.concatenate([atol_state] + [atol_state / s for s in scale] + [[1.0]]
+                          + ([reduced.event_atol(mech, rtol_v)] if event_control else []))
     n_err = 4 + 4 * nb
     # the recorded memory: p[P_MODE : P_SIGMA + nb] (mode, impact velocity, the flags, the
     # memory's sensitivities)

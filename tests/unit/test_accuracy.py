@@ -12,17 +12,6 @@ from mbs_clearance._warnings import AccuracyWarning
 from validation import accuracy_map as am
 
 
-def _rival_crest(mech, settings=()):
-    """Whether the run's peak of some revolution lies on another crest than the
-    reference's (peak times apart by more than 1e-3 of a period): a miss of the peak
-    refinement, which refines the best step's neighbourhood and the window's edge steps and
-    can miss a nearly equal crest elsewhere in the window (not of the error control: the
-    errors at the reference's crest are within the target there)."""
-    ref = reduced.run(mech, 4, rtol=am.REFERENCE_RTOL, record=False, **dict(settings))[4]
-    run = reduced.run(mech, 4, record=False, **dict(settings))[4]
-    return bool(np.any(np.abs(run - ref) > 1e-3 * mech.period))
-
-
 def _check(L2, L3):
     mech = am.grid_mechanism(L2, L3)
     err, _ = am.peak_errors(mech)
@@ -33,42 +22,91 @@ def _check(L2, L3):
         with pytest.warns(AccuracyWarning, match="grazing contact onset"):
             assert not simulate(mech).stats["accuracy_ok"]
         return "flagged"
-    if err.max() >= am.TARGET and _rival_crest(mech):
-        return "rival crest"
     assert err.max() < am.TARGET, (L2, L3, err)
     return "ok"
 
 
 @pytest.mark.parametrize("L2, L3", [(a, b) for a in (0.04, 0.05, 0.06) for b in (0.10, 0.12, 0.14)]
-                         + [(0.045, 0.125), (0.0425, 0.135)])
+                         + [(0.045, 0.125), (0.0425, 0.135), (0.0575, 0.105)])
 def test_every_peak_within_1e_5_of_rtol_1e_12_on_a_coarse_grid_of_the_box(L2, L3):
-    """3 x 3 grid of the box and two designs with slow re-contacts (0.045, 0.125: a grazing
-    re-contact, flagged; 0.0425, 0.135). Before the error control of the penetration every
-    one of these missed 1e-5 (the first impact's peak by 1.9e-5, the grazing design by
-    2e-2)."""
+    """3 x 3 grid of the box, two designs with slow re-contacts (0.045, 0.125: a grazing
+    re-contact, flagged; 0.0425, 0.135) and a near tie of two crests (0.0575, 0.105). Before
+    the error control of the penetration every one of these missed 1e-5 (the first impact's
+    peak by 1.9e-5, the grazing design by 2e-2); (0.06, 0.12) and (0.0575, 0.105) missed it
+    by 3.4e-5 and 1.3e-4 until the integrator refined the window's top crests (the peak of
+    another crest than the reference's)."""
     _check(L2, L3)
 
 
 @pytest.mark.slow
 def test_every_peak_within_1e_5_on_the_9_by_9_grid():
     outcome = [_check(L2, L3) for L2, L3 in am.grid_designs(9)]
-    # measured: 76 ok, 2 flagged (grazing onsets), 3 rival crests (docs/performance.md)
-    assert outcome.count("ok") >= 76 and outcome.count("rival crest") <= 3
+    # measured: 79 ok (worst 9.3e-6), 2 flagged grazing onsets (docs/performance.md)
+    assert outcome.count("ok") >= 79
 
 
-#: periodic stress cases that miss 1e-5 at the default settings (measured, worst revolution):
-#: the journal starting on the far wall (its reference separates and re-touches four
-#: times at grazing speed, the default run stays in contact) and Flores' law at e = 0.05
-#: (xi = 30: a heavily damped, stiff contact)
-STRESS_MISSES = {"journal starts against the wall (-1 c)": 3.4e-5,
-                 "flores law, restitution 0.05": 1.4e-5}
+#: periodic stress cases flagged by the run (stats["accuracy_ok"] False, AccuracyWarning):
+#: the journal placed on the far wall starts in contact at the floor impact velocity, whose
+#: damping (xi / floor times the penetration rate) is ill-conditioned: 3.4e-5 at the
+#: default rtol, 5e-8 at rtol 1e-10
+STRESS_FLAGGED = {"journal starts against the wall (-1 c)"}
 
 
 @pytest.mark.slow
-def test_periodic_stress_cases_within_1e_5():
+def test_periodic_stress_cases_within_1e_5_or_flagged():
+    from validation.stress import stress_cases
+
+    cases = {c.name: c for c in stress_cases()}
     for row in am.stress_map():
-        bound = 1.5 * STRESS_MISSES.get(row["case"], am.TARGET / 1.5)
-        assert row["errors"].max() < bound, row
+        case = cases[row["case"]]
+        if row["case"] in STRESS_FLAGGED:
+            assert row["errors"].max() < 1e-4, row
+            with pytest.warns(AccuracyWarning, match="grazing contact onset"):
+                assert not simulate(case.mech, case.revolutions,
+                                    **case.options).stats["accuracy_ok"]
+        else:
+            assert row["errors"].max() < am.TARGET, row
+
+
+def _errors_without_rate_control(mech, revolutions):
+    """Peak errors with the penetration rate's atol removed (as before DAMPED_XI)."""
+    atol = np.append(reduced.default_atol(mech, reduced.DEFAULT_RTOL),
+                     [reduced.event_atol(mech, reduced.DEFAULT_RTOL)[0], np.inf])
+    system = reduced.System(reduced.integrate_plain, reduced.initial_state(mech, 0.0),
+                            reduced.pack_parameters(mech), reduced.P_MODE, reduced.N_MEM,
+                            reduced.N_ERR, atol, len(reduced.OUT_COLUMNS))
+    out = reduced.run(mech, revolutions, record=False, system=system)
+    return np.abs(out[3] / am.reference_peaks(mech, revolutions) - 1.0)
+
+
+@pytest.mark.parametrize("e", [0.05, 0.1])
+def test_damping_dominated_contact_law_meets_1e_5_on_the_first_impact(e):
+    """Flores' law at low restitution (xi = 30, 14: the damping term dominates the spring
+    term at the impact speed) follows the penetration rate, which the state's error control
+    resolved only to 1.4e-5 and 1.2e-5 on the first impact's peak; with the rate under
+    error control (reduced.DAMPED_XI) every peak is within 1e-5 of rtol 1e-12."""
+    mech = SliderCrank(contact_model="flores", restitution=e)
+    assert np.isfinite(reduced.event_atol(mech, 1e-7)[1])
+    err, _ = am.peak_errors(mech, 1)
+    assert err.max() < am.TARGET, err
+    assert _errors_without_rate_control(mech, 1).max() > am.TARGET   # the control is needed
+    # the laws with xi <= 1.5 keep the rate under the state's control alone (the map's cost)
+    for law in ("lankarani_nikravesh", "hunt_crossley"):
+        assert np.isinf(reduced.event_atol(mech.replace(contact_model=law), 1e-7)[1])
+
+
+def test_journal_starting_on_the_far_wall_is_flagged_and_resolved_at_rtol_1e_10():
+    """The journal placed on the far wall (initial_offset -1) starts in contact at the floor
+    impact velocity: the run says so (a grazing onset), and the rtol the note recommends
+    (1e-10) meets 1e-5 against rtol 1e-12 (the default misses it by 3.4e-5 from the 2nd
+    revolution on)."""
+    mech, options = SliderCrank(), (("initial_offset", -1.0),)
+    with pytest.warns(AccuracyWarning, match="grazing contact onset.*rtol 1e-10"):
+        traj = simulate(mech, 2, initial_offset=-1.0)
+    assert not traj.stats["accuracy_ok"] and traj.stats["grazing_onsets"] == 1
+    assert am.peak_errors(mech, 2, options)[0].max() > am.TARGET     # the flag was deserved
+    assert am.peak_errors(mech, 2, options, rtol=1e-10)[0].max() < am.TARGET
+    assert simulate(mech, 2, initial_offset=-1.0, rtol=1e-10).stats["accuracy_ok"]
 
 
 def test_paper_case_error_and_cost_pinned_by_function_evaluations():

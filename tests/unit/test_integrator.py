@@ -11,6 +11,7 @@ from mbs_clearance.integrator import (
     EVENT_SIG,
     METHODS,
     MONITOR_SIG,
+    N_CRESTS,
     RHS_SIG,
     _clear_of_surface,
     dense_eval,
@@ -280,3 +281,45 @@ def test_a_peak_inside_the_first_step_of_a_window_is_found():
     values = [two_bumps(t, np.zeros(1), np.zeros(1), np.zeros(1), np.zeros(0))[0] for t in grid]
     assert peaks[0] == pytest.approx(max(values), abs=1e-9)
     assert peak_t[0] == pytest.approx(grid[int(np.argmax(values))], abs=1e-5)
+
+
+@nb.njit(MONITOR_SIG)
+def near_tie(t, y, p, d, out):
+    d[0] = 0.0
+    # two narrow crests: the higher (1.0 at t = 0.35) falls between the steps (0.1 apart),
+    # whose best sample is the lower crest's top (0.999 at t = 0.7)
+    m = math.exp(-((t - 0.35) / 0.1) ** 2) + 0.999 * math.exp(-((t - 0.7) / 0.1) ** 2)
+    return m, -1.0, 0.0      # the event function `never`
+
+
+def test_the_higher_of_two_nearly_equal_crests_is_refined():
+    """Top-k refinement: the best sample sits on the lower crest; refining only around it
+    would return ~0.999, the true maximum (fine grid) is ~1.0 near t = 0.35."""
+    tab = METHODS["dopri5"]
+    ts, _, _, peaks, peak_t, counters, _ = integrate(
+        still, never, nothing, near_tie, np.zeros(1), np.zeros(1), 0, 1, np.array([0.0, 1.0]),
+        1e-8, np.full(1, 1e-8), 1, 0.1, 0.1, 1000, True, 1e-14, 0.0, 1, 40, tab.arrays(), 0, 1)
+    samples = [near_tie(t, np.zeros(1), np.zeros(1), np.zeros(1), np.zeros(0))[0] for t in ts]
+    assert abs(ts[int(np.argmax(samples))] - 0.7) < 1e-9   # the best sample: the lower crest
+    grid = np.linspace(0.3, 0.4, 200001)
+    values = [near_tie(t, np.zeros(1), np.zeros(1), np.zeros(1), np.zeros(0))[0] for t in grid]
+    assert peaks[0] == pytest.approx(max(values), abs=1e-9)
+    assert peak_t[0] == pytest.approx(grid[int(np.argmax(values))], abs=1e-5)
+    # refined: the steps on both sides of each crest and the window's first and last steps,
+    # no step twice (3 crests at most: the start sample, 0.3 and 0.7 -> at most 6 + 2 steps)
+    assert 4 <= counters[5] <= 2 * N_CRESTS + 2
+
+
+def test_near_tie_design_of_the_slider_crank_refines_the_right_crest():
+    """At (L2, L3) = (0.0575, 0.105) of the GA box the rev-4 window has two crests of |F12|
+    within 1.3e-4 of each other, one near each end of the window; refining around the best
+    sample only picked the lower one (error 1.3e-4). Reference: rtol 1e-12."""
+    from mbs_clearance import reduced
+    from mbs_clearance.mechanism import SliderCrank
+    from mbs_clearance.optimize import design_mechanism
+
+    mech = design_mechanism(SliderCrank(), {"crank_length": 0.0575, "coupler_length": 0.105})
+    ref = reduced.run(mech, 4, rtol=1e-12, record=False)
+    out = reduced.run(mech, 4, record=False)
+    assert abs(out[3][3] / ref[3][3] - 1.0) < 1e-5
+    assert abs(out[4][3] - ref[4][3]) < 1e-3 * mech.period     # the same crest

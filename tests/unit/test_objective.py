@@ -136,7 +136,9 @@ def test_cost_in_function_evaluations(paper):
     plain = reduced.run(paper, 4, record=False)[5]
     res = peak_gradient(paper)
     ratio = res.stats["nfev"] / plain[0]
-    assert ratio < 1.75          # measured 1.68 (dop853 on the augmented system)
+    # measured 1.32 (dop853 on the augmented system, with the penetration under error
+    # control as in the plain run; 1.18 without it)
+    assert ratio < 1.45
     extra = res.stats["post_fev_plain"] + res.stats["post_fev_sens"]
     assert extra < 0.12 * plain[0]      # measured 0.10
     assert res.stats["post_refined_steps"] <= 2 * RIVAL_CANDIDATES + 2
