@@ -1230,8 +1230,9 @@ def integrate(rhs, event, on_event, monitor, y0, p, edges, settings, coefficient
                 h = h_next
             else:
                 zero_events = 0
-                _copy(g_end, g_start)  # valid for the next step (no event intervened)
-                _copy(gd_end, gd_start)
+                for j in range(n_ev):  # valid for the next step (no event intervened)
+                    g_start[j] = g_end[j]
+                    gd_start[j] = gd_end[j]
                 t_old = t
                 h_step = h_try
                 _copy(y, ftmp)
