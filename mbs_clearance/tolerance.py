@@ -447,8 +447,8 @@ class ToleranceResult:
         lines = [f"output: {self.output}; inputs: {', '.join(self.names)}"]
         w = max(len(n) for n in self.names)
         if self.sobol:
-            lines.append(f"Sobol (N = {self.sobol['N']}, {self.sobol['runs']} runs): "
-                         f"{'':>{max(0, w - 5)}}S1 +- conf      ST +- conf")
+            lines.append(f"Sobol (N = {self.sobol['N']}, {self.sobol['runs']} runs)")
+            lines.append(f"  {'':<{w}}  {'S1 +- conf':>16}  {'ST +- conf':>16}")
             for i, n in enumerate(self.names):
                 lines.append(f"  {n:<{w}}  {self.sobol['S1'][i]:7.3f} +- "
                              f"{self.sobol['S1_conf'][i]:.3f}  {self.sobol['ST'][i]:7.3f} +- "

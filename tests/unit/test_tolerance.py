@@ -242,8 +242,9 @@ def test_cli_tolerance_reads_a_salib_parameter_file_and_writes_the_result(tmp_pa
 def test_dgsm_bounds_the_total_sobol_index_on_the_mechanism():
     """Sobol & Kucherenko: S_T,i <= C_i nu_i / V (C_i = (b - a)^2 / pi^2 for the uniform and
     the log-concave fit clearance) with nu_i from the exact gradients of the peak; checked
-    against Sobol's S_T (less its interval) for every input of a tolerance batch; the two
-    methods agree on the most influential input."""
+    against Sobol's S_T (less its interval) for every input of a tolerance batch. (The bound
+    is not a ranking: the peak's steep dependence on the clearance near contact-mode changes
+    makes its bound far larger than its S_T, docs/tolerance.md.)"""
     m = SliderCrank()
     inputs = {"crank_length": band(m.crank_length, 5e-5),
               "coupler_length": band(m.coupler_length, 5e-5),
@@ -253,5 +254,5 @@ def test_dgsm_bounds_the_total_sobol_index_on_the_mechanism():
                         progress=False)
     assert r.counts["failed"] == 0
     st, conf, bound = r.sobol["ST"], r.sobol["ST_conf"], r.dgsm["bound"]
+    print(r.summary())
     assert np.all(st - conf <= bound), (st, conf, bound)
-    assert r.ranking("dgsm")[0] == r.ranking("sobol")[0]
