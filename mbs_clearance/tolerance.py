@@ -233,9 +233,11 @@ def _from_spec(name: str, spec) -> Any:
         if "fit" in spec:
             return FitClearance(spec["fit"], spec["diameter"], spec.get("shape", "trapezoid"))
         kind = next(k for k in kinds if k in spec)
+        if not isinstance(spec[kind], list) or len(spec[kind]) != 2:
+            raise ValueError(f"{kind!r} needs a list of two numbers")
         a, b = spec[kind]
         return {"uniform": Uniform, "band": band, "normal": Normal}[kind](a, b)
-    except (KeyError, TypeError) as exc:
+    except (KeyError, TypeError, ValueError) as exc:
         raise ValueError(f"input {name!r}: bad specification {spec!r} ({exc})") from None
 
 

@@ -256,3 +256,24 @@ def test_dgsm_bounds_the_total_sobol_index_on_the_mechanism():
     st, conf, bound = r.sobol["ST"], r.sobol["ST_conf"], r.dgsm["bound"]
     print(r.summary())
     assert np.all(st - conf <= bound), (st, conf, bound)
+
+
+def test_read_inputs_json_and_salib_formats(tmp_path):
+    from mbs_clearance.tolerance import read_inputs
+
+    js = tmp_path / "in.json"
+    js.write_text('{"crank_length": {"band": [0.05, 1e-4]}, "slider_mass": {"normal": [0.14, '
+                  '0.001]}, "radial_clearance": {"fit": "H7/g6", "diameter": 0.02}}')
+    got = read_inputs(js)
+    assert got["crank_length"] == Uniform(0.05 - 1e-4, 0.05 + 1e-4)
+    assert got["slider_mass"] == Normal(0.14, 0.001)
+    assert got["radial_clearance"].limits == pytest.approx((3.5e-6, 20.5e-6), abs=1e-12)
+    txt = tmp_path / "in.txt"
+    txt.write_text("# SALib\nx1 -3.14 3.14\n\nx2 0 1\n")
+    assert read_inputs(txt) == {"x1": Uniform(-3.14, 3.14), "x2": Uniform(0.0, 1.0)}
+    js.write_text('{"crank_length": {"band": [0.05]}}')
+    with pytest.raises(ValueError, match="input 'crank_length': bad specification"):
+        read_inputs(js)
+    txt.write_text("x1 1.0\n")
+    with pytest.raises(ValueError, match="line 1: expected NAME LOW HIGH"):
+        read_inputs(txt)
