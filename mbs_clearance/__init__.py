@@ -25,6 +25,7 @@ from .objective import PeakGradient, peak_gradient  # noqa: E402
 from .optimize import OptimizationResult, optimize_link_lengths  # noqa: E402
 from .sensitivity import DEFAULT_PARAMETERS, Sensitivities, sensitivities  # noqa: E402
 from .simulate import BACKENDS, peak_base_force, simulate  # noqa: E402
+from .tolerance import ToleranceResult, tolerance_study  # noqa: E402
 from .trajectory import Trajectory, load_trajectory  # noqa: E402
 
 __all__ = [
@@ -34,6 +35,7 @@ __all__ = [
     "sensitivities", "Sensitivities", "DEFAULT_PARAMETERS",
     "optimize_link_lengths", "OptimizationResult",
     "peak_gradient", "PeakGradient",
+    "tolerance_study", "ToleranceResult",
     "MbsClearanceWarning", "AccuracyWarning", "PhysicsWarning", "CacheWarning",
 ]
 

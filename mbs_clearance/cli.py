@@ -370,6 +370,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=_cmd_sensitivity)
 
     _add_optimize_parser(sub)
+    _add_tolerance_parser(sub)
     _add_plugins(sub)
     return parser
 
@@ -510,6 +511,87 @@ def _cmd_optimize(args: argparse.Namespace) -> int:
         staged.commit()
     print(f"result.json, table3.md, fitness_history.png and force_comparison.png written to "
           f"{args.out}", file=sys.stderr)
+    return 0
+
+
+def _add_tolerance_parser(subparsers) -> argparse.ArgumentParser:
+    """The ``tolerance`` subcommand: global sensitivity and exceedance over tolerances."""
+    p = subparsers.add_parser(
+        "tolerance", help="tolerances and wear: Sobol/Morris/DGSM indices, P(load exceeded)",
+        description="Global sensitivity of a run's output (peak base force, RMS drive moment, "
+                    "max contact force) to manufacturing tolerances (SALib), Monte Carlo of "
+                    "its distribution and the probability of exceeding --allowable, and a "
+                    "wear study. Inputs: a JSON object {field: {\"uniform\": [lo, hi]} | "
+                    "{\"band\": [nominal, tol]} | {\"normal\": [mean, sigma]} | "
+                    "{\"fit\": \"H7/g6\", \"diameter\": 0.02}} (field 'radial_clearance' "
+                    "for a fit), or a SALib parameter file (lines: NAME LOW HIGH, uniform). "
+                    "Prints the indices and writes result.json and summary.txt into --out.")
+    p.add_argument("inputs", type=Path, help="input distributions (JSON, or SALib text file)")
+    p.add_argument("--output", choices=("peak", "rms_drive_moment", "max_contact_force"),
+                   default="peak", help="output of a run (default: peak)")
+    p.add_argument("--revolution", type=int_at_least(1), default=4,
+                   help="crank revolution of the output (default 4)")
+    p.add_argument("--sobol", type=int_at_least(0), default=256,
+                   help="Sobol base sample N, a power of 2 (0: none; default 256)")
+    p.add_argument("--first-order-only", action="store_true",
+                   help="no second-order Sobol indices (N (d + 2) runs instead of N (2d + 2))")
+    p.add_argument("--morris", type=int_at_least(0), default=0,
+                   help="Morris trajectories (0: none)")
+    p.add_argument("--dgsm", type=int_at_least(0), default=0,
+                   help="DGSM gradient samples (output peak only; 0: none)")
+    p.add_argument("--monte-carlo", type=int_at_least(0), default=0,
+                   help="Monte Carlo samples of the output distribution (0: none)")
+    p.add_argument("--allowable", type=finite_float,
+                   help="allowable load: estimate P(output > allowable)")
+    p.add_argument("--wear", type=finite_float, nargs="+", metavar="M",
+                   help="radial wear amounts in m added to the clearance (needs --monte-carlo)")
+    p.add_argument("--seed", type=int_at_least(0), default=0, help="seed (default 0)")
+    p.add_argument("--rtol", type=positive_float, help="relative tolerance of the reduced model")
+    p.add_argument("--scheduler", metavar="tcp://HOST:PORT",
+                   help="evaluate on this dask.distributed scheduler")
+    p.add_argument("--workers", type=int_at_least(1), default=2,
+                   help="local worker threads when no --scheduler (1 = this process)")
+    p.add_argument("--out", type=Path, default=Path("tolerance"),
+                   help="output directory (default ./tolerance)")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    add_force_option(p)
+    add_mechanism_options(p)
+    p.set_defaults(func=_cmd_tolerance)
+    return p
+
+
+def _cmd_tolerance(args: argparse.Namespace) -> int:
+    from .tolerance import read_inputs, tolerance_study
+
+    mech = mechanism_from_args(args)
+    inputs = read_inputs(args.inputs)
+    check_output_dir(args.out, "--out", args.force)
+    kw = dict(output=args.output, revolution=args.revolution, sobol=args.sobol,
+              second_order=not args.first_order_only, morris=args.morris, dgsm=args.dgsm,
+              monte_carlo=args.monte_carlo, allowable=args.allowable, wear=args.wear,
+              seed=args.seed, progress=not args.no_progress)
+    if args.rtol is not None:
+        kw["rtol"] = args.rtol
+    if args.scheduler:
+        try:
+            import dask.distributed  # noqa: F401
+        except ImportError as exc:
+            raise ValueError("--scheduler needs dask.distributed: "
+                             "pip install 'mbs-clearance[dask]'") from exc
+        with connect_dask(args.scheduler) as client:
+            print(f"evaluating on the dask cluster at {args.scheduler}", file=sys.stderr)
+            result = tolerance_study(inputs, mech, executor=client, **kw)
+    elif args.workers == 1:
+        result = tolerance_study(inputs, mech, executor="serial", **kw)
+    else:
+        result = tolerance_study(inputs, mech, workers=args.workers, **kw)
+    text = result.summary()
+    print(text)
+    with OutputDir(args.out, "tolerance") as staged:
+        result.to_json(staged.path / "result.json")
+        (staged.path / "summary.txt").write_text(text + "\n")
+        staged.commit()
+    print(f"result.json and summary.txt written to {args.out}", file=sys.stderr)
     return 0
 
 

@@ -23,19 +23,15 @@ the same whatever the units and widths of the design variables.
 
 from __future__ import annotations
 
-import contextlib
 import itertools
 import json
 import logging
 import math
 import multiprocessing
 import numbers
-import os
-import signal
-import threading
 import time
 import warnings
-from concurrent.futures import ProcessPoolExecutor, ThreadPoolExecutor
+from concurrent.futures import ThreadPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -45,6 +41,22 @@ import numpy as np
 
 from ._io import read_json_object
 from ._warnings import AccuracyWarning
+from .executor import (  # noqa: F401 - the executors live in executor.py (shared)
+    _THREAD_SAFE_BACKENDS,
+    DASK_CONNECT_TIMEOUT,
+    DASK_WORKER_TIMEOUT,
+    LOCAL_EXECUTORS,
+    _check_timeout,
+    _describe_executor,
+    _Dispatcher,
+    _is_dask_client,
+    _peak_chunk,
+    _sigterm_raises,
+    _stop_pool,
+    _wait_for_dask_workers,
+    connect_dask,
+    local_process_pool,
+)
 from .mechanism import CONTINUOUS_FIELDS, SliderCrank
 from .simulate import BACKENDS, peak_base_force, simulate
 
@@ -52,21 +64,9 @@ __all__ = ["optimize_link_lengths", "OptimizationResult", "MASS_SCALINGS", "PAPE
            "design_mechanism", "connect_dask", "LOCAL_EXECUTORS", "SATURATION_RTOL",
            "DASK_CONNECT_TIMEOUT", "DASK_WORKER_TIMEOUT"]
 
-#: the executors the call can create itself: "serial" (this process), "threads" (a pool of
-#: `workers` threads; the default for the compiled backends), "processes" (a pool of
-#: `workers` processes; the default for backend="exudyn", whose engine is not thread-safe)
-LOCAL_EXECUTORS = ("serial", "threads", "processes")
-
-#: backends evaluated in threads by default (their kernels release the GIL or are numpy)
-_THREAD_SAFE_BACKENDS = ("reduced", "ideal")
-
 #: saturation: the best value counts as unchanged over the last N generations when it moved
 #: by at most this fraction of its value
 SATURATION_RTOL = 1e-9
-
-#: seconds to wait for a dask scheduler to answer, and for its first worker to join
-DASK_CONNECT_TIMEOUT = 10.0
-DASK_WORKER_TIMEOUT = 60.0
 
 #: what to do when worker processes re-import a script without a main guard
 _MAIN_GUARD_ADVICE = (
@@ -154,199 +154,6 @@ class _Problem:
     def mechanism(self, u) -> SliderCrank:
         return design_mechanism(self.base, dict(zip(self.names, self.physical(u))),
                                 self.mass_scaling)
-
-
-def _peak_chunk(mechs: list[SliderCrank], revolution: int, backend: str,
-                options: dict, stop: threading.Event | None = None) -> list[float]:
-    """Worker: peak |F12| of each mechanism (inf where the integration fails).
-
-    `stop` (thread pools only) is checked between designs: once set, the chunk returns
-    at once (its result is then discarded).
-    """
-    out = []
-    for mech in mechs:
-        if stop is not None and stop.is_set():
-            break
-        try:
-            out.append(float(peak_base_force(mech, revolution, backend, **options)))
-        except RuntimeError:
-            out.append(math.inf)
-    return out
-
-
-def _peak_chunk_packed(args: tuple) -> list[float]:
-    """`_peak_chunk` with its arguments in one tuple (for map-only executors)."""
-    return _peak_chunk(*args)
-
-
-def _init_worker() -> None:
-    """Process-pool initializer: one thread per worker process, SIGINT left to the parent.
-
-    The numba kernels are serial (no parallel=True), so numba never starts its thread pool;
-    these variables keep any OpenMP/BLAS library loaded later from starting one thread per
-    core in each of the worker processes. Ctrl-C at a terminal reaches the whole process
-    group: the workers ignore it and the parent, which gets it too, terminates them (a
-    KeyboardInterrupt inside a worker would break the pool while it shuts down).
-    """
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    for name in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS",
-                 "NUMBA_NUM_THREADS"):
-        os.environ.setdefault(name, "1")
-
-
-# ----------------------------------------------------------------------------- executors
-
-class _Dispatcher:
-    """Uniform `map` over a thread or process pool, a concurrent.futures executor or a dask
-    Client. `stop` (set on an interrupt) makes thread-pool chunks return between designs."""
-
-    def __init__(self, executor, n_workers: int | None):
-        self.executor = executor
-        self.is_dask = _is_dask_client(executor)
-        self.stop = threading.Event() if isinstance(executor, ThreadPoolExecutor) else None
-        if n_workers is None and executor is not None:
-            if self.is_dask:
-                n_workers = max(1, sum(executor.nthreads().values()))
-            else:
-                n_workers = getattr(executor, "_max_workers", None)
-        self.n_workers = n_workers
-
-    def map(self, mechs: list[SliderCrank], problem: _Problem) -> list[float]:
-        args = (problem.revolution, problem.backend, problem.options)
-        if self.executor is None or len(mechs) <= 1:
-            return _peak_chunk(mechs, *args)
-        n_chunks = len(mechs) if self.n_workers is None else min(len(mechs), self.n_workers)
-        bounds = np.linspace(0, len(mechs), n_chunks + 1).round().astype(int)
-        chunks = [mechs[a:b] for a, b in zip(bounds[:-1], bounds[1:])]
-        if self.is_dask:
-            futures = [self.executor.submit(_peak_chunk, c, *args, pure=False) for c in chunks]
-            results = self.executor.gather(futures)
-        elif hasattr(self.executor, "submit"):
-            extra = () if self.stop is None else (self.stop,)
-            futures = [self.executor.submit(_peak_chunk, c, *args, *extra) for c in chunks]
-            try:
-                results = [f.result() for f in futures]
-            except BaseException:
-                for f in futures:
-                    f.cancel()
-                if self.stop is not None:
-                    self.stop.set()
-                raise
-        else:  # map-only executors, e.g. multiprocessing.Pool: one iterable of tuples
-            results = list(self.executor.map(_peak_chunk_packed, [(c, *args) for c in chunks]))
-        return [p for chunk in results for p in chunk]
-
-
-def _is_dask_client(executor) -> bool:
-    return (type(executor).__module__.startswith("distributed")
-            and hasattr(executor, "gather") and hasattr(executor, "nthreads"))
-
-
-def _describe_executor(executor, workers) -> str:
-    if executor is None:
-        return "serial (this process)"
-    if _is_dask_client(executor):
-        return f"dask.distributed.Client({executor.scheduler.address}, {workers} threads)"
-    return f"{type(executor).__name__}({workers} workers)"
-
-
-def local_process_pool(workers: int = 2) -> ProcessPoolExecutor:
-    """A process pool suited to the GA: forkserver (spawn where unavailable), one thread
-    each, SIGINT ignored in the workers (the parent stops them, see `_stop_pool`).
-
-    Forkserver/spawn rather than fork because the parent may run threads (progress bar,
-    dask client) that fork would copy mid-operation. Both re-import the main script in each
-    worker: a script that calls the GA at its top level needs a main guard (the call then
-    fails with that advice in one line); thread pools have no such requirement.
-    """
-    method = "forkserver" if "forkserver" in multiprocessing.get_all_start_methods() \
-        else "spawn"
-    return ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context(method),
-                               initializer=_init_worker)
-
-
-def _stop_pool(pool, dispatcher: _Dispatcher, interrupted: bool) -> None:
-    """Shut a pool the call created down; after an interrupt, without waiting for queued
-    designs: threads stop between designs, processes are terminated and reaped."""
-    if not interrupted:
-        pool.shutdown(wait=True)
-        return
-    if dispatcher.stop is not None:
-        dispatcher.stop.set()
-    if isinstance(pool, ProcessPoolExecutor):
-        processes = list((getattr(pool, "_processes", None) or {}).values())
-        for proc in processes:
-            with contextlib.suppress(Exception):
-                proc.terminate()
-        pool.shutdown(wait=False, cancel_futures=True)
-        for proc in processes:
-            with contextlib.suppress(Exception):
-                proc.join(5.0)
-                if proc.is_alive():
-                    proc.kill()
-                    proc.join(1.0)
-    else:
-        pool.shutdown(wait=True, cancel_futures=True)
-
-
-class _Terminated(SystemExit):
-    """Raised in the main thread by SIGTERM during a run, so that the pool is cleaned up."""
-
-
-@contextlib.contextmanager
-def _sigterm_raises():
-    """For the duration of a run in the main thread, turn SIGTERM (whose default action
-    would kill this process at once and orphan pool workers) into `_Terminated` (exit code
-    143); a handler installed by the caller is left alone."""
-    if threading.current_thread() is not threading.main_thread() \
-            or signal.getsignal(signal.SIGTERM) is not signal.SIG_DFL:
-        yield
-        return
-
-    def handler(signum, frame):
-        raise _Terminated(128 + signum)
-
-    signal.signal(signal.SIGTERM, handler)
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGTERM, signal.SIG_DFL)
-
-
-def connect_dask(address: str, timeout: float = DASK_CONNECT_TIMEOUT):
-    """A `dask.distributed.Client` connected to the scheduler at `address`, or TimeoutError
-    with one line (how long it waited, what to check) after `timeout` seconds."""
-    from dask.distributed import Client
-
-    timeout = _check_timeout("timeout", timeout)
-    try:
-        return Client(address, timeout=timeout)
-    except (OSError, TimeoutError) as exc:
-        reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-        raise TimeoutError(
-            f"could not connect to the dask scheduler at {address!r} within {timeout:g} s "
-            f"({reason}); check that the scheduler runs (dask scheduler) and that the "
-            "address and port are reachable from here") from None
-
-
-def _wait_for_dask_workers(client, timeout: float) -> None:
-    """Wait up to `timeout` seconds for the first worker of a dask cluster (submitted tasks
-    would otherwise wait forever); TimeoutError with one line."""
-    try:
-        client.wait_for_workers(1, timeout=timeout)
-    except (OSError, TimeoutError) as exc:
-        address = getattr(client.scheduler, "address", "?")
-        raise TimeoutError(
-            f"no dask worker joined the scheduler at {address} within {timeout:g} s; start "
-            f"workers (dask worker {address}) or check that they can reach the scheduler "
-            "and import mbs_clearance") from exc
-
-
-def _check_timeout(name: str, value) -> float:
-    if not isinstance(value, numbers.Real) or isinstance(value, bool) \
-            or not math.isfinite(value) or value <= 0:
-        raise ValueError(f"{name} must be a finite number of seconds > 0; got {value!r}")
-    return float(value)
 
 
 #: run id -> (dispatcher, progress bar) while a run is active; kept out of the GA object
