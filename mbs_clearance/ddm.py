@@ -284,8 +284,9 @@ def rhs_sens(t, y, p, dydt):
 
 
 @nb.njit(ACTION_SIG, cache=True, error_model="numpy")
-def on_event_sens(t, y, p):
-    """Contact switch with the impact-velocity memory and its sensitivity (event-time term)."""
+def on_event_sens(t, y, p, j):
+    """Contact switch (the one joint, j = 0) with the impact-velocity memory and its
+    sensitivity (event-time term)."""
     if p[P_MODE] > 0.5:
         p[P_MODE] = 0.0
         return
@@ -432,12 +433,13 @@ def sens_outputs(ts, ys, ms, outs, p, coeffs):
 
 
 @nb.njit(MONITOR_SIG, **KERNEL)
-def monitor_sens(t, y, p, dydt, out):
+def monitor_sens(t, y, p, dydt, out, g, gd):
     """The integrator's last stage of a step: `rhs_sens`, the plain model's |F12| and its
-    event function (from one evaluation of the plain model). When the integrator records
-    outputs (out of N_OUT_PLAIN + npar entries): the plain model's outputs, then the total
-    derivatives of theta3dd along each direction, which `sens_outputs` needs at the
-    recorded steps (the right-hand side computed them already)."""
+    switching function into g, gd (from one evaluation of the plain model). When the
+    integrator records outputs (out of N_OUT_PLAIN + npar entries): the plain model's
+    outputs, then the total derivatives of theta3dd along each direction, which
+    `sens_outputs` needs at the recorded steps (the right-hand side computed them
+    already)."""
     rhs_sens(t, y, p, dydt)
     res = reduced.dynamics(t, y, p)
     if out.shape[0] > N_OUT_PLAIN:
@@ -445,7 +447,7 @@ def monitor_sens(t, y, p, dydt, out):
             out[k] = res[k]
         for k in range(out.shape[0] - N_OUT_PLAIN):
             out[N_OUT_PLAIN + k] = dydt[6 + 4 * k]
-    return reduced.peak_and_event(p, res)
+    return reduced.peak_and_switching(p, res, g, gd)
 
 
 @nb.njit(cache=True, error_model="numpy")
@@ -479,16 +481,12 @@ def norm_maxima(ys, coeffs, weights, lo, hi):
 
 
 @nb.njit(cache=True, error_model="numpy", nogil=True)
-def integrate_sens(y0, p, mem_start, n_mem, edges, rtol, atol, n_err, h0, h_max, max_steps,
-                   record, event_tol, event_margin, n_samples, refine_iters, coefficients, n_out,
-                   n_dense):
+def integrate_sens(y0, p, edges, settings, coefficients):
     """`integrator.integrate` bound to the sensitivity equations (compiled once, cached);
     events and monitor are the plain model's."""
     # module attributes, not plain globals: see reduced.integrate_plain
     return integrate(_THIS.rhs_sens, reduced.event, _THIS.on_event_sens, _THIS.monitor_sens,
-                     y0, p, mem_start, n_mem, edges, rtol, atol, n_err, h0, h_max,
-                     max_steps, record, event_tol, event_margin, n_samples, refine_iters,
-                     coefficients, n_out, n_dense)
+                     y0, p, edges, settings, coefficients)
 
 
 @nb.njit(cache=True, error_model="numpy")
@@ -500,11 +498,11 @@ def step_sens(t0, y0, p, hs, coefficients, n_out):
     so this gives the state at a refined peak time."""
     A, B, C = coefficients[0], coefficients[1], coefficients[2]
     n = y0.shape[0]
-    K, _, f_new, ytmp, f0 = step_workspace(coefficients, n)
+    K, _, f_new, ytmp, f0, g, gd = step_workspace(coefficients, n)
     ys = np.empty((hs.shape[0], n))
     outs = np.zeros((hs.shape[0], n_out))
     _THIS.rhs_sens(t0, y0, p, f0)
     for k in range(hs.shape[0]):
         _step_monitor(_THIS.rhs_sens, _THIS.monitor_sens, t0, y0, f0, hs[k], A, B, C, K, p,
-                      ys[k], f_new, ytmp, outs[k])
+                      ys[k], f_new, ytmp, outs[k], g, gd)
     return ys, outs

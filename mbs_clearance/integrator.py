@@ -1,43 +1,58 @@
 """Compiled adaptive explicit Runge-Kutta integration with event location (numba kernels).
 
-The model is passed as four compiled functions with fixed signatures (numba specialises the
-integrator for them, so the calls are direct and can be inlined):
+Protocol v2. The model is passed as four compiled functions with fixed signatures (numba
+specialises the integrator for them, so the calls are direct and can be inlined); it has
+J >= 1 switching functions (``IntegratorSettings.n_events``), one per clearance joint:
 
-- ``rhs(t, y, p, dydt)``: right-hand side; ``p`` holds parameters and the model's memory
-  variables (contact mode, impact velocity, ...), ``p[mem_start:mem_start + n_mem]``, which
+- ``rhs(t, y, p, dydt)`` (`RHS_SIG`): right-hand side; ``p`` holds parameters and the
+  model's memory variables, ``p[mem_start:mem_start + n_mem]`` (by convention two per joint
+  j: ``p[mem_start + 2 j]`` its mode, ``p[mem_start + 2 j + 1]`` its impact velocity), which
   are recorded with every step;
-- ``event(t, y, p) -> (g, gdot)``: switching function, negative in the current mode, and its
-  time derivative along the motion (used to look for excursions between samples); a crossing to
-  positive inside a step is an event;
-- ``on_event(t, y, p)``: applied exactly at a located event (updates the memory in ``p``);
-- ``monitor(t, y, p, dydt, out) -> (m, g, gdot)``: the right-hand side (into ``dydt``, as
-  ``rhs``), a scalar m whose maximum is tracked per time window (the peak) and the event
-  function (the same values as ``event(t, y, p)``); it may also write model outputs into
-  ``out`` (n_out entries), which are recorded with every step. It is called for the last
-  (FSAL) stage of every step, at the step's end, so that a model evaluates itself once
-  there for the derivative, the peak, the event search and the outputs.
+- ``event(t, y, p, j) -> (g, gdot)`` (`EVENT_SIG`): switching function of joint j, negative
+  in its current mode, and its time derivative along the motion (used to look for
+  excursions between samples); a crossing to positive inside a step is an event;
+- ``on_event(t, y, p, j)`` (`ACTION_SIG`): applied exactly at a located event of joint j
+  (updates joint j's memory in ``p``);
+- ``monitor(t, y, p, dydt, out, g, gd) -> m`` (`MONITOR_SIG`): the right-hand side (into
+  ``dydt``, as ``rhs``), every joint's switching function and rate into ``g[:J]``,
+  ``gd[:J]`` (the values of ``event(t, y, p, j)``) and a scalar m whose maximum is tracked
+  per time window (the peak); it may also write model outputs into ``out`` (n_out
+  entries), which are recorded with every step. It is called for the last (FSAL) stage of
+  every step, at the step's end, so that a model evaluates itself once there for the
+  derivative, the peak, the event search and the outputs.
+
+The settings are one record (`IntegratorSettings`, built with `make_settings`), the outcome a
+named result (`RESULTS`, each with an actionable message).
 
 Error control: the scaled RMS of the embedded error estimate over the first n_err state
-components, and optionally (two more entries in ``atol``) the change of the switching
-function g and of its rate between the step's solution and the embedded one: a model whose
+components, and optionally (2 J more entries in ``atol``) the change of each switching
+function g_j and of its rate between the step's solution and the embedded one: a model whose
 events hinge on a small difference of large state components (a penetration of
 micrometres in coordinates of decimetres) gets its error controlled at the scale of the
 difference.
 
-Events are searched on the step's dense output (`_search_event`: interior samples, a closer
-look wherever the cubic Hermite interpolant of g and its rate comes within `event_margin` of
-the surface, and steps limited while approaching it), so that a crossing and return inside one
-step is not missed. The first crossing is located on the dense output, then the step is redone
-with the located size and refined by Illinois iterations on the real step map, inside the
-search's bracket, until |g| <= event_tol: the memory is set at the landed state, never at the
-first state found inside the wall. The integration also lands exactly on the window edges, and
-the maximum of ``monitor`` in each window is refined between accepted steps by golden-section
-search on re-taken steps.
+A step is taken in named stages: `_attempt` (stages, monitor, error), then `_find_event`
+(every joint's switching function searched on the step's dense output: interior samples, a
+closer look wherever the cubic Hermite interpolant of g and its rate comes within
+`event_margin` of the surface, and steps limited while approaching it, so that a crossing
+and return inside one step is not missed; the earliest crossing among the joints is located
+on the dense output), `_land` (the step redone with the located size and refined by Illinois
+iterations on the real step map, inside the search's bracket, until |g| <= event_tol: the
+memory is set at the landed state, never at the first state found inside the wall),
+`_switch` (on_event for that joint and for every other joint on its surface there: two
+events in one step are two steps), `_track_crests` and, at a window's close,
+`_refine_window`. The integration also lands exactly on the window edges, and the maximum
+of ``monitor`` in each window is refined by golden-section search on re-taken steps: inside
+the steps on both sides of each of the window's best ``n_crests`` crests (local maxima of
+the sampled monitor: two crests within the integration accuracy of each other are both
+refined) and inside the window's first and last steps.
 """
 
 from __future__ import annotations
 
+import enum
 import math
+from typing import NamedTuple
 
 import numba as nb
 import numpy as np
@@ -45,8 +60,8 @@ from numba import types
 
 __all__ = [
     "KERNEL", "RHS_SIG", "SCALAR_SIG", "MONITOR_SIG", "EVENT_SIG", "ACTION_SIG", "METHODS",
-    "Tableau", "integrate",
-    "STATUS_MESSAGES",
+    "Tableau", "integrate", "N_CRESTS", "RESULTS", "IntegratorSettings", "make_settings",
+    "COUNTERS",
 ]
 
 #: numba options of the kernels (model functions and the integrator's helpers, everything
@@ -60,10 +75,9 @@ KERNEL = {"cache": True, "error_model": "numpy", "_nrt": False}
 _vec = types.float64[::1]
 RHS_SIG = types.void(types.float64, _vec, _vec, _vec)
 SCALAR_SIG = types.float64(types.float64, _vec, _vec)
-MONITOR_SIG = types.UniTuple(types.float64, 3)(types.float64, _vec, _vec, _vec, _vec)
-EVENT_SIG = types.UniTuple(types.float64, 2)(types.float64, _vec, _vec)
-ACTION_SIG = types.void(types.float64, _vec, _vec)
-
+EVENT_SIG = types.UniTuple(types.float64, 2)(types.float64, _vec, _vec, types.int64)
+ACTION_SIG = types.void(types.float64, _vec, _vec, types.int64)
+MONITOR_SIG = types.float64(types.float64, _vec, _vec, _vec, _vec, _vec, _vec)
 
 class Tableau:
     """Coefficients of an embedded explicit RK pair in the layout of scipy's ``rk_step``.
@@ -177,14 +191,112 @@ METHODS: dict[str, Tableau] = {
     "bs3": Tableau("bs3", _BS_A, _BS_B, _BS_C, _BS_E, _BS_P, 3, 2),
 }
 
-STATUS_MESSAGES = {
-    0: "success",
-    1: "maximum number of steps reached: raise max_steps or loosen rtol/atol",
-    2: "step size underflow: the problem is too stiff for this tolerance; loosen rtol/atol "
-       "or reduce the contact stiffness",
-    3: "events chatter (repeated zero-length events): the contact is grazing at machine "
-       "precision; raise impact_velocity_floor or change the initial state",
+class RESULTS(enum.IntEnum):
+    """Outcome of `integrate` (its last return value, as an int; ``RESULTS(status)``)."""
+
+    success = 0
+    max_steps = 1
+    step_underflow = 2
+    event_chatter = 3
+
+    @property
+    def message(self) -> str:
+        """What happened and what to change."""
+        return _RESULT_MESSAGES[self]
+
+
+_RESULT_MESSAGES = {
+    RESULTS.success: "success",
+    RESULTS.max_steps: "maximum number of steps reached: raise max_steps or loosen rtol/atol",
+    RESULTS.step_underflow: "step size underflow: the problem is too stiff for this "
+                            "tolerance; loosen rtol/atol or reduce the contact stiffness",
+    RESULTS.event_chatter: "events chatter (repeated zero-length events): the contact is "
+                           "grazing at machine precision; raise impact_velocity_floor or "
+                           "change the initial state",
 }
+# the kernel's codes (ints in compiled code)
+_MAX_STEPS = int(RESULTS.max_steps)
+_STEP_UNDERFLOW = int(RESULTS.step_underflow)
+_EVENT_CHATTER = int(RESULTS.event_chatter)
+
+#: the entries of the counters array returned by `integrate`
+COUNTERS = ("nfev", "naccept", "nreject", "nevent", "nrefine")
+
+#: crests (distinct local maxima of the sampled monitor) per window whose neighbouring steps
+#: are refined at the window's close (the default of ``IntegratorSettings.n_crests``): two
+#: crests within the integration accuracy of each other are both refined, and the best
+#: refined value is the window's peak
+N_CRESTS = 3
+
+
+class IntegratorSettings(NamedTuple):
+    """The settings of `integrate`, one record (build it with `make_settings`, which fixes
+    the field types: numba compiles one specialisation per set of types)."""
+
+    rtol: float
+    #: absolute tolerances: n_err entries (or len(y0)) for the state, plus optionally 2 J
+    #: (those of g_j and gdot_j, joint by joint) that put the switching functions under
+    #: error control
+    atol: np.ndarray
+    #: leading state components under error control
+    n_err: int
+    #: initial step (<= 0: automatic)
+    h0: float
+    h_max: float
+    max_steps: int
+    #: record every accepted step (t, y, memory, outputs)
+    record: bool
+    #: |g| below which an event is located (and a joint counts as on its surface)
+    event_tol: float
+    #: look closer between event samples where g comes this near the surface
+    event_margin: float
+    #: interior event samples per step
+    n_samples: int
+    #: golden-section iterations per refined step (0: peaks not refined)
+    refine_iters: int
+    #: outputs written by monitor, recorded
+    n_out: int
+    #: the event functions read only y[:n_dense]: the continuous extension is formed for
+    #: those components only, and its extra stages (DOP853) call `rhs` with the truncated
+    #: state y[:n_dense] (the model must give those derivatives then)
+    n_dense: int
+    #: J, the number of switching functions
+    n_events: int
+    #: the memory entries of p, recorded with every step
+    mem_start: int
+    n_mem: int
+    #: crests per window refined (see `N_CRESTS`)
+    n_crests: int
+
+
+def make_settings(rtol, atol, n_err, *, h0=0.0, h_max=np.inf, max_steps=10**6, record=True,
+                  event_tol=1e-12, event_margin=0.0, n_samples=1, refine_iters=24, n_out=0,
+                  n_dense, n_events=1, mem_start, n_mem=None,
+                  n_crests=N_CRESTS) -> IntegratorSettings:
+    """`IntegratorSettings` with its fields converted to the types the kernel is compiled
+    for (n_mem default: 2 n_events, two memory entries per joint). Raises ValueError for a
+    field out of its range."""
+    n_events = int(n_events)
+    n_mem = 2 * n_events if n_mem is None else int(n_mem)
+    atol = np.ascontiguousarray(atol, dtype=float).reshape(-1)
+    for name, value, low in (("n_err", n_err, 1), ("n_dense", n_dense, 1),
+                             ("n_events", n_events, 1), ("n_crests", n_crests, 1),
+                             ("max_steps", max_steps, 1), ("n_samples", n_samples, 0),
+                             ("refine_iters", refine_iters, 0), ("n_out", n_out, 0),
+                             ("mem_start", mem_start, 0), ("n_mem", n_mem, 0)):
+        if int(value) != value or value < low:
+            raise ValueError(f"{name} must be an integer >= {low}; got {value!r}")
+    if atol.shape[0] < n_err:
+        raise ValueError(f"atol must have at least n_err = {n_err} entries; got "
+                         f"{atol.shape[0]}")
+    if not (rtol > 0.0 and h_max > 0.0 and event_tol > 0.0 and event_margin >= 0.0):
+        raise ValueError("rtol, h_max and event_tol must be > 0 and event_margin >= 0; got "
+                         f"{rtol!r}, {h_max!r}, {event_tol!r}, {event_margin!r}")
+    return IntegratorSettings(float(rtol), atol, int(n_err), float(h0), float(h_max),
+                              int(max_steps), bool(record), float(event_tol),
+                              float(event_margin), int(n_samples), int(refine_iters),
+                              int(n_out), int(n_dense), n_events, int(mem_start), n_mem,
+                              int(n_crests))
 
 
 #: state length up to which `_combine` runs scalar code (unrolled loops with guards)
@@ -251,64 +363,68 @@ def rk_step(rhs, t, y, f, h, A, B, C, K, p, y_new, f_new, ytmp):
 
 
 @nb.njit(**KERNEL, inline="always")
-def step_workspace(coefficients, n):
+def step_workspace(coefficients, n, n_events=1):
     """Work arrays of one step of `n` states with the method's `coefficients`: the stage
-    derivatives K and the vectors y_new, f_new, ytmp, f0 (for `_step_monitor` callers
-    outside the integrator)."""
+    derivatives K, the vectors y_new, f_new, ytmp, f0 and the switching functions and
+    rates g, gd of `n_events` joints (for `_step_monitor` callers outside the
+    integrator)."""
     B, A_extra = coefficients[1], coefficients[6]
     return (np.zeros((B.shape[0] + 1 + A_extra.shape[0], n)), np.empty(n), np.empty(n),
-            np.empty(n), np.empty(n))
+            np.empty(n), np.empty(n), np.empty(n_events), np.empty(n_events))
 
 
 @nb.njit(**KERNEL, inline="always")
-def _step_monitor(rhs, monitor, t, y, f, h, A, B, C, K, p, y_new, f_new, ytmp, out):
-    """`rk_step` with the monitor as its last stage: returns the monitor and the event
-    function at the step's end (its outputs into out)."""
+def _step_monitor(rhs, monitor, t, y, f, h, A, B, C, K, p, y_new, f_new, ytmp, out, g, gd):
+    """`rk_step` with the monitor as its last stage: returns the monitor at the step's end
+    (the switching functions and rates there into g, gd, its outputs into out)."""
     rk_stages(rhs, t, y, f, h, A, B, C, K, p, y_new, ytmp)
-    res = monitor(t + h, y_new, p, f_new, out)
+    m = monitor(t + h, y_new, p, f_new, out, g, gd)
     _copy(f_new, K[B.shape[0]])
-    return res
+    return m
 
 
 @nb.njit(**KERNEL, inline="always")
-def _event_error_sq(event, t, h, y_new, p, work, g, gd, rtol, atol_g, atol_gd, n_err, yhat):
-    """Squared scaled differences, summed, of the switching function and its rate between
-    the step's solution y_new (where they are g, gd) and the embedded solution
-    y_new - h work (work: the error combination of the stages, first n_err components)."""
+def _event_error_sq(event, t, h, y_new, p, work, g, gd, rtol, atol, n_err, yhat):
+    """Squared scaled differences, summed over the joints, of the switching functions and
+    their rates between the step's solution y_new (where they are g, gd) and the embedded
+    solution y_new - h work (work: the error combination of the stages, first n_err
+    components); the absolute tolerances of joint j are atol[n + 2 j], atol[n + 2 j + 1]."""
     n = y_new.shape[0]
     for k in range(n):
         yhat[k] = y_new[k] - h * work[k] if k < n_err else y_new[k]
-    gh, gdh = event(t, yhat, p)
-    eg = (g - gh) / (atol_g + rtol * abs(g))
-    egd = (gd - gdh) / (atol_gd + rtol * abs(gd))
-    return eg * eg + egd * egd
+    acc = 0.0
+    for j in range(g.shape[0]):
+        gh, gdh = event(t, yhat, p, j)
+        eg = (g[j] - gh) / (atol[n + 2 * j] + rtol * abs(g[j]))
+        egd = (gd[j] - gdh) / (atol[n + 2 * j + 1] + rtol * abs(gd[j]))
+        acc += eg * eg + egd * egd
+    return acc
 
 
 @nb.njit(**KERNEL)
 def _attempt(rhs, event, monitor, t, y, f, h, A, B, C, E, E2, K, p, y_new, f_new, ytmp, work,
-             work2, out, rtol, atol, n_err, yhat):
-    """An attempted step of `integrate`: its stages, the monitor at its end (outputs into
-    out), the event function there and its scaled error; returns (monitor, g, gdot,
+             work2, out, rtol, atol, n_err, yhat, g, gd):
+    """Stage "attempt a step": its stages, the monitor at its end (outputs into out, the
+    switching functions and rates into g, gd) and its scaled error; returns (monitor,
     error). One call of a function without numba's runtime, into which the helpers are
     inlined (inlined into `integrate` they would reference-count their arrays).
 
-    With two more entries in atol than states, the switching function g and its rate are
-    under error control too, with those absolute tolerances (`integrate`)."""
-    m, g, gd = _step_monitor(rhs, monitor, t, y, f, h, A, B, C, K, p, y_new, f_new, ytmp, out)
+    With 2 J more entries in atol than states, the switching functions and their rates are
+    under error control too, with those absolute tolerances (`IntegratorSettings.atol`)."""
+    m = _step_monitor(rhs, monitor, t, y, f, h, A, B, C, K, p, y_new, f_new, ytmp, out, g, gd)
     err = error_norm(K, E, E2, h, y, y_new, rtol, atol, n_err, work, work2)
     n = y.shape[0]
-    if atol.shape[0] < n + 2:
-        return m, g, gd, err
+    n_g = 2.0 * g.shape[0]
+    if atol.shape[0] < n + 2 * g.shape[0]:
+        return m, err
     # error_norm left E.K in work (and E2.K in work2): the embedded solutions' g, gdot
-    e1 = _event_error_sq(event, t + h, h, y_new, p, work, g, gd, rtol, atol[n], atol[n + 1],
-                         n_err, yhat)
+    e1 = _event_error_sq(event, t + h, h, y_new, p, work, g, gd, rtol, atol, n_err, yhat)
     if E2.shape[0] == 0:
-        err_ev = math.sqrt(0.5 * e1)
+        err_ev = math.sqrt(e1 / n_g)
     else:
-        e2 = _event_error_sq(event, t + h, h, y_new, p, work2, g, gd, rtol, atol[n],
-                             atol[n + 1], n_err, yhat)
-        err_ev = 0.0 if e1 == 0.0 else e1 / math.sqrt((e1 + 0.01 * e2) * 2.0)
-    return m, g, gd, max(err, err_ev)
+        e2 = _event_error_sq(event, t + h, h, y_new, p, work2, g, gd, rtol, atol, n_err, yhat)
+        err_ev = 0.0 if e1 == 0.0 else e1 / math.sqrt((e1 + 0.01 * e2) * n_g)
+    return m, max(err, err_ev)
 
 
 @nb.njit(**KERNEL)
@@ -417,19 +533,19 @@ def initial_step(rhs, t, y, f, p, rtol, atol, order, direction_span, ytmp, ftmp)
 
 @nb.njit(**KERNEL)
 def _golden_max(rhs, monitor, t0, y0, p, h_max, A, B, C, K, y_new, f_new, ytmp, f0, iters,
-                out):
+                out, g, gd):
     """Maximise monitor(t0 + h, step(y0, h)) over h in [0, h_max]; return (value, t).
-    f0 and out (the monitor's outputs) are work arrays."""
+    f0, out (the monitor's outputs) and g, gd (its switching functions) are work arrays."""
     rhs(t0, y0, p, f0)
     invphi = 0.6180339887498949
     a = 0.0
     b = h_max
     c = b - invphi * (b - a)
     d = a + invphi * (b - a)
-    fc = _step_monitor(rhs, monitor, t0, y0, f0, c, A, B, C, K, p, y_new, f_new, ytmp,
-                       out)[0]
-    fd = _step_monitor(rhs, monitor, t0, y0, f0, d, A, B, C, K, p, y_new, f_new, ytmp,
-                       out)[0]
+    fc = _step_monitor(rhs, monitor, t0, y0, f0, c, A, B, C, K, p, y_new, f_new, ytmp, out,
+                       g, gd)
+    fd = _step_monitor(rhs, monitor, t0, y0, f0, d, A, B, C, K, p, y_new, f_new, ytmp, out,
+                       g, gd)
     for _ in range(iters):
         if fc > fd:
             b = d
@@ -437,17 +553,74 @@ def _golden_max(rhs, monitor, t0, y0, p, h_max, A, B, C, K, y_new, f_new, ytmp, 
             fd = fc
             c = b - invphi * (b - a)
             fc = _step_monitor(rhs, monitor, t0, y0, f0, c, A, B, C, K, p, y_new, f_new, ytmp,
-                               out)[0]
+                               out, g, gd)
         else:
             a = c
             c = d
             fc = fd
             d = a + invphi * (b - a)
             fd = _step_monitor(rhs, monitor, t0, y0, f0, d, A, B, C, K, p, y_new, f_new, ytmp,
-                               out)[0]
+                               out, g, gd)
     if fc > fd:
         return fc, t0 + c
     return fd, t0 + d
+
+
+@nb.njit(**KERNEL)
+def _crest_store(row, cr_y, cr_p, cr_sc, y_prev, p_prev, t_prev, h_prev, y, p, t, m):
+    """Store a (pending) crest in `row`: the step before it (state y_prev at t_prev, size
+    h_prev, memory p_prev: cr_y[row, 0], cr_p[row, 0]; h_prev = 0: none) and the sample
+    itself (y, memory p: cr_y[row, 1], cr_p[row, 1]; t, m)."""
+    if h_prev > 0.0:
+        for k in range(y.shape[0]):
+            cr_y[row, 0, k] = y_prev[k]
+        for k in range(p.shape[0]):
+            cr_p[row, 0, k] = p_prev[k]
+    for k in range(y.shape[0]):
+        cr_y[row, 1, k] = y[k]
+    for k in range(p.shape[0]):
+        cr_p[row, 1, k] = p[k]
+    cr_sc[row, 0] = t_prev
+    cr_sc[row, 1] = h_prev
+    cr_sc[row, 2] = t
+    cr_sc[row, 3] = 0.0
+    cr_sc[row, 4] = m
+
+
+@nb.njit(**KERNEL)
+def _crest_confirm(crest_rows, n_cr, cr_sc, next_h):
+    """Confirm the pending crest (row crest_rows[n_cr]; the step after it has size next_h,
+    0: none) among the window's best ones, crest_rows[:n_cr]: kept while fewer than
+    len(crest_rows) - 1 are, else in place of the smallest if larger. Returns the new count
+    and the value a sample must exceed to become a crest (-inf until the rows are full)."""
+    n_top = crest_rows.shape[0] - 1
+    row = crest_rows[n_cr]
+    cr_sc[row, 3] = next_h
+    if n_cr < n_top:
+        n_cr += 1
+    else:
+        i_min = 0
+        for i in range(1, n_top):
+            if cr_sc[crest_rows[i], 4] < cr_sc[crest_rows[i_min], 4]:
+                i_min = i
+        if cr_sc[row, 4] > cr_sc[crest_rows[i_min], 4]:
+            crest_rows[n_top] = crest_rows[i_min]
+            crest_rows[i_min] = row
+    if n_cr < n_top:
+        return n_cr, -np.inf
+    low = np.inf
+    for i in range(n_top):
+        low = min(low, cr_sc[crest_rows[i], 4])
+    return n_cr, low
+
+
+@nb.njit(**KERNEL, inline="always")
+def _seen(done_t, n_done, t0):
+    """Whether a step starting at t0 is among done_t[:n_done]."""
+    for i in range(n_done):
+        if done_t[i] == t0:
+            return True
+    return False
 
 
 @nb.njit(**KERNEL, inline="always")
@@ -517,54 +690,61 @@ def _hermite_max(g_a, d_a, g_b, d_b):
 
 @nb.njit(**KERNEL)
 def _clear_of_surface(event, t, y, y_new, f0, f1, h, p, g_start, gd_start, g_end, gd_end,
-                      n_samples, event_tol, event_margin, ytmp):
-    """Whether a step is certainly clear of the switching surface, from the cubic Hermite
-    interpolant of the state (its values and derivatives at both ends, no extra stages):
-    the test of `_search_event` at the same interior samples, with twice the margin, and
-    the interpolant's g checked against the Hermite interpolant of g itself (two cubic
-    approximations of different functions; where they differ by more than a tenth of the
-    margin, the interpolation error is not small against it). False sends the step to
-    `_search_event` on the continuous extension.
+                      n_samples, event_tol, event_margin, ytmp, g_a, gd_a):
+    """Whether a step is certainly clear of every joint's switching surface, from the cubic
+    Hermite interpolant of the state (its values and derivatives at both ends, no extra
+    stages): the test of `_search_event` at the same interior samples, with twice the
+    margin, and the interpolant's g checked against the Hermite interpolant of g itself (two
+    cubic approximations of different functions; where they differ by more than a tenth of
+    the margin, the interpolation error is not small against it). False sends the step to
+    `_search_event` on the continuous extension. g_a, gd_a: work arrays of J entries.
 
     Where the steps resolve the motion the cubic's error is far below the margin: in the
     paper's case at most 1.3e-9 m at mid-step against the margin of 5e-7 m (0.05 c)."""
-    if g_start > -100.0 * event_tol:
-        return False               # starts on the surface: `_search_event` looks closer
+    n_ev = g_start.shape[0]
+    for j in range(n_ev):
+        if g_start[j] > -100.0 * event_tol:
+            return False           # starts on the surface: `_search_event` looks closer
+        g_a[j] = g_start[j]
+        gd_a[j] = gd_start[j]
     margin = 2.0 * event_margin
     n = y.shape[0]
     theta_a = 0.0
-    g_a = g_start
-    gd_a = gd_start
     for i in range(1, n_samples + 2):
         theta_b = min(i / (n_samples + 1.0), 1.0)
-        if i == n_samples + 1:
-            g_b = g_end
-            gd_b = gd_end
-        else:
+        span = (theta_b - theta_a) * h
+        last = i == n_samples + 1
+        h00 = h10 = h01 = h11 = 0.0
+        if not last:
             h00, w10, h01, w11 = _hermite_weights(theta_b)
             h10 = w10 * h
             h11 = w11 * h
             for k in range(n):
                 ytmp[k] = h00 * y[k] + h10 * f0[k] + h01 * y_new[k] + h11 * f1[k]
-            g_b, gd_b = event(t + theta_b * h, ytmp, p)
-            # the Hermite interpolant of g over the whole step, at the same point
-            g_h = (h00 * g_start + h10 * gd_start + h01 * g_end + h11 * gd_end)
-            if abs(g_b - g_h) > 0.1 * event_margin:
+        for j in range(n_ev):
+            if last:
+                g_b = g_end[j]
+                gd_b = gd_end[j]
+            else:
+                g_b, gd_b = event(t + theta_b * h, ytmp, p, j)
+                # the Hermite interpolant of g over the whole step, at the same point
+                g_h = (h00 * g_start[j] + h10 * gd_start[j] + h01 * g_end[j]
+                       + h11 * gd_end[j])
+                if abs(g_b - g_h) > 0.1 * event_margin:
+                    return False
+            bound = _hermite_bound(g_a[j], gd_a[j] * span, g_b, gd_b * span)
+            if g_b > -margin or bound > -margin:
                 return False
-        span = (theta_b - theta_a) * h
-        bound = _hermite_bound(g_a, gd_a * span, g_b, gd_b * span)
-        if g_b > -margin or bound > -margin:
-            return False
+            g_a[j] = g_b
+            gd_a[j] = gd_b
         theta_a = theta_b
-        g_a = g_b
-        gd_a = gd_b
     return True
 
 
 @nb.njit(**KERNEL)
-def _search_event(event, t, y, h, K, P, p, g_start, gd_start, g_end, gd_end, n_samples,
+def _search_event(event, j, t, y, h, K, P, p, g_start, gd_start, g_end, gd_end, n_samples,
                   event_tol, event_margin, ytmp, wts, fine, sample_polys):
-    """First sign change of g (from <= 0 to > 0) inside a step of size h.
+    """First sign change of joint j's g (from <= 0 to > 0) inside a step of size h.
 
     g and its rate are sampled at n_samples interior points of the dense output; at the
     end (the real step) they are g_end, gd_end (from the monitor); a step that starts on
@@ -593,7 +773,7 @@ def _search_event(event, t, y, h, K, P, p, g_start, gd_start, g_end, gd_end, n_s
                 dense_eval(y, h, K, P, theta_b, ytmp, wts)
             else:
                 _dense_combine(y, h, K, sample_polys[i - 1], ytmp, wts)
-            g_b, gd_b = event(t + theta_b * h, ytmp, p)
+            g_b, gd_b = event(t + theta_b * h, ytmp, p, j)
         span = (theta_b - theta_a) * h
         d_a = gd_a * span
         d_b = gd_b * span
@@ -605,22 +785,22 @@ def _search_event(event, t, y, h, K, P, p, g_start, gd_start, g_end, gd_end, n_s
         if g_b <= 0.0 and peak > -event_margin:
             # 7 equally spaced points and the interpolant's maximum, in time order
             n_fine = 7
-            for j in range(7):
-                fine[j] = (j + 1) / 8.0
+            for q in range(7):
+                fine[q] = (q + 1) / 8.0
             if 0.0 < where < 1.0:
                 # insert the interpolant's maximum in order (the 7 points are sorted)
-                j = 7
-                while j > 0 and fine[j - 1] > where:
-                    fine[j] = fine[j - 1]
-                    j -= 1
-                fine[j] = where
+                q = 7
+                while q > 0 and fine[q - 1] > where:
+                    fine[q] = fine[q - 1]
+                    q -= 1
+                fine[q] = where
                 n_fine = 8
             span_theta = theta_b - theta_a
             base = theta_a
-            for j in range(n_fine):
-                theta_f = base + fine[j] * span_theta
+            for q in range(n_fine):
+                theta_f = base + fine[q] * span_theta
                 dense_eval(y, h, K, P, theta_f, ytmp, wts)
-                g_f, gd_f = event(t + theta_f * h, ytmp, p)
+                g_f, gd_f = event(t + theta_f * h, ytmp, p, j)
                 if g_f > 0.0:
                     return theta_a, g_a, theta_f, g_f
                 theta_a = theta_f
@@ -632,6 +812,180 @@ def _search_event(event, t, y, h, K, P, p, g_start, gd_start, g_end, gd_end, n_s
         gd_a = gd_b
     return theta_a, g_a, -1.0, 0.0
 
+
+
+@nb.njit(**KERNEL, inline="always")
+def _dense_root(event, j, t, y, h, K, P, p, a, ga, b, gb, event_tol, ytmp, ytmp_d, wts):
+    """Illinois root of joint j's g on the dense output in the bracket [a, b] of thetas
+    (g(a) <= 0 < g(b)); ytmp_d = ytmp[:len(y)] is written."""
+    side = 0
+    theta = b
+    for _ in range(60):
+        c = (a * gb - b * ga) / (gb - ga)
+        dense_eval(y, h, K, P, c, ytmp_d, wts)
+        gc = event(t + c * h, ytmp, p, j)[0]
+        theta = c
+        if abs(gc) <= event_tol or (b - a) < 1e-15:
+            break
+        a, ga, b, gb, side = _illinois_update(c, gc, a, ga, b, gb, side)
+    return theta
+
+
+@nb.njit(**KERNEL)
+def _find_event(rhs, event, t, y, y_new, h, K, P, A_extra, C_extra, p, g_start, gd_start,
+                g_end, gd_end, n_samples, event_tol, event_margin, ytmp, ytmp_d, wts, fine,
+                sample_polys, g_a, gd_a):
+    """Stage "search and locate an event" of an accepted step of size h from (t, y) (y, ytmp_d:
+    the first n_dense components): every joint's switching function searched on the step's
+    dense output (`_search_event`; a continuous extension with extra stages, DOP853, is
+    formed only where the cubic Hermite look `_clear_of_surface` does not show the step
+    clear of every surface), and the earliest crossing among the joints located on it.
+
+    Returns (j, theta_lo, g_lo, theta_hi, g_hi, theta, nfev): j = -1 if no joint crosses,
+    else the joint crossing first (the lowest j of equal times), the search's bracket
+    [theta_lo, theta_hi] of its crossing with g there, the located theta (0: already past
+    the surface at the step's start) and the function evaluations spent."""
+    n_extra = A_extra.shape[0]
+    s = K.shape[0] - n_extra - 1
+    nfev = 0
+    if n_extra > 0:
+        if _clear_of_surface(event, t, y, y_new, K[0], K[s], h, p, g_start, gd_start, g_end,
+                             gd_end, n_samples, event_tol, event_margin, ytmp, g_a, gd_a):
+            return -1, 1.0, 0.0, -1.0, 0.0, 1.0, 0
+        extra_stages(rhs, t, y, h, K, A_extra, C_extra, p, ytmp_d)
+        nfev = n_extra
+    best = -1
+    b_lo = 1.0
+    b_glo = 0.0
+    b_hi = -1.0
+    b_ghi = 0.0
+    b_theta = 1.0
+    for j in range(g_start.shape[0]):
+        lo, g_lo, hi, g_hi = _search_event(event, j, t, y, h, K, P, p, g_start[j], gd_start[j],
+                                           g_end[j], gd_end[j], n_samples, event_tol,
+                                           event_margin, ytmp, wts, fine, sample_polys)
+        if hi < 0.0:
+            continue
+        if g_lo > 0.0:
+            theta = 0.0        # already past the switching surface at the step start
+        else:
+            theta = _dense_root(event, j, t, y, h, K, P, p, lo, g_lo, hi, g_hi, event_tol,
+                                ytmp, ytmp_d, wts)
+        if best < 0 or theta < b_theta:
+            best = j
+            b_lo = lo
+            b_glo = g_lo
+            b_hi = hi
+            b_ghi = g_hi
+            b_theta = theta
+    return best, b_lo, b_glo, b_hi, b_ghi, b_theta, nfev
+
+
+@nb.njit(**KERNEL)
+def _land(rhs, event, j, t, y, f, h_ev, h_a, g_a, h_b, g_b, A, B, C, K, p, y_new, f_new, ytmp,
+          event_tol):
+    """Stage "land on an event": the step from (t, y) redone with the located size h_ev and
+    refined by Illinois iterations on its size inside the search's bracket [h_a, h_b] (g_a
+    <= 0 < g_b) until |g_j| <= event_tol, so that the root found is the first crossing (an
+    open secant could jump to a later crossing of a non-monotone g). Leaves the landed step
+    in K, y_new, f_new; returns (h_ev, nfev)."""
+    s = B.shape[0]
+    rk_step(rhs, t, y, f, h_ev, A, B, C, K, p, y_new, f_new, ytmp)
+    nfev = s
+    g_ev = event(t + h_ev, y_new, p, j)[0]
+    side = 0
+    for _ in range(16):
+        if abs(g_ev) <= event_tol or h_b - h_a <= 1e-15 * max(1.0, abs(t)):
+            break
+        h_a, g_a, h_b, g_b, side = _illinois_update(h_ev, g_ev, h_a, g_a, h_b, g_b, side)
+        h_c = (h_a * g_b - h_b * g_a) / (g_b - g_a)
+        if not (h_a < h_c < h_b):
+            h_c = 0.5 * (h_a + h_b)
+        h_ev = h_c
+        rk_step(rhs, t, y, f, h_ev, A, B, C, K, p, y_new, f_new, ytmp)
+        nfev += s
+        g_ev = event(t + h_ev, y_new, p, j)[0]
+    return h_ev, nfev
+
+
+@nb.njit(**KERNEL)
+def _switch(event, on_event, t, y, p, j, n_events, event_tol):
+    """Stage "switch": on_event for joint j at (t, y), and for every other joint whose
+    switching function is within event_tol of its surface there (simultaneous events);
+    returns the number of joints switched."""
+    n_sw = 1
+    for k in range(n_events):
+        if k != j and abs(event(t, y, p, k)[0]) <= event_tol:
+            on_event(t, y, p, k)
+            n_sw += 1
+    on_event(t, y, p, j)
+    return n_sw
+
+
+@nb.njit(**KERNEL)
+def _track_crests(m, m_last, pend, n_cr, thresh, crest_rows, cr_y, cr_p, cr_sc, y_prev,
+                  p_step, t_prev, h_step, y, p, t):
+    """Stage "track the window's peak": the sample m at the end of an accepted step (state
+    y, memory p, t; the step from (t_prev, y_prev) of size h_step ran with memory p_step)
+    confirms the pending crest if it is not above it, and becomes the pending crest if it
+    rises above the last sample (m_last) and above the smallest kept crest (thresh).
+    Returns (n_cr, thresh, pend)."""
+    if pend:
+        if not (m > cr_sc[crest_rows[n_cr], 4]):
+            n_cr, thresh = _crest_confirm(crest_rows, n_cr, cr_sc, h_step)
+        pend = False
+    if m > m_last and m > thresh:
+        _crest_store(crest_rows[n_cr], cr_y, cr_p, cr_sc, y_prev, p_step, t_prev, h_step, y,
+                     p, t, m)
+        pend = True
+    return n_cr, thresh, pend
+
+
+@nb.njit(cache=True, error_model="numpy")
+def _refine_window(rhs, monitor, peak, peak_t, n_cr, crest_rows, cr_y, cr_p, cr_sc, ws_t, ws_y,
+                   ws_p, ws_h, t_last, y_last, p_last, h_last, A, B, C, K, y_new, f_new, ytmp,
+                   f_ref, refine_iters, oscr, g, gd, done_t):
+    """Stage "refine the window's peak" at its close: golden-section search of the monitor
+    inside the steps on both sides of each kept crest, and inside the window's first step
+    (from ws_t, size ws_h) and last step (from t_last, size h_last), each step once (by its
+    start time). Returns (peak, peak_t, steps refined) given the best sample (peak,
+    peak_t)."""
+    n_done = 0
+    for i in range(n_cr + 2):
+        if i < n_cr:
+            row = crest_rows[i]
+            sides = 2
+        else:
+            row = -1
+            sides = 1
+        for side in range(sides):
+            if row >= 0:
+                t0 = cr_sc[row, 2 * side]
+                hh = cr_sc[row, 2 * side + 1]
+            elif i == n_cr:
+                t0 = ws_t
+                hh = ws_h
+            else:
+                t0 = t_last
+                hh = h_last
+            if hh <= 0.0 or _seen(done_t, n_done, t0):
+                continue
+            if row >= 0:
+                v, tv = _golden_max(rhs, monitor, t0, cr_y[row, side], cr_p[row, side], hh, A,
+                                    B, C, K, y_new, f_new, ytmp, f_ref, refine_iters, oscr, g,
+                                    gd)
+            elif i == n_cr:
+                v, tv = _golden_max(rhs, monitor, t0, ws_y, ws_p, hh, A, B, C, K, y_new, f_new,
+                                    ytmp, f_ref, refine_iters, oscr, g, gd)
+            else:
+                v, tv = _golden_max(rhs, monitor, t0, y_last, p_last, hh, A, B, C, K, y_new,
+                                    f_new, ytmp, f_ref, refine_iters, oscr, g, gd)
+            done_t[n_done] = t0
+            n_done += 1
+            if v > peak:
+                peak = v
+                peak_t = tv
+    return peak, peak_t, n_done
 
 
 @nb.njit(cache=True, error_model="numpy")
@@ -651,40 +1005,42 @@ def _record_arrays(cap, n, n_mem, n_out):
 
 
 @nb.njit(cache=True, error_model="numpy")
-def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rtol, atol, n_err,
-              h0, h_max, max_steps, record, event_tol, event_margin, n_samples, refine_iters,
-              coefficients, n_out, n_dense):
+def integrate(rhs, event, on_event, monitor, y0, p, edges, settings, coefficients):
     """Integrate from edges[0] to edges[-1]; see the module docstring for the protocol.
 
     Arguments: the four model kernels (compiled functions with the signatures RHS_SIG,
     EVENT_SIG, ACTION_SIG, MONITOR_SIG); y0; p (parameters + memory, modified in place);
-    mem_start, n_mem (the memory entries of p, recorded); edges (window edges, edges[0] =
-    t0, edges[-1] = t_end); rtol; atol (per component; with len(y0) + 2 entries the last
-    two are the absolute tolerances of the switching function g and its rate, which are
-    then under error control too, see `_attempt`); n_err (components under error
-    control); h0 (<= 0: automatic); h_max; max_steps; record; event_tol; event_margin (look
-    closer between samples this near the surface); n_samples (interior event samples per
-    step); refine_iters (golden-section iterations per peak candidate); then
-    coefficients = `Tableau.arrays()` (one tuple: numba types the kernels of calls with 30 or
-    more arguments as experimental first-class functions); n_out (outputs written by
-    monitor, recorded); n_dense: the event function reads only y[:n_dense], so the
-    continuous extension is formed for those components only, and its extra stages
-    (DOP853) call `rhs` with the truncated state y[:n_dense]: the model must then give those
-    derivatives (entries beyond are not used), which lets an augmented system skip its
-    extra equations there.
+    edges (window edges, edges[0] = t0, edges[-1] = t_end; the integration lands on each,
+    and the monitor's maximum is tracked per window); settings (`IntegratorSettings`, from
+    `make_settings`); coefficients = `Tableau.arrays()`.
 
     Returns (t (m,), y (m, n), memory (m, n_mem) of the recorded steps, the refined maximum
-    of monitor per window and its time, counters [nfev, naccept, nreject, nevent, status,
-    nrefine], outputs (m, n_out) of the recorded steps).
+    of monitor per window and its time, counters (`COUNTERS`: nfev, naccept, nreject,
+    nevent, nrefine), outputs (m, n_out) of the recorded steps, status (a `RESULTS` code)).
 
     numba compiles one specialisation per set of model kernels. Called from Python with
     the kernels as arguments it is compiled in every new process; bind the kernels in a
     cached wrapper instead (`reduced.integrate_plain`) to load it from the disk cache."""
     A, B, C, E, E2, P, A_extra, C_extra, error_order, pi_alpha, pi_beta = coefficients
+    rtol = settings.rtol
+    atol = settings.atol
+    n_err = settings.n_err
+    h_max = settings.h_max
+    max_steps = settings.max_steps
+    record = settings.record
+    event_tol = settings.event_tol
+    event_margin = settings.event_margin
+    n_samples = settings.n_samples
+    refine_iters = settings.refine_iters
+    n_out = settings.n_out
+    n_ev = settings.n_events
+    mem_start = settings.mem_start
+    n_mem = settings.n_mem
+    n_top = settings.n_crests
     n = y0.shape[0]
+    n_dense = min(settings.n_dense, n)
     s = B.shape[0]
-    n_extra = A_extra.shape[0]
-    K = np.zeros((s + 1 + n_extra, n))
+    K = np.zeros((s + 1 + A_extra.shape[0], n))
     y = y0.copy()
     f = np.empty(n)
     y_new = np.empty(n)
@@ -700,25 +1056,35 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
         for j in range(P.shape[0]):
             sample_polys[i - 1, j] = _dense_poly(P, j, min(i / (n_samples + 1.0), 1.0))
     fine = np.empty(8)
+    # every joint's switching function and rate at the step's start and end, and work arrays
+    g_start = np.empty(n_ev)
+    gd_start = np.empty(n_ev)
+    g_end = np.empty(n_ev)
+    gd_end = np.empty(n_ev)
+    g_work = np.empty(n_ev)
+    gd_work = np.empty(n_ev)
     n_win = edges.shape[0] - 1
     peaks = np.full(n_win, -np.inf)
     peak_t = np.zeros(n_win)
-    counters = np.zeros(6, dtype=np.int64)
-    # candidate of the current window's maximum: the step before it and the step after it
-    cand_prev_y = y.copy()
-    cand_prev_t = 0.0
-    cand_prev_h = 0.0
-    cand_prev_p = p.copy()
-    cand_y = y.copy()
-    cand_t = edges[0]
-    cand_p = p.copy()
-    cand_next_h = 0.0
+    counters = np.zeros(len(COUNTERS), dtype=np.int64)
+    status = 0
+    # the window's best crests (distinct local maxima of the sampled monitor), each with the
+    # step before it and the step after it (state and memory: [row, 0] before, [row, 1] at
+    # the crest; cr_sc[row]: prev_t, prev_h, t, next_h, value): crest_rows[:n_cr] are the
+    # kept crests, the pending one (the last sample, while it rises) takes the free row
+    # crest_rows[n_cr]
+    cr_y = np.empty((n_top + 1, 2, n))
+    cr_p = np.empty((n_top + 1, 2, p.shape[0]))
+    cr_sc = np.zeros((n_top + 1, 5))
+    crest_rows = np.arange(n_top + 1)
+    n_cr = 0
+    thresh = -np.inf                    # the smallest kept crest once n_top are kept
+    done_t = np.empty(2 * n_top + 2)    # start times of the steps refined at a window's close
     # the window's start (its first step is refined too)
     ws_y = y.copy()
     ws_t = edges[0]
     ws_p = p.copy()
     ws_h = 0.0
-    last_y = np.empty(n)
     yhat = np.empty(n)       # the embedded solution (error control of g)
     f_ref = np.empty(n)
     # the part of the state the continuous extension is formed for (views, no copies)
@@ -734,18 +1100,21 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
 
     t = edges[0]
     t_end = edges[-1]
-    m0, g_start, gd_start = monitor(t, y, p, f, obuf)
+    m0 = monitor(t, y, p, f, obuf, g_start, gd_start)
     counters[0] += 1
-    if h0 <= 0.0:
+    if settings.h0 <= 0.0:
         h = initial_step(rhs, t, y, f, p, rtol, atol, error_order + 1, min(h_max, t_end - t),
                          ytmp, ftmp)
         counters[0] += 1
     else:
-        h = min(h0, h_max)
+        h = min(settings.h0, h_max)
     win = 0
     peaks[0] = m0
     peak_t[0] = t
-    cand_fresh = True   # the first step gives the right-hand interval of the start point
+    # the window's start is its first pending crest (the first step is the one after it)
+    _crest_store(crest_rows[0], cr_y, cr_p, cr_sc, y, p, t, 0.0, y, p, t, m0)
+    pend = True
+    m_last = m0
     if record:
         ts[0] = t
         ys[0, :] = y
@@ -755,7 +1124,6 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
             os_[0, k] = obuf[k]
         nrec = 1
     zero_events = 0
-    g_start_valid = True
     inv_order = 1.0 / (error_order + 1)
     last_rejected = False
     err_prev = 1e-4
@@ -770,20 +1138,18 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
                 need_room = True
                 break
             if nstep >= max_steps:
-                counters[4] = 1
+                status = _MAX_STEPS
                 break
             nstep += 1
             t_target = edges[win + 1]
             land = False
             h_try = h
-            # approaching the surface: do not step far past the linear prediction of the
+            # approaching a surface: do not step far past the linear prediction of the
             # crossing, so that the samples of the event search resolve the approach
-            if not g_start_valid:
-                g_start, gd_start = event(t, y, p)
-                g_start_valid = True
-            if gd_start > 0.0:
-                h_try = min(h_try, (2.0 * abs(g_start) + (n_samples + 1) * event_margin)
-                            / gd_start)
+            for j in range(n_ev):
+                if gd_start[j] > 0.0:
+                    h_try = min(h_try, (2.0 * abs(g_start[j]) + (n_samples + 1) * event_margin)
+                                / gd_start[j])
             if t + h_try >= t_target - 1e-13 * max(1.0, abs(t_target)):
                 h_try = t_target - t
                 land = True
@@ -791,11 +1157,11 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
                 if land:
                     h_try = t_target - t
                 else:
-                    counters[4] = 2
+                    status = _STEP_UNDERFLOW
                     break
-            m_new, g_end, gd_end, err = _attempt(rhs, event, monitor, t, y, f, h_try, A, B, C,
-                                                 E, E2, K, p, y_new, f_new, ytmp, ytmp, ftmp,
-                                                 obuf, rtol, atol, n_err, yhat)
+            m_new, err = _attempt(rhs, event, monitor, t, y, f, h_try, A, B, C, E, E2, K, p,
+                                  y_new, f_new, ytmp, ytmp, ftmp, obuf, rtol, atol, n_err, yhat,
+                                  g_end, gd_end)
             counters[0] += s
             if not (err <= 1.0):
                 counters[2] += 1
@@ -822,56 +1188,23 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
             if land:
                 h_next = max(h_next, h)  # a short landing step says nothing about the scale
 
-            # ---- event search on the dense output (interior samples), then the end point;
-            # a continuous extension with extra stages (DOP853) is formed only where a look
-            # with the cubic Hermite interpolant does not show the step clear of the surface
-            g_start_valid = False
-            if n_extra > 0 and _clear_of_surface(event, t, y_d, y_new, K[0], K[s], h_try, p,
-                                                 g_start, gd_start, g_end, gd_end, n_samples,
-                                                 event_tol, event_margin, ytmp):
-                theta_lo, g_lo, theta_hi, g_hi = 1.0, g_end, -1.0, 0.0
-            else:
-                if n_extra > 0:
-                    extra_stages(rhs, t, y_d, h_try, K, A_extra, C_extra, p, ytmp_d)
-                    counters[0] += n_extra
-                theta_lo, g_lo, theta_hi, g_hi = _search_event(
-                    event, t, y_d, h_try, K, P, p, g_start, gd_start, g_end, gd_end,
-                    n_samples, event_tol, event_margin, ytmp, wts, fine, sample_polys)
-            if theta_hi < 0.0:
-                g_start = g_end       # valid for the next step if no event intervenes
-                gd_start = gd_end
-                g_start_valid = True
-            ev_step = theta_hi > 0.0
+            j_ev, theta_lo, g_lo, theta_hi, g_hi, theta_star, nfev = _find_event(
+                rhs, event, t, y_d, y_new, h_try, K, P, A_extra, C_extra, p, g_start, gd_start,
+                g_end, gd_end, n_samples, event_tol, event_margin, ytmp, ytmp_d, wts, fine,
+                sample_polys, g_work, gd_work)
+            counters[0] += nfev
+            ev_step = j_ev >= 0
             if ev_step:
                 _copy(p, p_prev)    # the step before the event ran with this memory
                 counters[3] += 1
-                if g_lo > 0.0:
-                    theta_star = 0.0   # already past the switching surface at the step start
-                else:
-                    # Illinois root finding of g on the dense output in [theta_lo, theta_hi]
-                    a = theta_lo
-                    b = theta_hi
-                    ga = g_lo
-                    gb = g_hi
-                    side = 0
-                    theta_star = b
-                    for _ in range(60):
-                        c = (a * gb - b * ga) / (gb - ga)
-                        dense_eval(y_d, h_try, K, P, c, ytmp_d, wts)
-                        gc = event(t + c * h_try, ytmp, p)[0]
-                        theta_star = c
-                        if abs(gc) <= event_tol or (b - a) < 1e-15:
-                            break
-                        a, ga, b, gb, side = _illinois_update(c, gc, a, ga, b, gb, side)
                 h_ev = theta_star * h_try
                 if h_ev <= 1e-14 * max(1.0, abs(t)):
                     zero_events += 1
                     if zero_events > 20:
-                        counters[4] = 3
+                        status = _EVENT_CHATTER
                         break
-                    on_event(t, y, p)
-                    _, g_start, gd_start = monitor(t, y, p, f, obuf)
-                    g_start_valid = True
+                    on_event(t, y, p, j_ev)
+                    monitor(t, y, p, f, obuf, g_start, gd_start)
                     counters[0] += 1
                     if record and nrec > 0 and ts[nrec - 1] == t:
                         # the memory recorded at t is the one used by the step that follows it
@@ -881,42 +1214,24 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
                             os_[nrec - 1, k] = obuf[k]
                     continue
                 zero_events = 0
-                # land on the event with the real step map: Illinois iterations on h inside the
-                # bracket of the search, so that the root found is the first crossing (an open
-                # secant could jump to a later crossing of a non-monotone g)
-                rk_step(rhs, t, y, f, h_ev, A, B, C, K, p, y_new, f_new, ytmp)
-                counters[0] += s
-                g_ev = event(t + h_ev, y_new, p)[0]
-                h_a = theta_lo * h_try
-                g_a = min(g_lo, 0.0)
-                h_b = theta_hi * h_try
-                g_b = max(g_hi, 1e-300)
-                side = 0
-                for _ in range(16):
-                    if abs(g_ev) <= event_tol or h_b - h_a <= 1e-15 * max(1.0, abs(t)):
-                        break
-                    h_a, g_a, h_b, g_b, side = _illinois_update(h_ev, g_ev, h_a, g_a, h_b, g_b,
-                                                                side)
-                    h_c = (h_a * g_b - h_b * g_a) / (g_b - g_a)
-                    if not (h_a < h_c < h_b):
-                        h_c = 0.5 * (h_a + h_b)
-                    h_ev = h_c
-                    rk_step(rhs, t, y, f, h_ev, A, B, C, K, p, y_new, f_new, ytmp)
-                    counters[0] += s
-                    g_ev = event(t + h_ev, y_new, p)[0]
+                h_ev, nfev = _land(rhs, event, j_ev, t, y, f, h_ev, theta_lo * h_try,
+                                   min(g_lo, 0.0), theta_hi * h_try, max(g_hi, 1e-300), A, B, C,
+                                   K, p, y_new, f_new, ytmp, event_tol)
+                counters[0] += nfev
                 t_old = t
                 t = t + h_ev
                 land = False
                 h_step = h_ev
-                _copy(y, ftmp)  # the pre-step state, kept for the peak candidate
+                _copy(y, ftmp)  # the pre-step state, kept for the peak's crests
                 _copy(y_new, y)
-                on_event(t, y, p)
-                m, g_start, gd_start = monitor(t, y, p, f, obuf)    # with the new memory
-                g_start_valid = True
+                counters[3] += _switch(event, on_event, t, y, p, j_ev, n_ev, event_tol) - 1
+                m = monitor(t, y, p, f, obuf, g_start, gd_start)    # with the new memory
                 counters[0] += 1
                 h = h_next
             else:
                 zero_events = 0
+                _copy(g_end, g_start)  # valid for the next step (no event intervened)
+                _copy(gd_end, gd_start)
                 t_old = t
                 h_step = h_try
                 _copy(y, ftmp)
@@ -927,27 +1242,21 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
                 h = h_next
             counters[1] += 1
 
-            # ---- peak tracking in the current window (m: the monitor at the step's end)
-            if cand_fresh:
-                cand_next_h = h_step
-                cand_fresh = False
+            # ---- the window's peak: the best sample, and the best crests with their steps
             if ws_h == 0.0:
                 ws_h = h_step
             if m > peaks[win]:
                 peaks[win] = m
                 peak_t[win] = t
-                _copy(ftmp, cand_prev_y)
-                cand_prev_t = t_old
-                cand_prev_h = h_step
-                if ev_step:
-                    _copy(p_prev, cand_prev_p)
-                else:
-                    _copy(p, cand_prev_p)
-                _copy(y, cand_y)
-                cand_t = t
-                _copy(p, cand_p)
-                cand_next_h = 0.0
-                cand_fresh = not land
+            if ev_step:
+                n_cr, thresh, pend = _track_crests(m, m_last, pend, n_cr, thresh, crest_rows,
+                                                   cr_y, cr_p, cr_sc, ftmp, p_prev, t_old,
+                                                   h_step, y, p, t)
+            else:
+                n_cr, thresh, pend = _track_crests(m, m_last, pend, n_cr, thresh, crest_rows,
+                                                   cr_y, cr_p, cr_sc, ftmp, p, t_old, h_step, y,
+                                                   p, t)
+            m_last = m
 
             if record:
                 ts[nrec] = t
@@ -960,55 +1269,26 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
                 nrec += 1
 
             if land:
-                # window closed: refine its maximum inside the steps on both sides of the best
-                # sample, and inside the window's first and last steps (a maximum just inside an
-                # edge is invisible to the samples when the best sample is elsewhere, e.g. at
-                # the other edge of a periodic window)
+                # window closed: refine its maximum (a step that lands on an edge is never an
+                # event step: p is the memory of its last step)
                 if refine_iters > 0:
-                    _copy(ftmp, last_y)
-                    n_cand = 0
-                    for which in range(4):
-                        if which == 0:
-                            if cand_prev_h <= 0.0:
-                                continue
-                            v, tv = _golden_max(rhs, monitor, cand_prev_t, cand_prev_y,
-                                                cand_prev_p, cand_prev_h, A, B, C, K, y_new,
-                                                f_new, ytmp, f_ref, refine_iters, oscr)
-                        elif which == 1:
-                            if cand_next_h <= 0.0:
-                                continue
-                            v, tv = _golden_max(rhs, monitor, cand_t, cand_y, cand_p, cand_next_h,
-                                                A, B, C, K, y_new, f_new, ytmp, f_ref,
-                                                refine_iters, oscr)
-                        elif which == 2:
-                            if ws_h <= 0.0 or cand_t == ws_t:
-                                continue
-                            v, tv = _golden_max(rhs, monitor, ws_t, ws_y, ws_p, ws_h, A, B, C, K,
-                                                y_new, f_new, ytmp, f_ref, refine_iters, oscr)
-                        else:
-                            if cand_t == t:
-                                continue
-                            # (a step that lands on an edge is never an event step: p is its memory)
-                            v, tv = _golden_max(rhs, monitor, t_old, last_y, p, h_step, A,
-                                                B, C, K, y_new, f_new, ytmp, f_ref,
-                                                refine_iters, oscr)
-                        n_cand += 1
-                        if v > peaks[win]:
-                            peaks[win] = v
-                            peak_t[win] = tv
-                    counters[5] += n_cand
+                    if pend:
+                        n_cr, thresh = _crest_confirm(crest_rows, n_cr, cr_sc, 0.0)
+                    peaks[win], peak_t[win], n_done = _refine_window(
+                        rhs, monitor, peaks[win], peak_t[win], n_cr, crest_rows, cr_y, cr_p,
+                        cr_sc, ws_t, ws_y, ws_p, ws_h, t_old, ftmp, p, h_step, A, B, C, K,
+                        y_new, f_new, ytmp, f_ref, refine_iters, oscr, g_work, gd_work, done_t)
+                    counters[4] += n_done
                 win += 1
                 if win < n_win:
-                    # the landed step's end is the next window's start (not an event step: m
-                    # and its outputs are for the memory p)
+                    # the landed step's end is the next window's start and its first pending
+                    # crest (m and its outputs are for the memory p)
                     peaks[win] = m
                     peak_t[win] = t
-                    _copy(y, cand_y)
-                    cand_t = t
-                    _copy(p, cand_p)
-                    cand_prev_h = 0.0
-                    cand_next_h = 0.0
-                    cand_fresh = True
+                    n_cr = 0
+                    thresh = -np.inf
+                    _crest_store(crest_rows[0], cr_y, cr_p, cr_sc, y, p, t, 0.0, y, p, t, m)
+                    pend = True
                     _copy(y, ws_y)
                     ws_t = t
                     _copy(p, ws_p)
@@ -1027,4 +1307,4 @@ def integrate(rhs, event, on_event, monitor, y0, p, mem_start, n_mem, edges, rto
         os_ = os2
     # the times are a copy (they become a Trajectory's t; a view would keep the whole
     # block alive), the other records views (the callers take what they keep from them)
-    return ts[:nrec].copy(), ys[:nrec], ms[:nrec], peaks, peak_t, counters, os_[:nrec]
+    return ts[:nrec].copy(), ys[:nrec], ms[:nrec], peaks, peak_t, counters, os_[:nrec], status

@@ -140,7 +140,7 @@ def _refine_steps(t0s, y0s, mems, p, hs, coefficients, iters):
     golden section as the integrator's peak refinement; returns values and times."""
     A, B, C = coefficients[0], coefficients[1], coefficients[2]
     n = y0s.shape[1]
-    K, y_new, f_new, ytmp, f0 = step_workspace(coefficients, n)
+    K, y_new, f_new, ytmp, f0, g, gd = step_workspace(coefficients, n)
     y0 = np.empty(n)
     out = np.zeros(0)
     q = p.copy()
@@ -152,7 +152,8 @@ def _refine_steps(t0s, y0s, mems, p, hs, coefficients, iters):
         q[reduced.P_MODE] = mems[k, 0]
         q[reduced.P_DMIN] = mems[k, 1]
         vals[k], times[k] = _golden_max(reduced.rhs, reduced.monitor_out, t0s[k], y0, q, hs[k],
-                                        A, B, C, K, y_new, f_new, ytmp, f0, iters, out)
+                                        A, B, C, K, y_new, f_new, ytmp, f0, iters, out, g,
+                                        gd)
     return vals, times
 
 
@@ -160,13 +161,13 @@ def _refine_steps(t0s, y0s, mems, p, hs, coefficients, iters):
 def _step_value(t0, y0, mem, p, h, coefficients):
     """|F12| of the plain model's step map at t0 + h (state y0 (5,), memory mem)."""
     A, B, C = coefficients[0], coefficients[1], coefficients[2]
-    K, y_new, f_new, ytmp, f0 = step_workspace(coefficients, y0.shape[0])
+    K, y_new, f_new, ytmp, f0, g, gd = step_workspace(coefficients, y0.shape[0])
     q = p.copy()
     q[reduced.P_MODE] = mem[0]
     q[reduced.P_DMIN] = mem[1]
     reduced.rhs(t0, y0, q, f0)
     return _step_monitor(reduced.rhs, reduced.monitor_out, t0, y0, f0, h, A, B, C, K, q,
-                         y_new, f_new, ytmp, np.zeros(0))[0]
+                         y_new, f_new, ytmp, np.zeros(0), g, gd)
 
 
 # ------------------------------------------------------------------ DDM at the peak

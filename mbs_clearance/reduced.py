@@ -35,14 +35,16 @@ from ._warnings import AccuracyWarning
 from .contact import CONTACT_MODELS, contact_force
 from .integrator import (
     ACTION_SIG,
+    COUNTERS,
     EVENT_SIG,
     KERNEL,
     METHODS,
     MONITOR_SIG,
+    RESULTS,
     RHS_SIG,
     SCALAR_SIG,
-    STATUS_MESSAGES,
     integrate,
+    make_settings,
 )
 from .mechanism import SliderCrank
 
@@ -216,11 +218,11 @@ def _switching(p, delta, deltadot):
 
 
 @nb.njit(**KERNEL, inline="always")
-def peak_and_event(p, res):
-    """(|F12|, g, gdot) from the result `res` of `dynamics`: the monitored value and the
-    event function of the integrator's last stage."""
-    g, gd = _switching(p, res[3], res[4])
-    return math.sqrt(res[8] * res[8] + res[9] * res[9]), g, gd
+def peak_and_switching(p, res, g, gd):
+    """|F12| from the result `res` of `dynamics`, the monitored value of the integrator's last
+    stage; the switching function and its rate into g[0], gd[0] (one joint)."""
+    g[0], gd[0] = _switching(p, res[3], res[4])
+    return math.sqrt(res[8] * res[8] + res[9] * res[9])
 
 
 @nb.njit(RHS_SIG, **KERNEL)
@@ -230,16 +232,17 @@ def rhs(t, y, p, dydt):
 
 
 @nb.njit(EVENT_SIG, **KERNEL)
-def event(t, y, p):
-    """Switching function and its rate: penetration (and its rate) in free flight, minus
-    them in contact."""
+def event(t, y, p, j):
+    """Switching function and its rate (the one joint, j = 0): penetration (and its rate)
+    in free flight, minus them in contact."""
     ex, ey, r, delta, deltadot, nx, ny = geometry(t, y, p)
     return _switching(p, delta, deltadot)
 
 
 @nb.njit(ACTION_SIG, **KERNEL)
-def on_event(t, y, p):
-    """Switch the contact mode; at onset store the impact velocity (floored, see docs)."""
+def on_event(t, y, p, j):
+    """Switch the contact mode (the one joint, j = 0); at onset store the impact velocity
+    (floored, see docs)."""
     if p[P_MODE] > 0.5:
         p[P_MODE] = 0.0
     else:
@@ -256,16 +259,16 @@ def monitor(t, y, p):
 
 
 @nb.njit(MONITOR_SIG, **KERNEL)
-def monitor_out(t, y, p, dydt, out):
+def monitor_out(t, y, p, dydt, out, g, gd):
     """The integrator's last stage of a step: the state derivative (as `rhs`), the outputs of
-    `dynamics` into out (len(OUT_COLUMNS) entries, or none), |F12| and the event function,
-    from one evaluation of the model."""
+    `dynamics` into out (len(OUT_COLUMNS) entries, or none), the switching function into g,
+    gd and |F12|, from one evaluation of the model."""
     res = dynamics(t, y, p)
     _derivative(y, p, res, dydt)
     if out.shape[0] >= 10:
         for k in range(10):
             out[k] = res[k]
-    return peak_and_event(p, res)
+    return peak_and_switching(p, res, g, gd)
 
 
 @nb.njit(cache=True, error_model="numpy")
@@ -472,16 +475,12 @@ class System(NamedTuple):
 
 
 @nb.njit(cache=True, error_model="numpy", nogil=True)
-def integrate_plain(y0, p, mem_start, n_mem, edges, rtol, atol, n_err, h0, h_max, max_steps,
-                    record, event_tol, event_margin, n_samples, refine_iters, coefficients,
-                    n_out, n_dense):
+def integrate_plain(y0, p, edges, settings, coefficients):
     """`integrate` bound to the reduced model's kernels (compiled once, cached)."""
     # the kernels are looked up as module attributes: numba then binds them as constants;
     # passed as plain globals they would be runtime values and the function not cacheable
-    return integrate(_THIS.rhs, _THIS.event, _THIS.on_event, _THIS.monitor_out, y0, p,
-                     mem_start, n_mem, edges, rtol, atol, n_err, h0, h_max, max_steps, record,
-                     event_tol, event_margin, n_samples, refine_iters, coefficients, n_out,
-                     n_dense)
+    return integrate(_THIS.rhs, _THIS.event, _THIS.on_event, _THIS.monitor_out, y0, p, edges,
+                     settings, coefficients)
 
 
 def run(mech: SliderCrank, revolutions: int = 4, *, rtol: float | None = None,
@@ -565,20 +564,23 @@ def run(mech: SliderCrank, revolutions: int = 4, *, rtol: float | None = None,
     kernel, y0, p, mem_start, n_mem, n_err, atol_arr, n_out = system
     if not record:
         n_out = 0
-    ts, ys, ms, peaks, peak_t, counters, outs = kernel(
-        y0, p, mem_start, n_mem, edges, rtol,
-        atol_arr, n_err, h0, h_max, step_limit, record, event_tol,
-        EVENT_MARGIN * mech.clearance, n_samples, refine, tab.arrays(), n_out, N_EVENT)
-    status = int(counters[4])
-    if status == 1 and step_limit < max_steps:
+    settings = make_settings(rtol, atol_arr, n_err, h0=h0, h_max=h_max, max_steps=step_limit,
+                             record=record, event_tol=event_tol,
+                             event_margin=EVENT_MARGIN * mech.clearance, n_samples=n_samples,
+                             refine_iters=refine, n_out=n_out, n_dense=N_EVENT, n_events=1,
+                             mem_start=mem_start, n_mem=n_mem)
+    ts, ys, ms, peaks, peak_t, counters, outs, status = kernel(y0, p, edges, settings,
+                                                               tab.arrays())
+    status = RESULTS(status)
+    if status is RESULTS.max_steps and step_limit < max_steps:
         raise MemoryLimitError(
             f"the reduced model's record reached max_memory={max_memory} bytes "
             f"({format_bytes(max_memory)}) at t = {ts[-1]:.6g} s, after {step_limit} steps; "
             "raise max_memory, run fewer revolutions, or use peak_base_force")
-    if status != 0:
+    if status is not RESULTS.success:
         raise RuntimeError(f"reduced model integration failed at about t = "
                            f"{ts[-1] if len(ts) else float('nan'):.6g} s: "
-                           f"{STATUS_MESSAGES[status]}")
+                           f"{status.message}")
     if t_eval is not None and select:
         keep = landed_indices(ts, t_eval)
         ts, ys, ms, outs = ts[keep], ys[keep], ms[keep], outs[keep]
@@ -628,9 +630,8 @@ def event_atol(mech: SliderCrank, rtol: float) -> np.ndarray:
 
 
 def counters_dict(counters) -> dict:
-    """Solver counters as a dict."""
-    names = ("nfev", "naccept", "nreject", "nevent", "status", "nrefine")
-    return {k: int(v) for k, v in zip(names, counters)}
+    """Solver counters (`integrator.COUNTERS`) as a dict."""
+    return {k: int(v) for k, v in zip(COUNTERS, counters)}
 
 
 #: options of `simulate(..., backend="reduced")` (keywords of `run` meant for users)

@@ -70,7 +70,7 @@ def solve_scipy(mech: SliderCrank, edges: np.ndarray | None = None, revolutions:
                  8 * np.finfo(float).eps * (mech.crank_length + mech.coupler_length))
 
     def ev(tt, yy):
-        return reduced.event(tt, np.ascontiguousarray(yy), p)[0] - offset
+        return reduced.event(tt, np.ascontiguousarray(yy), p, 0)[0] - offset
 
     ev.terminal = True
     ev.direction = 1
@@ -102,7 +102,7 @@ def solve_scipy(mech: SliderCrank, edges: np.ndarray | None = None, revolutions:
             break
         event_times.append(t_new)
         t = t_new
-        reduced.on_event(t, y, p)
+        reduced.on_event(t, y, p, 0)
         buf[:] = y
 
     res = ScipyResult(edges, np.zeros(len(edges) - 1), np.zeros(len(edges) - 1),
