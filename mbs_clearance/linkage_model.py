@@ -208,7 +208,6 @@ def run(linkage: Linkage, revolutions: int = 4, *, rtol: float | None = None,
     centred start; returns (model, ts, ys, ms, peaks, peak_times, counters dict, outs, p).
     Every option is checked first (ValueError naming it and its range); a run whose record
     would exceed `max_memory` bytes stops there with `MemoryLimitError`."""
-    from . import integrator
     from ._checks import (
         MemoryLimitError,
         check_bool,
@@ -218,10 +217,6 @@ def run(linkage: Linkage, revolutions: int = 4, *, rtol: float | None = None,
         check_real,
         format_bytes,
     )
-
-    if not hasattr(integrator, "make_settings"):
-        raise NotImplementedError("simulating a Linkage needs the integrator's kernel protocol "
-                                  "v2 (several switching functions; branch s7-int)")
     from .integrator import COUNTERS, METHODS, RESULTS, make_settings
 
     if not isinstance(linkage, Linkage):

@@ -1,28 +1,18 @@
-"""What every generated model module imports: the kernel signatures of protocol v2 and the
-clearance joints' contact stage (one place for the penetration, its rate and the force)."""
+"""What every generated model module imports: the kernel signatures of protocol v2 (from the
+integrator) and the clearance joints' contact stage (one place for the penetration, its rate
+and the force)."""
 
 from __future__ import annotations
 
 import math
 
 import numba as nb
-from numba import types
 
 from ..contact import contact_force
-from ..integrator import KERNEL
+from ..integrator import ACTION_SIG, EVENT_SIG, KERNEL, MONITOR_SIG, RHS_SIG
 
 __all__ = ["KERNEL", "RHS_SIG", "EVENT_SIG", "ACTION_SIG", "MONITOR_SIG", "gap_state",
            "contact_stage", "switching"]
-
-_vec = types.float64[::1]
-#: rhs(t, y, p, dydt)
-RHS_SIG = types.void(types.float64, _vec, _vec, _vec)
-#: event(t, y, p, j) -> (g, gdot) of clearance joint j
-EVENT_SIG = types.UniTuple(types.float64, 2)(types.float64, _vec, _vec, types.int64)
-#: on_event(t, y, p, j)
-ACTION_SIG = types.void(types.float64, _vec, _vec, types.int64)
-#: monitor(t, y, p, dydt, out, g, gd) -> m
-MONITOR_SIG = types.float64(types.float64, _vec, _vec, _vec, _vec, _vec, _vec)
 
 
 @nb.njit(**KERNEL, inline="always")

@@ -97,7 +97,7 @@ def test_paper_model_matches_reduced(mech):
             assert dydt[4] == pytest.approx(M2 * mech.crank_speed,
                                             abs=1e-12 * force_scale * 0.2 * mech.crank_speed)
             assert dydt[:2] == pytest.approx(y[2:4], abs=0)
-            ge, gde = reduced.event(t, y, pr)
+            ge, gde = reduced.event(t, y, pr, 0)
             vel = mech.crank_speed * (mech.crank_length + mech.coupler_length)
             assert model.event(t, y, p, 0) == pytest.approx((ge, gde), abs=1e-13 * vel)
             assert model.event(t, y, p, 0)[0] == pytest.approx(ge, abs=5e-16)
@@ -117,7 +117,7 @@ def test_on_event_matches_reduced():
         for mode in (0.0, 1.0):
             p[model.MEM_START] = pr[reduced.P_MODE] = mode
             model.on_event(t, y, p, 0)
-            reduced.on_event(t, y, pr)
+            reduced.on_event(t, y, pr, 0)
             assert p[model.MEM_START] == pr[reduced.P_MODE]
             assert p[model.MEM_START + 1] == pytest.approx(pr[reduced.P_DMIN], rel=1e-12,
                                                            abs=1e-15)
@@ -358,12 +358,6 @@ def test_trajectory_along_reduced_run(tmp_path):
         assert np.array_equal(back.peaks, traj.peaks)
 
 
-needs_v2 = pytest.mark.skipif(not hasattr(__import__("mbs_clearance.integrator").integrator,
-                                          "make_settings"),
-                              reason="the integrator's protocol v2 (branch s7-int) is not merged")
-
-
-@needs_v2
 def test_paper_case_through_the_linkage_path():
     """simulate(paper_slider_crank()) (generated model, protocol v2, glue) against
     simulate(SliderCrank()) (hand-written model) at the same default rtol: the refined
@@ -382,7 +376,6 @@ def test_paper_case_through_the_linkage_path():
     assert traj.crank_work[-1] == pytest.approx(ref.crank_work[-1], rel=1e-7)
 
 
-@needs_v2
 def test_two_joints_energy_balance_over_a_run():
     """Two clearance joints (a floating disc on the crank pin and a pendulum rattling in a
     ground bearing, ~470 impacts in 2 revolutions), restitution 1: the drive's work equals
