@@ -1,0 +1,294 @@
+"""The glue between a `Linkage` and its generated model: parameters, initial state, run.
+
+`pack_parameters(linkage)` fills the generated module's parameter vector from the
+description (by the module's PARAMETERS names, no index arithmetic) and computes its
+constants; `initial_state(linkage)` solves the loop closure of the clearance joints (journals
+centred) by Newton from the description's assembly guesses and the velocities from the
+velocity constraints.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .contact import CONTACT_MODELS
+from .generate import load_model
+from .linkage import GROUND, Linkage
+
+__all__ = ["parameter_values", "pack_parameters", "initial_state"]
+
+
+def parameter_values(linkage: Linkage) -> dict[str, float]:
+    """Values of the generated model's parameters (its PARAMETERS names) for `linkage`; the
+    memory of each clearance joint starts in free flight with the impact-velocity floor."""
+    values: dict[str, float] = {}
+    for b in linkage.bodies:
+        values[f"{b.name}.mass"] = b.mass
+        values[f"{b.name}.inertia"] = b.inertia
+        for pt, (x, y) in b.points.items():
+            values[f"{b.name}.{pt}.x"] = x
+            values[f"{b.name}.{pt}.y"] = y
+    for pt, (x, y) in linkage.ground_points.items():
+        values[f"{GROUND}.{pt}.x"] = x
+        values[f"{GROUND}.{pt}.y"] = y
+    for j in linkage.joints:
+        if hasattr(j, "angle"):
+            values[f"{j.name}.angle"] = j.angle
+    for j in linkage.clearance_joints:
+        values[f"{j.name}.clearance"] = j.clearance
+        values[f"{j.name}.stiffness"] = j.stiffness
+        values[f"{j.name}.restitution"] = j.restitution
+        values[f"{j.name}.contact_model"] = float(CONTACT_MODELS[j.contact_model])
+        values[f"{j.name}.impact_velocity_floor"] = j.impact_velocity_floor
+        values[f"{j.name}.mode"] = 0.0
+        values[f"{j.name}.impact_velocity"] = j.impact_velocity_floor
+    values["drive.speed"] = linkage.drive.speed
+    values["drive.initial_angle"] = linkage.drive.initial_angle
+    values["gravity"] = linkage.gravity
+    return values
+
+
+def pack_parameters(linkage: Linkage, model=None) -> np.ndarray:
+    """The parameter vector p (N_P,) of `linkage`'s generated model, constants computed."""
+    model = load_model(linkage) if model is None else model
+    values = parameter_values(linkage)
+    p = np.zeros(model.N_P)
+    for i, name in enumerate(model.PARAMETERS):
+        p[i] = values[name]
+    model.prepare(p)
+    return p
+
+
+def initial_state(linkage: Linkage, model=None, p=None, t0: float = 0.0, tol: float = 1e-14,
+                  max_iter: int = 50) -> np.ndarray:
+    """State y0 (N_STATE,) with every journal centred in its bearing: the coordinates solve
+    the loop closure (closure(t0, q, p) = 0) by Newton's method from the description's
+    assembly guesses (0 for coordinates without one; least squares if the closure is not
+    square), the rates the velocity constraints closure_jacobian qdot = -closure_rate;
+    W = 0. Raises ValueError if Newton does not converge (no assembly near the guesses)."""
+    model = load_model(linkage) if model is None else model
+    p = pack_parameters(linkage, model) if p is None else p
+    q = np.array([linkage.assembly.get(c, 0.0) for c in model.COORDINATES])
+    scale = max(linkage.length_scale, 1e-300)
+    for _ in range(max_iter):
+        res = model.closure(t0, q, p)
+        jac = model.closure_jacobian(t0, q, p)
+        dq = np.linalg.lstsq(jac, -res, rcond=None)[0]
+        q = q + dq
+        if np.max(np.abs(model.closure(t0, q, p))) <= tol * scale:
+            break
+    else:
+        raise ValueError(
+            f"the loop closure of linkage {linkage.name!r} did not converge from the assembly "
+            f"guesses {dict(linkage.assembly)} (residual "
+            f"{np.max(np.abs(model.closure(t0, q, p))):.3g} m): give guesses (Linkage."
+            f"assembly, by coordinate name {list(model.COORDINATES)}) near an assembly")
+    jac = model.closure_jacobian(t0, q, p)
+    qd = np.linalg.lstsq(jac, -model.closure_rate(t0, q, p), rcond=None)[0]
+    return np.concatenate([q, qd, [0.0]])
+
+
+# ---------------------------------------------------------------------------- tolerances
+
+#: default relative tolerance (as the hand-written paper model: reduced.DEFAULT_RTOL)
+DEFAULT_RTOL = 1e-7
+
+#: absolute tolerance of each switching function (the penetration) in clearances x rtol
+#: (as reduced.EVENT_ATOL: the penetration's error is controlled at the clearance's scale)
+EVENT_ATOL = 1.5
+
+
+def drive_extent(linkage: Linkage) -> float:
+    """The driven body's largest distance between two of its points (and its centre of
+    mass) in m: its tip speed / drive speed, the scale of length rates."""
+    import math
+
+    drive = next(j for j in linkage.joints if j.name == linkage.drive.joint)
+    body = next(b for b in linkage.bodies if b.name == drive.body_b)
+    pts = [(0.0, 0.0), *body.points.values()]
+    return max(math.dist(a, b) for a in pts for b in pts)
+
+
+def default_atol(linkage: Linkage, model, rtol: float) -> np.ndarray:
+    """Absolute tolerances: per state component from the linkage's natural scales (angles
+    1 rad, lengths the length scale, angle rates the drive speed, length rates the driven
+    body's tip speed, the drive's work 1 J, not under error control), then per clearance
+    joint of its switching function (EVENT_ATOL clearances x rtol) and its rate (none).
+    For the paper case these are reduced.default_atol and reduced.event_atol."""
+    w = linkage.drive.speed
+    length = linkage.length_scale
+    tip = w * drive_extent(linkage)
+    pos = [1.0 if c.endswith(".angle") else length for c in model.COORDINATES]
+    vel = [w if c.endswith(".angle") else tip for c in model.COORDINATES]
+    events = []
+    for j in linkage.clearance_joints:
+        events += [rtol * EVENT_ATOL * j.clearance, np.inf]
+    return np.concatenate([rtol * np.array(pos + vel + [1.0]), events])
+
+
+# ---------------------------------------------------------------------------- trajectory
+
+def trajectory_from_run(linkage: Linkage, model, ts, ys, ms, p, stats, peaks, outs=None):
+    """The `Trajectory` of a linkage run: recorded times, states, memories (n, N_MEM) and,
+    if recorded, outputs (OUT_COLUMNS; else evaluated here)."""
+    from .trajectory import Trajectory
+
+    ys = np.ascontiguousarray(ys)
+    ms = np.ascontiguousarray(ms[:, :model.N_MEM])
+    if outs is None or outs.shape[1] < model.N_OUT:
+        outs = model.outputs(np.ascontiguousarray(ts), ys, ms, p)
+    col = {c: i for i, c in enumerate(model.OUT_COLUMNS)}
+    joints = model.JOINTS
+    J, n = len(joints), model.N_Q
+
+    def per_joint(field):
+        return np.column_stack([outs[:, col[f"{j}.{field}"]] for j in joints])
+
+    reactions = {g: outs[:, [col[f"{g}.reaction_x"], col[f"{g}.reaction_y"]]].copy()
+                 for g in model.GROUND_JOINTS}
+    shaking = outs[:, [col["shaking_x"], col["shaking_y"]]].copy()
+    monitored = (shaking if model.MONITOR_JOINT is None
+                 else reactions[model.MONITOR_JOINT])
+    return Trajectory(
+        t=np.asarray(ts), base_force=monitored, crank_moment=outs[:, col["drive_moment"]].copy(),
+        contact_force=per_joint("contact_force"), penetration=per_joint("penetration"),
+        eccentricity=np.stack([per_joint("ecc_x"), per_joint("ecc_y")], axis=2),
+        slider_position=None, slider_velocity=None, slider_acceleration=None,
+        coupler_angle=None, coupler_rate=None,
+        contact_phase=(ms[:, 0:2 * J:2] > 0.5).astype(np.int8),
+        crank_work=ys[:, 2 * n].copy(), mechanism=linkage, backend="reduced", stats=stats,
+        peaks=peaks, joints=tuple(joints), reactions=reactions, shaking_force=shaking,
+        coordinates={c: ys[:, i].copy() for i, c in enumerate(model.COORDINATES)},
+        rates={c: ys[:, n + i].copy() for i, c in enumerate(model.COORDINATES)},
+        accelerations={c: outs[:, col[f"{c}.acc"]].copy() for c in model.COORDINATES},
+    )
+
+
+# ---------------------------------------------------------------------------- runs
+
+#: options of `simulate(linkage, backend="reduced")` (keywords of `run` meant for users)
+OPTION_NAMES = ("rtol", "atol", "method", "max_steps", "n_samples", "h_max", "h0",
+                "event_tol", "max_memory")
+
+#: the event search looks closer within this fraction of the smallest clearance of a wall
+#: (as reduced.EVENT_MARGIN)
+EVENT_MARGIN = 0.05
+
+#: default `max_steps` (step attempts) of a run
+DEFAULT_MAX_STEPS = 5_000_000
+
+#: golden-section iterations per refined peak candidate (as the hand-written model)
+REFINE_ITERS = 24
+
+
+def _tolerances(linkage, model, rtol, atol):
+    from ._checks import check_real
+
+    rtol = DEFAULT_RTOL if rtol is None else check_real("rtol", rtol, 1e-14, 1e-2)
+    full = default_atol(linkage, model, rtol)
+    if atol is not None:
+        try:
+            arr = np.broadcast_to(np.asarray(atol, dtype=float), (model.N_STATE,)).copy()
+        except (TypeError, ValueError):
+            arr = None
+        if (arr is None or not np.all(np.isfinite(arr)) or np.any(arr <= 0)
+                or isinstance(atol, (bool, np.bool_))):
+            raise ValueError(f"atol must be a finite number > 0 or {model.N_STATE} of them "
+                             f"(one per state component {list(model.COORDINATES)}, their "
+                             f"rates, the drive's work); got {atol!r}")
+        full[:model.N_STATE] = arr
+    return rtol, full
+
+
+def run(linkage: Linkage, revolutions: int = 4, *, rtol: float | None = None,
+        atol=None, method: str = "dopri5", record: bool = True,
+        max_steps: int = DEFAULT_MAX_STEPS, n_samples: int = 1, h_max: float | None = None,
+        h0: float = 0.0, event_tol: float | None = None, max_memory: int | None = None):
+    """Integrate `linkage`'s generated model over `revolutions` drive revolutions from the
+    centred start; returns (model, ts, ys, ms, peaks, peak_times, counters dict, outs, p).
+    Every option is checked first (ValueError naming it and its range); a run whose record
+    would exceed `max_memory` bytes stops there with `MemoryLimitError`."""
+    from ._checks import (
+        MemoryLimitError,
+        check_bool,
+        check_choice,
+        check_int,
+        check_max_memory,
+        check_real,
+        format_bytes,
+    )
+    from .integrator import COUNTERS, METHODS, RESULTS, make_settings
+
+    if not isinstance(linkage, Linkage):
+        raise ValueError(f"linkage must be a Linkage; got {type(linkage).__name__}")
+    revolutions = check_int("revolutions", revolutions, 1)
+    check_choice("method", method, METHODS)
+    record = check_bool("record", record)
+    max_steps = check_int("max_steps", max_steps, 1)
+    n_samples = check_int("n_samples (interior event samples per step)", n_samples, 0, 1000)
+    h0 = check_real("h0 (initial step; 0: automatic)", h0, 0.0, unit="s")
+    max_memory = check_max_memory(max_memory)
+    h_max = linkage.period / 8 if h_max is None else check_real(
+        "h_max (largest step)", h_max, 0.0, low_open=True, unit="s")
+    if event_tol is None:
+        # 1e-12 of the clearance, but not below the round-off of the journal positions
+        event_tol = max(1e-12 * linkage.min_clearance,
+                        8 * np.finfo(float).eps * linkage.length_scale)
+    else:
+        event_tol = check_real("event_tol (penetration tolerance of events)", event_tol, 0.0,
+                               low_open=True, unit="m")
+    model = load_model(linkage)
+    rtol, atol_arr = _tolerances(linkage, model, rtol, atol)
+    if rtol > 1e-4:
+        import warnings
+
+        from ._warnings import AccuracyWarning
+
+        warnings.warn(f"rtol {rtol:g} is too loose to resolve the contacts (looser than "
+                      f"1e-4: spurious contact events and peak forces wrong by any amount); "
+                      f"use rtol <= 1e-4, the default is {DEFAULT_RTOL:g}", AccuracyWarning,
+                      stacklevel=3)
+    p = pack_parameters(linkage, model)
+    y0 = initial_state(linkage, model, p)
+    edges = np.arange(revolutions + 1) * linkage.period
+    n_out = model.N_OUT if record else 0
+    row = 8 * (1 + model.N_STATE + model.N_MEM + n_out)
+    step_cap = max(1, (max_memory - 24 * len(edges)) // row) if record else max_steps
+    limit = min(max_steps, step_cap)
+    settings = make_settings(
+        rtol, atol_arr, 2 * model.N_Q, h0=h0, h_max=h_max, max_steps=limit, record=record,
+        event_tol=event_tol, event_margin=EVENT_MARGIN * linkage.min_clearance,
+        n_samples=n_samples, refine_iters=REFINE_ITERS, n_out=n_out, n_dense=2 * model.N_Q,
+        n_events=model.N_EVENTS, mem_start=model.MEM_START, n_mem=model.N_MEM)
+    ts, ys, ms, peaks, peak_t, counters, outs, status = model.integrate_model(
+        y0, p, edges, settings, METHODS[method].arrays())
+    status = RESULTS(int(status))
+    if status == RESULTS.max_steps and limit < max_steps:
+        raise MemoryLimitError(
+            f"the record of linkage {linkage.name!r} reached max_memory={max_memory} bytes "
+            f"({format_bytes(max_memory)}) at t = {ts[-1]:.6g} s, after {limit} steps; raise "
+            "max_memory or run fewer revolutions")
+    if status != RESULTS.success:
+        raise RuntimeError(f"integration of linkage {linkage.name!r} failed at about t = "
+                           f"{ts[-1] if len(ts) else float('nan'):.6g} s: {status.message()}")
+    stats = {k: int(v) for k, v in zip(COUNTERS, counters)}
+    stats.update(method=method, rtol=float(rtol))
+    return model, ts, ys, ms, peaks, peak_t, stats, outs, p
+
+
+def simulate_linkage(linkage: Linkage, revolutions: int = 4, **options):
+    """Simulate `linkage` with its generated model; a `Trajectory` of every accepted step
+    with per-joint series (see `Trajectory`), annotated (penetration, periodicity)."""
+    from .trajectory import annotate
+
+    model, ts, ys, ms, peaks, _, stats, outs, p = run(linkage, revolutions, record=True,
+                                                      **options)
+    traj = trajectory_from_run(linkage, model, ts, ys, ms, p, stats, peaks, outs)
+    return annotate(traj)
+
+
+def peak_linkage(linkage: Linkage, revolution: int = 4, **options) -> float:
+    """The monitored force's maximum in N over drive revolution `revolution` (1-based; the
+    monitored ground joint's |reaction|, or |shaking force|), recording nothing."""
+    peaks = run(linkage, revolution, record=False, **options)[4]
+    return float(peaks[revolution - 1])
