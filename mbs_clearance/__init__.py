@@ -20,6 +20,15 @@ from ._warnings import (  # noqa: F401 - public warning classes, users filter by
 # as imported (numba alone does not notice edits of the files a kernel calls into; _cache.py)
 register_package(__name__)
 
+from .linkage import (  # noqa: E402
+    GROUND,
+    Body,
+    ClearanceJoint,
+    Drive,
+    Linkage,
+    Prismatic,
+    Revolute,
+)
 from .mechanism import CONTINUOUS_FIELDS, PARAMETER_INFO, SliderCrank  # noqa: E402
 from .objective import PeakGradient, peak_gradient  # noqa: E402
 from .optimize import OptimizationResult, optimize_link_lengths  # noqa: E402
@@ -29,6 +38,7 @@ from .trajectory import Trajectory, load_trajectory  # noqa: E402
 
 __all__ = [
     "SliderCrank", "PARAMETER_INFO", "CONTINUOUS_FIELDS",
+    "Linkage", "Body", "Revolute", "Prismatic", "ClearanceJoint", "Drive", "GROUND",
     "simulate", "peak_base_force", "BACKENDS",
     "Trajectory", "load_trajectory",
     "sensitivities", "Sensitivities", "DEFAULT_PARAMETERS",

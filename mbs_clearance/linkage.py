@@ -1,0 +1,664 @@
+"""The description of a planar linkage with revolute clearance joints (`Linkage`).
+
+A linkage is rigid bodies (mass, inertia about the centre of mass, named points in the body
+frame), ideal revolute and prismatic joints, one constant-speed drive of a revolute joint to
+the ground, gravity along -y and any number of revolute clearance joints. Every value is SI.
+The clearance joints cut the kinematic loops: the ideal joints must form a forest rooted at
+the ground, so that the equations of motion are ODEs in minimal coordinates (no DAE). Bodies
+with no ideal path to the ground float (x, y, angle).
+
+Coordinates (`Linkage.coordinates`), in the order of the joints, then of the floating bodies:
+
+- a Revolute other than the drive's: "<body>.angle", the ABSOLUTE angle of the body on the
+  joint's far side from the ground (its x axis against the ground's x axis). An angle
+  relative to a body that turns with the crank grows by 2 pi per revolution, and with it the
+  integrator's relative error scale; the absolute angle of a coupler or a rocker stays
+  bounded;
+- a Prismatic: "<joint>.s", the distance of point_b from point_a along the axis;
+- a floating body: "<body>.x", "<body>.y" (its centre of mass), "<body>.angle".
+
+The drive's angle (body_b's angle) is prescribed, speed t + initial_angle, not a coordinate.
+
+Every description is validated on construction: a bad value raises ValueError naming the
+item and its allowed range, a graph error (unknown body or point, a closed loop of ideal
+joints, a drive not on a ground revolute, ...) names the joints involved.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+import numbers
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from .contact import CONTACT_MODELS, stiffness_eq9
+
+__all__ = ["Point", "GROUND", "Body", "Revolute", "Prismatic", "ClearanceJoint", "Drive",
+           "Linkage"]
+
+Point = tuple[float, float]
+#: reserved body name of the ground; its points are `Linkage.ground_points`
+GROUND = "ground"
+
+
+def _is_real(value: Any) -> bool:
+    return isinstance(value, numbers.Real) and not isinstance(value, bool)
+
+
+def _real(item: str, value: Any, allowed: str = "a finite number", ok=lambda v: True,
+          ) -> float:
+    """`value` as a float, or ValueError naming `item` and the allowed range."""
+    good = _is_real(value)
+    if good:
+        try:
+            value = float(value)
+        except OverflowError:
+            good = False
+        good = good and math.isfinite(value) and ok(value)
+    if not good:
+        raise ValueError(f"{item} must be {allowed}; got {value!r}")
+    return value
+
+
+def _name(item: str, value: Any) -> str:
+    if not isinstance(value, str) or not value or "." in value or value != value.strip():
+        raise ValueError(f"{item} must be a non-empty string without dots or surrounding "
+                         f"spaces; got {value!r}")
+    return value
+
+
+def _points(item: str, points: Any) -> dict[str, Point]:
+    if not isinstance(points, Mapping):
+        raise ValueError(f"{item} must be a mapping of point name to (x, y) in m; "
+                         f"got {points!r}")
+    out = {}
+    for key, xy in points.items():
+        _name(f"{item} key", key)
+        if isinstance(xy, (str, bytes)) or not hasattr(xy, "__len__") or len(xy) != 2:
+            raise ValueError(f"{item}[{key!r}] must be a pair (x, y) of finite numbers in m; "
+                             f"got {xy!r}")
+        out[key] = (_real(f"{item}[{key!r}] x", xy[0], "a finite number (m)"),
+                    _real(f"{item}[{key!r}] y", xy[1], "a finite number (m)"))
+    return out
+
+
+@dataclass(frozen=True)
+class Body:
+    """A rigid body: mass in kg, inertia about the centre of mass in kg m^2, and named points
+    (x, y) in m in the body frame, whose origin is the centre of mass and whose x axis is the
+    body's reference line (the body's angle is that axis's angle)."""
+
+    name: str
+    mass: float
+    inertia: float
+    points: Mapping[str, Point] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        _name("body name", self.name)
+        if self.name == GROUND:
+            raise ValueError(f"body name {GROUND!r} is reserved for the ground (its points are "
+                             "Linkage.ground_points)")
+        what = f"body {self.name!r}"
+        object.__setattr__(self, "mass", _real(f"{what} mass", self.mass,
+                                               "a finite number > 0 (kg)", lambda v: v > 0))
+        object.__setattr__(self, "inertia", _real(f"{what} inertia", self.inertia,
+                                                  "a finite number > 0 (kg m^2)",
+                                                  lambda v: v > 0))
+        object.__setattr__(self, "points", _points(f"{what} points", self.points))
+
+
+@dataclass(frozen=True)
+class Revolute:
+    """Ideal pin: point_a of body_a coincides with point_b of body_b."""
+
+    name: str
+    body_a: str
+    point_a: str
+    body_b: str
+    point_b: str
+
+    def __post_init__(self) -> None:
+        _joint_names(self)
+
+
+@dataclass(frozen=True)
+class Prismatic:
+    """Ideal slider: body_b keeps body_a's orientation; point_b moves along the axis through
+    point_a at `angle` (rad, in body_a's frame); the coordinate s is point_b's distance from
+    point_a along the axis."""
+
+    name: str
+    body_a: str
+    point_a: str
+    body_b: str
+    point_b: str
+    angle: float = 0.0
+
+    def __post_init__(self) -> None:
+        _joint_names(self)
+        object.__setattr__(self, "angle", _real(f"joint {self.name!r} angle", self.angle,
+                                                "a finite number (rad)"))
+
+
+def _joint_names(joint) -> None:
+    _name("joint name", joint.name)
+    for f in ("body_a", "point_a", "body_b", "point_b"):
+        _name(f"joint {joint.name!r} {f}", getattr(joint, f))
+    if joint.body_a == joint.body_b:
+        raise ValueError(f"joint {joint.name!r} joins body {joint.body_a!r} to itself; "
+                         "body_a and body_b must differ")
+
+
+@dataclass(frozen=True)
+class ClearanceJoint:
+    """A revolute joint with radial clearance: a journal (radius journal_radius, centred on
+    journal_point of journal_body) inside a bearing (bearing_radius, centred on bearing_point
+    of bearing_body). Contact: a Hertzian spring with hysteresis damping
+    (`contact.CONTACT_MODELS`); stiffness from the paper's Eq. 9 unless given."""
+
+    name: str
+    journal_body: str
+    journal_point: str
+    bearing_body: str
+    bearing_point: str
+    bearing_radius: float
+    journal_radius: float
+    youngs_modulus: float = 207e9
+    poisson_ratio: float = 0.3
+    restitution: float = 0.9
+    contact_stiffness: float | None = None
+    contact_model: str = "lankarani_nikravesh"
+    impact_velocity_floor: float = 1e-3
+
+    def __post_init__(self) -> None:
+        _name("clearance joint name", self.name)
+        what = f"clearance joint {self.name!r}"
+        for f in ("journal_body", "journal_point", "bearing_body", "bearing_point"):
+            _name(f"{what} {f}", getattr(self, f))
+        if self.journal_body == self.bearing_body:
+            raise ValueError(f"{what} has journal and bearing on the same body "
+                             f"{self.journal_body!r}; they must be on different bodies")
+        positive = lambda v: v > 0          # noqa: E731
+        for f, unit in (("bearing_radius", "m"), ("journal_radius", "m"),
+                        ("youngs_modulus", "Pa"), ("impact_velocity_floor", "m/s")):
+            object.__setattr__(self, f, _real(f"{what} {f}", getattr(self, f),
+                                              f"a finite number > 0 ({unit})", positive))
+        if self.journal_radius >= self.bearing_radius:
+            raise ValueError(f"{what} journal_radius must be smaller than its bearing_radius "
+                             f"({self.bearing_radius!r} m); got {self.journal_radius!r} m "
+                             "(allowed range: 0 < journal_radius < bearing_radius)")
+        object.__setattr__(self, "poisson_ratio", _real(
+            f"{what} poisson_ratio", self.poisson_ratio, "in the open interval (-1, 0.5)",
+            lambda v: -1.0 < v < 0.5))
+        object.__setattr__(self, "restitution", _real(
+            f"{what} restitution", self.restitution, "in the interval (0, 1]",
+            lambda v: 0.0 < v <= 1.0))
+        if self.contact_stiffness is not None:
+            object.__setattr__(self, "contact_stiffness", _real(
+                f"{what} contact_stiffness", self.contact_stiffness,
+                "None or a finite number > 0 (N/m^1.5)", positive))
+        if self.contact_model not in CONTACT_MODELS:
+            raise ValueError(f"{what} contact_model must be one of {sorted(CONTACT_MODELS)}; "
+                             f"got {self.contact_model!r}")
+
+    @property
+    def clearance(self) -> float:
+        """Radial clearance R_B - R_J in m."""
+        return self.bearing_radius - self.journal_radius
+
+    @property
+    def stiffness(self) -> float:
+        """Contact stiffness K in N/m^1.5: `contact_stiffness` or the paper's Eq. 9."""
+        if self.contact_stiffness is not None:
+            return float(self.contact_stiffness)
+        return stiffness_eq9(self.journal_radius, self.bearing_radius, self.youngs_modulus,
+                             self.poisson_ratio)
+
+
+@dataclass(frozen=True)
+class Drive:
+    """Constant-speed drive of a revolute joint to the ground: body_b's angle is
+    speed t + initial_angle (speed in rad/s > 0, angle in rad)."""
+
+    joint: str
+    speed: float
+    initial_angle: float = 0.0
+
+    def __post_init__(self) -> None:
+        _name("drive joint", self.joint)
+        object.__setattr__(self, "speed", _real("drive speed", self.speed,
+                                                "a finite number > 0 (rad/s)", lambda v: v > 0))
+        object.__setattr__(self, "initial_angle", _real(
+            "drive initial_angle", self.initial_angle, "a finite number (rad)"))
+
+    @property
+    def period(self) -> float:
+        """Duration of one revolution of the drive in s."""
+        return 2.0 * math.pi / self.speed
+
+
+#: the JSON/TOML "type" of each joint class
+_JOINT_TYPES = {"revolute": Revolute, "prismatic": Prismatic}
+
+#: parameter fields of the clearance joints (`Linkage.parameter_names`)
+CLEARANCE_PARAMETERS = ("bearing_radius", "journal_radius", "youngs_modulus", "poisson_ratio",
+                        "restitution", "contact_stiffness", "impact_velocity_floor")
+
+
+@dataclass(frozen=True)
+class Linkage:
+    """A planar linkage: bodies, ideal joints (a forest rooted at the ground), clearance
+    joints, the drive, ground points, gravity (m/s^2 along -y), the monitored ground joint
+    (None: the shaking force, the sum of the ground reactions) and assembly guesses of
+    coordinates (by coordinate name) that pick the assembly branch of the centred start.
+    See the module docstring for the coordinates."""
+
+    name: str
+    bodies: tuple[Body, ...]
+    joints: tuple[Revolute | Prismatic, ...]
+    clearance_joints: tuple[ClearanceJoint, ...]
+    drive: Drive
+    ground_points: Mapping[str, Point] = field(default_factory=dict)
+    gravity: float = 9.81
+    monitor_joint: str | None = None
+    assembly: Mapping[str, float] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.name, str) or not self.name:
+            raise ValueError(f"linkage name must be a non-empty string; got {self.name!r}")
+        for f, cls in (("bodies", Body), ("joints", (Revolute, Prismatic)),
+                       ("clearance_joints", ClearanceJoint)):
+            value = getattr(self, f)
+            if isinstance(value, (str, bytes, Mapping)) or not hasattr(value, "__iter__"):
+                raise ValueError(f"{f} must be a sequence; got {value!r}")
+            value = tuple(value)
+            for item in value:
+                if not isinstance(item, cls):
+                    raise ValueError(f"{f} must hold {_cls_names(cls)} objects; got {item!r}")
+            object.__setattr__(self, f, value)
+        if not isinstance(self.drive, Drive):
+            raise ValueError(f"drive must be a Drive; got {self.drive!r}")
+        object.__setattr__(self, "ground_points", _points("ground_points", self.ground_points))
+        object.__setattr__(self, "gravity", _real("gravity", self.gravity,
+                                                  "a finite number (m/s^2)"))
+        if not self.bodies:
+            raise ValueError("bodies must hold at least one Body")
+        if not self.clearance_joints:
+            raise ValueError("clearance_joints must hold at least one ClearanceJoint (a "
+                             "linkage without clearance has no switching function)")
+        self._check_graph()
+        coords = self.coordinates()
+        if not coords:
+            raise ValueError("the linkage has no free coordinate: every body is fixed by the "
+                             "drive and ideal joints")
+        if not isinstance(self.assembly, Mapping):
+            raise ValueError(f"assembly must be a mapping of coordinate name to a guess; "
+                             f"got {self.assembly!r}")
+        guesses = {}
+        for key, value in self.assembly.items():
+            if key not in coords:
+                raise ValueError(f"assembly names an unknown coordinate {key!r}; the "
+                                 f"coordinates are {list(coords)}")
+            guesses[key] = _real(f"assembly[{key!r}]", value, "a finite number")
+        object.__setattr__(self, "assembly", guesses)
+
+    # ------------------------------------------------------------------ graph
+    def _check_graph(self) -> None:
+        points = {GROUND: self.ground_points}
+        for body in self.bodies:
+            if body.name in points:
+                raise ValueError(f"body name {body.name!r} is used twice")
+            points[body.name] = body.points
+        names = set()
+        for joint in (*self.joints, *self.clearance_joints):
+            if joint.name in names or joint.name in ("drive", "gravity"):
+                raise ValueError(f"joint name {joint.name!r} is used twice or reserved "
+                                 "(joint names must be unique, not 'drive' or 'gravity')")
+            names.add(joint.name)
+        for body in self.bodies:
+            if body.name in names:
+                raise ValueError(f"name {body.name!r} is both a body and a joint")
+
+        def check_end(joint, body_field, point_field):
+            body, point = getattr(joint, body_field), getattr(joint, point_field)
+            if body not in points:
+                raise ValueError(f"joint {joint.name!r} {body_field} names an unknown body "
+                                 f"{body!r}; the bodies are {[GROUND, *points][1:]} and "
+                                 f"{GROUND!r}")
+            if point not in points[body]:
+                raise ValueError(f"joint {joint.name!r} {point_field} names an unknown point "
+                                 f"{point!r} of body {body!r}; its points are "
+                                 f"{sorted(points[body])}")
+
+        for joint in self.joints:
+            check_end(joint, "body_a", "point_a")
+            check_end(joint, "body_b", "point_b")
+        for joint in self.clearance_joints:
+            check_end(joint, "journal_body", "journal_point")
+            check_end(joint, "bearing_body", "bearing_point")
+        # the ideal joints must form a forest: a joint between two bodies already connected
+        # closes a loop, named by its joints
+        parent: dict[str, str] = {}
+
+        def root(b):
+            while b in parent:
+                b = parent[b]
+            return b
+
+        adjacency: dict[str, list] = {}
+        for joint in self.joints:
+            a, b = joint.body_a, joint.body_b
+            if root(a) == root(b):
+                loop = _path(adjacency, a, b) + [joint.name]
+                raise ValueError(f"the ideal joints {loop} form a closed loop; cut it with a "
+                                 "ClearanceJoint (a loop of ideal joints makes the equations "
+                                 "a DAE)")
+            parent[root(a)] = root(b)
+            adjacency.setdefault(a, []).append((b, joint.name))
+            adjacency.setdefault(b, []).append((a, joint.name))
+        drive = {j.name: j for j in self.joints}.get(self.drive.joint)
+        if not isinstance(drive, Revolute) or drive.body_a != GROUND:
+            found = ("no ideal joint of that name" if drive is None else
+                     f"a {type(drive).__name__} from {drive.body_a!r} to {drive.body_b!r}")
+            raise ValueError(f"drive joint {self.drive.joint!r} must be a Revolute with body_a "
+                             f"{GROUND!r}; found {found}")
+        if self.monitor_joint is not None and self.monitor_joint not in self.ground_joints():
+            raise ValueError(f"monitor_joint must be None or a joint to the ground "
+                             f"{list(self.ground_joints())}; got {self.monitor_joint!r}")
+
+    def tree(self) -> list[tuple[str, str | None, Any]]:
+        """The forest as (body, parent body or None for a floating root, joint or None), in
+        an order where every parent comes before its children (ground first)."""
+        adjacency: dict[str, list] = {}
+        for joint in self.joints:
+            adjacency.setdefault(joint.body_a, []).append((joint.body_b, joint))
+            adjacency.setdefault(joint.body_b, []).append((joint.body_a, joint))
+        order = [(GROUND, None, None)]
+        seen = {GROUND}
+        roots = [GROUND] + [b.name for b in self.bodies]
+        for start in roots:
+            if start not in seen:
+                seen.add(start)
+                order.append((start, None, None))
+            stack = [start]
+            while stack:
+                body = stack.pop(0)
+                for other, joint in adjacency.get(body, []):
+                    if other not in seen:
+                        seen.add(other)
+                        order.append((other, body, joint))
+                        stack.append(other)
+        return order
+
+    def coordinates(self) -> tuple[str, ...]:
+        """Names of the minimal coordinates, in state order (module docstring)."""
+        child = {joint.name: body for body, _, joint in self.tree() if joint is not None}
+        names = []
+        for joint in self.joints:
+            if joint.name == self.drive.joint:
+                continue
+            if isinstance(joint, Revolute):
+                names.append(f"{child[joint.name]}.angle")
+            else:
+                names.append(f"{joint.name}.s")
+        for body, parent, _ in self.tree():
+            if body != GROUND and parent is None:
+                names += [f"{body}.x", f"{body}.y", f"{body}.angle"]
+        return tuple(names)
+
+    def ground_joints(self) -> tuple[str, ...]:
+        """Names of the joints to the ground: ideal ones, then clearance joints."""
+        return tuple([j.name for j in self.joints if GROUND in (j.body_a, j.body_b)]
+                     + [j.name for j in self.clearance_joints
+                        if GROUND in (j.journal_body, j.bearing_body)])
+
+    @property
+    def period(self) -> float:
+        """Duration of one drive revolution in s."""
+        return self.drive.period
+
+    # ------------------------------------------------------------------ variants and I/O
+    def replace(self, **changes: Any) -> Linkage:
+        """A validated copy with some fields changed (unknown names raise ValueError)."""
+        allowed = [f.name for f in dataclasses.fields(self)]
+        unknown = [k for k in changes if k not in allowed]
+        if unknown:
+            raise ValueError(f"unknown Linkage field(s) {unknown}; allowed: {allowed}")
+        return dataclasses.replace(self, **changes)
+
+    def to_dict(self) -> dict[str, Any]:
+        """The description as plain data (JSON/TOML-serialisable; joints carry a "type")."""
+        def joint(j):
+            d = dataclasses.asdict(j)
+            return {"type": "prismatic" if isinstance(j, Prismatic) else "revolute", **d}
+
+        def points(m):
+            return {k: [x, y] for k, (x, y) in m.items()}
+
+        out = {
+            "name": self.name,
+            "bodies": [{"name": b.name, "mass": b.mass, "inertia": b.inertia,
+                        "points": points(b.points)} for b in self.bodies],
+            "joints": [joint(j) for j in self.joints],
+            "clearance_joints": [dataclasses.asdict(j) for j in self.clearance_joints],
+            "drive": dataclasses.asdict(self.drive),
+            "ground_points": points(self.ground_points),
+            "gravity": self.gravity,
+            "assembly": dict(self.assembly),
+        }
+        if self.monitor_joint is not None:
+            out["monitor_joint"] = self.monitor_joint
+        for j in out["clearance_joints"]:
+            if j["contact_stiffness"] is None:      # TOML has no null
+                del j["contact_stiffness"]
+        return out
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> Linkage:
+        """Build from `to_dict`'s form; unknown keys raise ValueError naming them."""
+        if not isinstance(data, Mapping):
+            raise ValueError(f"a linkage description must be a mapping; got {data!r}")
+        data = dict(data)
+        _known("linkage", data, [f.name for f in dataclasses.fields(cls)])
+        for key in ("name", "bodies", "joints", "clearance_joints", "drive"):
+            if key not in data:
+                raise ValueError(f"linkage description lacks {key!r}")
+
+        def items(key):
+            value = data.get(key, [])
+            if not isinstance(value, (list, tuple)) or not all(
+                    isinstance(v, Mapping) for v in value):
+                raise ValueError(f"{key} must be a list of tables/objects; got {value!r}")
+            return value
+
+        bodies = tuple(Body(**_known("body", dict(b), [f.name for f in dataclasses.fields(Body)]))
+                       for b in items("bodies"))
+        joints = []
+        for j in items("joints"):
+            j = dict(j)
+            kind = j.pop("type", "revolute")
+            if kind not in _JOINT_TYPES:
+                raise ValueError(f"joint {j.get('name')!r} type must be one of "
+                                 f"{sorted(_JOINT_TYPES)}; got {kind!r}")
+            jc = _JOINT_TYPES[kind]
+            joints.append(jc(**_known(f"{kind} joint", j,
+                                      [f.name for f in dataclasses.fields(jc)])))
+        clearance = tuple(ClearanceJoint(**_known(
+            "clearance joint", dict(j), [f.name for f in dataclasses.fields(ClearanceJoint)]))
+            for j in items("clearance_joints"))
+        drive = data["drive"]
+        if not isinstance(drive, Mapping):
+            raise ValueError(f"drive must be a table/object; got {drive!r}")
+        data.update(bodies=bodies, joints=tuple(joints), clearance_joints=clearance,
+                    drive=Drive(**_known("drive", dict(drive),
+                                         [f.name for f in dataclasses.fields(Drive)])))
+        return cls(**data)
+
+    @classmethod
+    def from_file(cls, path: str | Path) -> Linkage:
+        """Read a description from a JSON (.json) or TOML (.toml) file in `to_dict`'s form."""
+        path = Path(path)
+        try:
+            text = path.read_text()
+        except (OSError, UnicodeDecodeError) as exc:
+            raise ValueError(f"cannot read linkage file {str(path)!r}: {exc}") from exc
+        if path.suffix.lower() == ".toml":
+            try:
+                import tomllib
+            except ImportError:     # Python 3.10
+                raise ValueError("reading TOML needs Python >= 3.11 (tomllib); use JSON") from None
+            try:
+                data = tomllib.loads(text)
+            except tomllib.TOMLDecodeError as exc:
+                raise ValueError(f"cannot read linkage file {str(path)!r}: {exc}") from exc
+        else:
+            try:
+                data = json.loads(text)
+            except json.JSONDecodeError as exc:
+                raise ValueError(f"cannot read linkage file {str(path)!r}: {exc}") from exc
+        return cls.from_dict(data)
+
+    # ------------------------------------------------------------------ parameters
+    def parameter_names(self) -> tuple[str, ...]:
+        """Dotted names of the real-valued parameters ("<body>.mass", "<body>.inertia",
+        "<body>.<point>.x"/".y", "<prismatic>.angle", "<clearance joint>.<field>" for
+        CLEARANCE_PARAMETERS, "drive.speed", "drive.initial_angle", "gravity",
+        "ground.<point>.x"/".y")."""
+        names = []
+        for b in self.bodies:
+            names += [f"{b.name}.mass", f"{b.name}.inertia"]
+            for pt in b.points:
+                names += [f"{b.name}.{pt}.x", f"{b.name}.{pt}.y"]
+        for pt in self.ground_points:
+            names += [f"{GROUND}.{pt}.x", f"{GROUND}.{pt}.y"]
+        names += [f"{j.name}.angle" for j in self.joints if isinstance(j, Prismatic)]
+        for j in self.clearance_joints:
+            names += [f"{j.name}.{f}" for f in CLEARANCE_PARAMETERS]
+        return tuple(names + ["drive.speed", "drive.initial_angle", "gravity"])
+
+    def _locate(self, name: str):
+        """(kind, object, field, point index) of a parameter name, or ValueError."""
+        if not isinstance(name, str) or name not in self.parameter_names():
+            raise ValueError(f"unknown parameter {name!r} of linkage {self.name!r}; the "
+                             f"parameters are {list(self.parameter_names())}")
+        parts = name.split(".")
+        if parts[0] == "gravity":
+            return "linkage", None, "gravity", None
+        if parts[0] == "drive":
+            return "drive", self.drive, parts[1], None
+        if parts[0] == GROUND:
+            return "ground", None, parts[1], "xy".index(parts[2])
+        for b in self.bodies:
+            if b.name == parts[0]:
+                if len(parts) == 2:
+                    return "body", b, parts[1], None
+                return "point", b, parts[1], "xy".index(parts[2])
+        for j in (*self.joints, *self.clearance_joints):
+            if j.name == parts[0]:
+                return "joint", j, parts[1], None
+        raise AssertionError(name)      # parameter_names and _locate disagree
+
+    def parameter_value(self, name: str) -> float:
+        """The value of parameter `name` (a clearance joint's contact_stiffness: the
+        stiffness in use, Eq. 9 when not given)."""
+        kind, obj, f, k = self._locate(name)
+        if kind == "linkage":
+            return self.gravity
+        if kind == "ground":
+            return self.ground_points[f][k]
+        if kind == "point":
+            return obj.points[f][k]
+        if isinstance(obj, ClearanceJoint) and f == "contact_stiffness":
+            return obj.stiffness
+        return float(getattr(obj, f))
+
+    def with_parameter(self, name: str, value: float) -> Linkage:
+        """A validated copy with parameter `name` (see `parameter_names`) set to `value`."""
+        kind, obj, f, k = self._locate(name)
+        if kind == "linkage":
+            return self.replace(gravity=value)
+        if kind == "drive":
+            return self.replace(drive=dataclasses.replace(obj, **{f: value}))
+        if kind == "ground":
+            pts = dict(self.ground_points)
+            pts[f] = (value, pts[f][1]) if k == 0 else (pts[f][0], value)
+            return self.replace(ground_points=pts)
+        if kind == "point":
+            pts = dict(obj.points)
+            pts[f] = (value, pts[f][1]) if k == 0 else (pts[f][0], value)
+            new = dataclasses.replace(obj, points=pts)
+        else:
+            new = dataclasses.replace(obj, **{f: value})
+        if kind in ("body", "point"):
+            return self.replace(bodies=tuple(new if b is obj else b for b in self.bodies))
+        if isinstance(obj, ClearanceJoint):
+            return self.replace(clearance_joints=tuple(
+                new if j is obj else j for j in self.clearance_joints))
+        return self.replace(joints=tuple(new if j is obj else j for j in self.joints))
+
+    # ------------------------------------------------------------------ structure
+    def structure(self) -> dict[str, Any]:
+        """What the generated model depends on (names and topology, no numbers): two
+        linkages with equal structures share one generated module."""
+        return {
+            "bodies": [[b.name, sorted(b.points)] for b in self.bodies],
+            "ground_points": sorted(self.ground_points),
+            "joints": [["prismatic" if isinstance(j, Prismatic) else "revolute", j.name,
+                        j.body_a, j.point_a, j.body_b, j.point_b] for j in self.joints],
+            "clearance_joints": [[j.name, j.journal_body, j.journal_point, j.bearing_body,
+                                  j.bearing_point] for j in self.clearance_joints],
+            "drive": self.drive.joint,
+            "monitor_joint": self.monitor_joint,
+        }
+
+    @property
+    def length_scale(self) -> float:
+        """The sum over bodies of the largest distance between two of its points (and its
+        centre of mass) in m: the linkage's reach, the scale of position tolerances."""
+        total = 0.0
+        for b in self.bodies:
+            pts = [(0.0, 0.0), *b.points.values()]
+            total += max(math.dist(p, q) for p in pts for q in pts)
+        return total
+
+    @property
+    def min_clearance(self) -> float:
+        """The smallest radial clearance of the clearance joints in m."""
+        return min(j.clearance for j in self.clearance_joints)
+
+
+def _cls_names(cls) -> str:
+    if isinstance(cls, tuple):
+        return " or ".join(c.__name__ for c in cls)
+    return cls.__name__
+
+
+def _known(what: str, data: dict, allowed: list[str]) -> dict:
+    unknown = [k for k in data if k not in allowed]
+    if unknown:
+        raise ValueError(f"unknown {what} key(s) {unknown}; allowed: {allowed}")
+    return data
+
+
+def _path(adjacency: dict, start: str, goal: str) -> list[str]:
+    """Joint names on the path from `start` to `goal` in the forest so far."""
+    prev = {start: None}
+    queue = [start]
+    while queue:
+        node = queue.pop(0)
+        if node == goal:
+            break
+        for other, name in adjacency.get(node, []):
+            if other not in prev:
+                prev[other] = (node, name)
+                queue.append(other)
+    names = []
+    node = goal
+    while prev.get(node) is not None:
+        node, name = prev[node]
+        names.append(name)
+    return names[::-1]

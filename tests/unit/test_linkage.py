@@ -1,0 +1,227 @@
+"""The linkage description: validation, graph checks, parameters, files, the paper case."""
+
+import dataclasses
+import json
+import math
+
+import numpy as np
+import pytest
+
+from mbs_clearance.cases import from_slider_crank, paper_slider_crank
+from mbs_clearance.linkage import (
+    GROUND,
+    Body,
+    ClearanceJoint,
+    Drive,
+    Linkage,
+    Prismatic,
+    Revolute,
+)
+from mbs_clearance.mechanism import SliderCrank
+
+
+def four_bar_like(**changes):
+    """A crank-rocker four-bar with the coupler-rocker joint cut by a clearance joint."""
+    kw = dict(
+        name="fb",
+        bodies=(Body("crank", 0.1, 1e-4, {"o": (-0.01, 0), "a": (0.01, 0)}),
+                Body("coupler", 0.2, 1e-3, {"a": (-0.05, 0), "b": (0.05, 0)}),
+                Body("rocker", 0.2, 1e-3, {"o": (-0.04, 0), "b": (0.04, 0)})),
+        joints=(Revolute("j_o2", GROUND, "o2", "crank", "o"),
+                Revolute("j_a", "crank", "a", "coupler", "a"),
+                Revolute("j_o4", GROUND, "o4", "rocker", "o")),
+        clearance_joints=(ClearanceJoint("j_b", "coupler", "b", "rocker", "b", 0.005,
+                                         0.0049),),
+        drive=Drive("j_o2", 10.0),
+        ground_points={"o2": (0, 0), "o4": (0.08, 0)},
+    )
+    kw.update(changes)
+    return Linkage(**kw)
+
+
+def test_four_bar_structure():
+    fb = four_bar_like()
+    assert fb.coordinates() == ("coupler.angle", "rocker.angle")
+    assert fb.ground_joints() == ("j_o2", "j_o4")
+    tree = {b: (parent, j.name if j else None) for b, parent, j in fb.tree()}
+    assert tree["crank"] == (GROUND, "j_o2") and tree["coupler"] == ("crank", "j_a")
+    assert tree["rocker"] == (GROUND, "j_o4")
+
+
+def test_closed_ideal_loop_names_its_joints():
+    fb = four_bar_like()
+    with pytest.raises(ValueError, match=r"\['j_o2', 'j_a', 'j_b_ideal'\]|closed loop") as e:
+        four_bar_like(joints=(*fb.joints, Revolute("j_b_ideal", "coupler", "b", "rocker",
+                                                   "b")))
+    msg = str(e.value)
+    for name in ("j_a", "j_o2", "j_o4", "j_b_ideal"):
+        assert name in msg
+
+
+def test_unknown_body_and_point():
+    fb = four_bar_like()
+    with pytest.raises(ValueError, match="unknown body 'cranck'"):
+        four_bar_like(joints=(Revolute("j_o2", GROUND, "o2", "cranck", "o"), *fb.joints[1:]))
+    with pytest.raises(ValueError, match="unknown point 'zz' of body 'rocker'"):
+        four_bar_like(clearance_joints=(ClearanceJoint("j_b", "coupler", "b", "rocker", "zz",
+                                                       0.005, 0.0049),))
+    with pytest.raises(ValueError, match="unknown point 'o9' of body 'ground'"):
+        four_bar_like(joints=(*fb.joints[:2], Revolute("j_o4", GROUND, "o9", "rocker", "o")))
+
+
+def test_journal_not_smaller_than_bearing():
+    with pytest.raises(ValueError, match="clearance joint 'j_b' journal_radius must be smaller"):
+        ClearanceJoint("j_b", "coupler", "b", "rocker", "b", 0.005, 0.005)
+
+
+def test_negative_mass_and_inertia():
+    with pytest.raises(ValueError, match=r"body 'crank' mass must be a finite number > 0"):
+        Body("crank", -0.1, 1e-4)
+    with pytest.raises(ValueError, match=r"body 'crank' inertia must be a finite number > 0"):
+        Body("crank", 0.1, math.nan)
+
+
+def test_drive_must_be_a_ground_revolute():
+    with pytest.raises(ValueError, match="drive joint 'j_a' must be a Revolute with body_a"):
+        four_bar_like(drive=Drive("j_a", 10.0))
+    with pytest.raises(ValueError, match="drive joint 'nope'.*no ideal joint"):
+        four_bar_like(drive=Drive("nope", 10.0))
+    fb = four_bar_like()
+    with pytest.raises(ValueError, match="drive joint 'j_o2'.*Prismatic"):
+        four_bar_like(joints=(Prismatic("j_o2", GROUND, "o2", "crank", "o"), *fb.joints[1:]))
+    with pytest.raises(ValueError, match="drive speed must be a finite number > 0"):
+        Drive("j_o2", 0.0)
+
+
+def test_other_checks():
+    with pytest.raises(ValueError, match="same body"):
+        ClearanceJoint("c", "coupler", "b", "coupler", "a", 0.005, 0.004)
+    with pytest.raises(ValueError, match="joint name 'j_a' is used twice"):
+        fb = four_bar_like()
+        four_bar_like(clearance_joints=(dataclasses.replace(fb.clearance_joints[0],
+                                                            name="j_a"),))
+    with pytest.raises(ValueError, match="at least one ClearanceJoint"):
+        four_bar_like(clearance_joints=())
+    with pytest.raises(ValueError, match="unknown coordinate 'crank.angle'"):
+        four_bar_like(assembly={"crank.angle": 0.0})
+    with pytest.raises(ValueError, match="monitor_joint"):
+        four_bar_like(monitor_joint="j_a")
+    with pytest.raises(ValueError, match="reserved for the ground"):
+        Body(GROUND, 1.0, 1.0)
+    with pytest.raises(ValueError, match="restitution must be in the interval"):
+        ClearanceJoint("c", "a", "b", "c", "d", 0.005, 0.004, restitution=0.0)
+
+
+def test_floating_body_coordinates():
+    """Both coupler joints cut: the coupler floats (x, y, angle)."""
+    lk = paper_slider_crank()
+    cj = lk.clearance_joints[0]
+    two = lk.replace(
+        joints=(lk.joints[0], lk.joints[2]),
+        clearance_joints=(cj, dataclasses.replace(cj, name="crank_coupler", journal_body="crank",
+                                                  journal_point="pin", bearing_body="coupler",
+                                                  bearing_point="crank_end")),
+        assembly={})
+    assert two.coordinates() == ("slider_guide.s", "coupler.x", "coupler.y", "coupler.angle")
+
+
+def test_parameters_roundtrip():
+    lk = paper_slider_crank()
+    names = lk.parameter_names()
+    assert "coupler.slider_end.x" in names and "coupler_slider.bearing_radius" in names
+    for name in names:
+        v = lk.parameter_value(name)
+        new = lk.with_parameter(name, v * 1.0001 if v else 0.001)
+        assert new.parameter_value(name) == pytest.approx(v * 1.0001 if v else 0.001)
+        others = [n for n in names if n != name and not (
+            name.endswith(("radius", "modulus", "poisson_ratio")) and n.endswith("stiffness"))]
+        assert all(new.parameter_value(n) == lk.parameter_value(n) for n in others), name
+    with pytest.raises(ValueError, match="unknown parameter 'crank.length'"):
+        lk.with_parameter("crank.length", 1.0)
+    with pytest.raises(ValueError, match="body 'crank' mass must be"):
+        lk.with_parameter("crank.mass", -1.0)
+
+
+@pytest.mark.parametrize("suffix", [".json", ".toml"])
+def test_file_roundtrip(tmp_path, suffix):
+    lk = paper_slider_crank(contact_stiffness=1e10)
+    four = four_bar_like()
+    for desc in (lk, four):
+        path = tmp_path / f"d{suffix}"
+        if suffix == ".json":
+            path.write_text(json.dumps(desc.to_dict()))
+        else:
+            path.write_text(_toml(desc.to_dict()))
+        assert Linkage.from_file(path) == desc
+    with pytest.raises(ValueError, match="unknown body key"):
+        d = lk.to_dict()
+        d["bodies"][0]["colour"] = "red"
+        Linkage.from_dict(d)
+
+
+def _toml(d):
+    """A small TOML writer for the description's plain data (tests only)."""
+    def val(v):
+        if isinstance(v, str):
+            return json.dumps(v)
+        if isinstance(v, (list, tuple)):
+            return "[" + ", ".join(val(x) for x in v) + "]"
+        if isinstance(v, dict):
+            return "{" + ", ".join(f"{json.dumps(k)} = {val(x)}" for k, x in v.items()) + "}"
+        return repr(float(v)) if isinstance(v, float) else str(v)
+
+    lines = [f"{k} = {val(v)}" for k, v in d.items() if not isinstance(v, (list, dict))]
+    for k, v in d.items():
+        if isinstance(v, dict):
+            lines.append(f"{k} = {val(v)}")
+    for k, v in d.items():
+        if isinstance(v, list):
+            for item in v:
+                lines.append(f"[[{k}]]")
+                lines += [f"{kk} = {val(vv)}" for kk, vv in item.items()]
+    return "\n".join(lines) + "\n"
+
+
+def test_paper_case_maps_every_slider_crank_field():
+    """Every SliderCrank field changes the Linkage (no field is dropped), and the geometry is
+    the paper's: at crank angle th2 the pin sits at L2 (cos, sin) and the slider's pin on the
+    x axis at the closed-form x4."""
+    base = SliderCrank()
+    lk0 = from_slider_crank(base)
+    changed = {"crank_length": 0.06, "coupler_length": 0.13, "crank_mass": 0.4,
+               "coupler_mass": 0.3, "slider_mass": 0.2, "crank_inertia": 2e-4,
+               "coupler_inertia": 4e-4, "crank_speed": 300.0, "initial_crank_angle": 0.3,
+               "bearing_radius": 0.0101, "journal_radius": 0.00995, "youngs_modulus": 100e9,
+               "poisson_ratio": 0.25, "restitution": 0.5, "contact_stiffness": 1e9,
+               "gravity": 0.0, "contact_model": "flores", "impact_velocity_floor": 1e-2}
+    assert set(changed) == {f.name for f in dataclasses.fields(SliderCrank)}
+    for f, v in changed.items():
+        assert from_slider_crank(base.replace(**{f: v})) != lk0, f
+    mech = base.replace(**changed)
+    lk = from_slider_crank(mech)
+    cj = lk.clearance_joints[0]
+    assert (cj.clearance, cj.stiffness, cj.restitution, cj.contact_model) == pytest.approx(
+        (mech.clearance, mech.stiffness, mech.restitution, mech.contact_model))
+    assert lk.drive.speed == mech.crank_speed and lk.period == mech.period
+    crank, coupler, slider = lk.bodies
+    assert (crank.mass, crank.inertia, coupler.inertia) == (0.4, 2e-4, 4e-4)
+    # crank length = distance pivot-pin, coupler length = crank_end-slider_end
+    assert math.dist(*crank.points.values()) == pytest.approx(0.06)
+    assert math.dist(*coupler.points.values()) == pytest.approx(0.13)
+    # the centre of mass of crank and coupler at their midpoints (the paper's aG2, aG3)
+    assert np.sum(list(crank.points.values()), axis=0) == pytest.approx([0, 0])
+    th2 = mech.initial_crank_angle
+    th3, x4 = lk.assembly["coupler.angle"], lk.assembly["slider_guide.s"]
+    pin = 0.06 * np.array([np.cos(th2), np.sin(th2)])
+    journal = pin + 0.13 * np.array([np.cos(th3), np.sin(th3)])
+    assert journal == pytest.approx([x4, 0.0], abs=1e-15)
+    assert lk.monitor_joint == "crank_pivot"
+    assert lk.length_scale == pytest.approx(0.06 + 0.13)
+
+
+def test_paper_case_overrides_and_defaults():
+    lk = paper_slider_crank(journal_radius=0.00995)
+    assert lk.clearance_joints[0].clearance == pytest.approx(5e-5)
+    assert paper_slider_crank() == from_slider_crank(SliderCrank())
+    with pytest.raises(ValueError, match="unknown parameter name"):
+        paper_slider_crank(crank_lenght=0.1)
