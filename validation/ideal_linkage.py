@@ -417,7 +417,7 @@ def from_linkage(linkage) -> FourBarLoop | SliderCrankLoop:
             rocker=link(third, c_third, d_third), ground_crank=o2_ground,
             ground_rocker=d_ground, joints=(drive[0], pin_b[0], pin_c[0], pin_d[0]),
             **common)
-        return _pick_branch(loop, linkage)
+        return _pick_branch(loop, linkage, (crank, coupler, third))
     guide = [j for j in linkage.joints if type(j).__name__ == "Prismatic"
              and third in (j.body_a, j.body_b)]
     if len(guide) != 1 or guide[0].body_a != "ground":
@@ -428,17 +428,15 @@ def from_linkage(linkage) -> FourBarLoop | SliderCrankLoop:
         slider=link(third, c_third, where(third, g.point_b)), ground_crank=o2_ground,
         guide_origin=where("ground", g.point_a), guide_angle=float(g.angle),
         joints=(drive[0], pin_b[0], pin_c[0], g.name), **common)
-    return _pick_branch(loop, linkage)
+    return _pick_branch(loop, linkage, (crank, coupler, third))
 
 
-def _pick_branch(loop, linkage):
-    """The assembly branch nearest the description's assembly guesses of the third body's
-    angle or slider coordinate (default: +1)."""
-    guesses = dict(getattr(linkage, "assembly", {}) or {})
-    if not guesses:
-        return loop
+def _pick_branch(loop, linkage, names):
+    """The assembly branch nearest the description's assembly guesses ("<body>.angle": the
+    body's absolute angle, "<joint>.s": the slider coordinate); default +1."""
     from dataclasses import replace
 
+    guesses = dict(getattr(linkage, "assembly", {}) or {})
     best, best_err = loop, np.inf
     for branch in (1, -1):
         cand = replace(loop, branch=branch)
@@ -447,16 +445,12 @@ def _pick_branch(loop, linkage):
         except ValueError:
             continue
         err = 0.0
-        for name, value in guesses.items():
-            if name.endswith(".s") and "slider_position" in o:
+        for key, value in guesses.items():
+            body, _, coord = key.rpartition(".")
+            if coord == "s" and "slider_position" in o:
                 err += abs(o["slider_position"][0] - value)
-            elif name.endswith(".angle"):
-                # relative angles of the tree; compare the absolute angles' sines/cosines
-                # of the candidate bodies with the guess, whichever matches best
-                err += min(abs(np.angle(np.exp(1j * (a - value))))
-                           for a in (o["angles"][0, 1] - o["angles"][0, 0],
-                                     o["angles"][0, 2], o["angles"][0, 2] - o["angles"][0, 1],
-                                     o["angles"][0, 1]))
+            elif coord == "angle" and body in names:
+                err += abs(np.angle(np.exp(1j * (o["angles"][0, names.index(body)] - value))))
         if err < best_err:
             best, best_err = cand, err
     return best
