@@ -22,7 +22,7 @@ from .linkage import GROUND, Body, ClearanceJoint, Drive, Linkage, Prismatic, Re
 from .mechanism import SliderCrank
 
 __all__ = ["paper_slider_crank", "from_slider_crank", "slider_crank_two_clearances",
-           "four_bar", "CASES", "CASE_PARAMETERS"]
+           "four_bar", "CASES", "CASE_PARAMETERS", "CASE_SUMMARY"]
 
 
 def from_slider_crank(mech: SliderCrank) -> Linkage:
@@ -324,6 +324,16 @@ def four_bar(**overrides: Any) -> Linkage:
         assembly={"coupler.angle": th3, "rocker.angle": th4},
     )
 
+
+#: one line per case: what it is and where its values come from (CLI `simulate --help`)
+CASE_SUMMARY = {
+    "paper_slider_crank": "slider-crank, clearance in the coupler-slider joint (Ebrahimi et "
+                          "al. 2018; overrides: SliderCrank fields)",
+    "slider_crank_two_clearances": "the paper's slider-crank with clearance in both coupler "
+                                   "joints (Flores 2010's multiple-clearance study)",
+    "four_bar": "Grashof crank-rocker, clearance in the coupler-rocker joint (Siconos "
+                "four-bar example, Akhadkar et al. 2016)",
+}
 
 #: the named cases, by name (CLI `simulate --case NAME`)
 CASES = {
