@@ -1,0 +1,34 @@
+"""The model generator: a `Linkage` -> a compiled, event-exact numba model module.
+
+`generate_module(linkage)` derives the equations of the linkage's structure with
+sympy.physics.mechanics (`derive`) and writes the module's python source (`writer`, through
+the jinja2 template module.py.jinja); `load_model(linkage)` returns the module, from the
+checked-in modules of the named cases (mbs_clearance/_generated) or from a disk cache keyed
+by the structure's digest (`loader`).
+"""
+
+from .loader import generate_module, load_model, model_path
+from .writer import GENERATOR_VERSION, structure_digest
+
+__all__ = ["generate_module", "load_model", "model_path", "GENERATOR_VERSION",
+           "structure_digest", "NAMED_CASES", "named_cases", "registry_source"]
+
+#: the named cases (functions of mbs_clearance.cases) whose modules are checked in
+NAMED_CASES = ("paper_slider_crank", "slider_crank_two_clearances", "four_bar")
+
+
+def named_cases() -> dict:
+    """name -> Linkage (default arguments) of the NAMED_CASES that mbs_clearance.cases
+    defines."""
+    from .. import cases
+
+    return {name: getattr(cases, name)() for name in NAMED_CASES if hasattr(cases, name)}
+
+
+def registry_source(cases: dict) -> str:
+    """The source of mbs_clearance/_generated/__init__.py for the linkages `cases`."""
+    lines = [f"    {structure_digest(lk.structure())!r}: {name!r},"
+             for name, lk in cases.items()]
+    return ('"""Checked-in generated model modules of the named cases (written by\n'
+            'tools/generate_models.py; do not edit). MODULES maps a structure digest to a '
+            'module name."""\n\nMODULES: dict[str, str] = {\n' + "\n".join(lines) + "\n}\n")

@@ -1,0 +1,362 @@
+"""The symbolic model of a `Linkage`'s structure, derived with sympy.physics.mechanics.
+
+Every number of the description stays a symbol (a parameter of the vector p), so that one
+derivation serves every linkage of the same structure (`Linkage.structure`). The kinematics
+follow the forest of ideal joints from the ground (`Linkage.tree`); the equations of motion
+come from Kane's method (`KanesMethod`, one `RigidBody` per body, gravity and the contact
+forces of the clearance joints as point forces); the outputs (ground reactions by Newton on
+the subtree below each ground joint, the drive moment as the generalized force of the
+prescribed drive angle, the mechanical energy, the loop-closure residuals of the clearance
+joints) from the same kinematics.
+
+Trigonometry: every rotation is written with the sine and cosine of a *base angle* (an angle
+coordinate, the drive angle speed t + initial_angle, a prismatic axis angle); after the
+derivation they become symbols (S_k, C_k), computed once per evaluation by the kernels
+(`_trig.sincos`), and products are reduced modulo S_k^2 + C_k^2 = 1.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass, field
+
+import sympy as sp
+import sympy.physics.mechanics as me
+
+from ..linkage import GROUND, Linkage, Prismatic, Revolute
+
+__all__ = ["Derivation", "derive", "parameter_layout", "identifier"]
+
+
+def identifier(name: str, taken: set[str]) -> str:
+    """A Python identifier for a dotted name (unique among `taken`, which it joins)."""
+    base = re.sub(r"\W", "_", name.replace(".", "__"))
+    if not base or base[0].isdigit() or base in ("t", "y", "p"):
+        base = "p_" + base
+    ident, k = base, 1
+    while ident in taken:
+        ident, k = f"{base}_{k}", k + 1
+    taken.add(ident)
+    return ident
+
+
+def parameter_layout(linkage: Linkage) -> tuple[str, ...]:
+    """Dotted names of the entries of the kernels' parameter vector p, in order: bodies
+    (mass, inertia, points), ground points, prismatic axis angles, per clearance joint
+    (clearance, stiffness, restitution, contact_model id, impact_velocity_floor), the drive,
+    gravity, then the memory of each clearance joint (mode, impact velocity)."""
+    names = []
+    for b in linkage.bodies:
+        names += [f"{b.name}.mass", f"{b.name}.inertia"]
+        for pt in b.points:
+            names += [f"{b.name}.{pt}.x", f"{b.name}.{pt}.y"]
+    for pt in linkage.ground_points:
+        names += [f"{GROUND}.{pt}.x", f"{GROUND}.{pt}.y"]
+    names += [f"{j.name}.angle" for j in linkage.joints if isinstance(j, Prismatic)]
+    for j in linkage.clearance_joints:
+        names += [f"{j.name}.{f}" for f in CONTACT_FIELDS]
+    names += ["drive.speed", "drive.initial_angle", "gravity"]
+    for j in linkage.clearance_joints:
+        names += [f"{j.name}.mode", f"{j.name}.impact_velocity"]
+    return tuple(names)
+
+
+#: per clearance joint, the entries of p read by the contact law
+CONTACT_FIELDS = ("clearance", "stiffness", "restitution", "contact_model",
+                  "impact_velocity_floor")
+
+
+@dataclass
+class Derivation:
+    """The symbolic model (expressions in t, Q, U, A, the parameter symbols and the contact
+    force components FX, FY; the sines and cosines of the base angles as symbols S, C)."""
+
+    parameters: tuple[str, ...]             # dotted names, p order
+    psyms: dict[str, sp.Symbol]             # dotted name -> symbol
+    coordinates: tuple[str, ...]
+    t: sp.Symbol
+    Q: list[sp.Symbol]
+    U: list[sp.Symbol]
+    A: list[sp.Symbol]
+    FX: list[sp.Symbol]
+    FY: list[sp.Symbol]
+    #: base angles: (expression of the angle, S symbol, C symbol)
+    angles: list[tuple[sp.Expr, sp.Symbol, sp.Symbol]]
+    joints: tuple[str, ...]                 # clearance joints
+    ground_joints: tuple[str, ...]
+    #: per clearance joint: journal centre minus bearing centre and its rate
+    gaps: list[tuple[sp.Expr, sp.Expr, sp.Expr, sp.Expr]]
+    mass_matrix: sp.Matrix
+    forcing: sp.Matrix
+    #: per ground joint: the force on the ground (x, y)
+    reactions: list[tuple[sp.Expr, sp.Expr]]
+    drive_moment: sp.Expr
+    kinetic: sp.Expr
+    potential: sp.Expr
+    #: d gap / dQ (2J x N_Q) and d gap / dt at fixed Q (2J,)
+    closure_jacobian: sp.Matrix
+    closure_rate: sp.Matrix
+    monitor: str | None
+    extra: dict = field(default_factory=dict)
+
+
+def _rot(c, s, x, y):
+    return c * x - s * y, s * x + c * y
+
+
+def derive(linkage: Linkage) -> Derivation:
+    """Derive the symbolic model of `linkage`'s structure (its numbers are not used)."""
+    names = parameter_layout(linkage)
+    taken: set[str] = {"t"}
+    psyms = {n: sp.Symbol(identifier(n, taken), real=True) for n in names}
+    coords = linkage.coordinates()
+    n = len(coords)
+    t = me.dynamicsymbols._t
+    q = [me.dynamicsymbols(f"q{i}") for i in range(n)]
+    u = [me.dynamicsymbols(f"u{i}") for i in range(n)]
+    index = {c: i for i, c in enumerate(coords)}
+    J = len(linkage.clearance_joints)
+    FX = [sp.Symbol(f"FX{j}", real=True) for j in range(J)]
+    FY = [sp.Symbol(f"FY{j}", real=True) for j in range(J)]
+    g = psyms["gravity"]
+
+    # the drive angle: a plain symbol THETA in the positions (for the partial derivatives
+    # of the drive moment), speed t + initial_angle wherever time enters (`timed`)
+    drive_angle = psyms["drive.speed"] * t + psyms["drive.initial_angle"]
+    THETA = sp.Symbol("THETA", real=True)
+
+    def timed(expr):
+        return expr.xreplace({THETA: drive_angle})
+
+    def point(body, pt):
+        return psyms[f"{body}.{pt}.x"], psyms[f"{body}.{pt}.y"]
+
+    # ---- kinematics along the forest: per body the angle, (cos, sin) of it, centre of mass
+    angle = {GROUND: sp.S(0)}
+    rot = {GROUND: (sp.S(1), sp.S(0))}
+    pos = {GROUND: (sp.S(0), sp.S(0))}
+
+    def world(body, xy):
+        """World position of the body-frame point xy of `body`."""
+        c, s = rot[body]
+        dx, dy = _rot(c, s, *xy)
+        return pos[body][0] + dx, pos[body][1] + dy
+
+    local = point
+
+    children: dict[str, list[str]] = {}
+    for body, parent, joint in linkage.tree():
+        if body == GROUND:
+            continue
+        children.setdefault(parent, []).append(body)
+        if parent is None:                                  # floating root
+            i = index[f"{body}.angle"]
+            angle[body] = q[i]
+            rot[body] = (sp.cos(q[i]), sp.sin(q[i]))
+            pos[body] = (q[index[f"{body}.x"]], q[index[f"{body}.y"]])
+            continue
+        if isinstance(joint, Revolute):
+            if joint.name == linkage.drive.joint:
+                angle[body] = THETA
+                rot[body] = (sp.cos(THETA), sp.sin(THETA))
+            else:
+                i = index[f"{body}.angle"]
+                angle[body] = q[i]
+                rot[body] = (sp.cos(q[i]), sp.sin(q[i]))
+            pp, pc = ((joint.point_a, joint.point_b) if joint.body_a == parent
+                      else (joint.point_b, joint.point_a))
+            px, py = world(parent, local(parent, pp))
+            c, s = rot[body]
+            dx, dy = _rot(c, s, *local(body, pc))
+            pos[body] = (px - dx, py - dy)
+        else:                                               # Prismatic
+            s_q = q[index[f"{joint.name}.s"]]
+            alpha = psyms[f"{joint.name}.angle"]
+            angle[body] = angle[parent]
+            rot[body] = rot[parent]
+            c, s = rot[parent]
+            ux, uy = _rot(c, s, sp.cos(alpha), sp.sin(alpha))    # the axis in the world
+            if joint.body_a == parent:      # point_b = point_a + s axis
+                ax, ay = world(parent, local(parent, joint.point_a))
+                dx, dy = _rot(c, s, *local(body, joint.point_b))
+                pos[body] = (ax + s_q * ux - dx, ay + s_q * uy - dy)
+            else:                           # point_a = point_b - s axis
+                bx, by = world(parent, local(parent, joint.point_b))
+                dx, dy = _rot(c, s, *local(body, joint.point_a))
+                pos[body] = (bx - s_q * ux - dx, by - s_q * uy - dy)
+
+    def subtree(body):
+        out, stack = [], [body]
+        while stack:
+            b = stack.pop()
+            out.append(b)
+            stack += children.get(b, [])
+        return out
+
+    # ---- sympy.physics.mechanics: frames, points, rigid bodies, loads
+    N = me.ReferenceFrame("N")
+    O = me.Point("O")
+    O.set_vel(N, 0)
+
+    def mech_point(label, xy):
+        xy = (timed(xy[0]), timed(xy[1]))
+        P = me.Point(label)
+        P.set_pos(O, xy[0] * N.x + xy[1] * N.y)
+        P.set_vel(N, sp.diff(xy[0], t) * N.x + sp.diff(xy[1], t) * N.y)
+        return P
+
+    bodies, loads, com_point = [], [], {}
+    mass = {b.name: psyms[f"{b.name}.mass"] for b in linkage.bodies}
+    inertia = {b.name: psyms[f"{b.name}.inertia"] for b in linkage.bodies}
+    for b in linkage.bodies:
+        frame = me.ReferenceFrame(f"B_{len(bodies)}")
+        frame.orient_axis(N, N.z, timed(angle[b.name]))
+        P = mech_point(f"G_{len(bodies)}", pos[b.name])
+        com_point[b.name] = P
+        bodies.append(me.RigidBody(f"body_{len(bodies)}", P, frame, mass[b.name],
+                                   (me.inertia(frame, 0, 0, inertia[b.name]), P)))
+        loads.append((P, -mass[b.name] * g * N.y))
+    gaps_t = []
+    contact_loads = []       # (body, world position of the point, fx, fy)
+    for j, cj in enumerate(linkage.clearance_joints):
+        jr = world(cj.journal_body, local(cj.journal_body, cj.journal_point))
+        br = world(cj.bearing_body, local(cj.bearing_body, cj.bearing_point))
+        gaps_t.append((jr[0] - br[0], jr[1] - br[1]))
+        for body, xy, sign in ((cj.journal_body, jr, -1), (cj.bearing_body, br, 1)):
+            contact_loads.append((body, xy, sign * FX[j], sign * FY[j]))
+            if body != GROUND:
+                loads.append((mech_point(f"C_{j}_{body}", xy),
+                              sign * (FX[j] * N.x + FY[j] * N.y)))
+    kane = me.KanesMethod(N, q_ind=q, u_ind=u,
+                          kd_eqs=[q[i].diff(t) - u[i] for i in range(n)])
+    kane.kanes_equations(bodies, loads)
+    mass_matrix = kane.mass_matrix
+    forcing = kane.forcing
+
+    # ---- plain symbols for q(t) and its derivatives
+    Q = [sp.Symbol(f"Q{i}", real=True) for i in range(n)]
+    U = [sp.Symbol(f"U{i}", real=True) for i in range(n)]
+    A = [sp.Symbol(f"A{i}", real=True) for i in range(n)]
+    plain = {}
+    for i in range(n):
+        plain[q[i].diff(t, 2)] = A[i]
+        plain[u[i].diff(t)] = A[i]
+    for i in range(n):
+        plain[q[i].diff(t)] = U[i]
+    for i in range(n):
+        plain[q[i]] = Q[i]
+        plain[u[i]] = U[i]
+
+    def flat(expr):
+        return me.msubs(expr, plain)
+
+    # ---- base angles -> symbols
+    base = [flat(drive_angle)]
+    for c in coords:
+        if c.endswith(".angle"):
+            base.append(Q[index[c]])
+    for jt in linkage.joints:
+        if isinstance(jt, Prismatic):
+            base.append(psyms[f"{jt.name}.angle"])
+    angles = [(a, sp.Symbol(f"S{k}", real=True), sp.Symbol(f"C{k}", real=True))
+              for k, a in enumerate(base)]
+    trig = {}
+    for a, S, C in angles:
+        trig[sp.sin(a)] = S
+        trig[sp.cos(a)] = C
+    ideal = [S**2 + C**2 - 1 for _, S, C in angles]
+    gens = [g_ for _, S, C in angles for g_ in (S, C)]
+
+    def finish(expr):
+        """Plain symbols, trig symbols, reduced modulo S^2 + C^2 = 1."""
+        e = flat(timed(expr)).xreplace(trig)
+        bad = [f for f in e.atoms(sp.Function) if isinstance(f, (sp.sin, sp.cos))]
+        if bad:
+            raise AssertionError(f"trigonometric terms of no base angle: {bad}")
+        e = sp.expand(e)
+        if e.has(*[S for _, S, _ in angles]):
+            e = _reduce_trig(e, ideal, gens)
+        return e
+
+    def dt(expr):
+        return sp.diff(timed(expr), t)
+
+    gaps = []
+    for ex, ey in gaps_t:
+        gaps.append(tuple(finish(v) for v in (ex, ey, dt(ex), dt(ey))))
+
+    # ---- outputs: Newton on the subtree below each ground joint
+    acc = {}
+    for b in linkage.bodies:
+        x, y = pos[b.name]
+        acc[b.name] = (dt(dt(x)), dt(dt(y)))
+    ground_joints = linkage.ground_joints()
+    ideal_by_name = {jt.name: jt for jt in linkage.joints}
+    clear_by_name = {cj.name: (j, cj) for j, cj in enumerate(linkage.clearance_joints)}
+    reactions = []
+    for name in ground_joints:
+        if name in ideal_by_name:
+            jt = ideal_by_name[name]
+            child = jt.body_b if jt.body_a == GROUND else jt.body_a
+            sub = set(subtree(child))
+            rx, ry = sp.S(0), sp.S(0)
+            for b in sub:
+                rx += mass[b] * acc[b][0]
+                ry += mass[b] * acc[b][1] + mass[b] * g
+            for body, _, fx, fy in contact_loads:
+                if body in sub:
+                    rx -= fx
+                    ry -= fy
+            reactions.append((finish(-rx), finish(-ry)))
+        else:
+            j, cj = clear_by_name[name]
+            sign = -1 if cj.journal_body == GROUND else 1
+            reactions.append((sign * FX[j], sign * FY[j]))
+    # the drive moment: the generalized force of the prescribed drive angle (Kane's form
+    # of the paper's Eq. 8; with the other equations of motion it equals the moment balance
+    # of the driven subtree about its pivot): sum over bodies of (m a + m g ey) . dr/dtheta
+    # + J alpha dphi/dtheta, minus the contact forces' F . dr/dtheta
+    moment = sp.S(0)
+    for b in linkage.bodies:
+        x, y = pos[b.name]
+        dx, dy = sp.diff(x, THETA), sp.diff(y, THETA)
+        dphi = sp.diff(angle[b.name], THETA)
+        moment += (mass[b.name] * (acc[b.name][0] * dx + (acc[b.name][1] + g) * dy)
+                   + inertia[b.name] * dt(dt(angle[b.name])) * dphi)
+    for _, (x, y), fx, fy in contact_loads:
+        moment -= fx * sp.diff(x, THETA) + fy * sp.diff(y, THETA)
+    moment = timed(moment)
+    kinetic = sp.S(0)
+    potential = sp.S(0)
+    for b in linkage.bodies:
+        x, y = pos[b.name]
+        kinetic += (mass[b.name] * (dt(x) ** 2 + dt(y) ** 2) + inertia[b.name]
+                    * dt(angle[b.name]) ** 2) / 2
+        potential += mass[b.name] * g * y
+    # the gaps' rates are linear in U: d gap / dQ are their coefficients, d gap / dt at
+    # fixed q the rest
+    rates = sp.Matrix([v for gap in gaps for v in gap[2:]])
+    jac = rates.jacobian(U)
+    rate = rates.xreplace({Ui: 0 for Ui in U})
+    return Derivation(
+        parameters=names, psyms=psyms, coordinates=coords, t=t, Q=Q, U=U, A=A, FX=FX, FY=FY,
+        angles=angles, joints=tuple(cj.name for cj in linkage.clearance_joints),
+        ground_joints=ground_joints, gaps=gaps,
+        mass_matrix=mass_matrix.applyfunc(finish), forcing=forcing.applyfunc(finish),
+        reactions=reactions, drive_moment=finish(moment), kinetic=finish(kinetic),
+        potential=finish(potential), closure_jacobian=jac, closure_rate=rate,
+        monitor=linkage.monitor_joint)
+
+
+def _reduce_trig(expr, ideal, gens):
+    """`expr` (a polynomial in the S_k, C_k) reduced modulo S_k^2 + C_k^2 - 1: no S_k^2."""
+    if not ideal:
+        return expr
+    num, den = sp.fraction(sp.together(expr)) if expr.is_Add is False and any(
+        a.is_Pow and a.exp.is_negative for a in expr.atoms(sp.Pow)) else (expr, sp.S(1))
+    try:
+        _, rem = sp.reduced(num, ideal, *gens, order="lex")
+    except sp.PolynomialError:
+        return expr
+    return rem / den
+

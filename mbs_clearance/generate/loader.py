@@ -1,0 +1,134 @@
+"""Generated model modules: written once per structure, imported from disk.
+
+The checked-in modules of the named cases live in mbs_clearance/_generated (listed in its
+``MODULES``, digest -> module name; `tools/generate_models.py` rewrites them, a test fails when
+one is stale). Any other structure is generated on first use into
+``mbs_clearance/_generated/__pycache__/models/`` (or, where the package is read-only, the
+user's cache directory, keyed also by the digest of the library's sources: numba's own cache
+of those files does not see edits of the library), as ``model_<digest[:16]>.py``, written
+atomically. The kernels of a module inside the package are cached by the package's numba
+cache scheme (_cache.py), which keys them by the library's sources.
+"""
+
+from __future__ import annotations
+
+import importlib
+import importlib.util
+import os
+import sys
+import tempfile
+import threading
+from pathlib import Path
+from types import ModuleType
+
+from ..linkage import Linkage
+from .writer import structure_digest
+
+__all__ = ["generate_module", "load_model", "model_path"]
+
+_LOCK = threading.Lock()
+_LOADED: dict[str, ModuleType] = {}
+_PACKAGE = Path(__file__).resolve().parents[1]
+
+
+def generate_module(linkage: Linkage) -> str:
+    """The python source of `linkage`'s model module (deterministic: equal structures give
+    equal text)."""
+    from .derive import derive
+    from .writer import render
+
+    if not isinstance(linkage, Linkage):
+        raise ValueError(f"linkage must be a Linkage; got {type(linkage).__name__}")
+    structure = linkage.structure()
+    return render(derive(linkage), linkage.name, structure)
+
+
+def _cache_dirs(digest: str) -> list[Path]:
+    dirs = []
+    env = os.environ.get("MBS_CLEARANCE_MODEL_DIR")
+    if env:
+        dirs.append(Path(env))
+    dirs.append(_PACKAGE / "_generated" / "__pycache__" / "models")
+    from numba.misc.appdirs import AppDirs
+
+    from .. import _cache
+
+    lib = _cache._PACKAGES.get(str(_PACKAGE))
+    tag = lib.digest[:12] if lib is not None else "unversioned"
+    dirs.append(Path(AppDirs(appname="mbs_clearance", appauthor=False).user_cache_dir)
+                / "models" / tag)
+    return dirs
+
+
+def model_path(linkage: Linkage) -> Path | None:
+    """Where `linkage`'s generated module is (None: not generated yet)."""
+    digest = structure_digest(linkage.structure())
+    named = _named_modules().get(digest)
+    if named is not None:
+        return _PACKAGE / "_generated" / f"{named}.py"
+    for d in _cache_dirs(digest):
+        path = d / f"model_{digest[:16]}.py"
+        if path.is_file():
+            return path
+    return None
+
+
+def _named_modules() -> dict[str, str]:
+    from .._generated import MODULES
+
+    return MODULES
+
+
+def _write(digest: str, source: str) -> Path:
+    """Write `source` atomically into the first writable cache directory."""
+    last = None
+    for d in _cache_dirs(digest):
+        try:
+            d.mkdir(parents=True, exist_ok=True)
+            path = d / f"model_{digest[:16]}.py"
+            fd, tmp = tempfile.mkstemp(dir=d, prefix=".model-", suffix=".tmp")
+            with os.fdopen(fd, "w") as fh:
+                fh.write(source)
+            os.replace(tmp, path)
+            return path
+        except OSError as exc:
+            last = exc
+    raise OSError(f"no writable directory for the generated model: {last}")
+
+
+def load_model(linkage: Linkage) -> ModuleType:
+    """The generated model module of `linkage`'s structure: a checked-in one, a cached one,
+    or generated now (sympy derivation, a few seconds; the first compile of its kernels
+    follows on first use)."""
+    if not isinstance(linkage, Linkage):
+        raise ValueError(f"linkage must be a Linkage; got {type(linkage).__name__}")
+    digest = structure_digest(linkage.structure())
+    with _LOCK:
+        if digest in _LOADED:
+            return _LOADED[digest]
+        named = _named_modules().get(digest)
+        if named is not None:
+            module = importlib.import_module(f"mbs_clearance._generated.{named}")
+        else:
+            path = model_path(linkage)
+            if path is None or not _current(path, digest):
+                path = _write(digest, generate_module(linkage))
+            name = f"mbs_clearance_model_{digest[:16]}"
+            spec = importlib.util.spec_from_file_location(name, path)
+            module = importlib.util.module_from_spec(spec)
+            sys.modules[name] = module
+            spec.loader.exec_module(module)
+        if getattr(module, "STRUCTURE_DIGEST", None) != digest:
+            raise RuntimeError(f"generated model {module.__file__} is not the one of this "
+                               "structure (stale); regenerate it")
+        _LOADED[digest] = module
+        return module
+
+
+def _current(path: Path, digest: str) -> bool:
+    """Whether the file at `path` was generated for `digest` by this generator version."""
+    try:
+        head = path.read_text()[:20000]
+    except OSError:
+        return False
+    return f'STRUCTURE_DIGEST = "{digest}"' in head

@@ -1,0 +1,65 @@
+"""What every generated model module imports: the kernel signatures of protocol v2 and the
+clearance joints' contact stage (one place for the penetration, its rate and the force)."""
+
+from __future__ import annotations
+
+import math
+
+import numba as nb
+from numba import types
+
+from ..contact import contact_force
+from ..integrator import KERNEL
+
+__all__ = ["KERNEL", "RHS_SIG", "EVENT_SIG", "ACTION_SIG", "MONITOR_SIG", "gap_state",
+           "contact_stage", "switching"]
+
+_vec = types.float64[::1]
+#: rhs(t, y, p, dydt)
+RHS_SIG = types.void(types.float64, _vec, _vec, _vec)
+#: event(t, y, p, j) -> (g, gdot) of clearance joint j
+EVENT_SIG = types.UniTuple(types.float64, 2)(types.float64, _vec, _vec, types.int64)
+#: on_event(t, y, p, j)
+ACTION_SIG = types.void(types.float64, _vec, _vec, types.int64)
+#: monitor(t, y, p, dydt, out, g, gd) -> m
+MONITOR_SIG = types.float64(types.float64, _vec, _vec, _vec, _vec, _vec, _vec)
+
+
+@nb.njit(**KERNEL, inline="always")
+def gap_state(ex, ey, exd, eyd, clearance):
+    """(delta, deltadot, nx, ny) of a clearance joint from the journal centre's position
+    (ex, ey) and velocity relative to the bearing centre: penetration |e| - c, its rate and
+    the unit vector n = e / |e| (n = (-1, 0) when the journal is exactly centred, as the
+    hand-written model has it)."""
+    r = math.sqrt(ex * ex + ey * ey)
+    if r > 1e-300:
+        inv_r = 1.0 / r
+        nx = ex * inv_r
+        ny = ey * inv_r
+    else:
+        nx = -1.0
+        ny = 0.0
+    return r - clearance, nx * exd + ny * eyd, nx, ny
+
+
+@nb.njit(**KERNEL, inline="always")
+def contact_stage(ex, ey, exd, eyd, clearance, mode, deltadot_minus, stiffness, restitution,
+                  model):
+    """(F, delta, deltadot, fx, fy): the contact force magnitude of the law
+    (`contact.contact_force`, zero in free flight, mode 0), the penetration and its rate, and
+    the force F n that the bearing exerts on the journal is -F n (n from the bearing centre to
+    the journal centre): fx, fy = F n."""
+    delta, deltadot, nx, ny = gap_state(ex, ey, exd, eyd, clearance)
+    f = 0.0
+    if mode > 0.5:
+        f = contact_force(delta, deltadot, deltadot_minus, stiffness, restitution, int(model))
+    return f, delta, deltadot, f * nx, f * ny
+
+
+@nb.njit(**KERNEL, inline="always")
+def switching(mode, delta, deltadot):
+    """The switching function of a clearance joint and its rate: penetration (and rate) in
+    free flight, minus them in contact."""
+    if mode > 0.5:
+        return -delta, -deltadot
+    return delta, deltadot

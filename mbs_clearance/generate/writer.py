@@ -1,0 +1,314 @@
+"""Numba code of a `Derivation`: expressions split into parameter-only constants and state
+polynomials, common subexpressions (sympy.cse), the mass matrix solved in the kernel, all
+filled into the module template (module.py.jinja).
+
+Every expression of the model is a polynomial in the state-dependent symbols (sines and
+cosines of the angles, coordinates, rates, accelerations, contact force components) whose
+coefficients depend on the parameters only. Each coefficient that is more than a number or
+one parameter becomes a *constant*, computed once per run by the generated `prepare(p)`
+into p[CONST_START:] and read by the kernels: the per-step code multiplies constants and
+monomials, as a hand-written model with its lengths and masses combined would.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from pathlib import Path
+
+import jinja2
+import sympy as sp
+from sympy.printing.pycode import PythonCodePrinter
+
+from .derive import Derivation
+
+__all__ = ["render", "GENERATOR_VERSION", "structure_digest"]
+
+#: bump when the generated code changes for the same structure (the disk cache key)
+GENERATOR_VERSION = "1"
+
+_TEMPLATE = Path(__file__).with_name("module.py.jinja")
+
+
+def structure_digest(structure: dict) -> str:
+    """SHA-256 of a linkage structure and the generator version: the cache key."""
+    text = json.dumps(structure, sort_keys=True) + "\0" + GENERATOR_VERSION
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+class _Printer(PythonCodePrinter):
+    """Python/numba code: integer powers as products, square roots through math."""
+
+    def _print_Pow(self, expr, rational=False):
+        base, exp = expr.as_base_exp()
+        b = self._print(base)
+        if exp.is_Integer and 1 < abs(int(exp)) <= 4:
+            prod = " * ".join([f"{b}" if base.is_Symbol else f"({b})"] * abs(int(exp)))
+            return f"({prod})" if exp > 0 else f"(1.0 / ({prod}))"
+        if exp == -1:
+            return f"(1.0 / {b})" if base.is_Symbol else f"(1.0 / ({b}))"
+        if exp == sp.Rational(1, 2):
+            return f"math.sqrt({b})"
+        return super()._print_Pow(expr, rational=rational)
+
+    def _print_Rational(self, expr):
+        return repr(float(expr))
+
+    def _print_Integer(self, expr):
+        return f"{int(expr)}.0" if abs(int(expr)) < 2**53 else repr(float(expr))
+
+
+_PRINTER = _Printer({"fully_qualified_modules": True, "standard": "python3"})
+
+
+def _code(expr) -> str:
+    return _PRINTER.doprint(expr).replace("math.math.", "math.")
+
+
+class _Writer:
+    """Splits expressions into constants and state polynomials; emits function bodies."""
+
+    def __init__(self, d: Derivation):
+        self.d = d
+        self.pindex = {sym: i for i, sym in enumerate(d.psyms[n] for n in d.parameters)}
+        self.pname = {d.psyms[n]: n for n in d.parameters}
+        # state-dependent symbols: sin/cos of angles that move, Q, U, A, contact forces
+        self.moving = []           # (angle expr, S, C) of the angles depending on t or Q
+        self.fixed = []            # of the parameter-only angles (prismatic axes)
+        for a, S, C in d.angles:
+            (self.moving if a.free_symbols - set(self.pindex) else self.fixed).append(
+                (a, S, C))
+        self.vars = [s for _, S, C in self.moving for s in (S, C)]
+        self.vars += [*d.Q, *d.U, *d.A, *d.FX, *d.FY]
+        self.constants: dict[sp.Expr, sp.Symbol] = {}
+
+    # ---- constants
+    def _constant(self, coeff: sp.Expr) -> sp.Expr:
+        if coeff.is_Number or coeff in self.pindex or (
+                coeff.is_Mul and len(coeff.args) == 2 and coeff.args[0] == -1
+                and coeff.args[1] in self.pindex):
+            return coeff
+        if coeff in self.constants:
+            return self.constants[coeff]
+        if -coeff in self.constants:
+            return -self.constants[-coeff]
+        sym = sp.Symbol(f"k{len(self.constants)}", real=True)
+        self.constants[coeff] = sym
+        return sym
+
+    def split(self, expr: sp.Expr) -> sp.Expr:
+        """`expr` with its parameter-only coefficients replaced by constants."""
+        expr = sp.expand(expr)
+        if not expr.free_symbols & set(self.vars):
+            return self._constant(expr)
+        poly = sp.Poly(expr, *self.vars)
+        out = sp.S(0)
+        for monom, coeff in poly.terms():
+            term = sp.Mul(*[v**k for v, k in zip(self.vars, monom) if k])
+            out += self._constant(sp.factor_terms(coeff)) * term
+        return out
+
+    # ---- function bodies
+    def stage(self, exprs: list[sp.Expr], names: list[str], temps) -> tuple[set, list[str]]:
+        """(symbols used, lines) computing `exprs` into the local variables `names` through
+        common subexpressions (named from the iterator `temps`, shared by a function's
+        stages so that the names stay unique)."""
+        reps, reduced = sp.cse(exprs, symbols=temps, optimizations="basic", order="none")
+        used = set()
+        for e in [*(e for _, e in reps), *reduced]:
+            used |= e.free_symbols
+        lines = [f"{sym} = {_code(e)}" for sym, e in reps]
+        lines += [f"{name} = {_code(e)}" for name, e in zip(names, reduced)]
+        return used, lines
+
+    def preamble(self, used: set, state: str = "y") -> list[str]:
+        """Lines loading the parameters, constants and state components in `used`, and the
+        sines and cosines of the moving angles in it (one `sincos` per angle)."""
+        angles_used = [(a, S, C) for a, S, C in self.moving if S in used or C in used]
+        need = set(used)
+        for a, _, _ in angles_used:
+            need |= a.free_symbols
+        lines = self._loads(need, state)
+        lines += [f"{S}, {C} = sincos({_code(a)})" for a, S, C in angles_used]
+        return lines
+
+    def function(self, stages: list, state: str = "y") -> list[str]:
+        """The indented body of a function: a preamble, then the stages (each either
+        (exprs, names) or a list of literal lines)."""
+        temps = sp.numbered_symbols("x")
+        used, lines = set(), []
+        for st in stages:
+            if isinstance(st, tuple):
+                u, ls = self.stage(*st, temps)
+                used |= u
+                lines += ls
+            else:
+                lines += st
+        return ["    " + line for line in self.preamble(used, state) + lines]
+
+    def _loads(self, need, state) -> list[str]:
+        d = self.d
+        lines = []
+        for sym in sorted(need & set(self.pindex), key=lambda s: self.pindex[s]):
+            lines.append(f"{sym} = p[{self.pindex[sym]}]  # {self.pname[sym]}")
+        consts = {v: k for k, v in self.constants.items()}
+        for sym in sorted((s for s in need if s in consts), key=lambda s: int(s.name[1:])):
+            lines.append(f"{sym} = p[CONST_START + {sym.name[1:]}]")
+        n = len(d.Q)
+        for i in range(n):
+            if d.Q[i] in need:
+                lines.append(f"{d.Q[i]} = {state}[{i}]")
+        if state == "y":
+            for i in range(n):
+                if d.U[i] in need:
+                    lines.append(f"{d.U[i]} = y[{n + i}]")
+        return lines
+
+    def constants_body(self) -> list[str]:
+        """Lines of `prepare(p)`: every constant into p[CONST_START + k]."""
+        items = list(self.constants.items())
+        exprs = [e for e, _ in items]
+        reps, reduced = sp.cse(exprs, symbols=sp.numbered_symbols("x"), optimizations="basic",
+                               order="none")
+        used = set()
+        for e in [*(e for _, e in reps), *reduced]:
+            used |= e.free_symbols
+        lines = []
+        fixed = [(a, S, C) for a, S, C in self.fixed if S in used or C in used]
+        need = set(used)
+        for a, _, _ in fixed:
+            need |= a.free_symbols
+        lines += self._loads(need, "y")
+        for a, S, C in fixed:
+            lines.append(f"{S} = math.sin({_code(a)})")
+            lines.append(f"{C} = math.cos({_code(a)})")
+        for sym, e in reps:
+            lines.append(f"{sym} = {_code(e)}")
+        for (_, sym), e in zip(items, reduced):
+            lines.append(f"p[CONST_START + {sym.name[1:]}] = {_code(e)}")
+        return ["    " + line for line in lines]
+
+
+def _solve_lines(M, f, out, indent="    ") -> list[str]:
+    """Lines solving M x = f (M symmetric positive definite, entries given as code strings,
+    f as names) into the names `out`: by division for a diagonal M, else by an unrolled
+    Cholesky factorisation L L^T."""
+    n = len(f)
+    lines = []
+    if all(M[i][j] == "0" for i in range(n) for j in range(n) if i != j):
+        for i in range(n):
+            lines.append(f"{out[i]} = {f[i]} / {M[i][i]}")
+        return [indent + line for line in lines]
+    for i in range(n):
+        for j in range(i + 1):
+            lines.append(f"m_{i}_{j} = {M[i][j]}")
+    for j in range(n):
+        s = " - ".join([f"m_{j}_{j}"] + [f"l_{j}_{k} * l_{j}_{k}" for k in range(j)])
+        lines.append(f"l_{j}_{j} = math.sqrt({s})")
+        lines.append(f"il_{j} = 1.0 / l_{j}_{j}")
+        for i in range(j + 1, n):
+            s = " - ".join([f"m_{i}_{j}"] + [f"l_{i}_{k} * l_{j}_{k}" for k in range(j)])
+            lines.append(f"l_{i}_{j} = ({s}) * il_{j}")
+    for i in range(n):
+        s = " - ".join([f[i]] + [f"l_{i}_{k} * z_{k}" for k in range(i)])
+        lines.append(f"z_{i} = ({s}) * il_{i}")
+    for i in reversed(range(n)):
+        s = " - ".join([f"z_{i}"] + [f"l_{k}_{i} * {out[k]}" for k in range(i + 1, n)])
+        lines.append(f"{out[i]} = ({s}) * il_{i}")
+    return [indent + line for line in lines]
+
+
+def render(d: Derivation, linkage_name: str, structure: dict) -> str:
+    """The python source of the model module of derivation `d` (deterministic)."""
+    w = _Writer(d)
+    n, J, G = len(d.Q), len(d.joints), len(d.ground_joints)
+    params = list(d.parameters)
+    mem_start = params.index(f"{d.joints[0]}.mode")
+    contact = [{f: params.index(f"{name}.{f}") for f in
+                ("clearance", "stiffness", "restitution", "contact_model",
+                 "impact_velocity_floor")} for name in d.joints]
+
+    # ---- the stages of the model evaluation
+    gap_names = [[f"ex{j}", f"ey{j}", f"exd{j}", f"eyd{j}"] for j in range(J)]
+    gap_exprs = [[w.split(e) for e in gap] for gap in d.gaps]
+    gaps_stage = ([e for g in gap_exprs for e in g], [nm for g in gap_names for nm in g])
+    contact_lines = [
+        f"F{j}, d{j}, dd{j}, {d.FX[j]}, {d.FY[j]} = contact_stage(ex{j}, ey{j}, exd{j}, "
+        f"eyd{j}, p[{c['clearance']}], p[{mem_start + 2 * j}], p[{mem_start + 2 * j + 1}], "
+        f"p[{c['stiffness']}], p[{c['restitution']}], p[{c['contact_model']}])"
+        for j, c in enumerate(contact)]
+    M = [[w.split(d.mass_matrix[i, k]) for k in range(n)] for i in range(n)]
+    f = [w.split(d.forcing[i]) for i in range(n)]
+    fsyms = [sp.Symbol(f"f{i}", real=True) for i in range(n)]
+    diagonal = all(M[i][k] == 0 for i in range(n) for k in range(n) if i != k)
+    if diagonal and not any(M[i][i].free_symbols & set(w.vars) for i in range(n)):
+        # a constant diagonal mass matrix: its inverse is a constant, no division per call
+        eom = [(f, [str(s) for s in fsyms]),
+               ([fsyms[i] * w._constant(1 / sp.expand(d.mass_matrix[i, i]))
+                 for i in range(n)], [f"A{i}" for i in range(n)])]
+    else:
+        lower = [(i, k) for i in range(n) for k in range(i + 1) if M[i][k] != 0]
+        code = [[("0" if M[max(i, k)][min(i, k)] == 0 else f"mm_{max(i, k)}_{min(i, k)}")
+                 for k in range(n)] for i in range(n)]
+        eom = [(f + [M[i][k] for i, k in lower],
+                [str(s) for s in fsyms] + [f"mm_{i}_{k}" for i, k in lower]),
+               _solve_lines(code, [str(s) for s in fsyms], [f"A{i}" for i in range(n)], "")]
+    reaction_names = [f"r{g}{xy}" for g in range(G) for xy in "xy"]
+    outputs_stage = ([w.split(e) for r in d.reactions for e in r] + [w.split(d.drive_moment)],
+                     reaction_names + ["moment"])
+    results = []
+    for j in range(J):
+        results += [f"F{j}", f"d{j}", f"dd{j}", f"ex{j}", f"ey{j}"]
+    results += reaction_names
+    results += [" + ".join(f"r{g}x" for g in range(G)) or "0.0",
+                " + ".join(f"r{g}y" for g in range(G)) or "0.0", "moment"]
+    results += [f"A{i}" for i in range(n)]
+    dynamics = w.function([gaps_stage, contact_lines, *eom, outputs_stage])
+
+    gap_fns = [w.function([(gap_exprs[j], gap_names[j])]) for j in range(J)]
+    spring_lines = []
+    for j, c in enumerate(contact):
+        spring_lines += [
+            f"d{j}, dd{j}, nx{j}, ny{j} = gap_state(ex{j}, ey{j}, exd{j}, eyd{j}, "
+            f"p[{c['clearance']}])",
+            f"if p[{mem_start + 2 * j}] > 0.5 and d{j} > 0.0:",
+            f"    energy += p[{c['stiffness']}] * d{j} * d{j} * math.sqrt(d{j}) / 2.5"]
+    energy = w.function([gaps_stage, ([w.split(d.kinetic + d.potential)], ["energy"]),
+                         spring_lines])
+    closure = w.function([([e for g in gap_exprs for e in g[:2]],
+                           [f"res[{i}]" for i in range(2 * J)])], state="q")
+    closure_jac = w.function([([w.split(d.closure_jacobian[i, k]) for i in range(2 * J)
+                                for k in range(n)],
+                               [f"jac[{i}, {k}]" for i in range(2 * J) for k in range(n)])],
+                             state="q")
+    closure_rate = w.function([([w.split(e) for e in d.closure_rate],
+                                [f"res[{i}]" for i in range(2 * J)])], state="q")
+    prepare = w.constants_body()       # after every split: all constants known
+
+    out_columns = []
+    for j in d.joints:
+        out_columns += [f"{j}.contact_force", f"{j}.penetration", f"{j}.penetration_rate",
+                        f"{j}.ecc_x", f"{j}.ecc_y"]
+    for gname in d.ground_joints:
+        out_columns += [f"{gname}.reaction_x", f"{gname}.reaction_y"]
+    out_columns += ["shaking_x", "shaking_y", "drive_moment"]
+    out_columns += [f"{c}.acc" for c in d.coordinates]
+    if d.monitor is None:
+        mon = out_columns.index("shaking_x")
+    else:
+        mon = out_columns.index(f"{d.monitor}.reaction_x")
+    ctx = dict(
+        name=linkage_name, digest=structure_digest(structure), version=GENERATOR_VERSION,
+        structure=json.dumps(structure, sort_keys=True), parameters=params,
+        coordinates=list(d.coordinates), n=n, J=J, joints=list(d.joints),
+        ground_joints=list(d.ground_joints), mem_start=mem_start,
+        n_constants=len(w.constants), out_columns=out_columns, monitor=d.monitor,
+        monitor_column=mon, moment_column=out_columns.index("drive_moment"),
+        acc_column=out_columns.index(f"{d.coordinates[0]}.acc"),
+        speed=params.index("drive.speed"), results=results, dynamics=dynamics,
+        gap_fns=gap_fns, energy=energy, closure=closure, closure_jac=closure_jac,
+        closure_rate=closure_rate, prepare=prepare, contact_indices=contact,
+    )
+    env = jinja2.Environment(undefined=jinja2.StrictUndefined, keep_trailing_newline=True,
+                             trim_blocks=True, lstrip_blocks=True)
+    return env.from_string(_TEMPLATE.read_text()).render(**ctx)

@@ -1,0 +1,88 @@
+"""The glue between a `Linkage` and its generated model: parameters, initial state, run.
+
+`pack_parameters(linkage)` fills the generated module's parameter vector from the
+description (by the module's PARAMETERS names, no index arithmetic) and computes its
+constants; `initial_state(linkage)` solves the loop closure of the clearance joints (journals
+centred) by Newton from the description's assembly guesses and the velocities from the
+velocity constraints.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .contact import CONTACT_MODELS
+from .generate import load_model
+from .linkage import GROUND, Linkage
+
+__all__ = ["parameter_values", "pack_parameters", "initial_state"]
+
+
+def parameter_values(linkage: Linkage) -> dict[str, float]:
+    """Values of the generated model's parameters (its PARAMETERS names) for `linkage`; the
+    memory of each clearance joint starts in free flight with the impact-velocity floor."""
+    values: dict[str, float] = {}
+    for b in linkage.bodies:
+        values[f"{b.name}.mass"] = b.mass
+        values[f"{b.name}.inertia"] = b.inertia
+        for pt, (x, y) in b.points.items():
+            values[f"{b.name}.{pt}.x"] = x
+            values[f"{b.name}.{pt}.y"] = y
+    for pt, (x, y) in linkage.ground_points.items():
+        values[f"{GROUND}.{pt}.x"] = x
+        values[f"{GROUND}.{pt}.y"] = y
+    for j in linkage.joints:
+        if hasattr(j, "angle"):
+            values[f"{j.name}.angle"] = j.angle
+    for j in linkage.clearance_joints:
+        values[f"{j.name}.clearance"] = j.clearance
+        values[f"{j.name}.stiffness"] = j.stiffness
+        values[f"{j.name}.restitution"] = j.restitution
+        values[f"{j.name}.contact_model"] = float(CONTACT_MODELS[j.contact_model])
+        values[f"{j.name}.impact_velocity_floor"] = j.impact_velocity_floor
+        values[f"{j.name}.mode"] = 0.0
+        values[f"{j.name}.impact_velocity"] = j.impact_velocity_floor
+    values["drive.speed"] = linkage.drive.speed
+    values["drive.initial_angle"] = linkage.drive.initial_angle
+    values["gravity"] = linkage.gravity
+    return values
+
+
+def pack_parameters(linkage: Linkage, model=None) -> np.ndarray:
+    """The parameter vector p (N_P,) of `linkage`'s generated model, constants computed."""
+    model = load_model(linkage) if model is None else model
+    values = parameter_values(linkage)
+    p = np.zeros(model.N_P)
+    for i, name in enumerate(model.PARAMETERS):
+        p[i] = values[name]
+    model.prepare(p)
+    return p
+
+
+def initial_state(linkage: Linkage, model=None, p=None, t0: float = 0.0, tol: float = 1e-14,
+                  max_iter: int = 50) -> np.ndarray:
+    """State y0 (N_STATE,) with every journal centred in its bearing: the coordinates solve
+    the loop closure (closure(t0, q, p) = 0) by Newton's method from the description's
+    assembly guesses (0 for coordinates without one; least squares if the closure is not
+    square), the rates the velocity constraints closure_jacobian qdot = -closure_rate;
+    W = 0. Raises ValueError if Newton does not converge (no assembly near the guesses)."""
+    model = load_model(linkage) if model is None else model
+    p = pack_parameters(linkage, model) if p is None else p
+    q = np.array([linkage.assembly.get(c, 0.0) for c in model.COORDINATES])
+    scale = max(linkage.length_scale, 1e-300)
+    for _ in range(max_iter):
+        res = model.closure(t0, q, p)
+        jac = model.closure_jacobian(t0, q, p)
+        dq = np.linalg.lstsq(jac, -res, rcond=None)[0]
+        q = q + dq
+        if np.max(np.abs(model.closure(t0, q, p))) <= tol * scale:
+            break
+    else:
+        raise ValueError(
+            f"the loop closure of linkage {linkage.name!r} did not converge from the assembly "
+            f"guesses {dict(linkage.assembly)} (residual "
+            f"{np.max(np.abs(model.closure(t0, q, p))):.3g} m): give guesses (Linkage."
+            f"assembly, by coordinate name {list(model.COORDINATES)}) near an assembly")
+    jac = model.closure_jacobian(t0, q, p)
+    qd = np.linalg.lstsq(jac, -model.closure_rate(t0, q, p), rcond=None)[0]
+    return np.concatenate([q, qd, [0.0]])

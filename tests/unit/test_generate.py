@@ -1,0 +1,287 @@
+"""The generated models: the paper case against the hand-written reduced model (two
+independent derivations), energy balance, loop closure, checked-in modules not stale."""
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from mbs_clearance import reduced
+from mbs_clearance.cases import paper_slider_crank
+from mbs_clearance.generate import (
+    generate_module,
+    load_model,
+    named_cases,
+    registry_source,
+    structure_digest,
+)
+from mbs_clearance.linkage import GROUND, Body, ClearanceJoint, Drive, Linkage, Revolute
+from mbs_clearance.linkage_model import initial_state, pack_parameters
+from mbs_clearance.mechanism import SliderCrank
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def _random_states(mech, rng, n, spread):
+    """States near the ideal assembly: the journal off-centre by up to `spread` clearances."""
+    out = []
+    for _ in range(n):
+        t = rng.uniform(0, 3 * mech.period)
+        th2 = mech.crank_speed * t + mech.initial_crank_angle
+        q = reduced.ideal_kinematics(mech.crank_length, mech.coupler_length,
+                                     mech.crank_speed, th2)
+        q[0] += rng.uniform(-1, 1) * spread * mech.clearance / mech.coupler_length
+        q[1] += rng.uniform(-1, 1) * spread * mech.clearance
+        q[2] *= 1 + rng.uniform(-0.2, 0.2)
+        q[3] += rng.uniform(-1, 1) * mech.crank_speed * mech.crank_length * 0.1
+        out.append((t, np.append(q, rng.uniform(0, 10))))
+    return out
+
+
+@pytest.mark.parametrize("mech", [
+    SliderCrank(),
+    SliderCrank(crank_length=0.07, coupler_mass=0.4, initial_crank_angle=0.7,
+                contact_model="hunt_crossley", restitution=0.6, gravity=3.0,
+                journal_radius=0.00995),
+], ids=["paper", "varied"])
+def test_paper_model_matches_reduced(mech):
+    """Accelerations, |F12| (the crank pivot's reaction), drive moment, contact force and
+    switching function of the generated model equal reduced.py's hand-written dynamics at
+    random states in both contact modes (sympy.physics.mechanics + generated code against
+    the paper's Eqs. 1-8 written by hand)."""
+    lk = paper_slider_crank(**{f: getattr(mech, f) for f in (
+        "crank_length", "coupler_mass", "initial_crank_angle", "contact_model", "restitution",
+        "gravity", "journal_radius")})
+    model = load_model(lk)
+    p = pack_parameters(lk, model)
+    pr = reduced.pack_parameters(mech)
+    col = {c: i for i, c in enumerate(model.OUT_COLUMNS)}
+    rng = np.random.default_rng(5)
+    n_contact = 0
+    for t, y in _random_states(mech, rng, 40, 3.0):
+        for mode in (0.0, 1.0):
+            dmin = rng.uniform(0.01, 1.0)
+            p[model.MEM_START:model.MEM_START + 2] = mode, dmin
+            pr[reduced.P_MODE], pr[reduced.P_DMIN] = mode, dmin
+            th3dd, x4dd, F, delta, deltadot, ex, ey, M2, F12x, F12y = reduced.dynamics(t, y, pr)
+            out = np.empty(model.N_OUT)
+            dydt = np.empty(model.N_STATE)
+            g, gd = np.empty(1), np.empty(1)
+            m = model.monitor(t, y, p, dydt, out, g, gd)
+            n_contact += F > 0
+            # scales: the largest term of each quantity (inertial ~ m L w^2, contact F)
+            acc_scale = (abs(th3dd) + 300.0 / mech.coupler_inertia_value * mech.coupler_length
+                         + F * mech.coupler_length / mech.coupler_inertia_value)
+            force_scale = abs(F) + 20.0 + np.hypot(F12x, F12y)
+            assert out[col["coupler.angle.acc"]] == pytest.approx(th3dd, rel=1e-12,
+                                                                 abs=1e-12 * acc_scale)
+            assert out[col["slider_guide.s.acc"]] == pytest.approx(
+                x4dd, rel=1e-12, abs=1e-12 * (abs(x4dd) + F / mech.slider_mass))
+            assert out[col["coupler_slider.contact_force"]] == pytest.approx(F, rel=1e-12,
+                                                                             abs=1e-9)
+            # the journal's position is a difference of coordinates of size L2 + L3:
+            # round-off ~ a few ulps of 0.2 m
+            assert out[col["coupler_slider.penetration"]] == pytest.approx(delta, abs=5e-16)
+            assert out[col["coupler_slider.ecc_x"]] == pytest.approx(ex, abs=5e-16)
+            assert out[col["coupler_slider.ecc_y"]] == pytest.approx(ey, abs=5e-16)
+            assert out[col["crank_pivot.reaction_x"]] == pytest.approx(
+                F12x, abs=1e-12 * force_scale)
+            assert out[col["crank_pivot.reaction_y"]] == pytest.approx(
+                F12y, abs=1e-12 * force_scale)
+            assert m == pytest.approx(np.hypot(F12x, F12y), rel=1e-12, abs=1e-12 * force_scale)
+            assert out[col["drive_moment"]] == pytest.approx(
+                M2, abs=1e-12 * force_scale * (mech.crank_length + mech.coupler_length))
+            assert dydt[4] == pytest.approx(M2 * mech.crank_speed,
+                                            abs=1e-12 * force_scale * 0.2 * mech.crank_speed)
+            assert dydt[:2] == pytest.approx(y[2:4], abs=0)
+            ge, gde = reduced.event(t, y, pr)
+            vel = mech.crank_speed * (mech.crank_length + mech.coupler_length)
+            assert model.event(t, y, p, 0) == pytest.approx((ge, gde), abs=1e-13 * vel)
+            assert model.event(t, y, p, 0)[0] == pytest.approx(ge, abs=5e-16)
+            assert (g[0], gd[0]) == pytest.approx(model.event(t, y, p, 0), rel=1e-12,
+                                                  abs=1e-18)
+    assert n_contact > 10       # the contact branch was exercised
+
+
+def test_on_event_matches_reduced():
+    mech = SliderCrank()
+    lk = paper_slider_crank()
+    model = load_model(lk)
+    p = pack_parameters(lk, model)
+    pr = reduced.pack_parameters(mech)
+    rng = np.random.default_rng(2)
+    for t, y in _random_states(mech, rng, 5, 1.5):
+        for mode in (0.0, 1.0):
+            p[model.MEM_START] = pr[reduced.P_MODE] = mode
+            model.on_event(t, y, p, 0)
+            reduced.on_event(t, y, pr)
+            assert p[model.MEM_START] == pr[reduced.P_MODE]
+            assert p[model.MEM_START + 1] == pytest.approx(pr[reduced.P_DMIN], rel=1e-12,
+                                                           abs=1e-15)
+
+
+def _energy_rate_check(lk, mode, rng, n=5):
+    """d(mechanical energy)/dt along rhs (central differences at two step sizes, where
+    truncation ~h^2 and round-off ~1/h are both below 1e-7 of the power or at most one of
+    them is) against the drive power; returns the relative errors. A missing or wrong term
+    of the equations gives errors of order one."""
+    model = load_model(lk)
+    p = pack_parameters(lk, model)
+    y0 = initial_state(lk, model, p)
+    errs = []
+    for _ in range(n):
+        t = rng.uniform(0, lk.period)
+        y = initial_state(lk, model, p, t0=t)
+        y[:model.N_Q] += rng.uniform(-1, 1, model.N_Q) * 2 * lk.min_clearance / max(
+            lk.length_scale, 1e-3) * np.where(
+            [c.endswith(".angle") for c in model.COORDINATES], 1.0, lk.length_scale)
+        p[model.MEM_START::2][:model.N_EVENTS] = mode
+        f = np.empty(model.N_STATE)
+        model.rhs(t, y, p, f)
+        power = f[-1]
+        rates = []
+        for h in (1e-6 * lk.period, 0.5e-6 * lk.period):
+            fwd = model.mechanical_energy(t + h, y + h * f, p)
+            bwd = model.mechanical_energy(t - h, y - h * f, p)
+            # the state moves along the tangent, not the solution: second-order terms cancel
+            # in the central difference up to O(h^2)
+            rates.append((fwd - bwd) / (2 * h))
+        scale = abs(power) + 1e-3 * abs(model.mechanical_energy(t, y, p)) / lk.period
+        errs.append((abs(rates[0] - power) / scale, abs(rates[1] - power) / scale))
+    del y0
+    return errs
+
+
+def test_energy_rate_equals_drive_power_free_flight():
+    rng = np.random.default_rng(3)
+    for e1, e2 in _energy_rate_check(paper_slider_crank(), 0.0, rng):
+        assert min(e1, e2) < 1e-7
+
+
+def test_energy_rate_in_elastic_contact():
+    """Restitution 1: the contact is conservative (spring energy counted in contact mode)."""
+    rng = np.random.default_rng(4)
+    for e1, e2 in _energy_rate_check(paper_slider_crank(restitution=1.0), 1.0, rng):
+        assert min(e1, e2) < 1e-7
+
+
+def _pendulum_pair():
+    """A driven crank carrying a floating disc through a clearance joint, and a pendulum
+    hung from the ground through a second one: a floating body and a ground clearance
+    joint, two switching functions."""
+    return Linkage(
+        name="pendulum_pair",
+        bodies=(Body("crank", 0.2, 2e-4, {"o": (-0.02, 0.0), "a": (0.02, 0.0)}),
+                Body("disc", 0.1, 3e-5, {"c": (0.0, 0.0)}),
+                Body("pendulum", 0.3, 1e-3, {"top": (0.0, 0.05), "tip": (0.0, -0.05)})),
+        joints=(Revolute("drive_pin", GROUND, "o", "crank", "o"),),
+        clearance_joints=(
+            ClearanceJoint("disc_pin", "crank", "a", "disc", "c", 0.004, 0.0039,
+                           restitution=1.0),
+            ClearanceJoint("hanger", "pendulum", "top", GROUND, "h", 0.004, 0.0039,
+                           restitution=1.0)),
+        drive=Drive("drive_pin", 20.0, 0.3),
+        ground_points={"o": (0.0, 0.0), "h": (0.2, 0.0)},
+        assembly={"disc.x": 0.02, "pendulum.x": 0.2, "pendulum.y": -0.05},
+    )
+
+
+def test_floating_bodies_and_ground_clearance():
+    """Coordinates of floating bodies, closure at the centred start, its Jacobian against
+    central differences, energy balance in free flight and elastic contact."""
+    lk = _pendulum_pair()
+    model = load_model(lk)
+    assert model.COORDINATES == ("disc.x", "disc.y", "disc.angle", "pendulum.x",
+                                 "pendulum.y", "pendulum.angle")
+    assert model.GROUND_JOINTS == ("drive_pin", "hanger")
+    p = pack_parameters(lk, model)
+    y0 = initial_state(lk, model, p)
+    assert np.abs(model.closure(0.0, y0[:6], p)).max() < 1e-15
+    # crank pin at 0.04 (cos 0.3, sin 0.3); the disc's centre there; the pendulum hangs
+    assert y0[:2] == pytest.approx(0.04 * np.array([np.cos(0.3), np.sin(0.3)]), abs=1e-15)
+    assert y0[3:5] == pytest.approx([0.2, -0.05], abs=1e-15)
+    q = y0[:6] + np.random.default_rng(1).uniform(-0.1, 0.1, 6)
+    jac = model.closure_jacobian(0.1, q, p)
+    for k in range(6):
+        dq = np.zeros(6)
+        dq[k] = 1e-6
+        fd = (model.closure(0.1, q + dq, p) - model.closure(0.1, q - dq, p)) / 2e-6
+        assert jac[:, k] == pytest.approx(fd, abs=1e-8)
+    rate = model.closure_rate(0.1, q, p)
+    fd = (model.closure(0.1 + 1e-7, q, p) - model.closure(0.1 - 1e-7, q, p)) / 2e-7
+    assert rate == pytest.approx(fd, abs=1e-7)
+    rng = np.random.default_rng(6)
+    for mode in (0.0, 1.0):
+        for e1, e2 in _energy_rate_check(lk, mode, rng):
+            assert min(e1, e2) < 1e-7
+
+
+def test_shaking_force_is_newton_on_the_whole_mechanism():
+    """The sum of the forces on the ground equals -(sum of m a) - gravity of all bodies
+    (Newton on the whole mechanism), with the accelerations from finite differences of the
+    centres of mass (pendulum pair: a ground clearance joint's force counts too)."""
+    lk = _pendulum_pair()
+    model = load_model(lk)
+    p = pack_parameters(lk, model)
+    y = initial_state(lk, model, p, t0=0.05)
+    y[:6] += np.random.default_rng(9).uniform(-2e-4, 2e-4, 6)
+    y[6:12] += np.random.default_rng(8).uniform(-0.05, 0.05, 6)
+    col = {c: i for i, c in enumerate(model.OUT_COLUMNS)}
+    for mode in (0.0, 1.0):
+        p[model.MEM_START::2][:2] = mode
+        out = np.empty(model.N_OUT)
+        f = np.empty(model.N_STATE)
+        model.monitor(0.05, y, p, f, out, np.empty(2), np.empty(2))
+        # crank: rotation about the origin at the drive speed, centre of mass at its middle
+        th = 20.0 * 0.05 + 0.3
+        a_crank = -0.02 * 20.0**2 * np.array([np.cos(th), np.sin(th)])
+        total = (0.2 * a_crank + 0.1 * f[6:8] + 0.3 * f[9:11]
+                 + np.array([0.0, (0.2 + 0.1 + 0.3) * 9.81]))
+        shaking = out[[col["shaking_x"], col["shaking_y"]]]
+        assert shaking == pytest.approx(-total, rel=1e-12, abs=1e-12 * np.abs(total).max())
+
+
+def test_generated_modules_not_stale():
+    """The checked-in modules equal what the generator writes now (else run
+    tools/generate_models.py), and the registry lists each named case."""
+    cases = named_cases()
+    assert "paper_slider_crank" in cases
+    folder = ROOT / "mbs_clearance" / "_generated"
+    assert (folder / "__init__.py").read_text() == registry_source(cases), (
+        "run python tools/generate_models.py")
+    for name, lk in cases.items():
+        path = folder / f"{name}.py"
+        assert path.is_file() and path.read_text() == generate_module(lk), (
+            f"{path} is stale: run python tools/generate_models.py")
+
+
+def test_generation_is_deterministic_across_processes():
+    """Another hash seed gives the same text (sympy's set orders do not leak into it)."""
+    code = ("import sys; from mbs_clearance.cases import paper_slider_crank; "
+            "from mbs_clearance.generate import generate_module; "
+            "sys.stdout.write(generate_module(paper_slider_crank()))")
+    texts = []
+    for seed in ("1", "2"):
+        env = dict(os.environ, PYTHONHASHSEED=seed)
+        texts.append(subprocess.run([sys.executable, "-c", code], cwd=ROOT, env=env,
+                                    capture_output=True, text=True, check=True).stdout)
+    assert texts[0] == texts[1]
+
+
+def test_user_description_cached_by_structure(tmp_path, monkeypatch):
+    """A description not among the named cases is generated once into the cache and found
+    there again; changing a number keeps the module, changing the structure does not."""
+    monkeypatch.setenv("MBS_CLEARANCE_MODEL_DIR", str(tmp_path))
+    lk = _pendulum_pair()
+    from mbs_clearance.generate import loader, model_path
+
+    model = load_model(lk)
+    digest = structure_digest(lk.structure())
+    assert model.STRUCTURE_DIGEST == digest
+    assert model_path(lk) is not None
+    assert load_model(lk.with_parameter("crank.mass", 0.5)) is model
+    assert structure_digest(lk.replace(monitor_joint="hanger").structure()) != digest
+    assert loader._current(model_path(lk), digest)
