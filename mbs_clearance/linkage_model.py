@@ -86,3 +86,79 @@ def initial_state(linkage: Linkage, model=None, p=None, t0: float = 0.0, tol: fl
     jac = model.closure_jacobian(t0, q, p)
     qd = np.linalg.lstsq(jac, -model.closure_rate(t0, q, p), rcond=None)[0]
     return np.concatenate([q, qd, [0.0]])
+
+
+# ---------------------------------------------------------------------------- tolerances
+
+#: default relative tolerance (as the hand-written paper model: reduced.DEFAULT_RTOL)
+DEFAULT_RTOL = 1e-7
+
+#: absolute tolerance of each switching function (the penetration) in clearances x rtol
+#: (as reduced.EVENT_ATOL: the penetration's error is controlled at the clearance's scale)
+EVENT_ATOL = 1.5
+
+
+def drive_extent(linkage: Linkage) -> float:
+    """The driven body's largest distance between two of its points (and its centre of
+    mass) in m: its tip speed / drive speed, the scale of length rates."""
+    import math
+
+    drive = next(j for j in linkage.joints if j.name == linkage.drive.joint)
+    body = next(b for b in linkage.bodies if b.name == drive.body_b)
+    pts = [(0.0, 0.0), *body.points.values()]
+    return max(math.dist(a, b) for a in pts for b in pts)
+
+
+def default_atol(linkage: Linkage, model, rtol: float) -> np.ndarray:
+    """Absolute tolerances: per state component from the linkage's natural scales (angles
+    1 rad, lengths the length scale, angle rates the drive speed, length rates the driven
+    body's tip speed, the drive's work 1 J, not under error control), then per clearance
+    joint of its switching function (EVENT_ATOL clearances x rtol) and its rate (none).
+    For the paper case these are reduced.default_atol and reduced.event_atol."""
+    w = linkage.drive.speed
+    length = linkage.length_scale
+    tip = w * drive_extent(linkage)
+    pos = [1.0 if c.endswith(".angle") else length for c in model.COORDINATES]
+    vel = [w if c.endswith(".angle") else tip for c in model.COORDINATES]
+    events = []
+    for j in linkage.clearance_joints:
+        events += [rtol * EVENT_ATOL * j.clearance, np.inf]
+    return np.concatenate([rtol * np.array(pos + vel + [1.0]), events])
+
+
+# ---------------------------------------------------------------------------- trajectory
+
+def trajectory_from_run(linkage: Linkage, model, ts, ys, ms, p, stats, peaks, outs=None):
+    """The `Trajectory` of a linkage run: recorded times, states, memories (n, N_MEM) and,
+    if recorded, outputs (OUT_COLUMNS; else evaluated here)."""
+    from .trajectory import Trajectory
+
+    ys = np.ascontiguousarray(ys)
+    ms = np.ascontiguousarray(ms[:, :model.N_MEM])
+    if outs is None or outs.shape[1] < model.N_OUT:
+        outs = model.outputs(np.ascontiguousarray(ts), ys, ms, p)
+    col = {c: i for i, c in enumerate(model.OUT_COLUMNS)}
+    joints = model.JOINTS
+    J, n = len(joints), model.N_Q
+
+    def per_joint(field):
+        return np.column_stack([outs[:, col[f"{j}.{field}"]] for j in joints])
+
+    reactions = {g: outs[:, [col[f"{g}.reaction_x"], col[f"{g}.reaction_y"]]].copy()
+                 for g in model.GROUND_JOINTS}
+    shaking = outs[:, [col["shaking_x"], col["shaking_y"]]].copy()
+    monitored = (shaking if model.MONITOR_JOINT is None
+                 else reactions[model.MONITOR_JOINT])
+    return Trajectory(
+        t=np.asarray(ts), base_force=monitored, crank_moment=outs[:, col["drive_moment"]].copy(),
+        contact_force=per_joint("contact_force"), penetration=per_joint("penetration"),
+        eccentricity=np.stack([per_joint("ecc_x"), per_joint("ecc_y")], axis=2),
+        slider_position=None, slider_velocity=None, slider_acceleration=None,
+        coupler_angle=None, coupler_rate=None,
+        contact_phase=(ms[:, 0:2 * J:2] > 0.5).astype(np.int8),
+        crank_work=ys[:, 2 * n].copy(), mechanism=linkage, backend="reduced", stats=stats,
+        peaks=peaks, joints=tuple(joints), reactions=reactions, shaking_force=shaking,
+        coordinates={c: ys[:, i].copy() for i, c in enumerate(model.COORDINATES)},
+        rates={c: ys[:, n + i].copy() for i, c in enumerate(model.COORDINATES)},
+        accelerations={c: outs[:, col[f"{c}.acc"]].copy() for c in model.COORDINATES},
+    )

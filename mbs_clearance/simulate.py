@@ -6,6 +6,7 @@ import importlib
 from dataclasses import dataclass
 
 from ._checks import check_int
+from .linkage import Linkage
 from .mechanism import SliderCrank
 from .trajectory import Trajectory
 
@@ -42,9 +43,16 @@ def _backend(name: str) -> Backend:
     return BACKENDS[name]
 
 
+#: the models of a `Linkage` (generated from its description), by backend name
+LINKAGE_BACKENDS: dict[str, Backend] = {
+    "reduced": Backend("mbs_clearance.linkage_model", "simulate_linkage", "peak_linkage",
+                       "the model generated from the description, compiled (numba)"),
+}
+
+
 def _check(mech, revolutions, name="revolutions") -> int:
-    if not isinstance(mech, SliderCrank):
-        raise ValueError(f"mech must be a SliderCrank; got {type(mech).__name__}")
+    if not isinstance(mech, (SliderCrank, Linkage)):
+        raise ValueError(f"mech must be a SliderCrank or a Linkage; got {type(mech).__name__}")
     return check_int(name, revolutions, 1)
 
 
@@ -54,9 +62,11 @@ def simulate(mech: SliderCrank, revolutions: int = 4, backend: str = "reduced",
 
     Parameters
     ----------
-    mech : SliderCrank
+    mech : SliderCrank or Linkage
+        A `Linkage` (e.g. from `mbs_clearance.cases`) runs the model generated from its
+        description (backend "reduced"); its Trajectory has per-joint series.
     revolutions : int
-        Number of full crank revolutions (>= 1).
+        Number of full crank (drive) revolutions (>= 1).
     backend : str
         A key of `BACKENDS`: "reduced" (default), "exudyn" or "ideal".
     **options
@@ -92,6 +102,11 @@ def _call(backend: str, attr: str, mech, revolutions, options: dict,
     validates the options' values)."""
     be = _backend(backend)
     revolutions = _check(mech, revolutions, name)
+    if isinstance(mech, Linkage):
+        if backend not in LINKAGE_BACKENDS:
+            raise ValueError(f"backend must be one of {sorted(LINKAGE_BACKENDS)} for a Linkage "
+                             f"(the {backend!r} backend takes a SliderCrank); got {backend!r}")
+        be = LINKAGE_BACKENDS[backend]
     module = importlib.import_module(be.module)
     allowed = getattr(module, "OPTION_NAMES", None)
     if allowed is not None:

@@ -61,7 +61,16 @@ SERIES: dict[str, tuple[str, int]] = {
 
 @dataclass(frozen=True)
 class Trajectory:
-    """Time series of one simulation of a `SliderCrank`.
+    """Time series of one simulation of a `SliderCrank` or a `Linkage`.
+
+    For a `Linkage` (``traj.linkage`` is not None) the per-joint series have a joint axis
+    in the order of ``joints`` (the clearance joints): contact_force, penetration and
+    contact_phase (n, J), eccentricity (n, J, 2); base_force is the monitored ground joint's
+    reaction (the shaking force when the description monitors none), crank_moment the drive
+    moment, crank_work the drive's work; ``reactions`` holds every ground joint's force on
+    the ground by joint name, ``shaking_force`` their sum, ``coordinates``, ``rates`` and
+    ``accelerations`` the minimal coordinates by name. The slider-crank series
+    (slider_position ... coupler_rate) are None there.
 
     Attributes
     ----------
@@ -88,17 +97,34 @@ class Trajectory:
     contact_force: np.ndarray
     penetration: np.ndarray
     eccentricity: np.ndarray
-    slider_position: np.ndarray
-    slider_velocity: np.ndarray
-    slider_acceleration: np.ndarray
-    coupler_angle: np.ndarray
-    coupler_rate: np.ndarray
+    slider_position: np.ndarray | None
+    slider_velocity: np.ndarray | None
+    slider_acceleration: np.ndarray | None
+    coupler_angle: np.ndarray | None
+    coupler_rate: np.ndarray | None
     contact_phase: np.ndarray
     crank_work: np.ndarray
-    mechanism: SliderCrank
+    mechanism: Any
     backend: str
     stats: dict[str, Any] = field(default_factory=dict)
     peaks: np.ndarray | None = None
+    joints: tuple[str, ...] | None = None
+    reactions: dict[str, np.ndarray] | None = None
+    shaking_force: np.ndarray | None = None
+    coordinates: dict[str, np.ndarray] | None = None
+    rates: dict[str, np.ndarray] | None = None
+    accelerations: dict[str, np.ndarray] | None = None
+
+    @property
+    def linkage(self):
+        """The simulated `Linkage`, or None for a `SliderCrank`."""
+        return None if isinstance(self.mechanism, SliderCrank) else self.mechanism
+
+    def _drive(self) -> tuple[float, float]:
+        m = self.mechanism
+        if isinstance(m, SliderCrank):
+            return m.crank_speed, m.initial_crank_angle
+        return m.drive.speed, m.drive.initial_angle
 
     # ------------------------------------------------------------------ derived outputs
     @property
@@ -109,8 +135,8 @@ class Trajectory:
     @property
     def crank_angle(self) -> np.ndarray:
         """theta2 = omega2 t + theta20 in rad, shape (n,)."""
-        m = self.mechanism
-        return m.crank_speed * self.t + m.initial_crank_angle
+        speed, angle = self._drive()
+        return speed * self.t + angle
 
     @property
     def revolutions(self) -> int:
@@ -151,6 +177,8 @@ class Trajectory:
         """Write to ``.npz`` (all data) or ``.csv`` (series, metadata in a comment line)."""
         path = Path(path)
         meta = self._meta()
+        if self.linkage is not None:
+            return _save_linkage(self, path, meta)
         if path.suffix == ".npz":
             arrays = {name: getattr(self, name) for name in SERIES}
             if self.peaks is not None:
@@ -166,7 +194,8 @@ class Trajectory:
 
     def _meta(self) -> dict[str, Any]:
         stats = {k: (v.item() if isinstance(v, np.generic) else v) for k, v in self.stats.items()}
-        meta = {"mechanism": self.mechanism.to_dict(), "backend": self.backend, "stats": stats}
+        key = "mechanism" if self.linkage is None else "linkage"
+        meta = {key: self.mechanism.to_dict(), "backend": self.backend, "stats": stats}
         if self.peaks is not None:
             meta["peaks"] = [float(p) for p in self.peaks]
         return meta
@@ -195,16 +224,25 @@ def annotate(traj: Trajectory) -> Trajectory:
     - ``periodic`` (True, False or None) and ``periodicity_note``: see `periodicity`.
     """
     m = traj.mechanism
-    pen = float(np.max(traj.penetration, initial=-np.inf)) if len(traj.t) else -np.inf
-    pen = max(pen, 0.0)
-    ratio = pen / m.journal_radius
-    traj.stats["max_penetration_clearance"] = pen / m.clearance
+    if traj.linkage is not None:
+        # the joint with the largest penetration relative to its journal radius
+        radii = np.array([j.journal_radius for j in m.clearance_joints])
+        clear = np.array([j.clearance for j in m.clearance_joints])
+        pens = np.maximum(np.max(traj.penetration, axis=0, initial=0.0), 0.0)
+        k = int(np.argmax(pens / radii))
+        pen, radius, clearance = float(pens[k]), radii[k], clear[k]
+    else:
+        pen = float(np.max(traj.penetration, initial=-np.inf)) if len(traj.t) else -np.inf
+        pen = max(pen, 0.0)
+        radius, clearance = m.journal_radius, m.clearance
+    ratio = pen / radius
+    traj.stats["max_penetration_clearance"] = pen / clearance
     traj.stats["max_penetration_radius"] = ratio
     traj.stats["penetration_meaningless"] = bool(ratio > PENETRATION_LIMIT)
     if ratio > PENETRATION_LIMIT:
         warnings.warn(
             f"the journal penetrates the bearing by {pen:.3g} m = {ratio:.3g} journal radii "
-            f"({pen / m.clearance:.4g} clearances), more than {PENETRATION_LIMIT:g} R_J: the "
+            f"({pen / clearance:.4g} clearances), more than {PENETRATION_LIMIT:g} R_J: the "
             "contact law does not hold there and the result is physically meaningless "
             "(lower the crank speed or raise the contact stiffness)", PhysicsWarning,
             stacklevel=3)
@@ -229,6 +267,15 @@ def boundary_states(traj: Trajectory) -> np.ndarray | None:
                                                   len(traj.t) - 1)] - times))
     if np.any(near > 1e-3 * m.period):
         return None
+    if traj.linkage is not None:
+        # every joint's eccentricity in its clearances, every rate in drive speed x the
+        # smallest clearance (angle rates times the linkage's length scale)
+        c, w = m.min_clearance, m.drive.speed
+        cols = [traj.eccentricity[:, k, i] / j.clearance
+                for k, j in enumerate(m.clearance_joints) for i in range(2)]
+        cols += [v * (m.length_scale if name.endswith(".angle") else 1.0) / (w * c)
+                 for name, v in traj.rates.items()]
+        return np.column_stack([np.interp(times, traj.t, col) for col in cols])
     c, w = m.clearance, m.crank_speed
     cols = (traj.eccentricity[:, 0] / c, traj.eccentricity[:, 1] / c,
             traj.slider_velocity / (w * c), traj.coupler_rate * m.coupler_length / (w * c))
@@ -260,7 +307,11 @@ def periodicity(traj: Trajectory) -> tuple[bool | None, str]:
     m = traj.mechanism
     rtol = traj.stats.get("rtol") if traj.backend != "exudyn" else None
     rtol = rtol if isinstance(rtol, float) else 0.0
-    tol = max(PERIODIC_TOL, 10 * rtol * (m.crank_length + m.coupler_length) / m.clearance)
+    if traj.linkage is not None:
+        reach, clearance = m.length_scale, m.min_clearance
+    else:
+        reach, clearance = m.crank_length + m.coupler_length, m.clearance
+    tol = max(PERIODIC_TOL, 10 * rtol * reach / clearance)
     if tol > NOISE_LIMIT:
         return None, (f"undetermined: at rtol {rtol:g} the integration noise of the journal "
                       f"position ({tol / 10:.2g} clearances) is too large to tell a periodic "
@@ -354,12 +405,19 @@ def load_trajectory(path: str | Path) -> Trajectory:
         if path.suffix == ".npz":
             with np.load(path, allow_pickle=False) as data:
                 meta = json.loads(str(data["meta"]))
+                if isinstance(meta, dict) and "linkage" in meta:
+                    meta["_columns"] = {k: np.asarray(data[k]) for k in data.files
+                                        if k not in ("meta", "peaks")}
+                    return _load_linkage(path, meta)
                 series = {name: np.asarray(data[name]) for name in SERIES}
         elif path.suffix == ".csv":
             with open(path) as fh:
                 meta = json.loads(fh.readline()[1:].strip())
                 header = fh.readline().strip().split(",")
             table = np.loadtxt(path, delimiter=",", skiprows=2, ndmin=2)
+            if isinstance(meta, dict) and "linkage" in meta:
+                meta["_columns"] = {name: table[:, k] for k, name in enumerate(header)}
+                return _load_linkage(path, meta)
             series = {}
             for name, (_, ncol) in SERIES.items():
                 if ncol == 1:
@@ -374,6 +432,8 @@ def load_trajectory(path: str | Path) -> Trajectory:
         if isinstance(exc, ValueError) and "must end in" in str(exc):
             raise
         raise ValueError(f"cannot read trajectory file {str(path)!r}: {exc}") from exc
+    if isinstance(meta, dict) and "linkage" in meta:
+        return _load_linkage(path, meta)
     peaks = meta.get("peaks") if isinstance(meta, dict) else None
     try:
         peaks = None if peaks is None else np.asarray(peaks, dtype=float)
@@ -388,6 +448,99 @@ def load_trajectory(path: str | Path) -> Trajectory:
     traj = Trajectory(**series, mechanism=mech, backend=meta["backend"],
                       stats=meta.get("stats", {}), peaks=peaks)
     _check_peaks(path, traj)
+    return traj
+
+
+# ---------------------------------------------------------------------------- linkages
+
+def linkage_columns(traj: Trajectory) -> dict[str, np.ndarray]:
+    """The series of a linkage trajectory as named 1-D columns (units in brackets): what
+    .csv and .npz files of a linkage hold."""
+    cols = {"t[s]": traj.t, "base_force_x[N]": traj.base_force[:, 0],
+            "base_force_y[N]": traj.base_force[:, 1], "crank_moment[N m]": traj.crank_moment,
+            "crank_work[J]": traj.crank_work, "shaking_force_x[N]": traj.shaking_force[:, 0],
+            "shaking_force_y[N]": traj.shaking_force[:, 1]}
+    for k, j in enumerate(traj.joints):
+        cols[f"contact_force.{j}[N]"] = traj.contact_force[:, k]
+        cols[f"penetration.{j}[m]"] = traj.penetration[:, k]
+        cols[f"eccentricity.{j}_x[m]"] = traj.eccentricity[:, k, 0]
+        cols[f"eccentricity.{j}_y[m]"] = traj.eccentricity[:, k, 1]
+        cols[f"contact_phase.{j}[-]"] = traj.contact_phase[:, k]
+    for g, r in traj.reactions.items():
+        cols[f"reaction.{g}_x[N]"] = r[:, 0]
+        cols[f"reaction.{g}_y[N]"] = r[:, 1]
+    for kind, series in (("coordinate", traj.coordinates), ("rate", traj.rates),
+                         ("acceleration", traj.accelerations)):
+        for c, v in series.items():
+            cols[f"{kind}.{c}"] = v
+    return cols
+
+
+def _save_linkage(traj: Trajectory, path: Path, meta: dict) -> Path:
+    cols = linkage_columns(traj)
+    if path.suffix == ".npz":
+        extra = {} if traj.peaks is None else {"peaks": traj.peaks}
+        np.savez_compressed(path, meta=np.array(json.dumps(meta)), **cols, **extra)
+    elif path.suffix == ".csv":
+        np.savetxt(path, np.column_stack(list(cols.values())), delimiter=",",
+                   header="# " + json.dumps(meta) + "\n" + ",".join(cols), comments="",
+                   fmt="%.17g")
+    else:
+        raise ValueError(f"trajectory file must end in .npz or .csv; got {str(path)!r}")
+    return path
+
+
+def _load_linkage(path: Path, meta: dict) -> Trajectory:
+    """A linkage trajectory from its columns (`linkage_columns`) and metadata."""
+    from .linkage import Linkage
+
+    try:
+        linkage = Linkage.from_dict(meta["linkage"])
+    except (TypeError, ValueError) as exc:
+        raise _fail(path, f"bad linkage: {exc}") from exc
+    cols = meta.pop("_columns")
+    joints = tuple(j.name for j in linkage.clearance_joints)
+    try:
+        from .generate import load_model
+
+        model = load_model(linkage)
+        n = len(cols["t[s]"])
+        for name, v in cols.items():
+            if v.shape != (n,) or not np.all(np.isfinite(v)):
+                raise _fail(path, f"column {name!r} has shape {v.shape} or non-finite values")
+
+        def stack(prefix, names, suffix=""):
+            return np.column_stack([cols[f"{prefix}.{x}{suffix}"] for x in names])
+
+        peaks = meta.get("peaks")
+        traj = Trajectory(
+            t=cols["t[s]"],
+            base_force=np.column_stack([cols["base_force_x[N]"], cols["base_force_y[N]"]]),
+            crank_moment=cols["crank_moment[N m]"],
+            contact_force=stack("contact_force", joints, "[N]"),
+            penetration=stack("penetration", joints, "[m]"),
+            eccentricity=np.stack([stack("eccentricity", joints, "_x[m]"),
+                                   stack("eccentricity", joints, "_y[m]")], axis=2),
+            slider_position=None, slider_velocity=None, slider_acceleration=None,
+            coupler_angle=None, coupler_rate=None,
+            contact_phase=stack("contact_phase", joints, "[-]").astype(np.int8),
+            crank_work=cols["crank_work[J]"], mechanism=linkage, backend=meta["backend"],
+            stats=meta.get("stats", {}),
+            peaks=None if peaks is None else np.asarray(peaks, dtype=float),
+            joints=joints,
+            reactions={g: np.column_stack([cols[f"reaction.{g}_x[N]"],
+                                           cols[f"reaction.{g}_y[N]"]])
+                       for g in model.GROUND_JOINTS},
+            shaking_force=np.column_stack([cols["shaking_force_x[N]"],
+                                           cols["shaking_force_y[N]"]]),
+            coordinates={c: cols[f"coordinate.{c}"] for c in model.COORDINATES},
+            rates={c: cols[f"rate.{c}"] for c in model.COORDINATES},
+            accelerations={c: cols[f"acceleration.{c}"] for c in model.COORDINATES},
+        )
+    except KeyError as exc:
+        raise _fail(path, f"missing column {exc}") from exc
+    if np.any(np.diff(traj.t) <= 0):
+        raise _fail(path, "times 't' are not strictly increasing")
     return traj
 
 

@@ -2,5 +2,5 @@
 tools/generate_models.py; do not edit). MODULES maps a structure digest to a module name."""
 
 MODULES: dict[str, str] = {
-    'deff278815934bf12621b2e88b4e1f7501c2d1534848eb0fdffd16acdd332d93': 'paper_slider_crank',
+    'a11773ec455b798fd4d1e067a0b8e3c33ddb21a9d927972849ee1b1acb3ce433': 'paper_slider_crank',
 }

@@ -10,11 +10,13 @@ parameters change). Kernels of protocol v2: rhs, event, on_event, monitor.
 """
 # ruff: noqa
 import math
+import sys
 
 import numba as nb
 import numpy as np
 
 from mbs_clearance._trig import sincos
+from mbs_clearance.integrator import integrate
 from mbs_clearance.generate.runtime import (
     ACTION_SIG,
     EVENT_SIG,
@@ -28,8 +30,8 @@ from mbs_clearance.generate.runtime import (
 
 LINKAGE = "paper_slider_crank"
 STRUCTURE = "{\"bodies\": [[\"crank\", [\"pin\", \"pivot\"]], [\"coupler\", [\"crank_end\", \"slider_end\"]], [\"slider\", [\"pin\"]]], \"clearance_joints\": [[\"coupler_slider\", \"coupler\", \"slider_end\", \"slider\", \"pin\"]], \"drive\": \"crank_pivot\", \"ground_points\": [\"crank_pivot\", \"slider_axis\"], \"joints\": [[\"revolute\", \"crank_pivot\", \"ground\", \"crank_pivot\", \"crank\", \"pivot\"], [\"revolute\", \"crank_coupler\", \"crank\", \"pin\", \"coupler\", \"crank_end\"], [\"prismatic\", \"slider_guide\", \"ground\", \"slider_axis\", \"slider\", \"pin\"]], \"monitor_joint\": \"crank_pivot\"}"
-STRUCTURE_DIGEST = "deff278815934bf12621b2e88b4e1f7501c2d1534848eb0fdffd16acdd332d93"
-GENERATOR_VERSION = "1"
+STRUCTURE_DIGEST = "a11773ec455b798fd4d1e067a0b8e3c33ddb21a9d927972849ee1b1acb3ce433"
+GENERATOR_VERSION = "9a6198b6adf9fe8e"
 
 #: dotted names of the entries of p (without the constants)
 PARAMETERS = (
@@ -102,6 +104,7 @@ N_OUT = len(OUT_COLUMNS)
 MONITOR_COLUMN = 5
 MOMENT_COLUMN = 11
 ACC_COLUMN = 12
+_THIS = sys.modules[__name__]
 
 
 @nb.njit(**KERNEL)
@@ -498,3 +501,11 @@ def closure_rate(t, q, p):
     res[0] = C0*k9 + S0*k8
     res[1] = C0*k10 + S0*k9
     return res
+
+
+@nb.njit(cache=True, error_model="numpy", nogil=True)
+def integrate_model(y0, p, edges, settings, coefficients):
+    """`integrator.integrate` bound to this module's kernels (compiled once, cached)."""
+    # the kernels are looked up as module attributes: numba binds them as constants
+    return integrate(_THIS.rhs, _THIS.event, _THIS.on_event, _THIS.monitor, y0, p, edges,
+                     settings, coefficients)

@@ -2,11 +2,11 @@
 
 The checked-in modules of the named cases live in mbs_clearance/_generated (listed in its
 ``MODULES``, digest -> module name; `tools/generate_models.py` rewrites them, a test fails when
-one is stale). Any other structure is generated on first use into
-``mbs_clearance/_generated/__pycache__/models/`` (or, where the package is read-only, the
-user's cache directory, keyed also by the digest of the library's sources: numba's own cache
-of those files does not see edits of the library), as ``model_<digest[:16]>.py``, written
-atomically. The kernels of a module inside the package are cached by the package's numba
+one is stale). Any other structure is generated on first use into the first writable of
+``$MBS_CLEARANCE_MODEL_DIR/<library digest>``, ``mbs_clearance/_generated/__pycache__/models``
+and the user's cache directory (keyed by the library digest too: numba's own cache of files
+outside the package does not see edits of the library), as ``model_<digest[:16]>.py``,
+written atomically. The kernels of a module inside the package are cached by the package's numba
 cache scheme (_cache.py), which keys them by the library's sources.
 """
 
@@ -44,17 +44,19 @@ def generate_module(linkage: Linkage) -> str:
 
 
 def _cache_dirs(digest: str) -> list[Path]:
-    dirs = []
-    env = os.environ.get("MBS_CLEARANCE_MODEL_DIR")
-    if env:
-        dirs.append(Path(env))
-    dirs.append(_PACKAGE / "_generated" / "__pycache__" / "models")
     from numba.misc.appdirs import AppDirs
 
     from .. import _cache
 
+    # outside the package numba's own cache applies, which does not see edits of the
+    # library: those directories are keyed by the library's digest too
     lib = _cache._PACKAGES.get(str(_PACKAGE))
     tag = lib.digest[:12] if lib is not None else "unversioned"
+    dirs = []
+    env = os.environ.get("MBS_CLEARANCE_MODEL_DIR")
+    if env:
+        dirs.append(Path(env) / tag)
+    dirs.append(_PACKAGE / "_generated" / "__pycache__" / "models")
     dirs.append(Path(AppDirs(appname="mbs_clearance", appauthor=False).user_cache_dir)
                 / "models" / tag)
     return dirs

@@ -24,10 +24,20 @@ from .derive import Derivation
 
 __all__ = ["render", "GENERATOR_VERSION", "structure_digest"]
 
-#: bump when the generated code changes for the same structure (the disk cache key)
-GENERATOR_VERSION = "1"
-
 _TEMPLATE = Path(__file__).with_name("module.py.jinja")
+
+
+def _generator_version() -> str:
+    """Digest of the generator's own sources (derivation, writer, template): any edit of
+    them changes the cache key of every generated module."""
+    h = hashlib.sha256()
+    for path in (Path(__file__).with_name("derive.py"), Path(__file__), _TEMPLATE):
+        h.update(path.read_bytes().replace(b"\r\n", b"\n") + b"\0")
+    return h.hexdigest()[:16]
+
+
+#: part of the cache key: the generated code changes with the generator's sources
+GENERATOR_VERSION = _generator_version()
 
 
 def structure_digest(structure: dict) -> str:

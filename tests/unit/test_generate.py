@@ -285,3 +285,74 @@ def test_user_description_cached_by_structure(tmp_path, monkeypatch):
     assert load_model(lk.with_parameter("crank.mass", 0.5)) is model
     assert structure_digest(lk.replace(monitor_joint="hanger").structure()) != digest
     assert loader._current(model_path(lk), digest)
+
+
+def test_coupled_mass_matrix_chain():
+    """A chain (crank - link - link, the last link's tip in a ground bearing): a full,
+    state-dependent mass matrix, solved by the unrolled Cholesky factorisation; energy
+    balance in free flight and elastic contact, closure at the start."""
+    lk = Linkage(
+        name="chain",
+        bodies=(Body("crank", 0.2, 2e-4, {"o": (-0.02, 0.0), "a": (0.02, 0.0)}),
+                Body("l1", 0.3, 4e-4, {"a": (-0.06, 0.0), "b": (0.06, 0.01)}),
+                Body("l2", 0.25, 3e-4, {"b": (-0.05, 0.0), "c": (0.05, 0.0)})),
+        joints=(Revolute("drive_pin", GROUND, "o", "crank", "o"),
+                Revolute("ab", "crank", "a", "l1", "a"),
+                Revolute("bc", "l1", "b", "l2", "b")),
+        clearance_joints=(ClearanceJoint("tip", "l2", "c", GROUND, "t", 0.004, 0.0039,
+                                         restitution=1.0),),
+        drive=Drive("drive_pin", 15.0),
+        ground_points={"o": (0.0, 0.0), "t": (0.12, 0.08)},
+        assembly={"l1.angle": 0.8, "l2.angle": -0.5},
+    )
+    source = generate_module(lk)
+    assert "math.sqrt(m_0_0" in source      # the Cholesky path
+    model = load_model(lk)
+    p = pack_parameters(lk, model)
+    y0 = initial_state(lk, model, p)
+    assert np.abs(model.closure(0.0, y0[:2], p)).max() < 1e-15
+    rng = np.random.default_rng(11)
+    for mode in (0.0, 1.0):
+        for e1, e2 in _energy_rate_check(lk, mode, rng):
+            assert min(e1, e2) < 1e-7
+
+
+def test_trajectory_along_reduced_run(tmp_path):
+    """The glue's Trajectory from the hand-written model's recorded run (same state layout:
+    coupler angle, slider position, their rates, the drive's work): the generated outputs
+    equal reduced.py's series along a real trajectory with impacts; save/load round trip."""
+    from mbs_clearance.linkage_model import trajectory_from_run
+    from mbs_clearance.trajectory import annotate, load_trajectory
+
+    mech = SliderCrank()
+    lk = paper_slider_crank()
+    model = load_model(lk)
+    ts, ys, ms, peaks, _, counters, outs, pr = reduced.run(mech, 2)
+    ref = reduced.trajectory_from_states(mech, ts, ys, ms, pr, {}, peaks, outs)
+    p = pack_parameters(lk, model)
+    assert initial_state(lk, model, p) == pytest.approx(ys[0], abs=1e-15)
+    traj = annotate(trajectory_from_run(lk, model, ts, ys, ms, p, {"rtol": 1e-7}, peaks))
+    assert traj.contact_force.shape == (len(ts), 1)
+    assert traj.eccentricity.shape == (len(ts), 1, 2)
+    scale = np.abs(ref.base_force).max()
+    assert np.abs(traj.base_force - ref.base_force).max() < 1e-12 * scale
+    assert np.abs(traj.reactions["crank_pivot"] - ref.base_force).max() < 1e-12 * scale
+    assert np.abs(traj.crank_moment - ref.crank_moment).max() < 1e-12 * scale * 0.17
+    assert np.abs(traj.contact_force[:, 0] - ref.contact_force).max() < 1e-12 * scale
+    assert np.abs(traj.eccentricity[:, 0] - ref.eccentricity).max() < 5e-16
+    assert np.array_equal(traj.contact_phase[:, 0], ref.contact_phase)
+    assert np.array_equal(traj.crank_work, ref.crank_work)
+    assert np.abs(traj.accelerations["slider_guide.s"] - ref.slider_acceleration).max() < (
+        1e-12 * np.abs(ref.slider_acceleration).max())
+    assert traj.stats["max_penetration_clearance"] == pytest.approx(
+        ref.stats.get("max_penetration_clearance", annotate(ref).stats[
+            "max_penetration_clearance"]), rel=1e-9)
+    assert traj.max_base_force(2) == ref.max_base_force(2)
+    for suffix in (".npz", ".csv"):
+        back = load_trajectory(traj.save(tmp_path / f"t{suffix}"))
+        assert back.mechanism == lk and back.joints == traj.joints
+        assert np.array_equal(back.contact_force, traj.contact_force)
+        assert np.array_equal(back.reactions["slider_guide"], traj.reactions["slider_guide"])
+        assert np.array_equal(back.coordinates["coupler.angle"], traj.coordinates[
+            "coupler.angle"])
+        assert np.array_equal(back.peaks, traj.peaks)
