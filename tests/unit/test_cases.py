@@ -190,3 +190,33 @@ def test_case_description_round_trips_through_json(name, tmp_path):
     path = tmp_path / f"{name}.json"
     path.write_text(json.dumps(linkage.to_dict()))
     assert Linkage.from_file(path) == linkage
+
+
+def test_cases_start_with_every_journal_centred():
+    """The glue's initial state (Newton on the generated closure) is the ideal reference's
+    pose at t = 0: coordinates to 1e-12, rates to 1e-9 relative."""
+    from mbs_clearance.generate import load_model
+    from mbs_clearance.linkage_model import initial_state, pack_parameters
+    from validation.ideal_linkage import from_linkage, ideal_outputs
+
+    for lk in (four_bar(), slider_crank_two_clearances()):
+        model = load_model(lk)
+        p = pack_parameters(lk, model)
+        y0 = initial_state(lk, model, p)
+        assert np.max(np.abs(model.closure(0.0, y0[:model.N_Q], p))) < 1e-14
+        ref = ideal_outputs(from_linkage(lk), np.array([0.0]))
+        names = ("crank", "coupler", "rocker" if lk.name == "four_bar" else "slider")
+        for k, c in enumerate(model.COORDINATES):
+            body, _, coord = c.rpartition(".")
+            if coord == "angle":
+                i = names.index(body)
+                assert y0[k] == pytest.approx(ref["angles"][0, i], abs=1e-12)
+                assert y0[model.N_Q + k] == pytest.approx(ref["rates"][0, i], rel=1e-9,
+                                                          abs=1e-9 * lk.drive.speed)
+            elif coord in ("x", "y"):
+                i = names.index(body)
+                assert y0[k] == pytest.approx(ref["centres"][0, i, "xy".index(coord)],
+                                              abs=1e-14)
+            else:
+                assert y0[k] == pytest.approx(ref["slider_position"][0], abs=1e-14)
+        assert math.isfinite(y0[-1]) and y0[-1] == 0.0
