@@ -50,14 +50,18 @@ def run(linkage, revolutions, **options):
 
 
 def window_means(t, values, edges):
-    """Time averages of `values` (n, ...) over the windows [edges[k], edges[k+1]] by the
-    trapezoidal rule on the samples inside (samples lie on the window edges: the glue records
-    every step and the window edges are steps)."""
+    """Time averages of `values` (n,) or (n, k) over the windows [edges[k], edges[k+1]]:
+    trapezoidal rule on the samples inside, the window's ends linearly interpolated."""
+    values = np.asarray(values, dtype=float)
+    flat = values.reshape(len(t), -1)
     out = []
     for a, b in zip(edges[:-1], edges[1:]):
-        m = (t >= a - 1e-15) & (t <= b + 1e-15)
-        out.append(np.trapezoid(values[m], t[m], axis=0) / (t[m][-1] - t[m][0]))
-    return np.array(out)
+        inside = (t > a) & (t < b)
+        tw = np.concatenate([[a], t[inside], [b]])
+        vw = np.stack([np.concatenate([[np.interp(a, t, v)], v[inside], [np.interp(b, t, v)]])
+                       for v in flat.T], axis=1)
+        out.append(np.trapezoid(vw, tw, axis=0) / (b - a))
+    return np.array(out).reshape((len(edges) - 1,) + values.shape[1:])
 
 
 @pytest.fixture(scope="module")
