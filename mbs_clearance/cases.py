@@ -128,7 +128,7 @@ CASE_PARAMETERS: dict[str, dict[str, tuple[Any, str, str]]] = {
         "crank_inertia": (None, "kg m^2", "None: uniform rod m L^2/12 (same source, J1)"),
         "coupler_inertia": (None, "kg m^2", "None: uniform rod m L^2/12 (J2)"),
         "rocker_inertia": (None, "kg m^2", "None: uniform rod m L^2/12 (J3)"),
-        "crank_speed": (60.0 * RPM, "rad/s", "assumed: 60 rpm (the source tracks a "
+        "crank_speed": (10.0 * RPM, "rad/s", "assumed: 10 rpm (the source tracks a "
                         "sinusoidal crank angle, no constant speed)"),
         "initial_crank_angle": (math.pi / 2, "rad", "the source's initial crank angle"),
         "bearing_radius": (0.06, "m", "same source (r2, r4, r6)"),
@@ -274,7 +274,7 @@ def four_bar(**overrides: Any) -> Linkage:
     1 kg each, uniform rods (J = m l^2 / 12), bearing radius 0.06 m, initial crank angle
     pi/2, gravity 9.81 m/s^2. Grashof: 1 + 4 < 3 + 2.5 with the crank shortest: a
     crank-rocker. Assumed here (the source drives the crank along a sinusoid, has 5 mm
-    clearances in three joints, and no material): constant crank speed 60 rpm, one
+    clearances in three joints, and no material): constant crank speed 10 rpm, one
     clearance joint (coupler-rocker, journal on the rocker) of 0.1 mm, steel E = 207 GPa,
     nu = 0.3, restitution 0.9 (docs/cases.md says why).
 
