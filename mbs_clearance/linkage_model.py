@@ -162,3 +162,138 @@ def trajectory_from_run(linkage: Linkage, model, ts, ys, ms, p, stats, peaks, ou
         rates={c: ys[:, n + i].copy() for i, c in enumerate(model.COORDINATES)},
         accelerations={c: outs[:, col[f"{c}.acc"]].copy() for c in model.COORDINATES},
     )
+
+
+# ---------------------------------------------------------------------------- runs
+
+#: options of `simulate(linkage, backend="reduced")` (keywords of `run` meant for users)
+OPTION_NAMES = ("rtol", "atol", "method", "max_steps", "n_samples", "h_max", "h0",
+                "event_tol", "max_memory")
+
+#: the event search looks closer within this fraction of the smallest clearance of a wall
+#: (as reduced.EVENT_MARGIN)
+EVENT_MARGIN = 0.05
+
+#: default `max_steps` (step attempts) of a run
+DEFAULT_MAX_STEPS = 5_000_000
+
+#: golden-section iterations per refined peak candidate (as the hand-written model)
+REFINE_ITERS = 24
+
+
+def _tolerances(linkage, model, rtol, atol):
+    from ._checks import check_real
+
+    rtol = DEFAULT_RTOL if rtol is None else check_real("rtol", rtol, 1e-14, 1e-2)
+    full = default_atol(linkage, model, rtol)
+    if atol is not None:
+        try:
+            arr = np.broadcast_to(np.asarray(atol, dtype=float), (model.N_STATE,)).copy()
+        except (TypeError, ValueError):
+            arr = None
+        if (arr is None or not np.all(np.isfinite(arr)) or np.any(arr <= 0)
+                or isinstance(atol, (bool, np.bool_))):
+            raise ValueError(f"atol must be a finite number > 0 or {model.N_STATE} of them "
+                             f"(one per state component {list(model.COORDINATES)}, their "
+                             f"rates, the drive's work); got {atol!r}")
+        full[:model.N_STATE] = arr
+    return rtol, full
+
+
+def run(linkage: Linkage, revolutions: int = 4, *, rtol: float | None = None,
+        atol=None, method: str = "dopri5", record: bool = True,
+        max_steps: int = DEFAULT_MAX_STEPS, n_samples: int = 1, h_max: float | None = None,
+        h0: float = 0.0, event_tol: float | None = None, max_memory: int | None = None):
+    """Integrate `linkage`'s generated model over `revolutions` drive revolutions from the
+    centred start; returns (model, ts, ys, ms, peaks, peak_times, counters dict, outs, p).
+    Every option is checked first (ValueError naming it and its range); a run whose record
+    would exceed `max_memory` bytes stops there with `MemoryLimitError`."""
+    from . import integrator
+    from ._checks import (
+        MemoryLimitError,
+        check_bool,
+        check_choice,
+        check_int,
+        check_max_memory,
+        check_real,
+        format_bytes,
+    )
+
+    if not hasattr(integrator, "make_settings"):
+        raise NotImplementedError("simulating a Linkage needs the integrator's kernel protocol "
+                                  "v2 (several switching functions; branch s7-int)")
+    from .integrator import COUNTERS, METHODS, RESULTS, make_settings
+
+    if not isinstance(linkage, Linkage):
+        raise ValueError(f"linkage must be a Linkage; got {type(linkage).__name__}")
+    revolutions = check_int("revolutions", revolutions, 1)
+    check_choice("method", method, METHODS)
+    record = check_bool("record", record)
+    max_steps = check_int("max_steps", max_steps, 1)
+    n_samples = check_int("n_samples (interior event samples per step)", n_samples, 0, 1000)
+    h0 = check_real("h0 (initial step; 0: automatic)", h0, 0.0, unit="s")
+    max_memory = check_max_memory(max_memory)
+    h_max = linkage.period / 8 if h_max is None else check_real(
+        "h_max (largest step)", h_max, 0.0, low_open=True, unit="s")
+    if event_tol is None:
+        # 1e-12 of the clearance, but not below the round-off of the journal positions
+        event_tol = max(1e-12 * linkage.min_clearance,
+                        8 * np.finfo(float).eps * linkage.length_scale)
+    else:
+        event_tol = check_real("event_tol (penetration tolerance of events)", event_tol, 0.0,
+                               low_open=True, unit="m")
+    model = load_model(linkage)
+    rtol, atol_arr = _tolerances(linkage, model, rtol, atol)
+    if rtol > 1e-4:
+        import warnings
+
+        from ._warnings import AccuracyWarning
+
+        warnings.warn(f"rtol {rtol:g} is too loose to resolve the contacts (looser than "
+                      f"1e-4: spurious contact events and peak forces wrong by any amount); "
+                      f"use rtol <= 1e-4, the default is {DEFAULT_RTOL:g}", AccuracyWarning,
+                      stacklevel=3)
+    p = pack_parameters(linkage, model)
+    y0 = initial_state(linkage, model, p)
+    edges = np.arange(revolutions + 1) * linkage.period
+    n_out = model.N_OUT if record else 0
+    row = 8 * (1 + model.N_STATE + model.N_MEM + n_out)
+    step_cap = max(1, (max_memory - 24 * len(edges)) // row) if record else max_steps
+    limit = min(max_steps, step_cap)
+    settings = make_settings(
+        rtol, atol_arr, 2 * model.N_Q, h0=h0, h_max=h_max, max_steps=limit, record=record,
+        event_tol=event_tol, event_margin=EVENT_MARGIN * linkage.min_clearance,
+        n_samples=n_samples, refine_iters=REFINE_ITERS, n_out=n_out, n_dense=2 * model.N_Q,
+        n_events=model.N_EVENTS, mem_start=model.MEM_START, n_mem=model.N_MEM)
+    ts, ys, ms, peaks, peak_t, counters, outs, status = model.integrate_model(
+        y0, p, edges, settings, METHODS[method].arrays())
+    status = RESULTS(int(status))
+    if status == RESULTS.max_steps and limit < max_steps:
+        raise MemoryLimitError(
+            f"the record of linkage {linkage.name!r} reached max_memory={max_memory} bytes "
+            f"({format_bytes(max_memory)}) at t = {ts[-1]:.6g} s, after {limit} steps; raise "
+            "max_memory or run fewer revolutions")
+    if status != RESULTS.success:
+        raise RuntimeError(f"integration of linkage {linkage.name!r} failed at about t = "
+                           f"{ts[-1] if len(ts) else float('nan'):.6g} s: {status.message()}")
+    stats = {k: int(v) for k, v in zip(COUNTERS, counters)}
+    stats.update(method=method, rtol=float(rtol))
+    return model, ts, ys, ms, peaks, peak_t, stats, outs, p
+
+
+def simulate_linkage(linkage: Linkage, revolutions: int = 4, **options):
+    """Simulate `linkage` with its generated model; a `Trajectory` of every accepted step
+    with per-joint series (see `Trajectory`), annotated (penetration, periodicity)."""
+    from .trajectory import annotate
+
+    model, ts, ys, ms, peaks, _, stats, outs, p = run(linkage, revolutions, record=True,
+                                                      **options)
+    traj = trajectory_from_run(linkage, model, ts, ys, ms, p, stats, peaks, outs)
+    return annotate(traj)
+
+
+def peak_linkage(linkage: Linkage, revolution: int = 4, **options) -> float:
+    """The monitored force's maximum in N over drive revolution `revolution` (1-based; the
+    monitored ground joint's |reaction|, or |shaking force|), recording nothing."""
+    peaks = run(linkage, revolution, record=False, **options)[4]
+    return float(peaks[revolution - 1])

@@ -225,3 +225,14 @@ def test_paper_case_overrides_and_defaults():
     assert paper_slider_crank() == from_slider_crank(SliderCrank())
     with pytest.raises(ValueError, match="unknown parameter name"):
         paper_slider_crank(crank_lenght=0.1)
+
+
+def test_simulate_refuses_other_backends_and_options_for_a_linkage():
+    from mbs_clearance import simulate
+
+    with pytest.raises(ValueError, match=r"backend must be one of \['reduced'\] for a Linkage"):
+        simulate(paper_slider_crank(), 4, backend="exudyn")
+    with pytest.raises(ValueError, match=r"unknown option\(s\) \['step_size'\]"):
+        simulate(paper_slider_crank(), 4, step_size=1e-6)
+    with pytest.raises(ValueError, match="mech must be a SliderCrank or a Linkage"):
+        simulate({"name": "x"}, 4)

@@ -1,0 +1,61 @@
+"""The paper case generated from its description against the hand-written reduced model.
+
+A/B in one process, alternating (hand-written, generated, hand-written, ...): the median of
+the per-pair time ratios generated / hand-written, for a full `simulate` (4 revolutions,
+every step recorded) and for the peak only (`peak_base_force`), at the default rtol; with the
+peaks and function evaluations of both (the same events, peaks within 1e-9).
+
+    python -m validation.benchmarks.linkage_speed [--repeats 41]
+
+Run it on a quiet machine (the lead's benchmark run); the target is a ratio <= 1.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+import numpy as np
+
+from mbs_clearance import SliderCrank, peak_base_force, simulate
+from mbs_clearance.cases import paper_slider_crank
+from validation.benchmarks.common import machine_summary
+
+
+def _pairs(fa, fb, repeats):
+    ratios, ta, tb = [], [], []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        fa()
+        t1 = time.perf_counter()
+        fb()
+        t2 = time.perf_counter()
+        ta.append(t1 - t0)
+        tb.append(t2 - t1)
+        ratios.append((t2 - t1) / (t1 - t0))
+    return float(np.median(ratios)), float(np.median(ta)), float(np.median(tb))
+
+
+def main(argv=None) -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--repeats", type=int, default=41)
+    args = parser.parse_args(argv)
+    mech, lk = SliderCrank(), paper_slider_crank()
+    ref, gen = simulate(mech, 4), simulate(lk, 4)        # compile / load, then compare
+    print(machine_summary())
+    print(f"rev-4 peak: hand-written {ref.max_base_force(4):.10g} N, generated "
+          f"{gen.max_base_force(4):.10g} N (relative difference "
+          f"{gen.max_base_force(4) / ref.max_base_force(4) - 1:.2e})")
+    print(f"nfev: hand-written {ref.stats['nfev']}, generated {gen.stats['nfev']}; events "
+          f"{ref.stats['nevent']}, {gen.stats['nevent']}")
+    for what, fa, fb in (
+            ("simulate, 4 revolutions", lambda: simulate(mech, 4), lambda: simulate(lk, 4)),
+            ("peak only, revolution 4", lambda: peak_base_force(mech, 4),
+             lambda: peak_base_force(lk, 4))):
+        ratio, ta, tb = _pairs(fa, fb, args.repeats)
+        print(f"{what:<26} hand-written {ta * 1e3:7.3f} ms, generated {tb * 1e3:7.3f} ms, "
+              f"median ratio of pairs {ratio:.3f}")
+
+
+if __name__ == "__main__":
+    main()
