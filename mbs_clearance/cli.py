@@ -34,7 +34,8 @@ from .optimize import (
 from .simulate import BACKENDS, peak_base_force, simulate
 from .trajectory import load_trajectory
 
-__all__ = ["main", "build_parser", "mechanism_from_args", "add_mechanism_options",
+__all__ = ["main", "build_parser", "mechanism_from_args", "linkage_from_args",
+           "add_mechanism_options", "case_override",
            "format_table3", "run_command", "Parser", "int_at_least", "positive_float",
            "finite_float", "add_force_option"]
 
@@ -209,6 +210,69 @@ def mechanism_from_args(args: argparse.Namespace) -> SliderCrank:
     return base.replace(**changes)
 
 
+def _case_lines() -> str:
+    """One line per named case: its name and the first line of its docstring."""
+    from .cases import CASE_SUMMARY, CASES
+
+    return "\n".join(f"  {name}: {CASE_SUMMARY.get(name, '')}" for name in sorted(CASES))
+
+
+def _override_value(text: str):
+    """A --set value: a number, 'none' (None: the case's derived value) or a word."""
+    if text.strip().lower() == "none":
+        return None
+    try:
+        return float(text)
+    except ValueError:
+        return text
+
+
+def case_override(text: str) -> tuple[str, object]:
+    """argparse type: NAME=VALUE."""
+    name, sep, value = text.partition("=")
+    if not sep or not name.strip() or not value.strip():
+        raise argparse.ArgumentTypeError(f"must be NAME=VALUE (an override of the --case, "
+                                         f"e.g. clearance=1e-4); got {text!r}")
+    return name.strip(), _override_value(value.strip())
+
+
+def _mechanism_options_given(args: argparse.Namespace) -> list[str]:
+    given = ["--config"] if getattr(args, "config", None) else []
+    given += ["--" + f.name.replace("_", "-") for f in dataclasses.fields(SliderCrank)
+              if getattr(args, f.name, None) is not None]
+    return given
+
+
+def linkage_from_args(args: argparse.Namespace):
+    """The `Linkage` of --case NAME (with its --set overrides) or --description FILE, or None
+    when neither is given (the SliderCrank options then apply). ValueError on bad input."""
+    case = getattr(args, "case", None)
+    description = getattr(args, "description", None)
+    overrides = getattr(args, "set", None) or []
+    if overrides and case is None:
+        raise ValueError("--set applies to a --case only (a --description file holds its own "
+                         "values)")
+    if case is None and description is None:
+        return None
+    given = _mechanism_options_given(args)
+    if given:
+        raise ValueError(f"the SliderCrank option(s) {', '.join(given)} apply to the paper's "
+                         f"slider-crank only, not to --{'case' if case else 'description'}; "
+                         f"change a case with --set NAME=VALUE")
+    if description is not None:
+        from .linkage import Linkage
+
+        return Linkage.from_file(description)
+    from .cases import CASES
+
+    changes = {}
+    for name, value in overrides:
+        if name in changes:
+            raise ValueError(f"--set {name} given twice")
+        changes[name] = value
+    return CASES[case](**changes)
+
+
 def _progress(message: str) -> None:
     """A note that work starts, on an interactive terminal only (so that an error raised by
     the work stays the only line a failed run prints)."""
@@ -217,6 +281,9 @@ def _progress(message: str) -> None:
 
 
 def _cmd_simulate(args: argparse.Namespace) -> int:
+    linkage = linkage_from_args(args)
+    if linkage is not None:
+        return _simulate_linkage(linkage, args)
     mech = mechanism_from_args(args)
     if args.out:
         check_output_file(args.out, "--out", args.force, suffixes=(".npz", ".csv"),
@@ -259,6 +326,47 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
         with atomic_file(args.plot) as tmp:
             plot_trajectory(traj, path=tmp)
         print(f"figure written to {args.plot}", file=sys.stderr)
+    return 0
+
+
+def _simulate_options(args: argparse.Namespace) -> dict:
+    options = {}
+    for key, name in (("rtol", "rtol"), ("step_size", "step_size"), ("contact", "contact"),
+                      ("integrator", "method")):
+        if getattr(args, key) is not None:
+            options[name] = getattr(args, key)
+    return options
+
+
+def _simulate_linkage(linkage, args: argparse.Namespace) -> int:
+    """simulate --case / --description: peaks per revolution of the monitored force, the
+    drive moment and each clearance joint's contact force."""
+    if args.out:
+        check_output_file(args.out, "--out", args.force, suffixes=(".npz", ".csv"))
+    if args.plot:
+        raise ValueError("--plot draws the paper's slider-crank only; leave it out with "
+                         "--case or --description")
+    _progress(f"simulating {linkage.name!r}, {args.revolutions} revolutions with backend "
+              f"{args.backend!r} ...")
+    t0 = time.perf_counter()
+    traj = simulate(linkage, args.revolutions, backend=args.backend, **_simulate_options(args))
+    elapsed = time.perf_counter() - t0
+    print(f"done in {elapsed:.3g} s ({len(traj.t)} samples)", file=sys.stderr)
+    joints = [j.name for j in linkage.clearance_joints]
+    monitored = (f"max |{linkage.monitor_joint}| (N)" if linkage.monitor_joint
+                 else "max |shaking| (N)")
+    print(f"{'revolution':>10}  {monitored:>22}  {'max |drive| (N m)':>17}  "
+          + "  ".join(f"{'max F ' + j + ' (N)':>{max(14, len(j) + 10)}}" for j in joints))
+    for k in range(1, traj.revolutions + 1):
+        mask = traj.revolution_mask(k)
+        cells = "  ".join(f"{traj.contact_force[mask, i].max():>{max(14, len(j) + 10)}.2f}"
+                          for i, j in enumerate(joints))
+        print(f"{k:>10}  {traj.peaks[k - 1]:>22.2f}  "
+              f"{abs(traj.crank_moment[mask]).max():>17.3f}  {cells}")
+    if args.out:
+        with atomic_file(args.out) as tmp:
+            traj.save(tmp)
+        print(f"trajectory written to {args.out}", file=sys.stderr)
     return 0
 
 
@@ -325,6 +433,12 @@ def _cmd_sensitivity(args: argparse.Namespace) -> int:
     return 0
 
 
+def _case_names() -> list[str]:
+    from .cases import CASES
+
+    return sorted(CASES)
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = Parser(
         prog="mbs-clearance",
@@ -334,8 +448,21 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True)
 
     p = sub.add_parser("simulate", help="simulate and write the trajectory and a figure",
-                       description="Simulate the slider-crank; print the peak per revolution, "
-                                   "write the trajectory (csv/npz) and a Fig. 3-like PNG.")
+                       formatter_class=argparse.RawDescriptionHelpFormatter,
+                       description="Simulate the slider-crank (or a named case, or a linkage "
+                                   "described in a file); print the peak per revolution, "
+                                   "write the trajectory (csv/npz) and a Fig. 3-like PNG.",
+                       epilog="named cases (--case NAME; --set NAME=VALUE changes a value, "
+                              "docs/cases.md lists them):\n" + _case_lines())
+    source = p.add_mutually_exclusive_group()
+    source.add_argument("--case", metavar="NAME", choices=_case_names(),
+                        help="a named linkage (listed below): " + ", ".join(_case_names()))
+    source.add_argument("--description", type=Path, metavar="FILE",
+                        help="a linkage described in FILE, .json or .toml "
+                             "(mbs_clearance.Linkage.to_dict's form)")
+    p.add_argument("--set", type=case_override, action="append", metavar="NAME=VALUE",
+                   help="override a value of the --case (repeatable), e.g. --set "
+                        "clearance=1e-4")
     p.add_argument("--revolutions", type=int_at_least(1), default=4)
     p.add_argument("--backend", choices=sorted(BACKENDS), default="reduced")
     p.add_argument("--rtol", type=positive_float, help="relative tolerance (reduced backend)")

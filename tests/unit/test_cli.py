@@ -498,3 +498,102 @@ def test_warnings_during_a_command_are_one_line(tmp_path):
     assert proc.returncode == 0
     assert proc.stderr == ("mbs-clearance simulate: warning: penetration 9212 x the "
                            "clearance; reduce the speed\n")
+
+
+# ------------------------------------------------------------------ named cases, descriptions
+def _linkage(argv):
+    from mbs_clearance.cli import build_parser, linkage_from_args
+
+    return linkage_from_args(build_parser().parse_args(["simulate", *argv]))
+
+
+def test_help_lists_the_named_cases(capsys):
+    from mbs_clearance.cases import CASES
+
+    with pytest.raises(SystemExit) as exc:
+        main(["simulate", "--help"])
+    assert exc.value.code == 0
+    out = capsys.readouterr().out
+    epilog = out[out.index("named cases"):]
+    for name in CASES:
+        assert f"  {name}: " in epilog
+
+
+def test_case_and_overrides_from_the_command_line():
+    from mbs_clearance.cases import four_bar, paper_slider_crank
+
+    assert _linkage([]) is None                       # the SliderCrank options apply
+    assert _linkage(["--case", "four_bar"]) == four_bar()
+    assert _linkage(["--case", "four_bar", "--set", "clearance=1e-7", "--set",
+                     "crank_speed = 12.5", "--set", "coupler_inertia=none",
+                     "--set", "contact_model=hunt_crossley"]) == four_bar(
+        clearance=1e-7, crank_speed=12.5, contact_model="hunt_crossley")
+    assert _linkage(["--case", "paper_slider_crank", "--set", "journal_radius=0.00995"]) == \
+        paper_slider_crank(journal_radius=0.00995)
+
+
+@pytest.mark.parametrize("suffix", [".json", ".toml"])
+def test_description_file_json_and_toml(tmp_path, suffix):
+    from mbs_clearance.cases import slider_crank_two_clearances
+
+    linkage = slider_crank_two_clearances(coupler_slider_clearance=2e-5)
+    path = tmp_path / f"mech{suffix}"
+    if suffix == ".json":
+        path.write_text(json.dumps(linkage.to_dict()))
+    else:
+        path.write_text(_toml(linkage.to_dict()))
+    assert _linkage(["--description", str(path)]) == linkage
+
+
+def _toml(data, prefix=""):
+    """A minimal TOML writer for Linkage.to_dict's form (tables, arrays of tables)."""
+    def value(v):
+        if isinstance(v, str):
+            return json.dumps(v)
+        if isinstance(v, bool):
+            return "true" if v else "false"
+        if isinstance(v, (list, tuple)):
+            return "[" + ", ".join(value(x) for x in v) + "]"
+        if isinstance(v, dict):
+            return "{" + ", ".join(f"{json.dumps(k)} = {value(x)}" for k, x in v.items()) + "}"
+        return repr(float(v)) if isinstance(v, float) else str(v)
+
+    lines, tables = [], []
+    for k, v in data.items():
+        if v is None:
+            continue
+        if isinstance(v, list) and v and isinstance(v[0], dict):
+            tables.append((k, v))
+        elif isinstance(v, dict) and k == "drive":
+            tables.append((k, [v]))
+        else:
+            lines.append(f"{k} = {value(v)}")
+    for k, items in tables:
+        for item in items:
+            lines.append(f"[[{k}]]" if k != "drive" else "[drive]")
+            lines += [f"{kk} = {value(vv)}" for kk, vv in item.items() if vv is not None]
+    return "\n".join(lines) + "\n"
+
+
+@pytest.mark.parametrize("argv,message", [
+    (["--case", "nope"], "argument --case: invalid choice: 'nope'"),
+    (["--case", "four_bar", "--description", "x.json"],
+     "argument --description: not allowed with argument --case"),
+    (["--set", "clearance=1e-4"], "--set applies to a --case only"),
+    (["--case", "four_bar", "--set", "clearance"], "argument --set: must be NAME=VALUE"),
+    (["--case", "four_bar", "--set", "clerance=1e-4"],
+     "four_bar: unknown override(s) ['clerance']; allowed: ['bearing_radius', 'clearance'"),
+    (["--case", "four_bar", "--set", "clearance=-1"], "four_bar: clearance must be > 0 m"),
+    (["--case", "four_bar", "--set", "clearance=1e-4", "--set", "clearance=2e-4"],
+     "--set clearance given twice"),
+    (["--case", "four_bar", "--crank-length", "0.1"],
+     "the SliderCrank option(s) --crank-length apply to the paper's slider-crank only"),
+    (["--description", "/nonexistent.json"], "cannot read linkage file '/nonexistent.json'"),
+    (["--case", "four_bar", "--plot", "f.png"], "--plot draws the paper's slider-crank only"),
+])
+def test_case_and_description_errors_are_one_line(argv, message, capsys):
+    with pytest.raises(SystemExit) as exc:
+        main(["simulate", *argv])
+    assert exc.value.code == 2
+    err = capsys.readouterr().err
+    assert message in err and err.count("\n") == 1
