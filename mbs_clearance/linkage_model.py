@@ -270,7 +270,7 @@ def run(linkage: Linkage, revolutions: int = 4, *, rtol: float | None = None,
             "max_memory or run fewer revolutions")
     if status != RESULTS.success:
         raise RuntimeError(f"integration of linkage {linkage.name!r} failed at about t = "
-                           f"{ts[-1] if len(ts) else float('nan'):.6g} s: {status.message()}")
+                           f"{ts[-1] if len(ts) else float('nan'):.6g} s: {status.message}")
     stats = {k: int(v) for k, v in zip(COUNTERS, counters)}
     stats.update(method=method, rtol=float(rtol))
     return model, ts, ys, ms, peaks, peak_t, stats, outs, p
