@@ -21,22 +21,15 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from mbs_clearance import integrator
 from mbs_clearance.cases import four_bar, slider_crank_two_clearances
-
-# simulating a Linkage needs the integrator's protocol v2 (branch s7-int) under the glue
-HAVE_GLUE = hasattr(integrator, "make_settings")
-
-needs_glue = pytest.mark.skipif(not HAVE_GLUE, reason="the integrator's protocol v2 (branch "
-                                "s7-int) is not merged: simulate(Linkage) cannot run")
 
 C_IDEAL = 1e-7          # m, the ideal-joint limit's clearance
 FOUR_BAR_UNVERIFIED = pytest.param("four_bar", marks=pytest.mark.skip(
     reason="not verified: at c = 1e-7 m and rtol 1e-10 the run reaches max_steps at t = 11.08 "
-           "of 12 s (scratch merge with the v2 integrator); needs a cheaper setting"))
+           "of 12 s (measured with the v2 integrator); needs a cheaper setting"))
 # (the rtol-proportionality test leaves the four-bar out: its first revolution holds the
 # start's 79 impacts, and its end state does not converge with rtol: errors 3.7e-4, 9.5e-3,
-# 7.7e-3, 1.1e-2 at rtol 1e-6 ... 1e-9, measured in a scratch merge with the v2 integrator)
+# 7.7e-3, 1.1e-2 at rtol 1e-6 ... 1e-9, measured with the v2 integrator)
 N_WINDOWS = 36          # 10 degree windows of crank angle
 
 
@@ -85,7 +78,6 @@ def ideal_run(name):
     return _IDEAL_RUNS[name]
 
 
-@needs_glue
 @pytest.mark.slow
 @pytest.mark.parametrize("name", [FOUR_BAR_UNVERIFIED, "slider_crank_two_clearances"])
 def test_ideal_limit_window_averages(name):
@@ -110,7 +102,6 @@ def test_ideal_limit_window_averages(name):
         assert err < 1e-3 * scale, f"{name} {label}: {err / scale:.2e} of the peak"
 
 
-@needs_glue
 @pytest.mark.slow
 @pytest.mark.parametrize("name", [FOUR_BAR_UNVERIFIED, "slider_crank_two_clearances"])
 def test_ideal_limit_peak_of_the_monitored_force(name):
@@ -158,7 +149,6 @@ def _mechanical_energy(lk, traj):
     return energy
 
 
-@needs_glue
 @pytest.mark.slow
 @pytest.mark.parametrize("case", [
     lambda: four_bar(restitution=1.0),
@@ -179,7 +169,6 @@ def test_energy_balance_with_restitution_one(case):
     assert traj.contact_phase.any()          # the balance went through contact phases
 
 
-@needs_glue
 @pytest.mark.slow
 @pytest.mark.parametrize("case", [slider_crank_two_clearances],
                          ids=["slider_crank_two_clearances"])
