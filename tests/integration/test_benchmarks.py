@@ -12,6 +12,7 @@ from validation.stress import (
 )
 
 
+@pytest.mark.slow
 def test_work_precision_quick_invariants():
     rows, refs = run(quick=True, repeats=1, exudyn=False)
     for ref in refs.values():

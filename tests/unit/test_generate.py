@@ -376,6 +376,7 @@ def test_paper_case_through_the_linkage_path():
     assert traj.crank_work[-1] == pytest.approx(ref.crank_work[-1], rel=1e-7)
 
 
+@pytest.mark.slow
 def test_two_joints_energy_balance_over_a_run():
     """Two clearance joints (a floating disc on the crank pin and a pendulum rattling in a
     ground bearing, ~470 impacts in 2 revolutions), restitution 1: the drive's work equals
