@@ -143,6 +143,38 @@ def positive_float(text: str) -> float:
     return value
 
 
+def add_evaluation_options(parser: argparse.ArgumentParser, out: str) -> None:
+    """Options of a subcommand that evaluates many designs: --rtol, --scheduler, --workers,
+    --out (default ./`out`) and --no-progress (read by `evaluate_on`)."""
+    parser.add_argument("--rtol", type=positive_float,
+                        help="relative tolerance of the reduced model")
+    parser.add_argument("--scheduler", metavar="tcp://HOST:PORT",
+                        help="evaluate on this dask.distributed scheduler")
+    parser.add_argument("--workers", type=int_at_least(1), default=2,
+                        help="local worker threads when no --scheduler (1 = this process)")
+    parser.add_argument("--out", type=Path, default=Path(out),
+                        help=f"output directory (default ./{out})")
+    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+
+
+def evaluate_on(args: argparse.Namespace, fn, *fn_args, **kw):
+    """Call fn(*fn_args, executor=..., **kw) on the executor the options of
+    `add_evaluation_options` choose: the dask scheduler, this process (--workers 1) or a
+    local pool of --workers."""
+    if args.scheduler:
+        try:
+            import dask.distributed  # noqa: F401
+        except ImportError as exc:
+            raise ValueError("--scheduler needs dask.distributed: "
+                             "pip install 'mbs-clearance[dask]'") from exc
+        with connect_dask(args.scheduler) as client:
+            print(f"evaluating on the dask cluster at {args.scheduler}", file=sys.stderr)
+            return fn(*fn_args, executor=client, **kw)
+    if args.workers == 1:
+        return fn(*fn_args, executor="serial", **kw)
+    return fn(*fn_args, workers=args.workers, **kw)
+
+
 def add_force_option(parser: argparse.ArgumentParser) -> None:
     """--force: overwrite output files or folders that mbs-clearance did not write."""
     parser.add_argument("--force", action="store_true",
@@ -527,15 +559,8 @@ def _add_optimize_parser(subparsers) -> argparse.ArgumentParser:
                    default=(0.10, 0.14), help="bounds of L3 in m (default 0.10 0.14)")
     p.add_argument("--revolution", type=int_at_least(1), default=4,
                    help="crank revolution whose peak is minimised (default 4)")
-    p.add_argument("--rtol", type=positive_float, help="relative tolerance of the reduced model")
-    p.add_argument("--scheduler", metavar="tcp://HOST:PORT",
-                   help="evaluate on this dask.distributed scheduler")
-    p.add_argument("--workers", type=int_at_least(1), default=2,
-                   help="local worker processes when no --scheduler (1 = this process)")
-    p.add_argument("--out", type=Path, default=Path("optimize"),
-                   help="output directory (default ./optimize)")
+    add_evaluation_options(p, "optimize")
     p.add_argument("--no-refine", action="store_true", help="skip the local refinement")
-    p.add_argument("--no-progress", action="store_true", help="no progress bar")
     add_force_option(p)
     add_mechanism_options(p)
     p.set_defaults(func=_cmd_optimize)
@@ -583,19 +608,7 @@ def _cmd_optimize(args: argparse.Namespace) -> int:
                   generations=args.generations, saturation=args.saturation or None,
                   mass_scaling=args.mass_scaling, refine=not args.no_refine,
                   progress=not args.no_progress, **options)
-    if args.scheduler:
-        try:
-            import dask.distributed  # noqa: F401
-        except ImportError as exc:
-            raise ValueError("--scheduler needs dask.distributed: "
-                             "pip install 'mbs-clearance[dask]'") from exc
-        with connect_dask(args.scheduler) as client:
-            print(f"evaluating on the dask cluster at {args.scheduler}", file=sys.stderr)
-            result = optimize_link_lengths(mech, executor=client, **common)
-    elif args.workers == 1:
-        result = optimize_link_lengths(mech, executor="serial", **common)
-    else:
-        result = optimize_link_lengths(mech, workers=args.workers, **common)
+    result = evaluate_on(args, optimize_link_lengths, mech, **common)
 
     pp = PAPER_TABLE3["optimum"]
     paper_mech = design_mechanism(mech, {"crank_length": pp["crank_length"],
@@ -673,14 +686,7 @@ def _add_tolerance_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--wear", type=finite_float, nargs="+", metavar="M",
                    help="radial wear amounts in m added to the clearance (needs --monte-carlo)")
     p.add_argument("--seed", type=int_at_least(0), default=0, help="seed (default 0)")
-    p.add_argument("--rtol", type=positive_float, help="relative tolerance of the reduced model")
-    p.add_argument("--scheduler", metavar="tcp://HOST:PORT",
-                   help="evaluate on this dask.distributed scheduler")
-    p.add_argument("--workers", type=int_at_least(1), default=2,
-                   help="local worker threads when no --scheduler (1 = this process)")
-    p.add_argument("--out", type=Path, default=Path("tolerance"),
-                   help="output directory (default ./tolerance)")
-    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    add_evaluation_options(p, "tolerance")
     add_force_option(p)
     add_mechanism_options(p)
     p.set_defaults(func=_cmd_tolerance)
@@ -699,19 +705,7 @@ def _cmd_tolerance(args: argparse.Namespace) -> int:
               seed=args.seed, progress=not args.no_progress)
     if args.rtol is not None:
         kw["rtol"] = args.rtol
-    if args.scheduler:
-        try:
-            import dask.distributed  # noqa: F401
-        except ImportError as exc:
-            raise ValueError("--scheduler needs dask.distributed: "
-                             "pip install 'mbs-clearance[dask]'") from exc
-        with connect_dask(args.scheduler) as client:
-            print(f"evaluating on the dask cluster at {args.scheduler}", file=sys.stderr)
-            result = tolerance_study(inputs, mech, executor=client, **kw)
-    elif args.workers == 1:
-        result = tolerance_study(inputs, mech, executor="serial", **kw)
-    else:
-        result = tolerance_study(inputs, mech, workers=args.workers, **kw)
+    result = evaluate_on(args, tolerance_study, inputs, mech, **kw)
     text = result.summary()
     print(text)
     with OutputDir(args.out, "tolerance") as staged:
