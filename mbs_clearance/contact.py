@@ -16,6 +16,22 @@ at contact onset (the impact velocity). They differ in the hysteresis factor xi(
 
 The force is clamped at zero: a contact cannot pull (at low restitution the damping term
 can exceed the spring term late in the restitution phase).
+
+Friction (tangential force at the contact point, opposing the relative tangential velocity
+v_t of the journal's surface with respect to the bearing's), Ft = -mu * Fn * phi(v_t):
+
+- ``none``: phi = 0 (the frictionless joint).
+- ``coulomb``: regularised Coulomb, phi = v_t / sqrt(v_t^2 + v0^2): the sign of v_t, smoothed
+  over the velocity scale v0 (a smooth stand-in for the set-valued sign; |phi| > 0.995 for
+  |v_t| > 10 v0).
+- ``ambrosio``: Ambrosio's modified Coulomb law with the dynamic correction coefficient
+  c_d between two tangential-velocity thresholds, phi = c_d(|v_t|) sign(v_t) with
+  c_d = 0 for |v_t| <= v0, (|v_t| - v0) / (v1 - v0) between, 1 for |v_t| >= v1
+  (Ambrosio 2002, "Impact of rigid and flexible multibody systems: deformation description
+  and contact models", in Virtual Nonlinear Multibody Systems, NATO Sci. Ser. II 103;
+  used for clearance joints by Flores, Ambrosio, Claro & Lankarani, "Kinematics and
+  Dynamics of Multibody Systems with Imperfect Joints", Springer 2008). It has no stiction:
+  below v0 the joint is frictionless.
 """
 
 from __future__ import annotations
@@ -29,12 +45,16 @@ from .integrator import KERNEL
 __all__ = [
     "CONTACT_MODELS", "hysteresis_factor", "contact_force", "contact_force_partials",
     "stiffness_eq9", "stiffness_eq9_partials",
+    "FRICTION_LAWS", "friction_factor", "friction_force", "friction_force_partials",
 ]
 
 #: name -> integer id used inside compiled kernels
 CONTACT_MODELS: dict[str, int] = {"lankarani_nikravesh": 0, "hunt_crossley": 1, "flores": 2}
 
 EXPONENT = 1.5
+
+#: friction law name -> integer id used inside compiled kernels
+FRICTION_LAWS: dict[str, int] = {"none": 0, "coulomb": 1, "ambrosio": 2}
 
 
 @nb.njit(**KERNEL, inline="always")
@@ -105,3 +125,40 @@ def stiffness_eq9_partials(journal_radius, bearing_radius, youngs_modulus, poiss
     d_e = k / youngs_modulus
     d_nu = k * 2.0 * poisson_ratio / (1.0 - poisson_ratio**2)
     return k, d_rj, d_rb, d_e, d_nu
+
+
+@nb.njit(**KERNEL, inline="always")
+def friction_factor(vt, v0, v1, law):
+    """Return (phi, dphi/dvt, dphi/dv0, dphi/dv1) of friction law id `law` at the relative
+    tangential velocity `vt` (m/s), thresholds v0 < v1 (m/s); Ft = -mu Fn phi."""
+    if law == 1:
+        r = vt * vt + v0 * v0
+        root = math.sqrt(r)
+        return vt / root, v0 * v0 / (r * root), -vt * v0 / (r * root), 0.0
+    if law == 2:
+        speed = abs(vt)
+        if speed <= v0:
+            return 0.0, 0.0, 0.0, 0.0
+        sign = 1.0 if vt > 0.0 else -1.0
+        if speed >= v1:
+            return sign, 0.0, 0.0, 0.0
+        width = v1 - v0
+        return (sign * (speed - v0) / width, 1.0 / width,
+                sign * (speed - v1) / (width * width), -sign * (speed - v0) / (width * width))
+    return 0.0, 0.0, 0.0, 0.0
+
+
+@nb.njit(**KERNEL, inline="always")
+def friction_force(vt, fn, mu, v0, v1, law):
+    """Tangential friction force in N on the journal, along the tangent that defines `vt`
+    (negative where vt > 0: friction opposes the sliding)."""
+    phi, _, _, _ = friction_factor(vt, v0, v1, law)
+    return -mu * fn * phi
+
+
+@nb.njit(**KERNEL)
+def friction_force_partials(vt, fn, mu, v0, v1, law):
+    """Return (Ft, dFt/dvt, dFt/dFn, dFt/dmu, dFt/dv0, dFt/dv1) of `friction_force`."""
+    phi, d_vt, d_v0, d_v1 = friction_factor(vt, v0, v1, law)
+    scale = -mu * fn
+    return scale * phi, scale * d_vt, -mu * phi, -fn * phi, scale * d_v0, scale * d_v1

@@ -4,7 +4,14 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from mbs_clearance.contact import CONTACT_MODELS, contact_force, contact_force_partials
+from mbs_clearance.contact import (
+    CONTACT_MODELS,
+    FRICTION_LAWS,
+    contact_force,
+    contact_force_partials,
+    friction_force,
+    friction_force_partials,
+)
 
 ARGS = (2e-6, 0.05, 0.3, 4.8e11, 0.8)  # delta, deltadot, deltadot_minus, K, e
 
@@ -64,3 +71,57 @@ def test_lankarani_nikravesh_is_a_high_restitution_law():
         assert dev_fl < 0.05
         if e <= 0.8:
             assert dev_fl < abs(point_impact_restitution("lankarani_nikravesh", e) - e)
+
+
+# ---------------------------------------------------------------------------- friction laws
+
+V0, V1 = 1e-4, 1e-2
+
+
+@pytest.mark.parametrize("law", ["coulomb", "ambrosio"])
+@pytest.mark.parametrize("vt", [-0.3, -5e-3, -3e-5, 2e-5, 4e-3, 0.7])
+def test_friction_partials_match_central_differences(law, vt):
+    lid = FRICTION_LAWS[law]
+    args = [vt, 120.0, 0.1, V0, V1]
+    got = friction_force_partials(*args, lid)
+    assert got[0] == pytest.approx(friction_force(*args, lid), rel=1e-15, abs=0)
+    for k in range(5):
+        h = 1e-5 * max(abs(args[k]), V0)
+        up, dn = list(args), list(args)
+        up[k] += h
+        dn[k] -= h
+        fd = (friction_force(*up, lid) - friction_force(*dn, lid)) / (2 * h)
+        # round-off of the difference quotient: ~1e-15 |Ft| / h
+        assert got[k + 1] == pytest.approx(fd, rel=1e-6, abs=1e-14 * abs(got[0]) / h), k
+
+
+def test_friction_opposes_sliding_and_reaches_coulomb():
+    for law in ("coulomb", "ambrosio"):
+        lid = FRICTION_LAWS[law]
+        for vt in (-1.0, -0.05, 0.05, 1.0):
+            f = friction_force(vt, 200.0, 0.05, V0, V1, lid)
+            # well above both thresholds: |Ft| = mu Fn to the regularisation's 1e-5
+            assert f * vt < 0
+            assert abs(f) == pytest.approx(0.05 * 200.0, rel=1e-5)
+    assert friction_force(0.5, 200.0, 0.05, V0, V1, FRICTION_LAWS["none"]) == 0.0
+
+
+def test_ambrosio_dynamic_correction_is_piecewise_linear():
+    lid = FRICTION_LAWS["ambrosio"]
+    mu, fn = 0.1, 50.0
+    # Ambrosio's c_d: 0 up to v0, linear between the thresholds, 1 from v1
+    for speed, cd in ((0.5 * V0, 0.0), (V0, 0.0), (0.5 * (V0 + V1), 0.5),
+                      (V0 + 0.25 * (V1 - V0), 0.25), (V1, 1.0), (3 * V1, 1.0)):
+        for sign in (1.0, -1.0):
+            assert friction_force(sign * speed, fn, mu, V0, V1, lid) == pytest.approx(
+                -sign * mu * fn * cd, rel=1e-12, abs=1e-15)
+
+
+def test_regularised_coulomb_is_odd_and_smooth_through_zero():
+    lid = FRICTION_LAWS["coulomb"]
+    assert friction_force(0.0, 10.0, 0.2, V0, V1, lid) == 0.0
+    f, dvt = friction_force_partials(0.0, 10.0, 0.2, V0, V1, lid)[:2]
+    assert dvt == pytest.approx(-0.2 * 10.0 / V0, rel=1e-14)   # slope mu Fn / v0 at rest
+    for vt in (1e-5, 3e-4, 0.1):
+        assert friction_force(-vt, 10.0, 0.2, V0, V1, lid) == -friction_force(
+            vt, 10.0, 0.2, V0, V1, lid)
