@@ -63,6 +63,12 @@ def _peak_chunk(mechs: list[SliderCrank], revolution: int, backend: str,
     return out
 
 
+def peak_or_inf(mech: SliderCrank, revolution: int, backend: str, options: dict) -> float:
+    """Worker of the GA's `evaluate` calls: peak |F12| of one design (inf where the
+    integration fails)."""
+    return _peak_chunk([mech], revolution, backend, options)[0]
+
+
 def _peak_chunk_packed(args: tuple) -> list[float]:
     """`_peak_chunk` with its arguments in one tuple (for map-only executors)."""
     return _peak_chunk(*args)
