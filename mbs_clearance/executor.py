@@ -416,6 +416,8 @@ def evaluate(fn: Callable, items: Sequence, args: tuple = (), *, executor=None,
                                             int(retries))
             interrupted = False
         except BrokenProcessPool as exc:
+            if own_pool is None:    # the caller's pool: the caller says what to do
+                raise
             raise RuntimeError(f"the worker processes stopped ({exc}); a script that starts "
                                "a process pool at its top level needs the call under "
                                "`if __name__ == '__main__':`, or pass executor='threads'"
