@@ -224,3 +224,17 @@ def test_cli_map_writes_dataset_and_figures_and_resumes(tmp_path, capsys):
     with pytest.raises(SystemExit):
         main(["map", "--sweep", "foo=1,2", "--out", str(tmp_path / "x")])
     assert "unknown sweep field 'foo'" in capsys.readouterr().err
+
+
+def test_linkage_section_matches_the_hand_written_model():
+    # the same mechanism as a Linkage (generated model) and as a SliderCrank (reduced
+    # model): the same regime and the same section samples within the tolerance
+    from mbs_clearance.cases import from_slider_crank
+
+    link = poincare_section(from_slider_crank(PAPER), revolutions=12, keep=5, max_period=2)
+    red = poincare_section(PAPER, revolutions=12, keep=5, max_period=2)
+    assert link.joints == ("coupler_slider",) and link.regime == red.regime == "period_1"
+    np.testing.assert_allclose(link.scaled(), red.scaled(), atol=1e-3)
+    np.testing.assert_allclose(link.peaks, red.peaks, rtol=1e-4)
+    with pytest.raises(NotImplementedError, match="pending"):
+        lyapunov_exponent(from_slider_crank(PAPER), revolutions=4, transient=1)
