@@ -750,6 +750,9 @@ def _add_map_parser(subparsers) -> argparse.ArgumentParser:
                    help="recurrence tolerance, fraction of the clearance (default 1e-3)")
     p.add_argument("--max-period", type=int_at_least(1), default=8,
                    help="largest period looked for (default 8)")
+    p.add_argument("--write-interval", type=finite_float, default=5.0, metavar="SECONDS",
+                   help="write map.nc at most this often while points arrive (default 5; "
+                        "and at the end)")
     add_evaluation_options(p, "map")
     p.set_defaults(func=_cmd_map)
     return p
@@ -779,7 +782,7 @@ def _cmd_map(args: argparse.Namespace) -> int:
     kw = dict(case=None if paper else case, overrides=None if paper else overrides,
               revolutions=args.revolutions, keep=args.keep, lyapunov=args.lyapunov,
               angle=args.angle, tol=args.tol, max_period=args.max_period, rtol=args.rtol,
-              progress=not args.no_progress)
+              progress=not args.no_progress, write_interval=args.write_interval)
     args.out.mkdir(parents=True, exist_ok=True)
     path = args.out / "map.nc"
     if args.scheduler:

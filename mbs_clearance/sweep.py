@@ -325,7 +325,7 @@ def regime_map(mech, sweep, revolutions: int = 100, keep: int = 50, scheduler=No
                angle: float | None = None, tol: float = RECURRENCE_TOL,
                max_period: int = MAX_PERIOD, rtol: float | None = None, workers: int = 2,
                chunk_size: int | None = None, progress: bool = False,
-               retries: int = 2) -> MapResult:
+               retries: int = 2, write_interval: float = 5.0) -> MapResult:
     """A regime map / bifurcation diagram of `mech` over one or two swept fields.
 
     Parameters
@@ -343,8 +343,10 @@ def regime_map(mech, sweep, revolutions: int = 100, keep: int = 50, scheduler=No
     case, overrides :
         A named case (`cases.CASES`) and its fixed overrides, instead of `mech`.
     out : path, optional
-        netCDF file written as results arrive; an existing one made with the same settings
-        is resumed (its done points are skipped), one with other settings is refused.
+        netCDF file written as results arrive (at most every `write_interval` seconds, and
+        at the end, also after an error or Ctrl-C); an existing one made with the same
+        settings is resumed (its done points are skipped), one with other settings is
+        refused.
     lyapunov : bool
         Also compute each point's largest Lyapunov exponent (a tangent run instead of the
         plain one, SliderCrank only; the regimes then tell quasi-periodic from chaotic).
@@ -355,6 +357,9 @@ def regime_map(mech, sweep, revolutions: int = 100, keep: int = 50, scheduler=No
     retries : int
         Resubmissions of a dask task that raised (a lost worker's tasks are rescheduled by
         the scheduler).
+    write_interval : float
+        Seconds between writes of `out` while results arrive (0: after every chunk); a run
+        killed without warning loses at most the points of this interval.
 
     Returns a `MapResult`: the labelled dataset (dims: the swept fields, revolution, joint,
     component, lag; variables section, peak, peak_mean, peak_max, regime, period,
@@ -379,6 +384,7 @@ def regime_map(mech, sweep, revolutions: int = 100, keep: int = 50, scheduler=No
         angle = check_real("angle (section crank angle)", angle, unit="rad")
     if rtol is not None:
         rtol = check_real("rtol", rtol, 1e-14, 1e-4)
+    write_interval = check_real("write_interval", write_interval, 0.0, unit="s")
     # every design first: a bad field or value fails before any run
     shape = tuple(len(a.values) for a in axes)
     designs = []
@@ -417,11 +423,17 @@ def regime_map(mech, sweep, revolutions: int = 100, keep: int = 50, scheduler=No
         path.parent.mkdir(parents=True, exist_ok=True)
         _write(ds, path)
 
+    last_write = [time.monotonic()]
+    pending = [0]
+
     def on_result(start, results):
         for res in results:
             _store(ds, shape, res, omegas.__getitem__)
-        if path is not None:
+        pending[0] += len(results)
+        if path is not None and time.monotonic() - last_write[0] >= write_interval:
             _write(ds, path)
+            last_write[0] = time.monotonic()
+            pending[0] = 0
 
     executor, own = scheduler, None
     if isinstance(scheduler, str) and scheduler.startswith(("tcp://", "tls://", "ws://")):
@@ -434,6 +446,8 @@ def regime_map(mech, sweep, revolutions: int = 100, keep: int = 50, scheduler=No
     finally:
         if own is not None:
             own.close()
+        if path is not None and pending[0]:
+            _write(ds, path)        # what arrived since the last write (also on Ctrl-C)
     return MapResult(ds, path, len(todo), skipped, time.perf_counter() - t0)
 
 

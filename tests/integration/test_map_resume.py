@@ -25,7 +25,7 @@ def test_sigkill_midway_then_resume_equals_uninterrupted(tmp_path):
     out = tmp_path / "killed"
     cmd = [sys.executable, "-m", "mbs_clearance.cli", "map", "--sweep", SWEEP,
            "--revolutions", "12", "--keep", "5", "--max-period", "2", "--workers", "1",
-           "--no-progress", "--out", str(out)]
+           "--no-progress", "--write-interval", "0", "--out", str(out)]
     proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
                             cwd=os.getcwd())
     path = out / "map.nc"

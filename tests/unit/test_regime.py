@@ -173,13 +173,13 @@ def test_map_killed_midway_and_resumed_equals_uninterrupted(tmp_path, monkeypatc
             raise KeyboardInterrupt
         return real(item, settings)
 
-    path = tmp_path / "part.nc"
+    path = tmp_path / "part.nc"      # (written at the end: the default write_interval)
     monkeypatch.setattr(sweep_mod, "_map_point", dies_at_the_fourth)
     with pytest.raises(KeyboardInterrupt):
         regime_map(PAPER, sweep, out=path, **SMALL)
     monkeypatch.setattr(sweep_mod, "_map_point", real)
     part = sweep_mod._load(path)
-    assert int(part["done"].sum()) == 3                       # written as they arrived
+    assert int(part["done"].sum()) == 3                       # written on the interrupt
     resumed = regime_map(PAPER, sweep, out=path, **SMALL)
     assert resumed.computed == 3 and resumed.skipped == 3
     on_disk = sweep_mod._load(path)
