@@ -29,11 +29,14 @@ from .linkage import (  # noqa: E402
     Prismatic,
     Revolute,
 )
+from .lyapunov import LyapunovResult, lyapunov_exponent  # noqa: E402
 from .mechanism import CONTINUOUS_FIELDS, PARAMETER_INFO, SliderCrank  # noqa: E402
 from .objective import PeakGradient, peak_gradient  # noqa: E402
 from .optimize import OptimizationResult, optimize_link_lengths  # noqa: E402
+from .poincare import PoincareSection, poincare_section  # noqa: E402
 from .sensitivity import DEFAULT_PARAMETERS, Sensitivities, sensitivities  # noqa: E402
 from .simulate import BACKENDS, peak_base_force, simulate  # noqa: E402
+from .sweep import MapResult, regime_map  # noqa: E402
 from .tolerance import ToleranceResult, tolerance_study  # noqa: E402
 from .trajectory import Trajectory, load_trajectory  # noqa: E402
 
@@ -46,6 +49,8 @@ __all__ = [
     "optimize_link_lengths", "OptimizationResult",
     "peak_gradient", "PeakGradient",
     "tolerance_study", "ToleranceResult",
+    "poincare_section", "PoincareSection", "lyapunov_exponent", "LyapunovResult",
+    "regime_map", "MapResult",
     "MbsClearanceWarning", "AccuracyWarning", "PhysicsWarning", "CacheWarning",
 ]
 

@@ -530,6 +530,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     _add_optimize_parser(sub)
     _add_tolerance_parser(sub)
+    _add_map_parser(sub)
     _add_plugins(sub)
     return parser
 
@@ -713,6 +714,105 @@ def _cmd_tolerance(args: argparse.Namespace) -> int:
         (staged.path / "summary.txt").write_text(text + "\n")
         staged.commit()
     print(f"result.json and summary.txt written to {args.out}", file=sys.stderr)
+    return 0
+
+
+def _add_map_parser(subparsers) -> argparse.ArgumentParser:
+    """The ``map`` subcommand: regime map / bifurcation diagram (issue 19)."""
+    p = subparsers.add_parser(
+        "map", help="regime map / bifurcation diagram over one or two fields",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+        description="Run each point of a grid over one or two fields for --revolutions "
+                    "crank revolutions, keep the Poincare section of the last --keep, and "
+                    "classify the motion (period-k, quasi-periodic, chaotic, ...). Writes "
+                    "map.nc (an xarray dataset, netCDF; resumed if it exists with the same "
+                    "settings) and figures into --out.",
+        epilog="sweeps: NAME=LO:HI:N (linear), NAME=LO:HI:log:N, NAME=V1,V2,...; speeds may "
+               "be given in rpm (crank_speed=500rpm:10000rpm:40). Fields: SliderCrank "
+               "fields and 'clearance' (default: the paper's case), or a --case's "
+               "overrides and 'clearance'.\nnamed cases:\n" + _case_lines())
+    p.add_argument("--case", metavar="NAME", choices=_case_names(),
+                   help="a named case (default: the paper's slider-crank, reduced model)")
+    p.add_argument("--set", type=case_override, action="append", metavar="NAME=VALUE",
+                   help="a fixed override of the --case (repeatable)")
+    p.add_argument("--sweep", action="append", required=True, metavar="SPEC",
+                   help="a swept field (once or twice), e.g. clearance=1e-6:1e-3:log:60")
+    p.add_argument("--revolutions", type=int_at_least(2), default=100,
+                   help="crank revolutions per point (default 100)")
+    p.add_argument("--keep", type=int_at_least(1), default=50,
+                   help="last revolutions kept as section samples (default 50)")
+    p.add_argument("--lyapunov", action="store_true",
+                   help="also compute the largest Lyapunov exponent of each point (a "
+                        "tangent run; the paper's case only)")
+    p.add_argument("--angle", type=finite_float,
+                   help="crank angle of the section in rad (default: the initial angle)")
+    p.add_argument("--tol", type=positive_float, default=1e-3,
+                   help="recurrence tolerance, fraction of the clearance (default 1e-3)")
+    p.add_argument("--max-period", type=int_at_least(1), default=8,
+                   help="largest period looked for (default 8)")
+    p.add_argument("--write-interval", type=finite_float, default=5.0, metavar="SECONDS",
+                   help="write map.nc at most this often while points arrive (default 5; "
+                        "and at the end)")
+    add_evaluation_options(p, "map")
+    p.set_defaults(func=_cmd_map)
+    return p
+
+
+def _cmd_map(args: argparse.Namespace) -> int:
+    from . import plotting
+    from .sweep import regime_map
+
+    overrides = {}
+    for name, value in args.set or []:
+        if name in overrides:
+            raise ValueError(f"--set {name} given twice")
+        overrides[name] = value
+    if len(args.sweep) > 2:
+        raise ValueError(f"--sweep: one or two fields; got {len(args.sweep)}")
+    case = args.case
+    paper = case in (None, "paper_slider_crank")
+    if paper:
+        from .mechanism import field_names
+
+        unknown = sorted(set(overrides) - set(field_names()))
+        if unknown:
+            raise ValueError(f"--set: unknown field(s) {unknown} of the paper's case; allowed: "
+                             f"{sorted(field_names())}")
+    base = SliderCrank().replace(**overrides) if paper else None
+    kw = dict(case=None if paper else case, overrides=None if paper else overrides,
+              revolutions=args.revolutions, keep=args.keep, lyapunov=args.lyapunov,
+              angle=args.angle, tol=args.tol, max_period=args.max_period, rtol=args.rtol,
+              progress=not args.no_progress, write_interval=args.write_interval)
+    args.out.mkdir(parents=True, exist_ok=True)
+    path = args.out / "map.nc"
+    if args.scheduler:
+        kw["scheduler"] = args.scheduler
+    elif args.workers == 1:
+        kw["scheduler"] = "serial"
+    else:
+        kw["workers"] = args.workers
+    result = regime_map(base, args.sweep, out=path, **kw)
+    ds = result.dataset
+    print(result.summary())
+    written = [path]
+    dims = list(ds["regime"].dims)
+    plotting.plot_bifurcation(ds, args.out / "bifurcation.png")
+    written.append(args.out / "bifurcation.png")
+    if len(dims) == 2:
+        mark = None
+        if paper and set(dims) == {"clearance", "crank_speed"}:
+            mark = {"clearance": base.clearance, "crank_speed": base.crank_speed}
+        plotting.plot_regime_map(ds, args.out / "regime_map.png", mark=mark)
+        written.append(args.out / "regime_map.png")
+    shape = ds["regime"].shape
+    picks = sorted({0, shape[0] // 2, shape[0] - 1})
+    points = [{dims[0]: float(ds[dims[0]].values[i]),
+               **({dims[1]: float(ds[dims[1]].values[0])} if len(dims) == 2 else {})}
+              for i in picks]
+    plotting.plot_poincare(ds, points, args.out / "poincare.png")
+    written.append(args.out / "poincare.png")
+    print(f"{', '.join(str(w) for w in written)} written ({result.computed} points computed, "
+          f"{result.skipped} resumed from {path})", file=sys.stderr)
     return 0
 
 

@@ -20,7 +20,7 @@ import os
 import signal
 import threading
 from collections.abc import Callable, Sequence
-from concurrent.futures import ProcessPoolExecutor, ThreadPoolExecutor
+from concurrent.futures import ProcessPoolExecutor, ThreadPoolExecutor, as_completed
 from concurrent.futures.process import BrokenProcessPool
 
 import numpy as np
@@ -61,6 +61,12 @@ def _peak_chunk(mechs: list[SliderCrank], revolution: int, backend: str,
         except RuntimeError:
             out.append(math.inf)
     return out
+
+
+def peak_or_inf(mech: SliderCrank, revolution: int, backend: str, options: dict) -> float:
+    """Worker of the GA's `evaluate` calls: peak |F12| of one design (inf where the
+    integration fails)."""
+    return _peak_chunk([mech], revolution, backend, options)[0]
 
 
 def _peak_chunk_packed(args: tuple) -> list[float]:
@@ -127,21 +133,28 @@ class _Dispatcher:
 
 
     def map_tasks(self, fn: Callable, items: Sequence, args: tuple = (),
-                  chunk_size: int | None = None, on_chunk: Callable | None = None) -> list:
+                  chunk_size: int | None = None, on_chunk: Callable | None = None,
+                  on_result: Callable | None = None, retries: int = 0) -> list:
         """``[fn(item, *args) for item in items]`` on the executor, in order.
 
         Items go out in chunks of `chunk_size` (default: one chunk per worker); `on_chunk`
-        is called with the number of items of each chunk as it completes (in order), e.g.
-        a progress bar's ``update``. `fn` must be picklable for process pools and dask
-        (a module-level function) and handle its own failures.
+        is called with the number of items of each chunk as it completes, e.g. a progress
+        bar's ``update``; `on_result(start, results)` with each chunk's results as it
+        completes (in completion order: the chunk holds items[start:start + len(results)]),
+        e.g. to write them at once. A dask chunk that raised is retried `retries` times (a
+        lost worker's chunks are rescheduled by the dask scheduler itself). `fn` must be
+        picklable for process pools and dask (a module-level function) and handle its own
+        failures.
         """
         items = list(items)
         if self.executor is None or len(items) <= 1:
             out = []
-            for item in items:
+            for i, item in enumerate(items):
                 out.append(fn(item, *args))
                 if on_chunk is not None:
                     on_chunk(1)
+                if on_result is not None:
+                    on_result(i, out[-1:])
             return out
         if chunk_size is None:
             n_chunks = len(items) if self.n_workers is None \
@@ -150,26 +163,42 @@ class _Dispatcher:
             n_chunks = max(1, math.ceil(len(items) / chunk_size))
         bounds = np.linspace(0, len(items), n_chunks + 1).round().astype(int)
         chunks = [items[a:b] for a, b in zip(bounds[:-1], bounds[1:])]
-        results = []
+        results: list = [None] * len(chunks)
+
+        def done(i, r):
+            results[i] = r
+            if on_chunk is not None:
+                on_chunk(len(chunks[i]))
+            if on_result is not None:
+                on_result(int(bounds[i]), r)
+
         if self.is_dask:
-            futures = [self.executor.submit(_task_chunk, fn, c, args, pure=False)
-                       for c in chunks]
+            from dask.distributed import as_completed as dask_completed
+
+            futures = [self.executor.submit(_task_chunk, fn, c, args, pure=False,
+                                            retries=retries) for c in chunks]
+            index = {f.key: i for i, f in enumerate(futures)}
             try:
-                for c, f in zip(chunks, futures):
-                    results.append(f.result())
-                    if on_chunk is not None:
-                        on_chunk(len(c))
+                if on_result is None:
+                    for i, f in enumerate(futures):
+                        done(i, f.result())
+                else:
+                    for f in dask_completed(futures):
+                        done(index[f.key], f.result())
             except BaseException:
                 self.executor.cancel(futures)
                 raise
         elif hasattr(self.executor, "submit"):
             extra = () if self.stop is None else (self.stop,)
             futures = [self.executor.submit(_task_chunk, fn, c, args, *extra) for c in chunks]
+            index = {f: i for i, f in enumerate(futures)}
             try:
-                for c, f in zip(chunks, futures):
-                    results.append(f.result())
-                    if on_chunk is not None:
-                        on_chunk(len(c))
+                if on_result is None:
+                    for i, f in enumerate(futures):
+                        done(i, f.result())
+                else:
+                    for f in as_completed(futures):
+                        done(index[f], f.result())
             except BaseException:
                 for f in futures:
                     f.cancel()
@@ -177,11 +206,9 @@ class _Dispatcher:
                     self.stop.set()
                 raise
         else:  # map-only executors, e.g. multiprocessing.Pool: one iterable of tuples
-            for c, r in zip(chunks, self.executor.map(_task_chunk_packed,
-                                                      [(fn, c, args) for c in chunks])):
-                results.append(r)
-                if on_chunk is not None:
-                    on_chunk(len(c))
+            for i, r in enumerate(self.executor.map(_task_chunk_packed,
+                                                    [(fn, c, args) for c in chunks])):
+                done(i, r)
         return [r for chunk in results for r in chunk]
 
 
@@ -319,7 +346,8 @@ def _check_timeout(name: str, value) -> float:
 def evaluate(fn: Callable, items: Sequence, args: tuple = (), *, executor=None,
              workers: int = 2, thread_safe: bool = True, progress: bool = False,
              desc: str = "designs", chunk_size: int | None = None,
-             dask_timeout: float = DASK_WORKER_TIMEOUT) -> list:
+             dask_timeout: float = DASK_WORKER_TIMEOUT, on_result: Callable | None = None,
+             retries: int = 2) -> list:
     """``[fn(item, *args) for item in items]`` on an executor, with a progress bar.
 
     Parameters
@@ -341,6 +369,13 @@ def evaluate(fn: Callable, items: Sequence, args: tuple = (), *, executor=None,
         Items per task (default: about 8 tasks per worker, so that the bar moves).
     dask_timeout : float
         Seconds to wait for the first worker of a dask Client (> 0).
+    on_result : callable, optional
+        Called as ``on_result(start, results)`` with each chunk's results as the chunk
+        completes (completion order; items[start:start + len(results)]), in this process:
+        results stream back and can be written as they arrive.
+    retries : int
+        Times a dask chunk that raised is resubmitted (>= 0); the chunks of a worker that
+        is lost are rescheduled by the dask scheduler itself.
     """
     from tqdm.auto import tqdm
 
@@ -356,6 +391,8 @@ def evaluate(fn: Callable, items: Sequence, args: tuple = (), *, executor=None,
                                    or isinstance(chunk_size, bool) or chunk_size < 1):
         raise ValueError(f"chunk_size must be None or an integer >= 1; got {chunk_size!r}")
     dask_timeout = _check_timeout("dask_timeout", dask_timeout)
+    if not isinstance(retries, numbers.Integral) or isinstance(retries, bool) or retries < 0:
+        raise ValueError(f"retries must be an integer >= 0; got {retries!r}")
     items = list(items)
     if executor is None:
         executor = "threads" if thread_safe else "processes"
@@ -375,9 +412,12 @@ def evaluate(fn: Callable, items: Sequence, args: tuple = (), *, executor=None,
                 _wait_for_dask_workers(pool, dask_timeout)
             with tqdm(total=len(items), desc=desc, unit="run", disable=not progress,
                       leave=True) as bar:
-                out = dispatcher.map_tasks(fn, items, args, chunk_size, bar.update)
+                out = dispatcher.map_tasks(fn, items, args, chunk_size, bar.update, on_result,
+                                            int(retries))
             interrupted = False
         except BrokenProcessPool as exc:
+            if own_pool is None:    # the caller's pool: the caller says what to do
+                raise
             raise RuntimeError(f"the worker processes stopped ({exc}); a script that starts "
                                "a process pool at its top level needs the call under "
                                "`if __name__ == '__main__':`, or pass executor='threads'"

@@ -5,7 +5,9 @@ revolution (the 4th by default) over a box of `SliderCrank` fields (by default t
 crank length L2 in [4, 6] cm and coupler length L3 in [10, 14] cm) with pygad's GA, then
 polishes the GA's best point with a bounded local search (scipy Nelder-Mead) on the same objective.
 
-Parallelism: each generation's new designs are evaluated as one batch on an executor: by
+Parallelism: each generation's new designs are evaluated as one batch by
+`executor.evaluate` (the one evaluator of designs, shared with the tolerance study and the
+regime maps) on an executor: by
 default a local pool of `workers` threads (the compiled reduced model releases the GIL, so the
 threads run in parallel with no pickling and no start method: the call works from a script
 without a main guard, a notebook, ``python -`` and ``python -c``), a local process pool for
@@ -55,7 +57,9 @@ from .executor import (  # noqa: F401 - the executors live in executor.py (share
     _stop_pool,
     _wait_for_dask_workers,
     connect_dask,
+    evaluate,
     local_process_pool,
+    peak_or_inf,
 )
 from .mechanism import CONTINUOUS_FIELDS, SliderCrank
 from .simulate import BACKENDS, peak_base_force, simulate
@@ -181,9 +185,17 @@ class _Objective:
         if new:
             mechs = [self.problem.mechanism(k) for k in new]
             active = _ACTIVE.get(self.run_id)
-            dispatcher = active[0] if active is not None and not serial \
-                else _Dispatcher(None, None)
-            for k, p in zip(new, dispatcher.map(mechs, self.problem)):
+            executor, chunk = "serial", None
+            if active is not None and not serial and active[0].executor is not None:
+                # the run's pool or Client, one chunk per worker
+                executor = active[0].executor
+                if active[0].n_workers:
+                    chunk = math.ceil(len(mechs) / active[0].n_workers)
+            problem = self.problem
+            peaks = evaluate(peak_or_inf, mechs,
+                             (problem.revolution, problem.backend, problem.options),
+                             executor=executor, chunk_size=chunk, desc="GA designs")
+            for k, p in zip(new, peaks):
                 self.cache[k] = p
         return np.array([self.cache[k] for k in keys])
 

@@ -17,7 +17,8 @@ from .trajectory import Trajectory
 
 __all__ = ["plot_trajectory", "plot_overlay", "plot_comparison", "plot_sensitivities",
            "plot_work_precision", "plot_fitness_history", "plot_force_comparison",
-           "SENSITIVITY_FIGURES", "save"]
+           "SENSITIVITY_FIGURES", "save", "plot_bifurcation", "plot_regime_map",
+           "plot_poincare"]
 
 COLORS = ["C0", "C3", "C2", "C1", "C4", "C5"]
 
@@ -270,4 +271,150 @@ def plot_force_comparison(trajectories: Mapping[str, Trajectory],
     ax.set_xticks(np.arange(0, 361, 45))
     ax.grid(alpha=0.3)
     ax.legend(loc="best", fontsize=8)
+    return save(fig, path)
+
+
+# ---------------------------------------------------------------- regime maps (issue 19)
+
+#: colour of each regime code (poincare.REGIMES)
+REGIME_COLORS = {0: "#ffffff", 1: "#000000", 2: "#4c9be8", 3: "#8fd175", 4: "#f2c14e",
+                 5: "#d9534f", 6: "#b07cc6", 7: "#9e9e9e"}
+
+
+def _axis_label(ds, name: str) -> str:
+    units = {"clearance": "m", "crank_speed": "rad/s"}
+    return f"{name} ({units[name]})" if name in units else name
+
+
+def _sweep_dims(ds) -> list[str]:
+    return [d for d in ds["regime"].dims]
+
+
+def plot_bifurcation(ds, path: str | Path | None = None, joint: int = 0,
+                     component: str = "x", fixed: Mapping | None = None) -> Figure:
+    """Bifurcation diagram of a regime map (`sweep.regime_map`'s dataset): the kept
+    section samples of `component` of clearance joint `joint` (in clearances, or
+    clearance x speed for rates) against the first swept field, coloured by regime; a
+    two-field map is cut at `fixed` ({other field: value}, nearest; default its first
+    value)."""
+    from .poincare import REGIMES
+
+    dims = _sweep_dims(ds)
+    sel = ds
+    if len(dims) == 2:
+        other = dims[1]
+        value = (fixed or {}).get(other, float(ds[other].values[0]))
+        sel = ds.sel({other: value}, method="nearest")
+    x = sel[dims[0]].values
+    c = np.atleast_1d(np.asarray(ds.attrs["clearance"], dtype=float))[joint]
+    comp = list(ds["component"].values).index(component)
+    y = sel["section"].values[:, :, joint, comp] / c
+    if component.endswith("dot"):
+        y = y / _speed_of(sel, len(x))
+    fig = Figure(figsize=(7.5, 4.2))
+    ax = fig.subplots()
+    regime = sel["regime"].values
+    for code in np.unique(regime):
+        rows = regime == code
+        xs = np.repeat(x[rows], y.shape[1])
+        ax.plot(xs, y[rows].ravel(), ".", ms=2.0, color=REGIME_COLORS.get(int(code), "k"),
+                label=REGIMES[int(code)].replace("_", " "))
+    if ds[dims[0]].attrs.get("spacing") == "log":
+        ax.set_xscale("log")
+    ax.set_xlabel(_axis_label(ds, dims[0]))
+    unit = "clearance x crank speed" if component.endswith("dot") else "clearance"
+    ax.set_ylabel(f"section {component} of {ds['joint'].values[joint]} ({unit})")
+    title = "bifurcation diagram"
+    if len(dims) == 2:
+        title += f" at {dims[1]} = {float(sel[dims[1]].values):.4g}"
+    ax.set_title(title)
+    ax.legend(fontsize=8, markerscale=4, loc="best")
+    return save(fig, path)
+
+
+def _speed_of(sel, n: int) -> np.ndarray:
+    """The crank speed (rad/s) of each point of a 1-D cut: swept, or the base design's."""
+    import json
+
+    if "crank_speed" in sel.coords:
+        return np.broadcast_to(np.asarray(sel["crank_speed"].values, float), (n,))[:, None]
+    base = json.loads(sel.attrs["base_design"])
+    speed = base.get("crank_speed", base.get("drive", {}).get("speed", 1.0))
+    return np.full((n, 1), float(speed))
+
+
+def plot_regime_map(ds, path: str | Path | None = None, mark: Mapping | None = None
+                    ) -> Figure:
+    """2-D regime map of a two-field regime map dataset: each point's regime as a coloured
+    cell (log axes for log sweeps); `mark` ({field: value, ...}) marks a design, e.g. the
+    paper's."""
+    from matplotlib.patches import Patch
+
+    from .poincare import REGIMES
+
+    dims = _sweep_dims(ds)
+    if len(dims) != 2:
+        raise ValueError(f"plot_regime_map needs a map over two fields; got {dims}")
+    x = ds[dims[0]].values
+    y = ds[dims[1]].values
+    codes = sorted(REGIMES)
+    rgb = np.array([[int(REGIME_COLORS[k][i:i + 2], 16) / 255 for i in (1, 3, 5)]
+                    for k in codes])
+    img = rgb[ds["regime"].values.astype(int)]          # (nx, ny, 3)
+    fig = Figure(figsize=(7.5, 5.0))
+    ax = fig.subplots()
+    ax.pcolormesh(_edges(x, ds[dims[0]].attrs.get("spacing")),
+                  _edges(y, ds[dims[1]].attrs.get("spacing")),
+                  np.transpose(img, (1, 0, 2)), shading="flat")
+    for name, axis in ((dims[0], "x"), (dims[1], "y")):
+        if ds[name].attrs.get("spacing") == "log":
+            getattr(ax, f"set_{axis}scale")("log")
+    if mark:
+        ax.plot([mark[dims[0]]], [mark[dims[1]]], marker="*", ms=14, color="k",
+                mfc="yellow", ls="none", label="design")
+    present = [k for k in codes if np.any(ds["regime"].values == k)]
+    ax.legend(handles=[Patch(color=REGIME_COLORS[k], label=REGIMES[k].replace("_", " "))
+                       for k in present], fontsize=8, loc="upper left",
+              bbox_to_anchor=(1.01, 1.0))
+    ax.set_xlabel(_axis_label(ds, dims[0]))
+    ax.set_ylabel(_axis_label(ds, dims[1]))
+    ax.set_title("regime map")
+    return save(fig, path)
+
+
+def _edges(v: np.ndarray, spacing: str | None) -> np.ndarray:
+    """Cell edges around the sample values (geometric midpoints on log axes)."""
+    v = np.asarray(v, dtype=float)
+    if len(v) == 1:
+        return np.array([v[0] * 0.9, v[0] * 1.1]) if v[0] != 0 else np.array([-0.5, 0.5])
+    if spacing == "log" and np.all(v > 0):
+        lv = np.log(v)
+        mid = 0.5 * (lv[1:] + lv[:-1])
+        return np.exp(np.concatenate([[2 * lv[0] - mid[0]], mid, [2 * lv[-1] - mid[-1]]]))
+    mid = 0.5 * (v[1:] + v[:-1])
+    return np.concatenate([[2 * v[0] - mid[0]], mid, [2 * v[-1] - mid[-1]]])
+
+
+def plot_poincare(ds, points: Sequence[Mapping], path: str | Path | None = None,
+                  joint: int = 0) -> Figure:
+    """Poincare portraits: the section samples (x, y in clearances) of the given sweep
+    points ({field: value}, nearest), one panel each, the clearance circle drawn."""
+    from .poincare import REGIMES
+
+    n = len(points)
+    fig = Figure(figsize=(3.2 * n, 3.4))
+    axes = np.atleast_1d(fig.subplots(1, n))
+    c = np.atleast_1d(np.asarray(ds.attrs["clearance"], dtype=float))[joint]
+    circle = np.linspace(0, 2 * np.pi, 200)
+    for ax, point in zip(axes, points):
+        sel = ds.sel(dict(point), method="nearest")
+        xy = sel["section"].values[:, joint, :2] / c
+        ax.plot(np.cos(circle), np.sin(circle), color="0.7", lw=0.8)
+        ax.plot(xy[:, 0], xy[:, 1], ".", ms=4)
+        ax.set_aspect("equal")
+        label = ", ".join(f"{k} = {float(sel[k].values):.3g}" for k in point)
+        ax.set_title(f"{label}\n{REGIMES[int(sel['regime'].values)].replace('_', ' ')}",
+                     fontsize=8)
+        ax.set_xlabel("x / clearance")
+    axes[0].set_ylabel("y / clearance")
     return save(fig, path)

@@ -1,0 +1,301 @@
+"""The largest Lyapunov exponent from the variational equations (issue 19).
+
+The DDM kernels (ddm.py) integrate the state with sensitivities s' = (df/dy) s + (df/db) D +
+(df/d deltadot_minus) sigma. With no parameter (D = 0) and an initial sensitivity v0 (a
+direction in state space) the sensitivity is the tangent vector v(t) = Phi(t) v0 of the
+flow, and the impact-velocity memory's sensitivity sigma carries the tangent of that hidden
+state, set at each contact onset with the event-time term (ddm.on_event_sens) exactly as for
+parameters: the state's tangent does not jump at the switches (the contact force is zero on
+both sides of delta = 0), the memory's does.
+
+Benettin's method: the tangent is integrated over one window (a crank revolution), its
+growth measured in the scaled norm |v / S| (S: clearance-sized positions and clearance x
+speed rates, so that every component counts), then renormalised to 1. The exponent is the
+mean log-growth over the windows after a transient: lambda = sum log(growth_k) / (windows
+kept), per window, and / window time in 1/s.
+
+The memory's tangent at a renormalisation (`memory`): "reset" (the default) sets it to 0,
+"carry" divides it by the growth as v. The stored impact velocity is constant while a
+contact lasts, so in a motion that stays in contact (the paper's design: five contact
+switches in all, then permanent contact) a perturbation of it is never forgotten: nearby
+runs settle on nearby periodic motions with different stored impact velocities (checked
+against two runs of the plain model), and the full hybrid system's largest exponent is
+exactly 0 there, whatever the motion's own stability. "reset" measures the separation of
+the mechanical states for a given contact-law memory within each window (the memory's
+tangent is still set at each onset from v, with the event-time term): negative on a stable
+periodic motion, and the same as "carry" where contacts start again and again (chaos).
+
+The interface a flow offers (`TangentFlow`, `TextbookFlow`): `advance(t1)` integrates
+state and tangent from its time to t1 and returns the window's peak; `renormalise()` scales
+the tangent back to unit norm and returns the growth; `section()` the Poincare section
+of the state. A Linkage's flow will have the same members once the DDM covers generated
+models.
+
+`TextbookFlow` runs a reference system through the same integrator and the same
+renormalisation code: a linear system x' = A x (the exponent is the largest real part of
+A's eigenvalues) and the Lorenz system (sigma 10, rho 28, beta 8/3: 0.9056).
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+from dataclasses import dataclass, field
+
+import numba as nb
+import numpy as np
+
+from ._checks import check_int, check_real
+from .integrator import (
+    ACTION_SIG,
+    EVENT_SIG,
+    KERNEL,
+    METHODS,
+    MONITOR_SIG,
+    RHS_SIG,
+    integrate,
+    make_settings,
+)
+from .linkage import Linkage
+from .mechanism import SliderCrank
+from .poincare import DEFAULT_RTOL, Flow, _reduced_gap, drive_of, section_times
+
+__all__ = ["LyapunovResult", "TangentFlow", "TextbookFlow", "lyapunov_exponent",
+           "textbook_exponent", "LORENZ", "exponent_of_flow"]
+
+_THIS = sys.modules[__name__]
+
+
+@dataclass
+class LyapunovResult:
+    """The largest Lyapunov exponent: per_second (1/s) and per_revolution (per window),
+    from the log-growths (windows,) of the tangent, the first `transient` not counted."""
+
+    per_second: float
+    per_revolution: float
+    log_growth: np.ndarray
+    transient: int
+    window: float
+    counters: dict = field(default_factory=dict)
+
+
+class TangentFlow(Flow):
+    """The paper's reduced model with one tangent vector (the DDM sensitivity equations
+    with no parameter, `ddm.integrate_sens`). y = [state (4), tangent (4), W]; the
+    memory's tangent is p[ddm.P_SIGMA]."""
+
+    def __init__(self, mech, *, rtol: float | None = None, method: str = "dop853",
+                 direction=None, memory: str = "reset", max_steps: int = 5_000_000):
+        if isinstance(mech, Linkage):
+            raise NotImplementedError(
+                "the Lyapunov exponent of a Linkage needs the DDM of generated models "
+                "(pending: s8-ddm); pass the paper's case as a SliderCrank")
+        if memory not in ("reset", "carry"):
+            raise ValueError(f"memory must be 'reset' or 'carry'; got {memory!r}")
+        self.reset_memory = memory == "reset"
+        super().__init__(mech, rtol=rtol, method=method, max_steps=max_steps)
+        from . import ddm, reduced
+
+        rtol = self.rtol
+        c, L3, w = mech.clearance, mech.coupler_length, mech.crank_speed
+        #: scales of the tangent's components: the journal moves within the clearance
+        self.scale = np.array([c / L3, c, w * c / L3, w * c])
+        v = np.full(4, 0.5) if direction is None else np.asarray(direction, dtype=float)
+        if v.shape != (4,) or not np.all(np.isfinite(v)) or not np.any(v != 0.0):
+            raise ValueError("direction must be 4 finite numbers, not all zero (scaled "
+                             f"components of theta3, x4 and their rates); got {direction!r}")
+        v = v / np.linalg.norm(v) * self.scale
+        base = reduced.pack_parameters(mech)
+        self.p = ddm.pack(base, np.zeros((ddm.N_BETA, 1)), np.zeros(1), True)
+        self.y = np.concatenate([reduced.initial_state(mech)[:4], v, [0.0]])
+        atol = np.concatenate([reduced.default_atol(mech, rtol)[:4], rtol * self.scale, [1.0],
+                               reduced.event_atol(mech, rtol)])
+        self.settings = self.settings._replace(
+            atol=atol, n_err=8, mem_start=reduced.P_MODE,
+            n_mem=ddm.P_SIGMA - reduced.P_MODE + 1)
+        self.kernel = ddm.integrate_sens
+        self._sigma = ddm.P_SIGMA
+
+    def tangent(self) -> np.ndarray:
+        """The tangent vector (4,) in units of the state."""
+        return self.y[4:8]
+
+    def renormalise(self) -> float:
+        """Scale the tangent to unit scaled norm (the memory's tangent: reset to 0 or
+        scaled alike, `memory`); returns the growth."""
+        n = float(np.linalg.norm(self.y[4:8] / self.scale))
+        self.y[4:8] /= n
+        self.p[self._sigma] = 0.0 if self.reset_memory else self.p[self._sigma] / n
+        return n
+
+    def section(self) -> np.ndarray:
+        return np.array([_reduced_gap(self.t, self.y, self.p)], dtype=float)
+
+
+# ------------------------------------------------------------------ reference systems
+
+#: the reference systems of `TextbookFlow`: kind code in p[0]
+LINEAR, LORENZ = 0, 1
+
+
+@nb.njit(RHS_SIG, **KERNEL)
+def _tb_rhs(t, y, p, dydt):
+    """State (3) and, for the full state, tangent (3) derivatives of the reference system
+    p[0]: LINEAR (x' = A x, A row-major in p[1:10]) or LORENZ (sigma, rho, beta in p[1:4])."""
+    tangent = y.shape[0] >= 6
+    if p[0] < 0.5:
+        for i in range(3):
+            a = 0.0
+            b = 0.0
+            for j in range(3):
+                a += p[1 + 3 * i + j] * y[j]
+                if tangent:
+                    b += p[1 + 3 * i + j] * y[3 + j]
+            dydt[i] = a
+            if tangent:
+                dydt[3 + i] = b
+        return
+    s = p[1]
+    r = p[2]
+    b = p[3]
+    x = y[0]
+    yy = y[1]
+    z = y[2]
+    dydt[0] = s * (yy - x)
+    dydt[1] = x * (r - z) - yy
+    dydt[2] = x * yy - b * z
+    if tangent:
+        u = y[3]
+        v = y[4]
+        w = y[5]
+        dydt[3] = s * (v - u)
+        dydt[4] = (r - z) * u - v - x * w
+        dydt[5] = yy * u + x * v - b * w
+
+
+@nb.njit(EVENT_SIG, **KERNEL)
+def _tb_event(t, y, p, j):
+    """No switching: the function stays negative."""
+    return -1.0, 0.0
+
+
+@nb.njit(ACTION_SIG, **KERNEL)
+def _tb_on_event(t, y, p, j):
+    """Never called (no switching)."""
+    return
+
+
+@nb.njit(MONITOR_SIG, **KERNEL)
+def _tb_monitor(t, y, p, dydt, out, g, gd):
+    """The right-hand side; the monitored value is |x|."""
+    _tb_rhs(t, y, p, dydt)
+    g[0] = -1.0
+    gd[0] = 0.0
+    return math.sqrt(y[0] * y[0] + y[1] * y[1] + y[2] * y[2])
+
+
+@nb.njit(cache=True, error_model="numpy", nogil=True)
+def integrate_textbook(y0, p, edges, settings, coefficients):
+    """`integrate` bound to the reference systems' kernels (compiled once, cached)."""
+    return integrate(_THIS._tb_rhs, _THIS._tb_event, _THIS._tb_on_event, _THIS._tb_monitor,
+                     y0, p, edges, settings, coefficients)
+
+
+class TextbookFlow(Flow):
+    """A reference system (3 states + 3 tangent components) on the compiled integrator,
+    with the members of `TangentFlow`: `advance`, `renormalise`."""
+
+    def __init__(self, kind: int, params, x0, v0, *, rtol: float = 1e-10,
+                 method: str = "dop853"):
+        # no mechanism: the Flow's integration members only
+        self.mech = None
+        self.rtol = check_real("rtol", rtol, 1e-14, 1e-4)
+        self.p = np.zeros(10)
+        self.p[0] = kind
+        self.p[1:1 + len(params)] = params
+        self.y = np.concatenate([np.asarray(x0, float), np.asarray(v0, float)])
+        self.y[3:] /= np.linalg.norm(self.y[3:])
+        atol = np.full(6, rtol)
+        self.settings = make_settings(rtol, atol, 6, h_max=np.inf, max_steps=10**7,
+                                      record=True, refine_iters=0, n_out=0, n_dense=3,
+                                      n_events=1, mem_start=10, n_mem=0)
+        self.kernel = integrate_textbook
+        self.coefficients = METHODS[method].arrays()
+        self.t = 0.0
+        self.counters = np.zeros(5, dtype=np.int64)
+        self.max_recorded = 0
+        self.joints = ()
+
+    def renormalise(self) -> float:
+        n = float(np.linalg.norm(self.y[3:]))
+        self.y[3:] /= n
+        return n
+
+
+# ------------------------------------------------------------------------------ exponent
+
+def exponent_of_flow(flow, times, transient: int, window: float) -> LyapunovResult:
+    """Benettin's estimate on a flow with the `TangentFlow` members: advance to each of
+    `times`, renormalise, average the log-growths after the first `transient` windows of
+    duration `window` (s)."""
+    logs = np.empty(len(times))
+    for k, t1 in enumerate(times):
+        flow.advance(t1)
+        logs[k] = math.log(flow.renormalise())
+    per_window = float(np.mean(logs[transient:]))
+    from .reduced import counters_dict
+
+    return LyapunovResult(per_second=per_window / window, per_revolution=per_window,
+                          log_growth=logs, transient=transient, window=window,
+                          counters=counters_dict(flow.counters))
+
+
+def lyapunov_exponent(mech, revolutions: int = 100, transient: int = 50, *,
+                      rtol: float | None = None, method: str = "dop853",
+                      direction=None, memory: str = "reset") -> LyapunovResult:
+    """The largest Lyapunov exponent of `mech`'s motion (a SliderCrank; a Linkage once the
+    DDM covers generated models), in 1/s (`per_second`) and per crank revolution.
+
+    The state and one tangent vector (initial `direction`: 4 scaled components of
+    theta3, x4 and their rates; default all equal) are integrated over `revolutions` crank
+    revolutions, the tangent renormalised at the end of each; the log-growths of the last
+    revolutions - `transient` are averaged. rtol (default 1e-7) applies to the state and
+    the unit tangent alike. `memory`: the impact-velocity memory's tangent at each
+    renormalisation, "reset" or "carry" (module docstring).
+    """
+    if not isinstance(mech, (SliderCrank, Linkage)):
+        raise ValueError(f"mech must be a SliderCrank or a Linkage; got {type(mech).__name__}")
+    revolutions = check_int("revolutions", revolutions, 2)
+    transient = check_int("transient (revolutions not averaged)", transient, 0,
+                          revolutions - 1)
+    flow = TangentFlow(mech, rtol=DEFAULT_RTOL if rtol is None else rtol, method=method,
+                       direction=direction, memory=memory)
+    omega, _ = drive_of(mech)
+    return exponent_of_flow(flow, section_times(mech, revolutions), transient,
+                            2.0 * math.pi / omega)
+
+
+#: Lorenz's parameters and a point near its attractor
+LORENZ_PARAMS = (10.0, 28.0, 8.0 / 3.0)
+
+
+def textbook_exponent(kind: str, time: float, *, window: float = 1.0, transient: float = 0.0,
+                      matrix=None, x0=(1.0, 1.0, 20.0), v0=(1.0, 0.0, 0.0),
+                      rtol: float = 1e-10) -> LyapunovResult:
+    """The largest exponent of a reference system by `exponent_of_flow` (the same code as
+    the mechanism's): kind "lorenz" (sigma 10, rho 28, beta 8/3) or "linear" (x' = A x,
+    `matrix` 3 x 3), over `time` units in windows of `window`, the first `transient`
+    units not averaged."""
+    if kind not in ("lorenz", "linear"):
+        raise ValueError(f"kind must be 'lorenz' or 'linear'; got {kind!r}")
+    window = check_real("window", window, 0.0, low_open=True)
+    n = int(round(check_real("time", time, window) / window))
+    skip = int(round(check_real("transient", transient, 0.0, time - window) / window))
+    if kind == "linear":
+        A = np.asarray(matrix, dtype=float)
+        if A.shape != (3, 3) or not np.all(np.isfinite(A)):
+            raise ValueError("matrix must be 3 x 3 finite numbers for kind='linear'")
+        flow = TextbookFlow(LINEAR, A.ravel(), x0, v0, rtol=rtol)
+    else:
+        flow = TextbookFlow(LORENZ, LORENZ_PARAMS, x0, v0, rtol=rtol)
+    return exponent_of_flow(flow, window * np.arange(1, n + 1), skip, window)

@@ -1,0 +1,341 @@
+"""Poincare sections of a run and the classification of its motion (issue 19).
+
+A run is integrated one section interval at a time on the compiled event-exact integrator
+(`Flow`): the integrator lands exactly on each window's end, and for a constant-speed drive
+the crank angle `angle` is reached at t_k = (2 pi (k - 1) + ((angle - theta0) mod 2 pi)) /
+omega (with 2 pi in place of 0: sample k lies in revolution k, at its end when angle =
+theta0). Only one window's steps are held at a time; what a run keeps is the section
+samples and one peak per window, so its memory is O(samples), independent of its length.
+
+The section of each clearance joint is its eccentricity (journal centre minus bearing
+centre, x and y, m) and the eccentricity's rate (m/s): `SECTION_COMPONENTS`.
+
+Classification (`classify`), on the kept samples X_1..X_N made dimensionless (positions
+divided by the joint's clearance c, rates by c omega):
+
+- period-k: the smallest k <= max_period with max_i |X_{i+k} - X_i|_inf <= tol over all the
+  kept samples (the recurrence holds N - k times; N >= 2 max_period + 1 is required);
+- otherwise, by the largest Lyapunov exponent lambda per revolution (`lyapunov.py`), if it
+  was computed: chaotic if lambda > LYAPUNOV_ZERO, quasi-periodic if |lambda| <=
+  LYAPUNOV_ZERO, unsettled if lambda < -LYAPUNOV_ZERO (contracting, but not yet on its
+  periodic orbit after the transient: run longer);
+- aperiodic when no exponent was computed.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ._checks import check_int, check_real
+from .integrator import METHODS, RESULTS, make_settings
+from .linkage import Linkage
+from .mechanism import SliderCrank
+
+__all__ = ["SECTION_COMPONENTS", "REGIMES", "Flow", "PoincareSection", "poincare_section",
+           "classify", "section_times", "RECURRENCE_TOL", "MAX_PERIOD", "LYAPUNOV_ZERO"]
+
+#: the section's components per clearance joint
+SECTION_COMPONENTS = ("x", "y", "xdot", "ydot")
+
+#: regime codes (the dataset's `regime` variable; CF flag_values / flag_meanings)
+REGIMES = {0: "not_computed", 1: "failed", 2: "period_1", 3: "period_k",
+           4: "quasi_periodic", 5: "chaotic", 6: "aperiodic", 7: "unsettled"}
+REGIME_CODES = {v: k for k, v in REGIMES.items()}
+
+#: default recurrence tolerance of the dimensionless section samples (fraction of the
+#: clearance for positions, of clearance x crank speed for rates)
+RECURRENCE_TOL = 1e-3
+
+#: default largest period looked for
+MAX_PERIOD = 8
+
+#: |largest Lyapunov exponent| per revolution below which the motion counts as neither
+#: contracting nor chaotic: separations change less than e-fold in 50 revolutions
+LYAPUNOV_ZERO = 0.02
+
+#: default relative tolerance of section runs (as the plain runs)
+DEFAULT_RTOL = 1e-7
+
+
+def _is_linkage(mech) -> bool:
+    return isinstance(mech, Linkage)
+
+
+def _check_mech(mech) -> None:
+    if not isinstance(mech, (SliderCrank, Linkage)):
+        raise ValueError(f"mech must be a SliderCrank or a Linkage; got {type(mech).__name__}")
+
+
+def drive_of(mech) -> tuple[float, float]:
+    """(omega, theta0): the constant drive speed (rad/s) and initial crank angle (rad)."""
+    if _is_linkage(mech):
+        return mech.drive.speed, mech.drive.initial_angle
+    return mech.crank_speed, mech.initial_crank_angle
+
+
+def clearances_of(mech) -> np.ndarray:
+    """Radial clearance of each clearance joint (m)."""
+    if _is_linkage(mech):
+        return np.array([j.clearance for j in mech.clearance_joints])
+    return np.array([mech.clearance])
+
+
+def joints_of(mech) -> tuple[str, ...]:
+    """Names of the clearance joints (the paper's one joint: "coupler_slider")."""
+    if _is_linkage(mech):
+        return tuple(j.name for j in mech.clearance_joints)
+    return ("coupler_slider",)
+
+
+def section_times(mech, samples, angle: float | None = None, first: int = 1) -> np.ndarray:
+    """Times of section samples first..first+samples-1 at crank angle `angle` (rad; None:
+    the initial crank angle, i.e. the ends of the revolutions): sample k in revolution k."""
+    omega, theta0 = drive_of(mech)
+    rel = 2.0 * math.pi if angle is None else (angle - theta0) % (2.0 * math.pi)
+    if rel <= 1e-12:
+        rel = 2.0 * math.pi
+    k = np.arange(first, first + samples)
+    return (2.0 * math.pi * (k - 1) + rel) / omega
+
+
+# --------------------------------------------------------------------------------- flows
+
+class Flow:
+    """A mechanism's state advanced window by window on the compiled integrator (the plain
+    model: `reduced` for a SliderCrank, the generated model for a Linkage), holding one
+    window's record at a time. `t`, `y`, `p` are the current time, state and parameters
+    (with the contact memory). `advance(t1)` returns the window's refined maximum of the
+    monitored force (|F12|, or the linkage's monitored reaction)."""
+
+    def __init__(self, mech, *, rtol: float | None = None, method: str = "dopri5",
+                 max_steps: int = 5_000_000):
+        _check_mech(mech)
+        self.mech = mech
+        rtol = DEFAULT_RTOL if rtol is None else check_real("rtol", rtol, 1e-14, 1e-4)
+        if method not in METHODS:
+            raise ValueError(f"method must be one of {sorted(METHODS)}; got {method!r}")
+        self.omega, self.theta0 = drive_of(mech)
+        self.clearance = clearances_of(mech)
+        self.joints = joints_of(mech)
+        if _is_linkage(mech):
+            from . import linkage_model as lm
+            from .generate import load_model
+
+            model = self.model = load_model(mech)
+            p = lm.pack_parameters(mech, model)
+            y0 = lm.initial_state(mech, model, p)
+            rtol, atol = lm._tolerances(mech, model, rtol, None)
+            self.kernel = model.integrate_model
+            event_tol = max(1e-12 * mech.min_clearance,
+                            8 * np.finfo(float).eps * mech.length_scale)
+            self.settings = make_settings(
+                rtol, atol, 2 * model.N_Q, h_max=mech.period / 8, max_steps=max_steps,
+                record=True, event_tol=event_tol,
+                event_margin=lm.EVENT_MARGIN * mech.min_clearance, n_samples=1,
+                refine_iters=lm.REFINE_ITERS, n_out=0, n_dense=2 * model.N_Q,
+                n_events=model.N_EVENTS, mem_start=model.MEM_START, n_mem=model.N_MEM)
+            self._gaps = [getattr(model, f"_gap_{j}") for j in range(model.N_EVENTS)]
+        else:
+            from . import reduced
+
+            self.model = reduced
+            p = reduced.pack_parameters(mech)
+            y0 = reduced.initial_state(mech)
+            atol = np.append(reduced.default_atol(mech, rtol), reduced.event_atol(mech, rtol))
+            self.kernel = reduced.integrate_plain
+            # as reduced.run: 1e-12 of the clearance, not below the journal's round-off
+            event_tol = max(1e-12 * mech.clearance,
+                            8 * np.finfo(float).eps * (mech.crank_length + mech.coupler_length))
+            self.settings = make_settings(
+                rtol, atol, reduced.N_ERR, h_max=mech.period / 8, max_steps=max_steps,
+                record=True, event_tol=event_tol,
+                event_margin=reduced.EVENT_MARGIN * mech.clearance, n_samples=1,
+                refine_iters=24, n_out=0, n_dense=reduced.N_EVENT, n_events=1,
+                mem_start=reduced.P_MODE, n_mem=reduced.N_MEM)
+            self._gaps = [_reduced_gap]
+        self.rtol = rtol
+        self.coefficients = METHODS[method].arrays()
+        self.t = 0.0
+        self.y = np.ascontiguousarray(y0, dtype=float)
+        self.p = p
+        self.counters = np.zeros(5, dtype=np.int64)
+        #: the most steps recorded in one window (the run's record never holds more)
+        self.max_recorded = 0
+
+    def _run(self, kernel, y, p, t1, settings):
+        """One window [t, t1] of `kernel` from (y, p): the end state (landed on t1), the
+        window's peak; the next window starts with the last full step's size."""
+        edges = np.array([self.t, t1])
+        ts, ys, ms, peaks, _, counters, _, status = kernel(y, p, edges, settings,
+                                                            self.coefficients)
+        status = RESULTS(int(status))
+        if status is not RESULTS.success:
+            name = getattr(self.mech, "name", "slider-crank")
+            raise RuntimeError(f"{name}: integration failed at about t = "
+                               f"{ts[-1] if len(ts) else self.t:.6g} s: {status.message}")
+        self.counters += counters
+        self.max_recorded = max(self.max_recorded, len(ts))
+        if len(ts) >= 3:
+            self.settings = self.settings._replace(h0=float(ts[-2] - ts[-3]))
+        self.t = float(t1)
+        return np.ascontiguousarray(ys[-1]).copy(), float(peaks[0])
+
+    def advance(self, t1: float) -> float:
+        """Integrate to t1 (> t); returns the window's peak of the monitored force (N)."""
+        self.y, peak = self._run(self.kernel, self.y, self.p, t1, self.settings)
+        return peak
+
+    def section(self) -> np.ndarray:
+        """(J, 4) eccentricity x, y (m) and its rates (m/s) of each joint, now."""
+        return np.array([g(self.t, self.y, self.p) for g in self._gaps], dtype=float)
+
+
+def _reduced_gap(t, y, p):
+    """Journal centre minus bearing centre of the paper's joint and its rate: the negated
+    vector of reduced._geometry_trig (which computes the rates but returns only the radial
+    one), from the ideal crank-coupler kinematics."""
+    from . import reduced
+
+    L2, L3, w = p[reduced.P_L2], p[reduced.P_L3], p[reduced.P_W]
+    th2 = w * t + p[reduced.P_TH0]
+    s2, c2 = math.sin(th2), math.cos(th2)
+    s3, c3 = math.sin(y[0]), math.cos(y[0])
+    ex = y[1] - L2 * c2 - L3 * c3
+    ey = -L2 * s2 - L3 * s3
+    exd = y[3] + L2 * w * s2 + L3 * y[2] * s3
+    eyd = -L2 * w * c2 - L3 * y[2] * c3
+    return -ex, -ey, -exd, -eyd
+
+
+# ------------------------------------------------------------------------------ sections
+
+@dataclass
+class PoincareSection:
+    """Section samples of a run and its classification.
+
+    samples (N, J, 4): eccentricity x, y (m) and rates (m/s) of each joint at the kept
+    section times `t` (N,); peaks (revolutions,): the monitored force's maximum (N) over
+    each section interval (the crank revolutions when the section angle is the initial
+    crank angle); regime / period: `classify`'s result; lyapunov: the exponent per
+    revolution when computed (else NaN); distance: the recurrence distances d_k
+    (k = 1..max_period)."""
+
+    t: np.ndarray
+    samples: np.ndarray
+    peaks: np.ndarray
+    joints: tuple[str, ...]
+    clearance: np.ndarray
+    omega: float
+    regime: str
+    period: int
+    distance: np.ndarray
+    lyapunov: float = math.nan
+    counters: dict = field(default_factory=dict)
+
+    def scaled(self) -> np.ndarray:
+        """The samples made dimensionless (positions / c, rates / (c omega))."""
+        return scale_samples(self.samples, self.clearance, self.omega)
+
+
+def scale_samples(samples, clearance, omega) -> np.ndarray:
+    """Section samples (N, J, 4) divided by (c, c, c omega, c omega) per joint."""
+    c = np.asarray(clearance, dtype=float)[None, :, None]
+    unit = np.array([1.0, 1.0, omega, omega])[None, None, :]
+    return np.asarray(samples) / (c * unit)
+
+
+def recurrence_distances(scaled: np.ndarray, max_period: int) -> np.ndarray:
+    """d_k = max_i |X_{i+k} - X_i|_inf over the samples (N, ...), k = 1..max_period."""
+    n = scaled.shape[0]
+    flat = scaled.reshape(n, -1)
+    return np.array([np.max(np.abs(flat[k:] - flat[:-k])) if n > k else np.inf
+                     for k in range(1, max_period + 1)])
+
+
+def classify(scaled: np.ndarray, *, tol: float = RECURRENCE_TOL, max_period: int = MAX_PERIOD,
+             lyapunov: float | None = None) -> tuple[str, int, np.ndarray]:
+    """(regime, period, distances) of dimensionless section samples (N, ...) by the
+    criterion of the module docstring; `lyapunov` is the exponent per revolution (None or
+    NaN: not computed)."""
+    tol = check_real("tol (recurrence tolerance)", tol, 0.0, low_open=True)
+    max_period = check_int("max_period", max_period, 1)
+    if scaled.shape[0] < 2 * max_period + 1:
+        raise ValueError(f"keep must be >= 2 max_period + 1 = {2 * max_period + 1} samples "
+                         f"to detect periods up to {max_period}; got {scaled.shape[0]}")
+    d = recurrence_distances(scaled, max_period)
+    for k in range(1, max_period + 1):
+        if d[k - 1] <= tol:
+            return ("period_1" if k == 1 else "period_k"), k, d
+    if lyapunov is None or not math.isfinite(lyapunov):
+        return "aperiodic", 0, d
+    if lyapunov > LYAPUNOV_ZERO:
+        return "chaotic", 0, d
+    if lyapunov >= -LYAPUNOV_ZERO:
+        return "quasi_periodic", 0, d
+    return "unsettled", 0, d
+
+
+def _check_run(mech, revolutions, keep, angle):
+    _check_mech(mech)
+    revolutions = check_int("revolutions", revolutions, 1)
+    keep = check_int("keep (revolutions kept after the transient)", keep, 1, revolutions)
+    if angle is not None:
+        angle = check_real("angle (section crank angle)", angle, unit="rad")
+    return revolutions, keep, angle
+
+
+def poincare_section(mech, revolutions: int = 100, keep: int = 50, *,
+                     angle: float | None = None, tol: float = RECURRENCE_TOL,
+                     max_period: int = MAX_PERIOD, lyapunov: bool = False,
+                     rtol: float | None = None, method: str | None = None) -> PoincareSection:
+    """The Poincare section of a run of `mech` (a SliderCrank or a Linkage).
+
+    Parameters
+    ----------
+    revolutions : int
+        Crank revolutions run; the last `keep` give one section sample each (the first
+        revolutions - keep are the transient).
+    angle : float, optional
+        Crank angle of the section (rad); default the initial crank angle (revolution ends).
+    tol, max_period :
+        The recurrence criterion (`classify`).
+    lyapunov : bool
+        Also integrate one tangent vector (`lyapunov.lyapunov_exponent`'s flow, SliderCrank
+        only) and classify non-periodic motion by the exponent's sign; the state is then
+        integrated with the tangent under error control too.
+    rtol, method :
+        Integrator settings (defaults: 1e-7; dopri5, or dop853 with the tangent).
+    """
+    revolutions, keep, angle = _check_run(mech, revolutions, keep, angle)
+    times = section_times(mech, revolutions, angle)
+    if lyapunov:
+        from .lyapunov import TangentFlow
+
+        flow = TangentFlow(mech, rtol=rtol, method=method or "dop853")
+    else:
+        flow = Flow(mech, rtol=rtol, method=method or "dopri5")
+    samples = np.empty((keep, len(flow.joints), 4))
+    peaks = np.empty(revolutions)
+    log_growth = 0.0
+    first = revolutions - keep
+    for k, t1 in enumerate(times):
+        peaks[k] = flow.advance(t1)
+        if lyapunov:
+            growth = flow.renormalise()
+            if k >= first:
+                log_growth += math.log(growth)
+        if k >= first:
+            samples[k - first] = flow.section()
+    lam = log_growth / keep if lyapunov else math.nan
+    scaled = scale_samples(samples, flow.clearance, flow.omega)
+    regime, period, d = classify(scaled, tol=tol, max_period=max_period,
+                                 lyapunov=lam if lyapunov else None)
+    from .reduced import counters_dict
+
+    return PoincareSection(t=times[first:], samples=samples, peaks=peaks, joints=flow.joints,
+                           clearance=flow.clearance, omega=flow.omega, regime=regime,
+                           period=period, distance=d, lyapunov=lam,
+                           counters=counters_dict(flow.counters))

@@ -1,0 +1,475 @@
+"""Regime maps and bifurcation diagrams: sweeps of long runs on any executor (issue 19).
+
+`regime_map(mech, sweep, revolutions=100, keep=50, ...)` runs a grid over one or two fields
+of a description (`parse_sweep`: "clearance=1e-6:1e-3:log:60", "crank_speed=500rpm:10000rpm:40",
+"crank_length=0.04,0.05,0.06"); each point is a `poincare.poincare_section` run (the last
+`keep` revolutions' section samples, the regime, optionally the largest Lyapunov exponent)
+and keeps what the map needs only: O(keep) numbers per point.
+
+The points are evaluated by `executor.evaluate` (a local thread pool by default, a process
+pool, or dask.distributed: `scheduler="tcp://host:port"` or a Client), in chunks; each
+chunk's results are written into the dataset as it arrives (`out`: a netCDF file, written
+whole to a temporary file and renamed, so a killed run leaves the last complete file). A
+re-run with the same settings and `out` skips the points already done (`done` = 1), so a
+killed sweep resumed gives the same dataset as an uninterrupted one: every point is a
+deterministic function of its design.
+
+Fields: a SliderCrank's field names (`mechanism.SliderCrank`), plus "clearance" (the
+journal radius is set to bearing_radius - clearance); a Linkage's dotted parameter names
+(`Linkage.parameter_names`), plus "clearance" (every clearance joint's journal radius),
+"<joint>.clearance" and "crank_speed" (the drive's speed); for a named case (`case=`), its
+overrides (`cases.CASE_PARAMETERS`), plus "clearance" for every clearance of the case.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import re
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ._checks import check_bool, check_int, check_real
+from .linkage import Linkage
+from .mechanism import SliderCrank
+from .poincare import (
+    MAX_PERIOD,
+    RECURRENCE_TOL,
+    REGIME_CODES,
+    REGIMES,
+    SECTION_COMPONENTS,
+    _check_mech,
+    clearances_of,
+    joints_of,
+    poincare_section,
+)
+
+__all__ = ["SweepAxis", "parse_sweep", "design_at", "regime_map", "MapResult"]
+
+RPM = 2.0 * math.pi / 60.0
+
+#: the dataset format's version (a resumed run must match it)
+FORMAT = "mbs-clearance regime map 1"
+
+
+@dataclass(frozen=True)
+class SweepAxis:
+    """One swept field: its name, values (SI) and spacing ("log", "lin" or "list")."""
+
+    name: str
+    values: tuple[float, ...]
+    spacing: str = "list"
+
+    def __post_init__(self):
+        if not self.values:
+            raise ValueError(f"sweep {self.name}: no values")
+
+
+_NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
+
+
+def _value(name: str, text: str) -> float:
+    """A number, optionally with the unit rpm (converted to rad/s)."""
+    text = text.strip()
+    m = re.fullmatch(rf"({_NUMBER})\s*(rpm)?", text)
+    if not m:
+        raise ValueError(f"sweep {name}: {text!r} is not a number (optionally with 'rpm')")
+    v = float(m.group(1))
+    return v * RPM if m.group(2) else v
+
+
+def parse_sweep(spec) -> SweepAxis:
+    """A sweep from "NAME=LO:HI:N" (linear), "NAME=LO:HI:lin:N", "NAME=LO:HI:log:N" or
+    "NAME=V1,V2,..." (numbers, SI; a speed may be given in rpm: "500rpm"); a `SweepAxis`
+    or (name, values) is taken as is. ValueError naming the problem otherwise."""
+    if isinstance(spec, SweepAxis):
+        return spec
+    if isinstance(spec, tuple) and len(spec) == 2:
+        values = tuple(float(v) for v in np.atleast_1d(np.asarray(spec[1], dtype=float)))
+        if not all(math.isfinite(v) for v in values):
+            raise ValueError(f"sweep {spec[0]}: values must be finite")
+        return SweepAxis(str(spec[0]), values)
+    if not isinstance(spec, str) or "=" not in spec:
+        raise ValueError(f"a sweep must be 'NAME=LO:HI:[lin|log:]N' or 'NAME=V1,V2,...'; "
+                         f"got {spec!r}")
+    name, rhs = (s.strip() for s in spec.split("=", 1))
+    if not name:
+        raise ValueError(f"sweep {spec!r}: no field name before '='")
+    if ":" in rhs:
+        parts = [s.strip() for s in rhs.split(":")]
+        if len(parts) == 3:
+            parts.insert(2, "lin")
+        if len(parts) != 4 or parts[2] not in ("lin", "log"):
+            raise ValueError(f"sweep {name}: range must be LO:HI:N, LO:HI:lin:N or "
+                             f"LO:HI:log:N; got {rhs!r}")
+        lo, hi = _value(name, parts[0]), _value(name, parts[1])
+        try:
+            n = int(parts[3])
+        except ValueError:
+            raise ValueError(f"sweep {name}: the number of points must be an integer >= 1; "
+                             f"got {parts[3]!r}") from None
+        if n < 1:
+            raise ValueError(f"sweep {name}: the number of points must be >= 1; got {n}")
+        if parts[2] == "log":
+            if not (lo > 0 and hi > 0):
+                raise ValueError(f"sweep {name}: a log range needs LO, HI > 0; got {rhs!r}")
+            values = np.geomspace(lo, hi, n)
+        else:
+            values = np.linspace(lo, hi, n)
+        return SweepAxis(name, tuple(float(v) for v in values), parts[2])
+    values = tuple(_value(name, v) for v in rhs.split(",") if v.strip())
+    return SweepAxis(name, values)
+
+
+# ------------------------------------------------------------------------------ designs
+
+def _linkage_clearance(link: Linkage, joint: str | None, value: float) -> Linkage:
+    names = [j.name for j in link.clearance_joints] if joint is None else [joint]
+    for j in names:
+        rb = link.parameter_value(f"{j}.bearing_radius")
+        if not 0.0 < value < rb:
+            raise ValueError(f"clearance of {j} must be in (0, bearing radius {rb!r} m); "
+                             f"got {value!r}")
+        link = link.with_parameter(f"{j}.journal_radius", rb - value)
+    return link
+
+
+def design_at(mech, values: dict, case: str | None = None, overrides: dict | None = None):
+    """The design of a sweep point: `mech` with the fields `values` (see the module
+    docstring for the names), or the named `case` built with `overrides` and `values`.
+    ValueError for an unknown field or a value out of its range."""
+    if case is not None:
+        from .cases import CASE_PARAMETERS, CASES
+
+        if case not in CASES:
+            raise ValueError(f"case must be one of {sorted(CASES)}; got {case!r}")
+        table = CASE_PARAMETERS.get(case)
+        if table is None:       # the paper's case: SliderCrank fields
+            return design_at(SliderCrank().replace(**(overrides or {})), values)
+        changes = dict(overrides or {})
+        for name, v in values.items():
+            if name == "clearance" and name not in table:
+                for key in [k for k in table if k.endswith("clearance")]:
+                    changes[key] = v
+            elif name not in table:
+                raise ValueError(f"{case}: unknown sweep field {name!r}; allowed: "
+                                 f"{sorted(table) + ['clearance']}")
+            else:
+                changes[name] = v
+        return CASES[case](**changes)
+    _check_mech(mech)
+    if isinstance(mech, SliderCrank):
+        from .mechanism import field_names
+
+        changes = {}
+        for name, v in values.items():
+            if name == "clearance":
+                if not 0.0 < v < mech.bearing_radius:
+                    raise ValueError(f"clearance must be in (0, bearing_radius "
+                                     f"{mech.bearing_radius!r} m); got {v!r}")
+                changes["journal_radius"] = mech.bearing_radius - v
+            elif name in field_names():
+                changes[name] = v
+            else:
+                raise ValueError(f"unknown sweep field {name!r} of a SliderCrank; allowed: "
+                                 f"{sorted(field_names()) + ['clearance']}")
+        return mech.replace(**changes)
+    link = mech
+    for name, v in values.items():
+        if name == "clearance":
+            link = _linkage_clearance(link, None, v)
+        elif name.endswith(".clearance"):
+            link = _linkage_clearance(link, name[:-len(".clearance")], v)
+        elif name == "crank_speed":
+            link = link.with_parameter("drive.speed", v)
+        else:
+            if name not in link.parameter_names():
+                raise ValueError(f"unknown sweep field {name!r} of linkage {link.name!r}; "
+                                 f"allowed: {list(link.parameter_names())} or 'clearance', "
+                                 "'<joint>.clearance', 'crank_speed'")
+            link = link.with_parameter(name, v)
+    return link
+
+
+# ------------------------------------------------------------------------------- points
+
+def _map_point(item, settings: dict) -> dict:
+    """Worker: one sweep point (flat index, design) -> what the map keeps of its run."""
+    index, mech = item
+    keep = settings["keep"]
+    J = len(joints_of(mech))
+    out = {"index": index, "status": 1, "message": ""}
+    t0 = time.perf_counter()
+    try:
+        sec = poincare_section(mech, settings["revolutions"], keep, angle=settings["angle"],
+                               tol=settings["tol"], max_period=settings["max_period"],
+                               lyapunov=settings["lyapunov"], rtol=settings["rtol"])
+    except (RuntimeError, ValueError, NotImplementedError) as exc:
+        out.update(status=2, message=str(exc).splitlines()[0][:200],
+                   section=np.full((keep, J, 4), np.nan), peak=np.full(keep, np.nan),
+                   regime=REGIME_CODES["failed"], period=0, lyapunov=np.nan,
+                   distance=np.full(settings["max_period"], np.nan), nfev=0)
+    else:
+        out.update(section=sec.samples, peak=sec.peaks[-keep:],
+                   regime=REGIME_CODES[sec.regime], period=sec.period,
+                   lyapunov=sec.lyapunov, distance=sec.distance, nfev=sec.counters["nfev"])
+    out["seconds"] = time.perf_counter() - t0
+    return out
+
+
+# ------------------------------------------------------------------------------ dataset
+
+def _empty_dataset(axes, J, joints, keep, revolutions, max_period, attrs):
+    import xarray as xr
+
+    shape = tuple(len(a.values) for a in axes)
+    dims = tuple(a.name for a in axes)
+    coords = {a.name: (a.name, np.array(a.values), {"spacing": a.spacing}) for a in axes}
+    coords.update(joint=("joint", np.array(joints)),
+                  component=("component", np.array(SECTION_COMPONENTS)),
+                  revolution=("revolution", np.arange(revolutions - keep + 1,
+                                                      revolutions + 1, dtype=np.int32)),
+                  lag=("lag", np.arange(1, max_period + 1, dtype=np.int32)))
+    nan = np.nan
+    regime_attrs = {"flag_values": np.array(sorted(REGIMES), dtype=np.int8),
+                    "flag_meanings": " ".join(REGIMES[k] for k in sorted(REGIMES)),
+                    "long_name": "regime of the motion (poincare.classify)"}
+    data = {
+        "section": (dims + ("revolution", "joint", "component"),
+                    np.full(shape + (keep, J, 4), nan),
+                    {"long_name": "Poincare section: journal minus bearing centre (x, y, m) "
+                                  "and its rate (m/s)"}),
+        "peak": (dims + ("revolution",), np.full(shape + (keep,), nan),
+                 {"long_name": "monitored force's maximum per section interval", "units": "N"}),
+        "peak_mean": (dims, np.full(shape, nan), {"units": "N"}),
+        "peak_max": (dims, np.full(shape, nan), {"units": "N"}),
+        "regime": (dims, np.zeros(shape, dtype=np.int8), regime_attrs),
+        "period": (dims, np.zeros(shape, dtype=np.int16),
+                   {"long_name": "period in revolutions (0: not periodic)"}),
+        "lyapunov": (dims, np.full(shape, nan),
+                     {"long_name": "largest Lyapunov exponent per revolution (NaN: not "
+                                   "computed)"}),
+        "lyapunov_per_second": (dims, np.full(shape, nan), {"units": "1/s"}),
+        "recurrence": (dims + ("lag",), np.full(shape + (max_period,), nan),
+                       {"long_name": "max |X_{i+k} - X_i| of the scaled section samples"}),
+        "nfev": (dims, np.zeros(shape, dtype=np.int32),
+                 {"long_name": "right-hand side evaluations of the point's run"}),
+        "done": (dims, np.zeros(shape, dtype=np.int8),
+                 {"long_name": "1: computed (ok or failed), 0: to do"}),
+        "failed": (dims, np.zeros(shape, dtype=np.int8),
+                   {"long_name": "1: the point's run failed (regime 'failed')"}),
+    }
+    return xr.Dataset(data, coords=coords, attrs=attrs)
+
+
+def _store(ds, shape, res, omega_of) -> None:
+    """Write one point's result into the dataset (in place)."""
+    idx = np.unravel_index(res["index"], shape)
+    ds["section"].values[idx] = res["section"]
+    ds["peak"].values[idx] = res["peak"]
+    ok = res["status"] == 1
+    ds["peak_mean"].values[idx] = np.mean(res["peak"]) if ok else np.nan
+    ds["peak_max"].values[idx] = np.max(res["peak"]) if ok else np.nan
+    ds["regime"].values[idx] = res["regime"]
+    ds["period"].values[idx] = res["period"]
+    ds["lyapunov"].values[idx] = res["lyapunov"]
+    ds["lyapunov_per_second"].values[idx] = res["lyapunov"] * omega_of(res["index"]) / (
+        2.0 * math.pi)
+    ds["recurrence"].values[idx] = res["distance"]
+    ds["nfev"].values[idx] = min(res["nfev"], 2**31 - 1)
+    ds["done"].values[idx] = 1
+    ds["failed"].values[idx] = 0 if ok else 1
+
+
+def _write(ds, path: Path) -> None:
+    """The whole dataset to `path` (netCDF, scipy engine), through a temporary file renamed
+    over it, so that the file on disk is always a complete dataset."""
+    tmp = path.with_name(path.name + ".part")
+    ds.to_netcdf(tmp, engine="scipy")
+    os.replace(tmp, path)
+
+
+def _load(path: Path):
+    import xarray as xr
+
+    with xr.open_dataset(path, engine="scipy", mask_and_scale=False) as ds:
+        return ds.load()
+
+
+@dataclass
+class MapResult:
+    """A regime map: the dataset (xarray.Dataset), where it was written, and counts of the
+    points computed in this call and skipped (done before)."""
+
+    dataset: object
+    path: Path | None
+    computed: int
+    skipped: int
+    seconds: float
+
+    def summary(self) -> str:
+        ds = self.dataset
+        codes, counts = np.unique(ds["regime"].values, return_counts=True)
+        parts = ", ".join(f"{REGIMES[int(c)]}: {n}" for c, n in zip(codes, counts))
+        return (f"{int(ds['done'].sum())} of {ds['done'].size} points done ({self.computed} "
+                f"computed now, {self.skipped} before); regimes: {parts}")
+
+
+def regime_map(mech, sweep, revolutions: int = 100, keep: int = 50, scheduler=None, *,
+               case: str | None = None, overrides: dict | None = None,
+               out: str | Path | None = None, lyapunov: bool = False,
+               angle: float | None = None, tol: float = RECURRENCE_TOL,
+               max_period: int = MAX_PERIOD, rtol: float | None = None, workers: int = 2,
+               chunk_size: int | None = None, progress: bool = False,
+               retries: int = 2, write_interval: float = 5.0) -> MapResult:
+    """A regime map / bifurcation diagram of `mech` over one or two swept fields.
+
+    Parameters
+    ----------
+    mech : SliderCrank or Linkage
+        The base design (ignored when `case` is given).
+    sweep : str, SweepAxis or (name, values), or a list of one or two of them
+        The swept fields (`parse_sweep`); the first is the dataset's first dimension.
+    revolutions, keep : int
+        Crank revolutions per point and how many of the last ones give section samples
+        (keep >= 2 max_period + 1).
+    scheduler : optional
+        None (a local pool of `workers` threads), "serial", "threads", "processes", a
+        dask scheduler address "tcp://host:port", or a dask.distributed Client.
+    case, overrides :
+        A named case (`cases.CASES`) and its fixed overrides, instead of `mech`.
+    out : path, optional
+        netCDF file written as results arrive (at most every `write_interval` seconds, and
+        at the end, also after an error or Ctrl-C); an existing one made with the same
+        settings is resumed (its done points are skipped), one with other settings is
+        refused.
+    lyapunov : bool
+        Also compute each point's largest Lyapunov exponent (a tangent run instead of the
+        plain one, SliderCrank only; the regimes then tell quasi-periodic from chaotic).
+    angle, tol, max_period, rtol :
+        As in `poincare.poincare_section`.
+    chunk_size : int, optional
+        Points per task (default: about 8 tasks per worker).
+    retries : int
+        Resubmissions of a dask task that raised (a lost worker's tasks are rescheduled by
+        the scheduler).
+    write_interval : float
+        Seconds between writes of `out` while results arrive (0: after every chunk); a run
+        killed without warning loses at most the points of this interval.
+
+    Returns a `MapResult`: the labelled dataset (dims: the swept fields, revolution, joint,
+    component, lag; variables section, peak, peak_mean, peak_max, regime, period,
+    lyapunov, lyapunov_per_second, recurrence, nfev, done, failed).
+    """
+    from .executor import connect_dask, evaluate
+
+    sweeps = sweep if isinstance(sweep, list) else [sweep]
+    axes = [parse_sweep(s) for s in sweeps]
+    if not 1 <= len(axes) <= 2:
+        raise ValueError(f"sweep must name one or two fields; got {len(axes)}")
+    if len(axes) == 2 and axes[0].name == axes[1].name:
+        raise ValueError(f"sweep: the field {axes[0].name!r} is given twice")
+    revolutions = check_int("revolutions", revolutions, 2)
+    keep = check_int("keep (revolutions kept after the transient)", keep, 1, revolutions)
+    max_period = check_int("max_period", max_period, 1)
+    if keep < 2 * max_period + 1:
+        raise ValueError(f"keep must be >= 2 max_period + 1 = {2 * max_period + 1}; got {keep}")
+    tol = check_real("tol (recurrence tolerance)", tol, 0.0, low_open=True)
+    lyapunov = check_bool("lyapunov", lyapunov)
+    if angle is not None:
+        angle = check_real("angle (section crank angle)", angle, unit="rad")
+    if rtol is not None:
+        rtol = check_real("rtol", rtol, 1e-14, 1e-4)
+    write_interval = check_real("write_interval", write_interval, 0.0, unit="s")
+    # every design first: a bad field or value fails before any run
+    shape = tuple(len(a.values) for a in axes)
+    designs = []
+    for flat in range(int(np.prod(shape))):
+        idx = np.unravel_index(flat, shape)
+        values = {a.name: a.values[i] for a, i in zip(axes, idx)}
+        designs.append(design_at(mech, values, case, overrides))
+    base = designs[0]
+    if lyapunov and isinstance(base, Linkage):
+        raise ValueError("lyapunov=True needs the DDM of generated models (pending: s8-ddm); "
+                         "for a Linkage, map without the exponent")
+    J = len(joints_of(base))
+    settings = dict(revolutions=revolutions, keep=keep, angle=angle, tol=tol,
+                    max_period=max_period, lyapunov=lyapunov, rtol=rtol)
+    description = base.to_dict() if isinstance(base, Linkage) else base.to_dict()
+    attrs = {"format": FORMAT, "case": case or "",
+             "mechanism": type(base).__name__,
+             "base_design": json.dumps(_jsonable(description), sort_keys=True),
+             "overrides": json.dumps(_jsonable(overrides or {}), sort_keys=True),
+             "settings": json.dumps({k: (v if v is not None else "default")
+                                     for k, v in settings.items()}, sort_keys=True),
+             "sweep": json.dumps([[a.name, a.spacing] for a in axes]),
+             "regime_criterion": "poincare.classify: recurrence within tol (of the "
+                                 "clearance) over the kept samples, then the exponent's sign",
+             "clearance": np.asarray(clearances_of(base), dtype=float)}
+    ds = _empty_dataset(axes, J, joints_of(base), keep, revolutions, max_period, attrs)
+    path = None if out is None else Path(out)
+    if path is not None and path.exists():
+        old = _load(path)
+        _check_resumable(old, ds, path)
+        ds = old
+    todo = [i for i in range(len(designs)) if ds["done"].values.reshape(-1)[i] == 0]
+    skipped = len(designs) - len(todo)
+    omegas = [d.drive.speed if isinstance(d, Linkage) else d.crank_speed for d in designs]
+    if path is not None:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        _write(ds, path)
+
+    last_write = [time.monotonic()]
+    pending = [0]
+
+    def on_result(start, results):
+        for res in results:
+            _store(ds, shape, res, omegas.__getitem__)
+        pending[0] += len(results)
+        if path is not None and time.monotonic() - last_write[0] >= write_interval:
+            _write(ds, path)
+            last_write[0] = time.monotonic()
+            pending[0] = 0
+
+    executor, own = scheduler, None
+    if isinstance(scheduler, str) and scheduler.startswith(("tcp://", "tls://", "ws://")):
+        executor = own = connect_dask(scheduler)
+    t0 = time.perf_counter()
+    try:
+        evaluate(_map_point, [(i, designs[i]) for i in todo], (settings,), executor=executor,
+                 workers=workers, progress=progress, desc="map points",
+                 chunk_size=chunk_size, on_result=on_result, retries=retries)
+    finally:
+        if own is not None:
+            own.close()
+        if path is not None and pending[0]:
+            _write(ds, path)        # what arrived since the last write (also on Ctrl-C)
+    return MapResult(ds, path, len(todo), skipped, time.perf_counter() - t0)
+
+
+def _jsonable(obj):
+    if isinstance(obj, dict):
+        return {str(k): _jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_jsonable(v) for v in obj]
+    if isinstance(obj, (np.floating, np.integer)):
+        return obj.item()
+    return obj
+
+
+def _check_resumable(old, new, path: Path) -> None:
+    """ValueError unless `old` (the file at `path`) is a map with `new`'s settings and
+    coordinates."""
+    for key in ("format", "case", "mechanism", "base_design", "overrides", "settings",
+                "sweep"):
+        if str(old.attrs.get(key)) != str(new.attrs.get(key)):
+            raise ValueError(f"{path} holds a different regime map ({key} differs); resume "
+                             "with the same settings, or write to another file")
+    for name in new.coords:
+        if name not in old.coords or not np.array_equal(old[name].values, new[name].values):
+            raise ValueError(f"{path} holds a different regime map (coordinate {name!r} "
+                             "differs); resume with the same sweep, or write to another file")

@@ -1,0 +1,54 @@
+"""The regime map on a dask LocalCluster gives the same dataset as on the local thread pool
+(every point is a deterministic run), and the GA evaluates its designs through the same
+evaluator (`executor.evaluate`) with the same result on every executor."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from mbs_clearance import SliderCrank, regime_map
+
+SWEEP = ["clearance=1e-5:5e-4:log:3", "crank_speed=4000rpm:5000rpm:2"]
+SMALL = dict(revolutions=10, keep=5, max_period=2)
+
+
+def test_map_local_pool_and_dask_local_cluster_identical(tmp_path):
+    distributed = pytest.importorskip("dask.distributed")
+    local = regime_map(SliderCrank(), SWEEP, workers=2, chunk_size=1,
+                       out=tmp_path / "local.nc", **SMALL)
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  dashboard_address=None) as cluster, \
+            distributed.Client(cluster) as client:
+        remote = regime_map(SliderCrank(), SWEEP, scheduler=client, chunk_size=2,
+                            out=tmp_path / "dask.nc", **SMALL)
+    assert remote.computed == local.computed == 6
+    for name in local.dataset.data_vars:
+        np.testing.assert_array_equal(remote.dataset[name].values,
+                                      local.dataset[name].values, err_msg=name)
+    # the paper's design period-1, the 0.5 mm joint not periodic, at 5000 rpm
+    assert remote.dataset["regime"].values[0, 1] == 2
+    assert remote.dataset["regime"].values[2, 1] == 6
+
+
+def test_ga_evaluates_through_the_shared_evaluator(monkeypatch):
+    from mbs_clearance import executor, optimize
+
+    calls = []
+    real = executor.evaluate
+
+    def spy(fn, items, *args, **kw):
+        calls.append((fn.__name__, len(items)))
+        return real(fn, items, *args, **kw)
+
+    monkeypatch.setattr(optimize, "evaluate", spy)
+    kw = dict(population=6, generations=3, progress=False, seed=5, refine=False)
+    serial = optimize.optimize_link_lengths(SliderCrank(), executor="serial", **kw)
+    assert calls and all(name == "peak_or_inf" for name, _ in calls)
+    assert sum(n for _, n in calls) == serial.n_evaluations - 1   # all but the original
+    calls.clear()
+    threads = optimize.optimize_link_lengths(SliderCrank(), executor="threads", workers=2,
+                                             **kw)
+    assert calls
+    assert threads.best == serial.best and threads.best_peak_force == serial.best_peak_force
+    np.testing.assert_array_equal(threads.history, serial.history)
