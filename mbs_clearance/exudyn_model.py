@@ -154,7 +154,8 @@ def simulate_exudyn(mech: SliderCrank, revolutions: int = 4, **options) -> Traje
     Returns
     -------
     Trajectory
-        Every time step, t = 0, h, 2h, ...; ``peaks`` is None (maxima are over the steps).
+        Every time step, t = 0, h, 2h, ...; ``peaks``: max |F12| per revolution refined
+        between the steps (`exudyn_linkage.refined_peaks`).
         ``contact_phase`` is 1 where the penetration is positive. ``contact_force`` is
         the signed normal force (only the native sphere contact can make it negative, see
         the module docstring). ``stats`` holds the settings, the step actually used
@@ -173,11 +174,12 @@ def simulate_exudyn(mech: SliderCrank, revolutions: int = 4, **options) -> Traje
         slider_acceleration=lt.accelerations["slider_guide.s"],
         coupler_angle=lt.coordinates["coupler.angle"], coupler_rate=lt.rates["coupler.angle"],
         contact_phase=lt.contact_phase[:, 0].copy(), crank_work=lt.crank_work,
-        mechanism=mech, backend="exudyn", stats=lt.stats, peaks=None))
+        mechanism=mech, backend="exudyn", stats=lt.stats, peaks=lt.peaks))
 
 
 def peak_exudyn(mech: SliderCrank, revolution: int = 4, **options) -> float:
-    """Max |F12| in N over crank revolution `revolution` (1-based), over the time steps.
+    """Max |F12| in N over crank revolution `revolution` (1-based), refined between the
+    time steps (`exudyn_linkage.refined_peaks`).
 
     Integrates only up to the end of that revolution and records only the base force.
     Options as `simulate_exudyn`.
