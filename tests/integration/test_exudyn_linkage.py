@@ -166,3 +166,69 @@ def test_accuracy_chooses_the_step_by_second_order():
     s = xl.make_settings(dict(accuracy=xl.ACCURACY_AT_DEFAULT / 4))
     lk = cases.paper_slider_crank()
     assert s.step(lk.period) == pytest.approx(xl.make_settings({}).step(lk.period) / 2)
+
+
+# four revolutions per case (slow) ---------------------------------------------------------
+#: cases whose default operating point is periodic, checked across the models. The
+#: four-bar's default (s8-four: 10 rpm, 0.01 mm) approaches its periodic motion slowly
+#: (the frictionless sliding mode) and Exudyn's Newton iteration fails on it at fixed steps
+#: >= 2e-5 s in the persistent contact at 1e-3 m/s impact velocity (measured): its
+#: cross-model check is left out (docs/exudyn.md).
+PERIODIC = ("paper_slider_crank", "slider_crank_two_clearances")
+
+_RUNS: dict = {}
+
+
+def four_revolutions(name, backend, **options):
+    key = (name, backend, tuple(sorted(options.items())))
+    if key not in _RUNS:
+        _RUNS[key] = simulate(cases.CASES[name](), 4, backend=backend, **options)
+    return _RUNS[key]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", PERIODIC)
+def test_periodic_cases_agree_at_the_default_step(name):
+    """Issue 17: reduced (rtol 1e-11) vs Exudyn (default step 2e-6 s): the 4th-revolution
+    peak of the monitored force within 0.5 % and the RMS of the |shaking force| and of the
+    drive moment within 2 % (measured: peak -2.0e-4 / -8.0e-5, RMS shaking -1.3e-5 /
+    2.9e-5, RMS moment -4.5e-5 / 9.2e-6 for the paper / two-joint case). The periodic
+    regime is shown by the reduced model: its peaks at rtol 1e-10 and 1e-11 agree to 1e-6
+    and revolutions 3 and 4 repeat."""
+    from validation.compare import compare
+
+    ref = four_revolutions(name, "reduced", rtol=1e-11)
+    loose = four_revolutions(name, "reduced", rtol=1e-10)
+    assert abs(loose.peaks[3] / ref.peaks[3] - 1) < 1e-6
+    assert abs(ref.peaks[3] / ref.peaks[2] - 1) < 1e-4
+    ex = four_revolutions(name, "exudyn")
+    r = compare(ref, ex).revolution(4)
+    assert abs(r.peak_rel_diff) < 5e-3, r.peak_rel_diff
+    assert abs(r.shaking_rms_rel_diff) < 2e-2, r.shaking_rms_rel_diff
+    assert abs(r.moment_rms_rel_diff) < 2e-2, r.moment_rms_rel_diff
+    # tighter than required, at the measured level (a regression shows)
+    assert abs(r.peak_rel_diff) < 5e-4 and abs(r.shaking_rms_rel_diff) < 1e-4
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", PERIODIC)
+def test_difference_shrinks_at_second_order_as_the_step_halves(name):
+    """Exudyn at 8, 4 and 2 us against the reduced model (rtol 1e-11), 4th revolution. The
+    RMS difference of the |shaking force| falls by 2.6-3.6 per halving (paper) and 2.8-3.0
+    (two joints) (measured; 4 = second order), asserted > 2.3. The paper case's peak error
+    falls 1.4e-3 -> 4.9e-4 -> 2.0e-4 (asserted > 2 per halving); the two-joint case's peak
+    error does not fall monotonically (2.2e-3, 2.3e-3, 8e-5, 1.1e-3 at 1 us: the crank
+    joint's undamped sliding mode rides on the peak, its phase set by the step), so only
+    its RMS is asserted there."""
+    from validation.compare import compare
+
+    ref = four_revolutions(name, "reduced", rtol=1e-11)
+    rms, peak = [], []
+    for step in (8e-6, 4e-6, 2e-6):
+        r = compare(ref, four_revolutions(name, "exudyn", step_size=step)).revolution(4)
+        rms.append(abs(r.shaking_rms_rel_diff))
+        peak.append(abs(r.peak_rel_diff))
+    rms, peak = np.array(rms), np.array(peak)
+    assert np.all(rms[:-1] / rms[1:] > 2.3), rms
+    if name == "paper_slider_crank":
+        assert np.all(peak[:-1] / peak[1:] > 2.0), peak
