@@ -61,8 +61,9 @@ def _settings(quick: bool) -> dict[str, Any]:
         "exudyn_variants": ("symbolic", "sphere") if quick else ("symbolic", "python",
                                                                  "sphere"),
         # the named cases in both models (section 3): which, and how many revolutions
-        "agreement_cases": ("paper_slider_crank", "slider_crank_two_clearances")
-        if quick else ("paper_slider_crank", "slider_crank_two_clearances", "four_bar"),
+        # (not the four-bar: Exudyn's Newton fails in its contact, docs/exudyn.md)
+        "agreement_cases": ("slider_crank_two_clearances",) if quick
+        else ("paper_slider_crank", "slider_crank_two_clearances"),
         "case_revolutions": 2 if quick else 4,
         "ga_population": 8 if quick else 20,
         "ga_generations": 4 if quick else 30,

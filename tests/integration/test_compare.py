@@ -113,3 +113,20 @@ def test_linkage_comparison_per_joint(tmp_path):
     assert "first impact crank_coupler" in format_table(res)
     fig = plot_linkage_comparison(a, b, path=tmp_path / "o.png")
     assert len(fig.axes) == 5 and (tmp_path / "o.png").stat().st_size > 10_000
+
+
+def test_command_takes_a_named_case(tmp_path, capsys):
+    """`compare --case NAME`: the linkage's table (first impact per clearance joint) and
+    the per-joint overlay; --set changes the case; slider-crank options are refused."""
+    out = tmp_path / "case.png"
+    code = compare_command(["--case", "slider_crank_two_clearances", "--backend-a", "reduced",
+                            "--backend-b", "reduced", "--rtol", "1e-8", "--revolutions", "1",
+                            "--set", "crank_coupler_clearance=2e-5", "--out", str(out)])
+    assert code == 0
+    text = capsys.readouterr().out
+    assert "first impact crank_coupler" in text and "first impact coupler_slider" in text
+    assert out.stat().st_size > 10_000
+    with pytest.raises(SystemExit) as exc:
+        compare_command(["--case", "four_bar", "--crank-length", "0.1", "--no-plot"])
+    assert exc.value.code == 2
+    assert "apply to the paper's slider-crank only" in capsys.readouterr().err

@@ -232,3 +232,48 @@ def test_difference_shrinks_at_second_order_as_the_step_halves(name):
     assert np.all(rms[:-1] / rms[1:] > 2.3), rms
     if name == "paper_slider_crank":
         assert np.all(peak[:-1] / peak[1:] > 2.0), peak
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", PERIODIC)
+def test_ideal_joint_limit_against_the_ideal_model(name):
+    """Clearance 1e-7 m in every joint, Exudyn at its default step, 2nd revolution, against
+    the hand-written ideal model (validation/ideal_linkage.py: analytic closure,
+    Newton-Euler). Window averages (36 windows of 10 degrees) and pointwise values of the
+    drive moment, the shaking force and every ground reaction within 1e-3 of their peak
+    (measured: window <= 1.8e-4 / 4.3e-4, pointwise <= 3.4e-4 / 5.9e-4, paper / two-joint
+    case), the refined peak of the monitored force within 1e-4 (measured 7e-7 / 1.4e-5).
+    The residual is the clearance itself (1e-7 m against 10 mm bearings moves the force
+    lines) plus the step's O(h^2) error; the frictionless sliding mode (issue 17) stays
+    small here because Exudyn's numerical damping (rho_inf 0.9) removes it: pointwise
+    values agree as well as window averages, unlike in the four-bar."""
+    import sys
+    from pathlib import Path
+
+    from validation.ideal_linkage import from_linkage, ideal_outputs
+
+    sys.path.insert(0, str(Path(__file__).parent))
+    from test_linkage_physics import window_means
+
+    if name == "paper_slider_crank":
+        lk = cases.paper_slider_crank(journal_radius=0.01 - 1e-7)
+    else:
+        lk = cases.slider_crank_two_clearances(crank_coupler_clearance=1e-7,
+                                               coupler_slider_clearance=1e-7)
+    ex = simulate(lk, 2, backend="exudyn")
+    t = ex.t
+    ref = ideal_outputs(from_linkage(lk), t)
+    P = lk.period
+    edges = P + P * np.arange(37) / 36
+    pairs = [("drive moment", ex.crank_moment, ref["drive_moment"]),
+             ("shaking", ex.shaking_force, ref["shaking"])]
+    pairs += [(g, f, ref["ground_reactions"][g]) for g, f in ex.reactions.items()]
+    later = t >= P
+    for label, sim, ideal in pairs:
+        scale = np.max(np.abs(ideal[later]))
+        window = np.max(np.abs(window_means(t, sim, edges) - window_means(t, ideal, edges)))
+        point = np.max(np.abs(sim[later] - ideal[later]))
+        assert window < 1e-3 * scale, f"{label}: window {window / scale:.2e}"
+        assert point < 1e-3 * scale, f"{label}: pointwise {point / scale:.2e}"
+    ideal_peak = np.hypot(*ref["ground_reactions"][lk.monitor_joint][later].T).max()
+    assert abs(ex.peaks[1] / ideal_peak - 1) < 1e-4
