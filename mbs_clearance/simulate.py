@@ -47,6 +47,9 @@ def _backend(name: str) -> Backend:
 LINKAGE_BACKENDS: dict[str, Backend] = {
     "reduced": Backend("mbs_clearance.linkage_model", "simulate_linkage", "peak_linkage",
                        "the model generated from the description, compiled (numba)"),
+    "exudyn": Backend("mbs_clearance.exudyn_linkage", "simulate_exudyn_linkage",
+                      "peak_exudyn_linkage", "the description built in the multibody engine "
+                      "Exudyn"),
 }
 
 

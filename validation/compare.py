@@ -1,17 +1,23 @@
 """Compare two trajectories of the same mechanism on a common time grid.
 
-`compare(a, b)` returns per-revolution metrics with `a` as the reference:
+`compare(a, b)` returns per-revolution metrics with `a` as the reference, for the paper's
+`SliderCrank` and for any `Linkage` (a named case: per clearance joint):
 
-- peak |F12| of each model (each its own, refined where the backend refines it) and their
-  relative difference peak_b / peak_a - 1;
+- peak of the monitored force (|F12| of the slider-crank, the monitored ground joint's
+  |reaction| or the |shaking force| of a linkage) of each model (each its own, refined where
+  the backend refines it) and their relative difference peak_b / peak_a - 1;
+- the RMS over the revolution of the |shaking force| (sum of the ground reactions; the
+  slider-crank's |F12|) and of the drive moment of each model, and their relative
+  differences;
 - relative RMS differences rms(a - b) / rms(a) of the base force (vector) and the crank
   moment over the revolution;
 - the orbit distance |e_a - e_b| of the eccentricity curves, max and RMS, in m and relative
-  to the radial clearance;
+  to the radial clearance (the largest over the clearance joints);
 
-plus the first impact (time of the first contact onset and peak contact force of that
-contact) and time-averaged statistics over revolutions 2..n (mean and RMS of |F12|, RMS of
-the crank moment, contact time fraction), which are the meaningful comparison when the
+plus the first impact of every clearance joint (time of its first contact onset and peak
+contact force of that contact) and time-averaged statistics over revolutions 2..n (mean
+and RMS of the monitored force and of the |shaking force|, RMS of the drive moment,
+contact time fraction), which are the meaningful comparison when the
 response is chaotic and trajectories separate after a few impacts.
 
 The common grid is uniform with the finer of the two median sample spacings; both
@@ -35,7 +41,9 @@ import numpy as np
 from mbs_clearance.trajectory import Trajectory
 
 __all__ = ["RevolutionMetrics", "FirstImpact", "Statistics", "Comparison", "compare",
-           "common_grid", "first_impact", "statistics", "format_table", "compare_command"]
+           "common_grid", "first_impact", "statistics", "format_table", "compare_command",
+           "plot_linkage_comparison", "shaking_magnitude", "eccentricities", "clearances",
+           "joints_of"]
 
 #: upper bound on the number of points of the common grid (memory guard)
 MAX_GRID_POINTS = 4_000_000
@@ -55,6 +63,20 @@ class RevolutionMetrics:
     orbit_rms: float              # m, rms |e_a - e_b|
     orbit_max_rel: float          # orbit_max / clearance
     orbit_rms_rel: float          # orbit_rms / clearance
+    shaking_rms_a: float = float("nan")   # N, rms |shaking force| over the revolution
+    shaking_rms_b: float = float("nan")
+    moment_rms_a: float = float("nan")    # N m, rms drive moment over the revolution
+    moment_rms_b: float = float("nan")
+
+    @property
+    def shaking_rms_rel_diff(self) -> float:
+        """rms |shaking force| b / a - 1."""
+        return self.shaking_rms_b / self.shaking_rms_a - 1.0
+
+    @property
+    def moment_rms_rel_diff(self) -> float:
+        """rms drive moment b / a - 1."""
+        return self.moment_rms_b / self.moment_rms_a - 1.0
 
 
 @dataclass(frozen=True)
@@ -73,7 +95,8 @@ class Statistics:
     mean_base_force: float        # N, mean |F12|
     rms_base_force: float         # N, rms |F12|
     rms_crank_moment: float       # N m
-    contact_fraction: float       # share of time in contact
+    contact_fraction: float       # share of time in contact (any joint)
+    rms_shaking_force: float = float("nan")   # N, rms |shaking force|
 
 
 @dataclass(frozen=True)
@@ -90,6 +113,9 @@ class Comparison:
     statistics_a: Statistics | None
     statistics_b: Statistics | None
     meta: dict = field(default_factory=dict)
+    joints: tuple[str, ...] = ()
+    first_impacts_a: dict = field(default_factory=dict)   # joint -> FirstImpact or None
+    first_impacts_b: dict = field(default_factory=dict)
 
     def revolution(self, k: int) -> RevolutionMetrics:
         """Metrics of revolution `k` (1-based)."""
@@ -124,9 +150,36 @@ def _rms(x: np.ndarray) -> float:
     return float(np.sqrt(np.mean(np.square(x)))) if x.size else float("nan")
 
 
-def first_impact(tr: Trajectory) -> FirstImpact | None:
-    """First onset (penetration crossing zero upward) and the peak force of that contact."""
-    pen = tr.penetration
+def joints_of(tr: Trajectory) -> tuple[str, ...]:
+    """Names of the clearance joints of a trajectory (the slider-crank's: "coupler_slider")."""
+    return tr.joints if tr.joints is not None else ("coupler_slider",)
+
+
+def clearances(mech) -> np.ndarray:
+    """Radial clearance of each clearance joint in m."""
+    if hasattr(mech, "clearance_joints"):
+        return np.array([j.clearance for j in mech.clearance_joints])
+    return np.array([mech.clearance])
+
+
+def eccentricities(tr: Trajectory) -> np.ndarray:
+    """Eccentricity (n, J, 2) in m."""
+    e = np.asarray(tr.eccentricity)
+    return e[:, None, :] if e.ndim == 2 else e
+
+
+def shaking_magnitude(tr: Trajectory) -> np.ndarray:
+    """|shaking force| (n,) in N: |sum of the ground reactions| of a linkage; the
+    slider-crank's trajectory records only F12, so its |F12|."""
+    f = tr.shaking_force if tr.shaking_force is not None else tr.base_force
+    return np.hypot(f[:, 0], f[:, 1])
+
+
+def first_impact(tr: Trajectory, joint: int = 0) -> FirstImpact | None:
+    """First onset (penetration crossing zero upward) of clearance joint `joint` (index)
+    and the peak force of that contact."""
+    pen = tr.penetration if tr.penetration.ndim == 1 else tr.penetration[:, joint]
+    force = tr.contact_force if tr.contact_force.ndim == 1 else tr.contact_force[:, joint]
     inside = np.nonzero(pen > 0.0)[0]
     if inside.size == 0:
         return None
@@ -138,7 +191,7 @@ def first_impact(tr: Trajectory) -> FirstImpact | None:
         t_on = float(tr.t[i])
     after = np.nonzero(pen[i:] <= 0.0)[0]
     j = i + int(after[0]) if after.size else len(pen)
-    return FirstImpact(time=t_on, peak_contact_force=float(tr.contact_force[i:j].max()))
+    return FirstImpact(time=t_on, peak_contact_force=float(force[i:j].max()))
 
 
 def statistics(tr: Trajectory, revolutions: tuple[int, ...]) -> Statistics:
@@ -154,12 +207,15 @@ def statistics(tr: Trajectory, revolutions: tuple[int, ...]) -> Statistics:
         return float(np.trapezoid(y, t) / span)
 
     f = tr.base_force_magnitude[mask]
+    phase = tr.contact_phase[mask]
+    phase = phase if phase.ndim == 1 else phase.max(axis=1)
     return Statistics(
         revolutions=tuple(revolutions),
         mean_base_force=mean(f),
         rms_base_force=float(np.sqrt(mean(f * f))),
         rms_crank_moment=float(np.sqrt(mean(tr.crank_moment[mask] ** 2))),
-        contact_fraction=mean(tr.contact_phase[mask].astype(float)),
+        contact_fraction=mean(phase.astype(float)),
+        rms_shaking_force=float(np.sqrt(mean(shaking_magnitude(tr)[mask] ** 2))),
     )
 
 
@@ -198,34 +254,53 @@ def compare(a: Trajectory, b: Trajectory, revolutions=None) -> Comparison:
                          f"trajectories); got {revolutions!r}")
 
     mech = a.mechanism
-    c = mech.clearance
+    c = clearances(mech)
     t = common_grid(a, b, max(revs) * mech.period)
     Fa, Fb = _interp(t, a, "base_force"), _interp(t, b, "base_force")
     Ma, Mb = _interp(t, a, "crank_moment"), _interp(t, b, "crank_moment")
-    ea, eb = _interp(t, a, "eccentricity"), _interp(t, b, "eccentricity")
+    Sa, Sb = (np.interp(t, tr.t, shaking_magnitude(tr)) for tr in (a, b))
+    ea, eb = eccentricities(a), eccentricities(b)
+    # orbit distance per joint, in m and in that joint's clearances
+    dE = np.column_stack([
+        np.hypot(np.interp(t, a.t, ea[:, j, 0]) - np.interp(t, b.t, eb[:, j, 0]),
+                 np.interp(t, a.t, ea[:, j, 1]) - np.interp(t, b.t, eb[:, j, 1]))
+        for j in range(len(c))])
     dF = np.hypot(*(Fa - Fb).T)
     magF = np.hypot(*Fa.T)
-    dE = np.hypot(*(ea - eb).T)
     metrics = []
     for k in revs:
         t0, t1 = (k - 1) * mech.period, k * mech.period
         m = (t >= t0 - 1e-12 * t1) & (t <= t1 * (1 + 1e-12))
         pa, pb = a.max_base_force(k), b.max_base_force(k)
+        d = dE[m]
+        rms_j = np.sqrt(np.mean(d * d, axis=0))
         metrics.append(RevolutionMetrics(
             revolution=k, peak_a=pa, peak_b=pb, peak_rel_diff=pb / pa - 1.0,
             base_force_rel_rms=_rms(dF[m]) / _rms(magF[m]),
             crank_moment_rel_rms=_rms(Ma[m] - Mb[m]) / _rms(Ma[m]),
-            orbit_max=float(dE[m].max()), orbit_rms=_rms(dE[m]),
-            orbit_max_rel=float(dE[m].max()) / c, orbit_rms_rel=_rms(dE[m]) / c,
+            orbit_max=float(d.max()), orbit_rms=float(rms_j.max()),
+            orbit_max_rel=float((d.max(axis=0) / c).max()),
+            orbit_rms_rel=float((rms_j / c).max()),
+            shaking_rms_a=_rms(Sa[m]), shaking_rms_b=_rms(Sb[m]),
+            moment_rms_a=_rms(Ma[m]), moment_rms_b=_rms(Mb[m]),
         ))
     later = tuple(k for k in range(2, n_common + 1)) or (1,)
+    joints = joints_of(a)
+    fa = {name: first_impact(a, j) for j, name in enumerate(joints)}
+    fb = {name: first_impact(b, j) for j, name in enumerate(joints)}
     return Comparison(
-        backend_a=a.backend, backend_b=b.backend, clearance=c, grid_step=float(t[1] - t[0]),
-        revolutions=tuple(metrics),
-        first_impact_a=first_impact(a), first_impact_b=first_impact(b),
+        backend_a=a.backend, backend_b=b.backend, clearance=float(c.min()),
+        grid_step=float(t[1] - t[0]), revolutions=tuple(metrics),
+        first_impact_a=_earliest(fa), first_impact_b=_earliest(fb),
         statistics_a=statistics(a, later), statistics_b=statistics(b, later),
         meta={"stats_a": dict(a.stats), "stats_b": dict(b.stats)},
+        joints=joints, first_impacts_a=fa, first_impacts_b=fb,
     )
+
+
+def _earliest(impacts: dict) -> FirstImpact | None:
+    found = [f for f in impacts.values() if f is not None]
+    return min(found, key=lambda f: f.time) if found else None
 
 
 def _pct(x: float) -> str:
@@ -235,39 +310,97 @@ def _pct(x: float) -> str:
 def format_table(result: Comparison) -> str:
     """Plain-text table of a `Comparison` (returned as a string)."""
     a, b = result.backend_a, result.backend_b
-    lines = [f"comparison: a = {a} (reference), b = {b}; clearance c = "
+    lines = [f"comparison: a = {a} (reference), b = {b}; smallest clearance c = "
              f"{result.clearance:.4g} m; common grid step {result.grid_step:.3g} s", ""]
-    head = (f"{'rev':>3}  {'peak |F12| a (N)':>16}  {'peak |F12| b (N)':>16}  "
-            f"{'b/a - 1':>10}  {'rms dF12/rms':>12}  {'rms dM2/rms':>11}  "
-            f"{'orbit max/c':>11}  {'orbit rms/c':>11}")
+    head = (f"{'rev':>3}  {'peak a (N)':>12}  {'peak b (N)':>12}  "
+            f"{'b/a - 1':>10}  {'rms dF/rms':>10}  {'rms dM/rms':>10}  "
+            f"{'rms |S| b/a-1':>13}  {'rms M b/a-1':>11}  {'orbit max/c':>11}  "
+            f"{'orbit rms/c':>11}")
     lines += [head, "-" * len(head)]
     for r in result.revolutions:
         lines.append(
-            f"{r.revolution:>3}  {r.peak_a:>16.2f}  {r.peak_b:>16.2f}  "
-            f"{_pct(r.peak_rel_diff):>10}  {100 * r.base_force_rel_rms:>10.3f} %  "
-            f"{100 * r.crank_moment_rel_rms:>9.3f} %  {r.orbit_max_rel:>11.4f}  "
+            f"{r.revolution:>3}  {r.peak_a:>12.2f}  {r.peak_b:>12.2f}  "
+            f"{_pct(r.peak_rel_diff):>10}  {100 * r.base_force_rel_rms:>8.3f} %  "
+            f"{100 * r.crank_moment_rel_rms:>8.3f} %  {_pct(r.shaking_rms_rel_diff):>13}  "
+            f"{_pct(r.moment_rms_rel_diff):>11}  {r.orbit_max_rel:>11.4f}  "
             f"{r.orbit_rms_rel:>11.4f}")
-    lines.append("")
-    fa, fb = result.first_impact_a, result.first_impact_b
-    if fa is not None and fb is not None:
-        lines.append(f"first impact: t_a = {fa.time * 1e6:.3f} us, t_b = {fb.time * 1e6:.3f} us;"
-                     f" peak contact force a = {fa.peak_contact_force:.1f} N, b = "
-                     f"{fb.peak_contact_force:.1f} N "
-                     f"({_pct(fb.peak_contact_force / fa.peak_contact_force - 1)})")
+    lines += ["", "peak: the monitored force (|F12|, a ground joint's |reaction| or the |shaking "
+              "force|); S: shaking force; M: drive moment; orbit: journal centre distance "
+              "(largest over the joints) in clearances", ""]
+    for name in result.joints or ("",):
+        fa = result.first_impacts_a.get(name, result.first_impact_a)
+        fb = result.first_impacts_b.get(name, result.first_impact_b)
+        label = f"first impact {name}".rstrip()
+        if fa is not None and fb is not None:
+            lines.append(f"{label}: t_a = {fa.time * 1e6:.3f} us, t_b = {fb.time * 1e6:.3f} "
+                         f"us; peak contact force a = {fa.peak_contact_force:.1f} N, b = "
+                         f"{fb.peak_contact_force:.1f} N "
+                         f"({_pct(fb.peak_contact_force / fa.peak_contact_force - 1)})")
+        else:
+            lines.append(f"{label}: a {'none' if fa is None else f'{fa.time:.6g} s'}, "
+                         f"b {'none' if fb is None else f'{fb.time:.6g} s'}")
     sa, sb = result.statistics_a, result.statistics_b
     if sa is not None and sb is not None:
         revs = f"{min(sa.revolutions)}-{max(sa.revolutions)}"
         lines.append(f"statistics over revolutions {revs}:")
-        for label, x, y in (("mean |F12| (N)", sa.mean_base_force, sb.mean_base_force),
-                            ("rms |F12| (N)", sa.rms_base_force, sb.rms_base_force),
-                            ("rms M2 (N m)", sa.rms_crank_moment, sb.rms_crank_moment),
+        for label, x, y in (("mean |F| (N)", sa.mean_base_force, sb.mean_base_force),
+                            ("rms |F| (N)", sa.rms_base_force, sb.rms_base_force),
+                            ("rms |S| (N)", sa.rms_shaking_force, sb.rms_shaking_force),
+                            ("rms M (N m)", sa.rms_crank_moment, sb.rms_crank_moment),
                             ("contact fraction", sa.contact_fraction, sb.contact_fraction)):
             lines.append(f"  {label:<18} a = {x:>10.4g}   b = {y:>10.4g}   ({_pct(y / x - 1)})")
     return "\n".join(lines)
 
 
+def plot_linkage_comparison(a: Trajectory, b: Trajectory, path=None,
+                            revolution: int | None = None):
+    """Overlay two trajectories of a linkage: the monitored force, the |shaking force| and
+    the drive moment over one revolution (default: the last both cover) against the drive
+    angle, and the journal orbit of every clearance joint (in its clearances) over the whole
+    common span. Returns the matplotlib Figure (written to `path` if given)."""
+    from matplotlib.figure import Figure
+
+    from mbs_clearance.plotting import save
+
+    mech = a.mechanism
+    n = min(a.revolutions, b.revolutions)
+    k = n if revolution is None else revolution
+    if not isinstance(k, (int, np.integer)) or not 1 <= k <= n:
+        raise ValueError(f"revolution must be between 1 and {n}; got {revolution!r}")
+    joints, c = joints_of(a), clearances(mech)
+    fig = Figure(figsize=(4.6 * (3 + len(joints)), 4.5), layout="constrained")
+    axes = fig.subplots(1, 3 + len(joints))
+    for tr, style in ((a, dict(color="C0", lw=1.6)), (b, dict(color="C3", lw=1.0, ls="--"))):
+        m = tr.revolution_mask(k)
+        angle = np.degrees(tr.crank_angle[m] - tr.crank_angle[0] - 2 * np.pi * (k - 1))
+        label = tr.backend + (f" ({tr.stats['contact']})" if "contact" in tr.stats else "")
+        axes[0].plot(angle, tr.base_force_magnitude[m], label=label, **style)
+        axes[1].plot(angle, shaking_magnitude(tr)[m], label=label, **style)
+        axes[2].plot(angle, tr.crank_moment[m], label=label, **style)
+        mo = tr.t <= n * mech.period * (1 + 1e-12)
+        e = eccentricities(tr)
+        for j in range(len(joints)):
+            axes[3 + j].plot(e[mo, j, 0] / c[j], e[mo, j, 1] / c[j], label=label,
+                             **{**style, "lw": 0.6})
+    xlabel = f"drive angle in revolution {k} (deg)"
+    axes[0].set(xlabel=xlabel, ylabel="N", title="monitored force")
+    axes[1].set(xlabel=xlabel, ylabel="N", title="|shaking force|")
+    axes[2].set(xlabel=xlabel, ylabel="N m", title="drive moment")
+    phi = np.linspace(0.0, 2 * np.pi, 361)
+    for j, name in enumerate(joints):
+        ax = axes[3 + j]
+        ax.plot(np.cos(phi), np.sin(phi), color="0.5", lw=0.8, label="clearance circle")
+        ax.set(xlabel="journal x / clearance", ylabel="journal y / clearance",
+               title=f"orbit {name}", aspect="equal")
+    for ax in axes:
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8)
+    fig.suptitle(f"{getattr(mech, 'name', 'slider-crank')}: {a.backend} vs {b.backend}")
+    return save(fig, path)
+
+
 # ------------------------------------------------------------------------------ CLI
-def _backend_options(backend: str, other: str, args) -> dict:
+def _backend_options(backend: str, other: str, args, mech) -> dict:
     options = {}
     if backend == "reduced":
         if args.rtol is not None:
@@ -277,32 +410,40 @@ def _backend_options(backend: str, other: str, args) -> dict:
             # sample the adaptive model at least as densely as the fixed-step one: linear
             # interpolation between its long free-flight steps would otherwise cut the
             # curved orbit and show up as a spurious orbit distance
-            h_max = args.step_size if args.step_size is not None else _exudyn_default_step()
+            h_max = _exudyn_step(args, mech)
         if h_max is not None:
             options["h_max"] = h_max
     if backend == "exudyn":
-        if args.step_size is not None:
-            options["step_size"] = args.step_size
-        if args.contact is not None:
-            options["contact"] = args.contact
-        from mbs_clearance.exudyn_model import make_settings
-
-        make_settings(options)          # bad values fail before any simulation runs
+        for name in ("step_size", "accuracy", "contact"):
+            if getattr(args, name, None) is not None:
+                options[name] = getattr(args, name)
+        _exudyn_settings(options, mech)        # bad values fail before any simulation runs
     return options
 
 
-def _exudyn_default_step() -> float:
-    from mbs_clearance.exudyn_model import DEFAULT_STEP_SIZE
+def _exudyn_settings(options: dict, mech):
+    if hasattr(mech, "clearance_joints"):
+        from mbs_clearance.exudyn_linkage import make_settings
+    else:
+        from mbs_clearance.exudyn_model import make_settings
+    return make_settings(dict(options))
 
-    return DEFAULT_STEP_SIZE
+
+def _exudyn_step(args, mech) -> float:
+    """The Exudyn run's fixed step in s (its default for `mech` unless given)."""
+    options = {k: getattr(args, k) for k in ("step_size", "accuracy")
+               if getattr(args, k, None) is not None}
+    return _exudyn_settings(options, mech).step(mech.period)
 
 
 def build_parser(parser: argparse.ArgumentParser | None = None) -> argparse.ArgumentParser:
     """Arguments of ``mbs-clearance compare`` (added to `parser` if given)."""
+    from mbs_clearance.cases import CASES
     from mbs_clearance.cli import (
         Parser,
         add_force_option,
         add_mechanism_options,
+        case_override,
         int_at_least,
         positive_float,
     )
@@ -325,13 +466,23 @@ def build_parser(parser: argparse.ArgumentParser | None = None) -> argparse.Argu
                         help="largest step in s (reduced backend); default: the Exudyn step "
                              "size when compared with exudyn")
     parser.add_argument("--step-size", type=positive_float,
-                        help="time step in s (exudyn backend)")
+                        help="time step in s (exudyn backend; default: its default step)")
+    parser.add_argument("--accuracy", type=positive_float,
+                        help="target relative peak error (exudyn backend): chooses the step "
+                             "by the method's second order instead of --step-size")
     parser.add_argument("--contact", help="contact variant (exudyn backend): symbolic, "
                                           "python or sphere")
     parser.add_argument("--out", type=Path, default=Path("compare_overlay.png"),
                         help="overlay figure (PNG); default compare_overlay.png")
     parser.add_argument("--no-plot", action="store_true", help="do not write the figure")
     add_force_option(parser)
+    source = parser.add_argument_group("linkage (instead of the slider-crank options)")
+    source.add_argument("--case", metavar="NAME", choices=sorted(CASES),
+                        help="a named linkage: " + ", ".join(sorted(CASES)))
+    source.add_argument("--description", metavar="FILE",
+                        help="a linkage description file (JSON or TOML)")
+    source.add_argument("--set", type=case_override, action="append", metavar="NAME=VALUE",
+                        help="override a value of the --case (repeatable)")
     add_mechanism_options(parser)
     return parser
 
@@ -339,16 +490,17 @@ def build_parser(parser: argparse.ArgumentParser | None = None) -> argparse.Argu
 def run_compare(args: argparse.Namespace) -> int:
     """Body of ``mbs-clearance compare`` for parsed arguments; returns the exit code."""
     from mbs_clearance._io import atomic_file, check_output_file
-    from mbs_clearance.cli import figure_suffixes, mechanism_from_args
+    from mbs_clearance.cli import figure_suffixes, linkage_from_args, mechanism_from_args
     from mbs_clearance.simulate import simulate
 
-    mech = mechanism_from_args(args)
+    mech = linkage_from_args(args) or mechanism_from_args(args)
     if args.revolutions < 1:
         raise ValueError(f"--revolutions must be >= 1; got {args.revolutions}")
     if not args.no_plot:
         check_output_file(args.out, "--out", args.force, suffixes=figure_suffixes())
     pair = (args.backend_a, args.backend_b)
-    all_options = [_backend_options(be, other, args) for be, other in (pair, pair[::-1])]
+    all_options = [_backend_options(be, other, args, mech)
+                   for be, other in (pair, pair[::-1])]
     trajectories = []
     for backend, options in zip(pair, all_options):
         t0 = time.perf_counter()
@@ -357,10 +509,13 @@ def run_compare(args: argparse.Namespace) -> int:
     result = compare(*trajectories)
     print(format_table(result))
     if not args.no_plot:
-        from mbs_clearance.plotting import plot_comparison
-
         with atomic_file(args.out) as tmp:
-            plot_comparison(*trajectories, path=tmp)
+            if hasattr(mech, "clearance_joints"):
+                plot_linkage_comparison(*trajectories, path=tmp)
+            else:
+                from mbs_clearance.plotting import plot_comparison
+
+                plot_comparison(*trajectories, path=tmp)
         print(f"figure written to {args.out}", file=sys.stderr)
     return 0
 

@@ -9,6 +9,15 @@ operating point (is it periodic?), independent of the adaptive integrator: a con
 or separation is located by bisection of the step, then the joint's mode is switched by the
 generated on_event. The step must resolve the contact oscillation (h omega_contact < 1):
 check a result by halving the step.
+
+    python -m validation.regime_scan four_bar 8 adaptive 1e-10,1e-11 clearance=1e-5
+
+With "adaptive" and a list of rtol in place of the steps: the same case through the
+adaptive integrator (`simulate`'s peak-only run) at each rtol: the refined peak of every
+revolution, the contact events in total and in the first revolution, and the largest
+relative difference of the peaks between the rtols from each revolution on (the
+periodicity check of docs/cases.md: a periodic regime's peaks agree between rtols and
+repeat from revolution to revolution; a chaotic one's differ between rtols).
 """
 
 from __future__ import annotations
@@ -85,8 +94,60 @@ def make_runner(model):
     return run
 
 
+#: step attempts allowed to an adaptive run (the four-bar's sliding mode at rtol 1e-11 takes
+#: about a million steps per revolution)
+MAX_STEPS = 100_000_000
+
+
+def adaptive_peaks(linkage, revolutions: int, rtol: float) -> dict:
+    """Peaks per revolution (refined, N) and contact events (total, first revolution) of
+    `linkage` through the adaptive integrator at `rtol`, recording nothing."""
+    from mbs_clearance.linkage_model import run
+
+    first = run(linkage, 1, rtol=rtol, record=False, max_steps=MAX_STEPS)[6]["nevent"]
+    out = run(linkage, revolutions, rtol=rtol, record=False, max_steps=MAX_STEPS)
+    return {"rtol": rtol, "peaks": np.asarray(out[4]), "events": out[6]["nevent"],
+            "events_first": first, "nfev": out[6]["nfev"]}
+
+
+def periodicity(runs: list[dict]) -> dict:
+    """From `adaptive_peaks` of one case at several rtols: per revolution k, the largest
+    relative difference of the peaks between the rtols (`between_rtols`) and, at the
+    tightest rtol, the relative change from revolution k - 1 (`rev_to_rev`, NaN for k =
+    1); the events after the first revolution at each rtol (`later_events`)."""
+    peaks = np.array([r["peaks"] for r in runs])
+    tight = peaks[int(np.argmin([r["rtol"] for r in runs]))]
+    between = (peaks.max(axis=0) - peaks.min(axis=0)) / np.abs(tight)
+    rev = np.concatenate([[np.nan], np.abs(np.diff(tight)) / np.abs(tight[1:])])
+    return {"between_rtols": between, "rev_to_rev": rev,
+            "later_events": [r["events"] - r["events_first"] for r in runs]}
+
+
+def main_adaptive(name: str, revolutions: int, rtols: list[float], overrides: dict) -> None:
+    """Print `adaptive_peaks` at each rtol and their `periodicity` (the command line)."""
+    linkage = cases.CASES[name](**overrides)
+    runs = []
+    for rtol in rtols:
+        t0 = time.perf_counter()
+        r = adaptive_peaks(linkage, revolutions, rtol)
+        runs.append(r)
+        print(f"{name} {overrides} rtol {rtol:g}: nfev {r['nfev']}, contact events "
+              f"{r['events']} ({r['events_first']} in revolution 1) "
+              f"({time.perf_counter() - t0:.1f} s wall)", flush=True)
+    per = periodicity(runs)
+    for k in range(revolutions):
+        print(f"revolution {k + 1}: peaks " + " ".join(f"{r['peaks'][k]:.10g}" for r in runs)
+              + f" N; between rtols {per['between_rtols'][k]:.2e}, change from the "
+              f"previous revolution {per['rev_to_rev'][k]:.2e}")
+
+
 def main(argv=None) -> int:
     argv = sys.argv[1:] if argv is None else argv
+    if argv[2] == "adaptive":
+        overrides = {k: float(v) for k, v in (a.split("=") for a in argv[4:])}
+        main_adaptive(argv[0], int(argv[1]), [float(r) for r in argv[3].split(",")],
+                      overrides)
+        return 0
     name, revolutions, steps = argv[0], int(argv[1]), int(argv[2])
     overrides = {k: float(v) for k, v in (a.split("=") for a in argv[3:])}
     linkage = cases.CASES[name](**overrides)

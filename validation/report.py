@@ -60,6 +60,11 @@ def _settings(quick: bool) -> dict[str, Any]:
         "exudyn_step": 4e-6 if quick else 2e-6,
         "exudyn_variants": ("symbolic", "sphere") if quick else ("symbolic", "python",
                                                                  "sphere"),
+        # the named cases in both models (section 3): which, and how many revolutions
+        # (not the four-bar: Exudyn's Newton fails in its contact, docs/exudyn.md)
+        "agreement_cases": ("slider_crank_two_clearances",) if quick
+        else ("paper_slider_crank", "slider_crank_two_clearances"),
+        "case_revolutions": 2 if quick else 4,
         "ga_population": 8 if quick else 20,
         "ga_generations": 4 if quick else 30,
         "ga_seed": 1,
@@ -139,7 +144,42 @@ def section_agreement(out: Path, s: dict) -> dict:
                 else 1e6 * (fb.time - fa.time),
                 "periodic": c <= 1e-5,
             })
-    return {"rows": rows, "exudyn_step": s["exudyn_step"]}
+    return {"rows": rows, "exudyn_step": s["exudyn_step"],
+            **agreement_cases(out, s["case_revolutions"], s["agreement_cases"])}
+
+
+def agreement_cases(out: Path, revolutions: int, names) -> dict:
+    """Every named case (`names`) in both models: the reduced model (rtol 1e-10, sampled at
+    least at the Exudyn step) against Exudyn at its default step; per case the peaks per
+    revolution, the RMS of the |shaking force| and of the drive moment per revolution, the
+    first impact time per clearance joint and an overlay figure (orbit per joint)."""
+    from mbs_clearance.cases import CASES
+    from mbs_clearance.exudyn_linkage import make_settings
+    from validation.compare import compare, plot_linkage_comparison
+
+    rows, figures = [], []
+    (out / "figures").mkdir(parents=True, exist_ok=True)
+    for name in names:
+        linkage = CASES[name]()
+        step = make_settings({}).step(linkage.period)
+        ref = simulate(linkage, revolutions, rtol=1e-10, h_max=step)
+        ex = simulate(linkage, revolutions, backend="exudyn")
+        res = compare(ref, ex)
+        fig = f"agreement_{name}.png"
+        plot_linkage_comparison(ref, ex, path=out / "figures" / fig)
+        figures.append(fig)
+        rows.append({
+            "case": name, "exudyn_step": step, "periodic": ref.stats.get("periodic"),
+            "peaks_reduced": [r.peak_a for r in res.revolutions],
+            "peaks_exudyn": [r.peak_b for r in res.revolutions],
+            "peak_diff_percent": [100 * r.peak_rel_diff for r in res.revolutions],
+            "rms_shaking_percent": [100 * r.shaking_rms_rel_diff for r in res.revolutions],
+            "rms_moment_percent": [100 * r.moment_rms_rel_diff for r in res.revolutions],
+            "first_impact_us": {
+                j: [None if f is None else 1e6 * f.time for f in
+                    (res.first_impacts_a[j], res.first_impacts_b[j])] for j in res.joints},
+        })
+    return {"cases": rows, "case_figures": figures}
 
 
 def section_sensitivity(out: Path, s: dict) -> dict:
@@ -342,6 +382,9 @@ def draw_figures(out: Path, numbers: dict) -> dict[str, list[str]]:
         plot_tolerance(ToleranceResult.from_json(data / "tolerance.json"),
                        path=fig_dir / "tolerance.png")
         figs["tolerance"].append("tolerance.png")
+    if "agreement" in numbers:
+        figs["agreement"] += [f for f in numbers["agreement"].get("case_figures", [])
+                              if (fig_dir / f).exists()]
     if "performance" in numbers:
         rows = numbers["performance"]["work_precision"]
         plot_work_precision(rows, path=fig_dir / "work_precision.png")
@@ -451,6 +494,25 @@ only the first impact and statistics are comparable (see tests/integration/test_
 <td>{{ '%.4f' % r.orbit_rms_over_c_last }}</td>
 <td>{{ '%.4f' % r.first_impact_dt_us if r.first_impact_dt_us is not none else '-' }}</td></tr>
 {% endfor %}</table>
+{% if n.agreement.cases %}
+<p>Every named case from its description in both models (reduced rtol 1e-10; Exudyn at its
+default step, listed): the monitored force's peak per revolution, the relative differences
+(Exudyn / reduced - 1) of the RMS of the |shaking force| and of the drive moment per
+revolution, and the first impact time of each clearance joint (reduced / Exudyn). A case
+that is not periodic is compared by these statistics only.</p>
+<table><tr><th>case</th><th>Exudyn step (s)</th><th>periodic</th>
+<th>peak per rev., reduced (N)</th><th>peak diff. per rev. (%)</th>
+<th>RMS |shaking| diff. per rev. (%)</th><th>RMS moment diff. per rev. (%)</th>
+<th>first impact per joint, reduced / Exudyn (&micro;s)</th></tr>
+{% for r in n.agreement.cases %}<tr><td>{{ r.case }}</td><td>{{ '%.3g' % r.exudyn_step }}</td>
+<td>{{ r.periodic }}</td><td>{{ r.peaks_reduced | map('round', 2) | join(', ') }}</td>
+<td>{{ r.peak_diff_percent | map('round', 3) | join(', ') }}</td>
+<td>{{ r.rms_shaking_percent | map('round', 3) | join(', ') }}</td>
+<td>{{ r.rms_moment_percent | map('round', 3) | join(', ') }}</td>
+<td>{% for j, v in r.first_impact_us.items() %}{{ j }}: {{ v | map('string') | join(' / ') }}<br>{% endfor %}</td></tr>
+{% endfor %}</table>
+{% endif %}
+{% for f in figs.agreement %}<img src="{{ img[f] }}" alt="{{ f }}">{% endfor %}
 
 <h2 id="sensitivity">{{ titles.sensitivity }}</h2>
 <p>Normalized sensitivity (Eq. 15) of |F12| over revolution 4 by direct differentiation of

@@ -236,3 +236,32 @@ def test_simulate_refuses_other_backends_and_options_for_a_linkage():
         simulate(paper_slider_crank(), 4, step_size=1e-6)
     with pytest.raises(ValueError, match="mech must be a SliderCrank or a Linkage"):
         simulate({"name": "x"}, 4)
+
+
+@pytest.mark.parametrize("name", ["paper_slider_crank", "slider_crank_two_clearances",
+                                  "four_bar"])
+def test_issue_16_bad_descriptions_of_each_named_case(name):
+    """Issue 16's four bad descriptions, made from each named case: a clearance joint
+    replaced by an ideal pin (every loop then closed by ideal joints), an ideal joint on an
+    unknown body, a journal larger than its bearing, a negative mass; each a ValueError
+    naming the item."""
+    from mbs_clearance.cases import CASES
+
+    lk = CASES[name]()
+    # every clearance joint an ideal pin (a spare clearance joint kept, so that the refusal
+    # is the loop's): the loop through the pins is closed
+    pins = tuple(Revolute(c.name + "_pin", c.bearing_body, c.bearing_point, c.journal_body,
+                          c.journal_point) for c in lk.clearance_joints)
+    spare = dataclasses.replace(lk.clearance_joints[0], name="spare")
+    with pytest.raises(ValueError, match="closed loop") as err:
+        lk.replace(joints=(*lk.joints, *pins), clearance_joints=(spare,))
+    assert all(p.name in str(err.value) for p in pins), str(err.value)
+    cj = lk.clearance_joints[-1]
+    joint = lk.joints[-1]
+    with pytest.raises(ValueError, match="unknown body 'nobody'"):
+        lk.replace(joints=(*lk.joints[:-1], dataclasses.replace(joint, body_b="nobody")))
+    with pytest.raises(ValueError, match=f"clearance joint '{cj.name}' journal_radius must "
+                                         "be smaller"):
+        dataclasses.replace(cj, journal_radius=cj.bearing_radius * 1.01)
+    with pytest.raises(ValueError, match="body 'coupler' mass must be a finite number > 0"):
+        lk.with_parameter("coupler.mass", -0.2)

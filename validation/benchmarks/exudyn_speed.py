@@ -7,6 +7,15 @@ and of the crank moment over the 4th revolution (`validation.compare`). Wall tim
 medians over repeats, measured after a warm-up run, all in one process and one run.
 
     python -m validation.benchmarks.exudyn_speed [--repeats 3] [--step-sizes 5e-6 2e-6 1e-6]
+
+With ``--cases NAME ...`` (or ``--cases all``) it measures the named linkages instead (the
+models generated from their descriptions, `cases.CASES`): per case the reduced model's
+default run (rtol 1e-7) and its 4th-revolution peak error against the reduced model at
+rtol 1e-11, Exudyn at its default step and at that step times 2, 1/2, 1/4, each with its
+peak error, and Exudyn's time at the reduced default's error (interpolated in log-log
+between the two bracketing steps, second order) with our speed-up at equal error:
+
+    python -m validation.benchmarks.exudyn_speed --cases all [--repeats 3]
 """
 
 from __future__ import annotations
@@ -29,7 +38,11 @@ def main(argv=None):
     ap.add_argument("--contacts", nargs="+", default=list(CONTACT_VARIANTS),
                     choices=CONTACT_VARIANTS)
     ap.add_argument("--json", help="also write the results to this JSON file")
+    ap.add_argument("--cases", nargs="+", metavar="NAME",
+                    help="named linkages to measure (or 'all') instead of the contact variants")
     args = ap.parse_args(argv)
+    if args.cases:
+        return cases_main(args)
     mech = SliderCrank()
     rev = 4
 
@@ -71,6 +84,79 @@ def main(argv=None):
         with open(args.json, "w") as fh:
             json.dump({"reference_peak": ref_peak, "rows": rows,
                        "machine": machine_summary()}, fh, indent=1)
+
+
+def _interpolated_time(rows: list[dict], target: float) -> float | None:
+    """Exudyn's time at peak error `target`, log-log interpolated between the two runs whose
+    errors bracket it (None if none do)."""
+    import math
+
+    pts = sorted((r["peak_error"], r["time"]) for r in rows if r["peak_error"] > 0)
+    for (e0, t0), (e1, t1) in zip(pts[:-1], pts[1:]):
+        if e0 <= target <= e1:
+            w = math.log(target / e0) / math.log(e1 / e0) if e1 > e0 else 0.0
+            return math.exp(math.log(t0) + w * (math.log(t1) - math.log(t0)))
+    return None
+
+
+def cases_main(args) -> None:
+    """The named linkages: reduced default vs Exudyn at several steps (module docstring)."""
+    from mbs_clearance.cases import CASES
+    from mbs_clearance.exudyn_linkage import make_settings
+    from mbs_clearance.linkage_model import DEFAULT_RTOL as LINKAGE_RTOL
+
+    names = sorted(CASES) if args.cases == ["all"] else args.cases
+    rev = 4
+    out = []
+    for name in names:
+        lk = CASES[name]()
+        h0 = make_settings({}).step(lk.period)
+        ref = simulate(lk, rev, backend="reduced", rtol=1e-11)
+        ref_peak = ref.max_base_force(rev)
+        simulate(lk, rev, backend="reduced")                         # warm-up
+        t_red, red = timed(lambda lk=lk: simulate(lk, rev, backend="reduced"),
+                           args.reduced_repeats)
+        err_red = abs(red.max_base_force(rev) / ref_peak - 1)
+        rows = []
+        for factor in (2.0, 1.0, 0.5, 0.25):
+            h = h0 * factor
+            try:
+                t, tr = timed(lambda lk=lk, h=h: simulate(lk, rev, backend="exudyn",
+                                                          step_size=h), args.repeats)
+            except RuntimeError as exc:          # Exudyn's Newton failed at this step
+                print(f"  {name} exudyn h = {h:.3g} s: failed ({exc})", flush=True)
+                continue
+            m = compare(ref, tr, revolutions=(rev,)).revolution(rev)
+            rows.append(dict(step=h, time=t, peak_error=abs(m.peak_rel_diff),
+                             rms_shaking=abs(m.shaking_rms_rel_diff),
+                             rms_moment=abs(m.moment_rms_rel_diff)))
+            print(f"  {name} exudyn h = {h:.3g} s: {t:.3f} s, peak error "
+                  f"{abs(m.peak_rel_diff):.1e}", flush=True)
+        t_equal = _interpolated_time(rows, err_red)
+        out.append(dict(case=name, reduced_rtol=LINKAGE_RTOL, reduced_time=t_red,
+                        reduced_peak_error=err_red, exudyn=rows, exudyn_time_at_equal_error=
+                        t_equal, speedup=None if t_equal is None else t_equal / t_red))
+    print()
+    print(f"Machine: {machine_summary()}")
+    print()
+    print("| case | reduced (rtol 1e-7): time (s), peak error | Exudyn step (s) | time (s) | "
+          "peak error | RMS shaking | RMS moment |")
+    print("|---|---|---|---|---|---|---|")
+    for c in out:
+        for r in c["exudyn"]:
+            print(f"| {c['case']} | {c['reduced_time']:.4f}, {c['reduced_peak_error']:.1e} | "
+                  f"{r['step']:.3g} | {r['time']:.3f} | {r['peak_error']:.1e} | "
+                  f"{r['rms_shaking']:.1e} | {r['rms_moment']:.1e} |")
+    print()
+    print("| case | Exudyn time at the reduced default's error (s) | speed-up |")
+    print("|---|---|---|")
+    for c in out:
+        te, su = c["exudyn_time_at_equal_error"], c["speedup"]
+        print(f"| {c['case']} | {'outside the measured steps' if te is None else f'{te:.3f}'}"
+              f" | {'-' if su is None else f'{su:.0f} x'} |")
+    if args.json:
+        with open(args.json, "w") as fh:
+            json.dump({"cases": out, "machine": machine_summary()}, fh, indent=1)
 
 
 if __name__ == "__main__":

@@ -1,7 +1,10 @@
 """What a user waits for once per new linkage structure: generation and first compile.
 
-For a structure never seen before (a four-bar-like linkage whose names carry a fresh tag,
-so that no cache applies), in a fresh cache directory:
+For a structure never seen before, in a fresh cache directory: a small four-bar-like
+linkage whose names carry a fresh tag (default), or a named case (`--case NAME`, repeatable,
+or `--case all`) with one unused point of a fresh name added to its first body (the
+generated module is keyed by the structure, names included: no cache applies, the model is
+the case's):
 
 1. `generate_module` (sympy derivation, code writing);
 2. importing the module (numba compiles the kernels with explicit signatures: rhs, event,
@@ -11,7 +14,7 @@ so that no cache applies), in a fresh cache directory:
    integrator's protocol v2 is available;
 5. a second process loading the same structure (everything from the disk caches).
 
-    python -m validation.benchmarks.generation_time
+    python -m validation.benchmarks.generation_time [--case all]
 
 Run it on a quiet machine: the times are the point of the script.
 """
@@ -45,17 +48,50 @@ def _linkage(tag: str):
     )
 
 
-def main() -> None:
-    tag = uuid.uuid4().hex[:8]
+def _structure(case: str | None, tag: str):
+    """The bench linkage (case None) or the named case with an unused point named by `tag`
+    on its first body (a new structure, the same model)."""
+    if case is None:
+        return _linkage(tag)
+    import dataclasses
+
+    from mbs_clearance.cases import CASES
+
+    lk = CASES[case]()
+    first = lk.bodies[0]
+    tagged = dataclasses.replace(first, points={**first.points, f"tag_{tag}": (0.0, 0.0)})
+    return lk.replace(bodies=(tagged, *lk.bodies[1:]))
+
+
+def main(argv=None) -> None:
+    import argparse
+
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--case", action="append",
+                    help="a named case (repeatable), or 'all'; default: the bench linkage")
+    args = ap.parse_args(argv)
     cache = tempfile.mkdtemp(prefix="mbs-gen-bench-")
     os.environ["MBS_CLEARANCE_MODEL_DIR"] = cache
     t0 = time.perf_counter()
     import mbs_clearance  # noqa: F401 - the library's own kernels load first (not counted)
+
+    t_import = time.perf_counter() - t0
+    cases = args.case or [None]
+    if "all" in cases:
+        from mbs_clearance.cases import CASES
+
+        cases = list(CASES)
+    print(f"library import (not counted): {t_import:.2f} s")
+    for case in cases:
+        _measure(case, cache)
+
+
+def _measure(case, cache) -> None:
     from mbs_clearance.generate import generate_module, load_model
     from mbs_clearance.linkage_model import initial_state, pack_parameters
 
-    t_import = time.perf_counter() - t0
-    lk = _linkage(tag)
+    tag = uuid.uuid4().hex[:8]
+    lk = _structure(case, tag)
     t0 = time.perf_counter()
     generate_module(lk)
     t_gen = time.perf_counter() - t0
@@ -69,7 +105,7 @@ def main() -> None:
 
     model.outputs(np.zeros(1), y0[None, :], np.zeros((1, model.N_MEM)), p)
     t_glue = time.perf_counter() - t0
-    rows = [("library import (not counted)", t_import), ("generate_module (sympy)", t_gen),
+    rows = [("generate_module (sympy)", t_gen),
             ("import + compile of the kernels", t_load),
             ("first glue calls (prepare, closure, outputs)", t_glue)]
     try:
@@ -85,14 +121,15 @@ def main() -> None:
     except (ImportError, AttributeError, NotImplementedError) as exc:
         rows.append((f"simulation not available ({exc})", float("nan")))
     code = (f"import time, os; t0 = time.perf_counter(); "
-            f"from validation.benchmarks.generation_time import _linkage; "
+            f"from validation.benchmarks.generation_time import _structure; "
             f"from mbs_clearance.generate import load_model; "
-            f"t1 = time.perf_counter(); load_model(_linkage({tag!r})); "
+            f"lk = _structure({case!r}, {tag!r}); "
+            f"t1 = time.perf_counter(); load_model(lk); "
             f"print(time.perf_counter() - t1)")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          env=dict(os.environ), check=True).stdout.strip().splitlines()[-1]
     rows.append(("another process: load from the caches", float(out)))
-    print(f"new structure {lk.name} (cache {cache})")
+    print(f"new structure of {case or lk.name} (tag {tag}, cache {cache})")
     for name, sec in rows:
         print(f"  {name:<58} {sec:8.2f} s")
 

@@ -1,0 +1,279 @@
+"""Exudyn built from the descriptions (`exudyn_linkage`) against the generated reduced model.
+
+Two independent implementations of every named case: the reduced model generated from the
+description (minimal coordinates, sympy's Kane equations, compiled adaptive Runge-Kutta with
+located events) and Exudyn (absolute coordinates, algebraic constraints, generalized-alpha
+with a fixed step, reactions and drive moment from its own constraint multipliers). What
+they share is the description, the contact law and the centred initial state.
+
+Fast tests: the initial state carried to the bodies, and short windows (the first impacts)
+where pointwise values can be compared before the impacts' phase errors separate the
+trajectories. Slow tests: four revolutions per case (issue 17's agreement and convergence),
+the ideal-joint limit against validation/ideal_linkage.py, finite-difference sensitivities
+through Exudyn. Every tolerance has its measured value beside it.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from mbs_clearance import cases, simulate
+from mbs_clearance import exudyn_linkage as xl
+from mbs_clearance.linkage import GROUND
+from mbs_clearance.linkage_model import initial_state
+
+pytestmark = pytest.mark.exudyn
+
+CASE_NAMES = ("paper_slider_crank", "slider_crank_two_clearances", "four_bar")
+
+
+def _world_point(linkage, states, body, point):
+    if body == GROUND:
+        return np.array(linkage.ground_points[point]), np.zeros(2)
+    x, y, phi, vx, vy, w = states[body]
+    px, py = dict((b.name, b) for b in linkage.bodies)[body].points[point]
+    c, s = np.cos(phi), np.sin(phi)
+    r = np.array([c * px - s * py, s * px + c * py])
+    return np.array([x, y]) + r, np.array([vx, vy]) + w * np.array([-r[1], r[0]])
+
+
+@pytest.mark.parametrize("name", CASE_NAMES)
+def test_initial_body_states_are_the_centred_reduced_state(name):
+    """`body_states` carries the reduced model's centred start to the bodies: every ideal
+    joint's two points coincide (and move together), every journal sits at its bearing's
+    centre with the same velocity (the velocity constraints of the centred start), and the
+    velocities are the time derivatives of the positions (central differences)."""
+    lk = cases.CASES[name]()
+    y0 = initial_state(lk)
+    n = len(lk.coordinates())
+    q, qd = y0[:n], y0[n:2 * n]
+    st = xl.body_states(lk, 0.0, q, qd)
+    scale = lk.length_scale
+    pairs = [(j.body_a, j.point_a, j.body_b, j.point_b) for j in lk.joints
+             if not hasattr(j, "angle")]
+    pairs += [(j.journal_body, j.journal_point, j.bearing_body, j.bearing_point)
+              for j in lk.clearance_joints]
+    for a, pa, b, pb in pairs:
+        ra, va = _world_point(lk, st, a, pa)
+        rb, vb = _world_point(lk, st, b, pb)
+        assert np.abs(ra - rb).max() < 1e-12 * scale
+        assert np.abs(va - vb).max() < 1e-9 * lk.drive.speed * scale
+    dt = 1e-7 * lk.period
+    plus = xl.body_states(lk, dt, q + dt * qd, qd)
+    minus = xl.body_states(lk, -dt, q - dt * qd, qd)
+    for body, s in st.items():
+        rate = (np.array(plus[body][:3]) - np.array(minus[body][:3])) / (2 * dt)
+        assert np.allclose(rate, s[3:], rtol=1e-6, atol=1e-6 * lk.drive.speed * scale)
+
+
+# short windows: the first impacts, compared pointwise ----------------------------------
+#: (case, end time s, steps): the windows hold the first impacts of every joint
+WINDOWS = {"paper_slider_crank": (1e-4, 2e-7), "slider_crank_two_clearances": (1e-4, 2e-7)}
+
+
+def _short_run(lk, end, step):
+    model = xl.build(lk, xl.make_settings(dict(step_size=step)))
+    xl.solve(model, end)
+    t, reactions = xl._reactions(model)
+    moment = -xl.stored(model, "drive")[:, 1]
+    ecc = {cj.name: xl.stored(model, f"{cj.name}.displacement")[:, 1:3]
+           for cj in lk.clearance_joints}
+    return t, reactions, moment, ecc
+
+
+@pytest.mark.parametrize("name", sorted(WINDOWS))
+def test_first_impacts_reactions_and_drive_moment_pointwise(name):
+    """Over a window holding the first impacts, at a fine step, Exudyn's ground-joint
+    reactions (revolute and prismatic, from its multipliers), its drive moment and the
+    journals' eccentricities agree pointwise with the reduced model's outputs (Newton on
+    the subtrees, Kane's generalized force): this pins every sign convention of the
+    builder. Measured (max difference / max value): reactions and moment <= 4e-4 ...
+    see the assertion message; eccentricities <= 1e-3 of the clearance."""
+    lk = cases.CASES[name]()
+    end, step = WINDOWS[name]
+    t, reactions, moment, ecc = _short_run(lk, end, step)
+    ref = simulate(lk, 1, backend="reduced", rtol=1e-11, h_max=1e-6)
+    m = ref.t <= end * (1 + 1e-9)
+
+    def at(y):
+        return np.interp(t, ref.t[m], y[m])
+
+    for g, f in reactions.items():
+        for k in range(2):
+            scale = np.abs(ref.reactions[g][m, k]).max()
+            if scale < 1e-9 * np.abs(ref.reactions[g][m]).max():
+                # a frictionless guide's axial reaction: zero up to round-off in both
+                assert np.abs(f[:, k]).max() < 1e-9 * np.abs(f).max()
+                continue
+            err = np.abs(f[:, k] - at(ref.reactions[g][:, k])).max() / scale
+            assert err < 1e-2, f"{name} {g}[{k}]: {err:.2e} of its peak"
+    err = np.abs(moment - at(ref.crank_moment)).max() / np.abs(ref.crank_moment[m]).max()
+    assert err < 1e-2, f"{name} drive moment: {err:.2e} of its peak"
+    for j, cj in enumerate(lk.clearance_joints):
+        for k in range(2):
+            err = np.abs(ecc[cj.name][:, k] - at(ref.eccentricity[:, j, k])).max()
+            assert err < 2e-2 * cj.clearance, f"{name} {cj.name}: {err / cj.clearance:.2e} c"
+
+
+def test_first_impacts_converge_at_second_order():
+    """Halving the step over the first impacts of the two-joint slider-crank: the largest
+    eccentricity difference to the reduced model (rtol 1e-11) falls by ~4 (measured: see
+    the message); asserted >= 3 per halving."""
+    lk = cases.slider_crank_two_clearances()
+    end = 1e-4
+    ref = simulate(lk, 1, backend="reduced", rtol=1e-11, h_max=1e-6)
+    errors = []
+    for step in (8e-7, 4e-7, 2e-7):
+        t, _, _, ecc = _short_run(lk, end, step)
+        err = 0.0
+        for j, cj in enumerate(lk.clearance_joints):
+            for k in range(2):
+                err = max(err, np.abs(ecc[cj.name][:, k]
+                                      - np.interp(t, ref.t, ref.eccentricity[:, j, k])).max())
+        errors.append(err)
+    ratios = np.array(errors[:-1]) / np.array(errors[1:])
+    assert np.all(ratios > 3.0), f"errors {errors}, ratios {ratios}"
+
+
+def test_refined_peak_of_a_parabola_is_exact():
+    """`refined_peaks` recovers the vertex of a sampled parabola between the samples; where
+    the largest sample of a revolution is at its end (no local maximum), that sample."""
+    t = np.linspace(0.0, 2.0, 201)
+    y = 5.0 - 3.0 * (t - 0.5037) ** 2
+    peaks = xl.refined_peaks(t, y, 1.0, 2)
+    assert peaks[0] == pytest.approx(5.0, rel=1e-14)
+    assert peaks[1] == y[100]
+
+
+@pytest.mark.parametrize("options, match", [
+    (dict(step_size=1e-6, accuracy=1e-3), "not both"),
+    (dict(accuracy=1.0), "accuracy"),
+    (dict(steps_per_revolution=3), "steps_per_revolution"),
+    (dict(contact="penalty"), "contact"),
+    (dict(rtol=1e-8), "allowed"),
+])
+def test_bad_options_raise_before_building(monkeypatch, options, match):
+    def fail(*args, **kwargs):
+        raise AssertionError("the model was built despite a bad option")
+
+    monkeypatch.setattr(xl, "build", fail)
+    with pytest.raises(ValueError, match=match):
+        simulate(cases.four_bar(), 1, backend="exudyn", **options)
+
+
+def test_accuracy_chooses_the_step_by_second_order():
+    s = xl.make_settings(dict(accuracy=xl.ACCURACY_AT_DEFAULT / 4))
+    lk = cases.paper_slider_crank()
+    assert s.step(lk.period) == pytest.approx(xl.make_settings({}).step(lk.period) / 2)
+
+
+# four revolutions per case (slow) ---------------------------------------------------------
+#: cases whose default operating point is periodic, checked across the models. The
+#: four-bar's default (s8-four: 10 rpm, 0.01 mm) approaches its periodic motion slowly
+#: (the frictionless sliding mode) and Exudyn's Newton iteration fails on it at fixed steps
+#: >= 2e-5 s in the persistent contact at 1e-3 m/s impact velocity (measured): its
+#: cross-model check is left out (docs/exudyn.md).
+PERIODIC = ("paper_slider_crank", "slider_crank_two_clearances")
+
+_RUNS: dict = {}
+
+
+def four_revolutions(name, backend, **options):
+    key = (name, backend, tuple(sorted(options.items())))
+    if key not in _RUNS:
+        _RUNS[key] = simulate(cases.CASES[name](), 4, backend=backend, **options)
+    return _RUNS[key]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", PERIODIC)
+def test_periodic_cases_agree_at_the_default_step(name):
+    """Issue 17: reduced (rtol 1e-11) vs Exudyn (default step 2e-6 s): the 4th-revolution
+    peak of the monitored force within 0.5 % and the RMS of the |shaking force| and of the
+    drive moment within 2 % (measured: peak -2.0e-4 / -8.0e-5, RMS shaking -1.3e-5 /
+    2.9e-5, RMS moment -4.5e-5 / 9.2e-6 for the paper / two-joint case). The periodic
+    regime is shown by the reduced model: its peaks at rtol 1e-10 and 1e-11 agree to 1e-6
+    and revolutions 3 and 4 repeat."""
+    from validation.compare import compare
+
+    ref = four_revolutions(name, "reduced", rtol=1e-11)
+    loose = four_revolutions(name, "reduced", rtol=1e-10)
+    assert abs(loose.peaks[3] / ref.peaks[3] - 1) < 1e-6
+    assert abs(ref.peaks[3] / ref.peaks[2] - 1) < 1e-4
+    ex = four_revolutions(name, "exudyn")
+    r = compare(ref, ex).revolution(4)
+    assert abs(r.peak_rel_diff) < 5e-3, r.peak_rel_diff
+    assert abs(r.shaking_rms_rel_diff) < 2e-2, r.shaking_rms_rel_diff
+    assert abs(r.moment_rms_rel_diff) < 2e-2, r.moment_rms_rel_diff
+    # tighter than required, at the measured level (a regression shows)
+    assert abs(r.peak_rel_diff) < 5e-4 and abs(r.shaking_rms_rel_diff) < 1e-4
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", PERIODIC)
+def test_difference_shrinks_at_second_order_as_the_step_halves(name):
+    """Exudyn at 8, 4 and 2 us against the reduced model (rtol 1e-11), 4th revolution. The
+    RMS difference of the |shaking force| falls by 2.6-3.6 per halving (paper) and 2.8-3.0
+    (two joints) (measured; 4 = second order), asserted > 2.3. The paper case's peak error
+    falls 1.4e-3 -> 4.9e-4 -> 2.0e-4 (asserted > 2 per halving); the two-joint case's peak
+    error does not fall monotonically (2.2e-3, 2.3e-3, 8e-5, 1.1e-3 at 1 us: the crank
+    joint's undamped sliding mode rides on the peak, its phase set by the step), so only
+    its RMS is asserted there."""
+    from validation.compare import compare
+
+    ref = four_revolutions(name, "reduced", rtol=1e-11)
+    rms, peak = [], []
+    for step in (8e-6, 4e-6, 2e-6):
+        r = compare(ref, four_revolutions(name, "exudyn", step_size=step)).revolution(4)
+        rms.append(abs(r.shaking_rms_rel_diff))
+        peak.append(abs(r.peak_rel_diff))
+    rms, peak = np.array(rms), np.array(peak)
+    assert np.all(rms[:-1] / rms[1:] > 2.3), rms
+    if name == "paper_slider_crank":
+        assert np.all(peak[:-1] / peak[1:] > 2.0), peak
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", PERIODIC)
+def test_ideal_joint_limit_against_the_ideal_model(name):
+    """Clearance 1e-7 m in every joint, Exudyn at its default step, 2nd revolution, against
+    the hand-written ideal model (validation/ideal_linkage.py: analytic closure,
+    Newton-Euler). Window averages (36 windows of 10 degrees) and pointwise values of the
+    drive moment, the shaking force and every ground reaction within 1e-3 of their peak
+    (measured: window <= 1.8e-4 / 4.3e-4, pointwise <= 3.4e-4 / 5.9e-4, paper / two-joint
+    case), the refined peak of the monitored force within 1e-4 (measured 7e-7 / 1.4e-5).
+    The residual is the clearance itself (1e-7 m against 10 mm bearings moves the force
+    lines) plus the step's O(h^2) error; the frictionless sliding mode (issue 17) stays
+    small here because Exudyn's numerical damping (rho_inf 0.9) removes it: pointwise
+    values agree as well as window averages, unlike in the four-bar."""
+    import sys
+    from pathlib import Path
+
+    from validation.ideal_linkage import from_linkage, ideal_outputs
+
+    sys.path.insert(0, str(Path(__file__).parent))
+    from test_linkage_physics import window_means
+
+    if name == "paper_slider_crank":
+        lk = cases.paper_slider_crank(journal_radius=0.01 - 1e-7)
+    else:
+        lk = cases.slider_crank_two_clearances(crank_coupler_clearance=1e-7,
+                                               coupler_slider_clearance=1e-7)
+    ex = simulate(lk, 2, backend="exudyn")
+    t = ex.t
+    ref = ideal_outputs(from_linkage(lk), t)
+    P = lk.period
+    edges = P + P * np.arange(37) / 36
+    pairs = [("drive moment", ex.crank_moment, ref["drive_moment"]),
+             ("shaking", ex.shaking_force, ref["shaking"])]
+    pairs += [(g, f, ref["ground_reactions"][g]) for g, f in ex.reactions.items()]
+    later = t >= P
+    for label, sim, ideal in pairs:
+        scale = np.max(np.abs(ideal[later]))
+        window = np.max(np.abs(window_means(t, sim, edges) - window_means(t, ideal, edges)))
+        point = np.max(np.abs(sim[later] - ideal[later]))
+        assert window < 1e-3 * scale, f"{label}: window {window / scale:.2e}"
+        assert point < 1e-3 * scale, f"{label}: pointwise {point / scale:.2e}"
+    ideal_peak = np.hypot(*ref["ground_reactions"][lk.monitor_joint][later].T).max()
+    assert abs(ex.peaks[1] / ideal_peak - 1) < 1e-4
