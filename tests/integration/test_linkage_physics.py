@@ -117,9 +117,11 @@ def test_ideal_limit_window_averages(name):
     joint forces' magnitudes likewise (the sliding mode's centripetal part rides on a
     magnitude: measured 7.3e-4 for the four-bar's joint, 2e-5 ... 4e-5 for its reactions,
     shaking force and drive moment at rtol 1e-8). Four-bar: the same window averages at
-    rtol 1e-7 differ from those at 1e-8 by less than 1e-5 of the peak, far below what is
-    compared: the remaining difference is the physics of the clearance (the sliding mode,
-    the offsets ~ c), not integration error."""
+    rtol 1e-7 differ from those at 1e-8 by less than 2e-4 of the peak (measured 8.6e-5 on
+    the drive moment), a fifth of the tolerance at most: the comparison is not limited by
+    integration error (at rtol 1e-8, by proportionality, ~1e-5: the size of the reactions'
+    residual 2e-5 ... 4e-5, far below the joint force's 7.3e-4, which is the sliding
+    mode's)."""
     pairs, edges, t = _compared(name)
     inside = (t >= edges[0]) & (t <= edges[-1])
     means = {}
@@ -132,10 +134,11 @@ def test_ideal_limit_window_averages(name):
     if check is not None:
         pairs, edges, t = _compared(name, check)
         inside = (t >= edges[0]) & (t <= edges[-1])
+        diffs = {}
         for label, sim, ideal in pairs:
             scale = np.max(np.abs(ideal[inside]))
-            diff = np.max(np.abs(window_means(t, sim, edges) / scale - means[label]))
-            assert diff < 1e-5, f"{name} {label}: rtol {check:g} vs the run: {diff:.2e}"
+            diffs[label] = np.max(np.abs(window_means(t, sim, edges) / scale - means[label]))
+        assert max(diffs.values()) < 2e-4, f"{name}: rtol {check:g} vs the run: {diffs}"
 
 
 @pytest.mark.slow
@@ -384,12 +387,42 @@ def test_four_bar_default_regime():
     frictionless joint's sliding mode, excited by the start, decays slowly: the motion
     approaches a periodic orbit without reaching it (docs/cases.md). At the old default
     0.1 mm the same peaks differ by 1.2e-4 ... 2.1e-4 between these rtols."""
-    from validation.regime_scan import adaptive_peaks, periodicity
+    from validation.regime_scan import periodicity
 
-    lk = four_bar()
-    runs = [adaptive_peaks(lk, 4, rtol) for rtol in (1e-10, 1e-11)]
+    runs = [four_bar_peaks(rtol) for rtol in (1e-10, 1e-11)]
     per = periodicity(runs)
     assert per["later_events"] == [0, 0]
     assert np.all(per["between_rtols"][1:] < 1e-5), per["between_rtols"]
     peaks, change = runs[1]["peaks"], per["rev_to_rev"][2:]
     assert np.all(np.diff(peaks[1:]) < 0) and change[1] < change[0], (peaks, change)
+
+
+_FOUR_BAR_PEAKS: dict = {}
+
+
+def four_bar_peaks(rtol):
+    """`regime_scan.adaptive_peaks` of the default four-bar over 4 revolutions at `rtol`,
+    run once per session."""
+    from validation.regime_scan import adaptive_peaks
+
+    if rtol not in _FOUR_BAR_PEAKS:
+        _FOUR_BAR_PEAKS[rtol] = adaptive_peaks(four_bar(), 4, rtol)
+    return _FOUR_BAR_PEAKS[rtol]
+
+
+@pytest.mark.slow
+def test_four_bar_peak_converges_with_rtol():
+    """Convergence of the integrator on the four-bar, whose end state after the start's
+    impacts is sensitive (the number of start impacts changes with rtol: 65, 533, 313, 331,
+    329, 323 at rtol 1e-6 ... 1e-11): the 4th revolution's refined peak against rtol 1e-11
+    falls with rtol at least in proportion to it (measured errors 1.6e-3, 1.0e-4, 1.7e-6,
+    3.5e-7 at rtol 1e-6 ... 1e-9: log-log slope 1.3; 0.7 ... 2.2 allowed; rtol 1e-10 and
+    1e-11 differ by 7e-8) and is below
+    1e-6 at rtol 1e-9."""
+    ref = four_bar_peaks(1e-11)["peaks"][3]
+    rtols = np.array([1e-6, 1e-7, 1e-8, 1e-9])
+    errs = np.array([abs(four_bar_peaks(r)["peaks"][3] / ref - 1.0) for r in rtols])
+    assert np.all(np.diff(errs) < 0), errs
+    slope = np.polyfit(np.log(rtols), np.log(errs), 1)[0]
+    assert 0.7 < slope < 2.2, (errs, slope)
+    assert errs[-1] < 1e-6, errs

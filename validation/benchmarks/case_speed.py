@@ -1,0 +1,123 @@
+"""Per named case: the compiled integrator against scipy's DOP853 on the same compiled model.
+
+For each case of `mbs_clearance.cases` (or `--case NAME`), 4 drive revolutions from the
+centred start:
+
+- reference: the 4th revolution's refined peak of the monitored force by our integrator at
+  rtol 1e-12 (and, with --check-reference, by scipy DOP853 at rtol 1e-12: their relative
+  difference is printed);
+- ours: `simulate` (every step recorded) and the peak-only run at the default rtol, and the
+  peak's relative error against the reference;
+- scipy: `solve_ivp(method="DOP853")` on the generated model's compiled right-hand side,
+  one terminal event per clearance joint, the mode switched by the generated `on_event`
+  between restarts (validation.scipy_reference.solve_scipy_linkage), at rtol 1e-5, 1e-6,
+  ... until its error is not worse than ours;
+- each scipy row timed against ours in ALTERNATING pairs in one process (ours, scipy, ours,
+  scipy, ...; `common.paired`), the median of the per-pair ratios; the headline ratio is
+  interpolated to our error in log(ratio) against log(error) between the last two rows
+  (as speed_reduced.py does for the paper case);
+- why: the ratio of function evaluations (scipy / ours at the rows bracketing our error)
+  and the time per function evaluation of each (per-call overhead: scipy calls the
+  compiled right-hand side from Python at every stage).
+
+    python -m validation.benchmarks.case_speed [--case four_bar] [--repeats 3]
+
+Run it on a quiet machine: the ratios are the point of the script.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+
+from mbs_clearance import peak_base_force, simulate
+from mbs_clearance.cases import CASES
+from mbs_clearance.linkage_model import DEFAULT_RTOL
+from validation.benchmarks.common import machine_summary, paired
+from validation.benchmarks.speed_reduced import equal_error_ratio
+from validation.scipy_reference import solve_scipy_linkage
+
+SCIPY_RTOLS = (1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11)
+REVOLUTION = 4
+
+
+def case_speed(name: str, repeats: int, check_reference: bool = False) -> dict:
+    """The measurements of one case (see the module docstring) as a dict."""
+    lk = CASES[name]()
+    ref = peak_base_force(lk, REVOLUTION, rtol=1e-12)
+    result = {"case": name, "reference": ref}
+    if check_reference:
+        sref = solve_scipy_linkage(lk, REVOLUTION, rtol=1e-12).peaks[REVOLUTION - 1]
+        result["scipy_reference_difference"] = abs(sref / ref - 1.0)
+    traj = simulate(lk, REVOLUTION)                      # compile / load, then measure
+    ours_peak = peak_base_force(lk, REVOLUTION)
+    ours_err = abs(ours_peak / ref - 1.0)
+    result.update(ours_error=ours_err, ours_nfev=traj.stats["nfev"],
+                  ours_events=traj.stats["nevent"])
+    rows, ratios = [], []
+    for rtol in SCIPY_RTOLS:
+        res = solve_scipy_linkage(lk, REVOLUTION, rtol=rtol)
+        err = abs(res.peaks[REVOLUTION - 1] / ref - 1.0)
+
+        def run_scipy(r=rtol):
+            return solve_scipy_linkage(lk, REVOLUTION, rtol=r)
+
+        sim = paired(lambda: simulate(lk, REVOLUTION), run_scipy, repeats)
+        peak = paired(lambda: peak_base_force(lk, REVOLUTION), run_scipy, repeats)
+        rows.append((rtol, err, sim["b"], res.nfev))
+        ratios.append((sim["ratio"], peak["ratio"], sim["a"], peak["a"], len(res.event_times)))
+        print(f"  {name}: scipy rtol {rtol:g}: peak error {err:.2e} (ours {ours_err:.2e}), "
+              f"nfev {res.nfev}, events {len(res.event_times)}, {sim['b']:.3g} s; paired "
+              f"ratio {sim['ratio']:.0f} (simulate), {peak['ratio']:.0f} (peak only)",
+              flush=True)
+        if err <= ours_err:
+            break
+    result.update(rows=rows, paired=ratios)
+    result["ratio_simulate"] = equal_error_ratio(rows, [r[0] for r in ratios], ours_err)
+    result["ratio_peak"] = equal_error_ratio(rows, [r[1] for r in ratios], ours_err)
+    last = rows[-1]
+    t_ours = ratios[-1][2]
+    result["nfev_ratio"] = last[3] / traj.stats["nfev"]
+    result["us_per_nfev_scipy"] = 1e6 * last[2] / last[3]
+    result["us_per_nfev_ours"] = 1e6 * t_ours / traj.stats["nfev"]
+    return result
+
+
+def _fmt(x, spec):
+    return "n/a" if x is None else format(x, spec)
+
+
+def main(argv=None) -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--case", choices=sorted(CASES), action="append",
+                    help="a case (repeatable; default: every case)")
+    ap.add_argument("--repeats", type=int, default=3, help="alternating pairs per scipy row")
+    ap.add_argument("--check-reference", action="store_true",
+                    help="also compare the reference peak with scipy DOP853 at rtol 1e-12")
+    ap.add_argument("--json", help="also write the results to this JSON file")
+    args = ap.parse_args(argv)
+    names = args.case or list(CASES)
+    results = []
+    for name in names:
+        results.append(case_speed(name, args.repeats, args.check_reference))
+    print()
+    print(f"Machine: {machine_summary()}")
+    print(f"ours at the default rtol {DEFAULT_RTOL:g}; revolution {REVOLUTION}'s peak; "
+          f"{args.repeats} alternating pairs per scipy row")
+    print()
+    print("| case | ours: peak error | scipy rtol at/below it (error) | speed-up simulate | "
+          "speed-up peak only | nfev scipy / ours | us per nfev: scipy / ours |")
+    print("|---|---|---|---|---|---|---|")
+    for r in results:
+        rtol, err = r["rows"][-1][0], r["rows"][-1][1]
+        print(f"| {r['case']} | {r['ours_error']:.1e} | {rtol:g} ({err:.1e}) | "
+              f"{_fmt(r['ratio_simulate'], '.0f')} x | {_fmt(r['ratio_peak'], '.0f')} x | "
+              f"{r['nfev_ratio']:.2f} | {r['us_per_nfev_scipy']:.1f} / "
+              f"{r['us_per_nfev_ours']:.3f} |")
+    if args.json:
+        with open(args.json, "w") as fh:
+            json.dump(results, fh, indent=1, default=float)
+
+
+if __name__ == "__main__":
+    main()
