@@ -74,6 +74,10 @@ class Sensitivities:
     growth : (revolutions, p) max over each revolution of the normalized state-sensitivity
         norm; it stays bounded in periodic motion and grows without bound in chaotic motion
     stats : solver counters and settings
+    outputs : for a `Linkage` (else None): every output column of its generated model
+        (OUT_COLUMNS) and every coordinate, name -> (n, p) derivatives; there base_force is
+        the monitored reaction (the monitor joint's, or the shaking force), crank_moment
+        the drive moment, contact_force (n, p) for one clearance joint, (n, J, p) for J
     """
 
     t: np.ndarray
@@ -88,6 +92,7 @@ class Sensitivities:
     backend: str
     growth: np.ndarray | None = None
     stats: dict[str, Any] = field(default_factory=dict)
+    outputs: dict[str, np.ndarray] | None = None
 
     @property
     def normalized(self) -> np.ndarray:
@@ -617,12 +622,24 @@ def sensitivities(mech: SliderCrank, parameters=None, revolutions: int = 4,
     **options :
         Backend options passed to `simulate` (FD), e.g. ``step_size`` for Exudyn.
 
+    A `Linkage` (mbs_clearance.cases, any description): parameters are its dotted names
+    (`Linkage.parameter_names`, default: every one that is not a point coordinate); DDM on
+    its generated model's exact Jacobians (`linkage_ddm`), FD by central differences of
+    plain runs that land on t_eval (default 720 per revolution), reduced backend only.
+
     Returns
     -------
     Sensitivities
     """
+    from .linkage import Linkage
+
+    if isinstance(mech, Linkage):
+        return _linkage_sensitivities(mech, parameters, revolutions, method, backend, t_eval,
+                                      rtol, event_time_term, fd_relative_step, integrator,
+                                      options)
     if not isinstance(mech, SliderCrank):
-        raise ValueError(f"mech must be a SliderCrank; got {type(mech).__name__}")
+        raise ValueError(f"mech must be a SliderCrank or a Linkage; got "
+                         f"{type(mech).__name__}")
     names = _check_parameters(parameters)
     check_choice("method", method, ("ddm", "fd"))
     revolutions = check_int("revolutions", revolutions, 1)
@@ -658,3 +675,46 @@ def sensitivities(mech: SliderCrank, parameters=None, revolutions: int = 4,
     return _fd(mech, names, revolutions, backend, t_eval, rtol, fd_relative_step, executor,
                n_jobs, options)
 
+
+
+def _linkage_sensitivities(linkage, parameters, revolutions, method, backend, t_eval, rtol,
+                           event_time_term, fd_relative_step, integrator, options):
+    """`sensitivities` of a Linkage: arguments checked here, the work in linkage_ddm."""
+    from . import linkage_ddm
+
+    allowed = linkage.parameter_names()
+    if parameters is None:
+        names = tuple(n for n in allowed if not n.endswith((".x", ".y")))
+    else:
+        names = (parameters,) if isinstance(parameters, str) else tuple(parameters)
+    if not names:
+        raise ValueError(f"parameters must name at least one of {list(allowed)}")
+    for name in names:
+        if name not in allowed:
+            raise ValueError(f"unknown parameter {name!r} of linkage {linkage.name!r}; the "
+                             f"parameters are {list(allowed)}")
+    if len(set(names)) != len(names):
+        raise ValueError(f"parameters must not repeat a name; got {list(names)}")
+    check_choice("method", method, ("ddm", "fd"))
+    revolutions = check_int("revolutions", revolutions, 1)
+    if backend != "reduced":
+        raise ValueError(f"a Linkage's sensitivities need backend='reduced'; got {backend!r}")
+    if options:
+        raise ValueError(f"unknown option(s) for a Linkage: {sorted(options)}")
+    if rtol is not None:
+        rtol = check_real("rtol", rtol, 1e-14, 1e-2)
+    if t_eval is not None:
+        t_eval = check_times("t_eval", t_eval, revolutions * linkage.period)
+    event_time_term = check_bool("event_time_term", event_time_term)
+    fd_relative_step = check_real("fd_relative_step", fd_relative_step, 0.0, 0.1,
+                                  low_open=True, high_open=True)
+    if integrator is not None and integrator not in METHODS:
+        raise ValueError(f"integrator must be one of {sorted(METHODS)}; got {integrator!r}")
+    if method == "ddm":
+        fields = linkage_ddm.linkage_sensitivities(
+            linkage, names, revolutions, rtol, t_eval, event_time_term,
+            integrator or linkage_ddm.DDM_INTEGRATOR)
+    else:
+        fields = linkage_ddm.linkage_fd(linkage, names, revolutions, rtol, t_eval,
+                                        fd_relative_step, integrator or "dopri5")
+    return Sensitivities(**fields)

@@ -2,7 +2,7 @@
 tools/generate_models.py; do not edit). MODULES maps a structure digest to a module name."""
 
 MODULES: dict[str, str] = {
-    'a11773ec455b798fd4d1e067a0b8e3c33ddb21a9d927972849ee1b1acb3ce433': 'paper_slider_crank',
-    'cbfa31ef44fa88ac74d7973f77ea698e519c89f71e71d910462133a9e3b7796f': 'slider_crank_two_clearances',
-    'ff690bf22fb42717f3f472895f88a90b719aadd9b6e07d2f3f81783a0dfefbac': 'four_bar',
+    '655d360b0d155b98e584fb02c5eb358ad46569360a33052731e9f722566a511c': 'paper_slider_crank',
+    '0e2f09c436bb8da999a63b1aa6e8e36f3560857b146cd9f1073afdfbeac33cfa': 'slider_crank_two_clearances',
+    'aa6818650be699481b862edb4684886755cdbf1e9825e39c9b462e2fa2b8a229': 'four_bar',
 }

@@ -30,8 +30,8 @@ from mbs_clearance.generate.runtime import (
 
 LINKAGE = "four_bar"
 STRUCTURE = "{\"bodies\": [[\"crank\", [\"pin\", \"pivot\"]], [\"coupler\", [\"crank_end\", \"rocker_end\"]], [\"rocker\", [\"pin\", \"pivot\"]]], \"clearance_joints\": [[\"coupler_rocker\", \"rocker\", \"pin\", \"coupler\", \"rocker_end\"]], \"drive\": \"crank_pivot\", \"ground_points\": [\"crank_pivot\", \"rocker_pivot\"], \"joints\": [[\"revolute\", \"crank_pivot\", \"ground\", \"crank_pivot\", \"crank\", \"pivot\"], [\"revolute\", \"crank_coupler\", \"crank\", \"pin\", \"coupler\", \"crank_end\"], [\"revolute\", \"rocker_pivot\", \"ground\", \"rocker_pivot\", \"rocker\", \"pivot\"]], \"monitor_joint\": null}"
-STRUCTURE_DIGEST = "ff690bf22fb42717f3f472895f88a90b719aadd9b6e07d2f3f81783a0dfefbac"
-GENERATOR_VERSION = "9a6198b6adf9fe8e"
+STRUCTURE_DIGEST = "aa6818650be699481b862edb4684886755cdbf1e9825e39c9b462e2fa2b8a229"
+GENERATOR_VERSION = "5c88331610c7f9b0"
 
 #: dotted names of the entries of p (without the constants)
 PARAMETERS = (
@@ -81,7 +81,7 @@ GROUND_JOINTS = ("crank_pivot", "rocker_pivot", )
 #: the ground joint whose |reaction| is monitored (None: the shaking force)
 MONITOR_JOINT = None
 CONST_START = len(PARAMETERS)
-N_CONSTANTS = 44
+N_CONSTANTS = 106
 N_P = CONST_START + N_CONSTANTS
 #: columns of `outputs` (and of the monitor's out)
 OUT_COLUMNS = (
@@ -138,30 +138,57 @@ def prepare(p):
     x0 = crank__pin__y - crank__pivot__y
     x1 = crank__pin__x - crank__pivot__x
     x2 = drive__speed*x1
-    x3 = (coupler__crank_end__x * coupler__crank_end__x)*coupler__mass + (coupler__crank_end__y * coupler__crank_end__y)*coupler__mass + coupler__inertia
-    x4 = rocker__inertia + rocker__mass*(rocker__pivot__x * rocker__pivot__x) + rocker__mass*(rocker__pivot__y * rocker__pivot__y)
-    x5 = (drive__speed * drive__speed)
-    x6 = coupler__mass*(coupler__crank_end__x*crank__pin__y - coupler__crank_end__x*crank__pivot__y - coupler__crank_end__y*crank__pin__x + coupler__crank_end__y*crank__pivot__x)
-    x7 = coupler__mass*(coupler__crank_end__x*crank__pin__x - coupler__crank_end__x*crank__pivot__x + coupler__crank_end__y*crank__pin__y - coupler__crank_end__y*crank__pivot__y)
-    x8 = x5*x7
-    x9 = coupler__crank_end__y*coupler__mass
-    x10 = coupler__crank_end__x*coupler__mass
-    x11 = rocker__mass*rocker__pivot__y
-    x12 = rocker__mass*rocker__pivot__x
-    x13 = coupler__mass*crank__pivot__y
-    x14 = -coupler__mass*crank__pin__y + crank__mass*crank__pivot__y + x13
-    x15 = x14*x5
-    x16 = coupler__mass*crank__pivot__x
-    x17 = -coupler__mass*crank__pin__x + crank__mass*crank__pivot__x + x16
-    x18 = gravity*rocker__mass
-    x19 = gravity*x14
-    x20 = drive__speed*x6
-    x21 = (0.5)*x5
-    x22 = gravity*ground__crank_pivot__y
-    x23 = coupler__mass*x21
-    x24 = (crank__pivot__x * crank__pivot__x)
-    x25 = (crank__pivot__y * crank__pivot__y)
-    x26 = crank__mass*x21
+    x3 = drive__speed*x0
+    x4 = (coupler__crank_end__x * coupler__crank_end__x)
+    x5 = (coupler__crank_end__y * coupler__crank_end__y)
+    x6 = coupler__inertia + coupler__mass*x4 + coupler__mass*x5
+    x7 = (rocker__pivot__x * rocker__pivot__x)
+    x8 = (rocker__pivot__y * rocker__pivot__y)
+    x9 = rocker__inertia + rocker__mass*x7 + rocker__mass*x8
+    x10 = (drive__speed * drive__speed)
+    x11 = coupler__crank_end__x*crank__pin__y - coupler__crank_end__x*crank__pivot__y - coupler__crank_end__y*crank__pin__x + coupler__crank_end__y*crank__pivot__x
+    x12 = coupler__mass*x11
+    x13 = x10*x12
+    x14 = coupler__crank_end__x*crank__pin__x - coupler__crank_end__x*crank__pivot__x + coupler__crank_end__y*crank__pin__y - coupler__crank_end__y*crank__pivot__y
+    x15 = coupler__mass*x14
+    x16 = x10*x15
+    x17 = coupler__crank_end__y*coupler__mass
+    x18 = coupler__crank_end__x*coupler__mass
+    x19 = rocker__mass*rocker__pivot__y
+    x20 = rocker__mass*rocker__pivot__x
+    x21 = coupler__mass*crank__pivot__y
+    x22 = -coupler__mass*crank__pin__y + crank__mass*crank__pivot__y + x21
+    x23 = x10*x22
+    x24 = coupler__mass*crank__pivot__x
+    x25 = -coupler__mass*crank__pin__x + crank__mass*crank__pivot__x + x24
+    x26 = x10*x25
+    x27 = coupler__mass + crank__mass
+    x28 = gravity*rocker__mass
+    x29 = gravity*x22
+    x30 = gravity*x25
+    x31 = drive__speed*x15
+    x32 = drive__speed*x12
+    x33 = (0.5)*x10
+    x34 = coupler__mass*gravity
+    x35 = coupler__mass*x10
+    x36 = (0.5)*x35
+    x37 = (crank__pivot__x * crank__pivot__x)
+    x38 = (crank__pivot__y * crank__pivot__y)
+    x39 = crank__mass*x33
+    x40 = x0*x10
+    x41 = x1*x10
+    x42 = (drive__speed * drive__speed * drive__speed)
+    x43 = x12*x42
+    x44 = x10*x14
+    x45 = coupler__mass*x40
+    x46 = coupler__mass*x41
+    x47 = 2.0*x31
+    x48 = x25*x42
+    x49 = 2.0*drive__speed
+    x50 = x22*x49
+    x51 = 2.0*x15
+    x52 = coupler__mass*x0
+    x53 = coupler__mass*x1
     p[CONST_START + 0] = x0
     p[CONST_START + 1] = -x1
     p[CONST_START + 2] = -coupler__crank_end__y + coupler__rocker_end__y
@@ -171,41 +198,103 @@ def prepare(p):
     p[CONST_START + 6] = -ground__crank_pivot__x + ground__rocker_pivot__x
     p[CONST_START + 7] = -ground__crank_pivot__y + ground__rocker_pivot__y
     p[CONST_START + 8] = x2
-    p[CONST_START + 9] = drive__speed*x0
+    p[CONST_START + 9] = x3
     p[CONST_START + 10] = -x2
-    p[CONST_START + 11] = x3
-    p[CONST_START + 12] = x4
-    p[CONST_START + 13] = -x5*x6
-    p[CONST_START + 14] = -x8
-    p[CONST_START + 15] = x8
-    p[CONST_START + 16] = -gravity*x9
-    p[CONST_START + 17] = gravity*x10
-    p[CONST_START + 18] = -gravity*x11
-    p[CONST_START + 19] = gravity*x12
-    p[CONST_START + 20] = (1.0 / x3)
-    p[CONST_START + 21] = (1.0 / x4)
-    p[CONST_START + 22] = x15
-    p[CONST_START + 23] = -x17*x5
-    p[CONST_START + 24] = x9
-    p[CONST_START + 25] = -x10
-    p[CONST_START + 26] = -x15
-    p[CONST_START + 27] = -gravity*(coupler__mass + crank__mass)
-    p[CONST_START + 28] = x11
-    p[CONST_START + 29] = -x12
-    p[CONST_START + 30] = -x18
-    p[CONST_START + 31] = -x6
-    p[CONST_START + 32] = -x7
-    p[CONST_START + 33] = x6
-    p[CONST_START + 34] = x19
-    p[CONST_START + 35] = x7
-    p[CONST_START + 36] = -gravity*x17
-    p[CONST_START + 37] = -drive__speed*x7
-    p[CONST_START + 38] = x20
-    p[CONST_START + 39] = -x20
-    p[CONST_START + 40] = -x19
-    p[CONST_START + 41] = (0.5)*x3
-    p[CONST_START + 42] = (0.5)*x4
-    p[CONST_START + 43] = coupler__mass*x22 + crank__inertia*x21 + crank__mass*x22 + (crank__pin__x * crank__pin__x)*x23 - crank__pin__x*x16*x5 + (crank__pin__y * crank__pin__y)*x23 - crank__pin__y*x13*x5 + ground__rocker_pivot__y*x18 + x23*x24 + x23*x25 + x24*x26 + x25*x26
+    p[CONST_START + 11] = x6
+    p[CONST_START + 12] = x9
+    p[CONST_START + 13] = -x13
+    p[CONST_START + 14] = -x16
+    p[CONST_START + 15] = x16
+    p[CONST_START + 16] = -gravity*x17
+    p[CONST_START + 17] = gravity*x18
+    p[CONST_START + 18] = -gravity*x19
+    p[CONST_START + 19] = gravity*x20
+    p[CONST_START + 20] = (1.0 / x6)
+    p[CONST_START + 21] = (1.0 / x9)
+    p[CONST_START + 22] = x23
+    p[CONST_START + 23] = -x26
+    p[CONST_START + 24] = x17
+    p[CONST_START + 25] = -x18
+    p[CONST_START + 26] = -x23
+    p[CONST_START + 27] = -gravity*x27
+    p[CONST_START + 28] = x19
+    p[CONST_START + 29] = -x20
+    p[CONST_START + 30] = -x28
+    p[CONST_START + 31] = -x12
+    p[CONST_START + 32] = -x15
+    p[CONST_START + 33] = x12
+    p[CONST_START + 34] = x29
+    p[CONST_START + 35] = x15
+    p[CONST_START + 36] = -x30
+    p[CONST_START + 37] = -x31
+    p[CONST_START + 38] = x32
+    p[CONST_START + 39] = -x32
+    p[CONST_START + 40] = -x29
+    p[CONST_START + 41] = (0.5)*x6
+    p[CONST_START + 42] = (0.5)*x9
+    p[CONST_START + 43] = crank__inertia*x33 + crank__mass*gravity*ground__crank_pivot__y + (crank__pin__x * crank__pin__x)*x36 - crank__pin__x*x10*x24 + (crank__pin__y * crank__pin__y)*x36 - crank__pin__y*x10*x21 + ground__crank_pivot__y*x34 + ground__rocker_pivot__y*x28 + x36*x37 + x36*x38 + x37*x39 + x38*x39
+    p[CONST_START + 44] = -x40
+    p[CONST_START + 45] = x41
+    p[CONST_START + 46] = -x3
+    p[CONST_START + 47] = x40
+    p[CONST_START + 48] = x15*x42
+    p[CONST_START + 49] = -x43
+    p[CONST_START + 50] = x43
+    p[CONST_START + 51] = x13
+    p[CONST_START + 52] = x10*x17
+    p[CONST_START + 53] = -x10*x18
+    p[CONST_START + 54] = x10*x11
+    p[CONST_START + 55] = x44
+    p[CONST_START + 56] = -x44
+    p[CONST_START + 57] = coupler__crank_end__y*gravity
+    p[CONST_START + 58] = -coupler__crank_end__x*gravity
+    p[CONST_START + 59] = x4 + x5
+    p[CONST_START + 60] = x45
+    p[CONST_START + 61] = x46
+    p[CONST_START + 62] = -x46
+    p[CONST_START + 63] = -x34
+    p[CONST_START + 64] = 2.0*x18
+    p[CONST_START + 65] = -x45
+    p[CONST_START + 66] = 2.0*x17
+    p[CONST_START + 67] = 2.0*x32
+    p[CONST_START + 68] = x47
+    p[CONST_START + 69] = -x47
+    p[CONST_START + 70] = gravity*rocker__pivot__y
+    p[CONST_START + 71] = -gravity*rocker__pivot__x
+    p[CONST_START + 72] = x7 + x8
+    p[CONST_START + 73] = 2.0*x20
+    p[CONST_START + 74] = 2.0*x19
+    p[CONST_START + 75] = x48
+    p[CONST_START + 76] = x22*x42
+    p[CONST_START + 77] = crank__pivot__y*x10
+    p[CONST_START + 78] = -crank__pivot__x*x10
+    p[CONST_START + 79] = -x10*x27
+    p[CONST_START + 80] = x35
+    p[CONST_START + 81] = x26
+    p[CONST_START + 82] = x50
+    p[CONST_START + 83] = -x25*x49
+    p[CONST_START + 84] = -x48
+    p[CONST_START + 85] = -x50
+    p[CONST_START + 86] = -x27
+    p[CONST_START + 87] = x31
+    p[CONST_START + 88] = drive__speed*x30
+    p[CONST_START + 89] = drive__speed*x29
+    p[CONST_START + 90] = -2.0*x12
+    p[CONST_START + 91] = -x51
+    p[CONST_START + 92] = x51
+    p[CONST_START + 93] = crank__pivot__y*gravity
+    p[CONST_START + 94] = -crank__pivot__x*gravity
+    p[CONST_START + 95] = -x11
+    p[CONST_START + 96] = -x14
+    p[CONST_START + 97] = -gravity*x0
+    p[CONST_START + 98] = gravity*x1
+    p[CONST_START + 99] = -x52
+    p[CONST_START + 100] = -x53
+    p[CONST_START + 101] = x52
+    p[CONST_START + 102] = x53
+    p[CONST_START + 103] = x30
+    p[CONST_START + 104] = x22
+    p[CONST_START + 105] = -x25
     return
 
 
@@ -540,3 +629,585 @@ def integrate_model(y0, p, edges, settings, coefficients):
     # the kernels are looked up as module attributes: numba binds them as constants
     return integrate(_THIS.rhs, _THIS.event, _THIS.on_event, _THIS.monitor, y0, p, edges,
                      settings, coefficients)
+
+
+# ---------------------------------------------------------------------------- Jacobians
+# (generate/jacobians.py; the sensitivity equations in generate/sens_runtime.py)
+from mbs_clearance.generate.sens_runtime import (
+    contact_jacobian,
+    jacobian_at,
+    sens_monitor,
+    sens_on_event,
+    sens_outputs,
+    sens_rhs,
+)
+
+#: columns of the Jacobian: z = [t, q, qdot, p[:CONST_START]] (N_Z), then the value
+Z_NAMES = (
+    "t",
+    "coupler.angle",
+    "rocker.angle",
+    "coupler.angle.rate",
+    "rocker.angle.rate",
+    "crank.mass",
+    "crank.inertia",
+    "crank.pivot.x",
+    "crank.pivot.y",
+    "crank.pin.x",
+    "crank.pin.y",
+    "coupler.mass",
+    "coupler.inertia",
+    "coupler.crank_end.x",
+    "coupler.crank_end.y",
+    "coupler.rocker_end.x",
+    "coupler.rocker_end.y",
+    "rocker.mass",
+    "rocker.inertia",
+    "rocker.pivot.x",
+    "rocker.pivot.y",
+    "rocker.pin.x",
+    "rocker.pin.y",
+    "ground.crank_pivot.x",
+    "ground.crank_pivot.y",
+    "ground.rocker_pivot.x",
+    "ground.rocker_pivot.y",
+    "coupler_rocker.clearance",
+    "coupler_rocker.stiffness",
+    "coupler_rocker.restitution",
+    "coupler_rocker.contact_model",
+    "coupler_rocker.impact_velocity_floor",
+    "drive.speed",
+    "drive.initial_angle",
+    "gravity",
+    "coupler_rocker.mode",
+    "coupler_rocker.impact_velocity",
+)
+N_Z = 37
+JAC_STRIDE = N_Z + 1
+#: rows of the Jacobian: OUT_COLUMNS, then per clearance joint (exd, eyd, fx, fy)
+N_JROWS = 18
+JAC_EXTRA_ROWS = {
+    "exd:coupler_rocker": 14,
+    "eyd:coupler_rocker": 15,
+    "fx:coupler_rocker": 16,
+    "fy:coupler_rocker": 17,
+}
+#: the rows of joint 0's penetration and rate (joint j: + 5 j), the first acceleration's,
+#: the drive moment's; joint 0's impact-velocity floor in p (joint j: + 5 j); the column of
+#: joint 0's impact-velocity memory (joint j: + 2 j)
+_PEN_ROW = 1
+_RATE_ROW = 2
+_JOINT_ROWS = 5
+_FLOOR0 = 26
+_CONTACT_STRIDE = 5
+_MEM_COL0 = 1 + 2 * N_Q + MEM_START + 1
+
+
+@nb.njit(**KERNEL)
+def jacobian(t, y, p, jac, full):
+    """Values and total derivatives along z (Z_NAMES) of the model's quantities at (t, y)
+    in the contact modes of p, into jac (N_JROWS x JAC_STRIDE, flat; the last column the
+    value): the clearance joints' rows and the accelerations, with `full` the reactions, the
+    shaking force and the drive moment too (the drive moment's value always)."""
+    for k in range(N_JROWS * JAC_STRIDE):
+        jac[k] = 0.0
+    coupler__mass = p[6]  # coupler.mass
+    coupler__crank_end__x = p[8]  # coupler.crank_end.x
+    coupler__crank_end__y = p[9]  # coupler.crank_end.y
+    rocker__mass = p[12]  # rocker.mass
+    rocker__pivot__x = p[14]  # rocker.pivot.x
+    rocker__pivot__y = p[15]  # rocker.pivot.y
+    drive__speed = p[27]  # drive.speed
+    drive__initial_angle = p[28]  # drive.initial_angle
+    gravity = p[29]  # gravity
+    k0 = p[CONST_START + 0]
+    k1 = p[CONST_START + 1]
+    k2 = p[CONST_START + 2]
+    k3 = p[CONST_START + 3]
+    k4 = p[CONST_START + 4]
+    k5 = p[CONST_START + 5]
+    k6 = p[CONST_START + 6]
+    k7 = p[CONST_START + 7]
+    k8 = p[CONST_START + 8]
+    k9 = p[CONST_START + 9]
+    k10 = p[CONST_START + 10]
+    k11 = p[CONST_START + 11]
+    k12 = p[CONST_START + 12]
+    k13 = p[CONST_START + 13]
+    k14 = p[CONST_START + 14]
+    k15 = p[CONST_START + 15]
+    k16 = p[CONST_START + 16]
+    k17 = p[CONST_START + 17]
+    k18 = p[CONST_START + 18]
+    k19 = p[CONST_START + 19]
+    k22 = p[CONST_START + 22]
+    k23 = p[CONST_START + 23]
+    k24 = p[CONST_START + 24]
+    k25 = p[CONST_START + 25]
+    k26 = p[CONST_START + 26]
+    k27 = p[CONST_START + 27]
+    k28 = p[CONST_START + 28]
+    k29 = p[CONST_START + 29]
+    k30 = p[CONST_START + 30]
+    k31 = p[CONST_START + 31]
+    k32 = p[CONST_START + 32]
+    k33 = p[CONST_START + 33]
+    k34 = p[CONST_START + 34]
+    k35 = p[CONST_START + 35]
+    k36 = p[CONST_START + 36]
+    k37 = p[CONST_START + 37]
+    k38 = p[CONST_START + 38]
+    k39 = p[CONST_START + 39]
+    k44 = p[CONST_START + 44]
+    k45 = p[CONST_START + 45]
+    k46 = p[CONST_START + 46]
+    k47 = p[CONST_START + 47]
+    k48 = p[CONST_START + 48]
+    k49 = p[CONST_START + 49]
+    k50 = p[CONST_START + 50]
+    k51 = p[CONST_START + 51]
+    k52 = p[CONST_START + 52]
+    k53 = p[CONST_START + 53]
+    k54 = p[CONST_START + 54]
+    k55 = p[CONST_START + 55]
+    k56 = p[CONST_START + 56]
+    k57 = p[CONST_START + 57]
+    k58 = p[CONST_START + 58]
+    k59 = p[CONST_START + 59]
+    k60 = p[CONST_START + 60]
+    k61 = p[CONST_START + 61]
+    k62 = p[CONST_START + 62]
+    k63 = p[CONST_START + 63]
+    k64 = p[CONST_START + 64]
+    k65 = p[CONST_START + 65]
+    k66 = p[CONST_START + 66]
+    k67 = p[CONST_START + 67]
+    k68 = p[CONST_START + 68]
+    k69 = p[CONST_START + 69]
+    k70 = p[CONST_START + 70]
+    k71 = p[CONST_START + 71]
+    k72 = p[CONST_START + 72]
+    k73 = p[CONST_START + 73]
+    k74 = p[CONST_START + 74]
+    k75 = p[CONST_START + 75]
+    k76 = p[CONST_START + 76]
+    k77 = p[CONST_START + 77]
+    k78 = p[CONST_START + 78]
+    k79 = p[CONST_START + 79]
+    k80 = p[CONST_START + 80]
+    k81 = p[CONST_START + 81]
+    k82 = p[CONST_START + 82]
+    k83 = p[CONST_START + 83]
+    k84 = p[CONST_START + 84]
+    k85 = p[CONST_START + 85]
+    k86 = p[CONST_START + 86]
+    k87 = p[CONST_START + 87]
+    k88 = p[CONST_START + 88]
+    k89 = p[CONST_START + 89]
+    k90 = p[CONST_START + 90]
+    k91 = p[CONST_START + 91]
+    k92 = p[CONST_START + 92]
+    k93 = p[CONST_START + 93]
+    k94 = p[CONST_START + 94]
+    k95 = p[CONST_START + 95]
+    k96 = p[CONST_START + 96]
+    k97 = p[CONST_START + 97]
+    k98 = p[CONST_START + 98]
+    k99 = p[CONST_START + 99]
+    k100 = p[CONST_START + 100]
+    k101 = p[CONST_START + 101]
+    k102 = p[CONST_START + 102]
+    k103 = p[CONST_START + 103]
+    k104 = p[CONST_START + 104]
+    k105 = p[CONST_START + 105]
+    Q0 = y[0]
+    Q1 = y[1]
+    U0 = y[2]
+    U1 = y[3]
+    S0, C0 = sincos(drive__initial_angle + drive__speed*t)
+    S1, C1 = sincos(Q0)
+    S2, C2 = sincos(Q1)
+    x0 = C1*k3
+    x1 = S1*k2
+    x2 = x0 + x1
+    x3 = C2*k5
+    x4 = S2*k4
+    x5 = x3 + x4
+    x6 = C0*k1 + S0*k0
+    x7 = C0*k9
+    x8 = S0*k8
+    x9 = x7 + x8
+    x10 = C1*k2
+    x11 = S1*k3
+    x12 = x10 - x11
+    x13 = C2*k4
+    x14 = S2*k5
+    x15 = x13 - x14
+    x16 = -S0
+    x17 = -C0
+    x18 = -S1
+    x19 = -C1
+    x20 = -C2
+    x21 = -S2
+    x22 = C0*k0
+    x23 = S0*k1
+    x24 = x22 - x23
+    x25 = C0*k10 + S0*k9
+    x26 = S0*drive__speed
+    x27 = -x26
+    x28 = C0*drive__speed
+    x29 = -x28
+    x30 = S1*U0
+    x31 = -x30
+    x32 = C1*U0
+    x33 = -x32
+    x34 = S2*U1
+    x35 = C2*U1
+    x36 = -x34
+    x37 = -x35
+    x38 = C0*k8
+    x39 = S0*k46
+    gv0_0 = k6 + x2 + x5 + x6
+    jac[114] = x9
+    jac[115] = x12
+    jac[116] = x15
+    jac[121] = C0
+    jac[122] = x16
+    jac[123] = x17
+    jac[124] = S0
+    jac[127] = C1
+    jac[128] = x18
+    jac[129] = x19
+    jac[130] = S1
+    jac[133] = x20
+    jac[134] = S2
+    jac[135] = C2
+    jac[136] = x21
+    jac[137] = -1.0
+    jac[139] = 1.0
+    jac[146] = t*x24
+    jac[147] = x24
+    gv0_1 = k7 - x10 + x11 - x13 + x14 - x22 + x23
+    jac[152] = x25
+    jac[153] = x2
+    jac[154] = x5
+    jac[159] = S0
+    jac[160] = C0
+    jac[161] = x16
+    jac[162] = x17
+    jac[165] = S1
+    jac[166] = C1
+    jac[167] = x18
+    jac[168] = x19
+    jac[171] = x21
+    jac[172] = x20
+    jac[173] = S2
+    jac[174] = C2
+    jac[176] = -1.0
+    jac[178] = 1.0
+    jac[184] = t*x6
+    jac[185] = x6
+    gv0_2 = U0*x10 - U0*x11 + U1*x13 - U1*x14 + x9
+    jac[532] = C0*k45 + S0*k44
+    jac[533] = -U0*x2
+    jac[534] = -U1*x5
+    jac[535] = x12
+    jac[536] = x15
+    jac[539] = x27
+    jac[540] = x29
+    jac[541] = x26
+    jac[542] = x28
+    jac[545] = x31
+    jac[546] = x33
+    jac[547] = x30
+    jac[548] = x32
+    jac[551] = x34
+    jac[552] = x35
+    jac[553] = x36
+    jac[554] = x37
+    jac[564] = t*x38 + t*x39 + x24
+    jac[565] = x38 + x39
+    gv0_3 = U0*x0 + U0*x1 + U1*x3 + U1*x4 + x25
+    jac[570] = C0*k47 + S0*k45
+    jac[571] = U0*x12
+    jac[572] = U1*x15
+    jac[573] = x2
+    jac[574] = x5
+    jac[577] = x28
+    jac[578] = x27
+    jac[579] = x29
+    jac[580] = x26
+    jac[583] = x32
+    jac[584] = x31
+    jac[585] = x33
+    jac[586] = x30
+    jac[589] = x37
+    jac[590] = x34
+    jac[591] = x35
+    jac[592] = x36
+    jac[602] = t*x7 + t*x8 + x6
+    jac[603] = x9
+    FX0, FY0 = contact_jacobian(jac, 38, 37, gv0_0, gv0_1, gv0_2, gv0_3, 0, 1, 2, 3, 4, 14, 15, 16, 17, 27, 28, 29, 36, p[22], p[30], p[31], p[23], p[24], p[25])
+    m_0_0 = k11
+    m_1_0 = 0.0
+    m_1_1 = k12
+    f_0 = C0*C1*k13 + C0*S1*k15 - C1*FX0*k2 - C1*FY0*k3 + C1*S0*k14 + C1*k17 + FX0*S1*k3 - FY0*S1*k2 + S0*S1*k13 + S1*k16
+    f_1 = -C2*FX0*k4 - C2*FY0*k5 + C2*k19 + FX0*S2*k5 - FY0*S2*k4 + S2*k18
+    l_0_0 = math.sqrt(m_0_0)
+    il_0 = 1.0 / l_0_0
+    l_1_0 = (m_1_0) * il_0
+    l_1_1 = math.sqrt(m_1_1 - l_1_0 * l_1_0)
+    il_1 = 1.0 / l_1_1
+    zz_0 = (f_0) * il_0
+    zz_1 = (f_1 - l_1_0 * zz_0) * il_1
+    A1 = (zz_1) * il_1
+    A0 = (zz_0 - l_1_0 * A1) * il_0
+    x40 = C0*C1
+    x41 = C0*S1
+    x42 = C1*S0
+    x43 = S0*S1
+    x44 = C1*FY0
+    x45 = C1*FX0
+    x46 = FX0*S1
+    x47 = FY0*S1
+    x48 = k52*x40 + k52*x43 - k53*x41 + k53*x42
+    x49 = k52*x41 - k52*x42 + k53*x40 + k53*x43
+    x50 = x44 - x46
+    x51 = k15*x40
+    x52 = k51*x41
+    x53 = k13*x42
+    x54 = k15*x43
+    x55 = C2*FX0
+    x56 = FX0*S2
+    x57 = FY0*S2
+    x58 = C2*FY0
+    x59 = x55 + x57
+    jac[456] = k48*x40 + k48*x43 + k49*x42 + k50*x41
+    jac[457] = -C1*k16 + S1*k17 + k13*x41 + k14*x40 + k14*x43 + k2*x44 - k2*x46 - k3*x45 - k3*x47 + k51*x42
+    jac[463] = x48
+    jac[464] = x49
+    jac[465] = -x48
+    jac[466] = -x49
+    jac[467] = A0*k59 + C1*k58 + S1*k57 + k54*x40 + k54*x43 + k55*x42 + k56*x41
+    jac[468] = A0
+    jac[469] = A0*k64 + C1*k63 + k60*x40 + k60*x43 + k61*x42 + k62*x41 + x50
+    jac[470] = A0*k66 - S1*k63 + k60*x42 + k62*x40 + k62*x43 + k65*x41 - x45 - x47
+    jac[471] = -x50
+    jac[472] = x45 + x47
+    jac[488] = k67*x40 + k67*x43 + k68*x42 + k69*x41 + t*x51 + t*x52 + t*x53 + t*x54
+    jac[489] = x51 + x52 + x53 + x54
+    jac[490] = C1*k25 + S1*k24
+    rfx_0_0 = C1*k2 - S1*k3
+    rfy_0_0 = C1*k3 + S1*k2
+    jac[496] = C2*FY0*k4 - C2*k18 + S2*k19 - k4*x56 - k5*x55 - k5*x57
+    jac[511] = A1*k72 + C2*k71 + S2*k70
+    jac[512] = A1
+    jac[513] = A1*k73 + C2*k30 + x56 - x58
+    jac[514] = A1*k74 - S2*k30 + x59
+    jac[515] = -x56 + x58
+    jac[516] = -x59
+    jac[528] = C2*k29 + S2*k28
+    rfx_1_0 = C2*k4 - S2*k5
+    rfy_1_0 = C2*k5 + S2*k4
+    for col in range(37):
+        b_0 = -(jac[456 + col] + rfx_0_0 * jac[608 + col] + rfy_0_0 * jac[646 + col])
+        b_1 = -(jac[494 + col] + rfx_1_0 * jac[608 + col] + rfy_1_0 * jac[646 + col])
+        zz_0 = (b_0) * il_0
+        zz_1 = (b_1 - l_1_0 * zz_0) * il_1
+        x_1 = (zz_1) * il_1
+        x_0 = (zz_0 - l_1_0 * x_1) * il_0
+        jac[456 + col] = x_0
+        jac[494 + col] = x_1
+    jac[493] = A0
+    jac[531] = A1
+    x60 = A0*C0
+    x61 = C1*k32
+    x62 = S1*k31
+    x63 = A0*S0
+    x64 = (U0 * U0)
+    x65 = C0*x64
+    x66 = S0*x64
+    jac[455] = C0*FX0*k0 + C0*FY0*k1 + C0*k36 + C1*k31*x65 + C1*k33*x63 - FX0*S0*k1 + FY0*S0*k0 + S0*k34 + S1*k32*x63 + S1*k35*x65 + x60*x61 + x60*x62 + x61*x66 + x62*x66
+    if full:
+        x67 = C0*k23
+        x68 = S0*k22
+        x69 = x67 + x68
+        x70 = A0*S1
+        x71 = k25*x70
+        x72 = (U0 * U0)
+        x73 = C1*x72
+        x74 = k25*x73
+        x75 = S1*x72
+        x76 = k24*x75
+        x77 = A0*C1
+        x78 = k24*x77
+        x79 = x71 + x74 + x76 - x78
+        x80 = k25*x77
+        x81 = k24*x70
+        x82 = k24*x73
+        x83 = k25*x75
+        x84 = C0*k79
+        x85 = S0*k79
+        x86 = C0*k80
+        x87 = S0*k80
+        x88 = -coupler__mass*(x70 + x73)
+        x89 = -S1*x72 + x77
+        x90 = C0*k22
+        x91 = S0*k81
+        x92 = A1*S2
+        x93 = (U1 * U1)
+        x94 = C2*x93
+        x95 = S2*x93
+        x96 = A1*C2
+        x97 = k28*x95 - k28*x96 + k29*x92 + k29*x94
+        x98 = k28*x92 + k28*x94 - k29*x95 + k29*x96
+        x99 = -rocker__mass*(x92 + x94)
+        x100 = -S2*x93 + x96
+        x101 = C0*FX0
+        x102 = C0*FY0
+        x103 = FX0*S0
+        x104 = FY0*S0
+        x105 = C0*x77
+        x106 = C0*k37
+        x107 = S0*x77
+        x108 = S0*k38
+        x109 = C0*x75
+        x110 = S0*x75
+        x111 = C0*k35
+        x112 = S0*k31
+        x113 = C0*C1
+        x114 = C0*S1
+        x115 = C1*S0
+        x116 = S0*S1
+        x117 = C0*x80 + C0*x81 + C0*x82 - C0*x83 + S0*x71 + S0*x74 + S0*x76 - S0*x78 - x102 + x103
+        x118 = C0*x71 + C0*x74 + C0*x76 - C0*x78 - S0*x80 - S0*x81 - S0*x82 + S0*x83 + x101 + x104
+        x119 = C0*k95
+        x120 = S0*k96
+        x121 = C0*k99
+        x122 = S0*k100
+        x123 = C0*k102
+        x124 = S0*k99
+        x125 = C0*k32
+        x126 = S0*k33
+        x127 = C0*k34 + S0*k103 + k0*x102 - k0*x103 - k1*x101 - k1*x104 + k31*x109 + k32*x110 + k33*x105 + k35*x107 + x125*x70 + x125*x73 + x126*x70 + x126*x73
+        jac[227] = FX0 + x69 + x79
+        jac[190] = C0*k76 + S0*k75
+        jac[191] = x80 + x81 + x82 - x83
+        jac[193] = U0*(-C1*k64 + S1*k66)
+        jac[195] = C0*k78 + S0*k77
+        jac[197] = x84
+        jac[198] = -x85
+        jac[199] = x86
+        jac[200] = -x87
+        jac[201] = C0*k45 + S0*k44 + S1*coupler__crank_end__y*x72 - coupler__crank_end__x*x70 - coupler__crank_end__x*x73 - coupler__crank_end__y*x77
+        jac[203] = x88
+        jac[204] = -coupler__mass*x89
+        jac[222] = C0*k83 + S0*k82 + t*x90 + t*x91
+        jac[223] = x90 + x91
+        oa_0_0 = -C1*k24 + S1*k25
+        ofx_0_0 = 1.0
+        jac[265] = C0*k26 + FY0 + S0*k23 + k27 - x80 - x81 - x82 + x83
+        jac[228] = C0*k84 + S0*k76
+        jac[229] = x79
+        jac[231] = -U0*(C1*k66 + S1*k64)
+        jac[233] = -C0*k77 + S0*k78 - gravity
+        jac[235] = x85
+        jac[236] = x84
+        jac[237] = x87
+        jac[238] = x86
+        jac[239] = A0*C1*coupler__crank_end__x + C0*k47 + S0*k45 - coupler__crank_end__x*x75 - coupler__crank_end__y*x70 - coupler__crank_end__y*x73 - gravity
+        jac[241] = coupler__mass*x89
+        jac[242] = x88
+        jac[260] = C0*k85 + S0*k83 + t*x67 + t*x68
+        jac[261] = x69
+        jac[262] = k86
+        oa_1_0 = -C1*k25 - S1*k24
+        ofy_1_0 = 1.0
+        jac[303] = -FX0 + x97
+        jac[268] = x98
+        jac[270] = U1*(-C2*k73 + S2*k74)
+        jac[283] = S2*rocker__pivot__y*x93 - rocker__pivot__x*x92 - rocker__pivot__x*x94 - rocker__pivot__y*x96
+        jac[285] = x99
+        jac[286] = -rocker__mass*x100
+        oa_2_1 = -C2*k28 + S2*k29
+        ofx_2_0 = -1.0
+        jac[341] = -FY0 + k30 - x98
+        jac[306] = x97
+        jac[308] = -U1*(C2*k74 + S2*k73)
+        jac[321] = A1*C2*rocker__pivot__x - gravity - rocker__pivot__x*x95 - rocker__pivot__y*x92 - rocker__pivot__y*x94
+        jac[323] = rocker__mass*x100
+        jac[324] = x99
+        jac[338] = -rocker__mass
+        oa_3_1 = -C2*k29 - S2*k28
+        ofy_3_0 = -1.0
+        jac[418] = C0*k89 + S0*k88 + k37*x110 + k38*x105 + k39*x109 + k46*x103 + k8*x101 + k8*x104 + k87*x107 + k9*x102 + x106*x70 + x106*x73 + x108*x70 + x108*x73
+        jac[419] = k31*x105 + k32*x107 + k33*x109 + k35*x110 + x111*x70 + x111*x73 + x112*x70 + x112*x73
+        jac[421] = U0*(k90*x113 + k90*x116 + k91*x115 + k92*x114)
+        jac[423] = C0*k94 + S0*k93
+        jac[425] = C0*k27 - x117
+        jac[426] = -S0*k27 - x118
+        jac[427] = -C0*k63 + x117
+        jac[428] = S0*k63 + x118
+        jac[429] = C0*k98 + S0*k97 - k95*x107 + k95*x110 + k96*x105 - k96*x109 + x119*x70 + x119*x73 + x120*x70 + x120*x73
+        jac[431] = k100*x105 + k101*x107 + k102*x109 + k99*x110 + x121*x70 + x121*x73 + x122*x70 + x122*x73
+        jac[432] = k100*x107 + k101*x109 + k102*x110 + k99*x105 + x123*x70 + x123*x73 + x124*x70 + x124*x73
+        jac[450] = t*x127
+        jac[451] = x127
+        jac[452] = C0*k105 + S0*k104
+        oa_4_0 = k31*x114 + k32*x113 + k32*x116 + k33*x115
+        ofx_4_0 = C0*k0 - S0*k1
+        ofy_4_0 = C0*k1 + S0*k0
+        for col in range(37):
+            jac[190 + col] += oa_0_0 * jac[456 + col] + ofx_0_0 * jac[608 + col]
+            jac[228 + col] += oa_1_0 * jac[456 + col] + ofy_1_0 * jac[646 + col]
+            jac[266 + col] += oa_2_1 * jac[494 + col] + ofx_2_0 * jac[608 + col]
+            jac[304 + col] += oa_3_1 * jac[494 + col] + ofy_3_0 * jac[646 + col]
+            jac[418 + col] += oa_4_0 * jac[456 + col] + ofx_4_0 * jac[608 + col] + ofy_4_0 * jac[646 + col]
+        for col in range(38):
+            jac[342 + col] = jac[190 + col] + jac[266 + col]
+        for col in range(38):
+            jac[380 + col] = jac[228 + col] + jac[304 + col]
+    return
+
+
+@nb.njit(**KERNEL)
+def rhs_sens(t, y, p, dydt):
+    """Derivative of the sensitivity state (generate/sens_runtime.py)."""
+    sens_rhs(_THIS.jacobian, _THIS.rhs, t, y, p, dydt, N_Q, N_P, N_Z, N_JROWS, ACC_COLUMN,
+             MOMENT_COLUMN, 27, _MEM_COL0, N_EVENTS)
+
+
+@nb.njit(**KERNEL)
+def on_event_sens(t, y, p, j):
+    """Switch joint j, with the sensitivity of its impact-velocity memory at an onset."""
+    sens_on_event(_THIS.jacobian, _THIS.on_event, t, y, p, j, N_Q, N_P, N_Z, N_JROWS,
+                  MEM_START, _PEN_ROW, _RATE_ROW, _JOINT_ROWS, ACC_COLUMN, _FLOOR0,
+                  _CONTACT_STRIDE, _MEM_COL0, N_EVENTS)
+
+
+@nb.njit(**KERNEL)
+def monitor_sens(t, y, p, dydt, out, g, gd):
+    """`rhs_sens`, then the plain monitor on the state part."""
+    return sens_monitor(_THIS.rhs_sens, _THIS.monitor, t, y, p, dydt, out, g, gd, N_Q, N_P,
+                        N_Z, N_JROWS)
+
+
+@nb.njit(cache=True, error_model="numpy", nogil=True)
+def integrate_sens(y0, p, edges, settings, coefficients):
+    """`integrator.integrate` bound to the sensitivity kernels (compiled once, cached)."""
+    return integrate(_THIS.rhs_sens, _THIS.event, _THIS.on_event_sens, _THIS.monitor_sens,
+                     y0, p, edges, settings, coefficients)
+
+
+@nb.njit(cache=True, error_model="numpy")
+def output_sensitivities(ts, ys, ms, p):
+    """Values (n, N_OUT) and derivatives (n, N_OUT, nb) of the outputs along the integrated
+    directions at recorded steps of a sensitivity run."""
+    return sens_outputs(_THIS.jacobian, ts, ys, ms, p, N_Q, N_P, N_Z, N_JROWS, N_OUT,
+                        MEM_START, _MEM_COL0, N_EVENTS)
+
+
+@nb.njit(cache=True, error_model="numpy")
+def jacobian_matrix(t, y, p, full):
+    """The Jacobian (N_JROWS, JAC_STRIDE) at (t, y) as a matrix."""
+    return jacobian_at(_THIS.jacobian, t, y, p, N_JROWS, N_Z, full)

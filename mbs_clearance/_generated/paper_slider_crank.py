@@ -30,8 +30,8 @@ from mbs_clearance.generate.runtime import (
 
 LINKAGE = "paper_slider_crank"
 STRUCTURE = "{\"bodies\": [[\"crank\", [\"pin\", \"pivot\"]], [\"coupler\", [\"crank_end\", \"slider_end\"]], [\"slider\", [\"pin\"]]], \"clearance_joints\": [[\"coupler_slider\", \"coupler\", \"slider_end\", \"slider\", \"pin\"]], \"drive\": \"crank_pivot\", \"ground_points\": [\"crank_pivot\", \"slider_axis\"], \"joints\": [[\"revolute\", \"crank_pivot\", \"ground\", \"crank_pivot\", \"crank\", \"pivot\"], [\"revolute\", \"crank_coupler\", \"crank\", \"pin\", \"coupler\", \"crank_end\"], [\"prismatic\", \"slider_guide\", \"ground\", \"slider_axis\", \"slider\", \"pin\"]], \"monitor_joint\": \"crank_pivot\"}"
-STRUCTURE_DIGEST = "a11773ec455b798fd4d1e067a0b8e3c33ddb21a9d927972849ee1b1acb3ce433"
-GENERATOR_VERSION = "9a6198b6adf9fe8e"
+STRUCTURE_DIGEST = "655d360b0d155b98e584fb02c5eb358ad46569360a33052731e9f722566a511c"
+GENERATOR_VERSION = "5c88331610c7f9b0"
 
 #: dotted names of the entries of p (without the constants)
 PARAMETERS = (
@@ -80,7 +80,7 @@ GROUND_JOINTS = ("crank_pivot", "slider_guide", )
 #: the ground joint whose |reaction| is monitored (None: the shaking force)
 MONITOR_JOINT = "crank_pivot"
 CONST_START = len(PARAMETERS)
-N_CONSTANTS = 42
+N_CONSTANTS = 102
 N_P = CONST_START + N_CONSTANTS
 #: columns of `outputs` (and of the monitor's out)
 OUT_COLUMNS = (
@@ -136,28 +136,54 @@ def prepare(p):
     x0 = crank__pin__y - crank__pivot__y
     x1 = crank__pin__x - crank__pivot__x
     x2 = drive__speed*x1
-    x3 = (coupler__crank_end__x * coupler__crank_end__x)*coupler__mass + (coupler__crank_end__y * coupler__crank_end__y)*coupler__mass + coupler__inertia
-    x4 = (drive__speed * drive__speed)
-    x5 = coupler__mass*(coupler__crank_end__x*crank__pin__y - coupler__crank_end__x*crank__pivot__y - coupler__crank_end__y*crank__pin__x + coupler__crank_end__y*crank__pivot__x)
-    x6 = coupler__mass*(coupler__crank_end__x*crank__pin__x - coupler__crank_end__x*crank__pivot__x + coupler__crank_end__y*crank__pin__y - coupler__crank_end__y*crank__pivot__y)
-    x7 = x4*x6
-    x8 = coupler__crank_end__y*coupler__mass
-    x9 = coupler__crank_end__x*coupler__mass
-    x10 = S2*slider__mass
-    x11 = coupler__mass*crank__pivot__y
-    x12 = -coupler__mass*crank__pin__y + crank__mass*crank__pivot__y + x11
-    x13 = x12*x4
-    x14 = coupler__mass*crank__pivot__x
-    x15 = -coupler__mass*crank__pin__x + crank__mass*crank__pivot__x + x14
-    x16 = gravity*slider__mass
-    x17 = gravity*x12
-    x18 = drive__speed*x5
-    x19 = (0.5)*x4
-    x20 = gravity*ground__crank_pivot__y
-    x21 = coupler__mass*x19
-    x22 = (crank__pivot__x * crank__pivot__x)
-    x23 = (crank__pivot__y * crank__pivot__y)
-    x24 = crank__mass*x19
+    x3 = drive__speed*x0
+    x4 = (coupler__crank_end__x * coupler__crank_end__x)
+    x5 = (coupler__crank_end__y * coupler__crank_end__y)
+    x6 = coupler__inertia + coupler__mass*x4 + coupler__mass*x5
+    x7 = (drive__speed * drive__speed)
+    x8 = coupler__crank_end__x*crank__pin__y - coupler__crank_end__x*crank__pivot__y - coupler__crank_end__y*crank__pin__x + coupler__crank_end__y*crank__pivot__x
+    x9 = coupler__mass*x8
+    x10 = x7*x9
+    x11 = coupler__crank_end__x*crank__pin__x - coupler__crank_end__x*crank__pivot__x + coupler__crank_end__y*crank__pin__y - coupler__crank_end__y*crank__pivot__y
+    x12 = coupler__mass*x11
+    x13 = x12*x7
+    x14 = coupler__crank_end__y*coupler__mass
+    x15 = coupler__crank_end__x*coupler__mass
+    x16 = S2*slider__mass
+    x17 = coupler__mass*crank__pivot__y
+    x18 = -coupler__mass*crank__pin__y + crank__mass*crank__pivot__y + x17
+    x19 = x18*x7
+    x20 = coupler__mass*crank__pivot__x
+    x21 = -coupler__mass*crank__pin__x + crank__mass*crank__pivot__x + x20
+    x22 = x21*x7
+    x23 = coupler__mass + crank__mass
+    x24 = C2*slider__mass
+    x25 = gravity*slider__mass
+    x26 = gravity*x18
+    x27 = gravity*x21
+    x28 = drive__speed*x12
+    x29 = drive__speed*x9
+    x30 = (0.5)*x7
+    x31 = coupler__mass*gravity
+    x32 = coupler__mass*x7
+    x33 = (0.5)*x32
+    x34 = (crank__pivot__x * crank__pivot__x)
+    x35 = (crank__pivot__y * crank__pivot__y)
+    x36 = crank__mass*x30
+    x37 = x0*x7
+    x38 = x1*x7
+    x39 = (drive__speed * drive__speed * drive__speed)
+    x40 = x39*x9
+    x41 = x11*x7
+    x42 = coupler__mass*x37
+    x43 = coupler__mass*x38
+    x44 = 2.0*x28
+    x45 = x21*x39
+    x46 = 2.0*drive__speed
+    x47 = x18*x46
+    x48 = 2.0*x12
+    x49 = coupler__mass*x0
+    x50 = coupler__mass*x1
     p[CONST_START + 0] = -x0
     p[CONST_START + 1] = x1
     p[CONST_START + 2] = coupler__crank_end__y - coupler__slider_end__y
@@ -167,39 +193,99 @@ def prepare(p):
     p[CONST_START + 6] = -S2
     p[CONST_START + 7] = ground__crank_pivot__y - ground__slider_axis__y
     p[CONST_START + 8] = -x2
-    p[CONST_START + 9] = -drive__speed*x0
+    p[CONST_START + 9] = -x3
     p[CONST_START + 10] = x2
-    p[CONST_START + 11] = x3
-    p[CONST_START + 12] = -x4*x5
-    p[CONST_START + 13] = -x7
-    p[CONST_START + 14] = x7
-    p[CONST_START + 15] = -gravity*x8
-    p[CONST_START + 16] = gravity*x9
-    p[CONST_START + 17] = -gravity*x10
-    p[CONST_START + 18] = (1.0 / x3)
+    p[CONST_START + 11] = x6
+    p[CONST_START + 12] = -x10
+    p[CONST_START + 13] = -x13
+    p[CONST_START + 14] = x13
+    p[CONST_START + 15] = -gravity*x14
+    p[CONST_START + 16] = gravity*x15
+    p[CONST_START + 17] = -gravity*x16
+    p[CONST_START + 18] = (1.0 / x6)
     p[CONST_START + 19] = (1.0 / slider__mass)
-    p[CONST_START + 20] = x13
-    p[CONST_START + 21] = -x15*x4
-    p[CONST_START + 22] = x8
-    p[CONST_START + 23] = -x9
-    p[CONST_START + 24] = -x13
-    p[CONST_START + 25] = -gravity*(coupler__mass + crank__mass)
-    p[CONST_START + 26] = -C2*slider__mass
-    p[CONST_START + 27] = -x10
-    p[CONST_START + 28] = -x16
-    p[CONST_START + 29] = -x5
-    p[CONST_START + 30] = -x6
-    p[CONST_START + 31] = x5
-    p[CONST_START + 32] = x17
-    p[CONST_START + 33] = x6
-    p[CONST_START + 34] = -gravity*x15
-    p[CONST_START + 35] = -drive__speed*x6
-    p[CONST_START + 36] = x18
-    p[CONST_START + 37] = -x18
-    p[CONST_START + 38] = -x17
-    p[CONST_START + 39] = (0.5)*x3
+    p[CONST_START + 20] = x19
+    p[CONST_START + 21] = -x22
+    p[CONST_START + 22] = x14
+    p[CONST_START + 23] = -x15
+    p[CONST_START + 24] = -x19
+    p[CONST_START + 25] = -gravity*x23
+    p[CONST_START + 26] = -x24
+    p[CONST_START + 27] = -x16
+    p[CONST_START + 28] = -x25
+    p[CONST_START + 29] = -x9
+    p[CONST_START + 30] = -x12
+    p[CONST_START + 31] = x9
+    p[CONST_START + 32] = x26
+    p[CONST_START + 33] = x12
+    p[CONST_START + 34] = -x27
+    p[CONST_START + 35] = -x28
+    p[CONST_START + 36] = x29
+    p[CONST_START + 37] = -x29
+    p[CONST_START + 38] = -x26
+    p[CONST_START + 39] = (0.5)*x6
     p[CONST_START + 40] = (0.5)*slider__mass
-    p[CONST_START + 41] = coupler__mass*x20 + crank__inertia*x19 + crank__mass*x20 + (crank__pin__x * crank__pin__x)*x21 - crank__pin__x*x14*x4 + (crank__pin__y * crank__pin__y)*x21 - crank__pin__y*x11*x4 + ground__slider_axis__y*x16 - slider__pin__y*x16 + x21*x22 + x21*x23 + x22*x24 + x23*x24
+    p[CONST_START + 41] = crank__inertia*x30 + crank__mass*gravity*ground__crank_pivot__y + (crank__pin__x * crank__pin__x)*x33 - crank__pin__x*x20*x7 + (crank__pin__y * crank__pin__y)*x33 - crank__pin__y*x17*x7 + ground__crank_pivot__y*x31 + ground__slider_axis__y*x25 - slider__pin__y*x25 + x33*x34 + x33*x35 + x34*x36 + x35*x36
+    p[CONST_START + 42] = x37
+    p[CONST_START + 43] = -x38
+    p[CONST_START + 44] = x3
+    p[CONST_START + 45] = -x37
+    p[CONST_START + 46] = x12*x39
+    p[CONST_START + 47] = -x40
+    p[CONST_START + 48] = x40
+    p[CONST_START + 49] = x10
+    p[CONST_START + 50] = x14*x7
+    p[CONST_START + 51] = -x15*x7
+    p[CONST_START + 52] = x7*x8
+    p[CONST_START + 53] = x41
+    p[CONST_START + 54] = -x41
+    p[CONST_START + 55] = coupler__crank_end__y*gravity
+    p[CONST_START + 56] = -coupler__crank_end__x*gravity
+    p[CONST_START + 57] = x4 + x5
+    p[CONST_START + 58] = x42
+    p[CONST_START + 59] = x43
+    p[CONST_START + 60] = -x43
+    p[CONST_START + 61] = -x31
+    p[CONST_START + 62] = 2.0*x15
+    p[CONST_START + 63] = -x42
+    p[CONST_START + 64] = 2.0*x14
+    p[CONST_START + 65] = 2.0*x29
+    p[CONST_START + 66] = x44
+    p[CONST_START + 67] = -x44
+    p[CONST_START + 68] = S2*gravity
+    p[CONST_START + 69] = gravity*x24
+    p[CONST_START + 70] = x45
+    p[CONST_START + 71] = x18*x39
+    p[CONST_START + 72] = crank__pivot__y*x7
+    p[CONST_START + 73] = -crank__pivot__x*x7
+    p[CONST_START + 74] = -x23*x7
+    p[CONST_START + 75] = x32
+    p[CONST_START + 76] = x38
+    p[CONST_START + 77] = x22
+    p[CONST_START + 78] = x47
+    p[CONST_START + 79] = -x21*x46
+    p[CONST_START + 80] = -x45
+    p[CONST_START + 81] = -x47
+    p[CONST_START + 82] = -x23
+    p[CONST_START + 83] = x28
+    p[CONST_START + 84] = drive__speed*x27
+    p[CONST_START + 85] = drive__speed*x26
+    p[CONST_START + 86] = -2.0*x9
+    p[CONST_START + 87] = -x48
+    p[CONST_START + 88] = x48
+    p[CONST_START + 89] = crank__pivot__y*gravity
+    p[CONST_START + 90] = -crank__pivot__x*gravity
+    p[CONST_START + 91] = -x8
+    p[CONST_START + 92] = -x11
+    p[CONST_START + 93] = -gravity*x0
+    p[CONST_START + 94] = gravity*x1
+    p[CONST_START + 95] = -x49
+    p[CONST_START + 96] = -x50
+    p[CONST_START + 97] = x49
+    p[CONST_START + 98] = x50
+    p[CONST_START + 99] = x27
+    p[CONST_START + 100] = x18
+    p[CONST_START + 101] = -x21
     return
 
 
@@ -509,3 +595,533 @@ def integrate_model(y0, p, edges, settings, coefficients):
     # the kernels are looked up as module attributes: numba binds them as constants
     return integrate(_THIS.rhs, _THIS.event, _THIS.on_event, _THIS.monitor, y0, p, edges,
                      settings, coefficients)
+
+
+# ---------------------------------------------------------------------------- Jacobians
+# (generate/jacobians.py; the sensitivity equations in generate/sens_runtime.py)
+from mbs_clearance.generate.sens_runtime import (
+    contact_jacobian,
+    jacobian_at,
+    sens_monitor,
+    sens_on_event,
+    sens_outputs,
+    sens_rhs,
+)
+
+#: columns of the Jacobian: z = [t, q, qdot, p[:CONST_START]] (N_Z), then the value
+Z_NAMES = (
+    "t",
+    "coupler.angle",
+    "slider_guide.s",
+    "coupler.angle.rate",
+    "slider_guide.s.rate",
+    "crank.mass",
+    "crank.inertia",
+    "crank.pivot.x",
+    "crank.pivot.y",
+    "crank.pin.x",
+    "crank.pin.y",
+    "coupler.mass",
+    "coupler.inertia",
+    "coupler.crank_end.x",
+    "coupler.crank_end.y",
+    "coupler.slider_end.x",
+    "coupler.slider_end.y",
+    "slider.mass",
+    "slider.inertia",
+    "slider.pin.x",
+    "slider.pin.y",
+    "ground.crank_pivot.x",
+    "ground.crank_pivot.y",
+    "ground.slider_axis.x",
+    "ground.slider_axis.y",
+    "slider_guide.angle",
+    "coupler_slider.clearance",
+    "coupler_slider.stiffness",
+    "coupler_slider.restitution",
+    "coupler_slider.contact_model",
+    "coupler_slider.impact_velocity_floor",
+    "drive.speed",
+    "drive.initial_angle",
+    "gravity",
+    "coupler_slider.mode",
+    "coupler_slider.impact_velocity",
+)
+N_Z = 36
+JAC_STRIDE = N_Z + 1
+#: rows of the Jacobian: OUT_COLUMNS, then per clearance joint (exd, eyd, fx, fy)
+N_JROWS = 18
+JAC_EXTRA_ROWS = {
+    "exd:coupler_slider": 14,
+    "eyd:coupler_slider": 15,
+    "fx:coupler_slider": 16,
+    "fy:coupler_slider": 17,
+}
+#: the rows of joint 0's penetration and rate (joint j: + 5 j), the first acceleration's,
+#: the drive moment's; joint 0's impact-velocity floor in p (joint j: + 5 j); the column of
+#: joint 0's impact-velocity memory (joint j: + 2 j)
+_PEN_ROW = 1
+_RATE_ROW = 2
+_JOINT_ROWS = 5
+_FLOOR0 = 25
+_CONTACT_STRIDE = 5
+_MEM_COL0 = 1 + 2 * N_Q + MEM_START + 1
+
+
+@nb.njit(**KERNEL)
+def jacobian(t, y, p, jac, full):
+    """Values and total derivatives along z (Z_NAMES) of the model's quantities at (t, y)
+    in the contact modes of p, into jac (N_JROWS x JAC_STRIDE, flat; the last column the
+    value): the clearance joints' rows and the accelerations, with `full` the reactions, the
+    shaking force and the drive moment too (the drive moment's value always)."""
+    for k in range(N_JROWS * JAC_STRIDE):
+        jac[k] = 0.0
+    coupler__mass = p[6]  # coupler.mass
+    coupler__crank_end__x = p[8]  # coupler.crank_end.x
+    coupler__crank_end__y = p[9]  # coupler.crank_end.y
+    slider__mass = p[12]  # slider.mass
+    drive__speed = p[26]  # drive.speed
+    drive__initial_angle = p[27]  # drive.initial_angle
+    gravity = p[28]  # gravity
+    k0 = p[CONST_START + 0]
+    k1 = p[CONST_START + 1]
+    k2 = p[CONST_START + 2]
+    k3 = p[CONST_START + 3]
+    k4 = p[CONST_START + 4]
+    k5 = p[CONST_START + 5]
+    k6 = p[CONST_START + 6]
+    k7 = p[CONST_START + 7]
+    k8 = p[CONST_START + 8]
+    k9 = p[CONST_START + 9]
+    k10 = p[CONST_START + 10]
+    k11 = p[CONST_START + 11]
+    k12 = p[CONST_START + 12]
+    k13 = p[CONST_START + 13]
+    k14 = p[CONST_START + 14]
+    k15 = p[CONST_START + 15]
+    k16 = p[CONST_START + 16]
+    k17 = p[CONST_START + 17]
+    k20 = p[CONST_START + 20]
+    k21 = p[CONST_START + 21]
+    k22 = p[CONST_START + 22]
+    k23 = p[CONST_START + 23]
+    k24 = p[CONST_START + 24]
+    k25 = p[CONST_START + 25]
+    k26 = p[CONST_START + 26]
+    k27 = p[CONST_START + 27]
+    k28 = p[CONST_START + 28]
+    k29 = p[CONST_START + 29]
+    k30 = p[CONST_START + 30]
+    k31 = p[CONST_START + 31]
+    k32 = p[CONST_START + 32]
+    k33 = p[CONST_START + 33]
+    k34 = p[CONST_START + 34]
+    k35 = p[CONST_START + 35]
+    k36 = p[CONST_START + 36]
+    k37 = p[CONST_START + 37]
+    k42 = p[CONST_START + 42]
+    k43 = p[CONST_START + 43]
+    k44 = p[CONST_START + 44]
+    k45 = p[CONST_START + 45]
+    k46 = p[CONST_START + 46]
+    k47 = p[CONST_START + 47]
+    k48 = p[CONST_START + 48]
+    k49 = p[CONST_START + 49]
+    k50 = p[CONST_START + 50]
+    k51 = p[CONST_START + 51]
+    k52 = p[CONST_START + 52]
+    k53 = p[CONST_START + 53]
+    k54 = p[CONST_START + 54]
+    k55 = p[CONST_START + 55]
+    k56 = p[CONST_START + 56]
+    k57 = p[CONST_START + 57]
+    k58 = p[CONST_START + 58]
+    k59 = p[CONST_START + 59]
+    k60 = p[CONST_START + 60]
+    k61 = p[CONST_START + 61]
+    k62 = p[CONST_START + 62]
+    k63 = p[CONST_START + 63]
+    k64 = p[CONST_START + 64]
+    k65 = p[CONST_START + 65]
+    k66 = p[CONST_START + 66]
+    k67 = p[CONST_START + 67]
+    k68 = p[CONST_START + 68]
+    k69 = p[CONST_START + 69]
+    k70 = p[CONST_START + 70]
+    k71 = p[CONST_START + 71]
+    k72 = p[CONST_START + 72]
+    k73 = p[CONST_START + 73]
+    k74 = p[CONST_START + 74]
+    k75 = p[CONST_START + 75]
+    k76 = p[CONST_START + 76]
+    k77 = p[CONST_START + 77]
+    k78 = p[CONST_START + 78]
+    k79 = p[CONST_START + 79]
+    k80 = p[CONST_START + 80]
+    k81 = p[CONST_START + 81]
+    k82 = p[CONST_START + 82]
+    k83 = p[CONST_START + 83]
+    k84 = p[CONST_START + 84]
+    k85 = p[CONST_START + 85]
+    k86 = p[CONST_START + 86]
+    k87 = p[CONST_START + 87]
+    k88 = p[CONST_START + 88]
+    k89 = p[CONST_START + 89]
+    k90 = p[CONST_START + 90]
+    k91 = p[CONST_START + 91]
+    k92 = p[CONST_START + 92]
+    k93 = p[CONST_START + 93]
+    k94 = p[CONST_START + 94]
+    k95 = p[CONST_START + 95]
+    k96 = p[CONST_START + 96]
+    k97 = p[CONST_START + 97]
+    k98 = p[CONST_START + 98]
+    k99 = p[CONST_START + 99]
+    k100 = p[CONST_START + 100]
+    k101 = p[CONST_START + 101]
+    Q0 = y[0]
+    Q1 = y[1]
+    U0 = y[2]
+    U1 = y[3]
+    S0, C0 = sincos(drive__initial_angle + drive__speed*t)
+    S1, C1 = sincos(Q0)
+    x0 = Q1*k4
+    x1 = C1*k3
+    x2 = S1*k2
+    x3 = x1 + x2
+    x4 = C0*k1 + S0*k0
+    x5 = C0*k9
+    x6 = S0*k8
+    x7 = x5 + x6
+    x8 = C1*k2
+    x9 = S1*k3
+    x10 = x8 - x9
+    x11 = -C0
+    x12 = -S0
+    x13 = -C1
+    x14 = -S1
+    x15 = Q1*k6
+    x16 = C0*k0
+    x17 = S0*k1
+    x18 = x16 - x17
+    x19 = C0*k10 + S0*k9
+    x20 = U1*k4
+    x21 = S0*drive__speed
+    x22 = C0*drive__speed
+    x23 = -x21
+    x24 = -x22
+    x25 = S1*U0
+    x26 = C1*U0
+    x27 = -x25
+    x28 = -x26
+    x29 = U1*k6
+    x30 = C0*k8
+    x31 = S0*k44
+    gv0_0 = k5 + x0 + x3 + x4
+    jac[111] = x7
+    jac[112] = x10
+    jac[113] = k4
+    jac[118] = x11
+    jac[119] = S0
+    jac[120] = C0
+    jac[121] = x12
+    jac[124] = x13
+    jac[125] = S1
+    jac[126] = C1
+    jac[127] = x14
+    jac[132] = 1.0
+    jac[134] = -1.0
+    jac[136] = -x15
+    jac[142] = t*x18
+    jac[143] = x18
+    gv0_1 = k7 + x15 - x16 + x17 - x8 + x9
+    jac[148] = x19
+    jac[149] = x3
+    jac[150] = k6
+    jac[155] = x12
+    jac[156] = x11
+    jac[157] = S0
+    jac[158] = C0
+    jac[161] = x14
+    jac[162] = x13
+    jac[163] = S1
+    jac[164] = C1
+    jac[170] = 1.0
+    jac[172] = -1.0
+    jac[173] = x0
+    jac[179] = t*x4
+    jac[180] = x4
+    gv0_2 = U0*x8 - U0*x9 + x20 + x7
+    jac[518] = C0*k43 + S0*k42
+    jac[519] = -U0*x3
+    jac[521] = x10
+    jac[522] = k4
+    jac[525] = x21
+    jac[526] = x22
+    jac[527] = x23
+    jac[528] = x24
+    jac[531] = x25
+    jac[532] = x26
+    jac[533] = x27
+    jac[534] = x28
+    jac[543] = -x29
+    jac[549] = t*x30 + t*x31 + x18
+    jac[550] = x30 + x31
+    gv0_3 = U0*x1 + U0*x2 + x19 + x29
+    jac[555] = C0*k45 + S0*k43
+    jac[556] = U0*x10
+    jac[558] = x3
+    jac[559] = k6
+    jac[562] = x24
+    jac[563] = x21
+    jac[564] = x22
+    jac[565] = x23
+    jac[568] = x28
+    jac[569] = x25
+    jac[570] = x26
+    jac[571] = x27
+    jac[580] = x20
+    jac[586] = t*x5 + t*x6 + x4
+    jac[587] = x7
+    FX0, FY0 = contact_jacobian(jac, 37, 36, gv0_0, gv0_1, gv0_2, gv0_3, 0, 1, 2, 3, 4, 14, 15, 16, 17, 26, 27, 28, 35, p[21], p[29], p[30], p[22], p[23], p[24])
+    m_0_0 = k11
+    m_1_0 = 0.0
+    m_1_1 = slider__mass
+    f_0 = C0*C1*k12 + C0*S1*k14 - C1*FX0*k2 - C1*FY0*k3 + C1*S0*k13 + C1*k16 + FX0*S1*k3 - FY0*S1*k2 + S0*S1*k12 + S1*k15
+    f_1 = -FX0*k4 - FY0*k6 + k17
+    l_0_0 = math.sqrt(m_0_0)
+    il_0 = 1.0 / l_0_0
+    l_1_0 = (m_1_0) * il_0
+    l_1_1 = math.sqrt(m_1_1 - l_1_0 * l_1_0)
+    il_1 = 1.0 / l_1_1
+    zz_0 = (f_0) * il_0
+    zz_1 = (f_1 - l_1_0 * zz_0) * il_1
+    A1 = (zz_1) * il_1
+    A0 = (zz_0 - l_1_0 * A1) * il_0
+    x32 = C0*C1
+    x33 = C0*S1
+    x34 = C1*S0
+    x35 = S0*S1
+    x36 = C1*FY0
+    x37 = C1*FX0
+    x38 = FX0*S1
+    x39 = FY0*S1
+    x40 = k50*x32 + k50*x35 - k51*x33 + k51*x34
+    x41 = k50*x33 - k50*x34 + k51*x32 + k51*x35
+    x42 = x37 + x39
+    x43 = k14*x32
+    x44 = k49*x33
+    x45 = k12*x34
+    x46 = k14*x35
+    jac[444] = k46*x32 + k46*x35 + k47*x34 + k48*x33
+    jac[445] = -C1*k15 + S1*k16 + k12*x33 + k13*x32 + k13*x35 + k2*x36 - k2*x38 - k3*x37 - k3*x39 + k49*x34
+    jac[451] = x40
+    jac[452] = x41
+    jac[453] = -x40
+    jac[454] = -x41
+    jac[455] = A0*k57 + C1*k56 + S1*k55 + k52*x32 + k52*x35 + k53*x34 + k54*x33
+    jac[456] = A0
+    jac[457] = A0*k62 + C1*k61 + k58*x32 + k58*x35 + k59*x34 + k60*x33 - x36 + x38
+    jac[458] = A0*k64 - S1*k61 + k58*x34 + k60*x32 + k60*x35 + k63*x33 + x42
+    jac[459] = x36 - x38
+    jac[460] = -x42
+    jac[475] = k65*x32 + k65*x35 + k66*x34 + k67*x33 + t*x43 + t*x44 + t*x45 + t*x46
+    jac[476] = x43 + x44 + x45 + x46
+    jac[477] = C1*k23 + S1*k22
+    rfx_0_0 = C1*k2 - S1*k3
+    rfy_0_0 = C1*k3 + S1*k2
+    jac[498] = A1 + k68
+    jac[506] = -FX0*k6 + FY0*k4 + k69
+    jac[514] = -k27
+    rfx_1_0 = k4
+    rfy_1_0 = k6
+    for col in range(36):
+        b_0 = -(jac[444 + col] + rfx_0_0 * jac[592 + col] + rfy_0_0 * jac[629 + col])
+        b_1 = -(jac[481 + col] + rfx_1_0 * jac[592 + col] + rfy_1_0 * jac[629 + col])
+        zz_0 = (b_0) * il_0
+        zz_1 = (b_1 - l_1_0 * zz_0) * il_1
+        x_1 = (zz_1) * il_1
+        x_0 = (zz_0 - l_1_0 * x_1) * il_0
+        jac[444 + col] = x_0
+        jac[481 + col] = x_1
+    jac[480] = A0
+    jac[517] = A1
+    x47 = A0*C0
+    x48 = C1*k30
+    x49 = S1*k29
+    x50 = A0*S0
+    x51 = (U0 * U0)
+    x52 = C0*x51
+    x53 = S0*x51
+    jac[443] = C0*FX0*k0 + C0*FY0*k1 + C0*k34 + C1*k29*x52 + C1*k31*x50 - FX0*S0*k1 + FY0*S0*k0 + S0*k32 + S1*k30*x50 + S1*k33*x52 + x47*x48 + x47*x49 + x48*x53 + x49*x53
+    if full:
+        x54 = C0*k21
+        x55 = S0*k20
+        x56 = x54 + x55
+        x57 = A0*S1
+        x58 = k23*x57
+        x59 = (U0 * U0)
+        x60 = C1*x59
+        x61 = k23*x60
+        x62 = S1*x59
+        x63 = k22*x62
+        x64 = A0*C1
+        x65 = k22*x64
+        x66 = x58 + x61 + x63 - x65
+        x67 = k23*x64
+        x68 = k22*x57
+        x69 = k22*x60
+        x70 = k23*x62
+        x71 = x67 + x68 + x69 - x70
+        x72 = C0*k74
+        x73 = S0*k74
+        x74 = C0*k75
+        x75 = S0*k75
+        x76 = -coupler__mass*(x57 + x60)
+        x77 = -S1*x59 + x64
+        x78 = C0*k20
+        x79 = S0*k77
+        x80 = A1*k26
+        x81 = A1*k27
+        x82 = C0*FX0
+        x83 = C0*FY0
+        x84 = FX0*S0
+        x85 = FY0*S0
+        x86 = C0*x64
+        x87 = C0*k35
+        x88 = S0*x64
+        x89 = S0*k36
+        x90 = C0*x62
+        x91 = S0*x62
+        x92 = C0*k33
+        x93 = S0*k29
+        x94 = C0*C1
+        x95 = C0*S1
+        x96 = C1*S0
+        x97 = S0*S1
+        x98 = C0*x67 + C0*x68 + C0*x69 - C0*x70 + S0*x58 + S0*x61 + S0*x63 - S0*x65 + x83 - x84
+        x99 = -C0*x58 - C0*x61 - C0*x63 + C0*x65 + S0*x67 + S0*x68 + S0*x69 - S0*x70 + x82 + x85
+        x100 = C0*k91
+        x101 = S0*k92
+        x102 = C0*k95
+        x103 = S0*k96
+        x104 = C0*k98
+        x105 = S0*k95
+        x106 = C0*k30
+        x107 = S0*k31
+        x108 = C0*k32 + S0*k99 + k0*x83 - k0*x84 - k1*x82 - k1*x85 + k29*x90 + k30*x91 + k31*x86 + k33*x88 + x106*x57 + x106*x60 + x107*x57 + x107*x60
+        jac[221] = -FX0 + x56 + x66
+        jac[185] = C0*k71 + S0*k70
+        jac[186] = x71
+        jac[188] = U0*(-C1*k62 + S1*k64)
+        jac[190] = C0*k73 + S0*k72
+        jac[192] = x72
+        jac[193] = -x73
+        jac[194] = x74
+        jac[195] = -x75
+        jac[196] = C0*k76 + S0*k45 + S1*coupler__crank_end__y*x59 - coupler__crank_end__x*x57 - coupler__crank_end__x*x60 - coupler__crank_end__y*x64
+        jac[198] = x76
+        jac[199] = -coupler__mass*x77
+        jac[216] = C0*k79 + S0*k78 + t*x78 + t*x79
+        jac[217] = x78 + x79
+        oa_0_0 = -C1*k22 + S1*k23
+        ofx_0_0 = -1.0
+        jac[258] = C0*k24 - FY0 + S0*k21 + k25 - x71
+        jac[222] = C0*k80 + S0*k71
+        jac[223] = x66
+        jac[225] = -U0*(C1*k64 + S1*k62)
+        jac[227] = -C0*k72 + S0*k73 - gravity
+        jac[229] = x73
+        jac[230] = x72
+        jac[231] = x75
+        jac[232] = x74
+        jac[233] = A0*C1*coupler__crank_end__x + C0*k42 + S0*k76 - coupler__crank_end__x*x62 - coupler__crank_end__y*x57 - coupler__crank_end__y*x60 - gravity
+        jac[235] = coupler__mass*x77
+        jac[236] = x76
+        jac[253] = C0*k81 + S0*k79 + t*x54 + t*x55
+        jac[254] = x56
+        jac[255] = k82
+        oa_1_0 = -C1*k23 - S1*k22
+        ofy_1_0 = -1.0
+        jac[295] = FX0 + x80
+        jac[276] = A1*k4
+        jac[284] = -x81
+        oa_2_1 = k26
+        ofx_2_0 = 1.0
+        jac[332] = FY0 + k28 + x81
+        jac[313] = A1*k6 - gravity
+        jac[321] = x80
+        jac[329] = -slider__mass
+        oa_3_1 = k27
+        ofy_3_0 = 1.0
+        jac[407] = C0*k85 + S0*k84 + k35*x91 + k36*x86 + k37*x90 + k44*x84 + k8*x82 + k8*x85 + k83*x88 + k9*x83 + x57*x87 + x57*x89 + x60*x87 + x60*x89
+        jac[408] = k29*x86 + k30*x88 + k31*x90 + k33*x91 + x57*x92 + x57*x93 + x60*x92 + x60*x93
+        jac[410] = U0*(k86*x94 + k86*x97 + k87*x96 + k88*x95)
+        jac[412] = C0*k90 + S0*k89
+        jac[414] = C0*k25 - x98
+        jac[415] = -S0*k25 + x99
+        jac[416] = -C0*k61 + x98
+        jac[417] = S0*k61 - x99
+        jac[418] = C0*k94 + S0*k93 - k91*x88 + k91*x91 + k92*x86 - k92*x90 + x100*x57 + x100*x60 + x101*x57 + x101*x60
+        jac[420] = k95*x91 + k96*x86 + k97*x88 + k98*x90 + x102*x57 + x102*x60 + x103*x57 + x103*x60
+        jac[421] = k95*x86 + k96*x88 + k97*x90 + k98*x91 + x104*x57 + x104*x60 + x105*x57 + x105*x60
+        jac[438] = t*x108
+        jac[439] = x108
+        jac[440] = C0*k101 + S0*k100
+        oa_4_0 = k29*x95 + k30*x94 + k30*x97 + k31*x96
+        ofx_4_0 = C0*k0 - S0*k1
+        ofy_4_0 = C0*k1 + S0*k0
+        for col in range(36):
+            jac[185 + col] += oa_0_0 * jac[444 + col] + ofx_0_0 * jac[592 + col]
+            jac[222 + col] += oa_1_0 * jac[444 + col] + ofy_1_0 * jac[629 + col]
+            jac[259 + col] += oa_2_1 * jac[481 + col] + ofx_2_0 * jac[592 + col]
+            jac[296 + col] += oa_3_1 * jac[481 + col] + ofy_3_0 * jac[629 + col]
+            jac[407 + col] += oa_4_0 * jac[444 + col] + ofx_4_0 * jac[592 + col] + ofy_4_0 * jac[629 + col]
+        for col in range(37):
+            jac[333 + col] = jac[185 + col] + jac[259 + col]
+        for col in range(37):
+            jac[370 + col] = jac[222 + col] + jac[296 + col]
+    return
+
+
+@nb.njit(**KERNEL)
+def rhs_sens(t, y, p, dydt):
+    """Derivative of the sensitivity state (generate/sens_runtime.py)."""
+    sens_rhs(_THIS.jacobian, _THIS.rhs, t, y, p, dydt, N_Q, N_P, N_Z, N_JROWS, ACC_COLUMN,
+             MOMENT_COLUMN, 26, _MEM_COL0, N_EVENTS)
+
+
+@nb.njit(**KERNEL)
+def on_event_sens(t, y, p, j):
+    """Switch joint j, with the sensitivity of its impact-velocity memory at an onset."""
+    sens_on_event(_THIS.jacobian, _THIS.on_event, t, y, p, j, N_Q, N_P, N_Z, N_JROWS,
+                  MEM_START, _PEN_ROW, _RATE_ROW, _JOINT_ROWS, ACC_COLUMN, _FLOOR0,
+                  _CONTACT_STRIDE, _MEM_COL0, N_EVENTS)
+
+
+@nb.njit(**KERNEL)
+def monitor_sens(t, y, p, dydt, out, g, gd):
+    """`rhs_sens`, then the plain monitor on the state part."""
+    return sens_monitor(_THIS.rhs_sens, _THIS.monitor, t, y, p, dydt, out, g, gd, N_Q, N_P,
+                        N_Z, N_JROWS)
+
+
+@nb.njit(cache=True, error_model="numpy", nogil=True)
+def integrate_sens(y0, p, edges, settings, coefficients):
+    """`integrator.integrate` bound to the sensitivity kernels (compiled once, cached)."""
+    return integrate(_THIS.rhs_sens, _THIS.event, _THIS.on_event_sens, _THIS.monitor_sens,
+                     y0, p, edges, settings, coefficients)
+
+
+@nb.njit(cache=True, error_model="numpy")
+def output_sensitivities(ts, ys, ms, p):
+    """Values (n, N_OUT) and derivatives (n, N_OUT, nb) of the outputs along the integrated
+    directions at recorded steps of a sensitivity run."""
+    return sens_outputs(_THIS.jacobian, ts, ys, ms, p, N_Q, N_P, N_Z, N_JROWS, N_OUT,
+                        MEM_START, _MEM_COL0, N_EVENTS)
+
+
+@nb.njit(cache=True, error_model="numpy")
+def jacobian_matrix(t, y, p, full):
+    """The Jacobian (N_JROWS, JAC_STRIDE) at (t, y) as a matrix."""
+    return jacobian_at(_THIS.jacobian, t, y, p, N_JROWS, N_Z, full)

@@ -30,8 +30,8 @@ from mbs_clearance.generate.runtime import (
 
 LINKAGE = "slider_crank_two_clearances"
 STRUCTURE = "{\"bodies\": [[\"crank\", [\"pin\", \"pivot\"]], [\"coupler\", [\"crank_end\", \"slider_end\"]], [\"slider\", [\"pin\"]]], \"clearance_joints\": [[\"crank_coupler\", \"crank\", \"pin\", \"coupler\", \"crank_end\"], [\"coupler_slider\", \"coupler\", \"slider_end\", \"slider\", \"pin\"]], \"drive\": \"crank_pivot\", \"ground_points\": [\"crank_pivot\", \"slider_axis\"], \"joints\": [[\"revolute\", \"crank_pivot\", \"ground\", \"crank_pivot\", \"crank\", \"pivot\"], [\"prismatic\", \"slider_guide\", \"ground\", \"slider_axis\", \"slider\", \"pin\"]], \"monitor_joint\": \"crank_pivot\"}"
-STRUCTURE_DIGEST = "cbfa31ef44fa88ac74d7973f77ea698e519c89f71e71d910462133a9e3b7796f"
-GENERATOR_VERSION = "9a6198b6adf9fe8e"
+STRUCTURE_DIGEST = "0e2f09c436bb8da999a63b1aa6e8e36f3560857b146cd9f1073afdfbeac33cfa"
+GENERATOR_VERSION = "5c88331610c7f9b0"
 
 #: dotted names of the entries of p (without the constants)
 PARAMETERS = (
@@ -87,7 +87,7 @@ GROUND_JOINTS = ("crank_pivot", "slider_guide", )
 #: the ground joint whose |reaction| is monitored (None: the shaking force)
 MONITOR_JOINT = "crank_pivot"
 CONST_START = len(PARAMETERS)
-N_CONSTANTS = 24
+N_CONSTANTS = 43
 N_P = CONST_START + N_CONSTANTS
 #: columns of `outputs` (and of the monitor's out)
 OUT_COLUMNS = (
@@ -144,36 +144,66 @@ def prepare(p):
     x0 = crank__pin__y - crank__pivot__y
     x1 = crank__pin__x - crank__pivot__x
     x2 = drive__speed*x1
-    x3 = S2*slider__mass
-    x4 = (drive__speed * drive__speed)
-    x5 = crank__mass*x4
-    x6 = crank__mass*gravity
-    x7 = gravity*slider__mass
-    x8 = (0.5)*x5
+    x3 = drive__speed*x0
+    x4 = S2*slider__mass
+    x5 = (drive__speed * drive__speed)
+    x6 = crank__pivot__y*x5
+    x7 = crank__pivot__x*x5
+    x8 = crank__mass*gravity
+    x9 = C2*slider__mass
+    x10 = gravity*slider__mass
+    x11 = crank__pivot__y*x8
+    x12 = crank__pivot__x*x8
+    x13 = crank__mass*x5
+    x14 = (0.5)*x13
+    x15 = x0*x5
+    x16 = (drive__speed * drive__speed * drive__speed)
+    x17 = crank__mass*crank__pivot__x
+    x18 = crank__mass*crank__pivot__y
+    x19 = 2.0*drive__speed
     p[CONST_START + 0] = -x0
     p[CONST_START + 1] = x1
     p[CONST_START + 2] = -x2
-    p[CONST_START + 3] = -drive__speed*x0
+    p[CONST_START + 3] = -x3
     p[CONST_START + 4] = x2
     p[CONST_START + 5] = -C2
     p[CONST_START + 6] = -S2
-    p[CONST_START + 7] = -gravity*x3
+    p[CONST_START + 7] = -gravity*x4
     p[CONST_START + 8] = -coupler__mass*gravity
     p[CONST_START + 9] = (1.0 / slider__mass)
     p[CONST_START + 10] = (1.0 / coupler__mass)
     p[CONST_START + 11] = (1.0 / coupler__inertia)
-    p[CONST_START + 12] = crank__pivot__y*x5
-    p[CONST_START + 13] = -crank__pivot__x*x5
-    p[CONST_START + 14] = -x6
-    p[CONST_START + 15] = -C2*slider__mass
-    p[CONST_START + 16] = -x3
-    p[CONST_START + 17] = -x7
-    p[CONST_START + 18] = crank__pivot__y*x6
-    p[CONST_START + 19] = -crank__pivot__x*x6
+    p[CONST_START + 12] = crank__mass*x6
+    p[CONST_START + 13] = -crank__mass*x7
+    p[CONST_START + 14] = -x8
+    p[CONST_START + 15] = -x9
+    p[CONST_START + 16] = -x4
+    p[CONST_START + 17] = -x10
+    p[CONST_START + 18] = x11
+    p[CONST_START + 19] = -x12
     p[CONST_START + 20] = (0.5)*slider__mass
     p[CONST_START + 21] = (0.5)*coupler__mass
     p[CONST_START + 22] = (0.5)*coupler__inertia
-    p[CONST_START + 23] = (0.5)*crank__inertia*x4 + (crank__pivot__x * crank__pivot__x)*x8 + (crank__pivot__y * crank__pivot__y)*x8 + ground__crank_pivot__y*x6 + ground__slider_axis__y*x7 - slider__pin__y*x7
+    p[CONST_START + 23] = (0.5)*crank__inertia*x5 + (crank__pivot__x * crank__pivot__x)*x14 + (crank__pivot__y * crank__pivot__y)*x14 + ground__crank_pivot__y*x8 + ground__slider_axis__y*x10 - slider__pin__y*x10
+    p[CONST_START + 24] = x15
+    p[CONST_START + 25] = -x1*x5
+    p[CONST_START + 26] = x3
+    p[CONST_START + 27] = -x15
+    p[CONST_START + 28] = S2*gravity
+    p[CONST_START + 29] = gravity*x9
+    p[CONST_START + 30] = x16*x17
+    p[CONST_START + 31] = x16*x18
+    p[CONST_START + 32] = x6
+    p[CONST_START + 33] = -x7
+    p[CONST_START + 34] = -x13
+    p[CONST_START + 35] = x18*x19
+    p[CONST_START + 36] = -x17*x19
+    p[CONST_START + 37] = drive__speed*x12
+    p[CONST_START + 38] = drive__speed*x11
+    p[CONST_START + 39] = crank__pivot__y*gravity
+    p[CONST_START + 40] = -crank__pivot__x*gravity
+    p[CONST_START + 41] = x18
+    p[CONST_START + 42] = -x17
     return
 
 
@@ -560,3 +590,483 @@ def integrate_model(y0, p, edges, settings, coefficients):
     # the kernels are looked up as module attributes: numba binds them as constants
     return integrate(_THIS.rhs, _THIS.event, _THIS.on_event, _THIS.monitor, y0, p, edges,
                      settings, coefficients)
+
+
+# ---------------------------------------------------------------------------- Jacobians
+# (generate/jacobians.py; the sensitivity equations in generate/sens_runtime.py)
+from mbs_clearance.generate.sens_runtime import (
+    contact_jacobian,
+    jacobian_at,
+    sens_monitor,
+    sens_on_event,
+    sens_outputs,
+    sens_rhs,
+)
+
+#: columns of the Jacobian: z = [t, q, qdot, p[:CONST_START]] (N_Z), then the value
+Z_NAMES = (
+    "t",
+    "slider_guide.s",
+    "coupler.x",
+    "coupler.y",
+    "coupler.angle",
+    "slider_guide.s.rate",
+    "coupler.x.rate",
+    "coupler.y.rate",
+    "coupler.angle.rate",
+    "crank.mass",
+    "crank.inertia",
+    "crank.pivot.x",
+    "crank.pivot.y",
+    "crank.pin.x",
+    "crank.pin.y",
+    "coupler.mass",
+    "coupler.inertia",
+    "coupler.crank_end.x",
+    "coupler.crank_end.y",
+    "coupler.slider_end.x",
+    "coupler.slider_end.y",
+    "slider.mass",
+    "slider.inertia",
+    "slider.pin.x",
+    "slider.pin.y",
+    "ground.crank_pivot.x",
+    "ground.crank_pivot.y",
+    "ground.slider_axis.x",
+    "ground.slider_axis.y",
+    "slider_guide.angle",
+    "crank_coupler.clearance",
+    "crank_coupler.stiffness",
+    "crank_coupler.restitution",
+    "crank_coupler.contact_model",
+    "crank_coupler.impact_velocity_floor",
+    "coupler_slider.clearance",
+    "coupler_slider.stiffness",
+    "coupler_slider.restitution",
+    "coupler_slider.contact_model",
+    "coupler_slider.impact_velocity_floor",
+    "drive.speed",
+    "drive.initial_angle",
+    "gravity",
+    "crank_coupler.mode",
+    "crank_coupler.impact_velocity",
+    "coupler_slider.mode",
+    "coupler_slider.impact_velocity",
+)
+N_Z = 47
+JAC_STRIDE = N_Z + 1
+#: rows of the Jacobian: OUT_COLUMNS, then per clearance joint (exd, eyd, fx, fy)
+N_JROWS = 29
+JAC_EXTRA_ROWS = {
+    "exd:crank_coupler": 21,
+    "eyd:crank_coupler": 22,
+    "fx:crank_coupler": 23,
+    "fy:crank_coupler": 24,
+    "exd:coupler_slider": 25,
+    "eyd:coupler_slider": 26,
+    "fx:coupler_slider": 27,
+    "fy:coupler_slider": 28,
+}
+#: the rows of joint 0's penetration and rate (joint j: + 5 j), the first acceleration's,
+#: the drive moment's; joint 0's impact-velocity floor in p (joint j: + 5 j); the column of
+#: joint 0's impact-velocity memory (joint j: + 2 j)
+_PEN_ROW = 1
+_RATE_ROW = 2
+_JOINT_ROWS = 5
+_FLOOR0 = 25
+_CONTACT_STRIDE = 5
+_MEM_COL0 = 1 + 2 * N_Q + MEM_START + 1
+
+
+@nb.njit(**KERNEL)
+def jacobian(t, y, p, jac, full):
+    """Values and total derivatives along z (Z_NAMES) of the model's quantities at (t, y)
+    in the contact modes of p, into jac (N_JROWS x JAC_STRIDE, flat; the last column the
+    value): the clearance joints' rows and the accelerations, with `full` the reactions, the
+    shaking force and the drive moment too (the drive moment's value always)."""
+    for k in range(N_JROWS * JAC_STRIDE):
+        jac[k] = 0.0
+    crank__mass = p[0]  # crank.mass
+    coupler__mass = p[6]  # coupler.mass
+    coupler__inertia = p[7]  # coupler.inertia
+    coupler__crank_end__x = p[8]  # coupler.crank_end.x
+    coupler__crank_end__y = p[9]  # coupler.crank_end.y
+    coupler__slider_end__x = p[10]  # coupler.slider_end.x
+    coupler__slider_end__y = p[11]  # coupler.slider_end.y
+    slider__mass = p[12]  # slider.mass
+    ground__crank_pivot__x = p[16]  # ground.crank_pivot.x
+    ground__crank_pivot__y = p[17]  # ground.crank_pivot.y
+    ground__slider_axis__x = p[18]  # ground.slider_axis.x
+    ground__slider_axis__y = p[19]  # ground.slider_axis.y
+    drive__speed = p[31]  # drive.speed
+    drive__initial_angle = p[32]  # drive.initial_angle
+    gravity = p[33]  # gravity
+    k0 = p[CONST_START + 0]
+    k1 = p[CONST_START + 1]
+    k2 = p[CONST_START + 2]
+    k3 = p[CONST_START + 3]
+    k4 = p[CONST_START + 4]
+    k5 = p[CONST_START + 5]
+    k6 = p[CONST_START + 6]
+    k7 = p[CONST_START + 7]
+    k8 = p[CONST_START + 8]
+    k12 = p[CONST_START + 12]
+    k13 = p[CONST_START + 13]
+    k14 = p[CONST_START + 14]
+    k15 = p[CONST_START + 15]
+    k16 = p[CONST_START + 16]
+    k17 = p[CONST_START + 17]
+    k18 = p[CONST_START + 18]
+    k19 = p[CONST_START + 19]
+    k24 = p[CONST_START + 24]
+    k25 = p[CONST_START + 25]
+    k26 = p[CONST_START + 26]
+    k27 = p[CONST_START + 27]
+    k28 = p[CONST_START + 28]
+    k29 = p[CONST_START + 29]
+    k30 = p[CONST_START + 30]
+    k31 = p[CONST_START + 31]
+    k32 = p[CONST_START + 32]
+    k33 = p[CONST_START + 33]
+    k34 = p[CONST_START + 34]
+    k35 = p[CONST_START + 35]
+    k36 = p[CONST_START + 36]
+    k37 = p[CONST_START + 37]
+    k38 = p[CONST_START + 38]
+    k39 = p[CONST_START + 39]
+    k40 = p[CONST_START + 40]
+    k41 = p[CONST_START + 41]
+    k42 = p[CONST_START + 42]
+    Q0 = y[0]
+    Q1 = y[1]
+    Q2 = y[2]
+    Q3 = y[3]
+    U0 = y[4]
+    U1 = y[5]
+    U2 = y[6]
+    U3 = y[7]
+    S0, C0 = sincos(drive__initial_angle + drive__speed*t)
+    S1, C1 = sincos(Q3)
+    x0 = S1*coupler__crank_end__y
+    x1 = C1*coupler__crank_end__x
+    x2 = C0*k1 + S0*k0
+    x3 = C0*k3
+    x4 = S0*k2
+    x5 = x3 + x4
+    x6 = C1*coupler__crank_end__y
+    x7 = S1*coupler__crank_end__x
+    x8 = x6 + x7
+    x9 = -C0
+    x10 = -S0
+    x11 = -C1
+    x12 = C0*k0 - S0*k1
+    x13 = C0*k4 + S0*k3
+    x14 = -S1*coupler__crank_end__y + x1
+    x15 = -x14
+    x16 = -S1
+    x17 = -U1
+    x18 = S0*drive__speed
+    x19 = C0*drive__speed
+    x20 = -x18
+    x21 = -x19
+    x22 = S1*U3
+    x23 = C1*U3
+    x24 = C0*k2
+    x25 = S0*k26
+    x26 = -x23
+    x27 = Q0*k5
+    x28 = C1*coupler__slider_end__x - S1*coupler__slider_end__y
+    x29 = C1*coupler__slider_end__y + S1*coupler__slider_end__x
+    x30 = -x29
+    x31 = Q0*k6
+    x32 = -x22
+    x33 = U0*k6
+    gv0_0 = -Q1 + ground__crank_pivot__x + x0 - x1 + x2
+    jac[144] = x5
+    jac[146] = -1.0
+    jac[148] = x8
+    jac[155] = x9
+    jac[156] = S0
+    jac[157] = C0
+    jac[158] = x10
+    jac[161] = x11
+    jac[162] = S1
+    jac[169] = 1.0
+    jac[184] = t*x12
+    jac[185] = x12
+    gv0_1 = -Q2 + ground__crank_pivot__y - x12 - x8
+    jac[192] = x13
+    jac[195] = -1.0
+    jac[196] = x15
+    jac[203] = x10
+    jac[204] = x9
+    jac[205] = S0
+    jac[206] = C0
+    jac[209] = x16
+    jac[210] = x11
+    jac[218] = 1.0
+    jac[232] = t*x2
+    jac[233] = x2
+    gv0_2 = U3*x6 + U3*x7 + x17 + x5
+    jac[1008] = C0*k25 + S0*k24
+    jac[1012] = U3*x14
+    jac[1014] = -1.0
+    jac[1016] = x8
+    jac[1019] = x18
+    jac[1020] = x19
+    jac[1021] = x20
+    jac[1022] = x21
+    jac[1025] = x22
+    jac[1026] = x23
+    jac[1048] = t*x24 + t*x25 + x12
+    jac[1049] = x24 + x25
+    gv0_3 = -U2 + U3*x0 - U3*x1 + x13
+    jac[1056] = C0*k27 + S0*k25
+    jac[1060] = U3*x8
+    jac[1063] = -1.0
+    jac[1064] = x15
+    jac[1067] = x21
+    jac[1068] = x18
+    jac[1069] = x19
+    jac[1070] = x20
+    jac[1073] = x26
+    jac[1074] = x22
+    jac[1096] = t*x3 + t*x4 + x2
+    jac[1097] = x5
+    gv1_0 = Q1 - ground__slider_axis__x + x27 + x28
+    jac[385] = k5
+    jac[386] = 1.0
+    jac[388] = x30
+    jac[403] = C1
+    jac[404] = x16
+    jac[411] = -1.0
+    jac[413] = -x31
+    gv1_1 = Q2 - ground__slider_axis__y + x29 + x31
+    jac[433] = k6
+    jac[435] = 1.0
+    jac[436] = x28
+    jac[451] = S1
+    jac[452] = C1
+    jac[460] = -1.0
+    jac[461] = x27
+    gv1_2 = U0*k5 - coupler__slider_end__x*x22 - coupler__slider_end__y*x23 - x17
+    jac[1204] = -U3*x28
+    jac[1205] = k5
+    jac[1206] = 1.0
+    jac[1208] = x30
+    jac[1219] = x32
+    jac[1220] = x26
+    jac[1229] = -x33
+    gv1_3 = U2 + coupler__slider_end__x*x23 - coupler__slider_end__y*x22 + x33
+    jac[1252] = -U3*x29
+    jac[1253] = k6
+    jac[1255] = 1.0
+    jac[1256] = x28
+    jac[1267] = x23
+    jac[1268] = x32
+    jac[1277] = U0*k5
+    FX0, FY0 = contact_jacobian(jac, 48, 47, gv0_0, gv0_1, gv0_2, gv0_3, 0, 1, 2, 3, 4, 21, 22, 23, 24, 30, 31, 32, 44, p[21], p[34], p[35], p[22], p[23], p[24])
+    FX1, FY1 = contact_jacobian(jac, 48, 47, gv1_0, gv1_1, gv1_2, gv1_3, 5, 6, 7, 8, 9, 25, 26, 27, 28, 35, 36, 37, 46, p[26], p[36], p[37], p[27], p[28], p[29])
+    m_0_0 = slider__mass
+    m_1_0 = 0.0
+    m_1_1 = coupler__mass
+    m_2_0 = 0.0
+    m_2_1 = 0.0
+    m_2_2 = coupler__mass
+    m_3_0 = 0.0
+    m_3_1 = 0.0
+    m_3_2 = 0.0
+    m_3_3 = coupler__inertia
+    f_0 = -FX1*k5 - FY1*k6 + k7
+    f_1 = FX0 - FX1
+    f_2 = FY0 - FY1 + k8
+    f_3 = -C1*FX0*coupler__crank_end__y + C1*FX1*coupler__slider_end__y + C1*FY0*coupler__crank_end__x - C1*FY1*coupler__slider_end__x - FX0*S1*coupler__crank_end__x + FX1*S1*coupler__slider_end__x - FY0*S1*coupler__crank_end__y + FY1*S1*coupler__slider_end__y
+    l_0_0 = math.sqrt(m_0_0)
+    il_0 = 1.0 / l_0_0
+    l_1_0 = (m_1_0) * il_0
+    l_2_0 = (m_2_0) * il_0
+    l_3_0 = (m_3_0) * il_0
+    l_1_1 = math.sqrt(m_1_1 - l_1_0 * l_1_0)
+    il_1 = 1.0 / l_1_1
+    l_2_1 = (m_2_1 - l_2_0 * l_1_0) * il_1
+    l_3_1 = (m_3_1 - l_3_0 * l_1_0) * il_1
+    l_2_2 = math.sqrt(m_2_2 - l_2_0 * l_2_0 - l_2_1 * l_2_1)
+    il_2 = 1.0 / l_2_2
+    l_3_2 = (m_3_2 - l_3_0 * l_2_0 - l_3_1 * l_2_1) * il_2
+    l_3_3 = math.sqrt(m_3_3 - l_3_0 * l_3_0 - l_3_1 * l_3_1 - l_3_2 * l_3_2)
+    il_3 = 1.0 / l_3_3
+    zz_0 = (f_0) * il_0
+    zz_1 = (f_1 - l_1_0 * zz_0) * il_1
+    zz_2 = (f_2 - l_2_0 * zz_0 - l_2_1 * zz_1) * il_2
+    zz_3 = (f_3 - l_3_0 * zz_0 - l_3_1 * zz_1 - l_3_2 * zz_2) * il_3
+    A3 = (zz_3) * il_3
+    A2 = (zz_2 - l_3_2 * A3) * il_2
+    A1 = (zz_1 - l_2_1 * A2 - l_3_1 * A3) * il_1
+    A0 = (zz_0 - l_1_0 * A1 - l_2_0 * A2 - l_3_0 * A3) * il_0
+    x34 = C1*FX0
+    x35 = C1*FY0
+    x36 = FX1*S1
+    x37 = FY0*S1
+    x38 = C1*FX1
+    x39 = C1*FY1
+    x40 = FY1*S1
+    jac[837] = A0 + k28
+    jac[845] = -FX1*k6 + FY1*k5 + k29
+    jac[858] = -k16
+    rfx_0_0 = 0.0
+    rfy_0_0 = 0.0
+    rfx_0_1 = k5
+    rfy_0_1 = k6
+    jac[879] = A1
+    rfx_1_0 = -1.0
+    rfy_1_0 = 0.0
+    rfx_1_1 = 1.0
+    rfy_1_1 = 0.0
+    jac[927] = A2 + gravity
+    jac[954] = coupler__mass
+    rfx_2_0 = 0.0
+    rfy_2_0 = -1.0
+    rfx_2_1 = 0.0
+    rfy_2_1 = 1.0
+    jac[964] = -FX0*S1*coupler__crank_end__y + coupler__crank_end__x*x34 + coupler__crank_end__x*x37 + coupler__crank_end__y*x35 - coupler__slider_end__x*x38 - coupler__slider_end__x*x40 + coupler__slider_end__y*x36 - coupler__slider_end__y*x39
+    jac[976] = A3
+    jac[977] = FX0*S1 - x35
+    jac[978] = x34 + x37
+    jac[979] = -x36 + x39
+    jac[980] = -x38 - x40
+    rfx_3_0 = C1*coupler__crank_end__y + S1*coupler__crank_end__x
+    rfy_3_0 = -C1*coupler__crank_end__x + S1*coupler__crank_end__y
+    rfx_3_1 = -C1*coupler__slider_end__y - S1*coupler__slider_end__x
+    rfy_3_1 = C1*coupler__slider_end__x - S1*coupler__slider_end__y
+    for col in range(47):
+        b_0 = -(jac[816 + col] + rfx_0_0 * jac[1104 + col] + rfy_0_0 * jac[1152 + col] + rfx_0_1 * jac[1296 + col] + rfy_0_1 * jac[1344 + col])
+        b_1 = -(jac[864 + col] + rfx_1_0 * jac[1104 + col] + rfy_1_0 * jac[1152 + col] + rfx_1_1 * jac[1296 + col] + rfy_1_1 * jac[1344 + col])
+        b_2 = -(jac[912 + col] + rfx_2_0 * jac[1104 + col] + rfy_2_0 * jac[1152 + col] + rfx_2_1 * jac[1296 + col] + rfy_2_1 * jac[1344 + col])
+        b_3 = -(jac[960 + col] + rfx_3_0 * jac[1104 + col] + rfy_3_0 * jac[1152 + col] + rfx_3_1 * jac[1296 + col] + rfy_3_1 * jac[1344 + col])
+        zz_0 = (b_0) * il_0
+        zz_1 = (b_1 - l_1_0 * zz_0) * il_1
+        zz_2 = (b_2 - l_2_0 * zz_0 - l_2_1 * zz_1) * il_2
+        zz_3 = (b_3 - l_3_0 * zz_0 - l_3_1 * zz_1 - l_3_2 * zz_2) * il_3
+        x_3 = (zz_3) * il_3
+        x_2 = (zz_2 - l_3_2 * x_3) * il_2
+        x_1 = (zz_1 - l_2_1 * x_2 - l_3_1 * x_3) * il_1
+        x_0 = (zz_0 - l_1_0 * x_1 - l_2_0 * x_2 - l_3_0 * x_3) * il_0
+        jac[816 + col] = x_0
+        jac[864 + col] = x_1
+        jac[912 + col] = x_2
+        jac[960 + col] = x_3
+    jac[863] = A0
+    jac[911] = A1
+    jac[959] = A2
+    jac[1007] = A3
+    jac[815] = C0*FX0*k0 + C0*FY0*k1 + C0*k19 - FX0*S0*k1 + FY0*S0*k0 + S0*k18
+    if full:
+        x41 = C0*k13
+        x42 = S0*k12
+        x43 = x41 + x42
+        x44 = C0*k34
+        x45 = S0*k34
+        x46 = C0*k12
+        x47 = S0*k13
+        x48 = x46 - x47
+        x49 = A0*k15
+        x50 = A0*k16
+        x51 = C0*FX0
+        x52 = C0*FY0
+        x53 = FX0*S0
+        x54 = FY0*S0
+        x55 = x51 + x54
+        x56 = C0*FY0*k0 + C0*k18 - S0*k19 - k0*x53 - k1*x51 - k1*x54
+        jac[527] = -FX0 + x43
+        jac[480] = C0*k31 + S0*k30
+        jac[489] = C0*k33 + S0*k32
+        jac[491] = x44
+        jac[492] = -x45
+        jac[520] = C0*k36 + S0*k35 + t*x46 - t*x47
+        jac[521] = x48
+        ofx_0_0 = -1.0
+        jac[575] = -FY0 + k14 - x48
+        jac[528] = -C0*k30 + S0*k31
+        jac[537] = -C0*k32 + S0*k33 - gravity
+        jac[539] = x45
+        jac[540] = x44
+        jac[568] = -C0*k35 + S0*k36 + t*x41 + t*x42
+        jac[569] = x43
+        jac[570] = -crank__mass
+        ofy_1_0 = -1.0
+        jac[623] = FX1 + x49
+        jac[597] = A0*k5
+        jac[605] = -x50
+        oa_2_0 = k15
+        ofx_2_1 = 1.0
+        jac[671] = FY1 + k17 + x50
+        jac[645] = A0*k6 - gravity
+        jac[653] = x49
+        jac[666] = -slider__mass
+        oa_3_0 = k16
+        ofy_3_1 = 1.0
+        jac[768] = C0*k38 + S0*k37 + k2*x51 + k2*x54 + k26*x53 + k3*x52
+        jac[777] = C0*k40 + S0*k39
+        jac[779] = C0*k14 - x52 + x53
+        jac[780] = -S0*k14 + x55
+        jac[781] = x52 - x53
+        jac[782] = -x55
+        jac[808] = t*x56
+        jac[809] = x56
+        jac[810] = C0*k42 + S0*k41
+        ofx_4_0 = C0*k0 - S0*k1
+        ofy_4_0 = C0*k1 + S0*k0
+        for col in range(47):
+            jac[480 + col] += ofx_0_0 * jac[1104 + col]
+            jac[528 + col] += ofy_1_0 * jac[1152 + col]
+            jac[576 + col] += oa_2_0 * jac[816 + col] + ofx_2_1 * jac[1296 + col]
+            jac[624 + col] += oa_3_0 * jac[816 + col] + ofy_3_1 * jac[1344 + col]
+            jac[768 + col] += ofx_4_0 * jac[1104 + col] + ofy_4_0 * jac[1152 + col]
+        for col in range(48):
+            jac[672 + col] = jac[480 + col] + jac[576 + col]
+        for col in range(48):
+            jac[720 + col] = jac[528 + col] + jac[624 + col]
+    return
+
+
+@nb.njit(**KERNEL)
+def rhs_sens(t, y, p, dydt):
+    """Derivative of the sensitivity state (generate/sens_runtime.py)."""
+    sens_rhs(_THIS.jacobian, _THIS.rhs, t, y, p, dydt, N_Q, N_P, N_Z, N_JROWS, ACC_COLUMN,
+             MOMENT_COLUMN, 31, _MEM_COL0, N_EVENTS)
+
+
+@nb.njit(**KERNEL)
+def on_event_sens(t, y, p, j):
+    """Switch joint j, with the sensitivity of its impact-velocity memory at an onset."""
+    sens_on_event(_THIS.jacobian, _THIS.on_event, t, y, p, j, N_Q, N_P, N_Z, N_JROWS,
+                  MEM_START, _PEN_ROW, _RATE_ROW, _JOINT_ROWS, ACC_COLUMN, _FLOOR0,
+                  _CONTACT_STRIDE, _MEM_COL0, N_EVENTS)
+
+
+@nb.njit(**KERNEL)
+def monitor_sens(t, y, p, dydt, out, g, gd):
+    """`rhs_sens`, then the plain monitor on the state part."""
+    return sens_monitor(_THIS.rhs_sens, _THIS.monitor, t, y, p, dydt, out, g, gd, N_Q, N_P,
+                        N_Z, N_JROWS)
+
+
+@nb.njit(cache=True, error_model="numpy", nogil=True)
+def integrate_sens(y0, p, edges, settings, coefficients):
+    """`integrator.integrate` bound to the sensitivity kernels (compiled once, cached)."""
+    return integrate(_THIS.rhs_sens, _THIS.event, _THIS.on_event_sens, _THIS.monitor_sens,
+                     y0, p, edges, settings, coefficients)
+
+
+@nb.njit(cache=True, error_model="numpy")
+def output_sensitivities(ts, ys, ms, p):
+    """Values (n, N_OUT) and derivatives (n, N_OUT, nb) of the outputs along the integrated
+    directions at recorded steps of a sensitivity run."""
+    return sens_outputs(_THIS.jacobian, ts, ys, ms, p, N_Q, N_P, N_Z, N_JROWS, N_OUT,
+                        MEM_START, _MEM_COL0, N_EVENTS)
+
+
+@nb.njit(cache=True, error_model="numpy")
+def jacobian_matrix(t, y, p, full):
+    """The Jacobian (N_JROWS, JAC_STRIDE) at (t, y) as a matrix."""
+    return jacobian_at(_THIS.jacobian, t, y, p, N_JROWS, N_Z, full)

@@ -21,6 +21,7 @@ import sympy as sp
 from sympy.printing.pycode import PythonCodePrinter
 
 from .derive import Derivation
+from .jacobians import jacobian_context
 
 __all__ = ["render", "GENERATOR_VERSION", "structure_digest"]
 
@@ -31,7 +32,9 @@ def _generator_version() -> str:
     """Digest of the generator's own sources (derivation, writer, template): any edit of
     them changes the cache key of every generated module."""
     h = hashlib.sha256()
-    for path in (Path(__file__).with_name("derive.py"), Path(__file__), _TEMPLATE):
+    for path in (Path(__file__).with_name("derive.py"), Path(__file__), _TEMPLATE,
+                 Path(__file__).with_name("jacobians.py"), _TEMPLATE.with_name(
+                     "jacobians.py.jinja")):
         h.update(path.read_bytes().replace(b"\r\n", b"\n") + b"\0")
     return h.hexdigest()[:16]
 
@@ -293,7 +296,6 @@ def render(d: Derivation, linkage_name: str, structure: dict) -> str:
                              state="q")
     closure_rate = w.function([([w.split(e) for e in d.closure_rate],
                                 [f"res[{i}]" for i in range(2 * J)])], state="q")
-    prepare = w.constants_body()       # after every split: all constants known
 
     out_columns = []
     for j in d.joints:
@@ -307,6 +309,9 @@ def render(d: Derivation, linkage_name: str, structure: dict) -> str:
         mon = out_columns.index("shaking_x")
     else:
         mon = out_columns.index(f"{d.monitor}.reaction_x")
+    jac_ctx = jacobian_context(w, d, out_columns)
+    jac_ctx["floor0"] = params.index(f"{d.joints[0]}.impact_velocity_floor")
+    prepare = w.constants_body()       # after every split: all constants known
     ctx = dict(
         name=linkage_name, digest=structure_digest(structure), version=GENERATOR_VERSION,
         structure=json.dumps(structure, sort_keys=True), parameters=params,
@@ -317,8 +322,9 @@ def render(d: Derivation, linkage_name: str, structure: dict) -> str:
         acc_column=out_columns.index(f"{d.coordinates[0]}.acc"),
         speed=params.index("drive.speed"), results=results, dynamics=dynamics,
         gap_fns=gap_fns, energy=energy, closure=closure, closure_jac=closure_jac,
-        closure_rate=closure_rate, prepare=prepare, contact_indices=contact,
+        closure_rate=closure_rate, prepare=prepare, contact_indices=contact, **jac_ctx,
     )
     env = jinja2.Environment(undefined=jinja2.StrictUndefined, keep_trailing_newline=True,
+                             loader=jinja2.FileSystemLoader(str(_TEMPLATE.parent)),
                              trim_blocks=True, lstrip_blocks=True)
     return env.from_string(_TEMPLATE.read_text()).render(**ctx)

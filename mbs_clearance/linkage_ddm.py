@@ -1,0 +1,324 @@
+"""Design sensitivities of any `Linkage` by direct differentiation (DDM) on its generated
+model, or by central finite differences.
+
+The sensitivity equations use the generated model's exact Jacobian (the module's
+`jacobian`, generate/jacobians.py): for each parameter b_k (a dotted name of
+`Linkage.parameter_names`) the state sensitivity s_k = d(q, qdot)/db_k obeys
+
+    d/dt s_k = [s_k's rates; dA/dy s_k + dA/dp D_k + sum_j dA/dv_j sigma_jk],
+
+where p are the generated model's parameters, D_k = dp/db_k the chain of the description's
+values into them (`chain`: radii into clearance and Eq. 9 stiffness, ...) and sigma_jk the
+sensitivity of joint j's impact-velocity memory v_j, set at each contact onset with the
+event-time term (generate/sens_runtime.py). The state sensitivities do not jump at the
+events: each contact force is zero at zero penetration in both modes. The initial
+sensitivities are exact: the derivative of the assembly (journals centred: the closure
+e(t0, q, p) = 0 and its rate) by the implicit function theorem with the generated Jacobian's
+rows of the eccentricities and their rates.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from .contact import stiffness_eq9_partials
+from .generate import load_model
+from .linkage import Linkage
+from .linkage_model import (
+    DEFAULT_MAX_STEPS,
+    EVENT_MARGIN,
+    REFINE_ITERS,
+    _tolerances,
+    initial_state,
+    pack_parameters,
+    trajectory_from_run,
+)
+
+__all__ = ["chain", "initial_sensitivities", "linkage_sensitivities", "fd_step",
+           "DDM_INTEGRATOR"]
+
+#: method of the compiled integrator for the sensitivity equations (as the paper case's)
+DDM_INTEGRATOR = "dop853"
+
+_STIFFNESS_FIELDS = ("bearing_radius", "journal_radius", "youngs_modulus", "poisson_ratio",
+                     "contact_stiffness")
+
+
+def chain(linkage: Linkage, model, names) -> list[dict[int, float]]:
+    """Per parameter name, the nonzero entries {z column: d p / d b} of the chain from the
+    description's value b into the generated model's parameters p (z column of p[i]:
+    1 + 2 N_Q + i); the impact-velocity floor also starts each joint's memory (see
+    `initial_sensitivities`)."""
+    pidx = {name: i for i, name in enumerate(model.PARAMETERS)}
+    off = 1 + 2 * model.N_Q
+    joints = {j.name: j for j in linkage.clearance_joints}
+    out = []
+    for name in names:
+        head, _, field = name.rpartition(".")
+        entries: dict[int, float] = {}
+        if name in pidx:
+            entries[off + pidx[name]] = 1.0
+        elif head in joints and field in _STIFFNESS_FIELDS:
+            cj = joints[head]
+            _, d_rj, d_rb, d_e, d_nu = stiffness_eq9_partials(
+                cj.journal_radius, cj.bearing_radius, cj.youngs_modulus, cj.poisson_ratio)
+            derived = cj.contact_stiffness is None
+            k_col = off + pidx[f"{head}.stiffness"]
+            c_col = off + pidx[f"{head}.clearance"]
+            if field == "contact_stiffness":
+                entries[k_col] = 1.0
+            elif field == "bearing_radius":
+                entries[c_col] = 1.0
+                if derived:
+                    entries[k_col] = d_rb
+            elif field == "journal_radius":
+                entries[c_col] = -1.0
+                if derived:
+                    entries[k_col] = d_rj
+            elif derived:
+                entries[k_col] = d_e if field == "youngs_modulus" else d_nu
+        else:
+            raise AssertionError(f"no chain for parameter {name!r}")
+        out.append({c: v for c, v in entries.items() if v != 0.0})
+    return out
+
+
+def _memory_sensitivities(model, names) -> np.ndarray:
+    """(nb, J): d(initial impact-velocity memory of joint j)/db_k (the memory starts at the
+    floor)."""
+    sig = np.zeros((len(names), model.N_EVENTS))
+    for k, name in enumerate(names):
+        for j, joint in enumerate(model.JOINTS):
+            if name == f"{joint}.impact_velocity_floor":
+                sig[k, j] = 1.0
+    return sig
+
+
+def initial_sensitivities(linkage: Linkage, model, p, y0, entries, t0: float = 0.0):
+    """(nb, 2 N_Q): exact derivatives of the centred start (`linkage_model.initial_state`)
+    along the chains `entries`: the closure e(t0, q, p) = 0 and its rate edot(t0, q, qdot, p)
+    = 0 differentiated (least squares where the closure is not square, as the assembly)."""
+    n = model.N_Q
+    jac = model.jacobian_matrix(t0, y0, p, False)
+    rows = []
+    for j in model.JOINTS:
+        rows += [model.OUT_COLUMNS.index(f"{j}.ecc_x"), model.OUT_COLUMNS.index(f"{j}.ecc_y")]
+    rate_rows = []
+    for j in model.JOINTS:
+        rate_rows += [model.JAC_EXTRA_ROWS[f"exd:{j}"], model.JAC_EXTRA_ROWS[f"eyd:{j}"]]
+    e_q = jac[rows, 1:1 + n]
+    ed_q = jac[rate_rows, 1:1 + n]
+    ed_u = jac[rate_rows, 1 + n:1 + 2 * n]
+    s0 = np.zeros((len(entries), 2 * n))
+    for k, ent in enumerate(entries):
+        e_b = sum((jac[rows, c] * v for c, v in ent.items()), np.zeros(len(rows)))
+        ed_b = sum((jac[rate_rows, c] * v for c, v in ent.items()), np.zeros(len(rows)))
+        dq = -np.linalg.lstsq(e_q, e_b, rcond=None)[0]
+        du = -np.linalg.lstsq(ed_u, ed_q @ dq + ed_b, rcond=None)[0]
+        s0[k, :n] = dq
+        s0[k, n:] = du
+    return s0
+
+
+def pack_sensitivity_parameters(model, p, entries, event_time_term: bool = True):
+    """The parameter vector of a sensitivity run (layout: generate/sens_runtime.py)."""
+    nb = len(entries)
+    m = max([1] + [len(e) for e in entries])
+    cols = np.ones((nb, m))          # padding: column 1 (the first coordinate), value 0
+    vals = np.zeros((nb, m))
+    for k, ent in enumerate(entries):
+        for e, (c, v) in enumerate(sorted(ent.items())):
+            cols[k, e] = c
+            vals[k, e] = v
+    work = model.N_JROWS * model.JAC_STRIDE + 2 * model.N_Q + 1
+    return np.concatenate([p, [nb, 1.0 if event_time_term else 0.0, m], cols.ravel(),
+                           vals.ravel(), np.zeros(work)])
+
+
+def _run(linkage, model, y0, p, edges, rtol, method, n_err, atol, record=True,
+         max_steps=DEFAULT_MAX_STEPS, kernel="integrate_sens"):
+    from .integrator import COUNTERS, METHODS, RESULTS, make_settings
+
+    event_tol = max(1e-12 * linkage.min_clearance,
+                    8 * np.finfo(float).eps * linkage.length_scale)
+    settings = make_settings(
+        rtol, atol, n_err, h_max=linkage.period / 8, max_steps=max_steps, record=record,
+        event_tol=event_tol, event_margin=EVENT_MARGIN * linkage.min_clearance,
+        n_samples=1, refine_iters=REFINE_ITERS, n_out=model.N_OUT if record else 0,
+        n_dense=2 * model.N_Q, n_events=model.N_EVENTS, mem_start=model.MEM_START,
+        n_mem=model.N_MEM)
+    ts, ys, ms, peaks, peak_t, counters, outs, status = getattr(model, kernel)(
+        y0, p, edges, settings, METHODS[method].arrays())
+    status = RESULTS(int(status))
+    if status != RESULTS.success:
+        raise RuntimeError(f"integration of linkage {linkage.name!r} failed at about t = "
+                           f"{ts[-1] if len(ts) else float('nan'):.6g} s: {status.message}")
+    stats = {k: int(v) for k, v in zip(COUNTERS, counters)}
+    stats.update(method=method, rtol=float(rtol))
+    return ts, ys, ms, peaks, outs, stats
+
+
+def _edges(linkage, revolutions, t_eval):
+    """Window edges of a run: the revolutions, or (t_eval given) 0 and the times t_eval:
+    the run lands on each and ends at the last."""
+    if t_eval is None:
+        return np.arange(revolutions + 1) * linkage.period
+    return np.unique(np.concatenate([[0.0], t_eval]))
+
+
+def _landed(ts, t_eval):
+    """Indices of the recorded steps at the times t_eval (the integrator lands on each
+    window edge; the last record at that time holds the memory the next step uses)."""
+    idx = np.searchsorted(ts, t_eval, side="right") - 1
+    if np.any(np.abs(ts[idx] - t_eval) > 1e-12 * max(1.0, float(np.max(np.abs(t_eval))))):
+        raise RuntimeError("the run did not land on every requested time")
+    return idx
+
+
+def linkage_sensitivities(linkage: Linkage, names: tuple[str, ...], revolutions: int,
+                          rtol: float | None, t_eval, event_time_term: bool, method: str):
+    """DDM of `linkage` (see the module docstring): (Sensitivities fields as a dict)."""
+    model = load_model(linkage)
+    rtol, atol_plain = _tolerances(linkage, model, rtol, None)
+    p0 = pack_parameters(linkage, model)
+    y_state = initial_state(linkage, model, p0)
+    entries = chain(linkage, model, names)
+    nb, n2, J = len(names), 2 * model.N_Q, model.N_EVENTS
+    s0 = initial_sensitivities(linkage, model, p0, y_state, entries)
+    sigma0 = _memory_sensitivities(model, names)
+    p = pack_sensitivity_parameters(model, p0, entries, event_time_term)
+    y0 = np.concatenate([y_state[:n2], s0.ravel(), [0.0], sigma0.ravel()])
+    ref = np.array([linkage.parameter_value(n) for n in names])
+    # each parameter's natural scale (as the finite differences' steps: a radius enters
+    # through the clearance): the sensitivities' absolute tolerances are the state's / it
+    scale = np.array([fd_step(linkage, n, 1.0) for n in names])
+    a_state = atol_plain[:n2]
+    atol = np.concatenate([a_state] + [a_state / s for s in scale] + [[1.0]]
+                          + [np.full(nb * J, np.inf)] + [atol_plain[model.N_STATE:]])
+    edges = _edges(linkage, revolutions, t_eval)
+    t0 = time.perf_counter()
+    ts, ys, ms, peaks, outs, stats = _run(linkage, model, y0, p, edges, rtol, method,
+                                          n2 * (1 + nb), atol)
+    growth = _growth(linkage, model, ts, ys, scale, revolutions)
+    if t_eval is not None:
+        keep = _landed(ts, t_eval)
+        ts, ys, ms, outs = ts[keep], ys[keep], ms[keep], outs[keep]
+    ys, ms = np.ascontiguousarray(ys), np.ascontiguousarray(ms)
+    vals, ders = model.output_sensitivities(np.ascontiguousarray(ts), ys, ms, p)
+    stats.update(wall_time=time.perf_counter() - t0, event_time_term=event_time_term,
+                 directions=nb)
+    plain = np.column_stack([ys[:, :n2], ys[:, n2 * (1 + nb)]])
+    traj = trajectory_from_run(linkage, model, ts, plain, ms, p0, stats,
+                               None if t_eval is not None else peaks, vals)
+    return _fields(model, ts, names, ref, ders, traj, growth, stats, ys)
+
+
+def _growth(linkage, model, ts, ys, scale, revolutions):
+    """Per revolution and parameter, the maximum of the normalized state-sensitivity norm
+    (b_k |s_k| with angles in rad, lengths in clearances, rates by the drive speed)."""
+    n = model.N_Q
+    w = linkage.drive.speed
+    c = linkage.min_clearance
+    unit = np.array([1.0 if name.endswith(".angle") else c for name in model.COORDINATES])
+    unit = np.concatenate([unit, unit * w])
+    revolutions = min(revolutions, int(np.ceil(ts[-1] / linkage.period - 1e-9)))
+    edges = np.minimum(np.arange(revolutions + 1) * linkage.period, ts[-1])
+    lo = np.searchsorted(ts, edges[:-1], side="left")
+    hi = np.searchsorted(ts, edges[1:], side="right")
+    out = np.zeros((revolutions, len(scale)))
+    for k, s in enumerate(scale):
+        sk = ys[:, 2 * n * (1 + k):2 * n * (2 + k)] * s / unit
+        norm = np.sqrt(np.sum(sk * sk, axis=1))
+        for r in range(revolutions):
+            if hi[r] > lo[r]:
+                out[r, k] = norm[lo[r]:hi[r]].max()
+    return out
+
+
+def _fields(model, ts, names, ref, ders, traj, growth, stats, ys=None):
+    col = {c: i for i, c in enumerate(model.OUT_COLUMNS)}
+    mon = model.MONITOR_COLUMN
+    force = ders[:, mon:mon + 2, :]
+    fx, fy = traj.base_force[:, 0], traj.base_force[:, 1]
+    mag = np.maximum(np.hypot(fx, fy), 1e-300)
+    d_mag = (fx[:, None] * force[:, 0] + fy[:, None] * force[:, 1]) / mag[:, None]
+    contact = np.stack([ders[:, col[f"{j}.contact_force"], :] for j in model.JOINTS], axis=1)
+    if model.N_EVENTS == 1:
+        contact = contact[:, 0, :]
+    outputs = {c: ders[:, i, :].copy() for c, i in col.items()}
+    if ys is not None:
+        n2 = 2 * model.N_Q
+        for i, c in enumerate(model.COORDINATES):
+            outputs[c] = np.column_stack([ys[:, n2 * (1 + k) + i] for k in range(len(names))])
+    return dict(t=ts, parameters=tuple(names), reference=ref, base_force=force.copy(),
+                base_force_magnitude=d_mag, crank_moment=ders[:, col["drive_moment"], :].copy(),
+                contact_force=contact, trajectory=traj, method="ddm", backend="reduced",
+                growth=growth, stats=stats, outputs=outputs)
+
+
+def fd_step(linkage: Linkage, name: str, relative: float) -> float:
+    """Central-difference step of parameter `name`: `relative` times its value; the radii
+    relative to the clearance, zero-valued coordinates relative to the length scale, a zero
+    angle relative to 1 rad, zero gravity relative to 9.81 m/s^2."""
+    field = name.rpartition(".")[2]
+    if field in ("bearing_radius", "journal_radius"):
+        cj = next(j for j in linkage.clearance_joints if name.startswith(j.name + "."))
+        return relative * cj.clearance
+    value = abs(linkage.parameter_value(name))
+    if value != 0.0:
+        return relative * value
+    if field in ("x", "y"):
+        return relative * linkage.length_scale
+    return relative * (9.81 if name == "gravity" else 1.0)
+
+
+def _plain_at(linkage, revolutions, t_eval, rtol, method):
+    """Outputs (len(t_eval), N_OUT) and states of a plain run landing on t_eval."""
+    model = load_model(linkage)
+    rtol, atol = _tolerances(linkage, model, rtol, None)
+    p = pack_parameters(linkage, model)
+    y0 = initial_state(linkage, model, p)
+    edges = _edges(linkage, revolutions, t_eval)
+    ts, ys, ms, _, outs, stats = _run(linkage, model, y0, p, edges, rtol, method,
+                                      2 * model.N_Q, atol, kernel="integrate_model")
+    keep = _landed(ts, t_eval)
+    return ts[keep], ys[keep], ms[keep], outs[keep], p, stats
+
+
+def linkage_fd(linkage: Linkage, names: tuple[str, ...], revolutions: int, rtol, t_eval,
+               relative: float, method: str):
+    """Central finite differences of the outputs (and coordinates) at the times t_eval
+    (default: 720 per revolution), each run landing on them."""
+    model = load_model(linkage)
+    if t_eval is None:
+        t_eval = np.linspace(0.0, revolutions * linkage.period, 720 * revolutions + 1)
+    rtol = 1e-11 if rtol is None else rtol
+    t0 = time.perf_counter()
+    ts, ys, ms, outs, p, stats = _plain_at(linkage, revolutions, t_eval, rtol, method)
+    steps = [fd_step(linkage, n, relative) for n in names]
+    ders = np.empty((len(ts), model.N_OUT, len(names)))
+    coords = np.empty((len(ts), model.N_Q, len(names)))
+    for k, (name, h) in enumerate(zip(names, steps)):
+        b0 = linkage.parameter_value(name)
+        runs = []
+        for sign in (1.0, -1.0):
+            try:
+                lk = linkage.with_parameter(name, b0 + sign * h)
+            except ValueError as exc:
+                raise ValueError(f"the finite-difference step of {name} ({h:.3g}) leaves its "
+                                 f"valid range: {exc}; pass a smaller fd_relative_step"
+                                 ) from exc
+            runs.append(_plain_at(lk, revolutions, t_eval, rtol, method))
+        ders[:, :, k] = (runs[0][3][:, :model.N_OUT] - runs[1][3][:, :model.N_OUT]) / (2 * h)
+        coords[:, :, k] = (runs[0][1][:, :model.N_Q] - runs[1][1][:, :model.N_Q]) / (2 * h)
+    stats.update(fd_steps=steps, runs=2 * len(names) + 1,
+                 wall_time=time.perf_counter() - t0)
+    traj = trajectory_from_run(linkage, model, ts, ys, ms, p, stats, None, outs)
+    ref = np.array([linkage.parameter_value(n) for n in names])
+    fields = _fields(model, ts, names, ref, ders, traj, None, stats)
+    for i, c in enumerate(model.COORDINATES):
+        fields["outputs"][c] = coords[:, i, :]
+    fields["method"] = "fd"
+    return fields

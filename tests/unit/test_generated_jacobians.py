@@ -1,0 +1,116 @@
+"""The generated Jacobians (generate/jacobians.py) against central finite differences of the
+generated plain kernels (`outputs`, `prepare`), on every named case, in free flight and in
+contact, at states with the journals off-centre."""
+
+import numpy as np
+import pytest
+
+from mbs_clearance import cases
+from mbs_clearance.generate import load_model
+from mbs_clearance.linkage_model import initial_state, pack_parameters
+
+CASES = ("paper_slider_crank", "slider_crank_two_clearances", "four_bar")
+
+
+def _state(linkage, model, p, t, penetration, rng):
+    """A state at time t with every journal off-centre by (1 + penetration) clearances in a
+    random direction (closure solved by Newton), rates from the velocity constraints plus a
+    small random part."""
+    y = initial_state(linkage, model, p, t0=t)
+    n = model.N_Q
+    q = y[:n].copy()
+    target = []
+    for j in linkage.clearance_joints:
+        a = rng.uniform(0, 2 * np.pi)
+        target += [(1 + penetration) * j.clearance * np.cos(a),
+                   (1 + penetration) * j.clearance * np.sin(a)]
+    target = np.array(target)
+    for _ in range(30):
+        res = model.closure(t, q, p) - target
+        q -= np.linalg.lstsq(model.closure_jacobian(t, q, p), res, rcond=None)[0]
+    assert np.max(np.abs(model.closure(t, q, p) - target)) < 1e-12 * linkage.length_scale
+    qd = y[n:2 * n] * (1 + 1e-3 * rng.standard_normal(n))
+    return np.concatenate([q, qd, [0.0]])
+
+
+def _outputs(model, t, y, p):
+    ms = p[model.MEM_START:model.MEM_START + model.N_MEM][None, :].copy()
+    return model.outputs(np.array([t]), y[None, :].copy(), ms, p)[0]
+
+
+def _fd_column(model, t, y, p, col, h):
+    """Central differences with Richardson extrapolation (error O(h^4)) of the outputs along
+    z column col."""
+    n2 = 2 * model.N_Q
+
+    def at(step):
+        tt, yy, pp = t, y.copy(), p.copy()
+        if col == 0:
+            tt = t + step
+        elif col <= n2:
+            yy[col - 1] += step
+        else:
+            pp[col - 1 - n2] += step
+            model.prepare(pp)
+        return _outputs(model, tt, yy, pp)
+
+    d1 = (at(h) - at(-h)) / (2 * h)
+    d2 = (at(h / 2) - at(-h / 2)) / h
+    return (4 * d2 - d1) / 3
+
+
+@pytest.mark.parametrize("case", CASES)
+@pytest.mark.parametrize("mode", ["free", "contact"])
+def test_jacobian_matches_finite_differences(case, mode):
+    """Every output column's derivative along every column of z (time, coordinates, rates,
+    every parameter, the impact-velocity memory) equals central finite differences of the
+    plain generated `outputs`; the values equal `outputs` to round-off."""
+    linkage = getattr(cases, case)()
+    model = load_model(linkage)
+    p = pack_parameters(linkage, model)
+    rng = np.random.default_rng(7)
+    t = 0.37 * linkage.period
+    pen = 0.02 if mode == "contact" else -0.5
+    y = _state(linkage, model, p, t, pen, rng)
+    for j in range(model.N_EVENTS):
+        p[model.MEM_START + 2 * j] = 1.0 if mode == "contact" else 0.0
+        p[model.MEM_START + 2 * j + 1] = 0.05
+    plain = _outputs(model, t, y, p)
+    if mode == "contact":
+        forces = plain[[model.OUT_COLUMNS.index(f"{j}.contact_force") for j in model.JOINTS]]
+        assert np.all(forces > 0)
+    jac = model.jacobian_matrix(t, y, p, True)
+    n_out = model.N_OUT
+    # (a penetration is a difference of positions: its round-off relative to it is about
+    # 1e-16 length_scale / penetration, 1e-10 here)
+    np.testing.assert_allclose(jac[:n_out, -1], plain, rtol=1e-9,
+                               atol=1e-12 * np.max(np.abs(plain)))
+    z = np.concatenate([[t], y[:2 * model.N_Q], p[:model.CONST_START]])
+    clearance = min(j.clearance for j in linkage.clearance_joints)
+    pen_rows = [model.OUT_COLUMNS.index(f"{j}.penetration") for j in model.JOINTS]
+    gap = min(np.min(np.abs(plain[pen_rows])), clearance)
+    forces = [r for r, c in enumerate(model.OUT_COLUMNS)
+              if c.endswith(("contact_force", "_x", "_y")) and ".ecc_" not in c]
+    for col, name in enumerate(model.Z_NAMES):
+        if name.endswith((".mode", ".contact_model")):
+            assert np.all(jac[:n_out, col] == 0.0), name   # discrete: no derivative
+            continue
+        # a step that moves every penetration by at most 1 % of the smallest one (a force's
+        # Taylor series converges within the penetration) and the value by 1e-6
+        slope = np.max(np.abs(jac[pen_rows, col]))
+        h = 1e-6 * max(abs(z[col]), 1e-3)
+        if slope > 0:
+            h = min(h, 1e-2 * gap / slope)
+        fd = _fd_column(model, t, y, p, col, h)
+        # the finite differences' own error (truncation O(h^4), round-off ~ 1 / h, large
+        # where a penetration is the small difference of positions): their spread between
+        # the steps h and h / 3
+        spread = np.abs(fd - _fd_column(model, t, y, p, col, h / 3))
+        err = np.abs(jac[:n_out, col] - fd)
+        # (and the round-off of the analytic sums: 1e-13 of the row's largest entry, of all
+        # force rows' for a force: a guide's reaction along it is a cancelling sum)
+        floor = 1e-13 * np.abs(jac[:n_out, :-1]).max(axis=1)
+        floor[forces] = floor[forces].max()
+        bad = err > 1e-6 * np.abs(fd) + 10 * spread + floor
+        assert not bad.any(), (name, [model.OUT_COLUMNS[r] for r in np.flatnonzero(bad)],
+                               jac[:n_out, col][bad], fd[bad])
