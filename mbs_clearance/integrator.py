@@ -566,8 +566,8 @@ def _golden_max(rhs, monitor, t0, y0, p, h_max, A, B, C, K, y_new, f_new, ytmp, 
     return fd, t0 + d
 
 
-@nb.njit(**KERNEL)
-def _crest_store(row, cr_y, cr_p, cr_sc, y_prev, p_prev, t_prev, h_prev, y, p, t, m):
+@nb.njit(**KERNEL, inline="always")
+def _crest_put(row, cr_y, cr_p, cr_sc, y_prev, p_prev, t_prev, h_prev, y, p, t, m):
     """Store a (pending) crest in `row`: the step before it (state y_prev at t_prev, size
     h_prev, memory p_prev: cr_y[row, 0], cr_p[row, 0]; h_prev = 0: none) and the sample
     itself (y, memory p: cr_y[row, 1], cr_p[row, 1]; t, m)."""
@@ -585,6 +585,13 @@ def _crest_store(row, cr_y, cr_p, cr_sc, y_prev, p_prev, t_prev, h_prev, y, p, t
     cr_sc[row, 2] = t
     cr_sc[row, 3] = 0.0
     cr_sc[row, 4] = m
+
+
+@nb.njit(**KERNEL)
+def _crest_store(row, cr_y, cr_p, cr_sc, y_prev, p_prev, t_prev, h_prev, y, p, t, m):
+    """`_crest_put` as a call (from `integrate`, where an inlined body would
+    reference-count its arrays)."""
+    _crest_put(row, cr_y, cr_p, cr_sc, y_prev, p_prev, t_prev, h_prev, y, p, t, m)
 
 
 @nb.njit(**KERNEL)
@@ -741,7 +748,7 @@ def _clear_of_surface(event, t, y, y_new, f0, f1, h, p, g_start, gd_start, g_end
     return True
 
 
-@nb.njit(**KERNEL)
+@nb.njit(**KERNEL, inline="always")
 def _search_event(event, j, t, y, h, K, P, p, g_start, gd_start, g_end, gd_end, n_samples,
                   event_tol, event_margin, ytmp, wts, fine, sample_polys):
     """First sign change of joint j's g (from <= 0 to > 0) inside a step of size h.
@@ -935,7 +942,7 @@ def _track_crests(m, m_last, pend, n_cr, thresh, crest_rows, cr_y, cr_p, cr_sc, 
             n_cr, thresh = _crest_confirm(crest_rows, n_cr, cr_sc, h_step)
         pend = False
     if m > m_last and m > thresh:
-        _crest_store(crest_rows[n_cr], cr_y, cr_p, cr_sc, y_prev, p_step, t_prev, h_step, y,
+        _crest_put(crest_rows[n_cr], cr_y, cr_p, cr_sc, y_prev, p_step, t_prev, h_step, y,
                      p, t, m)
         pend = True
     return n_cr, thresh, pend
@@ -1249,7 +1256,9 @@ def integrate(rhs, event, on_event, monitor, y0, p, edges, settings, coefficient
             if m > peaks[win]:
                 peaks[win] = m
                 peak_t[win] = t
-            if ev_step:
+            if not (pend or (m > m_last and m > thresh)):
+                pass    # a falling sample, no crest pending: nothing to confirm or store
+            elif ev_step:
                 n_cr, thresh, pend = _track_crests(m, m_last, pend, n_cr, thresh, crest_rows,
                                                    cr_y, cr_p, cr_sc, ftmp, p_prev, t_old,
                                                    h_step, y, p, t)

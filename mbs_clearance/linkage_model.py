@@ -12,10 +12,17 @@ from __future__ import annotations
 import numpy as np
 
 from .contact import CONTACT_MODELS
-from .generate import load_model
 from .linkage import GROUND, Linkage
 
 __all__ = ["parameter_values", "pack_parameters", "initial_state"]
+
+
+def load_model(linkage: Linkage):
+    """`generate.load_model` (imported on first use: the generator imports sympy, which a
+    run of a checked-in model does not need)."""
+    from .generate import load_model as load
+
+    return load(linkage)
 
 
 def parameter_values(linkage: Linkage) -> dict[str, float]:

@@ -135,9 +135,10 @@ class PeakGradient:
 
 @nb.njit(cache=True, error_model="numpy")
 def _refine_steps(t0s, y0s, mems, p, hs, coefficients, iters):
-    """The maximum of |F12| over the step map of each step k of the plain model (start
-    t0s[k], state y0s[k] (5,), memory mems[k] (mode, impact velocity), size hs[k]), by
-    golden section as the integrator's peak refinement; returns values and times."""
+    """The maximum of |F12| over the step map of each step k of the plain model (the
+    generated model's kernels, its parameters p = reduced.model_parameters; start t0s[k],
+    state y0s[k] (5,), memory mems[k] (mode, impact velocity), size hs[k]), by golden
+    section as the integrator's peak refinement; returns values and times."""
     A, B, C = coefficients[0], coefficients[1], coefficients[2]
     n = y0s.shape[1]
     K, y_new, f_new, ytmp, f0, g, gd = step_workspace(coefficients, n)
@@ -149,25 +150,26 @@ def _refine_steps(t0s, y0s, mems, p, hs, coefficients, iters):
     for k in range(t0s.shape[0]):
         for j in range(n):
             y0[j] = y0s[k, j]
-        q[reduced.P_MODE] = mems[k, 0]
-        q[reduced.P_DMIN] = mems[k, 1]
-        vals[k], times[k] = _golden_max(reduced.rhs, reduced.monitor_out, t0s[k], y0, q, hs[k],
-                                        A, B, C, K, y_new, f_new, ytmp, f0, iters, out, g,
-                                        gd)
+        q[reduced.MEM_START] = mems[k, 0]
+        q[reduced.MEM_START + 1] = mems[k, 1]
+        vals[k], times[k] = _golden_max(reduced.MODEL.rhs, reduced.MODEL.monitor, t0s[k], y0, q,
+                                        hs[k], A, B, C, K, y_new, f_new, ytmp, f0, iters, out,
+                                        g, gd)
     return vals, times
 
 
 @nb.njit(cache=True, error_model="numpy")
 def _step_value(t0, y0, mem, p, h, coefficients):
-    """|F12| of the plain model's step map at t0 + h (state y0 (5,), memory mem)."""
+    """|F12| of the plain model's step map at t0 + h (state y0 (5,), memory mem; the
+    generated model's kernels and parameters p)."""
     A, B, C = coefficients[0], coefficients[1], coefficients[2]
     K, y_new, f_new, ytmp, f0, g, gd = step_workspace(coefficients, y0.shape[0])
     q = p.copy()
-    q[reduced.P_MODE] = mem[0]
-    q[reduced.P_DMIN] = mem[1]
-    reduced.rhs(t0, y0, q, f0)
-    return _step_monitor(reduced.rhs, reduced.monitor_out, t0, y0, f0, h, A, B, C, K, q,
-                         y_new, f_new, ytmp, np.zeros(0), g, gd)
+    q[reduced.MEM_START] = mem[0]
+    q[reduced.MEM_START + 1] = mem[1]
+    reduced.MODEL.rhs(t0, y0, q, f0)
+    return _step_monitor(reduced.MODEL.rhs, reduced.MODEL.monitor, t0, y0, f0, h, A, B, C, K,
+                         q, y_new, f_new, ytmp, np.zeros(0), g, gd)
 
 
 # ------------------------------------------------------------------ DDM at the peak
@@ -185,7 +187,7 @@ class _Run:
         self.counters = reduced.counters_dict(counters)
         self.n_mem = system.n_mem
         self.n_out = system.n_out
-        self.plain_p = reduced.pack_parameters(mech)
+        self.plain_p = reduced.model_parameters(mech)
         self.stages = self.coefficients[1].shape[0]
         # function evaluations after the run: plain (rival refinement), augmented (steps
         # to the peak and the rival)

@@ -1,17 +1,26 @@
-"""The paper's reduced Lagrange model (Eqs. 1-8) as compiled kernels, and its driver.
+"""The paper's slider-crank (`SliderCrank`) on the reduced model: its runs and `Trajectory`.
 
-Generalized coordinates theta3 (coupler angle) and x4 (slider position); the crank angle is
-prescribed, theta2 = omega2 t + theta20. State y = [theta3, x4, theta3dot, x4dot, W] where W is
-the work done by the crank drive (a quadrature, kept out of error control).
+A `SliderCrank` runs on the model generated from its description (`cases.from_slider_crank`,
+the checked-in module `MODEL` = mbs_clearance._generated.paper_slider_crank): one place of
+the physics for every linkage. Generalized coordinates theta3 (coupler angle) and x4
+(slider position); the crank angle is prescribed, theta2 = omega2 t + theta20. State y =
+[theta3, x4, theta3dot, x4dot, W] where W is the work done by the crank drive (a quadrature,
+kept out of error control). The clearance joint's memory (contact mode, impact velocity
+deltadot_minus, set exactly at the located onset) is p[MEM_START:MEM_START + 2] of the
+model's parameter vector (`model_parameters`).
 
-Memory variables at the end of the parameter array: the contact mode (0 free flight,
-1 contact) and the impact velocity deltadot_minus, set exactly at the located onset.
+This module keeps the orchestration of a SliderCrank's runs: tolerances from its scales,
+revolution windows, the pilot and memory estimate, accuracy flags and the Trajectory.
 
-See docs/derivations.md for the equations, including the base force F12.
+The hand-written kernels below (`dynamics`, `rhs`, `event`, ..., the P_* layout of
+`pack_parameters`; Eqs. 1-8 and the base force F12 of docs/derivations.md) serve only the
+sensitivity equations of ddm.py (and the scipy reference) until those run on the generated
+model's Jacobians.
 """
 
 from __future__ import annotations
 
+import functools
 import math
 import sys
 import warnings
@@ -30,6 +39,7 @@ from ._checks import (
     check_times,
     format_bytes,
 )
+from ._generated import paper_slider_crank as MODEL
 from ._trig import sincos
 from ._warnings import AccuracyWarning
 from .contact import CONTACT_MODELS, contact_force, hysteresis_factor
@@ -39,16 +49,22 @@ from .integrator import (
     EVENT_SIG,
     KERNEL,
     METHODS,
-    MONITOR_SIG,
     RESULTS,
     RHS_SIG,
     SCALAR_SIG,
-    integrate,
     make_settings,
 )
 from .mechanism import SliderCrank
 
-# ---- layout of the parameter vector p (indices are part of the kernels' contract)
+# ---- the generated model's layout (every SliderCrank maps to its structure)
+#: the clearance joint's memory (mode, impact velocity) in the generated model's p
+MEM_START = MODEL.MEM_START
+#: columns of the outputs that a plain run records (the generated model's)
+MODEL_COLUMNS = MODEL.OUT_COLUMNS
+#: index of the clearance in the generated model's p
+P_CLEARANCE = MODEL.PARAMETERS.index(f"{MODEL.JOINTS[0]}.clearance")
+
+# ---- layout of the hand-written kernels' parameter vector (ddm.py's sensitivity system)
 P_L2, P_L3, P_M2, P_M3, P_M4, P_J2, P_J3, P_W, P_TH0, P_C, P_K, P_E, P_G, P_MODEL, \
     P_VFLOOR, P_MODE, P_DMIN = range(17)
 _THIS = sys.modules[__name__]
@@ -59,13 +75,31 @@ N_ERR = 4          # W is a quadrature, not under error control
 N_EVENT = 4        # the event function reads theta3, x4 and their rates only (rhs needs
                    # no more: the integrator's continuous extension is formed for these)
 
-#: columns of `outputs`
+#: columns of the hand-written `outputs` (and of a sensitivity run's first outputs)
 OUT_COLUMNS = ("theta3dd", "x4dd", "contact_force", "penetration", "penetration_rate",
                "ecc_x", "ecc_y", "crank_moment", "base_force_x", "base_force_y")
 
 
+@functools.lru_cache(maxsize=256)
+def _model_parameters(mech: SliderCrank) -> np.ndarray:
+    from .cases import from_slider_crank
+    from .linkage_model import pack_parameters as pack
+
+    p = pack(from_slider_crank(mech), MODEL)
+    p.flags.writeable = False
+    return p
+
+
+def model_parameters(mech: SliderCrank) -> np.ndarray:
+    """The generated model's parameter vector p (MODEL.N_P,) for `mech`: its description's
+    values (`cases.from_slider_crank`) and constants, the memory in free flight (a new
+    array; the values are cached per mechanism)."""
+    return _model_parameters(mech).copy()
+
+
 def pack_parameters(mech: SliderCrank) -> np.ndarray:
-    """Parameter vector p of the kernels for `mech` (memory initialised to free flight)."""
+    """Parameter vector p of the hand-written kernels (P_* layout, ddm.py's sensitivity
+    system) for `mech` (memory initialised to free flight)."""
     p = np.zeros(N_PARAMS)
     p[P_L2] = mech.crank_length
     p[P_L3] = mech.coupler_length
@@ -258,19 +292,6 @@ def monitor(t, y, p):
     return math.sqrt(F12x * F12x + F12y * F12y)
 
 
-@nb.njit(MONITOR_SIG, **KERNEL)
-def monitor_out(t, y, p, dydt, out, g, gd):
-    """The integrator's last stage of a step: the state derivative (as `rhs`), the outputs of
-    `dynamics` into out (len(OUT_COLUMNS) entries, or none), the switching function into g,
-    gd and |F12|, from one evaluation of the model."""
-    res = dynamics(t, y, p)
-    _derivative(y, p, res, dydt)
-    if out.shape[0] >= 10:
-        for k in range(10):
-            out[k] = res[k]
-    return peak_and_switching(p, res, g, gd)
-
-
 @nb.njit(cache=True, error_model="numpy")
 def outputs(ts, ys, ms, p):
     """Evaluate `dynamics` at recorded steps; returns (m, len(OUT_COLUMNS))."""
@@ -283,37 +304,6 @@ def outputs(ts, ys, ms, p):
         for k in range(10):
             out[i, k] = res[k]
     return out
-
-
-@nb.njit(**KERNEL)
-def mechanical_energy(t, y, p):
-    """Kinetic + gravitational + contact-spring energy of the mechanism in J.
-
-    The contact spring energy K delta^2.5 / 2.5 is counted only in contact mode (where the
-    force acts). With e = 1 its change equals the crank drive's work W.
-    """
-    L2 = p[P_L2]
-    L3 = p[P_L3]
-    m2 = p[P_M2]
-    m3 = p[P_M3]
-    m4 = p[P_M4]
-    w = p[P_W]
-    g = p[P_G]
-    th2 = w * t + p[P_TH0]
-    th3 = y[0]
-    th3d = y[2]
-    vg3x = -L2 * w * math.sin(th2) - 0.5 * L3 * th3d * math.sin(th3)
-    vg3y = L2 * w * math.cos(th2) + 0.5 * L3 * th3d * math.cos(th3)
-    kin = (0.5 * (p[P_J2] + 0.25 * m2 * L2 * L2) * w * w
-           + 0.5 * m3 * (vg3x * vg3x + vg3y * vg3y) + 0.5 * p[P_J3] * th3d * th3d
-           + 0.5 * m4 * y[3] * y[3])
-    pot = g * (0.5 * m2 * L2 * math.sin(th2) + m3 * (L2 * math.sin(th2)
-                                                     + 0.5 * L3 * math.sin(th3)))
-    ex, ey, r, delta, deltadot, nx, ny = geometry(t, y, p)
-    spring = 0.0
-    if p[P_MODE] > 0.5 and delta > 0.0:
-        spring = p[P_K] * delta**2.5 / 2.5
-    return kin + pot + spring
 
 
 # ---------------------------------------------------------------------------- driver
@@ -407,7 +397,7 @@ SYSTEM_STEP_FACTOR = 2.5
 def _record_row(system) -> int:
     """Floats recorded per step: time, state, memory and outputs."""
     if system is None:
-        return 1 + N_STATE + N_MEM + len(OUT_COLUMNS)
+        return 1 + N_STATE + N_MEM + MODEL.N_OUT
     return 1 + len(system.y0) + max(system.n_mem, 1) + system.n_out
 
 
@@ -483,15 +473,22 @@ class System(NamedTuple):
     atol: np.ndarray
     #: outputs its monitor writes at each step, recorded (0: none)
     n_out: int = 0
+    #: names of those outputs (None: the hand-written OUT_COLUMNS, a sensitivity run's)
+    columns: tuple | None = None
 
 
-@nb.njit(cache=True, error_model="numpy", nogil=True)
-def integrate_plain(y0, p, edges, settings, coefficients):
-    """`integrate` bound to the reduced model's kernels (compiled once, cached)."""
-    # the kernels are looked up as module attributes: numba then binds them as constants;
-    # passed as plain globals they would be runtime values and the function not cacheable
-    return integrate(_THIS.rhs, _THIS.event, _THIS.on_event, _THIS.monitor_out, y0, p, edges,
-                     settings, coefficients)
+#: `integrate` bound to the generated model's kernels (compiled once, cached): the plain run
+integrate_plain = MODEL.integrate_model
+
+
+def plain_system(mech: SliderCrank, atol: np.ndarray, initial_offset: float = 0.0
+                 ) -> System:
+    """The plain model of `mech` as a `System`: the generated model's kernels, the centred
+    start (`initial_state`), its parameters (`model_parameters`) and `atol` (N_STATE entries,
+    plus optionally the switching function's and its rate's)."""
+    return System(_THIS.integrate_plain, initial_state(mech, initial_offset),
+                  model_parameters(mech), MEM_START, N_MEM, N_ERR, atol, MODEL.N_OUT,
+                  MODEL.OUT_COLUMNS)
 
 
 def run(mech: SliderCrank, revolutions: int = 4, *, rtol: float | None = None,
@@ -509,7 +506,8 @@ def run(mech: SliderCrank, revolutions: int = 4, *, rtol: float | None = None,
     between steps. With `t_eval` the integrator also lands exactly on those times and only
     they are returned (peaks are then maxima over the returned samples, not refined;
     ``select=False`` returns all steps, which include the times `t_eval`).
-    `system` (a `System`) replaces the plain model (used by the sensitivity equations).
+    `system` (a `System`) replaces the plain model (`plain_system`; another system: the
+    sensitivity equations), whose parameters `p` are returned.
     Every option is checked first (ValueError naming it and its range); then the run's
     memory and steps are estimated (`estimate_run`) and a run above ``max_memory`` bytes
     (default `_checks.default_max_memory`) or ``max_steps`` is refused with
@@ -569,10 +567,9 @@ def run(mech: SliderCrank, revolutions: int = 4, *, rtol: float | None = None,
     # the record never outgrows max_memory: a run that would stops there (and says so)
     step_limit = max_steps if est["step_cap"] is None else min(max_steps, est["step_cap"])
     if system is None:
-        system = System(integrate_plain, initial_state(mech, initial_offset),
-                        pack_parameters(mech), P_MODE, N_MEM, N_ERR,
-                        np.append(atol_arr, event_atol(mech, rtol)), len(OUT_COLUMNS))
-    kernel, y0, p, mem_start, n_mem, n_err, atol_arr, n_out = system
+        system = plain_system(mech, np.append(atol_arr, event_atol(mech, rtol)),
+                              initial_offset)
+    kernel, y0, p, mem_start, n_mem, n_err, atol_arr, n_out, columns = system
     if not record:
         n_out = 0
     settings = make_settings(rtol, atol_arr, n_err, h0=h0, h_max=h_max, max_steps=step_limit,
@@ -595,7 +592,9 @@ def run(mech: SliderCrank, revolutions: int = 4, *, rtol: float | None = None,
     if t_eval is not None and select:
         keep = landed_indices(ts, t_eval)
         ts, ys, ms, outs = ts[keep], ys[keep], ms[keep], outs[keep]
-        if outs.shape[1] >= len(OUT_COLUMNS):   # |F12| recorded by the integrator
+        if columns is not None:            # the generated model's outputs (recorded)
+            mags = np.hypot(outs[:, MODEL.MONITOR_COLUMN], outs[:, MODEL.MONITOR_COLUMN + 1])
+        elif outs.shape[1] >= len(OUT_COLUMNS):   # |F12| recorded by the integrator
             mags = np.hypot(outs[:, 8], outs[:, 9])
         else:
             mags = np.array([monitor(ts[i], ys[i], _with_memory(p, mem_start, ms[i]))
@@ -666,12 +665,13 @@ def simulate_reduced(mech: SliderCrank, revolutions: int = 4, **options):
     stats.update(method=options.get("method", "dopri5"),
                  rtol=DEFAULT_RTOL if rtol is None else float(rtol))
     if options.get("t_eval") is None:
-        stats["floored_impacts"] = floored_impacts(ms, p[P_VFLOOR])
+        stats["floored_impacts"] = floored_impacts(ms, mech.impact_velocity_floor)
     stats.update(accuracy_flags(mech, revolutions, ms, stats["nevent"], stats["rtol"]))
     if stats["accuracy_note"]:
         warnings.warn(stats["accuracy_note"], AccuracyWarning, stacklevel=3)
     traj = trajectory_from_states(mech, ts, ys, ms, p, stats,
-                                  None if options.get("t_eval") is not None else peaks, outs)
+                                  None if options.get("t_eval") is not None else peaks, outs,
+                                  MODEL.OUT_COLUMNS)
     return annotate(traj)
 
 
@@ -742,13 +742,29 @@ def _floored_impacts(ms, floor):
     return n
 
 
+#: the output columns of a Trajectory's series (base force x, y, eccentricity x, y, crank
+#: moment, contact force, penetration, slider acceleration), by name in the generated
+#: model's outputs and in the hand-written ones
+_SERIES = (("crank_pivot.reaction_x", "base_force_x"), ("crank_pivot.reaction_y", "base_force_y"),
+           ("coupler_slider.ecc_x", "ecc_x"), ("coupler_slider.ecc_y", "ecc_y"),
+           ("drive_moment", "crank_moment"), ("coupler_slider.contact_force", "contact_force"),
+           ("coupler_slider.penetration", "penetration"), ("slider_guide.s.acc", "x4dd"))
+
+
+def _series_columns(columns) -> np.ndarray:
+    """Indices of the `_SERIES` columns in the output layout `columns`."""
+    names = tuple(columns)
+    return np.array([names.index(a) if a in names else names.index(b) for a, b in _SERIES],
+                    dtype=np.int64)
+
+
 @nb.njit(cache=True)
-def _columns(ys, ms, out):
-    """The time series of a `Trajectory` from states, memories and outputs (OUT_COLUMNS), in
-    one pass: base_force, crank_moment, contact_force, penetration, eccentricity,
-    slider_position, slider_velocity, slider_acceleration, coupler_angle, coupler_rate,
-    contact_phase, crank_work (a copy of a strided column each, with numpy, took 0.18 ms,
-    3 % of the paper case's simulation; this takes 0.05 ms)."""
+def _columns(ys, ms, out, col):
+    """The time series of a `Trajectory` from states, memories and outputs (the `_SERIES`
+    columns col of out), in one pass: base_force, crank_moment, contact_force, penetration,
+    eccentricity, slider_position, slider_velocity, slider_acceleration, coupler_angle,
+    coupler_rate, contact_phase, crank_work (a copy of a strided column each, with numpy,
+    took 0.18 ms, 3 % of the paper case's simulation; this takes 0.05 ms)."""
     m = ys.shape[0]
     last = ys.shape[1] - 1
     base_force = np.empty((m, 2))
@@ -764,14 +780,14 @@ def _columns(ys, ms, out):
     contact_phase = np.empty(m, dtype=np.int8)
     crank_work = np.empty(m)
     for i in range(m):
-        base_force[i, 0] = out[i, 8]
-        base_force[i, 1] = out[i, 9]
-        eccentricity[i, 0] = out[i, 5]
-        eccentricity[i, 1] = out[i, 6]
-        crank_moment[i] = out[i, 7]
-        contact_force[i] = out[i, 2]
-        penetration[i] = out[i, 3]
-        slider_acceleration[i] = out[i, 1]
+        base_force[i, 0] = out[i, col[0]]
+        base_force[i, 1] = out[i, col[1]]
+        eccentricity[i, 0] = out[i, col[2]]
+        eccentricity[i, 1] = out[i, col[3]]
+        crank_moment[i] = out[i, col[4]]
+        contact_force[i] = out[i, col[5]]
+        penetration[i] = out[i, col[6]]
+        slider_acceleration[i] = out[i, col[7]]
         coupler_angle[i] = ys[i, 0]
         slider_position[i] = ys[i, 1]
         coupler_rate[i] = ys[i, 2]
@@ -783,22 +799,25 @@ def _columns(ys, ms, out):
             contact_phase, crank_work)
 
 
-def trajectory_from_states(mech, ts, ys, ms, p, stats, peaks, outs=None):
+def trajectory_from_states(mech, ts, ys, ms, p, stats, peaks, outs=None,
+                           columns=OUT_COLUMNS):
     """Build a `Trajectory` from recorded states [theta3, x4, theta3dot, x4dot, ..., W],
-    memories [mode, dmin, ...] and, if recorded by the integrator, outputs (OUT_COLUMNS
-    first, more columns allowed; else they are evaluated here). Wider records (a
-    sensitivity run's) are read in place, not copied."""
+    memories [mode, dmin, ...] and, if recorded by the integrator, outputs named `columns`
+    (the generated model's MODEL_COLUMNS with its parameters p, or the hand-written
+    OUT_COLUMNS with pack_parameters' p, first of a sensitivity run's wider record, read in
+    place, not copied); without outputs they are evaluated here."""
     from .trajectory import Trajectory
 
     ys = np.ascontiguousarray(ys)
     ms = np.ascontiguousarray(ms)
     if outs is None or outs.shape[1] == 0:
-        out = outputs(ts, ys, np.ascontiguousarray(ms[:, :N_MEM]), p)
+        evaluate = MODEL.outputs if tuple(columns) == MODEL.OUT_COLUMNS else outputs
+        out = evaluate(np.ascontiguousarray(ts), ys, np.ascontiguousarray(ms[:, :N_MEM]), p)
     else:
         out = outs
     (base_force, crank_moment, contact_force, penetration, eccentricity, slider_position,
      slider_velocity, slider_acceleration, coupler_angle, coupler_rate, contact_phase,
-     crank_work) = _columns(ys, ms, np.ascontiguousarray(out))
+     crank_work) = _columns(ys, ms, np.ascontiguousarray(out), _series_columns(columns))
     return Trajectory(
         t=ts,
         base_force=base_force,

@@ -56,10 +56,7 @@ def state_error_only(mech: SliderCrank, rtol: float = reduced.DEFAULT_RTOL,
                      initial_offset: float = 0.0) -> reduced.System:
     """The plain model's system with the state's atol only: the error control before the
     penetration was put under it (for before/after comparisons)."""
-    return reduced.System(reduced.integrate_plain, reduced.initial_state(mech, initial_offset),
-                          reduced.pack_parameters(mech), reduced.P_MODE, reduced.N_MEM,
-                          reduced.N_ERR, reduced.default_atol(mech, rtol),
-                          len(reduced.OUT_COLUMNS))
+    return reduced.plain_system(mech, reduced.default_atol(mech, rtol), initial_offset)
 
 
 def peak_errors(mech: SliderCrank, revolutions: int = REVOLUTIONS, options: tuple = (),

@@ -95,8 +95,8 @@ def _energy_error(case: StressCase) -> float:
     q = p.copy()
     energy = np.empty(len(ts))
     for i in range(len(ts)):
-        q[reduced.P_MODE], q[reduced.P_DMIN] = ms[i]
-        energy[i] = reduced.mechanical_energy(ts[i], ys[i], q)
+        q[reduced.MEM_START:reduced.MEM_START + 2] = ms[i]
+        energy[i] = reduced.MODEL.mechanical_energy(ts[i], ys[i], q)
     work = ys[:, -1]
     return float(np.max(np.abs(work - (energy - energy[0]))) / max(np.max(np.abs(work)), 1e-12))
 
@@ -105,8 +105,8 @@ def _energy_error(case: StressCase) -> float:
 def _step_excursion(ts, ys, ms, p, A, B, C, n_sub, mode):
     """Re-taken steps of one contact mode (0: free flight, 1: contact) at n_sub - 1 interior
     times: the largest excursion to the wrong side of the wall, in clearances (delta / c in
-    free flight, -delta / c in contact; > 0 means a missed contact or separation)."""
-    sign = 1.0 if mode == 0 else -1.0
+    free flight, -delta / c in contact; > 0 means a missed contact or separation), with the
+    generated model's kernels (p: its parameters, as reduced.run returns them)."""
     n = ys.shape[1]
     K = np.zeros((B.shape[0] + 1, n))
     f = np.empty(n)
@@ -118,14 +118,16 @@ def _step_excursion(ts, ys, ms, p, A, B, C, n_sub, mode):
     for k in range(ts.shape[0] - 1):
         if (ms[k, 0] > 0.5) != (mode == 1):
             continue
-        q[reduced.P_MODE] = ms[k, 0]
-        q[reduced.P_DMIN] = ms[k, 1]
+        q[reduced.MEM_START] = ms[k, 0]
+        q[reduced.MEM_START + 1] = ms[k, 1]
         y0 = ys[k].copy()
-        reduced.rhs(ts[k], y0, q, f)
+        reduced.MODEL.rhs(ts[k], y0, q, f)
         h = ts[k + 1] - ts[k]
         for j in range(1, n_sub):
-            rk_step(reduced.rhs, ts[k], y0, f, h * j / n_sub, A, B, C, K, q, y_new, f_new, tmp)
-            d = sign * reduced.geometry(ts[k] + h * j / n_sub, y_new, q)[3] / q[reduced.P_C]
+            rk_step(reduced.MODEL.rhs, ts[k], y0, f, h * j / n_sub, A, B, C, K, q, y_new, f_new,
+                    tmp)
+            # the switching function: delta in free flight, -delta in contact
+            d = reduced.MODEL.event(ts[k] + h * j / n_sub, y_new, q, 0)[0] / q[reduced.P_CLEARANCE]
             if d > worst:
                 worst = d
     return worst

@@ -7,8 +7,20 @@ checked-in modules of the named cases (mbs_clearance/_generated) or from a disk 
 by the structure's digest (`loader`).
 """
 
-from .loader import generate_module, load_model, model_path
-from .writer import GENERATOR_VERSION, structure_digest
+
+# the generator's names are imported on first use (sympy and jinja2 with them): a generated
+# module imports `generate.runtime` only, and with it this package
+_LAZY = {"generate_module": "loader", "load_model": "loader", "model_path": "loader",
+         "GENERATOR_VERSION": "writer", "structure_digest": "writer"}
+
+
+def __getattr__(name):
+    if name in _LAZY:
+        import importlib
+
+        return getattr(importlib.import_module(f"{__name__}.{_LAZY[name]}"), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
 
 __all__ = ["generate_module", "load_model", "model_path", "GENERATOR_VERSION",
            "structure_digest", "NAMED_CASES", "named_cases", "registry_source"]
@@ -27,6 +39,8 @@ def named_cases() -> dict:
 
 def registry_source(cases: dict) -> str:
     """The source of mbs_clearance/_generated/__init__.py for the linkages `cases`."""
+    from .writer import structure_digest
+
     lines = [f"    {structure_digest(lk.structure())!r}: {name!r},"
              for name, lk in cases.items()]
     return ('"""Checked-in generated model modules of the named cases (written by\n'

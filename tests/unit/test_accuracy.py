@@ -72,9 +72,7 @@ def _errors_without_rate_control(mech, revolutions):
     """Peak errors with the penetration rate's atol removed (as before DAMPED_XI)."""
     atol = np.append(reduced.default_atol(mech, reduced.DEFAULT_RTOL),
                      [reduced.event_atol(mech, reduced.DEFAULT_RTOL)[0], np.inf])
-    system = reduced.System(reduced.integrate_plain, reduced.initial_state(mech, 0.0),
-                            reduced.pack_parameters(mech), reduced.P_MODE, reduced.N_MEM,
-                            reduced.N_ERR, atol, len(reduced.OUT_COLUMNS))
+    system = reduced.plain_system(mech, atol)
     out = reduced.run(mech, revolutions, record=False, system=system)
     return np.abs(out[3] / am.reference_peaks(mech, revolutions) - 1.0)
 

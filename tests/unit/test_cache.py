@@ -374,7 +374,7 @@ from mbs_clearance.integrator import METHODS
 from validation import stress
 
 mech = SliderCrank()
-p = reduced.pack_parameters(mech)
+p = reduced.model_parameters(mech)
 y = reduced.initial_state(mech, 1.5)
 ts, ys, ms, tab = np.array([0.0, 1e-3]), np.array([y, y]), np.zeros((2, 2)), METHODS["dopri5"]
 value = stress._step_excursion(ts, ys, ms, p, tab.A, tab.B, tab.C, 5, 0)

@@ -69,8 +69,8 @@ def test_energy_balance_without_dissipation():
     energy = np.empty(len(ts))
     q = p.copy()
     for i in range(len(ts)):
-        q[reduced.P_MODE], q[reduced.P_DMIN] = ms[i]
-        energy[i] = reduced.mechanical_energy(ts[i], ys[i], q)
+        q[reduced.MEM_START:reduced.MEM_START + 2] = ms[i]
+        energy[i] = reduced.MODEL.mechanical_energy(ts[i], ys[i], q)
     work = ys[:, 4]
     scale = np.max(np.abs(work))
     assert scale > 1.0  # the crank does work against the mechanism
@@ -85,8 +85,8 @@ def test_dissipated_energy_is_positive_and_never_decreases():
         q = p.copy()
         energy = np.empty(len(ts))
         for i in range(len(ts)):
-            q[reduced.P_MODE], q[reduced.P_DMIN] = ms[i]
-            energy[i] = reduced.mechanical_energy(ts[i], ys[i], q)
+            q[reduced.MEM_START:reduced.MEM_START + 2] = ms[i]
+            energy[i] = reduced.MODEL.mechanical_energy(ts[i], ys[i], q)
         lost = ys[:, 4] - (energy - energy[0])
         scale = np.max(np.abs(ys[:, 4]))
         assert lost[-1] > 1e-3 * scale
@@ -161,3 +161,36 @@ def test_grazing_onsets_are_flagged():
     assert loose.stats["floored_impacts"] == 0
     paper = simulate(SliderCrank()).stats
     assert paper["grazing_onsets"] == 0 and paper["floored_impacts"] == 0 and paper["accuracy_ok"]
+
+
+def test_slider_crank_runs_on_the_generated_model(paper):
+    """One place of the physics: every SliderCrank maps to the structure of the checked-in
+    generated module, a run's parameters and recorded outputs are that module's, and they
+    equal the hand-written model (Eqs. 1-8, docs/derivations.md: an independent derivation)
+    at the run's states, in both contact modes."""
+    from mbs_clearance.cases import from_slider_crank
+    from mbs_clearance.generate import structure_digest
+
+    model = reduced.MODEL
+    other = paper.replace(crank_length=0.06, restitution=0.5, contact_model="flores")
+    for mech in (paper, other):
+        assert structure_digest(from_slider_crank(mech).structure()) == model.STRUCTURE_DIGEST
+    ts, ys, ms, peaks, _, counters, outs, p = reduced.run(paper, 2)
+    assert p.shape == (model.N_P,) and outs.shape == (len(ts), model.N_OUT)
+    assert set(ms[:, 0]) == {0.0, 1.0}
+    col = [model.OUT_COLUMNS.index(c) for c in (
+        "coupler_slider.contact_force", "coupler_slider.penetration",
+        "coupler_slider.penetration_rate", "coupler_slider.ecc_x", "coupler_slider.ecc_y",
+        "drive_moment", "crank_pivot.reaction_x", "crank_pivot.reaction_y",
+        "coupler.angle.acc", "slider_guide.s.acc")]
+    pr = reduced.pack_parameters(paper)
+    for i in range(0, len(ts), 37):
+        pr[reduced.P_MODE], pr[reduced.P_DMIN] = ms[i]
+        ref = np.array(reduced.dynamics(ts[i], ys[i], pr))[[2, 3, 4, 5, 6, 7, 8, 9, 0, 1]]
+        # delta (~1e-6 m) is a difference of coordinates of ~0.17 m: relative round-off
+        # ~eps (L2 + L3) / delta, so the two codes agree to ~1e-10 there
+        np.testing.assert_allclose(outs[i, col], ref, rtol=1e-9,
+                                   atol=1e-12 * np.abs(ref).max())
+    traj = simulate(paper, 2)
+    assert np.array_equal(traj.base_force[:, 0], outs[:, col[6]])
+    assert np.max(np.hypot(*traj.base_force.T)[ts >= paper.period]) <= peaks[1]

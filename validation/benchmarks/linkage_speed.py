@@ -1,13 +1,16 @@
-"""The paper case generated from its description against the hand-written reduced model.
+"""The paper case as a `SliderCrank` against the same case as a `Linkage` description.
 
-A/B in one process, alternating (hand-written, generated, hand-written, ...): the median of
-the per-pair time ratios generated / hand-written, for a full `simulate` (4 revolutions,
-every step recorded) and for the peak only (`peak_base_force`), at the default rtol; with the
-peaks and function evaluations of both (the same events, peaks within 1e-9).
+Both run on the same generated kernels (mbs_clearance/_generated/paper_slider_crank.py):
+the SliderCrank through reduced.py's orchestration (closed-form centred start, its
+Trajectory), the Linkage through linkage_model's glue (Newton on the loop closure, the
+per-joint Trajectory). A/B in one process, alternating (SliderCrank, Linkage, ...): the
+median of the per-pair time ratios Linkage / SliderCrank, for a full `simulate` (4
+revolutions, every step recorded) and for the peak only (`peak_base_force`), at the default
+rtol; with the peaks and function evaluations of both (the same events, peaks within 1e-9).
+The ratio is the glue's overhead; whether the paper case got slower than the hand-written
+kernels it replaced is measured across commits with `integrator_ab` (docs/performance.md).
 
     python -m validation.benchmarks.linkage_speed [--repeats 41]
-
-Run it on a quiet machine (the lead's benchmark run); the target is a ratio <= 1.
 """
 
 from __future__ import annotations
@@ -43,17 +46,17 @@ def main(argv=None) -> None:
     mech, lk = SliderCrank(), paper_slider_crank()
     ref, gen = simulate(mech, 4), simulate(lk, 4)        # compile / load, then compare
     print(machine_summary())
-    print(f"rev-4 peak: hand-written {ref.max_base_force(4):.10g} N, generated "
+    print(f"rev-4 peak: SliderCrank {ref.max_base_force(4):.10g} N, Linkage "
           f"{gen.max_base_force(4):.10g} N (relative difference "
           f"{gen.max_base_force(4) / ref.max_base_force(4) - 1:.2e})")
-    print(f"nfev: hand-written {ref.stats['nfev']}, generated {gen.stats['nfev']}; events "
+    print(f"nfev: SliderCrank {ref.stats['nfev']}, Linkage {gen.stats['nfev']}; events "
           f"{ref.stats['nevent']}, {gen.stats['nevent']}")
     for what, fa, fb in (
             ("simulate, 4 revolutions", lambda: simulate(mech, 4), lambda: simulate(lk, 4)),
             ("peak only, revolution 4", lambda: peak_base_force(mech, 4),
              lambda: peak_base_force(lk, 4))):
         ratio, ta, tb = _pairs(fa, fb, args.repeats)
-        print(f"{what:<26} hand-written {ta * 1e3:7.3f} ms, generated {tb * 1e3:7.3f} ms, "
+        print(f"{what:<26} SliderCrank {ta * 1e3:7.3f} ms, Linkage {tb * 1e3:7.3f} ms, "
               f"median ratio of pairs {ratio:.3f}")
 
 
