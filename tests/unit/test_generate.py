@@ -318,9 +318,9 @@ def test_coupled_mass_matrix_chain():
 
 
 def test_trajectory_along_reduced_run(tmp_path):
-    """The glue's Trajectory from the hand-written model's recorded run (same state layout:
-    coupler angle, slider position, their rates, the drive's work): the generated outputs
-    equal reduced.py's series along a real trajectory with impacts; save/load round trip."""
+    """The Linkage glue's Trajectory from the SliderCrank path's recorded run (same state
+    layout: coupler angle, slider position, their rates, the drive's work): both glues read
+    the same series along a real trajectory with impacts; save/load round trip."""
     from mbs_clearance.linkage_model import trajectory_from_run
     from mbs_clearance.trajectory import annotate, load_trajectory
 
@@ -328,7 +328,8 @@ def test_trajectory_along_reduced_run(tmp_path):
     lk = paper_slider_crank()
     model = load_model(lk)
     ts, ys, ms, peaks, _, counters, outs, pr = reduced.run(mech, 2)
-    ref = reduced.trajectory_from_states(mech, ts, ys, ms, pr, {}, peaks, outs)
+    ref = reduced.trajectory_from_states(mech, ts, ys, ms, pr, {}, peaks, outs,
+                                         reduced.MODEL.OUT_COLUMNS)
     p = pack_parameters(lk, model)
     assert initial_state(lk, model, p) == pytest.approx(ys[0], abs=1e-15)
     traj = annotate(trajectory_from_run(lk, model, ts, ys, ms, p, {"rtol": 1e-7}, peaks))
