@@ -428,18 +428,19 @@ def test_an_edit_of_contact_py_is_computed_by_the_next_import_of_mbs_clearance(t
 
 
 @pytest.mark.slow
-def test_an_edit_of_reduced_py_is_computed_by_validation_stress(tmp_path):
-    """validation.stress._step_excursion inlines reduced.geometry: with the penetration
-    defined as r - 2c instead of r - c, the excursion (delta / c in free flight, where the
-    motion does not depend on delta) drops by exactly one clearance."""
+def test_an_edit_of_the_generated_runtime_is_computed_by_validation_stress(tmp_path):
+    """validation.stress._step_excursion inlines the generated model's event, which inlines
+    generate/runtime.gap_state: with the penetration defined as r - 2c instead of r - c,
+    the excursion (delta / c in free flight, where the motion does not depend on delta)
+    drops by exactly one clearance."""
     site = copy_packages(tmp_path / "site", ("mbs_clearance", "validation"))
     env = clean_env([site])
     before, _ = run(STRESS_RUN, env)
     assert Path(before["file"]).is_relative_to(site)
     again, _ = run(STRESS_RUN, env)
     assert again["hits"] == 1 and again["misses"] == 0
-    edit(site / "mbs_clearance" / "reduced.py", "r - p[P_C], deltadot",
-         "r - 2.0 * p[P_C], deltadot")
+    edit(site / "mbs_clearance" / "generate" / "runtime.py", "return r - clearance, ",
+         "return r - 2.0 * clearance, ")
     after, _ = run(STRESS_RUN, env)
     assert after["misses"] == 1 and after["path"] != before["path"]
     assert after["value"] == pytest.approx(before["value"] - 1.0, rel=0, abs=1e-9)
