@@ -285,8 +285,9 @@ def four_bar(**overrides: Any) -> Linkage:
     per revolution agree between rtol 1e-10 and 1e-11 to 3e-6 (not tolerance-sensitive),
     but approach their periodic value slowly (change from the previous revolution 1.2e-2
     at revolution 3, 1.0e-3 at revolution 8): the frictionless joint's sliding mode,
-    excited by the start, is only weakly damped. Window averages and the RMS of the forces
-    over a revolution are the periodic statistics (docs/cases.md); with 0.1 mm the start's
+    excited by the start, is only weakly damped. Compare window averages of the forces
+    (the sliding mode averages out over a window), not a revolution's peak (docs/cases.md
+    "Regime of the defaults"); with 0.1 mm the start's
     impacts make the peaks tolerance-sensitive (2e-4 between those rtols), at 20 rpm and
     more the joint force passes near zero and impacts recur irregularly.
 

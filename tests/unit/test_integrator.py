@@ -56,16 +56,19 @@ def run(rhs, event, action, monitor, y0, p, edges, rtol, method="dopri5", record
         n_samples=3, h_max=10.0, n_mem=1, margin=0.0, n_events=1, atol=None, event_tol=1e-14,
         h0=0.0):
     """(ts, ys, ms, peaks, peak_t, counters, status) of `integrate` (memory: the last n_mem
-    entries of p)."""
+    entries of p) for the toy model with kernels (rhs, event, action, monitor), run through
+    the shared toy structure (`toy_rhs`, ...: see TOYS) with the toy's id after p."""
     tab = METHODS[method]
     p = np.asarray(p, float)
+    toy = TOYS[(rhs, event, action, monitor)]
     settings = make_settings(rtol, np.full(len(y0), rtol) if atol is None else atol, len(y0),
                              h0=h0, h_max=h_max, record=record, event_tol=event_tol,
                              event_margin=margin, n_samples=n_samples, refine_iters=40,
                              n_dense=len(y0), n_events=n_events, mem_start=len(p) - n_mem,
                              n_mem=n_mem)
-    out = integrate(rhs, event, action, monitor, np.asarray(y0, float), p,
-                    np.asarray(edges, float), settings, tab.arrays())
+    out = integrate(toy_rhs, toy_event, toy_action, toy_monitor, np.asarray(y0, float),
+                    np.append(p, float(toy)), np.asarray(edges, float), settings,
+                    tab.arrays())
     return out[:6] + (RESULTS(out[7]),)
 
 
@@ -488,6 +491,113 @@ def graze_monitor(t, y, p, d, out, g, gd):
     for j in range(2):
         g[j], gd[j] = graze_event(t, y, p, j)
     return 0.0
+
+
+# ---------------------------------------------------------------- one shared toy structure
+# numba compiles `integrate` once per set of model kernels (their types), for about a minute
+# in a new process (kernels defined here cannot use the package's disk cache). Every toy
+# above therefore runs through one set of kernels that dispatch on the toy's id, the last
+# entry of p (after the memory; the toys index p from the front): one compile in all.
+OSC, BALL, BUMP_ONLY, BUMP, TWO_BUMPS, NEAR_TIE, TWO, GRAZE = range(8)
+
+#: (rhs, event, on_event, monitor) of each toy -> its id
+TOYS = {
+    (osc_rhs, never, nothing, osc_minus_x): OSC,
+    (ball_rhs, ball_event, ball_bounce, ball_minus_x): BALL,
+    (still, bump_without_rate, flag, bump_only_minus_x): BUMP_ONLY,
+    (still, bump, flag, bump_minus_x): BUMP,
+    (still, never, nothing, two_bumps): TWO_BUMPS,
+    (still, never, nothing, near_tie): NEAR_TIE,
+    (two_rhs, two_event, two_impact, two_monitor): TWO,
+    (still, graze_event, graze_flag, graze_monitor): GRAZE,
+}
+
+
+@nb.njit(RHS_SIG)
+def toy_rhs(t, y, p, d):
+    toy = p[p.shape[0] - 1]
+    if toy == OSC:
+        osc_rhs(t, y, p, d)
+    elif toy == BALL:
+        ball_rhs(t, y, p, d)
+    elif toy == TWO:
+        two_rhs(t, y, p, d)
+    else:
+        still(t, y, p, d)
+
+
+@nb.njit(EVENT_SIG)
+def toy_event(t, y, p, j):
+    toy = p[p.shape[0] - 1]
+    if toy == BALL:
+        return ball_event(t, y, p, j)
+    if toy == BUMP_ONLY:
+        return bump_without_rate(t, y, p, j)
+    if toy == BUMP:
+        return bump(t, y, p, j)
+    if toy == TWO:
+        return two_event(t, y, p, j)
+    if toy == GRAZE:
+        return graze_event(t, y, p, j)
+    return never(t, y, p, j)
+
+
+@nb.njit(ACTION_SIG)
+def toy_action(t, y, p, j):
+    toy = p[p.shape[0] - 1]
+    if toy == BALL:
+        ball_bounce(t, y, p, j)
+    elif toy == BUMP_ONLY or toy == BUMP:
+        flag(t, y, p, j)
+    elif toy == TWO:
+        two_impact(t, y, p, j)
+    elif toy == GRAZE:
+        graze_flag(t, y, p, j)
+
+
+@nb.njit(MONITOR_SIG)
+def toy_monitor(t, y, p, d, out, g, gd):
+    toy = p[p.shape[0] - 1]
+    if toy == OSC:
+        return osc_minus_x(t, y, p, d, out, g, gd)
+    if toy == BALL:
+        return ball_minus_x(t, y, p, d, out, g, gd)
+    if toy == BUMP_ONLY:
+        return bump_only_minus_x(t, y, p, d, out, g, gd)
+    if toy == BUMP:
+        return bump_minus_x(t, y, p, d, out, g, gd)
+    if toy == TWO_BUMPS:
+        return two_bumps(t, y, p, d, out, g, gd)
+    if toy == NEAR_TIE:
+        return near_tie(t, y, p, d, out, g, gd)
+    if toy == TWO:
+        return two_monitor(t, y, p, d, out, g, gd)
+    return graze_monitor(t, y, p, d, out, g, gd)
+
+
+def test_every_toy_runs_through_the_one_shared_structure():
+    """The toys' kernels are compiled once: the toy's id selects its own kernels (each
+    kernel's result and effect on y and p compared on one call per toy), and `run` refuses a
+    kernel set that is not a registered toy."""
+    for (rhs, event, action, monitor), toy in TOYS.items():
+        n = 4 if toy == TWO else 2
+        y = np.array([0.5, -0.25, 0.125, 0.0625])[:n]
+        p = np.append(np.linspace(0.3, 1.2, 14), float(toy))
+        results = []
+        for kernels in ((rhs, event, action, monitor),
+                        (toy_rhs, toy_event, toy_action, toy_monitor)):
+            d, yy, pp = np.zeros(n), y.copy(), p.copy()
+            g, gd = np.zeros(2), np.zeros(2)
+            kernels[0](0.1, yy, pp, d)
+            ev = [kernels[1](0.1, yy, pp, j) for j in range(2 if toy in (TWO, GRAZE) else 1)]
+            m = kernels[3](0.1, yy, pp, np.zeros(n), np.zeros(0), g, gd)
+            kernels[2](0.1, yy, pp, 0)
+            results.append((d, ev, m, g, gd, yy, pp))
+        for want, got in zip(*results):
+            np.testing.assert_array_equal(np.asarray(got), np.asarray(want))
+    with pytest.raises(KeyError):
+        run(osc_rhs, ball_event, nothing, osc_minus_x, [1.0, 0.0], [2.0, 0.0], [0.0, 1.0],
+            1e-6)
 
 
 def test_grazing_touch_is_no_event_and_a_short_excursion_inside_a_step_is_found():
