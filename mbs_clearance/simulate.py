@@ -67,7 +67,8 @@ def simulate(mech: SliderCrank, revolutions: int = 4, backend: str = "reduced",
     ----------
     mech : SliderCrank or Linkage
         A `Linkage` (e.g. from `mbs_clearance.cases`) runs the model generated from its
-        description (backend "reduced"); its Trajectory has per-joint series.
+        description (backend "reduced") or the description built in Exudyn (backend
+        "exudyn", `exudyn_linkage`); its Trajectory has per-joint series.
     revolutions : int
         Number of full crank (drive) revolutions (>= 1).
     backend : str

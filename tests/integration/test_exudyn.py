@@ -274,9 +274,13 @@ def test_trajectory_fields_and_stats():
     assert traj.contact_phase.dtype == np.int8 and traj.backend == "exudyn"
     # peaks refined between the steps: at least the sampled maximum, above it by at most an
     # eighth of the drop to the neighbouring samples
+    mag = traj.base_force_magnitude
     for k in (1, 2):
-        sampled = traj.base_force_magnitude[traj.revolution_mask(k)].max()
-        assert sampled <= traj.peaks[k - 1] <= sampled * (1 + 1e-2)
+        i = np.flatnonzero(traj.revolution_mask(k))[np.argmax(mag[traj.revolution_mask(k)])]
+        drop = mag[i] - min(mag[i - 1], mag[i + 1])
+        assert mag[i] <= traj.peaks[k - 1] <= mag[i] + drop / 8
+    # the refinement moves the first impact's peak toward the reduced model's 18.6 kN
+    assert traj.peaks[0] > mag[traj.revolution_mask(1)].max()
     assert traj.stats["contact"] == "symbolic" and traj.stats["step_size"] == 8e-6
     assert traj.stats["wall_time"] > 0 and traj.stats["onsets"] >= 1
     assert traj.stats["uniform_steps"]

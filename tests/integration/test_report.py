@@ -17,7 +17,7 @@ pytestmark = pytest.mark.exudyn
 FIGURES = ["fig3_response.png", "fig4_kinematic.png", "fig5_contact.png", "fig6_journal.png",
            "fig7a_fitness_fixed.png", "fig7b_force_fixed.png", "fig7a_fitness_uniform.png",
            "fig7b_force_uniform.png", "tolerance.png", "work_precision.png",
-           "work_precision_series.png"]
+           "work_precision_series.png", "agreement_slider_crank_two_clearances.png"]
 
 
 @pytest.fixture(scope="module")
