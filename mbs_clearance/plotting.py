@@ -306,9 +306,9 @@ def plot_bifurcation(ds, path: str | Path | None = None, joint: int = 0,
         value = (fixed or {}).get(other, float(ds[other].values[0]))
         sel = ds.sel({other: value}, method="nearest")
     x = sel[dims[0]].values
-    c = np.atleast_1d(np.asarray(ds.attrs["clearance"], dtype=float))[joint]
+    c = sel["joint_clearance"].values[:, joint]
     comp = list(ds["component"].values).index(component)
-    y = sel["section"].values[:, :, joint, comp] / c
+    y = sel["section"].values[:, :, joint, comp] / c[:, None]
     if component.endswith("dot"):
         y = y / _speed_of(sel, len(x))
     fig = Figure(figsize=(7.5, 4.2))
@@ -404,11 +404,10 @@ def plot_poincare(ds, points: Sequence[Mapping], path: str | Path | None = None,
     n = len(points)
     fig = Figure(figsize=(3.2 * n, 3.4))
     axes = np.atleast_1d(fig.subplots(1, n))
-    c = np.atleast_1d(np.asarray(ds.attrs["clearance"], dtype=float))[joint]
     circle = np.linspace(0, 2 * np.pi, 200)
     for ax, point in zip(axes, points):
         sel = ds.sel(dict(point), method="nearest")
-        xy = sel["section"].values[:, joint, :2] / c
+        xy = sel["section"].values[:, joint, :2] / float(sel["joint_clearance"].values[joint])
         ax.plot(np.cos(circle), np.sin(circle), color="0.7", lw=0.8)
         ax.plot(xy[:, 0], xy[:, 1], ".", ms=4)
         ax.set_aspect("equal")

@@ -53,7 +53,7 @@ __all__ = ["SweepAxis", "parse_sweep", "design_at", "regime_map", "MapResult"]
 RPM = 2.0 * math.pi / 60.0
 
 #: the dataset format's version (a resumed run must match it)
-FORMAT = "mbs-clearance regime map 1"
+FORMAT = "mbs-clearance regime map 2"
 
 
 @dataclass(frozen=True)
@@ -202,12 +202,22 @@ def _map_point(item, settings: dict) -> dict:
     index, mech = item
     keep = settings["keep"]
     J = len(joints_of(mech))
-    out = {"index": index, "status": 1, "message": ""}
+    out = {"index": index, "status": 1, "message": "", "tangent_failed": 0}
     t0 = time.perf_counter()
+    run = dict(angle=settings["angle"], tol=settings["tol"],
+               max_period=settings["max_period"], rtol=settings["rtol"])
     try:
-        sec = poincare_section(mech, settings["revolutions"], keep, angle=settings["angle"],
-                               tol=settings["tol"], max_period=settings["max_period"],
-                               lyapunov=settings["lyapunov"], rtol=settings["rtol"])
+        try:
+            sec = poincare_section(mech, settings["revolutions"], keep,
+                                   lyapunov=settings["lyapunov"], **run)
+        except RuntimeError:
+            if not settings["lyapunov"]:
+                raise
+            # the tangent run failed (e.g. events chattering at a grazing contact under the
+            # tangent's error control): the plain run still gives the section and regime
+            out["tangent_failed"] = 1
+            sec = poincare_section(mech, settings["revolutions"], keep, lyapunov=False,
+                                   **run)
     except (RuntimeError, ValueError, NotImplementedError) as exc:
         out.update(status=2, message=str(exc).splitlines()[0][:200],
                    section=np.full((keep, J, 4), np.nan), peak=np.full(keep, np.nan),
@@ -256,12 +266,18 @@ def _empty_dataset(axes, J, joints, keep, revolutions, max_period, attrs):
         "lyapunov_per_second": (dims, np.full(shape, nan), {"units": "1/s"}),
         "recurrence": (dims + ("lag",), np.full(shape + (max_period,), nan),
                        {"long_name": "max |X_{i+k} - X_i| of the scaled section samples"}),
+        "joint_clearance": (dims + ("joint",), np.full(shape + (J,), nan),
+                            {"long_name": "radial clearance of each joint at the point",
+                             "units": "m"}),
         "nfev": (dims, np.zeros(shape, dtype=np.int32),
                  {"long_name": "right-hand side evaluations of the point's run"}),
         "done": (dims, np.zeros(shape, dtype=np.int8),
                  {"long_name": "1: computed (ok or failed), 0: to do"}),
         "failed": (dims, np.zeros(shape, dtype=np.int8),
                    {"long_name": "1: the point's run failed (regime 'failed')"}),
+        "tangent_failed": (dims, np.zeros(shape, dtype=np.int8),
+                           {"long_name": "1: the tangent run failed, the section is the "
+                                         "plain run's and the exponent NaN"}),
     }
     return xr.Dataset(data, coords=coords, attrs=attrs)
 
@@ -283,6 +299,7 @@ def _store(ds, shape, res, omega_of) -> None:
     ds["nfev"].values[idx] = min(res["nfev"], 2**31 - 1)
     ds["done"].values[idx] = 1
     ds["failed"].values[idx] = 0 if ok else 1
+    ds["tangent_failed"].values[idx] = res["tangent_failed"]
 
 
 def _write(ds, path: Path) -> None:
@@ -363,7 +380,8 @@ def regime_map(mech, sweep, revolutions: int = 100, keep: int = 50, scheduler=No
 
     Returns a `MapResult`: the labelled dataset (dims: the swept fields, revolution, joint,
     component, lag; variables section, peak, peak_mean, peak_max, regime, period,
-    lyapunov, lyapunov_per_second, recurrence, nfev, done, failed).
+    lyapunov, lyapunov_per_second, recurrence, joint_clearance, nfev, done, failed,
+    tangent_failed).
     """
     from .executor import connect_dask, evaluate
 
@@ -408,9 +426,10 @@ def regime_map(mech, sweep, revolutions: int = 100, keep: int = 50, scheduler=No
                                      for k, v in settings.items()}, sort_keys=True),
              "sweep": json.dumps([[a.name, a.spacing] for a in axes]),
              "regime_criterion": "poincare.classify: recurrence within tol (of the "
-                                 "clearance) over the kept samples, then the exponent's sign",
-             "clearance": np.asarray(clearances_of(base), dtype=float)}
+                                 "clearance) over the kept samples, then the exponent's sign"}
     ds = _empty_dataset(axes, J, joints_of(base), keep, revolutions, max_period, attrs)
+    ds["joint_clearance"].values[...] = np.array(
+        [clearances_of(d) for d in designs]).reshape(shape + (J,))
     path = None if out is None else Path(out)
     if path is not None and path.exists():
         old = _load(path)

@@ -52,3 +52,51 @@ def test_ga_evaluates_through_the_shared_evaluator(monkeypatch):
     assert calls
     assert threads.best == serial.best and threads.best_peak_force == serial.best_peak_force
     np.testing.assert_array_equal(threads.history, serial.history)
+
+
+def _exit_worker():
+    import os
+
+    os._exit(1)
+
+
+@pytest.mark.slow
+def test_a_lost_worker_chunk_is_rescheduled_and_the_map_is_unchanged(tmp_path):
+    # a worker process dies while the map runs (its nanny starts a new one): the chunks it
+    # held are rescheduled and the dataset equals the serial one
+    import contextlib
+    import threading
+    import time
+
+    distributed = pytest.importorskip("dask.distributed")
+    from mbs_clearance.sweep import _load
+
+    sweep = "clearance=1e-5:5e-4:log:8"
+    kw = dict(revolutions=30, keep=5, max_period=2)
+    serial = regime_map(SliderCrank(), sweep, scheduler="serial", **kw).dataset
+    path = tmp_path / "lost.nc"
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  dashboard_address=None) as cluster, \
+            distributed.Client(cluster) as client:
+        result = {}
+        run = threading.Thread(target=lambda: result.update(res=regime_map(
+            SliderCrank(), sweep, scheduler=client, chunk_size=1, out=path,
+            write_interval=0.0, **kw)))
+        run.start()
+        deadline = time.monotonic() + 300
+        while time.monotonic() < deadline and run.is_alive():
+            time.sleep(0.1)
+            if path.exists():
+                try:
+                    if int(_load(path)["done"].sum()) >= 1:
+                        break
+                except (OSError, ValueError):
+                    continue
+        victim = sorted(client.scheduler_info()["workers"])[0]
+        with contextlib.suppress(Exception):      # the worker dies before it answers
+            client.run(_exit_worker, workers=[victim])
+        run.join(600)
+    assert "res" in result and result["res"].computed == 8
+    for name in serial.data_vars:
+        np.testing.assert_array_equal(result["res"].dataset[name].values,
+                                      serial[name].values, err_msg=name)

@@ -165,7 +165,12 @@ def test_map_killed_midway_and_resumed_equals_uninterrupted(tmp_path, monkeypatc
     sweep = ["clearance=1e-5:5e-4:log:3", "crank_speed=4000rpm:5000rpm:2"]
     whole = regime_map(PAPER, sweep, out=tmp_path / "whole.nc", **SMALL)
     assert whole.computed == 6 and int(whole.dataset["done"].sum()) == 6
-    assert whole.dataset["regime"].values[0, 1] == 2          # the paper's design: period-1
+    ds = whole.dataset
+    assert ds["regime"].values[0, 1] == 2          # the paper's design: period-1
+    np.testing.assert_allclose(ds["joint_clearance"].values[:, 1, 0],
+                               np.geomspace(1e-5, 5e-4, 3))
+    r = np.hypot(*ds["section"].values[0, 1, :, 0, :2].T)   # on the wall there
+    assert np.all((r > 1e-5) & (r < 2e-5))
     real = sweep_mod._map_point
 
     def dies_at_the_fourth(item, settings):
@@ -238,3 +243,21 @@ def test_linkage_section_matches_the_hand_written_model():
     np.testing.assert_allclose(link.peaks, red.peaks, rtol=1e-4)
     with pytest.raises(NotImplementedError, match="pending"):
         lyapunov_exponent(from_slider_crank(PAPER), revolutions=4, transient=1)
+
+
+def test_a_failed_tangent_run_falls_back_to_the_plain_section(monkeypatch):
+    real = sweep_mod.poincare_section
+
+    def tangent_fails(mech, *args, lyapunov=False, **kw):
+        if lyapunov:
+            raise RuntimeError("events chatter")
+        return real(mech, *args, lyapunov=False, **kw)
+
+    monkeypatch.setattr(sweep_mod, "poincare_section", tangent_fails)
+    settings = dict(revolutions=8, keep=5, angle=None, tol=1e-3, max_period=2,
+                    lyapunov=True, rtol=None)
+    res = sweep_mod._map_point((0, PAPER), settings)
+    plain = sweep_mod._map_point((0, PAPER), {**settings, "lyapunov": False})
+    assert res["tangent_failed"] == 1 and res["status"] == 1 and math.isnan(res["lyapunov"])
+    np.testing.assert_array_equal(res["section"], plain["section"])
+    assert res["regime"] == plain["regime"] == 2
