@@ -142,7 +142,7 @@ class Flow:
             from . import reduced
 
             self.model = reduced
-            p = reduced.pack_parameters(mech)
+            p = reduced.model_parameters(mech)
             y0 = reduced.initial_state(mech)
             atol = np.append(reduced.default_atol(mech, rtol), reduced.event_atol(mech, rtol))
             self.kernel = reduced.integrate_plain
@@ -154,8 +154,8 @@ class Flow:
                 record=True, event_tol=event_tol,
                 event_margin=reduced.EVENT_MARGIN * mech.clearance, n_samples=1,
                 refine_iters=24, n_out=0, n_dense=reduced.N_EVENT, n_events=1,
-                mem_start=reduced.P_MODE, n_mem=reduced.N_MEM)
-            self._gaps = [_reduced_gap]
+                mem_start=reduced.MEM_START, n_mem=reduced.N_MEM)
+            self._gaps = [reduced.MODEL._gap_0]
         self.rtol = rtol
         self.coefficients = METHODS[method].arrays()
         self.t = 0.0

@@ -30,18 +30,21 @@ def _compare(a, b, what, rel):
     assert np.all(err <= rel), (what, err.max(axis=0))
 
 
-# (the two-joint case compiles its own sensitivity kernels: slow, to keep CI's fast suite
-# within its budget; the paper case and the four-bar cover one joint in the fast suite)
+# (the two-joint case and the four-bar compile their own sensitivity kernels (about a
+# minute each, cold): slow, to keep CI's fast suite within its budget; the paper case covers
+# the DDM in the fast suite, test_generated_jacobians every case's Jacobians)
 @pytest.mark.parametrize("case", [
     "paper_slider_crank",
     pytest.param("slider_crank_two_clearances", marks=pytest.mark.slow),
-    "four_bar",
+    pytest.param("four_bar", marks=pytest.mark.slow),
 ])
 def test_ddm_matches_finite_differences(case):
     """d(coordinates)/db and d(monitored reaction)/db of DDM (rtol 1e-10) equal central
     differences of plain runs (rtol 1e-12) at 12 times of a run with contact events, for
     every parameter; the run has at least two contact onsets."""
-    linkage = getattr(cases, case)()
+    # (the four-bar at the 0.1 mm clearance where the tolerances below were measured; its
+    # default became 0.01 mm in the same session, where DOPRI5 meets chattering events)
+    linkage = getattr(cases, case)(**({"clearance": 1e-4} if case == "four_bar" else {}))
     names, frac = CASES[case]
     t_eval = np.linspace(0.0, frac * linkage.period, 13)[1:]
     # (the four-bar's journal grazes after its first impacts: DOP853 at rtol 1e-10 lands on
