@@ -16,27 +16,10 @@ kernels it replaced is measured across commits with `integrator_ab` (docs/perfor
 from __future__ import annotations
 
 import argparse
-import time
-
-import numpy as np
 
 from mbs_clearance import SliderCrank, peak_base_force, simulate
 from mbs_clearance.cases import paper_slider_crank
-from validation.benchmarks.common import machine_summary
-
-
-def _pairs(fa, fb, repeats):
-    ratios, ta, tb = [], [], []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        fa()
-        t1 = time.perf_counter()
-        fb()
-        t2 = time.perf_counter()
-        ta.append(t1 - t0)
-        tb.append(t2 - t1)
-        ratios.append((t2 - t1) / (t1 - t0))
-    return float(np.median(ratios)), float(np.median(ta)), float(np.median(tb))
+from validation.benchmarks.common import machine_summary, paired
 
 
 def main(argv=None) -> None:
@@ -55,7 +38,8 @@ def main(argv=None) -> None:
             ("simulate, 4 revolutions", lambda: simulate(mech, 4), lambda: simulate(lk, 4)),
             ("peak only, revolution 4", lambda: peak_base_force(mech, 4),
              lambda: peak_base_force(lk, 4))):
-        ratio, ta, tb = _pairs(fa, fb, args.repeats)
+        r = paired(fa, fb, args.repeats)
+        ratio, ta, tb = r["ratio"], r["a"], r["b"]
         print(f"{what:<26} SliderCrank {ta * 1e3:7.3f} ms, Linkage {tb * 1e3:7.3f} ms, "
               f"median ratio of pairs {ratio:.3f}")
 
