@@ -54,4 +54,13 @@ __all__ = [
     "MbsClearanceWarning", "AccuracyWarning", "PhysicsWarning", "CacheWarning",
 ]
 
-__version__ = "0.1.0"
+def _version() -> str:
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("mbs-clearance")
+    except PackageNotFoundError:  # a source tree that was never installed
+        return "unknown"
+
+
+__version__ = _version()

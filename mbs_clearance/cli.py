@@ -471,12 +471,19 @@ def _case_names() -> list[str]:
     return sorted(CASES)
 
 
+def _package_version() -> str:
+    from mbs_clearance import __version__
+
+    return __version__
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = Parser(
         prog="mbs-clearance",
-        description="Slider-crank mechanism with a revolute clearance joint: simulate, "
-                    "compare models, sensitivities, optimisation, validation report.")
-    parser.add_argument("--version", action="version", version="%(prog)s 0.1.0")
+        description="Planar linkages with revolute clearance joints: simulate, compare "
+                    "models, sensitivities, optimisation, regime maps, validation report.")
+    parser.add_argument("--version", action="version",
+                        version=f"%(prog)s {_package_version()}")
     sub = parser.add_subparsers(dest="command", required=True)
 
     p = sub.add_parser("simulate", help="simulate and write the trajectory and a figure",

@@ -84,7 +84,7 @@ def grid_map(n: int = 9, **settings) -> list[dict]:
 
 def stress_map(**settings) -> list[dict]:
     """One row per periodic stress case: name, the per-revolution errors, nfev."""
-    from validation.stress import stress_cases
+    from .stress import stress_cases
 
     rows = []
     for case in stress_cases():

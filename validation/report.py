@@ -26,7 +26,8 @@ from typing import Any
 import numpy as np
 
 from mbs_clearance import PARAMETER_INFO, SliderCrank, load_trajectory, simulate
-from validation.plugin import make_register, run_script
+
+from .plugin import make_register, run_script
 
 #: the paper's published numbers (Ebrahimi, Salahshoor & Nouri 2018)
 PAPER = {
@@ -119,7 +120,7 @@ def section_response(out: Path, s: dict) -> dict:
 
 
 def section_agreement(out: Path, s: dict) -> dict:
-    from validation.compare import compare
+    from .compare import compare
 
     rows = []
     n = s["revolutions"]
@@ -155,7 +156,8 @@ def agreement_cases(out: Path, revolutions: int, names) -> dict:
     first impact time per clearance joint and an overlay figure (orbit per joint)."""
     from mbs_clearance.cases import CASES
     from mbs_clearance.exudyn_linkage import make_settings
-    from validation.compare import compare, plot_linkage_comparison
+
+    from .compare import compare, plot_linkage_comparison
 
     rows, figures = [], []
     (out / "figures").mkdir(parents=True, exist_ok=True)
@@ -241,7 +243,8 @@ def section_tolerance(out: Path, s: dict) -> dict:
     """Sobol indices of the rev-4 peak over the benchmark's 8 tolerances (quick: the 4
     largest, first order only), Monte Carlo with P(peak > allowable), a wear study."""
     from mbs_clearance.tolerance import tolerance_study
-    from validation.benchmarks.tolerance_speed import INPUTS
+
+    from .benchmarks.tolerance_speed import INPUTS
 
     inputs = dict(INPUTS)
     if s["quick"]:
@@ -309,8 +312,8 @@ def section_paper(out: Path, s: dict, numbers: dict) -> dict:
 
 
 def section_performance(out: Path, s: dict) -> dict:
-    from validation.benchmarks.work_precision import run, speed_ratios
-    from validation.stress import run_sweep, stress_cases, summary
+    from .benchmarks.work_precision import run, speed_ratios
+    from .stress import run_sweep, stress_cases, summary
 
     rows, refs = run(quick=s["quick"], repeats=3 if s["quick"] else 5)
     ratios = {case: {str(t): speed_ratios(rows, case, t) for t in (1e-2, 1e-3, 1e-5)}
@@ -321,7 +324,7 @@ def section_performance(out: Path, s: dict) -> dict:
 
 
 def section_environment(out: Path, s: dict, timings: dict) -> dict:
-    from validation.benchmarks.common import machine_summary
+    from .benchmarks.common import machine_summary
 
     versions = {}
     for pkg in ("mbs-clearance", "numpy", "scipy", "numba", "exudyn", "pygad", "matplotlib",

@@ -30,7 +30,8 @@ import numpy as np
 
 from mbs_clearance import SliderCrank, reduced, simulate
 from mbs_clearance.integrator import METHODS, rk_step
-from validation.plugin import make_register, run_script
+
+from .plugin import make_register, run_script
 
 RPM = 2 * math.pi / 60
 

@@ -597,3 +597,29 @@ def test_case_and_description_errors_are_one_line(argv, message, capsys):
     assert exc.value.code == 2
     err = capsys.readouterr().err
     assert message in err and err.count("\n") == 1
+
+
+def test_packaging_installs_no_generic_top_level_package_and_version_from_metadata(capsys):
+    """A wheel holds mbs_clearance and mbs_clearance_validation only (no top-level
+    `validation` to collide with other projects); the plugins load under the installed name;
+    --version and __version__ come from the package metadata (one place: pyproject)."""
+    from importlib.metadata import entry_points, version
+    from pathlib import Path
+
+    import tomllib
+
+    import mbs_clearance
+    from mbs_clearance.cli import PLUGIN_GROUP
+
+    cfg = tomllib.loads((Path(__file__).parents[2] / "pyproject.toml").read_text())
+    tops = {p.split(".")[0] for p in cfg["tool"]["setuptools"]["packages"]}
+    assert tops == {"mbs_clearance", "mbs_clearance_validation"}
+    eps = entry_points(group=PLUGIN_GROUP)
+    assert {ep.name for ep in eps} >= {"compare", "stress", "bench", "report"}
+    for ep in eps:
+        assert ep.value.startswith("mbs_clearance_validation."), ep.value
+        assert callable(ep.load())
+    assert mbs_clearance.__version__ == version("mbs-clearance") == cfg["project"]["version"]
+    with pytest.raises(SystemExit):
+        main(["--version"])
+    assert capsys.readouterr().out.strip() == f"mbs-clearance {cfg['project']['version']}"

@@ -19,8 +19,9 @@ import time
 import numpy as np
 
 from mbs_clearance import SliderCrank, reduced
-from validation import accuracy_map as am
-from validation.benchmarks.common import machine_summary
+
+from .. import accuracy_map as am
+from .common import machine_summary
 
 
 def _run(mech, fixed: bool, record: bool):

@@ -33,9 +33,10 @@ import json
 from mbs_clearance import peak_base_force, simulate
 from mbs_clearance.cases import CASES
 from mbs_clearance.linkage_model import DEFAULT_RTOL
-from validation.benchmarks.common import machine_summary, paired
-from validation.benchmarks.speed_reduced import equal_error_ratio
-from validation.scipy_reference import solve_scipy_linkage
+
+from ..scipy_reference import solve_scipy_linkage
+from .common import machine_summary, paired
+from .speed_reduced import equal_error_ratio
 
 SCIPY_RTOLS = (1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11)
 REVOLUTION = 4

@@ -20,7 +20,8 @@ import numpy as np
 from mbs_clearance import SliderCrank, simulate
 from mbs_clearance.reduced import DEFAULT_RTOL
 from mbs_clearance.sensitivity import sensitivities
-from validation.benchmarks.common import machine_summary, timed
+
+from .common import machine_summary, timed
 
 
 def error(s, ref):

@@ -26,8 +26,9 @@ import json
 from mbs_clearance import SliderCrank, simulate
 from mbs_clearance.exudyn_model import CONTACT_VARIANTS, DEFAULT_STEP_SIZE
 from mbs_clearance.reduced import DEFAULT_RTOL
-from validation.benchmarks.common import machine_summary, timed
-from validation.compare import compare
+
+from ..compare import compare
+from .common import machine_summary, timed
 
 
 def main(argv=None):

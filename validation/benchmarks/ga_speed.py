@@ -25,7 +25,8 @@ import numpy as np
 
 from mbs_clearance import SliderCrank, peak_base_force
 from mbs_clearance.optimize import local_process_pool, optimize_link_lengths
-from validation.benchmarks.common import machine_summary, timed
+
+from .common import machine_summary, timed
 
 
 def warm(executor, n=4):

@@ -121,7 +121,7 @@ def _measure(case, cache) -> None:
     except (ImportError, AttributeError, NotImplementedError) as exc:
         rows.append((f"simulation not available ({exc})", float("nan")))
     code = (f"import time, os; t0 = time.perf_counter(); "
-            f"from validation.benchmarks.generation_time import _structure; "
+            f"from {__package__}.generation_time import _structure; "
             f"from mbs_clearance.generate import load_model; "
             f"lk = _structure({case!r}, {tag!r}); "
             f"t1 = time.perf_counter(); load_model(lk); "

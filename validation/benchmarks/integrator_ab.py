@@ -23,7 +23,8 @@ import time
 import numpy as np
 
 from mbs_clearance import SliderCrank, peak_base_force, sensitivities, simulate
-from validation.benchmarks.common import machine_summary
+
+from .common import machine_summary
 
 
 def _cases(mech):

@@ -14,7 +14,8 @@ import argparse
 from mbs_clearance import cases
 from mbs_clearance.linkage_model import run
 from mbs_clearance.sensitivity import sensitivities
-from validation.benchmarks.common import machine_summary, paired
+
+from .common import machine_summary, paired
 
 PARAMETERS = {
     "paper_slider_crank": ("crank.pin.x", "coupler.slider_end.x", "coupler.mass",

@@ -19,7 +19,8 @@ import argparse
 
 from mbs_clearance import SliderCrank, peak_base_force, simulate
 from mbs_clearance.cases import paper_slider_crank
-from validation.benchmarks.common import machine_summary, paired
+
+from .common import machine_summary, paired
 
 
 def main(argv=None) -> None:

@@ -26,7 +26,8 @@ import numpy as np
 
 from mbs_clearance import SliderCrank, peak_base_force, regime_map
 from mbs_clearance.sweep import _map_point, design_at, parse_sweep
-from validation.benchmarks.common import machine_summary
+
+from .common import machine_summary
 
 CLEARANCE = "clearance=1e-6:1e-3:log:60"
 SPEED = "crank_speed=500rpm:10000rpm:40"

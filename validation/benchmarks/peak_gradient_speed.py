@@ -21,7 +21,8 @@ import numpy as np
 from mbs_clearance import SliderCrank, objective, peak_base_force, peak_gradient
 from mbs_clearance.reduced import run
 from mbs_clearance.sensitivity import ddm_setup, sensitivities
-from validation.benchmarks.common import machine_summary
+
+from .common import machine_summary
 
 DESIGNS = {
     "paper": {},

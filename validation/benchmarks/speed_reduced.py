@@ -21,8 +21,9 @@ import sys
 
 from mbs_clearance import SliderCrank, peak_base_force, simulate
 from mbs_clearance.reduced import DEFAULT_RTOL
-from validation.benchmarks.common import machine_summary, paired, timed
-from validation.scipy_reference import solve_scipy
+
+from ..scipy_reference import solve_scipy
+from .common import machine_summary, paired, timed
 
 FIRST_CALL = """
 import time

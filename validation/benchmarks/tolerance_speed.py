@@ -25,7 +25,8 @@ import numpy as np
 
 from mbs_clearance import SliderCrank, peak_base_force, peak_gradient
 from mbs_clearance.tolerance import FitClearance, band, tolerance_study, with_values
-from validation.benchmarks.common import machine_summary, paired
+
+from .common import machine_summary, paired
 
 #: the 8 fields of the target: lengths to +-0.05 mm, masses to +-2 %, crank inertia to
 #: +-5 %, the clearance of an H7/g6 fit on the 20 mm pin, restitution 0.85-0.95

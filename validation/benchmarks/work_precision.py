@@ -23,9 +23,10 @@ from pathlib import Path
 import numpy as np
 
 from mbs_clearance import SliderCrank, reduced, simulate
-from validation.benchmarks.common import machine_summary, timed
-from validation.plugin import make_register, run_script
-from validation.scipy_reference import solve_scipy
+
+from ..plugin import make_register, run_script
+from ..scipy_reference import solve_scipy
+from .common import machine_summary, timed
 
 CASES = {
     "paper (c = 0.01 mm)": (SliderCrank(), 4),
