@@ -141,7 +141,7 @@ class Flow:
         else:
             from . import reduced
 
-            self.model = reduced
+            self.model = reduced.MODEL
             p = reduced.model_parameters(mech)
             y0 = reduced.initial_state(mech)
             atol = np.append(reduced.default_atol(mech, rtol), reduced.event_atol(mech, rtol))
@@ -191,23 +191,6 @@ class Flow:
     def section(self) -> np.ndarray:
         """(J, 4) eccentricity x, y (m) and its rates (m/s) of each joint, now."""
         return np.array([g(self.t, self.y, self.p) for g in self._gaps], dtype=float)
-
-
-def _reduced_gap(t, y, p):
-    """Journal centre minus bearing centre of the paper's joint and its rate: the negated
-    vector of reduced._geometry_trig (which computes the rates but returns only the radial
-    one), from the ideal crank-coupler kinematics."""
-    from . import reduced
-
-    L2, L3, w = p[reduced.P_L2], p[reduced.P_L3], p[reduced.P_W]
-    th2 = w * t + p[reduced.P_TH0]
-    s2, c2 = math.sin(th2), math.cos(th2)
-    s3, c3 = math.sin(y[0]), math.cos(y[0])
-    ex = y[1] - L2 * c2 - L3 * c3
-    ey = -L2 * s2 - L3 * s3
-    exd = y[3] + L2 * w * s2 + L3 * y[2] * s3
-    eyd = -L2 * w * c2 - L3 * y[2] * c3
-    return -ex, -ey, -exd, -eyd
 
 
 # ------------------------------------------------------------------------------ sections
@@ -303,8 +286,8 @@ def poincare_section(mech, revolutions: int = 100, keep: int = 50, *,
     tol, max_period :
         The recurrence criterion (`classify`).
     lyapunov : bool
-        Also integrate one tangent vector (`lyapunov.lyapunov_exponent`'s flow, SliderCrank
-        only) and classify non-periodic motion by the exponent's sign; the state is then
+        Also integrate one tangent vector (`lyapunov.lyapunov_exponent`'s flow) and
+        classify non-periodic motion by the exponent's sign; the state is then
         integrated with the tangent under error control too.
     rtol, method :
         Integrator settings (defaults: 1e-7; dopri5, or dop853 with the tangent).
