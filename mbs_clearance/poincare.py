@@ -32,6 +32,8 @@ import numpy as np
 from ._checks import check_int, check_real
 from .integrator import METHODS, RESULTS, make_settings
 from .linkage import Linkage
+from .linkage_model import DEFAULT_RTOL as LM_DEFAULT_RTOL
+from .linkage_model import REFINE_ITERS
 from .mechanism import SliderCrank
 
 __all__ = ["SECTION_COMPONENTS", "REGIMES", "Flow", "PoincareSection", "poincare_section",
@@ -57,7 +59,7 @@ MAX_PERIOD = 8
 LYAPUNOV_ZERO = 0.02
 
 #: default relative tolerance of section runs (as the plain runs)
-DEFAULT_RTOL = 1e-7
+DEFAULT_RTOL = LM_DEFAULT_RTOL
 
 
 def _is_linkage(mech) -> bool:
@@ -153,7 +155,7 @@ class Flow:
                 rtol, atol, reduced.N_ERR, h_max=mech.period / 8, max_steps=max_steps,
                 record=True, event_tol=event_tol,
                 event_margin=reduced.EVENT_MARGIN * mech.clearance, n_samples=1,
-                refine_iters=24, n_out=0, n_dense=reduced.N_EVENT, n_events=1,
+                refine_iters=REFINE_ITERS, n_out=0, n_dense=reduced.N_EVENT, n_events=1,
                 mem_start=reduced.MEM_START, n_mem=reduced.N_MEM)
             self._gaps = [reduced.MODEL._gap_0]
         self.rtol = rtol
