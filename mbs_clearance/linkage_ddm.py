@@ -19,25 +19,31 @@ rows of the eccentricities and their rates.
 
 from __future__ import annotations
 
+import math
+import sys
 import time
+from typing import Any, NamedTuple
 
 import numpy as np
 
 from .contact import stiffness_eq9_partials
-from .generate import load_model
 from .linkage import Linkage
 from .linkage_model import (
     DEFAULT_MAX_STEPS,
     EVENT_MARGIN,
     REFINE_ITERS,
     _tolerances,
+    default_atol,
     initial_state,
+    load_model,
     pack_parameters,
     trajectory_from_run,
 )
 
-__all__ = ["chain", "initial_sensitivities", "linkage_sensitivities", "fd_step",
-           "DDM_INTEGRATOR"]
+__all__ = ["chain", "combine", "initial_sensitivities", "independent_directions", "setup",
+           "ddm_run", "DdmRun", "linkage_sensitivities", "fd_step", "DDM_INTEGRATOR"]
+
+_THIS = sys.modules[__name__]
 
 #: method of the compiled integrator for the sensitivity equations (as the paper case's)
 DDM_INTEGRATOR = "dop853"
@@ -96,6 +102,24 @@ def _memory_sensitivities(model, names) -> np.ndarray:
     return sig
 
 
+def combine(linkage: Linkage, model, directions):
+    """The chains (`chain`) and initial memory sensitivities (nb, J) of `directions`, each a
+    mapping {description parameter name: coefficient} (a design variable that moves several
+    of the description's values at once: d value / d variable)."""
+    names = sorted({n for d in directions for n in d})
+    per_name = dict(zip(names, chain(linkage, model, names)))
+    sig_name = dict(zip(names, _memory_sensitivities(model, names)))
+    entries, sigma = [], np.zeros((len(directions), model.N_EVENTS))
+    for k, d in enumerate(directions):
+        ent: dict[int, float] = {}
+        for name, coef in d.items():
+            for c, v in per_name[name].items():
+                ent[c] = ent.get(c, 0.0) + coef * v
+            sigma[k] += coef * sig_name[name]
+        entries.append({c: v for c, v in ent.items() if v != 0.0})
+    return entries, sigma
+
+
 def initial_sensitivities(linkage: Linkage, model, p, y0, entries, t0: float = 0.0):
     """(nb, 2 N_Q): exact derivatives of the centred start (`linkage_model.initial_state`)
     along the chains `entries`: the closure e(t0, q, p) = 0 and its rate edot(t0, q, qdot, p)
@@ -122,6 +146,44 @@ def initial_sensitivities(linkage: Linkage, model, p, y0, entries, t0: float = 0
     return s0
 
 
+#: relative tolerance of `independent_directions` on the dimensionless directions
+DIRECTION_TOL = 1e-12
+
+
+def independent_directions(M: np.ndarray, tol: float = DIRECTION_TOL):
+    """A basis of the columns of M (the parameters' directions) and the coefficients C with
+    M = M[:, basis] @ C.
+
+    The sensitivity equations are linear in the direction of a parameter (its initial
+    sensitivity, its chain into the model's parameters and its memory term), so parameters
+    whose directions are linearly dependent need not be integrated separately: a Young's
+    modulus, Poisson ratio and contact stiffness all enter through the stiffness alone, and
+    a parameter with no effect has a zero direction. M must be dimensionless (rows and
+    columns scaled by their reference values, see `setup`); a column joins the basis when
+    its least-squares residual on the basis so far exceeds tol times its norm. Greedy in
+    the given order, so the first of two proportional parameters is the one integrated. At
+    least one column is kept.
+    """
+    M = np.asarray(M, dtype=float)
+    npar = M.shape[1]
+    basis: list[int] = []
+    q = np.zeros((M.shape[0], npar))   # orthonormal basis of the columns kept so far
+    nq = 0
+    for k in range(npar):
+        col = M[:, k]
+        qk = q[:, :nq]
+        r = col - qk @ (qk.T @ col)
+        r = r - qk @ (qk.T @ r)         # Gram-Schmidt twice (re-orthogonalized)
+        rn = math.sqrt(r @ r)
+        if rn > tol * math.sqrt(col @ col) or (not basis and k == npar - 1):
+            basis.append(k)
+            if rn > 0.0:
+                q[:, nq] = r / rn
+                nq += 1
+    coeffs = np.linalg.lstsq(M[:, basis], M, rcond=None)[0]
+    return np.array(basis), coeffs
+
+
 def pack_sensitivity_parameters(model, p, entries, event_time_term: bool = True):
     """The parameter vector of a sensitivity run (layout: generate/sens_runtime.py)."""
     nb = len(entries)
@@ -137,8 +199,122 @@ def pack_sensitivity_parameters(model, p, entries, event_time_term: bool = True)
                            vals.ravel(), np.zeros(work)])
 
 
+def sensitivity_state(y_state, s0, sigma0) -> np.ndarray:
+    """The initial state [q, qdot, s_1 .. s_nb, W, sigma] of a sensitivity run."""
+    n2 = s0.shape[1]
+    return np.concatenate([y_state[:n2], s0.ravel(), [0.0], sigma0.ravel()])
+
+
+def sensitivity_atol(model, atol_plain, scale) -> np.ndarray:
+    """Absolute tolerances of a sensitivity run: the state's (atol_plain[:2 N_Q]), each
+    direction's the state's / its parameter's scale, the work none (1 J), the memories'
+    sensitivities none (not under error control), then the switching functions'
+    (atol_plain[N_STATE:])."""
+    n2 = 2 * model.N_Q
+    a_state = atol_plain[:n2]
+    return np.concatenate([a_state] + [a_state / s for s in scale] + [[1.0]]
+                          + [np.full(len(scale) * model.N_EVENTS, np.inf)]
+                          + [atol_plain[model.N_STATE:]])
+
+
+class DdmRun(NamedTuple):
+    """A recorded DDM run: the model, its plain parameters p0 and the sensitivity run's p,
+    the records (times, sensitivity states, memories, outputs of the monitor), the peaks,
+    the counters, and the coefficients (nb, npar) that combine the integrated directions
+    into the requested ones (`independent_directions`)."""
+
+    model: Any
+    p0: np.ndarray
+    p: np.ndarray
+    ts: np.ndarray
+    ys: np.ndarray
+    ms: np.ndarray
+    peaks: np.ndarray
+    peak_t: np.ndarray
+    outs: np.ndarray
+    stats: dict
+    coeffs: np.ndarray
+    scale: np.ndarray
+
+    @property
+    def nb(self) -> int:
+        return self.coeffs.shape[0]
+
+    def plain_states(self, ys=None) -> np.ndarray:
+        """[q, qdot, W] (n, N_STATE) of the records (or of sensitivity states ys)."""
+        ys = self.ys if ys is None else ys
+        n2 = 2 * self.model.N_Q
+        return np.column_stack([ys[:, :n2], ys[:, n2 * (1 + self.nb)]])
+
+    def state_sensitivities(self, ys=None) -> np.ndarray:
+        """(n, npar, 2 N_Q): d(q, qdot)/db_k of the requested directions."""
+        ys = self.ys if ys is None else ys
+        n2 = 2 * self.model.N_Q
+        s = ys[:, n2:n2 * (1 + self.nb)].reshape(len(ys), self.nb, n2)
+        return np.einsum("nbj,bk->nkj", s, self.coeffs)
+
+    def output_sensitivities(self, ts, ys, ms):
+        """Values (n, N_OUT) and derivatives (n, N_OUT, npar) of the model's outputs along
+        the requested directions at times ts, sensitivity states ys and memories ms."""
+        vals, ders = self.model.output_sensitivities(
+            np.ascontiguousarray(ts), np.ascontiguousarray(ys),
+            np.ascontiguousarray(ms[:, :self.model.N_MEM]), self.p)
+        return vals, ders @ self.coeffs
+
+
+def setup(linkage: Linkage, model, p0, y_state, directions, scale, atol_plain,
+          event_time_term: bool = True):
+    """The sensitivity system of `directions` (see `combine`): one integrated direction per
+    independent one (`independent_directions` on the directions made dimensionless: the
+    initial sensitivities by the state's tolerance scales, the chains by the parameters'
+    values, the memories by the floors, and each direction by its `scale`). Returns (y0, p,
+    atol, coefficients (nb, npar))."""
+    entries, sigma = combine(linkage, model, directions)
+    s0 = initial_sensitivities(linkage, model, p0, y_state, entries)
+    n2, off = 2 * model.N_Q, 1 + 2 * model.N_Q
+    cols = sorted({c for e in entries for c in e})
+    pcol = np.abs(p0[[c - off for c in cols]])
+    dense = np.zeros((len(cols), len(entries)))
+    for k, ent in enumerate(entries):
+        for i, c in enumerate(cols):
+            dense[i, k] = ent.get(c, 0.0)
+    floors = np.array([p0[model.PARAMETERS.index(f"{j}.impact_velocity_floor")]
+                       for j in model.JOINTS])
+    state_scale = default_atol(linkage, model, 1.0)[:n2]
+    M = np.vstack([s0.T / state_scale[:, None],
+                   dense / np.where(pcol > 0.0, pcol, 1.0)[:, None],
+                   sigma.T / floors[:, None]]) * np.asarray(scale)[None, :]
+    basis, coeffs = _THIS.independent_directions(M)
+    coeffs = coeffs * np.asarray(scale)[basis, None] / np.asarray(scale)[None, :]
+    coeffs[:, basis] = np.eye(len(basis))     # exactly (no least-squares round-off)
+    p = pack_sensitivity_parameters(model, p0, [entries[b] for b in basis], event_time_term)
+    y0 = sensitivity_state(y_state, s0[basis], sigma[basis])
+    atol = sensitivity_atol(model, atol_plain, np.asarray(scale)[basis])
+    return y0, p, atol, coeffs
+
+
+def ddm_run(linkage: Linkage, model, p0, y_state, directions, *, scale, rtol, atol_plain,
+            revolutions: int, t_eval=None, event_time_term: bool = True,
+            method: str = DDM_INTEGRATOR, record: bool = True) -> DdmRun:
+    """Integrate the sensitivity equations of `directions` (see `setup`) over `revolutions`
+    drive revolutions (landing on the times t_eval if given, without peak refinement);
+    returns the `DdmRun`."""
+    y0, p, atol, coeffs = setup(linkage, model, p0, y_state, directions, scale,
+                                   atol_plain, event_time_term)
+    nb = coeffs.shape[0]
+    edges = _edges(linkage, revolutions, t_eval)
+    t0 = time.perf_counter()
+    ts, ys, ms, peaks, peak_t, outs, stats = _run(
+        linkage, model, y0, p, edges, rtol, method, 2 * model.N_Q * (1 + nb), atol,
+        record=record, refine=REFINE_ITERS if t_eval is None else 0)
+    stats.update(wall_time=time.perf_counter() - t0, event_time_term=event_time_term,
+                 directions=nb)
+    return DdmRun(model, p0, p, ts, ys, ms, peaks, peak_t, outs, stats, coeffs,
+                  np.asarray(scale, dtype=float))
+
+
 def _run(linkage, model, y0, p, edges, rtol, method, n_err, atol, record=True,
-         max_steps=DEFAULT_MAX_STEPS, kernel="integrate_sens"):
+         max_steps=DEFAULT_MAX_STEPS, kernel="integrate_sens", refine=REFINE_ITERS):
     from .integrator import COUNTERS, METHODS, RESULTS, make_settings
 
     event_tol = max(1e-12 * linkage.min_clearance,
@@ -146,7 +322,7 @@ def _run(linkage, model, y0, p, edges, rtol, method, n_err, atol, record=True,
     settings = make_settings(
         rtol, atol, n_err, h_max=linkage.period / 8, max_steps=max_steps, record=record,
         event_tol=event_tol, event_margin=EVENT_MARGIN * linkage.min_clearance,
-        n_samples=1, refine_iters=REFINE_ITERS, n_out=model.N_OUT if record else 0,
+        n_samples=1, refine_iters=refine, n_out=model.N_OUT if record else 0,
         n_dense=2 * model.N_Q, n_events=model.N_EVENTS, mem_start=model.MEM_START,
         n_mem=model.N_MEM)
     ts, ys, ms, peaks, peak_t, counters, outs, status = getattr(model, kernel)(
@@ -157,18 +333,20 @@ def _run(linkage, model, y0, p, edges, rtol, method, n_err, atol, record=True,
                            f"{ts[-1] if len(ts) else float('nan'):.6g} s: {status.message}")
     stats = {k: int(v) for k, v in zip(COUNTERS, counters)}
     stats.update(method=method, rtol=float(rtol))
-    return ts, ys, ms, peaks, outs, stats
+    return ts, ys, ms, peaks, peak_t, outs, stats
 
 
 def _edges(linkage, revolutions, t_eval):
-    """Window edges of a run: the revolutions, or (t_eval given) 0 and the times t_eval:
-    the run lands on each and ends at the last."""
+    """Window edges of a run: the revolutions, and (t_eval given) the times t_eval: the run
+    lands on each."""
+    edges = np.arange(revolutions + 1) * linkage.period
     if t_eval is None:
-        return np.arange(revolutions + 1) * linkage.period
-    return np.unique(np.concatenate([[0.0], t_eval]))
+        return edges
+    edges = np.union1d(edges, t_eval)
+    return edges[np.concatenate([[True], np.diff(edges) > 1e-12 * edges[-1]])]
 
 
-def _landed(ts, t_eval):
+def landed(ts, t_eval):
     """Indices of the recorded steps at the times t_eval (the integrator lands on each
     window edge; the last record at that time holds the memory the next step uses)."""
     idx = np.searchsorted(ts, t_eval, side="right") - 1
@@ -184,60 +362,51 @@ def linkage_sensitivities(linkage: Linkage, names: tuple[str, ...], revolutions:
     rtol, atol_plain = _tolerances(linkage, model, rtol, None)
     p0 = pack_parameters(linkage, model)
     y_state = initial_state(linkage, model, p0)
-    entries = chain(linkage, model, names)
-    nb, n2, J = len(names), 2 * model.N_Q, model.N_EVENTS
-    s0 = initial_sensitivities(linkage, model, p0, y_state, entries)
-    sigma0 = _memory_sensitivities(model, names)
-    p = pack_sensitivity_parameters(model, p0, entries, event_time_term)
-    y0 = np.concatenate([y_state[:n2], s0.ravel(), [0.0], sigma0.ravel()])
     ref = np.array([linkage.parameter_value(n) for n in names])
     # each parameter's natural scale (as the finite differences' steps: a radius enters
     # through the clearance): the sensitivities' absolute tolerances are the state's / it
     scale = np.array([fd_step(linkage, n, 1.0) for n in names])
-    a_state = atol_plain[:n2]
-    atol = np.concatenate([a_state] + [a_state / s for s in scale] + [[1.0]]
-                          + [np.full(nb * J, np.inf)] + [atol_plain[model.N_STATE:]])
-    edges = _edges(linkage, revolutions, t_eval)
-    t0 = time.perf_counter()
-    ts, ys, ms, peaks, outs, stats = _run(linkage, model, y0, p, edges, rtol, method,
-                                          n2 * (1 + nb), atol)
-    growth = _growth(linkage, model, ts, ys, scale, revolutions)
-    if t_eval is not None:
-        keep = _landed(ts, t_eval)
-        ts, ys, ms, outs = ts[keep], ys[keep], ms[keep], outs[keep]
-    ys, ms = np.ascontiguousarray(ys), np.ascontiguousarray(ms)
-    vals, ders = model.output_sensitivities(np.ascontiguousarray(ts), ys, ms, p)
-    stats.update(wall_time=time.perf_counter() - t0, event_time_term=event_time_term,
-                 directions=nb)
-    plain = np.column_stack([ys[:, :n2], ys[:, n2 * (1 + nb)]])
-    traj = trajectory_from_run(linkage, model, ts, plain, ms, p0, stats,
-                               None if t_eval is not None else peaks, vals)
-    return _fields(model, ts, names, ref, ders, traj, growth, stats, ys)
-
-
-def _growth(linkage, model, ts, ys, scale, revolutions):
-    """Per revolution and parameter, the maximum of the normalized state-sensitivity norm
-    (b_k |s_k| with angles in rad, lengths in clearances, rates by the drive speed)."""
-    n = model.N_Q
-    w = linkage.drive.speed
-    c = linkage.min_clearance
+    run = ddm_run(linkage, model, p0, y_state, [{n: 1.0} for n in names], scale=scale,
+                  rtol=rtol, atol_plain=atol_plain, revolutions=revolutions, t_eval=t_eval,
+                  event_time_term=event_time_term, method=method)
+    w, c = linkage.drive.speed, linkage.min_clearance
     unit = np.array([1.0 if name.endswith(".angle") else c for name in model.COORDINATES])
     unit = np.concatenate([unit, unit * w])
-    revolutions = min(revolutions, int(np.ceil(ts[-1] / linkage.period - 1e-9)))
-    edges = np.minimum(np.arange(revolutions + 1) * linkage.period, ts[-1])
+    ts, ys, ms = run.ts, run.ys, run.ms
+    growth = growth_maxima(ts, run.state_sensitivities(), scale, unit, linkage.period,
+                           revolutions)
+    peaks = run.peaks
+    if t_eval is not None:
+        keep = landed(ts, t_eval)
+        ts, ys, ms = ts[keep], ys[keep], ms[keep]
+        peaks = None
+    vals, ders = run.output_sensitivities(ts, ys, ms)
+    traj = trajectory_from_run(linkage, model, ts, run.plain_states(ys), ms, p0, run.stats,
+                               peaks, vals)
+    ref = np.array([linkage.parameter_value(n) for n in names])
+    fields = _fields(model, ts, names, ref, ders, traj, growth, run.stats)
+    for i, cname in enumerate(model.COORDINATES):
+        fields["outputs"][cname] = run.state_sensitivities(ys)[:, :, i]
+    return fields
+
+
+def growth_maxima(ts, sens, scale, unit, period, revolutions):
+    """Per revolution and parameter, the maximum of the normalized state-sensitivity norm
+    |s_k scale_k / unit| (sens (n, npar, 2 N_Q) at the recorded times ts)."""
+    revolutions = min(revolutions, int(np.ceil(ts[-1] / period - 1e-9)))
+    edges = np.minimum(np.arange(revolutions + 1) * period, ts[-1])
     lo = np.searchsorted(ts, edges[:-1], side="left")
     hi = np.searchsorted(ts, edges[1:], side="right")
-    out = np.zeros((revolutions, len(scale)))
-    for k, s in enumerate(scale):
-        sk = ys[:, 2 * n * (1 + k):2 * n * (2 + k)] * s / unit
-        norm = np.sqrt(np.sum(sk * sk, axis=1))
-        for r in range(revolutions):
-            if hi[r] > lo[r]:
-                out[r, k] = norm[lo[r]:hi[r]].max()
+    norm = np.sqrt(np.sum((sens * (np.asarray(scale)[None, :, None] / unit[None, None, :]))
+                          ** 2, axis=2))
+    out = np.zeros((revolutions, sens.shape[1]))
+    for r in range(revolutions):
+        if hi[r] > lo[r]:
+            out[r] = norm[lo[r]:hi[r]].max(axis=0)
     return out
 
 
-def _fields(model, ts, names, ref, ders, traj, growth, stats, ys=None):
+def _fields(model, ts, names, ref, ders, traj, growth, stats):
     col = {c: i for i, c in enumerate(model.OUT_COLUMNS)}
     mon = model.MONITOR_COLUMN
     force = ders[:, mon:mon + 2, :]
@@ -248,10 +417,6 @@ def _fields(model, ts, names, ref, ders, traj, growth, stats, ys=None):
     if model.N_EVENTS == 1:
         contact = contact[:, 0, :]
     outputs = {c: ders[:, i, :].copy() for c, i in col.items()}
-    if ys is not None:
-        n2 = 2 * model.N_Q
-        for i, c in enumerate(model.COORDINATES):
-            outputs[c] = np.column_stack([ys[:, n2 * (1 + k) + i] for k in range(len(names))])
     return dict(t=ts, parameters=tuple(names), reference=ref, base_force=force.copy(),
                 base_force_magnitude=d_mag, crank_moment=ders[:, col["drive_moment"], :].copy(),
                 contact_force=contact, trajectory=traj, method="ddm", backend="reduced",
@@ -281,9 +446,10 @@ def _plain_at(linkage, revolutions, t_eval, rtol, method):
     p = pack_parameters(linkage, model)
     y0 = initial_state(linkage, model, p)
     edges = _edges(linkage, revolutions, t_eval)
-    ts, ys, ms, _, outs, stats = _run(linkage, model, y0, p, edges, rtol, method,
-                                      2 * model.N_Q, atol, kernel="integrate_model")
-    keep = _landed(ts, t_eval)
+    ts, ys, ms, _, _, outs, stats = _run(linkage, model, y0, p, edges, rtol, method,
+                                         2 * model.N_Q, atol, kernel="integrate_model",
+                                         refine=0)
+    keep = landed(ts, t_eval)
     return ts[keep], ys[keep], ms[keep], outs[keep], p, stats
 
 

@@ -97,11 +97,15 @@ def initial_state(linkage: Linkage, model=None, p=None, t0: float = 0.0, tol: fl
 
 # ---------------------------------------------------------------------------- tolerances
 
-#: default relative tolerance (as the hand-written paper model: reduced.DEFAULT_RTOL)
+#: default relative tolerance of the compiled integrator (chosen by the work-precision
+#: benchmark, see docs/performance.md)
 DEFAULT_RTOL = 1e-7
 
-#: absolute tolerance of each switching function (the penetration) in clearances x rtol
-#: (as reduced.EVENT_ATOL: the penetration's error is controlled at the clearance's scale)
+#: absolute tolerance of each switching function (the penetration), in clearances times
+#: rtol: the event functions and their rates are under error control beside the state
+#: (`integrator._attempt`). The state's own scales (positions ~ the length scale, speeds
+#: ~ omega times it) are 1e4 times coarser than the penetration that sets the contact force
+#: and the stored impact velocity; see docs/performance.md (the accuracy map)
 EVENT_ATOL = 1.5
 
 
@@ -177,14 +181,16 @@ def trajectory_from_run(linkage: Linkage, model, ts, ys, ms, p, stats, peaks, ou
 OPTION_NAMES = ("rtol", "atol", "method", "max_steps", "n_samples", "h_max", "h0",
                 "event_tol", "max_memory")
 
-#: the event search looks closer within this fraction of the smallest clearance of a wall
-#: (as reduced.EVENT_MARGIN)
+#: the event search looks closer (7 more samples and the interpolant's maximum) between two
+#: samples of a step where the cubic Hermite interpolant of a penetration comes within this
+#: fraction of the smallest clearance of the wall (see integrator._search_event)
 EVENT_MARGIN = 0.05
 
 #: default `max_steps` (step attempts) of a run
 DEFAULT_MAX_STEPS = 5_000_000
 
-#: golden-section iterations per refined peak candidate (as the hand-written model)
+#: golden-section iterations per refined peak candidate: the bracket shrinks to 0.618^24 =
+#: 1e-5 of a step, where the peak's quadratic error is ~1e-12 of its value
 REFINE_ITERS = 24
 
 

@@ -1,10 +1,11 @@
 """The largest Lyapunov exponent from the variational equations (issue 19).
 
-The DDM kernels (ddm.py) integrate the state with sensitivities s' = (df/dy) s + (df/db) D +
-(df/d deltadot_minus) sigma. With no parameter (D = 0) and an initial sensitivity v0 (a
-direction in state space) the sensitivity is the tangent vector v(t) = Phi(t) v0 of the
-flow, and the impact-velocity memory's sensitivity sigma carries the tangent of that hidden
-state, set at each contact onset with the event-time term (ddm.on_event_sens) exactly as for
+The DDM kernels of a generated model (linkage_ddm, generate/sens_runtime.py) integrate the
+state with sensitivities s' = (df/dy) s + (df/dp) D + (df/d deltadot_minus) sigma. With no
+parameter (D = 0) and an initial sensitivity v0 (a direction in state space) the
+sensitivity is the tangent vector v(t) = Phi(t) v0 of the flow, and each clearance joint's
+impact-velocity memory sensitivity sigma_j carries the tangent of that hidden state, set at
+each of its contact onsets with the event-time term (sens_runtime.sens_on_event) exactly as for
 parameters: the state's tangent does not jump at the switches (the contact force is zero on
 both sides of delta = 0), the memory's does.
 
@@ -28,8 +29,7 @@ periodic motion, and the same as "carry" where contacts start again and again (c
 The interface a flow offers (`TangentFlow`, `TextbookFlow`): `advance(t1)` integrates
 state and tangent from its time to t1 and returns the window's peak; `renormalise()` scales
 the tangent back to unit norm and returns the growth; `section()` the Poincare section
-of the state. A Linkage's flow will have the same members once the DDM covers generated
-models.
+of the state. Any Linkage (and a SliderCrank, on the paper's generated model) has one.
 
 `TextbookFlow` runs a reference system through the same integrator and the same
 renormalisation code: a linear system x' = A x (the exponent is the largest real part of
@@ -58,7 +58,7 @@ from .integrator import (
 )
 from .linkage import Linkage
 from .mechanism import SliderCrank
-from .poincare import DEFAULT_RTOL, Flow, _reduced_gap, drive_of, section_times
+from .poincare import DEFAULT_RTOL, Flow, drive_of, section_times
 
 __all__ = ["LyapunovResult", "TangentFlow", "TextbookFlow", "lyapunov_exponent",
            "textbook_exponent", "LORENZ", "exponent_of_flow"]
@@ -80,56 +80,63 @@ class LyapunovResult:
 
 
 class TangentFlow(Flow):
-    """The paper's reduced model with one tangent vector (the DDM sensitivity equations
-    with no parameter, `ddm.integrate_sens`). y = [state (4), tangent (4), W]; the
-    memory's tangent is p[ddm.P_SIGMA]."""
+    """A mechanism's generated model with one tangent vector: the DDM sensitivity equations
+    (`linkage_ddm`) with one direction and no parameter. y = [state (2 N_Q), tangent
+    (2 N_Q), W, the memories' tangents (J)]; a SliderCrank runs on the paper's model
+    (`cases.from_slider_crank`)."""
 
     def __init__(self, mech, *, rtol: float | None = None, method: str = "dop853",
                  direction=None, memory: str = "reset", max_steps: int = 5_000_000):
-        if isinstance(mech, Linkage):
-            raise NotImplementedError(
-                "the Lyapunov exponent of a Linkage needs the DDM of generated models "
-                "(pending: s8-ddm); pass the paper's case as a SliderCrank")
         if memory not in ("reset", "carry"):
             raise ValueError(f"memory must be 'reset' or 'carry'; got {memory!r}")
         self.reset_memory = memory == "reset"
         super().__init__(mech, rtol=rtol, method=method, max_steps=max_steps)
-        from . import ddm, reduced
+        from .linkage_ddm import pack_sensitivity_parameters, sensitivity_atol
 
-        rtol = self.rtol
-        c, L3, w = mech.clearance, mech.coupler_length, mech.crank_speed
+        model = self.model
+        n2 = 2 * model.N_Q
         #: scales of the tangent's components: the journal moves within the clearance
-        self.scale = np.array([c / L3, c, w * c / L3, w * c])
-        v = np.full(4, 0.5) if direction is None else np.asarray(direction, dtype=float)
-        if v.shape != (4,) or not np.all(np.isfinite(v)) or not np.any(v != 0.0):
-            raise ValueError("direction must be 4 finite numbers, not all zero (scaled "
-                             f"components of theta3, x4 and their rates); got {direction!r}")
+        self.scale = _tangent_scale(mech, model)
+        v = np.full(n2, 0.5) if direction is None else np.asarray(direction, dtype=float)
+        if v.shape != (n2,) or not np.all(np.isfinite(v)) or not np.any(v != 0.0):
+            raise ValueError(f"direction must be {n2} finite numbers, not all zero (scaled "
+                             f"components of {', '.join(model.COORDINATES)} and their rates); "
+                             f"got {direction!r}")
         v = v / np.linalg.norm(v) * self.scale
-        base = reduced.pack_parameters(mech)
-        self.p = ddm.pack(base, np.zeros((ddm.N_BETA, 1)), np.zeros(1), True)
-        self.y = np.concatenate([reduced.initial_state(mech)[:4], v, [0.0]])
-        atol = np.concatenate([reduced.default_atol(mech, rtol)[:4], rtol * self.scale, [1.0],
-                               reduced.event_atol(mech, rtol)])
-        self.settings = self.settings._replace(
-            atol=atol, n_err=8, mem_start=reduced.P_MODE,
-            n_mem=ddm.P_SIGMA - reduced.P_MODE + 1)
-        self.kernel = ddm.integrate_sens
-        self._sigma = ddm.P_SIGMA
+        self.p = pack_sensitivity_parameters(model, self.p, [{}], True)
+        self.y = np.concatenate([self.y[:n2], v, [self.y[n2]], np.zeros(model.N_EVENTS)])
+        atol_plain = self.settings.atol
+        atol = sensitivity_atol(model, atol_plain, [1.0])
+        atol[n2:2 * n2] = self.rtol * self.scale
+        self.settings = self.settings._replace(atol=atol, n_err=2 * n2)
+        self.kernel = model.integrate_sens
+        self._n2 = n2
 
     def tangent(self) -> np.ndarray:
-        """The tangent vector (4,) in units of the state."""
-        return self.y[4:8]
+        """The tangent vector (2 N_Q,) in units of the state."""
+        return self.y[self._n2:2 * self._n2]
 
     def renormalise(self) -> float:
-        """Scale the tangent to unit scaled norm (the memory's tangent: reset to 0 or
+        """Scale the tangent to unit scaled norm (the memories' tangents: reset to 0 or
         scaled alike, `memory`); returns the growth."""
-        n = float(np.linalg.norm(self.y[4:8] / self.scale))
-        self.y[4:8] /= n
-        self.p[self._sigma] = 0.0 if self.reset_memory else self.p[self._sigma] / n
+        n2 = self._n2
+        n = float(np.linalg.norm(self.y[n2:2 * n2] / self.scale))
+        self.y[n2:2 * n2] /= n
+        sig = slice(2 * n2 + 1, None)
+        self.y[sig] = 0.0 if self.reset_memory else self.y[sig] / n
         return n
 
-    def section(self) -> np.ndarray:
-        return np.array([_reduced_gap(self.t, self.y, self.p)], dtype=float)
+
+def _tangent_scale(mech, model) -> np.ndarray:
+    """Scales of the tangent's components: lengths the (smallest) clearance c, angles c
+    over the coupler's length (the paper's case) or over the linkage's length scale, rates
+    those times the drive speed."""
+    if isinstance(mech, SliderCrank):
+        c, length, w = mech.clearance, mech.coupler_length, mech.crank_speed
+    else:
+        c, length, w = mech.min_clearance, mech.length_scale, mech.drive.speed
+    pos = np.array([c / length if n.endswith(".angle") else c for n in model.COORDINATES])
+    return np.concatenate([pos, w * pos])
 
 
 # ------------------------------------------------------------------ reference systems
@@ -253,11 +260,12 @@ def exponent_of_flow(flow, times, transient: int, window: float) -> LyapunovResu
 def lyapunov_exponent(mech, revolutions: int = 100, transient: int = 50, *,
                       rtol: float | None = None, method: str = "dop853",
                       direction=None, memory: str = "reset") -> LyapunovResult:
-    """The largest Lyapunov exponent of `mech`'s motion (a SliderCrank; a Linkage once the
-    DDM covers generated models), in 1/s (`per_second`) and per crank revolution.
+    """The largest Lyapunov exponent of `mech`'s motion (a SliderCrank or a Linkage), in
+    1/s (`per_second`) and per drive revolution.
 
-    The state and one tangent vector (initial `direction`: 4 scaled components of
-    theta3, x4 and their rates; default all equal) are integrated over `revolutions` crank
+    The state and one tangent vector (initial `direction`: 2 N_Q scaled components of the
+    generated model's coordinates and their rates, for the paper's case theta3, x4 and
+    their rates; default all equal) are integrated over `revolutions` crank
     revolutions, the tangent renormalised at the end of each; the log-growths of the last
     revolutions - `transient` are averaged. rtol (default 1e-7) applies to the state and
     the unit tangent alike. `memory`: the impact-velocity memory's tangent at each

@@ -9,7 +9,7 @@ local maximum, d|F12|/dt = 0 there and the envelope theorem gives
 the DDM sensitivity of |F12| at the refined peak time t*. One DDM run gives both: its
 integrator refines the window's maximum of |F12| by golden section on re-taken steps (the
 step map), and the state and its sensitivities at t* are that step map's value at t*, taken
-again from the recorded step that contains it (`ddm.step_sens`). Reading the sensitivities
+again from the recorded step that contains it (`_step_sens`). Reading the sensitivities
 at the largest *recorded* sample instead is wrong by tens of percent: they oscillate with the
 contact vibration (~13 kHz) between samples.
 
@@ -30,7 +30,7 @@ from typing import Any
 import numba as nb
 import numpy as np
 
-from . import ddm, reduced
+from . import reduced
 from ._checks import check_choice, check_int, check_real
 from .integrator import METHODS, _golden_max, _step_monitor, step_workspace
 from .mechanism import SliderCrank
@@ -38,9 +38,9 @@ from .sensitivity import (
     DDM_INTEGRATOR,
     FD_RELATIVE_STEP,
     _check_parameters,
-    ddm_setup,
     fd_step,
     reference_value,
+    slider_crank_run,
 )
 
 __all__ = ["PeakGradient", "peak_gradient", "KINK_RTOL", "RIVAL_CANDIDATES"]
@@ -172,22 +172,43 @@ def _step_value(t0, y0, mem, p, h, coefficients):
                          q, y_new, f_new, ytmp, np.zeros(0), g, gd)
 
 
+@nb.njit(cache=True, error_model="numpy")
+def _step_sens(t0, y0, p, hs, coefficients, n_out):
+    """Steps of the sizes hs of the generated model's sensitivity equations from (t0, y0),
+    with the memory in p: the states (sensitivities included) at t0 + hs (len(hs), n) and
+    the monitor's outputs there (len(hs), n_out). The integrator's peak refinement
+    maximises |F12| over exactly this step map, so this gives the state at a refined peak
+    time."""
+    A, B, C = coefficients[0], coefficients[1], coefficients[2]
+    n = y0.shape[0]
+    K, _, f_new, ytmp, f0, g, gd = step_workspace(coefficients, n)
+    ys = np.empty((hs.shape[0], n))
+    outs = np.zeros((hs.shape[0], n_out))
+    reduced.MODEL.rhs_sens(t0, y0, p, f0)
+    for k in range(hs.shape[0]):
+        _step_monitor(reduced.MODEL.rhs_sens, reduced.MODEL.monitor_sens, t0, y0, f0, hs[k],
+                      A, B, C, K, p, ys[k], f_new, ytmp, outs[k], g, gd)
+    return ys, outs
+
+
 # ------------------------------------------------------------------ DDM at the peak
 
 class _Run:
-    """A recorded DDM run and what is needed to evaluate the step map inside it."""
+    """A recorded DDM run (`sensitivity.slider_crank_run`) and what is needed to evaluate
+    the step map inside it."""
 
     def __init__(self, mech, names, revolution, rtol, integrator):
-        self.setup = ddm_setup(mech, names, rtol)
+        self.run, self.ref = slider_crank_run(mech, names, rtol, revolutions=revolution,
+                                              method=integrator)
+        self.rtol = self.run.stats["rtol"]
         self.coefficients = METHODS[integrator].arrays()
-        system = self.setup.system
-        (self.ts, self.ys, self.ms, self.peaks, self.peak_t, counters, self.outs,
-         self.p) = reduced.run(mech, revolution, rtol=self.setup.rtol, method=integrator,
-                               system=system, record=True)
-        self.counters = reduced.counters_dict(counters)
-        self.n_mem = system.n_mem
-        self.n_out = system.n_out
-        self.plain_p = reduced.model_parameters(mech)
+        self.ts, self.ys, self.ms = self.run.ts, self.run.ys, self.run.ms
+        self.peaks, self.peak_t, self.outs = self.run.peaks, self.run.peak_t, self.run.outs
+        self.counters = {k: v for k, v in self.run.stats.items()
+                         if k not in ("rtol", "method", "wall_time", "event_time_term",
+                                      "directions")}
+        self.mon = reduced.MODEL.MONITOR_COLUMN
+        self.plain_p = self.run.p0
         self.stages = self.coefficients[1].shape[0]
         # function evaluations after the run: plain (rival refinement), augmented (steps
         # to the peak and the rival)
@@ -196,7 +217,7 @@ class _Run:
         self.post_steps = 0
 
     def magnitudes(self, lo, hi):
-        return np.hypot(self.outs[lo:hi, 8], self.outs[lo:hi, 9])
+        return np.hypot(self.outs[lo:hi, self.mon], self.outs[lo:hi, self.mon + 1])
 
     def step_start(self, t):
         """Index of the recorded step whose end or interior holds t: i with ts[i] < t <=
@@ -218,22 +239,24 @@ class _Run:
         if self.ts[i + 1] == t:
             i += 1
         if self.ts[i] == t:
-            ys, mems, outs = (a[i:i + 1] for a in (self.ys, self.ms, self.outs))
+            ys, mems = self.ys[i:i + 1], self.ms[i:i + 1]
             hs = np.zeros(1)
         else:
-            q = self.p.copy()
-            q[reduced.P_MODE:reduced.P_MODE + self.n_mem] = self.ms[i]
+            q = self.run.p.copy()
+            n_mem = reduced.MODEL.N_MEM
+            q[reduced.MEM_START:reduced.MEM_START + n_mem] = self.ms[i, :n_mem]
             h = t - self.ts[i]
             delta = 1e-4 * (self.ts[i + 1] - self.ts[i])
             hs = np.array([h, h - delta, h + delta]) if newton else np.array([h])
-            ys, outs = ddm.step_sens(self.ts[i], np.ascontiguousarray(self.ys[i]), q, hs,
-                                     self.coefficients, self.n_out)
+            ys, _ = _step_sens(self.ts[i], np.ascontiguousarray(self.ys[i]), q, hs,
+                               self.coefficients, reduced.MODEL.N_OUT)
             self.post_sens += 1 + len(hs) * self.stages
             mems = np.repeat(self.ms[i:i + 1], len(hs), axis=0)
-        _, d_mag, _, _ = ddm.sens_outputs(
-            self.ts[i] + hs, np.ascontiguousarray(ys), np.ascontiguousarray(mems),
-            np.ascontiguousarray(outs), self.p, self.setup.coeffs)
-        f = np.hypot(outs[:, 8], outs[:, 9])
+        vals, ders = self.run.output_sensitivities(self.ts[i] + hs, ys, mems)
+        fx, fy = vals[:, self.mon], vals[:, self.mon + 1]
+        f = np.hypot(fx, fy)
+        d_mag = (fx[:, None] * ders[:, self.mon] + fy[:, None] * ders[:, self.mon + 1]) \
+            / np.maximum(f, 1e-300)[:, None]
         if len(hs) == 1:
             return float(f[0]), d_mag[0], float(t)
         d = hs[2] - hs[0]
@@ -246,10 +269,10 @@ class _Run:
         return float(f[0]), g, float(t + s)
 
     def plain_rows(self, idx):
-        """States (plain model: 4 states and the work) and memories of recorded rows."""
-        y = np.zeros((len(idx), reduced.N_STATE))
-        y[:, :4] = self.ys[idx, :4]
-        return y, np.ascontiguousarray(self.ms[idx, :2])
+        """States (plain model: the coordinates, rates and the work) and memories of
+        recorded rows."""
+        return (np.ascontiguousarray(self.run.plain_states(self.ys[idx])),
+                np.ascontiguousarray(self.ms[idx, :reduced.MODEL.N_MEM]))
 
 
 def _local_maxima(run, lo, hi, period):
@@ -318,7 +341,7 @@ def _ddm_gradient(mech, names, revolution, rtol, integrator, kink_tol):
     kept = [(v, t) for v, t in kept if abs(t - t_int) > eps] + [(peak_int, t_int)]
     kept.sort(key=lambda vt: -vt[0])
     (_, t_peak) = kept[0]
-    tol = max(kink_tol, 100.0 * run.setup.rtol)
+    tol = max(kink_tol, 100.0 * run.rtol)
     at_edge = min(t_peak - t_lo, t_hi - t_peak) <= eps
     peak, grad, _ = run.gradient_at(t_peak, newton=not at_edge)
     rival_t = rival_v = math.nan
@@ -347,14 +370,14 @@ def _ddm_gradient(mech, names, revolution, rtol, integrator, kink_tol):
             f"the peak sits at the window's edge (t = {t_peak:.9g} s in [{t_lo:.9g}, "
             f"{t_hi:.9g}] s): gradient is the derivative of |F12| at the edge, valid while "
             f"the maximum stays there")
-    stats = dict(run.counters, rtol=run.setup.rtol, method=integrator,
-                 directions=int(run.setup.coeffs.shape[0]), integrator_peak=peak_int,
+    stats = dict(run.counters, rtol=run.rtol, method=integrator,
+                 directions=int(run.run.nb), integrator_peak=peak_int,
                  integrator_peak_time=t_int, local_maxima=len(kept),
                  post_fev_plain=run.post_plain, post_fev_sens=run.post_sens,
                  post_refined_steps=run.post_steps,
                  wall_time=time.perf_counter() - t_wall)
     return PeakGradient(
-        peak=peak, time=t_peak, parameters=names, reference=run.setup.ref, gradient=grad,
+        peak=peak, time=t_peak, parameters=names, reference=run.ref, gradient=grad,
         kink=kink, rival_time=rival_t, rival_peak=rival_v, rival_gradient=rival_g,
         at_edge=bool(at_edge), message=message, method="ddm", backend="reduced",
         revolution=revolution, kink_tol=tol, stats=stats)

@@ -32,6 +32,8 @@ import numpy as np
 from ._checks import check_int, check_real
 from .integrator import METHODS, RESULTS, make_settings
 from .linkage import Linkage
+from .linkage_model import DEFAULT_RTOL as LM_DEFAULT_RTOL
+from .linkage_model import REFINE_ITERS
 from .mechanism import SliderCrank
 
 __all__ = ["SECTION_COMPONENTS", "REGIMES", "Flow", "PoincareSection", "poincare_section",
@@ -57,7 +59,7 @@ MAX_PERIOD = 8
 LYAPUNOV_ZERO = 0.02
 
 #: default relative tolerance of section runs (as the plain runs)
-DEFAULT_RTOL = 1e-7
+DEFAULT_RTOL = LM_DEFAULT_RTOL
 
 
 def _is_linkage(mech) -> bool:
@@ -141,7 +143,7 @@ class Flow:
         else:
             from . import reduced
 
-            self.model = reduced
+            self.model = reduced.MODEL
             p = reduced.model_parameters(mech)
             y0 = reduced.initial_state(mech)
             atol = np.append(reduced.default_atol(mech, rtol), reduced.event_atol(mech, rtol))
@@ -153,7 +155,7 @@ class Flow:
                 rtol, atol, reduced.N_ERR, h_max=mech.period / 8, max_steps=max_steps,
                 record=True, event_tol=event_tol,
                 event_margin=reduced.EVENT_MARGIN * mech.clearance, n_samples=1,
-                refine_iters=24, n_out=0, n_dense=reduced.N_EVENT, n_events=1,
+                refine_iters=REFINE_ITERS, n_out=0, n_dense=reduced.N_EVENT, n_events=1,
                 mem_start=reduced.MEM_START, n_mem=reduced.N_MEM)
             self._gaps = [reduced.MODEL._gap_0]
         self.rtol = rtol
@@ -191,23 +193,6 @@ class Flow:
     def section(self) -> np.ndarray:
         """(J, 4) eccentricity x, y (m) and its rates (m/s) of each joint, now."""
         return np.array([g(self.t, self.y, self.p) for g in self._gaps], dtype=float)
-
-
-def _reduced_gap(t, y, p):
-    """Journal centre minus bearing centre of the paper's joint and its rate: the negated
-    vector of reduced._geometry_trig (which computes the rates but returns only the radial
-    one), from the ideal crank-coupler kinematics."""
-    from . import reduced
-
-    L2, L3, w = p[reduced.P_L2], p[reduced.P_L3], p[reduced.P_W]
-    th2 = w * t + p[reduced.P_TH0]
-    s2, c2 = math.sin(th2), math.cos(th2)
-    s3, c3 = math.sin(y[0]), math.cos(y[0])
-    ex = y[1] - L2 * c2 - L3 * c3
-    ey = -L2 * s2 - L3 * s3
-    exd = y[3] + L2 * w * s2 + L3 * y[2] * s3
-    eyd = -L2 * w * c2 - L3 * y[2] * c3
-    return -ex, -ey, -exd, -eyd
 
 
 # ------------------------------------------------------------------------------ sections
@@ -303,8 +288,8 @@ def poincare_section(mech, revolutions: int = 100, keep: int = 50, *,
     tol, max_period :
         The recurrence criterion (`classify`).
     lyapunov : bool
-        Also integrate one tangent vector (`lyapunov.lyapunov_exponent`'s flow, SliderCrank
-        only) and classify non-periodic motion by the exponent's sign; the state is then
+        Also integrate one tangent vector (`lyapunov.lyapunov_exponent`'s flow) and
+        classify non-periodic motion by the exponent's sign; the state is then
         integrated with the tangent under error control too.
     rtol, method :
         Integrator settings (defaults: 1e-7; dopri5, or dop853 with the tangent).

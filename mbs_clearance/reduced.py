@@ -10,12 +10,9 @@ deltadot_minus, set exactly at the located onset) is p[MEM_START:MEM_START + 2] 
 model's parameter vector (`model_parameters`).
 
 This module keeps the orchestration of a SliderCrank's runs: tolerances from its scales,
-revolution windows, the pilot and memory estimate, accuracy flags and the Trajectory.
-
-The hand-written kernels below (`dynamics`, `rhs`, `event`, ..., the P_* layout of
-`pack_parameters`; Eqs. 1-8 and the base force F12 of docs/derivations.md) serve only the
-sensitivity equations of ddm.py (and the scipy reference) until those run on the generated
-model's Jacobians.
+revolution windows, the pilot and memory estimate, accuracy flags and the Trajectory. Its
+sensitivities (sensitivity.py, objective.py) run on the same model's generated Jacobians
+(linkage_ddm).
 """
 
 from __future__ import annotations
@@ -40,19 +37,20 @@ from ._checks import (
     format_bytes,
 )
 from ._generated import paper_slider_crank as MODEL
-from ._trig import sincos
 from ._warnings import AccuracyWarning
-from .contact import CONTACT_MODELS, contact_force, hysteresis_factor
+from .contact import CONTACT_MODELS, hysteresis_factor
 from .integrator import (
-    ACTION_SIG,
     COUNTERS,
-    EVENT_SIG,
-    KERNEL,
     METHODS,
     RESULTS,
-    RHS_SIG,
-    SCALAR_SIG,
     make_settings,
+)
+from .linkage_model import (  # the settings shared with every linkage's runs
+    DEFAULT_MAX_STEPS,
+    DEFAULT_RTOL,
+    EVENT_ATOL,
+    EVENT_MARGIN,
+    REFINE_ITERS,
 )
 from .mechanism import SliderCrank
 
@@ -64,20 +62,12 @@ MODEL_COLUMNS = MODEL.OUT_COLUMNS
 #: index of the clearance in the generated model's p
 P_CLEARANCE = MODEL.PARAMETERS.index(f"{MODEL.JOINTS[0]}.clearance")
 
-# ---- layout of the hand-written kernels' parameter vector (ddm.py's sensitivity system)
-P_L2, P_L3, P_M2, P_M3, P_M4, P_J2, P_J3, P_W, P_TH0, P_C, P_K, P_E, P_G, P_MODEL, \
-    P_VFLOOR, P_MODE, P_DMIN = range(17)
 _THIS = sys.modules[__name__]
-N_PARAMS = 17
-N_MEM = 2          # P_MODE, P_DMIN
+N_MEM = 2          # the joint's mode and impact velocity
 N_STATE = 5        # theta3, x4, theta3dot, x4dot, W
 N_ERR = 4          # W is a quadrature, not under error control
 N_EVENT = 4        # the event function reads theta3, x4 and their rates only (rhs needs
                    # no more: the integrator's continuous extension is formed for these)
-
-#: columns of the hand-written `outputs` (and of a sensitivity run's first outputs)
-OUT_COLUMNS = ("theta3dd", "x4dd", "contact_force", "penetration", "penetration_rate",
-               "ecc_x", "ecc_y", "crank_moment", "base_force_x", "base_force_y")
 
 
 @functools.lru_cache(maxsize=256)
@@ -95,30 +85,6 @@ def model_parameters(mech: SliderCrank) -> np.ndarray:
     values (`cases.from_slider_crank`) and constants, the memory in free flight (a new
     array; the values are cached per mechanism)."""
     return _model_parameters(mech).copy()
-
-
-def pack_parameters(mech: SliderCrank) -> np.ndarray:
-    """Parameter vector p of the hand-written kernels (P_* layout, ddm.py's sensitivity
-    system) for `mech` (memory initialised to free flight)."""
-    p = np.zeros(N_PARAMS)
-    p[P_L2] = mech.crank_length
-    p[P_L3] = mech.coupler_length
-    p[P_M2] = mech.crank_mass
-    p[P_M3] = mech.coupler_mass
-    p[P_M4] = mech.slider_mass
-    p[P_J2] = mech.crank_inertia_value
-    p[P_J3] = mech.coupler_inertia_value
-    p[P_W] = mech.crank_speed
-    p[P_TH0] = mech.initial_crank_angle
-    p[P_C] = mech.clearance
-    p[P_K] = mech.stiffness
-    p[P_E] = mech.restitution
-    p[P_G] = mech.gravity
-    p[P_MODEL] = CONTACT_MODELS[mech.contact_model]
-    p[P_VFLOOR] = mech.impact_velocity_floor
-    p[P_MODE] = 0.0
-    p[P_DMIN] = mech.impact_velocity_floor
-    return p
 
 
 def ideal_kinematics(L2, L3, w, th2):
@@ -149,180 +115,7 @@ def initial_state(mech: SliderCrank, offset: float = 0.0) -> np.ndarray:
     return np.append(q, 0.0)
 
 
-@nb.njit(**KERNEL, inline="always")
-def _geometry_trig(y, p, c2, s2, c3, s3):
-    L2 = p[P_L2]
-    L3 = p[P_L3]
-    w = p[P_W]
-    ex = y[1] - L2 * c2 - L3 * c3
-    ey = -L2 * s2 - L3 * s3
-    exd = y[3] + L2 * w * s2 + L3 * y[2] * s3
-    eyd = -L2 * w * c2 - L3 * y[2] * c3
-    r = math.sqrt(ex * ex + ey * ey)
-    if r > 1e-300:
-        inv_r = 1.0 / r
-        nx = ex * inv_r
-        ny = ey * inv_r
-    else:
-        nx = 1.0
-        ny = 0.0
-    deltadot = nx * exd + ny * eyd
-    return ex, ey, r, r - p[P_C], deltadot, nx, ny
-
-
-@nb.njit(**KERNEL, inline="always")
-def geometry(t, y, p):
-    """Clearance-joint kinematics (Eqs. 1-3, 10-11).
-
-    Returns (ex, ey, r, delta, deltadot, nx, ny): the vector from journal centre to bearing
-    centre, its length, penetration, penetration rate and the unit vector n = e / r
-    (n = (1, 0) when the journal is exactly centred).
-    """
-    th2 = p[P_W] * t + p[P_TH0]
-    s2, c2 = sincos(th2)
-    s3, c3 = sincos(y[0])
-    return _geometry_trig(y, p, c2, s2, c3, s3)
-
-
-@nb.njit(**KERNEL, inline="always")
-def dynamics(t, y, p):
-    """Accelerations, contact force, crank moment (Eq. 8) and base force F12.
-
-    Returns (theta3dd, x4dd, F, delta, deltadot, ex, ey, M2, F12x, F12y); (ex, ey) is the
-    journal centre relative to the bearing centre.
-    """
-    L2 = p[P_L2]
-    L3 = p[P_L3]
-    m2 = p[P_M2]
-    m3 = p[P_M3]
-    m4 = p[P_M4]
-    w = p[P_W]
-    g = p[P_G]
-    # reciprocals first: they depend on parameters only, so the divisions can run while the
-    # trigonometry is computed instead of at the end of the chain (a small gain, within the
-    # benchmark's noise)
-    inv_inertia = 1.0 / (p[P_J3] + 0.25 * m3 * L3 * L3)
-    inv_m4 = 1.0 / m4
-    th2 = w * t + p[P_TH0]
-    s2, c2 = sincos(th2)
-    th3d = y[2]
-    s3, c3 = sincos(y[0])
-    ex, ey, r, delta, deltadot, nx, ny = _geometry_trig(y, p, c2, s2, c3, s3)
-    F = 0.0
-    if p[P_MODE] > 0.5:
-        F = contact_force(delta, deltadot, p[P_DMIN], p[P_K], p[P_E], int(p[P_MODEL]))
-    sin32 = s3 * c2 - c3 * s2          # sin(theta3 - theta2)
-    cos23 = c2 * c3 + s2 * s3          # cos(theta2 - theta3)
-    # Eq. 6: sin(theta3 - alpha) = s3 cos(alpha) - c3 sin(alpha)
-    th3dd = -(0.5 * m3 * L2 * L3 * w * w * sin32 + 0.5 * m3 * g * L3 * c3
-              + L3 * F * (s3 * nx - c3 * ny)) * inv_inertia
-    # Eq. 7
-    x4dd = -F * nx * inv_m4
-    # Eq. 8
-    M2 = (0.5 * m3 * L2 * L3 * (th3dd * cos23 - th3d * th3d * sin32)
-          + (m3 + 0.5 * m2) * g * L2 * c2 + L2 * F * (s2 * nx - c2 * ny))
-    # Newton for crank + coupler: R = m2 aG2 + m3 aG3 + (m2 + m3) g ey - F n, F12 = -R
-    w2 = w * w
-    ag2x = -0.5 * L2 * w2 * c2
-    ag2y = -0.5 * L2 * w2 * s2
-    ag3x = -L2 * w2 * c2 + 0.5 * L3 * (-th3dd * s3 - th3d * th3d * c3)
-    ag3y = -L2 * w2 * s2 + 0.5 * L3 * (th3dd * c3 - th3d * th3d * s3)
-    F12x = -(m2 * ag2x + m3 * ag3x - F * nx)
-    F12y = -(m2 * ag2y + m3 * ag3y + (m2 + m3) * g - F * ny)
-    return th3dd, x4dd, F, delta, deltadot, -ex, -ey, M2, F12x, F12y
-
-
-@nb.njit(**KERNEL, inline="always")
-def _derivative(y, p, res, dydt):
-    """The state derivative from the result `res` of `dynamics`."""
-    dydt[0] = y[2]
-    dydt[1] = y[3]
-    dydt[2] = res[0]
-    dydt[3] = res[1]
-    dydt[4] = res[7] * p[P_W]
-
-
-@nb.njit(**KERNEL, inline="always")
-def _switching(p, delta, deltadot):
-    """The switching function and its rate from penetration and its rate: as they are in
-    free flight, negated in contact."""
-    if p[P_MODE] > 0.5:
-        return -delta, -deltadot
-    return delta, deltadot
-
-
-@nb.njit(**KERNEL, inline="always")
-def peak_and_switching(p, res, g, gd):
-    """|F12| from the result `res` of `dynamics`, the monitored value of the integrator's last
-    stage; the switching function and its rate into g[0], gd[0] (one joint)."""
-    g[0], gd[0] = _switching(p, res[3], res[4])
-    return math.sqrt(res[8] * res[8] + res[9] * res[9])
-
-
-@nb.njit(RHS_SIG, **KERNEL)
-def rhs(t, y, p, dydt):
-    """State derivative [theta3dot, x4dot, theta3dd, x4dd, M2*omega2]."""
-    _derivative(y, p, dynamics(t, y, p), dydt)
-
-
-@nb.njit(EVENT_SIG, **KERNEL)
-def event(t, y, p, j):
-    """Switching function and its rate (the one joint, j = 0): penetration (and its rate)
-    in free flight, minus them in contact."""
-    ex, ey, r, delta, deltadot, nx, ny = geometry(t, y, p)
-    return _switching(p, delta, deltadot)
-
-
-@nb.njit(ACTION_SIG, **KERNEL)
-def on_event(t, y, p, j):
-    """Switch the contact mode (the one joint, j = 0); at onset store the impact velocity
-    (floored, see docs)."""
-    if p[P_MODE] > 0.5:
-        p[P_MODE] = 0.0
-    else:
-        ex, ey, r, delta, deltadot, nx, ny = geometry(t, y, p)
-        p[P_MODE] = 1.0
-        p[P_DMIN] = max(deltadot, p[P_VFLOOR])
-
-
-@nb.njit(SCALAR_SIG, **KERNEL)
-def monitor(t, y, p):
-    """|F12|, the magnitude of the base reaction force."""
-    th3dd, x4dd, F, delta, deltadot, ex, ey, M2, F12x, F12y = dynamics(t, y, p)
-    return math.sqrt(F12x * F12x + F12y * F12y)
-
-
-@nb.njit(cache=True, error_model="numpy")
-def outputs(ts, ys, ms, p):
-    """Evaluate `dynamics` at recorded steps; returns (m, len(OUT_COLUMNS))."""
-    q = p.copy()
-    out = np.empty((ts.shape[0], 10))
-    for i in range(ts.shape[0]):
-        q[P_MODE] = ms[i, 0]
-        q[P_DMIN] = ms[i, 1]
-        res = dynamics(ts[i], ys[i], q)
-        for k in range(10):
-            out[i, k] = res[k]
-    return out
-
-
 # ---------------------------------------------------------------------------- driver
-
-#: the event search looks closer (7 more samples and the interpolant's maximum) between two
-#: samples of a step where the cubic Hermite interpolant of the penetration comes within this
-#: fraction of the clearance of the wall (see integrator._search_event)
-EVENT_MARGIN = 0.05
-
-#: default relative tolerance of the compiled integrator (chosen by the work-precision
-#: benchmark, see docs/performance.md)
-DEFAULT_RTOL = 1e-7
-
-#: absolute tolerance of the switching function (the penetration), in clearances times rtol:
-#: the event function and its rate are under error control beside the state
-#: (`integrator._attempt`). The state's own scales (the slider's position ~L2 + L3, its
-#: speed ~omega2 L2) are 1e4 times coarser than the penetration that sets the contact force
-#: and the stored impact velocity; see docs/performance.md (the accuracy map)
-EVENT_ATOL = 1.5
 
 #: hysteresis factor xi (contact.py) above which the contact law counts as damping-dominated
 #: (the damping term exceeds the spring term xi-fold at the impact speed) and the
@@ -378,9 +171,6 @@ WINDOW_BYTES = 24
 
 #: largest `n_samples` (interior event samples per step) accepted
 MAX_SAMPLES = 1000
-
-#: default `max_steps` (step attempts) of a run
-DEFAULT_MAX_STEPS = 5_000_000
 
 #: runs of at least this many revolutions are preceded by a one-revolution pilot (no
 #: record) whose step count estimates the run's steps and memory; it costs at most 1/16
@@ -473,7 +263,7 @@ class System(NamedTuple):
     atol: np.ndarray
     #: outputs its monitor writes at each step, recorded (0: none)
     n_out: int = 0
-    #: names of those outputs (None: the hand-written OUT_COLUMNS, a sensitivity run's)
+    #: names of those outputs (the generated model's OUT_COLUMNS)
     columns: tuple | None = None
 
 
@@ -498,8 +288,7 @@ def run(mech: SliderCrank, revolutions: int = 4, *, rtol: float | None = None,
         t_eval: np.ndarray | None = None, system=None, select: bool = True,
         initial_offset: float = 0.0, max_memory: int | None = None):
     """Integrate the reduced model; returns (ts, ys, ms, peaks, peak_times, counters, outs, p)
-    with outs the outputs of `dynamics` (OUT_COLUMNS) at the recorded steps (plain model;
-    no columns for an augmented `system`).
+    with outs the generated model's outputs (MODEL.OUT_COLUMNS) at the recorded steps.
 
     The integration runs over the crank revolutions 1..`revolutions`, or over the windows
     given by `edges` (times, increasing, from 0); `peaks` holds max |F12| per window, refined
@@ -550,9 +339,7 @@ def run(mech: SliderCrank, revolutions: int = 4, *, rtol: float | None = None,
         initial_offset = check_real("initial_offset (fraction of the clearance)",
                                     initial_offset, -1.0, 1.0)
     win_edges = edges
-    # golden-section iterations per peak candidate: the bracket shrinks to 0.618^24 = 1e-5 of
-    # a step (~1e-10 s here), where the peak's quadratic error is ~1e-12 of its value
-    refine = 24
+    refine = REFINE_ITERS
     if t_eval is not None:
         t_eval = check_times("t_eval", t_eval, float(edges[-1]))
         edges = np.union1d(edges, t_eval)
@@ -569,7 +356,7 @@ def run(mech: SliderCrank, revolutions: int = 4, *, rtol: float | None = None,
     if system is None:
         system = plain_system(mech, np.append(atol_arr, event_atol(mech, rtol)),
                               initial_offset)
-    kernel, y0, p, mem_start, n_mem, n_err, atol_arr, n_out, columns = system
+    kernel, y0, p, mem_start, n_mem, n_err, atol_arr, n_out, _ = system
     if not record:
         n_out = 0
     settings = make_settings(rtol, atol_arr, n_err, h0=h0, h_max=h_max, max_steps=step_limit,
@@ -592,13 +379,10 @@ def run(mech: SliderCrank, revolutions: int = 4, *, rtol: float | None = None,
     if t_eval is not None and select:
         keep = landed_indices(ts, t_eval)
         ts, ys, ms, outs = ts[keep], ys[keep], ms[keep], outs[keep]
-        if columns is not None:            # the generated model's outputs (recorded)
-            mags = np.hypot(outs[:, MODEL.MONITOR_COLUMN], outs[:, MODEL.MONITOR_COLUMN + 1])
-        elif outs.shape[1] >= len(OUT_COLUMNS):   # |F12| recorded by the integrator
-            mags = np.hypot(outs[:, 8], outs[:, 9])
-        else:
-            mags = np.array([monitor(ts[i], ys[i], _with_memory(p, mem_start, ms[i]))
-                             for i in range(len(ts))])
+        if outs.shape[1] < MODEL.N_OUT:          # no outputs recorded: evaluated here
+            outs = MODEL.outputs(np.ascontiguousarray(ts), np.ascontiguousarray(ys),
+                                 np.ascontiguousarray(ms[:, :N_MEM]), p)
+        mags = np.hypot(outs[:, MODEL.MONITOR_COLUMN], outs[:, MODEL.MONITOR_COLUMN + 1])
         peaks = np.array([mags[(ts >= a) & (ts <= b)].max(initial=0.0)
                           for a, b in zip(win_edges[:-1], win_edges[1:])])
     return ts, ys, ms, peaks, peak_t, counters, outs, p
@@ -607,12 +391,6 @@ def run(mech: SliderCrank, revolutions: int = 4, *, rtol: float | None = None,
 def landed_indices(ts: np.ndarray, t_eval: np.ndarray) -> np.ndarray:
     """Indices of the recorded steps that landed on the times `t_eval`."""
     return np.minimum(np.searchsorted(ts, t_eval), len(ts) - 1)
-
-
-def _with_memory(p, mem_start, mem):
-    q = p.copy()
-    q[mem_start:mem_start + len(mem)] = mem
-    return q
 
 
 def _tolerances(mech, rtol, atol):
@@ -744,18 +522,16 @@ def _floored_impacts(ms, floor):
 
 #: the output columns of a Trajectory's series (base force x, y, eccentricity x, y, crank
 #: moment, contact force, penetration, slider acceleration), by name in the generated
-#: model's outputs and in the hand-written ones
-_SERIES = (("crank_pivot.reaction_x", "base_force_x"), ("crank_pivot.reaction_y", "base_force_y"),
-           ("coupler_slider.ecc_x", "ecc_x"), ("coupler_slider.ecc_y", "ecc_y"),
-           ("drive_moment", "crank_moment"), ("coupler_slider.contact_force", "contact_force"),
-           ("coupler_slider.penetration", "penetration"), ("slider_guide.s.acc", "x4dd"))
+#: model's outputs
+_SERIES = ("crank_pivot.reaction_x", "crank_pivot.reaction_y", "coupler_slider.ecc_x",
+           "coupler_slider.ecc_y", "drive_moment", "coupler_slider.contact_force",
+           "coupler_slider.penetration", "slider_guide.s.acc")
 
 
 def _series_columns(columns) -> np.ndarray:
     """Indices of the `_SERIES` columns in the output layout `columns`."""
     names = tuple(columns)
-    return np.array([names.index(a) if a in names else names.index(b) for a, b in _SERIES],
-                    dtype=np.int64)
+    return np.array([names.index(a) for a in _SERIES], dtype=np.int64)
 
 
 @nb.njit(cache=True)
@@ -800,19 +576,19 @@ def _columns(ys, ms, out, col):
 
 
 def trajectory_from_states(mech, ts, ys, ms, p, stats, peaks, outs=None,
-                           columns=OUT_COLUMNS):
+                           columns=MODEL.OUT_COLUMNS):
     """Build a `Trajectory` from recorded states [theta3, x4, theta3dot, x4dot, ..., W],
-    memories [mode, dmin, ...] and, if recorded by the integrator, outputs named `columns`
-    (the generated model's MODEL_COLUMNS with its parameters p, or the hand-written
-    OUT_COLUMNS with pack_parameters' p, first of a sensitivity run's wider record, read in
-    place, not copied); without outputs they are evaluated here."""
+    memories [mode, dmin, ...] and, if recorded by the integrator, the generated model's
+    outputs named `columns` (read in place, not copied); without outputs they are evaluated
+    here from the model's parameters p."""
     from .trajectory import Trajectory
 
     ys = np.ascontiguousarray(ys)
     ms = np.ascontiguousarray(ms)
     if outs is None or outs.shape[1] == 0:
-        evaluate = MODEL.outputs if tuple(columns) == MODEL.OUT_COLUMNS else outputs
-        out = evaluate(np.ascontiguousarray(ts), ys, np.ascontiguousarray(ms[:, :N_MEM]), p)
+        out = MODEL.outputs(np.ascontiguousarray(ts), ys, np.ascontiguousarray(ms[:, :N_MEM]),
+                            p)
+        columns = MODEL.OUT_COLUMNS
     else:
         out = outs
     (base_force, crank_moment, contact_force, penetration, eccentricity, slider_position,

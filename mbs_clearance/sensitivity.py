@@ -1,31 +1,32 @@
 """Design sensitivities of the base reaction force (paper Section 3, Figs. 4-6).
 
 `sensitivities(mech, parameters, method="ddm")` integrates the direct-differentiation
-equations of the reduced model (kernels in `ddm.py`); ``method="fd"`` takes central finite
+equations of the reduced model, generated with its exact Jacobians (`linkage_ddm`; a
+SliderCrank's fields are directions in its description's parameters,
+`slider_crank_directions`); ``method="fd"`` takes central finite
 differences through any backend, with the runs in parallel.
 """
 
 from __future__ import annotations
 
 import json
-import math
 import time
 from concurrent.futures import Executor, ProcessPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, NamedTuple
+from typing import Any
 
 import numpy as np
 
-from . import ddm, reduced
+from . import reduced
 from ._checks import check_bool, check_choice, check_int, check_real, check_times
-from .contact import stiffness_eq9_partials
 from .integrator import METHODS
+from .linkage_ddm import independent_directions  # noqa: F401  (public here since session 5)
 from .mechanism import CONTINUOUS_FIELDS, SliderCrank, check_field_names
 from .trajectory import Trajectory, annotate, load_trajectory
 
 __all__ = ["Sensitivities", "sensitivities", "load_sensitivities", "DEFAULT_PARAMETERS",
-           "chain_matrix", "reference_value", "fd_step"]
+           "slider_crank_directions", "reference_value", "fd_step"]
 
 #: the paper's set of design parameters (Figs. 4-6)
 DEFAULT_PARAMETERS = ("crank_length", "coupler_length", "coupler_mass", "slider_mass",
@@ -301,203 +302,107 @@ def reference_value(mech: SliderCrank, name: str) -> float:
     return float(getattr(mech, name))
 
 
-def chain_matrix(mech: SliderCrank, names: tuple[str, ...]) -> np.ndarray:
-    """D[beta, k] = d beta / d b_k: kernel parameters beta (ddm.BETA_NAMES) against the
-    named SliderCrank fields, with the chain rule of derived values."""
-    D = np.zeros((ddm.N_BETA, len(names)))
-    K_derived = mech.contact_stiffness is None
-    J3_derived = mech.coupler_inertia is None
-    _, dK_drj, dK_drb, dK_dE, dK_dnu = stiffness_eq9_partials(
-        mech.journal_radius, mech.bearing_radius, mech.youngs_modulus, mech.poisson_ratio)
-    L3, m3 = mech.coupler_length, mech.coupler_mass
-    for k, name in enumerate(names):
-        col = D[:, k]
-        if name == "crank_length":
-            col[ddm.B_L2] = 1.0
-        elif name == "coupler_length":
-            col[ddm.B_L3] = 1.0
-            if J3_derived:
-                col[ddm.B_J3] = m3 * L3 / 6.0
-        elif name == "crank_mass":
-            col[ddm.B_M2] = 1.0
-        elif name == "coupler_mass":
-            col[ddm.B_M3] = 1.0
-            if J3_derived:
-                col[ddm.B_J3] = L3**2 / 12.0
-        elif name == "slider_mass":
-            col[ddm.B_M4] = 1.0
-        elif name == "coupler_inertia":
-            col[ddm.B_J3] = 1.0
-        elif name == "crank_inertia":
-            pass  # no effect at constant crank speed
-        elif name == "crank_speed":
-            col[ddm.B_W] = 1.0
-        elif name == "initial_crank_angle":
-            col[ddm.B_TH0] = 1.0
-        elif name == "bearing_radius":
-            col[ddm.B_C] = 1.0
-            if K_derived:
-                col[ddm.B_K] = dK_drb
-        elif name == "journal_radius":
-            col[ddm.B_C] = -1.0
-            if K_derived:
-                col[ddm.B_K] = dK_drj
-        elif name == "youngs_modulus":
-            col[ddm.B_K] = dK_dE if K_derived else 0.0
-        elif name == "poisson_ratio":
-            col[ddm.B_K] = dK_dnu if K_derived else 0.0
-        elif name == "restitution":
-            col[ddm.B_E] = 1.0
-        elif name == "contact_stiffness":
-            col[ddm.B_K] = 1.0
-        elif name == "gravity":
-            col[ddm.B_G] = 1.0
-        elif name == "impact_velocity_floor":
-            col[ddm.B_VMIN] = 1.0
-        else:  # pragma: no cover - guarded by _check_parameters
-            raise ValueError(f"no sensitivity for {name!r}")
-    return D
+#: the SliderCrank's fields as the description's parameters (`cases.from_slider_crank`):
+#: field -> the description parameters it sets, with the derivative of each (a number, or a
+#: function of the mechanism for the derived values); the inertias derived from a uniform
+#: rod (field None) move with the lengths and masses too (`_derived_inertia`)
+_JOINT = "coupler_slider"
+_FIELD_MAP = {
+    "crank_length": {"crank.pivot.x": -0.5, "crank.pin.x": 0.5},
+    "coupler_length": {"coupler.crank_end.x": -0.5, "coupler.slider_end.x": 0.5},
+    "crank_mass": {"crank.mass": 1.0},
+    "coupler_mass": {"coupler.mass": 1.0},
+    "slider_mass": {"slider.mass": 1.0, "slider.inertia": 0.01**2 / 6.0},
+    "crank_inertia": {"crank.inertia": 1.0},
+    "coupler_inertia": {"coupler.inertia": 1.0},
+    "crank_speed": {"drive.speed": 1.0},
+    "initial_crank_angle": {"drive.initial_angle": 1.0},
+    "gravity": {"gravity": 1.0},
+    **{f: {f"{_JOINT}.{f}": 1.0} for f in (
+        "bearing_radius", "journal_radius", "youngs_modulus", "poisson_ratio", "restitution",
+        "contact_stiffness", "impact_velocity_floor")},
+}
 
 
-def _initial_sensitivities(mech: SliderCrank, D: np.ndarray) -> np.ndarray:
-    """ds(0)/db (4, p) by complex step on the initial state (exact to rounding)."""
-    args = [mech.crank_length, mech.coupler_length, mech.crank_speed,
-            mech.initial_crank_angle]
-    rows = [ddm.B_L2, ddm.B_L3, ddm.B_W, ddm.B_TH0]
-    dy_dbeta = np.zeros((4, ddm.N_BETA))
-    h = 1e-30
-    for j, row in enumerate(rows):
-        a = [complex(v) for v in args]
-        a[j] += 1j * h
-        dy_dbeta[:, row] = np.imag(reduced.ideal_kinematics(*a)) / h
-    return dy_dbeta @ D
+def _derived_inertia(mech: SliderCrank, name: str) -> dict[str, float]:
+    """d(inertia)/d(field) of the uniform-rod inertias m L^2 / 12 where they are derived."""
+    out = {}
+    if mech.crank_inertia is None:
+        m, L = mech.crank_mass, mech.crank_length
+        out.update({"crank_length": ("crank.inertia", m * L / 6.0),
+                    "crank_mass": ("crank.inertia", L * L / 12.0)})
+    if mech.coupler_inertia is None:
+        m, L = mech.coupler_mass, mech.coupler_length
+        out.update({"coupler_length": ("coupler.inertia", m * L / 6.0),
+                    "coupler_mass": ("coupler.inertia", L * L / 12.0)})
+    return dict([out[name]]) if name in out else {}
+
+
+def slider_crank_directions(mech: SliderCrank, names) -> list[dict[str, float]]:
+    """Per SliderCrank field, its direction in the description's parameters
+    ({dotted name: d value / d field}, exact: the mapping `cases.from_slider_crank` is
+    linear in every field but the derived inertias, differentiated here); the description's
+    own chain (`linkage_ddm.chain`) takes the radii and the material into the clearance and
+    the Eq. 9 stiffness."""
+    return [{**_FIELD_MAP[n], **_derived_inertia(mech, n)} for n in names]
 
 
 #: default method of the compiled integrator for the sensitivity equations
 DDM_INTEGRATOR = "dop853"
 
 
-#: relative tolerance of `independent_directions` on the dimensionless directions
-DIRECTION_TOL = 1e-12
+def slider_crank_run(mech: SliderCrank, names, rtol, *, revolutions: int, t_eval=None,
+                     event_time_term: bool = True, method: str = DDM_INTEGRATOR,
+                     record: bool = True):
+    """The DDM run (`linkage_ddm.ddm_run`) of the SliderCrank fields `names` on the paper's
+    generated model (reduced.MODEL), with the plain run's tolerances (reduced.default_atol,
+    reduced.event_atol); each direction's tolerance scaled by its field's value."""
+    from . import linkage_ddm
+    from .cases import from_slider_crank
 
-
-def independent_directions(M: np.ndarray, tol: float = DIRECTION_TOL):
-    """A basis of the columns of M (the parameters' directions) and the coefficients C with
-    M = M[:, basis] @ C.
-
-    The sensitivity equations are linear in the direction of a parameter (its initial
-    sensitivity, its column of the chain matrix D and its memory term), so parameters whose
-    directions are linearly dependent need not be integrated separately: youngs_modulus,
-    poisson_ratio and contact_stiffness all enter through K alone, and a parameter with no
-    effect (crank_inertia at constant crank speed) has a zero direction. M must be
-    dimensionless (rows and columns scaled by their reference values, see `_ddm`); a column
-    joins the basis when its least-squares residual on the basis so far exceeds tol times
-    its norm. Greedy in the given order, so the first of two proportional parameters is the
-    one integrated. At least one column is kept.
-    """
-    M = np.asarray(M, dtype=float)
-    npar = M.shape[1]
-    basis: list[int] = []
-    q = np.zeros((M.shape[0], npar))   # orthonormal basis of the columns kept so far
-    nq = 0
-    for k in range(npar):
-        col = M[:, k]
-        qk = q[:, :nq]
-        r = col - qk @ (qk.T @ col)
-        r = r - qk @ (qk.T @ r)         # Gram-Schmidt twice (re-orthogonalized)
-        rn = math.sqrt(r @ r)
-        if rn > tol * math.sqrt(col @ col) or (not basis and k == npar - 1):
-            basis.append(k)
-            if rn > 0.0:
-                q[:, nq] = r / rn
-                nq += 1
-    coeffs = np.linalg.lstsq(M[:, basis], M, rcond=None)[0]
-    return np.array(basis), coeffs
-
-
-class DdmSetup(NamedTuple):
-    """The sensitivity system of a DDM run (`ddm_setup`): the `reduced.System` to integrate,
-    the parameters' values `ref` (b0), their column scales and the coefficients (nb, npar)
-    that combine the integrated directions into the parameters' sensitivities."""
-
-    system: reduced.System
-    rtol: float
-    ref: np.ndarray
-    scale: np.ndarray
-    coeffs: np.ndarray
-
-
-def ddm_setup(mech, names, rtol, event_time_term=True, event_control=True) -> DdmSetup:
-    """The augmented system of the DDM for the named parameters (one integration per
-    independent direction, `independent_directions`), ready for `reduced.run`. With
-    `event_control` the penetration (and for a damping-dominated law its rate) is under
-    error control beside the state, as in the plain run (`reduced.event_atol`)."""
-    D_all = chain_matrix(mech, names)
+    linkage = from_slider_crank(mech)
+    rtol = reduced.DEFAULT_RTOL if rtol is None else rtol
+    atol = np.concatenate([reduced.default_atol(mech, rtol), reduced.event_atol(mech, rtol)])
     ref = np.array([reference_value(mech, n) for n in names])
-    s0_all = _initial_sensitivities(mech, D_all)
-    # integrate one sensitivity per independent direction: its initial value and its column
-    # of D (which holds the memory's initial sensitivity in row B_VMIN), made dimensionless
-    # by the parameters' values (columns), the states' and kernel parameters' scales (rows)
-    scale_all = np.where(ref != 0.0, np.abs(ref), 1.0)
-    base = reduced.pack_parameters(mech)
-    beta = np.abs(base[ddm.BETA_SLOTS])
-    L2, w = mech.crank_length, mech.crank_speed
-    row_scale = np.concatenate([[1.0, L2, w, w * L2], np.where(beta > 0.0, beta, 1.0)])
-    basis, coeffs = independent_directions(
-        np.vstack([s0_all, D_all]) * scale_all[None, :] / row_scale[:, None])
-    coeffs = coeffs * scale_all[basis, None] / scale_all[None, :]   # back to units
-    D, s0, nb = D_all[:, basis], s0_all[:, basis], len(basis)
-    sigma0 = D[ddm.B_VMIN].copy()
-    p = ddm.pack(base, D, sigma0, event_time_term)
-    y_state = reduced.initial_state(mech)
-    y0 = np.concatenate([y_state[:4], s0.T.ravel(), [0.0]])
-    rtol_v = reduced.DEFAULT_RTOL if rtol is None else rtol
-    atol_state = reduced.default_atol(mech, rtol_v)[:4]
-    scale = scale_all[basis]
-    atol = np.concatenate([atol_state] + [atol_state / s for s in scale] + [[1.0]]
-                          + ([reduced.event_atol(mech, rtol_v)] if event_control else []))
-    n_err = 4 + 4 * nb
-    # the recorded memory: p[P_MODE : P_SIGMA + nb] (mode, impact velocity, the flags, the
-    # memory's sensitivities)
-    system = reduced.System(ddm.integrate_sens, y0, p, reduced.P_MODE,
-                            ddm.P_SIGMA - reduced.P_MODE + nb, n_err, atol,
-                            ddm.N_OUT_PLAIN + nb)
-    return DdmSetup(system, rtol_v, ref, scale_all, coeffs)
+    scale = np.where(ref != 0.0, np.abs(ref), 1.0)
+    run = linkage_ddm.ddm_run(
+        linkage, reduced.MODEL, reduced.model_parameters(mech), reduced.initial_state(mech),
+        slider_crank_directions(mech, names), scale=scale, rtol=rtol, atol_plain=atol,
+        revolutions=revolutions, t_eval=t_eval, event_time_term=event_time_term,
+        method=method, record=record)
+    return run, ref
 
 
 def _ddm(mech, names, revolutions, rtol, t_eval, event_time_term, method):
-    system, rtol_v, ref, scale_all, coeffs = ddm_setup(mech, names, rtol, event_time_term)
-    nb = coeffs.shape[0]
-    t0 = time.perf_counter()
-    ts, ys, ms, peaks, _, counters, outs, p = reduced.run(
-        mech, revolutions, rtol=rtol_v, method=method, t_eval=t_eval, system=system,
-        select=False)
+    from .linkage_ddm import growth_maxima, landed
+
+    run, ref = slider_crank_run(mech, names, rtol, revolutions=revolutions, t_eval=t_eval,
+                                event_time_term=event_time_term, method=method)
+    model = run.model
     # growth diagnostic on all steps: normalized state sensitivities per revolution
-    state_scale = np.array([1.0, mech.clearance, mech.crank_speed,
-                            mech.crank_speed * mech.clearance / mech.crank_length])
-    weights = ((scale_all[:, None] / state_scale[None, :]) ** 2).ravel()
-    # maxima per revolution (the steps are sorted; a step on an edge counts for both sides)
-    edges = np.arange(revolutions + 1) * mech.period
-    lo = np.searchsorted(ts, edges[:-1], side="left")
-    hi = np.searchsorted(ts, edges[1:], side="right")
-    growth = ddm.norm_maxima(ys, coeffs, weights, lo, hi)
+    unit = np.array([1.0, mech.clearance, mech.crank_speed,
+                     mech.crank_speed * mech.clearance / mech.crank_length])
+    growth = growth_maxima(run.ts, run.state_sensitivities(), run.scale, unit, mech.period,
+                           revolutions)
+    ts, ys, ms, peaks = run.ts, run.ys, run.ms, run.peaks
     if t_eval is not None:
-        keep = reduced.landed_indices(ts, t_eval)
-        ts, ys, ms, outs = ts[keep], ys[keep], ms[keep], outs[keep]
-    ys, ms, outs = (np.ascontiguousarray(a) for a in (ys, ms, outs))
-    d_force, d_mag, d_moment, d_contact = ddm.sens_outputs(ts, ys, ms, outs, p, coeffs)
-    stats = reduced.counters_dict(counters)
-    stats.update(rtol=rtol_v, method=method, wall_time=time.perf_counter() - t0,
-                 event_time_term=event_time_term, directions=nb)
-    # (the states are ys[:, :4], the crank work the last column, as in a plain run)
-    traj = annotate(reduced.trajectory_from_states(mech, ts, ys, ms,
-                                                   reduced.pack_parameters(mech), stats,
-                                                   None if t_eval is not None else peaks,
-                                                   outs))
+        keep = landed(ts, t_eval)
+        ts, ys, ms, peaks = ts[keep], ys[keep], ms[keep], None
+    vals, ders = run.output_sensitivities(ts, ys, ms)
+    col = {c: i for i, c in enumerate(model.OUT_COLUMNS)}
+    mon = model.MONITOR_COLUMN
+    d_force = ders[:, mon:mon + 2, :].copy()
+    fx, fy = vals[:, mon], vals[:, mon + 1]
+    d_mag = ((fx[:, None] * d_force[:, 0] + fy[:, None] * d_force[:, 1])
+             / np.maximum(np.hypot(fx, fy), 1e-300)[:, None])
+    traj = annotate(reduced.trajectory_from_states(
+        mech, ts, run.plain_states(ys), ms[:, :model.N_MEM], run.p0, run.stats, peaks, vals,
+        model.OUT_COLUMNS))
     return Sensitivities(
         t=ts, parameters=names, reference=ref, base_force=d_force, base_force_magnitude=d_mag,
-        crank_moment=d_moment, contact_force=d_contact, trajectory=traj, method="ddm",
-        backend="reduced", growth=growth, stats=stats)
+        crank_moment=ders[:, col["drive_moment"], :].copy(),
+        contact_force=ders[:, col[f"{_JOINT}.contact_force"], :].copy(), trajectory=traj,
+        method="ddm", backend="reduced", growth=growth, stats=run.stats)
 
 
 def fd_step(mech: SliderCrank, name: str, relative: float = FD_RELATIVE_STEP) -> float:

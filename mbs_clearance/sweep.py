@@ -411,9 +411,6 @@ def regime_map(mech, sweep, revolutions: int = 100, keep: int = 50, scheduler=No
         values = {a.name: a.values[i] for a, i in zip(axes, idx)}
         designs.append(design_at(mech, values, case, overrides))
     base = designs[0]
-    if lyapunov and isinstance(base, Linkage):
-        raise ValueError("lyapunov=True needs the DDM of generated models (pending: s8-ddm); "
-                         "for a Linkage, map without the exponent")
     J = len(joints_of(base))
     settings = dict(revolutions=revolutions, keep=keep, angle=angle, tol=tol,
                     max_period=max_period, lyapunov=lyapunov, rtol=rtol)

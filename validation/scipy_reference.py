@@ -4,8 +4,9 @@ An independent integrator for the same equations: scipy steps, locates the conta
 separation with its own event machinery (terminal events, restart with the memory updated),
 and the peaks of |F12| are refined on scipy's dense output. Shares only the right-hand side
 and the contact-mode update with the compiled integrator. `solve_scipy` takes the paper's
-`SliderCrank` (hand-written reduced model), `solve_scipy_linkage` any `Linkage` (its
-generated model, one terminal event per clearance joint).
+`SliderCrank` (its generated model, with the SliderCrank's tolerances and start),
+`solve_scipy_linkage` any `Linkage` (its generated model, one terminal event per clearance
+joint).
 """
 
 from __future__ import annotations
@@ -46,11 +47,13 @@ class ScipyResult:
 def solve_scipy(mech: SliderCrank, edges: np.ndarray | None = None, revolutions: int = 4,
                 method: str = "DOP853", rtol: float = 1e-12,
                 atol: np.ndarray | None = None) -> ScipyResult:
-    """Integrate with solve_ivp from edges[0] to edges[-1]; max |F12| per window."""
+    """The paper's slider-crank (its generated model, reduced.MODEL, as the compiled runs)
+    integrated with solve_ivp from edges[0] to edges[-1]; max |F12| per window."""
     if edges is None:
         edges = reduced.window_edges(mech, revolutions)
     atol = reduced.default_atol(mech, rtol) if atol is None else atol
-    p = reduced.pack_parameters(mech)
+    model = reduced.MODEL
+    p = reduced.model_parameters(mech)
     # the switching function is offset by the round-off of the penetration (a difference of
     # coordinates of size L2 + L3): a state located on the surface may come out a few ulps
     # on the far side in the new mode, and scipy, which looks only for sign changes between
@@ -58,9 +61,19 @@ def solve_scipy(mech: SliderCrank, edges: np.ndarray | None = None, revolutions:
     # a separation: the journal flew through the wall)
     offset = max(1e-12 * mech.clearance,
                  8 * np.finfo(float).eps * (mech.crank_length + mech.coupler_length))
-    return _solve(reduced.rhs, reduced.event, reduced.on_event,
-                  lambda tt, yy, pp: reduced.monitor(tt, yy, pp), reduced.initial_state(mech),
-                  p, edges, 1, offset, method, rtol, atol)
+    return _solve(model.rhs, model.event, model.on_event, _monitored(model),
+                  reduced.initial_state(mech), p, edges, 1, offset, method, rtol, atol)
+
+
+def _monitored(model):
+    """monitored(t, y, p): the model's monitored force (its monitor's value)."""
+    dydt = np.empty(model.N_STATE)
+    out, g, gd = np.empty(0), np.empty(model.N_EVENTS), np.empty(model.N_EVENTS)
+
+    def monitored(tt, yy, pp):
+        return model.monitor(tt, yy, pp, dydt, out, g, gd)
+
+    return monitored
 
 
 def solve_scipy_linkage(linkage, revolutions: int = 4, method: str = "DOP853",
@@ -83,13 +96,7 @@ def solve_scipy_linkage(linkage, revolutions: int = 4, method: str = "DOP853",
         atol[2 * model.N_Q:] = np.inf          # the drive's work: a quadrature, no control
     edges = np.arange(revolutions + 1) * linkage.period
     offset = max(1e-12 * linkage.min_clearance, 8 * np.finfo(float).eps * linkage.length_scale)
-    dydt = np.empty(model.N_STATE)
-    out, g, gd = np.empty(0), np.empty(model.N_EVENTS), np.empty(model.N_EVENTS)
-
-    def monitored(tt, yy, pp):
-        return model.monitor(tt, yy, pp, dydt, out, g, gd)
-
-    return _solve(model.rhs, model.event, model.on_event, monitored, y0, p, edges,
+    return _solve(model.rhs, model.event, model.on_event, _monitored(model), y0, p, edges,
                   model.N_EVENTS, offset, method, rtol, atol)
 
 

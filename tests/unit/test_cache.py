@@ -355,12 +355,12 @@ import mbs_clearance
 from mbs_clearance import SliderCrank, reduced
 
 mech = SliderCrank()
-p = reduced.pack_parameters(mech)
+p = reduced.model_parameters(mech)
 y = reduced.initial_state(mech, 1.5)          # 0.5 clearances into the wall
-p[reduced.P_MODE] = 1.0
+p[reduced.MEM_START] = 1.0
 f = np.zeros(len(y))
-reduced.rhs(0.0, y, p, f)
-st = reduced.rhs.stats
+reduced.MODEL.rhs(0.0, y, p, f)
+st = reduced.MODEL.rhs.stats
 print(json.dumps({"file": mbs_clearance.__file__, "rhs": f.tolist(), "path": st.cache_path,
                   "hits": sum(st.cache_hits.values()),
                   "misses": sum(st.cache_misses.values())}))
@@ -389,11 +389,11 @@ CONTACT_EDIT = ("f = K * delta * math.sqrt(delta)", "f = 2.0 * K * delta * math.
 
 def rhs_here() -> np.ndarray:
     mech = SliderCrank()
-    p = reduced.pack_parameters(mech)
+    p = reduced.model_parameters(mech)
     y = reduced.initial_state(mech, 1.5)
-    p[reduced.P_MODE] = 1.0
+    p[reduced.MEM_START] = 1.0
     f = np.zeros(len(y))
-    reduced.rhs(0.0, y, p, f)
+    reduced.MODEL.rhs(0.0, y, p, f)
     return f
 
 
@@ -413,8 +413,9 @@ def test_a_read_only_copy_of_mbs_clearance_imports_and_computes_the_same(tmp_pat
 
 @pytest.mark.slow
 def test_an_edit_of_contact_py_is_computed_by_the_next_import_of_mbs_clearance(tmp_path):
-    """reduced.rhs (reduced.py) inlines contact.contact_force: doubling the force in
-    contact.py doubles the slider's acceleration -F nx / m4 in the next process."""
+    """The paper's generated rhs (reduced.MODEL.rhs) inlines contact.contact_force: doubling
+    the force in contact.py doubles the slider's acceleration -F nx / m4 in the next
+    process."""
     site = copy_packages(tmp_path / "site", ("mbs_clearance",))
     env = clean_env([site])
     before, _ = run(RHS_RUN, env)
@@ -449,7 +450,7 @@ def test_an_edit_of_the_generated_runtime_is_computed_by_validation_stress(tmp_p
 @pytest.mark.slow
 def test_the_race_with_the_real_package(tmp_path):
     """As the small race test, with mbs_clearance: A imports, contact.py is edited, B
-    imports, A compiles reduced.outputs for a new signature (F-ordered states) and caches
+    imports, A compiles reduced.MODEL.outputs for a new signature (F-ordered states) and caches
     it, B compiles the same: B's contact force is twice A's."""
     site = copy_packages(tmp_path / "site", ("mbs_clearance",))
     env = clean_env([site])
@@ -458,15 +459,16 @@ def test_the_race_with_the_real_package(tmp_path):
         import numpy as np
         from mbs_clearance import SliderCrank, reduced
         mech = SliderCrank()
-        p = reduced.pack_parameters(mech)
+        p = reduced.model_parameters(mech)
         y = reduced.initial_state(mech, 1.5)
         ys = np.asfortranarray(np.array([y, y]))
-        ms = np.array([[1.0, p[reduced.P_DMIN]]] * 2)
+        ms = np.array([[1.0, mech.impact_velocity_floor]] * 2)
+        col = reduced.MODEL.OUT_COLUMNS.index("coupler_slider.contact_force")
     """)
     then = textwrap.dedent("""
-        out = reduced.outputs(np.array([0.0, 0.0]), ys, ms, p)
-        st = reduced.outputs.stats
-        print(json.dumps({"force": out[:, 2].tolist(), "path": st.cache_path,
+        out = reduced.MODEL.outputs(np.array([0.0, 0.0]), ys, ms, p)
+        st = reduced.MODEL.outputs.stats
+        print(json.dumps({"force": out[:, col].tolist(), "path": st.cache_path,
                           "misses": sum(st.cache_misses.values())}))
     """)
     a = Waiting(first, then, env)

@@ -1,5 +1,6 @@
-"""The generated models: the paper case against the hand-written reduced model (two
-independent derivations), energy balance, loop closure, checked-in modules not stale."""
+"""The generated models: the paper case against its closed form written by hand
+(validation/paper_closed_form.py: two independent derivations), energy balance, loop
+closure, checked-in modules not stale."""
 
 import os
 import subprocess
@@ -21,6 +22,7 @@ from mbs_clearance.generate import (
 from mbs_clearance.linkage import GROUND, Body, ClearanceJoint, Drive, Linkage, Revolute
 from mbs_clearance.linkage_model import initial_state, pack_parameters
 from mbs_clearance.mechanism import SliderCrank
+from validation import paper_closed_form as closed
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -49,15 +51,14 @@ def _random_states(mech, rng, n, spread):
 ], ids=["paper", "varied"])
 def test_paper_model_matches_reduced(mech):
     """Accelerations, |F12| (the crank pivot's reaction), drive moment, contact force and
-    switching function of the generated model equal reduced.py's hand-written dynamics at
-    random states in both contact modes (sympy.physics.mechanics + generated code against
-    the paper's Eqs. 1-8 written by hand)."""
+    switching function of the generated model equal the paper's closed form at random
+    states in both contact modes (sympy.physics.mechanics + generated code against the
+    paper's Eqs. 1-8 written by hand, validation/paper_closed_form.py)."""
     lk = paper_slider_crank(**{f: getattr(mech, f) for f in (
         "crank_length", "coupler_mass", "initial_crank_angle", "contact_model", "restitution",
         "gravity", "journal_radius")})
     model = load_model(lk)
     p = pack_parameters(lk, model)
-    pr = reduced.pack_parameters(mech)
     col = {c: i for i, c in enumerate(model.OUT_COLUMNS)}
     rng = np.random.default_rng(5)
     n_contact = 0
@@ -65,8 +66,8 @@ def test_paper_model_matches_reduced(mech):
         for mode in (0.0, 1.0):
             dmin = rng.uniform(0.01, 1.0)
             p[model.MEM_START:model.MEM_START + 2] = mode, dmin
-            pr[reduced.P_MODE], pr[reduced.P_DMIN] = mode, dmin
-            th3dd, x4dd, F, delta, deltadot, ex, ey, M2, F12x, F12y = reduced.dynamics(t, y, pr)
+            th3dd, x4dd, F, delta, deltadot, ex, ey, M2, F12x, F12y = closed.dynamics(
+                mech, t, y, mode, dmin)
             out = np.empty(model.N_OUT)
             dydt = np.empty(model.N_STATE)
             g, gd = np.empty(1), np.empty(1)
@@ -97,7 +98,7 @@ def test_paper_model_matches_reduced(mech):
             assert dydt[4] == pytest.approx(M2 * mech.crank_speed,
                                             abs=1e-12 * force_scale * 0.2 * mech.crank_speed)
             assert dydt[:2] == pytest.approx(y[2:4], abs=0)
-            ge, gde = reduced.event(t, y, pr, 0)
+            ge, gde = closed.switching(mech, t, y, mode)
             vel = mech.crank_speed * (mech.crank_length + mech.coupler_length)
             assert model.event(t, y, p, 0) == pytest.approx((ge, gde), abs=1e-13 * vel)
             assert model.event(t, y, p, 0)[0] == pytest.approx(ge, abs=5e-16)
@@ -106,21 +107,20 @@ def test_paper_model_matches_reduced(mech):
     assert n_contact > 10       # the contact branch was exercised
 
 
-def test_on_event_matches_reduced():
+def test_on_event_matches_the_closed_form():
     mech = SliderCrank()
     lk = paper_slider_crank()
     model = load_model(lk)
     p = pack_parameters(lk, model)
-    pr = reduced.pack_parameters(mech)
     rng = np.random.default_rng(2)
     for t, y in _random_states(mech, rng, 5, 1.5):
         for mode in (0.0, 1.0):
-            p[model.MEM_START] = pr[reduced.P_MODE] = mode
+            p[model.MEM_START] = mode
             model.on_event(t, y, p, 0)
-            reduced.on_event(t, y, pr, 0)
-            assert p[model.MEM_START] == pr[reduced.P_MODE]
-            assert p[model.MEM_START + 1] == pytest.approx(pr[reduced.P_DMIN], rel=1e-12,
-                                                           abs=1e-15)
+            assert p[model.MEM_START] == 1.0 - mode
+            if mode == 0.0:     # an onset stores the impact velocity
+                assert p[model.MEM_START + 1] == pytest.approx(
+                    closed.impact_velocity(mech, t, y), rel=1e-12, abs=1e-15)
 
 
 def _energy_rate_check(lk, mode, rng, n=5):

@@ -5,6 +5,7 @@ import pytest
 
 from mbs_clearance import SliderCrank, peak_base_force, reduced, simulate
 from mbs_clearance.ideal import ideal_outputs
+from validation import paper_closed_form as closed
 from validation.scipy_reference import solve_scipy
 
 
@@ -166,8 +167,9 @@ def test_grazing_onsets_are_flagged():
 def test_slider_crank_runs_on_the_generated_model(paper):
     """One place of the physics: every SliderCrank maps to the structure of the checked-in
     generated module, a run's parameters and recorded outputs are that module's, and they
-    equal the hand-written model (Eqs. 1-8, docs/derivations.md: an independent derivation)
-    at the run's states, in both contact modes."""
+    equal the paper's closed form (Eqs. 1-8, docs/derivations.md, written by hand in
+    validation/paper_closed_form.py: an independent derivation) at the run's states, in both
+    contact modes."""
     from mbs_clearance.cases import from_slider_crank
     from mbs_clearance.generate import structure_digest
 
@@ -183,10 +185,9 @@ def test_slider_crank_runs_on_the_generated_model(paper):
         "coupler_slider.penetration_rate", "coupler_slider.ecc_x", "coupler_slider.ecc_y",
         "drive_moment", "crank_pivot.reaction_x", "crank_pivot.reaction_y",
         "coupler.angle.acc", "slider_guide.s.acc")]
-    pr = reduced.pack_parameters(paper)
     for i in range(0, len(ts), 37):
-        pr[reduced.P_MODE], pr[reduced.P_DMIN] = ms[i]
-        ref = np.array(reduced.dynamics(ts[i], ys[i], pr))[[2, 3, 4, 5, 6, 7, 8, 9, 0, 1]]
+        ref = np.array(closed.dynamics(paper, ts[i], ys[i], *ms[i]))[
+            [2, 3, 4, 5, 6, 7, 8, 9, 0, 1]]
         # delta (~1e-6 m) is a difference of coordinates of ~0.17 m: relative round-off
         # ~eps (L2 + L3) / delta, so the two codes agree to ~1e-10 there
         np.testing.assert_allclose(outs[i, col], ref, rtol=1e-9,

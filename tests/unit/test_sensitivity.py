@@ -1,28 +1,11 @@
 """Direct differentiation against finite differences, identities and the paper's findings."""
 
+import math
+
 import numpy as np
 import pytest
 
-from mbs_clearance import SliderCrank, reduced, simulate
-from mbs_clearance import sensitivity as sens_module
-from mbs_clearance._jacobians import (
-    CRANK_COLUMNS,
-    N_Z,
-    N_ZO,
-    N_ZW,
-    accel_constants,
-    contact_accel,
-    contact_accel_nc,
-    contact_branch,
-    contact_outputs,
-    contact_outputs_nc,
-    free_accel,
-    free_accel_nc,
-    free_branch,
-    free_outputs,
-    free_outputs_nc,
-)
-from mbs_clearance.contact import hysteresis_factor
+from mbs_clearance import SliderCrank, linkage_ddm, simulate
 from mbs_clearance.sensitivity import DEFAULT_PARAMETERS, independent_directions, sensitivities
 
 
@@ -41,115 +24,11 @@ def fd(paper, rev4):
     return sensitivities(paper, method="fd", t_eval=rev4)
 
 
-def _z(mech, t, y, dmin):
-    xi, _ = hysteresis_factor(mech.restitution, 0)
-    return np.array([t, y[0], y[1], y[2], y[3], dmin, mech.crank_length, mech.coupler_length,
-                     mech.crank_mass, mech.coupler_mass, mech.slider_mass,
-                     mech.coupler_inertia_value, mech.crank_speed, mech.initial_crank_angle,
-                     mech.clearance, mech.stiffness, xi, mech.gravity])
-
-
-@pytest.mark.parametrize("branch", [contact_branch, free_branch])
-def test_generated_jacobian_matches_hand_written_model_and_finite_differences(paper, branch):
-    """The sympy-generated outputs equal reduced.dynamics (written by hand) and every partial
-    derivative equals central differences (best of several steps: delta is ~1e-6 m)."""
-    ts, ys, ms, *_ = reduced.run(paper, 2)
-    p = reduced.pack_parameters(paper)      # the hand-written kernels' layout
-    i = 3 * len(ts) // 4
-    assert ms[i, 0] == 1.0  # a state in contact
-    z = _z(paper, ts[i], ys[i], ms[i, 1])
-    o, flat = np.zeros(8), np.zeros(8 * N_Z)
-    branch(z, o, flat)
-    jac = flat.reshape(8, N_Z)
-    if branch is contact_branch:
-        q = p.copy()
-        q[reduced.P_MODE], q[reduced.P_DMIN] = ms[i]
-        ref = np.array(reduced.dynamics(ts[i], ys[i], q))[[0, 1, 8, 9, 7, 2, 3, 4]]
-        # the two codes round differently: delta (~1e-6 m) is a difference of coordinates of
-        # size L2 + L3, so its relative round-off is ~eps (L2 + L3) / delta ~ 4e-11
-        np.testing.assert_allclose(o, ref, rtol=1e-9, atol=1e-12 * np.abs(ref).max())
-    for j in range(N_Z):
-        best = np.inf
-        for rel in (1e-5, 1e-6, 1e-7, 1e-8, 1e-9):
-            h = rel * max(abs(z[j]), 1e-3)
-            zp, zm = z.copy(), z.copy()
-            zp[j] += h
-            zm[j] -= h
-            op, om = np.zeros(8), np.zeros(8)
-            branch(zp, op, np.zeros(8 * N_Z))
-            branch(zm, om, np.zeros(8 * N_Z))
-            err = np.max(np.abs((op - om) / (2 * h) - jac[:, j]))
-            best = min(best, err / (np.abs(jac[:, j]).max() + 1e-300))
-        assert best < 1e-6, (j, best)
-
-
-@pytest.mark.parametrize("branch,accel,accel_nc", [
-    (contact_branch, contact_accel, contact_accel_nc), (free_branch, free_accel, free_accel_nc)])
-def test_acceleration_only_variants_equal_the_full_branch(paper, branch, accel, accel_nc):
-    """The right-hand side's *_accel functions (their parameter-only temporaries computed once
-    by accel_constants; the _nc variants without the crank-angle columns) give the full
-    branch's first two rows."""
-    ts, ys, ms, *_ = reduced.run(paper, 2)
-    i = 3 * len(ts) // 4
-    z = _z(paper, ts[i], ys[i], ms[i, 1])
-    o, flat = np.zeros(8), np.zeros(8 * N_Z)
-    branch(z, o, flat)
-    zw = np.zeros(N_ZW)
-    zw[:N_Z] = z
-    accel_constants(zw)
-    for f, skip in ((accel, ()), (accel_nc, CRANK_COLUMNS)):
-        oa, ja = np.zeros(4), np.full(2 * N_Z, np.nan)
-        f(zw, oa, ja)
-        # theta3dd, x4dd, F and M2 (M2's value only: the crank's work)
-        np.testing.assert_allclose(oa, o[[0, 1, 5, 4]], rtol=1e-13, atol=1e-13 * abs(o).max())
-        keep = [j for j in range(N_Z) if j not in skip]
-        ref = flat.reshape(8, N_Z)[:2, keep]
-        np.testing.assert_allclose(ja.reshape(2, N_Z)[:, keep], ref, rtol=1e-12,
-                                   atol=1e-13 * np.abs(ref).max())
-        assert np.isnan(ja.reshape(2, N_Z)[:, list(skip)]).all()   # left as they were
-
-
-@pytest.mark.parametrize("branch,outputs,outputs_nc", [
-    (contact_branch, contact_outputs, contact_outputs_nc),
-    (free_branch, free_outputs, free_outputs_nc)])
-def test_outputs_at_given_acceleration_chain_to_the_full_branch(paper, branch, outputs,
-                                                                outputs_nc):
-    """The *_outputs functions (theta3dd an input) give the full branch's F12x, F12y, M2 and
-    F, and their Jacobian chained through theta3dd's row gives the full branch's rows:
-    d o/d z_j = (d o/d z_j)|theta3dd + (d o/d theta3dd) (d theta3dd/d z_j)."""
-    ts, ys, ms, *_ = reduced.run(paper, 2)
-    i = 3 * len(ts) // 4
-    z = _z(paper, ts[i], ys[i], ms[i, 1])
-    o, flat = np.zeros(8), np.zeros(8 * N_Z)
-    branch(z, o, flat)
-    full = flat.reshape(8, N_Z)
-    zo = np.append(z, o[0])
-    assert len(zo) == N_ZO
-    oo, jo = np.zeros(4), np.zeros(4 * N_ZO)
-    outputs(zo, oo, jo)
-    jo = jo.reshape(4, N_ZO)
-    # the _nc variant: the same, without the crank-angle columns (left as they were)
-    oo_nc, jo_nc = np.zeros(4), np.full(4 * N_ZO, np.nan)
-    outputs_nc(zo, oo_nc, jo_nc)
-    jo_nc = jo_nc.reshape(4, N_ZO)
-    keep = [j for j in range(N_ZO) if j not in CRANK_COLUMNS]
-    np.testing.assert_array_equal(oo_nc, oo)
-    np.testing.assert_array_equal(jo_nc[:, keep], jo[:, keep])
-    assert np.isnan(jo_nc[:, list(CRANK_COLUMNS)]).all()
-    rows = [2, 3, 4, 5]    # F12x, F12y, M2, F of the full branch
-    # different expressions round differently: the penetration (~1e-6 m) is a difference of
-    # coordinates of size L2 + L3, relative round-off ~4e-11 (as in the test above)
-    np.testing.assert_allclose(oo, o[rows], rtol=1e-9, atol=1e-12 * abs(o).max())
-    chained = jo[:, :N_Z] + np.outer(jo[:, N_Z], full[0])
-    np.testing.assert_allclose(chained, full[rows], rtol=1e-9,
-                               atol=1e-12 * np.abs(full[rows]).max())
-    assert np.abs(jo[:, N_Z]).max() > 0.0 and np.abs(jo[3, N_Z]) == 0.0   # F: not through it
-
-
 def test_ddm_trajectory_equals_the_plain_simulation(paper, rev4, ddm):
     """The nominal trajectory of a DDM run (state integrated with its sensitivities by DOP853,
-    outputs recorded by the sensitivity monitor, crank work from the generated M2) equals
-    the plain model's (dopri5, hand-written dynamics) at the same output times."""
+    outputs from the generated Jacobian's value column, crank work from its drive moment)
+    equals the plain model's (dopri5, the generated plain kernels) at the same output
+    times."""
     plain = simulate(paper, 4, t_eval=rev4, rtol=1e-10)
     tr = ddm.trajectory
     np.testing.assert_array_equal(tr.t, plain.t)
@@ -161,23 +40,26 @@ def test_ddm_trajectory_equals_the_plain_simulation(paper, rev4, ddm):
     np.testing.assert_array_equal(tr.contact_phase, plain.contact_phase)
 
 
-def test_norm_maxima_equals_numpy():
-    """The compiled growth diagnostic against the same maxima written with numpy, with a
-    parameter that combines two directions and one with no direction."""
-    from mbs_clearance.ddm import norm_maxima
-
+def test_growth_maxima_equals_a_loop():
+    """The growth diagnostic (per revolution and parameter, the largest scaled norm of the
+    state sensitivity) against the same maxima by an explicit loop over the steps, with a
+    step on a revolution's edge (it counts for both sides)."""
     rng = np.random.default_rng(1)
-    nb, npar, n = 3, 5, 40
-    ys = rng.normal(size=(n, 4 + 4 * nb + 1))
-    coeffs = np.zeros((nb, npar))
-    coeffs[0, 0] = coeffs[1, 1] = coeffs[2, 2] = 1.0
-    coeffs[:2, 3] = [0.5, -2.0]          # parameter 4 zero: no direction
-    weights = rng.uniform(0.5, 2.0, 4 * npar)
-    lo, hi = np.array([0, 10, 25]), np.array([11, 25, 40])
-    s = np.einsum("nbj,bk->nkj", ys[:, 4:4 + 4 * nb].reshape(n, nb, 4), coeffs)
-    norms = np.sqrt((weights.reshape(npar, 4)[None] * s**2).sum(axis=2))
-    ref = np.array([norms[a:b].max(axis=0) for a, b in zip(lo, hi)])
-    np.testing.assert_allclose(norm_maxima(ys, coeffs, weights, lo, hi), ref, rtol=1e-13)
+    n, npar = 40, 3
+    ts = np.sort(rng.uniform(0.0, 3.0, n))
+    ts[[0, 17, -1]] = 0.0, 1.0, 3.0
+    ts = np.sort(ts)
+    sens = rng.normal(size=(n, npar, 4))
+    scale, unit = rng.uniform(0.5, 2.0, npar), rng.uniform(0.5, 2.0, 4)
+    ref = np.zeros((3, npar))
+    for i in range(n):
+        for r in range(3):
+            if r <= ts[i] <= r + 1:
+                for k in range(npar):
+                    ref[r, k] = max(ref[r, k],
+                                    math.sqrt(np.sum((sens[i, k] * scale[k] / unit) ** 2)))
+    np.testing.assert_allclose(linkage_ddm.growth_maxima(ts, sens, scale, unit, 1.0, 3), ref,
+                               rtol=1e-13)
 
 
 def test_independent_directions():
@@ -195,16 +77,18 @@ def test_independent_directions():
 
 def test_dependent_parameters_share_one_integration(paper, rev4, ddm, monkeypatch):
     """youngs_modulus, poisson_ratio and contact_stiffness enter through K alone: one
-    integrated direction; crank_inertia (no effect at constant crank speed) none. The
-    compressed result equals a run that integrates every parameter separately."""
+    integrated direction. crank_inertia (no effect at constant crank speed) is integrated
+    (its chain is not zero: the crank's inertia is a parameter of the generated model) and
+    stays exactly zero (its Jacobian columns are). The compressed result equals a run that
+    integrates every parameter separately."""
     assert ddm.stats["directions"] == 7
     names = ["youngs_modulus", "crank_inertia", "poisson_ratio", "contact_stiffness",
              "journal_radius", "bearing_radius"]
     s = sensitivities(paper, names, t_eval=rev4, rtol=1e-10)
-    # K alone; c and K by R_J; R_B moves c and K too: a combination of the two
-    assert s.stats["directions"] == 2
+    # K alone; J2; c and K by R_J; R_B moves c and K too: a combination of the two
+    assert s.stats["directions"] == 3
     assert np.all(s.base_force_magnitude[:, 1] == 0.0)
-    monkeypatch.setattr(sens_module, "independent_directions",
+    monkeypatch.setattr(linkage_ddm, "independent_directions",
                         lambda M, tol=0.0: (np.arange(M.shape[1]), np.eye(M.shape[1])))
     full = sensitivities(paper, names, t_eval=rev4, rtol=1e-10)
     assert full.stats["directions"] == len(names)
@@ -271,8 +155,8 @@ def test_youngs_modulus_and_contact_stiffness_normalized_sensitivities_are_equal
         paper, rev4, monkeypatch):
     """K is proportional to E (Eq. 9), so (dJ/dE) E = (dJ/dK) K exactly (paper, Fig. 5).
     Checked with both integrated (the default shares one integration between them), through
-    the chain matrix and the Jacobian's K column."""
-    monkeypatch.setattr(sens_module, "independent_directions",
+    the description's chain (Eq. 9's partials) and the Jacobian's stiffness column."""
+    monkeypatch.setattr(linkage_ddm, "independent_directions",
                         lambda M, tol=0.0: (np.arange(M.shape[1]), np.eye(M.shape[1])))
     s = sensitivities(paper, ["youngs_modulus", "contact_stiffness"], t_eval=rev4, rtol=1e-10)
     assert s.stats["directions"] == 2

@@ -5,8 +5,7 @@ settings: the ratio of the median time of `peak_gradient(mech)` to the median ti
 `peak_base_force(mech)` (the GA's objective, nothing recorded), measured in the same run
 (medians over interleaved repeats after warm-up). Target: at most 4. Also the ratio of function
 evaluations (a DDM evaluation costs more than a plain one) and of `sensitivities(mech)` (the
-default call, every step) for context, and `peak_gradient` without the penetration under
-error control (`ddm_setup(..., event_control=False)`, as before session 7) in the same run.
+default call, every step) for context.
 
     python -m validation.benchmarks.peak_gradient_speed [--repeats 21]
 """
@@ -18,9 +17,9 @@ import time
 
 import numpy as np
 
-from mbs_clearance import SliderCrank, objective, peak_base_force, peak_gradient
+from mbs_clearance import SliderCrank, peak_base_force, peak_gradient
 from mbs_clearance.reduced import run
-from mbs_clearance.sensitivity import ddm_setup, sensitivities
+from mbs_clearance.sensitivity import sensitivities
 
 from .common import machine_summary
 
@@ -29,16 +28,6 @@ DESIGNS = {
     "L2 = 4.5 cm, L3 = 13 cm": {"crank_length": 0.045, "coupler_length": 0.13},
     "L2 = 5.5 cm, L3 = 11 cm": {"crank_length": 0.055, "coupler_length": 0.11},
 }
-
-
-def _gradient_without_event_control(mech):
-    """peak_gradient with the DDM run's error control on the state alone."""
-    objective.ddm_setup = lambda m, n, r, event_time_term=True: ddm_setup(
-        m, n, r, event_time_term, event_control=False)
-    try:
-        return peak_gradient(mech)
-    finally:
-        objective.ddm_setup = ddm_setup
 
 
 def main(argv=None):
@@ -50,32 +39,27 @@ def main(argv=None):
         mech = SliderCrank().replace(**values) if values else SliderCrank()
         calls = {"peak": lambda m=mech: peak_base_force(m),
                  "grad": lambda m=mech: peak_gradient(m),
-                 "grad_old": lambda m=mech: _gradient_without_event_control(m),
                  "sens": lambda m=mech: sensitivities(m)}
         for fn in calls.values():       # warm-up (caches, allocator)
             fn()
-        # interleaved: a change of the machine's load hits all three alike
+        # interleaved: a change of the machine's load hits all alike
         times = {k: [] for k in calls}
         for _ in range(args.repeats):
             for k, fn in calls.items():
                 t0 = time.perf_counter()
                 fn()
                 times[k].append(time.perf_counter() - t0)
-        t_peak, t_grad, t_old, t_sens = (float(np.median(times[k])) for k in calls)
+        t_peak, t_grad, t_sens = (float(np.median(times[k])) for k in calls)
         g = peak_gradient(mech)
-        nfev_old = _gradient_without_event_control(mech).stats["nfev"]
         nfev_plain = int(run(mech, 4, record=False)[5][0])
-        rows.append((name, t_peak, t_grad, t_old, t_sens, g.stats["nfev"] / nfev_plain,
-                     g.stats["nfev"] / nfev_old, g.kink))
+        rows.append((name, t_peak, t_grad, t_sens, g.stats["nfev"] / nfev_plain, g.kink))
     print(f"Machine: {machine_summary()}\n")
     print("| design | peak_base_force (ms) | peak_gradient (ms) | ratio (target <= 4) "
-          "| sensitivities() / peak_base_force | nfev ratio | peak_gradient with / without "
-          "event control (time, nfev) | kink |")
-    print("|---|---|---|---|---|---|---|---|")
-    for name, t_peak, t_grad, t_old, t_sens, nfev_ratio, nfev_ev, kink in rows:
+          "| sensitivities() / peak_base_force | nfev ratio | kink |")
+    print("|---|---|---|---|---|---|---|")
+    for name, t_peak, t_grad, t_sens, nfev_ratio, kink in rows:
         print(f"| {name} | {t_peak * 1e3:.2f} | {t_grad * 1e3:.2f} | {t_grad / t_peak:.2f} "
-              f"| {t_sens / t_peak:.2f} | {nfev_ratio:.2f} | {t_grad / t_old:.2f}, "
-              f"{nfev_ev:.2f} | {kink} |")
+              f"| {t_sens / t_peak:.2f} | {nfev_ratio:.2f} | {kink} |")
     print()
 
 

@@ -52,11 +52,14 @@ def _errors(force, peak, ref_force, ref_peak):
 
 
 def _scipy_force(res, grid):
+    model = reduced.MODEL
     out = np.empty((len(grid), 2))
     for i, t in enumerate(grid):
         y, p = res.state(t)
-        dyn = reduced.dynamics(t, np.ascontiguousarray(y), p)
-        out[i] = dyn[8], dyn[9]
+        o = model.outputs(np.array([t]), np.ascontiguousarray(y)[None, :],
+                          np.ascontiguousarray(p[model.MEM_START:model.MEM_START + 2])[None, :],
+                          p)[0]
+        out[i] = o[model.MONITOR_COLUMN], o[model.MONITOR_COLUMN + 1]
     return out
 
 
