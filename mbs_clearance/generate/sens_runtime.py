@@ -14,8 +14,6 @@ derivative, 2 N_Q + 1).
 
 from __future__ import annotations
 
-import math
-
 import numba as nb
 import numpy as np
 
@@ -110,15 +108,8 @@ def friction_jacobian(jac, stride, nz, spin, r_ex, r_ey, r_exd, r_eyd, r_spin, r
     exd = jac[r_exd * stride + nz]
     eyd = jac[r_eyd * stride + nz]
     f = jac[r_f * stride + nz]
-    r = math.sqrt(ex * ex + ey * ey)
-    if r > 1e-300:
-        rinv = 1.0 / r
-        nx = ex * rinv
-        ny = ey * rinv
-    else:
-        rinv = 0.0
-        nx = -1.0
-        ny = 0.0
+    r, _, nx, ny = gap_state(ex, ey, exd, eyd, 0.0)
+    rinv = 1.0 / r if r > 1e-300 else 0.0
     vt = eyd * nx - exd * ny + spin
     ft, ft_vt, ft_fn, ft_mu, ft_v0, ft_v1 = friction_force_partials(vt, f, mu, v0, v1,
                                                                     int(law))
@@ -135,13 +126,7 @@ def friction_jacobian(jac, stride, nz, spin, r_ex, r_ey, r_exd, r_eyd, r_spin, r
         jac[r_pw * stride + col] = -(d_ft * vt + ft * d_vt)
         jac[r_fx * stride + col] += d_ft * ny + ft * dny
         jac[r_fy * stride + col] -= d_ft * nx + ft * dnx
-    for k in range(3):
-        if k == 0:
-            col, d_ft = c_mu, ft_mu
-        elif k == 1:
-            col, d_ft = c_v0, ft_v0
-        else:
-            col, d_ft = c_v1, ft_v1
+    for col, d_ft in ((c_mu, ft_mu), (c_v0, ft_v0), (c_v1, ft_v1)):
         jac[r_ft * stride + col] += d_ft
         jac[r_pw * stride + col] -= d_ft * vt
         jac[r_fx * stride + col] += d_ft * ny

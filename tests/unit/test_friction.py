@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
 from mbs_clearance import SliderCrank, cases
@@ -52,3 +53,29 @@ def test_friction_overrides_reach_every_joint():
                for j in lk.clearance_joints)
     lk = cases.four_bar(friction_law="ambrosio", friction_v0=1e-3, friction_v1=1e-1)
     assert lk.clearance_joints[0].friction_v1 == 1e-1
+
+
+@pytest.mark.parametrize("law, phi", [("coulomb", 0.2 / np.hypot(0.2, 0.05)),
+                                      ("ambrosio", 1.0), ("none", 0.0)])
+def test_friction_stage_of_a_journal_on_a_turning_bearing(law, phi):
+    """The kernels' friction stage (runtime.friction_stage) at a journal pressed on the
+    bottom of a bearing that turns at omega (n = (0, -1), t = (1, 0), slip velocity
+    edot . t - omega R_B = -0.2 m/s): the friction force on the journal mu Fn phi along t
+    (dragged along by the wall), and the force on the bearing Fn n - Ft t."""
+    from mbs_clearance.contact import CONTACT_MODELS, contact_force
+    from mbs_clearance.generate.runtime import friction_stage
+
+    c, pen, k, mu, v0, v1 = 1e-5, 1e-7, 1e10, 0.2, 0.05, 0.1
+    spin = -20.0 * 0.01                 # omega_J R_J - omega_B R_B, the journal not turning
+    ey, eyd = -(c + pen), -1e-4         # at the bottom, still sinking; sliding sideways:
+    exd = 0.0                           # (none: the slip is the wall's)
+    model = CONTACT_MODELS["lankarani_nikravesh"]
+    f, delta, _, fx, fy, ft, vt = friction_stage(0.0, ey, exd, eyd, spin, c, 1.0, 0.01, k,
+                                                 0.9, model, FRICTION_LAWS[law], mu, v0, v1)
+    fn = contact_force(pen, 1e-4, 0.01, k, 0.9, model)
+    assert f == pytest.approx(fn, rel=1e-12) and delta == pytest.approx(pen, rel=1e-6)
+    assert vt == pytest.approx(spin, rel=1e-12)
+    assert ft == pytest.approx(mu * fn * phi, rel=1e-12)
+    # force on the bearing: Fn n - Ft t with n = (0, -1), t = (1, 0)
+    assert fx == pytest.approx(-ft, rel=1e-12, abs=1e-12 * fn)
+    assert fy == pytest.approx(-fn, rel=1e-12)
