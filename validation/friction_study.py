@@ -1,0 +1,130 @@
+"""Friction in the clearance joints (issue 18): the paper's slider-crank and the slider-crank
+with both coupler joints loose, at several coefficients of friction.
+
+For each case and mu (Ambrosio's modified Coulomb law, the thresholds' defaults; mu = 0 is
+the frictionless joint), one run of `revolutions` drive revolutions at the default rtol on
+the generated model, and over the last revolution: the peak of the monitored force (the
+crank pivot's reaction), the RMS drive moment, the work of the drive and of friction, and
+per clearance joint the fraction of the revolution in contact (whether the journal follows
+the bearing's wall) and the number of contact onsets. Prints a markdown table (what
+docs/friction.md quotes) and draws the journal orbits of the last revolution.
+
+    python -m validation.friction_study [--revolutions 4] [--mu 0,0.01,0.05,0.1]
+        [--law ambrosio] [--figure docs/figures/friction_orbits.png]
+"""
+
+from __future__ import annotations
+
+import argparse
+
+import numpy as np
+
+from mbs_clearance import cases, simulate
+
+CASES = ("paper_slider_crank", "slider_crank_two_clearances")
+
+
+def _window(traj, period, rev):
+    """Indices of the recorded steps in revolution `rev` (1-based)."""
+    return np.flatnonzero((traj.t >= (rev - 1) * period - 1e-15)
+                          & (traj.t <= rev * period + 1e-15))
+
+
+def measures(traj, period, rev):
+    """The last revolution's measures of one run (a dict)."""
+    idx = _window(traj, period, rev)
+    t = traj.t[idx]
+    dt = np.diff(t)
+    moment = traj.crank_moment[idx]
+    rms = float(np.sqrt(np.sum(0.5 * (moment[1:] ** 2 + moment[:-1] ** 2) * dt) / period))
+    # the contact mode of a step is the memory at its start (the integrator lands on each
+    # onset and separation)
+    phase = traj.contact_phase[idx]
+    follow = [float(np.sum(dt * phase[:-1, j]) / period) for j in range(phase.shape[1])]
+    onsets = [int(np.sum(np.diff(phase[:, j].astype(int)) == 1))
+              for j in range(phase.shape[1])]
+    fw = 0.0 if traj.friction_work is None else float(
+        traj.friction_work[idx[-1]] - traj.friction_work[idx[0]])
+    return {"peak": float(traj.peaks[rev - 1]), "rms_moment": rms,
+            "drive_work": float(traj.crank_work[idx[-1]] - traj.crank_work[idx[0]]),
+            "friction_work": fw, "in_contact": follow, "onsets": onsets,
+            "nfev": int(traj.stats["nfev"])}
+
+
+def study(mus, revolutions: int, law: str):
+    """{case: [(mu, measures, trajectory)]}."""
+    out = {}
+    for case in CASES:
+        rows = []
+        for mu in mus:
+            over = {} if mu == 0.0 else {"friction_law": law, "friction_coefficient": mu}
+            lk = getattr(cases, case)(**over)
+            traj = simulate(lk, revolutions)
+            rows.append((mu, measures(traj, lk.period, revolutions), traj))
+        out[case] = rows
+    return out
+
+
+def table(results, revolutions: int) -> str:
+    lines = [f"| case | mu | rev-{revolutions} peak (N) | change | RMS drive moment (N m) | "
+             "drive work (J) | friction work (J) | in contact (fraction of the revolution) "
+             "| contact onsets | nfev |",
+             "|---|---|---|---|---|---|---|---|---|---|"]
+    for case, rows in results.items():
+        p0 = rows[0][1]["peak"]
+        for mu, m, traj in rows:
+            joints = traj.joints
+            contact = ", ".join(f"{j} {f:.3f}" for j, f in zip(joints, m["in_contact"]))
+            onsets = ", ".join(f"{j} {k}" for j, k in zip(joints, m["onsets"]))
+            lines.append(f"| {case} | {mu:g} | {m['peak']:.1f} | {m['peak'] / p0 - 1:+.2%} | "
+                         f"{m['rms_moment']:.4f} | {m['drive_work']:.4f} | "
+                         f"{m['friction_work']:.4f} | {contact} | {onsets} | {m['nfev']} |")
+    return "\n".join(lines)
+
+
+def figure(results, revolutions: int, path: str) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    panels = [(case, k, joint) for case, rows in results.items()
+              for k, joint in enumerate(rows[0][2].joints)]
+    fig, axes = plt.subplots(1, len(panels), figsize=(4.2 * len(panels), 4.4))
+    theta = np.linspace(0, 2 * np.pi, 400)
+    for ax, (case, k, joint) in zip(np.atleast_1d(axes), panels):
+        for mu, _, traj in results[case]:
+            lk = traj.mechanism
+            c = lk.clearance_joints[k].clearance
+            idx = _window(traj, lk.period, revolutions)
+            e = traj.eccentricity[idx, k, :] / c
+            ax.plot(e[:, 0], e[:, 1], lw=0.8, label=f"mu = {mu:g}")
+        ax.plot(np.cos(theta), np.sin(theta), "k--", lw=0.6)
+        ax.set_aspect("equal")
+        ax.set_title(f"{case}\n{joint}", fontsize=9)
+        ax.set_xlabel("e_x / clearance")
+        ax.set_ylabel("e_y / clearance")
+    np.atleast_1d(axes)[0].legend(fontsize=8, loc="center")
+    fig.suptitle(f"journal centre relative to the bearing centre, revolution {revolutions}",
+                 fontsize=10)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    print(f"wrote {path}")
+
+
+def main(argv=None) -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--revolutions", type=int, default=4)
+    parser.add_argument("--mu", default="0,0.01,0.05,0.1")
+    parser.add_argument("--law", default="ambrosio", choices=("ambrosio", "coulomb"))
+    parser.add_argument("--figure", default=None, help="path of the orbit figure (PNG)")
+    args = parser.parse_args(argv)
+    mus = [float(v) for v in args.mu.split(",")]
+    results = study(mus, args.revolutions, args.law)
+    print(table(results, args.revolutions))
+    if args.figure:
+        figure(results, args.revolutions, args.figure)
+
+
+if __name__ == "__main__":
+    main()
