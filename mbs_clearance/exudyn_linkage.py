@@ -65,7 +65,13 @@ from ._checks import (
     check_real,
     format_bytes,
 )
-from .contact import CONTACT_MODELS, contact_force, hysteresis_factor
+from .contact import (
+    CONTACT_MODELS,
+    FRICTION_LAWS,
+    contact_force,
+    friction_force,
+    hysteresis_factor,
+)
 from .linkage import GROUND, ClearanceJoint, Linkage, Prismatic, Revolute
 
 __all__ = ["ExudynSettings", "make_settings", "build", "solve", "simulate_exudyn_linkage",
@@ -356,6 +362,22 @@ def _python_force(joint: ClearanceJoint, memory: ImpactMemory):
     return force
 
 
+def _symbolic_normal(K, c, xi, dmin, dx, dy, vx, vy):
+    """Symbolic normal force of the contact law from the journal centre's position (dx, dy)
+    and velocity (vx, vy) relative to the bearing centre: (r, magnitude or 0 when free);
+    the same formula as contact.contact_force (clamped at zero, zero for delta <= 0)."""
+    import exudyn as exu
+
+    esym = exu.symbolic
+    zero = esym.Real(0.0)
+    r = esym.sqrt(dx * dx + dy * dy)
+    delta = r - c
+    rate = (dx * vx + dy * vy) / r
+    magnitude = esym.max(K * delta**1.5 * (1.0 + xi * rate / dmin), zero)
+    # lazy: r > c > 0 inside the true branch, so no division by zero when centred
+    return r, esym.IfThenElse(delta > 0.0, magnitude, zero)
+
+
 def _symbolic_force(mbs, obj, joint: ClearanceJoint, memory: ImpactMemory, k: int):
     """Compiled (symbolic) user function; the impact velocity is a named symbolic variable
     (one per joint)."""
@@ -370,15 +392,175 @@ def _symbolic_force(mbs, obj, joint: ClearanceJoint, memory: ImpactMemory, k: in
 
     def force(mbs, t, itemNumber, displacement, velocity, stiffness, damping, offset):
         dx, dy = displacement[0], displacement[1]
-        r = esym.sqrt(dx * dx + dy * dy)
-        delta = r - c
-        rate = (dx * velocity[0] + dy * velocity[1]) / r
-        magnitude = esym.max(K * delta**1.5 * (1.0 + xi * rate / dmin), zero)
-        # lazy: r > c > 0 inside the true branch, so no division by zero when centred
-        factor = esym.IfThenElse(delta > 0.0, magnitude / r, zero)
+        r, magnitude = _symbolic_normal(K, c, xi, dmin, dx, dy, velocity[0], velocity[1])
+        factor = esym.IfThenElse(r - c > 0.0, magnitude / r, zero)
         return [factor * dx, factor * dy, zero]
 
     return CreateSymbolicUserFunction(mbs, force, "springForceUserFunction", obj)
+
+
+# ---------------------------------------------------------------------------- friction
+
+def friction_of(joint: ClearanceJoint):
+    """(law id, mu, v0, v1) of a clearance joint whose friction is on (law not "none" and
+    mu > 0), else None: a joint without friction gets no friction element, so its results
+    are the frictionless ones bit for bit."""
+    law = getattr(joint, "friction_law", "none")
+    mu = float(getattr(joint, "friction_coefficient", 0.0))
+    if law == "none" or mu == 0.0:
+        return None
+    return (FRICTION_LAWS[law], mu, float(joint.friction_v0), float(joint.friction_v1))
+
+
+def symbolic_friction_factor(vt, v0: float, v1: float, law: int):
+    """phi(vt) of `contact.friction_factor` as an Exudyn symbolic expression (the same
+    piecewise formulas: regularised Coulomb vt / sqrt(vt^2 + v0^2); Ambrosio's c_d(|vt|)
+    sign(vt) with c_d clipped linearly between v0 and v1); tested against
+    contact.friction_factor point by point."""
+    import exudyn as exu
+
+    esym = exu.symbolic
+    if law == FRICTION_LAWS["coulomb"]:
+        return vt / esym.sqrt(vt * vt + v0 * v0)
+    if law == FRICTION_LAWS["ambrosio"]:
+        c_d = esym.min(esym.max((esym.abs(vt) - v0) / (v1 - v0), esym.Real(0.0)),
+                       esym.Real(1.0))
+        return c_d * esym.sign(vt)
+    return 0.0 * vt
+
+
+class _Side:
+    """One body of a contact pair inside the friction element: its node's slice of the
+    element's coordinates (None for the ground), reference pose and the joint's point."""
+
+    def __init__(self, slot, reference, point, fixed):
+        self.slot, self.reference, self.point, self.fixed = slot, reference, point, fixed
+
+    def kinematics(self, q, qt, cos, sin):
+        """(position, velocity of the point, arm from the centre of mass, omega)."""
+        px, py = self.point
+        if self.slot is None:                           # ground: a fixed point
+            return self.fixed, (0.0, 0.0), (0.0, 0.0), 0.0
+        i = self.slot
+        x0, y0, phi0 = self.reference
+        phi = phi0 + q[i + 2]
+        co, si = cos(phi), sin(phi)
+        ax, ay = co * px - si * py, si * px + co * py
+        w = qt[i + 2]
+        return ((x0 + q[i] + ax, y0 + q[i + 1] + ay),
+                (qt[i] - w * ay, qt[i + 1] + w * ax), (ax, ay), w)
+
+
+def _friction_loads(joint, sides, q, qt, normal, friction, cos, sin, gate):
+    """Generalized forces of the friction of one joint on its bodies' coordinates (the
+    friction element's force vector): the tangential force Ft t on the journal at its
+    point plus the moment R_J Ft, the opposite force on the bearing plus -R_B Ft, with
+    vt = de/dt . t + omega_J R_J - omega_B R_B and Ft = friction_force(vt, Fn, ...)
+    (`normal` gives |e| and Fn from e, de/dt; `friction` Ft from vt, Fn; `gate`(delta,
+    value) is the value in contact and zero in free flight, where t is undefined when
+    the journal is centred)."""
+    journal, bearing = sides
+    (xj, yj), (vxj, vyj), (axj, ayj), wj = journal.kinematics(q, qt, cos, sin)
+    (xb, yb), (vxb, vyb), (axb, ayb), wb = bearing.kinematics(q, qt, cos, sin)
+    dx, dy, vx, vy = xj - xb, yj - yb, vxj - vxb, vyj - vyb
+    r, fn = normal(dx, dy, vx, vy)
+    tx, ty = -dy / r, dx / r
+    vt = vx * tx + vy * ty + wj * joint.journal_radius - wb * joint.bearing_radius
+    ft = friction(vt, fn)
+    fx, fy = ft * tx, ft * ty
+    out = [None] * (3 * sum(s.slot is not None for s in sides))
+    delta = r - joint.clearance
+    for side, sign, radius, (ax, ay) in ((journal, 1.0, joint.journal_radius, (axj, ayj)),
+                                         (bearing, -1.0, joint.bearing_radius, (axb, ayb))):
+        if side.slot is not None:
+            i = side.slot
+            out[i] = gate(delta, sign * fx)
+            out[i + 1] = gate(delta, sign * fy)
+            out[i + 2] = gate(delta, sign * (ax * fy - ay * fx + radius * ft))
+    return out
+
+
+def _friction_element(mbs, joint: ClearanceJoint, memory: ImpactMemory, nodes: dict,
+                      pts: dict, variant: str, keep_alive: list):
+    """Add the friction of `joint` (friction on) as an `ObjectGenericODE2` on the two
+    bodies' nodes whose force user function returns the generalized forces of
+    `_friction_loads` (symbolic, or Python with contact.contact_force/friction_force)."""
+    import exudyn as exu
+    import exudyn.itemInterface as ii
+
+    law, mu, v0, v1 = friction_of(joint)
+    K, c, xi, model = _law_constants(joint)
+    sides, node_list = [], []
+    for body, point in ((joint.journal_body, joint.journal_point),
+                        (joint.bearing_body, joint.bearing_point)):
+        if body == GROUND:
+            sides.append(_Side(None, None, pts[GROUND][point], pts[GROUND][point]))
+            continue
+        ref = list(mbs.GetNodeParameter(nodes[body], "referenceCoordinates"))
+        sides.append(_Side(3 * len(node_list), ref, pts[body][point], None))
+        node_list.append(nodes[body])
+    n = 3 * len(node_list)
+    obj = mbs.AddObject(ii.ObjectGenericODE2(nodeNumbers=node_list, forceVector=[0.0] * n))
+    if variant == "python":
+        def normal(dx, dy, vx, vy):
+            r = math.sqrt(dx * dx + dy * dy)
+            if r <= c:
+                return max(r, 1e-300), 0.0     # free flight (gated to 0); finite at centre
+            rate = (dx * vx + dy * vy) / r
+            return r, contact_force(r - c, rate, memory.dmin, K, joint.restitution, model)
+
+        def force(mbs, t, itemNumber, q, q_t):
+            return _friction_loads(joint, sides, q, q_t, normal,
+                                   lambda vt, fn: friction_force(vt, fn, mu, v0, v1, law),
+                                   math.cos, math.sin,
+                                   lambda delta, v: v if delta > 0.0 else 0.0)
+
+        mbs.SetObjectParameter(obj, "forceUserFunction", force)
+        keep_alive.append(force)
+        return obj
+    esym = exu.symbolic
+    dmin = memory.symbol
+
+    def normal(dx, dy, vx, vy):
+        return _symbolic_normal(K, c, xi, dmin, dx, dy, vx, vy)
+
+    def friction(vt, fn):
+        return -mu * fn * symbolic_friction_factor(vt, v0, v1, law)
+
+    zero = esym.Real(0.0)
+
+    def force(mbs, t, itemNumber, q, q_t):
+        # lazy gates: r > c > 0 inside the true branch (t = perp(e) / |e| is defined)
+        return _friction_loads(joint, sides, q, q_t, normal, friction, esym.cos, esym.sin,
+                               lambda delta, v: esym.IfThenElse(delta > 0.0, v, zero))
+
+    uf = _symbolic_vector_function(mbs, force, obj, n)
+    mbs.SetObjectParameter(obj, "forceUserFunction", uf)
+    keep_alive.append(uf)
+    return obj
+
+
+def _symbolic_vector_function(mbs, function, obj, n: int):
+    """Exudyn symbolic user function of an `ObjectGenericODE2` force (mbs, t, itemNumber,
+    q, q_t) -> vector of n: as exudyn.advancedUtilities.CreateSymbolicUserFunction, whose
+    recording gives the vector arguments length 0 (we give them the element's n)."""
+    import exudyn as exu
+
+    esym = exu.symbolic
+    recording = esym.GetRecording()
+    esym.SetRecording(True)
+    try:
+        args = dict(mbs=mbs, t=esym.Real("t", 0.0), itemNumber=esym.Real("itemNumber", 0),
+                    q=esym.Vector("q", [0.0] * n), q_t=esym.Vector("q_t", [0.0] * n))
+        value = esym.Vector(function(**args))
+    finally:
+        esym.SetRecording(recording)
+    spec = {"functionName": function.__name__, "argList": list(args.values()),
+            "argTypeList": ["MainSystem", "Real", "Index", "StdVector", "StdVector"],
+            "returnValue": value, "returnType": "StdVector"}
+    uf = esym.UserFunction()
+    uf.SetUserFunctionFromDict(mbs, spec, "forceUserFunction", obj, "None")
+    return uf
 
 
 # ---------------------------------------------------------------------------- build
@@ -407,6 +589,16 @@ OUTPUT_GROUPS: tuple[str, ...] = ("reactions", "drive", "contact", "bodies")
 def _check_linkage(linkage, settings: ExudynSettings) -> None:
     if not isinstance(linkage, Linkage):
         raise ValueError(f"linkage must be a Linkage; got {type(linkage).__name__}")
+    for j in linkage.clearance_joints:
+        if friction_of(j) is None:
+            continue
+        if settings.contact == "sphere":
+            raise ValueError(f"contact='sphere' has no friction law of ours (joint {j.name!r} "
+                             "has friction on); use contact='symbolic' or 'python'")
+        if GROUND in (j.journal_body, j.bearing_body):
+            raise ValueError(f"friction in clearance joint {j.name!r}, which is a ground "
+                             "joint, is not built in the exudyn backend (its reaction would "
+                             "miss the friction force); use the reduced backend")
     if settings.contact == "sphere":
         for j in linkage.clearance_joints:
             if sphere_restitution(j) <= 0.0:
@@ -519,6 +711,8 @@ def build(linkage: Linkage, settings: ExudynSettings | None = None,
             mbs.SetObjectParameter(obj, "springForceUserFunction", uf)
             memories.append(memory)
             contacts.append((obj, memory))
+            if friction_of(cj) is not None:
+                _friction_element(mbs, cj, memory, nodes, pts, settings.contact, keep_alive)
         contact_items.append(obj)
         if GROUND in (cj.journal_body, cj.bearing_body):
             # the force on the bearing is +f (user force) / -f (sphere: markers swapped)
