@@ -18,7 +18,17 @@ import math
 import numbers
 from typing import Any
 
-from .linkage import GROUND, Body, ClearanceJoint, Drive, Linkage, Prismatic, Revolute
+from .linkage import (
+    FRICTION_DEFAULTS,
+    GROUND,
+    Body,
+    ClearanceJoint,
+    Drive,
+    Linkage,
+    Prismatic,
+    Revolute,
+    check_friction,
+)
 from .mechanism import SliderCrank
 
 __all__ = ["paper_slider_crank", "from_slider_crank", "slider_crank_two_clearances",
@@ -63,7 +73,10 @@ def from_slider_crank(mech: SliderCrank) -> Linkage:
                 youngs_modulus=mech.youngs_modulus, poisson_ratio=mech.poisson_ratio,
                 restitution=mech.restitution, contact_stiffness=mech.contact_stiffness,
                 contact_model=mech.contact_model,
-                impact_velocity_floor=mech.impact_velocity_floor),
+                impact_velocity_floor=mech.impact_velocity_floor,
+                friction_law=mech.friction_law,
+                friction_coefficient=mech.friction_coefficient,
+                friction_v0=mech.friction_v0, friction_v1=mech.friction_v1),
         ),
         drive=Drive("crank_pivot", mech.crank_speed, mech.initial_crank_angle),
         ground_points={"crank_pivot": (0.0, 0.0), "slider_axis": (0.0, 0.0)},
@@ -96,6 +109,11 @@ def paper_slider_crank(**overrides: Any) -> Linkage:
 
 RPM = 2.0 * math.pi / 60.0
 
+#: the friction overrides of every case (ClearanceJoint's friction fields, every clearance
+#: joint of the case): name -> (default, unit, source)
+_FRICTION = {k: (default, unit, source)
+             for k, (_, unit, default, source) in FRICTION_DEFAULTS.items()}
+
 #: case -> {override name: (default, unit, source)}; docs/cases.md lists the same table
 CASE_PARAMETERS: dict[str, dict[str, tuple[Any, str, str]]] = {
     "slider_crank_two_clearances": {
@@ -116,6 +134,7 @@ CASE_PARAMETERS: dict[str, dict[str, tuple[Any, str, str]]] = {
         "restitution": (0.9, "-", "Ebrahimi et al. 2018 Table 2"),
         "contact_model": ("lankarani_nikravesh", "-", "paper Eq. 9"),
         "gravity": (9.81, "m/s^2", "standard gravity along -y"),
+        **_FRICTION,
     },
     "four_bar": {
         "ground_length": (3.0, "m", "Siconos FourBarLinkageWith3clearance, Table 1 (l0)"),
@@ -139,6 +158,7 @@ CASE_PARAMETERS: dict[str, dict[str, tuple[Any, str, str]]] = {
         "restitution": (0.9, "-", "assumed: as the paper"),
         "contact_model": ("lankarani_nikravesh", "-", "paper Eq. 9"),
         "gravity": (9.81, "m/s^2", "same source"),
+        **_FRICTION,
     },
 }
 
@@ -151,8 +171,10 @@ def _case_values(case: str, overrides: dict[str, Any]) -> dict[str, Any]:
         raise ValueError(f"{case}: unknown override(s) {unknown}; allowed: {sorted(table)}")
     values = {k: v[0] for k, v in table.items()}
     values.update(overrides)
+    check_friction(case, values["friction_law"], values["friction_coefficient"],
+                   values["friction_v0"], values["friction_v1"])
     for key, value in values.items():
-        if key == "contact_model":
+        if key in ("contact_model", "friction_law"):
             continue
         if value is None and table[key][0] is None:     # None: the uniform-rod inertia
             continue
@@ -187,7 +209,10 @@ def _clearance_joint(name, journal_body, journal_point, bearing_body, bearing_po
         bearing_radius=values["bearing_radius"],
         journal_radius=values["bearing_radius"] - clearance,
         youngs_modulus=values["youngs_modulus"], poisson_ratio=values["poisson_ratio"],
-        restitution=values["restitution"], contact_model=values["contact_model"])
+        restitution=values["restitution"], contact_model=values["contact_model"],
+        friction_law=values["friction_law"],
+        friction_coefficient=values["friction_coefficient"],
+        friction_v0=values["friction_v0"], friction_v1=values["friction_v1"])
 
 
 def slider_crank_two_clearances(**overrides: Any) -> Linkage:

@@ -220,7 +220,8 @@ def add_mechanism_options(parser: argparse.ArgumentParser) -> None:
         symbol, unit, _ = PARAMETER_INFO[f.name]
         default = getattr(defaults, f.name)
         optional = default is None or f.name.endswith("inertia")
-        kind = str if f.name == "contact_model" else (_optional_float if optional else _float)
+        kind = str if f.name in ("contact_model", "friction_law") else (
+            _optional_float if optional else _float)
         extra = "; 'none': derived value" if optional else ""
         group.add_argument("--" + f.name.replace("_", "-"), dest=f.name, type=kind,
                            default=None, metavar="X",

@@ -35,10 +35,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from .contact import CONTACT_MODELS, stiffness_eq9
+from .contact import CONTACT_MODELS, FRICTION_LAWS, stiffness_eq9
 
 __all__ = ["Point", "GROUND", "Body", "Revolute", "Prismatic", "ClearanceJoint", "Drive",
-           "Linkage"]
+           "Linkage", "FRICTION_DEFAULTS", "check_friction"]
 
 Point = tuple[float, float]
 #: reserved body name of the ground; its points are `Linkage.ground_points`
@@ -173,6 +173,10 @@ class ClearanceJoint:
     contact_stiffness: float | None = None
     contact_model: str = "lankarani_nikravesh"
     impact_velocity_floor: float = 1e-3
+    friction_law: str = "none"
+    friction_coefficient: float = 0.0
+    friction_v0: float = 1e-4
+    friction_v1: float = 1e-2
 
     def __post_init__(self) -> None:
         _name("clearance joint name", self.name)
@@ -204,6 +208,16 @@ class ClearanceJoint:
         if self.contact_model not in CONTACT_MODELS:
             raise ValueError(f"{what} contact_model must be one of {sorted(CONTACT_MODELS)}; "
                              f"got {self.contact_model!r}")
+        check_friction(what, self.friction_law, self.friction_coefficient,
+                       self.friction_v0, self.friction_v1)
+        for f in ("friction_coefficient", "friction_v0", "friction_v1"):
+            object.__setattr__(self, f, float(getattr(self, f)))
+
+    @property
+    def has_friction(self) -> bool:
+        """Whether the joint carries a friction law (its generated model has the tangential
+        force; a zero coefficient still runs that model)."""
+        return self.friction_law != "none"
 
     @property
     def clearance(self) -> float:
@@ -241,12 +255,38 @@ class Drive:
         return 2.0 * math.pi / self.speed
 
 
+#: field -> (symbol, unit, default, source) of the friction fields of `ClearanceJoint`
+FRICTION_DEFAULTS: dict[str, tuple[str, str, Any, str]] = {
+    "friction_law": ("-", "-", "none", "frictionless, the paper's Eqs. 6-8 (issue 18)"),
+    "friction_coefficient": ("mu", "-", 0.0, "0: frictionless; give the pair's value "
+                             "(steel on steel, dry: about 0.1-0.2; lubricated about 0.01)"),
+    "friction_v0": ("v0", "m/s", 1e-4, "assumed: typical lower threshold of Ambrosio's law "
+                    "(project design notes); no readable source gives the paper case's"),
+    "friction_v1": ("v1", "m/s", 1e-2, "assumed: typical upper threshold of Ambrosio's law "
+                    "(project design notes); no readable source gives the paper case's"),
+}
+
+
+def check_friction(what: str, law: Any, mu: Any, v0: Any, v1: Any) -> None:
+    """ValueError naming `what` and the item unless the friction fields are valid: law one
+    of contact.FRICTION_LAWS, mu a finite number >= 0, 0 < v0 < v1 finite (m/s)."""
+    if not isinstance(law, str) or law not in FRICTION_LAWS:
+        raise ValueError(f"{what} friction_law must be one of {sorted(FRICTION_LAWS)}; "
+                         f"got {law!r}")
+    _real(f"{what} friction_coefficient", mu, "a finite number >= 0", lambda v: v >= 0)
+    v0 = _real(f"{what} friction_v0", v0, "a finite number > 0 (m/s)", lambda v: v > 0)
+    _real(f"{what} friction_v1", v1, f"a finite number > friction_v0 = {v0!r} (m/s)",
+          lambda v: v > v0)
+
+
 #: the JSON/TOML "type" of each joint class
 _JOINT_TYPES = {"revolute": Revolute, "prismatic": Prismatic}
 
 #: parameter fields of the clearance joints (`Linkage.parameter_names`)
 CLEARANCE_PARAMETERS = ("bearing_radius", "journal_radius", "youngs_modulus", "poisson_ratio",
                         "restitution", "contact_stiffness", "impact_velocity_floor")
+#: parameter fields of the clearance joints with a friction law (not "none")
+FRICTION_PARAMETERS = ("friction_coefficient", "friction_v0", "friction_v1")
 
 
 @dataclass(frozen=True)
@@ -526,7 +566,8 @@ class Linkage:
     def parameter_names(self) -> tuple[str, ...]:
         """Dotted names of the real-valued parameters ("<body>.mass", "<body>.inertia",
         "<body>.<point>.x"/".y", "<prismatic>.angle", "<clearance joint>.<field>" for
-        CLEARANCE_PARAMETERS, "drive.speed", "drive.initial_angle", "gravity",
+        CLEARANCE_PARAMETERS (and FRICTION_PARAMETERS if its friction_law is not "none"),
+        "drive.speed", "drive.initial_angle", "gravity",
         "ground.<point>.x"/".y")."""
         names = []
         for b in self.bodies:
@@ -538,6 +579,8 @@ class Linkage:
         names += [f"{j.name}.angle" for j in self.joints if isinstance(j, Prismatic)]
         for j in self.clearance_joints:
             names += [f"{j.name}.{f}" for f in CLEARANCE_PARAMETERS]
+            if j.has_friction:
+                names += [f"{j.name}.{f}" for f in FRICTION_PARAMETERS]
         return tuple(names + ["drive.speed", "drive.initial_angle", "gravity"])
 
     def _locate(self, name: str):

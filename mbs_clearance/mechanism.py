@@ -17,6 +17,7 @@ from typing import Any
 
 from ._io import read_json_object
 from .contact import CONTACT_MODELS, stiffness_eq9
+from .linkage import FRICTION_DEFAULTS, check_friction
 
 __all__ = ["SliderCrank", "PARAMETER_INFO", "CONTINUOUS_FIELDS"]
 
@@ -42,11 +43,13 @@ PARAMETER_INFO: dict[str, tuple[str, str, str]] = {
     "gravity": ("g", "m/s^2", "standard gravity along -y"),
     "contact_model": ("-", "-", "paper: Lankarani-Nikravesh"),
     "impact_velocity_floor": ("v_min", "m/s", "numerical floor for grazing onsets (docs)"),
+    # friction in the clearance joint (issue 18; docs/friction.md)
+    **{k: (sym, unit, source) for k, (sym, unit, _, source) in FRICTION_DEFAULTS.items()},
 }
 
 #: fields that are real numbers and can be design variables (sensitivities, GA genes)
 CONTINUOUS_FIELDS: tuple[str, ...] = tuple(
-    k for k in PARAMETER_INFO if k not in ("contact_model",)
+    k for k in PARAMETER_INFO if k not in ("contact_model", "friction_law")
 )
 
 
@@ -88,6 +91,15 @@ class SliderCrank:
     impact_velocity_floor : float
         Lower bound in m/s on the impact velocity used by the hysteresis damping; it only
         matters for grazing onsets, where the measured impact velocity tends to zero.
+    friction_law : str
+        Friction in the clearance joint (`contact.FRICTION_LAWS`): "none" (default, the
+        paper's frictionless joint), "coulomb" (regularised over friction_v0) or "ambrosio"
+        (Ambrosio's modified Coulomb law between friction_v0 and friction_v1).
+    friction_coefficient : float
+        Coefficient of friction mu >= 0 (default 0).
+    friction_v0, friction_v1 : float
+        Tangential-velocity thresholds in m/s, 0 < v0 < v1 (defaults assumed:
+        `linkage.FRICTION_DEFAULTS`).
     """
 
     crank_length: float = 0.05
@@ -108,13 +120,17 @@ class SliderCrank:
     gravity: float = 9.81
     contact_model: str = "lankarani_nikravesh"
     impact_velocity_floor: float = 1.0e-3
+    friction_law: str = "none"
+    friction_coefficient: float = 0.0
+    friction_v0: float = 1.0e-4
+    friction_v1: float = 1.0e-2
 
     def __post_init__(self) -> None:
         # numbers of any numeric type (numpy scalars, Fraction, int) are stored as Python
         # floats, so that every value is JSON-serialisable and behaves as a float
         for f in dataclasses.fields(self):
             value = getattr(self, f.name)
-            if f.name != "contact_model" and _is_real(value):
+            if f.name not in ("contact_model", "friction_law") and _is_real(value):
                 try:
                     as_float = float(value)
                 except OverflowError:
@@ -154,6 +170,8 @@ class SliderCrank:
                 f"contact_model must be one of {sorted(CONTACT_MODELS)}; "
                 f"got {self.contact_model!r}"
             )
+        check_friction("SliderCrank", self.friction_law, self.friction_coefficient,
+                       self.friction_v0, self.friction_v1)
 
     # ------------------------------------------------------------------ derived values
     @property

@@ -193,7 +193,9 @@ def test_paper_case_maps_every_slider_crank_field():
                "coupler_inertia": 4e-4, "crank_speed": 300.0, "initial_crank_angle": 0.3,
                "bearing_radius": 0.0101, "journal_radius": 0.00995, "youngs_modulus": 100e9,
                "poisson_ratio": 0.25, "restitution": 0.5, "contact_stiffness": 1e9,
-               "gravity": 0.0, "contact_model": "flores", "impact_velocity_floor": 1e-2}
+               "gravity": 0.0, "contact_model": "flores", "impact_velocity_floor": 1e-2,
+               "friction_law": "ambrosio", "friction_coefficient": 0.05, "friction_v0": 2e-4,
+               "friction_v1": 2e-2}
     assert set(changed) == {f.name for f in dataclasses.fields(SliderCrank)}
     for f, v in changed.items():
         assert from_slider_crank(base.replace(**{f: v})) != lk0, f
