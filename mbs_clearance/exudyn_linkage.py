@@ -118,8 +118,9 @@ class ExudynSettings:
         Reuse the Newton Jacobian between iterations and steps (Exudyn's default).
     onset : str
         "predict" or "detect": when the impact velocity is registered (`_pre_step`).
-    newton_tolerance : float
-        Relative tolerance of Newton's method (> 0).
+    newton_tolerance : float or None
+        Relative tolerance of Newton's method (> 0); None: `NEWTON_TOLERANCE`, raised to
+        the contact's roundoff floor where that is higher (`contact_scales`).
     """
 
     step_size: float | None = None
@@ -129,15 +130,68 @@ class ExudynSettings:
     spectral_radius: float = 0.9
     modified_newton: bool = True
     onset: str = "predict"
-    newton_tolerance: float = 1e-8
+    newton_tolerance: float | None = None
 
-    def step(self, period: float) -> float:
-        """The fixed step in s for a drive period `period` (s)."""
+    def step(self, linkage) -> float:
+        """The fixed step in s for a `Linkage` (or a drive period in s): `step_size`; else
+        the step of `accuracy` or `steps_per_revolution`, for a Linkage at most a
+        `STEPS_PER_CONTACT_PERIOD`-th of its contacts' linearised period."""
         if self.step_size is not None:
             return self.step_size
+        period = linkage.period if isinstance(linkage, Linkage) else float(linkage)
         if self.accuracy is not None:
-            return step_for_accuracy(period, self.accuracy)
-        return period / self.steps_per_revolution
+            h = step_for_accuracy(period, self.accuracy)
+        else:
+            h = period / self.steps_per_revolution
+        if isinstance(linkage, Linkage):
+            h = min(h, contact_scales(linkage)[0] / STEPS_PER_CONTACT_PERIOD)
+        return h
+
+    def tolerance(self, linkage: Linkage) -> float:
+        """Newton's relative tolerance for `linkage`: `newton_tolerance` if given, else
+        `NEWTON_TOLERANCE` or, if higher, ROUNDOFF_MARGIN times the contact force's roundoff
+        floor (`contact_scales`): below it Newton stalls without converging."""
+        if self.newton_tolerance is not None:
+            return self.newton_tolerance
+        return max(NEWTON_TOLERANCE, ROUNDOFF_MARGIN * contact_scales(linkage)[1])
+
+
+#: Newton's relative tolerance where the residual's roundoff allows it (Exudyn's default)
+NEWTON_TOLERANCE = 1e-8
+
+#: the automatic Newton tolerance stays this factor above the estimated roundoff floor
+ROUNDOFF_MARGIN = 3.0
+
+#: the default step resolves a contact's linearised oscillation by at least this many steps
+#: (docs/exudyn.md, "Four-bar": coarser steps let the persistent contact blow up)
+STEPS_PER_CONTACT_PERIOD = 12
+
+
+def contact_scales(linkage: Linkage) -> tuple[float, float]:
+    """(shortest linearised contact period in s, largest relative roundoff floor of a
+    contact force) of `linkage`, estimated at a load scale F = m (g + omega^2 L) (m: total
+    mass, omega: drive speed, L: the ground points' largest distance from the origin plus
+    every body's largest point distance, a bound on any position's size).
+
+    At that load a joint penetrates delta = (F / K)^(2/3) with the linearised stiffness
+    k = 1.5 K delta^(1/2); its oscillation period is 2 pi sqrt(m_j / k) (m_j the lighter of
+    its bodies). Exudyn holds absolute positions of size L, rounded to eps L; the contact
+    force in the Newton residual then carries an error k eps L, relative to F:
+    1.5 eps L / delta. A light mechanism of metres with a stiff, lightly loaded contact (the
+    four-bar: delta ~ 7e-8 m, L ~ 7 m) has a floor above Exudyn's default 1e-8."""
+    masses = {b.name: b.mass for b in linkage.bodies}
+    size = max((math.hypot(*p) for p in linkage.ground_points.values()), default=0.0)
+    size += sum(max((math.hypot(*p) for p in b.points.values()), default=0.0)
+                for b in linkage.bodies)
+    load = sum(masses.values()) * (linkage.gravity + linkage.drive.speed ** 2 * size)
+    period, floor = math.inf, 0.0
+    for cj in linkage.clearance_joints:
+        delta = (load / cj.stiffness) ** (2.0 / 3.0)
+        k = 1.5 * cj.stiffness * math.sqrt(delta)
+        m = min(masses.get(cj.journal_body, math.inf), masses.get(cj.bearing_body, math.inf))
+        period = min(period, 2.0 * math.pi * math.sqrt(m / k))
+        floor = max(floor, 1.5 * float(np.finfo(float).eps) * size / delta)
+    return period, floor
 
 
 #: option names of simulate(linkage, backend="exudyn"): the settings and ``max_memory``
@@ -171,8 +225,8 @@ def make_settings(options: dict) -> ExudynSettings:
         spectral_radius=check_real("spectral_radius", s.spectral_radius, 0.0, 1.0),
         modified_newton=check_bool("modified_newton", s.modified_newton),
         onset=check_choice("onset", s.onset, ONSET_MODES),
-        newton_tolerance=check_real("newton_tolerance", s.newton_tolerance, 0.0,
-                                    low_open=True))
+        newton_tolerance=None if s.newton_tolerance is None else check_real(
+            "newton_tolerance", s.newton_tolerance, 0.0, low_open=True))
 
 
 def sphere_restitution(joint: ClearanceJoint) -> float:
@@ -405,11 +459,10 @@ def friction_of(joint: ClearanceJoint):
     """(law id, mu, v0, v1) of a clearance joint whose friction is on (law not "none" and
     mu > 0), else None: a joint without friction gets no friction element, so its results
     are the frictionless ones bit for bit."""
-    law = getattr(joint, "friction_law", "none")
-    mu = float(getattr(joint, "friction_coefficient", 0.0))
-    if law == "none" or mu == 0.0:
+    if not joint.has_friction or joint.friction_coefficient == 0.0:
         return None
-    return (FRICTION_LAWS[law], mu, float(joint.friction_v0), float(joint.friction_v1))
+    return (FRICTION_LAWS[joint.friction_law], joint.friction_coefficient, joint.friction_v0,
+            joint.friction_v1)
 
 
 def symbolic_friction_factor(vt, v0: float, v1: float, law: int):
@@ -629,7 +682,7 @@ def build(linkage: Linkage, settings: ExudynSettings | None = None,
                          f"allowed: {['all', *OUTPUT_GROUPS]}")
     if "all" in want:
         want = set(OUTPUT_GROUPS)
-    step = settings.step(linkage.period)
+    step = settings.step(linkage)
     if y0 is None:
         from .linkage_model import initial_state
         y0 = initial_state(linkage)
@@ -760,7 +813,8 @@ def build(linkage: Linkage, settings: ExudynSettings | None = None,
 
 # ---------------------------------------------------------------------------- solve
 
-def _simulation_settings(settings: ExudynSettings, step: float, end_time: float):
+def _simulation_settings(settings: ExudynSettings, step: float, end_time: float,
+                         tolerance: float):
     import exudyn as exu
 
     ss = exu.SimulationSettings()
@@ -772,7 +826,7 @@ def _simulation_settings(settings: ExudynSettings, step: float, end_time: float)
     ti.discontinuous.useRecommendedStepSize = False
     ti.generalizedAlpha.spectralRadius = float(settings.spectral_radius)
     ti.newton.useModifiedNewton = settings.modified_newton
-    ti.newton.relativeTolerance = float(settings.newton_tolerance)
+    ti.newton.relativeTolerance = float(tolerance)
     ss.show.statistics = False
     ss.show.computationTime = False
     ss.solution.file.write = False
@@ -787,7 +841,8 @@ def solve(model: ExudynModel, end_time: float) -> dict:
     """
     import exudyn as exu
 
-    ss, n_steps = _simulation_settings(model.settings, model.step, end_time)
+    tolerance = model.settings.tolerance(model.linkage)
+    ss, n_steps = _simulation_settings(model.settings, model.step, end_time, tolerance)
     wall = time.perf_counter()
     try:
         ok = exu.SolveDynamic(model.mbs, ss, storeSolver=True)
@@ -801,6 +856,7 @@ def solve(model: ExudynModel, end_time: float) -> dict:
     stats = dict(step_size=model.step, step_size_used=end_time / n_steps, n_steps=n_steps,
                  wall_time=wall,
                  **{k: v for k, v in asdict(model.settings).items() if k != "step_size"})
+    stats["newton_tolerance"] = tolerance
     solver = model.mbs.sys.get("dynamicSolver")
     if solver is not None:
         it = solver.it
@@ -847,7 +903,7 @@ def _check_run(linkage, revolutions, settings, outputs, max_memory, name="revolu
     _check_linkage(linkage, settings)
     revolutions = check_int(name, revolutions, 1)
     max_memory = check_max_memory(max_memory)
-    step = settings.step(linkage.period)
+    step = settings.step(linkage)
     steps, need = estimate_memory(linkage, revolutions, step, outputs)
     if need > max_memory:
         raise MemoryLimitError(
