@@ -166,6 +166,55 @@ def test_accuracy_chooses_the_step_by_second_order():
     s = xl.make_settings(dict(accuracy=xl.ACCURACY_AT_DEFAULT / 4))
     lk = cases.paper_slider_crank()
     assert s.step(lk.period) == pytest.approx(xl.make_settings({}).step(lk.period) / 2)
+    assert s.step(lk) == s.step(lk.period)
+
+
+def test_default_step_and_tolerance_follow_the_contact_scales():
+    """The slider-cranks keep period / 6000 and Newton's 1e-8 (their contacts are resolved
+    and their roundoff floors ~3e-12); the four-bar's step is a 12th of its contact's
+    linearised period (~1.9e-4 s at its load scale: 1.56e-5 s instead of 1 ms) and its
+    tolerance 3 times its roundoff floor (~3.3e-8: 1.5 eps L / delta with L ~ 6.8 m,
+    delta ~ 7e-8 m). The floor's estimate is checked against a direct evaluation: the
+    contact force's change when its positions move by one rounding unit of L."""
+    s = xl.make_settings({})
+    for name in ("paper_slider_crank", "slider_crank_two_clearances"):
+        lk = cases.CASES[name]()
+        assert s.step(lk) == lk.period / xl.DEFAULT_STEPS_PER_REVOLUTION
+        assert s.tolerance(lk) == xl.NEWTON_TOLERANCE
+    fb = cases.four_bar()
+    period, floor = xl.contact_scales(fb)
+    assert 1e-4 < period < 3e-4 and s.step(fb) == period / xl.STEPS_PER_CONTACT_PERIOD
+    assert 1e-8 < floor < 1e-7 and s.tolerance(fb) == xl.ROUNDOFF_MARGIN * floor
+    assert xl.make_settings(dict(newton_tolerance=1e-9)).tolerance(fb) == 1e-9
+    # independent: the force error of one rounding unit at L, relative to the load
+    from mbs_clearance.contact import contact_force
+
+    cj = fb.clearance_joints[0]
+    load = sum(b.mass for b in fb.bodies) * (fb.gravity + fb.drive.speed ** 2 * 6.75)
+    delta = (load / cj.stiffness) ** (2 / 3)
+    ulp = np.spacing(6.75)
+    df = (contact_force(delta + ulp, 0.0, 1e-3, cj.stiffness, 1.0, 0)
+          - contact_force(delta, 0.0, 1e-3, cj.stiffness, 1.0, 0))
+    assert df / load == pytest.approx(floor, rel=0.6)    # ulp(L) / (eps L) is in [0.5, 1]
+
+
+def test_four_bar_newton_converges_with_the_floor_tolerance():
+    """The four-bar's persistent contact (10 N, penetration ~2e-8 m) at 2e-5 s: with
+    Newton's relative tolerance 1e-8, below the residual's roundoff floor, Newton stalls
+    (residual constant at ~1.3e-8 relative, contraction 1.0) and the run fails at 0.24 s
+    (measured); with the automatic tolerance (3 x the floor) the same 0.3 s run passes
+    and the contact stays closed with a force of the static order (< 50 N)."""
+    fb = cases.four_bar()
+    tight = xl.build(fb, xl.make_settings(dict(step_size=2e-5, newton_tolerance=1e-8)),
+                     outputs=("contact",))
+    with pytest.raises(RuntimeError, match="failed"):
+        xl.solve(tight, 0.3)
+    model = xl.build(fb, xl.make_settings(dict(step_size=2e-5)), outputs=("contact",))
+    stats = xl.solve(model, 0.3)
+    assert stats["newton_tolerance"] == xl.make_settings({}).tolerance(fb)
+    f = xl.stored(model, "coupler_rocker.force")
+    late = f[:, 0] > 0.2
+    assert np.hypot(f[late, 1], f[late, 2]).max() < 50.0
 
 
 # four revolutions per case (slow) ---------------------------------------------------------
