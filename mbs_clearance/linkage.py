@@ -652,8 +652,11 @@ class Linkage:
             "ground_points": sorted(self.ground_points),
             "joints": [["prismatic" if isinstance(j, Prismatic) else "revolute", j.name,
                         j.body_a, j.point_a, j.body_b, j.point_b] for j in self.joints],
+            # a joint with friction adds the tangential force to the model (its law and
+            # values are parameters); frictionless joints keep the structure of old
             "clearance_joints": [[j.name, j.journal_body, j.journal_point, j.bearing_body,
-                                  j.bearing_point] for j in self.clearance_joints],
+                                  j.bearing_point] + (["friction"] if j.has_friction else [])
+                                 for j in self.clearance_joints],
             "drive": self.drive.joint,
             "monitor_joint": self.monitor_joint,
         }

@@ -59,8 +59,9 @@ def chain(linkage: Linkage, model, names) -> list[dict[int, float]]:
         head, _, field = name.rpartition(".")
         entries: dict[int, float] = {}
         if name in pidx:
+            # a p entry of its own (with friction the radii are too: the contact points)
             entries[off + pidx[name]] = 1.0
-        elif head in joints and field in _STIFFNESS_FIELDS:
+        if head in joints and field in _STIFFNESS_FIELDS:
             cj = joints[head]
             _, d_rj, d_rb, d_e, d_nu = stiffness_eq9_partials(
                 cj.journal_radius, cj.bearing_radius, cj.youngs_modulus, cj.poisson_ratio)
@@ -79,7 +80,7 @@ def chain(linkage: Linkage, model, names) -> list[dict[int, float]]:
                     entries[k_col] = d_rj
             elif derived:
                 entries[k_col] = d_e if field == "youngs_modulus" else d_nu
-        else:
+        elif name not in pidx:
             raise AssertionError(f"no chain for parameter {name!r}")
         out.append({c: v for c, v in entries.items() if v != 0.0})
     return out

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .contact import CONTACT_MODELS
+from .contact import CONTACT_MODELS, FRICTION_LAWS
 from .linkage import GROUND, Linkage
 
 __all__ = ["parameter_values", "pack_parameters", "initial_state"]
@@ -49,6 +49,12 @@ def parameter_values(linkage: Linkage) -> dict[str, float]:
         values[f"{j.name}.impact_velocity_floor"] = j.impact_velocity_floor
         values[f"{j.name}.mode"] = 0.0
         values[f"{j.name}.impact_velocity"] = j.impact_velocity_floor
+        values[f"{j.name}.friction_law"] = float(FRICTION_LAWS[j.friction_law])
+        values[f"{j.name}.friction_coefficient"] = j.friction_coefficient
+        values[f"{j.name}.friction_v0"] = j.friction_v0
+        values[f"{j.name}.friction_v1"] = j.friction_v1
+        values[f"{j.name}.journal_radius"] = j.journal_radius
+        values[f"{j.name}.bearing_radius"] = j.bearing_radius
     values["drive.speed"] = linkage.drive.speed
     values["drive.initial_angle"] = linkage.drive.initial_angle
     values["gravity"] = linkage.gravity
@@ -72,7 +78,8 @@ def initial_state(linkage: Linkage, model=None, p=None, t0: float = 0.0, tol: fl
     the loop closure (closure(t0, q, p) = 0) by Newton's method from the description's
     assembly guesses (0 for coordinates without one; least squares if the closure is not
     square), the rates the velocity constraints closure_jacobian qdot = -closure_rate;
-    W = 0. Raises ValueError if Newton does not converge (no assembly near the guesses)."""
+    W = 0 (and the friction work). Raises ValueError if Newton does not converge (no
+    assembly near the guesses)."""
     model = load_model(linkage) if model is None else model
     p = pack_parameters(linkage, model) if p is None else p
     q = np.array([linkage.assembly.get(c, 0.0) for c in model.COORDINATES])
@@ -92,7 +99,7 @@ def initial_state(linkage: Linkage, model=None, p=None, t0: float = 0.0, tol: fl
             f"assembly, by coordinate name {list(model.COORDINATES)}) near an assembly")
     jac = model.closure_jacobian(t0, q, p)
     qd = np.linalg.lstsq(jac, -model.closure_rate(t0, q, p), rcond=None)[0]
-    return np.concatenate([q, qd, [0.0]])
+    return np.concatenate([q, qd, np.zeros(model.N_STATE - 2 * len(q))])
 
 
 # ---------------------------------------------------------------------------- tolerances
@@ -119,7 +126,8 @@ def drive_extent(linkage: Linkage) -> float:
 def default_atol(linkage: Linkage, model, rtol: float) -> np.ndarray:
     """Absolute tolerances: per state component from the linkage's natural scales (angles
     1 rad, lengths the length scale, angle rates the drive speed, length rates the driven
-    body's tip speed, the drive's work 1 J, not under error control), then per clearance
+    body's tip speed, the drive's (and friction's) work 1 J, not under error control), then
+    per clearance
     joint of its switching function (EVENT_ATOL clearances x rtol) and its rate (none).
     For the paper case these are reduced.default_atol and reduced.event_atol."""
     w = linkage.drive.speed
@@ -130,7 +138,8 @@ def default_atol(linkage: Linkage, model, rtol: float) -> np.ndarray:
     events = []
     for j in linkage.clearance_joints:
         events += [rtol * EVENT_ATOL * j.clearance, np.inf]
-    return np.concatenate([rtol * np.array(pos + vel + [1.0]), events])
+    works = [1.0] * (model.N_STATE - 2 * model.N_Q)
+    return np.concatenate([rtol * np.array(pos + vel + works), events])
 
 
 # ---------------------------------------------------------------------------- trajectory
@@ -168,6 +177,8 @@ def trajectory_from_run(linkage: Linkage, model, ts, ys, ms, p, stats, peaks, ou
         coordinates={c: ys[:, i].copy() for i, c in enumerate(model.COORDINATES)},
         rates={c: ys[:, n + i].copy() for i, c in enumerate(model.COORDINATES)},
         accelerations={c: outs[:, col[f"{c}.acc"]].copy() for c in model.COORDINATES},
+        friction_work=(ys[:, model.FRICTION_WORK].copy() if getattr(model, "FRICTION_WORK", -1)
+                       > 0 and ys.shape[1] > model.FRICTION_WORK else None),
     )
 
 
@@ -258,6 +269,10 @@ def run(linkage: Linkage, revolutions: int = 4, *, rtol: float | None = None,
     p = pack_parameters(linkage, model)
     y0 = initial_state(linkage, model, p)
     edges = np.arange(revolutions + 1) * linkage.period
+    extra_fev = 0
+    if h0 == 0.0 and model.N_STATE > 2 * model.N_Q + 1:
+        h0 = _start_step(model, y0, p, rtol, atol_arr, method, min(h_max, edges[-1]))
+        extra_fev = 1
     n_out = model.N_OUT if record else 0
     row = 8 * (1 + model.N_STATE + model.N_MEM + n_out)
     step_cap = max(1, (max_memory - 24 * len(edges)) // row) if record else max_steps
@@ -279,8 +294,24 @@ def run(linkage: Linkage, revolutions: int = 4, *, rtol: float | None = None,
         raise RuntimeError(f"integration of linkage {linkage.name!r} failed at about t = "
                            f"{ts[-1] if len(ts) else float('nan'):.6g} s: {status.message}")
     stats = {k: int(v) for k, v in zip(COUNTERS, counters)}
+    stats["nfev"] += extra_fev
     stats.update(method=method, rtol=float(rtol))
     return model, ts, ys, ms, peaks, peak_t, stats, outs, p
+
+
+def _start_step(model, y0, p, rtol, atol, method, span):
+    """The integrator's automatic starting step (`integrator.initial_step`) of the state
+    without the friction work (one evaluation of the model): the step a frictionless model
+    takes, so that a zero friction coefficient reproduces its run bit for bit (the friction
+    work, a quadrature, would otherwise enter the starting step's norms)."""
+    from .integrator import METHODS, initial_step
+
+    n = 2 * model.N_Q + 1
+    y = np.ascontiguousarray(y0[:n])
+    f = np.empty(n)
+    model.rhs(0.0, y, p, f)
+    return initial_step(model.rhs, 0.0, y, f, p, rtol, np.ascontiguousarray(atol[:n]),
+                        METHODS[method].error_order + 1, span, np.empty(n), np.empty(n))
 
 
 def simulate_linkage(linkage: Linkage, revolutions: int = 4, **options):

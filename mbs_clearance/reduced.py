@@ -658,6 +658,8 @@ OPTION_NAMES = ("rtol", "atol", "method", "max_steps", "n_samples", "h_max", "h0
 def simulate_reduced(mech: SliderCrank, revolutions: int = 4, **options):
     """Simulate with the reduced model and return a `Trajectory` (all accepted steps, or the
     times `t_eval` if given)."""
+    if mech.friction_law != "none":
+        return _with_friction(mech, revolutions, options, record=True)
     ts, ys, ms, peaks, peak_t, counters, outs, p = run(mech, revolutions, record=True,
                                                        **options)
     stats = counters_dict(counters)
@@ -848,5 +850,37 @@ def annotate(traj):
 
 def peak_reduced(mech: SliderCrank, revolution: int = 4, **options) -> float:
     """Max |F12| in N over revolution `revolution`, recording nothing but running maxima."""
+    if mech.friction_law != "none":
+        return _with_friction(mech, revolution, options, record=False)
     peaks = run(mech, revolution, record=False, **options)[3]
     return float(peaks[revolution - 1])
+
+
+def _with_friction(mech: SliderCrank, revolutions: int, options: dict, record: bool):
+    """A SliderCrank with friction in its joint runs on the model generated for its
+    description (`cases.from_slider_crank`, whose structure has the tangential force;
+    `linkage_model`): its Trajectory in a SliderCrank's form (with the friction work), or
+    (record False) the peak of revolution `revolutions`."""
+    import dataclasses
+
+    from . import linkage_model as lm
+    from .cases import from_slider_crank
+
+    unknown = sorted(set(options) - set(lm.OPTION_NAMES))
+    if unknown:
+        raise ValueError(f"option(s) {unknown} are not available for a SliderCrank with "
+                         f"friction (friction_law {mech.friction_law!r}); allowed: "
+                         f"{list(lm.OPTION_NAMES)}")
+    lk = from_slider_crank(mech)
+    if not record:
+        return lm.peak_linkage(lk, revolutions, **options)
+    traj = lm.simulate_linkage(lk, revolutions, **options)
+    pos, rate, acc = traj.coordinates, traj.rates, traj.accelerations
+    return dataclasses.replace(
+        traj, mechanism=mech, contact_force=traj.contact_force[:, 0],
+        penetration=traj.penetration[:, 0], eccentricity=traj.eccentricity[:, 0, :],
+        contact_phase=traj.contact_phase[:, 0], slider_position=pos["slider_guide.s"],
+        slider_velocity=rate["slider_guide.s"], slider_acceleration=acc["slider_guide.s"],
+        coupler_angle=pos["coupler.angle"], coupler_rate=rate["coupler.angle"], joints=None,
+        reactions=None, shaking_force=None, coordinates=None, rates=None,
+        accelerations=None)

@@ -114,6 +114,9 @@ class Trajectory:
     coordinates: dict[str, np.ndarray] | None = None
     rates: dict[str, np.ndarray] | None = None
     accelerations: dict[str, np.ndarray] | None = None
+    #: J, work dissipated by friction in the clearance joints since t = 0 (a linkage with
+    #: friction; None otherwise)
+    friction_work: np.ndarray | None = None
 
     @property
     def linkage(self):
@@ -473,6 +476,8 @@ def linkage_columns(traj: Trajectory) -> dict[str, np.ndarray]:
                          ("acceleration", traj.accelerations)):
         for c, v in series.items():
             cols[f"{kind}.{c}"] = v
+    if traj.friction_work is not None:
+        cols["friction_work[J]"] = traj.friction_work
     return cols
 
 
@@ -536,6 +541,7 @@ def _load_linkage(path: Path, meta: dict) -> Trajectory:
             coordinates={c: cols[f"coordinate.{c}"] for c in model.COORDINATES},
             rates={c: cols[f"rate.{c}"] for c in model.COORDINATES},
             accelerations={c: cols[f"acceleration.{c}"] for c in model.COORDINATES},
+            friction_work=cols.get("friction_work[J]"),
         )
     except KeyError as exc:
         raise _fail(path, f"missing column {exc}") from exc

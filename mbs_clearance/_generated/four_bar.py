@@ -3,7 +3,8 @@
 Regenerate with `python tools/generate_models.py` (checked-in modules) or let
 `mbs_clearance.generate.load_model` do it (any description, cached by STRUCTURE_DIGEST).
 
-State y = [q (COORDINATES), qdot, W] (W: work of the drive). Parameter vector p: PARAMETERS
+State y = [q (COORDINATES), qdot, W] (W: work of the drive), with friction (FRICTION_JOINTS)
+[q, qdot, W, Wf] (Wf: work dissipated by friction, from 0). Parameter vector p: PARAMETERS
 (the clearance joints' memory from MEM_START: mode, impact velocity per joint), then
 N_CONSTANTS parameter-only constants that `prepare(p)` computes (call it whenever the
 parameters change). Kernels of protocol v2: rhs, event, on_event, monitor.
@@ -24,14 +25,15 @@ from mbs_clearance.generate.runtime import (
     MONITOR_SIG,
     RHS_SIG,
     contact_stage,
+    friction_stage,
     gap_state,
     switching,
 )
 
 LINKAGE = "four_bar"
 STRUCTURE = "{\"bodies\": [[\"crank\", [\"pin\", \"pivot\"]], [\"coupler\", [\"crank_end\", \"rocker_end\"]], [\"rocker\", [\"pin\", \"pivot\"]]], \"clearance_joints\": [[\"coupler_rocker\", \"rocker\", \"pin\", \"coupler\", \"rocker_end\"]], \"drive\": \"crank_pivot\", \"ground_points\": [\"crank_pivot\", \"rocker_pivot\"], \"joints\": [[\"revolute\", \"crank_pivot\", \"ground\", \"crank_pivot\", \"crank\", \"pivot\"], [\"revolute\", \"crank_coupler\", \"crank\", \"pin\", \"coupler\", \"crank_end\"], [\"revolute\", \"rocker_pivot\", \"ground\", \"rocker_pivot\", \"rocker\", \"pivot\"]], \"monitor_joint\": null}"
-STRUCTURE_DIGEST = "aa6818650be699481b862edb4684886755cdbf1e9825e39c9b462e2fa2b8a229"
-GENERATOR_VERSION = "5c88331610c7f9b0"
+STRUCTURE_DIGEST = "6dc0c8c3865905b2b6ab15ccddb221ec3c39b6840073c168f318aff072ff08fe"
+GENERATOR_VERSION = "913b0af478b0b9a5"
 
 #: dotted names of the entries of p (without the constants)
 PARAMETERS = (
@@ -70,7 +72,11 @@ PARAMETERS = (
 )
 COORDINATES = ("coupler.angle", "rocker.angle", )
 N_Q = 2
-N_STATE = 2 * N_Q + 1
+#: the clearance joints with friction (their tangential force is in the model)
+FRICTION_JOINTS = ()
+N_STATE = 2 * N_Q + 1 + (1 if FRICTION_JOINTS else 0)
+#: index of the friction work Wf in the state (-1: no friction)
+FRICTION_WORK = 2 * N_Q + 1 if FRICTION_JOINTS else -1
 #: the clearance joints (one switching function each)
 JOINTS = ("coupler_rocker", )
 N_EVENTS = 1
@@ -399,7 +405,7 @@ def _derivative(y, p, res, dydt):
 
 @nb.njit(RHS_SIG, **KERNEL)
 def rhs(t, y, p, dydt):
-    """State derivative [qdot, qddot, drive moment x speed]."""
+    """State derivative [qdot, qddot, drive moment x speed (, friction power)]."""
     _derivative(y, p, dynamics(t, y, p), dydt)
 
 
@@ -635,6 +641,7 @@ def integrate_model(y0, p, edges, settings, coefficients):
 # (generate/jacobians.py; the sensitivity equations in generate/sens_runtime.py)
 from mbs_clearance.generate.sens_runtime import (
     contact_jacobian,
+    friction_jacobian,
     jacobian_at,
     sens_monitor,
     sens_on_event,
@@ -684,7 +691,8 @@ Z_NAMES = (
 )
 N_Z = 37
 JAC_STRIDE = N_Z + 1
-#: rows of the Jacobian: OUT_COLUMNS, then per clearance joint (exd, eyd, fx, fy)
+#: rows of the Jacobian: OUT_COLUMNS, then per clearance joint (exd, eyd, fx, fy), then per
+#: joint with friction the rotation part of its slip velocity (spin)
 N_JROWS = 18
 JAC_EXTRA_ROWS = {
     "exd:coupler_rocker": 14,

@@ -3,7 +3,8 @@
 Regenerate with `python tools/generate_models.py` (checked-in modules) or let
 `mbs_clearance.generate.load_model` do it (any description, cached by STRUCTURE_DIGEST).
 
-State y = [q (COORDINATES), qdot, W] (W: work of the drive). Parameter vector p: PARAMETERS
+State y = [q (COORDINATES), qdot, W] (W: work of the drive), with friction (FRICTION_JOINTS)
+[q, qdot, W, Wf] (Wf: work dissipated by friction, from 0). Parameter vector p: PARAMETERS
 (the clearance joints' memory from MEM_START: mode, impact velocity per joint), then
 N_CONSTANTS parameter-only constants that `prepare(p)` computes (call it whenever the
 parameters change). Kernels of protocol v2: rhs, event, on_event, monitor.
@@ -24,14 +25,15 @@ from mbs_clearance.generate.runtime import (
     MONITOR_SIG,
     RHS_SIG,
     contact_stage,
+    friction_stage,
     gap_state,
     switching,
 )
 
 LINKAGE = "paper_slider_crank"
 STRUCTURE = "{\"bodies\": [[\"crank\", [\"pin\", \"pivot\"]], [\"coupler\", [\"crank_end\", \"slider_end\"]], [\"slider\", [\"pin\"]]], \"clearance_joints\": [[\"coupler_slider\", \"coupler\", \"slider_end\", \"slider\", \"pin\"]], \"drive\": \"crank_pivot\", \"ground_points\": [\"crank_pivot\", \"slider_axis\"], \"joints\": [[\"revolute\", \"crank_pivot\", \"ground\", \"crank_pivot\", \"crank\", \"pivot\"], [\"revolute\", \"crank_coupler\", \"crank\", \"pin\", \"coupler\", \"crank_end\"], [\"prismatic\", \"slider_guide\", \"ground\", \"slider_axis\", \"slider\", \"pin\"]], \"monitor_joint\": \"crank_pivot\"}"
-STRUCTURE_DIGEST = "655d360b0d155b98e584fb02c5eb358ad46569360a33052731e9f722566a511c"
-GENERATOR_VERSION = "5c88331610c7f9b0"
+STRUCTURE_DIGEST = "28827036d8ba57343936826dafb04d0e620fdab4a14f5bb9a6552e15b0e02ef9"
+GENERATOR_VERSION = "913b0af478b0b9a5"
 
 #: dotted names of the entries of p (without the constants)
 PARAMETERS = (
@@ -69,7 +71,11 @@ PARAMETERS = (
 )
 COORDINATES = ("coupler.angle", "slider_guide.s", )
 N_Q = 2
-N_STATE = 2 * N_Q + 1
+#: the clearance joints with friction (their tangential force is in the model)
+FRICTION_JOINTS = ()
+N_STATE = 2 * N_Q + 1 + (1 if FRICTION_JOINTS else 0)
+#: index of the friction work Wf in the state (-1: no friction)
+FRICTION_WORK = 2 * N_Q + 1 if FRICTION_JOINTS else -1
 #: the clearance joints (one switching function each)
 JOINTS = ("coupler_slider", )
 N_EVENTS = 1
@@ -379,7 +385,7 @@ def _derivative(y, p, res, dydt):
 
 @nb.njit(RHS_SIG, **KERNEL)
 def rhs(t, y, p, dydt):
-    """State derivative [qdot, qddot, drive moment x speed]."""
+    """State derivative [qdot, qddot, drive moment x speed (, friction power)]."""
     _derivative(y, p, dynamics(t, y, p), dydt)
 
 
@@ -601,6 +607,7 @@ def integrate_model(y0, p, edges, settings, coefficients):
 # (generate/jacobians.py; the sensitivity equations in generate/sens_runtime.py)
 from mbs_clearance.generate.sens_runtime import (
     contact_jacobian,
+    friction_jacobian,
     jacobian_at,
     sens_monitor,
     sens_on_event,
@@ -649,7 +656,8 @@ Z_NAMES = (
 )
 N_Z = 36
 JAC_STRIDE = N_Z + 1
-#: rows of the Jacobian: OUT_COLUMNS, then per clearance joint (exd, eyd, fx, fy)
+#: rows of the Jacobian: OUT_COLUMNS, then per clearance joint (exd, eyd, fx, fy), then per
+#: joint with friction the rotation part of its slip velocity (spin)
 N_JROWS = 18
 JAC_EXTRA_ROWS = {
     "exd:coupler_slider": 14,

@@ -23,18 +23,28 @@ def __getattr__(name):
 
 
 __all__ = ["generate_module", "load_model", "model_path", "GENERATOR_VERSION",
-           "structure_digest", "NAMED_CASES", "named_cases", "registry_source"]
+           "structure_digest", "NAMED_CASES", "NAMED_VARIANTS", "named_cases",
+           "registry_source"]
 
 #: the named cases (functions of mbs_clearance.cases) whose modules are checked in
 NAMED_CASES = ("paper_slider_crank", "slider_crank_two_clearances", "four_bar")
 
+#: checked-in variants of named cases with another structure: module name -> (case,
+#: overrides); the paper case with friction in its joint (any law: a parameter)
+NAMED_VARIANTS = {"paper_slider_crank_friction": ("paper_slider_crank",
+                                                  {"friction_law": "ambrosio"})}
+
 
 def named_cases() -> dict:
     """name -> Linkage (default arguments) of the NAMED_CASES that mbs_clearance.cases
-    defines."""
+    defines, and of the NAMED_VARIANTS."""
     from .. import cases
 
-    return {name: getattr(cases, name)() for name in NAMED_CASES if hasattr(cases, name)}
+    out = {name: getattr(cases, name)() for name in NAMED_CASES if hasattr(cases, name)}
+    for name, (case, overrides) in NAMED_VARIANTS.items():
+        if hasattr(cases, case):
+            out[name] = getattr(cases, case)(**overrides)
+    return out
 
 
 def registry_source(cases: dict) -> str:

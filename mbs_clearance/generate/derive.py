@@ -43,8 +43,9 @@ def identifier(name: str, taken: set[str]) -> str:
 def parameter_layout(linkage: Linkage) -> tuple[str, ...]:
     """Dotted names of the entries of the kernels' parameter vector p, in order: bodies
     (mass, inertia, points), ground points, prismatic axis angles, per clearance joint
-    (clearance, stiffness, restitution, contact_model id, impact_velocity_floor), the drive,
-    gravity, then the memory of each clearance joint (mode, impact velocity)."""
+    (clearance, stiffness, restitution, contact_model id, impact_velocity_floor), per
+    clearance joint with friction (friction_law id, coefficient, v0, v1, journal and bearing
+    radius), the drive, gravity, then the memory of each clearance joint (mode, impact velocity)."""
     names = []
     for b in linkage.bodies:
         names += [f"{b.name}.mass", f"{b.name}.inertia"]
@@ -55,6 +56,9 @@ def parameter_layout(linkage: Linkage) -> tuple[str, ...]:
     names += [f"{j.name}.angle" for j in linkage.joints if isinstance(j, Prismatic)]
     for j in linkage.clearance_joints:
         names += [f"{j.name}.{f}" for f in CONTACT_FIELDS]
+    for j in linkage.clearance_joints:
+        if j.has_friction:
+            names += [f"{j.name}.{f}" for f in FRICTION_FIELDS]
     names += ["drive.speed", "drive.initial_angle", "gravity"]
     for j in linkage.clearance_joints:
         names += [f"{j.name}.mode", f"{j.name}.impact_velocity"]
@@ -64,6 +68,11 @@ def parameter_layout(linkage: Linkage) -> tuple[str, ...]:
 #: per clearance joint, the entries of p read by the contact law
 CONTACT_FIELDS = ("clearance", "stiffness", "restitution", "contact_model",
                   "impact_velocity_floor")
+
+#: per clearance joint with friction, the entries of p read by the friction law and the
+#: tangential slip (the radii put the contact point on each body's surface)
+FRICTION_FIELDS = ("friction_law", "friction_coefficient", "friction_v0", "friction_v1",
+                   "journal_radius", "bearing_radius")
 
 
 @dataclass
@@ -98,6 +107,11 @@ class Derivation:
     closure_rate: sp.Matrix
     monitor: str | None
     extra: dict = field(default_factory=dict)
+    #: per clearance joint: the symbol of its friction force Ft on the journal along the
+    #: tangent t = (-n_y, n_x) (None: no friction), and the part of the slip velocity
+    #: from the bodies' rotations, omega_J R_J - omega_B R_B (None: no friction)
+    TQ: list = field(default_factory=list)
+    spins: list = field(default_factory=list)
 
 
 def _rot(c, s, x, y):
@@ -205,7 +219,7 @@ def derive(linkage: Linkage) -> Derivation:
         P.set_vel(N, sp.diff(xy[0], t) * N.x + sp.diff(xy[1], t) * N.y)
         return P
 
-    bodies, loads, com_point = [], [], {}
+    bodies, loads, com_point, frames = [], [], {}, {}
     mass = {b.name: psyms[f"{b.name}.mass"] for b in linkage.bodies}
     inertia = {b.name: psyms[f"{b.name}.inertia"] for b in linkage.bodies}
     for b in linkage.bodies:
@@ -213,6 +227,7 @@ def derive(linkage: Linkage) -> Derivation:
         frame.orient_axis(N, N.z, timed(angle[b.name]))
         P = mech_point(f"G_{len(bodies)}", pos[b.name])
         com_point[b.name] = P
+        frames[b.name] = frame
         bodies.append(me.RigidBody(f"body_{len(bodies)}", P, frame, mass[b.name],
                                    (me.inertia(frame, 0, 0, inertia[b.name]), P)))
         loads.append((P, -mass[b.name] * g * N.y))
@@ -227,6 +242,22 @@ def derive(linkage: Linkage) -> Derivation:
             if body != GROUND:
                 loads.append((mech_point(f"C_{j}_{body}", xy),
                               sign * (FX[j] * N.x + FY[j] * N.y)))
+    # friction: Ft t on the journal at its contact point, -Ft t on the bearing at its; with
+    # the forces (FX, FY = Fn n - Ft t on the bearing) moved to the centres, the moments
+    # R_J Ft on the journal and -R_B Ft on the bearing about their centres remain
+    TQ, spin_t, torque_loads = [], [], []     # torque_loads: (body, moment about its centre)
+    for j, cj in enumerate(linkage.clearance_joints):
+        if not cj.has_friction:
+            TQ.append(None)
+            spin_t.append(None)
+            continue
+        TQ.append(sp.Symbol(f"TQ{j}", real=True))
+        rj, rb = psyms[f"{cj.name}.journal_radius"], psyms[f"{cj.name}.bearing_radius"]
+        spin_t.append(angle[cj.journal_body] * rj - angle[cj.bearing_body] * rb)
+        for body, tau in ((cj.journal_body, rj * TQ[j]), (cj.bearing_body, -rb * TQ[j])):
+            torque_loads.append((body, tau))
+            if body != GROUND:
+                loads.append((frames[body], tau * N.z))
     kane = me.KanesMethod(N, q_ind=q, u_ind=u,
                           kd_eqs=[q[i].diff(t) - u[i] for i in range(n)])
     kane.kanes_equations(bodies, loads)
@@ -284,6 +315,8 @@ def derive(linkage: Linkage) -> Derivation:
     gaps = []
     for ex, ey in gaps_t:
         gaps.append(tuple(finish(v) for v in (ex, ey, dt(ex), dt(ey))))
+    # the slip velocity's rotation part: d/dt of (angle_J R_J - angle_B R_B)
+    spins = [None if e is None else finish(dt(e)) for e in spin_t]
 
     # ---- outputs: Newton on the subtree below each ground joint
     acc = {}
@@ -325,6 +358,8 @@ def derive(linkage: Linkage) -> Derivation:
                    + inertia[b.name] * dt(dt(angle[b.name])) * dphi)
     for _, (x, y), fx, fy in contact_loads:
         moment -= fx * sp.diff(x, THETA) + fy * sp.diff(y, THETA)
+    for body, tau in torque_loads:
+        moment -= tau * sp.diff(angle[body], THETA)
     moment = timed(moment)
     kinetic = sp.S(0)
     potential = sp.S(0)
@@ -345,7 +380,7 @@ def derive(linkage: Linkage) -> Derivation:
         mass_matrix=mass_matrix.applyfunc(finish), forcing=forcing.applyfunc(finish),
         reactions=reactions, drive_moment=finish(moment), kinetic=finish(kinetic),
         potential=finish(potential), closure_jacobian=jac, closure_rate=rate,
-        monitor=linkage.monitor_joint)
+        monitor=linkage.monitor_joint, TQ=TQ, spins=spins)
 
 
 def _reduce_trig(expr, ideal, gens):

@@ -16,7 +16,10 @@ parameter-only constants, as the plain kernels are.
 
 Rows of jac (flat, stride N_Z + 1; column N_Z holds the value): OUT_COLUMNS, then per
 clearance joint the journal centre's velocity relative to the bearing (x, y) and the contact
-force components (x, y) on the journal's side. `full=False` fills the rows of the clearance
+force components (x, y) on the bearing's side, then per joint with friction the rotation
+part of the slip velocity (omega_J R_J - omega_B R_B); the friction force's derivatives come
+from `runtime.friction_jacobian` (`contact.friction_force_partials`), its moments enter the
+equations of motion through the symbol TQ. `full=False` fills the rows of the clearance
 joints and the accelerations only (what the sensitivity equations need).
 """
 
@@ -74,7 +77,10 @@ def jacobian_context(w, d: Derivation, out_columns: list[str]) -> dict:
     for j in range(J):
         for k, what in enumerate(("exd", "eyd", "fx", "fy")):
             extra[(what, j)] = n_out + 4 * j + k
-    n_rows = n_out + 4 * J
+    fric = [j for j in range(J) if d.TQ[j] is not None]
+    for k, j in enumerate(fric):
+        extra[("spin", j)] = n_out + 4 * J + k
+    n_rows = n_out + 4 * J + len(fric)
     params = list(d.parameters)
     pcol = {name: 1 + 2 * n + i for i, name in enumerate(params)}
 
@@ -95,6 +101,12 @@ def jacobian_context(w, d: Derivation, out_columns: list[str]) -> dict:
             for k, der in _gradient(d, e, cols).items():
                 gexprs.append(w.split(der))
                 gnames.append(at(r, k))
+    for j in fric:
+        gexprs.append(w.split(d.spins[j]))
+        gnames.append(f"gv{j}_4")
+        for k, der in _gradient(d, d.spins[j], cols).items():
+            gexprs.append(w.split(der))
+            gnames.append(at(extra[("spin", j)], k))
     stages = [(gexprs, gnames)]
     clines = []
     for j, name in enumerate(d.joints):
@@ -109,6 +121,19 @@ def jacobian_context(w, d: Derivation, out_columns: list[str]) -> dict:
         clines.append(f"{d.FX[j]}, {d.FY[j]} = contact_jacobian(jac, {stride}, {nz}, "
                       f"gv{j}_0, gv{j}_1, gv{j}_2, gv{j}_3, "
                       + ", ".join(str(v) for v in rows + zc) + ", " + ", ".join(pv) + ")")
+        if j in fric:
+            frows = [row[f"{name}.{f}"] for f in ("ecc_x", "ecc_y")] + [
+                extra[(what, j)] for what in ("exd", "eyd", "spin")] + [
+                row[f"{name}.contact_force"], extra[("fx", j)], extra[("fy", j)]] + [
+                row[f"{name}.{f}"] for f in ("friction_force", "slip_velocity",
+                                             "friction_power")]
+            fc = [pcol[f"{name}.{f}"] for f in ("friction_coefficient", "friction_v0",
+                                                "friction_v1")]
+            fv = [f"p[{pcol[f'{name}.{f}'] - 1 - 2 * n}]" for f in (
+                "friction_law", "friction_coefficient", "friction_v0", "friction_v1")]
+            clines.append(f"{d.FX[j]}, {d.FY[j]}, {d.TQ[j]} = friction_jacobian(jac, {stride}, "
+                          f"{nz}, gv{j}_4, " + ", ".join(str(v) for v in frows + fc) + ", "
+                          + ", ".join(fv) + ")")
     stages.append(clines)
 
     # ---- the equations of motion: values (Cholesky of M), then dA/dz
@@ -137,6 +162,9 @@ def jacobian_context(w, d: Derivation, out_columns: list[str]) -> dict:
             rnames.append(f"rfx_{i}_{j}")
             rexprs.append(w.split(sp.expand(sp.diff(R[i], d.FY[j]))))
             rnames.append(f"rfy_{i}_{j}")
+            if j in fric:
+                rexprs.append(w.split(sp.expand(sp.diff(R[i], d.TQ[j]))))
+                rnames.append(f"rtq_{i}_{j}")
     stages.append((rexprs, rnames))
     loop = [f"for col in range({nz}):"]
     for i in range(n):
@@ -144,6 +172,9 @@ def jacobian_context(w, d: Derivation, out_columns: list[str]) -> dict:
         for j in range(J):
             terms.append(f"rfx_{i}_{j} * jac[{extra[('fx', j)] * stride} + col]")
             terms.append(f"rfy_{i}_{j} * jac[{extra[('fy', j)] * stride} + col]")
+            if j in fric:
+                ft_row = row[f"{d.joints[j]}.friction_force"]
+                terms.append(f"rtq_{i}_{j} * jac[{ft_row * stride} + col]")
         loop.append(f"    b_{i} = -(" + " + ".join(terms) + ")")
     loop += _solve(n, [f"b_{i}" for i in range(n)], [f"x_{i}" for i in range(n)], "    ")
     for i in range(n):
@@ -177,12 +208,15 @@ def jacobian_context(w, d: Derivation, out_columns: list[str]) -> dict:
                 onames.append(f"oa_{m}_{i}")
                 terms.append(f"oa_{m}_{i} * jac[{acc_rows[i] * stride} + col]")
         for j in range(J):
-            for what, F in (("fx", d.FX[j]), ("fy", d.FY[j])):
+            loads = [("fx", d.FX[j], extra[("fx", j)]), ("fy", d.FY[j], extra[("fy", j)])]
+            if j in fric:
+                loads.append(("tq", d.TQ[j], row[f"{d.joints[j]}.friction_force"]))
+            for what, F, frow in loads:
                 c = sp.expand(sp.diff(e, F))
                 if c != 0:
                     oexprs.append(w.split(c))
                     onames.append(f"o{what}_{m}_{j}")
-                    terms.append(f"o{what}_{m}_{j} * jac[{extra[(what, j)] * stride} + col]")
+                    terms.append(f"o{what}_{m}_{j} * jac[{frow * stride} + col]")
         if terms:
             oloop.append(f"    jac[{r * stride} + col] += " + " + ".join(terms))
     full_stage = (oexprs, onames)
@@ -205,7 +239,7 @@ def jacobian_context(w, d: Derivation, out_columns: list[str]) -> dict:
             body += st
     fu, fl = w.stage(*full_stage, temps)
     used |= fu
-    extra_syms = {*d.A, *d.FX, *d.FY}
+    extra_syms = {*d.A, *d.FX, *d.FY, *(d.TQ[j] for j in fric)}
     used -= extra_syms
     if oloop:
         full_body = fl + [f"for col in range({nz}):"] + oloop + shake

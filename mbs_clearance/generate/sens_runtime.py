@@ -14,15 +14,17 @@ derivative, 2 N_Q + 1).
 
 from __future__ import annotations
 
+import math
+
 import numba as nb
 import numpy as np
 
-from ..contact import contact_force, contact_force_partials
+from ..contact import contact_force, contact_force_partials, friction_force_partials
 from ..integrator import KERNEL
 from .runtime import gap_state
 
-__all__ = ["contact_jacobian", "sens_rhs", "sens_on_event", "sens_monitor", "sens_outputs",
-           "ddm_layout"]
+__all__ = ["contact_jacobian", "friction_jacobian", "sens_rhs", "sens_on_event",
+           "sens_monitor", "sens_outputs", "ddm_layout"]
 
 
 @nb.njit(**KERNEL, inline="always")
@@ -91,6 +93,68 @@ def contact_jacobian(jac, stride, nz, ex, ey, exd, eyd, r_f, r_pen, r_rate, r_ex
     jac[r_fx * stride + nz] = fx
     jac[r_fy * stride + nz] = fy
     return fx, fy
+
+
+@nb.njit(**KERNEL, inline="always")
+def friction_jacobian(jac, stride, nz, spin, r_ex, r_ey, r_exd, r_eyd, r_spin, r_f, r_fx,
+                      r_fy, r_ft, r_vt, r_pw, c_mu, c_v0, c_v1, law, mu, v0, v1):
+    """Rows of one clearance joint's friction in the Jacobian, after `contact_jacobian` has
+    filled its rows (values and total derivatives of the offset, its rate and the normal
+    force F): the slip velocity vt = edot . t + spin (t = (-n_y, n_x); the spin's row holds
+    the derivatives of omega_J R_J - omega_B R_B), the friction force Ft of the law
+    (`contact.friction_force_partials`, with the columns of mu, v0, v1), the friction power
+    -Ft vt, and -Ft t added to the force on the bearing (rows fx, fy), as
+    `runtime.friction_stage`. Returns (fx, fy, Ft)."""
+    ex = jac[r_ex * stride + nz]
+    ey = jac[r_ey * stride + nz]
+    exd = jac[r_exd * stride + nz]
+    eyd = jac[r_eyd * stride + nz]
+    f = jac[r_f * stride + nz]
+    r = math.sqrt(ex * ex + ey * ey)
+    if r > 1e-300:
+        rinv = 1.0 / r
+        nx = ex * rinv
+        ny = ey * rinv
+    else:
+        rinv = 0.0
+        nx = -1.0
+        ny = 0.0
+    vt = eyd * nx - exd * ny + spin
+    ft, ft_vt, ft_fn, ft_mu, ft_v0, ft_v1 = friction_force_partials(vt, f, mu, v0, v1,
+                                                                    int(law))
+    for col in range(nz):
+        dex = jac[r_ex * stride + col]
+        dey = jac[r_ey * stride + col]
+        dnx = (ny * ny * dex - nx * ny * dey) * rinv
+        dny = (nx * nx * dey - nx * ny * dex) * rinv
+        d_vt = (jac[r_eyd * stride + col] * nx + eyd * dnx - jac[r_exd * stride + col] * ny
+                - exd * dny + jac[r_spin * stride + col])
+        d_ft = ft_vt * d_vt + ft_fn * jac[r_f * stride + col]
+        jac[r_vt * stride + col] = d_vt
+        jac[r_ft * stride + col] = d_ft
+        jac[r_pw * stride + col] = -(d_ft * vt + ft * d_vt)
+        jac[r_fx * stride + col] += d_ft * ny + ft * dny
+        jac[r_fy * stride + col] -= d_ft * nx + ft * dnx
+    for k in range(3):
+        if k == 0:
+            col, d_ft = c_mu, ft_mu
+        elif k == 1:
+            col, d_ft = c_v0, ft_v0
+        else:
+            col, d_ft = c_v1, ft_v1
+        jac[r_ft * stride + col] += d_ft
+        jac[r_pw * stride + col] -= d_ft * vt
+        jac[r_fx * stride + col] += d_ft * ny
+        jac[r_fy * stride + col] -= d_ft * nx
+    fx = jac[r_fx * stride + nz] + ft * ny
+    fy = jac[r_fy * stride + nz] - ft * nx
+    jac[r_fx * stride + nz] = fx
+    jac[r_fy * stride + nz] = fy
+    jac[r_spin * stride + nz] = spin
+    jac[r_vt * stride + nz] = vt
+    jac[r_ft * stride + nz] = ft
+    jac[r_pw * stride + nz] = -ft * vt
+    return fx, fy, ft
 
 
 @nb.njit(**KERNEL, inline="always")

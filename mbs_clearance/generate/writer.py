@@ -20,7 +20,7 @@ import jinja2
 import sympy as sp
 from sympy.printing.pycode import PythonCodePrinter
 
-from .derive import Derivation
+from .derive import FRICTION_FIELDS, Derivation
 from .jacobians import jacobian_context
 
 __all__ = ["render", "GENERATOR_VERSION", "structure_digest"]
@@ -92,7 +92,7 @@ class _Writer:
             (self.moving if a.free_symbols - set(self.pindex) else self.fixed).append(
                 (a, S, C))
         self.vars = [s for _, S, C in self.moving for s in (S, C)]
-        self.vars += [*d.Q, *d.U, *d.A, *d.FX, *d.FY]
+        self.vars += [*d.Q, *d.U, *d.A, *d.FX, *d.FY, *(s for s in d.TQ if s is not None)]
         self.constants: dict[sp.Expr, sp.Symbol] = {}
 
     # ---- constants
@@ -245,11 +245,26 @@ def render(d: Derivation, linkage_name: str, structure: dict) -> str:
     gap_names = [[f"ex{j}", f"ey{j}", f"exd{j}", f"eyd{j}"] for j in range(J)]
     gap_exprs = [[w.split(e) for e in gap] for gap in d.gaps]
     gaps_stage = ([e for g in gap_exprs for e in g], [nm for g in gap_names for nm in g])
-    contact_lines = [
-        f"F{j}, d{j}, dd{j}, {d.FX[j]}, {d.FY[j]} = contact_stage(ex{j}, ey{j}, exd{j}, "
-        f"eyd{j}, p[{c['clearance']}], p[{mem_start + 2 * j}], p[{mem_start + 2 * j + 1}], "
-        f"p[{c['stiffness']}], p[{c['restitution']}], p[{c['contact_model']}])"
-        for j, c in enumerate(contact)]
+    # friction (joints with a law): the rotation part of the slip velocity beside the gaps,
+    # the friction stage in place of the contact stage
+    fric = [j for j in range(J) if d.TQ[j] is not None]
+    fpar = {j: {f: params.index(f"{d.joints[j]}.{f}") for f in FRICTION_FIELDS} for j in fric}
+    gaps_stage[0].extend(w.split(d.spins[j]) for j in fric)
+    gaps_stage[1].extend(f"sp{j}" for j in fric)
+    contact_lines = []
+    for j, c in enumerate(contact):
+        law = (f"p[{c['clearance']}], p[{mem_start + 2 * j}], p[{mem_start + 2 * j + 1}], "
+               f"p[{c['stiffness']}], p[{c['restitution']}], p[{c['contact_model']}]")
+        if j in fric:
+            fp = fpar[j]
+            contact_lines.append(
+                f"F{j}, d{j}, dd{j}, {d.FX[j]}, {d.FY[j]}, {d.TQ[j]}, vt{j} = friction_stage("
+                f"ex{j}, ey{j}, exd{j}, eyd{j}, sp{j}, {law}, p[{fp['friction_law']}], "
+                f"p[{fp['friction_coefficient']}], p[{fp['friction_v0']}], "
+                f"p[{fp['friction_v1']}])")
+        else:
+            contact_lines.append(f"F{j}, d{j}, dd{j}, {d.FX[j]}, {d.FY[j]} = contact_stage("
+                                 f"ex{j}, ey{j}, exd{j}, eyd{j}, {law})")
     M = [[w.split(d.mass_matrix[i, k]) for k in range(n)] for i in range(n)]
     f = [w.split(d.forcing[i]) for i in range(n)]
     fsyms = [sp.Symbol(f"f{i}", real=True) for i in range(n)]
@@ -276,6 +291,8 @@ def render(d: Derivation, linkage_name: str, structure: dict) -> str:
     results += [" + ".join(f"r{g}x" for g in range(G)) or "0.0",
                 " + ".join(f"r{g}y" for g in range(G)) or "0.0", "moment"]
     results += [f"A{i}" for i in range(n)]
+    for j in fric:
+        results += [str(d.TQ[j]), f"vt{j}", f"-{d.TQ[j]} * vt{j}"]
     dynamics = w.function([gaps_stage, contact_lines, *eom, outputs_stage])
 
     gap_fns = [w.function([(gap_exprs[j], gap_names[j])]) for j in range(J)]
@@ -305,6 +322,9 @@ def render(d: Derivation, linkage_name: str, structure: dict) -> str:
         out_columns += [f"{gname}.reaction_x", f"{gname}.reaction_y"]
     out_columns += ["shaking_x", "shaking_y", "drive_moment"]
     out_columns += [f"{c}.acc" for c in d.coordinates]
+    for j in fric:
+        out_columns += [f"{d.joints[j]}.{f}" for f in ("friction_force", "slip_velocity",
+                                                        "friction_power")]
     if d.monitor is None:
         mon = out_columns.index("shaking_x")
     else:
@@ -322,7 +342,10 @@ def render(d: Derivation, linkage_name: str, structure: dict) -> str:
         acc_column=out_columns.index(f"{d.coordinates[0]}.acc"),
         speed=params.index("drive.speed"), results=results, dynamics=dynamics,
         gap_fns=gap_fns, energy=energy, closure=closure, closure_jac=closure_jac,
-        closure_rate=closure_rate, prepare=prepare, contact_indices=contact, **jac_ctx,
+        closure_rate=closure_rate, prepare=prepare, contact_indices=contact,
+        friction_joints=[d.joints[j] for j in fric],
+        power_columns=[out_columns.index(f"{d.joints[j]}.friction_power") for j in fric],
+        **jac_ctx,
     )
     env = jinja2.Environment(undefined=jinja2.StrictUndefined, keep_trailing_newline=True,
                              loader=jinja2.FileSystemLoader(str(_TEMPLATE.parent)),
