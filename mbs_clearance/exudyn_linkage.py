@@ -322,6 +322,7 @@ class ImpactMemory:
         self.first_onset = None    # time of the first registered onset, s
         self.symbol = None         # named symbolic Real mirrored for the compiled force
         self.previous = None       # (t, delta, deltadot) of the previous step's state
+        self.history = None        # [(t, deltadot_minus)] per step if recorded (friction)
 
     def set(self, value: float, t: float, new_onset: bool = True) -> None:
         self.dmin = max(value, self.floor)
@@ -387,6 +388,8 @@ def _pre_step(contacts: list, h: float, predict: bool):
             r = math.sqrt(d[0] * d[0] + d[1] * d[1])
             rate = (d[0] * v[0] + d[1] * v[1]) / r if r > 0.0 else 0.0
             _update_memory(memory, t, h, r - memory.clearance, rate, predict)
+            if memory.history is not None:
+                memory.history.append((t, memory.dmin))
         return True
 
     return pre_step
@@ -767,6 +770,7 @@ def build(linkage: Linkage, settings: ExudynSettings | None = None,
             contacts.append((obj, memory))
             if friction_of(cj) is not None:
                 _friction_element(mbs, cj, memory, nodes, pts, settings.contact, keep_alive)
+                memory.history = []
         contact_items.append(obj)
         if GROUND in (cj.journal_body, cj.bearing_body):
             # the force on the bearing is +f (user force) / -f (sphere: markers swapped)
@@ -1012,6 +1016,46 @@ def _coordinates(model: ExudynModel):
     return coords, rates, accs
 
 
+def _friction_power(model: ExudynModel, joint: ClearanceJoint, memory: ImpactMemory):
+    """Power Ft vt (W, <= 0) of a joint's friction at every kept sample, from the stored
+    body states and the impact velocity in force at each step (`ImpactMemory.history`),
+    by contact.contact_force / friction_force (the Python variant's law)."""
+    law, mu, v0, v1 = friction_of(joint)
+    K, c, _, cmodel = _law_constants(joint)
+    pts = _points(model.linkage)
+    t = stored(model, f"{model.linkage.bodies[0].name}.q")[:, 0]
+
+    def point(body, name):
+        if body == GROUND:
+            p = np.asarray(pts[GROUND][name], dtype=float)
+            return np.tile(p, (len(t), 1)), np.zeros((len(t), 2)), np.zeros(len(t))
+        q = stored(model, f"{body}.q")[:, 1:4] + np.asarray(
+            model.mbs.GetNodeParameter(model.nodes[body], "referenceCoordinates"))
+        v = stored(model, f"{body}.v")[:, 1:4]
+        x, y = pts[body][name]
+        co, si = np.cos(q[:, 2]), np.sin(q[:, 2])
+        arm = np.column_stack([co * x - si * y, si * x + co * y])
+        return (q[:, :2] + arm, v[:, :2] + v[:, 2:3] * np.column_stack([-arm[:, 1], arm[:, 0]]),
+                v[:, 2])
+
+    rj, vj, wj = point(joint.journal_body, joint.journal_point)
+    rb, vb, wb = point(joint.bearing_body, joint.bearing_point)
+    e, ed = rj - rb, vj - vb
+    r = np.hypot(e[:, 0], e[:, 1])
+    hist = np.asarray(memory.history)
+    at = np.clip(np.searchsorted(hist[:, 0], t, side="right") - 1, 0, len(hist) - 1)
+    dmin = np.where(hist[at, 0] <= t, hist[at, 1], joint.impact_velocity_floor)
+    power = np.zeros(len(t))
+    for i in np.nonzero(r > c)[0]:
+        n = e[i] / r[i]
+        rate = float(ed[i] @ n)
+        vt = float(ed[i, 1] * n[0] - ed[i, 0] * n[1]) + (wj[i] * joint.journal_radius
+                                                         - wb[i] * joint.bearing_radius)
+        fn = contact_force(r[i] - c, rate, float(dmin[i]), K, joint.restitution, cmodel)
+        power[i] = friction_force(vt, fn, mu, v0, v1, law) * vt
+    return power
+
+
 def _reactions(model: ExudynModel) -> tuple[np.ndarray, dict]:
     t = None
     reactions = {}
@@ -1081,6 +1125,14 @@ def run_linkage(linkage: Linkage, revolutions: int, settings: ExudynSettings,
     stats["uniform_steps"] = bool(len(t) == stats["n_steps"] + 1 and np.allclose(
         np.diff(t), stats["step_size_used"], rtol=1e-6, atol=0.0))
     coords, rates, accs = _coordinates(model)
+    friction = [_friction_power(model, cj, m) for cj, m in
+                zip(linkage.clearance_joints, model.memories)
+                if m is not None and m.history is not None]
+    friction_work = None
+    if friction:
+        power = sum(friction)
+        friction_work = -np.concatenate([[0.0], np.cumsum(0.5 * (power[1:] + power[:-1])
+                                                           * np.diff(t))])
     return Trajectory(
         t=t, base_force=np.ascontiguousarray(monitored), crank_moment=moment,
         contact_force=np.column_stack(force), penetration=penetration,
@@ -1093,7 +1145,7 @@ def run_linkage(linkage: Linkage, revolutions: int, settings: ExudynSettings,
                             revolutions),
         joints=tuple(cj.name for cj in linkage.clearance_joints), reactions=reactions,
         shaking_force=np.ascontiguousarray(shaking), coordinates=coords, rates=rates,
-        accelerations=accs)
+        accelerations=accs, friction_work=friction_work)
 
 
 def peak_exudyn_linkage(linkage: Linkage, revolution: int = 4, **options) -> float:
