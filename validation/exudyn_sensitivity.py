@@ -22,10 +22,11 @@ import argparse
 
 import numpy as np
 
-#: per case: the three parameters of the docs' table (masses and a contact parameter)
+#: per case: the three parameters of the docs' table (masses and an inertia that move the
+#: monitored force; the driven crank's inertia does not: its speed is prescribed)
 PARAMETERS = {
     "paper_slider_crank": ("coupler.mass", "slider.mass", "coupler.inertia"),
-    "slider_crank_two_clearances": ("coupler.mass", "slider.mass", "crank.inertia"),
+    "slider_crank_two_clearances": ("coupler.mass", "slider.mass", "coupler.inertia"),
     "four_bar": ("coupler.mass", "rocker.mass", "rocker.inertia"),
 }
 
