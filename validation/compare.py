@@ -433,7 +433,8 @@ def _exudyn_step(args, mech) -> float:
     """The Exudyn run's fixed step in s (its default for `mech` unless given)."""
     options = {k: getattr(args, k) for k in ("step_size", "accuracy")
                if getattr(args, k, None) is not None}
-    return _exudyn_settings(options, mech).step(mech.period)
+    return _exudyn_settings(options, mech).step(
+        mech if hasattr(mech, "clearance_joints") else mech.period)
 
 
 def build_parser(parser: argparse.ArgumentParser | None = None) -> argparse.ArgumentParser:
