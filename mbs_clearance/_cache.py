@@ -22,6 +22,11 @@ A package that calls `register_package` in its ``__init__`` (mbs_clearance; vali
 - where ``__pycache__`` is not writable: under ``NUMBA_CACHE_DIR`` if set (it is tried
   first), else numba's user-wide cache directory, else a directory of the user's own in the
   temporary directory, with one `CacheWarning` per process.
+
+When a kernel of a registered package is not in the cache (numba's "numba:compile" event
+fires on cache misses only), the logger "mbs_clearance" says so once, at INFO: "compiling
+kernels (first run only, about N s)", N being the longest compilation measured so far
+(kept in ``__pycache__/compile-seconds.txt``), then progress every few seconds.
 """
 
 from __future__ import annotations
@@ -29,6 +34,7 @@ from __future__ import annotations
 import atexit
 import hashlib
 import importlib
+import logging
 import os
 import shutil
 import stat
@@ -42,6 +48,7 @@ from pathlib import Path
 
 import numba
 from numba.core import caching, config
+from numba.core import event as numba_event
 from numba.core.caching import _CacheLocator
 from numba.misc.appdirs import AppDirs
 
@@ -115,6 +122,81 @@ _DIRS: dict[tuple[str, str], str | None] = {}  # (source directory, name) -> cac
 _WARNED = False
 
 
+log = logging.getLogger("mbs_clearance")
+#: file (in the package's __pycache__) with the seconds the last full compilation took
+COMPILE_SECONDS = "compile-seconds.txt"
+#: seconds between two progress messages while kernels compile
+PROGRESS_EVERY = 10.0
+
+
+class CompileListener(numba_event.Listener):
+    """Logs when the kernels of a registered package compile (cache misses only): one
+    "compiling kernels" line with the expected time, then progress."""
+
+    def __init__(self):
+        self.t0 = None
+        self.last = 0.0
+        self.count = 0
+        self.depth = 0
+        self.package = None
+
+    def _ours(self, event) -> _Package | None:
+        dispatcher = (event.data or {}).get("dispatcher")
+        code = getattr(getattr(dispatcher, "py_func", None), "__code__", None)
+        return None if code is None else _package_of(code.co_filename)
+
+    def on_start(self, event):
+        package = self._ours(event)
+        if package is None:
+            return
+        self.depth += 1
+        if self.t0 is None:
+            self.t0 = self.last = time.perf_counter()
+            self.package = package
+            seconds = _read_seconds(package)
+            about = f"about {seconds:.0f} s" if seconds else "a minute or more"
+            log.info(f"compiling kernels (first run only, {about}; later runs load them "
+                     f"from the cache)")
+
+    def on_end(self, event):
+        if self._ours(event) is None:
+            return
+        self.depth -= 1
+        self.count += 1
+        now = time.perf_counter()
+        if self.depth == 0:
+            _write_seconds(self.package, now - self.t0)
+            if now - self.last >= PROGRESS_EVERY:
+                self.last = now
+                name = getattr(event.data["dispatcher"], "__name__", "?")
+                log.info(f"compiling kernels: {self.count} done ({name}), "
+                         f"{now - self.t0:.0f} s so far")
+
+
+def _seconds_file(package: _Package) -> Path:
+    return Path(package.root) / "__pycache__" / COMPILE_SECONDS
+
+
+def _read_seconds(package: _Package) -> float | None:
+    try:
+        return float(_seconds_file(package).read_text().split()[0])
+    except (OSError, ValueError, IndexError):
+        return None
+
+
+def _write_seconds(package: _Package, seconds: float) -> None:
+    """Keep the longest compilation seen (a run that uses few kernels compiles few)."""
+    if seconds < 1.0 or seconds <= (_read_seconds(package) or 0.0):
+        return
+    try:
+        _seconds_file(package).write_text(f"{seconds:.1f}\n")
+    except OSError:
+        pass        # a read-only install: the estimate stays unknown
+
+
+_LISTENER: CompileListener | None = None
+
+
 def register_package(name: str, depends_on: tuple[str, ...] = ()) -> str | None:
     """Key the numba cache of the kernels defined in package `name` (and its subpackages) by
     the digest of its sources now and of the packages `depends_on`, whose functions its
@@ -134,6 +216,10 @@ def register_package(name: str, depends_on: tuple[str, ...] = ()) -> str | None:
     _PACKAGES[str(root)] = _Package(name, str(root), digest, tuple(deps), files, signature)
     if DigestLocator not in CacheImpl._locator_classes:
         CacheImpl._locator_classes.insert(0, DigestLocator)
+    global _LISTENER
+    if _LISTENER is None:
+        _LISTENER = CompileListener()
+        numba_event.register("numba:compile", _LISTENER)
     return digest
 
 

@@ -23,7 +23,6 @@ import json
 import os
 import secrets
 import shutil
-import sys
 import tempfile
 import time
 from collections.abc import Callable, Iterator
@@ -153,7 +152,9 @@ def check_output_file(path: str | Path, option: str, force: bool = False,
 
 
 def _note(message: str) -> None:
-    print(f"note: {message}", file=sys.stderr, flush=True)
+    import logging
+
+    logging.getLogger("mbs_clearance").warning(f"note: {message}")
 
 
 def read_manifest(folder: Path) -> dict[str, Any] | None:

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import logging
 import math
 import os
 import re
@@ -22,32 +23,64 @@ import warnings
 from pathlib import Path
 
 from ._io import OutputDir, atomic_file, check_output_dir, check_output_file
-from .integrator import METHODS
 from .mechanism import PARAMETER_INFO, SliderCrank
-from .optimize import (
-    MASS_SCALINGS,
-    PAPER_TABLE3,
-    connect_dask,
-    design_mechanism,
-    optimize_link_lengths,
-)
-from .simulate import BACKENDS, peak_base_force, simulate
-from .trajectory import load_trajectory
+from .units import quantity
+
+# the subcommands import what they need when they run (start-up time): simulate, optimize,
+# sensitivity, the plotting and the validation plugins are not imported to build the parser
+
+#: the backends and integrators offered (checked again by the library when it runs)
+BACKEND_NAMES = ("exudyn", "ideal", "reduced")
+MASS_SCALING_NAMES = ("fixed", "uniform")
 
 __all__ = ["main", "build_parser", "mechanism_from_args", "linkage_from_args",
            "add_mechanism_options", "case_override",
            "format_table3", "run_command", "Parser", "int_at_least", "positive_float",
-           "finite_float", "add_force_option"]
+           "finite_float", "add_force_option", "HelpFormatter", "wrote"]
 
 #: environment variable that makes unexpected errors show their traceback
 DEBUG_ENV = "MBS_CLEARANCE_DEBUG"
 
 
+class HelpFormatter(argparse.RawDescriptionHelpFormatter):
+    """--help that shows every option's default (unless its text already says it), "(required)"
+    for required options, the choices that a metavar hides, and keeps the descriptions' and
+    epilogs' line breaks (each line wrapped to the terminal's width)."""
+
+    def _fill_text(self, text, width, indent):
+        import textwrap
+
+        return "\n".join(textwrap.fill(line, width, initial_indent=indent,
+                                        subsequent_indent=indent + ("  " if line.startswith(
+                                            "  ") else "")) if line.strip() else ""
+                         for line in text.splitlines())
+
+    def _get_help_string(self, action):
+        text = action.help or ""
+        if not action.option_strings or text == argparse.SUPPRESS:
+            return text
+        if action.choices is not None and action.metavar is not None and \
+                not all(str(c) in text for c in action.choices):
+            text += f" (choices: {', '.join(str(c) for c in action.choices)})"
+        if "default" in text or action.nargs == 0:
+            return text
+        if action.required:
+            return f"{text} (required)"
+        default = action.default
+        if default is None or default is argparse.SUPPRESS:
+            default = "none"
+        elif isinstance(default, (list, tuple)):
+            default = " ".join(str(v) for v in default)
+        return f"{text} (default: {str(default).replace('%', '%%')})"
+
+
 class Parser(argparse.ArgumentParser):
     """ArgumentParser whose usage errors are one line: ``PROG: error: MESSAGE`` (status 2),
-    and that reads ``--rtol -1e-8`` as a (negative) value, not as an option."""
+    and that reads ``--rtol -1e-8`` as a (negative) value, not as an option. Its --help
+    shows defaults (`HelpFormatter`)."""
 
     def __init__(self, *args, **kwargs):
+        kwargs.setdefault("formatter_class", HelpFormatter)
         super().__init__(*args, **kwargs)
         # argparse's own pattern misses exponents (-1e-8) and would report "expected one
         # argument"; the value then reaches the option's check and its clear message
@@ -61,6 +94,29 @@ def _one_line(text: str) -> str:
     return "; ".join(line.strip() for line in str(text).splitlines() if line.strip())
 
 
+def wrote(path, what: str) -> None:
+    """Say where a file or folder was written: ``wrote FILE (WHAT)`` on stderr."""
+    print(f"wrote {path} ({what})", file=sys.stderr, flush=True)
+
+
+class _CliLogHandler(logging.Handler):
+    """The library's messages (logger "mbs_clearance") on stderr, one line each, while a
+    command runs: ``PROG: MESSAGE``. Notes (INFO: "compiling kernels ...") on an interactive
+    terminal only, like `_progress`, so that a failed run's error stays its only line;
+    warnings always."""
+
+    def __init__(self, prog: str):
+        super().__init__(logging.INFO if sys.stderr.isatty() else logging.WARNING)
+        self.prog = prog
+
+    def emit(self, record):
+        try:
+            sys.stderr.write(f"{self.prog}: {_one_line(record.getMessage())}\n")
+            sys.stderr.flush()
+        except Exception:  # noqa: BLE001 - logging must never break the command
+            self.handleError(record)
+
+
 def run_command(prog: str, func, args: argparse.Namespace) -> int:
     """Run a subcommand; a failure ends the process (SystemExit) after one line on stderr.
 
@@ -71,6 +127,12 @@ def run_command(prog: str, func, args: argparse.Namespace) -> int:
     """
     debug = os.environ.get(DEBUG_ENV, "") not in ("", "0")
     formatwarning = warnings.formatwarning
+    logger = logging.getLogger("mbs_clearance")
+    handler = _CliLogHandler(prog)
+    logger.addHandler(handler)
+    level = logger.level
+    if logger.level == logging.NOTSET or logger.level > logging.INFO:
+        logger.setLevel(logging.INFO)
     if not debug:   # warnings as one line too: "PROG: warning: MESSAGE"
         warnings.formatwarning = lambda message, category, *rest, **kw: (
             f"{prog}: warning: {_one_line(message)}\n")
@@ -82,6 +144,8 @@ def run_command(prog: str, func, args: argparse.Namespace) -> int:
         error = exc
     finally:
         warnings.formatwarning = formatwarning
+        logger.removeHandler(handler)
+        logger.setLevel(level)
     if isinstance(error, KeyboardInterrupt):
         code, message = 130, "interrupted"
     elif isinstance(error, ValueError):
@@ -147,13 +211,15 @@ def add_evaluation_options(parser: argparse.ArgumentParser, out: str) -> None:
     """Options of a subcommand that evaluates many designs: --rtol, --scheduler, --workers,
     --out (default ./`out`) and --no-progress (read by `evaluate_on`)."""
     parser.add_argument("--rtol", type=positive_float,
-                        help="relative tolerance of the reduced model")
+                        help="relative tolerance of the reduced model (default: the model's, "
+                             "1e-7)")
     parser.add_argument("--scheduler", metavar="tcp://HOST:PORT",
-                        help="evaluate on this dask.distributed scheduler")
+                        help="evaluate on this dask.distributed scheduler (default: none, a "
+                             "local pool)")
     parser.add_argument("--workers", type=int_at_least(1), default=2,
                         help="local worker threads when no --scheduler (1 = this process)")
     parser.add_argument("--out", type=Path, default=Path(out),
-                        help=f"output directory (default ./{out})")
+                        help=f"output folder (default ./{out}, named after the command)")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
 
 
@@ -167,6 +233,8 @@ def evaluate_on(args: argparse.Namespace, fn, *fn_args, **kw):
         except ImportError as exc:
             raise ValueError("--scheduler needs dask.distributed: "
                              "pip install 'mbs-clearance[dask]'") from exc
+        from .optimize import connect_dask
+
         with connect_dask(args.scheduler) as client:
             print(f"evaluating on the dask cluster at {args.scheduler}", file=sys.stderr)
             return fn(*fn_args, executor=client, **kw)
@@ -214,7 +282,8 @@ def add_mechanism_options(parser: argparse.ArgumentParser) -> None:
     """One option per SliderCrank field (--crank-length ...) plus --config FILE.json."""
     group = parser.add_argument_group("mechanism (SI units; defaults: the paper's case)")
     group.add_argument("--config", metavar="FILE.json",
-                       help="JSON object of SliderCrank fields; options below override it")
+                       help="JSON object of SliderCrank fields; options below override it "
+                            "(default: none, the paper's values)")
     defaults = SliderCrank()
     for f in dataclasses.fields(SliderCrank):
         symbol, unit, _ = PARAMETER_INFO[f.name]
@@ -223,9 +292,19 @@ def add_mechanism_options(parser: argparse.ArgumentParser) -> None:
         kind = str if f.name in ("contact_model", "friction_law") else (
             _optional_float if optional else _float)
         extra = "; 'none': derived value" if optional else ""
+        if f.name == "contact_model":
+            from .contact import CONTACT_MODELS
+
+            shown = f"{default}; one of {', '.join(CONTACT_MODELS)}"
+        elif default is None:
+            shown = "derived"
+        else:
+            shown = quantity(default, unit, 6)
+            if shown != f"{default:g} {unit}".strip() and unit not in ("-", ""):
+                shown += f" = {default:g}"
         group.add_argument("--" + f.name.replace("_", "-"), dest=f.name, type=kind,
                            default=None, metavar="X",
-                           help=f"{symbol} [{unit}] (default {default}{extra})")
+                           help=f"{symbol} in {unit} (default {shown}{extra})")
 
 
 def mechanism_from_args(args: argparse.Namespace) -> SliderCrank:
@@ -313,7 +392,23 @@ def _progress(message: str) -> None:
         print(message, file=sys.stderr, flush=True)
 
 
+#: the note under the per-revolution tables (their revolution 1 is marked *)
+START_UP_NOTE = ("* revolution 1 is the start-up transient (the journal starts centred with "
+                 "ideal-joint velocities); the paper reports revolution 4")
+
+
+def _revolution_label(k: int) -> str:
+    return f"{k}*" if k == 1 else str(k)
+
+
+def _force(value: float) -> str:
+    return quantity(value, "N", 7)
+
+
 def _cmd_simulate(args: argparse.Namespace) -> int:
+    from .simulate import simulate
+    from .trajectory import load_trajectory
+
     linkage = linkage_from_args(args)
     if linkage is not None:
         return _simulate_linkage(linkage, args)
@@ -323,27 +418,21 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
                           reader=load_trajectory)
     if args.plot:
         check_output_file(args.plot, "--plot", args.force, suffixes=figure_suffixes())
-    options = {}
-    if args.rtol is not None:
-        options["rtol"] = args.rtol
-    if args.step_size is not None:
-        options["step_size"] = args.step_size
-    if args.contact is not None:
-        options["contact"] = args.contact
-    if args.integrator is not None:
-        options["method"] = args.integrator
+    options = _simulate_options(args)
     _progress(f"simulating {args.revolutions} revolutions with backend {args.backend!r} ...")
     t0 = time.perf_counter()
     traj = simulate(mech, args.revolutions, backend=args.backend, **options)
     elapsed = time.perf_counter() - t0
     print(f"done in {elapsed:.3g} s ({len(traj.t)} samples)", file=sys.stderr)
-    print(f"{'revolution':>10}  {'max |F12| (N)':>14}  {'max |M2| (N m)':>14}  "
-          f"{'max contact force (N)':>22}")
+    ideal = args.backend == "ideal"     # no clearance: no contact force
+    print(f"{'revolution':>10}  {'max |F12|':>12}  {'max |M2|':>12}"
+          + ("" if ideal else f"  {'max contact force':>17}"))
     for k in range(1, traj.revolutions + 1):
         mask = traj.revolution_mask(k)
-        print(f"{k:>10}  {traj.max_base_force(k):>14.2f}  "
-              f"{abs(traj.crank_moment[mask]).max():>14.3f}  "
-              f"{traj.contact_force[mask].max():>22.2f}")
+        print(f"{_revolution_label(k):>10}  {_force(traj.max_base_force(k)):>12}  "
+              f"{quantity(abs(traj.crank_moment[mask]).max(), 'N m', 6):>12}"
+              + ("" if ideal else f"  {_force(traj.contact_force[mask].max()):>17}"))
+    print(START_UP_NOTE, file=sys.stderr)
     floored = traj.stats.get("floored_impacts") if traj.stats else None
     if floored:
         print(f"note: {floored} contact onset(s) at the impact-velocity floor (grazing); the "
@@ -352,13 +441,13 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     if args.out:
         with atomic_file(args.out) as tmp:
             traj.save(tmp)
-        print(f"trajectory written to {args.out}", file=sys.stderr)
+        wrote(args.out, "trajectory")
     if args.plot:
         from .plotting import plot_trajectory
 
         with atomic_file(args.plot) as tmp:
             plot_trajectory(traj, path=tmp)
-        print(f"figure written to {args.plot}", file=sys.stderr)
+        wrote(args.plot, "figure")
     return 0
 
 
@@ -366,7 +455,7 @@ def _simulate_options(args: argparse.Namespace) -> dict:
     options = {}
     for key, name in (("rtol", "rtol"), ("step_size", "step_size"), ("contact", "contact"),
                       ("integrator", "method")):
-        if getattr(args, key) is not None:
+        if getattr(args, key, None) is not None:
             options[name] = getattr(args, key)
     return options
 
@@ -374,6 +463,8 @@ def _simulate_options(args: argparse.Namespace) -> dict:
 def _simulate_linkage(linkage, args: argparse.Namespace) -> int:
     """simulate --case / --description: peaks per revolution of the monitored force, the
     drive moment and each clearance joint's contact force."""
+    from .simulate import simulate
+
     if args.out:
         check_output_file(args.out, "--out", args.force, suffixes=(".npz", ".csv"))
     if args.plot:
@@ -385,21 +476,23 @@ def _simulate_linkage(linkage, args: argparse.Namespace) -> int:
     traj = simulate(linkage, args.revolutions, backend=args.backend, **_simulate_options(args))
     elapsed = time.perf_counter() - t0
     print(f"done in {elapsed:.3g} s ({len(traj.t)} samples)", file=sys.stderr)
-    joints = [j.name for j in linkage.clearance_joints]
-    monitored = (f"max |{linkage.monitor_joint}| (N)" if linkage.monitor_joint
-                 else "max |shaking| (N)")
-    print(f"{'revolution':>10}  {monitored:>22}  {'max |drive| (N m)':>17}  "
-          + "  ".join(f"{'max F ' + j + ' (N)':>{max(14, len(j) + 10)}}" for j in joints))
+    joints = [] if args.backend == "ideal" else [j.name for j in linkage.clearance_joints]
+    monitored = (f"max |{linkage.monitor_joint}|" if linkage.monitor_joint
+                 else "max |shaking|")
+    widths = [max(12, len(j) + 6) for j in joints]
+    print(f"{'revolution':>10}  {monitored:>18}  {'max |drive|':>12}  "
+          + "  ".join(f"{'max F ' + j:>{w}}" for j, w in zip(joints, widths)))
     for k in range(1, traj.revolutions + 1):
         mask = traj.revolution_mask(k)
-        cells = "  ".join(f"{traj.contact_force[mask, i].max():>{max(14, len(j) + 10)}.2f}"
-                          for i, j in enumerate(joints))
-        print(f"{k:>10}  {traj.peaks[k - 1]:>22.2f}  "
-              f"{abs(traj.crank_moment[mask]).max():>17.3f}  {cells}")
+        cells = "  ".join(f"{_force(traj.contact_force[mask, i].max()):>{w}}"
+                          for i, w in enumerate(widths))
+        print(f"{_revolution_label(k):>10}  {_force(traj.peaks[k - 1]):>18}  "
+              f"{quantity(abs(traj.crank_moment[mask]).max(), 'N m', 6):>12}  {cells}")
+    print(START_UP_NOTE, file=sys.stderr)
     if args.out:
         with atomic_file(args.out) as tmp:
             traj.save(tmp)
-        print(f"trajectory written to {args.out}", file=sys.stderr)
+        wrote(args.out, "trajectory")
     return 0
 
 
@@ -424,28 +517,51 @@ def parameter_list(text: str) -> tuple[str, ...]:
     return names
 
 
+#: the column headings of the sensitivity table, each defined (printed under the table)
+SENSITIVITY_COLUMNS = (
+    ("b0", "the parameter's value where the derivative is taken"),
+    ("mean |S|", "mean over the last revolution of |S| = |(b0 / F) dF/db| (Eq. 15): % change "
+                 "of the force per % change of the parameter"),
+    ("max |S|", "its maximum over the last revolution"),
+    ("growth/rev", "growth factor of the sensitivity's norm per revolution over the last two "
+                   "(about 1: periodic motion, the derivatives mean something)"),
+)
+
+
 def _cmd_sensitivity(args: argparse.Namespace) -> int:
     from .sensitivity import DEFAULT_PARAMETERS, sensitivities
 
-    mech = mechanism_from_args(args)
-    names = args.parameters if args.parameters is not None else DEFAULT_PARAMETERS
+    linkage = linkage_from_args(args)
+    mech = linkage if linkage is not None else mechanism_from_args(args)
+    names = args.parameters
+    if names is None and linkage is None:
+        names = DEFAULT_PARAMETERS
     if args.out:
         check_output_dir(args.out, "--out", args.force)
     options = {}
     if args.step_size is not None:
         options["step_size"] = args.step_size
-    _progress(f"sensitivities of |F12| to {len(names)} parameters by {args.method} "
-              f"({args.backend}), {args.revolutions} revolutions ...")
+    what = f"{linkage.name!r}" if linkage is not None else "|F12|"
+    _progress(f"sensitivities of {what} by {args.method} ({args.backend}), "
+              f"{args.revolutions} revolutions ...")
     t0 = time.perf_counter()
     sens = sensitivities(mech, names, args.revolutions, method=args.method,
                          backend=args.backend, rtol=args.rtol, integrator=args.integrator,
                          **options)
     print(f"done in {time.perf_counter() - t0:.3g} s", file=sys.stderr)
-    print(f"{'parameter':<22} {'b0':>12} {'mean |S|':>10} {'max |S|':>10} {'growth/rev':>10}")
+    width = max([22] + [len(p) + 1 for p in sens.parameters])
+    print(f"{'parameter':<{width}} {'b0':>14} {'mean |S|':>10} {'max |S|':>10} "
+          f"{'growth/rev':>10}")
+    from .units import number
+
     for row in sens.summary():
-        print(f"{row['parameter']:<22} {row['reference']:>12.5g} "
-              f"{row['mean_abs_normalized']:>10.4g} {row['max_abs_normalized']:>10.4g} "
-              f"{row['growth_per_revolution']:>10.3g}")
+        unit = PARAMETER_INFO[row["parameter"]][1] if row["parameter"] in PARAMETER_INFO \
+            else "-"
+        print(f"{row['parameter']:<{width}} {quantity(row['reference'], unit):>14} "
+              f"{number(row['mean_abs_normalized']):>10} {number(row['max_abs_normalized']):>10} "
+              f"{number(row['growth_per_revolution'], 3):>10}")
+    for head, text in SENSITIVITY_COLUMNS:
+        print(f"  {head}: {text}")
     if sens.chaotic:
         print("WARNING: the sensitivities grow from revolution to revolution: the motion is "
               "not periodic (chaotic or transient) and these derivatives are not meaningful; "
@@ -455,14 +571,23 @@ def _cmd_sensitivity(args: argparse.Namespace) -> int:
     if args.out:
         from .plotting import SENSITIVITY_FIGURES, plot_sensitivities
 
+        figures = []
         with OutputDir(args.out, "sensitivity") as staged:
             sens.save(staged.path / "sensitivities.npz")
-            for stem, (title, group) in SENSITIVITY_FIGURES.items():
+            groups = SENSITIVITY_FIGURES.items() if linkage is None else [
+                ("sensitivities", (f"Sensitivities, {linkage.name}", list(sens.parameters)))]
+            for stem, (title, group) in groups:
                 group = [g for g in group if g in sens.parameters]
                 if group:
                     plot_sensitivities(sens, group, title, path=staged.path / f"{stem}.png")
+                    figures.append(f"{stem}.png")
             staged.commit()
-        print(f"sensitivities.npz and figures written to {args.out}", file=sys.stderr)
+        what = {"sensitivities.npz": "the sensitivities (load_sensitivities)",
+                "sensitivities.trajectory.npz": "the nominal trajectory they belong to"}
+        for f in sorted(p.name for p in args.out.iterdir() if p.suffix == ".npz"):
+            wrote(args.out / f, what.get(f, "data"))
+        for f in figures:
+            wrote(args.out / f, "figure")
     return 0
 
 
@@ -478,7 +603,44 @@ def _package_version() -> str:
     return __version__
 
 
-def build_parser() -> argparse.ArgumentParser:
+def add_linkage_options(p: argparse.ArgumentParser) -> None:
+    """--case NAME | --description FILE, and --set NAME=VALUE."""
+    source = p.add_mutually_exclusive_group()
+    source.add_argument("--case", metavar="NAME", choices=_case_names(),
+                        help="a named linkage (listed below; default: the paper's "
+                             "slider-crank with the options below): "
+                             + ", ".join(_case_names()))
+    source.add_argument("--description", type=Path, metavar="FILE",
+                        help="a linkage described in FILE, .json or .toml "
+                             "(mbs_clearance.Linkage.to_dict's form; default: none)")
+    p.add_argument("--set", type=case_override, action="append", metavar="NAME=VALUE",
+                   help="override a value of the --case (repeatable), e.g. --set "
+                        "clearance=1e-4 (default: none)")
+
+
+def add_run_options(p: argparse.ArgumentParser, methods, integrator_default="dopri5") -> None:
+    """--backend, --rtol, --step-size, --integrator."""
+    p.add_argument("--backend", choices=BACKEND_NAMES, default="reduced",
+                   help="reduced: the compiled reduced model; exudyn: the Exudyn multibody "
+                        "model; ideal: ideal joints (closed form)")
+    p.add_argument("--rtol", type=positive_float,
+                   help="relative tolerance of the reduced backend (default: the model's, "
+                        "1e-7)")
+    p.add_argument("--step-size", type=positive_float,
+                   help="time step in s of the exudyn backend (default: 6000 steps per "
+                        "revolution, 2 us at 5000 rpm)")
+    p.add_argument("--integrator", choices=methods,
+                   help=f"method of the compiled integrator (reduced backend; default "
+                        f"{integrator_default})")
+
+
+def build_parser(command: str | None = None) -> argparse.ArgumentParser:
+    """The parser of every subcommand. With `command` given (the one being run), only that
+    plugin subcommand is loaded, and none for a built-in one (start-up time)."""
+    from .exudyn_linkage import CONTACT_VARIANTS as contact_variants
+    from .integrator import METHODS
+
+    methods = sorted(METHODS)
     parser = Parser(
         prog="mbs-clearance",
         description="Planar linkages with revolute clearance joints: simulate, compare "
@@ -488,50 +650,50 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True)
 
     p = sub.add_parser("simulate", help="simulate and write the trajectory and a figure",
-                       formatter_class=argparse.RawDescriptionHelpFormatter,
+                       formatter_class=HelpFormatter,
                        description="Simulate the slider-crank (or a named case, or a linkage "
-                                   "described in a file); print the peak per revolution, "
-                                   "write the trajectory (csv/npz) and a Fig. 3-like PNG.",
+                                   "described in a file) and print the peaks per revolution; "
+                                   "with --out write the trajectory (csv/npz), with --plot a "
+                                   "Fig. 3-like figure (nothing is written without them).",
                        epilog="named cases (--case NAME; --set NAME=VALUE changes a value, "
                               "docs/cases.md lists them):\n" + _case_lines())
-    source = p.add_mutually_exclusive_group()
-    source.add_argument("--case", metavar="NAME", choices=_case_names(),
-                        help="a named linkage (listed below): " + ", ".join(_case_names()))
-    source.add_argument("--description", type=Path, metavar="FILE",
-                        help="a linkage described in FILE, .json or .toml "
-                             "(mbs_clearance.Linkage.to_dict's form)")
-    p.add_argument("--set", type=case_override, action="append", metavar="NAME=VALUE",
-                   help="override a value of the --case (repeatable), e.g. --set "
-                        "clearance=1e-4")
-    p.add_argument("--revolutions", type=int_at_least(1), default=4)
-    p.add_argument("--backend", choices=sorted(BACKENDS), default="reduced")
-    p.add_argument("--rtol", type=positive_float, help="relative tolerance (reduced backend)")
-    p.add_argument("--step-size", type=positive_float, help="time step in s (exudyn backend)")
-    p.add_argument("--contact", help="contact variant (exudyn backend)")
-    p.add_argument("--integrator", choices=sorted(METHODS),
-                   help="method of the compiled integrator (reduced backend; default dopri5)")
-    p.add_argument("--out", type=Path, help="trajectory file, .csv or .npz")
-    p.add_argument("--plot", type=Path, help="figure file, e.g. simulate.png")
+    add_linkage_options(p)
+    p.add_argument("--revolutions", type=int_at_least(1), default=4,
+                   help="crank revolutions from the start (revolution 1: start-up transient)")
+    add_run_options(p, methods)
+    p.add_argument("--contact", choices=contact_variants,
+                   help="clearance-joint variant of the exudyn backend (default symbolic)")
+    p.add_argument("--out", type=Path,
+                   help="trajectory file, .csv or .npz (default: none written)")
+    p.add_argument("--plot", type=Path,
+                   help="Fig. 3-like figure file, e.g. simulate.png (paper's slider-crank; "
+                        "default: none written)")
     add_force_option(p)
     add_mechanism_options(p)
     p.set_defaults(func=_cmd_simulate)
 
     p = sub.add_parser("sensitivity", help="design sensitivities of the base force (Figs. 4-6)",
-                       description="Sensitivities of |F12| by direct differentiation (reduced "
-                                   "model) or finite differences (any backend); prints mean "
-                                   "and max normalized sensitivity (Eq. 15) over the last "
-                                   "revolution and writes Fig. 4-6-like plots.")
+                       epilog="named cases (--case NAME; --set NAME=VALUE changes a value):\n"
+                              + _case_lines(),
+                       description="Sensitivities of |F12| (a named case: its monitored "
+                                   "force) by direct differentiation (reduced model) or "
+                                   "finite differences; prints b0 and the mean and max "
+                                   "normalized sensitivity (Eq. 15) over the last revolution. "
+                                   "With --out, writes sensitivities.npz and Fig. 4-6-like "
+                                   "plots into that folder (nothing is written without it).")
+    add_linkage_options(p)
     p.add_argument("--parameters", type=parameter_list,
-                   help="comma-separated SliderCrank fields (default: the paper's eight)")
-    p.add_argument("--method", choices=("ddm", "fd"), default="ddm")
-    p.add_argument("--backend", choices=sorted(BACKENDS), default="reduced")
-    p.add_argument("--revolutions", type=int_at_least(1), default=4)
-    p.add_argument("--rtol", type=positive_float, help="relative tolerance (reduced backend)")
-    p.add_argument("--step-size", type=positive_float, help="time step in s (exudyn backend)")
-    p.add_argument("--integrator", choices=sorted(METHODS),
-                   help="method of the compiled integrator (reduced backend; default dop853 "
-                        "for DDM, dopri5 for FD)")
-    p.add_argument("--out", type=Path, help="folder for sensitivities.npz and figures")
+                   help="comma-separated fields: SliderCrank fields (default: the paper's "
+                        "eight) or a case's dotted parameter names (default: all but point "
+                        "coordinates)")
+    p.add_argument("--method", choices=("ddm", "fd"), default="ddm",
+                   help="ddm: direct differentiation (reduced model); fd: central finite "
+                        "differences (any backend)")
+    p.add_argument("--revolutions", type=int_at_least(1), default=4,
+                   help="crank revolutions; the sensitivities are those of the last")
+    add_run_options(p, methods, integrator_default="dop853 for ddm, dopri5 for fd")
+    p.add_argument("--out", type=Path,
+                   help="folder for sensitivities.npz and figures (default: none written)")
     add_force_option(p)
     add_mechanism_options(p)
     p.set_defaults(func=_cmd_sensitivity)
@@ -539,7 +701,9 @@ def build_parser() -> argparse.ArgumentParser:
     _add_optimize_parser(sub)
     _add_tolerance_parser(sub)
     _add_map_parser(sub)
-    _add_plugins(sub)
+    _add_animate_parser(sub)
+    if command not in BUILTIN:
+        _add_plugins(sub, command)
     return parser
 
 
@@ -559,13 +723,15 @@ def _add_optimize_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--saturation", type=int_at_least(0), default=10,
                    help="stop after this many generations without improvement (default 10;"
                         " 0 disables)")
-    p.add_argument("--mass-scaling", choices=MASS_SCALINGS, default="fixed",
+    p.add_argument("--mass-scaling", choices=MASS_SCALING_NAMES, default="fixed",
                    help="fixed: link masses fixed (paper); uniform: crank and coupler masses "
                         "proportional to their lengths")
     p.add_argument("--crank-bounds", type=finite_float, nargs=2, metavar=("LO", "HI"),
-                   default=(0.04, 0.06), help="bounds of L2 in m (default 0.04 0.06)")
+                   default=(0.04, 0.06),
+                   help="bounds of L2 in m (default 0.04 0.06: 40 to 60 mm)")
     p.add_argument("--coupler-bounds", type=finite_float, nargs=2, metavar=("LO", "HI"),
-                   default=(0.10, 0.14), help="bounds of L3 in m (default 0.10 0.14)")
+                   default=(0.10, 0.14),
+                   help="bounds of L3 in m (default 0.10 0.14: 100 to 140 mm)")
     p.add_argument("--revolution", type=int_at_least(1), default=4,
                    help="crank revolution whose peak is minimised (default 4)")
     add_evaluation_options(p, "optimize")
@@ -577,6 +743,8 @@ def _add_optimize_parser(subparsers) -> argparse.ArgumentParser:
 
 
 def format_table3(result, paper_in_model: float, ideal: dict[str, float]) -> str:
+    from .optimize import PAPER_TABLE3
+
     """Markdown table: the paper's Table 3 beside our optimum and the paper's optimum.
 
     `paper_in_model` is max |F12| of the paper's published optimum in our model, `ideal` the
@@ -609,6 +777,9 @@ def format_table3(result, paper_in_model: float, ideal: dict[str, float]) -> str
 
 
 def _cmd_optimize(args: argparse.Namespace) -> int:
+    from .optimize import PAPER_TABLE3, design_mechanism, optimize_link_lengths
+    from .simulate import peak_base_force, simulate
+
     mech = mechanism_from_args(args)
     check_output_dir(args.out, "--out", args.force)
     options = {} if args.rtol is None else {"rtol": args.rtol}
@@ -658,8 +829,11 @@ def _cmd_optimize(args: argparse.Namespace) -> int:
         plot_force_comparison(trajectories, out / "force_comparison.png",
                               revolution=args.revolution)
         staged.commit()
-    print(f"result.json, table3.md, fitness_history.png and force_comparison.png written to "
-          f"{args.out}", file=sys.stderr)
+    for name, what in (("result.json", "the optimisation's result"),
+                       ("table3.md", "Table 3 beside the paper's"),
+                       ("fitness_history.png", "best peak per generation"),
+                       ("force_comparison.png", "base force of the three designs")):
+        wrote(args.out / name, what)
     return 0
 
 
@@ -721,7 +895,8 @@ def _cmd_tolerance(args: argparse.Namespace) -> int:
         result.to_json(staged.path / "result.json")
         (staged.path / "summary.txt").write_text(text + "\n")
         staged.commit()
-    print(f"result.json and summary.txt written to {args.out}", file=sys.stderr)
+    wrote(args.out / "result.json", "indices and samples")
+    wrote(args.out / "summary.txt", "the summary printed above")
     return 0
 
 
@@ -729,7 +904,7 @@ def _add_map_parser(subparsers) -> argparse.ArgumentParser:
     """The ``map`` subcommand: regime map / bifurcation diagram (issue 19)."""
     p = subparsers.add_parser(
         "map", help="regime map / bifurcation diagram over one or two fields",
-        formatter_class=argparse.RawDescriptionHelpFormatter,
+        formatter_class=HelpFormatter,
         description="Run each point of a grid over one or two fields for --revolutions "
                     "crank revolutions, keep the Poincare section of the last --keep, and "
                     "classify the motion (period-k, quasi-periodic, chaotic, ...). Writes "
@@ -819,8 +994,55 @@ def _cmd_map(args: argparse.Namespace) -> int:
               for i in picks]
     plotting.plot_poincare(ds, points, args.out / "poincare.png")
     written.append(args.out / "poincare.png")
-    print(f"{', '.join(str(w) for w in written)} written ({result.computed} points computed, "
-          f"{result.skipped} resumed from {path})", file=sys.stderr)
+    print(f"{result.computed} points computed, {result.skipped} resumed from {path}",
+          file=sys.stderr)
+    for w in written:
+        wrote(w, "regime map dataset" if w == path else "figure")
+    return 0
+
+
+def _add_animate_parser(subparsers) -> argparse.ArgumentParser:
+    """The ``animate`` subcommand: the mechanism over a revolution, GIF or MP4."""
+    p = subparsers.add_parser(
+        "animate", help="animation of the mechanism over a revolution (GIF/MP4)",
+        description="Simulate the slider-crank and write an animation of one crank "
+                    "revolution beside the journal-centre orbit in units of the clearance "
+                    "(the clearance magnified) into --out (GIF; MP4 with --format mp4 where "
+                    "ffmpeg is installed).")
+    p.add_argument("--revolutions", type=int_at_least(1), default=4,
+                   help="crank revolutions simulated; the last is animated")
+    p.add_argument("--backend", choices=("exudyn", "reduced"), default="reduced",
+                   help="model that computes the motion")
+    p.add_argument("--frames", type=int_at_least(2), default=72, help="frames per revolution")
+    p.add_argument("--fps", type=int_at_least(1), default=12, help="frames per second")
+    p.add_argument("--format", choices=("gif", "mp4"), default="gif",
+                   help="file format (mp4 needs ffmpeg)")
+    p.add_argument("--out", type=Path, default=Path("animate"),
+                   help="output folder (default ./animate, named after the command)")
+    add_force_option(p)
+    add_mechanism_options(p)
+    p.set_defaults(func=_cmd_animate)
+    return p
+
+
+def _cmd_animate(args: argparse.Namespace) -> int:
+    from .simulate import simulate
+
+    mech = mechanism_from_args(args)
+    check_output_dir(args.out, "--out", args.force)
+    if args.format == "mp4":
+        from matplotlib.animation import FFMpegWriter
+
+        if not FFMpegWriter.isAvailable():
+            raise ValueError("--format mp4 needs ffmpeg on the PATH; use --format gif")
+    traj = simulate(mech, args.revolutions, backend=args.backend)
+    from .plotting import animate_mechanism
+
+    name = f"mechanism.{args.format}"
+    with OutputDir(args.out, "animate") as staged:
+        animate_mechanism(traj, staged.path / name, frames=args.frames, fps=args.fps)
+        staged.commit()
+    wrote(args.out / name, f"animation of revolution {traj.revolutions}")
     return 0
 
 
@@ -830,10 +1052,19 @@ def _cmd_map(args: argparse.Namespace) -> int:
 PLUGIN_GROUP = "mbs_clearance.commands"
 
 
-def _add_plugins(sub) -> None:
+#: the subcommands defined here (the others come from plugins)
+BUILTIN = ("simulate", "sensitivity", "optimize", "tolerance", "map", "animate")
+
+
+def _add_plugins(sub, command: str | None = None) -> None:
+    """Add the plugin subcommands: only `command` if a plugin has that name, else all (for
+    --help and the list of choices)."""
     from importlib.metadata import entry_points
 
-    for ep in sorted(entry_points(group=PLUGIN_GROUP), key=lambda e: e.name):
+    eps = sorted(entry_points(group=PLUGIN_GROUP), key=lambda e: e.name)
+    if any(ep.name == command for ep in eps):
+        eps = [ep for ep in eps if ep.name == command]
+    for ep in eps:
         try:
             register = ep.load()
         except ImportError:  # a plugin whose dependencies are missing is left out
@@ -843,7 +1074,9 @@ def _add_plugins(sub) -> None:
 
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the `mbs-clearance` console script."""
-    parser = build_parser()
+    argv = sys.argv[1:] if argv is None else list(argv)
+    command = next((a for a in argv if not a.startswith("-")), None)
+    parser = build_parser(command)
     args = parser.parse_args(argv)
     return run_command(f"mbs-clearance {args.command}", args.func, args)
 

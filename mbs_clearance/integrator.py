@@ -148,6 +148,25 @@ _BS_P = [[1, -4 / 3, 5 / 9], [0, 1, -2 / 3], [0, 4 / 3, -8 / 9], [0, -1, 1]]
 
 
 
+def _dop853_coefficients():
+    """scipy's table of DOP853 coefficients (scipy/integrate/_ivp/dop853_coefficients.py, plain
+    numpy arrays) read from its file: importing it as a module would import all of
+    scipy.integrate, a large part of the start-up time of every command."""
+    import importlib.util
+    from pathlib import Path
+
+    spec = importlib.util.find_spec("scipy")
+    path = Path(spec.origin).parent / "integrate" / "_ivp" / "dop853_coefficients.py"
+    if path.is_file():
+        module_spec = importlib.util.spec_from_file_location("_mbs_dop853_coefficients", path)
+        module = importlib.util.module_from_spec(module_spec)
+        module_spec.loader.exec_module(module)
+        return module
+    from scipy.integrate._ivp import dop853_coefficients  # another layout: the usual way
+
+    return dop853_coefficients
+
+
 def _dop853() -> Tableau:
     """Dormand & Prince's 8(5,3) pair (Hairer, Norsett & Wanner, Solving ODEs I, Sec. II.10),
     coefficients taken from scipy's DOP853 class, with Hairer's 7th-order continuous
@@ -158,12 +177,14 @@ def _dop853() -> Tableau:
     carries the weight theta^(i//2 + 1) (1 - theta)^((i + 1)//2).
     """
     from numpy.polynomial import polynomial as npoly
-    from scipy.integrate import DOP853 as ref
 
-    s = ref.n_stages
-    n_all = s + 1 + len(ref.C_EXTRA)
+    k = _dop853_coefficients()
+    s = k.N_STAGES
+    # the slices scipy's DOP853 class takes of the table
+    A, C, A_extra, C_extra = k.A[:s, :s], k.C[:s], k.A[s + 1:], k.C[s + 1:]
+    n_all = s + 1 + len(C_extra)
     b = np.zeros(n_all)
-    b[:s] = ref.B
+    b[:s] = k.B
     F = np.zeros((7, n_all))
     F[0] = b
     F[1] = -b
@@ -171,7 +192,7 @@ def _dop853() -> Tableau:
     F[2] = 2.0 * b
     F[2, 0] -= 1.0
     F[2, s] -= 1.0
-    F[3:] = ref.D
+    F[3:] = k.D
     P = np.zeros((n_all, 7))
     for i in range(7):
         w = npoly.polymul(npoly.polypow([0.0, 1.0], i // 2 + 1),
@@ -180,8 +201,8 @@ def _dop853() -> Tableau:
         P += np.outer(F[i], w[1:])
     # beta = 0.06: where stability limits the step (the stiff contact) the I controller
     # rejects ~30 % of the steps; measured on the sensitivity equations (docs/performance.md)
-    return Tableau("dop853", ref.A, ref.B, ref.C, ref.E5, P, 8, 7, E2=ref.E3,
-                   A_extra=ref.A_EXTRA, C_extra=ref.C_EXTRA, pi_beta=0.06, pi_gain=0.2)
+    return Tableau("dop853", A, k.B, C, k.E5, P, 8, 7, E2=k.E3,
+                   A_extra=A_extra, C_extra=C_extra, pi_beta=0.06, pi_gain=0.2)
 
 
 #: name -> Tableau; the registry of integration methods of the compiled integrator

@@ -417,3 +417,67 @@ def plot_poincare(ds, points: Sequence[Mapping], path: str | Path | None = None,
         ax.set_xlabel("x / clearance")
     axes[0].set_ylabel("y / clearance")
     return save(fig, path)
+
+
+def animate_mechanism(traj: Trajectory, path: str | Path, revolution: int | None = None,
+                      frames: int = 72, fps: int = 12) -> Path:
+    """Animation of the slider-crank over one crank revolution (default: the last) beside
+    the journal-centre orbit in units of the clearance (the clearance magnified to be
+    seen): GIF (Pillow) or, for a .mp4 `path`, MP4 when ffmpeg is installed. Returns the
+    path."""
+    from matplotlib.animation import FFMpegWriter, FuncAnimation, PillowWriter
+
+    mech = traj.mechanism
+    if traj.coupler_angle is None or traj.slider_position is None or \
+            not hasattr(mech, "crank_length"):
+        raise ValueError("animate draws the paper's slider-crank (a trajectory with coupler "
+                         "angle and slider position); this trajectory has none")
+    path = Path(path)
+    if path.suffix.lower() not in (".gif", ".mp4"):
+        raise ValueError(f"animation file must end in .gif or .mp4; got {str(path)!r}")
+    if path.suffix.lower() == ".mp4" and not FFMpegWriter.isAvailable():
+        raise ValueError("an .mp4 needs ffmpeg on the PATH; write a .gif instead")
+    rev = revolution or traj.revolutions
+    mask = np.flatnonzero(traj.revolution_mask(rev))
+    picks = mask[np.linspace(0, len(mask) - 1, frames).round().astype(int)]
+    th2 = traj.crank_angle
+    L2, L3, c = mech.crank_length, mech.coupler_length, mech.clearance
+    ax_ = L2 * np.cos(th2)
+    ay_ = L2 * np.sin(th2)
+    bx = ax_ + L3 * np.cos(traj.coupler_angle)
+    by = ay_ + L3 * np.sin(traj.coupler_angle)
+    e = traj.eccentricity / c
+
+    fig = Figure(figsize=(10, 4), layout="constrained")
+    m_ax, o_ax = fig.subplots(1, 2, width_ratios=(2.2, 1))
+    m_ax.set_xlim(-1.3 * L2, L2 + L3 + 0.3 * L2)
+    m_ax.set_ylim(-1.4 * L2, 1.4 * L2)
+    m_ax.set_aspect("equal")
+    m_ax.axhline(0, color="0.8", lw=0.8)
+    m_ax.set_title(f"slider-crank, revolution {rev} (lengths in m)")
+    crank, = m_ax.plot([], [], "-o", lw=3, color="C0")
+    coupler, = m_ax.plot([], [], "-o", lw=3, color="C1")
+    slider, = m_ax.plot([], [], "s", ms=18, color="0.5")
+    theta = np.linspace(0, 2 * np.pi, 100)
+    o_ax.plot(np.cos(theta), np.sin(theta), "k-", lw=1, label="wall (e = c)")
+    o_ax.plot(e[mask, 0], e[mask, 1], color="0.7", lw=0.8, label="orbit")
+    dot, = o_ax.plot([], [], "o", color="C3")
+    lim = max(1.2, float(np.abs(e[mask]).max()) * 1.1)
+    o_ax.set_xlim(-lim, lim)
+    o_ax.set_ylim(-lim, lim)
+    o_ax.set_aspect("equal")
+    o_ax.set_title(f"journal centre / c (c = {c * 1e3:.3g} mm)")
+    o_ax.legend(fontsize=7, loc="lower right")
+
+    def draw(k):
+        i = picks[k]
+        crank.set_data([0, ax_[i]], [0, ay_[i]])
+        coupler.set_data([ax_[i], bx[i]], [ay_[i], by[i]])
+        slider.set_data([traj.slider_position[i]], [0])
+        dot.set_data([e[i, 0]], [e[i, 1]])
+        return crank, coupler, slider, dot
+
+    anim = FuncAnimation(fig, draw, frames=len(picks), blit=False)
+    writer = FFMpegWriter(fps=fps) if path.suffix.lower() == ".mp4" else PillowWriter(fps=fps)
+    anim.save(str(path), writer=writer, dpi=80)
+    return path

@@ -10,6 +10,7 @@ differences through any backend, with the runs in parallel.
 from __future__ import annotations
 
 import json
+import logging
 import time
 from concurrent.futures import Executor, ProcessPoolExecutor
 from dataclasses import dataclass, field
@@ -442,6 +443,12 @@ def _fd(mech, names, revolutions, backend, t_eval, rtol, fd_relative_step, execu
     elif t_eval is not None:
         raise ValueError("t_eval is only supported by the reduced backend; the exudyn "
                          "backend reports its own fixed time steps")
+    if backend == "exudyn" and options.get("step_size", 2e-6) > 7.5e-7:
+        # measured: docs/sensitivity.md "DDM against finite differences of the Exudyn model"
+        logging.getLogger("mbs_clearance").warning(
+            f"finite differences through Exudyn at step {options.get('step_size', 2e-6):g} s "
+            "are coarse (the paper's case at the default 2e-6 s: 15-19 % RMS off the DDM "
+            "sensitivities); step_size=5e-7 gives about 1 % (4 times the run time)")
     steps = [fd_step(mech, n, fd_relative_step) for n in names]
     jobs = []
     for name, h in zip(names, steps):

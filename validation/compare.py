@@ -460,7 +460,8 @@ def build_parser(parser: argparse.ArgumentParser | None = None) -> argparse.Argu
                         help="reference backend (default: reduced)")
     parser.add_argument("--backend-b", choices=sorted(BACKENDS), default="exudyn",
                         help="compared backend (default: exudyn)")
-    parser.add_argument("--revolutions", type=int_at_least(1), default=4)
+    parser.add_argument("--revolutions", type=int_at_least(1), default=4,
+                        help="crank revolutions")
     parser.add_argument("--rtol", type=positive_float,
                         help="relative tolerance (reduced backend)")
     parser.add_argument("--h-max", type=positive_float,

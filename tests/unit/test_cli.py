@@ -97,11 +97,16 @@ def test_parameter_list_accepts_spaces_and_runs(capsys):
 
     assert main(["sensitivity", "--parameters", "crank_length, slider_mass ",
                  "--revolutions", "1"]) == 0
-    rows = capsys.readouterr().out.splitlines()[1:]
+    out = capsys.readouterr().out.splitlines()
+    rows = out[1:3]
     ref = sensitivities(SliderCrank(), ("crank_length", "slider_mass"), 1)
     assert [r.split()[0] for r in rows] == ["crank_length", "slider_mass"]
+    assert rows[0].split()[1:3] == ["50", "mm"] and rows[1].split()[1:3] == ["0.14", "kg"]
     for row, r in zip(rows, ref.summary()):
-        assert float(row.split()[2]) == pytest.approx(r["mean_abs_normalized"], rel=1e-3)
+        assert float(row.split()[-3]) == pytest.approx(r["mean_abs_normalized"], rel=1e-3)
+    # every column is defined under the table
+    for head in ("b0", "mean |S|", "max |S|", "growth/rev"):
+        assert any(line.startswith(f"  {head}: ") for line in out[3:]), head
 
 
 @pytest.mark.parametrize("argv,message", [
@@ -135,12 +140,14 @@ def test_work_precision_rejects_zero_repeats():
 
 # ------------------------------------------------------------------ errors: one line, codes
 def _fail_with(monkeypatch, exc):
-    import mbs_clearance.cli as cli
+    import importlib
+
+    sim = importlib.import_module("mbs_clearance.simulate")   # the module, not the function
 
     def boom(*args, **kwargs):
         raise exc
 
-    monkeypatch.setattr(cli, "simulate", boom)
+    monkeypatch.setattr(sim, "simulate", boom)
 
 
 @pytest.mark.parametrize("exc,code,shown", [
@@ -199,9 +206,17 @@ def _env():
 
 
 # ------------------------------------------------------------------ outputs
+def _plugin_modules(name):
+    """validation.NAME as the tests import it and mbs_clearance_validation.NAME as the CLI's
+    plugin entry points load it: two module objects of one file, both to be patched."""
+    import importlib
+
+    return [importlib.import_module(f"{package}.{name}")
+            for package in ("validation", "mbs_clearance_validation")]
+
+
 def _forbid_computing(monkeypatch):
     """Every entry point that computes raises: output checks must come first."""
-    import mbs_clearance.cli as cli
     import mbs_clearance.sensitivity as sens_mod
     import validation.benchmarks.work_precision as wp
     import validation.compare as cmp
@@ -211,10 +226,17 @@ def _forbid_computing(monkeypatch):
     def forbidden(*args, **kwargs):
         raise AssertionError("computation started before the output path was checked")
 
-    for module, name in ((cli, "simulate"), (cli, "optimize_link_lengths"),
+    import importlib
+
+    for module, name in ((importlib.import_module("mbs_clearance.optimize"),
+                          "optimize_link_lengths"),
                          (sens_mod, "sensitivities"), (wp, "run"), (stress, "run_sweep"),
                          (rep, "section_mechanism"), (rep, "section_response")):
         monkeypatch.setattr(module, name, forbidden)
+    for plugin, name in (("benchmarks.work_precision", "run"), ("stress", "run_sweep"),
+                         ("report", "section_mechanism"), ("report", "section_response")):
+        for module in _plugin_modules(plugin):
+            monkeypatch.setattr(module, name, forbidden)
     import sys
 
     monkeypatch.setattr(sys.modules["mbs_clearance.simulate"], "simulate", forbidden)
@@ -459,7 +481,8 @@ def test_stress_json_is_stamped_checked_first_and_replaced_only_if_ours(tmp_path
     from mbs_clearance._io import RUN_KEY
 
     case = stress.StressCase("paper case, 1 revolution", SliderCrank(), revolutions=1)
-    monkeypatch.setattr(stress, "stress_cases", lambda quick: [case])
+    for module in _plugin_modules("stress"):      # the one the CLI runs, too
+        monkeypatch.setattr(module, "stress_cases", lambda quick: [case])
     out = tmp_path / "s.json"
     assert main(["stress", "--json", str(out)]) == 0
     first = json.loads(out.read_text())
@@ -623,3 +646,205 @@ def test_packaging_installs_no_generic_top_level_package_and_version_from_metada
     with pytest.raises(SystemExit):
         main(["--version"])
     assert capsys.readouterr().out.strip() == f"mbs-clearance {cfg['project']['version']}"
+
+
+# ------------------------------------------------------------------ help, outputs, start-up
+def _help_entries(text):
+    """--help's option entries, each joined to one line."""
+    import re
+
+    entries, current = [], None
+    for line in text.splitlines():
+        if re.match(r"^  -", line):
+            current = [line]
+            entries.append(current)
+        elif current is not None and re.match(r"^\s{6,}\S", line):
+            current.append(line)
+        else:
+            current = None
+    return [" ".join(" ".join(e).split()) for e in entries]
+
+
+def _subcommands():
+    from importlib.metadata import entry_points
+
+    from mbs_clearance.cli import BUILTIN, PLUGIN_GROUP
+
+    return list(BUILTIN) + sorted(ep.name for ep in entry_points(group=PLUGIN_GROUP))
+
+
+@pytest.mark.parametrize("command", _subcommands())
+def test_help_shows_every_default_and_choice(command, capsys):
+    """Every option that takes a value says its default (or that it is required) and lists
+    its choices in `COMMAND --help`."""
+    import argparse
+
+    with pytest.raises(SystemExit):
+        main([command, "--help"])
+    entries = _help_entries(capsys.readouterr().out)
+    from mbs_clearance.cli import build_parser
+
+    parser = build_parser(command)
+    sub = next(a for a in parser._actions
+               if isinstance(a, argparse._SubParsersAction)).choices[command]
+    checked = 0
+    for action in sub._actions:
+        if not action.option_strings or action.nargs == 0:
+            continue
+        entry = next(e for e in entries if e.split(" ")[0].rstrip(",") in action.option_strings)
+        assert "default" in entry or "(required)" in entry, entry
+        for choice in action.choices or ():
+            assert str(choice) in entry, (entry, choice)
+        checked += 1
+    assert checked >= 1
+
+
+def test_help_shows_engineering_units(capsys):
+    with pytest.raises(SystemExit):
+        main(["simulate", "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    for shown in ("(default 5000 rpm = 523.599)", "(default 207 GPa = 2.07e+11)",
+                  "(default 9.99 mm = 0.00999)", "lankarani_nikravesh; one of"):
+        assert shown in text, shown
+
+
+def _wrote(err):
+    """The files a command says it wrote: `wrote PATH (WHAT)` lines."""
+    import re
+    from pathlib import Path
+
+    return [Path(m.group(1)) for m in re.finditer(r"^wrote (.+?) \(.+\)$", err, re.M)]
+
+
+def test_simulate_says_what_it_wrote_and_marks_the_start_up(tmp_path, capsys):
+    out, fig = tmp_path / "t.npz", tmp_path / "f.png"
+    assert main(["simulate", "--revolutions", "2", "--out", str(out), "--plot",
+                 str(fig)]) == 0
+    captured = capsys.readouterr()
+    assert _wrote(captured.err) == [out, fig]
+    assert out.is_file() and fig.is_file()
+    rows = captured.out.splitlines()
+    assert rows[1].split()[0] == "1*" and "start-up transient" in captured.err
+    assert rows[1].split()[2] == "N" and rows[1].split()[4:6] == ["N", "m"]
+    # without --out/--plot nothing is written (as its help says)
+    before = sorted(tmp_path.iterdir())
+    assert main(["simulate", "--revolutions", "1"]) == 0
+    assert _wrote(capsys.readouterr().err) == [] and sorted(tmp_path.iterdir()) == before
+
+
+def test_ideal_joint_table_has_no_contact_force(capsys):
+    assert main(["simulate", "--revolutions", "1", "--backend", "ideal"]) == 0
+    out = capsys.readouterr().out
+    assert "contact" not in out and "max |F12|" in out
+    # the ideal-joint peak printed matches the closed form's
+    peak = float(out.splitlines()[1].split()[1])
+    assert peak == pytest.approx(peak_base_force(SliderCrank(), 1, backend="ideal"), rel=1e-6)
+
+
+def test_sensitivity_writes_what_it_says(tmp_path, capsys):
+    out = tmp_path / "sens"
+    assert main(["sensitivity", "--parameters", "crank_length,restitution", "--revolutions",
+                 "1", "--out", str(out)]) == 0
+    wrote = _wrote(capsys.readouterr().err)
+    assert wrote[0] == out / "sensitivities.npz" and len(wrote) >= 3
+    assert all(p.is_file() and p.parent == out for p in wrote)
+    written = {p.name for p in out.iterdir()} - {"manifest.json"}
+    assert written == {p.name for p in wrote}
+
+
+def test_sensitivity_of_a_named_case(capsys):
+    """`sensitivity --case`: the paper case as a description, by the generated model's DDM,
+    prints the same mean |S| as the hand-derived SliderCrank DDM for the same parameter."""
+    from mbs_clearance.sensitivity import sensitivities
+
+    assert main(["sensitivity", "--case", "paper_slider_crank", "--parameters",
+                 "slider.mass,coupler_slider.restitution", "--revolutions", "2"]) == 0
+    rows = capsys.readouterr().out.splitlines()[1:3]
+    assert [r.split()[0] for r in rows] == ["slider.mass", "coupler_slider.restitution"]
+    ref = sensitivities(SliderCrank(), ("slider_mass", "restitution"), 2, rtol=None).summary()
+    for row, r in zip(rows, ref):
+        assert float(row.split()[-3]) == pytest.approx(r["mean_abs_normalized"], rel=2e-3)
+
+
+def test_animate_writes_a_gif(tmp_path, capsys):
+    from PIL import Image
+
+    out = tmp_path / "anim"
+    assert main(["animate", "--revolutions", "1", "--frames", "4", "--out", str(out)]) == 0
+    (gif,) = _wrote(capsys.readouterr().err)
+    assert gif == out / "mechanism.gif"
+    with Image.open(gif) as image:
+        assert image.n_frames == 4 and image.width > 300
+        frames = []
+        for k in range(image.n_frames):
+            image.seek(k)
+            frames.append(np.asarray(image.convert("L"), dtype=float))
+    assert np.abs(frames[1] - frames[0]).max() > 0       # the mechanism moves
+
+
+def test_import_loads_only_what_is_needed():
+    """`import mbs_clearance` and building the CLI's parser for a built-in command load no
+    compiled model, no scipy.integrate, no exudyn, no matplotlib, no validation plugin."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    code = ("import sys, mbs_clearance; a = set(sys.modules); "
+            "from mbs_clearance.cli import build_parser; build_parser('simulate'); "
+            "b = set(sys.modules); print(repr((sorted(a), sorted(b))))")
+    root = Path(__file__).resolve().parents[2]
+    out = subprocess.run([sys.executable, "-c", code], cwd=root, capture_output=True,
+                         text=True, check=True).stdout
+    after_import, after_parser = eval(out.strip().splitlines()[-1])  # noqa: S307 - own output
+    heavy = ("scipy.integrate", "matplotlib", "exudyn", "mbs_clearance._generated",
+             "mbs_clearance.reduced", "mbs_clearance.ddm", "mbs_clearance_validation",
+             "sympy", "pygad", "xarray")
+    for modules in (after_import, after_parser):
+        assert not [m for m in modules if m.startswith(heavy)]
+    # the public names still resolve (lazily) and __all__ is complete
+    import mbs_clearance
+
+    for name in mbs_clearance.__all__:
+        assert getattr(mbs_clearance, name) is not None
+    assert set(mbs_clearance.__all__) <= set(dir(mbs_clearance))
+
+
+def test_library_messages_go_through_logging(caplog, capsys):
+    """The library's messages are records of the logger "mbs_clearance" (silenced like any
+    logger); the CLI prints them as `PROG: MESSAGE` while a command runs."""
+    import logging
+    import types
+
+    from mbs_clearance import _cache
+    from mbs_clearance.cli import run_command
+
+    listener = _cache.CompileListener()
+    kernel = types.SimpleNamespace(py_func=_cache.register_package, __name__="kernel")
+    event = types.SimpleNamespace(data={"dispatcher": kernel})
+    with caplog.at_level(logging.INFO, logger="mbs_clearance"):
+        listener.on_start(event)
+        listener.on_end(event)
+    (record,) = caplog.records
+    assert record.name == "mbs_clearance" and record.levelno == logging.INFO
+    assert record.getMessage().startswith("compiling kernels (first run only, about ")
+    caplog.clear()
+    logging.getLogger("mbs_clearance").setLevel(logging.WARNING)       # a user silences it
+    try:
+        with caplog.at_level(logging.WARNING, logger="mbs_clearance"):
+            _cache.CompileListener().on_start(event)
+        assert not caplog.records
+    finally:
+        logging.getLogger("mbs_clearance").setLevel(logging.NOTSET)
+    # a kernel of another package is not ours to announce
+    other = types.SimpleNamespace(data={"dispatcher": types.SimpleNamespace(
+        py_func=pytest.approx)})
+    with caplog.at_level(logging.INFO, logger="mbs_clearance"):
+        _cache.CompileListener().on_start(other)
+    assert not caplog.records
+
+    def command(args):
+        logging.getLogger("mbs_clearance.sensitivity").warning("coarse result")
+        return 0
+
+    assert run_command("mbs-clearance test", command, None) == 0
+    assert capsys.readouterr().err == "mbs-clearance test: coarse result\n"
