@@ -296,6 +296,10 @@ def add_mechanism_options(parser: argparse.ArgumentParser) -> None:
             from .contact import CONTACT_MODELS
 
             shown = f"{default}; one of {', '.join(CONTACT_MODELS)}"
+        elif f.name == "friction_law":
+            from .contact import FRICTION_LAWS
+
+            shown = f"{default}; one of {', '.join(FRICTION_LAWS)}"
         elif default is None:
             shown = "derived"
         else:

@@ -190,7 +190,7 @@ def trajectory_from_run(linkage: Linkage, model, ts, ys, ms, p, stats, peaks, ou
 
 #: options of `simulate(linkage, backend="reduced")` (keywords of `run` meant for users)
 OPTION_NAMES = ("rtol", "atol", "method", "max_steps", "n_samples", "h_max", "h0",
-                "event_tol", "max_memory")
+                "event_tol", "max_memory", "t_eval")
 
 #: the event search looks closer (7 more samples and the interpolant's maximum) between two
 #: samples of a step where the cubic Hermite interpolant of a penetration comes within this
@@ -227,11 +227,14 @@ def _tolerances(linkage, model, rtol, atol):
 def run(linkage: Linkage, revolutions: int = 4, *, rtol: float | None = None,
         atol=None, method: str = "dopri5", record: bool = True,
         max_steps: int = DEFAULT_MAX_STEPS, n_samples: int = 1, h_max: float | None = None,
-        h0: float = 0.0, event_tol: float | None = None, max_memory: int | None = None):
+        h0: float = 0.0, event_tol: float | None = None, max_memory: int | None = None,
+        t_eval=None):
     """Integrate `linkage`'s generated model over `revolutions` drive revolutions from the
     centred start; returns (model, ts, ys, ms, peaks, peak_times, counters dict, outs, p).
-    Every option is checked first (ValueError naming it and its range); a run whose record
-    would exceed `max_memory` bytes stops there with `MemoryLimitError`."""
+    With `t_eval` the integrator also lands exactly on those times and only they are
+    returned (the peaks then are the maxima over them per revolution). Every option is
+    checked first (ValueError naming it and its range); a run whose record would exceed
+    `max_memory` bytes stops there with `MemoryLimitError`."""
     from ._checks import (
         MemoryLimitError,
         check_bool,
@@ -239,6 +242,7 @@ def run(linkage: Linkage, revolutions: int = 4, *, rtol: float | None = None,
         check_int,
         check_max_memory,
         check_real,
+        check_times,
         format_bytes,
     )
     from .integrator import COUNTERS, METHODS, RESULTS, make_settings
@@ -274,7 +278,13 @@ def run(linkage: Linkage, revolutions: int = 4, *, rtol: float | None = None,
                       stacklevel=3)
     p = pack_parameters(linkage, model)
     y0 = initial_state(linkage, model, p)
-    edges = np.arange(revolutions + 1) * linkage.period
+    edges = win_edges = np.arange(revolutions + 1) * linkage.period
+    refine = REFINE_ITERS
+    if t_eval is not None:
+        t_eval = check_times("t_eval", t_eval, float(edges[-1]))
+        edges = np.union1d(edges, t_eval)
+        edges = edges[np.concatenate([[True], np.diff(edges) > 1e-12 * edges[-1]])]
+        record, refine = True, 0
     extra_fev = 0
     if h0 == 0.0 and model.N_STATE > 2 * model.N_Q + 1:
         h0 = _start_step(model, y0, p, rtol, atol_arr, method, min(h_max, edges[-1]))
@@ -286,7 +296,7 @@ def run(linkage: Linkage, revolutions: int = 4, *, rtol: float | None = None,
     settings = make_settings(
         rtol, atol_arr, 2 * model.N_Q, h0=h0, h_max=h_max, max_steps=limit, record=record,
         event_tol=event_tol, event_margin=EVENT_MARGIN * linkage.min_clearance,
-        n_samples=n_samples, refine_iters=REFINE_ITERS, n_out=n_out, n_dense=2 * model.N_Q,
+        n_samples=n_samples, refine_iters=refine, n_out=n_out, n_dense=2 * model.N_Q,
         n_events=model.N_EVENTS, mem_start=model.MEM_START, n_mem=model.N_MEM)
     ts, ys, ms, peaks, peak_t, counters, outs, status = model.integrate_model(
         y0, p, edges, settings, METHODS[method].arrays())
@@ -299,6 +309,13 @@ def run(linkage: Linkage, revolutions: int = 4, *, rtol: float | None = None,
     if status != RESULTS.success:
         raise RuntimeError(f"integration of linkage {linkage.name!r} failed at about t = "
                            f"{ts[-1] if len(ts) else float('nan'):.6g} s: {status.message}")
+    if t_eval is not None:
+        keep = np.minimum(np.searchsorted(ts, t_eval), len(ts) - 1)    # landed on t_eval
+        ts, ys, ms, outs = ts[keep], ys[keep], ms[keep], outs[keep]
+        mon = model.MONITOR_COLUMN
+        mags = np.hypot(outs[:, mon], outs[:, mon + 1])
+        peaks = np.array([mags[(ts >= a) & (ts <= b)].max(initial=0.0)
+                          for a, b in zip(win_edges[:-1], win_edges[1:])])
     stats = {k: int(v) for k, v in zip(COUNTERS, counters)}
     stats["nfev"] += extra_fev
     stats.update(method=method, rtol=float(rtol))

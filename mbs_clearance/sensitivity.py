@@ -323,6 +323,8 @@ _FIELD_MAP = {
         "bearing_radius", "journal_radius", "youngs_modulus", "poisson_ratio", "restitution",
         "contact_stiffness", "impact_velocity_floor")},
 }
+#: the friction fields: description parameters only where the joint has a friction law
+_FRICTION_FIELDS = ("friction_coefficient", "friction_v0", "friction_v1")
 
 
 def _derived_inertia(mech: SliderCrank, name: str) -> dict[str, float]:
@@ -345,7 +347,9 @@ def slider_crank_directions(mech: SliderCrank, names) -> list[dict[str, float]]:
     linear in every field but the derived inertias, differentiated here); the description's
     own chain (`linkage_ddm.chain`) takes the radii and the material into the clearance and
     the Eq. 9 stiffness."""
-    return [{**_FIELD_MAP[n], **_derived_inertia(mech, n)} for n in names]
+    return [({f"{_JOINT}.{n}": 1.0} if mech.friction_law != "none" else {})
+            if n in _FRICTION_FIELDS else {**_FIELD_MAP[n], **_derived_inertia(mech, n)}
+            for n in names]
 
 
 #: default method of the compiled integrator for the sensitivity equations
@@ -363,11 +367,22 @@ def slider_crank_run(mech: SliderCrank, names, rtol, *, revolutions: int, t_eval
 
     linkage = from_slider_crank(mech)
     rtol = reduced.DEFAULT_RTOL if rtol is None else rtol
-    atol = np.concatenate([reduced.default_atol(mech, rtol), reduced.event_atol(mech, rtol)])
     ref = np.array([reference_value(mech, n) for n in names])
     scale = np.where(ref != 0.0, np.abs(ref), 1.0)
+    if mech.friction_law == "none":
+        model, p0, y0 = reduced.MODEL, reduced.model_parameters(mech), reduced.initial_state(mech)
+        atol = np.concatenate([reduced.default_atol(mech, rtol),
+                               reduced.event_atol(mech, rtol)])
+    else:       # the model generated with the tangential force (as `simulate` runs it)
+        from .generate import load_model
+        from .linkage_model import _tolerances, initial_state, pack_parameters
+
+        model = load_model(linkage)
+        rtol, atol = _tolerances(linkage, model, rtol, None)
+        p0 = pack_parameters(linkage, model)
+        y0 = initial_state(linkage, model, p0)
     run = linkage_ddm.ddm_run(
-        linkage, reduced.MODEL, reduced.model_parameters(mech), reduced.initial_state(mech),
+        linkage, model, p0, y0,
         slider_crank_directions(mech, names), scale=scale, rtol=rtol, atol_plain=atol,
         revolutions=revolutions, t_eval=t_eval, event_time_term=event_time_term,
         method=method, record=record)
