@@ -296,14 +296,14 @@ def setup(linkage: Linkage, model, p0, y_state, directions, scale, atol_plain,
 
 def ddm_run(linkage: Linkage, model, p0, y_state, directions, *, scale, rtol, atol_plain,
             revolutions: int, t_eval=None, event_time_term: bool = True,
-            method: str = DDM_INTEGRATOR, record: bool = True) -> DdmRun:
+            method: str = DDM_INTEGRATOR, record: bool = True, whole: bool = False) -> DdmRun:
     """Integrate the sensitivity equations of `directions` (see `setup`) over `revolutions`
-    drive revolutions (landing on the times t_eval if given, without peak refinement);
-    returns the `DdmRun`."""
+    drive revolutions (landing on the times t_eval if given, without peak refinement, and
+    ending at the last unless `whole`); returns the `DdmRun`."""
     y0, p, atol, coeffs = setup(linkage, model, p0, y_state, directions, scale,
                                    atol_plain, event_time_term)
     nb = coeffs.shape[0]
-    edges = _edges(linkage, revolutions, t_eval)
+    edges = _edges(linkage, revolutions, t_eval, whole)
     t0 = time.perf_counter()
     ts, ys, ms, peaks, peak_t, outs, stats = _run(
         linkage, model, y0, p, edges, rtol, method, 2 * model.N_Q * (1 + nb), atol,
@@ -316,12 +316,18 @@ def ddm_run(linkage: Linkage, model, p0, y_state, directions, *, scale, rtol, at
 
 def _run(linkage, model, y0, p, edges, rtol, method, n_err, atol, record=True,
          max_steps=DEFAULT_MAX_STEPS, kernel="integrate_sens", refine=REFINE_ITERS):
+    from ._checks import MemoryLimitError, default_max_memory, format_bytes
     from .integrator import COUNTERS, METHODS, RESULTS, make_settings
 
     event_tol = max(1e-12 * linkage.min_clearance,
                     8 * np.finfo(float).eps * linkage.length_scale)
+    # the record never outgrows the default memory limit: a run that would stops there
+    max_memory = default_max_memory()
+    row = 8 * (1 + len(y0) + model.N_MEM + (model.N_OUT if record else 0))
+    limit = min(max_steps, max(1, (max_memory - 24 * len(edges)) // row)) if record \
+        else max_steps
     settings = make_settings(
-        rtol, atol, n_err, h_max=linkage.period / 8, max_steps=max_steps, record=record,
+        rtol, atol, n_err, h_max=linkage.period / 8, max_steps=limit, record=record,
         event_tol=event_tol, event_margin=EVENT_MARGIN * linkage.min_clearance,
         n_samples=1, refine_iters=refine, n_out=model.N_OUT if record else 0,
         n_dense=2 * model.N_Q, n_events=model.N_EVENTS, mem_start=model.MEM_START,
@@ -329,6 +335,11 @@ def _run(linkage, model, y0, p, edges, rtol, method, n_err, atol, record=True,
     ts, ys, ms, peaks, peak_t, counters, outs, status = getattr(model, kernel)(
         y0, p, edges, settings, METHODS[method].arrays())
     status = RESULTS(int(status))
+    if status == RESULTS.max_steps and limit < max_steps:
+        raise MemoryLimitError(
+            f"the record of linkage {linkage.name!r} reached {format_bytes(max_memory)} (the "
+            f"default memory limit) at t = {ts[-1]:.6g} s, after {limit} steps; run fewer "
+            "revolutions")
     if status != RESULTS.success:
         raise RuntimeError(f"integration of linkage {linkage.name!r} failed at about t = "
                            f"{ts[-1] if len(ts) else float('nan'):.6g} s: {status.message}")
@@ -337,13 +348,14 @@ def _run(linkage, model, y0, p, edges, rtol, method, n_err, atol, record=True,
     return ts, ys, ms, peaks, peak_t, outs, stats
 
 
-def _edges(linkage, revolutions, t_eval):
-    """Window edges of a run: the revolutions, and (t_eval given) the times t_eval: the run
-    lands on each."""
+def _edges(linkage, revolutions, t_eval, whole: bool = False):
+    """Window edges of a run: the revolutions, or (t_eval given) 0 and the times t_eval:
+    the run lands on each and ends at the last; with `whole` it runs the revolutions too
+    (as a SliderCrank's runs do)."""
     edges = np.arange(revolutions + 1) * linkage.period
     if t_eval is None:
         return edges
-    edges = np.union1d(edges, t_eval)
+    edges = np.union1d(edges if whole else [0.0], t_eval)
     return edges[np.concatenate([[True], np.diff(edges) > 1e-12 * edges[-1]])]
 
 

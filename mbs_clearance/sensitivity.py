@@ -385,7 +385,7 @@ def slider_crank_run(mech: SliderCrank, names, rtol, *, revolutions: int, t_eval
         linkage, model, p0, y0,
         slider_crank_directions(mech, names), scale=scale, rtol=rtol, atol_plain=atol,
         revolutions=revolutions, t_eval=t_eval, event_time_term=event_time_term,
-        method=method, record=record)
+        method=method, record=record, whole=True)
     return run, ref
 
 

@@ -366,7 +366,7 @@ def regime_map(mech, sweep, revolutions: int = 100, keep: int = 50, scheduler=No
         refused.
     lyapunov : bool
         Also compute each point's largest Lyapunov exponent (a tangent run instead of the
-        plain one, SliderCrank only; the regimes then tell quasi-periodic from chaotic).
+        plain one; the regimes then tell quasi-periodic from chaotic).
     angle, tol, max_period, rtol :
         As in `poincare.poincare_section`.
     chunk_size : int, optional
