@@ -69,8 +69,10 @@ def test_ddm_matches_finite_differences(case):
 
 
 @pytest.mark.parametrize("mech", [SliderCrank(), SliderCrank(crank_inertia=None,
-                                                             contact_stiffness=3e11)],
-                         ids=["paper", "derived_inertias"])
+                                                             contact_stiffness=3e11),
+                                  SliderCrank(friction_law="ambrosio",
+                                              friction_coefficient=0.05)],
+                         ids=["paper", "derived_inertias", "friction"])
 def test_slider_crank_directions_are_the_derivatives_of_its_description(mech):
     """A SliderCrank's DDM runs on its description's parameters: the direction of each
     field (`slider_crank_directions`, exact) equals central differences of the mapping
@@ -90,11 +92,13 @@ def test_slider_crank_directions_are_the_derivatives_of_its_description(mech):
         h = 1e-4 * (b0 if b0 != 0.0 else 1.0)
         if field in ("journal_radius", "bearing_radius"):
             h = 1e-3 * mech.clearance
-        lo, hi = (from_slider_crank(mech.replace(**{field: b0 + s * h})) for s in (-1, 1))
+        # one-sided at a field's lower bound (mu = 0: the mapping is linear there, exact)
+        steps = (0, 1) if field == "friction_coefficient" and b0 == 0.0 else (-1, 1)
+        lo, hi = (from_slider_crank(mech.replace(**{field: b0 + s * h})) for s in steps)
         for name in names:
             if name.endswith(".contact_stiffness") and mech.contact_stiffness is None:
                 continue        # Eq. 9 of the radii and material: the description's chain
-            fd = (hi.parameter_value(name) - lo.parameter_value(name)) / (2 * h)
+            fd = (hi.parameter_value(name) - lo.parameter_value(name)) / ((steps[1] - steps[0]) * h)
             scale = max(abs(base.parameter_value(name)) / max(abs(b0), 1e-300), 1e-12)
             assert direction.get(name, 0.0) == pytest.approx(fd, rel=1e-7, abs=1e-9 * scale), \
                 (field, name)
