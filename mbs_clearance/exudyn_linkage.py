@@ -29,6 +29,13 @@ Model (`build`)
   Python user function calling `contact.contact_force` (for debugging); ``"sphere"``
   Exudyn's native `ObjectContactSphereSphere`, the bearing as hollow sphere, restitution
   e' = 1 - xi(e)/1.5 (`sphere_restitution`), only for laws it represents.
+- a clearance joint with friction (law not "none", mu > 0): an `ObjectGenericODE2` on its
+  two bodies' nodes whose (symbolic, or Python) force function returns the generalized
+  forces of the tangential force Ft t at the joint's points and the moments R_J Ft /
+  -R_B Ft, Ft = contact.friction_force(vt, Fn, ...) with vt = de/dt . t + omega_J R_J -
+  omega_B R_B (`_friction_loads`); the connectors that carry moments apply equal and
+  opposite ones, so a generic element is used; the friction work is computed after the
+  run from the stored states (`_friction_power`).
 - Each user-force joint has its own impact-velocity memory (`ImpactMemory`): a pre-step
   function (one Python call per time step for all joints, never inside Newton) registers
   the onsets (penetration crossing zero upward) and sets the joint's named symbolic
@@ -45,7 +52,9 @@ carried to the bodies by the forest's kinematics (`body_states`).
 Step size (`ExudynSettings`): a fixed step ``step_size`` in s; if None, the step of
 ``steps_per_revolution`` (default `DEFAULT_STEPS_PER_REVOLUTION`) or, with ``accuracy``, the
 step that gives that relative error of the monitored peak by the method's second order
-(`step_for_accuracy`).
+(`step_for_accuracy`), at most a `STEPS_PER_CONTACT_PERIOD`-th of the contacts' linearised
+period. Newton's tolerance: `NEWTON_TOLERANCE`, or `ROUNDOFF_MARGIN` times the contact
+force's roundoff floor where that is higher (`contact_scales`; docs/exudyn.md).
 """
 
 from __future__ import annotations
@@ -78,7 +87,9 @@ __all__ = ["ExudynSettings", "make_settings", "build", "solve", "simulate_exudyn
            "peak_exudyn_linkage", "run_linkage", "peak_run", "body_states",
            "sphere_restitution", "step_for_accuracy", "refined_peaks",
            "CONTACT_VARIANTS", "ONSET_MODES", "OPTION_NAMES", "DEFAULT_STEPS_PER_REVOLUTION",
-           "ACCURACY_AT_DEFAULT", "ExudynModel"]
+           "ACCURACY_AT_DEFAULT", "ExudynModel", "contact_scales", "friction_of",
+           "symbolic_friction_factor", "NEWTON_TOLERANCE", "ROUNDOFF_MARGIN",
+           "STEPS_PER_CONTACT_PERIOD"]
 
 #: clearance-joint implementations (option ``contact``)
 CONTACT_VARIANTS: tuple[str, ...] = ("symbolic", "python", "sphere")
