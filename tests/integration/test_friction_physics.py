@@ -166,8 +166,11 @@ def test_friction_ddm_matches_finite_differences(overrides, names):
     linkage = cases.paper_slider_crank(**overrides)
     t_eval = np.linspace(0.0, 0.25 * linkage.period, 13)[1:]
     ddm = sensitivities(linkage, names, revolutions=1, t_eval=t_eval, rtol=1e-10)
+    # (the thresholds act weakly: at a relative step of 1e-5 their differences are at the
+    # plain runs' noise, measured against DDM 5.8e-4 (Coulomb v0) and 4.4e-2 (Ambrosio v0)
+    # off, at 1e-4 7.6e-5 and 5.9e-3, at 1e-3 4.9e-6 and 7.5e-5: converging to DDM)
     fd = sensitivities(linkage, names, revolutions=1, method="fd", t_eval=t_eval,
-                       rtol=1e-12, fd_relative_step=1e-5)
+                       rtol=1e-12, fd_relative_step=1e-3)
     assert ddm.stats["nevent"] >= 2, ddm.stats
     for k, name in enumerate(names):
         assert np.max(np.abs(ddm.base_force[:, :, k])) > 0.0, name
