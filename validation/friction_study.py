@@ -10,7 +10,9 @@ the bearing's wall) and the number of contact onsets. Prints a markdown table (w
 docs/friction.md quotes) and draws the journal orbits of the last revolution.
 
     python -m validation.friction_study [--revolutions 4] [--mu 0,0.01,0.05,0.1]
-        [--law ambrosio] [--figure docs/figures/friction_orbits.png]
+        [--law ambrosio] [--clearance C] [--figure docs/figures/friction_orbits.png]
+
+`--clearance` (m) sets every clearance joint's radial clearance (default: the cases', 0.01 mm).
 """
 
 from __future__ import annotations
@@ -51,13 +53,23 @@ def measures(traj, period, rev):
             "nfev": int(traj.stats["nfev"])}
 
 
-def study(mus, revolutions: int, law: str):
+#: per case, the overrides that set its clearances to c (m)
+_CLEARANCE = {
+    "paper_slider_crank": lambda c: {"journal_radius": 0.010 - c},
+    "slider_crank_two_clearances": lambda c: {"crank_coupler_clearance": c,
+                                              "coupler_slider_clearance": c},
+}
+
+
+def study(mus, revolutions: int, law: str, clearance: float | None = None):
     """{case: [(mu, measures, trajectory)]}."""
     out = {}
     for case in CASES:
         rows = []
         for mu in mus:
             over = {} if mu == 0.0 else {"friction_law": law, "friction_coefficient": mu}
+            if clearance is not None:
+                over.update(_CLEARANCE[case](clearance))
             lk = getattr(cases, case)(**over)
             traj = simulate(lk, revolutions)
             rows.append((mu, measures(traj, lk.period, revolutions), traj))
@@ -117,10 +129,12 @@ def main(argv=None) -> None:
     parser.add_argument("--revolutions", type=int, default=4)
     parser.add_argument("--mu", default="0,0.01,0.05,0.1")
     parser.add_argument("--law", default="ambrosio", choices=("ambrosio", "coulomb"))
+    parser.add_argument("--clearance", type=float, default=None,
+                        help="radial clearance of every joint in m (default: the cases')")
     parser.add_argument("--figure", default=None, help="path of the orbit figure (PNG)")
     args = parser.parse_args(argv)
     mus = [float(v) for v in args.mu.split(",")]
-    results = study(mus, args.revolutions, args.law)
+    results = study(mus, args.revolutions, args.law, args.clearance)
     print(table(results, args.revolutions))
     if args.figure:
         figure(results, args.revolutions, args.figure)

@@ -79,3 +79,15 @@ def test_friction_stage_of_a_journal_on_a_turning_bearing(law, phi):
     # force on the bearing: Fn n - Ft t with n = (0, -1), t = (1, 0)
     assert fx == pytest.approx(-ft, rel=1e-12, abs=1e-12 * fn)
     assert fy == pytest.approx(-fn, rel=1e-12)
+
+
+def test_slider_crank_ddm_with_friction_is_refused():
+    """The SliderCrank's own DDM has no friction terms: asked for with friction (or for a
+    friction parameter) it refuses before any computation and names the Linkage path."""
+    from mbs_clearance.sensitivity import sensitivities
+
+    mech = SliderCrank(friction_law="ambrosio", friction_coefficient=0.1)
+    with pytest.raises(ValueError, match="from_slider_crank"):
+        sensitivities(mech, ["crank_mass"])
+    with pytest.raises(ValueError, match="coupler_slider.friction_coefficient"):
+        sensitivities(SliderCrank(), ["friction_coefficient"])
