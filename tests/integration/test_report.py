@@ -3,6 +3,7 @@
 import json
 import re
 import shutil
+from html.parser import HTMLParser
 
 import numpy as np
 import pytest
@@ -14,7 +15,8 @@ from validation.report import SECTIONS
 
 pytestmark = pytest.mark.exudyn
 
-FIGURES = ["fig3_response.png", "fig4_kinematic.png", "fig5_contact.png", "fig6_journal.png",
+FIGURES = ["fig3_response.png", "fig3_differences.png", "regime_map.png",
+           "fig4_kinematic.png", "fig5_contact.png", "fig6_journal.png",
            "fig7a_fitness_fixed.png", "fig7b_force_fixed.png", "fig7a_fitness_uniform.png",
            "fig7b_force_uniform.png", "tolerance.png", "work_precision.png",
            "work_precision_series.png", "agreement_slider_crank_two_clearances.png"]
@@ -38,6 +40,8 @@ def test_files_sections_and_figures(report):
         assert (out / "figures" / f).stat().st_size > 20_000, f  # not an empty canvas
         assert f'alt="{f}"' in html
     assert len(re.findall(r'src="data:image/png;base64,', html)) == len(FIGURES)
+    assert len(re.findall(r'src="data:image/gif;base64,', html)) == 1   # the animation
+    assert (out / "figures" / "mechanism.gif").stat().st_size > 20_000
     assert "nan" not in json.dumps(numbers).lower()
     # run time is recorded (the 2-minute budget is a benchmark figure, not a test)
     assert set(numbers["environment"]["section_seconds"]) == set(SECTIONS)
@@ -89,6 +93,8 @@ def test_replot_redraws_without_recomputing(report, monkeypatch):
     run = read_manifest(out)["run_id"]
     assert main(["report", "--replot", "--out", str(out)]) == 0
     assert (out / "figures" / "fig3_response.png").exists()
+    for f in [*FIGURES, "mechanism.gif"]:      # all redrawn, the cross-model ones kept
+        assert (out / "figures" / f).is_file(), f
     assert (out / "report.json").read_text() == before
     assert verify_run_folder(out)["run_id"] == run      # still the same run
 
@@ -99,8 +105,130 @@ def test_replot_without_a_report_is_a_clear_error(tmp_path, capsys):
     assert "needs a previous report" in capsys.readouterr().err
 
 
-@pytest.mark.skipif(shutil.which("chromium") is None,
-                    reason="Debian's chromium is not installed (apt-get install chromium)")
+def _has_browser():
+    from validation.render_report import has_browser
+
+    return has_browser()
+
+
+# The browser is Qt WebEngine's Chromium from the PyQt6-WebEngine wheel (the test extra), or
+# Debian's chromium: a machine installed from pyproject has one. The skip is for a machine
+# installed without the test extra.
+needs_browser = pytest.mark.skipif(not _has_browser(), reason="no Chromium: pip install "
+                                   "'mbs-clearance[test]' (PyQt6-WebEngine) or apt-get "
+                                   "install chromium")
+
+
+def expected_verdicts(n):
+    """The summary's statuses, recomputed here from report.json with the thresholds the
+    summary states (1 % on the peak and the lengths, 1 point on the reduction, 10x for
+    'far more sensitive')."""
+    sens = {r["parameter"]: r["mean_abs_normalized"] for r in n["sensitivity"]["summary"]}
+    ok = {}
+    ok["fig3_peak"] = abs(n["response"]["reduced"]["peak_base_force"][3] / 8311 - 1) <= 0.01
+    kin = min(sens[p] for p in ("crank_length", "coupler_length", "coupler_mass",
+                                "slider_mass"))
+    con = max(sens[p] for p in ("contact_stiffness", "youngs_modulus", "restitution"))
+    ok["fig45_ranking"] = kin > con and not n["sensitivity"]["chaotic"]
+    ok["fig5_identical"] = sens["contact_stiffness"] == pytest.approx(sens["youngs_modulus"],
+                                                                      rel=1e-6)
+    rest = max(v for p, v in sens.items() if p != "journal_radius")
+    ok["fig6_clearance"] = sens["journal_radius"] >= 10 * rest
+    fixed = n["optimization"]["results"]["fixed"]
+    ok["table3_optimum"] = (abs(fixed["crank_length"] / 0.040733 - 1) <= 0.01
+                            and abs(fixed["coupler_length"] / 0.137468 - 1) <= 0.01)
+    ok["reduction"] = abs(fixed["reduction_percent"] - 43.85) <= 1.0
+    return {k: "reproduced" if v else "not reproduced" for k, v in ok.items()}
+
+
+class _Page(HTMLParser):
+    """The verdict lines, image sources, link targets and ids of report.html."""
+
+    def __init__(self):
+        super().__init__()
+        self.verdicts, self.images, self.links, self.ids = {}, [], [], set()
+        self._li = None
+
+    def handle_starttag(self, tag, attrs):
+        a = dict(attrs)
+        if "id" in a:
+            self.ids.add(a["id"])
+        if tag == "li" and "verdict" in (a.get("class") or ""):
+            self._li = a["data-key"]
+            self.verdicts[self._li] = {"status": a["data-status"], "text": ""}
+        elif tag == "img":
+            self.images.append(a["src"])
+        elif tag == "a" and "href" in a:
+            self.links.append(a["href"])
+
+    def handle_endtag(self, tag):
+        if tag == "li":
+            self._li = None
+
+    def handle_data(self, data):
+        if self._li:
+            self.verdicts[self._li]["text"] += data
+
+
+def test_summary_verdicts_images_and_links(report):
+    """Without a browser: each verdict line of the summary says what report.json's numbers
+    give (status and the number it quotes), every image decodes, every link has a target."""
+    import base64
+    import io
+
+    from PIL import Image
+
+    from mbs_clearance.units import quantity
+
+    n = json.loads((report / "report.json").read_text())
+    page = _Page()
+    page.feed((report / "report.html").read_text())
+    expected = expected_verdicts(n)
+    assert set(expected) <= set(page.verdicts)
+    for key, status in expected.items():
+        assert page.verdicts[key]["status"] == status, key
+        assert f": {status} " in " ".join(page.verdicts[key]["text"].split()), key
+    ours = n["response"]["reduced"]["peak_base_force"][3]
+    assert quantity(ours, "N") in page.verdicts["fig3_peak"]["text"]
+    assert {"agreement", "speed"} <= set(page.verdicts)
+    assert len(page.images) == len(FIGURES) + 1          # the figures and the animation
+    for src in page.images:
+        head, data = src.split(",", 1)
+        assert head in ("data:image/png;base64", "data:image/gif;base64")
+        image = Image.open(io.BytesIO(base64.b64decode(data)))
+        image.load()
+        assert image.width > 100 and image.height > 100
+        assert image.format == head[11:14].upper()
+        if image.format == "GIF":
+            assert image.n_frames > 10
+    for href in page.links:
+        assert href.startswith("#"), href          # no link to a file outside the report
+        assert href[1:] in page.ids, href
+    # the why of 4667 N is a paragraph of the optimisation section, with our numbers
+    assert "why-4667" in page.ids
+
+
+@needs_browser
+def test_browser_shows_the_verdicts_and_every_image(report):
+    """In Chromium (Qt WebEngine offscreen): the summary lines a reader sees carry the
+    statuses report.json gives, every image decoded (natural size > 0), every in-page link
+    has its target."""
+    from validation.render_report import inspect
+
+    n = json.loads((report / "report.json").read_text())
+    seen = inspect(report / "report.html")
+    assert seen["loaded"]
+    shown = {v["key"]: v for v in seen["verdicts"]}
+    for key, status in expected_verdicts(n).items():
+        assert shown[key]["status"] == status, key
+        assert status in shown[key]["text"], key
+    assert len(seen["images"]) == len(FIGURES) + 1
+    for image in seen["images"]:
+        assert image["complete"] and image["width"] > 100, image["alt"]
+    assert seen["anchors"] and all(a["found"] for a in seen["anchors"])
+
+
+@needs_browser
 def test_rendered_report_pages_are_not_blank(report, tmp_path):
     """Render the HTML in headless Chromium (validation/render_report.py): every page has
     content, and the whole report spans several pages of figures and tables."""
@@ -192,3 +320,20 @@ def test_killed_report_leaves_the_previous_report(report, tmp_path):
     assert main(["report", "--replot", "--out", str(out)]) == 0
     assert verify_run_folder(out)["run_id"] == before["run_id"]
     assert not partial.exists()
+
+
+def test_regime_section_and_map_option(report, tmp_path, capsys):
+    """The regime map section: every grid point classified, the paper's design placed; a
+    --map file that does not exist is a one-line error before any computation."""
+    n = json.loads((report / "report.json").read_text())["regimes"]
+    assert n["dims"] == ["clearance", "crank_speed"]
+    assert sum(n["counts"].values()) == np.prod(n["shape"])
+    assert "not_computed" not in n["counts"]
+    near = n["design_nearest"]
+    assert near["clearance"] == pytest.approx(1e-5, rel=1e-9)      # on the log grid
+    assert "coarse (--quick)" in n["source"]
+    with pytest.raises(SystemExit) as exc:
+        main(["report", "--quick", "--map", str(tmp_path / "none.nc"), "--out",
+              str(tmp_path / "r")])
+    assert exc.value.code == 2 and "no such file" in capsys.readouterr().err
+    assert not (tmp_path / "r").exists()
