@@ -511,6 +511,12 @@ def peak_gradient(mech: SliderCrank, parameters=None, revolution: int = 4,
         if options or executor is not None:
             extra = sorted(options) + (["executor"] if executor is not None else [])
             raise ValueError(f"unknown option(s) for method='ddm': {extra}")
+        if mech.friction_law != "none":
+            # the step map at the peak (_refine_steps, _step_value) is the frictionless
+            # model's; `sensitivities` differentiates a SliderCrank with friction
+            raise ValueError(f"method='ddm' of peak_gradient is not available with friction "
+                             f"(friction_law {mech.friction_law!r}); use method='fd', or "
+                             f"sensitivities(mech, ..., method='ddm') for the time series")
         return _ddm_gradient(mech, names, revolution, rtol, integrator or DDM_INTEGRATOR,
                              kink_tol)
     if rtol is not None:

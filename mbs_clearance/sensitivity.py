@@ -592,12 +592,6 @@ def sensitivities(mech: SliderCrank, parameters=None, revolutions: int = 4,
                              "method='fd' for other backends")
         if options:
             raise ValueError(f"unknown option(s) for method='ddm': {sorted(options)}")
-        if mech.friction_law != "none" or any(n.startswith("friction_") for n in names):
-            # (the SliderCrank's DDM has no friction terms yet; the Linkage's has them)
-            raise ValueError("method='ddm' of a SliderCrank with friction (or its friction "
-                             "parameters) runs on its Linkage: pass cases.from_slider_crank"
-                             "(mech) with dotted parameter names, e.g. "
-                             "'coupler_slider.friction_coefficient', or use method='fd'")
         return _ddm(mech, names, revolutions, rtol, t_eval, event_time_term,
                     integrator or DDM_INTEGRATOR)
     if integrator is not None:

@@ -81,13 +81,23 @@ def test_friction_stage_of_a_journal_on_a_turning_bearing(law, phi):
     assert fy == pytest.approx(-fn, rel=1e-12)
 
 
-def test_slider_crank_ddm_with_friction_is_refused():
-    """The SliderCrank's own DDM has no friction terms: asked for with friction (or for a
-    friction parameter) it refuses before any computation and names the Linkage path."""
+def test_slider_crank_ddm_of_a_friction_field_without_a_law_is_zero():
+    """A SliderCrank's DDM runs on its friction model when it has a law (checked against
+    central differences in test_sensitivity.py, slow); without a law the friction fields do
+    not act: their derivative is exactly zero, beside a nonzero one."""
+    import numpy as np
+
     from mbs_clearance.sensitivity import sensitivities
 
-    mech = SliderCrank(friction_law="ambrosio", friction_coefficient=0.1)
-    with pytest.raises(ValueError, match="from_slider_crank"):
-        sensitivities(mech, ["crank_mass"])
-    with pytest.raises(ValueError, match="coupler_slider.friction_coefficient"):
-        sensitivities(SliderCrank(), ["friction_coefficient"])
+    d = sensitivities(SliderCrank(), ["friction_coefficient", "crank_mass"], revolutions=1)
+    assert np.all(d.base_force_magnitude[:, 0] == 0.0)
+    assert np.abs(d.base_force_magnitude[:, 1]).max() > 0.0
+
+
+def test_peak_gradient_ddm_with_friction_is_refused_before_computing():
+    """peak_gradient's step map at the peak is the frictionless model's: with a friction law
+    method='ddm' is a ValueError naming the alternatives, raised before any run."""
+    from mbs_clearance import peak_gradient
+
+    with pytest.raises(ValueError, match="method='fd'"):
+        peak_gradient(SliderCrank(friction_law="coulomb", friction_coefficient=0.1))
