@@ -177,7 +177,7 @@ def agreement_cases(out: Path, revolutions: int, names) -> dict:
     (out / "figures").mkdir(parents=True, exist_ok=True)
     for name in names:
         linkage = CASES[name]()
-        step = make_settings({}).step(linkage.period)
+        step = make_settings({}).step(linkage)
         ref = simulate(linkage, revolutions, rtol=1e-10, h_max=step)
         ex = simulate(linkage, revolutions, backend="exudyn")
         res = compare(ref, ex)
