@@ -2,12 +2,13 @@
 
 import math
 import os
+import warnings
 
 import numpy as np
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from mbs_clearance import SliderCrank, simulate
+from mbs_clearance import AccuracyWarning, SliderCrank, simulate
 from mbs_clearance.contact import CONTACT_MODELS
 
 mechanisms = st.builds(
@@ -34,7 +35,12 @@ mechanisms = st.builds(
           suppress_health_check=[HealthCheck.too_slow])
 @given(mech=mechanisms)
 def test_outputs_finite_and_no_penetration_in_free_flight(mech):
-    traj = simulate(mech, 1)
+    # a run may warn that its peaks may miss the stated accuracy (e.g. a grazing onset,
+    # found by hypothesis at 0.09 mm, 2949 rpm, e = 0.375): that is the documented warning,
+    # not a failure of the properties checked here
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", AccuracyWarning)
+        traj = simulate(mech, 1)
     for name in ("t", "base_force", "crank_moment", "contact_force", "penetration",
                  "eccentricity", "slider_position", "slider_velocity", "slider_acceleration",
                  "crank_work"):
