@@ -281,9 +281,18 @@ REGIME_COLORS = {0: "#ffffff", 1: "#000000", 2: "#4c9be8", 3: "#8fd175", 4: "#f2
                  5: "#d9534f", 6: "#b07cc6", 7: "#9e9e9e"}
 
 
+#: swept field -> (axis label, factor from SI to the plotted unit)
+_AXIS_UNITS = {"clearance": ("clearance (mm)", 1e3),
+               "crank_speed": ("crank speed (rpm)", 60.0 / (2.0 * np.pi))}
+
+
 def _axis_label(ds, name: str) -> str:
-    units = {"clearance": "m", "crank_speed": "rad/s"}
-    return f"{name} ({units[name]})" if name in units else name
+    return _AXIS_UNITS.get(name, (name, 1.0))[0]
+
+
+def _axis_factor(name: str) -> float:
+    """Factor from a swept field's SI value to its plotted unit (mm, rpm; else 1)."""
+    return _AXIS_UNITS.get(name, (name, 1.0))[1]
 
 
 def _sweep_dims(ds) -> list[str]:
@@ -305,7 +314,7 @@ def plot_bifurcation(ds, path: str | Path | None = None, joint: int = 0,
         other = dims[1]
         value = (fixed or {}).get(other, float(ds[other].values[0]))
         sel = ds.sel({other: value}, method="nearest")
-    x = sel[dims[0]].values
+    x = sel[dims[0]].values * _axis_factor(dims[0])
     c = sel["joint_clearance"].values[:, joint]
     comp = list(ds["component"].values).index(component)
     y = sel["section"].values[:, :, joint, comp] / c[:, None]
@@ -326,7 +335,11 @@ def plot_bifurcation(ds, path: str | Path | None = None, joint: int = 0,
     ax.set_ylabel(f"section {component} of {ds['joint'].values[joint]} ({unit})")
     title = "bifurcation diagram"
     if len(dims) == 2:
-        title += f" at {dims[1]} = {float(sel[dims[1]].values):.4g}"
+        from .units import quantity
+
+        si_unit = {"clearance": "m", "crank_speed": "rad/s"}.get(dims[1], "-")
+        value = quantity(float(sel[dims[1]].values), si_unit)
+        title += f" at {dims[1].replace('_', ' ')} = {value}"
     ax.set_title(title)
     ax.legend(fontsize=8, markerscale=4, loc="best")
     return save(fig, path)
@@ -355,8 +368,8 @@ def plot_regime_map(ds, path: str | Path | None = None, mark: Mapping | None = N
     dims = _sweep_dims(ds)
     if len(dims) != 2:
         raise ValueError(f"plot_regime_map needs a map over two fields; got {dims}")
-    x = ds[dims[0]].values
-    y = ds[dims[1]].values
+    x = ds[dims[0]].values * _axis_factor(dims[0])
+    y = ds[dims[1]].values * _axis_factor(dims[1])
     codes = sorted(REGIMES)
     rgb = np.array([[int(REGIME_COLORS[k][i:i + 2], 16) / 255 for i in (1, 3, 5)]
                     for k in codes])
@@ -370,7 +383,8 @@ def plot_regime_map(ds, path: str | Path | None = None, mark: Mapping | None = N
         if ds[name].attrs.get("spacing") == "log":
             getattr(ax, f"set_{axis}scale")("log")
     if mark:
-        ax.plot([mark[dims[0]]], [mark[dims[1]]], marker="*", ms=14, color="k",
+        ax.plot([mark[dims[0]] * _axis_factor(dims[0])],
+                [mark[dims[1]] * _axis_factor(dims[1])], marker="*", ms=14, color="k",
                 mfc="yellow", ls="none", label="design")
     present = [k for k in codes if np.any(ds["regime"].values == k)]
     ax.legend(handles=[Patch(color=REGIME_COLORS[k], label=REGIMES[k].replace("_", " "))

@@ -53,7 +53,7 @@ __all__ = ["SweepAxis", "parse_sweep", "design_at", "regime_map", "MapResult"]
 RPM = 2.0 * math.pi / 60.0
 
 #: the dataset format's version (a resumed run must match it)
-FORMAT = "mbs-clearance regime map 2"
+FORMAT = "mbs-clearance regime map 3"
 
 
 @dataclass(frozen=True)
@@ -222,11 +222,12 @@ def _map_point(item, settings: dict) -> dict:
         out.update(status=2, message=str(exc).splitlines()[0][:200],
                    section=np.full((keep, J, 4), np.nan), peak=np.full(keep, np.nan),
                    regime=REGIME_CODES["failed"], period=0, lyapunov=np.nan,
-                   distance=np.full(settings["max_period"], np.nan), nfev=0)
+                   distance=np.full(settings["max_period"], np.nan), nfev=0, rtol=np.nan)
     else:
         out.update(section=sec.samples, peak=sec.peaks[-keep:],
                    regime=REGIME_CODES[sec.regime], period=sec.period,
-                   lyapunov=sec.lyapunov, distance=sec.distance, nfev=sec.counters["nfev"])
+                   lyapunov=sec.lyapunov, distance=sec.distance, nfev=sec.counters["nfev"],
+                   rtol=sec.rtol)
     out["seconds"] = time.perf_counter() - t0
     return out
 
@@ -271,6 +272,10 @@ def _empty_dataset(axes, J, joints, keep, revolutions, max_period, attrs):
                              "units": "m"}),
         "nfev": (dims, np.zeros(shape, dtype=np.int32),
                  {"long_name": "right-hand side evaluations of the point's run"}),
+        "rtol": (dims, np.full(shape, nan),
+                 {"long_name": "relative tolerance of the run that gave the section (below "
+                               "the map's when its classification was re-checked: "
+                               "poincare.RESOLVE_BAND)"}),
         "done": (dims, np.zeros(shape, dtype=np.int8),
                  {"long_name": "1: computed (ok or failed), 0: to do"}),
         "failed": (dims, np.zeros(shape, dtype=np.int8),
@@ -297,6 +302,7 @@ def _store(ds, shape, res, omega_of) -> None:
         2.0 * math.pi)
     ds["recurrence"].values[idx] = res["distance"]
     ds["nfev"].values[idx] = min(res["nfev"], 2**31 - 1)
+    ds["rtol"].values[idx] = res["rtol"]
     ds["done"].values[idx] = 1
     ds["failed"].values[idx] = 0 if ok else 1
     ds["tangent_failed"].values[idx] = res["tangent_failed"]

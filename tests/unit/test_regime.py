@@ -12,7 +12,7 @@ import pytest
 from mbs_clearance import SliderCrank, lyapunov_exponent, poincare_section, regime_map
 from mbs_clearance import sweep as sweep_mod
 from mbs_clearance.lyapunov import TangentFlow, textbook_exponent
-from mbs_clearance.poincare import Flow, classify, section_times
+from mbs_clearance.poincare import Flow, classify, near_tolerance, section_times
 from mbs_clearance.sweep import design_at, parse_sweep
 
 PAPER = SliderCrank()                               # 0.01 mm, 5000 rpm
@@ -97,6 +97,33 @@ def test_classify_criterion():
     assert classify(noise, max_period=3)[0] == "aperiodic"
     with pytest.raises(ValueError, match="keep must be >= 2 max_period"):
         classify(noise[:4], max_period=3)
+
+
+def test_near_tolerance_flags_verdicts_decided_at_the_tolerance():
+    d = np.array([2.5e-3, 2.2e-3, 2.9e-3])                      # flat, just above tol
+    assert near_tolerance("aperiodic", 0, d, 1e-3)
+    assert not near_tolerance("aperiodic", 0, 20 * d, 1e-3)     # clearly no recurrence
+    assert near_tolerance("period_k", 2, np.array([1.1e-3, 7e-4, 9e-4]), 1e-3)
+    assert not near_tolerance("period_k", 2, np.array([27.0, 8.7e-5, 27.0]), 1e-3)
+    assert not near_tolerance("period_1", 1, np.array([9e-4, 9e-4]), 1e-3)
+
+
+def test_micrometre_clearance_is_rechecked_at_a_tighter_tolerance():
+    """At c = 1 um the rtol 1e-7 run's section noise (~3e-3 c) exceeds the recurrence
+    tolerance (1e-3 c) and reads 'aperiodic'; the re-check at rtol 1e-9 finds period 1,
+    as an independent run at rtol 1e-10 does (recurrence of the same size)."""
+    ref = SliderCrank(crank_speed=511.5)
+    mech = SliderCrank(crank_speed=511.5, journal_radius=ref.bearing_radius - 1e-6)
+    one = poincare_section(mech, 40, 17, rtol=1e-7, recheck=False)
+    assert one.regime == "aperiodic" and not one.rechecked
+    assert 1e-3 < one.distance.min() < 1e-2
+    sec = poincare_section(mech, 40, 17, rtol=1e-7)
+    assert sec.rechecked and sec.rtol == pytest.approx(1e-9)
+    assert sec.regime == "period_1"
+    tight = poincare_section(mech, 40, 17, rtol=1e-10, recheck=False)
+    assert tight.regime == "period_1"
+    assert sec.distance[0] < 10 * max(tight.distance[0], 1e-5)
+    assert sec.counters["nfev"] > one.counters["nfev"]       # both runs counted
 
 
 def test_tangent_matches_two_nearby_runs_of_the_plain_model():
