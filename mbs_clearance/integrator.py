@@ -148,6 +148,18 @@ _BS_P = [[1, -4 / 3, 5 / 9], [0, 1, -2 / 3], [0, 4 / 3, -8 / 9], [0, -1, 1]]
 
 
 
+# dopri5's coefficients as compile-time constants of `_dp5_step_monitor` and `_dp5_error`
+# (the same floats as _DP_A, _DP_B, _DP_C, _DP_E: the same arithmetic, bit for bit)
+_A21 = _DP_A[1][0]
+_A31, _A32 = _DP_A[2][:2]
+_A41, _A42, _A43 = _DP_A[3][:3]
+_A51, _A52, _A53, _A54 = _DP_A[4][:4]
+_A61, _A62, _A63, _A64, _A65 = _DP_A[5][:5]
+_B1, _B2, _B3, _B4, _B5, _B6 = _DP_B
+_C2, _C3, _C4, _C5, _C6 = _DP_C[1:]
+_E1, _E2, _E3, _E4, _E5, _E6, _E7 = _DP_E
+
+
 def _dop853_coefficients():
     """scipy's table of DOP853 coefficients (scipy/integrate/_ivp/dop853_coefficients.py, plain
     numpy arrays) read from its file: importing it as a module would import all of
@@ -404,6 +416,105 @@ def _step_monitor(rhs, monitor, t, y, f, h, A, B, C, K, p, y_new, f_new, ytmp, o
     return m
 
 
+@nb.njit(**KERNEL)
+def _is_dopri5(A, B, C, E, E2, A_extra):
+    """Whether the coefficients that a step uses (A below the diagonal, B, C[1:], E) are
+    dopri5's, with one error estimator and no extra stages."""
+    if (A.shape[0] != 6 or A.shape[1] < 5 or B.shape[0] != 6 or C.shape[0] != 6
+            or E.shape[0] != 7 or E2.shape[0] != 0 or A_extra.shape[0] != 0):
+        return False
+    lower = (A[1, 0] == _A21 and A[2, 0] == _A31 and A[2, 1] == _A32 and A[3, 0] == _A41
+             and A[3, 1] == _A42 and A[3, 2] == _A43 and A[4, 0] == _A51 and A[4, 1] == _A52
+             and A[4, 2] == _A53 and A[4, 3] == _A54 and A[5, 0] == _A61 and A[5, 1] == _A62
+             and A[5, 2] == _A63 and A[5, 3] == _A64 and A[5, 4] == _A65)
+    weights = (B[0] == _B1 and B[1] == _B2 and B[2] == _B3 and B[3] == _B4 and B[4] == _B5
+               and B[5] == _B6 and C[1] == _C2 and C[2] == _C3 and C[3] == _C4
+               and C[4] == _C5 and C[5] == _C6)
+    errors = (E[0] == _E1 and E[1] == _E2 and E[2] == _E3 and E[3] == _E4 and E[4] == _E5
+              and E[5] == _E6 and E[6] == _E7)
+    return lower and weights and errors and _B2 == 0.0 and _E2 == 0.0
+
+
+@nb.njit(**KERNEL, inline="always")
+def _dp5_step_monitor(rhs, monitor, t, y, f, h, K, p, y_new, f_new, ytmp, out, g, gd):
+    """`_step_monitor` for dopri5 with a short state (n <= SMALL): the stage combinations
+    written out with the coefficients as constants (no loop over the terms, no test of zero
+    coefficients, each component summed in a register and stored once), in the order and
+    with the products (h a_ij) of `_combine`: bit-identical to the generic step. The generic
+    loops cost about a quarter of a plain run (their trip counts and zero tests are known at
+    run time only)."""
+    n = y.shape[0]
+    for k in range(SMALL):
+        if k < n:
+            K[0, k] = f[k]
+    c1 = h * _A21
+    for k in range(SMALL):
+        if k < n:
+            ytmp[k] = y[k] + c1 * K[0, k]
+    rhs(t + _C2 * h, ytmp, p, K[1])
+    c1 = h * _A31
+    c2 = h * _A32
+    for k in range(SMALL):
+        if k < n:
+            ytmp[k] = y[k] + c1 * K[0, k] + c2 * K[1, k]
+    rhs(t + _C3 * h, ytmp, p, K[2])
+    c1 = h * _A41
+    c2 = h * _A42
+    c3 = h * _A43
+    for k in range(SMALL):
+        if k < n:
+            ytmp[k] = y[k] + c1 * K[0, k] + c2 * K[1, k] + c3 * K[2, k]
+    rhs(t + _C4 * h, ytmp, p, K[3])
+    c1 = h * _A51
+    c2 = h * _A52
+    c3 = h * _A53
+    c4 = h * _A54
+    for k in range(SMALL):
+        if k < n:
+            ytmp[k] = y[k] + c1 * K[0, k] + c2 * K[1, k] + c3 * K[2, k] + c4 * K[3, k]
+    rhs(t + _C5 * h, ytmp, p, K[4])
+    c1 = h * _A61
+    c2 = h * _A62
+    c3 = h * _A63
+    c4 = h * _A64
+    c5 = h * _A65
+    for k in range(SMALL):
+        if k < n:
+            ytmp[k] = (y[k] + c1 * K[0, k] + c2 * K[1, k] + c3 * K[2, k] + c4 * K[3, k]
+                       + c5 * K[4, k])
+    rhs(t + _C6 * h, ytmp, p, K[5])
+    c1 = h * _B1
+    c3 = h * _B3          # b2 = 0: skipped, as `_combine` skips it
+    c4 = h * _B4
+    c5 = h * _B5
+    c6 = h * _B6
+    for k in range(SMALL):
+        if k < n:
+            y_new[k] = (y[k] + c1 * K[0, k] + c3 * K[2, k] + c4 * K[3, k] + c5 * K[4, k]
+                        + c6 * K[5, k])
+    m = monitor(t + h, y_new, p, f_new, out, g, gd)
+    for k in range(SMALL):
+        if k < n:
+            K[6, k] = f_new[k]
+    return m
+
+
+@nb.njit(**KERNEL, inline="always")
+def _dp5_error(K, h, y, y_new, rtol, atol, n_err, work):
+    """`error_norm` of dopri5 (one estimator, e2 = 0 skipped) for n_err <= SMALL, the
+    weights as constants; the same arithmetic in the same order (bit-identical); leaves
+    E.K in work as `error_norm` does."""
+    acc = 0.0
+    for k in range(SMALL):
+        if k < n_err:
+            w = (0.0 + _E1 * K[0, k] + _E3 * K[2, k] + _E4 * K[3, k] + _E5 * K[4, k]
+                 + _E6 * K[5, k] + _E7 * K[6, k])
+            work[k] = w
+            scale = atol[k] + rtol * max(abs(y[k]), abs(y_new[k]))
+            acc += (w / scale) ** 2
+    return abs(h) * math.sqrt(acc / n_err)
+
+
 @nb.njit(**KERNEL, inline="always")
 def _event_error_sq(event, t, h, y_new, p, work, g, gd, rtol, atol, n_err, yhat):
     """Squared scaled differences, summed over the joints, of the switching functions and
@@ -424,16 +535,22 @@ def _event_error_sq(event, t, h, y_new, p, work, g, gd, rtol, atol, n_err, yhat)
 
 @nb.njit(**KERNEL)
 def _attempt(rhs, event, monitor, t, y, f, h, A, B, C, E, E2, K, p, y_new, f_new, ytmp, work,
-             work2, out, rtol, atol, n_err, yhat, g, gd):
+             work2, out, rtol, atol, n_err, yhat, g, gd, dp5):
     """Stage "attempt a step": its stages, the monitor at its end (outputs into out, the
     switching functions and rates into g, gd) and its scaled error; returns (monitor,
     error). One call of a function without numba's runtime, into which the helpers are
-    inlined (inlined into `integrate` they would reference-count their arrays).
+    inlined (inlined into `integrate` they would reference-count their arrays). dp5: the
+    coefficients are dopri5's and the state is short (`_dp5_step_monitor`, `_dp5_error`).
 
     With 2 J more entries in atol than states, the switching functions and their rates are
     under error control too, with those absolute tolerances (`IntegratorSettings.atol`)."""
-    m = _step_monitor(rhs, monitor, t, y, f, h, A, B, C, K, p, y_new, f_new, ytmp, out, g, gd)
-    err = error_norm(K, E, E2, h, y, y_new, rtol, atol, n_err, work, work2)
+    if dp5:
+        m = _dp5_step_monitor(rhs, monitor, t, y, f, h, K, p, y_new, f_new, ytmp, out, g, gd)
+        err = _dp5_error(K, h, y, y_new, rtol, atol, n_err, work)
+    else:
+        m = _step_monitor(rhs, monitor, t, y, f, h, A, B, C, K, p, y_new, f_new, ytmp, out, g,
+                          gd)
+        err = error_norm(K, E, E2, h, y, y_new, rtol, atol, n_err, work, work2)
     n = y.shape[0]
     n_g = 2.0 * g.shape[0]
     if atol.shape[0] < n + 2 * g.shape[0]:
@@ -1068,6 +1185,8 @@ def integrate(rhs, event, on_event, monitor, y0, p, edges, settings, coefficient
     n = y0.shape[0]
     n_dense = min(settings.n_dense, n)
     s = B.shape[0]
+    # dopri5 on a short state: its step written out with constant coefficients
+    dp5 = n <= SMALL and n_err <= SMALL and _is_dopri5(A, B, C, E, E2, A_extra)
     K = np.zeros((s + 1 + A_extra.shape[0], n))
     y = y0.copy()
     f = np.empty(n)
@@ -1189,7 +1308,7 @@ def integrate(rhs, event, on_event, monitor, y0, p, edges, settings, coefficient
                     break
             m_new, err = _attempt(rhs, event, monitor, t, y, f, h_try, A, B, C, E, E2, K, p,
                                   y_new, f_new, ytmp, ytmp, ftmp, obuf, rtol, atol, n_err, yhat,
-                                  g_end, gd_end)
+                                  g_end, gd_end, dp5)
             counters[0] += s
             if not (err <= 1.0):
                 counters[2] += 1

@@ -12,13 +12,25 @@ too: equal nfev in both versions means equal work, and then the time ratio is th
 per-evaluation overhead of the integrator.
 
     python -m validation.benchmarks.integrator_ab [--repeats 41] [--json]
+
+Times are CPU time of the calling thread (`time.thread_time`: on a loaded machine wall time
+also counts the other processes) and wall time. A/B against another checkout of the
+repository (e.g. main's, compiled there once) in ALTERNATING processes, this checkout's and
+the other's, each timing `--repeats` rotations; the ratio (other / this) of each pair of
+processes, and their median:
+
+    python -m validation.benchmarks.integrator_ab --other /path/to/main --rounds 5
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import os
+import subprocess
+import sys
 import time
+from pathlib import Path
 
 import numpy as np
 
@@ -44,35 +56,100 @@ def measure(repeats: int) -> dict:
     for name, (call, count) in cases.items():
         nfev[name] = count(call())                  # warm-up (compile or load the cache)
     times = {name: [] for name in cases}
+    cpu = {name: [] for name in cases}
     for _ in range(repeats):
         for name, (call, _) in cases.items():
+            c0 = time.thread_time()
             t0 = time.perf_counter()
             call()
             times[name].append(time.perf_counter() - t0)
+            cpu[name].append(time.thread_time() - c0)
     out = {}
     for name, ts in times.items():
         q1, med, q3 = np.percentile(ts, [25, 50, 75])
         out[name] = {"median_s": float(med), "q1_s": float(q1), "q3_s": float(q3),
+                     "cpu_median_s": float(np.median(cpu[name])),
                      "repeats": repeats, "nfev": nfev[name]}
     return out
+
+
+def _process(checkout: Path, repeats: int) -> dict:
+    """`measure` of this script in a new process that imports the package `mbs_clearance`
+    from `checkout` (the same measurement code on either side)."""
+    here = Path(__file__).resolve().parents[2]
+    code = ("import json, sys; sys.path.insert(0, sys.argv[1]); import mbs_clearance; "
+            "sys.path.insert(0, sys.argv[2]); "
+            "from validation.benchmarks.integrator_ab import measure; "
+            "import validation; "
+            "assert mbs_clearance.__file__.startswith(sys.argv[1]), mbs_clearance.__file__; "
+            "assert validation.__file__.startswith(sys.argv[2]), validation.__file__; "
+            "print(json.dumps(measure(int(sys.argv[3]))))")
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
+    res = subprocess.run([sys.executable, "-c", code, str(checkout), str(here), str(repeats)],
+                         cwd=checkout, env=env, capture_output=True, text=True, check=True)
+    return json.loads(res.stdout.strip().splitlines()[-1])
+
+
+def compare(other: Path, rounds: int, repeats: int) -> dict:
+    """Alternating processes of this checkout and `other` (this, other, this, ...): per
+    case the median over rounds of the ratio other / this of the CPU medians (and of the
+    wall medians), and each side's nfev."""
+    here = Path(__file__).resolve().parents[2]
+    _process(here, 1)                     # warm-up: compile or load both caches
+    _process(other, 1)
+    ratios = {}
+    last = {}
+    for _ in range(rounds):
+        a = _process(here, repeats)
+        b = _process(other, repeats)
+        for name in a:
+            r = ratios.setdefault(name, {"cpu": [], "wall": []})
+            r["cpu"].append(b[name]["cpu_median_s"] / a[name]["cpu_median_s"])
+            r["wall"].append(b[name]["median_s"] / a[name]["median_s"])
+        last = {"this": a, "other": b}
+    return {name: {"cpu_ratio": float(np.median(r["cpu"])),
+                   "wall_ratio": float(np.median(r["wall"])),
+                   "cpu_ratios": r["cpu"],
+                   "this_cpu_ms": 1e3 * last["this"][name]["cpu_median_s"],
+                   "other_cpu_ms": 1e3 * last["other"][name]["cpu_median_s"],
+                   "nfev_this": last["this"][name]["nfev"],
+                   "nfev_other": last["other"][name]["nfev"]} for name, r in ratios.items()}
 
 
 def _main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeats", type=int, default=41)
     ap.add_argument("--json", action="store_true", help="print one JSON object")
+    ap.add_argument("--other", type=Path,
+                    help="another checkout of the repository: A/B in alternating processes")
+    ap.add_argument("--rounds", type=int, default=5, help="process pairs with --other")
     args = ap.parse_args(argv)
     if args.repeats < 1:
         ap.error("--repeats must be >= 1")
+    if args.other is not None:
+        if args.rounds < 1:
+            ap.error("--rounds must be >= 1")
+        res = compare(args.other.resolve(), args.rounds, args.repeats)
+        print(machine_summary())
+        print(f"other = {args.other}; {args.rounds} alternating process pairs, "
+              f"{args.repeats} repeats each; ratio = other / this (> 1: this is faster)")
+        print("| case | CPU ratio (median of pairs) | wall ratio | CPU ms this / other "
+              "(last pair) | nfev this / other |\n|---|---|---|---|---|")
+        for name, r in res.items():
+            print(f"| {name} | {r['cpu_ratio']:.3f} | {r['wall_ratio']:.3f} | "
+                  f"{r['this_cpu_ms']:.3f} / {r['other_cpu_ms']:.3f} | "
+                  f"{r['nfev_this']} / {r['nfev_other']} |")
+        return 0
     res = measure(args.repeats)
     if args.json:
         print(json.dumps({"machine": machine_summary(), "cases": res}))
         return 0
     print(machine_summary())
-    print("| case | median (ms) | quartiles (ms) | nfev |\n|---|---|---|---|")
+    print("| case | median (ms) | quartiles (ms) | CPU median (ms) | nfev |\n"
+          "|---|---|---|---|---|")
     for name, r in res.items():
         print(f"| {name} | {1e3 * r['median_s']:.3f} | {1e3 * r['q1_s']:.3f} - "
-              f"{1e3 * r['q3_s']:.3f} | {r['nfev']} |")
+              f"{1e3 * r['q3_s']:.3f} | {1e3 * r['cpu_median_s']:.3f} | {r['nfev']} |")
     return 0
 
 
