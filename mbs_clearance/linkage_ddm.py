@@ -27,6 +27,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from .contact import stiffness_eq9_partials
+from .generate.sens_runtime import fill_seed_work, work_size
 from .linkage import Linkage
 from .linkage_model import (
     DEFAULT_MAX_STEPS,
@@ -195,9 +196,11 @@ def pack_sensitivity_parameters(model, p, entries, event_time_term: bool = True)
         for e, (c, v) in enumerate(sorted(ent.items())):
             cols[k, e] = c
             vals[k, e] = v
-    work = model.N_JROWS * model.JAC_STRIDE + 2 * model.N_Q + 1
+    work = np.zeros(work_size(nb, model.N_Z, model.N_JROWS, model.N_Q, model.N_EVENTS))
+    fill_seed_work(work, entries, model.N_Z, model.N_JROWS, model.N_Q,
+                   1 + 2 * model.N_Q + model.MEM_START + 1, model.N_EVENTS)
     return np.concatenate([p, [nb, 1.0 if event_time_term else 0.0, m], cols.ravel(),
-                           vals.ravel(), np.zeros(work)])
+                           vals.ravel(), work])
 
 
 def sensitivity_state(y_state, s0, sigma0) -> np.ndarray:
