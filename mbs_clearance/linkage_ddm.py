@@ -221,6 +221,23 @@ def sensitivity_atol(model, atol_plain, scale) -> np.ndarray:
                           + [atol_plain[model.N_STATE:]])
 
 
+def tangent_work(model, p) -> dict:
+    """The column work of one sensitivity right-hand side (sensitivity run's p): the
+    integrated directions (each one pass of the contact and the solve stages), the state
+    columns contracted for every direction (t, q, qdot), and the (direction, parameter
+    column) pairs evaluated (`sens_runtime.seed_index`; the memories' columns included),
+    against the N_Z columns of the full Jacobian."""
+    from .generate.sens_runtime import ddm_layout, work_offsets
+
+    nb, _, _, _, w0 = ddm_layout(p, model.N_P)
+    _, use0, _, _, _ = work_offsets(nb, w0, model.N_Z, model.N_JROWS, model.N_EVENTS)
+    n2 = 2 * model.N_Q
+    use = p[use0:use0 + model.N_Z + 1]
+    return dict(directions=int(nb), state_columns=1 + n2,
+                parameter_pairs=int(use[model.N_Z] - use[1 + n2]),
+                jacobian_columns=int(model.N_Z))
+
+
 class DdmRun(NamedTuple):
     """A recorded DDM run: the model, its plain parameters p0 and the sensitivity run's p,
     the records (times, sensitivity states, memories, outputs of the monitor), the peaks,
@@ -371,13 +388,20 @@ def landed(ts, t_eval):
     return idx
 
 
+def plain_setup(linkage: Linkage, rtol: float | None):
+    """What a DDM run of `linkage` starts from, as its plain run: the generated model, the
+    parameter vector, the centred initial state and the plain run's tolerances (rtol, atol
+    with the switching functions'). Returns (model, p0, y_state, rtol, atol)."""
+    model = load_model(linkage)
+    rtol, atol = _tolerances(linkage, model, rtol, None)
+    p0 = pack_parameters(linkage, model)
+    return model, p0, initial_state(linkage, model, p0), rtol, atol
+
+
 def linkage_sensitivities(linkage: Linkage, names: tuple[str, ...], revolutions: int,
                           rtol: float | None, t_eval, event_time_term: bool, method: str):
     """DDM of `linkage` (see the module docstring): (Sensitivities fields as a dict)."""
-    model = load_model(linkage)
-    rtol, atol_plain = _tolerances(linkage, model, rtol, None)
-    p0 = pack_parameters(linkage, model)
-    y_state = initial_state(linkage, model, p0)
+    model, p0, y_state, rtol, atol_plain = plain_setup(linkage, rtol)
     ref = np.array([linkage.parameter_value(n) for n in names])
     # each parameter's natural scale (as the finite differences' steps: a radius enters
     # through the clearance): the sensitivities' absolute tolerances are the state's / it
