@@ -27,6 +27,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from .contact import stiffness_eq9_partials
+from .generate.sens_runtime import fill_seed_work, work_size
 from .linkage import Linkage
 from .linkage_model import (
     DEFAULT_MAX_STEPS,
@@ -195,9 +196,11 @@ def pack_sensitivity_parameters(model, p, entries, event_time_term: bool = True)
         for e, (c, v) in enumerate(sorted(ent.items())):
             cols[k, e] = c
             vals[k, e] = v
-    work = model.N_JROWS * model.JAC_STRIDE + 2 * model.N_Q + 1
+    work = np.zeros(work_size(nb, model.N_Z, model.N_JROWS, model.N_Q, model.N_EVENTS))
+    fill_seed_work(work, entries, model.N_Z, model.N_JROWS, model.N_Q,
+                   1 + 2 * model.N_Q + model.MEM_START + 1, model.N_EVENTS)
     return np.concatenate([p, [nb, 1.0 if event_time_term else 0.0, m], cols.ravel(),
-                           vals.ravel(), np.zeros(work)])
+                           vals.ravel(), work])
 
 
 def sensitivity_state(y_state, s0, sigma0) -> np.ndarray:
@@ -216,6 +219,23 @@ def sensitivity_atol(model, atol_plain, scale) -> np.ndarray:
     return np.concatenate([a_state] + [a_state / s for s in scale] + [[1.0]]
                           + [np.full(len(scale) * model.N_EVENTS, np.inf)]
                           + [atol_plain[model.N_STATE:]])
+
+
+def tangent_work(model, p) -> dict:
+    """The column work of one sensitivity right-hand side (sensitivity run's p): the
+    integrated directions (each one pass of the contact and the solve stages), the state
+    columns contracted for every direction (t, q, qdot), and the (direction, parameter
+    column) pairs evaluated (`sens_runtime.seed_index`; the memories' columns included),
+    against the N_Z columns of the full Jacobian."""
+    from .generate.sens_runtime import ddm_layout, work_offsets
+
+    nb, _, _, _, w0 = ddm_layout(p, model.N_P)
+    _, use0, _, _, _ = work_offsets(nb, w0, model.N_Z, model.N_JROWS, model.N_EVENTS)
+    n2 = 2 * model.N_Q
+    use = p[use0:use0 + model.N_Z + 1]
+    return dict(directions=int(nb), state_columns=1 + n2,
+                parameter_pairs=int(use[model.N_Z] - use[1 + n2]),
+                jacobian_columns=int(model.N_Z))
 
 
 class DdmRun(NamedTuple):
@@ -368,13 +388,20 @@ def landed(ts, t_eval):
     return idx
 
 
+def plain_setup(linkage: Linkage, rtol: float | None):
+    """What a DDM run of `linkage` starts from, as its plain run: the generated model, the
+    parameter vector, the centred initial state and the plain run's tolerances (rtol, atol
+    with the switching functions'). Returns (model, p0, y_state, rtol, atol)."""
+    model = load_model(linkage)
+    rtol, atol = _tolerances(linkage, model, rtol, None)
+    p0 = pack_parameters(linkage, model)
+    return model, p0, initial_state(linkage, model, p0), rtol, atol
+
+
 def linkage_sensitivities(linkage: Linkage, names: tuple[str, ...], revolutions: int,
                           rtol: float | None, t_eval, event_time_term: bool, method: str):
     """DDM of `linkage` (see the module docstring): (Sensitivities fields as a dict)."""
-    model = load_model(linkage)
-    rtol, atol_plain = _tolerances(linkage, model, rtol, None)
-    p0 = pack_parameters(linkage, model)
-    y_state = initial_state(linkage, model, p0)
+    model, p0, y_state, rtol, atol_plain = plain_setup(linkage, rtol)
     ref = np.array([linkage.parameter_value(n) for n in names])
     # each parameter's natural scale (as the finite differences' steps: a radius enters
     # through the clearance): the sensitivities' absolute tolerances are the state's / it

@@ -9,7 +9,7 @@ local maximum, d|F12|/dt = 0 there and the envelope theorem gives
 the DDM sensitivity of |F12| at the refined peak time t*. One DDM run gives both: its
 integrator refines the window's maximum of |F12| by golden section on re-taken steps (the
 step map), and the state and its sensitivities at t* are that step map's value at t*, taken
-again from the recorded step that contains it (`_step_sens`). Reading the sensitivities
+again from the recorded step that contains it (the model's `step_sens`). Reading the sensitivities
 at the largest *recorded* sample instead is wrong by tens of percent: they oscillate with the
 contact vibration (~13 kHz) between samples.
 
@@ -27,12 +27,11 @@ import time
 from dataclasses import dataclass, field
 from typing import Any
 
-import numba as nb
 import numpy as np
 
 from . import reduced
 from ._checks import check_choice, check_int, check_real
-from .integrator import METHODS, _golden_max, _step_monitor, step_workspace
+from .integrator import METHODS
 from .mechanism import SliderCrank
 from .sensitivity import (
     DDM_INTEGRATOR,
@@ -131,66 +130,6 @@ class PeakGradient:
         return {n: float(g) for n, g in zip(self.parameters, self.gradient)}
 
 
-# ------------------------------------------------------------------ compiled helpers
-
-@nb.njit(cache=True, error_model="numpy")
-def _refine_steps(t0s, y0s, mems, p, hs, coefficients, iters):
-    """The maximum of |F12| over the step map of each step k of the plain model (the
-    generated model's kernels, its parameters p = reduced.model_parameters; start t0s[k],
-    state y0s[k] (5,), memory mems[k] (mode, impact velocity), size hs[k]), by golden
-    section as the integrator's peak refinement; returns values and times."""
-    A, B, C = coefficients[0], coefficients[1], coefficients[2]
-    n = y0s.shape[1]
-    K, y_new, f_new, ytmp, f0, g, gd = step_workspace(coefficients, n)
-    y0 = np.empty(n)
-    out = np.zeros(0)
-    q = p.copy()
-    vals = np.empty(t0s.shape[0])
-    times = np.empty(t0s.shape[0])
-    for k in range(t0s.shape[0]):
-        for j in range(n):
-            y0[j] = y0s[k, j]
-        q[reduced.MEM_START] = mems[k, 0]
-        q[reduced.MEM_START + 1] = mems[k, 1]
-        vals[k], times[k] = _golden_max(reduced.MODEL.rhs, reduced.MODEL.monitor, t0s[k], y0, q,
-                                        hs[k], A, B, C, K, y_new, f_new, ytmp, f0, iters, out,
-                                        g, gd)
-    return vals, times
-
-
-@nb.njit(cache=True, error_model="numpy")
-def _step_value(t0, y0, mem, p, h, coefficients):
-    """|F12| of the plain model's step map at t0 + h (state y0 (5,), memory mem; the
-    generated model's kernels and parameters p)."""
-    A, B, C = coefficients[0], coefficients[1], coefficients[2]
-    K, y_new, f_new, ytmp, f0, g, gd = step_workspace(coefficients, y0.shape[0])
-    q = p.copy()
-    q[reduced.MEM_START] = mem[0]
-    q[reduced.MEM_START + 1] = mem[1]
-    reduced.MODEL.rhs(t0, y0, q, f0)
-    return _step_monitor(reduced.MODEL.rhs, reduced.MODEL.monitor, t0, y0, f0, h, A, B, C, K,
-                         q, y_new, f_new, ytmp, np.zeros(0), g, gd)
-
-
-@nb.njit(cache=True, error_model="numpy")
-def _step_sens(t0, y0, p, hs, coefficients, n_out):
-    """Steps of the sizes hs of the generated model's sensitivity equations from (t0, y0),
-    with the memory in p: the states (sensitivities included) at t0 + hs (len(hs), n) and
-    the monitor's outputs there (len(hs), n_out). The integrator's peak refinement
-    maximises |F12| over exactly this step map, so this gives the state at a refined peak
-    time."""
-    A, B, C = coefficients[0], coefficients[1], coefficients[2]
-    n = y0.shape[0]
-    K, _, f_new, ytmp, f0, g, gd = step_workspace(coefficients, n)
-    ys = np.empty((hs.shape[0], n))
-    outs = np.zeros((hs.shape[0], n_out))
-    reduced.MODEL.rhs_sens(t0, y0, p, f0)
-    for k in range(hs.shape[0]):
-        _step_monitor(reduced.MODEL.rhs_sens, reduced.MODEL.monitor_sens, t0, y0, f0, hs[k],
-                      A, B, C, K, p, ys[k], f_new, ytmp, outs[k], g, gd)
-    return ys, outs
-
-
 # ------------------------------------------------------------------ DDM at the peak
 
 class _Run:
@@ -207,7 +146,8 @@ class _Run:
         self.counters = {k: v for k, v in self.run.stats.items()
                          if k not in ("rtol", "method", "wall_time", "event_time_term",
                                       "directions")}
-        self.mon = reduced.MODEL.MONITOR_COLUMN
+        self.model = self.run.model
+        self.mon = self.model.MONITOR_COLUMN
         self.plain_p = self.run.p0
         self.stages = self.coefficients[1].shape[0]
         # function evaluations after the run: plain (rival refinement), augmented (steps
@@ -243,13 +183,13 @@ class _Run:
             hs = np.zeros(1)
         else:
             q = self.run.p.copy()
-            n_mem = reduced.MODEL.N_MEM
-            q[reduced.MEM_START:reduced.MEM_START + n_mem] = self.ms[i, :n_mem]
+            n_mem, m0 = self.model.N_MEM, self.model.MEM_START
+            q[m0:m0 + n_mem] = self.ms[i, :n_mem]
             h = t - self.ts[i]
             delta = 1e-4 * (self.ts[i + 1] - self.ts[i])
             hs = np.array([h, h - delta, h + delta]) if newton else np.array([h])
-            ys, _ = _step_sens(self.ts[i], np.ascontiguousarray(self.ys[i]), q, hs,
-                               self.coefficients, reduced.MODEL.N_OUT)
+            ys, _ = self.model.step_sens(self.ts[i], np.ascontiguousarray(self.ys[i]), q, hs,
+                                         self.coefficients)
             self.post_sens += 1 + len(hs) * self.stages
             mems = np.repeat(self.ms[i:i + 1], len(hs), axis=0)
         vals, ders = self.run.output_sensitivities(self.ts[i] + hs, ys, mems)
@@ -272,7 +212,7 @@ class _Run:
         """States (plain model: the coordinates, rates and the work) and memories of
         recorded rows."""
         return (np.ascontiguousarray(self.run.plain_states(self.ys[idx])),
-                np.ascontiguousarray(self.ms[idx, :reduced.MODEL.N_MEM]))
+                np.ascontiguousarray(self.ms[idx, :self.model.N_MEM]))
 
 
 def _local_maxima(run, lo, hi, period):
@@ -302,8 +242,8 @@ def _local_maxima(run, lo, hi, period):
     y0s, mems = run.plain_rows(starts)
     t0s = run.ts[starts]
     hs = run.ts[starts + 1] - t0s
-    vals, times = _refine_steps(t0s, y0s, mems, run.plain_p, hs, run.coefficients,
-                                _REFINE_ITERS)
+    vals, times = run.model.refine_steps(t0s, y0s, mems, run.plain_p, hs, run.coefficients,
+                                         _REFINE_ITERS)
     run.post_steps += len(starts)
     run.post_plain += len(starts) * (1 + (_REFINE_ITERS + 2) * run.stages)
     # where each refinement ended: inside its step, or at its start or end sample
@@ -392,8 +332,10 @@ def _edge_slope(run, t):
     y0s, mems = run.plain_rows(np.array([i]))
     h = t - run.ts[i]
     d = 1e-3 * (run.ts[i + 1] - run.ts[i])
-    v0 = _step_value(run.ts[i], y0s[0], mems[0], run.plain_p, h - d, run.coefficients)
-    v1 = _step_value(run.ts[i], y0s[0], mems[0], run.plain_p, h + d, run.coefficients)
+    v0 = run.model.step_monitor_value(run.ts[i], y0s[0], mems[0], run.plain_p, h - d,
+                                      run.coefficients)
+    v1 = run.model.step_monitor_value(run.ts[i], y0s[0], mems[0], run.plain_p, h + d,
+                                      run.coefficients)
     run.post_plain += 2 * (1 + run.stages)
     return (v1 - v0) / (2.0 * d)
 
@@ -432,7 +374,8 @@ def _fd_gradient(mech, names, revolution, backend, fd_relative_step, executor, o
     minus = np.array(values[2::2])
     h = np.array(steps)
     t_peak = math.nan
-    if backend == "reduced":
+    if backend == "reduced" and mech.friction_law == "none":
+        # (the frictionless model's run; with friction the peak's time is not reported)
         run_opts = {k: v for k, v in options.items() if k != "t_eval"}
         t_peak = float(reduced.run(mech, revolution, record=False, **run_opts)[4][-1])
     stats = {"fd_steps": steps, "runs": len(mechs), "forward": (plus - peak) / h,
@@ -468,7 +411,9 @@ def peak_gradient(mech: SliderCrank, parameters=None, revolution: int = 4,
         "reduced" for DDM; any backend of `simulate` for ``method="fd"``.
     method : {"ddm", "fd"}
         "ddm": the DDM sensitivity of |F12| at the refined peak time (envelope theorem),
-        one run of the sensitivity equations. "fd": central differences of the refined peak
+        one run of the sensitivity equations, on the model `simulate` runs (with friction:
+        the model generated with the tangential force; friction_coefficient, friction_v0
+        and friction_v1 are then parameters too). "fd": central differences of the refined peak
         (`peak_base_force`), 2 p + 1 runs, for checking.
     rtol : float, optional
         Relative tolerance of the reduced model (DDM: default 1e-7; FD: default 1e-11).
@@ -511,12 +456,6 @@ def peak_gradient(mech: SliderCrank, parameters=None, revolution: int = 4,
         if options or executor is not None:
             extra = sorted(options) + (["executor"] if executor is not None else [])
             raise ValueError(f"unknown option(s) for method='ddm': {extra}")
-        if mech.friction_law != "none":
-            # the step map at the peak (_refine_steps, _step_value) is the frictionless
-            # model's; `sensitivities` differentiates a SliderCrank with friction
-            raise ValueError(f"method='ddm' of peak_gradient is not available with friction "
-                             f"(friction_law {mech.friction_law!r}); use method='fd', or "
-                             f"sensitivities(mech, ..., method='ddm') for the time series")
         return _ddm_gradient(mech, names, revolution, rtol, integrator or DDM_INTEGRATOR,
                              kink_tol)
     if rtol is not None:

@@ -374,13 +374,7 @@ def slider_crank_run(mech: SliderCrank, names, rtol, *, revolutions: int, t_eval
         atol = np.concatenate([reduced.default_atol(mech, rtol),
                                reduced.event_atol(mech, rtol)])
     else:       # the model generated with the tangential force (as `simulate` runs it)
-        from .generate import load_model
-        from .linkage_model import _tolerances, initial_state, pack_parameters
-
-        model = load_model(linkage)
-        rtol, atol = _tolerances(linkage, model, rtol, None)
-        p0 = pack_parameters(linkage, model)
-        y0 = initial_state(linkage, model, p0)
+        model, p0, y0, rtol, atol = linkage_ddm.plain_setup(linkage, rtol)
     run = linkage_ddm.ddm_run(
         linkage, model, p0, y0,
         slider_crank_directions(mech, names), scale=scale, rtol=rtol, atol_plain=atol,

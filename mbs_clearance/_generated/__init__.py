@@ -2,8 +2,8 @@
 tools/generate_models.py; do not edit). MODULES maps a structure digest to a module name."""
 
 MODULES: dict[str, str] = {
-    '28827036d8ba57343936826dafb04d0e620fdab4a14f5bb9a6552e15b0e02ef9': 'paper_slider_crank',
-    '55699602ef89980ddb565b3ce032d3b0d43b611d882372fb1519483a3eb54793': 'slider_crank_two_clearances',
-    '6dc0c8c3865905b2b6ab15ccddb221ec3c39b6840073c168f318aff072ff08fe': 'four_bar',
-    'a678249d93521f7121e6c2f9261b87328fa0fb219c777b5b32222d712cf2b469': 'paper_slider_crank_friction',
+    'a92d02bde0350143848fcb9f252a0043cda35fd8ad2a39038b43e68ddaa6ca89': 'paper_slider_crank',
+    '57f84236999007e4e27db575983ac3035551c8201c3ce27b231122f2f3a95d46': 'slider_crank_two_clearances',
+    '71f166249c728efdb7ac4db64f75a5960d52fdaa5e982edc21247f9bd5afc5d8': 'four_bar',
+    'e7e5f682694d9749effc7a11bcf051028673fe3d83ee860bac9afa16f70f750a': 'paper_slider_crank_friction',
 }

@@ -32,8 +32,8 @@ from mbs_clearance.generate.runtime import (
 
 LINKAGE = "four_bar"
 STRUCTURE = "{\"bodies\": [[\"crank\", [\"pin\", \"pivot\"]], [\"coupler\", [\"crank_end\", \"rocker_end\"]], [\"rocker\", [\"pin\", \"pivot\"]]], \"clearance_joints\": [[\"coupler_rocker\", \"rocker\", \"pin\", \"coupler\", \"rocker_end\"]], \"drive\": \"crank_pivot\", \"ground_points\": [\"crank_pivot\", \"rocker_pivot\"], \"joints\": [[\"revolute\", \"crank_pivot\", \"ground\", \"crank_pivot\", \"crank\", \"pivot\"], [\"revolute\", \"crank_coupler\", \"crank\", \"pin\", \"coupler\", \"crank_end\"], [\"revolute\", \"rocker_pivot\", \"ground\", \"rocker_pivot\", \"rocker\", \"pivot\"]], \"monitor_joint\": null}"
-STRUCTURE_DIGEST = "6dc0c8c3865905b2b6ab15ccddb221ec3c39b6840073c168f318aff072ff08fe"
-GENERATOR_VERSION = "913b0af478b0b9a5"
+STRUCTURE_DIGEST = "71f166249c728efdb7ac4db64f75a5960d52fdaa5e982edc21247f9bd5afc5d8"
+GENERATOR_VERSION = "952cfa6b1c5da349"
 
 #: dotted names of the entries of p (without the constants)
 PARAMETERS = (
@@ -641,12 +641,18 @@ def integrate_model(y0, p, edges, settings, coefficients):
 # (generate/jacobians.py; the sensitivity equations in generate/sens_runtime.py)
 from mbs_clearance.generate.sens_runtime import (
     contact_jacobian,
+    contact_tangent,
     friction_jacobian,
+    friction_tangent,
     jacobian_at,
     sens_monitor,
     sens_on_event,
     sens_outputs,
     sens_rhs,
+    step_peaks,
+    step_states,
+    step_value,
+    tangent_at,
 )
 
 #: columns of the Jacobian: z = [t, q, qdot, p[:CONST_START]] (N_Z), then the value
@@ -1018,8 +1024,8 @@ def jacobian(t, y, p, jac, full):
     rfx_1_0 = C2*k4 - S2*k5
     rfy_1_0 = C2*k5 + S2*k4
     for col in range(37):
-        b_0 = -(jac[456 + col] + rfx_0_0 * jac[608 + col] + rfy_0_0 * jac[646 + col])
-        b_1 = -(jac[494 + col] + rfx_1_0 * jac[608 + col] + rfy_1_0 * jac[646 + col])
+        b_0 = -(jac[456 + col] + rfx_0_0 * jac[16 * 38 + col] + rfy_0_0 * jac[17 * 38 + col])
+        b_1 = -(jac[494 + col] + rfx_1_0 * jac[16 * 38 + col] + rfy_1_0 * jac[17 * 38 + col])
         zz_0 = (b_0) * il_0
         zz_1 = (b_1 - l_1_0 * zz_0) * il_1
         x_1 = (zz_1) * il_1
@@ -1179,9 +1185,811 @@ def jacobian(t, y, p, jac, full):
 
 
 @nb.njit(**KERNEL)
+def tangent(t, y, p, dz, nd, use, out, full):
+    """The directional derivatives of `jacobian`'s rows along nd seeds dz (nd x N_Z, flat:
+    dz[d * N_Z + k] the component along Z_NAMES[k]) from the same derivative expressions,
+    into out (N_JROWS x (nd + 1), flat; column nd the value); `full` as `jacobian` (rows
+    not computed are left as they are). use: which seeds use each column of z
+    (`sens_runtime.seed_index`): a parameter column is evaluated and contracted only for
+    those (t, q and qdot always, for every seed)."""
+    ts = nd + 1
+    coupler__mass = p[6]  # coupler.mass
+    coupler__crank_end__x = p[8]  # coupler.crank_end.x
+    coupler__crank_end__y = p[9]  # coupler.crank_end.y
+    rocker__mass = p[12]  # rocker.mass
+    rocker__pivot__x = p[14]  # rocker.pivot.x
+    rocker__pivot__y = p[15]  # rocker.pivot.y
+    drive__speed = p[27]  # drive.speed
+    drive__initial_angle = p[28]  # drive.initial_angle
+    gravity = p[29]  # gravity
+    k0 = p[CONST_START + 0]
+    k1 = p[CONST_START + 1]
+    k2 = p[CONST_START + 2]
+    k3 = p[CONST_START + 3]
+    k4 = p[CONST_START + 4]
+    k5 = p[CONST_START + 5]
+    k6 = p[CONST_START + 6]
+    k7 = p[CONST_START + 7]
+    k8 = p[CONST_START + 8]
+    k9 = p[CONST_START + 9]
+    k10 = p[CONST_START + 10]
+    k11 = p[CONST_START + 11]
+    k12 = p[CONST_START + 12]
+    k13 = p[CONST_START + 13]
+    k14 = p[CONST_START + 14]
+    k15 = p[CONST_START + 15]
+    k16 = p[CONST_START + 16]
+    k17 = p[CONST_START + 17]
+    k18 = p[CONST_START + 18]
+    k19 = p[CONST_START + 19]
+    k22 = p[CONST_START + 22]
+    k23 = p[CONST_START + 23]
+    k24 = p[CONST_START + 24]
+    k25 = p[CONST_START + 25]
+    k26 = p[CONST_START + 26]
+    k27 = p[CONST_START + 27]
+    k28 = p[CONST_START + 28]
+    k29 = p[CONST_START + 29]
+    k30 = p[CONST_START + 30]
+    k31 = p[CONST_START + 31]
+    k32 = p[CONST_START + 32]
+    k33 = p[CONST_START + 33]
+    k34 = p[CONST_START + 34]
+    k35 = p[CONST_START + 35]
+    k36 = p[CONST_START + 36]
+    k37 = p[CONST_START + 37]
+    k38 = p[CONST_START + 38]
+    k39 = p[CONST_START + 39]
+    k44 = p[CONST_START + 44]
+    k45 = p[CONST_START + 45]
+    k46 = p[CONST_START + 46]
+    k47 = p[CONST_START + 47]
+    k48 = p[CONST_START + 48]
+    k49 = p[CONST_START + 49]
+    k50 = p[CONST_START + 50]
+    k51 = p[CONST_START + 51]
+    k52 = p[CONST_START + 52]
+    k53 = p[CONST_START + 53]
+    k54 = p[CONST_START + 54]
+    k55 = p[CONST_START + 55]
+    k56 = p[CONST_START + 56]
+    k57 = p[CONST_START + 57]
+    k58 = p[CONST_START + 58]
+    k59 = p[CONST_START + 59]
+    k60 = p[CONST_START + 60]
+    k61 = p[CONST_START + 61]
+    k62 = p[CONST_START + 62]
+    k63 = p[CONST_START + 63]
+    k64 = p[CONST_START + 64]
+    k65 = p[CONST_START + 65]
+    k66 = p[CONST_START + 66]
+    k67 = p[CONST_START + 67]
+    k68 = p[CONST_START + 68]
+    k69 = p[CONST_START + 69]
+    k70 = p[CONST_START + 70]
+    k71 = p[CONST_START + 71]
+    k72 = p[CONST_START + 72]
+    k73 = p[CONST_START + 73]
+    k74 = p[CONST_START + 74]
+    k75 = p[CONST_START + 75]
+    k76 = p[CONST_START + 76]
+    k77 = p[CONST_START + 77]
+    k78 = p[CONST_START + 78]
+    k79 = p[CONST_START + 79]
+    k80 = p[CONST_START + 80]
+    k81 = p[CONST_START + 81]
+    k82 = p[CONST_START + 82]
+    k83 = p[CONST_START + 83]
+    k84 = p[CONST_START + 84]
+    k85 = p[CONST_START + 85]
+    k86 = p[CONST_START + 86]
+    k87 = p[CONST_START + 87]
+    k88 = p[CONST_START + 88]
+    k89 = p[CONST_START + 89]
+    k90 = p[CONST_START + 90]
+    k91 = p[CONST_START + 91]
+    k92 = p[CONST_START + 92]
+    k93 = p[CONST_START + 93]
+    k94 = p[CONST_START + 94]
+    k95 = p[CONST_START + 95]
+    k96 = p[CONST_START + 96]
+    k97 = p[CONST_START + 97]
+    k98 = p[CONST_START + 98]
+    k99 = p[CONST_START + 99]
+    k100 = p[CONST_START + 100]
+    k101 = p[CONST_START + 101]
+    k102 = p[CONST_START + 102]
+    k103 = p[CONST_START + 103]
+    k104 = p[CONST_START + 104]
+    k105 = p[CONST_START + 105]
+    Q0 = y[0]
+    Q1 = y[1]
+    U0 = y[2]
+    U1 = y[3]
+    S0, C0 = sincos(drive__initial_angle + drive__speed*t)
+    S1, C1 = sincos(Q0)
+    S2, C2 = sincos(Q1)
+    x0 = C1*k3
+    x1 = S1*k2
+    x2 = x0 + x1
+    x3 = C2*k5
+    x4 = S2*k4
+    x5 = x3 + x4
+    x6 = C0*k1 + S0*k0
+    x7 = C0*k9
+    x8 = S0*k8
+    x9 = x7 + x8
+    x10 = C1*k2
+    x11 = S1*k3
+    x12 = x10 - x11
+    x13 = C2*k4
+    x14 = S2*k5
+    x15 = x13 - x14
+    x16 = -S0
+    x17 = -C0
+    x18 = -S1
+    x19 = -C1
+    x20 = -C2
+    x21 = -S2
+    x22 = C0*k0
+    x23 = S0*k1
+    x24 = x22 - x23
+    x25 = C0*k10 + S0*k9
+    x26 = S0*drive__speed
+    x27 = -x26
+    x28 = C0*drive__speed
+    x29 = -x28
+    x30 = S1*U0
+    x31 = -x30
+    x32 = C1*U0
+    x33 = -x32
+    x34 = S2*U1
+    x35 = C2*U1
+    x36 = -x34
+    x37 = -x35
+    x38 = C0*k8
+    x39 = S0*k46
+    gv0_0 = k6 + x2 + x5 + x6
+    g3_0 = x9
+    g3_1 = x12
+    g3_2 = x15
+    gv0_1 = k7 - x10 + x11 - x13 + x14 - x22 + x23
+    g4_0 = x25
+    g4_1 = x2
+    g4_2 = x5
+    gv0_2 = U0*x10 - U0*x11 + U1*x13 - U1*x14 + x9
+    g14_0 = C0*k45 + S0*k44
+    g14_1 = -U0*x2
+    g14_2 = -U1*x5
+    g14_3 = x12
+    g14_4 = x15
+    gv0_3 = U0*x0 + U0*x1 + U1*x3 + U1*x4 + x25
+    g15_0 = C0*k47 + S0*k45
+    g15_1 = U0*x12
+    g15_2 = U1*x15
+    g15_3 = x2
+    g15_4 = x5
+    for d in range(nd):
+        dzo = d * 37
+        out[3 * ts + d] = g3_0 * dz[dzo + 0] + g3_1 * dz[dzo + 1] + g3_2 * dz[dzo + 2]
+        out[4 * ts + d] = g4_0 * dz[dzo + 0] + g4_1 * dz[dzo + 1] + g4_2 * dz[dzo + 2]
+        out[14 * ts + d] = g14_0 * dz[dzo + 0] + g14_1 * dz[dzo + 1] + g14_2 * dz[dzo + 2] + g14_3 * dz[dzo + 3] + g14_4 * dz[dzo + 4]
+        out[15 * ts + d] = g15_0 * dz[dzo + 0] + g15_1 * dz[dzo + 1] + g15_2 * dz[dzo + 2] + g15_3 * dz[dzo + 3] + g15_4 * dz[dzo + 4]
+    if use[8] > use[7]:
+        g3_7 = C0
+        g4_7 = S0
+        g14_7 = x27
+        g15_7 = x28
+        for e in range(int(use[7]), int(use[8])):
+            d = int(use[38 + e])
+            dk = dz[d * 37 + 7]
+            out[3 * ts + d] += g3_7 * dk
+            out[4 * ts + d] += g4_7 * dk
+            out[14 * ts + d] += g14_7 * dk
+            out[15 * ts + d] += g15_7 * dk
+    if use[9] > use[8]:
+        g3_8 = x16
+        g4_8 = C0
+        g14_8 = x29
+        g15_8 = x27
+        for e in range(int(use[8]), int(use[9])):
+            d = int(use[38 + e])
+            dk = dz[d * 37 + 8]
+            out[3 * ts + d] += g3_8 * dk
+            out[4 * ts + d] += g4_8 * dk
+            out[14 * ts + d] += g14_8 * dk
+            out[15 * ts + d] += g15_8 * dk
+    if use[10] > use[9]:
+        g3_9 = x17
+        g4_9 = x16
+        g14_9 = x26
+        g15_9 = x29
+        for e in range(int(use[9]), int(use[10])):
+            d = int(use[38 + e])
+            dk = dz[d * 37 + 9]
+            out[3 * ts + d] += g3_9 * dk
+            out[4 * ts + d] += g4_9 * dk
+            out[14 * ts + d] += g14_9 * dk
+            out[15 * ts + d] += g15_9 * dk
+    if use[11] > use[10]:
+        g3_10 = S0
+        g4_10 = x17
+        g14_10 = x28
+        g15_10 = x26
+        for e in range(int(use[10]), int(use[11])):
+            d = int(use[38 + e])
+            dk = dz[d * 37 + 10]
+            out[3 * ts + d] += g3_10 * dk
+            out[4 * ts + d] += g4_10 * dk
+            out[14 * ts + d] += g14_10 * dk
+            out[15 * ts + d] += g15_10 * dk
+    if use[14] > use[13]:
+        g3_13 = C1
+        g4_13 = S1
+        g14_13 = x31
+        g15_13 = x32
+        for e in range(int(use[13]), int(use[14])):
+            d = int(use[38 + e])
+            dk = dz[d * 37 + 13]
+            out[3 * ts + d] += g3_13 * dk
+            out[4 * ts + d] += g4_13 * dk
+            out[14 * ts + d] += g14_13 * dk
+            out[15 * ts + d] += g15_13 * dk
+    if use[15] > use[14]:
+        g3_14 = x18
+        g4_14 = C1
+        g14_14 = x33
+        g15_14 = x31
+        for e in range(int(use[14]), int(use[15])):
+            d = int(use[38 + e])
+            dk = dz[d * 37 + 14]
+            out[3 * ts + d] += g3_14 * dk
+            out[4 * ts + d] += g4_14 * dk
+            out[14 * ts + d] += g14_14 * dk
+            out[15 * ts + d] += g15_14 * dk
+    if use[16] > use[15]:
+        g3_15 = x19
+        g4_15 = x18
+        g14_15 = x30
+        g15_15 = x33
+        for e in range(int(use[15]), int(use[16])):
+            d = int(use[38 + e])
+            dk = dz[d * 37 + 15]
+            out[3 * ts + d] += g3_15 * dk
+            out[4 * ts + d] += g4_15 * dk
+            out[14 * ts + d] += g14_15 * dk
+            out[15 * ts + d] += g15_15 * dk
+    if use[17] > use[16]:
+        g3_16 = S1
+        g4_16 = x19
+        g14_16 = x32
+        g15_16 = x30
+        for e in range(int(use[16]), int(use[17])):
+            d = int(use[38 + e])
+            dk = dz[d * 37 + 16]
+            out[3 * ts + d] += g3_16 * dk
+            out[4 * ts + d] += g4_16 * dk
+            out[14 * ts + d] += g14_16 * dk
+            out[15 * ts + d] += g15_16 * dk
+    if use[20] > use[19]:
+        g3_19 = x20
+        g4_19 = x21
+        g14_19 = x34
+        g15_19 = x37
+        for e in range(int(use[19]), int(use[20])):
+            d = int(use[38 + e])
+            dk = dz[d * 37 + 19]
+            out[3 * ts + d] += g3_19 * dk
+            out[4 * ts + d] += g4_19 * dk
+            out[14 * ts + d] += g14_19 * dk
+            out[15 * ts + d] += g15_19 * dk
+    if use[21] > use[20]:
+        g3_20 = S2
+        g4_20 = x20
+        g14_20 = x35
+        g15_20 = x34
+        for e in range(int(use[20]), int(use[21])):
+            d = int(use[38 + e])
+            dk = dz[d * 37 + 20]
+            out[3 * ts + d] += g3_20 * dk
+            out[4 * ts + d] += g4_20 * dk
+            out[14 * ts + d] += g14_20 * dk
+            out[15 * ts + d] += g15_20 * dk
+    if use[22] > use[21]:
+        g3_21 = C2
+        g4_21 = S2
+        g14_21 = x36
+        g15_21 = x35
+        for e in range(int(use[21]), int(use[22])):
+            d = int(use[38 + e])
+            dk = dz[d * 37 + 21]
+            out[3 * ts + d] += g3_21 * dk
+            out[4 * ts + d] += g4_21 * dk
+            out[14 * ts + d] += g14_21 * dk
+            out[15 * ts + d] += g15_21 * dk
+    if use[23] > use[22]:
+        g3_22 = x21
+        g4_22 = C2
+        g14_22 = x37
+        g15_22 = x36
+        for e in range(int(use[22]), int(use[23])):
+            d = int(use[38 + e])
+            dk = dz[d * 37 + 22]
+            out[3 * ts + d] += g3_22 * dk
+            out[4 * ts + d] += g4_22 * dk
+            out[14 * ts + d] += g14_22 * dk
+            out[15 * ts + d] += g15_22 * dk
+    if use[24] > use[23]:
+        g3_23 = -1.0
+        for e in range(int(use[23]), int(use[24])):
+            d = int(use[38 + e])
+            dk = dz[d * 37 + 23]
+            out[3 * ts + d] += g3_23 * dk
+    if use[25] > use[24]:
+        g4_24 = -1.0
+        for e in range(int(use[24]), int(use[25])):
+            d = int(use[38 + e])
+            dk = dz[d * 37 + 24]
+            out[4 * ts + d] += g4_24 * dk
+    if use[26] > use[25]:
+        g3_25 = 1.0
+        for e in range(int(use[25]), int(use[26])):
+            d = int(use[38 + e])
+            dk = dz[d * 37 + 25]
+            out[3 * ts + d] += g3_25 * dk
+    if use[27] > use[26]:
+        g4_26 = 1.0
+        for e in range(int(use[26]), int(use[27])):
+            d = int(use[38 + e])
+            dk = dz[d * 37 + 26]
+            out[4 * ts + d] += g4_26 * dk
+    if use[33] > use[32]:
+        g3_32 = t*x24
+        g4_32 = t*x6
+        g14_32 = t*x38 + t*x39 + x24
+        g15_32 = t*x7 + t*x8 + x6
+        for e in range(int(use[32]), int(use[33])):
+            d = int(use[38 + e])
+            dk = dz[d * 37 + 32]
+            out[3 * ts + d] += g3_32 * dk
+            out[4 * ts + d] += g4_32 * dk
+            out[14 * ts + d] += g14_32 * dk
+            out[15 * ts + d] += g15_32 * dk
+    if use[34] > use[33]:
+        g3_33 = x24
+        g4_33 = x6
+        g14_33 = x38 + x39
+        g15_33 = x9
+        for e in range(int(use[33]), int(use[34])):
+            d = int(use[38 + e])
+            dk = dz[d * 37 + 33]
+            out[3 * ts + d] += g3_33 * dk
+            out[4 * ts + d] += g4_33 * dk
+            out[14 * ts + d] += g14_33 * dk
+            out[15 * ts + d] += g15_33 * dk
+    FX0, FY0 = contact_tangent(out, ts, nd, dz, 37, gv0_0, gv0_1, gv0_2, gv0_3, 0, 1, 2, 3, 4, 14, 15, 16, 17, 27, 28, 29, 36, p[22], p[30], p[31], p[23], p[24], p[25])
+    m_0_0 = k11
+    m_1_0 = 0.0
+    m_1_1 = k12
+    f_0 = C0*C1*k13 + C0*S1*k15 - C1*FX0*k2 - C1*FY0*k3 + C1*S0*k14 + C1*k17 + FX0*S1*k3 - FY0*S1*k2 + S0*S1*k13 + S1*k16
+    f_1 = -C2*FX0*k4 - C2*FY0*k5 + C2*k19 + FX0*S2*k5 - FY0*S2*k4 + S2*k18
+    l_0_0 = math.sqrt(m_0_0)
+    il_0 = 1.0 / l_0_0
+    l_1_0 = (m_1_0) * il_0
+    l_1_1 = math.sqrt(m_1_1 - l_1_0 * l_1_0)
+    il_1 = 1.0 / l_1_1
+    zz_0 = (f_0) * il_0
+    zz_1 = (f_1 - l_1_0 * zz_0) * il_1
+    A1 = (zz_1) * il_1
+    A0 = (zz_0 - l_1_0 * A1) * il_0
+    x40 = C0*C1
+    x41 = C0*S1
+    x42 = C1*S0
+    x43 = S0*S1
+    x44 = C1*FY0
+    x45 = C1*FX0
+    x46 = FX0*S1
+    x47 = FY0*S1
+    x48 = k52*x40 + k52*x43 - k53*x41 + k53*x42
+    x49 = k52*x41 - k52*x42 + k53*x40 + k53*x43
+    x50 = x44 - x46
+    x51 = k15*x40
+    x52 = k51*x41
+    x53 = k13*x42
+    x54 = k15*x43
+    x55 = C2*FX0
+    x56 = FX0*S2
+    x57 = FY0*S2
+    x58 = C2*FY0
+    x59 = x55 + x57
+    r0_0 = k48*x40 + k48*x43 + k49*x42 + k50*x41
+    r0_1 = -C1*k16 + S1*k17 + k13*x41 + k14*x40 + k14*x43 + k2*x44 - k2*x46 - k3*x45 - k3*x47 + k51*x42
+    rfx_0_0 = C1*k2 - S1*k3
+    rfy_0_0 = C1*k3 + S1*k2
+    r1_2 = C2*FY0*k4 - C2*k18 + S2*k19 - k4*x56 - k5*x55 - k5*x57
+    rfx_1_0 = C2*k4 - S2*k5
+    rfy_1_0 = C2*k5 + S2*k4
+    for d in range(nd):
+        dzo = d * 37
+        out[12 * ts + d] = r0_0 * dz[dzo + 0] + r0_1 * dz[dzo + 1]
+        out[13 * ts + d] = r1_2 * dz[dzo + 2]
+    if use[8] > use[7]:
+        r0_7 = x48
+        for e in range(int(use[7]), int(use[8])):
+            d = int(use[38 + e])
+            dk = dz[d * 37 + 7]
+            out[12 * ts + d] += r0_7 * dk
+    if use[9] > use[8]:
+        r0_8 = x49
+        for e in range(int(use[8]), int(use[9])):
+            d = int(use[38 + e])
+            dk = dz[d * 37 + 8]
+            out[12 * ts + d] += r0_8 * dk
+    if use[10] > use[9]:
+        r0_9 = -x48
+        for e in range(int(use[9]), int(use[10])):
+            d = int(use[38 + e])
+            dk = dz[d * 37 + 9]
+            out[12 * ts + d] += r0_9 * dk
+    if use[11] > use[10]:
+        r0_10 = -x49
+        for e in range(int(use[10]), int(use[11])):
+            d = int(use[38 + e])
+            dk = dz[d * 37 + 10]
+            out[12 * ts + d] += r0_10 * dk
+    if use[12] > use[11]:
+        r0_11 = A0*k59 + C1*k58 + S1*k57 + k54*x40 + k54*x43 + k55*x42 + k56*x41
+        for e in range(int(use[11]), int(use[12])):
+            d = int(use[38 + e])
+            dk = dz[d * 37 + 11]
+            out[12 * ts + d] += r0_11 * dk
+    if use[13] > use[12]:
+        r0_12 = A0
+        for e in range(int(use[12]), int(use[13])):
+            d = int(use[38 + e])
+            dk = dz[d * 37 + 12]
+            out[12 * ts + d] += r0_12 * dk
+    if use[14] > use[13]:
+        r0_13 = A0*k64 + C1*k63 + k60*x40 + k60*x43 + k61*x42 + k62*x41 + x50
+        for e in range(int(use[13]), int(use[14])):
+            d = int(use[38 + e])
+            dk = dz[d * 37 + 13]
+            out[12 * ts + d] += r0_13 * dk
+    if use[15] > use[14]:
+        r0_14 = A0*k66 - S1*k63 + k60*x42 + k62*x40 + k62*x43 + k65*x41 - x45 - x47
+        for e in range(int(use[14]), int(use[15])):
+            d = int(use[38 + e])
+            dk = dz[d * 37 + 14]
+            out[12 * ts + d] += r0_14 * dk
+    if use[16] > use[15]:
+        r0_15 = -x50
+        for e in range(int(use[15]), int(use[16])):
+            d = int(use[38 + e])
+            dk = dz[d * 37 + 15]
+            out[12 * ts + d] += r0_15 * dk
+    if use[17] > use[16]:
+        r0_16 = x45 + x47
+        for e in range(int(use[16]), int(use[17])):
+            d = int(use[38 + e])
+            dk = dz[d * 37 + 16]
+            out[12 * ts + d] += r0_16 * dk
+    if use[18] > use[17]:
+        r1_17 = A1*k72 + C2*k71 + S2*k70
+        for e in range(int(use[17]), int(use[18])):
+            d = int(use[38 + e])
+            dk = dz[d * 37 + 17]
+            out[13 * ts + d] += r1_17 * dk
+    if use[19] > use[18]:
+        r1_18 = A1
+        for e in range(int(use[18]), int(use[19])):
+            d = int(use[38 + e])
+            dk = dz[d * 37 + 18]
+            out[13 * ts + d] += r1_18 * dk
+    if use[20] > use[19]:
+        r1_19 = A1*k73 + C2*k30 + x56 - x58
+        for e in range(int(use[19]), int(use[20])):
+            d = int(use[38 + e])
+            dk = dz[d * 37 + 19]
+            out[13 * ts + d] += r1_19 * dk
+    if use[21] > use[20]:
+        r1_20 = A1*k74 - S2*k30 + x59
+        for e in range(int(use[20]), int(use[21])):
+            d = int(use[38 + e])
+            dk = dz[d * 37 + 20]
+            out[13 * ts + d] += r1_20 * dk
+    if use[22] > use[21]:
+        r1_21 = -x56 + x58
+        for e in range(int(use[21]), int(use[22])):
+            d = int(use[38 + e])
+            dk = dz[d * 37 + 21]
+            out[13 * ts + d] += r1_21 * dk
+    if use[23] > use[22]:
+        r1_22 = -x59
+        for e in range(int(use[22]), int(use[23])):
+            d = int(use[38 + e])
+            dk = dz[d * 37 + 22]
+            out[13 * ts + d] += r1_22 * dk
+    if use[33] > use[32]:
+        r0_32 = k67*x40 + k67*x43 + k68*x42 + k69*x41 + t*x51 + t*x52 + t*x53 + t*x54
+        for e in range(int(use[32]), int(use[33])):
+            d = int(use[38 + e])
+            dk = dz[d * 37 + 32]
+            out[12 * ts + d] += r0_32 * dk
+    if use[34] > use[33]:
+        r0_33 = x51 + x52 + x53 + x54
+        for e in range(int(use[33]), int(use[34])):
+            d = int(use[38 + e])
+            dk = dz[d * 37 + 33]
+            out[12 * ts + d] += r0_33 * dk
+    if use[35] > use[34]:
+        r0_34 = C1*k25 + S1*k24
+        r1_34 = C2*k29 + S2*k28
+        for e in range(int(use[34]), int(use[35])):
+            d = int(use[38 + e])
+            dk = dz[d * 37 + 34]
+            out[12 * ts + d] += r0_34 * dk
+            out[13 * ts + d] += r1_34 * dk
+    for d in range(nd):
+        b_0 = -(out[12 * ts + d] + rfx_0_0 * out[16 * ts + d] + rfy_0_0 * out[17 * ts + d])
+        b_1 = -(out[13 * ts + d] + rfx_1_0 * out[16 * ts + d] + rfy_1_0 * out[17 * ts + d])
+        zz_0 = (b_0) * il_0
+        zz_1 = (b_1 - l_1_0 * zz_0) * il_1
+        x_1 = (zz_1) * il_1
+        x_0 = (zz_0 - l_1_0 * x_1) * il_0
+        out[12 * ts + d] = x_0
+        out[13 * ts + d] = x_1
+    out[12 * ts + nd] = A0
+    out[13 * ts + nd] = A1
+    x60 = A0*C0
+    x61 = C1*k32
+    x62 = S1*k31
+    x63 = A0*S0
+    x64 = (U0 * U0)
+    x65 = C0*x64
+    x66 = S0*x64
+    out[11 * ts + nd] = C0*FX0*k0 + C0*FY0*k1 + C0*k36 + C1*k31*x65 + C1*k33*x63 - FX0*S0*k1 + FY0*S0*k0 + S0*k34 + S1*k32*x63 + S1*k35*x65 + x60*x61 + x60*x62 + x61*x66 + x62*x66
+    if full:
+        x67 = C0*k23
+        x68 = S0*k22
+        x69 = x67 + x68
+        x70 = A0*S1
+        x71 = k25*x70
+        x72 = (U0 * U0)
+        x73 = C1*x72
+        x74 = k25*x73
+        x75 = S1*x72
+        x76 = k24*x75
+        x77 = A0*C1
+        x78 = k24*x77
+        x79 = x71 + x74 + x76 - x78
+        x80 = k25*x77
+        x81 = k24*x70
+        x82 = k24*x73
+        x83 = k25*x75
+        x84 = C0*k79
+        x85 = S0*k79
+        x86 = C0*k80
+        x87 = S0*k80
+        x88 = -coupler__mass*(x70 + x73)
+        x89 = -S1*x72 + x77
+        x90 = C0*k22
+        x91 = S0*k81
+        x92 = A1*S2
+        x93 = (U1 * U1)
+        x94 = C2*x93
+        x95 = S2*x93
+        x96 = A1*C2
+        x97 = k28*x95 - k28*x96 + k29*x92 + k29*x94
+        x98 = k28*x92 + k28*x94 - k29*x95 + k29*x96
+        x99 = -rocker__mass*(x92 + x94)
+        x100 = -S2*x93 + x96
+        x101 = C0*FX0
+        x102 = C0*FY0
+        x103 = FX0*S0
+        x104 = FY0*S0
+        x105 = C0*x77
+        x106 = C0*k37
+        x107 = S0*x77
+        x108 = S0*k38
+        x109 = C0*x75
+        x110 = S0*x75
+        x111 = C0*k35
+        x112 = S0*k31
+        x113 = C0*C1
+        x114 = C0*S1
+        x115 = C1*S0
+        x116 = S0*S1
+        x117 = C0*x80 + C0*x81 + C0*x82 - C0*x83 + S0*x71 + S0*x74 + S0*x76 - S0*x78 - x102 + x103
+        x118 = C0*x71 + C0*x74 + C0*x76 - C0*x78 - S0*x80 - S0*x81 - S0*x82 + S0*x83 + x101 + x104
+        x119 = C0*k95
+        x120 = S0*k96
+        x121 = C0*k99
+        x122 = S0*k100
+        x123 = C0*k102
+        x124 = S0*k99
+        x125 = C0*k32
+        x126 = S0*k33
+        x127 = C0*k34 + S0*k103 + k0*x102 - k0*x103 - k1*x101 - k1*x104 + k31*x109 + k32*x110 + k33*x105 + k35*x107 + x125*x70 + x125*x73 + x126*x70 + x126*x73
+        out[5 * ts + nd] = FX0 + x69 + x79
+        o5_0 = C0*k76 + S0*k75
+        o5_1 = x80 + x81 + x82 - x83
+        o5_3 = U0*(-C1*k64 + S1*k66)
+        oa_0_0 = -C1*k24 + S1*k25
+        ofx_0_0 = 1.0
+        out[6 * ts + nd] = C0*k26 + FY0 + S0*k23 + k27 - x80 - x81 - x82 + x83
+        o6_0 = C0*k84 + S0*k76
+        o6_1 = x79
+        o6_3 = -U0*(C1*k66 + S1*k64)
+        oa_1_0 = -C1*k25 - S1*k24
+        ofy_1_0 = 1.0
+        out[7 * ts + nd] = -FX0 + x97
+        o7_2 = x98
+        o7_4 = U1*(-C2*k73 + S2*k74)
+        oa_2_1 = -C2*k28 + S2*k29
+        ofx_2_0 = -1.0
+        out[8 * ts + nd] = -FY0 + k30 - x98
+        o8_2 = x97
+        o8_4 = -U1*(C2*k74 + S2*k73)
+        oa_3_1 = -C2*k29 - S2*k28
+        ofy_3_0 = -1.0
+        o11_0 = C0*k89 + S0*k88 + k37*x110 + k38*x105 + k39*x109 + k46*x103 + k8*x101 + k8*x104 + k87*x107 + k9*x102 + x106*x70 + x106*x73 + x108*x70 + x108*x73
+        o11_1 = k31*x105 + k32*x107 + k33*x109 + k35*x110 + x111*x70 + x111*x73 + x112*x70 + x112*x73
+        o11_3 = U0*(k90*x113 + k90*x116 + k91*x115 + k92*x114)
+        oa_4_0 = k31*x114 + k32*x113 + k32*x116 + k33*x115
+        ofx_4_0 = C0*k0 - S0*k1
+        ofy_4_0 = C0*k1 + S0*k0
+        for d in range(nd):
+            dzo = d * 37
+            out[5 * ts + d] = o5_0 * dz[dzo + 0] + o5_1 * dz[dzo + 1] + o5_3 * dz[dzo + 3] + oa_0_0 * out[12 * ts + d] + ofx_0_0 * out[16 * ts + d]
+            out[6 * ts + d] = o6_0 * dz[dzo + 0] + o6_1 * dz[dzo + 1] + o6_3 * dz[dzo + 3] + oa_1_0 * out[12 * ts + d] + ofy_1_0 * out[17 * ts + d]
+            out[7 * ts + d] = o7_2 * dz[dzo + 2] + o7_4 * dz[dzo + 4] + oa_2_1 * out[13 * ts + d] + ofx_2_0 * out[16 * ts + d]
+            out[8 * ts + d] = o8_2 * dz[dzo + 2] + o8_4 * dz[dzo + 4] + oa_3_1 * out[13 * ts + d] + ofy_3_0 * out[17 * ts + d]
+            out[11 * ts + d] = o11_0 * dz[dzo + 0] + o11_1 * dz[dzo + 1] + o11_3 * dz[dzo + 3] + oa_4_0 * out[12 * ts + d] + ofx_4_0 * out[16 * ts + d] + ofy_4_0 * out[17 * ts + d]
+        if use[6] > use[5]:
+            o5_5 = C0*k78 + S0*k77
+            o6_5 = -C0*k77 + S0*k78 - gravity
+            o11_5 = C0*k94 + S0*k93
+            for e in range(int(use[5]), int(use[6])):
+                d = int(use[38 + e])
+                dk = dz[d * 37 + 5]
+                out[5 * ts + d] += o5_5 * dk
+                out[6 * ts + d] += o6_5 * dk
+                out[11 * ts + d] += o11_5 * dk
+        if use[8] > use[7]:
+            o5_7 = x84
+            o6_7 = x85
+            o11_7 = C0*k27 - x117
+            for e in range(int(use[7]), int(use[8])):
+                d = int(use[38 + e])
+                dk = dz[d * 37 + 7]
+                out[5 * ts + d] += o5_7 * dk
+                out[6 * ts + d] += o6_7 * dk
+                out[11 * ts + d] += o11_7 * dk
+        if use[9] > use[8]:
+            o5_8 = -x85
+            o6_8 = x84
+            o11_8 = -S0*k27 - x118
+            for e in range(int(use[8]), int(use[9])):
+                d = int(use[38 + e])
+                dk = dz[d * 37 + 8]
+                out[5 * ts + d] += o5_8 * dk
+                out[6 * ts + d] += o6_8 * dk
+                out[11 * ts + d] += o11_8 * dk
+        if use[10] > use[9]:
+            o5_9 = x86
+            o6_9 = x87
+            o11_9 = -C0*k63 + x117
+            for e in range(int(use[9]), int(use[10])):
+                d = int(use[38 + e])
+                dk = dz[d * 37 + 9]
+                out[5 * ts + d] += o5_9 * dk
+                out[6 * ts + d] += o6_9 * dk
+                out[11 * ts + d] += o11_9 * dk
+        if use[11] > use[10]:
+            o5_10 = -x87
+            o6_10 = x86
+            o11_10 = S0*k63 + x118
+            for e in range(int(use[10]), int(use[11])):
+                d = int(use[38 + e])
+                dk = dz[d * 37 + 10]
+                out[5 * ts + d] += o5_10 * dk
+                out[6 * ts + d] += o6_10 * dk
+                out[11 * ts + d] += o11_10 * dk
+        if use[12] > use[11]:
+            o5_11 = C0*k45 + S0*k44 + S1*coupler__crank_end__y*x72 - coupler__crank_end__x*x70 - coupler__crank_end__x*x73 - coupler__crank_end__y*x77
+            o6_11 = A0*C1*coupler__crank_end__x + C0*k47 + S0*k45 - coupler__crank_end__x*x75 - coupler__crank_end__y*x70 - coupler__crank_end__y*x73 - gravity
+            o11_11 = C0*k98 + S0*k97 - k95*x107 + k95*x110 + k96*x105 - k96*x109 + x119*x70 + x119*x73 + x120*x70 + x120*x73
+            for e in range(int(use[11]), int(use[12])):
+                d = int(use[38 + e])
+                dk = dz[d * 37 + 11]
+                out[5 * ts + d] += o5_11 * dk
+                out[6 * ts + d] += o6_11 * dk
+                out[11 * ts + d] += o11_11 * dk
+        if use[14] > use[13]:
+            o5_13 = x88
+            o6_13 = coupler__mass*x89
+            o11_13 = k100*x105 + k101*x107 + k102*x109 + k99*x110 + x121*x70 + x121*x73 + x122*x70 + x122*x73
+            for e in range(int(use[13]), int(use[14])):
+                d = int(use[38 + e])
+                dk = dz[d * 37 + 13]
+                out[5 * ts + d] += o5_13 * dk
+                out[6 * ts + d] += o6_13 * dk
+                out[11 * ts + d] += o11_13 * dk
+        if use[15] > use[14]:
+            o5_14 = -coupler__mass*x89
+            o6_14 = x88
+            o11_14 = k100*x107 + k101*x109 + k102*x110 + k99*x105 + x123*x70 + x123*x73 + x124*x70 + x124*x73
+            for e in range(int(use[14]), int(use[15])):
+                d = int(use[38 + e])
+                dk = dz[d * 37 + 14]
+                out[5 * ts + d] += o5_14 * dk
+                out[6 * ts + d] += o6_14 * dk
+                out[11 * ts + d] += o11_14 * dk
+        if use[18] > use[17]:
+            o7_17 = S2*rocker__pivot__y*x93 - rocker__pivot__x*x92 - rocker__pivot__x*x94 - rocker__pivot__y*x96
+            o8_17 = A1*C2*rocker__pivot__x - gravity - rocker__pivot__x*x95 - rocker__pivot__y*x92 - rocker__pivot__y*x94
+            for e in range(int(use[17]), int(use[18])):
+                d = int(use[38 + e])
+                dk = dz[d * 37 + 17]
+                out[7 * ts + d] += o7_17 * dk
+                out[8 * ts + d] += o8_17 * dk
+        if use[20] > use[19]:
+            o7_19 = x99
+            o8_19 = rocker__mass*x100
+            for e in range(int(use[19]), int(use[20])):
+                d = int(use[38 + e])
+                dk = dz[d * 37 + 19]
+                out[7 * ts + d] += o7_19 * dk
+                out[8 * ts + d] += o8_19 * dk
+        if use[21] > use[20]:
+            o7_20 = -rocker__mass*x100
+            o8_20 = x99
+            for e in range(int(use[20]), int(use[21])):
+                d = int(use[38 + e])
+                dk = dz[d * 37 + 20]
+                out[7 * ts + d] += o7_20 * dk
+                out[8 * ts + d] += o8_20 * dk
+        if use[33] > use[32]:
+            o5_32 = C0*k83 + S0*k82 + t*x90 + t*x91
+            o6_32 = C0*k85 + S0*k83 + t*x67 + t*x68
+            o11_32 = t*x127
+            for e in range(int(use[32]), int(use[33])):
+                d = int(use[38 + e])
+                dk = dz[d * 37 + 32]
+                out[5 * ts + d] += o5_32 * dk
+                out[6 * ts + d] += o6_32 * dk
+                out[11 * ts + d] += o11_32 * dk
+        if use[34] > use[33]:
+            o5_33 = x90 + x91
+            o6_33 = x69
+            o11_33 = x127
+            for e in range(int(use[33]), int(use[34])):
+                d = int(use[38 + e])
+                dk = dz[d * 37 + 33]
+                out[5 * ts + d] += o5_33 * dk
+                out[6 * ts + d] += o6_33 * dk
+                out[11 * ts + d] += o11_33 * dk
+        if use[35] > use[34]:
+            o6_34 = k86
+            o8_34 = -rocker__mass
+            o11_34 = C0*k105 + S0*k104
+            for e in range(int(use[34]), int(use[35])):
+                d = int(use[38 + e])
+                dk = dz[d * 37 + 34]
+                out[6 * ts + d] += o6_34 * dk
+                out[8 * ts + d] += o8_34 * dk
+                out[11 * ts + d] += o11_34 * dk
+        for col in range(ts):
+            out[9 * ts + col] = out[5 * ts + col] + out[7 * ts + col]
+        for col in range(ts):
+            out[10 * ts + col] = out[6 * ts + col] + out[8 * ts + col]
+    return
+
+
+@nb.njit(**KERNEL)
 def rhs_sens(t, y, p, dydt):
     """Derivative of the sensitivity state (generate/sens_runtime.py)."""
-    sens_rhs(_THIS.jacobian, _THIS.rhs, t, y, p, dydt, N_Q, N_P, N_Z, N_JROWS, ACC_COLUMN,
+    sens_rhs(_THIS.tangent, _THIS.rhs, t, y, p, dydt, N_Q, N_P, N_Z, N_JROWS, ACC_COLUMN,
              MOMENT_COLUMN, 27, _MEM_COL0, N_EVENTS)
 
 
@@ -1197,7 +2005,7 @@ def on_event_sens(t, y, p, j):
 def monitor_sens(t, y, p, dydt, out, g, gd):
     """`rhs_sens`, then the plain monitor on the state part."""
     return sens_monitor(_THIS.rhs_sens, _THIS.monitor, t, y, p, dydt, out, g, gd, N_Q, N_P,
-                        N_Z, N_JROWS)
+                        N_Z, N_JROWS, N_EVENTS)
 
 
 @nb.njit(cache=True, error_model="numpy", nogil=True)
@@ -1219,3 +2027,32 @@ def output_sensitivities(ts, ys, ms, p):
 def jacobian_matrix(t, y, p, full):
     """The Jacobian (N_JROWS, JAC_STRIDE) at (t, y) as a matrix."""
     return jacobian_at(_THIS.jacobian, t, y, p, N_JROWS, N_Z, full)
+
+
+@nb.njit(cache=True, error_model="numpy")
+def tangent_matrix(t, y, p, dz, full):
+    """The tangents (N_JROWS, nd + 1) at (t, y) along the seeds dz (nd, N_Z) as a matrix."""
+    return tangent_at(_THIS.tangent, t, y, p, dz, N_JROWS, full)
+
+
+@nb.njit(cache=True, error_model="numpy")
+def refine_steps(t0s, y0s, mems, p, hs, coefficients, iters):
+    """The maximum of the monitored value over the plain step map of each step k (start
+    t0s[k], state y0s[k], memories mems[k], size hs[k]), by golden section; values, times."""
+    return step_peaks(_THIS.rhs, _THIS.monitor, t0s, y0s, mems, p, hs, coefficients, iters,
+                      MEM_START, N_EVENTS)
+
+
+@nb.njit(cache=True, error_model="numpy")
+def step_monitor_value(t0, y0, mem, p, h, coefficients):
+    """The monitored value of the plain step map at t0 + h (state y0, memories mem)."""
+    return step_value(_THIS.rhs, _THIS.monitor, t0, y0, mem, p, h, coefficients, MEM_START,
+                      N_EVENTS)
+
+
+@nb.njit(cache=True, error_model="numpy")
+def step_sens(t0, y0, p, hs, coefficients):
+    """Steps of the sizes hs of the sensitivity equations from (t0, y0) (memories in p):
+    states (len(hs), n) and the monitor's outputs (len(hs), N_OUT) at t0 + hs."""
+    return step_states(_THIS.rhs_sens, _THIS.monitor_sens, t0, y0, p, hs, coefficients, N_OUT,
+                       N_EVENTS)

@@ -32,8 +32,8 @@ from mbs_clearance.generate.runtime import (
 
 LINKAGE = "paper_slider_crank"
 STRUCTURE = "{\"bodies\": [[\"crank\", [\"pin\", \"pivot\"]], [\"coupler\", [\"crank_end\", \"slider_end\"]], [\"slider\", [\"pin\"]]], \"clearance_joints\": [[\"coupler_slider\", \"coupler\", \"slider_end\", \"slider\", \"pin\"]], \"drive\": \"crank_pivot\", \"ground_points\": [\"crank_pivot\", \"slider_axis\"], \"joints\": [[\"revolute\", \"crank_pivot\", \"ground\", \"crank_pivot\", \"crank\", \"pivot\"], [\"revolute\", \"crank_coupler\", \"crank\", \"pin\", \"coupler\", \"crank_end\"], [\"prismatic\", \"slider_guide\", \"ground\", \"slider_axis\", \"slider\", \"pin\"]], \"monitor_joint\": \"crank_pivot\"}"
-STRUCTURE_DIGEST = "28827036d8ba57343936826dafb04d0e620fdab4a14f5bb9a6552e15b0e02ef9"
-GENERATOR_VERSION = "913b0af478b0b9a5"
+STRUCTURE_DIGEST = "a92d02bde0350143848fcb9f252a0043cda35fd8ad2a39038b43e68ddaa6ca89"
+GENERATOR_VERSION = "952cfa6b1c5da349"
 
 #: dotted names of the entries of p (without the constants)
 PARAMETERS = (
@@ -607,12 +607,18 @@ def integrate_model(y0, p, edges, settings, coefficients):
 # (generate/jacobians.py; the sensitivity equations in generate/sens_runtime.py)
 from mbs_clearance.generate.sens_runtime import (
     contact_jacobian,
+    contact_tangent,
     friction_jacobian,
+    friction_tangent,
     jacobian_at,
     sens_monitor,
     sens_on_event,
     sens_outputs,
     sens_rhs,
+    step_peaks,
+    step_states,
+    step_value,
+    tangent_at,
 )
 
 #: columns of the Jacobian: z = [t, q, qdot, p[:CONST_START]] (N_Z), then the value
@@ -944,8 +950,8 @@ def jacobian(t, y, p, jac, full):
     rfx_1_0 = k4
     rfy_1_0 = k6
     for col in range(36):
-        b_0 = -(jac[444 + col] + rfx_0_0 * jac[592 + col] + rfy_0_0 * jac[629 + col])
-        b_1 = -(jac[481 + col] + rfx_1_0 * jac[592 + col] + rfy_1_0 * jac[629 + col])
+        b_0 = -(jac[444 + col] + rfx_0_0 * jac[16 * 37 + col] + rfy_0_0 * jac[17 * 37 + col])
+        b_1 = -(jac[481 + col] + rfx_1_0 * jac[16 * 37 + col] + rfy_1_0 * jac[17 * 37 + col])
         zz_0 = (b_0) * il_0
         zz_1 = (b_1 - l_1_0 * zz_0) * il_1
         x_1 = (zz_1) * il_1
@@ -1093,9 +1099,710 @@ def jacobian(t, y, p, jac, full):
 
 
 @nb.njit(**KERNEL)
+def tangent(t, y, p, dz, nd, use, out, full):
+    """The directional derivatives of `jacobian`'s rows along nd seeds dz (nd x N_Z, flat:
+    dz[d * N_Z + k] the component along Z_NAMES[k]) from the same derivative expressions,
+    into out (N_JROWS x (nd + 1), flat; column nd the value); `full` as `jacobian` (rows
+    not computed are left as they are). use: which seeds use each column of z
+    (`sens_runtime.seed_index`): a parameter column is evaluated and contracted only for
+    those (t, q and qdot always, for every seed)."""
+    ts = nd + 1
+    coupler__mass = p[6]  # coupler.mass
+    coupler__crank_end__x = p[8]  # coupler.crank_end.x
+    coupler__crank_end__y = p[9]  # coupler.crank_end.y
+    slider__mass = p[12]  # slider.mass
+    drive__speed = p[26]  # drive.speed
+    drive__initial_angle = p[27]  # drive.initial_angle
+    gravity = p[28]  # gravity
+    k0 = p[CONST_START + 0]
+    k1 = p[CONST_START + 1]
+    k2 = p[CONST_START + 2]
+    k3 = p[CONST_START + 3]
+    k4 = p[CONST_START + 4]
+    k5 = p[CONST_START + 5]
+    k6 = p[CONST_START + 6]
+    k7 = p[CONST_START + 7]
+    k8 = p[CONST_START + 8]
+    k9 = p[CONST_START + 9]
+    k10 = p[CONST_START + 10]
+    k11 = p[CONST_START + 11]
+    k12 = p[CONST_START + 12]
+    k13 = p[CONST_START + 13]
+    k14 = p[CONST_START + 14]
+    k15 = p[CONST_START + 15]
+    k16 = p[CONST_START + 16]
+    k17 = p[CONST_START + 17]
+    k20 = p[CONST_START + 20]
+    k21 = p[CONST_START + 21]
+    k22 = p[CONST_START + 22]
+    k23 = p[CONST_START + 23]
+    k24 = p[CONST_START + 24]
+    k25 = p[CONST_START + 25]
+    k26 = p[CONST_START + 26]
+    k27 = p[CONST_START + 27]
+    k28 = p[CONST_START + 28]
+    k29 = p[CONST_START + 29]
+    k30 = p[CONST_START + 30]
+    k31 = p[CONST_START + 31]
+    k32 = p[CONST_START + 32]
+    k33 = p[CONST_START + 33]
+    k34 = p[CONST_START + 34]
+    k35 = p[CONST_START + 35]
+    k36 = p[CONST_START + 36]
+    k37 = p[CONST_START + 37]
+    k42 = p[CONST_START + 42]
+    k43 = p[CONST_START + 43]
+    k44 = p[CONST_START + 44]
+    k45 = p[CONST_START + 45]
+    k46 = p[CONST_START + 46]
+    k47 = p[CONST_START + 47]
+    k48 = p[CONST_START + 48]
+    k49 = p[CONST_START + 49]
+    k50 = p[CONST_START + 50]
+    k51 = p[CONST_START + 51]
+    k52 = p[CONST_START + 52]
+    k53 = p[CONST_START + 53]
+    k54 = p[CONST_START + 54]
+    k55 = p[CONST_START + 55]
+    k56 = p[CONST_START + 56]
+    k57 = p[CONST_START + 57]
+    k58 = p[CONST_START + 58]
+    k59 = p[CONST_START + 59]
+    k60 = p[CONST_START + 60]
+    k61 = p[CONST_START + 61]
+    k62 = p[CONST_START + 62]
+    k63 = p[CONST_START + 63]
+    k64 = p[CONST_START + 64]
+    k65 = p[CONST_START + 65]
+    k66 = p[CONST_START + 66]
+    k67 = p[CONST_START + 67]
+    k68 = p[CONST_START + 68]
+    k69 = p[CONST_START + 69]
+    k70 = p[CONST_START + 70]
+    k71 = p[CONST_START + 71]
+    k72 = p[CONST_START + 72]
+    k73 = p[CONST_START + 73]
+    k74 = p[CONST_START + 74]
+    k75 = p[CONST_START + 75]
+    k76 = p[CONST_START + 76]
+    k77 = p[CONST_START + 77]
+    k78 = p[CONST_START + 78]
+    k79 = p[CONST_START + 79]
+    k80 = p[CONST_START + 80]
+    k81 = p[CONST_START + 81]
+    k82 = p[CONST_START + 82]
+    k83 = p[CONST_START + 83]
+    k84 = p[CONST_START + 84]
+    k85 = p[CONST_START + 85]
+    k86 = p[CONST_START + 86]
+    k87 = p[CONST_START + 87]
+    k88 = p[CONST_START + 88]
+    k89 = p[CONST_START + 89]
+    k90 = p[CONST_START + 90]
+    k91 = p[CONST_START + 91]
+    k92 = p[CONST_START + 92]
+    k93 = p[CONST_START + 93]
+    k94 = p[CONST_START + 94]
+    k95 = p[CONST_START + 95]
+    k96 = p[CONST_START + 96]
+    k97 = p[CONST_START + 97]
+    k98 = p[CONST_START + 98]
+    k99 = p[CONST_START + 99]
+    k100 = p[CONST_START + 100]
+    k101 = p[CONST_START + 101]
+    Q0 = y[0]
+    Q1 = y[1]
+    U0 = y[2]
+    U1 = y[3]
+    S0, C0 = sincos(drive__initial_angle + drive__speed*t)
+    S1, C1 = sincos(Q0)
+    x0 = Q1*k4
+    x1 = C1*k3
+    x2 = S1*k2
+    x3 = x1 + x2
+    x4 = C0*k1 + S0*k0
+    x5 = C0*k9
+    x6 = S0*k8
+    x7 = x5 + x6
+    x8 = C1*k2
+    x9 = S1*k3
+    x10 = x8 - x9
+    x11 = -C0
+    x12 = -S0
+    x13 = -C1
+    x14 = -S1
+    x15 = Q1*k6
+    x16 = C0*k0
+    x17 = S0*k1
+    x18 = x16 - x17
+    x19 = C0*k10 + S0*k9
+    x20 = U1*k4
+    x21 = S0*drive__speed
+    x22 = C0*drive__speed
+    x23 = -x21
+    x24 = -x22
+    x25 = S1*U0
+    x26 = C1*U0
+    x27 = -x25
+    x28 = -x26
+    x29 = U1*k6
+    x30 = C0*k8
+    x31 = S0*k44
+    gv0_0 = k5 + x0 + x3 + x4
+    g3_0 = x7
+    g3_1 = x10
+    g3_2 = k4
+    gv0_1 = k7 + x15 - x16 + x17 - x8 + x9
+    g4_0 = x19
+    g4_1 = x3
+    g4_2 = k6
+    gv0_2 = U0*x8 - U0*x9 + x20 + x7
+    g14_0 = C0*k43 + S0*k42
+    g14_1 = -U0*x3
+    g14_3 = x10
+    g14_4 = k4
+    gv0_3 = U0*x1 + U0*x2 + x19 + x29
+    g15_0 = C0*k45 + S0*k43
+    g15_1 = U0*x10
+    g15_3 = x3
+    g15_4 = k6
+    for d in range(nd):
+        dzo = d * 36
+        out[3 * ts + d] = g3_0 * dz[dzo + 0] + g3_1 * dz[dzo + 1] + g3_2 * dz[dzo + 2]
+        out[4 * ts + d] = g4_0 * dz[dzo + 0] + g4_1 * dz[dzo + 1] + g4_2 * dz[dzo + 2]
+        out[14 * ts + d] = g14_0 * dz[dzo + 0] + g14_1 * dz[dzo + 1] + g14_3 * dz[dzo + 3] + g14_4 * dz[dzo + 4]
+        out[15 * ts + d] = g15_0 * dz[dzo + 0] + g15_1 * dz[dzo + 1] + g15_3 * dz[dzo + 3] + g15_4 * dz[dzo + 4]
+    if use[8] > use[7]:
+        g3_7 = x11
+        g4_7 = x12
+        g14_7 = x21
+        g15_7 = x24
+        for e in range(int(use[7]), int(use[8])):
+            d = int(use[37 + e])
+            dk = dz[d * 36 + 7]
+            out[3 * ts + d] += g3_7 * dk
+            out[4 * ts + d] += g4_7 * dk
+            out[14 * ts + d] += g14_7 * dk
+            out[15 * ts + d] += g15_7 * dk
+    if use[9] > use[8]:
+        g3_8 = S0
+        g4_8 = x11
+        g14_8 = x22
+        g15_8 = x21
+        for e in range(int(use[8]), int(use[9])):
+            d = int(use[37 + e])
+            dk = dz[d * 36 + 8]
+            out[3 * ts + d] += g3_8 * dk
+            out[4 * ts + d] += g4_8 * dk
+            out[14 * ts + d] += g14_8 * dk
+            out[15 * ts + d] += g15_8 * dk
+    if use[10] > use[9]:
+        g3_9 = C0
+        g4_9 = S0
+        g14_9 = x23
+        g15_9 = x22
+        for e in range(int(use[9]), int(use[10])):
+            d = int(use[37 + e])
+            dk = dz[d * 36 + 9]
+            out[3 * ts + d] += g3_9 * dk
+            out[4 * ts + d] += g4_9 * dk
+            out[14 * ts + d] += g14_9 * dk
+            out[15 * ts + d] += g15_9 * dk
+    if use[11] > use[10]:
+        g3_10 = x12
+        g4_10 = C0
+        g14_10 = x24
+        g15_10 = x23
+        for e in range(int(use[10]), int(use[11])):
+            d = int(use[37 + e])
+            dk = dz[d * 36 + 10]
+            out[3 * ts + d] += g3_10 * dk
+            out[4 * ts + d] += g4_10 * dk
+            out[14 * ts + d] += g14_10 * dk
+            out[15 * ts + d] += g15_10 * dk
+    if use[14] > use[13]:
+        g3_13 = x13
+        g4_13 = x14
+        g14_13 = x25
+        g15_13 = x28
+        for e in range(int(use[13]), int(use[14])):
+            d = int(use[37 + e])
+            dk = dz[d * 36 + 13]
+            out[3 * ts + d] += g3_13 * dk
+            out[4 * ts + d] += g4_13 * dk
+            out[14 * ts + d] += g14_13 * dk
+            out[15 * ts + d] += g15_13 * dk
+    if use[15] > use[14]:
+        g3_14 = S1
+        g4_14 = x13
+        g14_14 = x26
+        g15_14 = x25
+        for e in range(int(use[14]), int(use[15])):
+            d = int(use[37 + e])
+            dk = dz[d * 36 + 14]
+            out[3 * ts + d] += g3_14 * dk
+            out[4 * ts + d] += g4_14 * dk
+            out[14 * ts + d] += g14_14 * dk
+            out[15 * ts + d] += g15_14 * dk
+    if use[16] > use[15]:
+        g3_15 = C1
+        g4_15 = S1
+        g14_15 = x27
+        g15_15 = x26
+        for e in range(int(use[15]), int(use[16])):
+            d = int(use[37 + e])
+            dk = dz[d * 36 + 15]
+            out[3 * ts + d] += g3_15 * dk
+            out[4 * ts + d] += g4_15 * dk
+            out[14 * ts + d] += g14_15 * dk
+            out[15 * ts + d] += g15_15 * dk
+    if use[17] > use[16]:
+        g3_16 = x14
+        g4_16 = C1
+        g14_16 = x28
+        g15_16 = x27
+        for e in range(int(use[16]), int(use[17])):
+            d = int(use[37 + e])
+            dk = dz[d * 36 + 16]
+            out[3 * ts + d] += g3_16 * dk
+            out[4 * ts + d] += g4_16 * dk
+            out[14 * ts + d] += g14_16 * dk
+            out[15 * ts + d] += g15_16 * dk
+    if use[22] > use[21]:
+        g3_21 = 1.0
+        for e in range(int(use[21]), int(use[22])):
+            d = int(use[37 + e])
+            dk = dz[d * 36 + 21]
+            out[3 * ts + d] += g3_21 * dk
+    if use[23] > use[22]:
+        g4_22 = 1.0
+        for e in range(int(use[22]), int(use[23])):
+            d = int(use[37 + e])
+            dk = dz[d * 36 + 22]
+            out[4 * ts + d] += g4_22 * dk
+    if use[24] > use[23]:
+        g3_23 = -1.0
+        for e in range(int(use[23]), int(use[24])):
+            d = int(use[37 + e])
+            dk = dz[d * 36 + 23]
+            out[3 * ts + d] += g3_23 * dk
+    if use[25] > use[24]:
+        g4_24 = -1.0
+        for e in range(int(use[24]), int(use[25])):
+            d = int(use[37 + e])
+            dk = dz[d * 36 + 24]
+            out[4 * ts + d] += g4_24 * dk
+    if use[26] > use[25]:
+        g3_25 = -x15
+        g4_25 = x0
+        g14_25 = -x29
+        g15_25 = x20
+        for e in range(int(use[25]), int(use[26])):
+            d = int(use[37 + e])
+            dk = dz[d * 36 + 25]
+            out[3 * ts + d] += g3_25 * dk
+            out[4 * ts + d] += g4_25 * dk
+            out[14 * ts + d] += g14_25 * dk
+            out[15 * ts + d] += g15_25 * dk
+    if use[32] > use[31]:
+        g3_31 = t*x18
+        g4_31 = t*x4
+        g14_31 = t*x30 + t*x31 + x18
+        g15_31 = t*x5 + t*x6 + x4
+        for e in range(int(use[31]), int(use[32])):
+            d = int(use[37 + e])
+            dk = dz[d * 36 + 31]
+            out[3 * ts + d] += g3_31 * dk
+            out[4 * ts + d] += g4_31 * dk
+            out[14 * ts + d] += g14_31 * dk
+            out[15 * ts + d] += g15_31 * dk
+    if use[33] > use[32]:
+        g3_32 = x18
+        g4_32 = x4
+        g14_32 = x30 + x31
+        g15_32 = x7
+        for e in range(int(use[32]), int(use[33])):
+            d = int(use[37 + e])
+            dk = dz[d * 36 + 32]
+            out[3 * ts + d] += g3_32 * dk
+            out[4 * ts + d] += g4_32 * dk
+            out[14 * ts + d] += g14_32 * dk
+            out[15 * ts + d] += g15_32 * dk
+    FX0, FY0 = contact_tangent(out, ts, nd, dz, 36, gv0_0, gv0_1, gv0_2, gv0_3, 0, 1, 2, 3, 4, 14, 15, 16, 17, 26, 27, 28, 35, p[21], p[29], p[30], p[22], p[23], p[24])
+    m_0_0 = k11
+    m_1_0 = 0.0
+    m_1_1 = slider__mass
+    f_0 = C0*C1*k12 + C0*S1*k14 - C1*FX0*k2 - C1*FY0*k3 + C1*S0*k13 + C1*k16 + FX0*S1*k3 - FY0*S1*k2 + S0*S1*k12 + S1*k15
+    f_1 = -FX0*k4 - FY0*k6 + k17
+    l_0_0 = math.sqrt(m_0_0)
+    il_0 = 1.0 / l_0_0
+    l_1_0 = (m_1_0) * il_0
+    l_1_1 = math.sqrt(m_1_1 - l_1_0 * l_1_0)
+    il_1 = 1.0 / l_1_1
+    zz_0 = (f_0) * il_0
+    zz_1 = (f_1 - l_1_0 * zz_0) * il_1
+    A1 = (zz_1) * il_1
+    A0 = (zz_0 - l_1_0 * A1) * il_0
+    x32 = C0*C1
+    x33 = C0*S1
+    x34 = C1*S0
+    x35 = S0*S1
+    x36 = C1*FY0
+    x37 = C1*FX0
+    x38 = FX0*S1
+    x39 = FY0*S1
+    x40 = k50*x32 + k50*x35 - k51*x33 + k51*x34
+    x41 = k50*x33 - k50*x34 + k51*x32 + k51*x35
+    x42 = x37 + x39
+    x43 = k14*x32
+    x44 = k49*x33
+    x45 = k12*x34
+    x46 = k14*x35
+    r0_0 = k46*x32 + k46*x35 + k47*x34 + k48*x33
+    r0_1 = -C1*k15 + S1*k16 + k12*x33 + k13*x32 + k13*x35 + k2*x36 - k2*x38 - k3*x37 - k3*x39 + k49*x34
+    rfx_0_0 = C1*k2 - S1*k3
+    rfy_0_0 = C1*k3 + S1*k2
+    rfx_1_0 = k4
+    rfy_1_0 = k6
+    for d in range(nd):
+        dzo = d * 36
+        out[12 * ts + d] = r0_0 * dz[dzo + 0] + r0_1 * dz[dzo + 1]
+        out[13 * ts + d] = 0.0
+    if use[8] > use[7]:
+        r0_7 = x40
+        for e in range(int(use[7]), int(use[8])):
+            d = int(use[37 + e])
+            dk = dz[d * 36 + 7]
+            out[12 * ts + d] += r0_7 * dk
+    if use[9] > use[8]:
+        r0_8 = x41
+        for e in range(int(use[8]), int(use[9])):
+            d = int(use[37 + e])
+            dk = dz[d * 36 + 8]
+            out[12 * ts + d] += r0_8 * dk
+    if use[10] > use[9]:
+        r0_9 = -x40
+        for e in range(int(use[9]), int(use[10])):
+            d = int(use[37 + e])
+            dk = dz[d * 36 + 9]
+            out[12 * ts + d] += r0_9 * dk
+    if use[11] > use[10]:
+        r0_10 = -x41
+        for e in range(int(use[10]), int(use[11])):
+            d = int(use[37 + e])
+            dk = dz[d * 36 + 10]
+            out[12 * ts + d] += r0_10 * dk
+    if use[12] > use[11]:
+        r0_11 = A0*k57 + C1*k56 + S1*k55 + k52*x32 + k52*x35 + k53*x34 + k54*x33
+        for e in range(int(use[11]), int(use[12])):
+            d = int(use[37 + e])
+            dk = dz[d * 36 + 11]
+            out[12 * ts + d] += r0_11 * dk
+    if use[13] > use[12]:
+        r0_12 = A0
+        for e in range(int(use[12]), int(use[13])):
+            d = int(use[37 + e])
+            dk = dz[d * 36 + 12]
+            out[12 * ts + d] += r0_12 * dk
+    if use[14] > use[13]:
+        r0_13 = A0*k62 + C1*k61 + k58*x32 + k58*x35 + k59*x34 + k60*x33 - x36 + x38
+        for e in range(int(use[13]), int(use[14])):
+            d = int(use[37 + e])
+            dk = dz[d * 36 + 13]
+            out[12 * ts + d] += r0_13 * dk
+    if use[15] > use[14]:
+        r0_14 = A0*k64 - S1*k61 + k58*x34 + k60*x32 + k60*x35 + k63*x33 + x42
+        for e in range(int(use[14]), int(use[15])):
+            d = int(use[37 + e])
+            dk = dz[d * 36 + 14]
+            out[12 * ts + d] += r0_14 * dk
+    if use[16] > use[15]:
+        r0_15 = x36 - x38
+        for e in range(int(use[15]), int(use[16])):
+            d = int(use[37 + e])
+            dk = dz[d * 36 + 15]
+            out[12 * ts + d] += r0_15 * dk
+    if use[17] > use[16]:
+        r0_16 = -x42
+        for e in range(int(use[16]), int(use[17])):
+            d = int(use[37 + e])
+            dk = dz[d * 36 + 16]
+            out[12 * ts + d] += r0_16 * dk
+    if use[18] > use[17]:
+        r1_17 = A1 + k68
+        for e in range(int(use[17]), int(use[18])):
+            d = int(use[37 + e])
+            dk = dz[d * 36 + 17]
+            out[13 * ts + d] += r1_17 * dk
+    if use[26] > use[25]:
+        r1_25 = -FX0*k6 + FY0*k4 + k69
+        for e in range(int(use[25]), int(use[26])):
+            d = int(use[37 + e])
+            dk = dz[d * 36 + 25]
+            out[13 * ts + d] += r1_25 * dk
+    if use[32] > use[31]:
+        r0_31 = k65*x32 + k65*x35 + k66*x34 + k67*x33 + t*x43 + t*x44 + t*x45 + t*x46
+        for e in range(int(use[31]), int(use[32])):
+            d = int(use[37 + e])
+            dk = dz[d * 36 + 31]
+            out[12 * ts + d] += r0_31 * dk
+    if use[33] > use[32]:
+        r0_32 = x43 + x44 + x45 + x46
+        for e in range(int(use[32]), int(use[33])):
+            d = int(use[37 + e])
+            dk = dz[d * 36 + 32]
+            out[12 * ts + d] += r0_32 * dk
+    if use[34] > use[33]:
+        r0_33 = C1*k23 + S1*k22
+        r1_33 = -k27
+        for e in range(int(use[33]), int(use[34])):
+            d = int(use[37 + e])
+            dk = dz[d * 36 + 33]
+            out[12 * ts + d] += r0_33 * dk
+            out[13 * ts + d] += r1_33 * dk
+    for d in range(nd):
+        b_0 = -(out[12 * ts + d] + rfx_0_0 * out[16 * ts + d] + rfy_0_0 * out[17 * ts + d])
+        b_1 = -(out[13 * ts + d] + rfx_1_0 * out[16 * ts + d] + rfy_1_0 * out[17 * ts + d])
+        zz_0 = (b_0) * il_0
+        zz_1 = (b_1 - l_1_0 * zz_0) * il_1
+        x_1 = (zz_1) * il_1
+        x_0 = (zz_0 - l_1_0 * x_1) * il_0
+        out[12 * ts + d] = x_0
+        out[13 * ts + d] = x_1
+    out[12 * ts + nd] = A0
+    out[13 * ts + nd] = A1
+    x47 = A0*C0
+    x48 = C1*k30
+    x49 = S1*k29
+    x50 = A0*S0
+    x51 = (U0 * U0)
+    x52 = C0*x51
+    x53 = S0*x51
+    out[11 * ts + nd] = C0*FX0*k0 + C0*FY0*k1 + C0*k34 + C1*k29*x52 + C1*k31*x50 - FX0*S0*k1 + FY0*S0*k0 + S0*k32 + S1*k30*x50 + S1*k33*x52 + x47*x48 + x47*x49 + x48*x53 + x49*x53
+    if full:
+        x54 = C0*k21
+        x55 = S0*k20
+        x56 = x54 + x55
+        x57 = A0*S1
+        x58 = k23*x57
+        x59 = (U0 * U0)
+        x60 = C1*x59
+        x61 = k23*x60
+        x62 = S1*x59
+        x63 = k22*x62
+        x64 = A0*C1
+        x65 = k22*x64
+        x66 = x58 + x61 + x63 - x65
+        x67 = k23*x64
+        x68 = k22*x57
+        x69 = k22*x60
+        x70 = k23*x62
+        x71 = x67 + x68 + x69 - x70
+        x72 = C0*k74
+        x73 = S0*k74
+        x74 = C0*k75
+        x75 = S0*k75
+        x76 = -coupler__mass*(x57 + x60)
+        x77 = -S1*x59 + x64
+        x78 = C0*k20
+        x79 = S0*k77
+        x80 = A1*k26
+        x81 = A1*k27
+        x82 = C0*FX0
+        x83 = C0*FY0
+        x84 = FX0*S0
+        x85 = FY0*S0
+        x86 = C0*x64
+        x87 = C0*k35
+        x88 = S0*x64
+        x89 = S0*k36
+        x90 = C0*x62
+        x91 = S0*x62
+        x92 = C0*k33
+        x93 = S0*k29
+        x94 = C0*C1
+        x95 = C0*S1
+        x96 = C1*S0
+        x97 = S0*S1
+        x98 = C0*x67 + C0*x68 + C0*x69 - C0*x70 + S0*x58 + S0*x61 + S0*x63 - S0*x65 + x83 - x84
+        x99 = -C0*x58 - C0*x61 - C0*x63 + C0*x65 + S0*x67 + S0*x68 + S0*x69 - S0*x70 + x82 + x85
+        x100 = C0*k91
+        x101 = S0*k92
+        x102 = C0*k95
+        x103 = S0*k96
+        x104 = C0*k98
+        x105 = S0*k95
+        x106 = C0*k30
+        x107 = S0*k31
+        x108 = C0*k32 + S0*k99 + k0*x83 - k0*x84 - k1*x82 - k1*x85 + k29*x90 + k30*x91 + k31*x86 + k33*x88 + x106*x57 + x106*x60 + x107*x57 + x107*x60
+        out[5 * ts + nd] = -FX0 + x56 + x66
+        o5_0 = C0*k71 + S0*k70
+        o5_1 = x71
+        o5_3 = U0*(-C1*k62 + S1*k64)
+        oa_0_0 = -C1*k22 + S1*k23
+        ofx_0_0 = -1.0
+        out[6 * ts + nd] = C0*k24 - FY0 + S0*k21 + k25 - x71
+        o6_0 = C0*k80 + S0*k71
+        o6_1 = x66
+        o6_3 = -U0*(C1*k64 + S1*k62)
+        oa_1_0 = -C1*k23 - S1*k22
+        ofy_1_0 = -1.0
+        out[7 * ts + nd] = FX0 + x80
+        oa_2_1 = k26
+        ofx_2_0 = 1.0
+        out[8 * ts + nd] = FY0 + k28 + x81
+        oa_3_1 = k27
+        ofy_3_0 = 1.0
+        o11_0 = C0*k85 + S0*k84 + k35*x91 + k36*x86 + k37*x90 + k44*x84 + k8*x82 + k8*x85 + k83*x88 + k9*x83 + x57*x87 + x57*x89 + x60*x87 + x60*x89
+        o11_1 = k29*x86 + k30*x88 + k31*x90 + k33*x91 + x57*x92 + x57*x93 + x60*x92 + x60*x93
+        o11_3 = U0*(k86*x94 + k86*x97 + k87*x96 + k88*x95)
+        oa_4_0 = k29*x95 + k30*x94 + k30*x97 + k31*x96
+        ofx_4_0 = C0*k0 - S0*k1
+        ofy_4_0 = C0*k1 + S0*k0
+        for d in range(nd):
+            dzo = d * 36
+            out[5 * ts + d] = o5_0 * dz[dzo + 0] + o5_1 * dz[dzo + 1] + o5_3 * dz[dzo + 3] + oa_0_0 * out[12 * ts + d] + ofx_0_0 * out[16 * ts + d]
+            out[6 * ts + d] = o6_0 * dz[dzo + 0] + o6_1 * dz[dzo + 1] + o6_3 * dz[dzo + 3] + oa_1_0 * out[12 * ts + d] + ofy_1_0 * out[17 * ts + d]
+            out[7 * ts + d] = 0.0 + oa_2_1 * out[13 * ts + d] + ofx_2_0 * out[16 * ts + d]
+            out[8 * ts + d] = 0.0 + oa_3_1 * out[13 * ts + d] + ofy_3_0 * out[17 * ts + d]
+            out[11 * ts + d] = o11_0 * dz[dzo + 0] + o11_1 * dz[dzo + 1] + o11_3 * dz[dzo + 3] + oa_4_0 * out[12 * ts + d] + ofx_4_0 * out[16 * ts + d] + ofy_4_0 * out[17 * ts + d]
+        if use[6] > use[5]:
+            o5_5 = C0*k73 + S0*k72
+            o6_5 = -C0*k72 + S0*k73 - gravity
+            o11_5 = C0*k90 + S0*k89
+            for e in range(int(use[5]), int(use[6])):
+                d = int(use[37 + e])
+                dk = dz[d * 36 + 5]
+                out[5 * ts + d] += o5_5 * dk
+                out[6 * ts + d] += o6_5 * dk
+                out[11 * ts + d] += o11_5 * dk
+        if use[8] > use[7]:
+            o5_7 = x72
+            o6_7 = x73
+            o11_7 = C0*k25 - x98
+            for e in range(int(use[7]), int(use[8])):
+                d = int(use[37 + e])
+                dk = dz[d * 36 + 7]
+                out[5 * ts + d] += o5_7 * dk
+                out[6 * ts + d] += o6_7 * dk
+                out[11 * ts + d] += o11_7 * dk
+        if use[9] > use[8]:
+            o5_8 = -x73
+            o6_8 = x72
+            o11_8 = -S0*k25 + x99
+            for e in range(int(use[8]), int(use[9])):
+                d = int(use[37 + e])
+                dk = dz[d * 36 + 8]
+                out[5 * ts + d] += o5_8 * dk
+                out[6 * ts + d] += o6_8 * dk
+                out[11 * ts + d] += o11_8 * dk
+        if use[10] > use[9]:
+            o5_9 = x74
+            o6_9 = x75
+            o11_9 = -C0*k61 + x98
+            for e in range(int(use[9]), int(use[10])):
+                d = int(use[37 + e])
+                dk = dz[d * 36 + 9]
+                out[5 * ts + d] += o5_9 * dk
+                out[6 * ts + d] += o6_9 * dk
+                out[11 * ts + d] += o11_9 * dk
+        if use[11] > use[10]:
+            o5_10 = -x75
+            o6_10 = x74
+            o11_10 = S0*k61 - x99
+            for e in range(int(use[10]), int(use[11])):
+                d = int(use[37 + e])
+                dk = dz[d * 36 + 10]
+                out[5 * ts + d] += o5_10 * dk
+                out[6 * ts + d] += o6_10 * dk
+                out[11 * ts + d] += o11_10 * dk
+        if use[12] > use[11]:
+            o5_11 = C0*k76 + S0*k45 + S1*coupler__crank_end__y*x59 - coupler__crank_end__x*x57 - coupler__crank_end__x*x60 - coupler__crank_end__y*x64
+            o6_11 = A0*C1*coupler__crank_end__x + C0*k42 + S0*k76 - coupler__crank_end__x*x62 - coupler__crank_end__y*x57 - coupler__crank_end__y*x60 - gravity
+            o11_11 = C0*k94 + S0*k93 - k91*x88 + k91*x91 + k92*x86 - k92*x90 + x100*x57 + x100*x60 + x101*x57 + x101*x60
+            for e in range(int(use[11]), int(use[12])):
+                d = int(use[37 + e])
+                dk = dz[d * 36 + 11]
+                out[5 * ts + d] += o5_11 * dk
+                out[6 * ts + d] += o6_11 * dk
+                out[11 * ts + d] += o11_11 * dk
+        if use[14] > use[13]:
+            o5_13 = x76
+            o6_13 = coupler__mass*x77
+            o11_13 = k95*x91 + k96*x86 + k97*x88 + k98*x90 + x102*x57 + x102*x60 + x103*x57 + x103*x60
+            for e in range(int(use[13]), int(use[14])):
+                d = int(use[37 + e])
+                dk = dz[d * 36 + 13]
+                out[5 * ts + d] += o5_13 * dk
+                out[6 * ts + d] += o6_13 * dk
+                out[11 * ts + d] += o11_13 * dk
+        if use[15] > use[14]:
+            o5_14 = -coupler__mass*x77
+            o6_14 = x76
+            o11_14 = k95*x86 + k96*x88 + k97*x90 + k98*x91 + x104*x57 + x104*x60 + x105*x57 + x105*x60
+            for e in range(int(use[14]), int(use[15])):
+                d = int(use[37 + e])
+                dk = dz[d * 36 + 14]
+                out[5 * ts + d] += o5_14 * dk
+                out[6 * ts + d] += o6_14 * dk
+                out[11 * ts + d] += o11_14 * dk
+        if use[18] > use[17]:
+            o7_17 = A1*k4
+            o8_17 = A1*k6 - gravity
+            for e in range(int(use[17]), int(use[18])):
+                d = int(use[37 + e])
+                dk = dz[d * 36 + 17]
+                out[7 * ts + d] += o7_17 * dk
+                out[8 * ts + d] += o8_17 * dk
+        if use[26] > use[25]:
+            o7_25 = -x81
+            o8_25 = x80
+            for e in range(int(use[25]), int(use[26])):
+                d = int(use[37 + e])
+                dk = dz[d * 36 + 25]
+                out[7 * ts + d] += o7_25 * dk
+                out[8 * ts + d] += o8_25 * dk
+        if use[32] > use[31]:
+            o5_31 = C0*k79 + S0*k78 + t*x78 + t*x79
+            o6_31 = C0*k81 + S0*k79 + t*x54 + t*x55
+            o11_31 = t*x108
+            for e in range(int(use[31]), int(use[32])):
+                d = int(use[37 + e])
+                dk = dz[d * 36 + 31]
+                out[5 * ts + d] += o5_31 * dk
+                out[6 * ts + d] += o6_31 * dk
+                out[11 * ts + d] += o11_31 * dk
+        if use[33] > use[32]:
+            o5_32 = x78 + x79
+            o6_32 = x56
+            o11_32 = x108
+            for e in range(int(use[32]), int(use[33])):
+                d = int(use[37 + e])
+                dk = dz[d * 36 + 32]
+                out[5 * ts + d] += o5_32 * dk
+                out[6 * ts + d] += o6_32 * dk
+                out[11 * ts + d] += o11_32 * dk
+        if use[34] > use[33]:
+            o6_33 = k82
+            o8_33 = -slider__mass
+            o11_33 = C0*k101 + S0*k100
+            for e in range(int(use[33]), int(use[34])):
+                d = int(use[37 + e])
+                dk = dz[d * 36 + 33]
+                out[6 * ts + d] += o6_33 * dk
+                out[8 * ts + d] += o8_33 * dk
+                out[11 * ts + d] += o11_33 * dk
+        for col in range(ts):
+            out[9 * ts + col] = out[5 * ts + col] + out[7 * ts + col]
+        for col in range(ts):
+            out[10 * ts + col] = out[6 * ts + col] + out[8 * ts + col]
+    return
+
+
+@nb.njit(**KERNEL)
 def rhs_sens(t, y, p, dydt):
     """Derivative of the sensitivity state (generate/sens_runtime.py)."""
-    sens_rhs(_THIS.jacobian, _THIS.rhs, t, y, p, dydt, N_Q, N_P, N_Z, N_JROWS, ACC_COLUMN,
+    sens_rhs(_THIS.tangent, _THIS.rhs, t, y, p, dydt, N_Q, N_P, N_Z, N_JROWS, ACC_COLUMN,
              MOMENT_COLUMN, 26, _MEM_COL0, N_EVENTS)
 
 
@@ -1111,7 +1818,7 @@ def on_event_sens(t, y, p, j):
 def monitor_sens(t, y, p, dydt, out, g, gd):
     """`rhs_sens`, then the plain monitor on the state part."""
     return sens_monitor(_THIS.rhs_sens, _THIS.monitor, t, y, p, dydt, out, g, gd, N_Q, N_P,
-                        N_Z, N_JROWS)
+                        N_Z, N_JROWS, N_EVENTS)
 
 
 @nb.njit(cache=True, error_model="numpy", nogil=True)
@@ -1133,3 +1840,32 @@ def output_sensitivities(ts, ys, ms, p):
 def jacobian_matrix(t, y, p, full):
     """The Jacobian (N_JROWS, JAC_STRIDE) at (t, y) as a matrix."""
     return jacobian_at(_THIS.jacobian, t, y, p, N_JROWS, N_Z, full)
+
+
+@nb.njit(cache=True, error_model="numpy")
+def tangent_matrix(t, y, p, dz, full):
+    """The tangents (N_JROWS, nd + 1) at (t, y) along the seeds dz (nd, N_Z) as a matrix."""
+    return tangent_at(_THIS.tangent, t, y, p, dz, N_JROWS, full)
+
+
+@nb.njit(cache=True, error_model="numpy")
+def refine_steps(t0s, y0s, mems, p, hs, coefficients, iters):
+    """The maximum of the monitored value over the plain step map of each step k (start
+    t0s[k], state y0s[k], memories mems[k], size hs[k]), by golden section; values, times."""
+    return step_peaks(_THIS.rhs, _THIS.monitor, t0s, y0s, mems, p, hs, coefficients, iters,
+                      MEM_START, N_EVENTS)
+
+
+@nb.njit(cache=True, error_model="numpy")
+def step_monitor_value(t0, y0, mem, p, h, coefficients):
+    """The monitored value of the plain step map at t0 + h (state y0, memories mem)."""
+    return step_value(_THIS.rhs, _THIS.monitor, t0, y0, mem, p, h, coefficients, MEM_START,
+                      N_EVENTS)
+
+
+@nb.njit(cache=True, error_model="numpy")
+def step_sens(t0, y0, p, hs, coefficients):
+    """Steps of the sizes hs of the sensitivity equations from (t0, y0) (memories in p):
+    states (len(hs), n) and the monitor's outputs (len(hs), N_OUT) at t0 + hs."""
+    return step_states(_THIS.rhs_sens, _THIS.monitor_sens, t0, y0, p, hs, coefficients, N_OUT,
+                       N_EVENTS)

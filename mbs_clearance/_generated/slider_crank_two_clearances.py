@@ -32,8 +32,8 @@ from mbs_clearance.generate.runtime import (
 
 LINKAGE = "slider_crank_two_clearances"
 STRUCTURE = "{\"bodies\": [[\"crank\", [\"pin\", \"pivot\"]], [\"coupler\", [\"crank_end\", \"slider_end\"]], [\"slider\", [\"pin\"]]], \"clearance_joints\": [[\"crank_coupler\", \"crank\", \"pin\", \"coupler\", \"crank_end\"], [\"coupler_slider\", \"coupler\", \"slider_end\", \"slider\", \"pin\"]], \"drive\": \"crank_pivot\", \"ground_points\": [\"crank_pivot\", \"slider_axis\"], \"joints\": [[\"revolute\", \"crank_pivot\", \"ground\", \"crank_pivot\", \"crank\", \"pivot\"], [\"prismatic\", \"slider_guide\", \"ground\", \"slider_axis\", \"slider\", \"pin\"]], \"monitor_joint\": \"crank_pivot\"}"
-STRUCTURE_DIGEST = "55699602ef89980ddb565b3ce032d3b0d43b611d882372fb1519483a3eb54793"
-GENERATOR_VERSION = "913b0af478b0b9a5"
+STRUCTURE_DIGEST = "57f84236999007e4e27db575983ac3035551c8201c3ce27b231122f2f3a95d46"
+GENERATOR_VERSION = "952cfa6b1c5da349"
 
 #: dotted names of the entries of p (without the constants)
 PARAMETERS = (
@@ -602,12 +602,18 @@ def integrate_model(y0, p, edges, settings, coefficients):
 # (generate/jacobians.py; the sensitivity equations in generate/sens_runtime.py)
 from mbs_clearance.generate.sens_runtime import (
     contact_jacobian,
+    contact_tangent,
     friction_jacobian,
+    friction_tangent,
     jacobian_at,
     sens_monitor,
     sens_on_event,
     sens_outputs,
     sens_rhs,
+    step_peaks,
+    step_states,
+    step_value,
+    tangent_at,
 )
 
 #: columns of the Jacobian: z = [t, q, qdot, p[:CONST_START]] (N_Z), then the value
@@ -947,10 +953,10 @@ def jacobian(t, y, p, jac, full):
     rfx_3_1 = -C1*coupler__slider_end__y - S1*coupler__slider_end__x
     rfy_3_1 = C1*coupler__slider_end__x - S1*coupler__slider_end__y
     for col in range(47):
-        b_0 = -(jac[816 + col] + rfx_0_0 * jac[1104 + col] + rfy_0_0 * jac[1152 + col] + rfx_0_1 * jac[1296 + col] + rfy_0_1 * jac[1344 + col])
-        b_1 = -(jac[864 + col] + rfx_1_0 * jac[1104 + col] + rfy_1_0 * jac[1152 + col] + rfx_1_1 * jac[1296 + col] + rfy_1_1 * jac[1344 + col])
-        b_2 = -(jac[912 + col] + rfx_2_0 * jac[1104 + col] + rfy_2_0 * jac[1152 + col] + rfx_2_1 * jac[1296 + col] + rfy_2_1 * jac[1344 + col])
-        b_3 = -(jac[960 + col] + rfx_3_0 * jac[1104 + col] + rfy_3_0 * jac[1152 + col] + rfx_3_1 * jac[1296 + col] + rfy_3_1 * jac[1344 + col])
+        b_0 = -(jac[816 + col] + rfx_0_0 * jac[23 * 48 + col] + rfy_0_0 * jac[24 * 48 + col] + rfx_0_1 * jac[27 * 48 + col] + rfy_0_1 * jac[28 * 48 + col])
+        b_1 = -(jac[864 + col] + rfx_1_0 * jac[23 * 48 + col] + rfy_1_0 * jac[24 * 48 + col] + rfx_1_1 * jac[27 * 48 + col] + rfy_1_1 * jac[28 * 48 + col])
+        b_2 = -(jac[912 + col] + rfx_2_0 * jac[23 * 48 + col] + rfy_2_0 * jac[24 * 48 + col] + rfx_2_1 * jac[27 * 48 + col] + rfy_2_1 * jac[28 * 48 + col])
+        b_3 = -(jac[960 + col] + rfx_3_0 * jac[23 * 48 + col] + rfy_3_0 * jac[24 * 48 + col] + rfx_3_1 * jac[27 * 48 + col] + rfy_3_1 * jac[28 * 48 + col])
         zz_0 = (b_0) * il_0
         zz_1 = (b_1 - l_1_0 * zz_0) * il_1
         zz_2 = (b_2 - l_2_0 * zz_0 - l_2_1 * zz_1) * il_2
@@ -1038,9 +1044,597 @@ def jacobian(t, y, p, jac, full):
 
 
 @nb.njit(**KERNEL)
+def tangent(t, y, p, dz, nd, use, out, full):
+    """The directional derivatives of `jacobian`'s rows along nd seeds dz (nd x N_Z, flat:
+    dz[d * N_Z + k] the component along Z_NAMES[k]) from the same derivative expressions,
+    into out (N_JROWS x (nd + 1), flat; column nd the value); `full` as `jacobian` (rows
+    not computed are left as they are). use: which seeds use each column of z
+    (`sens_runtime.seed_index`): a parameter column is evaluated and contracted only for
+    those (t, q and qdot always, for every seed)."""
+    ts = nd + 1
+    crank__mass = p[0]  # crank.mass
+    coupler__mass = p[6]  # coupler.mass
+    coupler__inertia = p[7]  # coupler.inertia
+    coupler__crank_end__x = p[8]  # coupler.crank_end.x
+    coupler__crank_end__y = p[9]  # coupler.crank_end.y
+    coupler__slider_end__x = p[10]  # coupler.slider_end.x
+    coupler__slider_end__y = p[11]  # coupler.slider_end.y
+    slider__mass = p[12]  # slider.mass
+    ground__crank_pivot__x = p[16]  # ground.crank_pivot.x
+    ground__crank_pivot__y = p[17]  # ground.crank_pivot.y
+    ground__slider_axis__x = p[18]  # ground.slider_axis.x
+    ground__slider_axis__y = p[19]  # ground.slider_axis.y
+    drive__speed = p[31]  # drive.speed
+    drive__initial_angle = p[32]  # drive.initial_angle
+    gravity = p[33]  # gravity
+    k0 = p[CONST_START + 0]
+    k1 = p[CONST_START + 1]
+    k2 = p[CONST_START + 2]
+    k3 = p[CONST_START + 3]
+    k4 = p[CONST_START + 4]
+    k5 = p[CONST_START + 5]
+    k6 = p[CONST_START + 6]
+    k7 = p[CONST_START + 7]
+    k8 = p[CONST_START + 8]
+    k12 = p[CONST_START + 12]
+    k13 = p[CONST_START + 13]
+    k14 = p[CONST_START + 14]
+    k15 = p[CONST_START + 15]
+    k16 = p[CONST_START + 16]
+    k17 = p[CONST_START + 17]
+    k18 = p[CONST_START + 18]
+    k19 = p[CONST_START + 19]
+    k24 = p[CONST_START + 24]
+    k25 = p[CONST_START + 25]
+    k26 = p[CONST_START + 26]
+    k27 = p[CONST_START + 27]
+    k28 = p[CONST_START + 28]
+    k29 = p[CONST_START + 29]
+    k30 = p[CONST_START + 30]
+    k31 = p[CONST_START + 31]
+    k32 = p[CONST_START + 32]
+    k33 = p[CONST_START + 33]
+    k34 = p[CONST_START + 34]
+    k35 = p[CONST_START + 35]
+    k36 = p[CONST_START + 36]
+    k37 = p[CONST_START + 37]
+    k38 = p[CONST_START + 38]
+    k39 = p[CONST_START + 39]
+    k40 = p[CONST_START + 40]
+    k41 = p[CONST_START + 41]
+    k42 = p[CONST_START + 42]
+    Q0 = y[0]
+    Q1 = y[1]
+    Q2 = y[2]
+    Q3 = y[3]
+    U0 = y[4]
+    U1 = y[5]
+    U2 = y[6]
+    U3 = y[7]
+    S0, C0 = sincos(drive__initial_angle + drive__speed*t)
+    S1, C1 = sincos(Q3)
+    x0 = S1*coupler__crank_end__y
+    x1 = C1*coupler__crank_end__x
+    x2 = C0*k1 + S0*k0
+    x3 = C0*k3
+    x4 = S0*k2
+    x5 = x3 + x4
+    x6 = C1*coupler__crank_end__y
+    x7 = S1*coupler__crank_end__x
+    x8 = x6 + x7
+    x9 = -C0
+    x10 = -S0
+    x11 = -C1
+    x12 = C0*k0 - S0*k1
+    x13 = C0*k4 + S0*k3
+    x14 = -S1*coupler__crank_end__y + x1
+    x15 = -x14
+    x16 = -S1
+    x17 = -U1
+    x18 = S0*drive__speed
+    x19 = C0*drive__speed
+    x20 = -x18
+    x21 = -x19
+    x22 = S1*U3
+    x23 = C1*U3
+    x24 = C0*k2
+    x25 = S0*k26
+    x26 = -x23
+    x27 = Q0*k5
+    x28 = C1*coupler__slider_end__x - S1*coupler__slider_end__y
+    x29 = C1*coupler__slider_end__y + S1*coupler__slider_end__x
+    x30 = -x29
+    x31 = Q0*k6
+    x32 = -x22
+    x33 = U0*k6
+    gv0_0 = -Q1 + ground__crank_pivot__x + x0 - x1 + x2
+    g3_0 = x5
+    g3_2 = -1.0
+    g3_4 = x8
+    gv0_1 = -Q2 + ground__crank_pivot__y - x12 - x8
+    g4_0 = x13
+    g4_3 = -1.0
+    g4_4 = x15
+    gv0_2 = U3*x6 + U3*x7 + x17 + x5
+    g21_0 = C0*k25 + S0*k24
+    g21_4 = U3*x14
+    g21_6 = -1.0
+    g21_8 = x8
+    gv0_3 = -U2 + U3*x0 - U3*x1 + x13
+    g22_0 = C0*k27 + S0*k25
+    g22_4 = U3*x8
+    g22_7 = -1.0
+    g22_8 = x15
+    gv1_0 = Q1 - ground__slider_axis__x + x27 + x28
+    g8_1 = k5
+    g8_2 = 1.0
+    g8_4 = x30
+    gv1_1 = Q2 - ground__slider_axis__y + x29 + x31
+    g9_1 = k6
+    g9_3 = 1.0
+    g9_4 = x28
+    gv1_2 = U0*k5 - coupler__slider_end__x*x22 - coupler__slider_end__y*x23 - x17
+    g25_4 = -U3*x28
+    g25_5 = k5
+    g25_6 = 1.0
+    g25_8 = x30
+    gv1_3 = U2 + coupler__slider_end__x*x23 - coupler__slider_end__y*x22 + x33
+    g26_4 = -U3*x29
+    g26_5 = k6
+    g26_7 = 1.0
+    g26_8 = x28
+    for d in range(nd):
+        dzo = d * 47
+        out[3 * ts + d] = g3_0 * dz[dzo + 0] + g3_2 * dz[dzo + 2] + g3_4 * dz[dzo + 4]
+        out[4 * ts + d] = g4_0 * dz[dzo + 0] + g4_3 * dz[dzo + 3] + g4_4 * dz[dzo + 4]
+        out[21 * ts + d] = g21_0 * dz[dzo + 0] + g21_4 * dz[dzo + 4] + g21_6 * dz[dzo + 6] + g21_8 * dz[dzo + 8]
+        out[22 * ts + d] = g22_0 * dz[dzo + 0] + g22_4 * dz[dzo + 4] + g22_7 * dz[dzo + 7] + g22_8 * dz[dzo + 8]
+        out[8 * ts + d] = g8_1 * dz[dzo + 1] + g8_2 * dz[dzo + 2] + g8_4 * dz[dzo + 4]
+        out[9 * ts + d] = g9_1 * dz[dzo + 1] + g9_3 * dz[dzo + 3] + g9_4 * dz[dzo + 4]
+        out[25 * ts + d] = g25_4 * dz[dzo + 4] + g25_5 * dz[dzo + 5] + g25_6 * dz[dzo + 6] + g25_8 * dz[dzo + 8]
+        out[26 * ts + d] = g26_4 * dz[dzo + 4] + g26_5 * dz[dzo + 5] + g26_7 * dz[dzo + 7] + g26_8 * dz[dzo + 8]
+    if use[12] > use[11]:
+        g3_11 = x9
+        g4_11 = x10
+        g21_11 = x18
+        g22_11 = x21
+        for e in range(int(use[11]), int(use[12])):
+            d = int(use[48 + e])
+            dk = dz[d * 47 + 11]
+            out[3 * ts + d] += g3_11 * dk
+            out[4 * ts + d] += g4_11 * dk
+            out[21 * ts + d] += g21_11 * dk
+            out[22 * ts + d] += g22_11 * dk
+    if use[13] > use[12]:
+        g3_12 = S0
+        g4_12 = x9
+        g21_12 = x19
+        g22_12 = x18
+        for e in range(int(use[12]), int(use[13])):
+            d = int(use[48 + e])
+            dk = dz[d * 47 + 12]
+            out[3 * ts + d] += g3_12 * dk
+            out[4 * ts + d] += g4_12 * dk
+            out[21 * ts + d] += g21_12 * dk
+            out[22 * ts + d] += g22_12 * dk
+    if use[14] > use[13]:
+        g3_13 = C0
+        g4_13 = S0
+        g21_13 = x20
+        g22_13 = x19
+        for e in range(int(use[13]), int(use[14])):
+            d = int(use[48 + e])
+            dk = dz[d * 47 + 13]
+            out[3 * ts + d] += g3_13 * dk
+            out[4 * ts + d] += g4_13 * dk
+            out[21 * ts + d] += g21_13 * dk
+            out[22 * ts + d] += g22_13 * dk
+    if use[15] > use[14]:
+        g3_14 = x10
+        g4_14 = C0
+        g21_14 = x21
+        g22_14 = x20
+        for e in range(int(use[14]), int(use[15])):
+            d = int(use[48 + e])
+            dk = dz[d * 47 + 14]
+            out[3 * ts + d] += g3_14 * dk
+            out[4 * ts + d] += g4_14 * dk
+            out[21 * ts + d] += g21_14 * dk
+            out[22 * ts + d] += g22_14 * dk
+    if use[18] > use[17]:
+        g3_17 = x11
+        g4_17 = x16
+        g21_17 = x22
+        g22_17 = x26
+        for e in range(int(use[17]), int(use[18])):
+            d = int(use[48 + e])
+            dk = dz[d * 47 + 17]
+            out[3 * ts + d] += g3_17 * dk
+            out[4 * ts + d] += g4_17 * dk
+            out[21 * ts + d] += g21_17 * dk
+            out[22 * ts + d] += g22_17 * dk
+    if use[19] > use[18]:
+        g3_18 = S1
+        g4_18 = x11
+        g21_18 = x23
+        g22_18 = x22
+        for e in range(int(use[18]), int(use[19])):
+            d = int(use[48 + e])
+            dk = dz[d * 47 + 18]
+            out[3 * ts + d] += g3_18 * dk
+            out[4 * ts + d] += g4_18 * dk
+            out[21 * ts + d] += g21_18 * dk
+            out[22 * ts + d] += g22_18 * dk
+    if use[20] > use[19]:
+        g8_19 = C1
+        g9_19 = S1
+        g25_19 = x32
+        g26_19 = x23
+        for e in range(int(use[19]), int(use[20])):
+            d = int(use[48 + e])
+            dk = dz[d * 47 + 19]
+            out[8 * ts + d] += g8_19 * dk
+            out[9 * ts + d] += g9_19 * dk
+            out[25 * ts + d] += g25_19 * dk
+            out[26 * ts + d] += g26_19 * dk
+    if use[21] > use[20]:
+        g8_20 = x16
+        g9_20 = C1
+        g25_20 = x26
+        g26_20 = x32
+        for e in range(int(use[20]), int(use[21])):
+            d = int(use[48 + e])
+            dk = dz[d * 47 + 20]
+            out[8 * ts + d] += g8_20 * dk
+            out[9 * ts + d] += g9_20 * dk
+            out[25 * ts + d] += g25_20 * dk
+            out[26 * ts + d] += g26_20 * dk
+    if use[26] > use[25]:
+        g3_25 = 1.0
+        for e in range(int(use[25]), int(use[26])):
+            d = int(use[48 + e])
+            dk = dz[d * 47 + 25]
+            out[3 * ts + d] += g3_25 * dk
+    if use[27] > use[26]:
+        g4_26 = 1.0
+        for e in range(int(use[26]), int(use[27])):
+            d = int(use[48 + e])
+            dk = dz[d * 47 + 26]
+            out[4 * ts + d] += g4_26 * dk
+    if use[28] > use[27]:
+        g8_27 = -1.0
+        for e in range(int(use[27]), int(use[28])):
+            d = int(use[48 + e])
+            dk = dz[d * 47 + 27]
+            out[8 * ts + d] += g8_27 * dk
+    if use[29] > use[28]:
+        g9_28 = -1.0
+        for e in range(int(use[28]), int(use[29])):
+            d = int(use[48 + e])
+            dk = dz[d * 47 + 28]
+            out[9 * ts + d] += g9_28 * dk
+    if use[30] > use[29]:
+        g8_29 = -x31
+        g9_29 = x27
+        g25_29 = -x33
+        g26_29 = U0*k5
+        for e in range(int(use[29]), int(use[30])):
+            d = int(use[48 + e])
+            dk = dz[d * 47 + 29]
+            out[8 * ts + d] += g8_29 * dk
+            out[9 * ts + d] += g9_29 * dk
+            out[25 * ts + d] += g25_29 * dk
+            out[26 * ts + d] += g26_29 * dk
+    if use[41] > use[40]:
+        g3_40 = t*x12
+        g4_40 = t*x2
+        g21_40 = t*x24 + t*x25 + x12
+        g22_40 = t*x3 + t*x4 + x2
+        for e in range(int(use[40]), int(use[41])):
+            d = int(use[48 + e])
+            dk = dz[d * 47 + 40]
+            out[3 * ts + d] += g3_40 * dk
+            out[4 * ts + d] += g4_40 * dk
+            out[21 * ts + d] += g21_40 * dk
+            out[22 * ts + d] += g22_40 * dk
+    if use[42] > use[41]:
+        g3_41 = x12
+        g4_41 = x2
+        g21_41 = x24 + x25
+        g22_41 = x5
+        for e in range(int(use[41]), int(use[42])):
+            d = int(use[48 + e])
+            dk = dz[d * 47 + 41]
+            out[3 * ts + d] += g3_41 * dk
+            out[4 * ts + d] += g4_41 * dk
+            out[21 * ts + d] += g21_41 * dk
+            out[22 * ts + d] += g22_41 * dk
+    FX0, FY0 = contact_tangent(out, ts, nd, dz, 47, gv0_0, gv0_1, gv0_2, gv0_3, 0, 1, 2, 3, 4, 21, 22, 23, 24, 30, 31, 32, 44, p[21], p[34], p[35], p[22], p[23], p[24])
+    FX1, FY1 = contact_tangent(out, ts, nd, dz, 47, gv1_0, gv1_1, gv1_2, gv1_3, 5, 6, 7, 8, 9, 25, 26, 27, 28, 35, 36, 37, 46, p[26], p[36], p[37], p[27], p[28], p[29])
+    m_0_0 = slider__mass
+    m_1_0 = 0.0
+    m_1_1 = coupler__mass
+    m_2_0 = 0.0
+    m_2_1 = 0.0
+    m_2_2 = coupler__mass
+    m_3_0 = 0.0
+    m_3_1 = 0.0
+    m_3_2 = 0.0
+    m_3_3 = coupler__inertia
+    f_0 = -FX1*k5 - FY1*k6 + k7
+    f_1 = FX0 - FX1
+    f_2 = FY0 - FY1 + k8
+    f_3 = -C1*FX0*coupler__crank_end__y + C1*FX1*coupler__slider_end__y + C1*FY0*coupler__crank_end__x - C1*FY1*coupler__slider_end__x - FX0*S1*coupler__crank_end__x + FX1*S1*coupler__slider_end__x - FY0*S1*coupler__crank_end__y + FY1*S1*coupler__slider_end__y
+    l_0_0 = math.sqrt(m_0_0)
+    il_0 = 1.0 / l_0_0
+    l_1_0 = (m_1_0) * il_0
+    l_2_0 = (m_2_0) * il_0
+    l_3_0 = (m_3_0) * il_0
+    l_1_1 = math.sqrt(m_1_1 - l_1_0 * l_1_0)
+    il_1 = 1.0 / l_1_1
+    l_2_1 = (m_2_1 - l_2_0 * l_1_0) * il_1
+    l_3_1 = (m_3_1 - l_3_0 * l_1_0) * il_1
+    l_2_2 = math.sqrt(m_2_2 - l_2_0 * l_2_0 - l_2_1 * l_2_1)
+    il_2 = 1.0 / l_2_2
+    l_3_2 = (m_3_2 - l_3_0 * l_2_0 - l_3_1 * l_2_1) * il_2
+    l_3_3 = math.sqrt(m_3_3 - l_3_0 * l_3_0 - l_3_1 * l_3_1 - l_3_2 * l_3_2)
+    il_3 = 1.0 / l_3_3
+    zz_0 = (f_0) * il_0
+    zz_1 = (f_1 - l_1_0 * zz_0) * il_1
+    zz_2 = (f_2 - l_2_0 * zz_0 - l_2_1 * zz_1) * il_2
+    zz_3 = (f_3 - l_3_0 * zz_0 - l_3_1 * zz_1 - l_3_2 * zz_2) * il_3
+    A3 = (zz_3) * il_3
+    A2 = (zz_2 - l_3_2 * A3) * il_2
+    A1 = (zz_1 - l_2_1 * A2 - l_3_1 * A3) * il_1
+    A0 = (zz_0 - l_1_0 * A1 - l_2_0 * A2 - l_3_0 * A3) * il_0
+    x34 = C1*FX0
+    x35 = C1*FY0
+    x36 = FX1*S1
+    x37 = FY0*S1
+    x38 = C1*FX1
+    x39 = C1*FY1
+    x40 = FY1*S1
+    rfx_0_0 = 0.0
+    rfy_0_0 = 0.0
+    rfx_0_1 = k5
+    rfy_0_1 = k6
+    rfx_1_0 = -1.0
+    rfy_1_0 = 0.0
+    rfx_1_1 = 1.0
+    rfy_1_1 = 0.0
+    rfx_2_0 = 0.0
+    rfy_2_0 = -1.0
+    rfx_2_1 = 0.0
+    rfy_2_1 = 1.0
+    r3_4 = -FX0*S1*coupler__crank_end__y + coupler__crank_end__x*x34 + coupler__crank_end__x*x37 + coupler__crank_end__y*x35 - coupler__slider_end__x*x38 - coupler__slider_end__x*x40 + coupler__slider_end__y*x36 - coupler__slider_end__y*x39
+    rfx_3_0 = C1*coupler__crank_end__y + S1*coupler__crank_end__x
+    rfy_3_0 = -C1*coupler__crank_end__x + S1*coupler__crank_end__y
+    rfx_3_1 = -C1*coupler__slider_end__y - S1*coupler__slider_end__x
+    rfy_3_1 = C1*coupler__slider_end__x - S1*coupler__slider_end__y
+    for d in range(nd):
+        dzo = d * 47
+        out[17 * ts + d] = 0.0
+        out[18 * ts + d] = 0.0
+        out[19 * ts + d] = 0.0
+        out[20 * ts + d] = r3_4 * dz[dzo + 4]
+    if use[16] > use[15]:
+        r1_15 = A1
+        r2_15 = A2 + gravity
+        for e in range(int(use[15]), int(use[16])):
+            d = int(use[48 + e])
+            dk = dz[d * 47 + 15]
+            out[18 * ts + d] += r1_15 * dk
+            out[19 * ts + d] += r2_15 * dk
+    if use[17] > use[16]:
+        r3_16 = A3
+        for e in range(int(use[16]), int(use[17])):
+            d = int(use[48 + e])
+            dk = dz[d * 47 + 16]
+            out[20 * ts + d] += r3_16 * dk
+    if use[18] > use[17]:
+        r3_17 = FX0*S1 - x35
+        for e in range(int(use[17]), int(use[18])):
+            d = int(use[48 + e])
+            dk = dz[d * 47 + 17]
+            out[20 * ts + d] += r3_17 * dk
+    if use[19] > use[18]:
+        r3_18 = x34 + x37
+        for e in range(int(use[18]), int(use[19])):
+            d = int(use[48 + e])
+            dk = dz[d * 47 + 18]
+            out[20 * ts + d] += r3_18 * dk
+    if use[20] > use[19]:
+        r3_19 = -x36 + x39
+        for e in range(int(use[19]), int(use[20])):
+            d = int(use[48 + e])
+            dk = dz[d * 47 + 19]
+            out[20 * ts + d] += r3_19 * dk
+    if use[21] > use[20]:
+        r3_20 = -x38 - x40
+        for e in range(int(use[20]), int(use[21])):
+            d = int(use[48 + e])
+            dk = dz[d * 47 + 20]
+            out[20 * ts + d] += r3_20 * dk
+    if use[22] > use[21]:
+        r0_21 = A0 + k28
+        for e in range(int(use[21]), int(use[22])):
+            d = int(use[48 + e])
+            dk = dz[d * 47 + 21]
+            out[17 * ts + d] += r0_21 * dk
+    if use[30] > use[29]:
+        r0_29 = -FX1*k6 + FY1*k5 + k29
+        for e in range(int(use[29]), int(use[30])):
+            d = int(use[48 + e])
+            dk = dz[d * 47 + 29]
+            out[17 * ts + d] += r0_29 * dk
+    if use[43] > use[42]:
+        r0_42 = -k16
+        r2_42 = coupler__mass
+        for e in range(int(use[42]), int(use[43])):
+            d = int(use[48 + e])
+            dk = dz[d * 47 + 42]
+            out[17 * ts + d] += r0_42 * dk
+            out[19 * ts + d] += r2_42 * dk
+    for d in range(nd):
+        b_0 = -(out[17 * ts + d] + rfx_0_0 * out[23 * ts + d] + rfy_0_0 * out[24 * ts + d] + rfx_0_1 * out[27 * ts + d] + rfy_0_1 * out[28 * ts + d])
+        b_1 = -(out[18 * ts + d] + rfx_1_0 * out[23 * ts + d] + rfy_1_0 * out[24 * ts + d] + rfx_1_1 * out[27 * ts + d] + rfy_1_1 * out[28 * ts + d])
+        b_2 = -(out[19 * ts + d] + rfx_2_0 * out[23 * ts + d] + rfy_2_0 * out[24 * ts + d] + rfx_2_1 * out[27 * ts + d] + rfy_2_1 * out[28 * ts + d])
+        b_3 = -(out[20 * ts + d] + rfx_3_0 * out[23 * ts + d] + rfy_3_0 * out[24 * ts + d] + rfx_3_1 * out[27 * ts + d] + rfy_3_1 * out[28 * ts + d])
+        zz_0 = (b_0) * il_0
+        zz_1 = (b_1 - l_1_0 * zz_0) * il_1
+        zz_2 = (b_2 - l_2_0 * zz_0 - l_2_1 * zz_1) * il_2
+        zz_3 = (b_3 - l_3_0 * zz_0 - l_3_1 * zz_1 - l_3_2 * zz_2) * il_3
+        x_3 = (zz_3) * il_3
+        x_2 = (zz_2 - l_3_2 * x_3) * il_2
+        x_1 = (zz_1 - l_2_1 * x_2 - l_3_1 * x_3) * il_1
+        x_0 = (zz_0 - l_1_0 * x_1 - l_2_0 * x_2 - l_3_0 * x_3) * il_0
+        out[17 * ts + d] = x_0
+        out[18 * ts + d] = x_1
+        out[19 * ts + d] = x_2
+        out[20 * ts + d] = x_3
+    out[17 * ts + nd] = A0
+    out[18 * ts + nd] = A1
+    out[19 * ts + nd] = A2
+    out[20 * ts + nd] = A3
+    out[16 * ts + nd] = C0*FX0*k0 + C0*FY0*k1 + C0*k19 - FX0*S0*k1 + FY0*S0*k0 + S0*k18
+    if full:
+        x41 = C0*k13
+        x42 = S0*k12
+        x43 = x41 + x42
+        x44 = C0*k34
+        x45 = S0*k34
+        x46 = C0*k12
+        x47 = S0*k13
+        x48 = x46 - x47
+        x49 = A0*k15
+        x50 = A0*k16
+        x51 = C0*FX0
+        x52 = C0*FY0
+        x53 = FX0*S0
+        x54 = FY0*S0
+        x55 = x51 + x54
+        x56 = C0*FY0*k0 + C0*k18 - S0*k19 - k0*x53 - k1*x51 - k1*x54
+        out[10 * ts + nd] = -FX0 + x43
+        o10_0 = C0*k31 + S0*k30
+        ofx_0_0 = -1.0
+        out[11 * ts + nd] = -FY0 + k14 - x48
+        o11_0 = -C0*k30 + S0*k31
+        ofy_1_0 = -1.0
+        out[12 * ts + nd] = FX1 + x49
+        oa_2_0 = k15
+        ofx_2_1 = 1.0
+        out[13 * ts + nd] = FY1 + k17 + x50
+        oa_3_0 = k16
+        ofy_3_1 = 1.0
+        o16_0 = C0*k38 + S0*k37 + k2*x51 + k2*x54 + k26*x53 + k3*x52
+        ofx_4_0 = C0*k0 - S0*k1
+        ofy_4_0 = C0*k1 + S0*k0
+        for d in range(nd):
+            dzo = d * 47
+            out[10 * ts + d] = o10_0 * dz[dzo + 0] + ofx_0_0 * out[23 * ts + d]
+            out[11 * ts + d] = o11_0 * dz[dzo + 0] + ofy_1_0 * out[24 * ts + d]
+            out[12 * ts + d] = 0.0 + oa_2_0 * out[17 * ts + d] + ofx_2_1 * out[27 * ts + d]
+            out[13 * ts + d] = 0.0 + oa_3_0 * out[17 * ts + d] + ofy_3_1 * out[28 * ts + d]
+            out[16 * ts + d] = o16_0 * dz[dzo + 0] + ofx_4_0 * out[23 * ts + d] + ofy_4_0 * out[24 * ts + d]
+        if use[10] > use[9]:
+            o10_9 = C0*k33 + S0*k32
+            o11_9 = -C0*k32 + S0*k33 - gravity
+            o16_9 = C0*k40 + S0*k39
+            for e in range(int(use[9]), int(use[10])):
+                d = int(use[48 + e])
+                dk = dz[d * 47 + 9]
+                out[10 * ts + d] += o10_9 * dk
+                out[11 * ts + d] += o11_9 * dk
+                out[16 * ts + d] += o16_9 * dk
+        if use[12] > use[11]:
+            o10_11 = x44
+            o11_11 = x45
+            o16_11 = C0*k14 - x52 + x53
+            for e in range(int(use[11]), int(use[12])):
+                d = int(use[48 + e])
+                dk = dz[d * 47 + 11]
+                out[10 * ts + d] += o10_11 * dk
+                out[11 * ts + d] += o11_11 * dk
+                out[16 * ts + d] += o16_11 * dk
+        if use[13] > use[12]:
+            o10_12 = -x45
+            o11_12 = x44
+            o16_12 = -S0*k14 + x55
+            for e in range(int(use[12]), int(use[13])):
+                d = int(use[48 + e])
+                dk = dz[d * 47 + 12]
+                out[10 * ts + d] += o10_12 * dk
+                out[11 * ts + d] += o11_12 * dk
+                out[16 * ts + d] += o16_12 * dk
+        if use[14] > use[13]:
+            o16_13 = x52 - x53
+            for e in range(int(use[13]), int(use[14])):
+                d = int(use[48 + e])
+                dk = dz[d * 47 + 13]
+                out[16 * ts + d] += o16_13 * dk
+        if use[15] > use[14]:
+            o16_14 = -x55
+            for e in range(int(use[14]), int(use[15])):
+                d = int(use[48 + e])
+                dk = dz[d * 47 + 14]
+                out[16 * ts + d] += o16_14 * dk
+        if use[22] > use[21]:
+            o12_21 = A0*k5
+            o13_21 = A0*k6 - gravity
+            for e in range(int(use[21]), int(use[22])):
+                d = int(use[48 + e])
+                dk = dz[d * 47 + 21]
+                out[12 * ts + d] += o12_21 * dk
+                out[13 * ts + d] += o13_21 * dk
+        if use[30] > use[29]:
+            o12_29 = -x50
+            o13_29 = x49
+            for e in range(int(use[29]), int(use[30])):
+                d = int(use[48 + e])
+                dk = dz[d * 47 + 29]
+                out[12 * ts + d] += o12_29 * dk
+                out[13 * ts + d] += o13_29 * dk
+        if use[41] > use[40]:
+            o10_40 = C0*k36 + S0*k35 + t*x46 - t*x47
+            o11_40 = -C0*k35 + S0*k36 + t*x41 + t*x42
+            o16_40 = t*x56
+            for e in range(int(use[40]), int(use[41])):
+                d = int(use[48 + e])
+                dk = dz[d * 47 + 40]
+                out[10 * ts + d] += o10_40 * dk
+                out[11 * ts + d] += o11_40 * dk
+                out[16 * ts + d] += o16_40 * dk
+        if use[42] > use[41]:
+            o10_41 = x48
+            o11_41 = x43
+            o16_41 = x56
+            for e in range(int(use[41]), int(use[42])):
+                d = int(use[48 + e])
+                dk = dz[d * 47 + 41]
+                out[10 * ts + d] += o10_41 * dk
+                out[11 * ts + d] += o11_41 * dk
+                out[16 * ts + d] += o16_41 * dk
+        if use[43] > use[42]:
+            o11_42 = -crank__mass
+            o13_42 = -slider__mass
+            o16_42 = C0*k42 + S0*k41
+            for e in range(int(use[42]), int(use[43])):
+                d = int(use[48 + e])
+                dk = dz[d * 47 + 42]
+                out[11 * ts + d] += o11_42 * dk
+                out[13 * ts + d] += o13_42 * dk
+                out[16 * ts + d] += o16_42 * dk
+        for col in range(ts):
+            out[14 * ts + col] = out[10 * ts + col] + out[12 * ts + col]
+        for col in range(ts):
+            out[15 * ts + col] = out[11 * ts + col] + out[13 * ts + col]
+    return
+
+
+@nb.njit(**KERNEL)
 def rhs_sens(t, y, p, dydt):
     """Derivative of the sensitivity state (generate/sens_runtime.py)."""
-    sens_rhs(_THIS.jacobian, _THIS.rhs, t, y, p, dydt, N_Q, N_P, N_Z, N_JROWS, ACC_COLUMN,
+    sens_rhs(_THIS.tangent, _THIS.rhs, t, y, p, dydt, N_Q, N_P, N_Z, N_JROWS, ACC_COLUMN,
              MOMENT_COLUMN, 31, _MEM_COL0, N_EVENTS)
 
 
@@ -1056,7 +1650,7 @@ def on_event_sens(t, y, p, j):
 def monitor_sens(t, y, p, dydt, out, g, gd):
     """`rhs_sens`, then the plain monitor on the state part."""
     return sens_monitor(_THIS.rhs_sens, _THIS.monitor, t, y, p, dydt, out, g, gd, N_Q, N_P,
-                        N_Z, N_JROWS)
+                        N_Z, N_JROWS, N_EVENTS)
 
 
 @nb.njit(cache=True, error_model="numpy", nogil=True)
@@ -1078,3 +1672,32 @@ def output_sensitivities(ts, ys, ms, p):
 def jacobian_matrix(t, y, p, full):
     """The Jacobian (N_JROWS, JAC_STRIDE) at (t, y) as a matrix."""
     return jacobian_at(_THIS.jacobian, t, y, p, N_JROWS, N_Z, full)
+
+
+@nb.njit(cache=True, error_model="numpy")
+def tangent_matrix(t, y, p, dz, full):
+    """The tangents (N_JROWS, nd + 1) at (t, y) along the seeds dz (nd, N_Z) as a matrix."""
+    return tangent_at(_THIS.tangent, t, y, p, dz, N_JROWS, full)
+
+
+@nb.njit(cache=True, error_model="numpy")
+def refine_steps(t0s, y0s, mems, p, hs, coefficients, iters):
+    """The maximum of the monitored value over the plain step map of each step k (start
+    t0s[k], state y0s[k], memories mems[k], size hs[k]), by golden section; values, times."""
+    return step_peaks(_THIS.rhs, _THIS.monitor, t0s, y0s, mems, p, hs, coefficients, iters,
+                      MEM_START, N_EVENTS)
+
+
+@nb.njit(cache=True, error_model="numpy")
+def step_monitor_value(t0, y0, mem, p, h, coefficients):
+    """The monitored value of the plain step map at t0 + h (state y0, memories mem)."""
+    return step_value(_THIS.rhs, _THIS.monitor, t0, y0, mem, p, h, coefficients, MEM_START,
+                      N_EVENTS)
+
+
+@nb.njit(cache=True, error_model="numpy")
+def step_sens(t0, y0, p, hs, coefficients):
+    """Steps of the sizes hs of the sensitivity equations from (t0, y0) (memories in p):
+    states (len(hs), n) and the monitor's outputs (len(hs), N_OUT) at t0 + hs."""
+    return step_states(_THIS.rhs_sens, _THIS.monitor_sens, t0, y0, p, hs, coefficients, N_OUT,
+                       N_EVENTS)

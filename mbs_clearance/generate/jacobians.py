@@ -63,7 +63,9 @@ def _gradient(d: Derivation, expr: sp.Expr, cols: list) -> dict[int, sp.Expr]:
 
 
 def jacobian_context(w, d: Derivation, out_columns: list[str]) -> dict:
-    """Template variables of jacobians.py.jinja: the body of `jacobian` and the layout."""
+    """Template variables of jacobians.py.jinja: the bodies of `jacobian` (every column of
+    z) and `tangent` (the directional derivatives along given seeds dz, from the same
+    derivative expressions), and the layout."""
     n, J = len(d.Q), len(d.joints)
     if d.t not in w.vars:
         # time enters the derivatives explicitly (d angle / d speed = t): not a constant
@@ -84,31 +86,88 @@ def jacobian_context(w, d: Derivation, out_columns: list[str]) -> dict:
     params = list(d.parameters)
     pcol = {name: 1 + 2 * n + i for i, name in enumerate(params)}
 
+    def grad(e):
+        return {k: w.split(der) for k, der in _gradient(d, e, cols).items()}
+
+    # Each stage is built twice from the same (split) expressions: for `jacobian` (J: the
+    # derivative of row r along column k into jac[r * stride + k]) and for `tangent` (T:
+    # the derivatives as locals, contracted with the seeds in a loop over the directions d:
+    # out[r * ts + d] = sum_k der_k dz[d * N_Z + k], ts = nd + 1, the value in column nd).
     def at(r, c):
         return f"jac[{r * stride + c}]"
 
-    # ---- the gaps of the clearance joints: values and partials
-    gap_rows = []
-    for j, name in enumerate(d.joints):
-        gap_rows.append([row[f"{name}.ecc_x"], row[f"{name}.ecc_y"], extra[("exd", j)],
-                         extra[("eyd", j)]])
-    gexprs, gnames = [], []
+    def contract(terms):
+        return " + ".join(f"{v} * dz[dzo + {k}]" for k, v in terms) or "0.0"
+
+    n2 = 2 * n
+    masked_cols: set[int] = set()
+
+    def masked(rows_terms, head=None, tail=None):
+        """The post-processing of a tangent stage: rows_terms is a list of (target, {k:
+        local name}, extra terms). The state columns (t, q, qdot: every direction uses
+        them) are contracted in one loop over the directions; each parameter column's
+        derivatives are computed and added only to the directions whose seed uses that
+        column (the lists in `use`, see sens_runtime.seed_index)."""
+        by_name = {}
+        for _, terms, _ in rows_terms:
+            for k, v in terms.items():
+                if k > n2:
+                    by_name[v] = k
+                    masked_cols.add(k)
+
+        def post(lines):
+            keep, blocks = [], {}
+            for ln in lines:
+                lhs = ln.split(" = ", 1)[0]
+                if lhs in by_name:
+                    blocks.setdefault(by_name[lhs], []).append(ln)
+                else:
+                    keep.append(ln)
+            loop = ["for d in range(nd):", f"    dzo = d * {nz}"]
+            for tgt, terms, extra_terms in rows_terms:
+                dense = [contract([(k, v) for k, v in terms.items() if k <= n2])]
+                loop.append(f"    {tgt} = " + " + ".join(dense + extra_terms))
+            out = keep + (head or []) + loop
+            for k in sorted(blocks):
+                out.append(f"if use[{k + 1}] > use[{k}]:")
+                out += ["    " + ln for ln in blocks[k]]
+                out += [f"    for e in range(int(use[{k}]), int(use[{k + 1}])):",
+                        f"        d = int(use[{nz + 1} + e])",
+                        f"        dk = dz[d * {nz} + {k}]"]
+                for tgt, terms, _ in rows_terms:
+                    if k in terms:
+                        out.append(f"        {tgt} += {terms[k]} * dk")
+            return out + (tail or [])
+        return post
+
+    # ---- the gaps of the clearance joints (and the spins): values and partials
+    gap_items = []          # (value name or None, row, expression, gradient)
     for j, gap in enumerate(d.gaps):
+        rows4 = [row[f"{d.joints[j]}.ecc_x"], row[f"{d.joints[j]}.ecc_y"],
+                 extra[("exd", j)], extra[("eyd", j)]]
         for c, e in enumerate(gap):
-            r = gap_rows[j][c]
-            gexprs.append(w.split(e))
-            gnames.append(f"gv{j}_{c}")
-            for k, der in _gradient(d, e, cols).items():
-                gexprs.append(w.split(der))
-                gnames.append(at(r, k))
+            gap_items.append((f"gv{j}_{c}", rows4[c], w.split(e), grad(e)))
     for j in fric:
-        gexprs.append(w.split(d.spins[j]))
-        gnames.append(f"gv{j}_4")
-        for k, der in _gradient(d, d.spins[j], cols).items():
-            gexprs.append(w.split(der))
-            gnames.append(at(extra[("spin", j)], k))
-    stages = [(gexprs, gnames)]
-    clines = []
+        gap_items.append((f"gv{j}_4", extra[("spin", j)], w.split(d.spins[j]),
+                          grad(d.spins[j])))
+    J_stages, T_stages = [], []
+    gx, gn, tx, tn, trows = [], [], [], [], []
+    for name, r, e, g in gap_items:
+        gx.append(e)
+        gn.append(name)
+        tx.append(e)
+        tn.append(name)
+        for k, der in g.items():
+            gx.append(der)
+            gn.append(at(r, k))
+            tx.append(der)
+            tn.append(f"g{r}_{k}")
+        trows.append((f"out[{r} * ts + d]", {k: f"g{r}_{k}" for k in g}, []))
+    J_stages.append((gx, gn))
+    T_stages.append((tx, tn, masked(trows)))
+
+    # ---- the contact (and friction) forces: one place each, sens_runtime
+    jlines, tlines = [], []
     for j, name in enumerate(d.joints):
         rows = [row[f"{name}.{f}"] for f in ("contact_force", "penetration",
                                              "penetration_rate", "ecc_x", "ecc_y")]
@@ -118,9 +177,12 @@ def jacobian_context(w, d: Derivation, out_columns: list[str]) -> dict:
         pv = [f"p[{pcol[f'{name}.{f}'] - 1 - 2 * n}]" for f in (
             "clearance", "mode", "impact_velocity", "stiffness", "restitution",
             "contact_model")]
-        clines.append(f"{d.FX[j]}, {d.FY[j]} = contact_jacobian(jac, {stride}, {nz}, "
-                      f"gv{j}_0, gv{j}_1, gv{j}_2, gv{j}_3, "
-                      + ", ".join(str(v) for v in rows + zc) + ", " + ", ".join(pv) + ")")
+        args = (f"gv{j}_0, gv{j}_1, gv{j}_2, gv{j}_3, "
+                + ", ".join(str(v) for v in rows + zc) + ", " + ", ".join(pv) + ")")
+        jlines.append(f"{d.FX[j]}, {d.FY[j]} = contact_jacobian(jac, {stride}, {nz}, "
+                      + args)
+        tlines.append(f"{d.FX[j]}, {d.FY[j]} = contact_tangent(out, ts, nd, dz, {nz}, "
+                      + args)
         if j in fric:
             frows = [row[f"{name}.{f}"] for f in ("ecc_x", "ecc_y")] + [
                 extra[(what, j)] for what in ("exd", "eyd", "spin")] + [
@@ -131,10 +193,14 @@ def jacobian_context(w, d: Derivation, out_columns: list[str]) -> dict:
                                                 "friction_v1")]
             fv = [f"p[{pcol[f'{name}.{f}'] - 1 - 2 * n}]" for f in (
                 "friction_law", "friction_coefficient", "friction_v0", "friction_v1")]
-            clines.append(f"{d.FX[j]}, {d.FY[j]}, {d.TQ[j]} = friction_jacobian(jac, {stride}, "
-                          f"{nz}, gv{j}_4, " + ", ".join(str(v) for v in frows + fc) + ", "
-                          + ", ".join(fv) + ")")
-    stages.append(clines)
+            args = (f"gv{j}_4, " + ", ".join(str(v) for v in frows + fc) + ", "
+                    + ", ".join(fv) + ")")
+            jlines.append(f"{d.FX[j]}, {d.FY[j]}, {d.TQ[j]} = friction_jacobian(jac, "
+                          f"{stride}, {nz}, " + args)
+            tlines.append(f"{d.FX[j]}, {d.FY[j]}, {d.TQ[j]} = friction_tangent(out, ts, nd, "
+                          f"dz, {nz}, " + args)
+    J_stages.append(jlines)
+    T_stages.append(tlines)
 
     # ---- the equations of motion: values (Cholesky of M), then dA/dz
     A = d.A
@@ -148,108 +214,144 @@ def jacobian_context(w, d: Derivation, out_columns: list[str]) -> dict:
     for i in range(n):
         mexprs.append(w.split(d.forcing[i]))
         mnames.append(f"f_{i}")
-    stages.append((mexprs, mnames))
-    stages.append(_cholesky_lines(n))
-    stages.append(_solve(n, [f"f_{i}" for i in range(n)], [str(a) for a in A], ""))
+    values = [(mexprs, mnames), _cholesky_lines(n),
+              _solve(n, [f"f_{i}" for i in range(n)], [str(a) for a in A], "")]
+    J_stages += values
+    T_stages += values
     acc_rows = [row[f"{c}.acc"] for c in d.coordinates]
-    rexprs, rnames = [], []
+    rx, rn, trn = [], [], []
+    rgrad = []
+    loads = []              # (symbol, its row, coefficient name stem, joint)
+    for j in range(J):
+        loads.append((d.FX[j], extra[("fx", j)], "rfx", j))
+        loads.append((d.FY[j], extra[("fy", j)], "rfy", j))
+        if j in fric:
+            loads.append((d.TQ[j], row[f"{d.joints[j]}.friction_force"], "rtq", j))
     for i in range(n):
-        for k, der in _gradient(d, R[i], cols).items():
-            rexprs.append(w.split(der))
-            rnames.append(at(acc_rows[i], k))
-        for j in range(J):
-            rexprs.append(w.split(sp.expand(sp.diff(R[i], d.FX[j]))))
-            rnames.append(f"rfx_{i}_{j}")
-            rexprs.append(w.split(sp.expand(sp.diff(R[i], d.FY[j]))))
-            rnames.append(f"rfy_{i}_{j}")
-            if j in fric:
-                rexprs.append(w.split(sp.expand(sp.diff(R[i], d.TQ[j]))))
-                rnames.append(f"rtq_{i}_{j}")
-    stages.append((rexprs, rnames))
+        g = grad(R[i])
+        rgrad.append(g)
+        for k, der in g.items():
+            rx.append(der)
+            rn.append(at(acc_rows[i], k))
+            trn.append(f"r{i}_{k}")
+        for F, _, stem, jj in loads:
+            rx.append(w.split(sp.expand(sp.diff(R[i], F))))
+            rn.append(f"{stem}_{i}_{jj}")
+            trn.append(f"{stem}_{i}_{jj}")
+    J_stages.append((rx, rn))
+
+    def load_terms(i, col, tab, st):
+        out = []
+        for _, frow, stem, jj in loads:
+            out.append(f"{stem}_{i}_{jj} * {tab}[{frow} * {st} + {col}]")
+        return out
+
     loop = [f"for col in range({nz}):"]
     for i in range(n):
-        terms = [f"jac[{acc_rows[i] * stride} + col]"]
-        for j in range(J):
-            terms.append(f"rfx_{i}_{j} * jac[{extra[('fx', j)] * stride} + col]")
-            terms.append(f"rfy_{i}_{j} * jac[{extra[('fy', j)] * stride} + col]")
-            if j in fric:
-                ft_row = row[f"{d.joints[j]}.friction_force"]
-                terms.append(f"rtq_{i}_{j} * jac[{ft_row * stride} + col]")
+        terms = [f"jac[{acc_rows[i] * stride} + col]"] + load_terms(i, "col", "jac",
+                                                                     stride)
         loop.append(f"    b_{i} = -(" + " + ".join(terms) + ")")
     loop += _solve(n, [f"b_{i}" for i in range(n)], [f"x_{i}" for i in range(n)], "    ")
     for i in range(n):
         loop.append(f"    jac[{acc_rows[i] * stride} + col] = x_{i}")
     for i in range(n):
         loop.append(f"{at(acc_rows[i], nz)} = {A[i]}")
-    stages.append(loop)
+    J_stages.append(loop)
+    # (the tangent: dR/dz dz into the accelerations' rows, then the solve in place)
+    tloop = ["for d in range(nd):"]
+    for i in range(n):
+        terms = [f"out[{acc_rows[i]} * ts + d]"] + load_terms(i, "d", "out", "ts")
+        tloop.append(f"    b_{i} = -(" + " + ".join(terms) + ")")
+    tloop += _solve(n, [f"b_{i}" for i in range(n)], [f"x_{i}" for i in range(n)], "    ")
+    for i in range(n):
+        tloop.append(f"    out[{acc_rows[i]} * ts + d] = x_{i}")
+    for i in range(n):
+        tloop.append(f"out[{acc_rows[i]} * ts + nd] = {A[i]}")
+    T_stages.append((rx, trn, masked(
+        [(f"out[{acc_rows[i]} * ts + d]", {k: f"r{i}_{k}" for k in rgrad[i]}, [])
+         for i in range(n)], tail=tloop)))
 
     # ---- the drive moment's value (the work's rate) in every call
     mom = row["drive_moment"]
-    stages.append(([w.split(d.drive_moment)], [at(mom, nz)]))
+    mom_e = w.split(d.drive_moment)
+    J_stages.append(([mom_e], [at(mom, nz)]))
+    T_stages.append(([mom_e], [f"out[{mom} * ts + nd]"]))
 
     # ---- full: the reactions and the drive moment with their derivatives
     outs = [(row[f"{g}.reaction_{xy}"], d.reactions[gi][k])
             for gi, g in enumerate(d.ground_joints) for k, xy in enumerate("xy")]
     outs.append((mom, d.drive_moment))
-    oexprs, onames, oloop = [], [], []
+    oexprs, onames, tonames, oloop, trows_full = [], [], [], [], []
     for m, (r, e) in enumerate(outs):
         e = sp.expand(e)
         if r != mom:
             oexprs.append(w.split(e))
             onames.append(at(r, nz))
-        for k, der in _gradient(d, e, cols).items():
-            oexprs.append(w.split(der))
+            tonames.append(f"out[{r} * ts + nd]")
+        g = grad(e)
+        for k, der in g.items():
+            oexprs.append(der)
             onames.append(at(r, k))
-        terms = []
+            tonames.append(f"o{r}_{k}")
+        terms, tterms = [], []
         for i in range(n):
             c = sp.expand(sp.diff(e, A[i]))
             if c != 0:
                 oexprs.append(w.split(c))
                 onames.append(f"oa_{m}_{i}")
+                tonames.append(f"oa_{m}_{i}")
                 terms.append(f"oa_{m}_{i} * jac[{acc_rows[i] * stride} + col]")
+                tterms.append(f"oa_{m}_{i} * out[{acc_rows[i]} * ts + d]")
         for j in range(J):
-            loads = [("fx", d.FX[j], extra[("fx", j)]), ("fy", d.FY[j], extra[("fy", j)])]
+            lds = [("fx", d.FX[j], extra[("fx", j)]), ("fy", d.FY[j], extra[("fy", j)])]
             if j in fric:
-                loads.append(("tq", d.TQ[j], row[f"{d.joints[j]}.friction_force"]))
-            for what, F, frow in loads:
+                lds.append(("tq", d.TQ[j], row[f"{d.joints[j]}.friction_force"]))
+            for what, F, frow in lds:
                 c = sp.expand(sp.diff(e, F))
                 if c != 0:
                     oexprs.append(w.split(c))
                     onames.append(f"o{what}_{m}_{j}")
+                    tonames.append(f"o{what}_{m}_{j}")
                     terms.append(f"o{what}_{m}_{j} * jac[{frow * stride} + col]")
+                    tterms.append(f"o{what}_{m}_{j} * out[{frow} * ts + d]")
         if terms:
             oloop.append(f"    jac[{r * stride} + col] += " + " + ".join(terms))
-    full_stage = (oexprs, onames)
-    shake = []
+        trows_full.append((f"out[{r} * ts + d]", {k: f"o{r}_{k}" for k in g}, tterms))
+    shake, tshake = [], []
     for xy in "xy":
         rs = [row[f"{g}.reaction_{xy}"] for g in d.ground_joints]
         tgt = row[f"shaking_{xy}"]
         shake.append(f"for col in range({stride}):")
         shake.append(f"    jac[{tgt * stride} + col] = "
                      + (" + ".join(f"jac[{r * stride} + col]" for r in rs) or "0.0"))
+        tshake.append("for col in range(ts):")
+        tshake.append(f"    out[{tgt} * ts + col] = "
+                      + (" + ".join(f"out[{r} * ts + col]" for r in rs) or "0.0"))
 
-    temps = sp.numbered_symbols("x")
-    used, body = set(), []
-    for st in stages:
-        if isinstance(st, tuple):
-            u, ls = w.stage(*st, temps)
-            used |= u
-            body += ls
-        else:
-            body += st
-    fu, fl = w.stage(*full_stage, temps)
-    used |= fu
     extra_syms = {*d.A, *d.FX, *d.FY, *(d.TQ[j] for j in fric)}
-    used -= extra_syms
-    if oloop:
-        full_body = fl + [f"for col in range({nz}):"] + oloop + shake
-    else:
-        full_body = fl + shake
-    pre = w.preamble(used)
-    code = ["    " + ln for ln in pre + body]
-    code.append("    if full:")
-    code += ["        " + ln for ln in full_body]
-    return dict(jac_body=code, n_z=nz, jac_stride=stride, n_jrows=n_rows,
+
+    def emit(stages, full_stage):
+        temps = sp.numbered_symbols("x")
+        used, body = set(), []
+        for st in [*stages, full_stage]:
+            if isinstance(st, tuple):
+                u, ls = w.stage(*st[:2], temps)
+                used |= u
+                body.append(st[2](ls) if len(st) > 2 else ls)
+            else:
+                body.append(st)
+        used -= extra_syms
+        code = ["    " + ln for ln in w.preamble(used) + [ln for b in body[:-1] for ln in b]]
+        code.append("    if full:")
+        code += ["        " + ln for ln in body[-1]]
+        return code
+
+    oloop = ([f"for col in range({nz}):"] + oloop) if oloop else []
+    jac_code = emit(J_stages, (oexprs, onames, lambda ls: ls + oloop + shake))
+    full_post = masked(trows_full, tail=tshake)
+    tan_code = emit(T_stages, (oexprs, tonames, full_post))
+    return dict(jac_body=jac_code, tan_body=tan_code, n_z=nz, jac_stride=stride,
+                n_jrows=n_rows,
                 z_names=["t", *(f"{c}" for c in d.coordinates),
                          *(f"{c}.rate" for c in d.coordinates), *params],
                 jac_extra={f"{what}:{d.joints[j]}": r for (what, j), r in extra.items()})

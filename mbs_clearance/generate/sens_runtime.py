@@ -18,24 +18,20 @@ import numba as nb
 import numpy as np
 
 from ..contact import contact_force, contact_force_partials, friction_force_partials
-from ..integrator import KERNEL
+from ..integrator import KERNEL, _golden_max, _step_monitor, step_workspace
 from .runtime import gap_state
 
-__all__ = ["contact_jacobian", "friction_jacobian", "sens_rhs", "sens_on_event",
-           "sens_monitor", "sens_outputs", "ddm_layout"]
+__all__ = ["contact_jacobian", "friction_jacobian", "contact_tangent", "friction_tangent",
+           "sens_rhs", "seed_directions", "seed_index", "work_size", "fill_seed_work", "tangent_at",
+           "step_peaks", "step_value", "step_states", "sens_on_event", "sens_monitor",
+           "sens_outputs", "ddm_layout"]
 
 
 @nb.njit(**KERNEL, inline="always")
-def contact_jacobian(jac, stride, nz, ex, ey, exd, eyd, r_f, r_pen, r_rate, r_ex, r_ey, r_exd,
-                     r_eyd, r_fx, r_fy, c_clear, c_stiff, c_rest, c_dmin, clearance, mode, dmin,
-                     stiffness, restitution, model):
-    """Rows of one clearance joint in the Jacobian jac (flat, `stride` per row, column nz
-    the value): from the rows of the journal centre's offset (ex, ey) and velocity (exd, eyd)
-    against the bearing centre, the penetration delta = |e| - c, its rate n . edot, the
-    contact force F of the law (zero in free flight, mode 0) and F n (the force of the
-    bearing's side on ... the journal: fx, fy as `runtime.contact_stage`), with the
-    parameters that enter the law directly (columns of the clearance, stiffness,
-    restitution and the impact velocity). Returns (fx, fy)."""
+def _contact_values(ex, ey, exd, eyd, clearance, mode, dmin, stiffness, restitution, model):
+    """The gap (delta, deltadot, n), 1 / |e|, the contact force F of the law (zero in free
+    flight, mode 0) and its partial derivatives (d delta, d deltadot, d impact velocity, d
+    stiffness, d restitution)."""
     delta, deltadot, nx, ny = gap_state(ex, ey, exd, eyd, clearance)
     r = delta + clearance
     rinv = 1.0 / r if r > 1e-300 else 0.0
@@ -50,47 +46,138 @@ def contact_jacobian(jac, stride, nz, ex, ey, exd, eyd, r_f, r_pen, r_rate, r_ex
         if f > 0.0:
             _, f_d, f_dd, f_dm, f_k, f_e = contact_force_partials(
                 delta, deltadot, dmin, stiffness, restitution, int(model))
+    return delta, deltadot, nx, ny, rinv, f, f_d, f_dd, f_dm, f_k, f_e
+
+
+@nb.njit(**KERNEL, inline="always")
+def _contact_direction(dex, dey, dexd, deyd, dcl, dk, de, ddm, exd, eyd, nx, ny, rinv, f,
+                       f_d, f_dd, f_dm, f_k, f_e):
+    """Derivatives of (delta, deltadot, F, F n_x, F n_y) along one direction, from those of
+    the offset (dex, dey), its rate (dexd, deyd) and the law's parameters (clearance,
+    stiffness, restitution, impact velocity): delta = |e| - c, deltadot = n . edot."""
+    d_delta = nx * dex + ny * dey - dcl
+    dnx = (ny * ny * dex - nx * ny * dey) * rinv
+    dny = (nx * nx * dey - nx * ny * dex) * rinv
+    d_rate = exd * dnx + eyd * dny + nx * dexd + ny * deyd
+    d_f = f_d * d_delta + f_dd * d_rate + f_dm * ddm + f_k * dk + f_e * de
+    return d_delta, d_rate, d_f, nx * d_f + f * dnx, ny * d_f + f * dny
+
+
+@nb.njit(**KERNEL, inline="always")
+def _contact_write(jac, stride, vc, r_f, r_pen, r_rate, r_ex, r_ey, r_exd, r_eyd, r_fx, r_fy,
+                   ex, ey, exd, eyd, delta, deltadot, f, nx, ny):
+    """The values (column vc) of one clearance joint's rows; returns (fx, fy) = F n."""
     fx = f * nx
     fy = f * ny
+    jac[r_f * stride + vc] = f
+    jac[r_pen * stride + vc] = delta
+    jac[r_rate * stride + vc] = deltadot
+    jac[r_ex * stride + vc] = ex
+    jac[r_ey * stride + vc] = ey
+    jac[r_exd * stride + vc] = exd
+    jac[r_eyd * stride + vc] = eyd
+    jac[r_fx * stride + vc] = fx
+    jac[r_fy * stride + vc] = fy
+    return fx, fy
+
+
+@nb.njit(**KERNEL, inline="always")
+def contact_jacobian(jac, stride, nz, ex, ey, exd, eyd, r_f, r_pen, r_rate, r_ex, r_ey, r_exd,
+                     r_eyd, r_fx, r_fy, c_clear, c_stiff, c_rest, c_dmin, clearance, mode, dmin,
+                     stiffness, restitution, model):
+    """Rows of one clearance joint in the Jacobian jac (flat, `stride` per row, column nz
+    the value): from the rows of the journal centre's offset (ex, ey) and velocity (exd, eyd)
+    against the bearing centre, the penetration delta = |e| - c, its rate n . edot, the
+    contact force F of the law (zero in free flight, mode 0) and F n (the force of the
+    bearing's side on ... the journal: fx, fy as `runtime.contact_stage`), with the
+    parameters that enter the law directly (columns of the clearance, stiffness,
+    restitution and the impact velocity). Returns (fx, fy)."""
+    delta, deltadot, nx, ny, rinv, f, f_d, f_dd, f_dm, f_k, f_e = _contact_values(
+        ex, ey, exd, eyd, clearance, mode, dmin, stiffness, restitution, model)
     for col in range(nz):
-        dex = jac[r_ex * stride + col]
-        dey = jac[r_ey * stride + col]
-        dexd = jac[r_exd * stride + col]
-        deyd = jac[r_eyd * stride + col]
-        d_delta = nx * dex + ny * dey
-        dnx = (ny * ny * dex - nx * ny * dey) * rinv
-        dny = (nx * nx * dey - nx * ny * dex) * rinv
-        d_rate = exd * dnx + eyd * dny + nx * dexd + ny * deyd
-        d_f = f_d * d_delta + f_dd * d_rate
+        d_delta, d_rate, d_f, d_fx, d_fy = _contact_direction(
+            jac[r_ex * stride + col], jac[r_ey * stride + col], jac[r_exd * stride + col],
+            jac[r_eyd * stride + col], 1.0 if col == c_clear else 0.0,
+            1.0 if col == c_stiff else 0.0, 1.0 if col == c_rest else 0.0,
+            1.0 if col == c_dmin else 0.0, exd, eyd, nx, ny, rinv, f, f_d, f_dd, f_dm, f_k,
+            f_e)
         jac[r_pen * stride + col] = d_delta
         jac[r_rate * stride + col] = d_rate
         jac[r_f * stride + col] = d_f
-        jac[r_fx * stride + col] = nx * d_f + f * dnx
-        jac[r_fy * stride + col] = ny * d_f + f * dny
-    # the parameters of the law: delta = |e| - c
-    jac[r_pen * stride + c_clear] -= 1.0
-    for k in range(4):
-        if k == 0:
-            col, d_f = c_clear, -f_d
-        elif k == 1:
-            col, d_f = c_stiff, f_k
-        elif k == 2:
-            col, d_f = c_rest, f_e
-        else:
-            col, d_f = c_dmin, f_dm
-        jac[r_f * stride + col] += d_f
-        jac[r_fx * stride + col] += nx * d_f
-        jac[r_fy * stride + col] += ny * d_f
-    jac[r_f * stride + nz] = f
-    jac[r_pen * stride + nz] = delta
-    jac[r_rate * stride + nz] = deltadot
-    jac[r_ex * stride + nz] = ex
-    jac[r_ey * stride + nz] = ey
-    jac[r_exd * stride + nz] = exd
-    jac[r_eyd * stride + nz] = eyd
-    jac[r_fx * stride + nz] = fx
-    jac[r_fy * stride + nz] = fy
-    return fx, fy
+        jac[r_fx * stride + col] = d_fx
+        jac[r_fy * stride + col] = d_fy
+    return _contact_write(jac, stride, nz, r_f, r_pen, r_rate, r_ex, r_ey, r_exd, r_eyd, r_fx,
+                          r_fy, ex, ey, exd, eyd, delta, deltadot, f, nx, ny)
+
+
+@nb.njit(**KERNEL, inline="always")
+def contact_tangent(out, ts, nd, dz, nz, ex, ey, exd, eyd, r_f, r_pen, r_rate, r_ex, r_ey,
+                    r_exd, r_eyd, r_fx, r_fy, c_clear, c_stiff, c_rest, c_dmin, clearance, mode,
+                    dmin, stiffness, restitution, model):
+    """`contact_jacobian` along nd seed directions dz (nd x nz, flat) instead of every
+    column: the rows of out (ts = nd + 1 per row, column nd the value) hold the offset's
+    and its rate's derivatives along each direction; the law's parameters enter through
+    their seeds dz[d, c_*]. Returns (fx, fy)."""
+    delta, deltadot, nx, ny, rinv, f, f_d, f_dd, f_dm, f_k, f_e = _contact_values(
+        ex, ey, exd, eyd, clearance, mode, dmin, stiffness, restitution, model)
+    for d in range(nd):
+        o = d * nz
+        d_delta, d_rate, d_f, d_fx, d_fy = _contact_direction(
+            out[r_ex * ts + d], out[r_ey * ts + d], out[r_exd * ts + d], out[r_eyd * ts + d],
+            dz[o + c_clear], dz[o + c_stiff], dz[o + c_rest], dz[o + c_dmin], exd, eyd, nx,
+            ny, rinv, f, f_d, f_dd, f_dm, f_k, f_e)
+        out[r_pen * ts + d] = d_delta
+        out[r_rate * ts + d] = d_rate
+        out[r_f * ts + d] = d_f
+        out[r_fx * ts + d] = d_fx
+        out[r_fy * ts + d] = d_fy
+    return _contact_write(out, ts, nd, r_f, r_pen, r_rate, r_ex, r_ey, r_exd, r_eyd, r_fx,
+                          r_fy, ex, ey, exd, eyd, delta, deltadot, f, nx, ny)
+
+
+@nb.njit(**KERNEL, inline="always")
+def _friction_values(jac, stride, vc, spin, r_ex, r_ey, r_exd, r_eyd, r_f, law, mu, v0, v1):
+    """From the values (column vc) of the offset, its rate and the normal force: n, 1 / |e|,
+    the slip velocity vt = edot . t + spin (t = (-n_y, n_x)), the friction force Ft of the
+    law and its partials (`contact.friction_force_partials`)."""
+    ex = jac[r_ex * stride + vc]
+    ey = jac[r_ey * stride + vc]
+    exd = jac[r_exd * stride + vc]
+    eyd = jac[r_eyd * stride + vc]
+    f = jac[r_f * stride + vc]
+    r, _, nx, ny = gap_state(ex, ey, exd, eyd, 0.0)
+    rinv = 1.0 / r if r > 1e-300 else 0.0
+    vt = eyd * nx - exd * ny + spin
+    ft, ft_vt, ft_fn, ft_mu, ft_v0, ft_v1 = friction_force_partials(vt, f, mu, v0, v1,
+                                                                    int(law))
+    return exd, eyd, nx, ny, rinv, vt, ft, ft_vt, ft_fn, ft_mu, ft_v0, ft_v1
+
+
+@nb.njit(**KERNEL, inline="always")
+def _friction_direction(dex, dey, dexd, deyd, dspin, dfn, dmu, dv0, dv1, exd, eyd, nx, ny,
+                        rinv, vt, ft, ft_vt, ft_fn, ft_mu, ft_v0, ft_v1):
+    """Derivatives of (vt, Ft, the power -Ft vt, and the additions -Ft t to the force on the
+    bearing (x, y)) along one direction."""
+    dnx = (ny * ny * dex - nx * ny * dey) * rinv
+    dny = (nx * nx * dey - nx * ny * dex) * rinv
+    d_vt = dexd * (-ny) - exd * dny + deyd * nx + eyd * dnx + dspin
+    d_ft = ft_vt * d_vt + ft_fn * dfn + ft_mu * dmu + ft_v0 * dv0 + ft_v1 * dv1
+    return d_vt, d_ft, -(d_ft * vt + ft * d_vt), d_ft * ny + ft * dny, -(d_ft * nx + ft * dnx)
+
+
+@nb.njit(**KERNEL, inline="always")
+def _friction_write(jac, stride, vc, spin, r_spin, r_fx, r_fy, r_ft, r_vt, r_pw, nx, ny, vt,
+                    ft):
+    """The values (column vc) of one joint's friction rows; returns (fx, fy, Ft)."""
+    fx = jac[r_fx * stride + vc] + ft * ny
+    fy = jac[r_fy * stride + vc] - ft * nx
+    jac[r_fx * stride + vc] = fx
+    jac[r_fy * stride + vc] = fy
+    jac[r_spin * stride + vc] = spin
+    jac[r_vt * stride + vc] = vt
+    jac[r_ft * stride + vc] = ft
+    jac[r_pw * stride + vc] = -ft * vt
+    return fx, fy, ft
 
 
 @nb.njit(**KERNEL, inline="always")
@@ -103,43 +190,45 @@ def friction_jacobian(jac, stride, nz, spin, r_ex, r_ey, r_exd, r_eyd, r_spin, r
     (`contact.friction_force_partials`, with the columns of mu, v0, v1), the friction power
     -Ft vt, and -Ft t added to the force on the bearing (rows fx, fy), as
     `runtime.friction_stage`. Returns (fx, fy, Ft)."""
-    ex = jac[r_ex * stride + nz]
-    ey = jac[r_ey * stride + nz]
-    exd = jac[r_exd * stride + nz]
-    eyd = jac[r_eyd * stride + nz]
-    f = jac[r_f * stride + nz]
-    r, _, nx, ny = gap_state(ex, ey, exd, eyd, 0.0)
-    rinv = 1.0 / r if r > 1e-300 else 0.0
-    vt = eyd * nx - exd * ny + spin
-    ft, ft_vt, ft_fn, ft_mu, ft_v0, ft_v1 = friction_force_partials(vt, f, mu, v0, v1,
-                                                                    int(law))
+    exd, eyd, nx, ny, rinv, vt, ft, ft_vt, ft_fn, ft_mu, ft_v0, ft_v1 = _friction_values(
+        jac, stride, nz, spin, r_ex, r_ey, r_exd, r_eyd, r_f, law, mu, v0, v1)
     for col in range(nz):
-        dex = jac[r_ex * stride + col]
-        dey = jac[r_ey * stride + col]
-        dnx = (ny * ny * dex - nx * ny * dey) * rinv
-        dny = (nx * nx * dey - nx * ny * dex) * rinv
-        d_vt = (jac[r_eyd * stride + col] * nx + eyd * dnx - jac[r_exd * stride + col] * ny
-                - exd * dny + jac[r_spin * stride + col])
-        d_ft = ft_vt * d_vt + ft_fn * jac[r_f * stride + col]
+        d_vt, d_ft, d_pw, d_fx, d_fy = _friction_direction(
+            jac[r_ex * stride + col], jac[r_ey * stride + col], jac[r_exd * stride + col],
+            jac[r_eyd * stride + col], jac[r_spin * stride + col], jac[r_f * stride + col],
+            1.0 if col == c_mu else 0.0, 1.0 if col == c_v0 else 0.0,
+            1.0 if col == c_v1 else 0.0, exd, eyd, nx, ny, rinv, vt, ft, ft_vt, ft_fn, ft_mu,
+            ft_v0, ft_v1)
         jac[r_vt * stride + col] = d_vt
         jac[r_ft * stride + col] = d_ft
-        jac[r_pw * stride + col] = -(d_ft * vt + ft * d_vt)
-        jac[r_fx * stride + col] += d_ft * ny + ft * dny
-        jac[r_fy * stride + col] -= d_ft * nx + ft * dnx
-    for col, d_ft in ((c_mu, ft_mu), (c_v0, ft_v0), (c_v1, ft_v1)):
-        jac[r_ft * stride + col] += d_ft
-        jac[r_pw * stride + col] -= d_ft * vt
-        jac[r_fx * stride + col] += d_ft * ny
-        jac[r_fy * stride + col] -= d_ft * nx
-    fx = jac[r_fx * stride + nz] + ft * ny
-    fy = jac[r_fy * stride + nz] - ft * nx
-    jac[r_fx * stride + nz] = fx
-    jac[r_fy * stride + nz] = fy
-    jac[r_spin * stride + nz] = spin
-    jac[r_vt * stride + nz] = vt
-    jac[r_ft * stride + nz] = ft
-    jac[r_pw * stride + nz] = -ft * vt
-    return fx, fy, ft
+        jac[r_pw * stride + col] = d_pw
+        jac[r_fx * stride + col] += d_fx
+        jac[r_fy * stride + col] += d_fy
+    return _friction_write(jac, stride, nz, spin, r_spin, r_fx, r_fy, r_ft, r_vt, r_pw, nx, ny,
+                           vt, ft)
+
+
+@nb.njit(**KERNEL, inline="always")
+def friction_tangent(out, ts, nd, dz, nz, spin, r_ex, r_ey, r_exd, r_eyd, r_spin, r_f, r_fx,
+                     r_fy, r_ft, r_vt, r_pw, c_mu, c_v0, c_v1, law, mu, v0, v1):
+    """`friction_jacobian` along nd seed directions dz (nd x nz, flat), after
+    `contact_tangent` (rows of out: ts = nd + 1 per row, column nd the value). Returns
+    (fx, fy, Ft)."""
+    exd, eyd, nx, ny, rinv, vt, ft, ft_vt, ft_fn, ft_mu, ft_v0, ft_v1 = _friction_values(
+        out, ts, nd, spin, r_ex, r_ey, r_exd, r_eyd, r_f, law, mu, v0, v1)
+    for d in range(nd):
+        o = d * nz
+        d_vt, d_ft, d_pw, d_fx, d_fy = _friction_direction(
+            out[r_ex * ts + d], out[r_ey * ts + d], out[r_exd * ts + d], out[r_eyd * ts + d],
+            out[r_spin * ts + d], out[r_f * ts + d], dz[o + c_mu], dz[o + c_v0],
+            dz[o + c_v1], exd, eyd, nx, ny, rinv, vt, ft, ft_vt, ft_fn, ft_mu, ft_v0, ft_v1)
+        out[r_vt * ts + d] = d_vt
+        out[r_ft * ts + d] = d_ft
+        out[r_pw * ts + d] = d_pw
+        out[r_fx * ts + d] += d_fx
+        out[r_fy * ts + d] += d_fy
+    return _friction_write(out, ts, nd, spin, r_spin, r_fx, r_fy, r_ft, r_vt, r_pw, nx, ny, vt,
+                           ft)
 
 
 @nb.njit(**KERNEL, inline="always")
@@ -169,30 +258,104 @@ def _directional(jac, row, stride, y, n2, base, p, c0, v0, m, k, mem_col0, n_joi
 
 
 @nb.njit(**KERNEL, inline="always")
-def sens_rhs(jacobian, rhs, t, y, p, dydt, n_q, n_p, nz, n_jrows, acc_row, mom_row, speed,
+def work_offsets(nb_, w0, nz, n_jrows, n_joints):
+    """Starts of the work space's parts: the Jacobian (n_jrows (nz + 1)), the seeds
+    (nb nz), which seeds use each column (`seed_index`: nz + 1 + nb nz), the chain's part
+    of the seeds at the memories' columns (nb J), the tangents (n_jrows (nb + 1)), the
+    plain monitor's derivative."""
+    dz0 = w0 + n_jrows * (nz + 1)
+    use0 = dz0 + nb_ * nz
+    mb0 = use0 + nz + 1 + nb_ * nz
+    t0 = mb0 + nb_ * n_joints
+    return dz0, use0, mb0, t0, t0 + n_jrows * (nb_ + 1)
+
+
+def work_size(nb_: int, nz: int, n_jrows: int, n_q: int, n_joints: int) -> int:
+    """Entries of a sensitivity run's work space (see `work_offsets`)."""
+    return (n_jrows * (nz + 1) + nb_ * nz + nz + 1 + nb_ * nz + nb_ * n_joints
+            + n_jrows * (nb_ + 1) + 2 * n_q + 1)
+
+
+@nb.njit(error_model="numpy")
+def seed_index(nonzero, use):
+    """Which seeds use each column of z, as the generated `tangent` reads it: for column k
+    the seeds use[nz + 1 + e], e in [use[k], use[k + 1]) (nonzero: (nd, nz) booleans)."""
+    nd, nz = nonzero.shape
+    e = 0
+    for k in range(nz):
+        use[k] = e
+        for d in range(nd):
+            if nonzero[d, k]:
+                use[nz + 1 + e] = d
+                e += 1
+    use[nz] = e
+
+
+def fill_seed_work(work, entries, nz: int, n_jrows: int, n_q: int, mem_col0: int,
+                   n_joints: int):
+    """The constant part of the seeds in a sensitivity run's work space (laid out as
+    `work_offsets` with w0 = 0): the chains D_k (entries[k]: {column of z: value}) into the
+    seeds' parameter columns, the columns used, and the chains' values at the memories'
+    columns (`seed_directions` adds sigma_k there in each call)."""
+    nb_ = len(entries)
+    dz0, use0, mb0, _, _ = work_offsets(nb_, 0, nz, n_jrows, n_joints)
+    nonzero = np.zeros((nb_, nz), dtype=np.bool_)
+    nonzero[:, 1:1 + 2 * n_q] = True
+    mem_cols = [mem_col0 + 2 * j for j in range(n_joints)]
+    nonzero[:, mem_cols] = True
+    for k, ent in enumerate(entries):
+        for c, v in ent.items():
+            work[dz0 + k * nz + c] += v
+            nonzero[k, c] = True
+        for j, c in enumerate(mem_cols):
+            work[mb0 + k * n_joints + j] = work[dz0 + k * nz + c]
+    seed_index(nonzero, work[use0:mb0])
+
+
+@nb.njit(**KERNEL, inline="always")
+def seed_directions(dz, membase, y, nb_, n2, nz, mem_col0, n_joints):
+    """The seeds dz_k = [0, s_k, D_k + sigma_k] (nb x nz, flat) of the integrated directions
+    for this call: the state part s_k and, at the memories' columns, the chain's part
+    (membase) plus sigma_k; the chain's other columns are constant (`fill_seed_work`)."""
+    wpos = n2 * (1 + nb_)
+    for k in range(nb_):
+        o = k * nz
+        base = n2 * (1 + k)
+        for c in range(n2):
+            dz[o + 1 + c] = y[base + c]
+        sig = wpos + 1 + k * n_joints
+        for j in range(n_joints):
+            dz[o + mem_col0 + 2 * j] = membase[k * n_joints + j] + y[sig + j]
+
+
+@nb.njit(**KERNEL, inline="always")
+def sens_rhs(tangent, rhs, t, y, p, dydt, n_q, n_p, nz, n_jrows, acc_row, mom_row, speed,
              mem_col0, n_joints):
-    """The state, sensitivity and work derivatives; for the truncated state y[:2 N_Q] (the
+    """The state, sensitivity and work derivatives, from the model's `tangent` along the
+    integrated directions (`seed_directions`); for the truncated state y[:2 N_Q] (the
     integrator's continuous extension) the plain model's."""
     n2 = 2 * n_q
     nb_, m, c0, v0, w0 = ddm_layout(p, n_p)
     if y.shape[0] < n2 * (1 + nb_) + 1 + nb_ * n_joints:
         rhs(t, y, p, dydt)
         return
-    stride = nz + 1
-    jac = p[w0:w0 + n_jrows * stride]
-    jacobian(t, y, p, jac, False)
+    dz0, use0, mb0, t0, ws = work_offsets(nb_, w0, nz, n_jrows, n_joints)
+    ts = nb_ + 1
+    dz = p[dz0:use0]
+    out = p[t0:ws]
+    seed_directions(dz, p[mb0:t0], y, nb_, n2, nz, mem_col0, n_joints)
+    tangent(t, y, p, dz, nb_, p[use0:mb0], out, False)
     for i in range(n_q):
         dydt[i] = y[n_q + i]
-        dydt[n_q + i] = jac[(acc_row + i) * stride + nz]
+        dydt[n_q + i] = out[(acc_row + i) * ts + nb_]
     wpos = n2 * (1 + nb_)
-    dydt[wpos] = jac[mom_row * stride + nz] * p[speed]
+    dydt[wpos] = out[mom_row * ts + nb_] * p[speed]
     for k in range(nb_):
         base = n2 * (1 + k)
         sig = wpos + 1 + k * n_joints
         for i in range(n_q):
             dydt[base + i] = y[base + n_q + i]
-            dydt[base + n_q + i] = _directional(jac, acc_row + i, stride, y, n2, base, p, c0,
-                                                v0, m, k, mem_col0, n_joints, sig)
+            dydt[base + n_q + i] = out[(acc_row + i) * ts + k]
         for j in range(n_joints):
             dydt[sig + j] = 0.0
 
@@ -248,13 +411,14 @@ def sens_on_event(jacobian, on_event, t, y, p, j, n_q, n_p, nz, n_jrows, mem_sta
 
 
 @nb.njit(**KERNEL, inline="always")
-def sens_monitor(rhs_sens, monitor, t, y, p, dydt, out, g, gd, n_q, n_p, nz, n_jrows):
+def sens_monitor(rhs_sens, monitor, t, y, p, dydt, out, g, gd, n_q, n_p, nz, n_jrows,
+                 n_joints):
     """`rhs_sens`, then the plain model's monitor on the state (outputs, switching functions,
     the monitored value), its derivative into work space."""
     rhs_sens(t, y, p, dydt)
     n2 = 2 * n_q
-    _, _, _, _, w0 = ddm_layout(p, n_p)
-    ws = w0 + n_jrows * (nz + 1)
+    nb_, _, _, _, w0 = ddm_layout(p, n_p)
+    _, _, _, _, ws = work_offsets(nb_, w0, nz, n_jrows, n_joints)
     return monitor(t, y[:n2], p, p[ws:ws + n2], out, g, gd)
 
 
@@ -292,3 +456,71 @@ def jacobian_at(jacobian, t, y, p, n_jrows, nz, full):
     jac = np.zeros(n_jrows * (nz + 1))
     jacobian(t, y, p, jac, full)
     return jac.reshape((n_jrows, nz + 1))
+
+
+@nb.njit(error_model="numpy")
+def tangent_at(tangent, t, y, p, dz, n_jrows, full):
+    """The tangents (n_jrows, nd + 1) at (t, y) along the seeds dz (nd, nz) (tests)."""
+    nd = dz.shape[0]
+    out = np.zeros(n_jrows * (nd + 1))
+    use = np.zeros(dz.shape[1] + 1 + dz.size)
+    seed_index(dz != 0.0, use)
+    tangent(t, y, p, np.ascontiguousarray(dz).ravel(), nd, use, out, full)
+    return out.reshape((n_jrows, nd + 1))
+
+
+# ------------------------------------------------------------- the step map (objective.py)
+
+@nb.njit(error_model="numpy")
+def step_peaks(rhs, monitor, t0s, y0s, mems, p, hs, coefficients, iters, mem_start,
+               n_events):
+    """The maximum of the monitored value over the plain step map of each step k (start
+    t0s[k], state y0s[k], memories mems[k] (N_MEM), size hs[k]), by golden section as the
+    integrator's peak refinement; returns values and times."""
+    A, B, C = coefficients[0], coefficients[1], coefficients[2]
+    n = y0s.shape[1]
+    K, y_new, f_new, ytmp, f0, g, gd = step_workspace(coefficients, n, n_events)
+    y0 = np.empty(n)
+    out = np.zeros(0)
+    q = p.copy()
+    vals = np.empty(t0s.shape[0])
+    times = np.empty(t0s.shape[0])
+    for k in range(t0s.shape[0]):
+        for j in range(n):
+            y0[j] = y0s[k, j]
+        for j in range(mems.shape[1]):
+            q[mem_start + j] = mems[k, j]
+        vals[k], times[k] = _golden_max(rhs, monitor, t0s[k], y0, q, hs[k], A, B, C, K, y_new,
+                                        f_new, ytmp, f0, iters, out, g, gd)
+    return vals, times
+
+
+@nb.njit(error_model="numpy")
+def step_value(rhs, monitor, t0, y0, mem, p, h, coefficients, mem_start, n_events):
+    """The monitored value of the plain step map at t0 + h (state y0, memories mem)."""
+    A, B, C = coefficients[0], coefficients[1], coefficients[2]
+    K, y_new, f_new, ytmp, f0, g, gd = step_workspace(coefficients, y0.shape[0], n_events)
+    q = p.copy()
+    for j in range(mem.shape[0]):
+        q[mem_start + j] = mem[j]
+    rhs(t0, y0, q, f0)
+    return _step_monitor(rhs, monitor, t0, y0, f0, h, A, B, C, K, q, y_new, f_new, ytmp,
+                         np.zeros(0), g, gd)
+
+
+@nb.njit(error_model="numpy")
+def step_states(rhs_sens, monitor_sens, t0, y0, p, hs, coefficients, n_out, n_events):
+    """Steps of the sizes hs of the sensitivity equations from (t0, y0), the memories in p:
+    the states (sensitivities included) at t0 + hs (len(hs), n) and the monitor's outputs
+    there (len(hs), n_out). The integrator's peak refinement maximises the monitored value
+    over exactly this step map, so this gives the state at a refined peak time."""
+    A, B, C = coefficients[0], coefficients[1], coefficients[2]
+    n = y0.shape[0]
+    K, _, f_new, ytmp, f0, g, gd = step_workspace(coefficients, n, n_events)
+    ys = np.empty((hs.shape[0], n))
+    outs = np.zeros((hs.shape[0], n_out))
+    rhs_sens(t0, y0, p, f0)
+    for k in range(hs.shape[0]):
+        _step_monitor(rhs_sens, monitor_sens, t0, y0, f0, hs[k], A, B, C, K, p, ys[k], f_new,
+                      ytmp, outs[k], g, gd)
+    return ys, outs

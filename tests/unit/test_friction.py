@@ -92,12 +92,3 @@ def test_slider_crank_ddm_of_a_friction_field_without_a_law_is_zero():
     d = sensitivities(SliderCrank(), ["friction_coefficient", "crank_mass"], revolutions=1)
     assert np.all(d.base_force_magnitude[:, 0] == 0.0)
     assert np.abs(d.base_force_magnitude[:, 1]).max() > 0.0
-
-
-def test_peak_gradient_ddm_with_friction_is_refused_before_computing():
-    """peak_gradient's step map at the peak is the frictionless model's: with a friction law
-    method='ddm' is a ValueError naming the alternatives, raised before any run."""
-    from mbs_clearance import peak_gradient
-
-    with pytest.raises(ValueError, match="method='fd'"):
-        peak_gradient(SliderCrank(friction_law="coulomb", friction_coefficient=0.1))

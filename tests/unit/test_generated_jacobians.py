@@ -130,3 +130,45 @@ def test_jacobian_matches_finite_differences(case, mode):
         bad = err > 1e-6 * np.abs(fd) + 10 * spread + floor
         assert not bad.any(), (name, [model.OUT_COLUMNS[r] for r in np.flatnonzero(bad)],
                                jac[:n_out, col][bad], fd[bad])
+
+
+@pytest.mark.parametrize("case", CASES)
+@pytest.mark.parametrize("mode", ["free", "contact"])
+def test_tangent_is_jacobian_times_seeds(case, mode):
+    """The generated forward-mode kernel `tangent` (what the sensitivity equations evaluate)
+    equals the full Jacobian times the seed directions to round-off, on every row (outputs,
+    the joints' extra rows, friction), for random dense seeds and for unit seeds (the
+    Jacobian's own columns); the value column equals the Jacobian's."""
+    linkage = getattr(cases, case.partition("+")[0])(**OVERRIDES.get(case, {}))
+    model = load_model(linkage)
+    p = pack_parameters(linkage, model)
+    rng = np.random.default_rng(11)
+    t = 0.29 * linkage.period
+    y = _state(linkage, model, p, t, 0.02 if mode == "contact" else -0.5, rng)
+    for j in range(model.N_EVENTS):
+        p[model.MEM_START + 2 * j] = 1.0 if mode == "contact" else 0.0
+        p[model.MEM_START + 2 * j + 1] = 0.05
+    for full in (False, True):
+        jac = model.jacobian_matrix(t, y, p, full)
+        # each column of z scaled by its natural size (a parameter by its value), so every
+        # column contributes to the product
+        z = np.concatenate([[t], y[:2 * model.N_Q], p[:model.CONST_START]])
+        scale = np.where(np.abs(z) > 0, np.abs(z), 1.0)
+        seeds = rng.standard_normal((5, model.N_Z)) * scale[None, :]
+        unit = np.eye(model.N_Z)[[0, 1, model.N_Z - 1]]
+        for dz in (seeds, unit):
+            tan = model.tangent_matrix(t, y, p, np.ascontiguousarray(dz), full)
+            ref = jac[:, :-1] @ dz.T
+            # the rows a call fills (without `full`: the joints' rows, the accelerations,
+            # the drive moment's value)
+            rows = np.arange(model.N_JROWS) if full else np.array(
+                [r for r in range(model.N_JROWS) if np.any(jac[r, :-1] != 0.0)])
+            # round-off: 1e-13 of each row's largest term |J_rk dz_dk|, of all force rows'
+            # for a force (a guide's reaction along it is a cancelling sum of them)
+            terms = (np.abs(jac[:, :-1])[:, None, :] * np.abs(dz)[None, :, :]).max(axis=2)
+            forces = [r for r, c in enumerate(model.OUT_COLUMNS)
+                      if c.endswith(("contact_force", "_x", "_y")) and ".ecc_" not in c]
+            terms[forces] = terms[forces].max(axis=0)
+            np.testing.assert_array_less(np.abs(tan[rows, :-1] - ref[rows]),
+                                         1e-13 * terms[rows] + 1e-300)
+            np.testing.assert_array_equal(tan[rows, -1], jac[rows, -1])

@@ -128,3 +128,31 @@ def test_ddm_cost_pinned():
     ddm = sensitivities(linkage, names, revolutions=4)
     assert ddm.stats["nfev"] <= 1.4 * plain["nfev"], (ddm.stats["nfev"], plain["nfev"])
     assert ddm.stats["nevent"] == plain["nevent"]
+
+
+def test_tangent_work_per_call_pinned():
+    """Each sensitivity right-hand side evaluates the generated `tangent` along the
+    integrated directions only: per call nb passes of the contact and solve stages (not
+    the N_Z columns of the full Jacobian) and, of the parameter columns, only the
+    (direction, column) pairs of the chains plus each direction's memory column (counted
+    here from the chains' sparse form in p, independently of the kernel's index)."""
+    from mbs_clearance.linkage_ddm import tangent_work
+    from mbs_clearance.sensitivity import DEFAULT_PARAMETERS, slider_crank_run
+
+    run, _ = slider_crank_run(SliderCrank(), DEFAULT_PARAMETERS, None, revolutions=1)
+    model, p = run.model, run.p
+    work = tangent_work(model, p)
+    nb = work["directions"]
+    assert nb == 7 and work["jacobian_columns"] == model.N_Z == 36
+    # the chains in p: per direction m (column, value) pairs, padding with value 0
+    m = int(p[model.N_P + 2])
+    cols = p[model.N_P + 3:model.N_P + 3 + nb * m]
+    vals = p[model.N_P + 3 + nb * m:model.N_P + 3 + 2 * nb * m]
+    pairs = {(k // m, int(c)) for k, (c, v) in enumerate(zip(cols, vals)) if v != 0.0}
+    pairs |= {(k, 1 + 2 * model.N_Q + model.MEM_START + 1 + 2 * j) for k in range(nb)
+              for j in range(model.N_EVENTS)}
+    assert work["parameter_pairs"] == len(pairs)
+    # measured 20 pairs (13 of the chains, 7 memories) for 7 directions: with the state
+    # columns, 7 x 5 + 20 = 55 column terms per call against 36 x (contact + solve) column
+    # passes and 7 x 2 contractions of the full Jacobian
+    assert work["parameter_pairs"] <= 3 * nb

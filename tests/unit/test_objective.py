@@ -166,3 +166,21 @@ def test_fd_through_other_backends(paper):
 def test_bad_input_raises_before_computing(paper, kwargs, match):
     with pytest.raises(ValueError, match=match):
         peak_gradient(paper, **kwargs)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("law", ["coulomb", "ambrosio"])
+def test_friction_matches_central_differences(law):
+    """With friction the DDM runs on the model generated with the tangential force (the one
+    `peak_base_force` runs), its step map at the peak included: the gradient for mu and two
+    link lengths against central differences of the refined peak (revolution 2)."""
+    mech = SliderCrank(friction_law=law, friction_coefficient=0.05)
+    names = ["friction_coefficient", "crank_length", "coupler_length"]
+    ddm = peak_gradient(mech, names, revolution=2)
+    fd = peak_gradient(mech, names, revolution=2, method="fd", rtol=1e-12,
+                       fd_relative_step=1e-5)
+    assert not ddm.kink and not ddm.at_edge
+    assert abs(ddm.peak - fd.peak) < 1e-6 * ddm.peak
+    # friction moves the peak: mu's gradient is not zero (so the comparison tests it)
+    assert abs(fd.normalized[0]) > 1e-3
+    assert np.max(_error(ddm, fd)) < 1e-3

@@ -8,7 +8,13 @@ recorded), and also with the same 721 output times as the DDM run (`t_eval`: bot
 them); the default call `sensitivities(mech)` (every step, no t_eval) is timed too. Medians
 over repeats after warm-up, in one run.
 
-    python -m validation.benchmarks.ddm_speed [--repeats 5]
+The headline (issue 16's target: DDM of the 8 default parameters at most 4 plain
+simulations) comes first: `sensitivities(mech)` against `simulate(mech, 4)`, the median of
+the per-pair ratios over alternating pairs in this process (`common.paired`), with the
+function evaluations of both and the column work of one sensitivity right-hand side
+(`linkage_ddm.tangent_work`). `--headline` prints only that.
+
+    python -m validation.benchmarks.ddm_speed [--repeats 5] [--pairs 11] [--headline]
 """
 
 from __future__ import annotations
@@ -21,7 +27,7 @@ from mbs_clearance import SliderCrank, simulate
 from mbs_clearance.reduced import DEFAULT_RTOL
 from mbs_clearance.sensitivity import sensitivities
 
-from .common import machine_summary, timed
+from .common import machine_summary, paired, timed
 
 
 def error(s, ref):
@@ -30,11 +36,37 @@ def error(s, ref):
                for k in range(len(ref.parameters)))
 
 
+def headline(mech, pairs):
+    """DDM of the default parameters / plain simulation: paired time ratio, nfev, work."""
+    from mbs_clearance.linkage_ddm import tangent_work
+    from mbs_clearance.sensitivity import DEFAULT_PARAMETERS, slider_crank_run
+
+    plain = simulate(mech, 4)
+    ddm = sensitivities(mech)
+    res = paired(lambda: simulate(mech, 4), lambda: sensitivities(mech), pairs)
+    run, _ = slider_crank_run(mech, DEFAULT_PARAMETERS, None, revolutions=1)
+    work = tangent_work(run.model, run.p)
+    print(f"Machine: {machine_summary()}\n")
+    print(f"DDM of the {len(DEFAULT_PARAMETERS)} default parameters "
+          f"({work['directions']} integrated directions) / simulate(mech, 4): "
+          f"{res['ratio']:.2f} (median of {pairs} alternating pairs; target <= 4); "
+          f"nfev {ddm.stats['nfev']} / {plain.stats['nfev']} = "
+          f"{ddm.stats['nfev'] / plain.stats['nfev']:.2f}; per right-hand side: "
+          f"{work['directions']} directions x {work['state_columns']} state columns + "
+          f"{work['parameter_pairs']} (direction, parameter column) pairs "
+          f"(the full Jacobian: {work['jacobian_columns']} columns)\n")
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeats", type=int, default=5)
+    ap.add_argument("--pairs", type=int, default=11)
+    ap.add_argument("--headline", action="store_true")
     args = ap.parse_args(argv)
     mech = SliderCrank()
+    headline(mech, args.pairs)
+    if args.headline:
+        return
     T = mech.period
     t_eval = np.linspace(3 * T, 4 * T, 721)
     ref = sensitivities(mech, t_eval=t_eval, rtol=1e-11, integrator="dopri5")

@@ -1,8 +1,9 @@
 """Cost of the Linkage DDM (generated Jacobians) against a plain simulation of the same
 linkage, per named case: 4 revolutions (the four-bar: 1), every step recorded, default
 tolerances; the DDM with the paper's 8 design parameters' counterparts (paper case) or 8
-parameters of bodies, joints and drive. Reports nfev of both and the median over
-alternating pairs (plain, DDM, plain, DDM, ...) of the time ratio DDM / plain, in one run.
+parameters of bodies, joints and drive. Reports nfev of both, the column work of one
+sensitivity right-hand side (`linkage_ddm.tangent_work`) and the median over alternating
+pairs (plain, DDM, plain, DDM, ...) of the time ratio DDM / plain, in one run.
 
     python -m validation.benchmarks.linkage_ddm_speed [--pairs 5]
 """
@@ -12,7 +13,9 @@ from __future__ import annotations
 import argparse
 
 from mbs_clearance import cases
-from mbs_clearance.linkage_model import run
+from mbs_clearance.generate import load_model
+from mbs_clearance.linkage_ddm import setup, tangent_work
+from mbs_clearance.linkage_model import default_atol, initial_state, pack_parameters, run
 from mbs_clearance.sensitivity import sensitivities
 
 from .common import machine_summary, paired
@@ -47,9 +50,17 @@ def main(argv=None):
         res = paired(lambda lk=linkage, r=revs: run(lk, r),
                      lambda lk=linkage, nm=names, r=revs, i=integrator: sensitivities(
                          lk, nm, revolutions=r, integrator=i), args.pairs)
-        print(f"{case}: plain nfev {plain['nfev']}, DDM ({len(names)} parameters) nfev "
-              f"{ddm.stats['nfev']}; time DDM / plain (median of {args.pairs} pairs) "
-              f"{res['ratio']:.2f}")
+        model = load_model(linkage)
+        y0, p, _, _ = setup(linkage, model, pack_parameters(linkage, model),
+                            initial_state(linkage, model), [{n: 1.0} for n in names],
+                            [1.0] * len(names), default_atol(linkage, model, 1e-7))
+        work = tangent_work(model, p)
+        print(f"{case}: plain nfev {plain['nfev']}, DDM ({len(names)} parameters, "
+              f"{work['directions']} directions) nfev {ddm.stats['nfev']}; per right-hand "
+              f"side {work['state_columns']} state columns x {work['directions']} + "
+              f"{work['parameter_pairs']} parameter pairs (full Jacobian "
+              f"{work['jacobian_columns']} columns); time DDM / plain (median of "
+              f"{args.pairs} pairs) {res['ratio']:.2f}")
 
 
 if __name__ == "__main__":

@@ -2,8 +2,9 @@
 
 Paper case and two designs of the GA's box, the 8 default parameters, revolution 4, default
 settings: the ratio of the median time of `peak_gradient(mech)` to the median time of
-`peak_base_force(mech)` (the GA's objective, nothing recorded), measured in the same run
-(medians over interleaved repeats after warm-up). Target: at most 4. Also the ratio of function
+`peak_base_force(mech)` (the GA's objective, nothing recorded), measured in the same run:
+the median of the per-repeat ratios over interleaved repeats after warm-up (each ratio under
+the same load). Target: at most 4. Also the ratio of function
 evaluations (a DDM evaluation costs more than a plain one) and of `sensitivities(mech)` (the
 default call, every step) for context.
 
@@ -50,16 +51,20 @@ def main(argv=None):
                 fn()
                 times[k].append(time.perf_counter() - t0)
         t_peak, t_grad, t_sens = (float(np.median(times[k])) for k in calls)
+        tp = np.asarray(times["peak"])
+        r_grad = float(np.median(np.asarray(times["grad"]) / tp))
+        r_sens = float(np.median(np.asarray(times["sens"]) / tp))
         g = peak_gradient(mech)
         nfev_plain = int(run(mech, 4, record=False)[5][0])
-        rows.append((name, t_peak, t_grad, t_sens, g.stats["nfev"] / nfev_plain, g.kink))
+        rows.append((name, t_peak, t_grad, r_grad, r_sens, g.stats["nfev"] / nfev_plain,
+                     g.kink))
     print(f"Machine: {machine_summary()}\n")
     print("| design | peak_base_force (ms) | peak_gradient (ms) | ratio (target <= 4) "
           "| sensitivities() / peak_base_force | nfev ratio | kink |")
     print("|---|---|---|---|---|---|---|")
-    for name, t_peak, t_grad, t_sens, nfev_ratio, kink in rows:
-        print(f"| {name} | {t_peak * 1e3:.2f} | {t_grad * 1e3:.2f} | {t_grad / t_peak:.2f} "
-              f"| {t_sens / t_peak:.2f} | {nfev_ratio:.2f} | {kink} |")
+    for name, t_peak, t_grad, r_grad, r_sens, nfev_ratio, kink in rows:
+        print(f"| {name} | {t_peak * 1e3:.2f} | {t_grad * 1e3:.2f} | {r_grad:.2f} "
+              f"| {r_sens:.2f} | {nfev_ratio:.2f} | {kink} |")
     print()
 
 
