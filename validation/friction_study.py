@@ -13,6 +13,15 @@ docs/friction.md quotes) and draws the journal orbits of the last revolution.
         [--law ambrosio] [--clearance C] [--figure docs/figures/friction_orbits.png]
 
 `--clearance` (m) sets every clearance joint's radial clearance (default: the cases', 0.01 mm).
+
+With `--sensitivities`, instead: the paper's sensitivities of |F12| (Figs. 4-6, DDM, the
+paper's parameters) of the SliderCrank at each mu (default 0, 0.01, 0.1), a markdown table
+of each parameter's max |normalized sensitivity| and max |d|F12|/db| over the last
+revolution and their change against mu = 0, and a figure of the normalized sensitivities
+with the coefficients overlaid, one panel per parameter:
+
+    python -m validation.friction_study --sensitivities
+        --figure docs/figures/friction_sensitivities.png
 """
 
 from __future__ import annotations
@@ -61,10 +70,11 @@ _CLEARANCE = {
 }
 
 
-def study(mus, revolutions: int, law: str, clearance: float | None = None):
+def study(mus, revolutions: int, law: str, clearance: float | None = None,
+          case_names=CASES):
     """{case: [(mu, measures, trajectory)]}."""
     out = {}
-    for case in CASES:
+    for case in case_names:
         rows = []
         for mu in mus:
             over = {} if mu == 0.0 else {"friction_law": law, "friction_coefficient": mu}
@@ -121,23 +131,128 @@ def figure(results, revolutions: int, path: str) -> None:
                  fontsize=10)
     fig.tight_layout()
     fig.savefig(path, dpi=120)
-    print(f"wrote {path}")
+    plt.close(fig)
+
+
+def sensitivity_study(mus, revolutions: int = 4, law: str = "ambrosio"):
+    """[(mu, Sensitivities)] of the paper's SliderCrank, DDM, the paper's parameters."""
+    from mbs_clearance import SliderCrank, sensitivities
+    from mbs_clearance.sensitivity import DEFAULT_PARAMETERS
+
+    out = []
+    for mu in mus:
+        mech = SliderCrank() if mu == 0.0 else SliderCrank(friction_law=law,
+                                                          friction_coefficient=mu)
+        out.append((mu, sensitivities(mech, DEFAULT_PARAMETERS, revolutions, method="ddm")))
+    return out
+
+
+def sensitivity_measures(results) -> list[dict]:
+    """Per parameter: max |S| (Eq. 15) and max |d|F12|/db| over the last revolution at each
+    mu, their relative changes against the first mu (the frictionless run), and whether
+    every run was judged periodic. Rows in the paper's order."""
+    rows = []
+    mu0, s0 = results[0]
+    for k, name in enumerate(s0.parameters):
+        row = {"parameter": name, "mu": [], "max_s": [], "max_d": [], "periodic": []}
+        for mu, s in results:
+            mask = s.revolution_mask(s.trajectory.revolutions)
+            row["mu"].append(mu)
+            row["max_s"].append(float(np.abs(s.normalized[mask, k]).max()))
+            row["max_d"].append(float(np.abs(s.base_force_magnitude[mask, k]).max()))
+            row["periodic"].append(s.periodic)
+        row["change_s"] = [m / row["max_s"][0] - 1 for m in row["max_s"]]
+        row["change_d"] = [m / row["max_d"][0] - 1 for m in row["max_d"]]
+        rows.append(row)
+    return rows
+
+
+def sensitivity_table(rows) -> str:
+    """Markdown: per parameter, max |S| and max |d|F12|/db| at each mu and their change."""
+    mus = rows[0]["mu"]
+    head = ["parameter"] + [f"max \\|S\\| mu={m:g}" for m in mus] + \
+        [f"max \\|dF/db\\| mu={m:g}" for m in mus]
+    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    for r in rows:
+        cells = [r["parameter"], f"{r['max_s'][0]:.4g}"]
+        cells += [f"{v:.4g} ({c:+.1%})" for v, c in zip(r["max_s"][1:], r["change_s"][1:])]
+        cells.append(f"{r['max_d'][0]:.4g}")
+        cells += [f"{v:.4g} ({c:+.1%})" for v, c in zip(r["max_d"][1:], r["change_d"][1:])]
+        lines.append("| " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def sensitivity_figure(results, path: str) -> None:
+    """Figs. 4-6 with friction: the normalized sensitivity of |F12| (Eq. 15) over the last
+    revolution, one panel per parameter (grouped as the paper's figures), the coefficients
+    of friction overlaid."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from mbs_clearance.plotting import SENSITIVITY_FIGURES
+
+    panels = [(title.split(":")[0], name) for title, group in SENSITIVITY_FIGURES.values()
+              for name in group if name in results[0][1].parameters]
+    ncol = 4
+    nrow = -(-len(panels) // ncol)
+    fig, axes = plt.subplots(nrow, ncol, figsize=(4.0 * ncol, 3.0 * nrow), squeeze=False)
+    styles = ["-", "--", ":", "-."]
+    for ax, (fig_name, name) in zip(axes.flat, panels):
+        for i, (mu, s) in enumerate(results):
+            rev = s.trajectory.revolutions
+            mask = s.revolution_mask(rev)
+            ang = np.degrees(s.trajectory.crank_angle[mask]) - 360.0 * (rev - 1)
+            ax.plot(ang, s.normalized[mask, s.column(name)], styles[i % len(styles)],
+                    color=f"C{i}", lw=0.9, label=f"mu = {mu:g}")
+        ax.set_title(f"{fig_name}: {name}", fontsize=9)
+        ax.set_xlabel("crank angle in revolution (deg)", fontsize=8)
+        ax.set_ylabel("normalized sensitivity (-)", fontsize=8)
+        ax.grid(alpha=0.3)
+    for ax in list(axes.flat)[len(panels):]:
+        ax.axis("off")
+    axes.flat[0].legend(fontsize=8)
+    rev = results[0][1].trajectory.revolutions
+    fig.suptitle("Sensitivities of |F12| (Eq. 15, DDM) with friction in the joint "
+                 f"(Ambrosio's law), revolution {rev}", fontsize=10)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
 
 
 def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--revolutions", type=int, default=4)
-    parser.add_argument("--mu", default="0,0.01,0.05,0.1")
+    parser.add_argument("--mu", default=None,
+                        help="coefficients of friction (default 0,0.01,0.05,0.1; with "
+                             "--sensitivities 0,0.01,0.1)")
     parser.add_argument("--law", default="ambrosio", choices=("ambrosio", "coulomb"))
     parser.add_argument("--clearance", type=float, default=None,
                         help="radial clearance of every joint in m (default: the cases')")
-    parser.add_argument("--figure", default=None, help="path of the orbit figure (PNG)")
+    parser.add_argument("--figure", default=None, help="path of the figure (PNG)")
+    parser.add_argument("--sensitivities", action="store_true",
+                        help="the sensitivities of Figs. 4-6 with friction instead")
     args = parser.parse_args(argv)
-    mus = [float(v) for v in args.mu.split(",")]
+    mu_text = args.mu or ("0,0.01,0.1" if args.sensitivities else "0,0.01,0.05,0.1")
+    mus = [float(v) for v in mu_text.split(",")]
+    if args.sensitivities:
+        if mus[0] != 0.0:
+            parser.error("--sensitivities compares against the frictionless run: the first "
+                         "--mu must be 0")
+        sens = sensitivity_study(mus, args.revolutions, args.law)
+        print(sensitivity_table(sensitivity_measures(sens)))
+        for mu, s in sens:
+            print(f"mu = {mu:g}: {s.periodicity_note}")
+        if args.figure:
+            sensitivity_figure(sens, args.figure)
+            print(f"wrote {args.figure}")
+        return
     results = study(mus, args.revolutions, args.law, args.clearance)
     print(table(results, args.revolutions))
     if args.figure:
         figure(results, args.revolutions, args.figure)
+        print(f"wrote {args.figure}")
 
 
 if __name__ == "__main__":
