@@ -2,8 +2,8 @@
 tools/generate_models.py; do not edit). MODULES maps a structure digest to a module name."""
 
 MODULES: dict[str, str] = {
-    'a92d02bde0350143848fcb9f252a0043cda35fd8ad2a39038b43e68ddaa6ca89': 'paper_slider_crank',
-    '57f84236999007e4e27db575983ac3035551c8201c3ce27b231122f2f3a95d46': 'slider_crank_two_clearances',
-    '71f166249c728efdb7ac4db64f75a5960d52fdaa5e982edc21247f9bd5afc5d8': 'four_bar',
-    'e7e5f682694d9749effc7a11bcf051028673fe3d83ee860bac9afa16f70f750a': 'paper_slider_crank_friction',
+    'cfdd5260a9180ad68192d888e8e80a8bdc78e54152e554a4f07b6e4ade115a3d': 'paper_slider_crank',
+    '8b6b6b57578ff57ac131e7439baefdb1b276ba65672034674aca2a2b31adccbf': 'slider_crank_two_clearances',
+    '5f78541c27e157d02c9d765a18d2c834871ac87257eed43869ae614eb374fa8c': 'four_bar',
+    '05db4800d3445cffb1a5642a5eee32896b7d8ba3333c15eae08065435ac4f0e2': 'paper_slider_crank_friction',
 }

@@ -32,8 +32,8 @@ from mbs_clearance.generate.runtime import (
 
 LINKAGE = "four_bar"
 STRUCTURE = "{\"bodies\": [[\"crank\", [\"pin\", \"pivot\"]], [\"coupler\", [\"crank_end\", \"rocker_end\"]], [\"rocker\", [\"pin\", \"pivot\"]]], \"clearance_joints\": [[\"coupler_rocker\", \"rocker\", \"pin\", \"coupler\", \"rocker_end\"]], \"drive\": \"crank_pivot\", \"ground_points\": [\"crank_pivot\", \"rocker_pivot\"], \"joints\": [[\"revolute\", \"crank_pivot\", \"ground\", \"crank_pivot\", \"crank\", \"pivot\"], [\"revolute\", \"crank_coupler\", \"crank\", \"pin\", \"coupler\", \"crank_end\"], [\"revolute\", \"rocker_pivot\", \"ground\", \"rocker_pivot\", \"rocker\", \"pivot\"]], \"monitor_joint\": null}"
-STRUCTURE_DIGEST = "71f166249c728efdb7ac4db64f75a5960d52fdaa5e982edc21247f9bd5afc5d8"
-GENERATOR_VERSION = "952cfa6b1c5da349"
+STRUCTURE_DIGEST = "5f78541c27e157d02c9d765a18d2c834871ac87257eed43869ae614eb374fa8c"
+GENERATOR_VERSION = "8ff364455ab6b159"
 
 #: dotted names of the entries of p (without the constants)
 PARAMETERS = (
@@ -2019,7 +2019,7 @@ def integrate_sens(y0, p, edges, settings, coefficients):
 def output_sensitivities(ts, ys, ms, p):
     """Values (n, N_OUT) and derivatives (n, N_OUT, nb) of the outputs along the integrated
     directions at recorded steps of a sensitivity run."""
-    return sens_outputs(_THIS.jacobian, ts, ys, ms, p, N_Q, N_P, N_Z, N_JROWS, N_OUT,
+    return sens_outputs(_THIS.tangent, ts, ys, ms, p, N_Q, N_P, N_Z, N_JROWS, N_OUT,
                         MEM_START, _MEM_COL0, N_EVENTS)
 
 

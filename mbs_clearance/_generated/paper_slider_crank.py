@@ -32,8 +32,8 @@ from mbs_clearance.generate.runtime import (
 
 LINKAGE = "paper_slider_crank"
 STRUCTURE = "{\"bodies\": [[\"crank\", [\"pin\", \"pivot\"]], [\"coupler\", [\"crank_end\", \"slider_end\"]], [\"slider\", [\"pin\"]]], \"clearance_joints\": [[\"coupler_slider\", \"coupler\", \"slider_end\", \"slider\", \"pin\"]], \"drive\": \"crank_pivot\", \"ground_points\": [\"crank_pivot\", \"slider_axis\"], \"joints\": [[\"revolute\", \"crank_pivot\", \"ground\", \"crank_pivot\", \"crank\", \"pivot\"], [\"revolute\", \"crank_coupler\", \"crank\", \"pin\", \"coupler\", \"crank_end\"], [\"prismatic\", \"slider_guide\", \"ground\", \"slider_axis\", \"slider\", \"pin\"]], \"monitor_joint\": \"crank_pivot\"}"
-STRUCTURE_DIGEST = "a92d02bde0350143848fcb9f252a0043cda35fd8ad2a39038b43e68ddaa6ca89"
-GENERATOR_VERSION = "952cfa6b1c5da349"
+STRUCTURE_DIGEST = "cfdd5260a9180ad68192d888e8e80a8bdc78e54152e554a4f07b6e4ade115a3d"
+GENERATOR_VERSION = "8ff364455ab6b159"
 
 #: dotted names of the entries of p (without the constants)
 PARAMETERS = (
@@ -1832,7 +1832,7 @@ def integrate_sens(y0, p, edges, settings, coefficients):
 def output_sensitivities(ts, ys, ms, p):
     """Values (n, N_OUT) and derivatives (n, N_OUT, nb) of the outputs along the integrated
     directions at recorded steps of a sensitivity run."""
-    return sens_outputs(_THIS.jacobian, ts, ys, ms, p, N_Q, N_P, N_Z, N_JROWS, N_OUT,
+    return sens_outputs(_THIS.tangent, ts, ys, ms, p, N_Q, N_P, N_Z, N_JROWS, N_OUT,
                         MEM_START, _MEM_COL0, N_EVENTS)
 
 

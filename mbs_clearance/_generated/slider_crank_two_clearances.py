@@ -32,8 +32,8 @@ from mbs_clearance.generate.runtime import (
 
 LINKAGE = "slider_crank_two_clearances"
 STRUCTURE = "{\"bodies\": [[\"crank\", [\"pin\", \"pivot\"]], [\"coupler\", [\"crank_end\", \"slider_end\"]], [\"slider\", [\"pin\"]]], \"clearance_joints\": [[\"crank_coupler\", \"crank\", \"pin\", \"coupler\", \"crank_end\"], [\"coupler_slider\", \"coupler\", \"slider_end\", \"slider\", \"pin\"]], \"drive\": \"crank_pivot\", \"ground_points\": [\"crank_pivot\", \"slider_axis\"], \"joints\": [[\"revolute\", \"crank_pivot\", \"ground\", \"crank_pivot\", \"crank\", \"pivot\"], [\"prismatic\", \"slider_guide\", \"ground\", \"slider_axis\", \"slider\", \"pin\"]], \"monitor_joint\": \"crank_pivot\"}"
-STRUCTURE_DIGEST = "57f84236999007e4e27db575983ac3035551c8201c3ce27b231122f2f3a95d46"
-GENERATOR_VERSION = "952cfa6b1c5da349"
+STRUCTURE_DIGEST = "8b6b6b57578ff57ac131e7439baefdb1b276ba65672034674aca2a2b31adccbf"
+GENERATOR_VERSION = "8ff364455ab6b159"
 
 #: dotted names of the entries of p (without the constants)
 PARAMETERS = (
@@ -1664,7 +1664,7 @@ def integrate_sens(y0, p, edges, settings, coefficients):
 def output_sensitivities(ts, ys, ms, p):
     """Values (n, N_OUT) and derivatives (n, N_OUT, nb) of the outputs along the integrated
     directions at recorded steps of a sensitivity run."""
-    return sens_outputs(_THIS.jacobian, ts, ys, ms, p, N_Q, N_P, N_Z, N_JROWS, N_OUT,
+    return sens_outputs(_THIS.tangent, ts, ys, ms, p, N_Q, N_P, N_Z, N_JROWS, N_OUT,
                         MEM_START, _MEM_COL0, N_EVENTS)
 
 

@@ -423,30 +423,31 @@ def sens_monitor(rhs_sens, monitor, t, y, p, dydt, out, g, gd, n_q, n_p, nz, n_j
 
 
 @nb.njit(error_model="numpy")
-def sens_outputs(jacobian, ts, ys, ms, p, n_q, n_p, nz, n_jrows, n_out, mem_start, mem_col0,
+def sens_outputs(tangent, ts, ys, ms, p, n_q, n_p, nz, n_jrows, n_out, mem_start, mem_col0,
                  n_joints):
     """Values (n, n_out) and total derivatives (n, n_out, nb) of the outputs (the first
     n_out rows of the Jacobian) along the integrated directions at recorded steps (times
-    ts, sensitivity states ys, memories ms)."""
+    ts, sensitivity states ys, memories ms): the model's `tangent` (full) along each
+    step's seeds."""
     n2 = 2 * n_q
     q = p.copy()
-    nb_, m, c0, v0, w0 = ddm_layout(q, n_p)
-    stride = nz + 1
-    jac = np.zeros(n_jrows * stride)
+    nb_, _, _, _, w0 = ddm_layout(q, n_p)
+    dz0, use0, mb0, t0, ws = work_offsets(nb_, w0, nz, n_jrows, n_joints)
+    st = nb_ + 1
     n = ts.shape[0]
     vals = np.empty((n, n_out))
     ders = np.empty((n, n_out, nb_))
-    wpos = n2 * (1 + nb_)
     for i in range(n):
         for k in range(ms.shape[1]):
             q[mem_start + k] = ms[i, k]
         y = ys[i]
-        jacobian(ts[i], y, q, jac, True)
+        seed_directions(q[dz0:use0], q[mb0:t0], y, nb_, n2, nz, mem_col0, n_joints)
+        out = q[t0:ws]
+        tangent(ts[i], y, q, q[dz0:use0], nb_, q[use0:mb0], out, True)
         for r in range(n_out):
-            vals[i, r] = jac[r * stride + nz]
+            vals[i, r] = out[r * st + nb_]
             for k in range(nb_):
-                ders[i, r, k] = _directional(jac, r, stride, y, n2, n2 * (1 + k), q, c0, v0, m,
-                                             k, mem_col0, n_joints, wpos + 1 + k * n_joints)
+                ders[i, r, k] = out[r * st + k]
     return vals, ders
 
 
