@@ -333,8 +333,11 @@ def _start_step(model, y0, p, rtol, atol, method, span):
     y = np.ascontiguousarray(y0[:n])
     f = np.empty(n)
     model.rhs(0.0, y, p, f)
-    return initial_step(model.rhs, 0.0, y, f, p, rtol, np.ascontiguousarray(atol[:n]),
-                        METHODS[method].error_order + 1, span, np.empty(n), np.empty(n))
+    # the kernel's Python source, calling the compiled rhs: the compiled initial_step would
+    # be specialised for this rhs in every process (a function argument is not cached)
+    return initial_step.py_func(model.rhs, 0.0, y, f, p, rtol, np.ascontiguousarray(atol[:n]),
+                                METHODS[method].error_order + 1, span, np.empty(n),
+                                np.empty(n))
 
 
 def simulate_linkage(linkage: Linkage, revolutions: int = 4, **options):

@@ -40,7 +40,7 @@ PAPER = {
 }
 
 SECTIONS = ("mechanism", "response", "agreement", "sensitivity", "optimization",
-            "tolerance", "regimes", "paper", "performance", "environment")
+            "tolerance", "regimes", "friction", "paper", "performance", "environment")
 
 TITLES = {
     "mechanism": "1. Mechanism and parameters",
@@ -50,6 +50,7 @@ TITLES = {
     "optimization": "5. Optimisation of the link lengths (paper Fig. 7, Table 3)",
     "tolerance": "5b. Manufacturing tolerances and wear (global sensitivity)",
     "regimes": "5c. Where the motion is periodic: regime map over clearance and speed",
+    "friction": "5d. Beyond the paper: friction in the clearance joints",
     "paper": "6. Comparison with the paper's numbers",
     "performance": "7. Accuracy and speed",
     "environment": "8. Environment",
@@ -86,6 +87,12 @@ def _settings(quick: bool) -> dict[str, Any]:
         "regime_keep": 20 if quick else 50,
         "regime_max_period": 4 if quick else 8,
         "regime_map_file": None,
+        # friction (section 5d, beyond the paper): cases of the table and coefficients of
+        # friction of the table and of the sensitivities (Ambrosio's law)
+        "friction_cases": ("paper_slider_crank",) if quick
+        else ("paper_slider_crank", "slider_crank_two_clearances"),
+        "friction_mus": (0.0, 0.01, 0.05, 0.1),
+        "friction_sensitivity_mus": (0.0, 0.1) if quick else (0.0, 0.01, 0.1),
     }
 
 
@@ -325,6 +332,37 @@ def section_regimes(out: Path, s: dict) -> dict:
                 "settings": {k: settings[k] for k in ("revolutions", "keep", "max_period")
                              if k in settings},
                 "axes": {d: [float(v) for v in ds[d].values] for d in dims}}
+
+
+def section_friction(out: Path, s: dict) -> dict:
+    """Friction in the joints (issue 18; the paper's joint is frictionless): the table of
+    docs/friction.md (rev-4 peak, RMS drive moment, works, time in contact) per case and mu,
+    the runs saved for the orbit figure, and the sensitivities of Figs. 4-6 with friction
+    (DDM) saved for their figure, with each parameter's max |S| and max |dF/db| per mu."""
+    from .friction_study import (
+        sensitivity_measures,
+        sensitivity_study,
+        study,
+    )
+
+    n = s["revolutions"]
+    results = study(s["friction_mus"], n, "ambrosio", case_names=s["friction_cases"])
+    rows = []
+    for case, runs in results.items():
+        p0 = runs[0][1]["peak"]
+        for mu, m, traj in runs:
+            traj.save(out / "data" / f"friction_{case}_mu{mu:g}.npz")
+            rows.append({"case": case, "mu": mu, "joints": list(traj.joints),
+                         "peak_change_percent": 100 * (m["peak"] / p0 - 1), **m})
+    sens = sensitivity_study(s["friction_sensitivity_mus"], n)
+    for mu, sn in sens:
+        sn.save(out / "data" / f"friction_sensitivity_mu{mu:g}.npz")
+    return {"law": "ambrosio", "revolution": n, "rows": rows,
+            "runs": {case: [f"friction_{case}_mu{mu:g}.npz" for mu, _, _ in runs]
+                     for case, runs in results.items()},
+            "sensitivity_files": [f"friction_sensitivity_mu{mu:g}.npz" for mu, _ in sens],
+            "sensitivity": sensitivity_measures(sens),
+            "periodic": [{"mu": mu, "note": sn.periodicity_note} for mu, sn in sens]}
 
 
 def section_paper(out: Path, s: dict, numbers: dict) -> dict:
@@ -619,6 +657,24 @@ def draw_figures(out: Path, numbers: dict) -> dict[str, list[str]]:
     if (data / "regime_map.nc").exists():
         plot_regimes(data / "regime_map.nc", fig_dir / "regime_map.png")
         figs["regimes"].append("regime_map.png")
+    if "friction" in numbers:
+        from mbs_clearance.sensitivity import load_sensitivities
+
+        from .friction_study import figure as orbit_figure
+        from .friction_study import sensitivity_figure
+
+        fr = numbers["friction"]
+        mus = {r["case"]: [] for r in fr["rows"]}
+        for r in fr["rows"]:
+            mus[r["case"]].append(r["mu"])
+        runs = {case: [(mu, None, load_trajectory(data / f))
+                       for mu, f in zip(mus[case], files)]
+                for case, files in fr["runs"].items()}
+        orbit_figure(runs, fr["revolution"], str(fig_dir / "friction_orbits.png"))
+        sens = [(r, load_sensitivities(data / f))
+                for r, f in zip(fr["sensitivity"][0]["mu"], fr["sensitivity_files"])]
+        sensitivity_figure(sens, str(fig_dir / "friction_sensitivities.png"))
+        figs["friction"] += ["friction_orbits.png", "friction_sensitivities.png"]
     if "agreement" in numbers:
         figs["agreement"] += [f for f in numbers["agreement"].get("case_figures", [])
                               if (fig_dir / f).exists()]
@@ -941,6 +997,35 @@ the motion is <b>{{ n.regimes.design_nearest.regime | replace('_', ' ') }}</b>.{
 <table><tr><th>regime</th><th>points</th></tr>{% for k, v in n.regimes.counts.items() %}
 <tr><td>{{ k | replace('_', ' ') }}</td><td>{{ v }}</td></tr>{% endfor %}</table>
 {% for f in figs.regimes %}<img src="{{ img[f] }}" alt="{{ f }}">{% endfor %}
+
+<h2 id="friction">{{ titles.friction }}</h2>
+<p>The paper's joint is frictionless and the paper claims nothing about friction: no verdict
+line. Here each clearance joint carries Ambrosio's modified Coulomb law (coefficient mu,
+thresholds 1e-4 and 1e-2 m/s; docs/friction.md): revolution {{ n.friction.revolution }},
+default rtol{% if quick %}; the paper's case only (--quick){% endif %}.</p>
+<table><tr><th>case</th><th>mu</th><th>peak (N)</th><th>change (%)</th>
+<th>RMS drive moment (N m)</th><th>drive work (J)</th><th>friction work (J)</th>
+<th>in contact (fraction of the revolution)</th><th>contact onsets</th></tr>
+{% for r in n.friction.rows %}<tr><td>{{ r.case }}</td><td>{{ r.mu }}</td>
+<td>{{ r.peak | num(5) }}</td><td>{{ '%+.2f' % r.peak_change_percent }}</td>
+<td>{{ r.rms_moment | num(5) }}</td><td>{{ '%.4f' % r.drive_work }}</td>
+<td>{{ '%.4f' % r.friction_work }}</td>
+<td>{% for j in r.joints %}{{ j }} {{ '%.3f' % r.in_contact[loop.index0] }}{% if not loop.last %}, {% endif %}{% endfor %}</td>
+<td>{% for j in r.joints %}{{ j }} {{ r.onsets[loop.index0] }}{% if not loop.last %}, {% endif %}{% endfor %}</td></tr>{% endfor %}</table>
+<dl class="defs"><dt>peak</dt><dd>the crank pivot's largest |reaction| (the paper's base
+force) over the revolution; change against mu = 0.</dd>
+<dt>in contact</dt><dd>the fraction of the revolution the journal spends on the bearing wall
+(1: it follows the wall throughout); contact onsets: new contacts in the revolution.</dd></dl>
+<p>Sensitivities of Figs. 4-6 (DDM, Eq. 15) with friction: per parameter the largest
+|S| and the largest |d|F12|/db| over the revolution, and their change against mu = 0.</p>
+<table><tr><th>parameter</th>{% for mu in n.friction.sensitivity[0].mu %}<th>max |S|,
+mu = {{ mu }}</th>{% endfor %}{% for mu in n.friction.sensitivity[0].mu %}<th>max |dF/db|,
+mu = {{ mu }}</th>{% endfor %}</tr>
+{% for r in n.friction.sensitivity %}<tr><td>{{ r.parameter }}</td>
+{% for v in r.max_s %}<td>{{ v | num(4) }}{% if not loop.first %} ({{ '%+.1f' % (100 * r.change_s[loop.index0]) }} %){% endif %}</td>{% endfor %}
+{% for v in r.max_d %}<td>{{ v | num(4) }}{% if not loop.first %} ({{ '%+.1f' % (100 * r.change_d[loop.index0]) }} %){% endif %}</td>{% endfor %}</tr>{% endfor %}</table>
+<p class="note">{% for p in n.friction.periodic %}mu = {{ p.mu }}: {{ p.note }}. {% endfor %}</p>
+{% for f in figs.friction %}<img src="{{ img[f] }}" alt="{{ f }}">{% endfor %}
 
 <h2 id="paper">{{ titles.paper }}</h2>
 <table><tr><th>quantity</th><th>paper</th><th>ours</th><th>difference</th><th>explanation</th></tr>

@@ -19,7 +19,8 @@ FIGURES = ["fig3_response.png", "fig3_differences.png", "regime_map.png",
            "fig4_kinematic.png", "fig5_contact.png", "fig6_journal.png",
            "fig7a_fitness_fixed.png", "fig7b_force_fixed.png", "fig7a_fitness_uniform.png",
            "fig7b_force_uniform.png", "tolerance.png", "work_precision.png",
-           "work_precision_series.png", "agreement_slider_crank_two_clearances.png"]
+           "work_precision_series.png", "agreement_slider_crank_two_clearances.png",
+           "friction_orbits.png", "friction_sensitivities.png"]
 
 
 @pytest.fixture(scope="module")
@@ -337,3 +338,47 @@ def test_regime_section_and_map_option(report, tmp_path, capsys):
               str(tmp_path / "r")])
     assert exc.value.code == 2 and "no such file" in capsys.readouterr().err
     assert not (tmp_path / "r").exists()
+
+
+def test_friction_section(report):
+    """Friction in the joints (beyond the paper, no verdict line): the quick report's table
+    holds the paper case only, each row's peak is the plain run's of the same description
+    (independent call), the frictionless row dissipates nothing by friction and the rows
+    with friction do; the sensitivity table's numbers are those of the saved DDM runs, the
+    first of them frictionless and equal to an independent DDM run; both figures are in the
+    HTML and decode."""
+    from mbs_clearance import cases
+    from mbs_clearance.sensitivity import load_sensitivities
+
+    n = json.loads((report / "report.json").read_text())
+    fr = n["friction"]
+    assert {r["case"] for r in fr["rows"]} == {"paper_slider_crank"}      # --quick
+    assert [r["mu"] for r in fr["rows"]] == [0.0, 0.01, 0.05, 0.1]
+    for r in fr["rows"]:
+        over = {} if r["mu"] == 0 else {"friction_law": "ambrosio",
+                                        "friction_coefficient": r["mu"]}
+        traj = simulate(cases.paper_slider_crank(**over), 4)
+        assert r["peak"] == pytest.approx(float(traj.peaks[3]), rel=1e-12), r["mu"]
+        assert (r["friction_work"] == 0.0) == (r["mu"] == 0.0)
+        assert r["friction_work"] <= r["drive_work"] + 1e-9
+    mus = fr["sensitivity"][0]["mu"]
+    assert mus[0] == 0.0 and 0.1 in mus
+    for mu, f in zip(mus, fr["sensitivity_files"]):
+        sens = load_sensitivities(report / "data" / f)
+        mask = sens.revolution_mask(4)
+        for k, row in enumerate(fr["sensitivity"]):
+            assert row["parameter"] == sens.parameters[k]
+            assert row["max_s"][mus.index(mu)] == pytest.approx(
+                float(np.abs(sens.normalized[mask, k]).max()), rel=1e-12)
+    ref = sensitivities(SliderCrank(), revolutions=4)       # the paper's set, DDM
+    for k, row in enumerate(fr["sensitivity"]):
+        assert row["max_s"][0] == pytest.approx(
+            float(np.abs(ref.normalized[ref.revolution_mask(4), k]).max()), rel=1e-9)
+    html = (report / "report.html").read_text()
+    assert 'id="friction"' in html and "no verdict" in html
+    assert "friction" not in expected_verdicts(n)
+    page = _Page()
+    page.feed(html)
+    assert "friction" not in page.verdicts
+    for f in ("friction_orbits.png", "friction_sensitivities.png"):
+        assert f'alt="{f}"' in html

@@ -92,3 +92,24 @@ def test_slider_crank_ddm_of_a_friction_field_without_a_law_is_zero():
     d = sensitivities(SliderCrank(), ["friction_coefficient", "crank_mass"], revolutions=1)
     assert np.all(d.base_force_magnitude[:, 0] == 0.0)
     assert np.abs(d.base_force_magnitude[:, 1]).max() > 0.0
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("mu, names", [(0.1, ["journal_radius", "restitution"]),
+                                       (0.01, ["restitution"])])
+def test_ddm_of_figs_5_6_fields_with_friction_matches_central_differences(mu, names):
+    """The sensitivities of Figs. 4-6 with friction (docs/friction.md): DDM of |F12| for the
+    journal radius (Fig. 6) and the restitution (Fig. 5; at mu = 0.01 its sensitivity is
+    about 5 times the frictionless one) agrees with central differences of plain runs at
+    rtol 1e-10 over two revolutions, Ambrosio's law (the mu = 0.05 check of mu and the
+    crank length is in test_sensitivity.py)."""
+    from mbs_clearance.sensitivity import sensitivities
+
+    mech = SliderCrank(friction_law="ambrosio", friction_coefficient=mu)
+    te = np.linspace(0.0, 2 * mech.period, 801)[1:]
+    d = sensitivities(mech, names, revolutions=2, method="ddm", t_eval=te)
+    f = sensitivities(mech, names, revolutions=2, method="fd", t_eval=te, rtol=1e-10)
+    np.testing.assert_array_equal(d.t, f.t)
+    for k, name in enumerate(names):
+        a, b = d.base_force_magnitude[:, k], f.base_force_magnitude[:, k]
+        assert np.sqrt(np.mean((a - b) ** 2)) < 5e-3 * np.sqrt(np.mean(b ** 2)), name
