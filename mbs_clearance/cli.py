@@ -389,6 +389,13 @@ def linkage_from_args(args: argparse.Namespace):
     return CASES[case](**changes)
 
 
+def design_from_args(args: argparse.Namespace):
+    """(linkage, design): the `Linkage` of --case / --description (`linkage_from_args`) as
+    both, or (None, the SliderCrank of the mechanism options)."""
+    linkage = linkage_from_args(args)
+    return linkage, linkage if linkage is not None else mechanism_from_args(args)
+
+
 def _progress(message: str) -> None:
     """A note that work starts, on an interactive terminal only (so that an error raised by
     the work stays the only line a failed run prints)."""
@@ -535,8 +542,7 @@ SENSITIVITY_COLUMNS = (
 def _cmd_sensitivity(args: argparse.Namespace) -> int:
     from .sensitivity import DEFAULT_PARAMETERS, sensitivities
 
-    linkage = linkage_from_args(args)
-    mech = linkage if linkage is not None else mechanism_from_args(args)
+    linkage, mech = design_from_args(args)
     names = args.parameters
     if names is None and linkage is None:
         names = DEFAULT_PARAMETERS
@@ -1046,8 +1052,7 @@ def _add_animate_parser(subparsers) -> argparse.ArgumentParser:
 def _cmd_animate(args: argparse.Namespace) -> int:
     from .simulate import simulate
 
-    linkage = linkage_from_args(args)
-    mech = linkage if linkage is not None else mechanism_from_args(args)
+    linkage, mech = design_from_args(args)
     revolution = args.revolutions if args.revolution is None else args.revolution
     if revolution > args.revolutions:
         raise ValueError(f"--revolution must be between 1 and --revolutions "
@@ -1124,8 +1129,7 @@ def _cmd_lyapunov(args: argparse.Namespace) -> int:
     from .poincare import LYAPUNOV_ZERO
     from .units import number
 
-    linkage = linkage_from_args(args)
-    mech = linkage if linkage is not None else mechanism_from_args(args)
+    linkage, mech = design_from_args(args)
     transient = args.revolutions // 2 if args.transient is None else args.transient
     if transient >= args.revolutions:
         raise ValueError(f"--transient must be between 0 and --revolutions - 1 "
@@ -1144,9 +1148,11 @@ def _cmd_lyapunov(args: argparse.Namespace) -> int:
           f"{transient + 1}-{args.revolutions}")
     print(f"sign: {sign} (|lambda| <= {LYAPUNOV_ZERO:g} per revolution counts as zero): "
           f"{LYAPUNOV_MEANING[sign]}")
-    print(f"  per revolution: log of the growth of a small perturbation over one crank "
-          f"revolution (e-fold every {number(1 / abs(lam), 3) if lam else 'inf'} "
-          f"revolutions); 1/s: the same per second")
+    trend = "" if sign == "zero" else (
+        f": it {'grows' if lam > 0 else 'shrinks'} e-fold every {number(1 / abs(lam), 3)} "
+        f"revolutions")
+    print(f"  per revolution: the log of the growth of a small perturbation over one crank "
+          f"revolution{trend}; 1/s: the same per second")
     return 0
 
 

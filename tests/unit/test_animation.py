@@ -84,18 +84,31 @@ def test_paper_case_drawn_as_the_closed_form_slider_crank(runs):
     assert np.abs(slider[:, 1]).max() < 1e-15
 
 
-@pytest.mark.parametrize("name", sorted(cases.CASES))
-def test_each_named_case_animates(name, runs, tmp_path):
+def _moving_gif(path, n_frames: int) -> None:
+    """`path` is a GIF of `n_frames` frames, wide enough to read, whose pictures differ."""
     from PIL import Image
 
-    gif = animate_mechanism(runs[name], tmp_path / "a.gif", frames=3, fps=5)
-    with Image.open(gif) as image:
-        assert image.n_frames == 3 and image.width > 300
+    with Image.open(path) as image:
+        assert image.n_frames == n_frames and image.width > 300
         frames = []
         for k in range(image.n_frames):
             image.seek(k)
             frames.append(np.asarray(image.convert("L"), dtype=float))
     assert np.abs(frames[1] - frames[0]).max() > 0       # the mechanism moves
+
+
+@pytest.mark.parametrize("name", sorted(cases.CASES))
+def test_each_named_case_animates(name, runs, tmp_path):
+    _moving_gif(animate_mechanism(runs[name], tmp_path / "a.gif", frames=3, fps=5), 3)
+
+
+def test_cli_animates_the_paper_slider_crank(tmp_path, capsys):
+    """Without --case: the paper's SliderCrank, drawn as before."""
+    out = tmp_path / "anim"
+    assert main(["animate", "--revolutions", "1", "--frames", "4", "--out", str(out)]) == 0
+    err = capsys.readouterr().err
+    assert f"wrote {out / 'mechanism.gif'} (animation of slider-crank, revolution 1)" in err
+    _moving_gif(out / "mechanism.gif", 4)
 
 
 def test_bad_input_is_a_clear_error(runs, tmp_path):
@@ -143,4 +156,4 @@ def test_cli_animates_a_case_and_says_the_magnification(tmp_path, capsys):
     lk = cases.four_bar()
     assert (f"wrote {out / 'mechanism.gif'} (animation of four_bar, revolution 1, journal "
             f"offsets x {magnification(lk):.3g})") in err
-    assert (out / "mechanism.gif").stat().st_size > 0
+    _moving_gif(out / "mechanism.gif", 3)
