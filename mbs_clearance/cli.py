@@ -389,6 +389,13 @@ def linkage_from_args(args: argparse.Namespace):
     return CASES[case](**changes)
 
 
+def design_from_args(args: argparse.Namespace):
+    """(linkage, design): the `Linkage` of --case / --description (`linkage_from_args`) as
+    both, or (None, the SliderCrank of the mechanism options)."""
+    linkage = linkage_from_args(args)
+    return linkage, linkage if linkage is not None else mechanism_from_args(args)
+
+
 def _progress(message: str) -> None:
     """A note that work starts, on an interactive terminal only (so that an error raised by
     the work stays the only line a failed run prints)."""
@@ -535,8 +542,7 @@ SENSITIVITY_COLUMNS = (
 def _cmd_sensitivity(args: argparse.Namespace) -> int:
     from .sensitivity import DEFAULT_PARAMETERS, sensitivities
 
-    linkage = linkage_from_args(args)
-    mech = linkage if linkage is not None else mechanism_from_args(args)
+    linkage, mech = design_from_args(args)
     names = args.parameters
     if names is None and linkage is None:
         names = DEFAULT_PARAMETERS
@@ -706,6 +712,7 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     _add_tolerance_parser(sub)
     _add_map_parser(sub)
     _add_animate_parser(sub)
+    _add_lyapunov_parser(sub)
     if command not in BUILTIN:
         _add_plugins(sub, command)
     return parser
@@ -930,7 +937,7 @@ def _add_map_parser(subparsers) -> argparse.ArgumentParser:
                    help="last revolutions kept as section samples (default 50)")
     p.add_argument("--lyapunov", action="store_true",
                    help="also compute the largest Lyapunov exponent of each point (a "
-                        "tangent run; the paper's case only)")
+                        "tangent run instead of the plain one; any --case)")
     p.add_argument("--angle", type=finite_float,
                    help="crank angle of the section in rad (default: the initial angle)")
     p.add_argument("--tol", type=positive_float, default=1e-3,
@@ -1009,18 +1016,31 @@ def _add_animate_parser(subparsers) -> argparse.ArgumentParser:
     """The ``animate`` subcommand: the mechanism over a revolution, GIF or MP4."""
     p = subparsers.add_parser(
         "animate", help="animation of the mechanism over a revolution (GIF/MP4)",
-        description="Simulate the slider-crank and write an animation of one crank "
-                    "revolution beside the journal-centre orbit in units of the clearance "
-                    "(the clearance magnified) into --out (GIF; MP4 with --format mp4 where "
-                    "ffmpeg is installed).")
+        description="Simulate the slider-crank (or a named case, or a linkage described in "
+                    "a file) and write an animation of one crank revolution into --out "
+                    "(GIF; MP4 with --format mp4 where ffmpeg is installed). A case or "
+                    "description is drawn from its description: bodies as polylines through "
+                    "their named points, ground pivots, sliders' guides, each clearance "
+                    "joint's bearing circle and its journal with the journal's offset "
+                    "magnified (the factor is in the title), beside the orbits in units of "
+                    "the clearance.",
+        epilog="named cases (--case NAME; --set NAME=VALUE changes a value):\n"
+               + _case_lines())
+    add_linkage_options(p)
     p.add_argument("--revolutions", type=int_at_least(1), default=4,
-                   help="crank revolutions simulated; the last is animated")
+                   help="crank revolutions simulated")
+    p.add_argument("--revolution", type=int_at_least(1),
+                   help="the revolution animated (default: the last, --revolutions)")
     p.add_argument("--backend", choices=("exudyn", "reduced"), default="reduced",
                    help="model that computes the motion")
     p.add_argument("--frames", type=int_at_least(2), default=72, help="frames per revolution")
     p.add_argument("--fps", type=int_at_least(1), default=12, help="frames per second")
     p.add_argument("--format", choices=("gif", "mp4"), default="gif",
                    help="file format (mp4 needs ffmpeg)")
+    p.add_argument("--magnify", type=positive_float,
+                   help="magnification of the journals' offsets in their bearings (--case / "
+                        "--description; default: the largest clearance drawn as 40 %% of the "
+                        "drawn bearing radius)")
     p.add_argument("--out", type=Path, default=Path("animate"),
                    help="output folder (default ./animate, named after the command)")
     add_force_option(p)
@@ -1032,21 +1052,107 @@ def _add_animate_parser(subparsers) -> argparse.ArgumentParser:
 def _cmd_animate(args: argparse.Namespace) -> int:
     from .simulate import simulate
 
-    mech = mechanism_from_args(args)
+    linkage, mech = design_from_args(args)
+    revolution = args.revolutions if args.revolution is None else args.revolution
+    if revolution > args.revolutions:
+        raise ValueError(f"--revolution must be between 1 and --revolutions "
+                         f"({args.revolutions}); got {revolution}")
+    if linkage is None and args.magnify is not None:
+        raise ValueError("--magnify applies to --case or --description (the slider-crank's "
+                         "orbit is drawn in units of the clearance beside it)")
+    from .plotting import animate_mechanism, magnification
+
+    magnify = None if linkage is None else magnification(linkage, args.magnify)
     check_output_dir(args.out, "--out", args.force)
     if args.format == "mp4":
         from matplotlib.animation import FFMpegWriter
 
         if not FFMpegWriter.isAvailable():
             raise ValueError("--format mp4 needs ffmpeg on the PATH; use --format gif")
+    name = linkage.name if linkage is not None else "slider-crank"
+    _progress(f"simulating {name!r}, {args.revolutions} revolutions with backend "
+              f"{args.backend!r} ...")
     traj = simulate(mech, args.revolutions, backend=args.backend)
-    from .plotting import animate_mechanism
-
-    name = f"mechanism.{args.format}"
+    file = f"mechanism.{args.format}"
     with OutputDir(args.out, "animate") as staged:
-        animate_mechanism(traj, staged.path / name, frames=args.frames, fps=args.fps)
+        animate_mechanism(traj, staged.path / file, revolution=revolution, frames=args.frames,
+                          fps=args.fps, magnify=magnify)
         staged.commit()
-    wrote(args.out / name, f"animation of revolution {traj.revolutions}")
+    what = f"animation of {name}, revolution {revolution}"
+    if magnify is not None:
+        what += f", journal offsets x {magnify:.3g}"
+    wrote(args.out / file, what)
+    return 0
+
+
+#: what the sign of the largest Lyapunov exponent means (lambda per revolution; the band
+#: |lambda| <= poincare.LYAPUNOV_ZERO counts as zero)
+LYAPUNOV_MEANING = {
+    "negative": "nearby motions converge: a stable periodic motion, where peaks and "
+                "sensitivities mean something",
+    "zero": "nearby motions neither converge nor diverge within the resolution: "
+            "quasi-periodic or marginal; run longer to decide",
+    "positive": "nearby motions diverge: chaotic, only statistics of peaks mean something",
+}
+
+
+def _add_lyapunov_parser(subparsers) -> argparse.ArgumentParser:
+    """The ``lyapunov`` subcommand: the largest Lyapunov exponent of one design (issue 19)."""
+    p = subparsers.add_parser(
+        "lyapunov", help="largest Lyapunov exponent of a design (periodic or chaotic?)",
+        description="Integrate the motion and one tangent vector (the variational equations "
+                    "of the generated model, renormalised at the end of each crank "
+                    "revolution) and print the largest Lyapunov exponent per revolution and "
+                    "in 1/s, averaged over the revolutions after --transient, with what its "
+                    "sign means: negative, a stable periodic motion; positive, chaos. "
+                    "Nothing is written.",
+        epilog="named cases (--case NAME; --set NAME=VALUE changes a value):\n"
+               + _case_lines())
+    add_linkage_options(p)
+    p.add_argument("--revolutions", type=int_at_least(2), default=100,
+                   help="crank revolutions integrated")
+    p.add_argument("--transient", type=int_at_least(0),
+                   help="first revolutions not averaged (default: half of --revolutions)")
+    p.add_argument("--rtol", type=positive_float,
+                   help="relative tolerance of the state and the tangent (default: the "
+                        "model's, 1e-7)")
+    p.add_argument("--memory", choices=("reset", "carry"), default="reset",
+                   help="the impact-velocity memory's tangent at each renormalisation: reset "
+                        "to 0, or carried (docs/regimes.md)")
+    add_mechanism_options(p)
+    p.set_defaults(func=_cmd_lyapunov)
+    return p
+
+
+def _cmd_lyapunov(args: argparse.Namespace) -> int:
+    from .lyapunov import lyapunov_exponent
+    from .poincare import LYAPUNOV_ZERO
+    from .units import number
+
+    linkage, mech = design_from_args(args)
+    transient = args.revolutions // 2 if args.transient is None else args.transient
+    if transient >= args.revolutions:
+        raise ValueError(f"--transient must be between 0 and --revolutions - 1 "
+                         f"({args.revolutions - 1}); got {transient}")
+    name = linkage.name if linkage is not None else "the paper's slider-crank"
+    _progress(f"Lyapunov exponent of {name}: {args.revolutions} revolutions ...")
+    t0 = time.perf_counter()
+    res = lyapunov_exponent(mech, revolutions=args.revolutions, transient=transient,
+                            rtol=args.rtol, memory=args.memory)
+    print(f"done in {time.perf_counter() - t0:.3g} s", file=sys.stderr)
+    lam = res.per_revolution
+    sign = ("positive" if lam > LYAPUNOV_ZERO else "negative" if lam < -LYAPUNOV_ZERO
+            else "zero")
+    print(f"largest Lyapunov exponent of {name}: {number(lam, 4)} per revolution "
+          f"({number(res.per_second, 4)} 1/s), the mean over revolutions "
+          f"{transient + 1}-{args.revolutions}")
+    print(f"sign: {sign} (|lambda| <= {LYAPUNOV_ZERO:g} per revolution counts as zero): "
+          f"{LYAPUNOV_MEANING[sign]}")
+    trend = "" if sign == "zero" else (
+        f": it {'grows' if lam > 0 else 'shrinks'} e-fold every {number(1 / abs(lam), 3)} "
+        f"revolutions")
+    print(f"  per revolution: the log of the growth of a small perturbation over one crank "
+          f"revolution{trend}; 1/s: the same per second")
     return 0
 
 
@@ -1057,7 +1163,8 @@ PLUGIN_GROUP = "mbs_clearance.commands"
 
 
 #: the subcommands defined here (the others come from plugins)
-BUILTIN = ("simulate", "sensitivity", "optimize", "tolerance", "map", "animate")
+BUILTIN = ("simulate", "sensitivity", "optimize", "tolerance", "map", "animate",
+           "lyapunov")
 
 
 def _add_plugins(sub, command: str | None = None) -> None:

@@ -7,6 +7,7 @@ backend is ever needed; every function returns the Figure and saves it when give
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -18,7 +19,9 @@ from .trajectory import Trajectory
 __all__ = ["plot_trajectory", "plot_overlay", "plot_comparison", "plot_sensitivities",
            "plot_work_precision", "plot_fitness_history", "plot_force_comparison",
            "SENSITIVITY_FIGURES", "save", "plot_bifurcation", "plot_regime_map",
-           "plot_poincare"]
+           "plot_poincare", "animate_mechanism", "mechanism_frames", "MechanismFrames",
+           "magnification",
+           "DRAWN_BEARING", "JOURNAL_GAP"]
 
 COLORS = ["C0", "C3", "C2", "C1", "C4", "C5"]
 
@@ -434,23 +437,273 @@ def plot_poincare(ds, points: Sequence[Mapping], path: str | Path | None = None,
 
 
 def animate_mechanism(traj: Trajectory, path: str | Path, revolution: int | None = None,
-                      frames: int = 72, fps: int = 12) -> Path:
-    """Animation of the slider-crank over one crank revolution (default: the last) beside
-    the journal-centre orbit in units of the clearance (the clearance magnified to be
-    seen): GIF (Pillow) or, for a .mp4 `path`, MP4 when ffmpeg is installed. Returns the
-    path."""
-    from matplotlib.animation import FFMpegWriter, FuncAnimation, PillowWriter
+                      frames: int = 72, fps: int = 12, magnify: float | None = None) -> Path:
+    """Animation of the mechanism over one crank revolution (default: the last): GIF
+    (Pillow) or, for a .mp4 `path`, MP4 when ffmpeg is installed. Returns the path.
+
+    A trajectory of a `Linkage` (any named case or description) is drawn from its
+    description (`mechanism_frames`): bodies as polylines through their named points,
+    ground pivots, sliders' guides, each clearance joint's bearing circle and its journal
+    with the journal's offset magnified `magnify` times (default: the bearing's drawn
+    clearance, `JOURNAL_GAP` of the drawn bearing radius, shows the largest clearance), the
+    orbit of the revolution beside it in units of the clearance. A SliderCrank's trajectory
+    is drawn as the paper's slider-crank.
+    """
+    path = Path(path)
+    if path.suffix.lower() not in (".gif", ".mp4"):
+        raise ValueError(f"animation file must end in .gif or .mp4; got {str(path)!r}")
+    frames = _check_frames(frames, fps)
+    if traj.linkage is not None:
+        return _animate_linkage(traj, path, revolution, frames, fps, magnify)
+    if magnify is not None:
+        raise ValueError("magnify applies to a Linkage's trajectory (the slider-crank's "
+                         "orbit is drawn in units of the clearance beside it)")
+    return _animate_slider_crank(traj, path, revolution, frames, fps)
+
+
+def _check_frames(frames, fps) -> int:
+    from ._checks import check_int
+
+    check_int("fps (frames per second)", fps, 1)
+    return check_int("frames (frames per revolution)", frames, 2)
+
+
+def _writer(path: Path, fps: int):
+    from matplotlib.animation import FFMpegWriter, PillowWriter
+
+    if path.suffix.lower() == ".mp4":
+        if not FFMpegWriter.isAvailable():
+            raise ValueError("an .mp4 needs ffmpeg on the PATH; write a .gif instead")
+        return FFMpegWriter(fps=fps)
+    return PillowWriter(fps=fps)
+
+
+#: drawn bearing radius as a fraction of the linkage's length scale (`Linkage.length_scale`)
+DRAWN_BEARING = 0.035
+#: the drawn journal's gap to its bearing (drawn bearing radius minus drawn journal radius)
+#: at the largest clearance, as a fraction of the drawn bearing radius (default magnification)
+JOURNAL_GAP = 0.4
+
+
+@dataclass(frozen=True)
+class MechanismFrames:
+    """What `animate_mechanism` draws of a Linkage, per frame (F frames), in m.
+
+    t (F,) s: the frames' times (recorded steps nearest to uniform times in the revolution);
+    index (F,): their rows in the trajectory; bodies: name -> (F, k, 2) polyline through the
+    body's k named points; pivots: ground point name -> (2,) of every ground revolute joint;
+    guides: prismatic joint name -> (F, 2, 2) the ends of its guide (its axis over the
+    slider's travel); bearings: clearance joint name -> (F, 2) the bearing centre; journals:
+    -> (F, 2) the drawn journal centre, bearing + magnify x (journal - bearing) from the
+    description's kinematics; bearing_radius: the drawn bearing radius; journal_radius:
+    joint -> its drawn radius (the drawn gap is magnify x the joint's clearance); magnify:
+    the magnification of the journals' offsets.
+    """
+
+    t: np.ndarray
+    index: np.ndarray
+    bodies: dict
+    pivots: dict
+    guides: dict
+    bearings: dict
+    journals: dict
+    bearing_radius: float
+    journal_radius: dict
+    magnify: float
+    revolution: int
+
+
+def magnification(linkage, magnify: float | None = None) -> float:
+    """The magnification of the journals' offsets that `mechanism_frames` draws `linkage`
+    with: `magnify` checked (ValueError unless > 0 and <= 0.9 drawn bearing radius /
+    largest clearance: a drawn journal keeps a tenth of its bearing's drawn radius), or by
+    default the one that draws the largest clearance as `JOURNAL_GAP` of the drawn bearing
+    radius."""
+    from ._checks import check_real
+
+    rb = DRAWN_BEARING * linkage.length_scale
+    c_max = max(j.clearance for j in linkage.clearance_joints)
+    if magnify is None:
+        return JOURNAL_GAP * rb / c_max
+    return check_real("magnify (magnification of the journals' offsets)", magnify, 0.0,
+                      0.9 * rb / c_max, low_open=True)
+
+
+def _world(pose, xy) -> np.ndarray:
+    x, y, phi = pose[:3]
+    c, s = np.cos(phi), np.sin(phi)
+    return np.array([x + c * xy[0] - s * xy[1], y + s * xy[0] + c * xy[1]])
+
+
+def mechanism_frames(traj: Trajectory, revolution: int | None = None, frames: int = 72,
+                     magnify: float | None = None) -> MechanismFrames:
+    """The drawn geometry of a Linkage's trajectory at `frames` times of revolution
+    `revolution` (default: the last): the bodies' poses from the description's forest
+    kinematics (`exudyn_linkage.body_states`, the generated model's kinematics written once
+    for the description) at the recorded coordinates. ValueError for a trajectory without
+    a Linkage or coordinates, a revolution outside the trajectory, or a `magnify` that
+    would draw a journal larger than its bearing allows (> 0 and <= 0.9 drawn bearing
+    radius / largest clearance)."""
+    from .exudyn_linkage import body_states
+    from .linkage import GROUND, Prismatic
+
+    linkage = traj.linkage
+    if linkage is None or traj.coordinates is None:
+        raise ValueError("mechanism_frames draws a Linkage's trajectory (with its minimal "
+                         "coordinates); this one is of a "
+                         f"{type(traj.mechanism).__name__}")
+    frames = _check_frames(frames, 1)
+    rev = traj.revolutions if revolution is None else revolution
+    t_a, t_b = traj.revolution_window(rev)       # ValueError for a revolution not covered
+    rb = DRAWN_BEARING * linkage.length_scale
+    magnify = magnification(linkage, magnify)
+    times = np.linspace(t_a, t_b, frames)
+    index = np.clip(np.searchsorted(traj.t, times), 0, len(traj.t) - 1)
+    before = np.clip(index - 1, 0, len(traj.t) - 1)
+    index = np.where(np.abs(traj.t[before] - times) < np.abs(traj.t[index] - times),
+                     before, index)
+    names = linkage.coordinates()
+    q = np.column_stack([traj.coordinates[c] for c in names]) if names else \
+        np.zeros((len(traj.t), 0))
+    qd = (np.column_stack([traj.rates[c] for c in names])
+          if names and traj.rates is not None else np.zeros_like(q))
+    poses = [body_states(linkage, float(traj.t[i]), q[i], qd[i]) for i in index]
+    points = {b.name: b.points for b in linkage.bodies}
+
+    def world(body, point, k):
+        if body == GROUND:
+            return np.asarray(linkage.ground_points[point], dtype=float)
+        return _world(poses[k][body], points[body][point])
+
+    bodies = {b.name: np.array([[world(b.name, pt, k) for pt in b.points]
+                                for k in range(frames)]) for b in linkage.bodies}
+    pivots = {}
+    guides = {}
+    for j in linkage.joints:
+        if isinstance(j, Prismatic):
+            origin = np.array([world(j.body_a, j.point_a, k) for k in range(frames)])
+            slider = np.array([world(j.body_b, j.point_b, k) for k in range(frames)])
+            phi = np.array([0.0 if j.body_a == GROUND else poses[k][j.body_a][2]
+                            for k in range(frames)]) + j.angle
+            u = np.column_stack([np.cos(phi), np.sin(phi)])
+            s = np.einsum("ij,ij->i", slider - origin, u)
+            lo, hi = min(0.0, s.min()) - 2 * rb, max(0.0, s.max()) + 2 * rb
+            guides[j.name] = np.stack([origin + lo * u, origin + hi * u], axis=1)
+        elif GROUND in (j.body_a, j.body_b):
+            point = j.point_a if j.body_a == GROUND else j.point_b
+            pivots[point] = np.asarray(linkage.ground_points[point], dtype=float)
+    bearings, journals, radii = {}, {}, {}
+    for cj in linkage.clearance_joints:
+        b = np.array([world(cj.bearing_body, cj.bearing_point, k) for k in range(frames)])
+        jn = np.array([world(cj.journal_body, cj.journal_point, k) for k in range(frames)])
+        bearings[cj.name] = b
+        journals[cj.name] = b + magnify * (jn - b)
+        radii[cj.name] = rb - magnify * cj.clearance
+    return MechanismFrames(t=traj.t[index], index=index, bodies=bodies, pivots=pivots,
+                           guides=guides, bearings=bearings, journals=journals,
+                           bearing_radius=rb, journal_radius=radii, magnify=float(magnify),
+                           revolution=rev)
+
+
+def _animate_linkage(traj: Trajectory, path: Path, revolution, frames: int, fps: int,
+                     magnify) -> Path:
+    from matplotlib.animation import FuncAnimation
+    from matplotlib.patches import Circle
+
+    fr = mechanism_frames(traj, revolution, frames, magnify)
+    writer = _writer(path, fps)
+    linkage = traj.linkage
+    rb = fr.bearing_radius
+    every = np.concatenate([v.reshape(-1, 2) for v in
+                            (*fr.bodies.values(), *fr.guides.values(),
+                             *fr.bearings.values())]
+                           + [np.array(list(fr.pivots.values())).reshape(-1, 2)])
+    lo = every.min(axis=0) - 2.5 * rb
+    hi = every.max(axis=0) + 2.5 * rb
+    fig = Figure(figsize=(10, 4.2), layout="constrained")
+    m_ax, o_ax = fig.subplots(1, 2, width_ratios=(2.2, 1))
+    m_ax.set_xlim(lo[0], hi[0])
+    m_ax.set_ylim(lo[1], hi[1])
+    m_ax.set_aspect("equal")
+    m_ax.set_title(f"{linkage.name}, revolution {fr.revolution} (m); journal offsets "
+                   f"x {fr.magnify:.3g}", fontsize=9)
+    m_ax.grid(alpha=0.2)
+    for xy in fr.pivots.values():
+        m_ax.plot([xy[0]], [xy[1]], "^", ms=10, color="0.3", zorder=1)
+    guide_lines = {n: m_ax.plot([], [], "-", lw=1.0, color="0.6", zorder=1)[0]
+                   for n in fr.guides}
+    body_lines = {}
+    for k, (name, poly) in enumerate(fr.bodies.items()):
+        col = COLORS[k % len(COLORS)]
+        if poly.shape[1] == 1:       # a body with one point: a block
+            body_lines[name] = m_ax.plot([], [], "s", ms=14, color=col, alpha=0.7,
+                                         zorder=2)[0]
+        else:
+            body_lines[name] = m_ax.plot([], [], "-o", lw=3, ms=3, color=col, alpha=0.8,
+                                         zorder=2, label=name)[0]
+    bearing_patches = {}
+    journal_patches = {}
+    orbit_lines = {}
+    for name in fr.bearings:
+        bearing_patches[name] = m_ax.add_patch(Circle((0, 0), rb, fill=False, lw=1.2,
+                                                      color="k", zorder=3))
+        journal_patches[name] = m_ax.add_patch(Circle((0, 0), fr.journal_radius[name],
+                                                      color="C3", alpha=0.6, zorder=3))
+        orbit_lines[name] = m_ax.plot([], [], "-", lw=0.6, color="C3", zorder=3)[0]
+    m_ax.legend(fontsize=7, loc="upper right")
+    # the journals' orbits over the revolution, in units of their clearance
+    theta = np.linspace(0, 2 * np.pi, 100)
+    o_ax.plot(np.cos(theta), np.sin(theta), "k-", lw=1, label="wall (e = c)")
+    mask = traj.revolution_mask(fr.revolution)
+    dots = {}
+    lim = 1.2
+    for j, cj in enumerate(linkage.clearance_joints):
+        e = traj.eccentricity[:, j] / cj.clearance
+        col = COLORS[(j + 1) % len(COLORS)]
+        o_ax.plot(e[mask, 0], e[mask, 1], color=col, lw=0.7, alpha=0.6,
+                  label=f"{cj.name} (c = {cj.clearance * 1e3:.3g} mm)")
+        dots[cj.name] = o_ax.plot([], [], "o", color=col)[0]
+        lim = max(lim, float(np.abs(e[mask]).max()) * 1.1)
+    o_ax.set(xlim=(-lim, lim), ylim=(-lim, lim), aspect="equal",
+             title="journal centre / clearance")
+    o_ax.legend(fontsize=6, loc="lower right")
+    rows = {cj.name: j for j, cj in enumerate(linkage.clearance_joints)}
+    offsets = {name: fr.journals[name] - fr.bearings[name] for name in fr.bearings}
+
+    def draw(k):
+        for name, line in body_lines.items():
+            line.set_data(fr.bodies[name][k, :, 0], fr.bodies[name][k, :, 1])
+        for name, line in guide_lines.items():
+            line.set_data(fr.guides[name][k, :, 0], fr.guides[name][k, :, 1])
+        for name in fr.bearings:
+            centre = fr.bearings[name][k]
+            bearing_patches[name].center = tuple(centre)
+            journal_patches[name].center = tuple(fr.journals[name][k])
+            trail = centre + offsets[name]
+            orbit_lines[name].set_data(trail[:, 0], trail[:, 1])
+            i = fr.index[k]
+            c = linkage.clearance_joints[rows[name]].clearance
+            dots[name].set_data([traj.eccentricity[i, rows[name], 0] / c],
+                                [traj.eccentricity[i, rows[name], 1] / c])
+        return ()
+
+    anim = FuncAnimation(fig, draw, frames=frames, blit=False)
+    anim.save(str(path), writer=writer, dpi=80)
+    return path
+
+
+def _animate_slider_crank(traj: Trajectory, path: Path, revolution, frames: int,
+                          fps: int) -> Path:
+    """The paper's slider-crank (a SliderCrank's trajectory) beside the journal-centre orbit
+    in units of the clearance."""
+    from matplotlib.animation import FuncAnimation
 
     mech = traj.mechanism
     if traj.coupler_angle is None or traj.slider_position is None or \
             not hasattr(mech, "crank_length"):
         raise ValueError("animate draws the paper's slider-crank (a trajectory with coupler "
-                         "angle and slider position); this trajectory has none")
-    path = Path(path)
-    if path.suffix.lower() not in (".gif", ".mp4"):
-        raise ValueError(f"animation file must end in .gif or .mp4; got {str(path)!r}")
-    if path.suffix.lower() == ".mp4" and not FFMpegWriter.isAvailable():
-        raise ValueError("an .mp4 needs ffmpeg on the PATH; write a .gif instead")
+                         "angle and slider position) or a Linkage; this trajectory has none")
+    writer = _writer(path, fps)
     rev = revolution or traj.revolutions
     mask = np.flatnonzero(traj.revolution_mask(rev))
     picks = mask[np.linspace(0, len(mask) - 1, frames).round().astype(int)]
@@ -492,6 +745,5 @@ def animate_mechanism(traj: Trajectory, path: str | Path, revolution: int | None
         return crank, coupler, slider, dot
 
     anim = FuncAnimation(fig, draw, frames=len(picks), blit=False)
-    writer = FFMpegWriter(fps=fps) if path.suffix.lower() == ".mp4" else PillowWriter(fps=fps)
     anim.save(str(path), writer=writer, dpi=80)
     return path

@@ -766,22 +766,6 @@ def test_sensitivity_of_a_named_case(capsys):
         assert float(row.split()[-3]) == pytest.approx(r["mean_abs_normalized"], rel=2e-3)
 
 
-def test_animate_writes_a_gif(tmp_path, capsys):
-    from PIL import Image
-
-    out = tmp_path / "anim"
-    assert main(["animate", "--revolutions", "1", "--frames", "4", "--out", str(out)]) == 0
-    (gif,) = _wrote(capsys.readouterr().err)
-    assert gif == out / "mechanism.gif"
-    with Image.open(gif) as image:
-        assert image.n_frames == 4 and image.width > 300
-        frames = []
-        for k in range(image.n_frames):
-            image.seek(k)
-            frames.append(np.asarray(image.convert("L"), dtype=float))
-    assert np.abs(frames[1] - frames[0]).max() > 0       # the mechanism moves
-
-
 def test_import_loads_only_what_is_needed():
     """`import mbs_clearance` and building the CLI's parser for a built-in command load no
     compiled model, no scipy.integrate, no exudyn, no matplotlib, no validation plugin."""
@@ -848,3 +832,46 @@ def test_library_messages_go_through_logging(caplog, capsys):
 
     assert run_command("mbs-clearance test", command, None) == 0
     assert capsys.readouterr().err == "mbs-clearance test: coarse result\n"
+
+
+@pytest.mark.parametrize("case", [None, "paper_slider_crank"])
+def test_lyapunov_prints_the_exponent_with_units_and_its_sign(case, capsys):
+    """`lyapunov` prints the Python function's exponent for the same inputs (the paper's
+    SliderCrank by default, or a --case's Linkage), per revolution and in 1/s, and its sign's
+    meaning: negative at the paper's design (period-1 motion, docs/regimes.md)."""
+    import re
+
+    from mbs_clearance import cases, lyapunov_exponent
+
+    argv = ["lyapunov", "--revolutions", "16", "--transient", "8"]
+    argv += [] if case is None else ["--case", case]
+    assert main(argv) == 0
+    out = capsys.readouterr().out
+    m = re.search(r"exponent of .+?: (\S+) per revolution \((\S+) 1/s\), the mean over "
+                  r"revolutions 9-16", out)
+    assert m, out
+    mech = SliderCrank() if case is None else cases.CASES[case]()
+    ref = lyapunov_exponent(mech, revolutions=16, transient=8)
+    assert float(m.group(1)) == pytest.approx(ref.per_revolution, rel=1e-3)
+    assert float(m.group(2)) == pytest.approx(ref.per_second, rel=1e-3)
+    assert ref.per_revolution < -0.1 and "sign: negative" in out and "converge" in out
+    assert f"it shrinks e-fold every {1 / abs(ref.per_revolution):.3g} revolutions" in out
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--revolutions", "4", "--transient", "4"],
+     "--transient must be between 0 and --revolutions - 1 (3); got 4"),
+    (["--revolutions", "1"], "argument --revolutions: must be an integer >= 2; got 1"),
+    (["--memory", "keep"], "argument --memory: invalid choice: 'keep'"),
+    (["--case", "four_bar", "--crank-length", "0.1"], "apply to the paper's slider-crank"),
+])
+def test_lyapunov_bad_input_is_one_line_before_any_run(argv, message, capsys, monkeypatch):
+    import importlib
+
+    lyap = importlib.import_module("mbs_clearance.lyapunov")
+    monkeypatch.setattr(lyap, "lyapunov_exponent", lambda *a, **k: pytest.fail("ran"))
+    with pytest.raises(SystemExit) as exc:
+        main(["lyapunov", *argv])
+    assert exc.value.code == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and message in err, err

@@ -40,3 +40,69 @@ def test_exudyn_finite_differences_say_when_coarse(step, coarse, caplog, monkeyp
     text = record.getMessage()
     assert "15-19 % RMS off the DDM" in text and "step_size=5e-7 gives about 1 %" in text
     assert f"at step {step or 2e-6:g} s" in text
+
+
+@pytest.mark.skipif(not hasattr(__import__("os"), "openpty"), reason="needs a pseudo terminal")
+def test_compile_message_shows_on_a_terminal(tmp_path):
+    """A first run on a terminal says that kernels compile: the CLI in a real process whose
+    stdin/stdout/stderr are a pseudo terminal, with an empty numba cache directory
+    (NUMBA_CACHE_DIR is tried first, `_cache`), prints "compiling kernels (first run only,
+    about ...)" as soon as the first kernel compiles. The process is ended at that line: the
+    line comes before any kernel is built, so the model does not matter and no compilation
+    is waited for."""
+    import os
+    import re
+    import select
+    import signal
+    import subprocess
+    import sys
+    import time
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[2]
+    cache = tmp_path / "numba-cache"
+    cache.mkdir()
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(cache), COLUMNS="100")
+    env.pop("MBS_CLEARANCE_DEBUG", None)
+    master, slave = os.openpty()
+    proc = subprocess.Popen([sys.executable, "-m", "mbs_clearance.cli", "simulate",
+                             "--case", "four_bar", "--revolutions", "1"],
+                            stdin=slave, stdout=slave, stderr=slave, cwd=root, env=env,
+                            start_new_session=True)
+    os.close(slave)
+    text = b""
+    try:
+        deadline = time.monotonic() + 180
+        while b"compiling kernels" not in text and time.monotonic() < deadline:
+            ready, _, _ = select.select([master], [], [], 1.0)
+            if ready:
+                try:
+                    chunk = os.read(master, 4096)
+                except OSError:         # the terminal closed: the process ended
+                    break
+                if not chunk:
+                    break
+                text += chunk
+            elif proc.poll() is not None:
+                break
+        # let the rest of the line arrive
+        time.sleep(0.2)
+        while select.select([master], [], [], 0.1)[0]:
+            try:
+                chunk = os.read(master, 4096)
+            except OSError:
+                break
+            if not chunk:
+                break
+            text += chunk
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+        proc.wait()
+        os.close(master)
+    shown = text.decode(errors="replace").replace("\r", "")
+    assert re.search(r"^mbs-clearance simulate: compiling kernels \(first run only, about "
+                     r"(\d+ s|a minute or more); later runs load them from the cache\)$",
+                     shown, re.M), shown
+    # the note that work starts comes first, so the user sees what is being compiled for
+    assert shown.index("simulating 'four_bar'") < shown.index("compiling kernels")
