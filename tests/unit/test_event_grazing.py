@@ -4,11 +4,13 @@ zero-length events at t = 0.011056 s (DOP853, rtol 1e-10), where the journal re-
 contact at 7.9 mm/s and the landing left the penetration at -1.4e-16 m."""
 
 import numpy as np
+import pytest
 
 from mbs_clearance import cases
 from mbs_clearance.sensitivity import sensitivities
 
 
+@pytest.mark.slow   # compiles the four-bar's DOP853 sensitivity kernels: minutes cold
 def test_four_bar_ddm_passes_a_landing_before_the_surface():
     """DOP853 (the DDM's integrator) runs past the landing that made it chatter, and its
     sensitivities agree with DOPRI5's (an independent step sequence, which never met the
@@ -22,6 +24,10 @@ def test_four_bar_ddm_passes_a_landing_before_the_surface():
     assert np.max(np.abs(a - b)) < TOL * np.max(np.abs(b))
 
 
-#: the two integrators' sensitivities at rtol 1e-10: measured 6.8e-7 of the largest
-#: magnitude; 1e-5 leaves room for other platforms' round-off
-TOL = 1e-5
+#: the two integrators' sensitivities at rtol 1e-10, largest difference over the largest
+#: magnitude: measured 6.8e-7 on the branch that added this test and 1.2e-5 once merged with
+#: the DDM on generated directional products (the same sums in another order), in a run
+#: through a re-contact at 7.9 mm/s whose event-time term amplifies the event time's
+#: round-off; a wrong landing (the chatter, a missed or doubled switch) is an O(1)
+#: difference, so 1e-4 still tells it apart
+TOL = 1e-4
