@@ -1157,8 +1157,9 @@ def _cmd_lyapunov(args: argparse.Namespace) -> int:
 
 
 #: entry-point group through which other packages (this project's `validation`) add
-#: subcommands: each entry is a function register(subparsers). The library itself never
-#: imports `validation`.
+#: subcommands: each entry is a callable register(subparsers), optionally with attributes
+#: `help` and `description` for listing it without importing it
+#: (mbs_clearance_validation.commands). The library itself never imports `validation`.
 PLUGIN_GROUP = "mbs_clearance.commands"
 
 
@@ -1168,19 +1169,23 @@ BUILTIN = ("simulate", "sensitivity", "optimize", "tolerance", "map", "animate",
 
 
 def _add_plugins(sub, command: str | None = None) -> None:
-    """Add the plugin subcommands: only `command` if a plugin has that name, else all (for
-    --help and the list of choices)."""
+    """Add the plugin subcommands: only `command`, fully, if a plugin has that name; else
+    all of them for --help and the list of choices, by name and help line alone where the
+    plugin offers them (attributes `help` and `description`: its module, with the compiled
+    models and scipy, is then not imported)."""
     from importlib.metadata import entry_points
 
     eps = sorted(entry_points(group=PLUGIN_GROUP), key=lambda e: e.name)
-    if any(ep.name == command for ep in eps):
-        eps = [ep for ep in eps if ep.name == command]
-    for ep in eps:
+    chosen = [ep for ep in eps if ep.name == command]
+    for ep in chosen or eps:
         try:
             register = ep.load()
         except ImportError:  # a plugin whose dependencies are missing is left out
             continue
-        register(sub)
+        if not chosen and hasattr(register, "help"):
+            sub.add_parser(ep.name, help=register.help, description=register.description)
+        else:
+            register(sub)
 
 
 def main(argv: list[str] | None = None) -> int:

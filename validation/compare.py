@@ -537,13 +537,3 @@ def compare_command(argv: list[str] | None = None) -> int:
 
 if __name__ == "__main__":  # pragma: no cover
     sys.exit(compare_command())
-
-
-def register(subparsers) -> None:
-    """CLI plugin (entry point group ``mbs_clearance.commands``): `mbs-clearance compare`."""
-    p = subparsers.add_parser("compare", help="compare two backends (table + overlay plot)",
-                              description="Simulate one mechanism with two backends, print "
-                                          "per-revolution differences and write an overlay "
-                                          "plot.")
-    build_parser(p)
-    p.set_defaults(func=run_compare)

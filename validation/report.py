@@ -28,8 +28,6 @@ import numpy as np
 
 from mbs_clearance import PARAMETER_INFO, SliderCrank, load_trajectory, simulate
 
-from .plugin import make_register, run_script
-
 #: the paper's published numbers (Ebrahimi, Salahshoor & Nouri 2018)
 PAPER = {
     "peak_original": 8311.0,
@@ -1219,7 +1217,7 @@ def _verify_for_replot(out: Path) -> dict:
     return manifest
 
 
-def _main(args) -> int:
+def main(args) -> int:
     t0 = time.perf_counter()
     path = build_report(args.out, quick=args.quick, replot=args.replot, force=args.force,
                         map_file=args.map)
@@ -1233,7 +1231,7 @@ def _main(args) -> int:
     return 0
 
 
-def _add_arguments(p):
+def add_arguments(p):
     from mbs_clearance.cli import add_force_option
 
     p.add_argument("--out", type=Path, default=Path("report"), help="output folder")
@@ -1248,9 +1246,7 @@ def _add_arguments(p):
     add_force_option(p)
 
 
-register = make_register("report", "build the validation report (HTML + JSON)",
-                         __doc__.splitlines()[0], _add_arguments, _main)
-
-
 if __name__ == "__main__":
-    run_script(__doc__.splitlines()[0], _add_arguments, _main)
+    from .commands import report
+
+    report.run_script()

@@ -31,8 +31,6 @@ import numpy as np
 from mbs_clearance import SliderCrank, reduced, simulate
 from mbs_clearance.integrator import METHODS, rk_step
 
-from .plugin import make_register, run_script
-
 RPM = 2 * math.pi / 60
 
 #: Exudyn runs longer than this many fixed steps are skipped in the sweep (~1 min each)
@@ -246,7 +244,7 @@ def markdown_table(rows) -> str:
     return "\n".join(lines)
 
 
-def _main(args) -> int:
+def main(args) -> int:
     from mbs_clearance._io import RUN_KEY, atomic_file, check_output_file, run_stamp
 
     if args.json:
@@ -269,7 +267,7 @@ def _main(args) -> int:
     return 1 if s["fail"] else 0
 
 
-def _add_arguments(p):
+def add_arguments(p):
     from pathlib import Path
 
     from mbs_clearance.cli import add_force_option
@@ -281,9 +279,7 @@ def _add_arguments(p):
     add_force_option(p)
 
 
-register = make_register("stress", "numerical stress sweep (validation)",
-                         __doc__.splitlines()[0], _add_arguments, _main)
-
-
 if __name__ == "__main__":
-    run_script(__doc__.splitlines()[0], _add_arguments, _main)
+    from .commands import stress
+
+    stress.run_script()

@@ -768,7 +768,8 @@ def test_sensitivity_of_a_named_case(capsys):
 
 def test_import_loads_only_what_is_needed():
     """`import mbs_clearance` and building the CLI's parser for a built-in command load no
-    compiled model, no scipy.integrate, no exudyn, no matplotlib, no validation plugin."""
+    compiled model, no scipy.integrate, no exudyn, no matplotlib, no validation plugin; the
+    top-level --help lists the plugins without importing their modules."""
     import subprocess
     import sys
     from pathlib import Path
@@ -785,6 +786,20 @@ def test_import_loads_only_what_is_needed():
              "sympy", "pygad", "xarray")
     for modules in (after_import, after_parser):
         assert not [m for m in modules if m.startswith(heavy)]
+    # the top-level --help lists the plugin subcommands from their light declarations
+    code = ("import sys; from mbs_clearance.cli import build_parser; "
+            "p = build_parser(None); print(p.format_help()); print(repr(sorted(sys.modules)))")
+    out = subprocess.run([sys.executable, "-c", code], cwd=root, capture_output=True,
+                         text=True, check=True).stdout
+    listing, modules = out.strip().rsplit("\n", 1)
+    from importlib.metadata import entry_points
+
+    from mbs_clearance.cli import PLUGIN_GROUP
+
+    for ep in entry_points(group=PLUGIN_GROUP):
+        assert ep.name in listing and ep.load().help in listing
+    light = ("mbs_clearance_validation", "mbs_clearance_validation.commands")
+    assert not [m for m in eval(modules) if m.startswith(heavy) and m not in light]  # noqa: S307
     # the public names still resolve (lazily) and __all__ is complete
     import mbs_clearance
 

@@ -24,7 +24,6 @@ import numpy as np
 
 from mbs_clearance import SliderCrank, reduced, simulate
 
-from ..plugin import make_register, run_script
 from ..scipy_reference import solve_scipy
 from .common import machine_summary, timed
 
@@ -202,7 +201,7 @@ def markdown(rows, refs) -> str:
     return "\n".join(lines)
 
 
-def _main(args) -> int:
+def main(args) -> int:
     from mbs_clearance._io import OutputDir, check_output_dir
 
     if args.out:
@@ -224,7 +223,7 @@ def _main(args) -> int:
     return 0
 
 
-def _add_arguments(p):
+def add_arguments(p):
     from mbs_clearance.cli import add_force_option, int_at_least
 
     p.add_argument("--quick", action="store_true", help="a few settings only")
@@ -235,9 +234,7 @@ def _add_arguments(p):
     add_force_option(p)
 
 
-register = make_register("bench", "work-precision benchmark (validation)",
-                         __doc__.splitlines()[0], _add_arguments, _main)
-
-
 if __name__ == "__main__":
-    run_script(__doc__.splitlines()[0], _add_arguments, _main)
+    from ..commands import bench
+
+    bench.run_script()
