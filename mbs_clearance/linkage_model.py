@@ -224,6 +224,32 @@ def _tolerances(linkage, model, rtol, atol):
     return rtol, full
 
 
+def landing_edges(edges: np.ndarray, t_eval) -> tuple[np.ndarray, np.ndarray]:
+    """Output times `t_eval` (checked: increasing, within [0, edges[-1]]) and the edges the
+    integrator lands on: the window edges united with them, a time within 1e-12 of the span
+    of the previous one dropped. Returns (t_eval, edges)."""
+    from ._checks import check_times
+
+    t_eval = check_times("t_eval", t_eval, float(edges[-1]))
+    merged = np.union1d(edges, t_eval)
+    merged = merged[np.concatenate([[True], np.diff(merged) > 1e-12 * merged[-1]])]
+    return t_eval, merged
+
+
+def landed_indices(ts: np.ndarray, t_eval: np.ndarray) -> np.ndarray:
+    """Indices of the recorded steps that landed on the times `t_eval`."""
+    return np.minimum(np.searchsorted(ts, t_eval), len(ts) - 1)
+
+
+def window_peaks(ts: np.ndarray, outs: np.ndarray, column: int,
+                 win_edges: np.ndarray) -> np.ndarray:
+    """Per window [win_edges[i], win_edges[i + 1]] the largest magnitude of the outputs'
+    columns (column, column + 1) at the samples ts (0 for a window without samples)."""
+    mags = np.hypot(outs[:, column], outs[:, column + 1])
+    return np.array([mags[(ts >= a) & (ts <= b)].max(initial=0.0)
+                     for a, b in zip(win_edges[:-1], win_edges[1:])])
+
+
 def run(linkage: Linkage, revolutions: int = 4, *, rtol: float | None = None,
         atol=None, method: str = "dopri5", record: bool = True,
         max_steps: int = DEFAULT_MAX_STEPS, n_samples: int = 1, h_max: float | None = None,
@@ -242,7 +268,6 @@ def run(linkage: Linkage, revolutions: int = 4, *, rtol: float | None = None,
         check_int,
         check_max_memory,
         check_real,
-        check_times,
         format_bytes,
     )
     from .integrator import COUNTERS, METHODS, RESULTS, make_settings
@@ -281,9 +306,7 @@ def run(linkage: Linkage, revolutions: int = 4, *, rtol: float | None = None,
     edges = win_edges = np.arange(revolutions + 1) * linkage.period
     refine = REFINE_ITERS
     if t_eval is not None:
-        t_eval = check_times("t_eval", t_eval, float(edges[-1]))
-        edges = np.union1d(edges, t_eval)
-        edges = edges[np.concatenate([[True], np.diff(edges) > 1e-12 * edges[-1]])]
+        t_eval, edges = landing_edges(edges, t_eval)
         record, refine = True, 0
     extra_fev = 0
     if h0 == 0.0 and model.N_STATE > 2 * model.N_Q + 1:
@@ -310,12 +333,9 @@ def run(linkage: Linkage, revolutions: int = 4, *, rtol: float | None = None,
         raise RuntimeError(f"integration of linkage {linkage.name!r} failed at about t = "
                            f"{ts[-1] if len(ts) else float('nan'):.6g} s: {status.message}")
     if t_eval is not None:
-        keep = np.minimum(np.searchsorted(ts, t_eval), len(ts) - 1)    # landed on t_eval
+        keep = landed_indices(ts, t_eval)
         ts, ys, ms, outs = ts[keep], ys[keep], ms[keep], outs[keep]
-        mon = model.MONITOR_COLUMN
-        mags = np.hypot(outs[:, mon], outs[:, mon + 1])
-        peaks = np.array([mags[(ts >= a) & (ts <= b)].max(initial=0.0)
-                          for a, b in zip(win_edges[:-1], win_edges[1:])])
+        peaks = window_peaks(ts, outs, model.MONITOR_COLUMN, win_edges)
     stats = {k: int(v) for k, v in zip(COUNTERS, counters)}
     stats["nfev"] += extra_fev
     stats.update(method=method, rtol=float(rtol))

@@ -33,7 +33,6 @@ from ._checks import (
     check_int,
     check_max_memory,
     check_real,
-    check_times,
     format_bytes,
 )
 from ._generated import paper_slider_crank as MODEL
@@ -51,6 +50,9 @@ from .linkage_model import (  # the settings shared with every linkage's runs
     EVENT_ATOL,
     EVENT_MARGIN,
     REFINE_ITERS,
+    landed_indices,
+    landing_edges,
+    window_peaks,
 )
 from .mechanism import SliderCrank
 
@@ -341,9 +343,7 @@ def run(mech: SliderCrank, revolutions: int = 4, *, rtol: float | None = None,
     win_edges = edges
     refine = REFINE_ITERS
     if t_eval is not None:
-        t_eval = check_times("t_eval", t_eval, float(edges[-1]))
-        edges = np.union1d(edges, t_eval)
-        edges = edges[np.concatenate([[True], np.diff(edges) > 1e-12 * edges[-1]])]
+        t_eval, edges = landing_edges(edges, t_eval)
         record = True
         refine = 0
     est = estimate_run(mech, len(edges) - 1, window_time=float(edges[-1]), record=record,
@@ -382,15 +382,8 @@ def run(mech: SliderCrank, revolutions: int = 4, *, rtol: float | None = None,
         if outs.shape[1] < MODEL.N_OUT:          # no outputs recorded: evaluated here
             outs = MODEL.outputs(np.ascontiguousarray(ts), np.ascontiguousarray(ys),
                                  np.ascontiguousarray(ms[:, :N_MEM]), p)
-        mags = np.hypot(outs[:, MODEL.MONITOR_COLUMN], outs[:, MODEL.MONITOR_COLUMN + 1])
-        peaks = np.array([mags[(ts >= a) & (ts <= b)].max(initial=0.0)
-                          for a, b in zip(win_edges[:-1], win_edges[1:])])
+        peaks = window_peaks(ts, outs, MODEL.MONITOR_COLUMN, win_edges)
     return ts, ys, ms, peaks, peak_t, counters, outs, p
-
-
-def landed_indices(ts: np.ndarray, t_eval: np.ndarray) -> np.ndarray:
-    """Indices of the recorded steps that landed on the times `t_eval`."""
-    return np.minimum(np.searchsorted(ts, t_eval), len(ts) - 1)
 
 
 def _tolerances(mech, rtol, atol):
