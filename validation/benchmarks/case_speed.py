@@ -6,8 +6,10 @@ centred start:
 - reference: the 4th revolution's refined peak of the monitored force by our integrator at
   rtol 1e-12 (and, with --check-reference, by scipy DOP853 at rtol 1e-12: their relative
   difference is printed);
-- ours: `simulate` (every step recorded) and the peak-only run at the default rtol, and the
-  peak's relative error against the reference;
+- ours: `simulate` (every step recorded) and the peak-only run at the default settings
+  (dopri5, rtol 1e-7), or at the method and rtol given by ``--ours METHOD:RTOL`` (e.g.
+  ``--ours dop853:1e-4``: the same DOP853 pair as scipy's), and the peak's relative error
+  against the reference;
 - scipy: `solve_ivp(method="DOP853")` on the generated model's compiled right-hand side,
   one terminal event per clearance joint, the mode switched by the generated `on_event`
   between restarts (validation.scipy_reference.solve_scipy_linkage), at rtol 1e-5, 1e-6,
@@ -20,7 +22,7 @@ centred start:
   and the time per function evaluation of each (per-call overhead: scipy calls the
   compiled right-hand side from Python at every stage).
 
-    python -m validation.benchmarks.case_speed [--case four_bar] [--repeats 3]
+    python -m validation.benchmarks.case_speed [--case four_bar] [--repeats 3] [--ours dop853:1e-4]
 
 Run it on a quiet machine: the ratios are the point of the script.
 """
@@ -42,16 +44,19 @@ SCIPY_RTOLS = (1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11)
 REVOLUTION = 4
 
 
-def case_speed(name: str, repeats: int, check_reference: bool = False) -> dict:
-    """The measurements of one case (see the module docstring) as a dict."""
+def case_speed(name: str, repeats: int, check_reference: bool = False,
+               ours: dict | None = None) -> dict:
+    """The measurements of one case (see the module docstring) as a dict; `ours`: the
+    options of our runs (method, rtol), the defaults if None."""
+    ours = dict(ours or {})
     lk = CASES[name]()
     ref = peak_base_force(lk, REVOLUTION, rtol=1e-12)
-    result = {"case": name, "reference": ref}
+    result = {"case": name, "reference": ref, "ours": ours}
     if check_reference:
         sref = solve_scipy_linkage(lk, REVOLUTION, rtol=1e-12).peaks[REVOLUTION - 1]
         result["scipy_reference_difference"] = abs(sref / ref - 1.0)
-    traj = simulate(lk, REVOLUTION)                      # compile / load, then measure
-    ours_peak = peak_base_force(lk, REVOLUTION)
+    traj = simulate(lk, REVOLUTION, **ours)              # compile / load, then measure
+    ours_peak = peak_base_force(lk, REVOLUTION, **ours)
     ours_err = abs(ours_peak / ref - 1.0)
     result.update(ours_error=ours_err, ours_nfev=traj.stats["nfev"],
                   ours_events=traj.stats["nevent"])
@@ -63,8 +68,8 @@ def case_speed(name: str, repeats: int, check_reference: bool = False) -> dict:
         def run_scipy(r=rtol):
             return solve_scipy_linkage(lk, REVOLUTION, rtol=r)
 
-        sim = paired(lambda: simulate(lk, REVOLUTION), run_scipy, repeats)
-        peak = paired(lambda: peak_base_force(lk, REVOLUTION), run_scipy, repeats)
+        sim = paired(lambda: simulate(lk, REVOLUTION, **ours), run_scipy, repeats)
+        peak = paired(lambda: peak_base_force(lk, REVOLUTION, **ours), run_scipy, repeats)
         rows.append((rtol, err, sim["b"], res.nfev))
         ratios.append((sim["ratio"], peak["ratio"], sim["a"], peak["a"], len(res.event_times)))
         print(f"  {name}: scipy rtol {rtol:g}: peak error {err:.2e} (ours {ours_err:.2e}), "
@@ -84,6 +89,22 @@ def case_speed(name: str, repeats: int, check_reference: bool = False) -> dict:
     return result
 
 
+def ours_setting(text: str) -> dict:
+    """``METHOD:RTOL`` (--ours) as simulate's options."""
+    from mbs_clearance.integrator import METHODS
+
+    method, _, rtol = text.partition(":")
+    try:
+        value = float(rtol)
+    except ValueError:
+        value = -1.0
+    if method not in METHODS or not 0 < value < 1:
+        raise argparse.ArgumentTypeError(
+            f"--ours must be METHOD:RTOL with METHOD one of {sorted(METHODS)} and 0 < RTOL < 1;"
+            f" got {text!r}")
+    return {"method": method, "rtol": value}
+
+
 def _fmt(x, spec):
     return "n/a" if x is None else format(x, spec)
 
@@ -95,15 +116,19 @@ def main(argv=None) -> None:
     ap.add_argument("--repeats", type=int, default=3, help="alternating pairs per scipy row")
     ap.add_argument("--check-reference", action="store_true",
                     help="also compare the reference peak with scipy DOP853 at rtol 1e-12")
+    ap.add_argument("--ours", type=ours_setting, metavar="METHOD:RTOL",
+                    help="our integrator and rtol (default: the defaults, dopri5 at 1e-7)")
     ap.add_argument("--json", help="also write the results to this JSON file")
     args = ap.parse_args(argv)
     names = args.case or list(CASES)
     results = []
     for name in names:
-        results.append(case_speed(name, args.repeats, args.check_reference))
+        results.append(case_speed(name, args.repeats, args.check_reference, args.ours))
     print()
     print(f"Machine: {machine_summary()}")
-    print(f"ours at the default rtol {DEFAULT_RTOL:g}; revolution {REVOLUTION}'s peak; "
+    setting = (f"{args.ours['method']} at rtol {args.ours['rtol']:g}" if args.ours
+               else f"the defaults (dopri5 at rtol {DEFAULT_RTOL:g})")
+    print(f"ours: {setting}; revolution {REVOLUTION}'s peak; "
           f"{args.repeats} alternating pairs per scipy row")
     print()
     print("| case | ours: peak error | scipy rtol at/below it (error) | speed-up simulate | "
