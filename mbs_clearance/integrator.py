@@ -1007,15 +1007,17 @@ def _find_event(rhs, event, t, y, y_new, h, K, P, A_extra, C_extra, p, g_start, 
     b_theta = 1.0
     for j in range(g_start.shape[0]):
         g0 = g_start[j]
-        if 0.0 < g0 <= event_tol and gd_start[j] < 0.0:
-            # on the surface, moving into the new mode's side: the point an event was just
-            # landed on from before the surface (|g| <= event_tol), not a crossing
+        # on the surface (|g| <= event_tol), moving into the mode's side (g' < 0): the point
+        # an event was just landed on, or a slow onset's first steps in contact, where g is
+        # round-off; a crossing found from there with g <= event_tol is round-off too
+        on_surface = abs(g0) <= event_tol and gd_start[j] < 0.0
+        if on_surface and g0 > 0.0:
             g0 = 0.0
         lo, g_lo, hi, g_hi = _search_event(event, j, t, y, h, K, P, p, g0, gd_start[j],
                                            g_end[j], gd_end[j], n_samples, event_tol,
                                            event_margin, ytmp, wts, fine, sample_polys)
-        if hi < 0.0 or (g0 != g_start[j] and g_hi <= event_tol):
-            continue           # (from such a point: g within event_tol is round-off)
+        if hi < 0.0 or (on_surface and g_hi <= event_tol):
+            continue
         if g_lo > 0.0:
             theta = 0.0        # already past the switching surface at the step start
         else:

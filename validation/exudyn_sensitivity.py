@@ -14,6 +14,7 @@ thinned to `SAMPLES_PER_REVOLUTION` points. Two measures per parameter:
 
     python -m validation.exudyn_sensitivity paper_slider_crank [--steps 4e-6 2e-6]
         [--parameters coupler.mass slider.mass ...] [--rel 1e-3] [--revolutions 2]
+        [--ddm-rtol 1e-10]
 """
 
 from __future__ import annotations
@@ -74,12 +75,12 @@ def _value(linkage, name: str) -> float:
     return float(getattr({b.name: b for b in linkage.bodies}[body], field))
 
 
-def ddm(linkage, names, revolutions: int, t: np.ndarray):
-    """(d|F|/db (n, p) at times t, d RMS/db (p,)) by DDM (rtol 1e-10)."""
+def ddm(linkage, names, revolutions: int, t: np.ndarray, rtol: float = 1e-10):
+    """(d|F|/db (n, p) at times t, d RMS/db (p,)) by DDM (rtol 1e-10 unless given)."""
     from mbs_clearance.sensitivity import sensitivities
 
     s = sensitivities(linkage, list(names), revolutions=revolutions, method="ddm", t_eval=t,
-                      rtol=1e-10)
+                      rtol=rtol)
     f = _magnitude(s.trajectory)
     d = s.base_force_magnitude
     r = _rms(t, f)
@@ -88,7 +89,8 @@ def ddm(linkage, names, revolutions: int, t: np.ndarray):
     return d, d_rms
 
 
-def compare_fd_ddm(name: str, steps, names=None, revolutions: int = 2, rel: float = 1e-3):
+def compare_fd_ddm(name: str, steps, names=None, revolutions: int = 2, rel: float = 1e-3,
+                   ddm_rtol: float = 1e-10):
     """Rows (step, parameter, series difference, rms difference) for case `name`."""
     from mbs_clearance import cases
 
@@ -100,7 +102,7 @@ def compare_fd_ddm(name: str, steps, names=None, revolutions: int = 2, rel: floa
         stride = max(1, len(t) // SAMPLES_PER_REVOLUTION)
         ts = t[::stride]
         if reference is None or len(reference[0]) != len(ts) or np.any(reference[0] != ts):
-            reference = (ts, *ddm(linkage, names, revolutions, ts))
+            reference = (ts, *ddm(linkage, names, revolutions, ts, ddm_rtol))
         _, d_series, d_rms = reference
         for k, p in enumerate(names):
             a = d_series[:, k]
@@ -119,8 +121,11 @@ def main(argv=None) -> int:
     ap.add_argument("--parameters", nargs="+")
     ap.add_argument("--rel", type=float, default=1e-3)
     ap.add_argument("--revolutions", type=int, default=2)
+    ap.add_argument("--ddm-rtol", type=float, default=1e-10,
+                    help="rtol of the DDM reference (default 1e-10)")
     args = ap.parse_args(argv)
-    rows = compare_fd_ddm(args.case, args.steps, args.parameters, args.revolutions, args.rel)
+    rows = compare_fd_ddm(args.case, args.steps, args.parameters, args.revolutions, args.rel,
+                          args.ddm_rtol)
     print("| step (us) | parameter | d RMS/db DDM | rel. diff. d RMS/db | rel. RMS diff. "
           "d|F|/db |")
     print("|---|---|---|---|---|")
