@@ -205,8 +205,9 @@ def contact_scales(linkage: Linkage) -> tuple[float, float]:
     return period, floor
 
 
-#: option names of simulate(linkage, backend="exudyn"): the settings and ``max_memory``
-OPTION_NAMES: tuple[str, ...] = (*ExudynSettings.__dataclass_fields__, "max_memory")
+#: option names of simulate(linkage, backend="exudyn"): the settings, ``max_memory`` and
+#: ``start`` (a `linkage_model.Start`)
+OPTION_NAMES: tuple[str, ...] = (*ExudynSettings.__dataclass_fields__, "max_memory", "start")
 
 
 def step_for_accuracy(period: float, accuracy: float) -> float:
@@ -223,7 +224,8 @@ def make_settings(options: dict) -> ExudynSettings:
     if unknown:
         raise ValueError(f"unknown option(s) {unknown} for backend 'exudyn'; "
                          f"allowed: {list(OPTION_NAMES)}")
-    s = ExudynSettings(**{k: v for k, v in options.items() if k != "max_memory"})
+    s = ExudynSettings(**{k: v for k, v in options.items()
+                          if k not in ("max_memory", "start")})
     if s.step_size is not None and s.accuracy is not None:
         raise ValueError("give step_size or accuracy, not both (accuracy chooses the step)")
     return ExudynSettings(
@@ -678,9 +680,10 @@ def _check_linkage(linkage, settings: ExudynSettings) -> None:
 
 
 def build(linkage: Linkage, settings: ExudynSettings | None = None,
-          outputs: tuple[str, ...] = ("all",), y0=None) -> ExudynModel:
+          outputs: tuple[str, ...] = ("all",), y0=None, start=None) -> ExudynModel:
     """Create the Exudyn system of `linkage` (not yet solved), started from the reduced
-    model's centred state (or `y0`, a state [q, qdot, W] of the generated model).
+    model's centred state (or `y0`, a state [q, qdot, W] of the generated model, or
+    `start`, a `linkage_model.Start`: its state and each joint's mode and impact velocity).
 
     `outputs` selects the sensors: "reactions", "drive", "contact", "bodies" or "all".
     The symbolic user functions are built here, in the calling process.
@@ -698,7 +701,18 @@ def build(linkage: Linkage, settings: ExudynSettings | None = None,
     if "all" in want:
         want = set(OUTPUT_GROUPS)
     step = settings.step(linkage)
-    if y0 is None:
+    start_memory = None
+    if start is not None:
+        from .linkage_model import check_start, event_tolerance, load_model, pack_parameters
+
+        if settings.contact == "sphere":
+            raise ValueError("start needs a contact with its own impact-velocity memory "
+                             "(contact='symbolic' or 'python'), not 'sphere'")
+        gen = load_model(linkage)
+        p = pack_parameters(linkage, gen)
+        y0 = check_start(linkage, gen, p, start, event_tolerance(linkage))
+        start_memory = list(zip(start.modes, start.impact_velocities))
+    elif y0 is None:
         from .linkage_model import initial_state
         y0 = initial_state(linkage)
     n = len(linkage.coordinates())
@@ -770,6 +784,9 @@ def build(linkage: Linkage, settings: ExudynSettings | None = None,
             memories.append(None)
         else:
             memory = ImpactMemory(cj.impact_velocity_floor, cj.clearance)
+            if start_memory is not None:
+                memory.mode = int(start_memory[k][0])
+                memory.dmin = float(start_memory[k][1])
             obj = mbs.AddObject(ii.CartesianSpringDamper(markerNumbers=[m_bearing, m_journal]))
             if settings.contact == "symbolic":
                 uf = _symbolic_force(mbs, obj, cj, memory, k)
@@ -1103,17 +1120,20 @@ def simulate_exudyn_linkage(linkage: Linkage, revolutions: int = 4, **options):
     from .trajectory import annotate
 
     max_memory = options.pop("max_memory", None)
-    return annotate(run_linkage(linkage, revolutions, make_settings(options), max_memory))
+    start = options.pop("start", None)
+    return annotate(run_linkage(linkage, revolutions, make_settings(options), max_memory,
+                                start))
 
 
 def run_linkage(linkage: Linkage, revolutions: int, settings: ExudynSettings,
-                max_memory=None):
+                max_memory=None, start=None):
     """The (not annotated) `Trajectory` of `simulate_exudyn_linkage` for validated
-    `settings`; the run and the record size are checked first."""
+    `settings` (from `start`, a `linkage_model.Start`, if given); the run and the record
+    size are checked first."""
     from .trajectory import Trajectory
 
     revolutions = _check_run(linkage, revolutions, settings, ("all",), max_memory)
-    model = build(linkage, settings)
+    model = build(linkage, settings, start=start)
     stats = solve(model, revolutions * linkage.period)
 
     t, reactions = _reactions(model)
@@ -1165,15 +1185,16 @@ def peak_exudyn_linkage(linkage: Linkage, revolution: int = 4, **options) -> flo
     steps (`refined_peaks`);
     integrates only to the end of that revolution and records only the reactions."""
     max_memory = options.pop("max_memory", None)
-    return peak_run(linkage, revolution, make_settings(options), max_memory)
+    start = options.pop("start", None)
+    return peak_run(linkage, revolution, make_settings(options), max_memory, start)
 
 
 def peak_run(linkage: Linkage, revolution: int, settings: ExudynSettings,
-             max_memory=None) -> float:
-    """`peak_exudyn_linkage` for validated `settings`."""
+             max_memory=None, start=None) -> float:
+    """`peak_exudyn_linkage` for validated `settings` (from `start` if given)."""
     revolution = _check_run(linkage, revolution, settings, ("reactions",), max_memory,
                             "revolution")
-    model = build(linkage, settings, outputs=("reactions",))
+    model = build(linkage, settings, outputs=("reactions",), start=start)
     solve(model, revolution * linkage.period)
     t, reactions = _reactions(model)
     F = (sum(reactions.values()) if linkage.monitor_joint is None

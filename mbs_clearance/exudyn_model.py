@@ -93,7 +93,7 @@ __all__ = [
 DEFAULT_STEP_SIZE = 2.0e-6
 
 #: option names accepted by simulate_exudyn / peak_exudyn (as the linkage backend's)
-OPTION_NAMES: tuple[str, ...] = xl.OPTION_NAMES
+OPTION_NAMES: tuple[str, ...] = tuple(n for n in xl.OPTION_NAMES if n != "start")
 
 
 def make_settings(options: dict) -> ExudynSettings:

@@ -34,7 +34,9 @@ from .linkage_model import (
     EVENT_MARGIN,
     REFINE_ITERS,
     _tolerances,
+    check_start,
     default_atol,
+    event_tolerance,
     initial_state,
     load_model,
     pack_parameters,
@@ -284,14 +286,19 @@ class DdmRun(NamedTuple):
 
 
 def setup(linkage: Linkage, model, p0, y_state, directions, scale, atol_plain,
-          event_time_term: bool = True):
+          event_time_term: bool = True, fixed_start: bool = False):
     """The sensitivity system of `directions` (see `combine`): one integrated direction per
     independent one (`independent_directions` on the directions made dimensionless: the
     initial sensitivities by the state's tolerance scales, the chains by the parameters'
     values, the memories by the floors, and each direction by its `scale`). Returns (y0, p,
-    atol, coefficients (nb, npar))."""
+    atol, coefficients (nb, npar)). With `fixed_start` the initial state and memories do not
+    move with the parameters (a `linkage_model.Start`): the sensitivities start at zero."""
     entries, sigma = combine(linkage, model, directions)
-    s0 = initial_sensitivities(linkage, model, p0, y_state, entries)
+    if fixed_start:
+        s0 = np.zeros((len(entries), 2 * model.N_Q))
+        sigma = np.zeros_like(sigma)
+    else:
+        s0 = initial_sensitivities(linkage, model, p0, y_state, entries)
     n2, off = 2 * model.N_Q, 1 + 2 * model.N_Q
     cols = sorted({c for e in entries for c in e})
     pcol = np.abs(p0[[c - off for c in cols]])
@@ -316,12 +323,13 @@ def setup(linkage: Linkage, model, p0, y_state, directions, scale, atol_plain,
 
 def ddm_run(linkage: Linkage, model, p0, y_state, directions, *, scale, rtol, atol_plain,
             revolutions: int, t_eval=None, event_time_term: bool = True,
-            method: str = DDM_INTEGRATOR, record: bool = True, whole: bool = False) -> DdmRun:
+            method: str = DDM_INTEGRATOR, record: bool = True, whole: bool = False,
+            fixed_start: bool = False) -> DdmRun:
     """Integrate the sensitivity equations of `directions` (see `setup`) over `revolutions`
     drive revolutions (landing on the times t_eval if given, without peak refinement, and
     ending at the last unless `whole`); returns the `DdmRun`."""
     y0, p, atol, coeffs = setup(linkage, model, p0, y_state, directions, scale,
-                                   atol_plain, event_time_term)
+                                atol_plain, event_time_term, fixed_start)
     nb = coeffs.shape[0]
     edges = _edges(linkage, revolutions, t_eval, whole)
     t0 = time.perf_counter()
@@ -339,8 +347,7 @@ def _run(linkage, model, y0, p, edges, rtol, method, n_err, atol, record=True,
     from ._checks import MemoryLimitError, default_max_memory, format_bytes
     from .integrator import COUNTERS, METHODS, RESULTS, make_settings
 
-    event_tol = max(1e-12 * linkage.min_clearance,
-                    8 * np.finfo(float).eps * linkage.length_scale)
+    event_tol = event_tolerance(linkage)
     # the record never outgrows the default memory limit: a run that would stops there
     max_memory = default_max_memory()
     row = 8 * (1 + len(y0) + model.N_MEM + (model.N_OUT if record else 0))
@@ -388,27 +395,34 @@ def landed(ts, t_eval):
     return idx
 
 
-def plain_setup(linkage: Linkage, rtol: float | None):
+def plain_setup(linkage: Linkage, rtol: float | None, start=None):
     """What a DDM run of `linkage` starts from, as its plain run: the generated model, the
-    parameter vector, the centred initial state and the plain run's tolerances (rtol, atol
-    with the switching functions'). Returns (model, p0, y_state, rtol, atol)."""
+    parameter vector, the centred initial state (or `start`'s, a `linkage_model.Start`,
+    with its memories in p0) and the plain run's tolerances (rtol, atol with the switching
+    functions'). Returns (model, p0, y_state, rtol, atol)."""
     model = load_model(linkage)
     rtol, atol = _tolerances(linkage, model, rtol, None)
     p0 = pack_parameters(linkage, model)
-    return model, p0, initial_state(linkage, model, p0), rtol, atol
+    if start is None:
+        return model, p0, initial_state(linkage, model, p0), rtol, atol
+    return model, p0, check_start(linkage, model, p0, start, event_tolerance(linkage)), \
+        rtol, atol
 
 
 def linkage_sensitivities(linkage: Linkage, names: tuple[str, ...], revolutions: int,
-                          rtol: float | None, t_eval, event_time_term: bool, method: str):
-    """DDM of `linkage` (see the module docstring): (Sensitivities fields as a dict)."""
-    model, p0, y_state, rtol, atol_plain = plain_setup(linkage, rtol)
+                          rtol: float | None, t_eval, event_time_term: bool, method: str,
+                          start=None):
+    """DDM of `linkage` (see the module docstring): (Sensitivities fields as a dict). From
+    `start` (a `linkage_model.Start`) the start is held fixed: the sensitivities start at
+    zero."""
+    model, p0, y_state, rtol, atol_plain = plain_setup(linkage, rtol, start)
     ref = np.array([linkage.parameter_value(n) for n in names])
     # each parameter's natural scale (as the finite differences' steps: a radius enters
     # through the clearance): the sensitivities' absolute tolerances are the state's / it
     scale = np.array([fd_step(linkage, n, 1.0) for n in names])
     run = ddm_run(linkage, model, p0, y_state, [{n: 1.0} for n in names], scale=scale,
                   rtol=rtol, atol_plain=atol_plain, revolutions=revolutions, t_eval=t_eval,
-                  event_time_term=event_time_term, method=method)
+                  event_time_term=event_time_term, method=method, fixed_start=start is not None)
     w, c = linkage.drive.speed, linkage.min_clearance
     unit = np.array([1.0 if name.endswith(".angle") else c for name in model.COORDINATES])
     unit = np.concatenate([unit, unit * w])
@@ -479,12 +493,10 @@ def fd_step(linkage: Linkage, name: str, relative: float) -> float:
     return relative * (9.81 if name == "gravity" else 1.0)
 
 
-def _plain_at(linkage, revolutions, t_eval, rtol, method):
-    """Outputs (len(t_eval), N_OUT) and states of a plain run landing on t_eval."""
-    model = load_model(linkage)
-    rtol, atol = _tolerances(linkage, model, rtol, None)
-    p = pack_parameters(linkage, model)
-    y0 = initial_state(linkage, model, p)
+def _plain_at(linkage, revolutions, t_eval, rtol, method, start=None):
+    """Outputs (len(t_eval), N_OUT) and states of a plain run landing on t_eval (from the
+    centred start or `start`)."""
+    model, p, y0, rtol, atol = plain_setup(linkage, rtol, start)
     edges = _edges(linkage, revolutions, t_eval)
     ts, ys, ms, _, _, outs, stats = _run(linkage, model, y0, p, edges, rtol, method,
                                          2 * model.N_Q, atol, kernel="integrate_model",
@@ -494,15 +506,15 @@ def _plain_at(linkage, revolutions, t_eval, rtol, method):
 
 
 def linkage_fd(linkage: Linkage, names: tuple[str, ...], revolutions: int, rtol, t_eval,
-               relative: float, method: str):
+               relative: float, method: str, start=None):
     """Central finite differences of the outputs (and coordinates) at the times t_eval
-    (default: 720 per revolution), each run landing on them."""
+    (default: 720 per revolution), each run landing on them (from `start` if given)."""
     model = load_model(linkage)
     if t_eval is None:
         t_eval = np.linspace(0.0, revolutions * linkage.period, 720 * revolutions + 1)
     rtol = 1e-11 if rtol is None else rtol
     t0 = time.perf_counter()
-    ts, ys, ms, outs, p, stats = _plain_at(linkage, revolutions, t_eval, rtol, method)
+    ts, ys, ms, outs, p, stats = _plain_at(linkage, revolutions, t_eval, rtol, method, start)
     steps = [fd_step(linkage, n, relative) for n in names]
     ders = np.empty((len(ts), model.N_OUT, len(names)))
     coords = np.empty((len(ts), model.N_Q, len(names)))
@@ -516,7 +528,7 @@ def linkage_fd(linkage: Linkage, names: tuple[str, ...], revolutions: int, rtol,
                 raise ValueError(f"the finite-difference step of {name} ({h:.3g}) leaves its "
                                  f"valid range: {exc}; pass a smaller fd_relative_step"
                                  ) from exc
-            runs.append(_plain_at(lk, revolutions, t_eval, rtol, method))
+            runs.append(_plain_at(lk, revolutions, t_eval, rtol, method, start))
         ders[:, :, k] = (runs[0][3][:, :model.N_OUT] - runs[1][3][:, :model.N_OUT]) / (2 * h)
         coords[:, :, k] = (runs[0][1][:, :model.N_Q] - runs[1][1][:, :model.N_Q]) / (2 * h)
     stats.update(fd_steps=steps, runs=2 * len(names) + 1,

@@ -9,12 +9,14 @@ velocity constraints.
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 
 from .contact import CONTACT_MODELS, FRICTION_LAWS
 from .linkage import GROUND, Linkage
 
-__all__ = ["parameter_values", "pack_parameters", "initial_state"]
+__all__ = ["parameter_values", "pack_parameters", "initial_state", "Start", "settled_start"]
 
 
 def load_model(linkage: Linkage):
@@ -100,6 +102,93 @@ def initial_state(linkage: Linkage, model=None, p=None, t0: float = 0.0, tol: fl
     jac = model.closure_jacobian(t0, q, p)
     qd = np.linalg.lstsq(jac, -model.closure_rate(t0, q, p), rcond=None)[0]
     return np.concatenate([q, qd, np.zeros(model.N_STATE - 2 * len(q))])
+
+
+# ---------------------------------------------------------------------------- starts
+
+class Start(NamedTuple):
+    """A state of a linkage to start a run from instead of the centred assembly, e.g. on
+    its periodic orbit (`settled_start`), so that a run, its sensitivities and an Exudyn
+    run of the same description skip the start's settling impacts.
+
+    A start is taken a whole number of drive revolutions after the centred start: there the
+    drive is back at its initial angle, and the equations repeat with the drive, so a run
+    from it at t = 0 continues the run it was taken from. A run from a start holds the
+    start fixed: its sensitivities start at zero (the state and the memories do not move
+    with the parameters), as do finite differences of runs from the same start.
+    """
+
+    #: the generated model's coordinates and their rates (2 N_Q,), in SI units and rad
+    y: np.ndarray
+    #: per clearance joint: 1.0 in contact, 0.0 in free flight
+    modes: np.ndarray
+    #: per clearance joint: the stored impact velocity in m/s (the contact law's memory)
+    impact_velocities: np.ndarray
+    #: drive revolutions after the centred start at which the state was taken
+    revolutions: int
+    #: the linkage's name (a start is refused by a linkage of another structure)
+    linkage: str
+
+
+def settled_start(linkage: Linkage, revolutions: int, *, rtol: float | None = None,
+                  method: str = "dopri5", progress=None) -> Start:
+    """The `Start` after `revolutions` drive revolutions from the centred start, when the
+    start's impacts and the weakly damped sliding mode of a frictionless joint have settled
+    (the four-bar's default needs about 100, docs/cases.md). The revolutions run one at a
+    time, each from the previous one's end, so the memory holds one revolution's record.
+    `progress`: a callable called with the number of revolutions done."""
+    from ._checks import check_int
+
+    revolutions = check_int("revolutions", revolutions, 1)
+    start = None
+    for k in range(revolutions):
+        model, ts, ys, ms = run(linkage, 1, rtol=rtol, method=method, start=start)[:4]
+        n2, nj = 2 * model.N_Q, model.N_EVENTS
+        start = Start(y=ys[-1, :n2].copy(), modes=ms[-1, 0:2 * nj:2].copy(),
+                      impact_velocities=ms[-1, 1:2 * nj:2].copy(), revolutions=k + 1,
+                      linkage=linkage.name)
+        if progress is not None:
+            progress(k + 1)
+    return start
+
+
+def check_start(linkage: Linkage, model, p, start, event_tol: float) -> np.ndarray:
+    """Validate `start` for `linkage` (ValueError naming what is wrong), store its memories
+    in p and return the state y0 (N_STATE,) it gives (works zero)."""
+    if not isinstance(start, Start):
+        raise ValueError(f"start must be a Start (from linkage_model.settled_start); "
+                         f"got {type(start).__name__}")
+    if start.linkage != linkage.name:
+        raise ValueError(f"start was taken of linkage {start.linkage!r}, not of "
+                         f"{linkage.name!r}")
+    y = np.asarray(start.y, dtype=float)
+    modes = np.asarray(start.modes, dtype=float)
+    dmin = np.asarray(start.impact_velocities, dtype=float)
+    n2, nj = 2 * model.N_Q, model.N_EVENTS
+    if y.shape != (n2,) or modes.shape != (nj,) or dmin.shape != (nj,):
+        raise ValueError(f"start of linkage {linkage.name!r} must hold {n2} coordinates and "
+                         f"rates ({list(model.COORDINATES)}) and {nj} modes and impact "
+                         f"velocities; got {y.shape}, {modes.shape}, {dmin.shape}")
+    if not (np.all(np.isfinite(y)) and np.all(np.isfinite(dmin))):
+        raise ValueError("start holds a value that is not finite")
+    for j, name in enumerate(model.JOINTS):
+        floor = p[model.PARAMETERS.index(f"{name}.impact_velocity_floor")]
+        if modes[j] not in (0.0, 1.0):
+            raise ValueError(f"start: the mode of joint {name!r} must be 0 (free) or 1 "
+                             f"(contact); got {modes[j]!r}")
+        if dmin[j] < floor:
+            raise ValueError(f"start: the impact velocity of joint {name!r} must be >= its "
+                             f"impact_velocity_floor {floor:g} m/s; got {dmin[j]!r}")
+        p[model.MEM_START + 2 * j] = modes[j]
+        p[model.MEM_START + 2 * j + 1] = dmin[j]
+    y0 = np.concatenate([y, np.zeros(model.N_STATE - n2)])
+    for j, name in enumerate(model.JOINTS):
+        g = model.event(0.0, y0, p, j)[0]
+        if g > event_tol:
+            side = "in contact" if modes[j] else "in free flight"
+            raise ValueError(f"start: joint {name!r} is marked {side} but its journal is "
+                             f"{g:.3g} m on the other side of the bearing wall")
+    return y0
 
 
 # ---------------------------------------------------------------------------- tolerances
@@ -190,7 +279,7 @@ def trajectory_from_run(linkage: Linkage, model, ts, ys, ms, p, stats, peaks, ou
 
 #: options of `simulate(linkage, backend="reduced")` (keywords of `run` meant for users)
 OPTION_NAMES = ("rtol", "atol", "method", "max_steps", "n_samples", "h_max", "h0",
-                "event_tol", "max_memory", "t_eval")
+                "event_tol", "max_memory", "t_eval", "start")
 
 #: the event search looks closer (7 more samples and the interpolant's maximum) between two
 #: samples of a step where the cubic Hermite interpolant of a penetration comes within this
@@ -203,6 +292,12 @@ DEFAULT_MAX_STEPS = 5_000_000
 #: golden-section iterations per refined peak candidate: the bracket shrinks to 0.618^24 =
 #: 1e-5 of a step, where the peak's quadratic error is ~1e-12 of its value
 REFINE_ITERS = 24
+
+
+def event_tolerance(linkage: Linkage) -> float:
+    """Default penetration tolerance of the events in m: 1e-12 of the smallest clearance,
+    but not below the round-off of the journal positions."""
+    return max(1e-12 * linkage.min_clearance, 8 * np.finfo(float).eps * linkage.length_scale)
 
 
 def _tolerances(linkage, model, rtol, atol):
@@ -254,9 +349,10 @@ def run(linkage: Linkage, revolutions: int = 4, *, rtol: float | None = None,
         atol=None, method: str = "dopri5", record: bool = True,
         max_steps: int = DEFAULT_MAX_STEPS, n_samples: int = 1, h_max: float | None = None,
         h0: float = 0.0, event_tol: float | None = None, max_memory: int | None = None,
-        t_eval=None):
+        t_eval=None, start: Start | None = None):
     """Integrate `linkage`'s generated model over `revolutions` drive revolutions from the
-    centred start; returns (model, ts, ys, ms, peaks, peak_times, counters dict, outs, p).
+    centred start (or from `start`, a `Start`); returns (model, ts, ys, ms, peaks,
+    peak_times, counters dict, outs, p).
     With `t_eval` the integrator also lands exactly on those times and only they are
     returned (the peaks then are the maxima over them per revolution). Every option is
     checked first (ValueError naming it and its range); a run whose record would exceed
@@ -284,9 +380,7 @@ def run(linkage: Linkage, revolutions: int = 4, *, rtol: float | None = None,
     h_max = linkage.period / 8 if h_max is None else check_real(
         "h_max (largest step)", h_max, 0.0, low_open=True, unit="s")
     if event_tol is None:
-        # 1e-12 of the clearance, but not below the round-off of the journal positions
-        event_tol = max(1e-12 * linkage.min_clearance,
-                        8 * np.finfo(float).eps * linkage.length_scale)
+        event_tol = event_tolerance(linkage)
     else:
         event_tol = check_real("event_tol (penetration tolerance of events)", event_tol, 0.0,
                                low_open=True, unit="m")
@@ -302,7 +396,10 @@ def run(linkage: Linkage, revolutions: int = 4, *, rtol: float | None = None,
                       f"use rtol <= 1e-4, the default is {DEFAULT_RTOL:g}", AccuracyWarning,
                       stacklevel=3)
     p = pack_parameters(linkage, model)
-    y0 = initial_state(linkage, model, p)
+    if start is None:
+        y0 = initial_state(linkage, model, p)
+    else:
+        y0 = check_start(linkage, model, p, start, event_tol)
     edges = win_edges = np.arange(revolutions + 1) * linkage.period
     refine = REFINE_ITERS
     if t_eval is not None:
@@ -368,6 +465,9 @@ def simulate_linkage(linkage: Linkage, revolutions: int = 4, **options):
     model, ts, ys, ms, peaks, _, stats, outs, p = run(linkage, revolutions, record=True,
                                                       **options)
     traj = trajectory_from_run(linkage, model, ts, ys, ms, p, stats, peaks, outs)
+    start = options.get("start")
+    if start is not None:
+        traj.stats["start_revolutions"] = start.revolutions
     return annotate(traj)
 
 

@@ -146,8 +146,7 @@ class Flow:
             y0 = lm.initial_state(mech, model, p)
             rtol, atol = lm._tolerances(mech, model, rtol, None)
             self.kernel = model.integrate_model
-            event_tol = max(1e-12 * mech.min_clearance,
-                            8 * np.finfo(float).eps * mech.length_scale)
+            event_tol = lm.event_tolerance(mech)
             self.settings = make_settings(
                 rtol, atol, 2 * model.N_Q, h_max=mech.period / 8, max_steps=max_steps,
                 record=True, event_tol=event_tol,

@@ -547,6 +547,9 @@ def sensitivities(mech: SliderCrank, parameters=None, revolutions: int = 4,
     (`Linkage.parameter_names`, default: every one that is not a point coordinate); DDM on
     its generated model's exact Jacobians (`linkage_ddm`), FD by central differences of
     plain runs that land on t_eval (default 720 per revolution), reduced backend only.
+    ``start=`` (a `linkage_model.Start`, e.g. `settled_start`) runs from that state instead
+    of the centred start, held fixed: the sensitivities start at zero, as finite
+    differences of runs from the same start do.
 
     Returns
     -------
@@ -620,8 +623,10 @@ def _linkage_sensitivities(linkage, parameters, revolutions, method, backend, t_
     revolutions = check_int("revolutions", revolutions, 1)
     if backend != "reduced":
         raise ValueError(f"a Linkage's sensitivities need backend='reduced'; got {backend!r}")
+    start = options.pop("start", None)
     if options:
-        raise ValueError(f"unknown option(s) for a Linkage: {sorted(options)}")
+        raise ValueError(f"unknown option(s) for a Linkage: {sorted(options)} (allowed: "
+                         "start)")
     if rtol is not None:
         rtol = check_real("rtol", rtol, 1e-14, 1e-2)
     if t_eval is not None:
@@ -634,8 +639,8 @@ def _linkage_sensitivities(linkage, parameters, revolutions, method, backend, t_
     if method == "ddm":
         fields = linkage_ddm.linkage_sensitivities(
             linkage, names, revolutions, rtol, t_eval, event_time_term,
-            integrator or linkage_ddm.DDM_INTEGRATOR)
+            integrator or linkage_ddm.DDM_INTEGRATOR, start)
     else:
         fields = linkage_ddm.linkage_fd(linkage, names, revolutions, rtol, t_eval,
-                                        fd_relative_step, integrator or "dopri5")
+                                        fd_relative_step, integrator or "dopri5", start)
     return Sensitivities(**fields)

@@ -14,7 +14,12 @@ thinned to `SAMPLES_PER_REVOLUTION` points. Two measures per parameter:
 
     python -m validation.exudyn_sensitivity paper_slider_crank [--steps 4e-6 2e-6]
         [--parameters coupler.mass slider.mass ...] [--rel 1e-3] [--revolutions 2]
-        [--ddm-rtol 1e-10]
+        [--ddm-rtol 1e-10] [--settled N]
+
+``--settled N`` starts every run (Exudyn's and the DDM's) from the reduced model's state
+after N revolutions (`linkage_model.settled_start`, at the DDM's rtol), held fixed: the
+sensitivities of the periodic response, without the start's settling impacts (the
+four-bar: docs/exudyn.md).
 """
 
 from __future__ import annotations
@@ -43,9 +48,9 @@ def _rms(t, y) -> float:
     return float(np.sqrt(np.trapezoid(y * y, t) / (t[-1] - t[0])))
 
 
-def exudyn_fd(linkage, names, revolutions: int, step: float, rel: float):
+def exudyn_fd(linkage, names, revolutions: int, step: float, rel: float, start=None):
     """(t of the last revolution, d|F|/db (n, p), d RMS/db (p,)) by central differences of
-    Exudyn runs at fixed step `step` with relative parameter step `rel`."""
+    Exudyn runs at fixed step `step` with relative parameter step `rel` (from `start`)."""
     from mbs_clearance import simulate
 
     series, rms, t_out = [], [], None
@@ -55,7 +60,7 @@ def exudyn_fd(linkage, names, revolutions: int, step: float, rel: float):
         out = []
         for b in (b0 + d, b0 - d):
             tr = simulate(linkage.with_parameter(name, b), revolutions, backend="exudyn",
-                          step_size=step)
+                          step_size=step, start=start)
             m = tr.revolution_mask(revolutions)
             t, f = tr.t[m], _magnitude(tr)[m]
             out.append((t, f, _rms(t, f)))
@@ -75,12 +80,15 @@ def _value(linkage, name: str) -> float:
     return float(getattr({b.name: b for b in linkage.bodies}[body], field))
 
 
-def ddm(linkage, names, revolutions: int, t: np.ndarray, rtol: float = 1e-10):
-    """(d|F|/db (n, p) at times t, d RMS/db (p,)) by DDM (rtol 1e-10 unless given)."""
+def ddm(linkage, names, revolutions: int, t: np.ndarray, rtol: float = 1e-10, start=None,
+        method: str = "ddm", rel: float | None = None):
+    """(d|F|/db (n, p) at times t, d RMS/db (p,)) by DDM (rtol 1e-10 unless given; or, with
+    method "fd", by central differences of reduced runs at relative step `rel`)."""
     from mbs_clearance.sensitivity import sensitivities
 
-    s = sensitivities(linkage, list(names), revolutions=revolutions, method="ddm", t_eval=t,
-                      rtol=rtol)
+    extra = {} if rel is None else {"fd_relative_step": rel}
+    s = sensitivities(linkage, list(names), revolutions=revolutions, method=method, t_eval=t,
+                      rtol=rtol, start=start, **extra)
     f = _magnitude(s.trajectory)
     d = s.base_force_magnitude
     r = _rms(t, f)
@@ -90,27 +98,48 @@ def ddm(linkage, names, revolutions: int, t: np.ndarray, rtol: float = 1e-10):
 
 
 def compare_fd_ddm(name: str, steps, names=None, revolutions: int = 2, rel: float = 1e-3,
-                   ddm_rtol: float = 1e-10):
-    """Rows (step, parameter, series difference, rms difference) for case `name`."""
+                   ddm_rtol: float = 1e-10, settled: int = 0):
+    """Rows (step, parameter, series difference, rms difference) for case `name` (from the
+    state after `settled` revolutions if > 0). A step of 0 is the reduced model's central
+    differences (rtol 1e-11) on the DDM's grid: the finite-difference step's own error."""
     from mbs_clearance import cases
+    from mbs_clearance.linkage_model import settled_start
 
     linkage = cases.CASES[name]()
     names = tuple(names or PARAMETERS[name])
+    start = settled_start(linkage, settled, rtol=ddm_rtol) if settled else None
     rows, reference = [], None
     for step in steps:
-        t, fd_series, fd_rms = exudyn_fd(linkage, names, revolutions, step, rel)
+        if step == 0.0:
+            if reference is None:
+                ts = np.linspace(0.0, revolutions * linkage.period,
+                                 SAMPLES_PER_REVOLUTION * revolutions + 1)
+                reference = (ts, *ddm(linkage, names, revolutions, ts, ddm_rtol, start))
+            t = reference[0]
+            fd_series, fd_rms = ddm(linkage, names, revolutions, t, 1e-11, start, "fd", rel)
+            m = t >= (revolutions - 1) * linkage.period - 1e-12 * t[-1]
+            ref_m = (t[m], reference[1][m], reference[2])
+            rows += _rows(step, names, ref_m, fd_series[m], fd_rms, 1)
+            continue
+        t, fd_series, fd_rms = exudyn_fd(linkage, names, revolutions, step, rel, start)
         stride = max(1, len(t) // SAMPLES_PER_REVOLUTION)
         ts = t[::stride]
         if reference is None or len(reference[0]) != len(ts) or np.any(reference[0] != ts):
-            reference = (ts, *ddm(linkage, names, revolutions, ts, ddm_rtol))
-        _, d_series, d_rms = reference
-        for k, p in enumerate(names):
-            a = d_series[:, k]
-            b = fd_series[::stride, k]
-            rows.append(dict(step=step, parameter=p,
-                             series=float(np.sqrt(np.mean((a - b) ** 2) / np.mean(a * a))),
-                             rms=float(abs(fd_rms[k] / d_rms[k] - 1.0)),
-                             ddm_rms=float(d_rms[k]), fd_rms=float(fd_rms[k])))
+            reference = (ts, *ddm(linkage, names, revolutions, ts, ddm_rtol, start))
+        rows += _rows(step, names, reference, fd_series, fd_rms, stride)
+    return rows
+
+
+def _rows(step, names, reference, fd_series, fd_rms, stride):
+    _, d_series, d_rms = reference
+    rows = []
+    for k, p in enumerate(names):
+        a = d_series[:, k]
+        b = fd_series[::stride, k]
+        rows.append(dict(step=step, parameter=p,
+                         series=float(np.sqrt(np.mean((a - b) ** 2) / np.mean(a * a))),
+                         rms=float(abs(fd_rms[k] / d_rms[k] - 1.0)),
+                         ddm_rms=float(d_rms[k]), fd_rms=float(fd_rms[k])))
     return rows
 
 
@@ -123,14 +152,17 @@ def main(argv=None) -> int:
     ap.add_argument("--revolutions", type=int, default=2)
     ap.add_argument("--ddm-rtol", type=float, default=1e-10,
                     help="rtol of the DDM reference (default 1e-10)")
+    ap.add_argument("--settled", type=int, default=0, metavar="N",
+                    help="start every run from the state after N revolutions (0: centred)")
     args = ap.parse_args(argv)
     rows = compare_fd_ddm(args.case, args.steps, args.parameters, args.revolutions, args.rel,
-                          args.ddm_rtol)
+                          args.ddm_rtol, args.settled)
     print("| step (us) | parameter | d RMS/db DDM | rel. diff. d RMS/db | rel. RMS diff. "
           "d|F|/db |")
     print("|---|---|---|---|---|")
     for r in rows:
-        print(f"| {r['step'] * 1e6:g} | {r['parameter']} | {r['ddm_rms']:.4g} | "
+        step = "reduced FD" if r["step"] == 0.0 else f"{r['step'] * 1e6:g}"
+        print(f"| {step} | {r['parameter']} | {r['ddm_rms']:.4g} | "
               f"{r['rms']:.1e} | {r['series']:.1e} |")
     return 0
 
