@@ -274,7 +274,7 @@ class DdmRun(NamedTuple):
         ys = self.ys if ys is None else ys
         n2 = 2 * self.model.N_Q
         s = ys[:, n2:n2 * (1 + self.nb)].reshape(len(ys), self.nb, n2)
-        return np.einsum("nbj,bk->nkj", s, self.coeffs)
+        return _combine_directions(s.transpose(0, 2, 1), self.coeffs).transpose(0, 2, 1)
 
     def output_sensitivities(self, ts, ys, ms):
         """Values (n, N_OUT) and derivatives (n, N_OUT, npar) of the model's outputs along
@@ -282,7 +282,14 @@ class DdmRun(NamedTuple):
         vals, ders = self.model.output_sensitivities(
             np.ascontiguousarray(ts), np.ascontiguousarray(ys),
             np.ascontiguousarray(ms[:, :self.model.N_MEM]), self.p)
-        return vals, ders @ self.coeffs
+        return vals, _combine_directions(ders, self.coeffs)
+
+
+def _combine_directions(a: np.ndarray, coeffs: np.ndarray) -> np.ndarray:
+    """a (..., nb) @ coeffs (nb, npar) as one matrix product (numpy's stacked matmul of a
+    3-d array runs one small product per leading index)."""
+    out = np.ascontiguousarray(a).reshape(-1, a.shape[-1]) @ coeffs
+    return out.reshape(*a.shape[:-1], coeffs.shape[1])
 
 
 def setup(linkage: Linkage, model, p0, y_state, directions, scale, atol_plain,
@@ -451,13 +458,13 @@ def growth_maxima(ts, sens, scale, unit, period, revolutions):
     edges = np.minimum(np.arange(revolutions + 1) * period, ts[-1])
     lo = np.searchsorted(ts, edges[:-1], side="left")
     hi = np.searchsorted(ts, edges[1:], side="right")
-    norm = np.sqrt(np.sum((sens * (np.asarray(scale)[None, :, None] / unit[None, None, :]))
-                          ** 2, axis=2))
+    weights = (np.asarray(scale)[:, None] / unit[None, :]) ** 2
+    norm2 = np.einsum("nkj,kj->nk", sens * sens, weights, optimize=False)
     out = np.zeros((revolutions, sens.shape[1]))
     for r in range(revolutions):
         if hi[r] > lo[r]:
-            out[r] = norm[lo[r]:hi[r]].max(axis=0)
-    return out
+            out[r] = norm2[lo[r]:hi[r]].max(axis=0)
+    return np.sqrt(out)
 
 
 def _fields(model, ts, names, ref, ders, traj, growth, stats):

@@ -391,6 +391,73 @@ def test_exudyn_finite_differences_converge_to_ddm(name, rel):
             assert max(fine[p]["rms"], coarse[p]["rms"]) < 1.5e-2, (p, coarse[p], fine[p])
 
 
+_SETTLED: dict = {}
+
+
+def four_bar_settled_start():
+    """The four-bar's state after 100 revolutions (reduced model, rtol 1e-10, about 70 s):
+    the start's impacts and the sliding mode have settled (docs/cases.md)."""
+    from mbs_clearance.linkage_model import settled_start
+
+    if "start" not in _SETTLED:
+        _SETTLED["start"] = settled_start(cases.four_bar(), 100, rtol=1e-10)
+    return _SETTLED["start"]
+
+
+@pytest.mark.slow
+def test_four_bar_from_a_settled_start_agrees_and_converges():
+    """Issue 17 for the four-bar in its periodic regime: both models started from the state
+    after 100 revolutions (the same state, contact mode and impact velocity), revolution 1
+    from there, reduced at rtol 1e-11 against Exudyn. At the default step (1.56e-5 s) the
+    peak of the |shaking force| within 0.5 % and the RMS of it and of the drive moment
+    within 2 % (measured: 8.0e-6, 5.7e-9, 8.2e-9). At 32, 16 and 8 times the default step
+    (498, 249, 125 us) the peak error falls at about second order or faster (measured
+    1.2e-4, 2.3e-5, 4.0e-7; at 500, 250, 125 us: 1.0e-4, 3.2e-5, 7.3e-6, x3.2 and x4.4:
+    the error scatters with the exact step), asserted > 3 per halving; below about 60 us it
+    grows again (1.3e-6, 1.4e-6, 8.0e-6, 5.1e-5, 2.9e-4 at 62, 31, 16, 7.8, 3.9 us): at
+    fine steps Exudyn keeps a radial contact vibration of ~3e-11 m that coarse steps damp
+    (docs/exudyn.md), which no test here hides: the default step's error is asserted."""
+    from validation.compare import compare
+
+    lk = cases.four_bar()
+    start = four_bar_settled_start()
+    ref = simulate(lk, 1, rtol=1e-11, start=start)
+    ex = simulate(lk, 1, backend="exudyn", start=start)
+    r = compare(ref, ex, revolutions=(1,)).revolution(1)
+    assert abs(r.peak_rel_diff) < 5e-3, r.peak_rel_diff
+    assert abs(r.shaking_rms_rel_diff) < 2e-2 and abs(r.moment_rms_rel_diff) < 2e-2
+    # tighter than required, at the measured level (a regression shows)
+    assert abs(r.peak_rel_diff) < 1e-4 and abs(r.shaking_rms_rel_diff) < 1e-6
+    h0 = xl.make_settings({}).step(lk)
+    peak = []
+    for factor in (32, 16, 8):
+        ex = simulate(lk, 1, backend="exudyn", start=start, step_size=factor * h0)
+        peak.append(abs(compare(ref, ex, revolutions=(1,)).revolution(1).peak_rel_diff))
+    peak = np.array(peak)
+    assert np.all(peak[:-1] / peak[1:] > 3.0), peak
+
+
+@pytest.mark.slow
+def test_four_bar_exudyn_finite_differences_converge_to_ddm_from_a_settled_start():
+    """Issue 17's finite differences for the four-bar, from the state after 100
+    revolutions (held fixed: from the centred start the sensitivities pass through its 325
+    settling impacts and are ill-conditioned, docs/exudyn.md). Relative step 1e-3,
+    revolution 1 from there, d RMS(|F|)/db of coupler.mass, rocker.mass and gravity
+    against DDM (rtol 1e-9): measured 7.8e-4, 4.8e-4, 5.2e-4 at 15.6 us and 4.7e-5,
+    2.4e-5, 8.0e-5 at 7.8 us (the reduced model's own central differences at this step:
+    5.2e-4, 2.5e-4, 1.5e-4), asserted < 2e-3 and < 3e-4, falling."""
+    from validation.exudyn_sensitivity import compare_fd_ddm
+
+    rows = compare_fd_ddm("four_bar", (1.5577e-5, 7.7885e-6), revolutions=1, rel=1e-3,
+                          ddm_rtol=1e-9, settled=100)
+    coarse = {r["parameter"]: r for r in rows if r["step"] == 1.5577e-5}
+    fine = {r["parameter"]: r for r in rows if r["step"] == 7.7885e-6}
+    assert set(fine) == {"coupler.mass", "rocker.mass", "gravity"}
+    for p in fine:
+        assert coarse[p]["rms"] < 2e-3 and fine[p]["rms"] < 3e-4, (p, coarse[p], fine[p])
+        assert fine[p]["rms"] < coarse[p]["rms"], (p, coarse[p], fine[p])
+
+
 @pytest.mark.slow
 def test_four_bar_ideal_joint_limit_separates_the_sliding_mode():
     """The four-bar with clearance 1e-7 m in Exudyn (its default: step 7.2e-6 s, a 12th of

@@ -8,8 +8,10 @@ into it) and of its `rhs`, `event` and `monitor`: their addresses are read from 
 object code in the cache files (nm) and placed by one symbol whose runtime address numba
 gives. Then it runs the case `--repeats` times. Use it under perf:
 
-    perf record -F 10000 -o /tmp/perf.data python -m validation.benchmarks.profile_run
+    perf record -F 10000 -o /tmp/perf.data python -m validation.benchmarks.profile_run [--ddm]
     perf report -i /tmp/perf.data --sort sym
+
+(``--ddm``: the DDM of the 8 default parameters, `sensitivities(mech)`, instead.)
 
 (the Python start-up and import are in the profile too; compare the kernels' shares
 with each other).
@@ -78,13 +80,19 @@ def _symbols(dispatcher, cache_file: Path) -> list[str]:
     return lines
 
 
-def write_perf_map() -> int:
+#: the kernels named in the map: of the plain run, of the DDM run (``--ddm``)
+KERNELS = ("integrate_model", "rhs", "event", "monitor")
+DDM_KERNELS = ("integrate_sens", "rhs_sens", "monitor_sens", "on_event_sens", "tangent",
+               "event")
+
+
+def write_perf_map(names=KERNELS) -> int:
     """Write /tmp/perf-<pid>.map for the paper model's kernels; returns the symbols."""
     model = reduced.MODEL
     cache = Path(model.__file__).parent / "__pycache__"
     stem = Path(model.__file__).stem
     lines = []
-    for name in ("integrate_model", "rhs", "event", "monitor"):
+    for name in names:
         files = sorted(cache.glob(f"nb-*/{stem}.{name}-*.nbc"), key=os.path.getmtime)
         if files:
             lines += _symbols(getattr(model, name), files[-1])    # the newest: this digest's
@@ -95,13 +103,24 @@ def write_perf_map() -> int:
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeats", type=int, default=300)
+    ap.add_argument("--ddm", action="store_true",
+                    help="profile the DDM of the 8 default parameters (`sensitivities(mech)`)")
     args = ap.parse_args(argv)
     mech = SliderCrank()
-    peak_base_force(mech, 4)                 # load (or compile) the kernels
-    print(f"{write_perf_map()} symbols in /tmp/perf-{os.getpid()}.map", flush=True)
+    if args.ddm:
+        from mbs_clearance.sensitivity import sensitivities
+
+        def work():
+            return sensitivities(mech)
+    else:
+        def work():
+            return peak_base_force(mech, 4)
+    work()                                   # load (or compile) the kernels
+    n = write_perf_map(DDM_KERNELS if args.ddm else KERNELS)
+    print(f"{n} symbols in /tmp/perf-{os.getpid()}.map", flush=True)
     t0 = time.process_time()
     for _ in range(args.repeats):
-        peak_base_force(mech, 4)
+        work()
     print(f"{1e3 * (time.process_time() - t0) / args.repeats:.3f} ms CPU per run")
 
 
