@@ -78,7 +78,9 @@ def simulate(mech: SliderCrank, revolutions: int = 4, backend: str = "reduced",
         ``contact`` for "exudyn". Unknown options or values out of range raise ValueError
         before any computation. Every backend takes ``max_memory`` (bytes; default
         min(4 GiB, half the RAM)): a run estimated to need more is refused with
-        `MemoryLimitError` (a ValueError) before it allocates.
+        `MemoryLimitError` (a ValueError) before it allocates. A `Linkage` on either
+        backend takes ``start`` (a `linkage_model.Start`, e.g. `settled_start(linkage,
+        100)`): the run starts from that state instead of the centred assembly.
 
     Returns
     -------
