@@ -408,8 +408,8 @@ START_UP_NOTE = ("* revolution 1 is the start-up transient (the journal starts c
                  "ideal-joint velocities); the paper reports revolution 4")
 
 
-def _revolution_label(k: int) -> str:
-    return f"{k}*" if k == 1 else str(k)
+def _revolution_label(k: int, transient: bool = True) -> str:
+    return f"{k}*" if k == 1 and transient else str(k)
 
 
 def _force(value: float) -> str:
@@ -423,6 +423,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     linkage = linkage_from_args(args)
     if linkage is not None:
         return _simulate_linkage(linkage, args)
+    settled_start_of(None, args)
     mech = mechanism_from_args(args)
     if args.out:
         check_output_file(args.out, "--out", args.force, suffixes=(".npz", ".csv"),
@@ -481,10 +482,16 @@ def _simulate_linkage(linkage, args: argparse.Namespace) -> int:
     if args.plot:
         raise ValueError("--plot draws the paper's slider-crank only; leave it out with "
                          "--case or --description")
+    options = _simulate_options(args)
+    if args.backend == "ideal" and args.settled:
+        raise ValueError("--settled needs the reduced or exudyn backend")
+    start = settled_start_of(linkage, args)
+    if start is not None:
+        options["start"] = start
     _progress(f"simulating {linkage.name!r}, {args.revolutions} revolutions with backend "
               f"{args.backend!r} ...")
     t0 = time.perf_counter()
-    traj = simulate(linkage, args.revolutions, backend=args.backend, **_simulate_options(args))
+    traj = simulate(linkage, args.revolutions, backend=args.backend, **options)
     elapsed = time.perf_counter() - t0
     print(f"done in {elapsed:.3g} s ({len(traj.t)} samples)", file=sys.stderr)
     joints = [] if args.backend == "ideal" else [j.name for j in linkage.clearance_joints]
@@ -497,9 +504,13 @@ def _simulate_linkage(linkage, args: argparse.Namespace) -> int:
         mask = traj.revolution_mask(k)
         cells = "  ".join(f"{_force(traj.contact_force[mask, i].max()):>{w}}"
                           for i, w in enumerate(widths))
-        print(f"{_revolution_label(k):>10}  {_force(traj.peaks[k - 1]):>18}  "
+        print(f"{_revolution_label(k, start is None):>10}  {_force(traj.peaks[k - 1]):>18}  "
               f"{quantity(abs(traj.crank_moment[mask]).max(), 'N m', 6):>12}  {cells}")
-    print(START_UP_NOTE, file=sys.stderr)
+    if start is None:
+        print(START_UP_NOTE, file=sys.stderr)
+    else:
+        print(f"revolutions counted from the state after {start.revolutions} revolutions "
+              "(--settled)", file=sys.stderr)
     if args.out:
         with atomic_file(args.out) as tmp:
             traj.save(tmp)
@@ -551,6 +562,9 @@ def _cmd_sensitivity(args: argparse.Namespace) -> int:
     options = {}
     if args.step_size is not None:
         options["step_size"] = args.step_size
+    start = settled_start_of(linkage, args)
+    if start is not None:
+        options["start"] = start
     what = f"{linkage.name!r}" if linkage is not None else "|F12|"
     _progress(f"sensitivities of {what} by {args.method} ({args.backend}), "
               f"{args.revolutions} revolutions ...")
@@ -628,6 +642,28 @@ def add_linkage_options(p: argparse.ArgumentParser) -> None:
                         "clearance=1e-4 (default: none)")
 
 
+def add_settled_option(p: argparse.ArgumentParser) -> None:
+    """--settled N: start a --case / --description from its state after N revolutions."""
+    p.add_argument("--settled", type=int_at_least(1), metavar="N",
+                   help="--case / --description only: start from the reduced model's state "
+                        "after N revolutions (the start's transient settled; the four-bar "
+                        "needs about 100), held fixed (default: the centred start)")
+
+
+def settled_start_of(linkage, args: argparse.Namespace):
+    """The `Start` of --settled N for `linkage` (None without it; an error for the paper's
+    SliderCrank, which is not a description)."""
+    n = getattr(args, "settled", None)
+    if n is None:
+        return None
+    if linkage is None:
+        raise ValueError("--settled applies to --case or --description only")
+    from .linkage_model import settled_start
+
+    _progress(f"settling {linkage.name!r}: {n} revolutions from the centred start ...")
+    return settled_start(linkage, n, rtol=getattr(args, "rtol", None))
+
+
 def add_run_options(p: argparse.ArgumentParser, methods, integrator_default="dopri5") -> None:
     """--backend, --rtol, --step-size, --integrator."""
     p.add_argument("--backend", choices=BACKEND_NAMES, default="reduced",
@@ -670,6 +706,7 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     add_linkage_options(p)
     p.add_argument("--revolutions", type=int_at_least(1), default=4,
                    help="crank revolutions from the start (revolution 1: start-up transient)")
+    add_settled_option(p)
     add_run_options(p, methods)
     p.add_argument("--contact", choices=contact_variants,
                    help="clearance-joint variant of the exudyn backend (default symbolic)")
@@ -701,6 +738,7 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
                         "differences (any backend)")
     p.add_argument("--revolutions", type=int_at_least(1), default=4,
                    help="crank revolutions; the sensitivities are those of the last")
+    add_settled_option(p)
     add_run_options(p, methods, integrator_default="dop853 for ddm, dopri5 for fd")
     p.add_argument("--out", type=Path,
                    help="folder for sensitivities.npz and figures (default: none written)")

@@ -67,6 +67,9 @@ CLI_CASES: list[tuple[str, str]] = [
     ("simulate --case four_bar --set crank_length=2.8", "four-bar no longer a crank-rocker"),
     ("simulate --case four_bar --crank-length 0.1", "a SliderCrank option with a case"),
     ("simulate --case four_bar --plot f.png", "figure of a case"),
+    ("simulate --settled 3", "--settled without a case"),
+    ("simulate --case four_bar --settled 0", "--settled zero"),
+    ("simulate --case four_bar --settled 2 --backend ideal", "--settled with the ideal backend"),
     ("simulate --description /nonexistent.json", "missing description file"),
     ("simulate --description user.txt", "description file neither JSON nor TOML"),
     ("simulate --description list.json", "description file not a linkage"),
@@ -243,6 +246,12 @@ LIBRARY_CASES: list[tuple[str, str]] = [
     ("SliderCrank.from_json(crafted('list_json'))", "mechanism file not a JSON object"),
     ("sensitivities(M, ['crank_length'], revolutions=2).chaotic",
      "chaos flag with fewer than 3 revolutions"),
+    ("simulate(cases.four_bar(), 1, start=(1.0, 2.0))", "start that is not a Start"),
+    ("simulate(cases.four_bar(), 1, start=Start(np.zeros(3), np.zeros(1), np.ones(1), 1, "
+     "'four_bar'))", "start of the wrong size"),
+    ("simulate(cases.four_bar(), 1, start=Start(np.zeros(4), np.zeros(1), np.ones(1), 1, "
+     "'paper_slider_crank'))", "start of another linkage"),
+    ("simulate(M, 1, start=None)", "start for a SliderCrank"),
 ]
 
 
@@ -252,7 +261,8 @@ def _library_namespace(tmp: Path) -> dict:
 
     import numpy as np
 
-    from mbs_clearance import SliderCrank, load_trajectory, peak_base_force, simulate
+    from mbs_clearance import SliderCrank, cases, load_trajectory, peak_base_force, simulate
+    from mbs_clearance.linkage_model import Start
     from mbs_clearance.optimize import OptimizationResult
     from mbs_clearance.sensitivity import load_sensitivities, sensitivities
 
@@ -317,7 +327,8 @@ def _library_namespace(tmp: Path) -> dict:
             "simulate": simulate, "peak_base_force": peak_base_force,
             "sensitivities": sensitivities, "load_trajectory": load_trajectory,
             "load_sensitivities": load_sensitivities, "OptimizationResult": OptimizationResult,
-            "trajectory": trajectory, "save_roundtrip": save_roundtrip, "crafted": crafted}
+            "trajectory": trajectory, "save_roundtrip": save_roundtrip, "crafted": crafted,
+            "cases": cases, "Start": Start}
 
 
 def _first_line(text: str) -> str:

@@ -96,3 +96,19 @@ def test_a_start_whose_mode_contradicts_its_penetration_is_refused():
         simulate(lk, 1, start=(good.y, good.modes))
     with pytest.raises(ValueError, match="start"):
         simulate(SliderCrank(), 1, start=good)
+
+
+def test_command_line_settled_start(capsys):
+    """`simulate --case NAME --settled N` prints the peaks of the run from the state after N
+    revolutions (the library's, to the 7 digits printed), without the start-up mark."""
+    from mbs_clearance.cli import main
+
+    assert main(["simulate", "--case", "paper_slider_crank", "--settled", "1",
+                 "--revolutions", "1", "--rtol", "1e-9"]) == 0
+    out = capsys.readouterr()
+    row = out.out.splitlines()[1].split()
+    assert row[0] == "1"
+    lk = cases.paper_slider_crank()
+    peak = simulate(lk, 1, rtol=1e-9, start=settled_start(lk, 1, rtol=1e-9)).peaks[0]
+    assert float(row[1]) == pytest.approx(peak, rel=1e-6)
+    assert "after 1 revolutions (--settled)" in out.err
