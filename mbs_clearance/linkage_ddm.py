@@ -276,12 +276,15 @@ class DdmRun(NamedTuple):
         s = ys[:, n2:n2 * (1 + self.nb)].reshape(len(ys), self.nb, n2)
         return _combine_directions(s.transpose(0, 2, 1), self.coeffs).transpose(0, 2, 1)
 
-    def output_sensitivities(self, ts, ys, ms):
+    def output_sensitivities(self, ts, ys, ms, columns=None):
         """Values (n, N_OUT) and derivatives (n, N_OUT, npar) of the model's outputs along
-        the requested directions at times ts, sensitivity states ys and memories ms."""
+        the requested directions at times ts, sensitivity states ys and memories ms; with
+        `columns` (indices of OUT_COLUMNS) only those derivatives (n, len(columns), npar)."""
         vals, ders = self.model.output_sensitivities(
             np.ascontiguousarray(ts), np.ascontiguousarray(ys),
             np.ascontiguousarray(ms[:, :self.model.N_MEM]), self.p)
+        if columns is not None:
+            ders = ders[:, columns, :]
         return vals, _combine_directions(ders, self.coeffs)
 
 

@@ -398,10 +398,12 @@ def _ddm(mech, names, revolutions, rtol, t_eval, event_time_term, method):
     if t_eval is not None:
         keep = landed(ts, t_eval)
         ts, ys, ms, peaks = ts[keep], ys[keep], ms[keep], None
-    vals, ders = run.output_sensitivities(ts, ys, ms)
     col = {c: i for i, c in enumerate(model.OUT_COLUMNS)}
     mon = model.MONITOR_COLUMN
-    d_force = ders[:, mon:mon + 2, :].copy()
+    # only the derivatives a SliderCrank's Sensitivities hold
+    vals, ders = run.output_sensitivities(ts, ys, ms, [mon, mon + 1, col["drive_moment"],
+                                                       col[f"{_JOINT}.contact_force"]])
+    d_force = ders[:, 0:2, :].copy()
     fx, fy = vals[:, mon], vals[:, mon + 1]
     d_mag = ((fx[:, None] * d_force[:, 0] + fy[:, None] * d_force[:, 1])
              / np.maximum(np.hypot(fx, fy), 1e-300)[:, None])
@@ -410,8 +412,7 @@ def _ddm(mech, names, revolutions, rtol, t_eval, event_time_term, method):
         model.OUT_COLUMNS))
     return Sensitivities(
         t=ts, parameters=names, reference=ref, base_force=d_force, base_force_magnitude=d_mag,
-        crank_moment=ders[:, col["drive_moment"], :].copy(),
-        contact_force=ders[:, col[f"{_JOINT}.contact_force"], :].copy(), trajectory=traj,
+        crank_moment=ders[:, 2, :].copy(), contact_force=ders[:, 3, :].copy(), trajectory=traj,
         method="ddm", backend="reduced", growth=growth, stats=run.stats)
 
 
