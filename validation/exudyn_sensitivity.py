@@ -113,15 +113,12 @@ def compare_fd_ddm(name: str, steps, names=None, revolutions: int = 2, rel: floa
     rows, reference = [], None
     for step in steps:
         if step == 0.0:
-            if reference is None:
-                ts = np.linspace(0.0, revolutions * linkage.period,
-                                 SAMPLES_PER_REVOLUTION * revolutions + 1)
-                reference = (ts, *ddm(linkage, names, revolutions, ts, ddm_rtol, start))
-            t = reference[0]
-            fd_series, fd_rms = ddm(linkage, names, revolutions, t, 1e-11, start, "fd", rel)
-            m = t >= (revolutions - 1) * linkage.period - 1e-12 * t[-1]
-            ref_m = (t[m], reference[1][m], reference[2])
-            rows += _rows(step, names, ref_m, fd_series[m], fd_rms, 1)
+            # the last revolution, as the Exudyn rows
+            ts = np.linspace((revolutions - 1) * linkage.period, revolutions * linkage.period,
+                             SAMPLES_PER_REVOLUTION + 1)
+            ref0 = (ts, *ddm(linkage, names, revolutions, ts, ddm_rtol, start))
+            fd_series, fd_rms = ddm(linkage, names, revolutions, ts, 1e-11, start, "fd", rel)
+            rows += _rows(step, names, ref0, fd_series, fd_rms, 1)
             continue
         t, fd_series, fd_rms = exudyn_fd(linkage, names, revolutions, step, rel, start)
         stride = max(1, len(t) // SAMPLES_PER_REVOLUTION)
