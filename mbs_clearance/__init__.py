@@ -34,6 +34,7 @@ _LAZY = {
     **dict.fromkeys(("GROUND", "Body", "ClearanceJoint", "Drive", "Linkage", "Prismatic",
                      "Revolute"), "linkage"),
     **dict.fromkeys(("LyapunovResult", "lyapunov_exponent"), "lyapunov"),
+    **dict.fromkeys(("Start", "settled_start"), "linkage_model"),
     **dict.fromkeys(("CONTINUOUS_FIELDS", "PARAMETER_INFO", "SliderCrank"), "mechanism"),
     **dict.fromkeys(("PeakGradient", "peak_gradient"), "objective"),
     **dict.fromkeys(("OptimizationResult", "optimize_link_lengths"), "optimize"),
@@ -83,7 +84,7 @@ sys.modules[__name__].__class__ = _Package
 __all__ = [
     "SliderCrank", "PARAMETER_INFO", "CONTINUOUS_FIELDS",
     "Linkage", "Body", "Revolute", "Prismatic", "ClearanceJoint", "Drive", "GROUND",
-    "simulate", "peak_base_force", "BACKENDS",
+    "simulate", "peak_base_force", "BACKENDS", "Start", "settled_start",
     "Trajectory", "load_trajectory",
     "sensitivities", "Sensitivities", "DEFAULT_PARAMETERS",
     "optimize_link_lengths", "OptimizationResult",
