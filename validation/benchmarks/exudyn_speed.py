@@ -51,6 +51,9 @@ def main(argv=None):
                     help="with --cases: Exudyn's steps as multiples of its default step")
     ap.add_argument("--settled", type=int, default=0, metavar="N",
                     help="with --cases: start from the state after N revolutions")
+    ap.add_argument("--spectral-radius", type=float, default=0.9,
+                    help="with --cases: Exudyn's spectral radius (numerical damping; "
+                         "default 0.9, the backend's)")
     args = ap.parse_args(argv)
     if args.cases:
         return cases_main(args)
@@ -141,7 +144,8 @@ def cases_main(args) -> None:
             h = h0 * factor
             try:
                 t, tr = timed(lambda lk=lk, h=h, rev=rev, st=start: simulate(
-                    lk, rev, backend="exudyn", step_size=h, start=st), args.repeats)
+                    lk, rev, backend="exudyn", step_size=h, start=st,
+                    spectral_radius=args.spectral_radius), args.repeats)
             except RuntimeError as exc:          # Exudyn's Newton failed at this step
                 print(f"  {name} exudyn h = {h:.3g} s: failed ({exc})", flush=True)
                 continue
@@ -161,6 +165,7 @@ def cases_main(args) -> None:
     if args.settled:
         print(f"Every run from the state after {args.settled} revolutions; revolution 1 "
               "from there.")
+    print(f"Exudyn's spectral radius: {args.spectral_radius:g}")
     print("| case | revolution | reduced (rtol 1e-7): time (s), peak error | Exudyn step (s) | "
           "time (s) | peak error | RMS shaking | RMS moment |")
     print("|---|---|---|---|---|---|---|---|")
