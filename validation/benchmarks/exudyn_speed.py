@@ -54,6 +54,9 @@ def main(argv=None):
     ap.add_argument("--spectral-radius", type=float, default=0.9,
                     help="with --cases: Exudyn's spectral radius (numerical damping; "
                          "default 0.9, the backend's)")
+    ap.add_argument("--newton-tolerance", type=float, default=None,
+                    help="with --cases: Exudyn's Newton tolerance (default: the backend's "
+                         "rule, docs/exudyn.md)")
     args = ap.parse_args(argv)
     if args.cases:
         return cases_main(args)
@@ -145,7 +148,8 @@ def cases_main(args) -> None:
             try:
                 t, tr = timed(lambda lk=lk, h=h, rev=rev, st=start: simulate(
                     lk, rev, backend="exudyn", step_size=h, start=st,
-                    spectral_radius=args.spectral_radius), args.repeats)
+                    spectral_radius=args.spectral_radius,
+                    newton_tolerance=args.newton_tolerance), args.repeats)
             except RuntimeError as exc:          # Exudyn's Newton failed at this step
                 print(f"  {name} exudyn h = {h:.3g} s: failed ({exc})", flush=True)
                 continue
