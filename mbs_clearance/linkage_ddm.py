@@ -31,11 +31,11 @@ from .generate.sens_runtime import fill_seed_work, work_size
 from .linkage import Linkage
 from .linkage_model import (
     DEFAULT_MAX_STEPS,
-    EVENT_MARGIN,
     REFINE_ITERS,
     _tolerances,
     check_start,
     default_atol,
+    event_margin,
     event_tolerance,
     initial_state,
     load_model,
@@ -365,7 +365,7 @@ def _run(linkage, model, y0, p, edges, rtol, method, n_err, atol, record=True,
         else max_steps
     settings = make_settings(
         rtol, atol, n_err, h_max=linkage.period / 8, max_steps=limit, record=record,
-        event_tol=event_tol, event_margin=EVENT_MARGIN * linkage.min_clearance,
+        event_tol=event_tol, event_margin=event_margin(linkage.min_clearance, rtol),
         n_samples=1, refine_iters=refine, n_out=model.N_OUT if record else 0,
         n_dense=2 * model.N_Q, n_events=model.N_EVENTS, mem_start=model.MEM_START,
         n_mem=model.N_MEM)

@@ -282,9 +282,13 @@ OPTION_NAMES = ("rtol", "atol", "method", "max_steps", "n_samples", "h_max", "h0
                 "event_tol", "max_memory", "t_eval", "start")
 
 #: the event search looks closer (7 more samples and the interpolant's maximum) between two
-#: samples of a step where the cubic Hermite interpolant of a penetration comes within this
-#: fraction of the smallest clearance of the wall (see integrator._search_event)
-EVENT_MARGIN = 0.05
+#: samples of a step where the cubic Hermite interpolant of a penetration comes within
+#: `event_margin` of the wall (see integrator._search_event): this fraction of the smallest
+#: clearance, or MARGIN_PER_RTOL x rtol of it where that is larger
+EVENT_MARGIN = 0.001
+#: the margin stays at least this many times the switching function's error tolerance
+#: (rtol (1.5 c + |delta|), `EVENT_ATOL`): 67 x at rtol 1e-5 and looser
+MARGIN_PER_RTOL = 100.0
 
 #: default `max_steps` (step attempts) of a run
 DEFAULT_MAX_STEPS = 5_000_000
@@ -292,6 +296,16 @@ DEFAULT_MAX_STEPS = 5_000_000
 #: golden-section iterations per refined peak candidate: the bracket shrinks to 0.618^24 =
 #: 1e-5 of a step, where the peak's quadratic error is ~1e-12 of its value
 REFINE_ITERS = 24
+
+
+def event_margin(clearance: float, rtol: float) -> float:
+    """Distance from a wall (m) within which the event search looks closer between samples:
+    EVENT_MARGIN of the (smallest) clearance, at least MARGIN_PER_RTOL rtol of it. It guards
+    against the interpolants' error, which the switching function's error control keeps
+    below rtol (1.5 c + |delta|); a fixed 0.05 c (before session 13) put every step of a
+    light lasting contact (penetration ~0.005 c, the four-bar's) under the closer look and
+    the approach step limit, at twice the run time with the same steps (docs/performance.md)."""
+    return clearance * max(EVENT_MARGIN, MARGIN_PER_RTOL * rtol)
 
 
 def event_tolerance(linkage: Linkage) -> float:
@@ -415,7 +429,7 @@ def run(linkage: Linkage, revolutions: int = 4, *, rtol: float | None = None,
     limit = min(max_steps, step_cap)
     settings = make_settings(
         rtol, atol_arr, 2 * model.N_Q, h0=h0, h_max=h_max, max_steps=limit, record=record,
-        event_tol=event_tol, event_margin=EVENT_MARGIN * linkage.min_clearance,
+        event_tol=event_tol, event_margin=event_margin(linkage.min_clearance, rtol),
         n_samples=n_samples, refine_iters=refine, n_out=n_out, n_dense=2 * model.N_Q,
         n_events=model.N_EVENTS, mem_start=model.MEM_START, n_mem=model.N_MEM)
     ts, ys, ms, peaks, peak_t, counters, outs, status = model.integrate_model(

@@ -150,7 +150,7 @@ class Flow:
             self.settings = make_settings(
                 rtol, atol, 2 * model.N_Q, h_max=mech.period / 8, max_steps=max_steps,
                 record=True, event_tol=event_tol,
-                event_margin=lm.EVENT_MARGIN * mech.min_clearance, n_samples=1,
+                event_margin=lm.event_margin(mech.min_clearance, rtol), n_samples=1,
                 refine_iters=lm.REFINE_ITERS, n_out=0, n_dense=2 * model.N_Q,
                 n_events=model.N_EVENTS, mem_start=model.MEM_START, n_mem=model.N_MEM)
             self._gaps = [getattr(model, f"_gap_{j}") for j in range(model.N_EVENTS)]
@@ -168,7 +168,7 @@ class Flow:
             self.settings = make_settings(
                 rtol, atol, reduced.N_ERR, h_max=mech.period / 8, max_steps=max_steps,
                 record=True, event_tol=event_tol,
-                event_margin=reduced.EVENT_MARGIN * mech.clearance, n_samples=1,
+                event_margin=reduced.event_margin(mech.clearance, rtol), n_samples=1,
                 refine_iters=REFINE_ITERS, n_out=0, n_dense=reduced.N_EVENT, n_events=1,
                 mem_start=reduced.MEM_START, n_mem=reduced.N_MEM)
             self._gaps = [reduced.MODEL._gap_0]

@@ -48,8 +48,8 @@ from .linkage_model import (  # the settings shared with every linkage's runs
     DEFAULT_MAX_STEPS,
     DEFAULT_RTOL,
     EVENT_ATOL,
-    EVENT_MARGIN,
     REFINE_ITERS,
+    event_margin,
     landed_indices,
     landing_edges,
     window_peaks,
@@ -361,7 +361,7 @@ def run(mech: SliderCrank, revolutions: int = 4, *, rtol: float | None = None,
         n_out = 0
     settings = make_settings(rtol, atol_arr, n_err, h0=h0, h_max=h_max, max_steps=step_limit,
                              record=record, event_tol=event_tol,
-                             event_margin=EVENT_MARGIN * mech.clearance, n_samples=n_samples,
+                             event_margin=event_margin(mech.clearance, rtol), n_samples=n_samples,
                              refine_iters=refine, n_out=n_out, n_dense=N_EVENT, n_events=1,
                              mem_start=mem_start, n_mem=n_mem)
     ts, ys, ms, peaks, peak_t, counters, outs, status = kernel(y0, p, edges, settings,

@@ -123,8 +123,10 @@ def test_a_tolerance_too_loose_to_resolve_the_contacts_warns():
     with pytest.warns(AccuracyWarning, match="too loose to resolve the contacts"):
         peak = peak_base_force(SliderCrank(), rtol=1e-2)
     assert peak > 2 * am.reference_peaks(SliderCrank())[3]     # the warning was deserved
-    with pytest.warns(AccuracyWarning, match="too loose"):
+    # the run at rtol 1e-3 may deserve other accuracy warnings too (e.g. many onsets)
+    with pytest.warns(AccuracyWarning) as caught:
         assert not simulate(SliderCrank(), rtol=1e-3).stats["accuracy_ok"]
+    assert any("too loose" in str(w.message) for w in caught)
 
 
 def test_error_falls_monotonically_with_rtol_in_the_paper_case():

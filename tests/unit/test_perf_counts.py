@@ -99,30 +99,34 @@ def test_written_out_dopri5_step_equals_the_generic_step_bit_for_bit():
 
 def test_paper_case_cost_counts():
     """The paper case's default run (4 revolutions, rtol 1e-7): its rev-4 peak, function
-    evaluations, steps, events and refined steps as before the speed work of session 10
-    (commit abc84ad: 8291.958246907485 N, 59911, 9711 + 255, 5, 23); a change of any count
-    changes the run's cost (or its result) and must be explained."""
+    evaluations, steps, events and refined steps; a change of any count changes the run's
+    cost (or its result) and must be explained. Since session 13 the event search's margin
+    is 0.001 c (`linkage_model.event_margin`; 0.05 c before): the approach step limit near
+    the onsets and separations differs, 8291.95826563021 N, 59959, 9712 + 261, 5, 23 (before:
+    8291.958246907485 N, 59911, 9711 + 255, as after the speed work of session 10, commit
+    abc84ad; both within 9.3e-7 of the rtol 1e-12 run's peak, the change 2.3e-9)."""
     traj = reduced.simulate_reduced(SliderCrank(), 4)
     s = traj.stats
     assert (s["nfev"], s["naccept"], s["nreject"], s["nevent"], s["nrefine"]) == (
-        59911, 9711, 255, 5, 23)
-    assert traj.peaks[-1] == pytest.approx(8291.958246907485, rel=1e-12)
+        59959, 9712, 261, 5, 23)
+    assert traj.peaks[-1] == pytest.approx(8291.95826563021, rel=1e-12)
 
 
 @pytest.mark.slow
 def test_paper_case_kernel_calls():
     """The kernels' calls in the peak-only run (the integrator specialised for counting
-    wrappers: a compile of minutes): per attempted step (9966) five rhs and one monitor
+    wrappers: a compile of minutes): per attempted step (9973) five rhs and one monitor
     (plus the landing steps' and the initial step's); the switching function once per
     attempt (the embedded solution's, for its error control) and once per accepted step
-    (the event search's interior sample), plus the closer looks and the landings (361)."""
+    (the event search's interior sample), plus the closer looks and the landings (170; 361
+    with the margin of 0.05 c before session 13, in 9966 attempts)."""
     from validation.benchmarks.cost_breakdown import counts
 
     c = counts()
     attempts = c["naccept"] + c["nreject"]
-    assert attempts == 9966
-    assert c["main"] == {"rhs": 50070, "event": 20038, "on_event": 5, "monitor": 9998}
-    assert c["main"]["event"] == attempts + c["naccept"] + 361
+    assert attempts == 9973
+    assert c["main"] == {"rhs": 50111, "event": 19855, "on_event": 5, "monitor": 10005}
+    assert c["main"]["event"] == attempts + c["naccept"] + 170
     # nfev counts the main loop's calls but one refined step's (1 + 26 x 6 = 157): a
     # window's last step is refined on p itself, where the wrappers count it
     assert c["main"]["rhs"] + c["main"]["monitor"] == c["nfev"] + 157

@@ -249,7 +249,7 @@ def _plain_args(mech, **changes):
     event_tol = max(1e-12 * mech.clearance,
                     8 * np.finfo(float).eps * (mech.crank_length + mech.coupler_length))
     fields = dict(h_max=mech.period / 8, max_steps=reduced.DEFAULT_MAX_STEPS, record=False,
-                  event_tol=event_tol, event_margin=reduced.EVENT_MARGIN * mech.clearance,
+                  event_tol=event_tol, event_margin=reduced.event_margin(mech.clearance, rtol),
                   n_samples=1, refine_iters=reduced.REFINE_ITERS, n_out=0,
                   n_dense=reduced.N_EVENT, n_events=1, mem_start=system.mem_start,
                   n_mem=system.n_mem)
