@@ -418,16 +418,20 @@ def four_bar_peaks(rtol):
 @pytest.mark.slow
 def test_four_bar_peak_converges_with_rtol():
     """Convergence of the integrator on the four-bar, whose end state after the start's
-    impacts is sensitive (the number of start impacts changes with rtol: 65, 533, 313, 331,
-    329, 323 at rtol 1e-6 ... 1e-11): the 4th revolution's refined peak against rtol 1e-11
-    falls with rtol at least in proportion to it (measured errors 1.6e-3, 1.0e-4, 1.7e-6,
-    3.5e-7 at rtol 1e-6 ... 1e-9: log-log slope 1.3; 0.7 ... 2.2 allowed; rtol 1e-10 and
-    1e-11 differ by 7e-8) and is below
-    1e-6 at rtol 1e-9."""
+    impacts is sensitive (the number of start impacts changes with rtol: 59, 523, 315, 331,
+    325, 325 at rtol 1e-6 ... 1e-11): the 4th revolution's refined peak against rtol 1e-11
+    falls with rtol from 1e-6 to 1e-8 at least in proportion to it (measured errors 2.3e-3,
+    1.0e-4, 1.7e-6: log-log slope 1.6; 0.7 ... 2.2 allowed) and stays below 1e-5 at 1e-9.
+    Finer than 1e-8 the peaks scatter at a few 1e-6 with the start impacts' sequence, and
+    the reference with them: at rtol 1e-9 and 1e-10 against 1e-11, 3.0e-6 and 1.0e-7 (event
+    margin 0.001 c, since session 13) or 3.0e-7 and 2.2e-6 (0.05 c, before), both on an
+    Intel Xeon; 3.5e-7 and 7e-8 on an AMD EPYC with 0.05 c (where rtol 1e-9 was asserted
+    below 1e-6 until session 13)."""
     ref = four_bar_peaks(1e-11)["peaks"][3]
-    rtols = np.array([1e-6, 1e-7, 1e-8, 1e-9])
+    rtols = np.array([1e-6, 1e-7, 1e-8])
     errs = np.array([abs(four_bar_peaks(r)["peaks"][3] / ref - 1.0) for r in rtols])
     assert np.all(np.diff(errs) < 0), errs
     slope = np.polyfit(np.log(rtols), np.log(errs), 1)[0]
     assert 0.7 < slope < 2.2, (errs, slope)
-    assert errs[-1] < 1e-6, errs
+    fine = abs(four_bar_peaks(1e-9)["peaks"][3] / ref - 1.0)
+    assert fine < 1e-5, fine

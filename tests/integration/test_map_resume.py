@@ -17,14 +17,18 @@ from mbs_clearance import SliderCrank, regime_map
 from mbs_clearance.sweep import _load
 
 SWEEP = "clearance=1e-5:5e-4:log:6"
-ARGS = dict(revolutions=12, keep=5, max_period=2)
+#: 120 revolutions per point: long enough (about 0.3 s on an Intel Xeon) that the polling
+#: below sees the file between two points; with 12, a fast machine finished all six points
+#: between two polls and the kill came too late
+REVOLUTIONS = 120
+ARGS = dict(revolutions=REVOLUTIONS, keep=5, max_period=2)
 
 
 @pytest.mark.slow
 def test_sigkill_midway_then_resume_equals_uninterrupted(tmp_path):
     out = tmp_path / "killed"
     cmd = [sys.executable, "-m", "mbs_clearance.cli", "map", "--sweep", SWEEP,
-           "--revolutions", "12", "--keep", "5", "--max-period", "2", "--workers", "1",
+           "--revolutions", str(REVOLUTIONS), "--keep", "5", "--max-period", "2", "--workers", "1",
            "--no-progress", "--write-interval", "0", "--out", str(out)]
     proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
                             cwd=os.getcwd())
@@ -32,7 +36,7 @@ def test_sigkill_midway_then_resume_equals_uninterrupted(tmp_path):
     deadline = time.monotonic() + 600
     done = 0
     while time.monotonic() < deadline and proc.poll() is None:
-        time.sleep(0.2)
+        time.sleep(0.02)
         if path.exists():
             try:
                 done = int(_load(path)["done"].sum())

@@ -306,8 +306,11 @@ def test_two_joint_slider_crank_exponent_agrees_with_two_nearby_runs():
     apart (scaled units, along the tangent's start) separate e-fold more than 10 times in
     the first revolution (measured: exponent 6.8 per revolution, separation 1e-9 -> 2.9);
     at the default 0.01 mm it is negative and the runs do not separate after the start's
-    transient (they settle at a constant distance: the persistent contacts' memories, as
-    the paper's design)."""
+    transient: they stay at the distance the persistent contacts' memories and the
+    integration's own error set, 4e-8 to 4e-7 over revolutions 2-6 (measured on an Intel
+    Xeon at rtol 1e-11 and 1e-12, with the event margin of 0.001 c and of 0.05 c: not
+    constant to a factor 1.5, as asserted until session 13), far from the chaotic case's
+    separation, asserted below 1e-6."""
     from mbs_clearance.cases import slider_crank_two_clearances
 
     for c, chaotic in ((2e-4, True), (1e-5, False)):
@@ -328,4 +331,4 @@ def test_two_joint_slider_crank_exponent_agrees_with_two_nearby_runs():
             assert math.log(d[0] / eps) > 10.0
         else:
             assert res.per_revolution < -1.0
-            assert max(d[1:]) <= 1.5 * d[1]
+            assert max(d[1:]) < 1e-6, d
