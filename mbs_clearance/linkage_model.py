@@ -304,7 +304,8 @@ def event_margin(clearance: float, rtol: float) -> float:
     against the interpolants' error, which the switching function's error control keeps
     below rtol (1.5 c + |delta|); a fixed 0.05 c (before session 13) put every step of a
     light lasting contact (penetration ~0.005 c, the four-bar's) under the closer look and
-    the approach step limit, at twice the run time with the same steps (docs/performance.md)."""
+    the approach step limit, at 1.7 times the run time with the same steps
+    (docs/performance.md)."""
     return clearance * max(EVENT_MARGIN, MARGIN_PER_RTOL * rtol)
 
 
