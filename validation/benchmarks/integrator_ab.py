@@ -89,7 +89,7 @@ def measure(repeats: int, rtol=None) -> dict:
     return out
 
 
-def _process(checkout: Path, repeats: int, rtol=None, what: str = "measure") -> dict:
+def _process(checkout: Path, repeats: int, rtol=None, what: str = "measure") -> dict | list:
     """`measure` (or `peak_errors`) of this script in a new process that imports the
     package `mbs_clearance` from `checkout` (the same measurement code on either side)."""
     here = Path(__file__).resolve().parents[2]
