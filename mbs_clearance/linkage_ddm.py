@@ -188,8 +188,11 @@ def independent_directions(M: np.ndarray, tol: float = DIRECTION_TOL):
     return np.array(basis), coeffs
 
 
-def pack_sensitivity_parameters(model, p, entries, event_time_term: bool = True):
-    """The parameter vector of a sensitivity run (layout: generate/sens_runtime.py)."""
+def pack_sensitivity_parameters(model, p, entries, event_time_term: bool = True,
+                                record_columns=()):
+    """The parameter vector of a sensitivity run (layout: generate/sens_runtime.py); after
+    the work space N_OUT slots of which the first hold `record_columns`, the outputs whose
+    derivatives a run with a longer record stores (`sens_runtime.sens_monitor`)."""
     nb = len(entries)
     m = max([1] + [len(e) for e in entries])
     cols = np.ones((nb, m))          # padding: column 1 (the first coordinate), value 0
@@ -201,8 +204,10 @@ def pack_sensitivity_parameters(model, p, entries, event_time_term: bool = True)
     work = np.zeros(work_size(nb, model.N_Z, model.N_JROWS, model.N_Q, model.N_EVENTS))
     fill_seed_work(work, entries, model.N_Z, model.N_JROWS, model.N_Q,
                    1 + 2 * model.N_Q + model.MEM_START + 1, model.N_EVENTS)
+    rec = np.zeros(model.N_OUT)
+    rec[:len(record_columns)] = record_columns
     return np.concatenate([p, [nb, 1.0 if event_time_term else 0.0, m], cols.ravel(),
-                           vals.ravel(), work])
+                           vals.ravel(), work, rec])
 
 
 def sensitivity_state(y_state, s0, sigma0) -> np.ndarray:
@@ -243,8 +248,11 @@ def tangent_work(model, p) -> dict:
 class DdmRun(NamedTuple):
     """A recorded DDM run: the model, its plain parameters p0 and the sensitivity run's p,
     the records (times, sensitivity states, memories, outputs of the monitor), the peaks,
-    the counters, and the coefficients (nb, npar) that combine the integrated directions
-    into the requested ones (`independent_directions`)."""
+    the counters, the coefficients (nb, npar) that combine the integrated directions
+    into the requested ones (`independent_directions`), the directions' scales, and (a run
+    with `derivatives`) the outputs' derivatives along the integrated directions at the
+    recorded steps (n, len(out_columns), nb) of the outputs out_columns (indices of
+    OUT_COLUMNS), else None."""
 
     model: Any
     p0: np.ndarray
@@ -258,6 +266,8 @@ class DdmRun(NamedTuple):
     stats: dict
     coeffs: np.ndarray
     scale: np.ndarray
+    out_ders: np.ndarray | None = None
+    out_columns: tuple[int, ...] = ()
 
     @property
     def nb(self) -> int:
@@ -275,6 +285,19 @@ class DdmRun(NamedTuple):
         n2 = 2 * self.model.N_Q
         s = ys[:, n2:n2 * (1 + self.nb)].reshape(len(ys), self.nb, n2)
         return _combine_directions(s.transpose(0, 2, 1), self.coeffs).transpose(0, 2, 1)
+
+    def recorded_output_sensitivities(self, rows=None):
+        """Values (n, N_OUT) and derivatives (n, len(out_columns), npar) of the outputs
+        along the requested directions at the recorded steps (all, or the indices `rows`),
+        from the run's records (a run with `derivatives`: the monitor computed them with
+        each step, as `output_sensitivities` would from the recorded states)."""
+        if self.out_ders is None:
+            raise ValueError("this DDM run recorded no output derivatives: run it with "
+                             "derivatives=True, or use output_sensitivities")
+        vals, ders = self.outs, self.out_ders
+        if rows is not None:
+            vals, ders = vals[rows], ders[rows]
+        return vals, _combine_directions(ders, self.coeffs)
 
     def output_sensitivities(self, ts, ys, ms, columns=None):
         """Values (n, N_OUT) and derivatives (n, N_OUT, npar) of the model's outputs along
@@ -296,13 +319,14 @@ def _combine_directions(a: np.ndarray, coeffs: np.ndarray) -> np.ndarray:
 
 
 def setup(linkage: Linkage, model, p0, y_state, directions, scale, atol_plain,
-          event_time_term: bool = True, fixed_start: bool = False):
+          event_time_term: bool = True, fixed_start: bool = False, record_columns=()):
     """The sensitivity system of `directions` (see `combine`): one integrated direction per
     independent one (`independent_directions` on the directions made dimensionless: the
     initial sensitivities by the state's tolerance scales, the chains by the parameters'
     values, the memories by the floors, and each direction by its `scale`). Returns (y0, p,
     atol, coefficients (nb, npar)). With `fixed_start` the initial state and memories do not
-    move with the parameters (a `linkage_model.Start`): the sensitivities start at zero."""
+    move with the parameters (a `linkage_model.Start`): the sensitivities start at zero.
+    record_columns: see `pack_sensitivity_parameters`."""
     entries, sigma = combine(linkage, model, directions)
     if fixed_start:
         s0 = np.zeros((len(entries), 2 * model.N_Q))
@@ -325,7 +349,8 @@ def setup(linkage: Linkage, model, p0, y_state, directions, scale, atol_plain,
     basis, coeffs = _THIS.independent_directions(M)
     coeffs = coeffs * np.asarray(scale)[basis, None] / np.asarray(scale)[None, :]
     coeffs[:, basis] = np.eye(len(basis))     # exactly (no least-squares round-off)
-    p = pack_sensitivity_parameters(model, p0, [entries[b] for b in basis], event_time_term)
+    p = pack_sensitivity_parameters(model, p0, [entries[b] for b in basis], event_time_term,
+                                    record_columns)
     y0 = sensitivity_state(y_state, s0[basis], sigma[basis])
     atol = sensitivity_atol(model, atol_plain, np.asarray(scale)[basis])
     return y0, p, atol, coeffs
@@ -334,39 +359,53 @@ def setup(linkage: Linkage, model, p0, y_state, directions, scale, atol_plain,
 def ddm_run(linkage: Linkage, model, p0, y_state, directions, *, scale, rtol, atol_plain,
             revolutions: int, t_eval=None, event_time_term: bool = True,
             method: str = DDM_INTEGRATOR, record: bool = True, whole: bool = False,
-            fixed_start: bool = False) -> DdmRun:
+            fixed_start: bool = False, derivatives=False) -> DdmRun:
     """Integrate the sensitivity equations of `directions` (see `setup`) over `revolutions`
     drive revolutions (landing on the times t_eval if given, without peak refinement, and
-    ending at the last unless `whole`); returns the `DdmRun`."""
+    ending at the last unless `whole`); returns the `DdmRun`. With `derivatives` (True:
+    every output; or a sequence of names in OUT_COLUMNS) and `record` the derivatives of
+    those outputs are computed with every step and recorded
+    (`DdmRun.recorded_output_sensitivities`)."""
+    if derivatives is True:
+        derivatives = model.OUT_COLUMNS
+    columns = tuple(model.OUT_COLUMNS.index(c) for c in derivatives) \
+        if derivatives and record else ()
     y0, p, atol, coeffs = setup(linkage, model, p0, y_state, directions, scale,
-                                atol_plain, event_time_term, fixed_start)
+                                atol_plain, event_time_term, fixed_start, columns)
     nb = coeffs.shape[0]
     edges = _edges(linkage, revolutions, t_eval, whole)
     t0 = time.perf_counter()
+    n_out = model.N_OUT + len(columns) * nb if columns else None
     ts, ys, ms, peaks, peak_t, outs, stats = _run(
         linkage, model, y0, p, edges, rtol, method, 2 * model.N_Q * (1 + nb), atol,
-        record=record, refine=REFINE_ITERS if t_eval is None else 0)
+        record=record, refine=REFINE_ITERS if t_eval is None else 0, n_out=n_out)
     stats.update(wall_time=time.perf_counter() - t0, event_time_term=event_time_term,
                  directions=nb)
+    out_ders = None
+    if columns:
+        out_ders = outs[:, model.N_OUT:].reshape(len(ts), len(columns), nb)
+        outs = outs[:, :model.N_OUT]
     return DdmRun(model, p0, p, ts, ys, ms, peaks, peak_t, outs, stats, coeffs,
-                  np.asarray(scale, dtype=float))
+                  np.asarray(scale, dtype=float), out_ders, columns)
 
 
 def _run(linkage, model, y0, p, edges, rtol, method, n_err, atol, record=True,
-         max_steps=DEFAULT_MAX_STEPS, kernel="integrate_sens", refine=REFINE_ITERS):
+         max_steps=DEFAULT_MAX_STEPS, kernel="integrate_sens", refine=REFINE_ITERS,
+         n_out=None):
     from ._checks import MemoryLimitError, default_max_memory, format_bytes
     from .integrator import COUNTERS, METHODS, RESULTS, make_settings
 
     event_tol = event_tolerance(linkage)
     # the record never outgrows the default memory limit: a run that would stops there
     max_memory = default_max_memory()
-    row = 8 * (1 + len(y0) + model.N_MEM + (model.N_OUT if record else 0))
+    n_out = (model.N_OUT if n_out is None else n_out) if record else 0
+    row = 8 * (1 + len(y0) + model.N_MEM + n_out)
     limit = min(max_steps, max(1, (max_memory - 24 * len(edges)) // row)) if record \
         else max_steps
     settings = make_settings(
         rtol, atol, n_err, h_max=linkage.period / 8, max_steps=limit, record=record,
         event_tol=event_tol, event_margin=event_margin(linkage.min_clearance, rtol),
-        n_samples=1, refine_iters=refine, n_out=model.N_OUT if record else 0,
+        n_samples=1, refine_iters=refine, n_out=n_out,
         n_dense=2 * model.N_Q, n_events=model.N_EVENTS, mem_start=model.MEM_START,
         n_mem=model.N_MEM)
     ts, ys, ms, peaks, peak_t, counters, outs, status = getattr(model, kernel)(
@@ -432,19 +471,20 @@ def linkage_sensitivities(linkage: Linkage, names: tuple[str, ...], revolutions:
     scale = np.array([fd_step(linkage, n, 1.0) for n in names])
     run = ddm_run(linkage, model, p0, y_state, [{n: 1.0} for n in names], scale=scale,
                   rtol=rtol, atol_plain=atol_plain, revolutions=revolutions, t_eval=t_eval,
-                  event_time_term=event_time_term, method=method, fixed_start=start is not None)
+                  event_time_term=event_time_term, method=method, fixed_start=start is not None,
+                  derivatives=True)
     w, c = linkage.drive.speed, linkage.min_clearance
     unit = np.array([1.0 if name.endswith(".angle") else c for name in model.COORDINATES])
     unit = np.concatenate([unit, unit * w])
     ts, ys, ms = run.ts, run.ys, run.ms
     growth = growth_maxima(ts, run.state_sensitivities(), scale, unit, linkage.period,
                            revolutions)
-    peaks = run.peaks
+    peaks, keep = run.peaks, None
     if t_eval is not None:
         keep = landed(ts, t_eval)
         ts, ys, ms = ts[keep], ys[keep], ms[keep]
         peaks = None
-    vals, ders = run.output_sensitivities(ts, ys, ms)
+    vals, ders = run.recorded_output_sensitivities(keep)
     traj = trajectory_from_run(linkage, model, ts, run.plain_states(ys), ms, p0, run.stats,
                                peaks, vals)
     ref = np.array([linkage.parameter_value(n) for n in names])

@@ -358,10 +358,11 @@ DDM_INTEGRATOR = "dop853"
 
 def slider_crank_run(mech: SliderCrank, names, rtol, *, revolutions: int, t_eval=None,
                      event_time_term: bool = True, method: str = DDM_INTEGRATOR,
-                     record: bool = True):
+                     record: bool = True, derivatives=False):
     """The DDM run (`linkage_ddm.ddm_run`) of the SliderCrank fields `names` on the paper's
     generated model (reduced.MODEL), with the plain run's tolerances (reduced.default_atol,
-    reduced.event_atol); each direction's tolerance scaled by its field's value."""
+    reduced.event_atol); each direction's tolerance scaled by its field's value; with
+    `derivatives` (`linkage_ddm.ddm_run`) outputs' derivatives recorded with the steps."""
     from . import linkage_ddm
     from .cases import from_slider_crank
 
@@ -379,30 +380,30 @@ def slider_crank_run(mech: SliderCrank, names, rtol, *, revolutions: int, t_eval
         linkage, model, p0, y0,
         slider_crank_directions(mech, names), scale=scale, rtol=rtol, atol_plain=atol,
         revolutions=revolutions, t_eval=t_eval, event_time_term=event_time_term,
-        method=method, record=record, whole=True)
+        method=method, record=record, whole=True, derivatives=derivatives)
     return run, ref
 
 
 def _ddm(mech, names, revolutions, rtol, t_eval, event_time_term, method):
     from .linkage_ddm import growth_maxima, landed
 
+    # only the derivatives a SliderCrank's Sensitivities hold, computed with the steps
+    force = reduced.MODEL.OUT_COLUMNS[reduced.MODEL.MONITOR_COLUMN:][:2]
     run, ref = slider_crank_run(mech, names, rtol, revolutions=revolutions, t_eval=t_eval,
-                                event_time_term=event_time_term, method=method)
+                                event_time_term=event_time_term, method=method,
+                                derivatives=[*force, "drive_moment", f"{_JOINT}.contact_force"])
     model = run.model
+    mon = model.MONITOR_COLUMN
     # growth diagnostic on all steps: normalized state sensitivities per revolution
     unit = np.array([1.0, mech.clearance, mech.crank_speed,
                      mech.crank_speed * mech.clearance / mech.crank_length])
     growth = growth_maxima(run.ts, run.state_sensitivities(), run.scale, unit, mech.period,
                            revolutions)
-    ts, ys, ms, peaks = run.ts, run.ys, run.ms, run.peaks
+    ts, ys, ms, peaks, keep = run.ts, run.ys, run.ms, run.peaks, None
     if t_eval is not None:
         keep = landed(ts, t_eval)
         ts, ys, ms, peaks = ts[keep], ys[keep], ms[keep], None
-    col = {c: i for i, c in enumerate(model.OUT_COLUMNS)}
-    mon = model.MONITOR_COLUMN
-    # only the derivatives a SliderCrank's Sensitivities hold
-    vals, ders = run.output_sensitivities(ts, ys, ms, [mon, mon + 1, col["drive_moment"],
-                                                       col[f"{_JOINT}.contact_force"]])
+    vals, ders = run.recorded_output_sensitivities(keep)
     d_force = ders[:, 0:2, :].copy()
     fx, fy = vals[:, mon], vals[:, mon + 1]
     d_mag = ((fx[:, None] * d_force[:, 0] + fy[:, None] * d_force[:, 1])

@@ -32,8 +32,8 @@ from mbs_clearance.generate.runtime import (
 
 LINKAGE = "four_bar"
 STRUCTURE = "{\"bodies\": [[\"crank\", [\"pin\", \"pivot\"]], [\"coupler\", [\"crank_end\", \"rocker_end\"]], [\"rocker\", [\"pin\", \"pivot\"]]], \"clearance_joints\": [[\"coupler_rocker\", \"rocker\", \"pin\", \"coupler\", \"rocker_end\"]], \"drive\": \"crank_pivot\", \"ground_points\": [\"crank_pivot\", \"rocker_pivot\"], \"joints\": [[\"revolute\", \"crank_pivot\", \"ground\", \"crank_pivot\", \"crank\", \"pivot\"], [\"revolute\", \"crank_coupler\", \"crank\", \"pin\", \"coupler\", \"crank_end\"], [\"revolute\", \"rocker_pivot\", \"ground\", \"rocker_pivot\", \"rocker\", \"pivot\"]], \"monitor_joint\": null}"
-STRUCTURE_DIGEST = "5f78541c27e157d02c9d765a18d2c834871ac87257eed43869ae614eb374fa8c"
-GENERATOR_VERSION = "8ff364455ab6b159"
+STRUCTURE_DIGEST = "ff10ffd3b832fe934cf442540d7e7b5f4a436f195427cd65f5a3700ac5ec2494"
+GENERATOR_VERSION = "6155ce9973d1b682"
 
 #: dotted names of the entries of p (without the constants)
 PARAMETERS = (
@@ -1990,7 +1990,7 @@ def tangent(t, y, p, dz, nd, use, out, full):
 def rhs_sens(t, y, p, dydt):
     """Derivative of the sensitivity state (generate/sens_runtime.py)."""
     sens_rhs(_THIS.tangent, _THIS.rhs, t, y, p, dydt, N_Q, N_P, N_Z, N_JROWS, ACC_COLUMN,
-             MOMENT_COLUMN, 27, _MEM_COL0, N_EVENTS)
+             MOMENT_COLUMN, 27, _MEM_COL0, N_EVENTS, False)
 
 
 @nb.njit(**KERNEL)
@@ -2003,9 +2003,11 @@ def on_event_sens(t, y, p, j):
 
 @nb.njit(**KERNEL)
 def monitor_sens(t, y, p, dydt, out, g, gd):
-    """`rhs_sens`, then the plain monitor on the state part."""
-    return sens_monitor(_THIS.rhs_sens, _THIS.monitor, t, y, p, dydt, out, g, gd, N_Q, N_P,
-                        N_Z, N_JROWS, N_EVENTS)
+    """`rhs_sens`, then the plain monitor on the state part; into an `out` longer than
+    N_OUT the outputs' derivatives along the directions too (`sens_runtime.sens_monitor`)."""
+    return sens_monitor(_THIS.tangent, _THIS.rhs, _THIS.monitor, t, y, p, dydt, out, g, gd,
+                        N_Q, N_P, N_Z, N_JROWS, ACC_COLUMN, MOMENT_COLUMN, 27,
+                        _MEM_COL0, N_EVENTS, N_OUT)
 
 
 @nb.njit(cache=True, error_model="numpy", nogil=True)

@@ -32,8 +32,8 @@ from mbs_clearance.generate.runtime import (
 
 LINKAGE = "paper_slider_crank"
 STRUCTURE = "{\"bodies\": [[\"crank\", [\"pin\", \"pivot\"]], [\"coupler\", [\"crank_end\", \"slider_end\"]], [\"slider\", [\"pin\"]]], \"clearance_joints\": [[\"coupler_slider\", \"coupler\", \"slider_end\", \"slider\", \"pin\"]], \"drive\": \"crank_pivot\", \"ground_points\": [\"crank_pivot\", \"slider_axis\"], \"joints\": [[\"revolute\", \"crank_pivot\", \"ground\", \"crank_pivot\", \"crank\", \"pivot\"], [\"revolute\", \"crank_coupler\", \"crank\", \"pin\", \"coupler\", \"crank_end\"], [\"prismatic\", \"slider_guide\", \"ground\", \"slider_axis\", \"slider\", \"pin\"]], \"monitor_joint\": \"crank_pivot\"}"
-STRUCTURE_DIGEST = "cfdd5260a9180ad68192d888e8e80a8bdc78e54152e554a4f07b6e4ade115a3d"
-GENERATOR_VERSION = "8ff364455ab6b159"
+STRUCTURE_DIGEST = "ad0dd71475fc4aad978c00047af65687bc99d0079056a46b3dacb832826912ee"
+GENERATOR_VERSION = "6155ce9973d1b682"
 
 #: dotted names of the entries of p (without the constants)
 PARAMETERS = (
@@ -1803,7 +1803,7 @@ def tangent(t, y, p, dz, nd, use, out, full):
 def rhs_sens(t, y, p, dydt):
     """Derivative of the sensitivity state (generate/sens_runtime.py)."""
     sens_rhs(_THIS.tangent, _THIS.rhs, t, y, p, dydt, N_Q, N_P, N_Z, N_JROWS, ACC_COLUMN,
-             MOMENT_COLUMN, 26, _MEM_COL0, N_EVENTS)
+             MOMENT_COLUMN, 26, _MEM_COL0, N_EVENTS, False)
 
 
 @nb.njit(**KERNEL)
@@ -1816,9 +1816,11 @@ def on_event_sens(t, y, p, j):
 
 @nb.njit(**KERNEL)
 def monitor_sens(t, y, p, dydt, out, g, gd):
-    """`rhs_sens`, then the plain monitor on the state part."""
-    return sens_monitor(_THIS.rhs_sens, _THIS.monitor, t, y, p, dydt, out, g, gd, N_Q, N_P,
-                        N_Z, N_JROWS, N_EVENTS)
+    """`rhs_sens`, then the plain monitor on the state part; into an `out` longer than
+    N_OUT the outputs' derivatives along the directions too (`sens_runtime.sens_monitor`)."""
+    return sens_monitor(_THIS.tangent, _THIS.rhs, _THIS.monitor, t, y, p, dydt, out, g, gd,
+                        N_Q, N_P, N_Z, N_JROWS, ACC_COLUMN, MOMENT_COLUMN, 26,
+                        _MEM_COL0, N_EVENTS, N_OUT)
 
 
 @nb.njit(cache=True, error_model="numpy", nogil=True)

@@ -32,8 +32,8 @@ from mbs_clearance.generate.runtime import (
 
 LINKAGE = "paper_slider_crank"
 STRUCTURE = "{\"bodies\": [[\"crank\", [\"pin\", \"pivot\"]], [\"coupler\", [\"crank_end\", \"slider_end\"]], [\"slider\", [\"pin\"]]], \"clearance_joints\": [[\"coupler_slider\", \"coupler\", \"slider_end\", \"slider\", \"pin\", \"friction\"]], \"drive\": \"crank_pivot\", \"ground_points\": [\"crank_pivot\", \"slider_axis\"], \"joints\": [[\"revolute\", \"crank_pivot\", \"ground\", \"crank_pivot\", \"crank\", \"pivot\"], [\"revolute\", \"crank_coupler\", \"crank\", \"pin\", \"coupler\", \"crank_end\"], [\"prismatic\", \"slider_guide\", \"ground\", \"slider_axis\", \"slider\", \"pin\"]], \"monitor_joint\": \"crank_pivot\"}"
-STRUCTURE_DIGEST = "05db4800d3445cffb1a5642a5eee32896b7d8ba3333c15eae08065435ac4f0e2"
-GENERATOR_VERSION = "8ff364455ab6b159"
+STRUCTURE_DIGEST = "6f1ff789d90aa3fdd6f3f5bea54d3a84874d1e7164eca6932b6323a49e966146"
+GENERATOR_VERSION = "6155ce9973d1b682"
 
 #: dotted names of the entries of p (without the constants)
 PARAMETERS = (
@@ -1852,7 +1852,7 @@ def tangent(t, y, p, dz, nd, use, out, full):
 def rhs_sens(t, y, p, dydt):
     """Derivative of the sensitivity state (generate/sens_runtime.py)."""
     sens_rhs(_THIS.tangent, _THIS.rhs, t, y, p, dydt, N_Q, N_P, N_Z, N_JROWS, ACC_COLUMN,
-             MOMENT_COLUMN, 32, _MEM_COL0, N_EVENTS)
+             MOMENT_COLUMN, 32, _MEM_COL0, N_EVENTS, False)
 
 
 @nb.njit(**KERNEL)
@@ -1865,9 +1865,11 @@ def on_event_sens(t, y, p, j):
 
 @nb.njit(**KERNEL)
 def monitor_sens(t, y, p, dydt, out, g, gd):
-    """`rhs_sens`, then the plain monitor on the state part."""
-    return sens_monitor(_THIS.rhs_sens, _THIS.monitor, t, y, p, dydt, out, g, gd, N_Q, N_P,
-                        N_Z, N_JROWS, N_EVENTS)
+    """`rhs_sens`, then the plain monitor on the state part; into an `out` longer than
+    N_OUT the outputs' derivatives along the directions too (`sens_runtime.sens_monitor`)."""
+    return sens_monitor(_THIS.tangent, _THIS.rhs, _THIS.monitor, t, y, p, dydt, out, g, gd,
+                        N_Q, N_P, N_Z, N_JROWS, ACC_COLUMN, MOMENT_COLUMN, 32,
+                        _MEM_COL0, N_EVENTS, N_OUT)
 
 
 @nb.njit(cache=True, error_model="numpy", nogil=True)

@@ -32,8 +32,8 @@ from mbs_clearance.generate.runtime import (
 
 LINKAGE = "slider_crank_two_clearances"
 STRUCTURE = "{\"bodies\": [[\"crank\", [\"pin\", \"pivot\"]], [\"coupler\", [\"crank_end\", \"slider_end\"]], [\"slider\", [\"pin\"]]], \"clearance_joints\": [[\"crank_coupler\", \"crank\", \"pin\", \"coupler\", \"crank_end\"], [\"coupler_slider\", \"coupler\", \"slider_end\", \"slider\", \"pin\"]], \"drive\": \"crank_pivot\", \"ground_points\": [\"crank_pivot\", \"slider_axis\"], \"joints\": [[\"revolute\", \"crank_pivot\", \"ground\", \"crank_pivot\", \"crank\", \"pivot\"], [\"prismatic\", \"slider_guide\", \"ground\", \"slider_axis\", \"slider\", \"pin\"]], \"monitor_joint\": \"crank_pivot\"}"
-STRUCTURE_DIGEST = "8b6b6b57578ff57ac131e7439baefdb1b276ba65672034674aca2a2b31adccbf"
-GENERATOR_VERSION = "8ff364455ab6b159"
+STRUCTURE_DIGEST = "6495cfc4df5233d382740ddd165fb7eb78a64ce96910faa3bb22714cb2fafbe3"
+GENERATOR_VERSION = "6155ce9973d1b682"
 
 #: dotted names of the entries of p (without the constants)
 PARAMETERS = (
@@ -1635,7 +1635,7 @@ def tangent(t, y, p, dz, nd, use, out, full):
 def rhs_sens(t, y, p, dydt):
     """Derivative of the sensitivity state (generate/sens_runtime.py)."""
     sens_rhs(_THIS.tangent, _THIS.rhs, t, y, p, dydt, N_Q, N_P, N_Z, N_JROWS, ACC_COLUMN,
-             MOMENT_COLUMN, 31, _MEM_COL0, N_EVENTS)
+             MOMENT_COLUMN, 31, _MEM_COL0, N_EVENTS, False)
 
 
 @nb.njit(**KERNEL)
@@ -1648,9 +1648,11 @@ def on_event_sens(t, y, p, j):
 
 @nb.njit(**KERNEL)
 def monitor_sens(t, y, p, dydt, out, g, gd):
-    """`rhs_sens`, then the plain monitor on the state part."""
-    return sens_monitor(_THIS.rhs_sens, _THIS.monitor, t, y, p, dydt, out, g, gd, N_Q, N_P,
-                        N_Z, N_JROWS, N_EVENTS)
+    """`rhs_sens`, then the plain monitor on the state part; into an `out` longer than
+    N_OUT the outputs' derivatives along the directions too (`sens_runtime.sens_monitor`)."""
+    return sens_monitor(_THIS.tangent, _THIS.rhs, _THIS.monitor, t, y, p, dydt, out, g, gd,
+                        N_Q, N_P, N_Z, N_JROWS, ACC_COLUMN, MOMENT_COLUMN, 31,
+                        _MEM_COL0, N_EVENTS, N_OUT)
 
 
 @nb.njit(cache=True, error_model="numpy", nogil=True)

@@ -330,10 +330,11 @@ def seed_directions(dz, membase, y, nb_, n2, nz, mem_col0, n_joints):
 
 @nb.njit(**KERNEL, inline="always")
 def sens_rhs(tangent, rhs, t, y, p, dydt, n_q, n_p, nz, n_jrows, acc_row, mom_row, speed,
-             mem_col0, n_joints):
+             mem_col0, n_joints, full):
     """The state, sensitivity and work derivatives, from the model's `tangent` along the
-    integrated directions (`seed_directions`); for the truncated state y[:2 N_Q] (the
-    integrator's continuous extension) the plain model's."""
+    integrated directions (`seed_directions`; with `full` every row of the tangent, the
+    outputs' too, in the work space); for the truncated state y[:2 N_Q] (the integrator's
+    continuous extension) the plain model's."""
     n2 = 2 * n_q
     nb_, m, c0, v0, w0 = ddm_layout(p, n_p)
     if y.shape[0] < n2 * (1 + nb_) + 1 + nb_ * n_joints:
@@ -344,7 +345,7 @@ def sens_rhs(tangent, rhs, t, y, p, dydt, n_q, n_p, nz, n_jrows, acc_row, mom_ro
     dz = p[dz0:use0]
     out = p[t0:ws]
     seed_directions(dz, p[mb0:t0], y, nb_, n2, nz, mem_col0, n_joints)
-    tangent(t, y, p, dz, nb_, p[use0:mb0], out, False)
+    tangent(t, y, p, dz, nb_, p[use0:mb0], out, full)
     for i in range(n_q):
         dydt[i] = y[n_q + i]
         dydt[n_q + i] = out[(acc_row + i) * ts + nb_]
@@ -411,15 +412,29 @@ def sens_on_event(jacobian, on_event, t, y, p, j, n_q, n_p, nz, n_jrows, mem_sta
 
 
 @nb.njit(**KERNEL, inline="always")
-def sens_monitor(rhs_sens, monitor, t, y, p, dydt, out, g, gd, n_q, n_p, nz, n_jrows,
-                 n_joints):
-    """`rhs_sens`, then the plain model's monitor on the state (outputs, switching functions,
-    the monitored value), its derivative into work space."""
-    rhs_sens(t, y, p, dydt)
+def sens_monitor(tangent, rhs, monitor, t, y, p, dydt, out, g, gd, n_q, n_p, nz, n_jrows,
+                 acc_row, mom_row, speed, mem_col0, n_joints, n_out):
+    """`sens_rhs`, then the plain model's monitor on the state (outputs into out[:n_out],
+    switching functions, the monitored value), its derivative into work space. An `out`
+    longer than n_out records derivatives of outputs too, those of the first
+    (len(out) - n_out) / nb columns listed after the work space (`pack_sensitivity_
+    parameters`'s record columns): out[n_out + i nb + k] that of the i-th along direction
+    k (the tangent's full rows, computed in the same call)."""
+    full = out.shape[0] > n_out
+    sens_rhs(tangent, rhs, t, y, p, dydt, n_q, n_p, nz, n_jrows, acc_row, mom_row, speed,
+             mem_col0, n_joints, full)
     n2 = 2 * n_q
     nb_, _, _, _, w0 = ddm_layout(p, n_p)
-    _, _, _, _, ws = work_offsets(nb_, w0, nz, n_jrows, n_joints)
-    return monitor(t, y[:n2], p, p[ws:ws + n2], out, g, gd)
+    _, _, _, t0, ws = work_offsets(nb_, w0, nz, n_jrows, n_joints)
+    m = monitor(t, y[:n2], p, p[ws:ws + n2], out, g, gd)
+    if full:
+        st = nb_ + 1
+        rec0 = ws + n2 + 1
+        for i in range((out.shape[0] - n_out) // nb_):
+            r = int(p[rec0 + i])
+            for k in range(nb_):
+                out[n_out + i * nb_ + k] = p[t0 + r * st + k]
+    return m
 
 
 @nb.njit(error_model="numpy")
