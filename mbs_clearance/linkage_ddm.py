@@ -24,6 +24,7 @@ import sys
 import time
 from typing import Any, NamedTuple
 
+import numba as nb
 import numpy as np
 
 from .contact import stiffness_eq9_partials
@@ -299,6 +300,15 @@ class DdmRun(NamedTuple):
             vals, ders = vals[rows], ders[rows]
         return vals, _combine_directions(ders, self.coeffs)
 
+    def growth(self, unit, period, revolutions) -> np.ndarray:
+        """`growth_maxima` of the requested directions over all recorded steps, without
+        forming their state sensitivities (`_weighted_norms2`)."""
+        n2 = 2 * self.model.N_Q
+        s = self.ys[:, n2:n2 * (1 + self.nb)].reshape(len(self.ys), self.nb, n2)
+        weights = (self.scale[:, None] / np.asarray(unit)[None, :]) ** 2
+        return _revolution_maxima(self.ts, _weighted_norms2(s, self.coeffs, weights),
+                                  period, revolutions)
+
     def output_sensitivities(self, ts, ys, ms, columns=None):
         """Values (n, N_OUT) and derivatives (n, N_OUT, npar) of the model's outputs along
         the requested directions at times ts, sensitivity states ys and memories ms; with
@@ -313,9 +323,49 @@ class DdmRun(NamedTuple):
 
 def _combine_directions(a: np.ndarray, coeffs: np.ndarray) -> np.ndarray:
     """a (..., nb) @ coeffs (nb, npar) as one matrix product (numpy's stacked matmul of a
-    3-d array runs one small product per leading index)."""
+    3-d array runs one small product per leading index); a 3-d a by `_combine_rows`."""
+    if a.ndim == 3:
+        return _combine_rows(a, np.ascontiguousarray(coeffs))
     out = np.ascontiguousarray(a).reshape(-1, a.shape[-1]) @ coeffs
     return out.reshape(*a.shape[:-1], coeffs.shape[1])
+
+
+@nb.njit(cache=True, error_model="numpy")
+def _combine_rows(a, coeffs):
+    """a (n, m, nb) @ coeffs (nb, npar), any strides of a: (n, m, npar) in one pass (numpy
+    copies a strided a first)."""
+    n, m, nb_ = a.shape
+    npar = coeffs.shape[1]
+    out = np.zeros((n, m, npar))
+    for i in range(n):
+        for r in range(m):
+            for b in range(nb_):
+                v = a[i, r, b]
+                for k in range(npar):
+                    out[i, r, k] += v * coeffs[b, k]
+    return out
+
+
+@nb.njit(cache=True, error_model="numpy")
+def _weighted_norms2(s, coeffs, weights):
+    """sum_j weights[k, j] (sum_b s[i, b, j] coeffs[b, k])^2 (n, npar): the squared weighted
+    norms of the combined state sensitivities, from those of the integrated directions
+    s (n, nb, 2 N_Q) without forming the combined ones."""
+    n, nb_, n2 = s.shape
+    npar = coeffs.shape[1]
+    out = np.zeros((n, npar))
+    tmp = np.empty(npar)
+    for i in range(n):
+        for j in range(n2):
+            for k in range(npar):
+                tmp[k] = 0.0
+            for b in range(nb_):
+                v = s[i, b, j]
+                for k in range(npar):
+                    tmp[k] += v * coeffs[b, k]
+            for k in range(npar):
+                out[i, k] += weights[k, j] * tmp[k] * tmp[k]
+    return out
 
 
 def setup(linkage: Linkage, model, p0, y_state, directions, scale, atol_plain,
@@ -477,8 +527,7 @@ def linkage_sensitivities(linkage: Linkage, names: tuple[str, ...], revolutions:
     unit = np.array([1.0 if name.endswith(".angle") else c for name in model.COORDINATES])
     unit = np.concatenate([unit, unit * w])
     ts, ys, ms = run.ts, run.ys, run.ms
-    growth = growth_maxima(ts, run.state_sensitivities(), scale, unit, linkage.period,
-                           revolutions)
+    growth = run.growth(unit, linkage.period, revolutions)
     peaks, keep = run.peaks, None
     if t_eval is not None:
         keep = landed(ts, t_eval)
@@ -497,13 +546,19 @@ def linkage_sensitivities(linkage: Linkage, names: tuple[str, ...], revolutions:
 def growth_maxima(ts, sens, scale, unit, period, revolutions):
     """Per revolution and parameter, the maximum of the normalized state-sensitivity norm
     |s_k scale_k / unit| (sens (n, npar, 2 N_Q) at the recorded times ts)."""
+    weights = (np.asarray(scale)[:, None] / unit[None, :]) ** 2
+    norm2 = np.einsum("nkj,kj->nk", sens * sens, weights, optimize=False)
+    return _revolution_maxima(ts, norm2, period, revolutions)
+
+
+def _revolution_maxima(ts, norm2, period, revolutions):
+    """Per revolution (a step on an edge counts for both sides) the maxima of the squared
+    norms norm2 (n, npar) at the times ts, square-rooted."""
     revolutions = min(revolutions, int(np.ceil(ts[-1] / period - 1e-9)))
     edges = np.minimum(np.arange(revolutions + 1) * period, ts[-1])
     lo = np.searchsorted(ts, edges[:-1], side="left")
     hi = np.searchsorted(ts, edges[1:], side="right")
-    weights = (np.asarray(scale)[:, None] / unit[None, :]) ** 2
-    norm2 = np.einsum("nkj,kj->nk", sens * sens, weights, optimize=False)
-    out = np.zeros((revolutions, sens.shape[1]))
+    out = np.zeros((revolutions, norm2.shape[1]))
     for r in range(revolutions):
         if hi[r] > lo[r]:
             out[r] = norm2[lo[r]:hi[r]].max(axis=0)

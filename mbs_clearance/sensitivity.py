@@ -385,7 +385,7 @@ def slider_crank_run(mech: SliderCrank, names, rtol, *, revolutions: int, t_eval
 
 
 def _ddm(mech, names, revolutions, rtol, t_eval, event_time_term, method):
-    from .linkage_ddm import growth_maxima, landed
+    from .linkage_ddm import landed
 
     # only the derivatives a SliderCrank's Sensitivities hold, computed with the steps
     force = reduced.MODEL.OUT_COLUMNS[reduced.MODEL.MONITOR_COLUMN:][:2]
@@ -397,8 +397,7 @@ def _ddm(mech, names, revolutions, rtol, t_eval, event_time_term, method):
     # growth diagnostic on all steps: normalized state sensitivities per revolution
     unit = np.array([1.0, mech.clearance, mech.crank_speed,
                      mech.crank_speed * mech.clearance / mech.crank_length])
-    growth = growth_maxima(run.ts, run.state_sensitivities(), run.scale, unit, mech.period,
-                           revolutions)
+    growth = run.growth(unit, mech.period, revolutions)
     ts, ys, ms, peaks, keep = run.ts, run.ys, run.ms, run.peaks, None
     if t_eval is not None:
         keep = landed(ts, t_eval)

@@ -156,3 +156,46 @@ def test_tangent_work_per_call_pinned():
     # columns, 7 x 5 + 20 = 55 column terms per call against 36 x (contact + solve) column
     # passes and 7 x 2 contractions of the full Jacobian
     assert work["parameter_pairs"] <= 3 * nb
+
+
+def test_recorded_derivatives_equal_a_second_pass_and_the_growth_its_loop():
+    """A DDM run that records outputs' derivatives with its steps (the monitor's full
+    tangent, only the columns asked for) gives bit for bit the derivatives of a second pass
+    of the tangent over the recorded states (`output_sensitivities`), and values within
+    round-off of it (the plain monitor's expressions); `DdmRun.growth` equals
+    `growth_maxima` of the combined state sensitivities, and those equal an einsum of the
+    integrated ones with the coefficients. Paper case, the 8 default fields (7 integrated
+    directions: one is combined)."""
+    from mbs_clearance.linkage_ddm import growth_maxima
+    from mbs_clearance.sensitivity import DEFAULT_PARAMETERS, slider_crank_run
+
+    mech = SliderCrank()
+    cols = ("crank_pivot.reaction_y", "coupler_slider.contact_force", "drive_moment")
+    run, _ = slider_crank_run(mech, DEFAULT_PARAMETERS, None, revolutions=1,
+                              derivatives=cols)
+    assert run.nb < len(DEFAULT_PARAMETERS) and run.stats["nevent"] >= 2
+    vals, ders = run.recorded_output_sensitivities()
+    rows = np.arange(0, len(run.ts), 7)
+    v2, d2 = run.recorded_output_sensitivities(rows)
+    ref_vals, ref = run.output_sensitivities(run.ts, run.ys, run.ms)
+    idx = [run.model.OUT_COLUMNS.index(c) for c in cols]
+    assert ders.shape == (len(run.ts), len(cols), len(DEFAULT_PARAMETERS))
+    np.testing.assert_array_equal(ders, ref[:, idx, :])
+    np.testing.assert_array_equal(d2, ders[rows])
+    np.testing.assert_array_equal(v2, vals[rows])
+    # (per column; the slider guide's x reaction is zero, at round-off, in both)
+    diff = np.max(np.abs(vals - ref_vals), axis=0)
+    assert np.all(diff <= 1e-9 * np.max(np.abs(ref_vals), axis=0) + 1e-9), diff
+    n2 = 2 * run.model.N_Q
+    s = run.ys[:, n2:n2 * (1 + run.nb)].reshape(len(run.ts), run.nb, n2)
+    sens = np.einsum("nbj,bk->nkj", s, run.coeffs)
+    np.testing.assert_allclose(run.state_sensitivities(), sens, rtol=1e-13,
+                               atol=1e-13 * np.max(np.abs(sens)))
+    unit = np.array([1.0, mech.clearance, mech.crank_speed,
+                     mech.crank_speed * mech.clearance / mech.crank_length])
+    np.testing.assert_allclose(run.growth(unit, mech.period, 1),
+                               growth_maxima(run.ts, sens, run.scale, unit, mech.period, 1),
+                               rtol=1e-12)
+    plain, _ = slider_crank_run(mech, DEFAULT_PARAMETERS, None, revolutions=1)
+    with pytest.raises(ValueError, match="derivatives=True"):
+        plain.recorded_output_sensitivities()
