@@ -32,8 +32,8 @@ from mbs_clearance.generate.runtime import (
 
 LINKAGE = "four_bar"
 STRUCTURE = "{\"bodies\": [[\"crank\", [\"pin\", \"pivot\"]], [\"coupler\", [\"crank_end\", \"rocker_end\"]], [\"rocker\", [\"pin\", \"pivot\"]]], \"clearance_joints\": [[\"coupler_rocker\", \"rocker\", \"pin\", \"coupler\", \"rocker_end\"]], \"drive\": \"crank_pivot\", \"ground_points\": [\"crank_pivot\", \"rocker_pivot\"], \"joints\": [[\"revolute\", \"crank_pivot\", \"ground\", \"crank_pivot\", \"crank\", \"pivot\"], [\"revolute\", \"crank_coupler\", \"crank\", \"pin\", \"coupler\", \"crank_end\"], [\"revolute\", \"rocker_pivot\", \"ground\", \"rocker_pivot\", \"rocker\", \"pivot\"]], \"monitor_joint\": null}"
-STRUCTURE_DIGEST = "ff10ffd3b832fe934cf442540d7e7b5f4a436f195427cd65f5a3700ac5ec2494"
-GENERATOR_VERSION = "6155ce9973d1b682"
+STRUCTURE_DIGEST = "c2f71d84614bf93c0c72e93e5fec9eaeeec625ff1cda26c8dca934d571a99727"
+GENERATOR_VERSION = "86d5ae0cf0ea2a49"
 
 #: dotted names of the entries of p (without the constants)
 PARAMETERS = (
@@ -1189,9 +1189,11 @@ def tangent(t, y, p, dz, nd, use, out, full):
     """The directional derivatives of `jacobian`'s rows along nd seeds dz (nd x N_Z, flat:
     dz[d * N_Z + k] the component along Z_NAMES[k]) from the same derivative expressions,
     into out (N_JROWS x (nd + 1), flat; column nd the value); `full` as `jacobian` (rows
-    not computed are left as they are). use: which seeds use each column of z
-    (`sens_runtime.seed_index`): a parameter column is evaluated and contracted only for
-    those (t, q and qdot always, for every seed)."""
+    not computed are left as they are). The seeds' state columns (q, qdot) are read from
+    y, as the sensitivity state holds them: seed d's at y[2 N_Q (d + 1):2 N_Q (d + 2)].
+    use: which seeds use each column of z (`sens_runtime.seed_index`): a parameter column
+    is evaluated and contracted only for those, and so is time (q and qdot always, for
+    every seed)."""
     ts = nd + 1
     coupler__mass = p[6]  # coupler.mass
     coupler__crank_end__x = p[8]  # coupler.crank_end.x
@@ -1350,31 +1352,39 @@ def tangent(t, y, p, dz, nd, use, out, full):
     x38 = C0*k8
     x39 = S0*k46
     gv0_0 = k6 + x2 + x5 + x6
-    g3_0 = x9
     g3_1 = x12
     g3_2 = x15
     gv0_1 = k7 - x10 + x11 - x13 + x14 - x22 + x23
-    g4_0 = x25
     g4_1 = x2
     g4_2 = x5
     gv0_2 = U0*x10 - U0*x11 + U1*x13 - U1*x14 + x9
-    g14_0 = C0*k45 + S0*k44
     g14_1 = -U0*x2
     g14_2 = -U1*x5
     g14_3 = x12
     g14_4 = x15
     gv0_3 = U0*x0 + U0*x1 + U1*x3 + U1*x4 + x25
-    g15_0 = C0*k47 + S0*k45
     g15_1 = U0*x12
     g15_2 = U1*x15
     g15_3 = x2
     g15_4 = x5
     for d in range(nd):
-        dzo = d * 37
-        out[3 * ts + d] = g3_0 * dz[dzo + 0] + g3_1 * dz[dzo + 1] + g3_2 * dz[dzo + 2]
-        out[4 * ts + d] = g4_0 * dz[dzo + 0] + g4_1 * dz[dzo + 1] + g4_2 * dz[dzo + 2]
-        out[14 * ts + d] = g14_0 * dz[dzo + 0] + g14_1 * dz[dzo + 1] + g14_2 * dz[dzo + 2] + g14_3 * dz[dzo + 3] + g14_4 * dz[dzo + 4]
-        out[15 * ts + d] = g15_0 * dz[dzo + 0] + g15_1 * dz[dzo + 1] + g15_2 * dz[dzo + 2] + g15_3 * dz[dzo + 3] + g15_4 * dz[dzo + 4]
+        yo = 4 * (d + 1)
+        out[3 * ts + d] = g3_1 * y[yo + 0] + g3_2 * y[yo + 1]
+        out[4 * ts + d] = g4_1 * y[yo + 0] + g4_2 * y[yo + 1]
+        out[14 * ts + d] = g14_1 * y[yo + 0] + g14_2 * y[yo + 1] + g14_3 * y[yo + 2] + g14_4 * y[yo + 3]
+        out[15 * ts + d] = g15_1 * y[yo + 0] + g15_2 * y[yo + 1] + g15_3 * y[yo + 2] + g15_4 * y[yo + 3]
+    if use[1] > use[0]:
+        g3_0 = x9
+        g4_0 = x25
+        g14_0 = C0*k45 + S0*k44
+        g15_0 = C0*k47 + S0*k45
+        for e in range(int(use[0]), int(use[1])):
+            d = int(use[38 + e])
+            dk = dz[d * 37 + 0]
+            out[3 * ts + d] += g3_0 * dk
+            out[4 * ts + d] += g4_0 * dk
+            out[14 * ts + d] += g14_0 * dk
+            out[15 * ts + d] += g15_0 * dk
     if use[8] > use[7]:
         g3_7 = C0
         g4_7 = S0
@@ -1602,7 +1612,6 @@ def tangent(t, y, p, dz, nd, use, out, full):
     x57 = FY0*S2
     x58 = C2*FY0
     x59 = x55 + x57
-    r0_0 = k48*x40 + k48*x43 + k49*x42 + k50*x41
     r0_1 = -C1*k16 + S1*k17 + k13*x41 + k14*x40 + k14*x43 + k2*x44 - k2*x46 - k3*x45 - k3*x47 + k51*x42
     rfx_0_0 = C1*k2 - S1*k3
     rfy_0_0 = C1*k3 + S1*k2
@@ -1610,9 +1619,15 @@ def tangent(t, y, p, dz, nd, use, out, full):
     rfx_1_0 = C2*k4 - S2*k5
     rfy_1_0 = C2*k5 + S2*k4
     for d in range(nd):
-        dzo = d * 37
-        out[12 * ts + d] = r0_0 * dz[dzo + 0] + r0_1 * dz[dzo + 1]
-        out[13 * ts + d] = r1_2 * dz[dzo + 2]
+        yo = 4 * (d + 1)
+        out[12 * ts + d] = r0_1 * y[yo + 0]
+        out[13 * ts + d] = r1_2 * y[yo + 1]
+    if use[1] > use[0]:
+        r0_0 = k48*x40 + k48*x43 + k49*x42 + k50*x41
+        for e in range(int(use[0]), int(use[1])):
+            d = int(use[38 + e])
+            dk = dz[d * 37 + 0]
+            out[12 * ts + d] += r0_0 * dk
     if use[8] > use[7]:
         r0_7 = x48
         for e in range(int(use[7]), int(use[8])):
@@ -1811,13 +1826,11 @@ def tangent(t, y, p, dz, nd, use, out, full):
         x126 = S0*k33
         x127 = C0*k34 + S0*k103 + k0*x102 - k0*x103 - k1*x101 - k1*x104 + k31*x109 + k32*x110 + k33*x105 + k35*x107 + x125*x70 + x125*x73 + x126*x70 + x126*x73
         out[5 * ts + nd] = FX0 + x69 + x79
-        o5_0 = C0*k76 + S0*k75
         o5_1 = x80 + x81 + x82 - x83
         o5_3 = U0*(-C1*k64 + S1*k66)
         oa_0_0 = -C1*k24 + S1*k25
         ofx_0_0 = 1.0
         out[6 * ts + nd] = C0*k26 + FY0 + S0*k23 + k27 - x80 - x81 - x82 + x83
-        o6_0 = C0*k84 + S0*k76
         o6_1 = x79
         o6_3 = -U0*(C1*k66 + S1*k64)
         oa_1_0 = -C1*k25 - S1*k24
@@ -1832,19 +1845,28 @@ def tangent(t, y, p, dz, nd, use, out, full):
         o8_4 = -U1*(C2*k74 + S2*k73)
         oa_3_1 = -C2*k29 - S2*k28
         ofy_3_0 = -1.0
-        o11_0 = C0*k89 + S0*k88 + k37*x110 + k38*x105 + k39*x109 + k46*x103 + k8*x101 + k8*x104 + k87*x107 + k9*x102 + x106*x70 + x106*x73 + x108*x70 + x108*x73
         o11_1 = k31*x105 + k32*x107 + k33*x109 + k35*x110 + x111*x70 + x111*x73 + x112*x70 + x112*x73
         o11_3 = U0*(k90*x113 + k90*x116 + k91*x115 + k92*x114)
         oa_4_0 = k31*x114 + k32*x113 + k32*x116 + k33*x115
         ofx_4_0 = C0*k0 - S0*k1
         ofy_4_0 = C0*k1 + S0*k0
         for d in range(nd):
-            dzo = d * 37
-            out[5 * ts + d] = o5_0 * dz[dzo + 0] + o5_1 * dz[dzo + 1] + o5_3 * dz[dzo + 3] + oa_0_0 * out[12 * ts + d] + ofx_0_0 * out[16 * ts + d]
-            out[6 * ts + d] = o6_0 * dz[dzo + 0] + o6_1 * dz[dzo + 1] + o6_3 * dz[dzo + 3] + oa_1_0 * out[12 * ts + d] + ofy_1_0 * out[17 * ts + d]
-            out[7 * ts + d] = o7_2 * dz[dzo + 2] + o7_4 * dz[dzo + 4] + oa_2_1 * out[13 * ts + d] + ofx_2_0 * out[16 * ts + d]
-            out[8 * ts + d] = o8_2 * dz[dzo + 2] + o8_4 * dz[dzo + 4] + oa_3_1 * out[13 * ts + d] + ofy_3_0 * out[17 * ts + d]
-            out[11 * ts + d] = o11_0 * dz[dzo + 0] + o11_1 * dz[dzo + 1] + o11_3 * dz[dzo + 3] + oa_4_0 * out[12 * ts + d] + ofx_4_0 * out[16 * ts + d] + ofy_4_0 * out[17 * ts + d]
+            yo = 4 * (d + 1)
+            out[5 * ts + d] = o5_1 * y[yo + 0] + o5_3 * y[yo + 2] + oa_0_0 * out[12 * ts + d] + ofx_0_0 * out[16 * ts + d]
+            out[6 * ts + d] = o6_1 * y[yo + 0] + o6_3 * y[yo + 2] + oa_1_0 * out[12 * ts + d] + ofy_1_0 * out[17 * ts + d]
+            out[7 * ts + d] = o7_2 * y[yo + 1] + o7_4 * y[yo + 3] + oa_2_1 * out[13 * ts + d] + ofx_2_0 * out[16 * ts + d]
+            out[8 * ts + d] = o8_2 * y[yo + 1] + o8_4 * y[yo + 3] + oa_3_1 * out[13 * ts + d] + ofy_3_0 * out[17 * ts + d]
+            out[11 * ts + d] = o11_1 * y[yo + 0] + o11_3 * y[yo + 2] + oa_4_0 * out[12 * ts + d] + ofx_4_0 * out[16 * ts + d] + ofy_4_0 * out[17 * ts + d]
+        if use[1] > use[0]:
+            o5_0 = C0*k76 + S0*k75
+            o6_0 = C0*k84 + S0*k76
+            o11_0 = C0*k89 + S0*k88 + k37*x110 + k38*x105 + k39*x109 + k46*x103 + k8*x101 + k8*x104 + k87*x107 + k9*x102 + x106*x70 + x106*x73 + x108*x70 + x108*x73
+            for e in range(int(use[0]), int(use[1])):
+                d = int(use[38 + e])
+                dk = dz[d * 37 + 0]
+                out[5 * ts + d] += o5_0 * dk
+                out[6 * ts + d] += o6_0 * dk
+                out[11 * ts + d] += o11_0 * dk
         if use[6] > use[5]:
             o5_5 = C0*k78 + S0*k77
             o6_5 = -C0*k77 + S0*k78 - gravity
@@ -2034,7 +2056,7 @@ def jacobian_matrix(t, y, p, full):
 @nb.njit(cache=True, error_model="numpy")
 def tangent_matrix(t, y, p, dz, full):
     """The tangents (N_JROWS, nd + 1) at (t, y) along the seeds dz (nd, N_Z) as a matrix."""
-    return tangent_at(_THIS.tangent, t, y, p, dz, N_JROWS, full)
+    return tangent_at(_THIS.tangent, t, y, p, dz, N_JROWS, N_Q, full)
 
 
 @nb.njit(cache=True, error_model="numpy")

@@ -32,8 +32,8 @@ from mbs_clearance.generate.runtime import (
 
 LINKAGE = "paper_slider_crank"
 STRUCTURE = "{\"bodies\": [[\"crank\", [\"pin\", \"pivot\"]], [\"coupler\", [\"crank_end\", \"slider_end\"]], [\"slider\", [\"pin\"]]], \"clearance_joints\": [[\"coupler_slider\", \"coupler\", \"slider_end\", \"slider\", \"pin\", \"friction\"]], \"drive\": \"crank_pivot\", \"ground_points\": [\"crank_pivot\", \"slider_axis\"], \"joints\": [[\"revolute\", \"crank_pivot\", \"ground\", \"crank_pivot\", \"crank\", \"pivot\"], [\"revolute\", \"crank_coupler\", \"crank\", \"pin\", \"coupler\", \"crank_end\"], [\"prismatic\", \"slider_guide\", \"ground\", \"slider_axis\", \"slider\", \"pin\"]], \"monitor_joint\": \"crank_pivot\"}"
-STRUCTURE_DIGEST = "6f1ff789d90aa3fdd6f3f5bea54d3a84874d1e7164eca6932b6323a49e966146"
-GENERATOR_VERSION = "6155ce9973d1b682"
+STRUCTURE_DIGEST = "674d15efba505c13a9edad3400663e20a6753fc9651790d213f7f5a21ff7a353"
+GENERATOR_VERSION = "86d5ae0cf0ea2a49"
 
 #: dotted names of the entries of p (without the constants)
 PARAMETERS = (
@@ -1133,9 +1133,11 @@ def tangent(t, y, p, dz, nd, use, out, full):
     """The directional derivatives of `jacobian`'s rows along nd seeds dz (nd x N_Z, flat:
     dz[d * N_Z + k] the component along Z_NAMES[k]) from the same derivative expressions,
     into out (N_JROWS x (nd + 1), flat; column nd the value); `full` as `jacobian` (rows
-    not computed are left as they are). use: which seeds use each column of z
-    (`sens_runtime.seed_index`): a parameter column is evaluated and contracted only for
-    those (t, q and qdot always, for every seed)."""
+    not computed are left as they are). The seeds' state columns (q, qdot) are read from
+    y, as the sensitivity state holds them: seed d's at y[2 N_Q (d + 1):2 N_Q (d + 2)].
+    use: which seeds use each column of z (`sens_runtime.seed_index`): a parameter column
+    is evaluated and contracted only for those, and so is time (q and qdot always, for
+    every seed)."""
     ts = nd + 1
     coupler__mass = p[6]  # coupler.mass
     coupler__crank_end__x = p[8]  # coupler.crank_end.x
@@ -1280,32 +1282,40 @@ def tangent(t, y, p, dz, nd, use, out, full):
     x30 = C0*k8
     x31 = S0*k44
     gv0_0 = k5 + x0 + x3 + x4
-    g3_0 = x7
     g3_1 = x10
     g3_2 = k4
     gv0_1 = k7 + x15 - x16 + x17 - x8 + x9
-    g4_0 = x19
     g4_1 = x3
     g4_2 = k6
     gv0_2 = U0*x8 - U0*x9 + x20 + x7
-    g17_0 = C0*k43 + S0*k42
     g17_1 = -U0*x3
     g17_3 = x10
     g17_4 = k4
     gv0_3 = U0*x1 + U0*x2 + x19 + x29
-    g18_0 = C0*k45 + S0*k43
     g18_1 = U0*x10
     g18_3 = x3
     g18_4 = k6
     gv0_4 = U0*coupler_slider__journal_radius
     g21_3 = coupler_slider__journal_radius
     for d in range(nd):
-        dzo = d * 42
-        out[3 * ts + d] = g3_0 * dz[dzo + 0] + g3_1 * dz[dzo + 1] + g3_2 * dz[dzo + 2]
-        out[4 * ts + d] = g4_0 * dz[dzo + 0] + g4_1 * dz[dzo + 1] + g4_2 * dz[dzo + 2]
-        out[17 * ts + d] = g17_0 * dz[dzo + 0] + g17_1 * dz[dzo + 1] + g17_3 * dz[dzo + 3] + g17_4 * dz[dzo + 4]
-        out[18 * ts + d] = g18_0 * dz[dzo + 0] + g18_1 * dz[dzo + 1] + g18_3 * dz[dzo + 3] + g18_4 * dz[dzo + 4]
-        out[21 * ts + d] = g21_3 * dz[dzo + 3]
+        yo = 4 * (d + 1)
+        out[3 * ts + d] = g3_1 * y[yo + 0] + g3_2 * y[yo + 1]
+        out[4 * ts + d] = g4_1 * y[yo + 0] + g4_2 * y[yo + 1]
+        out[17 * ts + d] = g17_1 * y[yo + 0] + g17_3 * y[yo + 2] + g17_4 * y[yo + 3]
+        out[18 * ts + d] = g18_1 * y[yo + 0] + g18_3 * y[yo + 2] + g18_4 * y[yo + 3]
+        out[21 * ts + d] = g21_3 * y[yo + 2]
+    if use[1] > use[0]:
+        g3_0 = x7
+        g4_0 = x19
+        g17_0 = C0*k43 + S0*k42
+        g18_0 = C0*k45 + S0*k43
+        for e in range(int(use[0]), int(use[1])):
+            d = int(use[43 + e])
+            dk = dz[d * 42 + 0]
+            out[3 * ts + d] += g3_0 * dk
+            out[4 * ts + d] += g4_0 * dk
+            out[17 * ts + d] += g17_0 * dk
+            out[18 * ts + d] += g18_0 * dk
     if use[8] > use[7]:
         g3_7 = x11
         g4_7 = x12
@@ -1499,7 +1509,6 @@ def tangent(t, y, p, dz, nd, use, out, full):
     x44 = k49*x33
     x45 = k12*x34
     x46 = k14*x35
-    r0_0 = k46*x32 + k46*x35 + k47*x34 + k48*x33
     r0_1 = -C1*k15 + S1*k16 + k12*x33 + k13*x32 + k13*x35 + k2*x36 - k2*x38 - k3*x37 - k3*x39 + k49*x34
     rfx_0_0 = C1*k2 - S1*k3
     rfy_0_0 = C1*k3 + S1*k2
@@ -1508,9 +1517,15 @@ def tangent(t, y, p, dz, nd, use, out, full):
     rfy_1_0 = k6
     rtq_1_0 = 0.0
     for d in range(nd):
-        dzo = d * 42
-        out[12 * ts + d] = r0_0 * dz[dzo + 0] + r0_1 * dz[dzo + 1]
+        yo = 4 * (d + 1)
+        out[12 * ts + d] = r0_1 * y[yo + 0]
         out[13 * ts + d] = 0.0
+    if use[1] > use[0]:
+        r0_0 = k46*x32 + k46*x35 + k47*x34 + k48*x33
+        for e in range(int(use[0]), int(use[1])):
+            d = int(use[43 + e])
+            dk = dz[d * 42 + 0]
+            out[12 * ts + d] += r0_0 * dk
     if use[8] > use[7]:
         r0_7 = x40
         for e in range(int(use[7]), int(use[8])):
@@ -1685,13 +1700,11 @@ def tangent(t, y, p, dz, nd, use, out, full):
         x107 = S0*k31
         x108 = C0*k32 + S0*k99 + k0*x83 - k0*x84 - k1*x82 - k1*x85 + k29*x90 + k30*x91 + k31*x86 + k33*x88 + x106*x57 + x106*x60 + x107*x57 + x107*x60
         out[5 * ts + nd] = -FX0 + x56 + x66
-        o5_0 = C0*k71 + S0*k70
         o5_1 = x71
         o5_3 = U0*(-C1*k62 + S1*k64)
         oa_0_0 = -C1*k22 + S1*k23
         ofx_0_0 = -1.0
         out[6 * ts + nd] = C0*k24 - FY0 + S0*k21 + k25 - x71
-        o6_0 = C0*k80 + S0*k71
         o6_1 = x66
         o6_3 = -U0*(C1*k64 + S1*k62)
         oa_1_0 = -C1*k23 - S1*k22
@@ -1702,19 +1715,28 @@ def tangent(t, y, p, dz, nd, use, out, full):
         out[8 * ts + nd] = FY0 + k28 + x81
         oa_3_1 = k27
         ofy_3_0 = 1.0
-        o11_0 = C0*k85 + S0*k84 + k35*x91 + k36*x86 + k37*x90 + k44*x84 + k8*x82 + k8*x85 + k83*x88 + k9*x83 + x57*x87 + x57*x89 + x60*x87 + x60*x89
         o11_1 = k29*x86 + k30*x88 + k31*x90 + k33*x91 + x57*x92 + x57*x93 + x60*x92 + x60*x93
         o11_3 = U0*(k86*x94 + k86*x97 + k87*x96 + k88*x95)
         oa_4_0 = k29*x95 + k30*x94 + k30*x97 + k31*x96
         ofx_4_0 = C0*k0 - S0*k1
         ofy_4_0 = C0*k1 + S0*k0
         for d in range(nd):
-            dzo = d * 42
-            out[5 * ts + d] = o5_0 * dz[dzo + 0] + o5_1 * dz[dzo + 1] + o5_3 * dz[dzo + 3] + oa_0_0 * out[12 * ts + d] + ofx_0_0 * out[19 * ts + d]
-            out[6 * ts + d] = o6_0 * dz[dzo + 0] + o6_1 * dz[dzo + 1] + o6_3 * dz[dzo + 3] + oa_1_0 * out[12 * ts + d] + ofy_1_0 * out[20 * ts + d]
+            yo = 4 * (d + 1)
+            out[5 * ts + d] = o5_1 * y[yo + 0] + o5_3 * y[yo + 2] + oa_0_0 * out[12 * ts + d] + ofx_0_0 * out[19 * ts + d]
+            out[6 * ts + d] = o6_1 * y[yo + 0] + o6_3 * y[yo + 2] + oa_1_0 * out[12 * ts + d] + ofy_1_0 * out[20 * ts + d]
             out[7 * ts + d] = 0.0 + oa_2_1 * out[13 * ts + d] + ofx_2_0 * out[19 * ts + d]
             out[8 * ts + d] = 0.0 + oa_3_1 * out[13 * ts + d] + ofy_3_0 * out[20 * ts + d]
-            out[11 * ts + d] = o11_0 * dz[dzo + 0] + o11_1 * dz[dzo + 1] + o11_3 * dz[dzo + 3] + oa_4_0 * out[12 * ts + d] + ofx_4_0 * out[19 * ts + d] + ofy_4_0 * out[20 * ts + d]
+            out[11 * ts + d] = o11_1 * y[yo + 0] + o11_3 * y[yo + 2] + oa_4_0 * out[12 * ts + d] + ofx_4_0 * out[19 * ts + d] + ofy_4_0 * out[20 * ts + d]
+        if use[1] > use[0]:
+            o5_0 = C0*k71 + S0*k70
+            o6_0 = C0*k80 + S0*k71
+            o11_0 = C0*k85 + S0*k84 + k35*x91 + k36*x86 + k37*x90 + k44*x84 + k8*x82 + k8*x85 + k83*x88 + k9*x83 + x57*x87 + x57*x89 + x60*x87 + x60*x89
+            for e in range(int(use[0]), int(use[1])):
+                d = int(use[43 + e])
+                dk = dz[d * 42 + 0]
+                out[5 * ts + d] += o5_0 * dk
+                out[6 * ts + d] += o6_0 * dk
+                out[11 * ts + d] += o11_0 * dk
         if use[6] > use[5]:
             o5_5 = C0*k73 + S0*k72
             o6_5 = -C0*k72 + S0*k73 - gravity
@@ -1896,7 +1918,7 @@ def jacobian_matrix(t, y, p, full):
 @nb.njit(cache=True, error_model="numpy")
 def tangent_matrix(t, y, p, dz, full):
     """The tangents (N_JROWS, nd + 1) at (t, y) along the seeds dz (nd, N_Z) as a matrix."""
-    return tangent_at(_THIS.tangent, t, y, p, dz, N_JROWS, full)
+    return tangent_at(_THIS.tangent, t, y, p, dz, N_JROWS, N_Q, full)
 
 
 @nb.njit(cache=True, error_model="numpy")

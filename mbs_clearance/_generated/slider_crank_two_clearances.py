@@ -32,8 +32,8 @@ from mbs_clearance.generate.runtime import (
 
 LINKAGE = "slider_crank_two_clearances"
 STRUCTURE = "{\"bodies\": [[\"crank\", [\"pin\", \"pivot\"]], [\"coupler\", [\"crank_end\", \"slider_end\"]], [\"slider\", [\"pin\"]]], \"clearance_joints\": [[\"crank_coupler\", \"crank\", \"pin\", \"coupler\", \"crank_end\"], [\"coupler_slider\", \"coupler\", \"slider_end\", \"slider\", \"pin\"]], \"drive\": \"crank_pivot\", \"ground_points\": [\"crank_pivot\", \"slider_axis\"], \"joints\": [[\"revolute\", \"crank_pivot\", \"ground\", \"crank_pivot\", \"crank\", \"pivot\"], [\"prismatic\", \"slider_guide\", \"ground\", \"slider_axis\", \"slider\", \"pin\"]], \"monitor_joint\": \"crank_pivot\"}"
-STRUCTURE_DIGEST = "6495cfc4df5233d382740ddd165fb7eb78a64ce96910faa3bb22714cb2fafbe3"
-GENERATOR_VERSION = "6155ce9973d1b682"
+STRUCTURE_DIGEST = "3abf8e5600ddb93e9d00fb87997170bbbef64b2056bf37d7e8dd05e7c03b8801"
+GENERATOR_VERSION = "86d5ae0cf0ea2a49"
 
 #: dotted names of the entries of p (without the constants)
 PARAMETERS = (
@@ -1048,9 +1048,11 @@ def tangent(t, y, p, dz, nd, use, out, full):
     """The directional derivatives of `jacobian`'s rows along nd seeds dz (nd x N_Z, flat:
     dz[d * N_Z + k] the component along Z_NAMES[k]) from the same derivative expressions,
     into out (N_JROWS x (nd + 1), flat; column nd the value); `full` as `jacobian` (rows
-    not computed are left as they are). use: which seeds use each column of z
-    (`sens_runtime.seed_index`): a parameter column is evaluated and contracted only for
-    those (t, q and qdot always, for every seed)."""
+    not computed are left as they are). The seeds' state columns (q, qdot) are read from
+    y, as the sensitivity state holds them: seed d's at y[2 N_Q (d + 1):2 N_Q (d + 2)].
+    use: which seeds use each column of z (`sens_runtime.seed_index`): a parameter column
+    is evaluated and contracted only for those, and so is time (q and qdot always, for
+    every seed)."""
     ts = nd + 1
     crank__mass = p[0]  # crank.mass
     coupler__mass = p[6]  # coupler.mass
@@ -1148,20 +1150,16 @@ def tangent(t, y, p, dz, nd, use, out, full):
     x32 = -x22
     x33 = U0*k6
     gv0_0 = -Q1 + ground__crank_pivot__x + x0 - x1 + x2
-    g3_0 = x5
     g3_2 = -1.0
     g3_4 = x8
     gv0_1 = -Q2 + ground__crank_pivot__y - x12 - x8
-    g4_0 = x13
     g4_3 = -1.0
     g4_4 = x15
     gv0_2 = U3*x6 + U3*x7 + x17 + x5
-    g21_0 = C0*k25 + S0*k24
     g21_4 = U3*x14
     g21_6 = -1.0
     g21_8 = x8
     gv0_3 = -U2 + U3*x0 - U3*x1 + x13
-    g22_0 = C0*k27 + S0*k25
     g22_4 = U3*x8
     g22_7 = -1.0
     g22_8 = x15
@@ -1184,15 +1182,27 @@ def tangent(t, y, p, dz, nd, use, out, full):
     g26_7 = 1.0
     g26_8 = x28
     for d in range(nd):
-        dzo = d * 47
-        out[3 * ts + d] = g3_0 * dz[dzo + 0] + g3_2 * dz[dzo + 2] + g3_4 * dz[dzo + 4]
-        out[4 * ts + d] = g4_0 * dz[dzo + 0] + g4_3 * dz[dzo + 3] + g4_4 * dz[dzo + 4]
-        out[21 * ts + d] = g21_0 * dz[dzo + 0] + g21_4 * dz[dzo + 4] + g21_6 * dz[dzo + 6] + g21_8 * dz[dzo + 8]
-        out[22 * ts + d] = g22_0 * dz[dzo + 0] + g22_4 * dz[dzo + 4] + g22_7 * dz[dzo + 7] + g22_8 * dz[dzo + 8]
-        out[8 * ts + d] = g8_1 * dz[dzo + 1] + g8_2 * dz[dzo + 2] + g8_4 * dz[dzo + 4]
-        out[9 * ts + d] = g9_1 * dz[dzo + 1] + g9_3 * dz[dzo + 3] + g9_4 * dz[dzo + 4]
-        out[25 * ts + d] = g25_4 * dz[dzo + 4] + g25_5 * dz[dzo + 5] + g25_6 * dz[dzo + 6] + g25_8 * dz[dzo + 8]
-        out[26 * ts + d] = g26_4 * dz[dzo + 4] + g26_5 * dz[dzo + 5] + g26_7 * dz[dzo + 7] + g26_8 * dz[dzo + 8]
+        yo = 8 * (d + 1)
+        out[3 * ts + d] = g3_2 * y[yo + 1] + g3_4 * y[yo + 3]
+        out[4 * ts + d] = g4_3 * y[yo + 2] + g4_4 * y[yo + 3]
+        out[21 * ts + d] = g21_4 * y[yo + 3] + g21_6 * y[yo + 5] + g21_8 * y[yo + 7]
+        out[22 * ts + d] = g22_4 * y[yo + 3] + g22_7 * y[yo + 6] + g22_8 * y[yo + 7]
+        out[8 * ts + d] = g8_1 * y[yo + 0] + g8_2 * y[yo + 1] + g8_4 * y[yo + 3]
+        out[9 * ts + d] = g9_1 * y[yo + 0] + g9_3 * y[yo + 2] + g9_4 * y[yo + 3]
+        out[25 * ts + d] = g25_4 * y[yo + 3] + g25_5 * y[yo + 4] + g25_6 * y[yo + 5] + g25_8 * y[yo + 7]
+        out[26 * ts + d] = g26_4 * y[yo + 3] + g26_5 * y[yo + 4] + g26_7 * y[yo + 6] + g26_8 * y[yo + 7]
+    if use[1] > use[0]:
+        g3_0 = x5
+        g4_0 = x13
+        g21_0 = C0*k25 + S0*k24
+        g22_0 = C0*k27 + S0*k25
+        for e in range(int(use[0]), int(use[1])):
+            d = int(use[48 + e])
+            dk = dz[d * 47 + 0]
+            out[3 * ts + d] += g3_0 * dk
+            out[4 * ts + d] += g4_0 * dk
+            out[21 * ts + d] += g21_0 * dk
+            out[22 * ts + d] += g22_0 * dk
     if use[12] > use[11]:
         g3_11 = x9
         g4_11 = x10
@@ -1412,11 +1422,11 @@ def tangent(t, y, p, dz, nd, use, out, full):
     rfx_3_1 = -C1*coupler__slider_end__y - S1*coupler__slider_end__x
     rfy_3_1 = C1*coupler__slider_end__x - S1*coupler__slider_end__y
     for d in range(nd):
-        dzo = d * 47
+        yo = 8 * (d + 1)
         out[17 * ts + d] = 0.0
         out[18 * ts + d] = 0.0
         out[19 * ts + d] = 0.0
-        out[20 * ts + d] = r3_4 * dz[dzo + 4]
+        out[20 * ts + d] = r3_4 * y[yo + 3]
     if use[16] > use[15]:
         r1_15 = A1
         r2_15 = A2 + gravity
@@ -1515,10 +1525,8 @@ def tangent(t, y, p, dz, nd, use, out, full):
         x55 = x51 + x54
         x56 = C0*FY0*k0 + C0*k18 - S0*k19 - k0*x53 - k1*x51 - k1*x54
         out[10 * ts + nd] = -FX0 + x43
-        o10_0 = C0*k31 + S0*k30
         ofx_0_0 = -1.0
         out[11 * ts + nd] = -FY0 + k14 - x48
-        o11_0 = -C0*k30 + S0*k31
         ofy_1_0 = -1.0
         out[12 * ts + nd] = FX1 + x49
         oa_2_0 = k15
@@ -1526,16 +1534,25 @@ def tangent(t, y, p, dz, nd, use, out, full):
         out[13 * ts + nd] = FY1 + k17 + x50
         oa_3_0 = k16
         ofy_3_1 = 1.0
-        o16_0 = C0*k38 + S0*k37 + k2*x51 + k2*x54 + k26*x53 + k3*x52
         ofx_4_0 = C0*k0 - S0*k1
         ofy_4_0 = C0*k1 + S0*k0
         for d in range(nd):
-            dzo = d * 47
-            out[10 * ts + d] = o10_0 * dz[dzo + 0] + ofx_0_0 * out[23 * ts + d]
-            out[11 * ts + d] = o11_0 * dz[dzo + 0] + ofy_1_0 * out[24 * ts + d]
+            yo = 8 * (d + 1)
+            out[10 * ts + d] = 0.0 + ofx_0_0 * out[23 * ts + d]
+            out[11 * ts + d] = 0.0 + ofy_1_0 * out[24 * ts + d]
             out[12 * ts + d] = 0.0 + oa_2_0 * out[17 * ts + d] + ofx_2_1 * out[27 * ts + d]
             out[13 * ts + d] = 0.0 + oa_3_0 * out[17 * ts + d] + ofy_3_1 * out[28 * ts + d]
-            out[16 * ts + d] = o16_0 * dz[dzo + 0] + ofx_4_0 * out[23 * ts + d] + ofy_4_0 * out[24 * ts + d]
+            out[16 * ts + d] = 0.0 + ofx_4_0 * out[23 * ts + d] + ofy_4_0 * out[24 * ts + d]
+        if use[1] > use[0]:
+            o10_0 = C0*k31 + S0*k30
+            o11_0 = -C0*k30 + S0*k31
+            o16_0 = C0*k38 + S0*k37 + k2*x51 + k2*x54 + k26*x53 + k3*x52
+            for e in range(int(use[0]), int(use[1])):
+                d = int(use[48 + e])
+                dk = dz[d * 47 + 0]
+                out[10 * ts + d] += o10_0 * dk
+                out[11 * ts + d] += o11_0 * dk
+                out[16 * ts + d] += o16_0 * dk
         if use[10] > use[9]:
             o10_9 = C0*k33 + S0*k32
             o11_9 = -C0*k32 + S0*k33 - gravity
@@ -1679,7 +1696,7 @@ def jacobian_matrix(t, y, p, full):
 @nb.njit(cache=True, error_model="numpy")
 def tangent_matrix(t, y, p, dz, full):
     """The tangents (N_JROWS, nd + 1) at (t, y) along the seeds dz (nd, N_Z) as a matrix."""
-    return tangent_at(_THIS.tangent, t, y, p, dz, N_JROWS, full)
+    return tangent_at(_THIS.tangent, t, y, p, dz, N_JROWS, N_Q, full)
 
 
 @nb.njit(cache=True, error_model="numpy")

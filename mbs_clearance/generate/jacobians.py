@@ -92,26 +92,29 @@ def jacobian_context(w, d: Derivation, out_columns: list[str]) -> dict:
     # Each stage is built twice from the same (split) expressions: for `jacobian` (J: the
     # derivative of row r along column k into jac[r * stride + k]) and for `tangent` (T:
     # the derivatives as locals, contracted with the seeds in a loop over the directions d:
-    # out[r * ts + d] = sum_k der_k dz[d * N_Z + k], ts = nd + 1, the value in column nd).
+    # out[r * ts + d] = sum_k der_k dz[d * N_Z + k], ts = nd + 1, the value in column nd;
+    # the seeds' state part, direction d's state sensitivity, read from y[2 N_Q (d + 1):]).
     def at(r, c):
         return f"jac[{r * stride + c}]"
 
     def contract(terms):
-        return " + ".join(f"{v} * dz[dzo + {k}]" for k, v in terms) or "0.0"
+        """sum over the state columns k (1 .. 2 N_Q) of der_k times the seed's, y[yo + k - 1]."""
+        return " + ".join(f"{v} * y[yo + {k - 1}]" for k, v in terms) or "0.0"
 
     n2 = 2 * n
     masked_cols: set[int] = set()
 
     def masked(rows_terms, head=None, tail=None):
         """The post-processing of a tangent stage: rows_terms is a list of (target, {k:
-        local name}, extra terms). The state columns (t, q, qdot: every direction uses
-        them) are contracted in one loop over the directions; each parameter column's
-        derivatives are computed and added only to the directions whose seed uses that
-        column (the lists in `use`, see sens_runtime.seed_index)."""
+        local name}, extra terms). The state columns (q, qdot: every direction uses them)
+        are contracted in one loop over the directions; the derivatives along each other
+        column (time: no DDM direction moves it; the parameters) are computed and added
+        only to the directions whose seed uses that column (the lists in `use`, see
+        sens_runtime.seed_index)."""
         by_name = {}
         for _, terms, _ in rows_terms:
             for k, v in terms.items():
-                if k > n2:
+                if k > n2 or k == 0:
                     by_name[v] = k
                     masked_cols.add(k)
 
@@ -123,9 +126,9 @@ def jacobian_context(w, d: Derivation, out_columns: list[str]) -> dict:
                     blocks.setdefault(by_name[lhs], []).append(ln)
                 else:
                     keep.append(ln)
-            loop = ["for d in range(nd):", f"    dzo = d * {nz}"]
+            loop = ["for d in range(nd):", f"    yo = {n2} * (d + 1)"]
             for tgt, terms, extra_terms in rows_terms:
-                dense = [contract([(k, v) for k, v in terms.items() if k <= n2])]
+                dense = [contract([(k, v) for k, v in terms.items() if 0 < k <= n2])]
                 loop.append(f"    {tgt} = " + " + ".join(dense + extra_terms))
             out = keep + (head or []) + loop
             for k in sorted(blocks):

@@ -315,14 +315,12 @@ def fill_seed_work(work, entries, nz: int, n_jrows: int, n_q: int, mem_col0: int
 @nb.njit(**KERNEL, inline="always")
 def seed_directions(dz, membase, y, nb_, n2, nz, mem_col0, n_joints):
     """The seeds dz_k = [0, s_k, D_k + sigma_k] (nb x nz, flat) of the integrated directions
-    for this call: the state part s_k and, at the memories' columns, the chain's part
-    (membase) plus sigma_k; the chain's other columns are constant (`fill_seed_work`)."""
+    for this call, at the memories' columns: the chain's part (membase) plus sigma_k. The
+    chain's other columns are constant (`fill_seed_work`); the generated `tangent` reads
+    the state part s_k from y[n2 (1 + k):] itself."""
     wpos = n2 * (1 + nb_)
     for k in range(nb_):
         o = k * nz
-        base = n2 * (1 + k)
-        for c in range(n2):
-            dz[o + 1 + c] = y[base + c]
         sig = wpos + 1 + k * n_joints
         for j in range(n_joints):
             dz[o + mem_col0 + 2 * j] = membase[k * n_joints + j] + y[sig + j]
@@ -475,13 +473,20 @@ def jacobian_at(jacobian, t, y, p, n_jrows, nz, full):
 
 
 @nb.njit(error_model="numpy")
-def tangent_at(tangent, t, y, p, dz, n_jrows, full):
-    """The tangents (n_jrows, nd + 1) at (t, y) along the seeds dz (nd, nz) (tests)."""
+def tangent_at(tangent, t, y, p, dz, n_jrows, n_q, full):
+    """The tangents (n_jrows, nd + 1) at (t, y) along the seeds dz (nd, nz) (tests): the
+    seeds' state columns (1 .. 2 N_Q) passed as state sensitivities after y[:2 N_Q], where
+    the generated `tangent` reads them."""
     nd = dz.shape[0]
+    n2 = 2 * n_q
     out = np.zeros(n_jrows * (nd + 1))
     use = np.zeros(dz.shape[1] + 1 + dz.size)
     seed_index(dz != 0.0, use)
-    tangent(t, y, p, np.ascontiguousarray(dz).ravel(), nd, use, out, full)
+    ys = np.empty(n2 * (1 + nd))
+    ys[:n2] = y[:n2]
+    for d in range(nd):
+        ys[n2 * (1 + d):n2 * (2 + d)] = dz[d, 1:1 + n2]
+    tangent(t, ys, p, np.ascontiguousarray(dz).ravel(), nd, use, out, full)
     return out.reshape((n_jrows, nd + 1))
 
 
