@@ -306,8 +306,9 @@ class DdmRun(NamedTuple):
         n2 = 2 * self.model.N_Q
         s = self.ys[:, n2:n2 * (1 + self.nb)].reshape(len(self.ys), self.nb, n2)
         weights = (self.scale[:, None] / np.asarray(unit)[None, :]) ** 2
-        return _revolution_maxima(self.ts, _weighted_norms2(s, self.coeffs, weights),
-                                  period, revolutions)
+        return _revolution_maxima(
+            self.ts, _weighted_norms2(s, *_sparse_columns(self.coeffs), weights), period,
+            revolutions)
 
     def output_sensitivities(self, ts, ys, ms, columns=None):
         """Values (n, N_OUT) and derivatives (n, N_OUT, npar) of the model's outputs along
@@ -325,46 +326,74 @@ def _combine_directions(a: np.ndarray, coeffs: np.ndarray) -> np.ndarray:
     """a (..., nb) @ coeffs (nb, npar) as one matrix product (numpy's stacked matmul of a
     3-d array runs one small product per leading index); a 3-d a by `_combine_rows`."""
     if a.ndim == 3:
-        return _combine_rows(a, np.ascontiguousarray(coeffs))
+        return _combine_rows(a, *_sparse_columns(coeffs))
     out = np.ascontiguousarray(a).reshape(-1, a.shape[-1]) @ coeffs
     return out.reshape(*a.shape[:-1], coeffs.shape[1])
 
 
+def _sparse_columns(coeffs):
+    """coeffs (nb, npar) by columns, its nonzero entries only: (ptr (npar + 1), rows,
+    values); column k's entries are ptr[k]:ptr[k + 1]. The coefficients of independent
+    directions are mostly an identity (one entry per requested direction that is
+    integrated)."""
+    ptr, rows, vals = [0], [], []
+    for k in range(coeffs.shape[1]):
+        nz = np.flatnonzero(coeffs[:, k])
+        rows += nz.tolist()
+        vals += coeffs[nz, k].tolist()
+        ptr.append(len(rows))
+    return np.array(ptr, dtype=np.int64), np.array(rows, dtype=np.int64), np.array(vals)
+
+
 @nb.njit(cache=True, error_model="numpy")
-def _combine_rows(a, coeffs):
-    """a (n, m, nb) @ coeffs (nb, npar), any strides of a: (n, m, npar) in one pass (numpy
-    copies a strided a first)."""
-    n, m, nb_ = a.shape
-    npar = coeffs.shape[1]
-    out = np.zeros((n, m, npar))
+def _combine_rows(a, ptr, rows, vals):
+    """a (n, m, nb) @ coeffs (nb, npar, by `_sparse_columns`), any strides of a: (n, m,
+    npar) in one pass (numpy copies a strided a first), the zero coefficients skipped."""
+    n, m, _ = a.shape
+    npar = ptr.shape[0] - 1
+    out = np.empty((n, m, npar))
     for i in range(n):
         for r in range(m):
-            for b in range(nb_):
-                v = a[i, r, b]
-                for k in range(npar):
-                    out[i, r, k] += v * coeffs[b, k]
+            for k in range(npar):
+                acc = 0.0
+                for e in range(ptr[k], ptr[k + 1]):
+                    acc += a[i, r, rows[e]] * vals[e]
+                out[i, r, k] = acc
     return out
 
 
 @nb.njit(cache=True, error_model="numpy")
-def _weighted_norms2(s, coeffs, weights):
+def _weighted_norms2(s, ptr, rows, vals, weights):
     """sum_j weights[k, j] (sum_b s[i, b, j] coeffs[b, k])^2 (n, npar): the squared weighted
-    norms of the combined state sensitivities, from those of the integrated directions
-    s (n, nb, 2 N_Q) without forming the combined ones."""
-    n, nb_, n2 = s.shape
-    npar = coeffs.shape[1]
+    norms of the combined state sensitivities (coeffs by `_sparse_columns`), from those of
+    the integrated directions s (n, nb, 2 N_Q) without forming the combined ones."""
+    n, _, n2 = s.shape
+    npar = ptr.shape[0] - 1
     out = np.zeros((n, npar))
-    tmp = np.empty(npar)
     for i in range(n):
-        for j in range(n2):
-            for k in range(npar):
-                tmp[k] = 0.0
-            for b in range(nb_):
-                v = s[i, b, j]
-                for k in range(npar):
-                    tmp[k] += v * coeffs[b, k]
-            for k in range(npar):
-                out[i, k] += weights[k, j] * tmp[k] * tmp[k]
+        for k in range(npar):
+            acc2 = 0.0
+            for j in range(n2):
+                acc = 0.0
+                for e in range(ptr[k], ptr[k + 1]):
+                    acc += s[i, rows[e], j] * vals[e]
+                acc2 += weights[k, j] * acc * acc
+            out[i, k] = acc2
+    return out
+
+
+@nb.njit(cache=True, error_model="numpy")
+def magnitude_derivative(vals, col, ders, row):
+    """d|F|/db (n, npar) of the force F = (vals[:, col], vals[:, col + 1]) from its
+    components' derivatives ders[:, row], ders[:, row + 1] (n, ., npar): (F . dF) / |F|
+    (|F| floored at 1e-300)."""
+    n, npar = ders.shape[0], ders.shape[2]
+    out = np.empty((n, npar))
+    for i in range(n):
+        fx, fy = vals[i, col], vals[i, col + 1]
+        inv = 1.0 / max(math.hypot(fx, fy), 1e-300)
+        for k in range(npar):
+            out[i, k] = (fx * ders[i, row, k] + fy * ders[i, row + 1, k]) * inv
     return out
 
 
@@ -569,9 +598,7 @@ def _fields(model, ts, names, ref, ders, traj, growth, stats):
     col = {c: i for i, c in enumerate(model.OUT_COLUMNS)}
     mon = model.MONITOR_COLUMN
     force = ders[:, mon:mon + 2, :]
-    fx, fy = traj.base_force[:, 0], traj.base_force[:, 1]
-    mag = np.maximum(np.hypot(fx, fy), 1e-300)
-    d_mag = (fx[:, None] * force[:, 0] + fy[:, None] * force[:, 1]) / mag[:, None]
+    d_mag = magnitude_derivative(np.ascontiguousarray(traj.base_force), 0, ders, mon)
     contact = np.stack([ders[:, col[f"{j}.contact_force"], :] for j in model.JOINTS], axis=1)
     if model.N_EVENTS == 1:
         contact = contact[:, 0, :]

@@ -385,7 +385,7 @@ def slider_crank_run(mech: SliderCrank, names, rtol, *, revolutions: int, t_eval
 
 
 def _ddm(mech, names, revolutions, rtol, t_eval, event_time_term, method):
-    from .linkage_ddm import landed
+    from .linkage_ddm import landed, magnitude_derivative
 
     # only the derivatives a SliderCrank's Sensitivities hold, computed with the steps
     force = reduced.MODEL.OUT_COLUMNS[reduced.MODEL.MONITOR_COLUMN:][:2]
@@ -404,9 +404,7 @@ def _ddm(mech, names, revolutions, rtol, t_eval, event_time_term, method):
         ts, ys, ms, peaks = ts[keep], ys[keep], ms[keep], None
     vals, ders = run.recorded_output_sensitivities(keep)
     d_force = ders[:, 0:2, :].copy()
-    fx, fy = vals[:, mon], vals[:, mon + 1]
-    d_mag = ((fx[:, None] * d_force[:, 0] + fy[:, None] * d_force[:, 1])
-             / np.maximum(np.hypot(fx, fy), 1e-300)[:, None])
+    d_mag = magnitude_derivative(vals, mon, ders, 0)
     traj = annotate(reduced.trajectory_from_states(
         mech, ts, run.plain_states(ys), ms[:, :model.N_MEM], run.p0, run.stats, peaks, vals,
         model.OUT_COLUMNS))
