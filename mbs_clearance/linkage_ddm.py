@@ -140,15 +140,16 @@ def initial_sensitivities(linkage: Linkage, model, p, y0, entries, t0: float = 0
     e_q = jac[rows, 1:1 + n]
     ed_q = jac[rate_rows, 1:1 + n]
     ed_u = jac[rate_rows, 1 + n:1 + 2 * n]
-    s0 = np.zeros((len(entries), 2 * n))
+    # the chains as columns (every direction at once: one least-squares solve per level)
+    d = np.zeros((jac.shape[1], len(entries)))
     for k, ent in enumerate(entries):
-        e_b = sum((jac[rows, c] * v for c, v in ent.items()), np.zeros(len(rows)))
-        ed_b = sum((jac[rate_rows, c] * v for c, v in ent.items()), np.zeros(len(rows)))
-        dq = -np.linalg.lstsq(e_q, e_b, rcond=None)[0]
-        du = -np.linalg.lstsq(ed_u, ed_q @ dq + ed_b, rcond=None)[0]
-        s0[k, :n] = dq
-        s0[k, n:] = du
-    return s0
+        for c, v in ent.items():
+            d[c, k] += v
+    e_b = jac[rows] @ d
+    ed_b = jac[rate_rows] @ d
+    dq = -np.linalg.lstsq(e_q, e_b, rcond=None)[0]
+    du = -np.linalg.lstsq(ed_u, ed_q @ dq + ed_b, rcond=None)[0]
+    return np.hstack([dq.T, du.T])
 
 
 #: relative tolerance of `independent_directions` on the dimensionless directions
