@@ -1104,7 +1104,8 @@ def _refine_window(rhs, monitor, peak, peak_t, n_cr, crest_rows, cr_y, cr_p, cr_
     inside the steps on both sides of each kept crest, and inside the window's first step
     (from ws_t, size ws_h) and last step (from t_last, size h_last), each step once (by its
     start time). Returns (peak, peak_t, steps refined) given the best sample (peak,
-    peak_t)."""
+    peak_t). The steps are taken on the leading len(ws_y) components of the states (the
+    crests' too), as long as ws_y, y_last, y_new and ytmp."""
     n_done = 0
     for i in range(n_cr + 2):
         if i < n_cr:
@@ -1126,9 +1127,9 @@ def _refine_window(rhs, monitor, peak, peak_t, n_cr, crest_rows, cr_y, cr_p, cr_
             if hh <= 0.0 or _seen(done_t, n_done, t0):
                 continue
             if row >= 0:
-                v, tv = _golden_max(rhs, monitor, t0, cr_y[row, side], cr_p[row, side], hh, A,
-                                    B, C, K, y_new, f_new, ytmp, f_ref, refine_iters, oscr, g,
-                                    gd)
+                v, tv = _golden_max(rhs, monitor, t0, cr_y[row, side][:ws_y.shape[0]],
+                                    cr_p[row, side], hh, A, B, C, K, y_new, f_new, ytmp, f_ref,
+                                    refine_iters, oscr, g, gd)
             elif i == n_cr:
                 v, tv = _golden_max(rhs, monitor, t0, ws_y, ws_p, hh, A, B, C, K, y_new, f_new,
                                     ytmp, f_ref, refine_iters, oscr, g, gd)
@@ -1434,10 +1435,14 @@ def integrate(rhs, event, on_event, monitor, y0, p, edges, settings, coefficient
                 if refine_iters > 0:
                     if pend:
                         n_cr, thresh = _crest_confirm(crest_rows, n_cr, cr_sc, 0.0)
+                    # on the state the monitor reads (y[:n_dense]; the model's rhs gives its
+                    # derivative alone, as for the continuous extension): a sensitivity run
+                    # refines its peaks by the plain model's steps
                     peaks[win], peak_t[win], n_done = _refine_window(
-                        rhs, monitor, peaks[win], peak_t[win], n_cr, crest_rows, cr_y, cr_p,
-                        cr_sc, ws_t, ws_y, ws_p, ws_h, t_old, ftmp, p, h_step, A, B, C, K,
-                        y_new, f_new, ytmp, f_ref, refine_iters, oscr, g_work, gd_work, done_t)
+                        rhs, monitor, peaks[win], peak_t[win], n_cr, crest_rows,
+                        cr_y, cr_p, cr_sc, ws_t, ws_y[:n_dense], ws_p, ws_h,
+                        t_old, ftmp[:n_dense], p, h_step, A, B, C, K, y_new[:n_dense], f_new,
+                        ytmp_d, f_ref, refine_iters, oscr, g_work, gd_work, done_t)
                     counters[4] += n_done
                 win += 1
                 if win < n_win:
