@@ -2,8 +2,8 @@
 tools/generate_models.py; do not edit). MODULES maps a structure digest to a module name."""
 
 MODULES: dict[str, str] = {
-    '361a606ca2cf92a923bb8304dd095a5bd71b503876b93e50173d933d6ac10c11': 'paper_slider_crank',
-    '3abf8e5600ddb93e9d00fb87997170bbbef64b2056bf37d7e8dd05e7c03b8801': 'slider_crank_two_clearances',
-    'c2f71d84614bf93c0c72e93e5fec9eaeeec625ff1cda26c8dca934d571a99727': 'four_bar',
-    '674d15efba505c13a9edad3400663e20a6753fc9651790d213f7f5a21ff7a353': 'paper_slider_crank_friction',
+    '1ebba2c9fe3079d0da0e795e787a4f875de9f1c726085904bb782678ccd83453': 'paper_slider_crank',
+    'dd3c934a2d49e128e440a6affa2f58a4d8ba89e717116ce90987224795928fca': 'slider_crank_two_clearances',
+    '397b5eb247db4e1455a05273ea7026fae732a6396d5f977cc873ef0a4cc37411': 'four_bar',
+    'd1fd701e717e2014bd9279feb2bae3fcedfde8492ab9c510599811910066a840': 'paper_slider_crank_friction',
 }

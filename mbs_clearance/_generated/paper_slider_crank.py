@@ -32,8 +32,8 @@ from mbs_clearance.generate.runtime import (
 
 LINKAGE = "paper_slider_crank"
 STRUCTURE = "{\"bodies\": [[\"crank\", [\"pin\", \"pivot\"]], [\"coupler\", [\"crank_end\", \"slider_end\"]], [\"slider\", [\"pin\"]]], \"clearance_joints\": [[\"coupler_slider\", \"coupler\", \"slider_end\", \"slider\", \"pin\"]], \"drive\": \"crank_pivot\", \"ground_points\": [\"crank_pivot\", \"slider_axis\"], \"joints\": [[\"revolute\", \"crank_pivot\", \"ground\", \"crank_pivot\", \"crank\", \"pivot\"], [\"revolute\", \"crank_coupler\", \"crank\", \"pin\", \"coupler\", \"crank_end\"], [\"prismatic\", \"slider_guide\", \"ground\", \"slider_axis\", \"slider\", \"pin\"]], \"monitor_joint\": \"crank_pivot\"}"
-STRUCTURE_DIGEST = "361a606ca2cf92a923bb8304dd095a5bd71b503876b93e50173d933d6ac10c11"
-GENERATOR_VERSION = "86d5ae0cf0ea2a49"
+STRUCTURE_DIGEST = "1ebba2c9fe3079d0da0e795e787a4f875de9f1c726085904bb782678ccd83453"
+GENERATOR_VERSION = "302c28485455de7f"
 
 #: dotted names of the entries of p (without the constants)
 PARAMETERS = (
@@ -460,6 +460,18 @@ def _monitored(res):
     return math.sqrt(x * x + y * y)
 
 
+@nb.njit(**KERNEL, inline="always")
+def _observe(p, res, out, g, gd):
+    """From the model's quantities res (OUT_COLUMNS first: `dynamics`' values, or the value
+    column of a full tangent): the outputs into out (N_OUT entries, or none), every joint's
+    switching function and rate into g, gd, and the monitored |reaction| (returned)."""
+    if out.shape[0] >= N_OUT:
+        for k in range(N_OUT):
+            out[k] = res[k]
+    g[0], gd[0] = switching(p[MEM_START + 0], res[1], res[2])
+    return _monitored(res)
+
+
 @nb.njit(MONITOR_SIG, **KERNEL)
 def monitor(t, y, p, dydt, out, g, gd):
     """The integrator's last stage of a step: the state derivative (as `rhs`), the outputs
@@ -467,11 +479,7 @@ def monitor(t, y, p, dydt, out, g, gd):
     and the monitored |reaction| (returned), from one evaluation of the model."""
     res = dynamics(t, y, p)
     _derivative(y, p, res, dydt)
-    if out.shape[0] >= N_OUT:
-        for k in range(N_OUT):
-            out[k] = res[k]
-    g[0], gd[0] = switching(p[MEM_START + 0], res[1], res[2])
-    return _monitored(res)
+    return _observe(p, res, out, g, gd)
 
 
 @nb.njit(cache=True, error_model="numpy")
@@ -1840,9 +1848,9 @@ def on_event_sens(t, y, p, j):
 def monitor_sens(t, y, p, dydt, out, g, gd):
     """`rhs_sens`, then the plain monitor on the state part; into an `out` longer than
     N_OUT the outputs' derivatives along the directions too (`sens_runtime.sens_monitor`)."""
-    return sens_monitor(_THIS.tangent, _THIS.rhs, _THIS.monitor, t, y, p, dydt, out, g, gd,
-                        N_Q, N_P, N_Z, N_JROWS, ACC_COLUMN, MOMENT_COLUMN, 26,
-                        _MEM_COL0, N_EVENTS, N_OUT)
+    return sens_monitor(_THIS.tangent, _THIS.rhs, _THIS.monitor, _THIS._observe, t, y, p,
+                        dydt, out, g, gd, N_Q, N_P, N_Z, N_JROWS, ACC_COLUMN, MOMENT_COLUMN,
+                        26, _MEM_COL0, N_EVENTS, N_OUT)
 
 
 @nb.njit(cache=True, error_model="numpy", nogil=True)

@@ -32,8 +32,8 @@ from mbs_clearance.generate.runtime import (
 
 LINKAGE = "paper_slider_crank"
 STRUCTURE = "{\"bodies\": [[\"crank\", [\"pin\", \"pivot\"]], [\"coupler\", [\"crank_end\", \"slider_end\"]], [\"slider\", [\"pin\"]]], \"clearance_joints\": [[\"coupler_slider\", \"coupler\", \"slider_end\", \"slider\", \"pin\", \"friction\"]], \"drive\": \"crank_pivot\", \"ground_points\": [\"crank_pivot\", \"slider_axis\"], \"joints\": [[\"revolute\", \"crank_pivot\", \"ground\", \"crank_pivot\", \"crank\", \"pivot\"], [\"revolute\", \"crank_coupler\", \"crank\", \"pin\", \"coupler\", \"crank_end\"], [\"prismatic\", \"slider_guide\", \"ground\", \"slider_axis\", \"slider\", \"pin\"]], \"monitor_joint\": \"crank_pivot\"}"
-STRUCTURE_DIGEST = "674d15efba505c13a9edad3400663e20a6753fc9651790d213f7f5a21ff7a353"
-GENERATOR_VERSION = "86d5ae0cf0ea2a49"
+STRUCTURE_DIGEST = "d1fd701e717e2014bd9279feb2bae3fcedfde8492ab9c510599811910066a840"
+GENERATOR_VERSION = "302c28485455de7f"
 
 #: dotted names of the entries of p (without the constants)
 PARAMETERS = (
@@ -473,6 +473,18 @@ def _monitored(res):
     return math.sqrt(x * x + y * y)
 
 
+@nb.njit(**KERNEL, inline="always")
+def _observe(p, res, out, g, gd):
+    """From the model's quantities res (OUT_COLUMNS first: `dynamics`' values, or the value
+    column of a full tangent): the outputs into out (N_OUT entries, or none), every joint's
+    switching function and rate into g, gd, and the monitored |reaction| (returned)."""
+    if out.shape[0] >= N_OUT:
+        for k in range(N_OUT):
+            out[k] = res[k]
+    g[0], gd[0] = switching(p[MEM_START + 0], res[1], res[2])
+    return _monitored(res)
+
+
 @nb.njit(MONITOR_SIG, **KERNEL)
 def monitor(t, y, p, dydt, out, g, gd):
     """The integrator's last stage of a step: the state derivative (as `rhs`), the outputs
@@ -480,11 +492,7 @@ def monitor(t, y, p, dydt, out, g, gd):
     and the monitored |reaction| (returned), from one evaluation of the model."""
     res = dynamics(t, y, p)
     _derivative(y, p, res, dydt)
-    if out.shape[0] >= N_OUT:
-        for k in range(N_OUT):
-            out[k] = res[k]
-    g[0], gd[0] = switching(p[MEM_START + 0], res[1], res[2])
-    return _monitored(res)
+    return _observe(p, res, out, g, gd)
 
 
 @nb.njit(cache=True, error_model="numpy")
@@ -1889,9 +1897,9 @@ def on_event_sens(t, y, p, j):
 def monitor_sens(t, y, p, dydt, out, g, gd):
     """`rhs_sens`, then the plain monitor on the state part; into an `out` longer than
     N_OUT the outputs' derivatives along the directions too (`sens_runtime.sens_monitor`)."""
-    return sens_monitor(_THIS.tangent, _THIS.rhs, _THIS.monitor, t, y, p, dydt, out, g, gd,
-                        N_Q, N_P, N_Z, N_JROWS, ACC_COLUMN, MOMENT_COLUMN, 32,
-                        _MEM_COL0, N_EVENTS, N_OUT)
+    return sens_monitor(_THIS.tangent, _THIS.rhs, _THIS.monitor, _THIS._observe, t, y, p,
+                        dydt, out, g, gd, N_Q, N_P, N_Z, N_JROWS, ACC_COLUMN, MOMENT_COLUMN,
+                        32, _MEM_COL0, N_EVENTS, N_OUT)
 
 
 @nb.njit(cache=True, error_model="numpy", nogil=True)

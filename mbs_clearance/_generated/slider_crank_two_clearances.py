@@ -32,8 +32,8 @@ from mbs_clearance.generate.runtime import (
 
 LINKAGE = "slider_crank_two_clearances"
 STRUCTURE = "{\"bodies\": [[\"crank\", [\"pin\", \"pivot\"]], [\"coupler\", [\"crank_end\", \"slider_end\"]], [\"slider\", [\"pin\"]]], \"clearance_joints\": [[\"crank_coupler\", \"crank\", \"pin\", \"coupler\", \"crank_end\"], [\"coupler_slider\", \"coupler\", \"slider_end\", \"slider\", \"pin\"]], \"drive\": \"crank_pivot\", \"ground_points\": [\"crank_pivot\", \"slider_axis\"], \"joints\": [[\"revolute\", \"crank_pivot\", \"ground\", \"crank_pivot\", \"crank\", \"pivot\"], [\"prismatic\", \"slider_guide\", \"ground\", \"slider_axis\", \"slider\", \"pin\"]], \"monitor_joint\": \"crank_pivot\"}"
-STRUCTURE_DIGEST = "3abf8e5600ddb93e9d00fb87997170bbbef64b2056bf37d7e8dd05e7c03b8801"
-GENERATOR_VERSION = "86d5ae0cf0ea2a49"
+STRUCTURE_DIGEST = "dd3c934a2d49e128e440a6affa2f58a4d8ba89e717116ce90987224795928fca"
+GENERATOR_VERSION = "302c28485455de7f"
 
 #: dotted names of the entries of p (without the constants)
 PARAMETERS = (
@@ -415,6 +415,19 @@ def _monitored(res):
     return math.sqrt(x * x + y * y)
 
 
+@nb.njit(**KERNEL, inline="always")
+def _observe(p, res, out, g, gd):
+    """From the model's quantities res (OUT_COLUMNS first: `dynamics`' values, or the value
+    column of a full tangent): the outputs into out (N_OUT entries, or none), every joint's
+    switching function and rate into g, gd, and the monitored |reaction| (returned)."""
+    if out.shape[0] >= N_OUT:
+        for k in range(N_OUT):
+            out[k] = res[k]
+    g[0], gd[0] = switching(p[MEM_START + 0], res[1], res[2])
+    g[1], gd[1] = switching(p[MEM_START + 2], res[6], res[7])
+    return _monitored(res)
+
+
 @nb.njit(MONITOR_SIG, **KERNEL)
 def monitor(t, y, p, dydt, out, g, gd):
     """The integrator's last stage of a step: the state derivative (as `rhs`), the outputs
@@ -422,12 +435,7 @@ def monitor(t, y, p, dydt, out, g, gd):
     and the monitored |reaction| (returned), from one evaluation of the model."""
     res = dynamics(t, y, p)
     _derivative(y, p, res, dydt)
-    if out.shape[0] >= N_OUT:
-        for k in range(N_OUT):
-            out[k] = res[k]
-    g[0], gd[0] = switching(p[MEM_START + 0], res[1], res[2])
-    g[1], gd[1] = switching(p[MEM_START + 2], res[6], res[7])
-    return _monitored(res)
+    return _observe(p, res, out, g, gd)
 
 
 @nb.njit(cache=True, error_model="numpy")
@@ -1667,9 +1675,9 @@ def on_event_sens(t, y, p, j):
 def monitor_sens(t, y, p, dydt, out, g, gd):
     """`rhs_sens`, then the plain monitor on the state part; into an `out` longer than
     N_OUT the outputs' derivatives along the directions too (`sens_runtime.sens_monitor`)."""
-    return sens_monitor(_THIS.tangent, _THIS.rhs, _THIS.monitor, t, y, p, dydt, out, g, gd,
-                        N_Q, N_P, N_Z, N_JROWS, ACC_COLUMN, MOMENT_COLUMN, 31,
-                        _MEM_COL0, N_EVENTS, N_OUT)
+    return sens_monitor(_THIS.tangent, _THIS.rhs, _THIS.monitor, _THIS._observe, t, y, p,
+                        dydt, out, g, gd, N_Q, N_P, N_Z, N_JROWS, ACC_COLUMN, MOMENT_COLUMN,
+                        31, _MEM_COL0, N_EVENTS, N_OUT)
 
 
 @nb.njit(cache=True, error_model="numpy", nogil=True)

@@ -410,28 +410,30 @@ def sens_on_event(jacobian, on_event, t, y, p, j, n_q, n_p, nz, n_jrows, mem_sta
 
 
 @nb.njit(**KERNEL, inline="always")
-def sens_monitor(tangent, rhs, monitor, t, y, p, dydt, out, g, gd, n_q, n_p, nz, n_jrows,
-                 acc_row, mom_row, speed, mem_col0, n_joints, n_out):
+def sens_monitor(tangent, rhs, monitor, observe, t, y, p, dydt, out, g, gd, n_q, n_p, nz,
+                 n_jrows, acc_row, mom_row, speed, mem_col0, n_joints, n_out):
     """`sens_rhs`, then the plain model's monitor on the state (outputs into out[:n_out],
     switching functions, the monitored value), its derivative into work space. An `out`
     longer than n_out records derivatives of outputs too, those of the first
     (len(out) - n_out) / nb columns listed after the work space (`pack_sensitivity_
     parameters`'s record columns): out[n_out + i nb + k] that of the i-th along direction
-    k (the tangent's full rows, computed in the same call)."""
+    k; the tangent then computes every row (full), and the monitor's values come from its
+    value column (the model's `observe`) instead of another evaluation of the model."""
     full = out.shape[0] > n_out
     sens_rhs(tangent, rhs, t, y, p, dydt, n_q, n_p, nz, n_jrows, acc_row, mom_row, speed,
              mem_col0, n_joints, full)
     n2 = 2 * n_q
     nb_, _, _, _, w0 = ddm_layout(p, n_p)
     _, _, _, t0, ws = work_offsets(nb_, w0, nz, n_jrows, n_joints)
-    m = monitor(t, y[:n2], p, p[ws:ws + n2], out, g, gd)
-    if full:
-        st = nb_ + 1
-        rec0 = ws + n2 + 1
-        for i in range((out.shape[0] - n_out) // nb_):
-            r = int(p[rec0 + i])
-            for k in range(nb_):
-                out[n_out + i * nb_ + k] = p[t0 + r * st + k]
+    if not full or y.shape[0] <= n2:
+        return monitor(t, y[:n2], p, p[ws:ws + n2], out, g, gd)
+    st = nb_ + 1
+    m = observe(p, p[t0 + nb_:ws:st], out, g, gd)
+    rec0 = ws + n2 + 1
+    for i in range((out.shape[0] - n_out) // nb_):
+        r = int(p[rec0 + i])
+        for k in range(nb_):
+            out[n_out + i * nb_ + k] = p[t0 + r * st + k]
     return m
 
 

@@ -20,7 +20,11 @@ centred start:
   (as speed_reduced.py does for the paper case);
 - why: the ratio of function evaluations (scipy / ours at the rows bracketing our error)
   and the time per function evaluation of each (per-call overhead: scipy calls the
-  compiled right-hand side from Python at every stage).
+  compiled right-hand side from Python at every stage);
+- the ceiling: one call of the compiled right-hand side alone (`rhs_call_ns`: a compiled
+  loop over the recorded states of our run, in their contact modes, median of 5), and
+  scipy's time per evaluation over it: the speed-up an integrator that cost nothing but
+  its right-hand side would reach at scipy's number of evaluations.
 
     python -m validation.benchmarks.case_speed [--case four_bar] [--repeats 3] [--ours dop853:1e-4]
 
@@ -31,6 +35,10 @@ from __future__ import annotations
 
 import argparse
 import json
+import time
+
+import numba as nb
+import numpy as np
 
 from mbs_clearance import peak_base_force, simulate
 from mbs_clearance.cases import CASES
@@ -42,6 +50,38 @@ from .speed_reduced import equal_error_ratio
 
 SCIPY_RTOLS = (1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11)
 REVOLUTION = 4
+
+
+@nb.njit(cache=True)
+def _rhs_loop(rhs, ts, ys, ms, p, mem_start, reps):
+    """reps passes of rhs over the states ys (memories ms) at the times ts."""
+    d = np.empty(ys.shape[1])
+    acc = 0.0
+    for _ in range(reps):
+        for i in range(ts.shape[0]):
+            for k in range(ms.shape[1]):
+                p[mem_start + k] = ms[i, k]
+            rhs(ts[i], ys[i], p, d)
+            acc += d[0]
+    return acc
+
+
+def rhs_call_ns(linkage, **options) -> float:
+    """ns per call of `linkage`'s compiled right-hand side over the recorded states of its
+    run (revolution 1 to REVOLUTION, `options` as simulate's), median of 5 timings."""
+    from mbs_clearance.linkage_model import run
+
+    model, ts, ys, ms, *_, p = run(linkage, REVOLUTION, **options)
+    args = (np.ascontiguousarray(ts), np.ascontiguousarray(ys),
+            np.ascontiguousarray(ms[:, :model.N_MEM]), p.copy(), model.MEM_START)
+    _rhs_loop(model.rhs, *args, 1)
+    reps = max(1, int(2e6 // len(ts)))
+    times = []
+    for _ in range(5):
+        t0 = time.perf_counter()
+        _rhs_loop(model.rhs, *args, reps)
+        times.append((time.perf_counter() - t0) / (reps * len(ts)))
+    return 1e9 * float(np.median(times))
 
 
 def case_speed(name: str, repeats: int, check_reference: bool = False,
@@ -86,6 +126,8 @@ def case_speed(name: str, repeats: int, check_reference: bool = False,
     result["nfev_ratio"] = last[3] / traj.stats["nfev"]
     result["us_per_nfev_scipy"] = 1e6 * last[2] / last[3]
     result["us_per_nfev_ours"] = 1e6 * t_ours / traj.stats["nfev"]
+    result["rhs_ns"] = rhs_call_ns(lk, **ours)
+    result["ceiling"] = 1e3 * result["us_per_nfev_scipy"] / result["rhs_ns"]
     return result
 
 
@@ -132,14 +174,16 @@ def main(argv=None) -> None:
           f"{args.repeats} alternating pairs per scipy row")
     print()
     print("| case | ours: peak error | scipy rtol at/below it (error) | speed-up simulate | "
-          "speed-up peak only | nfev scipy / ours | us per nfev: scipy / ours |")
-    print("|---|---|---|---|---|---|---|")
+          "speed-up peak only | nfev scipy / ours | us per nfev: scipy / ours | rhs call "
+          "alone | ceiling (scipy per nfev / rhs call) |")
+    print("|---|---|---|---|---|---|---|---|---|")
     for r in results:
         rtol, err = r["rows"][-1][0], r["rows"][-1][1]
         print(f"| {r['case']} | {r['ours_error']:.1e} | {rtol:g} ({err:.1e}) | "
               f"{_fmt(r['ratio_simulate'], '.0f')} x | {_fmt(r['ratio_peak'], '.0f')} x | "
               f"{r['nfev_ratio']:.2f} | {r['us_per_nfev_scipy']:.1f} / "
-              f"{r['us_per_nfev_ours']:.3f} |")
+              f"{r['us_per_nfev_ours']:.3f} | {r['rhs_ns']:.0f} ns | "
+              f"{r['ceiling']:.0f} x |")
     if args.json:
         with open(args.json, "w") as fh:
             json.dump(results, fh, indent=1, default=float)
