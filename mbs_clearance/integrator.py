@@ -42,7 +42,8 @@ memory is set at the landed state, never at the first state found inside the wal
 `_switch` (on_event for that joint and for every other joint on its surface there: two
 events in one step are two steps), `_track_crests` and, at a window's close,
 `_refine_window`. The integration also lands exactly on the window edges, and the maximum
-of ``monitor`` in each window is refined by golden-section search on re-taken steps: inside
+of ``monitor`` in each window is refined by golden-section search on re-taken steps (of the
+state the monitor reads, y[:n_dense]): inside
 the steps on both sides of each of the window's best ``n_crests`` crests (local maxima of
 the sampled monitor: two crests within the integration accuracy of each other are both
 refined) and inside the window's first and last steps.
@@ -289,9 +290,10 @@ class IntegratorSettings(NamedTuple):
     refine_iters: int
     #: outputs written by monitor, recorded
     n_out: int
-    #: the event functions read only y[:n_dense]: the continuous extension is formed for
-    #: those components only, and its extra stages (DOP853) call `rhs` with the truncated
-    #: state y[:n_dense] (the model must give those derivatives then)
+    #: the event functions and the monitor read only y[:n_dense]: the continuous extension
+    #: is formed for those components only, its extra stages (DOP853) and the peak
+    #: refinement's steps call `rhs` and `monitor` with the truncated state y[:n_dense] (the
+    #: model must give those derivatives then)
     n_dense: int
     #: J, the number of switching functions
     n_events: int

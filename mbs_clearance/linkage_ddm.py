@@ -324,12 +324,8 @@ class DdmRun(NamedTuple):
 
 
 def _combine_directions(a: np.ndarray, coeffs: np.ndarray) -> np.ndarray:
-    """a (..., nb) @ coeffs (nb, npar) as one matrix product (numpy's stacked matmul of a
-    3-d array runs one small product per leading index); a 3-d a by `_combine_rows`."""
-    if a.ndim == 3:
-        return _combine_rows(a, *_sparse_columns(coeffs))
-    out = np.ascontiguousarray(a).reshape(-1, a.shape[-1]) @ coeffs
-    return out.reshape(*a.shape[:-1], coeffs.shape[1])
+    """a (n, m, nb) @ coeffs (nb, npar): (n, m, npar) (`_combine_rows`)."""
+    return _combine_rows(a, *_sparse_columns(coeffs))
 
 
 def _sparse_columns(coeffs):
@@ -448,6 +444,10 @@ def ddm_run(linkage: Linkage, model, p0, y_state, directions, *, scale, rtol, at
     (`DdmRun.recorded_output_sensitivities`)."""
     if derivatives is True:
         derivatives = model.OUT_COLUMNS
+    unknown = [c for c in derivatives or () if c not in model.OUT_COLUMNS]
+    if unknown:
+        raise ValueError(f"derivatives: unknown output(s) {unknown}; the outputs of linkage "
+                         f"{linkage.name!r} are {list(model.OUT_COLUMNS)}")
     columns = tuple(model.OUT_COLUMNS.index(c) for c in derivatives) \
         if derivatives and record else ()
     y0, p, atol, coeffs = setup(linkage, model, p0, y_state, directions, scale,
@@ -568,8 +568,9 @@ def linkage_sensitivities(linkage: Linkage, names: tuple[str, ...], revolutions:
                                peaks, vals)
     ref = np.array([linkage.parameter_value(n) for n in names])
     fields = _fields(model, ts, names, ref, ders, traj, growth, run.stats)
+    sens = run.state_sensitivities(ys)
     for i, cname in enumerate(model.COORDINATES):
-        fields["outputs"][cname] = run.state_sensitivities(ys)[:, :, i]
+        fields["outputs"][cname] = sens[:, :, i]
     return fields
 
 

@@ -199,3 +199,6 @@ def test_recorded_derivatives_equal_a_second_pass_and_the_growth_its_loop():
     plain, _ = slider_crank_run(mech, DEFAULT_PARAMETERS, None, revolutions=1)
     with pytest.raises(ValueError, match="derivatives=True"):
         plain.recorded_output_sensitivities()
+    with pytest.raises(ValueError, match=r"unknown output\(s\) \['crank_pivot.torque'\]"):
+        slider_crank_run(mech, DEFAULT_PARAMETERS, None, revolutions=1,
+                         derivatives=["crank_pivot.torque"])
