@@ -311,15 +311,14 @@ class DdmRun(NamedTuple):
             self.ts, _weighted_norms2(s, *_sparse_columns(self.coeffs), weights), period,
             revolutions)
 
-    def output_sensitivities(self, ts, ys, ms, columns=None):
+    def output_sensitivities(self, ts, ys, ms):
         """Values (n, N_OUT) and derivatives (n, N_OUT, npar) of the model's outputs along
-        the requested directions at times ts, sensitivity states ys and memories ms; with
-        `columns` (indices of OUT_COLUMNS) only those derivatives (n, len(columns), npar)."""
+        the requested directions at times ts, sensitivity states ys and memories ms (a
+        second pass of the tangent: for states between the recorded steps; at the recorded
+        steps `recorded_output_sensitivities` has them)."""
         vals, ders = self.model.output_sensitivities(
             np.ascontiguousarray(ts), np.ascontiguousarray(ys),
             np.ascontiguousarray(ms[:, :self.model.N_MEM]), self.p)
-        if columns is not None:
-            ders = ders[:, columns, :]
         return vals, _combine_directions(ders, self.coeffs)
 
 
