@@ -41,6 +41,7 @@ from .linkage_model import (
     initial_state,
     load_model,
     pack_parameters,
+    specialisable,
     trajectory_from_run,
 )
 
@@ -441,6 +442,12 @@ def ddm_run(linkage: Linkage, model, p0, y_state, directions, *, scale, rtol, at
     every output; or a sequence of names in OUT_COLUMNS) and `record` the derivatives of
     those outputs are computed with every step and recorded
     (`DdmRun.recorded_output_sensitivities`)."""
+    zeros = set(getattr(model, "ZERO_PARAMETERS", ()))
+    along = sorted({n for d in directions for n, v in d.items() if v != 0.0 and n in zeros})
+    if along:
+        raise ValueError(f"directions along {along}: the model {model.__name__} is "
+                         "specialised on them being zero (no derivatives along them); use "
+                         "load_model(linkage, specialise=False)")
     if derivatives is True:
         derivatives = model.OUT_COLUMNS
     unknown = [c for c in derivatives or () if c not in model.OUT_COLUMNS]
@@ -523,12 +530,13 @@ def landed(ts, t_eval):
     return idx
 
 
-def plain_setup(linkage: Linkage, rtol: float | None, start=None):
-    """What a DDM run of `linkage` starts from, as its plain run: the generated model, the
+def plain_setup(linkage: Linkage, rtol: float | None, start=None, specialise: bool = True):
+    """What a DDM run of `linkage` starts from, as its plain run: the generated model
+    (`specialise`: the one specialised on its zero-valued geometric parameters), the
     parameter vector, the centred initial state (or `start`'s, a `linkage_model.Start`,
     with its memories in p0) and the plain run's tolerances (rtol, atol with the switching
     functions'). Returns (model, p0, y_state, rtol, atol)."""
-    model = load_model(linkage)
+    model = load_model(linkage, specialise)
     rtol, atol = _tolerances(linkage, model, rtol, None)
     p0 = pack_parameters(linkage, model)
     if start is None:
@@ -543,7 +551,8 @@ def linkage_sensitivities(linkage: Linkage, names: tuple[str, ...], revolutions:
     """DDM of `linkage` (see the module docstring): (Sensitivities fields as a dict). From
     `start` (a `linkage_model.Start`) the start is held fixed: the sensitivities start at
     zero."""
-    model, p0, y_state, rtol, atol_plain = plain_setup(linkage, rtol, start)
+    model, p0, y_state, rtol, atol_plain = plain_setup(linkage, rtol, start,
+                                                       specialisable(linkage, names))
     ref = np.array([linkage.parameter_value(n) for n in names])
     # each parameter's natural scale (as the finite differences' steps: a radius enters
     # through the clearance): the sensitivities' absolute tolerances are the state's / it
@@ -626,10 +635,10 @@ def fd_step(linkage: Linkage, name: str, relative: float) -> float:
     return relative * (9.81 if name == "gravity" else 1.0)
 
 
-def _plain_at(linkage, revolutions, t_eval, rtol, method, start=None):
+def _plain_at(linkage, revolutions, t_eval, rtol, method, start=None, specialise=True):
     """Outputs (len(t_eval), N_OUT) and states of a plain run landing on t_eval (from the
-    centred start or `start`)."""
-    model, p, y0, rtol, atol = plain_setup(linkage, rtol, start)
+    centred start or `start`; `specialise`: as `plain_setup`)."""
+    model, p, y0, rtol, atol = plain_setup(linkage, rtol, start, specialise)
     edges = _edges(linkage, revolutions, t_eval)
     ts, ys, ms, _, _, outs, stats = _run(linkage, model, y0, p, edges, rtol, method,
                                          2 * model.N_Q, atol, kernel="integrate_model",
@@ -641,13 +650,17 @@ def _plain_at(linkage, revolutions, t_eval, rtol, method, start=None):
 def linkage_fd(linkage: Linkage, names: tuple[str, ...], revolutions: int, rtol, t_eval,
                relative: float, method: str, start=None):
     """Central finite differences of the outputs (and coordinates) at the times t_eval
-    (default: 720 per revolution), each run landing on them (from `start` if given)."""
-    model = load_model(linkage)
+    (default: 720 per revolution), each run landing on them (from `start` if given). Every
+    run takes one model: the general one if a zero-valued geometric parameter is among
+    `names` (its steps leave zero), else the one specialised on them."""
+    spec = specialisable(linkage, names)
+    model = load_model(linkage, spec)
     if t_eval is None:
         t_eval = np.linspace(0.0, revolutions * linkage.period, 720 * revolutions + 1)
     rtol = 1e-11 if rtol is None else rtol
     t0 = time.perf_counter()
-    ts, ys, ms, outs, p, stats = _plain_at(linkage, revolutions, t_eval, rtol, method, start)
+    ts, ys, ms, outs, p, stats = _plain_at(linkage, revolutions, t_eval, rtol, method, start,
+                                           spec)
     steps = [fd_step(linkage, n, relative) for n in names]
     ders = np.empty((len(ts), model.N_OUT, len(names)))
     coords = np.empty((len(ts), model.N_Q, len(names)))
@@ -661,7 +674,7 @@ def linkage_fd(linkage: Linkage, names: tuple[str, ...], revolutions: int, rtol,
                 raise ValueError(f"the finite-difference step of {name} ({h:.3g}) leaves its "
                                  f"valid range: {exc}; pass a smaller fd_relative_step"
                                  ) from exc
-            runs.append(_plain_at(lk, revolutions, t_eval, rtol, method, start))
+            runs.append(_plain_at(lk, revolutions, t_eval, rtol, method, start, spec))
         ders[:, :, k] = (runs[0][3][:, :model.N_OUT] - runs[1][3][:, :model.N_OUT]) / (2 * h)
         coords[:, :, k] = (runs[0][1][:, :model.N_Q] - runs[1][1][:, :model.N_Q]) / (2 * h)
     stats.update(fd_steps=steps, runs=2 * len(names) + 1,

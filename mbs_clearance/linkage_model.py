@@ -19,12 +19,21 @@ from .linkage import GROUND, Linkage
 __all__ = ["parameter_values", "pack_parameters", "initial_state", "Start", "settled_start"]
 
 
-def load_model(linkage: Linkage):
+def load_model(linkage: Linkage, specialise: bool = True):
     """`generate.load_model` (imported on first use: the generator imports sympy, which a
-    run of a checked-in model does not need)."""
+    run of a checked-in model does not need): the module specialised on `linkage`'s
+    zero-valued geometric parameters, or (`specialise=False`) the general one."""
     from .generate import load_model as load
 
-    return load(linkage)
+    return load(linkage, specialise)
+
+
+def specialisable(linkage: Linkage, names) -> bool:
+    """Whether runs differentiated along the parameters `names` (dotted) may use the model
+    specialised on `linkage`'s zero-valued geometric parameters: none of them is one."""
+    from .generate.derive import geometric_zeros
+
+    return not set(names) & set(geometric_zeros(linkage))
 
 
 def parameter_values(linkage: Linkage) -> dict[str, float]:
@@ -70,6 +79,11 @@ def pack_parameters(linkage: Linkage, model=None) -> np.ndarray:
     p = np.zeros(model.N_P)
     for i, name in enumerate(model.PARAMETERS):
         p[i] = values[name]
+    for name in getattr(model, "ZERO_PARAMETERS", ()):
+        if values[name] != 0.0:
+            raise ValueError(f"{name} = {values[name]!r}: the model module {model.__name__} "
+                             "is specialised on it being 0; load the general one "
+                             "(load_model(linkage, specialise=False))")
     model.prepare(p)
     return p
 

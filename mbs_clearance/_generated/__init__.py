@@ -2,8 +2,8 @@
 tools/generate_models.py; do not edit). MODULES maps a structure digest to a module name."""
 
 MODULES: dict[str, str] = {
-    '1ebba2c9fe3079d0da0e795e787a4f875de9f1c726085904bb782678ccd83453': 'paper_slider_crank',
-    'dd3c934a2d49e128e440a6affa2f58a4d8ba89e717116ce90987224795928fca': 'slider_crank_two_clearances',
-    '397b5eb247db4e1455a05273ea7026fae732a6396d5f977cc873ef0a4cc37411': 'four_bar',
-    'd1fd701e717e2014bd9279feb2bae3fcedfde8492ab9c510599811910066a840': 'paper_slider_crank_friction',
+    '811aaa063d9be7576c48ffb376ffe20c2bfd5780c4b186f2753e14dff11acbe4': 'paper_slider_crank',
+    'b7dbc99113b46f74005035655a8ae114a47d50fd3049a3ceadba8be31ce0c6c6': 'slider_crank_two_clearances',
+    '9bd8b05020b57494f535322ed528cbdacaf1e3c953cb27a5deffc4999a6accf1': 'four_bar',
+    '4c46a44d05d7abb1aed6b7e41cf94d9b31cf85619a01509fdf43a2b0db069429': 'paper_slider_crank_friction',
 }

@@ -31,9 +31,9 @@ from mbs_clearance.generate.runtime import (
 )
 
 LINKAGE = "four_bar"
-STRUCTURE = "{\"bodies\": [[\"crank\", [\"pin\", \"pivot\"]], [\"coupler\", [\"crank_end\", \"rocker_end\"]], [\"rocker\", [\"pin\", \"pivot\"]]], \"clearance_joints\": [[\"coupler_rocker\", \"rocker\", \"pin\", \"coupler\", \"rocker_end\"]], \"drive\": \"crank_pivot\", \"ground_points\": [\"crank_pivot\", \"rocker_pivot\"], \"joints\": [[\"revolute\", \"crank_pivot\", \"ground\", \"crank_pivot\", \"crank\", \"pivot\"], [\"revolute\", \"crank_coupler\", \"crank\", \"pin\", \"coupler\", \"crank_end\"], [\"revolute\", \"rocker_pivot\", \"ground\", \"rocker_pivot\", \"rocker\", \"pivot\"]], \"monitor_joint\": null}"
-STRUCTURE_DIGEST = "397b5eb247db4e1455a05273ea7026fae732a6396d5f977cc873ef0a4cc37411"
-GENERATOR_VERSION = "302c28485455de7f"
+STRUCTURE = "{\"bodies\": [[\"crank\", [\"pin\", \"pivot\"]], [\"coupler\", [\"crank_end\", \"rocker_end\"]], [\"rocker\", [\"pin\", \"pivot\"]]], \"clearance_joints\": [[\"coupler_rocker\", \"rocker\", \"pin\", \"coupler\", \"rocker_end\"]], \"drive\": \"crank_pivot\", \"ground_points\": [\"crank_pivot\", \"rocker_pivot\"], \"joints\": [[\"revolute\", \"crank_pivot\", \"ground\", \"crank_pivot\", \"crank\", \"pivot\"], [\"revolute\", \"crank_coupler\", \"crank\", \"pin\", \"coupler\", \"crank_end\"], [\"revolute\", \"rocker_pivot\", \"ground\", \"rocker_pivot\", \"rocker\", \"pivot\"]], \"monitor_joint\": null, \"zero_parameters\": [\"crank.pivot.y\", \"crank.pin.y\", \"coupler.crank_end.y\", \"coupler.rocker_end.y\", \"rocker.pivot.y\", \"rocker.pin.y\", \"ground.crank_pivot.x\", \"ground.crank_pivot.y\", \"ground.rocker_pivot.y\"]}"
+STRUCTURE_DIGEST = "9bd8b05020b57494f535322ed528cbdacaf1e3c953cb27a5deffc4999a6accf1"
+GENERATOR_VERSION = "0b9e999437c58796"
 
 #: dotted names of the entries of p (without the constants)
 PARAMETERS = (
@@ -70,6 +70,10 @@ PARAMETERS = (
     "coupler_rocker.mode",
     "coupler_rocker.impact_velocity",
 )
+#: the parameters this module is specialised on: exactly zero (their terms are not in the
+#: kernels; their entries of p stay, checked by `prepare` and `integrate_model`)
+ZERO_PARAMETERS = ("crank.pivot.y", "crank.pin.y", "coupler.crank_end.y", "coupler.rocker_end.y", "rocker.pivot.y", "rocker.pin.y", "ground.crank_pivot.x", "ground.crank_pivot.y", "ground.rocker_pivot.y", )
+ZERO_INDEX = np.array([3, 5, 9, 11, 15, 17, 18, 19, 21], dtype=np.int64)
 COORDINATES = ("coupler.angle", "rocker.angle", )
 N_Q = 2
 #: the clearance joints with friction (their tangential force is in the model)
@@ -87,7 +91,7 @@ GROUND_JOINTS = ("crank_pivot", "rocker_pivot", )
 #: the ground joint whose |reaction| is monitored (None: the shaking force)
 MONITOR_JOINT = None
 CONST_START = len(PARAMETERS)
-N_CONSTANTS = 106
+N_CONSTANTS = 61
 N_P = CONST_START + N_CONSTANTS
 #: columns of `outputs` (and of the monitor's out)
 OUT_COLUMNS = (
@@ -112,195 +116,127 @@ MONITOR_COLUMN = 9
 MOMENT_COLUMN = 11
 ACC_COLUMN = 12
 _THIS = sys.modules[__name__]
+ZERO_MESSAGE = ("a parameter of ZERO_PARAMETERS is not zero: this model is specialised on "
+                "them; load the general one (load_model(linkage, specialise=False))")
+
+
+@nb.njit(**KERNEL)
+def _zeros_hold(p):
+    for i in ZERO_INDEX:
+        if p[i] != 0.0:
+            return False
+    return True
 
 
 @nb.njit(**KERNEL)
 def prepare(p):
     """The parameter-only constants into p[CONST_START:]."""
+    if not _zeros_hold(p):
+        raise ValueError(ZERO_MESSAGE)
     crank__mass = p[0]  # crank.mass
     crank__inertia = p[1]  # crank.inertia
     crank__pivot__x = p[2]  # crank.pivot.x
-    crank__pivot__y = p[3]  # crank.pivot.y
     crank__pin__x = p[4]  # crank.pin.x
-    crank__pin__y = p[5]  # crank.pin.y
     coupler__mass = p[6]  # coupler.mass
     coupler__inertia = p[7]  # coupler.inertia
     coupler__crank_end__x = p[8]  # coupler.crank_end.x
-    coupler__crank_end__y = p[9]  # coupler.crank_end.y
     coupler__rocker_end__x = p[10]  # coupler.rocker_end.x
-    coupler__rocker_end__y = p[11]  # coupler.rocker_end.y
     rocker__mass = p[12]  # rocker.mass
     rocker__inertia = p[13]  # rocker.inertia
     rocker__pivot__x = p[14]  # rocker.pivot.x
-    rocker__pivot__y = p[15]  # rocker.pivot.y
     rocker__pin__x = p[16]  # rocker.pin.x
-    rocker__pin__y = p[17]  # rocker.pin.y
-    ground__crank_pivot__x = p[18]  # ground.crank_pivot.x
-    ground__crank_pivot__y = p[19]  # ground.crank_pivot.y
-    ground__rocker_pivot__x = p[20]  # ground.rocker_pivot.x
-    ground__rocker_pivot__y = p[21]  # ground.rocker_pivot.y
     drive__speed = p[27]  # drive.speed
     gravity = p[29]  # gravity
-    x0 = crank__pin__y - crank__pivot__y
-    x1 = crank__pin__x - crank__pivot__x
-    x2 = drive__speed*x1
-    x3 = drive__speed*x0
-    x4 = (coupler__crank_end__x * coupler__crank_end__x)
-    x5 = (coupler__crank_end__y * coupler__crank_end__y)
-    x6 = coupler__inertia + coupler__mass*x4 + coupler__mass*x5
-    x7 = (rocker__pivot__x * rocker__pivot__x)
-    x8 = (rocker__pivot__y * rocker__pivot__y)
-    x9 = rocker__inertia + rocker__mass*x7 + rocker__mass*x8
-    x10 = (drive__speed * drive__speed)
-    x11 = coupler__crank_end__x*crank__pin__y - coupler__crank_end__x*crank__pivot__y - coupler__crank_end__y*crank__pin__x + coupler__crank_end__y*crank__pivot__x
-    x12 = coupler__mass*x11
-    x13 = x10*x12
-    x14 = coupler__crank_end__x*crank__pin__x - coupler__crank_end__x*crank__pivot__x + coupler__crank_end__y*crank__pin__y - coupler__crank_end__y*crank__pivot__y
-    x15 = coupler__mass*x14
-    x16 = x10*x15
-    x17 = coupler__crank_end__y*coupler__mass
-    x18 = coupler__crank_end__x*coupler__mass
-    x19 = rocker__mass*rocker__pivot__y
-    x20 = rocker__mass*rocker__pivot__x
-    x21 = coupler__mass*crank__pivot__y
-    x22 = -coupler__mass*crank__pin__y + crank__mass*crank__pivot__y + x21
-    x23 = x10*x22
-    x24 = coupler__mass*crank__pivot__x
-    x25 = -coupler__mass*crank__pin__x + crank__mass*crank__pivot__x + x24
-    x26 = x10*x25
-    x27 = coupler__mass + crank__mass
-    x28 = gravity*rocker__mass
-    x29 = gravity*x22
-    x30 = gravity*x25
-    x31 = drive__speed*x15
-    x32 = drive__speed*x12
-    x33 = (0.5)*x10
-    x34 = coupler__mass*gravity
-    x35 = coupler__mass*x10
-    x36 = (0.5)*x35
-    x37 = (crank__pivot__x * crank__pivot__x)
-    x38 = (crank__pivot__y * crank__pivot__y)
-    x39 = crank__mass*x33
-    x40 = x0*x10
-    x41 = x1*x10
-    x42 = (drive__speed * drive__speed * drive__speed)
-    x43 = x12*x42
-    x44 = x10*x14
-    x45 = coupler__mass*x40
-    x46 = coupler__mass*x41
-    x47 = 2.0*x31
-    x48 = x25*x42
-    x49 = 2.0*drive__speed
-    x50 = x22*x49
-    x51 = 2.0*x15
-    x52 = coupler__mass*x0
-    x53 = coupler__mass*x1
-    p[CONST_START + 0] = x0
-    p[CONST_START + 1] = -x1
-    p[CONST_START + 2] = -coupler__crank_end__y + coupler__rocker_end__y
-    p[CONST_START + 3] = coupler__crank_end__x - coupler__rocker_end__x
-    p[CONST_START + 4] = -rocker__pin__y + rocker__pivot__y
-    p[CONST_START + 5] = rocker__pin__x - rocker__pivot__x
-    p[CONST_START + 6] = -ground__crank_pivot__x + ground__rocker_pivot__x
-    p[CONST_START + 7] = -ground__crank_pivot__y + ground__rocker_pivot__y
-    p[CONST_START + 8] = x2
-    p[CONST_START + 9] = x3
-    p[CONST_START + 10] = -x2
-    p[CONST_START + 11] = x6
-    p[CONST_START + 12] = x9
+    x0 = crank__pin__x - crank__pivot__x
+    x1 = drive__speed*x0
+    x2 = (coupler__crank_end__x * coupler__crank_end__x)
+    x3 = coupler__inertia + coupler__mass*x2
+    x4 = (rocker__pivot__x * rocker__pivot__x)
+    x5 = rocker__inertia + rocker__mass*x4
+    x6 = coupler__crank_end__x*coupler__mass
+    x7 = (drive__speed * drive__speed)
+    x8 = x0*x7
+    x9 = x6*x8
+    x10 = rocker__mass*rocker__pivot__x
+    x11 = coupler__mass*crank__pivot__x
+    x12 = -coupler__mass*crank__pin__x + crank__mass*crank__pivot__x + x11
+    x13 = x12*x7
+    x14 = coupler__mass + crank__mass
+    x15 = x0*x6
+    x16 = gravity*x12
+    x17 = x1*x6
+    x18 = (0.5)*coupler__mass
+    x19 = (crank__pivot__x * crank__pivot__x)
+    x20 = (drive__speed * drive__speed * drive__speed)
+    x21 = coupler__crank_end__x*x8
+    x22 = coupler__mass*x8
+    x23 = 2.0*x6
+    x24 = x1*x23
+    x25 = x12*x20
+    x26 = 2.0*x15
+    x27 = coupler__crank_end__x*x0
+    x28 = coupler__mass*x0
+    p[CONST_START + 0] = -x0
+    p[CONST_START + 1] = coupler__crank_end__x - coupler__rocker_end__x
+    p[CONST_START + 2] = rocker__pin__x - rocker__pivot__x
+    p[CONST_START + 3] = x1
+    p[CONST_START + 4] = -x1
+    p[CONST_START + 5] = x3
+    p[CONST_START + 6] = x5
+    p[CONST_START + 7] = -x9
+    p[CONST_START + 8] = x9
+    p[CONST_START + 9] = gravity*x6
+    p[CONST_START + 10] = gravity*x10
+    p[CONST_START + 11] = (1.0 / x3)
+    p[CONST_START + 12] = (1.0 / x5)
     p[CONST_START + 13] = -x13
-    p[CONST_START + 14] = -x16
-    p[CONST_START + 15] = x16
-    p[CONST_START + 16] = -gravity*x17
-    p[CONST_START + 17] = gravity*x18
-    p[CONST_START + 18] = -gravity*x19
-    p[CONST_START + 19] = gravity*x20
-    p[CONST_START + 20] = (1.0 / x6)
-    p[CONST_START + 21] = (1.0 / x9)
-    p[CONST_START + 22] = x23
-    p[CONST_START + 23] = -x26
-    p[CONST_START + 24] = x17
-    p[CONST_START + 25] = -x18
-    p[CONST_START + 26] = -x23
-    p[CONST_START + 27] = -gravity*x27
-    p[CONST_START + 28] = x19
-    p[CONST_START + 29] = -x20
-    p[CONST_START + 30] = -x28
-    p[CONST_START + 31] = -x12
-    p[CONST_START + 32] = -x15
-    p[CONST_START + 33] = x12
-    p[CONST_START + 34] = x29
-    p[CONST_START + 35] = x15
-    p[CONST_START + 36] = -x30
-    p[CONST_START + 37] = -x31
-    p[CONST_START + 38] = x32
-    p[CONST_START + 39] = -x32
-    p[CONST_START + 40] = -x29
-    p[CONST_START + 41] = (0.5)*x6
-    p[CONST_START + 42] = (0.5)*x9
-    p[CONST_START + 43] = crank__inertia*x33 + crank__mass*gravity*ground__crank_pivot__y + (crank__pin__x * crank__pin__x)*x36 - crank__pin__x*x10*x24 + (crank__pin__y * crank__pin__y)*x36 - crank__pin__y*x10*x21 + ground__crank_pivot__y*x34 + ground__rocker_pivot__y*x28 + x36*x37 + x36*x38 + x37*x39 + x38*x39
-    p[CONST_START + 44] = -x40
-    p[CONST_START + 45] = x41
-    p[CONST_START + 46] = -x3
-    p[CONST_START + 47] = x40
-    p[CONST_START + 48] = x15*x42
-    p[CONST_START + 49] = -x43
-    p[CONST_START + 50] = x43
-    p[CONST_START + 51] = x13
-    p[CONST_START + 52] = x10*x17
-    p[CONST_START + 53] = -x10*x18
-    p[CONST_START + 54] = x10*x11
-    p[CONST_START + 55] = x44
-    p[CONST_START + 56] = -x44
-    p[CONST_START + 57] = coupler__crank_end__y*gravity
-    p[CONST_START + 58] = -coupler__crank_end__x*gravity
-    p[CONST_START + 59] = x4 + x5
-    p[CONST_START + 60] = x45
-    p[CONST_START + 61] = x46
-    p[CONST_START + 62] = -x46
-    p[CONST_START + 63] = -x34
-    p[CONST_START + 64] = 2.0*x18
-    p[CONST_START + 65] = -x45
-    p[CONST_START + 66] = 2.0*x17
-    p[CONST_START + 67] = 2.0*x32
-    p[CONST_START + 68] = x47
-    p[CONST_START + 69] = -x47
-    p[CONST_START + 70] = gravity*rocker__pivot__y
-    p[CONST_START + 71] = -gravity*rocker__pivot__x
-    p[CONST_START + 72] = x7 + x8
-    p[CONST_START + 73] = 2.0*x20
-    p[CONST_START + 74] = 2.0*x19
-    p[CONST_START + 75] = x48
-    p[CONST_START + 76] = x22*x42
-    p[CONST_START + 77] = crank__pivot__y*x10
-    p[CONST_START + 78] = -crank__pivot__x*x10
-    p[CONST_START + 79] = -x10*x27
-    p[CONST_START + 80] = x35
-    p[CONST_START + 81] = x26
-    p[CONST_START + 82] = x50
-    p[CONST_START + 83] = -x25*x49
-    p[CONST_START + 84] = -x48
-    p[CONST_START + 85] = -x50
-    p[CONST_START + 86] = -x27
-    p[CONST_START + 87] = x31
-    p[CONST_START + 88] = drive__speed*x30
-    p[CONST_START + 89] = drive__speed*x29
-    p[CONST_START + 90] = -2.0*x12
-    p[CONST_START + 91] = -x51
-    p[CONST_START + 92] = x51
-    p[CONST_START + 93] = crank__pivot__y*gravity
-    p[CONST_START + 94] = -crank__pivot__x*gravity
-    p[CONST_START + 95] = -x11
-    p[CONST_START + 96] = -x14
-    p[CONST_START + 97] = -gravity*x0
-    p[CONST_START + 98] = gravity*x1
-    p[CONST_START + 99] = -x52
-    p[CONST_START + 100] = -x53
-    p[CONST_START + 101] = x52
-    p[CONST_START + 102] = x53
-    p[CONST_START + 103] = x30
-    p[CONST_START + 104] = x22
-    p[CONST_START + 105] = -x25
+    p[CONST_START + 14] = -x6
+    p[CONST_START + 15] = -gravity*x14
+    p[CONST_START + 16] = -x10
+    p[CONST_START + 17] = -gravity*rocker__mass
+    p[CONST_START + 18] = -x15
+    p[CONST_START + 19] = x15
+    p[CONST_START + 20] = -x16
+    p[CONST_START + 21] = -x17
+    p[CONST_START + 22] = (0.5)*x3
+    p[CONST_START + 23] = (0.5)*x5
+    p[CONST_START + 24] = x7*((0.5)*crank__inertia + (0.5)*crank__mass*x19 + (crank__pin__x * crank__pin__x)*x18 - crank__pin__x*x11 + x18*x19)
+    p[CONST_START + 25] = x8
+    p[CONST_START + 26] = x15*x20
+    p[CONST_START + 27] = -x6*x7
+    p[CONST_START + 28] = x21
+    p[CONST_START + 29] = -x21
+    p[CONST_START + 30] = -coupler__crank_end__x*gravity
+    p[CONST_START + 31] = x2
+    p[CONST_START + 32] = x22
+    p[CONST_START + 33] = -x22
+    p[CONST_START + 34] = -coupler__mass*gravity
+    p[CONST_START + 35] = x23
+    p[CONST_START + 36] = x24
+    p[CONST_START + 37] = -x24
+    p[CONST_START + 38] = -gravity*rocker__pivot__x
+    p[CONST_START + 39] = x4
+    p[CONST_START + 40] = 2.0*x10
+    p[CONST_START + 41] = x25
+    p[CONST_START + 42] = -crank__pivot__x*x7
+    p[CONST_START + 43] = -x14*x7
+    p[CONST_START + 44] = coupler__mass*x7
+    p[CONST_START + 45] = x13
+    p[CONST_START + 46] = -2.0*drive__speed*x12
+    p[CONST_START + 47] = -x25
+    p[CONST_START + 48] = -x14
+    p[CONST_START + 49] = x17
+    p[CONST_START + 50] = drive__speed*x16
+    p[CONST_START + 51] = -x26
+    p[CONST_START + 52] = x26
+    p[CONST_START + 53] = -crank__pivot__x*gravity
+    p[CONST_START + 54] = -x27
+    p[CONST_START + 55] = x27
+    p[CONST_START + 56] = gravity*x0
+    p[CONST_START + 57] = -x28
+    p[CONST_START + 58] = x28
+    p[CONST_START + 59] = x16
+    p[CONST_START + 60] = -x12
     return
 
 
@@ -310,6 +246,7 @@ def dynamics(t, y, p):
     joint the contact force, penetration, its rate and the eccentricity (journal centre minus
     bearing centre); the ground reactions (forces on the ground); the shaking force; the drive
     moment; the accelerations (the mass matrix solved)."""
+    ground__rocker_pivot__x = p[20]  # ground.rocker_pivot.x
     drive__speed = p[27]  # drive.speed
     drive__initial_angle = p[28]  # drive.initial_angle
     k0 = p[CONST_START + 0]
@@ -317,12 +254,12 @@ def dynamics(t, y, p):
     k2 = p[CONST_START + 2]
     k3 = p[CONST_START + 3]
     k4 = p[CONST_START + 4]
-    k5 = p[CONST_START + 5]
-    k6 = p[CONST_START + 6]
     k7 = p[CONST_START + 7]
     k8 = p[CONST_START + 8]
     k9 = p[CONST_START + 9]
     k10 = p[CONST_START + 10]
+    k11 = p[CONST_START + 11]
+    k12 = p[CONST_START + 12]
     k13 = p[CONST_START + 13]
     k14 = p[CONST_START + 14]
     k15 = p[CONST_START + 15]
@@ -331,22 +268,6 @@ def dynamics(t, y, p):
     k18 = p[CONST_START + 18]
     k19 = p[CONST_START + 19]
     k20 = p[CONST_START + 20]
-    k21 = p[CONST_START + 21]
-    k22 = p[CONST_START + 22]
-    k23 = p[CONST_START + 23]
-    k24 = p[CONST_START + 24]
-    k25 = p[CONST_START + 25]
-    k26 = p[CONST_START + 26]
-    k27 = p[CONST_START + 27]
-    k28 = p[CONST_START + 28]
-    k29 = p[CONST_START + 29]
-    k30 = p[CONST_START + 30]
-    k31 = p[CONST_START + 31]
-    k32 = p[CONST_START + 32]
-    k33 = p[CONST_START + 33]
-    k34 = p[CONST_START + 34]
-    k35 = p[CONST_START + 35]
-    k36 = p[CONST_START + 36]
     Q0 = y[0]
     Q1 = y[1]
     U0 = y[2]
@@ -354,43 +275,30 @@ def dynamics(t, y, p):
     S0, C0 = sincos(drive__initial_angle + drive__speed*t)
     S1, C1 = sincos(Q0)
     S2, C2 = sincos(Q1)
-    x0 = C1*k3
-    x1 = C2*k5
-    x2 = S1*k2
-    x3 = S2*k4
-    x4 = S1*k3
-    x5 = S2*k5
-    x6 = C1*k2
-    x7 = C2*k4
-    ex0 = C0*k1 + S0*k0 + k6 + x0 + x1 + x2 + x3
-    ey0 = -C0*k0 + S0*k1 + k7 + x4 + x5 - x6 - x7
-    exd0 = C0*k9 + S0*k8 - U0*x4 + U0*x6 - U1*x5 + U1*x7
-    eyd0 = C0*k10 + S0*k9 + U0*x0 + U0*x2 + U1*x1 + U1*x3
+    x0 = C1*k1
+    x1 = C2*k2
+    x2 = S1*k1
+    x3 = S2*k2
+    ex0 = C0*k0 + ground__rocker_pivot__x + x0 + x1
+    ey0 = S0*k0 + x2 + x3
+    exd0 = S0*k3 - U0*x2 - U1*x3
+    eyd0 = C0*k4 + U0*x0 + U1*x1
     F0, d0, dd0, FX0, FY0 = contact_stage(ex0, ey0, exd0, eyd0, p[22], p[30], p[31], p[23], p[24], p[25])
-    f0 = C0*C1*k13 + C0*S1*k15 - C1*FX0*k2 - C1*FY0*k3 + C1*S0*k14 + C1*k17 + FX0*S1*k3 - FY0*S1*k2 + S0*S1*k13 + S1*k16
-    f1 = -C2*FX0*k4 - C2*FY0*k5 + C2*k19 + FX0*S2*k5 - FY0*S2*k4 + S2*k18
-    A0 = f0*k20
-    A1 = f1*k21
-    x8 = S1*k25
-    x9 = (U0 * U0)
-    x10 = C1*k25
-    x11 = S1*k24
-    x12 = C1*k24
-    x13 = (U1 * U1)
-    x14 = C2*k29
-    x15 = S2*k28
-    x16 = C2*k28
-    x17 = A0*C0
-    x18 = C1*k32
-    x19 = S1*k31
-    x20 = A0*S0
-    x21 = C0*x9
-    x22 = S0*x9
-    r0x = -A0*x12 + A0*x8 + C0*k23 + FX0 + S0*k22 + x10*x9 + x11*x9
-    r0y = -A0*x10 - A0*x11 + C0*k26 + FY0 + S0*k23 + k27 - x12*x9 + x8*x9
-    r1x = A1*S2*k29 - A1*x16 - FX0 + x13*x14 + x13*x15
-    r1y = -A1*x14 - A1*x15 - FY0 + S2*k29*x13 + k30 - x13*x16
-    moment = C0*FX0*k0 + C0*FY0*k1 + C0*k36 + C1*k31*x21 + C1*k33*x20 - FX0*S0*k1 + FY0*S0*k0 + S0*k34 + S1*k32*x20 + S1*k35*x21 + x17*x18 + x17*x19 + x18*x22 + x19*x22
+    f0 = C0*S1*k8 - C1*FY0*k1 + C1*S0*k7 + C1*k9 + FX0*S1*k1
+    f1 = -C2*FY0*k2 + C2*k10 + FX0*S2*k2
+    A0 = f0*k11
+    A1 = f1*k12
+    x4 = S1*k14
+    x5 = (U0 * U0)
+    x6 = C1*k14
+    x7 = (U1 * U1)
+    x8 = C2*k16
+    x9 = A0*k18
+    r0x = A0*x4 + C0*k13 + FX0 + x5*x6
+    r0y = -A0*x6 + FY0 + S0*k13 + k15 + x4*x5
+    r1x = A1*S2*k16 - FX0 + x7*x8
+    r1y = -A1*x8 - FY0 + S2*k16*x7 + k17
+    moment = C0*C1*x9 + C0*FY0*k0 + C0*S1*k19*x5 + C0*k20 + C1*S0*k18*x5 - FX0*S0*k0 + S0*S1*x9
     return (F0, d0, dd0, ex0, ey0, r0x, r0y, r1x, r1y, r0x + r1x, r0y + r1y, moment, A0, A1)
 
 
@@ -412,6 +320,7 @@ def rhs(t, y, p, dydt):
 @nb.njit(**KERNEL, inline="always")
 def _gap_0(t, y, p):
     """Journal centre minus bearing centre of coupler_rocker and its rate."""
+    ground__rocker_pivot__x = p[20]  # ground.rocker_pivot.x
     drive__speed = p[27]  # drive.speed
     drive__initial_angle = p[28]  # drive.initial_angle
     k0 = p[CONST_START + 0]
@@ -419,12 +328,6 @@ def _gap_0(t, y, p):
     k2 = p[CONST_START + 2]
     k3 = p[CONST_START + 3]
     k4 = p[CONST_START + 4]
-    k5 = p[CONST_START + 5]
-    k6 = p[CONST_START + 6]
-    k7 = p[CONST_START + 7]
-    k8 = p[CONST_START + 8]
-    k9 = p[CONST_START + 9]
-    k10 = p[CONST_START + 10]
     Q0 = y[0]
     Q1 = y[1]
     U0 = y[2]
@@ -432,18 +335,14 @@ def _gap_0(t, y, p):
     S0, C0 = sincos(drive__initial_angle + drive__speed*t)
     S1, C1 = sincos(Q0)
     S2, C2 = sincos(Q1)
-    x0 = C1*k3
-    x1 = C2*k5
-    x2 = S1*k2
-    x3 = S2*k4
-    x4 = S1*k3
-    x5 = S2*k5
-    x6 = C1*k2
-    x7 = C2*k4
-    ex0 = C0*k1 + S0*k0 + k6 + x0 + x1 + x2 + x3
-    ey0 = -C0*k0 + S0*k1 + k7 + x4 + x5 - x6 - x7
-    exd0 = C0*k9 + S0*k8 - U0*x4 + U0*x6 - U1*x5 + U1*x7
-    eyd0 = C0*k10 + S0*k9 + U0*x0 + U0*x2 + U1*x1 + U1*x3
+    x0 = C1*k1
+    x1 = C2*k2
+    x2 = S1*k1
+    x3 = S2*k2
+    ex0 = C0*k0 + ground__rocker_pivot__x + x0 + x1
+    ey0 = S0*k0 + x2 + x3
+    exd0 = S0*k3 - U0*x2 - U1*x3
+    eyd0 = C0*k4 + U0*x0 + U1*x1
     return ex0, ey0, exd0, eyd0
 
 
@@ -525,6 +424,7 @@ def outputs(ts, ys, ms, p):
 def mechanical_energy(t, y, p):
     """Kinetic + gravitational energy, plus the contact springs' energy K delta^2.5 / 2.5 of
     the joints in contact mode, in J."""
+    ground__rocker_pivot__x = p[20]  # ground.rocker_pivot.x
     drive__speed = p[27]  # drive.speed
     drive__initial_angle = p[28]  # drive.initial_angle
     k0 = p[CONST_START + 0]
@@ -532,24 +432,13 @@ def mechanical_energy(t, y, p):
     k2 = p[CONST_START + 2]
     k3 = p[CONST_START + 3]
     k4 = p[CONST_START + 4]
-    k5 = p[CONST_START + 5]
-    k6 = p[CONST_START + 6]
-    k7 = p[CONST_START + 7]
-    k8 = p[CONST_START + 8]
     k9 = p[CONST_START + 9]
     k10 = p[CONST_START + 10]
-    k16 = p[CONST_START + 16]
-    k17 = p[CONST_START + 17]
-    k18 = p[CONST_START + 18]
-    k19 = p[CONST_START + 19]
-    k36 = p[CONST_START + 36]
-    k37 = p[CONST_START + 37]
-    k38 = p[CONST_START + 38]
-    k39 = p[CONST_START + 39]
-    k40 = p[CONST_START + 40]
-    k41 = p[CONST_START + 41]
-    k42 = p[CONST_START + 42]
-    k43 = p[CONST_START + 43]
+    k20 = p[CONST_START + 20]
+    k21 = p[CONST_START + 21]
+    k22 = p[CONST_START + 22]
+    k23 = p[CONST_START + 23]
+    k24 = p[CONST_START + 24]
     Q0 = y[0]
     Q1 = y[1]
     U0 = y[2]
@@ -557,21 +446,16 @@ def mechanical_energy(t, y, p):
     S0, C0 = sincos(drive__initial_angle + drive__speed*t)
     S1, C1 = sincos(Q0)
     S2, C2 = sincos(Q1)
-    x0 = C1*k3
-    x1 = C2*k5
-    x2 = S1*k2
-    x3 = S2*k4
-    x4 = S1*k3
-    x5 = S2*k5
-    x6 = C1*k2
-    x7 = C2*k4
-    ex0 = C0*k1 + S0*k0 + k6 + x0 + x1 + x2 + x3
-    ey0 = -C0*k0 + S0*k1 + k7 + x4 + x5 - x6 - x7
-    exd0 = C0*k9 + S0*k8 - U0*x4 + U0*x6 - U1*x5 + U1*x7
-    eyd0 = C0*k10 + S0*k9 + U0*x0 + U0*x2 + U1*x1 + U1*x3
-    x8 = C0*U0
-    x9 = S0*U0
-    energy = C0*k40 + C1*k16 + C1*k37*x8 + C1*k38*x9 + C2*k18 + S0*k36 - S1*k17 + S1*k37*x9 + S1*k39*x8 - S2*k19 + (U0 * U0)*k41 + (U1 * U1)*k42 + k43
+    x0 = C1*k1
+    x1 = C2*k2
+    x2 = S1*k1
+    x3 = S2*k2
+    ex0 = C0*k0 + ground__rocker_pivot__x + x0 + x1
+    ey0 = S0*k0 + x2 + x3
+    exd0 = S0*k3 - U0*x2 - U1*x3
+    eyd0 = C0*k4 + U0*x0 + U1*x1
+    x4 = U0*k21
+    energy = C0*C1*x4 + S0*S1*x4 + S0*k20 - S1*k9 - S2*k10 + (U0 * U0)*k22 + (U1 * U1)*k23 + k24
     d0, dd0, nx0, ny0 = gap_state(ex0, ey0, exd0, eyd0, p[22])
     if p[30] > 0.5 and d0 > 0.0:
         energy += p[23] * d0 * d0 * math.sqrt(d0) / 2.5
@@ -583,23 +467,19 @@ def closure(t, q, p):
     """Journal centre minus bearing centre of every clearance joint (2 N_EVENTS,) at
     coordinates q: zero when the journals are centred."""
     res = np.empty(2 * N_EVENTS)
+    ground__rocker_pivot__x = p[20]  # ground.rocker_pivot.x
     drive__speed = p[27]  # drive.speed
     drive__initial_angle = p[28]  # drive.initial_angle
     k0 = p[CONST_START + 0]
     k1 = p[CONST_START + 1]
     k2 = p[CONST_START + 2]
-    k3 = p[CONST_START + 3]
-    k4 = p[CONST_START + 4]
-    k5 = p[CONST_START + 5]
-    k6 = p[CONST_START + 6]
-    k7 = p[CONST_START + 7]
     Q0 = q[0]
     Q1 = q[1]
     S0, C0 = sincos(drive__initial_angle + drive__speed*t)
     S1, C1 = sincos(Q0)
     S2, C2 = sincos(Q1)
-    res[0] = C0*k1 + C1*k3 + C2*k5 + S0*k0 + S1*k2 + S2*k4 + k6
-    res[1] = -C0*k0 - C1*k2 - C2*k4 + S0*k1 + S1*k3 + S2*k5 + k7
+    res[0] = C0*k0 + C1*k1 + C2*k2 + ground__rocker_pivot__x
+    res[1] = S0*k0 + S1*k1 + S2*k2
     return res
 
 
@@ -607,18 +487,16 @@ def closure(t, q, p):
 def closure_jacobian(t, q, p):
     """d closure / d q (2 N_EVENTS, N_Q)."""
     jac = np.zeros((2 * N_EVENTS, N_Q))
+    k1 = p[CONST_START + 1]
     k2 = p[CONST_START + 2]
-    k3 = p[CONST_START + 3]
-    k4 = p[CONST_START + 4]
-    k5 = p[CONST_START + 5]
     Q0 = q[0]
     Q1 = q[1]
     S1, C1 = sincos(Q0)
     S2, C2 = sincos(Q1)
-    jac[0, 0] = C1*k2 - S1*k3
-    jac[0, 1] = C2*k4 - S2*k5
-    jac[1, 0] = C1*k3 + S1*k2
-    jac[1, 1] = C2*k5 + S2*k4
+    jac[0, 0] = -S1*k1
+    jac[0, 1] = -S2*k2
+    jac[1, 0] = C1*k1
+    jac[1, 1] = C2*k2
     return jac
 
 
@@ -628,18 +506,19 @@ def closure_rate(t, q, p):
     res = np.empty(2 * N_EVENTS)
     drive__speed = p[27]  # drive.speed
     drive__initial_angle = p[28]  # drive.initial_angle
-    k8 = p[CONST_START + 8]
-    k9 = p[CONST_START + 9]
-    k10 = p[CONST_START + 10]
+    k3 = p[CONST_START + 3]
+    k4 = p[CONST_START + 4]
     S0, C0 = sincos(drive__initial_angle + drive__speed*t)
-    res[0] = C0*k9 + S0*k8
-    res[1] = C0*k10 + S0*k9
+    res[0] = S0*k3
+    res[1] = C0*k4
     return res
 
 
 @nb.njit(cache=True, error_model="numpy", nogil=True)
 def integrate_model(y0, p, edges, settings, coefficients):
     """`integrator.integrate` bound to this module's kernels (compiled once, cached)."""
+    if not _zeros_hold(p):
+        raise ValueError(ZERO_MESSAGE)
     # the kernels are looked up as module attributes: numba binds them as constants
     return integrate(_THIS.rhs, _THIS.event, _THIS.on_event, _THIS.monitor, y0, p, edges,
                      settings, coefficients)
@@ -735,10 +614,9 @@ def jacobian(t, y, p, jac, full):
         jac[k] = 0.0
     coupler__mass = p[6]  # coupler.mass
     coupler__crank_end__x = p[8]  # coupler.crank_end.x
-    coupler__crank_end__y = p[9]  # coupler.crank_end.y
     rocker__mass = p[12]  # rocker.mass
     rocker__pivot__x = p[14]  # rocker.pivot.x
-    rocker__pivot__y = p[15]  # rocker.pivot.y
+    ground__rocker_pivot__x = p[20]  # ground.rocker_pivot.x
     drive__speed = p[27]  # drive.speed
     drive__initial_angle = p[28]  # drive.initial_angle
     gravity = p[29]  # gravity
@@ -753,8 +631,6 @@ def jacobian(t, y, p, jac, full):
     k8 = p[CONST_START + 8]
     k9 = p[CONST_START + 9]
     k10 = p[CONST_START + 10]
-    k11 = p[CONST_START + 11]
-    k12 = p[CONST_START + 12]
     k13 = p[CONST_START + 13]
     k14 = p[CONST_START + 14]
     k15 = p[CONST_START + 15]
@@ -762,9 +638,8 @@ def jacobian(t, y, p, jac, full):
     k17 = p[CONST_START + 17]
     k18 = p[CONST_START + 18]
     k19 = p[CONST_START + 19]
-    k22 = p[CONST_START + 22]
-    k23 = p[CONST_START + 23]
-    k24 = p[CONST_START + 24]
+    k20 = p[CONST_START + 20]
+    k21 = p[CONST_START + 21]
     k25 = p[CONST_START + 25]
     k26 = p[CONST_START + 26]
     k27 = p[CONST_START + 27]
@@ -780,6 +655,10 @@ def jacobian(t, y, p, jac, full):
     k37 = p[CONST_START + 37]
     k38 = p[CONST_START + 38]
     k39 = p[CONST_START + 39]
+    k40 = p[CONST_START + 40]
+    k41 = p[CONST_START + 41]
+    k42 = p[CONST_START + 42]
+    k43 = p[CONST_START + 43]
     k44 = p[CONST_START + 44]
     k45 = p[CONST_START + 45]
     k46 = p[CONST_START + 46]
@@ -797,51 +676,6 @@ def jacobian(t, y, p, jac, full):
     k58 = p[CONST_START + 58]
     k59 = p[CONST_START + 59]
     k60 = p[CONST_START + 60]
-    k61 = p[CONST_START + 61]
-    k62 = p[CONST_START + 62]
-    k63 = p[CONST_START + 63]
-    k64 = p[CONST_START + 64]
-    k65 = p[CONST_START + 65]
-    k66 = p[CONST_START + 66]
-    k67 = p[CONST_START + 67]
-    k68 = p[CONST_START + 68]
-    k69 = p[CONST_START + 69]
-    k70 = p[CONST_START + 70]
-    k71 = p[CONST_START + 71]
-    k72 = p[CONST_START + 72]
-    k73 = p[CONST_START + 73]
-    k74 = p[CONST_START + 74]
-    k75 = p[CONST_START + 75]
-    k76 = p[CONST_START + 76]
-    k77 = p[CONST_START + 77]
-    k78 = p[CONST_START + 78]
-    k79 = p[CONST_START + 79]
-    k80 = p[CONST_START + 80]
-    k81 = p[CONST_START + 81]
-    k82 = p[CONST_START + 82]
-    k83 = p[CONST_START + 83]
-    k84 = p[CONST_START + 84]
-    k85 = p[CONST_START + 85]
-    k86 = p[CONST_START + 86]
-    k87 = p[CONST_START + 87]
-    k88 = p[CONST_START + 88]
-    k89 = p[CONST_START + 89]
-    k90 = p[CONST_START + 90]
-    k91 = p[CONST_START + 91]
-    k92 = p[CONST_START + 92]
-    k93 = p[CONST_START + 93]
-    k94 = p[CONST_START + 94]
-    k95 = p[CONST_START + 95]
-    k96 = p[CONST_START + 96]
-    k97 = p[CONST_START + 97]
-    k98 = p[CONST_START + 98]
-    k99 = p[CONST_START + 99]
-    k100 = p[CONST_START + 100]
-    k101 = p[CONST_START + 101]
-    k102 = p[CONST_START + 102]
-    k103 = p[CONST_START + 103]
-    k104 = p[CONST_START + 104]
-    k105 = p[CONST_START + 105]
     Q0 = y[0]
     Q1 = y[1]
     U0 = y[2]
@@ -849,132 +683,87 @@ def jacobian(t, y, p, jac, full):
     S0, C0 = sincos(drive__initial_angle + drive__speed*t)
     S1, C1 = sincos(Q0)
     S2, C2 = sincos(Q1)
-    x0 = C1*k3
-    x1 = S1*k2
-    x2 = x0 + x1
-    x3 = C2*k5
-    x4 = S2*k4
-    x5 = x3 + x4
-    x6 = C0*k1 + S0*k0
-    x7 = C0*k9
-    x8 = S0*k8
-    x9 = x7 + x8
-    x10 = C1*k2
-    x11 = S1*k3
-    x12 = x10 - x11
-    x13 = C2*k4
-    x14 = S2*k5
-    x15 = x13 - x14
-    x16 = -S0
-    x17 = -C0
-    x18 = -S1
-    x19 = -C1
-    x20 = -C2
-    x21 = -S2
-    x22 = C0*k0
-    x23 = S0*k1
-    x24 = x22 - x23
-    x25 = C0*k10 + S0*k9
-    x26 = S0*drive__speed
-    x27 = -x26
-    x28 = C0*drive__speed
-    x29 = -x28
-    x30 = S1*U0
-    x31 = -x30
-    x32 = C1*U0
-    x33 = -x32
-    x34 = S2*U1
-    x35 = C2*U1
-    x36 = -x34
-    x37 = -x35
-    x38 = C0*k8
-    x39 = S0*k46
-    gv0_0 = k6 + x2 + x5 + x6
-    jac[114] = x9
-    jac[115] = x12
-    jac[116] = x15
+    x0 = C0*k0
+    x1 = C1*k1
+    x2 = C2*k2
+    x3 = S0*k3
+    x4 = S1*k1
+    x5 = -x4
+    x6 = S2*k2
+    x7 = -x6
+    x8 = S0*k0
+    x9 = -x8
+    x10 = C0*k4
+    x11 = U0*x4
+    x12 = U1*x6
+    x13 = U0*x1
+    x14 = U1*x2
+    x15 = S0*drive__speed
+    x16 = S1*U0
+    x17 = S2*U1
+    x18 = C0*k3
+    x19 = C0*drive__speed
+    x20 = C1*U0
+    x21 = C2*U1
+    gv0_0 = ground__rocker_pivot__x + x0 + x1 + x2
+    jac[114] = x3
+    jac[115] = x5
+    jac[116] = x7
     jac[121] = C0
-    jac[122] = x16
-    jac[123] = x17
-    jac[124] = S0
+    jac[123] = -C0
     jac[127] = C1
-    jac[128] = x18
-    jac[129] = x19
-    jac[130] = S1
-    jac[133] = x20
-    jac[134] = S2
+    jac[129] = -C1
+    jac[133] = -C2
     jac[135] = C2
-    jac[136] = x21
-    jac[137] = -1.0
     jac[139] = 1.0
-    jac[146] = t*x24
-    jac[147] = x24
-    gv0_1 = k7 - x10 + x11 - x13 + x14 - x22 + x23
-    jac[152] = x25
-    jac[153] = x2
-    jac[154] = x5
+    jac[146] = -t*x8
+    jac[147] = x9
+    gv0_1 = x4 + x6 + x8
+    jac[152] = x10
+    jac[153] = x1
+    jac[154] = x2
     jac[159] = S0
-    jac[160] = C0
-    jac[161] = x16
-    jac[162] = x17
+    jac[161] = -S0
     jac[165] = S1
-    jac[166] = C1
-    jac[167] = x18
-    jac[168] = x19
-    jac[171] = x21
-    jac[172] = x20
+    jac[167] = -S1
+    jac[171] = -S2
     jac[173] = S2
-    jac[174] = C2
-    jac[176] = -1.0
-    jac[178] = 1.0
-    jac[184] = t*x6
-    jac[185] = x6
-    gv0_2 = U0*x10 - U0*x11 + U1*x13 - U1*x14 + x9
-    jac[532] = C0*k45 + S0*k44
-    jac[533] = -U0*x2
-    jac[534] = -U1*x5
-    jac[535] = x12
-    jac[536] = x15
-    jac[539] = x27
-    jac[540] = x29
-    jac[541] = x26
-    jac[542] = x28
-    jac[545] = x31
-    jac[546] = x33
-    jac[547] = x30
-    jac[548] = x32
-    jac[551] = x34
-    jac[552] = x35
-    jac[553] = x36
-    jac[554] = x37
-    jac[564] = t*x38 + t*x39 + x24
-    jac[565] = x38 + x39
-    gv0_3 = U0*x0 + U0*x1 + U1*x3 + U1*x4 + x25
-    jac[570] = C0*k47 + S0*k45
-    jac[571] = U0*x12
-    jac[572] = U1*x15
-    jac[573] = x2
-    jac[574] = x5
-    jac[577] = x28
-    jac[578] = x27
-    jac[579] = x29
-    jac[580] = x26
-    jac[583] = x32
-    jac[584] = x31
-    jac[585] = x33
-    jac[586] = x30
-    jac[589] = x37
-    jac[590] = x34
-    jac[591] = x35
-    jac[592] = x36
-    jac[602] = t*x7 + t*x8 + x6
-    jac[603] = x9
+    jac[184] = t*x0
+    jac[185] = x0
+    gv0_2 = S0*k3 - x11 - x12
+    jac[532] = C0*k25
+    jac[533] = -x13
+    jac[534] = -x14
+    jac[535] = x5
+    jac[536] = x7
+    jac[539] = -x15
+    jac[541] = x15
+    jac[545] = -x16
+    jac[547] = x16
+    jac[551] = x17
+    jac[553] = -x17
+    jac[564] = t*x18 + x9
+    jac[565] = x18
+    gv0_3 = x10 + x13 + x14
+    jac[570] = S0*k25
+    jac[571] = -x11
+    jac[572] = -x12
+    jac[573] = x1
+    jac[574] = x2
+    jac[577] = x19
+    jac[579] = -x19
+    jac[583] = x20
+    jac[585] = -x20
+    jac[589] = -x21
+    jac[591] = x21
+    jac[602] = t*x3 + x0
+    jac[603] = x3
     FX0, FY0 = contact_jacobian(jac, 38, 37, gv0_0, gv0_1, gv0_2, gv0_3, 0, 1, 2, 3, 4, 14, 15, 16, 17, 27, 28, 29, 36, p[22], p[30], p[31], p[23], p[24], p[25])
-    m_0_0 = k11
+    m_0_0 = k5
     m_1_0 = 0.0
-    m_1_1 = k12
-    f_0 = C0*C1*k13 + C0*S1*k15 - C1*FX0*k2 - C1*FY0*k3 + C1*S0*k14 + C1*k17 + FX0*S1*k3 - FY0*S1*k2 + S0*S1*k13 + S1*k16
-    f_1 = -C2*FX0*k4 - C2*FY0*k5 + C2*k19 + FX0*S2*k5 - FY0*S2*k4 + S2*k18
+    m_1_1 = k6
+    f_0 = C0*S1*k8 - C1*FY0*k1 + C1*S0*k7 + C1*k9 + FX0*S1*k1
+    f_1 = -C2*FY0*k2 + C2*k10 + FX0*S2*k2
     l_0_0 = math.sqrt(m_0_0)
     il_0 = 1.0 / l_0_0
     l_1_0 = (m_1_0) * il_0
@@ -984,53 +773,41 @@ def jacobian(t, y, p, jac, full):
     zz_1 = (f_1 - l_1_0 * zz_0) * il_1
     A1 = (zz_1) * il_1
     A0 = (zz_0 - l_1_0 * A1) * il_0
-    x40 = C0*C1
-    x41 = C0*S1
-    x42 = C1*S0
-    x43 = S0*S1
-    x44 = C1*FY0
-    x45 = C1*FX0
-    x46 = FX0*S1
-    x47 = FY0*S1
-    x48 = k52*x40 + k52*x43 - k53*x41 + k53*x42
-    x49 = k52*x41 - k52*x42 + k53*x40 + k53*x43
-    x50 = x44 - x46
-    x51 = k15*x40
-    x52 = k51*x41
-    x53 = k13*x42
-    x54 = k15*x43
-    x55 = C2*FX0
-    x56 = FX0*S2
-    x57 = FY0*S2
-    x58 = C2*FY0
-    x59 = x55 + x57
-    jac[456] = k48*x40 + k48*x43 + k49*x42 + k50*x41
-    jac[457] = -C1*k16 + S1*k17 + k13*x41 + k14*x40 + k14*x43 + k2*x44 - k2*x46 - k3*x45 - k3*x47 + k51*x42
-    jac[463] = x48
-    jac[464] = x49
-    jac[465] = -x48
-    jac[466] = -x49
-    jac[467] = A0*k59 + C1*k58 + S1*k57 + k54*x40 + k54*x43 + k55*x42 + k56*x41
+    x22 = C0*C1
+    x23 = S0*S1
+    x24 = x22 + x23
+    x25 = C1*k1
+    x26 = S1*k1
+    x27 = C0*S1
+    x28 = -C1*S0 + x27
+    x29 = C1*S0
+    x30 = C1*FY0 - FX0*S1
+    x31 = k8*t
+    x32 = C2*k2
+    x33 = S2*k2
+    x34 = FX0*S2
+    x35 = C2*FY0
+    jac[456] = k26*x24
+    jac[457] = -FX0*x25 - FY0*x26 + S1*k9 + k7*x22 + k7*x23
+    jac[463] = -k27*x28
+    jac[465] = k27*x28
+    jac[467] = A0*k31 + C1*k30 + k28*x29 + k29*x27
     jac[468] = A0
-    jac[469] = A0*k64 + C1*k63 + k60*x40 + k60*x43 + k61*x42 + k62*x41 + x50
-    jac[470] = A0*k66 - S1*k63 + k60*x42 + k62*x40 + k62*x43 + k65*x41 - x45 - x47
-    jac[471] = -x50
-    jac[472] = x45 + x47
-    jac[488] = k67*x40 + k67*x43 + k68*x42 + k69*x41 + t*x51 + t*x52 + t*x53 + t*x54
-    jac[489] = x51 + x52 + x53 + x54
-    jac[490] = C1*k25 + S1*k24
-    rfx_0_0 = C1*k2 - S1*k3
-    rfy_0_0 = C1*k3 + S1*k2
-    jac[496] = C2*FY0*k4 - C2*k18 + S2*k19 - k4*x56 - k5*x55 - k5*x57
-    jac[511] = A1*k72 + C2*k71 + S2*k70
+    jac[469] = A0*k35 + C1*k34 + k32*x29 + k33*x27 + x30
+    jac[471] = -x30
+    jac[488] = k36*x29 + k37*x27 + x22*x31 + x23*x31
+    jac[489] = k8*x24
+    jac[490] = C1*k14
+    rfx_0_0 = -x26
+    rfy_0_0 = x25
+    jac[496] = -FX0*x32 - FY0*x33 + S2*k10
+    jac[511] = A1*k39 + C2*k38
     jac[512] = A1
-    jac[513] = A1*k73 + C2*k30 + x56 - x58
-    jac[514] = A1*k74 - S2*k30 + x59
-    jac[515] = -x56 + x58
-    jac[516] = -x59
-    jac[528] = C2*k29 + S2*k28
-    rfx_1_0 = C2*k4 - S2*k5
-    rfy_1_0 = C2*k5 + S2*k4
+    jac[513] = A1*k40 + C2*k17 + x34 - x35
+    jac[515] = -x34 + x35
+    jac[528] = C2*k16
+    rfx_1_0 = -x33
+    rfy_1_0 = x32
     for col in range(37):
         b_0 = -(jac[456 + col] + rfx_0_0 * jac[16 * 38 + col] + rfy_0_0 * jac[17 * 38 + col])
         b_1 = -(jac[494 + col] + rfx_1_0 * jac[16 * 38 + col] + rfy_1_0 * jac[17 * 38 + col])
@@ -1042,143 +819,102 @@ def jacobian(t, y, p, jac, full):
         jac[494 + col] = x_1
     jac[493] = A0
     jac[531] = A1
-    x60 = A0*C0
-    x61 = C1*k32
-    x62 = S1*k31
-    x63 = A0*S0
-    x64 = (U0 * U0)
-    x65 = C0*x64
-    x66 = S0*x64
-    jac[455] = C0*FX0*k0 + C0*FY0*k1 + C0*k36 + C1*k31*x65 + C1*k33*x63 - FX0*S0*k1 + FY0*S0*k0 + S0*k34 + S1*k32*x63 + S1*k35*x65 + x60*x61 + x60*x62 + x61*x66 + x62*x66
+    x36 = A0*k18
+    x37 = (U0 * U0)
+    jac[455] = C0*C1*x36 + C0*FY0*k0 + C0*S1*k19*x37 + C0*k20 + C1*S0*k18*x37 - FX0*S0*k0 + S0*S1*x36
     if full:
-        x67 = C0*k23
-        x68 = S0*k22
-        x69 = x67 + x68
-        x70 = A0*S1
-        x71 = k25*x70
-        x72 = (U0 * U0)
-        x73 = C1*x72
-        x74 = k25*x73
-        x75 = S1*x72
-        x76 = k24*x75
-        x77 = A0*C1
-        x78 = k24*x77
-        x79 = x71 + x74 + x76 - x78
-        x80 = k25*x77
-        x81 = k24*x70
-        x82 = k24*x73
-        x83 = k25*x75
-        x84 = C0*k79
-        x85 = S0*k79
-        x86 = C0*k80
-        x87 = S0*k80
-        x88 = -coupler__mass*(x70 + x73)
-        x89 = -S1*x72 + x77
-        x90 = C0*k22
-        x91 = S0*k81
-        x92 = A1*S2
-        x93 = (U1 * U1)
-        x94 = C2*x93
-        x95 = S2*x93
-        x96 = A1*C2
-        x97 = k28*x95 - k28*x96 + k29*x92 + k29*x94
-        x98 = k28*x92 + k28*x94 - k29*x95 + k29*x96
-        x99 = -rocker__mass*(x92 + x94)
-        x100 = -S2*x93 + x96
-        x101 = C0*FX0
-        x102 = C0*FY0
-        x103 = FX0*S0
-        x104 = FY0*S0
-        x105 = C0*x77
-        x106 = C0*k37
-        x107 = S0*x77
-        x108 = S0*k38
-        x109 = C0*x75
-        x110 = S0*x75
-        x111 = C0*k35
-        x112 = S0*k31
-        x113 = C0*C1
-        x114 = C0*S1
-        x115 = C1*S0
-        x116 = S0*S1
-        x117 = C0*x80 + C0*x81 + C0*x82 - C0*x83 + S0*x71 + S0*x74 + S0*x76 - S0*x78 - x102 + x103
-        x118 = C0*x71 + C0*x74 + C0*x76 - C0*x78 - S0*x80 - S0*x81 - S0*x82 + S0*x83 + x101 + x104
-        x119 = C0*k95
-        x120 = S0*k96
-        x121 = C0*k99
-        x122 = S0*k100
-        x123 = C0*k102
-        x124 = S0*k99
-        x125 = C0*k32
-        x126 = S0*k33
-        x127 = C0*k34 + S0*k103 + k0*x102 - k0*x103 - k1*x101 - k1*x104 + k31*x109 + k32*x110 + k33*x105 + k35*x107 + x125*x70 + x125*x73 + x126*x70 + x126*x73
-        jac[227] = FX0 + x69 + x79
-        jac[190] = C0*k76 + S0*k75
-        jac[191] = x80 + x81 + x82 - x83
-        jac[193] = U0*(-C1*k64 + S1*k66)
-        jac[195] = C0*k78 + S0*k77
-        jac[197] = x84
-        jac[198] = -x85
-        jac[199] = x86
-        jac[200] = -x87
-        jac[201] = C0*k45 + S0*k44 + S1*coupler__crank_end__y*x72 - coupler__crank_end__x*x70 - coupler__crank_end__x*x73 - coupler__crank_end__y*x77
-        jac[203] = x88
-        jac[204] = -coupler__mass*x89
-        jac[222] = C0*k83 + S0*k82 + t*x90 + t*x91
-        jac[223] = x90 + x91
-        oa_0_0 = -C1*k24 + S1*k25
+        x38 = C0*k13
+        x39 = A0*S1
+        x40 = k14*x39
+        x41 = (U0 * U0)
+        x42 = C1*x41
+        x43 = k14*x42
+        x44 = A0*C1
+        x45 = S1*x41
+        x46 = x44 - x45
+        x47 = U0*k35
+        x48 = x39 + x42
+        x49 = S0*k45
+        x50 = k14*x45
+        x51 = k14*x44
+        x52 = -gravity
+        x53 = A1*S2
+        x54 = (U1 * U1)
+        x55 = C2*x54
+        x56 = A1*C2
+        x57 = S2*x54
+        x58 = x56 - x57
+        x59 = U1*k40
+        x60 = x53 + x55
+        x61 = C0*k21
+        x62 = S0*x44
+        x63 = S0*x45
+        x64 = C0*k19
+        x65 = -C0*FY0 - C0*x50 + C0*x51 + FX0*S0 + S0*x40 + S0*x43
+        x66 = C0*x44
+        x67 = S0*k54
+        x68 = C0*x45
+        x69 = S0*k57
+        x70 = C0*k0
+        x71 = S0*k0
+        x72 = C0*k18
+        x73 = -FX0*x70 - FY0*x71 + S0*k59 + k18*x63 + k19*x62 + x39*x72 + x42*x72
+        jac[227] = FX0 + x38 + x40 + x43
+        jac[190] = S0*k41
+        jac[191] = k14*x46
+        jac[193] = -C1*x47
+        jac[195] = C0*k42
+        jac[197] = C0*k43
+        jac[199] = C0*k44
+        jac[201] = C0*k25 - coupler__crank_end__x*x39 - coupler__crank_end__x*x42
+        jac[203] = -coupler__mass*x48
+        jac[222] = C0*k46 + t*x49
+        jac[223] = x49
+        oa_0_0 = S1*k14
         ofx_0_0 = 1.0
-        jac[265] = C0*k26 + FY0 + S0*k23 + k27 - x80 - x81 - x82 + x83
-        jac[228] = C0*k84 + S0*k76
-        jac[229] = x79
-        jac[231] = -U0*(C1*k66 + S1*k64)
-        jac[233] = -C0*k77 + S0*k78 - gravity
-        jac[235] = x85
-        jac[236] = x84
-        jac[237] = x87
-        jac[238] = x86
-        jac[239] = A0*C1*coupler__crank_end__x + C0*k47 + S0*k45 - coupler__crank_end__x*x75 - coupler__crank_end__y*x70 - coupler__crank_end__y*x73 - gravity
-        jac[241] = coupler__mass*x89
-        jac[242] = x88
-        jac[260] = C0*k85 + S0*k83 + t*x67 + t*x68
-        jac[261] = x69
-        jac[262] = k86
-        oa_1_0 = -C1*k25 - S1*k24
+        jac[265] = FY0 + S0*k13 + k15 + x50 - x51
+        jac[228] = C0*k47
+        jac[229] = k14*x48
+        jac[231] = -S1*x47
+        jac[233] = S0*k42 + x52
+        jac[235] = S0*k43
+        jac[237] = S0*k44
+        jac[239] = S0*k25 + coupler__crank_end__x*x44 - coupler__crank_end__x*x45 + x52
+        jac[241] = coupler__mass*x46
+        jac[260] = S0*k46 + t*x38
+        jac[261] = x38
+        jac[262] = k48
+        oa_1_0 = -C1*k14
         ofy_1_0 = 1.0
-        jac[303] = -FX0 + x97
-        jac[268] = x98
-        jac[270] = U1*(-C2*k73 + S2*k74)
-        jac[283] = S2*rocker__pivot__y*x93 - rocker__pivot__x*x92 - rocker__pivot__x*x94 - rocker__pivot__y*x96
-        jac[285] = x99
-        jac[286] = -rocker__mass*x100
-        oa_2_1 = -C2*k28 + S2*k29
+        jac[303] = -FX0 + k16*x53 + k16*x55
+        jac[268] = k16*x58
+        jac[270] = -C2*x59
+        jac[283] = -rocker__pivot__x*x60
+        jac[285] = -rocker__mass*x60
+        oa_2_1 = S2*k16
         ofx_2_0 = -1.0
-        jac[341] = -FY0 + k30 - x98
-        jac[306] = x97
-        jac[308] = -U1*(C2*k74 + S2*k73)
-        jac[321] = A1*C2*rocker__pivot__x - gravity - rocker__pivot__x*x95 - rocker__pivot__y*x92 - rocker__pivot__y*x94
-        jac[323] = rocker__mass*x100
-        jac[324] = x99
+        jac[341] = -FY0 + S2*k16*x54 - k16*x56 + k17
+        jac[306] = k16*x60
+        jac[308] = -S2*x59
+        jac[321] = A1*C2*rocker__pivot__x - gravity - rocker__pivot__x*x57
+        jac[323] = rocker__mass*x58
         jac[338] = -rocker__mass
-        oa_3_1 = -C2*k29 - S2*k28
+        oa_3_1 = -C2*k16
         ofy_3_0 = -1.0
-        jac[418] = C0*k89 + S0*k88 + k37*x110 + k38*x105 + k39*x109 + k46*x103 + k8*x101 + k8*x104 + k87*x107 + k9*x102 + x106*x70 + x106*x73 + x108*x70 + x108*x73
-        jac[419] = k31*x105 + k32*x107 + k33*x109 + k35*x110 + x111*x70 + x111*x73 + x112*x70 + x112*x73
-        jac[421] = U0*(k90*x113 + k90*x116 + k91*x115 + k92*x114)
-        jac[423] = C0*k94 + S0*k93
-        jac[425] = C0*k27 - x117
-        jac[426] = -S0*k27 - x118
-        jac[427] = -C0*k63 + x117
-        jac[428] = S0*k63 + x118
-        jac[429] = C0*k98 + S0*k97 - k95*x107 + k95*x110 + k96*x105 - k96*x109 + x119*x70 + x119*x73 + x120*x70 + x120*x73
-        jac[431] = k100*x105 + k101*x107 + k102*x109 + k99*x110 + x121*x70 + x121*x73 + x122*x70 + x122*x73
-        jac[432] = k100*x107 + k101*x109 + k102*x110 + k99*x105 + x123*x70 + x123*x73 + x124*x70 + x124*x73
-        jac[450] = t*x127
-        jac[451] = x127
-        jac[452] = C0*k105 + S0*k104
-        oa_4_0 = k31*x114 + k32*x113 + k32*x116 + k33*x115
-        ofx_4_0 = C0*k0 - S0*k1
-        ofy_4_0 = C0*k1 + S0*k0
+        jac[418] = C0*FX0*k3 + FY0*S0*k3 + S0*k50 + k21*x63 + k49*x62 + x39*x61 + x42*x61
+        jac[419] = k18*x62 + k19*x63 + x39*x64 + x42*x64
+        jac[421] = U0*(C0*S1*k52 + C1*S0*k51)
+        jac[423] = C0*k53
+        jac[425] = C0*k15 - x65
+        jac[427] = -C0*k34 + x65
+        jac[429] = C0*k56 + k54*x66 + k55*x68 + x39*x67 + x42*x67
+        jac[431] = k57*x66 + k58*x68 + x39*x69 + x42*x69
+        jac[450] = t*x73
+        jac[451] = x73
+        jac[452] = C0*k60
+        oa_4_0 = k18*(C0*C1 + S0*S1)
+        ofx_4_0 = -x71
+        ofy_4_0 = x70
         for col in range(37):
             jac[190 + col] += oa_0_0 * jac[456 + col] + ofx_0_0 * jac[608 + col]
             jac[228 + col] += oa_1_0 * jac[456 + col] + ofy_1_0 * jac[646 + col]
@@ -1205,10 +941,9 @@ def tangent(t, y, p, dz, nd, use, out, full):
     ts = nd + 1
     coupler__mass = p[6]  # coupler.mass
     coupler__crank_end__x = p[8]  # coupler.crank_end.x
-    coupler__crank_end__y = p[9]  # coupler.crank_end.y
     rocker__mass = p[12]  # rocker.mass
     rocker__pivot__x = p[14]  # rocker.pivot.x
-    rocker__pivot__y = p[15]  # rocker.pivot.y
+    ground__rocker_pivot__x = p[20]  # ground.rocker_pivot.x
     drive__speed = p[27]  # drive.speed
     drive__initial_angle = p[28]  # drive.initial_angle
     gravity = p[29]  # gravity
@@ -1223,8 +958,6 @@ def tangent(t, y, p, dz, nd, use, out, full):
     k8 = p[CONST_START + 8]
     k9 = p[CONST_START + 9]
     k10 = p[CONST_START + 10]
-    k11 = p[CONST_START + 11]
-    k12 = p[CONST_START + 12]
     k13 = p[CONST_START + 13]
     k14 = p[CONST_START + 14]
     k15 = p[CONST_START + 15]
@@ -1232,9 +965,8 @@ def tangent(t, y, p, dz, nd, use, out, full):
     k17 = p[CONST_START + 17]
     k18 = p[CONST_START + 18]
     k19 = p[CONST_START + 19]
-    k22 = p[CONST_START + 22]
-    k23 = p[CONST_START + 23]
-    k24 = p[CONST_START + 24]
+    k20 = p[CONST_START + 20]
+    k21 = p[CONST_START + 21]
     k25 = p[CONST_START + 25]
     k26 = p[CONST_START + 26]
     k27 = p[CONST_START + 27]
@@ -1250,6 +982,10 @@ def tangent(t, y, p, dz, nd, use, out, full):
     k37 = p[CONST_START + 37]
     k38 = p[CONST_START + 38]
     k39 = p[CONST_START + 39]
+    k40 = p[CONST_START + 40]
+    k41 = p[CONST_START + 41]
+    k42 = p[CONST_START + 42]
+    k43 = p[CONST_START + 43]
     k44 = p[CONST_START + 44]
     k45 = p[CONST_START + 45]
     k46 = p[CONST_START + 46]
@@ -1267,51 +1003,6 @@ def tangent(t, y, p, dz, nd, use, out, full):
     k58 = p[CONST_START + 58]
     k59 = p[CONST_START + 59]
     k60 = p[CONST_START + 60]
-    k61 = p[CONST_START + 61]
-    k62 = p[CONST_START + 62]
-    k63 = p[CONST_START + 63]
-    k64 = p[CONST_START + 64]
-    k65 = p[CONST_START + 65]
-    k66 = p[CONST_START + 66]
-    k67 = p[CONST_START + 67]
-    k68 = p[CONST_START + 68]
-    k69 = p[CONST_START + 69]
-    k70 = p[CONST_START + 70]
-    k71 = p[CONST_START + 71]
-    k72 = p[CONST_START + 72]
-    k73 = p[CONST_START + 73]
-    k74 = p[CONST_START + 74]
-    k75 = p[CONST_START + 75]
-    k76 = p[CONST_START + 76]
-    k77 = p[CONST_START + 77]
-    k78 = p[CONST_START + 78]
-    k79 = p[CONST_START + 79]
-    k80 = p[CONST_START + 80]
-    k81 = p[CONST_START + 81]
-    k82 = p[CONST_START + 82]
-    k83 = p[CONST_START + 83]
-    k84 = p[CONST_START + 84]
-    k85 = p[CONST_START + 85]
-    k86 = p[CONST_START + 86]
-    k87 = p[CONST_START + 87]
-    k88 = p[CONST_START + 88]
-    k89 = p[CONST_START + 89]
-    k90 = p[CONST_START + 90]
-    k91 = p[CONST_START + 91]
-    k92 = p[CONST_START + 92]
-    k93 = p[CONST_START + 93]
-    k94 = p[CONST_START + 94]
-    k95 = p[CONST_START + 95]
-    k96 = p[CONST_START + 96]
-    k97 = p[CONST_START + 97]
-    k98 = p[CONST_START + 98]
-    k99 = p[CONST_START + 99]
-    k100 = p[CONST_START + 100]
-    k101 = p[CONST_START + 101]
-    k102 = p[CONST_START + 102]
-    k103 = p[CONST_START + 103]
-    k104 = p[CONST_START + 104]
-    k105 = p[CONST_START + 105]
     Q0 = y[0]
     Q1 = y[1]
     U0 = y[2]
@@ -1319,62 +1010,44 @@ def tangent(t, y, p, dz, nd, use, out, full):
     S0, C0 = sincos(drive__initial_angle + drive__speed*t)
     S1, C1 = sincos(Q0)
     S2, C2 = sincos(Q1)
-    x0 = C1*k3
-    x1 = S1*k2
-    x2 = x0 + x1
-    x3 = C2*k5
-    x4 = S2*k4
-    x5 = x3 + x4
-    x6 = C0*k1 + S0*k0
-    x7 = C0*k9
-    x8 = S0*k8
-    x9 = x7 + x8
-    x10 = C1*k2
-    x11 = S1*k3
-    x12 = x10 - x11
-    x13 = C2*k4
-    x14 = S2*k5
-    x15 = x13 - x14
-    x16 = -S0
-    x17 = -C0
-    x18 = -S1
-    x19 = -C1
-    x20 = -C2
-    x21 = -S2
-    x22 = C0*k0
-    x23 = S0*k1
-    x24 = x22 - x23
-    x25 = C0*k10 + S0*k9
-    x26 = S0*drive__speed
-    x27 = -x26
-    x28 = C0*drive__speed
-    x29 = -x28
-    x30 = S1*U0
-    x31 = -x30
-    x32 = C1*U0
-    x33 = -x32
-    x34 = S2*U1
-    x35 = C2*U1
-    x36 = -x34
-    x37 = -x35
-    x38 = C0*k8
-    x39 = S0*k46
-    gv0_0 = k6 + x2 + x5 + x6
-    g3_1 = x12
-    g3_2 = x15
-    gv0_1 = k7 - x10 + x11 - x13 + x14 - x22 + x23
-    g4_1 = x2
-    g4_2 = x5
-    gv0_2 = U0*x10 - U0*x11 + U1*x13 - U1*x14 + x9
-    g14_1 = -U0*x2
-    g14_2 = -U1*x5
-    g14_3 = x12
-    g14_4 = x15
-    gv0_3 = U0*x0 + U0*x1 + U1*x3 + U1*x4 + x25
-    g15_1 = U0*x12
-    g15_2 = U1*x15
-    g15_3 = x2
-    g15_4 = x5
+    x0 = C0*k0
+    x1 = C1*k1
+    x2 = C2*k2
+    x3 = S0*k3
+    x4 = S1*k1
+    x5 = -x4
+    x6 = S2*k2
+    x7 = -x6
+    x8 = S0*k0
+    x9 = -x8
+    x10 = C0*k4
+    x11 = U0*x4
+    x12 = U1*x6
+    x13 = U0*x1
+    x14 = U1*x2
+    x15 = S0*drive__speed
+    x16 = S1*U0
+    x17 = S2*U1
+    x18 = C0*k3
+    x19 = C0*drive__speed
+    x20 = C1*U0
+    x21 = C2*U1
+    gv0_0 = ground__rocker_pivot__x + x0 + x1 + x2
+    g3_1 = x5
+    g3_2 = x7
+    gv0_1 = x4 + x6 + x8
+    g4_1 = x1
+    g4_2 = x2
+    gv0_2 = S0*k3 - x11 - x12
+    g14_1 = -x13
+    g14_2 = -x14
+    g14_3 = x5
+    g14_4 = x7
+    gv0_3 = x10 + x13 + x14
+    g15_1 = -x11
+    g15_2 = -x12
+    g15_3 = x1
+    g15_4 = x2
     for d in range(nd):
         yo = 4 * (d + 1)
         out[3 * ts + d] = g3_1 * y[yo + 0] + g3_2 * y[yo + 1]
@@ -1382,10 +1055,10 @@ def tangent(t, y, p, dz, nd, use, out, full):
         out[14 * ts + d] = g14_1 * y[yo + 0] + g14_2 * y[yo + 1] + g14_3 * y[yo + 2] + g14_4 * y[yo + 3]
         out[15 * ts + d] = g15_1 * y[yo + 0] + g15_2 * y[yo + 1] + g15_3 * y[yo + 2] + g15_4 * y[yo + 3]
     if use[1] > use[0]:
-        g3_0 = x9
-        g4_0 = x25
-        g14_0 = C0*k45 + S0*k44
-        g15_0 = C0*k47 + S0*k45
+        g3_0 = x3
+        g4_0 = x10
+        g14_0 = C0*k25
+        g15_0 = S0*k25
         for e in range(int(use[0]), int(use[1])):
             d = int(use[38 + e])
             dk = dz[d * 37 + 0]
@@ -1396,8 +1069,8 @@ def tangent(t, y, p, dz, nd, use, out, full):
     if use[8] > use[7]:
         g3_7 = C0
         g4_7 = S0
-        g14_7 = x27
-        g15_7 = x28
+        g14_7 = -x15
+        g15_7 = x19
         for e in range(int(use[7]), int(use[8])):
             d = int(use[38 + e])
             dk = dz[d * 37 + 7]
@@ -1405,23 +1078,11 @@ def tangent(t, y, p, dz, nd, use, out, full):
             out[4 * ts + d] += g4_7 * dk
             out[14 * ts + d] += g14_7 * dk
             out[15 * ts + d] += g15_7 * dk
-    if use[9] > use[8]:
-        g3_8 = x16
-        g4_8 = C0
-        g14_8 = x29
-        g15_8 = x27
-        for e in range(int(use[8]), int(use[9])):
-            d = int(use[38 + e])
-            dk = dz[d * 37 + 8]
-            out[3 * ts + d] += g3_8 * dk
-            out[4 * ts + d] += g4_8 * dk
-            out[14 * ts + d] += g14_8 * dk
-            out[15 * ts + d] += g15_8 * dk
     if use[10] > use[9]:
-        g3_9 = x17
-        g4_9 = x16
-        g14_9 = x26
-        g15_9 = x29
+        g3_9 = -C0
+        g4_9 = -S0
+        g14_9 = x15
+        g15_9 = -x19
         for e in range(int(use[9]), int(use[10])):
             d = int(use[38 + e])
             dk = dz[d * 37 + 9]
@@ -1429,23 +1090,11 @@ def tangent(t, y, p, dz, nd, use, out, full):
             out[4 * ts + d] += g4_9 * dk
             out[14 * ts + d] += g14_9 * dk
             out[15 * ts + d] += g15_9 * dk
-    if use[11] > use[10]:
-        g3_10 = S0
-        g4_10 = x17
-        g14_10 = x28
-        g15_10 = x26
-        for e in range(int(use[10]), int(use[11])):
-            d = int(use[38 + e])
-            dk = dz[d * 37 + 10]
-            out[3 * ts + d] += g3_10 * dk
-            out[4 * ts + d] += g4_10 * dk
-            out[14 * ts + d] += g14_10 * dk
-            out[15 * ts + d] += g15_10 * dk
     if use[14] > use[13]:
         g3_13 = C1
         g4_13 = S1
-        g14_13 = x31
-        g15_13 = x32
+        g14_13 = -x16
+        g15_13 = x20
         for e in range(int(use[13]), int(use[14])):
             d = int(use[38 + e])
             dk = dz[d * 37 + 13]
@@ -1453,23 +1102,11 @@ def tangent(t, y, p, dz, nd, use, out, full):
             out[4 * ts + d] += g4_13 * dk
             out[14 * ts + d] += g14_13 * dk
             out[15 * ts + d] += g15_13 * dk
-    if use[15] > use[14]:
-        g3_14 = x18
-        g4_14 = C1
-        g14_14 = x33
-        g15_14 = x31
-        for e in range(int(use[14]), int(use[15])):
-            d = int(use[38 + e])
-            dk = dz[d * 37 + 14]
-            out[3 * ts + d] += g3_14 * dk
-            out[4 * ts + d] += g4_14 * dk
-            out[14 * ts + d] += g14_14 * dk
-            out[15 * ts + d] += g15_14 * dk
     if use[16] > use[15]:
-        g3_15 = x19
-        g4_15 = x18
-        g14_15 = x30
-        g15_15 = x33
+        g3_15 = -C1
+        g4_15 = -S1
+        g14_15 = x16
+        g15_15 = -x20
         for e in range(int(use[15]), int(use[16])):
             d = int(use[38 + e])
             dk = dz[d * 37 + 15]
@@ -1477,23 +1114,11 @@ def tangent(t, y, p, dz, nd, use, out, full):
             out[4 * ts + d] += g4_15 * dk
             out[14 * ts + d] += g14_15 * dk
             out[15 * ts + d] += g15_15 * dk
-    if use[17] > use[16]:
-        g3_16 = S1
-        g4_16 = x19
-        g14_16 = x32
-        g15_16 = x30
-        for e in range(int(use[16]), int(use[17])):
-            d = int(use[38 + e])
-            dk = dz[d * 37 + 16]
-            out[3 * ts + d] += g3_16 * dk
-            out[4 * ts + d] += g4_16 * dk
-            out[14 * ts + d] += g14_16 * dk
-            out[15 * ts + d] += g15_16 * dk
     if use[20] > use[19]:
-        g3_19 = x20
-        g4_19 = x21
-        g14_19 = x34
-        g15_19 = x37
+        g3_19 = -C2
+        g4_19 = -S2
+        g14_19 = x17
+        g15_19 = -x21
         for e in range(int(use[19]), int(use[20])):
             d = int(use[38 + e])
             dk = dz[d * 37 + 19]
@@ -1501,23 +1126,11 @@ def tangent(t, y, p, dz, nd, use, out, full):
             out[4 * ts + d] += g4_19 * dk
             out[14 * ts + d] += g14_19 * dk
             out[15 * ts + d] += g15_19 * dk
-    if use[21] > use[20]:
-        g3_20 = S2
-        g4_20 = x20
-        g14_20 = x35
-        g15_20 = x34
-        for e in range(int(use[20]), int(use[21])):
-            d = int(use[38 + e])
-            dk = dz[d * 37 + 20]
-            out[3 * ts + d] += g3_20 * dk
-            out[4 * ts + d] += g4_20 * dk
-            out[14 * ts + d] += g14_20 * dk
-            out[15 * ts + d] += g15_20 * dk
     if use[22] > use[21]:
         g3_21 = C2
         g4_21 = S2
-        g14_21 = x36
-        g15_21 = x35
+        g14_21 = -x17
+        g15_21 = x21
         for e in range(int(use[21]), int(use[22])):
             d = int(use[38 + e])
             dk = dz[d * 37 + 21]
@@ -1525,47 +1138,17 @@ def tangent(t, y, p, dz, nd, use, out, full):
             out[4 * ts + d] += g4_21 * dk
             out[14 * ts + d] += g14_21 * dk
             out[15 * ts + d] += g15_21 * dk
-    if use[23] > use[22]:
-        g3_22 = x21
-        g4_22 = C2
-        g14_22 = x37
-        g15_22 = x36
-        for e in range(int(use[22]), int(use[23])):
-            d = int(use[38 + e])
-            dk = dz[d * 37 + 22]
-            out[3 * ts + d] += g3_22 * dk
-            out[4 * ts + d] += g4_22 * dk
-            out[14 * ts + d] += g14_22 * dk
-            out[15 * ts + d] += g15_22 * dk
-    if use[24] > use[23]:
-        g3_23 = -1.0
-        for e in range(int(use[23]), int(use[24])):
-            d = int(use[38 + e])
-            dk = dz[d * 37 + 23]
-            out[3 * ts + d] += g3_23 * dk
-    if use[25] > use[24]:
-        g4_24 = -1.0
-        for e in range(int(use[24]), int(use[25])):
-            d = int(use[38 + e])
-            dk = dz[d * 37 + 24]
-            out[4 * ts + d] += g4_24 * dk
     if use[26] > use[25]:
         g3_25 = 1.0
         for e in range(int(use[25]), int(use[26])):
             d = int(use[38 + e])
             dk = dz[d * 37 + 25]
             out[3 * ts + d] += g3_25 * dk
-    if use[27] > use[26]:
-        g4_26 = 1.0
-        for e in range(int(use[26]), int(use[27])):
-            d = int(use[38 + e])
-            dk = dz[d * 37 + 26]
-            out[4 * ts + d] += g4_26 * dk
     if use[33] > use[32]:
-        g3_32 = t*x24
-        g4_32 = t*x6
-        g14_32 = t*x38 + t*x39 + x24
-        g15_32 = t*x7 + t*x8 + x6
+        g3_32 = -t*x8
+        g4_32 = t*x0
+        g14_32 = t*x18 + x9
+        g15_32 = t*x3 + x0
         for e in range(int(use[32]), int(use[33])):
             d = int(use[38 + e])
             dk = dz[d * 37 + 32]
@@ -1574,10 +1157,10 @@ def tangent(t, y, p, dz, nd, use, out, full):
             out[14 * ts + d] += g14_32 * dk
             out[15 * ts + d] += g15_32 * dk
     if use[34] > use[33]:
-        g3_33 = x24
-        g4_33 = x6
-        g14_33 = x38 + x39
-        g15_33 = x9
+        g3_33 = x9
+        g4_33 = x0
+        g14_33 = x18
+        g15_33 = x3
         for e in range(int(use[33]), int(use[34])):
             d = int(use[38 + e])
             dk = dz[d * 37 + 33]
@@ -1586,11 +1169,11 @@ def tangent(t, y, p, dz, nd, use, out, full):
             out[14 * ts + d] += g14_33 * dk
             out[15 * ts + d] += g15_33 * dk
     FX0, FY0 = contact_tangent(out, ts, nd, dz, 37, gv0_0, gv0_1, gv0_2, gv0_3, 0, 1, 2, 3, 4, 14, 15, 16, 17, 27, 28, 29, 36, p[22], p[30], p[31], p[23], p[24], p[25])
-    m_0_0 = k11
+    m_0_0 = k5
     m_1_0 = 0.0
-    m_1_1 = k12
-    f_0 = C0*C1*k13 + C0*S1*k15 - C1*FX0*k2 - C1*FY0*k3 + C1*S0*k14 + C1*k17 + FX0*S1*k3 - FY0*S1*k2 + S0*S1*k13 + S1*k16
-    f_1 = -C2*FX0*k4 - C2*FY0*k5 + C2*k19 + FX0*S2*k5 - FY0*S2*k4 + S2*k18
+    m_1_1 = k6
+    f_0 = C0*S1*k8 - C1*FY0*k1 + C1*S0*k7 + C1*k9 + FX0*S1*k1
+    f_1 = -C2*FY0*k2 + C2*k10 + FX0*S2*k2
     l_0_0 = math.sqrt(m_0_0)
     il_0 = 1.0 / l_0_0
     l_1_0 = (m_1_0) * il_0
@@ -1600,68 +1183,50 @@ def tangent(t, y, p, dz, nd, use, out, full):
     zz_1 = (f_1 - l_1_0 * zz_0) * il_1
     A1 = (zz_1) * il_1
     A0 = (zz_0 - l_1_0 * A1) * il_0
-    x40 = C0*C1
-    x41 = C0*S1
-    x42 = C1*S0
-    x43 = S0*S1
-    x44 = C1*FY0
-    x45 = C1*FX0
-    x46 = FX0*S1
-    x47 = FY0*S1
-    x48 = k52*x40 + k52*x43 - k53*x41 + k53*x42
-    x49 = k52*x41 - k52*x42 + k53*x40 + k53*x43
-    x50 = x44 - x46
-    x51 = k15*x40
-    x52 = k51*x41
-    x53 = k13*x42
-    x54 = k15*x43
-    x55 = C2*FX0
-    x56 = FX0*S2
-    x57 = FY0*S2
-    x58 = C2*FY0
-    x59 = x55 + x57
-    r0_1 = -C1*k16 + S1*k17 + k13*x41 + k14*x40 + k14*x43 + k2*x44 - k2*x46 - k3*x45 - k3*x47 + k51*x42
-    rfx_0_0 = C1*k2 - S1*k3
-    rfy_0_0 = C1*k3 + S1*k2
-    r1_2 = C2*FY0*k4 - C2*k18 + S2*k19 - k4*x56 - k5*x55 - k5*x57
-    rfx_1_0 = C2*k4 - S2*k5
-    rfy_1_0 = C2*k5 + S2*k4
+    x22 = C0*C1
+    x23 = S0*S1
+    x24 = x22 + x23
+    x25 = C1*k1
+    x26 = S1*k1
+    x27 = C0*S1
+    x28 = -C1*S0 + x27
+    x29 = C1*S0
+    x30 = C1*FY0 - FX0*S1
+    x31 = k8*t
+    x32 = C2*k2
+    x33 = S2*k2
+    x34 = FX0*S2
+    x35 = C2*FY0
+    r0_1 = -FX0*x25 - FY0*x26 + S1*k9 + k7*x22 + k7*x23
+    rfx_0_0 = -x26
+    rfy_0_0 = x25
+    r1_2 = -FX0*x32 - FY0*x33 + S2*k10
+    rfx_1_0 = -x33
+    rfy_1_0 = x32
     for d in range(nd):
         yo = 4 * (d + 1)
         out[12 * ts + d] = r0_1 * y[yo + 0]
         out[13 * ts + d] = r1_2 * y[yo + 1]
     if use[1] > use[0]:
-        r0_0 = k48*x40 + k48*x43 + k49*x42 + k50*x41
+        r0_0 = k26*x24
         for e in range(int(use[0]), int(use[1])):
             d = int(use[38 + e])
             dk = dz[d * 37 + 0]
             out[12 * ts + d] += r0_0 * dk
     if use[8] > use[7]:
-        r0_7 = x48
+        r0_7 = -k27*x28
         for e in range(int(use[7]), int(use[8])):
             d = int(use[38 + e])
             dk = dz[d * 37 + 7]
             out[12 * ts + d] += r0_7 * dk
-    if use[9] > use[8]:
-        r0_8 = x49
-        for e in range(int(use[8]), int(use[9])):
-            d = int(use[38 + e])
-            dk = dz[d * 37 + 8]
-            out[12 * ts + d] += r0_8 * dk
     if use[10] > use[9]:
-        r0_9 = -x48
+        r0_9 = k27*x28
         for e in range(int(use[9]), int(use[10])):
             d = int(use[38 + e])
             dk = dz[d * 37 + 9]
             out[12 * ts + d] += r0_9 * dk
-    if use[11] > use[10]:
-        r0_10 = -x49
-        for e in range(int(use[10]), int(use[11])):
-            d = int(use[38 + e])
-            dk = dz[d * 37 + 10]
-            out[12 * ts + d] += r0_10 * dk
     if use[12] > use[11]:
-        r0_11 = A0*k59 + C1*k58 + S1*k57 + k54*x40 + k54*x43 + k55*x42 + k56*x41
+        r0_11 = A0*k31 + C1*k30 + k28*x29 + k29*x27
         for e in range(int(use[11]), int(use[12])):
             d = int(use[38 + e])
             dk = dz[d * 37 + 11]
@@ -1673,31 +1238,19 @@ def tangent(t, y, p, dz, nd, use, out, full):
             dk = dz[d * 37 + 12]
             out[12 * ts + d] += r0_12 * dk
     if use[14] > use[13]:
-        r0_13 = A0*k64 + C1*k63 + k60*x40 + k60*x43 + k61*x42 + k62*x41 + x50
+        r0_13 = A0*k35 + C1*k34 + k32*x29 + k33*x27 + x30
         for e in range(int(use[13]), int(use[14])):
             d = int(use[38 + e])
             dk = dz[d * 37 + 13]
             out[12 * ts + d] += r0_13 * dk
-    if use[15] > use[14]:
-        r0_14 = A0*k66 - S1*k63 + k60*x42 + k62*x40 + k62*x43 + k65*x41 - x45 - x47
-        for e in range(int(use[14]), int(use[15])):
-            d = int(use[38 + e])
-            dk = dz[d * 37 + 14]
-            out[12 * ts + d] += r0_14 * dk
     if use[16] > use[15]:
-        r0_15 = -x50
+        r0_15 = -x30
         for e in range(int(use[15]), int(use[16])):
             d = int(use[38 + e])
             dk = dz[d * 37 + 15]
             out[12 * ts + d] += r0_15 * dk
-    if use[17] > use[16]:
-        r0_16 = x45 + x47
-        for e in range(int(use[16]), int(use[17])):
-            d = int(use[38 + e])
-            dk = dz[d * 37 + 16]
-            out[12 * ts + d] += r0_16 * dk
     if use[18] > use[17]:
-        r1_17 = A1*k72 + C2*k71 + S2*k70
+        r1_17 = A1*k39 + C2*k38
         for e in range(int(use[17]), int(use[18])):
             d = int(use[38 + e])
             dk = dz[d * 37 + 17]
@@ -1709,44 +1262,32 @@ def tangent(t, y, p, dz, nd, use, out, full):
             dk = dz[d * 37 + 18]
             out[13 * ts + d] += r1_18 * dk
     if use[20] > use[19]:
-        r1_19 = A1*k73 + C2*k30 + x56 - x58
+        r1_19 = A1*k40 + C2*k17 + x34 - x35
         for e in range(int(use[19]), int(use[20])):
             d = int(use[38 + e])
             dk = dz[d * 37 + 19]
             out[13 * ts + d] += r1_19 * dk
-    if use[21] > use[20]:
-        r1_20 = A1*k74 - S2*k30 + x59
-        for e in range(int(use[20]), int(use[21])):
-            d = int(use[38 + e])
-            dk = dz[d * 37 + 20]
-            out[13 * ts + d] += r1_20 * dk
     if use[22] > use[21]:
-        r1_21 = -x56 + x58
+        r1_21 = -x34 + x35
         for e in range(int(use[21]), int(use[22])):
             d = int(use[38 + e])
             dk = dz[d * 37 + 21]
             out[13 * ts + d] += r1_21 * dk
-    if use[23] > use[22]:
-        r1_22 = -x59
-        for e in range(int(use[22]), int(use[23])):
-            d = int(use[38 + e])
-            dk = dz[d * 37 + 22]
-            out[13 * ts + d] += r1_22 * dk
     if use[33] > use[32]:
-        r0_32 = k67*x40 + k67*x43 + k68*x42 + k69*x41 + t*x51 + t*x52 + t*x53 + t*x54
+        r0_32 = k36*x29 + k37*x27 + x22*x31 + x23*x31
         for e in range(int(use[32]), int(use[33])):
             d = int(use[38 + e])
             dk = dz[d * 37 + 32]
             out[12 * ts + d] += r0_32 * dk
     if use[34] > use[33]:
-        r0_33 = x51 + x52 + x53 + x54
+        r0_33 = k8*x24
         for e in range(int(use[33]), int(use[34])):
             d = int(use[38 + e])
             dk = dz[d * 37 + 33]
             out[12 * ts + d] += r0_33 * dk
     if use[35] > use[34]:
-        r0_34 = C1*k25 + S1*k24
-        r1_34 = C2*k29 + S2*k28
+        r0_34 = C1*k14
+        r1_34 = C2*k16
         for e in range(int(use[34]), int(use[35])):
             d = int(use[38 + e])
             dk = dz[d * 37 + 34]
@@ -1763,101 +1304,71 @@ def tangent(t, y, p, dz, nd, use, out, full):
         out[13 * ts + d] = x_1
     out[12 * ts + nd] = A0
     out[13 * ts + nd] = A1
-    x60 = A0*C0
-    x61 = C1*k32
-    x62 = S1*k31
-    x63 = A0*S0
-    x64 = (U0 * U0)
-    x65 = C0*x64
-    x66 = S0*x64
-    out[11 * ts + nd] = C0*FX0*k0 + C0*FY0*k1 + C0*k36 + C1*k31*x65 + C1*k33*x63 - FX0*S0*k1 + FY0*S0*k0 + S0*k34 + S1*k32*x63 + S1*k35*x65 + x60*x61 + x60*x62 + x61*x66 + x62*x66
+    x36 = A0*k18
+    x37 = (U0 * U0)
+    out[11 * ts + nd] = C0*C1*x36 + C0*FY0*k0 + C0*S1*k19*x37 + C0*k20 + C1*S0*k18*x37 - FX0*S0*k0 + S0*S1*x36
     if full:
-        x67 = C0*k23
-        x68 = S0*k22
-        x69 = x67 + x68
-        x70 = A0*S1
-        x71 = k25*x70
-        x72 = (U0 * U0)
-        x73 = C1*x72
-        x74 = k25*x73
-        x75 = S1*x72
-        x76 = k24*x75
-        x77 = A0*C1
-        x78 = k24*x77
-        x79 = x71 + x74 + x76 - x78
-        x80 = k25*x77
-        x81 = k24*x70
-        x82 = k24*x73
-        x83 = k25*x75
-        x84 = C0*k79
-        x85 = S0*k79
-        x86 = C0*k80
-        x87 = S0*k80
-        x88 = -coupler__mass*(x70 + x73)
-        x89 = -S1*x72 + x77
-        x90 = C0*k22
-        x91 = S0*k81
-        x92 = A1*S2
-        x93 = (U1 * U1)
-        x94 = C2*x93
-        x95 = S2*x93
-        x96 = A1*C2
-        x97 = k28*x95 - k28*x96 + k29*x92 + k29*x94
-        x98 = k28*x92 + k28*x94 - k29*x95 + k29*x96
-        x99 = -rocker__mass*(x92 + x94)
-        x100 = -S2*x93 + x96
-        x101 = C0*FX0
-        x102 = C0*FY0
-        x103 = FX0*S0
-        x104 = FY0*S0
-        x105 = C0*x77
-        x106 = C0*k37
-        x107 = S0*x77
-        x108 = S0*k38
-        x109 = C0*x75
-        x110 = S0*x75
-        x111 = C0*k35
-        x112 = S0*k31
-        x113 = C0*C1
-        x114 = C0*S1
-        x115 = C1*S0
-        x116 = S0*S1
-        x117 = C0*x80 + C0*x81 + C0*x82 - C0*x83 + S0*x71 + S0*x74 + S0*x76 - S0*x78 - x102 + x103
-        x118 = C0*x71 + C0*x74 + C0*x76 - C0*x78 - S0*x80 - S0*x81 - S0*x82 + S0*x83 + x101 + x104
-        x119 = C0*k95
-        x120 = S0*k96
-        x121 = C0*k99
-        x122 = S0*k100
-        x123 = C0*k102
-        x124 = S0*k99
-        x125 = C0*k32
-        x126 = S0*k33
-        x127 = C0*k34 + S0*k103 + k0*x102 - k0*x103 - k1*x101 - k1*x104 + k31*x109 + k32*x110 + k33*x105 + k35*x107 + x125*x70 + x125*x73 + x126*x70 + x126*x73
-        out[5 * ts + nd] = FX0 + x69 + x79
-        o5_1 = x80 + x81 + x82 - x83
-        o5_3 = U0*(-C1*k64 + S1*k66)
-        oa_0_0 = -C1*k24 + S1*k25
+        x38 = C0*k13
+        x39 = A0*S1
+        x40 = k14*x39
+        x41 = (U0 * U0)
+        x42 = C1*x41
+        x43 = k14*x42
+        x44 = A0*C1
+        x45 = S1*x41
+        x46 = x44 - x45
+        x47 = U0*k35
+        x48 = x39 + x42
+        x49 = S0*k45
+        x50 = k14*x45
+        x51 = k14*x44
+        x52 = -gravity
+        x53 = A1*S2
+        x54 = (U1 * U1)
+        x55 = C2*x54
+        x56 = A1*C2
+        x57 = S2*x54
+        x58 = x56 - x57
+        x59 = U1*k40
+        x60 = x53 + x55
+        x61 = C0*k21
+        x62 = S0*x44
+        x63 = S0*x45
+        x64 = C0*k19
+        x65 = -C0*FY0 - C0*x50 + C0*x51 + FX0*S0 + S0*x40 + S0*x43
+        x66 = C0*x44
+        x67 = S0*k54
+        x68 = C0*x45
+        x69 = S0*k57
+        x70 = C0*k0
+        x71 = S0*k0
+        x72 = C0*k18
+        x73 = -FX0*x70 - FY0*x71 + S0*k59 + k18*x63 + k19*x62 + x39*x72 + x42*x72
+        out[5 * ts + nd] = FX0 + x38 + x40 + x43
+        o5_1 = k14*x46
+        o5_3 = -C1*x47
+        oa_0_0 = S1*k14
         ofx_0_0 = 1.0
-        out[6 * ts + nd] = C0*k26 + FY0 + S0*k23 + k27 - x80 - x81 - x82 + x83
-        o6_1 = x79
-        o6_3 = -U0*(C1*k66 + S1*k64)
-        oa_1_0 = -C1*k25 - S1*k24
+        out[6 * ts + nd] = FY0 + S0*k13 + k15 + x50 - x51
+        o6_1 = k14*x48
+        o6_3 = -S1*x47
+        oa_1_0 = -C1*k14
         ofy_1_0 = 1.0
-        out[7 * ts + nd] = -FX0 + x97
-        o7_2 = x98
-        o7_4 = U1*(-C2*k73 + S2*k74)
-        oa_2_1 = -C2*k28 + S2*k29
+        out[7 * ts + nd] = -FX0 + k16*x53 + k16*x55
+        o7_2 = k16*x58
+        o7_4 = -C2*x59
+        oa_2_1 = S2*k16
         ofx_2_0 = -1.0
-        out[8 * ts + nd] = -FY0 + k30 - x98
-        o8_2 = x97
-        o8_4 = -U1*(C2*k74 + S2*k73)
-        oa_3_1 = -C2*k29 - S2*k28
+        out[8 * ts + nd] = -FY0 + S2*k16*x54 - k16*x56 + k17
+        o8_2 = k16*x60
+        o8_4 = -S2*x59
+        oa_3_1 = -C2*k16
         ofy_3_0 = -1.0
-        o11_1 = k31*x105 + k32*x107 + k33*x109 + k35*x110 + x111*x70 + x111*x73 + x112*x70 + x112*x73
-        o11_3 = U0*(k90*x113 + k90*x116 + k91*x115 + k92*x114)
-        oa_4_0 = k31*x114 + k32*x113 + k32*x116 + k33*x115
-        ofx_4_0 = C0*k0 - S0*k1
-        ofy_4_0 = C0*k1 + S0*k0
+        o11_1 = k18*x62 + k19*x63 + x39*x64 + x42*x64
+        o11_3 = U0*(C0*S1*k52 + C1*S0*k51)
+        oa_4_0 = k18*(C0*C1 + S0*S1)
+        ofx_4_0 = -x71
+        ofy_4_0 = x70
         for d in range(nd):
             yo = 4 * (d + 1)
             out[5 * ts + d] = o5_1 * y[yo + 0] + o5_3 * y[yo + 2] + oa_0_0 * out[12 * ts + d] + ofx_0_0 * out[16 * ts + d]
@@ -1866,9 +1377,9 @@ def tangent(t, y, p, dz, nd, use, out, full):
             out[8 * ts + d] = o8_2 * y[yo + 1] + o8_4 * y[yo + 3] + oa_3_1 * out[13 * ts + d] + ofy_3_0 * out[17 * ts + d]
             out[11 * ts + d] = o11_1 * y[yo + 0] + o11_3 * y[yo + 2] + oa_4_0 * out[12 * ts + d] + ofx_4_0 * out[16 * ts + d] + ofy_4_0 * out[17 * ts + d]
         if use[1] > use[0]:
-            o5_0 = C0*k76 + S0*k75
-            o6_0 = C0*k84 + S0*k76
-            o11_0 = C0*k89 + S0*k88 + k37*x110 + k38*x105 + k39*x109 + k46*x103 + k8*x101 + k8*x104 + k87*x107 + k9*x102 + x106*x70 + x106*x73 + x108*x70 + x108*x73
+            o5_0 = S0*k41
+            o6_0 = C0*k47
+            o11_0 = C0*FX0*k3 + FY0*S0*k3 + S0*k50 + k21*x63 + k49*x62 + x39*x61 + x42*x61
             for e in range(int(use[0]), int(use[1])):
                 d = int(use[38 + e])
                 dk = dz[d * 37 + 0]
@@ -1876,9 +1387,9 @@ def tangent(t, y, p, dz, nd, use, out, full):
                 out[6 * ts + d] += o6_0 * dk
                 out[11 * ts + d] += o11_0 * dk
         if use[6] > use[5]:
-            o5_5 = C0*k78 + S0*k77
-            o6_5 = -C0*k77 + S0*k78 - gravity
-            o11_5 = C0*k94 + S0*k93
+            o5_5 = C0*k42
+            o6_5 = S0*k42 + x52
+            o11_5 = C0*k53
             for e in range(int(use[5]), int(use[6])):
                 d = int(use[38 + e])
                 dk = dz[d * 37 + 5]
@@ -1886,49 +1397,29 @@ def tangent(t, y, p, dz, nd, use, out, full):
                 out[6 * ts + d] += o6_5 * dk
                 out[11 * ts + d] += o11_5 * dk
         if use[8] > use[7]:
-            o5_7 = x84
-            o6_7 = x85
-            o11_7 = C0*k27 - x117
+            o5_7 = C0*k43
+            o6_7 = S0*k43
+            o11_7 = C0*k15 - x65
             for e in range(int(use[7]), int(use[8])):
                 d = int(use[38 + e])
                 dk = dz[d * 37 + 7]
                 out[5 * ts + d] += o5_7 * dk
                 out[6 * ts + d] += o6_7 * dk
                 out[11 * ts + d] += o11_7 * dk
-        if use[9] > use[8]:
-            o5_8 = -x85
-            o6_8 = x84
-            o11_8 = -S0*k27 - x118
-            for e in range(int(use[8]), int(use[9])):
-                d = int(use[38 + e])
-                dk = dz[d * 37 + 8]
-                out[5 * ts + d] += o5_8 * dk
-                out[6 * ts + d] += o6_8 * dk
-                out[11 * ts + d] += o11_8 * dk
         if use[10] > use[9]:
-            o5_9 = x86
-            o6_9 = x87
-            o11_9 = -C0*k63 + x117
+            o5_9 = C0*k44
+            o6_9 = S0*k44
+            o11_9 = -C0*k34 + x65
             for e in range(int(use[9]), int(use[10])):
                 d = int(use[38 + e])
                 dk = dz[d * 37 + 9]
                 out[5 * ts + d] += o5_9 * dk
                 out[6 * ts + d] += o6_9 * dk
                 out[11 * ts + d] += o11_9 * dk
-        if use[11] > use[10]:
-            o5_10 = -x87
-            o6_10 = x86
-            o11_10 = S0*k63 + x118
-            for e in range(int(use[10]), int(use[11])):
-                d = int(use[38 + e])
-                dk = dz[d * 37 + 10]
-                out[5 * ts + d] += o5_10 * dk
-                out[6 * ts + d] += o6_10 * dk
-                out[11 * ts + d] += o11_10 * dk
         if use[12] > use[11]:
-            o5_11 = C0*k45 + S0*k44 + S1*coupler__crank_end__y*x72 - coupler__crank_end__x*x70 - coupler__crank_end__x*x73 - coupler__crank_end__y*x77
-            o6_11 = A0*C1*coupler__crank_end__x + C0*k47 + S0*k45 - coupler__crank_end__x*x75 - coupler__crank_end__y*x70 - coupler__crank_end__y*x73 - gravity
-            o11_11 = C0*k98 + S0*k97 - k95*x107 + k95*x110 + k96*x105 - k96*x109 + x119*x70 + x119*x73 + x120*x70 + x120*x73
+            o5_11 = C0*k25 - coupler__crank_end__x*x39 - coupler__crank_end__x*x42
+            o6_11 = S0*k25 + coupler__crank_end__x*x44 - coupler__crank_end__x*x45 + x52
+            o11_11 = C0*k56 + k54*x66 + k55*x68 + x39*x67 + x42*x67
             for e in range(int(use[11]), int(use[12])):
                 d = int(use[38 + e])
                 dk = dz[d * 37 + 11]
@@ -1936,53 +1427,35 @@ def tangent(t, y, p, dz, nd, use, out, full):
                 out[6 * ts + d] += o6_11 * dk
                 out[11 * ts + d] += o11_11 * dk
         if use[14] > use[13]:
-            o5_13 = x88
-            o6_13 = coupler__mass*x89
-            o11_13 = k100*x105 + k101*x107 + k102*x109 + k99*x110 + x121*x70 + x121*x73 + x122*x70 + x122*x73
+            o5_13 = -coupler__mass*x48
+            o6_13 = coupler__mass*x46
+            o11_13 = k57*x66 + k58*x68 + x39*x69 + x42*x69
             for e in range(int(use[13]), int(use[14])):
                 d = int(use[38 + e])
                 dk = dz[d * 37 + 13]
                 out[5 * ts + d] += o5_13 * dk
                 out[6 * ts + d] += o6_13 * dk
                 out[11 * ts + d] += o11_13 * dk
-        if use[15] > use[14]:
-            o5_14 = -coupler__mass*x89
-            o6_14 = x88
-            o11_14 = k100*x107 + k101*x109 + k102*x110 + k99*x105 + x123*x70 + x123*x73 + x124*x70 + x124*x73
-            for e in range(int(use[14]), int(use[15])):
-                d = int(use[38 + e])
-                dk = dz[d * 37 + 14]
-                out[5 * ts + d] += o5_14 * dk
-                out[6 * ts + d] += o6_14 * dk
-                out[11 * ts + d] += o11_14 * dk
         if use[18] > use[17]:
-            o7_17 = S2*rocker__pivot__y*x93 - rocker__pivot__x*x92 - rocker__pivot__x*x94 - rocker__pivot__y*x96
-            o8_17 = A1*C2*rocker__pivot__x - gravity - rocker__pivot__x*x95 - rocker__pivot__y*x92 - rocker__pivot__y*x94
+            o7_17 = -rocker__pivot__x*x60
+            o8_17 = A1*C2*rocker__pivot__x - gravity - rocker__pivot__x*x57
             for e in range(int(use[17]), int(use[18])):
                 d = int(use[38 + e])
                 dk = dz[d * 37 + 17]
                 out[7 * ts + d] += o7_17 * dk
                 out[8 * ts + d] += o8_17 * dk
         if use[20] > use[19]:
-            o7_19 = x99
-            o8_19 = rocker__mass*x100
+            o7_19 = -rocker__mass*x60
+            o8_19 = rocker__mass*x58
             for e in range(int(use[19]), int(use[20])):
                 d = int(use[38 + e])
                 dk = dz[d * 37 + 19]
                 out[7 * ts + d] += o7_19 * dk
                 out[8 * ts + d] += o8_19 * dk
-        if use[21] > use[20]:
-            o7_20 = -rocker__mass*x100
-            o8_20 = x99
-            for e in range(int(use[20]), int(use[21])):
-                d = int(use[38 + e])
-                dk = dz[d * 37 + 20]
-                out[7 * ts + d] += o7_20 * dk
-                out[8 * ts + d] += o8_20 * dk
         if use[33] > use[32]:
-            o5_32 = C0*k83 + S0*k82 + t*x90 + t*x91
-            o6_32 = C0*k85 + S0*k83 + t*x67 + t*x68
-            o11_32 = t*x127
+            o5_32 = C0*k46 + t*x49
+            o6_32 = S0*k46 + t*x38
+            o11_32 = t*x73
             for e in range(int(use[32]), int(use[33])):
                 d = int(use[38 + e])
                 dk = dz[d * 37 + 32]
@@ -1990,9 +1463,9 @@ def tangent(t, y, p, dz, nd, use, out, full):
                 out[6 * ts + d] += o6_32 * dk
                 out[11 * ts + d] += o11_32 * dk
         if use[34] > use[33]:
-            o5_33 = x90 + x91
-            o6_33 = x69
-            o11_33 = x127
+            o5_33 = x49
+            o6_33 = x38
+            o11_33 = x73
             for e in range(int(use[33]), int(use[34])):
                 d = int(use[38 + e])
                 dk = dz[d * 37 + 33]
@@ -2000,9 +1473,9 @@ def tangent(t, y, p, dz, nd, use, out, full):
                 out[6 * ts + d] += o6_33 * dk
                 out[11 * ts + d] += o11_33 * dk
         if use[35] > use[34]:
-            o6_34 = k86
+            o6_34 = k48
             o8_34 = -rocker__mass
-            o11_34 = C0*k105 + S0*k104
+            o11_34 = C0*k60
             for e in range(int(use[34]), int(use[35])):
                 d = int(use[38 + e])
                 dk = dz[d * 37 + 34]
@@ -2043,6 +1516,8 @@ def monitor_sens(t, y, p, dydt, out, g, gd):
 @nb.njit(cache=True, error_model="numpy", nogil=True)
 def integrate_sens(y0, p, edges, settings, coefficients):
     """`integrator.integrate` bound to the sensitivity kernels (compiled once, cached)."""
+    if not _zeros_hold(p):
+        raise ValueError(ZERO_MESSAGE)
     return integrate(_THIS.rhs_sens, _THIS.event, _THIS.on_event_sens, _THIS.monitor_sens,
                      y0, p, edges, settings, coefficients)
 

@@ -31,9 +31,9 @@ from mbs_clearance.generate.runtime import (
 )
 
 LINKAGE = "slider_crank_two_clearances"
-STRUCTURE = "{\"bodies\": [[\"crank\", [\"pin\", \"pivot\"]], [\"coupler\", [\"crank_end\", \"slider_end\"]], [\"slider\", [\"pin\"]]], \"clearance_joints\": [[\"crank_coupler\", \"crank\", \"pin\", \"coupler\", \"crank_end\"], [\"coupler_slider\", \"coupler\", \"slider_end\", \"slider\", \"pin\"]], \"drive\": \"crank_pivot\", \"ground_points\": [\"crank_pivot\", \"slider_axis\"], \"joints\": [[\"revolute\", \"crank_pivot\", \"ground\", \"crank_pivot\", \"crank\", \"pivot\"], [\"prismatic\", \"slider_guide\", \"ground\", \"slider_axis\", \"slider\", \"pin\"]], \"monitor_joint\": \"crank_pivot\"}"
-STRUCTURE_DIGEST = "dd3c934a2d49e128e440a6affa2f58a4d8ba89e717116ce90987224795928fca"
-GENERATOR_VERSION = "302c28485455de7f"
+STRUCTURE = "{\"bodies\": [[\"crank\", [\"pin\", \"pivot\"]], [\"coupler\", [\"crank_end\", \"slider_end\"]], [\"slider\", [\"pin\"]]], \"clearance_joints\": [[\"crank_coupler\", \"crank\", \"pin\", \"coupler\", \"crank_end\"], [\"coupler_slider\", \"coupler\", \"slider_end\", \"slider\", \"pin\"]], \"drive\": \"crank_pivot\", \"ground_points\": [\"crank_pivot\", \"slider_axis\"], \"joints\": [[\"revolute\", \"crank_pivot\", \"ground\", \"crank_pivot\", \"crank\", \"pivot\"], [\"prismatic\", \"slider_guide\", \"ground\", \"slider_axis\", \"slider\", \"pin\"]], \"monitor_joint\": \"crank_pivot\", \"zero_parameters\": [\"crank.pivot.y\", \"crank.pin.y\", \"coupler.crank_end.y\", \"coupler.slider_end.y\", \"slider.pin.x\", \"slider.pin.y\", \"ground.crank_pivot.x\", \"ground.crank_pivot.y\", \"ground.slider_axis.x\", \"ground.slider_axis.y\", \"slider_guide.angle\"]}"
+STRUCTURE_DIGEST = "b7dbc99113b46f74005035655a8ae114a47d50fd3049a3ceadba8be31ce0c6c6"
+GENERATOR_VERSION = "0b9e999437c58796"
 
 #: dotted names of the entries of p (without the constants)
 PARAMETERS = (
@@ -76,6 +76,10 @@ PARAMETERS = (
     "coupler_slider.mode",
     "coupler_slider.impact_velocity",
 )
+#: the parameters this module is specialised on: exactly zero (their terms are not in the
+#: kernels; their entries of p stay, checked by `prepare` and `integrate_model`)
+ZERO_PARAMETERS = ("crank.pivot.y", "crank.pin.y", "coupler.crank_end.y", "coupler.slider_end.y", "slider.pin.x", "slider.pin.y", "ground.crank_pivot.x", "ground.crank_pivot.y", "ground.slider_axis.x", "ground.slider_axis.y", "slider_guide.angle", )
+ZERO_INDEX = np.array([3, 5, 9, 11, 14, 15, 16, 17, 18, 19, 20], dtype=np.int64)
 COORDINATES = ("slider_guide.s", "coupler.x", "coupler.y", "coupler.angle", )
 N_Q = 4
 #: the clearance joints with friction (their tangential force is in the model)
@@ -93,7 +97,7 @@ GROUND_JOINTS = ("crank_pivot", "slider_guide", )
 #: the ground joint whose |reaction| is monitored (None: the shaking force)
 MONITOR_JOINT = "crank_pivot"
 CONST_START = len(PARAMETERS)
-N_CONSTANTS = 43
+N_CONSTANTS = 23
 N_P = CONST_START + N_CONSTANTS
 #: columns of `outputs` (and of the monitor's out)
 OUT_COLUMNS = (
@@ -125,91 +129,62 @@ MONITOR_COLUMN = 10
 MOMENT_COLUMN = 16
 ACC_COLUMN = 17
 _THIS = sys.modules[__name__]
+ZERO_MESSAGE = ("a parameter of ZERO_PARAMETERS is not zero: this model is specialised on "
+                "them; load the general one (load_model(linkage, specialise=False))")
+
+
+@nb.njit(**KERNEL)
+def _zeros_hold(p):
+    for i in ZERO_INDEX:
+        if p[i] != 0.0:
+            return False
+    return True
 
 
 @nb.njit(**KERNEL)
 def prepare(p):
     """The parameter-only constants into p[CONST_START:]."""
+    if not _zeros_hold(p):
+        raise ValueError(ZERO_MESSAGE)
     crank__mass = p[0]  # crank.mass
     crank__inertia = p[1]  # crank.inertia
     crank__pivot__x = p[2]  # crank.pivot.x
-    crank__pivot__y = p[3]  # crank.pivot.y
     crank__pin__x = p[4]  # crank.pin.x
-    crank__pin__y = p[5]  # crank.pin.y
     coupler__mass = p[6]  # coupler.mass
     coupler__inertia = p[7]  # coupler.inertia
     slider__mass = p[12]  # slider.mass
-    slider__pin__y = p[15]  # slider.pin.y
-    ground__crank_pivot__y = p[17]  # ground.crank_pivot.y
-    ground__slider_axis__y = p[19]  # ground.slider_axis.y
-    slider_guide__angle = p[20]  # slider_guide.angle
     drive__speed = p[31]  # drive.speed
     gravity = p[33]  # gravity
-    S2 = math.sin(slider_guide__angle)
-    C2 = math.cos(slider_guide__angle)
-    x0 = crank__pin__y - crank__pivot__y
-    x1 = crank__pin__x - crank__pivot__x
-    x2 = drive__speed*x1
-    x3 = drive__speed*x0
-    x4 = S2*slider__mass
-    x5 = (drive__speed * drive__speed)
-    x6 = crank__pivot__y*x5
-    x7 = crank__pivot__x*x5
-    x8 = crank__mass*gravity
-    x9 = C2*slider__mass
-    x10 = gravity*slider__mass
-    x11 = crank__pivot__y*x8
-    x12 = crank__pivot__x*x8
-    x13 = crank__mass*x5
-    x14 = (0.5)*x13
-    x15 = x0*x5
-    x16 = (drive__speed * drive__speed * drive__speed)
-    x17 = crank__mass*crank__pivot__x
-    x18 = crank__mass*crank__pivot__y
-    x19 = 2.0*drive__speed
-    p[CONST_START + 0] = -x0
-    p[CONST_START + 1] = x1
-    p[CONST_START + 2] = -x2
-    p[CONST_START + 3] = -x3
-    p[CONST_START + 4] = x2
-    p[CONST_START + 5] = -C2
-    p[CONST_START + 6] = -S2
-    p[CONST_START + 7] = -gravity*x4
-    p[CONST_START + 8] = -coupler__mass*gravity
-    p[CONST_START + 9] = (1.0 / slider__mass)
-    p[CONST_START + 10] = (1.0 / coupler__mass)
-    p[CONST_START + 11] = (1.0 / coupler__inertia)
-    p[CONST_START + 12] = crank__mass*x6
-    p[CONST_START + 13] = -crank__mass*x7
-    p[CONST_START + 14] = -x8
-    p[CONST_START + 15] = -x9
-    p[CONST_START + 16] = -x4
-    p[CONST_START + 17] = -x10
-    p[CONST_START + 18] = x11
-    p[CONST_START + 19] = -x12
-    p[CONST_START + 20] = (0.5)*slider__mass
-    p[CONST_START + 21] = (0.5)*coupler__mass
-    p[CONST_START + 22] = (0.5)*coupler__inertia
-    p[CONST_START + 23] = (0.5)*crank__inertia*x5 + (crank__pivot__x * crank__pivot__x)*x14 + (crank__pivot__y * crank__pivot__y)*x14 + ground__crank_pivot__y*x8 + ground__slider_axis__y*x10 - slider__pin__y*x10
-    p[CONST_START + 24] = x15
-    p[CONST_START + 25] = -x1*x5
-    p[CONST_START + 26] = x3
-    p[CONST_START + 27] = -x15
-    p[CONST_START + 28] = S2*gravity
-    p[CONST_START + 29] = gravity*x9
-    p[CONST_START + 30] = x16*x17
-    p[CONST_START + 31] = x16*x18
-    p[CONST_START + 32] = x6
-    p[CONST_START + 33] = -x7
-    p[CONST_START + 34] = -x13
-    p[CONST_START + 35] = x18*x19
-    p[CONST_START + 36] = -x17*x19
-    p[CONST_START + 37] = drive__speed*x12
-    p[CONST_START + 38] = drive__speed*x11
-    p[CONST_START + 39] = crank__pivot__y*gravity
-    p[CONST_START + 40] = -crank__pivot__x*gravity
-    p[CONST_START + 41] = x18
-    p[CONST_START + 42] = -x17
+    x0 = crank__pin__x - crank__pivot__x
+    x1 = drive__speed*x0
+    x2 = (drive__speed * drive__speed)
+    x3 = crank__pivot__x*x2
+    x4 = crank__mass*gravity
+    x5 = crank__pivot__x*x4
+    x6 = crank__mass*crank__pivot__x
+    p[CONST_START + 0] = x0
+    p[CONST_START + 1] = -x1
+    p[CONST_START + 2] = x1
+    p[CONST_START + 3] = -coupler__mass*gravity
+    p[CONST_START + 4] = (1.0 / slider__mass)
+    p[CONST_START + 5] = (1.0 / coupler__mass)
+    p[CONST_START + 6] = (1.0 / coupler__inertia)
+    p[CONST_START + 7] = -crank__mass*x3
+    p[CONST_START + 8] = -x4
+    p[CONST_START + 9] = -gravity*slider__mass
+    p[CONST_START + 10] = -x5
+    p[CONST_START + 11] = (0.5)*slider__mass
+    p[CONST_START + 12] = (0.5)*coupler__mass
+    p[CONST_START + 13] = (0.5)*coupler__inertia
+    p[CONST_START + 14] = (0.5)*x2*(crank__inertia + crank__mass*(crank__pivot__x * crank__pivot__x))
+    p[CONST_START + 15] = -x0*x2
+    p[CONST_START + 16] = (drive__speed * drive__speed * drive__speed)*x6
+    p[CONST_START + 17] = -x3
+    p[CONST_START + 18] = -crank__mass*x2
+    p[CONST_START + 19] = -2.0*drive__speed*x6
+    p[CONST_START + 20] = drive__speed*x5
+    p[CONST_START + 21] = -crank__pivot__x*gravity
+    p[CONST_START + 22] = -x6
     return
 
 
@@ -220,13 +195,8 @@ def dynamics(t, y, p):
     bearing centre); the ground reactions (forces on the ground); the shaking force; the drive
     moment; the accelerations (the mass matrix solved)."""
     coupler__crank_end__x = p[8]  # coupler.crank_end.x
-    coupler__crank_end__y = p[9]  # coupler.crank_end.y
     coupler__slider_end__x = p[10]  # coupler.slider_end.x
-    coupler__slider_end__y = p[11]  # coupler.slider_end.y
-    ground__crank_pivot__x = p[16]  # ground.crank_pivot.x
-    ground__crank_pivot__y = p[17]  # ground.crank_pivot.y
-    ground__slider_axis__x = p[18]  # ground.slider_axis.x
-    ground__slider_axis__y = p[19]  # ground.slider_axis.y
+    slider__mass = p[12]  # slider.mass
     drive__speed = p[31]  # drive.speed
     drive__initial_angle = p[32]  # drive.initial_angle
     k0 = p[CONST_START + 0]
@@ -240,15 +210,6 @@ def dynamics(t, y, p):
     k8 = p[CONST_START + 8]
     k9 = p[CONST_START + 9]
     k10 = p[CONST_START + 10]
-    k11 = p[CONST_START + 11]
-    k12 = p[CONST_START + 12]
-    k13 = p[CONST_START + 13]
-    k14 = p[CONST_START + 14]
-    k15 = p[CONST_START + 15]
-    k16 = p[CONST_START + 16]
-    k17 = p[CONST_START + 17]
-    k18 = p[CONST_START + 18]
-    k19 = p[CONST_START + 19]
     Q0 = y[0]
     Q1 = y[1]
     Q2 = y[2]
@@ -259,38 +220,34 @@ def dynamics(t, y, p):
     U3 = y[7]
     S0, C0 = sincos(drive__initial_angle + drive__speed*t)
     S1, C1 = sincos(Q3)
-    x0 = S1*coupler__crank_end__y
-    x1 = C1*coupler__crank_end__x
-    x2 = C1*coupler__crank_end__y
-    x3 = S1*coupler__crank_end__x
-    x4 = -U1
-    x5 = C1*coupler__slider_end__x
-    x6 = S1*coupler__slider_end__y
-    x7 = C1*coupler__slider_end__y
-    x8 = S1*coupler__slider_end__x
-    ex0 = C0*k1 - Q1 + S0*k0 + ground__crank_pivot__x + x0 - x1
-    ey0 = -C0*k0 - Q2 + S0*k1 + ground__crank_pivot__y - x2 - x3
-    exd0 = C0*k3 + S0*k2 + U3*x2 + U3*x3 + x4
-    eyd0 = C0*k4 + S0*k3 - U2 + U3*x0 - U3*x1
-    ex1 = Q0*k5 + Q1 - ground__slider_axis__x + x5 - x6
-    ey1 = Q0*k6 + Q2 - ground__slider_axis__y + x7 + x8
-    exd1 = U0*k5 - U3*x7 - U3*x8 - x4
-    eyd1 = U0*k6 + U2 + U3*x5 - U3*x6
+    x0 = C1*coupler__crank_end__x
+    x1 = S1*coupler__crank_end__x
+    x2 = -U1
+    x3 = C1*coupler__slider_end__x
+    x4 = S1*coupler__slider_end__x
+    ex0 = C0*k0 - Q1 - x0
+    ey0 = -Q2 + S0*k0 - x1
+    exd0 = S0*k1 + U3*x1 + x2
+    eyd0 = C0*k2 - U2 - U3*x0
+    ex1 = -Q0 + Q1 + x3
+    ey1 = Q2 + x4
+    exd1 = -U0 - U3*x4 - x2
+    eyd1 = U2 + U3*x3
     F0, d0, dd0, FX0, FY0 = contact_stage(ex0, ey0, exd0, eyd0, p[21], p[34], p[35], p[22], p[23], p[24])
     F1, d1, dd1, FX1, FY1 = contact_stage(ex1, ey1, exd1, eyd1, p[26], p[36], p[37], p[27], p[28], p[29])
-    f0 = -FX1*k5 - FY1*k6 + k7
+    f0 = FX1
     f1 = FX0 - FX1
-    f2 = FY0 - FY1 + k8
-    f3 = -C1*FX0*coupler__crank_end__y + C1*FX1*coupler__slider_end__y + C1*FY0*coupler__crank_end__x - C1*FY1*coupler__slider_end__x - FX0*S1*coupler__crank_end__x + FX1*S1*coupler__slider_end__x - FY0*S1*coupler__crank_end__y + FY1*S1*coupler__slider_end__y
-    A0 = f0*k9
-    A1 = f1*k10
-    A2 = f2*k10
-    A3 = f3*k11
-    r0x = C0*k13 - FX0 + S0*k12
-    r0y = -C0*k12 - FY0 + S0*k13 + k14
-    r1x = A0*k15 + FX1
-    r1y = A0*k16 + FY1 + k17
-    moment = C0*FX0*k0 + C0*FY0*k1 + C0*k19 - FX0*S0*k1 + FY0*S0*k0 + S0*k18
+    f2 = FY0 - FY1 + k3
+    f3 = C1*FY0*coupler__crank_end__x - C1*FY1*coupler__slider_end__x - FX0*S1*coupler__crank_end__x + FX1*S1*coupler__slider_end__x
+    A0 = f0*k4
+    A1 = f1*k5
+    A2 = f2*k5
+    A3 = f3*k6
+    r0x = C0*k7 - FX0
+    r0y = -FY0 + S0*k7 + k8
+    r1x = -A0*slider__mass + FX1
+    r1y = FY1 + k9
+    moment = C0*FY0*k0 + C0*k10 - FX0*S0*k0
     return (F0, d0, dd0, ex0, ey0, F1, d1, dd1, ex1, ey1, r0x, r0y, r1x, r1y, r0x + r1x, r0y + r1y, moment, A0, A1, A2, A3)
 
 
@@ -313,16 +270,11 @@ def rhs(t, y, p, dydt):
 def _gap_0(t, y, p):
     """Journal centre minus bearing centre of crank_coupler and its rate."""
     coupler__crank_end__x = p[8]  # coupler.crank_end.x
-    coupler__crank_end__y = p[9]  # coupler.crank_end.y
-    ground__crank_pivot__x = p[16]  # ground.crank_pivot.x
-    ground__crank_pivot__y = p[17]  # ground.crank_pivot.y
     drive__speed = p[31]  # drive.speed
     drive__initial_angle = p[32]  # drive.initial_angle
     k0 = p[CONST_START + 0]
     k1 = p[CONST_START + 1]
     k2 = p[CONST_START + 2]
-    k3 = p[CONST_START + 3]
-    k4 = p[CONST_START + 4]
     Q1 = y[1]
     Q2 = y[2]
     Q3 = y[3]
@@ -331,14 +283,12 @@ def _gap_0(t, y, p):
     U3 = y[7]
     S0, C0 = sincos(drive__initial_angle + drive__speed*t)
     S1, C1 = sincos(Q3)
-    x0 = S1*coupler__crank_end__y
-    x1 = C1*coupler__crank_end__x
-    x2 = C1*coupler__crank_end__y
-    x3 = S1*coupler__crank_end__x
-    ex0 = C0*k1 - Q1 + S0*k0 + ground__crank_pivot__x + x0 - x1
-    ey0 = -C0*k0 - Q2 + S0*k1 + ground__crank_pivot__y - x2 - x3
-    exd0 = C0*k3 + S0*k2 - U1 + U3*x2 + U3*x3
-    eyd0 = C0*k4 + S0*k3 - U2 + U3*x0 - U3*x1
+    x0 = C1*coupler__crank_end__x
+    x1 = S1*coupler__crank_end__x
+    ex0 = C0*k0 - Q1 - x0
+    ey0 = -Q2 + S0*k0 - x1
+    exd0 = S0*k1 - U1 + U3*x1
+    eyd0 = C0*k2 - U2 - U3*x0
     return ex0, ey0, exd0, eyd0
 
 
@@ -346,11 +296,6 @@ def _gap_0(t, y, p):
 def _gap_1(t, y, p):
     """Journal centre minus bearing centre of coupler_slider and its rate."""
     coupler__slider_end__x = p[10]  # coupler.slider_end.x
-    coupler__slider_end__y = p[11]  # coupler.slider_end.y
-    ground__slider_axis__x = p[18]  # ground.slider_axis.x
-    ground__slider_axis__y = p[19]  # ground.slider_axis.y
-    k5 = p[CONST_START + 5]
-    k6 = p[CONST_START + 6]
     Q0 = y[0]
     Q1 = y[1]
     Q2 = y[2]
@@ -361,13 +306,11 @@ def _gap_1(t, y, p):
     U3 = y[7]
     S1, C1 = sincos(Q3)
     x0 = C1*coupler__slider_end__x
-    x1 = S1*coupler__slider_end__y
-    x2 = C1*coupler__slider_end__y
-    x3 = S1*coupler__slider_end__x
-    ex1 = Q0*k5 + Q1 - ground__slider_axis__x + x0 - x1
-    ey1 = Q0*k6 + Q2 - ground__slider_axis__y + x2 + x3
-    exd1 = U0*k5 + U1 - U3*x2 - U3*x3
-    eyd1 = U0*k6 + U2 + U3*x0 - U3*x1
+    x1 = S1*coupler__slider_end__x
+    ex1 = -Q0 + Q1 + x0
+    ey1 = Q2 + x1
+    exd1 = -U0 + U1 - U3*x1
+    eyd1 = U2 + U3*x0
     return ex1, ey1, exd1, eyd1
 
 
@@ -457,30 +400,18 @@ def mechanical_energy(t, y, p):
     """Kinetic + gravitational energy, plus the contact springs' energy K delta^2.5 / 2.5 of
     the joints in contact mode, in J."""
     coupler__crank_end__x = p[8]  # coupler.crank_end.x
-    coupler__crank_end__y = p[9]  # coupler.crank_end.y
     coupler__slider_end__x = p[10]  # coupler.slider_end.x
-    coupler__slider_end__y = p[11]  # coupler.slider_end.y
-    ground__crank_pivot__x = p[16]  # ground.crank_pivot.x
-    ground__crank_pivot__y = p[17]  # ground.crank_pivot.y
-    ground__slider_axis__x = p[18]  # ground.slider_axis.x
-    ground__slider_axis__y = p[19]  # ground.slider_axis.y
     drive__speed = p[31]  # drive.speed
     drive__initial_angle = p[32]  # drive.initial_angle
     k0 = p[CONST_START + 0]
     k1 = p[CONST_START + 1]
     k2 = p[CONST_START + 2]
     k3 = p[CONST_START + 3]
-    k4 = p[CONST_START + 4]
-    k5 = p[CONST_START + 5]
-    k6 = p[CONST_START + 6]
-    k7 = p[CONST_START + 7]
-    k8 = p[CONST_START + 8]
-    k18 = p[CONST_START + 18]
-    k19 = p[CONST_START + 19]
-    k20 = p[CONST_START + 20]
-    k21 = p[CONST_START + 21]
-    k22 = p[CONST_START + 22]
-    k23 = p[CONST_START + 23]
+    k10 = p[CONST_START + 10]
+    k11 = p[CONST_START + 11]
+    k12 = p[CONST_START + 12]
+    k13 = p[CONST_START + 13]
+    k14 = p[CONST_START + 14]
     Q0 = y[0]
     Q1 = y[1]
     Q2 = y[2]
@@ -491,24 +422,20 @@ def mechanical_energy(t, y, p):
     U3 = y[7]
     S0, C0 = sincos(drive__initial_angle + drive__speed*t)
     S1, C1 = sincos(Q3)
-    x0 = S1*coupler__crank_end__y
-    x1 = C1*coupler__crank_end__x
-    x2 = C1*coupler__crank_end__y
-    x3 = S1*coupler__crank_end__x
-    x4 = -U1
-    x5 = C1*coupler__slider_end__x
-    x6 = S1*coupler__slider_end__y
-    x7 = C1*coupler__slider_end__y
-    x8 = S1*coupler__slider_end__x
-    ex0 = C0*k1 - Q1 + S0*k0 + ground__crank_pivot__x + x0 - x1
-    ey0 = -C0*k0 - Q2 + S0*k1 + ground__crank_pivot__y - x2 - x3
-    exd0 = C0*k3 + S0*k2 + U3*x2 + U3*x3 + x4
-    eyd0 = C0*k4 + S0*k3 - U2 + U3*x0 - U3*x1
-    ex1 = Q0*k5 + Q1 - ground__slider_axis__x + x5 - x6
-    ey1 = Q0*k6 + Q2 - ground__slider_axis__y + x7 + x8
-    exd1 = U0*k5 - U3*x7 - U3*x8 - x4
-    eyd1 = U0*k6 + U2 + U3*x5 - U3*x6
-    energy = -C0*k18 - Q0*k7 - Q2*k8 + S0*k19 + (U0 * U0)*k20 + (U1 * U1)*k21 + (U2 * U2)*k21 + (U3 * U3)*k22 + k23
+    x0 = C1*coupler__crank_end__x
+    x1 = S1*coupler__crank_end__x
+    x2 = -U1
+    x3 = C1*coupler__slider_end__x
+    x4 = S1*coupler__slider_end__x
+    ex0 = C0*k0 - Q1 - x0
+    ey0 = -Q2 + S0*k0 - x1
+    exd0 = S0*k1 + U3*x1 + x2
+    eyd0 = C0*k2 - U2 - U3*x0
+    ex1 = -Q0 + Q1 + x3
+    ey1 = Q2 + x4
+    exd1 = -U0 - U3*x4 - x2
+    eyd1 = U2 + U3*x3
+    energy = -Q2*k3 + S0*k10 + (U0 * U0)*k11 + (U1 * U1)*k12 + (U2 * U2)*k12 + (U3 * U3)*k13 + k14
     d0, dd0, nx0, ny0 = gap_state(ex0, ey0, exd0, eyd0, p[21])
     if p[34] > 0.5 and d0 > 0.0:
         energy += p[22] * d0 * d0 * math.sqrt(d0) / 2.5
@@ -524,29 +451,20 @@ def closure(t, q, p):
     coordinates q: zero when the journals are centred."""
     res = np.empty(2 * N_EVENTS)
     coupler__crank_end__x = p[8]  # coupler.crank_end.x
-    coupler__crank_end__y = p[9]  # coupler.crank_end.y
     coupler__slider_end__x = p[10]  # coupler.slider_end.x
-    coupler__slider_end__y = p[11]  # coupler.slider_end.y
-    ground__crank_pivot__x = p[16]  # ground.crank_pivot.x
-    ground__crank_pivot__y = p[17]  # ground.crank_pivot.y
-    ground__slider_axis__x = p[18]  # ground.slider_axis.x
-    ground__slider_axis__y = p[19]  # ground.slider_axis.y
     drive__speed = p[31]  # drive.speed
     drive__initial_angle = p[32]  # drive.initial_angle
     k0 = p[CONST_START + 0]
-    k1 = p[CONST_START + 1]
-    k5 = p[CONST_START + 5]
-    k6 = p[CONST_START + 6]
     Q0 = q[0]
     Q1 = q[1]
     Q2 = q[2]
     Q3 = q[3]
     S0, C0 = sincos(drive__initial_angle + drive__speed*t)
     S1, C1 = sincos(Q3)
-    res[0] = C0*k1 - C1*coupler__crank_end__x - Q1 + S0*k0 + S1*coupler__crank_end__y + ground__crank_pivot__x
-    res[1] = -C0*k0 - C1*coupler__crank_end__y - Q2 + S0*k1 - S1*coupler__crank_end__x + ground__crank_pivot__y
-    res[2] = C1*coupler__slider_end__x + Q0*k5 + Q1 - S1*coupler__slider_end__y - ground__slider_axis__x
-    res[3] = C1*coupler__slider_end__y + Q0*k6 + Q2 + S1*coupler__slider_end__x - ground__slider_axis__y
+    res[0] = C0*k0 - C1*coupler__crank_end__x - Q1
+    res[1] = -Q2 + S0*k0 - S1*coupler__crank_end__x
+    res[2] = C1*coupler__slider_end__x - Q0 + Q1
+    res[3] = Q2 + S1*coupler__slider_end__x
     return res
 
 
@@ -555,29 +473,25 @@ def closure_jacobian(t, q, p):
     """d closure / d q (2 N_EVENTS, N_Q)."""
     jac = np.zeros((2 * N_EVENTS, N_Q))
     coupler__crank_end__x = p[8]  # coupler.crank_end.x
-    coupler__crank_end__y = p[9]  # coupler.crank_end.y
     coupler__slider_end__x = p[10]  # coupler.slider_end.x
-    coupler__slider_end__y = p[11]  # coupler.slider_end.y
-    k5 = p[CONST_START + 5]
-    k6 = p[CONST_START + 6]
     Q3 = q[3]
     S1, C1 = sincos(Q3)
     jac[0, 0] = 0.0
     jac[0, 1] = -1.0
     jac[0, 2] = 0.0
-    jac[0, 3] = C1*coupler__crank_end__y + S1*coupler__crank_end__x
+    jac[0, 3] = S1*coupler__crank_end__x
     jac[1, 0] = 0.0
     jac[1, 1] = 0.0
     jac[1, 2] = -1.0
-    jac[1, 3] = -C1*coupler__crank_end__x + S1*coupler__crank_end__y
-    jac[2, 0] = k5
+    jac[1, 3] = -C1*coupler__crank_end__x
+    jac[2, 0] = -1.0
     jac[2, 1] = 1.0
     jac[2, 2] = 0.0
-    jac[2, 3] = -C1*coupler__slider_end__y - S1*coupler__slider_end__x
-    jac[3, 0] = k6
+    jac[2, 3] = -S1*coupler__slider_end__x
+    jac[3, 0] = 0.0
     jac[3, 1] = 0.0
     jac[3, 2] = 1.0
-    jac[3, 3] = C1*coupler__slider_end__x - S1*coupler__slider_end__y
+    jac[3, 3] = C1*coupler__slider_end__x
     return jac
 
 
@@ -587,12 +501,11 @@ def closure_rate(t, q, p):
     res = np.empty(2 * N_EVENTS)
     drive__speed = p[31]  # drive.speed
     drive__initial_angle = p[32]  # drive.initial_angle
+    k1 = p[CONST_START + 1]
     k2 = p[CONST_START + 2]
-    k3 = p[CONST_START + 3]
-    k4 = p[CONST_START + 4]
     S0, C0 = sincos(drive__initial_angle + drive__speed*t)
-    res[0] = C0*k3 + S0*k2
-    res[1] = C0*k4 + S0*k3
+    res[0] = S0*k1
+    res[1] = C0*k2
     res[2] = 0.0
     res[3] = 0.0
     return res
@@ -601,6 +514,8 @@ def closure_rate(t, q, p):
 @nb.njit(cache=True, error_model="numpy", nogil=True)
 def integrate_model(y0, p, edges, settings, coefficients):
     """`integrator.integrate` bound to this module's kernels (compiled once, cached)."""
+    if not _zeros_hold(p):
+        raise ValueError(ZERO_MESSAGE)
     # the kernels are looked up as module attributes: numba binds them as constants
     return integrate(_THIS.rhs, _THIS.event, _THIS.on_event, _THIS.monitor, y0, p, edges,
                      settings, coefficients)
@@ -712,14 +627,8 @@ def jacobian(t, y, p, jac, full):
     coupler__mass = p[6]  # coupler.mass
     coupler__inertia = p[7]  # coupler.inertia
     coupler__crank_end__x = p[8]  # coupler.crank_end.x
-    coupler__crank_end__y = p[9]  # coupler.crank_end.y
     coupler__slider_end__x = p[10]  # coupler.slider_end.x
-    coupler__slider_end__y = p[11]  # coupler.slider_end.y
     slider__mass = p[12]  # slider.mass
-    ground__crank_pivot__x = p[16]  # ground.crank_pivot.x
-    ground__crank_pivot__y = p[17]  # ground.crank_pivot.y
-    ground__slider_axis__x = p[18]  # ground.slider_axis.x
-    ground__slider_axis__y = p[19]  # ground.slider_axis.y
     drive__speed = p[31]  # drive.speed
     drive__initial_angle = p[32]  # drive.initial_angle
     gravity = p[33]  # gravity
@@ -727,38 +636,18 @@ def jacobian(t, y, p, jac, full):
     k1 = p[CONST_START + 1]
     k2 = p[CONST_START + 2]
     k3 = p[CONST_START + 3]
-    k4 = p[CONST_START + 4]
-    k5 = p[CONST_START + 5]
-    k6 = p[CONST_START + 6]
     k7 = p[CONST_START + 7]
     k8 = p[CONST_START + 8]
-    k12 = p[CONST_START + 12]
-    k13 = p[CONST_START + 13]
-    k14 = p[CONST_START + 14]
+    k9 = p[CONST_START + 9]
+    k10 = p[CONST_START + 10]
     k15 = p[CONST_START + 15]
     k16 = p[CONST_START + 16]
     k17 = p[CONST_START + 17]
     k18 = p[CONST_START + 18]
     k19 = p[CONST_START + 19]
-    k24 = p[CONST_START + 24]
-    k25 = p[CONST_START + 25]
-    k26 = p[CONST_START + 26]
-    k27 = p[CONST_START + 27]
-    k28 = p[CONST_START + 28]
-    k29 = p[CONST_START + 29]
-    k30 = p[CONST_START + 30]
-    k31 = p[CONST_START + 31]
-    k32 = p[CONST_START + 32]
-    k33 = p[CONST_START + 33]
-    k34 = p[CONST_START + 34]
-    k35 = p[CONST_START + 35]
-    k36 = p[CONST_START + 36]
-    k37 = p[CONST_START + 37]
-    k38 = p[CONST_START + 38]
-    k39 = p[CONST_START + 39]
-    k40 = p[CONST_START + 40]
-    k41 = p[CONST_START + 41]
-    k42 = p[CONST_START + 42]
+    k20 = p[CONST_START + 20]
+    k21 = p[CONST_START + 21]
+    k22 = p[CONST_START + 22]
     Q0 = y[0]
     Q1 = y[1]
     Q2 = y[2]
@@ -769,124 +658,84 @@ def jacobian(t, y, p, jac, full):
     U3 = y[7]
     S0, C0 = sincos(drive__initial_angle + drive__speed*t)
     S1, C1 = sincos(Q3)
-    x0 = S1*coupler__crank_end__y
-    x1 = C1*coupler__crank_end__x
-    x2 = C0*k1 + S0*k0
-    x3 = C0*k3
-    x4 = S0*k2
-    x5 = x3 + x4
-    x6 = C1*coupler__crank_end__y
-    x7 = S1*coupler__crank_end__x
-    x8 = x6 + x7
-    x9 = -C0
-    x10 = -S0
-    x11 = -C1
-    x12 = C0*k0 - S0*k1
-    x13 = C0*k4 + S0*k3
-    x14 = -S1*coupler__crank_end__y + x1
-    x15 = -x14
-    x16 = -S1
-    x17 = -U1
-    x18 = S0*drive__speed
-    x19 = C0*drive__speed
-    x20 = -x18
-    x21 = -x19
-    x22 = S1*U3
-    x23 = C1*U3
-    x24 = C0*k2
-    x25 = S0*k26
-    x26 = -x23
-    x27 = Q0*k5
-    x28 = C1*coupler__slider_end__x - S1*coupler__slider_end__y
-    x29 = C1*coupler__slider_end__y + S1*coupler__slider_end__x
-    x30 = -x29
-    x31 = Q0*k6
-    x32 = -x22
-    x33 = U0*k6
-    gv0_0 = -Q1 + ground__crank_pivot__x + x0 - x1 + x2
-    jac[144] = x5
+    x0 = C1*coupler__crank_end__x
+    x1 = S0*k1
+    x2 = S1*coupler__crank_end__x
+    x3 = S0*k0
+    x4 = -x3
+    x5 = -x0
+    x6 = C0*k0
+    x7 = -U1
+    x8 = U3*x2
+    x9 = U3*x0
+    x10 = S0*drive__speed
+    x11 = S1*U3
+    x12 = C0*k1
+    x13 = C0*drive__speed
+    x14 = C1*U3
+    x15 = C1*coupler__slider_end__x
+    x16 = S1*coupler__slider_end__x
+    x17 = -x16
+    x18 = coupler__slider_end__x*x11
+    x19 = coupler__slider_end__x*x14
+    gv0_0 = C0*k0 - Q1 - x0
+    jac[144] = x1
     jac[146] = -1.0
-    jac[148] = x8
-    jac[155] = x9
-    jac[156] = S0
+    jac[148] = x2
+    jac[155] = -C0
     jac[157] = C0
-    jac[158] = x10
-    jac[161] = x11
-    jac[162] = S1
-    jac[169] = 1.0
-    jac[184] = t*x12
-    jac[185] = x12
-    gv0_1 = -Q2 + ground__crank_pivot__y - x12 - x8
-    jac[192] = x13
+    jac[161] = -C1
+    jac[184] = -t*x3
+    jac[185] = x4
+    gv0_1 = -Q2 - x2 - x4
+    jac[192] = C0*k2
     jac[195] = -1.0
-    jac[196] = x15
-    jac[203] = x10
-    jac[204] = x9
+    jac[196] = x5
+    jac[203] = -S0
     jac[205] = S0
-    jac[206] = C0
-    jac[209] = x16
-    jac[210] = x11
-    jac[218] = 1.0
-    jac[232] = t*x2
-    jac[233] = x2
-    gv0_2 = U3*x6 + U3*x7 + x17 + x5
-    jac[1008] = C0*k25 + S0*k24
-    jac[1012] = U3*x14
+    jac[209] = -S1
+    jac[232] = t*x6
+    jac[233] = x6
+    gv0_2 = x1 + x7 + x8
+    jac[1008] = C0*k15
+    jac[1012] = x9
     jac[1014] = -1.0
-    jac[1016] = x8
-    jac[1019] = x18
-    jac[1020] = x19
-    jac[1021] = x20
-    jac[1022] = x21
-    jac[1025] = x22
-    jac[1026] = x23
-    jac[1048] = t*x24 + t*x25 + x12
-    jac[1049] = x24 + x25
-    gv0_3 = -U2 + U3*x0 - U3*x1 + x13
-    jac[1056] = C0*k27 + S0*k25
-    jac[1060] = U3*x8
+    jac[1016] = x2
+    jac[1019] = x10
+    jac[1021] = -x10
+    jac[1025] = x11
+    jac[1048] = t*x12 + x4
+    jac[1049] = x12
+    gv0_3 = C0*k2 - U2 - x9
+    jac[1056] = S0*k15
+    jac[1060] = x8
     jac[1063] = -1.0
-    jac[1064] = x15
-    jac[1067] = x21
-    jac[1068] = x18
-    jac[1069] = x19
-    jac[1070] = x20
-    jac[1073] = x26
-    jac[1074] = x22
-    jac[1096] = t*x3 + t*x4 + x2
-    jac[1097] = x5
-    gv1_0 = Q1 - ground__slider_axis__x + x27 + x28
-    jac[385] = k5
+    jac[1064] = x5
+    jac[1067] = -x13
+    jac[1069] = x13
+    jac[1073] = -x14
+    jac[1096] = t*x1 + x6
+    jac[1097] = x1
+    gv1_0 = -Q0 + Q1 + x15
+    jac[385] = -1.0
     jac[386] = 1.0
-    jac[388] = x30
+    jac[388] = x17
     jac[403] = C1
-    jac[404] = x16
-    jac[411] = -1.0
-    jac[413] = -x31
-    gv1_1 = Q2 - ground__slider_axis__y + x29 + x31
-    jac[433] = k6
+    gv1_1 = Q2 + x16
     jac[435] = 1.0
-    jac[436] = x28
+    jac[436] = x15
     jac[451] = S1
-    jac[452] = C1
-    jac[460] = -1.0
-    jac[461] = x27
-    gv1_2 = U0*k5 - coupler__slider_end__x*x22 - coupler__slider_end__y*x23 - x17
-    jac[1204] = -U3*x28
-    jac[1205] = k5
+    gv1_2 = -U0 - x18 - x7
+    jac[1204] = -x19
+    jac[1205] = -1.0
     jac[1206] = 1.0
-    jac[1208] = x30
-    jac[1219] = x32
-    jac[1220] = x26
-    jac[1229] = -x33
-    gv1_3 = U2 + coupler__slider_end__x*x23 - coupler__slider_end__y*x22 + x33
-    jac[1252] = -U3*x29
-    jac[1253] = k6
+    jac[1208] = x17
+    jac[1219] = -x11
+    gv1_3 = U2 + x19
+    jac[1252] = -x18
     jac[1255] = 1.0
-    jac[1256] = x28
-    jac[1267] = x23
-    jac[1268] = x32
-    jac[1277] = U0*k5
+    jac[1256] = x15
+    jac[1267] = x14
     FX0, FY0 = contact_jacobian(jac, 48, 47, gv0_0, gv0_1, gv0_2, gv0_3, 0, 1, 2, 3, 4, 21, 22, 23, 24, 30, 31, 32, 44, p[21], p[34], p[35], p[22], p[23], p[24])
     FX1, FY1 = contact_jacobian(jac, 48, 47, gv1_0, gv1_1, gv1_2, gv1_3, 5, 6, 7, 8, 9, 25, 26, 27, 28, 35, 36, 37, 46, p[26], p[36], p[37], p[27], p[28], p[29])
     m_0_0 = slider__mass
@@ -899,10 +748,10 @@ def jacobian(t, y, p, jac, full):
     m_3_1 = 0.0
     m_3_2 = 0.0
     m_3_3 = coupler__inertia
-    f_0 = -FX1*k5 - FY1*k6 + k7
+    f_0 = FX1
     f_1 = FX0 - FX1
-    f_2 = FY0 - FY1 + k8
-    f_3 = -C1*FX0*coupler__crank_end__y + C1*FX1*coupler__slider_end__y + C1*FY0*coupler__crank_end__x - C1*FY1*coupler__slider_end__x - FX0*S1*coupler__crank_end__x + FX1*S1*coupler__slider_end__x - FY0*S1*coupler__crank_end__y + FY1*S1*coupler__slider_end__y
+    f_2 = FY0 - FY1 + k3
+    f_3 = C1*FY0*coupler__crank_end__x - C1*FY1*coupler__slider_end__x - FX0*S1*coupler__crank_end__x + FX1*S1*coupler__slider_end__x
     l_0_0 = math.sqrt(m_0_0)
     il_0 = 1.0 / l_0_0
     l_1_0 = (m_1_0) * il_0
@@ -925,20 +774,15 @@ def jacobian(t, y, p, jac, full):
     A2 = (zz_2 - l_3_2 * A3) * il_2
     A1 = (zz_1 - l_2_1 * A2 - l_3_1 * A3) * il_1
     A0 = (zz_0 - l_1_0 * A1 - l_2_0 * A2 - l_3_0 * A3) * il_0
-    x34 = C1*FX0
-    x35 = C1*FY0
-    x36 = FX1*S1
-    x37 = FY0*S1
-    x38 = C1*FX1
-    x39 = C1*FY1
-    x40 = FY1*S1
-    jac[837] = A0 + k28
-    jac[845] = -FX1*k6 + FY1*k5 + k29
-    jac[858] = -k16
+    x20 = C1*coupler__crank_end__x
+    x21 = S1*coupler__crank_end__x
+    x22 = C1*coupler__slider_end__x
+    x23 = S1*coupler__slider_end__x
+    jac[837] = A0
     rfx_0_0 = 0.0
     rfy_0_0 = 0.0
-    rfx_0_1 = k5
-    rfy_0_1 = k6
+    rfx_0_1 = -1.0
+    rfy_0_1 = 0.0
     jac[879] = A1
     rfx_1_0 = -1.0
     rfy_1_0 = 0.0
@@ -950,16 +794,14 @@ def jacobian(t, y, p, jac, full):
     rfy_2_0 = -1.0
     rfx_2_1 = 0.0
     rfy_2_1 = 1.0
-    jac[964] = -FX0*S1*coupler__crank_end__y + coupler__crank_end__x*x34 + coupler__crank_end__x*x37 + coupler__crank_end__y*x35 - coupler__slider_end__x*x38 - coupler__slider_end__x*x40 + coupler__slider_end__y*x36 - coupler__slider_end__y*x39
+    jac[964] = FX0*x20 - FX1*x22 + FY0*x21 - FY1*x23
     jac[976] = A3
-    jac[977] = FX0*S1 - x35
-    jac[978] = x34 + x37
-    jac[979] = -x36 + x39
-    jac[980] = -x38 - x40
-    rfx_3_0 = C1*coupler__crank_end__y + S1*coupler__crank_end__x
-    rfy_3_0 = -C1*coupler__crank_end__x + S1*coupler__crank_end__y
-    rfx_3_1 = -C1*coupler__slider_end__y - S1*coupler__slider_end__x
-    rfy_3_1 = C1*coupler__slider_end__x - S1*coupler__slider_end__y
+    jac[977] = -C1*FY0 + FX0*S1
+    jac[979] = C1*FY1 - FX1*S1
+    rfx_3_0 = x21
+    rfy_3_0 = -x20
+    rfx_3_1 = -x23
+    rfy_3_1 = x22
     for col in range(47):
         b_0 = -(jac[816 + col] + rfx_0_0 * jac[23 * 48 + col] + rfy_0_0 * jac[24 * 48 + col] + rfx_0_1 * jac[27 * 48 + col] + rfy_0_1 * jac[28 * 48 + col])
         b_1 = -(jac[864 + col] + rfx_1_0 * jac[23 * 48 + col] + rfy_1_0 * jac[24 * 48 + col] + rfx_1_1 * jac[27 * 48 + col] + rfy_1_1 * jac[28 * 48 + col])
@@ -981,68 +823,54 @@ def jacobian(t, y, p, jac, full):
     jac[911] = A1
     jac[959] = A2
     jac[1007] = A3
-    jac[815] = C0*FX0*k0 + C0*FY0*k1 + C0*k19 - FX0*S0*k1 + FY0*S0*k0 + S0*k18
+    jac[815] = C0*FY0*k0 + C0*k10 - FX0*S0*k0
     if full:
-        x41 = C0*k13
-        x42 = S0*k12
-        x43 = x41 + x42
-        x44 = C0*k34
-        x45 = S0*k34
-        x46 = C0*k12
-        x47 = S0*k13
-        x48 = x46 - x47
-        x49 = A0*k15
-        x50 = A0*k16
-        x51 = C0*FX0
-        x52 = C0*FY0
-        x53 = FX0*S0
-        x54 = FY0*S0
-        x55 = x51 + x54
-        x56 = C0*FY0*k0 + C0*k18 - S0*k19 - k0*x53 - k1*x51 - k1*x54
-        jac[527] = -FX0 + x43
-        jac[480] = C0*k31 + S0*k30
-        jac[489] = C0*k33 + S0*k32
-        jac[491] = x44
-        jac[492] = -x45
-        jac[520] = C0*k36 + S0*k35 + t*x46 - t*x47
-        jac[521] = x48
+        x24 = C0*k7
+        x25 = S0*k7
+        x26 = -gravity
+        x27 = -slider__mass
+        x28 = FX0*S0
+        x29 = C0*FY0
+        x30 = C0*k0
+        x31 = S0*k0
+        x32 = FX0*x30 + FY0*x31 + S0*k10
+        jac[527] = -FX0 + x24
+        jac[480] = S0*k16
+        jac[489] = C0*k17
+        jac[491] = C0*k18
+        jac[520] = C0*k19 - t*x25
+        jac[521] = -x25
         ofx_0_0 = -1.0
-        jac[575] = -FY0 + k14 - x48
-        jac[528] = -C0*k30 + S0*k31
-        jac[537] = -C0*k32 + S0*k33 - gravity
-        jac[539] = x45
-        jac[540] = x44
-        jac[568] = -C0*k35 + S0*k36 + t*x41 + t*x42
-        jac[569] = x43
+        jac[575] = -FY0 + k8 + x25
+        jac[528] = -C0*k16
+        jac[537] = S0*k17 + x26
+        jac[539] = S0*k18
+        jac[568] = S0*k19 + t*x24
+        jac[569] = x24
         jac[570] = -crank__mass
         ofy_1_0 = -1.0
-        jac[623] = FX1 + x49
-        jac[597] = A0*k5
-        jac[605] = -x50
-        oa_2_0 = k15
+        jac[623] = -A0*slider__mass + FX1
+        jac[597] = -A0
+        oa_2_0 = x27
         ofx_2_1 = 1.0
-        jac[671] = FY1 + k17 + x50
-        jac[645] = A0*k6 - gravity
-        jac[653] = x49
-        jac[666] = -slider__mass
-        oa_3_0 = k16
+        jac[671] = FY1 + k9
+        jac[645] = x26
+        jac[666] = x27
         ofy_3_1 = 1.0
-        jac[768] = C0*k38 + S0*k37 + k2*x51 + k2*x54 + k26*x53 + k3*x52
-        jac[777] = C0*k40 + S0*k39
-        jac[779] = C0*k14 - x52 + x53
-        jac[780] = -S0*k14 + x55
-        jac[781] = x52 - x53
-        jac[782] = -x55
-        jac[808] = t*x56
-        jac[809] = x56
-        jac[810] = C0*k42 + S0*k41
-        ofx_4_0 = C0*k0 - S0*k1
-        ofy_4_0 = C0*k1 + S0*k0
+        jac[768] = C0*FX0*k1 + FY0*S0*k1 + S0*k20
+        jac[777] = C0*k21
+        jac[779] = C0*k8 + x28 - x29
+        jac[781] = -x28 + x29
+        jac[808] = -t*x32
+        jac[809] = -x32
+        jac[810] = C0*k22
+        ofx_4_0 = -x31
+        ofy_4_0 = x30
         for col in range(47):
             jac[480 + col] += ofx_0_0 * jac[1104 + col]
             jac[528 + col] += ofy_1_0 * jac[1152 + col]
             jac[576 + col] += oa_2_0 * jac[816 + col] + ofx_2_1 * jac[1296 + col]
-            jac[624 + col] += oa_3_0 * jac[816 + col] + ofy_3_1 * jac[1344 + col]
+            jac[624 + col] += ofy_3_1 * jac[1344 + col]
             jac[768 + col] += ofx_4_0 * jac[1104 + col] + ofy_4_0 * jac[1152 + col]
         for col in range(48):
             jac[672 + col] = jac[480 + col] + jac[576 + col]
@@ -1066,14 +894,8 @@ def tangent(t, y, p, dz, nd, use, out, full):
     coupler__mass = p[6]  # coupler.mass
     coupler__inertia = p[7]  # coupler.inertia
     coupler__crank_end__x = p[8]  # coupler.crank_end.x
-    coupler__crank_end__y = p[9]  # coupler.crank_end.y
     coupler__slider_end__x = p[10]  # coupler.slider_end.x
-    coupler__slider_end__y = p[11]  # coupler.slider_end.y
     slider__mass = p[12]  # slider.mass
-    ground__crank_pivot__x = p[16]  # ground.crank_pivot.x
-    ground__crank_pivot__y = p[17]  # ground.crank_pivot.y
-    ground__slider_axis__x = p[18]  # ground.slider_axis.x
-    ground__slider_axis__y = p[19]  # ground.slider_axis.y
     drive__speed = p[31]  # drive.speed
     drive__initial_angle = p[32]  # drive.initial_angle
     gravity = p[33]  # gravity
@@ -1081,38 +903,18 @@ def tangent(t, y, p, dz, nd, use, out, full):
     k1 = p[CONST_START + 1]
     k2 = p[CONST_START + 2]
     k3 = p[CONST_START + 3]
-    k4 = p[CONST_START + 4]
-    k5 = p[CONST_START + 5]
-    k6 = p[CONST_START + 6]
     k7 = p[CONST_START + 7]
     k8 = p[CONST_START + 8]
-    k12 = p[CONST_START + 12]
-    k13 = p[CONST_START + 13]
-    k14 = p[CONST_START + 14]
+    k9 = p[CONST_START + 9]
+    k10 = p[CONST_START + 10]
     k15 = p[CONST_START + 15]
     k16 = p[CONST_START + 16]
     k17 = p[CONST_START + 17]
     k18 = p[CONST_START + 18]
     k19 = p[CONST_START + 19]
-    k24 = p[CONST_START + 24]
-    k25 = p[CONST_START + 25]
-    k26 = p[CONST_START + 26]
-    k27 = p[CONST_START + 27]
-    k28 = p[CONST_START + 28]
-    k29 = p[CONST_START + 29]
-    k30 = p[CONST_START + 30]
-    k31 = p[CONST_START + 31]
-    k32 = p[CONST_START + 32]
-    k33 = p[CONST_START + 33]
-    k34 = p[CONST_START + 34]
-    k35 = p[CONST_START + 35]
-    k36 = p[CONST_START + 36]
-    k37 = p[CONST_START + 37]
-    k38 = p[CONST_START + 38]
-    k39 = p[CONST_START + 39]
-    k40 = p[CONST_START + 40]
-    k41 = p[CONST_START + 41]
-    k42 = p[CONST_START + 42]
+    k20 = p[CONST_START + 20]
+    k21 = p[CONST_START + 21]
+    k22 = p[CONST_START + 22]
     Q0 = y[0]
     Q1 = y[1]
     Q2 = y[2]
@@ -1123,72 +925,56 @@ def tangent(t, y, p, dz, nd, use, out, full):
     U3 = y[7]
     S0, C0 = sincos(drive__initial_angle + drive__speed*t)
     S1, C1 = sincos(Q3)
-    x0 = S1*coupler__crank_end__y
-    x1 = C1*coupler__crank_end__x
-    x2 = C0*k1 + S0*k0
-    x3 = C0*k3
-    x4 = S0*k2
-    x5 = x3 + x4
-    x6 = C1*coupler__crank_end__y
-    x7 = S1*coupler__crank_end__x
-    x8 = x6 + x7
-    x9 = -C0
-    x10 = -S0
-    x11 = -C1
-    x12 = C0*k0 - S0*k1
-    x13 = C0*k4 + S0*k3
-    x14 = -S1*coupler__crank_end__y + x1
-    x15 = -x14
-    x16 = -S1
-    x17 = -U1
-    x18 = S0*drive__speed
-    x19 = C0*drive__speed
-    x20 = -x18
-    x21 = -x19
-    x22 = S1*U3
-    x23 = C1*U3
-    x24 = C0*k2
-    x25 = S0*k26
-    x26 = -x23
-    x27 = Q0*k5
-    x28 = C1*coupler__slider_end__x - S1*coupler__slider_end__y
-    x29 = C1*coupler__slider_end__y + S1*coupler__slider_end__x
-    x30 = -x29
-    x31 = Q0*k6
-    x32 = -x22
-    x33 = U0*k6
-    gv0_0 = -Q1 + ground__crank_pivot__x + x0 - x1 + x2
+    x0 = C1*coupler__crank_end__x
+    x1 = S0*k1
+    x2 = S1*coupler__crank_end__x
+    x3 = S0*k0
+    x4 = -x3
+    x5 = -x0
+    x6 = C0*k0
+    x7 = -U1
+    x8 = U3*x2
+    x9 = U3*x0
+    x10 = S0*drive__speed
+    x11 = S1*U3
+    x12 = C0*k1
+    x13 = C0*drive__speed
+    x14 = C1*U3
+    x15 = C1*coupler__slider_end__x
+    x16 = S1*coupler__slider_end__x
+    x17 = -x16
+    x18 = coupler__slider_end__x*x11
+    x19 = coupler__slider_end__x*x14
+    gv0_0 = C0*k0 - Q1 - x0
     g3_2 = -1.0
-    g3_4 = x8
-    gv0_1 = -Q2 + ground__crank_pivot__y - x12 - x8
+    g3_4 = x2
+    gv0_1 = -Q2 - x2 - x4
     g4_3 = -1.0
-    g4_4 = x15
-    gv0_2 = U3*x6 + U3*x7 + x17 + x5
-    g21_4 = U3*x14
+    g4_4 = x5
+    gv0_2 = x1 + x7 + x8
+    g21_4 = x9
     g21_6 = -1.0
-    g21_8 = x8
-    gv0_3 = -U2 + U3*x0 - U3*x1 + x13
-    g22_4 = U3*x8
+    g21_8 = x2
+    gv0_3 = C0*k2 - U2 - x9
+    g22_4 = x8
     g22_7 = -1.0
-    g22_8 = x15
-    gv1_0 = Q1 - ground__slider_axis__x + x27 + x28
-    g8_1 = k5
+    g22_8 = x5
+    gv1_0 = -Q0 + Q1 + x15
+    g8_1 = -1.0
     g8_2 = 1.0
-    g8_4 = x30
-    gv1_1 = Q2 - ground__slider_axis__y + x29 + x31
-    g9_1 = k6
+    g8_4 = x17
+    gv1_1 = Q2 + x16
     g9_3 = 1.0
-    g9_4 = x28
-    gv1_2 = U0*k5 - coupler__slider_end__x*x22 - coupler__slider_end__y*x23 - x17
-    g25_4 = -U3*x28
-    g25_5 = k5
+    g9_4 = x15
+    gv1_2 = -U0 - x18 - x7
+    g25_4 = -x19
+    g25_5 = -1.0
     g25_6 = 1.0
-    g25_8 = x30
-    gv1_3 = U2 + coupler__slider_end__x*x23 - coupler__slider_end__y*x22 + x33
-    g26_4 = -U3*x29
-    g26_5 = k6
+    g25_8 = x17
+    gv1_3 = U2 + x19
+    g26_4 = -x18
     g26_7 = 1.0
-    g26_8 = x28
+    g26_8 = x15
     for d in range(nd):
         yo = 8 * (d + 1)
         out[3 * ts + d] = g3_2 * y[yo + 1] + g3_4 * y[yo + 3]
@@ -1196,14 +982,14 @@ def tangent(t, y, p, dz, nd, use, out, full):
         out[21 * ts + d] = g21_4 * y[yo + 3] + g21_6 * y[yo + 5] + g21_8 * y[yo + 7]
         out[22 * ts + d] = g22_4 * y[yo + 3] + g22_7 * y[yo + 6] + g22_8 * y[yo + 7]
         out[8 * ts + d] = g8_1 * y[yo + 0] + g8_2 * y[yo + 1] + g8_4 * y[yo + 3]
-        out[9 * ts + d] = g9_1 * y[yo + 0] + g9_3 * y[yo + 2] + g9_4 * y[yo + 3]
+        out[9 * ts + d] = g9_3 * y[yo + 2] + g9_4 * y[yo + 3]
         out[25 * ts + d] = g25_4 * y[yo + 3] + g25_5 * y[yo + 4] + g25_6 * y[yo + 5] + g25_8 * y[yo + 7]
-        out[26 * ts + d] = g26_4 * y[yo + 3] + g26_5 * y[yo + 4] + g26_7 * y[yo + 6] + g26_8 * y[yo + 7]
+        out[26 * ts + d] = g26_4 * y[yo + 3] + g26_7 * y[yo + 6] + g26_8 * y[yo + 7]
     if use[1] > use[0]:
-        g3_0 = x5
-        g4_0 = x13
-        g21_0 = C0*k25 + S0*k24
-        g22_0 = C0*k27 + S0*k25
+        g3_0 = x1
+        g4_0 = C0*k2
+        g21_0 = C0*k15
+        g22_0 = S0*k15
         for e in range(int(use[0]), int(use[1])):
             d = int(use[48 + e])
             dk = dz[d * 47 + 0]
@@ -1212,10 +998,10 @@ def tangent(t, y, p, dz, nd, use, out, full):
             out[21 * ts + d] += g21_0 * dk
             out[22 * ts + d] += g22_0 * dk
     if use[12] > use[11]:
-        g3_11 = x9
-        g4_11 = x10
-        g21_11 = x18
-        g22_11 = x21
+        g3_11 = -C0
+        g4_11 = -S0
+        g21_11 = x10
+        g22_11 = -x13
         for e in range(int(use[11]), int(use[12])):
             d = int(use[48 + e])
             dk = dz[d * 47 + 11]
@@ -1223,23 +1009,11 @@ def tangent(t, y, p, dz, nd, use, out, full):
             out[4 * ts + d] += g4_11 * dk
             out[21 * ts + d] += g21_11 * dk
             out[22 * ts + d] += g22_11 * dk
-    if use[13] > use[12]:
-        g3_12 = S0
-        g4_12 = x9
-        g21_12 = x19
-        g22_12 = x18
-        for e in range(int(use[12]), int(use[13])):
-            d = int(use[48 + e])
-            dk = dz[d * 47 + 12]
-            out[3 * ts + d] += g3_12 * dk
-            out[4 * ts + d] += g4_12 * dk
-            out[21 * ts + d] += g21_12 * dk
-            out[22 * ts + d] += g22_12 * dk
     if use[14] > use[13]:
         g3_13 = C0
         g4_13 = S0
-        g21_13 = x20
-        g22_13 = x19
+        g21_13 = -x10
+        g22_13 = x13
         for e in range(int(use[13]), int(use[14])):
             d = int(use[48 + e])
             dk = dz[d * 47 + 13]
@@ -1247,23 +1021,11 @@ def tangent(t, y, p, dz, nd, use, out, full):
             out[4 * ts + d] += g4_13 * dk
             out[21 * ts + d] += g21_13 * dk
             out[22 * ts + d] += g22_13 * dk
-    if use[15] > use[14]:
-        g3_14 = x10
-        g4_14 = C0
-        g21_14 = x21
-        g22_14 = x20
-        for e in range(int(use[14]), int(use[15])):
-            d = int(use[48 + e])
-            dk = dz[d * 47 + 14]
-            out[3 * ts + d] += g3_14 * dk
-            out[4 * ts + d] += g4_14 * dk
-            out[21 * ts + d] += g21_14 * dk
-            out[22 * ts + d] += g22_14 * dk
     if use[18] > use[17]:
-        g3_17 = x11
-        g4_17 = x16
-        g21_17 = x22
-        g22_17 = x26
+        g3_17 = -C1
+        g4_17 = -S1
+        g21_17 = x11
+        g22_17 = -x14
         for e in range(int(use[17]), int(use[18])):
             d = int(use[48 + e])
             dk = dz[d * 47 + 17]
@@ -1271,23 +1033,11 @@ def tangent(t, y, p, dz, nd, use, out, full):
             out[4 * ts + d] += g4_17 * dk
             out[21 * ts + d] += g21_17 * dk
             out[22 * ts + d] += g22_17 * dk
-    if use[19] > use[18]:
-        g3_18 = S1
-        g4_18 = x11
-        g21_18 = x23
-        g22_18 = x22
-        for e in range(int(use[18]), int(use[19])):
-            d = int(use[48 + e])
-            dk = dz[d * 47 + 18]
-            out[3 * ts + d] += g3_18 * dk
-            out[4 * ts + d] += g4_18 * dk
-            out[21 * ts + d] += g21_18 * dk
-            out[22 * ts + d] += g22_18 * dk
     if use[20] > use[19]:
         g8_19 = C1
         g9_19 = S1
-        g25_19 = x32
-        g26_19 = x23
+        g25_19 = -x11
+        g26_19 = x14
         for e in range(int(use[19]), int(use[20])):
             d = int(use[48 + e])
             dk = dz[d * 47 + 19]
@@ -1295,59 +1045,11 @@ def tangent(t, y, p, dz, nd, use, out, full):
             out[9 * ts + d] += g9_19 * dk
             out[25 * ts + d] += g25_19 * dk
             out[26 * ts + d] += g26_19 * dk
-    if use[21] > use[20]:
-        g8_20 = x16
-        g9_20 = C1
-        g25_20 = x26
-        g26_20 = x32
-        for e in range(int(use[20]), int(use[21])):
-            d = int(use[48 + e])
-            dk = dz[d * 47 + 20]
-            out[8 * ts + d] += g8_20 * dk
-            out[9 * ts + d] += g9_20 * dk
-            out[25 * ts + d] += g25_20 * dk
-            out[26 * ts + d] += g26_20 * dk
-    if use[26] > use[25]:
-        g3_25 = 1.0
-        for e in range(int(use[25]), int(use[26])):
-            d = int(use[48 + e])
-            dk = dz[d * 47 + 25]
-            out[3 * ts + d] += g3_25 * dk
-    if use[27] > use[26]:
-        g4_26 = 1.0
-        for e in range(int(use[26]), int(use[27])):
-            d = int(use[48 + e])
-            dk = dz[d * 47 + 26]
-            out[4 * ts + d] += g4_26 * dk
-    if use[28] > use[27]:
-        g8_27 = -1.0
-        for e in range(int(use[27]), int(use[28])):
-            d = int(use[48 + e])
-            dk = dz[d * 47 + 27]
-            out[8 * ts + d] += g8_27 * dk
-    if use[29] > use[28]:
-        g9_28 = -1.0
-        for e in range(int(use[28]), int(use[29])):
-            d = int(use[48 + e])
-            dk = dz[d * 47 + 28]
-            out[9 * ts + d] += g9_28 * dk
-    if use[30] > use[29]:
-        g8_29 = -x31
-        g9_29 = x27
-        g25_29 = -x33
-        g26_29 = U0*k5
-        for e in range(int(use[29]), int(use[30])):
-            d = int(use[48 + e])
-            dk = dz[d * 47 + 29]
-            out[8 * ts + d] += g8_29 * dk
-            out[9 * ts + d] += g9_29 * dk
-            out[25 * ts + d] += g25_29 * dk
-            out[26 * ts + d] += g26_29 * dk
     if use[41] > use[40]:
-        g3_40 = t*x12
-        g4_40 = t*x2
-        g21_40 = t*x24 + t*x25 + x12
-        g22_40 = t*x3 + t*x4 + x2
+        g3_40 = -t*x3
+        g4_40 = t*x6
+        g21_40 = t*x12 + x4
+        g22_40 = t*x1 + x6
         for e in range(int(use[40]), int(use[41])):
             d = int(use[48 + e])
             dk = dz[d * 47 + 40]
@@ -1356,10 +1058,10 @@ def tangent(t, y, p, dz, nd, use, out, full):
             out[21 * ts + d] += g21_40 * dk
             out[22 * ts + d] += g22_40 * dk
     if use[42] > use[41]:
-        g3_41 = x12
-        g4_41 = x2
-        g21_41 = x24 + x25
-        g22_41 = x5
+        g3_41 = x4
+        g4_41 = x6
+        g21_41 = x12
+        g22_41 = x1
         for e in range(int(use[41]), int(use[42])):
             d = int(use[48 + e])
             dk = dz[d * 47 + 41]
@@ -1379,10 +1081,10 @@ def tangent(t, y, p, dz, nd, use, out, full):
     m_3_1 = 0.0
     m_3_2 = 0.0
     m_3_3 = coupler__inertia
-    f_0 = -FX1*k5 - FY1*k6 + k7
+    f_0 = FX1
     f_1 = FX0 - FX1
-    f_2 = FY0 - FY1 + k8
-    f_3 = -C1*FX0*coupler__crank_end__y + C1*FX1*coupler__slider_end__y + C1*FY0*coupler__crank_end__x - C1*FY1*coupler__slider_end__x - FX0*S1*coupler__crank_end__x + FX1*S1*coupler__slider_end__x - FY0*S1*coupler__crank_end__y + FY1*S1*coupler__slider_end__y
+    f_2 = FY0 - FY1 + k3
+    f_3 = C1*FY0*coupler__crank_end__x - C1*FY1*coupler__slider_end__x - FX0*S1*coupler__crank_end__x + FX1*S1*coupler__slider_end__x
     l_0_0 = math.sqrt(m_0_0)
     il_0 = 1.0 / l_0_0
     l_1_0 = (m_1_0) * il_0
@@ -1405,17 +1107,14 @@ def tangent(t, y, p, dz, nd, use, out, full):
     A2 = (zz_2 - l_3_2 * A3) * il_2
     A1 = (zz_1 - l_2_1 * A2 - l_3_1 * A3) * il_1
     A0 = (zz_0 - l_1_0 * A1 - l_2_0 * A2 - l_3_0 * A3) * il_0
-    x34 = C1*FX0
-    x35 = C1*FY0
-    x36 = FX1*S1
-    x37 = FY0*S1
-    x38 = C1*FX1
-    x39 = C1*FY1
-    x40 = FY1*S1
+    x20 = C1*coupler__crank_end__x
+    x21 = S1*coupler__crank_end__x
+    x22 = C1*coupler__slider_end__x
+    x23 = S1*coupler__slider_end__x
     rfx_0_0 = 0.0
     rfy_0_0 = 0.0
-    rfx_0_1 = k5
-    rfy_0_1 = k6
+    rfx_0_1 = -1.0
+    rfy_0_1 = 0.0
     rfx_1_0 = -1.0
     rfy_1_0 = 0.0
     rfx_1_1 = 1.0
@@ -1424,11 +1123,11 @@ def tangent(t, y, p, dz, nd, use, out, full):
     rfy_2_0 = -1.0
     rfx_2_1 = 0.0
     rfy_2_1 = 1.0
-    r3_4 = -FX0*S1*coupler__crank_end__y + coupler__crank_end__x*x34 + coupler__crank_end__x*x37 + coupler__crank_end__y*x35 - coupler__slider_end__x*x38 - coupler__slider_end__x*x40 + coupler__slider_end__y*x36 - coupler__slider_end__y*x39
-    rfx_3_0 = C1*coupler__crank_end__y + S1*coupler__crank_end__x
-    rfy_3_0 = -C1*coupler__crank_end__x + S1*coupler__crank_end__y
-    rfx_3_1 = -C1*coupler__slider_end__y - S1*coupler__slider_end__x
-    rfy_3_1 = C1*coupler__slider_end__x - S1*coupler__slider_end__y
+    r3_4 = FX0*x20 - FX1*x22 + FY0*x21 - FY1*x23
+    rfx_3_0 = x21
+    rfy_3_0 = -x20
+    rfx_3_1 = -x23
+    rfy_3_1 = x22
     for d in range(nd):
         yo = 8 * (d + 1)
         out[17 * ts + d] = 0.0
@@ -1450,48 +1149,28 @@ def tangent(t, y, p, dz, nd, use, out, full):
             dk = dz[d * 47 + 16]
             out[20 * ts + d] += r3_16 * dk
     if use[18] > use[17]:
-        r3_17 = FX0*S1 - x35
+        r3_17 = -C1*FY0 + FX0*S1
         for e in range(int(use[17]), int(use[18])):
             d = int(use[48 + e])
             dk = dz[d * 47 + 17]
             out[20 * ts + d] += r3_17 * dk
-    if use[19] > use[18]:
-        r3_18 = x34 + x37
-        for e in range(int(use[18]), int(use[19])):
-            d = int(use[48 + e])
-            dk = dz[d * 47 + 18]
-            out[20 * ts + d] += r3_18 * dk
     if use[20] > use[19]:
-        r3_19 = -x36 + x39
+        r3_19 = C1*FY1 - FX1*S1
         for e in range(int(use[19]), int(use[20])):
             d = int(use[48 + e])
             dk = dz[d * 47 + 19]
             out[20 * ts + d] += r3_19 * dk
-    if use[21] > use[20]:
-        r3_20 = -x38 - x40
-        for e in range(int(use[20]), int(use[21])):
-            d = int(use[48 + e])
-            dk = dz[d * 47 + 20]
-            out[20 * ts + d] += r3_20 * dk
     if use[22] > use[21]:
-        r0_21 = A0 + k28
+        r0_21 = A0
         for e in range(int(use[21]), int(use[22])):
             d = int(use[48 + e])
             dk = dz[d * 47 + 21]
             out[17 * ts + d] += r0_21 * dk
-    if use[30] > use[29]:
-        r0_29 = -FX1*k6 + FY1*k5 + k29
-        for e in range(int(use[29]), int(use[30])):
-            d = int(use[48 + e])
-            dk = dz[d * 47 + 29]
-            out[17 * ts + d] += r0_29 * dk
     if use[43] > use[42]:
-        r0_42 = -k16
         r2_42 = coupler__mass
         for e in range(int(use[42]), int(use[43])):
             d = int(use[48 + e])
             dk = dz[d * 47 + 42]
-            out[17 * ts + d] += r0_42 * dk
             out[19 * ts + d] += r2_42 * dk
     for d in range(nd):
         b_0 = -(out[17 * ts + d] + rfx_0_0 * out[23 * ts + d] + rfy_0_0 * out[24 * ts + d] + rfx_0_1 * out[27 * ts + d] + rfy_0_1 * out[28 * ts + d])
@@ -1514,47 +1193,39 @@ def tangent(t, y, p, dz, nd, use, out, full):
     out[18 * ts + nd] = A1
     out[19 * ts + nd] = A2
     out[20 * ts + nd] = A3
-    out[16 * ts + nd] = C0*FX0*k0 + C0*FY0*k1 + C0*k19 - FX0*S0*k1 + FY0*S0*k0 + S0*k18
+    out[16 * ts + nd] = C0*FY0*k0 + C0*k10 - FX0*S0*k0
     if full:
-        x41 = C0*k13
-        x42 = S0*k12
-        x43 = x41 + x42
-        x44 = C0*k34
-        x45 = S0*k34
-        x46 = C0*k12
-        x47 = S0*k13
-        x48 = x46 - x47
-        x49 = A0*k15
-        x50 = A0*k16
-        x51 = C0*FX0
-        x52 = C0*FY0
-        x53 = FX0*S0
-        x54 = FY0*S0
-        x55 = x51 + x54
-        x56 = C0*FY0*k0 + C0*k18 - S0*k19 - k0*x53 - k1*x51 - k1*x54
-        out[10 * ts + nd] = -FX0 + x43
+        x24 = C0*k7
+        x25 = S0*k7
+        x26 = -gravity
+        x27 = -slider__mass
+        x28 = FX0*S0
+        x29 = C0*FY0
+        x30 = C0*k0
+        x31 = S0*k0
+        x32 = FX0*x30 + FY0*x31 + S0*k10
+        out[10 * ts + nd] = -FX0 + x24
         ofx_0_0 = -1.0
-        out[11 * ts + nd] = -FY0 + k14 - x48
+        out[11 * ts + nd] = -FY0 + k8 + x25
         ofy_1_0 = -1.0
-        out[12 * ts + nd] = FX1 + x49
-        oa_2_0 = k15
+        out[12 * ts + nd] = -A0*slider__mass + FX1
+        oa_2_0 = x27
         ofx_2_1 = 1.0
-        out[13 * ts + nd] = FY1 + k17 + x50
-        oa_3_0 = k16
+        out[13 * ts + nd] = FY1 + k9
         ofy_3_1 = 1.0
-        ofx_4_0 = C0*k0 - S0*k1
-        ofy_4_0 = C0*k1 + S0*k0
+        ofx_4_0 = -x31
+        ofy_4_0 = x30
         for d in range(nd):
             yo = 8 * (d + 1)
             out[10 * ts + d] = 0.0 + ofx_0_0 * out[23 * ts + d]
             out[11 * ts + d] = 0.0 + ofy_1_0 * out[24 * ts + d]
             out[12 * ts + d] = 0.0 + oa_2_0 * out[17 * ts + d] + ofx_2_1 * out[27 * ts + d]
-            out[13 * ts + d] = 0.0 + oa_3_0 * out[17 * ts + d] + ofy_3_1 * out[28 * ts + d]
+            out[13 * ts + d] = 0.0 + ofy_3_1 * out[28 * ts + d]
             out[16 * ts + d] = 0.0 + ofx_4_0 * out[23 * ts + d] + ofy_4_0 * out[24 * ts + d]
         if use[1] > use[0]:
-            o10_0 = C0*k31 + S0*k30
-            o11_0 = -C0*k30 + S0*k31
-            o16_0 = C0*k38 + S0*k37 + k2*x51 + k2*x54 + k26*x53 + k3*x52
+            o10_0 = S0*k16
+            o11_0 = -C0*k16
+            o16_0 = C0*FX0*k1 + FY0*S0*k1 + S0*k20
             for e in range(int(use[0]), int(use[1])):
                 d = int(use[48 + e])
                 dk = dz[d * 47 + 0]
@@ -1562,9 +1233,9 @@ def tangent(t, y, p, dz, nd, use, out, full):
                 out[11 * ts + d] += o11_0 * dk
                 out[16 * ts + d] += o16_0 * dk
         if use[10] > use[9]:
-            o10_9 = C0*k33 + S0*k32
-            o11_9 = -C0*k32 + S0*k33 - gravity
-            o16_9 = C0*k40 + S0*k39
+            o10_9 = C0*k17
+            o11_9 = S0*k17 + x26
+            o16_9 = C0*k21
             for e in range(int(use[9]), int(use[10])):
                 d = int(use[48 + e])
                 dk = dz[d * 47 + 9]
@@ -1572,57 +1243,33 @@ def tangent(t, y, p, dz, nd, use, out, full):
                 out[11 * ts + d] += o11_9 * dk
                 out[16 * ts + d] += o16_9 * dk
         if use[12] > use[11]:
-            o10_11 = x44
-            o11_11 = x45
-            o16_11 = C0*k14 - x52 + x53
+            o10_11 = C0*k18
+            o11_11 = S0*k18
+            o16_11 = C0*k8 + x28 - x29
             for e in range(int(use[11]), int(use[12])):
                 d = int(use[48 + e])
                 dk = dz[d * 47 + 11]
                 out[10 * ts + d] += o10_11 * dk
                 out[11 * ts + d] += o11_11 * dk
                 out[16 * ts + d] += o16_11 * dk
-        if use[13] > use[12]:
-            o10_12 = -x45
-            o11_12 = x44
-            o16_12 = -S0*k14 + x55
-            for e in range(int(use[12]), int(use[13])):
-                d = int(use[48 + e])
-                dk = dz[d * 47 + 12]
-                out[10 * ts + d] += o10_12 * dk
-                out[11 * ts + d] += o11_12 * dk
-                out[16 * ts + d] += o16_12 * dk
         if use[14] > use[13]:
-            o16_13 = x52 - x53
+            o16_13 = -x28 + x29
             for e in range(int(use[13]), int(use[14])):
                 d = int(use[48 + e])
                 dk = dz[d * 47 + 13]
                 out[16 * ts + d] += o16_13 * dk
-        if use[15] > use[14]:
-            o16_14 = -x55
-            for e in range(int(use[14]), int(use[15])):
-                d = int(use[48 + e])
-                dk = dz[d * 47 + 14]
-                out[16 * ts + d] += o16_14 * dk
         if use[22] > use[21]:
-            o12_21 = A0*k5
-            o13_21 = A0*k6 - gravity
+            o12_21 = -A0
+            o13_21 = x26
             for e in range(int(use[21]), int(use[22])):
                 d = int(use[48 + e])
                 dk = dz[d * 47 + 21]
                 out[12 * ts + d] += o12_21 * dk
                 out[13 * ts + d] += o13_21 * dk
-        if use[30] > use[29]:
-            o12_29 = -x50
-            o13_29 = x49
-            for e in range(int(use[29]), int(use[30])):
-                d = int(use[48 + e])
-                dk = dz[d * 47 + 29]
-                out[12 * ts + d] += o12_29 * dk
-                out[13 * ts + d] += o13_29 * dk
         if use[41] > use[40]:
-            o10_40 = C0*k36 + S0*k35 + t*x46 - t*x47
-            o11_40 = -C0*k35 + S0*k36 + t*x41 + t*x42
-            o16_40 = t*x56
+            o10_40 = C0*k19 - t*x25
+            o11_40 = S0*k19 + t*x24
+            o16_40 = -t*x32
             for e in range(int(use[40]), int(use[41])):
                 d = int(use[48 + e])
                 dk = dz[d * 47 + 40]
@@ -1630,9 +1277,9 @@ def tangent(t, y, p, dz, nd, use, out, full):
                 out[11 * ts + d] += o11_40 * dk
                 out[16 * ts + d] += o16_40 * dk
         if use[42] > use[41]:
-            o10_41 = x48
-            o11_41 = x43
-            o16_41 = x56
+            o10_41 = -x25
+            o11_41 = x24
+            o16_41 = -x32
             for e in range(int(use[41]), int(use[42])):
                 d = int(use[48 + e])
                 dk = dz[d * 47 + 41]
@@ -1641,8 +1288,8 @@ def tangent(t, y, p, dz, nd, use, out, full):
                 out[16 * ts + d] += o16_41 * dk
         if use[43] > use[42]:
             o11_42 = -crank__mass
-            o13_42 = -slider__mass
-            o16_42 = C0*k42 + S0*k41
+            o13_42 = x27
+            o16_42 = C0*k22
             for e in range(int(use[42]), int(use[43])):
                 d = int(use[48 + e])
                 dk = dz[d * 47 + 42]
@@ -1683,6 +1330,8 @@ def monitor_sens(t, y, p, dydt, out, g, gd):
 @nb.njit(cache=True, error_model="numpy", nogil=True)
 def integrate_sens(y0, p, edges, settings, coefficients):
     """`integrator.integrate` bound to the sensitivity kernels (compiled once, cached)."""
+    if not _zeros_hold(p):
+        raise ValueError(ZERO_MESSAGE)
     return integrate(_THIS.rhs_sens, _THIS.event, _THIS.on_event_sens, _THIS.monitor_sens,
                      y0, p, edges, settings, coefficients)
 

@@ -11,6 +11,7 @@ by the structure's digest (`loader`).
 # the generator's names are imported on first use (sympy and jinja2 with them): a generated
 # module imports `generate.runtime` only, and with it this package
 _LAZY = {"generate_module": "loader", "load_model": "loader", "model_path": "loader",
+         "model_structure": "loader",
          "GENERATOR_VERSION": "writer", "structure_digest": "writer"}
 
 
@@ -22,7 +23,7 @@ def __getattr__(name):
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
-__all__ = ["generate_module", "load_model", "model_path", "GENERATOR_VERSION",
+__all__ = ["generate_module", "load_model", "model_path", "model_structure", "GENERATOR_VERSION",
            "structure_digest", "NAMED_CASES", "NAMED_VARIANTS", "named_cases",
            "registry_source"]
 
@@ -49,9 +50,10 @@ def named_cases() -> dict:
 
 def registry_source(cases: dict) -> str:
     """The source of mbs_clearance/_generated/__init__.py for the linkages `cases`."""
+    from .loader import model_structure
     from .writer import structure_digest
 
-    lines = [f"    {structure_digest(lk.structure())!r}: {name!r},"
+    lines = [f"    {structure_digest(model_structure(lk))!r}: {name!r},"
              for name, lk in cases.items()]
     return ('"""Checked-in generated model modules of the named cases (written by\n'
             'tools/generate_models.py; do not edit). MODULES maps a structure digest to a '

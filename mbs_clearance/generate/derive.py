@@ -25,7 +25,8 @@ import sympy.physics.mechanics as me
 
 from ..linkage import GROUND, Linkage, Prismatic, Revolute
 
-__all__ = ["Derivation", "derive", "parameter_layout", "identifier"]
+__all__ = ["Derivation", "derive", "parameter_layout", "identifier", "geometric_zeros",
+           "specialise"]
 
 
 def identifier(name: str, taken: set[str]) -> str:
@@ -63,6 +64,22 @@ def parameter_layout(linkage: Linkage) -> tuple[str, ...]:
     for j in linkage.clearance_joints:
         names += [f"{j.name}.mode", f"{j.name}.impact_velocity"]
     return tuple(names)
+
+
+def geometric_zeros(linkage: Linkage) -> tuple[str, ...]:
+    """Dotted names (p order) of `linkage`'s geometric parameters whose value is exactly 0:
+    body and ground point coordinates, prismatic axis angles. The generated model of a
+    linkage is specialised on them (`specialise`): a point on a body's axis or a guide
+    through the origin adds no terms to the equations."""
+    zeros = []
+    for b in linkage.bodies:
+        for pt, xy in b.points.items():
+            zeros += [f"{b.name}.{pt}.{c}" for c, v in zip("xy", xy) if v == 0.0]
+    for pt, xy in linkage.ground_points.items():
+        zeros += [f"{GROUND}.{pt}.{c}" for c, v in zip("xy", xy) if v == 0.0]
+    zeros += [f"{j.name}.angle" for j in linkage.joints
+              if isinstance(j, Prismatic) and j.angle == 0.0]
+    return tuple(zeros)
 
 
 #: per clearance joint, the entries of p read by the contact law
@@ -395,3 +412,36 @@ def _reduce_trig(expr, ideal, gens):
         return expr
     return rem / den
 
+
+
+def specialise(d: Derivation, zeros) -> Derivation:
+    """`d` with the parameters named in `zeros` (dotted names) set to zero in every
+    expression: the model of the linkages whose those entries are exactly 0. A zero prismatic
+    axis angle drops its sine and cosine (0 and 1). The parameter layout is `d`'s (the
+    entries stay in p, unread); derivatives along them are lost (zero)."""
+    zeros = tuple(zeros)
+    unknown = [z for z in zeros if z not in d.psyms]
+    if unknown:
+        raise ValueError(f"specialise: unknown parameters {unknown}")
+    subs = {d.psyms[z]: sp.S(0) for z in zeros}
+    angles = []
+    for a, S, C in d.angles:
+        if a in subs:
+            subs[S], subs[C] = sp.S(0), sp.S(1)
+        else:
+            angles.append((a, S, C))
+
+    def sub(e):
+        return e if e is None else sp.expand(sp.sympify(e).xreplace(subs))
+
+    return Derivation(
+        parameters=d.parameters, psyms=d.psyms, coordinates=d.coordinates, t=d.t, Q=d.Q,
+        U=d.U, A=d.A, FX=d.FX, FY=d.FY, angles=[(sub(a), S, C) for a, S, C in angles],
+        joints=d.joints, ground_joints=d.ground_joints,
+        gaps=[tuple(sub(e) for e in g) for g in d.gaps],
+        mass_matrix=d.mass_matrix.applyfunc(sub), forcing=d.forcing.applyfunc(sub),
+        reactions=[tuple(sub(e) for e in r) for r in d.reactions],
+        drive_moment=sub(d.drive_moment), kinetic=sub(d.kinetic), potential=sub(d.potential),
+        closure_jacobian=d.closure_jacobian.applyfunc(sub),
+        closure_rate=d.closure_rate.applyfunc(sub), monitor=d.monitor, extra=dict(d.extra),
+        TQ=d.TQ, spins=[sub(e) for e in d.spins])

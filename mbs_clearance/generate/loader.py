@@ -1,5 +1,12 @@
 """Generated model modules: written once per structure, imported from disk.
 
+A module is specialised on the linkage's geometric parameters that are exactly zero
+(`derive.geometric_zeros`: points on a body's axis, a guide through the origin; their terms
+vanish from the equations): its key is the structure and that zero set
+(`model_structure`), and its entries of p stay in place, checked to be zero. Pass
+``specialise=False`` for the general module (derivatives along those parameters, by DDM or
+finite differences, need it).
+
 The checked-in modules of the named cases live in mbs_clearance/_generated (listed in its
 ``MODULES``, digest -> module name; `tools/generate_models.py` rewrites them, a test fails when
 one is stale). Any other structure is generated on first use into the first writable of
@@ -24,23 +31,38 @@ from types import ModuleType
 from ..linkage import Linkage
 from .writer import structure_digest
 
-__all__ = ["generate_module", "load_model", "model_path"]
+__all__ = ["generate_module", "load_model", "model_path", "model_structure"]
 
 _LOCK = threading.Lock()
 _LOADED: dict[str, ModuleType] = {}
 _PACKAGE = Path(__file__).resolve().parents[1]
 
 
-def generate_module(linkage: Linkage) -> str:
-    """The python source of `linkage`'s model module (deterministic: equal structures give
-    equal text)."""
+def model_structure(linkage: Linkage, specialise: bool = True) -> dict:
+    """What `linkage`'s generated module depends on: its structure (`Linkage.structure`)
+    and, when specialised, the geometric parameters that are exactly zero in it."""
+    from .derive import geometric_zeros
+
+    structure = linkage.structure()
+    zeros = geometric_zeros(linkage) if specialise else ()
+    if zeros:
+        structure["zero_parameters"] = list(zeros)
+    return structure
+
+
+def generate_module(linkage: Linkage, specialise: bool = True) -> str:
+    """The python source of `linkage`'s model module (deterministic: equal structures and
+    zero sets give equal text); `specialise`: on its zero-valued geometric parameters."""
     from .derive import derive
+    from .derive import specialise as specialised
     from .writer import render
 
     if not isinstance(linkage, Linkage):
         raise ValueError(f"linkage must be a Linkage; got {type(linkage).__name__}")
-    structure = linkage.structure()
-    return render(derive(linkage), linkage.name, structure)
+    structure = model_structure(linkage, specialise)
+    zeros = tuple(structure.get("zero_parameters", ()))
+    d = derive(linkage)
+    return render(specialised(d, zeros) if zeros else d, linkage.name, structure, zeros)
 
 
 def _cache_dirs(digest: str) -> list[Path]:
@@ -62,9 +84,9 @@ def _cache_dirs(digest: str) -> list[Path]:
     return dirs
 
 
-def model_path(linkage: Linkage) -> Path | None:
+def model_path(linkage: Linkage, specialise: bool = True) -> Path | None:
     """Where `linkage`'s generated module is (None: not generated yet)."""
-    digest = structure_digest(linkage.structure())
+    digest = structure_digest(model_structure(linkage, specialise))
     named = _named_modules().get(digest)
     if named is not None:
         return _PACKAGE / "_generated" / f"{named}.py"
@@ -98,13 +120,16 @@ def _write(digest: str, source: str) -> Path:
     raise OSError(f"no writable directory for the generated model: {last}")
 
 
-def load_model(linkage: Linkage) -> ModuleType:
-    """The generated model module of `linkage`'s structure: a checked-in one, a cached one,
-    or generated now (sympy derivation, a few seconds; the first compile of its kernels
-    follows on first use)."""
+def load_model(linkage: Linkage, specialise: bool = True) -> ModuleType:
+    """The generated model module of `linkage`'s structure (specialised on its zero-valued
+    geometric parameters unless `specialise` is False): a checked-in one, a cached one, or
+    generated now (sympy derivation, a few seconds; the first compile of its kernels follows
+    on first use)."""
     if not isinstance(linkage, Linkage):
         raise ValueError(f"linkage must be a Linkage; got {type(linkage).__name__}")
-    digest = structure_digest(linkage.structure())
+    if not isinstance(specialise, bool):
+        raise ValueError(f"specialise must be True or False; got {specialise!r}")
+    digest = structure_digest(model_structure(linkage, specialise))
     with _LOCK:
         if digest in _LOADED:
             return _LOADED[digest]
@@ -112,9 +137,9 @@ def load_model(linkage: Linkage) -> ModuleType:
         if named is not None:
             module = importlib.import_module(f"mbs_clearance._generated.{named}")
         else:
-            path = model_path(linkage)
+            path = model_path(linkage, specialise)
             if path is None or not _current(path, digest):
-                path = _write(digest, generate_module(linkage))
+                path = _write(digest, generate_module(linkage, specialise))
             name = f"mbs_clearance_model_{digest[:16]}"
             spec = importlib.util.spec_from_file_location(name, path)
             module = importlib.util.module_from_spec(spec)

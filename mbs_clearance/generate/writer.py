@@ -231,8 +231,9 @@ def _solve_lines(M, f, out, indent="    ") -> list[str]:
     return [indent + line for line in lines]
 
 
-def render(d: Derivation, linkage_name: str, structure: dict) -> str:
-    """The python source of the model module of derivation `d` (deterministic)."""
+def render(d: Derivation, linkage_name: str, structure: dict, zeros: tuple = ()) -> str:
+    """The python source of the model module of derivation `d` (deterministic); `zeros`:
+    the parameters `d` is specialised on (`derive.specialise`), checked to be zero."""
     w = _Writer(d)
     n, J, G = len(d.Q), len(d.joints), len(d.ground_joints)
     params = list(d.parameters)
@@ -335,6 +336,7 @@ def render(d: Derivation, linkage_name: str, structure: dict) -> str:
     ctx = dict(
         name=linkage_name, digest=structure_digest(structure), version=GENERATOR_VERSION,
         structure=json.dumps(structure, sort_keys=True), parameters=params,
+        zeros=list(zeros), zero_index=[params.index(z) for z in zeros],
         coordinates=list(d.coordinates), n=n, J=J, joints=list(d.joints),
         ground_joints=list(d.ground_joints), mem_start=mem_start,
         n_constants=len(w.constants), out_columns=out_columns, monitor=d.monitor,

@@ -276,15 +276,62 @@ def test_user_description_cached_by_structure(tmp_path, monkeypatch):
     there again; changing a number keeps the module, changing the structure does not."""
     monkeypatch.setenv("MBS_CLEARANCE_MODEL_DIR", str(tmp_path))
     lk = _pendulum_pair()
-    from mbs_clearance.generate import loader, model_path
+    from mbs_clearance.generate import loader, model_path, model_structure
 
     model = load_model(lk)
-    digest = structure_digest(lk.structure())
+    digest = structure_digest(model_structure(lk))
     assert model.STRUCTURE_DIGEST == digest
     assert model_path(lk) is not None
     assert load_model(lk.with_parameter("crank.mass", 0.5)) is model
-    assert structure_digest(lk.replace(monitor_joint="hanger").structure()) != digest
+    assert structure_digest(model_structure(lk.replace(monitor_joint="hanger"))) != digest
     assert loader._current(model_path(lk), digest)
+
+
+def test_models_specialised_on_zero_geometry_equal_the_general_one(tmp_path, monkeypatch):
+    """The paper case's checked-in module is specialised on its zero-valued geometric
+    parameters (points on the links' axes, the guide through the origin): its quantities
+    equal the general module's (no specialisation, generated here) at the states of a run,
+    to round-off; a nonzero offset takes another module; the specialised module refuses a
+    nonzero entry in its zero set (pack_parameters naming it; integrate_model; a DDM
+    direction along it). (Sensitivities along such parameters: test_linkage_ddm.)"""
+    from mbs_clearance import cases, linkage_ddm
+    from mbs_clearance.generate.derive import geometric_zeros
+    from mbs_clearance.integrator import METHODS, make_settings
+
+    monkeypatch.setenv("MBS_CLEARANCE_MODEL_DIR", str(tmp_path))
+    lk = cases.paper_slider_crank()
+    spec, gen = load_model(lk), load_model(lk, specialise=False)
+    assert spec.ZERO_PARAMETERS == geometric_zeros(lk) and "slider.pin.y" in spec.ZERO_PARAMETERS
+    assert gen.ZERO_PARAMETERS == () and gen is not spec
+    assert spec.PARAMETERS == gen.PARAMETERS
+    p, pg = pack_parameters(lk, spec), pack_parameters(lk, gen)
+    assert np.array_equal(p[:spec.CONST_START], pg[:gen.CONST_START])
+    from mbs_clearance.linkage_model import run
+
+    _, ts, ys, ms, *_ = run(lk, 1)
+    rng = np.random.default_rng(3)
+    for i in rng.choice(len(ts), 300, replace=False):
+        for q, m in ((p, spec), (pg, gen)):
+            q[m.MEM_START:m.MEM_START + m.N_MEM] = ms[i]
+        a = np.array(spec.dynamics(ts[i], ys[i], p))
+        b = np.array(gen.dynamics(ts[i], ys[i], pg))
+        scale = np.maximum(np.abs(b), 1e-9 * np.max(np.abs(b)))
+        assert np.max(np.abs(a - b) / scale) < 1e-9, i
+    # an offset of the slider's pin: no longer in the zero set, another module
+    off = lk.with_parameter("slider.pin.y", 1e-3)
+    assert "slider.pin.y" not in load_model(off).ZERO_PARAMETERS
+    with pytest.raises(ValueError, match=r"slider\.pin\.y = 0\.001.*specialise=False"):
+        pack_parameters(off, spec)
+    q = pack_parameters(lk, spec)
+    q[spec.PARAMETERS.index("slider.pin.y")] = 1e-3
+    settings = make_settings(1e-7, np.full(5, 1e-9), 4, h_max=1e-3, max_steps=10,
+                             n_dense=4, n_events=1, mem_start=spec.MEM_START, n_mem=2)
+    with pytest.raises(ValueError, match="ZERO_PARAMETERS"):
+        spec.integrate_model(initial_state(lk, spec, p), q, np.array([0.0, 1e-3]), settings,
+                             METHODS["dopri5"].arrays())
+    with pytest.raises(ValueError, match=r"directions along \['slider\.pin\.y'\]"):
+        linkage_ddm.ddm_run(lk, spec, p, initial_state(lk, spec, p), [{"slider.pin.y": 1.0}],
+                            scale=[1.0], rtol=1e-7, atol_plain=np.ones(5), revolutions=1)
 
 
 def test_coupled_mass_matrix_chain():

@@ -68,6 +68,31 @@ def test_ddm_matches_finite_differences(case):
     _compare(ddm.base_force[:, 1], fd.base_force[:, 1], "reaction y", 2e-3)
 
 
+def test_ddm_along_zero_valued_geometry_runs_on_the_general_model():
+    """Along parameters that are exactly zero in the description (a pin on the coupler's
+    axis, the guide raised or turned), on which the checked-in module is
+    specialised, DDM and the finite differences run on the general module and agree as in
+    the test above (same tolerances); a run along other parameters keeps the specialised
+    one."""
+    from mbs_clearance.linkage_ddm import plain_setup
+    from mbs_clearance.linkage_model import specialisable
+
+    linkage = cases.paper_slider_crank()
+    names = ("coupler.slider_end.y", "ground.slider_axis.y", "slider_guide.angle", "crank.pin.x")
+    assert not specialisable(linkage, names) and specialisable(linkage, names[3:])
+    assert plain_setup(linkage, None)[0].ZERO_PARAMETERS
+    t_eval = np.linspace(0.0, 0.25 * linkage.period, 13)[1:]
+    ddm = sensitivities(linkage, names, revolutions=1, t_eval=t_eval, rtol=1e-10)
+    fd = sensitivities(linkage, names, revolutions=1, method="fd", t_eval=t_eval,
+                       rtol=1e-12, fd_relative_step=1e-5)
+    assert ddm.stats["nevent"] >= 2, ddm.stats
+    assert np.all(np.max(np.abs(fd.base_force), axis=0) > 0)
+    for c in linkage.coordinates():
+        _compare(ddm.outputs[c], fd.outputs[c], c, 2e-4)
+    _compare(ddm.base_force[:, 0], fd.base_force[:, 0], "reaction x", 2e-3)
+    _compare(ddm.base_force[:, 1], fd.base_force[:, 1], "reaction y", 2e-3)
+
+
 @pytest.mark.parametrize("mech", [SliderCrank(), SliderCrank(crank_inertia=None,
                                                              contact_stiffness=3e11),
                                   SliderCrank(friction_law="ambrosio",
