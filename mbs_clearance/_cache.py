@@ -23,6 +23,13 @@ A package that calls `register_package` in its ``__init__`` (mbs_clearance; vali
   first), else numba's user-wide cache directory, else a directory of the user's own in the
   temporary directory, with one `CacheWarning` per process.
 
+A shared kernel that takes kernels as arguments (`integrator.integrate` and its stages) has
+one index for all the models it was compiled for, and reading it imports each of their
+modules. A model generated on demand (`generate.load_model`) is imported from a file, not by
+name, so a process that has not loaded it cannot read such an index: numba would raise
+ModuleNotFoundError at the first compile of any other model. Such an index is read as empty
+here (`_load_index_or_empty`): the kernel is compiled and the index rewritten with it.
+
 When a kernel of a registered package is not in the cache (numba's "numba:compile" event
 fires on cache misses only), the logger "mbs_clearance" says so once, at INFO: "compiling
 kernels (first run only, about N s)", N being the longest compilation measured so far
@@ -197,6 +204,18 @@ def _write_seconds(package: _Package, seconds: float) -> None:
 _LISTENER: CompileListener | None = None
 
 
+_LOAD_INDEX = caching.IndexDataCacheFile._load_index
+
+
+def _load_index_or_empty(self):
+    """numba's index loader; an index naming a module this process cannot import (a model
+    generated on demand, loaded by another process) reads as empty (a cache miss)."""
+    try:
+        return _LOAD_INDEX(self)
+    except (ImportError, AttributeError):
+        return {}
+
+
 def register_package(name: str, depends_on: tuple[str, ...] = ()) -> str | None:
     """Key the numba cache of the kernels defined in package `name` (and its subpackages) by
     the digest of its sources now and of the packages `depends_on`, whose functions its
@@ -216,6 +235,7 @@ def register_package(name: str, depends_on: tuple[str, ...] = ()) -> str | None:
     _PACKAGES[str(root)] = _Package(name, str(root), digest, tuple(deps), files, signature)
     if DigestLocator not in CacheImpl._locator_classes:
         CacheImpl._locator_classes.insert(0, DigestLocator)
+    caching.IndexDataCacheFile._load_index = _load_index_or_empty
     global _LISTENER
     if _LISTENER is None:
         _LISTENER = CompileListener()

@@ -233,6 +233,61 @@ def test_an_edit_during_the_import_is_never_cached_for_others(small):
     assert back["value"] == 10.0 * 2.0 and back["misses"] == 1 and back["hits"] == 0
 
 
+# ------------------------------------------------ (iv) kernels of modules loaded from files
+
+# a shared kernel taking a kernel as argument (as integrator.integrate takes a model's), and
+# a kernel in a module imported from a file under a name no other process can import (as a
+# model generated on demand is)
+APPLY = """
+    import numba as nb
+
+
+    @nb.njit(cache=True)
+    def apply(f, x):
+        return f(x) + 1.0
+"""
+FILE_MODULE = """
+import importlib.util, json, sys
+spec = importlib.util.spec_from_file_location("loose_{tag}", {path!r})
+mod = importlib.util.module_from_spec(spec)
+sys.modules[spec.name] = mod
+spec.loader.exec_module(mod)
+from kpkg.apply import apply
+{control}value = apply(mod.f, 2.0)
+"""
+
+
+def test_an_index_naming_a_module_loaded_from_a_file_reads_as_a_miss(small, tmp_path):
+    """Process 1 compiles the shared kernel `apply` for a kernel of a module loaded from a
+    file (its index then names that module); process 2, which never loaded it, compiles
+    `apply` for another such module: numba alone would raise ModuleNotFoundError reading the
+    index (the control, with numba's loader restored); the cache reads it as a miss and
+    computes, and so does process 1's code run again."""
+    src, env = small
+    (src / "kpkg" / "apply.py").write_text(textwrap.dedent(APPLY).lstrip())
+    code = {}
+    restore = ("from numba.core import caching\nfrom mbs_clearance import _cache\n"
+               "caching.IndexDataCacheFile._load_index = _cache._LOAD_INDEX\n")
+    for tag, scale, control in (("a", 3.0, ""), ("b", 5.0, ""), ("control", 5.0, restore)):
+        path = tmp_path / f"loose_{tag}.py"
+        # (the generated sensitivity kernels name their module: _THIS.tangent)
+        path.write_text(f"import sys\nimport numba as nb\n_THIS = sys.modules[__name__]\n\n\n"
+                        f"@nb.njit(cache=True)\ndef g(x):\n    return {scale} * x\n\n\n"
+                        f"@nb.njit(cache=True)\ndef f(x):\n    return _THIS.g(x)\n")
+        code[tag] = ("import mbs_clearance\n"
+                     + FILE_MODULE.format(tag=tag, path=str(path), control=control)
+                     + stats_code("apply"))
+    first, _ = run(code["a"], env)
+    assert first["value"] == 7.0 and first["misses"] == 1
+    proc = subprocess.run([sys.executable, "-c", code["control"]], env=env,
+                          cwd=first_path(env), capture_output=True, text=True, timeout=600)
+    assert proc.returncode != 0 and "No module named 'loose_a'" in proc.stderr
+    second, _ = run(code["b"], env)
+    assert second["value"] == 11.0 and second["misses"] == 1
+    again, _ = run(code["a"], env)                  # the index now names loose_b
+    assert again["value"] == 7.0
+
+
 # ---------------------------------------------------------------- (iii) read-only install
 
 

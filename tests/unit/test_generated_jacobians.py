@@ -10,7 +10,8 @@ from mbs_clearance.generate import load_model
 from mbs_clearance.linkage_model import initial_state, pack_parameters
 
 CASES = ("paper_slider_crank", "slider_crank_two_clearances", "four_bar",
-         "paper_slider_crank+coulomb", "paper_slider_crank+ambrosio")
+         "paper_slider_crank+coulomb", "paper_slider_crank+ambrosio",
+         "paper_slider_crank+general")
 # the four-bar at the 0.1 mm clearance where this test was written and measured (its default
 # became 0.01 mm in the same session; the free-flight difference quotients of the point
 # coordinates there were not re-examined: 1.2e-6 relative off, see the session's note)
@@ -23,6 +24,13 @@ OVERRIDES = {"four_bar": {"clearance": 1e-4},
              "paper_slider_crank+ambrosio": {"friction_law": "ambrosio",
                                              "friction_coefficient": 0.3, "friction_v0": 0.01,
                                              "friction_v1": 20.0}}
+
+
+def _case(case):
+    """(linkage, model) of a case name: the module specialised on the linkage's zero-valued
+    geometric parameters, or ("+general") the general one, whose Jacobian has their columns."""
+    linkage = getattr(cases, case.partition("+")[0])(**OVERRIDES.get(case, {}))
+    return linkage, load_model(linkage, specialise=not case.endswith("+general"))
 
 
 def _state(linkage, model, p, t, penetration, rng):
@@ -77,9 +85,9 @@ def _fd_column(model, t, y, p, col, h):
 def test_jacobian_matches_finite_differences(case, mode):
     """Every output column's derivative along every column of z (time, coordinates, rates,
     every parameter, the impact-velocity memory) equals central finite differences of the
-    plain generated `outputs`; the values equal `outputs` to round-off."""
-    linkage = getattr(cases, case.partition("+")[0])(**OVERRIDES.get(case, {}))
-    model = load_model(linkage)
+    plain generated `outputs`; the values equal `outputs` to round-off. (The columns of the
+    parameters a module is specialised on, which must stay zero, are zero.)"""
+    linkage, model = _case(case)
     p = pack_parameters(linkage, model)
     rng = np.random.default_rng(7)
     t = 0.37 * linkage.period
@@ -108,8 +116,10 @@ def test_jacobian_matches_finite_differences(case, mode):
     forces = [r for r, c in enumerate(model.OUT_COLUMNS)
               if c.endswith(("contact_force", "_x", "_y")) and ".ecc_" not in c]
     for col, name in enumerate(model.Z_NAMES):
-        if name.endswith((".mode", ".contact_model", ".friction_law")):
-            assert np.all(jac[:n_out, col] == 0.0), name   # discrete: no derivative
+        if name.endswith((".mode", ".contact_model", ".friction_law")) or \
+                name in model.ZERO_PARAMETERS:
+            # discrete: no derivative; specialised on zero: not in the module's equations
+            assert np.all(jac[:n_out, col] == 0.0), name
             continue
         # a step that moves every penetration by at most 1 % of the smallest one (a force's
         # Taylor series converges within the penetration) and the value by 1e-6
@@ -139,8 +149,7 @@ def test_tangent_is_jacobian_times_seeds(case, mode):
     equals the full Jacobian times the seed directions to round-off, on every row (outputs,
     the joints' extra rows, friction), for random dense seeds and for unit seeds (the
     Jacobian's own columns); the value column equals the Jacobian's."""
-    linkage = getattr(cases, case.partition("+")[0])(**OVERRIDES.get(case, {}))
-    model = load_model(linkage)
+    linkage, model = _case(case)
     p = pack_parameters(linkage, model)
     rng = np.random.default_rng(11)
     t = 0.29 * linkage.period
