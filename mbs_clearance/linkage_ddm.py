@@ -304,13 +304,12 @@ class DdmRun(NamedTuple):
 
     def growth(self, unit, period, revolutions) -> np.ndarray:
         """`growth_maxima` of the requested directions over all recorded steps, without
-        forming their state sensitivities (`_weighted_norms2`)."""
+        forming their state sensitivities (`_window_norm_maxima`)."""
         n2 = 2 * self.model.N_Q
         s = self.ys[:, n2:n2 * (1 + self.nb)].reshape(len(self.ys), self.nb, n2)
         weights = (self.scale[:, None] / np.asarray(unit)[None, :]) ** 2
-        return _revolution_maxima(
-            self.ts, _weighted_norms2(s, *_sparse_columns(self.coeffs), weights), period,
-            revolutions)
+        lo, hi = _revolution_rows(self.ts, period, revolutions)
+        return np.sqrt(_window_norm_maxima(s, *_sparse_columns(self.coeffs), weights, lo, hi))
 
     def output_sensitivities(self, ts, ys, ms):
         """Values (n, N_OUT) and derivatives (n, N_OUT, npar) of the model's outputs along
@@ -360,22 +359,24 @@ def _combine_rows(a, ptr, rows, vals):
 
 
 @nb.njit(cache=True, error_model="numpy")
-def _weighted_norms2(s, ptr, rows, vals, weights):
-    """sum_j weights[k, j] (sum_b s[i, b, j] coeffs[b, k])^2 (n, npar): the squared weighted
+def _window_norm_maxima(s, ptr, rows, vals, weights, lo, hi):
+    """Per window w (rows lo[w]:hi[w]) the maximum over its rows i of
+    sum_j weights[k, j] (sum_b s[i, b, j] coeffs[b, k])^2 (nw, npar): the squared weighted
     norms of the combined state sensitivities (coeffs by `_sparse_columns`), from those of
     the integrated directions s (n, nb, 2 N_Q) without forming the combined ones."""
-    n, _, n2 = s.shape
+    n2 = s.shape[2]
     npar = ptr.shape[0] - 1
-    out = np.zeros((n, npar))
-    for i in range(n):
-        for k in range(npar):
-            acc2 = 0.0
-            for j in range(n2):
-                acc = 0.0
-                for e in range(ptr[k], ptr[k + 1]):
-                    acc += s[i, rows[e], j] * vals[e]
-                acc2 += weights[k, j] * acc * acc
-            out[i, k] = acc2
+    out = np.zeros((lo.shape[0], npar))
+    for w in range(lo.shape[0]):
+        for i in range(lo[w], hi[w]):
+            for k in range(npar):
+                acc2 = 0.0
+                for j in range(n2):
+                    acc = 0.0
+                    for e in range(ptr[k], ptr[k + 1]):
+                        acc += s[i, rows[e], j] * vals[e]
+                    acc2 += weights[k, j] * acc * acc
+                out[w, k] = max(out[w, k], acc2)
     return out
 
 
@@ -590,15 +591,22 @@ def growth_maxima(ts, sens, scale, unit, period, revolutions):
     return _revolution_maxima(ts, norm2, period, revolutions)
 
 
-def _revolution_maxima(ts, norm2, period, revolutions):
-    """Per revolution (a step on an edge counts for both sides) the maxima of the squared
-    norms norm2 (n, npar) at the times ts, square-rooted."""
+def _revolution_rows(ts, period, revolutions):
+    """Per revolution (a step on an edge counts for both sides; at most as many as the
+    times ts reach) the rows lo:hi of the times ts in it."""
     revolutions = min(revolutions, int(np.ceil(ts[-1] / period - 1e-9)))
     edges = np.minimum(np.arange(revolutions + 1) * period, ts[-1])
     lo = np.searchsorted(ts, edges[:-1], side="left")
     hi = np.searchsorted(ts, edges[1:], side="right")
-    out = np.zeros((revolutions, norm2.shape[1]))
-    for r in range(revolutions):
+    return lo.astype(np.int64), hi.astype(np.int64)
+
+
+def _revolution_maxima(ts, norm2, period, revolutions):
+    """Per revolution (`_revolution_rows`) the maxima of the squared norms norm2 (n, npar)
+    at the times ts, square-rooted."""
+    lo, hi = _revolution_rows(ts, period, revolutions)
+    out = np.zeros((len(lo), norm2.shape[1]))
+    for r in range(len(lo)):
         if hi[r] > lo[r]:
             out[r] = norm2[lo[r]:hi[r]].max(axis=0)
     return np.sqrt(out)

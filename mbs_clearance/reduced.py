@@ -574,7 +574,8 @@ def trajectory_from_states(mech, ts, ys, ms, p, stats, peaks, outs=None,
                            columns=MODEL.OUT_COLUMNS):
     """Build a `Trajectory` from recorded states [theta3, x4, theta3dot, x4dot, ..., W],
     memories [mode, dmin, ...] and, if recorded by the integrator, the generated model's
-    outputs named `columns` (read in place, not copied); without outputs they are evaluated
+    outputs named `columns` (read in place, not copied, with any strides: a DDM run's are
+    columns of its record); without outputs they are evaluated
     here from the model's parameters p."""
     from .trajectory import Trajectory
 
@@ -588,7 +589,7 @@ def trajectory_from_states(mech, ts, ys, ms, p, stats, peaks, outs=None,
         out = outs
     (base_force, crank_moment, contact_force, penetration, eccentricity, slider_position,
      slider_velocity, slider_acceleration, coupler_angle, coupler_rate, contact_phase,
-     crank_work) = _columns(ys, ms, np.ascontiguousarray(out), _series_columns(columns))
+     crank_work) = _columns(ys, ms, out, _series_columns(columns))
     return Trajectory(
         t=ts,
         base_force=base_force,

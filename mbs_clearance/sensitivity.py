@@ -403,14 +403,15 @@ def _ddm(mech, names, revolutions, rtol, t_eval, event_time_term, method):
         keep = landed(ts, t_eval)
         ts, ys, ms, peaks = ts[keep], ys[keep], ms[keep], None
     vals, ders = run.recorded_output_sensitivities(keep)
-    d_force = ders[:, 0:2, :].copy()
+    # (the fields are views of ders, one array (n, 4, npar) in the order asked above)
+    d_force = ders[:, 0:2, :]
     d_mag = magnitude_derivative(vals, mon, ders, 0)
     traj = annotate(reduced.trajectory_from_states(
         mech, ts, run.plain_states(ys), ms[:, :model.N_MEM], run.p0, run.stats, peaks, vals,
         model.OUT_COLUMNS))
     return Sensitivities(
         t=ts, parameters=names, reference=ref, base_force=d_force, base_force_magnitude=d_mag,
-        crank_moment=ders[:, 2, :].copy(), contact_force=ders[:, 3, :].copy(), trajectory=traj,
+        crank_moment=ders[:, 2, :], contact_force=ders[:, 3, :], trajectory=traj,
         method="ddm", backend="reduced", growth=growth, stats=run.stats)
 
 
