@@ -444,24 +444,26 @@ def test_four_bar_from_a_settled_start_agrees_and_converges():
 
 
 @pytest.mark.slow
-def test_four_bar_exudyn_finite_differences_converge_to_ddm_from_a_settled_start():
+def test_four_bar_exudyn_finite_differences_agree_with_ddm_from_a_settled_start():
     """Issue 17's finite differences for the four-bar, from the state after 100
     revolutions (held fixed: from the centred start the sensitivities pass through its 325
     settling impacts and are ill-conditioned, docs/exudyn.md). Relative step 1e-3,
     revolution 1 from there, d RMS(|F|)/db of coupler.mass, rocker.mass and gravity
-    against DDM (rtol 1e-9): measured 7.8e-4, 4.8e-4, 5.2e-4 at 15.6 us and 4.7e-5,
-    2.4e-5, 8.0e-5 at 7.8 us (the reduced model's own central differences at this step:
-    5.2e-4, 2.5e-4, 1.5e-4), asserted < 2e-3 and < 3e-4, falling."""
+    against DDM (rtol 1e-9), each RMS over the runs' own steps in the Exudyn runs' window.
+    Measured (session 15): 3.3e-6, 1.3e-5, 3.9e-6 at 15.6 us and 1.4e-5, 5.0e-6, 9.0e-6 at
+    7.8 us, the level of the reduced model's own central differences at this relative step
+    (3.5e-6, 6.5e-7, 4.4e-6): asserted < 5e-5 at both steps. (Until session 15 the DDM's RMS
+    was a trapezoid over the 3000 comparison samples, whose error, 1e-4 to 1e-3 and
+    dependent on where the samples of the contacts fell, was what had looked like
+    convergence: no rate is asserted.)"""
     from validation.exudyn_sensitivity import compare_fd_ddm
 
     rows = compare_fd_ddm("four_bar", (1.5577e-5, 7.7885e-6), revolutions=1, rel=1e-3,
                           ddm_rtol=1e-9, settled=100)
-    coarse = {r["parameter"]: r for r in rows if r["step"] == 1.5577e-5}
-    fine = {r["parameter"]: r for r in rows if r["step"] == 7.7885e-6}
-    assert set(fine) == {"coupler.mass", "rocker.mass", "gravity"}
-    for p in fine:
-        assert coarse[p]["rms"] < 2e-3 and fine[p]["rms"] < 3e-4, (p, coarse[p], fine[p])
-        assert fine[p]["rms"] < coarse[p]["rms"], (p, coarse[p], fine[p])
+    assert {r["parameter"] for r in rows} == {"coupler.mass", "rocker.mass", "gravity"}
+    assert len(rows) == 6
+    for r in rows:
+        assert r["rms"] < 5e-5, r
 
 
 @pytest.mark.slow
