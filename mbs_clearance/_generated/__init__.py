@@ -2,8 +2,8 @@
 tools/generate_models.py; do not edit). MODULES maps a structure digest to a module name."""
 
 MODULES: dict[str, str] = {
-    '811aaa063d9be7576c48ffb376ffe20c2bfd5780c4b186f2753e14dff11acbe4': 'paper_slider_crank',
-    'b7dbc99113b46f74005035655a8ae114a47d50fd3049a3ceadba8be31ce0c6c6': 'slider_crank_two_clearances',
-    '9bd8b05020b57494f535322ed528cbdacaf1e3c953cb27a5deffc4999a6accf1': 'four_bar',
-    '4c46a44d05d7abb1aed6b7e41cf94d9b31cf85619a01509fdf43a2b0db069429': 'paper_slider_crank_friction',
+    'a3972eca799fc6233dd7403dedff8ca7b9a78259e2ce4180af154b92f2063177': 'paper_slider_crank',
+    '3f94a1ee4d486e8e13c08ed3f9d963cf4ee1833ab8e523d06491fb0079206b57': 'slider_crank_two_clearances',
+    'ed28445add05b1c372fba6c0f37b003df97b01bd04b561b94ed5369085fbead7': 'four_bar',
+    '509f6398559de30bde59a61251183b6bf4435d8c91a6f4038e39dd80bbd9080a': 'paper_slider_crank_friction',
 }

@@ -413,7 +413,6 @@ def _reduce_trig(expr, ideal, gens):
     return rem / den
 
 
-
 def specialise(d: Derivation, zeros) -> Derivation:
     """`d` with the parameters named in `zeros` (dotted names) set to zero in every
     expression: the model of the linkages whose those entries are exactly 0. A zero prismatic
