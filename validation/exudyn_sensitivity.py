@@ -101,8 +101,8 @@ def ddm(linkage, names, revolutions: int, t: np.ndarray, rtol: float = 1e-10, st
         # depends on where they fall (the four-bar: 1e-3 between two Exudyn grids)
         full = sensitivities(linkage, list(names), revolutions=revolutions, rtol=rtol,
                              start=start)
-        return d, _rms_derivative(*_on_window(full.t, _magnitude(full.trajectory),
-                                              full.base_force_magnitude, lo, hi))
+        return d, _rms_derivative(*_on_window(full.t, lo, hi, _magnitude(full.trajectory),
+                                              full.base_force_magnitude))
     # method "fd": d RMS/db by central differences of the RMS over each run's own steps
     from mbs_clearance import simulate
 
@@ -113,25 +113,24 @@ def ddm(linkage, names, revolutions: int, t: np.ndarray, rtol: float = 1e-10, st
         r = []
         for b in (b0 + h, b0 - h):
             tr = simulate(linkage.with_parameter(name, b), revolutions, rtol=rtol, start=start)
-            tw, fw, _ = _on_window(tr.t, _magnitude(tr), np.zeros((len(tr.t), 0)), lo, hi)
-            r.append(_rms(tw, fw))
+            r.append(_rms(*_on_window(tr.t, lo, hi, _magnitude(tr))))
         rms.append((r[0] - r[1]) / (2 * h))
     return d, np.array(rms)
 
 
-def _on_window(t, f, d, lo, hi):
-    """The samples (t, f, d (n, p)) of a run's steps strictly inside (lo, hi) with values
-    interpolated at lo and hi: a window whose ends are not steps of the run (Exudyn's grid
-    ends at the revolution's edges to round-off, where an adaptive run's nearest step can
-    be microseconds away: 1e-2 of d RMS/db in the two-joint case)."""
+def _on_window(t, lo, hi, *series):
+    """(t, *series) of a run's steps strictly inside (lo, hi) with the series (n,) or
+    (n, p) interpolated at lo and hi: a window whose ends are not steps of the run
+    (Exudyn's grid ends at the revolution's edges to round-off, where an adaptive run's
+    nearest step can be microseconds away: 1e-2 of d RMS/db in the two-joint case)."""
     inner = (t > lo) & (t < hi)
 
     def ends(y):
-        return np.concatenate([[np.interp(lo, t, y)], y[inner], [np.interp(hi, t, y)]])
+        cols = y.reshape(len(t), -1)
+        rows = [[np.interp(x, t, c) for c in cols.T] for x in (lo, hi)]
+        return np.vstack([rows[0], cols[inner], rows[1]]).reshape((-1, *y.shape[1:]))
 
-    dw = np.column_stack([ends(d[:, k]) for k in range(d.shape[1])]) if d.shape[1] else \
-        np.zeros((inner.sum() + 2, 0))
-    return np.concatenate([[lo], t[inner], [hi]]), ends(f), dw
+    return (np.concatenate([[lo], t[inner], [hi]]), *(ends(y) for y in series))
 
 
 def _rms_derivative(t, f, d) -> np.ndarray:
