@@ -448,7 +448,7 @@ def ddm_run(linkage: Linkage, model, p0, y_state, directions, *, scale, rtol, at
     if along:
         raise ValueError(f"directions along {along}: the model {model.__name__} is "
                          "specialised on them being zero (no derivatives along them); use "
-                         "load_model(linkage, specialise=False)")
+                         "mbs_clearance.generate.load_model(linkage, specialise=False)")
     if derivatives is True:
         derivatives = model.OUT_COLUMNS
     unknown = [c for c in derivatives or () if c not in model.OUT_COLUMNS]

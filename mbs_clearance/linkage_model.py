@@ -83,7 +83,7 @@ def pack_parameters(linkage: Linkage, model=None) -> np.ndarray:
         if values[name] != 0.0:
             raise ValueError(f"{name} = {values[name]!r}: the model module {model.__name__} "
                              "is specialised on it being 0; load the general one "
-                             "(load_model(linkage, specialise=False))")
+                             "(mbs_clearance.generate.load_model(linkage, specialise=False))")
     model.prepare(p)
     return p
 

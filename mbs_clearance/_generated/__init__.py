@@ -2,8 +2,8 @@
 tools/generate_models.py; do not edit). MODULES maps a structure digest to a module name."""
 
 MODULES: dict[str, str] = {
-    'a3972eca799fc6233dd7403dedff8ca7b9a78259e2ce4180af154b92f2063177': 'paper_slider_crank',
-    '3f94a1ee4d486e8e13c08ed3f9d963cf4ee1833ab8e523d06491fb0079206b57': 'slider_crank_two_clearances',
-    'ed28445add05b1c372fba6c0f37b003df97b01bd04b561b94ed5369085fbead7': 'four_bar',
-    '509f6398559de30bde59a61251183b6bf4435d8c91a6f4038e39dd80bbd9080a': 'paper_slider_crank_friction',
+    '4b0e8a9fe181e01ddf002419b02b6b550400f91b0c445b28450ba4f33177cf82': 'paper_slider_crank',
+    '908b10684380b35946136c54a45d502d743a342520f6b9f27997d0db9dd0d382': 'slider_crank_two_clearances',
+    '96e93d6f4eef80a13fc8d40db7cff986e330ec152536d87c9bbcc91b83e5b0e1': 'four_bar',
+    '1c397ac8b201dcc88242c06ecb237f27fa619a364bdadf6316824d6f4bc42d87': 'paper_slider_crank_friction',
 }

@@ -32,8 +32,8 @@ from mbs_clearance.generate.runtime import (
 
 LINKAGE = "four_bar"
 STRUCTURE = "{\"bodies\": [[\"crank\", [\"pin\", \"pivot\"]], [\"coupler\", [\"crank_end\", \"rocker_end\"]], [\"rocker\", [\"pin\", \"pivot\"]]], \"clearance_joints\": [[\"coupler_rocker\", \"rocker\", \"pin\", \"coupler\", \"rocker_end\"]], \"drive\": \"crank_pivot\", \"ground_points\": [\"crank_pivot\", \"rocker_pivot\"], \"joints\": [[\"revolute\", \"crank_pivot\", \"ground\", \"crank_pivot\", \"crank\", \"pivot\"], [\"revolute\", \"crank_coupler\", \"crank\", \"pin\", \"coupler\", \"crank_end\"], [\"revolute\", \"rocker_pivot\", \"ground\", \"rocker_pivot\", \"rocker\", \"pivot\"]], \"monitor_joint\": null, \"zero_parameters\": [\"crank.pivot.y\", \"crank.pin.y\", \"coupler.crank_end.y\", \"coupler.rocker_end.y\", \"rocker.pivot.y\", \"rocker.pin.y\", \"ground.crank_pivot.x\", \"ground.crank_pivot.y\", \"ground.rocker_pivot.y\"]}"
-STRUCTURE_DIGEST = "ed28445add05b1c372fba6c0f37b003df97b01bd04b561b94ed5369085fbead7"
-GENERATOR_VERSION = "57481a18a730efb9"
+STRUCTURE_DIGEST = "96e93d6f4eef80a13fc8d40db7cff986e330ec152536d87c9bbcc91b83e5b0e1"
+GENERATOR_VERSION = "9e6f0453c2914754"
 
 #: dotted names of the entries of p (without the constants)
 PARAMETERS = (
@@ -117,7 +117,8 @@ MOMENT_COLUMN = 11
 ACC_COLUMN = 12
 _THIS = sys.modules[__name__]
 ZERO_MESSAGE = ("a parameter of ZERO_PARAMETERS is not zero: this model is specialised on "
-                "them; load the general one (load_model(linkage, specialise=False))")
+                "them; load the general one "
+                "(mbs_clearance.generate.load_model(linkage, specialise=False))")
 
 
 @nb.njit(**KERNEL)

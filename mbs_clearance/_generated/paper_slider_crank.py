@@ -32,8 +32,8 @@ from mbs_clearance.generate.runtime import (
 
 LINKAGE = "paper_slider_crank"
 STRUCTURE = "{\"bodies\": [[\"crank\", [\"pin\", \"pivot\"]], [\"coupler\", [\"crank_end\", \"slider_end\"]], [\"slider\", [\"pin\"]]], \"clearance_joints\": [[\"coupler_slider\", \"coupler\", \"slider_end\", \"slider\", \"pin\"]], \"drive\": \"crank_pivot\", \"ground_points\": [\"crank_pivot\", \"slider_axis\"], \"joints\": [[\"revolute\", \"crank_pivot\", \"ground\", \"crank_pivot\", \"crank\", \"pivot\"], [\"revolute\", \"crank_coupler\", \"crank\", \"pin\", \"coupler\", \"crank_end\"], [\"prismatic\", \"slider_guide\", \"ground\", \"slider_axis\", \"slider\", \"pin\"]], \"monitor_joint\": \"crank_pivot\", \"zero_parameters\": [\"crank.pivot.y\", \"crank.pin.y\", \"coupler.crank_end.y\", \"coupler.slider_end.y\", \"slider.pin.x\", \"slider.pin.y\", \"ground.crank_pivot.x\", \"ground.crank_pivot.y\", \"ground.slider_axis.x\", \"ground.slider_axis.y\", \"slider_guide.angle\"]}"
-STRUCTURE_DIGEST = "a3972eca799fc6233dd7403dedff8ca7b9a78259e2ce4180af154b92f2063177"
-GENERATOR_VERSION = "57481a18a730efb9"
+STRUCTURE_DIGEST = "4b0e8a9fe181e01ddf002419b02b6b550400f91b0c445b28450ba4f33177cf82"
+GENERATOR_VERSION = "9e6f0453c2914754"
 
 #: dotted names of the entries of p (without the constants)
 PARAMETERS = (
@@ -116,7 +116,8 @@ MOMENT_COLUMN = 11
 ACC_COLUMN = 12
 _THIS = sys.modules[__name__]
 ZERO_MESSAGE = ("a parameter of ZERO_PARAMETERS is not zero: this model is specialised on "
-                "them; load the general one (load_model(linkage, specialise=False))")
+                "them; load the general one "
+                "(mbs_clearance.generate.load_model(linkage, specialise=False))")
 
 
 @nb.njit(**KERNEL)

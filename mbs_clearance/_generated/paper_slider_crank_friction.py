@@ -32,8 +32,8 @@ from mbs_clearance.generate.runtime import (
 
 LINKAGE = "paper_slider_crank"
 STRUCTURE = "{\"bodies\": [[\"crank\", [\"pin\", \"pivot\"]], [\"coupler\", [\"crank_end\", \"slider_end\"]], [\"slider\", [\"pin\"]]], \"clearance_joints\": [[\"coupler_slider\", \"coupler\", \"slider_end\", \"slider\", \"pin\", \"friction\"]], \"drive\": \"crank_pivot\", \"ground_points\": [\"crank_pivot\", \"slider_axis\"], \"joints\": [[\"revolute\", \"crank_pivot\", \"ground\", \"crank_pivot\", \"crank\", \"pivot\"], [\"revolute\", \"crank_coupler\", \"crank\", \"pin\", \"coupler\", \"crank_end\"], [\"prismatic\", \"slider_guide\", \"ground\", \"slider_axis\", \"slider\", \"pin\"]], \"monitor_joint\": \"crank_pivot\", \"zero_parameters\": [\"crank.pivot.y\", \"crank.pin.y\", \"coupler.crank_end.y\", \"coupler.slider_end.y\", \"slider.pin.x\", \"slider.pin.y\", \"ground.crank_pivot.x\", \"ground.crank_pivot.y\", \"ground.slider_axis.x\", \"ground.slider_axis.y\", \"slider_guide.angle\"]}"
-STRUCTURE_DIGEST = "509f6398559de30bde59a61251183b6bf4435d8c91a6f4038e39dd80bbd9080a"
-GENERATOR_VERSION = "57481a18a730efb9"
+STRUCTURE_DIGEST = "1c397ac8b201dcc88242c06ecb237f27fa619a364bdadf6316824d6f4bc42d87"
+GENERATOR_VERSION = "9e6f0453c2914754"
 
 #: dotted names of the entries of p (without the constants)
 PARAMETERS = (
@@ -125,7 +125,8 @@ MOMENT_COLUMN = 11
 ACC_COLUMN = 12
 _THIS = sys.modules[__name__]
 ZERO_MESSAGE = ("a parameter of ZERO_PARAMETERS is not zero: this model is specialised on "
-                "them; load the general one (load_model(linkage, specialise=False))")
+                "them; load the general one "
+                "(mbs_clearance.generate.load_model(linkage, specialise=False))")
 
 
 @nb.njit(**KERNEL)

@@ -32,8 +32,8 @@ from mbs_clearance.generate.runtime import (
 
 LINKAGE = "slider_crank_two_clearances"
 STRUCTURE = "{\"bodies\": [[\"crank\", [\"pin\", \"pivot\"]], [\"coupler\", [\"crank_end\", \"slider_end\"]], [\"slider\", [\"pin\"]]], \"clearance_joints\": [[\"crank_coupler\", \"crank\", \"pin\", \"coupler\", \"crank_end\"], [\"coupler_slider\", \"coupler\", \"slider_end\", \"slider\", \"pin\"]], \"drive\": \"crank_pivot\", \"ground_points\": [\"crank_pivot\", \"slider_axis\"], \"joints\": [[\"revolute\", \"crank_pivot\", \"ground\", \"crank_pivot\", \"crank\", \"pivot\"], [\"prismatic\", \"slider_guide\", \"ground\", \"slider_axis\", \"slider\", \"pin\"]], \"monitor_joint\": \"crank_pivot\", \"zero_parameters\": [\"crank.pivot.y\", \"crank.pin.y\", \"coupler.crank_end.y\", \"coupler.slider_end.y\", \"slider.pin.x\", \"slider.pin.y\", \"ground.crank_pivot.x\", \"ground.crank_pivot.y\", \"ground.slider_axis.x\", \"ground.slider_axis.y\", \"slider_guide.angle\"]}"
-STRUCTURE_DIGEST = "3f94a1ee4d486e8e13c08ed3f9d963cf4ee1833ab8e523d06491fb0079206b57"
-GENERATOR_VERSION = "57481a18a730efb9"
+STRUCTURE_DIGEST = "908b10684380b35946136c54a45d502d743a342520f6b9f27997d0db9dd0d382"
+GENERATOR_VERSION = "9e6f0453c2914754"
 
 #: dotted names of the entries of p (without the constants)
 PARAMETERS = (
@@ -130,7 +130,8 @@ MOMENT_COLUMN = 16
 ACC_COLUMN = 17
 _THIS = sys.modules[__name__]
 ZERO_MESSAGE = ("a parameter of ZERO_PARAMETERS is not zero: this model is specialised on "
-                "them; load the general one (load_model(linkage, specialise=False))")
+                "them; load the general one "
+                "(mbs_clearance.generate.load_model(linkage, specialise=False))")
 
 
 @nb.njit(**KERNEL)
