@@ -5,7 +5,7 @@ Both modules of a named case (`load_model(linkage)` and `load_model(linkage,
 specialise=False)`) run the same plain run (`linkage_model.run`, 4 revolutions, default
 tolerances; recorded and peak only) in alternating pairs; printed: the median of the
 per-pair ratios specialised / general, each side's nfev and revolution-4 peak, and one
-`rhs` call of each (a compiled loop over the recorded states of a run).
+`rhs` call of each (`case_speed.model_rhs_ns` over the recorded states of a run).
 
     python -m validation.benchmarks.specialised_ab [--case paper_slider_crank] [--pairs 21]
 """
@@ -13,16 +13,13 @@ per-pair ratios specialised / general, each side's nfev and revolution-4 peak, a
 from __future__ import annotations
 
 import argparse
-import time
 from unittest import mock
-
-import numba as nb
-import numpy as np
 
 from mbs_clearance import cases
 from mbs_clearance import linkage_model as lm
 from mbs_clearance.generate import load_model
 
+from .case_speed import model_rhs_ns
 from .common import machine_summary, paired
 
 
@@ -30,29 +27,6 @@ def _run(linkage, model, record):
     """`linkage_model.run` on the given module (its `load_model` replaced for the call)."""
     with mock.patch.object(lm, "load_model", lambda *a, **k: model):
         return lm.run(linkage, 4, record=record)
-
-
-@nb.njit
-def _rhs_loop(rhs, ys, p, n):
-    f = np.empty(ys.shape[1])
-    s = 0.0
-    for _ in range(n):
-        for i in range(ys.shape[0]):
-            rhs(0.0, ys[i], p, f)
-            s += f[-1]
-    return s
-
-
-def rhs_ns(model, ys, p, repeats: int = 7, n: int = 20) -> float:
-    """Nanoseconds per `rhs` call of `model` over the states ys (best of `repeats`)."""
-    ys = np.ascontiguousarray(ys)
-    _rhs_loop(model.rhs, ys, p, 1)
-    best = np.inf
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        _rhs_loop(model.rhs, ys, p, n)
-        best = min(best, time.perf_counter() - t0)
-    return 1e9 * best / (n * len(ys))
 
 
 def main(argv=None) -> int:
@@ -75,12 +49,8 @@ def main(argv=None) -> int:
               f"{1e3 * r['b']:.2f} / {1e3 * r['a']:.2f} | {a[6]['nfev']} / {b[6]['nfev']} | "
               f"{a[4][-1]:.10g} / {b[4][-1]:.10g} |")
     _, ts, ys, ms, *_ = _run(linkage, gen, True)
-    rows = slice(0, min(len(ys), 2000))
-    ns = []
-    for model in (spec, gen):
-        p = lm.pack_parameters(linkage, model)
-        p[model.MEM_START:model.MEM_START + model.N_MEM] = ms[0]
-        ns.append(rhs_ns(model, ys[rows], p))
+    ns = [model_rhs_ns(model, ts, ys, ms, lm.pack_parameters(linkage, model))
+          for model in (spec, gen)]
     print(f"one rhs call: {ns[0]:.1f} ns specialised, {ns[1]:.1f} ns general")
     return 0
 
