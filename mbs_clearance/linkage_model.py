@@ -264,18 +264,22 @@ def trajectory_from_run(linkage: Linkage, model, ts, ys, ms, p, stats, peaks, ou
     joints = model.JOINTS
     J, n = len(joints), model.N_Q
 
-    def per_joint(field):
-        return np.column_stack([outs[:, col[f"{j}.{field}"]] for j in joints])
+    def take(*names):
+        return _take_columns(outs, [col[c] for c in names])
 
-    reactions = {g: outs[:, [col[f"{g}.reaction_x"], col[f"{g}.reaction_y"]]].copy()
-                 for g in model.GROUND_JOINTS}
-    shaking = outs[:, [col["shaking_x"], col["shaking_y"]]].copy()
+    def per_joint(field):
+        return take(*(f"{j}.{field}" for j in joints))
+
+    reactions = {g: take(f"{g}.reaction_x", f"{g}.reaction_y") for g in model.GROUND_JOINTS}
+    shaking = take("shaking_x", "shaking_y")
     monitored = (shaking if model.MONITOR_JOINT is None
                  else reactions[model.MONITOR_JOINT])
+    # (n, J, 2): per joint its x and y side by side
+    ecc = take(*(f"{j}.ecc_{a}" for j in joints for a in "xy")).reshape(-1, J, 2)
     return Trajectory(
         t=np.asarray(ts), base_force=monitored, crank_moment=outs[:, col["drive_moment"]].copy(),
         contact_force=per_joint("contact_force"), penetration=per_joint("penetration"),
-        eccentricity=np.stack([per_joint("ecc_x"), per_joint("ecc_y")], axis=2),
+        eccentricity=ecc,
         slider_position=None, slider_velocity=None, slider_acceleration=None,
         coupler_angle=None, coupler_rate=None,
         contact_phase=(ms[:, 0:2 * J:2] > 0.5).astype(np.int8),
@@ -287,6 +291,15 @@ def trajectory_from_run(linkage: Linkage, model, ts, ys, ms, p, stats, peaks, ou
         friction_work=(ys[:, model.FRICTION_WORK].copy() if getattr(model, "FRICTION_WORK", -1)
                        > 0 and ys.shape[1] > model.FRICTION_WORK else None),
     )
+
+
+def _take_columns(a: np.ndarray, columns) -> np.ndarray:
+    """a[:, columns] as a new C-contiguous (n, len(columns)) array, copied column by column
+    (for a long record several times faster than numpy's fancy indexing of columns)."""
+    out = np.empty((a.shape[0], len(columns)))
+    for k, c in enumerate(columns):
+        out[:, k] = a[:, c]
+    return out
 
 
 # ---------------------------------------------------------------------------- runs

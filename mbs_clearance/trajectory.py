@@ -265,24 +265,30 @@ def boundary_states(traj: Trajectory) -> np.ndarray | None:
     if k < 1:
         return np.zeros((0, 4))
     times = np.arange(1, k + 1) * m.period
-    near = np.abs(traj.t[np.clip(np.searchsorted(traj.t, times), 0, len(traj.t) - 1)] - times)
-    near = np.minimum(near, np.abs(traj.t[np.clip(np.searchsorted(traj.t, times) - 1, 0,
-                                                  len(traj.t) - 1)] - times))
+    t = traj.t
+    hi = np.clip(np.searchsorted(t, times), 0, len(t) - 1)
+    lo = np.clip(hi - 1, 0, len(t) - 1)
+    near = np.minimum(np.abs(t[hi] - times), np.abs(t[lo] - times))
     if np.any(near > 1e-3 * m.period):
         return None
+    # only the samples around the boundaries (np.interp on them takes the same brackets
+    # as on the whole series: the same values, without scaling every sample)
+    rows = np.unique(np.concatenate([lo, hi]))
+    t_rows = t[rows]
     if traj.linkage is not None:
         # every joint's eccentricity in its clearances, every rate in drive speed x the
         # smallest clearance (angle rates times the linkage's length scale)
         c, w = m.min_clearance, m.drive.speed
-        cols = [traj.eccentricity[:, k, i] / j.clearance
+        cols = [traj.eccentricity[rows, k, i] / j.clearance
                 for k, j in enumerate(m.clearance_joints) for i in range(2)]
-        cols += [v * (m.length_scale if name.endswith(".angle") else 1.0) / (w * c)
+        cols += [v[rows] * (m.length_scale if name.endswith(".angle") else 1.0) / (w * c)
                  for name, v in traj.rates.items()]
-        return np.column_stack([np.interp(times, traj.t, col) for col in cols])
+        return np.column_stack([np.interp(times, t_rows, col) for col in cols])
     c, w = m.clearance, m.crank_speed
-    cols = (traj.eccentricity[:, 0] / c, traj.eccentricity[:, 1] / c,
-            traj.slider_velocity / (w * c), traj.coupler_rate * m.coupler_length / (w * c))
-    return np.column_stack([np.interp(times, traj.t, col) for col in cols])
+    cols = (traj.eccentricity[rows, 0] / c, traj.eccentricity[rows, 1] / c,
+            traj.slider_velocity[rows] / (w * c),
+            traj.coupler_rate[rows] * m.coupler_length / (w * c))
+    return np.column_stack([np.interp(times, t_rows, col) for col in cols])
 
 
 def periodicity(traj: Trajectory) -> tuple[bool | None, str]:

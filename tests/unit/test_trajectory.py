@@ -41,3 +41,45 @@ def test_unreadable_files(tmp_path, traj):
     bad.write_text("garbage\n1,2,3\n")
     with pytest.raises(ValueError, match="cannot read trajectory file"):
         load_trajectory(bad)
+
+
+def test_linkage_series_are_the_model_outputs_and_boundaries_interpolate_them():
+    """A two-joint linkage's Trajectory against the generated model's outputs evaluated
+    again at the recorded states (numpy's column indexing): every per-joint series, the
+    reactions, the shaking force, the eccentricity's joint and axis order; the revolution
+    boundary states against np.interp over the whole series."""
+    from mbs_clearance import cases
+    from mbs_clearance.linkage_model import load_model, pack_parameters
+    from mbs_clearance.trajectory import boundary_states
+
+    lk = cases.slider_crank_two_clearances()
+    tr = simulate(lk, 3)
+    model = load_model(lk)
+    p = pack_parameters(lk, model)
+    ys = np.column_stack([*tr.coordinates.values(), *tr.rates.values(), tr.crank_work])
+    ms = np.zeros((len(tr.t), model.N_MEM))
+    ms[:, 0::2] = tr.contact_phase
+    # the impact velocities enter the contact force only: compare that series by itself
+    outs = model.outputs(tr.t, np.ascontiguousarray(ys), ms, p)
+    col = {c: i for i, c in enumerate(model.OUT_COLUMNS)}
+    for k, j in enumerate(model.JOINTS):
+        np.testing.assert_array_equal(tr.penetration[:, k], outs[:, col[f"{j}.penetration"]])
+        for a, axis in enumerate("xy"):
+            np.testing.assert_array_equal(tr.eccentricity[:, k, a],
+                                          outs[:, col[f"{j}.ecc_{axis}"]])
+        assert tr.contact_force.shape == tr.penetration.shape == (len(tr.t), 2)
+    for f in tr.reactions.values():
+        assert f.flags.c_contiguous and f.shape == (len(tr.t), 2)
+    np.testing.assert_array_equal(tr.base_force, tr.reactions[model.MONITOR_JOINT])
+    assert np.max(np.abs(tr.shaking_force - sum(tr.reactions.values()))) <= 1e-9 * np.max(
+        np.abs(tr.shaking_force))
+
+    got = boundary_states(tr)
+    times = np.arange(1, 4) * lk.period
+    c, w = lk.min_clearance, lk.drive.speed
+    cols = [tr.eccentricity[:, k, i] / j.clearance
+            for k, j in enumerate(lk.clearance_joints) for i in range(2)]
+    cols += [v * (lk.length_scale if name.endswith(".angle") else 1.0) / (w * c)
+             for name, v in tr.rates.items()]
+    want = np.column_stack([np.interp(times, tr.t, x) for x in cols])
+    np.testing.assert_array_equal(got, want)
