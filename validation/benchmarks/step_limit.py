@@ -1,0 +1,105 @@
+"""What limits a case's step size: the accuracy of its motion or a fast contact vibration.
+
+For one named case (default: the four-bar), 4 drive revolutions from the centred start:
+
+- our integrator at several tolerances (dopri5 and DOP853): function evaluations, accepted
+  and rejected steps, and the relative error of the 4th revolution's refined peak against
+  rtol 1e-12. Where the evaluations hardly fall as rtol is loosened, something other than
+  the tolerance sets the step;
+- along the default run, at `--states` recorded states: the eigenvalue of largest modulus
+  of the state Jacobian d(qdot, qddot)/d(q, qdot) in the state's contact mode (central
+  differences of the compiled right-hand side, independent of the generated Jacobians), its
+  real and imaginary parts, and h |lambda| with h the accepted step there. An eigenvalue
+  near the imaginary axis is a lightly damped vibration (in contact: the journal on the
+  contact stiffness); h |lambda| of order one means the steps resolve that vibration with a
+  few steps per period, 2 pi / (h |lambda|): an explicit method then cannot take longer
+  steps whatever the tolerance, and an implicit one that damps the vibration changes the
+  forces it carries.
+
+    python -m validation.benchmarks.step_limit [--case four_bar] [--states 400]
+"""
+
+from __future__ import annotations
+
+import argparse
+
+import numpy as np
+
+from mbs_clearance import peak_base_force
+from mbs_clearance.cases import CASES
+from mbs_clearance.linkage_model import run
+
+from .common import machine_summary
+
+REVOLUTION = 4
+SETTINGS = (("dopri5", 1e-5), ("dopri5", 1e-6), ("dopri5", 1e-7), ("dopri5", 1e-8),
+            ("dop853", 1e-5), ("dop853", 3e-6), ("dop853", 1e-6), ("dop853", 1e-7))
+
+
+def state_jacobian(model, t, y, p, rel=1e-7) -> np.ndarray:
+    """d(qdot, qddot)/d(q, qdot) at (t, y) with the memory in p, by central differences of
+    `model.rhs` (step rel |y_k|, at least rel 1e-3)."""
+    n = 2 * model.N_Q
+    fp = np.empty(model.N_STATE)
+    fm = np.empty(model.N_STATE)
+    jac = np.empty((n, n))
+    for c in range(n):
+        d = rel * max(abs(y[c]), 1e-3)
+        yp = y.copy()
+        yp[c] += d
+        ym = y.copy()
+        ym[c] -= d
+        model.rhs(t, yp, p, fp)
+        model.rhs(t, ym, p, fm)
+        jac[:, c] = (fp[:n] - fm[:n]) / (2.0 * d)
+    return jac
+
+
+def spectrum_along_run(linkage, states: int) -> dict:
+    """The dominant eigenvalue and h |lambda| at `states` recorded states of the default run."""
+    model, ts, ys, ms, *_, p = run(linkage, REVOLUTION)
+    h = np.diff(ts)
+    q = p.copy()
+    rows = np.unique(np.linspace(1, len(ts) - 2, states).astype(int))
+    lam = np.empty(len(rows), dtype=complex)
+    for k, i in enumerate(rows):
+        q[model.MEM_START:model.MEM_START + model.N_MEM] = ms[i]
+        ev = np.linalg.eigvals(state_jacobian(model, ts[i], ys[i].copy(), q))
+        lam[k] = ev[np.argmax(np.abs(ev))]
+    hl = h[rows] * np.abs(lam)
+    return {"states": len(rows), "contact_fraction": float(np.mean(ms[rows, 0] > 0.5)),
+            "re_median": float(np.median(lam.real)),
+            "im_median": float(np.median(np.abs(lam.imag))),
+            "h_lambda": [float(x) for x in np.quantile(hl, [0.1, 0.5, 0.9])],
+            "steps": len(ts) - 1, "duration": float(ts[-1])}
+
+
+def main(argv=None) -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--case", choices=sorted(CASES), default="four_bar")
+    ap.add_argument("--states", type=int, default=400, help="states sampled for the spectrum")
+    args = ap.parse_args(argv)
+    lk = CASES[args.case]()
+    ref = peak_base_force(lk, REVOLUTION, rtol=1e-12)
+    print(f"{args.case}: rev-{REVOLUTION} peak at rtol 1e-12: {ref:.10g} N\n")
+    print("| method | rtol | nfev | accepted | rejected | peak error |")
+    print("|---|---|---|---|---|---|")
+    for method, rtol in SETTINGS:
+        _, _, _, _, peaks, _, stats, _, _ = run(lk, REVOLUTION, method=method, rtol=rtol,
+                                                record=False)
+        err = abs(peaks[REVOLUTION - 1] / ref - 1.0)
+        print(f"| {method} | {rtol:g} | {stats['nfev']} | {stats['naccept']} | "
+              f"{stats['nreject']} | {err:.1e} |")
+    s = spectrum_along_run(lk, args.states)
+    q10, q50, q90 = s["h_lambda"]
+    print(f"\ndefault run: {s['steps']} steps over {s['duration']:.4g} s; at {s['states']} "
+          f"of its states ({100 * s['contact_fraction']:.1f} % in contact) the dominant "
+          f"eigenvalue is {s['re_median']:.4g} +/- {s['im_median']:.4g} i 1/s (medians), "
+          f"h |lambda| = {q10:.2f} / {q50:.2f} / {q90:.2f} (10 / 50 / 90 %): "
+          f"{2 * np.pi / q50:.1f} steps per period of the vibration at "
+          f"{s['im_median'] / (2 * np.pi):.4g} Hz")
+    print("\n" + machine_summary())
+
+
+if __name__ == "__main__":
+    main()
