@@ -14,14 +14,19 @@ For one named case (default: the four-bar), 4 drive revolutions from the centred
   contact stiffness); h |lambda| of order one means the steps resolve that vibration with a
   few steps per period, 2 pi / (h |lambda|): an explicit method then cannot take longer
   steps whatever the tolerance, and an implicit one that damps the vibration changes the
-  forces it carries.
+  forces it carries;
+- with ``--scipy-implicit``: scipy's Radau (implicit, L-stable; its Jacobian by finite
+  differences) on the same compiled model at rtol 1e-6 and 1e-7
+  (`validation.scipy_reference.solve_scipy_linkage`): whether an implicit method takes
+  longer steps at a useful error (about a minute per row for the four-bar).
 
-    python -m validation.benchmarks.step_limit [--case four_bar] [--states 400]
+    python -m validation.benchmarks.step_limit [--case four_bar] [--states 400] [--scipy-implicit]
 """
 
 from __future__ import annotations
 
 import argparse
+import time
 
 import numpy as np
 
@@ -78,6 +83,8 @@ def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--case", choices=sorted(CASES), default="four_bar")
     ap.add_argument("--states", type=int, default=400, help="states sampled for the spectrum")
+    ap.add_argument("--scipy-implicit", action="store_true",
+                    help="also scipy's Radau at rtol 1e-6 and 1e-7 (slow)")
     args = ap.parse_args(argv)
     lk = CASES[args.case]()
     ref = peak_base_force(lk, REVOLUTION, rtol=1e-12)
@@ -90,6 +97,15 @@ def main(argv=None) -> None:
         err = abs(peaks[REVOLUTION - 1] / ref - 1.0)
         print(f"| {method} | {rtol:g} | {stats['nfev']} | {stats['naccept']} | "
               f"{stats['nreject']} | {err:.1e} |")
+    if args.scipy_implicit:
+        from ..scipy_reference import solve_scipy_linkage
+
+        for rtol in (1e-6, 1e-7):
+            t0 = time.perf_counter()
+            res = solve_scipy_linkage(lk, REVOLUTION, method="Radau", rtol=rtol)
+            err = abs(res.peaks[REVOLUTION - 1] / ref - 1.0)
+            print(f"| scipy Radau | {rtol:g} | {res.nfev} | | | {err:.1e} "
+                  f"({len(res.event_times)} events, {time.perf_counter() - t0:.0f} s) |")
     s = spectrum_along_run(lk, args.states)
     q10, q50, q90 = s["h_lambda"]
     print(f"\ndefault run: {s['steps']} steps over {s['duration']:.4g} s; at {s['states']} "
