@@ -80,12 +80,16 @@ def test_step_limit_jacobian_matches_the_generated_one():
     generated exact Jacobian's state columns, at states of the two-joint case's run in
     their contact modes; its dominant eigenvalue along the run is a lightly damped contact
     vibration resolved with several steps per period (h |lambda| below dopri5's stability
-    bound on the imaginary axis, about 3.3)."""
+    bound in that direction)."""
     import numpy as np
 
     from mbs_clearance import cases
     from mbs_clearance.linkage_model import run
-    from validation.benchmarks.step_limit import spectrum_along_run, state_jacobian
+    from validation.benchmarks.step_limit import (
+        spectrum_along_run,
+        stability_radius,
+        state_jacobian,
+    )
 
     lk = cases.slider_crank_two_clearances()
     model, ts, ys, ms, *_, p = run(lk, 1)
@@ -107,4 +111,23 @@ def test_step_limit_jacobian_matches_the_generated_one():
     s = spectrum_along_run(lk, 50)
     assert s["contact_fraction"] > 0.9
     assert abs(s["re_median"]) < 0.2 * s["im_median"]       # lightly damped
-    assert 0.1 < s["h_lambda"][1] < 3.3
+    assert 0.1 < s["h_lambda"][1] < stability_radius("dopri5", s["angle_median"])
+
+
+def test_stability_radius_closed_forms():
+    """Runge-Kutta stability bounds against closed forms: bs3's stability function is
+    1 + z + z^2/2 + z^3/6 (three stages, order 3): on the imaginary axis |R(iy)|^2 = 1 -
+    y^4/12 + y^6/36, stable up to sqrt(3); on the negative real axis up to the real root of
+    R(-x) = -1; dopri5's R is the degree-6 polynomial with z^6/600, whose real bound is where
+    it comes back to +1."""
+    import numpy as np
+
+    from validation.benchmarks.step_limit import stability_radius
+
+    assert stability_radius("bs3", np.pi / 2) == pytest.approx(np.sqrt(3.0), rel=1e-9)
+    real_root = [r.real for r in np.roots([1 / 6, -1 / 2, 1.0, -2.0]) if abs(r.imag) < 1e-12]
+    assert stability_radius("bs3", np.pi) == pytest.approx(real_root[0], rel=1e-9)
+    # 1 - x + x^2/2 - x^3/6 + x^4/24 - x^5/120 + x^6/600 = 1, divided by x
+    coeffs = [1 / 600, -1 / 120, 1 / 24, -1 / 6, 1 / 2, -1.0]
+    roots = sorted(r.real for r in np.roots(coeffs) if abs(r.imag) < 1e-9 and r.real > 0)
+    assert stability_radius("dopri5", np.pi) == pytest.approx(roots[0], rel=1e-9)

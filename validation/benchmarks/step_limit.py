@@ -12,9 +12,11 @@ For one named case (default: the four-bar), 4 drive revolutions from the centred
   real and imaginary parts, and h |lambda| with h the accepted step there. An eigenvalue
   near the imaginary axis is a lightly damped vibration (in contact: the journal on the
   contact stiffness); h |lambda| of order one means the steps resolve that vibration with a
-  few steps per period, 2 pi / (h |lambda|): an explicit method then cannot take longer
-  steps whatever the tolerance, and an implicit one that damps the vibration changes the
-  forces it carries;
+  few steps per period, 2 pi / (h |lambda|). Beside it the method's stability bound along
+  that eigenvalue's direction in the complex plane (`stability_radius`: the largest r with
+  |R(r e^(i phi))| <= 1 for the method's stability function R(z) = 1 + z b^T (I - z A)^-1 1):
+  steps at that bound are set by stability, not by the tolerance, and an implicit method
+  that damps the vibration changes the forces it carries;
 - with ``--scipy-implicit``: scipy's Radau (implicit, L-stable; its Jacobian by finite
   differences) on the same compiled model at rtol 1e-6 and 1e-7
   (`validation.scipy_reference.solve_scipy_linkage`): whether an implicit method takes
@@ -60,6 +62,37 @@ def state_jacobian(model, t, y, p, rel=1e-7) -> np.ndarray:
     return jac
 
 
+def stability_radius(method: str, angle: float, r_max: float = 20.0) -> float:
+    """The largest r such that the explicit RK `method` (a name of integrator.METHODS) is
+    stable, |R(r e^(i angle))| <= 1, for every radius up to r along the direction `angle`
+    (pi / 2: the imaginary axis; larger: damped), R(z) = 1 + z b^T (I - z A)^-1 1 its
+    stability function; scanned in steps of 1e-3 and refined by bisection."""
+    from mbs_clearance.integrator import METHODS
+
+    tab = METHODS[method]
+    s = tab.B.shape[0]
+    a = tab.A[:s, :s]
+    ones = np.ones(s)
+    direction = np.exp(1j * angle)
+
+    def unstable(r):
+        z = r * direction
+        return abs(1.0 + z * tab.B @ np.linalg.solve(np.eye(s) - z * a, ones)) > 1.0 + 1e-12
+
+    lo = 0.0
+    for r in np.arange(1e-3, r_max, 1e-3):
+        if unstable(r):
+            hi = r
+            break
+        lo = r
+    else:
+        return r_max
+    for _ in range(40):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (lo, mid) if unstable(mid) else (mid, hi)
+    return lo
+
+
 def spectrum_along_run(linkage, states: int) -> dict:
     """The dominant eigenvalue and h |lambda| at `states` recorded states of the default run."""
     model, ts, ys, ms, *_, p = run(linkage, REVOLUTION)
@@ -75,6 +108,7 @@ def spectrum_along_run(linkage, states: int) -> dict:
     return {"states": len(rows), "contact_fraction": float(np.mean(ms[rows, 0] > 0.5)),
             "re_median": float(np.median(lam.real)),
             "im_median": float(np.median(np.abs(lam.imag))),
+            "angle_median": float(np.median(np.angle(lam.real + 1j * np.abs(lam.imag)))),
             "h_lambda": [float(x) for x in np.quantile(hl, [0.1, 0.5, 0.9])],
             "steps": len(ts) - 1, "duration": float(ts[-1])}
 
@@ -114,6 +148,10 @@ def main(argv=None) -> None:
           f"h |lambda| = {q10:.2f} / {q50:.2f} / {q90:.2f} (10 / 50 / 90 %): "
           f"{2 * np.pi / q50:.1f} steps per period of the vibration at "
           f"{s['im_median'] / (2 * np.pi):.4g} Hz")
+    zeta = -np.cos(s["angle_median"])
+    print(f"damping ratio {zeta:.3g}; stability bound of h |lambda| along that direction: "
+          + ", ".join(f"{m} {stability_radius(m, s['angle_median']):.2f}"
+                      for m in ("dopri5", "dop853")))
     print("\n" + machine_summary())
 
 
