@@ -86,6 +86,7 @@ def test_step_limit_jacobian_matches_the_generated_one():
     from mbs_clearance import cases
     from mbs_clearance.linkage_model import run
     from validation.benchmarks.step_limit import (
+        model_call_cost,
         spectrum_along_run,
         stability_radius,
         state_jacobian,
@@ -112,6 +113,11 @@ def test_step_limit_jacobian_matches_the_generated_one():
     assert s["contact_fraction"] > 0.9
     assert abs(s["re_median"]) < 0.2 * s["im_median"]       # lightly damped
     assert 0.1 < s["h_lambda"][1] < stability_radius("dopri5", s["angle_median"])
+    # the model's calls are a part of the run: less time per evaluation than the run's,
+    # and at least the 6 kernel calls of each dopri5 step over its ~6.2 evaluations
+    c = model_call_cost(lk)
+    assert c["rhs_ns"] > 0 and c["monitor_ns"] > 0 and c["event_ns"] > 0
+    assert 0.8 * c["rhs_ns"] < c["model_ns_per_nfev"] < c["run_ns_per_nfev"]
 
 
 def test_stability_radius_closed_forms():

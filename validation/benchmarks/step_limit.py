@@ -17,6 +17,11 @@ For one named case (default: the four-bar), 4 drive revolutions from the centred
   |R(r e^(i phi))| <= 1 for the method's stability function R(z) = 1 + z b^T (I - z A)^-1 1):
   steps at that bound are set by stability, not by the tolerance, and an implicit method
   that damps the vibration changes the forces it carries;
+- the cost of the model's own calls in an event-exact step: one call of `rhs`, `monitor`
+  (with the outputs) and `event` each, in compiled loops over the default run's recorded
+  states (medians of 5), and the calls per accepted and per attempted step, as ns per
+  function evaluation (nfev) beside the default peak-only run's time per evaluation (median
+  of 3 runs): what is left of the run for the integrator's own work;
 - with ``--scipy-implicit``: scipy's Radau (implicit, L-stable; its Jacobian by finite
   differences) on the same compiled model at rtol 1e-6 and 1e-7
   (`validation.scipy_reference.solve_scipy_linkage`): whether an implicit method takes
@@ -30,6 +35,7 @@ from __future__ import annotations
 import argparse
 import time
 
+import numba as nb
 import numpy as np
 
 from mbs_clearance import peak_base_force
@@ -93,6 +99,77 @@ def stability_radius(method: str, angle: float, r_max: float = 20.0) -> float:
     return lo
 
 
+@nb.njit
+def _monitor_loop(monitor, ts, ys, ms, p, mem_start, n_out, reps):
+    d = np.empty(ys.shape[1])
+    out = np.empty(n_out)
+    g = np.empty(ms.shape[1] // 2)
+    gd = np.empty(ms.shape[1] // 2)
+    acc = 0.0
+    for _ in range(reps):
+        for i in range(ts.shape[0]):
+            for k in range(ms.shape[1]):
+                p[mem_start + k] = ms[i, k]
+            acc += monitor(ts[i], ys[i], p, d, out, g, gd)
+    return acc
+
+
+@nb.njit
+def _event_loop(event, ts, ys, ms, p, mem_start, reps):
+    acc = 0.0
+    for _ in range(reps):
+        for i in range(ts.shape[0]):
+            for k in range(ms.shape[1]):
+                p[mem_start + k] = ms[i, k]
+            acc += event(ts[i], ys[i], p, 0)[0]
+    return acc
+
+
+def _ns_per_call(loop, n_calls, repeats=5) -> float:
+    loop(1)
+    reps = max(1, int(2e6 // n_calls))
+    times = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        loop(reps)
+        times.append((time.perf_counter() - t0) / (reps * n_calls))
+    return 1e9 * float(np.median(times))
+
+
+def model_call_cost(linkage) -> dict:
+    """ns per call of the default model's rhs, monitor (with outputs) and event (joint 0)
+    over the default run's recorded states; the run's counts; the model's calls per
+    evaluation (per attempted step: s - 1 rhs, the monitor and the embedded solution's
+    event per joint; per accepted step: the event search's interior sample per joint) and
+    the default peak-only run's time per evaluation (median of 3)."""
+    from mbs_clearance.integrator import METHODS
+
+    from .case_speed import model_rhs_ns
+
+    model, ts, ys, ms, _, _, stats, _, p = run(linkage, REVOLUTION)
+    ts, ys = np.ascontiguousarray(ts), np.ascontiguousarray(ys)
+    ms = np.ascontiguousarray(ms[:, :model.N_MEM])
+    q = p.copy()
+    rhs = model_rhs_ns(model, ts, ys, ms, p)
+    mon = _ns_per_call(lambda r: _monitor_loop(model.monitor, ts, ys, ms, q, model.MEM_START,
+                                               model.N_OUT, r), len(ts))
+    ev = _ns_per_call(lambda r: _event_loop(model.event, ts, ys, ms, q, model.MEM_START, r),
+                      len(ts))
+    stages = METHODS["dopri5"].B.shape[0]
+    attempts = stats["naccept"] + stats["nreject"]
+    J = model.N_EVENTS
+    model_ns = (attempts * ((stages - 1) * rhs + mon + J * ev) + stats["naccept"] * J * ev)
+    times = []
+    for _ in range(3):
+        t0 = time.perf_counter()
+        run(linkage, REVOLUTION, record=False)
+        times.append(time.perf_counter() - t0)
+    return {"rhs_ns": rhs, "monitor_ns": mon, "event_ns": ev, "nfev": stats["nfev"],
+            "naccept": stats["naccept"], "nreject": stats["nreject"],
+            "model_ns_per_nfev": model_ns / stats["nfev"],
+            "run_ns_per_nfev": 1e9 * float(np.median(times)) / stats["nfev"]}
+
+
 def spectrum_along_run(linkage, states: int) -> dict:
     """The dominant eigenvalue and h |lambda| at `states` recorded states of the default run."""
     model, ts, ys, ms, *_, p = run(linkage, REVOLUTION)
@@ -152,6 +229,12 @@ def main(argv=None) -> None:
     print(f"damping ratio {zeta:.3g}; stability bound of h |lambda| along that direction: "
           + ", ".join(f"{m} {stability_radius(m, s['angle_median']):.2f}"
                       for m in ("dopri5", "dop853")))
+    c = model_call_cost(lk)
+    print(f"\nthe model's calls (default run, dopri5 at rtol 1e-7): rhs {c['rhs_ns']:.0f} ns, "
+          f"monitor {c['monitor_ns']:.0f} ns, event {c['event_ns']:.0f} ns per call; "
+          f"{c['nfev']} evaluations in {c['naccept']} + {c['nreject']} steps: the model's "
+          f"calls {c['model_ns_per_nfev']:.0f} ns per evaluation, the peak-only run "
+          f"{c['run_ns_per_nfev']:.0f} ns per evaluation")
     print("\n" + machine_summary())
 
 
