@@ -35,7 +35,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import time
 
 import numba as nb
 import numpy as np
@@ -45,7 +44,7 @@ from mbs_clearance.cases import CASES
 from mbs_clearance.linkage_model import DEFAULT_RTOL
 
 from ..scipy_reference import solve_scipy_linkage
-from .common import machine_summary, paired
+from .common import machine_summary, ns_per_call, paired
 from .speed_reduced import equal_error_ratio
 
 SCIPY_RTOLS = (1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11)
@@ -80,14 +79,7 @@ def model_rhs_ns(model, ts, ys, ms, p) -> float:
     parameters p (not changed), median of 5 timings."""
     args = (np.ascontiguousarray(ts), np.ascontiguousarray(ys),
             np.ascontiguousarray(ms[:, :model.N_MEM]), p.copy(), model.MEM_START)
-    _rhs_loop(model.rhs, *args, 1)
-    reps = max(1, int(2e6 // len(ts)))
-    times = []
-    for _ in range(5):
-        t0 = time.perf_counter()
-        _rhs_loop(model.rhs, *args, reps)
-        times.append((time.perf_counter() - t0) / (reps * len(ts)))
-    return 1e9 * float(np.median(times))
+    return ns_per_call(lambda reps: _rhs_loop(model.rhs, *args, reps), len(ts))
 
 
 def case_speed(name: str, repeats: int, check_reference: bool = False,

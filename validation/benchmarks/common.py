@@ -45,6 +45,14 @@ def timed(fn: Callable[[], Any], repeats: int, warmup: bool = False) -> tuple[fl
     return float(np.median(times)), result
 
 
+def ns_per_call(loop: Callable[[int], Any], n_calls: int, repeats: int = 5) -> float:
+    """ns per call of a compiled loop: `loop(reps)` makes reps x `n_calls` calls. One pass
+    first (compile, warm), then the median of `repeats` timings of about 2 million calls."""
+    loop(1)
+    reps = max(1, int(2e6 // n_calls))
+    return 1e9 * timed(lambda: loop(reps), repeats)[0] / (reps * n_calls)
+
+
 def paired(fn_a: Callable[[], Any], fn_b: Callable[[], Any], pairs: int) -> dict[str, float]:
     """Time a and b in alternating pairs (a, b, a, b, ...) in this process; returns the
     median of the per-pair ratios t_b / t_a ("ratio") and the two medians ("a", "b").

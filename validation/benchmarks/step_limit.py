@@ -42,7 +42,7 @@ from mbs_clearance import peak_base_force
 from mbs_clearance.cases import CASES
 from mbs_clearance.linkage_model import run
 
-from .common import machine_summary
+from .common import machine_summary, ns_per_call, timed
 
 REVOLUTION = 4
 SETTINGS = (("dopri5", 1e-5), ("dopri5", 1e-6), ("dopri5", 1e-7), ("dopri5", 1e-8),
@@ -125,17 +125,6 @@ def _event_loop(event, ts, ys, ms, p, mem_start, reps):
     return acc
 
 
-def _ns_per_call(loop, n_calls, repeats=5) -> float:
-    loop(1)
-    reps = max(1, int(2e6 // n_calls))
-    times = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        loop(reps)
-        times.append((time.perf_counter() - t0) / (reps * n_calls))
-    return 1e9 * float(np.median(times))
-
-
 def model_call_cost(linkage) -> dict:
     """ns per call of the default model's rhs, monitor (with outputs) and event (joint 0)
     over the default run's recorded states; the run's counts; the model's calls per
@@ -151,23 +140,19 @@ def model_call_cost(linkage) -> dict:
     ms = np.ascontiguousarray(ms[:, :model.N_MEM])
     q = p.copy()
     rhs = model_rhs_ns(model, ts, ys, ms, p)
-    mon = _ns_per_call(lambda r: _monitor_loop(model.monitor, ts, ys, ms, q, model.MEM_START,
+    mon = ns_per_call(lambda r: _monitor_loop(model.monitor, ts, ys, ms, q, model.MEM_START,
                                                model.N_OUT, r), len(ts))
-    ev = _ns_per_call(lambda r: _event_loop(model.event, ts, ys, ms, q, model.MEM_START, r),
+    ev = ns_per_call(lambda r: _event_loop(model.event, ts, ys, ms, q, model.MEM_START, r),
                       len(ts))
     stages = METHODS["dopri5"].B.shape[0]
     attempts = stats["naccept"] + stats["nreject"]
     J = model.N_EVENTS
     model_ns = (attempts * ((stages - 1) * rhs + mon + J * ev) + stats["naccept"] * J * ev)
-    times = []
-    for _ in range(3):
-        t0 = time.perf_counter()
-        run(linkage, REVOLUTION, record=False)
-        times.append(time.perf_counter() - t0)
+    run_s = timed(lambda: run(linkage, REVOLUTION, record=False), 3)[0]
     return {"rhs_ns": rhs, "monitor_ns": mon, "event_ns": ev, "nfev": stats["nfev"],
             "naccept": stats["naccept"], "nreject": stats["nreject"],
             "model_ns_per_nfev": model_ns / stats["nfev"],
-            "run_ns_per_nfev": 1e9 * float(np.median(times)) / stats["nfev"]}
+            "run_ns_per_nfev": 1e9 * run_s / stats["nfev"]}
 
 
 def spectrum_along_run(linkage, states: int) -> dict:
