@@ -40,6 +40,7 @@ import numpy as np
 
 from mbs_clearance import peak_base_force
 from mbs_clearance.cases import CASES
+from mbs_clearance.cli import int_at_least
 from mbs_clearance.linkage_model import run
 
 from .common import machine_summary, ns_per_call, timed
@@ -178,7 +179,8 @@ def spectrum_along_run(linkage, states: int) -> dict:
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--case", choices=sorted(CASES), default="four_bar")
-    ap.add_argument("--states", type=int, default=400, help="states sampled for the spectrum")
+    ap.add_argument("--states", type=int_at_least(1), default=400,
+                    help="states sampled for the spectrum")
     ap.add_argument("--scipy-implicit", action="store_true",
                     help="also scipy's Radau at rtol 1e-6 and 1e-7 (slow)")
     args = ap.parse_args(argv)
