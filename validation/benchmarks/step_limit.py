@@ -25,7 +25,7 @@ For one named case (default: the four-bar), 4 drive revolutions from the centred
 - with ``--scipy-implicit``: scipy's Radau (implicit, L-stable; its Jacobian by finite
   differences) on the same compiled model at rtol 1e-6 and 1e-7
   (`validation.scipy_reference.solve_scipy_linkage`): whether an implicit method takes
-  longer steps at a useful error (about a minute per row for the four-bar).
+  longer steps at a useful error (about 40 s per row for the four-bar).
 
     python -m validation.benchmarks.step_limit [--case four_bar] [--states 400] [--scipy-implicit]
 """
