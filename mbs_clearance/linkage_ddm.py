@@ -363,20 +363,37 @@ def _window_norm_maxima(s, ptr, rows, vals, weights, lo, hi):
     """Per window w (rows lo[w]:hi[w]) the maximum over its rows i of
     sum_j weights[k, j] (sum_b s[i, b, j] coeffs[b, k])^2 (nw, npar): the squared weighted
     norms of the combined state sensitivities (coeffs by `_sparse_columns`), from those of
-    the integrated directions s (n, nb, 2 N_Q) without forming the combined ones."""
+    the integrated directions s (n, nb, 2 N_Q) without forming the combined ones. A column
+    with one coefficient (a direction integrated as it is) takes a loop without the inner
+    sum (the same values)."""
     n2 = s.shape[2]
     npar = ptr.shape[0] - 1
     out = np.zeros((lo.shape[0], npar))
+    best = np.zeros(npar)
     for w in range(lo.shape[0]):
+        for k in range(npar):
+            best[k] = 0.0
         for i in range(lo[w], hi[w]):
             for k in range(npar):
+                e0 = ptr[k]
+                e1 = ptr[k + 1]
                 acc2 = 0.0
-                for j in range(n2):
-                    acc = 0.0
-                    for e in range(ptr[k], ptr[k + 1]):
-                        acc += s[i, rows[e], j] * vals[e]
-                    acc2 += weights[k, j] * acc * acc
-                out[w, k] = max(out[w, k], acc2)
+                if e1 - e0 == 1:
+                    b = rows[e0]
+                    v = vals[e0]
+                    for j in range(n2):
+                        x = s[i, b, j] * v
+                        acc2 += weights[k, j] * x * x
+                else:
+                    for j in range(n2):
+                        acc = 0.0
+                        for e in range(e0, e1):
+                            acc += s[i, rows[e], j] * vals[e]
+                        acc2 += weights[k, j] * acc * acc
+                if acc2 > best[k]:
+                    best[k] = acc2
+        for k in range(npar):
+            out[w, k] = best[k]
     return out
 
 
