@@ -113,11 +113,13 @@ def test_step_limit_jacobian_matches_the_generated_one():
     assert s["contact_fraction"] > 0.9
     assert abs(s["re_median"]) < 0.2 * s["im_median"]       # lightly damped
     assert 0.1 < s["h_lambda"][1] < stability_radius("dopri5", s["angle_median"])
-    # the model's calls are a part of the run: less time per evaluation than the run's,
-    # and at least the 6 kernel calls of each dopri5 step over its ~6.2 evaluations
+    # the kernel costs (no timing is compared here: benchmarks, not tests, judge speed);
+    # the calls they are multiplied by: every attempted dopri5 step is 6 evaluations (5
+    # stages and the monitor), plus the starting step's and the landings' few
     c = model_call_cost(lk)
     assert c["rhs_ns"] > 0 and c["monitor_ns"] > 0 and c["event_ns"] > 0
-    assert 0.8 * c["rhs_ns"] < c["model_ns_per_nfev"] < c["run_ns_per_nfev"]
+    attempts = c["naccept"] + c["nreject"]
+    assert 0 <= c["nfev"] - 6 * attempts <= 0.01 * c["nfev"]
 
 
 def test_stability_radius_closed_forms():
