@@ -109,14 +109,15 @@ def test_step_limit_jacobian_matches_the_generated_one():
         # central differences with steps of 1e-7 |y|: round-off and truncation up to about
         # 1e-6 of the largest entry (measured: 8.4e-7 at worst of these states)
         assert np.max(np.abs(fd - exact)) <= 3e-6 * np.max(np.abs(exact)), i
-    s = spectrum_along_run(lk, 50)
+    default = run(lk, 4)
+    s = spectrum_along_run(lk, 50, default)
     assert s["contact_fraction"] > 0.9
     assert abs(s["re_median"]) < 0.2 * s["im_median"]       # lightly damped
     assert 0.1 < s["h_lambda"][1] < stability_radius("dopri5", s["angle_median"])
     # the kernel costs (no timing is compared here: benchmarks, not tests, judge speed);
     # the calls they are multiplied by: every attempted dopri5 step is 6 evaluations (5
     # stages and the monitor), plus the starting step's and the landings' few
-    c = model_call_cost(lk)
+    c = model_call_cost(lk, default)
     assert c["rhs_ns"] > 0 and c["monitor_ns"] > 0 and c["event_ns"] > 0
     attempts = c["naccept"] + c["nreject"]
     assert 0 <= c["nfev"] - 6 * attempts <= 0.01 * c["nfev"]

@@ -74,12 +74,54 @@ def rhs_call_ns(linkage, **options) -> float:
     return model_rhs_ns(model, ts, ys, ms, p)
 
 
+@nb.njit(cache=True)
+def _monitor_loop(monitor, ts, ys, ms, p, mem_start, n_out, reps):
+    """reps passes of monitor (with n_out outputs) over the states ys (memories ms)."""
+    d = np.empty(ys.shape[1])
+    out = np.empty(n_out)
+    g = np.empty(ms.shape[1] // 2)
+    gd = np.empty(ms.shape[1] // 2)
+    acc = 0.0
+    for _ in range(reps):
+        for i in range(ts.shape[0]):
+            for k in range(ms.shape[1]):
+                p[mem_start + k] = ms[i, k]
+            acc += monitor(ts[i], ys[i], p, d, out, g, gd)
+    return acc
+
+
+@nb.njit(cache=True)
+def _event_loop(event, ts, ys, ms, p, mem_start, reps):
+    """reps passes of joint 0's event over the states ys (memories ms)."""
+    acc = 0.0
+    for _ in range(reps):
+        for i in range(ts.shape[0]):
+            for k in range(ms.shape[1]):
+                p[mem_start + k] = ms[i, k]
+            acc += event(ts[i], ys[i], p, 0)[0]
+    return acc
+
+
+def _loop_args(model, ts, ys, ms, p):
+    return (np.ascontiguousarray(ts), np.ascontiguousarray(ys),
+            np.ascontiguousarray(ms[:, :model.N_MEM]), p.copy(), model.MEM_START)
+
+
 def model_rhs_ns(model, ts, ys, ms, p) -> float:
     """ns per call of `model.rhs` over the states ys (memories ms) at the times ts, with the
     parameters p (not changed), median of 5 timings."""
-    args = (np.ascontiguousarray(ts), np.ascontiguousarray(ys),
-            np.ascontiguousarray(ms[:, :model.N_MEM]), p.copy(), model.MEM_START)
+    args = _loop_args(model, ts, ys, ms, p)
     return ns_per_call(lambda reps: _rhs_loop(model.rhs, *args, reps), len(ts))
+
+
+def model_kernel_ns(model, ts, ys, ms, p) -> dict[str, float]:
+    """ns per call of `model`'s rhs, monitor (with its outputs) and event (joint 0) over the
+    states ys (memories ms) at the times ts, medians of 5 timings each."""
+    args = _loop_args(model, ts, ys, ms, p)
+    monitor = ns_per_call(lambda reps: _monitor_loop(model.monitor, *args, model.N_OUT, reps),
+                          len(ts))
+    event = ns_per_call(lambda reps: _event_loop(model.event, *args, reps), len(ts))
+    return {"rhs": model_rhs_ns(model, ts, ys, ms, p), "monitor": monitor, "event": event}
 
 
 def case_speed(name: str, repeats: int, check_reference: bool = False,

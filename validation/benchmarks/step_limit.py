@@ -35,7 +35,6 @@ from __future__ import annotations
 import argparse
 import time
 
-import numba as nb
 import numpy as np
 
 from mbs_clearance import peak_base_force
@@ -43,7 +42,7 @@ from mbs_clearance.cases import CASES
 from mbs_clearance.cli import int_at_least
 from mbs_clearance.linkage_model import run
 
-from .common import machine_summary, ns_per_call, timed
+from .common import machine_summary, timed
 
 REVOLUTION = 4
 SETTINGS = (("dopri5", 1e-5), ("dopri5", 1e-6), ("dopri5", 1e-7), ("dopri5", 1e-8),
@@ -100,51 +99,20 @@ def stability_radius(method: str, angle: float, r_max: float = 20.0) -> float:
     return lo
 
 
-@nb.njit
-def _monitor_loop(monitor, ts, ys, ms, p, mem_start, n_out, reps):
-    d = np.empty(ys.shape[1])
-    out = np.empty(n_out)
-    g = np.empty(ms.shape[1] // 2)
-    gd = np.empty(ms.shape[1] // 2)
-    acc = 0.0
-    for _ in range(reps):
-        for i in range(ts.shape[0]):
-            for k in range(ms.shape[1]):
-                p[mem_start + k] = ms[i, k]
-            acc += monitor(ts[i], ys[i], p, d, out, g, gd)
-    return acc
-
-
-@nb.njit
-def _event_loop(event, ts, ys, ms, p, mem_start, reps):
-    acc = 0.0
-    for _ in range(reps):
-        for i in range(ts.shape[0]):
-            for k in range(ms.shape[1]):
-                p[mem_start + k] = ms[i, k]
-            acc += event(ts[i], ys[i], p, 0)[0]
-    return acc
-
-
-def model_call_cost(linkage) -> dict:
+def model_call_cost(linkage, default=None) -> dict:
     """ns per call of the default model's rhs, monitor (with outputs) and event (joint 0)
-    over the default run's recorded states; the run's counts; the model's calls per
-    evaluation (per attempted step: s - 1 rhs, the monitor and the embedded solution's
-    event per joint; per accepted step: the event search's interior sample per joint) and
-    the default peak-only run's time per evaluation (median of 3)."""
+    over the default run's recorded states (`default`: that run's result, if at hand); the
+    run's counts; the model's calls per evaluation (per attempted step: s - 1 rhs, the
+    monitor and the embedded solution's event per joint; per accepted step: the event
+    search's interior sample per joint) and the default peak-only run's time per evaluation
+    (median of 3)."""
     from mbs_clearance.integrator import METHODS
 
-    from .case_speed import model_rhs_ns
+    from .case_speed import model_kernel_ns
 
-    model, ts, ys, ms, _, _, stats, _, p = run(linkage, REVOLUTION)
-    ts, ys = np.ascontiguousarray(ts), np.ascontiguousarray(ys)
-    ms = np.ascontiguousarray(ms[:, :model.N_MEM])
-    q = p.copy()
-    rhs = model_rhs_ns(model, ts, ys, ms, p)
-    mon = ns_per_call(lambda r: _monitor_loop(model.monitor, ts, ys, ms, q, model.MEM_START,
-                                               model.N_OUT, r), len(ts))
-    ev = ns_per_call(lambda r: _event_loop(model.event, ts, ys, ms, q, model.MEM_START, r),
-                      len(ts))
+    model, ts, ys, ms, _, _, stats, _, p = run(linkage, REVOLUTION) if default is None else default
+    cost = model_kernel_ns(model, ts, ys, ms, p)
+    rhs, mon, ev = cost["rhs"], cost["monitor"], cost["event"]
     stages = METHODS["dopri5"].B.shape[0]
     attempts = stats["naccept"] + stats["nreject"]
     J = model.N_EVENTS
@@ -156,9 +124,10 @@ def model_call_cost(linkage) -> dict:
             "run_ns_per_nfev": 1e9 * run_s / stats["nfev"]}
 
 
-def spectrum_along_run(linkage, states: int) -> dict:
-    """The dominant eigenvalue and h |lambda| at `states` recorded states of the default run."""
-    model, ts, ys, ms, *_, p = run(linkage, REVOLUTION)
+def spectrum_along_run(linkage, states: int, default=None) -> dict:
+    """The dominant eigenvalue and h |lambda| at `states` recorded states of the default run
+    (`default`: that run's result, if at hand)."""
+    model, ts, ys, ms, *_, p = run(linkage, REVOLUTION) if default is None else default
     h = np.diff(ts)
     q = p.copy()
     rows = np.unique(np.linspace(1, len(ts) - 2, states).astype(int))
@@ -204,7 +173,8 @@ def main(argv=None) -> None:
             err = abs(res.peaks[REVOLUTION - 1] / ref - 1.0)
             print(f"| scipy Radau | {rtol:g} | {res.nfev} | | | {err:.1e} "
                   f"({len(res.event_times)} events, {time.perf_counter() - t0:.0f} s) |")
-    s = spectrum_along_run(lk, args.states)
+    default = run(lk, REVOLUTION)
+    s = spectrum_along_run(lk, args.states, default)
     q10, q50, q90 = s["h_lambda"]
     print(f"\ndefault run: {s['steps']} steps over {s['duration']:.4g} s; at {s['states']} "
           f"of its states ({100 * s['contact_fraction']:.1f} % in contact) the dominant "
@@ -216,7 +186,7 @@ def main(argv=None) -> None:
     print(f"damping ratio {zeta:.3g}; stability bound of h |lambda| along that direction: "
           + ", ".join(f"{m} {stability_radius(m, s['angle_median']):.2f}"
                       for m in ("dopri5", "dop853")))
-    c = model_call_cost(lk)
+    c = model_call_cost(lk, default)
     print(f"\nthe model's calls (default run, dopri5 at rtol 1e-7): rhs {c['rhs_ns']:.0f} ns, "
           f"monitor {c['monitor_ns']:.0f} ns, event {c['event_ns']:.0f} ns per call; "
           f"{c['nfev']} evaluations in {c['naccept']} + {c['nreject']} steps: the model's "
