@@ -42,14 +42,26 @@ from .sensitivity import (
     slider_crank_run,
 )
 
-__all__ = ["PeakGradient", "peak_gradient", "KINK_RTOL", "RIVAL_CANDIDATES"]
+__all__ = ["PeakGradient", "peak_gradient", "KINK_RTOL", "PEAK_GRADIENT_RTOL", "RIVAL_CANDIDATES"]
 
 _THIS = sys.modules[__name__]
 
 #: relative gap (peak - rival) / peak below which two local maxima of the window count as
-#: tied within the integration accuracy (the kink tolerance is max(KINK_RTOL, 100 rtol)):
-#: the accuracy target of the default settings on every per-revolution peak
+#: tied within the integration accuracy (the kink tolerance is max(KINK_RTOL, KINK_PER_RTOL
+#: rtol)): the accuracy target of the default settings on every per-revolution peak
 KINK_RTOL = 1e-5
+
+#: the DDM run's rtol when none is given. Its peak and gradient do not need the plain run's
+#: 1e-7: against central differences at rtol 1e-12 the gradient is as accurate at 1e-6 as at
+#: 1e-7 (its error is set by the peak time's location, not by the tolerance) and the peak is
+#: within 1.5e-8, at about three quarters of the cost (`python -m
+#: validation.peak_gradient_accuracy`, docs/sensitivity.md)
+PEAK_GRADIENT_RTOL = 1e-6
+
+#: the kink tolerance's floor per unit of the DDM run's rtol: the run's peak error measured
+#: below rtol / 3 from rtol 1e-3 to 1e-7 (validation.peak_gradient_accuracy), and a gap is the
+#: difference of two peaks
+KINK_PER_RTOL = 10.0
 
 #: local maxima of the recorded samples (largest first) refined as rivals of the peak
 RIVAL_CANDIDATES = 8
@@ -281,7 +293,7 @@ def _ddm_gradient(mech, names, revolution, rtol, integrator, kink_tol):
     kept = [(v, t) for v, t in kept if abs(t - t_int) > eps] + [(peak_int, t_int)]
     kept.sort(key=lambda vt: -vt[0])
     (_, t_peak) = kept[0]
-    tol = max(kink_tol, 100.0 * run.rtol)
+    tol = max(kink_tol, KINK_PER_RTOL * run.rtol)
     at_edge = min(t_peak - t_lo, t_hi - t_peak) <= eps
     peak, grad, _ = run.gradient_at(t_peak, newton=not at_edge)
     rival_t = rival_v = math.nan
@@ -416,12 +428,13 @@ def peak_gradient(mech: SliderCrank, parameters=None, revolution: int = 4,
         and friction_v1 are then parameters too). "fd": central differences of the refined peak
         (`peak_base_force`), 2 p + 1 runs, for checking.
     rtol : float, optional
-        Relative tolerance of the reduced model (DDM: default 1e-7; FD: default 1e-11).
+        Relative tolerance of the reduced model (DDM: default `PEAK_GRADIENT_RTOL`, 1e-6;
+        FD: default 1e-11).
     integrator : str, optional
         Method of the compiled integrator (DDM default "dop853"; FD: the plain default).
     kink_tol : float
         Relative gap below which a second local maximum ties with the peak (the tolerance
-        used is max(kink_tol, 100 rtol)).
+        used is max(kink_tol, KINK_PER_RTOL * rtol) = max(kink_tol, 10 rtol)).
     fd_relative_step : float
         FD only: relative step, see `sensitivity.fd_step`.
     executor :
@@ -456,8 +469,9 @@ def peak_gradient(mech: SliderCrank, parameters=None, revolution: int = 4,
         if options or executor is not None:
             extra = sorted(options) + (["executor"] if executor is not None else [])
             raise ValueError(f"unknown option(s) for method='ddm': {extra}")
-        return _ddm_gradient(mech, names, revolution, rtol, integrator or DDM_INTEGRATOR,
-                             kink_tol)
+        return _ddm_gradient(mech, names, revolution,
+                             PEAK_GRADIENT_RTOL if rtol is None else rtol,
+                             integrator or DDM_INTEGRATOR, kink_tol)
     if rtol is not None:
         if backend != "reduced":
             raise ValueError(f"rtol applies to the reduced backend only; got "

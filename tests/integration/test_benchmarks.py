@@ -140,3 +140,22 @@ def test_stability_radius_closed_forms():
     coeffs = [1 / 600, -1 / 120, 1 / 24, -1 / 6, 1 / 2, -1.0]
     roots = sorted(r.real for r in np.roots(coeffs) if abs(r.imag) < 1e-9 and r.real > 0)
     assert stability_radius("dopri5", np.pi) == pytest.approx(roots[0], rel=1e-9)
+
+
+def test_peak_gradient_accuracy_script(capsys):
+    """validation.peak_gradient_accuracy on the paper's design at two DDM tolerances: one
+    row each, the error measure against central differences below the tests' 1e-3 (the
+    reference: tests/unit/test_objective.py), and the looser rtol's run cheaper in
+    evaluations; a malformed design is refused before any run."""
+    from validation.peak_gradient_accuracy import main
+
+    main(["--design", "0.05,0.12", "--rtol", "1e-7", "--rtol", "1e-6"])
+    lines = [ln for ln in capsys.readouterr().out.splitlines() if ln.startswith("| 0.05 ")]
+    assert len(lines) == 2
+    cells = [[c.strip() for c in ln.strip("|").split("|")] for ln in lines]
+    assert [c[4] for c in cells] == ["1e-07", "1e-06"]
+    assert all(float(c[7]) < 1e-3 and float(c[9]) < 1e-7 for c in cells)
+    assert float(cells[1][10]) < float(cells[0][10])      # nfev / peak-only run's
+    with pytest.raises(SystemExit):
+        main(["--design", "0.05"])
+    assert "L2,L3" in capsys.readouterr().err
