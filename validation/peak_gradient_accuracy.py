@@ -48,7 +48,6 @@ def design_rows(mech: SliderCrank, rtols) -> tuple[object, list[dict]]:
         rows.append(dict(rtol=ddm.stats["rtol"], kink=ddm.kink, at_edge=ddm.at_edge,
                          gap=ddm.gap, error=float(err[k]), worst=ddm.parameters[k],
                          peak_error=abs(ddm.peak / fd.peak - 1.0),
-                         time_shift=ddm.time - fd.time,
                          nfev_ratio=ddm.stats["nfev"] / nfev_peak))
     return fd, rows
 
