@@ -733,62 +733,17 @@ def plot_regimes(nc: Path, path: Path) -> Path:
     """The regime map with the paper's design marked and the region where the design
     sensitivities mean something (period-1 motion) outlined."""
     import xarray as xr
-    from matplotlib.lines import Line2D
 
     from mbs_clearance.plotting import plot_regime_map
-    from mbs_clearance.poincare import REGIME_CODES
 
     mech = SliderCrank()
     with xr.open_dataset(nc) as ds:
         ds = ds.load()
-    dims = [d for d in ds["regime"].dims]
+    dims = list(ds["regime"].dims)
     mark = ({"clearance": mech.clearance, "crank_speed": mech.crank_speed}
             if set(dims) == {"clearance", "crank_speed"} else None)
-    fig = plot_regime_map(ds, None, mark=mark)
-    ax = fig.axes[0]
-    # outline the period-1 cells: every cell edge between a period-1 cell and another
-    from mbs_clearance.plotting import _edges
-
-    valid = ds["regime"].values == REGIME_CODES["period_1"]
-    ex = _edges(ds[dims[0]].values, ds[dims[0]].attrs.get("spacing"))
-    ey = _edges(ds[dims[1]].values, ds[dims[1]].attrs.get("spacing"))
-    nx, ny = valid.shape
-
-    def inside(i, j):
-        return 0 <= i < nx and 0 <= j < ny and valid[i, j]
-
-    for i, j in zip(*np.nonzero(valid)):
-        for di, dj, xs, ys in ((-1, 0, [ex[i]] * 2, ey[j:j + 2]),
-                               (1, 0, [ex[i + 1]] * 2, ey[j:j + 2]),
-                               (0, -1, ex[i:i + 2], [ey[j]] * 2),
-                               (0, 1, ex[i:i + 2], [ey[j + 1]] * 2)):
-            if not inside(i + di, j + dj):
-                ax.plot(xs, ys, color="k", lw=2.0, solid_capstyle="projecting")
-    # engineering units on the axes: clearance in mm, speed in rpm
-    from matplotlib.ticker import FuncFormatter
-
-    from mbs_clearance.units import number
-
-    for name, axis in ((dims[0], ax.xaxis), (dims[1], ax.yaxis)):
-        if name == "clearance":
-            axis.set_major_formatter(FuncFormatter(lambda v, _: number(v * 1e3, 3)))
-            axis.set_label_text("radial clearance (mm)")
-        elif name == "crank_speed":
-            lo, hi = ax.get_ylim() if axis is ax.yaxis else ax.get_xlim()
-            rpm = np.arange(0.0, hi * 30 / np.pi + 1.0, 2000.0)
-            rpm = rpm[rpm * np.pi / 30 >= lo]
-            axis.set_ticks(rpm * np.pi / 30)
-            axis.set_major_formatter(FuncFormatter(lambda v, _: number(v * 30 / np.pi, 4)))
-            axis.set_label_text("crank speed (rpm)")
-    legend = ax.get_legend()
-    extra = [Line2D([], [], color="k", lw=2,
-                    label="period-1 region: sensitivities valid inside")]
-    if mark:
-        extra.append(Line2D([], [], marker="*", ms=12, color="k", mfc="yellow", ls="none",
-                            label="paper's design"))
-    ax.legend(handles=[*legend.legend_handles, *extra], fontsize=8, loc="upper left",
-              bbox_to_anchor=(1.01, 1.0))
-    ax.set_title("regime map of the paper's case")
+    fig = plot_regime_map(ds, None, mark=mark, outline="period_1",
+                          mark_label="paper's design", title="regime map of the paper's case")
     fig.savefig(path, dpi=110, bbox_inches="tight")
     return path
 
