@@ -24,7 +24,7 @@ from pathlib import Path
 
 from ._io import OutputDir, atomic_file, check_output_dir, check_output_file
 from .mechanism import PARAMETER_INFO, SliderCrank
-from .units import quantity
+from .units import number, quantity
 
 # the subcommands import what they need when they run (start-up time): simulate, optimize,
 # sensitivity, the plotting and the validation plugins are not imported to build the parser
@@ -405,7 +405,9 @@ def _progress(message: str) -> None:
 
 #: the note under the per-revolution tables (their revolution 1 is marked *)
 START_UP_NOTE = ("* revolution 1 is the start-up transient (the journal starts centred with "
-                 "ideal-joint velocities); the paper reports revolution 4")
+                 "ideal-joint velocities)")
+#: what the paper's case adds to it
+PAPER_NOTE = "; the paper reports revolution 4"
 
 
 def _revolution_label(k: int, transient: bool = True) -> str:
@@ -413,7 +415,8 @@ def _revolution_label(k: int, transient: bool = True) -> str:
 
 
 def _force(value: float) -> str:
-    return quantity(value, "N", 7)
+    # six significant digits: the default run's relative accuracy is 1e-5
+    return quantity(value, "N", 6)
 
 
 def _cmd_simulate(args: argparse.Namespace) -> int:
@@ -444,7 +447,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
         print(f"{_revolution_label(k):>10}  {_force(traj.max_base_force(k)):>12}  "
               f"{quantity(abs(traj.crank_moment[mask]).max(), 'N m', 6):>12}"
               + ("" if ideal else f"  {_force(traj.contact_force[mask].max()):>17}"))
-    print(START_UP_NOTE, file=sys.stderr)
+    print(START_UP_NOTE + PAPER_NOTE, file=sys.stderr)
     floored = traj.stats.get("floored_impacts") if traj.stats else None
     if floored:
         print(f"note: {floored} contact onset(s) at the impact-velocity floor (grazing); the "
@@ -695,7 +698,8 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
                         version=f"%(prog)s {_package_version()}")
     sub = parser.add_subparsers(dest="command", required=True)
 
-    p = sub.add_parser("simulate", help="simulate and write the trajectory and a figure",
+    p = sub.add_parser("simulate", help="simulate and print the peaks per revolution (with "
+                                       "--out / --plot: the trajectory, a figure)",
                        formatter_class=HelpFormatter,
                        description="Simulate the slider-crank (or a named case, or a linkage "
                                    "described in a file) and print the peaks per revolution; "
@@ -1118,7 +1122,7 @@ def _cmd_animate(args: argparse.Namespace) -> int:
         staged.commit()
     what = f"animation of {name}, revolution {revolution}"
     if magnify is not None:
-        what += f", journal offsets x {magnify:.3g}"
+        what += f", journal offsets drawn {number(magnify, 3)} times their size"
     wrote(args.out / file, what)
     return 0
 

@@ -15,6 +15,7 @@ from matplotlib.figure import Figure
 
 from ._io import PNG_SOFTWARE
 from .trajectory import Trajectory
+from .units import number
 
 __all__ = ["plot_trajectory", "plot_overlay", "plot_comparison", "plot_sensitivities",
            "plot_work_precision", "plot_fitness_history", "plot_force_comparison",
@@ -298,6 +299,14 @@ def _axis_factor(name: str) -> float:
     return _AXIS_UNITS.get(name, (name, 1.0))[1]
 
 
+def _field_text(name: str, value: float) -> str:
+    """``clearance = 0.0158 mm``: a swept field's value in its plotted unit."""
+    label, factor = _AXIS_UNITS.get(name, (name, 1.0))
+    unit = label[label.index("(") + 1:-1] if label.endswith(")") else ""
+    base = label[:label.index(" (")] if unit else label
+    return f"{base} = {number(value * factor, 3)}" + (f" {unit}" if unit else "")
+
+
 def _sweep_dims(ds) -> list[str]:
     return [d for d in ds["regime"].dims]
 
@@ -470,7 +479,7 @@ def plot_poincare(ds, points: Sequence[Mapping], path: str | Path | None = None,
         ax.plot(np.cos(circle), np.sin(circle), color="0.7", lw=0.8)
         ax.plot(xy[:, 0], xy[:, 1], ".", ms=4)
         ax.set_aspect("equal")
-        label = ", ".join(f"{k} = {float(sel[k].values):.3g}" for k in point)
+        label = ", ".join(_field_text(k, float(sel[k].values)) for k in point)
         ax.set_title(f"{label}\n{REGIMES[int(sel['regime'].values)].replace('_', ' ')}",
                      fontsize=8)
         ax.set_xlabel("x / clearance")
@@ -667,8 +676,10 @@ def _animate_linkage(traj: Trajectory, path: Path, revolution, frames: int, fps:
     m_ax.set_xlim(lo[0], hi[0])
     m_ax.set_ylim(lo[1], hi[1])
     m_ax.set_aspect("equal")
-    m_ax.set_title(f"{linkage.name}, revolution {fr.revolution} (m); journal offsets "
-                   f"x {fr.magnify:.3g}", fontsize=9)
+    m_ax.set_title(f"{linkage.name}, revolution {fr.revolution}; journal offsets drawn "
+                   f"{number(fr.magnify, 3)} times their size", fontsize=9)
+    m_ax.set_xlabel("x (m)")
+    m_ax.set_ylabel("y (m)")
     m_ax.grid(alpha=0.2)
     for xy in fr.pivots.values():
         m_ax.plot([xy[0]], [xy[1]], "^", ms=10, color="0.3", zorder=1)

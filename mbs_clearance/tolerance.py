@@ -56,6 +56,9 @@ __all__ = ["tolerance_study", "ToleranceResult", "Uniform", "Normal", "FitCleara
 #: built-in outputs of a run: the rev-k peak of |F12| (peak-only run), the RMS of the drive
 #: moment over revolution k, the max contact force over revolution k (recorded runs)
 OUTPUTS = ("peak", "rms_drive_moment", "max_contact_force")
+#: what each named output is, and its unit
+OUTPUT_LABELS = {"peak": ("max |F12|", "N"), "rms_drive_moment": ("RMS drive moment", "N m"),
+                 "max_contact_force": ("max contact force", "N")}
 
 #: derived input: the radial clearance R_B - R_J (set by moving the journal radius)
 CLEARANCE = "radial_clearance"
@@ -444,9 +447,27 @@ class ToleranceResult:
                    counts=data["counts"], notes=data["notes"], settings=data["settings"],
                    elapsed=float(data["elapsed"]))
 
+    @property
+    def output_unit(self) -> str:
+        """The output's unit ("" for a user's function)."""
+        return OUTPUT_LABELS.get(self.output, ("", ""))[1]
+
+    @property
+    def output_label(self) -> str:
+        """``max |F12| over revolution 4 (N)``: what the output is, with its unit."""
+        what, unit = OUTPUT_LABELS.get(self.output, (self.output, ""))
+        rev = self.settings.get("revolution")
+        return (what + (f" over revolution {rev}" if rev is not None else "")
+                + (f" ({unit})" if unit else ""))
+
     def summary(self) -> str:
         """A few lines of text: indices, probabilities, counts and notes."""
-        lines = [f"output: {self.output}; inputs: {', '.join(self.names)}"]
+        from .units import number
+
+        def val(v, digits=5):
+            return number(v, digits) + (f" {self.output_unit}" if self.output_unit else "")
+
+        lines = [f"output: {self.output_label}; inputs: {', '.join(self.names)}"]
         w = max(len(n) for n in self.names)
         if self.sobol:
             lines.append(f"Sobol (N = {self.sobol['N']}, {self.sobol['runs']} runs)")
@@ -466,15 +487,16 @@ class ToleranceResult:
             for i, n in enumerate(self.names):
                 lines.append(f"  {n:<{w}}  {self.dgsm['bound'][i]:.4g}")
         for label, mc in [("Monte Carlo", self.monte_carlo)] + [
-                (f"wear +{lv['wear'] * 1e6:.3g} um", lv) for lv in self.wear]:
+                (f"wear +{lv['wear'] * 1e6:.3g} \N{MICRO SIGN}m", lv) for lv in self.wear]:
             if not mc:
                 continue
-            line = (f"{label} ({mc['runs']} runs): mean {mc['mean']:.5g}, std "
-                    f"{mc['std']:.3g}, 5-95 % [{mc['quantiles']['0.05']:.5g}, "
-                    f"{mc['quantiles']['0.95']:.5g}]")
+            line = (f"{label} ({mc['runs']} runs): mean {val(mc['mean'])}, std "
+                    f"{val(mc['std'], 3)}, 5-95 % [{val(mc['quantiles']['0.05'])}, "
+                    f"{val(mc['quantiles']['0.95'])}]")
             if mc.get("p_exceed") is not None:
                 lo, hi = mc["p_exceed_ci"]
-                line += f", P(> {mc['allowable']:g}) = {mc['p_exceed']:.4f} [{lo:.4f}, {hi:.4f}]"
+                line += (f", P(> {val(mc['allowable'], 6)}) = {mc['p_exceed']:.4f} "
+                         f"[{lo:.4f}, {hi:.4f}]")
             lines.append(line)
         c = self.counts
         lines.append(f"runs {c.get('runs', 0)}, failed {c.get('failed', 0)}, not periodic "

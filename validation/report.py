@@ -27,6 +27,7 @@ from typing import Any
 import numpy as np
 
 from mbs_clearance import PARAMETER_INFO, SliderCrank, load_trajectory, simulate
+from mbs_clearance.units import number
 
 #: the paper's published numbers (Ebrahimi, Salahshoor & Nouri 2018)
 PAPER = {
@@ -775,14 +776,16 @@ def plot_tolerance(result, path: Path) -> Path:
     if len(values):
         ax2.hist(values, bins=30, color="0.6", label=f"new ({len(values)} runs)")
         if mc.get("allowable") is not None:
-            ax2.axvline(mc["allowable"], color="r", label=f"allowable {mc['allowable']:g}")
+            ax2.axvline(mc["allowable"], color="r",
+                        label=f"allowable load {number(mc['allowable'], 6)} "
+                              f"{result.output_unit}".rstrip())
         for lv in result.wear:
             worn = np.asarray(lv.get("values") or [], dtype=float)
             worn = worn[np.isfinite(worn)]
             if len(worn):
                 ax2.hist(worn, bins=30, histtype="step", lw=1.5,
-                         label=f"wear +{lv['wear'] * 1e6:.3g} um")
-        ax2.set_xlabel(f"output: {result.output}")
+                         label=f"wear +{lv['wear'] * 1e6:.3g} \N{MICRO SIGN}m")
+        ax2.set_xlabel(result.output_label)
         ax2.set_ylabel("designs")
         ax2.legend(fontsize=8)
     fig.tight_layout()

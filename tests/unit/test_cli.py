@@ -726,10 +726,21 @@ def test_simulate_says_what_it_wrote_and_marks_the_start_up(tmp_path, capsys):
     rows = captured.out.splitlines()
     assert rows[1].split()[0] == "1*" and "start-up transient" in captured.err
     assert rows[1].split()[2] == "N" and rows[1].split()[4:6] == ["N", "m"]
+    assert "the paper reports revolution 4" in captured.err
+    # six significant digits: the default run's stated relative accuracy is 1e-5
+    assert len(rows[1].split()[1].replace(".", "").lstrip("0")) <= 6
     # without --out/--plot nothing is written (as its help says)
     before = sorted(tmp_path.iterdir())
     assert main(["simulate", "--revolutions", "1"]) == 0
     assert _wrote(capsys.readouterr().err) == [] and sorted(tmp_path.iterdir()) == before
+
+
+def test_a_named_case_is_not_said_to_be_the_papers(capsys):
+    assert main(["simulate", "--case", "four_bar", "--revolutions", "1"]) == 0
+    captured = capsys.readouterr()
+    assert "start-up transient" in captured.err and "paper" not in captured.err
+    peak = captured.out.splitlines()[1].split()[1]
+    assert 1 <= len(peak.replace(".", "").lstrip("0")) <= 6
 
 
 def test_ideal_joint_table_has_no_contact_force(capsys):

@@ -9,7 +9,7 @@ import xarray as xr
 from matplotlib.collections import QuadMesh
 
 from mbs_clearance import SliderCrank
-from mbs_clearance.plotting import plot_regime_map
+from mbs_clearance.plotting import plot_poincare, plot_regime_map
 from mbs_clearance.poincare import REGIME_CODES
 
 RPM = 2.0 * np.pi / 60.0        # rad/s per rpm
@@ -75,8 +75,9 @@ def test_regime_map_marks_the_design_and_outlines_period_1(paper_map):
 
 def test_report_regime_figure_draws_in_mm_and_rpm(paper_map, tmp_path, monkeypatch):
     """The report's figure is the library's, not converted a second time."""
-    from mbs_clearance import plotting
     from mbs_clearance_validation.report import plot_regimes
+
+    from mbs_clearance import plotting
 
     figures = []
 
@@ -102,3 +103,16 @@ def test_report_regime_figure_draws_in_mm_and_rpm(paper_map, tmp_path, monkeypat
 def test_outline_names_a_regime(paper_map):
     with pytest.raises(ValueError, match="outline must be one of"):
         plot_regime_map(paper_map, outline="period-1")
+
+
+def test_poincare_titles_in_the_units_of_the_other_figures(paper_map):
+    rng = np.random.default_rng(0)
+    ds = paper_map.assign(
+        section=(("clearance", "crank_speed", "sample", "joint", "component"),
+                 rng.uniform(-1e-6, 1e-6, (4, 3, 5, 1, 4))),
+        joint_clearance=(("clearance", "crank_speed", "joint"),
+                         np.broadcast_to(paper_map["clearance"].values[:, None, None],
+                                         (4, 3, 1)).copy()))
+    fig = plot_poincare(ds, [{"clearance": 1e-5, "crank_speed": 5000 * RPM}])
+    title = fig.axes[0].get_title()
+    assert "clearance = 0.01 mm" in title and "crank speed = 5000 rpm" in title
