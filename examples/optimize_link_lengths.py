@@ -18,4 +18,3 @@ print(f"original design: {opt.original_peak_force:.1f} N")
 print(f"best design: L2 = {best.crank_length * 100:.3f} cm, "
       f"L3 = {best.coupler_length * 100:.3f} cm, {opt.best_peak_force:.1f} N "
       f"({opt.reduction_percent:.2f} % less)")
-print(f"generations run: {len(opt.history)}")

@@ -1,9 +1,9 @@
 """A small regime map: periodic or not, over clearance and crank speed.
 
-Each point is simulated for a number of revolutions, sampled once per revolution (a
-Poincare section) and classified: period-1, period-k, aperiodic, ... The grid here is
-2 x 2 with few revolutions so that it runs in seconds; `mbs-clearance map` makes the full
-maps (docs: Regimes).
+Each point is simulated for 100 crank revolutions, sampled once per revolution over the
+last 50 (a Poincare section) and classified: period-1, period-k, aperiodic (no recurrence;
+`lyapunov=True` tells quasi-periodic from chaotic), ... The grid here is 2 x 2 so that it
+runs in seconds; `mbs-clearance map` makes the full maps (docs: Regimes).
 
     python examples/regime_map.py
 """
@@ -11,7 +11,7 @@ maps (docs: Regimes).
 from mbs_clearance import SliderCrank, regime_map
 
 res = regime_map(SliderCrank(), ["clearance=1e-5,5e-4", "crank_speed=3000rpm,5000rpm"],
-                 revolutions=20, keep=9, max_period=4, progress=False)
+                 revolutions=100, keep=50, progress=False)
 print(res.summary())
 ds = res.dataset
 for c in ds["clearance"].values:
