@@ -1,7 +1,7 @@
 """The documentation describes the product as it is: no development history (work sessions,
-tracker numbers, commit hashes, processor brands, build-machine paths) in the README, the
-docs, the examples or, once the code is scrubbed, the sources and tests. The history lives in
-CHANGELOG.md and in git.
+tracker numbers, commit hashes, internal work branches, processor brands, build-machine
+paths) in the README, the docs, the examples or, once the code is scrubbed, the sources and
+tests. The history lives in CHANGELOG.md and in git.
 
 The patterns are assembled from parts so that this file does not match them itself.
 """
@@ -24,6 +24,7 @@ PATTERNS = {
     "commit hash": rf"\b{_C}s?\b\W{{0,3}}(?:\w+\W+){{0,2}}{_HEX}\b|\b{_HEX}\^?\W{{0,3}}{_C}",
     "processor brand": r"\b(?:" + "|".join(["Xe" + "on", "EP" + "YC", "Ry" + "zen",
                                              "Co" + r"re i\d"]) + r")\b",
+    "work branch": r"\bs\d{1,2}-[a-z]+\b",
     "build-machine path": "(?:" + "|".join([r"/wo" + r"rk/", r"/ro" + r"ot/",
                                             r"/ho" + r"me/[a-z_][\w.-]*/"]) + ")",
 }
@@ -75,6 +76,7 @@ CODE_XFAIL = pytest.mark.xfail(
     ("processor brand", "a quiet Intel " + "Xe" + "on"),
     ("processor brand", "AMD " + "EP" + "YC"),
     ("processor brand", "Co" + "re i7"),
+    ("work branch", "built by helper s" + "7-gen"),
     ("build-machine path", "in `/wo" + "rk/shared/paper`"),
     ("build-machine path", "/ho" + "me/alice/src"),
 ])
