@@ -116,3 +116,30 @@ def test_poincare_titles_in_the_units_of_the_other_figures(paper_map):
     fig = plot_poincare(ds, [{"clearance": 1e-5, "crank_speed": 5000 * RPM}])
     title = fig.axes[0].get_title()
     assert "clearance = 0.01 mm" in title and "crank speed = 5000 rpm" in title
+
+
+def test_fig3_panels_draw_the_trajectory_in_stated_units():
+    from mbs_clearance import simulate
+    from mbs_clearance.plotting import plot_trajectory
+
+    traj = simulate(SliderCrank(), 2)
+    ax_f, ax_m, ax_ph, ax_orb = plot_trajectory(traj).axes
+    angle, force = ax_f.lines[0].get_xdata(), ax_f.lines[0].get_ydata()
+    # revolution 2 in degrees within the revolution, the force in N: its sampled maximum
+    # within the sampling's reach of the located peak
+    assert angle.min() >= -1e-6 and 359.0 < angle.max() <= 360.0 + 1e-6
+    assert force.max() == pytest.approx(traj.max_base_force(2), rel=2e-3)
+    assert force.max() <= traj.max_base_force(2) * (1 + 1e-9)
+    assert "(N)" in ax_f.get_ylabel() and "(N m)" in ax_m.get_ylabel()
+    mask = traj.revolution_mask(2)
+    assert np.array_equal(ax_m.lines[0].get_ydata(), traj.crank_moment[mask])
+    # the orbit in clearances: beyond the unit circle by the deepest penetration, which the
+    # Hertz law gives from the largest contact force, delta = (F / K)^(2/3) (at the deepest
+    # point the damping term vanishes, so F there is at most the largest force)
+    mech = traj.mechanism
+    x, y = ax_orb.lines[0].get_xdata(), ax_orb.lines[0].get_ydata()
+    depth = np.hypot(x, y).max() - 1.0
+    hertz = (traj.contact_force.max() / mech.stiffness) ** (2 / 3) / mech.clearance
+    assert 0.9 * hertz < depth <= hertz * (1 + 1e-9)
+    circle = ax_orb.lines[-1]
+    assert np.allclose(np.hypot(circle.get_xdata(), circle.get_ydata()), 1.0)
