@@ -21,7 +21,11 @@ The drive's angle (body_b's angle) is prescribed, speed t + initial_angle, not a
 
 Every description is validated on construction: a bad value raises ValueError naming the
 item and its allowed range, a graph error (unknown body or point, a closed loop of ideal
-joints, a drive not on a ground revolute, ...) names the joints involved.
+joints, a drive not on a ground revolute, two clearance joints on one pin, ...) names the
+joints involved. Every name is an identifier (`NAME_RULE`: names reach the generated
+model's source and its cache), and the sizes are bounded (`MAX_BODIES`, `MAX_POINTS`,
+`MAX_JOINTS`, `MAX_CLEARANCE_JOINTS`), so that a description is refused before any work.
+`Linkage.from_file` also checks that the loops close with the journals centred (`assemble`).
 """
 
 from __future__ import annotations
@@ -231,7 +235,7 @@ class ClearanceJoint:
                 "None or a finite number > 0 (N/m^1.5)", positive))
         if self.contact_model not in CONTACT_MODELS:
             raise ValueError(f"{what} contact_model must be one of {sorted(CONTACT_MODELS)}; "
-                             f"got {self.contact_model!r}")
+                             f"got {_short(self.contact_model)}")
         check_friction(what, self.friction_law, self.friction_coefficient,
                        self.friction_v0, self.friction_v1)
         for f in ("friction_coefficient", "friction_v0", "friction_v1"):
@@ -296,7 +300,7 @@ def check_friction(what: str, law: Any, mu: Any, v0: Any, v1: Any) -> None:
     of contact.FRICTION_LAWS, mu a finite number >= 0, 0 < v0 < v1 finite (m/s)."""
     if not isinstance(law, str) or law not in FRICTION_LAWS:
         raise ValueError(f"{what} friction_law must be one of {sorted(FRICTION_LAWS)}; "
-                         f"got {law!r}")
+                         f"got {_short(law)}")
     _real(f"{what} friction_coefficient", mu, "a finite number >= 0", lambda v: v >= 0)
     v0 = _real(f"{what} friction_v0", v0, "a finite number > 0 (m/s)", lambda v: v > 0)
     _real(f"{what} friction_v1", v1, f"a finite number > friction_v0 = {v0!r} (m/s)",
@@ -445,7 +449,7 @@ class Linkage:
                              f"{GROUND!r}; found {found}")
         if self.monitor_joint is not None and self.monitor_joint not in self.ground_joints():
             raise ValueError(f"monitor_joint must be None or a joint to the ground "
-                             f"{list(self.ground_joints())}; got {self.monitor_joint!r}")
+                             f"{list(self.ground_joints())}; got {_short(self.monitor_joint)}")
 
     def tree(self) -> list[tuple[str, str | None, Any]]:
         """The forest as (body, parent body or None for a floating root, joint or None), in

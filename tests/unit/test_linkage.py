@@ -499,3 +499,20 @@ def test_a_four_bar_that_cannot_close_is_refused_on_loading(tmp_path):
     assert "short.json': the loop closure of linkage 'four_bar' cannot be solved" in out[0]
     assert "after 50 Newton steps" in out[0]
     assert out[1] == "[]"
+
+
+def test_the_command_line_refuses_a_malicious_description(tmp_path, monkeypatch, capsys):
+    """The issue's command, `lyapunov --revolutions 2 --description F` with a clearance joint
+    named with the payload: exit status 2, one line naming the item, no file written."""
+    from mbs_clearance.cli import main
+
+    mark = tmp_path / "pwned"
+    payload = PAYLOAD.replace("MARK", repr(str(mark)))
+    path = _description(tmp_path, lambda d: d["clearance_joints"][0].update(name=payload))
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(SystemExit) as exit_:
+        main(["lyapunov", "--revolutions", "2", "--description", str(path)])
+    err = capsys.readouterr().err.strip()
+    assert exit_.value.code == 2 and len(err.splitlines()) == 1
+    assert "clearance joint name must be an identifier" in err
+    assert not mark.exists()
