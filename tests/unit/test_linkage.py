@@ -146,7 +146,8 @@ def test_parameters_roundtrip():
 @pytest.mark.parametrize("suffix", [".json", ".toml"])
 def test_file_roundtrip(tmp_path, suffix):
     lk = paper_slider_crank(contact_stiffness=1e10)
-    four = four_bar_like()
+    # guesses off the collinear start (there the closure's Jacobian is singular)
+    four = four_bar_like(assembly={"coupler.angle": 0.5, "rocker.angle": 1.5})
     for desc in (lk, four):
         path = tmp_path / f"d{suffix}"
         if suffix == ".json":
@@ -154,6 +155,12 @@ def test_file_roundtrip(tmp_path, suffix):
         else:
             path.write_text(_toml(desc.to_dict()))
         assert Linkage.from_file(path) == desc
+    # a description that cannot start (no assembly from its guesses) is refused on loading
+    path.write_text(json.dumps(four_bar_like().to_dict()))
+    path = path.rename(path.with_suffix(".json"))
+    with pytest.raises(ValueError, match="loop closure of linkage 'fb' cannot be solved from "
+                                         "the assembly guesses {}"):
+        Linkage.from_file(path)
     with pytest.raises(ValueError, match="unknown body key"):
         d = lk.to_dict()
         d["bodies"][0]["colour"] = "red"
