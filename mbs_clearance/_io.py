@@ -37,13 +37,44 @@ RUN_KEY = "mbs_clearance_run"
 PNG_SOFTWARE = "mbs-clearance"
 
 
-def read_json_object(path: str | Path, what: str) -> dict[str, Any]:
-    """The JSON object in `path`; ValueError naming `what` and the file if it cannot be read
-    or is not an object."""
+#: the largest input file (description, configuration, inputs) read, in bytes
+MAX_INPUT_BYTES = 4 * 1024 * 1024
+
+
+def read_text(path: str | Path, what: str, limit: int = MAX_INPUT_BYTES) -> str:
+    """The text (UTF-8) of the input file `path`, read up to `limit` bytes; ValueError naming
+    `what` and the file if it cannot be read, is not UTF-8 or is larger (a device such as
+    /dev/zero included: never read to its end)."""
     try:
-        data = json.loads(Path(path).read_text())
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise ValueError(f"cannot read {what} {str(path)!r}: {exc}") from exc
+        with open(path, "rb") as fh:
+            data = fh.read(limit + 1)
+    except OSError as exc:
+        raise ValueError(f"cannot read {what} {str(path)!r}: {exc.strerror or exc}") from None
+    if len(data) > limit:
+        raise ValueError(f"{what} {str(path)!r} is larger than {limit // 1024} KiB ({limit} "
+                         f"bytes), the most an input file may hold")
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise ValueError(f"cannot read {what} {str(path)!r}: not UTF-8 text ({exc.reason} "
+                         f"at byte {exc.start})") from None
+
+
+def parse_json(text: str, path: str | Path, what: str) -> Any:
+    """`text` parsed as JSON; ValueError naming `what` and the file if it is not JSON (or
+    nested too deeply to parse)."""
+    try:
+        return json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise ValueError(f"cannot read {what} {str(path)!r}: {exc}") from None
+    except RecursionError:
+        raise ValueError(f"cannot read {what} {str(path)!r}: nested too deeply") from None
+
+
+def read_json_object(path: str | Path, what: str) -> dict[str, Any]:
+    """The JSON object in `path`; ValueError naming `what` and the file if it cannot be read,
+    is larger than MAX_INPUT_BYTES or is not an object."""
+    data = parse_json(read_text(path, what), path, what)
     if not isinstance(data, dict):
         raise ValueError(f"{what} {str(path)!r} must hold a JSON object")
     return data
@@ -113,8 +144,8 @@ def file_is_ours(path: str | Path, reader: Callable[[Path], Any] | None = None) 
         return True
     if suffix == ".json":
         try:
-            data = json.loads(path.read_text())
-        except (OSError, UnicodeDecodeError, ValueError):
+            data = parse_json(read_text(path, "file"), path, "file")
+        except ValueError:
             return False
         return isinstance(data, dict) and isinstance(data.get(RUN_KEY), dict)
     return False
@@ -160,8 +191,9 @@ def _note(message: str) -> None:
 def read_manifest(folder: Path) -> dict[str, Any] | None:
     """The manifest of a run folder, or None if there is none or it is not ours."""
     try:
-        data = json.loads((folder / MANIFEST).read_text())
-    except (OSError, UnicodeDecodeError, ValueError):
+        path = folder / MANIFEST
+        data = parse_json(read_text(path, "manifest"), path, "manifest")
+    except ValueError:
         return None
     if not (isinstance(data, dict) and data.get("tool") == TOOL
             and isinstance(data.get("files"), dict) and isinstance(data.get("run_id"), str)):

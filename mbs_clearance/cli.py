@@ -386,7 +386,10 @@ def linkage_from_args(args: argparse.Namespace):
         if name in changes:
             raise ValueError(f"--set {name} given twice")
         changes[name] = value
-    return CASES[case](**changes)
+    linkage = CASES[case](**changes)
+    if changes:
+        linkage.assemble()      # overrides that cannot close the loops: refused before any work
+    return linkage
 
 
 def design_from_args(args: argparse.Namespace):

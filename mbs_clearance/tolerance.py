@@ -201,16 +201,12 @@ def read_inputs(path: str | Path) -> dict[str, Any]:
     {"band": [nominal, tol]} | {"normal": [mean, sigma]} | {"fit": "H7/g6", "diameter": d,
     "shape": "trapezoid"}}, or a SALib parameter file (lines NAME LOW HIGH: uniform;
     blank lines and lines starting with # ignored)."""
+    from ._io import parse_json, read_text
+
     path = Path(path)
-    try:
-        text = path.read_text()
-    except OSError as exc:
-        raise ValueError(f"cannot read the inputs file {str(path)!r}: {exc.strerror}") from None
+    text = read_text(path, "the inputs file")       # at most _io.MAX_INPUT_BYTES
     if text.lstrip().startswith("{"):
-        try:
-            data = json.loads(text)
-        except json.JSONDecodeError as exc:
-            raise ValueError(f"{str(path)!r} is not valid JSON: {exc}") from None
+        data = parse_json(text, path, "the inputs file")
         return {str(k): _from_spec(str(k), v) for k, v in data.items()}
     out = {}
     for no, line in enumerate(text.splitlines(), 1):

@@ -133,6 +133,78 @@ CLI_CASES: list[tuple[str, str]] = [
 ]
 
 
+# ---- descriptions and input files: hostile names, missing keys, sizes, loops that cannot
+# close (the files are written by `_make_description_files`, only for the case naming them)
+CLI_CASES += [
+    ("simulate --description evil_name.json",
+     "a linkage name holding Python that would run on import"),
+    ("simulate --description evil_joint.json",
+     "a clearance joint name holding Python that would run on import"),
+    ("simulate --description no_mass.json", "a body lacking its mass"),
+    ("simulate --description unknown_key.json", "a clearance joint with an unknown key"),
+    ("simulate --description same_pin.json", "a second clearance joint on the same pin"),
+    ("simulate --description short_coupler.json", "a four-bar that cannot close"),
+    ("simulate --description many_points.json", "a body with 1.5 million points"),
+    ("simulate --description points_200.json", "a body with 200 points"),
+    ("simulate --description /dev/zero", "an endless description file"),
+    ("simulate --config /dev/zero", "an endless config file"),
+]
+
+#: a name that, pasted into generated source, would write the file PWNED when imported
+EVIL_NAME = 'x"""\nimport pathlib; pathlib.Path("PWNED").write_text("ran")\n"""'
+
+
+def _make_description_files(folder: Path, command: str) -> None:
+    """The description files of the cases above that `command` names."""
+    from mbs_clearance.cases import four_bar, paper_slider_crank
+
+    def paper():
+        return paper_slider_crank().to_dict()
+
+    def evil_name():
+        d = paper()
+        d["name"] = EVIL_NAME
+        return d
+
+    def evil_joint():
+        d = paper()
+        d["clearance_joints"][0]["name"] = EVIL_NAME
+        return d
+
+    def no_mass():
+        d = paper()
+        del d["bodies"][1]["mass"]
+        return d
+
+    def unknown_key():
+        d = paper()
+        d["clearance_joints"][0]["radius"] = 0.01
+        return d
+
+    def same_pin():
+        d = paper()
+        d["clearance_joints"].append({**d["clearance_joints"][0], "name": "second"})
+        return d
+
+    def short_coupler():
+        d = four_bar().to_dict()
+        d["bodies"][1]["points"] = {"crank_end": [-0.1, 0.0], "rocker_end": [0.1, 0.0]}
+        return d
+
+    def points(n):
+        d = paper()
+        d["bodies"][2]["points"].update({f"p{i}": [0.0, 0.0] for i in range(n)})
+        return d
+
+    makers = {"evil_name": evil_name, "evil_joint": evil_joint, "no_mass": no_mass,
+              "unknown_key": unknown_key, "same_pin": same_pin,
+              "short_coupler": short_coupler, "many_points": lambda: points(1_500_000),
+              "points_200": lambda: points(200)}
+    for name, make in makers.items():
+        if f"{name}.json" in command:
+            (folder / f"{name}.json").write_text(json.dumps(make()))
+
+
 def _make_user_files(folder: Path) -> None:
     """The files a user has in the working folder of the CLI cases."""
     (folder / "user.txt").write_text("my notes\n")
@@ -188,6 +260,7 @@ def run_cli_cases() -> list[dict]:
     for command, what in CLI_CASES:
         with tempfile.TemporaryDirectory() as tmp:
             _make_user_files(Path(tmp))
+            _make_description_files(Path(tmp), command)
             os.chdir(tmp)
             try:
                 row = run_cli_case(command)
@@ -253,6 +326,39 @@ LIBRARY_CASES: list[tuple[str, str]] = [
      "'paper_slider_crank'))", "start of another linkage"),
     ("simulate(M, 1, start=None)", "start for a SliderCrank"),
 ]
+
+
+# ---- descriptions: names, keys, sizes, loops (names from `_description_namespace`)
+LIBRARY_CASES += [
+    ("Linkage.from_dict({**paper_dict(), 'name': EVIL_NAME})",
+     "a linkage name holding Python that would run on import"),
+    ("Body('crank arm', 1.0, 1.0)", "a body name that is not an identifier"),
+    ("Linkage.from_dict(without_mass())", "a body lacking its mass"),
+    ("cases.paper_slider_crank().replace(clearance_joints=2 * "
+     "cases.paper_slider_crank().clearance_joints)", "the same clearance joint twice"),
+    ("Body('crank', 1.0, 1.0, {f'p{i}': (0.0, 0.0) for i in range(1_500_000)})",
+     "a body with 1.5 million points"),
+    ("cases.four_bar().with_parameter('coupler.crank_end.x', -0.1).with_parameter("
+     "'coupler.rocker_end.x', 0.1).assemble()", "a four-bar that cannot close"),
+    ("Linkage.from_file('/dev/zero')", "an endless description file"),
+]
+
+
+def _description_namespace() -> dict:
+    """Names the description cases use."""
+    from mbs_clearance import cases
+    from mbs_clearance.linkage import Body, Linkage
+
+    def paper_dict():
+        return cases.paper_slider_crank().to_dict()
+
+    def without_mass():
+        d = paper_dict()
+        del d["bodies"][0]["mass"]
+        return d
+
+    return {"Linkage": Linkage, "Body": Body, "paper_dict": paper_dict,
+            "without_mass": without_mass, "EVIL_NAME": EVIL_NAME}
 
 
 def _library_namespace(tmp: Path) -> dict:
@@ -328,7 +434,7 @@ def _library_namespace(tmp: Path) -> dict:
             "sensitivities": sensitivities, "load_trajectory": load_trajectory,
             "load_sensitivities": load_sensitivities, "OptimizationResult": OptimizationResult,
             "trajectory": trajectory, "save_roundtrip": save_roundtrip, "crafted": crafted,
-            "cases": cases, "Start": Start}
+            "cases": cases, "Start": Start, **_description_namespace()}
 
 
 def _first_line(text: str) -> str:
