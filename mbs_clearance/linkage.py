@@ -285,7 +285,7 @@ class Drive:
 
 #: field -> (symbol, unit, default, source) of the friction fields of `ClearanceJoint`
 FRICTION_DEFAULTS: dict[str, tuple[str, str, Any, str]] = {
-    "friction_law": ("-", "-", "none", "frictionless, the paper's Eqs. 6-8 (issue 18)"),
+    "friction_law": ("-", "-", "none", "frictionless, the paper's Eqs. 6-8"),
     "friction_coefficient": ("mu", "-", 0.0, "0: frictionless; give the pair's value "
                              "(steel on steel, dry: about 0.1-0.2; lubricated about 0.01)"),
     "friction_v0": ("v0", "m/s", 1e-4, "assumed: typical lower threshold of Ambrosio's law "

@@ -278,7 +278,7 @@ def plot_force_comparison(trajectories: Mapping[str, Trajectory],
     return save(fig, path)
 
 
-# ---------------------------------------------------------------- regime maps (issue 19)
+# ---------------------------------------------------------------- regime maps
 
 #: colour of each regime code (poincare.REGIMES)
 REGIME_COLORS = {0: "#ffffff", 1: "#000000", 2: "#4c9be8", 3: "#8fd175", 4: "#f2c14e",

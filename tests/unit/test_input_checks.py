@@ -1,5 +1,5 @@
-"""Bad input, unbounded runs, meaningless results, untrusted files and the periodicity flag
-(issue 14): every check is raised before any computation, against independent references."""
+"""Bad input, unbounded runs, meaningless results, untrusted files and the periodicity flag:
+every check is raised before any computation, against independent references."""
 
 import json
 import subprocess

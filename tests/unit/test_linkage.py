@@ -252,7 +252,7 @@ def test_simulate_refuses_other_backends_and_options_for_a_linkage():
 @pytest.mark.parametrize("name", ["paper_slider_crank", "slider_crank_two_clearances",
                                   "four_bar"])
 def test_issue_16_bad_descriptions_of_each_named_case(name):
-    """Issue 16's four bad descriptions, made from each named case: a clearance joint
+    """Four bad descriptions, made from each named case: a clearance joint
     replaced by an ideal pin (every loop then closed by ideal joints), an ideal joint on an
     unknown body, a journal larger than its bearing, a negative mass; each a ValueError
     naming the item."""
