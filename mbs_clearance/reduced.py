@@ -27,13 +27,16 @@ import numba as nb
 import numpy as np
 
 from ._checks import (
+    REVOLUTION_BYTES,
     MemoryLimitError,
     check_bool,
     check_choice,
     check_int,
     check_max_memory,
+    check_memory,
     check_real,
     format_bytes,
+    revolution_bytes,
 )
 from ._generated import paper_slider_crank as MODEL
 from ._warnings import AccuracyWarning
@@ -159,17 +162,15 @@ def window_edges(mech: SliderCrank, revolutions: int, max_memory: int | None = N
                  ) -> np.ndarray:
     """Times of the crank revolution boundaries 0, T, ..., revolutions*T (refused with
     `MemoryLimitError` if the per-revolution arrays alone exceed `max_memory` bytes)."""
-    need = WINDOW_BYTES * (revolutions + 1)
-    if max_memory is not None and need > max_memory:
-        raise MemoryLimitError(
-            f"{revolutions} revolutions need {format_bytes(need)} for the per-revolution "
-            f"arrays alone, more than max_memory={max_memory} bytes "
-            f"({format_bytes(max_memory)}); run fewer revolutions or raise max_memory")
+    if max_memory is not None:
+        check_memory(f"revolutions={revolutions}: the per-revolution arrays alone need",
+                     revolution_bytes(revolutions), max_memory,
+                     "run fewer revolutions or raise max_memory")
     return np.arange(revolutions + 1) * mech.period
 
 
 #: bytes per revolution window held during a run: its edge, refined peak and peak time
-WINDOW_BYTES = 24
+WINDOW_BYTES = REVOLUTION_BYTES
 
 #: largest `n_samples` (interior event samples per step) accepted
 MAX_SAMPLES = 1000
@@ -214,7 +215,7 @@ def estimate_run(mech: SliderCrank, windows: int, *, window_time: float, record:
     and max_memory. Returns dict(steps=estimate or None, bytes=estimate, step_cap=the
     largest number of recorded steps that fits in max_memory, or None without record).
     """
-    window_bytes = WINDOW_BYTES * (windows + 1)
+    window_bytes = revolution_bytes(windows)
     if window_bytes > max_memory:
         window_edges(mech, windows, max_memory)       # raises with the message
     revolutions = window_time / mech.period
