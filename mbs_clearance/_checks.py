@@ -16,7 +16,8 @@ import numpy as np
 
 __all__ = ["check_int", "check_real", "check_bool", "check_choice", "check_times",
            "check_max_memory", "default_max_memory", "format_bytes", "MemoryLimitError",
-           "check_memory", "revolution_bytes", "REVOLUTION_BYTES", "DESIGN_BYTES"]
+           "check_memory", "check_revolutions_memory", "revolution_bytes", "REVOLUTION_BYTES",
+           "DESIGN_BYTES"]
 
 
 class MemoryLimitError(ValueError):
@@ -159,3 +160,15 @@ def check_memory(what: str, need: float, max_memory: Any = None, advice: str = "
             f"{what} about {format_bytes(need)}, more than max_memory={limit} bytes "
             f"({format_bytes(limit)})" + (f"; {advice}" if advice else ""))
     return limit
+
+
+def check_revolutions_memory(revolutions: int, max_memory: Any = None, per_revolution: int = 0,
+                             name: str = "revolutions") -> int:
+    """Refuse a run whose per-revolution arrays alone (`REVOLUTION_BYTES`, plus
+    `per_revolution` more bytes each, e.g. a sensitivity's growth per parameter) exceed
+    `max_memory` (None: the default limit), with `check_memory`'s one line naming `name`.
+    Returns `revolutions`."""
+    check_memory(f"{name}={revolutions}: the per-revolution arrays alone need",
+                 (REVOLUTION_BYTES + per_revolution) * (int(revolutions) + 1), max_memory,
+                 f"run fewer {name.split(' ')[0]} or raise max_memory")
+    return revolutions

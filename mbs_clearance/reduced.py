@@ -33,8 +33,8 @@ from ._checks import (
     check_choice,
     check_int,
     check_max_memory,
-    check_memory,
     check_real,
+    check_revolutions_memory,
     format_bytes,
     revolution_bytes,
 )
@@ -163,9 +163,7 @@ def window_edges(mech: SliderCrank, revolutions: int, max_memory: int | None = N
     """Times of the crank revolution boundaries 0, T, ..., revolutions*T (refused with
     `MemoryLimitError` if the per-revolution arrays alone exceed `max_memory` bytes)."""
     if max_memory is not None:
-        check_memory(f"revolutions={revolutions}: the per-revolution arrays alone need",
-                     revolution_bytes(revolutions), max_memory,
-                     "run fewer revolutions or raise max_memory")
+        check_revolutions_memory(revolutions, max_memory)
     return np.arange(revolutions + 1) * mech.period
 
 
