@@ -457,7 +457,8 @@ def accuracy_flags(mech: SliderCrank, revolutions: int, ms: np.ndarray, nevent: 
 
     A rattling run (more than RATTLING contact switches per revolution) is not periodic: its
     late peaks depend on every digit and no tolerance makes them accurate; it is flagged
-    (accuracy_ok False) without a note."""
+    (accuracy_ok False) with a note saying so. Every run flagged has a note, except one
+    at an rtol looser than LOOSE_RTOL, which `run` has warned about already."""
     grazing = grazing_onsets(mech, ms)
     mode = ms[:, 0] > 0.5
     onsets = int(np.count_nonzero(mode[1:] & ~mode[:-1]))
@@ -476,6 +477,12 @@ def accuracy_flags(mech: SliderCrank, revolutions: int, ms: np.ndarray, nevent: 
                 f"a lightly damped contact vibration and may miss the stated accuracy (1e-5) "
                 f"by up to ~1e-3 at the default rtol (measured at 1000 and 2000 rpm and "
                 f"clearance 0.05 mm); use rtol 1e-10 for 1e-5 there "
+                f"(stats['accuracy_ok'] is False)")
+    elif rattling and not resolved:
+        note = (f"the contact rattles ({nevent} contact switches in {revolutions} "
+                f"revolutions, more than {RATTLING} per revolution): the motion is not "
+                f"periodic and its late peaks depend on every digit of the computation, at "
+                f"any rtol; compare statistics over several revolutions, not single peaks "
                 f"(stats['accuracy_ok'] is False)")
     ok = not ((grazing or settling or rattling) and not resolved) and rtol <= LOOSE_RTOL
     return {"grazing_onsets": grazing, "contact_onsets": onsets, "accuracy_ok": ok,

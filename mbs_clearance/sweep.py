@@ -341,11 +341,13 @@ def load_map(path: str | Path):
 
     path = Path(path)
     try:
-        with xr.open_dataset(path, engine="scipy", mask_and_scale=False) as ds:
+        with xr.open_dataset(path, engine="scipy", mask_and_scale=False, mmap=False) as ds:
             ds = ds.load()
     except FileNotFoundError:
         raise ValueError(f"regime map {str(path)!r} does not exist") from None
-    except (OSError, ValueError, TypeError, EOFError) as exc:
+    except MemoryError:
+        raise
+    except Exception as exc:  # noqa: BLE001 - a damaged file fails anywhere in the reader
         reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
         raise ValueError(f"cannot read the regime map {str(path)!r}: it is not a complete "
                          f"netCDF file ({reason})") from None
