@@ -183,6 +183,8 @@ def check_output_dir(path: str | Path, option: str, force: bool = False,
     without a manifest."""
     path = Path(path)
     recover(path)
+    for name in resume or {}:       # temporary files of a killed run's resumable files
+        recover(path / name)
     if os.path.lexists(path) and not path.is_dir():
         raise ValueError(f"{option} {str(path)!r} is a file; expected a folder")
     check_can_create_in(path, option, "folder")
