@@ -170,5 +170,5 @@ def check_revolutions_memory(revolutions: int, max_memory: Any = None, per_revol
     Returns `revolutions`."""
     check_memory(f"{name}={revolutions}: the per-revolution arrays alone need",
                  (REVOLUTION_BYTES + per_revolution) * (int(revolutions) + 1), max_memory,
-                 f"run fewer {name.split(' ')[0]} or raise max_memory")
+                 "run fewer revolutions or raise max_memory")
     return revolutions

@@ -45,7 +45,7 @@ from typing import Any
 
 import numpy as np
 
-from ._checks import DESIGN_BYTES, check_memory
+from ._checks import DESIGN_BYTES, check_memory, check_revolutions_memory
 from ._warnings import AccuracyWarning, PhysicsWarning
 from .executor import _THREAD_SAFE_BACKENDS, evaluate
 from .fits import iso_fit
@@ -761,11 +761,6 @@ def tolerance_study(inputs: Mapping[str, Any], mech: SliderCrank | None = None,
     -------
     ToleranceResult
     """
-    from SALib.analyze import morris as morris_analyze
-    from SALib.analyze import sobol as sobol_analyze
-    from SALib.sample import morris as morris_sample
-    from SALib.sample import sobol as sobol_sample
-
     from .simulate import BACKENDS
 
     t_start = time.perf_counter()
@@ -779,6 +774,7 @@ def tolerance_study(inputs: Mapping[str, Any], mech: SliderCrank | None = None,
     if backend not in BACKENDS:
         raise ValueError(f"backend must be one of {sorted(BACKENDS)}; got {backend!r}")
     revolution = _count("revolution", revolution, 1)
+    check_revolutions_memory(revolution, options.get("max_memory"), name="revolution")
     sobol = _count("sobol", sobol, 0)
     if sobol and sobol & (sobol - 1):
         raise ValueError(f"sobol must be 0 or a power of 2 (Sobol sequences); got {sobol}")
@@ -821,6 +817,11 @@ def tolerance_study(inputs: Mapping[str, Any], mech: SliderCrank | None = None,
     study_memory(len(names), sobol=sobol, second_order=second_order, morris=morris,
                  dgsm=dgsm, monte_carlo=monte_carlo, wear_levels=len(wear_levels),
                  max_memory=options.get("max_memory"))
+
+    from SALib.analyze import morris as morris_analyze
+    from SALib.analyze import sobol as sobol_analyze
+    from SALib.sample import morris as morris_sample
+    from SALib.sample import sobol as sobol_sample
 
     task = _Task(output=output, revolution=revolution, backend=backend,
                  options=dict(options))
