@@ -18,6 +18,7 @@ Output policy (command line):
 from __future__ import annotations
 
 import contextlib
+import errno
 import hashlib
 import json
 import os
@@ -348,12 +349,26 @@ class OutputDir:
         files = {f: sha256(self.path / f) for f in _listing(self.path)}
         manifest = {**self.stamp, **extra, "files": files}
         (self.path / MANIFEST).write_text(json.dumps(manifest, indent=1))
-        old = None
-        if os.path.lexists(self.target):
-            old = self.target.absolute().parent / (
-                f".{self.target.name}.old-{self.run_id.split('-', 1)[1]}")
-            os.rename(self.target, old)
-        os.rename(self.path, self.target)
+        # another run may commit into the same target at the same moment: whichever renames
+        # last wins, and the folder is always one complete run
+        for attempt in range(8):
+            old = None
+            if os.path.lexists(self.target):
+                old = self.target.absolute().parent / (
+                    f".{self.target.name}.old-{self.run_id.split('-', 1)[1]}-{attempt}")
+                try:
+                    os.rename(self.target, old)
+                except FileNotFoundError:       # the other run moved it meanwhile
+                    old = None
+            try:
+                os.rename(self.path, self.target)
+            except OSError as exc:
+                if exc.errno not in (errno.ENOTEMPTY, errno.EEXIST) or attempt == 7:
+                    raise
+                if old is not None:
+                    _remove(old)
+                continue
+            break
         self.path = None
         if old is not None:
             _remove(old)
