@@ -342,6 +342,9 @@ class OutputDir:
     def __exit__(self, exc_type, exc, tb) -> None:
         if self.path is not None and self.path.exists():
             shutil.rmtree(self.path, ignore_errors=True)
+        if isinstance(exc, OSError) and exc.filename is None and exc.strerror:
+            # a write that failed (a full disk): say which output it was
+            raise OSError(exc.errno, exc.strerror, str(self.target)) from exc
 
     def commit(self, **extra: Any) -> Path:
         """Write the manifest and move the folder into place; returns `target`."""

@@ -329,6 +329,10 @@ def _write(ds, path: Path) -> None:
     try:
         ds.to_netcdf(tmp, engine="scipy")
         os.replace(tmp, path)
+    except OSError as exc:
+        if exc.filename is None and exc.strerror:     # a failed write: name the map
+            raise OSError(exc.errno, exc.strerror, str(path)) from exc
+        raise
     finally:
         if tmp.exists():
             tmp.unlink()

@@ -6,6 +6,7 @@ no corrupt output."""
 
 from __future__ import annotations
 
+import errno
 import os
 import shutil
 import signal
@@ -195,14 +196,20 @@ def tiny_disk(tmp_path):
 @pytest.mark.parametrize("command", ["map", "tolerance"])
 def test_full_disk_one_line_and_no_corrupt_output(tiny_disk, tmp_path, command):
     (tiny_disk / "inputs.json").write_text(INPUTS)
-    (tiny_disk / "filler").write_bytes(b"x" * (80 * 1024))    # about 16 KiB left
+    with open(tiny_disk / "filler", "wb", buffering=0) as fh:   # the disk full
+        try:
+            while True:
+                fh.write(b"x" * 1024)
+        except OSError as exc:
+            assert exc.errno == errno.ENOSPC
     argv = {"map": ["map", "--sweep", "clearance=1e-5:5e-4:log:3", "--revolutions", "12",
                     "--keep", "5", "--max-period", "2", "--workers", "1"],
             "tolerance": ["tolerance", "inputs.json", "--sobol", "16", "--workers", "1"]}
     proc = _start([*argv[command], "--no-progress"], tiny_disk)
     _, err = proc.communicate(timeout=600)
     assert proc.returncode == 1, err
-    assert err.count("\n") == 1 and "No space left on device" in err, err
+    assert err.count("\n") == 1 and "No space left on device: " in err, err
+    assert command in err.split("No space left on device: ")[1], err
     left = sorted(p.name for p in tiny_disk.iterdir())
     if command == "map" and (tiny_disk / "map").exists():
         # a map that could not be finished: at most its last complete map.nc, resumable
