@@ -379,3 +379,18 @@ def test_lyapunov_default_transient_follows_revolutions():
     assert np.isfinite(res.per_revolution)
     with pytest.raises(ValueError, match=r"transient .* must be an integer in \[0, 5\]"):
         lyapunov_exponent(SliderCrank(), revolutions=6, transient=6)
+
+
+def test_a_real_scheduler_passes_the_probe():
+    distributed = pytest.importorskip("dask.distributed")
+    from mbs_clearance.executor import connect_dask
+
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=False,
+                                  dashboard_address=None) as cluster:
+        t0 = time.perf_counter()
+        client = connect_dask(cluster.scheduler_address, timeout=10.0)
+        try:
+            assert time.perf_counter() - t0 < 10.0
+            assert client.submit(sum, [1, 2, 3]).result(timeout=30) == 6
+        finally:
+            client.close()
