@@ -456,7 +456,9 @@ def regime_map(mech, sweep, revolutions: int = 100, keep: int = 50, scheduler=No
     shape = tuple(len(a.values) for a in axes)
     # the size first (the designs of a huge grid alone would not fit), from the base design
     joints = len(joints_of(mech if case is None else design_at(None, {}, case, overrides)))
-    concurrent = workers if isinstance(workers, int) and scheduler is None else 1
+    local_pool = scheduler is None or (isinstance(scheduler, str)
+                                       and scheduler in ("threads", "processes"))
+    concurrent = workers if isinstance(workers, int) and workers > 0 and local_pool else 1
     map_memory(shape, revolutions, keep, max_period, joints, concurrent, max_memory)
     # every design next: a bad field or value fails before any run
     designs = []
