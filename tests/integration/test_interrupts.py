@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import errno
 import os
-import shutil
 import signal
 import subprocess
 import sys
@@ -178,18 +177,9 @@ def test_two_tolerance_runs_into_the_same_folder_end_as_one_complete_run(tmp_pat
 
 
 @pytest.fixture
-def tiny_disk(tmp_path):
-    """A 96 KiB tmpfs (needs root and mount); skipped where it cannot be mounted."""
-    mnt = tmp_path / "tiny"
-    mnt.mkdir()
-    if shutil.which("mount") is None or subprocess.run(
-            ["mount", "-t", "tmpfs", "-o", "size=96k", "tmpfs", str(mnt)],
-            capture_output=True).returncode != 0:
-        pytest.skip("cannot mount a small tmpfs here (needs root)")
-    try:
-        yield mnt
-    finally:
-        subprocess.run(["umount", str(mnt)], check=True)
+def tiny_disk(tmpfs):
+    """A 96 KiB tmpfs (needs root and mount; skipped elsewhere)."""
+    return tmpfs("size=96k")
 
 
 @pytest.mark.slow
