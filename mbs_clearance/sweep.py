@@ -41,6 +41,7 @@ from ._checks import (
     check_real,
     revolution_bytes,
 )
+from ._io import recover
 from .linkage import Linkage
 from .mechanism import SliderCrank
 from .poincare import (
@@ -484,6 +485,8 @@ def regime_map(mech, sweep, revolutions: int = 100, keep: int = 50, scheduler=No
     ds["joint_clearance"].values[...] = np.array(
         [clearances_of(d) for d in designs]).reshape(shape + (J,))
     path = None if out is None else Path(out)
+    if path is not None:
+        recover(path)           # the temporary files of runs that were killed
     if path is not None and path.exists():
         old = load_map(path)
         _check_resumable(old, ds, path)
