@@ -22,7 +22,7 @@ import traceback
 import warnings
 from pathlib import Path
 
-from ._io import OutputDir, atomic_file, check_output_dir, check_output_file
+from ._io import OutputDir, atomic_file, check_output_dir, check_output_file, folder_lock
 from .mechanism import PARAMETER_INFO, SliderCrank
 from .units import number, quantity
 
@@ -993,6 +993,7 @@ def _add_map_parser(subparsers) -> argparse.ArgumentParser:
                    help="write map.nc at most this often while points arrive (default 5; "
                         "and at the end)")
     add_evaluation_options(p, "map")
+    add_force_option(p)
     p.set_defaults(func=_cmd_map)
     return p
 
@@ -1022,38 +1023,50 @@ def _cmd_map(args: argparse.Namespace) -> int:
               revolutions=args.revolutions, keep=args.keep, lyapunov=args.lyapunov,
               angle=args.angle, tol=args.tol, max_period=args.max_period, rtol=args.rtol,
               progress=not args.no_progress, write_interval=args.write_interval)
-    args.out.mkdir(parents=True, exist_ok=True)
-    path = args.out / "map.nc"
+    from .sweep import load_map
+
+    # the folder's rule is every command's; an unfinished run's map.nc is resumed
+    check_output_dir(args.out, "--out", args.force, resume={"map.nc": load_map})
     if args.scheduler:
         kw["scheduler"] = args.scheduler
     elif args.workers == 1:
         kw["scheduler"] = "serial"
     else:
         kw["workers"] = args.workers
-    result = regime_map(base, args.sweep, out=path, **kw)
-    ds = result.dataset
-    print(result.summary())
-    written = [path]
-    dims = list(ds["regime"].dims)
-    plotting.plot_bifurcation(ds, args.out / "bifurcation.png")
-    written.append(args.out / "bifurcation.png")
-    if len(dims) == 2:
-        mark = None
-        if paper and set(dims) == {"clearance", "crank_speed"}:
-            mark = {"clearance": base.clearance, "crank_speed": base.crank_speed}
-        plotting.plot_regime_map(ds, args.out / "regime_map.png", mark=mark)
-        written.append(args.out / "regime_map.png")
-    shape = ds["regime"].shape
-    picks = sorted({0, shape[0] // 2, shape[0] - 1})
-    points = [{dims[0]: float(ds[dims[0]].values[i]),
-               **({dims[1]: float(ds[dims[1]].values[0])} if len(dims) == 2 else {})}
-              for i in picks]
-    plotting.plot_poincare(ds, points, args.out / "poincare.png")
-    written.append(args.out / "poincare.png")
+    with folder_lock(args.out, "--out"):
+        path = args.out / "map.nc"
+        result = regime_map(base, args.sweep, out=path, **kw)
+        ds = result.dataset
+        print(result.summary())
+        dims = list(ds["regime"].dims)
+        with OutputDir(args.out, "map") as staged:
+            figures = ["bifurcation.png"]
+            plotting.plot_bifurcation(ds, staged.path / "bifurcation.png")
+            if len(dims) == 2:
+                mark = None
+                if paper and set(dims) == {"clearance", "crank_speed"}:
+                    mark = {"clearance": base.clearance, "crank_speed": base.crank_speed}
+                plotting.plot_regime_map(ds, staged.path / "regime_map.png", mark=mark)
+                figures.append("regime_map.png")
+            shape = ds["regime"].shape
+            picks = sorted({0, shape[0] // 2, shape[0] - 1})
+            points = [{dims[0]: float(ds[dims[0]].values[i]),
+                       **({dims[1]: float(ds[dims[1]].values[0])} if len(dims) == 2 else {})}
+                      for i in picks]
+            plotting.plot_poincare(ds, points, staged.path / "poincare.png")
+            figures.append("poincare.png")
+            # the map last: until the folder is in place it stays where a rerun resumes it
+            os.replace(path, staged.path / "map.nc")
+            try:
+                staged.commit()
+            except BaseException:
+                os.replace(staged.path / "map.nc", path)
+                raise
     print(f"{result.computed} points computed, {result.skipped} resumed from {path}",
           file=sys.stderr)
-    for w in written:
-        wrote(w, "regime map dataset" if w == path else "figure")
+    wrote(path, "regime map dataset")
+    for f in figures:
+        wrote(args.out / f, "figure")
     return 0
 
 

@@ -406,6 +406,7 @@ def run(linkage: Linkage, revolutions: int = 4, *, rtol: float | None = None,
         check_int,
         check_max_memory,
         check_real,
+        check_revolutions_memory,
         format_bytes,
     )
     from .integrator import COUNTERS, METHODS, RESULTS, make_settings
@@ -419,6 +420,7 @@ def run(linkage: Linkage, revolutions: int = 4, *, rtol: float | None = None,
     n_samples = check_int("n_samples (interior event samples per step)", n_samples, 0, 1000)
     h0 = check_real("h0 (initial step; 0: automatic)", h0, 0.0, unit="s")
     max_memory = check_max_memory(max_memory)
+    check_revolutions_memory(revolutions, max_memory)
     h_max = linkage.period / 8 if h_max is None else check_real(
         "h_max (largest step)", h_max, 0.0, low_open=True, unit="s")
     if event_tol is None:

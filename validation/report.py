@@ -304,6 +304,20 @@ def section_tolerance(out: Path, s: dict) -> dict:
                                          "chaotic_fraction")} for lv in res.wear]}
 
 
+def _check_map_file(path: Path) -> None:
+    """ValueError naming --map and the file unless it is a complete regime map of
+    `mbs-clearance map` (readable, with its regime variable over one or two swept fields)."""
+    from mbs_clearance.sweep import load_map
+
+    try:
+        ds = load_map(path)
+    except ValueError as exc:
+        raise ValueError(f"--map: {exc}") from None
+    if "regime" not in ds or not 1 <= ds["regime"].ndim <= 2:
+        raise ValueError(f"--map {str(path)!r}: a regime map over one or two fields must hold "
+                         "the variable 'regime'; this file does not")
+
+
 def section_regimes(out: Path, s: dict) -> dict:
     """The regime map of the paper's case over clearance and crank speed (issue 19): computed
     (coarse under --quick, docs/regimes.md's size otherwise) or read from a map file of
@@ -311,14 +325,13 @@ def section_regimes(out: Path, s: dict) -> dict:
     import xarray as xr
 
     from mbs_clearance.poincare import REGIMES
-    from mbs_clearance.sweep import regime_map
+    from mbs_clearance.sweep import load_map, regime_map
 
     mech = SliderCrank()
     target = out / "data" / "regime_map.nc"
     if s.get("regime_map_file"):
         source = str(s["regime_map_file"])
-        with xr.open_dataset(source) as ds:
-            ds.load().to_netcdf(target)
+        load_map(source).to_netcdf(target)
         how = f"read from {Path(source).name} (made by mbs-clearance map)"
     else:
         regime_map(mech, list(s["regime_sweeps"]), revolutions=s["regime_revolutions"],
@@ -1165,6 +1178,9 @@ def build_report(out: str | Path = "report", quick: bool = False, progress: bool
     from mbs_clearance._io import OutputDir, check_output_dir, recover
 
     out = Path(out)
+    if replot and map_file is not None:
+        raise ValueError("--map cannot be combined with --replot (a replot reuses the saved "
+                         "data, including its regime map); drop one of them")
     if replot:
         recover(out)
         manifest = _verify_for_replot(out)
@@ -1191,6 +1207,7 @@ def build_report(out: str | Path = "report", quick: bool = False, progress: bool
         if not map_file.is_file():
             raise ValueError(f"--map {str(map_file)!r}: no such file (a map.nc written by "
                              f"mbs-clearance map)")
+        _check_map_file(map_file)       # read now: a bad file fails before any section
         s["regime_map_file"] = str(map_file.resolve())
     with OutputDir(out, "report") as staged:
         work = staged.path
