@@ -329,7 +329,7 @@ def event_margin(clearance: float, rtol: float) -> float:
     """Distance from a wall (m) within which the event search looks closer between samples:
     EVENT_MARGIN of the (smallest) clearance, at least MARGIN_PER_RTOL rtol of it. It guards
     against the interpolants' error, which the switching function's error control keeps
-    below rtol (1.5 c + |delta|); a fixed 0.05 c (before session 13) put every step of a
+    below rtol (1.5 c + |delta|); a fixed 0.05 c would put every step of a
     light lasting contact (penetration ~0.005 c, the four-bar's) under the closer look and
     the approach step limit, at 1.7 times the run time with the same steps
     (docs/performance.md)."""

@@ -1,4 +1,4 @@
-"""Poincare sections of a run and the classification of its motion (issue 19).
+"""Poincare sections of a run and the classification of its motion.
 
 A run is integrated one section interval at a time on the compiled event-exact integrator
 (`Flow`): the integrator lands exactly on each window's end, and for a constant-speed drive

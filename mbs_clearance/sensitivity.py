@@ -29,7 +29,7 @@ from ._checks import (
     check_times,
 )
 from .integrator import METHODS
-from .linkage_ddm import independent_directions  # noqa: F401  (public here since session 5)
+from .linkage_ddm import independent_directions  # noqa: F401  (public here too)
 from .mechanism import CONTINUOUS_FIELDS, SliderCrank, check_field_names
 from .trajectory import Trajectory, annotate, load_trajectory
 

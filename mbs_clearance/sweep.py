@@ -1,4 +1,4 @@
-"""Regime maps and bifurcation diagrams: sweeps of long runs on any executor (issue 19).
+"""Regime maps and bifurcation diagrams: sweeps of long runs on any executor.
 
 `regime_map(mech, sweep, revolutions=100, keep=50, ...)` runs a grid over one or two fields
 of a description (`parse_sweep`: "clearance=1e-6:1e-3:log:60", "crank_speed=500rpm:10000rpm:40",

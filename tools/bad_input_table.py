@@ -1,4 +1,4 @@
-"""Run every bad-input case of issue 14 and write the table docs/bad_input.md.
+"""Run every bad-input case and write the table docs/bad_input.md.
 
     python tools/bad_input_table.py              # all cases; writes docs/bad_input.md
     python tools/bad_input_table.py --cli-only   # print the command-line table only
@@ -321,7 +321,7 @@ def _shown(stderr: str) -> str:
 
 
 # --------------------------------------------------------------------------- library cases
-#: (Python expression, item of issue 14) - evaluated in the worker with the names of
+#: (Python expression, what is tried) - evaluated in the worker with the names of
 #: `_library_namespace`
 LIBRARY_CASES: list[tuple[str, str]] = [
     ("simulate(M, 1, t_eval=[np.nan])", "t_eval NaN"),

@@ -319,7 +319,7 @@ def _check_map_file(path: Path) -> None:
 
 
 def section_regimes(out: Path, s: dict) -> dict:
-    """The regime map of the paper's case over clearance and crank speed (issue 19): computed
+    """The regime map of the paper's case over clearance and crank speed: computed
     (coarse under --quick, docs/regimes.md's size otherwise) or read from a map file of
     `mbs-clearance map` (--map FILE); saved as data/regime_map.nc."""
     import xarray as xr
@@ -363,7 +363,7 @@ def section_regimes(out: Path, s: dict) -> dict:
 
 
 def section_friction(out: Path, s: dict) -> dict:
-    """Friction in the joints (issue 18; the paper's joint is frictionless): the table of
+    """Friction in the joints (the paper's joint is frictionless): the table of
     docs/friction.md (rev-4 peak, RMS drive moment, works, time in contact) per case and mu,
     the runs saved for the orbit figure, and the sensitivities of Figs. 4-6 with friction
     (DDM) saved for their figure, with each parameter's max |S| and max |dF/db| per mu."""
