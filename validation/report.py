@@ -1069,7 +1069,7 @@ says what to change. <b>switches</b>: contact onsets and separations in the run.
 <td class="{{ 'pass' if r.status == 'pass' else 'fail' }}">{{ r.status }}</td>
 <td>{{ r.peak_last_revolution | q('N') if r.peak_last_revolution is defined else '' }}</td>
 <td>{{ r.contact_switches if r.contact_switches is defined else '' }}</td>
-<td class="note">{{ r.reasons | join('; ') }}</td></tr>{% endfor %}</table></details>
+<td class="note">{{ (r.reasons + (r.notes if r.notes is defined else [])) | join('; ') }}</td></tr>{% endfor %}</table></details>
 
 <h2 id="mechanism">{{ titles.mechanism }}</h2>
 <details><summary>the paper's design, field by field (values, symbols, sources)</summary>

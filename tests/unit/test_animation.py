@@ -9,6 +9,7 @@ from mbs_clearance import cases, simulate
 from mbs_clearance.cli import main
 from mbs_clearance.linkage import GROUND, Prismatic
 from mbs_clearance.plotting import animate_mechanism, magnification, mechanism_frames
+from mbs_clearance.units import number
 
 
 @pytest.fixture(scope="module")
@@ -155,5 +156,5 @@ def test_cli_animates_a_case_and_says_the_magnification(tmp_path, capsys):
     err = capsys.readouterr().err
     lk = cases.four_bar()
     assert (f"wrote {out / 'mechanism.gif'} (animation of four_bar, revolution 1, journal "
-            f"offsets x {magnification(lk):.3g})") in err
+            f"offsets drawn {number(magnification(lk), 3)} times their size)") in err
     _moving_gif(out / "mechanism.gif", 3)

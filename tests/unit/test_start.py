@@ -10,14 +10,20 @@ from mbs_clearance import SliderCrank, cases, simulate
 from mbs_clearance.linkage_model import Start, settled_start
 from mbs_clearance.sensitivity import sensitivities
 
+#: how closely the second revolution's peaks of two rtol 1e-9 runs that take other steps
+#: from T on agree: the paper case's measured 3e-10; the four-bar's peaks finer than rtol
+#: 1e-8 scatter at a few 1e-6 with the step sequence (measured against rtol 1e-11 in
+#: tests/integration/test_linkage_physics.py), so two such runs agree to that order only
+#: (measured here 1.1e-8 and, with other steps from T on, 1.6e-6)
+PEAK_AGREEMENT = {"paper_slider_crank": 1e-7, "four_bar": 1e-5}
+
 
 @pytest.mark.parametrize("case", ["paper_slider_crank", "four_bar"])
 def test_a_run_from_a_start_continues_the_run(case):
     """The start after one revolution is the uninterrupted run's state at t = T (the same
     steps up to the landing on T), and a run of one revolution from it has the
-    uninterrupted run's second-revolution peak and end state (measured: peaks within 3e-10
-    and 1.1e-8; from T on the two runs take other steps, so they agree to the tolerance's
-    order, not bit for bit)."""
+    uninterrupted run's second-revolution peak and end state (from T on the two runs take
+    other steps, so they agree to the tolerance's order, not bit for bit)."""
     lk = cases.CASES[case]()
     whole = simulate(lk, 2, rtol=1e-9)
     start = settled_start(lk, 1, rtol=1e-9)
@@ -31,7 +37,7 @@ def test_a_run_from_a_start_continues_the_run(case):
     part = simulate(lk, 1, rtol=1e-9, start=start)
     assert part.t[0] == 0.0 and part.t[-1] == pytest.approx(lk.period)
     assert part.stats["start_revolutions"] == 1
-    assert part.peaks[0] == pytest.approx(whole.peaks[1], rel=1e-7)
+    assert part.peaks[0] == pytest.approx(whole.peaks[1], rel=PEAK_AGREEMENT[case])
     for c in coords:
         scale = 1.0 if c.endswith(".angle") else lk.length_scale
         assert abs(part.coordinates[c][-1] - whole.coordinates[c][-1]) <= 1e-7 * scale, c
