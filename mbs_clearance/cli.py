@@ -1123,14 +1123,17 @@ def _cmd_animate(args: argparse.Namespace) -> int:
     return 0
 
 
-#: what the sign of the largest Lyapunov exponent means (lambda per revolution; the band
-#: |lambda| <= poincare.LYAPUNOV_ZERO counts as zero)
+#: what the verdict on the largest Lyapunov exponent means (`lyapunov.exponent_verdict`:
+#: from its interval; the band |lambda| <= poincare.LYAPUNOV_ZERO counts as zero)
 LYAPUNOV_MEANING = {
     "negative": "nearby motions converge: a stable periodic motion, where peaks and "
                 "sensitivities mean something",
     "zero": "nearby motions neither converge nor diverge within the resolution: "
             "quasi-periodic or marginal; run longer to decide",
     "positive": "nearby motions diverge: chaotic, only statistics of peaks mean something",
+    "undecided": "the interval contains zero: the averaged revolutions do not decide "
+                 "between converging and diverging motions; run more revolutions (or a "
+                 "longer --transient) to decide",
 }
 
 
@@ -1163,7 +1166,7 @@ def _add_lyapunov_parser(subparsers) -> argparse.ArgumentParser:
 
 
 def _cmd_lyapunov(args: argparse.Namespace) -> int:
-    from .lyapunov import lyapunov_exponent
+    from .lyapunov import BLOCKS, lyapunov_exponent
     from .poincare import LYAPUNOV_ZERO
     from .units import number
 
@@ -1179,14 +1182,15 @@ def _cmd_lyapunov(args: argparse.Namespace) -> int:
                             rtol=args.rtol, memory=args.memory)
     print(f"done in {time.perf_counter() - t0:.3g} s", file=sys.stderr)
     lam = res.per_revolution
-    sign = ("positive" if lam > LYAPUNOV_ZERO else "negative" if lam < -LYAPUNOV_ZERO
-            else "zero")
-    print(f"largest Lyapunov exponent of {name}: {number(lam, 4)} per revolution "
-          f"({number(res.per_second, 4)} 1/s), the mean over revolutions "
-          f"{transient + 1}-{args.revolutions}")
-    print(f"sign: {sign} (|lambda| <= {LYAPUNOV_ZERO:g} per revolution counts as zero): "
-          f"{LYAPUNOV_MEANING[sign]}")
-    trend = "" if sign == "zero" else (
+    sign = res.verdict
+    print(f"largest Lyapunov exponent of {name}: {number(lam, 4)} +- "
+          f"{number(res.uncertainty, 2)} per revolution ({number(res.per_second, 4)} +- "
+          f"{number(res.uncertainty / res.window, 2)} 1/s), the mean over revolutions "
+          f"{transient + 1}-{args.revolutions} (+-: batch means of {BLOCKS} blocks or the "
+          f"running mean's spread, the larger)")
+    print(f"verdict: {sign} (an interval within |lambda| <= {LYAPUNOV_ZERO:g} per revolution "
+          f"counts as zero): {LYAPUNOV_MEANING[sign]}")
+    trend = "" if sign in ("zero", "undecided") else (
         f": it {'grows' if lam > 0 else 'shrinks'} e-fold every {number(1 / abs(lam), 3)} "
         f"revolutions")
     print(f"  per revolution: the log of the growth of a small perturbation over one crank "

@@ -852,8 +852,9 @@ def test_library_messages_go_through_logging(caplog, capsys):
 @pytest.mark.parametrize("case", [None, "paper_slider_crank"])
 def test_lyapunov_prints_the_exponent_with_units_and_its_sign(case, capsys):
     """`lyapunov` prints the Python function's exponent for the same inputs (the paper's
-    SliderCrank by default, or a --case's Linkage), per revolution and in 1/s, and its sign's
-    meaning: negative at the paper's design (period-1 motion, docs/regimes.md)."""
+    SliderCrank by default, or a --case's Linkage), per revolution and in 1/s, with its
+    uncertainty, and its verdict's meaning: negative at the paper's design (period-1 motion,
+    docs/regimes.md)."""
     import re
 
     from mbs_clearance import cases, lyapunov_exponent
@@ -862,14 +863,15 @@ def test_lyapunov_prints_the_exponent_with_units_and_its_sign(case, capsys):
     argv += [] if case is None else ["--case", case]
     assert main(argv) == 0
     out = capsys.readouterr().out
-    m = re.search(r"exponent of .+?: (\S+) per revolution \((\S+) 1/s\), the mean over "
-                  r"revolutions 9-16", out)
+    m = re.search(r"exponent of .+?: (\S+) \+- (\S+) per revolution \((\S+) \+- \S+ 1/s\), "
+                  r"the mean over revolutions 9-16", out)
     assert m, out
     mech = SliderCrank() if case is None else cases.CASES[case]()
     ref = lyapunov_exponent(mech, revolutions=16, transient=8)
     assert float(m.group(1)) == pytest.approx(ref.per_revolution, rel=1e-3)
-    assert float(m.group(2)) == pytest.approx(ref.per_second, rel=1e-3)
-    assert ref.per_revolution < -0.1 and "sign: negative" in out and "converge" in out
+    assert float(m.group(2)) == pytest.approx(ref.uncertainty, rel=1e-2)
+    assert float(m.group(3)) == pytest.approx(ref.per_second, rel=1e-3)
+    assert ref.interval[1] < -0.1 and "verdict: negative" in out and "converge" in out
     assert f"it shrinks e-fold every {1 / abs(ref.per_revolution):.3g} revolutions" in out
 
 
