@@ -445,6 +445,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
               f"{quantity(abs(traj.crank_moment[mask]).max(), 'N m', 6):>12}"
               + ("" if ideal else f"  {_force(traj.contact_force[mask].max()):>17}"))
     print(START_UP_NOTE, file=sys.stderr)
+    _print_error_estimate(traj)
     floored = traj.stats.get("floored_impacts") if traj.stats else None
     if floored:
         print(f"note: {floored} contact onset(s) at the impact-velocity floor (grazing); the "
@@ -463,10 +464,21 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     return 0
 
 
+def _print_error_estimate(traj) -> None:
+    """The run's estimate of its peaks' error against the requested accuracy (runs to an
+    accuracy only)."""
+    st = traj.stats or {}
+    if st.get("error_estimate") is None:
+        return
+    print(f"estimated relative error of the peaks: {st['error_estimate']:.2g} (requested "
+          f"{st['accuracy']:g}, {'met' if st['accuracy_ok'] else 'NOT met'}; rtol "
+          f"{st['rtol']:g}, {len(st['accuracy_runs'])} runs)", file=sys.stderr)
+
+
 def _simulate_options(args: argparse.Namespace) -> dict:
     options = {}
     for key, name in (("rtol", "rtol"), ("step_size", "step_size"), ("contact", "contact"),
-                      ("integrator", "method")):
+                      ("integrator", "method"), ("accuracy", "accuracy")):
         if getattr(args, key, None) is not None:
             options[name] = getattr(args, key)
     return options
@@ -511,6 +523,7 @@ def _simulate_linkage(linkage, args: argparse.Namespace) -> int:
     else:
         print(f"revolutions counted from the state after {start.revolutions} revolutions "
               "(--settled)", file=sys.stderr)
+    _print_error_estimate(traj)
     if args.out:
         with atomic_file(args.out) as tmp:
             traj.save(tmp)
@@ -708,6 +721,11 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
                    help="crank revolutions from the start (revolution 1: start-up transient)")
     add_settled_option(p)
     add_run_options(p, methods)
+    p.add_argument("--accuracy", type=positive_float,
+                   help="requested relative accuracy of the per-revolution peaks (reduced "
+                        "backend: default 1e-5; the run estimates its own error and tightens "
+                        "until the estimate is within it; --rtol instead runs once at that "
+                        "tolerance. exudyn backend: chooses the step)")
     p.add_argument("--contact", choices=contact_variants,
                    help="clearance-joint variant of the exudyn backend (default symbolic)")
     p.add_argument("--out", type=Path,

@@ -1,0 +1,142 @@
+"""Runs of the reduced model to a requested accuracy: `simulate(mech, accuracy=1e-5)`.
+
+An adaptive method's error follows its tolerance, so two runs at different tolerances
+estimate the error of the less accurate one; the run tightens until the estimate is within
+the requested relative accuracy on its per-revolution peaks (the reported peaks).
+
+1. The first run (recorded) is at rtol = accuracy x `RTOL_PER_ACCURACY` (1e-7 for 1e-5: the
+   default that the accuracy map found within 1e-5 on every design whose diagnostics raise
+   no flag).
+2. If its diagnostics do not flag it (`reduced.accuracy_flags`: grazing onsets, a slowly
+   settling contact, rattling), a cheap check: the peaks alone (nothing recorded) at
+   `CHECK_LOOSER` x that rtol. The peaks' error falls at least `MIN_REDUCTION`-fold per
+   decade of rtol (measured on the paper case: 7.4, 3.9 and 4.7-fold from 1e-4 to 1e-7),
+   so the difference d of the two runs bounds the first run's error by
+   d / (MIN_REDUCTION - 1).
+3. If the first run is flagged, or the check's estimate misses the request: runs at rtol / 10,
+   / 100, ... (recorded): the difference of two successive runs bounds the coarser one's
+   error, hence the finer one's; the finer run is returned as soon as the difference is
+   within the request, or at `MIN_RTOL`. A rattling run (not periodic: its late peaks depend
+   on every digit) stops after one tighter run.
+
+The returned run's stats hold ``accuracy`` (requested), ``error_estimate`` (the estimate's
+relative error of the per-revolution peaks), ``error_estimate_method`` ("looser run" or
+"tighter run"), ``accuracy_runs`` (the rtols run, in order, with "peaks" for a run that
+recorded nothing), ``accuracy_nfev`` (the function evaluations of all of them) and
+``accuracy_ok`` (the estimate is within the request). The series between the peaks are not
+estimated separately: the tighter run that sets the peaks' accuracy sets theirs.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+
+import numpy as np
+
+from ._checks import check_real
+from ._warnings import AccuracyWarning
+
+__all__ = ["DEFAULT_ACCURACY", "simulate_to_accuracy", "peak_difference"]
+
+#: the accuracy a run meets by default (relative, on the per-revolution peaks)
+DEFAULT_ACCURACY = 1e-5
+
+#: the first run's rtol per unit of requested accuracy (1e-7 at 1e-5: the accuracy map's
+#: default, docs/performance.md)
+RTOL_PER_ACCURACY = 1e-2
+
+#: the cheap check's rtol over the first run's (peaks only)
+CHECK_LOOSER = 10.0
+
+#: least reduction of the peaks' error per decade of rtol (measured 3.9-7.4 on the paper
+#: case, `test_error_falls_monotonically_with_rtol_in_the_paper_case`)
+MIN_REDUCTION = 4.0
+
+#: rtol divisor of each tighter run
+TIGHTEN = 10.0
+
+#: the tightest rtol run (the accuracy map's reference)
+MIN_RTOL = 1e-12
+
+#: loosest rtol of a check run (the reduced model warns above it)
+MAX_RTOL = 1e-4
+
+
+def peak_difference(a, b) -> float:
+    """Largest relative difference max |a - b| / |b| of two runs' per-revolution peaks (a
+    window without samples, peak 0 in both, counts as equal)."""
+    a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+    scale = np.maximum(np.abs(b), np.finfo(float).tiny)
+    d = np.where((a == 0.0) & (b == 0.0), 0.0, np.abs(a - b) / scale)
+    return float(np.max(d)) if d.size else 0.0
+
+
+def revolution_peaks(traj) -> np.ndarray:
+    """A Trajectory's per-revolution peaks: its refined `peaks`, or (a run on output times)
+    the maxima over its samples."""
+    if traj.peaks is not None:
+        return np.asarray(traj.peaks, dtype=float)
+    return np.array([traj.max_base_force(k) for k in range(1, traj.revolutions + 1)])
+
+
+def _round(rtol: float) -> float:
+    """rtol to 12 digits (1e-5 x 1e-2 is 1e-7 exactly, the default's run bit for bit)."""
+    return float(f"{rtol:.12g}")
+
+
+def _quiet(fn, *args, **kwargs):
+    """fn(...) with its AccuracyWarnings held back (the estimate replaces the flags)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", AccuracyWarning)
+        return fn(*args, **kwargs)
+
+
+def simulate_to_accuracy(record, peaks, accuracy: float, *, rattling=None):
+    """The Trajectory of `record(rtol)` within `accuracy` on its peaks (module docstring).
+
+    record(rtol) -> Trajectory (its ``peaks`` per revolution and ``stats`` with
+    ``accuracy_ok`` from the diagnostics, ``nfev``); peaks(rtol) -> (peaks, nfev) without a
+    record; rattling(traj) -> bool (no tightening beyond one tighter run)."""
+    accuracy = check_real("accuracy (relative error of the peaks)", accuracy, 1e-10, 1e-3)
+    rtol = _round(min(max(accuracy * RTOL_PER_ACCURACY, MIN_RTOL), MAX_RTOL))
+    traj = _quiet(record, rtol)
+    runs, nfev = [rtol], int(traj.stats.get("nfev", 0))
+    flagged = traj.stats.get("accuracy_ok") is False
+    estimate, how = math.inf, "tighter run"
+    loose = _round(min(CHECK_LOOSER * rtol, MAX_RTOL))
+    if not flagged and loose >= 2.0 * rtol:
+        check, n = _quiet(peaks, loose)
+        runs.append((loose, "peaks"))
+        nfev += n
+        reduction = MIN_REDUCTION ** math.log10(loose / rtol)
+        estimate = peak_difference(revolution_peaks(traj), check) / (reduction - 1.0)
+        how = "looser run"
+    if estimate > accuracy:
+        limit = 1 if (rattling is not None and rattling(traj)) else math.inf
+        coarse = traj
+        while rtol / TIGHTEN >= MIN_RTOL * (1 - 1e-9) and limit > 0:
+            rtol = _round(rtol / TIGHTEN)
+            limit -= 1
+            fine = _quiet(record, rtol)
+            runs.append(rtol)
+            nfev += int(fine.stats.get("nfev", 0))
+            estimate, how = peak_difference(revolution_peaks(coarse),
+                                                    revolution_peaks(fine)), "tighter run"
+            traj = coarse = fine
+            if estimate <= accuracy:
+                break
+    ok = bool(estimate <= accuracy)
+    note = "" if ok else (
+        f"the estimated error of the peaks, {estimate:.2g} (from a {how} at rtol "
+        f"{runs[-1] if how == 'tighter run' else loose:g}), misses the requested accuracy "
+        f"{accuracy:g} at the tightest rtol tried, {rtol:g}"
+        + (" (the motion rattles: its late peaks depend on every digit)"
+           if limit == 0 and rattling is not None and rattling(traj) else "")
+        + " (stats['accuracy_ok'] is False)")
+    traj.stats.update(accuracy=accuracy, error_estimate=estimate, error_estimate_method=how,
+                      accuracy_runs=runs, accuracy_nfev=nfev, accuracy_ok=ok,
+                      accuracy_note=note)
+    if note:
+        warnings.warn(note, AccuracyWarning, stacklevel=3)
+    return traj
