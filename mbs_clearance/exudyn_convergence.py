@@ -60,9 +60,9 @@ def richardson(y_h, y_h2, y_h4):
 class Convergence:
     """Exudyn's per-revolution peaks (N) at the steps h, h/2, h/4 and their extrapolation."""
 
-    #: the three steps in s
+    #: the steps in s (h, h/2, h/4 and any further halvings)
     steps: tuple
-    #: (3, revolutions) refined peaks at each step
+    #: (len(steps), revolutions) refined peaks at each step
     peaks: np.ndarray
     #: (revolutions,) extrapolated peaks (or the h/4 peak where nothing was extrapolated)
     value: np.ndarray
@@ -90,11 +90,15 @@ def _linkage(mech) -> Linkage:
 
 
 def converged_peaks(mech, revolutions: int = 4, *, step_size: float | None = None,
+                    accuracy: float | None = None, max_halvings: int = 3,
                     **options) -> Convergence:
     """Per-revolution peaks of the monitored force from Exudyn runs at step_size h (default:
     the backend's default step for `mech`; a SliderCrank's as `exudyn_model`), h/2 and h/4,
-    extrapolated (`richardson`). Other `options`: the backend's (`ExudynSettings` fields but
-    step_size and accuracy, ``max_memory``, ``start``)."""
+    extrapolated (`richardson`). With `accuracy` (relative): while a revolution's bar
+    exceeds it, one more run at half the last step (at most `max_halvings` more), the
+    extrapolation from the last three. Other `options`: the backend's (`ExudynSettings`
+    fields but step_size and accuracy, ``max_memory``, ``start``); `steps` and `peaks` of
+    the result hold every run, `value`, `error`, `order` come from the last three."""
     from . import exudyn_linkage as xl
 
     revolutions = check_int("revolutions", revolutions, 1)
@@ -111,17 +115,30 @@ def converged_peaks(mech, revolutions: int = 4, *, step_size: float | None = Non
             step_size = DEFAULT_STEP_SIZE
         else:
             step_size = xl.make_settings(dict(options)).step(linkage)
-    steps = (step_size, step_size / 2.0, step_size / 4.0)
-    peaks, seconds = [], []
-    for h in steps:
+    if accuracy is not None:
+        from ._checks import check_real
+
+        accuracy = check_real("accuracy (relative error of the peaks)", accuracy, 1e-10, 0.1)
+    max_halvings = check_int("max_halvings", max_halvings, 0)
+    steps, peaks, seconds = [], [], []
+
+    def run(h):
         settings = xl.make_settings({**options, "step_size": h})
         t0 = time.perf_counter()
         peaks.append(_all_peaks(linkage, revolutions, settings, max_memory, start))
         seconds.append(time.perf_counter() - t0)
-    peaks = np.array(peaks)
-    value, error, order = richardson(*peaks)
-    return Convergence(steps=steps, peaks=peaks, value=value, error=error, order=order,
-                       seconds=tuple(seconds))
+        steps.append(h)
+
+    for h in (step_size, step_size / 2.0, step_size / 4.0):
+        run(h)
+    value, error, order = richardson(*peaks[-3:])
+    for _ in range(max_halvings if accuracy is not None else 0):
+        if np.all(error <= accuracy * np.abs(value)):
+            break
+        run(steps[-1] / 2.0)
+        value, error, order = richardson(*peaks[-3:])
+    return Convergence(steps=tuple(steps), peaks=np.array(peaks), value=value, error=error,
+                       order=order, seconds=tuple(seconds))
 
 
 def _all_peaks(linkage, revolutions, settings, max_memory, start) -> np.ndarray:

@@ -434,10 +434,12 @@ class CrossCheck:
 
 
 def cross_check(mech, revolutions: int = 4, *, accuracy: float = 1e-6,
-                step_size: float | None = None, **exudyn_options) -> CrossCheck:
+                step_size: float | None = None, exudyn_accuracy: float | None = None,
+                **exudyn_options) -> CrossCheck:
     """Converged peaks of both models (`CrossCheck`): the reduced model at `accuracy` (its
     error bar: its estimate x peak), Exudyn from `step_size` h (default its default step), h/2,
-    h/4, Richardson-extrapolated (its bar: the extrapolation's correction)."""
+    h/4, Richardson-extrapolated (its bar: `exudyn_convergence.richardson`), halved further
+    while a bar exceeds `exudyn_accuracy` (relative; None: three runs)."""
     from mbs_clearance import simulate
     from mbs_clearance.accuracy import revolution_peaks
     from mbs_clearance.exudyn_convergence import converged_peaks
@@ -446,10 +448,11 @@ def cross_check(mech, revolutions: int = 4, *, accuracy: float = 1e-6,
     red = simulate(mech, revolutions, accuracy=accuracy)
     reduced_seconds = time.perf_counter() - t0
     peaks = revolution_peaks(red)
-    conv = converged_peaks(mech, revolutions, step_size=step_size, **exudyn_options)
+    conv = converged_peaks(mech, revolutions, step_size=step_size, accuracy=exudyn_accuracy,
+                           **exudyn_options)
     return CrossCheck(reduced=peaks, reduced_error=red.stats["error_estimate"] * np.abs(peaks),
                       exudyn=conv.value, exudyn_error=conv.error, exudyn_order=conv.order,
-                      exudyn_steps=conv.steps, reduced_seconds=reduced_seconds,
+                      exudyn_steps=conv.steps[-3:], reduced_seconds=reduced_seconds,
                       exudyn_seconds=float(sum(conv.seconds)), accuracy=accuracy)
 
 
