@@ -3,10 +3,12 @@
 error bar, against the reduced model at rtol 1e-12; the time each model needed.
 
     python -m validation.cross_check [--revolutions 4] [--cases NAME ...] [--points LABEL ...]
+                                     [--exudyn-accuracy 1e-4]
 
 The points are those of `validation.accuracy_request` (default, a slower drive, a larger
-clearance, a lower restitution). Exudyn's steps start at its default step h and are halved
-beyond h/4 (at most three times) until every revolution's bar is within 1e-4.
+clearance, a lower restitution). Exudyn's steps start at its default step h; with
+--exudyn-accuracy they are halved beyond h/4 (at most three times) until every
+revolution's bar is within it.
 """
 
 from __future__ import annotations
@@ -20,16 +22,13 @@ from mbs_clearance import cases
 from .accuracy_request import points, reference_peaks
 from .compare import cross_check
 
-#: Exudyn's steps are halved (beyond h/4, at most three times) until every bar is within
-#: this relative accuracy
-EXUDYN_ACCURACY = 1e-4
 
-
-def rows(case: str, label: str, overrides: dict, revolutions: int) -> list[dict]:
+def rows(case: str, label: str, overrides: dict, revolutions: int,
+         exudyn_accuracy: float | None = None) -> list[dict]:
     """One row per revolution at one point."""
     linkage = cases.CASES[case](**overrides)
     ref = reference_peaks(linkage, revolutions)
-    cc = cross_check(linkage, revolutions, accuracy=1e-6, exudyn_accuracy=EXUDYN_ACCURACY)
+    cc = cross_check(linkage, revolutions, accuracy=1e-6, exudyn_accuracy=exudyn_accuracy)
     out = []
     for k in range(revolutions):
         out.append({"case": case, "point": label, "revolution": k + 1,
@@ -63,13 +62,16 @@ def main(argv=None) -> int:
     ap.add_argument("--cases", nargs="*", default=["paper_slider_crank",
                                                    "slider_crank_two_clearances"])
     ap.add_argument("--points", nargs="*", help="point labels (default: all four)")
+    ap.add_argument("--exudyn-accuracy", type=float,
+                    help="halve Exudyn's step beyond h/4 (at most three times) until every "
+                         "relative bar is within this (default: three runs)")
     args = ap.parse_args(argv)
     out = []
     for case in args.cases:
         for label, overrides in points()[case]:
             if args.points and label not in args.points:
                 continue
-            out += rows(case, label, overrides, args.revolutions)
+            out += rows(case, label, overrides, args.revolutions, args.exudyn_accuracy)
             print(table(out[-args.revolutions:]).split("\n", 1)[1], flush=True)
     print()
     print(table(out))

@@ -163,19 +163,19 @@ def _true_error(traj, mech, revolutions=am.REVOLUTIONS):
 
 def test_default_run_is_the_default_rtol_run_and_its_estimate_bounds_its_error():
     """simulate(mech) requests 1e-5: the paper case (no flag) is the rtol 1e-7 run bit for
-    bit plus a peaks-only check at 3e-6, whose estimate (difference / 6.8) is within 1e-5
+    bit plus a peaks-only check at 1e-5, whose estimate (difference / 15) is within 1e-5
     and at least the true error against rtol 1e-12 (3.0e-6). Its cost in function
-    evaluations: 1.59 x the run's (the check records nothing; the time ratio is
+    evaluations: 1.49 x the run's (the check records nothing; the time ratio is
     validation/benchmarks/accuracy_request_cost.py's)."""
     mech = SliderCrank()
     traj = simulate(mech)
     fixed = simulate(mech, rtol=1e-7)
     np.testing.assert_array_equal(traj.peaks, fixed.peaks)
     st = traj.stats
-    assert st["accuracy_runs"] == [1e-7, (3e-6, "peaks")] and st["rtol"] == 1e-7
+    assert st["accuracy_runs"] == [1e-7, (1e-5, "peaks")] and st["rtol"] == 1e-7
     assert st["accuracy_ok"] and st["error_estimate"] <= 1e-5
     assert st["error_estimate"] >= _true_error(traj, mech)
-    assert st["accuracy_nfev"] <= 1.65 * fixed.stats["nfev"]
+    assert st["accuracy_nfev"] <= 1.5 * fixed.stats["nfev"]
     assert fixed.stats.get("error_estimate") is None       # a fixed rtol: no estimate
 
 
