@@ -19,7 +19,9 @@ the requested relative accuracy on its per-revolution peaks (the reported peaks)
    / 100, ... (recorded): the difference of two successive runs bounds the coarser one's
    error, hence the finer one's; the finer run is returned as soon as the difference is
    within the request, or at `MIN_RTOL`. A rattling run (not periodic: its late peaks depend
-   on every digit) stops after one tighter run.
+   on every digit, and no tolerance makes them accurate) takes one tighter run for the
+   estimate and is returned itself, flagged in its stats (``accuracy_ok`` False, the
+   ``accuracy_note``) without a warning, as a run at a fixed rtol.
 
 The returned run's stats hold ``accuracy`` (requested), ``error_estimate`` (the estimate's
 relative error of the per-revolution peaks), ``error_estimate_method`` ("looser run" or
@@ -121,17 +123,25 @@ def simulate_to_accuracy(record, peaks, accuracy: float, *, rattling=None):
         reduction = MIN_REDUCTION ** math.log10(loose / rtol)
         estimate = peak_difference(revolution_peaks(traj), check) / (reduction - 1.0)
         how = "looser run"
-    if estimate > accuracy:
-        limit = 1 if (rattling is not None and rattling(traj)) else math.inf
+    rattles = False
+    if estimate > accuracy and rattling is not None and rattling(traj):
+        # not periodic: no tolerance makes its late peaks accurate; one tighter run gives
+        # the estimate of this run's error, and this run is returned (as at a fixed rtol)
+        rattles = True
+        fine = _quiet(record, _round(rtol / TIGHTEN))
+        runs.append(_round(rtol / TIGHTEN))
+        nfev += int(fine.stats.get("nfev", 0))
+        estimate = peak_difference(revolution_peaks(traj), revolution_peaks(fine))
+        how = "tighter run"
+    elif estimate > accuracy:
         coarse = traj
-        while rtol / TIGHTEN >= MIN_RTOL * (1 - 1e-9) and limit > 0:
+        while rtol / TIGHTEN >= MIN_RTOL * (1 - 1e-9):
             rtol = _round(rtol / TIGHTEN)
-            limit -= 1
             fine = _quiet(record, rtol)
             runs.append(rtol)
             nfev += int(fine.stats.get("nfev", 0))
             estimate, how = peak_difference(revolution_peaks(coarse),
-                                                    revolution_peaks(fine)), "tighter run"
+                                            revolution_peaks(fine)), "tighter run"
             traj = coarse = fine
             if estimate <= accuracy:
                 break
@@ -139,13 +149,14 @@ def simulate_to_accuracy(record, peaks, accuracy: float, *, rattling=None):
     note = "" if ok else (
         f"the estimated error of the peaks, {estimate:.2g} (from a {how} at rtol "
         f"{runs[-1] if how == 'tighter run' else loose:g}), misses the requested accuracy "
-        f"{accuracy:g} at the tightest rtol tried, {rtol:g}"
-        + (" (the motion rattles: its late peaks depend on every digit)"
-           if limit == 0 and rattling is not None and rattling(traj) else "")
+        f"{accuracy:g}"
+        + (" (the motion rattles, not periodic: its late peaks depend on every digit; the "
+           f"run at rtol {rtol:g} is returned)" if rattles
+           else f" at the tightest rtol tried, {rtol:g}")
         + " (stats['accuracy_ok'] is False)")
     traj.stats.update(accuracy=accuracy, error_estimate=estimate, error_estimate_method=how,
                       accuracy_runs=runs, accuracy_nfev=nfev, accuracy_ok=ok,
                       accuracy_note=note)
-    if note:
+    if note and not rattles:      # a rattling run is flagged in its stats, without a warning
         warnings.warn(note, AccuracyWarning, stacklevel=3)
     return traj
