@@ -892,3 +892,22 @@ def test_lyapunov_bad_input_is_one_line_before_any_run(argv, message, capsys, mo
     assert exc.value.code == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and message in err, err
+
+
+def test_simulate_accuracy_prints_the_runs_estimate(capsys):
+    """`simulate --accuracy 1e-6` prints the Python function's peaks at that request and
+    the run's own error estimate (stderr); with --rtol too it is refused in one line."""
+    from mbs_clearance import simulate
+
+    assert main(["simulate", "--revolutions", "1", "--accuracy", "1e-6"]) == 0
+    captured = capsys.readouterr()
+    peak1 = float(captured.out.splitlines()[1].split()[1])
+    traj = simulate(SliderCrank(), 1, accuracy=1e-6)
+    assert peak1 == pytest.approx(traj.peaks[0], abs=0.01)
+    assert (f"estimated relative error of the peaks: {traj.stats['error_estimate']:.2g} "
+            "(requested 1e-06, met") in captured.err
+    with pytest.raises(SystemExit) as exc:
+        main(["simulate", "--accuracy", "1e-6", "--rtol", "1e-8"])
+    assert exc.value.code == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "give accuracy or rtol, not both" in err, err
