@@ -30,6 +30,12 @@ name, so a process that has not loaded it cannot read such an index: numba would
 ModuleNotFoundError at the first compile of any other model. Such an index is read as empty
 here (`_load_index_or_empty`): the kernel is compiled and the index rewritten with it.
 
+A damaged cache file (an index ``.nbi`` or a data file ``.nbc`` cut short by a full disk or a
+killed process, or overwritten) would make numba raise ``UnpicklingError`` or ``EOFError`` on
+every later run. Reading one here (`_load_index_or_empty`, `_load_data_or_none`) drops the
+file and reads it as a cache miss: the kernel is compiled again and the entry rewritten, with
+one `CacheWarning` per process naming the file.
+
 When a kernel of a registered package is not in the cache (numba's "numba:compile" event
 fires on cache misses only), the logger "mbs_clearance" says so once, at INFO: "compiling
 kernels (first run only, about N s)", N being the longest compilation measured so far
@@ -126,7 +132,7 @@ class _Package:
 
 _PACKAGES: dict[str, _Package] = {}     # realpath of root -> package
 _DIRS: dict[tuple[str, str], str | None] = {}  # (source directory, name) -> cache directory
-_WARNED = False
+_WARNED: set[str] = set()      # kinds of CacheWarning given in this process
 
 
 log = logging.getLogger("mbs_clearance")
@@ -205,15 +211,46 @@ _LISTENER: CompileListener | None = None
 
 
 _LOAD_INDEX = caching.IndexDataCacheFile._load_index
+_LOAD_DATA = caching.IndexDataCacheFile._load_data
 
 
 def _load_index_or_empty(self):
     """numba's index loader; an index naming a module this process cannot import (a model
-    generated on demand, loaded by another process) reads as empty (a cache miss)."""
+    generated on demand, loaded by another process) reads as empty (a cache miss); a
+    damaged index is dropped and reads as empty."""
     try:
         return _LOAD_INDEX(self)
     except (ImportError, AttributeError):
         return {}
+    except Exception as exc:  # noqa: BLE001 - any failure to unpickle: a damaged file
+        _drop_damaged(self._index_path, exc)
+        return {}
+
+
+def _load_data_or_none(self, name):
+    """numba's data loader; a damaged data file is dropped and reads as missing (None: the
+    kernel is compiled again and its entry rewritten)."""
+    try:
+        return _LOAD_DATA(self, name)
+    except OSError:
+        raise                   # removed meanwhile: numba reads that as a miss itself
+    except Exception as exc:  # noqa: BLE001 - any failure to unpickle: a damaged file
+        _drop_damaged(self._data_path(name), exc)
+        return None
+
+
+def _drop_damaged(path: str, exc: Exception) -> None:
+    """Remove the damaged cache file `path` (the next compile rewrites it) and say so: one
+    CacheWarning per process, later ones at INFO."""
+    try:
+        os.unlink(path)
+    except OSError:
+        pass                    # removed by another process, or read-only: a miss anyway
+    reason = f"{type(exc).__name__}: {exc}"
+    message = (f"the compiled-kernel cache file {path} was damaged ({reason}); it was "
+               f"dropped and its kernels are compiled again")
+    if not _warn_once(message, "damaged"):
+        log.info(message)
 
 
 def register_package(name: str, depends_on: tuple[str, ...] = ()) -> str | None:
@@ -236,6 +273,7 @@ def register_package(name: str, depends_on: tuple[str, ...] = ()) -> str | None:
     if DigestLocator not in CacheImpl._locator_classes:
         CacheImpl._locator_classes.insert(0, DigestLocator)
     caching.IndexDataCacheFile._load_index = _load_index_or_empty
+    caching.IndexDataCacheFile._load_data = _load_data_or_none
     global _LISTENER
     if _LISTENER is None:
         _LISTENER = CompileListener()
@@ -300,13 +338,13 @@ def _prune(parent: str, keep: str) -> None:
             pass        # removed by a concurrent import, or read-only
 
 
-def _warn_once(message: str) -> None:
-    """`message` as a CacheWarning, once per process, attributed to the first frame outside
-    numba, importlib and the registered packages (the user's import)."""
-    global _WARNED
-    if _WARNED:
-        return
-    _WARNED = True
+def _warn_once(message: str, kind: str = "directory") -> bool:
+    """`message` as a CacheWarning, once per process and `kind`, attributed to the first
+    frame outside numba, importlib and the registered packages (the user's import or call);
+    returns whether it warned."""
+    if kind in _WARNED:
+        return False
+    _WARNED.add(kind)
     inside = (_NUMBA_DIR, *(root + os.sep for root in _PACKAGES))
     level, frame = 2, sys._getframe(1)      # stacklevel 2: the caller of this function
     while frame is not None:
@@ -319,6 +357,7 @@ def _warn_once(message: str) -> None:
             break
         frame = frame.f_back
     warnings.warn(message, CacheWarning, stacklevel=level)
+    return True
 
 
 def _cache_dir(package: _Package, py_file: str) -> str | None:

@@ -18,6 +18,7 @@ Output policy (command line):
 from __future__ import annotations
 
 import contextlib
+import errno
 import hashlib
 import json
 import os
@@ -37,13 +38,44 @@ RUN_KEY = "mbs_clearance_run"
 PNG_SOFTWARE = "mbs-clearance"
 
 
-def read_json_object(path: str | Path, what: str) -> dict[str, Any]:
-    """The JSON object in `path`; ValueError naming `what` and the file if it cannot be read
-    or is not an object."""
+#: the largest input file (description, configuration, inputs) read, in bytes
+MAX_INPUT_BYTES = 4 * 1024 * 1024
+
+
+def read_text(path: str | Path, what: str, limit: int = MAX_INPUT_BYTES) -> str:
+    """The text (UTF-8) of the input file `path`, read up to `limit` bytes; ValueError naming
+    `what` and the file if it cannot be read, is not UTF-8 or is larger (a device such as
+    /dev/zero included: never read to its end)."""
     try:
-        data = json.loads(Path(path).read_text())
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise ValueError(f"cannot read {what} {str(path)!r}: {exc}") from exc
+        with open(path, "rb") as fh:
+            data = fh.read(limit + 1)
+    except OSError as exc:
+        raise ValueError(f"cannot read {what} {str(path)!r}: {exc.strerror or exc}") from None
+    if len(data) > limit:
+        raise ValueError(f"{what} {str(path)!r} is larger than {limit // 1024} KiB ({limit} "
+                         f"bytes), the most an input file may hold")
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise ValueError(f"cannot read {what} {str(path)!r}: not UTF-8 text ({exc.reason} "
+                         f"at byte {exc.start})") from None
+
+
+def parse_json(text: str, path: str | Path, what: str) -> Any:
+    """`text` parsed as JSON; ValueError naming `what` and the file if it is not JSON (or
+    nested too deeply to parse)."""
+    try:
+        return json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise ValueError(f"cannot read {what} {str(path)!r}: {exc}") from None
+    except RecursionError:
+        raise ValueError(f"cannot read {what} {str(path)!r}: nested too deeply") from None
+
+
+def read_json_object(path: str | Path, what: str) -> dict[str, Any]:
+    """The JSON object in `path`; ValueError naming `what` and the file if it cannot be read,
+    is larger than MAX_INPUT_BYTES or is not an object."""
+    data = parse_json(read_text(path, what), path, what)
     if not isinstance(data, dict):
         raise ValueError(f"{what} {str(path)!r} must hold a JSON object")
     return data
@@ -97,13 +129,13 @@ def _png_is_ours(path: Path) -> bool:
 
 def file_is_ours(path: str | Path, reader: Callable[[Path], Any] | None = None) -> bool:
     """True if `path` was written by this program (see the module docstring). A data file
-    (``.npz``, ``.csv``) is ours when `reader`, the loader of the result type it holds,
+    (``.npz``, ``.csv``, ``.nc``) is ours when `reader`, the loader of the result type it holds,
     reads it without error (no reader: not ours)."""
     path = Path(path)
     suffix = path.suffix.lower()
     if suffix == ".png":
         return _png_is_ours(path)
-    if suffix in (".npz", ".csv"):
+    if suffix in (".npz", ".csv", ".nc"):
         if reader is None:
             return False
         try:
@@ -113,8 +145,8 @@ def file_is_ours(path: str | Path, reader: Callable[[Path], Any] | None = None) 
         return True
     if suffix == ".json":
         try:
-            data = json.loads(path.read_text())
-        except (OSError, UnicodeDecodeError, ValueError):
+            data = parse_json(read_text(path, "file"), path, "file")
+        except ValueError:
             return False
         return isinstance(data, dict) and isinstance(data.get(RUN_KEY), dict)
     return False
@@ -160,8 +192,9 @@ def _note(message: str) -> None:
 def read_manifest(folder: Path) -> dict[str, Any] | None:
     """The manifest of a run folder, or None if there is none or it is not ours."""
     try:
-        data = json.loads((folder / MANIFEST).read_text())
-    except (OSError, UnicodeDecodeError, ValueError):
+        path = folder / MANIFEST
+        data = parse_json(read_text(path, "manifest"), path, "manifest")
+    except ValueError:
         return None
     if not (isinstance(data, dict) and data.get("tool") == TOOL
             and isinstance(data.get("files"), dict) and isinstance(data.get("run_id"), str)):
@@ -174,17 +207,24 @@ def _listing(folder: Path) -> list[str]:
                   if not p.is_dir())
 
 
-def check_output_dir(path: str | Path, option: str, force: bool = False) -> Path:
+def check_output_dir(path: str | Path, option: str, force: bool = False,
+                     resume: dict[str, Callable[[Path], Any]] | None = None) -> Path:
     """Check an output folder before computing: ValueError naming `option` if it is a file,
     cannot be created or written, or holds files no run of this program wrote (unless
-    `force`)."""
+    `force`). `resume` names the files of an unfinished run that the command resumes from,
+    each with the loader that recognises it: such a file counts as this program's even
+    without a manifest."""
     path = Path(path)
     recover(path)
+    for name in resume or {}:       # temporary files of a killed run's resumable files
+        recover(path / name)
     if os.path.lexists(path) and not path.is_dir():
         raise ValueError(f"{option} {str(path)!r} is a file; expected a folder")
     check_can_create_in(path, option, "folder")
     if path.is_dir():
-        files = _listing(path)
+        resumable = {name for name, reader in (resume or {}).items()
+                     if (path / name).is_file() and file_is_ours(path / name, reader)}
+        files = [f for f in _listing(path) if f not in resumable]
         manifest = read_manifest(path) if files else None
         foreign = [f for f in files if manifest is None or
                    (f != MANIFEST and f not in manifest["files"])]
@@ -202,6 +242,34 @@ def check_output_dir(path: str | Path, option: str, force: bool = False) -> Path
                                  f"mbs-clearance run wrote; move it or pass --force to "
                                  f"replace the folder")
     return path
+
+
+@contextlib.contextmanager
+def folder_lock(path: str | Path, option: str) -> Iterator[Path]:
+    """Create the folder `path` if needed and hold an exclusive lock on it while the body
+    runs: a second run writing into the same folder is refused at once (ValueError naming
+    `option`) instead of mixing its files into this one's. The lock is the kernel's
+    (flock on the folder itself): it ends with the process, however that ends."""
+    import fcntl
+
+    path = Path(path)
+    created = not os.path.lexists(path)
+    path.mkdir(parents=True, exist_ok=True)
+    fd = os.open(path, os.O_RDONLY | os.O_DIRECTORY)
+    try:
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            raise ValueError(f"{option} {str(path)!r} is in use by another mbs-clearance "
+                             "run; wait for it to end or choose another folder") from None
+        yield path
+    except BaseException:
+        if created:             # a run that failed before writing leaves nothing behind
+            with contextlib.suppress(OSError):
+                path.rmdir()
+        raise
+    finally:
+        os.close(fd)
 
 
 def verify_run_folder(path: str | Path) -> dict[str, Any]:
@@ -306,6 +374,9 @@ class OutputDir:
     def __exit__(self, exc_type, exc, tb) -> None:
         if self.path is not None and self.path.exists():
             shutil.rmtree(self.path, ignore_errors=True)
+        if isinstance(exc, OSError) and exc.filename is None and exc.strerror:
+            # a write that failed (a full disk): say which output it was
+            raise OSError(exc.errno, exc.strerror, str(self.target)) from exc
 
     def commit(self, **extra: Any) -> Path:
         """Write the manifest and move the folder into place; returns `target`."""
@@ -313,12 +384,26 @@ class OutputDir:
         files = {f: sha256(self.path / f) for f in _listing(self.path)}
         manifest = {**self.stamp, **extra, "files": files}
         (self.path / MANIFEST).write_text(json.dumps(manifest, indent=1))
-        old = None
-        if os.path.lexists(self.target):
-            old = self.target.absolute().parent / (
-                f".{self.target.name}.old-{self.run_id.split('-', 1)[1]}")
-            os.rename(self.target, old)
-        os.rename(self.path, self.target)
+        # another run may commit into the same target at the same moment: whichever renames
+        # last wins, and the folder is always one complete run
+        for attempt in range(8):
+            old = None
+            if os.path.lexists(self.target):
+                old = self.target.absolute().parent / (
+                    f".{self.target.name}.old-{self.run_id.split('-', 1)[1]}-{attempt}")
+                try:
+                    os.rename(self.target, old)
+                except FileNotFoundError:       # the other run moved it meanwhile
+                    old = None
+            try:
+                os.rename(self.path, self.target)
+            except OSError as exc:
+                if exc.errno not in (errno.ENOTEMPTY, errno.EEXIST) or attempt == 7:
+                    raise
+                if old is not None:
+                    _remove(old)
+                continue
+            break
         self.path = None
         if old is not None:
             _remove(old)

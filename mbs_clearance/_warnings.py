@@ -5,7 +5,9 @@
 - `PhysicsWarning`: the result is computed as asked but is physically meaningless (penetration
   far beyond the clearance, motion whose periodicity cannot be judged).
 - `CacheWarning`: the compiled-kernel cache cannot be used (read-only install); the package
-  works without it, caching in a private temporary directory.
+  works without it, caching in a private temporary directory. Also: a damaged cache file was
+  dropped (its kernels compile again), or a generated model's text did not match its
+  recorded digest (it is generated again, never executed).
 """
 
 from __future__ import annotations
@@ -26,5 +28,6 @@ class PhysicsWarning(MbsClearanceWarning):
 
 
 class CacheWarning(MbsClearanceWarning):
-    """The compiled-kernel cache is unavailable; kernels are cached in a private
-    temporary directory instead (see the user guide)."""
+    """The compiled-kernel cache is unavailable (kernels are cached in a private temporary
+    directory instead, see the user guide), or a damaged cache entry or generated model was
+    dropped and is made again."""

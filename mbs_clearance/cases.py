@@ -104,7 +104,7 @@ def paper_slider_crank(**overrides: Any) -> Linkage:
 
 
 # ---------------------------------------------------------------------------------------
-# slider-crank with clearance in both coupler joints; crank-rocker four-bar (s7-ref)
+# slider-crank with clearance in both coupler joints; crank-rocker four-bar
 # ---------------------------------------------------------------------------------------
 
 RPM = 2.0 * math.pi / 60.0

@@ -22,9 +22,9 @@ import traceback
 import warnings
 from pathlib import Path
 
-from ._io import OutputDir, atomic_file, check_output_dir, check_output_file
+from ._io import OutputDir, atomic_file, check_output_dir, check_output_file, folder_lock
 from .mechanism import PARAMETER_INFO, SliderCrank
-from .units import quantity
+from .units import number, quantity
 
 # the subcommands import what they need when they run (start-up time): simulate, optimize,
 # sensitivity, the plotting and the validation plugins are not imported to build the parser
@@ -386,7 +386,10 @@ def linkage_from_args(args: argparse.Namespace):
         if name in changes:
             raise ValueError(f"--set {name} given twice")
         changes[name] = value
-    return CASES[case](**changes)
+    linkage = CASES[case](**changes)
+    if changes:
+        linkage.assemble()      # overrides that cannot close the loops: refused before any work
+    return linkage
 
 
 def design_from_args(args: argparse.Namespace):
@@ -405,7 +408,9 @@ def _progress(message: str) -> None:
 
 #: the note under the per-revolution tables (their revolution 1 is marked *)
 START_UP_NOTE = ("* revolution 1 is the start-up transient (the journal starts centred with "
-                 "ideal-joint velocities); the paper reports revolution 4")
+                 "ideal-joint velocities)")
+#: what the paper's case adds to it
+PAPER_NOTE = "; the paper reports revolution 4"
 
 
 def _revolution_label(k: int, transient: bool = True) -> str:
@@ -413,7 +418,8 @@ def _revolution_label(k: int, transient: bool = True) -> str:
 
 
 def _force(value: float) -> str:
-    return quantity(value, "N", 7)
+    # six significant digits: the default run's relative accuracy is 1e-5
+    return quantity(value, "N", 6)
 
 
 def _cmd_simulate(args: argparse.Namespace) -> int:
@@ -444,7 +450,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
         print(f"{_revolution_label(k):>10}  {_force(traj.max_base_force(k)):>12}  "
               f"{quantity(abs(traj.crank_moment[mask]).max(), 'N m', 6):>12}"
               + ("" if ideal else f"  {_force(traj.contact_force[mask].max()):>17}"))
-    print(START_UP_NOTE, file=sys.stderr)
+    print(START_UP_NOTE + PAPER_NOTE, file=sys.stderr)
     _print_error_estimate(traj)
     floored = traj.stats.get("floored_impacts") if traj.stats else None
     if floored:
@@ -708,7 +714,8 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
                         version=f"%(prog)s {_package_version()}")
     sub = parser.add_subparsers(dest="command", required=True)
 
-    p = sub.add_parser("simulate", help="simulate and write the trajectory and a figure",
+    p = sub.add_parser("simulate", help="simulate and print the peaks per revolution (with "
+                                       "--out / --plot: the trajectory, a figure)",
                        formatter_class=HelpFormatter,
                        description="Simulate the slider-crank (or a named case, or a linkage "
                                    "described in a file) and print the peaks per revolution; "
@@ -1004,6 +1011,7 @@ def _add_map_parser(subparsers) -> argparse.ArgumentParser:
                    help="write map.nc at most this often while points arrive (default 5; "
                         "and at the end)")
     add_evaluation_options(p, "map")
+    add_force_option(p)
     p.set_defaults(func=_cmd_map)
     return p
 
@@ -1033,38 +1041,50 @@ def _cmd_map(args: argparse.Namespace) -> int:
               revolutions=args.revolutions, keep=args.keep, lyapunov=args.lyapunov,
               angle=args.angle, tol=args.tol, max_period=args.max_period, rtol=args.rtol,
               progress=not args.no_progress, write_interval=args.write_interval)
-    args.out.mkdir(parents=True, exist_ok=True)
-    path = args.out / "map.nc"
+    from .sweep import load_map
+
+    # the folder's rule is every command's; an unfinished run's map.nc is resumed
+    check_output_dir(args.out, "--out", args.force, resume={"map.nc": load_map})
     if args.scheduler:
         kw["scheduler"] = args.scheduler
     elif args.workers == 1:
         kw["scheduler"] = "serial"
     else:
         kw["workers"] = args.workers
-    result = regime_map(base, args.sweep, out=path, **kw)
-    ds = result.dataset
-    print(result.summary())
-    written = [path]
-    dims = list(ds["regime"].dims)
-    plotting.plot_bifurcation(ds, args.out / "bifurcation.png")
-    written.append(args.out / "bifurcation.png")
-    if len(dims) == 2:
-        mark = None
-        if paper and set(dims) == {"clearance", "crank_speed"}:
-            mark = {"clearance": base.clearance, "crank_speed": base.crank_speed}
-        plotting.plot_regime_map(ds, args.out / "regime_map.png", mark=mark)
-        written.append(args.out / "regime_map.png")
-    shape = ds["regime"].shape
-    picks = sorted({0, shape[0] // 2, shape[0] - 1})
-    points = [{dims[0]: float(ds[dims[0]].values[i]),
-               **({dims[1]: float(ds[dims[1]].values[0])} if len(dims) == 2 else {})}
-              for i in picks]
-    plotting.plot_poincare(ds, points, args.out / "poincare.png")
-    written.append(args.out / "poincare.png")
+    with folder_lock(args.out, "--out"):
+        path = args.out / "map.nc"
+        result = regime_map(base, args.sweep, out=path, **kw)
+        ds = result.dataset
+        print(result.summary())
+        dims = list(ds["regime"].dims)
+        with OutputDir(args.out, "map") as staged:
+            figures = ["bifurcation.png"]
+            plotting.plot_bifurcation(ds, staged.path / "bifurcation.png")
+            if len(dims) == 2:
+                mark = None
+                if paper and set(dims) == {"clearance", "crank_speed"}:
+                    mark = {"clearance": base.clearance, "crank_speed": base.crank_speed}
+                plotting.plot_regime_map(ds, staged.path / "regime_map.png", mark=mark)
+                figures.append("regime_map.png")
+            shape = ds["regime"].shape
+            picks = sorted({0, shape[0] // 2, shape[0] - 1})
+            points = [{dims[0]: float(ds[dims[0]].values[i]),
+                       **({dims[1]: float(ds[dims[1]].values[0])} if len(dims) == 2 else {})}
+                      for i in picks]
+            plotting.plot_poincare(ds, points, staged.path / "poincare.png")
+            figures.append("poincare.png")
+            # the map last: until the folder is in place it stays where a rerun resumes it
+            os.replace(path, staged.path / "map.nc")
+            try:
+                staged.commit()
+            except BaseException:
+                os.replace(staged.path / "map.nc", path)
+                raise
     print(f"{result.computed} points computed, {result.skipped} resumed from {path}",
           file=sys.stderr)
-    for w in written:
-        wrote(w, "regime map dataset" if w == path else "figure")
+    wrote(path, "regime map dataset")
+    for f in figures:
+        wrote(args.out / f, "figure")
     return 0
 
 
@@ -1136,7 +1156,7 @@ def _cmd_animate(args: argparse.Namespace) -> int:
         staged.commit()
     what = f"animation of {name}, revolution {revolution}"
     if magnify is not None:
-        what += f", journal offsets x {magnify:.3g}"
+        what += f", journal offsets drawn {number(magnify, 3)} times their size"
     wrote(args.out / file, what)
     return 0
 

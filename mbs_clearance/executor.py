@@ -312,13 +312,59 @@ def connect_dask(address: str, timeout: float = DASK_CONNECT_TIMEOUT):
 
     timeout = _check_timeout("timeout", timeout)
     try:
+        _probe_scheduler(address, timeout)
         return Client(address, timeout=timeout)
+    except (MemoryError, ValueError, TypeError, EOFError) as exc:
+        # something answered that is not a dask scheduler (a web server or proxy): dask
+        # reads its first bytes as a message length (e.g. "HTTP/1.1" as exbibytes)
+        raise ConnectionError(
+            f"could not connect to the dask scheduler at {address!r}: the server there does "
+            f"not speak dask's protocol ({type(exc).__name__} while reading its answer); "
+            "check the address and port of the scheduler (dask scheduler prints them)"
+        ) from None
     except (OSError, TimeoutError) as exc:
         reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
         raise TimeoutError(
             f"could not connect to the dask scheduler at {address!r} within {timeout:g} s "
             f"({reason}); check that the scheduler runs (dask scheduler) and that the "
             "address and port are reachable from here") from None
+
+
+def _probe_scheduler(address: str, timeout: float) -> None:
+    """Ask the scheduler at `address` who it is, all within `timeout` seconds (raises
+    TimeoutError, OSError, or what a server that is not a scheduler makes dask raise).
+    dask's Client waits without a bound on a server that accepts the connection and then
+    stays silent; this bounds that wait (in a thread of its own, so that a caller's running
+    event loop is not disturbed)."""
+    import asyncio
+
+    from distributed.comm import connect
+
+    async def probe():
+        comm = await connect(address, timeout=timeout)
+        try:
+            await comm.write({"op": "identity", "reply": True})
+            return await comm.read()
+        finally:
+            comm.abort()
+
+    outcome: dict = {}
+
+    def target():
+        try:
+            outcome["reply"] = asyncio.run(asyncio.wait_for(probe(), timeout))
+        except BaseException as exc:  # noqa: BLE001 - handed to the caller's thread
+            outcome["error"] = exc
+
+    thread = threading.Thread(target=target, name="mbs-dask-probe", daemon=True)
+    thread.start()
+    thread.join(timeout + 5.0)
+    if thread.is_alive():
+        raise TimeoutError(f"no answer within {timeout:g} s")
+    if "error" in outcome:
+        raise outcome["error"]
+    if not isinstance(outcome.get("reply"), dict):
+        raise ValueError("its answer is not a scheduler's identity")
 
 
 def _wait_for_dask_workers(client, timeout: float) -> None:

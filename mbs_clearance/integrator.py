@@ -847,10 +847,9 @@ def _clear_of_surface(event, t, y, y_new, f0, f1, h, p, g_start, gd_start, g_end
     `_search_event` on the continuous extension. g_a, gd_a: work arrays of J entries.
 
     Where the steps resolve the motion the cubic's error is far below the margin: in the
-    paper's case at most 1.3e-9 m at mid-step (measured when the margin was 0.05 c,
-    5e-7 m; since session 13 it is 0.001 c = 1e-8 m at the default
-    rtol, `linkage_model.event_margin`, and a step whose two cubics differ by more than a
-    tenth of it takes the full search)."""
+    paper's case at most 1.3e-9 m at mid-step (measured with a margin of 0.05 c = 5e-7 m;
+    the margin is 0.001 c = 1e-8 m at the default rtol, `linkage_model.event_margin`, and a
+    step whose two cubics differ by more than a tenth of it takes the full search)."""
     n_ev = g_start.shape[0]
     for j in range(n_ev):
         if g_start[j] > -100.0 * event_tol:

@@ -21,15 +21,20 @@ The drive's angle (body_b's angle) is prescribed, speed t + initial_angle, not a
 
 Every description is validated on construction: a bad value raises ValueError naming the
 item and its allowed range, a graph error (unknown body or point, a closed loop of ideal
-joints, a drive not on a ground revolute, ...) names the joints involved.
+joints, a drive not on a ground revolute, two clearance joints on one pin, ...) names the
+joints involved. Every name is an identifier (`NAME_RULE`: names reach the generated
+model's source and its cache), and the sizes are bounded (`MAX_BODIES`, `MAX_POINTS`,
+`MAX_JOINTS`, `MAX_CLEARANCE_JOINTS`), so that a description is refused before any work.
+`Linkage.from_file` also checks that the loops close with the journals centred (`assemble`).
 """
 
 from __future__ import annotations
 
 import dataclasses
-import json
+import itertools
 import math
 import numbers
+import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -60,27 +65,50 @@ def _real(item: str, value: Any, allowed: str = "a finite number", ok=lambda v: 
             good = False
         good = good and math.isfinite(value) and ok(value)
     if not good:
-        raise ValueError(f"{item} must be {allowed}; got {value!r}")
+        raise ValueError(f"{item} must be {allowed}; got {_short(value)}")
     return value
+
+
+#: the rule every name of a description follows (names reach generated code and files)
+NAME_RULE = "an identifier [A-Za-z_][A-Za-z0-9_]* of at most 64 characters"
+_IDENTIFIER = re.compile(r"[A-Za-z_][A-Za-z0-9_]{0,63}")
+
+
+def _short(value: Any, limit: int = 60) -> str:
+    """repr of `value`, cut to `limit` characters (a message stays one short line)."""
+    text = repr(value)
+    return text if len(text) <= limit else text[:limit - 3] + "..."
 
 
 def _name(item: str, value: Any) -> str:
-    if not isinstance(value, str) or not value or "." in value or value != value.strip():
-        raise ValueError(f"{item} must be a non-empty string without dots or surrounding "
-                         f"spaces; got {value!r}")
+    """`value` if it is a valid name (NAME_RULE), else ValueError naming `item`."""
+    if not isinstance(value, str) or _IDENTIFIER.fullmatch(value) is None:
+        raise ValueError(f"{item} must be {NAME_RULE}; got {_short(value)}")
     return value
+
+
+#: the most bodies, points per body (and of the ground), ideal joints and clearance joints
+#: a description may hold: the derivation's cost grows fast with them, so a larger one is
+#: refused at once instead of after minutes of work
+MAX_BODIES = 64
+MAX_POINTS = 64
+MAX_JOINTS = 128
+MAX_CLEARANCE_JOINTS = 32
 
 
 def _points(item: str, points: Any) -> dict[str, Point]:
     if not isinstance(points, Mapping):
         raise ValueError(f"{item} must be a mapping of point name to (x, y) in m; "
-                         f"got {points!r}")
+                         f"got {_short(points)}")
+    if len(points) > MAX_POINTS:
+        raise ValueError(f"{item} holds {len(points)} points; at most {MAX_POINTS} are "
+                         f"allowed")
     out = {}
     for key, xy in points.items():
         _name(f"{item} key", key)
         if isinstance(xy, (str, bytes)) or not hasattr(xy, "__len__") or len(xy) != 2:
             raise ValueError(f"{item}[{key!r}] must be a pair (x, y) of finite numbers in m; "
-                             f"got {xy!r}")
+                             f"got {_short(xy)}")
         out[key] = (_real(f"{item}[{key!r}] x", xy[0], "a finite number (m)"),
                     _real(f"{item}[{key!r}] y", xy[1], "a finite number (m)"))
     return out
@@ -207,7 +235,7 @@ class ClearanceJoint:
                 "None or a finite number > 0 (N/m^1.5)", positive))
         if self.contact_model not in CONTACT_MODELS:
             raise ValueError(f"{what} contact_model must be one of {sorted(CONTACT_MODELS)}; "
-                             f"got {self.contact_model!r}")
+                             f"got {_short(self.contact_model)}")
         check_friction(what, self.friction_law, self.friction_coefficient,
                        self.friction_v0, self.friction_v1)
         for f in ("friction_coefficient", "friction_v0", "friction_v1"):
@@ -257,7 +285,7 @@ class Drive:
 
 #: field -> (symbol, unit, default, source) of the friction fields of `ClearanceJoint`
 FRICTION_DEFAULTS: dict[str, tuple[str, str, Any, str]] = {
-    "friction_law": ("-", "-", "none", "frictionless, the paper's Eqs. 6-8 (issue 18)"),
+    "friction_law": ("-", "-", "none", "frictionless, the paper's Eqs. 6-8"),
     "friction_coefficient": ("mu", "-", 0.0, "0: frictionless; give the pair's value "
                              "(steel on steel, dry: about 0.1-0.2; lubricated about 0.01)"),
     "friction_v0": ("v0", "m/s", 1e-4, "assumed: typical lower threshold of Ambrosio's law "
@@ -272,7 +300,7 @@ def check_friction(what: str, law: Any, mu: Any, v0: Any, v1: Any) -> None:
     of contact.FRICTION_LAWS, mu a finite number >= 0, 0 < v0 < v1 finite (m/s)."""
     if not isinstance(law, str) or law not in FRICTION_LAWS:
         raise ValueError(f"{what} friction_law must be one of {sorted(FRICTION_LAWS)}; "
-                         f"got {law!r}")
+                         f"got {_short(law)}")
     _real(f"{what} friction_coefficient", mu, "a finite number >= 0", lambda v: v >= 0)
     v0 = _real(f"{what} friction_v0", v0, "a finite number > 0 (m/s)", lambda v: v > 0)
     _real(f"{what} friction_v1", v1, f"a finite number > friction_v0 = {v0!r} (m/s)",
@@ -308,20 +336,22 @@ class Linkage:
     assembly: Mapping[str, float] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
-        if not isinstance(self.name, str) or not self.name:
-            raise ValueError(f"linkage name must be a non-empty string; got {self.name!r}")
-        for f, cls in (("bodies", Body), ("joints", (Revolute, Prismatic)),
-                       ("clearance_joints", ClearanceJoint)):
+        _name("linkage name", self.name)
+        for f, cls, most in (("bodies", Body, MAX_BODIES),
+                             ("joints", (Revolute, Prismatic), MAX_JOINTS),
+                             ("clearance_joints", ClearanceJoint, MAX_CLEARANCE_JOINTS)):
             value = getattr(self, f)
             if isinstance(value, (str, bytes, Mapping)) or not hasattr(value, "__iter__"):
-                raise ValueError(f"{f} must be a sequence; got {value!r}")
-            value = tuple(value)
+                raise ValueError(f"{f} must be a sequence; got {_short(value)}")
+            value = tuple(itertools.islice(value, most + 1))
+            _at_most(f, value, most)
             for item in value:
                 if not isinstance(item, cls):
-                    raise ValueError(f"{f} must hold {_cls_names(cls)} objects; got {item!r}")
+                    raise ValueError(f"{f} must hold {_cls_names(cls)} objects; "
+                                     f"got {_short(item)}")
             object.__setattr__(self, f, value)
         if not isinstance(self.drive, Drive):
-            raise ValueError(f"drive must be a Drive; got {self.drive!r}")
+            raise ValueError(f"drive must be a Drive; got {_short(self.drive)}")
         object.__setattr__(self, "ground_points", _points("ground_points", self.ground_points))
         object.__setattr__(self, "gravity", _real("gravity", self.gravity,
                                                   "a finite number (m/s^2)"))
@@ -337,11 +367,11 @@ class Linkage:
                              "drive and ideal joints")
         if not isinstance(self.assembly, Mapping):
             raise ValueError(f"assembly must be a mapping of coordinate name to a guess; "
-                             f"got {self.assembly!r}")
+                             f"got {_short(self.assembly)}")
         guesses = {}
         for key, value in self.assembly.items():
             if key not in coords:
-                raise ValueError(f"assembly names an unknown coordinate {key!r}; the "
+                raise ValueError(f"assembly names an unknown coordinate {_short(key)}; the "
                                  f"coordinates are {list(coords)}")
             guesses[key] = _real(f"assembly[{key!r}]", value, "a finite number")
         object.__setattr__(self, "assembly", guesses)
@@ -377,9 +407,20 @@ class Linkage:
         for joint in self.joints:
             check_end(joint, "body_a", "point_a")
             check_end(joint, "body_b", "point_b")
+        pins: dict[frozenset, str] = {}
         for joint in self.clearance_joints:
             check_end(joint, "journal_body", "journal_point")
             check_end(joint, "bearing_body", "bearing_point")
+            # a second clearance joint on the same pin duplicates the first one's contact
+            # (the integrator would chase two identical switching functions)
+            ends = frozenset({(joint.journal_body, joint.journal_point),
+                              (joint.bearing_body, joint.bearing_point)})
+            if ends in pins:
+                raise ValueError(f"clearance joints {pins[ends]!r} and {joint.name!r} join the "
+                                 f"same points {joint.journal_body}.{joint.journal_point} and "
+                                 f"{joint.bearing_body}.{joint.bearing_point}; a pin has at "
+                                 "most one clearance joint")
+            pins[ends] = joint.name
         # the ideal joints must form a forest: a joint between two bodies already connected
         # closes a loop, named by its joints
         parent: dict[str, str] = {}
@@ -408,7 +449,7 @@ class Linkage:
                              f"{GROUND!r}; found {found}")
         if self.monitor_joint is not None and self.monitor_joint not in self.ground_joints():
             raise ValueError(f"monitor_joint must be None or a joint to the ground "
-                             f"{list(self.ground_joints())}; got {self.monitor_joint!r}")
+                             f"{list(self.ground_joints())}; got {_short(self.monitor_joint)}")
 
     def tree(self) -> list[tuple[str, str | None, Any]]:
         """The forest as (body, parent body or None for a floating root, joint or None), in
@@ -461,6 +502,92 @@ class Linkage:
         """Duration of one drive revolution in s."""
         return self.drive.period
 
+    # ------------------------------------------------------------------ assembly
+    def gaps(self, q: Mapping[str, float], t: float = 0.0) -> list[float]:
+        """Journal centre minus bearing centre (x, y in m) of every clearance joint, in
+        order, at coordinates `q` (by name, `coordinates`) and time `t`: the loop closure,
+        zero when every journal is centred. Plain Python, the kinematics of the generated
+        model's ``closure`` (no model is generated or compiled)."""
+        theta = self.drive.speed * t + self.drive.initial_angle
+        points = {GROUND: self.ground_points, **{b.name: b.points for b in self.bodies}}
+        angle = {GROUND: 0.0}
+        pos = {GROUND: (0.0, 0.0)}
+
+        def turned(a, xy):
+            c, s = math.cos(a), math.sin(a)
+            return c * xy[0] - s * xy[1], s * xy[0] + c * xy[1]
+
+        def world(body, name):
+            dx, dy = turned(angle[body], points[body][name])
+            return pos[body][0] + dx, pos[body][1] + dy
+
+        for body, parent, joint in self.tree():
+            if body == GROUND:
+                continue
+            if parent is None:                          # floating
+                angle[body] = q[f"{body}.angle"]
+                pos[body] = (q[f"{body}.x"], q[f"{body}.y"])
+            elif isinstance(joint, Revolute):
+                angle[body] = theta if joint.name == self.drive.joint else q[f"{body}.angle"]
+                pp, pc = ((joint.point_a, joint.point_b) if joint.body_a == parent
+                          else (joint.point_b, joint.point_a))
+                px, py = world(parent, pp)
+                dx, dy = turned(angle[body], points[body][pc])
+                pos[body] = (px - dx, py - dy)
+            else:                                       # Prismatic: s along the axis
+                s_q, sign = q[f"{joint.name}.s"], 1.0 if joint.body_a == parent else -1.0
+                pp, pc = ((joint.point_a, joint.point_b) if sign > 0
+                          else (joint.point_b, joint.point_a))
+                angle[body] = angle[parent]
+                ux, uy = turned(angle[parent] + joint.angle, (1.0, 0.0))
+                px, py = world(parent, pp)
+                dx, dy = turned(angle[body], points[body][pc])
+                pos[body] = (px + sign * s_q * ux - dx, py + sign * s_q * uy - dy)
+        out = []
+        for cj in self.clearance_joints:
+            jx, jy = world(cj.journal_body, cj.journal_point)
+            bx, by = world(cj.bearing_body, cj.bearing_point)
+            out += [jx - bx, jy - by]
+        return out
+
+    def assemble(self, t: float = 0.0, max_iter: int = 50) -> dict[str, float]:
+        """The coordinates (by name) with every journal centred at time `t`, by at most
+        `max_iter` Newton steps from the `assembly` guesses (Jacobian by central
+        differences; least squares where the closure is not square), to 1e-9 of the length
+        scale; ValueError if there is no assembly near the guesses. A check that costs
+        milliseconds, made before any model is generated or compiled; the run's start
+        (`linkage_model.initial_state`) solves the same closure to round-off with the
+        model's exact Jacobian."""
+        import numpy as np
+
+        names = self.coordinates()
+        q = np.array([self.assembly.get(c, 0.0) for c in names])
+        scale = max(self.length_scale, 1e-300)
+        steps = np.array([1e-6 if c.endswith(".angle") else 1e-6 * scale for c in names])
+
+        def residual(v):
+            return np.array(self.gaps(dict(zip(names, v.tolist())), t))
+
+        r = residual(q)
+        for _ in range(max_iter):
+            if not np.all(np.isfinite(r)):
+                break
+            if np.max(np.abs(r)) <= 1e-9 * scale:
+                return dict(zip(names, q.tolist()))
+            jac = np.empty((len(r), len(q)))
+            for i, h in enumerate(steps):
+                e = np.zeros(len(q))
+                e[i] = h
+                jac[:, i] = (residual(q + e) - residual(q - e)) / (2.0 * h)
+            q = q + np.linalg.lstsq(jac, -r, rcond=None)[0]
+            r = residual(q)
+        raise ValueError(
+            f"the loop closure of linkage {self.name!r} cannot be solved from the assembly "
+            f"guesses {dict(self.assembly)} (residual {np.max(np.abs(r)):.3g} m after "
+            f"{max_iter} Newton steps): no assembly with the journals centred near them; "
+            f"check the lengths, or give guesses (assembly, by coordinate name "
+            f"{list(names)}) near an assembly")
+
     # ------------------------------------------------------------------ variants and I/O
     def replace(self, **changes: Any) -> Linkage:
         """A validated copy with some fields changed (unknown names raise ValueError)."""
@@ -499,53 +626,51 @@ class Linkage:
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> Linkage:
-        """Build from `to_dict`'s form; unknown keys raise ValueError naming them."""
+        """Build from `to_dict`'s form; a missing or unknown key raises ValueError naming it
+        and the item that holds it (``bodies[1] ('coupler')``)."""
         if not isinstance(data, Mapping):
-            raise ValueError(f"a linkage description must be a mapping; got {data!r}")
-        data = dict(data)
-        _known("linkage", data, [f.name for f in dataclasses.fields(cls)])
-        for key in ("name", "bodies", "joints", "clearance_joints", "drive"):
-            if key not in data:
-                raise ValueError(f"linkage description lacks {key!r}")
+            raise ValueError(f"a linkage description must be a mapping; got {_short(data)}")
+        data = dict(_fields_of(cls, "linkage", "the description", data))
 
-        def items(key):
+        def items(key, most):
             value = data.get(key, [])
-            if not isinstance(value, (list, tuple)) or not all(
-                    isinstance(v, Mapping) for v in value):
-                raise ValueError(f"{key} must be a list of tables/objects; got {value!r}")
-            return value
+            if not isinstance(value, (list, tuple)):
+                raise ValueError(f"{key} must be a list of tables/objects; got {_short(value)}")
+            _at_most(key, value, most)
+            for k, v in enumerate(value):
+                if not isinstance(v, Mapping):
+                    raise ValueError(f"{key}[{k}] must be a table/object; got {_short(v)}")
+            return [(f"{key}[{k}]{_named(v)}", dict(v)) for k, v in enumerate(value)]
 
-        bodies = tuple(Body(**_known("body", dict(b), [f.name for f in dataclasses.fields(Body)]))
-                       for b in items("bodies"))
+        bodies = tuple(Body(**_fields_of(Body, "body", where, b))
+                       for where, b in items("bodies", MAX_BODIES))
         joints = []
-        for j in items("joints"):
-            j = dict(j)
+        for where, j in items("joints", MAX_JOINTS):
             kind = j.pop("type", "revolute")
             if kind not in _JOINT_TYPES:
-                raise ValueError(f"joint {j.get('name')!r} type must be one of "
-                                 f"{sorted(_JOINT_TYPES)}; got {kind!r}")
+                raise ValueError(f"{where} type must be one of {sorted(_JOINT_TYPES)}; "
+                                 f"got {_short(kind)}")
             jc = _JOINT_TYPES[kind]
-            joints.append(jc(**_known(f"{kind} joint", j,
-                                      [f.name for f in dataclasses.fields(jc)])))
-        clearance = tuple(ClearanceJoint(**_known(
-            "clearance joint", dict(j), [f.name for f in dataclasses.fields(ClearanceJoint)]))
-            for j in items("clearance_joints"))
+            joints.append(jc(**_fields_of(jc, f"{kind} joint", where, j)))
+        clearance = tuple(ClearanceJoint(**_fields_of(ClearanceJoint, "clearance joint", where, j))
+                          for where, j in items("clearance_joints", MAX_CLEARANCE_JOINTS))
         drive = data["drive"]
         if not isinstance(drive, Mapping):
-            raise ValueError(f"drive must be a table/object; got {drive!r}")
+            raise ValueError(f"drive must be a table/object; got {_short(drive)}")
         data.update(bodies=bodies, joints=tuple(joints), clearance_joints=clearance,
-                    drive=Drive(**_known("drive", dict(drive),
-                                         [f.name for f in dataclasses.fields(Drive)])))
+                    drive=Drive(**_fields_of(Drive, "drive", "drive", drive)))
         return cls(**data)
 
     @classmethod
     def from_file(cls, path: str | Path) -> Linkage:
-        """Read a description from a JSON (.json) or TOML (.toml) file in `to_dict`'s form."""
+        """Read a description from a JSON (.json) or TOML (.toml) file in `to_dict`'s form
+        (at most `_io.MAX_INPUT_BYTES`); ValueError naming the file and the item, also when
+        the linkage cannot be assembled with its journals centred (`assemble`)."""
+        from ._io import parse_json, read_text
+
         path = Path(path)
-        try:
-            text = path.read_text()
-        except (OSError, UnicodeDecodeError) as exc:
-            raise ValueError(f"cannot read linkage file {str(path)!r}: {exc}") from exc
+        what = "linkage file"
+        text = read_text(path, what)
         if path.suffix.lower() == ".toml":
             try:
                 import tomllib
@@ -553,14 +678,17 @@ class Linkage:
                 raise ValueError("reading TOML needs Python >= 3.11 (tomllib); use JSON") from None
             try:
                 data = tomllib.loads(text)
-            except tomllib.TOMLDecodeError as exc:
-                raise ValueError(f"cannot read linkage file {str(path)!r}: {exc}") from exc
+            except (tomllib.TOMLDecodeError, RecursionError) as exc:
+                raise ValueError(f"cannot read {what} {str(path)!r}: "
+                                 f"{exc or 'nested too deeply'}") from None
         else:
-            try:
-                data = json.loads(text)
-            except json.JSONDecodeError as exc:
-                raise ValueError(f"cannot read linkage file {str(path)!r}: {exc}") from exc
-        return cls.from_dict(data)
+            data = parse_json(text, path, what)
+        try:
+            linkage = cls.from_dict(data)
+            linkage.assemble()
+        except ValueError as exc:
+            raise ValueError(f"{what} {str(path)!r}: {exc}") from None
+        return linkage
 
     # ------------------------------------------------------------------ parameters
     def parameter_names(self) -> tuple[str, ...]:
@@ -683,11 +811,33 @@ def _cls_names(cls) -> str:
     return cls.__name__
 
 
-def _known(what: str, data: dict, allowed: list[str]) -> dict:
+def _at_most(item: str, value: Any, most: int) -> None:
+    if len(value) > most:
+        raise ValueError(f"{item} holds {len(value)} entries; at most {most} are allowed")
+
+
+def _named(item: Any) -> str:
+    """" ('NAME')" for a table with a string name (how a message points at it), else ""."""
+    name = item.get("name") if isinstance(item, Mapping) else None
+    return f" ({_short(name, 40)})" if isinstance(name, str) else ""
+
+
+def _fields_of(cls, what: str, where: str, data: Mapping) -> dict:
+    """`data` as keyword arguments of dataclass `cls` (a `what`, at `where` in the
+    description): ValueError naming the key and `where` when a key is unknown or a required
+    one (a field without a default) is missing."""
+    fields = dataclasses.fields(cls)
+    allowed = [f.name for f in fields]
     unknown = [k for k in data if k not in allowed]
     if unknown:
-        raise ValueError(f"unknown {what} key(s) {unknown}; allowed: {allowed}")
-    return data
+        raise ValueError(f"unknown {what} key {_short(unknown[0], 40)} in {where}; allowed: "
+                         f"{allowed}")
+    required = [f.name for f in fields if f.default is dataclasses.MISSING
+                and f.default_factory is dataclasses.MISSING]
+    missing = [k for k in required if k not in data]
+    if missing:
+        raise ValueError(f"{where} lacks the key {missing[0]!r}; required: {required}")
+    return dict(data)
 
 
 def _path(adjacency: dict, start: str, goal: str) -> list[str]:

@@ -329,7 +329,7 @@ def event_margin(clearance: float, rtol: float) -> float:
     """Distance from a wall (m) within which the event search looks closer between samples:
     EVENT_MARGIN of the (smallest) clearance, at least MARGIN_PER_RTOL rtol of it. It guards
     against the interpolants' error, which the switching function's error control keeps
-    below rtol (1.5 c + |delta|); a fixed 0.05 c (before session 13) put every step of a
+    below rtol (1.5 c + |delta|); a fixed 0.05 c would put every step of a
     light lasting contact (penetration ~0.005 c, the four-bar's) under the closer look and
     the approach step limit, at 1.7 times the run time with the same steps
     (docs/performance.md)."""
@@ -406,6 +406,7 @@ def run(linkage: Linkage, revolutions: int = 4, *, rtol: float | None = None,
         check_int,
         check_max_memory,
         check_real,
+        check_revolutions_memory,
         format_bytes,
     )
     from .integrator import COUNTERS, METHODS, RESULTS, make_settings
@@ -419,6 +420,7 @@ def run(linkage: Linkage, revolutions: int = 4, *, rtol: float | None = None,
     n_samples = check_int("n_samples (interior event samples per step)", n_samples, 0, 1000)
     h0 = check_real("h0 (initial step; 0: automatic)", h0, 0.0, unit="s")
     max_memory = check_max_memory(max_memory)
+    check_revolutions_memory(revolutions, max_memory)
     h_max = linkage.period / 8 if h_max is None else check_real(
         "h_max (largest step)", h_max, 0.0, low_open=True, unit="s")
     if event_tol is None:

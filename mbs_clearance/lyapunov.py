@@ -52,7 +52,7 @@ from dataclasses import dataclass, field
 import numba as nb
 import numpy as np
 
-from ._checks import check_int, check_real
+from ._checks import check_int, check_real, check_revolutions_memory
 from .integrator import (
     ACTION_SIG,
     EVENT_SIG,
@@ -327,7 +327,7 @@ def exponent_of_flow(flow, times, transient: int, window: float) -> LyapunovResu
                           verdict=exponent_verdict(per_window - half, per_window + half))
 
 
-def lyapunov_exponent(mech, revolutions: int = 100, transient: int = 50, *,
+def lyapunov_exponent(mech, revolutions: int = 100, transient: int | None = None, *,
                       rtol: float | None = None, method: str = "dop853",
                       direction=None, memory: str = "reset") -> LyapunovResult:
     """The largest Lyapunov exponent of `mech`'s motion (a SliderCrank or a Linkage), in
@@ -337,17 +337,22 @@ def lyapunov_exponent(mech, revolutions: int = 100, transient: int = 50, *,
     generated model's coordinates and their rates, for the paper's case theta3, x4 and
     their rates; default all equal) are integrated over `revolutions` crank
     revolutions, the tangent renormalised at the end of each; the log-growths of the last
-    revolutions - `transient` are averaged. rtol (default 1e-7) applies to the state and
-    the unit tangent alike. The result carries the exponent's `uncertainty` (half-width
-    per revolution, `exponent_interval`) and its `verdict` ("positive", "negative", "zero"
-    or "undecided" where the interval contains zero). `memory`: the impact-velocity
-    memory's tangent at each renormalisation, "reset" or "carry" (module docstring).
+    revolutions - `transient` are averaged (default None: the first half, revolutions // 2,
+    so 50 of the default 100; any `revolutions` works with it). rtol (default 1e-7) applies
+    to the state and the unit tangent alike. The result carries the exponent's `uncertainty`
+    (half-width per revolution, `exponent_interval`) and its `verdict` ("positive",
+    "negative", "zero" or "undecided" where the interval contains zero). `memory`: the
+    impact-velocity memory's tangent at each renormalisation, "reset" or "carry" (module
+    docstring).
     """
     if not isinstance(mech, (SliderCrank, Linkage)):
         raise ValueError(f"mech must be a SliderCrank or a Linkage; got {type(mech).__name__}")
     revolutions = check_int("revolutions", revolutions, 2)
+    if transient is None:
+        transient = revolutions // 2
     transient = check_int("transient (revolutions not averaged)", transient, 0,
                           revolutions - 1)
+    check_revolutions_memory(revolutions, per_revolution=8)
     flow = TangentFlow(mech, rtol=DEFAULT_RTOL if rtol is None else rtol, method=method,
                        direction=direction, memory=memory)
     omega, _ = drive_of(mech)

@@ -43,7 +43,7 @@ PARAMETER_INFO: dict[str, tuple[str, str, str]] = {
     "gravity": ("g", "m/s^2", "standard gravity along -y"),
     "contact_model": ("-", "-", "paper: Lankarani-Nikravesh"),
     "impact_velocity_floor": ("v_min", "m/s", "numerical floor for grazing onsets (docs)"),
-    # friction in the clearance joint (issue 18; docs/friction.md)
+    # friction in the clearance joint (docs/friction.md)
     **{k: (sym, unit, source) for k, (sym, unit, _, source) in FRICTION_DEFAULTS.items()},
 }
 

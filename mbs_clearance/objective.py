@@ -30,7 +30,7 @@ from typing import Any
 import numpy as np
 
 from . import reduced
-from ._checks import check_choice, check_int, check_real
+from ._checks import check_choice, check_int, check_real, check_revolutions_memory
 from .integrator import METHODS
 from .mechanism import SliderCrank
 from .sensitivity import (
@@ -452,6 +452,7 @@ def peak_gradient(mech: SliderCrank, parameters=None, revolution: int = 4,
         raise ValueError(f"mech must be a SliderCrank; got {type(mech).__name__}")
     names = _check_parameters(parameters)
     revolution = check_int("revolution", revolution, 1)
+    check_revolutions_memory(revolution, name="revolution")
     check_choice("method", method, ("ddm", "fd"))
     check_choice("backend", backend, BACKENDS)
     if integrator is not None:

@@ -41,6 +41,7 @@ from typing import Any
 
 import numpy as np
 
+from ._checks import DESIGN_BYTES, check_memory
 from ._io import read_json_object
 from ._warnings import AccuracyWarning
 from .executor import (  # noqa: F401 - the executors live in executor.py (shared)
@@ -456,6 +457,19 @@ _DEFAULT_CRANK = (0.04, 0.06)
 _DEFAULT_COUPLER = (0.10, 0.14)
 
 
+def ga_memory(population: int, generations: int, n_genes: int,
+              max_memory: int | None = None) -> int:
+    """Estimated peak memory (bytes) of a GA run: pygad's arrays of the population (eight
+    copies of population x genes), one generation's designs, and the cache of every design
+    evaluated (population x generations entries, about 120 + 32 genes bytes each, measured);
+    `MemoryLimitError` naming population and generations above `max_memory`."""
+    need = (population * (64 * n_genes + 32 + DESIGN_BYTES)
+            + population * generations * (120 + 32 * n_genes))
+    check_memory(f"population={population} x generations={generations}: the GA needs", need,
+                 max_memory, "use a smaller population or fewer generations")
+    return need
+
+
 def optimize_link_lengths(mech: SliderCrank | None = None,
                           crank_length: tuple[float, float] = _DEFAULT_CRANK,
                           coupler_length: tuple[float, float] = _DEFAULT_COUPLER,
@@ -517,7 +531,9 @@ def optimize_link_lengths(mech: SliderCrank | None = None,
     dask_timeout : float
         Seconds to wait for the first worker of a dask Client before giving up (> 0).
     **backend_options
-        Passed to `peak_base_force` (e.g. ``rtol``).
+        Passed to `peak_base_force` (e.g. ``rtol``); ``max_memory`` (bytes) is also the
+        limit of the GA's own estimated memory (`ga_memory`; default
+        `_checks.default_max_memory`), checked before any design is simulated.
 
     Returns
     -------
@@ -562,6 +578,7 @@ def optimize_link_lengths(mech: SliderCrank | None = None,
         raise ValueError("pass either genes=... or crank_length/coupler_length bounds, "
                          "not both (put all bounds in genes)")
     genes = _check_genes(mech, genes, mass_scaling)
+    ga_memory(population, generations, len(genes), backend_options.get("max_memory"))
     if isinstance(executor, str) and executor not in LOCAL_EXECUTORS:
         raise ValueError(f"executor must be None, one of {list(LOCAL_EXECUTORS)}, a "
                          f"concurrent.futures executor or a dask.distributed.Client; "

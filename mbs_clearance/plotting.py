@@ -15,6 +15,7 @@ from matplotlib.figure import Figure
 
 from ._io import PNG_SOFTWARE
 from .trajectory import Trajectory
+from .units import number
 
 __all__ = ["plot_trajectory", "plot_overlay", "plot_comparison", "plot_sensitivities",
            "plot_work_precision", "plot_fitness_history", "plot_force_comparison",
@@ -277,7 +278,7 @@ def plot_force_comparison(trajectories: Mapping[str, Trajectory],
     return save(fig, path)
 
 
-# ---------------------------------------------------------------- regime maps (issue 19)
+# ---------------------------------------------------------------- regime maps
 
 #: colour of each regime code (poincare.REGIMES)
 REGIME_COLORS = {0: "#ffffff", 1: "#000000", 2: "#4c9be8", 3: "#8fd175", 4: "#f2c14e",
@@ -296,6 +297,14 @@ def _axis_label(ds, name: str) -> str:
 def _axis_factor(name: str) -> float:
     """Factor from a swept field's SI value to its plotted unit (mm, rpm; else 1)."""
     return _AXIS_UNITS.get(name, (name, 1.0))[1]
+
+
+def _field_text(name: str, value: float) -> str:
+    """``clearance = 0.0158 mm``: a swept field's value in its plotted unit."""
+    label, factor = _AXIS_UNITS.get(name, (name, 1.0))
+    unit = label[label.index("(") + 1:-1] if label.endswith(")") else ""
+    base = label[:label.index(" (")] if unit else label
+    return f"{base} = {number(value * factor, 3)}" + (f" {unit}" if unit else "")
 
 
 def _sweep_dims(ds) -> list[str]:
@@ -359,44 +368,86 @@ def _speed_of(sel, n: int) -> np.ndarray:
     return np.full((n, 1), float(speed))
 
 
-def plot_regime_map(ds, path: str | Path | None = None, mark: Mapping | None = None
-                    ) -> Figure:
+def plot_regime_map(ds, path: str | Path | None = None, mark: Mapping | None = None,
+                    outline: str | None = None, mark_label: str = "design",
+                    title: str = "regime map") -> Figure:
     """2-D regime map of a two-field regime map dataset: each point's regime as a coloured
-    cell (log axes for log sweeps); `mark` ({field: value, ...}) marks a design, e.g. the
-    paper's."""
+    cell (log axes for log sweeps), clearance in mm and crank speed in rpm.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A map made by `regime_map` over two fields.
+    path : str or Path, optional
+        Where to save the figure (format from the suffix).
+    mark : mapping, optional
+        ``{field: value}`` in SI units: a design to mark with a star, e.g. the paper's.
+    outline : str, optional
+        A regime name (`poincare.REGIMES`, e.g. ``"period_1"``) whose cells are outlined.
+    mark_label, title : str
+        The star's legend entry and the axes' title.
+    """
+    from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
 
-    from .poincare import REGIMES
+    from .poincare import REGIME_CODES, REGIMES
 
     dims = _sweep_dims(ds)
     if len(dims) != 2:
         raise ValueError(f"plot_regime_map needs a map over two fields; got {dims}")
-    x = ds[dims[0]].values * _axis_factor(dims[0])
-    y = ds[dims[1]].values * _axis_factor(dims[1])
+    if outline is not None and outline not in REGIME_CODES:
+        raise ValueError(f"outline must be one of {sorted(REGIME_CODES)}; got {outline!r}")
+    ex, ey = (_edges(ds[d].values * _axis_factor(d), ds[d].attrs.get("spacing"))
+              for d in dims)
     codes = sorted(REGIMES)
     rgb = np.array([[int(REGIME_COLORS[k][i:i + 2], 16) / 255 for i in (1, 3, 5)]
                     for k in codes])
-    img = rgb[ds["regime"].values.astype(int)]          # (nx, ny, 3)
+    regime = ds["regime"].values.astype(int)
+    img = rgb[regime]                                   # (nx, ny, 3)
     fig = Figure(figsize=(7.5, 5.0))
     ax = fig.subplots()
-    ax.pcolormesh(_edges(x, ds[dims[0]].attrs.get("spacing")),
-                  _edges(y, ds[dims[1]].attrs.get("spacing")),
-                  np.transpose(img, (1, 0, 2)), shading="flat")
+    ax.pcolormesh(ex, ey, np.transpose(img, (1, 0, 2)), shading="flat")
     for name, axis in ((dims[0], "x"), (dims[1], "y")):
         if ds[name].attrs.get("spacing") == "log":
             getattr(ax, f"set_{axis}scale")("log")
+    handles = [Patch(color=REGIME_COLORS[k], label=REGIMES[k].replace("_", " "))
+               for k in codes if np.any(regime == k)]
+    if outline is not None:
+        for xs, ys in _region_outline(regime == REGIME_CODES[outline], ex, ey):
+            ax.plot(xs, ys, color="k", lw=2.0, solid_capstyle="projecting")
+        handles.append(Line2D([], [], color="k", lw=2,
+                              label=f"{outline.replace('_', '-')} region"))
     if mark:
         ax.plot([mark[dims[0]] * _axis_factor(dims[0])],
                 [mark[dims[1]] * _axis_factor(dims[1])], marker="*", ms=14, color="k",
-                mfc="yellow", ls="none", label="design")
-    present = [k for k in codes if np.any(ds["regime"].values == k)]
-    ax.legend(handles=[Patch(color=REGIME_COLORS[k], label=REGIMES[k].replace("_", " "))
-                       for k in present], fontsize=8, loc="upper left",
-              bbox_to_anchor=(1.01, 1.0))
+                mfc="yellow", ls="none", label=mark_label)
+        handles.append(Line2D([], [], marker="*", ms=12, color="k", mfc="yellow", ls="none",
+                              label=mark_label))
+    ax.legend(handles=handles, fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     ax.set_xlabel(_axis_label(ds, dims[0]))
     ax.set_ylabel(_axis_label(ds, dims[1]))
-    ax.set_title("regime map")
+    ax.set_title(title)
     return save(fig, path)
+
+
+def _region_outline(inside: np.ndarray, ex: np.ndarray, ey: np.ndarray
+                    ) -> list[tuple[list[float], list[float]]]:
+    """The cell edges between the cells where `inside` (nx, ny) holds and the others (or
+    the map's border), as ([x0, x1], [y0, y1]) segments on the cell edges `ex`, `ey`."""
+    nx, ny = inside.shape
+
+    def within(i, j):
+        return 0 <= i < nx and 0 <= j < ny and inside[i, j]
+
+    segments = []
+    for i, j in zip(*np.nonzero(inside)):
+        for di, dj, xs, ys in ((-1, 0, [ex[i]] * 2, ey[j:j + 2]),
+                               (1, 0, [ex[i + 1]] * 2, ey[j:j + 2]),
+                               (0, -1, ex[i:i + 2], [ey[j]] * 2),
+                               (0, 1, ex[i:i + 2], [ey[j + 1]] * 2)):
+            if not within(i + di, j + dj):
+                segments.append((list(xs), list(ys)))
+    return segments
 
 
 def _edges(v: np.ndarray, spacing: str | None) -> np.ndarray:
@@ -428,7 +479,7 @@ def plot_poincare(ds, points: Sequence[Mapping], path: str | Path | None = None,
         ax.plot(np.cos(circle), np.sin(circle), color="0.7", lw=0.8)
         ax.plot(xy[:, 0], xy[:, 1], ".", ms=4)
         ax.set_aspect("equal")
-        label = ", ".join(f"{k} = {float(sel[k].values):.3g}" for k in point)
+        label = ", ".join(_field_text(k, float(sel[k].values)) for k in point)
         ax.set_title(f"{label}\n{REGIMES[int(sel['regime'].values)].replace('_', ' ')}",
                      fontsize=8)
         ax.set_xlabel("x / clearance")
@@ -625,8 +676,10 @@ def _animate_linkage(traj: Trajectory, path: Path, revolution, frames: int, fps:
     m_ax.set_xlim(lo[0], hi[0])
     m_ax.set_ylim(lo[1], hi[1])
     m_ax.set_aspect("equal")
-    m_ax.set_title(f"{linkage.name}, revolution {fr.revolution} (m); journal offsets "
-                   f"x {fr.magnify:.3g}", fontsize=9)
+    m_ax.set_title(f"{linkage.name}, revolution {fr.revolution}; journal offsets drawn "
+                   f"{number(fr.magnify, 3)} times their size", fontsize=9)
+    m_ax.set_xlabel("x (m)")
+    m_ax.set_ylabel("y (m)")
     m_ax.grid(alpha=0.2)
     for xy in fr.pivots.values():
         m_ax.plot([xy[0]], [xy[1]], "^", ms=10, color="0.3", zorder=1)

@@ -1,4 +1,4 @@
-"""Poincare sections of a run and the classification of its motion (issue 19).
+"""Poincare sections of a run and the classification of its motion.
 
 A run is integrated one section interval at a time on the compiled event-exact integrator
 (`Flow`): the integrator lands exactly on each window's end, and for a constant-speed drive
@@ -37,7 +37,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ._checks import check_int, check_real
+from ._checks import check_int, check_real, check_revolutions_memory
 from .integrator import METHODS, RESULTS, make_settings
 from .linkage import Linkage
 from .linkage_model import DEFAULT_RTOL as LM_DEFAULT_RTOL
@@ -299,6 +299,7 @@ def _check_run(mech, revolutions, keep, angle):
     _check_mech(mech)
     revolutions = check_int("revolutions", revolutions, 1)
     keep = check_int("keep (revolutions kept after the transient)", keep, 1, revolutions)
+    check_revolutions_memory(revolutions, per_revolution=8 * 4 * len(joints_of(mech)))
     if angle is not None:
         angle = check_real("angle (section crank angle)", angle, unit="rad")
     return revolutions, keep, angle

@@ -20,9 +20,16 @@ from typing import Any
 import numpy as np
 
 from . import reduced
-from ._checks import check_bool, check_choice, check_int, check_real, check_times
+from ._checks import (
+    check_bool,
+    check_choice,
+    check_int,
+    check_real,
+    check_revolutions_memory,
+    check_times,
+)
 from .integrator import METHODS
-from .linkage_ddm import independent_directions  # noqa: F401  (public here since session 5)
+from .linkage_ddm import independent_directions  # noqa: F401  (public here too)
 from .mechanism import CONTINUOUS_FIELDS, SliderCrank, check_field_names
 from .trajectory import Trajectory, annotate, load_trajectory
 
@@ -567,6 +574,7 @@ def sensitivities(mech: SliderCrank, parameters=None, revolutions: int = 4,
     names = _check_parameters(parameters)
     check_choice("method", method, ("ddm", "fd"))
     revolutions = check_int("revolutions", revolutions, 1)
+    check_revolutions_memory(revolutions, per_revolution=_per_revolution(method, len(names)))
     fd_relative_step = check_real("fd_relative_step", fd_relative_step, 0.0, 0.1,
                                   low_open=True, high_open=True)
     if rtol is not None:
@@ -601,6 +609,12 @@ def sensitivities(mech: SliderCrank, parameters=None, revolutions: int = 4,
 
 
 
+def _per_revolution(method: str, p: int) -> int:
+    """Bytes per revolution that a sensitivity run holds beyond any run's: DDM's growth
+    diagnostic (p floats), finite differences' default output times (720 floats)."""
+    return 8 * p if method == "ddm" else 8 * 720
+
+
 def _linkage_sensitivities(linkage, parameters, revolutions, method, backend, t_eval, rtol,
                            event_time_term, fd_relative_step, integrator, options):
     """`sensitivities` of a Linkage: arguments checked here, the work in linkage_ddm."""
@@ -621,6 +635,7 @@ def _linkage_sensitivities(linkage, parameters, revolutions, method, backend, t_
         raise ValueError(f"parameters must not repeat a name; got {list(names)}")
     check_choice("method", method, ("ddm", "fd"))
     revolutions = check_int("revolutions", revolutions, 1)
+    check_revolutions_memory(revolutions, per_revolution=_per_revolution(method, len(names)))
     if backend != "reduced":
         raise ValueError(f"a Linkage's sensitivities need backend='reduced'; got {backend!r}")
     start = options.pop("start", None)

@@ -1,4 +1,4 @@
-"""Regime maps and bifurcation diagrams: sweeps of long runs on any executor (issue 19).
+"""Regime maps and bifurcation diagrams: sweeps of long runs on any executor.
 
 `regime_map(mech, sweep, revolutions=100, keep=50, ...)` runs a grid over one or two fields
 of a description (`parse_sweep`: "clearance=1e-6:1e-3:log:60", "crank_speed=500rpm:10000rpm:40",
@@ -33,7 +33,15 @@ from pathlib import Path
 
 import numpy as np
 
-from ._checks import check_bool, check_int, check_real
+from ._checks import (
+    DESIGN_BYTES,
+    check_bool,
+    check_int,
+    check_memory,
+    check_real,
+    revolution_bytes,
+)
+from ._io import recover
 from .linkage import Linkage
 from .mechanism import SliderCrank
 from .poincare import (
@@ -48,7 +56,8 @@ from .poincare import (
     poincare_section,
 )
 
-__all__ = ["SweepAxis", "parse_sweep", "design_at", "regime_map", "MapResult"]
+__all__ = ["SweepAxis", "parse_sweep", "design_at", "regime_map", "MapResult", "load_map",
+           "map_memory"]
 
 RPM = 2.0 * math.pi / 60.0
 
@@ -68,6 +77,9 @@ class SweepAxis:
         if not self.values:
             raise ValueError(f"sweep {self.name}: no values")
 
+
+#: bytes of one swept value held while parsed (a float64 and a Python float in a tuple)
+_VALUE_BYTES = 40
 
 _NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
 
@@ -114,6 +126,8 @@ def parse_sweep(spec) -> SweepAxis:
                              f"got {parts[3]!r}") from None
         if n < 1:
             raise ValueError(f"sweep {name}: the number of points must be >= 1; got {n}")
+        check_memory(f"sweep {name} with {n} points: its values need", n * _VALUE_BYTES,
+                     advice="use fewer points")
         if parts[2] == "log":
             if not (lo > 0 and hi > 0):
                 raise ValueError(f"sweep {name}: a log range needs LO, HI > 0; got {rhs!r}")
@@ -309,18 +323,43 @@ def _store(ds, shape, res, omega_of) -> None:
 
 
 def _write(ds, path: Path) -> None:
-    """The whole dataset to `path` (netCDF, scipy engine), through a temporary file renamed
-    over it, so that the file on disk is always a complete dataset."""
-    tmp = path.with_name(path.name + ".part")
-    ds.to_netcdf(tmp, engine="scipy")
-    os.replace(tmp, path)
+    """The whole dataset to `path` (netCDF, scipy engine), through a temporary file of this
+    process renamed over it, so that the file on disk is always a complete dataset (a
+    failed write, e.g. a full disk, removes its temporary file and leaves the last one)."""
+    tmp = path.with_name(f".{path.name}.partial-{os.getpid()}")
+    try:
+        ds.to_netcdf(tmp, engine="scipy")
+        os.replace(tmp, path)
+    except OSError as exc:
+        if exc.filename is None and exc.strerror:     # a failed write: name the map
+            raise OSError(exc.errno, exc.strerror, str(path)) from exc
+        raise
+    finally:
+        if tmp.exists():
+            tmp.unlink()
 
 
-def _load(path: Path):
+def load_map(path: str | Path):
+    """The regime map (xarray.Dataset) in the netCDF file `path`, loaded into memory;
+    ValueError naming the file if it cannot be read or is not a map of this program."""
     import xarray as xr
 
-    with xr.open_dataset(path, engine="scipy", mask_and_scale=False) as ds:
-        return ds.load()
+    path = Path(path)
+    try:
+        with xr.open_dataset(path, engine="scipy", mask_and_scale=False, mmap=False) as ds:
+            ds = ds.load()
+    except FileNotFoundError:
+        raise ValueError(f"regime map {str(path)!r} does not exist") from None
+    except MemoryError:
+        raise
+    except Exception as exc:  # noqa: BLE001 - a damaged file fails anywhere in the reader
+        reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        raise ValueError(f"cannot read the regime map {str(path)!r}: it is not a complete "
+                         f"netCDF file ({reason})") from None
+    if not str(ds.attrs.get("format", "")).startswith("mbs-clearance regime map"):
+        raise ValueError(f"{str(path)!r} is a netCDF file but not a regime map of "
+                         "mbs-clearance (no 'format' attribute naming one)")
+    return ds
 
 
 @dataclass
@@ -348,7 +387,8 @@ def regime_map(mech, sweep, revolutions: int = 100, keep: int = 50, scheduler=No
                angle: float | None = None, tol: float = RECURRENCE_TOL,
                max_period: int = MAX_PERIOD, rtol: float | None = None, workers: int = 2,
                chunk_size: int | None = None, progress: bool = False,
-               retries: int = 2, write_interval: float = 5.0) -> MapResult:
+               retries: int = 2, write_interval: float = 5.0,
+               max_memory: int | None = None) -> MapResult:
     """A regime map / bifurcation diagram of `mech` over one or two swept fields.
 
     Parameters
@@ -383,6 +423,11 @@ def regime_map(mech, sweep, revolutions: int = 100, keep: int = 50, scheduler=No
     write_interval : float
         Seconds between writes of `out` while results arrive (0: after every chunk); a run
         killed without warning loses at most the points of this interval.
+    max_memory : int, optional
+        Limit in bytes of the map's estimated memory (default
+        `_checks.default_max_memory`): the dataset and the designs of every point, and each
+        running point's per-revolution arrays (`map_memory`). A map above it is refused
+        with `MemoryLimitError` (a ValueError) before any design is built.
 
     Returns a `MapResult`: the labelled dataset (dims: the swept fields, revolution, joint,
     component, lag; variables section, peak, peak_mean, peak_max, regime, period,
@@ -409,8 +454,14 @@ def regime_map(mech, sweep, revolutions: int = 100, keep: int = 50, scheduler=No
     if rtol is not None:
         rtol = check_real("rtol", rtol, 1e-14, 1e-4)
     write_interval = check_real("write_interval", write_interval, 0.0, unit="s")
-    # every design first: a bad field or value fails before any run
     shape = tuple(len(a.values) for a in axes)
+    # the size first (the designs of a huge grid alone would not fit), from the base design
+    joints = len(joints_of(mech if case is None else design_at(None, {}, case, overrides)))
+    local_pool = scheduler is None or (isinstance(scheduler, str)
+                                       and scheduler in ("threads", "processes"))
+    concurrent = workers if isinstance(workers, int) and workers > 0 and local_pool else 1
+    map_memory(shape, revolutions, keep, max_period, joints, concurrent, max_memory)
+    # every design next: a bad field or value fails before any run
     designs = []
     for flat in range(int(np.prod(shape))):
         idx = np.unravel_index(flat, shape)
@@ -434,16 +485,26 @@ def regime_map(mech, sweep, revolutions: int = 100, keep: int = 50, scheduler=No
     ds["joint_clearance"].values[...] = np.array(
         [clearances_of(d) for d in designs]).reshape(shape + (J,))
     path = None if out is None else Path(out)
+    if path is not None:
+        recover(path)           # the temporary files of runs that were killed
     if path is not None and path.exists():
-        old = _load(path)
+        old = load_map(path)
         _check_resumable(old, ds, path)
         ds = old
     todo = [i for i in range(len(designs)) if ds["done"].values.reshape(-1)[i] == 0]
     skipped = len(designs) - len(todo)
     omegas = [d.drive.speed if isinstance(d, Linkage) else d.crank_speed for d in designs]
+    executor, own = scheduler, None
+    if isinstance(scheduler, str) and scheduler.startswith(("tcp://", "tls://", "ws://")):
+        executor = own = connect_dask(scheduler)    # before any file: it may be unreachable
     if path is not None:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        _write(ds, path)
+        try:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            _write(ds, path)
+        except BaseException:
+            if own is not None:
+                own.close()
+            raise
 
     last_write = [time.monotonic()]
     pending = [0]
@@ -457,9 +518,6 @@ def regime_map(mech, sweep, revolutions: int = 100, keep: int = 50, scheduler=No
             last_write[0] = time.monotonic()
             pending[0] = 0
 
-    executor, own = scheduler, None
-    if isinstance(scheduler, str) and scheduler.startswith(("tcp://", "tls://", "ws://")):
-        executor = own = connect_dask(scheduler)
     t0 = time.perf_counter()
     try:
         evaluate(_map_point, [(i, designs[i]) for i in todo], (settings,), executor=executor,
@@ -471,6 +529,24 @@ def regime_map(mech, sweep, revolutions: int = 100, keep: int = 50, scheduler=No
         if path is not None and pending[0]:
             _write(ds, path)        # what arrived since the last write (also on Ctrl-C)
     return MapResult(ds, path, len(todo), skipped, time.perf_counter() - t0)
+
+
+def map_memory(shape: tuple[int, ...], revolutions: int, keep: int, max_period: int,
+               joints: int, concurrent: int = 1, max_memory: int | None = None) -> int:
+    """Estimated peak memory (bytes) of a regime map over a grid of `shape` with `joints`
+    clearance joints: its dataset (held twice while written), the designs and bookkeeping
+    of every point, and the per-revolution arrays of `concurrent` running points;
+    `MemoryLimitError` naming the options if either part exceeds `max_memory`."""
+    points = math.prod(shape)
+    run = revolution_bytes(revolutions) + 8 * 4 * keep * joints
+    check_memory(f"revolutions={revolutions}: each point's run needs", concurrent * run,
+                 max_memory, "run fewer revolutions")
+    floats = 4 * keep * joints + keep + max_period + joints + 8
+    need = points * (2 * 8 * floats + DESIGN_BYTES + 256) + concurrent * run
+    grid = " x ".join(str(n) for n in shape)
+    check_memory(f"a map of {grid} = {points} points with keep={keep} needs", need,
+                 max_memory, "sweep fewer points or keep fewer revolutions")
+    return need
 
 
 def _jsonable(obj):

@@ -45,6 +45,7 @@ from typing import Any
 
 import numpy as np
 
+from ._checks import DESIGN_BYTES, check_memory, check_revolutions_memory
 from ._warnings import AccuracyWarning, PhysicsWarning
 from .executor import _THREAD_SAFE_BACKENDS, evaluate
 from .fits import iso_fit
@@ -56,6 +57,9 @@ __all__ = ["tolerance_study", "ToleranceResult", "Uniform", "Normal", "FitCleara
 #: built-in outputs of a run: the rev-k peak of |F12| (peak-only run), the RMS of the drive
 #: moment over revolution k, the max contact force over revolution k (recorded runs)
 OUTPUTS = ("peak", "rms_drive_moment", "max_contact_force")
+#: what each named output is, and its unit
+OUTPUT_LABELS = {"peak": ("max |F12|", "N"), "rms_drive_moment": ("RMS drive moment", "N m"),
+                 "max_contact_force": ("max contact force", "N")}
 
 #: derived input: the radial clearance R_B - R_J (set by moving the journal radius)
 CLEARANCE = "radial_clearance"
@@ -198,16 +202,12 @@ def read_inputs(path: str | Path) -> dict[str, Any]:
     {"band": [nominal, tol]} | {"normal": [mean, sigma]} | {"fit": "H7/g6", "diameter": d,
     "shape": "trapezoid"}}, or a SALib parameter file (lines NAME LOW HIGH: uniform;
     blank lines and lines starting with # ignored)."""
+    from ._io import parse_json, read_text
+
     path = Path(path)
-    try:
-        text = path.read_text()
-    except OSError as exc:
-        raise ValueError(f"cannot read the inputs file {str(path)!r}: {exc.strerror}") from None
+    text = read_text(path, "the inputs file")       # at most _io.MAX_INPUT_BYTES
     if text.lstrip().startswith("{"):
-        try:
-            data = json.loads(text)
-        except json.JSONDecodeError as exc:
-            raise ValueError(f"{str(path)!r} is not valid JSON: {exc}") from None
+        data = parse_json(text, path, "the inputs file")
         return {str(k): _from_spec(str(k), v) for k, v in data.items()}
     out = {}
     for no, line in enumerate(text.splitlines(), 1):
@@ -444,21 +444,46 @@ class ToleranceResult:
                    counts=data["counts"], notes=data["notes"], settings=data["settings"],
                    elapsed=float(data["elapsed"]))
 
+    @property
+    def output_unit(self) -> str:
+        """The output's unit ("" for a user's function)."""
+        return OUTPUT_LABELS.get(self.output, ("", ""))[1]
+
+    @property
+    def output_label(self) -> str:
+        """``max |F12| over revolution 4 (N)``: what the output is, with its unit."""
+        what, unit = OUTPUT_LABELS.get(self.output, (self.output, ""))
+        rev = self.settings.get("revolution")
+        return (what + (f" over revolution {rev}" if rev is not None else "")
+                + (f" ({unit})" if unit else ""))
+
     def summary(self) -> str:
         """A few lines of text: indices, probabilities, counts and notes."""
-        lines = [f"output: {self.output}; inputs: {', '.join(self.names)}"]
+        from .units import number
+
+        def val(v, digits=5):
+            return number(v, digits) + (f" {self.output_unit}" if self.output_unit else "")
+
+        lines = [f"output: {self.output_label}; inputs: {', '.join(self.names)}"]
         w = max(len(n) for n in self.names)
         if self.sobol:
             lines.append(f"Sobol (N = {self.sobol['N']}, {self.sobol['runs']} runs)")
-            lines.append(f"  {'':<{w}}  {'S1 +- conf':>16}  {'ST +- conf':>16}")
-            for i, n in enumerate(self.names):
+            if "S1" not in self.sobol:
+                lines.append(f"  indices not computed: {self.sobol.get('failed', 0)} runs "
+                             "failed")
+            else:
+                lines.append(f"  {'':<{w}}  {'S1 +- conf':>16}  {'ST +- conf':>16}")
+            for i, n in enumerate(self.names if "S1" in self.sobol else ()):
                 lines.append(f"  {n:<{w}}  {self.sobol['S1'][i]:7.3f} +- "
                              f"{self.sobol['S1_conf'][i]:.3f}  {self.sobol['ST'][i]:7.3f} +- "
                              f"{self.sobol['ST_conf'][i]:.3f}")
         if self.morris:
             lines.append(f"Morris ({self.morris['runs']} runs): mu* (output units per full "
                          "range)")
-            for i, n in enumerate(self.names):
+            if "mu_star" not in self.morris:
+                lines.append(f"  indices not computed: {self.morris.get('failed', 0)} runs "
+                             "failed")
+            for i, n in enumerate(self.names if "mu_star" in self.morris else ()):
                 lines.append(f"  {n:<{w}}  {self.morris['mu_star'][i]:.4g} +- "
                              f"{self.morris['mu_star_conf'][i]:.2g}")
         if self.dgsm:
@@ -466,15 +491,16 @@ class ToleranceResult:
             for i, n in enumerate(self.names):
                 lines.append(f"  {n:<{w}}  {self.dgsm['bound'][i]:.4g}")
         for label, mc in [("Monte Carlo", self.monte_carlo)] + [
-                (f"wear +{lv['wear'] * 1e6:.3g} um", lv) for lv in self.wear]:
+                (f"wear +{lv['wear'] * 1e6:.3g} \N{MICRO SIGN}m", lv) for lv in self.wear]:
             if not mc:
                 continue
-            line = (f"{label} ({mc['runs']} runs): mean {mc['mean']:.5g}, std "
-                    f"{mc['std']:.3g}, 5-95 % [{mc['quantiles']['0.05']:.5g}, "
-                    f"{mc['quantiles']['0.95']:.5g}]")
+            line = (f"{label} ({mc['runs']} runs): mean {val(mc['mean'])}, std "
+                    f"{val(mc['std'], 3)}, 5-95 % [{val(mc['quantiles']['0.05'])}, "
+                    f"{val(mc['quantiles']['0.95'])}]")
             if mc.get("p_exceed") is not None:
                 lo, hi = mc["p_exceed_ci"]
-                line += f", P(> {mc['allowable']:g}) = {mc['p_exceed']:.4f} [{lo:.4f}, {hi:.4f}]"
+                line += (f", P(> {val(mc['allowable'], 6)}) = {mc['p_exceed']:.4f} "
+                         f"[{lo:.4f}, {hi:.4f}]")
             lines.append(line)
         c = self.counts
         lines.append(f"runs {c.get('runs', 0)}, failed {c.get('failed', 0)}, not periodic "
@@ -572,6 +598,95 @@ def _check_inputs(inputs, output) -> tuple[tuple[str, ...], dict]:
     return tuple(inputs), dict(inputs)
 
 
+#: a Normal input is checked over mean +- NORMAL_CHECK_SIGMAS sigma (all but 5.7e-7 of its
+#: draws); rarer draws outside the field's range make invalid designs, counted as failed runs
+NORMAL_CHECK_SIGMAS = 5.0
+
+
+def _support(dist) -> tuple[float, float]:
+    """The range of values a distribution is checked over (see NORMAL_CHECK_SIGMAS)."""
+    if isinstance(dist, Normal):
+        return (dist.mean - NORMAL_CHECK_SIGMAS * dist.sigma,
+                dist.mean + NORMAL_CHECK_SIGMAS * dist.sigma)
+    if isinstance(dist, FitClearance):
+        return dist.limits
+    return dist.low, dist.high
+
+
+def _describe(dist) -> str:
+    if isinstance(dist, Normal):
+        return (f"normal({dist.mean:g}, {dist.sigma:g}) over mean +- "
+                f"{NORMAL_CHECK_SIGMAS:g} sigma")
+    if isinstance(dist, FitClearance):
+        return f"fit {dist.fit} on {dist.diameter:g} m"
+    return f"uniform [{dist.low:g}, {dist.high:g}]"
+
+
+def _check_ranges(mech: SliderCrank, names, dists, wear_levels) -> None:
+    """ValueError, before any sample is drawn, if an input's distribution or a wear level
+    leaves the valid range of a design field: every input at both ends of its range with
+    the others nominal, then every corner of the inputs' box (SliderCrank's constraints are
+    linear in the fields, so the box is valid when its corners are; at most 2**12 of
+    them), each corner with the largest wear added to its radial clearance."""
+    import itertools
+
+    ranges = {n: _support(dists[n]) for n in names}
+    for n in names:
+        for v in ranges[n]:
+            try:
+                with_values(mech, {n: v})
+            except ValueError as exc:
+                raise ValueError(f"input {n!r}: {_describe(dists[n])} reaches {v:.6g}, "
+                                 f"outside the design's valid range ({exc})") from None
+    corners = (itertools.product(*(ranges[n] for n in names)) if len(names) <= 12
+               else [tuple(r[0] for r in ranges.values()), tuple(r[1] for r in ranges.values())])
+    worst = max(wear_levels, default=None)
+    for corner in corners:
+        row = dict(zip(names, corner))
+        try:
+            with_values(mech, row)
+        except ValueError as exc:
+            raise ValueError(f"inputs {list(names)} together reach an invalid design at "
+                             f"{_short(row)} ({exc}); narrow their ranges") from None
+        if worst is not None:
+            worn = {**row, CLEARANCE: row.get(CLEARANCE, field_value(with_values(mech, row),
+                                                                    CLEARANCE)) + worst}
+            try:
+                with_values(mech, worn)
+            except ValueError as exc:
+                raise ValueError(f"wear {worst:g} m leaves the design's valid range: radial "
+                                 f"clearance {worn[CLEARANCE]:.6g} m at {_short(row)} "
+                                 f"({exc})") from None
+
+
+def _short(row: Mapping[str, float]) -> str:
+    return "{" + ", ".join(f"{k}: {v:.6g}" for k, v in row.items()) + "}"
+
+
+def _run_bytes(d: int) -> int:
+    """Bytes per run of a study held at once: its inputs (unit and physical, two float64
+    per input), its design (`_checks.DESIGN_BYTES`), its row dict and its result tuple."""
+    return 16 * d + DESIGN_BYTES + 100 * d + 250
+
+
+def study_memory(d: int, *, sobol: int = 0, second_order: bool = True, morris: int = 0,
+                 dgsm: int = 0, monte_carlo: int = 0, wear_levels: int = 0,
+                 max_memory: int | None = None) -> int:
+    """Estimated peak memory (bytes) of a tolerance study over `d` inputs: the largest
+    sample held at once (Sobol N (2 d + 2) or N (d + 2) runs, Morris r (d + 1), DGSM n,
+    Monte Carlo n) at `_run_bytes` each, plus the kept outputs of every run;
+    `MemoryLimitError` naming the sample size above `max_memory` (None: the default)."""
+    sizes = {"sobol": sobol, "morris": morris, "dgsm": dgsm, "monte_carlo": monte_carlo}
+    runs = {"sobol": sobol * ((2 * d + 2) if second_order else (d + 2)),
+            "morris": morris * (d + 1), "dgsm": dgsm, "monte_carlo": monte_carlo}
+    outputs = 8 * (sum(runs.values()) + monte_carlo * wear_levels)
+    name, largest = max(runs.items(), key=lambda kv: kv[1])
+    need = largest * _run_bytes(d) + outputs
+    check_memory(f"{name}={sizes[name]} ({largest} runs over {d} inputs): the study needs",
+                 need, max_memory, f"use a smaller {name} sample")
+    return need
+
+
 def _count(name: str, value, minimum: int) -> int:
     if not isinstance(value, numbers.Integral) or isinstance(value, bool) or value < minimum:
         raise ValueError(f"{name} must be an integer >= {minimum}; got {value!r}")
@@ -664,11 +779,6 @@ def tolerance_study(inputs: Mapping[str, Any], mech: SliderCrank | None = None,
     -------
     ToleranceResult
     """
-    from SALib.analyze import morris as morris_analyze
-    from SALib.analyze import sobol as sobol_analyze
-    from SALib.sample import morris as morris_sample
-    from SALib.sample import sobol as sobol_sample
-
     from .simulate import BACKENDS
 
     t_start = time.perf_counter()
@@ -682,6 +792,7 @@ def tolerance_study(inputs: Mapping[str, Any], mech: SliderCrank | None = None,
     if backend not in BACKENDS:
         raise ValueError(f"backend must be one of {sorted(BACKENDS)}; got {backend!r}")
     revolution = _count("revolution", revolution, 1)
+    check_revolutions_memory(revolution, options.get("max_memory"), name="revolution")
     sobol = _count("sobol", sobol, 0)
     if sobol and sobol & (sobol - 1):
         raise ValueError(f"sobol must be 0 or a power of 2 (Sobol sequences); got {sobol}")
@@ -720,6 +831,15 @@ def tolerance_study(inputs: Mapping[str, Any], mech: SliderCrank | None = None,
         raise ValueError("nothing to do: set sobol, morris, dgsm or monte_carlo > 0")
     if not callable(output):
         with_values(mech, {n: field_value(mech, n) for n in names})   # checks the nominal
+        _check_ranges(mech, names, dists, wear_levels)
+    study_memory(len(names), sobol=sobol, second_order=second_order, morris=morris,
+                 dgsm=dgsm, monte_carlo=monte_carlo, wear_levels=len(wear_levels),
+                 max_memory=options.get("max_memory"))
+
+    from SALib.analyze import morris as morris_analyze
+    from SALib.analyze import sobol as sobol_analyze
+    from SALib.sample import morris as morris_sample
+    from SALib.sample import sobol as sobol_sample
 
     task = _Task(output=output, revolution=revolution, backend=backend,
                  options=dict(options))

@@ -1,4 +1,4 @@
-"""Run every bad-input case of issue 14 and write the table docs/bad_input.md.
+"""Run every bad-input case and write the table docs/bad_input.md.
 
     python tools/bad_input_table.py              # all cases; writes docs/bad_input.md
     python tools/bad_input_table.py --cli-only   # print the command-line table only
@@ -130,7 +130,105 @@ CLI_CASES: list[tuple[str, str]] = [
     ("report --out user.txt", "a file where a folder is expected"),
     ("report --out notes", "a folder holding a user's files"),
     ("report --out /proc/report", "a folder that is not writable"),
+    # ---- sizes refused before the work, unreachable schedulers, map and report inputs,
+    # ---- tolerance ranges (files from `_make_size_files`)
+    ("map --sweep clearance=1e-5:1e-3:log:10000 --sweep crank_speed=100:1000:10000",
+     "a map of 10^8 points"),
+    ("map --sweep clearance=1e-5:1e-3:1000 --sweep crank_speed=100:1000:1000",
+     "a map of 10^6 points"),
+    ("map --sweep clearance=1e-5:1e-3:1000000000", "one sweep axis of 10^9 points"),
+    ("map --sweep clearance=1e-5:1e-3:3 --revolutions 1000000000",
+     "10^9 revolutions per map point"),
+    ("sensitivity --revolutions 1000000000", "10^9 revolutions of sensitivities"),
+    ("lyapunov --revolutions 1000000000", "10^9 revolutions of a Lyapunov exponent"),
+    ("optimize --population 1000000000", "a GA population of 10^9"),
+    ("optimize --population 10000 --generations 100000", "10^9 GA evaluations"),
+    ("tolerance tol_ok.json --sobol 1073741824", "a Sobol sample of 2^30"),
+    ("tolerance tol_ok.json --sobol 0 --monte-carlo 1000000000", "a Monte Carlo of 10^9"),
+    ("tolerance tol_negative.json", "a uniform range leaving the field's range"),
+    ("tolerance tol_normal.json", "a normal whose 5 sigma leave the field's range"),
+    ("tolerance tol_fit.json --sobol 0 --monte-carlo 4 --wear 1",
+     "a wear of 1 m on a 10 mm bearing"),
+    ("map --sweep clearance=1e-5:1e-3:3 --out notes", "map into a folder of a user's files"),
+    ("map --sweep clearance=1e-5:1e-3:3 --out bad_map",
+     "map into a folder whose map.nc is not a map"),
+    ("report --map bad.nc", "a damaged regime map"),
+    ("report --map user.json", "a file that is not a regime map"),
+    ("report --map missing.nc", "a regime map that does not exist"),
+    ("report --map bad.nc --replot", "--map with --replot"),
 ]
+
+
+# ---- descriptions and input files: hostile names, missing keys, sizes, loops that cannot
+# close (the files are written by `_make_description_files`, only for the case naming them)
+CLI_CASES += [
+    ("simulate --description evil_name.json",
+     "a linkage name holding Python that would run on import"),
+    ("simulate --description evil_joint.json",
+     "a clearance joint name holding Python that would run on import"),
+    ("simulate --description no_mass.json", "a body lacking its mass"),
+    ("simulate --description unknown_key.json", "a clearance joint with an unknown key"),
+    ("simulate --description same_pin.json", "a second clearance joint on the same pin"),
+    ("simulate --description short_coupler.json", "a four-bar that cannot close"),
+    ("simulate --description many_points.json", "a body with 1.5 million points"),
+    ("simulate --description points_200.json", "a body with 200 points"),
+    ("simulate --description /dev/zero", "an endless description file"),
+    ("simulate --config /dev/zero", "an endless config file"),
+]
+
+#: a name that, pasted into generated source, would write the file PWNED when imported
+EVIL_NAME = 'x"""\nimport pathlib; pathlib.Path("PWNED").write_text("ran")\n"""'
+
+
+def _make_description_files(folder: Path, command: str) -> None:
+    """The description files of the cases above that `command` names."""
+    from mbs_clearance.cases import four_bar, paper_slider_crank
+
+    def paper():
+        return paper_slider_crank().to_dict()
+
+    def evil_name():
+        d = paper()
+        d["name"] = EVIL_NAME
+        return d
+
+    def evil_joint():
+        d = paper()
+        d["clearance_joints"][0]["name"] = EVIL_NAME
+        return d
+
+    def no_mass():
+        d = paper()
+        del d["bodies"][1]["mass"]
+        return d
+
+    def unknown_key():
+        d = paper()
+        d["clearance_joints"][0]["radius"] = 0.01
+        return d
+
+    def same_pin():
+        d = paper()
+        d["clearance_joints"].append({**d["clearance_joints"][0], "name": "second"})
+        return d
+
+    def short_coupler():
+        d = four_bar().to_dict()
+        d["bodies"][1]["points"] = {"crank_end": [-0.1, 0.0], "rocker_end": [0.1, 0.0]}
+        return d
+
+    def points(n):
+        d = paper()
+        d["bodies"][2]["points"].update({f"p{i}": [0.0, 0.0] for i in range(n)})
+        return d
+
+    makers = {"evil_name": evil_name, "evil_joint": evil_joint, "no_mass": no_mass,
+              "unknown_key": unknown_key, "same_pin": same_pin,
+              "short_coupler": short_coupler, "many_points": lambda: points(1_500_000),
+              "points_200": lambda: points(200)}
+    for name, make in makers.items():
+        if f"{name}.json" in command:
+            (folder / f"{name}.json").write_text(json.dumps(make()))
 
 
 def _make_user_files(folder: Path) -> None:
@@ -161,6 +259,21 @@ def _make_user_files(folder: Path) -> None:
     os.rename(folder / "report_a", mixed)
     os.replace(folder / "report_b" / "data" / "response_reduced.npz",
                mixed / "data" / "response_reduced.npz")
+    _make_size_files(folder)
+
+
+# ---- files of the cases on sizes, tolerance ranges and regime maps
+def _make_size_files(folder: Path) -> None:
+    """Tolerance inputs inside and outside the fields' ranges, a damaged regime map and a
+    map folder holding one."""
+    (folder / "tol_ok.json").write_text('{"crank_length": {"band": [0.05, 1e-4]}}\n')
+    (folder / "tol_negative.json").write_text('{"crank_length": {"uniform": [-1, 0.05]}}\n')
+    (folder / "tol_normal.json").write_text('{"slider_mass": {"normal": [0.14, 0.05]}}\n')
+    (folder / "tol_fit.json").write_text(
+        '{"radial_clearance": {"fit": "H7/g6", "diameter": 0.02}}\n')
+    (folder / "bad.nc").write_bytes(b"CDF\x01 cut short")
+    (folder / "bad_map").mkdir()
+    (folder / "bad_map" / "map.nc").write_bytes(b"not a map")
 
 
 def run_cli_case(command: str) -> dict:
@@ -188,6 +301,7 @@ def run_cli_cases() -> list[dict]:
     for command, what in CLI_CASES:
         with tempfile.TemporaryDirectory() as tmp:
             _make_user_files(Path(tmp))
+            _make_description_files(Path(tmp), command)
             os.chdir(tmp)
             try:
                 row = run_cli_case(command)
@@ -207,7 +321,7 @@ def _shown(stderr: str) -> str:
 
 
 # --------------------------------------------------------------------------- library cases
-#: (Python expression, item of issue 14) - evaluated in the worker with the names of
+#: (Python expression, what is tried) - evaluated in the worker with the names of
 #: `_library_namespace`
 LIBRARY_CASES: list[tuple[str, str]] = [
     ("simulate(M, 1, t_eval=[np.nan])", "t_eval NaN"),
@@ -252,7 +366,61 @@ LIBRARY_CASES: list[tuple[str, str]] = [
     ("simulate(cases.four_bar(), 1, start=Start(np.zeros(4), np.zeros(1), np.ones(1), 1, "
      "'paper_slider_crank'))", "start of another linkage"),
     ("simulate(M, 1, start=None)", "start for a SliderCrank"),
+    # ---- sizes refused before the work, tolerance ranges, flagged runs, adapting defaults
+    # ---- (names from `_sizes_namespace`)
+    ("regime_map(M, ['clearance=1e-5:1e-3:log:10000', 'crank_speed=100:1000:10000'])",
+     "a map of 10^8 points"),
+    ("regime_map(M, 'clearance=1e-5:1e-3:3', revolutions=10**9)",
+     "10^9 revolutions per map point"),
+    ("sensitivities(M, ['crank_length'], revolutions=10**9)", "10^9 revolutions"),
+    ("lyapunov_exponent(M, revolutions=10**9)", "10^9 revolutions"),
+    ("optimize_link_lengths(M, population=10**9, progress=False)", "population 10^9"),
+    ("tolerance_study({'crank_length': band(0.05, 1e-4)}, sobol=2**30)",
+     "Sobol sample of 2^30"),
+    ("tolerance_study({'crank_length': Uniform(-1, 0.05)})",
+     "uniform range leaving the field's range"),
+    ("tolerance_study({'radial_clearance': FitClearance('H7/g6', 0.02)}, sobol=0, "
+     "monte_carlo=4, wear=[1.0])", "wear of 1 m on a 10 mm bearing"),
+    ("simulate(SliderCrank(youngs_modulus=1e15), 4).stats['accuracy_ok']",
+     "E = 1e15 Pa: flagged, warns"),
+    ("simulate(SliderCrank(crank_mass=1e-6, coupler_mass=1e-6, slider_mass=1e-6), 4)"
+     ".stats['accuracy_ok']", "1e-6 kg masses: flagged, warns"),
+    ("lyapunov_exponent(M, revolutions=40).transient", "default transient with 40 revolutions"),
+    ("load_map(crafted_map())", "a damaged regime map"),
 ]
+
+
+# ---- descriptions: names, keys, sizes, loops (names from `_description_namespace`)
+LIBRARY_CASES += [
+    ("Linkage.from_dict({**paper_dict(), 'name': EVIL_NAME})",
+     "a linkage name holding Python that would run on import"),
+    ("Body('crank arm', 1.0, 1.0)", "a body name that is not an identifier"),
+    ("Linkage.from_dict(without_mass())", "a body lacking its mass"),
+    ("cases.paper_slider_crank().replace(clearance_joints=2 * "
+     "cases.paper_slider_crank().clearance_joints)", "the same clearance joint twice"),
+    ("Body('crank', 1.0, 1.0, {f'p{i}': (0.0, 0.0) for i in range(1_500_000)})",
+     "a body with 1.5 million points"),
+    ("cases.four_bar().with_parameter('coupler.crank_end.x', -0.1).with_parameter("
+     "'coupler.rocker_end.x', 0.1).assemble()", "a four-bar that cannot close"),
+    ("Linkage.from_file('/dev/zero')", "an endless description file"),
+]
+
+
+def _description_namespace() -> dict:
+    """Names the description cases use."""
+    from mbs_clearance import cases
+    from mbs_clearance.linkage import Body, Linkage
+
+    def paper_dict():
+        return cases.paper_slider_crank().to_dict()
+
+    def without_mass():
+        d = paper_dict()
+        del d["bodies"][0]["mass"]
+        return d
+
+    return {"Linkage": Linkage, "Body": Body, "paper_dict": paper_dict,
+            "without_mass": without_mass, "EVIL_NAME": EVIL_NAME}
 
 
 def _library_namespace(tmp: Path) -> dict:
@@ -328,7 +496,25 @@ def _library_namespace(tmp: Path) -> dict:
             "sensitivities": sensitivities, "load_trajectory": load_trajectory,
             "load_sensitivities": load_sensitivities, "OptimizationResult": OptimizationResult,
             "trajectory": trajectory, "save_roundtrip": save_roundtrip, "crafted": crafted,
-            "cases": cases, "Start": Start}
+            "cases": cases, "Start": Start, **_description_namespace(),
+            **_sizes_namespace(tmp)}
+
+
+# ---- names of the library cases on sizes, tolerance ranges and regime maps
+def _sizes_namespace(tmp: Path) -> dict:
+    from mbs_clearance import lyapunov_exponent, optimize_link_lengths, regime_map
+    from mbs_clearance.sweep import load_map
+    from mbs_clearance.tolerance import FitClearance, Uniform, band, tolerance_study
+
+    def crafted_map():
+        path = tmp / "damaged_map.nc"
+        path.write_bytes(b"CDF\x01 cut short")
+        return path
+
+    return {"regime_map": regime_map, "lyapunov_exponent": lyapunov_exponent,
+            "optimize_link_lengths": optimize_link_lengths, "tolerance_study": tolerance_study,
+            "Uniform": Uniform, "band": band, "FitClearance": FitClearance,
+            "load_map": load_map, "crafted_map": crafted_map}
 
 
 def _first_line(text: str) -> str:

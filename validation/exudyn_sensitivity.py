@@ -1,4 +1,4 @@
-"""Finite-difference sensitivities through Exudyn against the reduced model's DDM (issue 17).
+"""Finite-difference sensitivities through Exudyn against the reduced model's DDM.
 
 For a named case and parameters (dotted `Linkage` names): central differences of Exudyn
 runs (fixed step h, the parameter moved by +-rel b0) of the monitored force's magnitude

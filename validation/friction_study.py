@@ -1,4 +1,4 @@
-"""Friction in the clearance joints (issue 18): the paper's slider-crank and the slider-crank
+"""Friction in the clearance joints: the paper's slider-crank and the slider-crank
 with both coupler joints loose, at several coefficients of friction.
 
 For each case and mu (Ambrosio's modified Coulomb law, the thresholds' defaults; mu = 0 is

@@ -104,6 +104,7 @@ print(json.dumps(result))
 #: what `inspect` reads from the page (JavaScript; returns JSON text)
 READ_PAGE = """JSON.stringify({
   height: document.documentElement.scrollHeight,
+  scroll_width: document.documentElement.scrollWidth,
   verdicts: Array.from(document.querySelectorAll('li.verdict')).map(li => ({
     key: li.dataset.key, status: li.dataset.status, text: li.innerText})),
   images: Array.from(document.images).map(i => ({
@@ -133,7 +134,8 @@ def inspect(html: str | Path, width: int = 1300) -> dict:
     """Load `html` in Qt WebEngine (Chromium) and return what the page shows: ``verdicts``
     (key, status, text of each summary line), ``images`` (alt, natural width and height:
     0 when the image did not decode), ``anchors`` (each in-page link and whether its target
-    exists) and ``height`` (px)."""
+    exists), ``height`` (px) and ``scroll_width`` (px: above `width` when something overflows
+    the page)."""
     html = Path(html).resolve()
     if not html.is_file():
         raise ValueError(f"cannot read report file {str(html)!r}")

@@ -27,6 +27,7 @@ from typing import Any
 import numpy as np
 
 from mbs_clearance import PARAMETER_INFO, SliderCrank, load_trajectory, simulate
+from mbs_clearance.units import number
 
 #: the paper's published numbers (Ebrahimi, Salahshoor & Nouri 2018)
 PAPER = {
@@ -37,21 +38,26 @@ PAPER = {
     "optimum_coupler_length": 0.137468,
 }
 
-SECTIONS = ("mechanism", "response", "agreement", "sensitivity", "optimization",
-            "tolerance", "regimes", "friction", "paper", "performance", "environment")
+#: figures shown folded (under "more figures"): the body keeps those that carry a verdict
+FOLDED_FIGURES = frozenset({"fig3_differences.png", "mechanism.gif", "fig7a_fitness_fixed.png",
+                            "fig7a_fitness_uniform.png", "fig7b_force_uniform.png",
+                            "friction_sensitivities.png", "work_precision_series.png"})
+
+SECTIONS = ("response", "agreement", "sensitivity", "optimization", "tolerance", "regimes",
+            "friction", "paper", "performance", "mechanism", "environment")
 
 TITLES = {
-    "mechanism": "1. Mechanism and parameters",
-    "response": "2. Dynamic response (paper Fig. 3)",
-    "agreement": "3. Cross-model agreement: reduced model vs Exudyn",
-    "sensitivity": "4. Design sensitivities (paper Figs. 4-6)",
-    "optimization": "5. Optimisation of the link lengths (paper Fig. 7, Table 3)",
-    "tolerance": "5b. Manufacturing tolerances and wear (global sensitivity)",
-    "regimes": "5c. Where the motion is periodic: regime map over clearance and speed",
-    "friction": "5d. Beyond the paper: friction in the clearance joints",
-    "paper": "6. Comparison with the paper's numbers",
-    "performance": "7. Accuracy and speed",
-    "environment": "8. Environment",
+    "response": "1. Dynamic response (paper Fig. 3)",
+    "agreement": "2. Cross-model agreement: reduced model vs Exudyn",
+    "sensitivity": "3. Design sensitivities (paper Figs. 4-6)",
+    "optimization": "4. Optimisation of the link lengths (paper Fig. 7, Table 3)",
+    "tolerance": "5. Manufacturing tolerances and wear (global sensitivity)",
+    "regimes": "6. Where the motion is periodic: regime map over clearance and speed",
+    "friction": "7. Beyond the paper: friction in the clearance joints",
+    "paper": "8. Comparison with the paper's numbers",
+    "performance": "9. Accuracy and speed",
+    "mechanism": "Appendix A. Mechanism and parameters",
+    "environment": "Appendix B. Environment",
 }
 
 
@@ -80,7 +86,7 @@ def _settings(quick: bool) -> dict[str, Any]:
         "tolerance_monte_carlo": 64 if quick else 512,
         "tolerance_allowable": 8400.0,
         "tolerance_wear": (1e-5,) if quick else (5e-6, 1e-5, 2e-5),
-        # the regime map (section 5c): clearance and crank speed sweeps, revolutions per
+        # the regime map: clearance and crank speed sweeps, revolutions per
         # point and kept, largest period looked for (full: the map of docs/regimes.md)
         "regime_sweeps": ("clearance=1e-6:1e-3:log:4", "crank_speed=500rpm:10000rpm:3")
         if quick else ("clearance=1e-6:1e-3:log:16", "crank_speed=500rpm:10000rpm:10"),
@@ -88,7 +94,7 @@ def _settings(quick: bool) -> dict[str, Any]:
         "regime_keep": 20 if quick else 50,
         "regime_max_period": 4 if quick else 8,
         "regime_map_file": None,
-        # friction (section 5d, beyond the paper): cases of the table and coefficients of
+        # friction (beyond the paper): cases of the table and coefficients of
         # friction of the table and of the sensitivities (Ambrosio's law)
         "friction_cases": ("paper_slider_crank",) if quick
         else ("paper_slider_crank", "slider_crank_two_clearances"),
@@ -298,21 +304,34 @@ def section_tolerance(out: Path, s: dict) -> dict:
                                          "chaotic_fraction")} for lv in res.wear]}
 
 
+def _check_map_file(path: Path) -> None:
+    """ValueError naming --map and the file unless it is a complete regime map of
+    `mbs-clearance map` (readable, with its regime variable over one or two swept fields)."""
+    from mbs_clearance.sweep import load_map
+
+    try:
+        ds = load_map(path)
+    except ValueError as exc:
+        raise ValueError(f"--map: {exc}") from None
+    if "regime" not in ds or not 1 <= ds["regime"].ndim <= 2:
+        raise ValueError(f"--map {str(path)!r}: a regime map over one or two fields must hold "
+                         "the variable 'regime'; this file does not")
+
+
 def section_regimes(out: Path, s: dict) -> dict:
-    """The regime map of the paper's case over clearance and crank speed (issue 19): computed
+    """The regime map of the paper's case over clearance and crank speed: computed
     (coarse under --quick, docs/regimes.md's size otherwise) or read from a map file of
     `mbs-clearance map` (--map FILE); saved as data/regime_map.nc."""
     import xarray as xr
 
     from mbs_clearance.poincare import REGIMES
-    from mbs_clearance.sweep import regime_map
+    from mbs_clearance.sweep import load_map, regime_map
 
     mech = SliderCrank()
     target = out / "data" / "regime_map.nc"
     if s.get("regime_map_file"):
         source = str(s["regime_map_file"])
-        with xr.open_dataset(source) as ds:
-            ds.load().to_netcdf(target)
+        load_map(source).to_netcdf(target)
         how = f"read from {Path(source).name} (made by mbs-clearance map)"
     else:
         regime_map(mech, list(s["regime_sweeps"]), revolutions=s["regime_revolutions"],
@@ -344,7 +363,7 @@ def section_regimes(out: Path, s: dict) -> dict:
 
 
 def section_friction(out: Path, s: dict) -> dict:
-    """Friction in the joints (issue 18; the paper's joint is frictionless): the table of
+    """Friction in the joints (the paper's joint is frictionless): the table of
     docs/friction.md (rev-4 peak, RMS drive moment, works, time in contact) per case and mu,
     the runs saved for the orbit figure, and the sensitivities of Figs. 4-6 with friction
     (DDM) saved for their figure, with each parameter's max |S| and max |dF/db| per mu."""
@@ -507,8 +526,10 @@ def verdicts(numbers: dict) -> list[dict]:
         rel = abs(a - b) / max(abs(a), abs(b), 1e-300)
         out.append(_verdict(
             "fig5_identical", "Fig. 5: the sensitivities to K and to E are identical", rel < 1e-6,
-            f"mean |S| {number(a, 6)} and {number(b, 6)} (relative difference "
-            f"{rel:.1g}): K is proportional to E in Eq. 9.", "#sensitivity"))
+            (f"mean |S| {number(a, 4)} for both" if number(a, 4) == number(b, 4)
+             else f"mean |S| {number(a, 4)} and {number(b, 4)}")
+            + f" (relative difference {rel:.1g}): K is proportional to E in Eq. 9.",
+            "#sensitivity"))
     if "journal_radius" in sens:
         others = {p: v for p, v in sens.items() if p != "journal_radius"}
         top = max(others, key=others.get)
@@ -733,62 +754,17 @@ def plot_regimes(nc: Path, path: Path) -> Path:
     """The regime map with the paper's design marked and the region where the design
     sensitivities mean something (period-1 motion) outlined."""
     import xarray as xr
-    from matplotlib.lines import Line2D
 
     from mbs_clearance.plotting import plot_regime_map
-    from mbs_clearance.poincare import REGIME_CODES
 
     mech = SliderCrank()
     with xr.open_dataset(nc) as ds:
         ds = ds.load()
-    dims = [d for d in ds["regime"].dims]
+    dims = list(ds["regime"].dims)
     mark = ({"clearance": mech.clearance, "crank_speed": mech.crank_speed}
             if set(dims) == {"clearance", "crank_speed"} else None)
-    fig = plot_regime_map(ds, None, mark=mark)
-    ax = fig.axes[0]
-    # outline the period-1 cells: every cell edge between a period-1 cell and another
-    from mbs_clearance.plotting import _edges
-
-    valid = ds["regime"].values == REGIME_CODES["period_1"]
-    ex = _edges(ds[dims[0]].values, ds[dims[0]].attrs.get("spacing"))
-    ey = _edges(ds[dims[1]].values, ds[dims[1]].attrs.get("spacing"))
-    nx, ny = valid.shape
-
-    def inside(i, j):
-        return 0 <= i < nx and 0 <= j < ny and valid[i, j]
-
-    for i, j in zip(*np.nonzero(valid)):
-        for di, dj, xs, ys in ((-1, 0, [ex[i]] * 2, ey[j:j + 2]),
-                               (1, 0, [ex[i + 1]] * 2, ey[j:j + 2]),
-                               (0, -1, ex[i:i + 2], [ey[j]] * 2),
-                               (0, 1, ex[i:i + 2], [ey[j + 1]] * 2)):
-            if not inside(i + di, j + dj):
-                ax.plot(xs, ys, color="k", lw=2.0, solid_capstyle="projecting")
-    # engineering units on the axes: clearance in mm, speed in rpm
-    from matplotlib.ticker import FuncFormatter
-
-    from mbs_clearance.units import number
-
-    for name, axis in ((dims[0], ax.xaxis), (dims[1], ax.yaxis)):
-        if name == "clearance":
-            axis.set_major_formatter(FuncFormatter(lambda v, _: number(v * 1e3, 3)))
-            axis.set_label_text("radial clearance (mm)")
-        elif name == "crank_speed":
-            lo, hi = ax.get_ylim() if axis is ax.yaxis else ax.get_xlim()
-            rpm = np.arange(0.0, hi * 30 / np.pi + 1.0, 2000.0)
-            rpm = rpm[rpm * np.pi / 30 >= lo]
-            axis.set_ticks(rpm * np.pi / 30)
-            axis.set_major_formatter(FuncFormatter(lambda v, _: number(v * 30 / np.pi, 4)))
-            axis.set_label_text("crank speed (rpm)")
-    legend = ax.get_legend()
-    extra = [Line2D([], [], color="k", lw=2,
-                    label="period-1 region: sensitivities valid inside")]
-    if mark:
-        extra.append(Line2D([], [], marker="*", ms=12, color="k", mfc="yellow", ls="none",
-                            label="paper's design"))
-    ax.legend(handles=[*legend.legend_handles, *extra], fontsize=8, loc="upper left",
-              bbox_to_anchor=(1.01, 1.0))
-    ax.set_title("regime map of the paper's case")
+    fig = plot_regime_map(ds, None, mark=mark, outline="period_1",
+                          mark_label="paper's design", title="regime map of the paper's case")
     fig.savefig(path, dpi=110, bbox_inches="tight")
     return path
 
@@ -820,14 +796,16 @@ def plot_tolerance(result, path: Path) -> Path:
     if len(values):
         ax2.hist(values, bins=30, color="0.6", label=f"new ({len(values)} runs)")
         if mc.get("allowable") is not None:
-            ax2.axvline(mc["allowable"], color="r", label=f"allowable {mc['allowable']:g}")
+            ax2.axvline(mc["allowable"], color="r",
+                        label=f"allowable load {number(mc['allowable'], 6)} "
+                              f"{result.output_unit}".rstrip())
         for lv in result.wear:
             worn = np.asarray(lv.get("values") or [], dtype=float)
             worn = worn[np.isfinite(worn)]
             if len(worn):
                 ax2.hist(worn, bins=30, histtype="step", lw=1.5,
-                         label=f"wear +{lv['wear'] * 1e6:.3g} um")
-        ax2.set_xlabel(f"output: {result.output}")
+                         label=f"wear +{lv['wear'] * 1e6:.3g} \N{MICRO SIGN}m")
+        ax2.set_xlabel(result.output_label)
         ax2.set_ylabel("designs")
         ax2.legend(fontsize=8)
     fig.tight_layout()
@@ -854,7 +832,13 @@ img { max-width: 100%; border: 1px solid #ddd; margin: 0.5em 0; }
 .measured { color: #036; font-weight: bold; }
 dl.defs dt { font-weight: bold; float: left; clear: left; width: 11em; }
 dl.defs dd { margin-left: 12em; color: #444; font-size: 0.9em; }
+pre { white-space: pre-wrap; overflow-wrap: anywhere; }
+details { margin: 0.8em 0; } summary { cursor: pointer; color: #036; }
+.glossary { font-size: 0.9em; color: #444; }
 </style></head><body>
+{% macro figures(key) %}{% for f in figs[key] if f not in folded %}<img src="{{ img[f] }}" alt="{{ f }}">{% endfor %}
+{% set more = figs[key] | select('in', folded) | list %}{% if more %}<details><summary>more
+figures ({{ more | length }})</summary>{% for f in more %}<img src="{{ img[f] }}" alt="{{ f }}">{% endfor %}</details>{% endif %}{% endmacro %}
 <h1>mbs-clearance validation report</h1>
 <p>Slider-crank with a revolute clearance joint between coupler and slider, reproducing
 Ebrahimi, Salahshoor &amp; Nouri (2018), <i>Sensitivity Analysis for Optimal Design of
@@ -868,13 +852,15 @@ report.json.</p>
 data-status="{{ v.status }}"><b>{{ v.claim }}</b>: <span class="{{ v.status | replace(' ', '-') }}">{{ v.status }}</span>
 &mdash; {{ v.why }} <a href="{{ v.evidence }}">evidence</a></li>
 {% endfor %}</ul>
+<p class="glossary"><b>Words used above and below.</b> <i>Reduced model</i>: the paper's
+equations in two coordinates, integrated with a relative tolerance (the error allowed per
+step, relative to the solution) and with every contact start located exactly.
+<i>Sensitivity S</i> (the paper's Eq. 15): the % change of the base force per % change of a
+design parameter, (b / |F12|) d|F12|/db; <i>mean |S|</i> is its mean magnitude over
+revolution 4. <i>DDM</i> (direct differentiation): the derivatives integrated beside the
+motion, checked against finite differences. <i>Period-1</i>: the same motion every
+revolution.</p>
 <ul>{% for key in sections %}<li><a href="#{{ key }}">{{ titles[key] }}</a></li>{% endfor %}</ul>
-
-<h2 id="mechanism">{{ titles.mechanism }}</h2>
-<table><tr><th>field</th><th>symbol</th><th>value</th><th>source</th></tr>
-{% for r in n.mechanism.parameters %}<tr><td>{{ r.field }}</td><td>{{ r.symbol }}</td>
-<td>{% if r.derived is defined %}{{ r.derived | computed(r.unit, r.derived_how) }}{% elif r.value is string %}{{ r.value }}{% else %}{{ r.value | q(r.unit) }}{% endif %}</td>
-<td>{{ r.source }}</td></tr>{% endfor %}</table>
 
 <h2 id="response">{{ titles.response }}</h2>
 <p>Paper's case, 4 crank revolutions from the journal centred with ideal-joint velocities.
@@ -883,7 +869,8 @@ Panels: (a) base force magnitude, (b) crank moment, (c) slider acceleration vs v
 other: the second figure shows their differences (and the clearance's effect: ideal joint
 minus clearance joint). The animation shows the mechanism over revolution 4 beside the
 journal's orbit, the clearance magnified.</p>
-{% for f in figs.response %}<img src="{{ img[f] }}" alt="{{ f }}">{% endfor %}
+{{ figures('response') }}
+<details><summary>peaks per revolution, both models and the ideal joint</summary>
 <table><tr><th>model</th>{% for k in range(n.response.reduced.peak_base_force | length) %}
 <th>max |F12|, rev. {{ k + 1 }}{% if k == 0 %} (start-up transient){% endif %}</th>{% endfor %}
 <th>max |M2|, last rev.</th><th>max slider acc., last rev.</th>
@@ -897,7 +884,7 @@ journal's orbit, the clearance magnified.</p>
 ideal-joint velocities and first hits the bearing wall; the paper reports revolution 4.</dd>
 <dt>eccentricity / c</dt><dd>distance of the journal centre from the bearing centre over the
 radial clearance c; above 1 the journal penetrates the wall (elastic contact). An ideal
-joint has no clearance: '-'.</dd></dl>
+joint has no clearance: '-'.</dd></dl></details>
 
 <h2 id="agreement">{{ titles.agreement }}</h2>
 <p>Reduced model (rtol 1e-10) against Exudyn (generalized-alpha, step
@@ -939,11 +926,11 @@ revolution (the four-bar settles after about 100, docs/cases.md).</p>
 <td>{% for j, v in r.first_impact_us.items() %}{{ j }}: {% for x in v %}{{ x | num(6) if x is not none else '-' }}{% if not loop.last %} / {% endif %}{% endfor %}<br>{% endfor %}</td></tr>
 {% endfor %}</table>
 {% endif %}
-{% for f in figs.agreement %}<img src="{{ img[f] }}" alt="{{ f }}">{% endfor %}
+{{ figures('agreement') }}
 
 <h2 id="sensitivity">{{ titles.sensitivity }}</h2>
 <p>Normalized sensitivity (Eq. 15) of |F12| over revolution 4 by direct differentiation of
-the reduced model (rtol 1e-9, {{ n.sensitivity.ddm_steps }} steps,
+the reduced model (relative tolerance 1e-9, {{ n.sensitivity.ddm_steps }} steps,
 {{ n.sensitivity.ddm_seconds | dur }}{% if n.sensitivity.timing is defined %}, {{ n.sensitivity.timing }}{% endif %}), checked against central differences
 ({{ n.sensitivity.fd_seconds | dur }}). Motion flagged as non-periodic:
 {{ n.sensitivity.chaotic }}.</p>
@@ -962,10 +949,12 @@ last two revolutions: about 1 when the motion is periodic (the derivatives are t
 meaningful); steadily above 1 when it is chaotic.</dd></dl>
 <p class="note">In Fig. 5 the curves of contact_stiffness and youngs_modulus coincide
 exactly: K is proportional to E (Eq. 9), so their normalized sensitivities are identical.</p>
-<table><tr><th>FD check: parameter</th><th>max |DDM - FD| / max |DDM|</th></tr>
+<details><summary>the check against central finite differences</summary>
+<table><tr><th>parameter</th><th>largest difference of DDM and finite differences, over
+the largest DDM value</th></tr>
 {% for r in n.sensitivity.fd_check %}<tr><td>{{ r.parameter }}</td>
-<td>{{ '%.1e' % r.max_diff_over_max }}</td></tr>{% endfor %}</table>
-{% for f in figs.sensitivity %}<img src="{{ img[f] }}" alt="{{ f }}">{% endfor %}
+<td>{{ '%.1e' % r.max_diff_over_max }}</td></tr>{% endfor %}</table></details>
+{{ figures('sensitivity') }}
 
 <h2 id="optimization">{{ titles.optimization }}</h2>
 <p>pygad GA over L2 in [4, 6] cm and L3 in [10, 14] cm minimising max |F12| over revolution
@@ -984,7 +973,7 @@ wording) or scaled with length (uniform density).</p>
 <td>paper's optimum in our models, masses {{ k }}</td><td>4.0733</td><td>13.7468</td>
 <td>{% for m, v in r.items() %}{{ m }}: {{ v | q('N') }}{% if not loop.last %}; {% endif %}{% endfor %}</td><td></td></tr>{% endfor %}
 </table>
-{% for f in figs.optimization %}<img src="{{ img[f] }}" alt="{{ f }}">{% endfor %}
+{{ figures('optimization') }}
 
 <h2 id="tolerance">{{ titles.tolerance }}</h2>
 <p>Peak |F12| of revolution 4 over a production batch: lengths to &plusmn;0.05 mm, masses to
@@ -992,29 +981,31 @@ wording) or scaled with length (uniform density).</p>
 an H7/g6 fit on the 20 mm pin (ISO 286), as in docs/tolerance.md. Sobol indices (SALib,
 bootstrap intervals), Monte Carlo and the probability of exceeding the allowable load with
 its Clopper-Pearson interval, and the same as the clearance wears.</p>
-<pre>{{ n.tolerance.summary }}</pre>
-{% for f in figs.tolerance %}<img src="{{ img[f] }}" alt="{{ f }}">{% endfor %}
+<details><summary>the study's numbers (indices, probabilities, counts)</summary>
+<pre>{{ n.tolerance.summary }}</pre></details>
+{{ figures('tolerance') }}
 
 <h2 id="regimes">{{ titles.regimes }}</h2>
 <p>Each point of the map is a run of {{ n.regimes.settings.revolutions | default('?') }}
 crank revolutions of the paper's case at that clearance and speed; the journal's state once
 per revolution (the Poincare section) over the last {{ n.regimes.settings.keep | default('?') }}
 classifies the motion (period-1: the same state every revolution; chaotic: no recurrence).
-The design sensitivities of section 4 and the optimisation's peaks are meaningful where the
+The design sensitivities of section 3 and the optimisation's peaks are meaningful where the
 motion is period-1 (outlined): elsewhere only statistics are. Map: {{ n.regimes.source }},
 {{ n.regimes.shape | join(' x ') }} points.
 {% if n.regimes.design_nearest %}At the grid point nearest to the paper's design
 ({{ n.regimes.design_nearest.clearance | q('m') }}, {{ n.regimes.design_nearest.crank_speed | q('rad/s') }})
 the motion is <b>{{ n.regimes.design_nearest.regime | replace('_', ' ') }}</b>.{% endif %}</p>
+<details><summary>points per regime</summary>
 <table><tr><th>regime</th><th>points</th></tr>{% for k, v in n.regimes.counts.items() %}
-<tr><td>{{ k | replace('_', ' ') }}</td><td>{{ v }}</td></tr>{% endfor %}</table>
-{% for f in figs.regimes %}<img src="{{ img[f] }}" alt="{{ f }}">{% endfor %}
+<tr><td>{{ k | replace('_', ' ') }}</td><td>{{ v }}</td></tr>{% endfor %}</table></details>
+{{ figures('regimes') }}
 
 <h2 id="friction">{{ titles.friction }}</h2>
 <p>The paper's joint is frictionless and the paper claims nothing about friction: no verdict
 line. Here each clearance joint carries Ambrosio's modified Coulomb law (coefficient mu,
 thresholds 1e-4 and 1e-2 m/s; docs/friction.md): revolution {{ n.friction.revolution }},
-default rtol{% if quick %}; the paper's case only (--quick){% endif %}.</p>
+default tolerance{% if quick %}; the paper's case only (--quick){% endif %}.</p>
 <table><tr><th>case</th><th>mu</th><th>peak (N)</th><th>change (%)</th>
 <th>RMS drive moment (N m)</th><th>drive work (J)</th><th>friction work (J)</th>
 <th>in contact (fraction of the revolution)</th><th>contact onsets</th></tr>
@@ -1028,16 +1019,17 @@ default rtol{% if quick %}; the paper's case only (--quick){% endif %}.</p>
 force) over the revolution; change against mu = 0.</dd>
 <dt>in contact</dt><dd>the fraction of the revolution the journal spends on the bearing wall
 (1: it follows the wall throughout); contact onsets: new contacts in the revolution.</dd></dl>
-<p>Sensitivities of Figs. 4-6 (DDM, Eq. 15) with friction: per parameter the largest
-|S| and the largest |d|F12|/db| over the revolution, and their change against mu = 0.</p>
+<details><summary>sensitivities of Figs. 4-6 with friction</summary>
+<p>Per parameter the largest |S| and the largest |d|F12|/db| over the revolution (DDM,
+Eq. 15), and their change against mu = 0.</p>
 <table><tr><th>parameter</th>{% for mu in n.friction.sensitivity[0].mu %}<th>max |S|,
 mu = {{ mu }}</th>{% endfor %}{% for mu in n.friction.sensitivity[0].mu %}<th>max |dF/db|,
 mu = {{ mu }}</th>{% endfor %}</tr>
 {% for r in n.friction.sensitivity %}<tr><td>{{ r.parameter }}</td>
 {% for v in r.max_s %}<td>{{ v | num(4) }}{% if not loop.first %} ({{ '%+.1f' % (100 * r.change_s[loop.index0]) }} %){% endif %}</td>{% endfor %}
-{% for v in r.max_d %}<td>{{ v | num(4) }}{% if not loop.first %} ({{ '%+.1f' % (100 * r.change_d[loop.index0]) }} %){% endif %}</td>{% endfor %}</tr>{% endfor %}</table>
+{% for v in r.max_d %}<td>{{ v | num(4) }}{% if not loop.first %} ({{ '%+.1f' % (100 * r.change_d[loop.index0]) }} %){% endif %}</td>{% endfor %}</tr>{% endfor %}</table></details>
 <p class="note">{% for p in n.friction.periodic %}mu = {{ p.mu }}: {{ p.note }}. {% endfor %}</p>
-{% for f in figs.friction %}<img src="{{ img[f] }}" alt="{{ f }}">{% endfor %}
+{{ figures('friction') }}
 
 <h2 id="paper">{{ titles.paper }}</h2>
 <table><tr><th>quantity</th><th>paper</th><th>ours</th><th>difference</th><th>explanation</th></tr>
@@ -1051,7 +1043,8 @@ mu = {{ mu }}</th>{% endfor %}</tr>
 peak |F12| (first figure) and max error of the base-force series (second) against the
 reduced model at rtol 1e-12, for our compiled integrator, scipy solve_ivp on the same
 equations and events, and Exudyn.</p>
-{% for f in figs.performance %}<img src="{{ img[f] }}" alt="{{ f }}">{% endfor %}
+{{ figures('performance') }}
+<details><summary>fastest setting per accuracy, each method</summary>
 {% for case, by_target in n.performance.ratios.items() %}<h3>{{ case }}</h3>
 {% for target, rows in by_target.items() %}<p>Fastest setting with peak and series errors
 &le; {{ target }}{% if not rows %}: no run reached this accuracy{% endif %}:</p>
@@ -1061,7 +1054,9 @@ equations and events, and Exudyn.</p>
 <td>{{ r.ratio | num(3) }}</td></tr>{% endfor %}</table>{% endif %}{% endfor %}{% endfor %}
 <dl class="defs"><dt>x ours</dt><dd>run time over our compiled integrator's (dopri5) at its
 fastest setting that meets the same accuracy: 10 means ten times slower than ours.</dd></dl>
-<h3>Stress test</h3>
+</details>
+<details><summary>stress test: {{ n.performance.stress_summary.pass }} of
+{{ n.performance.stress_summary.cases }} cases pass</summary>
 <p>{{ n.performance.stress_summary.cases }} cases: {{ n.performance.stress_summary.pass }}
 passed, {{ n.performance.stress_summary['clear error'] }} stopped with a clear error,
 {{ n.performance.stress_summary.fail }} failed. A case <b>passes</b> when the run succeeds,
@@ -1074,15 +1069,23 @@ says what to change. <b>switches</b>: contact onsets and separations in the run.
 <td class="{{ 'pass' if r.status == 'pass' else 'fail' }}">{{ r.status }}</td>
 <td>{{ r.peak_last_revolution | q('N') if r.peak_last_revolution is defined else '' }}</td>
 <td>{{ r.contact_switches if r.contact_switches is defined else '' }}</td>
-<td class="note">{{ r.reasons | join('; ') }}</td></tr>{% endfor %}</table>
+<td class="note">{{ r.reasons | join('; ') }}</td></tr>{% endfor %}</table></details>
+
+<h2 id="mechanism">{{ titles.mechanism }}</h2>
+<details><summary>the paper's design, field by field (values, symbols, sources)</summary>
+<table><tr><th>field</th><th>symbol</th><th>value</th><th>source</th></tr>
+{% for r in n.mechanism.parameters %}<tr><td>{{ r.field }}</td><td>{{ r.symbol }}</td>
+<td>{% if r.derived is defined %}{{ r.derived | computed(r.unit, r.derived_how) }}{% elif r.value is string %}{{ r.value }}{% else %}{{ r.value | q(r.unit) }}{% endif %}</td>
+<td>{{ r.source }}</td></tr>{% endfor %}</table></details>
 
 <h2 id="environment">{{ titles.environment }}</h2>
 <p>{{ n.environment.machine }}.</p>
+<details><summary>package versions and the time of each section</summary>
 <table><tr><th>package</th><th>version</th></tr>{% for k, v in n.environment.versions.items() %}
 <tr><td>{{ k }}</td><td>{{ v }}</td></tr>{% endfor %}</table>
 <table><tr><th>section</th><th>run time (s)</th></tr>
 {% for k, v in n.environment.section_seconds.items() %}<tr><td>{{ k }}</td>
-<td>{{ '%.1f' % v }}</td></tr>{% endfor %}</table>
+<td>{{ '%.1f' % v }}</td></tr>{% endfor %}</table></details>
 </body></html>
 """
 
@@ -1101,6 +1104,38 @@ def _jsonable(obj):
     return obj
 
 
+def _typeset(fmt):
+    """`fmt`'s text for HTML: 4.793e+11 as 4.793 x 10 with a superscript 11, m^1.5 with a
+    superscript 1.5."""
+    import re
+
+    from markupsafe import Markup, escape
+
+    def power(m):
+        return f"{m[1]} &times; 10<sup>{'-' if m[2] == '-' else ''}{int(m[3])}</sup>"
+
+    def typeset(*args, **kwargs):
+        text = str(escape(fmt(*args, **kwargs)))
+        text = re.sub(r"(\d(?:\.\d+)?)e([+-]?)(\d+)", power, text)
+        return Markup(re.sub(r"\^([0-9.]+)", r"<sup>\1</sup>", text))
+
+    return typeset
+
+
+def _embedded_png(raw: bytes) -> bytes:
+    """A figure's PNG with a 256-colour palette: line plots look the same and take about
+    2.5 times less room in the self-contained HTML (the PNG files keep full colour)."""
+    import io
+
+    from PIL import Image
+
+    with Image.open(io.BytesIO(raw)) as im:
+        small = im.convert("RGB").quantize(colors=256, method=Image.Quantize.MEDIANCUT)
+    buf = io.BytesIO()
+    small.save(buf, format="PNG", optimize=True)
+    return buf.getvalue() if buf.tell() < len(raw) else raw
+
+
 def render(out: Path, numbers: dict, figs: dict) -> Path:
     """Write report.html from the numbers and the figure files (embedded as data URIs)."""
     import jinja2
@@ -1108,16 +1143,17 @@ def render(out: Path, numbers: dict, figs: dict) -> Path:
     img = {}
     for names in figs.values():
         for f in names:
-            data = base64.b64encode((out / "figures" / f).read_bytes()).decode()
+            raw = (out / "figures" / f).read_bytes()
+            data = base64.b64encode(raw if f.endswith(".gif") else _embedded_png(raw)).decode()
             mime = "image/gif" if f.endswith(".gif") else "image/png"
             img[f] = f"data:{mime};base64,{data}"
     from mbs_clearance import units
 
     env = jinja2.Environment(autoescape=True, undefined=jinja2.StrictUndefined)
-    env.filters.update(q=units.quantity, num=units.number, dur=units.duration,
-                       computed=units.derived)
+    env.filters.update(q=_typeset(units.quantity), num=_typeset(units.number),
+                       dur=units.duration, computed=_typeset(units.derived))
     html = env.from_string(TEMPLATE).render(
-        n=numbers, figs=figs, img=img, titles=TITLES, sections=SECTIONS,
+        n=numbers, figs=figs, img=img, titles=TITLES, sections=SECTIONS, folded=FOLDED_FIGURES,
         quick=numbers["environment"]["settings"]["quick"], verdicts=verdicts(numbers),
         opt_text=optimisation_paragraph(numbers),
         units={k: v[1] for k, v in PARAMETER_INFO.items()})
@@ -1142,6 +1178,9 @@ def build_report(out: str | Path = "report", quick: bool = False, progress: bool
     from mbs_clearance._io import OutputDir, check_output_dir, recover
 
     out = Path(out)
+    if replot and map_file is not None:
+        raise ValueError("--map cannot be combined with --replot (a replot reuses the saved "
+                         "data, including its regime map); drop one of them")
     if replot:
         recover(out)
         manifest = _verify_for_replot(out)
@@ -1168,6 +1207,7 @@ def build_report(out: str | Path = "report", quick: bool = False, progress: bool
         if not map_file.is_file():
             raise ValueError(f"--map {str(map_file)!r}: no such file (a map.nc written by "
                              f"mbs-clearance map)")
+        _check_map_file(map_file)       # read now: a bad file fails before any section
         s["regime_map_file"] = str(map_file.resolve())
     with OutputDir(out, "report") as staged:
         work = staged.path

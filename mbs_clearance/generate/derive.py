@@ -17,6 +17,7 @@ derivation they become symbols (S_k, C_k), computed once per evaluation by the k
 
 from __future__ import annotations
 
+import keyword
 import re
 from dataclasses import dataclass, field
 
@@ -30,9 +31,10 @@ __all__ = ["Derivation", "derive", "parameter_layout", "identifier", "geometric_
 
 
 def identifier(name: str, taken: set[str]) -> str:
-    """A Python identifier for a dotted name (unique among `taken`, which it joins)."""
-    base = re.sub(r"\W", "_", name.replace(".", "__"))
-    if not base or base[0].isdigit() or base in ("t", "y", "p"):
+    """A Python identifier for a dotted name (unique among `taken`, which it joins): ASCII
+    letters, digits and underscores only, whatever `name` holds, never a keyword."""
+    base = re.sub(r"[^A-Za-z0-9_]", "_", name.replace(".", "__"))
+    if not base or base[0].isdigit() or base in ("t", "y", "p") or keyword.iskeyword(base):
         base = "p_" + base
     ident, k = base, 1
     while ident in taken:

@@ -74,6 +74,12 @@ class _Printer(PythonCodePrinter):
 _PRINTER = _Printer({"fully_qualified_modules": True, "standard": "python3"})
 
 
+def _literal(text: str) -> str:
+    """`text` as a Python string literal (JSON, ASCII only): the one form in which a name of
+    the description enters the generated source, in code, docstrings and comments alike."""
+    return json.dumps(text)
+
+
 def _code(expr) -> str:
     return _PRINTER.doprint(expr).replace("math.math.", "math.")
 
@@ -163,7 +169,7 @@ class _Writer:
         d = self.d
         lines = []
         for sym in sorted(need & set(self.pindex), key=lambda s: self.pindex[s]):
-            lines.append(f"{sym} = p[{self.pindex[sym]}]  # {self.pname[sym]}")
+            lines.append(f"{sym} = p[{self.pindex[sym]}]  # {_literal(self.pname[sym])}")
         consts = {v: k for k, v in self.constants.items()}
         for sym in sorted((s for s in need if s in consts), key=lambda s: int(s.name[1:])):
             lines.append(f"{sym} = p[CONST_START + {sym.name[1:]}]")

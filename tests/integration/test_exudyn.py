@@ -133,8 +133,8 @@ def test_sensitive_regimes_first_impact_and_statistics(c):
     assert sb.mean_base_force == pytest.approx(sa.mean_base_force, rel=1e-2)
     # rms |F12| carries the impact peaks: Exudyn differs by <= 1.3 % (c = 0.5 mm); bound
     # 3 %. The reduced model's own scatter between rtol 1e-9 and 1e-12 is a sample of the
-    # chaos: 1.1 % before session 6, 4.0 % at c = 0.5 mm since the penetration is under
-    # error control (another trajectory of the same chaotic motion); bound 6 %
+    # chaos: 4.0 % at c = 0.5 mm with the penetration under error control (1.1 % without:
+    # another trajectory of the same chaotic motion); bound 6 %
     assert sb.rms_base_force == pytest.approx(sa.rms_base_force, rel=3e-2)
     assert abs(sl.rms_base_force / sa.rms_base_force - 1) < 6e-2
 

@@ -1,4 +1,4 @@
-"""Friction in the Exudyn model of a description (issue 18, the Exudyn side).
+"""Friction in the Exudyn model of a description (the Exudyn side).
 
 The friction of a clearance joint is an `ObjectGenericODE2` on the two bodies' nodes whose
 (symbolic) force function returns the tangential force at the joint's points and the
@@ -132,7 +132,7 @@ def test_friction_refused_where_not_built():
 @pytest.mark.slow
 @pytest.mark.parametrize("mu", [0.01, 0.1])
 def test_reduced_and_exudyn_agree_with_friction(mu):
-    """Cross-model with friction on (issue 18): the paper case, Ambrosio's law, between the
+    """Cross-model with friction on: the paper case, Ambrosio's law, between the
     generated reduced model (rtol 1e-10) and Exudyn at its default step (2 us): the rev-4
     peak of the monitored force within 0.5 % (measured -1.6e-5 at mu = 0.1), the RMS of
     the |shaking force| and of the drive moment within 2 % (-6.9e-6, -3.8e-5), and the

@@ -8,7 +8,7 @@ they share is the description, the contact law and the centred initial state.
 
 Fast tests: the initial state carried to the bodies, and short windows (the first impacts)
 where pointwise values can be compared before the impacts' phase errors separate the
-trajectories. Slow tests: four revolutions per case (issue 17's agreement and convergence),
+trajectories. Slow tests: four revolutions per case (agreement and convergence),
 the ideal-joint limit against validation/ideal_linkage.py, finite-difference sensitivities
 through Exudyn. Every tolerance has its measured value beside it.
 """
@@ -202,7 +202,7 @@ def test_four_bar_newton_converges_with_the_floor_tolerance():
     """The four-bar's persistent contact (10 N, penetration ~2e-8 m) at 2e-5 s: with
     Newton's relative tolerance below the residual's roundoff floor, Newton stalls
     (residual constant at ~1.3e-8 relative, contraction 1.0) and the run fails (at 1e-8 at
-    0.24 s on an AMD EPYC; the floor depends on the processor's arithmetic: on an Intel Xeon
+    0.24 s on one machine; the floor depends on the processor's arithmetic: on another
     1e-8 passes and 3e-9 fails, measured; 1e-9 is below it on both); with the automatic
     tolerance (3 x the floor) the same 0.3 s run passes and the contact stays closed with a
     force of the static order (< 50 N)."""
@@ -221,7 +221,7 @@ def test_four_bar_newton_converges_with_the_floor_tolerance():
 
 # four revolutions per case (slow) ---------------------------------------------------------
 #: cases whose default operating point is periodic, checked across the models at rev 4. The
-#: four-bar's default (s8-four: 10 rpm, 0.01 mm) approaches its periodic motion slowly (the
+#: four-bar's default (10 rpm, 0.01 mm) approaches its periodic motion slowly (the
 #: frictionless sliding mode, docs/cases.md): it is compared by statistics over its 2nd
 #: revolution (`test_four_bar_agrees_by_statistics`).
 PERIODIC = ("paper_slider_crank", "slider_crank_two_clearances")
@@ -239,7 +239,7 @@ def four_revolutions(name, backend, **options):
 @pytest.mark.slow
 @pytest.mark.parametrize("name", PERIODIC)
 def test_periodic_cases_agree_at_the_default_step(name):
-    """Issue 17: reduced (rtol 1e-11) vs Exudyn (default step 2e-6 s): the 4th-revolution
+    """Reduced (rtol 1e-11) vs Exudyn (default step 2e-6 s): the 4th-revolution
     peak of the monitored force within 0.5 % and the RMS of the |shaking force| and of the
     drive moment within 2 % (measured: peak -2.0e-4 / -8.0e-5, RMS shaking -1.3e-5 /
     2.9e-5, RMS moment -4.5e-5 / 9.2e-6 for the paper / two-joint case). The periodic
@@ -294,7 +294,7 @@ def test_ideal_joint_limit_against_the_ideal_model(name):
     (measured: window <= 1.8e-4 / 4.3e-4, pointwise <= 3.4e-4 / 5.9e-4, paper / two-joint
     case), the refined peak of the monitored force within 1e-4 (measured 7e-7 / 1.4e-5).
     The residual is the clearance itself (1e-7 m against 10 mm bearings moves the force
-    lines) plus the step's O(h^2) error; the frictionless sliding mode (issue 17) stays
+    lines) plus the step's O(h^2) error; the frictionless sliding mode stays
     small here because Exudyn's numerical damping (rho_inf 0.9) removes it: pointwise
     values agree as well as window averages, unlike in the four-bar."""
     import sys
@@ -374,7 +374,7 @@ def test_exudyn_finite_differences_converge_to_ddm(name, rel):
     (measured, paper: 0.55 / 0.59 / 0.90 -> 0.17 / 0.19 / 0.27 for coupler.mass,
     slider.mass, coupler.inertia; two joints: 0.69 / 0.80 / 1.4 -> 0.31 / 0.37 / 0.77): the
     derivative magnifies Exudyn's phase error at the contact frequency. The derivative of
-    the RMS (an integral, no phase error; each RMS over the runs' own steps, session 15):
+    the RMS (an integral, no phase error; each RMS over the runs' own steps):
     paper 3.0e-3 / 4.8e-3 / 6.1e-3 -> 7.3e-4 / 1.1e-3 / 3.0e-3, asserted falling and
     < 5e-3; two joints 1.9e-3 / 4.2e-3 / 9.9e-3 -> 4.8e-3 / 8.1e-3 / 4.5e-3, not falling:
     the crank joint's sliding mode, whose phase the parameter moves, puts noise of that
@@ -409,15 +409,15 @@ def four_bar_settled_start():
 
 @pytest.mark.slow
 def test_four_bar_from_a_settled_start_agrees_and_converges():
-    """Issue 17 for the four-bar in its periodic regime: both models started from the state
+    """The four-bar in its periodic regime: both models started from the state
     after 100 revolutions (the same state, contact mode and impact velocity), revolution 1
     from there, reduced at rtol 1e-11 against Exudyn. At the default step (1.56e-5 s) the
     peak of the |shaking force| within 0.5 % and the RMS of it and of the drive moment
     within 2 % (measured: 8.0e-6, 5.7e-9, 8.2e-9). At 32, 16 and 8 times the default step
-    (498, 249, 125 us) the peak error falls (measured on an AMD EPYC: 1.2e-4, 2.3e-5, 4.0e-7;
-    at 500, 250, 125 us: 1.0e-4, 3.2e-5, 7.3e-6; on an Intel Xeon: 4.5e-5, 2.2e-5, 4.5e-6,
-    and with the event margin of before session 13, which moves the start at round-off:
-    8.2e-5, 1.3e-8, 3.7e-6): the signed peak difference scatters with the exact step and
+    (498, 249, 125 us) the peak error falls (measured on one machine: 1.2e-4, 2.3e-5, 4.0e-7;
+    at 500, 250, 125 us: 1.0e-4, 3.2e-5, 7.3e-6; on another: 4.5e-5, 2.2e-5, 4.5e-6, and
+    with an event margin of 0.05 c, which moves the start at round-off: 8.2e-5, 1.3e-8,
+    3.7e-6): the signed peak difference scatters with the exact step and
     the processor and can pass near zero, so no rate per halving is asserted, only that the
     error at 8 times the default step is below a fifth of that at 32 times (second order:
     1/16) and that none exceeds 2e-4. Below about 60 us it grows again (1.3e-6, 1.4e-6,
@@ -446,17 +446,16 @@ def test_four_bar_from_a_settled_start_agrees_and_converges():
 
 @pytest.mark.slow
 def test_four_bar_exudyn_finite_differences_agree_with_ddm_from_a_settled_start():
-    """Issue 17's finite differences for the four-bar, from the state after 100
+    """Finite differences through Exudyn for the four-bar, from the state after 100
     revolutions (held fixed: from the centred start the sensitivities pass through its 325
     settling impacts and are ill-conditioned, docs/exudyn.md). Relative step 1e-3,
     revolution 1 from there, d RMS(|F|)/db of coupler.mass, rocker.mass and gravity
     against DDM (rtol 1e-9), each RMS over the runs' own steps in the Exudyn runs' window.
-    Measured (session 15): 3.3e-6, 1.3e-5, 3.9e-6 at 15.6 us and 1.4e-5, 5.1e-6, 9.2e-6 at
+    Measured: 3.3e-6, 1.3e-5, 3.9e-6 at 15.6 us and 1.4e-5, 5.1e-6, 9.2e-6 at
     7.8 us, the level of the reduced model's own central differences at this relative step
-    (3.5e-6, 6.5e-7, 4.4e-6): asserted < 5e-5 at both steps. (Until session 15 the DDM's RMS
-    was a trapezoid over the 3000 comparison samples, whose error, 1e-4 to 1e-3 and
-    dependent on where the samples of the contacts fell, was what had looked like
-    convergence: no rate is asserted.)"""
+    (3.5e-6, 6.5e-7, 4.4e-6): asserted < 5e-5 at both steps. (A trapezoid over 3000
+    comparison samples instead has an error of 1e-4 to 1e-3 that depends on where the
+    samples of the contacts fall and can look like convergence: no rate is asserted.)"""
     from validation.exudyn_sensitivity import compare_fd_ddm
 
     rows = compare_fd_ddm("four_bar", (1.5577e-5, 7.7885e-6), revolutions=1, rel=1e-3,

@@ -1,4 +1,4 @@
-"""Friction in the clearance joints (issue 18) on the generated reduced model: a zero
+"""Friction in the clearance joints on the generated reduced model: a zero
 coefficient reproduces the frictionless run bit for bit, the energy balance closes with the
 friction work, a closed-form case of the tangential law (a journal pressed by its weight on
 a rotating bearing), friction changes the paper case's peak by more than the integration
@@ -174,10 +174,10 @@ def test_friction_ddm_matches_finite_differences(overrides, names):
     # off, at 1e-4 7.6e-5 and 5.9e-3, at 1e-3 4.9e-6 and 7.5e-5 (1.2e-4 and 2.5e-4 for
     # Ambrosio's v0 and v1 beside other directions): converging to DDM, the differences are
     # the limit there; the other parameters at 1e-5, where 1e-3 has truncation error).
-    # The weak ones are compared within 1e-3 (5e-4 before session 13): with the event
+    # The weak ones are compared within 1e-3 (not 5e-4): with the event
     # search's margin of 0.001 c the difference quotient of Ambrosio's v0 at 1e-3 is off
     # DDM by 5.5e-4 on coupler.angle (8.1e-5 with 0.05 c), while at 3e-3 it agrees within
-    # 2.2e-5 (1.0e-4 with 0.05 c), measured on an Intel Xeon: the noise is the
+    # 2.2e-5 (1.0e-4 with 0.05 c), measured: the noise is the
     # differences', the DDM's derivative is the same to 1e-4 either way
     strong = [k for k, n in enumerate(names) if "friction_v" not in n]
     weak = [k for k, n in enumerate(names) if "friction_v" in n]

@@ -6,7 +6,7 @@
   Newton-Euler). Compared by window averages (36 windows of 10 degrees of crank angle) and
   by the refined peak of the monitored force. Pointwise values are NOT compared: a
   frictionless clearance joint has an undamped sliding mode (the journal swings along the
-  bearing wall at about sqrt(F / (m c)), issue 17), excited by the centred start and by
+  bearing wall at about sqrt(F / (m c))), excited by the centred start and by
   fast turns of the joint force; it averages out over a window but not at an instant.
 - Energy balance with restitution 1 (no contact dissipation): the drive's work W (integrated
   with the state) equals the change of mechanical energy (kinetic + gravity + contact
@@ -424,9 +424,8 @@ def test_four_bar_peak_converges_with_rtol():
     1.0e-4, 1.7e-6: log-log slope 1.6; 0.7 ... 2.2 allowed) and stays below 1e-5 at 1e-9.
     Finer than 1e-8 the peaks scatter at a few 1e-6 with the start impacts' sequence, and
     the reference with them: at rtol 1e-9 and 1e-10 against 1e-11, 3.0e-6 and 1.0e-7 (event
-    margin 0.001 c, since session 13) or 3.0e-7 and 2.2e-6 (0.05 c, before), both on an
-    Intel Xeon; 3.5e-7 and 7e-8 on an AMD EPYC with 0.05 c (where rtol 1e-9 was asserted
-    below 1e-6 until session 13)."""
+    margin 0.001 c) or 3.0e-7 and 2.2e-6 (a margin of 0.05 c), on one machine; 3.5e-7 and
+    7e-8 on another with 0.05 c."""
     ref = four_bar_peaks(1e-11)["peaks"][3]
     rtols = np.array([1e-6, 1e-7, 1e-8])
     errs = np.array([abs(four_bar_peaks(r)["peaks"][3] / ref - 1.0) for r in rtols])

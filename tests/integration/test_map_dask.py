@@ -69,7 +69,7 @@ def test_a_lost_worker_chunk_is_rescheduled_and_the_map_is_unchanged(tmp_path):
     import time
 
     distributed = pytest.importorskip("dask.distributed")
-    from mbs_clearance.sweep import _load
+    from mbs_clearance.sweep import load_map as _load
 
     sweep = "clearance=1e-5:5e-4:log:8"
     kw = dict(revolutions=30, keep=5, max_period=2)

@@ -14,10 +14,10 @@ import numpy as np
 import pytest
 
 from mbs_clearance import SliderCrank, regime_map
-from mbs_clearance.sweep import _load
+from mbs_clearance.sweep import load_map as _load
 
 SWEEP = "clearance=1e-5:5e-4:log:6"
-#: 120 revolutions per point: long enough (about 0.3 s on an Intel Xeon) that the polling
+#: 120 revolutions per point: long enough (about 0.3 s on a 2-core machine) that the polling
 #: below sees the file between two points; with 12, a fast machine finished all six points
 #: between two polls and the kill came too late
 REVOLUTIONS = 120

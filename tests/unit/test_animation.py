@@ -1,4 +1,4 @@
-"""`mbs-clearance animate` draws any Linkage from its description (issue 21)."""
+"""`mbs-clearance animate` draws any Linkage from its description."""
 
 import math
 

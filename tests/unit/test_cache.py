@@ -536,3 +536,46 @@ def test_the_race_with_the_real_package(tmp_path):
     # x4dd = -F nx / m4 with n = (-1, 0) here: A's force is the unedited one
     assert ra["force"][0] == pytest.approx(rhs_here()[3] * SliderCrank().slider_mass,
                                            rel=1e-12)
+
+
+# ---------------------------------------------------------------- damaged cache files
+
+
+def _truncate(path: Path, keep: float) -> None:
+    """Cut `path` to `keep` of its size (a full disk, a killed process)."""
+    data = path.read_bytes()
+    path.write_bytes(data[:int(len(data) * keep)])
+
+
+@pytest.mark.parametrize("damage", ["index", "data", "index-empty", "both"])
+def test_a_damaged_cache_file_is_dropped_and_recompiled_with_one_warning(small, damage):
+    """Real cache files of a real compile, cut short: numba alone raises on every later run
+    (the control, with numba's loaders restored); here the next process computes, warns
+    once naming the file, compiles again and rewrites the entry, and the one after that
+    loads it from the cache without a warning."""
+    src, env = small
+    code = "import json, kpkg\n" + KERNEL_RUN
+    first, err = run(code, env)
+    assert first["value"] == 3.0 and first["misses"] == 1 and not cache_warnings(err)
+    index = next(Path(first["path"]).glob("kern.kernel-*.nbi"))
+    data = next(Path(first["path"]).glob("kern.kernel-*.nbc"))
+    damaged = {"index": [index], "data": [data], "index-empty": [index],
+               "both": [index, data]}[damage]
+    for path in damaged:
+        _truncate(path, 0.0 if damage == "index-empty" else 0.5)
+    restore = ("from numba.core import caching\nfrom mbs_clearance import _cache\n"
+               "caching.IndexDataCacheFile._load_index = _cache._LOAD_INDEX\n"
+               "caching.IndexDataCacheFile._load_data = _cache._LOAD_DATA\n")
+    control = subprocess.run([sys.executable, "-c", "import kpkg\n" + restore + code],
+                             env=env, cwd=first_path(env), capture_output=True, text=True,
+                             timeout=600)
+    assert control.returncode != 0
+    assert re.search(r"(UnpicklingError|EOFError)", control.stderr), control.stderr
+    second, err = run(code, env)
+    assert second["value"] == 3.0 and second["misses"] == 1 and second["hits"] == 0
+    warned = cache_warnings(err)
+    assert len(warned) == 1, err
+    assert "damaged" in warned[0] and str(damaged[0]) in warned[0]
+    third, err = run(code, env)
+    assert third["value"] == 3.0 and third["hits"] == 1 and third["misses"] == 0
+    assert not cache_warnings(err), err

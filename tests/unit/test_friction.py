@@ -1,4 +1,4 @@
-"""Friction in the clearance joints (issue 18): description fields and their validation."""
+"""Friction in the clearance joints: description fields and their validation."""
 
 from __future__ import annotations
 

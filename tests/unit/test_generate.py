@@ -454,3 +454,121 @@ def test_two_joints_energy_balance_over_a_run():
         errors.append(np.abs(traj.crank_work - change).max() / scale)
     # measured: 2.3e-8 and 2.5e-9
     assert errors[1] < 1e-8 and errors[1] < errors[0] / 3
+
+
+# ---------------------------------------------------------------- hostile names, cached modules
+
+#: Python that writes the file MARK, behind a quote that would close a pasted docstring
+PAYLOAD = 'x"""\nimport pathlib; pathlib.Path(MARK).write_text("pwned")\n"""'
+
+
+def test_names_reach_the_generated_code_only_as_literals(tmp_path):
+    """Even names that bypass the description's checks (set on the frozen objects) are
+    inert in the generated source: it parses, the payload is nowhere its code, only inside
+    string constants, and LINKAGE / JOINTS hold it verbatim."""
+    import ast
+    import dataclasses
+
+    payload = PAYLOAD.replace("MARK", repr(str(tmp_path / "pwned")))
+    lk = _pendulum_pair()
+    cj = dataclasses.replace(lk.clearance_joints[1])
+    object.__setattr__(cj, "name", payload)
+    object.__setattr__(lk, "clearance_joints", (lk.clearance_joints[0], cj))
+    object.__setattr__(lk, "name", payload)
+    source = generate_module(lk)
+    tree = ast.parse(source)
+    calls = [n for n in ast.walk(tree) if isinstance(n, ast.Attribute) and n.attr == "write_text"]
+    assert not calls
+    imported = {a.name for n in ast.walk(tree) if isinstance(n, (ast.Import, ast.ImportFrom))
+                for a in n.names}
+    assert "pathlib" not in imported
+    values = {n.targets[0].id: n.value for n in tree.body if isinstance(n, ast.Assign)
+              and isinstance(n.targets[0], ast.Name)}
+    assert ast.literal_eval(values["LINKAGE"]) == payload
+    assert ast.literal_eval(values["JOINTS"]) == ("disc_pin", payload)
+    assert payload not in ast.get_docstring(tree)
+    strings = [n.value for n in ast.walk(tree) if isinstance(n, ast.Constant)
+               and isinstance(n.value, str) and "write_text" in n.value]
+    assert strings                                    # it is there, as data only
+    assert not (tmp_path / "pwned").exists()
+
+
+@pytest.fixture
+def planted(tmp_path, monkeypatch):
+    """(linkage, digest, directories, mark): two candidate directories for generated
+    modules (the loader's list replaced), the generator replaced by a stub (no derivation,
+    no compilation), and the file a planted module would write."""
+    from mbs_clearance.generate import loader, model_structure
+
+    lk = _pendulum_pair()
+    digest = structure_digest(model_structure(lk))
+    dirs = [tmp_path / "first", tmp_path / "second"]
+    monkeypatch.setattr(loader, "_cache_dirs", lambda d: list(dirs))
+    monkeypatch.setattr(loader, "generate_module", lambda *a, **k: (
+        f'STRUCTURE_DIGEST = "{digest}"\nREGENERATED = True\n'))
+    monkeypatch.setattr(loader, "_LOADED", {})
+    return lk, digest, dirs, tmp_path / "ran"
+
+
+def _plant(directory: Path, digest: str, mark: Path, mode: int = 0o700) -> Path:
+    from mbs_clearance.generate import loader
+
+    directory.mkdir(mode=0o700)
+    path = directory / f"model_{digest[:16]}.py"
+    text = (f'STRUCTURE_DIGEST = "{digest}"\nimport pathlib\n'
+            f'pathlib.Path({str(mark)!r}).write_text("ran")\n')
+    path.write_text(loader.with_digest(text))
+    path.chmod(0o600)
+    directory.chmod(mode)
+    return path
+
+
+def test_a_cached_module_runs_only_when_its_text_matches_its_digest(planted):
+    """The control: a planted module with a matching digest line in a private directory is
+    executed (it writes the mark). Changed after it was written (one line added), it is not
+    executed: a CacheWarning, the module generated again in its place."""
+    from mbs_clearance.generate import loader
+    from mbs_clearance.generate.loader import CacheWarning
+
+    lk, digest, dirs, mark = planted
+    path = _plant(dirs[0], digest, mark)
+    assert not hasattr(load_model(lk), "REGENERATED") and mark.read_text() == "ran"
+    mark.unlink()
+    loader._LOADED.clear()
+    path.write_text(path.read_text() + f'pathlib.Path({str(mark)!r}).write_text("tampered")\n')
+    with pytest.warns(CacheWarning, match="does not match its recorded digest"):
+        module = load_model(lk)
+    assert module.REGENERATED and not mark.exists()
+    assert loader._current(path, digest) and "REGENERATED" in path.read_text()
+    assert oct(path.stat().st_mode & 0o777) == oct(0o600)
+
+
+@pytest.mark.parametrize("unsafe", ["group-writable directory", "other-writable file",
+                                    "directory of another user", "symbolic link"])
+def test_a_module_others_could_have_written_is_never_executed(planted, unsafe):
+    """A planted module with a matching digest line (it would write the mark) is skipped
+    where others could have written it; the module is generated into the first private
+    directory instead (the next one, or the same if only the file was unsafe)."""
+    from mbs_clearance.generate import loader
+
+    lk, digest, dirs, mark = planted
+    if unsafe == "group-writable directory":
+        _plant(dirs[0], digest, mark, mode=0o770)
+    elif unsafe == "other-writable file":
+        _plant(dirs[0], digest, mark).chmod(0o602)
+    elif unsafe == "directory of another user":
+        if os.geteuid() != 0:
+            pytest.skip("needs root to give a directory to another user")
+        _plant(dirs[0], digest, mark)
+        os.chown(dirs[0], 12345, -1)
+    else:
+        real = dirs[0].parent / "elsewhere"
+        _plant(real, digest, mark)
+        dirs[0].symlink_to(real, target_is_directory=True)
+    # the file's directory is private: the module generated again replaces the file there
+    place = dirs[0] if unsafe == "other-writable file" else dirs[1]
+    assert loader.private_dir(dirs[0]) == (unsafe == "other-writable file")
+    module = load_model(lk)
+    assert module.REGENERATED and not mark.exists()
+    assert Path(module.__file__).parent == place
+    assert loader.model_path(lk) == place / f"model_{digest[:16]}.py"

@@ -16,7 +16,7 @@ CASES = ("paper_slider_crank", "slider_crank_two_clearances", "four_bar",
 # became 0.01 mm in the same session; the free-flight difference quotients of the point
 # coordinates there were not re-examined: 1.2e-6 relative off, see the session's note)
 OVERRIDES = {"four_bar": {"clearance": 1e-4},
-             # friction (issue 18): thresholds at the scale of the slip velocity (~1 m/s
+             # friction: thresholds at the scale of the slip velocity (~1 m/s
              # here) so that the laws' slopes in it are exercised
              "paper_slider_crank+coulomb": {"friction_law": "coulomb",
                                             "friction_coefficient": 0.3, "friction_v0": 0.5,

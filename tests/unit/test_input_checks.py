@@ -1,17 +1,18 @@
-"""Bad input, unbounded runs, meaningless results, untrusted files and the periodicity flag
-(issue 14): every check is raised before any computation, against independent references."""
+"""Bad input, unbounded runs, meaningless results, untrusted files and the periodicity flag:
+every check is raised before any computation, against independent references."""
 
 import json
 import subprocess
 import sys
 import textwrap
+import warnings
 from fractions import Fraction
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from mbs_clearance import SliderCrank, reduced, simulate
+from mbs_clearance import AccuracyWarning, SliderCrank, reduced, simulate
 from mbs_clearance._checks import MemoryLimitError
 from mbs_clearance._warnings import PhysicsWarning
 from mbs_clearance.mechanism import RPM
@@ -305,9 +306,14 @@ def test_periodicity_flag_in_simulate(paper):
     assert simulate(paper, 4).stats["periodic"] is True
     for mech in (paper.replace(journal_radius=0.0099), paper.replace(journal_radius=0.0095),
                  paper.replace(crank_speed=100 * RPM)):
-        traj = simulate(mech, 4)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            traj = simulate(mech, 4)
         assert traj.stats["periodic"] is False, traj.stats["periodicity_note"]
         assert "not periodic" in traj.stats["periodicity_note"]
+        # a run flagged inaccurate (the two large clearances rattle) warns, the others not
+        warned = [w for w in caught if issubclass(w.category, AccuracyWarning)]
+        assert bool(warned) == (traj.stats["accuracy_ok"] is False), traj.stats
     short = simulate(paper, 2).stats
     assert short["periodic"] is None and "at least 3 revolutions" in short["periodicity_note"]
     loose = simulate(paper, 4, rtol=1e-4).stats

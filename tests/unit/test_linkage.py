@@ -3,6 +3,7 @@
 import dataclasses
 import json
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -145,7 +146,8 @@ def test_parameters_roundtrip():
 @pytest.mark.parametrize("suffix", [".json", ".toml"])
 def test_file_roundtrip(tmp_path, suffix):
     lk = paper_slider_crank(contact_stiffness=1e10)
-    four = four_bar_like()
+    # guesses off the collinear start (there the closure's Jacobian is singular)
+    four = four_bar_like(assembly={"coupler.angle": 0.5, "rocker.angle": 1.5})
     for desc in (lk, four):
         path = tmp_path / f"d{suffix}"
         if suffix == ".json":
@@ -153,6 +155,12 @@ def test_file_roundtrip(tmp_path, suffix):
         else:
             path.write_text(_toml(desc.to_dict()))
         assert Linkage.from_file(path) == desc
+    # a description that cannot start (no assembly from its guesses) is refused on loading
+    path.write_text(json.dumps(four_bar_like().to_dict()))
+    path = path.rename(path.with_suffix(".json"))
+    with pytest.raises(ValueError, match="loop closure of linkage 'fb' cannot be solved from "
+                                         "the assembly guesses {}"):
+        Linkage.from_file(path)
     with pytest.raises(ValueError, match="unknown body key"):
         d = lk.to_dict()
         d["bodies"][0]["colour"] = "red"
@@ -244,7 +252,7 @@ def test_simulate_refuses_other_backends_and_options_for_a_linkage():
 @pytest.mark.parametrize("name", ["paper_slider_crank", "slider_crank_two_clearances",
                                   "four_bar"])
 def test_issue_16_bad_descriptions_of_each_named_case(name):
-    """Issue 16's four bad descriptions, made from each named case: a clearance joint
+    """Four bad descriptions, made from each named case: a clearance joint
     replaced by an ideal pin (every loop then closed by ideal joints), an ideal joint on an
     unknown body, a journal larger than its bearing, a negative mass; each a ValueError
     naming the item."""
@@ -285,3 +293,233 @@ def test_linkage_run_lands_on_t_eval():
     b = simulate(lk, 1)
     ref = np.interp(te, b.t, b.coordinates["slider_guide.s"])
     assert np.max(np.abs(a.coordinates["slider_guide.s"] - ref)) < 1e-6 * lk.length_scale
+
+
+# ---------------------------------------------------------------- hostile and careless input
+
+#: a name that, pasted into a generated module's docstring, would run its Python on import
+#: (it writes the file named by MARK)
+PAYLOAD = 'x"""\nimport pathlib; pathlib.Path(MARK).write_text("pwned")\n"""'
+
+
+def _description(tmp_path, change) -> Path:
+    d = paper_slider_crank().to_dict()
+    change(d)
+    path = tmp_path / "d.json"
+    path.write_text(json.dumps(d))
+    return path
+
+
+@pytest.mark.parametrize("where", ["linkage", "body", "point", "joint", "joint body",
+                                   "clearance joint", "clearance point", "drive", "ground"])
+def test_a_name_holding_python_is_refused_and_runs_nothing(tmp_path, where):
+    """Every name of a description must be an identifier: a name holding triple quotes and
+    Python (the payload writes a file when pasted into a docstring, shown by the control)
+    is refused on loading, with a one-line error naming the item and the rule, and the file
+    is never written."""
+    mark = tmp_path / "pwned"
+    payload = PAYLOAD.replace("MARK", repr(str(mark)))
+    exec(f'"""linkage {payload}: do not edit."""', {})      # noqa: S102 - the control
+    assert mark.read_text() == "pwned"
+    mark.unlink()
+
+    def change(d):
+        if where == "linkage":
+            d["name"] = payload
+        elif where == "body":
+            d["bodies"][0]["name"] = payload
+        elif where == "point":
+            d["bodies"][2]["points"][payload] = [0.0, 0.0]
+        elif where == "joint":
+            d["joints"][1]["name"] = payload
+        elif where == "joint body":
+            d["joints"][1]["body_b"] = payload
+        elif where == "clearance joint":
+            d["clearance_joints"][0]["name"] = payload
+        elif where == "clearance point":
+            d["clearance_joints"][0]["bearing_point"] = payload
+        elif where == "drive":
+            d["drive"]["joint"] = payload
+        else:
+            d["ground_points"][payload] = [0.0, 0.0]
+
+    path = _description(tmp_path, change)
+    with pytest.raises(ValueError) as err:
+        Linkage.from_file(path)
+    message = str(err.value)
+    assert "\n" not in message and "[A-Za-z_][A-Za-z0-9_]*" in message
+    assert not mark.exists()
+
+
+@pytest.mark.parametrize("name", ["", "1crank", "crank arm", "crank-arm", "crank.arm",
+                                  "kurbel\u00e4", "a" * 65, 3, None])
+def test_names_must_be_identifiers(name):
+    with pytest.raises(ValueError, match=r"body name must be an identifier"):
+        Body(name, 1.0, 1.0)
+    with pytest.raises(ValueError, match=r"linkage name must be an identifier"):
+        four_bar_like(name=name)
+    assert Body("_crank_2", 1.0, 1.0).name == "_crank_2"        # the rule admits these
+    assert four_bar_like(name="a" * 64).name == "a" * 64
+
+
+@pytest.mark.parametrize("section, key, expected", [
+    ("bodies", "mass", r"bodies\[0\] \('crank'\) lacks the key 'mass'"),
+    ("bodies", "inertia", r"bodies\[0\] \('crank'\) lacks the key 'inertia'"),
+    ("bodies", "name", r"bodies\[0\] lacks the key 'name'"),
+    ("joints", "point_b", r"joints\[0\] \('crank_pivot'\) lacks the key 'point_b'"),
+    ("clearance_joints", "bearing_radius",
+     r"clearance_joints\[0\] \('coupler_slider'\) lacks the key 'bearing_radius'"),
+    ("drive", "speed", r"drive lacks the key 'speed'"),
+    ("linkage", "drive", r"the description lacks the key 'drive'"),
+])
+def test_a_missing_key_is_named_with_its_place(tmp_path, section, key, expected):
+    def change(d):
+        if section == "linkage":
+            del d[key]
+        elif section == "drive":
+            del d["drive"][key]
+        else:
+            del d[section][0][key]
+
+    with pytest.raises(ValueError, match=expected) as err:
+        Linkage.from_file(_description(tmp_path, change))
+    assert "\n" not in str(err.value) and "d.json" in str(err.value)
+
+
+@pytest.mark.parametrize("section, expected", [
+    ("bodies", r"unknown body key 'colour' in bodies\[1\] \('coupler'\)"),
+    ("joints", r"unknown prismatic joint key 'colour' in joints\[2\] \('slider_guide'\)"),
+    ("clearance_joints", r"unknown clearance joint key 'colour' in clearance_joints\[0\]"),
+    ("drive", r"unknown drive key 'colour' in drive"),
+    ("linkage", r"unknown linkage key 'colour' in the description"),
+])
+def test_an_unknown_key_is_named_with_its_place(tmp_path, section, expected):
+    def change(d):
+        target = {"linkage": d, "drive": d["drive"]}.get(section) or d[section][
+            {"bodies": 1, "joints": 2}.get(section, 0)]
+        target["colour"] = "red"
+
+    with pytest.raises(ValueError, match=expected):
+        Linkage.from_file(_description(tmp_path, change))
+
+
+def test_a_second_clearance_joint_on_the_same_pin_is_refused():
+    lk = paper_slider_crank()
+    cj = lk.clearance_joints[0]
+    twin = dataclasses.replace(cj, name="second")
+    flipped = dataclasses.replace(cj, name="flipped", journal_body=cj.bearing_body,
+                                  journal_point=cj.bearing_point, bearing_body=cj.journal_body,
+                                  bearing_point=cj.journal_point)
+    for other in (twin, flipped):
+        with pytest.raises(ValueError, match=rf"clearance joints 'coupler_slider' and "
+                                             rf"'{other.name}' join the same points"):
+            lk.replace(clearance_joints=(cj, other))
+
+
+def test_sizes_are_refused_before_the_work():
+    """A body with 1.5 million points, too many bodies, joints or clearance joints: refused
+    on construction from their count (the points are never read one by one)."""
+    class Points(dict):
+        def items(self):
+            raise AssertionError("the points were read")
+
+    many = Points({f"p{i}": (0.0, 0.0) for i in range(1_500_000)})
+    with pytest.raises(ValueError, match="body 'crank' points holds 1500000 points; at most "
+                                         "64 are allowed"):
+        Body("crank", 1.0, 1.0, many)
+    fb = four_bar_like()
+    with pytest.raises(ValueError, match="bodies holds 65 entries; at most 64"):
+        four_bar_like(bodies=fb.bodies * 22)
+    with pytest.raises(ValueError, match="clearance_joints holds 33 entries; at most 32"):
+        four_bar_like(clearance_joints=fb.clearance_joints * 40)
+    endless = iter(lambda: fb.joints[0], None)           # never ends
+    with pytest.raises(ValueError, match="joints holds 129 entries; at most 128"):
+        four_bar_like(joints=endless)
+
+
+def test_input_files_are_capped(tmp_path):
+    """A description larger than the cap (here 5 MB of valid JSON) or an endless device is
+    refused after reading at most the cap."""
+    from mbs_clearance import _io
+
+    big = tmp_path / "big.json"
+    d = paper_slider_crank().to_dict()
+    d["gravity_note"] = "x" * (5 * 1024 * 1024)
+    big.write_text(json.dumps(d))
+    with pytest.raises(ValueError, match=r"big\.json' is larger than 4096 KiB"):
+        Linkage.from_file(big)
+    with pytest.raises(ValueError, match=r"'/dev/zero' is larger than 4096 KiB"):
+        Linkage.from_file("/dev/zero")
+    with pytest.raises(ValueError, match=r"mechanism file '/dev/zero' is larger"):
+        SliderCrank.from_json("/dev/zero")
+    deep = tmp_path / "deep.json"
+    deep.write_text("[" * 100_000 + "]" * 100_000)
+    with pytest.raises(ValueError, match="nested too deeply"):
+        Linkage.from_file(deep)
+    assert _io.MAX_INPUT_BYTES == 4 * 1024 * 1024
+
+
+def test_gaps_are_the_generated_closure():
+    """`Linkage.gaps` (plain Python) equals the generated model's closure (sympy's
+    kinematics) at random coordinates and times, for every named case; `assemble` finds the
+    centred start of `initial_state`."""
+    from mbs_clearance import linkage_model
+    from mbs_clearance.cases import CASES
+
+    rng = np.random.default_rng(5)
+    for make in CASES.values():
+        lk = make()
+        model = linkage_model.load_model(lk)
+        p = linkage_model.pack_parameters(lk, model)
+        for _ in range(20):
+            q = rng.normal(0.0, 0.3, model.N_Q) * np.where(
+                [c.endswith(".angle") for c in model.COORDINATES], 1.0, lk.length_scale)
+            t = rng.uniform(0.0, lk.period)
+            np.testing.assert_allclose(lk.gaps(dict(zip(model.COORDINATES, q)), t),
+                                       model.closure(t, q, p), rtol=1e-12,
+                                       atol=1e-14 * lk.length_scale)
+        q0 = linkage_model.initial_state(lk, model, p)[:model.N_Q]
+        np.testing.assert_allclose([lk.assemble()[c] for c in model.COORDINATES], q0,
+                                   atol=1e-8)
+
+
+def test_a_four_bar_that_cannot_close_is_refused_on_loading(tmp_path):
+    """A coupler too short to reach the rocker: refused by `from_file` after at most 50
+    Newton steps of plain Python, in a fresh process that generates, imports and compiles
+    no model (no generated module, no sympy loaded)."""
+    import subprocess
+    import sys
+
+    from mbs_clearance.cases import four_bar
+
+    d = four_bar().to_dict()
+    d["bodies"][1]["points"] = {"crank_end": [-0.1, 0.0], "rocker_end": [0.1, 0.0]}
+    path = tmp_path / "short.json"
+    path.write_text(json.dumps(d))
+    code = ("import sys\nfrom mbs_clearance.linkage import Linkage\n"
+            f"try:\n    Linkage.from_file({str(path)!r})\nexcept ValueError as e:\n"
+            "    print(e)\n"
+            "print(sorted(m for m in sys.modules if m.startswith(('sympy', "
+            "'mbs_clearance._generated', 'mbs_clearance_model'))))\n")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         timeout=120, check=True).stdout.splitlines()
+    assert "short.json': the loop closure of linkage 'four_bar' cannot be solved" in out[0]
+    assert "after 50 Newton steps" in out[0]
+    assert out[1] == "[]"
+
+
+def test_the_command_line_refuses_a_malicious_description(tmp_path, monkeypatch, capsys):
+    """The issue's command, `lyapunov --revolutions 2 --description F` with a clearance joint
+    named with the payload: exit status 2, one line naming the item, no file written."""
+    from mbs_clearance.cli import main
+
+    mark = tmp_path / "pwned"
+    payload = PAYLOAD.replace("MARK", repr(str(mark)))
+    path = _description(tmp_path, lambda d: d["clearance_joints"][0].update(name=payload))
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(SystemExit) as exit_:
+        main(["lyapunov", "--revolutions", "2", "--description", str(path)])
+    err = capsys.readouterr().err.strip()
+    assert exit_.value.code == 2 and len(err.splitlines()) == 1
+    assert "clearance joint name must be an identifier" in err
+    assert not mark.exists()

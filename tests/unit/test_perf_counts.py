@@ -1,4 +1,4 @@
-"""The plain run's cost pinned by counts (issue 16's speed), and the written-out dopri5 step
+"""The plain run's cost pinned by counts, and the written-out dopri5 step
 equal, bit for bit, to the generic step it replaces (docs/performance.md, "Where the time
 goes")."""
 
@@ -100,15 +100,14 @@ def test_written_out_dopri5_step_equals_the_generic_step_bit_for_bit():
 def test_paper_case_cost_counts():
     """The paper case's default run (4 revolutions, rtol 1e-7): its rev-4 peak, function
     evaluations, steps, events and refined steps; a change of any count changes the run's
-    cost (or its result) and must be explained. Since session 13 the event search's margin
-    is 0.001 c (`linkage_model.event_margin`; 0.05 c before): the approach step limit near
-    the onsets and separations differs, 8291.95826563021 N, 59959, 9712 + 261, 5, 23 (before:
-    8291.958246907485 N, 59911, 9711 + 255, as after the speed work of session 10, commit
-    abc84ad; both within 9.3e-7 of the rtol 1e-12 run's peak, the change 2.3e-9). Since
-    session 15 the model is specialised on its zero-valued geometric parameters (the
-    journal's gap 3 + 2 + 3 + 2 terms instead of 6 + 6 + 5 + 5): the same counts, the peak
-    8291.958273534865 N against 8291.95826563021 N (round-off of the shorter sums, 9.5e-10;
-    the run's error against rtol 1e-12 is 9.3e-7)."""
+    cost (or its result) and must be explained. The event search's margin is 0.001 c
+    (`linkage_model.event_margin`); with 0.05 c the approach step limit near the onsets and
+    separations differs: 8291.958246907485 N, 59911, 9711 + 255 (both within 9.3e-7 of the
+    rtol 1e-12 run's peak, the difference 2.3e-9). The model is specialised on its
+    zero-valued geometric parameters (the journal's gap 3 + 2 + 3 + 2 terms instead of
+    6 + 6 + 5 + 5): the same counts as the general model, the peak 8291.958273534865 N
+    against 8291.95826563021 N (round-off of the shorter sums, 9.5e-10; the run's error
+    against rtol 1e-12 is 9.3e-7)."""
     traj = reduced.simulate_reduced(SliderCrank(), 4)
     s = traj.stats
     assert (s["nfev"], s["naccept"], s["nreject"], s["nevent"], s["nrefine"]) == (
@@ -123,7 +122,7 @@ def test_paper_case_kernel_calls():
     (plus the landing steps' and the initial step's); the switching function once per
     attempt (the embedded solution's, for its error control) and once per accepted step
     (the event search's interior sample), plus the closer looks and the landings (170; 361
-    with the margin of 0.05 c before session 13, in 9966 attempts)."""
+    with a margin of 0.05 c, in 9966 attempts)."""
     from validation.benchmarks.cost_breakdown import counts
 
     c = counts()

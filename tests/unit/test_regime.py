@@ -216,11 +216,11 @@ def test_map_killed_midway_and_resumed_equals_uninterrupted(tmp_path, monkeypatc
     with pytest.raises(KeyboardInterrupt):
         regime_map(PAPER, sweep, out=path, **SMALL)
     monkeypatch.setattr(sweep_mod, "_map_point", real)
-    part = sweep_mod._load(path)
+    part = sweep_mod.load_map(path)
     assert int(part["done"].sum()) == 3                       # written on the interrupt
     resumed = regime_map(PAPER, sweep, out=path, **SMALL)
     assert resumed.computed == 3 and resumed.skipped == 3
-    on_disk = sweep_mod._load(path)
+    on_disk = sweep_mod.load_map(path)
     for ds in (resumed.dataset, on_disk):
         for name in whole.dataset.data_vars:
             np.testing.assert_array_equal(ds[name].values, whole.dataset[name].values,

@@ -229,13 +229,14 @@ def test_cli_tolerance_reads_a_salib_parameter_file_and_writes_the_result(tmp_pa
                  "--revolution", "1", "--allowable", "5000", "--seed", "4", "--workers", "1",
                  "--no-progress", "--out", str(out)]) == 0
     printed = capsys.readouterr().out
-    assert "Monte Carlo (3 runs)" in printed and "P(> 5000)" in printed
+    assert "Monte Carlo (3 runs)" in printed and "P(> 5000 N)" in printed
     res = ToleranceResult.from_json(out / "result.json")
     ref = tolerance_study({"crank_length": Uniform(0.0499, 0.0501)}, sobol=0, monte_carlo=3,
                           revolution=1, seed=4, executor="serial", progress=False)
     np.testing.assert_allclose(res.monte_carlo["values"], ref.monte_carlo["values"],
                                rtol=0, atol=0)
-    assert (out / "summary.txt").read_text().startswith("output: peak")
+    assert (out / "summary.txt").read_text().startswith(
+        "output: max |F12| over revolution 1 (N)")
 
 
 @pytest.mark.slow

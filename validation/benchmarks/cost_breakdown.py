@@ -1,4 +1,4 @@
-"""Where the time of the paper case's plain run goes (issue 16's cost per function evaluation).
+"""Where the time of the paper case's plain run goes (the cost per function evaluation).
 
 Three measurements, all in CPU time of this thread (`time.thread_time`, medians: on a
 loaded machine wall time counts the other processes too):

@@ -1,4 +1,4 @@
-"""What if the sensitivities were not under error control? (issue 16's DDM cost)
+"""What if the sensitivities were not under error control? (the DDM's cost)
 
 The DDM run controls its step size on the state and on every sensitivity (n_err = 2 N_Q
 (1 + directions)). CVODES offers the other choice (`errconS = false`: the step size

@@ -8,7 +8,7 @@ recorded), and also with the same 721 output times as the DDM run (`t_eval`: bot
 them); the default call `sensitivities(mech)` (every step, no t_eval) is timed too. Medians
 over repeats after warm-up, in one run.
 
-The headline (issue 16's target: DDM of the 8 default parameters at most 4 plain
+The headline (the target: DDM of the 8 default parameters at most 4 plain
 simulations) comes first: `sensitivities(mech)` against `simulate(mech, 4)`, the median of
 the per-pair ratios over alternating pairs in this process (`common.paired`), with the
 function evaluations of both and the column work of one sensitivity right-hand side

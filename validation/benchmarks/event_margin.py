@@ -61,7 +61,7 @@ def _main(argv=None) -> int:
     ap.add_argument("--case", action="append", choices=CASES,
                     help="named case (repeatable; default: all three)")
     ap.add_argument("--old", type=float, default=0.05,
-                    help="the margin compared, in clearances (default 0.05: before session 13)")
+                    help="the margin compared, in clearances (default 0.05: the earlier margin)")
     ap.add_argument("--pairs", type=int, default=9)
     args = ap.parse_args(argv)
     if not args.old > 0.0:

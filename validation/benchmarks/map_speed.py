@@ -1,4 +1,4 @@
-"""Speed of regime maps (issue 19): points per second per core for 100-revolution runs of the
+"""Speed of regime maps: points per second per core for 100-revolution runs of the
 paper's case, the time of a 60 x 40 map (clearance 1 um - 1 mm, log x 500 - 10000 rpm)
 extrapolated from a measured subset, and the efficiency of a dask LocalCluster with 1 and
 2 workers with an estimate for 64 workers from the measured per-task cost and overhead.

@@ -1,6 +1,6 @@
 """Another integrator setting against the default (dopri5, rtol 1e-7): time and accuracy.
 
-Issue 16 asks whether DOP853 at a loose rtol, which wins the 4th revolution's peak against
+Whether DOP853 at a loose rtol, which wins the 4th revolution's peak against
 scipy (docs/performance.md, "Per named case"), could be the default: it must hold the
 accuracy map (every per-revolution peak within 1e-5 over the GA's box and the periodic
 stress cases, `validation.accuracy_map`) and be faster. Timed here, as medians of the

@@ -1,4 +1,4 @@
-"""Start-up time of the library and the command line, in fresh processes (issue 21).
+"""Start-up time of the library and the command line, in fresh processes.
 
 Each command runs as a new Python process in the checkout's root (its `mbs_clearance`
 shadows an installed one):
@@ -14,8 +14,8 @@ caches), then `--repeats` rounds, each running the commands in rotation (import,
 simulate_help, simulate, import, ...), so that a change of the machine's load hits every
 command alike; the median wall time of each command is printed.
 
-With ``--vs PATH`` (another checkout, e.g. a worktree of commit 6f2d7da, before the lazy
-imports: ``git worktree add /tmp/before-lazy 6f2d7da``) every command of a round runs in both
+With ``--vs PATH`` (another checkout, e.g. a worktree of an earlier version: ``git worktree
+add /tmp/before REV``) every command of a round runs in both
 checkouts as a pair, in alternating order (this, other; then other, this), and the median of
 the per-pair ratios other / this is printed: the ratio of each pair is taken under the same
 load, so a noisy machine widens its spread, not its median.

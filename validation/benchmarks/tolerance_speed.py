@@ -1,4 +1,4 @@
-"""Speed of the tolerance study (issue 20): Sobol indices with N = 1024 over 8 fields
+"""Speed of the tolerance study: Sobol indices with N = 1024 over 8 fields
 (N (2 d + 2) = 18 432 peak-only runs) against the 3-minute target on 2 cores, and DGSM's cost
 and agreement with Sobol's ranking.
 

@@ -1,0 +1,61 @@
+"""Every script of examples/ runs as a user runs it (a fresh Python process, from the
+repository root, warnings as errors) and prints what its documentation page shows.
+
+The run times in the marks are those of a quiet 2-core machine with the kernels compiled;
+the first run after an install also compiles them.
+"""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+EXAMPLES = ROOT / "examples"
+TIMEOUT = 900  # s: includes a first compilation of the kernels on a loaded machine
+
+#: name -> (marks, lines its output must contain)
+CASES = {
+    "paper_slider_crank": ((), [
+        "clearance 0.010 mm, crank speed 523.6 rad/s",
+        "revolution 4: 8292.0 N, the paper reports 8311 N (-0.23 %)",
+        "motion periodic: True",
+    ]),
+    "custom_linkage": ((), [
+        "coordinates: coupler.angle, rocker.angle",
+        "revolution 3: peak shaking force",
+    ]),
+    "optimize_link_lengths": ((), [
+        "original design: 8292.0 N",
+        "best design: L2 = 4.000 cm, L3 = 14.000 cm, 6254.4 N",
+    ]),
+    "tolerance_study": ((), [
+        "P(peak > 8300 N) =",
+        "Morris mu* of radial_clearance:",
+    ]),
+    "regime_map": ((), [
+        "4 of 4 points done",
+        "clearance 0.010 mm, 5000 rpm: period_1",
+    ]),
+    "exudyn_cross_check": ((pytest.mark.exudyn,), [
+        "max |F12|, revolution 4: reduced 8292.0 N, Exudyn 8290.3 N",
+    ]),
+}
+
+
+def test_every_example_has_a_case():
+    assert sorted(p.stem for p in EXAMPLES.glob("*.py")) == sorted(CASES)
+
+
+@pytest.mark.parametrize("name", [pytest.param(n, marks=m) for n, (m, _) in CASES.items()])
+def test_example_runs_and_prints_its_result(name):
+    env = {**os.environ, "PYTHONWARNINGS": "error"}
+    res = subprocess.run([sys.executable, str(EXAMPLES / f"{name}.py")], cwd=ROOT, env=env,
+                         capture_output=True, text=True, timeout=TIMEOUT)
+    assert res.returncode == 0, res.stderr[-3000:]
+    for line in CASES[name][1]:
+        assert line in res.stdout, (line, res.stdout)
