@@ -975,7 +975,7 @@ def _cmd_tolerance(args: argparse.Namespace) -> int:
 
 
 def _add_map_parser(subparsers) -> argparse.ArgumentParser:
-    """The ``map`` subcommand: regime map / bifurcation diagram (issue 19)."""
+    """The ``map`` subcommand: regime map / bifurcation diagram."""
     p = subparsers.add_parser(
         "map", help="regime map / bifurcation diagram over one or two fields",
         formatter_class=HelpFormatter,
@@ -1176,7 +1176,7 @@ LYAPUNOV_MEANING = {
 
 
 def _add_lyapunov_parser(subparsers) -> argparse.ArgumentParser:
-    """The ``lyapunov`` subcommand: the largest Lyapunov exponent of one design (issue 19)."""
+    """The ``lyapunov`` subcommand: the largest Lyapunov exponent of one design."""
     p = subparsers.add_parser(
         "lyapunov", help="largest Lyapunov exponent of a design (periodic or chaotic?)",
         description="Integrate the motion and one tangent vector (the variational equations "

@@ -1,4 +1,4 @@
-"""The largest Lyapunov exponent from the variational equations (issue 19).
+"""The largest Lyapunov exponent from the variational equations.
 
 The DDM kernels of a generated model (linkage_ddm, generate/sens_runtime.py) integrate the
 state with sensitivities s' = (df/dy) s + (df/dp) D + (df/d deltadot_minus) sigma. With no

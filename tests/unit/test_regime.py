@@ -1,4 +1,4 @@
-"""Poincare sections, Lyapunov exponents and regime maps (issue 19): each checked against an
+"""Poincare sections, Lyapunov exponents and regime maps: each checked against an
 independent reference (closed form, the generated model's sympy kinematics, two nearby runs
 of the plain model, recurrence of the section)."""
 
@@ -307,9 +307,9 @@ def test_two_joint_slider_crank_exponent_agrees_with_two_nearby_runs():
     the first revolution (measured: exponent 6.8 per revolution, separation 1e-9 -> 2.9);
     at the default 0.01 mm it is negative and the runs do not separate after the start's
     transient: they stay at the distance the persistent contacts' memories and the
-    integration's own error set, 4e-8 to 4e-7 over revolutions 2-6 (measured on an Intel
-    Xeon at rtol 1e-11 and 1e-12, with the event margin of 0.001 c and of 0.05 c: not
-    constant to a factor 1.5, as asserted until session 13), far from the chaotic case's
+    integration's own error set, 4e-8 to 4e-7 over revolutions 2-6 (measured at rtol 1e-11
+    and 1e-12, with an event margin of 0.001 c and of 0.05 c: not constant to a factor
+    1.5), far from the chaotic case's
     separation, asserted below 1e-6."""
     from mbs_clearance.cases import slider_crank_two_clearances
 
