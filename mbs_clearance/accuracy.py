@@ -21,7 +21,7 @@ the requested relative accuracy on its per-revolution peaks (the reported peaks)
    within the request, or at `MIN_RTOL`. A rattling run (not periodic: its late peaks depend
    on every digit, and no tolerance makes them accurate) takes one tighter run for the
    estimate and is returned itself, flagged in its stats (``accuracy_ok`` False, the
-   ``accuracy_note``) without a warning, as a run at a fixed rtol.
+   ``accuracy_note``) and with an `AccuracyWarning`, as a run at a fixed rtol.
 
 The returned run's stats hold ``accuracy`` (requested), ``error_estimate`` (the estimate's
 relative error of the per-revolution peaks), ``error_estimate_method`` ("looser run" or
@@ -157,6 +157,6 @@ def simulate_to_accuracy(record, peaks, accuracy: float, *, rattling=None):
     traj.stats.update(accuracy=accuracy, error_estimate=estimate, error_estimate_method=how,
                       accuracy_runs=runs, accuracy_nfev=nfev, accuracy_ok=ok,
                       accuracy_note=note)
-    if note and not rattles:      # a rattling run is flagged in its stats, without a warning
+    if note:
         warnings.warn(note, AccuracyWarning, stacklevel=3)
     return traj
