@@ -451,6 +451,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
               f"{quantity(abs(traj.crank_moment[mask]).max(), 'N m', 6):>12}"
               + ("" if ideal else f"  {_force(traj.contact_force[mask].max()):>17}"))
     print(START_UP_NOTE + PAPER_NOTE, file=sys.stderr)
+    _print_error_estimate(traj)
     floored = traj.stats.get("floored_impacts") if traj.stats else None
     if floored:
         print(f"note: {floored} contact onset(s) at the impact-velocity floor (grazing); the "
@@ -469,10 +470,21 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     return 0
 
 
+def _print_error_estimate(traj) -> None:
+    """The run's estimate of its peaks' error against the requested accuracy (runs to an
+    accuracy only)."""
+    st = traj.stats or {}
+    if st.get("error_estimate") is None:
+        return
+    print(f"estimated relative error of the peaks: {st['error_estimate']:.2g} (requested "
+          f"{st['accuracy']:g}, {'met' if st['accuracy_ok'] else 'NOT met'}; rtol "
+          f"{st['rtol']:g}, {len(st['accuracy_runs'])} runs)", file=sys.stderr)
+
+
 def _simulate_options(args: argparse.Namespace) -> dict:
     options = {}
     for key, name in (("rtol", "rtol"), ("step_size", "step_size"), ("contact", "contact"),
-                      ("integrator", "method")):
+                      ("integrator", "method"), ("accuracy", "accuracy")):
         if getattr(args, key, None) is not None:
             options[name] = getattr(args, key)
     return options
@@ -517,6 +529,7 @@ def _simulate_linkage(linkage, args: argparse.Namespace) -> int:
     else:
         print(f"revolutions counted from the state after {start.revolutions} revolutions "
               "(--settled)", file=sys.stderr)
+    _print_error_estimate(traj)
     if args.out:
         with atomic_file(args.out) as tmp:
             traj.save(tmp)
@@ -715,6 +728,11 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
                    help="crank revolutions from the start (revolution 1: start-up transient)")
     add_settled_option(p)
     add_run_options(p, methods)
+    p.add_argument("--accuracy", type=positive_float,
+                   help="requested relative accuracy of the per-revolution peaks (reduced "
+                        "backend: default 1e-5; the run estimates its own error and tightens "
+                        "until the estimate is within it; --rtol instead runs once at that "
+                        "tolerance. exudyn backend: chooses the step)")
     p.add_argument("--contact", choices=contact_variants,
                    help="clearance-joint variant of the exudyn backend (default symbolic)")
     p.add_argument("--out", type=Path,
@@ -957,7 +975,7 @@ def _cmd_tolerance(args: argparse.Namespace) -> int:
 
 
 def _add_map_parser(subparsers) -> argparse.ArgumentParser:
-    """The ``map`` subcommand: regime map / bifurcation diagram (issue 19)."""
+    """The ``map`` subcommand: regime map / bifurcation diagram."""
     p = subparsers.add_parser(
         "map", help="regime map / bifurcation diagram over one or two fields",
         formatter_class=HelpFormatter,
@@ -1143,19 +1161,22 @@ def _cmd_animate(args: argparse.Namespace) -> int:
     return 0
 
 
-#: what the sign of the largest Lyapunov exponent means (lambda per revolution; the band
-#: |lambda| <= poincare.LYAPUNOV_ZERO counts as zero)
+#: what the verdict on the largest Lyapunov exponent means (`lyapunov.exponent_verdict`:
+#: from its interval; the band |lambda| <= poincare.LYAPUNOV_ZERO counts as zero)
 LYAPUNOV_MEANING = {
     "negative": "nearby motions converge: a stable periodic motion, where peaks and "
                 "sensitivities mean something",
     "zero": "nearby motions neither converge nor diverge within the resolution: "
             "quasi-periodic or marginal; run longer to decide",
     "positive": "nearby motions diverge: chaotic, only statistics of peaks mean something",
+    "undecided": "the interval contains zero: the averaged revolutions do not decide "
+                 "between converging and diverging motions; run more revolutions (or a "
+                 "longer --transient) to decide",
 }
 
 
 def _add_lyapunov_parser(subparsers) -> argparse.ArgumentParser:
-    """The ``lyapunov`` subcommand: the largest Lyapunov exponent of one design (issue 19)."""
+    """The ``lyapunov`` subcommand: the largest Lyapunov exponent of one design."""
     p = subparsers.add_parser(
         "lyapunov", help="largest Lyapunov exponent of a design (periodic or chaotic?)",
         description="Integrate the motion and one tangent vector (the variational equations "
@@ -1183,7 +1204,7 @@ def _add_lyapunov_parser(subparsers) -> argparse.ArgumentParser:
 
 
 def _cmd_lyapunov(args: argparse.Namespace) -> int:
-    from .lyapunov import lyapunov_exponent
+    from .lyapunov import BLOCKS, lyapunov_exponent
     from .poincare import LYAPUNOV_ZERO
     from .units import number
 
@@ -1199,14 +1220,15 @@ def _cmd_lyapunov(args: argparse.Namespace) -> int:
                             rtol=args.rtol, memory=args.memory)
     print(f"done in {time.perf_counter() - t0:.3g} s", file=sys.stderr)
     lam = res.per_revolution
-    sign = ("positive" if lam > LYAPUNOV_ZERO else "negative" if lam < -LYAPUNOV_ZERO
-            else "zero")
-    print(f"largest Lyapunov exponent of {name}: {number(lam, 4)} per revolution "
-          f"({number(res.per_second, 4)} 1/s), the mean over revolutions "
-          f"{transient + 1}-{args.revolutions}")
-    print(f"sign: {sign} (|lambda| <= {LYAPUNOV_ZERO:g} per revolution counts as zero): "
-          f"{LYAPUNOV_MEANING[sign]}")
-    trend = "" if sign == "zero" else (
+    sign = res.verdict
+    print(f"largest Lyapunov exponent of {name}: {number(lam, 4)} +- "
+          f"{number(res.uncertainty, 2)} per revolution ({number(res.per_second, 4)} +- "
+          f"{number(res.uncertainty / res.window, 2)} 1/s), the mean over revolutions "
+          f"{transient + 1}-{args.revolutions} (+-: batch means of {BLOCKS} blocks or the "
+          f"running mean's spread, the larger)")
+    print(f"verdict: {sign} (an interval within |lambda| <= {LYAPUNOV_ZERO:g} per revolution "
+          f"counts as zero): {LYAPUNOV_MEANING[sign]}")
+    trend = "" if sign in ("zero", "undecided") else (
         f": it {'grows' if lam > 0 else 'shrinks'} e-fold every {number(1 / abs(lam), 3)} "
         f"revolutions")
     print(f"  per revolution: the log of the growth of a small perturbation over one crank "

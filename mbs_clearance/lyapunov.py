@@ -1,4 +1,4 @@
-"""The largest Lyapunov exponent from the variational equations (issue 19).
+"""The largest Lyapunov exponent from the variational equations.
 
 The DDM kernels of a generated model (linkage_ddm, generate/sens_runtime.py) integrate the
 state with sensitivities s' = (df/dy) s + (df/dp) D + (df/d deltadot_minus) sigma. With no
@@ -34,6 +34,13 @@ of the state. Any Linkage (and a SliderCrank, on the paper's generated model) ha
 `TextbookFlow` runs a reference system through the same integrator and the same
 renormalisation code: a linear system x' = A x (the exponent is the largest real part of
 A's eigenvalues) and the Lorenz system (sigma 10, rho 28, beta 8/3: 0.9056).
+
+Uncertainty (`exponent_interval`): a finite mean of correlated log-growths. Its half-width
+is the larger of (a) the 95 % batch-means interval from `BLOCKS` blocks of the averaged
+windows (Student t with BLOCKS - 1 degrees of freedom) and (b) the spread of the running
+estimate over the last half of the averaged windows. The verdict (`exponent_verdict`) is
+"undecided" where the interval contains zero and does not lie within the zero band
+(poincare.LYAPUNOV_ZERO); "positive", "negative" or "zero" otherwise.
 """
 
 from __future__ import annotations
@@ -61,7 +68,8 @@ from .mechanism import SliderCrank
 from .poincare import DEFAULT_RTOL, Flow, drive_of, section_times
 
 __all__ = ["LyapunovResult", "TangentFlow", "TextbookFlow", "lyapunov_exponent",
-           "textbook_exponent", "LORENZ", "exponent_of_flow"]
+           "textbook_exponent", "LORENZ", "exponent_of_flow", "exponent_interval",
+           "exponent_verdict"]
 
 _THIS = sys.modules[__name__]
 
@@ -77,6 +85,21 @@ class LyapunovResult:
     transient: int
     window: float
     counters: dict = field(default_factory=dict)
+    #: half-width of the exponent's interval per revolution (per window; `exponent_interval`;
+    #: inf with fewer than BLOCKS averaged windows)
+    uncertainty: float = math.inf
+    #: "positive", "negative", "zero" or "undecided" (`exponent_verdict`)
+    verdict: str = "undecided"
+
+    @property
+    def interval(self) -> tuple[float, float]:
+        """(low, high) of the exponent per revolution (per window)."""
+        return (self.per_revolution - self.uncertainty, self.per_revolution + self.uncertainty)
+
+    @property
+    def interval_per_second(self) -> tuple[float, float]:
+        """(low, high) of the exponent in 1/s."""
+        return (self.interval[0] / self.window, self.interval[1] / self.window)
 
 
 class TangentFlow(Flow):
@@ -241,20 +264,67 @@ class TextbookFlow(Flow):
 
 # ------------------------------------------------------------------------------ exponent
 
+#: blocks of the batch-means interval of the exponent (`exponent_interval`)
+BLOCKS = 4
+
+#: two-sided 95 % quantile of Student's t with BLOCKS - 1 = 3 degrees of freedom
+T_QUANTILE = 3.182
+
+
+def exponent_interval(kept: np.ndarray) -> float:
+    """Half-width of the interval of the mean of the averaged log-growths `kept` (per
+    window): the larger of the 95 % batch-means half-width (`BLOCKS` consecutive blocks of
+    equal length, the first windows left over dropped; t quantile `T_QUANTILE`) and the
+    spread (max - min) of the running mean over the last half of the windows. inf with
+    fewer than BLOCKS windows. The running mean's spread catches a slow trend or a
+    periodic pattern of the growths that blocks of the wrong length would miss or average
+    out; the batch means, the scatter of a chaotic motion's growths."""
+    kept = np.asarray(kept, dtype=float)
+    n = len(kept)
+    if n < BLOCKS:
+        return math.inf
+    size = n // BLOCKS
+    means = kept[n - BLOCKS * size:].reshape(BLOCKS, size).mean(axis=1)
+    batch = T_QUANTILE * float(np.std(means, ddof=1)) / math.sqrt(BLOCKS)
+    running = np.cumsum(kept) / np.arange(1, n + 1)
+    tail = running[n // 2:]
+    return max(batch, float(tail.max() - tail.min()))
+
+
+def exponent_verdict(low: float, high: float) -> str:
+    """The sign of an exponent known to lie in [low, high] (per revolution): "zero" if the
+    interval lies within the band |lambda| <= poincare.LYAPUNOV_ZERO, "positive" if it lies
+    above 0, "negative" if below, "undecided" if it contains 0 and reaches out of the band
+    (run longer, or with a longer transient, to decide)."""
+    from .poincare import LYAPUNOV_ZERO
+
+    if not (math.isfinite(low) and math.isfinite(high)):
+        return "undecided"
+    if -LYAPUNOV_ZERO <= low and high <= LYAPUNOV_ZERO:
+        return "zero"
+    if low > 0.0:
+        return "positive"
+    if high < 0.0:
+        return "negative"
+    return "undecided"
+
+
 def exponent_of_flow(flow, times, transient: int, window: float) -> LyapunovResult:
     """Benettin's estimate on a flow with the `TangentFlow` members: advance to each of
     `times`, renormalise, average the log-growths after the first `transient` windows of
-    duration `window` (s)."""
+    duration `window` (s); with its interval (`exponent_interval`) and verdict."""
     logs = np.empty(len(times))
     for k, t1 in enumerate(times):
         flow.advance(t1)
         logs[k] = math.log(flow.renormalise())
     per_window = float(np.mean(logs[transient:]))
+    half = exponent_interval(logs[transient:])
     from .reduced import counters_dict
 
     return LyapunovResult(per_second=per_window / window, per_revolution=per_window,
                           log_growth=logs, transient=transient, window=window,
-                          counters=counters_dict(flow.counters))
+                          counters=counters_dict(flow.counters), uncertainty=half,
+                          verdict=exponent_verdict(per_window - half, per_window + half))
 
 
 def lyapunov_exponent(mech, revolutions: int = 100, transient: int | None = None, *,
@@ -269,8 +339,11 @@ def lyapunov_exponent(mech, revolutions: int = 100, transient: int | None = None
     revolutions, the tangent renormalised at the end of each; the log-growths of the last
     revolutions - `transient` are averaged (default None: the first half, revolutions // 2,
     so 50 of the default 100; any `revolutions` works with it). rtol (default 1e-7) applies
-    to the state and the unit tangent alike. `memory`: the impact-velocity memory's tangent at each
-    renormalisation, "reset" or "carry" (module docstring).
+    to the state and the unit tangent alike. The result carries the exponent's `uncertainty`
+    (half-width per revolution, `exponent_interval`) and its `verdict` ("positive",
+    "negative", "zero" or "undecided" where the interval contains zero). `memory`: the
+    impact-velocity memory's tangent at each renormalisation, "reset" or "carry" (module
+    docstring).
     """
     if not isinstance(mech, (SliderCrank, Linkage)):
         raise ValueError(f"mech must be a SliderCrank or a Linkage; got {type(mech).__name__}")

@@ -6,6 +6,7 @@ import importlib
 from dataclasses import dataclass
 
 from ._checks import check_int
+from .accuracy import DEFAULT_ACCURACY
 from .linkage import Linkage
 from .mechanism import SliderCrank
 from .trajectory import Trajectory
@@ -60,7 +61,7 @@ def _check(mech, revolutions, name="revolutions") -> int:
 
 
 def simulate(mech: SliderCrank, revolutions: int = 4, backend: str = "reduced",
-             **options) -> Trajectory:
+             accuracy: float | None = None, **options) -> Trajectory:
     """Simulate `revolutions` crank revolutions from t = 0.
 
     Parameters
@@ -73,6 +74,13 @@ def simulate(mech: SliderCrank, revolutions: int = 4, backend: str = "reduced",
         Number of full crank (drive) revolutions (>= 1).
     backend : str
         A key of `BACKENDS`: "reduced" (default), "exudyn" or "ideal".
+    accuracy : float or None
+        Requested relative accuracy of the per-revolution peaks. Backend "reduced": default
+        `accuracy.DEFAULT_ACCURACY` (1e-5) unless ``rtol`` or ``atol`` is given (an expert's
+        fixed tolerance, run once as given); the run estimates its own error from a second
+        run and tightens until the estimate is within the request (`mbs_clearance.accuracy`;
+        ``stats["error_estimate"]``, ``stats["accuracy_ok"]``: the estimate is within the
+        request). Backend "exudyn": the fixed step chosen for it (`exudyn_linkage`).
     **options
         Backend settings, e.g. ``rtol``, ``atol``, ``method`` for "reduced"; ``step_size``,
         ``contact`` for "exudyn". Unknown options or values out of range raise ValueError
@@ -90,7 +98,46 @@ def simulate(mech: SliderCrank, revolutions: int = 4, backend: str = "reduced",
         emitted when True) and ``periodic`` (True, False or None) with
         ``periodicity_note``; see `trajectory.annotate`.
     """
-    return _call(backend, "simulate", mech, revolutions, options)
+    if accuracy is not None and "rtol" in options:
+        raise ValueError("give accuracy or rtol, not both (accuracy chooses the tolerances)")
+    if backend != "reduced":
+        if accuracy is not None:
+            options["accuracy"] = accuracy
+        return _call(backend, "simulate", mech, revolutions, options)
+    if accuracy is None and ("rtol" in options or "atol" in options):
+        return _call(backend, "simulate", mech, revolutions, options)
+    return _to_accuracy(mech, revolutions, DEFAULT_ACCURACY if accuracy is None else accuracy,
+                        options)
+
+
+def _to_accuracy(mech, revolutions, accuracy, options: dict) -> Trajectory:
+    """The reduced model's run within `accuracy` (`accuracy.simulate_to_accuracy`): recorded
+    runs through `_call`, the peaks-only check through the backend's `run`."""
+    from . import reduced
+    from .accuracy import simulate_to_accuracy
+
+    def record(rtol):
+        return _call("reduced", "simulate", mech, revolutions, {**options, "rtol": rtol})
+
+    if isinstance(mech, SliderCrank) and mech.friction_law == "none":
+        def peaks(rtol):
+            out = reduced.run(mech, revolutions, record=False, rtol=rtol, **options)
+            return out[3], int(out[5][0])
+
+        def rattling(traj):
+            return traj.stats.get("nevent", 0) > reduced.RATTLING * revolutions
+    else:
+        from . import linkage_model as lm
+        from .cases import from_slider_crank
+
+        lk = from_slider_crank(mech) if isinstance(mech, SliderCrank) else mech
+
+        def peaks(rtol):
+            out = lm.run(lk, revolutions, record=False, rtol=rtol, **options)
+            return out[4], out[6]["nfev"]
+
+        rattling = None
+    return simulate_to_accuracy(record, peaks, accuracy, rattling=rattling)
 
 
 def peak_base_force(mech: SliderCrank, revolution: int = 4, backend: str = "reduced",

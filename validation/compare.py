@@ -43,7 +43,7 @@ from mbs_clearance.trajectory import Trajectory
 __all__ = ["RevolutionMetrics", "FirstImpact", "Statistics", "Comparison", "compare",
            "common_grid", "first_impact", "statistics", "format_table", "compare_command",
            "plot_linkage_comparison", "shaking_magnitude", "eccentricities", "clearances",
-           "joints_of"]
+           "joints_of", "CrossCheck", "cross_check", "format_cross_check"]
 
 #: upper bound on the number of points of the common grid (memory guard)
 MAX_GRID_POINTS = 4_000_000
@@ -400,6 +400,87 @@ def plot_linkage_comparison(a: Trajectory, b: Trajectory, path=None,
 
 
 # ------------------------------------------------------------------------------ CLI
+@dataclass(frozen=True)
+class CrossCheck:
+    """The two models' converged per-revolution peaks of the monitored force with their
+    error bars (N): the reduced model run to a requested accuracy (its own estimate), Exudyn
+    extrapolated from the steps h, h/2, h/4 (`exudyn_convergence`); and the time each
+    needed (s)."""
+
+    reduced: np.ndarray
+    reduced_error: np.ndarray
+    exudyn: np.ndarray
+    exudyn_error: np.ndarray
+    exudyn_order: np.ndarray
+    exudyn_steps: tuple
+    reduced_seconds: float
+    exudyn_seconds: float
+    accuracy: float
+
+    @property
+    def difference(self) -> np.ndarray:
+        """exudyn - reduced, N."""
+        return self.exudyn - self.reduced
+
+    @property
+    def bars(self) -> np.ndarray:
+        """Sum of the two error bars, N."""
+        return self.reduced_error + self.exudyn_error
+
+    @property
+    def model_difference(self) -> np.ndarray:
+        """Per revolution: the difference exceeds the two error bars together."""
+        return np.abs(self.difference) > self.bars
+
+
+def cross_check(mech, revolutions: int = 4, *, accuracy: float = 1e-6,
+                step_size: float | None = None, exudyn_accuracy: float | None = None,
+                **exudyn_options) -> CrossCheck:
+    """Converged peaks of both models (`CrossCheck`): the reduced model at `accuracy` (its
+    error bar: its estimate x peak), Exudyn from `step_size` h (default its default step), h/2,
+    h/4, Richardson-extrapolated (its bar: `exudyn_convergence.richardson`), halved further
+    while a bar exceeds `exudyn_accuracy` (relative; None: three runs)."""
+    from mbs_clearance import simulate
+    from mbs_clearance.accuracy import revolution_peaks
+    from mbs_clearance.exudyn_convergence import converged_peaks
+
+    t0 = time.perf_counter()
+    red = simulate(mech, revolutions, accuracy=accuracy)
+    reduced_seconds = time.perf_counter() - t0
+    peaks = revolution_peaks(red)
+    conv = converged_peaks(mech, revolutions, step_size=step_size, accuracy=exudyn_accuracy,
+                           **exudyn_options)
+    return CrossCheck(reduced=peaks, reduced_error=red.stats["error_estimate"] * np.abs(peaks),
+                      exudyn=conv.value, exudyn_error=conv.error, exudyn_order=conv.order,
+                      exudyn_steps=conv.steps[-3:], reduced_seconds=reduced_seconds,
+                      exudyn_seconds=float(sum(conv.seconds)), accuracy=accuracy)
+
+
+def format_cross_check(cc: CrossCheck) -> str:
+    """Plain-text table of a `CrossCheck`."""
+    h = cc.exudyn_steps
+    lines = [f"converged peaks: reduced at accuracy {cc.accuracy:g} ({cc.reduced_seconds:.3g} "
+             f"s); exudyn at steps {h[0]:.3g}, {h[1]:.3g}, {h[2]:.3g} s, extrapolated "
+             f"({cc.exudyn_seconds:.3g} s)", ""]
+    head = (f"{'rev':>3}  {'reduced (N)':>12}  {'+-':>9}  {'exudyn (N)':>12}  {'+-':>9}  "
+            f"{'order':>5}  {'difference':>10}  {'bars':>9}  verdict")
+    lines += [head, "-" * len(head)]
+    for k in range(len(cc.reduced)):
+        order = "-" if not np.isfinite(cc.exudyn_order[k]) else f"{cc.exudyn_order[k]:.2f}"
+        verdict = ("model difference" if cc.model_difference[k]
+                   else "agree within the error bars")
+        lines.append(f"{k + 1:>3}  {cc.reduced[k]:>12.3f}  {cc.reduced_error[k]:>9.3g}  "
+                     f"{cc.exudyn[k]:>12.3f}  {cc.exudyn_error[k]:>9.3g}  {order:>5}  "
+                     f"{_pct(cc.exudyn[k] / cc.reduced[k] - 1):>10}  "
+                     f"{_pct(cc.bars[k] / cc.reduced[k]):>9}  {verdict}")
+    lines += ["", "+-: each model's error estimate (reduced: its own, from a second run; "
+              "exudyn: the difference of its h/2 and h/4 peaks, or the larger step difference "
+              "where the observed order is outside [1, 4] and nothing is extrapolated); "
+              "difference: exudyn / reduced - 1; bars: the two error bars together, "
+              "relative to the reduced peak"]
+    return "\n".join(lines)
+
+
 def _backend_options(backend: str, other: str, args, mech) -> dict:
     options = {}
     if backend == "reduced":
@@ -474,6 +555,15 @@ def build_parser(parser: argparse.ArgumentParser | None = None) -> argparse.Argu
                              "by the method's second order instead of --step-size")
     parser.add_argument("--contact", help="contact variant (exudyn backend): symbolic, "
                                           "python or sphere")
+    parser.add_argument("--converged", action="store_true",
+                        help="also the converged cross-check: the reduced model at a "
+                             "requested accuracy (--converged-accuracy) and Exudyn at the "
+                             "steps h, h/2, h/4 (h: --step-size or its default), "
+                             "extrapolated, each with its error bar and the time it needed; "
+                             "'model difference' where the difference exceeds the bars")
+    parser.add_argument("--converged-accuracy", type=positive_float, default=1e-6,
+                        help="requested accuracy of the reduced model in the converged "
+                             "cross-check")
     parser.add_argument("--out", type=Path, default=Path("compare_overlay.png"),
                         help="overlay figure (PNG); default compare_overlay.png")
     parser.add_argument("--no-plot", action="store_true", help="do not write the figure")
@@ -510,6 +600,14 @@ def run_compare(args: argparse.Namespace) -> int:
         print(f"{backend}: {time.perf_counter() - t0:.3g} s", file=sys.stderr, flush=True)
     result = compare(*trajectories)
     print(format_table(result))
+    if args.converged:
+        if set(pair) != {"reduced", "exudyn"}:
+            raise ValueError("--converged compares the reduced and exudyn backends")
+        options = {"contact": args.contact} if args.contact is not None else {}
+        cc = cross_check(mech, args.revolutions, accuracy=args.converged_accuracy,
+                         step_size=args.step_size, **options)
+        print()
+        print(format_cross_check(cc))
     if not args.no_plot:
         with atomic_file(args.out) as tmp:
             if hasattr(mech, "clearance_joints"):

@@ -853,8 +853,9 @@ def test_library_messages_go_through_logging(caplog, capsys):
 @pytest.mark.parametrize("case", [None, "paper_slider_crank"])
 def test_lyapunov_prints_the_exponent_with_units_and_its_sign(case, capsys):
     """`lyapunov` prints the Python function's exponent for the same inputs (the paper's
-    SliderCrank by default, or a --case's Linkage), per revolution and in 1/s, and its sign's
-    meaning: negative at the paper's design (period-1 motion, docs/regimes.md)."""
+    SliderCrank by default, or a --case's Linkage), per revolution and in 1/s, with its
+    uncertainty, and its verdict's meaning: negative at the paper's design (period-1 motion,
+    docs/regimes.md)."""
     import re
 
     from mbs_clearance import cases, lyapunov_exponent
@@ -863,14 +864,15 @@ def test_lyapunov_prints_the_exponent_with_units_and_its_sign(case, capsys):
     argv += [] if case is None else ["--case", case]
     assert main(argv) == 0
     out = capsys.readouterr().out
-    m = re.search(r"exponent of .+?: (\S+) per revolution \((\S+) 1/s\), the mean over "
-                  r"revolutions 9-16", out)
+    m = re.search(r"exponent of .+?: (\S+) \+- (\S+) per revolution \((\S+) \+- \S+ 1/s\), "
+                  r"the mean over revolutions 9-16", out)
     assert m, out
     mech = SliderCrank() if case is None else cases.CASES[case]()
     ref = lyapunov_exponent(mech, revolutions=16, transient=8)
     assert float(m.group(1)) == pytest.approx(ref.per_revolution, rel=1e-3)
-    assert float(m.group(2)) == pytest.approx(ref.per_second, rel=1e-3)
-    assert ref.per_revolution < -0.1 and "sign: negative" in out and "converge" in out
+    assert float(m.group(2)) == pytest.approx(ref.uncertainty, rel=1e-2)
+    assert float(m.group(3)) == pytest.approx(ref.per_second, rel=1e-3)
+    assert ref.interval[1] < -0.1 and "verdict: negative" in out and "converge" in out
     assert f"it shrinks e-fold every {1 / abs(ref.per_revolution):.3g} revolutions" in out
 
 
@@ -891,3 +893,22 @@ def test_lyapunov_bad_input_is_one_line_before_any_run(argv, message, capsys, mo
     assert exc.value.code == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and message in err, err
+
+
+def test_simulate_accuracy_prints_the_runs_estimate(capsys):
+    """`simulate --accuracy 1e-6` prints the Python function's peaks at that request and
+    the run's own error estimate (stderr); with --rtol too it is refused in one line."""
+    from mbs_clearance import simulate
+
+    assert main(["simulate", "--revolutions", "1", "--accuracy", "1e-6"]) == 0
+    captured = capsys.readouterr()
+    peak1 = float(captured.out.splitlines()[1].split()[1])
+    traj = simulate(SliderCrank(), 1, accuracy=1e-6)
+    assert peak1 == pytest.approx(traj.peaks[0], abs=0.01)
+    assert (f"estimated relative error of the peaks: {traj.stats['error_estimate']:.2g} "
+            "(requested 1e-06, met") in captured.err
+    with pytest.raises(SystemExit) as exc:
+        main(["simulate", "--accuracy", "1e-6", "--rtol", "1e-8"])
+    assert exc.value.code == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "give accuracy or rtol, not both" in err, err

@@ -61,9 +61,6 @@ def _rel(path: Path) -> str:
 
 PRODUCT_DOCS = [_rel(p) for p in _files("README.md", "mkdocs.yml", "docs", "examples")]
 CODE_FOLDERS = ["mbs_clearance", "validation", "tools", "tests"]
-CODE_XFAIL = pytest.mark.xfail(
-    strict=False, reason="code comments and docstrings still carry history references; "
-    "to be scrubbed in the code, then this mark is removed")
 
 
 @pytest.mark.parametrize("kind,text", [
@@ -111,7 +108,7 @@ def test_no_history_in_the_documentation(path):
     assert not found, f"{path}:\n" + "\n".join(found)
 
 
-@pytest.mark.parametrize("folder", [pytest.param(f, marks=CODE_XFAIL) for f in CODE_FOLDERS])
+@pytest.mark.parametrize("folder", CODE_FOLDERS)
 def test_no_history_in_the_code(folder):
     found = []
     for path in _files(folder, suffixes=(".py", ".jinja")):
