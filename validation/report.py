@@ -853,8 +853,8 @@ data-status="{{ v.status }}"><b>{{ v.claim }}</b>: <span class="{{ v.status | re
 &mdash; {{ v.why }} <a href="{{ v.evidence }}">evidence</a></li>
 {% endfor %}</ul>
 <p class="glossary"><b>Words used above and below.</b> <i>Reduced model</i>: the paper's
-equations in two coordinates, integrated with a relative tolerance (the error allowed per
-step, relative to the solution) and with every contact start located exactly.
+equations in two coordinates, integrated with a relative tolerance (rtol: the error allowed
+per step, relative to the solution) and with every contact start located exactly.
 <i>Sensitivity S</i> (the paper's Eq. 15): the % change of the base force per % change of a
 design parameter, (b / |F12|) d|F12|/db; <i>mean |S|</i> is its mean magnitude over
 revolution 4. <i>DDM</i> (direct differentiation): the derivatives integrated beside the
@@ -887,10 +887,10 @@ radial clearance c; above 1 the journal penetrates the wall (elastic contact). A
 joint has no clearance: '-'.</dd></dl></details>
 
 <h2 id="agreement">{{ titles.agreement }}</h2>
-<p>Reduced model (rtol 1e-10) against Exudyn (generalized-alpha, step
+<p>Reduced model (relative tolerance 1e-10) against Exudyn (generalized-alpha, step
 {{ n.agreement.exudyn_step }} s). Periodic cases: peak difference per revolution and relative
 RMS of F12 and M2 over the last revolution. c = 0.1 mm is not periodic: trajectories diverge,
-only the first impact and statistics are comparable (see tests/integration/test_exudyn.py).</p>
+only the first impact and statistics are comparable.</p>
 <dl class="defs"><dt>peak diff.</dt><dd>Exudyn's peak |F12| of the revolution over the
 reduced model's, minus 1, in %; revolution 1 is the start-up transient.</dd>
 <dt>orbit RMS / c</dt><dd>RMS distance between the two models' journal-centre orbits over the
@@ -906,13 +906,14 @@ last revolution, in units of the radial clearance c.</dd></dl>
 <td>{{ '%.4f' % r.first_impact_dt_us if r.first_impact_dt_us is not none else '-' }}</td></tr>
 {% endfor %}</table>
 {% if n.agreement.cases %}
-<p>Every named case from its description in both models (reduced rtol 1e-10; Exudyn at its
+<p>Every named case from its description in both models (the reduced model at relative
+tolerance 1e-10; Exudyn at its
 default step, listed): the monitored force's peak per revolution, the relative differences
 (Exudyn / reduced - 1) of the RMS of the |shaking force| and of the drive moment per
 revolution, and the first impact time of each clearance joint (reduced / Exudyn). A case
 that is not periodic is compared by these statistics only. A case "from the state after N
 revolutions" starts both models from the reduced model's state on its periodic orbit
-(`settled_start`: the centred start's transient gone) and is compared over the next
+(the centred start's transient gone) and is compared over the next
 revolution (the four-bar settles after about 100, docs/cases.md).</p>
 <table><tr><th>case</th><th>Exudyn step (s)</th><th>periodic</th>
 <th>peak per rev., reduced (N)</th><th>peak diff. per rev. (%)</th>
@@ -1041,7 +1042,7 @@ mu = {{ mu }}</th>{% endfor %}</tr>
 <h2 id="performance">{{ titles.performance }}</h2>
 <p>Work-precision (median run times, one run, {{ n.environment.machine }}): error of the
 peak |F12| (first figure) and max error of the base-force series (second) against the
-reduced model at rtol 1e-12, for our compiled integrator, scipy solve_ivp on the same
+reduced model at relative tolerance 1e-12, for our compiled integrator, scipy solve_ivp on the same
 equations and events, and Exudyn.</p>
 {{ figures('performance') }}
 <details><summary>fastest setting per accuracy, each method</summary>
