@@ -59,8 +59,10 @@ def test_first_impact_is_interpolated_between_samples(reduced_paper):
 
 
 def test_bad_inputs(reduced_paper):
-    with pytest.warns(AccuracyWarning, match="rattles"):   # c = 0.1 mm: not periodic
-        other = simulate(SliderCrank(journal_radius=0.0099), 1, backend="reduced")
+    # c = 0.1 mm: not periodic, flagged at a fixed rtol (at a requested accuracy its first
+    # revolution's peak meets the request and is not)
+    with pytest.warns(AccuracyWarning, match="rattles"):
+        other = simulate(SliderCrank(journal_radius=0.0099), 1, backend="reduced", rtol=1e-7)
     with pytest.raises(ValueError, match="different mechanisms"):
         compare(reduced_paper, other)
     with pytest.raises(ValueError, match="revolutions"):
