@@ -354,6 +354,8 @@ def load_map(path: str | Path):
         raise
     except Exception as exc:  # noqa: BLE001 - a damaged file fails anywhere in the reader
         reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        # the reader names the file by its absolute path: name it as the user did
+        reason = reason.replace(str(path.resolve()), str(path))
         raise ValueError(f"cannot read the regime map {str(path)!r}: it is not a complete "
                          f"netCDF file ({reason})") from None
     if not str(ds.attrs.get("format", "")).startswith("mbs-clearance regime map"):

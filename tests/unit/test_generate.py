@@ -408,12 +408,13 @@ def test_trajectory_along_reduced_run(tmp_path):
 
 def test_paper_case_through_the_linkage_path():
     """simulate(paper_slider_crank()) (generated model, protocol v2, glue) against
-    simulate(SliderCrank()) (hand-written model) at the same default rtol: the refined
-    peak of |F12| of every revolution within 1e-9 relative, and the same contact events."""
+    simulate(SliderCrank()) (hand-written model) at the same fixed rtol (the default
+    accuracy request would check the two differently): the refined peak of |F12| of every
+    revolution within 1e-9 relative, and the same contact events."""
     from mbs_clearance import simulate
 
-    ref = simulate(SliderCrank(), 4)
-    traj = simulate(paper_slider_crank(), 4)
+    ref = simulate(SliderCrank(), 4, rtol=1e-7)
+    traj = simulate(paper_slider_crank(), 4, rtol=1e-7)
     for rev in range(1, 5):
         assert traj.max_base_force(rev) == pytest.approx(ref.max_base_force(rev), rel=1e-9)
     assert traj.stats["nevent"] == ref.stats["nevent"]
