@@ -75,6 +75,8 @@ def test_equal_error_time_interpolates_in_log_log():
     assert equal_error_time(rows[1:], 1e-2) == 1.0        # the first row is already better
 
 
+# slow: compiles the step-limit kernels, over a minute
+@pytest.mark.slow
 def test_step_limit_jacobian_matches_the_generated_one():
     """step_limit's state Jacobian (central differences of the compiled rhs) against the
     generated exact Jacobian's state columns, at states of the two-joint case's run in
@@ -142,6 +144,8 @@ def test_stability_radius_closed_forms():
     assert stability_radius("dopri5", np.pi) == pytest.approx(roots[0], rel=1e-9)
 
 
+# slow: central differences at rtol 1e-12 on nine designs, a minute or more
+@pytest.mark.slow
 def test_peak_gradient_accuracy_script(capsys):
     """validation.peak_gradient_accuracy on the paper's design at two DDM tolerances: one
     row each, the error measure against central differences below the tests' 1e-3 (the

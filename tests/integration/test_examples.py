@@ -1,8 +1,8 @@
 """Every script of examples/ runs as a user runs it (a fresh Python process, from the
 repository root, warnings as errors) and prints what its documentation page shows.
 
-The run times in the marks are those of a quiet 2-core machine with the kernels compiled;
-the first run after an install also compiles them.
+The fast suite runs the paper's example; the others compile kernels of their own (the
+description's model, the GA, SALib's study, the map, Exudyn) and run with ``-m slow``.
 """
 
 from __future__ import annotations
@@ -25,23 +25,23 @@ CASES = {
         "revolution 4: 8292.0 N, the paper reports 8311 N (-0.23 %)",
         "motion periodic: True",
     ]),
-    "custom_linkage": ((), [
+    "custom_linkage": ((pytest.mark.slow,), [
         "coordinates: coupler.angle, rocker.angle",
         "revolution 3: peak shaking force",
     ]),
-    "optimize_link_lengths": ((), [
+    "optimize_link_lengths": ((pytest.mark.slow,), [
         "original design: 8292.0 N",
         "best design: L2 = 4.000 cm, L3 = 14.000 cm, 6254.4 N",
     ]),
-    "tolerance_study": ((), [
+    "tolerance_study": ((pytest.mark.slow,), [
         "P(peak > 8300 N) =",
         "Morris mu* of radial_clearance:",
     ]),
-    "regime_map": ((), [
+    "regime_map": ((pytest.mark.slow,), [
         "4 of 4 points done",
         "clearance 0.010 mm, 5000 rpm: period_1",
     ]),
-    "exudyn_cross_check": ((pytest.mark.exudyn,), [
+    "exudyn_cross_check": ((pytest.mark.exudyn, pytest.mark.slow), [
         "max |F12|, revolution 4: reduced 8292.0 N, Exudyn 8290.3 N",
     ]),
 }

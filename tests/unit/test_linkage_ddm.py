@@ -68,6 +68,8 @@ def test_ddm_matches_finite_differences(case):
     _compare(ddm.base_force[:, 1], fd.base_force[:, 1], "reaction y", 2e-3)
 
 
+# slow: compiles the general (unspecialised) model and its DDM kernels, over 2 minutes
+@pytest.mark.slow
 def test_ddm_along_zero_valued_geometry_runs_on_the_general_model():
     """Along parameters that are exactly zero in the description (a pin on the coupler's
     axis, the guide raised or turned), on which the checked-in module is
