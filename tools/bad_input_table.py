@@ -605,13 +605,18 @@ def _cell(text: str) -> str:
     return str(text).replace("|", "\\|").replace("\n", " ")
 
 
+def _text(text: str) -> str:
+    """A table cell outside a code span: brackets escaped, so `[a][b]` is not a link."""
+    return _cell(text).replace("[", "\\[").replace("]", "\\]")
+
+
 def cli_table(rows: list[dict]) -> str:
     lines = ["| input | case | what the user sees (stderr) | exit status |",
              "|---|---|---|---|"]
     for r in rows:
         lines.append(f"| `{_cell(('mbs-clearance ' + r['command']).strip())}` | "
-                     f"{_cell(r['what'])} | "
-                     f"{_cell(_shown(r['stderr']))} | {r['status']} |")
+                     f"{_text(r['what'])} | "
+                     f"{_text(_shown(r['stderr']))} | {r['status']} |")
     return "\n".join(lines)
 
 
@@ -620,8 +625,8 @@ def library_table(rows: list[dict]) -> str:
     for r in rows:
         result = (f"{r['raises']}: {r['message']}" if "raises" in r
                   else f"returns {r['returns']}")
-        lines.append(f"| `{_cell(r['expr'])}` | {_cell(r['what'])} | {_cell(result)} | "
-                     f"{_cell('; '.join(r['warnings'])) or '-'} |")
+        lines.append(f"| `{_cell(r['expr'])}` | {_text(r['what'])} | {_text(result)} | "
+                     f"{_text('; '.join(r['warnings'])) or '-'} |")
     return "\n".join(lines)
 
 
