@@ -1233,7 +1233,28 @@ def _cmd_lyapunov(args: argparse.Namespace) -> int:
         f"revolutions")
     print(f"  per revolution: the log of the growth of a small perturbation over one crank "
           f"revolution{trend}; 1/s: the same per second")
+    if res.regime:
+        print(f"regime of revolutions {transient + 1}-{args.revolutions} (the regime map's "
+              f"rule): {_regime_line(res)}")
     return 0
+
+
+def _regime_line(res) -> str:
+    """The regime of a Lyapunov run in words, and why it differs from the verdict where it
+    does (a period found by recurrence decides over the exponent's sign)."""
+    words = res.regime.replace("_", " ")
+    if res.period:
+        words = f"period-{res.period}" + (
+            " (the section repeats every revolution within 1e-3 of the clearance)"
+            if res.period == 1 else
+            f" (the section repeats every {res.period} revolutions within 1e-3 of the "
+            f"clearance; the exponent is averaged over whole periods)")
+        if res.verdict != "negative":
+            words += (f"; the exponent's verdict is {res.verdict}: a recurrence seen over "
+                      f"the averaged revolutions decides the regime, the exponent's sign says "
+                      f"whether the repeating motion attracts its neighbours (run longer to "
+                      f"settle it)")
+    return words
 
 
 #: entry-point group through which other packages (this project's `validation`) add
