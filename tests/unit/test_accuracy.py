@@ -195,15 +195,33 @@ def test_requested_accuracy_is_met_against_rtol_1e_12(label, mech, accuracy):
     assert traj.stats["accuracy_ok"] and err <= traj.stats["error_estimate"] <= accuracy
 
 
-def test_named_case_as_linkage_meets_the_request():
-    """A Linkage (the two-clearance slider-crank, no diagnostics of its own) at 1e-6."""
+@pytest.mark.parametrize("overrides", [{}, {"crank_speed": 3000 * RPM},
+                                       {"crank_coupler_clearance": 5e-5}])
+def test_named_case_as_linkage_meets_the_request(overrides):
+    """A Linkage (the two-clearance slider-crank) at 1e-6 and, by default, at 1e-5: its
+    runs carry the contact diagnostics, so the default's unflagged run takes the cheap
+    check; both against the same model at rtol 1e-12."""
     from mbs_clearance.cases import slider_crank_two_clearances
 
-    lk = slider_crank_two_clearances()
-    traj = simulate(lk, accuracy=1e-6)
+    lk = slider_crank_two_clearances(**overrides)
     ref = simulate(lk, rtol=am.REFERENCE_RTOL).peaks
-    assert np.abs(traj.peaks / ref - 1.0).max() <= 1e-6
-    assert traj.stats["accuracy_ok"]
+    for accuracy, traj in ((1e-6, simulate(lk, accuracy=1e-6)), (1e-5, simulate(lk))):
+        assert np.abs(traj.peaks / ref - 1.0).max() <= accuracy, (overrides, accuracy)
+        assert traj.stats["accuracy_ok"] and traj.stats["accuracy"] == accuracy
+    if not overrides:
+        assert traj.stats["accuracy_runs"][1] == (1e-5, "peaks")      # the cheap check
+
+
+def test_peak_base_force_to_an_accuracy():
+    """`peak_base_force(..., accuracy=)` is `simulate`'s peak at that accuracy: at 2000 rpm,
+    where the fixed default rtol misses 1e-5 by two orders, within 1e-5 of rtol 1e-12."""
+    mech = SliderCrank(crank_speed=2000 * RPM)
+    ref = peak_base_force(mech, 4, rtol=am.REFERENCE_RTOL)
+    fixed = peak_base_force(mech, 4)
+    requested = peak_base_force(mech, 4, accuracy=1e-5)
+    assert abs(fixed / ref - 1.0) > 1e-4
+    assert abs(requested / ref - 1.0) <= 1e-5
+    assert requested == simulate(mech, 4, accuracy=1e-5).peaks[3]
 
 
 def test_accuracy_and_rtol_together_are_refused():
