@@ -659,6 +659,96 @@ def _fd_linkage_gradient(linkage, names, out, revolution, fd_relative_step, exec
                 "stats['backward'] hold the one-sided differences)", stats=stats)
 
 
+def _linkage_gradient_at(run, coefficients, out: Output, t: float, newton: bool):
+    """The output `out` at time t of the DDM run `run` (a `linkage_ddm.DdmRun`) and its
+    derivatives along the requested directions at the maximum next to t: the state and
+    its sensitivities from the step map of the recorded step that holds t (the model's
+    `step_sens`), the outputs' derivatives there (`DdmRun.output_sensitivities`), and
+    (``newton``) one Newton step for d out/dt = 0 from the values at t -+ 1e-4 of the step,
+    as `_Run.gradient_at`. Returns (value at t, gradient, time of the gradient)."""
+    model = run.model
+    col = {c: i for i, c in enumerate(model.OUT_COLUMNS)}
+    ts = run.ts
+    i = max(int(np.searchsorted(ts, t, side="left")) - 1, 0)
+    if ts[i + 1] == t:
+        i += 1
+    if ts[i] == t:
+        ys, mems, hs = run.ys[i:i + 1], run.ms[i:i + 1], np.zeros(1)
+    else:
+        q = run.p.copy()
+        n_mem, m0 = model.N_MEM, model.MEM_START
+        q[m0:m0 + n_mem] = run.ms[i, :n_mem]
+        h = t - ts[i]
+        delta = 1e-4 * (ts[i + 1] - ts[i])
+        hs = np.array([h, h - delta, h + delta]) if newton else np.array([h])
+        ys, _ = model.step_sens(ts[i], np.ascontiguousarray(run.ys[i]), q, hs, coefficients)
+        mems = np.repeat(run.ms[i:i + 1], len(hs), axis=0)
+    vals, ders = run.output_sensitivities(ts[i] + hs, ys, mems)
+    cols = [col[c] for c in out.columns]
+    if len(cols) == 2:
+        fx, fy = vals[:, cols[0]], vals[:, cols[1]]
+        f = np.hypot(fx, fy)
+        d = (fx[:, None] * ders[:, cols[0]] + fy[:, None] * ders[:, cols[1]]) \
+            / np.maximum(f, 1e-300)[:, None]
+    else:
+        f = np.abs(vals[:, cols[0]])
+        d = np.sign(vals[:, cols[0]])[:, None] * ders[:, cols[0]]
+    if len(hs) == 1:
+        return float(f[0]), d[0], float(t)
+    span = hs[2] - hs[1]
+    curv = (f[2] - 2.0 * f[0] + f[1]) / (0.25 * span * span)
+    slope = (f[2] - f[1]) / span
+    shift = -slope / curv if curv < 0.0 else 0.0
+    shift = min(max(shift, -0.5 * span), 0.5 * span)
+    g = (d[0] + shift * (d[2] - d[1]) / span
+         + 0.5 * shift * shift * (d[2] - 2.0 * d[0] + d[1]) / (0.25 * span * span))
+    return float(f[0]), g, float(t + shift)
+
+
+def _ddm_linkage_gradient(linkage, names, out: Output, revolution, rtol, integrator):
+    """The peak of `out` over drive revolution `revolution` and its DDM gradient along the
+    design names `names` (`design.direction`: a case override moves every description value
+    that follows from it): one run of the sensitivity equations of the generated model, the
+    peak refined between its steps (the integrator's refinement for the monitored force,
+    `_refined_peak` for another output), the gradient the outputs' sensitivity at the
+    refined peak time (envelope theorem)."""
+    from . import design, linkage_ddm
+    from .linkage_model import specialisable
+
+    t_wall = time.perf_counter()
+    directions = [design.direction(linkage, n) for n in names]
+    dotted = sorted({k for d in directions for k in d})
+    model, p0, y0, rtol, atol = linkage_ddm.plain_setup(
+        linkage, rtol, specialise=specialisable(linkage, dotted))
+    scale = np.array([abs(_linkage_fd_step(linkage, n, 1.0)) for n in names])
+    run = linkage_ddm.ddm_run(linkage, model, p0, y0, directions, scale=scale, rtol=rtol,
+                              atol_plain=atol, revolutions=revolution, method=integrator)
+    coefficients = METHODS[integrator].arrays()
+    t_lo, t_hi = (revolution - 1) * linkage.period, revolution * linkage.period
+    if out.monitored(linkage):
+        peak_int, t_peak = float(run.peaks[revolution - 1]), float(run.peak_t[revolution - 1])
+    else:
+        peak_int, t_peak = _refined_peak(model, run.ts, run.plain_states(), run.ms, p0,
+                                         run.outs, out, t_lo, t_hi, integrator)
+    eps = 1e-6 * linkage.period
+    at_edge = min(t_peak - t_lo, t_hi - t_peak) <= eps
+    peak, grad, _ = _linkage_gradient_at(run, coefficients, out, t_peak, not at_edge)
+    message = ("no rival detection for a Linkage: a second local maximum within the "
+               "accuracy of the peak is not looked for (compare with method='fd')")
+    if at_edge:
+        message += (f"; the peak sits at the window's edge (t = {t_peak:.9g} s): gradient "
+                    f"is the derivative of the output at the edge")
+    stats = dict({k: v for k, v in run.stats.items() if k not in ("wall_time",)},
+                 rtol=float(rtol), method=integrator, output=out.name,
+                 integrator_peak=peak_int, directions=directions,
+                 wall_time=time.perf_counter() - t_wall)
+    return PeakGradient(
+        peak=peak, time=t_peak, parameters=names,
+        reference=np.array([design.design_value(linkage, n) for n in names]), gradient=grad,
+        kink=bool(at_edge), at_edge=bool(at_edge), message=message, method="ddm",
+        backend="reduced", revolution=revolution, stats=stats)
+
+
 def _linkage_peak_gradient(linkage, parameters, output, revolution, backend, method, rtol,
                            integrator, fd_relative_step, executor, options):
     from . import design
@@ -675,11 +765,17 @@ def _linkage_peak_gradient(linkage, parameters, output, revolution, backend, met
     if backend != "reduced":
         raise ValueError(f"backend must be 'reduced' for a Linkage study (its generated "
                          f"model); got {backend!r}")
-    if method == "ddm":
-        raise ValueError("method='ddm' of the peak takes a SliderCrank; a Linkage's peak "
-                         "gradient is available with method='fd' (central differences of "
-                         "the refined peak, any parameter and output)")
     from . import linkage_model as lm
+
+    if method == "ddm":
+        if options or executor is not None:
+            extra = sorted(options) + (["executor"] if executor is not None else [])
+            raise ValueError(f"unknown option(s) for method='ddm': {extra}")
+        from .linkage_ddm import DDM_INTEGRATOR
+
+        return _ddm_linkage_gradient(linkage, names, out, revolution,
+                                     PEAK_GRADIENT_RTOL if rtol is None else rtol,
+                                     integrator or DDM_INTEGRATOR)
 
     unknown = sorted(set(options) - set(lm.OPTION_NAMES) | ({"t_eval", "start"}
                                                              & set(options)))
