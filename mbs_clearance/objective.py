@@ -806,8 +806,14 @@ def peak_gradient(mech: SliderCrank | Linkage, parameters=None, revolution: int 
     Parameters
     ----------
     mech : SliderCrank or Linkage
-        A Linkage (a named case's or a description's) takes ``method="fd"`` (its default):
-        central differences of `peak_output`, 2 p + 1 runs of its generated model.
+        A Linkage (a named case's or a description's): ``method="fd"`` (its default),
+        central differences of `peak_output`, 2 p + 1 runs of its generated model; or
+        ``method="ddm"``, one run of its sensitivity equations along the directions of
+        the named values (`design.direction`), the output's sensitivity at the refined
+        peak time, without the rival (kink) detection of the SliderCrank's. Measured: on
+        the paper slider-crank built by its case it agrees with central differences to
+        2e-5; on the four-bar's lightly damped sliding contact it does not converge with
+        rtol (docs/studies_linkage.md): use "fd" there.
     parameters : sequence of str, optional
         Continuous SliderCrank fields; default `sensitivity.DEFAULT_PARAMETERS`. For a
         Linkage (required): its case's overrides ("coupler_length", "clearance", ...) or
