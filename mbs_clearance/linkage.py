@@ -647,12 +647,9 @@ class Linkage:
         and the item that holds it (``bodies[1] ('coupler')``)."""
         if not isinstance(data, Mapping):
             raise ValueError(f"a linkage description must be a mapping; got {_short(data)}")
-        for key in ("case", "overrides"):
-            if key in data:     # provenance of a built case, not part of a description
-                raise ValueError(f"unknown linkage key {key!r} in the description: a "
-                                 "description gives the linkage itself (a named case is "
-                                 "built by its function, cases.CASES)")
-        data = dict(_fields_of(cls, "linkage", "the description", data))
+        # case and overrides: the provenance of a built case, not keys of a description
+        data = dict(_fields_of(cls, "linkage", "the description", data,
+                               exclude=("case", "overrides")))
 
         def items(key, most):
             value = data.get(key, [])
@@ -844,11 +841,12 @@ def _named(item: Any) -> str:
     return f" ({_short(name, 40)})" if isinstance(name, str) else ""
 
 
-def _fields_of(cls, what: str, where: str, data: Mapping) -> dict:
+def _fields_of(cls, what: str, where: str, data: Mapping, exclude=()) -> dict:
     """`data` as keyword arguments of dataclass `cls` (a `what`, at `where` in the
     description): ValueError naming the key and `where` when a key is unknown or a required
-    one (a field without a default) is missing."""
-    fields = dataclasses.fields(cls)
+    one (a field without a default) is missing. Fields in `exclude` are not description
+    keys."""
+    fields = [f for f in dataclasses.fields(cls) if f.name not in exclude]
     allowed = [f.name for f in fields]
     unknown = [k for k in data if k not in allowed]
     if unknown:
