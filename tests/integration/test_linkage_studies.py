@@ -99,6 +99,16 @@ def test_case_memory_and_design_names():
     both = linkage_with(fb, {"rocker_length": 2.6, "bodies.coupler.mass": 1.5})
     assert both.parameter_value("coupler.mass") == 1.5 and both.case is None
     assert both.parameter_value("rocker.pin.x") == pytest.approx(1.3, rel=1e-15)
+    # a description (no case): its dotted paths only
+    from mbs_clearance.linkage import Linkage
+
+    desc = Linkage.from_dict(four_bar().to_dict())
+    assert desc.case is None and desc == four_bar()
+    assert linkage_with(desc, {"bodies.coupler.mass": 2.0}).parameter_value("coupler.mass") \
+        == 2.0
+    with pytest.raises(ValueError, match=r"unknown parameter 'coupler_length' of linkage "
+                                         r"'four_bar'; allowed: 'clearance'"):
+        linkage_with(desc, {"coupler_length": 4.2})
     d = direction(fb, "coupler_length")
     assert set(d) == {"coupler.crank_end.x", "coupler.rocker_end.x", "coupler.inertia"}
     assert d["coupler.rocker_end.x"] == pytest.approx(0.5, rel=1e-9)
