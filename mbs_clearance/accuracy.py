@@ -41,7 +41,7 @@ import numpy as np
 from ._checks import check_real
 from ._warnings import AccuracyWarning
 
-__all__ = ["DEFAULT_ACCURACY", "simulate_to_accuracy", "peak_difference"]
+__all__ = ["DEFAULT_ACCURACY", "simulate_to_accuracy", "peak_difference", "value_to_accuracy"]
 
 #: the accuracy a run meets by default (relative, on the per-revolution peaks)
 DEFAULT_ACCURACY = 1e-5
@@ -160,3 +160,31 @@ def simulate_to_accuracy(record, peaks, accuracy: float, *, rattling=None):
     if note:
         warnings.warn(note, AccuracyWarning, stacklevel=3)
     return traj
+
+
+def value_to_accuracy(value, accuracy: float):
+    """(result, estimate, rtol, rtols) of ``value(rtol)`` within `accuracy`: ``value(rtol)``
+    returns (number, ...) for one run at `rtol`; runs at rtol = accuracy x
+    `RTOL_PER_ACCURACY`, then / 10, / 100, ... until two successive numbers differ by at
+    most `accuracy` relative (the difference bounds the coarser run's error, hence the
+    finer one's), or `MIN_RTOL`; the finer run's result is returned. For study outputs that
+    have no diagnostics of their own (any output of a linkage); an `AccuracyWarning` says
+    when the request was not reached."""
+    accuracy = check_real("accuracy (relative error of the peaks)", accuracy, 1e-10, 1e-3)
+    rtol = _round(min(max(accuracy * RTOL_PER_ACCURACY, MIN_RTOL), MAX_RTOL))
+    coarse = _quiet(value, rtol)
+    rtols, estimate = [rtol], math.inf
+    while rtol / TIGHTEN >= MIN_RTOL * (1 - 1e-9):
+        rtol = _round(rtol / TIGHTEN)
+        fine = _quiet(value, rtol)
+        rtols.append(rtol)
+        a, b = float(coarse[0]), float(fine[0])
+        estimate = 0.0 if a == b else abs(a - b) / max(abs(b), np.finfo(float).tiny)
+        coarse = fine
+        if estimate <= accuracy:
+            break
+    if estimate > accuracy:
+        warnings.warn(f"the estimated error of the output, {estimate:.2g} (from a tighter run "
+                      f"at rtol {rtol:g}), misses the requested accuracy {accuracy:g} at the "
+                      f"tightest rtol tried", AccuracyWarning, stacklevel=3)
+    return coarse, estimate, rtol, rtols

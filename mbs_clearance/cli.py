@@ -208,12 +208,19 @@ def positive_float(text: str) -> float:
     return value
 
 
-def add_evaluation_options(parser: argparse.ArgumentParser, out: str) -> None:
-    """Options of a subcommand that evaluates many designs: --rtol, --scheduler, --workers,
-    --out (default ./`out`) and --no-progress (read by `evaluate_on`)."""
+def add_evaluation_options(parser: argparse.ArgumentParser, out: str,
+                           accuracy: bool = False) -> None:
+    """Options of a subcommand that evaluates many designs: --rtol (and with `accuracy`
+    --accuracy), --scheduler, --workers, --out (default ./`out`) and --no-progress (read by
+    `evaluate_on`)."""
     parser.add_argument("--rtol", type=positive_float,
                         help="relative tolerance of the reduced model (default: the model's, "
                              "1e-7)")
+    if accuracy:
+        parser.add_argument("--accuracy", type=positive_float,
+                            help="requested relative accuracy of each design's output "
+                                 "instead of a fixed --rtol: each run estimates its own "
+                                 "error and tightens until it is within (costs more runs)")
     parser.add_argument("--scheduler", metavar="tcp://HOST:PORT",
                         help="evaluate on this dask.distributed scheduler (default: none, a "
                              "local pool)")
@@ -495,6 +502,18 @@ def _print_error_estimate(traj) -> None:
     print(f"estimated relative error of the peaks: {st['error_estimate']:.2g} (requested "
           f"{st['accuracy']:g}, {'met' if st['accuracy_ok'] else 'NOT met'}; rtol "
           f"{st['rtol']:g}, {len(st['accuracy_runs'])} runs)", file=sys.stderr)
+
+
+def _tolerances(args: argparse.Namespace) -> dict:
+    """--rtol or --accuracy of a study, as keywords (both given: refused)."""
+    if args.rtol is not None and getattr(args, "accuracy", None) is not None:
+        raise ValueError("give --accuracy or --rtol, not both (--accuracy chooses the "
+                         "tolerances)")
+    if getattr(args, "accuracy", None) is not None:
+        from ._checks import check_real
+
+        return {"accuracy": check_real("--accuracy", args.accuracy, 1e-10, 1e-3)}
+    return {} if args.rtol is None else {"rtol": args.rtol}
 
 
 def _simulate_options(args: argparse.Namespace) -> dict:
@@ -883,7 +902,7 @@ def _add_optimize_parser(subparsers) -> argparse.ArgumentParser:
                    help="--case / --description: the output whose peak is minimised, "
                         "pivot_force:JOINT, shaking_force, drive_moment or "
                         "contact_force:JOINT (default: the crank pivot's force)")
-    add_evaluation_options(p, "optimize")
+    add_evaluation_options(p, "optimize", accuracy=True)
     p.add_argument("--no-refine", action="store_true", help="skip the local refinement")
     add_force_option(p)
     add_linkage_options(p)
@@ -938,7 +957,7 @@ def _cmd_optimize(args: argparse.Namespace) -> int:
                          "slider-crank minimises |F12|)")
     mech = mechanism_from_args(args)
     check_output_dir(args.out, "--out", args.force)
-    options = {} if args.rtol is None else {"rtol": args.rtol}
+    options = _tolerances(args)
     if args.gene:
         if tuple(args.crank_bounds) != (0.04, 0.06) or tuple(args.coupler_bounds) != (0.10,
                                                                                        0.14):
@@ -1088,7 +1107,7 @@ def _add_tolerance_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--wear", type=finite_float, nargs="+", metavar="M",
                    help="radial wear amounts in m added to the clearance (needs --monte-carlo)")
     p.add_argument("--seed", type=int_at_least(0), default=0, help="seed (default 0)")
-    add_evaluation_options(p, "tolerance")
+    add_evaluation_options(p, "tolerance", accuracy=True)
     add_force_option(p)
     add_linkage_options(p)
     add_mechanism_options(p)
@@ -1106,8 +1125,7 @@ def _cmd_tolerance(args: argparse.Namespace) -> int:
               second_order=not args.first_order_only, morris=args.morris, dgsm=args.dgsm,
               monte_carlo=args.monte_carlo, allowable=args.allowable, wear=args.wear,
               seed=args.seed, progress=not args.no_progress)
-    if args.rtol is not None:
-        kw["rtol"] = args.rtol
+    kw.update(_tolerances(args))
     result = evaluate_on(args, tolerance_study, inputs, mech, **kw)
     text = result.summary()
     print(text)

@@ -569,6 +569,17 @@ def _linkage_peak(linkage: Linkage, out: Output, revolution: int, options: dict)
     recorded run (`_refined_peak`)."""
     from . import linkage_model as lm
 
+    if options.get("accuracy") is not None:
+        from .accuracy import value_to_accuracy
+
+        rest = {k: v for k, v in options.items() if k != "accuracy"}
+        if "rtol" in rest:
+            raise ValueError("give accuracy or rtol, not both (accuracy chooses the "
+                             "tolerances)")
+        return value_to_accuracy(
+            lambda rtol: _linkage_peak(linkage, out, revolution, {**rest, "rtol": rtol}),
+            options["accuracy"])[0]
+    options = {k: v for k, v in options.items() if k != "accuracy"}
     if out.monitored(linkage):
         res = lm.run(linkage, revolution, record=False, **options)
         return float(res[4][revolution - 1]), float(res[5][revolution - 1])
@@ -586,17 +597,19 @@ def peak_output(linkage: Linkage, output: str | None = None, revolution: int = 4
     shaking force) is refined between steps by the integrator (`simulate.peak_base_force`);
     any other output is the largest of the recorded steps' local maxima refined by golden
     section on the steps' map. `options`: those of `simulate` for the reduced backend
-    (e.g. ``rtol``)."""
+    (e.g. ``rtol``), or ``accuracy``: the peak within that relative accuracy by runs at
+    tightening rtol until two agree (`accuracy.value_to_accuracy`)."""
     from . import linkage_model as lm
 
     if not isinstance(linkage, Linkage):
         raise ValueError(f"linkage must be a Linkage; got {type(linkage).__name__}")
     out = parse_output(linkage, output)
     revolution = check_int("revolution", revolution, 1)
-    unknown = sorted(set(options) - set(lm.OPTION_NAMES) - {"t_eval"})
-    if unknown or "t_eval" in options or "start" in options:
-        raise ValueError(f"unknown option(s) {unknown or ['t_eval/start']} of peak_output; "
-                         f"allowed: {sorted(set(lm.OPTION_NAMES) - {'t_eval', 'start'})}")
+    allowed = set(lm.OPTION_NAMES) - {"t_eval", "start"} | {"accuracy"}
+    unknown = sorted(set(options) - allowed)
+    if unknown:
+        raise ValueError(f"unknown option(s) {unknown} of peak_output; allowed: "
+                         f"{sorted(allowed)}")
     return _linkage_peak(linkage, out, revolution, options)[0]
 
 

@@ -344,7 +344,7 @@ def _mechanism_output(mech: SliderCrank | Linkage, task: _Task):
 
         out = parse_output(mech, None if task.output == "peak" else task.output)
         return _linkage_peak(mech, out, k, task.options)[0], None, False, False
-    if task.output == "peak":
+    if task.output == "peak" and task.options.get("accuracy") is None:
         if task.backend == "reduced":
             from .reduced import RATTLING, run
 
@@ -367,7 +367,11 @@ def _mechanism_output(mech: SliderCrank | Linkage, task: _Task):
     for j in revs:
         mask |= traj.revolution_mask(j + 1)
     t = traj.t[mask]
-    if task.output == "rms_drive_moment":
+    if task.output == "peak":
+        from .accuracy import revolution_peaks
+
+        value = float(max(revolution_peaks(traj)[j] for j in revs))
+    elif task.output == "rms_drive_moment":
         m2 = traj.crank_moment[mask] ** 2
         value = math.sqrt(np.sum(0.5 * (m2[1:] + m2[:-1]) * np.diff(t)) / (t[-1] - t[0]))
     else:

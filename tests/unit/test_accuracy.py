@@ -265,3 +265,34 @@ def test_rattling_motion_is_returned_flagged_with_its_estimate():
     st = traj.stats
     assert not st["accuracy_ok"] and "rattles" in st["accuracy_note"]
     assert st["error_estimate"] == peak_difference(fixed.peaks, tight.peaks) > 1e-5
+
+
+def test_studies_run_to_a_requested_accuracy():
+    """Every study takes `accuracy` in place of a fixed rtol: a linkage's chosen output
+    (`peak_output`, the monitored force and another output), a tolerance study's outputs
+    and the GA's objective, each within the request of the same at rtol 1e-12."""
+    from mbs_clearance.cases import slider_crank_two_clearances
+    from mbs_clearance.objective import peak_output
+    from mbs_clearance.optimize import optimize_link_lengths
+    from mbs_clearance.tolerance import band, tolerance_study
+
+    lk = slider_crank_two_clearances()
+    for output in (None, "shaking_force"):
+        got = peak_output(lk, output, 2, accuracy=1e-6)
+        ref = peak_output(lk, output, 2, rtol=am.REFERENCE_RTOL)
+        assert abs(got / ref - 1.0) <= 1e-6, output
+    with pytest.raises(ValueError, match="accuracy or rtol"):
+        peak_output(lk, None, 2, accuracy=1e-6, rtol=1e-8)
+    inputs = {"crank_length": band(0.05, 1e-4)}
+    kw = dict(monte_carlo=6, sobol=0, revolution=2, progress=False, seed=3)
+    got = tolerance_study(inputs, SliderCrank(), accuracy=1e-6, **kw).monte_carlo["values"]
+    ref = tolerance_study(inputs, SliderCrank(), rtol=am.REFERENCE_RTOL,
+                          **kw).monte_carlo["values"]
+    assert np.max(np.abs(np.asarray(got) / np.asarray(ref) - 1.0)) <= 1e-6
+    ga = optimize_link_lengths(SliderCrank(), population=4, generations=1, revolution=2,
+                               seed=1, accuracy=1e-6, refine=False, progress=False,
+                               executor="serial")
+    best = SliderCrank().replace(crank_length=ga.best_genes["crank_length"],
+                                 coupler_length=ga.best_genes["coupler_length"])
+    ref = peak_base_force(best, 2, rtol=am.REFERENCE_RTOL)
+    assert abs(ga.best_peak_force / ref - 1.0) <= 1e-6
