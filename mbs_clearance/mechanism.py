@@ -17,6 +17,7 @@ from typing import Any
 
 from ._io import read_json_object
 from .contact import CONTACT_MODELS, stiffness_eq9
+from .laws.registry import FRICTION_SLOTS
 from .linkage import FRICTION_DEFAULTS, check_friction
 
 __all__ = ["SliderCrank", "PARAMETER_INFO", "CONTINUOUS_FIELDS"]
@@ -170,8 +171,8 @@ class SliderCrank:
                 f"contact_model must be one of {sorted(CONTACT_MODELS)}; "
                 f"got {self.contact_model!r}"
             )
-        check_friction("SliderCrank", self.friction_law, self.friction_coefficient,
-                       self.friction_v0, self.friction_v1)
+        check_friction("SliderCrank", self.friction_law,
+                       *(getattr(self, f) for f in FRICTION_SLOTS))
 
     # ------------------------------------------------------------------ derived values
     @property

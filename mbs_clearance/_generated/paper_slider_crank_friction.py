@@ -32,8 +32,8 @@ from mbs_clearance.generate.runtime import (
 
 LINKAGE = "paper_slider_crank"
 STRUCTURE = "{\"bodies\": [[\"crank\", [\"pin\", \"pivot\"]], [\"coupler\", [\"crank_end\", \"slider_end\"]], [\"slider\", [\"pin\"]]], \"clearance_joints\": [[\"coupler_slider\", \"coupler\", \"slider_end\", \"slider\", \"pin\", \"friction\"]], \"drive\": \"crank_pivot\", \"ground_points\": [\"crank_pivot\", \"slider_axis\"], \"joints\": [[\"revolute\", \"crank_pivot\", \"ground\", \"crank_pivot\", \"crank\", \"pivot\"], [\"revolute\", \"crank_coupler\", \"crank\", \"pin\", \"coupler\", \"crank_end\"], [\"prismatic\", \"slider_guide\", \"ground\", \"slider_axis\", \"slider\", \"pin\"]], \"monitor_joint\": \"crank_pivot\", \"zero_parameters\": [\"crank.pivot.y\", \"crank.pin.y\", \"coupler.crank_end.y\", \"coupler.slider_end.y\", \"slider.pin.x\", \"slider.pin.y\", \"ground.crank_pivot.x\", \"ground.crank_pivot.y\", \"ground.slider_axis.x\", \"ground.slider_axis.y\", \"slider_guide.angle\"]}"
-STRUCTURE_DIGEST = "5f5e05581f3e4a0604332e4383e76e7f15949a19a5d9f3489b81b8bc70ca97e8"
-GENERATOR_VERSION = "e520a9e17af71ea9"
+STRUCTURE_DIGEST = "e1cdeadfd8630da6f433ecc834145a8f878837e42eb016872a3f3bdb60c712c2"
+GENERATOR_VERSION = "2a454f8349dd3ee8"
 
 #: dotted names of the entries of p (without the constants)
 PARAMETERS = (
@@ -276,7 +276,7 @@ def dynamics(t, y, p):
     exd0 = S0*k2 - U0*x1 - U1
     eyd0 = C0*k3 + U0*x0
     sp0 = U0*coupler_slider__journal_radius
-    F0, d0, dd0, FX0, FY0, TQ0, vt0 = friction_stage(ex0, ey0, exd0, eyd0, sp0, p[21], p[35], p[36], p[22], p[23], p[24], p[26], p[27], p[28], p[29])
+    F0, d0, dd0, FX0, FY0, TQ0, vt0 = friction_stage(ex0, ey0, exd0, eyd0, sp0, p[21], p[35], p[36], p[22], p[23], p[24], p[26], (p[27], p[28], p[29]))
     f0 = C0*S1*k6 - C1*FY0*k1 + C1*S0*k5 + C1*k7 + FX0*S1*k1 + TQ0*coupler_slider__journal_radius
     f1 = FX0
     A0 = f0*k8
@@ -720,7 +720,7 @@ def jacobian(t, y, p, jac, full):
     jac[906] = coupler_slider__journal_radius
     jac[938] = U0
     FX0, FY0 = contact_jacobian(jac, 43, 42, gv0_0, gv0_1, gv0_2, gv0_3, 0, 1, 2, 3, 4, 17, 18, 19, 20, 26, 27, 28, 41, p[21], p[35], p[36], p[22], p[23], p[24])
-    FX0, FY0, TQ0 = friction_jacobian(jac, 43, 42, gv0_4, 3, 4, 17, 18, 21, 0, 19, 20, 14, 15, 16, 32, 33, 34, p[26], p[27], p[28], p[29])
+    FX0, FY0, TQ0 = friction_jacobian(jac, 43, 42, gv0_4, 3, 4, 17, 18, 21, 0, 19, 20, 14, 15, 16, (32, 33, 34), p[26], (p[27], p[28], p[29]))
     m_0_0 = k4
     m_1_0 = 0.0
     m_1_1 = slider__mass
@@ -1073,7 +1073,7 @@ def tangent(t, y, p, dz, nd, use, out, full):
             out[17 * ts + d] += g17_38 * dk
             out[18 * ts + d] += g18_38 * dk
     FX0, FY0 = contact_tangent(out, ts, nd, dz, 42, gv0_0, gv0_1, gv0_2, gv0_3, 0, 1, 2, 3, 4, 17, 18, 19, 20, 26, 27, 28, 41, p[21], p[35], p[36], p[22], p[23], p[24])
-    FX0, FY0, TQ0 = friction_tangent(out, ts, nd, dz, 42, gv0_4, 3, 4, 17, 18, 21, 0, 19, 20, 14, 15, 16, 32, 33, 34, p[26], p[27], p[28], p[29])
+    FX0, FY0, TQ0 = friction_tangent(out, ts, nd, dz, 42, gv0_4, 3, 4, 17, 18, 21, 0, 19, 20, 14, 15, 16, (32, 33, 34), p[26], (p[27], p[28], p[29]))
     m_0_0 = k4
     m_1_0 = 0.0
     m_1_1 = slider__mass

@@ -71,7 +71,7 @@ def test_friction_stage_of_a_journal_on_a_turning_bearing(law, phi):
     exd = 0.0                           # (none: the slip is the wall's)
     model = CONTACT_MODELS["lankarani_nikravesh"]
     f, delta, _, fx, fy, ft, vt = friction_stage(0.0, ey, exd, eyd, spin, c, 1.0, 0.01, k,
-                                                 0.9, model, FRICTION_LAWS[law], mu, v0, v1)
+                                                 0.9, model, FRICTION_LAWS[law], (mu, v0, v1))
     fn = contact_force(pen, 1e-4, 0.01, k, 0.9, model)
     assert f == pytest.approx(fn, rel=1e-12) and delta == pytest.approx(pen, rel=1e-6)
     assert vt == pytest.approx(spin, rel=1e-12)
