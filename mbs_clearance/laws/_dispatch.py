@@ -10,6 +10,7 @@ from .._kernel import KERNEL
 from .contact.lankarani_nikravesh import hysteresis as _xi0_py
 from .contact.hunt_crossley import hysteresis as _xi1_py
 from .contact.flores import hysteresis as _xi2_py
+from .contact.hu_guo import hysteresis as _xi3_py
 from .friction.none import force as _ft0_py
 from .friction.coulomb import force as _ft1_py
 from .friction.ambrosio import force as _ft2_py
@@ -20,6 +21,7 @@ __all__ = ["hysteresis_factor", "friction_force_slots", "friction_force_partials
 _xi0 = nb.njit(**KERNEL, inline="always")(_xi0_py)
 _xi1 = nb.njit(**KERNEL, inline="always")(_xi1_py)
 _xi2 = nb.njit(**KERNEL, inline="always")(_xi2_py)
+_xi3 = nb.njit(**KERNEL, inline="always")(_xi3_py)
 _ft0 = nb.njit(**KERNEL, inline="always")(_ft0_py)
 _ft1 = nb.njit(**KERNEL, inline="always")(_ft1_py)
 _ft2 = nb.njit(**KERNEL, inline="always")(_ft2_py)
@@ -32,7 +34,9 @@ def hysteresis_factor(e, model):
         return _xi0(e), -1.5*e
     if model == 1:
         return _xi1(e), -1.5
-    return _xi2(e), -1.6/((e)*(e))
+    if model == 2:
+        return _xi2(e), -1.6/((e)*(e))
+    return _xi3(e), -1.5/((e)*(e))
 
 
 @nb.njit(**KERNEL, inline="always")

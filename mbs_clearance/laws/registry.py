@@ -6,7 +6,7 @@ regenerated dispatch, and its entry in the law tests (parametrised over this reg
 from __future__ import annotations
 
 from .base import ContactLaw, FrictionLaw, Parameter
-from .contact import flores, hunt_crossley, lankarani_nikravesh
+from .contact import flores, hu_guo, hunt_crossley, lankarani_nikravesh
 from .friction import ambrosio, coulomb, none
 
 __all__ = ["CONTACT", "FRICTION", "CONTACT_MODELS", "FRICTION_LAWS", "FRICTION_SLOTS",
@@ -17,6 +17,7 @@ CONTACT: tuple[ContactLaw, ...] = (
     lankarani_nikravesh.LAW,
     hunt_crossley.LAW,
     flores.LAW,
+    hu_guo.LAW,
 )
 
 #: the friction laws; the position is the kernel id ("none" first: id 0 is frictionless)

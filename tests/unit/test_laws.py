@@ -47,10 +47,13 @@ PUBLISHED_XI = {
     "lankarani_nikravesh": lambda e: 3.0 * (1.0 - e**2) / 4.0,    # Lankarani & Nikravesh 1990
     "hunt_crossley": lambda e: 3.0 * (1.0 - e) / 2.0,             # Hunt & Crossley 1975
     "flores": lambda e: 8.0 * (1.0 - e) / (5.0 * e),              # Flores et al. 2011
+    "hu_guo": lambda e: 3.0 * (1.0 - e) / (2.0 * e),              # Hu & Guo 2015
 }
 
 #: the paper case with a law, run by both models (slow): law -> the case's overrides
-CROSS_MODEL: dict[str, dict] = {}
+CROSS_MODEL: dict[str, dict] = {
+    "hu_guo": {"contact_model": "hu_guo"},
+}
 
 
 def test_dispatch_is_generated_from_the_registry():
