@@ -21,11 +21,9 @@ __all__ = ["render", "PATH"]
 #: the generated module
 PATH = Path(__file__).with_name("_dispatch.py")
 
-_SLOT_SYMBOLS = {"friction_coefficient": "mu", "friction_v0": "v0", "friction_v1": "v1"}
-
-
 def _slot_symbol(field: str) -> str:
-    return _SLOT_SYMBOLS.get(field, field.removeprefix("friction_"))
+    """The name of a friction slot in the generated code: its declared symbol."""
+    return {p.name: p.symbol for p in FRICTION_PARAMETER_SPECS}[field]
 
 
 class _Printer(PythonCodePrinter):
