@@ -78,10 +78,10 @@ from .contact import (
     CONTACT_MODELS,
     FRICTION_LAWS,
     contact_force,
-    friction_force,
     hysteresis_factor,
 )
-from .laws.registry import FRICTION, FRICTION_SLOTS
+from .laws._dispatch import friction_force_slots
+from .laws.registry import FRICTION, FRICTION_PARAMETER_SPECS, FRICTION_SLOTS
 from .linkage import GROUND, ClearanceJoint, Linkage, Prismatic, Revolute
 
 __all__ = ["ExudynSettings", "make_settings", "build", "solve", "simulate_exudyn_linkage",
@@ -495,8 +495,10 @@ def symbolic_friction_force(vt, fn, law: int, slots: tuple):
 def symbolic_friction_factor(vt, v0: float, v1: float, law: int):
     """phi(vt) of `contact.friction_factor` as an Exudyn symbolic expression (Ft at mu = 1,
     Fn = -1, `symbolic_friction_force`); tested against contact.friction_factor point by
-    point."""
-    return symbolic_friction_force(vt, -1.0, law, (1.0, v0, v1))
+    point; further slots at their defaults."""
+    given = {"friction_coefficient": 1.0, "friction_v0": v0, "friction_v1": v1}
+    return symbolic_friction_force(vt, -1.0, law, tuple(
+        given.get(p.name, p.default) for p in FRICTION_PARAMETER_SPECS))
 
 
 class _Side:
@@ -581,7 +583,7 @@ def _friction_element(mbs, joint: ClearanceJoint, memory: ImpactMemory, nodes: d
 
         def force(mbs, t, itemNumber, q, q_t):
             return _friction_loads(joint, sides, q, q_t, normal,
-                                   lambda vt, fn: friction_force(vt, fn, *slots, law),
+                                   lambda vt, fn: friction_force_slots(vt, fn, slots, law),
                                    math.cos, math.sin,
                                    lambda delta, v: v if delta > 0.0 else 0.0)
 
@@ -1081,7 +1083,7 @@ def _friction_power(model: ExudynModel, joint: ClearanceJoint, memory: ImpactMem
         vt = float(ed[i, 1] * n[0] - ed[i, 0] * n[1]) + (wj[i] * joint.journal_radius
                                                          - wb[i] * joint.bearing_radius)
         fn = contact_force(r[i] - c, rate, float(dmin[i]), K, joint.restitution, cmodel)
-        power[i] = friction_force(vt, fn, *slots, law) * vt
+        power[i] = friction_force_slots(vt, fn, slots, law) * vt
     return power
 
 

@@ -9,10 +9,12 @@ from .registry import (
     CONTACT_MODELS,
     FRICTION,
     FRICTION_LAWS,
+    FRICTION_PARAMETER_SPECS,
     FRICTION_SLOTS,
     contact_law,
     friction_law,
 )
 
 __all__ = ["CONTACT", "FRICTION", "CONTACT_MODELS", "FRICTION_LAWS", "FRICTION_SLOTS",
+           "FRICTION_PARAMETER_SPECS",
            "contact_law", "friction_law"]
