@@ -206,6 +206,8 @@ class ClearanceJoint:
     friction_coefficient: float = 0.0
     friction_v0: float = 1e-4
     friction_v1: float = 1e-2
+    friction_static_coefficient: float = 0.0
+    friction_stribeck_velocity: float = 1e-3
 
     def __post_init__(self) -> None:
         _name("clearance joint name", self.name)

@@ -14,6 +14,7 @@ from .contact.hu_guo import hysteresis as _xi3_py
 from .friction.none import force as _ft0_py
 from .friction.coulomb import force as _ft1_py
 from .friction.ambrosio import force as _ft2_py
+from .friction.stribeck import force as _ft3_py
 
 __all__ = ["hysteresis_factor", "friction_force_slots", "friction_force_partials_slots", "friction_force",
            "friction_force_partials"]
@@ -25,6 +26,7 @@ _xi3 = nb.njit(**KERNEL, inline="always")(_xi3_py)
 _ft0 = nb.njit(**KERNEL, inline="always")(_ft0_py)
 _ft1 = nb.njit(**KERNEL, inline="always")(_ft1_py)
 _ft2 = nb.njit(**KERNEL, inline="always")(_ft2_py)
+_ft3 = nb.njit(**KERNEL, inline="always")(_ft3_py)
 
 
 @nb.njit(**KERNEL, inline="always")
@@ -47,17 +49,21 @@ def friction_force_slots(vt, fn, slots, law):
         return _ft1(vt, fn, slots[0], slots[1])
     if law == 2:
         return _ft2(vt, fn, slots[0], slots[1], slots[2])
+    if law == 3:
+        return _ft3(vt, fn, slots[0], slots[1], slots[3], slots[4])
     return _ft0(vt, fn)
 
 
 @nb.njit(**KERNEL, inline="always")
 def _ft0_partials(vt, fn, slots):
     """Ft of `none` and its partials."""
-    mu, v0, v1 = slots
+    mu, v0, v1, mu_s, v_s = slots
     return (_ft0(vt, fn),
             0.0,
             0.0,
             (0.0,
+             0.0,
+             0.0,
              0.0,
              0.0))
 
@@ -65,25 +71,43 @@ def _ft0_partials(vt, fn, slots):
 @nb.njit(**KERNEL, inline="always")
 def _ft1_partials(vt, fn, slots):
     """Ft of `coulomb` and its partials."""
-    mu, v0, v1 = slots
+    mu, v0, v1, mu_s, v_s = slots
     return (_ft1(vt, fn, slots[0], slots[1]),
             -fn*mu*((v0)*(v0))/((((v0)*(v0)) + ((vt)*(vt)))*math.sqrt(((v0)*(v0)) + ((vt)*(vt)))),
             -mu*vt/math.sqrt(((v0)*(v0)) + ((vt)*(vt))),
             (-fn*vt/math.sqrt(((v0)*(v0)) + ((vt)*(vt))),
              fn*mu*v0*vt/((((v0)*(v0)) + ((vt)*(vt)))*math.sqrt(((v0)*(v0)) + ((vt)*(vt)))),
+             0.0,
+             0.0,
              0.0))
 
 
 @nb.njit(**KERNEL, inline="always")
 def _ft2_partials(vt, fn, slots):
     """Ft of `ambrosio` and its partials."""
-    mu, v0, v1 = slots
+    mu, v0, v1, mu_s, v_s = slots
     return (_ft2(vt, fn, slots[0], slots[1], slots[2]),
             -fn*mu*((0.0) if (((v0 >= vt)) if (vt >= 0.0) else ((v0 >= -vt))) else (((0.0) if (((v1 <= vt)) if (vt >= 0.0) else ((v1 <= -vt))) else (((1.0) if (vt >= 0.0) else (-1.0))*((1.0) if (vt > 0.0) else (-1.0))/(-v0 + v1))))),
             -mu*((0.0) if (((v0 >= vt)) if (vt >= 0.0) else ((v0 >= -vt))) else (((((1.0) if (vt > 0.0) else (-1.0))) if (((v1 <= vt)) if (vt >= 0.0) else ((v1 <= -vt))) else ((-v0 + ((vt) if (vt >= 0.0) else (-vt)))*((1.0) if (vt > 0.0) else (-1.0))/(-v0 + v1))))),
             (-fn*((0.0) if (((v0 >= vt)) if (vt >= 0.0) else ((v0 >= -vt))) else (((((1.0) if (vt > 0.0) else (-1.0))) if (((v1 <= vt)) if (vt >= 0.0) else ((v1 <= -vt))) else ((-v0 + ((vt) if (vt >= 0.0) else (-vt)))*((1.0) if (vt > 0.0) else (-1.0))/(-v0 + v1))))),
              -fn*mu*((0.0) if (((v0 >= vt)) if (vt >= 0.0) else ((v0 >= -vt))) else (((0.0) if (((v1 <= vt)) if (vt >= 0.0) else ((v1 <= -vt))) else (-((1.0) if (vt > 0.0) else (-1.0))/(-v0 + v1) + (-v0 + ((vt) if (vt >= 0.0) else (-vt)))*((1.0) if (vt > 0.0) else (-1.0))/((-v0 + v1)*(-v0 + v1)))))),
-             -fn*mu*((0.0) if (((v0 >= vt)) if (vt >= 0.0) else ((v0 >= -vt))) else (((0.0) if (((v1 <= vt)) if (vt >= 0.0) else ((v1 <= -vt))) else (-(-v0 + ((vt) if (vt >= 0.0) else (-vt)))*((1.0) if (vt > 0.0) else (-1.0))/((-v0 + v1)*(-v0 + v1))))))))
+             -fn*mu*((0.0) if (((v0 >= vt)) if (vt >= 0.0) else ((v0 >= -vt))) else (((0.0) if (((v1 <= vt)) if (vt >= 0.0) else ((v1 <= -vt))) else (-(-v0 + ((vt) if (vt >= 0.0) else (-vt)))*((1.0) if (vt > 0.0) else (-1.0))/((-v0 + v1)*(-v0 + v1)))))),
+             0.0,
+             0.0))
+
+
+@nb.njit(**KERNEL, inline="always")
+def _ft3_partials(vt, fn, slots):
+    """Ft of `stribeck` and its partials."""
+    mu, v0, v1, mu_s, v_s = slots
+    return (_ft3(vt, fn, slots[0], slots[1], slots[3], slots[4]),
+            fn*(-mu*((v0)*(v0))*((v_s)*(v_s)) + mu*((v0)*(v0))*((v_s)*(v_s))*math.exp(-((vt)*(vt))/((v_s)*(v_s))) - 2.0*mu*((v0)*(v0))*((vt)*(vt))*math.exp(-((vt)*(vt))/((v_s)*(v_s))) - 2.0*mu*((vt)*(vt)*(vt)*(vt))*math.exp(-((vt)*(vt))/((v_s)*(v_s))) - mu_s*((v0)*(v0))*((v_s)*(v_s))*math.exp(-((vt)*(vt))/((v_s)*(v_s))) + 2.0*mu_s*((v0)*(v0))*((vt)*(vt))*math.exp(-((vt)*(vt))/((v_s)*(v_s))) + 2.0*mu_s*((vt)*(vt)*(vt)*(vt))*math.exp(-((vt)*(vt))/((v_s)*(v_s))))/(((v_s)*(v_s))*((((v0)*(v0)) + ((vt)*(vt)))*math.sqrt(((v0)*(v0)) + ((vt)*(vt))))),
+            vt*(-mu + mu*math.exp(-((vt)*(vt))/((v_s)*(v_s))) - mu_s*math.exp(-((vt)*(vt))/((v_s)*(v_s))))/math.sqrt(((v0)*(v0)) + ((vt)*(vt))),
+            (fn*vt*(-1.0 + math.exp(-((vt)*(vt))/((v_s)*(v_s))))/math.sqrt(((v0)*(v0)) + ((vt)*(vt))),
+             -fn*v0*vt*(-mu + mu*math.exp(-((vt)*(vt))/((v_s)*(v_s))) - mu_s*math.exp(-((vt)*(vt))/((v_s)*(v_s))))/((((v0)*(v0)) + ((vt)*(vt)))*math.sqrt(((v0)*(v0)) + ((vt)*(vt)))),
+             0.0,
+             -fn*vt*math.exp(-((vt)*(vt))/((v_s)*(v_s)))/math.sqrt(((v0)*(v0)) + ((vt)*(vt))),
+             2.0*fn*((vt)*(vt)*(vt))*(mu - mu_s)*math.exp(-((vt)*(vt))/((v_s)*(v_s)))/(((v_s)*(v_s)*(v_s))*math.sqrt(((v0)*(v0)) + ((vt)*(vt))))))
 
 
 @nb.njit(**KERNEL)
@@ -93,6 +117,8 @@ def friction_force_partials_slots(vt, fn, slots, law):
         return _ft1_partials(vt, fn, slots)
     if law == 2:
         return _ft2_partials(vt, fn, slots)
+    if law == 3:
+        return _ft3_partials(vt, fn, slots)
     return _ft0_partials(vt, fn, slots)
 
 
@@ -100,12 +126,12 @@ def friction_force_partials_slots(vt, fn, slots, law):
 def friction_force(vt, fn, mu, v0, v1, law):
     """`friction_force_slots` with the first three slots (further ones at their
     defaults)."""
-    return friction_force_slots(vt, fn, (mu, v0, v1), law)
+    return friction_force_slots(vt, fn, (mu, v0, v1, 0.0, 0.001), law)
 
 
 @nb.njit(**KERNEL)
 def friction_force_partials(vt, fn, mu, v0, v1, law):
     """(Ft, dFt/dvt, dFt/dfn, dFt/dmu, dFt/dv0, dFt/dv1) of `friction_force`."""
     ft, d_vt, d_fn, d_slots = friction_force_partials_slots(
-        vt, fn, (mu, v0, v1), law)
+        vt, fn, (mu, v0, v1, 0.0, 0.001), law)
     return ft, d_vt, d_fn, d_slots[0], d_slots[1], d_slots[2]

@@ -32,7 +32,9 @@ class _Printer(PythonCodePrinter):
 
     def _print_Pow(self, expr, rational=False):
         base, exp = expr.args
-        if exp.is_Integer and 1 <= abs(int(exp)) <= 3:
+        if exp.is_Float and exp == int(exp):
+            exp = sp.Integer(int(exp))
+        if exp.is_Integer and 1 <= abs(int(exp)) <= 4:
             prod = "*".join([self.parenthesize(base, 1000)] * abs(int(exp)))
             return f"({prod})" if exp > 0 else f"(1.0/({prod}))"
         if exp == sp.Rational(1, 2):
@@ -65,7 +67,11 @@ def _simplify(expr):
     expr = sp.sympify(expr)
     if expr.has(sp.Piecewise):
         return expr
-    return sp.factor(sp.cancel(expr))
+    # exponentials as opaque symbols: cancel must not trade exp(-x) for 1 / exp(x), which
+    # overflows where the law's own exp(-x) underflows harmlessly
+    opaque = {f: sp.Dummy(positive=True) for f in expr.atoms(sp.exp)}
+    out = sp.factor(sp.cancel(expr.xreplace(opaque)))
+    return out.xreplace({v: k for k, v in opaque.items()})
 
 
 def _module(law) -> str:

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 from .base import ContactLaw, FrictionLaw, Parameter
 from .contact import flores, hu_guo, hunt_crossley, lankarani_nikravesh
-from .friction import ambrosio, coulomb, none
+from .friction import ambrosio, coulomb, none, stribeck
 
 __all__ = ["CONTACT", "FRICTION", "CONTACT_MODELS", "FRICTION_LAWS", "FRICTION_SLOTS",
            "FRICTION_PARAMETER_SPECS", "contact_law", "friction_law"]
@@ -25,11 +25,14 @@ FRICTION: tuple[FrictionLaw, ...] = (
     none.LAW,
     coulomb.LAW,
     ambrosio.LAW,
+    stribeck.LAW,
 )
 
 #: the description fields the kernels pass to every friction law, in order (each law reads
 #: the ones in its `arguments`)
-FRICTION_SLOTS: tuple[str, ...] = ("friction_coefficient", "friction_v0", "friction_v1")
+FRICTION_SLOTS: tuple[str, ...] = ("friction_coefficient", "friction_v0", "friction_v1",
+                                   "friction_static_coefficient",
+                                   "friction_stribeck_velocity")
 
 #: the declared parameters of the friction slots (the first law's declaration of each)
 FRICTION_PARAMETER_SPECS: tuple[Parameter, ...] = tuple(

@@ -33,7 +33,9 @@ CONTACT_NAMES = list(CONTACT_MODELS)
 FRICTION_NAMES = list(FRICTION_LAWS)
 
 #: the friction slots' values of the checks: the declared defaults, mu = 0.1 (a dry pair)
-SLOTS = tuple(0.1 if p.name == "friction_coefficient" else p.default
+#: and any further coefficient (a static one) 0.15
+SLOTS = tuple(0.1 if p.name == "friction_coefficient" else
+              0.15 if p.name.endswith("coefficient") else p.default
               for p in FRICTION_PARAMETER_SPECS)
 V0, V1 = SLOTS[FRICTION_SLOTS.index("friction_v0")], SLOTS[FRICTION_SLOTS.index("friction_v1")]
 
@@ -53,6 +55,8 @@ PUBLISHED_XI = {
 #: the paper case with a law, run by both models (slow): law -> the case's overrides
 CROSS_MODEL: dict[str, dict] = {
     "hu_guo": {"contact_model": "hu_guo"},
+    "stribeck": {"friction_law": "stribeck", "friction_coefficient": 0.1,
+                 "friction_static_coefficient": 0.15},
 }
 
 
@@ -301,6 +305,32 @@ def test_declared_parameters_are_consistent():
                 assert not p.contains(p.low - 1.0)
 
 
+def test_description_fields_default_to_the_declarations():
+    """The friction fields of `ClearanceJoint` and `SliderCrank` default to what the laws
+    declare."""
+    import dataclasses
+
+    from mbs_clearance.linkage import ClearanceJoint
+    from mbs_clearance.mechanism import SliderCrank
+
+    for cls in (ClearanceJoint, SliderCrank):
+        defaults = {f.name: f.default for f in dataclasses.fields(cls)}
+        for p in FRICTION_PARAMETER_SPECS:
+            assert defaults[p.name] == p.default, (cls.__name__, p.name)
+
+
+@pytest.mark.parametrize("spec", FRICTION_PARAMETER_SPECS[3:], ids=lambda p: p.name)
+def test_further_slots_are_checked_at_load(spec):
+    """A friction slot beyond mu, v0, v1 outside its declared range (or not finite) fails
+    when the description is built, naming the field and the allowed range."""
+    bad = [math.nan, math.inf] + ([spec.low - 1.0] if spec.low is not None else [])
+    if spec.low is not None and spec.low_open:
+        bad.append(spec.low)
+    for value in bad:
+        with pytest.raises(ValueError, match=f"{spec.name}.*{spec.interval[1:4]}"):
+            cases.paper_slider_crank(**{spec.name: value})
+
+
 @pytest.mark.parametrize("name", FRICTION_NAMES)
 def test_friction_law_reaches_the_case_description(name):
     """A friction law and its slots given as case overrides reach every clearance joint
@@ -310,3 +340,41 @@ def test_friction_law_reaches_the_case_description(name):
     for j in lk.clearance_joints:
         assert j.friction_law == name
         assert all(getattr(j, f) == v for f, v in values.items())
+
+
+# ---------------------------------------------------------------- law-specific references
+
+def _slots(**values):
+    spec = dict(zip(FRICTION_SLOTS, SLOTS))
+    spec.update(values)
+    return tuple(spec[f] for f in FRICTION_SLOTS)
+
+
+def test_stribeck_falls_from_the_static_to_the_dynamic_coefficient():
+    """Stribeck's law against its closed form (Andersson et al. 2007 with the Gaussian
+    exponent), its limits (mu_s just above v0, mu_d well above v_s), and the regularised
+    Coulomb law where mu_s = mu_d."""
+    law, fn = FRICTION_LAWS["stribeck"], 100.0
+    mu, mu_s, v0, v_s = 0.1, 0.15, 1e-6, 1e-2
+    slots = _slots(friction_coefficient=mu, friction_static_coefficient=mu_s,
+                   friction_v0=v0, friction_stribeck_velocity=v_s)
+    for vt in (-0.3, -2e-2, -1e-2, -3e-3, -1e-5, 2e-7, 1e-5, 5e-3, 1e-2, 0.05, 1.0):
+        ref = -fn * (mu + (mu_s - mu) * math.exp(-(abs(vt) / v_s) ** 2)) * vt / math.hypot(
+            vt, v0)
+        assert friction_force_slots(vt, fn, slots, law) == pytest.approx(ref, rel=1e-14)
+    assert friction_force_slots(1e-4, fn, slots, law) == pytest.approx(-mu_s * fn, rel=1e-3)
+    # the regularised sign at 0.1 m/s is 1 - 5e-11
+    assert friction_force_slots(-0.1, fn, slots, law) == pytest.approx(mu * fn, rel=1e-9)
+    same = _slots(friction_coefficient=mu, friction_static_coefficient=mu, friction_v0=v0)
+    for vt in SLIPS:
+        assert friction_force_slots(vt, fn, same, law) == pytest.approx(
+            friction_force_slots(vt, fn, same, FRICTION_LAWS["coulomb"]), rel=1e-15)
+
+
+def test_stribeck_needs_the_static_coefficient_at_least_the_dynamic():
+    """mu_s < mu_d with the Stribeck law fails when the description is built, naming both;
+    other laws ignore the static coefficient."""
+    with pytest.raises(ValueError, match="friction_static_coefficient must be >= "
+                                         "friction_coefficient = 0.1"):
+        cases.paper_slider_crank(friction_law="stribeck", friction_coefficient=0.1)
+    cases.paper_slider_crank(friction_law="coulomb", friction_coefficient=0.1)
