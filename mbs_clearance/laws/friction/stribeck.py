@@ -18,9 +18,9 @@ MU_S = Parameter("friction_static_coefficient", "mu_s", "-", 0.0, 0.0,
                  source="0: give the pair's static coefficient (>= friction_coefficient, the "
                         "dynamic one, for the Stribeck law)")
 V_S = Parameter("friction_stribeck_velocity", "v_s", "m/s", 1e-3, 0.0, low_open=True,
-                source="assumed: within the range of Stribeck velocities of dry and "
-                       "lubricated metal pairs (about 1e-4 to 1e-2 m/s, Andersson et al. "
-                       "2007); give the pair's value")
+                source="assumed: an order of magnitude above the default regularisation "
+                       "velocity v0; no source read gives the paper case's; give the pair's "
+                       "value")
 
 
 def force(vt, fn, mu, v0, mu_s, v_s):
