@@ -7,14 +7,14 @@ the requested relative accuracy on its per-revolution peaks (the reported peaks)
 1. The first run (recorded) is at rtol = accuracy x `RTOL_PER_ACCURACY` (1e-7 for 1e-5: the
    default that the accuracy map found within 1e-5 on every design whose diagnostics raise
    no flag).
-2. If its diagnostics do not flag it (`reduced.accuracy_flags`: grazing onsets, a slowly
-   settling contact, rattling; a run without diagnostics, a Linkage's, counts as flagged:
-   the check failed on the four-bar, whose peaks' error does not fall with rtol between
-   1e-5 and 1e-7), a cheap check: the peaks alone (nothing recorded) at
+2. If its diagnostics do not flag it (`reduced.contact_flags`, per clearance joint: grazing
+   onsets, a slowly settling contact, rattling; the check failed on the four-bar, whose
+   peaks' error does not fall with rtol between 1e-5 and 1e-7, and which its hundreds of
+   contact onsets per revolution flag), a cheap check: the peaks alone (nothing recorded) at
    `CHECK_LOOSER` x that rtol. The peaks' error falls at least `MIN_REDUCTION`-fold per
-   decade of rtol (measured on the paper case: 7.4, 3.9 and 4.7-fold from 1e-4 to 1e-7),
-   R = MIN_REDUCTION ** log10(CHECK_LOOSER)-fold between the two runs, so their difference
-   d bounds the first run's error by d / (R - 1).
+   decade of rtol (measured on the paper case: 7.4, 3.9 and 4.7-fold from 1e-4 to 1e-7), R =
+   MIN_REDUCTION ** log10(CHECK_LOOSER)-fold between the two runs, so their difference d
+   bounds the first run's error by d / (R - 1).
 3. If the first run is flagged, or the check's estimate misses the request: runs at rtol / 10,
    / 100, ... (recorded): the difference of two successive runs bounds the coarser one's
    error, hence the finer one's; the finer run is returned as soon as the difference is
@@ -41,7 +41,7 @@ import numpy as np
 from ._checks import check_real
 from ._warnings import AccuracyWarning
 
-__all__ = ["DEFAULT_ACCURACY", "simulate_to_accuracy", "peak_difference"]
+__all__ = ["DEFAULT_ACCURACY", "simulate_to_accuracy", "peak_difference", "value_to_accuracy"]
 
 #: the accuracy a run meets by default (relative, on the per-revolution peaks)
 DEFAULT_ACCURACY = 1e-5
@@ -110,9 +110,9 @@ def simulate_to_accuracy(record, peaks, accuracy: float, *, rattling=None):
     rtol = _round(min(max(accuracy * RTOL_PER_ACCURACY, MIN_RTOL), MAX_RTOL))
     traj = _quiet(record, rtol)
     runs, nfev = [rtol], int(traj.stats.get("nfev", 0))
-    # a run without diagnostics of its own (a Linkage's) counts as flagged: the looser check
-    # failed on the four-bar (1 revolution at 10 rpm: its peaks at rtol 1e-5 and 1e-7 agree
-    # within 7e-5 while both are 7.7e-5 off; the check estimated 4.6e-6)
+    # a run without diagnostics counts as flagged: the looser check failed on the four-bar
+    # (1 revolution at 10 rpm: its peaks at rtol 1e-5 and 1e-7 agree within 7e-5 while both
+    # are 7.7e-5 off; the check estimated 4.6e-6), which its contact onsets flag
     flagged = traj.stats.get("accuracy_ok") is not True
     estimate, how = math.inf, "tighter run"
     loose = _round(min(CHECK_LOOSER * rtol, MAX_RTOL))
@@ -160,3 +160,31 @@ def simulate_to_accuracy(record, peaks, accuracy: float, *, rattling=None):
     if note:
         warnings.warn(note, AccuracyWarning, stacklevel=3)
     return traj
+
+
+def value_to_accuracy(value, accuracy: float):
+    """(result, estimate, rtol, rtols) of ``value(rtol)`` within `accuracy`: ``value(rtol)``
+    returns (number, ...) for one run at `rtol`; runs at rtol = accuracy x
+    `RTOL_PER_ACCURACY`, then / 10, / 100, ... until two successive numbers differ by at
+    most `accuracy` relative (the difference bounds the coarser run's error, hence the
+    finer one's), or `MIN_RTOL`; the finer run's result is returned. For study outputs that
+    have no diagnostics of their own (any output of a linkage); an `AccuracyWarning` says
+    when the request was not reached."""
+    accuracy = check_real("accuracy (relative error of the peaks)", accuracy, 1e-10, 1e-3)
+    rtol = _round(min(max(accuracy * RTOL_PER_ACCURACY, MIN_RTOL), MAX_RTOL))
+    coarse = _quiet(value, rtol)
+    rtols, estimate = [rtol], math.inf
+    while rtol / TIGHTEN >= MIN_RTOL * (1 - 1e-9):
+        rtol = _round(rtol / TIGHTEN)
+        fine = _quiet(value, rtol)
+        rtols.append(rtol)
+        a, b = float(coarse[0]), float(fine[0])
+        estimate = 0.0 if a == b else abs(a - b) / max(abs(b), np.finfo(float).tiny)
+        coarse = fine
+        if estimate <= accuracy:
+            break
+    if estimate > accuracy:
+        warnings.warn(f"the estimated error of the output, {estimate:.2g} (from a tighter run "
+                      f"at rtol {rtol:g}), misses the requested accuracy {accuracy:g} at the "
+                      f"tightest rtol tried", AccuracyWarning, stacklevel=3)
+    return coarse, estimate, rtol, rtols

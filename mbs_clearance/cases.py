@@ -100,7 +100,10 @@ def paper_slider_crank(**overrides: Any) -> Linkage:
     9.81 m/s^2; Ebrahimi, Salahshoor & Nouri 2018 Tables 1-2 and Flores & Ambrosio's
     benchmark, `mechanism.PARAMETER_INFO`), with `overrides` of SliderCrank fields (e.g.
     ``journal_radius=0.00995``), as a `Linkage` (`from_slider_crank`)."""
-    return from_slider_crank(SliderCrank().replace(**overrides))
+    import dataclasses
+
+    linkage = from_slider_crank(SliderCrank().replace(**overrides))
+    return dataclasses.replace(linkage, case="paper_slider_crank", overrides=dict(overrides))
 
 
 # ---------------------------------------------------------------------------------------
@@ -269,6 +272,7 @@ def slider_crank_two_clearances(**overrides: Any) -> Linkage:
         ground_points={"crank_pivot": (0.0, 0.0), "slider_axis": (0.0, 0.0)},
         gravity=v["gravity"],
         monitor_joint="crank_pivot",
+        case="slider_crank_two_clearances", overrides=dict(overrides),
         assembly={"slider_guide.s": x4, "coupler.angle": th3,
                   "coupler.x": bx + 0.5 * L3 * math.cos(th3),
                   "coupler.y": by + 0.5 * L3 * math.sin(th3)},
@@ -357,6 +361,7 @@ def four_bar(**overrides: Any) -> Linkage:
         gravity=v["gravity"],
         monitor_joint=None,
         assembly={"coupler.angle": th3, "rocker.angle": th4},
+        case="four_bar", overrides=dict(overrides),
     )
 
 

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import json
 import logging
 import math
 import os
@@ -207,12 +208,19 @@ def positive_float(text: str) -> float:
     return value
 
 
-def add_evaluation_options(parser: argparse.ArgumentParser, out: str) -> None:
-    """Options of a subcommand that evaluates many designs: --rtol, --scheduler, --workers,
-    --out (default ./`out`) and --no-progress (read by `evaluate_on`)."""
+def add_evaluation_options(parser: argparse.ArgumentParser, out: str,
+                           accuracy: bool = False) -> None:
+    """Options of a subcommand that evaluates many designs: --rtol (and with `accuracy`
+    --accuracy), --scheduler, --workers, --out (default ./`out`) and --no-progress (read by
+    `evaluate_on`)."""
     parser.add_argument("--rtol", type=positive_float,
                         help="relative tolerance of the reduced model (default: the model's, "
                              "1e-7)")
+    if accuracy:
+        parser.add_argument("--accuracy", type=positive_float,
+                            help="requested relative accuracy of each design's output "
+                                 "instead of a fixed --rtol: each run estimates its own "
+                                 "error and tightens until it is within (costs more runs)")
     parser.add_argument("--scheduler", metavar="tcp://HOST:PORT",
                         help="evaluate on this dask.distributed scheduler (default: none, a "
                              "local pool)")
@@ -352,6 +360,21 @@ def case_override(text: str) -> tuple[str, object]:
     return name.strip(), _override_value(value.strip())
 
 
+def gene_bounds(text: str) -> tuple[str, tuple[float, float]]:
+    """argparse type: NAME=LO:HI (a GA gene and its bounds, SI)."""
+    name, sep, rhs = text.partition("=")
+    lo, sep2, hi = rhs.partition(":")
+    try:
+        if not (sep and sep2 and name.strip()):
+            raise ValueError
+        bounds = (finite_float(lo), finite_float(hi))
+    except (ValueError, argparse.ArgumentTypeError):
+        raise argparse.ArgumentTypeError(f"must be NAME=LO:HI (a gene and its bounds in SI "
+                                         f"units, e.g. coupler_length=3.6:4.4); got "
+                                         f"{text!r}") from None
+    return name.strip(), bounds
+
+
 def _mechanism_options_given(args: argparse.Namespace) -> list[str]:
     given = ["--config"] if getattr(args, "config", None) else []
     given += ["--" + f.name.replace("_", "-") for f in dataclasses.fields(SliderCrank)
@@ -481,6 +504,18 @@ def _print_error_estimate(traj) -> None:
           f"{st['rtol']:g}, {len(st['accuracy_runs'])} runs)", file=sys.stderr)
 
 
+def _tolerances(args: argparse.Namespace) -> dict:
+    """--rtol or --accuracy of a study, as keywords (both given: refused)."""
+    if args.rtol is not None and getattr(args, "accuracy", None) is not None:
+        raise ValueError("give --accuracy or --rtol, not both (--accuracy chooses the "
+                         "tolerances)")
+    if getattr(args, "accuracy", None) is not None:
+        from ._checks import check_real
+
+        return {"accuracy": check_real("--accuracy", args.accuracy, 1e-10, 1e-3)}
+    return {} if args.rtol is None else {"rtol": args.rtol}
+
+
 def _simulate_options(args: argparse.Namespace) -> dict:
     options = {}
     for key, name in (("rtol", "rtol"), ("step_size", "step_size"), ("contact", "contact"),
@@ -569,10 +604,55 @@ SENSITIVITY_COLUMNS = (
 )
 
 
+def _peak_gradient_linkage(linkage, args: argparse.Namespace) -> int:
+    """sensitivity --output NAME (--case / --description): the peak of the output over the
+    last revolution and its gradient along --parameters (`objective.peak_gradient`)."""
+    from .objective import peak_gradient
+
+    if args.parameters is None:
+        from .design import design_names
+
+        raise ValueError(f"--output needs --parameters (comma-separated) of "
+                         f"{design_names(linkage)}")
+    if args.backend != "reduced" or args.step_size is not None or args.settled:
+        raise ValueError("--output takes the reduced backend from the centred start (no "
+                         "--backend, --step-size or --settled)")
+    if args.out:
+        check_output_dir(args.out, "--out", args.force)
+    _progress(f"peak of {args.output} of {linkage.name!r} over revolution "
+              f"{args.revolutions} and its gradient by {args.method} ...")
+    pg = peak_gradient(linkage, args.parameters, revolution=args.revolutions,
+                       method=args.method, output=args.output, rtol=args.rtol,
+                       integrator=args.integrator)
+    print(f"peak of {pg.stats['output']} over revolution {pg.revolution}: {pg.peak!r} at "
+          f"t = {pg.time!r} s ({args.method})")
+    width = max([22] + [len(p) + 1 for p in pg.parameters])
+    print(f"{'parameter':<{width}} {'b0':>24} {'d(peak)/db':>24} {'(b0/peak) d/db':>16}")
+    for name, b0, g, n in zip(pg.parameters, pg.reference, pg.gradient, pg.normalized):
+        print(f"{name:<{width}} {b0!r:>24} {g!r:>24} {n:>16.6g}")
+    if pg.message:
+        print(f"note: {pg.message}", file=sys.stderr)
+    if args.out:
+        data = {"output": pg.stats["output"], "revolution": pg.revolution, "peak": pg.peak,
+                "time": pg.time, "method": pg.method,
+                "gradient": pg.as_dict(), "reference": dict(zip(pg.parameters,
+                                                                 map(float, pg.reference)))}
+        with OutputDir(args.out, "sensitivity") as staged:
+            (staged.path / "peak_gradient.json").write_text(json.dumps(data, indent=2))
+            staged.commit()
+        wrote(args.out / "peak_gradient.json", "the peak and its gradient")
+    return 0
+
+
 def _cmd_sensitivity(args: argparse.Namespace) -> int:
     from .sensitivity import DEFAULT_PARAMETERS, sensitivities
 
     linkage, mech = design_from_args(args)
+    if args.output is not None:
+        if linkage is None:
+            raise ValueError("--output applies to --case or --description (the paper's "
+                             "slider-crank's sensitivities are those of |F12|)")
+        return _peak_gradient_linkage(linkage, args)
     names = args.parameters
     if names is None and linkage is None:
         names = DEFAULT_PARAMETERS
@@ -761,6 +841,11 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     p.add_argument("--method", choices=("ddm", "fd"), default="ddm",
                    help="ddm: direct differentiation (reduced model); fd: central finite "
                         "differences (any backend)")
+    p.add_argument("--output", metavar="NAME",
+                   help="--case / --description: instead of the time series, the peak of "
+                        "this output over the last revolution and its gradient along "
+                        "--parameters (case overrides or dotted paths): pivot_force:JOINT, "
+                        "shaking_force, drive_moment or contact_force:JOINT (default: none)")
     p.add_argument("--revolutions", type=int_at_least(1), default=4,
                    help="crank revolutions; the sensitivities are those of the last")
     add_settled_option(p)
@@ -808,9 +893,19 @@ def _add_optimize_parser(subparsers) -> argparse.ArgumentParser:
                    help="bounds of L3 in m (default 0.10 0.14: 100 to 140 mm)")
     p.add_argument("--revolution", type=int_at_least(1), default=4,
                    help="crank revolution whose peak is minimised (default 4)")
-    add_evaluation_options(p, "optimize")
+    p.add_argument("--gene", type=gene_bounds, action="append", metavar="NAME=LO:HI",
+                   help="a gene and its bounds (repeatable; SI): a --case's override or a "
+                        "dotted path of the description, e.g. --gene coupler_length=3.6:4.4; "
+                        "for the paper's slider-crank SliderCrank fields (default: the "
+                        "--crank-bounds and --coupler-bounds)")
+    p.add_argument("--output", metavar="NAME",
+                   help="--case / --description: the output whose peak is minimised, "
+                        "pivot_force:JOINT, shaking_force, drive_moment or "
+                        "contact_force:JOINT (default: the crank pivot's force)")
+    add_evaluation_options(p, "optimize", accuracy=True)
     p.add_argument("--no-refine", action="store_true", help="skip the local refinement")
     add_force_option(p)
+    add_linkage_options(p)
     add_mechanism_options(p)
     p.set_defaults(func=_cmd_optimize)
     return p
@@ -854,14 +949,30 @@ def _cmd_optimize(args: argparse.Namespace) -> int:
     from .optimize import PAPER_TABLE3, design_mechanism, optimize_link_lengths
     from .simulate import peak_base_force, simulate
 
+    linkage = linkage_from_args(args)
+    if linkage is not None:
+        return _optimize_linkage(linkage, args)
+    if args.output is not None:
+        raise ValueError("--output applies to --case or --description (the paper's "
+                         "slider-crank minimises |F12|)")
     mech = mechanism_from_args(args)
     check_output_dir(args.out, "--out", args.force)
-    options = {} if args.rtol is None else {"rtol": args.rtol}
-    common = dict(crank_length=tuple(args.crank_bounds), coupler_length=tuple(args.coupler_bounds),
-                  revolution=args.revolution, seed=args.seed, population=args.population,
+    options = _tolerances(args)
+    if args.gene:
+        if tuple(args.crank_bounds) != (0.04, 0.06) or tuple(args.coupler_bounds) != (0.10,
+                                                                                       0.14):
+            raise ValueError("give --gene or --crank-bounds/--coupler-bounds, not both")
+        options["genes"] = _genes(args)
+    else:
+        options.update(crank_length=tuple(args.crank_bounds),
+                       coupler_length=tuple(args.coupler_bounds))
+    common = dict(revolution=args.revolution, seed=args.seed, population=args.population,
                   generations=args.generations, saturation=args.saturation or None,
                   mass_scaling=args.mass_scaling, refine=not args.no_refine,
                   progress=not args.no_progress, **options)
+    options.pop("genes", None)
+    options.pop("crank_length", None)
+    options.pop("coupler_length", None)
     result = evaluate_on(args, optimize_link_lengths, mech, **common)
 
     pp = PAPER_TABLE3["optimum"]
@@ -911,6 +1022,56 @@ def _cmd_optimize(args: argparse.Namespace) -> int:
     return 0
 
 
+def _genes(args: argparse.Namespace) -> dict[str, tuple[float, float]]:
+    """{name: (lo, hi)} of the --gene options (a name given twice: ValueError)."""
+    genes = {}
+    for name, bounds in args.gene or []:
+        if name in genes:
+            raise ValueError(f"--gene {name} given twice")
+        genes[name] = bounds
+    return genes
+
+
+def _optimize_linkage(linkage, args: argparse.Namespace) -> int:
+    """optimize --case / --description: the GA over the --gene bounds, minimising the
+    --output's peak; prints the original and best designs' peaks and genes, writes
+    result.json and the fitness history into --out."""
+    from .optimize import optimize_link_lengths
+    from .plotting import plot_fitness_history
+
+    if not args.gene:
+        from .design import design_names
+
+        raise ValueError(f"--case / --description needs --gene NAME=LO:HI (one or more) of "
+                         f"{design_names(linkage)}")
+    if args.mass_scaling != "fixed":
+        raise ValueError("--mass-scaling applies to the paper's slider-crank only")
+    check_output_dir(args.out, "--out", args.force)
+    options = {} if args.rtol is None else {"rtol": args.rtol}
+    result = evaluate_on(args, optimize_link_lengths, linkage, genes=_genes(args),
+                         output=args.output, revolution=args.revolution, seed=args.seed,
+                         population=args.population, generations=args.generations,
+                         saturation=args.saturation or None, refine=not args.no_refine,
+                         progress=not args.no_progress, **options)
+    output = result.settings["output"]
+    print(f"linkage {linkage.name!r}: peak of {output} over revolution {args.revolution}")
+    print(f"original: {result.original_peak_force!r}")
+    print(f"best: {result.best_peak_force!r} ({result.reduction_percent:.2f} % lower)")
+    for name, value in result.best_genes.items():
+        lo, hi = result.genes[name]
+        print(f"  {name} = {value!r} (bounds {lo:g} .. {hi:g})")
+    print(f"seed {result.settings['seed']}; {result.generations_completed} generations, "
+          f"{result.n_evaluations} designs simulated in {result.elapsed:.1f} s; GA best "
+          f"before refinement {result.ga_best_peak_force!r}")
+    with OutputDir(args.out, "optimize") as staged:
+        result.to_json(staged.path / "result.json")
+        plot_fitness_history(result, staged.path / "fitness_history.png")
+        staged.commit()
+    wrote(args.out / "result.json", "the optimisation's result")
+    wrote(args.out / "fitness_history.png", "best peak per generation")
+    return 0
+
+
 def _add_tolerance_parser(subparsers) -> argparse.ArgumentParser:
     """The ``tolerance`` subcommand: global sensitivity and exceedance over tolerances."""
     p = subparsers.add_parser(
@@ -924,8 +1085,11 @@ def _add_tolerance_parser(subparsers) -> argparse.ArgumentParser:
                     "for a fit), or a SALib parameter file (lines: NAME LOW HIGH, uniform). "
                     "Prints the indices and writes result.json and summary.txt into --out.")
     p.add_argument("inputs", type=Path, help="input distributions (JSON, or SALib text file)")
-    p.add_argument("--output", choices=("peak", "rms_drive_moment", "max_contact_force"),
-                   default="peak", help="output of a run (default: peak)")
+    p.add_argument("--output", default="peak", metavar="NAME",
+                   help="output of a run: peak, rms_drive_moment or max_contact_force; with "
+                        "--case / --description also pivot_force:JOINT, shaking_force, "
+                        "drive_moment or contact_force:JOINT, its peak (default: peak, the "
+                        "crank pivot's force)")
     p.add_argument("--revolution", type=int_at_least(1), default=4,
                    help="crank revolution of the output (default 4)")
     p.add_argument("--sobol", type=int_at_least(0), default=256,
@@ -943,8 +1107,9 @@ def _add_tolerance_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--wear", type=finite_float, nargs="+", metavar="M",
                    help="radial wear amounts in m added to the clearance (needs --monte-carlo)")
     p.add_argument("--seed", type=int_at_least(0), default=0, help="seed (default 0)")
-    add_evaluation_options(p, "tolerance")
+    add_evaluation_options(p, "tolerance", accuracy=True)
     add_force_option(p)
+    add_linkage_options(p)
     add_mechanism_options(p)
     p.set_defaults(func=_cmd_tolerance)
     return p
@@ -953,15 +1118,14 @@ def _add_tolerance_parser(subparsers) -> argparse.ArgumentParser:
 def _cmd_tolerance(args: argparse.Namespace) -> int:
     from .tolerance import read_inputs, tolerance_study
 
-    mech = mechanism_from_args(args)
+    _, mech = design_from_args(args)
     inputs = read_inputs(args.inputs)
     check_output_dir(args.out, "--out", args.force)
     kw = dict(output=args.output, revolution=args.revolution, sobol=args.sobol,
               second_order=not args.first_order_only, morris=args.morris, dgsm=args.dgsm,
               monte_carlo=args.monte_carlo, allowable=args.allowable, wear=args.wear,
               seed=args.seed, progress=not args.no_progress)
-    if args.rtol is not None:
-        kw["rtol"] = args.rtol
+    kw.update(_tolerances(args))
     result = evaluate_on(args, tolerance_study, inputs, mech, **kw)
     text = result.summary()
     print(text)
@@ -1233,7 +1397,28 @@ def _cmd_lyapunov(args: argparse.Namespace) -> int:
         f"revolutions")
     print(f"  per revolution: the log of the growth of a small perturbation over one crank "
           f"revolution{trend}; 1/s: the same per second")
+    if res.regime:
+        print(f"regime of revolutions {transient + 1}-{args.revolutions} (the regime map's "
+              f"rule): {_regime_line(res)}")
     return 0
+
+
+def _regime_line(res) -> str:
+    """The regime of a Lyapunov run in words, and why it differs from the verdict where it
+    does (a period found by recurrence decides over the exponent's sign)."""
+    words = res.regime.replace("_", " ")
+    if res.period:
+        words = f"period-{res.period}" + (
+            " (the section repeats every revolution within 1e-3 of the clearance)"
+            if res.period == 1 else
+            f" (the section repeats every {res.period} revolutions within 1e-3 of the "
+            f"clearance; the exponent is averaged over whole periods)")
+        if res.verdict != "negative":
+            words += (f"; the exponent's verdict is {res.verdict}: a recurrence seen over "
+                      f"the averaged revolutions decides the regime, the exponent's sign says "
+                      f"whether the repeating motion attracts its neighbours (run longer to "
+                      f"settle it)")
+    return words
 
 
 #: entry-point group through which other packages (this project's `validation`) add

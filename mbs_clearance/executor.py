@@ -53,10 +53,18 @@ def _peak_chunk(mechs: list[SliderCrank], revolution: int, backend: str,
     at once (its result is then discarded).
     """
     out = []
+    options = dict(options)
+    # a Linkage study's output (objective.peak_output); none: the monitored force
+    output = options.pop("output", None)
     for mech in mechs:
         if stop is not None and stop.is_set():
             break
         try:
+            if output is not None:
+                from .objective import peak_output
+
+                out.append(float(peak_output(mech, output, revolution, **options)))
+                continue
             out.append(float(peak_base_force(mech, revolution, backend, **options)))
         except RuntimeError:
             out.append(math.inf)

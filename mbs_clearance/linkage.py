@@ -342,9 +342,20 @@ class Linkage:
     gravity: float = 9.81
     monitor_joint: str | None = None
     assembly: Mapping[str, float] = field(default_factory=dict)
+    #: the named case (`cases.CASES`) and overrides that built this linkage (None and {} for
+    #: a description from a file or a changed copy): a study rebuilds the case with other
+    #: overrides (`design.linkage_with`); not part of the description (`to_dict`) nor of
+    #: equality
+    case: str | None = field(default=None, compare=False)
+    overrides: Mapping[str, Any] = field(default_factory=dict, compare=False)
 
     def __post_init__(self) -> None:
         _name("linkage name", self.name)
+        if self.case is not None and not isinstance(self.case, str):
+            raise ValueError(f"case must be None or a case name; got {_short(self.case)}")
+        if not isinstance(self.overrides, Mapping):
+            raise ValueError(f"overrides must be a mapping; got {_short(self.overrides)}")
+        object.__setattr__(self, "overrides", dict(self.overrides))
         for f, cls, most in (("bodies", Body, MAX_BODIES),
                              ("joints", (Revolute, Prismatic), MAX_JOINTS),
                              ("clearance_joints", ClearanceJoint, MAX_CLEARANCE_JOINTS)):
@@ -598,11 +609,17 @@ class Linkage:
 
     # ------------------------------------------------------------------ variants and I/O
     def replace(self, **changes: Any) -> Linkage:
-        """A validated copy with some fields changed (unknown names raise ValueError)."""
+        """A validated copy with some fields changed (unknown names raise ValueError). The
+        copy remembers the case that built this linkage (`case`, `overrides`) only when the
+        change is its name alone (or names the case itself): any other change makes a
+        description the case's overrides cannot rebuild."""
         allowed = [f.name for f in dataclasses.fields(self)]
         unknown = [k for k in changes if k not in allowed]
         if unknown:
             raise ValueError(f"unknown Linkage field(s) {unknown}; allowed: {allowed}")
+        if not set(changes) <= {"name", "case", "overrides"}:
+            changes.setdefault("case", None)
+            changes.setdefault("overrides", {})
         return dataclasses.replace(self, **changes)
 
     def to_dict(self) -> dict[str, Any]:
@@ -638,7 +655,9 @@ class Linkage:
         and the item that holds it (``bodies[1] ('coupler')``)."""
         if not isinstance(data, Mapping):
             raise ValueError(f"a linkage description must be a mapping; got {_short(data)}")
-        data = dict(_fields_of(cls, "linkage", "the description", data))
+        # case and overrides: the provenance of a built case, not keys of a description
+        data = dict(_fields_of(cls, "linkage", "the description", data,
+                               exclude=("case", "overrides")))
 
         def items(key, most):
             value = data.get(key, [])
@@ -830,11 +849,12 @@ def _named(item: Any) -> str:
     return f" ({_short(name, 40)})" if isinstance(name, str) else ""
 
 
-def _fields_of(cls, what: str, where: str, data: Mapping) -> dict:
+def _fields_of(cls, what: str, where: str, data: Mapping, exclude=()) -> dict:
     """`data` as keyword arguments of dataclass `cls` (a `what`, at `where` in the
     description): ValueError naming the key and `where` when a key is unknown or a required
-    one (a field without a default) is missing."""
-    fields = dataclasses.fields(cls)
+    one (a field without a default) is missing. Fields in `exclude` are not description
+    keys."""
+    fields = [f for f in dataclasses.fields(cls) if f.name not in exclude]
     allowed = [f.name for f in fields]
     unknown = [k for k in data if k not in allowed]
     if unknown:

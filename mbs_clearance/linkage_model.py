@@ -9,10 +9,12 @@ velocity constraints.
 
 from __future__ import annotations
 
+import warnings
 from typing import NamedTuple
 
 import numpy as np
 
+from ._warnings import AccuracyWarning
 from .contact import CONTACT_MODELS, FRICTION_LAWS
 from .laws.registry import FRICTION_SLOTS
 from .linkage import GROUND, Linkage
@@ -504,10 +506,16 @@ def _start_step(model, y0, p, rtol, atol, method, span):
 def simulate_linkage(linkage: Linkage, revolutions: int = 4, **options):
     """Simulate `linkage` with its generated model; a `Trajectory` of every accepted step
     with per-joint series (see `Trajectory`), annotated (penetration, periodicity)."""
+    from .reduced import contact_flags
     from .trajectory import annotate
 
     model, ts, ys, ms, peaks, _, stats, outs, p = run(linkage, revolutions, record=True,
                                                       **options)
+    stats.update(contact_flags([j.clearance for j in linkage.clearance_joints],
+                               linkage.drive.speed, revolutions, ms[:, :model.N_MEM],
+                               stats.get("nevent", 0), stats["rtol"]))
+    if stats["accuracy_note"]:
+        warnings.warn(stats["accuracy_note"], AccuracyWarning, stacklevel=3)
     traj = trajectory_from_run(linkage, model, ts, ys, ms, p, stats, peaks, outs)
     start = options.get("start")
     if start is not None:

@@ -65,7 +65,21 @@ from .integrator import (
 )
 from .linkage import Linkage
 from .mechanism import SliderCrank
-from .poincare import DEFAULT_RTOL, Flow, drive_of, section_times
+from .poincare import (  # noqa: F401 - the exponent statistics, public here too
+    BLOCKS,
+    DEFAULT_RTOL,
+    MAX_PERIOD,
+    RECURRENCE_TOL,
+    T_QUANTILE,
+    Flow,
+    classify_run,
+    drive_of,
+    exponent_estimate,
+    exponent_interval,
+    exponent_verdict,
+    scale_samples,
+    section_times,
+)
 
 __all__ = ["LyapunovResult", "TangentFlow", "TextbookFlow", "lyapunov_exponent",
            "textbook_exponent", "LORENZ", "exponent_of_flow", "exponent_interval",
@@ -90,6 +104,11 @@ class LyapunovResult:
     uncertainty: float = math.inf
     #: "positive", "negative", "zero" or "undecided" (`exponent_verdict`)
     verdict: str = "undecided"
+    #: the regime of the averaged windows by the regime map's rule (`poincare.classify_run`;
+    #: "" where no section was taken)
+    regime: str = ""
+    #: the period in windows found by recurrence of the section (0: none)
+    period: int = 0
 
     @property
     def interval(self) -> tuple[float, float]:
@@ -264,67 +283,36 @@ class TextbookFlow(Flow):
 
 # ------------------------------------------------------------------------------ exponent
 
-#: blocks of the batch-means interval of the exponent (`exponent_interval`)
-BLOCKS = 4
-
-#: two-sided 95 % quantile of Student's t with BLOCKS - 1 = 3 degrees of freedom
-T_QUANTILE = 3.182
-
-
-def exponent_interval(kept: np.ndarray) -> float:
-    """Half-width of the interval of the mean of the averaged log-growths `kept` (per
-    window): the larger of the 95 % batch-means half-width (`BLOCKS` consecutive blocks of
-    equal length, the first windows left over dropped; t quantile `T_QUANTILE`) and the
-    spread (max - min) of the running mean over the last half of the windows. inf with
-    fewer than BLOCKS windows. The running mean's spread catches a slow trend or a
-    periodic pattern of the growths that blocks of the wrong length would miss or average
-    out; the batch means, the scatter of a chaotic motion's growths."""
-    kept = np.asarray(kept, dtype=float)
-    n = len(kept)
-    if n < BLOCKS:
-        return math.inf
-    size = n // BLOCKS
-    means = kept[n - BLOCKS * size:].reshape(BLOCKS, size).mean(axis=1)
-    batch = T_QUANTILE * float(np.std(means, ddof=1)) / math.sqrt(BLOCKS)
-    running = np.cumsum(kept) / np.arange(1, n + 1)
-    tail = running[n // 2:]
-    return max(batch, float(tail.max() - tail.min()))
-
-
-def exponent_verdict(low: float, high: float) -> str:
-    """The sign of an exponent known to lie in [low, high] (per revolution): "zero" if the
-    interval lies within the band |lambda| <= poincare.LYAPUNOV_ZERO, "positive" if it lies
-    above 0, "negative" if below, "undecided" if it contains 0 and reaches out of the band
-    (run longer, or with a longer transient, to decide)."""
-    from .poincare import LYAPUNOV_ZERO
-
-    if not (math.isfinite(low) and math.isfinite(high)):
-        return "undecided"
-    if -LYAPUNOV_ZERO <= low and high <= LYAPUNOV_ZERO:
-        return "zero"
-    if low > 0.0:
-        return "positive"
-    if high < 0.0:
-        return "negative"
-    return "undecided"
-
-
-def exponent_of_flow(flow, times, transient: int, window: float) -> LyapunovResult:
+def exponent_of_flow(flow, times, transient: int, window: float,
+                     sections: bool = False) -> LyapunovResult:
     """Benettin's estimate on a flow with the `TangentFlow` members: advance to each of
     `times`, renormalise, average the log-growths after the first `transient` windows of
-    duration `window` (s); with its interval (`exponent_interval`) and verdict."""
+    duration `window` (s); with its interval (`exponent_interval`) and verdict. With
+    `sections`, the flow's Poincare section after each averaged window is classified by the
+    regime map's rule (`poincare.classify_run`): a period found by recurrence is reported,
+    and the exponent is then averaged over whole periods."""
     logs = np.empty(len(times))
+    samples = []
     for k, t1 in enumerate(times):
         flow.advance(t1)
         logs[k] = math.log(flow.renormalise())
-    per_window = float(np.mean(logs[transient:]))
-    half = exponent_interval(logs[transient:])
+        if sections and k >= transient:
+            samples.append(flow.section())
+    kept = logs[transient:]
+    regime, period = "", 0
+    if sections and len(kept) >= 3:
+        scaled = scale_samples(np.array(samples), flow.clearance, flow.omega)
+        regime, period, _, per_window, half = classify_run(
+            scaled, kept, tol=RECURRENCE_TOL, max_period=min(MAX_PERIOD, (len(kept) - 1) // 2))
+    else:
+        per_window, half = exponent_estimate(kept)
     from .reduced import counters_dict
 
     return LyapunovResult(per_second=per_window / window, per_revolution=per_window,
                           log_growth=logs, transient=transient, window=window,
                           counters=counters_dict(flow.counters), uncertainty=half,
-                          verdict=exponent_verdict(per_window - half, per_window + half))
+                          verdict=exponent_verdict(per_window - half, per_window + half),
+                          regime=regime, period=period)
 
 
 def lyapunov_exponent(mech, revolutions: int = 100, transient: int | None = None, *,
@@ -341,9 +329,11 @@ def lyapunov_exponent(mech, revolutions: int = 100, transient: int | None = None
     so 50 of the default 100; any `revolutions` works with it). rtol (default 1e-7) applies
     to the state and the unit tangent alike. The result carries the exponent's `uncertainty`
     (half-width per revolution, `exponent_interval`) and its `verdict` ("positive",
-    "negative", "zero" or "undecided" where the interval contains zero). `memory`: the
-    impact-velocity memory's tangent at each renormalisation, "reset" or "carry" (module
-    docstring).
+    "negative", "zero" or "undecided" where the interval contains zero), and the `regime`
+    and `period` of the averaged revolutions by the regime map's rule
+    (`poincare.classify_run`: a period found by recurrence of the section decides, the
+    exponent is then averaged over whole periods). `memory`: the impact-velocity memory's
+    tangent at each renormalisation, "reset" or "carry" (module docstring).
     """
     if not isinstance(mech, (SliderCrank, Linkage)):
         raise ValueError(f"mech must be a SliderCrank or a Linkage; got {type(mech).__name__}")
@@ -357,7 +347,7 @@ def lyapunov_exponent(mech, revolutions: int = 100, transient: int | None = None
                        direction=direction, memory=memory)
     omega, _ = drive_of(mech)
     return exponent_of_flow(flow, section_times(mech, revolutions), transient,
-                            2.0 * math.pi / omega)
+                            2.0 * math.pi / omega, sections=True)
 
 
 #: Lorenz's parameters and a point near its attractor

@@ -62,6 +62,7 @@ from .executor import (  # noqa: F401 - the executors live in executor.py (share
     local_process_pool,
     peak_or_inf,
 )
+from .linkage import Linkage
 from .mechanism import CONTINUOUS_FIELDS, SliderCrank
 from .simulate import BACKENDS, peak_base_force, simulate
 
@@ -137,7 +138,7 @@ def design_mechanism(base: SliderCrank, values: dict[str, float],
 class _Problem:
     """Picklable description of the objective: design box, mapping, model settings."""
 
-    base: SliderCrank
+    base: SliderCrank | Linkage
     names: tuple[str, ...]
     lo: tuple[float, ...]
     hi: tuple[float, ...]
@@ -145,6 +146,15 @@ class _Problem:
     revolution: int
     backend: str
     options: dict
+    output: str | None = None
+
+    @property
+    def eval_options(self) -> dict:
+        """Options of a design's evaluation (`executor.peak_or_inf`): the backend's, and a
+        Linkage's output."""
+        if isinstance(self.base, Linkage):
+            return {**self.options, "output": self.output}
+        return self.options
 
     def physical(self, u) -> np.ndarray:
         """Genes in [0, 1] -> field values in SI units."""
@@ -156,9 +166,13 @@ class _Problem:
         lo, hi = np.asarray(self.lo), np.asarray(self.hi)
         return (np.asarray(x, dtype=float) - lo) / (hi - lo)
 
-    def mechanism(self, u) -> SliderCrank:
-        return design_mechanism(self.base, dict(zip(self.names, self.physical(u))),
-                                self.mass_scaling)
+    def mechanism(self, u) -> SliderCrank | Linkage:
+        values = dict(zip(self.names, self.physical(u)))
+        if isinstance(self.base, Linkage):
+            from .design import linkage_with
+
+            return linkage_with(self.base, values)
+        return design_mechanism(self.base, values, self.mass_scaling)
 
 
 #: run id -> (dispatcher, progress bar) while a run is active; kept out of the GA object
@@ -194,7 +208,7 @@ class _Objective:
                     chunk = math.ceil(len(mechs) / active[0].n_workers)
             problem = self.problem
             peaks = evaluate(peak_or_inf, mechs,
-                             (problem.revolution, problem.backend, problem.options),
+                             (problem.revolution, problem.backend, problem.eval_options),
                              executor=executor, chunk_size=chunk, desc="GA designs")
             for k, p in zip(new, peaks):
                 self.cache[k] = p
@@ -319,6 +333,10 @@ class OptimizationResult:
     @property
     def best_genes(self) -> dict[str, float]:
         """Design field -> optimal value (SI units)."""
+        if isinstance(self.best, Linkage):
+            from .design import design_value
+
+            return {name: design_value(self.best, name) for name in self.genes}
         return {name: getattr(self.best, name) for name in self.genes}
 
     def to_dict(self) -> dict[str, Any]:
@@ -360,16 +378,21 @@ class OptimizationResult:
         data = read_json_object(path, "optimisation result")
         if data.get("format") != _FORMAT:
             raise ValueError(f"{str(path)!r} is not an optimisation result ({_FORMAT})")
+        def design(d):
+            # a Linkage's description (it has bodies) or a SliderCrank's fields; a
+            # Linkage read back is the description, without the case that built it
+            return Linkage.from_dict(d) if "bodies" in d else SliderCrank.from_dict(d)
+
         return cls(
-            best=SliderCrank.from_dict(data["best"]),
+            best=design(data["best"]),
             best_peak_force=float(data["best_peak_force"]),
-            original=SliderCrank.from_dict(data["original"]),
+            original=design(data["original"]),
             original_peak_force=float(data["original_peak_force"]),
             history=np.asarray(data["history"], dtype=float),
             genes={k: (float(a), float(b)) for k, (a, b) in data["genes"].items()},
             settings=data["settings"],
             n_evaluations=int(data["n_evaluations"]),
-            ga_best=SliderCrank.from_dict(data["ga_best"]),
+            ga_best=design(data["ga_best"]),
             ga_best_peak_force=float(data["ga_best_peak_force"]),
             generations_completed=int(data["generations_completed"]),
             n_failed=int(data.get("n_failed", 0)),
@@ -411,13 +434,19 @@ def _check_int(name: str, value, minimum: int) -> int:
     return int(value)
 
 
-def _check_genes(base: SliderCrank, genes: dict, mass_scaling: str) -> dict:
+def _check_genes(base: SliderCrank | Linkage, genes: dict, mass_scaling: str) -> dict:
     if not isinstance(genes, dict) or not genes:
         raise ValueError("genes must be a non-empty dict {field: (lower, upper)}; "
                          f"got {genes!r}")
-    unknown = [n for n in genes if n not in CONTINUOUS_FIELDS]
-    if unknown:
-        raise ValueError(f"unknown gene name(s) {unknown}; allowed: {list(CONTINUOUS_FIELDS)}")
+    if isinstance(base, Linkage):
+        from .design import check_names
+
+        check_names(base, genes, "gene")
+    else:
+        unknown = [n for n in genes if n not in CONTINUOUS_FIELDS]
+        if unknown:
+            raise ValueError(f"unknown gene name(s) {unknown}; allowed: "
+                             f"{list(CONTINUOUS_FIELDS)}")
     if mass_scaling == "uniform":
         clash = [n for n in genes if n in _SCALED_FIELDS]
         if clash:
@@ -439,11 +468,18 @@ def _check_genes(base: SliderCrank, genes: dict, mass_scaling: str) -> dict:
                              f"got ({lo!r}, {hi!r})")
         out[name] = (float(lo), float(hi))
     # every constraint of SliderCrank is linear in the fields (L3 > L2, R_J < R_B, ranges),
-    # so the box is feasible when all its corners are
+    # so the box is feasible when all its corners are; a case's are convex in its overrides
+    # (positive values, clearance < bearing radius, the four-bar's Grashof crank-rocker:
+    # crank + longest - the other two < 0 with the crank shortest), so its box is too
     names = list(out)
     for corner in itertools.product(*(out[n] for n in names)):
         try:
-            design_mechanism(base, dict(zip(names, corner)), mass_scaling)
+            if isinstance(base, Linkage):
+                from .design import linkage_with
+
+                linkage_with(base, dict(zip(names, corner))).assemble()
+            else:
+                design_mechanism(base, dict(zip(names, corner)), mass_scaling)
         except ValueError as exc:
             raise ValueError(
                 f"the gene bounds {out} contain an invalid mechanism at "
@@ -481,14 +517,19 @@ def optimize_link_lengths(mech: SliderCrank | None = None,
                           progress: bool = True, workers: int = 2,
                           saturation_rtol: float = SATURATION_RTOL,
                           dask_timeout: float = DASK_WORKER_TIMEOUT,
+                          output: str | None = None,
                           **backend_options) -> OptimizationResult:
     """Minimise max |F12| over crank revolution `revolution` with a GA (paper Eq. 18).
 
     Parameters
     ----------
-    mech : SliderCrank, optional
+    mech : SliderCrank or Linkage, optional
         Starting design; every field that is not a gene keeps its value (default: the paper's
-        case).
+        case). A Linkage (a named case's or a description's) needs `genes` named by its
+        case's overrides or dotted paths of its description (`design`, e.g.
+        ``{"coupler_length": (3.6, 4.4), "rocker_length": (2.2, 2.8)}`` for the four-bar);
+        its objective is the peak of `output` (`objective.peak_output`), its refinement
+        (``refine=True``) Nelder-Mead, its backend the generated model ("reduced").
     crank_length, coupler_length : (float, float)
         Bounds in m of L2 and L3, the default genes (paper: [0.04, 0.06] and [0.10, 0.14]).
     revolution : int
@@ -530,6 +571,10 @@ def optimize_link_lengths(mech: SliderCrank | None = None,
         Relative tolerance of the saturation test, in [0, 1) (default 1e-9).
     dask_timeout : float
         Seconds to wait for the first worker of a dask Client before giving up (> 0).
+    output : str, optional
+        Linkage only: the output whose peak is minimised (`objective.parse_output`:
+        "pivot_force:<ground joint>", "shaking_force", "drive_moment",
+        "contact_force:<clearance joint>"; default the crank pivot's |reaction|).
     **backend_options
         Passed to `peak_base_force` (e.g. ``rtol``); ``max_memory`` (bytes) is also the
         limit of the GA's own estimated memory (`ga_memory`; default
@@ -551,8 +596,27 @@ def optimize_link_lengths(mech: SliderCrank | None = None,
         raise SystemExit(_MAIN_GUARD_ADVICE)
     t_start = time.perf_counter()
     mech = SliderCrank() if mech is None else mech
-    if not isinstance(mech, SliderCrank):
-        raise ValueError(f"mech must be a SliderCrank; got {type(mech).__name__}")
+    if not isinstance(mech, (SliderCrank, Linkage)):
+        raise ValueError(f"mech must be a SliderCrank or a Linkage; got {type(mech).__name__}")
+    is_linkage = isinstance(mech, Linkage)
+    if is_linkage:
+        from .objective import parse_output
+
+        output = parse_output(mech, output).name
+        if genes is None:
+            from .design import design_names
+
+            raise ValueError(f"genes must be given for a Linkage ({{name: (lower, upper)}} "
+                             f"of {design_names(mech)})")
+        if backend != "reduced":
+            raise ValueError(f"backend must be 'reduced' for a Linkage (its generated "
+                             f"model); got {backend!r}")
+        if mass_scaling != "fixed":
+            raise ValueError("mass_scaling applies to a SliderCrank; a Linkage's masses are "
+                             "genes or follow its case (mass_scaling='fixed')")
+    elif output is not None:
+        raise ValueError("output applies to a Linkage; a SliderCrank's objective is the "
+                         "peak of |F12|")
     if mass_scaling not in MASS_SCALINGS:
         raise ValueError(f"mass_scaling must be one of {list(MASS_SCALINGS)}; "
                          f"got {mass_scaling!r}")
@@ -568,6 +632,10 @@ def optimize_link_lengths(mech: SliderCrank | None = None,
         raise ValueError(f"saturation_rtol must be a number in [0, 1); got {saturation_rtol!r}")
     dask_timeout = _check_timeout("dask_timeout", dask_timeout)
     refine_method = _check_refine(refine)
+    if is_linkage and refine is True:
+        # a Linkage's gradient is central differences (2 p + 1 runs a call): the
+        # derivative-free search costs fewer runs
+        refine_method = "nelder-mead"
     if seed is None:
         seed = int(np.random.SeedSequence().generate_state(1)[0])
     elif not _is_int(seed) or not 0 <= seed < 2**32:
@@ -591,9 +659,15 @@ def optimize_link_lengths(mech: SliderCrank | None = None,
     names = tuple(genes)
     problem = _Problem(base=mech, names=names, lo=tuple(genes[n][0] for n in names),
                        hi=tuple(genes[n][1] for n in names), mass_scaling=mass_scaling,
-                       revolution=revolution, backend=backend, options=dict(backend_options))
+                       revolution=revolution, backend=backend, options=dict(backend_options),
+                       output=output)
     # the original design, in this process: checks the options and warms the compiled model
-    original_peak = float(peak_base_force(mech, revolution, backend, **backend_options))
+    if is_linkage:
+        from .objective import peak_output
+
+        original_peak = float(peak_output(mech, output, revolution, **backend_options))
+    else:
+        original_peak = float(peak_base_force(mech, revolution, backend, **backend_options))
 
     run_id = next(_RUN_IDS)
     objective = _Objective(problem, run_id)
@@ -606,6 +680,8 @@ def optimize_link_lengths(mech: SliderCrank | None = None,
         "seed": seed, "population": population, "generations": generations,
         "saturation": saturation, "saturation_rtol": float(saturation_rtol),
         "mass_scaling": mass_scaling, "refine": refine_method or False,
+        **({"output": output, "case": mech.case, "overrides": dict(mech.overrides)}
+           if is_linkage else {}),
         "ga": ga_settings, "pygad_version": pygad.__version__,
     }
     on_generation = _OnGeneration(run_id, saturation, float(saturation_rtol))
@@ -792,7 +868,9 @@ def _peak_and_gradient(problem: _Problem, u: np.ndarray):
     mech = problem.mechanism(u)
     params = _gradient_parameters(problem)
     options = dict(problem.options)
-    if problem.backend == "reduced":
+    if isinstance(mech, Linkage):
+        kwargs = {"method": "fd", "output": problem.output, **options}
+    elif problem.backend == "reduced":
         kwargs = {"method": "ddm", "rtol": options.get("rtol")}
     else:
         kwargs = {"method": "fd", **options}

@@ -282,7 +282,7 @@ def plot_force_comparison(trajectories: Mapping[str, Trajectory],
 
 #: colour of each regime code (poincare.REGIMES)
 REGIME_COLORS = {0: "#ffffff", 1: "#000000", 2: "#4c9be8", 3: "#8fd175", 4: "#f2c14e",
-                 5: "#d9534f", 6: "#b07cc6", 7: "#9e9e9e"}
+                 5: "#d9534f", 6: "#b07cc6", 7: "#9e9e9e", 8: "#e0e0e0"}
 
 
 #: swept field -> (axis label, factor from SI to the plotted unit)

@@ -16,9 +16,12 @@ divided by the joint's clearance c, rates by c omega):
 - period-k: the smallest k <= max_period with max_i |X_{i+k} - X_i|_inf <= tol over all the
   kept samples (the recurrence holds N - k times; N >= 2 max_period + 1 is required);
 - otherwise, by the largest Lyapunov exponent lambda per revolution (`lyapunov.py`), if it
-  was computed: chaotic if lambda > LYAPUNOV_ZERO, quasi-periodic if |lambda| <=
-  LYAPUNOV_ZERO, unsettled if lambda < -LYAPUNOV_ZERO (contracting, but not yet on its
-  periodic orbit after the transient: run longer);
+  was computed, through its interval [lambda - u, lambda + u] and the verdict of
+  `exponent_verdict` (the rule `lyapunov_exponent` prints, so a map's point and the
+  exponent of the same run agree): chaotic if "positive", quasi-periodic if "zero" (the
+  interval within |lambda| <= LYAPUNOV_ZERO), unsettled if "negative" (contracting, but not
+  yet on its periodic orbit after the transient: run longer), undecided if the interval
+  contains zero and reaches out of the band (run longer to decide);
 - aperiodic when no exponent was computed.
 
 The section samples carry the integration's error, of the order of rtol times the
@@ -45,14 +48,20 @@ from .linkage_model import REFINE_ITERS
 from .mechanism import SliderCrank
 
 __all__ = ["SECTION_COMPONENTS", "REGIMES", "Flow", "PoincareSection", "poincare_section",
-           "classify", "section_times", "RECURRENCE_TOL", "MAX_PERIOD", "LYAPUNOV_ZERO"]
+           "classify", "classify_run", "exponent_interval", "exponent_verdict",
+           "exponent_estimate", "section_times", "RECURRENCE_TOL", "MAX_PERIOD", "LYAPUNOV_ZERO"]
 
 #: the section's components per clearance joint
 SECTION_COMPONENTS = ("x", "y", "xdot", "ydot")
 
 #: regime codes (the dataset's `regime` variable; CF flag_values / flag_meanings)
 REGIMES = {0: "not_computed", 1: "failed", 2: "period_1", 3: "period_k",
-           4: "quasi_periodic", 5: "chaotic", 6: "aperiodic", 7: "unsettled"}
+           4: "quasi_periodic", 5: "chaotic", 6: "aperiodic", 7: "unsettled", 8: "undecided"}
+
+#: the exponent's verdict (`exponent_verdict`) -> the regime of a motion with no
+#: period found
+VERDICT_REGIMES = {"positive": "chaotic", "zero": "quasi_periodic", "negative": "unsettled",
+                   "undecided": "undecided"}
 REGIME_CODES = {v: k for k, v in REGIMES.items()}
 
 #: default recurrence tolerance of the dimensionless section samples (fraction of the
@@ -219,7 +228,8 @@ class PoincareSection:
     section times `t` (N,); peaks (revolutions,): the monitored force's maximum (N) over
     each section interval (the crank revolutions when the section angle is the initial
     crank angle); regime / period: `classify`'s result; lyapunov: the exponent per
-    revolution when computed (else NaN); distance: the recurrence distances d_k
+    revolution when computed (else NaN), lyapunov_uncertainty its half-width
+    (`exponent_interval`); distance: the recurrence distances d_k
     (k = 1..max_period)."""
 
     t: np.ndarray
@@ -232,6 +242,7 @@ class PoincareSection:
     period: int
     distance: np.ndarray
     lyapunov: float = math.nan
+    lyapunov_uncertainty: float = math.nan
     counters: dict = field(default_factory=dict)
     #: relative tolerance of the run that gave the samples
     rtol: float = DEFAULT_RTOL
@@ -258,11 +269,70 @@ def recurrence_distances(scaled: np.ndarray, max_period: int) -> np.ndarray:
                      for k in range(1, max_period + 1)])
 
 
+#: blocks of the batch-means interval of the exponent (`exponent_interval`)
+BLOCKS = 4
+
+#: two-sided 95 % quantile of Student's t with BLOCKS - 1 = 3 degrees of freedom
+T_QUANTILE = 3.182
+
+
+def exponent_interval(kept: np.ndarray) -> float:
+    """Half-width of the interval of the mean of the averaged log-growths `kept` (per
+    window): the larger of the 95 % batch-means half-width (`BLOCKS` consecutive blocks of
+    equal length, the first windows left over dropped; t quantile `T_QUANTILE`) and the
+    spread (max - min) of the running mean over the last half of the windows. inf with
+    fewer than BLOCKS windows. The running mean's spread catches a slow trend or a
+    periodic pattern of the growths that blocks of the wrong length would miss or average
+    out; the batch means, the scatter of a chaotic motion's growths."""
+    kept = np.asarray(kept, dtype=float)
+    n = len(kept)
+    if n < BLOCKS:
+        return math.inf
+    size = n // BLOCKS
+    means = kept[n - BLOCKS * size:].reshape(BLOCKS, size).mean(axis=1)
+    batch = T_QUANTILE * float(np.std(means, ddof=1)) / math.sqrt(BLOCKS)
+    running = np.cumsum(kept) / np.arange(1, n + 1)
+    tail = running[n // 2:]
+    return max(batch, float(tail.max() - tail.min()))
+
+
+def exponent_verdict(low: float, high: float) -> str:
+    """The sign of an exponent known to lie in [low, high] (per revolution): "zero" if the
+    interval lies within the band |lambda| <= LYAPUNOV_ZERO, "positive" if it lies
+    above 0, "negative" if below, "undecided" if it contains 0 and reaches out of the band
+    (run longer, or with a longer transient, to decide)."""
+    if not (math.isfinite(low) and math.isfinite(high)):
+        return "undecided"
+    if -LYAPUNOV_ZERO <= low and high <= LYAPUNOV_ZERO:
+        return "zero"
+    if low > 0.0:
+        return "positive"
+    if high < 0.0:
+        return "negative"
+    return "undecided"
+
+
+def exponent_estimate(kept: np.ndarray, period: int = 1) -> tuple[float, float]:
+    """(mean, half-width) per window of the log-growths `kept`, over whole periods of a
+    motion of `period` windows (the first windows left over dropped): on a period-k orbit
+    the growths repeat every k windows, and blocks or a running mean that cut across the
+    pattern would read its swing as uncertainty."""
+    kept = np.asarray(kept, dtype=float)
+    period = max(int(period), 1)
+    whole = (len(kept) // period) * period
+    if whole == 0:
+        return (float(np.mean(kept)) if len(kept) else math.nan), math.inf
+    per = kept[len(kept) - whole:].reshape(-1, period).mean(axis=1)
+    return float(np.mean(per)), exponent_interval(per)
+
+
 def classify(scaled: np.ndarray, *, tol: float = RECURRENCE_TOL, max_period: int = MAX_PERIOD,
-             lyapunov: float | None = None) -> tuple[str, int, np.ndarray]:
+             lyapunov: float | None = None,
+             uncertainty: float = 0.0) -> tuple[str, int, np.ndarray]:
     """(regime, period, distances) of dimensionless section samples (N, ...) by the
     criterion of the module docstring; `lyapunov` is the exponent per revolution (None or
-    NaN: not computed)."""
+    NaN: not computed), `uncertainty` its half-width (0: the point value decides)."""
+
     tol = check_real("tol (recurrence tolerance)", tol, 0.0, low_open=True)
     max_period = check_int("max_period", max_period, 1)
     if scaled.shape[0] < 2 * max_period + 1:
@@ -274,11 +344,24 @@ def classify(scaled: np.ndarray, *, tol: float = RECURRENCE_TOL, max_period: int
             return ("period_1" if k == 1 else "period_k"), k, d
     if lyapunov is None or not math.isfinite(lyapunov):
         return "aperiodic", 0, d
-    if lyapunov > LYAPUNOV_ZERO:
-        return "chaotic", 0, d
-    if lyapunov >= -LYAPUNOV_ZERO:
-        return "quasi_periodic", 0, d
-    return "unsettled", 0, d
+    verdict = exponent_verdict(lyapunov - uncertainty, lyapunov + uncertainty)
+    return VERDICT_REGIMES[verdict], 0, d
+
+
+def classify_run(scaled: np.ndarray, logs: np.ndarray | None, *, tol: float = RECURRENCE_TOL,
+                 max_period: int = MAX_PERIOD) -> tuple[str, int, np.ndarray, float, float]:
+    """(regime, period, distances, exponent, half-width) of one run: its dimensionless
+    section samples (N, ...) and the log-growths of its tangent over the same N windows
+    (None: no exponent). The one rule of the regime map and of `lyapunov_exponent`: a
+    period found by recurrence decides; the exponent is averaged over whole periods
+    (`exponent_estimate`) and, without a period, its verdict decides (`classify`)."""
+    regime, period, d = classify(scaled, tol=tol, max_period=max_period)
+    if logs is None:
+        return regime, period, d, math.nan, math.nan
+    lam, half = exponent_estimate(logs, period or 1)
+    regime, period, d = classify(scaled, tol=tol, max_period=max_period, lyapunov=lam,
+                                 uncertainty=half)
+    return regime, period, d, lam, half
 
 
 def near_tolerance(regime: str, period: int, distances: np.ndarray, tol: float) -> bool:
@@ -357,23 +440,23 @@ def _section_run(mech, times, keep, tol, max_period, lyapunov, rtol, method):
         flow = Flow(mech, rtol=rtol, method=method or "dopri5")
     samples = np.empty((keep, len(flow.joints), 4))
     peaks = np.empty(revolutions)
-    log_growth = 0.0
+    logs = np.empty(keep)
     first = revolutions - keep
     for k, t1 in enumerate(times):
         peaks[k] = flow.advance(t1)
         if lyapunov:
             growth = flow.renormalise()
             if k >= first:
-                log_growth += math.log(growth)
+                logs[k - first] = math.log(growth)
         if k >= first:
             samples[k - first] = flow.section()
-    lam = log_growth / keep if lyapunov else math.nan
     scaled = scale_samples(samples, flow.clearance, flow.omega)
-    regime, period, d = classify(scaled, tol=tol, max_period=max_period,
-                                 lyapunov=lam if lyapunov else None)
+    regime, period, d, lam, half = classify_run(scaled, logs if lyapunov else None, tol=tol,
+                                                max_period=max_period)
     from .reduced import counters_dict
 
     return PoincareSection(t=times[first:], samples=samples, peaks=peaks, joints=flow.joints,
                            clearance=flow.clearance, omega=flow.omega, regime=regime,
                            period=period, distance=d, lyapunov=lam,
+                           lyapunov_uncertainty=half,
                            counters=counters_dict(flow.counters), rtol=float(flow.rtol))

@@ -452,6 +452,12 @@ def simulate_reduced(mech: SliderCrank, revolutions: int = 4, **options):
     return annotate(traj)
 
 
+def rattles(nevent: int, revolutions: int, joints: int = 1) -> bool:
+    """True when a run's contact switches exceed RATTLING per revolution and joint beyond the
+    START_SWITCHES of each joint's start-up transient: the motion is not periodic."""
+    return nevent > joints * (RATTLING * revolutions + START_SWITCHES)
+
+
 def accuracy_flags(mech: SliderCrank, revolutions: int, ms: np.ndarray, nevent: int,
                    rtol: float) -> dict:
     """Whether a run is where the accuracy map (docs/performance.md) found the stated
@@ -460,15 +466,27 @@ def accuracy_flags(mech: SliderCrank, revolutions: int, ms: np.ndarray, nevent: 
     peaks ride on a lightly damped contact vibration), or a loose rtol. Returns the stats
     entries grazing_onsets, accuracy_ok and accuracy_note (the warning's text, "" for none).
 
-    A rattling run (more than RATTLING contact switches per revolution, beyond the
-    START_SWITCHES that the start-up transient may take) is not periodic: its
-    late peaks depend on every digit and no tolerance makes them accurate; it is flagged
-    (accuracy_ok False) with a note saying so. Every run flagged has a note, except one
-    at an rtol looser than LOOSE_RTOL, which `run` has warned about already."""
-    grazing = grazing_onsets(mech, ms)
-    mode = ms[:, 0] > 0.5
-    onsets = int(np.count_nonzero(mode[1:] & ~mode[:-1]))
-    rattling = nevent > RATTLING * revolutions + START_SWITCHES
+    A rattling run (`rattles`) is not periodic: its late peaks depend on every digit and no
+    tolerance makes them accurate; it is flagged (accuracy_ok False) with a note saying so.
+    Every run flagged has a note, except one at an rtol looser than LOOSE_RTOL, which `run`
+    has warned about already."""
+    return contact_flags([mech.clearance], mech.crank_speed, revolutions, ms, nevent, rtol)
+
+
+def contact_flags(clearances, speed: float, revolutions: int, ms: np.ndarray, nevent: int,
+                  rtol: float) -> dict:
+    """`accuracy_flags` of a run with clearance joints of `clearances` (m) at drive speed
+    `speed` (rad/s), from its recorded memories `ms` (n, 2 J: per joint its contact mode and
+    stored impact velocity) and its `nevent` contact switches; the onsets are counted per
+    joint and the largest count decides the settling test."""
+    clearances = list(clearances)
+    grazing = sum(grazing_onsets_of(ms[:, 2 * j:2 * j + 2], c * speed)
+                  for j, c in enumerate(clearances))
+    onsets = 0
+    for j in range(len(clearances)):
+        mode = ms[:, 2 * j] > 0.5
+        onsets = max(onsets, int(np.count_nonzero(mode[1:] & ~mode[:-1])))
+    rattling = rattles(nevent, revolutions, len(clearances))
     settling = onsets >= SETTLING_ONSETS
     resolved = rtol <= 1e-9
     note = ""
@@ -492,7 +510,7 @@ def accuracy_flags(mech: SliderCrank, revolutions: int, ms: np.ndarray, nevent: 
                 f"(stats['accuracy_ok'] is False)")
     ok = not ((grazing or settling or rattling) and not resolved) and rtol <= LOOSE_RTOL
     return {"grazing_onsets": grazing, "contact_onsets": onsets, "accuracy_ok": ok,
-            "accuracy_note": note}
+            "accuracy_note": note, "rattling": rattling}
 
 
 def grazing_onsets(mech: SliderCrank, ms: np.ndarray) -> int:
@@ -501,12 +519,17 @@ def grazing_onsets(mech: SliderCrank, ms: np.ndarray) -> int:
     missed at the default tolerance). A contact present at the start (the journal placed
     on the wall) counts as an onset at the floor velocity: its damping follows the
     penetration rate with weight xi / floor (measured: journal on the far wall, 3.4e-5)."""
+    return grazing_onsets_of(ms, mech.clearance * mech.crank_speed)
+
+
+def grazing_onsets_of(ms: np.ndarray, scale: float) -> int:
+    """`grazing_onsets` of one joint's memories (n, 2: mode, impact velocity), the joint's
+    clearance x drive speed `scale` (m/s)."""
     if len(ms) < 1:
         return 0
     mode = ms[:, 0] > 0.5
     onset = np.nonzero(np.concatenate([mode[:1], mode[1:] & ~mode[:-1]]))[0]
-    limit = GRAZING_ONSET * mech.clearance * mech.crank_speed
-    return int(np.count_nonzero(ms[onset, 1] < limit))
+    return int(np.count_nonzero(ms[onset, 1] < GRAZING_ONSET * scale))
 
 
 def floored_impacts(ms: np.ndarray, floor: float) -> int:

@@ -62,7 +62,7 @@ __all__ = ["SweepAxis", "parse_sweep", "design_at", "regime_map", "MapResult", "
 RPM = 2.0 * math.pi / 60.0
 
 #: the dataset format's version (a resumed run must match it)
-FORMAT = "mbs-clearance regime map 3"
+FORMAT = "mbs-clearance regime map 4"
 
 
 @dataclass(frozen=True)
@@ -236,11 +236,13 @@ def _map_point(item, settings: dict) -> dict:
         out.update(status=2, message=str(exc).splitlines()[0][:200],
                    section=np.full((keep, J, 4), np.nan), peak=np.full(keep, np.nan),
                    regime=REGIME_CODES["failed"], period=0, lyapunov=np.nan,
+                   lyapunov_uncertainty=np.nan,
                    distance=np.full(settings["max_period"], np.nan), nfev=0, rtol=np.nan)
     else:
         out.update(section=sec.samples, peak=sec.peaks[-keep:],
                    regime=REGIME_CODES[sec.regime], period=sec.period,
-                   lyapunov=sec.lyapunov, distance=sec.distance, nfev=sec.counters["nfev"],
+                   lyapunov=sec.lyapunov, lyapunov_uncertainty=sec.lyapunov_uncertainty,
+                   distance=sec.distance, nfev=sec.counters["nfev"],
                    rtol=sec.rtol)
     out["seconds"] = time.perf_counter() - t0
     return out
@@ -278,6 +280,9 @@ def _empty_dataset(axes, J, joints, keep, revolutions, max_period, attrs):
         "lyapunov": (dims, np.full(shape, nan),
                      {"long_name": "largest Lyapunov exponent per revolution (NaN: not "
                                    "computed)"}),
+        "lyapunov_uncertainty": (dims, np.full(shape, nan),
+                                 {"long_name": "half-width of the exponent's interval per "
+                                               "revolution (lyapunov.exponent_interval)"}),
         "lyapunov_per_second": (dims, np.full(shape, nan), {"units": "1/s"}),
         "recurrence": (dims + ("lag",), np.full(shape + (max_period,), nan),
                        {"long_name": "max |X_{i+k} - X_i| of the scaled section samples"}),
@@ -312,6 +317,7 @@ def _store(ds, shape, res, omega_of) -> None:
     ds["regime"].values[idx] = res["regime"]
     ds["period"].values[idx] = res["period"]
     ds["lyapunov"].values[idx] = res["lyapunov"]
+    ds["lyapunov_uncertainty"].values[idx] = res["lyapunov_uncertainty"]
     ds["lyapunov_per_second"].values[idx] = res["lyapunov"] * omega_of(res["index"]) / (
         2.0 * math.pi)
     ds["recurrence"].values[idx] = res["distance"]

@@ -49,6 +49,7 @@ from ._checks import DESIGN_BYTES, check_memory, check_revolutions_memory
 from ._warnings import AccuracyWarning, PhysicsWarning
 from .executor import _THREAD_SAFE_BACKENDS, evaluate
 from .fits import iso_fit
+from .linkage import Linkage
 from .mechanism import CONTINUOUS_FIELDS, SliderCrank
 
 __all__ = ["tolerance_study", "ToleranceResult", "Uniform", "Normal", "FitClearance",
@@ -243,8 +244,18 @@ def _from_spec(name: str, spec) -> Any:
 
 # ----------------------------------------------------------------------- field access
 
-def field_value(mech: SliderCrank, name: str) -> float:
-    """The value of design field `name` (SI; "radial_clearance" = R_B - R_J)."""
+def _linkage_name(name: str) -> str:
+    """A Linkage's design name of an input ("radial_clearance": every clearance)."""
+    return "clearance" if name == CLEARANCE else name
+
+
+def field_value(mech: SliderCrank | Linkage, name: str) -> float:
+    """The value of design field `name` (SI; "radial_clearance" = R_B - R_J; a Linkage's
+    names: `design`, "radial_clearance" its smallest clearance)."""
+    if isinstance(mech, Linkage):
+        from .design import design_value
+
+        return design_value(mech, _linkage_name(name))
     if name == CLEARANCE:
         return mech.bearing_radius - mech.journal_radius
     return getattr(mech, name)
@@ -252,7 +263,12 @@ def field_value(mech: SliderCrank, name: str) -> float:
 
 def with_values(mech: SliderCrank, values: Mapping[str, float]) -> SliderCrank:
     """`mech` with the fields `values` replaced ("radial_clearance" moves the journal
-    radius, after any new bearing radius)."""
+    radius, after any new bearing radius); a Linkage through `design.linkage_with`
+    ("radial_clearance" sets every clearance)."""
+    if isinstance(mech, Linkage):
+        from .design import linkage_with
+
+        return linkage_with(mech, {_linkage_name(k): v for k, v in values.items()})
     changes = {k: float(v) for k, v in values.items() if k != CLEARANCE}
     if CLEARANCE in values:
         rb = changes.get("bearing_radius", mech.bearing_radius)
@@ -321,9 +337,14 @@ def _span(k: int) -> range:
     return range(min(1, k - 1), k)
 
 
-def _mechanism_output(mech: SliderCrank, task: _Task):
+def _mechanism_output(mech: SliderCrank | Linkage, task: _Task):
     k = task.revolution
-    if task.output == "peak":
+    if isinstance(mech, Linkage) and task.output not in OUTPUTS[1:]:
+        from .objective import _linkage_peak, parse_output
+
+        out = parse_output(mech, None if task.output == "peak" else task.output)
+        return _linkage_peak(mech, out, k, task.options)[0], None, False, False
+    if task.output == "peak" and task.options.get("accuracy") is None:
         if task.backend == "reduced":
             from .reduced import RATTLING, run
 
@@ -346,7 +367,11 @@ def _mechanism_output(mech: SliderCrank, task: _Task):
     for j in revs:
         mask |= traj.revolution_mask(j + 1)
     t = traj.t[mask]
-    if task.output == "rms_drive_moment":
+    if task.output == "peak":
+        from .accuracy import revolution_peaks
+
+        value = float(max(revolution_peaks(traj)[j] for j in revs))
+    elif task.output == "rms_drive_moment":
         m2 = traj.crank_moment[mask] ** 2
         value = math.sqrt(np.sum(0.5 * (m2[1:] + m2[:-1]) * np.diff(t)) / (t[-1] - t[0]))
     else:
@@ -447,12 +472,13 @@ class ToleranceResult:
     @property
     def output_unit(self) -> str:
         """The output's unit ("" for a user's function)."""
-        return OUTPUT_LABELS.get(self.output, ("", ""))[1]
+        return OUTPUT_LABELS.get(self.output, ("", _linkage_unit(self.output)))[1]
 
     @property
     def output_label(self) -> str:
         """``max |F12| over revolution 4 (N)``: what the output is, with its unit."""
-        what, unit = OUTPUT_LABELS.get(self.output, (self.output, ""))
+        what, unit = OUTPUT_LABELS.get(self.output, (f"max {self.output}",
+                                                     _linkage_unit(self.output)))
         rev = self.settings.get("revolution")
         return (what + (f" over revolution {rev}" if rev is not None else "")
                 + (f" ({unit})" if unit else ""))
@@ -507,6 +533,14 @@ class ToleranceResult:
                      f"{c.get('chaotic', 0)}, flagged {c.get('flagged', 0)}")
         lines.extend(f"NOTE: {n}" for n in self.notes)
         return "\n".join(lines)
+
+
+def _linkage_unit(output: str) -> str:
+    """The unit of a Linkage output name ("" for anything else)."""
+    from .objective import OUTPUT_KINDS
+
+    kind = output.partition(":")[0] if isinstance(output, str) else ""
+    return OUTPUT_KINDS[kind][1] if kind in OUTPUT_KINDS else ""
 
 
 def _jsonable(obj):
@@ -580,13 +614,17 @@ class _Study:
         return y, chaotic
 
 
-def _check_inputs(inputs, output) -> tuple[tuple[str, ...], dict]:
+def _check_inputs(inputs, output, mech=None) -> tuple[tuple[str, ...], dict]:
     if not isinstance(inputs, Mapping) or not inputs:
         raise ValueError("inputs must be a non-empty dict {name: distribution}; "
                          f"got {inputs!r}")
     allowed = (*CONTINUOUS_FIELDS, CLEARANCE)
+    if isinstance(mech, Linkage) and not callable(output):
+        from .design import check_names
+
+        check_names(mech, [_linkage_name(n) for n in inputs], "input")
     for name, dist in inputs.items():
-        if not callable(output) and name not in allowed:
+        if not callable(output) and name not in allowed and not isinstance(mech, Linkage):
             raise ValueError(f"unknown input {name!r}; allowed: {list(allowed)}")
         if not isinstance(dist, _DISTRIBUTIONS):
             raise ValueError(f"input {name!r} must be a Uniform, Normal or FitClearance; "
@@ -733,13 +771,18 @@ def tolerance_study(inputs: Mapping[str, Any], mech: SliderCrank | None = None,
     inputs : dict
         name -> `Uniform`, `Normal` or `FitClearance`. Names are continuous SliderCrank
         fields or "radial_clearance" (R_B - R_J, set by moving the journal radius); with a
-        function `output`, any names (its arguments).
-    mech : SliderCrank, optional
+        function `output`, any names (its arguments). For a Linkage: its case's overrides
+        or dotted paths of its description (`design`; e.g. "coupler_length",
+        "crank_coupler_clearance", "coupler.mass"), "radial_clearance" every clearance.
+    mech : SliderCrank or Linkage, optional
         Nominal design; the inputs replace its fields (default: the paper's case).
     output : str or callable
         "peak" (max |F12| over revolution `revolution`, peak-only run), "rms_drive_moment"
         (N m) or "max_contact_force" (N) over that revolution (recorded runs); or a
-        module-level function of a dict {name: value} returning a float.
+        module-level function of a dict {name: value} returning a float. For a Linkage
+        also any output of `objective.parse_output` ("shaking_force",
+        "contact_force:<joint>", ...; "peak" is its default, the crank pivot's |reaction|),
+        its peak over the revolution (`objective.peak_output`).
     revolution : int
         Crank revolution k (1-based) of the output (revolutions 1..k are simulated).
     sobol : int
@@ -782,15 +825,25 @@ def tolerance_study(inputs: Mapping[str, Any], mech: SliderCrank | None = None,
     from .simulate import BACKENDS
 
     t_start = time.perf_counter()
-    if not callable(output) and output not in OUTPUTS:
+    mech = SliderCrank() if mech is None else mech
+    if not isinstance(mech, (SliderCrank, Linkage)):
+        raise ValueError(f"mech must be a SliderCrank or a Linkage; got {type(mech).__name__}")
+    if isinstance(mech, Linkage) and not callable(output) and output not in OUTPUTS:
+        from .objective import parse_output
+
+        parse_output(mech, output)      # ValueError naming the allowed outputs
+        if backend != "reduced":
+            raise ValueError(f"output {output!r} of a Linkage needs backend='reduced' (its "
+                             f"generated model); got {backend!r}")
+    elif not callable(output) and output not in OUTPUTS:
         raise ValueError(f"output must be one of {list(OUTPUTS)} or a function; "
                          f"got {output!r}")
-    names, dists = _check_inputs(inputs, output)
-    mech = SliderCrank() if mech is None else mech
-    if not isinstance(mech, SliderCrank):
-        raise ValueError(f"mech must be a SliderCrank; got {type(mech).__name__}")
+    names, dists = _check_inputs(inputs, output, mech)
     if backend not in BACKENDS:
         raise ValueError(f"backend must be one of {sorted(BACKENDS)}; got {backend!r}")
+    if isinstance(mech, Linkage) and not callable(output) and output == "peak" \
+            and backend != "reduced":
+        raise ValueError(f"output 'peak' of a Linkage needs backend='reduced'; got {backend!r}")
     revolution = _count("revolution", revolution, 1)
     check_revolutions_memory(revolution, options.get("max_memory"), name="revolution")
     sobol = _count("sobol", sobol, 0)
@@ -809,6 +862,9 @@ def tolerance_study(inputs: Mapping[str, Any], mech: SliderCrank | None = None,
         raise ValueError(f"confidence must be in (0, 1); got {confidence!r}")
     if allowable is not None:
         allowable = _real("allowable", allowable)
+    if dgsm and isinstance(mech, Linkage):
+        raise ValueError("dgsm takes a SliderCrank (the DDM gradients of its peak); for a "
+                         "Linkage use sobol, morris or monte_carlo")
     if dgsm and (callable(output) or output != "peak" or backend != "reduced"):
         raise ValueError("dgsm needs output='peak' and backend='reduced' (the exact "
                          "gradients of the peak, peak_gradient)")
@@ -909,6 +965,8 @@ def tolerance_study(inputs: Mapping[str, Any], mech: SliderCrank | None = None,
                   "morris_levels": morris_levels, "dgsm": dgsm, "monte_carlo": monte_carlo,
                   "allowable": allowable, "wear": wear_levels, "confidence": confidence,
                   "bootstrap": bootstrap, "seed": seed, "mechanism": mech.to_dict(),
+                  **({"case": mech.case, "overrides": dict(mech.overrides)}
+                     if isinstance(mech, Linkage) and mech.case is not None else {}),
                   "executor": _executor_name(executor, workers)},
         elapsed=time.perf_counter() - t_start)
 

@@ -76,6 +76,10 @@ def _settings(quick: bool) -> dict[str, Any]:
         else ("paper_slider_crank", "slider_crank_two_clearances"),
         "case_revolutions": 2 if quick else 4,
         "agreement_settled": () if quick else (("four_bar", 100),),
+        # the converged cross-check (section 2): (case, revolutions); the reduced model at
+        # accuracy 1e-6, Exudyn at h, h/2, h/4 extrapolated, each with its error bar
+        "converged_cases": (("paper_slider_crank", 2),) if quick
+        else (("paper_slider_crank", 4), ("slider_crank_two_clearances", 4)),
         "ga_population": 8 if quick else 20,
         "ga_generations": 4 if quick else 30,
         "ga_seed": 1,
@@ -174,8 +178,36 @@ def section_agreement(out: Path, s: dict) -> dict:
                 "periodic": c <= 1e-5,
             })
     return {"rows": rows, "exudyn_step": s["exudyn_step"],
+            "converged": converged_rows(s.get("converged_cases", ())),
             **agreement_cases(out, s["case_revolutions"], s["agreement_cases"],
                               s.get("agreement_settled", ()))}
+
+
+def converged_rows(cases) -> list[dict]:
+    """The converged cross-check of each (case, revolutions): per revolution both models'
+    peaks with their error bars, the difference, the verdict ("model difference" where it
+    exceeds the two bars together) and the time each model needed
+    (`validation.compare.cross_check`)."""
+    from mbs_clearance.cases import CASES
+
+    from .compare import cross_check
+
+    rows = []
+    for name, revolutions in cases:
+        cc = cross_check(CASES[name](), revolutions, accuracy=1e-6)
+        for k in range(revolutions):
+            order = float(cc.exudyn_order[k])
+            rows.append({
+                "case": name, "revolution": k + 1,
+                "reduced": float(cc.reduced[k]), "reduced_error": float(cc.reduced_error[k]),
+                "exudyn": float(cc.exudyn[k]), "exudyn_error": float(cc.exudyn_error[k]),
+                "order": order if math.isfinite(order) else None,
+                "difference": float(cc.exudyn[k] / cc.reduced[k] - 1.0),
+                "bars": float(cc.bars[k] / cc.reduced[k]),
+                "verdict": "model difference" if cc.model_difference[k] else "agree",
+                "exudyn_steps": [float(h) for h in cc.exudyn_steps],
+                "reduced_seconds": cc.reduced_seconds, "exudyn_seconds": cc.exudyn_seconds})
+    return rows
 
 
 def agreement_cases(out: Path, revolutions: int, names, settled=()) -> dict:
@@ -581,7 +613,8 @@ def verdicts(numbers: dict) -> list[dict]:
             f"peaks agree within {percent(worst, 2)} after the start-up revolution "
             f"({percent(max(first, default=0.0), 2)} in revolution 1) over "
             f"{len(agreement['rows'])} periodic runs and "
-            f"{len(agreement.get('cases', []))} named case(s).", "#agreement",
+            f"{len(agreement.get('cases', []))} named case(s)." + _converged_summary(agreement),
+            "#agreement",
             status="agree" if worst < AGREEMENT_PERCENT else "disagree"))
 
     ratios = numbers["performance"]["ratios"]
@@ -601,6 +634,20 @@ def verdicts(numbers: dict) -> list[dict]:
             f"{duration(sn['ddm_seconds'])} (compile time excluded).", "#performance",
             status="measured"))
     return out
+
+
+def _converged_summary(agreement: dict) -> str:
+    """One sentence on the converged cross-check: revolutions that agree within the error
+    bars, the largest difference and the largest bar."""
+    rows = agreement.get("converged") or []
+    if not rows:
+        return ""
+    agree = sum(r["verdict"] == "agree" for r in rows)
+    worst = max(abs(r["difference"]) for r in rows)
+    bars = max(r["bars"] for r in rows)
+    return (f" Converged (each model with its error bar): {agree} of {len(rows)} "
+            f"revolutions agree within the bars; largest difference {number(worst, 2)}, "
+            f"largest bars {number(bars, 2)}.")
 
 
 def optimisation_paragraph(numbers: dict) -> str:
@@ -905,6 +952,25 @@ last revolution, in units of the radial clearance c.</dd></dl>
 <td>{{ '%.4f' % r.orbit_rms_over_c_last }}</td>
 <td>{{ '%.4f' % r.first_impact_dt_us if r.first_impact_dt_us is not none else '-' }}</td></tr>
 {% endfor %}</table>
+{% if n.agreement.converged %}
+<p><b>Converged cross-check.</b> Each model's peak per revolution with its own error bar:
+the reduced model run to a requested accuracy of 1e-6 (its bar: its error estimate from a
+second run), Exudyn at its default step h, h/2 and h/4, Richardson-extrapolated (its bar:
+the difference of its h/2 and h/4 peaks; where the observed order is outside [1, 4] nothing
+is extrapolated and the bar is the larger step difference). A difference larger than the
+two bars together is a model difference; within them the models agree at the bars'
+size.</p>
+<table><tr><th>case</th><th>rev.</th><th>reduced (N)</th><th>&plusmn;</th>
+<th>Exudyn extrapolated (N)</th><th>&plusmn;</th><th>order</th><th>difference</th>
+<th>bars</th><th>verdict</th><th>time reduced / Exudyn (s)</th></tr>
+{% for r in n.agreement.converged %}<tr><td>{{ r.case }}</td><td>{{ r.revolution }}</td>
+<td>{{ '%.3f' % r.reduced }}</td><td>{{ r.reduced_error | num(2) }}</td>
+<td>{{ '%.3f' % r.exudyn }}</td><td>{{ r.exudyn_error | num(2) }}</td>
+<td>{{ '%.2f' % r.order if r.order is not none else '-' }}</td>
+<td>{{ r.difference | num(2) }}</td><td>{{ r.bars | num(2) }}</td><td>{{ r.verdict }}</td>
+<td>{{ '%.3g' % r.reduced_seconds }} / {{ '%.3g' % r.exudyn_seconds }}</td></tr>
+{% endfor %}</table>
+{% endif %}
 {% if n.agreement.cases %}
 <p>Every named case from its description in both models (the reduced model at relative
 tolerance 1e-10; Exudyn at its

@@ -79,6 +79,27 @@ def test_json_numbers_agree_with_the_python_api(report):
     assert row["difference_percent"] == pytest.approx(100 * (row["ours"] / 8311 - 1))
 
 
+def test_converged_cross_check_rows_follow_their_bars(report):
+    """Section 2's converged cross-check: the reduced peaks are `simulate`'s at accuracy
+    1e-6 (the same call gives them), each verdict says whether the difference exceeds the
+    two error bars, and the extrapolated Exudyn peak lies within the reduced model's
+    accuracy plus both bars of it."""
+    from mbs_clearance import cases
+    from mbs_clearance.accuracy import revolution_peaks
+
+    rows = json.loads((report / "report.json").read_text())["agreement"]["converged"]
+    assert [(r["case"], r["revolution"]) for r in rows] == [("paper_slider_crank", 1),
+                                                             ("paper_slider_crank", 2)]
+    peaks = revolution_peaks(simulate(cases.paper_slider_crank(), 2, accuracy=1e-6))
+    for r, peak in zip(rows, peaks):
+        assert r["reduced"] == pytest.approx(peak, rel=1e-12)
+        assert r["reduced_error"] <= 1e-6 * peak
+        assert (r["verdict"] == "model difference") == (abs(r["difference"]) > r["bars"])
+        assert r["exudyn_seconds"] > 0 and r["reduced_seconds"] > 0
+    html = (report / "report.html").read_text()
+    assert "Converged cross-check" in html
+
+
 def test_replot_redraws_without_recomputing(report, monkeypatch):
     import validation.report as rep
 

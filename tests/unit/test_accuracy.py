@@ -195,15 +195,33 @@ def test_requested_accuracy_is_met_against_rtol_1e_12(label, mech, accuracy):
     assert traj.stats["accuracy_ok"] and err <= traj.stats["error_estimate"] <= accuracy
 
 
-def test_named_case_as_linkage_meets_the_request():
-    """A Linkage (the two-clearance slider-crank, no diagnostics of its own) at 1e-6."""
+@pytest.mark.parametrize("overrides", [{}, {"crank_speed": 3000 * RPM},
+                                       {"crank_coupler_clearance": 5e-5}])
+def test_named_case_as_linkage_meets_the_request(overrides):
+    """A Linkage (the two-clearance slider-crank) at 1e-6 and, by default, at 1e-5: its
+    runs carry the contact diagnostics, so the default's unflagged run takes the cheap
+    check; both against the same model at rtol 1e-12."""
     from mbs_clearance.cases import slider_crank_two_clearances
 
-    lk = slider_crank_two_clearances()
-    traj = simulate(lk, accuracy=1e-6)
+    lk = slider_crank_two_clearances(**overrides)
     ref = simulate(lk, rtol=am.REFERENCE_RTOL).peaks
-    assert np.abs(traj.peaks / ref - 1.0).max() <= 1e-6
-    assert traj.stats["accuracy_ok"]
+    for accuracy, traj in ((1e-6, simulate(lk, accuracy=1e-6)), (1e-5, simulate(lk))):
+        assert np.abs(traj.peaks / ref - 1.0).max() <= accuracy, (overrides, accuracy)
+        assert traj.stats["accuracy_ok"] and traj.stats["accuracy"] == accuracy
+    if not overrides:
+        assert traj.stats["accuracy_runs"][1] == (1e-5, "peaks")      # the cheap check
+
+
+def test_peak_base_force_to_an_accuracy():
+    """`peak_base_force(..., accuracy=)` is `simulate`'s peak at that accuracy: at 2000 rpm,
+    where the fixed default rtol misses 1e-5 by two orders, within 1e-5 of rtol 1e-12."""
+    mech = SliderCrank(crank_speed=2000 * RPM)
+    ref = peak_base_force(mech, 4, rtol=am.REFERENCE_RTOL)
+    fixed = peak_base_force(mech, 4)
+    requested = peak_base_force(mech, 4, accuracy=1e-5)
+    assert abs(fixed / ref - 1.0) > 1e-4
+    assert abs(requested / ref - 1.0) <= 1e-5
+    assert requested == simulate(mech, 4, accuracy=1e-5).peaks[3]
 
 
 def test_accuracy_and_rtol_together_are_refused():
@@ -247,3 +265,34 @@ def test_rattling_motion_is_returned_flagged_with_its_estimate():
     st = traj.stats
     assert not st["accuracy_ok"] and "rattles" in st["accuracy_note"]
     assert st["error_estimate"] == peak_difference(fixed.peaks, tight.peaks) > 1e-5
+
+
+def test_studies_run_to_a_requested_accuracy():
+    """Every study takes `accuracy` in place of a fixed rtol: a linkage's chosen output
+    (`peak_output`, the monitored force and another output), a tolerance study's outputs
+    and the GA's objective, each within the request of the same at rtol 1e-12."""
+    from mbs_clearance.cases import slider_crank_two_clearances
+    from mbs_clearance.objective import peak_output
+    from mbs_clearance.optimize import optimize_link_lengths
+    from mbs_clearance.tolerance import band, tolerance_study
+
+    lk = slider_crank_two_clearances()
+    for output in (None, "shaking_force"):
+        got = peak_output(lk, output, 2, accuracy=1e-6)
+        ref = peak_output(lk, output, 2, rtol=am.REFERENCE_RTOL)
+        assert abs(got / ref - 1.0) <= 1e-6, output
+    with pytest.raises(ValueError, match="accuracy or rtol"):
+        peak_output(lk, None, 2, accuracy=1e-6, rtol=1e-8)
+    inputs = {"crank_length": band(0.05, 1e-4)}
+    kw = dict(monte_carlo=6, sobol=0, revolution=2, progress=False, seed=3)
+    got = tolerance_study(inputs, SliderCrank(), accuracy=1e-6, **kw).monte_carlo["values"]
+    ref = tolerance_study(inputs, SliderCrank(), rtol=am.REFERENCE_RTOL,
+                          **kw).monte_carlo["values"]
+    assert np.max(np.abs(np.asarray(got) / np.asarray(ref) - 1.0)) <= 1e-6
+    ga = optimize_link_lengths(SliderCrank(), population=4, generations=1, revolution=2,
+                               seed=1, accuracy=1e-6, refine=False, progress=False,
+                               executor="serial")
+    best = SliderCrank().replace(crank_length=ga.best_genes["crank_length"],
+                                 coupler_length=ga.best_genes["coupler_length"])
+    ref = peak_base_force(best, 2, rtol=am.REFERENCE_RTOL)
+    assert abs(ga.best_peak_force / ref - 1.0) <= 1e-6

@@ -874,6 +874,9 @@ def test_lyapunov_prints_the_exponent_with_units_and_its_sign(case, capsys):
     assert float(m.group(3)) == pytest.approx(ref.per_second, rel=1e-3)
     assert ref.interval[1] < -0.1 and "verdict: negative" in out and "converge" in out
     assert f"it shrinks e-fold every {1 / abs(ref.per_revolution):.3g} revolutions" in out
+    # the regime of the same revolutions by the map's rule: the section repeats each turn
+    assert (ref.regime, ref.period) == ("period_1", 1)
+    assert "regime of revolutions 9-16 (the regime map's rule): period-1" in out
 
 
 @pytest.mark.parametrize("argv, message", [

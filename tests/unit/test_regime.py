@@ -97,6 +97,34 @@ def test_classify_criterion():
     assert classify(noise, max_period=3)[0] == "aperiodic"
     with pytest.raises(ValueError, match="keep must be >= 2 max_period"):
         classify(noise[:4], max_period=3)
+    # with its interval: the exponent's verdict decides, as `lyapunov` prints it
+    assert classify(noise, max_period=3, lyapunov=0.5, uncertainty=0.4)[0] == "chaotic"
+    assert classify(noise, max_period=3, lyapunov=0.5, uncertainty=0.6)[0] == "undecided"
+    assert classify(noise, max_period=3, lyapunov=-0.05, uncertainty=0.1)[0] == "undecided"
+    assert classify(noise, max_period=3, lyapunov=0.01, uncertainty=0.005)[0] == \
+        "quasi_periodic"
+
+
+def test_a_period_k_pattern_of_growths_is_averaged_over_whole_periods():
+    """A motion that repeats every 4 revolutions has growths that repeat every 4: averaged
+    over whole periods their mean is the exponent and the interval closes; blocks of 5
+    revolutions cut across the pattern and leave it open (the mean -0.053 reads as
+    undecided). The reference: the exact mean of one period."""
+    from mbs_clearance.poincare import classify_run, exponent_estimate
+
+    pattern = np.array([0.397, -0.236, 0.252, -0.625])
+    logs = np.tile(pattern, 5)
+    lam, half = exponent_estimate(logs, 4)
+    assert lam == pytest.approx(pattern.mean(), rel=1e-12) and half < 1e-12
+    lam1, half1 = exponent_estimate(logs, 1)
+    assert half1 > abs(lam1)
+    rng = np.random.default_rng(1)
+    four = np.tile(rng.normal(size=(4, 1, 4)), (5, 1, 1))      # period 4 exactly
+    regime, period, _, lam, half = classify_run(four, logs, max_period=8)
+    assert (regime, period) == ("period_k", 4) and half < 1e-12
+    # with no recurrence the same growths leave the regime undecided
+    noise = rng.normal(size=(20, 1, 4))
+    assert classify_run(noise, logs, max_period=8)[0] == "undecided"
 
 
 def test_near_tolerance_flags_verdicts_decided_at_the_tolerance():
@@ -367,6 +395,22 @@ def test_fewer_averaged_windows_than_blocks_leave_the_verdict_undecided():
     # a periodic pattern of growths (period 4, mean -0.054 per window, as the 0.1 mm joint's
     # revolutions 21-40) averaged over 20 windows in blocks of 5: the blocks see the pattern
     assert exponent_interval(np.tile([0.397, -0.236, 0.252, -0.625], 5)) > 0.054
+
+
+def test_map_point_and_exponent_agree_on_the_same_run():
+    """The regime map's point (`poincare_section` with the exponent) and
+    `lyapunov_exponent` run the same tangent flow over the same revolutions: the same
+    exponent to round-off, the same interval, the same regime and period."""
+    from mbs_clearance.lyapunov import lyapunov_exponent as exponent
+
+    for mech in (PAPER, LOOSE):
+        sec = poincare_section(mech, revolutions=24, keep=12, max_period=5, lyapunov=True,
+                               recheck=False)
+        res = exponent(mech, revolutions=24, transient=12)
+        assert res.per_revolution == pytest.approx(sec.lyapunov, rel=1e-12, abs=1e-14)
+        assert res.uncertainty == pytest.approx(sec.lyapunov_uncertainty, rel=1e-12)
+        assert (res.regime, res.period) == (sec.regime, sec.period)
+    assert sec.regime == "chaotic" and res.verdict == "positive"
 
 
 @pytest.mark.slow

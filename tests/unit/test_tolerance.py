@@ -237,6 +237,17 @@ def test_cli_tolerance_reads_a_salib_parameter_file_and_writes_the_result(tmp_pa
                                rtol=0, atol=0)
     assert (out / "summary.txt").read_text().startswith(
         "output: max |F12| over revolution 1 (N)")
+    # --accuracy: each run to the requested accuracy, as the library's `accuracy=`
+    acc = tmp_path / "acc"
+    assert main(["tolerance", str(params), "--sobol", "0", "--monte-carlo", "3",
+                 "--revolution", "1", "--seed", "4", "--workers", "1", "--accuracy", "1e-6",
+                 "--no-progress", "--out", str(acc)]) == 0
+    res = ToleranceResult.from_json(acc / "result.json")
+    ref = tolerance_study({"crank_length": Uniform(0.0499, 0.0501)}, sobol=0, monte_carlo=3,
+                          revolution=1, seed=4, executor="serial", progress=False,
+                          accuracy=1e-6)
+    np.testing.assert_allclose(res.monte_carlo["values"], ref.monte_carlo["values"],
+                               rtol=0, atol=0)
 
 
 @pytest.mark.slow

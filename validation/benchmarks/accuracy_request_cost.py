@@ -1,9 +1,9 @@
 """Cost of a run to a requested accuracy: `simulate(mech)` (accuracy 1e-5: the run at rtol
 1e-7 and its error estimate) against a run at the fixed rtol 1e-7 (`simulate(mech,
 rtol=1e-7)`, the same run without an estimate), on designs where the fixed run already
-meets 1e-5 (the paper case and the named cases' defaults, 4 revolutions). A SliderCrank's
-run has diagnostics and takes the cheap check; a Linkage's (the named cases) has none and
-always takes a tighter run.
+meets 1e-5 (the paper case and the named cases' defaults, 4 revolutions). Every run has
+its contact diagnostics; an unflagged one takes the cheap check (a peaks-only run at
+100 x the rtol).
 
 Timed in alternating pairs (fixed, requested, fixed, ...) so that a change of the machine's
 load hits both; medians over the repeats and the ratio of the medians. Target: ratio <= 1.5.
