@@ -18,6 +18,7 @@ import math
 import numbers
 from typing import Any
 
+from .laws.registry import FRICTION_SLOTS
 from .linkage import (
     FRICTION_DEFAULTS,
     GROUND,
@@ -75,8 +76,7 @@ def from_slider_crank(mech: SliderCrank) -> Linkage:
                 contact_model=mech.contact_model,
                 impact_velocity_floor=mech.impact_velocity_floor,
                 friction_law=mech.friction_law,
-                friction_coefficient=mech.friction_coefficient,
-                friction_v0=mech.friction_v0, friction_v1=mech.friction_v1),
+                **{f: getattr(mech, f) for f in FRICTION_SLOTS}),
         ),
         drive=Drive("crank_pivot", mech.crank_speed, mech.initial_crank_angle),
         ground_points={"crank_pivot": (0.0, 0.0), "slider_axis": (0.0, 0.0)},
@@ -174,8 +174,7 @@ def _case_values(case: str, overrides: dict[str, Any]) -> dict[str, Any]:
         raise ValueError(f"{case}: unknown override(s) {unknown}; allowed: {sorted(table)}")
     values = {k: v[0] for k, v in table.items()}
     values.update(overrides)
-    check_friction(case, values["friction_law"], values["friction_coefficient"],
-                   values["friction_v0"], values["friction_v1"])
+    check_friction(case, values["friction_law"], *(values[f] for f in FRICTION_SLOTS))
     for key, value in values.items():
         if key in ("contact_model", "friction_law"):
             continue
@@ -213,9 +212,7 @@ def _clearance_joint(name, journal_body, journal_point, bearing_body, bearing_po
         journal_radius=values["bearing_radius"] - clearance,
         youngs_modulus=values["youngs_modulus"], poisson_ratio=values["poisson_ratio"],
         restitution=values["restitution"], contact_model=values["contact_model"],
-        friction_law=values["friction_law"],
-        friction_coefficient=values["friction_coefficient"],
-        friction_v0=values["friction_v0"], friction_v1=values["friction_v1"])
+        friction_law=values["friction_law"], **{f: values[f] for f in FRICTION_SLOTS})
 
 
 def slider_crank_two_clearances(**overrides: Any) -> Linkage:

@@ -1,37 +1,18 @@
-"""Continuous contact force laws for the clearance joint, as pure numba functions.
-
-All laws share the form of a Hertzian spring with hysteresis damping,
+"""The clearance joint's contact and friction laws as the kernels call them: the Hertzian
+normal force with hysteresis damping,
 
     F = K * delta**n * (1 + xi(e) * deltadot / deltadot_minus),     n = 3/2,
 
-where delta is the penetration, deltadot its rate and deltadot_minus the penetration rate
-at contact onset (the impact velocity). They differ in the hysteresis factor xi(e):
+clamped at zero (a contact cannot pull: at low restitution the damping term can exceed the
+spring term late in the restitution phase), where delta is the penetration, deltadot its
+rate and deltadot_minus the penetration rate at contact onset (the impact velocity); the
+friction force Ft at the contact point, opposing the relative tangential velocity v_t of the
+journal's surface with respect to the bearing's; and the paper's stiffness (Eq. 9).
 
-- ``lankarani_nikravesh``: xi = 3 (1 - e^2) / 4
-  (Lankarani & Nikravesh 1990, J. Mech. Des. 112:369; the paper's Eq. 9).
-- ``hunt_crossley``: xi = 3 (1 - e) / 2
-  (Hunt & Crossley 1975, J. Appl. Mech. 42:440, in the form of Flores et al. 2011).
-- ``flores``: xi = 8 (1 - e) / (5 e)
-  (Flores, Machado, Silva & Martins 2011, Multibody Syst. Dyn. 25:357).
-
-The force is clamped at zero: a contact cannot pull (at low restitution the damping term
-can exceed the spring term late in the restitution phase).
-
-Friction (tangential force at the contact point, opposing the relative tangential velocity
-v_t of the journal's surface with respect to the bearing's), Ft = -mu * Fn * phi(v_t):
-
-- ``none``: phi = 0 (the frictionless joint).
-- ``coulomb``: regularised Coulomb, phi = v_t / sqrt(v_t^2 + v0^2): the sign of v_t, smoothed
-  over the velocity scale v0 (a smooth stand-in for the set-valued sign; |phi| > 0.995 for
-  |v_t| > 10 v0).
-- ``ambrosio``: Ambrosio's modified Coulomb law with the dynamic correction coefficient
-  c_d between two tangential-velocity thresholds, phi = c_d(|v_t|) sign(v_t) with
-  c_d = 0 for |v_t| <= v0, (|v_t| - v0) / (v1 - v0) between, 1 for |v_t| >= v1
-  (Ambrosio 2002, "Impact of rigid and flexible multibody systems: deformation description
-  and contact models", in Virtual Nonlinear Multibody Systems, NATO Sci. Ser. II 103;
-  used for clearance joints by Flores, Ambrosio, Claro & Lankarani, "Kinematics and
-  Dynamics of Multibody Systems with Imperfect Joints", Springer 2008). It has no stiction:
-  below v0 the joint is frictionless.
+Each law (its hysteresis factor xi(e), or its friction force) is declared once in its own
+module of `mbs_clearance.laws` (with its parameters, their ranges and its source); this
+module dispatches on the law's integer id (`laws.registry`) through the generated
+`laws._dispatch`.
 """
 
 from __future__ import annotations
@@ -40,7 +21,9 @@ import math
 
 import numba as nb
 
-from .integrator import KERNEL
+from ._kernel import KERNEL
+from .laws._dispatch import friction_force, friction_force_partials, hysteresis_factor
+from .laws.registry import CONTACT_MODELS, FRICTION_LAWS
 
 __all__ = [
     "CONTACT_MODELS", "hysteresis_factor", "contact_force", "contact_force_partials",
@@ -48,24 +31,8 @@ __all__ = [
     "FRICTION_LAWS", "friction_factor", "friction_force", "friction_force_partials",
 ]
 
-#: name -> integer id used inside compiled kernels
-CONTACT_MODELS: dict[str, int] = {"lankarani_nikravesh": 0, "hunt_crossley": 1, "flores": 2}
-
 #: the Hertzian exponent of every contact law (the kernels write delta^1.5 as delta sqrt(delta))
 EXPONENT = 1.5
-
-#: friction law name -> integer id used inside compiled kernels
-FRICTION_LAWS: dict[str, int] = {"none": 0, "coulomb": 1, "ambrosio": 2}
-
-
-@nb.njit(**KERNEL, inline="always")
-def hysteresis_factor(e, model):
-    """Return (xi, dxi/de) for restitution `e` and contact model id `model`."""
-    if model == 0:
-        return 0.75 * (1.0 - e * e), -1.5 * e
-    if model == 1:
-        return 1.5 * (1.0 - e), -1.5
-    return 1.6 * (1.0 - e) / e, -1.6 / (e * e)
 
 
 @nb.njit(**KERNEL, inline="always")
@@ -131,38 +98,10 @@ def stiffness_eq9_partials(journal_radius, bearing_radius, youngs_modulus, poiss
     return k, d_rj, d_rb, d_e, d_nu
 
 
-@nb.njit(**KERNEL, inline="always")
+@nb.njit(**KERNEL)
 def friction_factor(vt, v0, v1, law):
     """Return (phi, dphi/dvt, dphi/dv0, dphi/dv1) of friction law id `law` at the relative
-    tangential velocity `vt` (m/s), thresholds v0 < v1 (m/s); Ft = -mu Fn phi."""
-    if law == 1:
-        r = vt * vt + v0 * v0
-        root = math.sqrt(r)
-        return vt / root, v0 * v0 / (r * root), -vt * v0 / (r * root), 0.0
-    if law == 2:
-        speed = abs(vt)
-        if speed <= v0:
-            return 0.0, 0.0, 0.0, 0.0
-        sign = 1.0 if vt > 0.0 else -1.0
-        if speed >= v1:
-            return sign, 0.0, 0.0, 0.0
-        width = v1 - v0
-        return (sign * (speed - v0) / width, 1.0 / width,
-                sign * (speed - v1) / (width * width), -sign * (speed - v0) / (width * width))
-    return 0.0, 0.0, 0.0, 0.0
-
-
-@nb.njit(**KERNEL, inline="always")
-def friction_force(vt, fn, mu, v0, v1, law):
-    """Tangential friction force in N on the journal, along the tangent that defines `vt`
-    (negative where vt > 0: friction opposes the sliding)."""
-    phi, _, _, _ = friction_factor(vt, v0, v1, law)
-    return -mu * fn * phi
-
-
-@nb.njit(**KERNEL)
-def friction_force_partials(vt, fn, mu, v0, v1, law):
-    """Return (Ft, dFt/dvt, dFt/dFn, dFt/dmu, dFt/dv0, dFt/dv1) of `friction_force`."""
-    phi, d_vt, d_v0, d_v1 = friction_factor(vt, v0, v1, law)
-    scale = -mu * fn
-    return scale * phi, scale * d_vt, -mu * phi, -fn * phi, scale * d_v0, scale * d_v1
+    tangential velocity `vt` (m/s) with the law's velocity parameters v0, v1 (m/s), for the
+    laws whose force is -mu Fn phi(vt) (phi is Ft at mu = 1, Fn = -1)."""
+    ft, d_vt, _, _, d_v0, d_v1 = friction_force_partials(vt, -1.0, 1.0, v0, v1, law)
+    return ft, d_vt, d_v0, d_v1

@@ -78,9 +78,10 @@ from .contact import (
     CONTACT_MODELS,
     FRICTION_LAWS,
     contact_force,
-    friction_force,
     hysteresis_factor,
 )
+from .laws._dispatch import friction_force_slots
+from .laws.registry import FRICTION, FRICTION_PARAMETER_SPECS, FRICTION_SLOTS
 from .linkage import GROUND, ClearanceJoint, Linkage, Prismatic, Revolute
 
 __all__ = ["ExudynSettings", "make_settings", "build", "solve", "simulate_exudyn_linkage",
@@ -88,8 +89,8 @@ __all__ = ["ExudynSettings", "make_settings", "build", "solve", "simulate_exudyn
            "sphere_restitution", "step_for_accuracy", "refined_peaks",
            "CONTACT_VARIANTS", "ONSET_MODES", "OPTION_NAMES", "DEFAULT_STEPS_PER_REVOLUTION",
            "ACCURACY_AT_DEFAULT", "ExudynModel", "contact_scales", "friction_of",
-           "symbolic_friction_factor", "NEWTON_TOLERANCE", "ROUNDOFF_MARGIN",
-           "STEPS_PER_CONTACT_PERIOD"]
+           "symbolic_friction_factor", "symbolic_friction_force", "NEWTON_TOLERANCE",
+           "ROUNDOFF_MARGIN", "STEPS_PER_CONTACT_PERIOD"]
 
 #: clearance-joint implementations (option ``contact``)
 CONTACT_VARIANTS: tuple[str, ...] = ("symbolic", "python", "sphere")
@@ -472,30 +473,32 @@ def _symbolic_force(mbs, obj, joint: ClearanceJoint, memory: ImpactMemory, k: in
 # ---------------------------------------------------------------------------- friction
 
 def friction_of(joint: ClearanceJoint):
-    """(law id, mu, v0, v1) of a clearance joint whose friction is on (law not "none" and
-    mu > 0), else None: a joint without friction gets no friction element, so its results
-    are the frictionless ones bit for bit."""
+    """(law id, the values of the friction slots `laws.FRICTION_SLOTS`) of a clearance joint
+    whose friction is on (law not "none" and mu > 0), else None: a joint without friction
+    gets no friction element, so its results are the frictionless ones bit for bit."""
     if not joint.has_friction or joint.friction_coefficient == 0.0:
         return None
-    return (FRICTION_LAWS[joint.friction_law], joint.friction_coefficient, joint.friction_v0,
-            joint.friction_v1)
+    return (FRICTION_LAWS[joint.friction_law],
+            tuple(getattr(joint, f) for f in FRICTION_SLOTS))
+
+
+def symbolic_friction_force(vt, fn, law: int, slots: tuple):
+    """Ft(vt, Fn) of friction law id `law` as an Exudyn symbolic expression: the law
+    module's own formula (`laws.friction.<name>.force`) evaluated on symbolic Reals, with
+    the law's parameters from `slots` (the values of `laws.FRICTION_SLOTS`)."""
+    spec = FRICTION[law]
+    values = dict(zip(FRICTION_SLOTS, slots))
+    ft = spec.force(vt, fn, *(values[a] for a in spec.arguments))
+    return ft if hasattr(ft, "Evaluate") else 0.0 * vt + ft
 
 
 def symbolic_friction_factor(vt, v0: float, v1: float, law: int):
-    """phi(vt) of `contact.friction_factor` as an Exudyn symbolic expression (the same
-    piecewise formulas: regularised Coulomb vt / sqrt(vt^2 + v0^2); Ambrosio's c_d(|vt|)
-    sign(vt) with c_d clipped linearly between v0 and v1); tested against
-    contact.friction_factor point by point."""
-    import exudyn as exu
-
-    esym = exu.symbolic
-    if law == FRICTION_LAWS["coulomb"]:
-        return vt / esym.sqrt(vt * vt + v0 * v0)
-    if law == FRICTION_LAWS["ambrosio"]:
-        c_d = esym.min(esym.max((esym.abs(vt) - v0) / (v1 - v0), esym.Real(0.0)),
-                       esym.Real(1.0))
-        return c_d * esym.sign(vt)
-    return 0.0 * vt
+    """phi(vt) of `contact.friction_factor` as an Exudyn symbolic expression (Ft at mu = 1,
+    Fn = -1, `symbolic_friction_force`); tested against contact.friction_factor point by
+    point; further slots at their defaults."""
+    given = {"friction_coefficient": 1.0, "friction_v0": v0, "friction_v1": v1}
+    return symbolic_friction_force(vt, -1.0, law, tuple(
+        given.get(p.name, p.default) for p in FRICTION_PARAMETER_SPECS))
 
 
 class _Side:
@@ -557,7 +560,7 @@ def _friction_element(mbs, joint: ClearanceJoint, memory: ImpactMemory, nodes: d
     import exudyn as exu
     import exudyn.itemInterface as ii
 
-    law, mu, v0, v1 = friction_of(joint)
+    law, slots = friction_of(joint)
     K, c, xi, model = _law_constants(joint)
     sides, node_list = [], []
     for body, point in ((joint.journal_body, joint.journal_point),
@@ -580,7 +583,7 @@ def _friction_element(mbs, joint: ClearanceJoint, memory: ImpactMemory, nodes: d
 
         def force(mbs, t, itemNumber, q, q_t):
             return _friction_loads(joint, sides, q, q_t, normal,
-                                   lambda vt, fn: friction_force(vt, fn, mu, v0, v1, law),
+                                   lambda vt, fn: friction_force_slots(vt, fn, slots, law),
                                    math.cos, math.sin,
                                    lambda delta, v: v if delta > 0.0 else 0.0)
 
@@ -594,7 +597,7 @@ def _friction_element(mbs, joint: ClearanceJoint, memory: ImpactMemory, nodes: d
         return _symbolic_normal(K, c, xi, dmin, dx, dy, vx, vy)
 
     def friction(vt, fn):
-        return -mu * fn * symbolic_friction_factor(vt, v0, v1, law)
+        return symbolic_friction_force(vt, fn, law, slots)
 
     zero = esym.Real(0.0)
 
@@ -1048,7 +1051,7 @@ def _friction_power(model: ExudynModel, joint: ClearanceJoint, memory: ImpactMem
     """Power Ft vt (W, <= 0) of a joint's friction at every kept sample, from the stored
     body states and the impact velocity in force at each step (`ImpactMemory.history`),
     by contact.contact_force / friction_force (the Python variant's law)."""
-    law, mu, v0, v1 = friction_of(joint)
+    law, slots = friction_of(joint)
     K, c, _, cmodel = _law_constants(joint)
     pts = _points(model.linkage)
     t = stored(model, f"{model.linkage.bodies[0].name}.q")[:, 0]
@@ -1080,7 +1083,7 @@ def _friction_power(model: ExudynModel, joint: ClearanceJoint, memory: ImpactMem
         vt = float(ed[i, 1] * n[0] - ed[i, 0] * n[1]) + (wj[i] * joint.journal_radius
                                                          - wb[i] * joint.bearing_radius)
         fn = contact_force(r[i] - c, rate, float(dmin[i]), K, joint.restitution, cmodel)
-        power[i] = friction_force(vt, fn, mu, v0, v1, law) * vt
+        power[i] = friction_force_slots(vt, fn, slots, law) * vt
     return power
 
 

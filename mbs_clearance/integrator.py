@@ -65,13 +65,8 @@ __all__ = [
     "COUNTERS",
 ]
 
-#: numba options of the kernels (model functions and the integrator's helpers, everything
-#: that runs per stage or per step and allocates nothing): error_model="numpy" drops the
-#: zero-division checks of every float division (the kernels guard their divisors), and
-#: without numba's runtime (_nrt=False) passing arrays to a compiled function costs no
-#: atomic reference counting (it was 22 % of a simulation, measured with perf). Such
-#: functions cannot allocate arrays; `integrate` itself allocates and keeps the runtime.
-KERNEL = {"cache": True, "error_model": "numpy", "_nrt": False}
+#: numba options of the kernels, shared with the contact laws (`_kernel`)
+from ._kernel import KERNEL  # noqa: E402
 
 _vec = types.float64[::1]
 RHS_SIG = types.void(types.float64, _vec, _vec, _vec)

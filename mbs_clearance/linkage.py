@@ -41,6 +41,7 @@ from pathlib import Path
 from typing import Any
 
 from .contact import CONTACT_MODELS, FRICTION_LAWS, stiffness_eq9
+from .laws.registry import FRICTION_PARAMETER_SPECS, FRICTION_SLOTS, friction_law
 
 __all__ = ["Point", "GROUND", "Body", "Revolute", "Prismatic", "ClearanceJoint", "Drive",
            "Linkage", "FRICTION_DEFAULTS", "check_friction"]
@@ -205,6 +206,8 @@ class ClearanceJoint:
     friction_coefficient: float = 0.0
     friction_v0: float = 1e-4
     friction_v1: float = 1e-2
+    friction_static_coefficient: float = 0.0
+    friction_stribeck_velocity: float = 1e-3
 
     def __post_init__(self) -> None:
         _name("clearance joint name", self.name)
@@ -236,9 +239,8 @@ class ClearanceJoint:
         if self.contact_model not in CONTACT_MODELS:
             raise ValueError(f"{what} contact_model must be one of {sorted(CONTACT_MODELS)}; "
                              f"got {_short(self.contact_model)}")
-        check_friction(what, self.friction_law, self.friction_coefficient,
-                       self.friction_v0, self.friction_v1)
-        for f in ("friction_coefficient", "friction_v0", "friction_v1"):
+        check_friction(what, self.friction_law, *(getattr(self, f) for f in FRICTION_SLOTS))
+        for f in FRICTION_SLOTS:
             object.__setattr__(self, f, float(getattr(self, f)))
 
     @property
@@ -283,21 +285,19 @@ class Drive:
         return 2.0 * math.pi / self.speed
 
 
-#: field -> (symbol, unit, default, source) of the friction fields of `ClearanceJoint`
+#: field -> (symbol, unit, default, source) of the friction fields of `ClearanceJoint`: the
+#: law's name and the parameters the friction laws declare (`laws.friction`)
 FRICTION_DEFAULTS: dict[str, tuple[str, str, Any, str]] = {
     "friction_law": ("-", "-", "none", "frictionless, the paper's Eqs. 6-8"),
-    "friction_coefficient": ("mu", "-", 0.0, "0: frictionless; give the pair's value "
-                             "(steel on steel, dry: about 0.1-0.2; lubricated about 0.01)"),
-    "friction_v0": ("v0", "m/s", 1e-4, "assumed: typical lower threshold of Ambrosio's law "
-                    "(project design notes); no readable source gives the paper case's"),
-    "friction_v1": ("v1", "m/s", 1e-2, "assumed: typical upper threshold of Ambrosio's law "
-                    "(project design notes); no readable source gives the paper case's"),
+    **{p.name: (p.symbol, p.unit, p.default, p.source) for p in FRICTION_PARAMETER_SPECS},
 }
 
 
-def check_friction(what: str, law: Any, mu: Any, v0: Any, v1: Any) -> None:
+def check_friction(what: str, law: Any, mu: Any, v0: Any, v1: Any, *more: Any) -> None:
     """ValueError naming `what` and the item unless the friction fields are valid: law one
-    of contact.FRICTION_LAWS, mu a finite number >= 0, 0 < v0 < v1 finite (m/s)."""
+    of contact.FRICTION_LAWS, mu a finite number >= 0, 0 < v0 < v1 finite (m/s), and the
+    further slots (`more`, in the order of `laws.FRICTION_SLOTS`) in the ranges their laws
+    declare."""
     if not isinstance(law, str) or law not in FRICTION_LAWS:
         raise ValueError(f"{what} friction_law must be one of {sorted(FRICTION_LAWS)}; "
                          f"got {_short(law)}")
@@ -305,6 +305,14 @@ def check_friction(what: str, law: Any, mu: Any, v0: Any, v1: Any) -> None:
     v0 = _real(f"{what} friction_v0", v0, "a finite number > 0 (m/s)", lambda v: v > 0)
     _real(f"{what} friction_v1", v1, f"a finite number > friction_v0 = {v0!r} (m/s)",
           lambda v: v > v0)
+    specs = {p.name: p for p in FRICTION_PARAMETER_SPECS}
+    for name, value in zip(FRICTION_SLOTS[3:], more, strict=True):
+        spec = specs[name]
+        _real(f"{what} {name}", value, f"a finite number in {spec.interval} ({spec.unit})",
+              spec.contains)
+    spec = friction_law(law)
+    if spec.check is not None:
+        spec.check(what, dict(zip(FRICTION_SLOTS, (mu, v0, v1, *more), strict=True)))
 
 
 #: the JSON/TOML "type" of each joint class
@@ -314,7 +322,7 @@ _JOINT_TYPES = {"revolute": Revolute, "prismatic": Prismatic}
 CLEARANCE_PARAMETERS = ("bearing_radius", "journal_radius", "youngs_modulus", "poisson_ratio",
                         "restitution", "contact_stiffness", "impact_velocity_floor")
 #: parameter fields of the clearance joints with a friction law (not "none")
-FRICTION_PARAMETERS = ("friction_coefficient", "friction_v0", "friction_v1")
+FRICTION_PARAMETERS = FRICTION_SLOTS
 
 
 @dataclass(frozen=True)

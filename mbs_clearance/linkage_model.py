@@ -16,6 +16,7 @@ import numpy as np
 
 from ._warnings import AccuracyWarning
 from .contact import CONTACT_MODELS, FRICTION_LAWS
+from .laws.registry import FRICTION_SLOTS
 from .linkage import GROUND, Linkage
 
 __all__ = ["parameter_values", "pack_parameters", "initial_state", "Start", "settled_start"]
@@ -63,9 +64,8 @@ def parameter_values(linkage: Linkage) -> dict[str, float]:
         values[f"{j.name}.mode"] = 0.0
         values[f"{j.name}.impact_velocity"] = j.impact_velocity_floor
         values[f"{j.name}.friction_law"] = float(FRICTION_LAWS[j.friction_law])
-        values[f"{j.name}.friction_coefficient"] = j.friction_coefficient
-        values[f"{j.name}.friction_v0"] = j.friction_v0
-        values[f"{j.name}.friction_v1"] = j.friction_v1
+        for f in FRICTION_SLOTS:
+            values[f"{j.name}.{f}"] = getattr(j, f)
         values[f"{j.name}.journal_radius"] = j.journal_radius
         values[f"{j.name}.bearing_radius"] = j.bearing_radius
     values["drive.speed"] = linkage.drive.speed

@@ -17,6 +17,7 @@ from typing import Any
 
 from ._io import read_json_object
 from .contact import CONTACT_MODELS, stiffness_eq9
+from .laws.registry import FRICTION_SLOTS
 from .linkage import FRICTION_DEFAULTS, check_friction
 
 __all__ = ["SliderCrank", "PARAMETER_INFO", "CONTINUOUS_FIELDS"]
@@ -87,19 +88,24 @@ class SliderCrank:
     gravity : float
         g in m/s^2, acting along -y.
     contact_model : str
-        One of ``CONTACT_MODELS``: "lankarani_nikravesh" (paper), "hunt_crossley", "flores".
+        One of ``CONTACT_MODELS`` (`mbs_clearance.laws`): "lankarani_nikravesh" (paper),
+        "hunt_crossley", "flores", "hu_guo".
     impact_velocity_floor : float
         Lower bound in m/s on the impact velocity used by the hysteresis damping; it only
         matters for grazing onsets, where the measured impact velocity tends to zero.
     friction_law : str
         Friction in the clearance joint (`contact.FRICTION_LAWS`): "none" (default, the
-        paper's frictionless joint), "coulomb" (regularised over friction_v0) or "ambrosio"
-        (Ambrosio's modified Coulomb law between friction_v0 and friction_v1).
+        paper's frictionless joint), "coulomb" (regularised over friction_v0), "ambrosio"
+        (Ambrosio's modified Coulomb law between friction_v0 and friction_v1) or "stribeck"
+        (from the static to the dynamic coefficient over the Stribeck velocity).
     friction_coefficient : float
         Coefficient of friction mu >= 0 (default 0).
     friction_v0, friction_v1 : float
         Tangential-velocity thresholds in m/s, 0 < v0 < v1 (defaults assumed:
         `linkage.FRICTION_DEFAULTS`).
+    friction_static_coefficient, friction_stribeck_velocity : float
+        The Stribeck law's static coefficient mu_s (>= friction_coefficient, the dynamic
+        one) and Stribeck velocity v_s > 0 in m/s.
     """
 
     crank_length: float = 0.05
@@ -124,6 +130,8 @@ class SliderCrank:
     friction_coefficient: float = 0.0
     friction_v0: float = 1.0e-4
     friction_v1: float = 1.0e-2
+    friction_static_coefficient: float = 0.0
+    friction_stribeck_velocity: float = 1.0e-3
 
     def __post_init__(self) -> None:
         # numbers of any numeric type (numpy scalars, Fraction, int) are stored as Python
@@ -170,8 +178,8 @@ class SliderCrank:
                 f"contact_model must be one of {sorted(CONTACT_MODELS)}; "
                 f"got {self.contact_model!r}"
             )
-        check_friction("SliderCrank", self.friction_law, self.friction_coefficient,
-                       self.friction_v0, self.friction_v1)
+        check_friction("SliderCrank", self.friction_law,
+                       *(getattr(self, f) for f in FRICTION_SLOTS))
 
     # ------------------------------------------------------------------ derived values
     @property

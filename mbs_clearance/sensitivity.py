@@ -29,6 +29,7 @@ from ._checks import (
     check_times,
 )
 from .integrator import METHODS
+from .laws.registry import FRICTION_SLOTS
 from .linkage_ddm import independent_directions  # noqa: F401  (public here too)
 from .mechanism import CONTINUOUS_FIELDS, SliderCrank, check_field_names
 from .trajectory import Trajectory, annotate, load_trajectory
@@ -331,7 +332,7 @@ _FIELD_MAP = {
         "contact_stiffness", "impact_velocity_floor")},
 }
 #: the friction fields: description parameters only where the joint has a friction law
-_FRICTION_FIELDS = ("friction_coefficient", "friction_v0", "friction_v1")
+_FRICTION_FIELDS = FRICTION_SLOTS
 
 
 def _derived_inertia(mech: SliderCrank, name: str) -> dict[str, float]:

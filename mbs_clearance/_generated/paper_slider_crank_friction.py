@@ -32,8 +32,8 @@ from mbs_clearance.generate.runtime import (
 
 LINKAGE = "paper_slider_crank"
 STRUCTURE = "{\"bodies\": [[\"crank\", [\"pin\", \"pivot\"]], [\"coupler\", [\"crank_end\", \"slider_end\"]], [\"slider\", [\"pin\"]]], \"clearance_joints\": [[\"coupler_slider\", \"coupler\", \"slider_end\", \"slider\", \"pin\", \"friction\"]], \"drive\": \"crank_pivot\", \"ground_points\": [\"crank_pivot\", \"slider_axis\"], \"joints\": [[\"revolute\", \"crank_pivot\", \"ground\", \"crank_pivot\", \"crank\", \"pivot\"], [\"revolute\", \"crank_coupler\", \"crank\", \"pin\", \"coupler\", \"crank_end\"], [\"prismatic\", \"slider_guide\", \"ground\", \"slider_axis\", \"slider\", \"pin\"]], \"monitor_joint\": \"crank_pivot\", \"zero_parameters\": [\"crank.pivot.y\", \"crank.pin.y\", \"coupler.crank_end.y\", \"coupler.slider_end.y\", \"slider.pin.x\", \"slider.pin.y\", \"ground.crank_pivot.x\", \"ground.crank_pivot.y\", \"ground.slider_axis.x\", \"ground.slider_axis.y\", \"slider_guide.angle\"]}"
-STRUCTURE_DIGEST = "5f5e05581f3e4a0604332e4383e76e7f15949a19a5d9f3489b81b8bc70ca97e8"
-GENERATOR_VERSION = "e520a9e17af71ea9"
+STRUCTURE_DIGEST = "e1cdeadfd8630da6f433ecc834145a8f878837e42eb016872a3f3bdb60c712c2"
+GENERATOR_VERSION = "2a454f8349dd3ee8"
 
 #: dotted names of the entries of p (without the constants)
 PARAMETERS = (
@@ -67,6 +67,8 @@ PARAMETERS = (
     "coupler_slider.friction_coefficient",
     "coupler_slider.friction_v0",
     "coupler_slider.friction_v1",
+    "coupler_slider.friction_static_coefficient",
+    "coupler_slider.friction_stribeck_velocity",
     "coupler_slider.journal_radius",
     "coupler_slider.bearing_radius",
     "drive.speed",
@@ -89,7 +91,7 @@ FRICTION_WORK = 2 * N_Q + 1 if FRICTION_JOINTS else -1
 #: the clearance joints (one switching function each)
 JOINTS = ("coupler_slider", )
 N_EVENTS = 1
-MEM_START = 35
+MEM_START = 37
 N_MEM = 2 * N_EVENTS
 #: joints to the ground (ideal, then clearance), whose reactions are outputs
 GROUND_JOINTS = ("crank_pivot", "slider_guide", )
@@ -151,8 +153,8 @@ def prepare(p):
     coupler__crank_end__x = p[8]  # "coupler.crank_end.x"
     coupler__slider_end__x = p[10]  # "coupler.slider_end.x"
     slider__mass = p[12]  # "slider.mass"
-    drive__speed = p[32]  # "drive.speed"
-    gravity = p[34]  # "gravity"
+    drive__speed = p[34]  # "drive.speed"
+    gravity = p[36]  # "gravity"
     x0 = crank__pin__x - crank__pivot__x
     x1 = drive__speed*x0
     x2 = (coupler__crank_end__x * coupler__crank_end__x)
@@ -244,9 +246,9 @@ def dynamics(t, y, p):
     bearing centre); the ground reactions (forces on the ground); the shaking force; the drive
     moment; the accelerations (the mass matrix solved)."""
     slider__mass = p[12]  # "slider.mass"
-    coupler_slider__journal_radius = p[30]  # "coupler_slider.journal_radius"
-    drive__speed = p[32]  # "drive.speed"
-    drive__initial_angle = p[33]  # "drive.initial_angle"
+    coupler_slider__journal_radius = p[32]  # "coupler_slider.journal_radius"
+    drive__speed = p[34]  # "drive.speed"
+    drive__initial_angle = p[35]  # "drive.initial_angle"
     k0 = p[CONST_START + 0]
     k1 = p[CONST_START + 1]
     k2 = p[CONST_START + 2]
@@ -276,7 +278,7 @@ def dynamics(t, y, p):
     exd0 = S0*k2 - U0*x1 - U1
     eyd0 = C0*k3 + U0*x0
     sp0 = U0*coupler_slider__journal_radius
-    F0, d0, dd0, FX0, FY0, TQ0, vt0 = friction_stage(ex0, ey0, exd0, eyd0, sp0, p[21], p[35], p[36], p[22], p[23], p[24], p[26], p[27], p[28], p[29])
+    F0, d0, dd0, FX0, FY0, TQ0, vt0 = friction_stage(ex0, ey0, exd0, eyd0, sp0, p[21], p[37], p[38], p[22], p[23], p[24], p[26], (p[27], p[28], p[29], p[30], p[31]))
     f0 = C0*S1*k6 - C1*FY0*k1 + C1*S0*k5 + C1*k7 + FX0*S1*k1 + TQ0*coupler_slider__journal_radius
     f1 = FX0
     A0 = f0*k8
@@ -300,7 +302,7 @@ def _derivative(y, p, res, dydt):
         dydt[i] = y[N_Q + i]
         dydt[N_Q + i] = res[ACC_COLUMN + i]
     if dydt.shape[0] > 2 * N_Q:
-        dydt[2 * N_Q] = res[MOMENT_COLUMN] * p[32]
+        dydt[2 * N_Q] = res[MOMENT_COLUMN] * p[34]
     if dydt.shape[0] > 2 * N_Q + 1:
         dydt[2 * N_Q + 1] = res[16]
 
@@ -315,8 +317,8 @@ def rhs(t, y, p, dydt):
 def _gap_0(t, y, p):
     """Journal centre minus bearing centre of clearance joint JOINTS[0] and its
     rate."""
-    drive__speed = p[32]  # "drive.speed"
-    drive__initial_angle = p[33]  # "drive.initial_angle"
+    drive__speed = p[34]  # "drive.speed"
+    drive__initial_angle = p[35]  # "drive.initial_angle"
     k0 = p[CONST_START + 0]
     k1 = p[CONST_START + 1]
     k2 = p[CONST_START + 2]
@@ -414,9 +416,9 @@ def outputs(ts, ys, ms, p):
 def mechanical_energy(t, y, p):
     """Kinetic + gravitational energy, plus the contact springs' energy K delta^2.5 / 2.5 of
     the joints in contact mode, in J."""
-    coupler_slider__journal_radius = p[30]  # "coupler_slider.journal_radius"
-    drive__speed = p[32]  # "drive.speed"
-    drive__initial_angle = p[33]  # "drive.initial_angle"
+    coupler_slider__journal_radius = p[32]  # "coupler_slider.journal_radius"
+    drive__speed = p[34]  # "drive.speed"
+    drive__initial_angle = p[35]  # "drive.initial_angle"
     k0 = p[CONST_START + 0]
     k1 = p[CONST_START + 1]
     k2 = p[CONST_START + 2]
@@ -443,7 +445,7 @@ def mechanical_energy(t, y, p):
     x2 = U0*k17
     energy = C0*C1*x2 + S0*S1*x2 + S0*k16 - S1*k7 + (U0 * U0)*k18 + (U1 * U1)*k19 + k20
     d0, dd0, nx0, ny0 = gap_state(ex0, ey0, exd0, eyd0, p[21])
-    if p[35] > 0.5 and d0 > 0.0:
+    if p[37] > 0.5 and d0 > 0.0:
         energy += p[22] * d0 * d0 * math.sqrt(d0) / 2.5
     return energy
 
@@ -453,8 +455,8 @@ def closure(t, q, p):
     """Journal centre minus bearing centre of every clearance joint (2 N_EVENTS,) at
     coordinates q: zero when the journals are centred."""
     res = np.empty(2 * N_EVENTS)
-    drive__speed = p[32]  # "drive.speed"
-    drive__initial_angle = p[33]  # "drive.initial_angle"
+    drive__speed = p[34]  # "drive.speed"
+    drive__initial_angle = p[35]  # "drive.initial_angle"
     k0 = p[CONST_START + 0]
     k1 = p[CONST_START + 1]
     Q0 = q[0]
@@ -484,8 +486,8 @@ def closure_jacobian(t, q, p):
 def closure_rate(t, q, p):
     """d closure / d t at fixed q (2 N_EVENTS,): the drive's part of the journals' motion."""
     res = np.empty(2 * N_EVENTS)
-    drive__speed = p[32]  # "drive.speed"
-    drive__initial_angle = p[33]  # "drive.initial_angle"
+    drive__speed = p[34]  # "drive.speed"
+    drive__initial_angle = p[35]  # "drive.initial_angle"
     k2 = p[CONST_START + 2]
     k3 = p[CONST_START + 3]
     S0, C0 = sincos(drive__initial_angle + drive__speed*t)
@@ -559,6 +561,8 @@ Z_NAMES = (
     "coupler_slider.friction_coefficient",
     "coupler_slider.friction_v0",
     "coupler_slider.friction_v1",
+    "coupler_slider.friction_static_coefficient",
+    "coupler_slider.friction_stribeck_velocity",
     "coupler_slider.journal_radius",
     "coupler_slider.bearing_radius",
     "drive.speed",
@@ -567,7 +571,7 @@ Z_NAMES = (
     "coupler_slider.mode",
     "coupler_slider.impact_velocity",
 )
-N_Z = 42
+N_Z = 44
 JAC_STRIDE = N_Z + 1
 #: rows of the Jacobian: OUT_COLUMNS, then per clearance joint (exd, eyd, fx, fy), then per
 #: joint with friction the rotation part of its slip velocity (spin)
@@ -601,10 +605,10 @@ def jacobian(t, y, p, jac, full):
     coupler__mass = p[6]  # "coupler.mass"
     coupler__crank_end__x = p[8]  # "coupler.crank_end.x"
     slider__mass = p[12]  # "slider.mass"
-    coupler_slider__journal_radius = p[30]  # "coupler_slider.journal_radius"
-    drive__speed = p[32]  # "drive.speed"
-    drive__initial_angle = p[33]  # "drive.initial_angle"
-    gravity = p[34]  # "gravity"
+    coupler_slider__journal_radius = p[32]  # "coupler_slider.journal_radius"
+    drive__speed = p[34]  # "drive.speed"
+    drive__initial_angle = p[35]  # "drive.initial_angle"
+    gravity = p[36]  # "gravity"
     k0 = p[CONST_START + 0]
     k1 = p[CONST_START + 1]
     k2 = p[CONST_START + 2]
@@ -677,50 +681,50 @@ def jacobian(t, y, p, jac, full):
     x13 = C0*drive__speed
     x14 = C1*U0
     gv0_0 = -Q1 + x0 + x1
-    jac[129] = x2
-    jac[130] = x4
-    jac[131] = -1.0
-    jac[136] = -C0
-    jac[138] = C0
-    jac[142] = -C1
-    jac[144] = C1
-    jac[166] = -t*x5
-    jac[167] = x6
+    jac[135] = x2
+    jac[136] = x4
+    jac[137] = -1.0
+    jac[142] = -C0
+    jac[144] = C0
+    jac[148] = -C1
+    jac[150] = C1
+    jac[174] = -t*x5
+    jac[175] = x6
     gv0_1 = x3 + x5
-    jac[172] = x7
-    jac[173] = x1
-    jac[179] = -S0
-    jac[181] = S0
-    jac[185] = -S1
-    jac[187] = S1
-    jac[209] = t*x0
-    jac[210] = x0
+    jac[180] = x7
+    jac[181] = x1
+    jac[187] = -S0
+    jac[189] = S0
+    jac[193] = -S1
+    jac[195] = S1
+    jac[219] = t*x0
+    jac[220] = x0
     gv0_2 = S0*k2 - U1 - x8
-    jac[731] = C0*k21
-    jac[732] = -x9
-    jac[734] = x4
-    jac[735] = -1.0
-    jac[738] = x10
-    jac[740] = -x10
-    jac[744] = x11
-    jac[746] = -x11
-    jac[768] = t*x12 + x6
-    jac[769] = x12
+    jac[765] = C0*k21
+    jac[766] = -x9
+    jac[768] = x4
+    jac[769] = -1.0
+    jac[772] = x10
+    jac[774] = -x10
+    jac[778] = x11
+    jac[780] = -x11
+    jac[804] = t*x12 + x6
+    jac[805] = x12
     gv0_3 = x7 + x9
-    jac[774] = S0*k21
-    jac[775] = -x8
-    jac[777] = x1
-    jac[781] = -x13
-    jac[783] = x13
-    jac[787] = -x14
-    jac[789] = x14
-    jac[811] = t*x2 + x0
-    jac[812] = x2
+    jac[810] = S0*k21
+    jac[811] = -x8
+    jac[813] = x1
+    jac[817] = -x13
+    jac[819] = x13
+    jac[823] = -x14
+    jac[825] = x14
+    jac[849] = t*x2 + x0
+    jac[850] = x2
     gv0_4 = U0*coupler_slider__journal_radius
-    jac[906] = coupler_slider__journal_radius
-    jac[938] = U0
-    FX0, FY0 = contact_jacobian(jac, 43, 42, gv0_0, gv0_1, gv0_2, gv0_3, 0, 1, 2, 3, 4, 17, 18, 19, 20, 26, 27, 28, 41, p[21], p[35], p[36], p[22], p[23], p[24])
-    FX0, FY0, TQ0 = friction_jacobian(jac, 43, 42, gv0_4, 3, 4, 17, 18, 21, 0, 19, 20, 14, 15, 16, 32, 33, 34, p[26], p[27], p[28], p[29])
+    jac[948] = coupler_slider__journal_radius
+    jac[982] = U0
+    FX0, FY0 = contact_jacobian(jac, 45, 44, gv0_0, gv0_1, gv0_2, gv0_3, 0, 1, 2, 3, 4, 17, 18, 19, 20, 26, 27, 28, 43, p[21], p[37], p[38], p[22], p[23], p[24])
+    FX0, FY0, TQ0 = friction_jacobian(jac, 45, 44, gv0_4, 3, 4, 17, 18, 21, 0, 19, 20, 14, 15, 16, (32, 33, 34, 35, 36), p[26], (p[27], p[28], p[29], p[30], p[31]))
     m_0_0 = k4
     m_1_0 = 0.0
     m_1_1 = slider__mass
@@ -746,39 +750,39 @@ def jacobian(t, y, p, jac, full):
     x23 = FX0*S1
     x24 = C1*FY0
     x25 = k6*t
-    jac[516] = k22*x17
-    jac[517] = -FX0*x18 - FY0*x19 + S1*k7 + k5*x15 + k5*x16
-    jac[523] = -k23*x21
-    jac[525] = k23*x21
-    jac[527] = A0*k27 + C1*k26 + k24*x22 + k25*x20
-    jac[528] = A0
-    jac[529] = A0*k31 + C1*k30 + k28*x22 + k29*x20 + x23 - x24
-    jac[531] = -x23 + x24
-    jac[551] = -TQ0
-    jac[553] = k32*x22 + k33*x20 + x15*x25 + x16*x25
-    jac[554] = k6*x17
-    jac[555] = C1*k11
+    jac[540] = k22*x17
+    jac[541] = -FX0*x18 - FY0*x19 + S1*k7 + k5*x15 + k5*x16
+    jac[547] = -k23*x21
+    jac[549] = k23*x21
+    jac[551] = A0*k27 + C1*k26 + k24*x22 + k25*x20
+    jac[552] = A0
+    jac[553] = A0*k31 + C1*k30 + k28*x22 + k29*x20 + x23 - x24
+    jac[555] = -x23 + x24
+    jac[577] = -TQ0
+    jac[579] = k32*x22 + k33*x20 + x15*x25 + x16*x25
+    jac[580] = k6*x17
+    jac[581] = C1*k11
     rfx_0_0 = -x19
     rfy_0_0 = x18
     rtq_0_0 = -coupler_slider__journal_radius
-    jac[576] = A1
+    jac[602] = A1
     rfx_1_0 = -1.0
     rfy_1_0 = 0.0
     rtq_1_0 = 0.0
-    for col in range(42):
-        b_0 = -(jac[516 + col] + rfx_0_0 * jac[19 * 43 + col] + rfy_0_0 * jac[20 * 43 + col] + rtq_0_0 * jac[14 * 43 + col])
-        b_1 = -(jac[559 + col] + rfx_1_0 * jac[19 * 43 + col] + rfy_1_0 * jac[20 * 43 + col] + rtq_1_0 * jac[14 * 43 + col])
+    for col in range(44):
+        b_0 = -(jac[540 + col] + rfx_0_0 * jac[19 * 45 + col] + rfy_0_0 * jac[20 * 45 + col] + rtq_0_0 * jac[14 * 45 + col])
+        b_1 = -(jac[585 + col] + rfx_1_0 * jac[19 * 45 + col] + rfy_1_0 * jac[20 * 45 + col] + rtq_1_0 * jac[14 * 45 + col])
         zz_0 = (b_0) * il_0
         zz_1 = (b_1 - l_1_0 * zz_0) * il_1
         x_1 = (zz_1) * il_1
         x_0 = (zz_0 - l_1_0 * x_1) * il_0
-        jac[516 + col] = x_0
-        jac[559 + col] = x_1
-    jac[558] = A0
-    jac[601] = A1
+        jac[540 + col] = x_0
+        jac[585 + col] = x_1
+    jac[584] = A0
+    jac[629] = A1
     x26 = A0*k14
     x27 = (U0 * U0)
-    jac[515] = C0*C1*x26 + C0*FY0*k0 + C0*S1*k15*x27 + C0*k16 + C1*S0*k14*x27 - FX0*S0*k0 + S0*S1*x26
+    jac[539] = C0*C1*x26 + C0*FY0*k0 + C0*S1*k15*x27 + C0*k16 + C1*S0*k14*x27 - FX0*S0*k0 + S0*S1*x26
     if full:
         x28 = -FX0
         x29 = C0*k10
@@ -810,65 +814,65 @@ def jacobian(t, y, p, jac, full):
         x55 = S0*k0
         x56 = C0*k14
         x57 = -FX0*x54 - FY0*x55 + S0*k53 + k14*x47 + k15*x46 + x30*x56 + x33*x56
-        jac[257] = x28 + x29 + x31 + x34
-        jac[215] = S0*k34
-        jac[216] = k11*x37
-        jac[218] = -C1*x38
-        jac[220] = C0*k35
-        jac[222] = C0*k36
-        jac[224] = C0*k37
-        jac[226] = C0*k38 - coupler__crank_end__x*x30 - coupler__crank_end__x*x33
-        jac[228] = -coupler__mass*x39
-        jac[252] = C0*k40 + t*x40
-        jac[253] = x40
+        jac[269] = x28 + x29 + x31 + x34
+        jac[225] = S0*k34
+        jac[226] = k11*x37
+        jac[228] = -C1*x38
+        jac[230] = C0*k35
+        jac[232] = C0*k36
+        jac[234] = C0*k37
+        jac[236] = C0*k38 - coupler__crank_end__x*x30 - coupler__crank_end__x*x33
+        jac[238] = -coupler__mass*x39
+        jac[264] = C0*k40 + t*x40
+        jac[265] = x40
         oa_0_0 = S1*k11
         ofx_0_0 = -1.0
-        jac[300] = -FY0 + S0*k10 + k12 + x41 - x42
-        jac[258] = C0*k41
-        jac[259] = k11*x39
-        jac[261] = -S1*x38
-        jac[263] = S0*k35 + x43
-        jac[265] = S0*k36
-        jac[267] = S0*k37
-        jac[269] = S0*k38 + coupler__crank_end__x*x35 - coupler__crank_end__x*x36 + x43
-        jac[271] = coupler__mass*x37
-        jac[295] = S0*k40 + t*x29
-        jac[296] = x29
-        jac[297] = k42
+        jac[314] = -FY0 + S0*k10 + k12 + x41 - x42
+        jac[270] = C0*k41
+        jac[271] = k11*x39
+        jac[273] = -S1*x38
+        jac[275] = S0*k35 + x43
+        jac[277] = S0*k36
+        jac[279] = S0*k37
+        jac[281] = S0*k38 + coupler__crank_end__x*x35 - coupler__crank_end__x*x36 + x43
+        jac[283] = coupler__mass*x37
+        jac[309] = S0*k40 + t*x29
+        jac[310] = x29
+        jac[311] = k42
         oa_1_0 = -C1*k11
         ofy_1_0 = -1.0
-        jac[343] = -A1*slider__mass - x28
-        jac[318] = -A1
+        jac[359] = -A1*slider__mass - x28
+        jac[332] = -A1
         oa_2_1 = x44
         ofx_2_0 = 1.0
-        jac[386] = FY0 + k13
-        jac[361] = x43
-        jac[383] = x44
+        jac[404] = FY0 + k13
+        jac[377] = x43
+        jac[401] = x44
         ofy_3_0 = 1.0
-        jac[473] = C0*FX0*k2 + FY0*S0*k2 + S0*k44 + k17*x47 + k43*x46 + x30*x45 + x33*x45
-        jac[474] = k14*x46 + k15*x47 + x30*x48 + x33*x48
-        jac[476] = U0*(C0*S1*k46 + C1*S0*k45)
-        jac[478] = C0*k47
-        jac[480] = C0*k12 - x49
-        jac[482] = -C0*k30 + x49
-        jac[484] = C0*k50 + k48*x50 + k49*x52 + x30*x51 + x33*x51
-        jac[486] = k51*x50 + k52*x52 + x30*x53 + x33*x53
-        jac[510] = t*x57
-        jac[511] = x57
-        jac[512] = C0*k54
+        jac[495] = C0*FX0*k2 + FY0*S0*k2 + S0*k44 + k17*x47 + k43*x46 + x30*x45 + x33*x45
+        jac[496] = k14*x46 + k15*x47 + x30*x48 + x33*x48
+        jac[498] = U0*(C0*S1*k46 + C1*S0*k45)
+        jac[500] = C0*k47
+        jac[502] = C0*k12 - x49
+        jac[504] = -C0*k30 + x49
+        jac[506] = C0*k50 + k48*x50 + k49*x52 + x30*x51 + x33*x51
+        jac[508] = k51*x50 + k52*x52 + x30*x53 + x33*x53
+        jac[534] = t*x57
+        jac[535] = x57
+        jac[536] = C0*k54
         oa_4_0 = k14*(C0*C1 + S0*S1)
         ofx_4_0 = -x55
         ofy_4_0 = x54
-        for col in range(42):
-            jac[215 + col] += oa_0_0 * jac[516 + col] + ofx_0_0 * jac[817 + col]
-            jac[258 + col] += oa_1_0 * jac[516 + col] + ofy_1_0 * jac[860 + col]
-            jac[301 + col] += oa_2_1 * jac[559 + col] + ofx_2_0 * jac[817 + col]
-            jac[344 + col] += ofy_3_0 * jac[860 + col]
-            jac[473 + col] += oa_4_0 * jac[516 + col] + ofx_4_0 * jac[817 + col] + ofy_4_0 * jac[860 + col]
-        for col in range(43):
-            jac[387 + col] = jac[215 + col] + jac[301 + col]
-        for col in range(43):
-            jac[430 + col] = jac[258 + col] + jac[344 + col]
+        for col in range(44):
+            jac[225 + col] += oa_0_0 * jac[540 + col] + ofx_0_0 * jac[855 + col]
+            jac[270 + col] += oa_1_0 * jac[540 + col] + ofy_1_0 * jac[900 + col]
+            jac[315 + col] += oa_2_1 * jac[585 + col] + ofx_2_0 * jac[855 + col]
+            jac[360 + col] += ofy_3_0 * jac[900 + col]
+            jac[495 + col] += oa_4_0 * jac[540 + col] + ofx_4_0 * jac[855 + col] + ofy_4_0 * jac[900 + col]
+        for col in range(45):
+            jac[405 + col] = jac[225 + col] + jac[315 + col]
+        for col in range(45):
+            jac[450 + col] = jac[270 + col] + jac[360 + col]
     return
 
 
@@ -886,10 +890,10 @@ def tangent(t, y, p, dz, nd, use, out, full):
     coupler__mass = p[6]  # "coupler.mass"
     coupler__crank_end__x = p[8]  # "coupler.crank_end.x"
     slider__mass = p[12]  # "slider.mass"
-    coupler_slider__journal_radius = p[30]  # "coupler_slider.journal_radius"
-    drive__speed = p[32]  # "drive.speed"
-    drive__initial_angle = p[33]  # "drive.initial_angle"
-    gravity = p[34]  # "gravity"
+    coupler_slider__journal_radius = p[32]  # "coupler_slider.journal_radius"
+    drive__speed = p[34]  # "drive.speed"
+    drive__initial_angle = p[35]  # "drive.initial_angle"
+    gravity = p[36]  # "gravity"
     k0 = p[CONST_START + 0]
     k1 = p[CONST_START + 1]
     k2 = p[CONST_START + 2]
@@ -988,8 +992,8 @@ def tangent(t, y, p, dz, nd, use, out, full):
         g17_0 = C0*k21
         g18_0 = S0*k21
         for e in range(int(use[0]), int(use[1])):
-            d = int(use[43 + e])
-            dk = dz[d * 42 + 0]
+            d = int(use[45 + e])
+            dk = dz[d * 44 + 0]
             out[3 * ts + d] += g3_0 * dk
             out[4 * ts + d] += g4_0 * dk
             out[17 * ts + d] += g17_0 * dk
@@ -1000,8 +1004,8 @@ def tangent(t, y, p, dz, nd, use, out, full):
         g17_7 = x10
         g18_7 = -x13
         for e in range(int(use[7]), int(use[8])):
-            d = int(use[43 + e])
-            dk = dz[d * 42 + 7]
+            d = int(use[45 + e])
+            dk = dz[d * 44 + 7]
             out[3 * ts + d] += g3_7 * dk
             out[4 * ts + d] += g4_7 * dk
             out[17 * ts + d] += g17_7 * dk
@@ -1012,8 +1016,8 @@ def tangent(t, y, p, dz, nd, use, out, full):
         g17_9 = -x10
         g18_9 = x13
         for e in range(int(use[9]), int(use[10])):
-            d = int(use[43 + e])
-            dk = dz[d * 42 + 9]
+            d = int(use[45 + e])
+            dk = dz[d * 44 + 9]
             out[3 * ts + d] += g3_9 * dk
             out[4 * ts + d] += g4_9 * dk
             out[17 * ts + d] += g17_9 * dk
@@ -1024,8 +1028,8 @@ def tangent(t, y, p, dz, nd, use, out, full):
         g17_13 = x11
         g18_13 = -x14
         for e in range(int(use[13]), int(use[14])):
-            d = int(use[43 + e])
-            dk = dz[d * 42 + 13]
+            d = int(use[45 + e])
+            dk = dz[d * 44 + 13]
             out[3 * ts + d] += g3_13 * dk
             out[4 * ts + d] += g4_13 * dk
             out[17 * ts + d] += g17_13 * dk
@@ -1036,44 +1040,44 @@ def tangent(t, y, p, dz, nd, use, out, full):
         g17_15 = -x11
         g18_15 = x14
         for e in range(int(use[15]), int(use[16])):
-            d = int(use[43 + e])
-            dk = dz[d * 42 + 15]
+            d = int(use[45 + e])
+            dk = dz[d * 44 + 15]
             out[3 * ts + d] += g3_15 * dk
             out[4 * ts + d] += g4_15 * dk
             out[17 * ts + d] += g17_15 * dk
             out[18 * ts + d] += g18_15 * dk
-    if use[36] > use[35]:
-        g21_35 = U0
-        for e in range(int(use[35]), int(use[36])):
-            d = int(use[43 + e])
-            dk = dz[d * 42 + 35]
-            out[21 * ts + d] += g21_35 * dk
     if use[38] > use[37]:
-        g3_37 = -t*x5
-        g4_37 = t*x0
-        g17_37 = t*x12 + x6
-        g18_37 = t*x2 + x0
+        g21_37 = U0
         for e in range(int(use[37]), int(use[38])):
-            d = int(use[43 + e])
-            dk = dz[d * 42 + 37]
-            out[3 * ts + d] += g3_37 * dk
-            out[4 * ts + d] += g4_37 * dk
-            out[17 * ts + d] += g17_37 * dk
-            out[18 * ts + d] += g18_37 * dk
-    if use[39] > use[38]:
-        g3_38 = x6
-        g4_38 = x0
-        g17_38 = x12
-        g18_38 = x2
-        for e in range(int(use[38]), int(use[39])):
-            d = int(use[43 + e])
-            dk = dz[d * 42 + 38]
-            out[3 * ts + d] += g3_38 * dk
-            out[4 * ts + d] += g4_38 * dk
-            out[17 * ts + d] += g17_38 * dk
-            out[18 * ts + d] += g18_38 * dk
-    FX0, FY0 = contact_tangent(out, ts, nd, dz, 42, gv0_0, gv0_1, gv0_2, gv0_3, 0, 1, 2, 3, 4, 17, 18, 19, 20, 26, 27, 28, 41, p[21], p[35], p[36], p[22], p[23], p[24])
-    FX0, FY0, TQ0 = friction_tangent(out, ts, nd, dz, 42, gv0_4, 3, 4, 17, 18, 21, 0, 19, 20, 14, 15, 16, 32, 33, 34, p[26], p[27], p[28], p[29])
+            d = int(use[45 + e])
+            dk = dz[d * 44 + 37]
+            out[21 * ts + d] += g21_37 * dk
+    if use[40] > use[39]:
+        g3_39 = -t*x5
+        g4_39 = t*x0
+        g17_39 = t*x12 + x6
+        g18_39 = t*x2 + x0
+        for e in range(int(use[39]), int(use[40])):
+            d = int(use[45 + e])
+            dk = dz[d * 44 + 39]
+            out[3 * ts + d] += g3_39 * dk
+            out[4 * ts + d] += g4_39 * dk
+            out[17 * ts + d] += g17_39 * dk
+            out[18 * ts + d] += g18_39 * dk
+    if use[41] > use[40]:
+        g3_40 = x6
+        g4_40 = x0
+        g17_40 = x12
+        g18_40 = x2
+        for e in range(int(use[40]), int(use[41])):
+            d = int(use[45 + e])
+            dk = dz[d * 44 + 40]
+            out[3 * ts + d] += g3_40 * dk
+            out[4 * ts + d] += g4_40 * dk
+            out[17 * ts + d] += g17_40 * dk
+            out[18 * ts + d] += g18_40 * dk
+    FX0, FY0 = contact_tangent(out, ts, nd, dz, 44, gv0_0, gv0_1, gv0_2, gv0_3, 0, 1, 2, 3, 4, 17, 18, 19, 20, 26, 27, 28, 43, p[21], p[37], p[38], p[22], p[23], p[24])
+    FX0, FY0, TQ0 = friction_tangent(out, ts, nd, dz, 44, gv0_4, 3, 4, 17, 18, 21, 0, 19, 20, 14, 15, 16, (32, 33, 34, 35, 36), p[26], (p[27], p[28], p[29], p[30], p[31]))
     m_0_0 = k4
     m_1_0 = 0.0
     m_1_1 = slider__mass
@@ -1113,75 +1117,75 @@ def tangent(t, y, p, dz, nd, use, out, full):
     if use[1] > use[0]:
         r0_0 = k22*x17
         for e in range(int(use[0]), int(use[1])):
-            d = int(use[43 + e])
-            dk = dz[d * 42 + 0]
+            d = int(use[45 + e])
+            dk = dz[d * 44 + 0]
             out[12 * ts + d] += r0_0 * dk
     if use[8] > use[7]:
         r0_7 = -k23*x21
         for e in range(int(use[7]), int(use[8])):
-            d = int(use[43 + e])
-            dk = dz[d * 42 + 7]
+            d = int(use[45 + e])
+            dk = dz[d * 44 + 7]
             out[12 * ts + d] += r0_7 * dk
     if use[10] > use[9]:
         r0_9 = k23*x21
         for e in range(int(use[9]), int(use[10])):
-            d = int(use[43 + e])
-            dk = dz[d * 42 + 9]
+            d = int(use[45 + e])
+            dk = dz[d * 44 + 9]
             out[12 * ts + d] += r0_9 * dk
     if use[12] > use[11]:
         r0_11 = A0*k27 + C1*k26 + k24*x22 + k25*x20
         for e in range(int(use[11]), int(use[12])):
-            d = int(use[43 + e])
-            dk = dz[d * 42 + 11]
+            d = int(use[45 + e])
+            dk = dz[d * 44 + 11]
             out[12 * ts + d] += r0_11 * dk
     if use[13] > use[12]:
         r0_12 = A0
         for e in range(int(use[12]), int(use[13])):
-            d = int(use[43 + e])
-            dk = dz[d * 42 + 12]
+            d = int(use[45 + e])
+            dk = dz[d * 44 + 12]
             out[12 * ts + d] += r0_12 * dk
     if use[14] > use[13]:
         r0_13 = A0*k31 + C1*k30 + k28*x22 + k29*x20 + x23 - x24
         for e in range(int(use[13]), int(use[14])):
-            d = int(use[43 + e])
-            dk = dz[d * 42 + 13]
+            d = int(use[45 + e])
+            dk = dz[d * 44 + 13]
             out[12 * ts + d] += r0_13 * dk
     if use[16] > use[15]:
         r0_15 = -x23 + x24
         for e in range(int(use[15]), int(use[16])):
-            d = int(use[43 + e])
-            dk = dz[d * 42 + 15]
+            d = int(use[45 + e])
+            dk = dz[d * 44 + 15]
             out[12 * ts + d] += r0_15 * dk
     if use[18] > use[17]:
         r1_17 = A1
         for e in range(int(use[17]), int(use[18])):
-            d = int(use[43 + e])
-            dk = dz[d * 42 + 17]
+            d = int(use[45 + e])
+            dk = dz[d * 44 + 17]
             out[13 * ts + d] += r1_17 * dk
-    if use[36] > use[35]:
-        r0_35 = -TQ0
-        for e in range(int(use[35]), int(use[36])):
-            d = int(use[43 + e])
-            dk = dz[d * 42 + 35]
-            out[12 * ts + d] += r0_35 * dk
     if use[38] > use[37]:
-        r0_37 = k32*x22 + k33*x20 + x15*x25 + x16*x25
+        r0_37 = -TQ0
         for e in range(int(use[37]), int(use[38])):
-            d = int(use[43 + e])
-            dk = dz[d * 42 + 37]
+            d = int(use[45 + e])
+            dk = dz[d * 44 + 37]
             out[12 * ts + d] += r0_37 * dk
-    if use[39] > use[38]:
-        r0_38 = k6*x17
-        for e in range(int(use[38]), int(use[39])):
-            d = int(use[43 + e])
-            dk = dz[d * 42 + 38]
-            out[12 * ts + d] += r0_38 * dk
     if use[40] > use[39]:
-        r0_39 = C1*k11
+        r0_39 = k32*x22 + k33*x20 + x15*x25 + x16*x25
         for e in range(int(use[39]), int(use[40])):
-            d = int(use[43 + e])
-            dk = dz[d * 42 + 39]
+            d = int(use[45 + e])
+            dk = dz[d * 44 + 39]
             out[12 * ts + d] += r0_39 * dk
+    if use[41] > use[40]:
+        r0_40 = k6*x17
+        for e in range(int(use[40]), int(use[41])):
+            d = int(use[45 + e])
+            dk = dz[d * 44 + 40]
+            out[12 * ts + d] += r0_40 * dk
+    if use[42] > use[41]:
+        r0_41 = C1*k11
+        for e in range(int(use[41]), int(use[42])):
+            d = int(use[45 + e])
+            dk = dz[d * 44 + 41]
+            out[12 * ts + d] += r0_41 * dk
     for d in range(nd):
         b_0 = -(out[12 * ts + d] + rfx_0_0 * out[19 * ts + d] + rfy_0_0 * out[20 * ts + d] + rtq_0_0 * out[14 * ts + d])
         b_1 = -(out[13 * ts + d] + rfx_1_0 * out[19 * ts + d] + rfy_1_0 * out[20 * ts + d] + rtq_1_0 * out[14 * ts + d])
@@ -1259,8 +1263,8 @@ def tangent(t, y, p, dz, nd, use, out, full):
             o6_0 = C0*k41
             o11_0 = C0*FX0*k2 + FY0*S0*k2 + S0*k44 + k17*x47 + k43*x46 + x30*x45 + x33*x45
             for e in range(int(use[0]), int(use[1])):
-                d = int(use[43 + e])
-                dk = dz[d * 42 + 0]
+                d = int(use[45 + e])
+                dk = dz[d * 44 + 0]
                 out[5 * ts + d] += o5_0 * dk
                 out[6 * ts + d] += o6_0 * dk
                 out[11 * ts + d] += o11_0 * dk
@@ -1269,8 +1273,8 @@ def tangent(t, y, p, dz, nd, use, out, full):
             o6_5 = S0*k35 + x43
             o11_5 = C0*k47
             for e in range(int(use[5]), int(use[6])):
-                d = int(use[43 + e])
-                dk = dz[d * 42 + 5]
+                d = int(use[45 + e])
+                dk = dz[d * 44 + 5]
                 out[5 * ts + d] += o5_5 * dk
                 out[6 * ts + d] += o6_5 * dk
                 out[11 * ts + d] += o11_5 * dk
@@ -1279,8 +1283,8 @@ def tangent(t, y, p, dz, nd, use, out, full):
             o6_7 = S0*k36
             o11_7 = C0*k12 - x49
             for e in range(int(use[7]), int(use[8])):
-                d = int(use[43 + e])
-                dk = dz[d * 42 + 7]
+                d = int(use[45 + e])
+                dk = dz[d * 44 + 7]
                 out[5 * ts + d] += o5_7 * dk
                 out[6 * ts + d] += o6_7 * dk
                 out[11 * ts + d] += o11_7 * dk
@@ -1289,8 +1293,8 @@ def tangent(t, y, p, dz, nd, use, out, full):
             o6_9 = S0*k37
             o11_9 = -C0*k30 + x49
             for e in range(int(use[9]), int(use[10])):
-                d = int(use[43 + e])
-                dk = dz[d * 42 + 9]
+                d = int(use[45 + e])
+                dk = dz[d * 44 + 9]
                 out[5 * ts + d] += o5_9 * dk
                 out[6 * ts + d] += o6_9 * dk
                 out[11 * ts + d] += o11_9 * dk
@@ -1299,8 +1303,8 @@ def tangent(t, y, p, dz, nd, use, out, full):
             o6_11 = S0*k38 + coupler__crank_end__x*x35 - coupler__crank_end__x*x36 + x43
             o11_11 = C0*k50 + k48*x50 + k49*x52 + x30*x51 + x33*x51
             for e in range(int(use[11]), int(use[12])):
-                d = int(use[43 + e])
-                dk = dz[d * 42 + 11]
+                d = int(use[45 + e])
+                dk = dz[d * 44 + 11]
                 out[5 * ts + d] += o5_11 * dk
                 out[6 * ts + d] += o6_11 * dk
                 out[11 * ts + d] += o11_11 * dk
@@ -1309,8 +1313,8 @@ def tangent(t, y, p, dz, nd, use, out, full):
             o6_13 = coupler__mass*x37
             o11_13 = k51*x50 + k52*x52 + x30*x53 + x33*x53
             for e in range(int(use[13]), int(use[14])):
-                d = int(use[43 + e])
-                dk = dz[d * 42 + 13]
+                d = int(use[45 + e])
+                dk = dz[d * 44 + 13]
                 out[5 * ts + d] += o5_13 * dk
                 out[6 * ts + d] += o6_13 * dk
                 out[11 * ts + d] += o11_13 * dk
@@ -1318,40 +1322,40 @@ def tangent(t, y, p, dz, nd, use, out, full):
             o7_17 = -A1
             o8_17 = x43
             for e in range(int(use[17]), int(use[18])):
-                d = int(use[43 + e])
-                dk = dz[d * 42 + 17]
+                d = int(use[45 + e])
+                dk = dz[d * 44 + 17]
                 out[7 * ts + d] += o7_17 * dk
                 out[8 * ts + d] += o8_17 * dk
-        if use[38] > use[37]:
-            o5_37 = C0*k40 + t*x40
-            o6_37 = S0*k40 + t*x29
-            o11_37 = t*x57
-            for e in range(int(use[37]), int(use[38])):
-                d = int(use[43 + e])
-                dk = dz[d * 42 + 37]
-                out[5 * ts + d] += o5_37 * dk
-                out[6 * ts + d] += o6_37 * dk
-                out[11 * ts + d] += o11_37 * dk
-        if use[39] > use[38]:
-            o5_38 = x40
-            o6_38 = x29
-            o11_38 = x57
-            for e in range(int(use[38]), int(use[39])):
-                d = int(use[43 + e])
-                dk = dz[d * 42 + 38]
-                out[5 * ts + d] += o5_38 * dk
-                out[6 * ts + d] += o6_38 * dk
-                out[11 * ts + d] += o11_38 * dk
         if use[40] > use[39]:
-            o6_39 = k42
-            o8_39 = x44
-            o11_39 = C0*k54
+            o5_39 = C0*k40 + t*x40
+            o6_39 = S0*k40 + t*x29
+            o11_39 = t*x57
             for e in range(int(use[39]), int(use[40])):
-                d = int(use[43 + e])
-                dk = dz[d * 42 + 39]
+                d = int(use[45 + e])
+                dk = dz[d * 44 + 39]
+                out[5 * ts + d] += o5_39 * dk
                 out[6 * ts + d] += o6_39 * dk
-                out[8 * ts + d] += o8_39 * dk
                 out[11 * ts + d] += o11_39 * dk
+        if use[41] > use[40]:
+            o5_40 = x40
+            o6_40 = x29
+            o11_40 = x57
+            for e in range(int(use[40]), int(use[41])):
+                d = int(use[45 + e])
+                dk = dz[d * 44 + 40]
+                out[5 * ts + d] += o5_40 * dk
+                out[6 * ts + d] += o6_40 * dk
+                out[11 * ts + d] += o11_40 * dk
+        if use[42] > use[41]:
+            o6_41 = k42
+            o8_41 = x44
+            o11_41 = C0*k54
+            for e in range(int(use[41]), int(use[42])):
+                d = int(use[45 + e])
+                dk = dz[d * 44 + 41]
+                out[6 * ts + d] += o6_41 * dk
+                out[8 * ts + d] += o8_41 * dk
+                out[11 * ts + d] += o11_41 * dk
         for col in range(ts):
             out[9 * ts + col] = out[5 * ts + col] + out[7 * ts + col]
         for col in range(ts):
@@ -1363,7 +1367,7 @@ def tangent(t, y, p, dz, nd, use, out, full):
 def rhs_sens(t, y, p, dydt):
     """Derivative of the sensitivity state (generate/sens_runtime.py)."""
     sens_rhs(_THIS.tangent, _THIS.rhs, t, y, p, dydt, N_Q, N_P, N_Z, N_JROWS, ACC_COLUMN,
-             MOMENT_COLUMN, 32, _MEM_COL0, N_EVENTS, False)
+             MOMENT_COLUMN, 34, _MEM_COL0, N_EVENTS, False)
 
 
 @nb.njit(**KERNEL)
@@ -1380,7 +1384,7 @@ def monitor_sens(t, y, p, dydt, out, g, gd):
     N_OUT the outputs' derivatives along the directions too (`sens_runtime.sens_monitor`)."""
     return sens_monitor(_THIS.tangent, _THIS.rhs, _THIS.monitor, _THIS._observe, t, y, p,
                         dydt, out, g, gd, N_Q, N_P, N_Z, N_JROWS, ACC_COLUMN, MOMENT_COLUMN,
-                        32, _MEM_COL0, N_EVENTS, N_OUT)
+                        34, _MEM_COL0, N_EVENTS, N_OUT)
 
 
 @nb.njit(cache=True, error_model="numpy", nogil=True)

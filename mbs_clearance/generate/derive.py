@@ -24,6 +24,7 @@ from dataclasses import dataclass, field
 import sympy as sp
 import sympy.physics.mechanics as me
 
+from ..laws.registry import FRICTION_SLOTS
 from ..linkage import GROUND, Linkage, Prismatic, Revolute
 
 __all__ = ["Derivation", "derive", "parameter_layout", "identifier", "geometric_zeros",
@@ -90,8 +91,7 @@ CONTACT_FIELDS = ("clearance", "stiffness", "restitution", "contact_model",
 
 #: per clearance joint with friction, the entries of p read by the friction law and the
 #: tangential slip (the radii put the contact point on each body's surface)
-FRICTION_FIELDS = ("friction_law", "friction_coefficient", "friction_v0", "friction_v1",
-                   "journal_radius", "bearing_radius")
+FRICTION_FIELDS = ("friction_law", *FRICTION_SLOTS, "journal_radius", "bearing_radius")
 
 
 @dataclass

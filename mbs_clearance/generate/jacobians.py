@@ -18,7 +18,7 @@ Rows of jac (flat, stride N_Z + 1; column N_Z holds the value): OUT_COLUMNS, the
 clearance joint the journal centre's velocity relative to the bearing (x, y) and the contact
 force components (x, y) on the bearing's side, then per joint with friction the rotation
 part of the slip velocity (omega_J R_J - omega_B R_B); the friction force's derivatives come
-from `runtime.friction_jacobian` (`contact.friction_force_partials`), its moments enter the
+from `runtime.friction_jacobian` (the friction law's partials), its moments enter the
 equations of motion through the symbol TQ. `full=False` fills the rows of the clearance
 joints and the accelerations only (what the sensitivity equations need).
 """
@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import sympy as sp
 
+from ..laws.registry import FRICTION_SLOTS
 from .derive import Derivation
 
 __all__ = ["jacobian_context", "z_columns"]
@@ -192,12 +193,13 @@ def jacobian_context(w, d: Derivation, out_columns: list[str]) -> dict:
                 row[f"{name}.contact_force"], extra[("fx", j)], extra[("fy", j)]] + [
                 row[f"{name}.{f}"] for f in ("friction_force", "slip_velocity",
                                              "friction_power")]
-            fc = [pcol[f"{name}.{f}"] for f in ("friction_coefficient", "friction_v0",
-                                                "friction_v1")]
-            fv = [f"p[{pcol[f'{name}.{f}'] - 1 - 2 * n}]" for f in (
-                "friction_law", "friction_coefficient", "friction_v0", "friction_v1")]
-            args = (f"gv{j}_4, " + ", ".join(str(v) for v in frows + fc) + ", "
-                    + ", ".join(fv) + ")")
+            comma = "," if len(FRICTION_SLOTS) == 1 else ""
+            fc = ", ".join(f"{pcol[f'{name}.{f}']}" for f in FRICTION_SLOTS) + comma
+            fv = ", ".join(f"p[{pcol[f'{name}.{f}'] - 1 - 2 * n}]"
+                           for f in FRICTION_SLOTS) + comma
+            law = f"p[{pcol[f'{name}.friction_law'] - 1 - 2 * n}]"
+            args = (f"gv{j}_4, " + ", ".join(str(v) for v in frows)
+                    + f", ({fc}), {law}, ({fv}))")
             jlines.append(f"{d.FX[j]}, {d.FY[j]}, {d.TQ[j]} = friction_jacobian(jac, "
                           f"{stride}, {nz}, " + args)
             tlines.append(f"{d.FX[j]}, {d.FY[j]}, {d.TQ[j]} = friction_tangent(out, ts, nd, "

@@ -8,8 +8,9 @@ import math
 
 import numba as nb
 
-from ..contact import contact_force, friction_force
+from ..contact import contact_force
 from ..integrator import ACTION_SIG, EVENT_SIG, KERNEL, MONITOR_SIG, RHS_SIG
+from ..laws._dispatch import friction_force_slots
 
 __all__ = ["KERNEL", "RHS_SIG", "EVENT_SIG", "ACTION_SIG", "MONITOR_SIG", "gap_state",
            "contact_stage", "friction_stage", "switching"]
@@ -48,16 +49,17 @@ def contact_stage(ex, ey, exd, eyd, clearance, mode, deltadot_minus, stiffness, 
 
 @nb.njit(**KERNEL, inline="always")
 def friction_stage(ex, ey, exd, eyd, spin, clearance, mode, deltadot_minus, stiffness,
-                   restitution, model, law, mu, v0, v1):
+                   restitution, model, law, slots):
     """`contact_stage` with friction: (F, delta, deltadot, fx, fy, ft, vt) where ft is the
-    friction force on the journal along the tangent t = (-n_y, n_x) (`contact.friction_force`
-    of the slip velocity vt = edot . t + spin, spin = omega_J R_J - omega_B R_B, and the
-    normal force F) and fx, fy = F n - ft t the force on the bearing."""
+    friction force on the journal along the tangent t = (-n_y, n_x) (the law's force, its
+    parameters `slots` the values of `laws.FRICTION_SLOTS`, of the slip velocity
+    vt = edot . t + spin, spin = omega_J R_J - omega_B R_B, and the normal force F) and
+    fx, fy = F n - ft t the force on the bearing."""
     f, delta, deltadot, fx, fy = contact_stage(ex, ey, exd, eyd, clearance, mode,
                                                deltadot_minus, stiffness, restitution, model)
     _, _, nx, ny = gap_state(ex, ey, exd, eyd, clearance)
     vt = eyd * nx - exd * ny + spin
-    ft = friction_force(vt, f, mu, v0, v1, int(law))
+    ft = friction_force_slots(vt, f, slots, int(law))
     return f, delta, deltadot, fx + ft * ny, fy - ft * nx, ft, vt
 
 

@@ -17,8 +17,9 @@ from __future__ import annotations
 import numba as nb
 import numpy as np
 
-from ..contact import contact_force, contact_force_partials, friction_force_partials
+from ..contact import contact_force, contact_force_partials
 from ..integrator import KERNEL, _golden_max, _step_monitor, step_workspace
+from ..laws._dispatch import friction_force_partials_slots
 from .runtime import gap_state
 
 __all__ = ["contact_jacobian", "friction_jacobian", "contact_tangent", "friction_tangent",
@@ -136,10 +137,10 @@ def contact_tangent(out, ts, nd, dz, nz, ex, ey, exd, eyd, r_f, r_pen, r_rate, r
 
 
 @nb.njit(**KERNEL, inline="always")
-def _friction_values(jac, stride, vc, spin, r_ex, r_ey, r_exd, r_eyd, r_f, law, mu, v0, v1):
+def _friction_values(jac, stride, vc, spin, r_ex, r_ey, r_exd, r_eyd, r_f, law, slots):
     """From the values (column vc) of the offset, its rate and the normal force: n, 1 / |e|,
     the slip velocity vt = edot . t + spin (t = (-n_y, n_x)), the friction force Ft of the
-    law and its partials (`contact.friction_force_partials`)."""
+    law and its partials (in vt, the normal force and each of the law's `slots`)."""
     ex = jac[r_ex * stride + vc]
     ey = jac[r_ey * stride + vc]
     exd = jac[r_exd * stride + vc]
@@ -148,20 +149,20 @@ def _friction_values(jac, stride, vc, spin, r_ex, r_ey, r_exd, r_eyd, r_f, law, 
     r, _, nx, ny = gap_state(ex, ey, exd, eyd, 0.0)
     rinv = 1.0 / r if r > 1e-300 else 0.0
     vt = eyd * nx - exd * ny + spin
-    ft, ft_vt, ft_fn, ft_mu, ft_v0, ft_v1 = friction_force_partials(vt, f, mu, v0, v1,
-                                                                    int(law))
-    return exd, eyd, nx, ny, rinv, vt, ft, ft_vt, ft_fn, ft_mu, ft_v0, ft_v1
+    ft, ft_vt, ft_fn, ft_slots = friction_force_partials_slots(vt, f, slots, int(law))
+    return exd, eyd, nx, ny, rinv, vt, ft, ft_vt, ft_fn, ft_slots
 
 
 @nb.njit(**KERNEL, inline="always")
-def _friction_direction(dex, dey, dexd, deyd, dspin, dfn, dmu, dv0, dv1, exd, eyd, nx, ny,
-                        rinv, vt, ft, ft_vt, ft_fn, ft_mu, ft_v0, ft_v1):
+def _friction_direction(dex, dey, dexd, deyd, dspin, dfn, dlaw, exd, eyd, nx, ny, rinv, vt,
+                        ft, ft_vt, ft_fn):
     """Derivatives of (vt, Ft, the power -Ft vt, and the additions -Ft t to the force on the
-    bearing (x, y)) along one direction."""
+    bearing (x, y)) along one direction; dlaw: the derivative of Ft through the law's
+    parameters along it."""
     dnx = (ny * ny * dex - nx * ny * dey) * rinv
     dny = (nx * nx * dey - nx * ny * dex) * rinv
     d_vt = dexd * (-ny) - exd * dny + deyd * nx + eyd * dnx + dspin
-    d_ft = ft_vt * d_vt + ft_fn * dfn + ft_mu * dmu + ft_v0 * dv0 + ft_v1 * dv1
+    d_ft = ft_vt * d_vt + ft_fn * dfn + dlaw
     return d_vt, d_ft, -(d_ft * vt + ft * d_vt), d_ft * ny + ft * dny, -(d_ft * nx + ft * dnx)
 
 
@@ -182,23 +183,25 @@ def _friction_write(jac, stride, vc, spin, r_spin, r_fx, r_fy, r_ft, r_vt, r_pw,
 
 @nb.njit(**KERNEL, inline="always")
 def friction_jacobian(jac, stride, nz, spin, r_ex, r_ey, r_exd, r_eyd, r_spin, r_f, r_fx,
-                      r_fy, r_ft, r_vt, r_pw, c_mu, c_v0, c_v1, law, mu, v0, v1):
+                      r_fy, r_ft, r_vt, r_pw, cols, law, slots):
     """Rows of one clearance joint's friction in the Jacobian, after `contact_jacobian` has
     filled its rows (values and total derivatives of the offset, its rate and the normal
     force F): the slip velocity vt = edot . t + spin (t = (-n_y, n_x); the spin's row holds
     the derivatives of omega_J R_J - omega_B R_B), the friction force Ft of the law
-    (`contact.friction_force_partials`, with the columns of mu, v0, v1), the friction power
+    (its partials; `cols` the columns of the law's `slots`), the friction power
     -Ft vt, and -Ft t added to the force on the bearing (rows fx, fy), as
     `runtime.friction_stage`. Returns (fx, fy, Ft)."""
-    exd, eyd, nx, ny, rinv, vt, ft, ft_vt, ft_fn, ft_mu, ft_v0, ft_v1 = _friction_values(
-        jac, stride, nz, spin, r_ex, r_ey, r_exd, r_eyd, r_f, law, mu, v0, v1)
+    exd, eyd, nx, ny, rinv, vt, ft, ft_vt, ft_fn, ft_slots = _friction_values(
+        jac, stride, nz, spin, r_ex, r_ey, r_exd, r_eyd, r_f, law, slots)
     for col in range(nz):
+        dlaw = 0.0
+        for k in range(len(cols)):
+            if col == cols[k]:
+                dlaw += ft_slots[k]
         d_vt, d_ft, d_pw, d_fx, d_fy = _friction_direction(
             jac[r_ex * stride + col], jac[r_ey * stride + col], jac[r_exd * stride + col],
             jac[r_eyd * stride + col], jac[r_spin * stride + col], jac[r_f * stride + col],
-            1.0 if col == c_mu else 0.0, 1.0 if col == c_v0 else 0.0,
-            1.0 if col == c_v1 else 0.0, exd, eyd, nx, ny, rinv, vt, ft, ft_vt, ft_fn, ft_mu,
-            ft_v0, ft_v1)
+            dlaw, exd, eyd, nx, ny, rinv, vt, ft, ft_vt, ft_fn)
         jac[r_vt * stride + col] = d_vt
         jac[r_ft * stride + col] = d_ft
         jac[r_pw * stride + col] = d_pw
@@ -210,18 +213,21 @@ def friction_jacobian(jac, stride, nz, spin, r_ex, r_ey, r_exd, r_eyd, r_spin, r
 
 @nb.njit(**KERNEL, inline="always")
 def friction_tangent(out, ts, nd, dz, nz, spin, r_ex, r_ey, r_exd, r_eyd, r_spin, r_f, r_fx,
-                     r_fy, r_ft, r_vt, r_pw, c_mu, c_v0, c_v1, law, mu, v0, v1):
+                     r_fy, r_ft, r_vt, r_pw, cols, law, slots):
     """`friction_jacobian` along nd seed directions dz (nd x nz, flat), after
     `contact_tangent` (rows of out: ts = nd + 1 per row, column nd the value). Returns
     (fx, fy, Ft)."""
-    exd, eyd, nx, ny, rinv, vt, ft, ft_vt, ft_fn, ft_mu, ft_v0, ft_v1 = _friction_values(
-        out, ts, nd, spin, r_ex, r_ey, r_exd, r_eyd, r_f, law, mu, v0, v1)
+    exd, eyd, nx, ny, rinv, vt, ft, ft_vt, ft_fn, ft_slots = _friction_values(
+        out, ts, nd, spin, r_ex, r_ey, r_exd, r_eyd, r_f, law, slots)
     for d in range(nd):
         o = d * nz
+        dlaw = 0.0
+        for k in range(len(cols)):
+            dlaw += ft_slots[k] * dz[o + cols[k]]
         d_vt, d_ft, d_pw, d_fx, d_fy = _friction_direction(
             out[r_ex * ts + d], out[r_ey * ts + d], out[r_exd * ts + d], out[r_eyd * ts + d],
-            out[r_spin * ts + d], out[r_f * ts + d], dz[o + c_mu], dz[o + c_v0],
-            dz[o + c_v1], exd, eyd, nx, ny, rinv, vt, ft, ft_vt, ft_fn, ft_mu, ft_v0, ft_v1)
+            out[r_spin * ts + d], out[r_f * ts + d], dlaw, exd, eyd, nx, ny, rinv, vt, ft,
+            ft_vt, ft_fn)
         out[r_vt * ts + d] = d_vt
         out[r_ft * ts + d] = d_ft
         out[r_pw * ts + d] = d_pw

@@ -20,6 +20,7 @@ import jinja2
 import sympy as sp
 from sympy.printing.pycode import PythonCodePrinter
 
+from ..laws.registry import FRICTION_SLOTS
 from .derive import FRICTION_FIELDS, Derivation
 from .jacobians import jacobian_context
 
@@ -266,9 +267,9 @@ def render(d: Derivation, linkage_name: str, structure: dict, zeros: tuple = ())
             fp = fpar[j]
             contact_lines.append(
                 f"F{j}, d{j}, dd{j}, {d.FX[j]}, {d.FY[j]}, {d.TQ[j]}, vt{j} = friction_stage("
-                f"ex{j}, ey{j}, exd{j}, eyd{j}, sp{j}, {law}, p[{fp['friction_law']}], "
-                f"p[{fp['friction_coefficient']}], p[{fp['friction_v0']}], "
-                f"p[{fp['friction_v1']}])")
+                f"ex{j}, ey{j}, exd{j}, eyd{j}, sp{j}, {law}, p[{fp['friction_law']}], ("
+                + ", ".join(f"p[{fp[f]}]" for f in FRICTION_SLOTS)
+                + ("," if len(FRICTION_SLOTS) == 1 else "") + "))")
         else:
             contact_lines.append(f"F{j}, d{j}, dd{j}, {d.FX[j]}, {d.FY[j]} = contact_stage("
                                  f"ex{j}, ey{j}, exd{j}, eyd{j}, {law})")

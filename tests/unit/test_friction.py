@@ -34,8 +34,8 @@ def test_friction_fields_default_to_frictionless():
     (dict(friction_v0=0.0), "friction_v0 must be a finite number > 0"),
     (dict(friction_v0=0.01, friction_v1=0.01), "friction_v1 must be a finite number > "
                                                "friction_v0"),
-    (dict(friction_law="stribeck"), r"friction_law must be one of \['ambrosio', 'coulomb', "
-                                    r"'none'\]"),
+    (dict(friction_law="dahl"), r"friction_law must be one of \['ambrosio', 'coulomb', "
+                                r"'none', 'stribeck'\]"),
 ])
 def test_friction_fields_are_validated(kw, match):
     with pytest.raises(ValueError, match=match):
@@ -44,7 +44,7 @@ def test_friction_fields_are_validated(kw, match):
         SliderCrank(**kw)
     with pytest.raises(ValueError, match=match):
         cases.slider_crank_two_clearances(**kw)
-    assert sorted(FRICTION_LAWS) == ["ambrosio", "coulomb", "none"]
+    assert sorted(FRICTION_LAWS) == ["ambrosio", "coulomb", "none", "stribeck"]
 
 
 def test_friction_overrides_reach_every_joint():
@@ -64,14 +64,18 @@ def test_friction_stage_of_a_journal_on_a_turning_bearing(law, phi):
     (dragged along by the wall), and the force on the bearing Fn n - Ft t."""
     from mbs_clearance.contact import CONTACT_MODELS, contact_force
     from mbs_clearance.generate.runtime import friction_stage
+    from mbs_clearance.laws import FRICTION_PARAMETER_SPECS
 
     c, pen, k, mu, v0, v1 = 1e-5, 1e-7, 1e10, 0.2, 0.05, 0.1
     spin = -20.0 * 0.01                 # omega_J R_J - omega_B R_B, the journal not turning
     ey, eyd = -(c + pen), -1e-4         # at the bottom, still sinking; sliding sideways:
     exd = 0.0                           # (none: the slip is the wall's)
     model = CONTACT_MODELS["lankarani_nikravesh"]
+    # the law's parameters (the registry's slots; further ones at their defaults)
+    given = {"friction_coefficient": mu, "friction_v0": v0, "friction_v1": v1}
+    slots = tuple(given.get(p.name, p.default) for p in FRICTION_PARAMETER_SPECS)
     f, delta, _, fx, fy, ft, vt = friction_stage(0.0, ey, exd, eyd, spin, c, 1.0, 0.01, k,
-                                                 0.9, model, FRICTION_LAWS[law], mu, v0, v1)
+                                                 0.9, model, FRICTION_LAWS[law], slots)
     fn = contact_force(pen, 1e-4, 0.01, k, 0.9, model)
     assert f == pytest.approx(fn, rel=1e-12) and delta == pytest.approx(pen, rel=1e-6)
     assert vt == pytest.approx(spin, rel=1e-12)

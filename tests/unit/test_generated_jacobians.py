@@ -11,7 +11,7 @@ from mbs_clearance.linkage_model import initial_state, pack_parameters
 
 CASES = ("paper_slider_crank", "slider_crank_two_clearances", "four_bar",
          "paper_slider_crank+coulomb", "paper_slider_crank+ambrosio",
-         "paper_slider_crank+general")
+         "paper_slider_crank+stribeck", "paper_slider_crank+general")
 # the four-bar at the 0.1 mm clearance where this test was written and measured (its default
 # became 0.01 mm in the same session; the free-flight difference quotients of the point
 # coordinates there were not re-examined: 1.2e-6 relative off, see the session's note)
@@ -23,7 +23,12 @@ OVERRIDES = {"four_bar": {"clearance": 1e-4},
                                             "friction_v1": 1.0},
              "paper_slider_crank+ambrosio": {"friction_law": "ambrosio",
                                              "friction_coefficient": 0.3, "friction_v0": 0.01,
-                                             "friction_v1": 20.0}}
+                                             "friction_v1": 20.0},
+             "paper_slider_crank+stribeck": {"friction_law": "stribeck",
+                                             "friction_coefficient": 0.3, "friction_v0": 0.5,
+                                             "friction_v1": 20.0,
+                                             "friction_static_coefficient": 0.45,
+                                             "friction_stribeck_velocity": 1.0}}
 
 
 def _case(case):

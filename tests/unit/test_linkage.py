@@ -203,7 +203,8 @@ def test_paper_case_maps_every_slider_crank_field():
                "poisson_ratio": 0.25, "restitution": 0.5, "contact_stiffness": 1e9,
                "gravity": 0.0, "contact_model": "flores", "impact_velocity_floor": 1e-2,
                "friction_law": "ambrosio", "friction_coefficient": 0.05, "friction_v0": 2e-4,
-               "friction_v1": 2e-2}
+               "friction_v1": 2e-2, "friction_static_coefficient": 0.08,
+               "friction_stribeck_velocity": 2e-3}
     assert set(changed) == {f.name for f in dataclasses.fields(SliderCrank)}
     for f, v in changed.items():
         assert from_slider_crank(base.replace(**{f: v})) != lk0, f

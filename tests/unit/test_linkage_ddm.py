@@ -119,8 +119,9 @@ def test_slider_crank_directions_are_the_derivatives_of_its_description(mech):
         h = 1e-4 * (b0 if b0 != 0.0 else 1.0)
         if field in ("journal_radius", "bearing_radius"):
             h = 1e-3 * mech.clearance
-        # one-sided at a field's lower bound (mu = 0: the mapping is linear there, exact)
-        steps = (0, 1) if field == "friction_coefficient" and b0 == 0.0 else (-1, 1)
+        # one-sided at a friction coefficient's lower bound (mu = 0 or mu_s = 0: the
+        # mapping is linear there, exact)
+        steps = (0, 1) if field.endswith("_coefficient") and b0 == 0.0 else (-1, 1)
         lo, hi = (from_slider_crank(mech.replace(**{field: b0 + s * h})) for s in steps)
         for name in names:
             if name.endswith(".contact_stiffness") and mech.contact_stiffness is None:

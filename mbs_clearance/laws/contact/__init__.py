@@ -1,0 +1,1 @@
+"""Contact laws, one module each (see `mbs_clearance.laws`)."""

@@ -1,0 +1,1 @@
+"""Friction laws, one module each (see `mbs_clearance.laws`)."""
