@@ -34,6 +34,7 @@ def test_work_precision_quick_invariants():
     assert float(row[" scipy DOP853 "].split()[0]) > 1.0
 
 
+@pytest.mark.slow   # a minute of stress runs; the CLI's stress command is tested quickly
 def test_stress_quick_all_pass():
     rows = [run_case(c) for c in stress_cases(quick=True)]
     s = summary(rows)

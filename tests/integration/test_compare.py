@@ -92,6 +92,7 @@ def test_format_table_lists_every_revolution(reduced_paper):
     assert text.count("\n  1 ") + text.count("\n  2 ") == 2
 
 
+@pytest.mark.slow   # a minute of Exudyn runs of both slider-cranks
 def test_linkage_comparison_per_joint(tmp_path):
     """A linkage against a copy with one joint's orbit shifted by 0.1 of its clearance and
     the drive moment scaled by 1.02: the per-joint orbit distance and the RMS differences

@@ -19,6 +19,7 @@ from mbs_clearance.sensitivity import sensitivities
 FRICTION = {"friction_law": "ambrosio", "friction_coefficient": 0.1}
 
 
+@pytest.mark.slow   # compiles the friction model's kernels of its own (40 s from a cold cache)
 def test_zero_coefficient_reproduces_the_frictionless_run():
     """mu = 0 with a law on runs the friction model (its own generated module, with the
     friction work in the state) and gives the frictionless run's steps and peaks bit for

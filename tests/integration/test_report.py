@@ -13,7 +13,9 @@ from mbs_clearance.cli import main
 from mbs_clearance.sensitivity import sensitivities
 from validation.report import SECTIONS
 
-pytestmark = pytest.mark.exudyn
+# the quick report computes every section (three to four minutes from a cold cache, the
+# largest share of the fast suite): run with -m slow
+pytestmark = [pytest.mark.exudyn, pytest.mark.slow]
 
 FIGURES = ["fig3_response.png", "fig3_differences.png", "regime_map.png",
            "fig4_kinematic.png", "fig5_contact.png", "fig6_journal.png",

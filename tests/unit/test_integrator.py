@@ -72,7 +72,9 @@ def run(rhs, event, action, monitor, y0, p, edges, rtol, method="dopri5", record
     return out[:6] + (RESULTS(out[7]),)
 
 
-@pytest.mark.parametrize("method", sorted(METHODS))
+# bs3's kernels are compiled for this test alone (40 s from a cold cache): slow
+@pytest.mark.parametrize("method", [pytest.param(m, marks=pytest.mark.slow) if m == "bs3"
+                                    else m for m in sorted(METHODS)])
 def test_oscillator_error_decreases_with_rtol_at_the_expected_rate(method):
     errors, nfevs = [], []
     for rtol in (1e-5, 1e-7, 1e-9):
