@@ -134,17 +134,19 @@ def simulate_to_accuracy(record, peaks, accuracy: float, *, rattling=None):
         estimate = peak_difference(revolution_peaks(traj), revolution_peaks(fine))
         how = "tighter run"
     elif estimate > accuracy:
-        coarse = traj
-        while rtol / TIGHTEN >= MIN_RTOL * (1 - 1e-9):
-            rtol = _round(rtol / TIGHTEN)
-            fine = _quiet(record, rtol)
-            runs.append(rtol)
-            nfev += int(fine.stats.get("nfev", 0))
-            estimate, how = peak_difference(revolution_peaks(coarse),
-                                            revolution_peaks(fine)), "tighter run"
-            traj = coarse = fine
-            if estimate <= accuracy:
-                break
+        fines = []
+
+        def recorded(r):
+            fines.append(record(r))
+            return fines[-1]
+
+        finer, tighter, rtol, rtols = _tighten(
+            recorded, lambda a, b: peak_difference(revolution_peaks(a), revolution_peaks(b)),
+            traj, rtol, accuracy)
+        if rtols:
+            traj, estimate, how = finer, tighter, "tighter run"
+            runs += rtols
+            nfev += sum(int(f.stats.get("nfev", 0)) for f in fines)
     ok = bool(estimate <= accuracy)
     note = "" if ok else (
         f"the estimated error of the peaks, {estimate:.2g} (from a {how} at rtol "
@@ -162,6 +164,30 @@ def simulate_to_accuracy(record, peaks, accuracy: float, *, rattling=None):
     return traj
 
 
+def _tighten(run, difference, coarse, rtol: float, accuracy: float):
+    """Runs ``run(rtol)`` at rtol / 10, / 100, ... after `coarse` (the run at `rtol`) until
+    two successive runs differ by at most `accuracy` (``difference(coarser, finer)``) or
+    `MIN_RTOL`: (the finest run, the last difference, its rtol, the rtols run). The
+    difference of two runs bounds the coarser one's error, hence the finer one's."""
+    estimate, rtols = math.inf, []
+    while rtol / TIGHTEN >= MIN_RTOL * (1 - 1e-9):
+        rtol = _round(rtol / TIGHTEN)
+        fine = _quiet(run, rtol)
+        rtols.append(rtol)
+        estimate = difference(coarse, fine)
+        coarse = fine
+        if estimate <= accuracy:
+            break
+    return coarse, estimate, rtol, rtols
+
+
+def check_accuracy_or_rtol(accuracy, options) -> None:
+    """ValueError when both a requested `accuracy` and a fixed ``rtol`` in `options` are
+    given (the accuracy chooses the tolerances)."""
+    if accuracy is not None and "rtol" in options:
+        raise ValueError("give accuracy or rtol, not both (accuracy chooses the tolerances)")
+
+
 def value_to_accuracy(value, accuracy: float):
     """(result, estimate, rtol, rtols) of ``value(rtol)`` within `accuracy`: ``value(rtol)``
     returns (number, ...) for one run at `rtol`; runs at rtol = accuracy x
@@ -172,17 +198,10 @@ def value_to_accuracy(value, accuracy: float):
     when the request was not reached."""
     accuracy = check_real("accuracy (relative error of the peaks)", accuracy, 1e-10, 1e-3)
     rtol = _round(min(max(accuracy * RTOL_PER_ACCURACY, MIN_RTOL), MAX_RTOL))
-    coarse = _quiet(value, rtol)
-    rtols, estimate = [rtol], math.inf
-    while rtol / TIGHTEN >= MIN_RTOL * (1 - 1e-9):
-        rtol = _round(rtol / TIGHTEN)
-        fine = _quiet(value, rtol)
-        rtols.append(rtol)
-        a, b = float(coarse[0]), float(fine[0])
-        estimate = 0.0 if a == b else abs(a - b) / max(abs(b), np.finfo(float).tiny)
-        coarse = fine
-        if estimate <= accuracy:
-            break
+    start = rtol
+    coarse, estimate, rtol, tighter = _tighten(
+        value, lambda a, b: peak_difference(a[0], b[0]), _quiet(value, rtol), rtol, accuracy)
+    rtols = [start] + tighter
     if estimate > accuracy:
         warnings.warn(f"the estimated error of the output, {estimate:.2g} (from a tighter run "
                       f"at rtol {rtol:g}), misses the requested accuracy {accuracy:g} at the "

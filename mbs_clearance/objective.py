@@ -570,12 +570,10 @@ def _linkage_peak(linkage: Linkage, out: Output, revolution: int, options: dict)
     from . import linkage_model as lm
 
     if options.get("accuracy") is not None:
-        from .accuracy import value_to_accuracy
+        from .accuracy import check_accuracy_or_rtol, value_to_accuracy
 
         rest = {k: v for k, v in options.items() if k != "accuracy"}
-        if "rtol" in rest:
-            raise ValueError("give accuracy or rtol, not both (accuracy chooses the "
-                             "tolerances)")
+        check_accuracy_or_rtol(options["accuracy"], rest)
         return value_to_accuracy(
             lambda rtol: _linkage_peak(linkage, out, revolution, {**rest, "rtol": rtol}),
             options["accuracy"])[0]

@@ -359,8 +359,8 @@ def classify_run(scaled: np.ndarray, logs: np.ndarray | None, *, tol: float = RE
     if logs is None:
         return regime, period, d, math.nan, math.nan
     lam, half = exponent_estimate(logs, period or 1)
-    regime, period, d = classify(scaled, tol=tol, max_period=max_period, lyapunov=lam,
-                                 uncertainty=half)
+    if not period:
+        regime = VERDICT_REGIMES[exponent_verdict(lam - half, lam + half)]
     return regime, period, d, lam, half
 
 

@@ -6,7 +6,7 @@ import importlib
 from dataclasses import dataclass
 
 from ._checks import check_int
-from .accuracy import DEFAULT_ACCURACY
+from .accuracy import DEFAULT_ACCURACY, check_accuracy_or_rtol
 from .linkage import Linkage
 from .mechanism import SliderCrank
 from .trajectory import Trajectory
@@ -100,8 +100,7 @@ def simulate(mech: SliderCrank, revolutions: int = 4, backend: str = "reduced",
         emitted when True) and ``periodic`` (True, False or None) with
         ``periodicity_note``; see `trajectory.annotate`.
     """
-    if accuracy is not None and "rtol" in options:
-        raise ValueError("give accuracy or rtol, not both (accuracy chooses the tolerances)")
+    check_accuracy_or_rtol(accuracy, options)
     if backend != "reduced":
         if accuracy is not None:
             options["accuracy"] = accuracy
