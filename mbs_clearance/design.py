@@ -32,8 +32,9 @@ import numbers
 from collections.abc import Iterable, Mapping
 
 from .linkage import GROUND, Linkage
+from .mechanism import SliderCrank
 
-__all__ = ["design_names", "check_names", "design_value", "linkage_with", "direction"]
+__all__ = ["design_names", "check_names", "design_value", "linkage_with", "direction", "design_at"]
 
 #: the description's sections accepted in front of a dotted path, and what they become
 _SECTIONS = {"bodies": "", "joints": "", "clearance_joints": "", "ground_points": f"{GROUND}."}
@@ -98,7 +99,6 @@ def design_value(linkage: Linkage, name: str) -> float:
     table = _case_table(linkage)
     if name in table:
         if linkage.case == "paper_slider_crank":
-            from .mechanism import SliderCrank
             from .sensitivity import reference_value
 
             return reference_value(SliderCrank().replace(**linkage.overrides), name)
@@ -117,9 +117,8 @@ def design_value(linkage: Linkage, name: str) -> float:
 def linkage_with(linkage: Linkage, values: Mapping[str, float]) -> Linkage:
     """`linkage` with the named values set (see the module docstring): a case's overrides
     rebuild the case, then the dotted paths, "clearance" and "<joint>.clearance" change the
-    description (`sweep.design_at`). ValueError for an unknown name, a value that is not
+    description (`design_at`). ValueError for an unknown name, a value that is not
     a finite number, or a design out of the case's or the description's valid range."""
-    from .sweep import design_at
 
     if not isinstance(values, Mapping):
         raise ValueError(f"values must be a mapping {{name: value}}; got {values!r}")
@@ -139,7 +138,6 @@ def linkage_with(linkage: Linkage, values: Mapping[str, float]) -> Linkage:
             dotted[_dotted(name)] = value
     if clearance is not None:
         if linkage.case == "paper_slider_crank":
-            from .mechanism import SliderCrank
 
             rb = SliderCrank().replace(**{**linkage.overrides, **overrides}).bearing_radius
             if not 0.0 < clearance < rb:
@@ -200,3 +198,74 @@ def direction(linkage: Linkage, name: str) -> dict[str, float]:
         if d != 0.0:
             out[p] = d / (2.0 * h)
     return out
+
+
+# ------------------------------------------------------------------------ sweep designs
+
+def _linkage_clearance(link: Linkage, joint: str | None, value: float) -> Linkage:
+    names = [j.name for j in link.clearance_joints] if joint is None else [joint]
+    for j in names:
+        rb = link.parameter_value(f"{j}.bearing_radius")
+        if not 0.0 < value < rb:
+            raise ValueError(f"clearance of {j} must be in (0, bearing radius {rb!r} m); "
+                             f"got {value!r}")
+        link = link.with_parameter(f"{j}.journal_radius", rb - value)
+    return link
+
+
+def design_at(mech, values: dict, case: str | None = None, overrides: dict | None = None):
+    """The design of a sweep point: `mech` with the fields `values` (see the module
+    docstring for the names), or the named `case` built with `overrides` and `values`.
+    ValueError for an unknown field or a value out of its range."""
+    if case is not None:
+        from .cases import CASE_PARAMETERS, CASES
+
+        if case not in CASES:
+            raise ValueError(f"case must be one of {sorted(CASES)}; got {case!r}")
+        table = CASE_PARAMETERS.get(case)
+        if table is None:       # the paper's case: SliderCrank fields
+            return design_at(SliderCrank().replace(**(overrides or {})), values)
+        changes = dict(overrides or {})
+        for name, v in values.items():
+            if name == "clearance" and name not in table:
+                for key in [k for k in table if k.endswith("clearance")]:
+                    changes[key] = v
+            elif name not in table:
+                raise ValueError(f"{case}: unknown sweep field {name!r}; allowed: "
+                                 f"{sorted(table) + ['clearance']}")
+            else:
+                changes[name] = v
+        return CASES[case](**changes)
+    if not isinstance(mech, (SliderCrank, Linkage)):
+        raise ValueError(f"mech must be a SliderCrank or a Linkage; got {type(mech).__name__}")
+    if isinstance(mech, SliderCrank):
+        from .mechanism import field_names
+
+        changes = {}
+        for name, v in values.items():
+            if name == "clearance":
+                if not 0.0 < v < mech.bearing_radius:
+                    raise ValueError(f"clearance must be in (0, bearing_radius "
+                                     f"{mech.bearing_radius!r} m); got {v!r}")
+                changes["journal_radius"] = mech.bearing_radius - v
+            elif name in field_names():
+                changes[name] = v
+            else:
+                raise ValueError(f"unknown sweep field {name!r} of a SliderCrank; allowed: "
+                                 f"{sorted(field_names()) + ['clearance']}")
+        return mech.replace(**changes)
+    link = mech
+    for name, v in values.items():
+        if name == "clearance":
+            link = _linkage_clearance(link, None, v)
+        elif name.endswith(".clearance"):
+            link = _linkage_clearance(link, name[:-len(".clearance")], v)
+        elif name == "crank_speed":
+            link = link.with_parameter("drive.speed", v)
+        else:
+            if name not in link.parameter_names():
+                raise ValueError(f"unknown sweep field {name!r} of linkage {link.name!r}; "
+                                 f"allowed: {list(link.parameter_names())} or 'clearance', "
+                                 "'<joint>.clearance', 'crank_speed'")
+            link = link.with_parameter(name, v)
+    return link

@@ -16,6 +16,7 @@ import numpy as np
 
 from ._warnings import AccuracyWarning
 from .contact import CONTACT_MODELS, FRICTION_LAWS
+from .diagnostics import contact_flags
 from .laws.registry import FRICTION_SLOTS
 from .linkage import GROUND, Linkage
 
@@ -506,7 +507,6 @@ def _start_step(model, y0, p, rtol, atol, method, span):
 def simulate_linkage(linkage: Linkage, revolutions: int = 4, **options):
     """Simulate `linkage` with its generated model; a `Trajectory` of every accepted step
     with per-joint series (see `Trajectory`), annotated (penetration, periodicity)."""
-    from .reduced import contact_flags
     from .trajectory import annotate
 
     model, ts, ys, ms, peaks, _, stats, outs, p = run(linkage, revolutions, record=True,

@@ -53,6 +53,7 @@ import numba as nb
 import numpy as np
 
 from ._checks import check_int, check_real, check_revolutions_memory
+from .flows import Flow, TangentFlow, drive_of
 from .integrator import (
     ACTION_SIG,
     EVENT_SIG,
@@ -71,9 +72,7 @@ from .poincare import (  # noqa: F401 - the exponent statistics, public here too
     MAX_PERIOD,
     RECURRENCE_TOL,
     T_QUANTILE,
-    Flow,
     classify_run,
-    drive_of,
     exponent_estimate,
     exponent_interval,
     exponent_verdict,
@@ -119,66 +118,6 @@ class LyapunovResult:
     def interval_per_second(self) -> tuple[float, float]:
         """(low, high) of the exponent in 1/s."""
         return (self.interval[0] / self.window, self.interval[1] / self.window)
-
-
-class TangentFlow(Flow):
-    """A mechanism's generated model with one tangent vector: the DDM sensitivity equations
-    (`linkage_ddm`) with one direction and no parameter. y = [state (2 N_Q), tangent
-    (2 N_Q), W, the memories' tangents (J)]; a SliderCrank runs on the paper's model
-    (`cases.from_slider_crank`)."""
-
-    def __init__(self, mech, *, rtol: float | None = None, method: str = "dop853",
-                 direction=None, memory: str = "reset", max_steps: int = 5_000_000):
-        if memory not in ("reset", "carry"):
-            raise ValueError(f"memory must be 'reset' or 'carry'; got {memory!r}")
-        self.reset_memory = memory == "reset"
-        super().__init__(mech, rtol=rtol, method=method, max_steps=max_steps)
-        from .linkage_ddm import pack_sensitivity_parameters, sensitivity_atol
-
-        model = self.model
-        n2 = 2 * model.N_Q
-        #: scales of the tangent's components: the journal moves within the clearance
-        self.scale = _tangent_scale(mech, model)
-        v = np.full(n2, 0.5) if direction is None else np.asarray(direction, dtype=float)
-        if v.shape != (n2,) or not np.all(np.isfinite(v)) or not np.any(v != 0.0):
-            raise ValueError(f"direction must be {n2} finite numbers, not all zero (scaled "
-                             f"components of {', '.join(model.COORDINATES)} and their rates); "
-                             f"got {direction!r}")
-        v = v / np.linalg.norm(v) * self.scale
-        self.p = pack_sensitivity_parameters(model, self.p, [{}], True)
-        self.y = np.concatenate([self.y[:n2], v, [self.y[n2]], np.zeros(model.N_EVENTS)])
-        atol_plain = self.settings.atol
-        atol = sensitivity_atol(model, atol_plain, [1.0])
-        atol[n2:2 * n2] = self.rtol * self.scale
-        self.settings = self.settings._replace(atol=atol, n_err=2 * n2)
-        self.kernel = model.integrate_sens
-        self._n2 = n2
-
-    def tangent(self) -> np.ndarray:
-        """The tangent vector (2 N_Q,) in units of the state."""
-        return self.y[self._n2:2 * self._n2]
-
-    def renormalise(self) -> float:
-        """Scale the tangent to unit scaled norm (the memories' tangents: reset to 0 or
-        scaled alike, `memory`); returns the growth."""
-        n2 = self._n2
-        n = float(np.linalg.norm(self.y[n2:2 * n2] / self.scale))
-        self.y[n2:2 * n2] /= n
-        sig = slice(2 * n2 + 1, None)
-        self.y[sig] = 0.0 if self.reset_memory else self.y[sig] / n
-        return n
-
-
-def _tangent_scale(mech, model) -> np.ndarray:
-    """Scales of the tangent's components: lengths the (smallest) clearance c, angles c
-    over the coupler's length (the paper's case) or over the linkage's length scale, rates
-    those times the drive speed."""
-    if isinstance(mech, SliderCrank):
-        c, length, w = mech.clearance, mech.coupler_length, mech.crank_speed
-    else:
-        c, length, w = mech.min_clearance, mech.length_scale, mech.drive.speed
-    pos = np.array([c / length if n.endswith(".angle") else c for n in model.COORDINATES])
-    return np.concatenate([pos, w * pos])
 
 
 # ------------------------------------------------------------------ reference systems

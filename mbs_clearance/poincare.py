@@ -41,11 +41,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ._checks import check_int, check_real, check_revolutions_memory
-from .integrator import METHODS, RESULTS, make_settings
-from .linkage import Linkage
+from .flows import Flow, TangentFlow, _check_mech, clearances_of, drive_of, joints_of  # noqa: F401
 from .linkage_model import DEFAULT_RTOL as LM_DEFAULT_RTOL
-from .linkage_model import REFINE_ITERS
-from .mechanism import SliderCrank
 
 __all__ = ["SECTION_COMPONENTS", "REGIMES", "Flow", "PoincareSection", "poincare_section",
            "classify", "classify_run", "exponent_interval", "exponent_verdict",
@@ -86,36 +83,6 @@ RESOLVE_FACTOR = 100.0
 MIN_RTOL = 1e-12
 
 
-def _is_linkage(mech) -> bool:
-    return isinstance(mech, Linkage)
-
-
-def _check_mech(mech) -> None:
-    if not isinstance(mech, (SliderCrank, Linkage)):
-        raise ValueError(f"mech must be a SliderCrank or a Linkage; got {type(mech).__name__}")
-
-
-def drive_of(mech) -> tuple[float, float]:
-    """(omega, theta0): the constant drive speed (rad/s) and initial crank angle (rad)."""
-    if _is_linkage(mech):
-        return mech.drive.speed, mech.drive.initial_angle
-    return mech.crank_speed, mech.initial_crank_angle
-
-
-def clearances_of(mech) -> np.ndarray:
-    """Radial clearance of each clearance joint (m)."""
-    if _is_linkage(mech):
-        return np.array([j.clearance for j in mech.clearance_joints])
-    return np.array([mech.clearance])
-
-
-def joints_of(mech) -> tuple[str, ...]:
-    """Names of the clearance joints (the paper's one joint: "coupler_slider")."""
-    if _is_linkage(mech):
-        return tuple(j.name for j in mech.clearance_joints)
-    return ("coupler_slider",)
-
-
 def section_times(mech, samples, angle: float | None = None, first: int = 1) -> np.ndarray:
     """Times of section samples first..first+samples-1 at crank angle `angle` (rad; None:
     the initial crank angle, i.e. the ends of the revolutions): sample k in revolution k."""
@@ -128,95 +95,6 @@ def section_times(mech, samples, angle: float | None = None, first: int = 1) -> 
 
 
 # --------------------------------------------------------------------------------- flows
-
-class Flow:
-    """A mechanism's state advanced window by window on the compiled integrator (the plain
-    model: `reduced` for a SliderCrank, the generated model for a Linkage), holding one
-    window's record at a time. `t`, `y`, `p` are the current time, state and parameters
-    (with the contact memory). `advance(t1)` returns the window's refined maximum of the
-    monitored force (|F12|, or the linkage's monitored reaction)."""
-
-    def __init__(self, mech, *, rtol: float | None = None, method: str = "dopri5",
-                 max_steps: int = 5_000_000):
-        _check_mech(mech)
-        self.mech = mech
-        rtol = DEFAULT_RTOL if rtol is None else check_real("rtol", rtol, 1e-14, 1e-4)
-        if method not in METHODS:
-            raise ValueError(f"method must be one of {sorted(METHODS)}; got {method!r}")
-        self.omega, self.theta0 = drive_of(mech)
-        self.clearance = clearances_of(mech)
-        self.joints = joints_of(mech)
-        if _is_linkage(mech):
-            from . import linkage_model as lm
-            from .generate import load_model
-
-            model = self.model = load_model(mech)
-            p = lm.pack_parameters(mech, model)
-            y0 = lm.initial_state(mech, model, p)
-            rtol, atol = lm._tolerances(mech, model, rtol, None)
-            self.kernel = model.integrate_model
-            event_tol = lm.event_tolerance(mech)
-            self.settings = make_settings(
-                rtol, atol, 2 * model.N_Q, h_max=mech.period / 8, max_steps=max_steps,
-                record=True, event_tol=event_tol,
-                event_margin=lm.event_margin(mech.min_clearance, rtol), n_samples=1,
-                refine_iters=lm.REFINE_ITERS, n_out=0, n_dense=2 * model.N_Q,
-                n_events=model.N_EVENTS, mem_start=model.MEM_START, n_mem=model.N_MEM)
-            self._gaps = [getattr(model, f"_gap_{j}") for j in range(model.N_EVENTS)]
-        else:
-            from . import reduced
-
-            self.model = reduced.MODEL
-            p = reduced.model_parameters(mech)
-            y0 = reduced.initial_state(mech)
-            atol = np.append(reduced.default_atol(mech, rtol), reduced.event_atol(mech, rtol))
-            self.kernel = reduced.integrate_plain
-            # as reduced.run: 1e-12 of the clearance, not below the journal's round-off
-            event_tol = max(1e-12 * mech.clearance,
-                            8 * np.finfo(float).eps * (mech.crank_length + mech.coupler_length))
-            self.settings = make_settings(
-                rtol, atol, reduced.N_ERR, h_max=mech.period / 8, max_steps=max_steps,
-                record=True, event_tol=event_tol,
-                event_margin=reduced.event_margin(mech.clearance, rtol), n_samples=1,
-                refine_iters=REFINE_ITERS, n_out=0, n_dense=reduced.N_EVENT, n_events=1,
-                mem_start=reduced.MEM_START, n_mem=reduced.N_MEM)
-            self._gaps = [reduced.MODEL._gap_0]
-        self.rtol = rtol
-        self.coefficients = METHODS[method].arrays()
-        self.t = 0.0
-        self.y = np.ascontiguousarray(y0, dtype=float)
-        self.p = p
-        self.counters = np.zeros(5, dtype=np.int64)
-        #: the most steps recorded in one window (the run's record never holds more)
-        self.max_recorded = 0
-
-    def _run(self, kernel, y, p, t1, settings):
-        """One window [t, t1] of `kernel` from (y, p): the end state (landed on t1), the
-        window's peak; the next window starts with the last full step's size."""
-        edges = np.array([self.t, t1])
-        ts, ys, ms, peaks, _, counters, _, status = kernel(y, p, edges, settings,
-                                                            self.coefficients)
-        status = RESULTS(int(status))
-        if status is not RESULTS.success:
-            name = getattr(self.mech, "name", "slider-crank")
-            raise RuntimeError(f"{name}: integration failed at about t = "
-                               f"{ts[-1] if len(ts) else self.t:.6g} s: {status.message}")
-        self.counters += counters
-        self.max_recorded = max(self.max_recorded, len(ts))
-        if len(ts) >= 3:
-            self.settings = self.settings._replace(h0=float(ts[-2] - ts[-3]))
-        self.t = float(t1)
-        return np.ascontiguousarray(ys[-1]).copy(), float(peaks[0])
-
-    def advance(self, t1: float) -> float:
-        """Integrate to t1 (> t); returns the window's peak of the monitored force (N)."""
-        self.y, peak = self._run(self.kernel, self.y, self.p, t1, self.settings)
-        return peak
-
-    def section(self) -> np.ndarray:
-        """(J, 4) eccentricity x, y (m) and its rates (m/s) of each joint, now."""
-        return np.array([g(self.t, self.y, self.p) for g in self._gaps], dtype=float)
-
 
 # ------------------------------------------------------------------------------ sections
 
@@ -433,8 +311,6 @@ def _section_run(mech, times, keep, tol, max_period, lyapunov, rtol, method):
     """One run of `poincare_section` at `rtol`, classified."""
     revolutions = len(times)
     if lyapunov:
-        from .lyapunov import TangentFlow
-
         flow = TangentFlow(mech, rtol=rtol, method=method or "dop853")
     else:
         flow = Flow(mech, rtol=rtol, method=method or "dopri5")

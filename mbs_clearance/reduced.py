@@ -41,6 +41,17 @@ from ._checks import (
 from ._generated import paper_slider_crank as MODEL
 from ._warnings import AccuracyWarning
 from .contact import CONTACT_MODELS, hysteresis_factor
+from .diagnostics import (  # noqa: F401 - the contact diagnostics, public here too
+    GRAZING_ONSET,
+    LOOSE_RTOL,
+    RATTLING,
+    SETTLING_ONSETS,
+    START_SWITCHES,
+    contact_flags,
+    floored_impacts,
+    grazing_onsets_of,
+    rattles,
+)
 from .integrator import (
     COUNTERS,
     METHODS,
@@ -58,6 +69,7 @@ from .linkage_model import (  # the settings shared with every linkage's runs
     window_peaks,
 )
 from .mechanism import SliderCrank
+from .trajectory import annotate
 
 # ---- the generated model's layout (every SliderCrank maps to its structure)
 #: the clearance joint's memory (mode, impact velocity) in the generated model's p
@@ -132,29 +144,6 @@ DAMPED_XI = 4.0
 #: absolute tolerance of the penetration rate of a damping-dominated law, in clearance x
 #: crank speed x rtol, divided by xi (the force's relative error goes as xi times the rate's)
 DAMPED_RATE_ATOL = 1e4
-
-#: rtol above which a run warns (AccuracyWarning): the contacts are not resolved (measured,
-#: paper case: peak error 0.5 % at rtol 1e-3, spurious events and a 1e12 N peak at 1e-2)
-LOOSE_RTOL = 1e-4
-
-#: contact switches per revolution above which a run counts as rattling (not periodic)
-RATTLING = 4
-
-#: contact switches of the start-up transient (the journal starts centred) that the
-#: rattling test of `accuracy_flags` allows beyond RATTLING per revolution: measured 5-17,
-#: all in revolution 1, on the paper case, the GA box's corners, 1000 rpm and c = 0.05 mm
-START_SWITCHES = 20
-
-#: a run with this many contact onsets or more (not rattling) settles slowly: the map found
-#: its late peaks off by up to ~1e-3 at the default tolerance (docs/performance.md)
-SETTLING_ONSETS = 6
-
-#: a contact onset slower than this many times clearance x crank speed is a grazing onset:
-#: its stored impact velocity sets the damping of the whole contact and is ill-conditioned,
-#: and the accuracy target (1e-5 on the per-revolution peaks) is not met there at the default
-#: tolerance (docs/performance.md)
-GRAZING_ONSET = 3.0
-
 
 def default_atol(mech: SliderCrank, rtol: float) -> np.ndarray:
     """Absolute tolerances per state component from the mechanism's natural scales."""
@@ -452,12 +441,6 @@ def simulate_reduced(mech: SliderCrank, revolutions: int = 4, **options):
     return annotate(traj)
 
 
-def rattles(nevent: int, revolutions: int, joints: int = 1) -> bool:
-    """True when a run's contact switches exceed RATTLING per revolution and joint beyond the
-    START_SWITCHES of each joint's start-up transient: the motion is not periodic."""
-    return nevent > joints * (RATTLING * revolutions + START_SWITCHES)
-
-
 def accuracy_flags(mech: SliderCrank, revolutions: int, ms: np.ndarray, nevent: int,
                    rtol: float) -> dict:
     """Whether a run is where the accuracy map (docs/performance.md) found the stated
@@ -473,46 +456,6 @@ def accuracy_flags(mech: SliderCrank, revolutions: int, ms: np.ndarray, nevent: 
     return contact_flags([mech.clearance], mech.crank_speed, revolutions, ms, nevent, rtol)
 
 
-def contact_flags(clearances, speed: float, revolutions: int, ms: np.ndarray, nevent: int,
-                  rtol: float) -> dict:
-    """`accuracy_flags` of a run with clearance joints of `clearances` (m) at drive speed
-    `speed` (rad/s), from its recorded memories `ms` (n, 2 J: per joint its contact mode and
-    stored impact velocity) and its `nevent` contact switches; the onsets are counted per
-    joint and the largest count decides the settling test."""
-    clearances = list(clearances)
-    grazing = sum(grazing_onsets_of(ms[:, 2 * j:2 * j + 2], c * speed)
-                  for j, c in enumerate(clearances))
-    onsets = 0
-    for j in range(len(clearances)):
-        mode = ms[:, 2 * j] > 0.5
-        onsets = max(onsets, int(np.count_nonzero(mode[1:] & ~mode[:-1])))
-    rattling = rattles(nevent, revolutions, len(clearances))
-    settling = onsets >= SETTLING_ONSETS
-    resolved = rtol <= 1e-9
-    note = ""
-    if grazing and not resolved and not rattling:
-        note = (f"{grazing} grazing contact onset(s) (impact velocity below "
-                f"{GRAZING_ONSET:g} x clearance x crank speed): the damping of the contact "
-                f"that follows depends on the onset's ill-conditioned velocity, and the peaks "
-                f"after it may miss the stated accuracy (1e-5) by up to ~1e-3 at the default "
-                f"rtol; use rtol 1e-10 for 1e-5 there (stats['accuracy_ok'] is False)")
-    elif settling and not resolved and not rattling:
-        note = (f"{onsets} contact onsets before the contact settles: the later peaks ride on "
-                f"a lightly damped contact vibration and may miss the stated accuracy (1e-5) "
-                f"by up to ~1e-3 at the default rtol (measured at 1000 and 2000 rpm and "
-                f"clearance 0.05 mm); use rtol 1e-10 for 1e-5 there "
-                f"(stats['accuracy_ok'] is False)")
-    elif rattling and not resolved:
-        note = (f"the contact rattles ({nevent} contact switches in {revolutions} "
-                f"revolutions, more than {RATTLING} per revolution): the motion is not "
-                f"periodic and its late peaks depend on every digit of the computation, at "
-                f"any rtol; compare statistics over several revolutions, not single peaks "
-                f"(stats['accuracy_ok'] is False)")
-    ok = not ((grazing or settling or rattling) and not resolved) and rtol <= LOOSE_RTOL
-    return {"grazing_onsets": grazing, "contact_onsets": onsets, "accuracy_ok": ok,
-            "accuracy_note": note, "rattling": rattling}
-
-
 def grazing_onsets(mech: SliderCrank, ms: np.ndarray) -> int:
     """Contact onsets among the recorded memories whose impact velocity is below
     GRAZING_ONSET x clearance x crank speed (where the accuracy map found the 1e-5 target
@@ -520,34 +463,6 @@ def grazing_onsets(mech: SliderCrank, ms: np.ndarray) -> int:
     on the wall) counts as an onset at the floor velocity: its damping follows the
     penetration rate with weight xi / floor (measured: journal on the far wall, 3.4e-5)."""
     return grazing_onsets_of(ms, mech.clearance * mech.crank_speed)
-
-
-def grazing_onsets_of(ms: np.ndarray, scale: float) -> int:
-    """`grazing_onsets` of one joint's memories (n, 2: mode, impact velocity), the joint's
-    clearance x drive speed `scale` (m/s)."""
-    if len(ms) < 1:
-        return 0
-    mode = ms[:, 0] > 0.5
-    onset = np.nonzero(np.concatenate([mode[:1], mode[1:] & ~mode[:-1]]))[0]
-    return int(np.count_nonzero(ms[onset, 1] < GRAZING_ONSET * scale))
-
-
-def floored_impacts(ms: np.ndarray, floor: float) -> int:
-    """Contact onsets whose impact velocity was raised to the floor, from the memories of all
-    recorded steps: grazing onsets, whose stored velocity (and with it the damping of the
-    whole contact) is ill-conditioned at loose tolerances (docs/performance.md)."""
-    return int(_floored_impacts(ms, float(floor)))
-
-
-@nb.njit(cache=True)
-def _floored_impacts(ms, floor):
-    """`floored_impacts` in one pass (five numpy passes over a strided column took 1 % of a
-    simulation)."""
-    n = 0
-    for i in range(1, ms.shape[0]):
-        if ms[i, 0] > 0.5 and not ms[i - 1, 0] > 0.5 and ms[i, 1] <= floor:
-            n += 1
-    return n
 
 
 #: the output columns of a Trajectory's series (base force x, y, eccentricity x, y, crank
@@ -644,13 +559,6 @@ def trajectory_from_states(mech, ts, ys, ms, p, stats, peaks, outs=None,
         stats=stats,
         peaks=peaks,
     )
-
-
-def annotate(traj):
-    """`trajectory.annotate` (imported late: trajectory imports this module's users)."""
-    from .trajectory import annotate as _annotate
-
-    return _annotate(traj)
 
 
 def peak_reduced(mech: SliderCrank, revolution: int = 4, **options) -> float:

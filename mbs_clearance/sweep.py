@@ -42,15 +42,14 @@ from ._checks import (
     revolution_bytes,
 )
 from ._io import recover
+from .design import design_at
 from .linkage import Linkage
-from .mechanism import SliderCrank
 from .poincare import (
     MAX_PERIOD,
     RECURRENCE_TOL,
     REGIME_CODES,
     REGIMES,
     SECTION_COMPONENTS,
-    _check_mech,
     clearances_of,
     joints_of,
     poincare_section,
@@ -140,74 +139,6 @@ def parse_sweep(spec) -> SweepAxis:
 
 
 # ------------------------------------------------------------------------------ designs
-
-def _linkage_clearance(link: Linkage, joint: str | None, value: float) -> Linkage:
-    names = [j.name for j in link.clearance_joints] if joint is None else [joint]
-    for j in names:
-        rb = link.parameter_value(f"{j}.bearing_radius")
-        if not 0.0 < value < rb:
-            raise ValueError(f"clearance of {j} must be in (0, bearing radius {rb!r} m); "
-                             f"got {value!r}")
-        link = link.with_parameter(f"{j}.journal_radius", rb - value)
-    return link
-
-
-def design_at(mech, values: dict, case: str | None = None, overrides: dict | None = None):
-    """The design of a sweep point: `mech` with the fields `values` (see the module
-    docstring for the names), or the named `case` built with `overrides` and `values`.
-    ValueError for an unknown field or a value out of its range."""
-    if case is not None:
-        from .cases import CASE_PARAMETERS, CASES
-
-        if case not in CASES:
-            raise ValueError(f"case must be one of {sorted(CASES)}; got {case!r}")
-        table = CASE_PARAMETERS.get(case)
-        if table is None:       # the paper's case: SliderCrank fields
-            return design_at(SliderCrank().replace(**(overrides or {})), values)
-        changes = dict(overrides or {})
-        for name, v in values.items():
-            if name == "clearance" and name not in table:
-                for key in [k for k in table if k.endswith("clearance")]:
-                    changes[key] = v
-            elif name not in table:
-                raise ValueError(f"{case}: unknown sweep field {name!r}; allowed: "
-                                 f"{sorted(table) + ['clearance']}")
-            else:
-                changes[name] = v
-        return CASES[case](**changes)
-    _check_mech(mech)
-    if isinstance(mech, SliderCrank):
-        from .mechanism import field_names
-
-        changes = {}
-        for name, v in values.items():
-            if name == "clearance":
-                if not 0.0 < v < mech.bearing_radius:
-                    raise ValueError(f"clearance must be in (0, bearing_radius "
-                                     f"{mech.bearing_radius!r} m); got {v!r}")
-                changes["journal_radius"] = mech.bearing_radius - v
-            elif name in field_names():
-                changes[name] = v
-            else:
-                raise ValueError(f"unknown sweep field {name!r} of a SliderCrank; allowed: "
-                                 f"{sorted(field_names()) + ['clearance']}")
-        return mech.replace(**changes)
-    link = mech
-    for name, v in values.items():
-        if name == "clearance":
-            link = _linkage_clearance(link, None, v)
-        elif name.endswith(".clearance"):
-            link = _linkage_clearance(link, name[:-len(".clearance")], v)
-        elif name == "crank_speed":
-            link = link.with_parameter("drive.speed", v)
-        else:
-            if name not in link.parameter_names():
-                raise ValueError(f"unknown sweep field {name!r} of linkage {link.name!r}; "
-                                 f"allowed: {list(link.parameter_names())} or 'clearance', "
-                                 "'<joint>.clearance', 'crank_speed'")
-            link = link.with_parameter(name, v)
-    return link
-
 
 # ------------------------------------------------------------------------------- points
 

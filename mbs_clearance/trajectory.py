@@ -511,10 +511,11 @@ def _load_linkage(path: Path, meta: dict) -> Trajectory:
         raise _fail(path, f"bad linkage: {exc}") from exc
     cols = meta.pop("_columns")
     joints = tuple(j.name for j in linkage.clearance_joints)
+    # the ground joints' and coordinates' names from the columns, in their stored order
+    grounds = [k[len("reaction."):-len("_x[N]")] for k in cols
+               if k.startswith("reaction.") and k.endswith("_x[N]")]
+    coords = [k[len("coordinate."):] for k in cols if k.startswith("coordinate.")]
     try:
-        from .generate import load_model
-
-        model = load_model(linkage)
         n = len(cols["t[s]"])
         for name, v in cols.items():
             if v.shape != (n,) or not np.all(np.isfinite(v)):
@@ -541,12 +542,12 @@ def _load_linkage(path: Path, meta: dict) -> Trajectory:
             joints=joints,
             reactions={g: np.column_stack([cols[f"reaction.{g}_x[N]"],
                                            cols[f"reaction.{g}_y[N]"]])
-                       for g in model.GROUND_JOINTS},
+                       for g in grounds},
             shaking_force=np.column_stack([cols["shaking_force_x[N]"],
                                            cols["shaking_force_y[N]"]]),
-            coordinates={c: cols[f"coordinate.{c}"] for c in model.COORDINATES},
-            rates={c: cols[f"rate.{c}"] for c in model.COORDINATES},
-            accelerations={c: cols[f"acceleration.{c}"] for c in model.COORDINATES},
+            coordinates={c: cols[f"coordinate.{c}"] for c in coords},
+            rates={c: cols[f"rate.{c}"] for c in coords},
+            accelerations={c: cols[f"acceleration.{c}"] for c in coords},
             friction_work=cols.get("friction_work[J]"),
         )
     except KeyError as exc:
