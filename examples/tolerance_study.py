@@ -10,7 +10,7 @@ probability that it exceeds 8300 N; Morris screening ranks the two inputs. Large
 """
 
 from mbs_clearance import SliderCrank, tolerance_study
-from mbs_clearance.tolerance import FitClearance, band
+from mbs_clearance.studies.tolerance import FitClearance, band
 
 inputs = {
     "radial_clearance": FitClearance("H7/g6", diameter=0.020),

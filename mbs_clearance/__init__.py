@@ -1,4 +1,4 @@
-"""mbs-clearance: slider-crank mechanisms with a revolute clearance joint.
+"""mbs-clearance: planar mechanisms with clearance joints.
 
 Public API::
 
@@ -9,8 +9,6 @@ Public API::
 """
 
 import logging
-import sys
-import types
 
 from ._cache import register_package
 from ._warnings import (  # noqa: F401 - public warning classes, users filter by them
@@ -32,18 +30,19 @@ logging.getLogger(__name__).addHandler(logging.NullHandler())
 #: `import mbs_clearance` and the CLI's start-up load only what a command needs
 _LAZY = {
     **dict.fromkeys(("GROUND", "Body", "ClearanceJoint", "Drive", "Linkage", "Prismatic",
-                     "Revolute"), "linkage"),
-    **dict.fromkeys(("LyapunovResult", "lyapunov_exponent"), "lyapunov"),
-    **dict.fromkeys(("Start", "settled_start"), "linkage_model"),
-    **dict.fromkeys(("CONTINUOUS_FIELDS", "PARAMETER_INFO", "SliderCrank"), "mechanism"),
-    **dict.fromkeys(("PeakGradient", "peak_gradient"), "objective"),
-    **dict.fromkeys(("OptimizationResult", "optimize_link_lengths"), "optimize"),
-    **dict.fromkeys(("PoincareSection", "poincare_section"), "poincare"),
-    **dict.fromkeys(("DEFAULT_PARAMETERS", "Sensitivities", "sensitivities"), "sensitivity"),
-    **dict.fromkeys(("BACKENDS", "peak_base_force", "simulate"), "simulate"),
-    **dict.fromkeys(("MapResult", "regime_map"), "sweep"),
-    **dict.fromkeys(("ToleranceResult", "tolerance_study"), "tolerance"),
-    **dict.fromkeys(("Trajectory", "load_trajectory"), "trajectory"),
+                     "Revolute"), "model.linkage"),
+    **dict.fromkeys(("LyapunovResult", "lyapunov_exponent"), "analysis.lyapunov"),
+    **dict.fromkeys(("Start", "settled_start"), "solve.linkage_model"),
+    **dict.fromkeys(("CONTINUOUS_FIELDS", "PARAMETER_INFO", "SliderCrank"), "model.mechanism"),
+    **dict.fromkeys(("PeakGradient", "peak_gradient"), "analysis.objective"),
+    **dict.fromkeys(("OptimizationResult", "optimize_link_lengths"), "studies.optimize"),
+    **dict.fromkeys(("PoincareSection", "poincare_section"), "analysis.poincare"),
+    **dict.fromkeys(("DEFAULT_PARAMETERS", "Sensitivities", "sensitivities"),
+                    "analysis.sensitivity"),
+    **dict.fromkeys(("BACKENDS", "peak_base_force", "simulate"), "solve.simulate"),
+    **dict.fromkeys(("MapResult", "regime_map"), "studies.sweep"),
+    **dict.fromkeys(("ToleranceResult", "tolerance_study"), "studies.tolerance"),
+    **dict.fromkeys(("Trajectory", "load_trajectory"), "solve.trajectory"),
 }
 
 
@@ -64,21 +63,6 @@ def __getattr__(name: str):
 
 def __dir__():
     return sorted(set(globals()) | set(_LAZY) | {"__version__"})
-
-
-class _Package(types.ModuleType):
-    """The package's module type: importing the submodule `simulate` (mbs_clearance/
-    simulate.py) must not replace the public function `simulate` of the same name, which the
-    import system would otherwise do (it sets the parent's attribute to the submodule)."""
-
-    def __setattr__(self, name, value):
-        if (isinstance(value, types.ModuleType) and value.__name__ == f"{__name__}.{name}"
-                and _LAZY.get(name) == name):
-            value = getattr(value, name)
-        super().__setattr__(name, value)
-
-
-sys.modules[__name__].__class__ = _Package
 
 
 __all__ = [

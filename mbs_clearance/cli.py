@@ -24,7 +24,7 @@ import warnings
 from pathlib import Path
 
 from ._io import OutputDir, atomic_file, check_output_dir, check_output_file, folder_lock
-from .mechanism import PARAMETER_INFO, SliderCrank
+from .model.mechanism import PARAMETER_INFO, SliderCrank
 from .units import number, quantity
 
 # the subcommands import what they need when they run (start-up time): simulate, optimize,
@@ -241,7 +241,7 @@ def evaluate_on(args: argparse.Namespace, fn, *fn_args, **kw):
         except ImportError as exc:
             raise ValueError("--scheduler needs dask.distributed: "
                              "pip install 'mbs-clearance[dask]'") from exc
-        from .optimize import connect_dask
+        from .studies.optimize import connect_dask
 
         with connect_dask(args.scheduler) as client:
             print(f"evaluating on the dask cluster at {args.scheduler}", file=sys.stderr)
@@ -301,11 +301,11 @@ def add_mechanism_options(parser: argparse.ArgumentParser) -> None:
             _optional_float if optional else _float)
         extra = "; 'none': derived value" if optional else ""
         if f.name == "contact_model":
-            from .contact import CONTACT_MODELS
+            from .laws.forces import CONTACT_MODELS
 
             shown = f"{default}; one of {', '.join(CONTACT_MODELS)}"
         elif f.name == "friction_law":
-            from .contact import FRICTION_LAWS
+            from .laws.forces import FRICTION_LAWS
 
             shown = f"{default}; one of {', '.join(FRICTION_LAWS)}"
         elif default is None:
@@ -336,7 +336,7 @@ def mechanism_from_args(args: argparse.Namespace) -> SliderCrank:
 
 def _case_lines() -> str:
     """One line per named case: its name and the first line of its docstring."""
-    from .cases import CASE_SUMMARY, CASES
+    from .model.cases import CASE_SUMMARY, CASES
 
     return "\n".join(f"  {name}: {CASE_SUMMARY.get(name, '')}" for name in sorted(CASES))
 
@@ -399,10 +399,10 @@ def linkage_from_args(args: argparse.Namespace):
                          f"slider-crank only, not to --{'case' if case else 'description'}; "
                          f"change a case with --set NAME=VALUE")
     if description is not None:
-        from .linkage import Linkage
+        from .model.linkage import Linkage
 
         return Linkage.from_file(description)
-    from .cases import CASES
+    from .model.cases import CASES
 
     changes = {}
     for name, value in overrides:
@@ -446,8 +446,8 @@ def _force(value: float) -> str:
 
 
 def _cmd_simulate(args: argparse.Namespace) -> int:
-    from .simulate import simulate
-    from .trajectory import load_trajectory
+    from .solve.simulate import simulate
+    from .solve.trajectory import load_trajectory
 
     linkage = linkage_from_args(args)
     if linkage is not None:
@@ -528,7 +528,7 @@ def _simulate_options(args: argparse.Namespace) -> dict:
 def _simulate_linkage(linkage, args: argparse.Namespace) -> int:
     """simulate --case / --description: peaks per revolution of the monitored force, the
     drive moment and each clearance joint's contact force."""
-    from .simulate import simulate
+    from .solve.simulate import simulate
 
     if args.out:
         check_output_file(args.out, "--out", args.force, suffixes=(".npz", ".csv"))
@@ -607,10 +607,10 @@ SENSITIVITY_COLUMNS = (
 def _peak_gradient_linkage(linkage, args: argparse.Namespace) -> int:
     """sensitivity --output NAME (--case / --description): the peak of the output over the
     last revolution and its gradient along --parameters (`objective.peak_gradient`)."""
-    from .objective import peak_gradient
+    from .analysis.objective import peak_gradient
 
     if args.parameters is None:
-        from .design import design_names
+        from .model.design import design_names
 
         raise ValueError(f"--output needs --parameters (comma-separated) of "
                          f"{design_names(linkage)}")
@@ -645,7 +645,7 @@ def _peak_gradient_linkage(linkage, args: argparse.Namespace) -> int:
 
 
 def _cmd_sensitivity(args: argparse.Namespace) -> int:
-    from .sensitivity import DEFAULT_PARAMETERS, sensitivities
+    from .analysis.sensitivity import DEFAULT_PARAMETERS, sensitivities
 
     linkage, mech = design_from_args(args)
     if args.output is not None:
@@ -715,7 +715,7 @@ def _cmd_sensitivity(args: argparse.Namespace) -> int:
 
 
 def _case_names() -> list[str]:
-    from .cases import CASES
+    from .model.cases import CASES
 
     return sorted(CASES)
 
@@ -757,7 +757,7 @@ def settled_start_of(linkage, args: argparse.Namespace):
         return None
     if linkage is None:
         raise ValueError("--settled applies to --case or --description only")
-    from .linkage_model import settled_start
+    from .solve.linkage_model import settled_start
 
     _progress(f"settling {linkage.name!r}: {n} revolutions from the centred start ...")
     return settled_start(linkage, n, rtol=getattr(args, "rtol", None))
@@ -782,8 +782,8 @@ def add_run_options(p: argparse.ArgumentParser, methods, integrator_default="dop
 def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     """The parser of every subcommand. With `command` given (the one being run), only that
     plugin subcommand is loaded, and none for a built-in one (start-up time)."""
-    from .exudyn_linkage import CONTACT_VARIANTS as contact_variants
-    from .integrator import METHODS
+    from .backends.exudyn_linkage import CONTACT_VARIANTS as contact_variants
+    from .numerics.integrator import METHODS
 
     methods = sorted(METHODS)
     parser = Parser(
@@ -912,7 +912,7 @@ def _add_optimize_parser(subparsers) -> argparse.ArgumentParser:
 
 
 def format_table3(result, paper_in_model: float, ideal: dict[str, float]) -> str:
-    from .optimize import PAPER_TABLE3
+    from .studies.optimize import PAPER_TABLE3
 
     """Markdown table: the paper's Table 3 beside our optimum and the paper's optimum.
 
@@ -946,8 +946,8 @@ def format_table3(result, paper_in_model: float, ideal: dict[str, float]) -> str
 
 
 def _cmd_optimize(args: argparse.Namespace) -> int:
-    from .optimize import PAPER_TABLE3, design_mechanism, optimize_link_lengths
-    from .simulate import peak_base_force, simulate
+    from .solve.simulate import peak_base_force, simulate
+    from .studies.optimize import PAPER_TABLE3, design_mechanism, optimize_link_lengths
 
     linkage = linkage_from_args(args)
     if linkage is not None:
@@ -1036,11 +1036,11 @@ def _optimize_linkage(linkage, args: argparse.Namespace) -> int:
     """optimize --case / --description: the GA over the --gene bounds, minimising the
     --output's peak; prints the original and best designs' peaks and genes, writes
     result.json and the fitness history into --out."""
-    from .optimize import optimize_link_lengths
     from .plotting import plot_fitness_history
+    from .studies.optimize import optimize_link_lengths
 
     if not args.gene:
-        from .design import design_names
+        from .model.design import design_names
 
         raise ValueError(f"--case / --description needs --gene NAME=LO:HI (one or more) of "
                          f"{design_names(linkage)}")
@@ -1116,7 +1116,7 @@ def _add_tolerance_parser(subparsers) -> argparse.ArgumentParser:
 
 
 def _cmd_tolerance(args: argparse.Namespace) -> int:
-    from .tolerance import read_inputs, tolerance_study
+    from .studies.tolerance import read_inputs, tolerance_study
 
     _, mech = design_from_args(args)
     inputs = read_inputs(args.inputs)
@@ -1182,7 +1182,7 @@ def _add_map_parser(subparsers) -> argparse.ArgumentParser:
 
 def _cmd_map(args: argparse.Namespace) -> int:
     from . import plotting
-    from .sweep import regime_map
+    from .studies.sweep import regime_map
 
     overrides = {}
     for name, value in args.set or []:
@@ -1194,7 +1194,7 @@ def _cmd_map(args: argparse.Namespace) -> int:
     case = args.case
     paper = case in (None, "paper_slider_crank")
     if paper:
-        from .mechanism import field_names
+        from .model.mechanism import field_names
 
         unknown = sorted(set(overrides) - set(field_names()))
         if unknown:
@@ -1205,7 +1205,7 @@ def _cmd_map(args: argparse.Namespace) -> int:
               revolutions=args.revolutions, keep=args.keep, lyapunov=args.lyapunov,
               angle=args.angle, tol=args.tol, max_period=args.max_period, rtol=args.rtol,
               progress=not args.no_progress, write_interval=args.write_interval)
-    from .sweep import load_map
+    from .studies.sweep import load_map
 
     # the folder's rule is every command's; an unfinished run's map.nc is resumed
     check_output_dir(args.out, "--out", args.force, resume={"map.nc": load_map})
@@ -1290,7 +1290,7 @@ def _add_animate_parser(subparsers) -> argparse.ArgumentParser:
 
 
 def _cmd_animate(args: argparse.Namespace) -> int:
-    from .simulate import simulate
+    from .solve.simulate import simulate
 
     linkage, mech = design_from_args(args)
     revolution = args.revolutions if args.revolution is None else args.revolution
@@ -1368,8 +1368,8 @@ def _add_lyapunov_parser(subparsers) -> argparse.ArgumentParser:
 
 
 def _cmd_lyapunov(args: argparse.Namespace) -> int:
-    from .lyapunov import BLOCKS, lyapunov_exponent
-    from .poincare import LYAPUNOV_ZERO
+    from .analysis.lyapunov import BLOCKS, lyapunov_exponent
+    from .analysis.poincare import LYAPUNOV_ZERO
     from .units import number
 
     linkage, mech = design_from_args(args)

@@ -14,7 +14,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from ._io import PNG_SOFTWARE
-from .trajectory import Trajectory
+from .solve.trajectory import Trajectory
 from .units import number
 
 __all__ = ["plot_trajectory", "plot_overlay", "plot_comparison", "plot_sensitivities",
@@ -318,7 +318,7 @@ def plot_bifurcation(ds, path: str | Path | None = None, joint: int = 0,
     clearance x speed for rates) against the first swept field, coloured by regime; a
     two-field map is cut at `fixed` ({other field: value}, nearest; default its first
     value)."""
-    from .poincare import REGIMES
+    from .analysis.poincare import REGIMES
 
     dims = _sweep_dims(ds)
     sel = ds
@@ -390,7 +390,7 @@ def plot_regime_map(ds, path: str | Path | None = None, mark: Mapping | None = N
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
 
-    from .poincare import REGIME_CODES, REGIMES
+    from .analysis.poincare import REGIME_CODES, REGIMES
 
     dims = _sweep_dims(ds)
     if len(dims) != 2:
@@ -467,7 +467,7 @@ def plot_poincare(ds, points: Sequence[Mapping], path: str | Path | None = None,
                   joint: int = 0) -> Figure:
     """Poincare portraits: the section samples (x, y in clearances) of the given sweep
     points ({field: value}, nearest), one panel each, the clearance circle drawn."""
-    from .poincare import REGIMES
+    from .analysis.poincare import REGIMES
 
     n = len(points)
     fig = Figure(figsize=(3.2 * n, 3.4))
@@ -595,8 +595,8 @@ def mechanism_frames(traj: Trajectory, revolution: int | None = None, frames: in
     a Linkage or coordinates, a revolution outside the trajectory, or a `magnify` that
     would draw a journal larger than its bearing allows (> 0 and <= 0.9 drawn bearing
     radius / largest clearance)."""
-    from .exudyn_linkage import body_states
-    from .linkage import GROUND, Prismatic
+    from .backends.exudyn_linkage import body_states
+    from .model.linkage import GROUND, Prismatic
 
     linkage = traj.linkage
     if linkage is None or traj.coordinates is None:

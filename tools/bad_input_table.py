@@ -182,7 +182,7 @@ EVIL_NAME = 'x"""\nimport pathlib; pathlib.Path("PWNED").write_text("ran")\n"""'
 
 def _make_description_files(folder: Path, command: str) -> None:
     """The description files of the cases above that `command` names."""
-    from mbs_clearance.cases import four_bar, paper_slider_crank
+    from mbs_clearance.model.cases import four_bar, paper_slider_crank
 
     def paper():
         return paper_slider_crank().to_dict()
@@ -408,8 +408,8 @@ LIBRARY_CASES += [
 
 def _description_namespace() -> dict:
     """Names the description cases use."""
-    from mbs_clearance import cases
-    from mbs_clearance.linkage import Body, Linkage
+    from mbs_clearance.model import cases
+    from mbs_clearance.model.linkage import Body, Linkage
 
     def paper_dict():
         return cases.paper_slider_crank().to_dict()
@@ -429,10 +429,11 @@ def _library_namespace(tmp: Path) -> dict:
 
     import numpy as np
 
-    from mbs_clearance import SliderCrank, cases, load_trajectory, peak_base_force, simulate
-    from mbs_clearance.linkage_model import Start
-    from mbs_clearance.optimize import OptimizationResult
-    from mbs_clearance.sensitivity import load_sensitivities, sensitivities
+    from mbs_clearance import SliderCrank, load_trajectory, peak_base_force, simulate
+    from mbs_clearance.analysis.sensitivity import load_sensitivities, sensitivities
+    from mbs_clearance.model import cases
+    from mbs_clearance.solve.linkage_model import Start
+    from mbs_clearance.studies.optimize import OptimizationResult
 
     cache: dict = {}
 
@@ -486,7 +487,7 @@ def _library_namespace(tmp: Path) -> dict:
         return path
 
     def _small_result():
-        from mbs_clearance.optimize import optimize_link_lengths
+        from mbs_clearance.studies.optimize import optimize_link_lengths
 
         return optimize_link_lengths(SliderCrank(), population=4, generations=1, seed=1,
                                      executor="serial", refine=False, progress=False)
@@ -503,8 +504,8 @@ def _library_namespace(tmp: Path) -> dict:
 # ---- names of the library cases on sizes, tolerance ranges and regime maps
 def _sizes_namespace(tmp: Path) -> dict:
     from mbs_clearance import lyapunov_exponent, optimize_link_lengths, regime_map
-    from mbs_clearance.sweep import load_map
-    from mbs_clearance.tolerance import FitClearance, Uniform, band, tolerance_study
+    from mbs_clearance.studies.sweep import load_map
+    from mbs_clearance.studies.tolerance import FitClearance, Uniform, band, tolerance_study
 
     def crafted_map():
         path = tmp / "damaged_map.nc"

@@ -3,7 +3,7 @@
     python tools/generate_models.py
 
 Writes mbs_clearance/_generated/<case>.py for every case of `generate.NAMED_CASES` that
-mbs_clearance.cases defines, and the registry MODULES (structure digest -> module) in
+mbs_clearance.model.cases defines, and the registry MODULES (structure digest -> module) in
 mbs_clearance/_generated/__init__.py. tests/unit/test_generate.py fails when a checked-in
 module differs from what this writes.
 """

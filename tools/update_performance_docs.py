@@ -1,10 +1,10 @@
 """Rewrite the measured tables of docs/performance.md and docs/sensitivity.md from the
 outputs of the benchmark commands (run them first, with nothing else running):
 
-    python -m validation.benchmarks.speed_reduced --json results/speed_reduced.json \
+    python -m benchmarks.speed_reduced --json results/speed_reduced.json \
         > results/speed_reduced.md
-    python -m validation.benchmarks.work_precision --out results
-    python -m validation.benchmarks.ddm_speed > results/ddm_speed.md
+    python -m validation.work_precision --out results
+    python -m benchmarks.ddm_speed > results/ddm_speed.md
     python -m validation.stress --backend reduced exudyn --json results/stress.json
     python tools/update_performance_docs.py
 """

@@ -13,8 +13,9 @@ from functools import cache
 
 import numpy as np
 
-from mbs_clearance import SliderCrank, reduced
-from mbs_clearance.optimize import design_mechanism
+from mbs_clearance import SliderCrank
+from mbs_clearance.solve import reduced
+from mbs_clearance.studies.optimize import design_mechanism
 
 #: the GA's default box (optimize.py)
 BOX = {"crank_length": (0.04, 0.06), "coupler_length": (0.10, 0.14)}

@@ -1,6 +1,6 @@
 """Accuracy as a request: `simulate(case, accuracy=a)` against the same model at rtol 1e-12.
 
-For each named case (mbs_clearance.cases) at its defaults and at three other points (a
+For each named case (mbs_clearance.model.cases) at its defaults and at three other points (a
 slower drive, a larger clearance, a lower restitution), the per-revolution peaks of the
 monitored force of `simulate(..., accuracy=a)` for a = 1e-5 and 1e-6 against the reduced
 model's own run at rtol 1e-12: the true error, the run's estimate, the rtols it ran, and
@@ -17,8 +17,9 @@ import time
 
 import numpy as np
 
-from mbs_clearance import cases, simulate
-from mbs_clearance.accuracy import revolution_peaks
+from mbs_clearance import simulate
+from mbs_clearance.model import cases
+from mbs_clearance.solve.accuracy import revolution_peaks
 
 RPM = 2.0 * math.pi / 60.0
 

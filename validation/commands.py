@@ -56,7 +56,7 @@ stress = Command(
 bench = Command(
     "bench", "work-precision benchmark (validation)",
     "Work-precision: run time against error for every backend and integrator, in one run.",
-    ".benchmarks.work_precision")
+    ".work_precision")
 report = Command(
     "report", "build the validation report (HTML + JSON)",
     "The validation report: the paper reproduced and cross-checked, in one command.",

@@ -38,7 +38,7 @@ from pathlib import Path
 
 import numpy as np
 
-from mbs_clearance.trajectory import Trajectory
+from mbs_clearance.solve.trajectory import Trajectory
 
 __all__ = ["RevolutionMetrics", "FirstImpact", "Statistics", "Comparison", "compare",
            "common_grid", "first_impact", "statistics", "format_table", "compare_command",
@@ -441,8 +441,8 @@ def cross_check(mech, revolutions: int = 4, *, accuracy: float = 1e-6,
     h/4, Richardson-extrapolated (its bar: `exudyn_convergence.richardson`), halved further
     while a bar exceeds `exudyn_accuracy` (relative; None: three runs)."""
     from mbs_clearance import simulate
-    from mbs_clearance.accuracy import revolution_peaks
-    from mbs_clearance.exudyn_convergence import converged_peaks
+    from mbs_clearance.backends.exudyn_convergence import converged_peaks
+    from mbs_clearance.solve.accuracy import revolution_peaks
 
     t0 = time.perf_counter()
     red = simulate(mech, revolutions, accuracy=accuracy)
@@ -504,9 +504,9 @@ def _backend_options(backend: str, other: str, args, mech) -> dict:
 
 def _exudyn_settings(options: dict, mech):
     if hasattr(mech, "clearance_joints"):
-        from mbs_clearance.exudyn_linkage import make_settings
+        from mbs_clearance.backends.exudyn_linkage import make_settings
     else:
-        from mbs_clearance.exudyn_model import make_settings
+        from mbs_clearance.backends.exudyn_model import make_settings
     return make_settings(dict(options))
 
 
@@ -520,7 +520,6 @@ def _exudyn_step(args, mech) -> float:
 
 def build_parser(parser: argparse.ArgumentParser | None = None) -> argparse.ArgumentParser:
     """Arguments of ``mbs-clearance compare`` (added to `parser` if given)."""
-    from mbs_clearance.cases import CASES
     from mbs_clearance.cli import (
         Parser,
         add_force_option,
@@ -529,7 +528,8 @@ def build_parser(parser: argparse.ArgumentParser | None = None) -> argparse.Argu
         int_at_least,
         positive_float,
     )
-    from mbs_clearance.simulate import BACKENDS
+    from mbs_clearance.model.cases import CASES
+    from mbs_clearance.solve.simulate import BACKENDS
 
     if parser is None:
         parser = Parser(
@@ -583,7 +583,7 @@ def run_compare(args: argparse.Namespace) -> int:
     """Body of ``mbs-clearance compare`` for parsed arguments; returns the exit code."""
     from mbs_clearance._io import atomic_file, check_output_file
     from mbs_clearance.cli import figure_suffixes, linkage_from_args, mechanism_from_args
-    from mbs_clearance.simulate import simulate
+    from mbs_clearance.solve.simulate import simulate
 
     mech = linkage_from_args(args) or mechanism_from_args(args)
     if args.revolutions < 1:

@@ -1,5 +1,5 @@
 """The converged cross-check at the named cases' points: Exudyn at h, h/2, h/4 extrapolated
-(`mbs_clearance.exudyn_convergence`) and the reduced model at accuracy 1e-6, each with its
+(`mbs_clearance.backends.exudyn_convergence`) and the reduced model at accuracy 1e-6, each with its
 error bar, against the reduced model at rtol 1e-12; the time each model needed.
 
     python -m validation.cross_check [--revolutions 4] [--cases NAME ...] [--points LABEL ...]
@@ -17,7 +17,7 @@ import argparse
 
 import numpy as np
 
-from mbs_clearance import cases
+from mbs_clearance.model import cases
 
 from .accuracy_request import points, reference_peaks
 from .compare import cross_check

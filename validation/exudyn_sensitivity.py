@@ -89,7 +89,7 @@ def ddm(linkage, names, revolutions: int, t: np.ndarray, rtol: float = 1e-10, st
     (over `window`, default t[0]..t[-1]) and its derivative come from the runs' own steps,
     not from the samples t."""
     lo, hi = (t[0], t[-1]) if window is None else window
-    from mbs_clearance.sensitivity import sensitivities
+    from mbs_clearance.analysis.sensitivity import sensitivities
 
     extra = {} if rel is None else {"fd_relative_step": rel}
     s = sensitivities(linkage, list(names), revolutions=revolutions, method=method, t_eval=t,
@@ -145,8 +145,8 @@ def compare_fd_ddm(name: str, steps, names=None, revolutions: int = 2, rel: floa
     """Rows (step, parameter, series difference, rms difference) for case `name` (from the
     state after `settled` revolutions if > 0). A step of 0 is the reduced model's central
     differences (rtol 1e-11) on the DDM's grid: the finite-difference step's own error."""
-    from mbs_clearance import cases
-    from mbs_clearance.linkage_model import settled_start
+    from mbs_clearance.model import cases
+    from mbs_clearance.solve.linkage_model import settled_start
 
     linkage = cases.CASES[name]()
     names = tuple(names or PARAMETERS[name])

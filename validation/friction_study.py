@@ -30,7 +30,8 @@ import argparse
 
 import numpy as np
 
-from mbs_clearance import cases, simulate
+from mbs_clearance import simulate
+from mbs_clearance.model import cases
 
 CASES = ("paper_slider_crank", "slider_crank_two_clearances")
 
@@ -137,7 +138,7 @@ def figure(results, revolutions: int, path: str) -> None:
 def sensitivity_study(mus, revolutions: int = 4, law: str = "ambrosio"):
     """[(mu, Sensitivities)] of the paper's SliderCrank, DDM, the paper's parameters."""
     from mbs_clearance import SliderCrank, sensitivities
-    from mbs_clearance.sensitivity import DEFAULT_PARAMETERS
+    from mbs_clearance.analysis.sensitivity import DEFAULT_PARAMETERS
 
     out = []
     for mu in mus:

@@ -14,9 +14,9 @@ from __future__ import annotations
 
 import math
 
-from mbs_clearance._trig import sincos
-from mbs_clearance.contact import CONTACT_MODELS, contact_force
-from mbs_clearance.mechanism import SliderCrank
+from mbs_clearance.laws.forces import CONTACT_MODELS, contact_force
+from mbs_clearance.model.mechanism import SliderCrank
+from mbs_clearance.numerics._trig import sincos
 
 __all__ = ["gap", "dynamics", "switching", "impact_velocity"]
 

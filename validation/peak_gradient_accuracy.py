@@ -17,10 +17,11 @@ import argparse
 
 import numpy as np
 
-from mbs_clearance import SliderCrank, peak_gradient, reduced
+from mbs_clearance import SliderCrank, peak_gradient
 from mbs_clearance.cli import positive_float
+from mbs_clearance.solve import reduced
 
-from .benchmarks.common import machine_summary
+from .timing import machine_summary
 
 #: (L2, L3) in m: the paper's design, the designs of tests/unit/test_objective.py and four
 #: more of the GA's box (L2 in [0.04, 0.06], L3 in [0.10, 0.14])

@@ -28,9 +28,9 @@ import time
 import numba as nb
 import numpy as np
 
-from mbs_clearance import cases
 from mbs_clearance.generate import load_model
-from mbs_clearance.linkage_model import initial_state, pack_parameters
+from mbs_clearance.model import cases
+from mbs_clearance.solve.linkage_model import initial_state, pack_parameters
 
 
 def make_runner(model):
@@ -102,7 +102,7 @@ MAX_STEPS = 100_000_000
 def adaptive_peaks(linkage, revolutions: int, rtol: float) -> dict:
     """Peaks per revolution (refined, N) and contact events (total, first revolution) of
     `linkage` through the adaptive integrator at `rtol`, recording nothing."""
-    from mbs_clearance.linkage_model import run
+    from mbs_clearance.solve.linkage_model import run
 
     first = run(linkage, 1, rtol=rtol, record=False, max_steps=MAX_STEPS)[6]["nevent"]
     out = run(linkage, revolutions, rtol=rtol, record=False, max_steps=MAX_STEPS)

@@ -188,7 +188,7 @@ def converged_rows(cases) -> list[dict]:
     peaks with their error bars, the difference, the verdict ("model difference" where it
     exceeds the two bars together) and the time each model needed
     (`validation.compare.cross_check`)."""
-    from mbs_clearance.cases import CASES
+    from mbs_clearance.model.cases import CASES
 
     from .compare import cross_check
 
@@ -217,9 +217,9 @@ def agreement_cases(out: Path, revolutions: int, names, settled=()) -> dict:
     first impact time per clearance joint and an overlay figure (orbit per joint). Each
     (name, N) of `settled`: the same over one revolution from the reduced model's state
     after N revolutions (`settled_start`, rtol 1e-10), in both models."""
-    from mbs_clearance.cases import CASES
-    from mbs_clearance.exudyn_linkage import make_settings
-    from mbs_clearance.linkage_model import settled_start
+    from mbs_clearance.backends.exudyn_linkage import make_settings
+    from mbs_clearance.model.cases import CASES
+    from mbs_clearance.solve.linkage_model import settled_start
 
     from .compare import compare, plot_linkage_comparison
 
@@ -253,7 +253,7 @@ def agreement_cases(out: Path, revolutions: int, names, settled=()) -> dict:
 
 
 def section_sensitivity(out: Path, s: dict) -> dict:
-    from mbs_clearance.sensitivity import DEFAULT_PARAMETERS, sensitivities
+    from mbs_clearance.analysis.sensitivity import DEFAULT_PARAMETERS, sensitivities
 
     mech = SliderCrank()
     n = s["revolutions"]
@@ -280,8 +280,8 @@ def section_sensitivity(out: Path, s: dict) -> dict:
 
 
 def section_optimization(out: Path, s: dict) -> dict:
-    from mbs_clearance.optimize import design_mechanism, optimize_link_lengths
-    from mbs_clearance.simulate import peak_base_force
+    from mbs_clearance.solve.simulate import peak_base_force
+    from mbs_clearance.studies.optimize import design_mechanism, optimize_link_lengths
 
     results, evals = {}, {}
     paper_lengths = {"crank_length": PAPER["optimum_crank_length"],
@@ -315,9 +315,9 @@ def section_optimization(out: Path, s: dict) -> dict:
 def section_tolerance(out: Path, s: dict) -> dict:
     """Sobol indices of the rev-4 peak over the benchmark's 8 tolerances (quick: the 4
     largest, first order only), Monte Carlo with P(peak > allowable), a wear study."""
-    from mbs_clearance.tolerance import tolerance_study
+    from mbs_clearance.studies.tolerance import tolerance_study
 
-    from .benchmarks.tolerance_speed import INPUTS
+    from .tolerance_inputs import INPUTS
 
     inputs = dict(INPUTS)
     if s["quick"]:
@@ -339,7 +339,7 @@ def section_tolerance(out: Path, s: dict) -> dict:
 def _check_map_file(path: Path) -> None:
     """ValueError naming --map and the file unless it is a complete regime map of
     `mbs-clearance map` (readable, with its regime variable over one or two swept fields)."""
-    from mbs_clearance.sweep import load_map
+    from mbs_clearance.studies.sweep import load_map
 
     try:
         ds = load_map(path)
@@ -356,8 +356,8 @@ def section_regimes(out: Path, s: dict) -> dict:
     `mbs-clearance map` (--map FILE); saved as data/regime_map.nc."""
     import xarray as xr
 
-    from mbs_clearance.poincare import REGIMES
-    from mbs_clearance.sweep import load_map, regime_map
+    from mbs_clearance.analysis.poincare import REGIMES
+    from mbs_clearance.studies.sweep import load_map, regime_map
 
     mech = SliderCrank()
     target = out / "data" / "regime_map.nc"
@@ -472,8 +472,8 @@ def section_paper(out: Path, s: dict, numbers: dict) -> dict:
 
 
 def section_performance(out: Path, s: dict) -> dict:
-    from .benchmarks.work_precision import run, speed_ratios
     from .stress import run_sweep, stress_cases, summary
+    from .work_precision import run, speed_ratios
 
     rows, refs = run(quick=s["quick"], repeats=3 if s["quick"] else 5)
     ratios = {case: {str(t): speed_ratios(rows, case, t) for t in (1e-2, 1e-3, 1e-5)}
@@ -484,7 +484,7 @@ def section_performance(out: Path, s: dict) -> dict:
 
 
 def section_environment(out: Path, s: dict, timings: dict) -> dict:
-    from .benchmarks.common import machine_summary
+    from .timing import machine_summary
 
     versions = {}
     for pkg in ("mbs-clearance", "numpy", "scipy", "numba", "exudyn", "pygad", "matplotlib",
@@ -705,15 +705,15 @@ def draw_figures(out: Path, numbers: dict) -> dict[str, list[str]]:
         animate_mechanism(trajs[0], fig_dir / "mechanism.gif", frames=36, fps=9)
         figs["response"].append("mechanism.gif")
     if (data / "sensitivity_ddm.npz").exists():
-        from mbs_clearance.sensitivity import load_sensitivities
+        from mbs_clearance.analysis.sensitivity import load_sensitivities
 
         sens = load_sensitivities(data / "sensitivity_ddm.npz")
         for stem, (title, group) in SENSITIVITY_FIGURES.items():
             plot_sensitivities(sens, group, title, path=fig_dir / f"{stem}.png")
             figs["sensitivity"].append(f"{stem}.png")
     if (data / "optimization_fixed.json").exists():
-        from mbs_clearance.optimize import OptimizationResult
         from mbs_clearance.plotting import plot_fitness_history, plot_force_comparison
+        from mbs_clearance.studies.optimize import OptimizationResult
 
         for scaling in ("fixed", "uniform"):
             res = OptimizationResult.from_json(data / f"optimization_{scaling}.json")
@@ -726,7 +726,7 @@ def draw_figures(out: Path, numbers: dict) -> dict[str, list[str]]:
             figs["optimization"] += [f"fig7a_fitness_{scaling}.png",
                                      f"fig7b_force_{scaling}.png"]
     if (data / "tolerance.json").exists():
-        from mbs_clearance.tolerance import ToleranceResult
+        from mbs_clearance.studies.tolerance import ToleranceResult
 
         plot_tolerance(ToleranceResult.from_json(data / "tolerance.json"),
                        path=fig_dir / "tolerance.png")
@@ -735,7 +735,7 @@ def draw_figures(out: Path, numbers: dict) -> dict[str, list[str]]:
         plot_regimes(data / "regime_map.nc", fig_dir / "regime_map.png")
         figs["regimes"].append("regime_map.png")
     if "friction" in numbers:
-        from mbs_clearance.sensitivity import load_sensitivities
+        from mbs_clearance.analysis.sensitivity import load_sensitivities
 
         from .friction_study import figure as orbit_figure
         from .friction_study import sensitivity_figure

@@ -17,9 +17,9 @@ import numpy as np
 from scipy.integrate import solve_ivp
 from scipy.optimize import minimize_scalar
 
-from mbs_clearance import reduced
-from mbs_clearance.integrator import N_CRESTS
-from mbs_clearance.mechanism import SliderCrank
+from mbs_clearance.model.mechanism import SliderCrank
+from mbs_clearance.numerics.integrator import N_CRESTS
+from mbs_clearance.solve import reduced
 
 __all__ = ["ScipyResult", "solve_scipy", "solve_scipy_linkage"]
 
@@ -86,7 +86,7 @@ def solve_scipy_linkage(linkage, revolutions: int = 4, method: str = "DOP853",
     atol: per state component (default: the compiled integrator's, the drive's work not
     under error control, as there)."""
     from mbs_clearance.generate import load_model
-    from mbs_clearance.linkage_model import default_atol, initial_state, pack_parameters
+    from mbs_clearance.solve.linkage_model import default_atol, initial_state, pack_parameters
 
     model = load_model(linkage)
     p = pack_parameters(linkage, model)

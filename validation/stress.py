@@ -29,9 +29,10 @@ from typing import Any
 import numba as nb
 import numpy as np
 
-from mbs_clearance import SliderCrank, reduced, simulate
+from mbs_clearance import SliderCrank, simulate
 from mbs_clearance._warnings import AccuracyWarning
-from mbs_clearance.integrator import METHODS, rk_step
+from mbs_clearance.numerics.integrator import METHODS, rk_step
+from mbs_clearance.solve import reduced
 
 RPM = 2 * math.pi / 60
 
@@ -169,7 +170,7 @@ def _check_case(case: StressCase, backend: str) -> dict[str, Any]:
         row.update(status="skipped", reasons=["option only in the reduced model"])
         return row
     if backend == "exudyn":
-        from mbs_clearance.exudyn_model import DEFAULT_STEP_SIZE
+        from mbs_clearance.backends.exudyn_model import DEFAULT_STEP_SIZE
 
         steps = case.revolutions * case.mech.period / DEFAULT_STEP_SIZE
         if steps > MAX_EXUDYN_STEPS:

@@ -16,8 +16,8 @@ import sys
 import numba as nb
 import numpy as np
 
-from mbs_clearance._trig import sincos
-from mbs_clearance.integrator import integrate
+from mbs_clearance.numerics._trig import sincos
+from mbs_clearance.numerics.integrator import integrate
 from mbs_clearance.generate.runtime import (
     ACTION_SIG,
     EVENT_SIG,

@@ -27,7 +27,7 @@ __all__ = ["generate_module", "load_model", "model_path", "model_structure", "GE
            "structure_digest", "NAMED_CASES", "NAMED_VARIANTS", "named_cases",
            "registry_source"]
 
-#: the named cases (functions of mbs_clearance.cases) whose modules are checked in
+#: the named cases (functions of mbs_clearance.model.cases) whose modules are checked in
 NAMED_CASES = ("paper_slider_crank", "slider_crank_two_clearances", "four_bar")
 
 #: checked-in variants of named cases with another structure: module name -> (case,
@@ -37,9 +37,9 @@ NAMED_VARIANTS = {"paper_slider_crank_friction": ("paper_slider_crank",
 
 
 def named_cases() -> dict:
-    """name -> Linkage (default arguments) of the NAMED_CASES that mbs_clearance.cases
+    """name -> Linkage (default arguments) of the NAMED_CASES that mbs_clearance.model.cases
     defines, and of the NAMED_VARIANTS."""
-    from .. import cases
+    from ..model import cases
 
     out = {name: getattr(cases, name)() for name in NAMED_CASES if hasattr(cases, name)}
     for name, (case, overrides) in NAMED_VARIANTS.items():

@@ -25,7 +25,7 @@ import sympy as sp
 import sympy.physics.mechanics as me
 
 from ..laws.registry import FRICTION_SLOTS
-from ..linkage import GROUND, Linkage, Prismatic, Revolute
+from ..model.linkage import GROUND, Linkage, Prismatic, Revolute
 
 __all__ = ["Derivation", "derive", "parameter_layout", "identifier", "geometric_zeros",
            "specialise"]

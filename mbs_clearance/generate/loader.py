@@ -42,7 +42,7 @@ from pathlib import Path
 from types import ModuleType
 
 from .._warnings import CacheWarning
-from ..linkage import Linkage
+from ..model.linkage import Linkage
 from .writer import structure_digest
 
 __all__ = ["generate_module", "load_model", "model_path", "model_structure"]

@@ -8,9 +8,9 @@ import math
 
 import numba as nb
 
-from ..contact import contact_force
-from ..integrator import ACTION_SIG, EVENT_SIG, KERNEL, MONITOR_SIG, RHS_SIG
 from ..laws._dispatch import friction_force_slots
+from ..laws.forces import contact_force
+from ..numerics.integrator import ACTION_SIG, EVENT_SIG, KERNEL, MONITOR_SIG, RHS_SIG
 
 __all__ = ["KERNEL", "RHS_SIG", "EVENT_SIG", "ACTION_SIG", "MONITOR_SIG", "gap_state",
            "contact_stage", "friction_stage", "switching"]

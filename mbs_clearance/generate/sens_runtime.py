@@ -17,9 +17,9 @@ from __future__ import annotations
 import numba as nb
 import numpy as np
 
-from ..contact import contact_force, contact_force_partials
-from ..integrator import KERNEL, _golden_max, _step_monitor, step_workspace
 from ..laws._dispatch import friction_force_partials_slots
+from ..laws.forces import contact_force, contact_force_partials
+from ..numerics.integrator import KERNEL, _golden_max, _step_monitor, step_workspace
 from .runtime import gap_state
 
 __all__ = ["contact_jacobian", "friction_jacobian", "contact_tangent", "friction_tangent",

@@ -6,7 +6,7 @@ import math  # noqa: F401
 
 import numba as nb
 
-from .._kernel import KERNEL
+from ..numerics._kernel import KERNEL
 from .contact.lankarani_nikravesh import hysteresis as _xi0_py
 from .contact.hunt_crossley import hysteresis as _xi1_py
 from .contact.flores import hysteresis as _xi2_py

@@ -2,7 +2,6 @@
 
 import pytest
 
-from validation.benchmarks.work_precision import run, speed_ratios, target_table
 from validation.stress import (
     backend_differences,
     run_case,
@@ -10,6 +9,7 @@ from validation.stress import (
     stress_cases,
     summary,
 )
+from validation.work_precision import run, speed_ratios, target_table
 
 
 @pytest.mark.slow
@@ -65,7 +65,7 @@ def test_stress_case_on_both_backends():
 
 
 def test_equal_error_time_interpolates_in_log_log():
-    from validation.benchmarks.speed_reduced import equal_error_time
+    from benchmarks.speed_reduced import equal_error_time
 
     # time ~ error^(-1/2) between the rows: at error 1e-6 (geometric midpoint of 1e-5 and
     # 1e-7) the interpolated time is the geometric midpoint of 1 and 100
@@ -86,14 +86,14 @@ def test_step_limit_jacobian_matches_the_generated_one():
     bound in that direction)."""
     import numpy as np
 
-    from mbs_clearance import cases
-    from mbs_clearance.linkage_model import run
-    from validation.benchmarks.step_limit import (
+    from benchmarks.step_limit import (
         model_call_cost,
         spectrum_along_run,
         stability_radius,
         state_jacobian,
     )
+    from mbs_clearance.model import cases
+    from mbs_clearance.solve.linkage_model import run
 
     lk = cases.slider_crank_two_clearances()
     model, ts, ys, ms, *_, p = run(lk, 1)
@@ -134,7 +134,7 @@ def test_stability_radius_closed_forms():
     it comes back to +1."""
     import numpy as np
 
-    from validation.benchmarks.step_limit import stability_radius
+    from benchmarks.step_limit import stability_radius
 
     assert stability_radius("bs3", np.pi / 2) == pytest.approx(np.sqrt(3.0), rel=1e-9)
     real_root = [r.real for r in np.roots([1 / 6, -1 / 2, 1.0, -2.0]) if abs(r.imag) < 1e-12]

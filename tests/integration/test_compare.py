@@ -97,7 +97,7 @@ def test_linkage_comparison_per_joint(tmp_path):
     """A linkage against a copy with one joint's orbit shifted by 0.1 of its clearance and
     the drive moment scaled by 1.02: the per-joint orbit distance and the RMS differences
     are measured exactly; the other joint's first impact is unchanged."""
-    from mbs_clearance.cases import slider_crank_two_clearances
+    from mbs_clearance.model.cases import slider_crank_two_clearances
     from validation.compare import plot_linkage_comparison
 
     lk = slider_crank_two_clearances()

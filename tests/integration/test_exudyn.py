@@ -23,8 +23,8 @@ import numpy as np
 import pytest
 
 from mbs_clearance import SliderCrank, peak_base_force, simulate
-from mbs_clearance import exudyn_model as em
-from mbs_clearance.ideal import simulate_ideal
+from mbs_clearance.backends import exudyn_model as em
+from mbs_clearance.backends.ideal import simulate_ideal
 from validation.compare import compare, first_impact, statistics
 
 pytestmark = pytest.mark.exudyn

@@ -16,9 +16,10 @@ import math
 import numpy as np
 import pytest
 
-from mbs_clearance import cases, simulate
-from mbs_clearance import exudyn_linkage as xl
-from mbs_clearance.contact import FRICTION_LAWS, friction_factor, friction_force
+from mbs_clearance import simulate
+from mbs_clearance.backends import exudyn_linkage as xl
+from mbs_clearance.laws.forces import FRICTION_LAWS, friction_factor, friction_force
+from mbs_clearance.model import cases
 
 pytestmark = pytest.mark.exudyn
 

@@ -18,10 +18,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from mbs_clearance import cases, simulate
-from mbs_clearance import exudyn_linkage as xl
-from mbs_clearance.linkage import GROUND
-from mbs_clearance.linkage_model import initial_state
+from mbs_clearance import simulate
+from mbs_clearance.backends import exudyn_linkage as xl
+from mbs_clearance.model import cases
+from mbs_clearance.model.linkage import GROUND
+from mbs_clearance.solve.linkage_model import initial_state
 
 pytestmark = pytest.mark.exudyn
 
@@ -187,7 +188,7 @@ def test_default_step_and_tolerance_follow_the_contact_scales():
     assert 1e-8 < floor < 1e-7 and s.tolerance(fb) == xl.ROUNDOFF_MARGIN * floor
     assert xl.make_settings(dict(newton_tolerance=1e-9)).tolerance(fb) == 1e-9
     # independent: the force error of one rounding unit at L, relative to the load
-    from mbs_clearance.contact import contact_force
+    from mbs_clearance.laws.forces import contact_force
 
     cj = fb.clearance_joints[0]
     load = sum(b.mass for b in fb.bodies) * (fb.gravity + fb.drive.speed ** 2 * 6.75)
@@ -400,7 +401,7 @@ _SETTLED: dict = {}
 def four_bar_settled_start():
     """The four-bar's state after 100 revolutions (reduced model, rtol 1e-10, about 70 s):
     the start's impacts and the sliding mode have settled (docs/cases.md)."""
-    from mbs_clearance.linkage_model import settled_start
+    from mbs_clearance.solve.linkage_model import settled_start
 
     if "start" not in _SETTLED:
         _SETTLED["start"] = settled_start(cases.four_bar(), 100, rtol=1e-10)

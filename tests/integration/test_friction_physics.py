@@ -12,9 +12,18 @@ import math
 import numpy as np
 import pytest
 
-from mbs_clearance import cases, peak_base_force, simulate
-from mbs_clearance.linkage import GROUND, Body, ClearanceJoint, Drive, Linkage, Prismatic, Revolute
-from mbs_clearance.sensitivity import sensitivities
+from mbs_clearance import peak_base_force, simulate
+from mbs_clearance.analysis.sensitivity import sensitivities
+from mbs_clearance.model import cases
+from mbs_clearance.model.linkage import (
+    GROUND,
+    Body,
+    ClearanceJoint,
+    Drive,
+    Linkage,
+    Prismatic,
+    Revolute,
+)
 
 FRICTION = {"friction_law": "ambrosio", "friction_coefficient": 0.1}
 
@@ -61,7 +70,7 @@ def _energy(lk, traj):
     """Kinetic + gravity + contact-spring energy at the recorded states, from the generated
     model's energy kernel (contact mode from the recorded phase)."""
     from mbs_clearance.generate import load_model
-    from mbs_clearance.linkage_model import pack_parameters
+    from mbs_clearance.solve.linkage_model import pack_parameters
 
     model = load_model(lk)
     p = pack_parameters(lk, model)

@@ -17,7 +17,7 @@ from pathlib import Path
 import pytest
 
 from mbs_clearance._io import MANIFEST
-from mbs_clearance.sweep import load_map
+from mbs_clearance.studies.sweep import load_map
 
 psutil = pytest.importorskip("psutil")
 
@@ -77,7 +77,8 @@ _busy.import_cpu = 0.0
 def _import_cpu():
     t = time.process_time()
     proc = subprocess.run([sys.executable, "-c", "import time, mbs_clearance.cli, "
-                           "mbs_clearance.optimize, mbs_clearance.tolerance, mbs_clearance.sweep;"
+                           "mbs_clearance.studies.optimize, mbs_clearance.studies.tolerance, "
+                           "mbs_clearance.studies.sweep;"
                            " print(time.process_time())"], capture_output=True, text=True)
     _busy.import_cpu = float(proc.stdout.strip() or 0.0) + (time.process_time() - t)
 

@@ -26,7 +26,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from mbs_clearance.cases import four_bar, slider_crank_two_clearances
+from mbs_clearance.model.cases import four_bar, slider_crank_two_clearances
 
 C_IDEAL = 1e-7          # m, the ideal-joint limit's clearance
 #: per case: revolutions run, rtol, and where the compared windows start (in periods).
@@ -183,7 +183,7 @@ def _mechanical_energy(lk, traj):
     """Kinetic + gravity + contact-spring energy along the run, from the generated model's
     own energy kernel at the recorded states (contact mode from the recorded phase)."""
     from mbs_clearance.generate import load_model
-    from mbs_clearance.linkage_model import pack_parameters
+    from mbs_clearance.solve.linkage_model import pack_parameters
 
     model = load_model(lk)
     p = pack_parameters(lk, model)
@@ -292,7 +292,7 @@ def test_generated_dynamics_loaded_by_the_ideal_joint_forces(name):
     (E = 2.07e14 Pa, delta ~ 4e-9 m): measured <= 1.7e-7. Tolerance 1e-6 of each quantity's
     scale."""
     from mbs_clearance.generate import load_model
-    from mbs_clearance.linkage_model import pack_parameters
+    from mbs_clearance.solve.linkage_model import pack_parameters
     from validation.ideal_linkage import from_linkage, ideal_outputs
 
     c, stiff = 1e-9, dict(youngs_modulus=2.07e14, restitution=1.0)
@@ -369,7 +369,7 @@ def test_slider_crank_defaults_are_periodic(name, revolutions, settled):
     revolution), and the peak repeats from one revolution to the next within `settled`
     at the last revolution (measured: paper 4.7e-8 at revolution 8, two joints 1.4e-9 at
     revolution 6), the change shrinking revolution by revolution (a stable orbit)."""
-    from mbs_clearance.cases import CASES
+    from mbs_clearance.model.cases import CASES
     from validation.regime_scan import adaptive_peaks, periodicity
 
     lk = CASES[name]()

@@ -10,13 +10,13 @@ import math
 import numpy as np
 import pytest
 
-from mbs_clearance.cases import four_bar, slider_crank_two_clearances
+from mbs_clearance.analysis.objective import parse_output, peak_gradient, peak_output
 from mbs_clearance.cli import main
-from mbs_clearance.design import design_value, direction, linkage_with
-from mbs_clearance.objective import parse_output, peak_gradient, peak_output
-from mbs_clearance.optimize import optimize_link_lengths
-from mbs_clearance.simulate import simulate
-from mbs_clearance.tolerance import Uniform, tolerance_study
+from mbs_clearance.model.cases import four_bar, slider_crank_two_clearances
+from mbs_clearance.model.design import design_value, direction, linkage_with
+from mbs_clearance.solve.simulate import simulate
+from mbs_clearance.studies.optimize import optimize_link_lengths
+from mbs_clearance.studies.tolerance import Uniform, tolerance_study
 
 #: tolerance of the four-bar's runs here: its peaks agree between rtol 1e-10 and 1e-11 to
 #: 3e-6 (cases.four_bar), and 1e-10 keeps each two-revolution run near a second
@@ -100,7 +100,7 @@ def test_case_memory_and_design_names():
     assert both.parameter_value("coupler.mass") == 1.5 and both.case is None
     assert both.parameter_value("rocker.pin.x") == pytest.approx(1.3, rel=1e-15)
     # a description (no case): its dotted paths only
-    from mbs_clearance.linkage import Linkage
+    from mbs_clearance.model.linkage import Linkage
 
     desc = Linkage.from_dict(four_bar().to_dict())
     assert desc.case is None and desc == four_bar()
@@ -152,8 +152,8 @@ def test_ddm_peak_gradient_along_case_overrides_against_central_differences(outp
     differences' own spread between steps of 3e-5 and 3e-4 is 7e-5), and for the monitored
     force against the SliderCrank's DDM gradient (its own directions and run) to 1e-4. The
     CLI prints and saves the same gradient."""
-    from mbs_clearance.cases import paper_slider_crank
-    from mbs_clearance.mechanism import SliderCrank
+    from mbs_clearance.model.cases import paper_slider_crank
+    from mbs_clearance.model.mechanism import SliderCrank
 
     names = ["coupler_length", "crank_length"]
     g = peak_gradient(paper_slider_crank(), names, 4, output=output, method="ddm")
@@ -186,8 +186,8 @@ def test_peaks_of_other_outputs_are_refined_between_the_recorded_steps():
     for the
     other outputs it is at least the recorded samples' maximum and above it by less than
     1e-4 (the samples are steps of a run at rtol 1e-10)."""
-    from mbs_clearance import linkage_model as lm
-    from mbs_clearance.objective import _refined_peak
+    from mbs_clearance.analysis.objective import _refined_peak
+    from mbs_clearance.solve import linkage_model as lm
 
     fb = four_bar(**DAMPED)
     model, ts, ys, ms, peaks, _, stats, outs, p = lm.run(fb, 2, record=True, rtol=RTOL)
@@ -304,7 +304,7 @@ def test_regime_map_of_the_four_bar_over_its_clearance_against_direct_runs(tmp_p
     steps: the map's run is stopped at each section, the direct one is not; measured at
     rtol 1e-9, the direct run's revolution-2 peak is 3.2e-6 and the map's 1.1e-6 from
     the value at rtol 1e-10; at the map's default rtol both were 4e-5 off)."""
-    from mbs_clearance.sweep import regime_map
+    from mbs_clearance.studies.sweep import regime_map
 
     values = (1e-5, 3e-5)
     res = regime_map(four_bar(**DAMPED), ("clearance", values), revolutions=4, keep=3,
@@ -321,7 +321,7 @@ def test_regime_map_of_the_four_bar_over_its_clearance_against_direct_runs(tmp_p
                  "--revolutions", "4", "--keep", "3", "--max-period", "1", "--workers", "1",
                  "--rtol", "1e-9",
                  "--out", str(out), "--no-progress"]) == 0
-    from mbs_clearance.sweep import load_map
+    from mbs_clearance.studies.sweep import load_map
 
     np.testing.assert_array_equal(load_map(out / "map.nc")["peak"].values, ds["peak"].values)
     assert math.isfinite(float(ds["peak_max"].max()))

@@ -32,7 +32,7 @@ def test_map_local_pool_and_dask_local_cluster_identical(tmp_path):
 
 
 def test_ga_evaluates_through_the_shared_evaluator(monkeypatch):
-    from mbs_clearance import executor, optimize
+    from mbs_clearance.studies import executor, optimize
 
     calls = []
     real = executor.evaluate
@@ -69,7 +69,7 @@ def test_a_lost_worker_chunk_is_rescheduled_and_the_map_is_unchanged(tmp_path):
     import time
 
     distributed = pytest.importorskip("dask.distributed")
-    from mbs_clearance.sweep import load_map as _load
+    from mbs_clearance.studies.sweep import load_map as _load
 
     sweep = "clearance=1e-5:5e-4:log:8"
     kw = dict(revolutions=30, keep=5, max_period=2)

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from mbs_clearance import SliderCrank, regime_map
-from mbs_clearance.sweep import load_map as _load
+from mbs_clearance.studies.sweep import load_map as _load
 
 SWEEP = "clearance=1e-5:5e-4:log:6"
 #: 120 revolutions per point: long enough (about 0.3 s on a 2-core machine) that the polling

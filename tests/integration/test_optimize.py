@@ -17,7 +17,7 @@ import pygad
 import pytest
 
 from mbs_clearance import SliderCrank, peak_base_force
-from mbs_clearance.optimize import OptimizationResult, optimize_link_lengths
+from mbs_clearance.studies.optimize import OptimizationResult, optimize_link_lengths
 
 L2_BOX, L3_BOX = (0.04, 0.06), (0.10, 0.14)
 PAPER = SliderCrank()
@@ -323,7 +323,7 @@ def test_threads_release_the_gil_inside_the_compiled_model(monkeypatch):
 
     import numba
 
-    from mbs_clearance import reduced
+    from mbs_clearance.solve import reduced
 
     def spin(n):
         s = 0.0
@@ -376,7 +376,7 @@ def test_threads_release_the_gil_inside_the_compiled_model(monkeypatch):
 ROOT = __import__("pathlib").Path(__file__).resolve().parents[2]
 SCRIPT_RUN = dict(seed=5, population=6, generations=2, refine=False, progress=False)
 GA_CALL = ("from mbs_clearance import SliderCrank\n"
-           "from mbs_clearance.optimize import optimize_link_lengths\n"
+           "from mbs_clearance.studies.optimize import optimize_link_lengths\n"
            "r = optimize_link_lengths(SliderCrank(), seed=5, population=6, generations=2,\n"
            "                          refine=False, progress=False{extra})\n"
            "print('BEST', r.best.crank_length.hex(), r.best.coupler_length.hex(),\n"
@@ -446,7 +446,7 @@ def test_process_pool_without_main_guard_fails_with_one_clear_line(tmp_path):
 
 LONG_GA = ("import sys\n"
            "from mbs_clearance import SliderCrank\n"
-           "from mbs_clearance.optimize import optimize_link_lengths\n"
+           "from mbs_clearance.studies.optimize import optimize_link_lengths\n"
            "def main():\n"
            "    optimize_link_lengths(SliderCrank(), seed=1, population=8, generations=10**6,\n"
            "                          saturation=None, refine=False, progress=True,\n"
@@ -577,7 +577,7 @@ def test_unreachable_dask_scheduler_fails_with_one_line(capsys):
     import time
 
     from mbs_clearance.cli import main
-    from mbs_clearance.optimize import connect_dask
+    from mbs_clearance.studies.optimize import connect_dask
 
     with socket.socket() as s:                 # a port nobody listens on
         s.bind(("127.0.0.1", 0))
@@ -637,7 +637,7 @@ def test_gene_gradient_matches_central_differences_under_uniform_scaling():
     """The unit-box gradient the refinement uses (DDM, chained through the uniform mass
     scaling, explicit crank inertia) against central differences of the peak of the
     rebuilt design, at tight rtol."""
-    from mbs_clearance.optimize import _peak_and_gradient, _Problem
+    from mbs_clearance.studies.optimize import _peak_and_gradient, _Problem
 
     base = SliderCrank(crank_inertia=1e-4)
     problem = _Problem(base=base, names=("crank_length", "coupler_length"), lo=L2_BOX[:1] +
@@ -691,7 +691,7 @@ def test_gradient_refinement_reaches_the_grid_minimum_with_fewer_calls(mass_scal
 
 
 def _fixed_problem():
-    from mbs_clearance.optimize import _Problem
+    from mbs_clearance.studies.optimize import _Problem
 
     return _Problem(base=PAPER, names=("crank_length", "coupler_length"),
                     lo=(L2_BOX[0], L3_BOX[0]), hi=(L2_BOX[1], L3_BOX[1]),
@@ -713,7 +713,7 @@ def test_refinement_says_truthfully_that_it_ended_on_the_corner(start, calls):
     GA's best the corner's default-rtol value is above the start's by integration noise
     (5e-8 relative; the first-order change is 6e-10 relative): the projection is kept and
     said (`projected`)."""
-    from mbs_clearance.optimize import _Objective, _refine
+    from mbs_clearance.studies.optimize import _Objective, _refine
 
     problem = _fixed_problem()
     objective = _Objective(problem, run_id=-1)

@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 from mbs_clearance import SliderCrank, peak_base_force, simulate
+from mbs_clearance.analysis.sensitivity import sensitivities
 from mbs_clearance.cli import main
-from mbs_clearance.sensitivity import sensitivities
 from validation.report import SECTIONS
 
 # the quick report computes every section (three to four minutes from a cold cache, the
@@ -86,8 +86,8 @@ def test_converged_cross_check_rows_follow_their_bars(report):
     1e-6 (the same call gives them), each verdict says whether the difference exceeds the
     two error bars, and the extrapolated Exudyn peak lies within the reduced model's
     accuracy plus both bars of it."""
-    from mbs_clearance import cases
-    from mbs_clearance.accuracy import revolution_peaks
+    from mbs_clearance.model import cases
+    from mbs_clearance.solve.accuracy import revolution_peaks
 
     rows = json.loads((report / "report.json").read_text())["agreement"]["converged"]
     assert [(r["case"], r["revolution"]) for r in rows] == [("paper_slider_crank", 1),
@@ -378,8 +378,8 @@ def test_friction_section(report):
     with friction do; the sensitivity table's numbers are those of the saved DDM runs, the
     first of them frictionless and equal to an independent DDM run; both figures are in the
     HTML and decode."""
-    from mbs_clearance import cases
-    from mbs_clearance.sensitivity import load_sensitivities
+    from mbs_clearance.analysis.sensitivity import load_sensitivities
+    from mbs_clearance.model import cases
 
     n = json.loads((report / "report.json").read_text())
     fr = n["friction"]

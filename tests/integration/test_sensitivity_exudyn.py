@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from mbs_clearance.sensitivity import sensitivities
+from mbs_clearance.analysis.sensitivity import sensitivities
 
 pytestmark = pytest.mark.exudyn
 
@@ -52,7 +52,8 @@ def test_exudyn_fd_of_a_linkage_agrees_with_the_reduced_model_fd():
     moves the RMS by only ~1e-3 per 1 %: the difference is at Exudyn's own error level);
     d peak / d mass 3.1e-2 and 2.0e-2 (the peak's 2e-4 error divided by the 1e-2 step).
     Asserted: RMS 1e-3 (masses), 0.15 (inertia); peak 0.06 (masses)."""
-    from mbs_clearance import cases, simulate
+    from mbs_clearance import simulate
+    from mbs_clearance.model import cases
     from validation.compare import shaking_magnitude
 
     lk = cases.paper_slider_crank()

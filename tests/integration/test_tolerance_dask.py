@@ -11,7 +11,7 @@ pytest.importorskip("SALib")
 
 def test_same_seed_same_indices_locally_and_on_a_dask_local_cluster():
     distributed = pytest.importorskip("dask.distributed")
-    from mbs_clearance.tolerance import FitClearance, band, tolerance_study
+    from mbs_clearance.studies.tolerance import FitClearance, band, tolerance_study
 
     inputs = {"crank_length": band(0.05, 2e-4),
               "radial_clearance": FitClearance("H7/g6", 0.020)}

@@ -7,8 +7,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from mbs_clearance import SliderCrank, peak_base_force, reduced, simulate
+from mbs_clearance import SliderCrank, peak_base_force, simulate
 from mbs_clearance._warnings import AccuracyWarning
+from mbs_clearance.solve import reduced
 from validation import accuracy_map as am
 
 
@@ -126,7 +127,7 @@ def test_journal_starting_on_the_far_wall_is_flagged_and_resolved_at_rtol_1e_10(
 def test_paper_case_error_and_cost_pinned_by_function_evaluations():
     """The fix's cost on the paper case: 59 911 function evaluations against 42 049 without
     the penetration under error control (1.42 x; the benchmark
-    validation/benchmarks/accuracy_cost.py times it); the error 1.8e-5 -> 3.0e-6."""
+    benchmarks/accuracy_cost.py times it); the error 1.8e-5 -> 3.0e-6."""
     mech = SliderCrank()
     err, counters = am.peak_errors(mech)
     assert err.max() < 5e-6
@@ -166,7 +167,7 @@ def test_default_run_is_the_default_rtol_run_and_its_estimate_bounds_its_error()
     bit plus a peaks-only check at 1e-5, whose estimate (difference / 15) is within 1e-5
     and at least the true error against rtol 1e-12 (3.0e-6). Its cost in function
     evaluations: 1.49 x the run's (the check records nothing; the time ratio is
-    validation/benchmarks/accuracy_request_cost.py's)."""
+    benchmarks/accuracy_request_cost.py's)."""
     mech = SliderCrank()
     traj = simulate(mech)
     fixed = simulate(mech, rtol=1e-7)
@@ -201,7 +202,7 @@ def test_named_case_as_linkage_meets_the_request(overrides):
     """A Linkage (the two-clearance slider-crank) at 1e-6 and, by default, at 1e-5: its
     runs carry the contact diagnostics, so the default's unflagged run takes the cheap
     check; both against the same model at rtol 1e-12."""
-    from mbs_clearance.cases import slider_crank_two_clearances
+    from mbs_clearance.model.cases import slider_crank_two_clearances
 
     lk = slider_crank_two_clearances(**overrides)
     ref = simulate(lk, rtol=am.REFERENCE_RTOL).peaks
@@ -236,7 +237,7 @@ def test_richardson_recovers_the_limit_and_order_of_a_second_order_sequence():
     error with a higher-order term): the observed order is near 2, the extrapolated value
     nearer L than y(h/4), within the bar; a sequence that does not converge monotonically
     is not extrapolated and gets the larger difference as its bar."""
-    from mbs_clearance.exudyn_convergence import richardson
+    from mbs_clearance.backends.exudyn_convergence import richardson
 
     L, C, D, h = 1000.0, 5.0, 40.0, 0.1
     y = [L + C * x**2 + D * x**3 for x in (h, h / 2, h / 4)]
@@ -254,7 +255,7 @@ def test_rattling_motion_is_returned_flagged_with_its_estimate():
     flagged and with a warning (as every run whose accuracy_ok is False), with the estimate
     from one run at 1e-8: the difference of the two runs' peaks, computed here
     independently."""
-    from mbs_clearance.accuracy import peak_difference
+    from mbs_clearance.solve.accuracy import peak_difference
 
     mech = SliderCrank(journal_radius=0.0099)
     with pytest.warns(AccuracyWarning, match="rattles"):
@@ -271,10 +272,10 @@ def test_studies_run_to_a_requested_accuracy():
     """Every study takes `accuracy` in place of a fixed rtol: a linkage's chosen output
     (`peak_output`, the monitored force and another output), a tolerance study's outputs
     and the GA's objective, each within the request of the same at rtol 1e-12."""
-    from mbs_clearance.cases import slider_crank_two_clearances
-    from mbs_clearance.objective import peak_output
-    from mbs_clearance.optimize import optimize_link_lengths
-    from mbs_clearance.tolerance import band, tolerance_study
+    from mbs_clearance.analysis.objective import peak_output
+    from mbs_clearance.model.cases import slider_crank_two_clearances
+    from mbs_clearance.studies.optimize import optimize_link_lengths
+    from mbs_clearance.studies.tolerance import band, tolerance_study
 
     lk = slider_crank_two_clearances()
     for output in (None, "shaking_force"):

@@ -5,9 +5,10 @@ import math
 import numpy as np
 import pytest
 
-from mbs_clearance import cases, simulate
+from mbs_clearance import simulate
 from mbs_clearance.cli import main
-from mbs_clearance.linkage import GROUND, Prismatic
+from mbs_clearance.model import cases
+from mbs_clearance.model.linkage import GROUND, Prismatic
 from mbs_clearance.plotting import animate_mechanism, magnification, mechanism_frames
 from mbs_clearance.units import number
 

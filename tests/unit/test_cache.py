@@ -29,7 +29,8 @@ import numpy as np
 import pytest
 
 import mbs_clearance
-from mbs_clearance import SliderCrank, _cache, reduced
+from mbs_clearance import SliderCrank, _cache
+from mbs_clearance.solve import reduced
 
 REPO = Path(mbs_clearance.__file__).resolve().parents[1]
 
@@ -407,7 +408,8 @@ RHS_RUN = """
 import json
 import numpy as np
 import mbs_clearance
-from mbs_clearance import SliderCrank, reduced
+from mbs_clearance import SliderCrank
+from mbs_clearance.solve import reduced
 
 mech = SliderCrank()
 p = reduced.model_parameters(mech)
@@ -424,8 +426,9 @@ print(json.dumps({"file": mbs_clearance.__file__, "rhs": f.tolist(), "path": st.
 STRESS_RUN = """
 import json
 import numpy as np
-from mbs_clearance import SliderCrank, reduced
-from mbs_clearance.integrator import METHODS
+from mbs_clearance import SliderCrank
+from mbs_clearance.solve import reduced
+from mbs_clearance.numerics.integrator import METHODS
 from validation import stress
 
 mech = SliderCrank()
@@ -512,7 +515,8 @@ def test_the_race_with_the_real_package(tmp_path):
     first = textwrap.dedent("""
         import json
         import numpy as np
-        from mbs_clearance import SliderCrank, reduced
+        from mbs_clearance import SliderCrank
+        from mbs_clearance.solve import reduced
         mech = SliderCrank()
         p = reduced.model_parameters(mech)
         y = reduced.initial_state(mech, 1.5)

@@ -1,4 +1,4 @@
-"""The named cases (mbs_clearance.cases): each builds, its overrides work and bad ones fail
+"""The named cases (mbs_clearance.model.cases): each builds, its overrides work and bad ones fail
 with a clear ValueError, the four-bar is a Grashof crank-rocker, and the assembly guesses
 at t = 0 are the closed loop of the hand-written ideal reference (validation.ideal_linkage)."""
 
@@ -8,14 +8,14 @@ import numpy as np
 import pytest
 
 from mbs_clearance import Linkage, SliderCrank
-from mbs_clearance.cases import (
+from mbs_clearance.backends.ideal import ideal_outputs as paper_ideal
+from mbs_clearance.model.cases import (
     CASE_PARAMETERS,
     CASES,
     four_bar,
     paper_slider_crank,
     slider_crank_two_clearances,
 )
-from mbs_clearance.ideal import ideal_outputs as paper_ideal
 from validation.ideal_linkage import from_linkage, grashof_type, ideal_outputs
 
 
@@ -172,7 +172,7 @@ def test_assembly_at_t0_closes_every_loop(name):
 
 def test_paper_case_reference_through_the_description_matches_the_closed_form(paper):
     """The reference read from the paper case's description (from_linkage) gives the
-    paper's closed-form ideal outputs (mbs_clearance.ideal), to rounding."""
+    paper's closed-form ideal outputs (mbs_clearance.backends.ideal), to rounding."""
     loop = from_linkage(paper_slider_crank())
     t = np.linspace(0.0, paper.period, 721)
     o, p = ideal_outputs(loop, t), paper_ideal(paper, t)
@@ -196,7 +196,7 @@ def test_cases_start_with_every_journal_centred():
     """The glue's initial state (Newton on the generated closure) is the ideal reference's
     pose at t = 0: coordinates to 1e-12, rates to 1e-9 relative."""
     from mbs_clearance.generate import load_model
-    from mbs_clearance.linkage_model import initial_state, pack_parameters
+    from mbs_clearance.solve.linkage_model import initial_state, pack_parameters
     from validation.ideal_linkage import from_linkage, ideal_outputs
 
     for lk in (four_bar(), slider_crank_two_clearances()):

@@ -94,7 +94,7 @@ def test_none_sets_the_derived_value_over_the_config_file(tmp_path):
 
 
 def test_parameter_list_accepts_spaces_and_runs(capsys):
-    from mbs_clearance.sensitivity import sensitivities
+    from mbs_clearance.analysis.sensitivity import sensitivities
 
     assert main(["sensitivity", "--parameters", "crank_length, slider_mass ",
                  "--revolutions", "1"]) == 0
@@ -133,7 +133,7 @@ def test_bad_option_values_are_one_line_usage_errors(argv, message, capsys):
 
 
 def test_work_precision_rejects_zero_repeats():
-    from validation.benchmarks.work_precision import run
+    from validation.work_precision import run
 
     with pytest.raises(ValueError, match="repeats must be an integer >= 1; got 0"):
         run(quick=True, repeats=0)
@@ -218,18 +218,18 @@ def _plugin_modules(name):
 
 def _forbid_computing(monkeypatch):
     """Every entry point that computes raises: output checks must come first."""
-    import mbs_clearance.sensitivity as sens_mod
-    import validation.benchmarks.work_precision as wp
+    import mbs_clearance.analysis.sensitivity as sens_mod
     import validation.compare as cmp
     import validation.report as rep
     import validation.stress as stress
+    import validation.work_precision as wp
 
     def forbidden(*args, **kwargs):
         raise AssertionError("computation started before the output path was checked")
 
     import importlib
 
-    for module, name in ((importlib.import_module("mbs_clearance.optimize"),
+    for module, name in ((importlib.import_module("mbs_clearance.studies.optimize"),
                           "optimize_link_lengths"),
                          (sens_mod, "sensitivities"), (wp, "run"), (stress, "run_sweep"),
                          (rep, "section_mechanism"), (rep, "section_response")):
@@ -241,7 +241,7 @@ def _forbid_computing(monkeypatch):
     import sys
 
     monkeypatch.setattr(sys.modules["mbs_clearance.simulate"], "simulate", forbidden)
-    assert cmp  # compare imports simulate from mbs_clearance.simulate at call time
+    assert cmp  # compare imports simulate from mbs_clearance.solve.simulate at call time
 
 
 def _output_cases():
@@ -322,7 +322,7 @@ def test_own_files_are_replaced_user_files_need_force(tmp_path, capsys):
 
 
 def test_failed_write_leaves_the_old_file(tmp_path, monkeypatch, capsys):
-    from mbs_clearance.trajectory import Trajectory
+    from mbs_clearance.solve.trajectory import Trajectory
 
     out = tmp_path / "t.npz"
     assert main(["simulate", "--revolutions", "1", "--out", str(out)]) == 0
@@ -521,7 +521,7 @@ def _linkage(argv):
 
 
 def test_help_lists_the_named_cases(capsys):
-    from mbs_clearance.cases import CASES
+    from mbs_clearance.model.cases import CASES
 
     with pytest.raises(SystemExit) as exc:
         main(["simulate", "--help"])
@@ -533,7 +533,7 @@ def test_help_lists_the_named_cases(capsys):
 
 
 def test_case_and_overrides_from_the_command_line():
-    from mbs_clearance.cases import four_bar, paper_slider_crank
+    from mbs_clearance.model.cases import four_bar, paper_slider_crank
 
     assert _linkage([]) is None                       # the SliderCrank options apply
     assert _linkage(["--case", "four_bar"]) == four_bar()
@@ -547,7 +547,7 @@ def test_case_and_overrides_from_the_command_line():
 
 @pytest.mark.parametrize("suffix", [".json", ".toml"])
 def test_description_file_json_and_toml(tmp_path, suffix):
-    from mbs_clearance.cases import slider_crank_two_clearances
+    from mbs_clearance.model.cases import slider_crank_two_clearances
 
     linkage = slider_crank_two_clearances(coupler_slider_clearance=2e-5)
     path = tmp_path / f"mech{suffix}"
@@ -756,7 +756,7 @@ def test_sensitivity_writes_what_it_says(tmp_path, capsys):
 def test_sensitivity_of_a_named_case(capsys):
     """`sensitivity --case`: the paper case as a description, by the generated model's DDM,
     prints the same mean |S| as the hand-derived SliderCrank DDM for the same parameter."""
-    from mbs_clearance.sensitivity import sensitivities
+    from mbs_clearance.analysis.sensitivity import sensitivities
 
     assert main(["sensitivity", "--case", "paper_slider_crank", "--parameters",
                  "slider.mass,coupler_slider.restitution", "--revolutions", "2"]) == 0
@@ -783,7 +783,7 @@ def test_import_loads_only_what_is_needed():
                          text=True, check=True).stdout
     after_import, after_parser = eval(out.strip().splitlines()[-1])  # noqa: S307 - own output
     heavy = ("scipy.integrate", "matplotlib", "exudyn", "mbs_clearance._generated",
-             "mbs_clearance.reduced", "mbs_clearance.ddm", "mbs_clearance_validation",
+             "mbs_clearance.solve.reduced", "mbs_clearance.ddm", "mbs_clearance_validation",
              "sympy", "pygad", "xarray")
     for modules in (after_import, after_parser):
         assert not [m for m in modules if m.startswith(heavy)]
@@ -843,7 +843,7 @@ def test_library_messages_go_through_logging(caplog, capsys):
     assert not caplog.records
 
     def command(args):
-        logging.getLogger("mbs_clearance.sensitivity").warning("coarse result")
+        logging.getLogger("mbs_clearance.analysis.sensitivity").warning("coarse result")
         return 0
 
     assert run_command("mbs-clearance test", command, None) == 0
@@ -858,7 +858,8 @@ def test_lyapunov_prints_the_exponent_with_units_and_its_sign(case, capsys):
     docs/regimes.md)."""
     import re
 
-    from mbs_clearance import cases, lyapunov_exponent
+    from mbs_clearance import lyapunov_exponent
+    from mbs_clearance.model import cases
 
     argv = ["lyapunov", "--revolutions", "16", "--transient", "8"]
     argv += [] if case is None else ["--case", case]
@@ -889,7 +890,7 @@ def test_lyapunov_prints_the_exponent_with_units_and_its_sign(case, capsys):
 def test_lyapunov_bad_input_is_one_line_before_any_run(argv, message, capsys, monkeypatch):
     import importlib
 
-    lyap = importlib.import_module("mbs_clearance.lyapunov")
+    lyap = importlib.import_module("mbs_clearance.analysis.lyapunov")
     monkeypatch.setattr(lyap, "lyapunov_exponent", lambda *a, **k: pytest.fail("ran"))
     with pytest.raises(SystemExit) as exc:
         main(["lyapunov", *argv])

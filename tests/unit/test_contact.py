@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from mbs_clearance.contact import (
+from mbs_clearance.laws.forces import (
     CONTACT_MODELS,
     FRICTION_LAWS,
     contact_force,

@@ -6,8 +6,8 @@ contact at 7.9 mm/s and the landing left the penetration at -1.4e-16 m."""
 import numpy as np
 import pytest
 
-from mbs_clearance import cases
-from mbs_clearance.sensitivity import sensitivities
+from mbs_clearance.analysis.sensitivity import sensitivities
+from mbs_clearance.model import cases
 
 
 @pytest.mark.slow   # compiles the four-bar's DOP853 sensitivity kernels: minutes cold

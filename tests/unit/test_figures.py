@@ -9,8 +9,8 @@ import xarray as xr
 from matplotlib.collections import QuadMesh
 
 from mbs_clearance import SliderCrank
+from mbs_clearance.analysis.poincare import REGIME_CODES
 from mbs_clearance.plotting import plot_poincare, plot_regime_map
-from mbs_clearance.poincare import REGIME_CODES
 
 RPM = 2.0 * np.pi / 60.0        # rad/s per rpm
 

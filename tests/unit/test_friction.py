@@ -5,9 +5,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from mbs_clearance import SliderCrank, cases
-from mbs_clearance.contact import FRICTION_LAWS
-from mbs_clearance.linkage import ClearanceJoint
+from mbs_clearance import SliderCrank
+from mbs_clearance.laws.forces import FRICTION_LAWS
+from mbs_clearance.model import cases
+from mbs_clearance.model.linkage import ClearanceJoint
 
 
 def _joint(**kw):
@@ -62,9 +63,9 @@ def test_friction_stage_of_a_journal_on_a_turning_bearing(law, phi):
     bottom of a bearing that turns at omega (n = (0, -1), t = (1, 0), slip velocity
     edot . t - omega R_B = -0.2 m/s): the friction force on the journal mu Fn phi along t
     (dragged along by the wall), and the force on the bearing Fn n - Ft t."""
-    from mbs_clearance.contact import CONTACT_MODELS, contact_force
     from mbs_clearance.generate.runtime import friction_stage
     from mbs_clearance.laws import FRICTION_PARAMETER_SPECS
+    from mbs_clearance.laws.forces import CONTACT_MODELS, contact_force
 
     c, pen, k, mu, v0, v1 = 1e-5, 1e-7, 1e10, 0.2, 0.05, 0.1
     spin = -20.0 * 0.01                 # omega_J R_J - omega_B R_B, the journal not turning
@@ -91,7 +92,7 @@ def test_slider_crank_ddm_of_a_friction_field_without_a_law_is_zero():
     not act: their derivative is exactly zero, beside a nonzero one."""
     import numpy as np
 
-    from mbs_clearance.sensitivity import sensitivities
+    from mbs_clearance.analysis.sensitivity import sensitivities
 
     d = sensitivities(SliderCrank(), ["friction_coefficient", "crank_mass"], revolutions=1)
     assert np.all(d.base_force_magnitude[:, 0] == 0.0)
@@ -107,7 +108,7 @@ def test_ddm_of_figs_5_6_fields_with_friction_matches_central_differences(mu, na
     about 5 times the frictionless one) agrees with central differences of plain runs at
     rtol 1e-10 over two revolutions, Ambrosio's law (the mu = 0.05 check of mu and the
     crank length is in test_sensitivity.py)."""
-    from mbs_clearance.sensitivity import sensitivities
+    from mbs_clearance.analysis.sensitivity import sensitivities
 
     mech = SliderCrank(friction_law="ambrosio", friction_coefficient=mu)
     te = np.linspace(0.0, 2 * mech.period, 801)[1:]

@@ -10,8 +10,6 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from mbs_clearance import reduced
-from mbs_clearance.cases import paper_slider_crank
 from mbs_clearance.generate import (
     generate_module,
     load_model,
@@ -19,9 +17,11 @@ from mbs_clearance.generate import (
     registry_source,
     structure_digest,
 )
-from mbs_clearance.linkage import GROUND, Body, ClearanceJoint, Drive, Linkage, Revolute
-from mbs_clearance.linkage_model import initial_state, pack_parameters
-from mbs_clearance.mechanism import SliderCrank
+from mbs_clearance.model.cases import paper_slider_crank
+from mbs_clearance.model.linkage import GROUND, Body, ClearanceJoint, Drive, Linkage, Revolute
+from mbs_clearance.model.mechanism import SliderCrank
+from mbs_clearance.solve import reduced
+from mbs_clearance.solve.linkage_model import initial_state, pack_parameters
 from validation import paper_closed_form as closed
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -260,7 +260,7 @@ def test_generated_modules_not_stale():
 
 def test_generation_is_deterministic_across_processes():
     """Another hash seed gives the same text (sympy's set orders do not leak into it)."""
-    code = ("import sys; from mbs_clearance.cases import paper_slider_crank; "
+    code = ("import sys; from mbs_clearance.model.cases import paper_slider_crank; "
             "from mbs_clearance.generate import generate_module; "
             "sys.stdout.write(generate_module(paper_slider_crank()))")
     texts = []
@@ -294,9 +294,10 @@ def test_models_specialised_on_zero_geometry_equal_the_general_one(tmp_path, mon
     to round-off; a nonzero offset takes another module; the specialised module refuses a
     nonzero entry in its zero set (pack_parameters naming it; integrate_model; a DDM
     direction along it). (Sensitivities along such parameters: test_linkage_ddm.)"""
-    from mbs_clearance import cases, linkage_ddm
     from mbs_clearance.generate.derive import geometric_zeros
-    from mbs_clearance.integrator import METHODS, make_settings
+    from mbs_clearance.model import cases
+    from mbs_clearance.numerics.integrator import METHODS, make_settings
+    from mbs_clearance.solve import linkage_ddm
 
     monkeypatch.setenv("MBS_CLEARANCE_MODEL_DIR", str(tmp_path))
     lk = cases.paper_slider_crank()
@@ -306,7 +307,7 @@ def test_models_specialised_on_zero_geometry_equal_the_general_one(tmp_path, mon
     assert spec.PARAMETERS == gen.PARAMETERS
     p, pg = pack_parameters(lk, spec), pack_parameters(lk, gen)
     assert np.array_equal(p[:spec.CONST_START], pg[:gen.CONST_START])
-    from mbs_clearance.linkage_model import run
+    from mbs_clearance.solve.linkage_model import run
 
     _, ts, ys, ms, *_ = run(lk, 1)
     rng = np.random.default_rng(3)
@@ -368,8 +369,8 @@ def test_trajectory_along_reduced_run(tmp_path):
     """The Linkage glue's Trajectory from the SliderCrank path's recorded run (same state
     layout: coupler angle, slider position, their rates, the drive's work): both glues read
     the same series along a real trajectory with impacts; save/load round trip."""
-    from mbs_clearance.linkage_model import trajectory_from_run
-    from mbs_clearance.trajectory import annotate, load_trajectory
+    from mbs_clearance.solve.linkage_model import trajectory_from_run
+    from mbs_clearance.solve.trajectory import annotate, load_trajectory
 
     mech = SliderCrank()
     lk = paper_slider_crank()

@@ -5,9 +5,9 @@ contact, at states with the journals off-centre."""
 import numpy as np
 import pytest
 
-from mbs_clearance import cases
 from mbs_clearance.generate import load_model
-from mbs_clearance.linkage_model import initial_state, pack_parameters
+from mbs_clearance.model import cases
+from mbs_clearance.solve.linkage_model import initial_state, pack_parameters
 
 CASES = ("paper_slider_crank", "slider_crank_two_clearances", "four_bar",
          "paper_slider_crank+coulomb", "paper_slider_crank+ambrosio",

@@ -1,5 +1,5 @@
 """The hand-written ideal-joint reference (validation/ideal_linkage.py) against checks of its
-own: the paper's closed-form slider-crank (mbs_clearance.ideal), the power balance of the
+own: the paper's closed-form slider-crank (mbs_clearance.backends.ideal), the power balance of the
 drive, the momentum balance of the shaking force, finite differences of its kinematics, and
 the assembly of Siconos' four-bar example."""
 
@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from mbs_clearance import SliderCrank
-from mbs_clearance.ideal import ideal_outputs as paper_ideal
+from mbs_clearance.backends.ideal import ideal_outputs as paper_ideal
 from validation.ideal_linkage import FourBarLoop, Link, SliderCrankLoop, grashof_type, ideal_outputs
 
 

@@ -12,13 +12,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from mbs_clearance import AccuracyWarning, SliderCrank, reduced, simulate
+from mbs_clearance import AccuracyWarning, SliderCrank, simulate
 from mbs_clearance._checks import MemoryLimitError
 from mbs_clearance._warnings import PhysicsWarning
-from mbs_clearance.mechanism import RPM
-from mbs_clearance.sensitivity import load_sensitivities, sensitivities
-from mbs_clearance.simulate import peak_base_force
-from mbs_clearance.trajectory import PENETRATION_LIMIT, load_trajectory
+from mbs_clearance.analysis.sensitivity import load_sensitivities, sensitivities
+from mbs_clearance.model.mechanism import RPM
+from mbs_clearance.solve import reduced
+from mbs_clearance.solve.simulate import peak_base_force
+from mbs_clearance.solve.trajectory import PENETRATION_LIMIT, load_trajectory
 
 
 @pytest.fixture
@@ -99,7 +100,7 @@ def test_sensitivities_options(paper, monkeypatch):
 
 
 def test_exudyn_and_ideal_options(paper):
-    from mbs_clearance.exudyn_model import make_settings
+    from mbs_clearance.backends.exudyn_model import make_settings
 
     for options, message in ((dict(step_size=NAN), "step_size must be a finite number > 0"),
                              (dict(step_size=-1e-6), "step_size"),
@@ -174,8 +175,9 @@ def test_record_never_outgrows_max_memory(paper):
 
 MEMORY_PROBE = textwrap.dedent("""
     import json
-    from mbs_clearance import SliderCrank, reduced
-    from mbs_clearance.simulate import peak_base_force, simulate
+    from mbs_clearance import SliderCrank
+    from mbs_clearance.solve import reduced
+    from mbs_clearance.solve.simulate import peak_base_force, simulate
 
     def peak_rss():
         # the resident-set high-water mark since the last reset (Linux)

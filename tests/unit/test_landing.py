@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from mbs_clearance import reduced
-from mbs_clearance.linkage_model import landed_indices, landing_edges, window_peaks
+from mbs_clearance.solve import reduced
+from mbs_clearance.solve.linkage_model import landed_indices, landing_edges, window_peaks
 
 
 def test_landing_edges_unite_edges_and_times_without_near_duplicates():

@@ -16,10 +16,9 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from mbs_clearance import cases
-from mbs_clearance.contact import contact_force, contact_force_partials, hysteresis_factor
 from mbs_clearance.laws import codegen
 from mbs_clearance.laws._dispatch import friction_force_partials_slots, friction_force_slots
+from mbs_clearance.laws.forces import contact_force, contact_force_partials, hysteresis_factor
 from mbs_clearance.laws.registry import (
     CONTACT,
     CONTACT_MODELS,
@@ -28,6 +27,7 @@ from mbs_clearance.laws.registry import (
     FRICTION_PARAMETER_SPECS,
     FRICTION_SLOTS,
 )
+from mbs_clearance.model import cases
 
 CONTACT_NAMES = list(CONTACT_MODELS)
 FRICTION_NAMES = list(FRICTION_LAWS)
@@ -169,7 +169,7 @@ def test_contact_symbolic_is_the_compiled_law(name):
     """The law's xi(e) evaluated as an Exudyn symbolic expression and the Exudyn model's
     symbolic normal force (with that xi) equal the compiled ones (to rounding)."""
     exu = pytest.importorskip("exudyn")
-    from mbs_clearance import exudyn_linkage as xl
+    from mbs_clearance.backends import exudyn_linkage as xl
 
     esym = exu.symbolic
     model = CONTACT_MODELS[name]
@@ -249,7 +249,7 @@ def test_friction_symbolic_is_the_compiled_law(name):
     friction element computes) equals the compiled force at slip velocities on both sides
     of every threshold, at them, and at zero."""
     exu = pytest.importorskip("exudyn")
-    from mbs_clearance import exudyn_linkage as xl
+    from mbs_clearance.backends import exudyn_linkage as xl
 
     esym = exu.symbolic
     law, fn = FRICTION_LAWS[name], 77.0
@@ -310,8 +310,8 @@ def test_description_fields_default_to_the_declarations():
     declare."""
     import dataclasses
 
-    from mbs_clearance.linkage import ClearanceJoint
-    from mbs_clearance.mechanism import SliderCrank
+    from mbs_clearance.model.linkage import ClearanceJoint
+    from mbs_clearance.model.mechanism import SliderCrank
 
     for cls in (ClearanceJoint, SliderCrank):
         defaults = {f.name: f.default for f in dataclasses.fields(cls)}

@@ -8,8 +8,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from mbs_clearance.cases import from_slider_crank, paper_slider_crank
-from mbs_clearance.linkage import (
+from mbs_clearance.model.cases import from_slider_crank, paper_slider_crank
+from mbs_clearance.model.linkage import (
     GROUND,
     Body,
     ClearanceJoint,
@@ -18,7 +18,7 @@ from mbs_clearance.linkage import (
     Prismatic,
     Revolute,
 )
-from mbs_clearance.mechanism import SliderCrank
+from mbs_clearance.model.mechanism import SliderCrank
 
 
 def four_bar_like(**changes):
@@ -257,7 +257,7 @@ def test_issue_16_bad_descriptions_of_each_named_case(name):
     replaced by an ideal pin (every loop then closed by ideal joints), an ideal joint on an
     unknown body, a journal larger than its bearing, a negative mass; each a ValueError
     naming the item."""
-    from mbs_clearance.cases import CASES
+    from mbs_clearance.model.cases import CASES
 
     lk = CASES[name]()
     # every clearance joint an ideal pin (a spare clearance joint kept, so that the refusal
@@ -285,7 +285,8 @@ def test_linkage_run_lands_on_t_eval():
     (the extra step ends change the steps, not the solution)."""
     import numpy as np
 
-    from mbs_clearance import cases, simulate
+    from mbs_clearance import simulate
+    from mbs_clearance.model import cases
 
     lk = cases.paper_slider_crank()
     te = np.linspace(0.0, lk.period, 41)[1:]
@@ -464,8 +465,8 @@ def test_gaps_are_the_generated_closure():
     """`Linkage.gaps` (plain Python) equals the generated model's closure (sympy's
     kinematics) at random coordinates and times, for every named case; `assemble` finds the
     centred start of `initial_state`."""
-    from mbs_clearance import linkage_model
-    from mbs_clearance.cases import CASES
+    from mbs_clearance.model.cases import CASES
+    from mbs_clearance.solve import linkage_model
 
     rng = np.random.default_rng(5)
     for make in CASES.values():
@@ -491,13 +492,13 @@ def test_a_four_bar_that_cannot_close_is_refused_on_loading(tmp_path):
     import subprocess
     import sys
 
-    from mbs_clearance.cases import four_bar
+    from mbs_clearance.model.cases import four_bar
 
     d = four_bar().to_dict()
     d["bodies"][1]["points"] = {"crank_end": [-0.1, 0.0], "rocker_end": [0.1, 0.0]}
     path = tmp_path / "short.json"
     path.write_text(json.dumps(d))
-    code = ("import sys\nfrom mbs_clearance.linkage import Linkage\n"
+    code = ("import sys\nfrom mbs_clearance.model.linkage import Linkage\n"
             f"try:\n    Linkage.from_file({str(path)!r})\nexcept ValueError as e:\n"
             "    print(e)\n"
             "print(sorted(m for m in sys.modules if m.startswith(('sympy', "

@@ -5,9 +5,9 @@ SliderCrank's fields as directions in its description's parameters."""
 import numpy as np
 import pytest
 
-from mbs_clearance import cases
-from mbs_clearance.mechanism import SliderCrank
-from mbs_clearance.sensitivity import sensitivities
+from mbs_clearance.analysis.sensitivity import sensitivities
+from mbs_clearance.model import cases
+from mbs_clearance.model.mechanism import SliderCrank
 
 #: per case: parameters (at least 4, of bodies, joints and the drive) and the end of the run
 #: as a fraction of a revolution (the four-bar: its first impacts, the journal falling
@@ -76,8 +76,8 @@ def test_ddm_along_zero_valued_geometry_runs_on_the_general_model():
     specialised, DDM and the finite differences run on the general module and agree as in
     the test above (same tolerances); a run along other parameters keeps the specialised
     one."""
-    from mbs_clearance.linkage_ddm import plain_setup
-    from mbs_clearance.linkage_model import specialisable
+    from mbs_clearance.solve.linkage_ddm import plain_setup
+    from mbs_clearance.solve.linkage_model import specialisable
 
     linkage = cases.paper_slider_crank()
     names = ("coupler.slider_end.y", "ground.slider_axis.y", "slider_guide.angle", "crank.pin.x")
@@ -107,9 +107,9 @@ def test_slider_crank_directions_are_the_derivatives_of_its_description(mech):
     quadratic in a field: central differences are exact to round-off), the description's
     own chain (radii and material into the stiffness) excepted: a derived stiffness is the
     description's, not the field map's."""
-    from mbs_clearance.cases import from_slider_crank
-    from mbs_clearance.mechanism import CONTINUOUS_FIELDS
-    from mbs_clearance.sensitivity import reference_value, slider_crank_directions
+    from mbs_clearance.analysis.sensitivity import reference_value, slider_crank_directions
+    from mbs_clearance.model.cases import from_slider_crank
+    from mbs_clearance.model.mechanism import CONTINUOUS_FIELDS
 
     base = from_slider_crank(mech)
     names = base.parameter_names()
@@ -145,8 +145,8 @@ def test_ddm_cost_pinned():
     """The paper case's DDM for 8 parameters (4 revolutions, DOP853) takes at most 1.4 times
     the right-hand side evaluations of the plain run (DOPRI5) at the same rtol (measured
     76576 against 59911: 1.28); the cost per evaluation is the lead's benchmark
-    (validation/benchmarks/linkage_ddm_speed.py)."""
-    from mbs_clearance.linkage_model import run
+    (benchmarks/linkage_ddm_speed.py)."""
+    from mbs_clearance.solve.linkage_model import run
 
     linkage = cases.paper_slider_crank()
     names = ("crank.pin.x", "coupler.slider_end.x", "coupler.mass", "slider.mass",
@@ -164,8 +164,8 @@ def test_tangent_work_per_call_pinned():
     the N_Z columns of the full Jacobian) and, of the parameter columns, only the
     (direction, column) pairs of the chains plus each direction's memory column (counted
     here from the chains' sparse form in p, independently of the kernel's index)."""
-    from mbs_clearance.linkage_ddm import tangent_work
-    from mbs_clearance.sensitivity import DEFAULT_PARAMETERS, slider_crank_run
+    from mbs_clearance.analysis.sensitivity import DEFAULT_PARAMETERS, slider_crank_run
+    from mbs_clearance.solve.linkage_ddm import tangent_work
 
     run, _ = slider_crank_run(SliderCrank(), DEFAULT_PARAMETERS, None, revolutions=1)
     model, p = run.model, run.p
@@ -194,8 +194,8 @@ def test_recorded_derivatives_equal_a_second_pass_and_the_growth_its_loop():
     `growth_maxima` of the combined state sensitivities, and those equal an einsum of the
     integrated ones with the coefficients. Paper case, the 8 default fields (7 integrated
     directions: one is combined)."""
-    from mbs_clearance.linkage_ddm import growth_maxima
-    from mbs_clearance.sensitivity import DEFAULT_PARAMETERS, slider_crank_run
+    from mbs_clearance.analysis.sensitivity import DEFAULT_PARAMETERS, slider_crank_run
+    from mbs_clearance.solve.linkage_ddm import growth_maxima
 
     mech = SliderCrank()
     cols = ("crank_pivot.reaction_y", "coupler_slider.contact_force", "drive_moment")

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from mbs_clearance import SliderCrank
-from mbs_clearance.contact import stiffness_eq9, stiffness_eq9_partials
+from mbs_clearance.laws.forces import stiffness_eq9, stiffness_eq9_partials
 
 
 def test_defaults_are_the_paper_case(paper):

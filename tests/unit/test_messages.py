@@ -5,7 +5,7 @@ import logging
 import pytest
 
 from mbs_clearance import SliderCrank
-from mbs_clearance.sensitivity import sensitivities
+from mbs_clearance.analysis.sensitivity import sensitivities
 
 
 class _Stop(Exception):

@@ -7,9 +7,10 @@ one-sided differences across a constructed kink; the peak-only run's function ev
 import numpy as np
 import pytest
 
-from mbs_clearance import SliderCrank, peak_base_force, peak_gradient, reduced
-from mbs_clearance.objective import KINK_RTOL, PEAK_GRADIENT_RTOL, RIVAL_CANDIDATES
-from mbs_clearance.sensitivity import DEFAULT_PARAMETERS
+from mbs_clearance import SliderCrank, peak_base_force, peak_gradient
+from mbs_clearance.analysis.objective import KINK_RTOL, PEAK_GRADIENT_RTOL, RIVAL_CANDIDATES
+from mbs_clearance.analysis.sensitivity import DEFAULT_PARAMETERS
+from mbs_clearance.solve import reduced
 
 #: designs of the GA's box (L2 in [0.04, 0.06], L3 in [0.10, 0.14]) besides the paper's
 #: whose peak is an interior local maximum clear of a rival (gap > 1e-4)
@@ -47,7 +48,7 @@ def test_paper_case_matches_central_differences(paper):
 def test_envelope_theorem_is_needed(paper):
     """The sensitivity at the largest recorded sample (the old reading) is far off; at the
     refined peak time it is right: the reference really tells the two apart."""
-    from mbs_clearance.sensitivity import sensitivities
+    from mbs_clearance.analysis.sensitivity import sensitivities
 
     names = ("crank_length", "slider_mass", "coupler_mass")
     sens = sensitivities(paper, names)

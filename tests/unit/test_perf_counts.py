@@ -8,8 +8,10 @@ import numba as nb
 import numpy as np
 import pytest
 
-from mbs_clearance import SliderCrank, integrator, reduced
-from mbs_clearance.integrator import METHODS
+from mbs_clearance import SliderCrank
+from mbs_clearance.numerics import integrator
+from mbs_clearance.numerics.integrator import METHODS
+from mbs_clearance.solve import reduced
 
 MODEL = reduced.MODEL
 
@@ -123,7 +125,7 @@ def test_paper_case_kernel_calls():
     attempt (the embedded solution's, for its error control) and once per accepted step
     (the event search's interior sample), plus the closer looks and the landings (170; 361
     with a margin of 0.05 c, in 9966 attempts)."""
-    from validation.benchmarks.cost_breakdown import counts
+    from benchmarks.cost_breakdown import counts
 
     c = counts()
     attempts = c["naccept"] + c["nreject"]

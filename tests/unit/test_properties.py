@@ -9,7 +9,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from mbs_clearance import AccuracyWarning, SliderCrank, simulate
-from mbs_clearance.contact import CONTACT_MODELS
+from mbs_clearance.laws.forces import CONTACT_MODELS
 
 mechanisms = st.builds(
     lambda c, rpm, e, l2, l3, m3, m4, th0, model, g: SliderCrank(

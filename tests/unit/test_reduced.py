@@ -3,8 +3,9 @@
 import numpy as np
 import pytest
 
-from mbs_clearance import SliderCrank, peak_base_force, reduced, simulate
-from mbs_clearance.ideal import ideal_outputs
+from mbs_clearance import SliderCrank, peak_base_force, simulate
+from mbs_clearance.backends.ideal import ideal_outputs
+from mbs_clearance.solve import reduced
 from validation import paper_closed_form as closed
 from validation.scipy_reference import solve_scipy
 
@@ -153,7 +154,7 @@ def test_grazing_onsets_are_flagged():
     peaks after it may miss the stated accuracy (docs/performance.md); the paper case has no
     grazing onset."""
     from mbs_clearance._warnings import AccuracyWarning
-    from mbs_clearance.optimize import design_mechanism
+    from mbs_clearance.studies.optimize import design_mechanism
 
     grazing = design_mechanism(SliderCrank(), {"crank_length": 0.045, "coupler_length": 0.125})
     with pytest.warns(AccuracyWarning, match="grazing contact onset"):
@@ -170,8 +171,8 @@ def test_slider_crank_runs_on_the_generated_model(paper):
     equal the paper's closed form (Eqs. 1-8, docs/derivations.md, written by hand in
     validation/paper_closed_form.py: an independent derivation) at the run's states, in both
     contact modes."""
-    from mbs_clearance.cases import from_slider_crank
     from mbs_clearance.generate import model_structure, structure_digest
+    from mbs_clearance.model.cases import from_slider_crank
 
     model = reduced.MODEL
     other = paper.replace(crank_length=0.06, restitution=0.5, contact_model="flores")

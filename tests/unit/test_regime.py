@@ -10,10 +10,10 @@ import numpy as np
 import pytest
 
 from mbs_clearance import SliderCrank, lyapunov_exponent, poincare_section, regime_map
-from mbs_clearance import sweep as sweep_mod
-from mbs_clearance.lyapunov import TangentFlow, textbook_exponent
-from mbs_clearance.poincare import Flow, classify, near_tolerance, section_times
-from mbs_clearance.sweep import design_at, parse_sweep
+from mbs_clearance.analysis.lyapunov import TangentFlow, textbook_exponent
+from mbs_clearance.analysis.poincare import Flow, classify, near_tolerance, section_times
+from mbs_clearance.studies import sweep as sweep_mod
+from mbs_clearance.studies.sweep import design_at, parse_sweep
 
 PAPER = SliderCrank()                               # 0.01 mm, 5000 rpm
 LOOSE = SliderCrank(journal_radius=0.0095)          # 0.5 mm
@@ -61,7 +61,7 @@ def _paper_gap(mech, t, y):
 def test_section_kinematics_match_the_generated_model():
     # the section's eccentricity and rate: the sympy-generated paper linkage against the
     # closed form
-    from mbs_clearance import reduced
+    from mbs_clearance.solve import reduced
 
     model, p = reduced.MODEL, reduced.model_parameters(PAPER)
     rng = np.random.default_rng(3)
@@ -110,7 +110,7 @@ def test_a_period_k_pattern_of_growths_is_averaged_over_whole_periods():
     over whole periods their mean is the exponent and the interval closes; blocks of 5
     revolutions cut across the pattern and leave it open (the mean -0.053 reads as
     undecided). The reference: the exact mean of one period."""
-    from mbs_clearance.poincare import classify_run, exponent_estimate
+    from mbs_clearance.analysis.poincare import classify_run, exponent_estimate
 
     pattern = np.array([0.397, -0.236, 0.252, -0.625])
     logs = np.tile(pattern, 5)
@@ -295,7 +295,7 @@ def test_cli_map_writes_dataset_and_figures_and_resumes(tmp_path, capsys):
 def test_linkage_section_matches_the_hand_written_model():
     # the same mechanism as a Linkage (generated model) and as a SliderCrank (reduced
     # model): the same regime and the same section samples within the tolerance
-    from mbs_clearance.cases import from_slider_crank
+    from mbs_clearance.model.cases import from_slider_crank
 
     link = poincare_section(from_slider_crank(PAPER), revolutions=12, keep=5, max_period=2)
     red = poincare_section(PAPER, revolutions=12, keep=5, max_period=2)
@@ -339,7 +339,7 @@ def test_two_joint_slider_crank_exponent_agrees_with_two_nearby_runs():
     and 1e-12, with an event margin of 0.001 c and of 0.05 c: not constant to a factor
     1.5), far from the chaotic case's
     separation, asserted below 1e-6."""
-    from mbs_clearance.cases import slider_crank_two_clearances
+    from mbs_clearance.model.cases import slider_crank_two_clearances
 
     for c, chaotic in ((2e-4, True), (1e-5, False)):
         lk = slider_crank_two_clearances(crank_coupler_clearance=c, coupler_slider_clearance=c)
@@ -367,7 +367,7 @@ def test_exponent_interval_covers_the_textbook_values_and_decides_their_sign():
     0.3 +- 2i, -1 (exactly 0.3: a narrow interval around it, positive); a pure rotation
     (+-2i, -1: exactly 0, "zero"); Lorenz (0.9056, Sprott 2003: inside the interval, which
     is wider than the linear one's since its growths scatter)."""
-    from mbs_clearance.lyapunov import exponent_verdict
+    from mbs_clearance.analysis.lyapunov import exponent_verdict
 
     spiral = np.array([[0.3, 2.0, 0.0], [-2.0, 0.3, 0.0], [0.0, 0.0, -1.0]])
     res = textbook_exponent("linear", 40.0, window=1.0, transient=10.0, matrix=spiral,
@@ -389,7 +389,7 @@ def test_exponent_interval_covers_the_textbook_values_and_decides_their_sign():
 
 
 def test_fewer_averaged_windows_than_blocks_leave_the_verdict_undecided():
-    from mbs_clearance.lyapunov import BLOCKS, exponent_interval
+    from mbs_clearance.analysis.lyapunov import BLOCKS, exponent_interval
 
     assert exponent_interval(np.full(BLOCKS - 1, -1.0)) == math.inf
     # a periodic pattern of growths (period 4, mean -0.054 per window, as the 0.1 mm joint's
@@ -401,7 +401,7 @@ def test_map_point_and_exponent_agree_on_the_same_run():
     """The regime map's point (`poincare_section` with the exponent) and
     `lyapunov_exponent` run the same tangent flow over the same revolutions: the same
     exponent to round-off, the same interval, the same regime and period."""
-    from mbs_clearance.lyapunov import lyapunov_exponent as exponent
+    from mbs_clearance.analysis.lyapunov import lyapunov_exponent as exponent
 
     for mech in (PAPER, LOOSE):
         sec = poincare_section(mech, revolutions=24, keep=12, max_period=5, lyapunov=True,

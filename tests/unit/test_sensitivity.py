@@ -5,8 +5,13 @@ import math
 import numpy as np
 import pytest
 
-from mbs_clearance import SliderCrank, linkage_ddm, simulate
-from mbs_clearance.sensitivity import DEFAULT_PARAMETERS, independent_directions, sensitivities
+from mbs_clearance import SliderCrank, simulate
+from mbs_clearance.analysis.sensitivity import (
+    DEFAULT_PARAMETERS,
+    independent_directions,
+    sensitivities,
+)
+from mbs_clearance.solve import linkage_ddm
 
 
 @pytest.fixture(scope="module")
@@ -216,7 +221,7 @@ def test_fd_step_leaving_valid_range_is_reported():
 
 
 def test_save_load_roundtrip(ddm, tmp_path):
-    from mbs_clearance.sensitivity import load_sensitivities
+    from mbs_clearance.analysis.sensitivity import load_sensitivities
 
     back = load_sensitivities(ddm.save(tmp_path / "s.npz"))
     assert back.parameters == ddm.parameters and back.method == "ddm"

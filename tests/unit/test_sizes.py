@@ -12,9 +12,9 @@ import numpy as np
 import pytest
 
 from mbs_clearance import AccuracyWarning, SliderCrank, simulate
-from mbs_clearance import sweep as sweep_mod
 from mbs_clearance._checks import MemoryLimitError
 from mbs_clearance.cli import main
+from mbs_clearance.studies import sweep as sweep_mod
 
 GRID_1E8 = ["clearance=1e-5:1e-3:log:10000", "crank_speed=100:1000:10000"]
 
@@ -59,7 +59,7 @@ def test_a_sweep_axis_too_long_is_refused_before_its_values():
 
 def test_long_runs_refused_in_every_function():
     from mbs_clearance import lyapunov_exponent, poincare_section, sensitivities
-    from mbs_clearance.cases import CASES
+    from mbs_clearance.model.cases import CASES
 
     paper = SliderCrank()
     _refused_fast(lambda: sensitivities(paper, ["crank_length"], 10**9),
@@ -73,7 +73,7 @@ def test_long_runs_refused_in_every_function():
 
 
 def test_ga_size_refused_before_any_simulation(monkeypatch):
-    from mbs_clearance import optimize
+    from mbs_clearance.studies import optimize
 
     def never(*args, **kw):
         raise AssertionError("a design was simulated")
@@ -87,7 +87,7 @@ def test_ga_size_refused_before_any_simulation(monkeypatch):
 
 
 def test_tolerance_sample_sizes_refused_before_sampling(monkeypatch):
-    from mbs_clearance import tolerance as tol
+    from mbs_clearance.studies import tolerance as tol
 
     def never(*args, **kw):
         raise AssertionError("a sample was evaluated")
@@ -171,7 +171,7 @@ class _Server:
 ])
 def test_a_server_that_is_not_a_scheduler_is_refused_in_bounded_time(reply, error, match):
     pytest.importorskip("distributed")
-    from mbs_clearance.executor import connect_dask
+    from mbs_clearance.studies.executor import connect_dask
 
     server = _Server(reply)
     try:
@@ -315,7 +315,7 @@ def test_report_checks_map_before_any_section(tmp_path, monkeypatch, capsys, con
 ])
 def test_tolerance_inputs_outside_a_fields_range_refused_before_sampling(
         monkeypatch, inputs, kw, match):
-    from mbs_clearance import tolerance as tol
+    from mbs_clearance.studies import tolerance as tol
 
     def never(*args, **kw):
         raise AssertionError("a sample was evaluated")
@@ -339,7 +339,7 @@ def test_tolerance_cli_bad_range_is_one_line(tmp_path, monkeypatch, capsys):
 
 
 def test_summary_of_a_study_with_failed_runs():
-    from mbs_clearance.tolerance import ToleranceResult
+    from mbs_clearance.studies.tolerance import ToleranceResult
 
     res = ToleranceResult(names=("a",), distributions={}, output="peak",
                           sobol={"N": 8, "runs": 24, "failed": 3},
@@ -383,7 +383,7 @@ def test_lyapunov_default_transient_follows_revolutions():
 
 def test_a_real_scheduler_passes_the_probe():
     distributed = pytest.importorskip("dask.distributed")
-    from mbs_clearance.executor import connect_dask
+    from mbs_clearance.studies.executor import connect_dask
 
     with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=False,
                                   dashboard_address=None) as cluster:

@@ -6,9 +6,10 @@ the same start; bad starts are refused before any computation."""
 import numpy as np
 import pytest
 
-from mbs_clearance import SliderCrank, cases, simulate
-from mbs_clearance.linkage_model import Start, settled_start
-from mbs_clearance.sensitivity import sensitivities
+from mbs_clearance import SliderCrank, simulate
+from mbs_clearance.analysis.sensitivity import sensitivities
+from mbs_clearance.model import cases
+from mbs_clearance.solve.linkage_model import Start, settled_start
 
 #: how closely the second revolution's peaks of two rtol 1e-9 runs that take other steps
 #: from T on agree: the paper case's measured 3e-10; the four-bar's peaks finer than rtol

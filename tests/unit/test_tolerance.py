@@ -12,8 +12,8 @@ import pytest
 pytest.importorskip("SALib")
 
 from mbs_clearance import SliderCrank  # noqa: E402
-from mbs_clearance.fits import FORMULAS, IT_GRADES, SHAFT_DEVIATIONS, SIZE_RANGES, iso_fit  # noqa: E402
-from mbs_clearance.tolerance import (  # noqa: E402
+from mbs_clearance.model.fits import FORMULAS, IT_GRADES, SHAFT_DEVIATIONS, SIZE_RANGES, iso_fit  # noqa: E402
+from mbs_clearance.studies.tolerance import (  # noqa: E402
     FitClearance,
     Normal,
     Uniform,
@@ -209,7 +209,7 @@ def test_bad_input_fails_before_any_run(kwargs, message):
 
 def test_gradient_chain_rule_for_the_radial_clearance():
     """R_J = R_B - c: d/dc = -d/dR_J and, at fixed c, d/dR_B = d/dR_B + d/dR_J."""
-    from mbs_clearance.tolerance import _gradient_names
+    from mbs_clearance.studies.tolerance import _gradient_names
 
     fields, J = _gradient_names(("bearing_radius", "radial_clearance", "crank_length"))
     assert fields == ("bearing_radius", "journal_radius", "crank_length")
@@ -220,7 +220,7 @@ def test_cli_tolerance_reads_a_salib_parameter_file_and_writes_the_result(tmp_pa
     """`mbs-clearance tolerance FILE` (SALib's parameter-file format) runs the study and
     writes result.json; its Monte Carlo values are the library call's with the same seed."""
     from mbs_clearance.cli import main
-    from mbs_clearance.tolerance import ToleranceResult
+    from mbs_clearance.studies.tolerance import ToleranceResult
 
     params = tmp_path / "params.txt"
     params.write_text("# name low high\ncrank_length 0.0499 0.0501\n")
@@ -271,7 +271,7 @@ def test_dgsm_bounds_the_total_sobol_index_on_the_mechanism():
 
 
 def test_read_inputs_json_and_salib_formats(tmp_path):
-    from mbs_clearance.tolerance import read_inputs
+    from mbs_clearance.studies.tolerance import read_inputs
 
     js = tmp_path / "in.json"
     js.write_text('{"crank_length": {"band": [0.05, 1e-4]}, "slider_mass": {"normal": [0.14, '

@@ -48,9 +48,9 @@ def test_linkage_series_are_the_model_outputs_and_boundaries_interpolate_them():
     again at the recorded states (numpy's column indexing): every per-joint series, the
     reactions, the shaking force, the eccentricity's joint and axis order; the revolution
     boundary states against np.interp over the whole series."""
-    from mbs_clearance import cases
-    from mbs_clearance.linkage_model import load_model, pack_parameters
-    from mbs_clearance.trajectory import boundary_states
+    from mbs_clearance.model import cases
+    from mbs_clearance.solve.linkage_model import load_model, pack_parameters
+    from mbs_clearance.solve.trajectory import boundary_states
 
     lk = cases.slider_crank_two_clearances()
     tr = simulate(lk, 3)

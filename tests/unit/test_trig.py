@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from mbs_clearance._trig import PIO2_HI, PIO2_LO, sincos
+from mbs_clearance.numerics._trig import PIO2_HI, PIO2_LO, sincos
 
 
 def test_the_split_of_pi_over_2():

@@ -1,0 +1,233 @@
+"""Per named case: the compiled integrator against scipy's DOP853 on the same compiled model.
+
+For each case of `mbs_clearance.model.cases` (or `--case NAME`), 4 drive revolutions from the
+centred start:
+
+- reference: the 4th revolution's refined peak of the monitored force by our integrator at
+  rtol 1e-12 (and, with --check-reference, by scipy DOP853 at rtol 1e-12: their relative
+  difference is printed);
+- ours: `simulate` (every step recorded) and the peak-only run at the default settings
+  (dopri5, rtol 1e-7), or at the method and rtol given by ``--ours METHOD:RTOL`` (e.g.
+  ``--ours dop853:1e-4``: the same DOP853 pair as scipy's), and the peak's relative error
+  against the reference;
+- scipy: `solve_ivp(method="DOP853")` on the generated model's compiled right-hand side,
+  one terminal event per clearance joint, the mode switched by the generated `on_event`
+  between restarts (validation.scipy_reference.solve_scipy_linkage), at rtol 1e-5, 1e-6,
+  ... until its error is not worse than ours;
+- each scipy row timed against ours in ALTERNATING pairs in one process (ours, scipy, ours,
+  scipy, ...; `common.paired`), the median of the per-pair ratios; the headline ratio is
+  interpolated to our error in log(ratio) against log(error) between the last two rows
+  (as speed_reduced.py does for the paper case);
+- why: the ratio of function evaluations (scipy / ours at the rows bracketing our error)
+  and the time per function evaluation of each (per-call overhead: scipy calls the
+  compiled right-hand side from Python at every stage);
+- the ceiling: one call of the compiled right-hand side alone (`rhs_call_ns`: a compiled
+  loop over the recorded states of our run, in their contact modes, median of 5), and
+  scipy's time per evaluation over it: the speed-up an integrator that cost nothing but
+  its right-hand side would reach at scipy's number of evaluations.
+
+    python -m benchmarks.case_speed [--case four_bar] [--repeats 3] [--ours dop853:1e-4]
+
+Run it on a quiet machine: the ratios are the point of the script.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+
+import numba as nb
+import numpy as np
+
+from mbs_clearance import peak_base_force, simulate
+from mbs_clearance.model.cases import CASES
+from mbs_clearance.solve.linkage_model import DEFAULT_RTOL
+from validation.scipy_reference import solve_scipy_linkage
+from validation.timing import machine_summary, ns_per_call, paired
+
+from .speed_reduced import equal_error_ratio
+
+SCIPY_RTOLS = (1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11)
+REVOLUTION = 4
+
+
+@nb.njit(cache=True)
+def _rhs_loop(rhs, ts, ys, ms, p, mem_start, reps):
+    """reps passes of rhs over the states ys (memories ms) at the times ts."""
+    d = np.empty(ys.shape[1])
+    acc = 0.0
+    for _ in range(reps):
+        for i in range(ts.shape[0]):
+            for k in range(ms.shape[1]):
+                p[mem_start + k] = ms[i, k]
+            rhs(ts[i], ys[i], p, d)
+            acc += d[0]
+    return acc
+
+
+def rhs_call_ns(linkage, **options) -> float:
+    """ns per call of `linkage`'s compiled right-hand side over the recorded states of its
+    run (revolution 1 to REVOLUTION, `options` as simulate's), median of 5 timings."""
+    from mbs_clearance.solve.linkage_model import run
+
+    model, ts, ys, ms, *_, p = run(linkage, REVOLUTION, **options)
+    return model_rhs_ns(model, ts, ys, ms, p)
+
+
+@nb.njit(cache=True)
+def _monitor_loop(monitor, ts, ys, ms, p, mem_start, n_out, reps):
+    """reps passes of monitor (with n_out outputs) over the states ys (memories ms)."""
+    d = np.empty(ys.shape[1])
+    out = np.empty(n_out)
+    g = np.empty(ms.shape[1] // 2)
+    gd = np.empty(ms.shape[1] // 2)
+    acc = 0.0
+    for _ in range(reps):
+        for i in range(ts.shape[0]):
+            for k in range(ms.shape[1]):
+                p[mem_start + k] = ms[i, k]
+            acc += monitor(ts[i], ys[i], p, d, out, g, gd)
+    return acc
+
+
+@nb.njit(cache=True)
+def _event_loop(event, ts, ys, ms, p, mem_start, reps):
+    """reps passes of joint 0's event over the states ys (memories ms)."""
+    acc = 0.0
+    for _ in range(reps):
+        for i in range(ts.shape[0]):
+            for k in range(ms.shape[1]):
+                p[mem_start + k] = ms[i, k]
+            acc += event(ts[i], ys[i], p, 0)[0]
+    return acc
+
+
+def _loop_args(model, ts, ys, ms, p):
+    return (np.ascontiguousarray(ts), np.ascontiguousarray(ys),
+            np.ascontiguousarray(ms[:, :model.N_MEM]), p.copy(), model.MEM_START)
+
+
+def model_rhs_ns(model, ts, ys, ms, p) -> float:
+    """ns per call of `model.rhs` over the states ys (memories ms) at the times ts, with the
+    parameters p (not changed), median of 5 timings."""
+    args = _loop_args(model, ts, ys, ms, p)
+    return ns_per_call(lambda reps: _rhs_loop(model.rhs, *args, reps), len(ts))
+
+
+def model_kernel_ns(model, ts, ys, ms, p) -> dict[str, float]:
+    """ns per call of `model`'s rhs, monitor (with its outputs) and event (joint 0) over the
+    states ys (memories ms) at the times ts, medians of 5 timings each."""
+    args = _loop_args(model, ts, ys, ms, p)
+    return {"rhs": ns_per_call(lambda reps: _rhs_loop(model.rhs, *args, reps), len(ts)),
+            "monitor": ns_per_call(
+                lambda reps: _monitor_loop(model.monitor, *args, model.N_OUT, reps), len(ts)),
+            "event": ns_per_call(lambda reps: _event_loop(model.event, *args, reps), len(ts))}
+
+
+def case_speed(name: str, repeats: int, check_reference: bool = False,
+               ours: dict | None = None) -> dict:
+    """The measurements of one case (see the module docstring) as a dict; `ours`: the
+    options of our runs (method, rtol), the defaults if None."""
+    ours = dict(ours or {})
+    lk = CASES[name]()
+    ref = peak_base_force(lk, REVOLUTION, rtol=1e-12)
+    result = {"case": name, "reference": ref, "ours": ours}
+    if check_reference:
+        sref = solve_scipy_linkage(lk, REVOLUTION, rtol=1e-12).peaks[REVOLUTION - 1]
+        result["scipy_reference_difference"] = abs(sref / ref - 1.0)
+    traj = simulate(lk, REVOLUTION, **ours)              # compile / load, then measure
+    ours_peak = peak_base_force(lk, REVOLUTION, **ours)
+    ours_err = abs(ours_peak / ref - 1.0)
+    result.update(ours_error=ours_err, ours_nfev=traj.stats["nfev"],
+                  ours_events=traj.stats["nevent"])
+    rows, ratios = [], []
+    for rtol in SCIPY_RTOLS:
+        res = solve_scipy_linkage(lk, REVOLUTION, rtol=rtol)
+        err = abs(res.peaks[REVOLUTION - 1] / ref - 1.0)
+
+        def run_scipy(r=rtol):
+            return solve_scipy_linkage(lk, REVOLUTION, rtol=r)
+
+        sim = paired(lambda: simulate(lk, REVOLUTION, **ours), run_scipy, repeats)
+        peak = paired(lambda: peak_base_force(lk, REVOLUTION, **ours), run_scipy, repeats)
+        rows.append((rtol, err, sim["b"], res.nfev))
+        ratios.append((sim["ratio"], peak["ratio"], sim["a"], peak["a"], len(res.event_times)))
+        print(f"  {name}: scipy rtol {rtol:g}: peak error {err:.2e} (ours {ours_err:.2e}), "
+              f"nfev {res.nfev}, events {len(res.event_times)}, {sim['b']:.3g} s; paired "
+              f"ratio {sim['ratio']:.0f} (simulate), {peak['ratio']:.0f} (peak only)",
+              flush=True)
+        if err <= ours_err:
+            break
+    result.update(rows=rows, paired=ratios)
+    result["ratio_simulate"] = equal_error_ratio(rows, [r[0] for r in ratios], ours_err)
+    result["ratio_peak"] = equal_error_ratio(rows, [r[1] for r in ratios], ours_err)
+    last = rows[-1]
+    t_ours = ratios[-1][2]
+    result["nfev_ratio"] = last[3] / traj.stats["nfev"]
+    result["us_per_nfev_scipy"] = 1e6 * last[2] / last[3]
+    result["us_per_nfev_ours"] = 1e6 * t_ours / traj.stats["nfev"]
+    result["rhs_ns"] = rhs_call_ns(lk, **ours)
+    result["ceiling"] = 1e3 * result["us_per_nfev_scipy"] / result["rhs_ns"]
+    return result
+
+
+def ours_setting(text: str) -> dict:
+    """``METHOD:RTOL`` (--ours) as simulate's options."""
+    from mbs_clearance.numerics.integrator import METHODS
+
+    method, _, rtol = text.partition(":")
+    try:
+        value = float(rtol)
+    except ValueError:
+        value = -1.0
+    if method not in METHODS or not 0 < value < 1:
+        raise argparse.ArgumentTypeError(
+            f"--ours must be METHOD:RTOL with METHOD one of {sorted(METHODS)} and 0 < RTOL < 1;"
+            f" got {text!r}")
+    return {"method": method, "rtol": value}
+
+
+def _fmt(x, spec):
+    return "n/a" if x is None else format(x, spec)
+
+
+def main(argv=None) -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--case", choices=sorted(CASES), action="append",
+                    help="a case (repeatable; default: every case)")
+    ap.add_argument("--repeats", type=int, default=3, help="alternating pairs per scipy row")
+    ap.add_argument("--check-reference", action="store_true",
+                    help="also compare the reference peak with scipy DOP853 at rtol 1e-12")
+    ap.add_argument("--ours", type=ours_setting, metavar="METHOD:RTOL",
+                    help="our integrator and rtol (default: the defaults, dopri5 at 1e-7)")
+    ap.add_argument("--json", help="also write the results to this JSON file")
+    args = ap.parse_args(argv)
+    names = args.case or list(CASES)
+    results = []
+    for name in names:
+        results.append(case_speed(name, args.repeats, args.check_reference, args.ours))
+    print()
+    print(f"Machine: {machine_summary()}")
+    setting = (f"{args.ours['method']} at rtol {args.ours['rtol']:g}" if args.ours
+               else f"the defaults (dopri5 at rtol {DEFAULT_RTOL:g})")
+    print(f"ours: {setting}; revolution {REVOLUTION}'s peak; "
+          f"{args.repeats} alternating pairs per scipy row")
+    print()
+    print("| case | ours: peak error | scipy rtol at/below it (error) | speed-up simulate | "
+          "speed-up peak only | nfev scipy / ours | us per nfev: scipy / ours | rhs call "
+          "alone | ceiling (scipy per nfev / rhs call) |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    for r in results:
+        rtol, err = r["rows"][-1][0], r["rows"][-1][1]
+        print(f"| {r['case']} | {r['ours_error']:.1e} | {rtol:g} ({err:.1e}) | "
+              f"{_fmt(r['ratio_simulate'], '.0f')} x | {_fmt(r['ratio_peak'], '.0f')} x | "
+              f"{r['nfev_ratio']:.2f} | {r['us_per_nfev_scipy']:.1f} / "
+              f"{r['us_per_nfev_ours']:.3f} | {r['rhs_ns']:.0f} ns | "
+              f"{r['ceiling']:.0f} x |")
+    if args.json:
+        with open(args.json, "w") as fh:
+            json.dump(results, fh, indent=1, default=float)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,139 @@
+"""Start-up time of the library and the command line, in fresh processes.
+
+Each command runs as a new Python process in the checkout's root (its `mbs_clearance`
+shadows an installed one):
+
+- ``import``: ``python -c "import mbs_clearance"``;
+- ``help``: ``python -m mbs_clearance.cli --help``;
+- ``simulate_help``: ``python -m mbs_clearance.cli simulate --help``;
+- ``simulate``: ``python -m mbs_clearance.cli simulate`` (the paper's case, 4 revolutions,
+  warm: the kernels load from the numba cache, which the untimed warm-up run fills).
+
+One untimed warm-up run of each command first (per checkout: it fills the bytecode and numba
+caches), then `--repeats` rounds, each running the commands in rotation (import, help,
+simulate_help, simulate, import, ...), so that a change of the machine's load hits every
+command alike; the median wall time of each command is printed.
+
+With ``--vs PATH`` (another checkout, e.g. a worktree of an earlier version: ``git worktree
+add /tmp/before REV``) every command of a round runs in both
+checkouts as a pair, in alternating order (this, other; then other, this), and the median of
+the per-pair ratios other / this is printed: the ratio of each pair is taken under the same
+load, so a noisy machine widens its spread, not its median.
+
+    python -m benchmarks.startup [--repeats 11] [--vs PATH] [--json]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from validation.timing import machine_summary
+
+#: name -> arguments after the Python executable
+COMMANDS = {
+    "import": ["-c", "import mbs_clearance"],
+    "help": ["-m", "mbs_clearance.cli", "--help"],
+    "simulate_help": ["-m", "mbs_clearance.cli", "simulate", "--help"],
+    "simulate": ["-m", "mbs_clearance.cli", "simulate"],
+}
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def checkout(path: str | Path) -> Path:
+    """The root of a checkout (a folder holding mbs_clearance/__init__.py); ValueError
+    otherwise."""
+    root = Path(path).resolve()
+    if not (root / "mbs_clearance" / "__init__.py").is_file():
+        raise ValueError(f"--vs must be a checkout of mbs-clearance (a folder with "
+                         f"mbs_clearance/__init__.py); got {str(path)!r}")
+    return root
+
+
+def run_once(root: Path, name: str) -> float:
+    """Wall time in s of one fresh process running command `name` in checkout `root`;
+    RuntimeError if it fails."""
+    env = dict(os.environ, PYTHONPATH=str(root))
+    env.pop("MBS_CLEARANCE_DEBUG", None)
+    t0 = time.perf_counter()
+    proc = subprocess.run([sys.executable, *COMMANDS[name]], cwd=root, env=env,
+                          stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    elapsed = time.perf_counter() - t0
+    if proc.returncode != 0:
+        raise RuntimeError(f"{name} failed in {root} (status {proc.returncode}): "
+                           f"{proc.stderr.strip().splitlines()[-1:] or ''}")
+    return elapsed
+
+
+def measure(repeats: int, other: Path | None = None, names=tuple(COMMANDS)) -> dict:
+    """Median wall times (s) of each command in this checkout and, with `other`, in that one
+    and the median of the per-pair ratios other / this."""
+    roots = [ROOT] + ([other] if other is not None else [])
+    for root in roots:                                 # warm-up: caches filled, not timed
+        for name in names:
+            run_once(root, name)
+    times = [{n: [] for n in names} for _ in roots]     # by checkout: this, other
+    for k in range(repeats):
+        for name in names:
+            order = range(len(roots)) if k % 2 == 0 else reversed(range(len(roots)))
+            for i in order:
+                times[i][name].append(run_once(roots[i], name))
+    out = {"repeats": repeats, "machine": machine_summary(), "this": str(ROOT),
+           "median_s": {n: float(np.median(times[0][n])) for n in names}}
+    if other is not None:
+        out["other"] = str(other)
+        out["other_median_s"] = {n: float(np.median(times[1][n])) for n in names}
+        out["ratio_other_over_this"] = {
+            n: float(np.median(np.asarray(times[1][n]) / np.asarray(times[0][n])))
+            for n in names}
+    return out
+
+
+def report(result: dict) -> str:
+    lines = [f"start-up in fresh processes, median of {result['repeats']} rounds "
+             f"({result['machine']})", f"this checkout: {result['this']}"]
+    if "other" in result:
+        lines.append(f"other checkout: {result['other']}")
+        lines.append(f"{'command':<15} {'this (s)':>10} {'other (s)':>10} "
+                     f"{'other / this':>13}")
+        for n, t in result["median_s"].items():
+            lines.append(f"{n:<15} {t:>10.3f} {result['other_median_s'][n]:>10.3f} "
+                         f"{result['ratio_other_over_this'][n]:>13.2f}")
+    else:
+        lines.append(f"{'command':<15} {'this (s)':>10}")
+        for n, t in result["median_s"].items():
+            lines.append(f"{n:<15} {t:>10.3f}")
+    return "\n".join(lines)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--repeats", type=int, default=11,
+                        help="timed rounds (default 11)")
+    parser.add_argument("--vs", metavar="PATH",
+                        help="another checkout timed in alternating pairs (default: none)")
+    parser.add_argument("--only", nargs="+", choices=list(COMMANDS), default=list(COMMANDS),
+                        help="commands timed (default: all)")
+    parser.add_argument("--json", action="store_true", help="print the result as JSON")
+    args = parser.parse_args(argv)
+    if args.repeats < 1:
+        parser.error(f"--repeats must be >= 1; got {args.repeats}")
+    try:
+        other = None if args.vs is None else checkout(args.vs)
+    except ValueError as exc:
+        parser.error(str(exc))
+    result = measure(args.repeats, other, tuple(args.only))
+    print(json.dumps(result, indent=2) if args.json else report(result))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,315 @@
+"""The largest Lyapunov exponent from the variational equations.
+
+The DDM kernels of a generated model (linkage_ddm, generate/sens_runtime.py) integrate the
+state with sensitivities s' = (df/dy) s + (df/dp) D + (df/d deltadot_minus) sigma. With no
+parameter (D = 0) and an initial sensitivity v0 (a direction in state space) the
+sensitivity is the tangent vector v(t) = Phi(t) v0 of the flow, and each clearance joint's
+impact-velocity memory sensitivity sigma_j carries the tangent of that hidden state, set at
+each of its contact onsets with the event-time term (sens_runtime.sens_on_event) exactly as for
+parameters: the state's tangent does not jump at the switches (the contact force is zero on
+both sides of delta = 0), the memory's does.
+
+Benettin's method: the tangent is integrated over one window (a crank revolution), its
+growth measured in the scaled norm |v / S| (S: clearance-sized positions and clearance x
+speed rates, so that every component counts), then renormalised to 1. The exponent is the
+mean log-growth over the windows after a transient: lambda = sum log(growth_k) / (windows
+kept), per window, and / window time in 1/s.
+
+The memory's tangent at a renormalisation (`memory`): "reset" (the default) sets it to 0,
+"carry" divides it by the growth as v. The stored impact velocity is constant while a
+contact lasts, so in a motion that stays in contact (the paper's design: five contact
+switches in all, then permanent contact) a perturbation of it is never forgotten: nearby
+runs settle on nearby periodic motions with different stored impact velocities (checked
+against two runs of the plain model), and the full hybrid system's largest exponent is
+exactly 0 there, whatever the motion's own stability. "reset" measures the separation of
+the mechanical states for a given contact-law memory within each window (the memory's
+tangent is still set at each onset from v, with the event-time term): negative on a stable
+periodic motion, and the same as "carry" where contacts start again and again (chaos).
+
+The interface a flow offers (`TangentFlow`, `TextbookFlow`): `advance(t1)` integrates
+state and tangent from its time to t1 and returns the window's peak; `renormalise()` scales
+the tangent back to unit norm and returns the growth; `section()` the Poincare section
+of the state. Any Linkage (and a SliderCrank, on the paper's generated model) has one.
+
+`TextbookFlow` runs a reference system through the same integrator and the same
+renormalisation code: a linear system x' = A x (the exponent is the largest real part of
+A's eigenvalues) and the Lorenz system (sigma 10, rho 28, beta 8/3: 0.9056).
+
+Uncertainty (`exponent_interval`): a finite mean of correlated log-growths. Its half-width
+is the larger of (a) the 95 % batch-means interval from `BLOCKS` blocks of the averaged
+windows (Student t with BLOCKS - 1 degrees of freedom) and (b) the spread of the running
+estimate over the last half of the averaged windows. The verdict (`exponent_verdict`) is
+"undecided" where the interval contains zero and does not lie within the zero band
+(poincare.LYAPUNOV_ZERO); "positive", "negative" or "zero" otherwise.
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+from dataclasses import dataclass, field
+
+import numba as nb
+import numpy as np
+
+from .._checks import check_int, check_real, check_revolutions_memory
+from ..model.linkage import Linkage
+from ..model.mechanism import SliderCrank
+from ..numerics.integrator import (
+    ACTION_SIG,
+    EVENT_SIG,
+    KERNEL,
+    METHODS,
+    MONITOR_SIG,
+    RHS_SIG,
+    integrate,
+    make_settings,
+)
+from ..solve.flows import Flow, TangentFlow, drive_of
+from .poincare import (  # noqa: F401 - the exponent statistics, public here too
+    BLOCKS,
+    DEFAULT_RTOL,
+    MAX_PERIOD,
+    RECURRENCE_TOL,
+    T_QUANTILE,
+    classify_run,
+    exponent_estimate,
+    exponent_interval,
+    exponent_verdict,
+    scale_samples,
+    section_times,
+)
+
+__all__ = ["LyapunovResult", "TangentFlow", "TextbookFlow", "lyapunov_exponent",
+           "textbook_exponent", "LORENZ", "exponent_of_flow", "exponent_interval",
+           "exponent_verdict"]
+
+_THIS = sys.modules[__name__]
+
+
+@dataclass
+class LyapunovResult:
+    """The largest Lyapunov exponent: per_second (1/s) and per_revolution (per window),
+    from the log-growths (windows,) of the tangent, the first `transient` not counted."""
+
+    per_second: float
+    per_revolution: float
+    log_growth: np.ndarray
+    transient: int
+    window: float
+    counters: dict = field(default_factory=dict)
+    #: half-width of the exponent's interval per revolution (per window; `exponent_interval`;
+    #: inf with fewer than BLOCKS averaged windows)
+    uncertainty: float = math.inf
+    #: "positive", "negative", "zero" or "undecided" (`exponent_verdict`)
+    verdict: str = "undecided"
+    #: the regime of the averaged windows by the regime map's rule (`poincare.classify_run`;
+    #: "" where no section was taken)
+    regime: str = ""
+    #: the period in windows found by recurrence of the section (0: none)
+    period: int = 0
+
+    @property
+    def interval(self) -> tuple[float, float]:
+        """(low, high) of the exponent per revolution (per window)."""
+        return (self.per_revolution - self.uncertainty, self.per_revolution + self.uncertainty)
+
+    @property
+    def interval_per_second(self) -> tuple[float, float]:
+        """(low, high) of the exponent in 1/s."""
+        return (self.interval[0] / self.window, self.interval[1] / self.window)
+
+
+# ------------------------------------------------------------------ reference systems
+
+#: the reference systems of `TextbookFlow`: kind code in p[0]
+LINEAR, LORENZ = 0, 1
+
+
+@nb.njit(RHS_SIG, **KERNEL)
+def _tb_rhs(t, y, p, dydt):
+    """State (3) and, for the full state, tangent (3) derivatives of the reference system
+    p[0]: LINEAR (x' = A x, A row-major in p[1:10]) or LORENZ (sigma, rho, beta in p[1:4])."""
+    tangent = y.shape[0] >= 6
+    if p[0] < 0.5:
+        for i in range(3):
+            a = 0.0
+            b = 0.0
+            for j in range(3):
+                a += p[1 + 3 * i + j] * y[j]
+                if tangent:
+                    b += p[1 + 3 * i + j] * y[3 + j]
+            dydt[i] = a
+            if tangent:
+                dydt[3 + i] = b
+        return
+    s = p[1]
+    r = p[2]
+    b = p[3]
+    x = y[0]
+    yy = y[1]
+    z = y[2]
+    dydt[0] = s * (yy - x)
+    dydt[1] = x * (r - z) - yy
+    dydt[2] = x * yy - b * z
+    if tangent:
+        u = y[3]
+        v = y[4]
+        w = y[5]
+        dydt[3] = s * (v - u)
+        dydt[4] = (r - z) * u - v - x * w
+        dydt[5] = yy * u + x * v - b * w
+
+
+@nb.njit(EVENT_SIG, **KERNEL)
+def _tb_event(t, y, p, j):
+    """No switching: the function stays negative."""
+    return -1.0, 0.0
+
+
+@nb.njit(ACTION_SIG, **KERNEL)
+def _tb_on_event(t, y, p, j):
+    """Never called (no switching)."""
+    return
+
+
+@nb.njit(MONITOR_SIG, **KERNEL)
+def _tb_monitor(t, y, p, dydt, out, g, gd):
+    """The right-hand side; the monitored value is |x|."""
+    _tb_rhs(t, y, p, dydt)
+    g[0] = -1.0
+    gd[0] = 0.0
+    return math.sqrt(y[0] * y[0] + y[1] * y[1] + y[2] * y[2])
+
+
+@nb.njit(cache=True, error_model="numpy", nogil=True)
+def integrate_textbook(y0, p, edges, settings, coefficients):
+    """`integrate` bound to the reference systems' kernels (compiled once, cached)."""
+    return integrate(_THIS._tb_rhs, _THIS._tb_event, _THIS._tb_on_event, _THIS._tb_monitor,
+                     y0, p, edges, settings, coefficients)
+
+
+class TextbookFlow(Flow):
+    """A reference system (3 states + 3 tangent components) on the compiled integrator,
+    with the members of `TangentFlow`: `advance`, `renormalise`."""
+
+    def __init__(self, kind: int, params, x0, v0, *, rtol: float = 1e-10,
+                 method: str = "dop853"):
+        # no mechanism: the Flow's integration members only
+        self.mech = None
+        self.rtol = check_real("rtol", rtol, 1e-14, 1e-4)
+        self.p = np.zeros(10)
+        self.p[0] = kind
+        self.p[1:1 + len(params)] = params
+        self.y = np.concatenate([np.asarray(x0, float), np.asarray(v0, float)])
+        self.y[3:] /= np.linalg.norm(self.y[3:])
+        atol = np.full(6, rtol)
+        self.settings = make_settings(rtol, atol, 6, h_max=np.inf, max_steps=10**7,
+                                      record=True, refine_iters=0, n_out=0, n_dense=3,
+                                      n_events=1, mem_start=10, n_mem=0)
+        self.kernel = integrate_textbook
+        self.coefficients = METHODS[method].arrays()
+        self.t = 0.0
+        self.counters = np.zeros(5, dtype=np.int64)
+        self.max_recorded = 0
+        self.joints = ()
+
+    def renormalise(self) -> float:
+        n = float(np.linalg.norm(self.y[3:]))
+        self.y[3:] /= n
+        return n
+
+
+# ------------------------------------------------------------------------------ exponent
+
+def exponent_of_flow(flow, times, transient: int, window: float,
+                     sections: bool = False) -> LyapunovResult:
+    """Benettin's estimate on a flow with the `TangentFlow` members: advance to each of
+    `times`, renormalise, average the log-growths after the first `transient` windows of
+    duration `window` (s); with its interval (`exponent_interval`) and verdict. With
+    `sections`, the flow's Poincare section after each averaged window is classified by the
+    regime map's rule (`poincare.classify_run`): a period found by recurrence is reported,
+    and the exponent is then averaged over whole periods."""
+    logs = np.empty(len(times))
+    samples = []
+    for k, t1 in enumerate(times):
+        flow.advance(t1)
+        logs[k] = math.log(flow.renormalise())
+        if sections and k >= transient:
+            samples.append(flow.section())
+    kept = logs[transient:]
+    regime, period = "", 0
+    if sections and len(kept) >= 3:
+        scaled = scale_samples(np.array(samples), flow.clearance, flow.omega)
+        regime, period, _, per_window, half = classify_run(
+            scaled, kept, tol=RECURRENCE_TOL, max_period=min(MAX_PERIOD, (len(kept) - 1) // 2))
+    else:
+        per_window, half = exponent_estimate(kept)
+    from ..solve.reduced import counters_dict
+
+    return LyapunovResult(per_second=per_window / window, per_revolution=per_window,
+                          log_growth=logs, transient=transient, window=window,
+                          counters=counters_dict(flow.counters), uncertainty=half,
+                          verdict=exponent_verdict(per_window - half, per_window + half),
+                          regime=regime, period=period)
+
+
+def lyapunov_exponent(mech, revolutions: int = 100, transient: int | None = None, *,
+                      rtol: float | None = None, method: str = "dop853",
+                      direction=None, memory: str = "reset") -> LyapunovResult:
+    """The largest Lyapunov exponent of `mech`'s motion (a SliderCrank or a Linkage), in
+    1/s (`per_second`) and per drive revolution.
+
+    The state and one tangent vector (initial `direction`: 2 N_Q scaled components of the
+    generated model's coordinates and their rates, for the paper's case theta3, x4 and
+    their rates; default all equal) are integrated over `revolutions` crank
+    revolutions, the tangent renormalised at the end of each; the log-growths of the last
+    revolutions - `transient` are averaged (default None: the first half, revolutions // 2,
+    so 50 of the default 100; any `revolutions` works with it). rtol (default 1e-7) applies
+    to the state and the unit tangent alike. The result carries the exponent's `uncertainty`
+    (half-width per revolution, `exponent_interval`) and its `verdict` ("positive",
+    "negative", "zero" or "undecided" where the interval contains zero), and the `regime`
+    and `period` of the averaged revolutions by the regime map's rule
+    (`poincare.classify_run`: a period found by recurrence of the section decides, the
+    exponent is then averaged over whole periods). `memory`: the impact-velocity memory's
+    tangent at each renormalisation, "reset" or "carry" (module docstring).
+    """
+    if not isinstance(mech, (SliderCrank, Linkage)):
+        raise ValueError(f"mech must be a SliderCrank or a Linkage; got {type(mech).__name__}")
+    revolutions = check_int("revolutions", revolutions, 2)
+    if transient is None:
+        transient = revolutions // 2
+    transient = check_int("transient (revolutions not averaged)", transient, 0,
+                          revolutions - 1)
+    check_revolutions_memory(revolutions, per_revolution=8)
+    flow = TangentFlow(mech, rtol=DEFAULT_RTOL if rtol is None else rtol, method=method,
+                       direction=direction, memory=memory)
+    omega, _ = drive_of(mech)
+    return exponent_of_flow(flow, section_times(mech, revolutions), transient,
+                            2.0 * math.pi / omega, sections=True)
+
+
+#: Lorenz's parameters and a point near its attractor
+LORENZ_PARAMS = (10.0, 28.0, 8.0 / 3.0)
+
+
+def textbook_exponent(kind: str, time: float, *, window: float = 1.0, transient: float = 0.0,
+                      matrix=None, x0=(1.0, 1.0, 20.0), v0=(1.0, 0.0, 0.0),
+                      rtol: float = 1e-10) -> LyapunovResult:
+    """The largest exponent of a reference system by `exponent_of_flow` (the same code as
+    the mechanism's): kind "lorenz" (sigma 10, rho 28, beta 8/3) or "linear" (x' = A x,
+    `matrix` 3 x 3), over `time` units in windows of `window`, the first `transient`
+    units not averaged."""
+    if kind not in ("lorenz", "linear"):
+        raise ValueError(f"kind must be 'lorenz' or 'linear'; got {kind!r}")
+    window = check_real("window", window, 0.0, low_open=True)
+    n = int(round(check_real("time", time, window) / window))
+    skip = int(round(check_real("transient", transient, 0.0, time - window) / window))
+    if kind == "linear":
+        A = np.asarray(matrix, dtype=float)
+        if A.shape != (3, 3) or not np.all(np.isfinite(A)):
+            raise ValueError("matrix must be 3 x 3 finite numbers for kind='linear'")
+        flow = TextbookFlow(LINEAR, A.ravel(), x0, v0, rtol=rtol)
+    else:
+        flow = TextbookFlow(LORENZ, LORENZ_PARAMS, x0, v0, rtol=rtol)
+    return exponent_of_flow(flow, window * np.arange(1, n + 1), skip, window)

@@ -1,0 +1,913 @@
+"""The gradient of the design objective: the peak of |F12| over one crank revolution.
+
+`peak_gradient(mech, parameters)` returns d(peak)/db for named SliderCrank fields. The peak
+is max_t |F12|(t, b) over the revolution's window; where its maximum is an interior, isolated
+local maximum, d|F12|/dt = 0 there and the envelope theorem gives
+
+    d(peak)/db = (partial d|F12|/db)(t*, b),
+
+the DDM sensitivity of |F12| at the refined peak time t*. One DDM run gives both: its
+integrator refines the window's maximum of |F12| by golden section on re-taken steps (the
+step map), and the state and its sensitivities at t* are that step map's value at t*, taken
+again from the recorded step that contains it (the model's `step_sens`). Reading the sensitivities
+at the largest *recorded* sample instead is wrong by tens of percent: they oscillate with the
+contact vibration (~13 kHz) between samples.
+
+Where a second local maximum of the window comes within the integration accuracy of the
+peak, the objective is the maximum of two smooth branches and has a kink: the result says so
+(`kink`), with the rival's time, value and gradient (the two one-sided values). A peak at the
+window's edge is flagged too. See docs/sensitivity.md, "Gradient of the design objective".
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+import time
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from .._checks import check_choice, check_int, check_real, check_revolutions_memory
+from ..model.linkage import GROUND, Linkage
+from ..model.mechanism import CONTINUOUS_FIELDS, SliderCrank
+from ..numerics.integrator import METHODS
+from ..solve import reduced
+from .sensitivity import (
+    DDM_INTEGRATOR,
+    FD_RELATIVE_STEP,
+    _check_parameters,
+    fd_step,
+    reference_value,
+    slider_crank_run,
+)
+
+__all__ = ["PeakGradient", "peak_gradient", "KINK_RTOL", "PEAK_GRADIENT_RTOL", "RIVAL_CANDIDATES",
+           "OUTPUT_KINDS", "Output", "parse_output", "ground_joints", "peak_output"]
+
+_THIS = sys.modules[__name__]
+
+#: relative gap (peak - rival) / peak below which two local maxima of the window count as
+#: tied within the integration accuracy (the kink tolerance is max(KINK_RTOL, KINK_PER_RTOL
+#: rtol)): the accuracy target of the default settings on every per-revolution peak
+KINK_RTOL = 1e-5
+
+#: the DDM run's rtol when none is given. Its peak and gradient do not need the plain run's
+#: 1e-7: against central differences at rtol 1e-12 the gradient is as accurate at 1e-6 as at
+#: 1e-7 (its error is set by the peak time's location, not by the tolerance) and the peak is
+#: within 1.5e-8, at about three quarters of the cost (`python -m
+#: validation.peak_gradient_accuracy`, docs/sensitivity.md)
+PEAK_GRADIENT_RTOL = 1e-6
+
+#: the kink tolerance's floor per unit of the DDM run's rtol: the run's peak error measured
+#: below rtol / 3 from rtol 1e-3 to 1e-7 (validation.peak_gradient_accuracy), and a gap is the
+#: difference of two peaks
+KINK_PER_RTOL = 10.0
+
+#: local maxima of the recorded samples (largest first) refined as rivals of the peak
+RIVAL_CANDIDATES = 8
+
+#: golden-section iterations per rival's step: the bracket shrinks to 0.618^18 = 1.7e-4 of a
+#: step, where the value's error is below 1e-7 of the peak even at the contact vibration's
+#: ~2 rad per step (the kink tolerance is 1e-5)
+_REFINE_ITERS = 18
+
+
+@dataclass(frozen=True)
+class PeakGradient:
+    """The peak of |F12| over a crank revolution and its gradient.
+
+    Attributes
+    ----------
+    peak : float
+        max |F12| over the revolution, N.
+    time : float
+        Where it is, s (NaN for backends that do not report it).
+    parameters : tuple of str
+        The SliderCrank fields b.
+    reference : (p,) their values b0 (derived values where the field is None).
+    gradient : (p,) d(peak)/db, N per SI unit of each parameter.
+    kink : bool
+        The objective is not differentiable here: a second local maximum (the rival) comes
+        within `kink_tol` of the peak, or the peak sits at the window's edge. `gradient`
+        and `rival_gradient` are then the two one-sided values (the objective is the
+        maximum of the two smooth branches).
+    rival_time, rival_peak : float
+        The largest other local maximum of |F12| in the window (s, N); NaN if none.
+    rival_gradient : (p,) its gradient (N per unit), NaN if none.
+    at_edge : bool
+        The peak sits at the window's edge.
+    message : str
+        What the flags mean for this result ("" when differentiable).
+    method, backend : how it was computed.
+    revolution : the crank revolution (1-based).
+    stats : solver counters (nfev, naccept, ...) and settings.
+    """
+
+    peak: float
+    time: float
+    parameters: tuple[str, ...]
+    reference: np.ndarray
+    gradient: np.ndarray
+    kink: bool = False
+    rival_time: float = math.nan
+    rival_peak: float = math.nan
+    rival_gradient: np.ndarray | None = None
+    at_edge: bool = False
+    message: str = ""
+    method: str = "ddm"
+    backend: str = "reduced"
+    revolution: int = 4
+    kink_tol: float = KINK_RTOL
+    stats: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def normalized(self) -> np.ndarray:
+        """Eq. 15 at the peak: gradient * b0 / peak, shape (p,) (0 where b0 = 0)."""
+        return self.gradient * self.reference / self.peak
+
+    @property
+    def rival_normalized(self) -> np.ndarray:
+        """Eq. 15 of the rival's branch: rival_gradient * b0 / peak."""
+        if self.rival_gradient is None:
+            return np.full(len(self.parameters), np.nan)
+        return self.rival_gradient * self.reference / self.peak
+
+    @property
+    def gap(self) -> float:
+        """(peak - rival_peak) / peak: how far the rival is below the peak (NaN if none)."""
+        return (self.peak - self.rival_peak) / self.peak
+
+    def as_dict(self) -> dict[str, float]:
+        """The gradient as {parameter: d(peak)/db}."""
+        return {n: float(g) for n, g in zip(self.parameters, self.gradient)}
+
+
+# ------------------------------------------------------------------ DDM at the peak
+
+class _Run:
+    """A recorded DDM run (`sensitivity.slider_crank_run`) and what is needed to evaluate
+    the step map inside it."""
+
+    def __init__(self, mech, names, revolution, rtol, integrator):
+        self.run, self.ref = slider_crank_run(mech, names, rtol, revolutions=revolution,
+                                              method=integrator)
+        self.rtol = self.run.stats["rtol"]
+        self.coefficients = METHODS[integrator].arrays()
+        self.ts, self.ys, self.ms = self.run.ts, self.run.ys, self.run.ms
+        self.peaks, self.peak_t, self.outs = self.run.peaks, self.run.peak_t, self.run.outs
+        self.counters = {k: v for k, v in self.run.stats.items()
+                         if k not in ("rtol", "method", "wall_time", "event_time_term",
+                                      "directions")}
+        self.model = self.run.model
+        self.mon = self.model.MONITOR_COLUMN
+        self.plain_p = self.run.p0
+        self.stages = self.coefficients[1].shape[0]
+        # function evaluations after the run: plain (rival refinement), augmented (steps
+        # to the peak and the rival)
+        self.post_plain = 0
+        self.post_sens = 0
+        self.post_steps = 0
+
+    def magnitudes(self, lo, hi):
+        return np.hypot(self.outs[lo:hi, self.mon], self.outs[lo:hi, self.mon + 1])
+
+    def step_start(self, t):
+        """Index of the recorded step whose end or interior holds t: i with ts[i] < t <=
+        ts[i + 1] (or t == ts[0])."""
+        return max(int(np.searchsorted(self.ts, t, side="left")) - 1, 0)
+
+    def gradient_at(self, t, newton=True):
+        """|F12| at time t and d|F12|/db (all parameters) at the maximum of |F12| next to
+        t, from the step map of the recorded step that holds t (or the recorded sample at
+        t). Returns (value at t, gradient, time of the gradient).
+
+        The golden-section refinement places t within ~1e-5 of a step of the maximum t**;
+        the sensitivities of parameters that carry the contact vibration at full weight
+        (the journal radius) change by percent over that (d/dt of S_k is large where
+        d|F12|/dt = 0). With ``newton``, |F12| and d|F12|/db are evaluated at t - delta,
+        t, t + delta (delta = 1e-4 of the step), t** = t - f'/f'' from their parabola (one
+        Newton step for d|F12|/dt = 0) and the gradient interpolated to t**."""
+        i = self.step_start(t)
+        if self.ts[i + 1] == t:
+            i += 1
+        if self.ts[i] == t:
+            ys, mems = self.ys[i:i + 1], self.ms[i:i + 1]
+            hs = np.zeros(1)
+        else:
+            q = self.run.p.copy()
+            n_mem, m0 = self.model.N_MEM, self.model.MEM_START
+            q[m0:m0 + n_mem] = self.ms[i, :n_mem]
+            h = t - self.ts[i]
+            delta = 1e-4 * (self.ts[i + 1] - self.ts[i])
+            hs = np.array([h, h - delta, h + delta]) if newton else np.array([h])
+            ys, _ = self.model.step_sens(self.ts[i], np.ascontiguousarray(self.ys[i]), q, hs,
+                                         self.coefficients)
+            self.post_sens += 1 + len(hs) * self.stages
+            mems = np.repeat(self.ms[i:i + 1], len(hs), axis=0)
+        vals, ders = self.run.output_sensitivities(self.ts[i] + hs, ys, mems)
+        fx, fy = vals[:, self.mon], vals[:, self.mon + 1]
+        f = np.hypot(fx, fy)
+        d_mag = (fx[:, None] * ders[:, self.mon] + fy[:, None] * ders[:, self.mon + 1]) \
+            / np.maximum(f, 1e-300)[:, None]
+        if len(hs) == 1:
+            return float(f[0]), d_mag[0], float(t)
+        d = hs[2] - hs[0]
+        curv = (f[2] - 2.0 * f[0] + f[1]) / (0.25 * d * d)      # f''
+        slope = (f[2] - f[1]) / d                                # f'
+        s = -slope / curv if curv < 0.0 else 0.0
+        s = min(max(s, -0.5 * d), 0.5 * d)
+        g = (d_mag[0] + s * (d_mag[2] - d_mag[1]) / d
+             + 0.5 * s * s * (d_mag[2] - 2.0 * d_mag[0] + d_mag[1]) / (0.25 * d * d))
+        return float(f[0]), g, float(t + s)
+
+    def plain_rows(self, idx):
+        """States (plain model: the coordinates, rates and the work) and memories of
+        recorded rows."""
+        return (np.ascontiguousarray(self.run.plain_states(self.ys[idx])),
+                np.ascontiguousarray(self.ms[idx, :self.model.N_MEM]))
+
+
+def _local_maxima(run, lo, hi, period):
+    """The window's local maxima of |F12| (value, time), largest first.
+
+    Candidates: the RIVAL_CANDIDATES largest local maxima of the recorded samples, each
+    refined over the steps on both sides (golden section on the step map, as the
+    integrator's refinement), and the window's first and last steps. A refined maximum is a
+    local maximum of the window where it lies inside its step, at a sample that both steps
+    beside it converge to, or at the window's edge (a boundary maximum: |F12| falls into the
+    window); a refinement that runs into the far end of its step is not (|F12| rises beyond
+    it, to a maximum found from the other side). Maxima closer than 1e-6 of a period are
+    one."""
+    mags = run.magnitudes(lo, hi)
+    m = len(mags)
+    is_max = np.zeros(m, dtype=bool)
+    if m >= 3:
+        is_max[1:-1] = (mags[1:-1] >= mags[:-2]) & (mags[1:-1] >= mags[2:])
+    cand = np.flatnonzero(is_max)
+    cand = cand[np.argsort(-mags[cand], kind="stable")][:RIVAL_CANDIDATES]
+    # steps (by their start row, absolute) to refine: both sides of each candidate sample,
+    # and the window's first and last steps
+    starts = {lo, hi - 2}
+    for j in cand:
+        starts.update((lo + j - 1, lo + j))
+    starts = np.array(sorted(s for s in starts if lo <= s < hi - 1), dtype=np.int64)
+    y0s, mems = run.plain_rows(starts)
+    t0s = run.ts[starts]
+    hs = run.ts[starts + 1] - t0s
+    vals, times = run.model.refine_steps(t0s, y0s, mems, run.plain_p, hs, run.coefficients,
+                                         _REFINE_ITERS)
+    run.post_steps += len(starts)
+    run.post_plain += len(starts) * (1 + (_REFINE_ITERS + 2) * run.stages)
+    # where each refinement ended: inside its step, or at its start or end sample
+    end_tol = 2.0 * 0.6180339887498949 ** _REFINE_ITERS * hs
+    at_start = times - t0s <= end_tol
+    at_end = t0s + hs - times <= end_tol
+    ends_at = {int(s) + 1 for s, e in zip(starts, at_end) if e}
+    starts_at = {int(s) for s, b in zip(starts, at_start) if b}
+    maxima = []
+    for s, v, t, b, e in zip(starts, vals, times, at_start, at_end):
+        s = int(s)
+        if not (b or e) or (b and s == lo) or (e and s + 1 == hi - 1) \
+                or (e and s + 1 in starts_at) or (b and s in ends_at):
+            maxima.append((float(v), float(t)))
+    # merge: largest first, a maximum closer than `eps` to a kept one is the same
+    eps = 1e-6 * period
+    maxima.sort(key=lambda vt: -vt[0])
+    kept: list[tuple[float, float]] = []
+    for v, t in maxima:
+        if all(abs(t - tk) > eps for _, tk in kept):
+            kept.append((v, t))
+    return kept, eps
+
+
+def _ddm_gradient(mech, names, revolution, rtol, integrator, kink_tol):
+    t_wall = time.perf_counter()
+    run = _Run(mech, names, revolution, rtol, integrator)
+    edges = reduced.window_edges(mech, revolution)
+    t_lo, t_hi = float(edges[-2]), float(edges[-1])
+    lo = int(np.searchsorted(run.ts, t_lo, side="left"))
+    hi = int(np.searchsorted(run.ts, t_hi, side="right"))
+    peak_int, t_int = float(run.peaks[-1]), float(run.peak_t[-1])
+    kept, eps = _local_maxima(run, lo, hi, mech.period)
+    # the integrator's peak among them (it replaces a candidate at the same time)
+    kept = [(v, t) for v, t in kept if abs(t - t_int) > eps] + [(peak_int, t_int)]
+    kept.sort(key=lambda vt: -vt[0])
+    (_, t_peak) = kept[0]
+    tol = max(kink_tol, KINK_PER_RTOL * run.rtol)
+    at_edge = min(t_peak - t_lo, t_hi - t_peak) <= eps
+    peak, grad, _ = run.gradient_at(t_peak, newton=not at_edge)
+    rival_t = rival_v = math.nan
+    rival_g = np.full(len(names), np.nan)
+    if len(kept) > 1:
+        rival_t = kept[1][1]
+        rival_v, rival_g, _ = run.gradient_at(
+            rival_t, newton=min(rival_t - t_lo, t_hi - rival_t) > eps)
+    if at_edge and "crank_speed" in names:
+        # the window's edges move with the crank speed: d(edge)/d omega = -edge / omega
+        t_edge = t_lo if t_peak - t_lo <= eps else t_hi
+        slope = _edge_slope(run, t_peak)
+        k = names.index("crank_speed")
+        grad = grad.copy()
+        grad[k] += slope * (-t_edge / mech.crank_speed)
+    near = np.isfinite(rival_v) and (peak - rival_v) <= tol * peak
+    kink = bool(near or at_edge)
+    message = ""
+    if near:
+        message = (f"kink: a second local maximum of |F12| at t = {rival_t:.9g} s "
+                   f"({rival_v:.9g} N) is within {tol:.1e} of the peak at t = {t_peak:.9g} s "
+                   f"({peak:.9g} N); the objective is the larger of two smooth branches: "
+                   f"gradient and rival_gradient are its one-sided derivatives")
+    if at_edge:
+        message += ("; " if message else "") + (
+            f"the peak sits at the window's edge (t = {t_peak:.9g} s in [{t_lo:.9g}, "
+            f"{t_hi:.9g}] s): gradient is the derivative of |F12| at the edge, valid while "
+            f"the maximum stays there")
+    stats = dict(run.counters, rtol=run.rtol, method=integrator,
+                 directions=int(run.run.nb), integrator_peak=peak_int,
+                 integrator_peak_time=t_int, local_maxima=len(kept),
+                 post_fev_plain=run.post_plain, post_fev_sens=run.post_sens,
+                 post_refined_steps=run.post_steps,
+                 wall_time=time.perf_counter() - t_wall)
+    return PeakGradient(
+        peak=peak, time=t_peak, parameters=names, reference=run.ref, gradient=grad,
+        kink=kink, rival_time=rival_t, rival_peak=rival_v, rival_gradient=rival_g,
+        at_edge=bool(at_edge), message=message, method="ddm", backend="reduced",
+        revolution=revolution, kink_tol=tol, stats=stats)
+
+
+def _edge_slope(run, t):
+    """d|F12|/dt at t from the plain step map of the step that holds t: a central difference
+    over +-1e-3 of the step (the map is smooth past the step's end; much shorter
+    differences are dominated by the rounding of the penetration, a difference of
+    coordinates of size L2 + L3)."""
+    i = run.step_start(t)
+    y0s, mems = run.plain_rows(np.array([i]))
+    h = t - run.ts[i]
+    d = 1e-3 * (run.ts[i + 1] - run.ts[i])
+    v0 = run.model.step_monitor_value(run.ts[i], y0s[0], mems[0], run.plain_p, h - d,
+                                      run.coefficients)
+    v1 = run.model.step_monitor_value(run.ts[i], y0s[0], mems[0], run.plain_p, h + d,
+                                      run.coefficients)
+    run.post_plain += 2 * (1 + run.stages)
+    return (v1 - v0) / (2.0 * d)
+
+
+# ------------------------------------------------------------------ finite differences
+
+def _fd_peak(args):
+    """One perturbed peak (module level: picklable for process pools)."""
+    from ..solve.simulate import peak_base_force
+
+    mech, revolution, backend, options = args
+    return float(peak_base_force(mech, revolution, backend, **options))
+
+
+def _fd_gradient(mech, names, revolution, backend, fd_relative_step, executor, options):
+    t_wall = time.perf_counter()
+    options = dict(options)
+    if backend == "reduced":
+        options.setdefault("rtol", 1e-11)
+    steps = [fd_step(mech, n, fd_relative_step) for n in names]
+    mechs = [mech]
+    for name, h in zip(names, steps):
+        b0 = reference_value(mech, name)
+        for sign in (1.0, -1.0):
+            try:
+                mechs.append(mech.replace(**{name: b0 + sign * h}))
+            except ValueError as exc:
+                raise ValueError(f"the finite-difference step of {name} ({h:.3g}) leaves its "
+                                 f"valid range: {exc}; pass a smaller fd_relative_step") from exc
+
+    jobs = [(m, revolution, backend, options) for m in mechs]
+    values = (list(executor.map(_fd_peak, jobs)) if executor is not None
+              else [_fd_peak(j) for j in jobs])
+    peak = values[0]
+    plus = np.array(values[1::2])
+    minus = np.array(values[2::2])
+    h = np.array(steps)
+    t_peak = math.nan
+    if backend == "reduced" and mech.friction_law == "none":
+        # (the frictionless model's run; with friction the peak's time is not reported)
+        run_opts = {k: v for k, v in options.items() if k != "t_eval"}
+        t_peak = float(reduced.run(mech, revolution, record=False, **run_opts)[4][-1])
+    stats = {"fd_steps": steps, "runs": len(mechs), "forward": (plus - peak) / h,
+             "backward": (peak - minus) / h, "wall_time": time.perf_counter() - t_wall,
+             **{k: v for k, v in options.items() if k in ("rtol", "method")}}
+    return PeakGradient(
+        peak=peak, time=t_peak, parameters=names,
+        reference=np.array([reference_value(mech, n) for n in names]),
+        gradient=(plus - minus) / (2.0 * h), method="fd", backend=backend,
+        revolution=revolution,
+        message="central differences: no kink detection (stats['forward'] and "
+                "stats['backward'] hold the one-sided differences)", stats=stats)
+
+
+# ------------------------------------------------------------------ outputs of a linkage
+
+#: the outputs whose peak a study of a `Linkage` takes (`parse_output`): kind -> (argument,
+#: unit, what); a force's peak is that of its magnitude, the drive moment's that of |M|
+OUTPUT_KINDS = {
+    "pivot_force": ("ground joint", "N", "|reaction| of a joint to the ground (the paper's "
+                    "base force F12 is the crank pivot's)"),
+    "shaking_force": (None, "N", "|sum of the ground joints' reactions|"),
+    "drive_moment": (None, "N m", "|drive moment|"),
+    "contact_force": ("clearance joint", "N", "normal contact force of a clearance joint"),
+}
+
+
+def ground_joints(linkage: Linkage) -> list[str]:
+    """Names of the joints (ideal, then clearance) that join a body to the ground."""
+    out = [j.name for j in linkage.joints if GROUND in (j.body_a, j.body_b)]
+    return out + [j.name for j in linkage.clearance_joints
+                  if GROUND in (j.journal_body, j.bearing_body)]
+
+
+@dataclass(frozen=True)
+class Output:
+    """A study's output of a linkage: its name ("pivot_force:crank_pivot", ...), the model
+    columns it is made of (two: the magnitude of a force; one: the absolute value) and
+    its unit."""
+
+    name: str
+    columns: tuple[str, ...]
+    unit: str
+
+    def monitored(self, linkage: Linkage) -> bool:
+        """Whether this is the linkage's monitored force (its peak is refined between steps
+        by the integrator itself, and its DDM gradient is available)."""
+        if linkage.monitor_joint is None:
+            return self.name == "shaking_force"
+        return self.name == f"pivot_force:{linkage.monitor_joint}"
+
+    def values(self, outs: np.ndarray, columns: dict[str, int]) -> np.ndarray:
+        """The output at the rows of a model's outputs `outs` (columns by name)."""
+        if len(self.columns) == 2:
+            return np.hypot(outs[:, columns[self.columns[0]]], outs[:, columns[self.columns[1]]])
+        return np.abs(outs[:, columns[self.columns[0]]])
+
+
+def default_output(linkage: Linkage) -> str:
+    """The default output: the |reaction| of the driven joint when it joins the ground (the
+    crank pivot: the paper's base force F12), else the shaking force."""
+    if linkage.drive.joint in ground_joints(linkage):
+        return f"pivot_force:{linkage.drive.joint}"
+    return "shaking_force"
+
+
+def parse_output(linkage: Linkage, output: str | None = None) -> Output:
+    """The `Output` named by `output` ("pivot_force:<ground joint>", "shaking_force",
+    "drive_moment", "contact_force:<clearance joint>"; None: `default_output`);
+    ValueError naming it and the allowed names otherwise."""
+    if output is None:
+        output = default_output(linkage)
+    grounds = ground_joints(linkage)
+    clearance = [j.name for j in linkage.clearance_joints]
+    allowed = ([f"pivot_force:{g}" for g in grounds] + ["shaking_force", "drive_moment"]
+               + [f"contact_force:{c}" for c in clearance])
+    if not isinstance(output, str) or output not in allowed:
+        raise ValueError(f"unknown output {output!r} of linkage {linkage.name!r}; allowed: "
+                         f"{allowed}")
+    kind, _, arg = output.partition(":")
+    if kind == "pivot_force":
+        columns = (f"{arg}.reaction_x", f"{arg}.reaction_y")
+    elif kind == "shaking_force":
+        columns = ("shaking_x", "shaking_y")
+    elif kind == "drive_moment":
+        columns = ("drive_moment",)
+    else:
+        columns = (f"{arg}.contact_force",)
+    return Output(output, columns, OUTPUT_KINDS[kind][1])
+
+
+def _rk_state(model, t0, y0, q, h, A, B, C):
+    """The state after one explicit Runge-Kutta step of size h (the integrator's step map,
+    in Python: the step re-taken from a recorded step's start)."""
+    n = len(y0)
+    K = np.empty((len(B), n))
+    f = np.empty(n)
+    model.rhs(t0, y0, q, f)
+    K[0] = f
+    for i in range(1, len(B)):
+        y = y0 + h * (A[i, :i] @ K[:i])
+        model.rhs(t0 + C[i] * h, np.ascontiguousarray(y), q, f)
+        K[i] = f
+    return y0 + h * (B @ K)
+
+
+#: recorded local maxima of an output (largest first) refined between steps
+_OUTPUT_CANDIDATES = 4
+
+
+def _refined_peak(model, ts, ys, ms, p, outs, out: Output, t_lo, t_hi, method):
+    """The maximum of `out` over [t_lo, t_hi] refined between the recorded steps: the
+    largest local maxima of the samples, each refined by golden section on the step maps of
+    the steps on both sides (as the integrator refines its monitored force). Returns
+    (peak, time)."""
+    from ..numerics.integrator import METHODS
+
+    A, B, C = METHODS[method].arrays()[:3]
+    col = {c: i for i, c in enumerate(model.OUT_COLUMNS)}
+    lo = int(np.searchsorted(ts, t_lo, side="left"))
+    hi = int(np.searchsorted(ts, t_hi, side="right"))
+    vals = out.values(outs[lo:hi], col)
+    m = len(vals)
+    is_max = np.zeros(m, dtype=bool)
+    is_max[0] = is_max[-1] = True
+    if m >= 3:
+        is_max[1:-1] = (vals[1:-1] >= vals[:-2]) & (vals[1:-1] >= vals[2:])
+    cand = np.flatnonzero(is_max)
+    cand = cand[np.argsort(-vals[cand], kind="stable")][:_OUTPUT_CANDIDATES]
+    k = int(np.argmax(vals))
+    best_v, best_t = float(vals[k]), float(ts[lo + k])
+    n_mem, m0 = model.N_MEM, model.MEM_START
+    q = p.copy()
+    for j in cand:
+        for s in (lo + j - 1, lo + j):
+            if not lo <= s < hi - 1:
+                continue
+            q[m0:m0 + n_mem] = ms[s, :n_mem]
+            y0 = np.ascontiguousarray(ys[s])
+            t0, span = float(ts[s]), float(ts[s + 1] - ts[s])
+            if span <= 0.0:
+                continue
+
+            def value(h, t0=t0, y0=y0, mem=ms[s:s + 1, :n_mem]):
+                y = _rk_state(model, t0, y0, q, h, A, B, C)
+                o = model.outputs(np.array([t0 + h]), y[None, :], mem, q)
+                return float(out.values(o, col)[0])
+
+            a, b = 0.0, span
+            g = 0.6180339887498949
+            x1, x2 = b - g * (b - a), a + g * (b - a)
+            f1, f2 = value(x1), value(x2)
+            for _ in range(REFINE_OUTPUT_ITERS):
+                if f1 >= f2:
+                    b, x2, f2 = x2, x1, f1
+                    x1 = b - g * (b - a)
+                    f1 = value(x1)
+                else:
+                    a, x1, f1 = x1, x2, f2
+                    x2 = a + g * (b - a)
+                    f2 = value(x2)
+            v, x = (f1, x1) if f1 >= f2 else (f2, x2)
+            if v > best_v and t_lo <= t0 + x <= t_hi:
+                best_v, best_t = v, t0 + x
+    return best_v, best_t
+
+
+#: golden-section iterations per step refined (`_refined_peak`): the bracket shrinks to
+#: 0.618^30 = 5e-7 of a step, the value's quadratic error to ~1e-13 of the step's variation
+REFINE_OUTPUT_ITERS = 30
+
+
+def _linkage_peak(linkage: Linkage, out: Output, revolution: int, options: dict):
+    """(peak, time) of output `out` over drive revolution `revolution` of the generated
+    model's run with `options` (`linkage_model.run`'s): the monitored force's peak from a
+    run that records nothing (the integrator refines it), any other output's from a
+    recorded run (`_refined_peak`)."""
+    from ..solve import linkage_model as lm
+
+    if options.get("accuracy") is not None:
+        from ..solve.accuracy import check_accuracy_or_rtol, value_to_accuracy
+
+        rest = {k: v for k, v in options.items() if k != "accuracy"}
+        check_accuracy_or_rtol(options["accuracy"], rest)
+        return value_to_accuracy(
+            lambda rtol: _linkage_peak(linkage, out, revolution, {**rest, "rtol": rtol}),
+            options["accuracy"])[0]
+    options = {k: v for k, v in options.items() if k != "accuracy"}
+    if out.monitored(linkage):
+        res = lm.run(linkage, revolution, record=False, **options)
+        return float(res[4][revolution - 1]), float(res[5][revolution - 1])
+    model, ts, ys, ms, _, _, stats, outs, p = lm.run(linkage, revolution, record=True,
+                                                     **options)
+    return _refined_peak(model, ts, ys, ms, p, outs, out, (revolution - 1) * linkage.period,
+                         revolution * linkage.period, stats["method"])
+
+
+def peak_output(linkage: Linkage, output: str | None = None, revolution: int = 4,
+                **options) -> float:
+    """The peak of `output` (`parse_output`; default the crank pivot's |reaction|) over drive
+    revolution `revolution` (1-based) of `linkage`'s generated model: the objective of the
+    studies of any linkage. The monitored force (the description's `monitor_joint`, or the
+    shaking force) is refined between steps by the integrator (`simulate.peak_base_force`);
+    any other output is the largest of the recorded steps' local maxima refined by golden
+    section on the steps' map. `options`: those of `simulate` for the reduced backend
+    (e.g. ``rtol``), or ``accuracy``: the peak within that relative accuracy by runs at
+    tightening rtol until two agree (`accuracy.value_to_accuracy`)."""
+    from ..solve import linkage_model as lm
+
+    if not isinstance(linkage, Linkage):
+        raise ValueError(f"linkage must be a Linkage; got {type(linkage).__name__}")
+    out = parse_output(linkage, output)
+    revolution = check_int("revolution", revolution, 1)
+    allowed = set(lm.OPTION_NAMES) - {"t_eval", "start"} | {"accuracy"}
+    unknown = sorted(set(options) - allowed)
+    if unknown:
+        raise ValueError(f"unknown option(s) {unknown} of peak_output; allowed: "
+                         f"{sorted(allowed)}")
+    return _linkage_peak(linkage, out, revolution, options)[0]
+
+
+# ------------------------------------------------------------------ any linkage
+
+def _linkage_fd_step(linkage: Linkage, name: str, relative: float) -> float:
+    """Central-difference step of design name `name` (`design`): a radius or clearance
+    relative to the clearance, a value relative to itself (1 of its unit where zero)."""
+    from ..model import design
+    from ..solve import linkage_ddm
+
+    if name.endswith("clearance"):
+        return relative * design.design_value(linkage, name)
+    if linkage.case == "paper_slider_crank" and name in CONTINUOUS_FIELDS:
+        return fd_step(SliderCrank().replace(**linkage.overrides), name, relative)
+    if name in design.design_names(linkage)[:len(design._case_table(linkage))]:
+        value = abs(design.design_value(linkage, name))
+        return relative * (value if value != 0.0 else 1.0)
+    return linkage_ddm.fd_step(linkage, design._dotted(name), relative)
+
+
+def _fd_linkage_peak(args):
+    """One perturbed peak of a linkage design (module level: picklable)."""
+    linkage, out, revolution, options = args
+    return _linkage_peak(linkage, out, revolution, options)
+
+
+def _fd_linkage_gradient(linkage, names, out, revolution, fd_relative_step, executor,
+                         options):
+    from ..model import design
+
+    t_wall = time.perf_counter()
+    options = dict(options)
+    options.setdefault("rtol", 1e-11)
+    steps = [_linkage_fd_step(linkage, n, fd_relative_step) for n in names]
+    ref = np.array([design.design_value(linkage, n) for n in names])
+    designs = [linkage]
+    for name, b0, h in zip(names, ref, steps):
+        for sign in (1.0, -1.0):
+            try:
+                designs.append(design.linkage_with(linkage, {name: b0 + sign * h}))
+            except ValueError as exc:
+                raise ValueError(f"the finite-difference step of {name} ({h:.3g}) leaves its "
+                                 f"valid range: {exc}; pass a smaller fd_relative_step") from exc
+    jobs = [(d, out, revolution, options) for d in designs]
+    values = (list(executor.map(_fd_linkage_peak, jobs)) if executor is not None
+              else [_fd_linkage_peak(j) for j in jobs])
+    peak, t_peak = values[0]
+    plus = np.array([v[0] for v in values[1::2]])
+    minus = np.array([v[0] for v in values[2::2]])
+    h = np.array(steps)
+    stats = {"fd_steps": steps, "runs": len(designs), "forward": (plus - peak) / h,
+             "backward": (peak - minus) / h, "wall_time": time.perf_counter() - t_wall,
+             "output": out.name, **{k: v for k, v in options.items()
+                                    if k in ("rtol", "method")}}
+    return PeakGradient(
+        peak=peak, time=t_peak, parameters=names, reference=ref,
+        gradient=(plus - minus) / (2.0 * h), method="fd", backend="reduced",
+        revolution=revolution,
+        message="central differences: no kink detection (stats['forward'] and "
+                "stats['backward'] hold the one-sided differences)", stats=stats)
+
+
+def _linkage_gradient_at(run, coefficients, out: Output, t: float, newton: bool):
+    """The output `out` at time t of the DDM run `run` (a `linkage_ddm.DdmRun`) and its
+    derivatives along the requested directions at the maximum next to t: the state and
+    its sensitivities from the step map of the recorded step that holds t (the model's
+    `step_sens`), the outputs' derivatives there (`DdmRun.output_sensitivities`), and
+    (``newton``) one Newton step for d out/dt = 0 from the values at t -+ 1e-4 of the step,
+    as `_Run.gradient_at`. Returns (value at t, gradient, time of the gradient)."""
+    model = run.model
+    col = {c: i for i, c in enumerate(model.OUT_COLUMNS)}
+    ts = run.ts
+    i = max(int(np.searchsorted(ts, t, side="left")) - 1, 0)
+    if ts[i + 1] == t:
+        i += 1
+    if ts[i] == t:
+        ys, mems, hs = run.ys[i:i + 1], run.ms[i:i + 1], np.zeros(1)
+    else:
+        q = run.p.copy()
+        n_mem, m0 = model.N_MEM, model.MEM_START
+        q[m0:m0 + n_mem] = run.ms[i, :n_mem]
+        h = t - ts[i]
+        delta = 1e-4 * (ts[i + 1] - ts[i])
+        hs = np.array([h, h - delta, h + delta]) if newton else np.array([h])
+        ys, _ = model.step_sens(ts[i], np.ascontiguousarray(run.ys[i]), q, hs, coefficients)
+        mems = np.repeat(run.ms[i:i + 1], len(hs), axis=0)
+    vals, ders = run.output_sensitivities(ts[i] + hs, ys, mems)
+    cols = [col[c] for c in out.columns]
+    if len(cols) == 2:
+        fx, fy = vals[:, cols[0]], vals[:, cols[1]]
+        f = np.hypot(fx, fy)
+        d = (fx[:, None] * ders[:, cols[0]] + fy[:, None] * ders[:, cols[1]]) \
+            / np.maximum(f, 1e-300)[:, None]
+    else:
+        f = np.abs(vals[:, cols[0]])
+        d = np.sign(vals[:, cols[0]])[:, None] * ders[:, cols[0]]
+    if len(hs) == 1:
+        return float(f[0]), d[0], float(t)
+    span = hs[2] - hs[1]
+    curv = (f[2] - 2.0 * f[0] + f[1]) / (0.25 * span * span)
+    slope = (f[2] - f[1]) / span
+    shift = -slope / curv if curv < 0.0 else 0.0
+    shift = min(max(shift, -0.5 * span), 0.5 * span)
+    g = (d[0] + shift * (d[2] - d[1]) / span
+         + 0.5 * shift * shift * (d[2] - 2.0 * d[0] + d[1]) / (0.25 * span * span))
+    return float(f[0]), g, float(t + shift)
+
+
+def _ddm_linkage_gradient(linkage, names, out: Output, revolution, rtol, integrator):
+    """The peak of `out` over drive revolution `revolution` and its DDM gradient along the
+    design names `names` (`design.direction`: a case override moves every description value
+    that follows from it): one run of the sensitivity equations of the generated model, the
+    peak refined between its steps (the integrator's refinement for the monitored force,
+    `_refined_peak` for another output), the gradient the outputs' sensitivity at the
+    refined peak time (envelope theorem)."""
+    from ..model import design
+    from ..solve import linkage_ddm
+    from ..solve.linkage_model import specialisable
+
+    t_wall = time.perf_counter()
+    directions = [design.direction(linkage, n) for n in names]
+    dotted = sorted({k for d in directions for k in d})
+    model, p0, y0, rtol, atol = linkage_ddm.plain_setup(
+        linkage, rtol, specialise=specialisable(linkage, dotted))
+    scale = np.array([abs(_linkage_fd_step(linkage, n, 1.0)) for n in names])
+    run = linkage_ddm.ddm_run(linkage, model, p0, y0, directions, scale=scale, rtol=rtol,
+                              atol_plain=atol, revolutions=revolution, method=integrator)
+    coefficients = METHODS[integrator].arrays()
+    t_lo, t_hi = (revolution - 1) * linkage.period, revolution * linkage.period
+    if out.monitored(linkage):
+        peak_int, t_peak = float(run.peaks[revolution - 1]), float(run.peak_t[revolution - 1])
+    else:
+        peak_int, t_peak = _refined_peak(model, run.ts, run.plain_states(), run.ms, p0,
+                                         run.outs, out, t_lo, t_hi, integrator)
+    eps = 1e-6 * linkage.period
+    at_edge = min(t_peak - t_lo, t_hi - t_peak) <= eps
+    peak, grad, _ = _linkage_gradient_at(run, coefficients, out, t_peak, not at_edge)
+    message = ("no rival detection for a Linkage: a second local maximum within the "
+               "accuracy of the peak is not looked for (compare with method='fd')")
+    if at_edge:
+        message += (f"; the peak sits at the window's edge (t = {t_peak:.9g} s): gradient "
+                    f"is the derivative of the output at the edge")
+    stats = dict({k: v for k, v in run.stats.items() if k not in ("wall_time",)},
+                 rtol=float(rtol), method=integrator, output=out.name,
+                 integrator_peak=peak_int, directions=directions,
+                 wall_time=time.perf_counter() - t_wall)
+    return PeakGradient(
+        peak=peak, time=t_peak, parameters=names,
+        reference=np.array([design.design_value(linkage, n) for n in names]), gradient=grad,
+        kink=bool(at_edge), at_edge=bool(at_edge), message=message, method="ddm",
+        backend="reduced", revolution=revolution, stats=stats)
+
+
+def _linkage_peak_gradient(linkage, parameters, output, revolution, backend, method, rtol,
+                           integrator, fd_relative_step, executor, options):
+    from ..model import design
+
+    if parameters is None:
+        raise ValueError(f"parameters must name what to differentiate for a Linkage: "
+                         f"{design.design_names(linkage)}")
+    if isinstance(parameters, str):
+        parameters = [parameters]
+    names = design.check_names(linkage, list(parameters))
+    if not names:
+        raise ValueError("parameters must name at least one parameter")
+    out = parse_output(linkage, output)
+    if backend != "reduced":
+        raise ValueError(f"backend must be 'reduced' for a Linkage study (its generated "
+                         f"model); got {backend!r}")
+    from ..solve import linkage_model as lm
+
+    if method == "ddm":
+        if options or executor is not None:
+            extra = sorted(options) + (["executor"] if executor is not None else [])
+            raise ValueError(f"unknown option(s) for method='ddm': {extra}")
+        from ..solve.linkage_ddm import DDM_INTEGRATOR
+
+        return _ddm_linkage_gradient(linkage, names, out, revolution,
+                                     PEAK_GRADIENT_RTOL if rtol is None else rtol,
+                                     integrator or DDM_INTEGRATOR)
+
+    unknown = sorted(set(options) - set(lm.OPTION_NAMES) | ({"t_eval", "start"}
+                                                             & set(options)))
+    if unknown:
+        raise ValueError(f"unknown option(s) {unknown} for a Linkage's peak gradient; "
+                         f"allowed: {sorted(set(lm.OPTION_NAMES) - {'t_eval', 'start'})}")
+    if rtol is not None:
+        options["rtol"] = rtol
+    if integrator is not None:
+        options["method"] = integrator
+    return _fd_linkage_gradient(linkage, names, out, revolution, fd_relative_step, executor,
+                                options)
+
+
+# ------------------------------------------------------------------ entry point
+
+def peak_gradient(mech: SliderCrank | Linkage, parameters=None, revolution: int = 4,
+                  backend: str = "reduced", method: str | None = None, *,
+                  output: str | None = None, rtol: float | None = None,
+                  integrator: str | None = None, kink_tol: float = KINK_RTOL,
+                  fd_relative_step: float = FD_RELATIVE_STEP, executor=None,
+                  **options) -> PeakGradient:
+    """The peak of |F12| over crank revolution `revolution` (the GA's objective,
+    `peak_base_force`) and its gradient with respect to named SliderCrank fields; for a
+    `Linkage`, the peak of any `output` (`peak_output`) with respect to any named design
+    value (`design`).
+
+    Parameters
+    ----------
+    mech : SliderCrank or Linkage
+        A Linkage (a named case's or a description's): ``method="fd"`` (its default),
+        central differences of `peak_output`, 2 p + 1 runs of its generated model; or
+        ``method="ddm"``, one run of its sensitivity equations along the directions of
+        the named values (`design.direction`), the output's sensitivity at the refined
+        peak time, without the rival (kink) detection of the SliderCrank's. Measured: on
+        the paper slider-crank built by its case it agrees with central differences to
+        2e-5; on the four-bar's lightly damped sliding contact it does not converge with
+        rtol (docs/studies_linkage.md): use "fd" there.
+    parameters : sequence of str, optional
+        Continuous SliderCrank fields; default `sensitivity.DEFAULT_PARAMETERS`. For a
+        Linkage (required): its case's overrides ("coupler_length", "clearance", ...) or
+        dotted paths of the description ("coupler.mass", "drive.speed"), `design`.
+    output : str, optional
+        Linkage only: "pivot_force:<ground joint>", "shaking_force", "drive_moment" or
+        "contact_force:<clearance joint>" (`parse_output`); default the crank pivot's
+        |reaction| (the paper's F12).
+    revolution : int
+        Crank revolution (1-based) whose peak is the objective (paper: 4).
+    backend : str
+        "reduced" for DDM; any backend of `simulate` for ``method="fd"``.
+    method : {"ddm", "fd"}
+        Default "ddm" for a SliderCrank, "fd" for a Linkage. "ddm": the DDM sensitivity of
+        |F12| at the refined peak time (envelope theorem),
+        one run of the sensitivity equations, on the model `simulate` runs (with friction:
+        the model generated with the tangential force; friction_coefficient, friction_v0
+        and friction_v1 are then parameters too). "fd": central differences of the refined peak
+        (`peak_base_force`), 2 p + 1 runs, for checking.
+    rtol : float, optional
+        Relative tolerance of the reduced model (DDM: default `PEAK_GRADIENT_RTOL`, 1e-6;
+        FD: default 1e-11).
+    integrator : str, optional
+        Method of the compiled integrator (DDM default "dop853"; FD: the plain default).
+    kink_tol : float
+        Relative gap below which a second local maximum ties with the peak (the tolerance
+        used is max(kink_tol, KINK_PER_RTOL * rtol) = max(kink_tol, 10 rtol)).
+    fd_relative_step : float
+        FD only: relative step, see `sensitivity.fd_step`.
+    executor :
+        FD only: a concurrent.futures-style executor for the 2 p + 1 runs.
+    **options :
+        FD only: backend options passed to `peak_base_force` (e.g. ``step_size``).
+
+    Returns
+    -------
+    PeakGradient
+    """
+    from ..solve.simulate import BACKENDS
+
+    if not isinstance(mech, (SliderCrank, Linkage)):
+        raise ValueError(f"mech must be a SliderCrank or a Linkage; got {type(mech).__name__}")
+    if method is None:
+        method = "fd" if isinstance(mech, Linkage) else "ddm"
+    revolution = check_int("revolution", revolution, 1)
+    check_revolutions_memory(revolution, name="revolution")
+    check_choice("method", method, ("ddm", "fd"))
+    check_choice("backend", backend, BACKENDS)
+    if integrator is not None:
+        check_choice("integrator", integrator, METHODS)
+    if rtol is not None:
+        rtol = check_real("rtol", rtol, 1e-14, 1e-2)
+    kink_tol = check_real("kink_tol", kink_tol, 0.0, 1.0, high_open=True)
+    fd_relative_step = check_real("fd_relative_step", fd_relative_step, 0.0, 0.1,
+                                  low_open=True, high_open=True)
+    if isinstance(mech, Linkage):
+        return _linkage_peak_gradient(mech, parameters, output, revolution, backend, method,
+                                      rtol, integrator, fd_relative_step, executor, options)
+    if output is not None:
+        raise ValueError("output applies to a Linkage; a SliderCrank's objective is the "
+                         "peak of |F12| (use cases.from_slider_crank for other outputs)")
+    names = _check_parameters(parameters)
+    if method == "ddm":
+        if backend != "reduced":
+            raise ValueError("method='ddm' needs backend='reduced' (the direct "
+                             "differentiation equations are those of the reduced model); use "
+                             "method='fd' for other backends")
+        if options or executor is not None:
+            extra = sorted(options) + (["executor"] if executor is not None else [])
+            raise ValueError(f"unknown option(s) for method='ddm': {extra}")
+        return _ddm_gradient(mech, names, revolution,
+                             PEAK_GRADIENT_RTOL if rtol is None else rtol,
+                             integrator or DDM_INTEGRATOR, kink_tol)
+    if rtol is not None:
+        if backend != "reduced":
+            raise ValueError(f"rtol applies to the reduced backend only; got "
+                             f"backend={backend!r}")
+        options["rtol"] = rtol
+    if integrator is not None:
+        if backend != "reduced":
+            raise ValueError(f"integrator applies to the reduced backend only; got "
+                             f"backend={backend!r}")
+        options["method"] = integrator
+    return _fd_gradient(mech, names, revolution, backend, fd_relative_step, executor, options)

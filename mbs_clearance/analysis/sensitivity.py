@@ -1,0 +1,662 @@
+"""Design sensitivities of the base reaction force (paper Section 3, Figs. 4-6).
+
+`sensitivities(mech, parameters, method="ddm")` integrates the direct-differentiation
+equations of the reduced model, generated with its exact Jacobians (`linkage_ddm`; a
+SliderCrank's fields are directions in its description's parameters,
+`slider_crank_directions`); ``method="fd"`` takes central finite
+differences through any backend, with the runs in parallel.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import time
+from concurrent.futures import Executor, ProcessPoolExecutor
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .._checks import (
+    check_bool,
+    check_choice,
+    check_int,
+    check_real,
+    check_revolutions_memory,
+    check_times,
+)
+from ..laws.registry import FRICTION_SLOTS
+from ..model.mechanism import CONTINUOUS_FIELDS, SliderCrank, check_field_names
+from ..numerics.integrator import METHODS
+from ..solve import reduced
+from ..solve.linkage_ddm import independent_directions  # noqa: F401  (public here too)
+from ..solve.trajectory import Trajectory, annotate, load_trajectory
+
+__all__ = ["Sensitivities", "sensitivities", "load_sensitivities", "DEFAULT_PARAMETERS",
+           "slider_crank_directions", "reference_value", "fd_step"]
+
+#: the paper's set of design parameters (Figs. 4-6)
+DEFAULT_PARAMETERS = ("crank_length", "coupler_length", "coupler_mass", "slider_mass",
+                      "contact_stiffness", "youngs_modulus", "journal_radius", "restitution")
+
+#: relative floor of the normalization of Eq. 15: |F12| is replaced by
+#: max(|F12|, NORMALIZATION_FLOOR * max_t |F12|) so the ratio stays finite near |F12| = 0
+NORMALIZATION_FLOOR = 0.01
+
+#: growth of the sensitivity norm per revolution, relative to its value in revolution 2,
+#: above which the motion is declared not periodic: the slope of a least-squares line
+#: through the per-revolution maxima (`growth`) from revolution 2 on (revolution 1 holds the
+#: start's transient), divided by the revolution-2 value. A line, not the ratio of the
+#: last two revolutions, so that steady algebraic growth is caught too: 100 rpm grows
+#: linearly, by 0.43 of its revolution-2 value per revolution over 4 revolutions (the ratio
+#: of the last two only 1.15); the paper case's largest is 0.031 (eight parameters, 4
+#: revolutions) and falls with more (bounded);
+#: 1000 rpm 22, c = 0.1 mm 263, c = 0.5 mm 1.2e5 (8 and 5 revolutions, docs/sensitivity.md)
+GROWTH_TREND_LIMIT = 0.1
+
+#: revolutions the growth diagnostic needs: revolution 1 is the transient, and a trend
+#: needs two more
+MIN_JUDGED_REVOLUTIONS = 3
+
+#: relative finite-difference step: central differences have error O(h^2) against the
+#: integration noise rtol / h; measured against DDM in the paper's case, 3e-5 is the best
+#: (DDM - FD: 9e-4 at 3e-4, 1e-4 at 1e-4, 9e-6 at 3e-5, 2e-6..6e-6 at 1e-5; docs/sensitivity.md)
+FD_RELATIVE_STEP = 3e-5
+
+
+@dataclass(frozen=True)
+class Sensitivities:
+    """Derivatives of the outputs with respect to named SliderCrank fields.
+
+    Attributes
+    ----------
+    t : (n,) s
+    parameters : tuple of p field names
+    reference : (p,) the parameter values b0 (derived values where the field is None)
+    base_force : (n, 2, p) dF12/db
+    base_force_magnitude : (n, p) d|F12|/db
+    crank_moment : (n, p) dM2/db
+    contact_force : (n, p) dF/db
+    trajectory : the nominal Trajectory on the same time grid
+    method, backend : how they were computed
+    growth : (revolutions, p) max over each revolution of the normalized state-sensitivity
+        norm; it stays bounded in periodic motion and grows without bound in chaotic motion
+    stats : solver counters and settings
+    outputs : for a `Linkage` (else None): every output column of its generated model
+        (OUT_COLUMNS) and every coordinate, name -> (n, p) derivatives; there base_force is
+        the monitored reaction (the monitor joint's, or the shaking force), crank_moment
+        the drive moment, contact_force (n, p) for one clearance joint, (n, J, p) for J
+    """
+
+    t: np.ndarray
+    parameters: tuple[str, ...]
+    reference: np.ndarray
+    base_force: np.ndarray
+    base_force_magnitude: np.ndarray
+    crank_moment: np.ndarray
+    contact_force: np.ndarray
+    trajectory: Trajectory
+    method: str
+    backend: str
+    growth: np.ndarray | None = None
+    stats: dict[str, Any] = field(default_factory=dict)
+    outputs: dict[str, np.ndarray] | None = None
+
+    @property
+    def normalized(self) -> np.ndarray:
+        """Eq. 15 for |F12|: (d|F12|/db) b0 / |F12|, shape (n, p).
+
+        |F12| in the denominator is floored at NORMALIZATION_FLOOR times its maximum over
+        the trajectory, so the ratio stays finite where the force passes near zero.
+        """
+        mag = self.trajectory.base_force_magnitude
+        denom = np.maximum(mag, NORMALIZATION_FLOOR * mag.max())
+        return self.base_force_magnitude * self.reference[None, :] / denom[:, None]
+
+    def revolution_mask(self, revolution: int) -> np.ndarray:
+        """Boolean mask of the samples in crank revolution `revolution` (1-based)."""
+        return self.trajectory.revolution_mask(revolution)
+
+    @property
+    def growth_rate(self) -> np.ndarray:
+        """Per parameter, the factor by which the sensitivity norm grows per revolution over
+        the last two revolutions (about 1 for periodic motion, >> 1 for chaotic motion; NaN
+        with fewer than 3 revolutions)."""
+        if self.growth is None or len(self.growth) < 3:
+            return np.full(len(self.parameters), np.nan)
+        return np.sqrt(self.growth[-1] / np.maximum(self.growth[-3], 1e-300))
+
+    @property
+    def growth_trend(self) -> np.ndarray:
+        """Per parameter, the growth of the sensitivity norm per revolution relative to its
+        revolution-2 value: the slope of a least-squares line through `growth` from
+        revolution 2 on, over the revolution-2 value (about 0 for periodic motion; NaN with
+        fewer than MIN_JUDGED_REVOLUTIONS revolutions)."""
+        if self.growth is None or len(self.growth) < MIN_JUDGED_REVOLUTIONS:
+            return np.full(len(self.parameters), np.nan)
+        g = np.asarray(self.growth[1:], dtype=float)
+        k = np.arange(len(g), dtype=float)
+        slope = np.polyfit(k, g, 1)[0]
+        return slope / np.maximum(g[0], 1e-300)
+
+    @property
+    def periodic(self) -> bool | None:
+        """True when the sensitivities stay bounded (periodic motion), False when they grow
+        by more than GROWTH_TREND_LIMIT of their revolution-2 value per revolution (chaotic,
+        a slow drift, or a long transient), None when it cannot be judged (fewer than
+        MIN_JUDGED_REVOLUTIONS revolutions, or no growth diagnostic: finite differences)."""
+        trend = self.growth_trend
+        if not np.all(np.isfinite(trend)):
+            return None
+        return bool(np.all(trend <= GROWTH_TREND_LIMIT))
+
+    @property
+    def periodicity_note(self) -> str:
+        """A sentence on `periodic`: why it cannot be judged, or the largest growth."""
+        if self.growth is None:
+            return ("undetermined: no growth diagnostic (finite differences); see "
+                    "trajectory.stats['periodic']")
+        if len(self.growth) < MIN_JUDGED_REVOLUTIONS:
+            return (f"undetermined: {len(self.growth)} revolution(s); the growth diagnostic "
+                    f"needs at least {MIN_JUDGED_REVOLUTIONS} (revolution 1 is the start's "
+                    "transient): the sensitivities' values cannot be trusted to be bounded")
+        trend = self.growth_trend
+        k = int(np.argmax(trend))
+        if self.periodic:
+            return (f"periodic: the sensitivity norms stay bounded (largest growth "
+                    f"{trend[k]:.2g} of the revolution-2 value per revolution, "
+                    f"{self.parameters[k]}; limit {GROWTH_TREND_LIMIT:g})")
+        return (f"not periodic: the sensitivity norm of {self.parameters[k]} grows by "
+                f"{trend[k]:.3g} times its revolution-2 value per revolution (limit "
+                f"{GROWTH_TREND_LIMIT:g}): the motion is chaotic or drifts, and these "
+                "derivatives are not meaningful")
+
+    @property
+    def chaotic(self) -> bool:
+        """True when `periodic` is False: the sensitivities grow from revolution to
+        revolution, the motion is not periodic (chaotic, drifting, or still in its
+        transient) and derivatives of the trajectory are meaningless there (docs). False
+        also when it cannot be judged: check `periodic` is not None."""
+        return self.periodic is False
+
+    def summary(self, revolution: int | None = None) -> list[dict[str, float]]:
+        """Per parameter: b0, mean and max |normalized sensitivity| over `revolution`
+        (default: the last), the growth rate per revolution over the last two and the
+        growth trend (`growth_trend`)."""
+        rev = revolution or self.trajectory.revolutions
+        mask = self.revolution_mask(rev)
+        norm = np.abs(self.normalized[mask])
+        rate = self.growth_rate
+        trend = self.growth_trend
+        return [{"parameter": n, "reference": float(self.reference[k]),
+                 "mean_abs_normalized": float(norm[:, k].mean()),
+                 "max_abs_normalized": float(norm[:, k].max()),
+                 "growth_per_revolution": float(rate[k]),
+                 "growth_trend": float(trend[k])}
+                for k, n in enumerate(self.parameters)]
+
+    def save(self, path: str | Path) -> Path:
+        """Write to `path` (.npz: every array, `normalized` included for other tools) and the
+        nominal trajectory beside it (``<stem>.trajectory.npz``); `load_sensitivities` reads
+        both back."""
+        path = Path(path)
+        if path.suffix != ".npz":
+            raise ValueError(f"sensitivities file must end in .npz; got {str(path)!r}")
+        self.trajectory.save(_trajectory_path(path))
+        np.savez_compressed(
+            path, t=self.t, parameters=np.array(self.parameters), reference=self.reference,
+            base_force=self.base_force, base_force_magnitude=self.base_force_magnitude,
+            crank_moment=self.crank_moment, contact_force=self.contact_force,
+            normalized=self.normalized,
+            growth=self.growth if self.growth is not None else np.zeros((0, 0)),
+            method=self.method, backend=self.backend,
+            stats=json.dumps(self.stats, default=float))
+        return path
+
+    def column(self, name: str) -> int:
+        """Index of parameter `name`."""
+        if name not in self.parameters:
+            raise ValueError(f"parameter {name!r} not computed; have {list(self.parameters)}")
+        return self.parameters.index(name)
+
+
+def _trajectory_path(path: Path) -> Path:
+    return path.with_name(path.stem + ".trajectory.npz")
+
+
+def load_sensitivities(path: str | Path) -> Sensitivities:
+    """Read sensitivities written by `Sensitivities.save` (and the trajectory beside them).
+
+    The file is checked against itself and its trajectory (shapes, parameter names, finite
+    values, the same time grid); a bad file raises ValueError naming it and the problem.
+    The stored `normalized` array is not read: it is recomputed from the rest.
+    """
+    path = Path(path)
+    try:
+        with np.load(path, allow_pickle=False) as d:
+            arrays = {k: np.asarray(d[k]) for k in (
+                "t", "parameters", "reference", "base_force", "base_force_magnitude",
+                "crank_moment", "contact_force", "growth", "method", "backend", "stats")}
+        stats = json.loads(str(arrays["stats"]))
+    except (OSError, KeyError, ValueError, EOFError, json.JSONDecodeError) as exc:
+        raise ValueError(f"cannot read sensitivities file {str(path)!r}: {exc}") from exc
+    traj = load_trajectory(_trajectory_path(path))
+    _check_loaded(path, arrays, stats, traj)
+    growth = arrays["growth"].astype(float)
+    return Sensitivities(
+        t=arrays["t"].astype(float), parameters=tuple(str(p) for p in arrays["parameters"]),
+        reference=arrays["reference"].astype(float), base_force=arrays["base_force"],
+        base_force_magnitude=arrays["base_force_magnitude"],
+        crank_moment=arrays["crank_moment"], contact_force=arrays["contact_force"],
+        trajectory=traj, method=str(arrays["method"]), backend=str(arrays["backend"]),
+        growth=growth if growth.size else None, stats=stats)
+
+
+def _check_loaded(path: Path, a: dict, stats: Any, traj: Trajectory) -> None:
+    def fail(problem):
+        return ValueError(f"inconsistent sensitivities file {str(path)!r}: {problem}")
+
+    names = a["parameters"]
+    if names.ndim != 1 or names.size == 0 or names.dtype.kind not in "US":
+        raise fail("'parameters' must be a non-empty list of names")
+    try:
+        _check_parameters(tuple(str(x) for x in names))
+    except ValueError as exc:
+        raise fail(str(exc)) from exc
+    n, p = a["t"].shape[0] if a["t"].ndim == 1 else -1, names.size
+    shapes = {"t": (n,), "reference": (p,), "base_force": (n, 2, p),
+              "base_force_magnitude": (n, p), "crank_moment": (n, p), "contact_force": (n, p)}
+    for key, shape in shapes.items():
+        arr = a[key]
+        if arr.shape != shape or n < 1:
+            raise fail(f"{key!r} has shape {arr.shape}, expected {shape} (n = len(t), "
+                       f"p = {p} parameters)")
+        if arr.dtype.kind not in "fi" or not np.all(np.isfinite(arr)):
+            raise fail(f"{key!r} holds non-finite or non-numeric values")
+    g = a["growth"]
+    if g.size and (g.ndim != 2 or g.shape[1] != p or g.dtype.kind not in "fi"
+                   or not np.all(np.isfinite(g)) or np.any(g < 0)):
+        raise fail(f"'growth' must be (revolutions, {p}) finite numbers >= 0; got shape "
+                   f"{g.shape}")
+    if str(a["method"]) not in ("ddm", "fd"):
+        raise fail(f"method must be 'ddm' or 'fd'; got {str(a['method'])!r}")
+    if not isinstance(stats, dict):
+        raise fail("'stats' must be a JSON object")
+    if len(traj.t) != n or not np.array_equal(traj.t, a["t"]):
+        raise fail(f"its time grid ({n} samples) differs from the trajectory file's "
+                   f"({len(traj.t)} samples)")
+
+
+def _check_parameters(parameters) -> tuple[str, ...]:
+    names = tuple(DEFAULT_PARAMETERS if parameters is None else parameters)
+    if isinstance(parameters, str):
+        names = (parameters,)
+    if not names:
+        raise ValueError("parameters must name at least one SliderCrank field")
+    check_field_names(names, CONTINUOUS_FIELDS)
+    if len(set(names)) != len(names):
+        raise ValueError(f"parameters must not repeat a name; got {list(names)}")
+    return names
+
+
+def reference_value(mech: SliderCrank, name: str) -> float:
+    """Value b0 of a design parameter (the derived value where the field is None)."""
+    derived = {"contact_stiffness": mech.stiffness,
+               "crank_inertia": mech.crank_inertia_value,
+               "coupler_inertia": mech.coupler_inertia_value}
+    if name in derived:
+        return float(derived[name])
+    return float(getattr(mech, name))
+
+
+#: the SliderCrank's fields as the description's parameters (`cases.from_slider_crank`):
+#: field -> the description parameters it sets, with the derivative of each (a number, or a
+#: function of the mechanism for the derived values); the inertias derived from a uniform
+#: rod (field None) move with the lengths and masses too (`_derived_inertia`)
+_JOINT = "coupler_slider"
+_FIELD_MAP = {
+    "crank_length": {"crank.pivot.x": -0.5, "crank.pin.x": 0.5},
+    "coupler_length": {"coupler.crank_end.x": -0.5, "coupler.slider_end.x": 0.5},
+    "crank_mass": {"crank.mass": 1.0},
+    "coupler_mass": {"coupler.mass": 1.0},
+    "slider_mass": {"slider.mass": 1.0, "slider.inertia": 0.01**2 / 6.0},
+    "crank_inertia": {"crank.inertia": 1.0},
+    "coupler_inertia": {"coupler.inertia": 1.0},
+    "crank_speed": {"drive.speed": 1.0},
+    "initial_crank_angle": {"drive.initial_angle": 1.0},
+    "gravity": {"gravity": 1.0},
+    **{f: {f"{_JOINT}.{f}": 1.0} for f in (
+        "bearing_radius", "journal_radius", "youngs_modulus", "poisson_ratio", "restitution",
+        "contact_stiffness", "impact_velocity_floor")},
+}
+#: the friction fields: description parameters only where the joint has a friction law
+_FRICTION_FIELDS = FRICTION_SLOTS
+
+
+def _derived_inertia(mech: SliderCrank, name: str) -> dict[str, float]:
+    """d(inertia)/d(field) of the uniform-rod inertias m L^2 / 12 where they are derived."""
+    out = {}
+    if mech.crank_inertia is None:
+        m, L = mech.crank_mass, mech.crank_length
+        out.update({"crank_length": ("crank.inertia", m * L / 6.0),
+                    "crank_mass": ("crank.inertia", L * L / 12.0)})
+    if mech.coupler_inertia is None:
+        m, L = mech.coupler_mass, mech.coupler_length
+        out.update({"coupler_length": ("coupler.inertia", m * L / 6.0),
+                    "coupler_mass": ("coupler.inertia", L * L / 12.0)})
+    return dict([out[name]]) if name in out else {}
+
+
+def slider_crank_directions(mech: SliderCrank, names) -> list[dict[str, float]]:
+    """Per SliderCrank field, its direction in the description's parameters
+    ({dotted name: d value / d field}, exact: the mapping `cases.from_slider_crank` is
+    linear in every field but the derived inertias, differentiated here); the description's
+    own chain (`linkage_ddm.chain`) takes the radii and the material into the clearance and
+    the Eq. 9 stiffness."""
+    return [({f"{_JOINT}.{n}": 1.0} if mech.friction_law != "none" else {})
+            if n in _FRICTION_FIELDS else {**_FIELD_MAP[n], **_derived_inertia(mech, n)}
+            for n in names]
+
+
+#: default method of the compiled integrator for the sensitivity equations
+DDM_INTEGRATOR = "dop853"
+
+
+def slider_crank_run(mech: SliderCrank, names, rtol, *, revolutions: int, t_eval=None,
+                     event_time_term: bool = True, method: str = DDM_INTEGRATOR,
+                     record: bool = True, derivatives=False):
+    """The DDM run (`linkage_ddm.ddm_run`) of the SliderCrank fields `names` on the paper's
+    generated model (reduced.MODEL), with the plain run's tolerances (reduced.default_atol,
+    reduced.event_atol); each direction's tolerance scaled by its field's value; with
+    `derivatives` (`linkage_ddm.ddm_run`) outputs' derivatives recorded with the steps."""
+    from ..model.cases import from_slider_crank
+    from ..solve import linkage_ddm
+
+    linkage = from_slider_crank(mech)
+    rtol = reduced.DEFAULT_RTOL if rtol is None else rtol
+    ref = np.array([reference_value(mech, n) for n in names])
+    scale = np.where(ref != 0.0, np.abs(ref), 1.0)
+    if mech.friction_law == "none":
+        model, p0, y0 = reduced.MODEL, reduced.model_parameters(mech), reduced.initial_state(mech)
+        atol = np.concatenate([reduced.default_atol(mech, rtol),
+                               reduced.event_atol(mech, rtol)])
+    else:       # the model generated with the tangential force (as `simulate` runs it)
+        model, p0, y0, rtol, atol = linkage_ddm.plain_setup(linkage, rtol)
+    run = linkage_ddm.ddm_run(
+        linkage, model, p0, y0,
+        slider_crank_directions(mech, names), scale=scale, rtol=rtol, atol_plain=atol,
+        revolutions=revolutions, t_eval=t_eval, event_time_term=event_time_term,
+        method=method, record=record, whole=True, derivatives=derivatives)
+    return run, ref
+
+
+def _ddm(mech, names, revolutions, rtol, t_eval, event_time_term, method):
+    from ..solve.linkage_ddm import landed, magnitude_derivative
+
+    # only the derivatives a SliderCrank's Sensitivities hold, computed with the steps
+    force = reduced.MODEL.OUT_COLUMNS[reduced.MODEL.MONITOR_COLUMN:][:2]
+    run, ref = slider_crank_run(mech, names, rtol, revolutions=revolutions, t_eval=t_eval,
+                                event_time_term=event_time_term, method=method,
+                                derivatives=[*force, "drive_moment", f"{_JOINT}.contact_force"])
+    model = run.model
+    mon = model.MONITOR_COLUMN
+    # growth diagnostic on all steps: normalized state sensitivities per revolution
+    unit = np.array([1.0, mech.clearance, mech.crank_speed,
+                     mech.crank_speed * mech.clearance / mech.crank_length])
+    growth = run.growth(unit, mech.period, revolutions)
+    ts, ys, ms, peaks, keep = run.ts, run.ys, run.ms, run.peaks, None
+    if t_eval is not None:
+        keep = landed(ts, t_eval)
+        ts, ys, ms, peaks = ts[keep], ys[keep], ms[keep], None
+    vals, ders = run.recorded_output_sensitivities(keep)
+    # (the fields are views of ders, one array (n, 4, npar) in the order asked above)
+    d_force = ders[:, 0:2, :]
+    d_mag = magnitude_derivative(vals, mon, ders, 0)
+    traj = annotate(reduced.trajectory_from_states(
+        mech, ts, run.plain_states(ys), ms[:, :model.N_MEM], run.p0, run.stats, peaks, vals,
+        model.OUT_COLUMNS))
+    return Sensitivities(
+        t=ts, parameters=names, reference=ref, base_force=d_force, base_force_magnitude=d_mag,
+        crank_moment=ders[:, 2, :], contact_force=ders[:, 3, :], trajectory=traj,
+        method="ddm", backend="reduced", growth=growth, stats=run.stats)
+
+
+def fd_step(mech: SliderCrank, name: str, relative: float = FD_RELATIVE_STEP) -> float:
+    """Central-difference step for parameter `name`.
+
+    `relative` times the parameter value, except for the radii, whose step is relative to
+    the clearance (they enter through R_B - R_J), and for zero-valued angles (1 rad scale)
+    and gravity (9.81 m/s^2 scale).
+    """
+    if name in ("journal_radius", "bearing_radius"):
+        return relative * mech.clearance
+    value = abs(reference_value(mech, name))
+    if value == 0.0:
+        return relative * (9.81 if name == "gravity" else 1.0)
+    return relative * value
+
+
+def _fd_run(args):
+    """One perturbed simulation (module level: picklable for process pools)."""
+    from ..solve.simulate import simulate
+
+    mech, revolutions, backend, options = args
+    traj = simulate(mech, revolutions, backend=backend, **options)
+    return (traj.t, traj.base_force, traj.crank_moment, traj.contact_force)
+
+
+def _fd(mech, names, revolutions, backend, t_eval, rtol, fd_relative_step, executor, n_jobs,
+        options):
+    from ..solve.simulate import simulate
+
+    options = dict(options)
+    if backend == "reduced":
+        options["rtol"] = 1e-11 if rtol is None else rtol
+        if t_eval is None:
+            t_eval = np.linspace(0.0, revolutions * mech.period, 720 * revolutions + 1)
+        options["t_eval"] = t_eval
+    elif t_eval is not None:
+        raise ValueError("t_eval is only supported by the reduced backend; the exudyn "
+                         "backend reports its own fixed time steps")
+    if backend == "exudyn" and options.get("step_size", 2e-6) > 7.5e-7:
+        # measured: docs/sensitivity.md "DDM against finite differences of the Exudyn model"
+        logging.getLogger("mbs_clearance").warning(
+            f"finite differences through Exudyn at step {options.get('step_size', 2e-6):g} s "
+            "are coarse (the paper's case at the default 2e-6 s: 15-19 % RMS off the DDM "
+            "sensitivities); step_size=5e-7 gives about 1 % (4 times the run time)")
+    steps = [fd_step(mech, n, fd_relative_step) for n in names]
+    jobs = []
+    for name, h in zip(names, steps):
+        b0 = reference_value(mech, name)
+        for sign in (1.0, -1.0):
+            try:
+                jobs.append((mech.replace(**{name: b0 + sign * h}), revolutions, backend,
+                             options))
+            except ValueError as exc:
+                raise ValueError(f"the finite-difference step of {name} ({h:.3g}) leaves its "
+                                 f"valid range: {exc}; pass a smaller fd_relative_step") from exc
+    t0 = time.perf_counter()
+    nominal = simulate(mech, revolutions, backend=backend, **options)
+    if executor is not None:
+        results = list(executor.map(_fd_run, jobs))
+    elif n_jobs == 1 or backend == "reduced":
+        results = [_fd_run(j) for j in jobs]
+    else:
+        with ProcessPoolExecutor(max_workers=n_jobs or 2) as pool:
+            results = list(pool.map(_fd_run, jobs))
+    n = len(nominal.t)
+    d_force = np.empty((n, 2, len(names)))
+    d_mag = np.empty((n, len(names)))
+    d_moment = np.empty((n, len(names)))
+    d_contact = np.empty((n, len(names)))
+    for k, h in enumerate(steps):
+        (t_p, f_p, m_p, c_p), (t_m, f_m, m_m, c_m) = results[2 * k], results[2 * k + 1]
+        if len(t_p) != n or len(t_m) != n or not (np.allclose(t_p, nominal.t, rtol=0,
+                                                              atol=1e-12)
+                                                  and np.allclose(t_m, nominal.t, rtol=0,
+                                                                  atol=1e-12)):
+            raise RuntimeError("perturbed runs returned different time grids")
+        d_force[:, :, k] = (f_p - f_m) / (2 * h)
+        d_mag[:, k] = (np.hypot(*f_p.T) - np.hypot(*f_m.T)) / (2 * h)
+        d_moment[:, k] = (m_p - m_m) / (2 * h)
+        d_contact[:, k] = (c_p - c_m) / (2 * h)
+    stats = {"fd_steps": steps, "runs": 2 * len(names) + 1,
+             "wall_time": time.perf_counter() - t0}
+    return Sensitivities(
+        t=nominal.t, parameters=names,
+        reference=np.array([reference_value(mech, n) for n in names]),
+        base_force=d_force, base_force_magnitude=d_mag, crank_moment=d_moment,
+        contact_force=d_contact, trajectory=nominal, method="fd", backend=backend, stats=stats)
+
+
+def sensitivities(mech: SliderCrank, parameters=None, revolutions: int = 4,
+                  method: str = "ddm", backend: str = "reduced", *,
+                  t_eval: np.ndarray | None = None, rtol: float | None = None,
+                  event_time_term: bool = True, fd_relative_step: float = FD_RELATIVE_STEP,
+                  executor: Executor | None = None, n_jobs: int | None = None,
+                  integrator: str | None = None, **options) -> Sensitivities:
+    """Sensitivities of the outputs to named SliderCrank fields.
+
+    Parameters
+    ----------
+    mech : SliderCrank
+    parameters : sequence of str, optional
+        Continuous SliderCrank fields; default `DEFAULT_PARAMETERS` (the paper's set).
+    revolutions : int
+        Crank revolutions simulated from t = 0.
+    method : {"ddm", "fd"}
+        Direct differentiation (reduced model only) or central finite differences (any
+        backend; 2 p + 1 runs, in parallel).
+    backend : str
+        Model for ``method="fd"``: "reduced" or "exudyn".
+    t_eval : (m,) array, optional
+        Times (s) at which to report (reduced backend; the integrator lands on them).
+    rtol : float, optional
+        Relative tolerance of the reduced model (DDM: default 1e-7; FD: default 1e-11).
+    event_time_term : bool
+        DDM only: include the event-time term of the impact-velocity sensitivity. Only for
+        demonstrating that it matters; leave it True.
+    fd_relative_step : float
+        FD only: relative step, see `fd_step`.
+    executor, n_jobs :
+        FD only: a concurrent.futures-style executor for the perturbed runs, or the number
+        of local worker processes (Exudyn runs default to 2; reduced runs run serially).
+    integrator : str, optional
+        Method of the compiled integrator for the reduced model ("dop853", "dopri5",
+        "bs3"). Default: "dop853" for DDM (the augmented system is accuracy-limited, where
+        the 8th-order pair takes 4 times fewer steps; docs/sensitivity.md), the plain
+        simulation's "dopri5" for finite differences.
+    **options :
+        Backend options passed to `simulate` (FD), e.g. ``step_size`` for Exudyn.
+
+    A `Linkage` (mbs_clearance.model.cases, any description): parameters are its dotted names
+    (`Linkage.parameter_names`, default: every one that is not a point coordinate); DDM on
+    its generated model's exact Jacobians (`linkage_ddm`), FD by central differences of
+    plain runs that land on t_eval (default 720 per revolution), reduced backend only.
+    ``start=`` (a `linkage_model.Start`, e.g. `settled_start`) runs from that state instead
+    of the centred start, held fixed: the sensitivities start at zero, as finite
+    differences of runs from the same start do.
+
+    Returns
+    -------
+    Sensitivities
+    """
+    from ..model.linkage import Linkage
+
+    if isinstance(mech, Linkage):
+        return _linkage_sensitivities(mech, parameters, revolutions, method, backend, t_eval,
+                                      rtol, event_time_term, fd_relative_step, integrator,
+                                      options)
+    if not isinstance(mech, SliderCrank):
+        raise ValueError(f"mech must be a SliderCrank or a Linkage; got "
+                         f"{type(mech).__name__}")
+    names = _check_parameters(parameters)
+    check_choice("method", method, ("ddm", "fd"))
+    revolutions = check_int("revolutions", revolutions, 1)
+    check_revolutions_memory(revolutions, per_revolution=_per_revolution(method, len(names)))
+    fd_relative_step = check_real("fd_relative_step", fd_relative_step, 0.0, 0.1,
+                                  low_open=True, high_open=True)
+    if rtol is not None:
+        rtol = check_real("rtol", rtol, 1e-14, 1e-2)
+    if t_eval is not None:
+        t_eval = check_times("t_eval", t_eval, revolutions * mech.period)
+    event_time_term = check_bool("event_time_term", event_time_term)
+    if n_jobs is not None:
+        n_jobs = check_int("n_jobs", n_jobs, 1)
+    from ..solve.simulate import BACKENDS
+
+    if backend not in BACKENDS:
+        raise ValueError(f"backend must be one of {sorted(BACKENDS)}; got {backend!r}")
+    if integrator is not None and integrator not in METHODS:
+        raise ValueError(f"integrator must be one of {sorted(METHODS)}; got {integrator!r}")
+    if method == "ddm":
+        if backend != "reduced":
+            raise ValueError("method='ddm' needs backend='reduced' (the direct "
+                             "differentiation equations are those of the reduced model); use "
+                             "method='fd' for other backends")
+        if options:
+            raise ValueError(f"unknown option(s) for method='ddm': {sorted(options)}")
+        return _ddm(mech, names, revolutions, rtol, t_eval, event_time_term,
+                    integrator or DDM_INTEGRATOR)
+    if integrator is not None:
+        if backend != "reduced":
+            raise ValueError(f"integrator applies to the reduced backend only; got "
+                             f"backend={backend!r}")
+        options["method"] = integrator
+    return _fd(mech, names, revolutions, backend, t_eval, rtol, fd_relative_step, executor,
+               n_jobs, options)
+
+
+
+def _per_revolution(method: str, p: int) -> int:
+    """Bytes per revolution that a sensitivity run holds beyond any run's: DDM's growth
+    diagnostic (p floats), finite differences' default output times (720 floats)."""
+    return 8 * p if method == "ddm" else 8 * 720
+
+
+def _linkage_sensitivities(linkage, parameters, revolutions, method, backend, t_eval, rtol,
+                           event_time_term, fd_relative_step, integrator, options):
+    """`sensitivities` of a Linkage: arguments checked here, the work in linkage_ddm."""
+    from ..solve import linkage_ddm
+
+    allowed = linkage.parameter_names()
+    if parameters is None:
+        names = tuple(n for n in allowed if not n.endswith((".x", ".y")))
+    else:
+        names = (parameters,) if isinstance(parameters, str) else tuple(parameters)
+    if not names:
+        raise ValueError(f"parameters must name at least one of {list(allowed)}")
+    for name in names:
+        if name not in allowed:
+            raise ValueError(f"unknown parameter {name!r} of linkage {linkage.name!r}; the "
+                             f"parameters are {list(allowed)}")
+    if len(set(names)) != len(names):
+        raise ValueError(f"parameters must not repeat a name; got {list(names)}")
+    check_choice("method", method, ("ddm", "fd"))
+    revolutions = check_int("revolutions", revolutions, 1)
+    check_revolutions_memory(revolutions, per_revolution=_per_revolution(method, len(names)))
+    if backend != "reduced":
+        raise ValueError(f"a Linkage's sensitivities need backend='reduced'; got {backend!r}")
+    start = options.pop("start", None)
+    if options:
+        raise ValueError(f"unknown option(s) for a Linkage: {sorted(options)} (allowed: "
+                         "start)")
+    if rtol is not None:
+        rtol = check_real("rtol", rtol, 1e-14, 1e-2)
+    if t_eval is not None:
+        t_eval = check_times("t_eval", t_eval, revolutions * linkage.period)
+    event_time_term = check_bool("event_time_term", event_time_term)
+    fd_relative_step = check_real("fd_relative_step", fd_relative_step, 0.0, 0.1,
+                                  low_open=True, high_open=True)
+    if integrator is not None and integrator not in METHODS:
+        raise ValueError(f"integrator must be one of {sorted(METHODS)}; got {integrator!r}")
+    if method == "ddm":
+        fields = linkage_ddm.linkage_sensitivities(
+            linkage, names, revolutions, rtol, t_eval, event_time_term,
+            integrator or linkage_ddm.DDM_INTEGRATOR, start)
+    else:
+        fields = linkage_ddm.linkage_fd(linkage, names, revolutions, rtol, t_eval,
+                                        fd_relative_step, integrator or "dopri5", start)
+    return Sensitivities(**fields)

@@ -1,0 +1,1206 @@
+"""Any `Linkage` description built in the multibody engine Exudyn (backend "exudyn").
+
+An independent implementation of the same description as the generated reduced model:
+planar rigid bodies in absolute coordinates, ideal joints as algebraic constraints, solved
+by Exudyn's implicit generalized-alpha integrator with a fixed step. Only the clearance
+joints' contact law is ours; kinematics, mass matrices, constraint and reaction forces are
+Exudyn's.
+
+Model (`build`)
+---------------
+- every body: `NodeRigidBody2D` at its centre of mass + `ObjectRigidBody2D` (mass, inertia
+  about the centre of mass); the ground is `ObjectGround`; gravity g along -y on every body
+  (`LoadMassProportional`);
+- `Revolute`: `RevoluteJoint2D` between `MarkerBodyPosition` markers at the two named
+  points (a joint to the ground has the ground's marker first);
+- `Prismatic`: `ObjectJointPrismatic2D` between `MarkerBodyRigid` markers at point_a of
+  body_a (marker 0, axis (cos angle, sin angle) in body_a's frame) and point_b of body_b,
+  with the relative rotation constrained (body_b keeps body_a's orientation);
+- the `Drive`: a velocity-level `CoordinateConstraint` on the driven body's rotation
+  coordinate (dphi/dt = speed); its Lagrange multiplier lambda gives the drive moment
+  -lambda (Exudyn adds C_q^T lambda on the left-hand side);
+- each `ClearanceJoint`: one contact element between `MarkerBodyRigid` markers at the
+  bearing and journal points, one of three variants (option ``contact``):
+  ``"symbolic"`` (default) `ObjectConnectorCartesianSpringDamper` with an Exudyn symbolic
+  (C++-evaluated) spring force user function: with d the journal centre relative to the
+  bearing centre, delta = |d| - c, deltadot = d.d'/|d|, F = max(K delta^1.5 (1 + xi(e)
+  deltadot / deltadot_minus), 0) for delta > 0, returned as F d/|d| (Exudyn applies it to
+  the bearing and its opposite to the journal); ``"python"`` the same connector with a
+  Python user function calling `contact.contact_force` (for debugging); ``"sphere"``
+  Exudyn's native `ObjectContactSphereSphere`, the bearing as hollow sphere, restitution
+  e' = 1 - xi(e)/1.5 (`sphere_restitution`), only for laws it represents.
+- a clearance joint with friction (law not "none", mu > 0): an `ObjectGenericODE2` on its
+  two bodies' nodes whose (symbolic, or Python) force function returns the generalized
+  forces of the tangential force Ft t at the joint's points and the moments R_J Ft /
+  -R_B Ft, Ft = contact.friction_force(vt, Fn, ...) with vt = de/dt . t + omega_J R_J -
+  omega_B R_B (`_friction_loads`); the connectors that carry moments apply equal and
+  opposite ones, so a generic element is used; the friction work is computed after the
+  run from the stored states (`_friction_power`).
+- Each user-force joint has its own impact-velocity memory (`ImpactMemory`): a pre-step
+  function (one Python call per time step for all joints, never inside Newton) registers
+  the onsets (penetration crossing zero upward) and sets the joint's named symbolic
+  variable deltadot_minus, second-order accurate (`_pre_step`, option ``onset``).
+
+Outputs from Exudyn's own sensors (stored in memory every step): the force of each ground
+joint's constraint (the reaction on the ground), the drive constraint's multiplier, each
+contact element's displacement and force, and every body node's coordinates, velocities and
+accelerations (the minimal coordinates of the description are computed from those).
+
+The initial state is the reduced model's (`linkage_model.initial_state`: journals centred),
+carried to the bodies by the forest's kinematics (`body_states`).
+
+Step size (`ExudynSettings`): a fixed step ``step_size`` in s; if None, the step of
+``steps_per_revolution`` (default `DEFAULT_STEPS_PER_REVOLUTION`) or, with ``accuracy``, the
+step that gives that relative error of the monitored peak by the method's second order
+(`step_for_accuracy`), at most a `STEPS_PER_CONTACT_PERIOD`-th of the contacts' linearised
+period. Newton's tolerance: `NEWTON_TOLERANCE`, or `ROUNDOFF_MARGIN` times the contact
+force's roundoff floor where that is higher (`contact_scales`; docs/exudyn.md).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import asdict, dataclass, field
+
+import numpy as np
+
+from .._checks import (
+    MemoryLimitError,
+    check_bool,
+    check_choice,
+    check_int,
+    check_max_memory,
+    check_real,
+    format_bytes,
+)
+from ..laws._dispatch import friction_force_slots
+from ..laws.forces import (
+    CONTACT_MODELS,
+    FRICTION_LAWS,
+    contact_force,
+    hysteresis_factor,
+)
+from ..laws.registry import FRICTION, FRICTION_PARAMETER_SPECS, FRICTION_SLOTS
+from ..model.linkage import GROUND, ClearanceJoint, Linkage, Prismatic, Revolute
+
+__all__ = ["ExudynSettings", "make_settings", "build", "solve", "simulate_exudyn_linkage",
+           "peak_exudyn_linkage", "run_linkage", "peak_run", "body_states",
+           "sphere_restitution", "step_for_accuracy", "refined_peaks",
+           "CONTACT_VARIANTS", "ONSET_MODES", "OPTION_NAMES", "DEFAULT_STEPS_PER_REVOLUTION",
+           "ACCURACY_AT_DEFAULT", "ExudynModel", "contact_scales", "friction_of",
+           "symbolic_friction_factor", "symbolic_friction_force", "NEWTON_TOLERANCE",
+           "ROUNDOFF_MARGIN", "STEPS_PER_CONTACT_PERIOD"]
+
+#: clearance-joint implementations (option ``contact``)
+CONTACT_VARIANTS: tuple[str, ...] = ("symbolic", "python", "sphere")
+
+ONSET_MODES: tuple[str, ...] = ("predict", "detect")
+
+#: default fixed steps per drive revolution: 2e-6 s in the paper case (5000 rpm), where the
+#: 4th-revolution peak is within 3e-4 of the tight reduced reference (docs/exudyn.md lists
+#: the error of this default for every named case, measured)
+DEFAULT_STEPS_PER_REVOLUTION = 6000
+
+#: relative error of the monitored 4th-revolution peak at DEFAULT_STEPS_PER_REVOLUTION,
+#: the reference point of `step_for_accuracy`'s second-order law (the paper case's,
+#: measured; other cases are checked against it in tests/integration/test_exudyn_linkage.py)
+ACCURACY_AT_DEFAULT = 3e-4
+
+
+@dataclass(frozen=True)
+class ExudynSettings:
+    """Integrator and model settings of the Exudyn backend (its options).
+
+    Parameters
+    ----------
+    step_size : float or None
+        Fixed time step in s (> 0); None: from ``accuracy`` or ``steps_per_revolution``.
+    steps_per_revolution : int
+        Steps per drive revolution when neither step_size nor accuracy is given.
+    accuracy : float or None
+        Target relative error of the monitored peak (1e-8 ... 0.1): the step is
+        `step_for_accuracy` (second order from the default's measured error).
+    contact : str
+        Clearance-joint variant, one of `CONTACT_VARIANTS`.
+    spectral_radius : float
+        Generalized-alpha spectral radius at infinity rho_inf in [0, 1]; 0.9 damps the
+        spurious high-frequency oscillation of index-3 constraint forces.
+    modified_newton : bool
+        Reuse the Newton Jacobian between iterations and steps (Exudyn's default).
+    onset : str
+        "predict" or "detect": when the impact velocity is registered (`_pre_step`).
+    newton_tolerance : float or None
+        Relative tolerance of Newton's method (> 0); None: `NEWTON_TOLERANCE`, raised to
+        the contact's roundoff floor where that is higher (`contact_scales`).
+    """
+
+    step_size: float | None = None
+    steps_per_revolution: int = DEFAULT_STEPS_PER_REVOLUTION
+    accuracy: float | None = None
+    contact: str = "symbolic"
+    spectral_radius: float = 0.9
+    modified_newton: bool = True
+    onset: str = "predict"
+    newton_tolerance: float | None = None
+
+    def step(self, linkage) -> float:
+        """The fixed step in s for a `Linkage` (or a drive period in s): `step_size`; else
+        the step of `accuracy` or `steps_per_revolution`, for a Linkage at most a
+        `STEPS_PER_CONTACT_PERIOD`-th of its contacts' linearised period."""
+        if self.step_size is not None:
+            return self.step_size
+        period = linkage.period if isinstance(linkage, Linkage) else float(linkage)
+        if self.accuracy is not None:
+            h = step_for_accuracy(period, self.accuracy)
+        else:
+            h = period / self.steps_per_revolution
+        if isinstance(linkage, Linkage):
+            h = min(h, contact_scales(linkage)[0] / STEPS_PER_CONTACT_PERIOD)
+        return h
+
+    def tolerance(self, linkage: Linkage) -> float:
+        """Newton's relative tolerance for `linkage`: `newton_tolerance` if given, else
+        `NEWTON_TOLERANCE` or, if higher, ROUNDOFF_MARGIN times the contact force's roundoff
+        floor (`contact_scales`): below it Newton stalls without converging."""
+        if self.newton_tolerance is not None:
+            return self.newton_tolerance
+        return max(NEWTON_TOLERANCE, ROUNDOFF_MARGIN * contact_scales(linkage)[1])
+
+
+#: Newton's relative tolerance where the residual's roundoff allows it (Exudyn's default)
+NEWTON_TOLERANCE = 1e-8
+
+#: the automatic Newton tolerance stays this factor above the estimated roundoff floor
+ROUNDOFF_MARGIN = 3.0
+
+#: the default step resolves a contact's linearised oscillation by at least this many steps
+#: (docs/exudyn.md, "Four-bar": coarser steps let the persistent contact blow up)
+STEPS_PER_CONTACT_PERIOD = 12
+
+
+def contact_scales(linkage: Linkage) -> tuple[float, float]:
+    """(shortest linearised contact period in s, largest relative roundoff floor of a
+    contact force) of `linkage`, estimated at a load scale F = m (g + omega^2 L) (m: total
+    mass, omega: drive speed, L: the ground points' largest distance from the origin plus
+    every body's largest point distance, a bound on any position's size).
+
+    At that load a joint penetrates delta = (F / K)^(2/3) with the linearised stiffness
+    k = 1.5 K delta^(1/2); its oscillation period is 2 pi sqrt(m_j / k) (m_j the lighter of
+    its bodies). Exudyn holds absolute positions of size L, rounded to eps L; the contact
+    force in the Newton residual then carries an error k eps L, relative to F:
+    1.5 eps L / delta. A light mechanism of metres with a stiff, lightly loaded contact (the
+    four-bar: delta ~ 7e-8 m, L ~ 7 m) has a floor above Exudyn's default 1e-8."""
+    masses = {b.name: b.mass for b in linkage.bodies}
+    size = max((math.hypot(*p) for p in linkage.ground_points.values()), default=0.0)
+    size += sum(max((math.hypot(*p) for p in b.points.values()), default=0.0)
+                for b in linkage.bodies)
+    load = sum(masses.values()) * (linkage.gravity + linkage.drive.speed ** 2 * size)
+    period, floor = math.inf, 0.0
+    for cj in linkage.clearance_joints:
+        delta = (load / cj.stiffness) ** (2.0 / 3.0)
+        k = 1.5 * cj.stiffness * math.sqrt(delta)
+        m = min(masses.get(cj.journal_body, math.inf), masses.get(cj.bearing_body, math.inf))
+        period = min(period, 2.0 * math.pi * math.sqrt(m / k))
+        floor = max(floor, 1.5 * float(np.finfo(float).eps) * size / delta)
+    return period, floor
+
+
+#: option names of simulate(linkage, backend="exudyn"): the settings, ``max_memory`` and
+#: ``start`` (a `linkage_model.Start`)
+OPTION_NAMES: tuple[str, ...] = (*ExudynSettings.__dataclass_fields__, "max_memory", "start")
+
+
+def step_for_accuracy(period: float, accuracy: float) -> float:
+    """Fixed step (s) for a target relative peak error `accuracy`: generalized-alpha is
+    second order, so h = (period / DEFAULT_STEPS_PER_REVOLUTION) sqrt(accuracy /
+    ACCURACY_AT_DEFAULT), the error constant measured at the default step."""
+    return (period / DEFAULT_STEPS_PER_REVOLUTION) * math.sqrt(accuracy / ACCURACY_AT_DEFAULT)
+
+
+def make_settings(options: dict) -> ExudynSettings:
+    """Validate backend options and return them as `ExudynSettings` (ValueError naming the
+    option and its range if bad); ``max_memory`` is accepted and checked by the runs."""
+    unknown = sorted(set(options) - set(OPTION_NAMES))
+    if unknown:
+        raise ValueError(f"unknown option(s) {unknown} for backend 'exudyn'; "
+                         f"allowed: {list(OPTION_NAMES)}")
+    s = ExudynSettings(**{k: v for k, v in options.items()
+                          if k not in ("max_memory", "start")})
+    if s.step_size is not None and s.accuracy is not None:
+        raise ValueError("give step_size or accuracy, not both (accuracy chooses the step)")
+    return ExudynSettings(
+        step_size=None if s.step_size is None else check_real(
+            "step_size", s.step_size, 0.0, low_open=True, unit="s"),
+        steps_per_revolution=check_int("steps_per_revolution", s.steps_per_revolution, 10),
+        accuracy=None if s.accuracy is None else check_real(
+            "accuracy (relative peak error)", s.accuracy, 1e-8, 0.1),
+        contact=check_choice("contact", s.contact, CONTACT_VARIANTS),
+        spectral_radius=check_real("spectral_radius", s.spectral_radius, 0.0, 1.0),
+        modified_newton=check_bool("modified_newton", s.modified_newton),
+        onset=check_choice("onset", s.onset, ONSET_MODES),
+        newton_tolerance=None if s.newton_tolerance is None else check_real(
+            "newton_tolerance", s.newton_tolerance, 0.0, low_open=True))
+
+
+def sphere_restitution(joint: ClearanceJoint) -> float:
+    """Restitution e' for Exudyn's Hunt-Crossley sphere contact that reproduces our law:
+    Exudyn's impactModel 1 damps with 1.5 (1 - e'), so e' = 1 - xi(e)/1.5 ((1 + e^2)/2 for
+    Lankarani-Nikravesh, e for Hunt-Crossley)."""
+    xi, _ = hysteresis_factor(joint.restitution, CONTACT_MODELS[joint.contact_model])
+    return 1.0 - xi / 1.5
+
+
+# ---------------------------------------------------------------------------- kinematics
+
+def _rot(phi: float, xy) -> np.ndarray:
+    c, s = math.cos(phi), math.sin(phi)
+    return np.array([c * xy[0] - s * xy[1], s * xy[0] + c * xy[1]])
+
+
+def _perp(v) -> np.ndarray:
+    return np.array([-v[1], v[0]])
+
+
+def _points(linkage: Linkage) -> dict:
+    pts = {b.name: b.points for b in linkage.bodies}
+    pts[GROUND] = linkage.ground_points
+    return pts
+
+
+def body_states(linkage: Linkage, t: float, q, qd) -> dict[str, tuple]:
+    """Per body (x, y, phi, vx, vy, omega) of its centre of mass at time t for the minimal
+    coordinates q and rates qd (`Linkage.coordinates` order), by the forest's kinematics
+    (as the generated model's: the driven body's angle is speed t + initial angle, other
+    revolute bodies' angles and floating bodies' x, y, angle are coordinates, a prismatic
+    child keeps its parent's angle)."""
+    index = {c: i for i, c in enumerate(linkage.coordinates())}
+    pts = _points(linkage)
+    state = {GROUND: (np.zeros(2), 0.0, np.zeros(2), 0.0)}    # r, phi, v, omega
+    for body, parent, joint in linkage.tree():
+        if body == GROUND:
+            continue
+        if parent is None:                                      # floating
+            i = [index[f"{body}.{k}"] for k in ("x", "y", "angle")]
+            state[body] = (np.array([q[i[0]], q[i[1]]]), q[i[2]],
+                           np.array([qd[i[0]], qd[i[1]]]), qd[i[2]])
+            continue
+        rp, php, vp, wp = state[parent]
+        if isinstance(joint, Revolute):
+            if joint.name == linkage.drive.joint:
+                phi = linkage.drive.speed * t + linkage.drive.initial_angle
+                w = linkage.drive.speed
+            else:
+                i = index[f"{body}.angle"]
+                phi, w = q[i], qd[i]
+            pp, pc = ((joint.point_a, joint.point_b) if joint.body_a == parent
+                      else (joint.point_b, joint.point_a))
+            arm_p = _rot(php, pts[parent][pp])
+            arm_c = _rot(phi, pts[body][pc])
+            r = rp + arm_p - arm_c
+            v = vp + wp * _perp(arm_p) - w * _perp(arm_c)
+        else:
+            i = index[f"{joint.name}.s"]
+            s, sd = q[i], qd[i]
+            phi, w = php, wp
+            u = _rot(php, (math.cos(joint.angle), math.sin(joint.angle)))
+            if joint.body_a == parent:          # point_b = point_a + s u
+                arm_p = _rot(php, pts[parent][joint.point_a])
+                arm_c = _rot(phi, pts[body][joint.point_b])
+                rel = arm_p + s * u - arm_c
+                r = rp + rel
+                v = vp + wp * _perp(rel) + sd * u
+            else:                               # point_a = point_b - s u
+                arm_p = _rot(php, pts[parent][joint.point_b])
+                arm_c = _rot(phi, pts[body][joint.point_a])
+                rel = arm_p - s * u - arm_c
+                r = rp + rel
+                v = vp + wp * _perp(rel) - sd * u
+        state[body] = (r, phi, v, w)
+    return {b: (r[0], r[1], phi, v[0], v[1], w) for b, (r, phi, v, w) in state.items()
+            if b != GROUND}
+
+
+# ---------------------------------------------------------------------------- memory
+
+class ImpactMemory:
+    """Impact velocity deltadot_minus and contact mode of one clearance joint, updated once
+    per step by the pre-step function."""
+
+    def __init__(self, floor: float, clearance: float):
+        self.floor = floor
+        self.clearance = clearance
+        self.dmin = floor          # as the reduced model: the floor until the first onset
+        self.mode = 0              # 1 from a registered onset until separation
+        self.onsets = 0
+        self.first_onset = None    # time of the first registered onset, s
+        self.symbol = None         # named symbolic Real mirrored for the compiled force
+        self.previous = None       # (t, delta, deltadot) of the previous step's state
+        self.history = None        # [(t, deltadot_minus)] per step if recorded (friction)
+
+    def set(self, value: float, t: float, new_onset: bool = True) -> None:
+        self.dmin = max(value, self.floor)
+        if new_onset:
+            self.onsets += 1
+            if self.first_onset is None:
+                self.first_onset = t
+        if self.symbol is not None:
+            self.symbol.SetValue(self.dmin)
+
+
+def _update_memory(memory: ImpactMemory, t: float, h: float, delta: float, rate: float,
+                   predict: bool) -> None:
+    """Register an onset of one joint from the converged state at the step's start (see
+    `_pre_step`)."""
+    prev = memory.previous
+    if prev is not None and t <= prev[0]:
+        prev = None        # step repeated after a failed Newton: no new information
+    if delta <= 0.0:
+        if predict and delta + h * rate > 0.0:
+            accel = (rate - prev[2]) / (t - prev[0]) if prev is not None else 0.0
+            s = -delta / rate                      # time to the crossing, then one
+            qv = rate + accel * s                  # Newton step on the quadratic
+            if qv > 0.0:
+                s -= (delta + rate * s + 0.5 * accel * s * s) / qv
+            s = min(max(s, 0.0), h)
+            memory.set(rate + accel * s, t - h + s, new_onset=memory.mode == 0)
+            memory.mode = 1
+        else:
+            memory.mode = 0
+    elif prev is not None and prev[1] <= 0.0:
+        # crossed during the last step: interpolate deltadot at delta = 0
+        theta = prev[1] / (prev[1] - delta)
+        memory.set(prev[2] + theta * (rate - prev[2]), prev[0] + theta * (t - prev[0]),
+                   new_onset=memory.mode == 0)
+        memory.mode = 1
+    elif memory.mode == 0:
+        memory.set(rate, t)    # in contact without a registered onset (e.g. the first step)
+        memory.mode = 1
+    memory.previous = (t, delta, rate)
+
+
+def _pre_step(contacts: list, h: float, predict: bool):
+    """Pre-step function: register contact onsets and impact velocities of every joint.
+
+    Exudyn calls it at the start of each step with the new time t_n+1 and the converged
+    state of t_n. With two consecutive states the penetration acceleration is known by a
+    difference quotient, which makes both impact-velocity estimates second order in h:
+    a predicted onset (``onset="predict"``, delta_n <= 0 < delta_n + h deltadot_n) uses
+    deltadot extrapolated to the predicted crossing from the crossing step on; an onset
+    found after the crossing step (delta_n-1 <= 0 < delta_n) interpolates deltadot
+    linearly in delta between the bracketing states (this also refines a prediction).
+    """
+    import exudyn as exu
+
+    disp = exu.OutputVariableType.Displacement
+    vel = exu.OutputVariableType.Velocity
+
+    def pre_step(mbs, t):
+        for obj, memory in contacts:
+            d = mbs.GetObjectOutput(obj, disp)
+            v = mbs.GetObjectOutput(obj, vel)
+            r = math.sqrt(d[0] * d[0] + d[1] * d[1])
+            rate = (d[0] * v[0] + d[1] * v[1]) / r if r > 0.0 else 0.0
+            _update_memory(memory, t, h, r - memory.clearance, rate, predict)
+            if memory.history is not None:
+                memory.history.append((t, memory.dmin))
+        return True
+
+    return pre_step
+
+
+def _law_constants(joint: ClearanceJoint):
+    model = CONTACT_MODELS[joint.contact_model]
+    xi, _ = hysteresis_factor(joint.restitution, model)
+    return joint.stiffness, joint.clearance, float(xi), model
+
+
+def _python_force(joint: ClearanceJoint, memory: ImpactMemory):
+    """Plain Python user function: the reduced model's compiled contact law."""
+    K, c, _, model = _law_constants(joint)
+    e = joint.restitution
+
+    def force(mbs, t, itemNumber, displacement, velocity, stiffness, damping, offset):
+        dx, dy = displacement[0], displacement[1]
+        r = math.sqrt(dx * dx + dy * dy)
+        delta = r - c
+        if delta <= 0.0:
+            return [0.0, 0.0, 0.0]
+        rate = (dx * velocity[0] + dy * velocity[1]) / r
+        f = contact_force(delta, rate, memory.dmin, K, e, model) / r
+        return [f * dx, f * dy, 0.0]
+
+    return force
+
+
+def _symbolic_normal(K, c, xi, dmin, dx, dy, vx, vy):
+    """Symbolic normal force of the contact law from the journal centre's position (dx, dy)
+    and velocity (vx, vy) relative to the bearing centre: (r, magnitude or 0 when free);
+    the same formula as contact.contact_force (clamped at zero, zero for delta <= 0)."""
+    import exudyn as exu
+
+    esym = exu.symbolic
+    zero = esym.Real(0.0)
+    r = esym.sqrt(dx * dx + dy * dy)
+    delta = r - c
+    rate = (dx * vx + dy * vy) / r
+    magnitude = esym.max(K * delta**1.5 * (1.0 + xi * rate / dmin), zero)
+    # lazy: r > c > 0 inside the true branch, so no division by zero when centred
+    return r, esym.IfThenElse(delta > 0.0, magnitude, zero)
+
+
+def _symbolic_force(mbs, obj, joint: ClearanceJoint, memory: ImpactMemory, k: int):
+    """Compiled (symbolic) user function; the impact velocity is a named symbolic variable
+    (one per joint)."""
+    import exudyn as exu
+    from exudyn.advancedUtilities import CreateSymbolicUserFunction
+
+    esym = exu.symbolic
+    K, c, xi, _ = _law_constants(joint)
+    dmin = esym.Real(f"deltadot_minus_{k}", memory.dmin)
+    memory.symbol = dmin
+    zero = esym.Real(0.0)
+
+    def force(mbs, t, itemNumber, displacement, velocity, stiffness, damping, offset):
+        dx, dy = displacement[0], displacement[1]
+        r, magnitude = _symbolic_normal(K, c, xi, dmin, dx, dy, velocity[0], velocity[1])
+        factor = esym.IfThenElse(r - c > 0.0, magnitude / r, zero)
+        return [factor * dx, factor * dy, zero]
+
+    return CreateSymbolicUserFunction(mbs, force, "springForceUserFunction", obj)
+
+
+# ---------------------------------------------------------------------------- friction
+
+def friction_of(joint: ClearanceJoint):
+    """(law id, the values of the friction slots `laws.FRICTION_SLOTS`) of a clearance joint
+    whose friction is on (law not "none" and mu > 0), else None: a joint without friction
+    gets no friction element, so its results are the frictionless ones bit for bit."""
+    if not joint.has_friction or joint.friction_coefficient == 0.0:
+        return None
+    return (FRICTION_LAWS[joint.friction_law],
+            tuple(getattr(joint, f) for f in FRICTION_SLOTS))
+
+
+def symbolic_friction_force(vt, fn, law: int, slots: tuple):
+    """Ft(vt, Fn) of friction law id `law` as an Exudyn symbolic expression: the law
+    module's own formula (`laws.friction.<name>.force`) evaluated on symbolic Reals, with
+    the law's parameters from `slots` (the values of `laws.FRICTION_SLOTS`)."""
+    spec = FRICTION[law]
+    values = dict(zip(FRICTION_SLOTS, slots))
+    ft = spec.force(vt, fn, *(values[a] for a in spec.arguments))
+    return ft if hasattr(ft, "Evaluate") else 0.0 * vt + ft
+
+
+def symbolic_friction_factor(vt, v0: float, v1: float, law: int):
+    """phi(vt) of `contact.friction_factor` as an Exudyn symbolic expression (Ft at mu = 1,
+    Fn = -1, `symbolic_friction_force`); tested against contact.friction_factor point by
+    point; further slots at their defaults."""
+    given = {"friction_coefficient": 1.0, "friction_v0": v0, "friction_v1": v1}
+    return symbolic_friction_force(vt, -1.0, law, tuple(
+        given.get(p.name, p.default) for p in FRICTION_PARAMETER_SPECS))
+
+
+class _Side:
+    """One body of a contact pair inside the friction element: its node's slice of the
+    element's coordinates (None for the ground), reference pose and the joint's point."""
+
+    def __init__(self, slot, reference, point, fixed):
+        self.slot, self.reference, self.point, self.fixed = slot, reference, point, fixed
+
+    def kinematics(self, q, qt, cos, sin):
+        """(position, velocity of the point, arm from the centre of mass, omega)."""
+        px, py = self.point
+        if self.slot is None:                           # ground: a fixed point
+            return self.fixed, (0.0, 0.0), (0.0, 0.0), 0.0
+        i = self.slot
+        x0, y0, phi0 = self.reference
+        phi = phi0 + q[i + 2]
+        co, si = cos(phi), sin(phi)
+        ax, ay = co * px - si * py, si * px + co * py
+        w = qt[i + 2]
+        return ((x0 + q[i] + ax, y0 + q[i + 1] + ay),
+                (qt[i] - w * ay, qt[i + 1] + w * ax), (ax, ay), w)
+
+
+def _friction_loads(joint, sides, q, qt, normal, friction, cos, sin, gate):
+    """Generalized forces of the friction of one joint on its bodies' coordinates (the
+    friction element's force vector): the tangential force Ft t on the journal at its
+    point plus the moment R_J Ft, the opposite force on the bearing plus -R_B Ft, with
+    vt = de/dt . t + omega_J R_J - omega_B R_B and Ft = friction_force(vt, Fn, ...)
+    (`normal` gives |e| and Fn from e, de/dt; `friction` Ft from vt, Fn; `gate`(delta,
+    value) is the value in contact and zero in free flight, where t is undefined when
+    the journal is centred)."""
+    journal, bearing = sides
+    (xj, yj), (vxj, vyj), (axj, ayj), wj = journal.kinematics(q, qt, cos, sin)
+    (xb, yb), (vxb, vyb), (axb, ayb), wb = bearing.kinematics(q, qt, cos, sin)
+    dx, dy, vx, vy = xj - xb, yj - yb, vxj - vxb, vyj - vyb
+    r, fn = normal(dx, dy, vx, vy)
+    tx, ty = -dy / r, dx / r
+    vt = vx * tx + vy * ty + wj * joint.journal_radius - wb * joint.bearing_radius
+    ft = friction(vt, fn)
+    fx, fy = ft * tx, ft * ty
+    out = [None] * (3 * sum(s.slot is not None for s in sides))
+    delta = r - joint.clearance
+    for side, sign, radius, (ax, ay) in ((journal, 1.0, joint.journal_radius, (axj, ayj)),
+                                         (bearing, -1.0, joint.bearing_radius, (axb, ayb))):
+        if side.slot is not None:
+            i = side.slot
+            out[i] = gate(delta, sign * fx)
+            out[i + 1] = gate(delta, sign * fy)
+            out[i + 2] = gate(delta, sign * (ax * fy - ay * fx + radius * ft))
+    return out
+
+
+def _friction_element(mbs, joint: ClearanceJoint, memory: ImpactMemory, nodes: dict,
+                      pts: dict, variant: str, keep_alive: list):
+    """Add the friction of `joint` (friction on) as an `ObjectGenericODE2` on the two
+    bodies' nodes whose force user function returns the generalized forces of
+    `_friction_loads` (symbolic, or Python with contact.contact_force/friction_force)."""
+    import exudyn as exu
+    import exudyn.itemInterface as ii
+
+    law, slots = friction_of(joint)
+    K, c, xi, model = _law_constants(joint)
+    sides, node_list = [], []
+    for body, point in ((joint.journal_body, joint.journal_point),
+                        (joint.bearing_body, joint.bearing_point)):
+        if body == GROUND:
+            sides.append(_Side(None, None, pts[GROUND][point], pts[GROUND][point]))
+            continue
+        ref = list(mbs.GetNodeParameter(nodes[body], "referenceCoordinates"))
+        sides.append(_Side(3 * len(node_list), ref, pts[body][point], None))
+        node_list.append(nodes[body])
+    n = 3 * len(node_list)
+    obj = mbs.AddObject(ii.ObjectGenericODE2(nodeNumbers=node_list, forceVector=[0.0] * n))
+    if variant == "python":
+        def normal(dx, dy, vx, vy):
+            r = math.sqrt(dx * dx + dy * dy)
+            if r <= c:
+                return max(r, 1e-300), 0.0     # free flight (gated to 0); finite at centre
+            rate = (dx * vx + dy * vy) / r
+            return r, contact_force(r - c, rate, memory.dmin, K, joint.restitution, model)
+
+        def force(mbs, t, itemNumber, q, q_t):
+            return _friction_loads(joint, sides, q, q_t, normal,
+                                   lambda vt, fn: friction_force_slots(vt, fn, slots, law),
+                                   math.cos, math.sin,
+                                   lambda delta, v: v if delta > 0.0 else 0.0)
+
+        mbs.SetObjectParameter(obj, "forceUserFunction", force)
+        keep_alive.append(force)
+        return obj
+    esym = exu.symbolic
+    dmin = memory.symbol
+
+    def normal(dx, dy, vx, vy):
+        return _symbolic_normal(K, c, xi, dmin, dx, dy, vx, vy)
+
+    def friction(vt, fn):
+        return symbolic_friction_force(vt, fn, law, slots)
+
+    zero = esym.Real(0.0)
+
+    def force(mbs, t, itemNumber, q, q_t):
+        # lazy gates: r > c > 0 inside the true branch (t = perp(e) / |e| is defined)
+        return _friction_loads(joint, sides, q, q_t, normal, friction, esym.cos, esym.sin,
+                               lambda delta, v: esym.IfThenElse(delta > 0.0, v, zero))
+
+    uf = _symbolic_vector_function(mbs, force, obj, n)
+    mbs.SetObjectParameter(obj, "forceUserFunction", uf)
+    keep_alive.append(uf)
+    return obj
+
+
+def _symbolic_vector_function(mbs, function, obj, n: int):
+    """Exudyn symbolic user function of an `ObjectGenericODE2` force (mbs, t, itemNumber,
+    q, q_t) -> vector of n: as exudyn.advancedUtilities.CreateSymbolicUserFunction, whose
+    recording gives the vector arguments length 0 (we give them the element's n)."""
+    import exudyn as exu
+
+    esym = exu.symbolic
+    recording = esym.GetRecording()
+    esym.SetRecording(True)
+    try:
+        args = dict(mbs=mbs, t=esym.Real("t", 0.0), itemNumber=esym.Real("itemNumber", 0),
+                    q=esym.Vector("q", [0.0] * n), q_t=esym.Vector("q_t", [0.0] * n))
+        value = esym.Vector(function(**args))
+    finally:
+        esym.SetRecording(recording)
+    spec = {"functionName": function.__name__, "argList": list(args.values()),
+            "argTypeList": ["MainSystem", "Real", "Index", "StdVector", "StdVector"],
+            "returnValue": value, "returnType": "StdVector"}
+    uf = esym.UserFunction()
+    uf.SetUserFunctionFromDict(mbs, spec, "forceUserFunction", obj, "None")
+    return uf
+
+
+# ---------------------------------------------------------------------------- build
+
+@dataclass
+class ExudynModel:
+    """A built Exudyn system of a linkage: container, system, items, sensors, memories."""
+
+    SC: object
+    mbs: object
+    linkage: Linkage
+    settings: ExudynSettings
+    step: float
+    nodes: dict            # body -> node index
+    sensors: dict          # name -> sensor index
+    ground_signs: dict     # ground joint -> sign turning the sensor force into the reaction
+    ecc_sign: float        # contact Displacement -> journal minus bearing
+    memories: list         # ImpactMemory per clearance joint (None for "sphere")
+    keep_alive: list = field(default_factory=list)
+    keep: np.ndarray | None = None   # rows of the stored data kept (`solve`: sliver steps)
+
+
+#: sensor groups `build` can record
+OUTPUT_GROUPS: tuple[str, ...] = ("reactions", "drive", "contact", "bodies")
+
+
+def _check_linkage(linkage, settings: ExudynSettings) -> None:
+    if not isinstance(linkage, Linkage):
+        raise ValueError(f"linkage must be a Linkage; got {type(linkage).__name__}")
+    for j in linkage.clearance_joints:
+        if friction_of(j) is None:
+            continue
+        if settings.contact == "sphere":
+            raise ValueError(f"contact='sphere' has no friction law of ours (joint {j.name!r} "
+                             "has friction on); use contact='symbolic' or 'python'")
+        if GROUND in (j.journal_body, j.bearing_body):
+            raise ValueError(f"friction in clearance joint {j.name!r}, which is a ground "
+                             "joint, is not built in the exudyn backend (its reaction would "
+                             "miss the friction force); use the reduced backend")
+    if settings.contact == "sphere":
+        for j in linkage.clearance_joints:
+            if sphere_restitution(j) <= 0.0:
+                raise ValueError(
+                    f"contact='sphere' cannot represent joint {j.name!r}'s contact_model="
+                    f"{j.contact_model!r} with restitution {j.restitution!r}: Exudyn's "
+                    f"restitution 1 - xi/1.5 = {sphere_restitution(j):.3g} must be > 0; use "
+                    "contact='symbolic'")
+
+
+def build(linkage: Linkage, settings: ExudynSettings | None = None,
+          outputs: tuple[str, ...] = ("all",), y0=None, start=None) -> ExudynModel:
+    """Create the Exudyn system of `linkage` (not yet solved), started from the reduced
+    model's centred state (or `y0`, a state [q, qdot, W] of the generated model, or
+    `start`, a `linkage_model.Start`: its state and each joint's mode and impact velocity).
+
+    `outputs` selects the sensors: "reactions", "drive", "contact", "bodies" or "all".
+    The symbolic user functions are built here, in the calling process.
+    """
+    import exudyn as exu
+    import exudyn.itemInterface as ii
+
+    settings = ExudynSettings() if settings is None else settings
+    _check_linkage(linkage, settings)
+    want = set(outputs)
+    unknown = want - {"all", *OUTPUT_GROUPS}
+    if unknown:
+        raise ValueError(f"unknown output group(s) {sorted(unknown)}; "
+                         f"allowed: {['all', *OUTPUT_GROUPS]}")
+    if "all" in want:
+        want = set(OUTPUT_GROUPS)
+    step = settings.step(linkage)
+    start_memory = None
+    if start is not None:
+        from ..solve.linkage_model import check_start, event_tolerance, load_model, pack_parameters
+
+        if settings.contact == "sphere":
+            raise ValueError("start needs a contact with its own impact-velocity memory "
+                             "(contact='symbolic' or 'python'), not 'sphere'")
+        gen = load_model(linkage)
+        p = pack_parameters(linkage, gen)
+        y0 = check_start(linkage, gen, p, start, event_tolerance(linkage))
+        start_memory = list(zip(start.modes, start.impact_velocities))
+    elif y0 is None:
+        from ..solve.linkage_model import initial_state
+        y0 = initial_state(linkage)
+    n = len(linkage.coordinates())
+    states = body_states(linkage, 0.0, y0[:n], y0[n:2 * n])
+
+    SC = exu.SystemContainer()
+    mbs = SC.AddSystem()
+    objects = {GROUND: mbs.AddObject(ii.ObjectGround())}
+    n_ground = mbs.AddNode(ii.NodePointGround())
+    nodes = {}
+    for b in linkage.bodies:
+        x, y, phi, vx, vy, w = states[b.name]
+        nodes[b.name] = mbs.AddNode(ii.NodeRigidBody2D(referenceCoordinates=[x, y, phi],
+                                                       initialVelocities=[vx, vy, w]))
+        objects[b.name] = mbs.AddObject(ii.ObjectRigidBody2D(
+            nodeNumber=nodes[b.name], mass=b.mass, inertia=b.inertia))
+        m = mbs.AddMarker(ii.MarkerBodyMass(bodyNumber=objects[b.name]))
+        mbs.AddLoad(ii.LoadMassProportional(markerNumber=m, loadVector=[0, -linkage.gravity, 0]))
+    pts = _points(linkage)
+
+    def marker(body, point, rigid=False):
+        x, y = pts[body][point]
+        make = ii.MarkerBodyRigid if rigid else ii.MarkerBodyPosition
+        return mbs.AddMarker(make(bodyNumber=objects[body], localPosition=[x, y, 0.0]))
+
+    ground_items, ground_signs = {}, {}
+    for jt in linkage.joints:
+        if isinstance(jt, Revolute):
+            ends = [(jt.body_a, jt.point_a), (jt.body_b, jt.point_b)]
+            if jt.body_b == GROUND:
+                ends.reverse()
+            obj = mbs.AddObject(ii.RevoluteJoint2D(markerNumbers=[marker(*e) for e in ends]))
+            sign = 1.0
+        else:
+            ma = marker(jt.body_a, jt.point_a, rigid=True)
+            mb = marker(jt.body_b, jt.point_b, rigid=True)
+            ca, sa = math.cos(jt.angle), math.sin(jt.angle)
+            obj = mbs.AddObject(ii.ObjectJointPrismatic2D(
+                markerNumbers=[ma, mb], axisMarker0=[ca, sa, 0.0],
+                normalMarker1=[-sa, ca, 0.0], constrainRotation=True))
+            sign = 1.0 if jt.body_a == GROUND else -1.0
+        if GROUND in (jt.body_a, jt.body_b):
+            ground_items[jt.name], ground_signs[jt.name] = obj, sign
+
+    drive_joint = next(j for j in linkage.joints if j.name == linkage.drive.joint)
+    m_gc = mbs.AddMarker(ii.MarkerNodeCoordinate(nodeNumber=n_ground, coordinate=0))
+    m_phi = mbs.AddMarker(ii.MarkerNodeCoordinate(nodeNumber=nodes[drive_joint.body_b],
+                                                  coordinate=2))
+    drive = mbs.AddObject(ii.CoordinateConstraint(markerNumbers=[m_gc, m_phi],
+                                                  offset=linkage.drive.speed,
+                                                  velocityLevel=True))
+
+    keep_alive: list = []
+    memories: list = []
+    contacts, contact_items = [], []
+    for k, cj in enumerate(linkage.clearance_joints):
+        m_journal = marker(cj.journal_body, cj.journal_point, rigid=True)
+        m_bearing = marker(cj.bearing_body, cj.bearing_point, rigid=True)
+        if settings.contact == "sphere":
+            n_data = mbs.AddNode(ii.NodeGenericData(numberOfDataCoordinates=4,
+                                                    initialCoordinates=[cj.clearance, 0, 0, 0]))
+            obj = mbs.AddObject(ii.ObjectContactSphereSphere(
+                markerNumbers=[m_journal, m_bearing], nodeNumber=n_data,
+                spheresRadii=[cj.journal_radius, cj.bearing_radius], isHollowSphere1=True,
+                contactStiffness=cj.stiffness, contactStiffnessExponent=1.5,
+                contactDamping=0.0, dynamicFriction=0.0,
+                restitutionCoefficient=sphere_restitution(cj),
+                minimumImpactVelocity=cj.impact_velocity_floor, impactModel=1))
+            memories.append(None)
+        else:
+            memory = ImpactMemory(cj.impact_velocity_floor, cj.clearance)
+            if start_memory is not None:
+                memory.mode = int(start_memory[k][0])
+                memory.dmin = float(start_memory[k][1])
+            obj = mbs.AddObject(ii.CartesianSpringDamper(markerNumbers=[m_bearing, m_journal]))
+            if settings.contact == "symbolic":
+                uf = _symbolic_force(mbs, obj, cj, memory, k)
+                keep_alive += [uf, memory.symbol]   # the expression tree must outlive the run
+            else:
+                uf = _python_force(cj, memory)
+            mbs.SetObjectParameter(obj, "springForceUserFunction", uf)
+            memories.append(memory)
+            contacts.append((obj, memory))
+            if friction_of(cj) is not None:
+                _friction_element(mbs, cj, memory, nodes, pts, settings.contact, keep_alive)
+                memory.history = []
+        contact_items.append(obj)
+        if GROUND in (cj.journal_body, cj.bearing_body):
+            # the force on the bearing is +f (user force) / -f (sphere: markers swapped)
+            on_bearing = 1.0 if settings.contact != "sphere" else -1.0
+            ground_items[cj.name] = obj
+            ground_signs[cj.name] = on_bearing * (1.0 if cj.bearing_body == GROUND else -1.0)
+    if contacts:
+        mbs.SetPreStepUserFunction(_pre_step(contacts, step, settings.onset == "predict"))
+    ecc_sign = -1.0 if settings.contact == "sphere" else 1.0
+
+    OVT = exu.OutputVariableType
+
+    def sensor(kind, number, var):
+        make = ii.SensorObject if kind == "object" else ii.SensorNode
+        key = "objectNumber" if kind == "object" else "nodeNumber"
+        return mbs.AddSensor(make(**{key: number}, outputVariableType=var, storeInternal=True,
+                                  writeToFile=False))
+
+    sensors: dict = {}
+    if "reactions" in want:
+        prismatic = {j.name: j for j in linkage.joints if isinstance(j, Prismatic)}
+        for name in linkage.ground_joints():
+            # a prismatic joint outputs its force in marker 0's (body_a's) frame
+            var = OVT.ForceLocal if name in prismatic else OVT.Force
+            sensors[f"{name}.force"] = sensor("object", ground_items[name], var)
+            if name in prismatic and prismatic[name].body_a != GROUND:
+                sensors[f"{name}.frame"] = sensor("node", nodes[prismatic[name].body_a],
+                                                  OVT.Coordinates)
+    if "drive" in want:
+        sensors["drive"] = sensor("object", drive, OVT.Force)
+    if "contact" in want:
+        for cj, obj in zip(linkage.clearance_joints, contact_items):
+            sensors[f"{cj.name}.displacement"] = sensor("object", obj, OVT.Displacement)
+            sensors[f"{cj.name}.force"] = sensor("object", obj, OVT.Force)
+    if "bodies" in want:
+        for b in linkage.bodies:
+            for var, suffix in ((OVT.Coordinates, "q"), (OVT.Coordinates_t, "v"),
+                                (OVT.Coordinates_tt, "a")):
+                sensors[f"{b.name}.{suffix}"] = sensor("node", nodes[b.name], var)
+    mbs.Assemble()
+    return ExudynModel(SC=SC, mbs=mbs, linkage=linkage, settings=settings, step=step,
+                       nodes=nodes, sensors=sensors, ground_signs=ground_signs,
+                       ecc_sign=ecc_sign, memories=memories, keep_alive=keep_alive)
+
+
+# ---------------------------------------------------------------------------- solve
+
+def _simulation_settings(settings: ExudynSettings, step: float, end_time: float,
+                         tolerance: float):
+    import exudyn as exu
+
+    ss = exu.SimulationSettings()
+    ti = ss.timeIntegration
+    n_steps = max(1, int(round(end_time / step)))
+    ti.numberOfSteps = n_steps
+    ti.endTime = end_time
+    ti.verboseMode = 0
+    ti.discontinuous.useRecommendedStepSize = False
+    ti.generalizedAlpha.spectralRadius = float(settings.spectral_radius)
+    ti.newton.useModifiedNewton = settings.modified_newton
+    ti.newton.relativeTolerance = float(tolerance)
+    ss.show.statistics = False
+    ss.show.computationTime = False
+    ss.solution.file.write = False
+    ss.solution.sensors.writePeriod = 0.0      # every step
+    return ss, n_steps
+
+
+def solve(model: ExudynModel, end_time: float) -> dict:
+    """Run the time integration to `end_time` (s); returns solver statistics.
+
+    Raises RuntimeError with advice if Exudyn's solver fails.
+    """
+    import exudyn as exu
+
+    tolerance = model.settings.tolerance(model.linkage)
+    ss, n_steps = _simulation_settings(model.settings, model.step, end_time, tolerance)
+    wall = time.perf_counter()
+    try:
+        ok = exu.SolveDynamic(model.mbs, ss, storeSolver=True)
+    except Exception as exc:  # Exudyn raises its own error types from C++
+        if "USER FUNCTION" in str(exc):      # a bug in our pre-step or force function
+            raise RuntimeError(f"Exudyn user function failed: {exc}") from exc
+        raise RuntimeError(_failure_message(model, f"{type(exc).__name__}: {exc}")) from exc
+    wall = time.perf_counter() - wall
+    if not ok:
+        raise RuntimeError(_failure_message(model, "the solver reported failure"))
+    stats = dict(step_size=model.step, step_size_used=end_time / n_steps, n_steps=n_steps,
+                 wall_time=wall,
+                 **{k: v for k, v in asdict(model.settings).items() if k != "step_size"})
+    stats["newton_tolerance"] = tolerance
+    solver = model.mbs.sys.get("dynamicSolver")
+    if solver is not None:
+        it = solver.it
+        stats.update(newton_steps=int(it.newtonStepsCount), jacobians=int(it.newtonJacobiCount),
+                     discontinuous_iterations=int(it.discontinuousIterationsCount))
+    if model.sensors:
+        t = np.asarray(model.mbs.GetSensorStoredData(next(iter(model.sensors.values()))))[:, 0]
+        model.keep = _sliver_rows(t, model.step)
+        stats["sliver_steps"] = int(len(t) - model.keep.sum())
+    mems = [m for m in model.memories if m is not None]
+    if mems:
+        stats["onsets"] = sum(m.onsets for m in mems)
+        stats["first_onsets"] = {cj.name: m.first_onset for cj, m in
+                                 zip(model.linkage.clearance_joints, model.memories)
+                                 if m is not None}
+    return stats
+
+
+def _failure_message(model: ExudynModel, reason: str) -> str:
+    s = model.settings
+    return (f"Exudyn time integration of linkage {model.linkage.name!r} failed ({reason}) "
+            f"with step_size={model.step:g} s, contact={s.contact!r}; try a smaller "
+            f"step_size (e.g. {model.step / 2:g}) or modified_newton=False")
+
+
+def stored(model: ExudynModel, name: str) -> np.ndarray:
+    """The stored data (n, 1 + components) of sensor `name`: time, then the values (the
+    rows `solve` keeps)."""
+    data = np.asarray(model.mbs.GetSensorStoredData(model.sensors[name]))
+    return data if model.keep is None else data[model.keep]
+
+
+#: a step shorter than this fraction of the fixed step is a sliver (`_sliver_rows`)
+SLIVER = 1e-2
+
+
+def _sliver_rows(t: np.ndarray, step: float) -> np.ndarray:
+    """Rows to keep: all but those ending a sliver step. When Exudyn has halved steps after
+    a failed Newton iteration, its time grid no longer divides the end time and the run
+    ends with a sliver (e.g. 3e-10 s after 7.8e-6 s steps); the constraint multipliers of
+    a step of length s carry Newton's residual times ~1/s^2 (index-3 constraints), so the
+    reactions and the drive moment of that sample are noise (8.7 kN against 30 N in the
+    four-bar, measured). Such samples are dropped; the state is continuous across them."""
+    keep = np.ones(len(t), dtype=bool)
+    keep[1:] = np.diff(t) >= SLIVER * step
+    return keep
+
+
+#: floats Exudyn stores per step: per ground joint 4, drive 2, per clearance joint 8, per
+#: body 12 (time + 3 components per sensor)
+def estimate_memory(linkage: Linkage, revolutions: int, step: float,
+                    outputs: tuple[str, ...] = ("all",)) -> tuple[int, int]:
+    """(time steps, peak bytes) of a run: every step of every sensor stored by Exudyn,
+    copied once, and the Trajectory's per-step arrays."""
+    J, B = len(linkage.clearance_joints), len(linkage.bodies)
+    G = len(linkage.ground_joints())
+    full = "all" in outputs
+    floats = 4 * G + (2 + 8 * J + 12 * B if full else 0)
+    steps = max(1, int(round(revolutions * linkage.period / step)))
+    per_step = 8 * (2 * floats + ((6 + 6 * J + 2 * G + 3 * len(linkage.coordinates()))
+                                  if full else 0))
+    return steps, (steps + 1) * per_step
+
+
+def _check_run(linkage, revolutions, settings, outputs, max_memory, name="revolutions"):
+    _check_linkage(linkage, settings)
+    revolutions = check_int(name, revolutions, 1)
+    max_memory = check_max_memory(max_memory)
+    step = settings.step(linkage)
+    steps, need = estimate_memory(linkage, revolutions, step, outputs)
+    if need > max_memory:
+        raise MemoryLimitError(
+            f"the Exudyn run of {revolutions} revolutions takes {steps:.3g} fixed steps of "
+            f"{step:g} s and needs about {format_bytes(need)} for its records, more than "
+            f"max_memory={max_memory} bytes ({format_bytes(max_memory)}); raise step_size "
+            "or max_memory, or run fewer revolutions")
+    return revolutions
+
+
+# ---------------------------------------------------------------------------- results
+
+def refined_peaks(t: np.ndarray, magnitude: np.ndarray, period: float,
+                  revolutions: int) -> np.ndarray:
+    """Maximum of `magnitude` over each revolution, refined between the fixed steps: the
+    vertex of the parabola through the largest sample and its two neighbours (the sampled
+    maximum misses a sharp peak by up to its curvature times (h/2)^2 / 2, which would not
+    converge at second order as h is halved; the vertex does). The refined value lies
+    between the largest sample and that plus an eighth of its drop to the neighbours; a
+    largest sample that is no local maximum (at a revolution's end) is kept."""
+    peaks = np.empty(revolutions)
+    tol = 1e-12 * max(1.0, revolutions * period)
+    for k in range(revolutions):
+        idx = np.nonzero((t >= k * period - tol) & (t <= (k + 1) * period + tol))[0]
+        i = idx[np.argmax(magnitude[idx])]
+        f0 = magnitude[i]
+        if 0 < i < len(t) - 1:
+            fm, fp = magnitude[i - 1], magnitude[i + 1]
+            curvature = fm - 2.0 * f0 + fp
+            if curvature < 0.0 and max(fm, fp) <= f0:      # a local maximum: vertex within
+                f0 = f0 - 0.125 * (fp - fm) ** 2 / curvature   # h/2 of the sample
+        peaks[k] = f0
+    return peaks
+
+
+
+def _coordinates(model: ExudynModel):
+    """Minimal coordinates, rates and accelerations (by `Linkage.coordinates` name) from
+    the bodies' node sensors."""
+    linkage = model.linkage
+    q, v, a = {}, {}, {}
+    for b in linkage.bodies:
+        q[b.name] = stored(model, f"{b.name}.q")[:, 1:4] + np.asarray(
+            model.mbs.GetNodeParameter(model.nodes[b.name], "referenceCoordinates"))
+        v[b.name] = stored(model, f"{b.name}.v")[:, 1:4]
+        a[b.name] = stored(model, f"{b.name}.a")[:, 1:4]
+    pts = _points(linkage)
+    zero = np.zeros((len(next(iter(q.values()))), 3))
+    for arr in (q, v, a):
+        arr[GROUND] = zero
+    joints = {j.name: j for j in linkage.joints}
+    coords, rates, accs = {}, {}, {}
+    for c in linkage.coordinates():
+        owner, what = c.rsplit(".", 1)
+        if what in ("x", "y", "angle"):
+            k = ("x", "y", "angle").index(what)
+            coords[c], rates[c], accs[c] = q[owner][:, k], v[owner][:, k], a[owner][:, k]
+            continue
+        jt = joints[owner]                          # prismatic: s along the axis
+        A, B = jt.body_a, jt.body_b
+
+        def point(body, name):
+            phi, w, al = q[body][:, 2], v[body][:, 2], a[body][:, 2]
+            x, y = pts[body][name]
+            c_, s_ = np.cos(phi), np.sin(phi)
+            r = np.stack([c_ * x - s_ * y, s_ * x + c_ * y], axis=1)
+            rp = np.stack([-r[:, 1], r[:, 0]], axis=1)
+            pos = q[body][:, :2] + r
+            vel = v[body][:, :2] + w[:, None] * rp
+            acc = a[body][:, :2] + al[:, None] * rp - (w * w)[:, None] * r
+            return pos, vel, acc
+
+        pa, va, aa = point(A, jt.point_a)
+        pb, vb, ab = point(B, jt.point_b)
+        phi, w, al = q[A][:, 2] + jt.angle, v[A][:, 2], a[A][:, 2]
+        u = np.stack([np.cos(phi), np.sin(phi)], axis=1)
+        up = np.stack([-u[:, 1], u[:, 0]], axis=1)
+        d, dv, da = pb - pa, vb - va, ab - aa
+        coords[c] = np.einsum("ij,ij->i", d, u)
+        rates[c] = np.einsum("ij,ij->i", dv, u) + w * np.einsum("ij,ij->i", d, up)
+        accs[c] = (np.einsum("ij,ij->i", da, u) + 2 * w * np.einsum("ij,ij->i", dv, up)
+                   + al * np.einsum("ij,ij->i", d, up) - w * w * np.einsum("ij,ij->i", d, u))
+    return coords, rates, accs
+
+
+def _friction_power(model: ExudynModel, joint: ClearanceJoint, memory: ImpactMemory):
+    """Power Ft vt (W, <= 0) of a joint's friction at every kept sample, from the stored
+    body states and the impact velocity in force at each step (`ImpactMemory.history`),
+    by contact.contact_force / friction_force (the Python variant's law)."""
+    law, slots = friction_of(joint)
+    K, c, _, cmodel = _law_constants(joint)
+    pts = _points(model.linkage)
+    t = stored(model, f"{model.linkage.bodies[0].name}.q")[:, 0]
+
+    def point(body, name):
+        if body == GROUND:
+            p = np.asarray(pts[GROUND][name], dtype=float)
+            return np.tile(p, (len(t), 1)), np.zeros((len(t), 2)), np.zeros(len(t))
+        q = stored(model, f"{body}.q")[:, 1:4] + np.asarray(
+            model.mbs.GetNodeParameter(model.nodes[body], "referenceCoordinates"))
+        v = stored(model, f"{body}.v")[:, 1:4]
+        x, y = pts[body][name]
+        co, si = np.cos(q[:, 2]), np.sin(q[:, 2])
+        arm = np.column_stack([co * x - si * y, si * x + co * y])
+        return (q[:, :2] + arm, v[:, :2] + v[:, 2:3] * np.column_stack([-arm[:, 1], arm[:, 0]]),
+                v[:, 2])
+
+    rj, vj, wj = point(joint.journal_body, joint.journal_point)
+    rb, vb, wb = point(joint.bearing_body, joint.bearing_point)
+    e, ed = rj - rb, vj - vb
+    r = np.hypot(e[:, 0], e[:, 1])
+    hist = np.asarray(memory.history)
+    at = np.clip(np.searchsorted(hist[:, 0], t, side="right") - 1, 0, len(hist) - 1)
+    dmin = np.where(hist[at, 0] <= t, hist[at, 1], joint.impact_velocity_floor)
+    power = np.zeros(len(t))
+    for i in np.nonzero(r > c)[0]:
+        n = e[i] / r[i]
+        rate = float(ed[i] @ n)
+        vt = float(ed[i, 1] * n[0] - ed[i, 0] * n[1]) + (wj[i] * joint.journal_radius
+                                                         - wb[i] * joint.bearing_radius)
+        fn = contact_force(r[i] - c, rate, float(dmin[i]), K, joint.restitution, cmodel)
+        power[i] = friction_force_slots(vt, fn, slots, law) * vt
+    return power
+
+
+def _reactions(model: ExudynModel) -> tuple[np.ndarray, dict]:
+    t = None
+    reactions = {}
+    for name in model.linkage.ground_joints():
+        F = stored(model, f"{name}.force")
+        t = F[:, 0].copy() if t is None else t
+        f = F[:, 1:3]
+        if f"{name}.frame" in model.sensors:          # body_a's frame -> world
+            node = model.nodes[next(j.body_a for j in model.linkage.joints if j.name == name)]
+            phi = stored(model, f"{name}.frame")[:, 3] + model.mbs.GetNodeParameter(
+                node, "referenceCoordinates")[2]
+            c, s = np.cos(phi), np.sin(phi)
+            f = np.column_stack([c * f[:, 0] - s * f[:, 1], s * f[:, 0] + c * f[:, 1]])
+        reactions[name] = np.ascontiguousarray(model.ground_signs[name] * f)
+    return t, reactions
+
+
+def simulate_exudyn_linkage(linkage: Linkage, revolutions: int = 4, **options):
+    """Simulate `revolutions` drive revolutions of `linkage` in Exudyn; a `Trajectory` of
+    the same form as the reduced backend's (per-joint series, reactions by ground joint).
+
+    Options: `ExudynSettings` fields (``step_size`` s, or ``accuracy``, or
+    ``steps_per_revolution``; ``contact``, ``spectral_radius``, ``modified_newton``,
+    ``onset``, ``newton_tolerance``) and ``max_memory`` (bytes). Unknown names or bad
+    values raise ValueError before anything is computed.
+
+    Every time step is recorded (t = 0, h, 2h, ...); ``peaks`` holds the monitored force's
+    maximum per revolution refined between the steps (`refined_peaks`). ``contact_phase``
+    is 1 where the penetration is positive; ``contact_force`` the
+    signed normal force; ``crank_work`` the trapezoidal integral of the drive's power.
+    ``stats`` holds the settings, the step, Newton counters, onsets (per joint the first
+    registered onset time in ``first_onsets``) and the wall time in s.
+    """
+    from ..solve.trajectory import annotate
+
+    max_memory = options.pop("max_memory", None)
+    start = options.pop("start", None)
+    return annotate(run_linkage(linkage, revolutions, make_settings(options), max_memory,
+                                start))
+
+
+def run_linkage(linkage: Linkage, revolutions: int, settings: ExudynSettings,
+                max_memory=None, start=None):
+    """The (not annotated) `Trajectory` of `simulate_exudyn_linkage` for validated
+    `settings` (from `start`, a `linkage_model.Start`, if given); the run and the record
+    size are checked first."""
+    from ..solve.trajectory import Trajectory
+
+    revolutions = _check_run(linkage, revolutions, settings, ("all",), max_memory)
+    model = build(linkage, settings, start=start)
+    stats = solve(model, revolutions * linkage.period)
+
+    t, reactions = _reactions(model)
+    shaking = sum(reactions[g] for g in reactions)
+    monitored = shaking if linkage.monitor_joint is None else reactions[linkage.monitor_joint]
+    moment = -stored(model, "drive")[:, 1]
+    ecc, pen, force = [], [], []
+    for cj in linkage.clearance_joints:
+        e = model.ecc_sign * stored(model, f"{cj.name}.displacement")[:, 1:3]
+        r = np.hypot(e[:, 0], e[:, 1])
+        f = stored(model, f"{cj.name}.force")[:, 1:3]
+        with np.errstate(invalid="ignore", divide="ignore"):
+            fn = model.ecc_sign * (f[:, 0] * e[:, 0] + f[:, 1] * e[:, 1]) / r
+        ecc.append(e)
+        pen.append(r - cj.clearance)
+        force.append(np.where(r > 0.0, fn, 0.0))
+    penetration = np.column_stack(pen)
+    power = moment * linkage.drive.speed
+    work = np.concatenate([[0.0], np.cumsum(0.5 * (power[1:] + power[:-1]) * np.diff(t))])
+    stats["uniform_steps"] = bool(len(t) == stats["n_steps"] + 1 and np.allclose(
+        np.diff(t), stats["step_size_used"], rtol=1e-6, atol=0.0))
+    coords, rates, accs = _coordinates(model)
+    friction = [_friction_power(model, cj, m) for cj, m in
+                zip(linkage.clearance_joints, model.memories)
+                if m is not None and m.history is not None]
+    friction_work = None
+    if friction:
+        power = sum(friction)
+        friction_work = -np.concatenate([[0.0], np.cumsum(0.5 * (power[1:] + power[:-1])
+                                                           * np.diff(t))])
+    return Trajectory(
+        t=t, base_force=np.ascontiguousarray(monitored), crank_moment=moment,
+        contact_force=np.column_stack(force), penetration=penetration,
+        eccentricity=np.stack(ecc, axis=1),
+        slider_position=None, slider_velocity=None, slider_acceleration=None,
+        coupler_angle=None, coupler_rate=None,
+        contact_phase=(penetration > 0.0).astype(np.int8), crank_work=work,
+        mechanism=linkage, backend="exudyn", stats=stats,
+        peaks=refined_peaks(t, np.hypot(monitored[:, 0], monitored[:, 1]), linkage.period,
+                            revolutions),
+        joints=tuple(cj.name for cj in linkage.clearance_joints), reactions=reactions,
+        shaking_force=np.ascontiguousarray(shaking), coordinates=coords, rates=rates,
+        accelerations=accs, friction_work=friction_work)
+
+
+def peak_exudyn_linkage(linkage: Linkage, revolution: int = 4, **options) -> float:
+    """Max of the monitored force (|reaction| of the monitored ground joint, or |shaking
+    force|) in N over drive revolution `revolution` (1-based), refined between the time
+    steps (`refined_peaks`);
+    integrates only to the end of that revolution and records only the reactions."""
+    max_memory = options.pop("max_memory", None)
+    start = options.pop("start", None)
+    return peak_run(linkage, revolution, make_settings(options), max_memory, start)
+
+
+def peak_run(linkage: Linkage, revolution: int, settings: ExudynSettings,
+             max_memory=None, start=None) -> float:
+    """`peak_exudyn_linkage` for validated `settings` (from `start` if given)."""
+    revolution = _check_run(linkage, revolution, settings, ("reactions",), max_memory,
+                            "revolution")
+    model = build(linkage, settings, outputs=("reactions",), start=start)
+    solve(model, revolution * linkage.period)
+    t, reactions = _reactions(model)
+    F = (sum(reactions.values()) if linkage.monitor_joint is None
+         else reactions[linkage.monitor_joint])
+    return float(refined_peaks(t, np.hypot(F[:, 0], F[:, 1]), linkage.period,
+                               revolution)[revolution - 1])

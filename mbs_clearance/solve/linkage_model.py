@@ -1,0 +1,530 @@
+"""The glue between a `Linkage` and its generated model: parameters, initial state, run.
+
+`pack_parameters(linkage)` fills the generated module's parameter vector from the
+description (by the module's PARAMETERS names, no index arithmetic) and computes its
+constants; `initial_state(linkage)` solves the loop closure of the clearance joints (journals
+centred) by Newton from the description's assembly guesses and the velocities from the
+velocity constraints.
+"""
+
+from __future__ import annotations
+
+import warnings
+from typing import NamedTuple
+
+import numpy as np
+
+from .._warnings import AccuracyWarning
+from ..laws.forces import CONTACT_MODELS, FRICTION_LAWS
+from ..laws.registry import FRICTION_SLOTS
+from ..model.linkage import GROUND, Linkage
+from .diagnostics import contact_flags
+
+__all__ = ["parameter_values", "pack_parameters", "initial_state", "Start", "settled_start"]
+
+
+def load_model(linkage: Linkage, specialise: bool = True):
+    """`generate.load_model` (imported on first use: the generator imports sympy, which a
+    run of a checked-in model does not need): the module specialised on `linkage`'s
+    zero-valued geometric parameters, or (`specialise=False`) the general one."""
+    from ..generate import load_model as load
+
+    return load(linkage, specialise)
+
+
+def specialisable(linkage: Linkage, names) -> bool:
+    """Whether runs differentiated along the parameters `names` (dotted) may use the model
+    specialised on `linkage`'s zero-valued geometric parameters: none of them is one."""
+    from ..generate.derive import geometric_zeros
+
+    return not set(names) & set(geometric_zeros(linkage))
+
+
+def parameter_values(linkage: Linkage) -> dict[str, float]:
+    """Values of the generated model's parameters (its PARAMETERS names) for `linkage`; the
+    memory of each clearance joint starts in free flight with the impact-velocity floor."""
+    values: dict[str, float] = {}
+    for b in linkage.bodies:
+        values[f"{b.name}.mass"] = b.mass
+        values[f"{b.name}.inertia"] = b.inertia
+        for pt, (x, y) in b.points.items():
+            values[f"{b.name}.{pt}.x"] = x
+            values[f"{b.name}.{pt}.y"] = y
+    for pt, (x, y) in linkage.ground_points.items():
+        values[f"{GROUND}.{pt}.x"] = x
+        values[f"{GROUND}.{pt}.y"] = y
+    for j in linkage.joints:
+        if hasattr(j, "angle"):
+            values[f"{j.name}.angle"] = j.angle
+    for j in linkage.clearance_joints:
+        values[f"{j.name}.clearance"] = j.clearance
+        values[f"{j.name}.stiffness"] = j.stiffness
+        values[f"{j.name}.restitution"] = j.restitution
+        values[f"{j.name}.contact_model"] = float(CONTACT_MODELS[j.contact_model])
+        values[f"{j.name}.impact_velocity_floor"] = j.impact_velocity_floor
+        values[f"{j.name}.mode"] = 0.0
+        values[f"{j.name}.impact_velocity"] = j.impact_velocity_floor
+        values[f"{j.name}.friction_law"] = float(FRICTION_LAWS[j.friction_law])
+        for f in FRICTION_SLOTS:
+            values[f"{j.name}.{f}"] = getattr(j, f)
+        values[f"{j.name}.journal_radius"] = j.journal_radius
+        values[f"{j.name}.bearing_radius"] = j.bearing_radius
+    values["drive.speed"] = linkage.drive.speed
+    values["drive.initial_angle"] = linkage.drive.initial_angle
+    values["gravity"] = linkage.gravity
+    return values
+
+
+def pack_parameters(linkage: Linkage, model=None) -> np.ndarray:
+    """The parameter vector p (N_P,) of `linkage`'s generated model, constants computed."""
+    model = load_model(linkage) if model is None else model
+    values = parameter_values(linkage)
+    p = np.zeros(model.N_P)
+    for i, name in enumerate(model.PARAMETERS):
+        p[i] = values[name]
+    for name in getattr(model, "ZERO_PARAMETERS", ()):
+        if values[name] != 0.0:
+            raise ValueError(f"{name} = {values[name]!r}: the model module {model.__name__} "
+                             "is specialised on it being 0; load the general one "
+                             "(mbs_clearance.generate.load_model(linkage, specialise=False))")
+    model.prepare(p)
+    return p
+
+
+def initial_state(linkage: Linkage, model=None, p=None, t0: float = 0.0, tol: float = 1e-14,
+                  max_iter: int = 50) -> np.ndarray:
+    """State y0 (N_STATE,) with every journal centred in its bearing: the coordinates solve
+    the loop closure (closure(t0, q, p) = 0) by Newton's method from the description's
+    assembly guesses (0 for coordinates without one; least squares if the closure is not
+    square), the rates the velocity constraints closure_jacobian qdot = -closure_rate;
+    W = 0 (and the friction work). Raises ValueError if Newton does not converge (no
+    assembly near the guesses)."""
+    model = load_model(linkage) if model is None else model
+    p = pack_parameters(linkage, model) if p is None else p
+    q = np.array([linkage.assembly.get(c, 0.0) for c in model.COORDINATES])
+    scale = max(linkage.length_scale, 1e-300)
+    for _ in range(max_iter):
+        res = model.closure(t0, q, p)
+        jac = model.closure_jacobian(t0, q, p)
+        dq = np.linalg.lstsq(jac, -res, rcond=None)[0]
+        q = q + dq
+        if np.max(np.abs(model.closure(t0, q, p))) <= tol * scale:
+            break
+    else:
+        raise ValueError(
+            f"the loop closure of linkage {linkage.name!r} did not converge from the assembly "
+            f"guesses {dict(linkage.assembly)} (residual "
+            f"{np.max(np.abs(model.closure(t0, q, p))):.3g} m): give guesses (Linkage."
+            f"assembly, by coordinate name {list(model.COORDINATES)}) near an assembly")
+    jac = model.closure_jacobian(t0, q, p)
+    qd = np.linalg.lstsq(jac, -model.closure_rate(t0, q, p), rcond=None)[0]
+    return np.concatenate([q, qd, np.zeros(model.N_STATE - 2 * len(q))])
+
+
+# ---------------------------------------------------------------------------- starts
+
+class Start(NamedTuple):
+    """A state of a linkage to start a run from instead of the centred assembly, e.g. on
+    its periodic orbit (`settled_start`), so that a run, its sensitivities and an Exudyn
+    run of the same description skip the start's settling impacts.
+
+    A start is taken a whole number of drive revolutions after the centred start: there the
+    drive is back at its initial angle, and the equations repeat with the drive, so a run
+    from it at t = 0 continues the run it was taken from. A run from a start holds the
+    start fixed: its sensitivities start at zero (the state and the memories do not move
+    with the parameters), as do finite differences of runs from the same start.
+    """
+
+    #: the generated model's coordinates and their rates (2 N_Q,), in SI units and rad
+    y: np.ndarray
+    #: per clearance joint: 1.0 in contact, 0.0 in free flight
+    modes: np.ndarray
+    #: per clearance joint: the stored impact velocity in m/s (the contact law's memory)
+    impact_velocities: np.ndarray
+    #: drive revolutions after the centred start at which the state was taken
+    revolutions: int
+    #: the linkage's name (a start is refused by a linkage of another structure)
+    linkage: str
+
+
+def settled_start(linkage: Linkage, revolutions: int, *, rtol: float | None = None,
+                  method: str = "dopri5", progress=None) -> Start:
+    """The `Start` after `revolutions` drive revolutions from the centred start, when the
+    start's impacts and the weakly damped sliding mode of a frictionless joint have settled
+    (the four-bar's default needs about 100, docs/cases.md). The revolutions run one at a
+    time, each from the previous one's end, so the memory holds one revolution's record.
+    `progress`: a callable called with the number of revolutions done."""
+    from .._checks import check_int
+
+    revolutions = check_int("revolutions", revolutions, 1)
+    start = None
+    for k in range(revolutions):
+        model, ts, ys, ms = run(linkage, 1, rtol=rtol, method=method, start=start)[:4]
+        n2, nj = 2 * model.N_Q, model.N_EVENTS
+        start = Start(y=ys[-1, :n2].copy(), modes=ms[-1, 0:2 * nj:2].copy(),
+                      impact_velocities=ms[-1, 1:2 * nj:2].copy(), revolutions=k + 1,
+                      linkage=linkage.name)
+        if progress is not None:
+            progress(k + 1)
+    return start
+
+
+def check_start(linkage: Linkage, model, p, start, event_tol: float) -> np.ndarray:
+    """Validate `start` for `linkage` (ValueError naming what is wrong), store its memories
+    in p and return the state y0 (N_STATE,) it gives (works zero)."""
+    if not isinstance(start, Start):
+        raise ValueError(f"start must be a Start (from linkage_model.settled_start); "
+                         f"got {type(start).__name__}")
+    if start.linkage != linkage.name:
+        raise ValueError(f"start was taken of linkage {start.linkage!r}, not of "
+                         f"{linkage.name!r}")
+    y = np.asarray(start.y, dtype=float)
+    modes = np.asarray(start.modes, dtype=float)
+    dmin = np.asarray(start.impact_velocities, dtype=float)
+    n2, nj = 2 * model.N_Q, model.N_EVENTS
+    if y.shape != (n2,) or modes.shape != (nj,) or dmin.shape != (nj,):
+        raise ValueError(f"start of linkage {linkage.name!r} must hold {n2} coordinates and "
+                         f"rates ({list(model.COORDINATES)}) and {nj} modes and impact "
+                         f"velocities; got {y.shape}, {modes.shape}, {dmin.shape}")
+    if not (np.all(np.isfinite(y)) and np.all(np.isfinite(dmin))):
+        raise ValueError("start holds a value that is not finite")
+    for j, name in enumerate(model.JOINTS):
+        floor = p[model.PARAMETERS.index(f"{name}.impact_velocity_floor")]
+        if modes[j] not in (0.0, 1.0):
+            raise ValueError(f"start: the mode of joint {name!r} must be 0 (free) or 1 "
+                             f"(contact); got {modes[j]!r}")
+        if dmin[j] < floor:
+            raise ValueError(f"start: the impact velocity of joint {name!r} must be >= its "
+                             f"impact_velocity_floor {floor:g} m/s; got {dmin[j]!r}")
+        p[model.MEM_START + 2 * j] = modes[j]
+        p[model.MEM_START + 2 * j + 1] = dmin[j]
+    y0 = np.concatenate([y, np.zeros(model.N_STATE - n2)])
+    for j, name in enumerate(model.JOINTS):
+        g = model.event(0.0, y0, p, j)[0]
+        if g > event_tol:
+            side = "in contact" if modes[j] else "in free flight"
+            raise ValueError(f"start: joint {name!r} is marked {side} but its journal is "
+                             f"{g:.3g} m on the other side of the bearing wall")
+    return y0
+
+
+# ---------------------------------------------------------------------------- tolerances
+
+#: default relative tolerance of the compiled integrator (chosen by the work-precision
+#: benchmark, see docs/performance.md)
+DEFAULT_RTOL = 1e-7
+
+#: absolute tolerance of each switching function (the penetration), in clearances times
+#: rtol: the event functions and their rates are under error control beside the state
+#: (`integrator._attempt`). The state's own scales (positions ~ the length scale, speeds
+#: ~ omega times it) are 1e4 times coarser than the penetration that sets the contact force
+#: and the stored impact velocity; see docs/performance.md (the accuracy map)
+EVENT_ATOL = 1.5
+
+
+def drive_extent(linkage: Linkage) -> float:
+    """The driven body's largest distance between two of its points (and its centre of
+    mass) in m: its tip speed / drive speed, the scale of length rates."""
+    import math
+
+    drive = next(j for j in linkage.joints if j.name == linkage.drive.joint)
+    body = next(b for b in linkage.bodies if b.name == drive.body_b)
+    pts = [(0.0, 0.0), *body.points.values()]
+    return max(math.dist(a, b) for a in pts for b in pts)
+
+
+def default_atol(linkage: Linkage, model, rtol: float) -> np.ndarray:
+    """Absolute tolerances: per state component from the linkage's natural scales (angles
+    1 rad, lengths the length scale, angle rates the drive speed, length rates the driven
+    body's tip speed, the drive's (and friction's) work 1 J, not under error control), then
+    per clearance
+    joint of its switching function (EVENT_ATOL clearances x rtol) and its rate (none).
+    For the paper case these are reduced.default_atol and reduced.event_atol."""
+    w = linkage.drive.speed
+    length = linkage.length_scale
+    tip = w * drive_extent(linkage)
+    pos = [1.0 if c.endswith(".angle") else length for c in model.COORDINATES]
+    vel = [w if c.endswith(".angle") else tip for c in model.COORDINATES]
+    events = []
+    for j in linkage.clearance_joints:
+        events += [rtol * EVENT_ATOL * j.clearance, np.inf]
+    works = [1.0] * (model.N_STATE - 2 * model.N_Q)
+    return np.concatenate([rtol * np.array(pos + vel + works), events])
+
+
+# ---------------------------------------------------------------------------- trajectory
+
+def trajectory_from_run(linkage: Linkage, model, ts, ys, ms, p, stats, peaks, outs=None):
+    """The `Trajectory` of a linkage run: recorded times, states, memories (n, N_MEM) and,
+    if recorded, outputs (OUT_COLUMNS; else evaluated here)."""
+    from .trajectory import Trajectory
+
+    ys = np.ascontiguousarray(ys)
+    ms = np.ascontiguousarray(ms[:, :model.N_MEM])
+    if outs is None or outs.shape[1] < model.N_OUT:
+        outs = model.outputs(np.ascontiguousarray(ts), ys, ms, p)
+    col = {c: i for i, c in enumerate(model.OUT_COLUMNS)}
+    joints = model.JOINTS
+    J, n = len(joints), model.N_Q
+
+    def take(*names):
+        return _take_columns(outs, [col[c] for c in names])
+
+    def per_joint(field):
+        return take(*(f"{j}.{field}" for j in joints))
+
+    reactions = {g: take(f"{g}.reaction_x", f"{g}.reaction_y") for g in model.GROUND_JOINTS}
+    shaking = take("shaking_x", "shaking_y")
+    monitored = (shaking if model.MONITOR_JOINT is None
+                 else reactions[model.MONITOR_JOINT])
+    # (n, J, 2): per joint its x and y side by side
+    ecc = take(*(f"{j}.ecc_{a}" for j in joints for a in "xy")).reshape(-1, J, 2)
+    return Trajectory(
+        t=np.asarray(ts), base_force=monitored, crank_moment=outs[:, col["drive_moment"]].copy(),
+        contact_force=per_joint("contact_force"), penetration=per_joint("penetration"),
+        eccentricity=ecc,
+        slider_position=None, slider_velocity=None, slider_acceleration=None,
+        coupler_angle=None, coupler_rate=None,
+        contact_phase=(ms[:, 0:2 * J:2] > 0.5).astype(np.int8),
+        crank_work=ys[:, 2 * n].copy(), mechanism=linkage, backend="reduced", stats=stats,
+        peaks=peaks, joints=tuple(joints), reactions=reactions, shaking_force=shaking,
+        coordinates={c: ys[:, i].copy() for i, c in enumerate(model.COORDINATES)},
+        rates={c: ys[:, n + i].copy() for i, c in enumerate(model.COORDINATES)},
+        accelerations={c: outs[:, col[f"{c}.acc"]].copy() for c in model.COORDINATES},
+        friction_work=(ys[:, model.FRICTION_WORK].copy() if getattr(model, "FRICTION_WORK", -1)
+                       > 0 and ys.shape[1] > model.FRICTION_WORK else None),
+    )
+
+
+def _take_columns(a: np.ndarray, columns) -> np.ndarray:
+    """a[:, columns] as a new C-contiguous (n, len(columns)) array, copied column by column
+    (for a long record several times faster than numpy's fancy indexing of columns)."""
+    out = np.empty((a.shape[0], len(columns)))
+    for k, c in enumerate(columns):
+        out[:, k] = a[:, c]
+    return out
+
+
+# ---------------------------------------------------------------------------- runs
+
+#: options of `simulate(linkage, backend="reduced")` (keywords of `run` meant for users)
+OPTION_NAMES = ("rtol", "atol", "method", "max_steps", "n_samples", "h_max", "h0",
+                "event_tol", "max_memory", "t_eval", "start")
+
+#: the event search looks closer (7 more samples and the interpolant's maximum) between two
+#: samples of a step where the cubic Hermite interpolant of a penetration comes within
+#: `event_margin` of the wall (see integrator._search_event): this fraction of the smallest
+#: clearance, or MARGIN_PER_RTOL x rtol of it where that is larger
+EVENT_MARGIN = 0.001
+#: the margin stays at least this many times the switching function's error tolerance
+#: (rtol (1.5 c + |delta|), `EVENT_ATOL`): 67 x at rtol 1e-5 and looser
+MARGIN_PER_RTOL = 100.0
+
+#: default `max_steps` (step attempts) of a run
+DEFAULT_MAX_STEPS = 5_000_000
+
+#: golden-section iterations per refined peak candidate: the bracket shrinks to 0.618^24 =
+#: 1e-5 of a step, where the peak's quadratic error is ~1e-12 of its value
+REFINE_ITERS = 24
+
+
+def event_margin(clearance: float, rtol: float) -> float:
+    """Distance from a wall (m) within which the event search looks closer between samples:
+    EVENT_MARGIN of the (smallest) clearance, at least MARGIN_PER_RTOL rtol of it. It guards
+    against the interpolants' error, which the switching function's error control keeps
+    below rtol (1.5 c + |delta|); a fixed 0.05 c would put every step of a
+    light lasting contact (penetration ~0.005 c, the four-bar's) under the closer look and
+    the approach step limit, at 1.7 times the run time with the same steps
+    (docs/performance.md)."""
+    return clearance * max(EVENT_MARGIN, MARGIN_PER_RTOL * rtol)
+
+
+def event_tolerance(linkage: Linkage) -> float:
+    """Default penetration tolerance of the events in m: 1e-12 of the smallest clearance,
+    but not below the round-off of the journal positions."""
+    return max(1e-12 * linkage.min_clearance, 8 * np.finfo(float).eps * linkage.length_scale)
+
+
+def _tolerances(linkage, model, rtol, atol):
+    from .._checks import check_real
+
+    rtol = DEFAULT_RTOL if rtol is None else check_real("rtol", rtol, 1e-14, 1e-2)
+    full = default_atol(linkage, model, rtol)
+    if atol is not None:
+        try:
+            arr = np.broadcast_to(np.asarray(atol, dtype=float), (model.N_STATE,)).copy()
+        except (TypeError, ValueError):
+            arr = None
+        if (arr is None or not np.all(np.isfinite(arr)) or np.any(arr <= 0)
+                or isinstance(atol, (bool, np.bool_))):
+            raise ValueError(f"atol must be a finite number > 0 or {model.N_STATE} of them "
+                             f"(one per state component {list(model.COORDINATES)}, their "
+                             f"rates, the drive's work); got {atol!r}")
+        full[:model.N_STATE] = arr
+    return rtol, full
+
+
+def landing_edges(edges: np.ndarray, t_eval) -> tuple[np.ndarray, np.ndarray]:
+    """Output times `t_eval` (checked: increasing, within [0, edges[-1]]) and the edges the
+    integrator lands on: the window edges united with them, a time within 1e-12 of the span
+    of the previous one dropped. Returns (t_eval, edges)."""
+    from .._checks import check_times
+
+    t_eval = check_times("t_eval", t_eval, float(edges[-1]))
+    merged = np.union1d(edges, t_eval)
+    merged = merged[np.concatenate([[True], np.diff(merged) > 1e-12 * merged[-1]])]
+    return t_eval, merged
+
+
+def landed_indices(ts: np.ndarray, t_eval: np.ndarray) -> np.ndarray:
+    """Indices of the recorded steps that landed on the times `t_eval`."""
+    return np.minimum(np.searchsorted(ts, t_eval), len(ts) - 1)
+
+
+def window_peaks(ts: np.ndarray, outs: np.ndarray, column: int,
+                 win_edges: np.ndarray) -> np.ndarray:
+    """Per window [win_edges[i], win_edges[i + 1]] the largest magnitude of the outputs'
+    columns (column, column + 1) at the samples ts (0 for a window without samples)."""
+    mags = np.hypot(outs[:, column], outs[:, column + 1])
+    return np.array([mags[(ts >= a) & (ts <= b)].max(initial=0.0)
+                     for a, b in zip(win_edges[:-1], win_edges[1:])])
+
+
+def run(linkage: Linkage, revolutions: int = 4, *, rtol: float | None = None,
+        atol=None, method: str = "dopri5", record: bool = True,
+        max_steps: int = DEFAULT_MAX_STEPS, n_samples: int = 1, h_max: float | None = None,
+        h0: float = 0.0, event_tol: float | None = None, max_memory: int | None = None,
+        t_eval=None, start: Start | None = None):
+    """Integrate `linkage`'s generated model over `revolutions` drive revolutions from the
+    centred start (or from `start`, a `Start`); returns (model, ts, ys, ms, peaks,
+    peak_times, counters dict, outs, p).
+    With `t_eval` the integrator also lands exactly on those times and only they are
+    returned (the peaks then are the maxima over them per revolution). Every option is
+    checked first (ValueError naming it and its range); a run whose record would exceed
+    `max_memory` bytes stops there with `MemoryLimitError`."""
+    from .._checks import (
+        MemoryLimitError,
+        check_bool,
+        check_choice,
+        check_int,
+        check_max_memory,
+        check_real,
+        check_revolutions_memory,
+        format_bytes,
+    )
+    from ..numerics.integrator import COUNTERS, METHODS, RESULTS, make_settings
+
+    if not isinstance(linkage, Linkage):
+        raise ValueError(f"linkage must be a Linkage; got {type(linkage).__name__}")
+    revolutions = check_int("revolutions", revolutions, 1)
+    check_choice("method", method, METHODS)
+    record = check_bool("record", record)
+    max_steps = check_int("max_steps", max_steps, 1)
+    n_samples = check_int("n_samples (interior event samples per step)", n_samples, 0, 1000)
+    h0 = check_real("h0 (initial step; 0: automatic)", h0, 0.0, unit="s")
+    max_memory = check_max_memory(max_memory)
+    check_revolutions_memory(revolutions, max_memory)
+    h_max = linkage.period / 8 if h_max is None else check_real(
+        "h_max (largest step)", h_max, 0.0, low_open=True, unit="s")
+    if event_tol is None:
+        event_tol = event_tolerance(linkage)
+    else:
+        event_tol = check_real("event_tol (penetration tolerance of events)", event_tol, 0.0,
+                               low_open=True, unit="m")
+    model = load_model(linkage)
+    rtol, atol_arr = _tolerances(linkage, model, rtol, atol)
+    if rtol > 1e-4:
+        import warnings
+
+        from .._warnings import AccuracyWarning
+
+        warnings.warn(f"rtol {rtol:g} is too loose to resolve the contacts (looser than "
+                      f"1e-4: spurious contact events and peak forces wrong by any amount); "
+                      f"use rtol <= 1e-4, the default is {DEFAULT_RTOL:g}", AccuracyWarning,
+                      stacklevel=3)
+    p = pack_parameters(linkage, model)
+    if start is None:
+        y0 = initial_state(linkage, model, p)
+    else:
+        y0 = check_start(linkage, model, p, start, event_tol)
+    edges = win_edges = np.arange(revolutions + 1) * linkage.period
+    refine = REFINE_ITERS
+    if t_eval is not None:
+        t_eval, edges = landing_edges(edges, t_eval)
+        record, refine = True, 0
+    extra_fev = 0
+    if h0 == 0.0 and model.N_STATE > 2 * model.N_Q + 1:
+        h0 = _start_step(model, y0, p, rtol, atol_arr, method, min(h_max, edges[-1]))
+        extra_fev = 1
+    n_out = model.N_OUT if record else 0
+    row = 8 * (1 + model.N_STATE + model.N_MEM + n_out)
+    step_cap = max(1, (max_memory - 24 * len(edges)) // row) if record else max_steps
+    limit = min(max_steps, step_cap)
+    settings = make_settings(
+        rtol, atol_arr, 2 * model.N_Q, h0=h0, h_max=h_max, max_steps=limit, record=record,
+        event_tol=event_tol, event_margin=event_margin(linkage.min_clearance, rtol),
+        n_samples=n_samples, refine_iters=refine, n_out=n_out, n_dense=2 * model.N_Q,
+        n_events=model.N_EVENTS, mem_start=model.MEM_START, n_mem=model.N_MEM)
+    ts, ys, ms, peaks, peak_t, counters, outs, status = model.integrate_model(
+        y0, p, edges, settings, METHODS[method].arrays())
+    status = RESULTS(int(status))
+    if status == RESULTS.max_steps and limit < max_steps:
+        raise MemoryLimitError(
+            f"the record of linkage {linkage.name!r} reached max_memory={max_memory} bytes "
+            f"({format_bytes(max_memory)}) at t = {ts[-1]:.6g} s, after {limit} steps; raise "
+            "max_memory or run fewer revolutions")
+    if status != RESULTS.success:
+        raise RuntimeError(f"integration of linkage {linkage.name!r} failed at about t = "
+                           f"{ts[-1] if len(ts) else float('nan'):.6g} s: {status.message}")
+    if t_eval is not None:
+        keep = landed_indices(ts, t_eval)
+        ts, ys, ms, outs = ts[keep], ys[keep], ms[keep], outs[keep]
+        peaks = window_peaks(ts, outs, model.MONITOR_COLUMN, win_edges)
+    stats = {k: int(v) for k, v in zip(COUNTERS, counters)}
+    stats["nfev"] += extra_fev
+    stats.update(method=method, rtol=float(rtol))
+    return model, ts, ys, ms, peaks, peak_t, stats, outs, p
+
+
+def _start_step(model, y0, p, rtol, atol, method, span):
+    """The integrator's automatic starting step (`integrator.initial_step`) of the state
+    without the friction work (one evaluation of the model): the step a frictionless model
+    takes, so that a zero friction coefficient reproduces its run bit for bit (the friction
+    work, a quadrature, would otherwise enter the starting step's norms)."""
+    from ..numerics.integrator import METHODS, initial_step
+
+    n = 2 * model.N_Q + 1
+    y = np.ascontiguousarray(y0[:n])
+    f = np.empty(n)
+    model.rhs(0.0, y, p, f)
+    # the kernel's Python source, calling the compiled rhs: the compiled initial_step would
+    # be specialised for this rhs in every process (a function argument is not cached)
+    return initial_step.py_func(model.rhs, 0.0, y, f, p, rtol, np.ascontiguousarray(atol[:n]),
+                                METHODS[method].error_order + 1, span, np.empty(n),
+                                np.empty(n))
+
+
+def simulate_linkage(linkage: Linkage, revolutions: int = 4, **options):
+    """Simulate `linkage` with its generated model; a `Trajectory` of every accepted step
+    with per-joint series (see `Trajectory`), annotated (penetration, periodicity)."""
+    from .trajectory import annotate
+
+    model, ts, ys, ms, peaks, _, stats, outs, p = run(linkage, revolutions, record=True,
+                                                      **options)
+    stats.update(contact_flags([j.clearance for j in linkage.clearance_joints],
+                               linkage.drive.speed, revolutions, ms[:, :model.N_MEM],
+                               stats.get("nevent", 0), stats["rtol"]))
+    if stats["accuracy_note"]:
+        warnings.warn(stats["accuracy_note"], AccuracyWarning, stacklevel=3)
+    traj = trajectory_from_run(linkage, model, ts, ys, ms, p, stats, peaks, outs)
+    start = options.get("start")
+    if start is not None:
+        traj.stats["start_revolutions"] = start.revolutions
+    return annotate(traj)
+
+
+def peak_linkage(linkage: Linkage, revolution: int = 4, **options) -> float:
+    """The monitored force's maximum in N over drive revolution `revolution` (1-based; the
+    monitored ground joint's |reaction|, or |shaking force|), recording nothing."""
+    peaks = run(linkage, revolution, record=False, **options)[4]
+    return float(peaks[revolution - 1])

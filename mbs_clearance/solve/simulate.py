@@ -1,0 +1,187 @@
+"""`simulate(mech, backend=...)`: one entry point for every model, one `Trajectory` result."""
+
+from __future__ import annotations
+
+import importlib
+from dataclasses import dataclass
+
+from .._checks import check_int
+from ..model.linkage import Linkage
+from ..model.mechanism import SliderCrank
+from .accuracy import DEFAULT_ACCURACY, check_accuracy_or_rtol
+from .trajectory import Trajectory
+
+__all__ = ["simulate", "peak_base_force", "BACKENDS", "Backend"]
+
+
+@dataclass(frozen=True)
+class Backend:
+    """A model: module and the names of its simulate and peak-only functions."""
+
+    module: str
+    simulate: str
+    peak: str
+    description: str
+
+    def load(self, attr: str):
+        return getattr(importlib.import_module(self.module), getattr(self, attr))
+
+
+#: name -> Backend; the registry of models (imported lazily: Exudyn only when asked for)
+BACKENDS: dict[str, Backend] = {
+    "reduced": Backend("mbs_clearance.solve.reduced", "simulate_reduced", "peak_reduced",
+                       "the paper's reduced Lagrange model, compiled (numba)"),
+    "exudyn": Backend("mbs_clearance.backends.exudyn_model", "simulate_exudyn", "peak_exudyn",
+                      "the same mechanism in the multibody engine Exudyn"),
+    "ideal": Backend("mbs_clearance.backends.ideal", "simulate_ideal", "peak_ideal",
+                     "closed-form slider-crank with ideal joints (no clearance)"),
+}
+
+
+def _backend(name: str) -> Backend:
+    if name not in BACKENDS:
+        raise ValueError(f"backend must be one of {sorted(BACKENDS)}; got {name!r}")
+    return BACKENDS[name]
+
+
+#: the models of a `Linkage` (generated from its description), by backend name
+LINKAGE_BACKENDS: dict[str, Backend] = {
+    "reduced": Backend("mbs_clearance.solve.linkage_model", "simulate_linkage", "peak_linkage",
+                       "the model generated from the description, compiled (numba)"),
+    "exudyn": Backend("mbs_clearance.backends.exudyn_linkage", "simulate_exudyn_linkage",
+                      "peak_exudyn_linkage", "the description built in the multibody engine "
+                      "Exudyn"),
+}
+
+
+def _check(mech, revolutions, name="revolutions") -> int:
+    if not isinstance(mech, (SliderCrank, Linkage)):
+        raise ValueError(f"mech must be a SliderCrank or a Linkage; got {type(mech).__name__}")
+    return check_int(name, revolutions, 1)
+
+
+def simulate(mech: SliderCrank, revolutions: int = 4, backend: str = "reduced",
+             accuracy: float | None = None, **options) -> Trajectory:
+    """Simulate `revolutions` crank revolutions from t = 0.
+
+    Parameters
+    ----------
+    mech : SliderCrank or Linkage
+        A `Linkage` (e.g. from `mbs_clearance.model.cases`) runs the model generated from its
+        description (backend "reduced") or the description built in Exudyn (backend
+        "exudyn", `exudyn_linkage`); its Trajectory has per-joint series.
+    revolutions : int
+        Number of full crank (drive) revolutions (>= 1).
+    backend : str
+        A key of `BACKENDS`: "reduced" (default), "exudyn" or "ideal".
+    accuracy : float or None
+        Requested relative accuracy of the per-revolution peaks. Backend "reduced": for a
+        `SliderCrank` or a `Linkage` default `accuracy.DEFAULT_ACCURACY` (1e-5) unless
+        ``rtol`` or ``atol`` is given (an expert's fixed tolerance, run once as given); the
+        run estimates its own error from a second run and tightens until the estimate is
+        within the request
+        (`mbs_clearance.solve.accuracy`; ``stats["error_estimate"]``, ``stats["accuracy_ok"]``: the
+        estimate is within the request). Backend "exudyn": the fixed step chosen for it
+        (`exudyn_linkage`).
+    **options
+        Backend settings, e.g. ``rtol``, ``atol``, ``method`` for "reduced"; ``step_size``,
+        ``contact`` for "exudyn". Unknown options or values out of range raise ValueError
+        before any computation. Every backend takes ``max_memory`` (bytes; default
+        min(4 GiB, half the RAM)): a run estimated to need more is refused with
+        `MemoryLimitError` (a ValueError) before it allocates. A `Linkage` on either
+        backend takes ``start`` (a `linkage_model.Start`, e.g. `settled_start(linkage,
+        100)`): the run starts from that state instead of the centred assembly.
+
+    Returns
+    -------
+    Trajectory
+        ``stats`` holds, besides the solver counters, ``max_penetration_clearance``,
+        ``max_penetration_radius``, ``penetration_meaningless`` (a `PhysicsWarning` is
+        emitted when True) and ``periodic`` (True, False or None) with
+        ``periodicity_note``; see `trajectory.annotate`.
+    """
+    check_accuracy_or_rtol(accuracy, options)
+    if backend != "reduced":
+        if accuracy is not None:
+            options["accuracy"] = accuracy
+        return _call(backend, "simulate", mech, revolutions, options)
+    if accuracy is None and ("rtol" in options or "atol" in options):
+        return _call(backend, "simulate", mech, revolutions, options)
+    return _to_accuracy(mech, revolutions, DEFAULT_ACCURACY if accuracy is None else accuracy,
+                        options)
+
+
+def _to_accuracy(mech, revolutions, accuracy, options: dict) -> Trajectory:
+    """The reduced model's run within `accuracy` (`accuracy.simulate_to_accuracy`): recorded
+    runs through `_call`, the peaks-only check through the backend's `run`."""
+    from . import reduced
+    from .accuracy import simulate_to_accuracy
+
+    def record(rtol):
+        return _call("reduced", "simulate", mech, revolutions, {**options, "rtol": rtol})
+
+    if isinstance(mech, SliderCrank) and mech.friction_law == "none":
+        def peaks(rtol):
+            out = reduced.run(mech, revolutions, record=False, rtol=rtol, **options)
+            return out[3], int(out[5][0])
+
+        def rattling(traj):
+            return bool(traj.stats.get("rattling"))
+    else:
+        from ..model.cases import from_slider_crank
+        from . import linkage_model as lm
+
+        lk = from_slider_crank(mech) if isinstance(mech, SliderCrank) else mech
+
+        def peaks(rtol):
+            out = lm.run(lk, revolutions, record=False, rtol=rtol, **options)
+            return out[4], out[6]["nfev"]
+
+        # no rattling shortcut: the four-bar's slow drive switches its contact hundreds of
+        # times per revolution, yet its peaks converge as rtol falls (docs/performance.md)
+        rattling = None
+    return simulate_to_accuracy(record, peaks, accuracy, rattling=rattling)
+
+
+def peak_base_force(mech: SliderCrank, revolution: int = 4, backend: str = "reduced",
+                    accuracy: float | None = None, **options) -> float:
+    """Max |F12| in N over crank revolution `revolution` (1-based), the GA's objective (a
+    Linkage: its monitored force).
+
+    Records no time series: only running maxima are kept, at the backend's default
+    tolerance (on the reduced model rtol 1e-7, within 1e-5 on the paper's GA box: the
+    accuracy map, docs/performance.md) or the ``rtol`` given. With `accuracy` the peak is
+    that of `simulate(mech, revolution, accuracy=accuracy)`: a run that estimates its own
+    error and tightens until the estimate is within the request (a recorded run and a check,
+    about 1.2 times a fixed run where the default meets it).
+    """
+    if accuracy is not None and backend == "reduced":
+        from .accuracy import revolution_peaks
+
+        revolution = _check(mech, revolution, "revolution")
+        traj = simulate(mech, revolution, accuracy=accuracy, **options)
+        return float(revolution_peaks(traj)[revolution - 1])
+    if accuracy is not None:
+        options["accuracy"] = accuracy
+    return _call(backend, "peak", mech, revolution, options, "revolution")
+
+
+def _call(backend: str, attr: str, mech, revolutions, options: dict,
+          name: str = "revolutions"):
+    """Validate backend, mechanism, count and option names, then call the backend (which
+    validates the options' values)."""
+    be = _backend(backend)
+    revolutions = _check(mech, revolutions, name)
+    if isinstance(mech, Linkage):
+        if backend not in LINKAGE_BACKENDS:
+            raise ValueError(f"backend must be one of {sorted(LINKAGE_BACKENDS)} for a Linkage "
+                             f"(the {backend!r} backend takes a SliderCrank); got {backend!r}")
+        be = LINKAGE_BACKENDS[backend]
+    module = importlib.import_module(be.module)
+    allowed = getattr(module, "OPTION_NAMES", None)
+    if allowed is not None:
+        unknown = sorted(set(options) - set(allowed))
+        if unknown:
+            raise ValueError(f"unknown option(s) {unknown} for backend {backend!r}; "
+                             f"allowed: {sorted(allowed)}")
+    return be.load(attr)(mech, revolutions, **options)

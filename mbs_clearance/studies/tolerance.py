@@ -1,0 +1,1038 @@
+"""Manufacturing tolerances and wear: global sensitivity and the probability of exceeding a
+load over a production batch.
+
+`tolerance_study(inputs, ...)` takes an uncertainty description (each input a distribution:
+`Uniform` over a tolerance band, `Normal` with a sigma, or `FitClearance`, the radial
+clearance of an ISO 286 fit, `mbs_clearance.model.fits`) and an output (the rev-k peak of |F12|,
+the RMS drive moment, the max contact force, or any function of the inputs), and computes
+
+- Sobol first- and total-order indices with bootstrap confidence intervals (SALib; Saltelli
+  sampling on a scrambled Sobol sequence), and Morris' mu* (SALib);
+- DGSM (derivative-based global sensitivity measures) nu_i = E[(dY/dx_i)^2] from the exact
+  gradients of the peak (`peak_gradient`, DDM), with the bound of the total Sobol index
+  S_T,i <= C_i nu_i / V (Sobol & Kucherenko 2009; Lamboni et al. 2013), C_i the Poincare
+  constant of input i: (b - a)^2 / pi^2 for a uniform or any log-concave density on [a, b]
+  (Payne & Weinberger 1960), sigma^2 for a normal;
+- Monte Carlo of the output distribution and P(Y > allowable) with its Clopper-Pearson
+  interval; a wear study: the same statistics as the radial clearance grows by given
+  amounts.
+
+Inputs are sampled in the unit cube (SALib, seeded) and mapped through each distribution's
+quantile function, so that the same seed gives the same designs and, every run being
+deterministic, the same indices on any executor (`executor.evaluate`: threads, processes,
+dask). Runs whose motion is not periodic (a rattling contact, `reduced.RATTLING`; or
+``stats["periodic"] is False``) are counted; their output is a statistic over revolutions
+2..k (the max of the per-revolution peaks, the RMS over those revolutions) instead of
+revolution k alone. Runs flagged by the accuracy or physics checks (``accuracy_ok`` False,
+``penetration_meaningless``) are counted and reported.
+
+Design fields are read and written through `field_value` / `with_values` only (name -> value,
+replace), so that a general mechanism description can take the place of `SliderCrank`.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import numbers
+import threading
+import time
+import warnings
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .._checks import DESIGN_BYTES, check_memory, check_revolutions_memory
+from .._warnings import AccuracyWarning, PhysicsWarning
+from ..model.fits import iso_fit
+from ..model.linkage import Linkage
+from ..model.mechanism import CONTINUOUS_FIELDS, SliderCrank
+from .executor import _THREAD_SAFE_BACKENDS, evaluate
+
+__all__ = ["tolerance_study", "ToleranceResult", "Uniform", "Normal", "FitClearance",
+           "OUTPUTS", "field_value", "with_values", "band", "read_inputs"]
+
+#: built-in outputs of a run: the rev-k peak of |F12| (peak-only run), the RMS of the drive
+#: moment over revolution k, the max contact force over revolution k (recorded runs)
+OUTPUTS = ("peak", "rms_drive_moment", "max_contact_force")
+#: what each named output is, and its unit
+OUTPUT_LABELS = {"peak": ("max |F12|", "N"), "rms_drive_moment": ("RMS drive moment", "N m"),
+                 "max_contact_force": ("max contact force", "N")}
+
+#: derived input: the radial clearance R_B - R_J (set by moving the journal radius)
+CLEARANCE = "radial_clearance"
+
+_FORMAT = "mbs_clearance.studies.tolerance/1"
+
+#: quantiles are taken at u clipped to [EPS, 1 - EPS] (the normal's tails are infinite)
+_U_EPS = 1e-12
+
+
+# ----------------------------------------------------------------------- distributions
+
+def _real(name: str, value, positive: bool = False) -> float:
+    if not isinstance(value, numbers.Real) or isinstance(value, bool) \
+            or not math.isfinite(value) or (positive and value <= 0):
+        raise ValueError(f"{name} must be a finite number{' > 0' if positive else ''}; "
+                         f"got {value!r}")
+    return float(value)
+
+
+@dataclass(frozen=True)
+class Uniform:
+    """Uniform over [low, high] (a tolerance band)."""
+
+    low: float
+    high: float
+
+    def __post_init__(self):
+        _real("Uniform.low", self.low)
+        _real("Uniform.high", self.high)
+        if not self.low < self.high:
+            raise ValueError(f"Uniform needs low < high; got ({self.low!r}, {self.high!r})")
+
+    def ppf(self, u: np.ndarray) -> np.ndarray:
+        return self.low * (1.0 - u) + self.high * u
+
+    @property
+    def poincare(self) -> float:
+        """Poincare constant C: Var f <= C E[f'^2] for every smooth f."""
+        return (self.high - self.low) ** 2 / math.pi**2
+
+    def describe(self) -> dict:
+        return {"kind": "uniform", "low": self.low, "high": self.high}
+
+
+def band(nominal: float, tolerance: float) -> Uniform:
+    """Uniform over the tolerance band nominal +- tolerance."""
+    _real("nominal", nominal)
+    tolerance = _real("tolerance", tolerance, positive=True)
+    return Uniform(nominal - tolerance, nominal + tolerance)
+
+
+@dataclass(frozen=True)
+class Normal:
+    """Normal with mean and standard deviation sigma (> 0)."""
+
+    mean: float
+    sigma: float
+
+    def __post_init__(self):
+        _real("Normal.mean", self.mean)
+        _real("Normal.sigma", self.sigma, positive=True)
+
+    def ppf(self, u: np.ndarray) -> np.ndarray:
+        from scipy.special import ndtri
+
+        return self.mean + self.sigma * ndtri(np.clip(u, _U_EPS, 1.0 - _U_EPS))
+
+    @property
+    def poincare(self) -> float:
+        return self.sigma**2
+
+    def describe(self) -> dict:
+        return {"kind": "normal", "mean": self.mean, "sigma": self.sigma}
+
+
+@dataclass(frozen=True)
+class FitClearance:
+    """The radial clearance of an ISO 286 fit at a nominal diameter (m).
+
+    shape "trapezoid" (default): hole and shaft diameters independent and uniform over their
+    tolerance zones, the clearance their half difference (a trapezoidal density); "uniform":
+    uniform between the minimum and maximum clearance (the worst-case band).
+    """
+
+    fit: str
+    diameter: float
+    shape: str = "trapezoid"
+
+    def __post_init__(self):
+        if self.shape not in ("trapezoid", "uniform"):
+            raise ValueError(f"FitClearance.shape must be 'trapezoid' or 'uniform'; "
+                             f"got {self.shape!r}")
+        lo, _ = self.limits
+        if lo <= 0:
+            raise ValueError(f"fit {self.fit!r} has a minimum clearance of 0; the model needs "
+                             "a clearance > 0 (use a fit with a clearance, e.g. H7/g6)")
+
+    @property
+    def iso(self):
+        return iso_fit(self.fit, self.diameter)
+
+    @property
+    def limits(self) -> tuple[float, float]:
+        """(min, max) radial clearance, m."""
+        return self.iso.radial_clearance
+
+    def ppf(self, u: np.ndarray) -> np.ndarray:
+        lo, hi = self.limits
+        if self.shape == "uniform":
+            return lo * (1.0 - u) + hi * u
+        f = self.iso
+        # radial clearance = lo + (A + B) / 2, A ~ U(0, hole IT), B ~ U(0, shaft IT)
+        a = (f.hole[1] - f.hole[0]) / 2.0
+        b = (f.shaft[1] - f.shaft[0]) / 2.0
+        w1, w2 = min(a, b), max(a, b)
+        u = np.asarray(u, dtype=float)
+        t = np.where(u <= w1 / (2 * w2), np.sqrt(2 * a * b * u),
+                     np.where(u <= 1 - w1 / (2 * w2), u * w2 + w1 / 2,
+                              w1 + w2 - np.sqrt(2 * a * b * np.clip(1 - u, 0.0, 1.0))))
+        return lo + t
+
+    @property
+    def poincare(self) -> float:
+        # log-concave on [lo, hi] (a convolution of uniforms): C <= (hi - lo)^2 / pi^2
+        lo, hi = self.limits
+        return (hi - lo) ** 2 / math.pi**2
+
+    def describe(self) -> dict:
+        lo, hi = self.limits
+        return {"kind": "fit", "fit": self.fit, "diameter": self.diameter,
+                "shape": self.shape, "low": lo, "high": hi}
+
+
+_DISTRIBUTIONS = (Uniform, Normal, FitClearance)
+
+
+def read_inputs(path: str | Path) -> dict[str, Any]:
+    """Input distributions from a file: a JSON object {name: {"uniform": [lo, hi]} |
+    {"band": [nominal, tol]} | {"normal": [mean, sigma]} | {"fit": "H7/g6", "diameter": d,
+    "shape": "trapezoid"}}, or a SALib parameter file (lines NAME LOW HIGH: uniform;
+    blank lines and lines starting with # ignored)."""
+    from .._io import parse_json, read_text
+
+    path = Path(path)
+    text = read_text(path, "the inputs file")       # at most _io.MAX_INPUT_BYTES
+    if text.lstrip().startswith("{"):
+        data = parse_json(text, path, "the inputs file")
+        return {str(k): _from_spec(str(k), v) for k, v in data.items()}
+    out = {}
+    for no, line in enumerate(text.splitlines(), 1):
+        parts = line.split()
+        if not parts or parts[0].startswith("#"):
+            continue
+        try:
+            out[parts[0]] = Uniform(float(parts[1]), float(parts[2]))
+        except (IndexError, ValueError) as exc:
+            raise ValueError(f"{str(path)!r} line {no}: expected NAME LOW HIGH with LOW < "
+                             f"HIGH; got {line.strip()!r} ({exc})") from None
+    if not out:
+        raise ValueError(f"{str(path)!r} holds no inputs")
+    return out
+
+
+def _from_spec(name: str, spec) -> Any:
+    kinds = ("uniform", "band", "normal", "fit")
+    if not isinstance(spec, dict) or not any(k in spec for k in kinds):
+        raise ValueError(f"input {name!r}: expected an object with one of {list(kinds)}; "
+                         f"got {spec!r}")
+    try:
+        if "fit" in spec:
+            return FitClearance(spec["fit"], spec["diameter"], spec.get("shape", "trapezoid"))
+        kind = next(k for k in kinds if k in spec)
+        if not isinstance(spec[kind], list) or len(spec[kind]) != 2:
+            raise ValueError(f"{kind!r} needs a list of two numbers")
+        a, b = spec[kind]
+        return {"uniform": Uniform, "band": band, "normal": Normal}[kind](a, b)
+    except (KeyError, TypeError, ValueError) as exc:
+        raise ValueError(f"input {name!r}: bad specification {spec!r} ({exc})") from None
+
+
+# ----------------------------------------------------------------------- field access
+
+def _linkage_name(name: str) -> str:
+    """A Linkage's design name of an input ("radial_clearance": every clearance)."""
+    return "clearance" if name == CLEARANCE else name
+
+
+def field_value(mech: SliderCrank | Linkage, name: str) -> float:
+    """The value of design field `name` (SI; "radial_clearance" = R_B - R_J; a Linkage's
+    names: `design`, "radial_clearance" its smallest clearance)."""
+    if isinstance(mech, Linkage):
+        from ..model.design import design_value
+
+        return design_value(mech, _linkage_name(name))
+    if name == CLEARANCE:
+        return mech.bearing_radius - mech.journal_radius
+    return getattr(mech, name)
+
+
+def with_values(mech: SliderCrank, values: Mapping[str, float]) -> SliderCrank:
+    """`mech` with the fields `values` replaced ("radial_clearance" moves the journal
+    radius, after any new bearing radius); a Linkage through `design.linkage_with`
+    ("radial_clearance" sets every clearance)."""
+    if isinstance(mech, Linkage):
+        from ..model.design import linkage_with
+
+        return linkage_with(mech, {_linkage_name(k): v for k, v in values.items()})
+    changes = {k: float(v) for k, v in values.items() if k != CLEARANCE}
+    if CLEARANCE in values:
+        rb = changes.get("bearing_radius", mech.bearing_radius)
+        changes["journal_radius"] = rb - float(values[CLEARANCE])
+    return mech.replace(**changes)
+
+
+def _gradient_names(names: tuple[str, ...]) -> tuple[tuple[str, ...], np.ndarray]:
+    """Fields to differentiate and the chain-rule matrix: d/d(input) = J @ d/d(field)."""
+    fields = []
+    for n in names:
+        f = "journal_radius" if n == CLEARANCE else n
+        if f not in fields:
+            fields.append(f)
+    J = np.zeros((len(names), len(fields)))
+    for i, n in enumerate(names):
+        if n == CLEARANCE:
+            J[i, fields.index("journal_radius")] = -1.0       # R_J = R_B - c
+        else:
+            J[i, fields.index(n)] = 1.0
+            if n == "bearing_radius" and CLEARANCE in names:
+                J[i, fields.index("journal_radius")] = 1.0    # R_J follows R_B at fixed c
+    return tuple(fields), J
+
+
+# ----------------------------------------------------------------------- one run
+
+@dataclass(frozen=True)
+class _Task:
+    """Picklable description of the output of one design."""
+
+    output: str | Callable
+    revolution: int
+    backend: str
+    options: dict
+
+
+def _quiet(fn, *args):
+    """Call `fn` with the library's accuracy/physics warnings silenced where that is safe
+    (the main thread of a worker process; in threads the caller has silenced them): their
+    content is in the stats, which are counted."""
+    if threading.current_thread() is threading.main_thread():
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", AccuracyWarning)
+            warnings.simplefilter("ignore", PhysicsWarning)
+            return fn(*args)
+    return fn(*args)
+
+
+def _run_one(item, task: _Task) -> tuple[float, bool | None, bool, bool]:
+    """(value, chaotic, flagged, failed) of one design: a SliderCrank, or a dict of input
+    values for a function output."""
+    if callable(task.output):
+        try:
+            return float(task.output(item)), None, False, False
+        except (ValueError, ArithmeticError):
+            return math.nan, None, False, True
+    try:
+        return _quiet(_mechanism_output, item, task)
+    except (RuntimeError, ValueError):
+        return math.nan, None, False, True
+
+
+def _span(k: int) -> range:
+    """Revolutions (0-based) over which a chaotic run's statistic is taken: 2..k."""
+    return range(min(1, k - 1), k)
+
+
+def _mechanism_output(mech: SliderCrank | Linkage, task: _Task):
+    k = task.revolution
+    if isinstance(mech, Linkage) and task.output not in OUTPUTS[1:]:
+        from ..analysis.objective import _linkage_peak, parse_output
+
+        out = parse_output(mech, None if task.output == "peak" else task.output)
+        return _linkage_peak(mech, out, k, task.options)[0], None, False, False
+    if task.output == "peak" and task.options.get("accuracy") is None:
+        if task.backend == "reduced":
+            from ..solve.reduced import RATTLING, run
+
+            peaks, counters = run(mech, k, record=False, **task.options)[3:6:2]
+            chaotic = bool(counters[3] > RATTLING * k)
+            value = max(peaks[j] for j in _span(k)) if chaotic else peaks[k - 1]
+            return float(value), chaotic, chaotic, False
+        from ..solve.simulate import peak_base_force
+
+        return float(peak_base_force(mech, k, task.backend, **task.options)), None, False, \
+            False
+    from ..solve.simulate import simulate
+
+    traj = simulate(mech, k, task.backend, **task.options)
+    st = traj.stats
+    chaotic = None if st.get("periodic") is None else not st["periodic"]
+    flagged = (st.get("accuracy_ok") is False) or bool(st.get("penetration_meaningless"))
+    revs = list(_span(k)) if chaotic else [k - 1]
+    mask = np.zeros(len(traj.t), dtype=bool)
+    for j in revs:
+        mask |= traj.revolution_mask(j + 1)
+    t = traj.t[mask]
+    if task.output == "peak":
+        from ..solve.accuracy import revolution_peaks
+
+        value = float(max(revolution_peaks(traj)[j] for j in revs))
+    elif task.output == "rms_drive_moment":
+        m2 = traj.crank_moment[mask] ** 2
+        value = math.sqrt(np.sum(0.5 * (m2[1:] + m2[:-1]) * np.diff(t)) / (t[-1] - t[0]))
+    else:
+        value = float(np.max(traj.contact_force[mask]))
+    return value, chaotic, flagged, False
+
+
+def _grad_one(mech: SliderCrank, fields: tuple[str, ...], revolution: int):
+    """(peak, gradient over `fields`, kink) of one design; NaNs where it fails."""
+    from ..analysis.objective import peak_gradient
+
+    try:
+        g = _quiet(peak_gradient, mech, fields, revolution)
+    except (RuntimeError, ValueError):
+        return math.nan, np.full(len(fields), math.nan), False
+    return float(g.peak), np.asarray(g.gradient, dtype=float), bool(g.kink)
+
+
+# ----------------------------------------------------------------------- the result
+
+@dataclass(frozen=True, eq=False)
+class ToleranceResult:
+    """Outcome of `tolerance_study`.
+
+    Attributes
+    ----------
+    names : input names (design fields, "radial_clearance", or a function's arguments)
+    distributions : name -> description of its distribution
+    output : the output's name
+    sobol : {"S1", "S1_conf", "ST", "ST_conf", "S2", "S2_conf", "N", "runs", ...} or {}
+    morris : {"mu_star", "mu_star_conf", "sigma", "trajectories", "runs", ...} or {}
+    dgsm : {"nu", "bound", "poincare", "variance", "runs", "kinks", ...} or {}
+    monte_carlo : {"values", "mean", "std", "quantiles", "p_exceed", "p_exceed_ci", ...}
+    wear : one dict per wear level (radial clearance added, m) with the same statistics
+    counts : runs, failed, chaotic (not periodic), flagged (accuracy/physics) over the study
+    notes : sentences on what the counts mean for the result
+    settings : everything needed to repeat the study (seed, sizes, model, executor)
+    elapsed : wall time, s
+    """
+
+    names: tuple[str, ...]
+    distributions: dict[str, dict]
+    output: str
+    sobol: dict[str, Any] = field(default_factory=dict)
+    morris: dict[str, Any] = field(default_factory=dict)
+    dgsm: dict[str, Any] = field(default_factory=dict)
+    monte_carlo: dict[str, Any] = field(default_factory=dict)
+    wear: list[dict[str, Any]] = field(default_factory=list)
+    counts: dict[str, int] = field(default_factory=dict)
+    notes: list[str] = field(default_factory=list)
+    settings: dict[str, Any] = field(default_factory=dict)
+    elapsed: float = 0.0
+
+    def ranking(self, method: str = "sobol") -> list[str]:
+        """Inputs from the most to the least influential: by S_T ("sobol"), mu* ("morris")
+        or the DGSM bound ("dgsm")."""
+        key = {"sobol": ("sobol", "ST"), "morris": ("morris", "mu_star"),
+               "dgsm": ("dgsm", "bound")}
+        if method not in key:
+            raise ValueError(f"method must be one of {list(key)}; got {method!r}")
+        block, name = key[method]
+        values = getattr(self, block).get(name)
+        if values is None:
+            raise ValueError(f"the study did not compute {method!r}")
+        order = np.argsort(-np.asarray(values, dtype=float), kind="stable")
+        return [self.names[i] for i in order]
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain JSON-serialisable dict."""
+        return _jsonable({
+            "format": _FORMAT, "names": list(self.names), "distributions": self.distributions,
+            "output": self.output, "sobol": self.sobol, "morris": self.morris,
+            "dgsm": self.dgsm, "monte_carlo": self.monte_carlo, "wear": self.wear,
+            "counts": self.counts, "notes": self.notes, "settings": self.settings,
+            "elapsed": self.elapsed})
+
+    def to_json(self, path: str | Path) -> Path:
+        """Write the result to `path` (JSON); returns the path."""
+        path = Path(path)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(json.dumps(self.to_dict(), indent=2))
+        return path
+
+    @classmethod
+    def from_json(cls, path: str | Path) -> ToleranceResult:
+        """Read a result written by `to_json` (arrays as lists)."""
+        from .._io import read_json_object
+
+        data = read_json_object(path, "tolerance study")
+        if data.get("format") != _FORMAT:
+            raise ValueError(f"{str(path)!r} is not a tolerance study ({_FORMAT})")
+        return cls(names=tuple(data["names"]), distributions=data["distributions"],
+                   output=data["output"], sobol=data["sobol"], morris=data["morris"],
+                   dgsm=data["dgsm"], monte_carlo=data["monte_carlo"], wear=data["wear"],
+                   counts=data["counts"], notes=data["notes"], settings=data["settings"],
+                   elapsed=float(data["elapsed"]))
+
+    @property
+    def output_unit(self) -> str:
+        """The output's unit ("" for a user's function)."""
+        return OUTPUT_LABELS.get(self.output, ("", _linkage_unit(self.output)))[1]
+
+    @property
+    def output_label(self) -> str:
+        """``max |F12| over revolution 4 (N)``: what the output is, with its unit."""
+        what, unit = OUTPUT_LABELS.get(self.output, (f"max {self.output}",
+                                                     _linkage_unit(self.output)))
+        rev = self.settings.get("revolution")
+        return (what + (f" over revolution {rev}" if rev is not None else "")
+                + (f" ({unit})" if unit else ""))
+
+    def summary(self) -> str:
+        """A few lines of text: indices, probabilities, counts and notes."""
+        from ..units import number
+
+        def val(v, digits=5):
+            return number(v, digits) + (f" {self.output_unit}" if self.output_unit else "")
+
+        lines = [f"output: {self.output_label}; inputs: {', '.join(self.names)}"]
+        w = max(len(n) for n in self.names)
+        if self.sobol:
+            lines.append(f"Sobol (N = {self.sobol['N']}, {self.sobol['runs']} runs)")
+            if "S1" not in self.sobol:
+                lines.append(f"  indices not computed: {self.sobol.get('failed', 0)} runs "
+                             "failed")
+            else:
+                lines.append(f"  {'':<{w}}  {'S1 +- conf':>16}  {'ST +- conf':>16}")
+            for i, n in enumerate(self.names if "S1" in self.sobol else ()):
+                lines.append(f"  {n:<{w}}  {self.sobol['S1'][i]:7.3f} +- "
+                             f"{self.sobol['S1_conf'][i]:.3f}  {self.sobol['ST'][i]:7.3f} +- "
+                             f"{self.sobol['ST_conf'][i]:.3f}")
+        if self.morris:
+            lines.append(f"Morris ({self.morris['runs']} runs): mu* (output units per full "
+                         "range)")
+            if "mu_star" not in self.morris:
+                lines.append(f"  indices not computed: {self.morris.get('failed', 0)} runs "
+                             "failed")
+            for i, n in enumerate(self.names if "mu_star" in self.morris else ()):
+                lines.append(f"  {n:<{w}}  {self.morris['mu_star'][i]:.4g} +- "
+                             f"{self.morris['mu_star_conf'][i]:.2g}")
+        if self.dgsm:
+            lines.append(f"DGSM ({self.dgsm['runs']} gradient runs): bound on S_T")
+            for i, n in enumerate(self.names):
+                lines.append(f"  {n:<{w}}  {self.dgsm['bound'][i]:.4g}")
+        for label, mc in [("Monte Carlo", self.monte_carlo)] + [
+                (f"wear +{lv['wear'] * 1e6:.3g} \N{MICRO SIGN}m", lv) for lv in self.wear]:
+            if not mc:
+                continue
+            line = (f"{label} ({mc['runs']} runs): mean {val(mc['mean'])}, std "
+                    f"{val(mc['std'], 3)}, 5-95 % [{val(mc['quantiles']['0.05'])}, "
+                    f"{val(mc['quantiles']['0.95'])}]")
+            if mc.get("p_exceed") is not None:
+                lo, hi = mc["p_exceed_ci"]
+                line += (f", P(> {val(mc['allowable'], 6)}) = {mc['p_exceed']:.4f} "
+                         f"[{lo:.4f}, {hi:.4f}]")
+            lines.append(line)
+        c = self.counts
+        lines.append(f"runs {c.get('runs', 0)}, failed {c.get('failed', 0)}, not periodic "
+                     f"{c.get('chaotic', 0)}, flagged {c.get('flagged', 0)}")
+        lines.extend(f"NOTE: {n}" for n in self.notes)
+        return "\n".join(lines)
+
+
+def _linkage_unit(output: str) -> str:
+    """The unit of a Linkage output name ("" for anything else)."""
+    from ..analysis.objective import OUTPUT_KINDS
+
+    kind = output.partition(":")[0] if isinstance(output, str) else ""
+    return OUTPUT_KINDS[kind][1] if kind in OUTPUT_KINDS else ""
+
+
+def _jsonable(obj):
+    if isinstance(obj, dict):
+        return {str(k): _jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_jsonable(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return _jsonable(obj.tolist())
+    if isinstance(obj, (np.floating, float)):
+        return None if not math.isfinite(obj) else float(obj)
+    if isinstance(obj, np.integer):
+        return int(obj)
+    if isinstance(obj, np.bool_):
+        return bool(obj)
+    return obj
+
+
+# ----------------------------------------------------------------------- the driver
+
+class _Study:
+    """Inputs, output and executor of one study; maps unit-cube rows to output values."""
+
+    def __init__(self, names, dists, base, task, executor, workers, progress):
+        self.names, self.dists, self.base, self.task = names, dists, base, task
+        self.executor, self.workers, self.progress = executor, workers, progress
+        self.counts = {"runs": 0, "failed": 0, "chaotic": 0, "flagged": 0}
+
+    def physical(self, U: np.ndarray) -> np.ndarray:
+        U = np.atleast_2d(np.asarray(U, dtype=float))
+        return np.column_stack([self.dists[n].ppf(U[:, j]) for j, n in enumerate(self.names)])
+
+    def items(self, X: np.ndarray, extra: Mapping[str, float] | None = None) -> list:
+        rows = [dict(zip(self.names, map(float, x))) for x in X]
+        if extra:
+            rows = [{**r, **{k: r.get(k, field_value(self.base, k)) + v
+                             for k, v in extra.items()}} for r in rows]
+        if callable(self.task.output):
+            return rows
+        out = []
+        for r in rows:
+            try:
+                out.append(with_values(self.base, r))
+            except ValueError:
+                out.append(None)        # an invalid design (e.g. a normal's tail): failed
+        return out
+
+    def values(self, X: np.ndarray, desc: str, extra=None) -> tuple[np.ndarray, np.ndarray]:
+        """Output of each row of physical inputs `X`; and whether each run was chaotic."""
+        items = self.items(X, extra)
+        ok = [i for i, it in enumerate(items) if it is not None]
+        thread_safe = self.task.backend in _THREAD_SAFE_BACKENDS
+        with warnings.catch_warnings():
+            # the worker threads share this process's filters: the warnings' content is in
+            # the stats, which are counted
+            warnings.simplefilter("ignore", AccuracyWarning)
+            warnings.simplefilter("ignore", PhysicsWarning)
+            res = evaluate(_run_one, [items[i] for i in ok], (self.task,),
+                           executor=self.executor, workers=self.workers,
+                           thread_safe=thread_safe, progress=self.progress, desc=desc)
+        y = np.full(len(items), math.nan)
+        chaotic = np.zeros(len(items), dtype=bool)
+        self.counts["runs"] += len(items)
+        self.counts["failed"] += len(items) - len(ok)
+        for i, (v, c, f, failed) in zip(ok, res):
+            y[i] = v
+            chaotic[i] = bool(c)
+            self.counts["chaotic"] += bool(c)
+            self.counts["flagged"] += bool(f)
+            self.counts["failed"] += bool(failed)
+        return y, chaotic
+
+
+def _check_inputs(inputs, output, mech=None) -> tuple[tuple[str, ...], dict]:
+    if not isinstance(inputs, Mapping) or not inputs:
+        raise ValueError("inputs must be a non-empty dict {name: distribution}; "
+                         f"got {inputs!r}")
+    allowed = (*CONTINUOUS_FIELDS, CLEARANCE)
+    if isinstance(mech, Linkage) and not callable(output):
+        from ..model.design import check_names
+
+        check_names(mech, [_linkage_name(n) for n in inputs], "input")
+    for name, dist in inputs.items():
+        if not callable(output) and name not in allowed and not isinstance(mech, Linkage):
+            raise ValueError(f"unknown input {name!r}; allowed: {list(allowed)}")
+        if not isinstance(dist, _DISTRIBUTIONS):
+            raise ValueError(f"input {name!r} must be a Uniform, Normal or FitClearance; "
+                             f"got {dist!r}")
+        if isinstance(dist, FitClearance) and name != CLEARANCE and not callable(output):
+            raise ValueError(f"a FitClearance describes {CLEARANCE!r}; got it for {name!r}")
+    if not callable(output) and CLEARANCE in inputs and "journal_radius" in inputs:
+        raise ValueError(f"give either {CLEARANCE!r} or 'journal_radius', not both")
+    return tuple(inputs), dict(inputs)
+
+
+#: a Normal input is checked over mean +- NORMAL_CHECK_SIGMAS sigma (all but 5.7e-7 of its
+#: draws); rarer draws outside the field's range make invalid designs, counted as failed runs
+NORMAL_CHECK_SIGMAS = 5.0
+
+
+def _support(dist) -> tuple[float, float]:
+    """The range of values a distribution is checked over (see NORMAL_CHECK_SIGMAS)."""
+    if isinstance(dist, Normal):
+        return (dist.mean - NORMAL_CHECK_SIGMAS * dist.sigma,
+                dist.mean + NORMAL_CHECK_SIGMAS * dist.sigma)
+    if isinstance(dist, FitClearance):
+        return dist.limits
+    return dist.low, dist.high
+
+
+def _describe(dist) -> str:
+    if isinstance(dist, Normal):
+        return (f"normal({dist.mean:g}, {dist.sigma:g}) over mean +- "
+                f"{NORMAL_CHECK_SIGMAS:g} sigma")
+    if isinstance(dist, FitClearance):
+        return f"fit {dist.fit} on {dist.diameter:g} m"
+    return f"uniform [{dist.low:g}, {dist.high:g}]"
+
+
+def _check_ranges(mech: SliderCrank, names, dists, wear_levels) -> None:
+    """ValueError, before any sample is drawn, if an input's distribution or a wear level
+    leaves the valid range of a design field: every input at both ends of its range with
+    the others nominal, then every corner of the inputs' box (SliderCrank's constraints are
+    linear in the fields, so the box is valid when its corners are; at most 2**12 of
+    them), each corner with the largest wear added to its radial clearance."""
+    import itertools
+
+    ranges = {n: _support(dists[n]) for n in names}
+    for n in names:
+        for v in ranges[n]:
+            try:
+                with_values(mech, {n: v})
+            except ValueError as exc:
+                raise ValueError(f"input {n!r}: {_describe(dists[n])} reaches {v:.6g}, "
+                                 f"outside the design's valid range ({exc})") from None
+    corners = (itertools.product(*(ranges[n] for n in names)) if len(names) <= 12
+               else [tuple(r[0] for r in ranges.values()), tuple(r[1] for r in ranges.values())])
+    worst = max(wear_levels, default=None)
+    for corner in corners:
+        row = dict(zip(names, corner))
+        try:
+            with_values(mech, row)
+        except ValueError as exc:
+            raise ValueError(f"inputs {list(names)} together reach an invalid design at "
+                             f"{_short(row)} ({exc}); narrow their ranges") from None
+        if worst is not None:
+            worn = {**row, CLEARANCE: row.get(CLEARANCE, field_value(with_values(mech, row),
+                                                                    CLEARANCE)) + worst}
+            try:
+                with_values(mech, worn)
+            except ValueError as exc:
+                raise ValueError(f"wear {worst:g} m leaves the design's valid range: radial "
+                                 f"clearance {worn[CLEARANCE]:.6g} m at {_short(row)} "
+                                 f"({exc})") from None
+
+
+def _short(row: Mapping[str, float]) -> str:
+    return "{" + ", ".join(f"{k}: {v:.6g}" for k, v in row.items()) + "}"
+
+
+def _run_bytes(d: int) -> int:
+    """Bytes per run of a study held at once: its inputs (unit and physical, two float64
+    per input), its design (`_checks.DESIGN_BYTES`), its row dict and its result tuple."""
+    return 16 * d + DESIGN_BYTES + 100 * d + 250
+
+
+def study_memory(d: int, *, sobol: int = 0, second_order: bool = True, morris: int = 0,
+                 dgsm: int = 0, monte_carlo: int = 0, wear_levels: int = 0,
+                 max_memory: int | None = None) -> int:
+    """Estimated peak memory (bytes) of a tolerance study over `d` inputs: the largest
+    sample held at once (Sobol N (2 d + 2) or N (d + 2) runs, Morris r (d + 1), DGSM n,
+    Monte Carlo n) at `_run_bytes` each, plus the kept outputs of every run;
+    `MemoryLimitError` naming the sample size above `max_memory` (None: the default)."""
+    sizes = {"sobol": sobol, "morris": morris, "dgsm": dgsm, "monte_carlo": monte_carlo}
+    runs = {"sobol": sobol * ((2 * d + 2) if second_order else (d + 2)),
+            "morris": morris * (d + 1), "dgsm": dgsm, "monte_carlo": monte_carlo}
+    outputs = 8 * (sum(runs.values()) + monte_carlo * wear_levels)
+    name, largest = max(runs.items(), key=lambda kv: kv[1])
+    need = largest * _run_bytes(d) + outputs
+    check_memory(f"{name}={sizes[name]} ({largest} runs over {d} inputs): the study needs",
+                 need, max_memory, f"use a smaller {name} sample")
+    return need
+
+
+def _count(name: str, value, minimum: int) -> int:
+    if not isinstance(value, numbers.Integral) or isinstance(value, bool) or value < minimum:
+        raise ValueError(f"{name} must be an integer >= {minimum}; got {value!r}")
+    return int(value)
+
+
+def _stats(y: np.ndarray, chaotic: np.ndarray, allowable: float | None,
+           confidence: float) -> dict[str, Any]:
+    from scipy.stats import binomtest
+
+    good = y[np.isfinite(y)]
+    out: dict[str, Any] = {"runs": len(y), "failed": int(len(y) - len(good)),
+                           "chaotic_fraction": float(np.mean(chaotic)) if len(y) else 0.0,
+                           "values": y}
+    if not len(good):
+        return {**out, "mean": math.nan, "std": math.nan,
+                "quantiles": {q: math.nan for q in ("0.05", "0.5", "0.95")}}
+    out.update(mean=float(np.mean(good)), std=float(np.std(good, ddof=1)) if len(good) > 1
+               else 0.0, quantiles={str(q): float(np.quantile(good, q))
+                                    for q in (0.05, 0.5, 0.95)})
+    out["allowable"] = allowable
+    if allowable is not None:
+        k = int(np.count_nonzero(good > allowable))
+        ci = binomtest(k, len(good)).proportion_ci(confidence, method="exact")
+        out.update(p_exceed=k / len(good), p_exceed_ci=[float(ci.low), float(ci.high)],
+                   exceed_count=k)
+    else:
+        out["p_exceed"] = None
+    return out
+
+
+def tolerance_study(inputs: Mapping[str, Any], mech: SliderCrank | None = None,
+                    output: str | Callable = "peak", revolution: int = 4, *,
+                    sobol: int = 256, second_order: bool = True, morris: int = 0,
+                    morris_levels: int = 4, dgsm: int = 0, monte_carlo: int = 0,
+                    allowable: float | None = None, wear: Any = None,
+                    confidence: float = 0.95, bootstrap: int = 200, seed: int = 0,
+                    executor=None, workers: int = 2, progress: bool = True,
+                    backend: str = "reduced", **options) -> ToleranceResult:
+    """Global sensitivity and exceedance probability of a run's output over tolerances.
+
+    Parameters
+    ----------
+    inputs : dict
+        name -> `Uniform`, `Normal` or `FitClearance`. Names are continuous SliderCrank
+        fields or "radial_clearance" (R_B - R_J, set by moving the journal radius); with a
+        function `output`, any names (its arguments). For a Linkage: its case's overrides
+        or dotted paths of its description (`design`; e.g. "coupler_length",
+        "crank_coupler_clearance", "coupler.mass"), "radial_clearance" every clearance.
+    mech : SliderCrank or Linkage, optional
+        Nominal design; the inputs replace its fields (default: the paper's case).
+    output : str or callable
+        "peak" (max |F12| over revolution `revolution`, peak-only run), "rms_drive_moment"
+        (N m) or "max_contact_force" (N) over that revolution (recorded runs); or a
+        module-level function of a dict {name: value} returning a float. For a Linkage
+        also any output of `objective.parse_output` ("shaking_force",
+        "contact_force:<joint>", ...; "peak" is its default, the crank pivot's |reaction|),
+        its peak over the revolution (`objective.peak_output`).
+    revolution : int
+        Crank revolution k (1-based) of the output (revolutions 1..k are simulated).
+    sobol : int
+        Base sample size N of Sobol indices (a power of 2; 0: none). Runs: N (2 d + 2)
+        with `second_order`, else N (d + 2).
+    morris : int
+        Morris trajectories r (0: none); runs r (d + 1).
+    morris_levels : int
+        Grid levels of Morris' design (even, >= 2).
+    dgsm : int
+        Gradient samples for DGSM (0: none; output "peak" with the reduced backend only).
+    monte_carlo : int
+        Monte Carlo samples of the output distribution (0: none).
+    allowable : float, optional
+        Load whose exceedance probability P(Y > allowable) is estimated (with its
+        Clopper-Pearson interval at `confidence`).
+    wear : sequence of float, optional
+        Radial wear amounts in m added to the clearance; each level repeats the Monte Carlo
+        (the same `monte_carlo` samples, common random numbers).
+    confidence : float
+        Level of every confidence interval, in (0, 1).
+    bootstrap : int
+        Bootstrap resamples of SALib's intervals and of the DGSM means.
+    seed : int
+        Seed of every sample and bootstrap (>= 0): the same seed gives the same result on
+        every executor.
+    executor, workers :
+        As in `executor.evaluate` (None: a local pool of `workers` threads).
+    progress : bool
+        tqdm bars of the runs.
+    backend : str
+        Model of the mechanism outputs ("reduced" default).
+    **options
+        Passed to the backend (e.g. ``rtol``); the library's default accuracy otherwise.
+
+    Returns
+    -------
+    ToleranceResult
+    """
+    from ..solve.simulate import BACKENDS
+
+    t_start = time.perf_counter()
+    mech = SliderCrank() if mech is None else mech
+    if not isinstance(mech, (SliderCrank, Linkage)):
+        raise ValueError(f"mech must be a SliderCrank or a Linkage; got {type(mech).__name__}")
+    if isinstance(mech, Linkage) and not callable(output) and output not in OUTPUTS:
+        from ..analysis.objective import parse_output
+
+        parse_output(mech, output)      # ValueError naming the allowed outputs
+        if backend != "reduced":
+            raise ValueError(f"output {output!r} of a Linkage needs backend='reduced' (its "
+                             f"generated model); got {backend!r}")
+    elif not callable(output) and output not in OUTPUTS:
+        raise ValueError(f"output must be one of {list(OUTPUTS)} or a function; "
+                         f"got {output!r}")
+    names, dists = _check_inputs(inputs, output, mech)
+    if backend not in BACKENDS:
+        raise ValueError(f"backend must be one of {sorted(BACKENDS)}; got {backend!r}")
+    if isinstance(mech, Linkage) and not callable(output) and output == "peak" \
+            and backend != "reduced":
+        raise ValueError(f"output 'peak' of a Linkage needs backend='reduced'; got {backend!r}")
+    revolution = _count("revolution", revolution, 1)
+    check_revolutions_memory(revolution, options.get("max_memory"), name="revolution")
+    sobol = _count("sobol", sobol, 0)
+    if sobol and sobol & (sobol - 1):
+        raise ValueError(f"sobol must be 0 or a power of 2 (Sobol sequences); got {sobol}")
+    morris = _count("morris", morris, 0)
+    morris_levels = _count("morris_levels", morris_levels, 2)
+    if morris_levels % 2:
+        raise ValueError(f"morris_levels must be even; got {morris_levels}")
+    dgsm = _count("dgsm", dgsm, 0)
+    monte_carlo = _count("monte_carlo", monte_carlo, 0)
+    bootstrap = _count("bootstrap", bootstrap, 10)
+    seed = _count("seed", seed, 0)
+    confidence = _real("confidence", confidence)
+    if not 0.0 < confidence < 1.0:
+        raise ValueError(f"confidence must be in (0, 1); got {confidence!r}")
+    if allowable is not None:
+        allowable = _real("allowable", allowable)
+    if dgsm and isinstance(mech, Linkage):
+        raise ValueError("dgsm takes a SliderCrank (the DDM gradients of its peak); for a "
+                         "Linkage use sobol, morris or monte_carlo")
+    if dgsm and (callable(output) or output != "peak" or backend != "reduced"):
+        raise ValueError("dgsm needs output='peak' and backend='reduced' (the exact "
+                         "gradients of the peak, peak_gradient)")
+    wear_levels = []
+    if wear is not None:
+        if callable(output):
+            raise ValueError("wear applies to the mechanism's radial clearance; not to a "
+                             "function output")
+        try:
+            wear_levels = [_real("wear", w) for w in wear]
+        except TypeError:
+            raise ValueError(f"wear must be a sequence of radial wear amounts in m; "
+                             f"got {wear!r}") from None
+        if not wear_levels or min(wear_levels) < 0:
+            raise ValueError(f"wear must be a non-empty sequence of amounts >= 0 m; "
+                             f"got {wear!r}")
+        if not monte_carlo:
+            raise ValueError("wear needs monte_carlo > 0 (the samples of each level)")
+    if not (sobol or morris or dgsm or monte_carlo):
+        raise ValueError("nothing to do: set sobol, morris, dgsm or monte_carlo > 0")
+    if not callable(output):
+        with_values(mech, {n: field_value(mech, n) for n in names})   # checks the nominal
+        _check_ranges(mech, names, dists, wear_levels)
+    study_memory(len(names), sobol=sobol, second_order=second_order, morris=morris,
+                 dgsm=dgsm, monte_carlo=monte_carlo, wear_levels=len(wear_levels),
+                 max_memory=options.get("max_memory"))
+
+    from SALib.analyze import morris as morris_analyze
+    from SALib.analyze import sobol as sobol_analyze
+    from SALib.sample import morris as morris_sample
+    from SALib.sample import sobol as sobol_sample
+
+    task = _Task(output=output, revolution=revolution, backend=backend,
+                 options=dict(options))
+    study = _Study(names, dists, mech, task, executor, workers, progress)
+    d = len(names)
+    unit = {"num_vars": d, "names": list(names), "bounds": [[0.0, 1.0]] * d}
+    rng = np.random.default_rng(seed)
+    res: dict[str, Any] = {}
+    chaotic_any = []
+
+    if sobol:
+        U = sobol_sample.sample(unit, sobol, calc_second_order=second_order, seed=seed)
+        y, ch = study.values(study.physical(U), "Sobol")
+        chaotic_any.append(ch)
+        base = {"N": sobol, "runs": len(y), "failed": int(np.count_nonzero(~np.isfinite(y))),
+                "chaotic_fraction": float(np.mean(ch)),
+                "values_A": y[::(2 * d + 2) if second_order else d + 2]}
+        if np.all(np.isfinite(y)):
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", RuntimeWarning)
+                Si = sobol_analyze.analyze(unit, y, calc_second_order=second_order,
+                                           num_resamples=bootstrap, conf_level=confidence,
+                                           seed=seed, print_to_console=False)
+            base.update({k: np.asarray(Si[k]) for k in ("S1", "S1_conf", "ST", "ST_conf")})
+            if second_order:
+                base.update(S2=np.asarray(Si["S2"]), S2_conf=np.asarray(Si["S2_conf"]))
+            base["variance"] = float(np.var(y, ddof=1))
+        res["sobol"] = base
+
+    if morris:
+        U = morris_sample.sample(unit, morris, num_levels=morris_levels, seed=seed)
+        y, ch = study.values(study.physical(U), "Morris")
+        chaotic_any.append(ch)
+        base = {"trajectories": morris, "levels": morris_levels, "runs": len(y),
+                "failed": int(np.count_nonzero(~np.isfinite(y)))}
+        if np.all(np.isfinite(y)):
+            Mi = morris_analyze.analyze(unit, U, y, num_resamples=bootstrap,
+                                        conf_level=confidence, num_levels=morris_levels,
+                                        seed=seed, print_to_console=False)
+            base.update({k: np.asarray(Mi[k], dtype=float)
+                         for k in ("mu_star", "mu_star_conf", "sigma", "mu")})
+        res["morris"] = base
+
+    if dgsm:
+        res["dgsm"] = _dgsm(study, dgsm, seed, bootstrap, confidence)
+
+    if monte_carlo:
+        U = rng.random((monte_carlo, d))
+        X = study.physical(U)
+        y, ch = study.values(X, "Monte Carlo")
+        chaotic_any.append(ch)
+        res["monte_carlo"] = _stats(y, ch, allowable, confidence)
+        res["wear"] = []
+        for w in wear_levels:
+            yw, chw = study.values(X, f"wear +{w * 1e6:.3g} um", extra={CLEARANCE: w})
+            res["wear"].append({"wear": w, **_stats(yw, chw, allowable, confidence)})
+
+    notes = _notes(study.counts, res, names, output)
+    return ToleranceResult(
+        names=names, distributions={n: dists[n].describe() for n in names},
+        output=output if isinstance(output, str) else getattr(output, "__name__", "function"),
+        sobol=res.get("sobol", {}), morris=res.get("morris", {}), dgsm=res.get("dgsm", {}),
+        monte_carlo=res.get("monte_carlo", {}), wear=res.get("wear", []),
+        counts=dict(study.counts), notes=notes,
+        settings={"revolution": revolution, "backend": backend, "options": dict(options),
+                  "sobol": sobol, "second_order": second_order, "morris": morris,
+                  "morris_levels": morris_levels, "dgsm": dgsm, "monte_carlo": monte_carlo,
+                  "allowable": allowable, "wear": wear_levels, "confidence": confidence,
+                  "bootstrap": bootstrap, "seed": seed, "mechanism": mech.to_dict(),
+                  **({"case": mech.case, "overrides": dict(mech.overrides)}
+                     if isinstance(mech, Linkage) and mech.case is not None else {}),
+                  "executor": _executor_name(executor, workers)},
+        elapsed=time.perf_counter() - t_start)
+
+
+def _executor_name(executor, workers) -> str:
+    if executor is None or isinstance(executor, str):
+        return f"{executor or 'threads'}({workers} workers)"
+    from .executor import _describe_executor
+
+    return _describe_executor(executor, None)
+
+
+def _dgsm(study: _Study, n: int, seed: int, bootstrap: int, confidence: float) -> dict:
+    """DGSM nu_i = E[(dY/dx_i)^2] over `n` quasi-random designs (scrambled Sobol), and the
+    bound C_i nu_i / V on S_T,i with V the variance of the same sample's peaks."""
+    from scipy.stats import qmc
+
+    names = study.names
+    fields, J = _gradient_names(names)
+    U = qmc.Sobol(len(names), scramble=True, seed=seed).random(n)
+    mechs = study.items(study.physical(U))
+    if any(m is None for m in mechs):
+        raise ValueError("a DGSM sample point is not a valid mechanism; narrow the inputs")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", AccuracyWarning)
+        warnings.simplefilter("ignore", PhysicsWarning)
+        res = evaluate(_grad_one, mechs, (fields, study.task.revolution),
+                       executor=study.executor, workers=study.workers, progress=study.progress,
+                       desc="DGSM")
+    peaks = np.array([r[0] for r in res])
+    grads = np.array([J @ r[1] for r in res])         # (n, d) d(peak)/d(input)
+    kinks = int(sum(r[2] for r in res))
+    ok = np.isfinite(peaks) & np.all(np.isfinite(grads), axis=1)
+    study.counts["runs"] += n
+    study.counts["failed"] += int(np.count_nonzero(~ok))
+    g2 = grads[ok] ** 2
+    nu = g2.mean(axis=0)
+    V = float(np.var(peaks[ok], ddof=1))
+    C = np.array([study.dists[nm].poincare for nm in names])
+    rng = np.random.default_rng(seed)
+    boot = np.array([g2[rng.integers(0, len(g2), len(g2))].mean(axis=0)
+                     for _ in range(bootstrap)])
+    alpha = (1.0 - confidence) / 2.0
+    return {"nu": nu, "nu_ci": np.quantile(boot, [alpha, 1 - alpha], axis=0),
+            "poincare": C, "variance": V, "bound": C * nu / V, "runs": n,
+            "failed": int(np.count_nonzero(~ok)), "kinks": kinks,
+            "gradient_fields": list(fields)}
+
+
+def _notes(counts, res, names, output) -> list[str]:
+    notes = []
+    if counts["chaotic"]:
+        notes.append(
+            f"{counts['chaotic']} of {counts['runs']} runs are not periodic (a rattling "
+            "contact or stats['periodic'] False): their output is the statistic over "
+            "revolutions 2..k (max of the per-revolution peaks, RMS over those revolutions), "
+            "not revolution k alone; the indices mix the two regimes")
+    if counts["flagged"]:
+        notes.append(
+            f"{counts['flagged']} runs are flagged by the accuracy or physics checks "
+            "(stats['accuracy_ok'] False or penetration_meaningless; for output 'peak': a "
+            "rattling contact): their values may miss the stated accuracy")
+    if counts["failed"]:
+        notes.append(f"{counts['failed']} runs failed (invalid design or integration "
+                     "failure); indices are not computed for a method with a failed run")
+    if res.get("dgsm") and res.get("dgsm", {}).get("kinks"):
+        notes.append(f"{res['dgsm']['kinks']} DGSM designs sit at a kink of the peak (two "
+                     "maxima tie); their gradient is a one-sided value")
+    return notes
