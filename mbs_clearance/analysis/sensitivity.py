@@ -28,7 +28,12 @@ from .._checks import (
     check_times,
 )
 from ..laws.registry import FRICTION_SLOTS
-from ..model.mechanism import CONTINUOUS_FIELDS, SliderCrank, check_field_names
+from ..model.mechanism import (  # noqa: F401 - reference_value public here too
+    CONTINUOUS_FIELDS,
+    SliderCrank,
+    check_field_names,
+    reference_value,
+)
 from ..numerics.integrator import METHODS
 from ..solve import reduced
 from ..solve.linkage_ddm import independent_directions  # noqa: F401  (public here too)
@@ -299,16 +304,6 @@ def _check_parameters(parameters) -> tuple[str, ...]:
     if len(set(names)) != len(names):
         raise ValueError(f"parameters must not repeat a name; got {list(names)}")
     return names
-
-
-def reference_value(mech: SliderCrank, name: str) -> float:
-    """Value b0 of a design parameter (the derived value where the field is None)."""
-    derived = {"contact_stiffness": mech.stiffness,
-               "crank_inertia": mech.crank_inertia_value,
-               "coupler_inertia": mech.coupler_inertia_value}
-    if name in derived:
-        return float(derived[name])
-    return float(getattr(mech, name))
 
 
 #: the SliderCrank's fields as the description's parameters (`cases.from_slider_crank`):

@@ -32,7 +32,7 @@ import numbers
 from collections.abc import Iterable, Mapping
 
 from .linkage import GROUND, Linkage
-from .mechanism import SliderCrank
+from .mechanism import SliderCrank, reference_value
 
 __all__ = ["design_names", "check_names", "design_value", "linkage_with", "direction", "design_at"]
 
@@ -99,8 +99,6 @@ def design_value(linkage: Linkage, name: str) -> float:
     table = _case_table(linkage)
     if name in table:
         if linkage.case == "paper_slider_crank":
-            from ..analysis.sensitivity import reference_value
-
             return reference_value(SliderCrank().replace(**linkage.overrides), name)
         value = linkage.overrides.get(name, table[name])
         if value is None and name.endswith("_inertia"):

@@ -256,3 +256,13 @@ def check_field_names(names: Any, allowed: tuple[str, ...] | None = None) -> Non
 def _check_number(name: str, value: Any, allowed: str, ok) -> None:
     if not _is_real(value) or not math.isfinite(value) or not ok(value):
         raise ValueError(f"{name} must be {allowed}; got {value!r}")
+
+
+def reference_value(mech: SliderCrank, name: str) -> float:
+    """Value b0 of a design parameter (the derived value where the field is None)."""
+    derived = {"contact_stiffness": mech.stiffness,
+               "crank_inertia": mech.crank_inertia_value,
+               "coupler_inertia": mech.coupler_inertia_value}
+    if name in derived:
+        return float(derived[name])
+    return float(getattr(mech, name))
