@@ -292,6 +292,9 @@ def add_mechanism_options(parser: argparse.ArgumentParser) -> None:
     group.add_argument("--config", metavar="FILE.json",
                        help="JSON object of SliderCrank fields; options below override it "
                             "(default: none, the paper's values)")
+    group.add_argument("--clearance", type=_float, default=None, metavar="X",
+                       help="radial clearance of the clearance joint(s) in m, the same as "
+                            "--set clearance=X (default: the case's; the paper's 0.01 mm)")
     defaults = SliderCrank()
     for f in dataclasses.fields(SliderCrank):
         symbol, unit, _ = PARAMETER_INFO[f.name]
@@ -320,18 +323,48 @@ def add_mechanism_options(parser: argparse.ArgumentParser) -> None:
 
 
 def mechanism_from_args(args: argparse.Namespace) -> SliderCrank:
-    """SliderCrank from --config and the per-field options (ValueError on bad values).
+    """SliderCrank from --config, the per-field options and --set (ValueError on bad values).
 
-    An option given as ``none`` sets its field to None (the derived value), also over a value
-    from the config file.
+    The per-field options are aliases of --set NAME=VALUE; ``none`` sets a field to None (the
+    derived value), also over a value from the config file. --clearance (or --set
+    clearance=X) sets the journal radius to the bearing radius minus X.
     """
-    base = SliderCrank.from_json(args.config) if args.config else SliderCrank()
-    changes = {}
+    base = SliderCrank.from_json(args.config) if getattr(args, "config", None) else SliderCrank()
+    changes = _mechanism_changes(args)
+    clearance = changes.pop("clearance", None)
+    unknown = sorted(set(changes) - {f.name for f in dataclasses.fields(SliderCrank)})
+    if unknown:
+        raise ValueError(f"--set {unknown[0]}: not a field of the paper's slider-crank; "
+                         f"allowed: {', '.join(f.name for f in dataclasses.fields(SliderCrank))}"
+                         f", clearance")
+    mech = base.replace(**changes)
+    if clearance is not None:
+        if not isinstance(clearance, float) or not 0.0 < clearance < mech.bearing_radius:
+            raise ValueError(f"clearance must be in (0, bearing_radius {mech.bearing_radius!r} "
+                             f"m); got {clearance!r}")
+        mech = mech.replace(journal_radius=mech.bearing_radius - clearance)
+    return mech
+
+
+def _mechanism_changes(args: argparse.Namespace) -> dict:
+    """NAME -> value of the per-field options (--crank-length ..., --clearance) and --set,
+    one dictionary: the options are aliases of --set. ValueError for a name given twice."""
+    changes: dict = {}
     for f in dataclasses.fields(SliderCrank):
-        value = getattr(args, f.name)
+        value = getattr(args, f.name, None)
         if value is not None:
             changes[f.name] = None if value is DERIVED else value
-    return base.replace(**changes)
+    if getattr(args, "clearance", None) is not None:
+        changes["clearance"] = args.clearance
+    options = set(changes)
+    for name, value in getattr(args, "set", None) or []:
+        if name in options:
+            option = "--" + name.replace("_", "-")
+            raise ValueError(f"{name} given twice: {option} is --set {name}; give one")
+        if name in changes:
+            raise ValueError(f"--set {name} given twice")
+        changes[name] = value
+    return changes
 
 
 def _case_lines() -> str:
@@ -375,43 +408,35 @@ def gene_bounds(text: str) -> tuple[str, tuple[float, float]]:
     return name.strip(), bounds
 
 
-def _mechanism_options_given(args: argparse.Namespace) -> list[str]:
-    given = ["--config"] if getattr(args, "config", None) else []
-    given += ["--" + f.name.replace("_", "-") for f in dataclasses.fields(SliderCrank)
-              if getattr(args, f.name, None) is not None]
-    return given
-
-
 def linkage_from_args(args: argparse.Namespace):
-    """The `Linkage` of --case NAME (with its --set overrides) or --description FILE, or None
-    when neither is given (the SliderCrank options then apply). ValueError on bad input."""
+    """The `Linkage` of --case NAME or --description FILE with the --set values (and the
+    per-field options, aliases of --set), or None when neither is given (the paper's
+    SliderCrank then, `mechanism_from_args`). A case's --set names are its overrides (and
+    'clearance'); a description's are its dotted paths (`coupler.mass`, 'clearance',
+    '<joint>.clearance'). ValueError on bad input."""
     case = getattr(args, "case", None)
     description = getattr(args, "description", None)
-    overrides = getattr(args, "set", None) or []
-    if overrides and case is None:
-        raise ValueError("--set applies to a --case only (a --description file holds its own "
-                         "values)")
     if case is None and description is None:
         return None
-    given = _mechanism_options_given(args)
-    if given:
-        raise ValueError(f"the SliderCrank option(s) {', '.join(given)} apply to the paper's "
-                         f"slider-crank only, not to --{'case' if case else 'description'}; "
-                         f"change a case with --set NAME=VALUE")
+    if getattr(args, "config", None):
+        raise ValueError(f"--config holds SliderCrank fields, for the paper's slider-crank "
+                         f"only, not for --{'case' if case else 'description'}")
+    changes = _mechanism_changes(args)
     if description is not None:
         from .model.linkage import Linkage
 
-        return Linkage.from_file(description)
-    from .model.cases import CASES
+        linkage = Linkage.from_file(description)
+        if not changes:
+            return linkage
+        from .model.design import linkage_with
 
-    changes = {}
-    for name, value in overrides:
-        if name in changes:
-            raise ValueError(f"--set {name} given twice")
-        changes[name] = value
-    linkage = CASES[case](**changes)
+        linkage = linkage_with(linkage, changes)
+    else:
+        from .model.cases import CASES
+
+        linkage = CASES[case](**changes)
     if changes:
-        linkage.assemble()      # overrides that cannot close the loops: refused before any work
+        linkage.assemble()      # values that cannot close the loops: refused before any work
     return linkage
 
 
@@ -737,8 +762,10 @@ def add_linkage_options(p: argparse.ArgumentParser) -> None:
                         help="a linkage described in FILE, .json or .toml "
                              "(mbs_clearance.Linkage.to_dict's form; default: none)")
     p.add_argument("--set", type=case_override, action="append", metavar="NAME=VALUE",
-                   help="override a value of the --case (repeatable), e.g. --set "
-                        "clearance=1e-4 (default: none)")
+                   help="set a value (repeatable): a field of the paper's slider-crank, an "
+                        "override of the --case, or a dotted path of the --description, and "
+                        "'clearance'; e.g. --set clearance=1e-4. The mechanism options "
+                        "below are aliases of it (default: none)")
 
 
 def add_settled_option(p: argparse.ArgumentParser) -> None:

@@ -135,9 +135,9 @@ def test_command_takes_a_named_case(tmp_path, capsys):
     assert "first impact crank_coupler" in text and "first impact coupler_slider" in text
     assert out.stat().st_size > 10_000
     with pytest.raises(SystemExit) as exc:
-        compare_command(["--case", "four_bar", "--crank-length", "0.1", "--no-plot"])
+        compare_command(["--case", "four_bar", "--journal-radius", "0.05", "--no-plot"])
     assert exc.value.code == 2
-    assert "apply to the paper's slider-crank only" in capsys.readouterr().err
+    assert "four_bar: unknown override(s) ['journal_radius']" in capsys.readouterr().err
 
 
 @pytest.mark.slow

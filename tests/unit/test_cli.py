@@ -592,15 +592,17 @@ def _toml(data, prefix=""):
     (["--case", "nope"], "argument --case: invalid choice: 'nope'"),
     (["--case", "four_bar", "--description", "x.json"],
      "argument --description: not allowed with argument --case"),
-    (["--set", "clearance=1e-4"], "--set applies to a --case only"),
+    (["--set", "clerance=1e-4"], "--set clerance: not a field of the paper's slider-crank"),
     (["--case", "four_bar", "--set", "clearance"], "argument --set: must be NAME=VALUE"),
     (["--case", "four_bar", "--set", "clerance=1e-4"],
      "four_bar: unknown override(s) ['clerance']; allowed: ['bearing_radius', 'clearance'"),
     (["--case", "four_bar", "--set", "clearance=-1"], "four_bar: clearance must be > 0 m"),
     (["--case", "four_bar", "--set", "clearance=1e-4", "--set", "clearance=2e-4"],
      "--set clearance given twice"),
-    (["--case", "four_bar", "--crank-length", "0.1"],
-     "the SliderCrank option(s) --crank-length apply to the paper's slider-crank only"),
+    (["--case", "four_bar", "--journal-radius", "0.05"],
+     "four_bar: unknown override(s) ['journal_radius']"),
+    (["--case", "four_bar", "--clearance", "1e-4", "--set", "clearance=2e-4"],
+     "clearance given twice"),
     (["--description", "/nonexistent.json"], "cannot read linkage file '/nonexistent.json'"),
     (["--case", "four_bar", "--plot", "f.png"], "--plot draws the paper's slider-crank only"),
 ])
@@ -885,7 +887,8 @@ def test_lyapunov_prints_the_exponent_with_units_and_its_sign(case, capsys):
      "--transient must be between 0 and --revolutions - 1 (3); got 4"),
     (["--revolutions", "1"], "argument --revolutions: must be an integer >= 2; got 1"),
     (["--memory", "keep"], "argument --memory: invalid choice: 'keep'"),
-    (["--case", "four_bar", "--crank-length", "0.1"], "apply to the paper's slider-crank"),
+    (["--case", "four_bar", "--journal-radius", "0.05"],
+     "four_bar: unknown override(s) ['journal_radius']"),
 ])
 def test_lyapunov_bad_input_is_one_line_before_any_run(argv, message, capsys, monkeypatch):
     import importlib
@@ -916,3 +919,35 @@ def test_simulate_accuracy_prints_the_runs_estimate(capsys):
     assert exc.value.code == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "give accuracy or rtol, not both" in err, err
+
+
+def test_mechanism_options_are_aliases_of_set(tmp_path):
+    """One option system: a SliderCrank option, --clearance and --set NAME=VALUE give the
+    same design, for the paper's slider-crank, a named case and a description."""
+    from mbs_clearance import SliderCrank
+    from mbs_clearance.cli import build_parser, linkage_from_args, mechanism_from_args
+    from mbs_clearance.model.cases import four_bar
+
+    parse = build_parser().parse_args
+    paper = SliderCrank()
+    by_flag = mechanism_from_args(parse(["simulate", "--crank-length", "0.06",
+                                         "--clearance", "2e-5"]))
+    by_set = mechanism_from_args(parse(["simulate", "--set", "crank_length=0.06",
+                                        "--set", "clearance=2e-5"]))
+    assert by_flag == by_set
+    assert by_flag.crank_length == 0.06
+    assert by_flag.journal_radius == pytest.approx(paper.bearing_radius - 2e-5, abs=1e-15)
+    case = linkage_from_args(parse(["simulate", "--case", "four_bar", "--coupler-length",
+                                    "4.2", "--clearance", "1e-4"]))
+    same = linkage_from_args(parse(["simulate", "--case", "four_bar", "--set",
+                                    "coupler_length=4.2", "--set", "clearance=1e-4"]))
+    assert case.to_dict() == same.to_dict() == four_bar(coupler_length=4.2,
+                                                          clearance=1e-4).to_dict()
+    assert case.overrides == {"coupler_length": 4.2, "clearance": 1e-4}
+    path = tmp_path / "four_bar.json"
+    path.write_text(__import__("json").dumps(four_bar().to_dict()))
+    desc = linkage_from_args(parse(["simulate", "--description", str(path), "--set",
+                                    "coupler.mass=1.5", "--clearance", "2e-4"]))
+    assert desc.parameter_value("coupler.mass") == 1.5
+    assert min(j.clearance for j in desc.clearance_joints) == pytest.approx(2e-4, rel=1e-12)
+    assert max(j.clearance for j in desc.clearance_joints) == pytest.approx(2e-4, rel=1e-12)
