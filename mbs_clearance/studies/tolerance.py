@@ -26,6 +26,12 @@ dask). Runs whose motion is not periodic (a rattling contact, `reduced.RATTLING`
 revolution k alone. Runs flagged by the accuracy or physics checks (``accuracy_ok`` False,
 ``penetration_meaningless``) are counted and reported.
 
+The study is four steps, as in SALib, each a function of its own: `describe` (the inputs,
+the nominal design, the output: a `ToleranceProblem`, checked before any run), `sample` (a
+`ToleranceSample` of one method: "sobol", "morris" or "monte_carlo"), `evaluate` (the runs:
+an `Evaluation`) and `analyse` (the indices or statistics of that method).
+`tolerance_study` does the four for every method asked, plus DGSM and wear, in one call.
+
 Design fields are read and written through `field_value` / `with_values` only (name -> value,
 replace), so that a general mechanism description can take the place of `SliderCrank`.
 """
@@ -50,10 +56,13 @@ from .._warnings import AccuracyWarning, PhysicsWarning
 from ..model.fits import iso_fit
 from ..model.linkage import Linkage
 from ..model.mechanism import CONTINUOUS_FIELDS, SliderCrank
-from .executor import _THREAD_SAFE_BACKENDS, evaluate
+from .executor import _THREAD_SAFE_BACKENDS
+from .executor import evaluate as _evaluate_all
 
 __all__ = ["tolerance_study", "ToleranceResult", "Uniform", "Normal", "FitClearance",
-           "OUTPUTS", "field_value", "with_values", "band", "read_inputs"]
+           "OUTPUTS", "field_value", "with_values", "band", "read_inputs",
+           "ToleranceProblem", "ToleranceSample", "Evaluation", "describe", "sample",
+           "evaluate", "analyse", "SAMPLERS"]
 
 #: built-in outputs of a run: the rev-k peak of |F12| (peak-only run), the RMS of the drive
 #: moment over revolution k, the max contact force over revolution k (recorded runs)
@@ -598,7 +607,7 @@ class _Study:
             # the stats, which are counted
             warnings.simplefilter("ignore", AccuracyWarning)
             warnings.simplefilter("ignore", PhysicsWarning)
-            res = evaluate(_run_one, [items[i] for i in ok], (self.task,),
+            res = _evaluate_all(_run_one, [items[i] for i in ok], (self.task,),
                            executor=self.executor, workers=self.workers,
                            thread_safe=thread_safe, progress=self.progress, desc=desc)
         y = np.full(len(items), math.nan)
@@ -756,6 +765,218 @@ def _stats(y: np.ndarray, chaotic: np.ndarray, allowable: float | None,
     return out
 
 
+# ------------------------------------------------------- describe, sample, evaluate, analyse
+
+#: the sampling methods of `sample`, each with what `analyse` computes from its runs
+SAMPLERS = {"sobol": "Sobol first-, total- (and second-) order indices (SALib, Saltelli)",
+            "morris": "Morris' elementary effects mu*, sigma (SALib)",
+            "monte_carlo": "the output's distribution and P(Y > allowable)"}
+
+
+@dataclass(frozen=True)
+class ToleranceProblem:
+    """What a tolerance study varies and what it measures (`describe`): the input names and
+    their distributions, the nominal design, the output and the runs' settings."""
+
+    names: tuple[str, ...]
+    distributions: dict[str, Any]
+    mech: SliderCrank | Linkage
+    output: str | Callable
+    revolution: int = 4
+    backend: str = "reduced"
+    options: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def unit_problem(self) -> dict[str, Any]:
+        """SALib's problem over the unit cube (every input is sampled there and mapped
+        through its distribution's quantile function)."""
+        d = len(self.names)
+        return {"num_vars": d, "names": list(self.names), "bounds": [[0.0, 1.0]] * d}
+
+    def physical(self, unit: np.ndarray) -> np.ndarray:
+        """Rows of the unit cube -> rows of input values (SI)."""
+        U = np.atleast_2d(np.asarray(unit, dtype=float))
+        return np.column_stack([self.distributions[n].ppf(U[:, j])
+                                for j, n in enumerate(self.names)])
+
+
+@dataclass
+class ToleranceSample:
+    """Designs of one method (`sample`): `unit` rows in the unit cube, `values` the inputs
+    (SI), `settings` the method's sizes and seed."""
+
+    method: str
+    unit: np.ndarray
+    values: np.ndarray
+    settings: dict[str, Any] = field(default_factory=dict)
+
+
+@dataclass
+class Evaluation:
+    """The runs of a sample (`evaluate`): the output of each design (nan: failed), whether
+    its motion was not periodic, and the counts of runs, failed, chaotic and flagged runs."""
+
+    y: np.ndarray
+    chaotic: np.ndarray
+    counts: dict[str, int]
+    wear: float = 0.0
+
+
+def describe(inputs: Mapping[str, Any], mech: SliderCrank | Linkage | None = None,
+             output: str | Callable = "peak", revolution: int = 4, *,
+             backend: str = "reduced", **options) -> ToleranceProblem:
+    """The problem of a tolerance study, checked before any run: `inputs` (name ->
+    `Uniform`, `Normal` or `FitClearance`), the nominal `mech` (default: the paper's
+    case), the `output` over `revolution`, the `backend` and its options (see
+    `tolerance_study` for each). ValueError naming the item on bad input."""
+    from ..solve.simulate import BACKENDS
+
+    mech = SliderCrank() if mech is None else mech
+    if not isinstance(mech, (SliderCrank, Linkage)):
+        raise ValueError(f"mech must be a SliderCrank or a Linkage; got {type(mech).__name__}")
+    if isinstance(mech, Linkage) and not callable(output) and output not in OUTPUTS:
+        from ..analysis.objective import parse_output
+
+        parse_output(mech, output)      # ValueError naming the allowed outputs
+        if backend != "reduced":
+            raise ValueError(f"output {output!r} of a Linkage needs backend='reduced' (its "
+                             f"generated model); got {backend!r}")
+    elif not callable(output) and output not in OUTPUTS:
+        raise ValueError(f"output must be one of {list(OUTPUTS)} or a function; "
+                         f"got {output!r}")
+    names, dists = _check_inputs(inputs, output, mech)
+    if backend not in BACKENDS:
+        raise ValueError(f"backend must be one of {sorted(BACKENDS)}; got {backend!r}")
+    if isinstance(mech, Linkage) and not callable(output) and output == "peak" \
+            and backend != "reduced":
+        raise ValueError(f"output 'peak' of a Linkage needs backend='reduced'; got {backend!r}")
+    revolution = _count("revolution", revolution, 1)
+    check_revolutions_memory(revolution, options.get("max_memory"), name="revolution")
+    if not callable(output):
+        with_values(mech, {n: field_value(mech, n) for n in names})   # checks the nominal
+        _check_ranges(mech, names, dists, [])
+    return ToleranceProblem(names=names, distributions=dists, mech=mech, output=output,
+                            revolution=revolution, backend=backend, options=dict(options))
+
+
+def sample(problem: ToleranceProblem, method: str, n: int, *, seed: int = 0,
+           second_order: bool = True, levels: int = 4) -> ToleranceSample:
+    """Designs of one `method` of `SAMPLERS`: "sobol" (Saltelli's scheme on a scrambled
+    Sobol sequence, base size `n` a power of 2: n (2 d + 2) designs with `second_order`,
+    else n (d + 2)), "morris" (`n` trajectories on a grid of `levels`: n (d + 1)) or
+    "monte_carlo" (`n` independent uniform rows). The same seed gives the same designs."""
+    if method not in SAMPLERS:
+        raise ValueError(f"method must be one of {list(SAMPLERS)}; got {method!r}")
+    n = _count("n", n, 1)
+    seed = _count("seed", seed, 0)
+    unit = problem.unit_problem
+    if method == "sobol":
+        if n & (n - 1):
+            raise ValueError(f"n must be a power of 2 for method 'sobol'; got {n}")
+        from SALib.sample import sobol as sobol_sample
+
+        U = sobol_sample.sample(unit, n, calc_second_order=second_order, seed=seed)
+        settings = {"N": n, "second_order": bool(second_order), "seed": seed}
+    elif method == "morris":
+        levels = _count("levels", levels, 2)
+        if levels % 2:
+            raise ValueError(f"levels must be even; got {levels}")
+        from SALib.sample import morris as morris_sample
+
+        U = morris_sample.sample(unit, n, num_levels=levels, seed=seed)
+        settings = {"trajectories": n, "levels": levels, "seed": seed}
+    else:
+        U = np.random.default_rng(seed).random((n, len(problem.names)))
+        settings = {"n": n, "seed": seed}
+    return ToleranceSample(method=method, unit=U, values=problem.physical(U),
+                           settings=settings)
+
+
+def _task(problem: ToleranceProblem) -> _Task:
+    return _Task(output=problem.output, revolution=problem.revolution,
+                 backend=problem.backend, options=dict(problem.options))
+
+
+def evaluate(problem: ToleranceProblem, samples: ToleranceSample, *, wear: float = 0.0,
+             executor=None, workers: int = 2, progress: bool = True) -> Evaluation:
+    """Run every design of `samples` (`executor.evaluate`: threads, processes or dask;
+    None: a local pool of `workers`), with `wear` (m) added to the radial clearance. An
+    invalid design (a normal's far tail) or a failed run gives nan."""
+    wear = _real("wear", wear)
+    if wear < 0:
+        raise ValueError(f"wear must be >= 0 m; got {wear!r}")
+    if wear and callable(problem.output):
+        raise ValueError("wear applies to the mechanism's radial clearance; not to a "
+                         "function output")
+    study = _Study(problem.names, problem.distributions, problem.mech, _task(problem),
+                   executor, workers, progress)
+    desc = {"sobol": "Sobol", "morris": "Morris", "monte_carlo": "Monte Carlo"}[samples.method]
+    if wear:
+        desc = f"wear +{wear * 1e6:.3g} um"
+    y, chaotic = study.values(samples.values, desc, extra={CLEARANCE: wear} if wear else None)
+    return Evaluation(y=y, chaotic=chaotic, counts=dict(study.counts), wear=wear)
+
+
+def _analysis_settings(bootstrap, confidence, seed, allowable):
+    bootstrap = _count("bootstrap", bootstrap, 10)
+    seed = _count("seed", seed, 0)
+    confidence = _real("confidence", confidence)
+    if not 0.0 < confidence < 1.0:
+        raise ValueError(f"confidence must be in (0, 1); got {confidence!r}")
+    if allowable is not None:
+        allowable = _real("allowable", allowable)
+    return bootstrap, confidence, seed, allowable
+
+
+def analyse(problem: ToleranceProblem, samples: ToleranceSample, evaluation: Evaluation, *,
+            bootstrap: int = 200, confidence: float = 0.95, seed: int = 0,
+            allowable: float | None = None) -> dict[str, Any]:
+    """What the runs of `samples` say, by its method: Sobol indices (S1, ST, S2 with their
+    bootstrap intervals at `confidence`) or Morris' mu*, sigma (SALib), or the Monte Carlo
+    statistics (mean, std, quantiles, P(Y > allowable) with its Clopper-Pearson interval).
+    Indices are computed only when every run gave a value."""
+    bootstrap, confidence, seed, allowable = _analysis_settings(bootstrap, confidence, seed,
+                                                                allowable)
+    y, ch = evaluation.y, evaluation.chaotic
+    if len(y) != len(samples.unit):
+        raise ValueError(f"evaluation has {len(y)} outputs for {len(samples.unit)} designs")
+    unit = problem.unit_problem
+    failed = int(np.count_nonzero(~np.isfinite(y)))
+    if samples.method == "monte_carlo":
+        return _stats(y, ch, allowable, confidence)
+    if samples.method == "sobol":
+        from SALib.analyze import sobol as sobol_analyze
+
+        d = len(problem.names)
+        second_order = samples.settings["second_order"]
+        out = {"N": samples.settings["N"], "runs": len(y), "failed": failed,
+               "chaotic_fraction": float(np.mean(ch)),
+               "values_A": y[::(2 * d + 2) if second_order else d + 2]}
+        if np.all(np.isfinite(y)):
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", RuntimeWarning)
+                Si = sobol_analyze.analyze(unit, y, calc_second_order=second_order,
+                                           num_resamples=bootstrap, conf_level=confidence,
+                                           seed=seed, print_to_console=False)
+            out.update({k: np.asarray(Si[k]) for k in ("S1", "S1_conf", "ST", "ST_conf")})
+            if second_order:
+                out.update(S2=np.asarray(Si["S2"]), S2_conf=np.asarray(Si["S2_conf"]))
+            out["variance"] = float(np.var(y, ddof=1))
+        return out
+    from SALib.analyze import morris as morris_analyze
+
+    out = {"trajectories": samples.settings["trajectories"],
+           "levels": samples.settings["levels"], "runs": len(y), "failed": failed}
+    if np.all(np.isfinite(y)):
+        Mi = morris_analyze.analyze(unit, samples.unit, y, num_resamples=bootstrap,
+                                    conf_level=confidence,
+                                    num_levels=samples.settings["levels"], seed=seed,
+                                    print_to_console=False)
+        out.update({k: np.asarray(Mi[k], dtype=float)
+                    for k in ("mu_star", "mu_star_conf", "sigma", "mu")})
+    return out
+
+
 def tolerance_study(inputs: Mapping[str, Any], mech: SliderCrank | None = None,
                     output: str | Callable = "peak", revolution: int = 4, *,
                     sobol: int = 256, second_order: bool = True, morris: int = 0,
@@ -822,30 +1043,10 @@ def tolerance_study(inputs: Mapping[str, Any], mech: SliderCrank | None = None,
     -------
     ToleranceResult
     """
-    from ..solve.simulate import BACKENDS
-
     t_start = time.perf_counter()
-    mech = SliderCrank() if mech is None else mech
-    if not isinstance(mech, (SliderCrank, Linkage)):
-        raise ValueError(f"mech must be a SliderCrank or a Linkage; got {type(mech).__name__}")
-    if isinstance(mech, Linkage) and not callable(output) and output not in OUTPUTS:
-        from ..analysis.objective import parse_output
-
-        parse_output(mech, output)      # ValueError naming the allowed outputs
-        if backend != "reduced":
-            raise ValueError(f"output {output!r} of a Linkage needs backend='reduced' (its "
-                             f"generated model); got {backend!r}")
-    elif not callable(output) and output not in OUTPUTS:
-        raise ValueError(f"output must be one of {list(OUTPUTS)} or a function; "
-                         f"got {output!r}")
-    names, dists = _check_inputs(inputs, output, mech)
-    if backend not in BACKENDS:
-        raise ValueError(f"backend must be one of {sorted(BACKENDS)}; got {backend!r}")
-    if isinstance(mech, Linkage) and not callable(output) and output == "peak" \
-            and backend != "reduced":
-        raise ValueError(f"output 'peak' of a Linkage needs backend='reduced'; got {backend!r}")
-    revolution = _count("revolution", revolution, 1)
-    check_revolutions_memory(revolution, options.get("max_memory"), name="revolution")
+    problem = describe(inputs, mech, output, revolution, backend=backend, **options)
+    mech, names, dists = problem.mech, problem.names, problem.distributions
+    revolution = problem.revolution
     sobol = _count("sobol", sobol, 0)
     if sobol and sobol & (sobol - 1):
         raise ValueError(f"sobol must be 0 or a power of 2 (Sobol sequences); got {sobol}")
@@ -855,13 +1056,8 @@ def tolerance_study(inputs: Mapping[str, Any], mech: SliderCrank | None = None,
         raise ValueError(f"morris_levels must be even; got {morris_levels}")
     dgsm = _count("dgsm", dgsm, 0)
     monte_carlo = _count("monte_carlo", monte_carlo, 0)
-    bootstrap = _count("bootstrap", bootstrap, 10)
-    seed = _count("seed", seed, 0)
-    confidence = _real("confidence", confidence)
-    if not 0.0 < confidence < 1.0:
-        raise ValueError(f"confidence must be in (0, 1); got {confidence!r}")
-    if allowable is not None:
-        allowable = _real("allowable", allowable)
+    bootstrap, confidence, seed, allowable = _analysis_settings(bootstrap, confidence, seed,
+                                                                allowable)
     if dgsm and isinstance(mech, Linkage):
         raise ValueError("dgsm takes a SliderCrank (the DDM gradients of its peak); for a "
                          "Linkage use sobol, morris or monte_carlo")
@@ -886,80 +1082,52 @@ def tolerance_study(inputs: Mapping[str, Any], mech: SliderCrank | None = None,
     if not (sobol or morris or dgsm or monte_carlo):
         raise ValueError("nothing to do: set sobol, morris, dgsm or monte_carlo > 0")
     if not callable(output):
-        with_values(mech, {n: field_value(mech, n) for n in names})   # checks the nominal
         _check_ranges(mech, names, dists, wear_levels)
     study_memory(len(names), sobol=sobol, second_order=second_order, morris=morris,
                  dgsm=dgsm, monte_carlo=monte_carlo, wear_levels=len(wear_levels),
                  max_memory=options.get("max_memory"))
 
-    from SALib.analyze import morris as morris_analyze
-    from SALib.analyze import sobol as sobol_analyze
-    from SALib.sample import morris as morris_sample
-    from SALib.sample import sobol as sobol_sample
-
-    task = _Task(output=output, revolution=revolution, backend=backend,
-                 options=dict(options))
-    study = _Study(names, dists, mech, task, executor, workers, progress)
-    d = len(names)
-    unit = {"num_vars": d, "names": list(names), "bounds": [[0.0, 1.0]] * d}
-    rng = np.random.default_rng(seed)
+    run = {"executor": executor, "workers": workers, "progress": progress}
+    stats = {"bootstrap": bootstrap, "confidence": confidence, "seed": seed,
+             "allowable": allowable}
+    counts = {"runs": 0, "failed": 0, "chaotic": 0, "flagged": 0}
     res: dict[str, Any] = {}
-    chaotic_any = []
+
+    def step(method, n, **kw):
+        samples = sample(problem, method, n, seed=seed, **kw)
+        ev = evaluate(problem, samples, **run)
+        for k in counts:
+            counts[k] += ev.counts[k]
+        return samples, ev
 
     if sobol:
-        U = sobol_sample.sample(unit, sobol, calc_second_order=second_order, seed=seed)
-        y, ch = study.values(study.physical(U), "Sobol")
-        chaotic_any.append(ch)
-        base = {"N": sobol, "runs": len(y), "failed": int(np.count_nonzero(~np.isfinite(y))),
-                "chaotic_fraction": float(np.mean(ch)),
-                "values_A": y[::(2 * d + 2) if second_order else d + 2]}
-        if np.all(np.isfinite(y)):
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore", RuntimeWarning)
-                Si = sobol_analyze.analyze(unit, y, calc_second_order=second_order,
-                                           num_resamples=bootstrap, conf_level=confidence,
-                                           seed=seed, print_to_console=False)
-            base.update({k: np.asarray(Si[k]) for k in ("S1", "S1_conf", "ST", "ST_conf")})
-            if second_order:
-                base.update(S2=np.asarray(Si["S2"]), S2_conf=np.asarray(Si["S2_conf"]))
-            base["variance"] = float(np.var(y, ddof=1))
-        res["sobol"] = base
-
+        samples, ev = step("sobol", sobol, second_order=second_order)
+        res["sobol"] = analyse(problem, samples, ev, **stats)
     if morris:
-        U = morris_sample.sample(unit, morris, num_levels=morris_levels, seed=seed)
-        y, ch = study.values(study.physical(U), "Morris")
-        chaotic_any.append(ch)
-        base = {"trajectories": morris, "levels": morris_levels, "runs": len(y),
-                "failed": int(np.count_nonzero(~np.isfinite(y)))}
-        if np.all(np.isfinite(y)):
-            Mi = morris_analyze.analyze(unit, U, y, num_resamples=bootstrap,
-                                        conf_level=confidence, num_levels=morris_levels,
-                                        seed=seed, print_to_console=False)
-            base.update({k: np.asarray(Mi[k], dtype=float)
-                         for k in ("mu_star", "mu_star_conf", "sigma", "mu")})
-        res["morris"] = base
-
+        samples, ev = step("morris", morris, levels=morris_levels)
+        res["morris"] = analyse(problem, samples, ev, **stats)
     if dgsm:
+        study = _Study(names, dists, mech, _task(problem), executor, workers, progress)
         res["dgsm"] = _dgsm(study, dgsm, seed, bootstrap, confidence)
-
+        for k in counts:
+            counts[k] += study.counts[k]
     if monte_carlo:
-        U = rng.random((monte_carlo, d))
-        X = study.physical(U)
-        y, ch = study.values(X, "Monte Carlo")
-        chaotic_any.append(ch)
-        res["monte_carlo"] = _stats(y, ch, allowable, confidence)
+        samples, ev = step("monte_carlo", monte_carlo)
+        res["monte_carlo"] = analyse(problem, samples, ev, **stats)
         res["wear"] = []
         for w in wear_levels:
-            yw, chw = study.values(X, f"wear +{w * 1e6:.3g} um", extra={CLEARANCE: w})
-            res["wear"].append({"wear": w, **_stats(yw, chw, allowable, confidence)})
+            ew = evaluate(problem, samples, wear=w, **run)
+            for k in counts:
+                counts[k] += ew.counts[k]
+            res["wear"].append({"wear": w, **analyse(problem, samples, ew, **stats)})
 
-    notes = _notes(study.counts, res, names, output)
+    notes = _notes(counts, res, names, output)
     return ToleranceResult(
         names=names, distributions={n: dists[n].describe() for n in names},
         output=output if isinstance(output, str) else getattr(output, "__name__", "function"),
         sobol=res.get("sobol", {}), morris=res.get("morris", {}), dgsm=res.get("dgsm", {}),
         monte_carlo=res.get("monte_carlo", {}), wear=res.get("wear", []),
-        counts=dict(study.counts), notes=notes,
+        counts=dict(counts), notes=notes,
         settings={"revolution": revolution, "backend": backend, "options": dict(options),
                   "sobol": sobol, "second_order": second_order, "morris": morris,
                   "morris_levels": morris_levels, "dgsm": dgsm, "monte_carlo": monte_carlo,
@@ -993,7 +1161,7 @@ def _dgsm(study: _Study, n: int, seed: int, bootstrap: int, confidence: float) -
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", AccuracyWarning)
         warnings.simplefilter("ignore", PhysicsWarning)
-        res = evaluate(_grad_one, mechs, (fields, study.task.revolution),
+        res = _evaluate_all(_grad_one, mechs, (fields, study.task.revolution),
                        executor=study.executor, workers=study.workers, progress=study.progress,
                        desc="DGSM")
     peaks = np.array([r[0] for r in res])
