@@ -121,7 +121,7 @@ LENGTHS = (("coupler_length", 4.0), ("rocker_length", 2.5))
 
 
 @pytest.mark.slow
-def test_peak_gradient_of_the_four_bars_shaking_force_against_central_differences():
+def test_peak_gradient_of_the_four_bars_shaking_force_against_central_differences(tmp_path):
     """d(peak shaking force over revolution 2)/d(coupler length, rocker length) by the
     library (central differences of the refined peak over 1e-3 of each value, the design
     rebuilt by the case's overrides) against central differences computed here from
@@ -137,6 +137,15 @@ def test_peak_gradient_of_the_four_bars_shaking_force_against_central_difference
         up = simulate(four_bar(**{name: value + h}, **DAMPED), 2, rtol=RTOL).peaks[1]
         down = simulate(four_bar(**{name: value - h}, **DAMPED), 2, rtol=RTOL).peaks[1]
         assert g.gradient[k] == pytest.approx((up - down) / (2 * h), rel=GRADIENT_RTOL), name
+    # the command line: the same gradient (central differences at the library's default
+    # step) within the spread of central differences over steps (GRADIENT_RTOL)
+    assert main(["sensitivity", "--case", "four_bar", "--set", "restitution=0.3",
+                 "--output", "shaking_force", "--parameters", "coupler_length,rocker_length",
+                 "--revolutions", "2", "--method", "fd", "--rtol", str(RTOL),
+                 "--out", str(tmp_path / "s")]) == 0
+    saved = json.loads((tmp_path / "s" / "peak_gradient.json").read_text())["gradient"]
+    for k, (name, _) in enumerate(LENGTHS):
+        assert saved[name] == pytest.approx(g.gradient[k], rel=GRADIENT_RTOL), name
 
 
 @pytest.mark.slow
