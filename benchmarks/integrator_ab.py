@@ -91,7 +91,7 @@ def measure(repeats: int, rtol=None) -> dict:
 def _process(checkout: Path, repeats: int, rtol=None, what: str = "measure") -> dict | list:
     """`measure` (or `peak_errors`) of this script in a new process that imports the
     package `mbs_clearance` from `checkout` (the same measurement code on either side)."""
-    here = Path(__file__).resolve().parents[2]
+    here = Path(__file__).resolve().parents[1]
     code = ("import json, sys; sys.path.insert(0, sys.argv[1]); import mbs_clearance; "
             "sys.path.insert(0, sys.argv[2]); "
             "from benchmarks.integrator_ab import measure, peak_errors; "
@@ -113,7 +113,7 @@ def compare(other: Path, rounds: int, repeats: int, other_rtol=None) -> dict:
     case the median over rounds of the ratio other / this of the CPU medians (and of the
     wall medians), and each side's nfev; `other_rtol`: the other side's plain runs at this
     tolerance (for an A/B at equal accuracy: `peak_errors` of each side are printed)."""
-    here = Path(__file__).resolve().parents[2]
+    here = Path(__file__).resolve().parents[1]
     _process(here, 1)                     # warm-up: compile or load both caches
     _process(other, 1, other_rtol)
     ratios = {}
@@ -163,7 +163,7 @@ def _main(argv=None) -> int:
             print(f"| {name} | {r['cpu_ratio']:.3f} | {r['wall_ratio']:.3f} | "
                   f"{r['this_cpu_ms']:.3f} / {r['other_cpu_ms']:.3f} | "
                   f"{r['nfev_this']} / {r['nfev_other']} |")
-        here = Path(__file__).resolve().parents[2]
+        here = Path(__file__).resolve().parents[1]
         mine = _process(here, 1, None, "errors")
         theirs = _process(args.other.resolve(), 1, args.other_rtol, "errors")
         print("per-revolution peak |F12| error against the same code at rtol 1e-12 "

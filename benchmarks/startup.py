@@ -21,6 +21,11 @@ the per-pair ratios other / this is printed: the ratio of each pair is taken und
 load, so a noisy machine widens its spread, not its median.
 
     python -m benchmarks.startup [--repeats 11] [--vs PATH] [--json]
+    python -m benchmarks.startup --cold integrator simulate simulate_four_bar sensitivity
+
+``--cold`` instead runs the given commands once each, in order, in a fresh copy of the
+package (an empty numba cache, as on a fresh install), and prints each one's wall and CPU
+time: the first answer a new user waits for. CPU time is the measure on a busy machine.
 """
 
 from __future__ import annotations
@@ -45,7 +50,18 @@ COMMANDS = {
     "simulate": ["-m", "mbs_clearance.cli", "simulate"],
 }
 
-ROOT = Path(__file__).resolve().parents[2]
+#: what --cold runs, in this order, in one fresh copy of the package: the integrator alone
+#: (specialised for a 3-state linear system: the floor of any model's first compilation),
+#: then the first commands of a new user
+COLD_COMMANDS = {
+    "integrator": ["-c", "from mbs_clearance.analysis.lyapunov import textbook_exponent as t; "
+                         "t('linear', 1.0, matrix=[[-1, 0, 0], [0, -2, 0], [0, 0, -3]])"],
+    "simulate": ["-m", "mbs_clearance.cli", "simulate"],
+    "simulate_four_bar": ["-m", "mbs_clearance.cli", "simulate", "--case", "four_bar"],
+    "sensitivity": ["-m", "mbs_clearance.cli", "sensitivity"],
+}
+
+ROOT = Path(__file__).resolve().parents[1]
 
 
 def checkout(path: str | Path) -> Path:
@@ -97,6 +113,46 @@ def measure(repeats: int, other: Path | None = None, names=tuple(COMMANDS)) -> d
     return out
 
 
+def cold(names=tuple(COLD_COMMANDS)) -> dict:
+    """Wall and CPU time (s) of each of `names`, run once and in order in a fresh copy of
+    the package (its numba cache empty, as on a fresh install): the first is a cold start,
+    each later one pays for what the ones before it did not compile."""
+    import resource
+    import shutil
+    import tempfile
+
+    rows = {}
+    with tempfile.TemporaryDirectory(prefix="mbs-cold-") as tmp:
+        shutil.copytree(ROOT / "mbs_clearance", Path(tmp) / "mbs_clearance",
+                        ignore=shutil.ignore_patterns("__pycache__"))
+        env = {k: v for k, v in os.environ.items()
+               if k not in ("PYTHONPATH", "NUMBA_CACHE_DIR", "MBS_CLEARANCE_DEBUG")}
+        env["PYTHONPATH"] = tmp
+        for name in names:
+            before = resource.getrusage(resource.RUSAGE_CHILDREN)
+            t0 = time.perf_counter()
+            proc = subprocess.run([sys.executable, *COLD_COMMANDS[name]], cwd=tmp, env=env,
+                                  stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                                  text=True)
+            wall = time.perf_counter() - t0
+            after = resource.getrusage(resource.RUSAGE_CHILDREN)
+            if proc.returncode != 0:
+                raise RuntimeError(f"{name} failed (status {proc.returncode}): "
+                                   f"{proc.stderr.strip().splitlines()[-1:] or ''}")
+            rows[name] = {"wall_s": wall,
+                          "cpu_s": (after.ru_utime - before.ru_utime
+                                    + after.ru_stime - before.ru_stime)}
+    return {"machine": machine_summary(), "cold": rows}
+
+
+def report_cold(result: dict) -> str:
+    lines = [f"first runs in a fresh copy of the package, numba cache empty "
+             f"({result['machine']})", f"{'command':<18} {'wall (s)':>9} {'CPU (s)':>9}"]
+    for n, r in result["cold"].items():
+        lines.append(f"{n:<18} {r['wall_s']:>9.1f} {r['cpu_s']:>9.1f}")
+    return "\n".join(lines)
+
+
 def report(result: dict) -> str:
     lines = [f"start-up in fresh processes, median of {result['repeats']} rounds "
              f"({result['machine']})", f"this checkout: {result['this']}"]
@@ -122,8 +178,16 @@ def main(argv: list[str] | None = None) -> int:
                         help="another checkout timed in alternating pairs (default: none)")
     parser.add_argument("--only", nargs="+", choices=list(COMMANDS), default=list(COMMANDS),
                         help="commands timed (default: all)")
+    parser.add_argument("--cold", nargs="+", choices=list(COLD_COMMANDS), metavar="COMMAND",
+                        help="instead: run these once, in order, in a fresh copy of the "
+                             "package with an empty numba cache (choices: "
+                             f"{', '.join(COLD_COMMANDS)})")
     parser.add_argument("--json", action="store_true", help="print the result as JSON")
     args = parser.parse_args(argv)
+    if args.cold:
+        result = cold(tuple(args.cold))
+        print(json.dumps(result, indent=2) if args.json else report_cold(result))
+        return 0
     if args.repeats < 1:
         parser.error(f"--repeats must be >= 1; got {args.repeats}")
     try:
