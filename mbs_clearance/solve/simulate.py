@@ -11,30 +11,62 @@ from ..model.mechanism import SliderCrank
 from .accuracy import DEFAULT_ACCURACY, check_accuracy_or_rtol
 from .trajectory import Trajectory
 
-__all__ = ["simulate", "peak_base_force", "BACKENDS", "Backend"]
+__all__ = ["simulate", "peak_base_force", "BACKENDS", "Backend", "Model"]
 
 
 @dataclass(frozen=True)
-class Backend:
-    """A model: module and the names of its simulate and peak-only functions."""
+class Model:
+    """Where a backend's functions for one kind of input live: the module (imported when
+    first asked for) and the names of its simulate and peak-only functions."""
 
     module: str
     simulate: str
     peak: str
-    description: str
 
     def load(self, attr: str):
         return getattr(importlib.import_module(self.module), getattr(self, attr))
 
 
-#: name -> Backend; the registry of models (imported lazily: Exudyn only when asked for)
+@dataclass(frozen=True)
+class Backend:
+    """A model of a mechanism: what it is, and its functions for a `Linkage` and for the
+    paper's `SliderCrank` parameter set (None: it does not take that input)."""
+
+    description: str
+    linkage: Model | None
+    slider_crank: Model | None
+
+    def model_for(self, mech, name: str) -> Model:
+        """The functions for `mech`; ValueError when this backend does not take it."""
+        model = self.linkage if isinstance(mech, Linkage) else self.slider_crank
+        if model is None:
+            takes = sorted(n for n, b in BACKENDS.items()
+                           if (b.linkage if isinstance(mech, Linkage) else b.slider_crank))
+            kind = "a Linkage" if isinstance(mech, Linkage) else "a SliderCrank"
+            raise ValueError(f"backend must be one of {takes} for {kind} (the {name!r} "
+                             f"backend does not take it); got {name!r}")
+        return model
+
+
+#: name -> Backend: the one registry of models (each module imported when first asked for,
+#: Exudyn only then)
 BACKENDS: dict[str, Backend] = {
-    "reduced": Backend("mbs_clearance.solve.reduced", "simulate_reduced", "peak_reduced",
-                       "the paper's reduced Lagrange model, compiled (numba)"),
-    "exudyn": Backend("mbs_clearance.backends.exudyn_model", "simulate_exudyn", "peak_exudyn",
-                      "the same mechanism in the multibody engine Exudyn"),
-    "ideal": Backend("mbs_clearance.backends.ideal", "simulate_ideal", "peak_ideal",
-                     "closed-form slider-crank with ideal joints (no clearance)"),
+    "reduced": Backend(
+        "the model generated from the description (the paper's: its checked-in module), "
+        "compiled (numba)",
+        linkage=Model("mbs_clearance.solve.linkage_model", "simulate_linkage",
+                      "peak_linkage"),
+        slider_crank=Model("mbs_clearance.solve.reduced", "simulate_reduced", "peak_reduced")),
+    "exudyn": Backend(
+        "the same mechanism built in the multibody engine Exudyn",
+        linkage=Model("mbs_clearance.backends.exudyn_linkage", "simulate_exudyn_linkage",
+                      "peak_exudyn_linkage"),
+        slider_crank=Model("mbs_clearance.backends.exudyn_model", "simulate_exudyn",
+                           "peak_exudyn")),
+    "ideal": Backend(
+        "closed-form slider-crank with ideal joints (no clearance)",
+        linkage=None,
+        slider_crank=Model("mbs_clearance.backends.ideal", "simulate_ideal", "peak_ideal")),
 }
 
 
@@ -42,16 +74,6 @@ def _backend(name: str) -> Backend:
     if name not in BACKENDS:
         raise ValueError(f"backend must be one of {sorted(BACKENDS)}; got {name!r}")
     return BACKENDS[name]
-
-
-#: the models of a `Linkage` (generated from its description), by backend name
-LINKAGE_BACKENDS: dict[str, Backend] = {
-    "reduced": Backend("mbs_clearance.solve.linkage_model", "simulate_linkage", "peak_linkage",
-                       "the model generated from the description, compiled (numba)"),
-    "exudyn": Backend("mbs_clearance.backends.exudyn_linkage", "simulate_exudyn_linkage",
-                      "peak_exudyn_linkage", "the description built in the multibody engine "
-                      "Exudyn"),
-}
 
 
 def _check(mech, revolutions, name="revolutions") -> int:
@@ -172,16 +194,12 @@ def _call(backend: str, attr: str, mech, revolutions, options: dict,
     validates the options' values)."""
     be = _backend(backend)
     revolutions = _check(mech, revolutions, name)
-    if isinstance(mech, Linkage):
-        if backend not in LINKAGE_BACKENDS:
-            raise ValueError(f"backend must be one of {sorted(LINKAGE_BACKENDS)} for a Linkage "
-                             f"(the {backend!r} backend takes a SliderCrank); got {backend!r}")
-        be = LINKAGE_BACKENDS[backend]
-    module = importlib.import_module(be.module)
+    model = be.model_for(mech, backend)
+    module = importlib.import_module(model.module)
     allowed = getattr(module, "OPTION_NAMES", None)
     if allowed is not None:
         unknown = sorted(set(options) - set(allowed))
         if unknown:
             raise ValueError(f"unknown option(s) {unknown} for backend {backend!r}; "
                              f"allowed: {sorted(allowed)}")
-    return be.load(attr)(mech, revolutions, **options)
+    return model.load(attr)(mech, revolutions, **options)
