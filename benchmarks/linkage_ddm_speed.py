@@ -44,7 +44,7 @@ def main(argv=None):
         linkage = getattr(cases, case)()
         revs = 1 if case == "four_bar" else 4
         integrator = "dopri5" if case == "four_bar" else None
-        plain = run(linkage, revs)[6]
+        plain = run(linkage, revs).stats
         ddm = sensitivities(linkage, names, revolutions=revs, integrator=integrator)
         res = paired(lambda lk=linkage, r=revs: run(lk, r),
                      lambda lk=linkage, nm=names, r=revs, i=integrator: sensitivities(

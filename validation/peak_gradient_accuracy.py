@@ -40,7 +40,7 @@ def normalized_error(ddm, fd) -> np.ndarray:
 def design_rows(mech: SliderCrank, rtols) -> tuple[object, list[dict]]:
     """The central-difference reference of `mech` and one row per DDM tolerance."""
     fd = peak_gradient(mech, method="fd", rtol=FD_RTOL, fd_relative_step=FD_STEP)
-    nfev_peak = int(reduced.run(mech, 4, record=False)[5][0])
+    nfev_peak = int(reduced.run(mech, 4, record=False).counters[0])
     rows = []
     for rtol in rtols:
         ddm = peak_gradient(mech, rtol=rtol)

@@ -104,7 +104,7 @@ def adaptive_peaks(linkage, revolutions: int, rtol: float) -> dict:
     `linkage` through the adaptive integrator at `rtol`, recording nothing."""
     from mbs_clearance.solve.linkage_model import run
 
-    first = run(linkage, 1, rtol=rtol, record=False, max_steps=MAX_STEPS)[6]["nevent"]
+    first = run(linkage, 1, rtol=rtol, record=False, max_steps=MAX_STEPS).stats["nevent"]
     out = run(linkage, revolutions, rtol=rtol, record=False, max_steps=MAX_STEPS)
     return {"rtol": rtol, "peaks": np.asarray(out[4]), "events": out[6]["nevent"],
             "events_first": first, "nfev": out[6]["nfev"]}

@@ -391,7 +391,7 @@ def _fd_gradient(mech, names, revolution, backend, fd_relative_step, executor, o
     if backend == "reduced" and mech.friction_law == "none":
         # (the frictionless model's run; with friction the peak's time is not reported)
         run_opts = {k: v for k, v in options.items() if k != "t_eval"}
-        t_peak = float(reduced.run(mech, revolution, record=False, **run_opts)[4][-1])
+        t_peak = float(reduced.run(mech, revolution, record=False, **run_opts).peak_times[-1])
     stats = {"fd_steps": steps, "runs": len(mechs), "forward": (plus - peak) / h,
              "backward": (peak - minus) / h, "wall_time": time.perf_counter() - t_wall,
              **{k: v for k, v in options.items() if k in ("rtol", "method")}}
@@ -580,7 +580,7 @@ def _linkage_peak(linkage: Linkage, out: Output, revolution: int, options: dict)
     options = {k: v for k, v in options.items() if k != "accuracy"}
     if out.monitored(linkage):
         res = lm.run(linkage, revolution, record=False, **options)
-        return float(res[4][revolution - 1]), float(res[5][revolution - 1])
+        return float(res.peaks[revolution - 1]), float(res.peak_times[revolution - 1])
     model, ts, ys, ms, _, _, stats, outs, p = lm.run(linkage, revolution, record=True,
                                                      **options)
     return _refined_peak(model, ts, ys, ms, p, outs, out, (revolution - 1) * linkage.period,

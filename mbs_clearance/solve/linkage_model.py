@@ -390,14 +390,31 @@ def window_peaks(ts: np.ndarray, outs: np.ndarray, column: int,
                      for a, b in zip(win_edges[:-1], win_edges[1:])])
 
 
+class LinkageRun(NamedTuple):
+    """What `run` returns: the compiled model, the recorded times, states, memories (per
+    joint its mode and impact velocity) and outputs (model.OUT_COLUMNS) per step, the
+    refined peak of the monitored force and its time per revolution, the run's stats
+    (counters, tolerances) and the parameter vector."""
+
+    model: object
+    ts: np.ndarray
+    ys: np.ndarray
+    ms: np.ndarray
+    peaks: np.ndarray
+    peak_times: np.ndarray
+    stats: dict
+    outs: np.ndarray
+    p: np.ndarray
+
+
 def run(linkage: Linkage, revolutions: int = 4, *, rtol: float | None = None,
         atol=None, method: str = "dopri5", record: bool = True,
         max_steps: int = DEFAULT_MAX_STEPS, n_samples: int = 1, h_max: float | None = None,
         h0: float = 0.0, event_tol: float | None = None, max_memory: int | None = None,
         t_eval=None, start: Start | None = None):
     """Integrate `linkage`'s generated model over `revolutions` drive revolutions from the
-    centred start (or from `start`, a `Start`); returns (model, ts, ys, ms, peaks,
-    peak_times, counters dict, outs, p).
+    centred start (or from `start`, a `Start`); returns a `LinkageRun` (model, ts, ys, ms,
+    peaks, peak_times, stats, outs, p).
     With `t_eval` the integrator also lands exactly on those times and only they are
     returned (the peaks then are the maxima over them per revolution). Every option is
     checked first (ValueError naming it and its range); a run whose record would exceed
@@ -483,7 +500,7 @@ def run(linkage: Linkage, revolutions: int = 4, *, rtol: float | None = None,
     stats = {k: int(v) for k, v in zip(COUNTERS, counters)}
     stats["nfev"] += extra_fev
     stats.update(method=method, rtol=float(rtol))
-    return model, ts, ys, ms, peaks, peak_t, stats, outs, p
+    return LinkageRun(model, ts, ys, ms, peaks, peak_t, stats, outs, p)
 
 
 def _start_step(model, y0, p, rtol, atol, method, span):
@@ -526,5 +543,5 @@ def simulate_linkage(linkage: Linkage, revolutions: int = 4, **options):
 def peak_linkage(linkage: Linkage, revolution: int = 4, **options) -> float:
     """The monitored force's maximum in N over drive revolution `revolution` (1-based; the
     monitored ground joint's |reaction|, or |shaking force|), recording nothing."""
-    peaks = run(linkage, revolution, record=False, **options)[4]
+    peaks = run(linkage, revolution, record=False, **options).peaks
     return float(peaks[revolution - 1])

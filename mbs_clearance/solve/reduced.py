@@ -223,7 +223,7 @@ def estimate_run(mech: SliderCrank, windows: int, *, window_time: float, record:
         factor = 1.0 if row == _record_row(None) else SYSTEM_STEP_FACTOR
         try:
             counters = run(mech, 1, record=False, max_steps=max_steps, h_max=h_max,
-                           **pilot)[5]
+                           **pilot).counters
             per_rev = factor * (int(counters[1]) + int(counters[2]))
         except RuntimeError:
             per_rev = float(max_steps)
@@ -276,14 +276,30 @@ def plain_system(mech: SliderCrank, atol: np.ndarray, initial_offset: float = 0.
                   MODEL.OUT_COLUMNS)
 
 
+class RunOutput(NamedTuple):
+    """What `run` returns: the recorded times, states, memories (mode and impact velocity)
+    and outputs (MODEL.OUT_COLUMNS) per step, the refined peak of |F12| and its time per
+    window, the integrator's counters (`COUNTERS`) and the parameter vector."""
+
+    ts: np.ndarray
+    ys: np.ndarray
+    ms: np.ndarray
+    peaks: np.ndarray
+    peak_times: np.ndarray
+    counters: np.ndarray
+    outs: np.ndarray
+    p: np.ndarray
+
+
 def run(mech: SliderCrank, revolutions: int = 4, *, rtol: float | None = None,
         atol: float | np.ndarray | None = None, method: str = "dopri5", record: bool = True,
         max_steps: int = DEFAULT_MAX_STEPS, n_samples: int = 1, h_max: float | None = None,
         h0: float = 0.0, event_tol: float | None = None, edges: np.ndarray | None = None,
         t_eval: np.ndarray | None = None, system=None, select: bool = True,
         initial_offset: float = 0.0, max_memory: int | None = None):
-    """Integrate the reduced model; returns (ts, ys, ms, peaks, peak_times, counters, outs, p)
-    with outs the generated model's outputs (MODEL.OUT_COLUMNS) at the recorded steps.
+    """Integrate the reduced model; returns a `RunOutput` (ts, ys, ms, peaks, peak_times,
+    counters, outs, p) with outs the generated model's outputs (MODEL.OUT_COLUMNS) at the
+    recorded steps.
 
     The integration runs over the crank revolutions 1..`revolutions`, or over the windows
     given by `edges` (times, increasing, from 0); `peaks` holds max |F12| per window, refined
@@ -376,7 +392,7 @@ def run(mech: SliderCrank, revolutions: int = 4, *, rtol: float | None = None,
             outs = MODEL.outputs(np.ascontiguousarray(ts), np.ascontiguousarray(ys),
                                  np.ascontiguousarray(ms[:, :N_MEM]), p)
         peaks = window_peaks(ts, outs, MODEL.MONITOR_COLUMN, win_edges)
-    return ts, ys, ms, peaks, peak_t, counters, outs, p
+    return RunOutput(ts, ys, ms, peaks, peak_t, counters, outs, p)
 
 
 def _tolerances(mech, rtol, atol):
@@ -565,7 +581,7 @@ def peak_reduced(mech: SliderCrank, revolution: int = 4, **options) -> float:
     """Max |F12| in N over revolution `revolution`, recording nothing but running maxima."""
     if mech.friction_law != "none":
         return _with_friction(mech, revolution, options, record=False)
-    peaks = run(mech, revolution, record=False, **options)[3]
+    peaks = run(mech, revolution, record=False, **options).peaks
     return float(peaks[revolution - 1])
 
 

@@ -145,7 +145,7 @@ def _to_accuracy(mech, revolutions, accuracy, options: dict) -> Trajectory:
     if isinstance(mech, SliderCrank) and mech.friction_law == "none":
         def peaks(rtol):
             out = reduced.run(mech, revolutions, record=False, rtol=rtol, **options)
-            return out[3], int(out[5][0])
+            return out.peaks, int(out.counters[0])
 
         def rattling(traj):
             return bool(traj.stats.get("rattling"))
@@ -157,7 +157,7 @@ def _to_accuracy(mech, revolutions, accuracy, options: dict) -> Trajectory:
 
         def peaks(rtol):
             out = lm.run(lk, revolutions, record=False, rtol=rtol, **options)
-            return out[4], out[6]["nfev"]
+            return out.peaks, out.stats["nfev"]
 
         # no rattling shortcut: the four-bar's slow drive switches its contact hundreds of
         # times per revolution, yet its peaks converge as rtol falls (docs/performance.md)

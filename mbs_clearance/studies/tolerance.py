@@ -357,7 +357,8 @@ def _mechanism_output(mech: SliderCrank | Linkage, task: _Task):
         if task.backend == "reduced":
             from ..solve.reduced import RATTLING, run
 
-            peaks, counters = run(mech, k, record=False, **task.options)[3:6:2]
+            out = run(mech, k, record=False, **task.options)
+            peaks, counters = out.peaks, out.counters
             chaotic = bool(counters[3] > RATTLING * k)
             value = max(peaks[j] for j in _span(k)) if chaotic else peaks[k - 1]
             return float(value), chaotic, chaotic, False
