@@ -140,7 +140,7 @@ def test_cli_bad_input_is_one_line_before_any_run(argv, message, tmp_path, capsy
                                                   monkeypatch):
     import importlib
 
-    sim = importlib.import_module("mbs_clearance.simulate")   # the module, not the function
+    sim = importlib.import_module("mbs_clearance.solve.simulate")   # the module, not the function
     monkeypatch.setattr(sim, "simulate", lambda *a, **k: pytest.fail("ran"))
     with pytest.raises(SystemExit) as exc:
         main(["animate", *argv, "--out", str(tmp_path / "out")])

@@ -143,7 +143,7 @@ def test_work_precision_rejects_zero_repeats():
 def _fail_with(monkeypatch, exc):
     import importlib
 
-    sim = importlib.import_module("mbs_clearance.simulate")   # the module, not the function
+    sim = importlib.import_module("mbs_clearance.solve.simulate")   # the module, not the function
 
     def boom(*args, **kwargs):
         raise exc
@@ -240,7 +240,7 @@ def _forbid_computing(monkeypatch):
             monkeypatch.setattr(module, name, forbidden)
     import sys
 
-    monkeypatch.setattr(sys.modules["mbs_clearance.simulate"], "simulate", forbidden)
+    monkeypatch.setattr(sys.modules["mbs_clearance.solve.simulate"], "simulate", forbidden)
     assert cmp  # compare imports simulate from mbs_clearance.solve.simulate at call time
 
 

@@ -24,7 +24,7 @@ def test_exudyn_finite_differences_say_when_coarse(step, coarse, caplog, monkeyp
     (docs/sensitivity.md, measured); at 5e-7 s it says nothing."""
     import importlib
 
-    sim = importlib.import_module("mbs_clearance.simulate")   # the module, not the function
+    sim = importlib.import_module("mbs_clearance.solve.simulate")   # the module, not the function
 
     monkeypatch.setattr(sim, "simulate", _no_run)      # stop at the first run
     options = {} if step is None else {"step_size": step}
