@@ -378,13 +378,19 @@ class OptimizationResult:
         data = read_json_object(path, "optimisation result")
         if data.get("format") != _FORMAT:
             raise ValueError(f"{str(path)!r} is not an optimisation result ({_FORMAT})")
-        def design(d):
-            # a Linkage's description (it has bodies) or a SliderCrank's fields; a
-            # Linkage read back is the description, without the case that built it
-            return Linkage.from_dict(d) if "bodies" in d else SliderCrank.from_dict(d)
+        settings = data["settings"]
+        case, overrides = settings.get("case"), settings.get("overrides") or {}
+
+        def design(d, genes=None):
+            # a Linkage's description (it has bodies) or a SliderCrank's fields; a linkage
+            # of a named case is rebuilt by the case (with the genes' values) where that
+            # gives the stored description, so that it keeps its case and overrides
+            if "bodies" not in d:
+                return SliderCrank.from_dict(d)
+            return _rebuilt(Linkage.from_dict(d), case, overrides, genes)
 
         return cls(
-            best=design(data["best"]),
+            best=design(data["best"], data.get("best_genes")),
             best_peak_force=float(data["best_peak_force"]),
             original=design(data["original"]),
             original_peak_force=float(data["original_peak_force"]),
@@ -403,6 +409,24 @@ class OptimizationResult:
             stop_reason=str(data.get("stop_reason", "generations")),
             refinement=dict(data.get("refinement") or {}),
         )
+
+
+def _rebuilt(description: Linkage, case: str | None, overrides: dict,
+             genes: dict | None) -> Linkage:
+    """`description` as its named case built with `overrides` and the `genes`' values
+    (`design.linkage_with`), where that gives the same description; else as read."""
+    if case is None:
+        return description
+    from ..model.cases import CASES
+    from ..model.design import linkage_with
+
+    try:
+        linkage = CASES[case](**overrides)
+        if genes:
+            linkage = linkage_with(linkage, {k: float(v) for k, v in genes.items()})
+    except (KeyError, TypeError, ValueError):
+        return description
+    return linkage if linkage.to_dict() == description.to_dict() else description
 
 
 def _optional_bool(value) -> bool | None:

@@ -334,3 +334,31 @@ def test_regime_map_of_the_four_bar_over_its_clearance_against_direct_runs(tmp_p
 
     np.testing.assert_array_equal(load_map(out / "map.nc")["peak"].values, ds["peak"].values)
     assert math.isfinite(float(ds["peak_max"].max()))
+
+
+def test_ga_result_of_a_case_reads_back_with_its_case(tmp_path):
+    """A GA result of a named case, written and read back, keeps the case and overrides of
+    its original and best designs (rebuilt by the case: the same descriptions), so that a
+    study can go on from it by name; a description edited by hand reads back as written."""
+    import numpy as np
+
+    from mbs_clearance.studies.optimize import OptimizationResult
+
+    genes = {"coupler_length": (3.6, 4.4), "rocker_length": (2.2, 2.8)}
+    original = four_bar(**DAMPED)
+    best = four_bar(**DAMPED, coupler_length=4.1, rocker_length=2.4)
+    res = OptimizationResult(
+        best=best, best_peak_force=1.0, original=original, original_peak_force=2.0,
+        history=np.array([2.0, 1.0]), genes=genes,
+        settings={"case": "four_bar", "overrides": dict(DAMPED), "output": "peak"},
+        n_evaluations=4, ga_best=best, ga_best_peak_force=1.0, generations_completed=1)
+    back = OptimizationResult.from_json(res.to_json(tmp_path / "r.json"))
+    assert back.original.case == "four_bar" and back.original.overrides == DAMPED
+    assert back.best.case == "four_bar"
+    assert back.best.overrides == {**DAMPED, "coupler_length": 4.1, "rocker_length": 2.4}
+    assert back.best.to_dict() == best.to_dict()
+    data = json.loads((tmp_path / "r.json").read_text())
+    data["best"]["bodies"][1]["mass"] = 1.5          # no longer what the case builds
+    (tmp_path / "edited.json").write_text(json.dumps(data))
+    edited = OptimizationResult.from_json(tmp_path / "edited.json")
+    assert edited.best.case is None and edited.best.bodies[1].mass == 1.5
