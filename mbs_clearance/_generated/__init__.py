@@ -2,8 +2,8 @@
 tools/generate_models.py; do not edit). MODULES maps a structure digest to a module name."""
 
 MODULES: dict[str, str] = {
-    '160dbb658a1648461e4a4e2cfa5f76cfdc4e345049eaa8ce6bb406a5cda9f137': 'paper_slider_crank',
-    'a0464d16b9c1006cc4d7ee11a91d6d5aa57a3fbfaa57ec965908978211292d29': 'slider_crank_two_clearances',
-    '28a89f57fc5dba4a960243750a5a62120116b9a1ae02a87bd5639d843a6d562c': 'four_bar',
-    'e1cdeadfd8630da6f433ecc834145a8f878837e42eb016872a3f3bdb60c712c2': 'paper_slider_crank_friction',
+    '3f7d55226b938a3fb5a40dd52d9e306b8954707276f4497eeab2d9dd0a9c8215': 'paper_slider_crank',
+    'c3ba4dbde5821463ab2b856d627e24d852026d948b6b2e0499600f45a02611ec': 'slider_crank_two_clearances',
+    'd6cf89a4be4d4da3a0fcb0e57104f74c1f18d9fb50d5fba72aa16c020cdae5b4': 'four_bar',
+    'd12f7193fceb8a37082857d1c19f95f4f1b9f30253e035acc7ec2b126055ab79': 'paper_slider_crank_friction',
 }

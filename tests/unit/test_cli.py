@@ -234,7 +234,7 @@ def _forbid_computing(monkeypatch):
                          (sens_mod, "sensitivities"), (wp, "run"), (stress, "run_sweep"),
                          (rep, "section_mechanism"), (rep, "section_response")):
         monkeypatch.setattr(module, name, forbidden)
-    for plugin, name in (("benchmarks.work_precision", "run"), ("stress", "run_sweep"),
+    for plugin, name in (("work_precision", "run"), ("stress", "run_sweep"),
                          ("report", "section_mechanism"), ("report", "section_response")):
         for module in _plugin_modules(plugin):
             monkeypatch.setattr(module, name, forbidden)
