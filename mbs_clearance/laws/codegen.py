@@ -84,7 +84,7 @@ def render() -> str:
            '(`registry`): do not\nedit. The values are the laws\' own formulas compiled by '
            'numba; the partial derivatives\nare sympy\'s, printed."""',
            "", "import math  # noqa: F401", "", "import numba as nb", "",
-           "from .._kernel import KERNEL"]
+           "from ..numerics._kernel import KERNEL"]
     for i, law in enumerate(CONTACT):
         out.append(f"from {_module(law).replace('mbs_clearance.laws', '')} import "
                    f"hysteresis as _xi{i}_py")

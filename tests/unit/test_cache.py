@@ -470,16 +470,16 @@ def test_a_read_only_copy_of_mbs_clearance_imports_and_computes_the_same(tmp_pat
 
 
 @pytest.mark.slow
-def test_an_edit_of_contact_py_is_computed_by_the_next_import_of_mbs_clearance(tmp_path):
-    """The paper's generated rhs (reduced.MODEL.rhs) inlines contact.contact_force: doubling
-    the force in contact.py doubles the slider's acceleration -F nx / m4 in the next
+def test_an_edit_of_the_contact_force_is_computed_by_the_next_import_of_mbs_clearance(tmp_path):
+    """The paper's generated rhs (reduced.MODEL.rhs) inlines laws.forces.contact_force: doubling
+    the force in laws/forces.py doubles the slider's acceleration -F nx / m4 in the next
     process."""
     site = copy_packages(tmp_path / "site", ("mbs_clearance",))
     env = clean_env([site])
     before, _ = run(RHS_RUN, env)
     assert Path(before["file"]).is_relative_to(site)
     assert before["hits"] == 1 and before["misses"] == 0    # nothing recompiled
-    edit(site / "mbs_clearance" / "contact.py", *CONTACT_EDIT)
+    edit(site / "mbs_clearance" / "laws" / "forces.py", *CONTACT_EDIT)
     after, _ = run(RHS_RUN, env)
     assert after["misses"] == 1 and after["path"] != before["path"]
     assert after["rhs"][3] == 2.0 * before["rhs"][3] != 0.0
@@ -507,7 +507,7 @@ def test_an_edit_of_the_generated_runtime_is_computed_by_validation_stress(tmp_p
 
 @pytest.mark.slow
 def test_the_race_with_the_real_package(tmp_path):
-    """As the small race test, with mbs_clearance: A imports, contact.py is edited, B
+    """As the small race test, with mbs_clearance: A imports, laws/forces.py is edited, B
     imports, A compiles reduced.MODEL.outputs for a new signature (F-ordered states) and caches
     it, B compiles the same: B's contact force is twice A's."""
     site = copy_packages(tmp_path / "site", ("mbs_clearance",))
@@ -531,7 +531,7 @@ def test_the_race_with_the_real_package(tmp_path):
                           "misses": sum(st.cache_misses.values())}))
     """)
     a = Waiting(first, then, env)
-    edit(site / "mbs_clearance" / "contact.py", *CONTACT_EDIT)
+    edit(site / "mbs_clearance" / "laws" / "forces.py", *CONTACT_EDIT)
     b = Waiting(first, then, env)
     ra = a.go()
     rb = b.go()
