@@ -1,9 +1,10 @@
 """Keep numba's on-disk cache of the compiled kernels consistent with their sources.
 
 numba checks a cached kernel against its *own* source file only, but a kernel contains the
-code of every function it calls: a generated model's `rhs` inlines laws/forces.py and numerics/_trig.py,
-`validation.stress._step_excursion` inlines generate/runtime.py and numerics/integrator.py. After an edit of
-such a helper numba would go on loading the old machine code. And a process that imported
+code of every function it calls: a generated model's `rhs` inlines laws/forces.py and
+numerics/_trig.py, `validation.stress._step_excursion` inlines generate/runtime.py and
+numerics/integrator.py. After an edit of such a helper numba would go on loading the old
+machine code. And a process that imported
 the old sources but compiles after the edit would write old code into the cache for everyone.
 
 A package that calls `register_package` in its ``__init__`` (mbs_clearance; validation with
