@@ -82,7 +82,13 @@ _NUMBA_DIR = os.path.dirname(os.path.abspath(numba.__file__)) + os.sep
 
 
 def _source_files(root: Path) -> list[Path]:
-    return sorted(p for p in root.rglob("*.py") if "__pycache__" not in p.parts)
+    # called for every kernel defined: the walk skips the __pycache__ folders (the kernel
+    # caches, hundreds of files) instead of listing them and filtering
+    found = []
+    for folder, subfolders, names in os.walk(root):
+        subfolders[:] = [d for d in subfolders if d != "__pycache__"]
+        found.extend(Path(folder) / n for n in names if n.endswith(".py"))
+    return sorted(found)
 
 
 def _stat_signature(files: list[Path]) -> tuple:
