@@ -39,6 +39,8 @@ _LAZY = {
     **dict.fromkeys(("PeakGradient", "peak_gradient"), "objective"),
     **dict.fromkeys(("OptimizationResult", "optimize_link_lengths"), "optimize"),
     **dict.fromkeys(("PoincareSection", "poincare_section"), "poincare"),
+    **dict.fromkeys(("PeriodicOrbit", "periodic_orbit", "Branch", "continue_orbits"),
+                    "periodic"),
     **dict.fromkeys(("DEFAULT_PARAMETERS", "Sensitivities", "sensitivities"), "sensitivity"),
     **dict.fromkeys(("BACKENDS", "peak_base_force", "simulate"), "simulate"),
     **dict.fromkeys(("MapResult", "regime_map"), "sweep"),
@@ -92,6 +94,7 @@ __all__ = [
     "tolerance_study", "ToleranceResult",
     "poincare_section", "PoincareSection", "lyapunov_exponent", "LyapunovResult",
     "regime_map", "MapResult",
+    "periodic_orbit", "PeriodicOrbit", "continue_orbits", "Branch",
     "MbsClearanceWarning", "AccuracyWarning", "PhysicsWarning", "CacheWarning",
 ]
 
