@@ -385,17 +385,22 @@ def _newton(sh, x, modes, vel, period, tol, max_iterations, trajectory):
 #: kinds of the detected points of a branch
 POINT_KINDS = ("fold", "period_doubling", "neimark_sacker", "grazing")
 
+#: a located fold with no multiplier within this distance of +1 is marked non-smooth
+FOLD_MU_TOL = 0.05
+
 
 @dataclass
 class BranchPoint:
     """A detected point of a branch: `kind` (POINT_KINDS), the field's value located to
-    +- `tolerance` (bisection on the arclength), the multipliers there and a note."""
+    +- `tolerance` (bisection on the arclength), the multipliers there, a note, and `index`:
+    the branch's orbit after which it lies."""
 
     kind: str
     value: float
     tolerance: float
     multipliers: np.ndarray
     note: str = ""
+    index: int = -1
 
 
 @dataclass
@@ -667,7 +672,9 @@ def continue_orbits(mech, field_name: str, start: float, stop: float, *, period:
         kinds = _crossings(cur, pt)
         pts.append(pt)
         for kind in kinds:
-            found.append(_locate(con, cur, pt, kind, modes, held, tol, locate_tol))
+            point = _locate(con, cur, pt, kind, modes, held, tol, locate_tol)
+            point.index = len(pts) - 2
+            found.append(point)
         if progress is not None:
             progress(len(pts), con.value_of(wn[-1]))
         if info["iterations"] <= 3:
@@ -731,8 +738,12 @@ def _crossings(a, b) -> list:
 def _test_value(kind, pt):
     if kind == "grazing":
         return None
+    if kind == "fold":
+        # the field's component of the tangent: it changes sign at every fold, also where
+        # the map's smoothness changes there (no multiplier at +1)
+        return pt["t"][-1]
     f, p, n, _ = pt["tests"]
-    return {"fold": f, "period_doubling": p, "neimark_sacker": n}[kind]
+    return {"period_doubling": p, "neimark_sacker": n}[kind]
 
 
 def _locate(con, a, b, kind, modes, held, tol, locate_tol) -> BranchPoint:
@@ -751,7 +762,8 @@ def _locate(con, a, b, kind, modes, held, tol, locate_tol) -> BranchPoint:
         if new is None:
             break
         wm, info = new
-        pm = dict(w=wm, onsets=info["onsets"], tests=_tests(info["A"]))
+        pm = dict(w=wm, onsets=info["onsets"], tests=_tests(info["A"]),
+                  t=_tangent_of(info["J"], a["t"]))
         if kind == "grazing":
             same = np.array_equal(pm["onsets"], a["onsets"])
         else:
@@ -766,6 +778,11 @@ def _locate(con, a, b, kind, modes, held, tol, locate_tol) -> BranchPoint:
     note = ""
     if kind == "grazing":
         note = f"onsets per period {list(a['onsets'])} -> {list(b['onsets'])}"
+    if kind == "fold" and np.min(np.abs(mu - 1.0)) > FOLD_MU_TOL:
+        note = ("no multiplier at +1: the map's smoothness changes at this fold (e.g. a "
+                "contact force reaching zero within a contact phase)")
+    if hi - lo > 0.0 and abs(ub - ua) > locate_tol:
+        note += ("; " if note else "") + "bisection stopped (corrector did not converge)"
     return BranchPoint(kind=kind, value=value, tolerance=half,
                        multipliers=mu[np.argsort(-np.abs(mu), kind="stable")], note=note)
 

@@ -176,3 +176,100 @@ def test_no_convergence_says_what_to_try():
     # from the centred start (no settling) one iteration cannot reach the orbit
     with pytest.raises(RuntimeError, match="try a guess from a settled run"):
         periodic_orbit(PAPER, settle=0, max_iterations=1, trajectory=False)
+
+
+@pytest.fixture(scope="module")
+def paper_branch():
+    # 120 orbits along clearance from the paper's design (about 40 s on a quiet machine)
+    return continue_orbits(PAPER, "clearance", 1e-5, 2e-5, step=0.1, max_step=3.0,
+                           max_points=120)
+
+
+@pytest.mark.slow
+def test_period_doublings_of_the_branch_are_where_plain_shooting_sees_minus_one(
+        paper_branch):
+    """Each period doubling located by bisection on the arclength (to +- 3e-10 m measured)
+    is confirmed by plain shooting (no arclength, no bisection) at 20 tolerances either
+    side, from the branch's orbit there: the multiplier nearest -1 lies on opposite sides
+    of -1. Measured: doublings at 0.0121101 and 0.0121885 mm."""
+    branch = paper_branch
+    doublings = [p for p in branch.points if p.kind == "period_doubling"]
+    assert doublings
+    for p in doublings:
+        assert p.tolerance < 1e-4 * p.value
+        i = p.index
+        guess = (branch.states[i], np.ones(1), branch.impact_velocities[i])
+        sides = []
+        for sign in (-1.0, 1.0):
+            c = p.value + sign * 20 * max(p.tolerance, 1e-12)
+            mech = PAPER.replace(journal_radius=PAPER.bearing_radius - c)
+            orbit = periodic_orbit(mech, guess=guess, trajectory=False, max_iterations=20)
+            mu = orbit.multipliers
+            real = mu[np.abs(mu.imag) < 1e-9].real
+            sides.append(real[np.argmin(np.abs(real + 1.0))])
+        assert (sides[0] + 1.0) * (sides[1] + 1.0) < 0.0, sides
+
+
+@pytest.mark.slow
+def test_branch_points_are_orbits_of_the_map(paper_branch):
+    """Every orbit of the branch is a fixed point of the plain map at its clearance (rtol
+    as the shooting's) to the Newton tolerance, and its stability is the multipliers'."""
+    from mbs_clearance.periodic import with_field
+
+    branch = paper_branch
+    for i in range(0, len(branch.values), 17):
+        mech = with_field(PAPER, "clearance", branch.values[i])
+        xe, me, ve, _ = return_map(mech, branch.states[i], np.ones(1),
+                                   branch.impact_velocities[i])
+        scale = np.concatenate([[PAPER.clearance / PAPER.coupler_length, PAPER.clearance],
+                                PAPER.crank_speed * np.array([
+                                    PAPER.clearance / PAPER.coupler_length,
+                                    PAPER.clearance])])
+        assert np.max(np.abs((xe - branch.states[i]) / scale)) < 1e-5
+        mu = branch.multipliers[i]
+        assert branch.stable[i] == bool(np.nanmax(np.abs(mu)) < 1.0)
+
+
+def test_cli_orbits_prints_the_python_functions_multipliers(paper_orbit, capsys):
+    """`orbits` prints the stability and the multipliers of `periodic_orbit` for the same
+    design (the paper's by default; its default guess, 20 settling revolutions)."""
+    import re
+
+    from mbs_clearance.cli import main
+
+    assert main(["orbits"]) == 0
+    out = capsys.readouterr().out
+    assert "period-1 orbit of the paper's slider-crank: stable" in out
+    printed = [float(v) for v in re.findall(r"\|mu\| = (\S+)", out)]
+    np.testing.assert_allclose(printed[:2], np.abs(paper_orbit.multipliers[:2]), rtol=1e-4)
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--field", "clearance", "--start", "1e-5"], "--field, --start and --stop go together"),
+    (["--plot", "x.png"], "--plot and --map draw a branch"),
+    (["--period", "0"], "argument --period: must be an integer >= 1; got 0"),
+])
+def test_cli_orbits_bad_input_is_one_line_before_any_run(argv, message, capsys,
+                                                          monkeypatch):
+    from mbs_clearance import periodic
+    from mbs_clearance.cli import main
+
+    monkeypatch.setattr(periodic, "periodic_orbit", lambda *a, **k: pytest.fail("ran"))
+    monkeypatch.setattr(periodic, "continue_orbits", lambda *a, **k: pytest.fail("ran"))
+    with pytest.raises(SystemExit) as exc:
+        main(["orbits", *argv])
+    assert exc.value.code == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and message in err, err
+
+
+def test_cli_orbits_branch_writes_the_diagram(tmp_path, capsys):
+    """A short branch over clearance: the summary line and the diagram's file."""
+    from mbs_clearance.cli import main
+
+    plot = tmp_path / "branch.png"
+    assert main(["orbits", "--field", "clearance", "--start", "1e-5", "--stop", "1.01e-5",
+                 "--max-points", "4", "--plot", str(plot)]) == 0
+    out = capsys.readouterr().out
+    assert "branch over clearance: 4 orbits of period 1" in out
+    assert plot.stat().st_size > 10_000
