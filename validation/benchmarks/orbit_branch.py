@@ -33,7 +33,7 @@ def main(argv=None) -> int:
     # warm the kernels (compiled once per source digest) outside the timings
     continue_orbits(mech, "clearance", args.start, args.start * 1.001, max_points=2)
     regime_map(paper, [f"clearance={args.start},{args.start * 1.001}"], revolutions=4,
-               keep=2, max_period=1, workers=1)
+               keep=3, max_period=1, workers=1)
     t0 = time.perf_counter()
     branch = continue_orbits(mech, "clearance", args.start, args.stop, step=0.1,
                              max_step=3.0, max_points=args.max_points, stop_at_first=True)
