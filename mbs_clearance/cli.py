@@ -1450,6 +1450,9 @@ def _add_orbits_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--stop", type=finite_float, help="last value of --field (SI; default: none)")
     p.add_argument("--max-points", type=int_at_least(2), default=200,
                    help="most orbits computed along the branch")
+    p.add_argument("--max-step", type=positive_float, default=3.0,
+                   help="largest continuation step (in clearances of the scaled state and "
+                        "of the field's range)")
     p.add_argument("--map", type=Path, metavar="FILE",
                    help="a regime map (map.nc of mbs-clearance map) under the diagram "
                         "(default: none)")
@@ -1500,7 +1503,8 @@ def _cmd_orbits(args: argparse.Namespace) -> int:
         return 0
     _progress(f"branch of {name} over {args.field} ...")
     branch = continue_orbits(mech, args.field, args.start, args.stop, period=args.period,
-                             settle=args.settle, rtol=args.rtol, max_points=args.max_points)
+                             settle=args.settle, rtol=args.rtol, max_points=args.max_points,
+                             step=min(0.1, args.max_step), max_step=args.max_step)
     print(branch.summary())
     print(f"({branch.counters['shooting_runs']} shooting runs, "
           f"{time.perf_counter() - t0:.3g} s)")

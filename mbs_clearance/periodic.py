@@ -595,8 +595,8 @@ def _tests(A):
 
 
 def continue_orbits(mech, field_name: str, start: float, stop: float, *, period: int = 1,
-                    guess=None, step: float = 0.02, min_step: float = 1e-5,
-                    max_step: float = 0.1, max_points: int = 200, log: bool | None = None,
+                    guess=None, step: float = 0.1, min_step: float = 1e-5,
+                    max_step: float = 3.0, max_points: int = 200, log: bool | None = None,
                     rtol: float | None = None, tol: float = NEWTON_TOL,
                     locate_tol: float = 1e-4, settle: int = SETTLE, method: str = "dop853",
                     stop_at_first: bool = False, progress=None) -> Branch:
