@@ -43,6 +43,8 @@ _LAZY = {
     **dict.fromkeys(("MapResult", "regime_map"), "studies.sweep"),
     **dict.fromkeys(("ToleranceResult", "tolerance_study"), "studies.tolerance"),
     **dict.fromkeys(("Trajectory", "load_trajectory"), "solve.trajectory"),
+    **dict.fromkeys(("PeriodicOrbit", "periodic_orbit", "Branch", "continue_orbits"),
+                    "analysis.periodic"),
 }
 
 
@@ -76,6 +78,7 @@ __all__ = [
     "tolerance_study", "ToleranceResult",
     "poincare_section", "PoincareSection", "lyapunov_exponent", "LyapunovResult",
     "regime_map", "MapResult",
+    "periodic_orbit", "PeriodicOrbit", "continue_orbits", "Branch",
     "MbsClearanceWarning", "AccuracyWarning", "PhysicsWarning", "CacheWarning",
 ]
 

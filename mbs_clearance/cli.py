@@ -888,6 +888,7 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     _add_map_parser(sub)
     _add_animate_parser(sub)
     _add_lyapunov_parser(sub)
+    _add_orbits_parser(sub)
     if command not in BUILTIN:
         _add_plugins(sub, command)
     return parser
@@ -1448,6 +1449,98 @@ def _regime_line(res) -> str:
     return words
 
 
+def _add_orbits_parser(subparsers) -> argparse.ArgumentParser:
+    """The ``orbits`` subcommand: a periodic orbit and its stability, or a branch of them."""
+    p = subparsers.add_parser(
+        "orbits", help="periodic orbit by shooting, its Floquet multipliers; a branch "
+                       "over a field with its bifurcations",
+        description="Find the periodic orbit of a design by Newton shooting on the state at "
+                    "the crank-angle section (the monodromy matrix from the variational "
+                    "run), print its section state, Floquet multipliers and stability. With "
+                    "--field, --start and --stop, continue it by pseudo-arclength in that "
+                    "field, print the folds, period doublings, Neimark-Sacker and grazing "
+                    "points found, and with --plot draw the bifurcation diagram (over the "
+                    "brute-force samples of a saved regime map with --map).",
+        epilog="named cases (--case NAME; --set NAME=VALUE changes a value):\n"
+               + _case_lines())
+    add_linkage_options(p)
+    p.add_argument("--period", type=int_at_least(1), default=1,
+                   help="period of the orbit in crank revolutions")
+    p.add_argument("--settle", type=int_at_least(0), default=20,
+                   help="revolutions of the plain run that gives Newton's first guess")
+    p.add_argument("--rtol", type=positive_float,
+                   help="relative tolerance of the shooting runs (default 1e-10)")
+    p.add_argument("--field", metavar="NAME",
+                   help="continue the orbit in this field (a sweep field: clearance, "
+                        "crank_speed, a case override or a dotted field; default: none)")
+    p.add_argument("--start", type=finite_float, help="first value of --field (SI; default: none)")
+    p.add_argument("--stop", type=finite_float, help="last value of --field (SI; default: none)")
+    p.add_argument("--max-points", type=int_at_least(2), default=200,
+                   help="most orbits computed along the branch")
+    p.add_argument("--max-step", type=positive_float, default=3.0,
+                   help="largest continuation step (in clearances of the scaled state and "
+                        "of the field's range)")
+    p.add_argument("--map", type=Path, metavar="FILE",
+                   help="a regime map (map.nc of mbs-clearance map) under the diagram "
+                        "(default: none)")
+    p.add_argument("--plot", type=Path, metavar="FILE",
+                   help="bifurcation diagram of the branch (.png, .pdf, .svg; default: none)")
+    add_force_option(p)
+    add_mechanism_options(p)
+    p.set_defaults(func=_cmd_orbits)
+    return p
+
+
+def _cmd_orbits(args: argparse.Namespace) -> int:
+    from .periodic import continue_orbits, periodic_orbit, plot_branch
+
+    linkage, mech = design_from_args(args)
+    name = linkage.name if linkage is not None else "the paper's slider-crank"
+    branch_args = (args.field, args.start, args.stop)
+    if any(a is not None for a in branch_args) and any(a is None for a in branch_args):
+        raise ValueError("--field, --start and --stop go together (a branch); give all three "
+                         "or none")
+    if args.field is None and (args.plot or args.map):
+        raise ValueError("--plot and --map draw a branch: give --field, --start and --stop")
+    regime = None
+    if args.map is not None:
+        from .sweep import load_map
+
+        regime = load_map(args.map)
+    if args.plot:
+        check_output_file(args.plot, "--plot", args.force, suffixes=figure_suffixes())
+    t0 = time.perf_counter()
+    if args.field is None:
+        _progress(f"periodic orbit of {name} ...")
+        orbit = periodic_orbit(mech, args.period, settle=args.settle, rtol=args.rtol,
+                               trajectory=False)
+        print(f"period-{orbit.period} orbit of {name}: {orbit.stability} (Newton: "
+              f"{orbit.iterations} iterations, residual {orbit.residual:.2g} of the "
+              f"clearance; {time.perf_counter() - t0:.3g} s)")
+        coords = orbit.unknowns[:len(orbit.state)]
+        for c, v in zip(coords, orbit.state):
+            print(f"  {c:<28s} {v: .10g}")
+        for j, (m, v) in enumerate(zip(orbit.modes, orbit.impact_velocities)):
+            print(f"  joint {j}: {'contact' if m else 'free flight'} at the section, stored "
+                  f"impact velocity {v:.6g} m/s, {int(orbit.onsets[j])} contact onset(s) per "
+                  "period")
+        print("Floquet multipliers (largest first; |mu| < 1 for all: stable):")
+        for mu in orbit.multipliers:
+            print(f"  {mu.real: .6g}{mu.imag:+.3g}j  |mu| = {abs(mu):.6g}")
+        return 0
+    _progress(f"branch of {name} over {args.field} ...")
+    branch = continue_orbits(mech, args.field, args.start, args.stop, period=args.period,
+                             settle=args.settle, rtol=args.rtol, max_points=args.max_points,
+                             step=min(0.1, args.max_step), max_step=args.max_step)
+    print(branch.summary())
+    print(f"({branch.counters['shooting_runs']} shooting runs, "
+          f"{time.perf_counter() - t0:.3g} s)")
+    if args.plot:
+        plot_branch(branch, args.plot, regime_map=regime)
+        wrote(args.plot, "bifurcation diagram")
+    return 0
+
+
 #: entry-point group through which other packages (this project's `validation`) add
 #: subcommands: each entry is a callable register(subparsers), optionally with attributes
 #: `help` and `description` for listing it without importing it
@@ -1457,7 +1550,7 @@ PLUGIN_GROUP = "mbs_clearance.commands"
 
 #: the subcommands defined here (the others come from plugins)
 BUILTIN = ("simulate", "sensitivity", "optimize", "tolerance", "map", "animate",
-           "lyapunov")
+           "lyapunov", "orbits")
 
 
 def _add_plugins(sub, command: str | None = None) -> None:

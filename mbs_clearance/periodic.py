@@ -1,0 +1,852 @@
+"""Periodic orbits of a constant-speed mechanism and their stability: Newton shooting on
+the state at a crank-angle section, with the monodromy matrix from the variational run.
+
+The return map. A constant-speed drive repeats the equations every revolution, so the
+state after `period` revolutions from t = 0 is a map P of the state at t = 0; a periodic
+orbit is a fixed point of P. The hybrid state is the mechanical state x = (q, qdot)
+(2 N_Q: the generated model's coordinates and rates) and, per clearance joint, its contact
+mode and the stored impact velocity v_j (the contact law's memory). The mode is discrete:
+it is carried through the shooting and must be the same at both ends. The memory enters
+the map by what it does in one period:
+
+- a joint with a contact onset within the period: its memory at the end is set at that
+  onset, a function of the state (the event-time term, `sens_runtime.sens_on_event`), and
+  the memory at the start acts on the motion until then (where the joint is in contact at
+  the section). Its v_j is an unknown of the shooting and a row and column of the
+  monodromy matrix: the multipliers are those of the full hybrid map.
+- a joint with no onset within the period (in permanent contact, the paper's design, or
+  in free flight throughout): its memory is never overwritten, P leaves it unchanged, so
+  the hybrid map has the multiplier exactly 1 along it whatever the motion's stability:
+  nearby memories give nearby periodic orbits, a family (lyapunov.py's module docstring).
+  Its v_j is held at the guess's value (a parameter of the orbit, not an unknown), and its
+  row and column are left out: the multipliers are those of the mechanical state for that
+  memory, as the Lyapunov exponent's memory "reset". With them in, Newton's matrix
+  P' - I would be singular and the verdict could never be "stable".
+
+The monodromy matrix comes from one run of the sensitivity equations (linkage_ddm,
+generate/sens_runtime.py) with no parameter and 2 N_Q + J directions: the scaled unit
+vectors of the state (positions in clearances, angles in clearance / length, rates times
+the drive speed: `lyapunov._tangent_scale`) and of each memory (clearance x drive
+speed). The tangent of the state does not jump at contact switches, the memory's is set at
+each onset with the event-time term: the matrix is that of the non-smooth map (checked
+against central finite differences of the map, tests/unit/test_periodic.py).
+
+Stability: "stable" where every multiplier lies inside the unit circle, else "unstable".
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ._checks import check_int, check_real
+from .integrator import RESULTS
+from .linkage import Linkage
+from .lyapunov import _tangent_scale
+from .mechanism import SliderCrank
+from .poincare import Flow, clearances_of, drive_of, joints_of
+
+__all__ = ["PeriodicOrbit", "periodic_orbit", "return_map", "Branch", "BranchPoint",
+           "continue_orbits", "plot_branch", "field_value", "with_field", "SHOOTING_RTOL",
+           "NEWTON_TOL", "POINT_KINDS"]
+
+#: default relative tolerance of the shooting runs (the map's error must stay well below
+#: the Newton tolerance)
+SHOOTING_RTOL = 1e-10
+
+#: default Newton tolerance: the largest scaled component of P(z) - z (fractions of the
+#: clearance, of clearance x speed for rates)
+NEWTON_TOL = 1e-6
+
+#: largest Newton step, scaled (clearances; clearance x speed for rates)
+MAX_STEP = 0.5
+
+#: default settling revolutions of the guess (a plain run from the centred start)
+SETTLE = 20
+
+
+@dataclass
+class PeriodicOrbit:
+    """A periodic orbit of `period` drive revolutions found by shooting.
+
+    `state` (2 N_Q,) is the generated model's coordinates and rates at the section
+    (t = 0, the drive at its initial angle), `modes` and `impact_velocities` (J,) each
+    clearance joint's contact mode and stored impact velocity there; `multipliers` the
+    Floquet multipliers (complex, largest modulus first) of the return map over the
+    unknowns `unknowns` (coordinate names, then "<joint>.impact_velocity" of the joints
+    with a contact onset per period; the module docstring), `monodromy` its matrix in
+    scaled variables (`scale`); `stability` "stable" or "unstable"; `iterations` the
+    Newton iterations, `residual` the final max |P(z) - z| in scaled units; `onsets`
+    the contact onsets per joint over one period; `trajectory` the orbit over `period`
+    revolutions (None where not asked for)."""
+
+    mech: object
+    period: int
+    state: np.ndarray
+    modes: np.ndarray
+    impact_velocities: np.ndarray
+    multipliers: np.ndarray
+    monodromy: np.ndarray
+    unknowns: tuple
+    scale: np.ndarray
+    stability: str
+    iterations: int
+    residual: float
+    onsets: np.ndarray
+    rtol: float
+    trajectory: object = None
+    history: list = field(default_factory=list)
+
+    @property
+    def spectral_radius(self) -> float:
+        """Largest modulus of the multipliers."""
+        return float(np.max(np.abs(self.multipliers))) if len(self.multipliers) else 0.0
+
+    @property
+    def contact_phases(self) -> int:
+        """Contact onsets per period, all joints."""
+        return int(np.sum(self.onsets))
+
+    def start(self):
+        """The section state as a `linkage_model.Start` (of the mechanism's linkage: a
+        SliderCrank's `cases.from_slider_crank`), to run from the orbit."""
+        from .linkage_model import Start
+
+        return Start(y=self.state.copy(), modes=self.modes.copy(),
+                     impact_velocities=self.impact_velocities.copy(), revolutions=0,
+                     linkage=_linkage_of(self.mech).name)
+
+
+def _linkage_of(mech):
+    if isinstance(mech, SliderCrank):
+        from .cases import from_slider_crank
+
+        return from_slider_crank(mech)
+    return mech
+
+
+class _Shooter:
+    """The return map of `mech` over `period` revolutions: plain (`value`) and with the
+    monodromy matrix (`jacobian`), from a state x and memory (modes, impact velocities)."""
+
+    def __init__(self, mech, period: int, rtol: float, method: str):
+        from .linkage_ddm import pack_sensitivity_parameters, sensitivity_atol
+
+        flow = Flow(mech, rtol=rtol, method=method)
+        self.mech = mech
+        self.model = model = flow.model
+        self.n2 = n2 = 2 * model.N_Q
+        self.J = J = model.N_EVENTS
+        self.p0 = flow.p.copy()
+        self.y0 = flow.y.copy()
+        self.n_state = len(self.y0)
+        self.mem0 = model.MEM_START
+        self.plain_kernel = flow.kernel
+        self.plain_settings = flow.settings
+        self.coefficients = flow.coefficients
+        self.omega, _ = drive_of(mech)
+        self.edges = np.arange(period + 1) * 2.0 * math.pi / self.omega
+        self.scale = np.concatenate([_tangent_scale(mech, model),
+                                     clearances_of(mech) * self.omega])
+        self.joints = joints_of(mech)
+        nb = n2 + J
+        self.nb = nb
+        self.sp = pack_sensitivity_parameters(model, self.p0, [{}] * nb, True)
+        # each column a perturbation of the size of the state's scales: the state's atol
+        atol = sensitivity_atol(model, flow.settings.atol, [1.0] * nb)
+        self.sens_settings = flow.settings._replace(atol=atol, n_err=n2 * (1 + nb))
+        self.sens_kernel = model.integrate_sens
+        self.rtol = flow.rtol
+        self.guess_flow = flow
+
+    def memory(self, p) -> tuple[np.ndarray, np.ndarray]:
+        m = p[self.mem0:self.mem0 + 2 * self.J]
+        return m[0::2].copy(), m[1::2].copy()
+
+    def _set_memory(self, p, modes, vel):
+        p[self.mem0:self.mem0 + 2 * self.J:2] = modes
+        p[self.mem0 + 1:self.mem0 + 2 * self.J:2] = vel
+
+    def _call(self, kernel, y, p, settings):
+        ts, ys, ms, peaks, _, counters, _, status = kernel(y, p, self.edges, settings,
+                                                           self.coefficients)
+        status = RESULTS(int(status))
+        if status is not RESULTS.success:
+            raise RuntimeError(f"integration of the return map failed at about t = "
+                               f"{ts[-1] if len(ts) else 0.0:.6g} s: {status.message}")
+        return ys[-1], ms, peaks
+
+    def onsets(self, modes0, ms) -> np.ndarray:
+        """Contact onsets per joint in a run's record (modes from modes0 at the start)."""
+        out = np.zeros(self.J, dtype=int)
+        for j in range(self.J):
+            m = np.concatenate([[modes0[j]], ms[:, 2 * j]])
+            out[j] = int(np.sum((m[1:] > 0.5) & (m[:-1] < 0.5)))
+        return out
+
+    def value(self, x, modes, vel):
+        """P: (end state, end modes, end impact velocities, onsets per joint, peaks)."""
+        p = self.p0.copy()
+        self._set_memory(p, modes, vel)
+        y = np.concatenate([x, np.zeros(self.n_state - self.n2)])
+        ye, ms, peaks = self._call(self.plain_kernel, y, p, self.plain_settings)
+        m, v = self.memory(p)
+        return ye[:self.n2].copy(), m, v, self.onsets(modes, ms), peaks
+
+    def jacobian(self, x, modes, vel):
+        """As `value`, with the monodromy matrix (n2 + J, n2 + J) in scaled variables."""
+        n2, nb, J = self.n2, self.nb, self.J
+        p = self.sp.copy()
+        self._set_memory(p, modes, vel)
+        s0 = np.zeros((nb, n2))
+        s0[np.arange(n2), np.arange(n2)] = self.scale[:n2]
+        sig0 = np.zeros((nb, J))
+        for j in range(J):
+            sig0[n2 + j, j] = self.scale[n2 + j]
+        y = np.concatenate([x, s0.ravel(), [0.0], sig0.ravel()])
+        ye, ms, peaks = self._call(self.sens_kernel, y, p, self.sens_settings)
+        s = ye[n2:n2 * (1 + nb)].reshape(nb, n2)
+        sig = ye[n2 * (1 + nb) + 1:].reshape(nb, J)
+        M = np.empty((n2 + J, nb))
+        M[:n2] = s.T / self.scale[:n2, None]
+        M[n2:] = sig.T / self.scale[n2:, None]
+        m, v = self.memory(p)
+        return ye[:n2].copy(), m, v, self.onsets(modes, ms), peaks, M
+
+
+def return_map(mech, state, modes, impact_velocities, period: int = 1, *,
+               rtol: float | None = None, method: str = "dop853", jacobian: bool = False):
+    """The state after `period` drive revolutions from (state, modes, impact_velocities)
+    at t = 0: (end state, end modes, end impact velocities, onsets per joint), and with
+    `jacobian` the monodromy matrix in scaled variables (module docstring) last."""
+    sh = _Shooter(mech, check_int("period", period, 1),
+                  SHOOTING_RTOL if rtol is None else rtol, method)
+    x, modes, vel = _check_state(sh, state, modes, impact_velocities)
+    out = (sh.jacobian if jacobian else sh.value)(x, modes, vel)
+    return out[:4] + ((out[5],) if jacobian else ())
+
+
+def _check_state(sh, state, modes, vel):
+    x = np.asarray(state, dtype=float)
+    modes = np.asarray(modes, dtype=float).reshape(-1)
+    vel = np.asarray(vel, dtype=float).reshape(-1)
+    if x.shape != (sh.n2,) or not np.all(np.isfinite(x)):
+        raise ValueError(f"state must be {sh.n2} finite numbers (the coordinates "
+                         f"{list(sh.model.COORDINATES)} and their rates); got {state!r}")
+    if modes.shape != (sh.J,) or not np.all((modes == 0.0) | (modes == 1.0)):
+        raise ValueError(f"modes must be {sh.J} values 0 (free) or 1 (contact), one per "
+                         f"clearance joint {list(sh.joints)}; got {modes!r}")
+    if vel.shape != (sh.J,) or not np.all(np.isfinite(vel)) or np.any(vel < 0.0):
+        raise ValueError(f"impact_velocities must be {sh.J} finite numbers >= 0 (m/s), one "
+                         f"per clearance joint {list(sh.joints)}; got {vel!r}")
+    return x, modes, vel
+
+
+def _guess_of(sh, guess, settle: int):
+    """(x, modes, impact velocities) to start Newton from."""
+    from .linkage_model import Start
+
+    if guess is None:
+        flow = sh.guess_flow
+        for k in range(settle):
+            flow.advance((k + 1) * 2.0 * math.pi / sh.omega)
+        m, v = sh.memory(flow.p)
+        return flow.y[:sh.n2].copy(), m, v
+    if isinstance(guess, PeriodicOrbit):
+        return guess.state.copy(), guess.modes.copy(), guess.impact_velocities.copy()
+    if isinstance(guess, Start):
+        return _check_state(sh, guess.y, guess.modes, guess.impact_velocities)
+    if isinstance(guess, (tuple, list)) and len(guess) == 3:
+        return _check_state(sh, *guess)
+    raise ValueError("guess must be None (a settled run), a PeriodicOrbit, a "
+                     "linkage_model.Start or a tuple (state, modes, impact_velocities); got "
+                     f"{type(guess).__name__}")
+
+
+def periodic_orbit(mech, period: int = 1, guess=None, *, rtol: float | None = None,
+                   tol: float = NEWTON_TOL, max_iterations: int = 12, settle: int = SETTLE,
+                   method: str = "dop853", trajectory: bool = True) -> PeriodicOrbit:
+    """The periodic orbit of `mech` (a SliderCrank or a Linkage) of `period` drive
+    revolutions by Newton shooting on the state at the section t = 0 (the drive at its
+    initial angle), its Jacobian the monodromy matrix of the variational run (module
+    docstring); with the Floquet multipliers and the stability verdict.
+
+    guess: None (the state after `settle` revolutions of a plain run from the centred
+    start), a PeriodicOrbit (e.g. of a nearby design), a `linkage_model.Start`, or a tuple
+    (state, modes, impact_velocities). rtol: of the shooting runs (default
+    SHOOTING_RTOL); tol: Newton's tolerance on max |P(z) - z| in scaled units (fractions of
+    the clearance; of clearance x speed for rates). trajectory: also run the orbit through
+    `simulate` from the converged state (`PeriodicOrbit.trajectory`).
+
+    Raises ValueError for bad input before any computation, RuntimeError where Newton does
+    not converge within `max_iterations` (with what to try).
+    """
+    if not isinstance(mech, (SliderCrank, Linkage)):
+        raise ValueError(f"mech must be a SliderCrank or a Linkage; got {type(mech).__name__}")
+    period = check_int("period (drive revolutions)", period, 1, 64)
+    rtol = SHOOTING_RTOL if rtol is None else check_real("rtol", rtol, 1e-14, 1e-4)
+    tol = check_real("tol (Newton tolerance, scaled)", tol, 0.0, 1e-1, low_open=True)
+    max_iterations = check_int("max_iterations", max_iterations, 1, 200)
+    settle = check_int("settle (revolutions of the default guess)", settle, 0, 100_000)
+    sh = _Shooter(mech, period, rtol, method)
+    x, modes, vel = _guess_of(sh, guess, settle)
+    return _newton(sh, x, modes, vel, period, tol, max_iterations, trajectory)
+
+
+def _newton(sh, x, modes, vel, period, tol, max_iterations, trajectory):
+    n2, J = sh.n2, sh.J
+    S = sh.scale
+    history = []
+    res = math.inf
+    for it in range(1, max_iterations + 1):
+        try:
+            xe, me, ve, ons, _, M = sh.jacobian(x, modes, vel)
+        except RuntimeError as exc:
+            raise RuntimeError(f"periodic_orbit: {exc} (Newton iteration {it}); try a guess "
+                               "from a settled run or a tighter rtol") from exc
+        active = [j for j in range(J) if ons[j] > 0]
+        idx = list(range(n2)) + [n2 + j for j in active]
+        z = np.concatenate([x, vel[active]]) / S[idx]
+        ze = np.concatenate([xe, ve[active]]) / S[idx]
+        g = ze - z
+        res = float(np.max(np.abs(g)))
+        mode_change = bool(np.any(me != modes))
+        A = M[np.ix_(idx, idx)]
+        history.append(dict(residual=res, active=tuple(active), mode_change=mode_change,
+                            multipliers=np.linalg.eigvals(A)))
+        if res <= tol and not mode_change:
+            break
+        if mode_change:
+            # the end's contact mode differs: restart from the end of the period
+            x, modes, vel = xe, me, ve
+            continue
+        try:
+            dz = np.linalg.solve(A - np.eye(len(idx)), -g)
+        except np.linalg.LinAlgError as exc:
+            raise RuntimeError("periodic_orbit: a multiplier is 1 (Newton's matrix is "
+                               "singular): a fold of the orbit; try a nearby design or "
+                               "continue_orbits") from exc
+        # a step is at most MAX_STEP clearances (the orbit moves within the clearance)
+        big = float(np.max(np.abs(dz)))
+        if big > MAX_STEP:
+            dz *= MAX_STEP / big
+        # damped: halve a step whose map residual does not fall (the map is only piecewise
+        # smooth, and strongly nonlinear where contact forces switch); the smallest step
+        # is taken where none falls (an unstable orbit's neighbourhood can need it)
+        lam = 1.0
+        for _ in range(5):
+            zn = z + lam * dz
+            xn = zn[:n2] * S[:n2]
+            vn = vel.copy()
+            vn[active] = zn[n2:] * S[[n2 + j for j in active]]
+            if not np.any(vn < 0.0):
+                try:
+                    xe2, me2, ve2, _, _ = sh.value(xn, modes, vn)
+                except RuntimeError:
+                    xe2 = None
+                if xe2 is not None and not np.any(me2 != modes):
+                    ze2 = np.concatenate([xe2, ve2[active]]) / S[idx]
+                    if float(np.max(np.abs(ze2 - zn))) < res:
+                        break
+            if lam < 0.1:
+                break
+            lam *= 0.5
+        if np.any(vn < 0.0):
+            vn = np.maximum(vn, 0.0)
+        history[-1]["damping"] = lam
+        x, vel = xn, vn
+    else:
+        raise RuntimeError(
+            f"periodic_orbit: Newton did not converge in {max_iterations} iterations "
+            f"(residual {res:.3g} > tol {tol:g}, scaled); try a guess from a settled run "
+            "(settle=... more revolutions, or a Start / PeriodicOrbit of a nearby design), "
+            "a different period, or a tighter rtol")
+    mult = np.linalg.eigvals(A)
+    mult = mult[np.argsort(-np.abs(mult), kind="stable")]
+    names = tuple(sh.model.COORDINATES) + tuple(f"{c}_rate" for c in sh.model.COORDINATES)
+    unknowns = names + tuple(f"{sh.joints[j]}.impact_velocity" for j in active)
+    orbit = PeriodicOrbit(
+        mech=sh.mech, period=period, state=x.copy(), modes=modes.copy(),
+        impact_velocities=vel.copy(), multipliers=mult, monodromy=A, unknowns=unknowns,
+        scale=S[idx].copy(), stability="stable" if np.max(np.abs(mult)) < 1.0 else "unstable",
+        iterations=it, residual=res, onsets=ons, rtol=sh.rtol, history=history)
+    if trajectory:
+        from .simulate import simulate
+
+        orbit.trajectory = simulate(_linkage_of(sh.mech), period, rtol=sh.rtol,
+                                    start=orbit.start())
+    return orbit
+
+
+# ------------------------------------------------------------------------ continuation
+
+#: kinds of the detected points of a branch
+POINT_KINDS = ("fold", "period_doubling", "neimark_sacker", "grazing")
+
+#: a located fold with no multiplier within this distance of +1 is marked non-smooth
+FOLD_MU_TOL = 0.05
+
+
+@dataclass
+class BranchPoint:
+    """A detected point of a branch: `kind` (POINT_KINDS), the field's value located to
+    +- `tolerance` (bisection on the arclength), the multipliers there, a note, and `index`:
+    the branch's orbit after which it lies."""
+
+    kind: str
+    value: float
+    tolerance: float
+    multipliers: np.ndarray
+    note: str = ""
+    index: int = -1
+
+
+@dataclass
+class Branch:
+    """A branch of periodic orbits over `field`: per computed point the field's `values`,
+    the section `states` (n, 2 N_Q), the impact velocities (n, J), the `multipliers` (n,
+    padded with NaN where the memory unknowns differ), `stable` (n,), the contact onsets
+    per period (n, J), the section of each clearance joint (n, J, 4: eccentricity x, y in
+    m and its rates in m/s, as `poincare.Flow.section`), and the detected `points`;
+    `stopped` says why it ended."""
+
+    field: str
+    values: np.ndarray
+    states: np.ndarray
+    impact_velocities: np.ndarray
+    multipliers: np.ndarray
+    stable: np.ndarray
+    onsets: np.ndarray
+    points: list
+    stopped: str
+    period: int = 1
+    sections: np.ndarray | None = None
+    clearances: np.ndarray | None = None
+    counters: dict = field(default_factory=dict)
+
+    def summary(self) -> str:
+        """The branch in words: its range, stable points and detected points."""
+        lines = [f"branch over {self.field}: {len(self.values)} orbits of period "
+                 f"{self.period}, {self.values[0]:.6g} to {self.values[-1]:.6g} "
+                 f"({int(np.sum(self.stable))} stable); stopped: {self.stopped}"]
+        for p in self.points:
+            lines.append(f"  {p.kind} at {self.field} = {p.value:.8g} +- {p.tolerance:.2g}"
+                         f" (largest multipliers {_format_mu(p.multipliers[:2])})"
+                         + (f"; {p.note}" if p.note else ""))
+        return "\n".join(lines)
+
+
+def _format_mu(mu) -> str:
+    return ", ".join(f"{m.real:.4g}{m.imag:+.3g}j" if abs(m.imag) > 1e-12 else f"{m.real:.4g}"
+                     for m in np.asarray(mu))
+
+
+def field_value(mech, name: str) -> float:
+    """The value of sweep field `name` on `mech` (`sweep.design_at`'s names)."""
+    if isinstance(mech, SliderCrank):
+        if name == "clearance":
+            return float(mech.clearance)
+        from .mechanism import field_names
+
+        if name not in field_names():
+            raise ValueError(f"unknown field {name!r} of a SliderCrank; allowed: "
+                             f"{sorted(field_names()) + ['clearance']}")
+        return float(getattr(mech, name))
+    if name == "crank_speed":
+        return float(mech.drive.speed)
+    if name.endswith(".clearance"):
+        joint = name[:-len(".clearance")]
+        for cj in mech.clearance_joints:
+            if cj.name == joint:
+                return float(cj.clearance)
+        raise ValueError(f"unknown clearance joint {joint!r} of linkage {mech.name!r}")
+    from .design import design_value
+
+    return float(design_value(mech, name))
+
+
+def with_field(mech, name: str, value: float):
+    """`mech` with field `name` set to `value` (`sweep.design_at`)."""
+    from .sweep import design_at
+
+    return design_at(mech, {name: float(value)})
+
+
+class _Continuation:
+    """The extended system of pseudo-arclength continuation in u (the field, or its
+    logarithm), scaled: unknowns w = (z, u) with z the state and every joint's impact
+    velocity over the start's scales S0, u over `span`."""
+
+    def __init__(self, mech, name, period, rtol, method, log, span, u0):
+        self.mech0, self.name, self.period = mech, name, period
+        self.rtol, self.method, self.log = rtol, method, log
+        self.span, self.u0 = span, u0
+        self.sh0 = _Shooter(mech, period, rtol, method)
+        self.S0 = self.sh0.scale
+        self.n2, self.J = self.sh0.n2, self.sh0.J
+        self.cache = {}
+        self.runs = 0
+
+    def value_of(self, uu):
+        u = self.u0 + uu * self.span
+        return math.exp(u) if self.log else u
+
+    def shooter(self, uu):
+        key = float(uu)
+        if key not in self.cache:
+            if len(self.cache) > 8:
+                self.cache.clear()
+            self.cache[key] = _Shooter(with_field(self.mech0, self.name, self.value_of(uu)),
+                                       self.period, self.rtol, self.method)
+        return self.cache[key]
+
+    def residual(self, w, modes, held, jac=True):
+        """G(w) (n,), its Jacobian (n, n + 1) and the point's (A, active, onsets, end
+        modes); `held`: the memories of the joints with no onset."""
+        n2, J, S0 = self.n2, self.J, self.S0
+        z, uu = w[:-1], w[-1]
+        x, vel = z[:n2] * S0[:n2], z[n2:] * S0[n2:]
+        sh = self.shooter(uu)
+        xe, me, ve, ons, _, M = sh.jacobian(x, modes, vel)
+        self.runs += 1
+        ze = np.concatenate([xe, ve]) / S0
+        g = ze - z
+        active = [j for j in range(J) if ons[j] > 0]
+        D = sh.scale / S0
+        Mf = D[:, None] * M / D[None, :]
+        jz = Mf - np.eye(n2 + J)
+        for j in range(J):
+            if j not in active:
+                # a memory no onset overwrites: held at its value (a parameter of the branch)
+                g[n2 + j] = z[n2 + j] - held[j] / S0[n2 + j]
+                jz[n2 + j] = 0.0
+                jz[n2 + j, n2 + j] = 1.0
+        gu = None
+        if jac:
+            # the field's derivative: central differences of the map (two plain runs)
+            h = 1e-4
+            outs = []
+            for sgn in (1.0, -1.0):
+                shp = self.shooter(uu + sgn * h)
+                xe2, _, ve2, _, _ = shp.value(x, modes, vel)
+                outs.append(np.concatenate([xe2, ve2]) / S0)
+            gu = (outs[0] - outs[1]) / (2 * h)
+            for j in range(J):
+                if j not in active:
+                    gu[n2 + j] = 0.0
+        idx = list(range(n2)) + [n2 + j for j in active]
+        A = Mf[np.ix_(idx, idx)]
+        return g, (np.hstack([jz, gu[:, None]]) if jac else jz), A, active, ons, me
+
+    def correct(self, w_pred, w_base, tangent, ds, modes, held, tol, max_it=8):
+        """Newton on G = 0 and tangent . (w - w_base) = ds from w_pred; returns (w, info)
+        or None where it does not converge."""
+        w = w_pred.copy()
+        for it in range(1, max_it + 1):
+            try:
+                g, Jg, A, active, ons, me = self.residual(w, modes, held)
+            except RuntimeError:
+                return None
+            if np.any(me != modes):
+                return None
+            res = float(np.max(np.abs(g)))
+            arc = float(tangent @ (w - w_base) - ds)
+            if res <= tol and abs(arc) <= tol:
+                return w, dict(A=A, active=active, onsets=ons, J=Jg, iterations=it,
+                               residual=res)
+            F = np.concatenate([g, [arc]])
+            Jx = np.vstack([Jg, tangent[None, :]])
+            try:
+                dw = np.linalg.solve(Jx, -F)
+            except np.linalg.LinAlgError:
+                return None
+            w = w + dw
+            if not np.all(np.isfinite(w)) or np.any(w[self.n2:-1] < 0.0):
+                return None
+        return None
+
+
+def _tangent_of(Jg, previous):
+    """The unit null vector of the Jacobian Jg (n, n + 1), oriented along `previous`."""
+    n = Jg.shape[0]
+    rhs = np.zeros(n + 1)
+    rhs[-1] = 1.0
+    try:
+        t = np.linalg.solve(np.vstack([Jg, previous[None, :]]), rhs)
+    except np.linalg.LinAlgError:
+        t = np.linalg.svd(Jg)[2][-1]
+    t /= np.linalg.norm(t)
+    return t if t @ previous >= 0 else -t
+
+
+def _tests(A):
+    """Test functions of a point: det(A - I) (fold), det(A + I) (period doubling), the
+    product of mu_i mu_j - 1 over pairs (Neimark-Sacker)."""
+    mu = np.linalg.eigvals(A)
+    ns = 1.0 + 0j
+    for i in range(len(mu)):
+        for j in range(i + 1, len(mu)):
+            ns *= mu[i] * mu[j] - 1.0
+    n = len(mu)
+    return (float(np.real(np.linalg.det(A - np.eye(n)))),
+            float(np.real(np.linalg.det(A + np.eye(n)))), float(np.real(ns)), mu)
+
+
+def continue_orbits(mech, field_name: str, start: float, stop: float, *, period: int = 1,
+                    guess=None, step: float = 0.1, min_step: float = 1e-5,
+                    max_step: float = 3.0, max_points: int = 200, log: bool | None = None,
+                    rtol: float | None = None, tol: float = NEWTON_TOL,
+                    locate_tol: float = 1e-4, settle: int = SETTLE, method: str = "dop853",
+                    stop_at_first: bool = False, progress=None) -> Branch:
+    """Pseudo-arclength continuation of a periodic orbit of `mech` in `field_name` (a sweep
+    field: "clearance", "crank_speed", a SliderCrank field, a case override or a dotted
+    field of a Linkage; `sweep.design_at`) from `start` to `stop`.
+
+    The orbit at `start` is found by `periodic_orbit` (from `guess`, or a settled run).
+    Steps are in the arclength of (scaled state, u) with u the field (log: its logarithm;
+    default for clearances and for ranges over a factor 10 or more) over |u(stop) -
+    u(start)|; `step` the first, adapted between `min_step` and `max_step`. The memory of a
+    joint with no contact onset per period is held at the start orbit's value along the
+    branch (module docstring). Detected between consecutive points and located by
+    bisection on the arclength to `locate_tol` of the scaled field: folds (det(M - I)
+    changes sign), period doublings (det(M + I)), Neimark-Sacker points (a complex pair
+    crosses the unit circle) and grazing (the contact onsets per period change). Stops at
+    `stop`, after `max_points`, where the step falls below `min_step`, or (with
+    `stop_at_first`) at the first detected point.
+    """
+    if not isinstance(mech, (SliderCrank, Linkage)):
+        raise ValueError(f"mech must be a SliderCrank or a Linkage; got {type(mech).__name__}")
+    if not isinstance(field_name, str):
+        raise ValueError(f"field must be a field name (str); got {field_name!r}")
+    start = check_real("start", start)
+    stop = check_real("stop", stop)
+    if start == stop:
+        raise ValueError(f"start and stop must differ; got {start!r} twice")
+    field_value(mech, field_name)           # ValueError for an unknown name
+    m0 = with_field(mech, field_name, start)
+    with_field(mech, field_name, stop)      # ValueError for a value out of range
+    period = check_int("period (drive revolutions)", period, 1, 64)
+    step = check_real("step", step, 0.0, 100.0, low_open=True)
+    min_step = check_real("min_step", min_step, 0.0, step, low_open=True)
+    max_step = check_real("max_step", max_step, step, 100.0)
+    max_points = check_int("max_points", max_points, 2, 100_000)
+    locate_tol = check_real("locate_tol", locate_tol, 0.0, 0.1, low_open=True)
+    tol = check_real("tol (Newton tolerance, scaled)", tol, 0.0, 1e-1, low_open=True)
+    rtol = SHOOTING_RTOL if rtol is None else check_real("rtol", rtol, 1e-14, 1e-4)
+    if log is None:
+        log = (field_name.endswith("clearance") or max(abs(start), abs(stop))
+               >= 10 * min(abs(start), abs(stop)) > 0.0) and start > 0.0 and stop > 0.0
+    if log and (start <= 0.0 or stop <= 0.0):
+        raise ValueError(f"log continuation needs start and stop > 0; got {start!r}, "
+                         f"{stop!r}")
+    u0 = math.log(start) if log else start
+    span = (math.log(stop) if log else stop) - u0
+    orbit = periodic_orbit(m0, period, guess, rtol=rtol, tol=tol, settle=settle,
+                           method=method, trajectory=False)
+    con = _Continuation(mech, field_name, period, rtol, method, log, span, u0)
+    held = orbit.impact_velocities.copy()
+    modes = orbit.modes.copy()
+    w = np.concatenate([np.concatenate([orbit.state, held]) / con.S0, [0.0]])
+    g, Jg, A, active, ons, _ = con.residual(w, modes, held)
+    t = _tangent_of(Jg, np.concatenate([np.zeros(len(w) - 1), [1.0]]))
+    pts = [dict(w=w, A=A, active=active, onsets=ons, t=t, tests=_tests(A))]
+    found: list[BranchPoint] = []
+    ds = step
+    stopped = "max_points"
+    while len(pts) < max_points:
+        cur = pts[-1]
+        new = con.correct(cur["w"] + ds * cur["t"], cur["w"], cur["t"], ds, modes, held, tol)
+        if new is None:
+            ds /= 2.0
+            if ds < min_step:
+                stopped = "step below min_step (no convergence: a fold of the map's " \
+                          "smoothness, a grazing contact or a mode change)"
+                break
+            continue
+        wn, info = new
+        tn = _tangent_of(info["J"], cur["t"])
+        pt = dict(w=wn, A=info["A"], active=info["active"], onsets=info["onsets"], t=tn,
+                  tests=_tests(info["A"]), ds=ds)
+        kinds = _crossings(cur, pt)
+        pts.append(pt)
+        for kind in kinds:
+            point = _locate(con, cur, pt, kind, modes, held, tol, locate_tol)
+            point.index = len(pts) - 2
+            found.append(point)
+        if progress is not None:
+            progress(len(pts), con.value_of(wn[-1]))
+        if info["iterations"] <= 3:
+            ds = min(ds * 1.5, max_step)
+        elif info["iterations"] >= 6:
+            ds = max(ds / 2.0, min_step)
+        if wn[-1] >= 1.0:
+            stopped = "reached stop"
+            break
+        if wn[-1] < -0.5:
+            stopped = "turned back past start"
+            break
+        if stop_at_first and kinds:
+            stopped = f"first detected point ({kinds[0]})"
+            break
+    n2 = con.n2
+    nmu = max(len(p["tests"][3]) for p in pts)
+    mults = np.full((len(pts), nmu), np.nan + 0j)
+    for i, p in enumerate(pts):
+        mu = p["tests"][3]
+        mults[i, :len(mu)] = mu[np.argsort(-np.abs(mu), kind="stable")]
+    W = np.array([p["w"] for p in pts])
+    states = W[:, :n2] * con.S0[:n2]
+    sections, clear = [], []
+    for w_, x in zip(W, states):
+        sh = con.shooter(w_[-1])
+        sections.append([g(0.0, np.concatenate([x, np.zeros(sh.n_state - n2)]), sh.p0)
+                         for g in sh.guess_flow._gaps])
+        clear.append(clearances_of(sh.mech))
+    return Branch(field=field_name, values=np.array([con.value_of(u) for u in W[:, -1]]),
+                  states=states, impact_velocities=W[:, n2:-1] * con.S0[n2:],
+                  multipliers=mults,
+                  stable=np.array([np.max(np.abs(p["tests"][3])) < 1.0 for p in pts]),
+                  onsets=np.array([p["onsets"] for p in pts]), points=found, stopped=stopped,
+                  period=period, sections=np.array(sections, dtype=float),
+                  clearances=np.array(clear),
+                  counters=dict(shooting_runs=con.runs, speed=con.sh0.omega))
+
+
+def _crossings(a, b) -> list:
+    """The kinds of points between two consecutive points a, b of a branch."""
+    kinds = []
+    if not np.array_equal(a["onsets"], b["onsets"]):
+        kinds.append("grazing")
+        return kinds       # the smooth test functions jump with the active memories
+    fa, pa, na, mua = a["tests"]
+    fb, pb, nb_, mub = b["tests"]
+    if fa * fb < 0.0 or a["t"][-1] * b["t"][-1] < 0.0:
+        kinds.append("fold")
+    if pa * pb < 0.0:
+        kinds.append("period_doubling")
+
+    def outside_pairs(mu):
+        return int(np.sum((np.abs(mu) > 1.0) & (np.abs(mu.imag) > 1e-12)))
+
+    if na * nb_ < 0.0 and outside_pairs(mua) != outside_pairs(mub):
+        kinds.append("neimark_sacker")
+    return kinds
+
+
+def _test_value(kind, pt):
+    if kind == "grazing":
+        return None
+    if kind == "fold":
+        # the field's component of the tangent: it changes sign at every fold, also where
+        # the map's smoothness changes there (no multiplier at +1)
+        return pt["t"][-1]
+    f, p, n, _ = pt["tests"]
+    return {"period_doubling": p, "neimark_sacker": n}[kind]
+
+
+def _locate(con, a, b, kind, modes, held, tol, locate_tol) -> BranchPoint:
+    """Bisection on the arclength between points a and b for a sign change of `kind`'s
+    test function (grazing: a change of the onsets per period) to `locate_tol` of the
+    scaled field."""
+    lo, hi = 0.0, float(b["ds"])
+    side_a = _test_value(kind, a)
+    ua, ub = a["w"][-1], b["w"][-1]
+    last = a
+    for _ in range(40):
+        if abs(ub - ua) <= locate_tol:
+            break
+        mid = 0.5 * (lo + hi)
+        new = con.correct(a["w"] + mid * a["t"], a["w"], a["t"], mid, modes, held, tol)
+        if new is None:
+            break
+        wm, info = new
+        pm = dict(w=wm, onsets=info["onsets"], tests=_tests(info["A"]),
+                  t=_tangent_of(info["J"], a["t"]))
+        if kind == "grazing":
+            same = np.array_equal(pm["onsets"], a["onsets"])
+        else:
+            same = _test_value(kind, pm) * side_a > 0.0
+        if same:
+            lo, ua, last = mid, wm[-1], pm
+        else:
+            hi, ub = mid, wm[-1]
+    value = 0.5 * (con.value_of(ua) + con.value_of(ub))
+    half = 0.5 * abs(con.value_of(ub) - con.value_of(ua))
+    mu = last["tests"][3]
+    note = ""
+    if kind == "grazing":
+        note = f"onsets per period {list(a['onsets'])} -> {list(b['onsets'])}"
+    if kind == "fold" and np.min(np.abs(mu - 1.0)) > FOLD_MU_TOL:
+        note = ("no multiplier at +1: the map's smoothness changes at this fold (e.g. a "
+                "contact force reaching zero within a contact phase)")
+    if hi - lo > 0.0 and abs(ub - ua) > locate_tol:
+        note += ("; " if note else "") + "bisection stopped (corrector did not converge)"
+    return BranchPoint(kind=kind, value=value, tolerance=half,
+                       multipliers=mu[np.argsort(-np.abs(mu), kind="stable")], note=note)
+
+
+def plot_branch(branch: Branch, path=None, regime_map=None, joint: int = 0,
+                component: str = "x"):
+    """Bifurcation diagram of a branch: the section `component` of clearance joint `joint`
+    (in clearances; rates in clearance x drive speed) against the field, stable orbits
+    solid, unstable dashed, detected points marked; over the brute-force samples of a
+    `regime_map` dataset (`plotting.plot_bifurcation`, a two-field map cut at the branch's
+    other values) where given. Saved to `path` if given; returns the Figure."""
+    from matplotlib.figure import Figure
+
+    from .plotting import _axis_factor, plot_bifurcation, save
+    from .poincare import SECTION_COMPONENTS
+
+    if component not in SECTION_COMPONENTS:
+        raise ValueError(f"component must be one of {SECTION_COMPONENTS}; got {component!r}")
+    J = branch.sections.shape[1]
+    joint = check_int("joint", joint, 0, J - 1)
+    comp = SECTION_COMPONENTS.index(component)
+    y = branch.sections[:, joint, comp] / branch.clearances[:, joint]
+    if component.endswith("dot"):
+        y = y / _branch_speed(branch)
+    x = branch.values * _axis_factor(branch.field)
+    if regime_map is not None:
+        fig = plot_bifurcation(regime_map, joint=joint, component=component)
+        ax = fig.axes[0]
+    else:
+        fig = Figure(figsize=(7.5, 4.2))
+        ax = fig.subplots()
+        ax.set_xlabel(branch.field)
+        ax.set_ylabel(f"section {component} of joint {joint} (clearance)")
+        if branch.field.endswith("clearance"):
+            ax.set_xscale("log")
+    first = {True: True, False: True}
+    start = 0
+    for i in range(1, len(x) + 1):
+        if i == len(x) or branch.stable[i] != branch.stable[start]:
+            st = bool(branch.stable[start])
+            seg = slice(start, min(i + 1, len(x)))
+            ax.plot(x[seg], y[seg], "-" if st else "--", color="k", lw=1.2,
+                    label=("stable period-%d orbit" if st else "unstable period-%d orbit")
+                    % branch.period if first[st] else None)
+            first[st] = False
+            start = i
+    marks = {"fold": "o", "period_doubling": "s", "neimark_sacker": "D", "grazing": "^"}
+    for kind, marker in marks.items():
+        pts = [p for p in branch.points if p.kind == kind]
+        if pts:
+            xv = np.array([p.value for p in pts])
+            yv = np.interp(xv, *_monotone(branch.values, y))
+            ax.plot(xv * _axis_factor(branch.field), yv, marker, mfc="none", color="C3",
+                    label=kind.replace("_", " "))
+    ax.legend(fontsize=7, loc="best")
+    return save(fig, path)
+
+
+def _branch_speed(branch) -> np.ndarray:
+    if branch.field == "crank_speed":
+        return branch.values
+    return np.full(len(branch.values), float(branch.counters.get("speed", 1.0)))
+
+
+def _monotone(xv, yv):
+    order = np.argsort(xv, kind="stable")
+    return np.asarray(xv)[order], np.asarray(yv)[order]

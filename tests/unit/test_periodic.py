@@ -1,0 +1,305 @@
+"""Periodic orbits by shooting and their Floquet multipliers, each checked against an
+independent reference: central differences of the return map, the Lyapunov exponent of a
+long run, the section a long run of the regime map's flow settles on, and the growth of a
+run started on an unstable orbit."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from mbs_clearance import SliderCrank, continue_orbits, lyapunov_exponent, periodic_orbit
+from mbs_clearance.periodic import return_map
+from mbs_clearance.poincare import Flow, poincare_section
+
+PAPER = SliderCrank()                                       # 0.01 mm, 5000 rpm
+#: 0.15 mm at 5000 rpm: the regime map's run is aperiodic there (no recurrence within 1e-3
+#: of the clearance over 50 revolutions), its period-1 orbit unstable
+LOOSE = PAPER.replace(journal_radius=PAPER.bearing_radius - 1.5e-4)
+
+
+@pytest.fixture(scope="module")
+def paper_orbit():
+    # from 3 settling revolutions: Newton has work to do (residual 2.5e-3 of the clearance)
+    return periodic_orbit(PAPER, settle=3)
+
+
+def _mem_index(mech):
+    from mbs_clearance import reduced
+
+    return reduced.MEM_START
+
+
+def _central_differences(orbit, h=1e-4, rtol=1e-12):
+    """The return map's derivative by central differences of its plain runs, in the
+    scaled variables of the monodromy matrix (state, then the joint's impact velocity)."""
+    n2 = len(orbit.state)
+    scale = orbit.scale
+    J = len(orbit.modes)
+    vscale = PAPER.clearance * PAPER.crank_speed
+    full_scale = np.concatenate([scale[:n2], np.full(J, vscale)])
+    F = np.empty((n2 + J, n2 + J))
+    for k in range(n2 + J):
+        ends = []
+        for sign in (1.0, -1.0):
+            x = orbit.state.copy()
+            v = orbit.impact_velocities.copy()
+            if k < n2:
+                x[k] += sign * h * full_scale[k]
+            else:
+                v[k - n2] += sign * h * full_scale[k]
+            xe, _, ve, _ = return_map(orbit.mech, x, orbit.modes, v, rtol=rtol)
+            ends.append(np.concatenate([xe, ve]) / full_scale)
+        F[:, k] = (ends[0] - ends[1]) / (2 * h)
+    return F
+
+
+def test_multipliers_match_central_differences_of_the_return_map(paper_orbit):
+    """The monodromy matrix of the variational run (state and memory columns) against
+    central differences of the plain map: steps 1e-4 of the scales (clearances), rtol 1e-12;
+    measured agreement 1.2e-5 of the largest entry (5.8), the differences' truncation and
+    the runs' error."""
+    orbit = paper_orbit
+    *_, M = return_map(orbit.mech, orbit.state, orbit.modes, orbit.impact_velocities,
+                       rtol=1e-12, jacobian=True)
+    F = _central_differences(orbit)
+    np.testing.assert_allclose(M, F, atol=1e-3 * np.max(np.abs(F)))
+    # permanent contact: the memory is never overwritten, its multiplier exactly 1, so the
+    # orbit's multipliers are those of the mechanical state (the module docstring)
+    assert orbit.onsets.tolist() == [0] and orbit.modes.tolist() == [1.0]
+    np.testing.assert_array_equal(M[-1], [0.0, 0.0, 0.0, 0.0, 1.0])
+    np.testing.assert_allclose(np.sort_complex(orbit.multipliers),
+                               np.sort_complex(np.linalg.eigvals(F[:4, :4])), atol=2e-3)
+
+
+def test_largest_multiplier_is_the_lyapunov_exponent_of_a_long_run(paper_orbit):
+    """On a stable period-1 orbit the largest exponent per revolution (Benettin's method
+    over 100 revolutions, memory reset: a separate run and code path) is log |mu_max|;
+    measured -1.712689 against -1.712689."""
+    orbit = paper_orbit
+    assert orbit.stability == "stable" and orbit.iterations >= 2
+    assert orbit.residual <= 1e-6
+    lam = lyapunov_exponent(PAPER).per_revolution
+    assert math.log(orbit.spectral_radius) == pytest.approx(lam, rel=1e-3)
+
+
+def test_paper_orbit_is_the_section_a_long_run_settles_on(paper_orbit):
+    """100 revolutions of the regime map's plain flow (dopri5, from the centred start)
+    end on the orbit found by shooting from 3 settling revolutions (dop853): measured
+    within 8.7e-7 of the scales (clearances; clearance x speed for rates)."""
+    orbit = paper_orbit
+    flow = Flow(PAPER, rtol=1e-10)
+    for k in range(100):
+        flow.advance((k + 1) * PAPER.period)
+    diff = (flow.y[:4] - orbit.state) / orbit.scale[:4]
+    assert np.max(np.abs(diff)) < 1e-5
+    mem = _mem_index(PAPER)
+    # the same last contact onset (in the start-up): the same stored impact velocity, to
+    # the two integrators' error (measured 8e-10 relative)
+    assert flow.p[mem + 1] == pytest.approx(orbit.impact_velocities[0], rel=1e-6)
+    # the orbit's Trajectory (a run of the paper's linkage from the orbit's state through
+    # `simulate`) ends where it started
+    traj = orbit.trajectory
+    assert traj.t[-1] == pytest.approx(PAPER.period)
+    for i, name in enumerate(traj.coordinates):
+        series = traj.coordinates[name]
+        assert series[0] == pytest.approx(orbit.state[i], abs=1e-9 * orbit.scale[i])
+        assert series[-1] == pytest.approx(series[0], abs=1e-4 * orbit.scale[i])
+
+
+def test_unstable_orbit_where_the_simulation_does_not_settle():
+    """At 0.15 mm the regime map's run is aperiodic; shooting finds the period-1 orbit with
+    a multiplier outside the unit circle (measured -2.527). Started on it (and on it plus
+    1e-6 along its unstable eigenvector), the regime map's flow leaves it: the deviation at
+    the section grows by |mu_max| per revolution (measured 2.52-2.53 over revolutions 4-12)."""
+    sec = poincare_section(LOOSE, 100, 50)
+    assert sec.regime not in ("period_1", "period_k")
+    orbit = periodic_orbit(LOOSE, settle=60, trajectory=False, max_iterations=20)
+    assert orbit.stability == "unstable"
+    mu = orbit.multipliers[0]
+    assert abs(mu) > 1.5
+    w, V = np.linalg.eig(orbit.monodromy)
+    v = np.real(V[:, np.argmax(np.abs(w))])
+    v /= np.max(np.abs(v))
+    mem = _mem_index(LOOSE)
+    for eps in (0.0, 1e-6):
+        flow = Flow(LOOSE, rtol=1e-11)
+        flow.y[:4] = orbit.state + eps * v[:4] * orbit.scale[:4]
+        flow.p[mem] = orbit.modes[0]
+        flow.p[mem + 1] = orbit.impact_velocities[0]
+        dev = []
+        for k in range(12):
+            flow.advance((k + 1) * LOOSE.period)
+            dev.append(np.max(np.abs((flow.y[:4] - orbit.state) / orbit.scale[:4])))
+        dev = np.array(dev)
+        rate = (dev[11] / dev[3]) ** (1 / 8)
+        assert rate == pytest.approx(abs(mu), rel=0.02)
+        assert dev[-1] > 1e3 * max(dev[0], 1e-9)
+
+
+@pytest.mark.parametrize("kwargs, message", [
+    (dict(period=0), "period"),
+    (dict(tol=0.0), "tol"),
+    (dict(rtol=1e-2), "rtol"),
+    (dict(max_iterations=0), "max_iterations"),
+    (dict(guess=(np.zeros(3), [1.0], [0.1])), "state must be 4 finite numbers"),
+    (dict(guess=(np.zeros(4), [0.5], [0.1])), "modes must be 1 values 0"),
+    (dict(guess=(np.zeros(4), [1.0], [-1.0])), "impact_velocities"),
+    (dict(guess="settled"), "guess must be"),
+])
+def test_bad_input_is_refused_before_computing(kwargs, message, monkeypatch):
+    from mbs_clearance import periodic
+
+    monkeypatch.setattr(periodic, "_newton", lambda *a, **k: pytest.fail("ran"))
+    monkeypatch.setattr(periodic._Shooter, "jacobian", lambda *a, **k: pytest.fail("ran"))
+    with pytest.raises(ValueError, match=message):
+        periodic_orbit(PAPER, **kwargs)
+
+
+def test_bad_input_of_the_continuation_is_refused_before_computing(monkeypatch):
+    from mbs_clearance import periodic
+
+    monkeypatch.setattr(periodic, "periodic_orbit", lambda *a, **k: pytest.fail("ran"))
+    with pytest.raises(ValueError, match="unknown"):
+        continue_orbits(PAPER, "no_such_field", 1e-5, 2e-5)
+    with pytest.raises(ValueError, match="start and stop must differ"):
+        continue_orbits(PAPER, "clearance", 1e-5, 1e-5)
+    with pytest.raises(ValueError, match="clearance"):
+        continue_orbits(PAPER, "clearance", 1e-5, 1.0)
+    with pytest.raises(ValueError, match="mech must be"):
+        periodic_orbit("paper")
+
+
+def test_no_convergence_says_what_to_try():
+    # from the centred start (no settling) one iteration cannot reach the orbit
+    with pytest.raises(RuntimeError, match="try a guess from a settled run"):
+        periodic_orbit(PAPER, settle=0, max_iterations=1, trajectory=False)
+
+
+@pytest.fixture(scope="module")
+def paper_branch():
+    # 120 orbits along clearance from the paper's design (about 40 s on a quiet machine)
+    return continue_orbits(PAPER, "clearance", 1e-5, 2e-5, step=0.1, max_step=3.0,
+                           max_points=120)
+
+
+@pytest.mark.slow
+def test_period_doublings_of_the_branch_are_where_plain_shooting_sees_minus_one(
+        paper_branch):
+    """Each period doubling located by bisection on the arclength (to +- 3e-10 m measured)
+    is confirmed by plain shooting (no arclength, no bisection) at 20 tolerances either
+    side, from the branch's orbit there: the multiplier nearest -1 lies on opposite sides
+    of -1. Measured: doublings at 0.0121101 and 0.0121885 mm."""
+    branch = paper_branch
+    doublings = [p for p in branch.points if p.kind == "period_doubling"]
+    assert doublings
+    for p in doublings:
+        assert p.tolerance < 1e-4 * p.value
+        i = p.index
+        guess = (branch.states[i], np.ones(1), branch.impact_velocities[i])
+        sides = []
+        for sign in (-1.0, 1.0):
+            c = p.value + sign * 20 * max(p.tolerance, 1e-12)
+            mech = PAPER.replace(journal_radius=PAPER.bearing_radius - c)
+            orbit = periodic_orbit(mech, guess=guess, trajectory=False, max_iterations=20)
+            mu = orbit.multipliers
+            real = mu[np.abs(mu.imag) < 1e-9].real
+            sides.append(real[np.argmin(np.abs(real + 1.0))])
+        assert (sides[0] + 1.0) * (sides[1] + 1.0) < 0.0, sides
+
+
+@pytest.mark.slow
+def test_branch_points_are_orbits_of_the_map(paper_branch):
+    """Every orbit of the branch is a fixed point of the plain map at its clearance (rtol
+    as the shooting's) to the Newton tolerance, and its stability is the multipliers'."""
+    from mbs_clearance.periodic import with_field
+
+    branch = paper_branch
+    for i in range(0, len(branch.values), 17):
+        mech = with_field(PAPER, "clearance", branch.values[i])
+        xe, me, ve, _ = return_map(mech, branch.states[i], np.ones(1),
+                                   branch.impact_velocities[i])
+        scale = np.concatenate([[PAPER.clearance / PAPER.coupler_length, PAPER.clearance],
+                                PAPER.crank_speed * np.array([
+                                    PAPER.clearance / PAPER.coupler_length,
+                                    PAPER.clearance])])
+        assert np.max(np.abs((xe - branch.states[i]) / scale)) < 1e-5
+        mu = branch.multipliers[i]
+        assert branch.stable[i] == bool(np.nanmax(np.abs(mu)) < 1.0)
+
+
+def test_cli_orbits_prints_the_python_functions_multipliers(paper_orbit, capsys):
+    """`orbits` prints the stability and the multipliers of `periodic_orbit` for the same
+    design (the paper's by default; its default guess, 20 settling revolutions)."""
+    import re
+
+    from mbs_clearance.cli import main
+
+    assert main(["orbits"]) == 0
+    out = capsys.readouterr().out
+    assert "period-1 orbit of the paper's slider-crank: stable" in out
+    printed = [float(v) for v in re.findall(r"\|mu\| = (\S+)", out)]
+    np.testing.assert_allclose(printed[:2], np.abs(paper_orbit.multipliers[:2]), rtol=1e-4)
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--field", "clearance", "--start", "1e-5"], "--field, --start and --stop go together"),
+    (["--plot", "x.png"], "--plot and --map draw a branch"),
+    (["--period", "0"], "argument --period: must be an integer >= 1; got 0"),
+])
+def test_cli_orbits_bad_input_is_one_line_before_any_run(argv, message, capsys,
+                                                          monkeypatch):
+    from mbs_clearance import periodic
+    from mbs_clearance.cli import main
+
+    monkeypatch.setattr(periodic, "periodic_orbit", lambda *a, **k: pytest.fail("ran"))
+    monkeypatch.setattr(periodic, "continue_orbits", lambda *a, **k: pytest.fail("ran"))
+    with pytest.raises(SystemExit) as exc:
+        main(["orbits", *argv])
+    assert exc.value.code == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and message in err, err
+
+
+def test_cli_orbits_branch_writes_the_diagram(tmp_path, capsys):
+    """A short branch over clearance: the summary line and the diagram's file."""
+    from mbs_clearance.cli import main
+
+    plot = tmp_path / "branch.png"
+    assert main(["orbits", "--field", "clearance", "--start", "1e-5", "--stop", "1.01e-5",
+                 "--max-points", "4", "--plot", str(plot)]) == 0
+    out = capsys.readouterr().out
+    assert "branch over clearance: 4 orbits of period 1" in out
+    assert plot.stat().st_size > 10_000
+
+
+def test_branch_over_crank_speed_runs_through_the_regime_maps_samples():
+    """Continuation over crank speed (5000 - 5100 rpm, smooth and stable: 41 orbits) and
+    the brute-force map at 5050 rpm (40 revolutions from the centred start, rtol 1e-10):
+    the orbit shot there from the branch's nearest orbit has the map's section within 1e-3
+    clearances in position and 1e-2 in rate (measured 1.8e-4 and 1.2e-3: the map's run
+    settles on its own memory, 0.2540 m/s against the branch's held 0.2524)."""
+    from mbs_clearance import regime_map
+    from mbs_clearance.periodic import with_field
+
+    speed = 5050 * math.pi / 30
+    branch = continue_orbits(PAPER, "crank_speed", PAPER.crank_speed, 5100 * math.pi / 30,
+                             max_points=80)
+    assert branch.stopped == "reached stop" and branch.stable.all() and not branch.points
+    ds = regime_map(PAPER, ["crank_speed=5050rpm"], revolutions=40, keep=9, max_period=4,
+                    workers=1, rtol=1e-10).dataset
+    assert int(ds["regime"].values[0]) == 2                 # period-1
+    i = int(np.argmin(np.abs(branch.values - speed)))
+    mech = with_field(PAPER, "crank_speed", speed)
+    orbit = periodic_orbit(mech, guess=(branch.states[i], np.ones(1),
+                                        branch.impact_velocities[i]), trajectory=False)
+    flow = Flow(mech)
+    flow.y[:4] = orbit.state
+    mem = _mem_index(mech)
+    flow.p[mem:mem + 2] = orbit.modes[0], orbit.impact_velocities[0]
+    diff = (ds["section"].values[0, -1, 0] - flow.section()[0]) / (
+        PAPER.clearance * np.array([1.0, 1.0, speed, speed]))
+    assert np.max(np.abs(diff[:2])) < 1e-3
+    assert np.max(np.abs(diff[2:])) < 1e-2
