@@ -276,3 +276,66 @@ def test_declared_parameters():
         assert not p.contains(0.0) and not p.contains(-1.0) and not p.contains(math.inf)
     for law in LAWS:
         assert law.parameters == (VISCOSITY, BEARING_LENGTH) and law.source and law.limit
+
+
+# ------------------------------------------------------------------ fade into dry contact
+
+def test_fade_is_a_smooth_step():
+    """The film's weight: 1 up to the start, 0 from the end, monotone between, its slope
+    the central difference of its value, value, slope and curvature continuous at both
+    ends (the quintic step), and one half at the middle."""
+    from mbs_clearance.laws.lubrication import fade
+
+    a, b = 0.9, 0.97
+    xs = np.linspace(0.85, 1.0, 3001)
+    ws = np.array([fade(x, a, b)[0] for x in xs])
+    assert ws[xs <= a].min() == 1.0 and ws[xs >= b].max() == 0.0
+    assert np.all(np.diff(ws) <= 0.0)
+    # to the rounding of s = (eps - start) / (end - start)
+    assert fade(0.5 * (a + b), a, b)[0] == pytest.approx(0.5, abs=1e-13)
+    h = 1e-7
+    for x in (0.905, 0.93, 0.96):
+        fd = (fade(x + h, a, b)[0] - fade(x - h, a, b)[0]) / (2 * h)
+        assert fade(x, a, b)[1] == pytest.approx(fd, rel=1e-6)
+    for end in (a, b):
+        for side in (-1, 1):
+            x = end + side * 1e-6
+            assert abs(fade(x, a, b)[1]) < 1e-7
+            assert abs(fade(x, a, b)[0] - fade(end, a, b)[0]) < 1e-15
+
+
+def test_faded_film_power_is_never_positive_and_vanishes_at_the_wall():
+    """The faded film is the film times its weight: the power keeps its sign, and from the
+    end of the fade on (near the wall) the film carries nothing."""
+    from mbs_clearance.laws.lubrication import lubricated_force
+
+    rng = np.random.default_rng(3)
+    for _ in range(2000):
+        eps, th = rng.uniform(0.0, 0.999), rng.uniform(-math.pi, math.pi)
+        ux, uy = math.cos(th), math.sin(th)
+        ex, ey = eps * C * ux, eps * C * uy
+        vx, vy = rng.normal(0, 1e-3, 2)
+        wj, wb = rng.uniform(-1000, 1000, 2)
+        for model in (0, 1):
+            fx, fy, torque, w = lubricated_force(ex, ey, vx, vy, wj, wb, R, C, 0.01, MU,
+                                                 model, 0.9, 0.97)
+            raw = film_force(ex, ey, vx, vy, wj, wb, R, C, 0.01, MU, model)
+            assert (fx, fy, torque) == pytest.approx(tuple(w * v for v in raw), rel=1e-15)
+            terms = (fx * (vx + wb * ey), fy * (vy - wb * ex), torque * (wj - wb))
+            assert sum(terms) <= 1e-12 * sum(abs(x) for x in terms)
+            if eps >= 0.97:
+                assert (fx, fy, torque, w) == (0.0, 0.0, 0.0, 0.0)
+
+
+@pytest.mark.parametrize("start, end, match", [
+    (0.0, 0.9, "film_fade_start must be a number in \\(0, 1\\)"),
+    (0.9, 1.0, "film_fade_end must be a number in \\(0, 1\\)"),
+    (0.95, 0.9, "film_fade_start must be smaller than film_fade_end = 0.9"),
+    (math.nan, 0.9, "film_fade_start"),
+])
+def test_fade_ends_are_checked(start, end, match):
+    """Fade ends outside (0, 1) or out of order fail, naming the field and the range."""
+    from mbs_clearance.laws.lubrication import check_fade
+
+    with pytest.raises(ValueError, match=match):
+        check_fade("clearance joint 'j'", start, end)
