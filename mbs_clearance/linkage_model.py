@@ -16,8 +16,9 @@ import numpy as np
 
 from ._warnings import AccuracyWarning
 from .contact import CONTACT_MODELS, FRICTION_LAWS
+from .laws.lubrication import MODELS as LUBRICATION_MODELS
 from .laws.registry import FRICTION_SLOTS
-from .linkage import GROUND, Linkage
+from .linkage import GROUND, LUBRICATION_PARAMETERS, Linkage
 
 __all__ = ["parameter_values", "pack_parameters", "initial_state", "Start", "settled_start"]
 
@@ -68,6 +69,10 @@ def parameter_values(linkage: Linkage) -> dict[str, float]:
             values[f"{j.name}.{f}"] = getattr(j, f)
         values[f"{j.name}.journal_radius"] = j.journal_radius
         values[f"{j.name}.bearing_radius"] = j.bearing_radius
+        # the film's model id (-1: dry, never read: a dry joint's model has no film)
+        values[f"{j.name}.lubrication"] = float(LUBRICATION_MODELS.get(j.lubrication, -1))
+        for f in LUBRICATION_PARAMETERS:
+            values[f"{j.name}.{f}"] = getattr(j, f)
     values["drive.speed"] = linkage.drive.speed
     values["drive.initial_angle"] = linkage.drive.initial_angle
     values["gravity"] = linkage.gravity

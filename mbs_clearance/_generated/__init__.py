@@ -2,8 +2,8 @@
 tools/generate_models.py; do not edit). MODULES maps a structure digest to a module name."""
 
 MODULES: dict[str, str] = {
-    '160dbb658a1648461e4a4e2cfa5f76cfdc4e345049eaa8ce6bb406a5cda9f137': 'paper_slider_crank',
-    'a0464d16b9c1006cc4d7ee11a91d6d5aa57a3fbfaa57ec965908978211292d29': 'slider_crank_two_clearances',
-    '28a89f57fc5dba4a960243750a5a62120116b9a1ae02a87bd5639d843a6d562c': 'four_bar',
-    'e1cdeadfd8630da6f433ecc834145a8f878837e42eb016872a3f3bdb60c712c2': 'paper_slider_crank_friction',
+    'c7770ccb9a0b0b7b6a5918a3ae4a30f2ca11d9c7e76be893a1ebbd913a7ebca1': 'paper_slider_crank',
+    '65e401805bf3702ae3e7b19ccc9f047c6c1e7833795c7ce65cd2a21b74aa3572': 'slider_crank_two_clearances',
+    '3975ee4709a1c92a200d57182e9a3d866013f1f81cb7647eeb6ca5447bb8693b': 'four_bar',
+    '635ad707e4b930853b5ae01880948b736c05a0fd948b9e380a0f5ee2d7852381': 'paper_slider_crank_friction',
 }
