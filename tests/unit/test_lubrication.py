@@ -18,6 +18,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from mbs_clearance import cases
 from mbs_clearance.laws.lubrication import (
     BEARING_LENGTH,
     LAWS,
@@ -340,3 +341,71 @@ def test_fade_ends_are_checked(start, end, match):
 
     with pytest.raises(ValueError, match=match):
         check_fade("clearance joint 'j'", start, end)
+
+
+# ------------------------------------------------------------- the lubricated description
+
+@pytest.mark.parametrize("field, value, match", [
+    ("lubrication", "medium", "lubrication must be one of \\['none', 'short', 'long'\\]"),
+    ("viscosity", 0.0, "viscosity must be a finite number in \\(0, inf\\) \\(Pa s\\)"),
+    ("viscosity", math.inf, "viscosity must be a finite number in \\(0, inf\\)"),
+    ("bearing_length", -0.01, "bearing_length must be a finite number in \\(0, inf\\) \\(m\\)"),
+    ("film_fade_end", 0.85, "film_fade_start must be smaller than film_fade_end = 0.85"),
+    ("film_fade_end", 1.0, "film_fade_end must be a number in \\(0, 1\\)"),
+])
+def test_lubricated_joint_fields_are_checked_at_load(field, value, match):
+    """Bad lubrication fields fail when the description is built, naming the joint, the
+    field and its allowed range."""
+    with pytest.raises(ValueError, match="clearance joint 'coupler_slider' " + match):
+        cases.paper_slider_crank_lubricated(**{field: value})
+
+
+def test_lubricated_joint_takes_no_friction_law():
+    """A film and a dry friction law on one joint fail at load, naming both."""
+    with pytest.raises(ValueError, match="has lubrication 'short' and friction_law 'coulomb'"):
+        cases.paper_slider_crank_lubricated(friction_law="coulomb", friction_coefficient=0.1)
+
+
+def test_lubricated_case_description():
+    """The lubricated case is the paper case with its joint's film fields (the declared
+    defaults unless overridden), a structure of its own, a description that round-trips,
+    and the film's fields as parameters; a dry description's dictionary has no film keys."""
+    import dataclasses
+
+    from mbs_clearance.linkage import Linkage
+
+    lk = cases.paper_slider_crank_lubricated(viscosity=0.02, crank_speed=300.0)
+    j = lk.clearance_joints[0]
+    assert (j.lubrication, j.viscosity, j.bearing_length) == ("short", 0.02, 0.01)
+    assert lk.drive.speed == 300.0
+    dry = cases.paper_slider_crank(crank_speed=300.0)
+    film = ("lubrication", "viscosity", "bearing_length", "film_fade_start", "film_fade_end")
+    assert dataclasses.replace(j, **{f: getattr(dry.clearance_joints[0], f) for f in film}
+                               ) == dry.clearance_joints[0]
+    assert lk.structure() != dry.structure()
+    assert Linkage.from_dict(lk.to_dict()) == lk
+    assert "lubrication" not in dry.to_dict()["clearance_joints"][0]
+    assert {f"coupler_slider.{f}" for f in ("viscosity", "bearing_length")} <= set(
+        lk.parameter_names())
+
+
+def test_ddm_refuses_a_lubricated_joint():
+    """DDM sensitivities of a lubricated linkage fail before any work, saying why (the
+    film's derivatives are not in the sensitivity equations)."""
+    from mbs_clearance.generate import load_model
+    from mbs_clearance.linkage_ddm import ddm_run
+
+    lk = cases.paper_slider_crank_lubricated()
+    with pytest.raises(ValueError, match="lubricated clearance joints.*finite differences"):
+        ddm_run(lk, load_model(lk), None, None, [], scale=1.0, rtol=1e-6, atol_plain=None,
+                revolutions=1)
+
+
+@pytest.mark.exudyn
+def test_exudyn_refuses_a_lubricated_joint():
+    """The Exudyn backend does not build the film: a lubricated joint fails, naming it."""
+    pytest.importorskip("exudyn")
+    from mbs_clearance.exudyn_linkage import build
+
+    with pytest.raises(ValueError, match="'coupler_slider' is lubricated"):
+        build(cases.paper_slider_crank_lubricated())
