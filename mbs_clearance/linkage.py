@@ -189,7 +189,10 @@ class ClearanceJoint:
     """A revolute joint with radial clearance: a journal (radius journal_radius, centred on
     journal_point of journal_body) inside a bearing (bearing_radius, centred on bearing_point
     of bearing_body). Contact: a Hertzian spring with hysteresis damping
-    (`contact.CONTACT_MODELS`); stiffness from the paper's Eq. 9 unless given."""
+    (`contact.CONTACT_MODELS`); stiffness from the paper's Eq. 9 unless given. With
+    `lubrication` "short" or "long" the joint runs in an oil film (`laws.lubrication`:
+    viscosity, bearing_length; the film fades out between the eccentricity ratios
+    film_fade_start and film_fade_end, the dry contact taking over at the wall)."""
 
     name: str
     journal_body: str

@@ -409,3 +409,31 @@ def test_exudyn_refuses_a_lubricated_joint():
 
     with pytest.raises(ValueError, match="'coupler_slider' is lubricated"):
         build(cases.paper_slider_crank_lubricated())
+
+
+def test_lubricated_stage_loads_balance_on_the_massless_film():
+    """The generated model's stage of a lubricated joint: the dry contact's force on the
+    bearing minus the faded film's force on the journal; the film's loads on journal
+    (force at its centre, torque) and bearing (the opposite force at the bearing's centre,
+    its torque) have no resultant and no moment about the bearing's centre (the film has
+    no mass); its power is the law's."""
+    from mbs_clearance.contact import CONTACT_MODELS
+    from mbs_clearance.generate.runtime import contact_stage, lubricated_stage
+    from mbs_clearance.laws.lubrication import lubricated_force
+
+    ex, ey, exd, eyd, wj, wb = 0.3 * C, -0.6 * C, 2e-3, -1e-3, 250.0, -30.0
+    contact = (C, 0.0, 1e-3, 4e10, 0.9, float(CONTACT_MODELS["lankarani_nikravesh"]))
+    for model in (0.0, 1.0):
+        out = lubricated_stage(ex, ey, exd, eyd, wj, wb, *contact, model, MU, 0.01, R,
+                               0.9, 0.97)
+        f, delta, rate, fx, fy, tj, tb, ffx, ffy, power = out
+        dry = contact_stage(ex, ey, exd, eyd, *contact)
+        film = lubricated_force(ex, ey, exd, eyd, wj, wb, R, C, 0.01, MU, int(model), 0.9,
+                                0.97)
+        assert (f, delta, rate) == dry[:3]
+        assert (ffx, ffy, tj) == film[:3] and ffx != 0.0
+        assert (fx, fy) == (dry[3] - ffx, dry[4] - ffy)
+        moment = (ex * ffy - ey * ffx) + tj + tb
+        assert abs(moment) < 1e-12 * (abs(tj) + abs(tb))
+        ref = ffx * (exd + wb * ey) + ffy * (eyd - wb * ex) + tj * (wj - wb)
+        assert power == pytest.approx(ref, rel=1e-14) and power < 0.0
