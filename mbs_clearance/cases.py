@@ -126,8 +126,9 @@ def paper_slider_crank_lubricated(**overrides: Any) -> Linkage:
     """The paper's slider-crank (`paper_slider_crank`) with its coupler-slider joint in an
     oil film (`laws.lubrication`): the overrides are SliderCrank fields and the lubrication
     fields of `LUBRICATED_DEFAULTS` (film model, viscosity, bearing length, the fade's
-    ends). Not in `CASES`: the DDM sensitivities and the Exudyn model do not take the film
-    yet."""
+    ends). Not in `CASES` (the DDM sensitivities and the Exudyn model do not take the film
+    yet): the studies take it as a description, varying dotted paths
+    ("coupler_slider.viscosity")."""
     import dataclasses
 
     lubricated = {k: overrides[k] for k in LUBRICATED_DEFAULTS if k in overrides}
@@ -136,9 +137,7 @@ def paper_slider_crank_lubricated(**overrides: Any) -> Linkage:
     values = {k: lubricated.get(k, d[0]) for k, d in LUBRICATED_DEFAULTS.items()}
     joint = dataclasses.replace(linkage.clearance_joints[0], **values)
     return dataclasses.replace(linkage.replace(clearance_joints=(joint,)),
-                               name="paper_slider_crank_lubricated",
-                               case="paper_slider_crank_lubricated",
-                               overrides=dict(overrides))
+                               name="paper_slider_crank_lubricated", case=None, overrides={})
 
 
 # ---------------------------------------------------------------------------------------
