@@ -34,6 +34,8 @@ LINKAGE = "four_bar"
 STRUCTURE = "{\"bodies\": [[\"crank\", [\"pin\", \"pivot\"]], [\"coupler\", [\"crank_end\", \"rocker_end\"]], [\"rocker\", [\"pin\", \"pivot\"]]], \"clearance_joints\": [[\"coupler_rocker\", \"rocker\", \"pin\", \"coupler\", \"rocker_end\"]], \"drive\": \"crank_pivot\", \"ground_points\": [\"crank_pivot\", \"rocker_pivot\"], \"joints\": [[\"revolute\", \"crank_pivot\", \"ground\", \"crank_pivot\", \"crank\", \"pivot\"], [\"revolute\", \"crank_coupler\", \"crank\", \"pin\", \"coupler\", \"crank_end\"], [\"revolute\", \"rocker_pivot\", \"ground\", \"rocker_pivot\", \"rocker\", \"pivot\"]], \"monitor_joint\": null, \"zero_parameters\": [\"crank.pivot.y\", \"crank.pin.y\", \"coupler.crank_end.y\", \"coupler.rocker_end.y\", \"rocker.pivot.y\", \"rocker.pin.y\", \"ground.crank_pivot.x\", \"ground.crank_pivot.y\", \"ground.rocker_pivot.y\"]}"
 STRUCTURE_DIGEST = "d6cf89a4be4d4da3a0fcb0e57104f74c1f18d9fb50d5fba72aa16c020cdae5b4"
 GENERATOR_VERSION = "9879c6ceb453efa9"
+STRUCTURE_DIGEST = "3975ee4709a1c92a200d57182e9a3d866013f1f81cb7647eeb6ca5447bb8693b"
+GENERATOR_VERSION = "b88af7d3e72e6eb3"
 
 #: dotted names of the entries of p (without the constants)
 PARAMETERS = (

@@ -663,6 +663,10 @@ def _check_linkage(linkage, settings: ExudynSettings) -> None:
     if not isinstance(linkage, Linkage):
         raise ValueError(f"linkage must be a Linkage; got {type(linkage).__name__}")
     for j in linkage.clearance_joints:
+        if j.has_lubrication:
+            raise ValueError(f"clearance joint {j.name!r} is lubricated: the oil film is not "
+                             "built in the exudyn backend; use the reduced backend")
+    for j in linkage.clearance_joints:
         if friction_of(j) is None:
             continue
         if settings.contact == "sphere":

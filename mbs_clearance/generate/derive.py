@@ -28,7 +28,7 @@ from ..laws.registry import FRICTION_SLOTS
 from ..model.linkage import GROUND, Linkage, Prismatic, Revolute
 
 __all__ = ["Derivation", "derive", "parameter_layout", "identifier", "geometric_zeros",
-           "specialise"]
+           "specialise", "LUBRICATION_FIELDS"]
 
 
 def identifier(name: str, taken: set[str]) -> str:
@@ -63,6 +63,9 @@ def parameter_layout(linkage: Linkage) -> tuple[str, ...]:
     for j in linkage.clearance_joints:
         if j.has_friction:
             names += [f"{j.name}.{f}" for f in FRICTION_FIELDS]
+    for j in linkage.clearance_joints:
+        if j.has_lubrication:
+            names += [f"{j.name}.{f}" for f in LUBRICATION_FIELDS]
     names += ["drive.speed", "drive.initial_angle", "gravity"]
     for j in linkage.clearance_joints:
         names += [f"{j.name}.mode", f"{j.name}.impact_velocity"]
@@ -92,6 +95,10 @@ CONTACT_FIELDS = ("clearance", "stiffness", "restitution", "contact_model",
 #: per clearance joint with friction, the entries of p read by the friction law and the
 #: tangential slip (the radii put the contact point on each body's surface)
 FRICTION_FIELDS = ("friction_law", *FRICTION_SLOTS, "journal_radius", "bearing_radius")
+
+#: per lubricated clearance joint, the entries of p read by the film (`laws.lubrication`)
+LUBRICATION_FIELDS = ("lubrication", "viscosity", "bearing_length", "journal_radius",
+                      "film_fade_start", "film_fade_end")
 
 
 @dataclass
@@ -131,6 +138,11 @@ class Derivation:
     #: from the bodies' rotations, omega_J R_J - omega_B R_B (None: no friction)
     TQ: list = field(default_factory=list)
     spins: list = field(default_factory=list)
+    #: per clearance joint: the symbols (TJ, TB) of the film's torques on the journal and
+    #: on the bearing about their centres (None: not lubricated), and the bodies' angular
+    #: velocities (omega_J, omega_B) (None: not lubricated)
+    TL: list = field(default_factory=list)
+    omegas: list = field(default_factory=list)
 
 
 def _rot(c, s, x, y):
@@ -277,6 +289,21 @@ def derive(linkage: Linkage) -> Derivation:
             torque_loads.append((body, tau))
             if body != GROUND:
                 loads.append((frames[body], tau * N.z))
+    # lubrication: the film's force on the journal is in FX, FY (moved to the bearing's
+    # centre on the bearing's side); its torques on the two bodies, the bearing's including
+    # that move, are TJ and TB
+    TL, omega_t = [], []
+    for j, cj in enumerate(linkage.clearance_joints):
+        if not cj.has_lubrication:
+            TL.append(None)
+            omega_t.append(None)
+            continue
+        TL.append((sp.Symbol(f"TJ{j}", real=True), sp.Symbol(f"TB{j}", real=True)))
+        omega_t.append((angle[cj.journal_body], angle[cj.bearing_body]))
+        for body, tau in ((cj.journal_body, TL[j][0]), (cj.bearing_body, TL[j][1])):
+            torque_loads.append((body, tau))
+            if body != GROUND:
+                loads.append((frames[body], tau * N.z))
     kane = me.KanesMethod(N, q_ind=q, u_ind=u,
                           kd_eqs=[q[i].diff(t) - u[i] for i in range(n)])
     kane.kanes_equations(bodies, loads)
@@ -336,6 +363,7 @@ def derive(linkage: Linkage) -> Derivation:
         gaps.append(tuple(finish(v) for v in (ex, ey, dt(ex), dt(ey))))
     # the slip velocity's rotation part: d/dt of (angle_J R_J - angle_B R_B)
     spins = [None if e is None else finish(dt(e)) for e in spin_t]
+    omegas = [None if e is None else tuple(finish(dt(a)) for a in e) for e in omega_t]
 
     # ---- outputs: Newton on the subtree below each ground joint
     acc = {}
@@ -399,7 +427,7 @@ def derive(linkage: Linkage) -> Derivation:
         mass_matrix=mass_matrix.applyfunc(finish), forcing=forcing.applyfunc(finish),
         reactions=reactions, drive_moment=finish(moment), kinetic=finish(kinetic),
         potential=finish(potential), closure_jacobian=jac, closure_rate=rate,
-        monitor=linkage.monitor_joint, TQ=TQ, spins=spins)
+        monitor=linkage.monitor_joint, TQ=TQ, spins=spins, TL=TL, omegas=omegas)
 
 
 def _reduce_trig(expr, ideal, gens):
@@ -445,4 +473,5 @@ def specialise(d: Derivation, zeros) -> Derivation:
         drive_moment=sub(d.drive_moment), kinetic=sub(d.kinetic), potential=sub(d.potential),
         closure_jacobian=d.closure_jacobian.applyfunc(sub),
         closure_rate=d.closure_rate.applyfunc(sub), monitor=d.monitor, extra=dict(d.extra),
-        TQ=d.TQ, spins=[sub(e) for e in d.spins])
+        TQ=d.TQ, spins=[sub(e) for e in d.spins], TL=d.TL,
+        omegas=[None if e is None else tuple(sub(a) for a in e) for e in d.omegas])

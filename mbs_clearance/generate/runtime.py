@@ -11,9 +11,10 @@ import numba as nb
 from ..laws._dispatch import friction_force_slots
 from ..laws.forces import contact_force
 from ..numerics.integrator import ACTION_SIG, EVENT_SIG, KERNEL, MONITOR_SIG, RHS_SIG
+from ..laws.lubrication import lubricated_force
 
 __all__ = ["KERNEL", "RHS_SIG", "EVENT_SIG", "ACTION_SIG", "MONITOR_SIG", "gap_state",
-           "contact_stage", "friction_stage", "switching"]
+           "contact_stage", "friction_stage", "lubricated_stage", "switching"]
 
 
 @nb.njit(**KERNEL, inline="always")
@@ -61,6 +62,27 @@ def friction_stage(ex, ey, exd, eyd, spin, clearance, mode, deltadot_minus, stif
     vt = eyd * nx - exd * ny + spin
     ft = friction_force_slots(vt, f, slots, int(law))
     return f, delta, deltadot, fx + ft * ny, fy - ft * nx, ft, vt
+
+
+@nb.njit(**KERNEL, inline="always")
+def lubricated_stage(ex, ey, exd, eyd, omega_j, omega_b, clearance, mode, deltadot_minus,
+                     stiffness, restitution, model, lubrication, viscosity, length,
+                     journal_radius, fade_start, fade_end):
+    """`contact_stage` of a joint in an oil film: (F, delta, deltadot, fx, fy, tj, tb, ffx,
+    ffy, power) with fx, fy the dry contact's force on the bearing minus the film's force
+    (ffx, ffy) on the journal (`laws.lubrication.lubricated_force`, faded out near the
+    wall), tj the film's torque on the journal, tb its torque on the bearing about the
+    bearing's centre (-tj minus the moment of the film's force moved there), and the film's
+    total power (never positive)."""
+    f, delta, deltadot, fx, fy = contact_stage(ex, ey, exd, eyd, clearance, mode,
+                                               deltadot_minus, stiffness, restitution, model)
+    ffx, ffy, tj, _ = lubricated_force(ex, ey, exd, eyd, omega_j, omega_b, journal_radius,
+                                       clearance, length, viscosity, int(lubrication),
+                                       fade_start, fade_end)
+    tb = -tj - (ex * ffy - ey * ffx)
+    power = (ffx * (exd + omega_b * ey) + ffy * (eyd - omega_b * ex)
+             + tj * (omega_j - omega_b))
+    return f, delta, deltadot, fx - ffx, fy - ffy, tj, tb, ffx, ffy, power
 
 
 @nb.njit(**KERNEL, inline="always")

@@ -21,7 +21,7 @@ import sympy as sp
 from sympy.printing.pycode import PythonCodePrinter
 
 from ..laws.registry import FRICTION_SLOTS
-from .derive import FRICTION_FIELDS, Derivation
+from .derive import FRICTION_FIELDS, LUBRICATION_FIELDS, Derivation
 from .jacobians import jacobian_context
 
 __all__ = ["render", "GENERATOR_VERSION", "structure_digest"]
@@ -100,6 +100,7 @@ class _Writer:
                 (a, S, C))
         self.vars = [s for _, S, C in self.moving for s in (S, C)]
         self.vars += [*d.Q, *d.U, *d.A, *d.FX, *d.FY, *(s for s in d.TQ if s is not None)]
+        self.vars += [s for pair in d.TL if pair is not None for s in pair]
         self.constants: dict[sp.Expr, sp.Symbol] = {}
 
     # ---- constants
@@ -259,11 +260,26 @@ def render(d: Derivation, linkage_name: str, structure: dict, zeros: tuple = ())
     fpar = {j: {f: params.index(f"{d.joints[j]}.{f}") for f in FRICTION_FIELDS} for j in fric}
     gaps_stage[0].extend(w.split(d.spins[j]) for j in fric)
     gaps_stage[1].extend(f"sp{j}" for j in fric)
+    # lubrication (joints with a film): the bodies' angular velocities beside the gaps, the
+    # lubricated stage (dry contact plus the faded film) in place of the contact stage
+    lub = [j for j in range(J) if d.TL and d.TL[j] is not None]
+    lpar = {j: {f: params.index(f"{d.joints[j]}.{f}") for f in LUBRICATION_FIELDS}
+            for j in lub}
+    for j in lub:
+        gaps_stage[0].extend(w.split(e) for e in d.omegas[j])
+        gaps_stage[1].extend([f"wj{j}", f"wb{j}"])
     contact_lines = []
     for j, c in enumerate(contact):
         law = (f"p[{c['clearance']}], p[{mem_start + 2 * j}], p[{mem_start + 2 * j + 1}], "
                f"p[{c['stiffness']}], p[{c['restitution']}], p[{c['contact_model']}]")
-        if j in fric:
+        if j in lub:
+            lp = lpar[j]
+            contact_lines.append(
+                f"F{j}, d{j}, dd{j}, {d.FX[j]}, {d.FY[j]}, {d.TL[j][0]}, {d.TL[j][1]}, "
+                f"ffx{j}, ffy{j}, fpw{j} = lubricated_stage(ex{j}, ey{j}, exd{j}, eyd{j}, "
+                f"wj{j}, wb{j}, {law}, "
+                + ", ".join(f"p[{lp[f]}]" for f in LUBRICATION_FIELDS) + ")")
+        elif j in fric:
             fp = fpar[j]
             contact_lines.append(
                 f"F{j}, d{j}, dd{j}, {d.FX[j]}, {d.FY[j]}, {d.TQ[j]}, vt{j} = friction_stage("
@@ -301,6 +317,8 @@ def render(d: Derivation, linkage_name: str, structure: dict, zeros: tuple = ())
     results += [f"A{i}" for i in range(n)]
     for j in fric:
         results += [str(d.TQ[j]), f"vt{j}", f"-{d.TQ[j]} * vt{j}"]
+    for j in lub:
+        results += [f"ffx{j}", f"ffy{j}", str(d.TL[j][0]), f"fpw{j}"]
     dynamics = w.function([gaps_stage, contact_lines, *eom, outputs_stage])
 
     gap_fns = [w.function([(gap_exprs[j], gap_names[j])]) for j in range(J)]
@@ -333,6 +351,9 @@ def render(d: Derivation, linkage_name: str, structure: dict, zeros: tuple = ())
     for j in fric:
         out_columns += [f"{d.joints[j]}.{f}" for f in ("friction_force", "slip_velocity",
                                                         "friction_power")]
+    for j in lub:
+        out_columns += [f"{d.joints[j]}.{f}" for f in ("film_force_x", "film_force_y",
+                                                        "film_torque", "film_power")]
     if d.monitor is None:
         mon = out_columns.index("shaking_x")
     else:
@@ -353,6 +374,7 @@ def render(d: Derivation, linkage_name: str, structure: dict, zeros: tuple = ())
         gap_fns=gap_fns, energy=energy, closure=closure, closure_jac=closure_jac,
         closure_rate=closure_rate, prepare=prepare, contact_indices=contact,
         friction_joints=[d.joints[j] for j in fric],
+        lubricated_joints=[d.joints[j] for j in lub],
         power_columns=[out_columns.index(f"{d.joints[j]}.friction_power") for j in fric],
         **jac_ctx,
     )

@@ -42,9 +42,13 @@ from typing import Any
 
 from ..laws.forces import CONTACT_MODELS, FRICTION_LAWS, stiffness_eq9
 from ..laws.registry import FRICTION_PARAMETER_SPECS, FRICTION_SLOTS, friction_law
+from .contact import CONTACT_MODELS, FRICTION_LAWS, stiffness_eq9
+from .laws.lubrication import BEARING_LENGTH, FADE_END, FADE_START, VISCOSITY, check_fade
+from .laws.lubrication import MODELS as LUBRICATION_MODELS
+from .laws.registry import FRICTION_PARAMETER_SPECS, FRICTION_SLOTS, friction_law
 
 __all__ = ["Point", "GROUND", "Body", "Revolute", "Prismatic", "ClearanceJoint", "Drive",
-           "Linkage", "FRICTION_DEFAULTS", "check_friction"]
+           "Linkage", "FRICTION_DEFAULTS", "check_friction", "check_lubrication"]
 
 Point = tuple[float, float]
 #: reserved body name of the ground; its points are `Linkage.ground_points`
@@ -187,7 +191,10 @@ class ClearanceJoint:
     """A revolute joint with radial clearance: a journal (radius journal_radius, centred on
     journal_point of journal_body) inside a bearing (bearing_radius, centred on bearing_point
     of bearing_body). Contact: a Hertzian spring with hysteresis damping
-    (`contact.CONTACT_MODELS`); stiffness from the paper's Eq. 9 unless given."""
+    (`contact.CONTACT_MODELS`); stiffness from the paper's Eq. 9 unless given. With
+    `lubrication` "short" or "long" the joint runs in an oil film (`laws.lubrication`:
+    viscosity, bearing_length; the film fades out between the eccentricity ratios
+    film_fade_start and film_fade_end, the dry contact taking over at the wall)."""
 
     name: str
     journal_body: str
@@ -208,6 +215,11 @@ class ClearanceJoint:
     friction_v1: float = 1e-2
     friction_static_coefficient: float = 0.0
     friction_stribeck_velocity: float = 1e-3
+    lubrication: str = "none"
+    viscosity: float = VISCOSITY.default
+    bearing_length: float = BEARING_LENGTH.default
+    film_fade_start: float = FADE_START.default
+    film_fade_end: float = FADE_END.default
 
     def __post_init__(self) -> None:
         _name("clearance joint name", self.name)
@@ -242,6 +254,20 @@ class ClearanceJoint:
         check_friction(what, self.friction_law, *(getattr(self, f) for f in FRICTION_SLOTS))
         for f in FRICTION_SLOTS:
             object.__setattr__(self, f, float(getattr(self, f)))
+        check_lubrication(what, self.lubrication, self.viscosity, self.bearing_length,
+                          self.film_fade_start, self.film_fade_end)
+        if self.lubrication != "none" and self.friction_law != "none":
+            raise ValueError(f"{what} has lubrication {self.lubrication!r} and friction_law "
+                             f"{self.friction_law!r}: a lubricated joint takes no friction "
+                             "law (friction_law must be 'none')")
+        for f in LUBRICATION_PARAMETERS:
+            object.__setattr__(self, f, float(getattr(self, f)))
+
+    @property
+    def has_lubrication(self) -> bool:
+        """Whether the joint runs in an oil film (`laws.lubrication`): the film's force and
+        torque, faded out near the wall, besides the dry contact."""
+        return self.lubrication != "none"
 
     @property
     def has_friction(self) -> bool:
@@ -315,6 +341,20 @@ def check_friction(what: str, law: Any, mu: Any, v0: Any, v1: Any, *more: Any) -
         spec.check(what, dict(zip(FRICTION_SLOTS, (mu, v0, v1, *more), strict=True)))
 
 
+def check_lubrication(what: str, model: Any, viscosity: Any, length: Any, start: Any,
+                      end: Any) -> None:
+    """ValueError naming `what` and the item unless the lubrication fields are valid: model
+    "none" or one of `laws.lubrication.MODELS`, viscosity (Pa s) and bearing length (m)
+    finite and > 0, 0 < film_fade_start < film_fade_end < 1."""
+    allowed = ["none", *LUBRICATION_MODELS]
+    if not isinstance(model, str) or model not in allowed:
+        raise ValueError(f"{what} lubrication must be one of {allowed}; got {_short(model)}")
+    for spec, value in ((VISCOSITY, viscosity), (BEARING_LENGTH, length)):
+        _real(f"{what} {spec.name}", value, f"a finite number in {spec.interval} "
+              f"({spec.unit})", spec.contains)
+    check_fade(what, start, end)
+
+
 #: the JSON/TOML "type" of each joint class
 _JOINT_TYPES = {"revolute": Revolute, "prismatic": Prismatic}
 
@@ -323,6 +363,8 @@ CLEARANCE_PARAMETERS = ("bearing_radius", "journal_radius", "youngs_modulus", "p
                         "restitution", "contact_stiffness", "impact_velocity_floor")
 #: parameter fields of the clearance joints with a friction law (not "none")
 FRICTION_PARAMETERS = FRICTION_SLOTS
+#: parameter fields of the lubricated clearance joints
+LUBRICATION_PARAMETERS = ("viscosity", "bearing_length", "film_fade_start", "film_fade_end")
 
 
 @dataclass(frozen=True)
@@ -647,6 +689,9 @@ class Linkage:
         for j in out["clearance_joints"]:
             if j["contact_stiffness"] is None:      # TOML has no null
                 del j["contact_stiffness"]
+            if j["lubrication"] == "none":          # dry joints: the keys of old
+                for f in ("lubrication", *LUBRICATION_PARAMETERS):
+                    del j[f]
         return out
 
     @classmethod
@@ -736,6 +781,8 @@ class Linkage:
             names += [f"{j.name}.{f}" for f in CLEARANCE_PARAMETERS]
             if j.has_friction:
                 names += [f"{j.name}.{f}" for f in FRICTION_PARAMETERS]
+            if j.has_lubrication:
+                names += [f"{j.name}.{f}" for f in LUBRICATION_PARAMETERS]
         return tuple(names + ["drive.speed", "drive.initial_angle", "gravity"])
 
     def _locate(self, name: str):
@@ -811,6 +858,7 @@ class Linkage:
             # values are parameters); frictionless joints keep the structure of old
             "clearance_joints": [[j.name, j.journal_body, j.journal_point, j.bearing_body,
                                   j.bearing_point] + (["friction"] if j.has_friction else [])
+                                 + (["lubrication"] if j.has_lubrication else [])
                                  for j in self.clearance_joints],
             "drive": self.drive.joint,
             "monitor_joint": self.monitor_joint,

@@ -460,6 +460,11 @@ def ddm_run(linkage: Linkage, model, p0, y_state, directions, *, scale, rtol, at
     every output; or a sequence of names in OUT_COLUMNS) and `record` the derivatives of
     those outputs are computed with every step and recorded
     (`DdmRun.recorded_output_sensitivities`)."""
+    if getattr(model, "LUBRICATED_JOINTS", ()):
+        raise ValueError(f"DDM sensitivities of a linkage with lubricated clearance joints "
+                         f"({list(model.LUBRICATED_JOINTS)}) are not available: the film's "
+                         "derivatives are not in the sensitivity equations; use finite "
+                         "differences")
     zeros = set(getattr(model, "ZERO_PARAMETERS", ()))
     along = sorted({n for d in directions for n, v in d.items() if v != 0.0 and n in zeros})
     if along:

@@ -19,6 +19,11 @@ from ..laws.forces import CONTACT_MODELS, FRICTION_LAWS
 from ..laws.registry import FRICTION_SLOTS
 from ..model.linkage import GROUND, Linkage
 from .diagnostics import contact_flags
+from ._warnings import AccuracyWarning
+from .contact import CONTACT_MODELS, FRICTION_LAWS
+from .laws.lubrication import MODELS as LUBRICATION_MODELS
+from .laws.registry import FRICTION_SLOTS
+from .linkage import GROUND, LUBRICATION_PARAMETERS, Linkage
 
 __all__ = ["parameter_values", "pack_parameters", "initial_state", "Start", "settled_start"]
 
@@ -69,6 +74,10 @@ def parameter_values(linkage: Linkage) -> dict[str, float]:
             values[f"{j.name}.{f}"] = getattr(j, f)
         values[f"{j.name}.journal_radius"] = j.journal_radius
         values[f"{j.name}.bearing_radius"] = j.bearing_radius
+        # the film's model id (-1: dry, never read: a dry joint's model has no film)
+        values[f"{j.name}.lubrication"] = float(LUBRICATION_MODELS.get(j.lubrication, -1))
+        for f in LUBRICATION_PARAMETERS:
+            values[f"{j.name}.{f}"] = getattr(j, f)
     values["drive.speed"] = linkage.drive.speed
     values["drive.initial_angle"] = linkage.drive.initial_angle
     values["gravity"] = linkage.gravity
