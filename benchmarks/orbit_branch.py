@@ -6,7 +6,7 @@ map's line over the same clearances with as many points as the branch has orbits
 Prints both wall times, the branch's detected point and the brute-force regimes along
 the line. Run it on a quiet machine (timings on a shared machine vary).
 
-    python -m validation.benchmarks.orbit_branch [--start 1e-6] [--stop 1e-4]
+    python -m benchmarks.orbit_branch [--start 1e-6] [--stop 1e-4]
 """
 
 from __future__ import annotations
@@ -17,9 +17,8 @@ import time
 import numpy as np
 
 from mbs_clearance import SliderCrank, continue_orbits, regime_map
-from mbs_clearance.poincare import REGIMES
-
-from .common import machine_summary
+from mbs_clearance.analysis.poincare import REGIMES
+from validation.timing import machine_summary
 
 
 def main(argv=None) -> int:

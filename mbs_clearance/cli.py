@@ -1492,7 +1492,8 @@ def _add_orbits_parser(subparsers) -> argparse.ArgumentParser:
 
 
 def _cmd_orbits(args: argparse.Namespace) -> int:
-    from .periodic import continue_orbits, periodic_orbit, plot_branch
+    from .analysis.periodic import continue_orbits, periodic_orbit
+    from .plotting import plot_branch
 
     linkage, mech = design_from_args(args)
     name = linkage.name if linkage is not None else "the paper's slider-crank"
@@ -1504,7 +1505,7 @@ def _cmd_orbits(args: argparse.Namespace) -> int:
         raise ValueError("--plot and --map draw a branch: give --field, --start and --stop")
     regime = None
     if args.map is not None:
-        from .sweep import load_map
+        from .studies.sweep import load_map
 
         regime = load_map(args.map)
     if args.plot:

@@ -13,11 +13,13 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
+from ._checks import check_int
 from ._io import PNG_SOFTWARE
 from .solve.trajectory import Trajectory
 from .units import number
 
-__all__ = ["plot_trajectory", "plot_overlay", "plot_comparison", "plot_sensitivities",
+__all__ = ["plot_branch", "plot_trajectory", "plot_overlay", "plot_comparison",
+           "plot_sensitivities",
            "plot_work_precision", "plot_fitness_history", "plot_force_comparison",
            "SENSITIVITY_FIGURES", "save", "plot_bifurcation", "plot_regime_map",
            "plot_poincare", "animate_mechanism", "mechanism_frames", "MechanismFrames",
@@ -800,3 +802,69 @@ def _animate_slider_crank(traj: Trajectory, path: Path, revolution, frames: int,
     anim = FuncAnimation(fig, draw, frames=len(picks), blit=False)
     anim.save(str(path), writer=writer, dpi=80)
     return path
+
+
+# ------------------------------------------------------------------ periodic orbits
+
+def plot_branch(branch, path=None, regime_map=None, joint: int = 0,
+                component: str = "x"):
+    """Bifurcation diagram of a branch: the section `component` of clearance joint `joint`
+    (in clearances; rates in clearance x drive speed) against the field, stable orbits
+    solid, unstable dashed, detected points marked; over the brute-force samples of a
+    `regime_map` dataset (`plotting.plot_bifurcation`, a two-field map cut at the branch's
+    other values) where given. Saved to `path` if given; returns the Figure."""
+    from matplotlib.figure import Figure
+
+    from .analysis.poincare import SECTION_COMPONENTS
+
+    if component not in SECTION_COMPONENTS:
+        raise ValueError(f"component must be one of {SECTION_COMPONENTS}; got {component!r}")
+    J = branch.sections.shape[1]
+    joint = check_int("joint", joint, 0, J - 1)
+    comp = SECTION_COMPONENTS.index(component)
+    y = branch.sections[:, joint, comp] / branch.clearances[:, joint]
+    if component.endswith("dot"):
+        y = y / _branch_speed(branch)
+    x = branch.values * _axis_factor(branch.field)
+    if regime_map is not None:
+        fig = plot_bifurcation(regime_map, joint=joint, component=component)
+        ax = fig.axes[0]
+    else:
+        fig = Figure(figsize=(7.5, 4.2))
+        ax = fig.subplots()
+        ax.set_xlabel(branch.field)
+        ax.set_ylabel(f"section {component} of joint {joint} (clearance)")
+        if branch.field.endswith("clearance"):
+            ax.set_xscale("log")
+    first = {True: True, False: True}
+    start = 0
+    for i in range(1, len(x) + 1):
+        if i == len(x) or branch.stable[i] != branch.stable[start]:
+            st = bool(branch.stable[start])
+            seg = slice(start, min(i + 1, len(x)))
+            ax.plot(x[seg], y[seg], "-" if st else "--", color="k", lw=1.2,
+                    label=("stable period-%d orbit" if st else "unstable period-%d orbit")
+                    % branch.period if first[st] else None)
+            first[st] = False
+            start = i
+    marks = {"fold": "o", "period_doubling": "s", "neimark_sacker": "D", "grazing": "^"}
+    for kind, marker in marks.items():
+        pts = [p for p in branch.points if p.kind == kind]
+        if pts:
+            xv = np.array([p.value for p in pts])
+            yv = np.interp(xv, *_monotone(branch.values, y))
+            ax.plot(xv * _axis_factor(branch.field), yv, marker, mfc="none", color="C3",
+                    label=kind.replace("_", " "))
+    ax.legend(fontsize=7, loc="best")
+    return save(fig, path)
+
+
+def _branch_speed(branch) -> np.ndarray:
+    if branch.field == "crank_speed":
+        return branch.values
+    return np.full(len(branch.values), float(branch.counters.get("speed", 1.0)))
+
+
+def _monotone(xv, yv):
+    order = np.argsort(xv, kind="stable")
+    return np.asarray(xv)[order], np.asarray(yv)[order]

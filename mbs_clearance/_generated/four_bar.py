@@ -32,10 +32,8 @@ from mbs_clearance.generate.runtime import (
 
 LINKAGE = "four_bar"
 STRUCTURE = "{\"bodies\": [[\"crank\", [\"pin\", \"pivot\"]], [\"coupler\", [\"crank_end\", \"rocker_end\"]], [\"rocker\", [\"pin\", \"pivot\"]]], \"clearance_joints\": [[\"coupler_rocker\", \"rocker\", \"pin\", \"coupler\", \"rocker_end\"]], \"drive\": \"crank_pivot\", \"ground_points\": [\"crank_pivot\", \"rocker_pivot\"], \"joints\": [[\"revolute\", \"crank_pivot\", \"ground\", \"crank_pivot\", \"crank\", \"pivot\"], [\"revolute\", \"crank_coupler\", \"crank\", \"pin\", \"coupler\", \"crank_end\"], [\"revolute\", \"rocker_pivot\", \"ground\", \"rocker_pivot\", \"rocker\", \"pivot\"]], \"monitor_joint\": null, \"zero_parameters\": [\"crank.pivot.y\", \"crank.pin.y\", \"coupler.crank_end.y\", \"coupler.rocker_end.y\", \"rocker.pivot.y\", \"rocker.pin.y\", \"ground.crank_pivot.x\", \"ground.crank_pivot.y\", \"ground.rocker_pivot.y\"]}"
-STRUCTURE_DIGEST = "d6cf89a4be4d4da3a0fcb0e57104f74c1f18d9fb50d5fba72aa16c020cdae5b4"
-GENERATOR_VERSION = "9879c6ceb453efa9"
-STRUCTURE_DIGEST = "3975ee4709a1c92a200d57182e9a3d866013f1f81cb7647eeb6ca5447bb8693b"
-GENERATOR_VERSION = "b88af7d3e72e6eb3"
+STRUCTURE_DIGEST = "b6b1bef0dbbb1aa563cb9d2b0b1fc81ddc96a5ded3b725969c6ba767c01b284d"
+GENERATOR_VERSION = "8a5b6bd46b1827cb"
 
 #: dotted names of the entries of p (without the constants)
 PARAMETERS = (

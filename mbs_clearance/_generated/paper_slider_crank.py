@@ -32,10 +32,8 @@ from mbs_clearance.generate.runtime import (
 
 LINKAGE = "paper_slider_crank"
 STRUCTURE = "{\"bodies\": [[\"crank\", [\"pin\", \"pivot\"]], [\"coupler\", [\"crank_end\", \"slider_end\"]], [\"slider\", [\"pin\"]]], \"clearance_joints\": [[\"coupler_slider\", \"coupler\", \"slider_end\", \"slider\", \"pin\"]], \"drive\": \"crank_pivot\", \"ground_points\": [\"crank_pivot\", \"slider_axis\"], \"joints\": [[\"revolute\", \"crank_pivot\", \"ground\", \"crank_pivot\", \"crank\", \"pivot\"], [\"revolute\", \"crank_coupler\", \"crank\", \"pin\", \"coupler\", \"crank_end\"], [\"prismatic\", \"slider_guide\", \"ground\", \"slider_axis\", \"slider\", \"pin\"]], \"monitor_joint\": \"crank_pivot\", \"zero_parameters\": [\"crank.pivot.y\", \"crank.pin.y\", \"coupler.crank_end.y\", \"coupler.slider_end.y\", \"slider.pin.x\", \"slider.pin.y\", \"ground.crank_pivot.x\", \"ground.crank_pivot.y\", \"ground.slider_axis.x\", \"ground.slider_axis.y\", \"slider_guide.angle\"]}"
-STRUCTURE_DIGEST = "3f7d55226b938a3fb5a40dd52d9e306b8954707276f4497eeab2d9dd0a9c8215"
-GENERATOR_VERSION = "9879c6ceb453efa9"
-STRUCTURE_DIGEST = "c7770ccb9a0b0b7b6a5918a3ae4a30f2ca11d9c7e76be893a1ebbd913a7ebca1"
-GENERATOR_VERSION = "b88af7d3e72e6eb3"
+STRUCTURE_DIGEST = "a1e8cd13e316bef71106968d523beb1d77f4d5e5e766ab51e599f7dba6e0e76f"
+GENERATOR_VERSION = "8a5b6bd46b1827cb"
 
 #: dotted names of the entries of p (without the constants)
 PARAMETERS = (

@@ -32,10 +32,8 @@ from mbs_clearance.generate.runtime import (
 
 LINKAGE = "paper_slider_crank"
 STRUCTURE = "{\"bodies\": [[\"crank\", [\"pin\", \"pivot\"]], [\"coupler\", [\"crank_end\", \"slider_end\"]], [\"slider\", [\"pin\"]]], \"clearance_joints\": [[\"coupler_slider\", \"coupler\", \"slider_end\", \"slider\", \"pin\", \"friction\"]], \"drive\": \"crank_pivot\", \"ground_points\": [\"crank_pivot\", \"slider_axis\"], \"joints\": [[\"revolute\", \"crank_pivot\", \"ground\", \"crank_pivot\", \"crank\", \"pivot\"], [\"revolute\", \"crank_coupler\", \"crank\", \"pin\", \"coupler\", \"crank_end\"], [\"prismatic\", \"slider_guide\", \"ground\", \"slider_axis\", \"slider\", \"pin\"]], \"monitor_joint\": \"crank_pivot\", \"zero_parameters\": [\"crank.pivot.y\", \"crank.pin.y\", \"coupler.crank_end.y\", \"coupler.slider_end.y\", \"slider.pin.x\", \"slider.pin.y\", \"ground.crank_pivot.x\", \"ground.crank_pivot.y\", \"ground.slider_axis.x\", \"ground.slider_axis.y\", \"slider_guide.angle\"]}"
-STRUCTURE_DIGEST = "d12f7193fceb8a37082857d1c19f95f4f1b9f30253e035acc7ec2b126055ab79"
-GENERATOR_VERSION = "9879c6ceb453efa9"
-STRUCTURE_DIGEST = "635ad707e4b930853b5ae01880948b736c05a0fd948b9e380a0f5ee2d7852381"
-GENERATOR_VERSION = "b88af7d3e72e6eb3"
+STRUCTURE_DIGEST = "7e0d3a1d0806c8f6c988696b700db5b35e60afa1cf789224ea9eac2153475fff"
+GENERATOR_VERSION = "8a5b6bd46b1827cb"
 
 #: dotted names of the entries of p (without the constants)
 PARAMETERS = (

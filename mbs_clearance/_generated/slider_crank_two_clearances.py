@@ -32,10 +32,8 @@ from mbs_clearance.generate.runtime import (
 
 LINKAGE = "slider_crank_two_clearances"
 STRUCTURE = "{\"bodies\": [[\"crank\", [\"pin\", \"pivot\"]], [\"coupler\", [\"crank_end\", \"slider_end\"]], [\"slider\", [\"pin\"]]], \"clearance_joints\": [[\"crank_coupler\", \"crank\", \"pin\", \"coupler\", \"crank_end\"], [\"coupler_slider\", \"coupler\", \"slider_end\", \"slider\", \"pin\"]], \"drive\": \"crank_pivot\", \"ground_points\": [\"crank_pivot\", \"slider_axis\"], \"joints\": [[\"revolute\", \"crank_pivot\", \"ground\", \"crank_pivot\", \"crank\", \"pivot\"], [\"prismatic\", \"slider_guide\", \"ground\", \"slider_axis\", \"slider\", \"pin\"]], \"monitor_joint\": \"crank_pivot\", \"zero_parameters\": [\"crank.pivot.y\", \"crank.pin.y\", \"coupler.crank_end.y\", \"coupler.slider_end.y\", \"slider.pin.x\", \"slider.pin.y\", \"ground.crank_pivot.x\", \"ground.crank_pivot.y\", \"ground.slider_axis.x\", \"ground.slider_axis.y\", \"slider_guide.angle\"]}"
-STRUCTURE_DIGEST = "c3ba4dbde5821463ab2b856d627e24d852026d948b6b2e0499600f45a02611ec"
-GENERATOR_VERSION = "9879c6ceb453efa9"
-STRUCTURE_DIGEST = "65e401805bf3702ae3e7b19ccc9f047c6c1e7833795c7ce65cd2a21b74aa3572"
-GENERATOR_VERSION = "b88af7d3e72e6eb3"
+STRUCTURE_DIGEST = "f4323ddd58353fc0180d43626916eeaa4ee3396e2725f30ab71e485a409f1305"
+GENERATOR_VERSION = "8a5b6bd46b1827cb"
 
 #: dotted names of the entries of p (without the constants)
 PARAMETERS = (

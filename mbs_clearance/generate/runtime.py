@@ -10,8 +10,8 @@ import numba as nb
 
 from ..laws._dispatch import friction_force_slots
 from ..laws.forces import contact_force
-from ..numerics.integrator import ACTION_SIG, EVENT_SIG, KERNEL, MONITOR_SIG, RHS_SIG
 from ..laws.lubrication import lubricated_force
+from ..numerics.integrator import ACTION_SIG, EVENT_SIG, KERNEL, MONITOR_SIG, RHS_SIG
 
 __all__ = ["KERNEL", "RHS_SIG", "EVENT_SIG", "ACTION_SIG", "MONITOR_SIG", "gap_state",
            "contact_stage", "friction_stage", "lubricated_stage", "switching"]

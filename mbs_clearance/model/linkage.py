@@ -41,11 +41,9 @@ from pathlib import Path
 from typing import Any
 
 from ..laws.forces import CONTACT_MODELS, FRICTION_LAWS, stiffness_eq9
+from ..laws.lubrication import BEARING_LENGTH, FADE_END, FADE_START, VISCOSITY, check_fade
+from ..laws.lubrication import MODELS as LUBRICATION_MODELS
 from ..laws.registry import FRICTION_PARAMETER_SPECS, FRICTION_SLOTS, friction_law
-from .contact import CONTACT_MODELS, FRICTION_LAWS, stiffness_eq9
-from .laws.lubrication import BEARING_LENGTH, FADE_END, FADE_START, VISCOSITY, check_fade
-from .laws.lubrication import MODELS as LUBRICATION_MODELS
-from .laws.registry import FRICTION_PARAMETER_SPECS, FRICTION_SLOTS, friction_law
 
 __all__ = ["Point", "GROUND", "Body", "Revolute", "Prismatic", "ClearanceJoint", "Drive",
            "Linkage", "FRICTION_DEFAULTS", "check_friction", "check_lubrication"]

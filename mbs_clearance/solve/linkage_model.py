@@ -16,14 +16,10 @@ import numpy as np
 
 from .._warnings import AccuracyWarning
 from ..laws.forces import CONTACT_MODELS, FRICTION_LAWS
+from ..laws.lubrication import MODELS as LUBRICATION_MODELS
 from ..laws.registry import FRICTION_SLOTS
-from ..model.linkage import GROUND, Linkage
+from ..model.linkage import GROUND, LUBRICATION_PARAMETERS, Linkage
 from .diagnostics import contact_flags
-from ._warnings import AccuracyWarning
-from .contact import CONTACT_MODELS, FRICTION_LAWS
-from .laws.lubrication import MODELS as LUBRICATION_MODELS
-from .laws.registry import FRICTION_SLOTS
-from .linkage import GROUND, LUBRICATION_PARAMETERS, Linkage
 
 __all__ = ["parameter_values", "pack_parameters", "initial_state", "Start", "settled_start"]
 

@@ -10,10 +10,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from mbs_clearance import SliderCrank, cases, simulate
+from mbs_clearance import SliderCrank, simulate
+from mbs_clearance.backends.ideal import peak_ideal
 from mbs_clearance.generate import load_model
-from mbs_clearance.ideal import peak_ideal
-from mbs_clearance.linkage_model import pack_parameters
+from mbs_clearance.model import cases
+from mbs_clearance.solve.linkage_model import pack_parameters
 
 pytestmark = pytest.mark.slow
 

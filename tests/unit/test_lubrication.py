@@ -18,7 +18,6 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from mbs_clearance import cases
 from mbs_clearance.laws.lubrication import (
     BEARING_LENGTH,
     LAWS,
@@ -28,6 +27,7 @@ from mbs_clearance.laws.lubrication import (
     long_bearing,
     short_bearing,
 )
+from mbs_clearance.model import cases
 from validation.reynolds import solve
 
 #: the paper case's joint: journal radius (m), radial clearance (m); an oil of 10 mPa s
@@ -372,7 +372,7 @@ def test_lubricated_case_description():
     and the film's fields as parameters; a dry description's dictionary has no film keys."""
     import dataclasses
 
-    from mbs_clearance.linkage import Linkage
+    from mbs_clearance.model.linkage import Linkage
 
     lk = cases.paper_slider_crank_lubricated(viscosity=0.02, crank_speed=300.0)
     j = lk.clearance_joints[0]
@@ -393,7 +393,7 @@ def test_ddm_refuses_a_lubricated_joint():
     """DDM sensitivities of a lubricated linkage fail before any work, saying why (the
     film's derivatives are not in the sensitivity equations)."""
     from mbs_clearance.generate import load_model
-    from mbs_clearance.linkage_ddm import ddm_run
+    from mbs_clearance.solve.linkage_ddm import ddm_run
 
     lk = cases.paper_slider_crank_lubricated()
     with pytest.raises(ValueError, match="lubricated clearance joints.*finite differences"):
@@ -405,7 +405,7 @@ def test_ddm_refuses_a_lubricated_joint():
 def test_exudyn_refuses_a_lubricated_joint():
     """The Exudyn backend does not build the film: a lubricated joint fails, naming it."""
     pytest.importorskip("exudyn")
-    from mbs_clearance.exudyn_linkage import build
+    from mbs_clearance.backends.exudyn_linkage import build
 
     with pytest.raises(ValueError, match="'coupler_slider' is lubricated"):
         build(cases.paper_slider_crank_lubricated())
@@ -417,8 +417,8 @@ def test_lubricated_stage_loads_balance_on_the_massless_film():
     (force at its centre, torque) and bearing (the opposite force at the bearing's centre,
     its torque) have no resultant and no moment about the bearing's centre (the film has
     no mass); its power is the law's."""
-    from mbs_clearance.contact import CONTACT_MODELS
     from mbs_clearance.generate.runtime import contact_stage, lubricated_stage
+    from mbs_clearance.laws.forces import CONTACT_MODELS
     from mbs_clearance.laws.lubrication import lubricated_force
 
     ex, ey, exd, eyd, wj, wb = 0.3 * C, -0.6 * C, 2e-3, -1e-3, 250.0, -30.0

@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 
 from mbs_clearance import SliderCrank, continue_orbits, lyapunov_exponent, periodic_orbit
-from mbs_clearance.periodic import return_map
-from mbs_clearance.poincare import Flow, poincare_section
+from mbs_clearance.analysis.periodic import return_map
+from mbs_clearance.analysis.poincare import Flow, poincare_section
 
 PAPER = SliderCrank()                                       # 0.01 mm, 5000 rpm
 #: 0.15 mm at 5000 rpm: the regime map's run is aperiodic there (no recurrence within 1e-3
@@ -27,7 +27,7 @@ def paper_orbit():
 
 
 def _mem_index(mech):
-    from mbs_clearance import reduced
+    from mbs_clearance.solve import reduced
 
     return reduced.MEM_START
 
@@ -150,7 +150,7 @@ def test_unstable_orbit_where_the_simulation_does_not_settle():
     (dict(guess="settled"), "guess must be"),
 ])
 def test_bad_input_is_refused_before_computing(kwargs, message, monkeypatch):
-    from mbs_clearance import periodic
+    from mbs_clearance.analysis import periodic
 
     monkeypatch.setattr(periodic, "_newton", lambda *a, **k: pytest.fail("ran"))
     monkeypatch.setattr(periodic._Shooter, "jacobian", lambda *a, **k: pytest.fail("ran"))
@@ -159,7 +159,7 @@ def test_bad_input_is_refused_before_computing(kwargs, message, monkeypatch):
 
 
 def test_bad_input_of_the_continuation_is_refused_before_computing(monkeypatch):
-    from mbs_clearance import periodic
+    from mbs_clearance.analysis import periodic
 
     monkeypatch.setattr(periodic, "periodic_orbit", lambda *a, **k: pytest.fail("ran"))
     with pytest.raises(ValueError, match="unknown"):
@@ -214,7 +214,7 @@ def test_period_doublings_of_the_branch_are_where_plain_shooting_sees_minus_one(
 def test_branch_points_are_orbits_of_the_map(paper_branch):
     """Every orbit of the branch is a fixed point of the plain map at its clearance (rtol
     as the shooting's) to the Newton tolerance, and its stability is the multipliers'."""
-    from mbs_clearance.periodic import with_field
+    from mbs_clearance.analysis.periodic import with_field
 
     branch = paper_branch
     for i in range(0, len(branch.values), 17):
@@ -251,7 +251,7 @@ def test_cli_orbits_prints_the_python_functions_multipliers(paper_orbit, capsys)
 ])
 def test_cli_orbits_bad_input_is_one_line_before_any_run(argv, message, capsys,
                                                           monkeypatch):
-    from mbs_clearance import periodic
+    from mbs_clearance.analysis import periodic
     from mbs_clearance.cli import main
 
     monkeypatch.setattr(periodic, "periodic_orbit", lambda *a, **k: pytest.fail("ran"))
@@ -282,7 +282,7 @@ def test_branch_over_crank_speed_runs_through_the_regime_maps_samples():
     clearances in position and 1e-2 in rate (measured 1.8e-4 and 1.2e-3: the map's run
     settles on its own memory, 0.2540 m/s against the branch's held 0.2524)."""
     from mbs_clearance import regime_map
-    from mbs_clearance.periodic import with_field
+    from mbs_clearance.analysis.periodic import with_field
 
     speed = 5050 * math.pi / 30
     branch = continue_orbits(PAPER, "crank_speed", PAPER.crank_speed, 5100 * math.pi / 30,

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import numba as nb
 
-from ..._kernel import KERNEL
+from ...numerics._kernel import KERNEL
 from ..base import Parameter
 from .journal_bearing import film_force
 

@@ -56,7 +56,7 @@ from dataclasses import dataclass
 
 import numba as nb
 
-from ..._kernel import KERNEL
+from ...numerics._kernel import KERNEL
 from ..base import Parameter
 
 __all__ = ["LubricationLaw", "VISCOSITY", "BEARING_LENGTH", "LAWS", "MODELS",

@@ -41,15 +41,15 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ._checks import check_int, check_real
-from .integrator import RESULTS
-from .linkage import Linkage
-from .lyapunov import _tangent_scale
-from .mechanism import SliderCrank
-from .poincare import Flow, clearances_of, drive_of, joints_of
+from .._checks import check_int, check_real
+from ..model.design import design_at
+from ..model.linkage import Linkage
+from ..model.mechanism import SliderCrank
+from ..numerics.integrator import RESULTS
+from ..solve.flows import Flow, _tangent_scale, clearances_of, drive_of, joints_of
 
 __all__ = ["PeriodicOrbit", "periodic_orbit", "return_map", "Branch", "BranchPoint",
-           "continue_orbits", "plot_branch", "field_value", "with_field", "SHOOTING_RTOL",
+           "continue_orbits", "field_value", "with_field", "SHOOTING_RTOL",
            "NEWTON_TOL", "POINT_KINDS"]
 
 #: default relative tolerance of the shooting runs (the map's error must stay well below
@@ -112,7 +112,7 @@ class PeriodicOrbit:
     def start(self):
         """The section state as a `linkage_model.Start` (of the mechanism's linkage: a
         SliderCrank's `cases.from_slider_crank`), to run from the orbit."""
-        from .linkage_model import Start
+        from ..solve.linkage_model import Start
 
         return Start(y=self.state.copy(), modes=self.modes.copy(),
                      impact_velocities=self.impact_velocities.copy(), revolutions=0,
@@ -121,7 +121,7 @@ class PeriodicOrbit:
 
 def _linkage_of(mech):
     if isinstance(mech, SliderCrank):
-        from .cases import from_slider_crank
+        from ..model.cases import from_slider_crank
 
         return from_slider_crank(mech)
     return mech
@@ -132,7 +132,7 @@ class _Shooter:
     monodromy matrix (`jacobian`), from a state x and memory (modes, impact velocities)."""
 
     def __init__(self, mech, period: int, rtol: float, method: str):
-        from .linkage_ddm import pack_sensitivity_parameters, sensitivity_atol
+        from ..solve.linkage_ddm import pack_sensitivity_parameters, sensitivity_atol
 
         flow = Flow(mech, rtol=rtol, method=method)
         self.mech = mech
@@ -246,7 +246,7 @@ def _check_state(sh, state, modes, vel):
 
 def _guess_of(sh, guess, settle: int):
     """(x, modes, impact velocities) to start Newton from."""
-    from .linkage_model import Start
+    from ..solve.linkage_model import Start
 
     if guess is None:
         flow = sh.guess_flow
@@ -373,7 +373,7 @@ def _newton(sh, x, modes, vel, period, tol, max_iterations, trajectory):
         scale=S[idx].copy(), stability="stable" if np.max(np.abs(mult)) < 1.0 else "unstable",
         iterations=it, residual=res, onsets=ons, rtol=sh.rtol, history=history)
     if trajectory:
-        from .simulate import simulate
+        from ..solve.simulate import simulate
 
         orbit.trajectory = simulate(_linkage_of(sh.mech), period, rtol=sh.rtol,
                                     start=orbit.start())
@@ -444,11 +444,11 @@ def _format_mu(mu) -> str:
 
 
 def field_value(mech, name: str) -> float:
-    """The value of sweep field `name` on `mech` (`sweep.design_at`'s names)."""
+    """The value of sweep field `name` on `mech` (`design.design_at`'s names)."""
     if isinstance(mech, SliderCrank):
         if name == "clearance":
             return float(mech.clearance)
-        from .mechanism import field_names
+        from ..model.mechanism import field_names
 
         if name not in field_names():
             raise ValueError(f"unknown field {name!r} of a SliderCrank; allowed: "
@@ -462,15 +462,13 @@ def field_value(mech, name: str) -> float:
             if cj.name == joint:
                 return float(cj.clearance)
         raise ValueError(f"unknown clearance joint {joint!r} of linkage {mech.name!r}")
-    from .design import design_value
+    from ..model.design import design_value
 
     return float(design_value(mech, name))
 
 
 def with_field(mech, name: str, value: float):
-    """`mech` with field `name` set to `value` (`sweep.design_at`)."""
-    from .sweep import design_at
-
+    """`mech` with field `name` set to `value` (`design.design_at`)."""
     return design_at(mech, {name: float(value)})
 
 
@@ -602,7 +600,7 @@ def continue_orbits(mech, field_name: str, start: float, stop: float, *, period:
                     stop_at_first: bool = False, progress=None) -> Branch:
     """Pseudo-arclength continuation of a periodic orbit of `mech` in `field_name` (a sweep
     field: "clearance", "crank_speed", a SliderCrank field, a case override or a dotted
-    field of a Linkage; `sweep.design_at`) from `start` to `stop`.
+    field of a Linkage; `design.design_at`) from `start` to `stop`.
 
     The orbit at `start` is found by `periodic_orbit` (from `guess`, or a settled run).
     Steps are in the arclength of (scaled state, u) with u the field (log: its logarithm;
@@ -785,68 +783,3 @@ def _locate(con, a, b, kind, modes, held, tol, locate_tol) -> BranchPoint:
         note += ("; " if note else "") + "bisection stopped (corrector did not converge)"
     return BranchPoint(kind=kind, value=value, tolerance=half,
                        multipliers=mu[np.argsort(-np.abs(mu), kind="stable")], note=note)
-
-
-def plot_branch(branch: Branch, path=None, regime_map=None, joint: int = 0,
-                component: str = "x"):
-    """Bifurcation diagram of a branch: the section `component` of clearance joint `joint`
-    (in clearances; rates in clearance x drive speed) against the field, stable orbits
-    solid, unstable dashed, detected points marked; over the brute-force samples of a
-    `regime_map` dataset (`plotting.plot_bifurcation`, a two-field map cut at the branch's
-    other values) where given. Saved to `path` if given; returns the Figure."""
-    from matplotlib.figure import Figure
-
-    from .plotting import _axis_factor, plot_bifurcation, save
-    from .poincare import SECTION_COMPONENTS
-
-    if component not in SECTION_COMPONENTS:
-        raise ValueError(f"component must be one of {SECTION_COMPONENTS}; got {component!r}")
-    J = branch.sections.shape[1]
-    joint = check_int("joint", joint, 0, J - 1)
-    comp = SECTION_COMPONENTS.index(component)
-    y = branch.sections[:, joint, comp] / branch.clearances[:, joint]
-    if component.endswith("dot"):
-        y = y / _branch_speed(branch)
-    x = branch.values * _axis_factor(branch.field)
-    if regime_map is not None:
-        fig = plot_bifurcation(regime_map, joint=joint, component=component)
-        ax = fig.axes[0]
-    else:
-        fig = Figure(figsize=(7.5, 4.2))
-        ax = fig.subplots()
-        ax.set_xlabel(branch.field)
-        ax.set_ylabel(f"section {component} of joint {joint} (clearance)")
-        if branch.field.endswith("clearance"):
-            ax.set_xscale("log")
-    first = {True: True, False: True}
-    start = 0
-    for i in range(1, len(x) + 1):
-        if i == len(x) or branch.stable[i] != branch.stable[start]:
-            st = bool(branch.stable[start])
-            seg = slice(start, min(i + 1, len(x)))
-            ax.plot(x[seg], y[seg], "-" if st else "--", color="k", lw=1.2,
-                    label=("stable period-%d orbit" if st else "unstable period-%d orbit")
-                    % branch.period if first[st] else None)
-            first[st] = False
-            start = i
-    marks = {"fold": "o", "period_doubling": "s", "neimark_sacker": "D", "grazing": "^"}
-    for kind, marker in marks.items():
-        pts = [p for p in branch.points if p.kind == kind]
-        if pts:
-            xv = np.array([p.value for p in pts])
-            yv = np.interp(xv, *_monotone(branch.values, y))
-            ax.plot(xv * _axis_factor(branch.field), yv, marker, mfc="none", color="C3",
-                    label=kind.replace("_", " "))
-    ax.legend(fontsize=7, loc="best")
-    return save(fig, path)
-
-
-def _branch_speed(branch) -> np.ndarray:
-    if branch.field == "crank_speed":
-        return branch.values
-    return np.full(len(branch.values), float(branch.counters.get("speed", 1.0)))
-
-
-def _monotone(xv, yv):
-    order = np.argsort(xv, kind="stable")
-    return np.asarray(xv)[order], np.asarray(yv)[order]
