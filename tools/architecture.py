@@ -29,7 +29,7 @@ LAYERS = {
     "generate": (("generate", "_generated"), "description -> compiled model module"),
     "solve": (("solve",), "runs, DDM, accuracy, Trajectory, the backend registry"),
     "backends": (("backends",), "Exudyn and the ideal joint"),
-    "analysis": (("analysis",), "sensitivities, objectives, sections, Lyapunov exponents"),
+    "analysis": (("analysis",), "sensitivities, objectives, sections, Lyapunov, periodic orbits"),
     "studies": (("studies",), "GA, tolerance studies, regime maps, executors"),
     "plotting": (("plotting",), "every figure"),
     "cli": (("cli",), "the command line"),
