@@ -25,13 +25,13 @@ from validation.timing import machine_summary
 
 
 def _run(mech, fixed: bool, record: bool):
-    system = None if fixed else am.state_error_only(mech)
-    return reduced.run(mech, 4, record=record, system=system)
+    options = {} if fixed else am.state_error_only()
+    return reduced.run(mech, 4, record=record, **options)
 
 
 def _peaks(mech, fixed, record=False):
     out = _run(mech, fixed, record)
-    return out[3], int(out[5][0])
+    return out.peaks, int(out.counters[0])
 
 
 def _interleaved(fn_before, fn_after, repeats):

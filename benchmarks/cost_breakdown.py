@@ -243,20 +243,24 @@ def _count_monitor(t, y, p, dydt, out, g, gd):
 def _plain_args(mech, **changes):
     """(y0, p, edges, settings, coefficients) of the default peak-only run, as reduced.run
     builds them, with the settings' fields in `changes` replaced."""
-    rtol, atol = reduced._tolerances(mech, None, None)
-    system = reduced.plain_system(mech, np.append(atol, reduced.event_atol(mech, rtol)))
+    from mbs_clearance.solve import linkage_model as lm
+
+    linkage = reduced.linkage_of(mech)
+    rtol = reduced.DEFAULT_RTOL
+    atol = np.append(reduced.default_atol(mech, rtol), reduced.event_atol(mech, rtol))
     edges = reduced.window_edges(mech, 4)
-    event_tol = max(1e-12 * mech.clearance,
-                    8 * np.finfo(float).eps * (mech.crank_length + mech.coupler_length))
+    event_tol = lm.event_tolerance(linkage)
+    p = reduced.model_parameters(mech)
+    y0 = lm.check_start(linkage, MODEL, p, reduced.centred_start(mech), event_tol)
     fields = dict(h_max=mech.period / 8, max_steps=reduced.DEFAULT_MAX_STEPS, record=False,
                   event_tol=event_tol, event_margin=reduced.event_margin(mech.clearance, rtol),
                   n_samples=1, refine_iters=reduced.REFINE_ITERS, n_out=0,
-                  n_dense=reduced.N_EVENT, n_events=1, mem_start=system.mem_start,
-                  n_mem=system.n_mem)
-    atol_arr = changes.pop("atol", system.atol)
+                  n_dense=reduced.N_EVENT, n_events=1, mem_start=MODEL.MEM_START,
+                  n_mem=MODEL.N_MEM)
+    atol_arr = changes.pop("atol", atol)
     fields.update(changes)
-    settings = make_settings(rtol, atol_arr, system.n_err, **fields)
-    return system.y0, system.p, edges, settings, METHODS["dopri5"].arrays()
+    settings = make_settings(rtol, atol_arr, reduced.N_ERR, **fields)
+    return y0, p, edges, settings, METHODS["dopri5"].arrays()
 
 
 def counts() -> dict:
@@ -280,7 +284,7 @@ def counts() -> dict:
 def variants(repeats: int) -> dict:
     """CPU ms (median) of the peak-only kernel run with parts switched off, and recorded."""
     mech = SliderCrank()
-    kernel = reduced.integrate_plain
+    kernel = reduced.MODEL.integrate_model
     runs = {
         "peak only (default)": _plain_args(mech),
         "no peak refinement": _plain_args(mech, refine_iters=0),

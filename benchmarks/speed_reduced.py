@@ -32,7 +32,7 @@ from mbs_clearance.solve import reduced
 t1 = time.perf_counter()
 simulate(SliderCrank(), 4)
 t2 = time.perf_counter()
-print(t1 - t0, t2 - t1, sum(reduced.integrate_plain.stats.cache_misses.values()))
+print(t1 - t0, t2 - t1, sum(reduced.MODEL.integrate_model.stats.cache_misses.values()))
 """
 
 

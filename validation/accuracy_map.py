@@ -50,14 +50,13 @@ def reference_peaks(mech: SliderCrank, revolutions: int = REVOLUTIONS,
     """Per-revolution peaks at rtol 1e-12 (cached per process: the references dominate the
     cost of the map)."""
     return reduced.run(mech, revolutions, rtol=REFERENCE_RTOL, record=False,
-                       **dict(options))[3]
+                       **dict(options)).peaks
 
 
-def state_error_only(mech: SliderCrank, rtol: float = reduced.DEFAULT_RTOL,
-                     initial_offset: float = 0.0) -> reduced.System:
-    """The plain model's system with the state's atol only: the error control before the
-    penetration was put under it (for before/after comparisons)."""
-    return reduced.plain_system(mech, reduced.default_atol(mech, rtol), initial_offset)
+def state_error_only() -> dict:
+    """The run options of the error control before the penetration was put under it: the
+    state's atol only (for before/after comparisons)."""
+    return {"event_control": False}
 
 
 def peak_errors(mech: SliderCrank, revolutions: int = REVOLUTIONS, options: tuple = (),
@@ -67,11 +66,9 @@ def peak_errors(mech: SliderCrank, revolutions: int = REVOLUTIONS, options: tupl
     penetration), and the run's counters."""
     ref = reference_peaks(mech, revolutions, options)
     if before:
-        settings["system"] = state_error_only(mech, settings.get("rtol") or
-                                              reduced.DEFAULT_RTOL,
-                                              dict(options).get("initial_offset", 0.0))
+        settings.update(state_error_only())
     out = reduced.run(mech, revolutions, record=False, **dict(options), **settings)
-    return np.abs(out[3] / ref - 1.0), reduced.counters_dict(out[5])
+    return np.abs(out.peaks / ref - 1.0), reduced.counters_dict(out.counters)
 
 
 def grid_map(n: int = 9, **settings) -> list[dict]:

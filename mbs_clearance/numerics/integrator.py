@@ -1172,7 +1172,8 @@ def integrate(rhs, event, on_event, monitor, y0, p, edges, settings, coefficient
 
     numba compiles one specialisation per set of model kernels. Called from Python with
     the kernels as arguments it is compiled in every new process; bind the kernels in a
-    cached wrapper instead (`reduced.integrate_plain`) to load it from the disk cache."""
+    cached wrapper instead (a generated model's `integrate_model`) to load it from the
+    disk cache."""
     A, B, C, E, E2, P, A_extra, C_extra, error_order, pi_alpha, pi_beta = coefficients
     rtol = settings.rtol
     atol = settings.atol

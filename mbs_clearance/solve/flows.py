@@ -10,8 +10,8 @@ import numpy as np
 from .._checks import check_real
 from ..model.linkage import Linkage
 from ..model.mechanism import SliderCrank
-from ..numerics.integrator import METHODS, RESULTS, make_settings
-from .linkage_model import DEFAULT_RTOL, REFINE_ITERS
+from ..numerics.integrator import METHODS, RESULTS
+from .linkage_model import DEFAULT_RTOL
 
 __all__ = ["Flow", "TangentFlow", "drive_of", "clearances_of", "joints_of"]
 
@@ -63,41 +63,23 @@ class Flow:
         self.omega, self.theta0 = drive_of(mech)
         self.clearance = clearances_of(mech)
         self.joints = joints_of(mech)
+        from . import linkage_model as lm
+        from . import reduced
+
+        linkage = mech if _is_linkage(mech) else reduced.linkage_of(mech)
+        model = self.model = lm.load_model(linkage)
+        p = lm.pack_parameters(linkage, model)
+        rtol, atol = lm._tolerances(linkage, model, rtol, None)
+        event_tol = lm.event_tolerance(linkage)
         if _is_linkage(mech):
-            from ..generate import load_model
-            from . import linkage_model as lm
-
-            model = self.model = load_model(mech)
-            p = lm.pack_parameters(mech, model)
-            y0 = lm.initial_state(mech, model, p)
-            rtol, atol = lm._tolerances(mech, model, rtol, None)
-            self.kernel = model.integrate_model
-            event_tol = lm.event_tolerance(mech)
-            self.settings = make_settings(
-                rtol, atol, 2 * model.N_Q, h_max=mech.period / 8, max_steps=max_steps,
-                record=True, event_tol=event_tol,
-                event_margin=lm.event_margin(mech.min_clearance, rtol), n_samples=1,
-                refine_iters=lm.REFINE_ITERS, n_out=0, n_dense=2 * model.N_Q,
-                n_events=model.N_EVENTS, mem_start=model.MEM_START, n_mem=model.N_MEM)
-            self._gaps = [getattr(model, f"_gap_{j}") for j in range(model.N_EVENTS)]
-        else:
-            from . import reduced
-
-            self.model = reduced.MODEL
-            p = reduced.model_parameters(mech)
-            y0 = reduced.initial_state(mech)
-            atol = np.append(reduced.default_atol(mech, rtol), reduced.event_atol(mech, rtol))
-            self.kernel = reduced.integrate_plain
-            # as reduced.run: 1e-12 of the clearance, not below the journal's round-off
-            event_tol = max(1e-12 * mech.clearance,
-                            8 * np.finfo(float).eps * (mech.crank_length + mech.coupler_length))
-            self.settings = make_settings(
-                rtol, atol, reduced.N_ERR, h_max=mech.period / 8, max_steps=max_steps,
-                record=True, event_tol=event_tol,
-                event_margin=reduced.event_margin(mech.clearance, rtol), n_samples=1,
-                refine_iters=REFINE_ITERS, n_out=0, n_dense=reduced.N_EVENT, n_events=1,
-                mem_start=reduced.MEM_START, n_mem=reduced.N_MEM)
-            self._gaps = [reduced.MODEL._gap_0]
+            y0 = lm.initial_state(linkage, model, p)
+        else:                       # the paper's closed-form start, as its runs
+            y0 = lm.check_start(linkage, model, p, reduced.centred_start(mech), event_tol)
+        self.kernel = model.integrate_model
+        self.settings = lm.integrator_settings(
+            linkage, model, rtol, atol, h_max=linkage.period / 8, max_steps=max_steps,
+            record=True, event_tol=event_tol)
+        self._gaps = [getattr(model, f"_gap_{j}") for j in range(model.N_EVENTS)]
         self.rtol = rtol
         self.coefficients = METHODS[method].arrays()
         self.t = 0.0

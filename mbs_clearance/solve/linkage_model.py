@@ -238,23 +238,47 @@ def drive_extent(linkage: Linkage) -> float:
     return max(math.dist(a, b) for a in pts for b in pts)
 
 
+#: hysteresis factor xi (laws.forces) above which a contact law counts as damping-dominated
+#: (the damping term exceeds the spring term xi-fold at the impact speed) and the
+#: penetration rate is put under error control too: Flores' law at e = 0.05 (xi = 30) and
+#: 0.1 (xi = 14) missed 1e-5 on the paper case's first impact's peak without it; the laws
+#: with xi <= 1.5 (every restitution of the other laws) met it (docs/performance.md, the
+#: accuracy map)
+DAMPED_XI = 4.0
+
+#: absolute tolerance of the penetration rate of a damping-dominated law, in clearance x
+#: drive speed x rtol, divided by xi (the force's relative error goes as xi times the rate's)
+DAMPED_RATE_ATOL = 1e4
+
+
+def event_atol(joint, speed: float, rtol: float) -> np.ndarray:
+    """Absolute tolerances of one clearance joint's switching function (penetration, m)
+    and its rate (m/s): the penetration's error is controlled at the clearance's scale;
+    its rate only through the state (a tolerance on it at the clearance's scale cost more
+    than it gained, docs/performance.md), except for a damping-dominated contact law
+    (hysteresis factor xi > DAMPED_XI), whose force follows the rate with weight xi: there
+    the rate's atol is rtol x DAMPED_RATE_ATOL / xi x clearance x drive speed."""
+    from ..laws.forces import hysteresis_factor
+
+    xi = hysteresis_factor(joint.restitution, CONTACT_MODELS[joint.contact_model])[0]
+    rate = (rtol * DAMPED_RATE_ATOL / xi * joint.clearance * speed
+            if xi > DAMPED_XI else np.inf)
+    return np.array([rtol * EVENT_ATOL * joint.clearance, rate])
+
+
 def default_atol(linkage: Linkage, model, rtol: float) -> np.ndarray:
     """Absolute tolerances: per state component from the linkage's natural scales (angles
     1 rad, lengths the length scale, angle rates the drive speed, length rates the driven
     body's tip speed, the drive's (and friction's) work 1 J, not under error control), then
-    per clearance
-    joint of its switching function (EVENT_ATOL clearances x rtol) and its rate (none).
-    For the paper case these are reduced.default_atol and reduced.event_atol."""
+    per clearance joint of its switching function and its rate (`event_atol`)."""
     w = linkage.drive.speed
     length = linkage.length_scale
     tip = w * drive_extent(linkage)
     pos = [1.0 if c.endswith(".angle") else length for c in model.COORDINATES]
     vel = [w if c.endswith(".angle") else tip for c in model.COORDINATES]
-    events = []
-    for j in linkage.clearance_joints:
-        events += [rtol * EVENT_ATOL * j.clearance, np.inf]
+    events = [event_atol(j, w, rtol) for j in linkage.clearance_joints]
     works = [1.0] * (model.N_STATE - 2 * model.N_Q)
-    return np.concatenate([rtol * np.array(pos + vel + works), events])
+    return np.concatenate([rtol * np.array(pos + vel + works), *events])
 
 
 # ---------------------------------------------------------------------------- trajectory
@@ -355,17 +379,26 @@ def _tolerances(linkage, model, rtol, atol):
 
     rtol = DEFAULT_RTOL if rtol is None else check_real("rtol", rtol, 1e-14, 1e-2)
     full = default_atol(linkage, model, rtol)
-    if atol is not None:
+    if atol is None:
+        return rtol, full
+    arr = None
+    if not isinstance(atol, (bool, np.bool_)):
         try:
-            arr = np.broadcast_to(np.asarray(atol, dtype=float), (model.N_STATE,)).copy()
+            arr = np.asarray(atol, dtype=float)
+            if arr.ndim == 1 and arr.shape[0] == full.shape[0]:
+                arr = arr.copy()            # the state's and the switching functions'
+            else:
+                arr = np.broadcast_to(arr, (model.N_STATE,)).copy()
         except (TypeError, ValueError):
             arr = None
-        if (arr is None or not np.all(np.isfinite(arr)) or np.any(arr <= 0)
-                or isinstance(atol, (bool, np.bool_))):
-            raise ValueError(f"atol must be a finite number > 0 or {model.N_STATE} of them "
-                             f"(one per state component {list(model.COORDINATES)}, their "
-                             f"rates, the drive's work); got {atol!r}")
-        full[:model.N_STATE] = arr
+    n = model.N_STATE
+    if (arr is None or not np.all(np.isfinite(arr[:n])) or np.any(arr <= 0)
+            or np.any(np.isnan(arr))):
+        raise ValueError(f"atol must be a finite number > 0 or {n} of them (one per state "
+                         f"component {list(model.COORDINATES)}, their rates, the drive's "
+                         f"work), or {full.shape[0]} (then per clearance joint its "
+                         f"penetration's and penetration rate's, inf allowed); got {atol!r}")
+    full[:arr.shape[0]] = arr
     return rtol, full
 
 
@@ -412,18 +445,108 @@ class LinkageRun(NamedTuple):
     p: np.ndarray
 
 
+#: largest `n_samples` (interior event samples per step) accepted
+MAX_SAMPLES = 1000
+
+#: runs of at least this many revolutions are preceded by a one-revolution pilot (no
+#: record) whose step count estimates the run's steps and memory; it costs at most 1/16
+#: of the run and turns a run that would stop at max_steps or max_memory into an
+#: immediate refusal
+PILOT_MIN_REVOLUTIONS = 16
+
+
+def record_row(model, record: bool = True) -> int:
+    """Floats recorded per step: time, state, memory and (if recorded) outputs."""
+    return 1 + model.N_STATE + model.N_MEM + (model.N_OUT if record else 0)
+
+
+def trajectory_floats(model) -> int:
+    """Floats per step of a `Trajectory`'s series (`trajectory_from_run`) and the times'
+    copy: monitored force 2, drive moment 1, per joint contact force, penetration,
+    eccentricity 2 and phase, per ground joint its reaction 2, shaking force 2, works 2,
+    coordinates, rates and accelerations."""
+    return 1 + 2 + 1 + 5 * model.N_EVENTS + 2 * len(model.GROUND_JOINTS) + 2 + 2 \
+        + 3 * model.N_Q
+
+
+def bytes_per_step(model) -> int:
+    """Peak bytes per recorded step: the record grows by doubling, so up to 3 rows are
+    alive while it is copied; the Trajectory's series are built while the record is
+    alive."""
+    return 8 * (3 * record_row(model) + trajectory_floats(model))
+
+
+def _estimate_steps(linkage, revolutions: float, *, max_steps: int, h_max: float,
+                    pilot: dict) -> int | None:
+    """Steps of a run of `revolutions` revolutions, estimated before it; refused with
+    `MemoryLimitError` where h_max alone forces more than max_steps, or (runs of
+    `PILOT_MIN_REVOLUTIONS` or more) where a one-revolution pilot without record (`pilot`:
+    its run options) predicts more. None: not estimated (a short run)."""
+    import math
+
+    from .._checks import MemoryLimitError
+
+    forced = math.ceil(revolutions * linkage.period / h_max)
+    if forced > max_steps:
+        raise MemoryLimitError(
+            f"a run of {revolutions:.6g} revolutions with h_max = {h_max:.3g} s takes at least "
+            f"{forced:.3g} steps, more than max_steps={max_steps}; raise h_max or max_steps, "
+            "or run fewer revolutions")
+    if revolutions < PILOT_MIN_REVOLUTIONS:
+        return None
+    try:
+        stats = run(linkage, 1, record=False, max_steps=max_steps, h_max=h_max,
+                    **pilot).stats
+        per_rev = float(stats["naccept"] + stats["nreject"])
+    except RuntimeError:
+        per_rev = float(max_steps)
+    steps = int(math.ceil(per_rev * revolutions))
+    if steps > max_steps:
+        raise MemoryLimitError(
+            f"a run of {revolutions:.6g} revolutions needs about {steps:.3g} steps "
+            f"({per_rev:.4g} in the first revolution), more than max_steps={max_steps}; "
+            "raise max_steps or run fewer revolutions")
+    return steps
+
+
+def integrator_settings(linkage: Linkage, model, rtol: float, atol: np.ndarray, *,
+                        h_max: float, max_steps: int, record: bool, event_tol: float,
+                        h0: float = 0.0, n_samples: int = 1,
+                        refine_iters: int = REFINE_ITERS, n_out: int = 0):
+    """The integrator's settings record (`integrator.IntegratorSettings`) of a plain run of
+    `linkage`'s generated `model`: the state's leading 2 N_Q components under error control
+    (the works are quadratures), the event search's margin from the smallest clearance
+    (`event_margin`), the memories of every clearance joint recorded."""
+    from ..numerics.integrator import make_settings
+
+    return make_settings(
+        rtol, atol, 2 * model.N_Q, h0=h0, h_max=h_max, max_steps=max_steps, record=record,
+        event_tol=event_tol, event_margin=event_margin(linkage.min_clearance, rtol),
+        n_samples=n_samples, refine_iters=refine_iters, n_out=n_out, n_dense=2 * model.N_Q,
+        n_events=model.N_EVENTS, mem_start=model.MEM_START, n_mem=model.N_MEM)
+
+
 def run(linkage: Linkage, revolutions: int = 4, *, rtol: float | None = None,
         atol=None, method: str = "dopri5", record: bool = True,
         max_steps: int = DEFAULT_MAX_STEPS, n_samples: int = 1, h_max: float | None = None,
         h0: float = 0.0, event_tol: float | None = None, max_memory: int | None = None,
-        t_eval=None, start: Start | None = None):
+        t_eval=None, start: Start | None = None, edges=None, select: bool = True,
+        event_control: bool = True):
     """Integrate `linkage`'s generated model over `revolutions` drive revolutions from the
     centred start (or from `start`, a `Start`); returns a `LinkageRun` (model, ts, ys, ms,
-    peaks, peak_times, stats, outs, p).
-    With `t_eval` the integrator also lands exactly on those times and only they are
-    returned (the peaks then are the maxima over them per revolution). Every option is
-    checked first (ValueError naming it and its range); a run whose record would exceed
-    `max_memory` bytes stops there with `MemoryLimitError`."""
+    peaks, peak_times, stats, outs, p). The one place where a plain run meets the
+    integrator (the paper's `SliderCrank` runs here too, as its description).
+
+    `edges` (increasing times from 0) replaces the revolution windows over which the peaks
+    are taken. With `t_eval` the integrator also lands exactly on those times and only
+    they are returned (the peaks then are the maxima over them per window; ``select=False``
+    returns every step, which include them). `atol`: one number or one per state component,
+    or the state's and then each joint's penetration and penetration rate (np.inf: not
+    under error control); ``event_control=False`` leaves the penetrations out of the error
+    control (for comparisons). Every option is checked first (ValueError naming it and its
+    range); a run of `PILOT_MIN_REVOLUTIONS` or more is estimated by a one-revolution pilot
+    and refused with `MemoryLimitError` (a ValueError) if it cannot fit in max_steps or
+    `max_memory` bytes; a recording run stops there and says so."""
     from .._checks import (
         MemoryLimitError,
         check_bool,
@@ -433,19 +556,23 @@ def run(linkage: Linkage, revolutions: int = 4, *, rtol: float | None = None,
         check_real,
         check_revolutions_memory,
         format_bytes,
+        revolution_bytes,
     )
-    from ..numerics.integrator import COUNTERS, METHODS, RESULTS, make_settings
+    from ..numerics.integrator import COUNTERS, METHODS, RESULTS
+    from .diagnostics import LOOSE_RTOL
 
     if not isinstance(linkage, Linkage):
         raise ValueError(f"linkage must be a Linkage; got {type(linkage).__name__}")
     revolutions = check_int("revolutions", revolutions, 1)
     check_choice("method", method, METHODS)
     record = check_bool("record", record)
+    select = check_bool("select", select)
+    event_control = check_bool("event_control", event_control)
     max_steps = check_int("max_steps", max_steps, 1)
-    n_samples = check_int("n_samples (interior event samples per step)", n_samples, 0, 1000)
+    n_samples = check_int("n_samples (interior event samples per step)", n_samples, 0,
+                          MAX_SAMPLES)
     h0 = check_real("h0 (initial step; 0: automatic)", h0, 0.0, unit="s")
     max_memory = check_max_memory(max_memory)
-    check_revolutions_memory(revolutions, max_memory)
     h_max = linkage.period / 8 if h_max is None else check_real(
         "h_max (largest step)", h_max, 0.0, low_open=True, unit="s")
     if event_tol is None:
@@ -453,52 +580,70 @@ def run(linkage: Linkage, revolutions: int = 4, *, rtol: float | None = None,
     else:
         event_tol = check_real("event_tol (penetration tolerance of events)", event_tol, 0.0,
                                low_open=True, unit="m")
+    if edges is None:
+        check_revolutions_memory(revolutions, max_memory)
+        edges = np.arange(revolutions + 1) * linkage.period
+    else:
+        edges = np.ascontiguousarray(edges, dtype=float)
+        if (edges.ndim != 1 or len(edges) < 2 or edges[0] != 0.0
+                or not np.all(np.isfinite(edges)) or np.any(np.diff(edges) <= 0)):
+            raise ValueError("edges must be increasing finite times starting at 0.0")
+        check_revolutions_memory(len(edges) - 1, max_memory, name="windows")
     model = load_model(linkage)
     rtol, atol_arr = _tolerances(linkage, model, rtol, atol)
-    if rtol > 1e-4:
-        import warnings
-
-        from .._warnings import AccuracyWarning
-
+    if rtol > LOOSE_RTOL:
         warnings.warn(f"rtol {rtol:g} is too loose to resolve the contacts (looser than "
-                      f"1e-4: spurious contact events and peak forces wrong by any amount); "
-                      f"use rtol <= 1e-4, the default is {DEFAULT_RTOL:g}", AccuracyWarning,
-                      stacklevel=3)
+                      f"{LOOSE_RTOL:g}: spurious contact events and peak forces wrong by any "
+                      f"amount); use rtol <= {LOOSE_RTOL:g}, the default is {DEFAULT_RTOL:g}",
+                      AccuracyWarning, stacklevel=3)
+    if not event_control:
+        atol_arr = atol_arr[:model.N_STATE]
     p = pack_parameters(linkage, model)
     if start is None:
         y0 = initial_state(linkage, model, p)
     else:
         y0 = check_start(linkage, model, p, start, event_tol)
-    edges = win_edges = np.arange(revolutions + 1) * linkage.period
+    win_edges = edges
     refine = REFINE_ITERS
     if t_eval is not None:
         t_eval, edges = landing_edges(edges, t_eval)
         record, refine = True, 0
+    steps = _estimate_steps(linkage, float(edges[-1]) / linkage.period, max_steps=max_steps,
+                            h_max=h_max,
+                            pilot=dict(rtol=rtol, atol=atol, method=method, start=start,
+                                       event_control=event_control))
+    window_bytes = revolution_bytes(len(edges) - 1)
+    per_step = bytes_per_step(model)
+    if record and steps is not None and window_bytes + steps * per_step > max_memory:
+        need = window_bytes + steps * per_step
+        raise MemoryLimitError(
+            f"a run of {edges[-1] / linkage.period:.6g} revolutions needs about "
+            f"{format_bytes(need)} ({steps:.3g} recorded steps of {per_step} bytes), more "
+            f"than max_memory={max_memory} bytes ({format_bytes(max_memory)}); raise "
+            "max_memory, run fewer revolutions, or ask for the peaks only (record=False)")
     extra_fev = 0
     if h0 == 0.0 and model.N_STATE > 2 * model.N_Q + 1:
         h0 = _start_step(model, y0, p, rtol, atol_arr, method, min(h_max, edges[-1]))
         extra_fev = 1
     n_out = model.N_OUT if record else 0
-    row = 8 * (1 + model.N_STATE + model.N_MEM + n_out)
-    step_cap = max(1, (max_memory - 24 * len(edges)) // row) if record else max_steps
-    limit = min(max_steps, step_cap)
-    settings = make_settings(
-        rtol, atol_arr, 2 * model.N_Q, h0=h0, h_max=h_max, max_steps=limit, record=record,
-        event_tol=event_tol, event_margin=event_margin(linkage.min_clearance, rtol),
-        n_samples=n_samples, refine_iters=refine, n_out=n_out, n_dense=2 * model.N_Q,
-        n_events=model.N_EVENTS, mem_start=model.MEM_START, n_mem=model.N_MEM)
+    # the record never outgrows max_memory: a run that would stops there (and says so)
+    limit = min(max_steps, max(1, (max_memory - window_bytes) // per_step)) if record \
+        else max_steps
+    settings = integrator_settings(linkage, model, rtol, atol_arr, h0=h0, h_max=h_max,
+                                   max_steps=limit, record=record, event_tol=event_tol,
+                                   n_samples=n_samples, refine_iters=refine, n_out=n_out)
     ts, ys, ms, peaks, peak_t, counters, outs, status = model.integrate_model(
         y0, p, edges, settings, METHODS[method].arrays())
     status = RESULTS(int(status))
     if status == RESULTS.max_steps and limit < max_steps:
         raise MemoryLimitError(
-            f"the record of linkage {linkage.name!r} reached max_memory={max_memory} bytes "
+            f"linkage {linkage.name!r}: the run's record reached max_memory={max_memory} bytes "
             f"({format_bytes(max_memory)}) at t = {ts[-1]:.6g} s, after {limit} steps; raise "
-            "max_memory or run fewer revolutions")
+            "max_memory, run fewer revolutions, or ask for the peaks only (record=False)")
     if status != RESULTS.success:
         raise RuntimeError(f"integration of linkage {linkage.name!r} failed at about t = "
                            f"{ts[-1] if len(ts) else float('nan'):.6g} s: {status.message}")
-    if t_eval is not None:
+    if t_eval is not None and select:
         keep = landed_indices(ts, t_eval)
         ts, ys, ms, outs = ts[keep], ys[keep], ms[keep], outs[keep]
         peaks = window_peaks(ts, outs, model.MONITOR_COLUMN, win_edges)

@@ -142,7 +142,7 @@ def _to_accuracy(mech, revolutions, accuracy, options: dict) -> Trajectory:
     def record(rtol):
         return _call("reduced", "simulate", mech, revolutions, {**options, "rtol": rtol})
 
-    if isinstance(mech, SliderCrank) and mech.friction_law == "none":
+    if isinstance(mech, SliderCrank):
         def peaks(rtol):
             out = reduced.run(mech, revolutions, record=False, rtol=rtol, **options)
             return out.peaks, int(out.counters[0])
@@ -150,13 +150,10 @@ def _to_accuracy(mech, revolutions, accuracy, options: dict) -> Trajectory:
         def rattling(traj):
             return bool(traj.stats.get("rattling"))
     else:
-        from ..model.cases import from_slider_crank
         from . import linkage_model as lm
 
-        lk = from_slider_crank(mech) if isinstance(mech, SliderCrank) else mech
-
         def peaks(rtol):
-            out = lm.run(lk, revolutions, record=False, rtol=rtol, **options)
+            out = lm.run(mech, revolutions, record=False, rtol=rtol, **options)
             return out.peaks, out.stats["nfev"]
 
         # no rattling shortcut: the four-bar's slow drive switches its contact hundreds of

@@ -348,7 +348,7 @@ def test_threads_release_the_gil_inside_the_compiled_model(monkeypatch):
 
     mech = SliderCrank()
     peak_base_force(mech, 1)                    # compiled / loaded from the cache
-    kernel, state = reduced.integrate_plain, {}
+    kernel, state = reduced.MODEL.integrate_model, {}
 
     def bracketed(*args):
         state["mark"]()
@@ -357,7 +357,7 @@ def test_threads_release_the_gil_inside_the_compiled_model(monkeypatch):
         finally:
             state["mark"]()
 
-    monkeypatch.setattr(reduced, "integrate_plain", bracketed)
+    monkeypatch.setattr(reduced.MODEL, "integrate_model", bracketed)
 
     def call(mark):
         state["mark"] = mark

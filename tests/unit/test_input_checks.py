@@ -17,7 +17,7 @@ from mbs_clearance._checks import MemoryLimitError
 from mbs_clearance._warnings import PhysicsWarning
 from mbs_clearance.analysis.sensitivity import load_sensitivities, sensitivities
 from mbs_clearance.model.mechanism import RPM
-from mbs_clearance.solve import reduced
+from mbs_clearance.solve import linkage_model, reduced
 from mbs_clearance.solve.simulate import peak_base_force
 from mbs_clearance.solve.trajectory import PENETRATION_LIMIT, load_trajectory
 
@@ -29,7 +29,7 @@ def no_integration(monkeypatch):
     def forbidden(*args, **kwargs):
         raise AssertionError("the integrator ran before the input was checked")
 
-    monkeypatch.setattr(reduced, "integrate_plain", forbidden)
+    monkeypatch.setattr(reduced.MODEL, "integrate_model", forbidden)
 
 
 NAN = float("nan")
@@ -165,7 +165,7 @@ def test_pilot_refuses_a_run_that_would_hit_max_steps(paper):
 def test_record_never_outgrows_max_memory(paper):
     traj = simulate(paper, 1)
     steps = len(traj.t)
-    per_step = reduced.bytes_per_step(reduced._record_row(None))
+    per_step = linkage_model.bytes_per_step(reduced.MODEL)
     limit = steps * per_step // 2
     with pytest.raises(MemoryLimitError, match="record reached max_memory"):
         simulate(paper, 1, max_memory=limit)
@@ -176,7 +176,7 @@ def test_record_never_outgrows_max_memory(paper):
 MEMORY_PROBE = textwrap.dedent("""
     import json
     from mbs_clearance import SliderCrank
-    from mbs_clearance.solve import reduced
+    from mbs_clearance.solve import linkage_model, reduced
     from mbs_clearance.solve.simulate import peak_base_force, simulate
 
     def peak_rss():
@@ -200,7 +200,7 @@ MEMORY_PROBE = textwrap.dedent("""
     r3 = peak_rss()
     steps = traj.stats["naccept"] + traj.stats["nreject"]
     print(json.dumps({"peak": r1 - r0, "record": r3 - r2, "steps": steps,
-                      "per_step": reduced.bytes_per_step(reduced._record_row(None))}))
+                      "per_step": linkage_model.bytes_per_step(reduced.MODEL)}))
 """)
 
 

@@ -5,7 +5,6 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from mbs_clearance.solve import reduced
 from mbs_clearance.solve.linkage_model import landed_indices, landing_edges, window_peaks
 
 
@@ -29,4 +28,3 @@ def test_landed_indices_and_window_peaks_against_a_direct_search():
     for i, (a, b) in enumerate([(0.0, 1.0), (1.0, 2.0)]):
         best = max(np.hypot(outs[k, 1], outs[k, 2]) for k in range(len(ts)) if a <= ts[k] <= b)
         assert peaks[i] == best
-    assert reduced.landed_indices is landed_indices     # one place, re-exported
