@@ -33,6 +33,7 @@ _LAZY = {
                      "Revolute"), "model.linkage"),
     **dict.fromkeys(("LyapunovResult", "lyapunov_exponent"), "analysis.lyapunov"),
     **dict.fromkeys(("Start", "settled_start"), "solve.linkage_model"),
+    "RunSettings": "solve.settings",
     **dict.fromkeys(("CONTINUOUS_FIELDS", "PARAMETER_INFO", "SliderCrank"), "model.mechanism"),
     **dict.fromkeys(("PeakGradient", "peak_gradient"), "analysis.objective"),
     **dict.fromkeys(("OptimizationResult", "optimize_link_lengths"), "studies.optimize"),
@@ -70,7 +71,7 @@ def __dir__():
 __all__ = [
     "SliderCrank", "PARAMETER_INFO", "CONTINUOUS_FIELDS",
     "Linkage", "Body", "Revolute", "Prismatic", "ClearanceJoint", "Drive", "GROUND",
-    "simulate", "peak_base_force", "BACKENDS", "Start", "settled_start",
+    "simulate", "peak_base_force", "BACKENDS", "RunSettings", "Start", "settled_start",
     "Trajectory", "load_trajectory",
     "sensitivities", "Sensitivities", "DEFAULT_PARAMETERS",
     "optimize_link_lengths", "OptimizationResult",

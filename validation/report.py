@@ -2,6 +2,9 @@
 
     mbs-clearance report [--out report/] [--quick] [--replot]
 
+(With ``--case NAME`` or ``--description FILE``: the report of that linkage,
+`validation.linkage_report`.)
+
 Writes ``report.html`` (self-contained: figures embedded), ``report.json`` (every number in
 the report), ``figures/*.png``, ``data/`` (what each section computed) and ``manifest.json``
 (the run id and the SHA-256 of every file). Each section computes its data once and saves
@@ -1240,7 +1243,6 @@ def build_report(out: str | Path = "report", quick: bool = False, progress: bool
     run (ValueError otherwise). An existing `out` that is not an earlier report is replaced
     only with `force`.
     """
-    from tqdm import tqdm
 
     from mbs_clearance._io import OutputDir, check_output_dir, recover
 
@@ -1279,26 +1281,44 @@ def build_report(out: str | Path = "report", quick: bool = False, progress: bool
     with OutputDir(out, "report") as staged:
         work = staged.path
         (work / "data").mkdir()
-        numbers: dict[str, Any] = {}
-        timings: dict[str, float] = {}
-        bar = tqdm(SECTIONS, desc="report", disable=not progress)
-        for key in bar:
-            bar.set_postfix_str(key)
-            t0 = time.perf_counter()
+
+        def compute(key, numbers, timings):
             if key == "paper":
-                numbers[key] = section_paper(work, s, numbers)
-            elif key == "environment":
-                numbers[key] = section_environment(work, s, timings)
-            else:
-                numbers[key] = globals()[f"section_{key}"](work, s)
-            timings[key] = time.perf_counter() - t0
-        numbers["environment"]["run_id"] = staged.run_id
-        numbers = _jsonable(numbers)
-        (work / "report.json").write_text(json.dumps(numbers, indent=1))
-        figs = draw_figures(work, numbers)
-        render(work, numbers, figs)
-        staged.commit()
+                return section_paper(work, s, numbers)
+            if key == "environment":
+                return section_environment(work, s, timings)
+            return globals()[f"section_{key}"](work, s)
+
+        write_report(staged, SECTIONS, compute, progress, draw_figures, render)
     return out / "report.html"
+
+
+def write_report(staged, sections, compute, progress: bool, draw, render_html) -> None:
+    """Fill the staged folder `staged` (an `_io.OutputDir`): every section's numbers
+    (`run_sections`) into report.json, the figures (`draw(folder, numbers)`), the HTML
+    (`render_html(folder, numbers, figures)`), then commit it into place."""
+    numbers = run_sections(sections, compute, progress)
+    numbers["environment"]["run_id"] = staged.run_id
+    numbers = _jsonable(numbers)
+    (staged.path / "report.json").write_text(json.dumps(numbers, indent=1))
+    render_html(staged.path, numbers, draw(staged.path, numbers))
+    staged.commit()
+
+
+def run_sections(sections, compute, progress: bool) -> dict[str, Any]:
+    """{section: compute(section, the numbers so far, the seconds so far)}, in order, with a
+    progress bar naming the running section."""
+    from tqdm import tqdm
+
+    numbers: dict[str, Any] = {}
+    timings: dict[str, float] = {}
+    bar = tqdm(sections, desc="report", disable=not progress)
+    for key in bar:
+        bar.set_postfix_str(key)
+        t0 = time.perf_counter()
+        numbers[key] = compute(key, numbers, timings)
+        timings[key] = time.perf_counter() - t0
+    return numbers
 
 
 #: files that --replot rebuilds (may be missing or changed); all others are its input
@@ -1339,10 +1359,26 @@ def _verify_for_replot(out: Path) -> dict:
 
 
 def main(args) -> int:
+    from mbs_clearance.cli import linkage_from_args, wrote
+
     t0 = time.perf_counter()
+    linkage = linkage_from_args(args)
+    if linkage is None and args.set:
+        raise ValueError("--set applies with --case or --description (the report of that "
+                         "linkage); the paper's report runs the paper's case as published")
+    if linkage is not None:
+        if args.replot or args.map is not None:
+            raise ValueError("--replot and --map belong to the paper's report; the report of "
+                             "a --case or --description computes its own regime map")
+        from .linkage_report import build_linkage_report
+
+        path = build_linkage_report(linkage, args.out, quick=args.quick, force=args.force)
+        print(f"report done in {time.perf_counter() - t0:.0f} s", file=sys.stderr)
+        wrote(path, "the report, figures embedded")
+        wrote(path.with_name("report.json"), "every number of the report")
+        return 0
     path = build_report(args.out, quick=args.quick, replot=args.replot, force=args.force,
                         map_file=args.map)
-    from mbs_clearance.cli import wrote
 
     print(f"report done in {time.perf_counter() - t0:.0f} s", file=sys.stderr)
     wrote(path, "the report, figures embedded")
@@ -1353,7 +1389,9 @@ def main(args) -> int:
 
 
 def add_arguments(p):
-    from mbs_clearance.cli import add_force_option
+    from mbs_clearance.cli import add_force_option, add_linkage_options
+
+    add_linkage_options(p)
 
     p.add_argument("--out", type=Path, default=Path("report"), help="output folder")
     p.add_argument("--quick", action="store_true",

@@ -36,14 +36,15 @@ from .linkage_model import (
     _tolerances,
     check_start,
     default_atol,
-    event_margin,
     event_tolerance,
     initial_state,
+    integrator_settings,
     load_model,
     pack_parameters,
     specialisable,
     trajectory_from_run,
 )
+from .settings import RunSettings
 
 __all__ = ["chain", "combine", "initial_sensitivities", "independent_directions", "setup",
            "ddm_run", "DdmRun", "linkage_sensitivities", "fd_step", "DDM_INTEGRATOR"]
@@ -502,7 +503,7 @@ def _run(linkage, model, y0, p, edges, rtol, method, n_err, atol, record=True,
          max_steps=DEFAULT_MAX_STEPS, kernel="integrate_sens", refine=REFINE_ITERS,
          n_out=None):
     from .._checks import MemoryLimitError, default_max_memory, format_bytes
-    from ..numerics.integrator import COUNTERS, METHODS, RESULTS, make_settings
+    from ..numerics.integrator import COUNTERS, METHODS, RESULTS
 
     event_tol = event_tolerance(linkage)
     # the record never outgrows the default memory limit: a run that would stops there
@@ -511,12 +512,9 @@ def _run(linkage, model, y0, p, edges, rtol, method, n_err, atol, record=True,
     row = 8 * (1 + len(y0) + model.N_MEM + n_out)
     limit = min(max_steps, max(1, (max_memory - 24 * len(edges)) // row)) if record \
         else max_steps
-    settings = make_settings(
-        rtol, atol, n_err, h_max=linkage.period / 8, max_steps=limit, record=record,
-        event_tol=event_tol, event_margin=event_margin(linkage.min_clearance, rtol),
-        n_samples=1, refine_iters=refine, n_out=n_out,
-        n_dense=2 * model.N_Q, n_events=model.N_EVENTS, mem_start=model.MEM_START,
-        n_mem=model.N_MEM)
+    settings = integrator_settings(
+        linkage, model, rtol, atol, h_max=linkage.period / 8, max_steps=limit, record=record,
+        event_tol=event_tol, refine_iters=refine, n_out=n_out, n_err=n_err)
     ts, ys, ms, peaks, peak_t, counters, outs, status = getattr(model, kernel)(
         y0, p, edges, settings, METHODS[method].arrays())
     status = RESULTS(int(status))
@@ -666,15 +664,14 @@ def fd_step(linkage: Linkage, name: str, relative: float) -> float:
 
 
 def _plain_at(linkage, revolutions, t_eval, rtol, method, start=None, specialise=True):
-    """Outputs (len(t_eval), N_OUT) and states of a plain run landing on t_eval (from the
-    centred start or `start`; `specialise`: as `plain_setup`)."""
-    model, p, y0, rtol, atol = plain_setup(linkage, rtol, start, specialise)
-    edges = _edges(linkage, revolutions, t_eval)
-    ts, ys, ms, _, _, outs, stats = _run(linkage, model, y0, p, edges, rtol, method,
-                                         2 * model.N_Q, atol, kernel="integrate_model",
-                                         refine=0)
-    keep = landed(ts, t_eval)
-    return ts[keep], ys[keep], ms[keep], outs[keep], p, stats
+    """Outputs (len(t_eval), N_OUT) and states of a plain run (`linkage_model.run`) landing
+    on t_eval (from the centred start or `start`; `specialise`: as `plain_setup`)."""
+    from .linkage_model import run
+
+    out = run(linkage, revolutions, RunSettings(rtol=rtol, method=method),
+              edges=np.array([0.0, t_eval[-1]]), t_eval=t_eval, start=start,
+              specialise=specialise)
+    return out.ts, out.ys, out.ms, out.outs, out.p, out.stats
 
 
 def linkage_fd(linkage: Linkage, names: tuple[str, ...], revolutions: int, rtol, t_eval,

@@ -20,6 +20,7 @@ from ..laws.lubrication import MODELS as LUBRICATION_MODELS
 from ..laws.registry import FRICTION_SLOTS
 from ..model.linkage import GROUND, LUBRICATION_PARAMETERS, Linkage
 from .diagnostics import contact_flags
+from .settings import DEFAULT_MAX_STEPS, DEFAULT_RTOL, MAX_SAMPLES, RunSettings  # noqa: F401
 
 __all__ = ["parameter_values", "pack_parameters", "initial_state", "Start", "settled_start"]
 
@@ -215,10 +216,6 @@ def check_start(linkage: Linkage, model, p, start, event_tol: float) -> np.ndarr
 
 # ---------------------------------------------------------------------------- tolerances
 
-#: default relative tolerance of the compiled integrator (chosen by the work-precision
-#: benchmark, see docs/performance.md)
-DEFAULT_RTOL = 1e-7
-
 #: absolute tolerance of each switching function (the penetration), in clearances times
 #: rtol: the event functions and their rates are under error control beside the state
 #: (`integrator._attempt`). The state's own scales (positions ~ the length scale, speeds
@@ -337,8 +334,8 @@ def _take_columns(a: np.ndarray, columns) -> np.ndarray:
 # ---------------------------------------------------------------------------- runs
 
 #: options of `simulate(linkage, backend="reduced")` (keywords of `run` meant for users)
-OPTION_NAMES = ("rtol", "atol", "method", "max_steps", "n_samples", "h_max", "h0",
-                "event_tol", "max_memory", "t_eval", "start")
+#: (the run settings, `RunSettings`, but the comparisons' event_control)
+OPTION_NAMES = (*(n for n in RunSettings.names() if n != "event_control"), "t_eval", "start")
 
 #: the event search looks closer (7 more samples and the interpolant's maximum) between two
 #: samples of a step where the cubic Hermite interpolant of a penetration comes within
@@ -348,9 +345,6 @@ EVENT_MARGIN = 0.001
 #: the margin stays at least this many times the switching function's error tolerance
 #: (rtol (1.5 c + |delta|), `EVENT_ATOL`): 67 x at rtol 1e-5 and looser
 MARGIN_PER_RTOL = 100.0
-
-#: default `max_steps` (step attempts) of a run
-DEFAULT_MAX_STEPS = 5_000_000
 
 #: golden-section iterations per refined peak candidate: the bracket shrinks to 0.618^24 =
 #: 1e-5 of a step, where the peak's quadratic error is ~1e-12 of its value
@@ -445,9 +439,6 @@ class LinkageRun(NamedTuple):
     p: np.ndarray
 
 
-#: largest `n_samples` (interior event samples per step) accepted
-MAX_SAMPLES = 1000
-
 #: runs of at least this many revolutions are preceded by a one-revolution pilot (no
 #: record) whose step count estimates the run's steps and memory; it costs at most 1/16
 #: of the run and turns a run that would stop at max_steps or max_memory into an
@@ -495,8 +486,7 @@ def _estimate_steps(linkage, revolutions: float, *, max_steps: int, h_max: float
     if revolutions < PILOT_MIN_REVOLUTIONS:
         return None
     try:
-        stats = run(linkage, 1, record=False, max_steps=max_steps, h_max=h_max,
-                    **pilot).stats
+        stats = run(linkage, 1, record=False, **pilot).stats
         per_rev = float(stats["naccept"] + stats["nreject"])
     except RuntimeError:
         per_rev = float(max_steps)
@@ -512,48 +502,47 @@ def _estimate_steps(linkage, revolutions: float, *, max_steps: int, h_max: float
 def integrator_settings(linkage: Linkage, model, rtol: float, atol: np.ndarray, *,
                         h_max: float, max_steps: int, record: bool, event_tol: float,
                         h0: float = 0.0, n_samples: int = 1,
-                        refine_iters: int = REFINE_ITERS, n_out: int = 0):
-    """The integrator's settings record (`integrator.IntegratorSettings`) of a plain run of
-    `linkage`'s generated `model`: the state's leading 2 N_Q components under error control
-    (the works are quadratures), the event search's margin from the smallest clearance
-    (`event_margin`), the memories of every clearance joint recorded."""
+                        refine_iters: int = REFINE_ITERS, n_out: int = 0,
+                        n_err: int | None = None):
+    """The integrator's settings record (`integrator.IntegratorSettings`) of a run of
+    `linkage`'s generated `model`: the leading `n_err` state components under error control
+    (default the plain state's 2 N_Q; the works are quadratures; a sensitivity run adds its
+    own), the event search's margin from the smallest clearance (`event_margin`), the
+    memories of every clearance joint recorded."""
     from ..numerics.integrator import make_settings
 
     return make_settings(
-        rtol, atol, 2 * model.N_Q, h0=h0, h_max=h_max, max_steps=max_steps, record=record,
+        rtol, atol, 2 * model.N_Q if n_err is None else n_err, h0=h0, h_max=h_max,
+        max_steps=max_steps, record=record,
         event_tol=event_tol, event_margin=event_margin(linkage.min_clearance, rtol),
         n_samples=n_samples, refine_iters=refine_iters, n_out=n_out, n_dense=2 * model.N_Q,
         n_events=model.N_EVENTS, mem_start=model.MEM_START, n_mem=model.N_MEM)
 
 
-def run(linkage: Linkage, revolutions: int = 4, *, rtol: float | None = None,
-        atol=None, method: str = "dopri5", record: bool = True,
-        max_steps: int = DEFAULT_MAX_STEPS, n_samples: int = 1, h_max: float | None = None,
-        h0: float = 0.0, event_tol: float | None = None, max_memory: int | None = None,
-        t_eval=None, start: Start | None = None, edges=None, select: bool = True,
-        event_control: bool = True):
+def run(linkage: Linkage, revolutions: int = 4, settings: RunSettings | None = None, *,
+        record: bool = True, t_eval=None, start: Start | None = None, edges=None,
+        select: bool = True, specialise: bool = True, **options):
     """Integrate `linkage`'s generated model over `revolutions` drive revolutions from the
     centred start (or from `start`, a `Start`); returns a `LinkageRun` (model, ts, ys, ms,
     peaks, peak_times, stats, outs, p). The one place where a plain run meets the
     integrator (the paper's `SliderCrank` runs here too, as its description).
 
+    `settings` (a `RunSettings`: tolerances, step control, events, memory) says how;
+    keyword `options` (its field names, e.g. ``rtol=1e-9``) change single fields.
     `edges` (increasing times from 0) replaces the revolution windows over which the peaks
     are taken. With `t_eval` the integrator also lands exactly on those times and only
     they are returned (the peaks then are the maxima over them per window; ``select=False``
-    returns every step, which include them). `atol`: one number or one per state component,
-    or the state's and then each joint's penetration and penetration rate (np.inf: not
-    under error control); ``event_control=False`` leaves the penetrations out of the error
-    control (for comparisons). Every option is checked first (ValueError naming it and its
-    range); a run of `PILOT_MIN_REVOLUTIONS` or more is estimated by a one-revolution pilot
-    and refused with `MemoryLimitError` (a ValueError) if it cannot fit in max_steps or
-    `max_memory` bytes; a recording run stops there and says so."""
+    returns every step, which include them). `specialise`: the model specialised on the
+    linkage's zero-valued geometric parameters (False: the general one, for differences in
+    one of them). Every option is checked first (ValueError naming it and its range); a
+    run of `PILOT_MIN_REVOLUTIONS` or more is estimated by a one-revolution pilot and
+    refused with `MemoryLimitError` (a ValueError) if it cannot fit in max_steps or
+    max_memory bytes; a recording run stops there and says so."""
     from .._checks import (
         MemoryLimitError,
         check_bool,
-        check_choice,
         check_int,
         check_max_memory,
-        check_real,
         check_revolutions_memory,
         format_bytes,
         revolution_bytes,
@@ -563,23 +552,21 @@ def run(linkage: Linkage, revolutions: int = 4, *, rtol: float | None = None,
 
     if not isinstance(linkage, Linkage):
         raise ValueError(f"linkage must be a Linkage; got {type(linkage).__name__}")
+    if settings is None:
+        settings = RunSettings(**options) if set(options) <= set(RunSettings.names()) \
+            else RunSettings().replace(**options)
+    elif not isinstance(settings, RunSettings):
+        raise ValueError(f"settings must be a RunSettings; got {type(settings).__name__}")
+    else:
+        settings = settings.with_options(options)
     revolutions = check_int("revolutions", revolutions, 1)
-    check_choice("method", method, METHODS)
     record = check_bool("record", record)
     select = check_bool("select", select)
-    event_control = check_bool("event_control", event_control)
-    max_steps = check_int("max_steps", max_steps, 1)
-    n_samples = check_int("n_samples (interior event samples per step)", n_samples, 0,
-                          MAX_SAMPLES)
-    h0 = check_real("h0 (initial step; 0: automatic)", h0, 0.0, unit="s")
-    max_memory = check_max_memory(max_memory)
-    h_max = linkage.period / 8 if h_max is None else check_real(
-        "h_max (largest step)", h_max, 0.0, low_open=True, unit="s")
-    if event_tol is None:
-        event_tol = event_tolerance(linkage)
-    else:
-        event_tol = check_real("event_tol (penetration tolerance of events)", event_tol, 0.0,
-                               low_open=True, unit="m")
+    method, max_steps, n_samples, h0 = (settings.method, settings.max_steps,
+                                        settings.n_samples, settings.h0)
+    max_memory = check_max_memory(settings.max_memory)
+    h_max = linkage.period / 8 if settings.h_max is None else settings.h_max
+    event_tol = event_tolerance(linkage) if settings.event_tol is None else settings.event_tol
     if edges is None:
         check_revolutions_memory(revolutions, max_memory)
         edges = np.arange(revolutions + 1) * linkage.period
@@ -589,14 +576,14 @@ def run(linkage: Linkage, revolutions: int = 4, *, rtol: float | None = None,
                 or not np.all(np.isfinite(edges)) or np.any(np.diff(edges) <= 0)):
             raise ValueError("edges must be increasing finite times starting at 0.0")
         check_revolutions_memory(len(edges) - 1, max_memory, name="windows")
-    model = load_model(linkage)
-    rtol, atol_arr = _tolerances(linkage, model, rtol, atol)
+    model = load_model(linkage, specialise)
+    rtol, atol_arr = _tolerances(linkage, model, settings.rtol, settings.atol)
     if rtol > LOOSE_RTOL:
         warnings.warn(f"rtol {rtol:g} is too loose to resolve the contacts (looser than "
                       f"{LOOSE_RTOL:g}: spurious contact events and peak forces wrong by any "
                       f"amount); use rtol <= {LOOSE_RTOL:g}, the default is {DEFAULT_RTOL:g}",
                       AccuracyWarning, stacklevel=3)
-    if not event_control:
+    if not settings.event_control:
         atol_arr = atol_arr[:model.N_STATE]
     p = pack_parameters(linkage, model)
     if start is None:
@@ -609,9 +596,8 @@ def run(linkage: Linkage, revolutions: int = 4, *, rtol: float | None = None,
         t_eval, edges = landing_edges(edges, t_eval)
         record, refine = True, 0
     steps = _estimate_steps(linkage, float(edges[-1]) / linkage.period, max_steps=max_steps,
-                            h_max=h_max,
-                            pilot=dict(rtol=rtol, atol=atol, method=method, start=start,
-                                       event_control=event_control))
+                            h_max=h_max, pilot=dict(settings=settings, start=start,
+                                                    specialise=specialise))
     window_bytes = revolution_bytes(len(edges) - 1)
     per_step = bytes_per_step(model)
     if record and steps is not None and window_bytes + steps * per_step > max_memory:
@@ -629,11 +615,11 @@ def run(linkage: Linkage, revolutions: int = 4, *, rtol: float | None = None,
     # the record never outgrows max_memory: a run that would stops there (and says so)
     limit = min(max_steps, max(1, (max_memory - window_bytes) // per_step)) if record \
         else max_steps
-    settings = integrator_settings(linkage, model, rtol, atol_arr, h0=h0, h_max=h_max,
-                                   max_steps=limit, record=record, event_tol=event_tol,
-                                   n_samples=n_samples, refine_iters=refine, n_out=n_out)
+    kernel_settings = integrator_settings(
+        linkage, model, rtol, atol_arr, h0=h0, h_max=h_max, max_steps=limit, record=record,
+        event_tol=event_tol, n_samples=n_samples, refine_iters=refine, n_out=n_out)
     ts, ys, ms, peaks, peak_t, counters, outs, status = model.integrate_model(
-        y0, p, edges, settings, METHODS[method].arrays())
+        y0, p, edges, kernel_settings, METHODS[method].arrays())
     status = RESULTS(int(status))
     if status == RESULTS.max_steps and limit < max_steps:
         raise MemoryLimitError(
@@ -676,8 +662,9 @@ def simulate_linkage(linkage: Linkage, revolutions: int = 4, **options):
     with per-joint series (see `Trajectory`), annotated (penetration, periodicity)."""
     from .trajectory import annotate
 
-    model, ts, ys, ms, peaks, _, stats, outs, p = run(linkage, revolutions, record=True,
-                                                      **options)
+    settings, rest = RunSettings.split(options)
+    model, ts, ys, ms, peaks, _, stats, outs, p = run(linkage, revolutions, settings,
+                                                      record=True, **rest)
     stats.update(contact_flags([j.clearance for j in linkage.clearance_joints],
                                linkage.drive.speed, revolutions, ms[:, :model.N_MEM],
                                stats.get("nevent", 0), stats["rtol"]))

@@ -52,6 +52,7 @@ from .linkage_model import (  # noqa: F401 - the settings shared with every link
     Start,
     event_margin,
 )
+from .settings import RunSettings
 from .trajectory import annotate
 
 # ---- the generated model's layout (every SliderCrank maps to its structure)
@@ -197,8 +198,7 @@ def counters_dict(counters) -> dict:
 
 
 #: options of `simulate(..., backend="reduced")` (keywords of `run` meant for users)
-OPTION_NAMES = ("rtol", "atol", "method", "max_steps", "n_samples", "h_max", "h0",
-                "event_tol", "t_eval", "initial_offset", "max_memory")
+OPTION_NAMES = (*(n for n in lm.OPTION_NAMES if n != "start"), "initial_offset")
 
 
 def simulate_reduced(mech: SliderCrank, revolutions: int = 4, **options):
@@ -207,10 +207,11 @@ def simulate_reduced(mech: SliderCrank, revolutions: int = 4, **options):
     unknown = sorted(set(options) - set(OPTION_NAMES))
     if unknown:
         raise ValueError(f"unknown option(s) {unknown}; allowed: {sorted(OPTION_NAMES)}")
-    offset = options.pop("initial_offset", 0.0)
-    offset = check_real("initial_offset (fraction of the clearance)", offset, -1.0, 1.0)
-    lk = linkage_of(mech)
-    out = lm.run(lk, revolutions, record=True, start=centred_start(mech, offset), **options)
+    settings, rest = RunSettings.split(options)
+    offset = check_real("initial_offset (fraction of the clearance)",
+                        rest.get("initial_offset", 0.0), -1.0, 1.0)
+    out = lm.run(linkage_of(mech), revolutions, settings, record=True,
+                 start=centred_start(mech, offset), t_eval=rest.get("t_eval"))
     model, ms = out.model, out.ms
     stats = dict(out.stats)
     if options.get("t_eval") is None:

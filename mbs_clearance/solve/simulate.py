@@ -9,6 +9,7 @@ from .._checks import check_int
 from ..model.linkage import Linkage
 from ..model.mechanism import SliderCrank
 from .accuracy import DEFAULT_ACCURACY, check_accuracy_or_rtol
+from .settings import expand
 from .trajectory import Trajectory
 
 __all__ = ["simulate", "peak_base_force", "BACKENDS", "Backend", "Model"]
@@ -106,8 +107,9 @@ def simulate(mech: SliderCrank, revolutions: int = 4, backend: str = "reduced",
         estimate is within the request). Backend "exudyn": the fixed step chosen for it
         (`exudyn_linkage`).
     **options
-        Backend settings, e.g. ``rtol``, ``atol``, ``method`` for "reduced"; ``step_size``,
-        ``contact`` for "exudyn". Unknown options or values out of range raise ValueError
+        Backend settings, e.g. ``rtol``, ``atol``, ``method`` for "reduced" (or all of them
+        as one record, ``settings=RunSettings(...)``); ``step_size``, ``contact`` for
+        "exudyn". Unknown options or values out of range raise ValueError
         before any computation. Every backend takes ``max_memory`` (bytes; default
         min(4 GiB, half the RAM)): a run estimated to need more is refused with
         `MemoryLimitError` (a ValueError) before it allocates. A `Linkage` on either
@@ -122,6 +124,8 @@ def simulate(mech: SliderCrank, revolutions: int = 4, backend: str = "reduced",
         emitted when True) and ``periodic`` (True, False or None) with
         ``periodicity_note``; see `trajectory.annotate`.
     """
+    if backend == "reduced":
+        options = expand(options)
     check_accuracy_or_rtol(accuracy, options)
     if backend != "reduced":
         if accuracy is not None:
@@ -174,6 +178,8 @@ def peak_base_force(mech: SliderCrank, revolution: int = 4, backend: str = "redu
     error and tightens until the estimate is within the request (a recorded run and a check,
     about 1.2 times a fixed run where the default meets it).
     """
+    if backend == "reduced":
+        options = expand(options)
     if accuracy is not None and backend == "reduced":
         from .accuracy import revolution_peaks
 

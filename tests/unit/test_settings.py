@@ -1,0 +1,115 @@
+"""One plain run and one settings record: `linkage_model.run` with `RunSettings`."""
+
+import numpy as np
+import pytest
+
+from mbs_clearance import RunSettings, SliderCrank, simulate
+from mbs_clearance._checks import MemoryLimitError
+from mbs_clearance.laws.forces import CONTACT_MODELS, hysteresis_factor
+from mbs_clearance.model import cases
+from mbs_clearance.solve import linkage_model as lm
+from mbs_clearance.solve import reduced
+
+
+@pytest.mark.parametrize("field, value, message", [
+    ("rtol", 0.5, r"rtol must be a finite number in \[1e-14, 0.01\]"),
+    ("method", "rk4", r"method must be one of"),
+    ("max_steps", 0, r"max_steps must be"),
+    ("h_max", -1.0, r"h_max \(largest step\)"),
+    ("n_samples", 5000, r"n_samples \(interior event samples per step\)"),
+    ("event_tol", 0.0, r"event_tol"),
+    ("atol", -1e-9, r"atol must be a finite number > 0"),
+    ("atol", [[1e-9]], r"atol must be a finite number > 0"),
+    ("event_control", "yes", r"event_control must be True or False"),
+])
+def test_a_bad_setting_is_refused_when_the_record_is_made(field, value, message):
+    with pytest.raises(ValueError, match=message):
+        RunSettings(**{field: value})
+
+
+def test_a_bad_setting_is_refused_before_any_integration(monkeypatch):
+    def forbidden(*args, **kwargs):
+        raise AssertionError("the integrator ran before the settings were checked")
+
+    monkeypatch.setattr(reduced.MODEL, "integrate_model", forbidden)
+    with pytest.raises(ValueError, match="unknown run setting"):
+        lm.run(reduced.linkage_of(SliderCrank()), 1, rtol_typo=1e-8)
+    with pytest.raises(ValueError, match="settings must be a RunSettings"):
+        simulate(SliderCrank(), 1, settings={"rtol": 1e-8})
+
+
+def test_the_record_and_the_keywords_give_the_same_run():
+    """The record is the keywords' one form: equal runs bit for bit; its non-default fields
+    rebuild it."""
+    s = RunSettings(rtol=1e-9, method="dop853", n_samples=2)
+    assert RunSettings(**s.options()) == s
+    assert s.options() == {"rtol": 1e-9, "method": "dop853", "n_samples": 2}
+    a = simulate(SliderCrank(), 2, settings=s)
+    b = simulate(SliderCrank(), 2, rtol=1e-9, method="dop853", n_samples=2)
+    np.testing.assert_array_equal(a.t, b.t)
+    np.testing.assert_array_equal(a.base_force, b.base_force)
+    # a keyword beside the record wins
+    c = simulate(SliderCrank(), 2, settings=s, method="dopri5")
+    d = simulate(SliderCrank(), 2, rtol=1e-9, n_samples=2)
+    np.testing.assert_array_equal(c.base_force, d.base_force)
+
+
+@pytest.mark.parametrize("mech", [
+    SliderCrank(),
+    SliderCrank(friction_law="coulomb", friction_coefficient=0.1),
+], ids=["dry", "coulomb"])
+def test_a_slider_crank_is_its_description_run_from_its_closed_form_start(mech):
+    """The paper's parameter set runs as its description: the peaks and counts of
+    `reduced.run` are those of `linkage_model.run` of `cases.from_slider_crank` from the
+    closed-form centred start, with or without friction (one path); the closed-form start
+    and the description's Newton assembly agree to round-off."""
+    lk = cases.from_slider_crank(mech)
+    start = reduced.centred_start(mech)
+    a = reduced.run(mech, 2)
+    b = lm.run(lk, 2, start=start)
+    np.testing.assert_array_equal(a.peaks, b.peaks)
+    assert reduced.counters_dict(a.counters) == {k: b.stats[k] for k in reduced.COUNTERS}
+    newton = lm.initial_state(lk)[:4]
+    np.testing.assert_allclose(start.y, newton, rtol=1e-12, atol=1e-12)
+
+
+def test_damped_law_rate_tolerance_holds_for_every_linkage():
+    """A damping-dominated law (xi > DAMPED_XI) puts the penetration rate under error
+    control with atol rtol DAMPED_RATE_ATOL / xi c omega, joint by joint; a law with
+    small xi leaves it out (inf). Checked on the two-clearance slider-crank with one joint
+    changed to Flores' law at e = 0.1."""
+    import dataclasses
+
+    lk = cases.CASES["slider_crank_two_clearances"]()
+    j0, j1 = lk.clearance_joints
+    lk = dataclasses.replace(lk, clearance_joints=(
+        dataclasses.replace(j0, contact_model="flores", restitution=0.1), j1))
+    model = lm.load_model(lk)
+    rtol = 1e-7
+    atol = lm.default_atol(lk, model, rtol)
+    xi = hysteresis_factor(0.1, CONTACT_MODELS["flores"])[0]
+    assert xi > lm.DAMPED_XI
+    n = model.N_STATE
+    w = lk.drive.speed
+    c0 = lk.clearance_joints[0].clearance
+    assert atol[n + 1] == pytest.approx(rtol * lm.DAMPED_RATE_ATOL / xi * c0 * w, rel=1e-14)
+    assert atol[n] == pytest.approx(rtol * lm.EVENT_ATOL * c0, rel=1e-14)
+    assert np.isinf(atol[n + 3])
+
+
+def test_a_long_linkage_run_is_refused_by_its_pilot(monkeypatch):
+    """A run of 16 revolutions or more is estimated by a one-revolution pilot: one that
+    cannot fit in max_steps is refused after the pilot alone (one kernel call)."""
+    lk = cases.CASES["four_bar"]()
+    model = lm.load_model(lk)
+    calls = []
+    kernel = model.integrate_model
+
+    def counted(*args):
+        calls.append(1)
+        return kernel(*args)
+
+    monkeypatch.setattr(model, "integrate_model", counted)
+    with pytest.raises(MemoryLimitError, match="needs about .* steps .* max_steps=20000"):
+        lm.run(lk, 40, record=False, max_steps=20_000)
+    assert len(calls) == 1
