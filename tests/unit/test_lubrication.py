@@ -389,26 +389,27 @@ def test_lubricated_case_description():
         lk.parameter_names())
 
 
-def test_ddm_refuses_a_lubricated_joint():
-    """DDM sensitivities of a lubricated linkage fail before any work, saying why (the
-    film's derivatives are not in the sensitivity equations)."""
+def test_ddm_refuses_the_long_film():
+    """DDM sensitivities of a joint in the long film (whose partial derivatives are not
+    there) fail before any work, naming the joint, the law and what is allowed."""
     from mbs_clearance.generate import load_model
     from mbs_clearance.solve.linkage_ddm import ddm_run
 
-    lk = cases.paper_slider_crank_lubricated()
-    with pytest.raises(ValueError, match="lubricated clearance joints.*finite differences"):
+    lk = cases.paper_slider_crank_lubricated(lubrication="long")
+    with pytest.raises(ValueError, match="'coupler_slider'.*'long' film.*'short'.*'fd'"):
         ddm_run(lk, load_model(lk), None, None, [], scale=1.0, rtol=1e-6, atol_plain=None,
                 revolutions=1)
 
 
 @pytest.mark.exudyn
-def test_exudyn_refuses_a_lubricated_joint():
-    """The Exudyn backend does not build the film: a lubricated joint fails, naming it."""
+def test_exudyn_refuses_a_film_it_cannot_build():
+    """The Exudyn backend builds the film beside its own contact element; with Exudyn's
+    native sphere contact it fails first, naming the joint and what to use."""
     pytest.importorskip("exudyn")
-    from mbs_clearance.backends.exudyn_linkage import build
+    from mbs_clearance.backends.exudyn_linkage import ExudynSettings, build
 
-    with pytest.raises(ValueError, match="'coupler_slider' is lubricated"):
-        build(cases.paper_slider_crank_lubricated())
+    with pytest.raises(ValueError, match="'sphere' has no oil film.*'coupler_slider'"):
+        build(cases.paper_slider_crank_lubricated(), ExudynSettings(contact="sphere"))
 
 
 def test_lubricated_stage_loads_balance_on_the_massless_film():
