@@ -716,25 +716,18 @@ def _check_linkage(linkage, settings: ExudynSettings) -> None:
     if not isinstance(linkage, Linkage):
         raise ValueError(f"linkage must be a Linkage; got {type(linkage).__name__}")
     for j in linkage.clearance_joints:
-        if not j.has_lubrication:
+        # the friction and the film are generic elements beside the contact element
+        what = ("friction law of ours" if friction_of(j) is not None
+                else "oil film" if j.has_lubrication else None)
+        if what is None:
             continue
         if settings.contact == "sphere":
-            raise ValueError(f"contact='sphere' has no oil film (joint {j.name!r} is "
-                             "lubricated); use contact='symbolic' or 'python'")
+            raise ValueError(f"contact='sphere' has no {what} (joint {j.name!r} has it); use "
+                             "contact='symbolic' or 'python'")
         if GROUND in (j.journal_body, j.bearing_body):
-            raise ValueError(f"the oil film of clearance joint {j.name!r}, which is a ground "
-                             "joint, is not built in the exudyn backend (its reaction would "
-                             "miss the film's force); use the reduced backend")
-    for j in linkage.clearance_joints:
-        if friction_of(j) is None:
-            continue
-        if settings.contact == "sphere":
-            raise ValueError(f"contact='sphere' has no friction law of ours (joint {j.name!r} "
-                             "has friction on); use contact='symbolic' or 'python'")
-        if GROUND in (j.journal_body, j.bearing_body):
-            raise ValueError(f"friction in clearance joint {j.name!r}, which is a ground "
-                             "joint, is not built in the exudyn backend (its reaction would "
-                             "miss the friction force); use the reduced backend")
+            raise ValueError(f"the {what.split(' of')[0]} of clearance joint {j.name!r}, which "
+                             "is a ground joint, is not built in the exudyn backend (its "
+                             "reaction would miss that force); use the reduced backend")
     if settings.contact == "sphere":
         for j in linkage.clearance_joints:
             if sphere_restitution(j) <= 0.0:
