@@ -110,16 +110,18 @@ def test_ga_on_the_lubricated_case_against_direct_runs(tmp_path, capsys):
 
 def test_regime_maps_over_clearance_and_speed_beside_the_dry_joint(tmp_path):
     """Regime maps of the lubricated and the dry case over clearance (10, 40 um) and crank
-    speed (3000, 5000 rpm): each lubricated point's per-revolution peaks are a direct run's
+    speed (3000, 5000 rpm), 4 revolutions, 3 kept: each lubricated point's peaks are a direct
+    run's
     of the case rebuilt there (at the point's tolerance, to 1e-5: the map's run stops at
     each section), and at every point the film lowers the largest peak of the kept
-    revolutions below the dry joint's (measured: see the printed table). The command line
-    writes the same map."""
+    revolutions below the dry joint's (measured, film against dry: 2971.2 / 3019.9 N and
+    3218.1 / 3330.7 N at 3000 rpm, 8253.3 / 8292.3 N and 8773.1 / 8805.3 N at 5000 rpm, for
+    10 and 40 um). The command line writes the same map."""
     from mbs_clearance.studies.sweep import load_map, regime_map
 
     clearances, speeds = (1e-5, 4e-5), (3000 * RPM, 5000 * RPM)
-    sweep = (("clearance", clearances), ("crank_speed", speeds))
-    kw = dict(revolutions=3, keep=2, max_period=1, rtol=1e-9, scheduler="serial",
+    sweep = [("clearance", clearances), ("crank_speed", speeds)]
+    kw = dict(revolutions=4, keep=3, max_period=1, rtol=1e-9, scheduler="serial",
               progress=False)
     lube = regime_map(None, sweep, case="paper_slider_crank_lubricated", **kw).dataset
     dry = regime_map(None, sweep, case="paper_slider_crank", **kw).dataset
@@ -127,15 +129,15 @@ def test_regime_maps_over_clearance_and_speed_beside_the_dry_joint(tmp_path):
         for k, w in enumerate(speeds):
             rtol = float(lube["rtol"].values[i, k])
             run = simulate(cases.paper_slider_crank_lubricated(
-                journal_radius=0.010 - c, crank_speed=w), 3, rtol=rtol)
-            np.testing.assert_allclose(lube["peak"].values[i, k], run.peaks[-2:], rtol=1e-5)
+                journal_radius=0.010 - c, crank_speed=w), 4, rtol=rtol)
+            np.testing.assert_allclose(lube["peak"].values[i, k], run.peaks[-3:], rtol=1e-5)
             film, metal = lube["peak_max"].values[i, k], dry["peak_max"].values[i, k]
             print(f"clearance {c:g} m, {w / RPM:.0f} rpm: film {film:.6g} N, dry {metal:.6g} N")
             assert film < metal
     out = tmp_path / "map"
     assert main(["map", "--case", "paper_slider_crank_lubricated", "--sweep",
                  "clearance=1e-5,4e-5", "--sweep", f"crank_speed={speeds[0]},{speeds[1]}",
-                 "--revolutions", "3", "--keep", "2", "--max-period", "1", "--workers",
+                 "--revolutions", "4", "--keep", "3", "--max-period", "1", "--workers",
                  "1", "--rtol", "1e-9", "--out", str(out), "--no-progress"]) == 0
     np.testing.assert_array_equal(load_map(out / "map.nc")["peak"].values,
                                   lube["peak"].values)
