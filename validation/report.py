@@ -505,7 +505,7 @@ def plot_film_orbits(numbers: dict, data: Path, path: Path) -> Path:
         e = traj.eccentricity[:, 0] / c
         ax.plot(e[:, 0], e[:, 1], lw=0.6)
         ax.plot(np.cos(theta), np.sin(theta), "k-", lw=1.0, label="wall")
-        for r in lub["fade"]:
+        for r in (lub["fade"] if row["viscosity"] is not None else ()):
             ax.plot(r * np.cos(theta), r * np.sin(theta), "k:", lw=0.6)
         ax.plot([0.0], [0.0], "k+", label="ideal joint")
         ax.set_aspect("equal")
