@@ -141,3 +141,24 @@ def test_regime_maps_over_clearance_and_speed_beside_the_dry_joint(tmp_path):
                  "1", "--rtol", "1e-9", "--out", str(out), "--no-progress"]) == 0
     np.testing.assert_array_equal(load_map(out / "map.nc")["peak"].values,
                                   lube["peak"].values)
+
+
+def test_sensitivities_along_the_film_from_the_command_line(tmp_path):
+    """`mbs-clearance sensitivity --case paper_slider_crank_lubricated` along the film's
+    dotted parameters (DDM, one revolution) saves the API's sensitivities of the base force
+    (`sensitivities` on the case, whose DDM is checked against differences in
+    test_lubricated_case.py), and the viscosity moves the base force (nonzero)."""
+    from mbs_clearance.analysis.sensitivity import load_sensitivities, sensitivities
+
+    lk = cases.paper_slider_crank_lubricated()
+    names = ("coupler_slider.viscosity", "coupler_slider.bearing_length")
+    ref = sensitivities(lk, names, revolutions=1, rtol=1e-8)
+    out = tmp_path / "sens"
+    assert main(["sensitivity", "--case", "paper_slider_crank_lubricated", "--parameters",
+                 ",".join(names), "--revolutions", "1", "--rtol", "1e-8",
+                 "--out", str(out)]) == 0
+    saved = load_sensitivities(out / "sensitivities.npz")
+    assert tuple(saved.parameters) == names
+    np.testing.assert_allclose(saved.base_force_magnitude, ref.base_force_magnitude,
+                               rtol=1e-12, atol=0.0)
+    assert np.max(np.abs(ref.base_force_magnitude[:, 0])) > 0.0
