@@ -47,7 +47,7 @@ FOLDED_FIGURES = frozenset({"fig3_differences.png", "mechanism.gif", "fig7a_fitn
                             "friction_sensitivities.png", "work_precision_series.png"})
 
 SECTIONS = ("response", "agreement", "sensitivity", "optimization", "tolerance", "regimes",
-            "friction", "paper", "performance", "mechanism", "environment")
+            "friction", "lubrication", "paper", "performance", "mechanism", "environment")
 
 TITLES = {
     "response": "1. Dynamic response (paper Fig. 3)",
@@ -57,8 +57,9 @@ TITLES = {
     "tolerance": "5. Manufacturing tolerances and wear (global sensitivity)",
     "regimes": "6. Where the motion is periodic: regime map over clearance and speed",
     "friction": "7. Beyond the paper: friction in the clearance joints",
-    "paper": "8. Comparison with the paper's numbers",
-    "performance": "9. Accuracy and speed",
+    "lubrication": "8. Beyond the paper: the joint in an oil film",
+    "paper": "9. Comparison with the paper's numbers",
+    "performance": "10. Accuracy and speed",
     "mechanism": "Appendix A. Mechanism and parameters",
     "environment": "Appendix B. Environment",
 }
@@ -107,6 +108,9 @@ def _settings(quick: bool) -> dict[str, Any]:
         else ("paper_slider_crank", "slider_crank_two_clearances"),
         "friction_mus": (0.0, 0.01, 0.05, 0.1),
         "friction_sensitivity_mus": (0.0, 0.1) if quick else (0.0, 0.01, 0.1),
+        # the lubricated joint (beyond the paper): the oil's viscosities (Pa s) beside the
+        # dry joint and the ideal one; the SAE 30 oil at 100 C (the case's) is the last
+        "lubrication_viscosities": (9e-3,) if quick else (1e-5, 1e-3, 9e-3),
     }
 
 
@@ -426,6 +430,102 @@ def section_friction(out: Path, s: dict) -> dict:
             "sensitivity_files": [f"friction_sensitivity_mu{mu:g}.npz" for mu, _ in sens],
             "sensitivity": sensitivity_measures(sens),
             "periodic": [{"mu": mu, "note": sn.periodicity_note} for mu, sn in sens]}
+
+
+def _film_row(traj, joint, label: str, viscosity) -> dict:
+    """One run's row of the lubrication table: per revolution the peak, the largest
+    eccentricity ratio |e| / c, the smallest film thickness c - |e| (m; negative: into the
+    wall) and the contact onsets."""
+    c = joint.clearance
+    eps = np.hypot(traj.eccentricity[:, 0, 0], traj.eccentricity[:, 0, 1]) / c
+    T = traj.mechanism.period
+    rev = np.minimum((traj.t / T).astype(int), len(traj.peaks) - 1)
+    onset = np.concatenate([[False], np.diff(traj.contact_phase[:, 0].astype(int)) == 1])
+    largest = [float(eps[rev == k].max()) for k in range(len(traj.peaks))]
+    return {"joint": label, "viscosity": viscosity, "peaks": [float(v) for v in traj.peaks],
+            "max_eccentricity_ratio": largest,
+            "min_film_thickness": [c * (1.0 - v) for v in largest],
+            "onsets": [int(onset[rev == k].sum()) for k in range(len(traj.peaks))]}
+
+
+def section_lubrication(out: Path, s: dict) -> dict:
+    """The paper's case with its coupler-slider joint dry, in oil films of the viscosities
+    `lubrication_viscosities` (the short film, `cases.paper_slider_crank_lubricated`) and
+    ideal: per revolution the peaks, the journal's largest eccentricity ratio, its smallest
+    film thickness and the contact onsets (default accuracy); the runs saved for the orbit
+    figure; the sentence on what the film changes, from these numbers."""
+    from mbs_clearance.model import cases
+
+    n = s["revolutions"]
+    dry = cases.paper_slider_crank()
+    joint = dry.clearance_joints[0]
+    runs = [("dry", dry, None)] + [
+        (f"film_{mu:g}", cases.paper_slider_crank_lubricated(viscosity=mu), mu)
+        for mu in s["lubrication_viscosities"]]
+    rows, files = [], []
+    for key, lk, mu in runs:
+        traj = simulate(lk, n)
+        traj.save(out / "data" / f"lubrication_{key}.npz")
+        files.append(f"lubrication_{key}.npz")
+        rows.append(_film_row(traj, joint, "dry contact" if mu is None else "oil film", mu))
+    ideal = simulate(SliderCrank(), n, backend="ideal")
+    ideal_peaks = [float(ideal.max_base_force(k)) for k in range(1, n + 1)]
+    oil, metal = rows[-1], rows[0]
+    worst = max(abs(a / b - 1.0) for a, b in zip(oil["peaks"], ideal_peaks))
+    summary = (
+        f"In the oil of {oil['viscosity']:g} Pa s the film carries the joint's load without "
+        f"metal contact ({sum(oil['onsets'])} contact onsets against the dry joint's "
+        f"{sum(metal['onsets'])}): the journal stays within "
+        f"{max(oil['max_eccentricity_ratio']):.2f} of the clearance (a film of at least "
+        f"{min(oil['min_film_thickness']) * 1e6:.1f} um), the start-up impact of the dry "
+        f"joint ({metal['peaks'][0]:.1f} N in revolution 1) is gone, and every revolution's "
+        f"peak is the ideal joint's within {100 * worst:.3f} % (the dry joint's revolution-"
+        f"{n} peak: {metal['peaks'][-1]:.1f} N, the ideal joint's {ideal_peaks[-1]:.1f} N)."
+        if sum(oil["onsets"]) == 0 else
+        f"In the oil of {oil['viscosity']:g} Pa s the journal still reaches the wall "
+        f"({sum(oil['onsets'])} contact onsets).")
+    return {"revolutions": n, "clearance": joint.clearance, "rows": rows,
+            "ideal_peaks": ideal_peaks, "runs": files, "summary": summary,
+            "fade": [cases.LUBRICATED_DEFAULTS[k][0]
+                     for k in ("film_fade_start", "film_fade_end")]}
+
+
+def plot_film_orbits(numbers: dict, data: Path, path: Path) -> Path:
+    """The journal centre's orbit (e / c) of each run of the lubrication section over all
+    revolutions, with the bearing wall (|e| = c) and the film's fade (its start and end)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    lub = numbers["lubrication"]
+    c = lub["clearance"]
+    fig, axes = plt.subplots(1, len(lub["rows"]), figsize=(3.6 * len(lub["rows"]), 3.8),
+                             squeeze=False)
+    theta = np.linspace(0.0, 2.0 * np.pi, 361)
+    for ax, row, f in zip(axes[0], lub["rows"], lub["runs"]):
+        traj = load_trajectory(data / f)
+        e = traj.eccentricity[:, 0] / c
+        ax.plot(e[:, 0], e[:, 1], lw=0.6)
+        ax.plot(np.cos(theta), np.sin(theta), "k-", lw=1.0, label="wall")
+        for r in (lub["fade"] if row["viscosity"] is not None else ()):
+            ax.plot(r * np.cos(theta), r * np.sin(theta), "k:", lw=0.6)
+        ax.plot([0.0], [0.0], "k+", label="ideal joint")
+        ax.set_aspect("equal")
+        lim = max(1.1, float(np.max(np.abs(e))) * 1.05)
+        ax.set_xlim(-lim, lim)
+        ax.set_ylim(-lim, lim)
+        ax.set_xlabel("e_x / c")
+        ax.set_title(row["joint"] + ("" if row["viscosity"] is None
+                                     else f", {row['viscosity']:g} Pa s"), fontsize=9)
+    axes[0][0].set_ylabel("e_y / c")
+    axes[0][0].legend(fontsize=7, loc="lower left")
+    fig.suptitle(f"Journal orbit, revolutions 1-{lub['revolutions']} (dotted: the film's "
+                 "fade into contact)", fontsize=10)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
 
 
 def section_paper(out: Path, s: dict, numbers: dict) -> dict:
@@ -755,6 +855,9 @@ def draw_figures(out: Path, numbers: dict) -> dict[str, list[str]]:
                 for r, f in zip(fr["sensitivity"][0]["mu"], fr["sensitivity_files"])]
         sensitivity_figure(sens, str(fig_dir / "friction_sensitivities.png"))
         figs["friction"] += ["friction_orbits.png", "friction_sensitivities.png"]
+    if "lubrication" in numbers:
+        plot_film_orbits(numbers, data, fig_dir / "lubrication_orbits.png")
+        figs["lubrication"].append("lubrication_orbits.png")
     if "agreement" in numbers:
         figs["agreement"] += [f for f in numbers["agreement"].get("case_figures", [])
                               if (fig_dir / f).exists()]
@@ -1100,6 +1203,24 @@ mu = {{ mu }}</th>{% endfor %}</tr>
 {% for v in r.max_d %}<td>{{ v | num(4) }}{% if not loop.first %} ({{ '%+.1f' % (100 * r.change_d[loop.index0]) }} %){% endif %}</td>{% endfor %}</tr>{% endfor %}</table></details>
 <p class="note">{% for p in n.friction.periodic %}mu = {{ p.mu }}: {{ p.note }}. {% endfor %}</p>
 {{ figures('friction') }}
+
+<h2 id="lubrication">{{ titles.lubrication }}</h2>
+<p>The paper's joint is dry. Here its coupler-slider joint runs in an oil film (the
+short-bearing film with the half-Sommerfeld condition, bearing length 10 mm, fading into
+the dry contact between eccentricity ratios {{ n.lubrication.fade | join(' and ') }};
+docs/lubrication.md), beside the dry joint and the ideal one: {{ n.lubrication.revolutions }}
+revolutions at the default accuracy.</p>
+<p><b>{{ n.lubrication.summary }}</b></p>
+<table><tr><th>joint</th><th>viscosity (Pa s)</th>{% for k in range(n.lubrication.revolutions) %}<th>peak rev {{ k + 1 }} (N)</th>{% endfor %}
+<th>largest |e| / c</th><th>smallest film (um)</th><th>contact onsets</th></tr>
+{% for r in n.lubrication.rows %}<tr><td>{{ r.joint }}</td><td>{{ r.viscosity if r.viscosity is not none else '-' }}</td>
+{% for v in r.peaks %}<td>{{ v | num(6) }}</td>{% endfor %}
+<td>{{ '%.3f' % (r.max_eccentricity_ratio | max) }}</td>
+<td>{{ '%.2f' % (1e6 * (r.min_film_thickness | min)) }}</td><td>{{ r.onsets | sum }}</td></tr>{% endfor %}
+<tr><td>ideal joint</td><td>-</td>{% for v in n.lubrication.ideal_peaks %}<td>{{ v | num(6) }}</td>{% endfor %}<td>0</td><td>-</td><td>-</td></tr></table>
+<dl class="defs"><dt>smallest film</dt><dd>c - |e| at the journal's largest eccentricity
+(negative: the journal pressed into the wall, the dry contact's penetration).</dd></dl>
+{{ figures('lubrication') }}
 
 <h2 id="paper">{{ titles.paper }}</h2>
 <table><tr><th>quantity</th><th>paper</th><th>ours</th><th>difference</th><th>explanation</th></tr>

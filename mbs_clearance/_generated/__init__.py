@@ -2,8 +2,8 @@
 tools/generate_models.py; do not edit). MODULES maps a structure digest to a module name."""
 
 MODULES: dict[str, str] = {
-    'a1e8cd13e316bef71106968d523beb1d77f4d5e5e766ab51e599f7dba6e0e76f': 'paper_slider_crank',
-    'f4323ddd58353fc0180d43626916eeaa4ee3396e2725f30ab71e485a409f1305': 'slider_crank_two_clearances',
-    'b6b1bef0dbbb1aa563cb9d2b0b1fc81ddc96a5ded3b725969c6ba767c01b284d': 'four_bar',
-    '7e0d3a1d0806c8f6c988696b700db5b35e60afa1cf789224ea9eac2153475fff': 'paper_slider_crank_friction',
+    'b283f50383a4af24c4fedc79f835d340b55126376dc25b94fec6bb27dfea507a': 'paper_slider_crank',
+    'eb0a97fbb57575274e10fe5d7d9e7d4af0b2e67ad2e8b8a5d6ae5c0b81b69717': 'slider_crank_two_clearances',
+    '01a0dafa28b9d982a4b7178c274eaf9024fdcc37de9988865ef498f7acf46f5c': 'four_bar',
+    '346e2de397ee492677ef30c1c6206071e9e5296fd7446b6e74fe34c1171500c1': 'paper_slider_crank_friction',
 }

@@ -32,8 +32,8 @@ from mbs_clearance.generate.runtime import (
 
 LINKAGE = "four_bar"
 STRUCTURE = "{\"bodies\": [[\"crank\", [\"pin\", \"pivot\"]], [\"coupler\", [\"crank_end\", \"rocker_end\"]], [\"rocker\", [\"pin\", \"pivot\"]]], \"clearance_joints\": [[\"coupler_rocker\", \"rocker\", \"pin\", \"coupler\", \"rocker_end\"]], \"drive\": \"crank_pivot\", \"ground_points\": [\"crank_pivot\", \"rocker_pivot\"], \"joints\": [[\"revolute\", \"crank_pivot\", \"ground\", \"crank_pivot\", \"crank\", \"pivot\"], [\"revolute\", \"crank_coupler\", \"crank\", \"pin\", \"coupler\", \"crank_end\"], [\"revolute\", \"rocker_pivot\", \"ground\", \"rocker_pivot\", \"rocker\", \"pivot\"]], \"monitor_joint\": null, \"zero_parameters\": [\"crank.pivot.y\", \"crank.pin.y\", \"coupler.crank_end.y\", \"coupler.rocker_end.y\", \"rocker.pivot.y\", \"rocker.pin.y\", \"ground.crank_pivot.x\", \"ground.crank_pivot.y\", \"ground.rocker_pivot.y\"]}"
-STRUCTURE_DIGEST = "b6b1bef0dbbb1aa563cb9d2b0b1fc81ddc96a5ded3b725969c6ba767c01b284d"
-GENERATOR_VERSION = "8a5b6bd46b1827cb"
+STRUCTURE_DIGEST = "01a0dafa28b9d982a4b7178c274eaf9024fdcc37de9988865ef498f7acf46f5c"
+GENERATOR_VERSION = "dd8e16be390f7c7f"
 
 #: dotted names of the entries of p (without the constants)
 PARAMETERS = (
@@ -531,6 +531,8 @@ def integrate_model(y0, p, edges, settings, coefficients):
 from mbs_clearance.generate.sens_runtime import (
     contact_jacobian,
     contact_tangent,
+    film_jacobian,
+    film_tangent,
     friction_jacobian,
     friction_tangent,
     jacobian_at,
@@ -587,7 +589,8 @@ Z_NAMES = (
 N_Z = 37
 JAC_STRIDE = N_Z + 1
 #: rows of the Jacobian: OUT_COLUMNS, then per clearance joint (exd, eyd, fx, fy), then per
-#: joint with friction the rotation part of its slip velocity (spin)
+#: joint with friction the rotation part of its slip velocity (spin), then per lubricated
+#: joint the bodies' angular velocities (wj, wb) and the film's torque on the bearing (tb)
 N_JROWS = 18
 JAC_EXTRA_ROWS = {
     "exd:coupler_rocker": 14,

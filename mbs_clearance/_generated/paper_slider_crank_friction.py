@@ -32,8 +32,8 @@ from mbs_clearance.generate.runtime import (
 
 LINKAGE = "paper_slider_crank"
 STRUCTURE = "{\"bodies\": [[\"crank\", [\"pin\", \"pivot\"]], [\"coupler\", [\"crank_end\", \"slider_end\"]], [\"slider\", [\"pin\"]]], \"clearance_joints\": [[\"coupler_slider\", \"coupler\", \"slider_end\", \"slider\", \"pin\", \"friction\"]], \"drive\": \"crank_pivot\", \"ground_points\": [\"crank_pivot\", \"slider_axis\"], \"joints\": [[\"revolute\", \"crank_pivot\", \"ground\", \"crank_pivot\", \"crank\", \"pivot\"], [\"revolute\", \"crank_coupler\", \"crank\", \"pin\", \"coupler\", \"crank_end\"], [\"prismatic\", \"slider_guide\", \"ground\", \"slider_axis\", \"slider\", \"pin\"]], \"monitor_joint\": \"crank_pivot\", \"zero_parameters\": [\"crank.pivot.y\", \"crank.pin.y\", \"coupler.crank_end.y\", \"coupler.slider_end.y\", \"slider.pin.x\", \"slider.pin.y\", \"ground.crank_pivot.x\", \"ground.crank_pivot.y\", \"ground.slider_axis.x\", \"ground.slider_axis.y\", \"slider_guide.angle\"]}"
-STRUCTURE_DIGEST = "7e0d3a1d0806c8f6c988696b700db5b35e60afa1cf789224ea9eac2153475fff"
-GENERATOR_VERSION = "8a5b6bd46b1827cb"
+STRUCTURE_DIGEST = "346e2de397ee492677ef30c1c6206071e9e5296fd7446b6e74fe34c1171500c1"
+GENERATOR_VERSION = "dd8e16be390f7c7f"
 
 #: dotted names of the entries of p (without the constants)
 PARAMETERS = (
@@ -511,6 +511,8 @@ def integrate_model(y0, p, edges, settings, coefficients):
 from mbs_clearance.generate.sens_runtime import (
     contact_jacobian,
     contact_tangent,
+    film_jacobian,
+    film_tangent,
     friction_jacobian,
     friction_tangent,
     jacobian_at,
@@ -574,7 +576,8 @@ Z_NAMES = (
 N_Z = 44
 JAC_STRIDE = N_Z + 1
 #: rows of the Jacobian: OUT_COLUMNS, then per clearance joint (exd, eyd, fx, fy), then per
-#: joint with friction the rotation part of its slip velocity (spin)
+#: joint with friction the rotation part of its slip velocity (spin), then per lubricated
+#: joint the bodies' angular velocities (wj, wb) and the film's torque on the bearing (tb)
 N_JROWS = 22
 JAC_EXTRA_ROWS = {
     "exd:coupler_slider": 17,

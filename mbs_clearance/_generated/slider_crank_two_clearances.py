@@ -32,8 +32,8 @@ from mbs_clearance.generate.runtime import (
 
 LINKAGE = "slider_crank_two_clearances"
 STRUCTURE = "{\"bodies\": [[\"crank\", [\"pin\", \"pivot\"]], [\"coupler\", [\"crank_end\", \"slider_end\"]], [\"slider\", [\"pin\"]]], \"clearance_joints\": [[\"crank_coupler\", \"crank\", \"pin\", \"coupler\", \"crank_end\"], [\"coupler_slider\", \"coupler\", \"slider_end\", \"slider\", \"pin\"]], \"drive\": \"crank_pivot\", \"ground_points\": [\"crank_pivot\", \"slider_axis\"], \"joints\": [[\"revolute\", \"crank_pivot\", \"ground\", \"crank_pivot\", \"crank\", \"pivot\"], [\"prismatic\", \"slider_guide\", \"ground\", \"slider_axis\", \"slider\", \"pin\"]], \"monitor_joint\": \"crank_pivot\", \"zero_parameters\": [\"crank.pivot.y\", \"crank.pin.y\", \"coupler.crank_end.y\", \"coupler.slider_end.y\", \"slider.pin.x\", \"slider.pin.y\", \"ground.crank_pivot.x\", \"ground.crank_pivot.y\", \"ground.slider_axis.x\", \"ground.slider_axis.y\", \"slider_guide.angle\"]}"
-STRUCTURE_DIGEST = "f4323ddd58353fc0180d43626916eeaa4ee3396e2725f30ab71e485a409f1305"
-GENERATOR_VERSION = "8a5b6bd46b1827cb"
+STRUCTURE_DIGEST = "eb0a97fbb57575274e10fe5d7d9e7d4af0b2e67ad2e8b8a5d6ae5c0b81b69717"
+GENERATOR_VERSION = "dd8e16be390f7c7f"
 
 #: dotted names of the entries of p (without the constants)
 PARAMETERS = (
@@ -529,6 +529,8 @@ def integrate_model(y0, p, edges, settings, coefficients):
 from mbs_clearance.generate.sens_runtime import (
     contact_jacobian,
     contact_tangent,
+    film_jacobian,
+    film_tangent,
     friction_jacobian,
     friction_tangent,
     jacobian_at,
@@ -595,7 +597,8 @@ Z_NAMES = (
 N_Z = 47
 JAC_STRIDE = N_Z + 1
 #: rows of the Jacobian: OUT_COLUMNS, then per clearance joint (exd, eyd, fx, fy), then per
-#: joint with friction the rotation part of its slip velocity (spin)
+#: joint with friction the rotation part of its slip velocity (spin), then per lubricated
+#: joint the bodies' angular velocities (wj, wb) and the film's torque on the bearing (tb)
 N_JROWS = 29
 JAC_EXTRA_ROWS = {
     "exd:crank_coupler": 21,

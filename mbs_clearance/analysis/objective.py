@@ -621,8 +621,8 @@ def _linkage_fd_step(linkage: Linkage, name: str, relative: float) -> float:
 
     if name.endswith("clearance"):
         return relative * design.design_value(linkage, name)
-    if linkage.case == "paper_slider_crank" and name in CONTINUOUS_FIELDS:
-        return fd_step(SliderCrank().replace(**linkage.overrides), name, relative)
+    if design.slider_crank_of(linkage) is not None and name in CONTINUOUS_FIELDS:
+        return fd_step(design.slider_crank_of(linkage), name, relative)
     if name in design.design_names(linkage)[:len(design._case_table(linkage))]:
         value = abs(design.design_value(linkage, name))
         return relative * (value if value != 0.0 else 1.0)

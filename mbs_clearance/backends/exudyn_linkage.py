@@ -81,6 +81,7 @@ from ..laws.forces import (
     contact_force,
     hysteresis_factor,
 )
+from ..laws.lubrication import MODELS, lubricated_force
 from ..laws.registry import FRICTION, FRICTION_PARAMETER_SPECS, FRICTION_SLOTS
 from ..model.linkage import GROUND, ClearanceJoint, Linkage, Prismatic, Revolute
 
@@ -523,6 +524,36 @@ class _Side:
                 (qt[i] - w * ay, qt[i + 1] + w * ax), (ax, ay), w)
 
 
+def _pair(sides, q, qt, cos, sin):
+    """(e, de/dt (x, y each), omega_J, omega_B, the two points' arms from their centres of
+    mass) of a journal-bearing pair of `_Side`s."""
+    (xj, yj), (vxj, vyj), arm_j, wj = sides[0].kinematics(q, qt, cos, sin)
+    (xb, yb), (vxb, vyb), arm_b, wb = sides[1].kinematics(q, qt, cos, sin)
+    return xj - xb, yj - yb, vxj - vxb, vyj - vyb, wj, wb, arm_j, arm_b
+
+
+def _film_loads(joint, sides, q, qt):
+    """Generalized forces of the oil film of one lubricated joint on its bodies'
+    coordinates: the film's force F on the journal centre and its torque T_J on the
+    journal (`laws.lubrication.lubricated_force`, faded out near the wall), -F at the
+    bearing's point and the bearing's torque -T_J - e x F (as the reduced model's
+    `lubricated_stage`)."""
+    dx, dy, vx, vy, wj, wb, (axj, ayj), (axb, ayb) = _pair(sides, q, qt, math.cos, math.sin)
+    fx, fy, tj, _ = lubricated_force(
+        dx, dy, vx, vy, wj, wb, joint.journal_radius, joint.clearance,
+        joint.bearing_length, joint.viscosity, MODELS[joint.lubrication],
+        joint.film_fade_start, joint.film_fade_end)
+    tb = -tj - (dx * fy - dy * fx)
+    out = [0.0] * (3 * sum(s.slot is not None for s in sides))
+    for side, sign, (ax, ay), torque in ((sides[0], 1.0, (axj, ayj), tj),
+                                         (sides[1], -1.0, (axb, ayb), tb)):
+        if side.slot is not None:
+            i = side.slot
+            out[i], out[i + 1] = sign * fx, sign * fy
+            out[i + 2] = sign * (ax * fy - ay * fx) + torque
+    return out
+
+
 def _friction_loads(joint, sides, q, qt, normal, friction, cos, sin, gate):
     """Generalized forces of the friction of one joint on its bodies' coordinates (the
     friction element's force vector): the tangential force Ft t on the journal at its
@@ -532,9 +563,7 @@ def _friction_loads(joint, sides, q, qt, normal, friction, cos, sin, gate):
     value) is the value in contact and zero in free flight, where t is undefined when
     the journal is centred)."""
     journal, bearing = sides
-    (xj, yj), (vxj, vyj), (axj, ayj), wj = journal.kinematics(q, qt, cos, sin)
-    (xb, yb), (vxb, vyb), (axb, ayb), wb = bearing.kinematics(q, qt, cos, sin)
-    dx, dy, vx, vy = xj - xb, yj - yb, vxj - vxb, vyj - vyb
+    dx, dy, vx, vy, wj, wb, (axj, ayj), (axb, ayb) = _pair(sides, q, qt, cos, sin)
     r, fn = normal(dx, dy, vx, vy)
     tx, ty = -dy / r, dx / r
     vt = vx * tx + vy * ty + wj * joint.journal_radius - wb * joint.bearing_radius
@@ -552,16 +581,11 @@ def _friction_loads(joint, sides, q, qt, normal, friction, cos, sin, gate):
     return out
 
 
-def _friction_element(mbs, joint: ClearanceJoint, memory: ImpactMemory, nodes: dict,
-                      pts: dict, variant: str, keep_alive: list):
-    """Add the friction of `joint` (friction on) as an `ObjectGenericODE2` on the two
-    bodies' nodes whose force user function returns the generalized forces of
-    `_friction_loads` (symbolic, or Python with contact.contact_force/friction_force)."""
-    import exudyn as exu
+def _pair_element(mbs, joint: ClearanceJoint, nodes: dict, pts: dict):
+    """(sides, element, n): an `ObjectGenericODE2` on the nodes of a clearance joint's two
+    bodies (n coordinates) and their `_Side`s, for a force user function of both."""
     import exudyn.itemInterface as ii
 
-    law, slots = friction_of(joint)
-    K, c, xi, model = _law_constants(joint)
     sides, node_list = [], []
     for body, point in ((joint.journal_body, joint.journal_point),
                         (joint.bearing_body, joint.bearing_point)):
@@ -573,6 +597,35 @@ def _friction_element(mbs, joint: ClearanceJoint, memory: ImpactMemory, nodes: d
         node_list.append(nodes[body])
     n = 3 * len(node_list)
     obj = mbs.AddObject(ii.ObjectGenericODE2(nodeNumbers=node_list, forceVector=[0.0] * n))
+    return sides, obj, n
+
+
+def _film_element(mbs, joint: ClearanceJoint, nodes: dict, pts: dict, keep_alive: list):
+    """Add the oil film of the lubricated `joint` as an `ObjectGenericODE2` on its bodies'
+    nodes whose force is `_film_loads`, a Python user function calling the compiled law
+    (not a symbolic one: the law's one formula is the compiled kernel, whose film ends are
+    found by `atan2` (short) or by a search for the pressure's zeros (long), and an Exudyn
+    expression of it would be a second formula of the same law)."""
+    sides, obj, _ = _pair_element(mbs, joint, nodes, pts)
+
+    def force(mbs, t, itemNumber, q, q_t):
+        return _film_loads(joint, sides, q, q_t)
+
+    mbs.SetObjectParameter(obj, "forceUserFunction", force)
+    keep_alive.append(force)
+    return obj
+
+
+def _friction_element(mbs, joint: ClearanceJoint, memory: ImpactMemory, nodes: dict,
+                      pts: dict, variant: str, keep_alive: list):
+    """Add the friction of `joint` (friction on) as an `ObjectGenericODE2` on the two
+    bodies' nodes whose force user function returns the generalized forces of
+    `_friction_loads` (symbolic, or Python with contact.contact_force/friction_force)."""
+    import exudyn as exu
+
+    law, slots = friction_of(joint)
+    K, c, xi, model = _law_constants(joint)
+    sides, obj, n = _pair_element(mbs, joint, nodes, pts)
     if variant == "python":
         def normal(dx, dy, vx, vy):
             r = math.sqrt(dx * dx + dy * dy)
@@ -663,19 +716,18 @@ def _check_linkage(linkage, settings: ExudynSettings) -> None:
     if not isinstance(linkage, Linkage):
         raise ValueError(f"linkage must be a Linkage; got {type(linkage).__name__}")
     for j in linkage.clearance_joints:
-        if j.has_lubrication:
-            raise ValueError(f"clearance joint {j.name!r} is lubricated: the oil film is not "
-                             "built in the exudyn backend; use the reduced backend")
-    for j in linkage.clearance_joints:
-        if friction_of(j) is None:
+        # the friction and the film are generic elements beside the contact element
+        what = ("friction law of ours" if friction_of(j) is not None
+                else "oil film" if j.has_lubrication else None)
+        if what is None:
             continue
         if settings.contact == "sphere":
-            raise ValueError(f"contact='sphere' has no friction law of ours (joint {j.name!r} "
-                             "has friction on); use contact='symbolic' or 'python'")
+            raise ValueError(f"contact='sphere' has no {what} (joint {j.name!r} has it); use "
+                             "contact='symbolic' or 'python'")
         if GROUND in (j.journal_body, j.bearing_body):
-            raise ValueError(f"friction in clearance joint {j.name!r}, which is a ground "
-                             "joint, is not built in the exudyn backend (its reaction would "
-                             "miss the friction force); use the reduced backend")
+            raise ValueError(f"the {what.split(' of')[0]} of clearance joint {j.name!r}, which "
+                             "is a ground joint, is not built in the exudyn backend (its "
+                             "reaction would miss that force); use the reduced backend")
     if settings.contact == "sphere":
         for j in linkage.clearance_joints:
             if sphere_restitution(j) <= 0.0:
@@ -806,6 +858,8 @@ def build(linkage: Linkage, settings: ExudynSettings | None = None,
             if friction_of(cj) is not None:
                 _friction_element(mbs, cj, memory, nodes, pts, settings.contact, keep_alive)
                 memory.history = []
+            if cj.has_lubrication:
+                _film_element(mbs, cj, nodes, pts, keep_alive)
         contact_items.append(obj)
         if GROUND in (cj.journal_body, cj.bearing_body):
             # the force on the bearing is +f (user force) / -f (sphere: markers swapped)

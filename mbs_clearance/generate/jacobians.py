@@ -83,7 +83,13 @@ def jacobian_context(w, d: Derivation, out_columns: list[str]) -> dict:
     fric = [j for j in range(J) if d.TQ[j] is not None]
     for k, j in enumerate(fric):
         extra[("spin", j)] = n_out + 4 * J + k
-    n_rows = n_out + 4 * J + len(fric)
+    # per lubricated joint: the bodies' angular velocities and the film's torque on the
+    # bearing (its force and its torque on the journal are output rows)
+    lub = [j for j in range(J) if d.TL and d.TL[j] is not None]
+    for k, j in enumerate(lub):
+        for m, what in enumerate(("wj", "wb", "tb")):
+            extra[(what, j)] = n_out + 4 * J + len(fric) + 3 * k + m
+    n_rows = n_out + 4 * J + len(fric) + 3 * len(lub)
     params = list(d.parameters)
     pcol = {name: 1 + 2 * n + i for i, name in enumerate(params)}
 
@@ -154,6 +160,10 @@ def jacobian_context(w, d: Derivation, out_columns: list[str]) -> dict:
     for j in fric:
         gap_items.append((f"gv{j}_4", extra[("spin", j)], w.split(d.spins[j]),
                           grad(d.spins[j])))
+    for j in lub:
+        for m, what in enumerate(("wj", "wb")):
+            gap_items.append((f"gv{j}_{5 + m}", extra[(what, j)], w.split(d.omegas[j][m]),
+                              grad(d.omegas[j][m])))
     J_stages, T_stages = [], []
     gx, gn, tx, tn, trows = [], [], [], [], []
     for name, r, e, g in gap_items:
@@ -204,6 +214,23 @@ def jacobian_context(w, d: Derivation, out_columns: list[str]) -> dict:
                           f"{stride}, {nz}, " + args)
             tlines.append(f"{d.FX[j]}, {d.FY[j]}, {d.TQ[j]} = friction_tangent(out, ts, nd, "
                           f"dz, {nz}, " + args)
+        if j in lub:
+            lrows = [row[f"{name}.{f}"] for f in ("ecc_x", "ecc_y")] + [
+                extra[(what, j)] for what in ("exd", "eyd", "wj", "wb", "fx", "fy")] + [
+                row[f"{name}.{f}"] for f in ("film_force_x", "film_force_y", "film_torque")] + [
+                extra[("tb", j)], row[f"{name}.film_power"]]
+            fields = ("journal_radius", "clearance", "bearing_length", "viscosity",
+                      "film_fade_start", "film_fade_end")
+            lcols = [pcol[f"{name}.{f}"] for f in fields]
+            lvals = [f"p[{pcol[f'{name}.{f}'] - 1 - 2 * n}]" for f in (
+                *fields[:4], "lubrication", *fields[4:])]
+            args = ", ".join([f"gv{j}_5", f"gv{j}_6"] + [str(v) for v in lrows + lcols
+                                                            + lvals]) + ")"
+            TJ, TB = d.TL[j]
+            jlines.append(f"{d.FX[j]}, {d.FY[j]}, {TJ}, {TB} = film_jacobian(jac, {stride}, "
+                          f"{nz}, " + args)
+            tlines.append(f"{d.FX[j]}, {d.FY[j]}, {TJ}, {TB} = film_tangent(out, ts, nd, dz, "
+                          f"{nz}, " + args)
     J_stages.append(jlines)
     T_stages.append(tlines)
 
@@ -232,6 +259,9 @@ def jacobian_context(w, d: Derivation, out_columns: list[str]) -> dict:
         loads.append((d.FY[j], extra[("fy", j)], "rfy", j))
         if j in fric:
             loads.append((d.TQ[j], row[f"{d.joints[j]}.friction_force"], "rtq", j))
+        if j in lub:
+            loads.append((d.TL[j][0], row[f"{d.joints[j]}.film_torque"], "rtj", j))
+            loads.append((d.TL[j][1], extra[("tb", j)], "rtb", j))
     for i in range(n):
         g = grad(R[i])
         rgrad.append(g)
@@ -311,6 +341,9 @@ def jacobian_context(w, d: Derivation, out_columns: list[str]) -> dict:
             lds = [("fx", d.FX[j], extra[("fx", j)]), ("fy", d.FY[j], extra[("fy", j)])]
             if j in fric:
                 lds.append(("tq", d.TQ[j], row[f"{d.joints[j]}.friction_force"]))
+            if j in lub:
+                lds.append(("tj", d.TL[j][0], row[f"{d.joints[j]}.film_torque"]))
+                lds.append(("tb", d.TL[j][1], extra[("tb", j)]))
             for what, F, frow in lds:
                 c = sp.expand(sp.diff(e, F))
                 if c != 0:
@@ -333,7 +366,8 @@ def jacobian_context(w, d: Derivation, out_columns: list[str]) -> dict:
         tshake.append(f"    out[{tgt} * ts + col] = "
                       + (" + ".join(f"out[{r} * ts + col]" for r in rs) or "0.0"))
 
-    extra_syms = {*d.A, *d.FX, *d.FY, *(d.TQ[j] for j in fric)}
+    extra_syms = {*d.A, *d.FX, *d.FY, *(d.TQ[j] for j in fric),
+                  *(s for j in lub for s in d.TL[j])}
 
     def emit(stages, full_stage):
         temps = sp.numbered_symbols("x")

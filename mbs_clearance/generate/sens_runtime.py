@@ -19,10 +19,12 @@ import numpy as np
 
 from ..laws._dispatch import friction_force_partials_slots
 from ..laws.forces import contact_force, contact_force_partials
+from ..laws.lubrication.partials import film_direction, film_values
 from ..numerics.integrator import KERNEL, _golden_max, _step_monitor, step_workspace
 from .runtime import gap_state
 
 __all__ = ["contact_jacobian", "friction_jacobian", "contact_tangent", "friction_tangent",
+           "film_jacobian", "film_tangent",
            "sens_rhs", "seed_directions", "seed_index", "work_size", "fill_seed_work", "tangent_at",
            "step_peaks", "step_value", "step_states", "sens_on_event", "sens_monitor",
            "sens_outputs", "ddm_layout"]
@@ -235,6 +237,103 @@ def friction_tangent(out, ts, nd, dz, nz, spin, r_ex, r_ey, r_exd, r_eyd, r_spin
         out[r_fy * ts + d] += d_fy
     return _friction_write(out, ts, nd, spin, r_spin, r_fx, r_fy, r_ft, r_vt, r_pw, nx, ny, vt,
                            ft)
+
+
+@nb.njit(**KERNEL)
+def _film_rows(jac, stride, col, r_fx, r_fy, r_ffx, r_ffy, r_tj, r_tb, r_pw, d):
+    """One column of the film's rows from d (Fx, Fy, T_J, T_B, power), d's force taken off
+    the force on the bearing's column."""
+    jac[r_ffx * stride + col] = d[0]
+    jac[r_ffy * stride + col] = d[1]
+    jac[r_tj * stride + col] = d[2]
+    jac[r_tb * stride + col] = d[3]
+    jac[r_pw * stride + col] = d[4]
+    jac[r_fx * stride + col] -= d[0]
+    jac[r_fy * stride + col] -= d[1]
+
+
+@nb.njit(**KERNEL)
+def _film_write(jac, stride, vc, r_fx, r_fy, r_ffx, r_ffy, r_tj, r_tb, r_pw, values):
+    """The values (column vc) of one lubricated joint's film rows (Fx, Fy, T_J, T_B,
+    power), the film's force taken off the force on the bearing (rows fx, fy); returns
+    (fx, fy, T_J, T_B)."""
+    _film_rows(jac, stride, vc, r_fx, r_fy, r_ffx, r_ffy, r_tj, r_tb, r_pw, values)
+    return jac[r_fx * stride + vc], jac[r_fy * stride + vc], values[2], values[3]
+
+
+@nb.njit(**KERNEL)
+def _film_state(jac, stride, vc, wj, wb, r_ex, r_ey, r_exd, r_eyd, r_wj, r_wb, radius,
+                clearance, length, viscosity, model, start, end):
+    """The film's inputs (the offset and its rate from their rows' values, column vc; the
+    angular velocities wj, wb, written there) and `film_values` of them."""
+    ex, ey = jac[r_ex * stride + vc], jac[r_ey * stride + vc]
+    exd, eyd = jac[r_exd * stride + vc], jac[r_eyd * stride + vc]
+    jac[r_wj * stride + vc] = wj
+    jac[r_wb * stride + vc] = wb
+    active, p1, p2, w, dw, fx, fy, tj, tb, pw = film_values(
+        ex, ey, exd, eyd, wj, wb, radius, clearance, length, viscosity, int(model), start,
+        end)
+    return ex, ey, exd, eyd, wj, wb, active, p1, p2, w, dw, fx, fy, tj, tb, pw
+
+
+@nb.njit(**KERNEL)
+def film_jacobian(jac, stride, nz, wj, wb, r_ex, r_ey, r_exd, r_eyd, r_wj, r_wb, r_fx, r_fy, r_ffx,
+                  r_ffy, r_tj, r_tb, r_pw, c_r, c_c, c_l, c_mu, c_s, c_e, radius, clearance,
+                  length, viscosity, model, start, end):
+    """Rows of one lubricated joint's oil film in the Jacobian, after `contact_jacobian`
+    has filled the joint's rows: from the rows of the offset, its rate and the bodies'
+    angular velocities (values wj, wb; their rows hold their derivatives) and the film's
+    parameters (columns of the journal radius,
+    clearance, bearing length, viscosity and the fade's ends), the film's force on the
+    journal (rows ffx, ffy, taken off the force on the bearing, rows fx, fy), its torques
+    on the journal and on the bearing and its power (`laws.lubrication.partials`), as
+    `runtime.lubricated_stage` (film law id `model`: derivatives NaN for a law without
+    partials, `laws.lubrication.partials.DIFFERENTIABLE`). Returns (fx, fy, T_J, T_B)."""
+    vc = nz
+    ex, ey, exd, eyd, wj, wb, active, p1, p2, w, dw, fx, fy, tj, tb, pw = _film_state(
+        jac, stride, vc, wj, wb, r_ex, r_ey, r_exd, r_eyd, r_wj, r_wb, radius, clearance,
+        length, viscosity, model, start, end)
+    if active:
+        for col in range(nz):
+            dr = 1.0 if col == c_r else 0.0
+            dc = 1.0 if col == c_c else 0.0
+            dl = 1.0 if col == c_l else 0.0
+            dmu = 1.0 if col == c_mu else 0.0
+            ds = 1.0 if col == c_s else 0.0
+            de = 1.0 if col == c_e else 0.0
+            d = film_direction(
+                ex, ey, exd, eyd, wj, wb, radius, clearance, length, viscosity, start, end,
+                p1, p2, w, dw, fx, fy, tj, jac[r_ex * stride + col], jac[r_ey * stride + col],
+                jac[r_exd * stride + col], jac[r_eyd * stride + col],
+                jac[r_wj * stride + col], jac[r_wb * stride + col], dr, dc, dl, dmu, ds, de)
+            _film_rows(jac, stride, col, r_fx, r_fy, r_ffx, r_ffy, r_tj, r_tb, r_pw, d)
+    return _film_write(jac, stride, vc, r_fx, r_fy, r_ffx, r_ffy, r_tj, r_tb, r_pw,
+                       (fx, fy, tj, tb, pw))
+
+
+@nb.njit(**KERNEL)
+def film_tangent(out, ts, nd, dz, nz, wj, wb, r_ex, r_ey, r_exd, r_eyd, r_wj, r_wb, r_fx, r_fy,
+                 r_ffx, r_ffy, r_tj, r_tb, r_pw, c_r, c_c, c_l, c_mu, c_s, c_e, radius,
+                 clearance, length, viscosity, model, start, end):
+    """`film_jacobian` along nd seed directions dz (nd x nz, flat), after `contact_tangent`
+    (rows of out: ts = nd + 1 per row, column nd the value). Returns (fx, fy, T_J, T_B)."""
+    ex, ey, exd, eyd, wj, wb, active, p1, p2, w, dw, fx, fy, tj, tb, pw = _film_state(
+        out, ts, nd, wj, wb, r_ex, r_ey, r_exd, r_eyd, r_wj, r_wb, radius, clearance,
+        length, viscosity, model, start, end)
+    for d in range(nd):
+        o = d * nz
+        if active:
+            der = film_direction(
+                ex, ey, exd, eyd, wj, wb, radius, clearance, length, viscosity, start, end,
+                p1, p2, w, dw, fx, fy, tj, out[r_ex * ts + d], out[r_ey * ts + d],
+                out[r_exd * ts + d], out[r_eyd * ts + d], out[r_wj * ts + d],
+                out[r_wb * ts + d], dz[o + c_r], dz[o + c_c], dz[o + c_l], dz[o + c_mu],
+                dz[o + c_s], dz[o + c_e])
+        else:
+            der = (0.0, 0.0, 0.0, 0.0, 0.0)
+        _film_rows(out, ts, d, r_fx, r_fy, r_ffx, r_ffy, r_tj, r_tb, r_pw, der)
+    return _film_write(out, ts, nd, r_fx, r_fy, r_ffx, r_ffy, r_tj, r_tb, r_pw,
+                       (fx, fy, tj, tb, pw))
 
 
 @nb.njit(**KERNEL, inline="always")

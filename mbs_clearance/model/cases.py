@@ -126,9 +126,7 @@ def paper_slider_crank_lubricated(**overrides: Any) -> Linkage:
     """The paper's slider-crank (`paper_slider_crank`) with its coupler-slider joint in an
     oil film (`laws.lubrication`): the overrides are SliderCrank fields and the lubrication
     fields of `LUBRICATED_DEFAULTS` (film model, viscosity, bearing length, the fade's
-    ends). Not in `CASES` (the DDM sensitivities and the Exudyn model do not take the film
-    yet): the studies take it as a description, varying dotted paths
-    ("coupler_slider.viscosity")."""
+    ends), each a design name of the studies (``viscosity``, ``crank_speed``, ...)."""
     import dataclasses
 
     lubricated = {k: overrides[k] for k in LUBRICATED_DEFAULTS if k in overrides}
@@ -137,7 +135,9 @@ def paper_slider_crank_lubricated(**overrides: Any) -> Linkage:
     values = {k: lubricated.get(k, d[0]) for k, d in LUBRICATED_DEFAULTS.items()}
     joint = dataclasses.replace(linkage.clearance_joints[0], **values)
     return dataclasses.replace(linkage.replace(clearance_joints=(joint,)),
-                               name="paper_slider_crank_lubricated", case=None, overrides={})
+                               name="paper_slider_crank_lubricated",
+                               case="paper_slider_crank_lubricated",
+                               overrides=dict(overrides))
 
 
 # ---------------------------------------------------------------------------------------
@@ -403,6 +403,9 @@ def four_bar(**overrides: Any) -> Linkage:
 CASE_SUMMARY = {
     "paper_slider_crank": "slider-crank, clearance in the coupler-slider joint (Ebrahimi et "
                           "al. 2018; overrides: SliderCrank fields)",
+    "paper_slider_crank_lubricated": "the paper's slider-crank, its coupler-slider joint in "
+                                     "SAE 30 oil (overrides: SliderCrank fields, viscosity, "
+                                     "bearing_length, lubrication, film_fade_start/end)",
     "slider_crank_two_clearances": "the paper's slider-crank with clearance in both coupler "
                                    "joints (Flores 2010's multiple-clearance study)",
     "four_bar": "Grashof crank-rocker, clearance in the coupler-rocker joint (Siconos "
@@ -412,6 +415,7 @@ CASE_SUMMARY = {
 #: the named cases, by name (CLI `simulate --case NAME`)
 CASES = {
     "paper_slider_crank": paper_slider_crank,
+    "paper_slider_crank_lubricated": paper_slider_crank_lubricated,
     "slider_crank_two_clearances": slider_crank_two_clearances,
     "four_bar": four_bar,
 }

@@ -34,20 +34,40 @@ from collections.abc import Iterable, Mapping
 from .linkage import GROUND, Linkage
 from .mechanism import SliderCrank, reference_value
 
-__all__ = ["design_names", "check_names", "design_value", "linkage_with", "direction", "design_at"]
+__all__ = ["design_names", "check_names", "design_value", "linkage_with", "direction", "design_at",
+           "slider_crank_of"]
 
 #: the description's sections accepted in front of a dotted path, and what they become
 _SECTIONS = {"bodies": "", "joints": "", "clearance_joints": "", "ground_points": f"{GROUND}."}
+
+
+#: the cases whose overrides are SliderCrank fields (the lubricated one: and its film's)
+_SLIDER_CRANK_CASES = ("paper_slider_crank", "paper_slider_crank_lubricated")
+
+
+def slider_crank_of(linkage: Linkage) -> SliderCrank | None:
+    """The `SliderCrank` of a linkage built by a case whose overrides are its fields (its
+    overrides that are fields), else None."""
+    if linkage.case not in _SLIDER_CRANK_CASES:
+        return None
+    from .mechanism import CONTINUOUS_FIELDS
+
+    fields = {k: v for k, v in linkage.overrides.items()
+              if k in CONTINUOUS_FIELDS or k in SliderCrank.__dataclass_fields__}
+    return SliderCrank().replace(**fields)
 
 
 def _case_table(linkage: Linkage) -> dict[str, object]:
     """The numeric overrides of the linkage's case: name -> default (None: derived)."""
     if linkage.case is None:
         return {}
-    if linkage.case == "paper_slider_crank":
+    if linkage.case in _SLIDER_CRANK_CASES:
+        from .cases import LUBRICATED_DEFAULTS
         from .mechanism import CONTINUOUS_FIELDS
 
-        return dict.fromkeys(CONTINUOUS_FIELDS)
+        film = {k: v[0] for k, v in LUBRICATED_DEFAULTS.items() if not isinstance(v[0], str)}
+        return {**dict.fromkeys(CONTINUOUS_FIELDS),
+                **(film if linkage.case == "paper_slider_crank_lubricated" else {})}
     from .cases import CASE_PARAMETERS
 
     return {k: v[0] for k, v in CASE_PARAMETERS[linkage.case].items()
@@ -98,8 +118,9 @@ def design_value(linkage: Linkage, name: str) -> float:
     check_names(linkage, [name])
     table = _case_table(linkage)
     if name in table:
-        if linkage.case == "paper_slider_crank":
-            return reference_value(SliderCrank().replace(**linkage.overrides), name)
+        mech = slider_crank_of(linkage)
+        if mech is not None and table[name] is None:
+            return reference_value(mech, name)
         value = linkage.overrides.get(name, table[name])
         if value is None and name.endswith("_inertia"):
             return linkage.parameter_value(f"{name[:-len('_inertia')]}.inertia")
@@ -135,9 +156,8 @@ def linkage_with(linkage: Linkage, values: Mapping[str, float]) -> Linkage:
         else:
             dotted[_dotted(name)] = value
     if clearance is not None:
-        if linkage.case == "paper_slider_crank":
-
-            rb = SliderCrank().replace(**{**linkage.overrides, **overrides}).bearing_radius
+        if linkage.case in _SLIDER_CRANK_CASES:
+            rb = overrides.get("bearing_radius", slider_crank_of(linkage).bearing_radius)
             if not 0.0 < clearance < rb:
                 raise ValueError(f"clearance must be in (0, bearing_radius {rb!r} m); "
                                  f"got {clearance!r}")
@@ -220,6 +240,9 @@ def design_at(mech, values: dict, case: str | None = None, overrides: dict | Non
 
         if case not in CASES:
             raise ValueError(f"case must be one of {sorted(CASES)}; got {case!r}")
+        if case == "paper_slider_crank_lubricated":
+            # SliderCrank fields and the film's, "clearance" and dotted paths
+            return linkage_with(CASES[case](**(overrides or {})), values)
         table = CASE_PARAMETERS.get(case)
         if table is None:       # the paper's case: SliderCrank fields
             return design_at(SliderCrank().replace(**(overrides or {})), values)

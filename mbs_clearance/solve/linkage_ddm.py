@@ -29,6 +29,7 @@ import numpy as np
 
 from ..generate.sens_runtime import fill_seed_work, work_size
 from ..laws.forces import stiffness_eq9_partials
+from ..laws.lubrication.partials import check_partials
 from ..model.linkage import Linkage
 from .linkage_model import (
     DEFAULT_MAX_STEPS,
@@ -461,11 +462,9 @@ def ddm_run(linkage: Linkage, model, p0, y_state, directions, *, scale, rtol, at
     every output; or a sequence of names in OUT_COLUMNS) and `record` the derivatives of
     those outputs are computed with every step and recorded
     (`DdmRun.recorded_output_sensitivities`)."""
-    if getattr(model, "LUBRICATED_JOINTS", ()):
-        raise ValueError(f"DDM sensitivities of a linkage with lubricated clearance joints "
-                         f"({list(model.LUBRICATED_JOINTS)}) are not available: the film's "
-                         "derivatives are not in the sensitivity equations; use finite "
-                         "differences")
+    for j in linkage.clearance_joints:
+        if j.has_lubrication:
+            check_partials(f"clearance joint {j.name!r}", j.lubrication)
     zeros = set(getattr(model, "ZERO_PARAMETERS", ()))
     along = sorted({n for d in directions for n, v in d.items() if v != 0.0 and n in zeros})
     if along:

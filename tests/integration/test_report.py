@@ -22,7 +22,7 @@ FIGURES = ["fig3_response.png", "fig3_differences.png", "regime_map.png",
            "fig7a_fitness_fixed.png", "fig7b_force_fixed.png", "fig7a_fitness_uniform.png",
            "fig7b_force_uniform.png", "tolerance.png", "work_precision.png",
            "work_precision_series.png", "agreement_slider_crank_two_clearances.png",
-           "friction_orbits.png", "friction_sensitivities.png"]
+           "friction_orbits.png", "friction_sensitivities.png", "lubrication_orbits.png"]
 
 
 @pytest.fixture(scope="module")
@@ -413,3 +413,29 @@ def test_friction_section(report):
     assert "friction" not in page.verdicts
     for f in ("friction_orbits.png", "friction_sensitivities.png"):
         assert f'alt="{f}"' in html
+
+
+def test_lubrication_section(report):
+    """The lubrication table's rows are independent runs' (the dry case and the lubricated
+    one at the same viscosity, default accuracy): peaks to 1e-12; the ideal joint's peaks
+    are the ideal backend's; in the SAE 30 oil the journal never reaches the wall (no
+    onset, largest eccentricity ratio below the fade), the dry joint does; the sentence
+    states the oil's numbers; the orbit figure is in the section."""
+    from mbs_clearance.model import cases
+
+    n = json.loads((report / "report.json").read_text())["lubrication"]
+    dry, oil = n["rows"][0], n["rows"][-1]
+    revs = n["revolutions"]
+    np.testing.assert_allclose(dry["peaks"], simulate(cases.paper_slider_crank(), revs).peaks,
+                               rtol=1e-12)
+    run = simulate(cases.paper_slider_crank_lubricated(viscosity=oil["viscosity"]), revs)
+    np.testing.assert_allclose(oil["peaks"], run.peaks, rtol=1e-12)
+    ideal = simulate(SliderCrank(), revs, backend="ideal")
+    np.testing.assert_allclose(n["ideal_peaks"],
+                               [ideal.max_base_force(k) for k in range(1, revs + 1)],
+                               rtol=1e-12)
+    assert sum(oil["onsets"]) == 0 and max(oil["max_eccentricity_ratio"]) < n["fade"][0]
+    assert sum(dry["onsets"]) > 0 and max(dry["max_eccentricity_ratio"]) > 1.0
+    assert f"{max(oil['max_eccentricity_ratio']):.2f}" in n["summary"]
+    html = (report / "report.html").read_text()
+    assert n["summary"].replace("'", "&#39;") in html or n["summary"] in html

@@ -50,7 +50,8 @@ def test_each_case_builds_with_its_documented_defaults(name):
     linkage = CASES[name]()
     assert isinstance(linkage, Linkage)
     assert linkage.name == name
-    n_q = {"paper_slider_crank": 2, "slider_crank_two_clearances": 4, "four_bar": 2}[name]
+    n_q = {"paper_slider_crank": 2, "paper_slider_crank_lubricated": 2,
+           "slider_crank_two_clearances": 4, "four_bar": 2}[name]
     assert len(linkage.coordinates()) == n_q
     if name in CASE_PARAMETERS:
         table = CASE_PARAMETERS[name]

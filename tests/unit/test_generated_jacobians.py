@@ -11,7 +11,8 @@ from mbs_clearance.solve.linkage_model import initial_state, pack_parameters
 
 CASES = ("paper_slider_crank", "slider_crank_two_clearances", "four_bar",
          "paper_slider_crank+coulomb", "paper_slider_crank+ambrosio",
-         "paper_slider_crank+stribeck", "paper_slider_crank+general")
+         "paper_slider_crank+stribeck", "paper_slider_crank+general",
+         "paper_slider_crank_lubricated", "paper_slider_crank_lubricated+fade")
 # the four-bar at the 0.1 mm clearance where this test was written and measured (its default
 # became 0.01 mm in the same session; the free-flight difference quotients of the point
 # coordinates there were not re-examined: 1.2e-6 relative off, see the session's note)
@@ -31,10 +32,16 @@ OVERRIDES = {"four_bar": {"clearance": 1e-4},
                                              "friction_stribeck_velocity": 1.0}}
 
 
+#: the lubricated case with its film's fade over eps 0.3-0.7: the "free" states below (the
+#: journal half a clearance off-centre) are inside the fade, its ends' columns exercised
+FADE = {"film_fade_start": 0.3, "film_fade_end": 0.7}
+
+
 def _case(case):
     """(linkage, model) of a case name: the module specialised on the linkage's zero-valued
     geometric parameters, or ("+general") the general one, whose Jacobian has their columns."""
-    linkage = getattr(cases, case.partition("+")[0])(**OVERRIDES.get(case, {}))
+    linkage = getattr(cases, case.partition("+")[0])(
+        **(FADE if case.endswith("+fade") else OVERRIDES.get(case, {})))
     return linkage, load_model(linkage, specialise=not case.endswith("+general"))
 
 
