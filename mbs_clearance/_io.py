@@ -81,6 +81,15 @@ def read_json_object(path: str | Path, what: str) -> dict[str, Any]:
     return data
 
 
+def write_json_object(path: str | Path, data: dict[str, Any]) -> Path:
+    """Write `data` as indented JSON to `path` (its folder made if missing); returns the
+    path. The one writer of the results' JSON files (`read_json_object` reads them)."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps(data, indent=2))
+    return path
+
+
 def new_run_id() -> str:
     """A run id: UTC time, process id and a random tag (unique across concurrent runs)."""
     return f"{time.strftime('%Y%m%dT%H%M%SZ', time.gmtime())}-{os.getpid()}-{secrets.token_hex(3)}"

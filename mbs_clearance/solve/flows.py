@@ -67,7 +67,8 @@ class Flow:
         from . import reduced
 
         linkage = mech if _is_linkage(mech) else reduced.linkage_of(mech)
-        model = self.model = lm.load_model(linkage)
+        model = self.model = (lm.load_model(linkage) if _is_linkage(mech)
+                              else reduced.model_of(mech))
         p = lm.pack_parameters(linkage, model)
         rtol, atol = lm._tolerances(linkage, model, rtol, None)
         event_tol = lm.event_tolerance(linkage)

@@ -521,7 +521,7 @@ def integrator_settings(linkage: Linkage, model, rtol: float, atol: np.ndarray, 
 
 def run(linkage: Linkage, revolutions: int = 4, settings: RunSettings | None = None, *,
         record: bool = True, t_eval=None, start: Start | None = None, edges=None,
-        select: bool = True, specialise: bool = True, **options):
+        select: bool = True, specialise: bool = True, model=None, **options):
     """Integrate `linkage`'s generated model over `revolutions` drive revolutions from the
     centred start (or from `start`, a `Start`); returns a `LinkageRun` (model, ts, ys, ms,
     peaks, peak_times, stats, outs, p). The one place where a plain run meets the
@@ -534,7 +534,9 @@ def run(linkage: Linkage, revolutions: int = 4, settings: RunSettings | None = N
     they are returned (the peaks then are the maxima over them per window; ``select=False``
     returns every step, which include them). `specialise`: the model specialised on the
     linkage's zero-valued geometric parameters (False: the general one, for differences in
-    one of them). Every option is checked first (ValueError naming it and its range); a
+    one of them). `model`: the generated module, where the caller knows it (the paper's
+    checked-in one: the lookup by structure imports the generator). Every option is checked
+    first (ValueError naming it and its range); a
     run of `PILOT_MIN_REVOLUTIONS` or more is estimated by a one-revolution pilot and
     refused with `MemoryLimitError` (a ValueError) if it cannot fit in max_steps or
     max_memory bytes; a recording run stops there and says so."""
@@ -576,7 +578,8 @@ def run(linkage: Linkage, revolutions: int = 4, settings: RunSettings | None = N
                 or not np.all(np.isfinite(edges)) or np.any(np.diff(edges) <= 0)):
             raise ValueError("edges must be increasing finite times starting at 0.0")
         check_revolutions_memory(len(edges) - 1, max_memory, name="windows")
-    model = load_model(linkage, specialise)
+    if model is None:
+        model = load_model(linkage, specialise)
     rtol, atol_arr = _tolerances(linkage, model, settings.rtol, settings.atol)
     if rtol > LOOSE_RTOL:
         warnings.warn(f"rtol {rtol:g} is too loose to resolve the contacts (looser than "
@@ -597,7 +600,7 @@ def run(linkage: Linkage, revolutions: int = 4, settings: RunSettings | None = N
         record, refine = True, 0
     steps = _estimate_steps(linkage, float(edges[-1]) / linkage.period, max_steps=max_steps,
                             h_max=h_max, pilot=dict(settings=settings, start=start,
-                                                    specialise=specialise))
+                                                    specialise=specialise, model=model))
     window_bytes = revolution_bytes(len(edges) - 1)
     per_step = bytes_per_step(model)
     if record and steps is not None and window_bytes + steps * per_step > max_memory:

@@ -126,6 +126,17 @@ def linkage_of(mech: SliderCrank):
     return from_slider_crank(mech)
 
 
+def model_of(mech: SliderCrank):
+    """The checked-in generated module of `mech`'s description: the paper's model, or its
+    variant with the tangential force for a joint with friction (any law: a parameter).
+    Known without the generator's lookup by structure, which imports sympy."""
+    if mech.friction_law == "none":
+        return MODEL
+    from .._generated import paper_slider_crank_friction
+
+    return paper_slider_crank_friction
+
+
 def centred_start(mech: SliderCrank, offset: float = 0.0) -> Start:
     """The run's start: the ideal joints' closed-form state (`initial_state`), the joint in
     free flight with its floor as impact velocity (the centred start, offset 0)."""
@@ -186,7 +197,7 @@ def run(mech: SliderCrank, revolutions: int = 4, *, initial_offset: float = 0.0,
     initial_offset = check_real("initial_offset (fraction of the clearance)",
                                 initial_offset, -1.0, 1.0)
     out = lm.run(linkage_of(mech), revolutions, start=centred_start(mech, initial_offset),
-                 **options)
+                 model=model_of(mech), **options)
     counters = np.array([out.stats[k] for k in COUNTERS], dtype=np.int64)
     return RunOutput(out.ts, out.ys, out.ms, out.peaks, out.peak_times, counters, out.outs,
                      out.p)
@@ -211,7 +222,8 @@ def simulate_reduced(mech: SliderCrank, revolutions: int = 4, **options):
     offset = check_real("initial_offset (fraction of the clearance)",
                         rest.get("initial_offset", 0.0), -1.0, 1.0)
     out = lm.run(linkage_of(mech), revolutions, settings, record=True,
-                 start=centred_start(mech, offset), t_eval=rest.get("t_eval"))
+                 start=centred_start(mech, offset), t_eval=rest.get("t_eval"),
+                 model=model_of(mech))
     model, ms = out.model, out.ms
     stats = dict(out.stats)
     if options.get("t_eval") is None:

@@ -26,7 +26,6 @@ the same whatever the units and widths of the design variables.
 from __future__ import annotations
 
 import itertools
-import json
 import logging
 import math
 import multiprocessing
@@ -42,7 +41,7 @@ from typing import Any
 import numpy as np
 
 from .._checks import DESIGN_BYTES, check_memory
-from .._io import read_json_object
+from .._io import read_json_object, write_json_object
 from .._warnings import AccuracyWarning
 from ..model.linkage import Linkage
 from ..model.mechanism import CONTINUOUS_FIELDS, SliderCrank
@@ -367,10 +366,7 @@ class OptimizationResult:
 
     def to_json(self, path: str | Path) -> Path:
         """Write the result with the settings used to `path` (JSON); returns the path."""
-        path = Path(path)
-        path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_text(json.dumps(self.to_dict(), indent=2))
-        return path
+        return write_json_object(path, self.to_dict())
 
     @classmethod
     def from_json(cls, path: str | Path) -> OptimizationResult:

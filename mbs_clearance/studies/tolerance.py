@@ -38,7 +38,6 @@ replace), so that a general mechanism description can take the place of `SliderC
 
 from __future__ import annotations
 
-import json
 import math
 import numbers
 import threading
@@ -460,10 +459,9 @@ class ToleranceResult:
 
     def to_json(self, path: str | Path) -> Path:
         """Write the result to `path` (JSON); returns the path."""
-        path = Path(path)
-        path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_text(json.dumps(self.to_dict(), indent=2))
-        return path
+        from .._io import write_json_object
+
+        return write_json_object(path, self.to_dict())
 
     @classmethod
     def from_json(cls, path: str | Path) -> ToleranceResult:
