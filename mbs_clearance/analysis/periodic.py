@@ -49,8 +49,8 @@ from ..numerics.integrator import RESULTS
 from ..solve.flows import Flow, _tangent_scale, clearances_of, drive_of, joints_of
 
 __all__ = ["PeriodicOrbit", "periodic_orbit", "return_map", "Branch", "BranchPoint",
-           "continue_orbits", "field_value", "with_field", "SHOOTING_RTOL",
-           "NEWTON_TOL", "POINT_KINDS"]
+           "continue_orbits", "field_value", "with_field", "newton_check", "OrbitCheck",
+           "SHOOTING_RTOL", "NEWTON_TOL", "POINT_KINDS"]
 
 #: default relative tolerance of the shooting runs (the map's error must stay well below
 #: the Newton tolerance)
@@ -131,7 +131,7 @@ class _Shooter:
     """The return map of `mech` over `period` revolutions: plain (`value`) and with the
     monodromy matrix (`jacobian`), from a state x and memory (modes, impact velocities)."""
 
-    def __init__(self, mech, period: int, rtol: float, method: str):
+    def __init__(self, mech, period: int, rtol: float, method: str, t0: float = 0.0):
         from ..solve.linkage_ddm import pack_sensitivity_parameters, sensitivity_atol
 
         flow = Flow(mech, rtol=rtol, method=method)
@@ -147,7 +147,9 @@ class _Shooter:
         self.plain_settings = flow.settings
         self.coefficients = flow.coefficients
         self.omega, _ = drive_of(mech)
-        self.edges = np.arange(period + 1) * 2.0 * math.pi / self.omega
+        # the drive repeats every revolution: a map from any section time t0
+        self.edges = t0 + np.arange(period + 1) * 2.0 * math.pi / self.omega
+        self.counters = np.zeros(5, dtype=np.int64)
         self.scale = np.concatenate([_tangent_scale(mech, model),
                                      clearances_of(mech) * self.omega])
         self.joints = joints_of(mech)
@@ -173,6 +175,7 @@ class _Shooter:
         ts, ys, ms, peaks, _, counters, _, status = kernel(y, p, self.edges, settings,
                                                            self.coefficients)
         status = RESULTS(int(status))
+        self.counters += counters
         if status is not RESULTS.success:
             raise RuntimeError(f"integration of the return map failed at about t = "
                                f"{ts[-1] if len(ts) else 0.0:.6g} s: {status.message}")
@@ -378,6 +381,88 @@ def _newton(sh, x, modes, vel, period, tol, max_iterations, trajectory):
         orbit.trajectory = simulate(_linkage_of(sh.mech), period, rtol=sh.rtol,
                                     start=orbit.start())
     return orbit
+
+
+# ------------------------------------------------------------- one step, from a run
+
+#: a Newton step longer than this (scaled) does not confirm an orbit: the multipliers
+#: describe the map only near the orbit
+CHECK_MAX_STEP = 0.05
+
+
+@dataclass
+class OrbitCheck:
+    """One Newton step of the `period`-revolution map from a run's state (`newton_check`):
+    `confirmed` where it lands on a stable orbit; `reason` otherwise ("integration",
+    "mode change", "unstable", "far", "residual"); the multipliers at the state, the
+    step's length and the map's residual before and after it (scaled), and the runs'
+    right-hand side evaluations."""
+
+    confirmed: bool
+    reason: str
+    multipliers: np.ndarray
+    step: float
+    residual: float
+    residual_after: float
+    nfev: int
+
+    @property
+    def spectral_radius(self) -> float:
+        """Largest modulus of the multipliers (inf where none was computed)."""
+        return float(np.max(np.abs(self.multipliers))) if len(self.multipliers) else math.inf
+
+
+def newton_check(mech, t0: float, state, modes, impact_velocities, period: int = 1, *,
+                 rtol: float = SHOOTING_RTOL, tol: float = 1e-4,
+                 method: str = "dop853") -> OrbitCheck:
+    """Is the state of a run at time `t0` (a section time: any, the drive repeats every
+    revolution) near a stable periodic orbit of `period` revolutions? One Newton step
+    with the monodromy matrix (the shooting's variational run from the state), then one
+    plain run from the step's end: confirmed where every multiplier lies inside the
+    unit circle, the step is at most CHECK_MAX_STEP (scaled) and the map's residual after
+    it is at most `tol` and at most half the residual before it (or below NEWTON_TOL)."""
+    sh = _Shooter(mech, period, rtol, method, t0)
+    x, modes, vel = _check_state(sh, state, modes, impact_velocities)
+    n2, J = sh.n2, sh.J
+    none = np.zeros(0, dtype=complex)
+
+    def out(ok, reason, mu=none, step=math.nan, res=math.nan, res2=math.nan):
+        return OrbitCheck(ok, reason, mu, step, res, res2, int(sh.counters[0]))
+
+    try:
+        xe, me, ve, ons, _, M = sh.jacobian(x, modes, vel)
+    except RuntimeError:
+        return out(False, "integration")
+    if np.any(me != modes):
+        return out(False, "mode change")
+    active = [j for j in range(J) if ons[j] > 0]
+    idx = list(range(n2)) + [n2 + j for j in active]
+    S = sh.scale[idx]
+    z = np.concatenate([x, vel[active]]) / S
+    g = np.concatenate([xe, ve[active]]) / S - z
+    A = M[np.ix_(idx, idx)]
+    mu = np.linalg.eigvals(A)
+    mu = mu[np.argsort(-np.abs(mu), kind="stable")]
+    res = float(np.max(np.abs(g)))
+    if np.max(np.abs(mu)) >= 1.0:
+        return out(False, "unstable", mu, res=res)
+    dz = np.linalg.solve(A - np.eye(len(idx)), -g)
+    step = float(np.max(np.abs(dz)))
+    if step > CHECK_MAX_STEP:
+        return out(False, "far", mu, step, res)
+    zs = z + dz
+    vs = vel.copy()
+    vs[active] = zs[n2:] * S[n2:]
+    if np.any(vs < 0.0):
+        return out(False, "far", mu, step, res)
+    try:
+        xe2, me2, ve2, _, _ = sh.value(zs[:n2] * S[:n2], modes, vs)
+    except RuntimeError:
+        return out(False, "integration", mu, step, res)
+    res2 = float(np.max(np.abs(np.concatenate([xe2, ve2[active]]) / S - zs)))
+    if np.any(me2 != modes) or res2 > tol or res2 > max(0.5 * res, NEWTON_TOL):
+        return out(False, "residual", mu, step, res, res2)
+    return out(True, "", mu, step, res, res2)
 
 
 # ------------------------------------------------------------------------ continuation
