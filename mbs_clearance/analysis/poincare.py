@@ -39,8 +39,10 @@ rtol / RESOLVE_FACTOR): where the step lands on a stable orbit near the state, t
 contracts onto it, and the run stops. Its remaining revolutions repeat its last k
 section samples and peaks: the run's own recurrence, which the integration's error at the
 run's rtol sets, not the orbit's (the two differ by that error, up to a few 1e-3 of the
-clearance at rtol 1e-7). A check that fails (unstable, too far, no convergence) lets the
-run go on and is tried again later, at most EARLY_STOP_ATTEMPTS times.
+clearance at rtol 1e-7). A check that fails (unstable, too far, no convergence, or an orbit
+repeating after fewer revolutions than the lag: the run's own section does not repeat to
+tol / RESOLVE_BAND at its period) lets the run go on and is tried again later, at most
+EARLY_STOP_ATTEMPTS times.
 """
 
 from __future__ import annotations
@@ -433,7 +435,10 @@ class _EarlyStop:
             self.next = k + EARLY_STOP_BACKOFF * self.attempts
             return False
         self.nfev += check.nfev
-        if not check.confirmed:
+        # an orbit of fewer revolutions than the lag: the run's own section does not repeat
+        # to tol / RESOLVE_BAND at the orbit's period (its integration error), so its
+        # remaining revolutions must be run, as without early stop
+        if not check.confirmed or check.least_period != lag:
             self.next = k + EARLY_STOP_BACKOFF * self.attempts
             return False
         self.period, self.multipliers = lag, check.multipliers

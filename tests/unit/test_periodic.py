@@ -180,9 +180,10 @@ def test_no_convergence_says_what_to_try():
 
 @pytest.fixture(scope="module")
 def paper_branch():
-    # 120 orbits along clearance from the paper's design (about 40 s on a quiet machine)
+    # 260 orbits along clearance from the paper's design, through its first period
+    # doublings (224 orbits to the first)
     return continue_orbits(PAPER, "clearance", 1e-5, 2e-5, step=0.1, max_step=3.0,
-                           max_points=120)
+                           max_points=260)
 
 
 @pytest.mark.slow
@@ -228,6 +229,46 @@ def test_branch_points_are_orbits_of_the_map(paper_branch):
         assert np.max(np.abs((xe - branch.states[i]) / scale)) < 1e-5
         mu = branch.multipliers[i]
         assert branch.stable[i] == bool(np.nanmax(np.abs(mu)) < 1.0)
+
+
+@pytest.mark.slow
+def test_switch_at_a_period_doubling_gives_orbits_of_period_two(paper_branch):
+    """The branch born at the first period doubling (`switch_branch`): each of its orbits,
+    run through the plain map (not the continuation's corrector), is back after two
+    revolutions (to 1e-5 of the scales) and not after one (a period-1 orbit would be,
+    to 1e-6); at its start its multipliers are the squares of the period-1 orbit's at the
+    doubling (-1 squared: +1)."""
+    from mbs_clearance.analysis.periodic import switch_branch, with_field
+
+    branch = paper_branch
+    pd = next(p for p in branch.points if p.kind == "period_doubling")
+    doubled = switch_branch(branch, pd, max_points=6)
+    assert doubled.period == 2 and len(doubled.values) >= 3
+    np.testing.assert_allclose(np.sort(np.abs(doubled.multipliers[0])),
+                               np.sort(np.abs(pd.multipliers) ** 2), atol=0.05)
+    scale = np.array([PAPER.clearance / PAPER.coupler_length, PAPER.clearance])
+    scale = np.concatenate([scale, PAPER.crank_speed * scale])
+    for i in range(len(doubled.values)):
+        mech = with_field(PAPER, "clearance", doubled.values[i])
+        x, v = doubled.states[i], doubled.impact_velocities[i]
+        x1, m1, v1, _ = return_map(mech, x, np.ones(1), v)
+        x2, _, _, _ = return_map(mech, x1, m1, v1)
+        assert np.max(np.abs((x2 - x) / scale)) < 1e-5
+        assert np.max(np.abs((x1 - x) / scale)) > 1e-4
+
+
+def test_switch_branch_refuses_a_point_that_is_not_a_doubling_of_the_branch():
+    from mbs_clearance.analysis.periodic import Branch, BranchPoint, switch_branch
+
+    fold = BranchPoint(kind="fold", value=1e-5, tolerance=1e-9, multipliers=np.ones(1))
+    with pytest.raises(ValueError, match="Branch returned by continue_orbits"):
+        switch_branch("branch", fold)
+    branch = Branch(field="clearance", values=np.ones(1), states=np.ones((1, 4)),
+                    impact_velocities=np.ones((1, 1)), multipliers=np.ones((1, 1)),
+                    stable=np.ones(1, bool), onsets=np.zeros((1, 1)), points=[fold],
+                    stopped="", setup={"mech": PAPER})
+    with pytest.raises(ValueError, match="period doublings"):
+        switch_branch(branch, fold)
 
 
 def test_cli_orbits_prints_the_python_functions_multipliers(paper_orbit, capsys):
