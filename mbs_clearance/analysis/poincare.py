@@ -33,7 +33,8 @@ re-checked: the run is repeated at rtol / RESOLVE_FACTOR and classified again, a
 samples are kept (`PoincareSection.rtol`, `rechecked`).
 
 Early stop (`early_stop=True`, plain runs only). A run whose section repeats with some
-lag k <= max_period to tol / RESOLVE_BAND at two consecutive revolutions is checked by
+lag k <= EARLY_STOP_MAX_LAG to tol / RESOLVE_BAND at two consecutive revolutions, with at
+least EARLY_STOP_MIN_LEFT revolutions left, is checked by
 one Newton step on the k-revolution map from its state (`periodic.newton_check`, at
 rtol / RESOLVE_FACTOR): where the step lands on a stable orbit near the state, the motion
 contracts onto it, and the run stops. Its remaining revolutions repeat its last k
@@ -95,9 +96,14 @@ RESOLVE_FACTOR = 100.0
 MIN_RTOL = 1e-12
 
 #: Newton checks of an early stop per run (each costs a few revolutions' work)
-EARLY_STOP_ATTEMPTS = 4
+EARLY_STOP_ATTEMPTS = 2
 #: revolutions before another check after one failed (times the checks so far)
 EARLY_STOP_BACKOFF = 10
+#: the longest lag checked: a check's plain run costs its lag in revolutions at a
+#: tighter rtol, and period-k motions are few in a map
+EARLY_STOP_MAX_LAG = 2
+#: a check only where at least this many revolutions are left to save
+EARLY_STOP_MIN_LEFT = 10
 
 
 def section_times(mech, samples, angle: float | None = None, first: int = 1) -> np.ndarray:
@@ -350,7 +356,7 @@ def _section_run(mech, times, keep, tol, max_period, lyapunov, rtol, method,
     peaks = np.empty(revolutions)
     logs = np.empty(keep)
     first = revolutions - keep
-    stop = _EarlyStop(flow, tol, max_period) if early_stop else None
+    stop = _EarlyStop(flow, tol, max_period, revolutions) if early_stop else None
     stopped, extra = 0, 0
     for k, t1 in enumerate(times):
         peaks[k] = flow.advance(t1)
@@ -393,8 +399,9 @@ class _EarlyStop:
     """The early stop of a plain run (module docstring): the recent section samples and
     peaks, and the Newton checks."""
 
-    def __init__(self, flow, tol, max_period):
+    def __init__(self, flow, tol, max_period, revolutions):
         self.flow, self.tol, self.max_period = flow, tol, max_period
+        self.revolutions = revolutions
         self.unit = (flow.clearance[:, None]
                      * np.array([1.0, 1.0, flow.omega, flow.omega])[None, :])
         self.recent = []        # (scaled sample, sample, peak), the last max_period + 2
@@ -405,7 +412,7 @@ class _EarlyStop:
         """The smallest lag with the section repeating to tol / RESOLVE_BAND at the last
         two revolutions (one alone can be a chance near-return), else 0."""
         r = self.recent
-        for lag in range(1, min(self.max_period, len(r) - 2) + 1):
+        for lag in range(1, min(self.max_period, EARLY_STOP_MAX_LAG, len(r) - 2) + 1):
             if all(np.max(np.abs(r[-1 - i][0] - r[-1 - i - lag][0]))
                    <= self.tol / RESOLVE_BAND for i in (0, 1)):
                 return lag
@@ -417,7 +424,8 @@ class _EarlyStop:
         self.recent.append((sample / self.unit, sample, peak))
         if len(self.recent) > self.max_period + 2:
             self.recent.pop(0)
-        if k < self.next or self.attempts >= EARLY_STOP_ATTEMPTS:
+        if k < self.next or self.attempts >= EARLY_STOP_ATTEMPTS or \
+                k + EARLY_STOP_MIN_LEFT >= self.revolutions:
             return False
         lag = self._lag()
         if not lag:
