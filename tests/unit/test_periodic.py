@@ -257,6 +257,36 @@ def test_switch_at_a_period_doubling_gives_orbits_of_period_two(paper_branch):
         assert np.max(np.abs((x1 - x) / scale)) > 1e-4
 
 
+@pytest.mark.slow
+def test_brute_force_from_the_branch_loses_period_one_at_the_located_doubling(paper_branch):
+    """The regime map's rule (100 revolutions, 50 kept, rtol 1e-7) on plain runs started
+    on the branch's orbit below the first doubling (its state and held impact velocity):
+    period-1 10 nm before the located doubling, period-2 10 nm after it (measured on a
+    5 nm grid: period-1 up to -5 nm, period-2 from the doubling itself)."""
+    from mbs_clearance.analysis.periodic import with_field
+    from mbs_clearance.analysis.poincare import classify, scale_samples, section_times
+
+    branch = paper_branch
+    pd = next(p for p in branch.points if p.kind == "period_doubling")
+    below = (branch.values < pd.value) & (np.arange(len(branch.values)) <= pd.index)
+    i = int(np.argmin(np.where(below, pd.value - branch.values, np.inf)))
+    regimes = []
+    for c in (pd.value - 1e-8, pd.value + 1e-8):
+        mech = with_field(PAPER, "clearance", c)
+        flow = Flow(mech)
+        mem = _mem_index(mech)
+        flow.y[:4] = branch.states[i]
+        flow.p[mem:mem + 2] = 1.0, branch.impact_velocities[i, 0]
+        samples = []
+        for k, t in enumerate(section_times(mech, 100)):
+            flow.advance(t)
+            if k >= 50:
+                samples.append(flow.section())
+        regimes.append(classify(scale_samples(np.array(samples), flow.clearance,
+                                              flow.omega))[:2])
+    assert regimes == [("period_1", 1), ("period_k", 2)]
+
+
 def test_switch_branch_refuses_a_point_that_is_not_a_doubling_of_the_branch():
     from mbs_clearance.analysis.periodic import Branch, BranchPoint, switch_branch
 
