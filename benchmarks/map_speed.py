@@ -53,7 +53,7 @@ def main(argv=None) -> int:
     designs = [design_at(paper, {"clearance": c, "crank_speed": s})
                for c in c_sub for s in s_sub]
     settings = dict(revolutions=args.revolutions, keep=args.keep, angle=None, tol=1e-3,
-                    max_period=8, lyapunov=False, rtol=None)
+                    max_period=8, lyapunov=False, rtol=None, early_stop=False)
     _map_point((0, paper), {**settings, "revolutions": 20, "keep": 17})   # compile
     peak_base_force(paper, 2)
     t_map, t_peak = [], []

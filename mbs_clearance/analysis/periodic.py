@@ -49,8 +49,9 @@ from ..numerics.integrator import RESULTS
 from ..solve.flows import Flow, _tangent_scale, clearances_of, drive_of, joints_of
 
 __all__ = ["PeriodicOrbit", "periodic_orbit", "return_map", "Branch", "BranchPoint",
-           "continue_orbits", "field_value", "with_field", "SHOOTING_RTOL",
-           "NEWTON_TOL", "POINT_KINDS"]
+           "continue_orbits", "switch_branch", "field_value", "with_field", "newton_check",
+           "OrbitCheck",
+           "SHOOTING_RTOL", "NEWTON_TOL", "POINT_KINDS"]
 
 #: default relative tolerance of the shooting runs (the map's error must stay well below
 #: the Newton tolerance)
@@ -131,7 +132,7 @@ class _Shooter:
     """The return map of `mech` over `period` revolutions: plain (`value`) and with the
     monodromy matrix (`jacobian`), from a state x and memory (modes, impact velocities)."""
 
-    def __init__(self, mech, period: int, rtol: float, method: str):
+    def __init__(self, mech, period: int, rtol: float, method: str, t0: float = 0.0):
         from ..solve.linkage_ddm import pack_sensitivity_parameters, sensitivity_atol
 
         flow = Flow(mech, rtol=rtol, method=method)
@@ -147,7 +148,9 @@ class _Shooter:
         self.plain_settings = flow.settings
         self.coefficients = flow.coefficients
         self.omega, _ = drive_of(mech)
-        self.edges = np.arange(period + 1) * 2.0 * math.pi / self.omega
+        # the drive repeats every revolution: a map from any section time t0
+        self.edges = t0 + np.arange(period + 1) * 2.0 * math.pi / self.omega
+        self.counters = np.zeros(5, dtype=np.int64)
         self.scale = np.concatenate([_tangent_scale(mech, model),
                                      clearances_of(mech) * self.omega])
         self.joints = joints_of(mech)
@@ -173,6 +176,7 @@ class _Shooter:
         ts, ys, ms, peaks, _, counters, _, status = kernel(y, p, self.edges, settings,
                                                            self.coefficients)
         status = RESULTS(int(status))
+        self.counters += counters
         if status is not RESULTS.success:
             raise RuntimeError(f"integration of the return map failed at about t = "
                                f"{ts[-1] if len(ts) else 0.0:.6g} s: {status.message}")
@@ -380,6 +384,104 @@ def _newton(sh, x, modes, vel, period, tol, max_iterations, trajectory):
     return orbit
 
 
+# ------------------------------------------------------------- one step, from a run
+
+#: a Newton step longer than this (scaled) does not confirm an orbit: the multipliers
+#: describe the map only near the orbit
+CHECK_MAX_STEP = 0.05
+
+
+@dataclass
+class OrbitCheck:
+    """One Newton step of the `period`-revolution map from a run's state (`newton_check`):
+    `confirmed` where it lands on a stable orbit; `reason` otherwise ("integration",
+    "mode change", "unstable", "far", "residual"); the multipliers at the state, the
+    step's length and the map's residual before and after it (scaled), and the runs'
+    right-hand side evaluations."""
+
+    confirmed: bool
+    reason: str
+    multipliers: np.ndarray
+    step: float
+    residual: float
+    residual_after: float
+    nfev: int
+    #: the orbit's least period: the first revolution count dividing `period` after which
+    #: the plain run from the step's end is back within `tol` (0: not checked)
+    least_period: int = 0
+
+    @property
+    def spectral_radius(self) -> float:
+        """Largest modulus of the multipliers (inf where none was computed)."""
+        return float(np.max(np.abs(self.multipliers))) if len(self.multipliers) else math.inf
+
+
+def newton_check(mech, t0: float, state, modes, impact_velocities, period: int = 1, *,
+                 rtol: float = SHOOTING_RTOL, tol: float = 1e-4,
+                 method: str = "dop853") -> OrbitCheck:
+    """Is the state of a run at time `t0` (a section time: any, the drive repeats every
+    revolution) near a stable periodic orbit of `period` revolutions? One Newton step
+    with the monodromy matrix (the shooting's variational run from the state), then one
+    plain run from the step's end: confirmed where every multiplier lies inside the
+    unit circle, the step is at most CHECK_MAX_STEP (scaled) and the map's residual after
+    it is at most `tol` and at most half the residual before it (or below NEWTON_TOL);
+    `least_period` says whether the orbit repeats after fewer revolutions."""
+    sh = _Shooter(mech, period, rtol, method, t0)
+    x, modes, vel = _check_state(sh, state, modes, impact_velocities)
+    n2, J = sh.n2, sh.J
+    none = np.zeros(0, dtype=complex)
+
+    def out(ok, reason, mu=none, step=math.nan, res=math.nan, res2=math.nan, least=0):
+        return OrbitCheck(ok, reason, mu, step, res, res2, int(sh.counters[0]), least)
+
+    try:
+        xe, me, ve, ons, _, M = sh.jacobian(x, modes, vel)
+    except RuntimeError:
+        return out(False, "integration")
+    if np.any(me != modes):
+        return out(False, "mode change")
+    active = [j for j in range(J) if ons[j] > 0]
+    idx = list(range(n2)) + [n2 + j for j in active]
+    S = sh.scale[idx]
+    z = np.concatenate([x, vel[active]]) / S
+    g = np.concatenate([xe, ve[active]]) / S - z
+    A = M[np.ix_(idx, idx)]
+    mu = np.linalg.eigvals(A)
+    mu = mu[np.argsort(-np.abs(mu), kind="stable")]
+    res = float(np.max(np.abs(g)))
+    if np.max(np.abs(mu)) >= 1.0:
+        return out(False, "unstable", mu, res=res)
+    dz = np.linalg.solve(A - np.eye(len(idx)), -g)
+    step = float(np.max(np.abs(dz)))
+    if step > CHECK_MAX_STEP:
+        return out(False, "far", mu, step, res)
+    zs = z + dz
+    vs = vel.copy()
+    vs[active] = zs[n2:] * S[n2:]
+    if np.any(vs < 0.0):
+        return out(False, "far", mu, step, res)
+    # the plain run one revolution at a time: an orbit of `period` revolutions may repeat
+    # sooner (a period-1 orbit is a fixed point of every iterate of the map)
+    xe2, me2, ve2 = zs[:n2] * S[:n2], modes, vs
+    least = period
+    for r in range(period):
+        one = _Shooter(mech, 1, rtol, method, t0 + r * 2.0 * math.pi / sh.omega)
+        try:
+            xe2, me2, ve2, _, _ = one.value(xe2, me2, ve2)
+        except RuntimeError:
+            return out(False, "integration", mu, step, res)
+        finally:
+            sh.counters += one.counters
+        back = float(np.max(np.abs(np.concatenate([xe2, ve2[active]]) / S - zs)))
+        if r + 1 < least and period % (r + 1) == 0 and back <= tol and \
+                np.all(me2 == modes):
+            least = r + 1
+    res2 = back
+    if np.any(me2 != modes) or res2 > tol or res2 > max(0.5 * res, NEWTON_TOL):
+        return out(False, "residual", mu, step, res, res2)
+    return out(True, "", mu, step, res, res2, least)
+
+
 # ------------------------------------------------------------------------ continuation
 
 #: kinds of the detected points of a branch
@@ -401,6 +503,11 @@ class BranchPoint:
     multipliers: np.ndarray
     note: str = ""
     index: int = -1
+    #: the located orbit's scaled unknowns (state, memories, field) and, at a period
+    #: doubling, the eigenvector of the multiplier -1 in them: `switch_branch` starts there
+    w: np.ndarray | None = field(default=None, repr=False)
+    eigenvector: np.ndarray | None = field(default=None, repr=False)
+    tangent: np.ndarray | None = field(default=None, repr=False)
 
 
 @dataclass
@@ -425,6 +532,8 @@ class Branch:
     sections: np.ndarray | None = None
     clearances: np.ndarray | None = None
     counters: dict = field(default_factory=dict)
+    #: what `switch_branch` needs to go on from a point of this branch
+    setup: dict = field(default_factory=dict, repr=False)
 
     def summary(self) -> str:
         """The branch in words: its range, stable points and detected points."""
@@ -486,6 +595,7 @@ class _Continuation:
         self.n2, self.J = self.sh0.n2, self.sh0.J
         self.cache = {}
         self.runs = 0
+        self.plain_runs = 0
 
     def value_of(self, uu):
         u = self.u0 + uu * self.span
@@ -538,26 +648,60 @@ class _Continuation:
         A = Mf[np.ix_(idx, idx)]
         return g, (np.hstack([jz, gu[:, None]]) if jac else jz), A, active, ons, me
 
-    def correct(self, w_pred, w_base, tangent, ds, modes, held, tol, max_it=8):
+    def value(self, w, modes, held):
+        """G(w) from one plain run (no Jacobian), the onsets and end modes."""
+        n2, J, S0 = self.n2, self.J, self.S0
+        z, uu = w[:-1], w[-1]
+        sh = self.shooter(uu)
+        xe, me, ve, ons, _ = sh.value(z[:n2] * S0[:n2], modes, z[n2:] * S0[n2:])
+        self.plain_runs += 1
+        g = np.concatenate([xe, ve]) / S0 - z
+        for j in range(J):
+            if ons[j] == 0:
+                g[n2 + j] = z[n2 + j] - held[j] / S0[n2 + j]
+        return g, ons, me
+
+    def correct(self, w_pred, w_base, tangent, ds, modes, held, tol, max_it=8, Jg=None):
         """Newton on G = 0 and tangent . (w - w_base) = ds from w_pred; returns (w, info)
-        or None where it does not converge."""
+        or None where it does not converge. With `Jg`, the Jacobian of a nearby point, a
+        chord method: `Jg` is held (plain runs only) while the residual falls by half per
+        iteration and recomputed at the iterate where it does not, and one run with the
+        monodromy matrix at the converged point gives its multipliers; info["jacobians"]
+        counts the recomputations."""
+        hold = Jg is not None
         w = w_pred.copy()
+        last = math.inf
+        fresh = 0
         for it in range(1, max_it + 1):
             try:
-                g, Jg, A, active, ons, me = self.residual(w, modes, held)
+                if hold:
+                    g, ons, me = self.value(w, modes, held)
+                else:
+                    g, Jg, A, active, ons, me = self.residual(w, modes, held)
             except RuntimeError:
                 return None
             if np.any(me != modes):
                 return None
             res = float(np.max(np.abs(g)))
             arc = float(tangent @ (w - w_base) - ds)
-            if res <= tol and abs(arc) <= tol:
-                return w, dict(A=A, active=active, onsets=ons, J=Jg, iterations=it,
-                               residual=res)
-            F = np.concatenate([g, [arc]])
-            Jx = np.vstack([Jg, tangent[None, :]])
             try:
-                dw = np.linalg.solve(Jx, -F)
+                if res <= tol and abs(arc) <= tol:
+                    if hold:
+                        _, Jg, A, active, ons, me = self.residual(w, modes, held)
+                    return w, dict(A=A, active=active, onsets=ons, J=Jg, iterations=it,
+                                   residual=res, jacobians=fresh)
+                if hold and max(res, abs(arc)) > 0.5 * last:
+                    # the held Jacobian no longer contracts: Newton's own at this iterate
+                    g, Jg, *_ = self.residual(w, modes, held)
+                    fresh += 1
+                    if fresh > 3:
+                        return None
+            except RuntimeError:
+                return None
+            last = max(res, abs(arc))
+            try:
+                dw = np.linalg.solve(np.vstack([Jg, tangent[None, :]]),
+                                     -np.concatenate([g, [arc]]))
             except np.linalg.LinAlgError:
                 return None
             w = w + dw
@@ -649,13 +793,28 @@ def continue_orbits(mech, field_name: str, start: float, stop: float, *, period:
     w = np.concatenate([np.concatenate([orbit.state, held]) / con.S0, [0.0]])
     g, Jg, A, active, ons, _ = con.residual(w, modes, held)
     t = _tangent_of(Jg, np.concatenate([np.zeros(len(w) - 1), [1.0]]))
-    pts = [dict(w=w, A=A, active=active, onsets=ons, t=t, tests=_tests(A))]
+    pts = [dict(w=w, A=A, active=active, onsets=ons, t=t, tests=_tests(A), J=Jg)]
+    steps = dict(step=step, min_step=min_step, max_step=max_step, max_points=max_points,
+                 tol=tol, locate_tol=locate_tol, stop_at_first=stop_at_first)
+    found, stopped = _follow(con, pts, modes, held, progress=progress, **steps)
+    setup = dict(mech=mech, log=log, span=span, u0=u0, rtol=rtol, method=method,
+                 modes=modes, held=held, steps=steps)
+    return _branch_of(con, pts, found, stopped, setup)
+
+
+def _follow(con, pts, modes, held, *, step, min_step, max_step, max_points, tol,
+            locate_tol, stop_at_first, progress=None):
+    """Pseudo-arclength steps from the last of `pts` (appended to it): (the detected
+    points, why it stopped). A step's corrector holds the last point's Jacobian (chord),
+    and takes Newton's with the Jacobian recomputed where that does not converge."""
     found: list[BranchPoint] = []
     ds = step
     stopped = "max_points"
     while len(pts) < max_points:
         cur = pts[-1]
-        new = con.correct(cur["w"] + ds * cur["t"], cur["w"], cur["t"], ds, modes, held, tol)
+        pred = cur["w"] + ds * cur["t"]
+        new = con.correct(pred, cur["w"], cur["t"], ds, modes, held, tol, max_it=10,
+                          Jg=cur["J"])
         if new is None:
             ds /= 2.0
             if ds < min_step:
@@ -666,7 +825,7 @@ def continue_orbits(mech, field_name: str, start: float, stop: float, *, period:
         wn, info = new
         tn = _tangent_of(info["J"], cur["t"])
         pt = dict(w=wn, A=info["A"], active=info["active"], onsets=info["onsets"], t=tn,
-                  tests=_tests(info["A"]), ds=ds)
+                  tests=_tests(info["A"]), ds=ds, J=info["J"])
         kinds = _crossings(cur, pt)
         pts.append(pt)
         for kind in kinds:
@@ -675,9 +834,11 @@ def continue_orbits(mech, field_name: str, start: float, stop: float, *, period:
             found.append(point)
         if progress is not None:
             progress(len(pts), con.value_of(wn[-1]))
-        if info["iterations"] <= 3:
+        # converged in few plain runs on the last point's Jacobian: the branch is nearly
+        # straight over the step, so a longer one will do
+        if info["iterations"] <= 6 and info["jacobians"] == 0:
             ds = min(ds * 1.5, max_step)
-        elif info["iterations"] >= 6:
+        elif info["jacobians"] >= 2:
             ds = max(ds / 2.0, min_step)
         if wn[-1] >= 1.0:
             stopped = "reached stop"
@@ -688,6 +849,11 @@ def continue_orbits(mech, field_name: str, start: float, stop: float, *, period:
         if stop_at_first and kinds:
             stopped = f"first detected point ({kinds[0]})"
             break
+    return found, stopped
+
+
+def _branch_of(con, pts, found, stopped, setup) -> Branch:
+    """The Branch of the computed points `pts` of continuation `con`."""
     n2 = con.n2
     nmu = max(len(p["tests"][3]) for p in pts)
     mults = np.full((len(pts), nmu), np.nan + 0j)
@@ -702,14 +868,83 @@ def continue_orbits(mech, field_name: str, start: float, stop: float, *, period:
         sections.append([g(0.0, np.concatenate([x, np.zeros(sh.n_state - n2)]), sh.p0)
                          for g in sh.guess_flow._gaps])
         clear.append(clearances_of(sh.mech))
-    return Branch(field=field_name, values=np.array([con.value_of(u) for u in W[:, -1]]),
+    return Branch(field=con.name, values=np.array([con.value_of(u) for u in W[:, -1]]),
                   states=states, impact_velocities=W[:, n2:-1] * con.S0[n2:],
                   multipliers=mults,
                   stable=np.array([np.max(np.abs(p["tests"][3])) < 1.0 for p in pts]),
                   onsets=np.array([p["onsets"] for p in pts]), points=found, stopped=stopped,
-                  period=period, sections=np.array(sections, dtype=float),
+                  period=con.period, sections=np.array(sections, dtype=float),
                   clearances=np.array(clear),
-                  counters=dict(shooting_runs=con.runs, speed=con.sh0.omega))
+                  counters=dict(shooting_runs=con.runs, plain_runs=con.plain_runs,
+                                speed=con.sh0.omega),
+                  setup=setup)
+
+
+def switch_branch(branch: Branch, point: BranchPoint, *, step: float = 0.01,
+                  max_points: int = 50, stop_at_first: bool = False,
+                  progress=None) -> Branch:
+    """The branch of period 2 x `branch.period` born at the period doubling `point` of
+    `branch` (`continue_orbits`), followed by pseudo-arclength continuation in the same
+    field and scaled units, up to the same stop.
+
+    Its first orbit is found on the doubled map from the located orbit moved by `step`
+    (scaled) along the eigenvector of the multiplier -1, the arclength condition taken
+    across the old branch (the old branch is a fixed point of the doubled map too); then
+    as `continue_orbits`, with `max_points` orbits at most. ValueError if `point` is not
+    a period doubling of `branch`."""
+    if not isinstance(branch, Branch) or not branch.setup:
+        raise ValueError("branch must be a Branch returned by continue_orbits")
+    if not isinstance(point, BranchPoint) or point.kind != "period_doubling" or \
+            point.eigenvector is None or all(point is not q for q in branch.points):
+        raise ValueError("point must be one of the branch's period doublings "
+                         "(branch.points, kind 'period_doubling')")
+    step = check_real("step", step, 0.0, 1.0, low_open=True)
+    max_points = check_int("max_points", max_points, 2, 100_000)
+    st = branch.setup
+    steps = dict(st["steps"], max_points=max_points, stop_at_first=stop_at_first)
+    con = _Continuation(st["mech"], branch.field, 2 * branch.period, st["rtol"],
+                        st["method"], st["log"], st["span"], st["u0"])
+    modes, held, tol = st["modes"], st["held"], steps["tol"]
+    w0, v = point.w, point.eigenvector
+    # across the old branch (a branch of fixed points of the doubled map too): the
+    # arclength condition then meets it only far away
+    t0 = v - (v @ point.tangent) * point.tangent
+    t0 = t0 / np.linalg.norm(t0)
+    new = None
+    ds = step
+    while new is None and ds >= steps["min_step"]:
+        new = con.correct(w0 + ds * t0, w0, t0, ds, modes, held, tol, max_it=12)
+        # where the old branch bends fast the corrector can slide back onto it: the two
+        # halves of a doubled orbit lie about 2 ds apart, an old orbit's coincide
+        if new is not None and _half_apart(con, new[0], modes, branch.period) < ds / 2:
+            new = None
+        if new is None:
+            ds /= 2.0
+    if new is None:
+        raise RuntimeError("switch_branch: no orbit of the doubled period found near the "
+                           "period doubling; try a smaller step or a tighter locate_tol")
+    w1, info = new
+    t1 = _tangent_of(info["J"], t0)
+    pts = [dict(w=w1, A=info["A"], active=info["active"], onsets=info["onsets"], t=t1,
+                tests=_tests(info["A"]), J=info["J"])]
+    found, stopped = _follow(con, pts, modes, held, progress=progress,
+                             **dict(steps, step=max(ds, steps["min_step"])))
+    return _branch_of(con, pts, found, stopped, dict(st, steps=steps))
+
+
+def _half_apart(con, w, modes, period) -> float:
+    """Scaled distance between the orbit w of the doubled map and its image under the
+    map of `period` revolutions (0 for an orbit of that period)."""
+    n2, S0 = con.n2, con.S0
+    sh = _Shooter(with_field(con.mech0, con.name, con.value_of(w[-1])), period, con.rtol,
+                  con.method)
+    z = w[:-1]
+    try:
+        xe, _, _, _, _ = sh.value(z[:n2] * S0[:n2], modes, z[n2:] * S0[n2:])
+    except RuntimeError:
+        return 0.0
+    con.plain_runs += 1
+    return float(np.max(np.abs(xe / S0[:n2] - z[:n2])))
 
 
 def _crossings(a, b) -> list:
@@ -761,7 +996,7 @@ def _locate(con, a, b, kind, modes, held, tol, locate_tol) -> BranchPoint:
             break
         wm, info = new
         pm = dict(w=wm, onsets=info["onsets"], tests=_tests(info["A"]),
-                  t=_tangent_of(info["J"], a["t"]))
+                  t=_tangent_of(info["J"], a["t"]), A=info["A"], active=info["active"])
         if kind == "grazing":
             same = np.array_equal(pm["onsets"], a["onsets"])
         else:
@@ -781,5 +1016,14 @@ def _locate(con, a, b, kind, modes, held, tol, locate_tol) -> BranchPoint:
                 "contact force reaching zero within a contact phase)")
     if hi - lo > 0.0 and abs(ub - ua) > locate_tol:
         note += ("; " if note else "") + "bisection stopped (corrector did not converge)"
+    vec = None
+    if kind == "period_doubling":
+        w_, V = np.linalg.eig(last["A"])
+        k = int(np.argmin(np.abs(w_ + 1.0)))
+        idx = list(range(con.n2)) + [con.n2 + j for j in last["active"]]
+        vec = np.zeros(len(a["w"]))
+        vec[idx] = np.real(V[:, k])
+        vec /= np.linalg.norm(vec)
     return BranchPoint(kind=kind, value=value, tolerance=half,
-                       multipliers=mu[np.argsort(-np.abs(mu), kind="stable")], note=note)
+                       multipliers=mu[np.argsort(-np.abs(mu), kind="stable")], note=note,
+                       w=last["w"].copy(), eigenvector=vec, tangent=last["t"].copy())

@@ -31,6 +31,19 @@ decided by a distance within a factor RESOLVE_BAND of the tolerance (no period f
 some d_k <= RESOLVE_BAND tol, or a period k > 1 with d_k > tol / RESOLVE_BAND) is therefore
 re-checked: the run is repeated at rtol / RESOLVE_FACTOR and classified again, and that run's
 samples are kept (`PoincareSection.rtol`, `rechecked`).
+
+Early stop (`early_stop=True`, plain runs only). A run whose section repeats with some
+lag k <= EARLY_STOP_MAX_LAG to tol / RESOLVE_BAND at two consecutive revolutions, with at
+least EARLY_STOP_MIN_LEFT revolutions left, is checked by
+one Newton step on the k-revolution map from its state (`periodic.newton_check`, at
+rtol / RESOLVE_FACTOR): where the step lands on a stable orbit near the state, the motion
+contracts onto it, and the run stops. Its remaining revolutions repeat its last k
+section samples and peaks: the run's own recurrence, which the integration's error at the
+run's rtol sets, not the orbit's (the two differ by that error, up to a few 1e-3 of the
+clearance at rtol 1e-7). A check that fails (unstable, too far, no convergence, or an orbit
+repeating after fewer revolutions than the lag: the run's own section does not repeat to
+tol / RESOLVE_BAND at its period) lets the run go on and is tried again later, at most
+EARLY_STOP_ATTEMPTS times.
 """
 
 from __future__ import annotations
@@ -82,6 +95,16 @@ RESOLVE_BAND = 10.0
 RESOLVE_FACTOR = 100.0
 MIN_RTOL = 1e-12
 
+#: Newton checks of an early stop per run (each costs a few revolutions' work)
+EARLY_STOP_ATTEMPTS = 2
+#: revolutions before another check after one failed (times the checks so far)
+EARLY_STOP_BACKOFF = 10
+#: the longest lag checked: a check's plain run costs its lag in revolutions at a
+#: tighter rtol, and period-k motions are few in a map
+EARLY_STOP_MAX_LAG = 2
+#: a check only where at least this many revolutions are left to save
+EARLY_STOP_MIN_LEFT = 10
+
 
 def section_times(mech, samples, angle: float | None = None, first: int = 1) -> np.ndarray:
     """Times of section samples first..first+samples-1 at crank angle `angle` (rad; None:
@@ -126,6 +149,10 @@ class PoincareSection:
     rtol: float = DEFAULT_RTOL
     #: True when the classification was re-checked at a tighter rtol (module docstring)
     rechecked: bool = False
+    #: revolutions run before an early stop (0: all of them; the module docstring)
+    stopped: int = 0
+    #: the confirmed orbit's multipliers at an early stop (else empty)
+    multipliers: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=complex))
 
     def scaled(self) -> np.ndarray:
         """The samples made dimensionless (positions / c, rates / (c omega))."""
@@ -270,7 +297,7 @@ def poincare_section(mech, revolutions: int = 100, keep: int = 50, *,
                      angle: float | None = None, tol: float = RECURRENCE_TOL,
                      max_period: int = MAX_PERIOD, lyapunov: bool = False,
                      rtol: float | None = None, method: str | None = None,
-                     recheck: bool = True) -> PoincareSection:
+                     recheck: bool = True, early_stop: bool = False) -> PoincareSection:
     """The Poincare section of a run of `mech` (a SliderCrank or a Linkage).
 
     Parameters
@@ -291,23 +318,34 @@ def poincare_section(mech, revolutions: int = 100, keep: int = 50, *,
     recheck : bool
         Repeat the run at rtol / RESOLVE_FACTOR when the classification was decided within
         a factor RESOLVE_BAND of `tol` (the module docstring); False: one run only.
+    early_stop : bool
+        Stop a run whose section repeats, once one Newton step confirms a stable periodic
+        orbit there (the module docstring); not with `lyapunov`.
     """
     revolutions, keep, angle = _check_run(mech, revolutions, keep, angle)
     if rtol is not None:
         rtol = check_real("rtol", rtol, 1e-14, 1e-4)
     tol = check_real("tol (recurrence tolerance)", tol, 0.0, low_open=True)
+    max_period = check_int("max_period", max_period, 1)
+    if not isinstance(early_stop, bool):
+        raise ValueError(f"early_stop must be True or False; got {early_stop!r}")
+    if early_stop and lyapunov:
+        raise ValueError("early_stop needs lyapunov=False (the exponent averages the kept "
+                         "revolutions' growths: they must be run)")
     times = section_times(mech, revolutions, angle)
-    sec = _section_run(mech, times, keep, tol, max_period, lyapunov, rtol, method)
+    sec = _section_run(mech, times, keep, tol, max_period, lyapunov, rtol, method, early_stop)
     tighter = max(sec.rtol / RESOLVE_FACTOR, MIN_RTOL)
     if recheck and tighter < sec.rtol and near_tolerance(sec.regime, sec.period, sec.distance, tol):
         first = sec.counters
-        sec = _section_run(mech, times, keep, tol, max_period, lyapunov, tighter, method)
+        sec = _section_run(mech, times, keep, tol, max_period, lyapunov, tighter, method,
+                           early_stop)
         sec.counters = {k: first.get(k, 0) + v for k, v in sec.counters.items()}
         sec.rechecked = True
     return sec
 
 
-def _section_run(mech, times, keep, tol, max_period, lyapunov, rtol, method):
+def _section_run(mech, times, keep, tol, max_period, lyapunov, rtol, method,
+                 early_stop=False):
     """One run of `poincare_section` at `rtol`, classified."""
     revolutions = len(times)
     if lyapunov:
@@ -318,21 +356,98 @@ def _section_run(mech, times, keep, tol, max_period, lyapunov, rtol, method):
     peaks = np.empty(revolutions)
     logs = np.empty(keep)
     first = revolutions - keep
+    stop = _EarlyStop(flow, tol, max_period, revolutions) if early_stop else None
+    stopped, extra = 0, 0
     for k, t1 in enumerate(times):
         peaks[k] = flow.advance(t1)
         if lyapunov:
             growth = flow.renormalise()
             if k >= first:
                 logs[k - first] = math.log(growth)
+        sample = flow.section()
         if k >= first:
-            samples[k - first] = flow.section()
+            samples[k - first] = sample
+        if stop is not None and k + 1 < revolutions and stop.confirmed(k, t1, sample,
+                                                                         peaks[k]):
+            # the rest repeats the run's last `period` revolutions
+            for m in range(k + 1, revolutions):
+                sample, peaks[m] = stop.recent[len(stop.recent) - stop.period
+                                               + (m - k - 1) % stop.period][1:]
+                if m >= first:
+                    samples[m - first] = sample
+            stopped = k + 1
+            break
+    if stop is not None:
+        extra = stop.nfev
     scaled = scale_samples(samples, flow.clearance, flow.omega)
     regime, period, d, lam, half = classify_run(scaled, logs if lyapunov else None, tol=tol,
                                                 max_period=max_period)
     from ..solve.reduced import counters_dict
 
+    counters = counters_dict(flow.counters)
+    counters["nfev"] += extra
     return PoincareSection(t=times[first:], samples=samples, peaks=peaks, joints=flow.joints,
                            clearance=flow.clearance, omega=flow.omega, regime=regime,
                            period=period, distance=d, lyapunov=lam,
-                           lyapunov_uncertainty=half,
-                           counters=counters_dict(flow.counters), rtol=float(flow.rtol))
+                           lyapunov_uncertainty=half, counters=counters,
+                           rtol=float(flow.rtol), stopped=stopped,
+                           multipliers=stop.multipliers if stopped else
+                           np.zeros(0, dtype=complex))
+
+
+class _EarlyStop:
+    """The early stop of a plain run (module docstring): the recent section samples and
+    peaks, and the Newton checks."""
+
+    def __init__(self, flow, tol, max_period, revolutions):
+        self.flow, self.tol, self.max_period = flow, tol, max_period
+        self.revolutions = revolutions
+        self.unit = (flow.clearance[:, None]
+                     * np.array([1.0, 1.0, flow.omega, flow.omega])[None, :])
+        self.recent = []        # (scaled sample, sample, peak), the last max_period + 2
+        self.attempts, self.next, self.nfev, self.period = 0, 0, 0, 0
+        self.multipliers = np.zeros(0, dtype=complex)
+
+    def _lag(self) -> int:
+        """The smallest lag with the section repeating to tol / RESOLVE_BAND at the last
+        two revolutions (one alone can be a chance near-return), else 0."""
+        r = self.recent
+        for lag in range(1, min(self.max_period, EARLY_STOP_MAX_LAG, len(r) - 2) + 1):
+            if all(np.max(np.abs(r[-1 - i][0] - r[-1 - i - lag][0]))
+                   <= self.tol / RESOLVE_BAND for i in (0, 1)):
+                return lag
+        return 0
+
+    def confirmed(self, k, t, sample, peak) -> bool:
+        from .periodic import newton_check
+
+        self.recent.append((sample / self.unit, sample, peak))
+        if len(self.recent) > self.max_period + 2:
+            self.recent.pop(0)
+        if k < self.next or self.attempts >= EARLY_STOP_ATTEMPTS or \
+                k + EARLY_STOP_MIN_LEFT >= self.revolutions:
+            return False
+        lag = self._lag()
+        if not lag:
+            return False
+        self.attempts += 1
+        flow = self.flow
+        model = flow.model
+        n2, mem, J = 2 * model.N_Q, model.MEM_START, model.N_EVENTS
+        try:
+            check = newton_check(flow.mech, t, flow.y[:n2], flow.p[mem:mem + 2 * J:2],
+                                 flow.p[mem + 1:mem + 2 * J:2], lag,
+                                 rtol=max(flow.rtol / RESOLVE_FACTOR, MIN_RTOL),
+                                 tol=self.tol / RESOLVE_BAND)
+        except ValueError:      # a state the shooting does not take: run on
+            self.next = k + EARLY_STOP_BACKOFF * self.attempts
+            return False
+        self.nfev += check.nfev
+        # an orbit of fewer revolutions than the lag: the run's own section does not repeat
+        # to tol / RESOLVE_BAND at the orbit's period (its integration error), so its
+        # remaining revolutions must be run, as without early stop
+        if not check.confirmed or check.least_period != lag:
+            self.next = k + EARLY_STOP_BACKOFF * self.attempts
+            return False
+        self.period, self.multipliers = lag, check.multipliers
+        return True

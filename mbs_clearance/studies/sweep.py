@@ -61,7 +61,7 @@ __all__ = ["SweepAxis", "parse_sweep", "design_at", "regime_map", "MapResult", "
 RPM = 2.0 * math.pi / 60.0
 
 #: the dataset format's version (a resumed run must match it)
-FORMAT = "mbs-clearance regime map 4"
+FORMAT = "mbs-clearance regime map 5"
 
 
 @dataclass(frozen=True)
@@ -151,10 +151,11 @@ def _map_point(item, settings: dict) -> dict:
     t0 = time.perf_counter()
     run = dict(angle=settings["angle"], tol=settings["tol"],
                max_period=settings["max_period"], rtol=settings["rtol"])
+    early = dict(early_stop=settings.get("early_stop", False) and not settings["lyapunov"])
     try:
         try:
             sec = poincare_section(mech, settings["revolutions"], keep,
-                                   lyapunov=settings["lyapunov"], **run)
+                                   lyapunov=settings["lyapunov"], **run, **early)
         except RuntimeError:
             if not settings["lyapunov"]:
                 raise
@@ -168,13 +169,14 @@ def _map_point(item, settings: dict) -> dict:
                    section=np.full((keep, J, 4), np.nan), peak=np.full(keep, np.nan),
                    regime=REGIME_CODES["failed"], period=0, lyapunov=np.nan,
                    lyapunov_uncertainty=np.nan,
-                   distance=np.full(settings["max_period"], np.nan), nfev=0, rtol=np.nan)
+                   distance=np.full(settings["max_period"], np.nan), nfev=0, rtol=np.nan,
+                   stopped=0)
     else:
         out.update(section=sec.samples, peak=sec.peaks[-keep:],
                    regime=REGIME_CODES[sec.regime], period=sec.period,
                    lyapunov=sec.lyapunov, lyapunov_uncertainty=sec.lyapunov_uncertainty,
                    distance=sec.distance, nfev=sec.counters["nfev"],
-                   rtol=sec.rtol)
+                   rtol=sec.rtol, stopped=sec.stopped)
     out["seconds"] = time.perf_counter() - t0
     return out
 
@@ -226,6 +228,9 @@ def _empty_dataset(axes, J, joints, keep, revolutions, max_period, attrs):
                  {"long_name": "relative tolerance of the run that gave the section (below "
                                "the map's when its classification was re-checked: "
                                "poincare.RESOLVE_BAND)"}),
+        "stopped": (dims, np.zeros(shape, dtype=np.int16),
+                    {"long_name": "revolutions run before an early stop on a confirmed "
+                                  "periodic orbit (0: all; poincare.py)"}),
         "done": (dims, np.zeros(shape, dtype=np.int8),
                  {"long_name": "1: computed (ok or failed), 0: to do"}),
         "failed": (dims, np.zeros(shape, dtype=np.int8),
@@ -254,6 +259,7 @@ def _store(ds, shape, res, omega_of) -> None:
     ds["recurrence"].values[idx] = res["distance"]
     ds["nfev"].values[idx] = min(res["nfev"], 2**31 - 1)
     ds["rtol"].values[idx] = res["rtol"]
+    ds["stopped"].values[idx] = res["stopped"]
     ds["done"].values[idx] = 1
     ds["failed"].values[idx] = 0 if ok else 1
     ds["tangent_failed"].values[idx] = res["tangent_failed"]
@@ -327,7 +333,7 @@ def regime_map(mech, sweep, revolutions: int = 100, keep: int = 50, scheduler=No
                max_period: int = MAX_PERIOD, rtol: float | None = None, workers: int = 2,
                chunk_size: int | None = None, progress: bool = False,
                retries: int = 2, write_interval: float = 5.0,
-               max_memory: int | None = None) -> MapResult:
+               max_memory: int | None = None, early_stop: bool = True) -> MapResult:
     """A regime map / bifurcation diagram of `mech` over one or two swept fields.
 
     Parameters
@@ -362,6 +368,11 @@ def regime_map(mech, sweep, revolutions: int = 100, keep: int = 50, scheduler=No
     write_interval : float
         Seconds between writes of `out` while results arrive (0: after every chunk); a run
         killed without warning loses at most the points of this interval.
+    early_stop : bool
+        Stop a point's run once its section repeats and one Newton step confirms a
+        stable periodic orbit there (`poincare.poincare_section`); its remaining
+        revolutions repeat its last period. Not with `lyapunov` (its exponent averages the
+        kept revolutions).
     max_memory : int, optional
         Limit in bytes of the map's estimated memory (default
         `_checks.default_max_memory`): the dataset and the designs of every point, and each
@@ -370,8 +381,8 @@ def regime_map(mech, sweep, revolutions: int = 100, keep: int = 50, scheduler=No
 
     Returns a `MapResult`: the labelled dataset (dims: the swept fields, revolution, joint,
     component, lag; variables section, peak, peak_mean, peak_max, regime, period,
-    lyapunov, lyapunov_per_second, recurrence, joint_clearance, nfev, done, failed,
-    tangent_failed).
+    lyapunov, lyapunov_per_second, recurrence, joint_clearance, nfev, stopped, done,
+    failed, tangent_failed).
     """
     from .executor import connect_dask, evaluate
 
@@ -388,6 +399,7 @@ def regime_map(mech, sweep, revolutions: int = 100, keep: int = 50, scheduler=No
         raise ValueError(f"keep must be >= 2 max_period + 1 = {2 * max_period + 1}; got {keep}")
     tol = check_real("tol (recurrence tolerance)", tol, 0.0, low_open=True)
     lyapunov = check_bool("lyapunov", lyapunov)
+    early_stop = check_bool("early_stop", early_stop) and not lyapunov
     if angle is not None:
         angle = check_real("angle (section crank angle)", angle, unit="rad")
     if rtol is not None:
@@ -409,7 +421,8 @@ def regime_map(mech, sweep, revolutions: int = 100, keep: int = 50, scheduler=No
     base = designs[0]
     J = len(joints_of(base))
     settings = dict(revolutions=revolutions, keep=keep, angle=angle, tol=tol,
-                    max_period=max_period, lyapunov=lyapunov, rtol=rtol)
+                    max_period=max_period, lyapunov=lyapunov, rtol=rtol,
+                    early_stop=early_stop)
     description = base.to_dict() if isinstance(base, Linkage) else base.to_dict()
     attrs = {"format": FORMAT, "case": case or "",
              "mechanism": type(base).__name__,

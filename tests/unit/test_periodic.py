@@ -180,9 +180,10 @@ def test_no_convergence_says_what_to_try():
 
 @pytest.fixture(scope="module")
 def paper_branch():
-    # 120 orbits along clearance from the paper's design (about 40 s on a quiet machine)
+    # 260 orbits along clearance from the paper's design, through its first period
+    # doublings (224 orbits to the first)
     return continue_orbits(PAPER, "clearance", 1e-5, 2e-5, step=0.1, max_step=3.0,
-                           max_points=120)
+                           max_points=260)
 
 
 @pytest.mark.slow
@@ -228,6 +229,76 @@ def test_branch_points_are_orbits_of_the_map(paper_branch):
         assert np.max(np.abs((xe - branch.states[i]) / scale)) < 1e-5
         mu = branch.multipliers[i]
         assert branch.stable[i] == bool(np.nanmax(np.abs(mu)) < 1.0)
+
+
+@pytest.mark.slow
+def test_switch_at_a_period_doubling_gives_orbits_of_period_two(paper_branch):
+    """The branch born at the first period doubling (`switch_branch`): each of its orbits,
+    run through the plain map (not the continuation's corrector), is back after two
+    revolutions (to 1e-5 of the scales) and not after one (a period-1 orbit would be,
+    to 1e-6); at its start its multipliers are the squares of the period-1 orbit's at the
+    doubling (-1 squared: +1)."""
+    from mbs_clearance.analysis.periodic import switch_branch, with_field
+
+    branch = paper_branch
+    pd = next(p for p in branch.points if p.kind == "period_doubling")
+    doubled = switch_branch(branch, pd, max_points=6)
+    assert doubled.period == 2 and len(doubled.values) >= 3
+    np.testing.assert_allclose(np.sort(np.abs(doubled.multipliers[0])),
+                               np.sort(np.abs(pd.multipliers) ** 2), atol=0.05)
+    scale = np.array([PAPER.clearance / PAPER.coupler_length, PAPER.clearance])
+    scale = np.concatenate([scale, PAPER.crank_speed * scale])
+    for i in range(len(doubled.values)):
+        mech = with_field(PAPER, "clearance", doubled.values[i])
+        x, v = doubled.states[i], doubled.impact_velocities[i]
+        x1, m1, v1, _ = return_map(mech, x, np.ones(1), v)
+        x2, _, _, _ = return_map(mech, x1, m1, v1)
+        assert np.max(np.abs((x2 - x) / scale)) < 1e-5
+        assert np.max(np.abs((x1 - x) / scale)) > 1e-4
+
+
+@pytest.mark.slow
+def test_brute_force_from_the_branch_loses_period_one_at_the_located_doubling(paper_branch):
+    """The regime map's rule (100 revolutions, 50 kept, rtol 1e-7) on plain runs started
+    on the branch's orbit below the first doubling (its state and held impact velocity):
+    period-1 10 nm before the located doubling, period-2 10 nm after it (measured on a
+    5 nm grid: period-1 up to -5 nm, period-2 from the doubling itself)."""
+    from mbs_clearance.analysis.periodic import with_field
+    from mbs_clearance.analysis.poincare import classify, scale_samples, section_times
+
+    branch = paper_branch
+    pd = next(p for p in branch.points if p.kind == "period_doubling")
+    below = (branch.values < pd.value) & (np.arange(len(branch.values)) <= pd.index)
+    i = int(np.argmin(np.where(below, pd.value - branch.values, np.inf)))
+    regimes = []
+    for c in (pd.value - 1e-8, pd.value + 1e-8):
+        mech = with_field(PAPER, "clearance", c)
+        flow = Flow(mech)
+        mem = _mem_index(mech)
+        flow.y[:4] = branch.states[i]
+        flow.p[mem:mem + 2] = 1.0, branch.impact_velocities[i, 0]
+        samples = []
+        for k, t in enumerate(section_times(mech, 100)):
+            flow.advance(t)
+            if k >= 50:
+                samples.append(flow.section())
+        regimes.append(classify(scale_samples(np.array(samples), flow.clearance,
+                                              flow.omega))[:2])
+    assert regimes == [("period_1", 1), ("period_k", 2)]
+
+
+def test_switch_branch_refuses_a_point_that_is_not_a_doubling_of_the_branch():
+    from mbs_clearance.analysis.periodic import Branch, BranchPoint, switch_branch
+
+    fold = BranchPoint(kind="fold", value=1e-5, tolerance=1e-9, multipliers=np.ones(1))
+    with pytest.raises(ValueError, match="Branch returned by continue_orbits"):
+        switch_branch("branch", fold)
+    branch = Branch(field="clearance", values=np.ones(1), states=np.ones((1, 4)),
+                    impact_velocities=np.ones((1, 1)), multipliers=np.ones((1, 1)),
+                    stable=np.ones(1, bool), onsets=np.zeros((1, 1)), points=[fold],
+                    stopped="", setup={"mech": PAPER})
+    with pytest.raises(ValueError, match="period doublings"):
+        switch_branch(branch, fold)
 
 
 def test_cli_orbits_prints_the_python_functions_multipliers(paper_orbit, capsys):

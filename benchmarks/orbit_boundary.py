@@ -1,0 +1,75 @@
+"""The period-1 boundary of the paper's case over clearance at 5000 rpm: continuation from
+the paper's design to its first period doubling (`continue_orbits`, stop_at_first), and
+the brute-force classification (100 revolutions, 50 kept, the regime map's rule) at
+clearances around it, from two starts: the centred start of the regime map, and the
+branch's orbit nearest below (a matched start: its state and held impact velocity, the
+journal's memory the branch follows).
+
+Prints the located doubling, then per clearance the regime from each start, and the
+brute-force boundary (the last period-1 clearance and the next) from each.
+
+    python -m benchmarks.orbit_boundary [--points 9] [--width 2e-8]
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import time
+
+import numpy as np
+
+from mbs_clearance import SliderCrank, continue_orbits, poincare_section
+from mbs_clearance.analysis.periodic import with_field
+from mbs_clearance.analysis.poincare import Flow, classify, scale_samples, section_times
+from validation.timing import machine_summary
+
+
+def matched_regime(mech, state, modes, vel, revolutions=100, keep=50):
+    """The regime map's rule on a plain run started from (state, modes, vel)."""
+    flow = Flow(mech)
+    n2 = len(state)
+    mem = flow.model.MEM_START
+    flow.y[:n2] = state
+    flow.p[mem:mem + 2 * len(modes):2] = modes
+    flow.p[mem + 1:mem + 2 * len(modes):2] = vel
+    samples = []
+    for k, t in enumerate(section_times(mech, revolutions)):
+        flow.advance(t)
+        if k >= revolutions - keep:
+            samples.append(flow.section())
+    scaled = scale_samples(np.array(samples), flow.clearance, flow.omega)
+    regime, period, d = classify(scaled)
+    return regime, period, float(d[0])
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--points", type=int, default=9)
+    ap.add_argument("--width", type=float, default=2e-8,
+                    help="clearances within +- width (m) of the doubling")
+    args = ap.parse_args(argv)
+    print(machine_summary())
+    paper = SliderCrank()
+    t0 = time.perf_counter()
+    branch = continue_orbits(paper, "clearance", 1e-5, 2e-5, max_points=400,
+                             stop_at_first=True)
+    print(f"{branch.summary()}\n({time.perf_counter() - t0:.1f} s, "
+          f"{branch.counters['shooting_runs']} variational and "
+          f"{branch.counters['plain_runs']} plain runs)")
+    pd = branch.points[0]
+    below = branch.values < pd.value
+    for c in np.linspace(pd.value - args.width, pd.value + args.width, args.points):
+        mech = with_field(paper, "clearance", c)
+        centred = poincare_section(mech, 100, 50)
+        i = int(np.argmin(np.where(below, np.abs(branch.values - c), math.inf)))
+        reg, per, d1 = matched_regime(mech, branch.states[i], np.ones(1),
+                                      branch.impact_velocities[i])
+        print(f"clearance {c:.10g} m ({(c - pd.value) * 1e9:+.1f} nm from the doubling): "
+              f"centred start {centred.regime}/{centred.period}, matched start "
+              f"{reg}/{per} (d1 {d1:.2g})")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
