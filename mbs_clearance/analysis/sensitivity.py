@@ -266,13 +266,23 @@ def _check_loaded(path: Path, a: dict, stats: Any, traj: Trajectory) -> None:
     names = a["parameters"]
     if names.ndim != 1 or names.size == 0 or names.dtype.kind not in "US":
         raise fail("'parameters' must be a non-empty list of names")
+    linkage = traj.linkage
     try:
-        _check_parameters(tuple(str(x) for x in names))
+        if linkage is None:             # a SliderCrank's: its fields
+            _check_parameters(tuple(str(x) for x in names))
+        else:                           # a linkage's: its dotted parameters
+            allowed = set(linkage.parameter_names())
+            unknown = [str(x) for x in names if str(x) not in allowed]
+            if unknown:
+                raise ValueError(f"unknown parameter(s) {unknown} of linkage "
+                                 f"{linkage.name!r}")
     except ValueError as exc:
         raise fail(str(exc)) from exc
     n, p = a["t"].shape[0] if a["t"].ndim == 1 else -1, names.size
+    joints = len(traj.joints) if linkage is not None and traj.joints else 1
     shapes = {"t": (n,), "reference": (p,), "base_force": (n, 2, p),
-              "base_force_magnitude": (n, p), "crank_moment": (n, p), "contact_force": (n, p)}
+              "base_force_magnitude": (n, p), "crank_moment": (n, p),
+              "contact_force": (n, p) if joints == 1 else (n, joints, p)}
     for key, shape in shapes.items():
         arr = a[key]
         if arr.shape != shape or n < 1:

@@ -230,3 +230,31 @@ def test_recorded_derivatives_equal_a_second_pass_and_the_growth_its_loop():
     with pytest.raises(ValueError, match=r"unknown output\(s\) \['crank_pivot.torque'\]"):
         slider_crank_run(mech, DEFAULT_PARAMETERS, None, revolutions=1,
                          derivatives=["crank_pivot.torque"])
+
+
+@pytest.mark.parametrize("case, names", [
+    ("slider_crank_two_clearances", ("crank_coupler.restitution", "coupler.mass")),
+    ("paper_slider_crank", ("coupler_slider.restitution",)),
+])
+def test_a_linkage_s_saved_sensitivities_load_back(tmp_path, case, names):
+    """A linkage's sensitivities (dotted parameters; per-joint contact forces with two
+    joints) read back equal to what was saved; a name that is not the linkage's is refused
+    naming it."""
+    from mbs_clearance.analysis.sensitivity import load_sensitivities
+
+    sens = sensitivities(cases.CASES[case](), list(names), revolutions=1)
+    path = sens.save(tmp_path / "s.npz")
+    back = load_sensitivities(path)
+    assert back.parameters == names
+    for field in ("t", "base_force", "base_force_magnitude", "crank_moment",
+                  "contact_force"):
+        np.testing.assert_array_equal(getattr(back, field), getattr(sens, field))
+    with np.load(path) as d:
+        arrays = dict(d)
+    arrays["parameters"] = np.array(["nobody.mass"] + list(names[1:]))
+    np.savez(tmp_path / "bad.npz", **arrays)
+    import shutil
+
+    shutil.copy(tmp_path / "s.trajectory.npz", tmp_path / "bad.trajectory.npz")
+    with pytest.raises(ValueError, match="unknown parameter.*nobody.mass"):
+        load_sensitivities(tmp_path / "bad.npz")
