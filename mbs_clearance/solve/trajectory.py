@@ -72,6 +72,13 @@ class Trajectory:
     ``accelerations`` the minimal coordinates by name. The slider-crank series
     (slider_position ... coupler_rate) are None there.
 
+    A `SliderCrank`'s run on the reduced model (the paper's parameter set of one linkage)
+    has the paper's series as above and, beside them, the same generic ones as its
+    description's: ``joints`` ("coupler_slider",), ``reactions`` ("crank_pivot" is
+    base_force, F12; "slider_guide"), ``shaking_force``, ``coordinates`` ("coupler.angle",
+    "slider_guide.s"), ``rates`` and ``accelerations`` (not stored by `save`: a saved
+    SliderCrank trajectory keeps the paper's series).
+
     Attributes
     ----------
     t : (n,) s

@@ -130,3 +130,24 @@ def test_a_long_linkage_run_is_refused_by_its_pilot(monkeypatch):
     with pytest.raises(MemoryLimitError, match="needs about .* steps .* max_steps=20000"):
         lm.run(lk, 40, record=False, max_steps=20_000)
     assert len(calls) == 1
+
+
+def test_a_slider_crank_trajectory_has_its_description_s_names():
+    """The paper's names are aliases on its case: a SliderCrank's Trajectory carries the
+    generic series of its description's run (built by the linkage's own code), equal to
+    them; base_force is the crank pivot's reaction, slider_position the guide's
+    coordinate."""
+    mech = SliderCrank()
+    a = simulate(mech, 2, rtol=1e-7)
+    b = simulate(reduced.linkage_of(mech), 2, rtol=1e-7, start=reduced.centred_start(mech))
+    assert a.joints == b.joints == ("coupler_slider",)
+    np.testing.assert_array_equal(a.t, b.t)
+    for name in ("reactions", "coordinates", "rates", "accelerations"):
+        mine, theirs = getattr(a, name), getattr(b, name)
+        assert mine.keys() == theirs.keys()
+        for k in theirs:
+            np.testing.assert_array_equal(mine[k], theirs[k])
+    np.testing.assert_array_equal(a.shaking_force, b.shaking_force)
+    np.testing.assert_array_equal(a.base_force, b.reactions["crank_pivot"])
+    np.testing.assert_array_equal(a.slider_position, b.coordinates["slider_guide.s"])
+    np.testing.assert_array_equal(a.contact_force, b.contact_force[:, 0])
