@@ -200,8 +200,7 @@ def section_regimes(linkage, out: Path, s: dict) -> dict:
 def section_environment(linkage, out: Path, s: dict, timings: dict | None = None) -> dict:
     from .report import section_environment as paper_environment
 
-    env = paper_environment(out, s, timings or {})
-    return env
+    return paper_environment(out, s, timings or {})
 
 
 # ------------------------------------------------------------------------------ figures

@@ -299,10 +299,9 @@ def trajectory_from_run(linkage: Linkage, model, ts, ys, ms, p, stats, peaks, ou
     def per_joint(field):
         return take(*(f"{j}.{field}" for j in joints))
 
-    reactions = {g: take(f"{g}.reaction_x", f"{g}.reaction_y") for g in model.GROUND_JOINTS}
-    shaking = take("shaking_x", "shaking_y")
-    monitored = (shaking if model.MONITOR_JOINT is None
-                 else reactions[model.MONITOR_JOINT])
+    named = named_series(model, ys, outs, model.OUT_COLUMNS)
+    monitored = (named["shaking_force"] if model.MONITOR_JOINT is None
+                 else named["reactions"][model.MONITOR_JOINT])
     # (n, J, 2): per joint its x and y side by side
     ecc = take(*(f"{j}.ecc_{a}" for j in joints for a in "xy")).reshape(-1, J, 2)
     return Trajectory(
@@ -313,13 +312,32 @@ def trajectory_from_run(linkage: Linkage, model, ts, ys, ms, p, stats, peaks, ou
         coupler_angle=None, coupler_rate=None,
         contact_phase=(ms[:, 0:2 * J:2] > 0.5).astype(np.int8),
         crank_work=ys[:, 2 * n].copy(), mechanism=linkage, backend="reduced", stats=stats,
-        peaks=peaks, joints=tuple(joints), reactions=reactions, shaking_force=shaking,
-        coordinates={c: ys[:, i].copy() for i, c in enumerate(model.COORDINATES)},
-        rates={c: ys[:, n + i].copy() for i, c in enumerate(model.COORDINATES)},
-        accelerations={c: outs[:, col[f"{c}.acc"]].copy() for c in model.COORDINATES},
+        peaks=peaks, **named,
         friction_work=(ys[:, model.FRICTION_WORK].copy() if getattr(model, "FRICTION_WORK", -1)
                        > 0 and ys.shape[1] > model.FRICTION_WORK else None),
     )
+
+
+def named_series(model, ys, outs, columns) -> dict:
+    """The series of a run by the description's names (the Trajectory fields joints,
+    reactions, shaking_force, coordinates, rates, accelerations): the clearance joints,
+    every ground joint's reaction, the shaking force, the coordinates, their rates and
+    accelerations, from the recorded states and the outputs named `columns`."""
+    col = {c: i for i, c in enumerate(columns)}
+    n = model.N_Q
+
+    def take(*names):
+        return _take_columns(outs, [col[c] for c in names])
+
+    return {
+        "joints": tuple(model.JOINTS),
+        "reactions": {g: take(f"{g}.reaction_x", f"{g}.reaction_y")
+                      for g in model.GROUND_JOINTS},
+        "shaking_force": take("shaking_x", "shaking_y"),
+        "coordinates": {c: ys[:, i].copy() for i, c in enumerate(model.COORDINATES)},
+        "rates": {c: ys[:, n + i].copy() for i, c in enumerate(model.COORDINATES)},
+        "accelerations": {c: outs[:, col[f"{c}.acc"]].copy() for c in model.COORDINATES},
+    }
 
 
 def _take_columns(a: np.ndarray, columns) -> np.ndarray:
@@ -554,13 +572,9 @@ def run(linkage: Linkage, revolutions: int = 4, settings: RunSettings | None = N
 
     if not isinstance(linkage, Linkage):
         raise ValueError(f"linkage must be a Linkage; got {type(linkage).__name__}")
-    if settings is None:
-        settings = RunSettings(**options) if set(options) <= set(RunSettings.names()) \
-            else RunSettings().replace(**options)
-    elif not isinstance(settings, RunSettings):
+    if settings is not None and not isinstance(settings, RunSettings):
         raise ValueError(f"settings must be a RunSettings; got {type(settings).__name__}")
-    else:
-        settings = settings.with_options(options)
+    settings = (settings or RunSettings()).with_options(options)
     revolutions = check_int("revolutions", revolutions, 1)
     record = check_bool("record", record)
     select = check_bool("select", select)

@@ -318,8 +318,8 @@ def _columns(ys, ms, out, col, work):
 def trajectory_from_states(mech, ts, ys, ms, p, stats, peaks, outs=None,
                            columns=MODEL.OUT_COLUMNS, model=MODEL):
     """Build a `Trajectory` in the paper's names (and beside them the generic ones of every
-    linkage's, `_generic_series`) from recorded states [theta3, x4, theta3dot, x4dot, W
-    (, friction work)], memories [mode, dmin, ...] and, if recorded by the integrator, the
+    linkage's, `linkage_model.named_series`) from recorded states [theta3, x4, theta3dot,
+    x4dot, W (, friction work)], memories [mode, dmin, ...] and, if recorded by the integrator, the
     outputs of `model` named `columns` (read in place, with any strides: a DDM run's are
     columns of its record); without outputs they are evaluated here from the model's
     parameters p."""
@@ -337,7 +337,7 @@ def trajectory_from_states(mech, ts, ys, ms, p, stats, peaks, outs=None,
      slider_velocity, slider_acceleration, coupler_angle, coupler_rate, contact_phase,
      crank_work) = _columns(ys, ms, out, _series_columns(columns), 2 * model.N_Q)
     friction = getattr(model, "FRICTION_WORK", -1)
-    generic = _generic_series(model, ys, out, columns)
+    generic = lm.named_series(model, ys, out, columns)
     return Trajectory(
         t=ts,
         base_force=base_force,
@@ -359,28 +359,6 @@ def trajectory_from_states(mech, ts, ys, ms, p, stats, peaks, outs=None,
         friction_work=(ys[:, friction].copy() if 0 < friction < ys.shape[1] else None),
         **generic,
     )
-
-
-def _generic_series(model, ys, out, columns) -> dict:
-    """The series every linkage's Trajectory has, by the description's names: the clearance
-    joints, every ground joint's reaction (the crank pivot's is `base_force`, F12), the
-    shaking force, and the coordinates (coupler.angle, slider_guide.s), their rates and
-    accelerations."""
-    col = {c: i for i, c in enumerate(columns)}
-    n = model.N_Q
-
-    def pair(a, b):
-        return np.column_stack([out[:, col[a]], out[:, col[b]]])
-
-    return {
-        "joints": tuple(model.JOINTS),
-        "reactions": {g: pair(f"{g}.reaction_x", f"{g}.reaction_y")
-                      for g in model.GROUND_JOINTS},
-        "shaking_force": pair("shaking_x", "shaking_y"),
-        "coordinates": {c: ys[:, i].copy() for i, c in enumerate(model.COORDINATES)},
-        "rates": {c: ys[:, n + i].copy() for i, c in enumerate(model.COORDINATES)},
-        "accelerations": {c: out[:, col[f"{c}.acc"]].copy() for c in model.COORDINATES},
-    }
 
 
 def peak_reduced(mech: SliderCrank, revolution: int = 4, **options) -> float:
