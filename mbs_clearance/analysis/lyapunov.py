@@ -53,8 +53,7 @@ import numba as nb
 import numpy as np
 
 from .._checks import check_int, check_real, check_revolutions_memory
-from ..model.linkage import Linkage
-from ..model.mechanism import SliderCrank
+from ..model.cases import as_linkage
 from ..numerics.integrator import (
     ACTION_SIG,
     EVENT_SIG,
@@ -66,6 +65,7 @@ from ..numerics.integrator import (
     make_settings,
 )
 from ..solve.flows import Flow, TangentFlow, drive_of
+from ..solve.settings import RunSettings
 from .poincare import (  # noqa: F401 - the exponent statistics, public here too
     BLOCKS,
     DEFAULT_RTOL,
@@ -257,8 +257,8 @@ def exponent_of_flow(flow, times, transient: int, window: float,
 def lyapunov_exponent(mech, revolutions: int = 100, transient: int | None = None, *,
                       rtol: float | None = None, method: str = "dop853",
                       direction=None, memory: str = "reset") -> LyapunovResult:
-    """The largest Lyapunov exponent of `mech`'s motion (a SliderCrank or a Linkage), in
-    1/s (`per_second`) and per drive revolution.
+    """The largest Lyapunov exponent of `mech`'s motion (any Linkage; the paper's
+    SliderCrank as its case), in 1/s (`per_second`) and per drive revolution.
 
     The state and one tangent vector (initial `direction`: 2 N_Q scaled components of the
     generated model's coordinates and their rates, for the paper's case theta3, x4 and
@@ -274,16 +274,15 @@ def lyapunov_exponent(mech, revolutions: int = 100, transient: int | None = None
     exponent is then averaged over whole periods). `memory`: the impact-velocity memory's
     tangent at each renormalisation, "reset" or "carry" (module docstring).
     """
-    if not isinstance(mech, (SliderCrank, Linkage)):
-        raise ValueError(f"mech must be a SliderCrank or a Linkage; got {type(mech).__name__}")
+    as_linkage(mech)
     revolutions = check_int("revolutions", revolutions, 2)
     if transient is None:
         transient = revolutions // 2
     transient = check_int("transient (revolutions not averaged)", transient, 0,
                           revolutions - 1)
     check_revolutions_memory(revolutions, per_revolution=8)
-    flow = TangentFlow(mech, rtol=DEFAULT_RTOL if rtol is None else rtol, method=method,
-                       direction=direction, memory=memory)
+    flow = TangentFlow(mech, RunSettings(rtol=DEFAULT_RTOL if rtol is None else rtol,
+                                         method=method), direction=direction, memory=memory)
     omega, _ = drive_of(mech)
     return exponent_of_flow(flow, section_times(mech, revolutions), transient,
                             2.0 * math.pi / omega, sections=True)

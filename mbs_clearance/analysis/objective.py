@@ -1,17 +1,20 @@
-"""The gradient of the design objective: the peak of |F12| over one crank revolution.
+"""The gradient of the design objective: the peak of an output over one drive revolution.
 
-`peak_gradient(mech, parameters)` returns d(peak)/db for named SliderCrank fields. The peak
-is max_t |F12|(t, b) over the revolution's window; where its maximum is an interior, isolated
-local maximum, d|F12|/dt = 0 there and the envelope theorem gives
+`peak_gradient(linkage, parameters)` returns d(peak)/db for named design values of any
+linkage (`design`; the paper's SliderCrank is its case, its fields the names). The peak is
+max_t F(t, b) of the output F (by default the crank pivot's |reaction|, the paper's |F12|)
+over the revolution's window; where its maximum is an interior, isolated local maximum,
+dF/dt = 0 there and the envelope theorem gives
 
-    d(peak)/db = (partial d|F12|/db)(t*, b),
+    d(peak)/db = (partial dF/db)(t*, b),
 
-the DDM sensitivity of |F12| at the refined peak time t*. One DDM run gives both: its
-integrator refines the window's maximum of |F12| by golden section on re-taken steps (the
-step map), and the state and its sensitivities at t* are that step map's value at t*, taken
-again from the recorded step that contains it (the model's `step_sens`). Reading the sensitivities
-at the largest *recorded* sample instead is wrong by tens of percent: they oscillate with the
-contact vibration (~13 kHz) between samples.
+the DDM sensitivity of F at the refined peak time t*. One DDM run gives both: its
+integrator refines the window's maximum of the monitored force by golden section on
+re-taken steps (the step map; another output is refined on the same step maps
+afterwards), and the state and its sensitivities at t* are that step map's value at t*,
+taken again from the recorded step that contains it (the model's `step_sens`). Reading the
+sensitivities at the largest *recorded* sample instead is wrong by tens of percent: they
+oscillate with the contact vibration (~13 kHz) between samples.
 
 Where a second local maximum of the window comes within the integration accuracy of the
 peak, the objective is the maximum of two smooth branches and has a kink: the result says so
@@ -33,15 +36,7 @@ from .._checks import check_choice, check_int, check_real, check_revolutions_mem
 from ..model.linkage import GROUND, Linkage
 from ..model.mechanism import CONTINUOUS_FIELDS, SliderCrank
 from ..numerics.integrator import METHODS
-from ..solve import reduced
-from .sensitivity import (
-    DDM_INTEGRATOR,
-    FD_RELATIVE_STEP,
-    _check_parameters,
-    fd_step,
-    reference_value,
-    slider_crank_run,
-)
+from .sensitivity import DDM_INTEGRATOR, DEFAULT_PARAMETERS, FD_RELATIVE_STEP, fd_step
 
 __all__ = ["PeakGradient", "peak_gradient", "KINK_RTOL", "PEAK_GRADIENT_RTOL", "RIVAL_CANDIDATES",
            "OUTPUT_KINDS", "Output", "parse_output", "ground_joints", "peak_output"]
@@ -142,266 +137,6 @@ class PeakGradient:
     def as_dict(self) -> dict[str, float]:
         """The gradient as {parameter: d(peak)/db}."""
         return {n: float(g) for n, g in zip(self.parameters, self.gradient)}
-
-
-# ------------------------------------------------------------------ DDM at the peak
-
-class _Run:
-    """A recorded DDM run (`sensitivity.slider_crank_run`) and what is needed to evaluate
-    the step map inside it."""
-
-    def __init__(self, mech, names, revolution, rtol, integrator):
-        self.run, self.ref = slider_crank_run(mech, names, rtol, revolutions=revolution,
-                                              method=integrator)
-        self.rtol = self.run.stats["rtol"]
-        self.coefficients = METHODS[integrator].arrays()
-        self.ts, self.ys, self.ms = self.run.ts, self.run.ys, self.run.ms
-        self.peaks, self.peak_t, self.outs = self.run.peaks, self.run.peak_t, self.run.outs
-        self.counters = {k: v for k, v in self.run.stats.items()
-                         if k not in ("rtol", "method", "wall_time", "event_time_term",
-                                      "directions")}
-        self.model = self.run.model
-        self.mon = self.model.MONITOR_COLUMN
-        self.plain_p = self.run.p0
-        self.stages = self.coefficients[1].shape[0]
-        # function evaluations after the run: plain (rival refinement), augmented (steps
-        # to the peak and the rival)
-        self.post_plain = 0
-        self.post_sens = 0
-        self.post_steps = 0
-
-    def magnitudes(self, lo, hi):
-        return np.hypot(self.outs[lo:hi, self.mon], self.outs[lo:hi, self.mon + 1])
-
-    def step_start(self, t):
-        """Index of the recorded step whose end or interior holds t: i with ts[i] < t <=
-        ts[i + 1] (or t == ts[0])."""
-        return max(int(np.searchsorted(self.ts, t, side="left")) - 1, 0)
-
-    def gradient_at(self, t, newton=True):
-        """|F12| at time t and d|F12|/db (all parameters) at the maximum of |F12| next to
-        t, from the step map of the recorded step that holds t (or the recorded sample at
-        t). Returns (value at t, gradient, time of the gradient).
-
-        The golden-section refinement places t within ~1e-5 of a step of the maximum t**;
-        the sensitivities of parameters that carry the contact vibration at full weight
-        (the journal radius) change by percent over that (d/dt of S_k is large where
-        d|F12|/dt = 0). With ``newton``, |F12| and d|F12|/db are evaluated at t - delta,
-        t, t + delta (delta = 1e-4 of the step), t** = t - f'/f'' from their parabola (one
-        Newton step for d|F12|/dt = 0) and the gradient interpolated to t**."""
-        i = self.step_start(t)
-        if self.ts[i + 1] == t:
-            i += 1
-        if self.ts[i] == t:
-            ys, mems = self.ys[i:i + 1], self.ms[i:i + 1]
-            hs = np.zeros(1)
-        else:
-            q = self.run.p.copy()
-            n_mem, m0 = self.model.N_MEM, self.model.MEM_START
-            q[m0:m0 + n_mem] = self.ms[i, :n_mem]
-            h = t - self.ts[i]
-            delta = 1e-4 * (self.ts[i + 1] - self.ts[i])
-            hs = np.array([h, h - delta, h + delta]) if newton else np.array([h])
-            ys, _ = self.model.step_sens(self.ts[i], np.ascontiguousarray(self.ys[i]), q, hs,
-                                         self.coefficients)
-            self.post_sens += 1 + len(hs) * self.stages
-            mems = np.repeat(self.ms[i:i + 1], len(hs), axis=0)
-        vals, ders = self.run.output_sensitivities(self.ts[i] + hs, ys, mems)
-        fx, fy = vals[:, self.mon], vals[:, self.mon + 1]
-        f = np.hypot(fx, fy)
-        d_mag = (fx[:, None] * ders[:, self.mon] + fy[:, None] * ders[:, self.mon + 1]) \
-            / np.maximum(f, 1e-300)[:, None]
-        if len(hs) == 1:
-            return float(f[0]), d_mag[0], float(t)
-        d = hs[2] - hs[0]
-        curv = (f[2] - 2.0 * f[0] + f[1]) / (0.25 * d * d)      # f''
-        slope = (f[2] - f[1]) / d                                # f'
-        s = -slope / curv if curv < 0.0 else 0.0
-        s = min(max(s, -0.5 * d), 0.5 * d)
-        g = (d_mag[0] + s * (d_mag[2] - d_mag[1]) / d
-             + 0.5 * s * s * (d_mag[2] - 2.0 * d_mag[0] + d_mag[1]) / (0.25 * d * d))
-        return float(f[0]), g, float(t + s)
-
-    def plain_rows(self, idx):
-        """States (plain model: the coordinates, rates and the work) and memories of
-        recorded rows."""
-        return (np.ascontiguousarray(self.run.plain_states(self.ys[idx])),
-                np.ascontiguousarray(self.ms[idx, :self.model.N_MEM]))
-
-
-def _local_maxima(run, lo, hi, period):
-    """The window's local maxima of |F12| (value, time), largest first.
-
-    Candidates: the RIVAL_CANDIDATES largest local maxima of the recorded samples, each
-    refined over the steps on both sides (golden section on the step map, as the
-    integrator's refinement), and the window's first and last steps. A refined maximum is a
-    local maximum of the window where it lies inside its step, at a sample that both steps
-    beside it converge to, or at the window's edge (a boundary maximum: |F12| falls into the
-    window); a refinement that runs into the far end of its step is not (|F12| rises beyond
-    it, to a maximum found from the other side). Maxima closer than 1e-6 of a period are
-    one."""
-    mags = run.magnitudes(lo, hi)
-    m = len(mags)
-    is_max = np.zeros(m, dtype=bool)
-    if m >= 3:
-        is_max[1:-1] = (mags[1:-1] >= mags[:-2]) & (mags[1:-1] >= mags[2:])
-    cand = np.flatnonzero(is_max)
-    cand = cand[np.argsort(-mags[cand], kind="stable")][:RIVAL_CANDIDATES]
-    # steps (by their start row, absolute) to refine: both sides of each candidate sample,
-    # and the window's first and last steps
-    starts = {lo, hi - 2}
-    for j in cand:
-        starts.update((lo + j - 1, lo + j))
-    starts = np.array(sorted(s for s in starts if lo <= s < hi - 1), dtype=np.int64)
-    y0s, mems = run.plain_rows(starts)
-    t0s = run.ts[starts]
-    hs = run.ts[starts + 1] - t0s
-    vals, times = run.model.refine_steps(t0s, y0s, mems, run.plain_p, hs, run.coefficients,
-                                         _REFINE_ITERS)
-    run.post_steps += len(starts)
-    run.post_plain += len(starts) * (1 + (_REFINE_ITERS + 2) * run.stages)
-    # where each refinement ended: inside its step, or at its start or end sample
-    end_tol = 2.0 * 0.6180339887498949 ** _REFINE_ITERS * hs
-    at_start = times - t0s <= end_tol
-    at_end = t0s + hs - times <= end_tol
-    ends_at = {int(s) + 1 for s, e in zip(starts, at_end) if e}
-    starts_at = {int(s) for s, b in zip(starts, at_start) if b}
-    maxima = []
-    for s, v, t, b, e in zip(starts, vals, times, at_start, at_end):
-        s = int(s)
-        if not (b or e) or (b and s == lo) or (e and s + 1 == hi - 1) \
-                or (e and s + 1 in starts_at) or (b and s in ends_at):
-            maxima.append((float(v), float(t)))
-    # merge: largest first, a maximum closer than `eps` to a kept one is the same
-    eps = 1e-6 * period
-    maxima.sort(key=lambda vt: -vt[0])
-    kept: list[tuple[float, float]] = []
-    for v, t in maxima:
-        if all(abs(t - tk) > eps for _, tk in kept):
-            kept.append((v, t))
-    return kept, eps
-
-
-def _ddm_gradient(mech, names, revolution, rtol, integrator, kink_tol):
-    t_wall = time.perf_counter()
-    run = _Run(mech, names, revolution, rtol, integrator)
-    edges = reduced.window_edges(mech, revolution)
-    t_lo, t_hi = float(edges[-2]), float(edges[-1])
-    lo = int(np.searchsorted(run.ts, t_lo, side="left"))
-    hi = int(np.searchsorted(run.ts, t_hi, side="right"))
-    peak_int, t_int = float(run.peaks[-1]), float(run.peak_t[-1])
-    kept, eps = _local_maxima(run, lo, hi, mech.period)
-    # the integrator's peak among them (it replaces a candidate at the same time)
-    kept = [(v, t) for v, t in kept if abs(t - t_int) > eps] + [(peak_int, t_int)]
-    kept.sort(key=lambda vt: -vt[0])
-    (_, t_peak) = kept[0]
-    tol = max(kink_tol, KINK_PER_RTOL * run.rtol)
-    at_edge = min(t_peak - t_lo, t_hi - t_peak) <= eps
-    peak, grad, _ = run.gradient_at(t_peak, newton=not at_edge)
-    rival_t = rival_v = math.nan
-    rival_g = np.full(len(names), np.nan)
-    if len(kept) > 1:
-        rival_t = kept[1][1]
-        rival_v, rival_g, _ = run.gradient_at(
-            rival_t, newton=min(rival_t - t_lo, t_hi - rival_t) > eps)
-    if at_edge and "crank_speed" in names:
-        # the window's edges move with the crank speed: d(edge)/d omega = -edge / omega
-        t_edge = t_lo if t_peak - t_lo <= eps else t_hi
-        slope = _edge_slope(run, t_peak)
-        k = names.index("crank_speed")
-        grad = grad.copy()
-        grad[k] += slope * (-t_edge / mech.crank_speed)
-    near = np.isfinite(rival_v) and (peak - rival_v) <= tol * peak
-    kink = bool(near or at_edge)
-    message = ""
-    if near:
-        message = (f"kink: a second local maximum of |F12| at t = {rival_t:.9g} s "
-                   f"({rival_v:.9g} N) is within {tol:.1e} of the peak at t = {t_peak:.9g} s "
-                   f"({peak:.9g} N); the objective is the larger of two smooth branches: "
-                   f"gradient and rival_gradient are its one-sided derivatives")
-    if at_edge:
-        message += ("; " if message else "") + (
-            f"the peak sits at the window's edge (t = {t_peak:.9g} s in [{t_lo:.9g}, "
-            f"{t_hi:.9g}] s): gradient is the derivative of |F12| at the edge, valid while "
-            f"the maximum stays there")
-    stats = dict(run.counters, rtol=run.rtol, method=integrator,
-                 directions=int(run.run.nb), integrator_peak=peak_int,
-                 integrator_peak_time=t_int, local_maxima=len(kept),
-                 post_fev_plain=run.post_plain, post_fev_sens=run.post_sens,
-                 post_refined_steps=run.post_steps,
-                 wall_time=time.perf_counter() - t_wall)
-    return PeakGradient(
-        peak=peak, time=t_peak, parameters=names, reference=run.ref, gradient=grad,
-        kink=kink, rival_time=rival_t, rival_peak=rival_v, rival_gradient=rival_g,
-        at_edge=bool(at_edge), message=message, method="ddm", backend="reduced",
-        revolution=revolution, kink_tol=tol, stats=stats)
-
-
-def _edge_slope(run, t):
-    """d|F12|/dt at t from the plain step map of the step that holds t: a central difference
-    over +-1e-3 of the step (the map is smooth past the step's end; much shorter
-    differences are dominated by the rounding of the penetration, a difference of
-    coordinates of size L2 + L3)."""
-    i = run.step_start(t)
-    y0s, mems = run.plain_rows(np.array([i]))
-    h = t - run.ts[i]
-    d = 1e-3 * (run.ts[i + 1] - run.ts[i])
-    v0 = run.model.step_monitor_value(run.ts[i], y0s[0], mems[0], run.plain_p, h - d,
-                                      run.coefficients)
-    v1 = run.model.step_monitor_value(run.ts[i], y0s[0], mems[0], run.plain_p, h + d,
-                                      run.coefficients)
-    run.post_plain += 2 * (1 + run.stages)
-    return (v1 - v0) / (2.0 * d)
-
-
-# ------------------------------------------------------------------ finite differences
-
-def _fd_peak(args):
-    """One perturbed peak (module level: picklable for process pools)."""
-    from ..solve.simulate import peak_base_force
-
-    mech, revolution, backend, options = args
-    return float(peak_base_force(mech, revolution, backend, **options))
-
-
-def _fd_gradient(mech, names, revolution, backend, fd_relative_step, executor, options):
-    t_wall = time.perf_counter()
-    options = dict(options)
-    if backend == "reduced":
-        options.setdefault("rtol", 1e-11)
-    steps = [fd_step(mech, n, fd_relative_step) for n in names]
-    mechs = [mech]
-    for name, h in zip(names, steps):
-        b0 = reference_value(mech, name)
-        for sign in (1.0, -1.0):
-            try:
-                mechs.append(mech.replace(**{name: b0 + sign * h}))
-            except ValueError as exc:
-                raise ValueError(f"the finite-difference step of {name} ({h:.3g}) leaves its "
-                                 f"valid range: {exc}; pass a smaller fd_relative_step") from exc
-
-    jobs = [(m, revolution, backend, options) for m in mechs]
-    values = (list(executor.map(_fd_peak, jobs)) if executor is not None
-              else [_fd_peak(j) for j in jobs])
-    peak = values[0]
-    plus = np.array(values[1::2])
-    minus = np.array(values[2::2])
-    h = np.array(steps)
-    t_peak = math.nan
-    if backend == "reduced" and mech.friction_law == "none":
-        # (the frictionless model's run; with friction the peak's time is not reported)
-        run_opts = {k: v for k, v in options.items() if k != "t_eval"}
-        t_peak = float(reduced.run(mech, revolution, record=False, **run_opts).peak_times[-1])
-    stats = {"fd_steps": steps, "runs": len(mechs), "forward": (plus - peak) / h,
-             "backward": (peak - minus) / h, "wall_time": time.perf_counter() - t_wall,
-             **{k: v for k, v in options.items() if k in ("rtol", "method")}}
-    return PeakGradient(
-        peak=peak, time=t_peak, parameters=names,
-        reference=np.array([reference_value(mech, n) for n in names]),
-        gradient=(plus - minus) / (2.0 * h), method="fd", backend=backend,
-        revolution=revolution,
-        message="central differences: no kink detection (stats['forward'] and "
-                "stats['backward'] hold the one-sided differences)", stats=stats)
 
 
 # ------------------------------------------------------------------ outputs of a linkage
@@ -629,19 +364,280 @@ def _linkage_fd_step(linkage: Linkage, name: str, relative: float) -> float:
     return linkage_ddm.fd_step(linkage, design._dotted(name), relative)
 
 
-def _fd_linkage_peak(args):
-    """One perturbed peak of a linkage design (module level: picklable)."""
-    linkage, out, revolution, options = args
-    return _linkage_peak(linkage, out, revolution, options)
+# ------------------------------------------------------------------ DDM at the peak
+
+class _Run:
+    """A recorded DDM run of `linkage` along the directions of the design names `names`
+    (`design.direction`: a case override moves every description value that follows from
+    it), on the model its plain runs use, with the plain run's tolerances (each direction's
+    scaled by its finite-difference scale, `_linkage_fd_step`), and what is needed to
+    evaluate the step map inside it for the output `out`."""
+
+    def __init__(self, linkage, names, out: Output, revolution, rtol, integrator):
+        from ..model import design
+        from ..solve import linkage_ddm
+        from ..solve.linkage_model import specialisable
+
+        self.directions = [design.direction(linkage, n) for n in names]
+        dotted = sorted({k for d in self.directions for k in d})
+        model, p0, y0, rtol, atol = linkage_ddm.plain_setup(
+            linkage, rtol, specialise=specialisable(linkage, dotted))
+        scale = np.array([abs(_linkage_fd_step(linkage, n, 1.0)) for n in names])
+        self.run = linkage_ddm.ddm_run(linkage, model, p0, y0, self.directions, scale=scale,
+                                       rtol=rtol, atol_plain=atol, revolutions=revolution,
+                                       method=integrator)
+        self.out = out
+        self.rtol = float(rtol)
+        self.coefficients = METHODS[integrator].arrays()
+        self.ts, self.ys, self.ms = self.run.ts, self.run.ys, self.run.ms
+        self.peaks, self.peak_t, self.outs = self.run.peaks, self.run.peak_t, self.run.outs
+        self.counters = {k: v for k, v in self.run.stats.items()
+                         if k not in ("rtol", "method", "wall_time", "event_time_term",
+                                      "directions")}
+        self.model = model
+        self.columns = {c: i for i, c in enumerate(model.OUT_COLUMNS)}
+        self.plain_p = self.run.p0
+        self.stages = self.coefficients[1].shape[0]
+        # function evaluations after the run: plain (rival refinement), augmented (steps
+        # to the peak and the rival)
+        self.post_plain = 0
+        self.post_sens = 0
+        self.post_steps = 0
+
+    def magnitudes(self, lo, hi):
+        return self.out.values(self.outs[lo:hi], self.columns)
+
+    def step_start(self, t):
+        """Index of the recorded step whose end or interior holds t: i with ts[i] < t <=
+        ts[i + 1] (or t == ts[0])."""
+        return max(int(np.searchsorted(self.ts, t, side="left")) - 1, 0)
+
+    def gradient_at(self, t, newton=True):
+        """The output at time t and its derivatives along the directions at the maximum next
+        to t, from the step map of the recorded step that holds t (or the recorded sample at
+        t). Returns (value at t, gradient, time of the gradient).
+
+        The golden-section refinement places t within ~1e-5 of a step of the maximum t**;
+        the sensitivities of parameters that carry the contact vibration at full weight
+        (the journal radius) change by percent over that (d/dt of S_k is large where
+        d out/dt = 0). With ``newton``, the output and its derivatives are evaluated at
+        t - delta, t, t + delta (delta = 1e-4 of the step), t** = t - f'/f'' from their
+        parabola (one Newton step for d out/dt = 0) and the gradient interpolated to t**."""
+        i = self.step_start(t)
+        if self.ts[i + 1] == t:
+            i += 1
+        if self.ts[i] == t:
+            ys, mems = self.ys[i:i + 1], self.ms[i:i + 1]
+            hs = np.zeros(1)
+        else:
+            q = self.run.p.copy()
+            n_mem, m0 = self.model.N_MEM, self.model.MEM_START
+            q[m0:m0 + n_mem] = self.ms[i, :n_mem]
+            h = t - self.ts[i]
+            delta = 1e-4 * (self.ts[i + 1] - self.ts[i])
+            hs = np.array([h, h - delta, h + delta]) if newton else np.array([h])
+            ys, _ = self.model.step_sens(self.ts[i], np.ascontiguousarray(self.ys[i]), q, hs,
+                                         self.coefficients)
+            self.post_sens += 1 + len(hs) * self.stages
+            mems = np.repeat(self.ms[i:i + 1], len(hs), axis=0)
+        vals, ders = self.run.output_sensitivities(self.ts[i] + hs, ys, mems)
+        cols = [self.columns[c] for c in self.out.columns]
+        if len(cols) == 2:
+            fx, fy = vals[:, cols[0]], vals[:, cols[1]]
+            f = np.hypot(fx, fy)
+            d_out = (fx[:, None] * ders[:, cols[0]] + fy[:, None] * ders[:, cols[1]]) \
+                / np.maximum(f, 1e-300)[:, None]
+        else:
+            f = np.abs(vals[:, cols[0]])
+            d_out = np.sign(vals[:, cols[0]])[:, None] * ders[:, cols[0]]
+        if len(hs) == 1:
+            return float(f[0]), d_out[0], float(t)
+        d = hs[2] - hs[0]
+        curv = (f[2] - 2.0 * f[0] + f[1]) / (0.25 * d * d)      # f''
+        slope = (f[2] - f[1]) / d                                # f'
+        s = -slope / curv if curv < 0.0 else 0.0
+        s = min(max(s, -0.5 * d), 0.5 * d)
+        g = (d_out[0] + s * (d_out[2] - d_out[1]) / d
+             + 0.5 * s * s * (d_out[2] - 2.0 * d_out[0] + d_out[1]) / (0.25 * d * d))
+        return float(f[0]), g, float(t + s)
+
+    def plain_rows(self, idx):
+        """States (plain model: the coordinates, rates and the work) and memories of
+        recorded rows."""
+        return (np.ascontiguousarray(self.run.plain_states(self.ys[idx])),
+                np.ascontiguousarray(self.ms[idx, :self.model.N_MEM]))
+
+    def value_at(self, t):
+        """The output at time t from the plain step map of the recorded step that holds t."""
+        i = self.step_start(t)
+        y0s, mems = self.plain_rows(np.array([i]))
+        q = self.plain_p.copy()
+        n_mem, m0 = self.model.N_MEM, self.model.MEM_START
+        q[m0:m0 + n_mem] = mems[0]
+        A, B, C = self.coefficients[:3]
+        y = _rk_state(self.model, float(self.ts[i]), y0s[0], q, t - self.ts[i], A, B, C)
+        o = self.model.outputs(np.array([t]), y[None, :], mems, q)
+        self.post_plain += self.stages
+        return float(self.out.values(o, self.columns)[0])
 
 
-def _fd_linkage_gradient(linkage, names, out, revolution, fd_relative_step, executor,
-                         options):
+def _local_maxima(run, lo, hi, period):
+    """The window's local maxima of the monitored force (value, time), largest first.
+
+    Candidates: the RIVAL_CANDIDATES largest local maxima of the recorded samples, each
+    refined over the steps on both sides (golden section on the step map, as the
+    integrator's refinement), and the window's first and last steps. A refined maximum is a
+    local maximum of the window where it lies inside its step, at a sample that both steps
+    beside it converge to, or at the window's edge (a boundary maximum: the force falls
+    into the window); a refinement that runs into the far end of its step is not (it rises
+    beyond it, to a maximum found from the other side). Maxima closer than 1e-6 of a period
+    are one."""
+    mags = run.magnitudes(lo, hi)
+    m = len(mags)
+    is_max = np.zeros(m, dtype=bool)
+    if m >= 3:
+        is_max[1:-1] = (mags[1:-1] >= mags[:-2]) & (mags[1:-1] >= mags[2:])
+    cand = np.flatnonzero(is_max)
+    cand = cand[np.argsort(-mags[cand], kind="stable")][:RIVAL_CANDIDATES]
+    # steps (by their start row, absolute) to refine: both sides of each candidate sample,
+    # and the window's first and last steps
+    starts = {lo, hi - 2}
+    for j in cand:
+        starts.update((lo + j - 1, lo + j))
+    starts = np.array(sorted(s for s in starts if lo <= s < hi - 1), dtype=np.int64)
+    y0s, mems = run.plain_rows(starts)
+    t0s = run.ts[starts]
+    hs = run.ts[starts + 1] - t0s
+    vals, times = run.model.refine_steps(t0s, y0s, mems, run.plain_p, hs, run.coefficients,
+                                         _REFINE_ITERS)
+    run.post_steps += len(starts)
+    run.post_plain += len(starts) * (1 + (_REFINE_ITERS + 2) * run.stages)
+    # where each refinement ended: inside its step, or at its start or end sample
+    end_tol = 2.0 * 0.6180339887498949 ** _REFINE_ITERS * hs
+    at_start = times - t0s <= end_tol
+    at_end = t0s + hs - times <= end_tol
+    ends_at = {int(s) + 1 for s, e in zip(starts, at_end) if e}
+    starts_at = {int(s) for s, b in zip(starts, at_start) if b}
+    maxima = []
+    for s, v, t, b, e in zip(starts, vals, times, at_start, at_end):
+        s = int(s)
+        if not (b or e) or (b and s == lo) or (e and s + 1 == hi - 1) \
+                or (e and s + 1 in starts_at) or (b and s in ends_at):
+            maxima.append((float(v), float(t)))
+    # merge: largest first, a maximum closer than `eps` to a kept one is the same
+    eps = 1e-6 * period
+    maxima.sort(key=lambda vt: -vt[0])
+    kept: list[tuple[float, float]] = []
+    for v, t in maxima:
+        if all(abs(t - tk) > eps for _, tk in kept):
+            kept.append((v, t))
+    return kept, eps
+
+
+def _edge_slope(run, t):
+    """d out/dt at t from the plain step map of the step that holds t: a central difference
+    over +-1e-3 of the step (the map is smooth past the step's end; much shorter
+    differences are dominated by the rounding of the penetration, a difference of
+    coordinates of the linkage's size)."""
+    i = run.step_start(t)
+    d = 1e-3 * (run.ts[i + 1] - run.ts[i])
+    return (run.value_at(t + d) - run.value_at(t - d)) / (2.0 * d)
+
+
+def _ddm_gradient(linkage, names, out: Output, revolution, rtol, integrator, kink_tol):
+    """The peak of `out` over drive revolution `revolution` and its DDM gradient along the
+    design names `names`: one run of the sensitivity equations, the peak refined between
+    its steps (the integrator's refinement for the monitored force, `_refined_peak` for
+    another output), the gradient the output's sensitivity at the refined peak time
+    (envelope theorem); for the monitored force the window's other local maxima too (a
+    rival within the kink tolerance: a kink, with both one-sided gradients)."""
+    from ..model import design
+
+    t_wall = time.perf_counter()
+    run = _Run(linkage, names, out, revolution, rtol, integrator)
+    t_lo, t_hi = (revolution - 1) * linkage.period, revolution * linkage.period
+    monitored = out.monitored(linkage)
+    if monitored:
+        peak_int, t_int = float(run.peaks[revolution - 1]), float(run.peak_t[revolution - 1])
+        lo = int(np.searchsorted(run.ts, t_lo, side="left"))
+        hi = int(np.searchsorted(run.ts, t_hi, side="right"))
+        kept, eps = _local_maxima(run, lo, hi, linkage.period)
+        # the integrator's peak among them (it replaces a candidate at the same time)
+        kept = [(v, t) for v, t in kept if abs(t - t_int) > eps] + [(peak_int, t_int)]
+        kept.sort(key=lambda vt: -vt[0])
+    else:
+        peak_int, t_int = _refined_peak(run.model, run.ts, run.run.plain_states(), run.ms,
+                                        run.plain_p, run.outs, out, t_lo, t_hi, integrator)
+        kept, eps = [(peak_int, t_int)], 1e-6 * linkage.period
+    t_peak = kept[0][1]
+    tol = max(kink_tol, KINK_PER_RTOL * run.rtol)
+    at_edge = min(t_peak - t_lo, t_hi - t_peak) <= eps
+    peak, grad, _ = run.gradient_at(t_peak, newton=not at_edge)
+    rival_t = rival_v = math.nan
+    rival_g = np.full(len(names), np.nan)
+    if len(kept) > 1:
+        rival_t = kept[1][1]
+        rival_v, rival_g, _ = run.gradient_at(
+            rival_t, newton=min(rival_t - t_lo, t_hi - rival_t) > eps)
+    speed = np.array([d.get("drive.speed", 0.0) for d in run.directions])
+    if at_edge and np.any(speed != 0.0):
+        # the window's edges move with the drive speed: d(edge)/d omega = -edge / omega
+        t_edge = t_lo if t_peak - t_lo <= eps else t_hi
+        grad = grad + _edge_slope(run, t_peak) * (-t_edge / linkage.drive.speed) * speed
+    near = np.isfinite(rival_v) and (peak - rival_v) <= tol * peak
+    kink = bool(near or at_edge)
+    messages = []
+    if near:
+        messages.append(
+            f"kink: a second local maximum of {out.name} at t = {rival_t:.9g} s "
+            f"({rival_v:.9g} {out.unit}) is within {tol:.1e} of the peak at t = "
+            f"{t_peak:.9g} s ({peak:.9g} {out.unit}); the objective is the larger of two "
+            f"smooth branches: gradient and rival_gradient are its one-sided derivatives")
+    if not monitored:
+        messages.append(f"no rival detection for {out.name} (not the monitored force): a "
+                        f"second local maximum within the accuracy of the peak is not looked "
+                        f"for (compare with method='fd')")
+    if at_edge:
+        messages.append(
+            f"the peak sits at the window's edge (t = {t_peak:.9g} s in [{t_lo:.9g}, "
+            f"{t_hi:.9g}] s): gradient is the derivative of the output at the edge, valid "
+            f"while the maximum stays there")
+    stats = dict(run.counters, rtol=run.rtol, method=integrator, output=out.name,
+                 directions=int(run.run.nb), integrator_peak=peak_int,
+                 integrator_peak_time=t_int, local_maxima=len(kept),
+                 post_fev_plain=run.post_plain, post_fev_sens=run.post_sens,
+                 post_refined_steps=run.post_steps,
+                 wall_time=time.perf_counter() - t_wall)
+    return PeakGradient(
+        peak=peak, time=t_peak, parameters=names,
+        reference=np.array([design.design_value(linkage, n) for n in names]), gradient=grad,
+        kink=kink, rival_time=rival_t, rival_peak=rival_v, rival_gradient=rival_g,
+        at_edge=bool(at_edge), message="; ".join(messages), method="ddm",
+        backend="reduced", revolution=revolution, kink_tol=tol, stats=stats)
+
+
+# ------------------------------------------------------------------ finite differences
+
+def _fd_peak(args):
+    """One perturbed peak (module level: picklable for process pools): (peak, time); the
+    reduced model's refined peak of any output, another backend's peak of the monitored
+    force (time NaN)."""
+    linkage, out, revolution, backend, options = args
+    if backend == "reduced":
+        return _linkage_peak(linkage, out, revolution, options)
+    from ..solve.simulate import peak_base_force
+
+    return float(peak_base_force(linkage, revolution, backend, **options)), math.nan
+
+
+def _fd_gradient(linkage, names, out: Output, revolution, backend, fd_relative_step,
+                 executor, options):
     from ..model import design
 
     t_wall = time.perf_counter()
     options = dict(options)
-    options.setdefault("rtol", 1e-11)
+    if backend == "reduced":
+        options.setdefault("rtol", 1e-11)
     steps = [_linkage_fd_step(linkage, n, fd_relative_step) for n in names]
     ref = np.array([design.design_value(linkage, n) for n in names])
     designs = [linkage]
@@ -652,9 +648,9 @@ def _fd_linkage_gradient(linkage, names, out, revolution, fd_relative_step, exec
             except ValueError as exc:
                 raise ValueError(f"the finite-difference step of {name} ({h:.3g}) leaves its "
                                  f"valid range: {exc}; pass a smaller fd_relative_step") from exc
-    jobs = [(d, out, revolution, options) for d in designs]
-    values = (list(executor.map(_fd_linkage_peak, jobs)) if executor is not None
-              else [_fd_linkage_peak(j) for j in jobs])
+    jobs = [(d, out, revolution, backend, options) for d in designs]
+    values = (list(executor.map(_fd_peak, jobs)) if executor is not None
+              else [_fd_peak(j) for j in jobs])
     peak, t_peak = values[0]
     plus = np.array([v[0] for v in values[1::2]])
     minus = np.array([v[0] for v in values[2::2]])
@@ -665,187 +661,53 @@ def _fd_linkage_gradient(linkage, names, out, revolution, fd_relative_step, exec
                                     if k in ("rtol", "method")}}
     return PeakGradient(
         peak=peak, time=t_peak, parameters=names, reference=ref,
-        gradient=(plus - minus) / (2.0 * h), method="fd", backend="reduced",
+        gradient=(plus - minus) / (2.0 * h), method="fd", backend=backend,
         revolution=revolution,
         message="central differences: no kink detection (stats['forward'] and "
                 "stats['backward'] hold the one-sided differences)", stats=stats)
 
 
-def _linkage_gradient_at(run, coefficients, out: Output, t: float, newton: bool):
-    """The output `out` at time t of the DDM run `run` (a `linkage_ddm.DdmRun`) and its
-    derivatives along the requested directions at the maximum next to t: the state and
-    its sensitivities from the step map of the recorded step that holds t (the model's
-    `step_sens`), the outputs' derivatives there (`DdmRun.output_sensitivities`), and
-    (``newton``) one Newton step for d out/dt = 0 from the values at t -+ 1e-4 of the step,
-    as `_Run.gradient_at`. Returns (value at t, gradient, time of the gradient)."""
-    model = run.model
-    col = {c: i for i, c in enumerate(model.OUT_COLUMNS)}
-    ts = run.ts
-    i = max(int(np.searchsorted(ts, t, side="left")) - 1, 0)
-    if ts[i + 1] == t:
-        i += 1
-    if ts[i] == t:
-        ys, mems, hs = run.ys[i:i + 1], run.ms[i:i + 1], np.zeros(1)
-    else:
-        q = run.p.copy()
-        n_mem, m0 = model.N_MEM, model.MEM_START
-        q[m0:m0 + n_mem] = run.ms[i, :n_mem]
-        h = t - ts[i]
-        delta = 1e-4 * (ts[i + 1] - ts[i])
-        hs = np.array([h, h - delta, h + delta]) if newton else np.array([h])
-        ys, _ = model.step_sens(ts[i], np.ascontiguousarray(run.ys[i]), q, hs, coefficients)
-        mems = np.repeat(run.ms[i:i + 1], len(hs), axis=0)
-    vals, ders = run.output_sensitivities(ts[i] + hs, ys, mems)
-    cols = [col[c] for c in out.columns]
-    if len(cols) == 2:
-        fx, fy = vals[:, cols[0]], vals[:, cols[1]]
-        f = np.hypot(fx, fy)
-        d = (fx[:, None] * ders[:, cols[0]] + fy[:, None] * ders[:, cols[1]]) \
-            / np.maximum(f, 1e-300)[:, None]
-    else:
-        f = np.abs(vals[:, cols[0]])
-        d = np.sign(vals[:, cols[0]])[:, None] * ders[:, cols[0]]
-    if len(hs) == 1:
-        return float(f[0]), d[0], float(t)
-    span = hs[2] - hs[1]
-    curv = (f[2] - 2.0 * f[0] + f[1]) / (0.25 * span * span)
-    slope = (f[2] - f[1]) / span
-    shift = -slope / curv if curv < 0.0 else 0.0
-    shift = min(max(shift, -0.5 * span), 0.5 * span)
-    g = (d[0] + shift * (d[2] - d[1]) / span
-         + 0.5 * shift * shift * (d[2] - 2.0 * d[0] + d[1]) / (0.25 * span * span))
-    return float(f[0]), g, float(t + shift)
-
-
-def _ddm_linkage_gradient(linkage, names, out: Output, revolution, rtol, integrator):
-    """The peak of `out` over drive revolution `revolution` and its DDM gradient along the
-    design names `names` (`design.direction`: a case override moves every description value
-    that follows from it): one run of the sensitivity equations of the generated model, the
-    peak refined between its steps (the integrator's refinement for the monitored force,
-    `_refined_peak` for another output), the gradient the outputs' sensitivity at the
-    refined peak time (envelope theorem)."""
-    from ..model import design
-    from ..solve import linkage_ddm
-    from ..solve.linkage_model import specialisable
-
-    t_wall = time.perf_counter()
-    directions = [design.direction(linkage, n) for n in names]
-    dotted = sorted({k for d in directions for k in d})
-    model, p0, y0, rtol, atol = linkage_ddm.plain_setup(
-        linkage, rtol, specialise=specialisable(linkage, dotted))
-    scale = np.array([abs(_linkage_fd_step(linkage, n, 1.0)) for n in names])
-    run = linkage_ddm.ddm_run(linkage, model, p0, y0, directions, scale=scale, rtol=rtol,
-                              atol_plain=atol, revolutions=revolution, method=integrator)
-    coefficients = METHODS[integrator].arrays()
-    t_lo, t_hi = (revolution - 1) * linkage.period, revolution * linkage.period
-    if out.monitored(linkage):
-        peak_int, t_peak = float(run.peaks[revolution - 1]), float(run.peak_t[revolution - 1])
-    else:
-        peak_int, t_peak = _refined_peak(model, run.ts, run.plain_states(), run.ms, p0,
-                                         run.outs, out, t_lo, t_hi, integrator)
-    eps = 1e-6 * linkage.period
-    at_edge = min(t_peak - t_lo, t_hi - t_peak) <= eps
-    peak, grad, _ = _linkage_gradient_at(run, coefficients, out, t_peak, not at_edge)
-    message = ("no rival detection for a Linkage: a second local maximum within the "
-               "accuracy of the peak is not looked for (compare with method='fd')")
-    if at_edge:
-        message += (f"; the peak sits at the window's edge (t = {t_peak:.9g} s): gradient "
-                    f"is the derivative of the output at the edge")
-    stats = dict({k: v for k, v in run.stats.items() if k not in ("wall_time",)},
-                 rtol=float(rtol), method=integrator, output=out.name,
-                 integrator_peak=peak_int, directions=directions,
-                 wall_time=time.perf_counter() - t_wall)
-    return PeakGradient(
-        peak=peak, time=t_peak, parameters=names,
-        reference=np.array([design.design_value(linkage, n) for n in names]), gradient=grad,
-        kink=bool(at_edge), at_edge=bool(at_edge), message=message, method="ddm",
-        backend="reduced", revolution=revolution, stats=stats)
-
-
-def _linkage_peak_gradient(linkage, parameters, output, revolution, backend, method, rtol,
-                           integrator, fd_relative_step, executor, options):
-    from ..model import design
-
-    if parameters is None:
-        raise ValueError(f"parameters must name what to differentiate for a Linkage: "
-                         f"{design.design_names(linkage)}")
-    if isinstance(parameters, str):
-        parameters = [parameters]
-    names = design.check_names(linkage, list(parameters))
-    if not names:
-        raise ValueError("parameters must name at least one parameter")
-    out = parse_output(linkage, output)
-    if backend != "reduced":
-        raise ValueError(f"backend must be 'reduced' for a Linkage study (its generated "
-                         f"model); got {backend!r}")
-    from ..solve import linkage_model as lm
-
-    if method == "ddm":
-        if options or executor is not None:
-            extra = sorted(options) + (["executor"] if executor is not None else [])
-            raise ValueError(f"unknown option(s) for method='ddm': {extra}")
-        from ..solve.linkage_ddm import DDM_INTEGRATOR
-
-        return _ddm_linkage_gradient(linkage, names, out, revolution,
-                                     PEAK_GRADIENT_RTOL if rtol is None else rtol,
-                                     integrator or DDM_INTEGRATOR)
-
-    unknown = sorted(set(options) - set(lm.OPTION_NAMES) | ({"t_eval", "start"}
-                                                             & set(options)))
-    if unknown:
-        raise ValueError(f"unknown option(s) {unknown} for a Linkage's peak gradient; "
-                         f"allowed: {sorted(set(lm.OPTION_NAMES) - {'t_eval', 'start'})}")
-    if rtol is not None:
-        options["rtol"] = rtol
-    if integrator is not None:
-        options["method"] = integrator
-    return _fd_linkage_gradient(linkage, names, out, revolution, fd_relative_step, executor,
-                                options)
-
-
 # ------------------------------------------------------------------ entry point
 
-def peak_gradient(mech: SliderCrank | Linkage, parameters=None, revolution: int = 4,
+def peak_gradient(mech: Linkage | SliderCrank, parameters=None, revolution: int = 4,
                   backend: str = "reduced", method: str | None = None, *,
                   output: str | None = None, rtol: float | None = None,
                   integrator: str | None = None, kink_tol: float = KINK_RTOL,
                   fd_relative_step: float = FD_RELATIVE_STEP, executor=None,
                   **options) -> PeakGradient:
-    """The peak of |F12| over crank revolution `revolution` (the GA's objective,
-    `peak_base_force`) and its gradient with respect to named SliderCrank fields; for a
-    `Linkage`, the peak of any `output` (`peak_output`) with respect to any named design
-    value (`design`).
+    """The peak of an output over drive revolution `revolution` (the GA's objective) and
+    its gradient with respect to named design values.
 
     Parameters
     ----------
-    mech : SliderCrank or Linkage
-        A Linkage (a named case's or a description's): ``method="fd"`` (its default),
-        central differences of `peak_output`, 2 p + 1 runs of its generated model; or
-        ``method="ddm"``, one run of its sensitivity equations along the directions of
-        the named values (`design.direction`), the output's sensitivity at the refined
-        peak time, without the rival (kink) detection of the SliderCrank's. Measured: on
-        the paper slider-crank built by its case it agrees with central differences to
-        2e-5; on the four-bar's lightly damped sliding contact it does not converge with
-        rtol (docs/studies_linkage.md): use "fd" there.
+    mech : Linkage or SliderCrank
+        Any description (a named case's, a file's); the paper's `SliderCrank` is its
+        case "paper_slider_crank" (`cases.as_linkage`), its fields the design names.
     parameters : sequence of str, optional
-        Continuous SliderCrank fields; default `sensitivity.DEFAULT_PARAMETERS`. For a
-        Linkage (required): its case's overrides ("coupler_length", "clearance", ...) or
-        dotted paths of the description ("coupler.mass", "drive.speed"), `design`.
+        Design names (`design`): the case's overrides ("coupler_length", "clearance",
+        ...; the paper's case: continuous SliderCrank fields) or dotted paths of the
+        description ("coupler.mass", "drive.speed"). Default on the paper's case
+        `sensitivity.DEFAULT_PARAMETERS`; required otherwise.
     output : str, optional
-        Linkage only: "pivot_force:<ground joint>", "shaking_force", "drive_moment" or
-        "contact_force:<clearance joint>" (`parse_output`); default the crank pivot's
-        |reaction| (the paper's F12).
+        "pivot_force:<ground joint>", "shaking_force", "drive_moment" or
+        "contact_force:<clearance joint>" (`parse_output`); default the driven ground
+        joint's |reaction| (the paper's base force F12).
     revolution : int
-        Crank revolution (1-based) whose peak is the objective (paper: 4).
+        Drive revolution (1-based) whose peak is the objective (paper: 4).
     backend : str
-        "reduced" for DDM; any backend of `simulate` for ``method="fd"``.
-    method : {"ddm", "fd"}
-        Default "ddm" for a SliderCrank, "fd" for a Linkage. "ddm": the DDM sensitivity of
-        |F12| at the refined peak time (envelope theorem),
-        one run of the sensitivity equations, on the model `simulate` runs (with friction:
-        the model generated with the tangential force; friction_coefficient, friction_v0
-        and friction_v1 are then parameters too). "fd": central differences of the refined peak
-        (`peak_base_force`), 2 p + 1 runs, for checking.
+        "reduced" for DDM; any backend of `simulate` for ``method="fd"`` (another
+        backend's peak is that of the monitored force).
+    method : {"ddm", "fd"}, optional
+        "ddm": one run of the sensitivity equations along the directions of the named values
+        (`design.direction`), the output's sensitivity at the refined peak time (envelope
+        theorem), on the model `simulate` runs (with friction: the model generated with the
+        tangential force). For the monitored force the window's other local maxima are
+        refined too, and a rival within `kink_tol` is reported as a kink with both
+        one-sided gradients. "fd": central differences of the refined peak, 2 p + 1 runs.
+        Default: "ddm" on the paper's case (measured against central differences to 1e-3
+        on the GA's box, docs/sensitivity.md); "fd" on other linkages (on the four-bar's
+        lightly damped sliding contact the DDM does not converge with rtol,
+        docs/studies_linkage.md).
     rtol : float, optional
         Relative tolerance of the reduced model (DDM: default `PEAK_GRADIENT_RTOL`, 1e-6;
         FD: default 1e-11).
@@ -859,22 +721,25 @@ def peak_gradient(mech: SliderCrank | Linkage, parameters=None, revolution: int 
     executor :
         FD only: a concurrent.futures-style executor for the 2 p + 1 runs.
     **options :
-        FD only: backend options passed to `peak_base_force` (e.g. ``step_size``).
+        FD only: backend options passed to the peak runs (e.g. ``step_size`` for Exudyn).
 
     Returns
     -------
     PeakGradient
     """
+    from ..model import design
+    from ..model.cases import as_linkage
+    from ..solve import linkage_model as lm
     from ..solve.simulate import BACKENDS
 
-    if not isinstance(mech, (SliderCrank, Linkage)):
-        raise ValueError(f"mech must be a SliderCrank or a Linkage; got {type(mech).__name__}")
-    if method is None:
-        method = "fd" if isinstance(mech, Linkage) else "ddm"
+    linkage = as_linkage(mech)
     revolution = check_int("revolution", revolution, 1)
     check_revolutions_memory(revolution, name="revolution")
-    check_choice("method", method, ("ddm", "fd"))
     check_choice("backend", backend, BACKENDS)
+    paper = design.slider_crank_of(linkage) is not None
+    if method is None:
+        method = "ddm" if paper else "fd"
+    check_choice("method", method, ("ddm", "fd"))
     if integrator is not None:
         check_choice("integrator", integrator, METHODS)
     if rtol is not None:
@@ -882,13 +747,16 @@ def peak_gradient(mech: SliderCrank | Linkage, parameters=None, revolution: int 
     kink_tol = check_real("kink_tol", kink_tol, 0.0, 1.0, high_open=True)
     fd_relative_step = check_real("fd_relative_step", fd_relative_step, 0.0, 0.1,
                                   low_open=True, high_open=True)
-    if isinstance(mech, Linkage):
-        return _linkage_peak_gradient(mech, parameters, output, revolution, backend, method,
-                                      rtol, integrator, fd_relative_step, executor, options)
-    if output is not None:
-        raise ValueError("output applies to a Linkage; a SliderCrank's objective is the "
-                         "peak of |F12| (use cases.from_slider_crank for other outputs)")
-    names = _check_parameters(parameters)
+    if parameters is None and paper:
+        parameters = DEFAULT_PARAMETERS
+    if parameters is None:
+        raise ValueError(f"parameters must name what to differentiate for a Linkage: "
+                         f"{design.design_names(linkage)}")
+    names = design.check_names(linkage, [parameters] if isinstance(parameters, str)
+                               else list(parameters))
+    if not names:
+        raise ValueError("parameters must name at least one parameter")
+    out = parse_output(linkage, output)
     if method == "ddm":
         if backend != "reduced":
             raise ValueError("method='ddm' needs backend='reduced' (the direct "
@@ -897,17 +765,27 @@ def peak_gradient(mech: SliderCrank | Linkage, parameters=None, revolution: int 
         if options or executor is not None:
             extra = sorted(options) + (["executor"] if executor is not None else [])
             raise ValueError(f"unknown option(s) for method='ddm': {extra}")
-        return _ddm_gradient(mech, names, revolution,
+        return _ddm_gradient(linkage, names, out, revolution,
                              PEAK_GRADIENT_RTOL if rtol is None else rtol,
                              integrator or DDM_INTEGRATOR, kink_tol)
+    if backend == "reduced":
+        allowed = set(lm.OPTION_NAMES) - {"t_eval", "start"}
+        unknown = sorted(set(options) - allowed)
+        if unknown:
+            raise ValueError(f"unknown option(s) {unknown} for the reduced model's peak; "
+                             f"allowed: {sorted(allowed)}")
+    else:
+        if not out.monitored(linkage):
+            raise ValueError(f"output {out.name!r} is the reduced model's only (backend "
+                             f"{backend!r} gives the monitored force's peak); use "
+                             f"backend='reduced'")
+        for name, value in (("rtol", rtol), ("integrator", integrator)):
+            if value is not None:
+                raise ValueError(f"{name} applies to the reduced backend only; got "
+                                 f"backend={backend!r}")
     if rtol is not None:
-        if backend != "reduced":
-            raise ValueError(f"rtol applies to the reduced backend only; got "
-                             f"backend={backend!r}")
         options["rtol"] = rtol
     if integrator is not None:
-        if backend != "reduced":
-            raise ValueError(f"integrator applies to the reduced backend only; got "
-                             f"backend={backend!r}")
         options["method"] = integrator
-    return _fd_gradient(mech, names, revolution, backend, fd_relative_step, executor, options)
+    return _fd_gradient(linkage, names, out, revolution, backend, fd_relative_step, executor,
+                        options)

@@ -56,6 +56,7 @@ import numpy as np
 from .._checks import check_int, check_real, check_revolutions_memory
 from ..solve.flows import Flow, TangentFlow, _check_mech, clearances_of, drive_of, joints_of  # noqa: F401
 from ..solve.linkage_model import DEFAULT_RTOL as LM_DEFAULT_RTOL
+from ..solve.settings import RunSettings
 
 __all__ = ["SECTION_COMPONENTS", "REGIMES", "Flow", "PoincareSection", "poincare_section",
            "classify", "classify_run", "exponent_interval", "exponent_verdict",
@@ -348,10 +349,8 @@ def _section_run(mech, times, keep, tol, max_period, lyapunov, rtol, method,
                  early_stop=False):
     """One run of `poincare_section` at `rtol`, classified."""
     revolutions = len(times)
-    if lyapunov:
-        flow = TangentFlow(mech, rtol=rtol, method=method or "dop853")
-    else:
-        flow = Flow(mech, rtol=rtol, method=method or "dopri5")
+    kind = TangentFlow if lyapunov else Flow
+    flow = kind(mech, RunSettings(rtol=rtol, method=method or kind.METHOD))
     samples = np.empty((keep, len(flow.joints), 4))
     peaks = np.empty(revolutions)
     logs = np.empty(keep)

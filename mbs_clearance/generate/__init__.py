@@ -11,8 +11,7 @@ by the structure's digest (`loader`).
 # the generator's names are imported on first use (sympy and jinja2 with them): a generated
 # module imports `generate.runtime` only, and with it this package
 _LAZY = {"generate_module": "loader", "load_model": "loader", "model_path": "loader",
-         "model_structure": "loader",
-         "GENERATOR_VERSION": "writer", "structure_digest": "writer"}
+         "model_structure": "key", "GENERATOR_VERSION": "key", "structure_digest": "key"}
 
 
 def __getattr__(name):
@@ -50,8 +49,7 @@ def named_cases() -> dict:
 
 def registry_source(cases: dict) -> str:
     """The source of mbs_clearance/_generated/__init__.py for the linkages `cases`."""
-    from .loader import model_structure
-    from .writer import structure_digest
+    from .key import model_structure, structure_digest
 
     lines = [f"    {structure_digest(model_structure(lk))!r}: {name!r},"
              for name, lk in cases.items()]

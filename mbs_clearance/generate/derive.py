@@ -27,7 +27,7 @@ import sympy.physics.mechanics as me
 from ..laws.registry import FRICTION_SLOTS
 from ..model.linkage import GROUND, Linkage, Prismatic, Revolute
 
-__all__ = ["Derivation", "derive", "parameter_layout", "identifier", "geometric_zeros",
+__all__ = ["Derivation", "derive", "parameter_layout", "identifier",
            "specialise", "LUBRICATION_FIELDS"]
 
 
@@ -70,22 +70,6 @@ def parameter_layout(linkage: Linkage) -> tuple[str, ...]:
     for j in linkage.clearance_joints:
         names += [f"{j.name}.mode", f"{j.name}.impact_velocity"]
     return tuple(names)
-
-
-def geometric_zeros(linkage: Linkage) -> tuple[str, ...]:
-    """Dotted names (p order) of `linkage`'s geometric parameters whose value is exactly 0:
-    body and ground point coordinates, prismatic axis angles. The generated model of a
-    linkage is specialised on them (`specialise`): a point on a body's axis or a guide
-    through the origin adds no terms to the equations."""
-    zeros = []
-    for b in linkage.bodies:
-        for pt, xy in b.points.items():
-            zeros += [f"{b.name}.{pt}.{c}" for c, v in zip("xy", xy) if v == 0.0]
-    for pt, xy in linkage.ground_points.items():
-        zeros += [f"{GROUND}.{pt}.{c}" for c, v in zip("xy", xy) if v == 0.0]
-    zeros += [f"{j.name}.angle" for j in linkage.joints
-              if isinstance(j, Prismatic) and j.angle == 0.0]
-    return tuple(zeros)
 
 
 #: per clearance joint, the entries of p read by the contact law

@@ -1,7 +1,7 @@
 """Generated model modules: written once per structure, imported from disk.
 
 A module is specialised on the linkage's geometric parameters that are exactly zero
-(`derive.geometric_zeros`: points on a body's axis, a guide through the origin; their terms
+(`key.geometric_zeros`: points on a body's axis, a guide through the origin; their terms
 vanish from the equations): its key is the structure and that zero set
 (`model_structure`), and its entries of p stay in place, checked to be zero. Pass
 ``specialise=False`` for the general module (derivatives along those parameters, by DDM or
@@ -43,7 +43,7 @@ from types import ModuleType
 
 from .._warnings import CacheWarning
 from ..model.linkage import Linkage
-from .writer import structure_digest
+from .key import model_structure, structure_digest
 
 __all__ = ["generate_module", "load_model", "model_path", "model_structure"]
 
@@ -57,18 +57,6 @@ DIGEST_HEADER = "# mbs-clearance generated model, sha256 of the text below: "
 DAMAGED = "does not match its recorded digest (its text changed after it was written)"
 #: the largest generated module read (bytes); the named cases' are about 50 KB
 MAX_MODULE_BYTES = 32 * 1024 * 1024
-
-
-def model_structure(linkage: Linkage, specialise: bool = True) -> dict:
-    """What `linkage`'s generated module depends on: its structure (`Linkage.structure`)
-    and, when specialised, the geometric parameters that are exactly zero in it."""
-    from .derive import geometric_zeros
-
-    structure = linkage.structure()
-    zeros = geometric_zeros(linkage) if specialise else ()
-    if zeros:
-        structure["zero_parameters"] = list(zeros)
-    return structure
 
 
 def generate_module(linkage: Linkage, specialise: bool = True) -> str:

@@ -12,7 +12,6 @@ monomials, as a hand-written model with its lengths and masses combined would.
 
 from __future__ import annotations
 
-import hashlib
 import json
 from pathlib import Path
 
@@ -23,31 +22,11 @@ from sympy.printing.pycode import PythonCodePrinter
 from ..laws.registry import FRICTION_SLOTS
 from .derive import FRICTION_FIELDS, LUBRICATION_FIELDS, Derivation
 from .jacobians import jacobian_context
+from .key import GENERATOR_VERSION, structure_digest  # noqa: F401  (public here too)
 
 __all__ = ["render", "GENERATOR_VERSION", "structure_digest"]
 
 _TEMPLATE = Path(__file__).with_name("module.py.jinja")
-
-
-def _generator_version() -> str:
-    """Digest of the generator's own sources (derivation, writer, template): any edit of
-    them changes the cache key of every generated module."""
-    h = hashlib.sha256()
-    for path in (Path(__file__).with_name("derive.py"), Path(__file__), _TEMPLATE,
-                 Path(__file__).with_name("jacobians.py"), _TEMPLATE.with_name(
-                     "jacobians.py.jinja")):
-        h.update(path.read_bytes().replace(b"\r\n", b"\n") + b"\0")
-    return h.hexdigest()[:16]
-
-
-#: part of the cache key: the generated code changes with the generator's sources
-GENERATOR_VERSION = _generator_version()
-
-
-def structure_digest(structure: dict) -> str:
-    """SHA-256 of a linkage structure and the generator version: the cache key."""
-    text = json.dumps(structure, sort_keys=True) + "\0" + GENERATOR_VERSION
-    return hashlib.sha256(text.encode()).hexdigest()
 
 
 class _Printer(PythonCodePrinter):

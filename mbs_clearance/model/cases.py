@@ -14,6 +14,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+import functools
 import math
 import numbers
 from typing import Any
@@ -32,7 +34,7 @@ from .linkage import (
 )
 from .mechanism import SliderCrank
 
-__all__ = ["paper_slider_crank", "from_slider_crank", "slider_crank_two_clearances",
+__all__ = ["as_linkage", "paper_slider_crank", "from_slider_crank", "slider_crank_two_clearances",
            "four_bar", "paper_slider_crank_lubricated", "LUBRICATED_DEFAULTS", "CASES",
            "CASE_PARAMETERS", "CASE_SUMMARY"]
 
@@ -85,6 +87,29 @@ def from_slider_crank(mech: SliderCrank) -> Linkage:
         monitor_joint="crank_pivot",
         assembly={"coupler.angle": th3, "slider_guide.s": x4},
     )
+
+
+@functools.lru_cache(maxsize=256)
+def _paper_case_of(mech: SliderCrank) -> Linkage:
+    changed = {f.name: getattr(mech, f.name) for f in dataclasses.fields(SliderCrank)
+               if getattr(mech, f.name) != getattr(_PAPER_DEFAULTS, f.name)}
+    return paper_slider_crank(**changed)
+
+
+_PAPER_DEFAULTS = SliderCrank()
+
+
+def as_linkage(mech: SliderCrank | Linkage) -> Linkage:
+    """The description a study runs: a `Linkage` as it is; the paper's `SliderCrank` (a
+    named parameter set) as the case "paper_slider_crank" with its changed fields as the
+    case's overrides, so its field names are design names of every study (`design`).
+    ValueError for anything else."""
+    if isinstance(mech, Linkage):
+        return mech
+    if isinstance(mech, SliderCrank):
+        return _paper_case_of(mech)
+    raise ValueError(f"mech must be a Linkage (or the paper's SliderCrank); got "
+                     f"{type(mech).__name__}")
 
 
 def _slider_inertia(mech: SliderCrank) -> float:

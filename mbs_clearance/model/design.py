@@ -188,7 +188,8 @@ def direction(linkage: Linkage, name: str) -> dict[str, float]:
     radii (-1); a case override's coefficients are central differences of the rebuilt
     case's values over +-1e-6 of the override (exact for the cases' values, which are at
     most quadratic in an override: the uniform-rod inertia m L^2 / 12). A contact
-    stiffness derived from the radii (Eq. 9) is left to the DDM's own chain."""
+    stiffness still derived from the radii (Eq. 9) in the rebuilt case is left to the
+    DDM's own chain; an override of the stiffness itself moves it."""
     check_names(linkage, [name])
     if name == "clearance" and linkage.case is None:
         return {f"{j.name}.journal_radius": -1.0 for j in linkage.clearance_joints}
@@ -206,7 +207,7 @@ def direction(linkage: Linkage, name: str) -> dict[str, float]:
         except ValueError:
             if step == _DIRECTION_STEPS[-1]:
                 raise
-    derived = {f"{j.name}.contact_stiffness" for j in linkage.clearance_joints
+    derived = {f"{j.name}.contact_stiffness" for j in plus.clearance_joints
                if j.contact_stiffness is None}
     out = {}
     for p in linkage.parameter_names():

@@ -1,88 +1,84 @@
-"""A mechanism's state advanced window by window on the compiled integrator: `Flow` (the
+"""A linkage's state advanced window by window on the compiled integrator: `Flow` (the
 plain model) and `TangentFlow` (the state with one tangent vector of the variational
-equations), the runs under Poincare sections (poincare.py) and Lyapunov exponents
-(lyapunov.py). Any Linkage has one, and a SliderCrank on the paper's generated model."""
+equations), the runs under Poincare sections (poincare.py), Lyapunov exponents
+(lyapunov.py) and periodic orbits (periodic.py). Any Linkage has one (the paper's
+SliderCrank as its case, `cases.as_linkage`)."""
 
 from __future__ import annotations
 
 import numpy as np
 
 from .._checks import check_real
-from ..model.linkage import Linkage
-from ..model.mechanism import SliderCrank
+from ..model.cases import as_linkage
 from ..numerics.integrator import METHODS, RESULTS
-from .linkage_model import DEFAULT_RTOL
+from .settings import DEFAULT_RTOL, RunSettings
 
 __all__ = ["Flow", "TangentFlow", "drive_of", "clearances_of", "joints_of"]
 
 
-def _is_linkage(mech) -> bool:
-    return isinstance(mech, Linkage)
-
-
 def _check_mech(mech) -> None:
-    if not isinstance(mech, (SliderCrank, Linkage)):
-        raise ValueError(f"mech must be a SliderCrank or a Linkage; got {type(mech).__name__}")
+    as_linkage(mech)
 
 
 def drive_of(mech) -> tuple[float, float]:
     """(omega, theta0): the constant drive speed (rad/s) and initial crank angle (rad)."""
-    if _is_linkage(mech):
-        return mech.drive.speed, mech.drive.initial_angle
-    return mech.crank_speed, mech.initial_crank_angle
+    drive = as_linkage(mech).drive
+    return drive.speed, drive.initial_angle
 
 
 def clearances_of(mech) -> np.ndarray:
     """Radial clearance of each clearance joint (m)."""
-    if _is_linkage(mech):
-        return np.array([j.clearance for j in mech.clearance_joints])
-    return np.array([mech.clearance])
+    return np.array([j.clearance for j in as_linkage(mech).clearance_joints])
 
 
 def joints_of(mech) -> tuple[str, ...]:
     """Names of the clearance joints (the paper's one joint: "coupler_slider")."""
-    if _is_linkage(mech):
-        return tuple(j.name for j in mech.clearance_joints)
-    return ("coupler_slider",)
+    return tuple(j.name for j in as_linkage(mech).clearance_joints)
 
 
 class Flow:
-    """A mechanism's state advanced window by window on the compiled integrator (the plain
-    model: `reduced` for a SliderCrank, the generated model for a Linkage), holding one
-    window's record at a time. `t`, `y`, `p` are the current time, state and parameters
-    (with the contact memory). `advance(t1)` returns the window's refined maximum of the
-    monitored force (|F12|, or the linkage's monitored reaction)."""
+    """A linkage's state advanced window by window on its generated model's integrator,
+    holding one window's record at a time. `t`, `y`, `p` are the current time, state and
+    parameters (with the contact memory). `advance(t1)` returns the window's refined
+    maximum of the monitored force (the linkage's monitored reaction, or the shaking
+    force).
 
-    def __init__(self, mech, *, rtol: float | None = None, method: str = "dopri5",
-                 max_steps: int = 5_000_000):
-        _check_mech(mech)
-        self.mech = mech
-        rtol = DEFAULT_RTOL if rtol is None else check_real("rtol", rtol, 1e-14, 1e-4)
-        if method not in METHODS:
-            raise ValueError(f"method must be one of {sorted(METHODS)}; got {method!r}")
-        self.omega, self.theta0 = drive_of(mech)
-        self.clearance = clearances_of(mech)
-        self.joints = joints_of(mech)
+    `settings` (a `RunSettings`; keywords change single fields): its rtol (at most 1e-4;
+    default `DEFAULT_RTOL`), atol, method, max_steps, h_max (default an eighth of a drive
+    revolution) and event_tol are the runs'."""
+
+    #: the method when the settings name none
+    METHOD = "dopri5"
+
+    def __init__(self, mech, settings: RunSettings | None = None, **options):
         from . import linkage_model as lm
-        from . import reduced
 
-        linkage = mech if _is_linkage(mech) else reduced.linkage_of(mech)
-        model = self.model = (lm.load_model(linkage) if _is_linkage(mech)
-                              else reduced.model_of(mech))
+        linkage = self.linkage = as_linkage(mech)
+        self.mech = mech
+        if settings is None:
+            settings = RunSettings(method=options.pop("method", None) or self.METHOD)
+        if not isinstance(settings, RunSettings):
+            raise ValueError(f"settings must be a RunSettings; got {type(settings).__name__}")
+        settings = settings.with_options(options)
+        rtol = DEFAULT_RTOL if settings.rtol is None else check_real(
+            "rtol", settings.rtol, 1e-14, 1e-4)
+        self.omega, self.theta0 = linkage.drive.speed, linkage.drive.initial_angle
+        self.clearance = clearances_of(linkage)
+        self.joints = joints_of(linkage)
+        model = self.model = lm.load_model(linkage)
         p = lm.pack_parameters(linkage, model)
-        rtol, atol = lm._tolerances(linkage, model, rtol, None)
-        event_tol = lm.event_tolerance(linkage)
-        if _is_linkage(mech):
-            y0 = lm.initial_state(linkage, model, p)
-        else:                       # the paper's closed-form start, as its runs
-            y0 = lm.check_start(linkage, model, p, reduced.centred_start(mech), event_tol)
+        rtol, atol = lm._tolerances(linkage, model, rtol, settings.atol)
+        event_tol = (lm.event_tolerance(linkage) if settings.event_tol is None
+                     else settings.event_tol)
+        y0 = lm.initial_state(linkage, model, p)
         self.kernel = model.integrate_model
         self.settings = lm.integrator_settings(
-            linkage, model, rtol, atol, h_max=linkage.period / 8, max_steps=max_steps,
-            record=True, event_tol=event_tol)
+            linkage, model, rtol, atol,
+            h_max=linkage.period / 8 if settings.h_max is None else settings.h_max,
+            max_steps=settings.max_steps, record=True, event_tol=event_tol)
         self._gaps = [getattr(model, f"_gap_{j}") for j in range(model.N_EVENTS)]
         self.rtol = rtol
-        self.coefficients = METHODS[method].arrays()
+        self.coefficients = METHODS[settings.method].arrays()
         self.t = 0.0
         self.y = np.ascontiguousarray(y0, dtype=float)
         self.p = p
@@ -98,8 +94,7 @@ class Flow:
                                                             self.coefficients)
         status = RESULTS(int(status))
         if status is not RESULTS.success:
-            name = getattr(self.mech, "name", "slider-crank")
-            raise RuntimeError(f"{name}: integration failed at about t = "
+            raise RuntimeError(f"{self.linkage.name}: integration failed at about t = "
                                f"{ts[-1] if len(ts) else self.t:.6g} s: {status.message}")
         self.counters += counters
         self.max_recorded = max(self.max_recorded, len(ts))
@@ -124,18 +119,21 @@ class TangentFlow(Flow):
     (2 N_Q), W, the memories' tangents (J)]; a SliderCrank runs on the paper's model
     (`cases.from_slider_crank`)."""
 
-    def __init__(self, mech, *, rtol: float | None = None, method: str = "dop853",
-                 direction=None, memory: str = "reset", max_steps: int = 5_000_000):
+    #: the variational equations are accuracy-limited: the 8th-order pair
+    METHOD = "dop853"
+
+    def __init__(self, mech, settings: RunSettings | None = None, *, direction=None,
+                 memory: str = "reset", **options):
         if memory not in ("reset", "carry"):
             raise ValueError(f"memory must be 'reset' or 'carry'; got {memory!r}")
         self.reset_memory = memory == "reset"
-        super().__init__(mech, rtol=rtol, method=method, max_steps=max_steps)
+        super().__init__(mech, settings, **options)
         from .linkage_ddm import pack_sensitivity_parameters, sensitivity_atol
 
         model = self.model
         n2 = 2 * model.N_Q
         #: scales of the tangent's components: the journal moves within the clearance
-        self.scale = _tangent_scale(mech, model)
+        self.scale = _tangent_scale(self.linkage, model)
         v = np.full(n2, 0.5) if direction is None else np.asarray(direction, dtype=float)
         if v.shape != (n2,) or not np.all(np.isfinite(v)) or not np.any(v != 0.0):
             raise ValueError(f"direction must be {n2} finite numbers, not all zero (scaled "
@@ -167,12 +165,9 @@ class TangentFlow(Flow):
 
 
 def _tangent_scale(mech, model) -> np.ndarray:
-    """Scales of the tangent's components: lengths the (smallest) clearance c, angles c
-    over the coupler's length (the paper's case) or over the linkage's length scale, rates
-    those times the drive speed."""
-    if isinstance(mech, SliderCrank):
-        c, length, w = mech.clearance, mech.coupler_length, mech.crank_speed
-    else:
-        c, length, w = mech.min_clearance, mech.length_scale, mech.drive.speed
+    """Scales of the tangent's components: lengths the smallest clearance c, angles c over
+    the linkage's length scale, rates those times the drive speed."""
+    linkage = as_linkage(mech)
+    c, length, w = linkage.min_clearance, linkage.length_scale, linkage.drive.speed
     pos = np.array([c / length if n.endswith(".angle") else c for n in model.COORDINATES])
     return np.concatenate([pos, w * pos])

@@ -37,7 +37,7 @@ def load_model(linkage: Linkage, specialise: bool = True):
 def specialisable(linkage: Linkage, names) -> bool:
     """Whether runs differentiated along the parameters `names` (dotted) may use the model
     specialised on `linkage`'s zero-valued geometric parameters: none of them is one."""
-    from ..generate.derive import geometric_zeros
+    from ..generate.key import geometric_zeros
 
     return not set(names) & set(geometric_zeros(linkage))
 

@@ -197,6 +197,11 @@ def _call(backend: str, attr: str, mech, revolutions, options: dict,
     validates the options' values)."""
     be = _backend(backend)
     revolutions = _check(mech, revolutions, name)
+    if isinstance(mech, Linkage) and be.linkage is None:
+        from ..model.design import slider_crank_of
+
+        # a backend of the paper's parameter set only takes its case as that set
+        mech = slider_crank_of(mech) or mech
     model = be.model_for(mech, backend)
     module = importlib.import_module(model.module)
     allowed = getattr(module, "OPTION_NAMES", None)

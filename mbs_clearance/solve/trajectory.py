@@ -189,15 +189,17 @@ class Trajectory:
         meta = self._meta()
         if self.linkage is not None:
             return _save_linkage(self, path, meta)
+        generic = generic_columns(self)
         if path.suffix == ".npz":
             arrays = {name: getattr(self, name) for name in SERIES}
             if self.peaks is not None:
                 arrays["peaks"] = self.peaks
-            np.savez_compressed(path, meta=np.array(json.dumps(meta)), **arrays)
+            np.savez_compressed(path, meta=np.array(json.dumps(meta)), **arrays, **generic)
         elif path.suffix == ".csv":
             columns, header = self._columns()
+            columns = np.column_stack([columns, *generic.values()])
             np.savetxt(path, columns, delimiter=",", header="# " + json.dumps(meta) + "\n"
-                       + ",".join(header), comments="", fmt="%.17g")
+                       + ",".join([*header, *generic]), comments="", fmt="%.17g")
         else:
             raise ValueError(f"trajectory file must end in .npz or .csv; got {str(path)!r}")
         return path
@@ -426,6 +428,8 @@ def load_trajectory(path: str | Path) -> Trajectory:
                                         if k not in ("meta", "peaks")}
                     return _load_linkage(path, meta)
                 series = {name: np.asarray(data[name]) for name in SERIES}
+                rest = {k: np.asarray(data[k]) for k in data.files
+                        if k not in SERIES and k not in ("meta", "peaks")}
         elif path.suffix == ".csv":
             with open(path) as fh:
                 meta = json.loads(fh.readline()[1:].strip())
@@ -435,12 +439,16 @@ def load_trajectory(path: str | Path) -> Trajectory:
                 meta["_columns"] = {name: table[:, k] for k, name in enumerate(header)}
                 return _load_linkage(path, meta)
             series = {}
+            used = set()
             for name, (_, ncol) in SERIES.items():
                 if ncol == 1:
+                    used.add(header.index(f"{name}[{SERIES[name][0]}]"))
                     series[name] = table[:, header.index(f"{name}[{SERIES[name][0]}]")]
                 else:
                     idx = [header.index(f"{name}_{a}[{SERIES[name][0]}]") for a in "xy"]
+                    used.update(idx)
                     series[name] = table[:, idx]
+            rest = {name: table[:, k] for k, name in enumerate(header) if k not in used}
         else:
             raise ValueError(f"trajectory file must end in .npz or .csv; got {str(path)!r}")
     except (OSError, KeyError, json.JSONDecodeError, UnicodeDecodeError, EOFError,
@@ -461,8 +469,13 @@ def load_trajectory(path: str | Path) -> Trajectory:
         mech = SliderCrank.from_dict(meta["mechanism"])
     except (TypeError, ValueError) as exc:
         raise _fail(path, f"bad mechanism: {exc}") from exc
+    generic = _generic_series(path, rest, len(series["t"]))
+    if generic:
+        from ..model.cases import as_linkage
+
+        generic["joints"] = tuple(j.name for j in as_linkage(mech).clearance_joints)
     traj = Trajectory(**series, mechanism=mech, backend=meta["backend"],
-                      stats=meta.get("stats", {}), peaks=peaks)
+                      stats=meta.get("stats", {}), peaks=peaks, **generic)
     _check_peaks(path, traj)
     return traj
 
@@ -482,16 +495,57 @@ def linkage_columns(traj: Trajectory) -> dict[str, np.ndarray]:
         cols[f"eccentricity.{j}_x[m]"] = traj.eccentricity[:, k, 0]
         cols[f"eccentricity.{j}_y[m]"] = traj.eccentricity[:, k, 1]
         cols[f"contact_phase.{j}[-]"] = traj.contact_phase[:, k]
-    for g, r in traj.reactions.items():
+    return {**cols, **generic_columns(traj)}
+
+
+def generic_columns(traj: Trajectory) -> dict[str, np.ndarray]:
+    """The series every linkage's run has besides the per-joint ones (the ground joints'
+    reactions, the shaking force, the coordinates, their rates and accelerations, the
+    friction work) as named 1-D columns; empty for a trajectory without them (an Exudyn or
+    ideal run of the paper's parameter set)."""
+    cols: dict[str, np.ndarray] = {}
+    if traj.shaking_force is not None and traj.linkage is None:
+        cols["shaking_force_x[N]"] = traj.shaking_force[:, 0]
+        cols["shaking_force_y[N]"] = traj.shaking_force[:, 1]
+    for g, r in (traj.reactions or {}).items():
         cols[f"reaction.{g}_x[N]"] = r[:, 0]
         cols[f"reaction.{g}_y[N]"] = r[:, 1]
     for kind, series in (("coordinate", traj.coordinates), ("rate", traj.rates),
                          ("acceleration", traj.accelerations)):
-        for c, v in series.items():
+        for c, v in (series or {}).items():
             cols[f"{kind}.{c}"] = v
     if traj.friction_work is not None:
         cols["friction_work[J]"] = traj.friction_work
     return cols
+
+
+def _generic_series(path: Path, cols: dict[str, np.ndarray], n: int) -> dict[str, Any]:
+    """The Trajectory fields of the generic columns (`generic_columns`) among `cols` (none
+    present: none filled)."""
+    for name, v in cols.items():
+        if v.shape != (n,) or not np.all(np.isfinite(v)):
+            raise _fail(path, f"column {name!r} has shape {v.shape} or non-finite values")
+    grounds = [k[len("reaction."):-len("_x[N]")] for k in cols
+               if k.startswith("reaction.") and k.endswith("_x[N]")]
+    coords = [k[len("coordinate."):] for k in cols if k.startswith("coordinate.")]
+    out: dict[str, Any] = {}
+    try:
+        if grounds:
+            out["reactions"] = {g: np.column_stack([cols[f"reaction.{g}_x[N]"],
+                                                    cols[f"reaction.{g}_y[N]"]])
+                                for g in grounds}
+        if "shaking_force_x[N]" in cols:
+            out["shaking_force"] = np.column_stack([cols["shaking_force_x[N]"],
+                                                    cols["shaking_force_y[N]"]])
+        if coords:
+            out["coordinates"] = {c: cols[f"coordinate.{c}"] for c in coords}
+            out["rates"] = {c: cols[f"rate.{c}"] for c in coords}
+            out["accelerations"] = {c: cols[f"acceleration.{c}"] for c in coords}
+    except KeyError as exc:
+        raise _fail(path, f"missing column {exc}") from exc
+    if "friction_work[J]" in cols:
+        out["friction_work"] = cols["friction_work[J]"]
+    return out
 
 
 def _save_linkage(traj: Trajectory, path: Path, meta: dict) -> Path:

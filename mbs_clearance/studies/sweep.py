@@ -49,11 +49,11 @@ from ..analysis.poincare import (
     REGIMES,
     SECTION_COMPONENTS,
     clearances_of,
+    drive_of,
     joints_of,
     poincare_section,
 )
 from ..model.design import design_at
-from ..model.linkage import Linkage
 
 __all__ = ["SweepAxis", "parse_sweep", "design_at", "regime_map", "MapResult", "load_map",
            "map_memory"]
@@ -423,7 +423,7 @@ def regime_map(mech, sweep, revolutions: int = 100, keep: int = 50, scheduler=No
     settings = dict(revolutions=revolutions, keep=keep, angle=angle, tol=tol,
                     max_period=max_period, lyapunov=lyapunov, rtol=rtol,
                     early_stop=early_stop)
-    description = base.to_dict() if isinstance(base, Linkage) else base.to_dict()
+    description = base.to_dict()
     attrs = {"format": FORMAT, "case": case or "",
              "mechanism": type(base).__name__,
              "base_design": json.dumps(_jsonable(description), sort_keys=True),
@@ -445,7 +445,7 @@ def regime_map(mech, sweep, revolutions: int = 100, keep: int = 50, scheduler=No
         ds = old
     todo = [i for i in range(len(designs)) if ds["done"].values.reshape(-1)[i] == 0]
     skipped = len(designs) - len(todo)
-    omegas = [d.drive.speed if isinstance(d, Linkage) else d.crank_speed for d in designs]
+    omegas = [drive_of(d)[0] for d in designs]
     executor, own = scheduler, None
     if isinstance(scheduler, str) and scheduler.startswith(("tcp://", "tls://", "ws://")):
         executor = own = connect_dask(scheduler)    # before any file: it may be unreachable

@@ -668,15 +668,22 @@ def _describe(dist) -> str:
     return f"uniform [{dist.low:g}, {dist.high:g}]"
 
 
-def _check_ranges(mech: SliderCrank, names, dists, wear_levels) -> None:
-    """ValueError, before any sample is drawn, if an input's distribution or a wear level
-    leaves the valid range of a design field: every input at both ends of its range with
-    the others nominal, then every corner of the inputs' box (SliderCrank's constraints are
-    linear in the fields, so the box is valid when its corners are; at most 2**12 of
-    them), each corner with the largest wear added to its radial clearance."""
+def _corners(names, dists):
+    """The corners of the inputs' box (at most 2**12; beyond, its two extreme corners)."""
     import itertools
 
     ranges = {n: _support(dists[n]) for n in names}
+    if len(names) <= 12:
+        return ranges, itertools.product(*(ranges[n] for n in names))
+    return ranges, [tuple(r[0] for r in ranges.values()), tuple(r[1] for r in ranges.values())]
+
+
+def _check_ranges(mech: SliderCrank | Linkage, names, dists) -> None:
+    """ValueError, before any sample is drawn, if an input's distribution leaves the valid
+    range of a design field: every input at both ends of its range with the others nominal,
+    then every corner of the inputs' box (SliderCrank's constraints are linear in the
+    fields, so the box is valid when its corners are)."""
+    ranges, corners = _corners(names, dists)
     for n in names:
         for v in ranges[n]:
             try:
@@ -684,9 +691,6 @@ def _check_ranges(mech: SliderCrank, names, dists, wear_levels) -> None:
             except ValueError as exc:
                 raise ValueError(f"input {n!r}: {_describe(dists[n])} reaches {v:.6g}, "
                                  f"outside the design's valid range ({exc})") from None
-    corners = (itertools.product(*(ranges[n] for n in names)) if len(names) <= 12
-               else [tuple(r[0] for r in ranges.values()), tuple(r[1] for r in ranges.values())])
-    worst = max(wear_levels, default=None)
     for corner in corners:
         row = dict(zip(names, corner))
         try:
@@ -694,15 +698,22 @@ def _check_ranges(mech: SliderCrank, names, dists, wear_levels) -> None:
         except ValueError as exc:
             raise ValueError(f"inputs {list(names)} together reach an invalid design at "
                              f"{_short(row)} ({exc}); narrow their ranges") from None
-        if worst is not None:
-            worn = {**row, CLEARANCE: row.get(CLEARANCE, field_value(with_values(mech, row),
-                                                                    CLEARANCE)) + worst}
-            try:
-                with_values(mech, worn)
-            except ValueError as exc:
-                raise ValueError(f"wear {worst:g} m leaves the design's valid range: radial "
-                                 f"clearance {worn[CLEARANCE]:.6g} m at {_short(row)} "
-                                 f"({exc})") from None
+
+
+def _check_wear(mech: SliderCrank | Linkage, names, dists, worst: float) -> None:
+    """ValueError, before any sample is drawn, if the largest wear `worst` added to the
+    radial clearance at a corner of the inputs' box (`describe` checked the box itself)
+    leaves the design's valid range."""
+    for corner in _corners(names, dists)[1]:
+        row = dict(zip(names, corner))
+        worn = {**row, CLEARANCE: row.get(CLEARANCE, field_value(with_values(mech, row),
+                                                                CLEARANCE)) + worst}
+        try:
+            with_values(mech, worn)
+        except ValueError as exc:
+            raise ValueError(f"wear {worst:g} m leaves the design's valid range: radial "
+                             f"clearance {worn[CLEARANCE]:.6g} m at {_short(row)} "
+                             f"({exc})") from None
 
 
 def _short(row: Mapping[str, float]) -> str:
@@ -853,7 +864,7 @@ def describe(inputs: Mapping[str, Any], mech: SliderCrank | Linkage | None = Non
     check_revolutions_memory(revolution, options.get("max_memory"), name="revolution")
     if not callable(output):
         with_values(mech, {n: field_value(mech, n) for n in names})   # checks the nominal
-        _check_ranges(mech, names, dists, [])
+        _check_ranges(mech, names, dists)
     return ToleranceProblem(names=names, distributions=dists, mech=mech, output=output,
                             revolution=revolution, backend=backend, options=dict(options))
 
@@ -1080,8 +1091,8 @@ def tolerance_study(inputs: Mapping[str, Any], mech: SliderCrank | None = None,
             raise ValueError("wear needs monte_carlo > 0 (the samples of each level)")
     if not (sobol or morris or dgsm or monte_carlo):
         raise ValueError("nothing to do: set sobol, morris, dgsm or monte_carlo > 0")
-    if not callable(output):
-        _check_ranges(mech, names, dists, wear_levels)
+    if wear_levels and not callable(output):
+        _check_wear(mech, names, dists, max(wear_levels))
     study_memory(len(names), sobol=sobol, second_order=second_order, morris=morris,
                  dgsm=dgsm, monte_carlo=monte_carlo, wear_levels=len(wear_levels),
                  max_memory=options.get("max_memory"))

@@ -294,7 +294,7 @@ def test_models_specialised_on_zero_geometry_equal_the_general_one(tmp_path, mon
     to round-off; a nonzero offset takes another module; the specialised module refuses a
     nonzero entry in its zero set (pack_parameters naming it; integrate_model; a DDM
     direction along it). (Sensitivities along such parameters: test_linkage_ddm.)"""
-    from mbs_clearance.generate.derive import geometric_zeros
+    from mbs_clearance.generate.key import geometric_zeros
     from mbs_clearance.model import cases
     from mbs_clearance.numerics.integrator import METHODS, make_settings
     from mbs_clearance.solve import linkage_ddm

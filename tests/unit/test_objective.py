@@ -202,3 +202,23 @@ def test_friction_matches_central_differences(law):
     # friction moves the peak: mu's gradient is not zero (so the comparison tests it)
     assert abs(fd.normalized[0]) > 1e-3
     assert np.max(_error(ddm, fd)) < 1e-3
+
+
+def test_a_slider_crank_is_its_case_in_the_gradient(paper):
+    """One computation: the SliderCrank's gradient is that of its case's linkage
+    (`cases.as_linkage`) to the last bit, and the ideal backend (a parameter set's only)
+    takes the case's linkage as that parameter set."""
+    from mbs_clearance.model.cases import as_linkage, paper_slider_crank
+
+    names = ("crank_length", "slider_mass")
+    a = peak_gradient(paper, names)
+    b = peak_gradient(paper_slider_crank(), names)
+    assert a.peak == b.peak and a.time == b.time
+    np.testing.assert_array_equal(a.gradient, b.gradient)
+    assert as_linkage(paper) == paper_slider_crank()
+    mech = SliderCrank(crank_length=0.045)
+    assert as_linkage(mech).overrides == {"crank_length": 0.045}
+    assert peak_base_force(as_linkage(mech), backend="ideal") == peak_base_force(
+        mech, backend="ideal")
+    with pytest.raises(ValueError, match="mech must be a Linkage"):
+        peak_gradient(object())

@@ -20,6 +20,18 @@ def test_save_load_roundtrip(tmp_path, traj, suffix):
         np.testing.assert_array_equal(getattr(back, name), getattr(traj, name))
     assert back.max_base_force(2) == traj.max_base_force(2)
     assert Trajectory.load(path).stats == back.stats
+    # the description's generic series come back too, and the paper's names stay their
+    # aliases: the crank pivot's reaction is the base force
+    assert back.joints == traj.joints == ("coupler_slider",)
+    assert set(back.reactions) == set(traj.reactions) and set(back.coordinates) == set(
+        traj.coordinates)
+    for g in traj.reactions:
+        np.testing.assert_array_equal(back.reactions[g], traj.reactions[g])
+    for c in traj.coordinates:
+        for kind in ("coordinates", "rates", "accelerations"):
+            np.testing.assert_array_equal(getattr(back, kind)[c], getattr(traj, kind)[c])
+    np.testing.assert_array_equal(back.shaking_force, traj.shaking_force)
+    np.testing.assert_array_equal(back.reactions["crank_pivot"], back.base_force)
 
 
 def test_revolution_windows(traj, paper):
