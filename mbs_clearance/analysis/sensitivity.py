@@ -372,23 +372,17 @@ DDM_INTEGRATOR = "dop853"
 def slider_crank_run(mech: SliderCrank, names, rtol, *, revolutions: int, t_eval=None,
                      event_time_term: bool = True, method: str = DDM_INTEGRATOR,
                      record: bool = True, derivatives=False):
-    """The DDM run (`linkage_ddm.ddm_run`) of the SliderCrank fields `names` on the paper's
-    generated model (reduced.MODEL), with the plain run's tolerances (reduced.default_atol,
-    reduced.event_atol); each direction's tolerance scaled by its field's value; with
-    `derivatives` (`linkage_ddm.ddm_run`) outputs' derivatives recorded with the steps."""
-    from ..model.cases import from_slider_crank
+    """The DDM run (`linkage_ddm.ddm_run`) of the SliderCrank fields `names` on its case's
+    model, from its start, with its plain run's tolerances (`linkage_ddm.plain_setup`);
+    each direction's tolerance scaled by its field's value; with `derivatives`
+    (`linkage_ddm.ddm_run`) outputs' derivatives recorded with the steps."""
+    from ..model.cases import as_linkage
     from ..solve import linkage_ddm
 
-    linkage = from_slider_crank(mech)
-    rtol = reduced.DEFAULT_RTOL if rtol is None else rtol
+    linkage = as_linkage(mech)
     ref = np.array([reference_value(mech, n) for n in names])
     scale = np.where(ref != 0.0, np.abs(ref), 1.0)
-    if mech.friction_law == "none":
-        model, p0, y0 = reduced.MODEL, reduced.model_parameters(mech), reduced.initial_state(mech)
-        atol = np.concatenate([reduced.default_atol(mech, rtol),
-                               reduced.event_atol(mech, rtol)])
-    else:       # the model generated with the tangential force (as `simulate` runs it)
-        model, p0, y0, rtol, atol = linkage_ddm.plain_setup(linkage, rtol)
+    model, p0, y0, rtol, atol = linkage_ddm.plain_setup(linkage, rtol)
     run = linkage_ddm.ddm_run(
         linkage, model, p0, y0,
         slider_crank_directions(mech, names), scale=scale, rtol=rtol, atol_plain=atol,
