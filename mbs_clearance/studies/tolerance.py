@@ -284,8 +284,11 @@ def with_values(mech: SliderCrank, values: Mapping[str, float]) -> SliderCrank:
     return mech.replace(**changes)
 
 
-def _gradient_names(names: tuple[str, ...]) -> tuple[tuple[str, ...], np.ndarray]:
-    """Fields to differentiate and the chain-rule matrix: d/d(input) = J @ d/d(field)."""
+def _gradient_names(names: tuple[str, ...], mech) -> tuple[tuple[str, ...], np.ndarray]:
+    """Fields to differentiate and the chain-rule matrix: d/d(input) = J @ d/d(field) (a
+    Linkage's inputs are its design names)."""
+    if isinstance(mech, Linkage):
+        return tuple(_linkage_name(n) for n in names), np.eye(len(names))
     fields = []
     for n in names:
         f = "journal_radius" if n == CLEARANCE else n
@@ -388,7 +391,7 @@ def _mechanism_output(mech: SliderCrank | Linkage, task: _Task):
     return value, chaotic, flagged, False
 
 
-def _grad_one(mech: SliderCrank, fields: tuple[str, ...], revolution: int):
+def _grad_one(mech: SliderCrank | Linkage, fields: tuple[str, ...], revolution: int):
     """(peak, gradient over `fields`, kink) of one design; NaNs where it fails."""
     from ..analysis.objective import peak_gradient
 
@@ -1024,7 +1027,9 @@ def tolerance_study(inputs: Mapping[str, Any], mech: SliderCrank | None = None,
     morris_levels : int
         Grid levels of Morris' design (even, >= 2).
     dgsm : int
-        Gradient samples for DGSM (0: none; output "peak" with the reduced backend only).
+        Gradient samples for DGSM (0: none; output "peak" with the reduced backend only;
+        the gradients of `objective.peak_gradient`: DDM on the paper's case, central
+        differences on other linkages, 2 d + 1 runs per sample).
     monte_carlo : int
         Monte Carlo samples of the output distribution (0: none).
     allowable : float, optional
@@ -1068,9 +1073,6 @@ def tolerance_study(inputs: Mapping[str, Any], mech: SliderCrank | None = None,
     monte_carlo = _count("monte_carlo", monte_carlo, 0)
     bootstrap, confidence, seed, allowable = _analysis_settings(bootstrap, confidence, seed,
                                                                 allowable)
-    if dgsm and isinstance(mech, Linkage):
-        raise ValueError("dgsm takes a SliderCrank (the DDM gradients of its peak); for a "
-                         "Linkage use sobol, morris or monte_carlo")
     if dgsm and (callable(output) or output != "peak" or backend != "reduced"):
         raise ValueError("dgsm needs output='peak' and backend='reduced' (the exact "
                          "gradients of the peak, peak_gradient)")
@@ -1163,7 +1165,7 @@ def _dgsm(study: _Study, n: int, seed: int, bootstrap: int, confidence: float) -
     from scipy.stats import qmc
 
     names = study.names
-    fields, J = _gradient_names(names)
+    fields, J = _gradient_names(names, study.base)
     U = qmc.Sobol(len(names), scramble=True, seed=seed).random(n)
     mechs = study.items(study.physical(U))
     if any(m is None for m in mechs):

@@ -271,6 +271,40 @@ def test_dgsm_bounds_the_total_sobol_index_on_the_mechanism():
     assert np.all(st - conf <= bound), (st, conf, bound)
 
 
+@pytest.mark.slow
+def test_dgsm_of_a_linkage_is_that_of_its_parameter_set():
+    """DGSM on any linkage: the paper's case given as a Linkage (its inputs its design names,
+    the clearance "radial_clearance") gives the SliderCrank's gradients and bounds (the same
+    peak_gradient path; the clearance's direction there is the journal radius's negated, by
+    the case's differences, not the field's unit seed: the DDM's own error at its rtol 1e-6,
+    measured 8e-5 of a gradient, so nu to 1e-3), and on the
+    two-clearance slider-crank (central differences of its peak) each nu_i is the mean
+    square of gradients checked against central differences of the peak here."""
+    from mbs_clearance.analysis.objective import peak_output
+    from mbs_clearance.model.cases import paper_slider_crank, slider_crank_two_clearances
+    from mbs_clearance.model.design import linkage_with
+
+    m = SliderCrank()
+    inputs = {"crank_length": band(m.crank_length, 5e-5),
+              "radial_clearance": band(1e-5, 1e-6)}
+    a = tolerance_study(inputs, dgsm=4, revolution=2, seed=3, progress=False)
+    b = tolerance_study(inputs, paper_slider_crank(), dgsm=4, revolution=2, seed=3,
+                        progress=False)
+    np.testing.assert_allclose(b.dgsm["nu"], a.dgsm["nu"], rtol=1e-3)
+    np.testing.assert_allclose(b.dgsm["bound"], a.dgsm["bound"], rtol=1e-3)
+    lk = slider_crank_two_clearances()
+    two = {"coupler_length": band(0.12, 5e-5)}
+    r = tolerance_study(two, lk, dgsm=2, revolution=2, seed=4, progress=False)
+    from scipy.stats import qmc
+
+    x = two["coupler_length"].ppf(qmc.Sobol(1, scramble=True, seed=4).random(2)[:, 0])
+    h = 1e-4 * 0.12
+    g = [(peak_output(linkage_with(lk, {"coupler_length": v + h}), None, 2, rtol=1e-11)
+          - peak_output(linkage_with(lk, {"coupler_length": v - h}), None, 2, rtol=1e-11))
+         / (2 * h) for v in x]
+    assert r.dgsm["nu"][0] == pytest.approx(np.mean(np.square(g)), rel=1e-3)
+
+
 def test_read_inputs_json_and_salib_formats(tmp_path):
     from mbs_clearance.studies.tolerance import read_inputs
 
