@@ -164,6 +164,34 @@ def test_ddm_along_the_long_film_matches_finite_differences():
         assert np.all(np.max(np.abs(b), axis=0) > 0.0)
 
 
+def test_ddm_through_a_contact_onset_from_the_film_matches_finite_differences():
+    """In thin oil (0.1 mPa s) the journal crosses the film's fade (eccentricity ratios 0.9
+    to 0.97) into metal contact at about 0.022 of the first revolution: DDM along the
+    viscosity and the bearing length (the film's partial derivatives, then the contact
+    onset's jump of the sensitivities) against central differences of plain runs (rtol
+    1e-12, relative step 1e-5) for the coordinates at 12 times of the first tenth of a
+    revolution, within 2e-4 of each series' largest magnitude (measured: 5.7e-5; the
+    differences' own spread, steps 1e-5 against 1e-4: 6.2e-5)."""
+    lk = cases.paper_slider_crank_lubricated(viscosity=1e-4)
+    t_eval = np.linspace(0.0, 0.1 * lk.period, 13)[1:]
+    plain = simulate(lk, 1, rtol=1e-10)
+    onset = plain.t[1:][np.diff(plain.contact_phase[:, 0].astype(int)) == 1]
+    assert len(onset) >= 1 and onset[0] < t_eval[-1]
+    before = plain.t < onset[0]
+    clearance = lk.clearance_joints[0].clearance
+    assert _max_eps(plain, lk) >= 1.0 > np.max(np.hypot(
+        plain.eccentricity[before, 0, 0], plain.eccentricity[before, 0, 1])) / clearance
+    names = ("coupler_slider.viscosity", "coupler_slider.bearing_length")
+    ddm = sensitivities(lk, names, revolutions=1, t_eval=t_eval, rtol=1e-10)
+    fd = sensitivities(lk, names, revolutions=1, method="fd", t_eval=t_eval, rtol=1e-12,
+                       fd_relative_step=1e-5)
+    for c in lk.coordinates():
+        a, b = ddm.outputs[c], fd.outputs[c]
+        err = np.max(np.abs(a - b), axis=0) / np.max(np.abs(b), axis=0)
+        assert np.all(err < 2e-4), (c, err)
+        assert np.all(np.max(np.abs(b), axis=0) > 0.0)
+
+
 def _orbit_rms(t, ecc, t0, t1, clearance):
     """RMS of the eccentricity ratio |e| / c over [t0, t1] (trapezoids on the samples)."""
     keep = (t >= t0) & (t <= t1)
