@@ -281,6 +281,5 @@ def check_partials(what: str, model: str) -> None:
         raise ValueError(f"{what}: unknown film law {model!r}; allowed: {list(MODELS)}")
     if model not in DIFFERENTIABLE:
         raise ValueError(
-            f"{what}: the {model!r} film has no partial derivatives for DDM sensitivities "
-            f"(its closed form is integrated by parts, so its ends' motion enters); "
+            f"{what}: the {model!r} film has no partial derivatives for DDM sensitivities; "
             f"allowed: lubrication in {list(DIFFERENTIABLE)}, or method='fd'")
