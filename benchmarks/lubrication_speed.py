@@ -5,9 +5,12 @@ joint (`cases.paper_slider_crank`), at equal accuracy (each run at the default a
 
 A/B in one process, alternating (dry, lubricated, ...): the median of the per-pair time
 ratios lubricated / dry for a full `simulate` of 4 revolutions, with the right-hand side
-evaluations of both and their revolution-4 peaks. The budget: 2.
+evaluations of both and their revolution-4 peaks. The budget: 2. `--method` runs the
+lubricated case with another integration method (e.g. rodas4, linearly implicit), `--rtol`
+at a fixed tolerance instead of the default accuracy (both runs).
 
-    python -m benchmarks.lubrication_speed [--repeats 5] [--viscosity 9e-3]
+    python -m benchmarks.lubrication_speed [--repeats 5] [--viscosity 9e-3] [--method rodas4]
+        [--rtol 1e-8]
 """
 
 from __future__ import annotations
@@ -23,16 +26,22 @@ def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=5)
     parser.add_argument("--viscosity", type=float, default=9e-3, help="Pa s")
+    parser.add_argument("--method", default="dopri5", help="the lubricated run's method")
+    parser.add_argument("--rtol", type=float, default=None, help="fixed rtol of both runs")
     args = parser.parse_args(argv)
     dry = paper_slider_crank()
     lube = paper_slider_crank_lubricated(viscosity=args.viscosity)
+    fixed = {} if args.rtol is None else {"rtol": args.rtol}
     print(machine_summary())
-    a = simulate(dry, 4)                      # compile / load both
-    b = simulate(lube, 4)
+    print(f"lubricated run: method {args.method}, "
+          + ("default accuracy" if args.rtol is None else f"rtol {args.rtol:g}"))
+    a = simulate(dry, 4, **fixed)                      # compile / load both
+    b = simulate(lube, 4, method=args.method, **fixed)
     print(f"viscosity {args.viscosity} Pa s: nfev dry {a.stats['nfev']}, lubricated "
           f"{b.stats['nfev']} (ratio {b.stats['nfev'] / a.stats['nfev']:.1f}); rev-4 peak "
           f"dry {a.max_base_force(4):.6g} N, lubricated {b.max_base_force(4):.6g} N")
-    r = paired(lambda: simulate(dry, 4), lambda: simulate(lube, 4), args.repeats)
+    r = paired(lambda: simulate(dry, 4, **fixed),
+               lambda: simulate(lube, 4, method=args.method, **fixed), args.repeats)
     print(f"simulate, 4 revolutions: dry {r['a'] * 1e3:.1f} ms, lubricated "
           f"{r['b'] * 1e3:.1f} ms, median ratio of pairs {r['ratio']:.1f} (budget 2)")
 

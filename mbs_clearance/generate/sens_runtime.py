@@ -270,10 +270,10 @@ def _film_state(jac, stride, vc, wj, wb, r_ex, r_ey, r_exd, r_eyd, r_wj, r_wb, r
     exd, eyd = jac[r_exd * stride + vc], jac[r_eyd * stride + vc]
     jac[r_wj * stride + vc] = wj
     jac[r_wb * stride + vc] = wb
-    active, p1, p2, w, dw, fx, fy, tj, tb, pw = film_values(
+    active, ends, w, dw, fx, fy, tj, tb, pw = film_values(
         ex, ey, exd, eyd, wj, wb, radius, clearance, length, viscosity, int(model), start,
         end)
-    return ex, ey, exd, eyd, wj, wb, active, p1, p2, w, dw, fx, fy, tj, tb, pw
+    return ex, ey, exd, eyd, wj, wb, active, ends, w, dw, fx, fy, tj, tb, pw
 
 
 @nb.njit(**KERNEL)
@@ -287,10 +287,10 @@ def film_jacobian(jac, stride, nz, wj, wb, r_ex, r_ey, r_exd, r_eyd, r_wj, r_wb,
     clearance, bearing length, viscosity and the fade's ends), the film's force on the
     journal (rows ffx, ffy, taken off the force on the bearing, rows fx, fy), its torques
     on the journal and on the bearing and its power (`laws.lubrication.partials`), as
-    `runtime.lubricated_stage` (film law id `model`: derivatives NaN for a law without
+    `runtime.lubricated_stage` (film law id `model`; derivatives NaN for a law without
     partials, `laws.lubrication.partials.DIFFERENTIABLE`). Returns (fx, fy, T_J, T_B)."""
     vc = nz
-    ex, ey, exd, eyd, wj, wb, active, p1, p2, w, dw, fx, fy, tj, tb, pw = _film_state(
+    ex, ey, exd, eyd, wj, wb, active, ends, w, dw, fx, fy, tj, tb, pw = _film_state(
         jac, stride, vc, wj, wb, r_ex, r_ey, r_exd, r_eyd, r_wj, r_wb, radius, clearance,
         length, viscosity, model, start, end)
     if active:
@@ -302,8 +302,9 @@ def film_jacobian(jac, stride, nz, wj, wb, r_ex, r_ey, r_exd, r_eyd, r_wj, r_wb,
             ds = 1.0 if col == c_s else 0.0
             de = 1.0 if col == c_e else 0.0
             d = film_direction(
-                ex, ey, exd, eyd, wj, wb, radius, clearance, length, viscosity, start, end,
-                p1, p2, w, dw, fx, fy, tj, jac[r_ex * stride + col], jac[r_ey * stride + col],
+                ex, ey, exd, eyd, wj, wb, radius, clearance, length, viscosity, int(model),
+                start, end, ends, w, dw, fx, fy, tj, jac[r_ex * stride + col],
+                jac[r_ey * stride + col],
                 jac[r_exd * stride + col], jac[r_eyd * stride + col],
                 jac[r_wj * stride + col], jac[r_wb * stride + col], dr, dc, dl, dmu, ds, de)
             _film_rows(jac, stride, col, r_fx, r_fy, r_ffx, r_ffy, r_tj, r_tb, r_pw, d)
@@ -317,15 +318,15 @@ def film_tangent(out, ts, nd, dz, nz, wj, wb, r_ex, r_ey, r_exd, r_eyd, r_wj, r_
                  clearance, length, viscosity, model, start, end):
     """`film_jacobian` along nd seed directions dz (nd x nz, flat), after `contact_tangent`
     (rows of out: ts = nd + 1 per row, column nd the value). Returns (fx, fy, T_J, T_B)."""
-    ex, ey, exd, eyd, wj, wb, active, p1, p2, w, dw, fx, fy, tj, tb, pw = _film_state(
+    ex, ey, exd, eyd, wj, wb, active, ends, w, dw, fx, fy, tj, tb, pw = _film_state(
         out, ts, nd, wj, wb, r_ex, r_ey, r_exd, r_eyd, r_wj, r_wb, radius, clearance,
         length, viscosity, model, start, end)
     for d in range(nd):
         o = d * nz
         if active:
             der = film_direction(
-                ex, ey, exd, eyd, wj, wb, radius, clearance, length, viscosity, start, end,
-                p1, p2, w, dw, fx, fy, tj, out[r_ex * ts + d], out[r_ey * ts + d],
+                ex, ey, exd, eyd, wj, wb, radius, clearance, length, viscosity, int(model),
+                start, end, ends, w, dw, fx, fy, tj, out[r_ex * ts + d], out[r_ey * ts + d],
                 out[r_exd * ts + d], out[r_eyd * ts + d], out[r_wj * ts + d],
                 out[r_wb * ts + d], dz[o + c_r], dz[o + c_c], dz[o + c_l], dz[o + c_mu],
                 dz[o + c_s], dz[o + c_e])

@@ -39,7 +39,8 @@ class RunSettings:
     atol : absolute tolerance: one number, one per state component, or the state's and then
         per clearance joint its penetration's and penetration rate's (np.inf: not under
         error control); None: from the linkage's scales (`linkage_model.default_atol`)
-    method : the integrator's method ("dopri5", "dop853", "bs3")
+    method : the integrator's method ("dopri5", "dop853", "bs3", "rodas4": linearly
+        implicit, for a stiff oil film at a fixed rtol, docs/lubrication.md)
     max_steps : step attempts allowed (>= 1)
     h_max : largest step in s (> 0; None: an eighth of a drive revolution)
     h0 : first step in s (0: automatic)

@@ -12,10 +12,12 @@ from mbs_clearance.solve.linkage_model import initial_state, pack_parameters
 CASES = ("paper_slider_crank", "slider_crank_two_clearances", "four_bar",
          "paper_slider_crank+coulomb", "paper_slider_crank+ambrosio",
          "paper_slider_crank+stribeck", "paper_slider_crank+general",
-         "paper_slider_crank_lubricated", "paper_slider_crank_lubricated+fade")
+         "paper_slider_crank_lubricated", "paper_slider_crank_lubricated+fade",
+         "paper_slider_crank_lubricated+long")
 # the four-bar at the 0.1 mm clearance where this test was written and measured (its default
 # became 0.01 mm in the same session; the free-flight difference quotients of the point
 # coordinates there were not re-examined: 1.2e-6 relative off, see the session's note)
+FADE_ENDS = {"film_fade_start": 0.3, "film_fade_end": 0.7}
 OVERRIDES = {"four_bar": {"clearance": 1e-4},
              # friction: thresholds at the scale of the slip velocity (~1 m/s
              # here) so that the laws' slopes in it are exercised
@@ -29,12 +31,14 @@ OVERRIDES = {"four_bar": {"clearance": 1e-4},
                                              "friction_coefficient": 0.3, "friction_v0": 0.5,
                                              "friction_v1": 20.0,
                                              "friction_static_coefficient": 0.45,
-                                             "friction_stribeck_velocity": 1.0}}
+                                             "friction_stribeck_velocity": 1.0},
+             # the long film (its partials with its lobes' ends moving), inside the fade
+             "paper_slider_crank_lubricated+long": {"lubrication": "long", **FADE_ENDS}}
 
 
 #: the lubricated case with its film's fade over eps 0.3-0.7: the "free" states below (the
 #: journal half a clearance off-centre) are inside the fade, its ends' columns exercised
-FADE = {"film_fade_start": 0.3, "film_fade_end": 0.7}
+FADE = FADE_ENDS
 
 
 def _case(case):

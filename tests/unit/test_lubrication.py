@@ -389,18 +389,6 @@ def test_lubricated_case_description():
         lk.parameter_names())
 
 
-def test_ddm_refuses_the_long_film():
-    """DDM sensitivities of a joint in the long film (whose partial derivatives are not
-    there) fail before any work, naming the joint, the law and what is allowed."""
-    from mbs_clearance.generate import load_model
-    from mbs_clearance.solve.linkage_ddm import ddm_run
-
-    lk = cases.paper_slider_crank_lubricated(lubrication="long")
-    with pytest.raises(ValueError, match="'coupler_slider'.*'long' film.*'short'.*'fd'"):
-        ddm_run(lk, load_model(lk), None, None, [], scale=1.0, rtol=1e-6, atol_plain=None,
-                revolutions=1)
-
-
 @pytest.mark.exudyn
 def test_exudyn_refuses_a_film_it_cannot_build():
     """The Exudyn backend builds the film beside its own contact element; with Exudyn's
@@ -454,29 +442,39 @@ def _film_outputs(x, model=0):
                      fx * (vx + wb * ey) + fy * (vy - wb * ex) + tj * (wj - wb)])
 
 
+@pytest.mark.parametrize("model", [0, 1])
 @pytest.mark.parametrize("eps, bound", [(0.3, 1e-7), (0.93, 1e-7), (1e-6, 1e-7), (0.0, 1e-6)])
-def test_film_partials_match_central_differences(eps, bound):
-    """The faded short film's partial derivatives (`partials.film_partials`: the complex
-    step of its closed form with the film's ends held) along every input (offset, its rate,
-    the angular velocities, radius, clearance, length, viscosity, the fade's ends) equal
-    central differences of the law (Richardson, steps 1e-6 and 5e-7 of each input) in the
-    film, inside the fade (0.93) and at and near the centre, within `bound` of each
-    column's largest entry (measured: at most 1e-8 off the centre, 3.7e-8 at 1e-6 c and
-    2e-7 at the centre, where the derivatives are taken 1e-8 c away)."""
+def test_film_partials_match_central_differences(eps, bound, model):
+    """The faded film's partial derivatives (`partials.film_partials`: the complex step of
+    its closed form, the short film's with its ends held, the long film's with its ends
+    moved as zeros of the pressure) along every input (offset, its rate, the angular
+    velocities, radius, clearance, length, viscosity, the fade's ends) equal central
+    differences of the law (Richardson, steps 1e-6 and 5e-7 of each input) in the film,
+    inside the fade (0.93) and at and near the centre, within `bound` of each column's
+    largest entry (measured: at most 1e-8 off the centre, 3.7e-8 at 1e-6 c and 2e-7 at the
+    centre, where the derivatives are taken 1e-8 c away; there the long film's wedge gives
+    its force a slope along omega, 2.9e-6 of the column's largest entry, where the law at
+    the centre has none: bound 5e-6)."""
     from mbs_clearance.laws.lubrication.partials import N_INPUTS, film_partials
 
+    if model == 1 and eps == 0.0:
+        bound = 5e-6
     rng = np.random.default_rng(3)
     a = rng.uniform(0.0, 2.0 * np.pi)
     x = np.array([eps * C * math.cos(a), eps * C * math.sin(a), 1e-3, -2e-3, 300.0, 40.0,
                   R, C, 0.01, MU, 0.9, 0.97])
-    P = film_partials(*x)
-    np.testing.assert_allclose(P[:, -1], _film_outputs(x), rtol=1e-13, atol=0.0)
+    P = film_partials(*x, model)
+    np.testing.assert_allclose(P[:, -1], _film_outputs(x, model), rtol=1e-13, atol=0.0)
     for k in range(N_INPUTS):
-        h = 1e-6 * max(abs(x[k]), C if k < 2 else 1e-3)
+        # near the centre the long film's force moves with the angular velocities by 1e-14
+        # of itself per 1e-6 of them, below its round-off: steps of 1e-2 there
+        rel = 1e-2 if model == 1 and eps < 1e-3 and k in (4, 5) else 1e-6
+        h = rel * max(abs(x[k]), C if k < 2 else 1e-3)
         e = np.eye(N_INPUTS)[k]
 
         def d(step, e=e):
-            return (_film_outputs(x + step * e) - _film_outputs(x - step * e)) / (2 * step)
+            return (_film_outputs(x + step * e, model)
+                    - _film_outputs(x - step * e, model)) / (2 * step)
 
         fd = (4 * d(h / 2) - d(h)) / 3
         scale = np.max(np.abs(fd))
@@ -485,13 +483,3 @@ def test_film_partials_match_central_differences(eps, bound):
             continue
         assert scale > 0.0, k
         assert np.max(np.abs(P[:, k] - fd)) <= bound * scale, (k, P[:, k], fd)
-
-
-def test_long_film_has_no_partials():
-    """The long film's partial derivatives are not there: NaN, never a silent number (its
-    DDM run is refused by name before, `test_ddm_refuses_the_long_film`)."""
-    from mbs_clearance.laws.lubrication.partials import film_partials
-
-    P = film_partials(0.4 * C, 0.1 * C, 1e-3, 0.0, 300.0, 0.0, R, C, 0.01, MU, 0.9, 0.97, 1)
-    assert np.all(np.isnan(P[:, :-1]))
-    assert np.all(np.isfinite(P[:, -1]))

@@ -60,7 +60,7 @@ from ...numerics._kernel import KERNEL
 from ..base import Parameter
 
 __all__ = ["LubricationLaw", "VISCOSITY", "BEARING_LENGTH", "LAWS", "MODELS",
-           "short_bearing", "long_bearing", "film_force", "sommerfeld_angle"]
+           "short_bearing", "long_bearing", "film_force", "sommerfeld_angle", "long_lobes"]
 
 VISCOSITY = Parameter(
     "viscosity", "mu", "Pa s", 9.0e-3, 0.0, low_open=True,
@@ -196,17 +196,14 @@ def _long_integrals(p1, p2, eps):
 
 
 @nb.njit(**KERNEL)
-def long_bearing(ex, ey, vx, vy, omega_j, omega_b, R, c, L, mu):
-    """(Fx, Fy, T) of the long (Sommerfeld) film with the half-Sommerfeld condition over
-    the exact positive region of the full-film pressure (valid for eps < 1)."""
-    e, eps, ux, uy, eps_dot, rate_t = _frame(ex, ey, vx, vy, c)
-    a = (omega_j + omega_b) * eps - 2.0 * rate_t
-    q = 1.0 - eps * eps
-    s = math.sqrt(q)
-    a1 = a / ((2.0 + eps * eps) * q * s)
-    b1 = eps_dot / ((2.0 + 3.0 * eps * eps) * q * q)
-    # the positive region: from each up-crossing of the pressure to the next down-crossing
-    j1 = j2 = j3 = j4 = 0.0
+def long_lobes(eps, a1, b1):
+    """The positive region of the long film's full pressure (`_long_pressure`) as its
+    lobes in Sommerfeld's variable: (n, u1, d1, u2, d2), n lobes (u_k, d_k) from an
+    up-crossing to the next down-crossing (a trigonometric polynomial of degree 2: at most
+    two), in the order the sum over them takes (the one wrapping through psi = 0 last, its
+    end past 2 pi); n = -1: positive all around (0, 2 pi), n = 0: nowhere."""
+    n = 0
+    u1 = d1 = u2 = d2 = 0.0
     step = 2.0 * math.pi / _SAMPLES
     g0 = _long_pressure(0.0, eps, a1, b1)[0]
     prev = g0
@@ -222,19 +219,47 @@ def long_bearing(ex, ey, vx, vy, omega_j, omega_b, R, c, L, mu):
             if g > 0.0:
                 up = z
             elif up >= 0.0:
-                i1, i2, i3, i4 = _long_integrals(up, z, eps)
-                j1, j2, j3, j4 = j1 + i1, j2 + i2, j3 + i3, j4 + i4
+                if n == 0:
+                    u1, d1 = up, z
+                else:
+                    u2, d2 = up, z
+                n += 1
                 up = -1.0
             else:
                 first_down = z
         prev = g
     if crossed and up >= 0.0 and first_down >= 0.0:
         # the last positive lobe wraps through psi = 0
-        i1, i2, i3, i4 = _long_integrals(up, first_down + 2.0 * math.pi, eps)
-        j1, j2, j3, j4 = j1 + i1, j2 + i2, j3 + i3, j4 + i4
+        if n == 0:
+            u1, d1 = up, first_down + 2.0 * math.pi
+        else:
+            u2, d2 = up, first_down + 2.0 * math.pi
+        n += 1
     elif not crossed and g0 > 0.0:
-        i1, i2, i3, i4 = _long_integrals(0.0, 2.0 * math.pi, eps)
-        j1, j2, j3, j4 = i1, i2, i3, i4
+        return -1, 0.0, 2.0 * math.pi, 0.0, 0.0
+    return n, u1, d1, u2, d2
+
+
+@nb.njit(**KERNEL)
+def long_bearing(ex, ey, vx, vy, omega_j, omega_b, R, c, L, mu):
+    """(Fx, Fy, T) of the long (Sommerfeld) film with the half-Sommerfeld condition over
+    the exact positive region of the full-film pressure (valid for eps < 1)."""
+    e, eps, ux, uy, eps_dot, rate_t = _frame(ex, ey, vx, vy, c)
+    a = (omega_j + omega_b) * eps - 2.0 * rate_t
+    q = 1.0 - eps * eps
+    s = math.sqrt(q)
+    a1 = a / ((2.0 + eps * eps) * q * s)
+    b1 = eps_dot / ((2.0 + 3.0 * eps * eps) * q * q)
+    n, u1, d1, u2, d2 = long_lobes(eps, a1, b1)
+    j1 = j2 = j3 = j4 = 0.0
+    if n == -1:
+        j1, j2, j3, j4 = _long_integrals(u1, d1, eps)
+    if n >= 1:
+        i1, i2, i3, i4 = _long_integrals(u1, d1, eps)
+        j1, j2, j3, j4 = j1 + i1, j2 + i2, j3 + i3, j4 + i4
+    if n >= 2:
+        i1, i2, i3, i4 = _long_integrals(u2, d2, eps)
+        j1, j2, j3, j4 = j1 + i1, j2 + i2, j3 + i3, j4 + i4
     k6 = 6.0 * mu * R * R * R * L / (c * c)
     fr = -k6 * (a * j1 / ((2.0 + eps * eps) * q) + 2.0 * eps_dot * j2 / (q * s))
     ft = k6 * (a * j3 / ((2.0 + eps * eps) * q * s) + 2.0 * eps_dot * j4 / (q * q))
