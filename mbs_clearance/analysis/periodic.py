@@ -596,6 +596,8 @@ class _Continuation:
         self.cache = {}
         self.runs = 0
         self.plain_runs = 0
+        #: fold candidates bisection did not confirm (field value, half width)
+        self.unconfirmed = []
 
     def value_of(self, uu):
         u = self.u0 + uu * self.span
@@ -710,8 +712,12 @@ class _Continuation:
         return None
 
 
-def _tangent_of(Jg, previous):
-    """The unit null vector of the Jacobian Jg (n, n + 1), oriented along `previous`."""
+def _tangent_of(Jg, previous, orientation=None):
+    """The unit null vector of the Jacobian Jg (n, n + 1), oriented along `previous`, or,
+    with `orientation` (+-1), so that det([Jg; t]) has that sign: that sign is the sign
+    of det(M - I) t_u, so the field's component t_u changes sign exactly where det(M - I)
+    does (a fold), not where the branch turns by more than a right angle in the state
+    over one step (where orienting along `previous` flips it)."""
     n = Jg.shape[0]
     rhs = np.zeros(n + 1)
     rhs[-1] = 1.0
@@ -720,7 +726,14 @@ def _tangent_of(Jg, previous):
     except np.linalg.LinAlgError:
         t = np.linalg.svd(Jg)[2][-1]
     t /= np.linalg.norm(t)
+    if orientation is not None:
+        return t if _orientation(Jg, t) == orientation else -t
     return t if t @ previous >= 0 else -t
+
+
+def _orientation(Jg, t) -> float:
+    """The sign of det([Jg; t]) (the branch's orientation, constant along it)."""
+    return 1.0 if np.linalg.det(np.vstack([Jg, t[None, :]])) >= 0.0 else -1.0
 
 
 def _tests(A):
@@ -793,7 +806,8 @@ def continue_orbits(mech, field_name: str, start: float, stop: float, *, period:
     w = np.concatenate([np.concatenate([orbit.state, held]) / con.S0, [0.0]])
     g, Jg, A, active, ons, _ = con.residual(w, modes, held)
     t = _tangent_of(Jg, np.concatenate([np.zeros(len(w) - 1), [1.0]]))
-    pts = [dict(w=w, A=A, active=active, onsets=ons, t=t, tests=_tests(A), J=Jg)]
+    pts = [dict(w=w, A=A, active=active, onsets=ons, t=t, tests=_tests(A), J=Jg,
+                o=_orientation(Jg, t))]
     steps = dict(step=step, min_step=min_step, max_step=max_step, max_points=max_points,
                  tol=tol, locate_tol=locate_tol, stop_at_first=stop_at_first)
     found, stopped = _follow(con, pts, modes, held, progress=progress, **steps)
@@ -823,13 +837,16 @@ def _follow(con, pts, modes, held, *, step, min_step, max_step, max_points, tol,
                 break
             continue
         wn, info = new
-        tn = _tangent_of(info["J"], cur["t"])
+        tn = _tangent_of(info["J"], cur["t"], cur["o"])
         pt = dict(w=wn, A=info["A"], active=info["active"], onsets=info["onsets"], t=tn,
-                  tests=_tests(info["A"]), ds=ds, J=info["J"])
+                  tests=_tests(info["A"]), ds=ds, J=info["J"], o=cur["o"])
         kinds = _crossings(cur, pt)
         pts.append(pt)
-        for kind in kinds:
+        for kind in list(kinds):
             point = _locate(con, cur, pt, kind, modes, held, tol, locate_tol)
+            if point is None:
+                kinds.remove(kind)
+                continue
             point.index = len(pts) - 2
             found.append(point)
         if progress is not None:
@@ -876,7 +893,8 @@ def _branch_of(con, pts, found, stopped, setup) -> Branch:
                   period=con.period, sections=np.array(sections, dtype=float),
                   clearances=np.array(clear),
                   counters=dict(shooting_runs=con.runs, plain_runs=con.plain_runs,
-                                speed=con.sh0.omega),
+                                speed=con.sh0.omega,
+                                unconfirmed_folds=len(con.unconfirmed)),
                   setup=setup)
 
 
@@ -926,7 +944,7 @@ def switch_branch(branch: Branch, point: BranchPoint, *, step: float = 0.01,
     w1, info = new
     t1 = _tangent_of(info["J"], t0)
     pts = [dict(w=w1, A=info["A"], active=info["active"], onsets=info["onsets"], t=t1,
-                tests=_tests(info["A"]), J=info["J"])]
+                tests=_tests(info["A"]), J=info["J"], o=_orientation(info["J"], t1))]
     found, stopped = _follow(con, pts, modes, held, progress=progress,
                              **dict(steps, step=max(ds, steps["min_step"])))
     return _branch_of(con, pts, found, stopped, dict(st, steps=steps))
@@ -955,7 +973,9 @@ def _crossings(a, b) -> list:
         return kinds       # the smooth test functions jump with the active memories
     fa, pa, na, mua = a["tests"]
     fb, pb, nb_, mub = b["tests"]
-    if fa * fb < 0.0 or a["t"][-1] * b["t"][-1] < 0.0:
+    # with the tangent oriented by det([Jg; t]) its field component turns exactly where
+    # det(M - I) changes sign: one test
+    if fa * fb < 0.0:
         kinds.append("fold")
     if pa * pb < 0.0:
         kinds.append("period_doubling")
@@ -971,12 +991,8 @@ def _crossings(a, b) -> list:
 def _test_value(kind, pt):
     if kind == "grazing":
         return None
-    if kind == "fold":
-        # the field's component of the tangent: it changes sign at every fold, also where
-        # the map's smoothness changes there (no multiplier at +1)
-        return pt["t"][-1]
     f, p, n, _ = pt["tests"]
-    return {"period_doubling": p, "neimark_sacker": n}[kind]
+    return {"fold": f, "period_doubling": p, "neimark_sacker": n}[kind]
 
 
 def _locate(con, a, b, kind, modes, held, tol, locate_tol) -> BranchPoint:
@@ -996,7 +1012,8 @@ def _locate(con, a, b, kind, modes, held, tol, locate_tol) -> BranchPoint:
             break
         wm, info = new
         pm = dict(w=wm, onsets=info["onsets"], tests=_tests(info["A"]),
-                  t=_tangent_of(info["J"], a["t"]), A=info["A"], active=info["active"])
+                  t=_tangent_of(info["J"], a["t"], a["o"]), A=info["A"],
+                  active=info["active"])
         if kind == "grazing":
             same = np.array_equal(pm["onsets"], a["onsets"])
         else:
@@ -1015,6 +1032,11 @@ def _locate(con, a, b, kind, modes, held, tol, locate_tol) -> BranchPoint:
         note = ("no multiplier at +1: the map's smoothness changes at this fold (e.g. a "
                 "contact force reaching zero within a contact phase)")
     if hi - lo > 0.0 and abs(ub - ua) > locate_tol:
+        if kind == "fold":
+            # unconfirmed: det(M - I) changed sign over a step the corrector cannot
+            # bisect, no evidence of a multiplier through +1
+            con.unconfirmed.append((value, half))
+            return None
         note += ("; " if note else "") + "bisection stopped (corrector did not converge)"
     vec = None
     if kind == "period_doubling":

@@ -374,3 +374,43 @@ def test_branch_over_crank_speed_runs_through_the_regime_maps_samples():
         PAPER.clearance * np.array([1.0, 1.0, speed, speed]))
     assert np.max(np.abs(diff[:2])) < 1e-3
     assert np.max(np.abs(diff[2:])) < 1e-2
+
+
+def test_tangent_turns_back_only_where_det_of_m_minus_i_changes_sign():
+    """The continuation's tangent, oriented by the sign of det([Jg; t]), against closed
+    forms. (a) P(z, u) = z + u - z^2: fixed points u = z^2, det(P' - I) = -2 z, a fold at
+    z = 0, where (and only where) t_u must change sign. (b) A branch
+    with multipliers 0 (det(P' - I) = 1, never a fold) whose state turns by more than a right
+    angle over one step: t_u keeps its sign (orienting along the previous tangent flips it:
+    the false fold)."""
+    from mbs_clearance.analysis.periodic import _orientation, _tangent_of
+
+    # (a) the fold of P(z, u) = z + u - z^2 (fixed points u = z^2) at z = 0
+    def jac(z):
+        return np.array([[-2.0 * z, 1.0]])          # [P_z - 1, P_u]
+
+    zs = np.linspace(-1.0, 1.0, 21)
+    t = _tangent_of(jac(zs[0]), np.array([1.0, 0.0]))
+    o = _orientation(jac(zs[0]), t)
+    signs = []
+    for z in zs:
+        t = _tangent_of(jac(z), t, o)
+        # closed form: the null vector of [-2 z, 1] is (1, 2 z) / norm
+        np.testing.assert_allclose(abs(t[1]), abs(2 * z) / math.hypot(1.0, 2 * z))
+        signs.append(np.sign(t[1]) if z != 0.0 else 0.0)
+    signs = np.array(signs)
+    assert np.all(signs[zs < 0] == signs[0]) and np.all(signs[zs > 0] == -signs[0])
+    # (b) P(z, u) = b(u) u-derivative rotating by 150 degrees per step, P_z = 0 (A - I = -I)
+    t = np.array([0.0, 0.0, 1.0])
+    for k, ang in enumerate(np.radians(np.arange(0.0, 900.0, 150.0))):
+        b = 50.0 * np.array([math.cos(ang), math.sin(ang)])
+        Jg = np.hstack([-np.eye(2), b[:, None]])
+        if k == 0:
+            t = _tangent_of(Jg, t)
+            o = _orientation(Jg, t)
+        flip = _tangent_of(Jg, t)                     # along the previous tangent only
+        t = _tangent_of(Jg, t, o)
+        np.testing.assert_allclose(t[:2], b * t[2], atol=1e-12)   # t_z = (I - P_z)^-1 P_u t_u
+        assert t[2] > 0.0
+        if k:
+            assert flip[2] < 0.0
