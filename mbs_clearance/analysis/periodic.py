@@ -32,6 +32,15 @@ each onset with the event-time term: the matrix is that of the non-smooth map (c
 against central finite differences of the map, tests/unit/test_periodic.py).
 
 Stability: "stable" where every multiplier lies inside the unit circle, else "unstable".
+
+The guess. A settled run can still carry a weakly damped fast vibration of the contact
+(the four-bar at 10 rpm: the joint's contact mode, thousands of oscillations per
+revolution, decays over about 100 revolutions), and a Newton step on it leaves the region
+where the map is near linear (the oscillation's frequency depends on its amplitude, so its
+phase after a revolution does too). The default guess is therefore the better, by the map's
+residual, of the settled section state and its smoothed value one revolution later: a
+polynomial fitted to the run's states over a short window around the section (a slow
+orbit's state is smooth there, the vibration averages out of the fit).
 """
 
 from __future__ import annotations
@@ -66,6 +75,12 @@ MAX_STEP = 0.5
 
 #: default settling revolutions of the guess (a plain run from the centred start)
 SETTLE = 20
+
+#: the smoothed guess: a window of this fraction of a revolution around the section, and
+#: the degree of the polynomial fitted there (module docstring, "The guess")
+SMOOTH_WINDOW = 0.02
+SMOOTH_DEGREE = 6
+SMOOTH_SAMPLES = 401
 
 
 @dataclass
@@ -162,6 +177,7 @@ class _Shooter:
         self.sens_settings = flow.settings._replace(atol=atol, n_err=n2 * (1 + nb))
         self.sens_kernel = model.integrate_sens
         self.rtol = flow.rtol
+        self.method = method
         self.guess_flow = flow
 
     def memory(self, p) -> tuple[np.ndarray, np.ndarray]:
@@ -257,7 +273,22 @@ def _guess_of(sh, guess, settle: int):
         for k in range(settle):
             flow.advance((k + 1) * 2.0 * math.pi / sh.omega)
         m, v = sh.memory(flow.p)
-        return flow.y[:sh.n2].copy(), m, v
+        raw = flow.y[:sh.n2].copy(), m, v
+        if settle == 0:
+            return raw
+        smooth = _smoothed_section(sh, flow, settle + 1)
+        if smooth is None:
+            return raw
+        res = []
+        for x, m_, v_ in (raw, smooth):
+            try:
+                xe, me, ve, ons, _ = sh.value(x, m_, v_)
+            except RuntimeError:
+                res.append(math.inf)
+                continue
+            res.append(float(np.max(np.abs((xe - x) / sh.scale[:sh.n2])))
+                       if np.all(me == m_) else math.inf)
+        return smooth if res[1] < res[0] else raw
     if isinstance(guess, PeriodicOrbit):
         return guess.state.copy(), guess.modes.copy(), guess.impact_velocities.copy()
     if isinstance(guess, Start):
@@ -269,6 +300,51 @@ def _guess_of(sh, guess, settle: int):
                      f"{type(guess).__name__}")
 
 
+def _map_error(sh, x, modes, vel, idx) -> float:
+    """Largest scaled difference of the map at (x, modes, vel) between its runs at the
+    shooting's rtol and at rtol / 10 (an estimate of the map's integration error: the
+    residual Newton can reach); nan where a run fails."""
+    ends = []
+    for rtol in (sh.rtol, sh.rtol / 10.0):
+        one = _Shooter(sh.mech, len(sh.edges) - 1, rtol, sh.method, sh.edges[0])
+        try:
+            xe, _, ve, _, _ = one.value(x, modes, vel)
+        except RuntimeError:
+            return math.nan
+        ends.append(np.concatenate([xe, ve])[idx] / sh.scale[idx])
+    return float(np.max(np.abs(ends[0] - ends[1])))
+
+
+def _smoothed_section(sh, flow, revolution: int):
+    """The section state of the plain run `flow` at the end of `revolution`, smoothed: the
+    value at the section of a polynomial (SMOOTH_DEGREE, Hann-weighted least squares)
+    fitted per coordinate and rate to the run's states over SMOOTH_WINDOW of a revolution
+    centred there; with the memory at the section. None where a contact mode or memory
+    changes within the window (the state is not smooth there)."""
+    T = 2.0 * math.pi / sh.omega
+    t_c = revolution * T
+    w = SMOOTH_WINDOW * T
+    ts = np.linspace(t_c - 0.5 * w, t_c + 0.5 * w, SMOOTH_SAMPLES)
+    try:
+        flow.advance(ts[0])
+        mem0 = sh.memory(flow.p)
+        ys = []
+        for t in ts:
+            if t > flow.t:
+                flow.advance(t)
+            ys.append(flow.y[:sh.n2].copy())
+    except RuntimeError:
+        return None
+    m, v = sh.memory(flow.p)
+    if np.any(m != mem0[0]) or np.any(v != mem0[1]):
+        return None
+    tau = (ts - t_c) / w
+    weight = np.sqrt(np.sin(math.pi * (tau + 0.5)) ** 2 + 1e-3)
+    ys = np.array(ys) / sh.scale[:sh.n2]
+    fit = np.polynomial.polynomial.polyfit(tau, ys, SMOOTH_DEGREE, w=weight)
+    return fit[0] * sh.scale[:sh.n2], m, v
+
+
 def periodic_orbit(mech, period: int = 1, guess=None, *, rtol: float | None = None,
                    tol: float = NEWTON_TOL, max_iterations: int = 12, settle: int = SETTLE,
                    method: str = "dop853", trajectory: bool = True) -> PeriodicOrbit:
@@ -278,11 +354,14 @@ def periodic_orbit(mech, period: int = 1, guess=None, *, rtol: float | None = No
     docstring); with the Floquet multipliers and the stability verdict.
 
     guess: None (the state after `settle` revolutions of a plain run from the centred
-    start), a PeriodicOrbit (e.g. of a nearby design), a `linkage_model.Start`, or a tuple
-    (state, modes, impact_velocities). rtol: of the shooting runs (default
-    SHOOTING_RTOL); tol: Newton's tolerance on max |P(z) - z| in scaled units (fractions of
-    the clearance; of clearance x speed for rates). trajectory: also run the orbit through
-    `simulate` from the converged state (`PeriodicOrbit.trajectory`).
+    start, or its smoothed value a revolution later where the map's residual is smaller
+    there: the module docstring), a PeriodicOrbit (e.g. of a nearby design), a
+    `linkage_model.Start`, or a tuple (state, modes, impact_velocities). rtol: of the
+    shooting runs (default SHOOTING_RTOL); tol: Newton's tolerance on max |P(z) - z| in
+    scaled units (fractions of the clearance; of clearance x speed for rates), to be above
+    the map's integration error (the four-bar's: about 1e-4 at rtol 1e-10). trajectory:
+    also run the orbit through `simulate` from the converged state
+    (`PeriodicOrbit.trajectory`).
 
     Raises ValueError for bad input before any computation, RuntimeError where Newton does
     not converge within `max_iterations` (with what to try).
@@ -362,11 +441,15 @@ def _newton(sh, x, modes, vel, period, tol, max_iterations, trajectory):
         history[-1]["damping"] = lam
         x, vel = xn, vn
     else:
+        err = _map_error(sh, x, modes, vel, idx)
+        floor = (f"; the map's own error there (its runs at rtol and rtol / 10 differ by "
+                 f"{err:.2g}, scaled) is above tol: a larger tol or a tighter rtol"
+                 if err > tol else "")
         raise RuntimeError(
             f"periodic_orbit: Newton did not converge in {max_iterations} iterations "
-            f"(residual {res:.3g} > tol {tol:g}, scaled); try a guess from a settled run "
-            "(settle=... more revolutions, or a Start / PeriodicOrbit of a nearby design), "
-            "a different period, or a tighter rtol")
+            f"(residual {res:.3g} > tol {tol:g}, scaled){floor}; try a guess from a settled "
+            "run (settle=... more revolutions, or a Start / PeriodicOrbit of a nearby "
+            "design), a different period, or a tighter rtol")
     mult = np.linalg.eigvals(A)
     mult = mult[np.argsort(-np.abs(mult), kind="stable")]
     names = tuple(sh.model.COORDINATES) + tuple(f"{c}_rate" for c in sh.model.COORDINATES)

@@ -414,3 +414,73 @@ def test_tangent_turns_back_only_where_det_of_m_minus_i_changes_sign():
         assert t[2] > 0.0
         if k:
             assert flip[2] < 0.0
+
+
+#: the four-bar's map is computed to about 1e-4 of the scales (its runs at rtol 1e-10,
+#: 1e-11 and 1e-12 differ by up to 3.2e-4 in the rates; Newton stalls at 7e-5 - 1.2e-4
+#: whatever the rtol): a Newton tolerance above that error
+FOUR_BAR_TOL = 5e-4
+
+
+@pytest.fixture(scope="module")
+def four_bar_orbit():
+    from mbs_clearance.model import cases
+
+    # the default guess: 20 settling revolutions, smoothed (module docstring, "The guess")
+    return periodic_orbit(cases.four_bar(), tol=FOUR_BAR_TOL, trajectory=False)
+
+
+@pytest.mark.slow
+def test_four_bar_orbit_is_where_a_long_run_settles(four_bar_orbit):
+    """The four-bar (10 rpm) from its default guess: Newton converges (measured 3
+    iterations, residual 7.1e-5), stable, multipliers 0.966 +- 0.141i (the weakly damped
+    vibration of the joint) and two near 0. The regime map's flow (dopri5, rtol 1e-10,
+    from the centred start) settles on it: the mean of its sections over revolutions
+    101-150 lies within 2e-3 of the scales of the orbit in position and 0.5 in rate (the
+    run's sections still scatter about it, measured std 1e-4 - 4e-4 and 0.16 - 0.75 over
+    revolutions 161-200, the mean there 4e-5 and 0.17 from the orbit)."""
+    from mbs_clearance.model import cases
+
+    orbit = four_bar_orbit
+    assert orbit.stability == "stable" and orbit.residual <= FOUR_BAR_TOL
+    assert orbit.onsets.tolist() == [0] and orbit.iterations <= 6
+    assert orbit.spectral_radius == pytest.approx(0.976, abs=0.01)
+    mech = cases.four_bar()
+    flow = Flow(mech, rtol=1e-10)
+    period = 2.0 * math.pi / flow.omega
+    sections = []
+    for k in range(150):
+        flow.advance((k + 1) * period)
+        if k >= 100:
+            sections.append(flow.y[:4].copy())
+    diff = (np.mean(sections, axis=0) - orbit.state) / orbit.scale[:4]
+    assert np.max(np.abs(diff[:2])) < 2e-3, diff
+    assert np.max(np.abs(diff[2:])) < 0.5, diff
+
+
+@pytest.mark.slow
+def test_four_bar_monodromy_matches_central_differences_of_the_return_map(four_bar_orbit):
+    """The four-bar orbit's monodromy matrix (variational run, scaled) against central
+    differences of the plain map, steps 3e-4 of the scales: measured within 1.4e-3 of its
+    largest entry (200). Steps of 1e-3 and more leave the map's near-linear region (1.4e-2,
+    1.4 and 7 of it at 1e-3, 1e-2, 1e-1: the vibration's phase after a revolution depends on
+    its amplitude), steps of 1e-4 and less meet the map's error (about 1e-4 of the scales).
+    The matrix is far from normal (rates rows about -235 times the positions rows), so its
+    eigenvalues move by O(0.1) under such entry errors: the entries are compared, and the
+    multipliers are the eigenvalues of the matrix checked here."""
+    orbit = four_bar_orbit
+    S, h = orbit.scale, 3e-4
+    F = np.empty((4, 4))
+    for k in range(4):
+        ends = []
+        for sign in (1.0, -1.0):
+            x = orbit.state.copy()
+            x[k] += sign * h * S[k]
+            xe, _, _, _ = return_map(orbit.mech, x, orbit.modes, orbit.impact_velocities)
+            ends.append(xe / S)
+        F[:, k] = (ends[0] - ends[1]) / (2 * h)
+    A = orbit.monodromy
+    assert A.shape == (4, 4)            # permanent contact: the memory's held, not a column
+    np.testing.assert_allclose(A, F, atol=3e-3 * np.max(np.abs(A)))
+    np.testing.assert_allclose(np.sort_complex(np.linalg.eigvals(A)),
+                               np.sort_complex(orbit.multipliers))
