@@ -1,14 +1,16 @@
-"""The period-1 boundary of the paper's case over clearance at 5000 rpm: continuation from
-the paper's design to its first period doubling (`continue_orbits`, stop_at_first), and
+"""The period-1 boundary of the paper's case over clearance at 5000 rpm, or over crank speed
+at 0.01 mm (--field crank_speed, downwards from 5000 rpm): continuation from the paper's
+design to its first period doubling (`continue_orbits`, stop_at_first), and
 the brute-force classification (100 revolutions, 50 kept, the regime map's rule) at
 clearances around it, from two starts: the centred start of the regime map, and the
 branch's orbit nearest below (a matched start: its state and held impact velocity, the
 journal's memory the branch follows).
 
 Prints the located doubling, then per clearance the regime from each start, and the
-brute-force boundary (the last period-1 clearance and the next) from each.
+brute-force boundary (the last period-1 value and the next) from each.
 
     python -m benchmarks.orbit_boundary [--points 9] [--width 2e-8]
+    python -m benchmarks.orbit_boundary --field crank_speed [--points 9] [--width 2]
 """
 
 from __future__ import annotations
@@ -46,26 +48,39 @@ def matched_regime(mech, state, modes, vel, revolutions=100, keep=50):
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--points", type=int, default=9)
-    ap.add_argument("--width", type=float, default=2e-8,
-                    help="clearances within +- width (m) of the doubling")
+    ap.add_argument("--field", choices=("clearance", "crank_speed"), default="clearance")
+    ap.add_argument("--width", type=float, default=None,
+                    help="values within +- width of the doubling (default 2e-8 m of "
+                         "clearance, 2 rad/s of crank speed)")
     args = ap.parse_args(argv)
     print(machine_summary())
     paper = SliderCrank()
     t0 = time.perf_counter()
-    branch = continue_orbits(paper, "clearance", 1e-5, 2e-5, max_points=400,
-                             stop_at_first=True)
+    if args.field == "clearance":
+        width = 2e-8 if args.width is None else args.width
+        branch = continue_orbits(paper, "clearance", 1e-5, 2e-5, max_points=400,
+                                 stop_at_first=True)
+    else:
+        width = 2.0 if args.width is None else args.width
+        branch = continue_orbits(paper, "crank_speed", paper.crank_speed,
+                                 1000 * math.pi / 30, max_points=1500, max_step=30.0,
+                                 stop_at_first=True)
     print(f"{branch.summary()}\n({time.perf_counter() - t0:.1f} s, "
           f"{branch.counters['shooting_runs']} variational and "
           f"{branch.counters['plain_runs']} plain runs)")
     pd = branch.points[0]
-    below = branch.values < pd.value
-    for c in np.linspace(pd.value - args.width, pd.value + args.width, args.points):
-        mech = with_field(paper, "clearance", c)
+    # the branch's side of the doubling (it starts at the paper's design)
+    below = (branch.values < pd.value) == (branch.values[0] < pd.value)
+    for c in np.linspace(pd.value - width, pd.value + width, args.points):
+        mech = with_field(paper, args.field, c)
         centred = poincare_section(mech, 100, 50)
         i = int(np.argmin(np.where(below, np.abs(branch.values - c), math.inf)))
         reg, per, d1 = matched_regime(mech, branch.states[i], np.ones(1),
                                       branch.impact_velocities[i])
-        print(f"clearance {c:.10g} m ({(c - pd.value) * 1e9:+.1f} nm from the doubling): "
+        where = (f"clearance {c:.10g} m ({(c - pd.value) * 1e9:+.1f} nm" if
+                 args.field == "clearance" else
+                 f"crank speed {c * 30 / math.pi:.6g} rpm ({c - pd.value:+.3g} rad/s")
+        print(f"{where} from the doubling): "
               f"centred start {centred.regime}/{centred.period}, matched start "
               f"{reg}/{per} (d1 {d1:.2g})")
     return 0

@@ -32,6 +32,15 @@ each onset with the event-time term: the matrix is that of the non-smooth map (c
 against central finite differences of the map, tests/unit/test_periodic.py).
 
 Stability: "stable" where every multiplier lies inside the unit circle, else "unstable".
+
+The guess. A settled run can still carry a weakly damped fast vibration of the contact
+(the four-bar at 10 rpm: the joint's contact mode, thousands of oscillations per
+revolution, decays over about 100 revolutions), and a Newton step on it leaves the region
+where the map is near linear (the oscillation's frequency depends on its amplitude, so its
+phase after a revolution does too). The default guess is therefore the better, by the map's
+residual, of the settled section state and its smoothed value one revolution later: a
+polynomial fitted to the run's states over a short window around the section (a slow
+orbit's state is smooth there, the vibration averages out of the fit).
 """
 
 from __future__ import annotations
@@ -66,6 +75,12 @@ MAX_STEP = 0.5
 
 #: default settling revolutions of the guess (a plain run from the centred start)
 SETTLE = 20
+
+#: the smoothed guess: a window of this fraction of a revolution around the section, and
+#: the degree of the polynomial fitted there (module docstring, "The guess")
+SMOOTH_WINDOW = 0.02
+SMOOTH_DEGREE = 6
+SMOOTH_SAMPLES = 401
 
 
 @dataclass
@@ -162,6 +177,7 @@ class _Shooter:
         self.sens_settings = flow.settings._replace(atol=atol, n_err=n2 * (1 + nb))
         self.sens_kernel = model.integrate_sens
         self.rtol = flow.rtol
+        self.method = method
         self.guess_flow = flow
 
     def memory(self, p) -> tuple[np.ndarray, np.ndarray]:
@@ -257,7 +273,22 @@ def _guess_of(sh, guess, settle: int):
         for k in range(settle):
             flow.advance((k + 1) * 2.0 * math.pi / sh.omega)
         m, v = sh.memory(flow.p)
-        return flow.y[:sh.n2].copy(), m, v
+        raw = flow.y[:sh.n2].copy(), m, v
+        if settle == 0:
+            return raw
+        smooth = _smoothed_section(sh, flow, settle + 1)
+        if smooth is None:
+            return raw
+        res = []
+        for x, m_, v_ in (raw, smooth):
+            try:
+                xe, me, ve, ons, _ = sh.value(x, m_, v_)
+            except RuntimeError:
+                res.append(math.inf)
+                continue
+            res.append(float(np.max(np.abs((xe - x) / sh.scale[:sh.n2])))
+                       if np.all(me == m_) else math.inf)
+        return smooth if res[1] < res[0] else raw
     if isinstance(guess, PeriodicOrbit):
         return guess.state.copy(), guess.modes.copy(), guess.impact_velocities.copy()
     if isinstance(guess, Start):
@@ -269,6 +300,51 @@ def _guess_of(sh, guess, settle: int):
                      f"{type(guess).__name__}")
 
 
+def _map_error(sh, x, modes, vel, idx) -> float:
+    """Largest scaled difference of the map at (x, modes, vel) between its runs at the
+    shooting's rtol and at rtol / 10 (an estimate of the map's integration error: the
+    residual Newton can reach); nan where a run fails."""
+    ends = []
+    for rtol in (sh.rtol, sh.rtol / 10.0):
+        one = _Shooter(sh.mech, len(sh.edges) - 1, rtol, sh.method, sh.edges[0])
+        try:
+            xe, _, ve, _, _ = one.value(x, modes, vel)
+        except RuntimeError:
+            return math.nan
+        ends.append(np.concatenate([xe, ve])[idx] / sh.scale[idx])
+    return float(np.max(np.abs(ends[0] - ends[1])))
+
+
+def _smoothed_section(sh, flow, revolution: int):
+    """The section state of the plain run `flow` at the end of `revolution`, smoothed: the
+    value at the section of a polynomial (SMOOTH_DEGREE, Hann-weighted least squares)
+    fitted per coordinate and rate to the run's states over SMOOTH_WINDOW of a revolution
+    centred there; with the memory at the section. None where a contact mode or memory
+    changes within the window (the state is not smooth there)."""
+    T = 2.0 * math.pi / sh.omega
+    t_c = revolution * T
+    w = SMOOTH_WINDOW * T
+    ts = np.linspace(t_c - 0.5 * w, t_c + 0.5 * w, SMOOTH_SAMPLES)
+    try:
+        flow.advance(ts[0])
+        mem0 = sh.memory(flow.p)
+        ys = []
+        for t in ts:
+            if t > flow.t:
+                flow.advance(t)
+            ys.append(flow.y[:sh.n2].copy())
+    except RuntimeError:
+        return None
+    m, v = sh.memory(flow.p)
+    if np.any(m != mem0[0]) or np.any(v != mem0[1]):
+        return None
+    tau = (ts - t_c) / w
+    weight = np.sqrt(np.sin(math.pi * (tau + 0.5)) ** 2 + 1e-3)
+    ys = np.array(ys) / sh.scale[:sh.n2]
+    fit = np.polynomial.polynomial.polyfit(tau, ys, SMOOTH_DEGREE, w=weight)
+    return fit[0] * sh.scale[:sh.n2], m, v
+
+
 def periodic_orbit(mech, period: int = 1, guess=None, *, rtol: float | None = None,
                    tol: float = NEWTON_TOL, max_iterations: int = 12, settle: int = SETTLE,
                    method: str = "dop853", trajectory: bool = True) -> PeriodicOrbit:
@@ -278,11 +354,14 @@ def periodic_orbit(mech, period: int = 1, guess=None, *, rtol: float | None = No
     docstring); with the Floquet multipliers and the stability verdict.
 
     guess: None (the state after `settle` revolutions of a plain run from the centred
-    start), a PeriodicOrbit (e.g. of a nearby design), a `linkage_model.Start`, or a tuple
-    (state, modes, impact_velocities). rtol: of the shooting runs (default
-    SHOOTING_RTOL); tol: Newton's tolerance on max |P(z) - z| in scaled units (fractions of
-    the clearance; of clearance x speed for rates). trajectory: also run the orbit through
-    `simulate` from the converged state (`PeriodicOrbit.trajectory`).
+    start, or its smoothed value a revolution later where the map's residual is smaller
+    there: the module docstring), a PeriodicOrbit (e.g. of a nearby design), a
+    `linkage_model.Start`, or a tuple (state, modes, impact_velocities). rtol: of the
+    shooting runs (default SHOOTING_RTOL); tol: Newton's tolerance on max |P(z) - z| in
+    scaled units (fractions of the clearance; of clearance x speed for rates), to be above
+    the map's integration error (the four-bar's: about 1e-4 at rtol 1e-10). trajectory:
+    also run the orbit through `simulate` from the converged state
+    (`PeriodicOrbit.trajectory`).
 
     Raises ValueError for bad input before any computation, RuntimeError where Newton does
     not converge within `max_iterations` (with what to try).
@@ -362,11 +441,15 @@ def _newton(sh, x, modes, vel, period, tol, max_iterations, trajectory):
         history[-1]["damping"] = lam
         x, vel = xn, vn
     else:
+        err = _map_error(sh, x, modes, vel, idx)
+        floor = (f"; the map's own error there (its runs at rtol and rtol / 10 differ by "
+                 f"{err:.2g}, scaled) is above tol: a larger tol or a tighter rtol"
+                 if err > tol else "")
         raise RuntimeError(
             f"periodic_orbit: Newton did not converge in {max_iterations} iterations "
-            f"(residual {res:.3g} > tol {tol:g}, scaled); try a guess from a settled run "
-            "(settle=... more revolutions, or a Start / PeriodicOrbit of a nearby design), "
-            "a different period, or a tighter rtol")
+            f"(residual {res:.3g} > tol {tol:g}, scaled){floor}; try a guess from a settled "
+            "run (settle=... more revolutions, or a Start / PeriodicOrbit of a nearby "
+            "design), a different period, or a tighter rtol")
     mult = np.linalg.eigvals(A)
     mult = mult[np.argsort(-np.abs(mult), kind="stable")]
     names = tuple(sh.model.COORDINATES) + tuple(f"{c}_rate" for c in sh.model.COORDINATES)
@@ -596,6 +679,8 @@ class _Continuation:
         self.cache = {}
         self.runs = 0
         self.plain_runs = 0
+        #: fold candidates bisection did not confirm (field value, half width)
+        self.unconfirmed = []
 
     def value_of(self, uu):
         u = self.u0 + uu * self.span
@@ -710,8 +795,12 @@ class _Continuation:
         return None
 
 
-def _tangent_of(Jg, previous):
-    """The unit null vector of the Jacobian Jg (n, n + 1), oriented along `previous`."""
+def _tangent_of(Jg, previous, orientation=None):
+    """The unit null vector of the Jacobian Jg (n, n + 1), oriented along `previous`, or,
+    with `orientation` (+-1), so that det([Jg; t]) has that sign: that sign is the sign
+    of det(M - I) t_u, so the field's component t_u changes sign exactly where det(M - I)
+    does (a fold), not where the branch turns by more than a right angle in the state
+    over one step (where orienting along `previous` flips it)."""
     n = Jg.shape[0]
     rhs = np.zeros(n + 1)
     rhs[-1] = 1.0
@@ -720,7 +809,14 @@ def _tangent_of(Jg, previous):
     except np.linalg.LinAlgError:
         t = np.linalg.svd(Jg)[2][-1]
     t /= np.linalg.norm(t)
+    if orientation is not None:
+        return t if _orientation(Jg, t) == orientation else -t
     return t if t @ previous >= 0 else -t
+
+
+def _orientation(Jg, t) -> float:
+    """The sign of det([Jg; t]) (the branch's orientation, constant along it)."""
+    return 1.0 if np.linalg.det(np.vstack([Jg, t[None, :]])) >= 0.0 else -1.0
 
 
 def _tests(A):
@@ -793,7 +889,8 @@ def continue_orbits(mech, field_name: str, start: float, stop: float, *, period:
     w = np.concatenate([np.concatenate([orbit.state, held]) / con.S0, [0.0]])
     g, Jg, A, active, ons, _ = con.residual(w, modes, held)
     t = _tangent_of(Jg, np.concatenate([np.zeros(len(w) - 1), [1.0]]))
-    pts = [dict(w=w, A=A, active=active, onsets=ons, t=t, tests=_tests(A), J=Jg)]
+    pts = [dict(w=w, A=A, active=active, onsets=ons, t=t, tests=_tests(A), J=Jg,
+                o=_orientation(Jg, t))]
     steps = dict(step=step, min_step=min_step, max_step=max_step, max_points=max_points,
                  tol=tol, locate_tol=locate_tol, stop_at_first=stop_at_first)
     found, stopped = _follow(con, pts, modes, held, progress=progress, **steps)
@@ -823,13 +920,16 @@ def _follow(con, pts, modes, held, *, step, min_step, max_step, max_points, tol,
                 break
             continue
         wn, info = new
-        tn = _tangent_of(info["J"], cur["t"])
+        tn = _tangent_of(info["J"], cur["t"], cur["o"])
         pt = dict(w=wn, A=info["A"], active=info["active"], onsets=info["onsets"], t=tn,
-                  tests=_tests(info["A"]), ds=ds, J=info["J"])
+                  tests=_tests(info["A"]), ds=ds, J=info["J"], o=cur["o"])
         kinds = _crossings(cur, pt)
         pts.append(pt)
-        for kind in kinds:
+        for kind in list(kinds):
             point = _locate(con, cur, pt, kind, modes, held, tol, locate_tol)
+            if point is None:
+                kinds.remove(kind)
+                continue
             point.index = len(pts) - 2
             found.append(point)
         if progress is not None:
@@ -876,7 +976,8 @@ def _branch_of(con, pts, found, stopped, setup) -> Branch:
                   period=con.period, sections=np.array(sections, dtype=float),
                   clearances=np.array(clear),
                   counters=dict(shooting_runs=con.runs, plain_runs=con.plain_runs,
-                                speed=con.sh0.omega),
+                                speed=con.sh0.omega,
+                                unconfirmed_folds=len(con.unconfirmed)),
                   setup=setup)
 
 
@@ -926,7 +1027,7 @@ def switch_branch(branch: Branch, point: BranchPoint, *, step: float = 0.01,
     w1, info = new
     t1 = _tangent_of(info["J"], t0)
     pts = [dict(w=w1, A=info["A"], active=info["active"], onsets=info["onsets"], t=t1,
-                tests=_tests(info["A"]), J=info["J"])]
+                tests=_tests(info["A"]), J=info["J"], o=_orientation(info["J"], t1))]
     found, stopped = _follow(con, pts, modes, held, progress=progress,
                              **dict(steps, step=max(ds, steps["min_step"])))
     return _branch_of(con, pts, found, stopped, dict(st, steps=steps))
@@ -955,7 +1056,9 @@ def _crossings(a, b) -> list:
         return kinds       # the smooth test functions jump with the active memories
     fa, pa, na, mua = a["tests"]
     fb, pb, nb_, mub = b["tests"]
-    if fa * fb < 0.0 or a["t"][-1] * b["t"][-1] < 0.0:
+    # with the tangent oriented by det([Jg; t]) its field component turns exactly where
+    # det(M - I) changes sign: one test
+    if fa * fb < 0.0:
         kinds.append("fold")
     if pa * pb < 0.0:
         kinds.append("period_doubling")
@@ -971,12 +1074,8 @@ def _crossings(a, b) -> list:
 def _test_value(kind, pt):
     if kind == "grazing":
         return None
-    if kind == "fold":
-        # the field's component of the tangent: it changes sign at every fold, also where
-        # the map's smoothness changes there (no multiplier at +1)
-        return pt["t"][-1]
     f, p, n, _ = pt["tests"]
-    return {"period_doubling": p, "neimark_sacker": n}[kind]
+    return {"fold": f, "period_doubling": p, "neimark_sacker": n}[kind]
 
 
 def _locate(con, a, b, kind, modes, held, tol, locate_tol) -> BranchPoint:
@@ -996,7 +1095,8 @@ def _locate(con, a, b, kind, modes, held, tol, locate_tol) -> BranchPoint:
             break
         wm, info = new
         pm = dict(w=wm, onsets=info["onsets"], tests=_tests(info["A"]),
-                  t=_tangent_of(info["J"], a["t"]), A=info["A"], active=info["active"])
+                  t=_tangent_of(info["J"], a["t"], a["o"]), A=info["A"],
+                  active=info["active"])
         if kind == "grazing":
             same = np.array_equal(pm["onsets"], a["onsets"])
         else:
@@ -1015,6 +1115,11 @@ def _locate(con, a, b, kind, modes, held, tol, locate_tol) -> BranchPoint:
         note = ("no multiplier at +1: the map's smoothness changes at this fold (e.g. a "
                 "contact force reaching zero within a contact phase)")
     if hi - lo > 0.0 and abs(ub - ua) > locate_tol:
+        if kind == "fold":
+            # unconfirmed: det(M - I) changed sign over a step the corrector cannot
+            # bisect, no evidence of a multiplier through +1
+            con.unconfirmed.append((value, half))
+            return None
         note += ("; " if note else "") + "bisection stopped (corrector did not converge)"
     vec = None
     if kind == "period_doubling":

@@ -374,3 +374,168 @@ def test_branch_over_crank_speed_runs_through_the_regime_maps_samples():
         PAPER.clearance * np.array([1.0, 1.0, speed, speed]))
     assert np.max(np.abs(diff[:2])) < 1e-3
     assert np.max(np.abs(diff[2:])) < 1e-2
+
+
+def test_tangent_turns_back_only_where_det_of_m_minus_i_changes_sign():
+    """The continuation's tangent, oriented by the sign of det([Jg; t]), against closed
+    forms. (a) P(z, u) = z + u - z^2: fixed points u = z^2, det(P' - I) = -2 z, a fold at
+    z = 0, where (and only where) t_u must change sign. (b) A branch
+    with multipliers 0 (det(P' - I) = 1, never a fold) whose state turns by more than a right
+    angle over one step: t_u keeps its sign (orienting along the previous tangent flips it:
+    the false fold)."""
+    from mbs_clearance.analysis.periodic import _orientation, _tangent_of
+
+    # (a) the fold of P(z, u) = z + u - z^2 (fixed points u = z^2) at z = 0
+    def jac(z):
+        return np.array([[-2.0 * z, 1.0]])          # [P_z - 1, P_u]
+
+    zs = np.linspace(-1.0, 1.0, 21)
+    t = _tangent_of(jac(zs[0]), np.array([1.0, 0.0]))
+    o = _orientation(jac(zs[0]), t)
+    signs = []
+    for z in zs:
+        t = _tangent_of(jac(z), t, o)
+        # closed form: the null vector of [-2 z, 1] is (1, 2 z) / norm
+        np.testing.assert_allclose(abs(t[1]), abs(2 * z) / math.hypot(1.0, 2 * z))
+        signs.append(np.sign(t[1]) if z != 0.0 else 0.0)
+    signs = np.array(signs)
+    assert np.all(signs[zs < 0] == signs[0]) and np.all(signs[zs > 0] == -signs[0])
+    # (b) P(z, u) = b(u) u-derivative rotating by 150 degrees per step, P_z = 0 (A - I = -I)
+    t = np.array([0.0, 0.0, 1.0])
+    for k, ang in enumerate(np.radians(np.arange(0.0, 900.0, 150.0))):
+        b = 50.0 * np.array([math.cos(ang), math.sin(ang)])
+        Jg = np.hstack([-np.eye(2), b[:, None]])
+        if k == 0:
+            t = _tangent_of(Jg, t)
+            o = _orientation(Jg, t)
+        flip = _tangent_of(Jg, t)                     # along the previous tangent only
+        t = _tangent_of(Jg, t, o)
+        np.testing.assert_allclose(t[:2], b * t[2], atol=1e-12)   # t_z = (I - P_z)^-1 P_u t_u
+        assert t[2] > 0.0
+        if k:
+            assert flip[2] < 0.0
+
+
+#: the four-bar's map is computed to about 1e-4 of the scales (its runs at rtol 1e-10,
+#: 1e-11 and 1e-12 differ by up to 3.2e-4 in the rates; Newton stalls at 7e-5 - 1.2e-4
+#: whatever the rtol): a Newton tolerance above that error
+FOUR_BAR_TOL = 5e-4
+
+
+@pytest.fixture(scope="module")
+def four_bar_orbit():
+    from mbs_clearance.model import cases
+
+    # the default guess: 20 settling revolutions, smoothed (module docstring, "The guess")
+    return periodic_orbit(cases.four_bar(), tol=FOUR_BAR_TOL, trajectory=False)
+
+
+@pytest.mark.slow
+def test_four_bar_orbit_is_where_a_long_run_settles(four_bar_orbit):
+    """The four-bar (10 rpm) from its default guess: Newton converges (measured 3
+    iterations, residual 7.1e-5), stable, multipliers 0.966 +- 0.141i (the weakly damped
+    vibration of the joint) and two near 0. The regime map's flow (dopri5, rtol 1e-10,
+    from the centred start) settles on it: the mean of its sections over revolutions
+    101-150 lies within 2e-3 of the scales of the orbit in position and 0.5 in rate (the
+    run's sections still scatter about it, measured std 1e-4 - 4e-4 and 0.16 - 0.75 over
+    revolutions 161-200, the mean there 4e-5 and 0.17 from the orbit)."""
+    from mbs_clearance.model import cases
+
+    orbit = four_bar_orbit
+    assert orbit.stability == "stable" and orbit.residual <= FOUR_BAR_TOL
+    assert orbit.onsets.tolist() == [0] and orbit.iterations <= 6
+    assert orbit.spectral_radius == pytest.approx(0.976, abs=0.01)
+    mech = cases.four_bar()
+    flow = Flow(mech, rtol=1e-10)
+    period = 2.0 * math.pi / flow.omega
+    sections = []
+    for k in range(150):
+        flow.advance((k + 1) * period)
+        if k >= 100:
+            sections.append(flow.y[:4].copy())
+    diff = (np.mean(sections, axis=0) - orbit.state) / orbit.scale[:4]
+    assert np.max(np.abs(diff[:2])) < 2e-3, diff
+    assert np.max(np.abs(diff[2:])) < 0.5, diff
+
+
+@pytest.mark.slow
+def test_four_bar_monodromy_matches_central_differences_of_the_return_map(four_bar_orbit):
+    """The four-bar orbit's monodromy matrix (variational run, scaled) against central
+    differences of the plain map, steps 3e-4 of the scales: measured within 1.4e-3 of its
+    largest entry (200). Steps of 1e-3 and more leave the map's near-linear region (1.4e-2,
+    1.4 and 7 of it at 1e-3, 1e-2, 1e-1: the vibration's phase after a revolution depends on
+    its amplitude), steps of 1e-4 and less meet the map's error (about 1e-4 of the scales).
+    The matrix is far from normal (rates rows about -235 times the positions rows), so its
+    eigenvalues move by O(0.1) under such entry errors: the entries are compared, and the
+    multipliers are the eigenvalues of the matrix checked here."""
+    orbit = four_bar_orbit
+    S, h = orbit.scale, 3e-4
+    F = np.empty((4, 4))
+    for k in range(4):
+        ends = []
+        for sign in (1.0, -1.0):
+            x = orbit.state.copy()
+            x[k] += sign * h * S[k]
+            xe, _, _, _ = return_map(orbit.mech, x, orbit.modes, orbit.impact_velocities)
+            ends.append(xe / S)
+        F[:, k] = (ends[0] - ends[1]) / (2 * h)
+    A = orbit.monodromy
+    assert A.shape == (4, 4)            # permanent contact: the memory's held, not a column
+    np.testing.assert_allclose(A, F, atol=3e-3 * np.max(np.abs(A)))
+    np.testing.assert_allclose(np.sort_complex(np.linalg.eigvals(A)),
+                               np.sort_complex(orbit.multipliers))
+
+
+@pytest.mark.slow
+def test_branch_from_a_micrometre_passes_the_sharp_turn_without_a_fold():
+    """From 0.001 mm the branch's section rate winds with the clearance (a helix in the
+    scaled state); with the tangent oriented along the previous one a "fold" was reported
+    at 0.00177 mm with no multiplier near +1. Now: no fold along 60 orbits past 0.002 mm,
+    and det(M - I), the product of (mu - 1) over each orbit's multipliers, keeps its sign
+    at every orbit (measured: every |mu| below 0.06)."""
+    mech = PAPER.replace(journal_radius=PAPER.bearing_radius - 1e-6)
+    branch = continue_orbits(mech, "clearance", 1e-6, 1e-4, max_points=60)
+    assert not [p for p in branch.points if p.kind == "fold"]
+    assert branch.counters["unconfirmed_folds"] == 0
+    assert branch.values.max() > 2e-6
+    dets = [np.real(np.prod(mu[np.isfinite(mu)] - 1.0)) for mu in branch.multipliers]
+    assert np.all(np.sign(dets) == np.sign(dets[0]))
+
+
+@pytest.mark.slow
+def test_period_one_boundary_over_crank_speed_by_continuation_and_brute_force():
+    """Continuation over crank speed from the paper's design downwards: the first period
+    doubling at 396.967 +- 0.012 rad/s (3790.7 rpm; 67 orbits, measured 7.1 s). The regime
+    map's rule (100 revolutions, 50 kept) on runs started on the branch's nearest orbit
+    above the doubling: period-1 3 rad/s above it (measured d_1 2.2e-5), period-2 2 rad/s
+    below it (d_1 2.5). Measured on a 0.5 rad/s grid from -2 to +2 and at +-3, +-6: period-2
+    from -3 to -1 and at +1.5, not settled (aperiodic) from -0.5 to +1, period-1 at +2
+    (d_1 8.4e-4), +3 and +6, period-2 at +2.5 (started from another orbit of the branch):
+    near the doubling the multiplier near -1 contracts slowly, so the brute-force boundary
+    lies 1.5 - 3 rad/s above the located one, as over clearance; at -6 rad/s the run from
+    the branch is period-1 again (not followed here)."""
+    from mbs_clearance.analysis.periodic import with_field
+    from mbs_clearance.analysis.poincare import classify, scale_samples, section_times
+
+    branch = continue_orbits(PAPER, "crank_speed", PAPER.crank_speed, 1000 * math.pi / 30,
+                             max_points=300, max_step=30.0, stop_at_first=True)
+    pd = branch.points[0]
+    assert pd.kind == "period_doubling" and pd.tolerance < 0.05
+    assert pd.value == pytest.approx(396.967, abs=0.05)
+    above = branch.values > pd.value
+    regimes = []
+    for w in (pd.value + 3.0, pd.value - 2.0):
+        i = int(np.argmin(np.where(above, np.abs(branch.values - w), np.inf)))
+        mech = with_field(PAPER, "crank_speed", w)
+        flow = Flow(mech)
+        mem = _mem_index(mech)
+        flow.y[:4] = branch.states[i]
+        flow.p[mem:mem + 2] = 1.0, branch.impact_velocities[i, 0]
+        samples = []
+        for k, t in enumerate(section_times(mech, 100)):
+            flow.advance(t)
+            if k >= 50:
+                samples.append(flow.section())
+        regimes.append(classify(scale_samples(np.array(samples), flow.clearance,
+                                              flow.omega))[:2])
+    assert regimes == [("period_1", 1), ("period_k", 2)]
