@@ -44,6 +44,7 @@ def test_stress_quick_all_pass():
     assert energy and max(energy) < 1e-6  # e = 1 case closes the energy balance
 
 
+@pytest.mark.slow      # re-takes every step of a run: about 50 s on a CI machine
 def test_step_checks_measure_distances_inside_steps():
     """The missed-contact and missed-separation checks re-take free-flight and contact steps
     at interior times: in the paper case the journal stays outside the wall in free flight

@@ -119,6 +119,7 @@ def test_linkage_comparison_per_joint(tmp_path):
     assert len(fig.axes) == 5 and (tmp_path / "o.png").stat().st_size > 10_000
 
 
+@pytest.mark.slow      # three Exudyn runs of a named case: about 90 s on a CI machine
 def test_command_takes_a_named_case(tmp_path, capsys):
     """`compare --case NAME`: the linkage's table (first impact per clearance joint) and
     the per-joint overlay; --set changes the case; slider-crank options are refused. At a

@@ -9,7 +9,8 @@ import pytest
 from mbs_clearance.cli import main
 from mbs_clearance.model import cases
 
-pytestmark = [pytest.mark.exudyn]
+# slow: the quick report runs every study of the linkage (about 2 minutes on a CI machine)
+pytestmark = [pytest.mark.exudyn, pytest.mark.slow]
 
 CASE = "slider_crank_two_clearances"
 

@@ -240,10 +240,13 @@ def test_paper_case_overrides_and_defaults():
 
 def test_simulate_refuses_other_backends_and_options_for_a_linkage():
     from mbs_clearance import simulate
+    from mbs_clearance.model.cases import four_bar
 
+    # the ideal backend takes the paper's parameter set only: its case as that set, not
+    # another linkage
     with pytest.raises(ValueError,
                        match=r"backend must be one of \['exudyn', 'reduced'\] for a Linkage"):
-        simulate(paper_slider_crank(), 4, backend="ideal")
+        simulate(four_bar(), 2, backend="ideal")
     with pytest.raises(ValueError, match=r"unknown option\(s\) \['step_size'\]"):
         simulate(paper_slider_crank(), 4, step_size=1e-6)
     with pytest.raises(ValueError, match="mech must be a SliderCrank or a Linkage"):
@@ -252,7 +255,7 @@ def test_simulate_refuses_other_backends_and_options_for_a_linkage():
 
 @pytest.mark.parametrize("name", ["paper_slider_crank", "slider_crank_two_clearances",
                                   "four_bar"])
-def test_issue_16_bad_descriptions_of_each_named_case(name):
+def test_bad_descriptions_of_each_named_case(name):
     """Four bad descriptions, made from each named case: a clearance joint
     replaced by an ideal pin (every loop then closed by ideal joints), an ideal joint on an
     unknown body, a journal larger than its bearing, a negative mass; each a ValueError

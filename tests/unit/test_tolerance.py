@@ -212,7 +212,8 @@ def test_gradient_chain_rule_for_the_radial_clearance():
     """R_J = R_B - c: d/dc = -d/dR_J and, at fixed c, d/dR_B = d/dR_B + d/dR_J."""
     from mbs_clearance.studies.tolerance import _gradient_names
 
-    fields, J = _gradient_names(("bearing_radius", "radial_clearance", "crank_length"))
+    fields, J = _gradient_names(("bearing_radius", "radial_clearance", "crank_length"),
+                                SliderCrank())
     assert fields == ("bearing_radius", "journal_radius", "crank_length")
     np.testing.assert_array_equal(J, [[1, 1, 0], [0, -1, 0], [0, 0, 1]])
 
