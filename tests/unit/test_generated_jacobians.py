@@ -9,14 +9,17 @@ from mbs_clearance.generate import load_model
 from mbs_clearance.model import cases
 from mbs_clearance.solve.linkage_model import initial_state, pack_parameters
 
+#: the lubricated model's Jacobian kernels compile for about a minute on a CI machine: its
+#: cases are slow (the film's partials are checked in the fast suite by test_lubrication)
+_LUBRICATED = ("paper_slider_crank_lubricated", "paper_slider_crank_lubricated+fade",
+               "paper_slider_crank_lubricated+long")
 CASES = ("paper_slider_crank", "slider_crank_two_clearances", "four_bar",
          "paper_slider_crank+coulomb", "paper_slider_crank+ambrosio",
          "paper_slider_crank+stribeck", "paper_slider_crank+general",
-         "paper_slider_crank_lubricated", "paper_slider_crank_lubricated+fade",
-         "paper_slider_crank_lubricated+long")
-# the four-bar at the 0.1 mm clearance where this test was written and measured (its default
-# became 0.01 mm in the same session; the free-flight difference quotients of the point
-# coordinates there were not re-examined: 1.2e-6 relative off, see the session's note)
+         *(pytest.param(c, marks=pytest.mark.slow) for c in _LUBRICATED))
+# the four-bar at the 0.1 mm clearance where this test was measured (the case's default is
+# 0.01 mm, where the free-flight difference quotients of the point coordinates, 1.2e-6
+# relative off, were not re-examined)
 FADE_ENDS = {"film_fade_start": 0.3, "film_fade_end": 0.7}
 OVERRIDES = {"four_bar": {"clearance": 1e-4},
              # friction: thresholds at the scale of the slip velocity (~1 m/s
