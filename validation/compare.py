@@ -503,10 +503,8 @@ def _backend_options(backend: str, other: str, args, mech) -> dict:
 
 
 def _exudyn_settings(options: dict, mech):
-    if hasattr(mech, "clearance_joints"):
-        from mbs_clearance.backends.exudyn_linkage import make_settings
-    else:
-        from mbs_clearance.backends.exudyn_model import make_settings
+    from mbs_clearance.backends.exudyn_linkage import make_settings
+
     return make_settings(dict(options))
 
 
@@ -514,8 +512,9 @@ def _exudyn_step(args, mech) -> float:
     """The Exudyn run's fixed step in s (its default for `mech` unless given)."""
     options = {k: getattr(args, k) for k in ("step_size", "accuracy")
                if getattr(args, k, None) is not None}
-    return _exudyn_settings(options, mech).step(
-        mech if hasattr(mech, "clearance_joints") else mech.period)
+    from mbs_clearance.model.cases import as_linkage
+
+    return _exudyn_settings(options, mech).step(as_linkage(mech))
 
 
 def build_parser(parser: argparse.ArgumentParser | None = None) -> argparse.ArgumentParser:

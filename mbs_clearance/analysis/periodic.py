@@ -51,7 +51,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .._checks import check_int, check_real
-from ..model.design import design_at
+from ..model.cases import as_linkage
+from ..model.design import design_at, value_at
 from ..model.linkage import Linkage
 from ..model.mechanism import SliderCrank
 from ..numerics.integrator import RESULTS
@@ -132,15 +133,7 @@ class PeriodicOrbit:
 
         return Start(y=self.state.copy(), modes=self.modes.copy(),
                      impact_velocities=self.impact_velocities.copy(), revolutions=0,
-                     linkage=_linkage_of(self.mech).name)
-
-
-def _linkage_of(mech):
-    if isinstance(mech, SliderCrank):
-        from ..model.cases import from_slider_crank
-
-        return from_slider_crank(mech)
-    return mech
+                     linkage=as_linkage(self.mech).name)
 
 
 class _Shooter:
@@ -462,7 +455,7 @@ def _newton(sh, x, modes, vel, period, tol, max_iterations, trajectory):
     if trajectory:
         from ..solve.simulate import simulate
 
-        orbit.trajectory = simulate(_linkage_of(sh.mech), period, rtol=sh.rtol,
+        orbit.trajectory = simulate(as_linkage(sh.mech), period, rtol=sh.rtol,
                                     start=orbit.start())
     return orbit
 
@@ -637,26 +630,7 @@ def _format_mu(mu) -> str:
 
 def field_value(mech, name: str) -> float:
     """The value of sweep field `name` on `mech` (`design.design_at`'s names)."""
-    if isinstance(mech, SliderCrank):
-        if name == "clearance":
-            return float(mech.clearance)
-        from ..model.mechanism import field_names
-
-        if name not in field_names():
-            raise ValueError(f"unknown field {name!r} of a SliderCrank; allowed: "
-                             f"{sorted(field_names()) + ['clearance']}")
-        return float(getattr(mech, name))
-    if name == "crank_speed":
-        return float(mech.drive.speed)
-    if name.endswith(".clearance"):
-        joint = name[:-len(".clearance")]
-        for cj in mech.clearance_joints:
-            if cj.name == joint:
-                return float(cj.clearance)
-        raise ValueError(f"unknown clearance joint {joint!r} of linkage {mech.name!r}")
-    from ..model.design import design_value
-
-    return float(design_value(mech, name))
+    return value_at(mech, name)
 
 
 def with_field(mech, name: str, value: float):

@@ -30,8 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._checks import check_int
-from ..model.linkage import Linkage
-from ..model.mechanism import SliderCrank
+from ..model.cases import as_linkage
 
 __all__ = ["Convergence", "richardson", "converged_peaks", "MIN_ORDER", "MAX_ORDER"]
 
@@ -79,21 +78,11 @@ class Convergence:
         return self.error / np.abs(self.value)
 
 
-def _linkage(mech) -> Linkage:
-    if isinstance(mech, SliderCrank):
-        from ..model.cases import from_slider_crank
-
-        return from_slider_crank(mech)
-    if not isinstance(mech, Linkage):
-        raise ValueError(f"mech must be a SliderCrank or a Linkage; got {type(mech).__name__}")
-    return mech
-
-
 def converged_peaks(mech, revolutions: int = 4, *, step_size: float | None = None,
                     accuracy: float | None = None, max_halvings: int = 3,
                     **options) -> Convergence:
     """Per-revolution peaks of the monitored force from Exudyn runs at step_size h (default:
-    the backend's default step for `mech`; a SliderCrank's as `exudyn_model`), h/2 and h/4,
+    the backend's default step for `mech`'s description, `ExudynSettings.step`), h/2 and h/4,
     extrapolated (`richardson`). With `accuracy` (relative): while a revolution's bar
     exceeds it, one more run at half the last step (at most `max_halvings` more), the
     extrapolation from the last three. Other `options`: the backend's (`ExudynSettings`
@@ -105,16 +94,11 @@ def converged_peaks(mech, revolutions: int = 4, *, step_size: float | None = Non
     if "accuracy" in options:
         raise ValueError("converged_peaks chooses its steps from step_size; leave accuracy "
                          "out")
-    linkage = _linkage(mech)
+    linkage = as_linkage(mech)
     max_memory = options.pop("max_memory", None)
     start = options.pop("start", None)
     if step_size is None:
-        if isinstance(mech, SliderCrank):
-            from .exudyn_model import DEFAULT_STEP_SIZE
-
-            step_size = DEFAULT_STEP_SIZE
-        else:
-            step_size = xl.make_settings(dict(options)).step(linkage)
+        step_size = xl.make_settings(dict(options)).step(linkage)
     if accuracy is not None:
         from .._checks import check_real
 

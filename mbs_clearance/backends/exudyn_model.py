@@ -86,7 +86,8 @@ __all__ = [
     "sphere_restitution",
 ]
 
-#: default fixed step size in s of a SliderCrank run (whatever its speed); chosen with
+#: the default fixed step in s at the paper's design (`ExudynSettings.step` of its
+#: description; other designs take the same rule); chosen with
 #: benchmarks/exudyn_speed.py: at 2e-6 s (6000 steps per revolution at 5000 rpm,
 #: `exudyn_linkage.DEFAULT_STEPS_PER_REVOLUTION`) the paper case's 4th-revolution peak |F12|
 #: is within 0.03 % of the tight reduced reference; 5e-6 s gives 0.07 %.
@@ -99,11 +100,8 @@ OPTION_NAMES: tuple[str, ...] = tuple(n for n in xl.OPTION_NAMES if n != "start"
 def make_settings(options: dict) -> ExudynSettings:
     """Validate backend options and return them as `ExudynSettings` (ValueError naming the
     option and its range if bad); without step_size, accuracy or steps_per_revolution the
-    step is `DEFAULT_STEP_SIZE`."""
-    settings = xl.make_settings(options)
-    if not {"step_size", "accuracy", "steps_per_revolution"} & set(options):
-        settings = ExudynSettings(**{**settings.__dict__, "step_size": DEFAULT_STEP_SIZE})
-    return settings
+    step follows the description's rule (`ExudynSettings.step`), as for every linkage."""
+    return xl.make_settings(options)
 
 
 def sphere_restitution(mech: SliderCrank) -> float:
@@ -144,7 +142,8 @@ def simulate_exudyn(mech: SliderCrank, revolutions: int = 4, **options) -> Traje
     revolutions : int
         Full crank revolutions from t = 0 (>= 1).
     **options
-        `ExudynSettings` fields: ``step_size`` (s, default `DEFAULT_STEP_SIZE`) or
+        `ExudynSettings` fields: ``step_size`` (s, default `ExudynSettings.step` of the
+        description: 2e-6 s at the paper's design) or
         ``accuracy`` or ``steps_per_revolution``, ``contact`` ("symbolic", "python",
         "sphere"), ``spectral_radius``, ``modified_newton``, ``onset``,
         ``newton_tolerance``, and ``max_memory`` (bytes; a run whose records are estimated

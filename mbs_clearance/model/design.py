@@ -35,7 +35,7 @@ from .linkage import GROUND, Linkage
 from .mechanism import SliderCrank, reference_value
 
 __all__ = ["design_names", "check_names", "design_value", "linkage_with", "direction", "design_at",
-           "slider_crank_of"]
+           "value_at", "slider_crank_of"]
 
 #: the description's sections accepted in front of a dotted path, and what they become
 _SECTIONS = {"bodies": "", "joints": "", "clearance_joints": "", "ground_points": f"{GROUND}."}
@@ -291,3 +291,23 @@ def design_at(mech, values: dict, case: str | None = None, overrides: dict | Non
                                  "'<joint>.clearance', 'crank_speed'")
             link = link.with_parameter(name, v)
     return link
+
+
+def value_at(mech, name: str) -> float:
+    """The value (SI) of `design_at`'s field `name` on `mech`: a `SliderCrank` field or
+    "clearance" (R_B - R_J); on a `Linkage` its design names (`design_value`) and
+    "crank_speed" (the drive's speed). ValueError for an unknown name."""
+    if isinstance(mech, SliderCrank):
+        from .mechanism import field_names
+
+        if name == "clearance":
+            return float(mech.clearance)
+        if name not in field_names():
+            raise ValueError(f"unknown field {name!r} of a SliderCrank; allowed: "
+                             f"{sorted(field_names()) + ['clearance']}")
+        return float(getattr(mech, name))
+    if not isinstance(mech, Linkage):
+        raise ValueError(f"mech must be a SliderCrank or a Linkage; got {type(mech).__name__}")
+    if name == "crank_speed" and "crank_speed" not in _case_table(mech):
+        return float(mech.drive.speed)
+    return float(design_value(mech, name))

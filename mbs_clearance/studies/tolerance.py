@@ -52,6 +52,7 @@ import numpy as np
 
 from .._checks import DESIGN_BYTES, check_memory, check_revolutions_memory
 from .._warnings import AccuracyWarning, PhysicsWarning
+from ..model.design import value_at
 from ..model.fits import iso_fit
 from ..model.linkage import Linkage
 from ..model.mechanism import CONTINUOUS_FIELDS, SliderCrank
@@ -260,13 +261,7 @@ def _linkage_name(name: str) -> str:
 def field_value(mech: SliderCrank | Linkage, name: str) -> float:
     """The value of design field `name` (SI; "radial_clearance" = R_B - R_J; a Linkage's
     names: `design`, "radial_clearance" its smallest clearance)."""
-    if isinstance(mech, Linkage):
-        from ..model.design import design_value
-
-        return design_value(mech, _linkage_name(name))
-    if name == CLEARANCE:
-        return mech.bearing_radius - mech.journal_radius
-    return getattr(mech, name)
+    return value_at(mech, _linkage_name(name))
 
 
 def with_values(mech: SliderCrank, values: Mapping[str, float]) -> SliderCrank:

@@ -145,8 +145,9 @@ def test_huge_runs_refused_before_allocating(paper, no_integration):
     with pytest.raises(MemoryLimitError, match="takes at least 8e\\+05 steps, more than "
                                                "max_steps=1000"):
         simulate(paper, 10**5, max_steps=1000)
-    # Exudyn at 1 rpm: 1.2e8 fixed steps of every sensor (about 80 GB)
-    with pytest.raises(MemoryLimitError, match="1.2e\\+08 fixed steps .* GiB.*max_memory"):
+    # Exudyn at 1 rpm: 1.6e7 fixed steps (the contact's period sets the step) of every
+    # sensor, about 15 GiB
+    with pytest.raises(MemoryLimitError, match="1.6e\\+07 fixed steps .* GiB.*max_memory"):
         simulate(SliderCrank(crank_speed=RPM), 4, backend="exudyn")
     with pytest.raises(MemoryLimitError, match="max_memory"):
         simulate(paper, 10**4, backend="ideal")
