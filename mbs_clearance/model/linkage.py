@@ -705,14 +705,18 @@ class Linkage:
         """The coordinates (by name) with every journal centred at time `t`, by at most
         `max_iter` Newton steps from the `assembly` guesses (Jacobian by central
         differences; least squares where the closure is not square), to 1e-9 of the length
-        scale; ValueError if there is no assembly near the guesses. A check that costs
+        scale (a free linkage's initial coordinates held); ValueError if there is no assembly
+        near the guesses. A check that costs
         milliseconds, made before any model is generated or compiled; the run's start
         (`linkage_model.initial_state`) solves the same closure to round-off with the
         model's exact Jacobian."""
         import numpy as np
 
         names = self.coordinates()
-        q = np.array([self.assembly.get(c, 0.0) for c in names])
+        # a free linkage holds its given initial coordinates
+        held = dict(self.initial.coordinates) if self.drive is None else {}
+        q = np.array([held.get(c, self.assembly.get(c, 0.0)) for c in names])
+        free = np.array([c not in held for c in names])
         scale = max(self.length_scale, 1e-300)
         steps = np.array([1e-6 if c.endswith(".angle") else 1e-6 * scale for c in names])
 
@@ -725,8 +729,10 @@ class Linkage:
                 break
             if np.max(np.abs(r)) <= 1e-9 * scale:
                 return dict(zip(names, q.tolist()))
-            jac = np.empty((len(r), len(q)))
+            jac = np.zeros((len(r), len(q)))
             for i, h in enumerate(steps):
+                if not free[i]:
+                    continue
                 e = np.zeros(len(q))
                 e[i] = h
                 jac[:, i] = (residual(q + e) - residual(q - e)) / (2.0 * h)
