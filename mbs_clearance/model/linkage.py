@@ -452,6 +452,9 @@ class Linkage:
                              f"got {_short(self.drive)}")
         if self.initial is not None and not isinstance(self.initial, Initial):
             raise ValueError(f"initial must be None or an Initial; got {_short(self.initial)}")
+        if (self.drive is not None and isinstance(self.initial, Initial)
+                and not self.initial.coordinates and not self.initial.rates):
+            object.__setattr__(self, "initial", None)   # an empty start: nothing to refuse
         if self.initial is not None and self.drive is not None:
             raise ValueError("initial is for a free linkage (drive=None): a driven linkage "
                              "starts from its centred assembly (assembly guesses) or from a "

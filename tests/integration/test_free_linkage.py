@@ -76,6 +76,8 @@ def closed_form_energy(ys: np.ndarray, joint: ClearanceJoint) -> np.ndarray:
 
 
 @pytest.mark.slow
+# (the short run's contact onsets draw the settling note, whose advice is about peaks)
+@pytest.mark.filterwarnings("ignore::mbs_clearance.AccuracyWarning")
 def test_initial_state_holds_the_given_start_and_solves_the_rest():
     # the slider's position from the closure (journal centred), its rate from the velocity
     # constraint: at zero angles the pin moves vertically only, so ds/dt = 0

@@ -39,12 +39,15 @@ def test_free_description_round_trips_and_refuses_bad_starts(tmp_path):
     path.write_text(json.dumps(data))
     assert Linkage.from_file(path) == lk
     assert free_case().start == Initial()          # a free linkage without initial: at rest
+    # back to driven: an empty start is dropped, a driven linkage has none
+    assert lk.replace(drive=driven.drive, initial=Initial()).initial is None
     driven = cases.paper_slider_crank()
     bad = [
         (lambda: Initial(rates={"crank.angle": math.inf}), r"initial rates\['crank.angle'\]"),
         (lambda: Initial(coordinates=[1.0]), "initial coordinates must be a mapping"),
         (lambda: free_case(rates={"crank.omega": 1.0}), "unknown coordinate 'crank.omega'"),
-        (lambda: dataclasses.replace(driven, initial=Initial()), "initial is for a free"),
+        (lambda: dataclasses.replace(driven, initial=Initial(rates={"coupler.angle": 1.0})),
+         "initial is for a free"),
         (lambda: free_case().period, "free .* duration"),
         (lambda: Linkage.from_dict({**data, "initial": {"speeds": {}}}),
          "unknown initial key 'speeds'"),
