@@ -39,9 +39,9 @@ def test_free_description_round_trips_and_refuses_bad_starts(tmp_path):
     path.write_text(json.dumps(data))
     assert Linkage.from_file(path) == lk
     assert free_case().start == Initial()          # a free linkage without initial: at rest
+    driven = cases.paper_slider_crank()
     # back to driven: an empty start is dropped, a driven linkage has none
     assert lk.replace(drive=driven.drive, initial=Initial()).initial is None
-    driven = cases.paper_slider_crank()
     bad = [
         (lambda: Initial(rates={"crank.angle": math.inf}), r"initial rates\['crank.angle'\]"),
         (lambda: Initial(coordinates=[1.0]), "initial coordinates must be a mapping"),
