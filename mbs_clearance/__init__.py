@@ -29,8 +29,8 @@ logging.getLogger(__name__).addHandler(logging.NullHandler())
 #: public name -> submodule that defines it; imported on first use (PEP 562), so that
 #: `import mbs_clearance` and the CLI's start-up load only what a command needs
 _LAZY = {
-    **dict.fromkeys(("GROUND", "Body", "ClearanceJoint", "Drive", "Linkage", "Prismatic",
-                     "Revolute"), "model.linkage"),
+    **dict.fromkeys(("GROUND", "Body", "ClearanceJoint", "Drive", "Initial", "Linkage",
+                     "Prismatic", "Revolute"), "model.linkage"),
     **dict.fromkeys(("LyapunovResult", "lyapunov_exponent"), "analysis.lyapunov"),
     **dict.fromkeys(("Start", "settled_start"), "solve.linkage_model"),
     "RunSettings": "solve.settings",
@@ -70,7 +70,7 @@ def __dir__():
 
 __all__ = [
     "SliderCrank", "PARAMETER_INFO", "CONTINUOUS_FIELDS",
-    "Linkage", "Body", "Revolute", "Prismatic", "ClearanceJoint", "Drive", "GROUND",
+    "Linkage", "Body", "Revolute", "Prismatic", "ClearanceJoint", "Drive", "Initial", "GROUND",
     "simulate", "peak_base_force", "BACKENDS", "RunSettings", "Start", "settled_start",
     "Trajectory", "load_trajectory",
     "sensitivities", "Sensitivities", "DEFAULT_PARAMETERS",

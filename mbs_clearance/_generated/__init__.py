@@ -2,8 +2,8 @@
 tools/generate_models.py; do not edit). MODULES maps a structure digest to a module name."""
 
 MODULES: dict[str, str] = {
-    '63d0453923b6e1090ac1ce684ca045555e76520af79e926d36535fdde82eb837': 'paper_slider_crank',
-    '5aaa9c683a2875d551a2ef8007bd64f8663f44a62c34dc70141f0ffac72574b1': 'slider_crank_two_clearances',
-    '04c3e06cd35629611296f33c31266ef2df60a7e3e7a393116d6558b03a1e928f': 'four_bar',
-    '9d95b835133c9d45896a53b318e757d0e9b1abe140cd8fae4213261efc6e8d47': 'paper_slider_crank_friction',
+    'ad763907a0448533472d08fe2aa6e93c764df2229616296c1d958bccb64c4576': 'paper_slider_crank',
+    '0e93fb021bf182c61dc35f3fdadcf700db6c1ff79677e37117b7313af4d1e624': 'slider_crank_two_clearances',
+    '432870fa3d09cb6113e91d47664b6413a23478c43611b90cdd38a43512aa85a0': 'four_bar',
+    '70e9fd4316dca6fc4c1f23e4120f53e610fbf9b367c0b20a9e193f71f886ec92': 'paper_slider_crank_friction',
 }

@@ -185,8 +185,9 @@ class Output:
 
 def default_output(linkage: Linkage) -> str:
     """The default output: the |reaction| of the driven joint when it joins the ground (the
-    crank pivot: the paper's base force F12), else the shaking force."""
-    if linkage.drive.joint in ground_joints(linkage):
+    crank pivot: the paper's base force F12), else the shaking force (and of a free
+    linkage)."""
+    if linkage.drive is not None and linkage.drive.joint in ground_joints(linkage):
         return f"pivot_force:{linkage.drive.joint}"
     return "shaking_force"
 

@@ -151,7 +151,9 @@ class ExudynSettings:
         `STEPS_PER_CONTACT_PERIOD`-th of its contacts' linearised period."""
         if self.step_size is not None:
             return self.step_size
-        period = linkage.period if isinstance(linkage, Linkage) else float(linkage)
+        # a free linkage: its time scale (a turn at its largest initial rate) for a revolution
+        period = ((linkage.period if linkage.drive is not None else linkage.time_scale)
+                  if isinstance(linkage, Linkage) else float(linkage))
         if self.accuracy is not None:
             h = step_for_accuracy(period, self.accuracy)
         else:
@@ -196,7 +198,7 @@ def contact_scales(linkage: Linkage) -> tuple[float, float]:
     size = max((math.hypot(*p) for p in linkage.ground_points.values()), default=0.0)
     size += sum(max((math.hypot(*p) for p in b.points.values()), default=0.0)
                 for b in linkage.bodies)
-    load = sum(masses.values()) * (linkage.gravity + linkage.drive.speed ** 2 * size)
+    load = sum(masses.values()) * (linkage.gravity + linkage.rate_scale ** 2 * size)
     period, floor = math.inf, 0.0
     for cj in linkage.clearance_joints:
         delta = (load / cj.stiffness) ** (2.0 / 3.0)
@@ -209,7 +211,8 @@ def contact_scales(linkage: Linkage) -> tuple[float, float]:
 
 #: option names of simulate(linkage, backend="exudyn"): the settings, ``max_memory`` and
 #: ``start`` (a `linkage_model.Start`)
-OPTION_NAMES: tuple[str, ...] = (*ExudynSettings.__dataclass_fields__, "max_memory", "start")
+OPTION_NAMES: tuple[str, ...] = (*ExudynSettings.__dataclass_fields__, "max_memory", "start",
+                                 "duration", "window")
 
 
 def step_for_accuracy(period: float, accuracy: float) -> float:
@@ -227,7 +230,7 @@ def make_settings(options: dict) -> ExudynSettings:
         raise ValueError(f"unknown option(s) {unknown} for backend 'exudyn'; "
                          f"allowed: {list(OPTION_NAMES)}")
     s = ExudynSettings(**{k: v for k, v in options.items()
-                          if k not in ("max_memory", "start")})
+                          if k not in ("max_memory", "start", "duration", "window")})
     if s.step_size is not None and s.accuracy is not None:
         raise ValueError("give step_size or accuracy, not both (accuracy chooses the step)")
     return ExudynSettings(
@@ -288,7 +291,7 @@ def body_states(linkage: Linkage, t: float, q, qd) -> dict[str, tuple]:
             continue
         rp, php, vp, wp = state[parent]
         if isinstance(joint, Revolute):
-            if joint.name == linkage.drive.joint:
+            if linkage.drive is not None and joint.name == linkage.drive.joint:
                 phi = linkage.drive.speed * t + linkage.drive.initial_angle
                 w = linkage.drive.speed
             else:
@@ -816,13 +819,15 @@ def build(linkage: Linkage, settings: ExudynSettings | None = None,
         if GROUND in (jt.body_a, jt.body_b):
             ground_items[jt.name], ground_signs[jt.name] = obj, sign
 
-    drive_joint = next(j for j in linkage.joints if j.name == linkage.drive.joint)
-    m_gc = mbs.AddMarker(ii.MarkerNodeCoordinate(nodeNumber=n_ground, coordinate=0))
-    m_phi = mbs.AddMarker(ii.MarkerNodeCoordinate(nodeNumber=nodes[drive_joint.body_b],
-                                                  coordinate=2))
-    drive = mbs.AddObject(ii.CoordinateConstraint(markerNumbers=[m_gc, m_phi],
-                                                  offset=linkage.drive.speed,
-                                                  velocityLevel=True))
+    drive = None        # a free linkage: no drive constraint, it moves from its start
+    if linkage.drive is not None:
+        drive_joint = next(j for j in linkage.joints if j.name == linkage.drive.joint)
+        m_gc = mbs.AddMarker(ii.MarkerNodeCoordinate(nodeNumber=n_ground, coordinate=0))
+        m_phi = mbs.AddMarker(ii.MarkerNodeCoordinate(nodeNumber=nodes[drive_joint.body_b],
+                                                      coordinate=2))
+        drive = mbs.AddObject(ii.CoordinateConstraint(markerNumbers=[m_gc, m_phi],
+                                                      offset=linkage.drive.speed,
+                                                      velocityLevel=True))
 
     keep_alive: list = []
     memories: list = []
@@ -888,7 +893,7 @@ def build(linkage: Linkage, settings: ExudynSettings | None = None,
             if name in prismatic and prismatic[name].body_a != GROUND:
                 sensors[f"{name}.frame"] = sensor("node", nodes[prismatic[name].body_a],
                                                   OVT.Coordinates)
-    if "drive" in want:
+    if "drive" in want and drive is not None:
         sensors["drive"] = sensor("object", drive, OVT.Force)
     if "contact" in want:
         for cj, obj in zip(linkage.clearance_joints, contact_items):
@@ -1009,28 +1014,66 @@ def estimate_memory(linkage: Linkage, revolutions: int, step: float,
     G = len(linkage.ground_joints())
     full = "all" in outputs
     floats = 4 * G + (2 + 8 * J + 12 * B if full else 0)
-    steps = max(1, int(round(revolutions * linkage.period / step)))
+    # (a free linkage: `revolutions` is its duration in s)
+    span = revolutions if linkage.drive is None else revolutions * linkage.period
+    steps = max(1, int(round(span / step)))
     per_step = 8 * (2 * floats + ((6 + 6 * J + 2 * G + 3 * len(linkage.coordinates()))
                                   if full else 0))
     return steps, (steps + 1) * per_step
 
 
-def _check_run(linkage, revolutions, settings, outputs, max_memory, name="revolutions"):
+def _check_run(linkage, revolutions, settings, outputs, max_memory, name="revolutions",
+               duration=None, window=None):
+    """The run's revolutions, or a free linkage's window edges in s (`time_edges`)."""
+    from ..solve.linkage_model import check_span, time_edges
+
     _check_linkage(linkage, settings)
-    revolutions = check_int(name, revolutions, 1)
+    edges = None
+    if linkage.drive is None:
+        check_span(linkage, revolutions, duration, window, name)
+        if duration is None:
+            raise ValueError(f"linkage {linkage.name!r} is free (drive=None): give its run's "
+                             "duration= in s")
+        edges = time_edges(duration, window)
+        revolutions = float(edges[-1])
+    else:
+        revolutions = check_span(linkage, revolutions, duration, window, name)
+    unit = "s" if edges is not None else "revolutions"
     max_memory = check_max_memory(max_memory)
     step = settings.step(linkage)
     steps, need = estimate_memory(linkage, revolutions, step, outputs)
     if need > max_memory:
         raise MemoryLimitError(
-            f"the Exudyn run of {revolutions} revolutions takes {steps:.3g} fixed steps of "
+            f"the Exudyn run of {revolutions} {unit} takes {steps:.3g} fixed steps of "
             f"{step:g} s and needs about {format_bytes(need)} for its records, more than "
             f"max_memory={max_memory} bytes ({format_bytes(max_memory)}); raise step_size "
             "or max_memory, or run fewer revolutions")
-    return revolutions
+    return edges if edges is not None else revolutions
 
 
 # ---------------------------------------------------------------------------- results
+
+def window_peaks(t: np.ndarray, magnitude: np.ndarray, edges: np.ndarray) -> np.ndarray:
+    """`refined_peaks` over the windows [edges[k], edges[k + 1]] (s) of a free linkage's
+    run."""
+    peaks = np.empty(len(edges) - 1)
+    tol = 1e-12 * max(1.0, float(edges[-1]))
+    for k in range(len(peaks)):
+        idx = np.nonzero((t >= edges[k] - tol) & (t <= edges[k + 1] + tol))[0]
+        peaks[k] = _refined(magnitude, int(idx[np.argmax(magnitude[idx])]))
+    return peaks
+
+
+def _refined(magnitude: np.ndarray, i: int) -> float:
+    """The vertex of the parabola through sample i and its neighbours where it is a local
+    maximum (`refined_peaks`), else the sample."""
+    f0 = magnitude[i]
+    if 0 < i < len(magnitude) - 1:
+        fm, fp = magnitude[i - 1], magnitude[i + 1]
+        curvature = fm - 2.0 * f0 + fp
+        if curvature < 0.0 and max(fm, fp) <= f0:
+            f0 = f0 - 0.125 * (fp - fm) ** 2 / curvature
+    return float(f0)
 
 def refined_peaks(t: np.ndarray, magnitude: np.ndarray, period: float,
                   revolutions: int) -> np.ndarray:
@@ -1162,7 +1205,7 @@ def _reactions(model: ExudynModel) -> tuple[np.ndarray, dict]:
     return t, reactions
 
 
-def simulate_exudyn_linkage(linkage: Linkage, revolutions: int = 4, **options):
+def simulate_exudyn_linkage(linkage: Linkage, revolutions: int | None = None, **options):
     """Simulate `revolutions` drive revolutions of `linkage` in Exudyn; a `Trajectory` of
     the same form as the reduced backend's (per-joint series, reactions by ground joint).
 
@@ -1177,30 +1220,41 @@ def simulate_exudyn_linkage(linkage: Linkage, revolutions: int = 4, **options):
     signed normal force; ``crank_work`` the trapezoidal integral of the drive's power.
     ``stats`` holds the settings, the step, Newton counters, onsets (per joint the first
     registered onset time in ``first_onsets``) and the wall time in s.
+
+    A free linkage (drive None) takes ``duration`` (s) and ``window`` (s) instead of
+    revolutions: no drive constraint, started from its `Initial`; no drive moment or
+    work (None), ``peaks`` per window.
     """
     from ..solve.trajectory import annotate
 
     max_memory = options.pop("max_memory", None)
     start = options.pop("start", None)
+    duration, window = options.pop("duration", None), options.pop("window", None)
     return annotate(run_linkage(linkage, revolutions, make_settings(options), max_memory,
-                                start))
+                                start, duration=duration, window=window))
 
 
-def run_linkage(linkage: Linkage, revolutions: int, settings: ExudynSettings,
-                max_memory=None, start=None):
+def run_linkage(linkage: Linkage, revolutions: int | None, settings: ExudynSettings,
+                max_memory=None, start=None, *, duration=None, window=None):
     """The (not annotated) `Trajectory` of `simulate_exudyn_linkage` for validated
     `settings` (from `start`, a `linkage_model.Start`, if given); the run and the record
-    size are checked first."""
+    size are checked first. A free linkage runs for `duration` s (windows of `window`)."""
     from ..solve.trajectory import Trajectory
 
-    revolutions = _check_run(linkage, revolutions, settings, ("all",), max_memory)
+    span = _check_run(linkage, revolutions, settings, ("all",), max_memory,
+                      duration=duration, window=window)
+    free = linkage.drive is None
+    if free and start is not None:
+        raise ValueError("start is for a driven linkage; a free linkage starts from its "
+                         "initial (Linkage.initial, an Initial)")
+    revolutions = None if free else span
     model = build(linkage, settings, start=start)
-    stats = solve(model, revolutions * linkage.period)
+    stats = solve(model, float(span[-1]) if free else revolutions * linkage.period)
 
     t, reactions = _reactions(model)
     shaking = sum(reactions[g] for g in reactions)
     monitored = shaking if linkage.monitor_joint is None else reactions[linkage.monitor_joint]
-    moment = -stored(model, "drive")[:, 1]
+    moment = None if free else -stored(model, "drive")[:, 1]
     ecc, pen, force = [], [], []
     for cj in linkage.clearance_joints:
         e = model.ecc_sign * stored(model, f"{cj.name}.displacement")[:, 1:3]
@@ -1212,8 +1266,10 @@ def run_linkage(linkage: Linkage, revolutions: int, settings: ExudynSettings,
         pen.append(r - cj.clearance)
         force.append(np.where(r > 0.0, fn, 0.0))
     penetration = np.column_stack(pen)
-    power = moment * linkage.drive.speed
-    work = np.concatenate([[0.0], np.cumsum(0.5 * (power[1:] + power[:-1]) * np.diff(t))])
+    work = None
+    if not free:
+        power = moment * linkage.drive.speed
+        work = np.concatenate([[0.0], np.cumsum(0.5 * (power[1:] + power[:-1]) * np.diff(t))])
     stats["uniform_steps"] = bool(len(t) == stats["n_steps"] + 1 and np.allclose(
         np.diff(t), stats["step_size_used"], rtol=1e-6, atol=0.0))
     coords, rates, accs = _coordinates(model)
@@ -1233,32 +1289,44 @@ def run_linkage(linkage: Linkage, revolutions: int, settings: ExudynSettings,
         coupler_angle=None, coupler_rate=None,
         contact_phase=(penetration > 0.0).astype(np.int8), crank_work=work,
         mechanism=linkage, backend="exudyn", stats=stats,
-        peaks=refined_peaks(t, np.hypot(monitored[:, 0], monitored[:, 1]), linkage.period,
-                            revolutions),
+        peaks=(window_peaks(t, np.hypot(monitored[:, 0], monitored[:, 1]), span) if free
+               else refined_peaks(t, np.hypot(monitored[:, 0], monitored[:, 1]),
+                                  linkage.period, revolutions)),
         joints=tuple(cj.name for cj in linkage.clearance_joints), reactions=reactions,
         shaking_force=np.ascontiguousarray(shaking), coordinates=coords, rates=rates,
         accelerations=accs, friction_work=friction_work)
 
 
-def peak_exudyn_linkage(linkage: Linkage, revolution: int = 4, **options) -> float:
+def peak_exudyn_linkage(linkage: Linkage, revolution: int | None = None,
+                        **options) -> float:
     """Max of the monitored force (|reaction| of the monitored ground joint, or |shaking
-    force|) in N over drive revolution `revolution` (1-based), refined between the time
-    steps (`refined_peaks`);
-    integrates only to the end of that revolution and records only the reactions."""
+    force|) in N over drive revolution `revolution` (1-based, default 4), refined between
+    the time steps (`refined_peaks`); integrates only to the end of that revolution and
+    records only the reactions. A free linkage: over the last window of a run of
+    ``duration`` s (windows of ``window`` s)."""
     max_memory = options.pop("max_memory", None)
     start = options.pop("start", None)
-    return peak_run(linkage, revolution, make_settings(options), max_memory, start)
+    duration, window = options.pop("duration", None), options.pop("window", None)
+    return peak_run(linkage, revolution, make_settings(options), max_memory, start,
+                    duration=duration, window=window)
 
 
-def peak_run(linkage: Linkage, revolution: int, settings: ExudynSettings,
-             max_memory=None, start=None) -> float:
+def peak_run(linkage: Linkage, revolution: int | None, settings: ExudynSettings,
+             max_memory=None, start=None, *, duration=None, window=None) -> float:
     """`peak_exudyn_linkage` for validated `settings` (from `start` if given)."""
-    revolution = _check_run(linkage, revolution, settings, ("reactions",), max_memory,
-                            "revolution")
+    span = _check_run(linkage, revolution, settings, ("reactions",), max_memory,
+                      "revolution", duration=duration, window=window)
+    free = linkage.drive is None
+    if free and start is not None:
+        raise ValueError("start is for a driven linkage; a free linkage starts from its "
+                         "initial (Linkage.initial, an Initial)")
     model = build(linkage, settings, outputs=("reactions",), start=start)
-    solve(model, revolution * linkage.period)
+    solve(model, float(span[-1]) if free else span * linkage.period)
     t, reactions = _reactions(model)
     F = (sum(reactions.values()) if linkage.monitor_joint is None
          else reactions[linkage.monitor_joint])
+    if free:
+        return float(window_peaks(t, np.hypot(F[:, 0], F[:, 1]), span)[-1])
+    revolution = span
     return float(refined_peaks(t, np.hypot(F[:, 0], F[:, 1]), linkage.period,
                                revolution)[revolution - 1])

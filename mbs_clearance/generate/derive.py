@@ -66,7 +66,9 @@ def parameter_layout(linkage: Linkage) -> tuple[str, ...]:
     for j in linkage.clearance_joints:
         if j.has_lubrication:
             names += [f"{j.name}.{f}" for f in LUBRICATION_FIELDS]
-    names += ["drive.speed", "drive.initial_angle", "gravity"]
+    if linkage.drive is not None:       # a free linkage has no drive parameters
+        names += ["drive.speed", "drive.initial_angle"]
+    names += ["gravity"]
     for j in linkage.clearance_joints:
         names += [f"{j.name}.mode", f"{j.name}.impact_velocity"]
     return tuple(names)
@@ -151,11 +153,13 @@ def derive(linkage: Linkage) -> Derivation:
 
     # the drive angle: a plain symbol THETA in the positions (for the partial derivatives
     # of the drive moment), speed t + initial_angle wherever time enters (`timed`)
-    drive_angle = psyms["drive.speed"] * t + psyms["drive.initial_angle"]
+    # (a free linkage has neither: its equations are autonomous, its drive moment is 0)
+    driven = linkage.drive is not None
+    drive_angle = psyms["drive.speed"] * t + psyms["drive.initial_angle"] if driven else None
     THETA = sp.Symbol("THETA", real=True)
 
     def timed(expr):
-        return expr.xreplace({THETA: drive_angle})
+        return expr.xreplace({THETA: drive_angle}) if driven else expr
 
     def point(body, pt):
         return psyms[f"{body}.{pt}.x"], psyms[f"{body}.{pt}.y"]
@@ -185,7 +189,7 @@ def derive(linkage: Linkage) -> Derivation:
             pos[body] = (q[index[f"{body}.x"]], q[index[f"{body}.y"]])
             continue
         if isinstance(joint, Revolute):
-            if joint.name == linkage.drive.joint:
+            if driven and joint.name == linkage.drive.joint:
                 angle[body] = THETA
                 rot[body] = (sp.cos(THETA), sp.sin(THETA))
             else:
@@ -312,7 +316,7 @@ def derive(linkage: Linkage) -> Derivation:
         return me.msubs(expr, plain)
 
     # ---- base angles -> symbols
-    base = [flat(drive_angle)]
+    base = [flat(drive_angle)] if driven else []
     for c in coords:
         if c.endswith(".angle"):
             base.append(Q[index[c]])

@@ -306,16 +306,18 @@ def jacobian_context(w, d: Derivation, out_columns: list[str]) -> dict:
         [(f"out[{acc_rows[i]} * ts + d]", {k: f"r{i}_{k}" for k in rgrad[i]}, [])
          for i in range(n)], tail=tloop)))
 
-    # ---- the drive moment's value (the work's rate) in every call
-    mom = row["drive_moment"]
-    mom_e = w.split(d.drive_moment)
-    J_stages.append(([mom_e], [at(mom, nz)]))
-    T_stages.append(([mom_e], [f"out[{mom} * ts + nd]"]))
+    # ---- the drive moment's value (the work's rate) in every call (a free linkage: none)
+    mom = row.get("drive_moment", -1)
+    if mom >= 0:
+        mom_e = w.split(d.drive_moment)
+        J_stages.append(([mom_e], [at(mom, nz)]))
+        T_stages.append(([mom_e], [f"out[{mom} * ts + nd]"]))
 
     # ---- full: the reactions and the drive moment with their derivatives
     outs = [(row[f"{g}.reaction_{xy}"], d.reactions[gi][k])
             for gi, g in enumerate(d.ground_joints) for k, xy in enumerate("xy")]
-    outs.append((mom, d.drive_moment))
+    if mom >= 0:
+        outs.append((mom, d.drive_moment))
     oexprs, onames, tonames, oloop, trows_full = [], [], [], [], []
     for m, (r, e) in enumerate(outs):
         e = sp.expand(e)

@@ -285,14 +285,17 @@ def render(d: Derivation, linkage_name: str, structure: dict, zeros: tuple = ())
                 [str(s) for s in fsyms] + [f"mm_{i}_{k}" for i, k in lower]),
                _solve_lines(code, [str(s) for s in fsyms], [f"A{i}" for i in range(n)], "")]
     reaction_names = [f"r{g}{xy}" for g in range(G) for xy in "xy"]
-    outputs_stage = ([w.split(e) for r in d.reactions for e in r] + [w.split(d.drive_moment)],
-                     reaction_names + ["moment"])
+    # a free linkage (no drive parameters) has no drive moment
+    driven = "drive.speed" in params
+    moment = ["moment"] if driven else []
+    outputs_stage = ([w.split(e) for r in d.reactions for e in r]
+                     + [w.split(d.drive_moment)] * driven, reaction_names + moment)
     results = []
     for j in range(J):
         results += [f"F{j}", f"d{j}", f"dd{j}", f"ex{j}", f"ey{j}"]
     results += reaction_names
     results += [" + ".join(f"r{g}x" for g in range(G)) or "0.0",
-                " + ".join(f"r{g}y" for g in range(G)) or "0.0", "moment"]
+                " + ".join(f"r{g}y" for g in range(G)) or "0.0", *moment]
     results += [f"A{i}" for i in range(n)]
     for j in fric:
         results += [str(d.TQ[j]), f"vt{j}", f"-{d.TQ[j]} * vt{j}"]
@@ -325,7 +328,7 @@ def render(d: Derivation, linkage_name: str, structure: dict, zeros: tuple = ())
                         f"{j}.ecc_x", f"{j}.ecc_y"]
     for gname in d.ground_joints:
         out_columns += [f"{gname}.reaction_x", f"{gname}.reaction_y"]
-    out_columns += ["shaking_x", "shaking_y", "drive_moment"]
+    out_columns += ["shaking_x", "shaking_y", *(["drive_moment"] if driven else [])]
     out_columns += [f"{c}.acc" for c in d.coordinates]
     for j in fric:
         out_columns += [f"{d.joints[j]}.{f}" for f in ("friction_force", "slip_velocity",
@@ -347,9 +350,10 @@ def render(d: Derivation, linkage_name: str, structure: dict, zeros: tuple = ())
         coordinates=list(d.coordinates), n=n, J=J, joints=list(d.joints),
         ground_joints=list(d.ground_joints), mem_start=mem_start,
         n_constants=len(w.constants), out_columns=out_columns, monitor=d.monitor,
-        monitor_column=mon, moment_column=out_columns.index("drive_moment"),
+        monitor_column=mon,
+        moment_column=out_columns.index("drive_moment") if driven else -1,
         acc_column=out_columns.index(f"{d.coordinates[0]}.acc"),
-        speed=params.index("drive.speed"), results=results, dynamics=dynamics,
+        speed=params.index("drive.speed") if driven else -1, results=results, dynamics=dynamics,
         gap_fns=gap_fns, energy=energy, closure=closure, closure_jac=closure_jac,
         closure_rate=closure_rate, prepare=prepare, contact_indices=contact,
         friction_joints=[d.joints[j] for j in fric],

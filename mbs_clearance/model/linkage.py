@@ -18,6 +18,9 @@ Coordinates (`Linkage.coordinates`), in the order of the joints, then of the flo
 - a floating body: "<body>.x", "<body>.y" (its centre of mass), "<body>.angle".
 
 The drive's angle (body_b's angle) is prescribed, speed t + initial_angle, not a coordinate.
+A free linkage (``drive=None``) has no prescribed motion: every joint's angle is a
+coordinate, and the run starts from `Initial` coordinates and rates (the equations are
+autonomous; a run covers a duration in s instead of drive revolutions).
 
 Every description is validated on construction: a bad value raises ValueError naming the
 item and its allowed range, a graph error (unknown body or point, a closed loop of ideal
@@ -46,7 +49,7 @@ from ..laws.lubrication import MODELS as LUBRICATION_MODELS
 from ..laws.registry import FRICTION_PARAMETER_SPECS, FRICTION_SLOTS, friction_law
 
 __all__ = ["Point", "GROUND", "Body", "Revolute", "Prismatic", "ClearanceJoint", "Drive",
-           "Linkage", "FRICTION_DEFAULTS", "check_friction", "check_lubrication"]
+           "Initial", "Linkage", "FRICTION_DEFAULTS", "check_friction", "check_lubrication"]
 
 Point = tuple[float, float]
 #: reserved body name of the ground; its points are `Linkage.ground_points`
@@ -309,6 +312,37 @@ class Drive:
         return 2.0 * math.pi / self.speed
 
 
+def _values(item: str, values: Any) -> dict[str, float]:
+    """`values` (a mapping of coordinate name to a finite number) as a dict of floats."""
+    if not isinstance(values, Mapping):
+        raise ValueError(f"{item} must be a mapping of coordinate name to a finite number; "
+                         f"got {_short(values)}")
+    out = {}
+    for key, value in values.items():
+        if not isinstance(key, str):
+            raise ValueError(f"{item} key must be a coordinate name; got {_short(key)}")
+        out[key] = _real(f"{item}[{key!r}]", value, "a finite number (SI units, rad)")
+    return out
+
+
+@dataclass(frozen=True)
+class Initial:
+    """The start of a free linkage (``Linkage(drive=None)``): coordinates (by name,
+    `Linkage.coordinates`; m or rad) and their rates (m/s or rad/s). A coordinate not given
+    solves the loop closure of the clearance joints (journals centred) with the given ones
+    held, from the linkage's assembly guesses; a rate not given solves the velocity
+    constraints with the given ones held (least squares, minimum norm: a rate no constraint
+    fixes starts at 0)."""
+
+    coordinates: Mapping[str, float] = field(default_factory=dict)
+    rates: Mapping[str, float] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "coordinates",
+                           _values("initial coordinates", self.coordinates))
+        object.__setattr__(self, "rates", _values("initial rates", self.rates))
+
+
 #: field -> (symbol, unit, default, source) of the friction fields of `ClearanceJoint`: the
 #: law's name and the parameters the friction laws declare (`laws.friction`)
 FRICTION_DEFAULTS: dict[str, tuple[str, str, Any, str]] = {
@@ -368,20 +402,24 @@ LUBRICATION_PARAMETERS = ("viscosity", "bearing_length", "film_fade_start", "fil
 @dataclass(frozen=True)
 class Linkage:
     """A planar linkage: bodies, ideal joints (a forest rooted at the ground), clearance
-    joints, the drive, ground points, gravity (m/s^2 along -y), the monitored ground joint
-    (None: the shaking force, the sum of the ground reactions) and assembly guesses of
-    coordinates (by coordinate name) that pick the assembly branch of the centred start.
-    See the module docstring for the coordinates."""
+    joints, the drive (None: a free linkage, started from `initial`), ground points,
+    gravity (m/s^2 along -y), the monitored ground joint (None: the shaking force, the sum
+    of the ground reactions) and assembly guesses of coordinates (by coordinate name) that
+    pick the assembly branch of the centred start. See the module docstring for the
+    coordinates."""
 
     name: str
     bodies: tuple[Body, ...]
     joints: tuple[Revolute | Prismatic, ...]
     clearance_joints: tuple[ClearanceJoint, ...]
-    drive: Drive
+    drive: Drive | None
     ground_points: Mapping[str, Point] = field(default_factory=dict)
     gravity: float = 9.81
     monitor_joint: str | None = None
     assembly: Mapping[str, float] = field(default_factory=dict)
+    #: the start of a free linkage (drive None; None: `Initial()`, assembled at rest); a
+    #: driven linkage takes none (its start is the centred assembly or a `Start`)
+    initial: Initial | None = None
     #: the named case (`cases.CASES`) and overrides that built this linkage (None and {} for
     #: a description from a file or a changed copy): a study rebuilds the case with other
     #: overrides (`design.linkage_with`); not part of the description (`to_dict`) nor of
@@ -409,8 +447,20 @@ class Linkage:
                     raise ValueError(f"{f} must hold {_cls_names(cls)} objects; "
                                      f"got {_short(item)}")
             object.__setattr__(self, f, value)
-        if not isinstance(self.drive, Drive):
-            raise ValueError(f"drive must be a Drive; got {_short(self.drive)}")
+        if self.drive is not None and not isinstance(self.drive, Drive):
+            raise ValueError(f"drive must be a Drive or None (a free linkage); "
+                             f"got {_short(self.drive)}")
+        if self.initial is not None and not isinstance(self.initial, Initial):
+            raise ValueError(f"initial must be None or an Initial; got {_short(self.initial)}")
+        if (self.drive is not None and isinstance(self.initial, Initial)
+                and not self.initial.coordinates and not self.initial.rates):
+            object.__setattr__(self, "initial", None)   # an empty start: nothing to refuse
+        if self.initial is not None and self.drive is not None:
+            raise ValueError("initial is for a free linkage (drive=None): a driven linkage "
+                             "starts from its centred assembly (assembly guesses) or from a "
+                             "Start (linkage_model.settled_start)")
+        if self.drive is None and self.initial is None:
+            object.__setattr__(self, "initial", Initial())
         object.__setattr__(self, "ground_points", _points("ground_points", self.ground_points))
         object.__setattr__(self, "gravity", _real("gravity", self.gravity,
                                                   "a finite number (m/s^2)"))
@@ -434,6 +484,44 @@ class Linkage:
                                  f"coordinates are {list(coords)}")
             guesses[key] = _real(f"assembly[{key!r}]", value, "a finite number")
         object.__setattr__(self, "assembly", guesses)
+        if self.initial is not None:
+            for what, values in (("coordinates", self.initial.coordinates),
+                                 ("rates", self.initial.rates)):
+                for key in values:
+                    if key not in coords:
+                        raise ValueError(f"initial {what} names an unknown coordinate "
+                                         f"{_short(key)}; the coordinates are {list(coords)}")
+
+    @property
+    def is_free(self) -> bool:
+        """Whether the linkage has no drive (it moves from `initial`)."""
+        return self.drive is None
+
+    @property
+    def start(self) -> Initial:
+        """The start of a free linkage (`initial`, or `Initial()`); ValueError if driven."""
+        if self.drive is not None:
+            raise ValueError(f"linkage {self.name!r} is driven: it starts from its centred "
+                             "assembly, not from an Initial")
+        return self.initial
+
+    @property
+    def rate_scale(self) -> float:
+        """The scale of angular rates in rad/s: the drive speed; of a free linkage the
+        largest initial rate (an angle's, or a length's over the length scale), at least
+        sqrt(|gravity| / length scale) (the rate of a swing from rest), at least 1e-3."""
+        if self.drive is not None:
+            return self.drive.speed
+        length = max(self.length_scale, 1e-300)
+        rates = [abs(v) if c.endswith(".angle") else abs(v) / length
+                 for c, v in self.start.rates.items()]
+        return max([1e-3, math.sqrt(abs(self.gravity) / length), *rates])
+
+    @property
+    def time_scale(self) -> float:
+        """2 pi / `rate_scale` in s: a drive revolution, or a free linkage's time of one
+        turn at its largest initial rate."""
+        return 2.0 * math.pi / self.rate_scale
 
     # ------------------------------------------------------------------ graph
     def _check_graph(self) -> None:
@@ -500,8 +588,10 @@ class Linkage:
             parent[root(a)] = root(b)
             adjacency.setdefault(a, []).append((b, joint.name))
             adjacency.setdefault(b, []).append((a, joint.name))
-        drive = {j.name: j for j in self.joints}.get(self.drive.joint)
-        if not isinstance(drive, Revolute) or drive.body_a != GROUND:
+        drive = (None if self.drive is None
+                 else {j.name: j for j in self.joints}.get(self.drive.joint))
+        if self.drive is not None and (not isinstance(drive, Revolute)
+                                       or drive.body_a != GROUND):
             found = ("no ideal joint of that name" if drive is None else
                      f"a {type(drive).__name__} from {drive.body_a!r} to {drive.body_b!r}")
             raise ValueError(f"drive joint {self.drive.joint!r} must be a Revolute with body_a "
@@ -539,7 +629,7 @@ class Linkage:
         child = {joint.name: body for body, _, joint in self.tree() if joint is not None}
         names = []
         for joint in self.joints:
-            if joint.name == self.drive.joint:
+            if self.drive is not None and joint.name == self.drive.joint:
                 continue
             if isinstance(joint, Revolute):
                 names.append(f"{child[joint.name]}.angle")
@@ -558,7 +648,10 @@ class Linkage:
 
     @property
     def period(self) -> float:
-        """Duration of one drive revolution in s."""
+        """Duration of one drive revolution in s (ValueError for a free linkage)."""
+        if self.drive is None:
+            raise ValueError(f"linkage {self.name!r} is free (drive=None): it has no drive "
+                             "revolution; run it for a duration in s (duration=)")
         return self.drive.period
 
     # ------------------------------------------------------------------ assembly
@@ -567,7 +660,8 @@ class Linkage:
         order, at coordinates `q` (by name, `coordinates`) and time `t`: the loop closure,
         zero when every journal is centred. Plain Python, the kinematics of the generated
         model's ``closure`` (no model is generated or compiled)."""
-        theta = self.drive.speed * t + self.drive.initial_angle
+        drive = self.drive
+        theta = 0.0 if drive is None else drive.speed * t + drive.initial_angle
         points = {GROUND: self.ground_points, **{b.name: b.points for b in self.bodies}}
         angle = {GROUND: 0.0}
         pos = {GROUND: (0.0, 0.0)}
@@ -587,7 +681,8 @@ class Linkage:
                 angle[body] = q[f"{body}.angle"]
                 pos[body] = (q[f"{body}.x"], q[f"{body}.y"])
             elif isinstance(joint, Revolute):
-                angle[body] = theta if joint.name == self.drive.joint else q[f"{body}.angle"]
+                angle[body] = (theta if drive is not None and joint.name == drive.joint
+                               else q[f"{body}.angle"])
                 pp, pc = ((joint.point_a, joint.point_b) if joint.body_a == parent
                           else (joint.point_b, joint.point_a))
                 px, py = world(parent, pp)
@@ -613,14 +708,18 @@ class Linkage:
         """The coordinates (by name) with every journal centred at time `t`, by at most
         `max_iter` Newton steps from the `assembly` guesses (Jacobian by central
         differences; least squares where the closure is not square), to 1e-9 of the length
-        scale; ValueError if there is no assembly near the guesses. A check that costs
+        scale (a free linkage's initial coordinates held); ValueError if there is no assembly
+        near the guesses. A check that costs
         milliseconds, made before any model is generated or compiled; the run's start
         (`linkage_model.initial_state`) solves the same closure to round-off with the
         model's exact Jacobian."""
         import numpy as np
 
         names = self.coordinates()
-        q = np.array([self.assembly.get(c, 0.0) for c in names])
+        # a free linkage holds its given initial coordinates
+        held = dict(self.initial.coordinates) if self.drive is None else {}
+        q = np.array([held.get(c, self.assembly.get(c, 0.0)) for c in names])
+        free = np.array([c not in held for c in names])
         scale = max(self.length_scale, 1e-300)
         steps = np.array([1e-6 if c.endswith(".angle") else 1e-6 * scale for c in names])
 
@@ -633,8 +732,10 @@ class Linkage:
                 break
             if np.max(np.abs(r)) <= 1e-9 * scale:
                 return dict(zip(names, q.tolist()))
-            jac = np.empty((len(r), len(q)))
+            jac = np.zeros((len(r), len(q)))
             for i, h in enumerate(steps):
+                if not free[i]:
+                    continue
                 e = np.zeros(len(q))
                 e[i] = h
                 jac[:, i] = (residual(q + e) - residual(q - e)) / (2.0 * h)
@@ -677,13 +778,17 @@ class Linkage:
                         "points": points(b.points)} for b in self.bodies],
             "joints": [joint(j) for j in self.joints],
             "clearance_joints": [dataclasses.asdict(j) for j in self.clearance_joints],
-            "drive": dataclasses.asdict(self.drive),
+            **({} if self.drive is None else {"drive": dataclasses.asdict(self.drive)}),
             "ground_points": points(self.ground_points),
             "gravity": self.gravity,
             "assembly": dict(self.assembly),
         }
         if self.monitor_joint is not None:
             out["monitor_joint"] = self.monitor_joint
+        if self.drive is None:      # a free linkage: its start (TOML has no null drive)
+            start = self.start
+            out["initial"] = {"coordinates": dict(start.coordinates),
+                              "rates": dict(start.rates)}
         for j in out["clearance_joints"]:
             if j["contact_stiffness"] is None:      # TOML has no null
                 del j["contact_stiffness"]
@@ -698,6 +803,8 @@ class Linkage:
         and the item that holds it (``bodies[1] ('coupler')``)."""
         if not isinstance(data, Mapping):
             raise ValueError(f"a linkage description must be a mapping; got {_short(data)}")
+        if "drive" not in data and "initial" in data:      # a free linkage
+            data = {**data, "drive": None}
         # case and overrides: the provenance of a built case, not keys of a description
         data = dict(_fields_of(cls, "linkage", "the description", data,
                                exclude=("case", "overrides")))
@@ -725,10 +832,18 @@ class Linkage:
         clearance = tuple(ClearanceJoint(**_fields_of(ClearanceJoint, "clearance joint", where, j))
                           for where, j in items("clearance_joints", MAX_CLEARANCE_JOINTS))
         drive = data["drive"]
-        if not isinstance(drive, Mapping):
-            raise ValueError(f"drive must be a table/object; got {_short(drive)}")
+        if drive is not None:
+            if not isinstance(drive, Mapping):
+                raise ValueError(f"drive must be a table/object (or absent, with initial, for "
+                                 f"a free linkage); got {_short(drive)}")
+            drive = Drive(**_fields_of(Drive, "drive", "drive", drive))
+        initial = data.get("initial")
+        if initial is not None:
+            if not isinstance(initial, Mapping):
+                raise ValueError(f"initial must be a table/object; got {_short(initial)}")
+            initial = Initial(**_fields_of(Initial, "initial", "initial", initial))
         data.update(bodies=bodies, joints=tuple(joints), clearance_joints=clearance,
-                    drive=Drive(**_fields_of(Drive, "drive", "drive", drive)))
+                    drive=drive, initial=initial)
         return cls(**data)
 
     @classmethod
@@ -781,7 +896,8 @@ class Linkage:
                 names += [f"{j.name}.{f}" for f in FRICTION_PARAMETERS]
             if j.has_lubrication:
                 names += [f"{j.name}.{f}" for f in LUBRICATION_PARAMETERS]
-        return tuple(names + ["drive.speed", "drive.initial_angle", "gravity"])
+        drive = [] if self.drive is None else ["drive.speed", "drive.initial_angle"]
+        return tuple(names + drive + ["gravity"])
 
     def _locate(self, name: str):
         """(kind, object, field, point index) of a parameter name, or ValueError."""
@@ -858,7 +974,7 @@ class Linkage:
                                   j.bearing_point] + (["friction"] if j.has_friction else [])
                                  + (["lubrication"] if j.has_lubrication else [])
                                  for j in self.clearance_joints],
-            "drive": self.drive.joint,
+            "drive": None if self.drive is None else self.drive.joint,
             "monitor_joint": self.monitor_joint,
         }
 

@@ -54,6 +54,10 @@ class Flow:
         from . import linkage_model as lm
 
         linkage = self.linkage = as_linkage(mech)
+        if linkage.drive is None:
+            raise ValueError(f"linkage {linkage.name!r} is free (drive=None): a flow maps "
+                             "drive revolutions; run a free linkage with simulate(..., "
+                             "duration=)")
         self.mech = mech
         if settings is None:
             settings = RunSettings(method=options.pop("method", None) or self.METHOD)

@@ -555,7 +555,11 @@ def plain_setup(linkage: Linkage, rtol: float | None, start=None, specialise: bo
     (`specialise`: the one specialised on its zero-valued geometric parameters), the
     parameter vector, the centred initial state (or `start`'s, a `linkage_model.Start`,
     with its memories in p0) and the plain run's tolerances (rtol, atol with the switching
-    functions'). Returns (model, p0, y_state, rtol, atol)."""
+    functions'). Returns (model, p0, y_state, rtol, atol). A free linkage is refused: its
+    model has no drive moment, the sensitivity kernels' work rate."""
+    if linkage.drive is None:
+        raise ValueError(f"linkage {linkage.name!r} is free (drive=None): sensitivities (DDM) "
+                         "need a driven linkage; use finite differences of its runs")
     model = load_model(linkage, specialise)
     rtol, atol = _tolerances(linkage, model, rtol, None)
     p0 = pack_parameters(linkage, model)

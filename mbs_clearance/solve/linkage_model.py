@@ -75,8 +75,9 @@ def parameter_values(linkage: Linkage) -> dict[str, float]:
         values[f"{j.name}.lubrication"] = float(LUBRICATION_MODELS.get(j.lubrication, -1))
         for f in LUBRICATION_PARAMETERS:
             values[f"{j.name}.{f}"] = getattr(j, f)
-    values["drive.speed"] = linkage.drive.speed
-    values["drive.initial_angle"] = linkage.drive.initial_angle
+    if linkage.drive is not None:
+        values["drive.speed"] = linkage.drive.speed
+        values["drive.initial_angle"] = linkage.drive.initial_angle
     values["gravity"] = linkage.gravity
     return values
 
@@ -103,17 +104,28 @@ def initial_state(linkage: Linkage, model=None, p=None, t0: float = 0.0, tol: fl
     the loop closure (closure(t0, q, p) = 0) by Newton's method from the description's
     assembly guesses (0 for coordinates without one; least squares if the closure is not
     square), the rates the velocity constraints closure_jacobian qdot = -closure_rate;
-    W = 0 (and the friction work). Raises ValueError if Newton does not converge (no
-    assembly near the guesses)."""
+    W = 0 (and the friction work). A free linkage holds the coordinates and rates its
+    `Initial` gives and solves only the others (the given coordinates first, over the
+    assembly guesses). Raises ValueError if Newton does not converge (no assembly near the
+    guesses)."""
     model = load_model(linkage) if model is None else model
     p = pack_parameters(linkage, model) if p is None else p
-    q = np.array([linkage.assembly.get(c, 0.0) for c in model.COORDINATES])
+    coords = list(model.COORDINATES)
+    given_q, given_u = ({}, {}) if linkage.drive is not None else (
+        linkage.start.coordinates, linkage.start.rates)
+    q = np.array([given_q.get(c, linkage.assembly.get(c, 0.0)) for c in coords])
+    solve_q = np.array([c not in given_q for c in coords])
     scale = max(linkage.length_scale, 1e-300)
+    every = bool(solve_q.all())
     for _ in range(max_iter):
         res = model.closure(t0, q, p)
+        if not solve_q.any():
+            break
         jac = model.closure_jacobian(t0, q, p)
-        dq = np.linalg.lstsq(jac, -res, rcond=None)[0]
-        q = q + dq
+        if every:
+            q = q + np.linalg.lstsq(jac, -res, rcond=None)[0]
+        else:
+            q[solve_q] += np.linalg.lstsq(jac[:, solve_q], -res, rcond=None)[0]
         if np.max(np.abs(model.closure(t0, q, p))) <= tol * scale:
             break
     else:
@@ -122,8 +134,20 @@ def initial_state(linkage: Linkage, model=None, p=None, t0: float = 0.0, tol: fl
             f"guesses {dict(linkage.assembly)} (residual "
             f"{np.max(np.abs(model.closure(t0, q, p))):.3g} m): give guesses (Linkage."
             f"assembly, by coordinate name {list(model.COORDINATES)}) near an assembly")
+    if given_q and np.max(np.abs(model.closure(t0, q, p))) > 1e-9 * scale:
+        raise ValueError(
+            f"the initial coordinates {dict(given_q)} of linkage {linkage.name!r} leave a "
+            f"journal off its bearing's centre by {np.max(np.abs(model.closure(t0, q, p))):.3g}"
+            f" m (the start is centred): give fewer coordinates, or ones of an assembly")
     jac = model.closure_jacobian(t0, q, p)
-    qd = np.linalg.lstsq(jac, -model.closure_rate(t0, q, p), rcond=None)[0]
+    if linkage.drive is not None:
+        qd = np.linalg.lstsq(jac, -model.closure_rate(t0, q, p), rcond=None)[0]
+        return np.concatenate([q, qd, np.zeros(model.N_STATE - 2 * len(q))])
+    qd = np.array([given_u.get(c, 0.0) for c in coords])
+    solve_u = np.array([c not in given_u for c in coords])
+    rhs = -model.closure_rate(t0, q, p) - jac[:, ~solve_u] @ qd[~solve_u]
+    if solve_u.any():
+        qd[solve_u] = np.linalg.lstsq(jac[:, solve_u], rhs, rcond=None)[0]
     return np.concatenate([q, qd, np.zeros(model.N_STATE - 2 * len(q))])
 
 
@@ -268,9 +292,10 @@ def default_atol(linkage: Linkage, model, rtol: float) -> np.ndarray:
     1 rad, lengths the length scale, angle rates the drive speed, length rates the driven
     body's tip speed, the drive's (and friction's) work 1 J, not under error control), then
     per clearance joint of its switching function and its rate (`event_atol`)."""
-    w = linkage.drive.speed
+    w = linkage.rate_scale
     length = linkage.length_scale
-    tip = w * drive_extent(linkage)
+    # a free linkage: its whole reach as the extent
+    tip = w * (drive_extent(linkage) if linkage.drive is not None else length)
     pos = [1.0 if c.endswith(".angle") else length for c in model.COORDINATES]
     vel = [w if c.endswith(".angle") else tip for c in model.COORDINATES]
     events = [event_atol(j, w, rtol) for j in linkage.clearance_joints]
@@ -304,14 +329,18 @@ def trajectory_from_run(linkage: Linkage, model, ts, ys, ms, p, stats, peaks, ou
                  else named["reactions"][model.MONITOR_JOINT])
     # (n, J, 2): per joint its x and y side by side
     ecc = take(*(f"{j}.ecc_{a}" for j in joints for a in "xy")).reshape(-1, J, 2)
+    # a free linkage has no drive: no drive moment, no drive work
+    free = "drive_moment" not in col
     return Trajectory(
-        t=np.asarray(ts), base_force=monitored, crank_moment=outs[:, col["drive_moment"]].copy(),
+        t=np.asarray(ts), base_force=monitored,
+        crank_moment=None if free else outs[:, col["drive_moment"]].copy(),
         contact_force=per_joint("contact_force"), penetration=per_joint("penetration"),
         eccentricity=ecc,
         slider_position=None, slider_velocity=None, slider_acceleration=None,
         coupler_angle=None, coupler_rate=None,
         contact_phase=(ms[:, 0:2 * J:2] > 0.5).astype(np.int8),
-        crank_work=ys[:, 2 * n].copy(), mechanism=linkage, backend="reduced", stats=stats,
+        crank_work=None if free else ys[:, 2 * n].copy(), mechanism=linkage,
+        backend="reduced", stats=stats,
         peaks=peaks, **named,
         friction_work=(ys[:, model.FRICTION_WORK].copy() if getattr(model, "FRICTION_WORK", -1)
                        > 0 and ys.shape[1] > model.FRICTION_WORK else None),
@@ -353,7 +382,8 @@ def _take_columns(a: np.ndarray, columns) -> np.ndarray:
 
 #: options of `simulate(linkage, backend="reduced")` (keywords of `run` meant for users)
 #: (the run settings, `RunSettings`, but the comparisons' event_control)
-OPTION_NAMES = (*(n for n in RunSettings.names() if n != "event_control"), "t_eval", "start")
+OPTION_NAMES = (*(n for n in RunSettings.names() if n != "event_control"), "t_eval", "start",
+                "duration", "window")
 
 #: the event search looks closer (7 more samples and the interpolant's maximum) between two
 #: samples of a step where the cubic Hermite interpolant of a penetration comes within
@@ -487,6 +517,30 @@ def bytes_per_step(model) -> int:
 
 def _estimate_steps(linkage, revolutions: float, *, max_steps: int, h_max: float,
                     pilot: dict) -> int | None:
+    if linkage.drive is None:       # a free linkage: `revolutions` are seconds, no pilot
+        return _estimate_free(revolutions, max_steps, h_max)
+    return _estimate_driven(linkage, revolutions, max_steps=max_steps, h_max=h_max,
+                            pilot=pilot)
+
+
+def _estimate_free(duration: float, max_steps: int, h_max: float) -> None:
+    """A free linkage's run of `duration` s: refused where h_max alone forces more than
+    max_steps (no pilot: a free motion's first part need not be like the rest)."""
+    import math
+
+    from .._checks import MemoryLimitError
+
+    forced = math.ceil(duration / h_max)
+    if forced > max_steps:
+        raise MemoryLimitError(
+            f"a run of {duration:.6g} s with h_max = {h_max:.3g} s takes at least "
+            f"{forced:.3g} steps, more than max_steps={max_steps}; raise h_max or max_steps, "
+            "or run a shorter duration")
+    return None
+
+
+def _estimate_driven(linkage, revolutions: float, *, max_steps: int, h_max: float,
+                     pilot: dict) -> int | None:
     """Steps of a run of `revolutions` revolutions, estimated before it; refused with
     `MemoryLimitError` where h_max alone forces more than max_steps, or (runs of
     `PILOT_MIN_REVOLUTIONS` or more) where a one-revolution pilot without record (`pilot`:
@@ -537,13 +591,63 @@ def integrator_settings(linkage: Linkage, model, rtol: float, atol: np.ndarray, 
         n_events=model.N_EVENTS, mem_start=model.MEM_START, n_mem=model.N_MEM)
 
 
-def run(linkage: Linkage, revolutions: int = 4, settings: RunSettings | None = None, *,
-        record: bool = True, t_eval=None, start: Start | None = None, edges=None,
-        select: bool = True, specialise: bool = True, model=None, **options):
-    """Integrate `linkage`'s generated model over `revolutions` drive revolutions from the
-    centred start (or from `start`, a `Start`); returns a `LinkageRun` (model, ts, ys, ms,
-    peaks, peak_times, stats, outs, p). The one place where a plain run meets the
-    integrator (the paper's `SliderCrank` runs here too, as its description).
+def time_edges(duration, window=None) -> np.ndarray:
+    """The window edges of a free linkage's run of `duration` s: windows of `window` s
+    from t = 0 (None: one window, the whole run; the last window ends at `duration`, a
+    remainder shorter than 1e-9 of it joined to the window before)."""
+    from .._checks import check_real
+
+    duration = check_real("duration", duration, 0.0, None, low_open=True, unit="s")
+    if window is None:
+        return np.array([0.0, duration])
+    window = check_real("window", window, 0.0, duration, low_open=True, unit="s")
+    edges = np.arange(0.0, duration, window)
+    if duration - edges[-1] < 1e-9 * duration and len(edges) > 1:
+        edges = edges[:-1]
+    if len(edges) > MAX_WINDOWS:
+        raise ValueError(f"window must be at least duration / {MAX_WINDOWS} = "
+                         f"{duration / MAX_WINDOWS:.3g} s (at most {MAX_WINDOWS} windows); "
+                         f"got {window!r}")
+    return np.append(edges, duration)
+
+
+#: the most time windows of a free linkage's run
+MAX_WINDOWS = 1_000_000
+
+
+def check_span(linkage: Linkage, revolutions, duration, window,
+               name: str = "revolutions") -> int | None:
+    """The revolutions of a driven linkage's run (None: 4), or None for a free linkage
+    (which takes `duration` in s and `window`, not revolutions); ValueError naming the
+    allowed choice otherwise."""
+    from .._checks import check_int
+
+    if linkage.drive is None:
+        if revolutions is not None:
+            raise ValueError(f"linkage {linkage.name!r} is free (drive=None): it has no drive "
+                             f"revolutions; give duration= (s) and optionally window= (s) "
+                             f"instead of {name}={revolutions!r}")
+        return None
+    if duration is not None or window is not None:
+        raise ValueError(f"linkage {linkage.name!r} is driven: its runs cover revolutions= "
+                         f"(whole drive revolutions, windows of one revolution); duration= "
+                         f"and window= are for a free linkage (drive=None)")
+    return check_int(name, 4 if revolutions is None else revolutions, 1)
+
+
+def run(linkage: Linkage, revolutions: int | None = None,
+        settings: RunSettings | None = None, *, duration: float | None = None,
+        window: float | None = None, record: bool = True, t_eval=None,
+        start: Start | None = None, edges=None, select: bool = True,
+        specialise: bool = True, model=None, **options):
+    """Integrate `linkage`'s generated model over `revolutions` drive revolutions (default
+    4) from the centred start (or from `start`, a `Start`); returns a `LinkageRun` (model,
+    ts, ys, ms, peaks, peak_times, stats, outs, p). The one place where a plain run meets
+    the integrator (the paper's `SliderCrank` runs here too, as its description).
+
+    A free linkage (drive None) runs for `duration` s from its `Initial` start, its peaks
+    taken over windows of `window` s (None: the whole run) instead of revolutions
+    (`time_edges`); it takes no revolutions (and a driven one no duration or window).
 
     `settings` (a `RunSettings`: tolerances, step control, events, memory) says how;
     keyword `options` (its field names, e.g. ``rtol=1e-9``) change single fields.
@@ -561,7 +665,6 @@ def run(linkage: Linkage, revolutions: int = 4, settings: RunSettings | None = N
     from .._checks import (
         MemoryLimitError,
         check_bool,
-        check_int,
         check_max_memory,
         check_revolutions_memory,
         format_bytes,
@@ -575,13 +678,27 @@ def run(linkage: Linkage, revolutions: int = 4, settings: RunSettings | None = N
     if settings is not None and not isinstance(settings, RunSettings):
         raise ValueError(f"settings must be a RunSettings; got {type(settings).__name__}")
     settings = (settings or RunSettings()).with_options(options)
-    revolutions = check_int("revolutions", revolutions, 1)
+    free = linkage.drive is None
+    if free and edges is not None and revolutions is None and duration is None:
+        pass            # the caller's windows
+    elif free:
+        check_span(linkage, revolutions, duration, window)
+        if duration is None:
+            raise ValueError(f"linkage {linkage.name!r} is free (drive=None): give its run's "
+                             "duration= in s")
+        edges = time_edges(duration, window)
+    else:
+        revolutions = check_span(linkage, revolutions, duration, window)
+    if free and start is not None:
+        raise ValueError("start is for a driven linkage; a free linkage starts from its "
+                         "initial (Linkage.initial, an Initial)")
     record = check_bool("record", record)
     select = check_bool("select", select)
     method, max_steps, n_samples, h0 = (settings.method, settings.max_steps,
                                         settings.n_samples, settings.h0)
     max_memory = check_max_memory(settings.max_memory)
-    h_max = linkage.period / 8 if settings.h_max is None else settings.h_max
+    h_max = ((linkage.time_scale if free else linkage.period) / 8
+             if settings.h_max is None else settings.h_max)
     event_tol = event_tolerance(linkage) if settings.event_tol is None else settings.event_tol
     if edges is None:
         check_revolutions_memory(revolutions, max_memory)
@@ -612,7 +729,8 @@ def run(linkage: Linkage, revolutions: int = 4, settings: RunSettings | None = N
     if t_eval is not None:
         t_eval, edges = landing_edges(edges, t_eval)
         record, refine = True, 0
-    steps = _estimate_steps(linkage, float(edges[-1]) / linkage.period, max_steps=max_steps,
+    span = float(edges[-1]) if free else float(edges[-1]) / linkage.period
+    steps = _estimate_steps(linkage, span, max_steps=max_steps,
                             h_max=h_max, pilot=dict(settings=settings, start=start,
                                                     specialise=specialise, model=model))
     window_bytes = revolution_bytes(len(edges) - 1)
@@ -620,7 +738,7 @@ def run(linkage: Linkage, revolutions: int = 4, settings: RunSettings | None = N
     if record and steps is not None and window_bytes + steps * per_step > max_memory:
         need = window_bytes + steps * per_step
         raise MemoryLimitError(
-            f"a run of {edges[-1] / linkage.period:.6g} revolutions needs about "
+            f"a run of {span:.6g} {'s' if free else 'revolutions'} needs about "
             f"{format_bytes(need)} ({steps:.3g} recorded steps of {per_step} bytes), more "
             f"than max_memory={max_memory} bytes ({format_bytes(max_memory)}); raise "
             "max_memory, run fewer revolutions, or ask for the peaks only (record=False)")
@@ -674,16 +792,22 @@ def _start_step(model, y0, p, rtol, atol, method, span):
                                 np.empty(n))
 
 
-def simulate_linkage(linkage: Linkage, revolutions: int = 4, **options):
+def simulate_linkage(linkage: Linkage, revolutions: int | None = None, **options):
     """Simulate `linkage` with its generated model; a `Trajectory` of every accepted step
-    with per-joint series (see `Trajectory`), annotated (penetration, periodicity)."""
+    with per-joint series (see `Trajectory`), annotated (penetration, periodicity). A free
+    linkage takes ``duration`` (s) and ``window`` (s) instead of revolutions (`run`)."""
+    import math
+
     from .trajectory import annotate
 
     settings, rest = RunSettings.split(options)
     model, ts, ys, ms, peaks, _, stats, outs, p = run(linkage, revolutions, settings,
                                                       record=True, **rest)
+    # a free linkage: its duration in turns at its rate scale stands for revolutions
+    turns = (check_span(linkage, revolutions, None, None) if linkage.drive is not None
+             else max(1, math.ceil(float(ts[-1]) / linkage.time_scale)))
     stats.update(contact_flags([j.clearance for j in linkage.clearance_joints],
-                               linkage.drive.speed, revolutions, ms[:, :model.N_MEM],
+                               linkage.rate_scale, turns, ms[:, :model.N_MEM],
                                stats.get("nevent", 0), stats["rtol"]))
     if stats["accuracy_note"]:
         warnings.warn(stats["accuracy_note"], AccuracyWarning, stacklevel=3)
@@ -694,8 +818,14 @@ def simulate_linkage(linkage: Linkage, revolutions: int = 4, **options):
     return annotate(traj)
 
 
-def peak_linkage(linkage: Linkage, revolution: int = 4, **options) -> float:
-    """The monitored force's maximum in N over drive revolution `revolution` (1-based; the
-    monitored ground joint's |reaction|, or |shaking force|), recording nothing."""
+def peak_linkage(linkage: Linkage, revolution: int | None = None, **options) -> float:
+    """The monitored force's maximum in N over drive revolution `revolution` (1-based,
+    default 4; the monitored ground joint's |reaction|, or |shaking force|), recording
+    nothing. A free linkage: over the last window of a run of ``duration`` s (windows of
+    ``window`` s; default the whole run), `revolution` not given."""
+    if linkage.drive is None:
+        check_span(linkage, revolution, None, None, "revolution")
+        return float(run(linkage, record=False, **options).peaks[-1])
+    revolution = check_span(linkage, revolution, None, None, "revolution")
     peaks = run(linkage, revolution, record=False, **options).peaks
     return float(peaks[revolution - 1])

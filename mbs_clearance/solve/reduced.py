@@ -209,7 +209,8 @@ def counters_dict(counters) -> dict:
 
 
 #: options of `simulate(..., backend="reduced")` (keywords of `run` meant for users)
-OPTION_NAMES = (*(n for n in lm.OPTION_NAMES if n != "start"), "initial_offset")
+OPTION_NAMES = (*(n for n in lm.OPTION_NAMES if n not in ("start", "duration", "window")),
+                "initial_offset")
 
 
 def simulate_reduced(mech: SliderCrank, revolutions: int = 4, **options):

@@ -77,13 +77,21 @@ def _backend(name: str) -> Backend:
     return BACKENDS[name]
 
 
-def _check(mech, revolutions, name="revolutions") -> int:
+def _check(mech, revolutions, name="revolutions") -> int | None:
+    """The revolutions (default 4) of a driven mechanism; None for a free linkage (it runs
+    for the option ``duration``), which refuses revolutions."""
     if not isinstance(mech, (SliderCrank, Linkage)):
         raise ValueError(f"mech must be a SliderCrank or a Linkage; got {type(mech).__name__}")
-    return check_int(name, revolutions, 1)
+    if isinstance(mech, Linkage) and mech.drive is None:
+        if revolutions is not None:
+            raise ValueError(f"linkage {mech.name!r} is free (drive=None): it has no drive "
+                             f"revolutions; give duration= (s) and optionally window= (s) "
+                             f"instead of {name}={revolutions!r}")
+        return None
+    return check_int(name, 4 if revolutions is None else revolutions, 1)
 
 
-def simulate(mech: SliderCrank, revolutions: int = 4, backend: str = "reduced",
+def simulate(mech: SliderCrank, revolutions: int | None = None, backend: str = "reduced",
              accuracy: float | None = None, **options) -> Trajectory:
     """Simulate `revolutions` crank revolutions from t = 0.
 
@@ -93,8 +101,10 @@ def simulate(mech: SliderCrank, revolutions: int = 4, backend: str = "reduced",
         A `Linkage` (e.g. from `mbs_clearance.model.cases`) runs the model generated from its
         description (backend "reduced") or the description built in Exudyn (backend
         "exudyn", `exudyn_linkage`); its Trajectory has per-joint series.
-    revolutions : int
-        Number of full crank (drive) revolutions (>= 1).
+    revolutions : int or None
+        Number of full crank (drive) revolutions (>= 1; None: 4). A free `Linkage`
+        (``drive=None``) takes none: it runs for ``duration`` (an option, s) from its
+        `Initial` start, its peaks per window of ``window`` s (default the whole run).
     backend : str
         A key of `BACKENDS`: "reduced" (default), "exudyn" or "ideal".
     accuracy : float or None
@@ -166,7 +176,7 @@ def _to_accuracy(mech, revolutions, accuracy, options: dict) -> Trajectory:
     return simulate_to_accuracy(record, peaks, accuracy, rattling=rattling)
 
 
-def peak_base_force(mech: SliderCrank, revolution: int = 4, backend: str = "reduced",
+def peak_base_force(mech: SliderCrank, revolution: int | None = None, backend: str = "reduced",
                     accuracy: float | None = None, **options) -> float:
     """Max |F12| in N over crank revolution `revolution` (1-based), the GA's objective (a
     Linkage: its monitored force).
@@ -185,6 +195,8 @@ def peak_base_force(mech: SliderCrank, revolution: int = 4, backend: str = "redu
 
         revolution = _check(mech, revolution, "revolution")
         traj = simulate(mech, revolution, accuracy=accuracy, **options)
+        if revolution is None:      # a free linkage: its last window's peak
+            return float(traj.peaks[-1])
         return float(revolution_peaks(traj)[revolution - 1])
     if accuracy is not None:
         options["accuracy"] = accuracy

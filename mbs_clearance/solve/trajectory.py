@@ -134,6 +134,9 @@ class Trajectory:
         m = self.mechanism
         if isinstance(m, SliderCrank):
             return m.crank_speed, m.initial_crank_angle
+        if m.drive is None:
+            raise ValueError(f"linkage {m.name!r} is free (drive=None): it has no crank angle; "
+                             "its angles are in coordinates")
         return m.drive.speed, m.drive.initial_angle
 
     # ------------------------------------------------------------------ derived outputs
@@ -150,7 +153,9 @@ class Trajectory:
 
     @property
     def revolutions(self) -> int:
-        """Number of full crank revolutions covered."""
+        """Number of full crank revolutions covered (0 for a free linkage: no drive)."""
+        if self.linkage is not None and self.mechanism.drive is None:
+            return 0
         return int(np.floor(self.t[-1] / self.mechanism.period + 1e-9))
 
     def revolution_window(self, revolution: int) -> tuple[float, float]:
@@ -313,6 +318,8 @@ def periodicity(traj: Trajectory) -> tuple[bool | None, str]:
     settled), else not periodic (False: chaotic, quasi-periodic or a transient longer than
     the run).
     """
+    if traj.linkage is not None and traj.mechanism.drive is None:
+        return None, "undetermined: a free linkage has no drive revolutions to compare"
     x = boundary_states(traj)
     if x is None:
         return None, ("undetermined: the samples do not resolve the revolution boundaries "
@@ -390,8 +397,8 @@ def check_consistency(path: Path, series: dict[str, np.ndarray], meta: Any,
 def _check_peaks(path: Path, traj: Trajectory) -> None:
     """The stored refined peaks must agree with the stored series: each at least the largest
     sample of its revolution (within 1e-9) and at most PEAK_EXCESS above it."""
-    if traj.peaks is None:
-        return
+    if traj.peaks is None or (traj.linkage is not None and traj.mechanism.drive is None):
+        return      # (a free linkage's windows are not stored: its peaks are not checked)
     if len(traj.peaks) != traj.revolutions:
         raise _fail(path, f"{len(traj.peaks)} peaks for {traj.revolutions} revolutions")
     mag = traj.base_force_magnitude
@@ -489,6 +496,8 @@ def linkage_columns(traj: Trajectory) -> dict[str, np.ndarray]:
             "base_force_y[N]": traj.base_force[:, 1], "crank_moment[N m]": traj.crank_moment,
             "crank_work[J]": traj.crank_work, "shaking_force_x[N]": traj.shaking_force[:, 0],
             "shaking_force_y[N]": traj.shaking_force[:, 1]}
+    # a free linkage has no drive: no drive moment or work columns
+    cols = {k: v for k, v in cols.items() if v is not None}
     for k, j in enumerate(traj.joints):
         cols[f"contact_force.{j}[N]"] = traj.contact_force[:, k]
         cols[f"penetration.{j}[m]"] = traj.penetration[:, k]
@@ -589,7 +598,7 @@ def _load_linkage(path: Path, meta: dict) -> Trajectory:
         traj = Trajectory(
             t=cols["t[s]"],
             base_force=np.column_stack([cols["base_force_x[N]"], cols["base_force_y[N]"]]),
-            crank_moment=cols["crank_moment[N m]"],
+            crank_moment=cols.get("crank_moment[N m]"),
             contact_force=stack("contact_force", joints, "[N]"),
             penetration=stack("penetration", joints, "[m]"),
             eccentricity=np.stack([stack("eccentricity", joints, "_x[m]"),
@@ -597,7 +606,7 @@ def _load_linkage(path: Path, meta: dict) -> Trajectory:
             slider_position=None, slider_velocity=None, slider_acceleration=None,
             coupler_angle=None, coupler_rate=None,
             contact_phase=stack("contact_phase", joints, "[-]").astype(np.int8),
-            crank_work=cols["crank_work[J]"], mechanism=linkage, backend=meta["backend"],
+            crank_work=cols.get("crank_work[J]"), mechanism=linkage, backend=meta["backend"],
             stats=meta.get("stats", {}),
             peaks=None if peaks is None else np.asarray(peaks, dtype=float),
             joints=joints,
