@@ -2,8 +2,8 @@
 tools/generate_models.py; do not edit). MODULES maps a structure digest to a module name."""
 
 MODULES: dict[str, str] = {
-    '63d0453923b6e1090ac1ce684ca045555e76520af79e926d36535fdde82eb837': 'paper_slider_crank',
-    '5aaa9c683a2875d551a2ef8007bd64f8663f44a62c34dc70141f0ffac72574b1': 'slider_crank_two_clearances',
-    '04c3e06cd35629611296f33c31266ef2df60a7e3e7a393116d6558b03a1e928f': 'four_bar',
-    '9d95b835133c9d45896a53b318e757d0e9b1abe140cd8fae4213261efc6e8d47': 'paper_slider_crank_friction',
+    'b40d1b49ad29316a6f745de43d1ba1574fb08751de8f6e45d154e16eb116a24e': 'paper_slider_crank',
+    'dab484a58b76f6198c50477626805a04a4d14c8e773af13975f28880ce446a5a': 'slider_crank_two_clearances',
+    'db5d500bb29c23329a691a04583002c9430d82598ebf981c3be250e40160c01d': 'four_bar',
+    'c3a4b3863f6e2d5e1406d5ae22caf35325f44e6c1abc7cbb23763845c7d00f7a': 'paper_slider_crank_friction',
 }

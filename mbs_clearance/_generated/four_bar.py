@@ -32,8 +32,8 @@ from mbs_clearance.generate.runtime import (
 
 LINKAGE = "four_bar"
 STRUCTURE = "{\"bodies\": [[\"crank\", [\"pin\", \"pivot\"]], [\"coupler\", [\"crank_end\", \"rocker_end\"]], [\"rocker\", [\"pin\", \"pivot\"]]], \"clearance_joints\": [[\"coupler_rocker\", \"rocker\", \"pin\", \"coupler\", \"rocker_end\"]], \"drive\": \"crank_pivot\", \"ground_points\": [\"crank_pivot\", \"rocker_pivot\"], \"joints\": [[\"revolute\", \"crank_pivot\", \"ground\", \"crank_pivot\", \"crank\", \"pivot\"], [\"revolute\", \"crank_coupler\", \"crank\", \"pin\", \"coupler\", \"crank_end\"], [\"revolute\", \"rocker_pivot\", \"ground\", \"rocker_pivot\", \"rocker\", \"pivot\"]], \"monitor_joint\": null, \"zero_parameters\": [\"crank.pivot.y\", \"crank.pin.y\", \"coupler.crank_end.y\", \"coupler.rocker_end.y\", \"rocker.pivot.y\", \"rocker.pin.y\", \"ground.crank_pivot.x\", \"ground.crank_pivot.y\", \"ground.rocker_pivot.y\"]}"
-STRUCTURE_DIGEST = "04c3e06cd35629611296f33c31266ef2df60a7e3e7a393116d6558b03a1e928f"
-GENERATOR_VERSION = "43b42c04a2e5e256"
+STRUCTURE_DIGEST = "db5d500bb29c23329a691a04583002c9430d82598ebf981c3be250e40160c01d"
+GENERATOR_VERSION = "fb3d5fb09814e865"
 
 #: dotted names of the entries of p (without the constants)
 PARAMETERS = (

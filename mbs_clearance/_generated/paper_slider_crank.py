@@ -32,8 +32,8 @@ from mbs_clearance.generate.runtime import (
 
 LINKAGE = "paper_slider_crank"
 STRUCTURE = "{\"bodies\": [[\"crank\", [\"pin\", \"pivot\"]], [\"coupler\", [\"crank_end\", \"slider_end\"]], [\"slider\", [\"pin\"]]], \"clearance_joints\": [[\"coupler_slider\", \"coupler\", \"slider_end\", \"slider\", \"pin\"]], \"drive\": \"crank_pivot\", \"ground_points\": [\"crank_pivot\", \"slider_axis\"], \"joints\": [[\"revolute\", \"crank_pivot\", \"ground\", \"crank_pivot\", \"crank\", \"pivot\"], [\"revolute\", \"crank_coupler\", \"crank\", \"pin\", \"coupler\", \"crank_end\"], [\"prismatic\", \"slider_guide\", \"ground\", \"slider_axis\", \"slider\", \"pin\"]], \"monitor_joint\": \"crank_pivot\", \"zero_parameters\": [\"crank.pivot.y\", \"crank.pin.y\", \"coupler.crank_end.y\", \"coupler.slider_end.y\", \"slider.pin.x\", \"slider.pin.y\", \"ground.crank_pivot.x\", \"ground.crank_pivot.y\", \"ground.slider_axis.x\", \"ground.slider_axis.y\", \"slider_guide.angle\"]}"
-STRUCTURE_DIGEST = "63d0453923b6e1090ac1ce684ca045555e76520af79e926d36535fdde82eb837"
-GENERATOR_VERSION = "43b42c04a2e5e256"
+STRUCTURE_DIGEST = "b40d1b49ad29316a6f745de43d1ba1574fb08751de8f6e45d154e16eb116a24e"
+GENERATOR_VERSION = "fb3d5fb09814e865"
 
 #: dotted names of the entries of p (without the constants)
 PARAMETERS = (

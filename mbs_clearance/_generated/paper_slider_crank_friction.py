@@ -32,8 +32,8 @@ from mbs_clearance.generate.runtime import (
 
 LINKAGE = "paper_slider_crank"
 STRUCTURE = "{\"bodies\": [[\"crank\", [\"pin\", \"pivot\"]], [\"coupler\", [\"crank_end\", \"slider_end\"]], [\"slider\", [\"pin\"]]], \"clearance_joints\": [[\"coupler_slider\", \"coupler\", \"slider_end\", \"slider\", \"pin\", \"friction\"]], \"drive\": \"crank_pivot\", \"ground_points\": [\"crank_pivot\", \"slider_axis\"], \"joints\": [[\"revolute\", \"crank_pivot\", \"ground\", \"crank_pivot\", \"crank\", \"pivot\"], [\"revolute\", \"crank_coupler\", \"crank\", \"pin\", \"coupler\", \"crank_end\"], [\"prismatic\", \"slider_guide\", \"ground\", \"slider_axis\", \"slider\", \"pin\"]], \"monitor_joint\": \"crank_pivot\", \"zero_parameters\": [\"crank.pivot.y\", \"crank.pin.y\", \"coupler.crank_end.y\", \"coupler.slider_end.y\", \"slider.pin.x\", \"slider.pin.y\", \"ground.crank_pivot.x\", \"ground.crank_pivot.y\", \"ground.slider_axis.x\", \"ground.slider_axis.y\", \"slider_guide.angle\"]}"
-STRUCTURE_DIGEST = "9d95b835133c9d45896a53b318e757d0e9b1abe140cd8fae4213261efc6e8d47"
-GENERATOR_VERSION = "43b42c04a2e5e256"
+STRUCTURE_DIGEST = "c3a4b3863f6e2d5e1406d5ae22caf35325f44e6c1abc7cbb23763845c7d00f7a"
+GENERATOR_VERSION = "fb3d5fb09814e865"
 
 #: dotted names of the entries of p (without the constants)
 PARAMETERS = (

@@ -32,8 +32,8 @@ from mbs_clearance.generate.runtime import (
 
 LINKAGE = "slider_crank_two_clearances"
 STRUCTURE = "{\"bodies\": [[\"crank\", [\"pin\", \"pivot\"]], [\"coupler\", [\"crank_end\", \"slider_end\"]], [\"slider\", [\"pin\"]]], \"clearance_joints\": [[\"crank_coupler\", \"crank\", \"pin\", \"coupler\", \"crank_end\"], [\"coupler_slider\", \"coupler\", \"slider_end\", \"slider\", \"pin\"]], \"drive\": \"crank_pivot\", \"ground_points\": [\"crank_pivot\", \"slider_axis\"], \"joints\": [[\"revolute\", \"crank_pivot\", \"ground\", \"crank_pivot\", \"crank\", \"pivot\"], [\"prismatic\", \"slider_guide\", \"ground\", \"slider_axis\", \"slider\", \"pin\"]], \"monitor_joint\": \"crank_pivot\", \"zero_parameters\": [\"crank.pivot.y\", \"crank.pin.y\", \"coupler.crank_end.y\", \"coupler.slider_end.y\", \"slider.pin.x\", \"slider.pin.y\", \"ground.crank_pivot.x\", \"ground.crank_pivot.y\", \"ground.slider_axis.x\", \"ground.slider_axis.y\", \"slider_guide.angle\"]}"
-STRUCTURE_DIGEST = "5aaa9c683a2875d551a2ef8007bd64f8663f44a62c34dc70141f0ffac72574b1"
-GENERATOR_VERSION = "43b42c04a2e5e256"
+STRUCTURE_DIGEST = "dab484a58b76f6198c50477626805a04a4d14c8e773af13975f28880ce446a5a"
+GENERATOR_VERSION = "fb3d5fb09814e865"
 
 #: dotted names of the entries of p (without the constants)
 PARAMETERS = (

@@ -715,6 +715,10 @@ OUTPUT_GROUPS: tuple[str, ...] = ("reactions", "drive", "contact", "bodies")
 def _check_linkage(linkage, settings: ExudynSettings) -> None:
     if not isinstance(linkage, Linkage):
         raise ValueError(f"linkage must be a Linkage; got {type(linkage).__name__}")
+    if linkage.translational_joints:
+        raise ValueError(f"linkage {linkage.name!r} has translational clearance joints "
+                         f"{[j.name for j in linkage.translational_joints]}, which the exudyn "
+                         "backend does not build; use the reduced backend")
     for j in linkage.clearance_joints:
         # the friction and the film are generic elements beside the contact element
         what = ("friction law of ours" if friction_of(j) is not None

@@ -556,6 +556,12 @@ def plain_setup(linkage: Linkage, rtol: float | None, start=None, specialise: bo
     parameter vector, the centred initial state (or `start`'s, a `linkage_model.Start`,
     with its memories in p0) and the plain run's tolerances (rtol, atol with the switching
     functions'). Returns (model, p0, y_state, rtol, atol)."""
+    if linkage.translational_joints:
+        raise ValueError(
+            f"linkage {linkage.name!r} has translational clearance joints "
+            f"{[j.name for j in linkage.translational_joints]}: their generated model has no "
+            "exact Jacobians, so DDM sensitivities are not available; use finite "
+            "differences (method='fd')")
     model = load_model(linkage, specialise)
     rtol, atol = _tolerances(linkage, model, rtol, None)
     p0 = pack_parameters(linkage, model)
