@@ -156,20 +156,21 @@ def test_bad_linkages_are_refused():
 
 # ---------------------------------------------------------------- the generated model (slow)
 
-def _corners_by_hand(mech, lk, t, q):
+def _corners_by_hand(mech, lk, t, q, positions=False):
     """(penetration, rate 0) of the four corners in `CORNERS` order at coordinates q (coupler
     angle, slider angle) and time t, from plane geometry: the slider centre at the coupler's
     end, each corner at centre + R(phi) (+-a, +-b); penetration y - (b + c) at the top,
-    -y - (b + c) at the bottom."""
+    -y - (b + c) at the bottom; with `positions` also the corners' x (along the guide)."""
     th2 = mech.crank_speed * t
     x = mech.crank_length * math.cos(th2) + mech.coupler_length * math.cos(q[0])
     y = mech.crank_length * math.sin(th2) + mech.coupler_length * math.sin(q[0])
     c = lk.translational_joints[0].clearance
-    out = []
+    pen, xs = [], []
     for sa, sb in ((1, 1), (-1, 1), (1, -1), (-1, -1)):
         cy = y + math.sin(q[1]) * sa * A + math.cos(q[1]) * sb * B
-        out.append(sb * cy - (B + c))
-    return np.array(out)
+        xs.append(x + math.cos(q[1]) * sa * A - math.sin(q[1]) * sb * B)
+        pen.append(sb * cy - (B + c))
+    return (np.array(pen), np.array(xs)) if positions else np.array(pen)
 
 
 @pytest.mark.slow
@@ -194,8 +195,10 @@ def test_corner_penetrations_and_jammed_forces_by_hand():
     ys = np.column_stack([qs, np.zeros((6, model.N_STATE - 2))])
     out = model.outputs(ts, ys, np.zeros((6, model.N_MEM)), p)
     for i in range(6):
-        pen = [out[i, col[f"{n}.penetration"]] for n in names]
-        assert pen == pytest.approx(_corners_by_hand(mech, lk, ts[i], qs[i]), abs=1e-15)
+        pen, xs = _corners_by_hand(mech, lk, ts[i], qs[i], positions=True)
+        assert [out[i, col[f"{n}.penetration"]] for n in names] == pytest.approx(pen,
+                                                                                abs=1e-15)
+        assert [out[i, col[f"{n}.ecc_x"]] for n in names] == pytest.approx(xs, abs=1e-15)
     # jammed: the slider turned by 1.2 c / a about its centre on the mid-line (two
     # opposite corners about 0.2 c deep)
     tilt = 1.2 * 1e-4 / A
