@@ -70,6 +70,12 @@ def test_description_round_trip_and_centred_assembly(tmp_path):
     wider = lk.with_parameter("guide.clearance", 2e-4)
     assert wider.translational_joints[0].clearance == 2e-4 and wider.min_clearance == 2e-4
     assert wider.structure() == lk.structure()
+    # a study's names: the guide's clearance, and "clearance" moving every joint's
+    from mbs_clearance.model.design import design_value, direction, linkage_with
+
+    assert design_value(lk, "guide.clearance") == 1e-4
+    assert linkage_with(lk, {"clearance": 3e-4}).translational_joints[0].clearance == 3e-4
+    assert direction(lk, "clearance") == {"guide.clearance": 1.0}
     rubbing = guided(friction_law="coulomb", friction_coefficient=0.1)[1]
     assert rubbing.structure() != lk.structure()
     assert "guide.friction_coefficient" in rubbing.parameter_names()
@@ -281,6 +287,27 @@ def test_elastic_corners_conserve_energy():
     change = energy - energy[0]
     scale = np.abs(traj.crank_work).max() + np.abs(change).max()
     assert np.abs(traj.crank_work - change).max() / scale < 1e-6
+    # with Coulomb friction at the corners: the drive's work minus the change of energy is
+    # the work the friction dissipated (its own quadrature), which grows
+    _, rubbing = guided(c=1e-4, restitution=1.0, friction_law="coulomb",
+                        friction_coefficient=0.2)
+    model = load_model(rubbing)
+    p = pack_parameters(rubbing, model)
+    traj = simulate(rubbing, 1, rtol=1e-10)
+    ys = np.column_stack([traj.coordinates[c] for c in model.COORDINATES]
+                         + [traj.rates[c] for c in model.COORDINATES] + [traj.crank_work])
+    energy = np.array([model.mechanical_energy(t, ys[i], _memories(model, p, traj, i))
+                       for i, t in enumerate(traj.t)])
+    lost = traj.crank_work - (energy - energy[0])
+    assert traj.friction_work[-1] > 1e-3 * np.abs(traj.crank_work).max()
+    assert np.all(np.diff(traj.friction_work) >= -1e-12)
+    assert np.abs(lost - traj.friction_work).max() < 1e-6 * np.abs(traj.crank_work).max()
+
+
+def _memories(model, p, traj, i):
+    """p with the contact modes of sample i."""
+    p[model.MEM_START::2][:model.N_EVENTS] = traj.contact_phase[i]
+    return p
 
 
 @pytest.mark.slow
