@@ -2,7 +2,9 @@
 
 A linkage is rigid bodies (mass, inertia about the centre of mass, named points in the body
 frame), ideal revolute and prismatic joints, one constant-speed drive of a revolute joint to
-the ground, gravity along -y and any number of revolute clearance joints. Every value is SI.
+the ground, gravity along -y, any number of revolute clearance joints and of translational
+(prismatic) clearance joints (`TranslationalClearance`: a rectangular slider in a guide,
+its four corners each a contact). Every value is SI.
 The clearance joints cut the kinematic loops: the ideal joints must form a forest rooted at
 the ground, so that the equations of motion are ODEs in minimal coordinates (no DAE). Bodies
 with no ideal path to the ground float (x, y, angle).
