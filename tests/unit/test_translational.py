@@ -366,3 +366,55 @@ def test_reduced_against_exudyn():
     # measured: peak 2.3e-2, 5.6e-3; guide force rms 0.136, 0.053
     assert errors[1][0] < 0.01 and errors[1][1] < 0.08
     assert errors[1][0] < errors[0][0] / 2 and errors[1][1] < errors[0][1] / 2
+
+
+@pytest.mark.slow
+def test_moving_guide_conserves_energy():
+    """A guide on a driven arm (its axis at 0.3 rad in the arm's frame) carrying a floating
+    block (its long axis at 0.3 rad in its own frame), restitution 1: d(mechanical
+    energy)/dt equals the drive's power with the corners free and in contact, so the
+    forces on the moving guide (moved to its point, with their moment) and the drive
+    moment's share of them are consistent with the corners' springs."""
+    from mbs_clearance.generate import load_model
+    from mbs_clearance.solve.linkage_model import initial_state, pack_parameters
+
+    lk = Linkage(
+        name="arm_guide",
+        bodies=(Body("arm", 0.5, 2e-3, {"pivot": (-0.1, 0.0), "mid": (0.05, 0.02)}),
+                Body("block", 0.1, 1e-5, {"c": (0.0, 0.0)})),
+        joints=(Revolute("drive_pin", GROUND, "o", "arm", "pivot"),),
+        clearance_joints=(),
+        translational_joints=(TranslationalClearance(
+            "guide", "arm", "mid", "block", "c", half_length=0.02, half_height=0.008,
+            clearance=2e-4, contact_stiffness=1e9, angle=0.3, slider_angle=0.3,
+            restitution=1.0),),
+        drive=Drive("drive_pin", 15.0, 0.2),
+        ground_points={"o": (0.0, 0.0)},
+        assembly={"block.x": 0.15, "block.y": 0.05, "block.angle": 0.2})
+    assert lk.ground_joints() == ("drive_pin",)
+    model = load_model(lk)
+    p = pack_parameters(lk, model)
+    rng = np.random.default_rng(11)
+    touching = 0
+    for mode in (0.0, 1.0):
+        for _ in range(4):
+            t = rng.uniform(0, lk.period)
+            y = initial_state(lk, model, p, t0=t)
+            assert np.abs(model.closure(t, y[:3], p)).max() < 1e-12
+            # up to 1.5 clearances off the centre and tilted by up to c / a
+            y[:3] += rng.uniform(-1, 1, 3) * np.array([3e-4, 3e-4, 2e-4 / 0.02])
+            y[3:6] += rng.uniform(-1, 1, 3) * np.array([0.1, 0.1, 3.0])
+            p[model.MEM_START::2][:model.N_EVENTS] = mode
+            f = np.empty(model.N_STATE)
+            model.rhs(t, y, p, f)
+            h = 1e-6 * lk.period
+            rate = (model.mechanical_energy(t + h, y + h * f, p)
+                    - model.mechanical_energy(t - h, y - h * f, p)) / (2 * h)
+            scale = abs(f[-1]) + 1e-3 * abs(model.mechanical_energy(t, y, p)) / lk.period
+            assert abs(rate - f[-1]) / scale < 1e-6
+            if mode:
+                out = model.outputs(np.array([t]), y[None, :], p[None, model.MEM_START:
+                                                                  model.MEM_START + 8], p)[0]
+                touching += sum(out[5 * k] > 0.0 for k in range(4))
+    # the corners' springs were loaded at some of the states
+    assert touching >= 2
