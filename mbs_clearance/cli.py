@@ -572,7 +572,7 @@ def _simulate_linkage(linkage, args: argparse.Namespace) -> int:
     traj = simulate(linkage, args.revolutions, backend=args.backend, **options)
     elapsed = time.perf_counter() - t0
     print(f"done in {elapsed:.3g} s ({len(traj.t)} samples)", file=sys.stderr)
-    joints = [] if args.backend == "ideal" else [j.name for j in linkage.clearance_joints]
+    joints = [] if args.backend == "ideal" else [name for name, _ in linkage.contacts()]
     monitored = (f"max |{linkage.monitor_joint}|" if linkage.monitor_joint
                  else "max |shaking|")
     widths = [max(12, len(j) + 6) for j in joints]

@@ -2,8 +2,8 @@
 tools/generate_models.py; do not edit). MODULES maps a structure digest to a module name."""
 
 MODULES: dict[str, str] = {
-    'ad763907a0448533472d08fe2aa6e93c764df2229616296c1d958bccb64c4576': 'paper_slider_crank',
-    '0e93fb021bf182c61dc35f3fdadcf700db6c1ff79677e37117b7313af4d1e624': 'slider_crank_two_clearances',
-    '432870fa3d09cb6113e91d47664b6413a23478c43611b90cdd38a43512aa85a0': 'four_bar',
-    '70e9fd4316dca6fc4c1f23e4120f53e610fbf9b367c0b20a9e193f71f886ec92': 'paper_slider_crank_friction',
+    '20d756729fdc75a97bebce95786e7f1083e43a0cd17a38fd8a2e0bef49a9b996': 'paper_slider_crank',
+    'af065b1fca31ad3cf70b5e9ae071d517bd6ff30ac435b69efea2033acf8f773e': 'slider_crank_two_clearances',
+    '9c1ce365c0fbd7f90ec791b7217469d12625bff10bd520f93f00009c6a8af346': 'four_bar',
+    '4bff47262a665e476543d6714a81b7b93d3fff9a5f8336a3b007e670ce8a500a': 'paper_slider_crank_friction',
 }

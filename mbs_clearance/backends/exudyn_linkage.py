@@ -36,6 +36,14 @@ Model (`build`)
   omega_B R_B (`_friction_loads`); the connectors that carry moments apply equal and
   opposite ones, so a generic element is used; the friction work is computed after the
   run from the stored states (`_friction_power`).
+- each `TranslationalClearance`: an `ObjectGenericODE2` on the slider's node (and the
+  guide's, unless the guide is the ground) whose Python force function returns the
+  generalized forces of the four corners' contacts (`_corner_loads`: the normal force of
+  the contact law at each corner's penetration beyond b + c, friction along the guide's
+  axis from its sliding velocity, the opposite forces on the guide at the same place),
+  every corner with its own impact-velocity memory; the guide's reaction on the ground and
+  the corners' series are computed after the run from the stored body states and each
+  corner's impact velocity in force at each step (`_corner_series`).
 - Each user-force joint has its own impact-velocity memory (`ImpactMemory`): a pre-step
   function (one Python call per time step for all joints, never inside Newton) registers
   the onsets (penetration crossing zero upward) and sets the joint's named symbolic
@@ -83,7 +91,15 @@ from ..laws.forces import (
 )
 from ..laws.lubrication import MODELS, lubricated_force
 from ..laws.registry import FRICTION, FRICTION_PARAMETER_SPECS, FRICTION_SLOTS
-from ..model.linkage import GROUND, ClearanceJoint, Linkage, Prismatic, Revolute
+from ..model.linkage import (
+    CORNERS,
+    GROUND,
+    ClearanceJoint,
+    Linkage,
+    Prismatic,
+    Revolute,
+    TranslationalClearance,
+)
 
 __all__ = ["ExudynSettings", "make_settings", "build", "solve", "simulate_exudyn_linkage",
            "peak_exudyn_linkage", "run_linkage", "peak_run", "body_states",
@@ -205,6 +221,11 @@ def contact_scales(linkage: Linkage) -> tuple[float, float]:
         k = 1.5 * cj.stiffness * math.sqrt(delta)
         m = min(masses.get(cj.journal_body, math.inf), masses.get(cj.bearing_body, math.inf))
         period = min(period, 2.0 * math.pi * math.sqrt(m / k))
+        floor = max(floor, 1.5 * float(np.finfo(float).eps) * size / delta)
+    for tj in linkage.translational_joints:
+        delta = (load / tj.stiffness) ** (2.0 / 3.0)
+        k = 1.5 * tj.stiffness * math.sqrt(delta)
+        period = min(period, 2.0 * math.pi * math.sqrt(masses[tj.slider_body] / k))
         floor = max(floor, 1.5 * float(np.finfo(float).eps) * size / delta)
     return period, floor
 
@@ -401,6 +422,12 @@ def _pre_step(contacts: list, h: float, predict: bool):
 
     def pre_step(mbs, t):
         for obj, memory in contacts:
+            if callable(obj):       # a corner of a translational joint: (delta, rate)
+                delta, rate = obj(mbs)
+                _update_memory(memory, t, h, delta, rate, predict)
+                if memory.history is not None:
+                    memory.history.append((t, memory.dmin))
+                continue
             d = mbs.GetObjectOutput(obj, disp)
             v = mbs.GetObjectOutput(obj, vel)
             r = math.sqrt(d[0] * d[0] + d[1] * d[1])
@@ -512,6 +539,10 @@ class _Side:
     def __init__(self, slot, reference, point, fixed):
         self.slot, self.reference, self.point, self.fixed = slot, reference, point, fixed
 
+    def angle(self, q):
+        """The body's angle (0 for the ground)."""
+        return 0.0 if self.slot is None else self.reference[2] + q[self.slot + 2]
+
     def kinematics(self, q, qt, cos, sin):
         """(position, velocity of the point, arm from the centre of mass, omega)."""
         px, py = self.point
@@ -582,6 +613,72 @@ def _friction_loads(joint, sides, q, qt, normal, friction, cos, sin, gate):
             out[i + 1] = gate(delta, sign * fy)
             out[i + 2] = gate(delta, sign * (ax * fy - ay * fx + radius * ft))
     return out
+
+
+def _corner_loads(joint: TranslationalClearance, sides, q, qt, dmins):
+    """(generalized forces on the element's coordinates, per corner (F, delta, position
+    along the guide's axis, normal offset, friction force, sliding velocity, penetration
+    rate)) of the four
+    corners of a translational clearance joint (`sides`: the slider's and the guide's
+    `_Side`, each with its angle's reference; `dmins`: the corners' impact velocities):
+    each corner's normal force of the contact law at its penetration beyond b + c along
+    the guide's normal (zero in free flight), friction along the axis from its velocity
+    relative to the guide's material point there, the opposite force on the guide."""
+    slider, guide = sides
+    (sx, sy), (svx, svy), (sax, say), sw = slider.kinematics(q, qt, math.cos, math.sin)
+    (gx, gy), (gvx, gvy), (gax, gay), gw = guide.kinematics(q, qt, math.cos, math.sin)
+    ga = guide.angle(q) + joint.angle
+    ux, uy = math.cos(ga), math.sin(ga)
+    nx, ny = -uy, ux
+    sa_ = slider.angle(q) + joint.slider_angle
+    ax, ay = math.cos(sa_), math.sin(sa_)
+    K, c, b = joint.stiffness, joint.clearance, joint.half_height
+    model = CONTACT_MODELS[joint.contact_model]
+    law = FRICTION_LAWS[joint.friction_law]
+    slots = tuple(getattr(joint, f) for f in FRICTION_SLOTS)
+    out = [0.0] * (3 * sum(sd.slot is not None for sd in sides))
+    series = []
+    for (ka, kb), dmin in zip(CORNERS.values(), dmins):
+        # the corner's arm from the slider's point, its position from the guide's point
+        cx = ka * joint.half_length * ax - kb * b * ay
+        cy = ka * joint.half_length * ay + kb * b * ax
+        rx, ry = sx + cx - gx, sy + cy - gy
+        vx = svx - sw * cy - (gvx - gw * ry)
+        vy = svy + sw * cx - (gvy + gw * rx)
+        h, hd = nx * rx + ny * ry, nx * vx + ny * vy
+        along, vt = ux * rx + uy * ry, ux * vx + uy * vy
+        delta, rate = kb * h - (b + c), kb * hd
+        f = contact_force(delta, rate, dmin, K, joint.restitution, model) if delta > 0 else 0.0
+        ft = friction_force_slots(vt, f, slots, law) if law else 0.0
+        fx, fy = -kb * f * nx + ft * ux, -kb * f * ny + ft * uy
+        series.append((f, delta, along, h, ft, vt, rate))
+        for side, sign, (px, py) in ((slider, 1.0, (sax + cx, say + cy)),
+                                     (guide, -1.0, (gax + rx, gay + ry))):
+            if side.slot is not None:
+                i = side.slot
+                out[i] += sign * fx
+                out[i + 1] += sign * fy
+                out[i + 2] += sign * (px * fy - py * fx)
+    return out, series
+
+
+def _corner_element(mbs, joint: TranslationalClearance, nodes: dict, pts: dict):
+    """(sides, element, node list): an `ObjectGenericODE2` on the slider's and the guide's
+    nodes (the ground has none) and their `_Side`s (slider first)."""
+    import exudyn.itemInterface as ii
+
+    sides, node_list = [], []
+    for body, point in ((joint.slider_body, joint.slider_point),
+                        (joint.guide_body, joint.guide_point)):
+        if body == GROUND:
+            sides.append(_Side(None, None, pts[GROUND][point], pts[GROUND][point]))
+            continue
+        ref = list(mbs.GetNodeParameter(nodes[body], "referenceCoordinates"))
+        sides.append(_Side(3 * len(node_list), ref, pts[body][point], None))
+        node_list.append(nodes[body])
+    obj = mbs.AddObject(ii.ObjectGenericODE2(nodeNumbers=node_list,
+                                             forceVector=[0.0] * (3 * len(node_list))))
+    return sides, obj, node_list
 
 
 def _pair_element(mbs, joint: ClearanceJoint, nodes: dict, pts: dict):
@@ -708,6 +805,9 @@ class ExudynModel:
     ecc_sign: float        # contact Displacement -> journal minus bearing
     memories: list         # ImpactMemory per clearance joint (None for "sphere")
     keep_alive: list = field(default_factory=list)
+    #: per translational clearance joint: (joint, its element's `_Side`s, the corners'
+    #: ImpactMemory)
+    corners: list = field(default_factory=list)
     keep: np.ndarray | None = None   # rows of the stored data kept (`solve`: sliver steps)
 
 
@@ -718,6 +818,10 @@ OUTPUT_GROUPS: tuple[str, ...] = ("reactions", "drive", "contact", "bodies")
 def _check_linkage(linkage, settings: ExudynSettings) -> None:
     if not isinstance(linkage, Linkage):
         raise ValueError(f"linkage must be a Linkage; got {type(linkage).__name__}")
+    if linkage.translational_joints and settings.contact == "sphere":
+        raise ValueError(f"contact='sphere' has no translational clearance joint (linkage "
+                         f"{linkage.name!r} has {[j.name for j in linkage.translational_joints]}"
+                         "); use contact='symbolic' or 'python'")
     for j in linkage.clearance_joints:
         # the friction and the film are generic elements beside the contact element
         what = ("friction law of ours" if friction_of(j) is not None
@@ -871,6 +975,40 @@ def build(linkage: Linkage, settings: ExudynSettings | None = None,
             on_bearing = 1.0 if settings.contact != "sphere" else -1.0
             ground_items[cj.name] = obj
             ground_signs[cj.name] = on_bearing * (1.0 if cj.bearing_body == GROUND else -1.0)
+    corner_items = []
+    k0 = len(linkage.clearance_joints)
+    for tj in linkage.translational_joints:
+        sides, obj, node_list = _corner_element(mbs, tj, nodes, pts)
+        mems = []
+        for _ in CORNERS:
+            memory = ImpactMemory(tj.impact_velocity_floor, tj.clearance)
+            if start_memory is not None:
+                memory.mode = int(start_memory[k0 + len(memories)][0])
+                memory.dmin = float(start_memory[k0 + len(memories)][1])
+            memory.history = []
+            mems.append(memory)
+            memories.append(memory)
+        corner_items.append((tj, sides, mems))
+
+        def force(mbs, t, itemNumber, q, q_t, tj=tj, sides=sides, mems=mems):
+            return _corner_loads(tj, sides, q, q_t, [m.dmin for m in mems])[0]
+
+        def state(mbs, node_list=node_list):
+            q, qt = [], []
+            for node in node_list:
+                q += list(mbs.GetNodeOutput(node, exu.OutputVariableType.Coordinates))
+                qt += list(mbs.GetNodeOutput(node, exu.OutputVariableType.Coordinates_t))
+            return q, qt
+
+        for k in range(len(CORNERS)):
+            def gap(mbs, k=k, tj=tj, sides=sides, mems=mems, state=state):
+                # the corner's penetration and its rate
+                row = _corner_loads(tj, sides, *state(mbs), [m.dmin for m in mems])[1][k]
+                return row[1], row[6]
+
+            contacts.append((gap, mems[k]))
+        mbs.SetObjectParameter(obj, "forceUserFunction", force)
+        keep_alive += [force]
     if contacts:
         mbs.SetPreStepUserFunction(_pre_step(contacts, step, settings.onset == "predict"))
     ecc_sign = -1.0 if settings.contact == "sphere" else 1.0
@@ -886,7 +1024,10 @@ def build(linkage: Linkage, settings: ExudynSettings | None = None,
     sensors: dict = {}
     if "reactions" in want:
         prismatic = {j.name: j for j in linkage.joints if isinstance(j, Prismatic)}
+        guides = {j.name for j in linkage.translational_joints}
         for name in linkage.ground_joints():
+            if name in guides:          # from the corners' forces after the run
+                continue
             # a prismatic joint outputs its force in marker 0's (body_a's) frame
             var = OVT.ForceLocal if name in prismatic else OVT.Force
             sensors[f"{name}.force"] = sensor("object", ground_items[name], var)
@@ -907,7 +1048,8 @@ def build(linkage: Linkage, settings: ExudynSettings | None = None,
     mbs.Assemble()
     return ExudynModel(SC=SC, mbs=mbs, linkage=linkage, settings=settings, step=step,
                        nodes=nodes, sensors=sensors, ground_signs=ground_signs,
-                       ecc_sign=ecc_sign, memories=memories, keep_alive=keep_alive)
+                       ecc_sign=ecc_sign, memories=memories, keep_alive=keep_alive,
+                       corners=corner_items)
 
 
 # ---------------------------------------------------------------------------- solve
@@ -1188,10 +1330,43 @@ def _friction_power(model: ExudynModel, joint: ClearanceJoint, memory: ImpactMem
     return power
 
 
+def _corner_series(model: ExudynModel, joint, sides, memories) -> dict:
+    """The series of a translational joint's corners at every kept sample, from the
+    stored body states and each corner's impact velocity in force at each step
+    (`ImpactMemory.history`): (n, 4) arrays "force", "penetration", "along", "offset",
+    "friction", "slip" (`_corner_loads`) and the corners' force on the ground (n, 2)
+    "ground"."""
+    t = stored(model, f"{model.linkage.bodies[0].name}.q")[:, 0]
+    bodies = [b for b in (joint.slider_body, joint.guide_body) if b != GROUND]
+    q = np.hstack([stored(model, f"{b}.q")[:, 1:4] for b in bodies])
+    qt = np.hstack([stored(model, f"{b}.v")[:, 1:4] for b in bodies])
+    dmins = []
+    for memory in memories:
+        hist = np.asarray(memory.history).reshape(-1, 2)
+        if len(hist):
+            at = np.clip(np.searchsorted(hist[:, 0], t, side="right") - 1, 0, len(hist) - 1)
+            dmins.append(np.where(hist[at, 0] <= t, hist[at, 1], memory.floor))
+        else:
+            dmins.append(np.full(len(t), memory.floor))
+    rows = np.empty((len(t), 4, 7))
+    ground = np.zeros((len(t), 2))
+    for i in range(len(t)):
+        loads, series = _corner_loads(joint, sides, q[i], qt[i], [d[i] for d in dmins])
+        rows[i] = series
+        if joint.guide_body == GROUND:     # the slider's loads, reversed
+            ground[i] = -np.asarray(loads[:2])
+    names = ("force", "penetration", "along", "offset", "friction", "slip")
+    out = {k: rows[:, :, j].copy() for j, k in enumerate(names)}
+    out["ground"] = ground
+    return out
+
+
 def _reactions(model: ExudynModel) -> tuple[np.ndarray, dict]:
     t = None
     reactions = {}
     for name in model.linkage.ground_joints():
+        if f"{name}.force" not in model.sensors:    # a translational joint's guide
+            continue
         F = stored(model, f"{name}.force")
         t = F[:, 0].copy() if t is None else t
         f = F[:, 1:3]
@@ -1252,10 +1427,14 @@ def run_linkage(linkage: Linkage, revolutions: int | None, settings: ExudynSetti
     stats = solve(model, float(span[-1]) if free else revolutions * linkage.period)
 
     t, reactions = _reactions(model)
-    shaking = sum(reactions[g] for g in reactions)
-    monitored = shaking if linkage.monitor_joint is None else reactions[linkage.monitor_joint]
     moment = None if free else -stored(model, "drive")[:, 1]
     ecc, pen, force = [], [], []
+    corners = [_corner_series(model, *item) for item in model.corners]
+    for (tj, _, _), series in zip(model.corners, corners):
+        if tj.guide_body == GROUND:
+            reactions[tj.name] = series["ground"]
+    shaking = sum(reactions[g] for g in reactions)
+    monitored = shaking if linkage.monitor_joint is None else reactions[linkage.monitor_joint]
     for cj in linkage.clearance_joints:
         e = model.ecc_sign * stored(model, f"{cj.name}.displacement")[:, 1:3]
         r = np.hypot(e[:, 0], e[:, 1])
@@ -1265,6 +1444,11 @@ def run_linkage(linkage: Linkage, revolutions: int | None, settings: ExudynSetti
         ecc.append(e)
         pen.append(r - cj.clearance)
         force.append(np.where(r > 0.0, fn, 0.0))
+    for series in corners:
+        for k in range(len(CORNERS)):
+            ecc.append(np.column_stack([series["along"][:, k], series["offset"][:, k]]))
+            pen.append(series["penetration"][:, k])
+            force.append(series["force"][:, k])
     penetration = np.column_stack(pen)
     work = None
     if not free:
@@ -1276,6 +1460,8 @@ def run_linkage(linkage: Linkage, revolutions: int | None, settings: ExudynSetti
     friction = [_friction_power(model, cj, m) for cj, m in
                 zip(linkage.clearance_joints, model.memories)
                 if m is not None and m.history is not None]
+    friction += [np.sum(series["friction"] * series["slip"], axis=1)
+                 for (tj, _, _), series in zip(model.corners, corners) if tj.has_friction]
     friction_work = None
     if friction:
         power = sum(friction)
@@ -1292,7 +1478,7 @@ def run_linkage(linkage: Linkage, revolutions: int | None, settings: ExudynSetti
         peaks=(window_peaks(t, np.hypot(monitored[:, 0], monitored[:, 1]), span) if free
                else refined_peaks(t, np.hypot(monitored[:, 0], monitored[:, 1]),
                                   linkage.period, revolutions)),
-        joints=tuple(cj.name for cj in linkage.clearance_joints), reactions=reactions,
+        joints=tuple(name for name, _ in linkage.contacts()), reactions=reactions,
         shaking_force=np.ascontiguousarray(shaking), coordinates=coords, rates=rates,
         accelerations=accs, friction_work=friction_work)
 

@@ -25,10 +25,10 @@ import sympy as sp
 import sympy.physics.mechanics as me
 
 from ..laws.registry import FRICTION_SLOTS
-from ..model.linkage import GROUND, Linkage, Prismatic, Revolute
+from ..model.linkage import CORNERS, GROUND, Linkage, Prismatic, Revolute
 
 __all__ = ["Derivation", "derive", "parameter_layout", "identifier",
-           "specialise", "LUBRICATION_FIELDS"]
+           "specialise", "LUBRICATION_FIELDS", "TRANSLATIONAL_FIELDS"]
 
 
 def identifier(name: str, taken: set[str]) -> str:
@@ -49,7 +49,10 @@ def parameter_layout(linkage: Linkage) -> tuple[str, ...]:
     (mass, inertia, points), ground points, prismatic axis angles, per clearance joint
     (clearance, stiffness, restitution, contact_model id, impact_velocity_floor), per
     clearance joint with friction (friction_law id, coefficient, v0, v1, journal and bearing
-    radius), the drive, gravity, then the memory of each clearance joint (mode, impact velocity)."""
+    radius), per translational clearance joint (its contact fields, half-length,
+    half-height, the guide's and the slider's axis angles; with friction the law's), the
+    drive, gravity, then the memory (mode, impact velocity) of each clearance joint, then of
+    each corner of the translational joints."""
     names = []
     for b in linkage.bodies:
         names += [f"{b.name}.mass", f"{b.name}.inertia"]
@@ -66,11 +69,18 @@ def parameter_layout(linkage: Linkage) -> tuple[str, ...]:
     for j in linkage.clearance_joints:
         if j.has_lubrication:
             names += [f"{j.name}.{f}" for f in LUBRICATION_FIELDS]
+    for j in linkage.translational_joints:
+        names += [f"{j.name}.{f}" for f in TRANSLATIONAL_FIELDS]
+        if j.has_friction:
+            names += [f"{j.name}.{f}" for f in ("friction_law", *FRICTION_SLOTS)]
     if linkage.drive is not None:       # a free linkage has no drive parameters
         names += ["drive.speed", "drive.initial_angle"]
     names += ["gravity"]
     for j in linkage.clearance_joints:
         names += [f"{j.name}.mode", f"{j.name}.impact_velocity"]
+    for j in linkage.translational_joints:
+        for c in j.corner_names():
+            names += [f"{c}.mode", f"{c}.impact_velocity"]
     return tuple(names)
 
 
@@ -81,6 +91,11 @@ CONTACT_FIELDS = ("clearance", "stiffness", "restitution", "contact_model",
 #: per clearance joint with friction, the entries of p read by the friction law and the
 #: tangential slip (the radii put the contact point on each body's surface)
 FRICTION_FIELDS = ("friction_law", *FRICTION_SLOTS, "journal_radius", "bearing_radius")
+
+#: per translational clearance joint, the entries of p read by its corners' contacts
+#: (CONTACT_FIELDS first, as a clearance joint's) and its geometry
+TRANSLATIONAL_FIELDS = (*CONTACT_FIELDS, "half_length", "half_height", "angle",
+                        "slider_angle")
 
 #: per lubricated clearance joint, the entries of p read by the film (`laws.lubrication`)
 LUBRICATION_FIELDS = ("lubrication", "viscosity", "bearing_length", "journal_radius",
@@ -129,6 +144,15 @@ class Derivation:
     #: velocities (omega_J, omega_B) (None: not lubricated)
     TL: list = field(default_factory=list)
     omegas: list = field(default_factory=list)
+    #: per corner of the translational clearance joints (events after the clearance
+    #: joints'): (contact name, joint name, side +1 top / -1 bottom, symbol of the normal
+    #: force on the slider along the guide's normal, symbol of the friction force on it along
+    #: the guide's axis or None); their gaps (position along the axis, normal offset, their
+    #: rates) follow the clearance joints' in `gaps`
+    corners: list = field(default_factory=list)
+    #: per translational clearance joint: the slider centre's normal offset and half_length
+    #: times the sine of its tilt (the loop closure beside the clearance joints' gaps)
+    slider_closure: list = field(default_factory=list)
 
 
 def _rot(c, s, x, y):
@@ -292,6 +316,45 @@ def derive(linkage: Linkage) -> Derivation:
             torque_loads.append((body, tau))
             if body != GROUND:
                 loads.append((frames[body], tau * N.z))
+    # translational clearance joints: each corner's normal force FN (along the guide's
+    # normal n) and friction FT (along its axis u) act on the slider at the corner; on the
+    # guide the opposite force acts at the same place: moved to the guide point, with its
+    # moment about it (a load at the corner's expression would move with the slider)
+    corners, corner_gaps_t, closure_t, guide_forces = [], [], [], {}
+    for tj in linkage.translational_joints:
+        gx, gy = world(tj.guide_body, local(tj.guide_body, tj.guide_point))
+        sx, sy = world(tj.slider_body, local(tj.slider_body, tj.slider_point))
+        alpha = psyms[f"{tj.name}.angle"]
+        beta = psyms[f"{tj.name}.slider_angle"]
+        ux, uy = _rot(*rot[tj.guide_body], sp.cos(alpha), sp.sin(alpha))
+        nx, ny = -uy, ux
+        ax, ay = _rot(*rot[tj.slider_body], sp.cos(beta), sp.sin(beta))
+        a, b = psyms[f"{tj.name}.half_length"], psyms[f"{tj.name}.half_height"]
+        closure_t.append((nx * (sx - gx) + ny * (sy - gy), a * (nx * ax + ny * ay)))
+        for cname, (sa, sb) in zip(tj.corner_names(), CORNERS.values()):
+            k = len(corners)
+            FN = sp.Symbol(f"FN{k}", real=True)
+            FT = sp.Symbol(f"FT{k}", real=True) if tj.has_friction else None
+            corners.append((cname, tj.name, sb, FN, FT))
+            cx = sx + sa * a * ax - sb * b * ay
+            cy = sy + sa * a * ay + sb * b * ax
+            rx, ry = cx - gx, cy - gy
+            corner_gaps_t.append((ux * rx + uy * ry, nx * rx + ny * ry))
+            fx, fy = FN * nx, FN * ny
+            if FT is not None:
+                fx, fy = fx + FT * ux, fy + FT * uy
+            contact_loads.append((tj.slider_body, (cx, cy), fx, fy))
+            contact_loads.append((tj.guide_body, (gx, gy), -fx, -fy))
+            guide_forces.setdefault(tj.name, []).append((-fx, -fy))
+            tau = -(rx * fy - ry * fx)
+            torque_loads.append((tj.guide_body, tau))
+            if tj.slider_body != GROUND:
+                loads.append((mech_point(f"K_{k}_{tj.slider_body}", (cx, cy)),
+                              fx * N.x + fy * N.y))
+            if tj.guide_body != GROUND:
+                loads.append((mech_point(f"KG_{k}_{tj.guide_body}", (gx, gy)),
+                              -fx * N.x - fy * N.y))
+                loads.append((frames[tj.guide_body], tau * N.z))
     kane = me.KanesMethod(N, q_ind=q, u_ind=u,
                           kd_eqs=[q[i].diff(t) - u[i] for i in range(n)])
     kane.kanes_equations(bodies, loads)
@@ -323,6 +386,8 @@ def derive(linkage: Linkage) -> Derivation:
     for jt in linkage.joints:
         if isinstance(jt, Prismatic):
             base.append(psyms[f"{jt.name}.angle"])
+    for tj in linkage.translational_joints:
+        base += [psyms[f"{tj.name}.angle"], psyms[f"{tj.name}.slider_angle"]]
     angles = [(a, sp.Symbol(f"S{k}", real=True), sp.Symbol(f"C{k}", real=True))
               for k, a in enumerate(base)]
     trig = {}
@@ -349,6 +414,10 @@ def derive(linkage: Linkage) -> Derivation:
     gaps = []
     for ex, ey in gaps_t:
         gaps.append(tuple(finish(v) for v in (ex, ey, dt(ex), dt(ey))))
+    for sx_, h in corner_gaps_t:
+        gaps.append(tuple(finish(v) for v in (sx_, h, dt(sx_), dt(h))))
+    slider_closure = [tuple(finish(v) for v in pair) for pair in closure_t]
+    slider_rates = [finish(dt(v)) for pair in closure_t for v in pair]
     # the slip velocity's rotation part: d/dt of (angle_J R_J - angle_B R_B)
     spins = [None if e is None else finish(dt(e)) for e in spin_t]
     omegas = [None if e is None else tuple(finish(dt(a)) for a in e) for e in omega_t]
@@ -376,6 +445,10 @@ def derive(linkage: Linkage) -> Derivation:
                     rx -= fx
                     ry -= fy
             reactions.append((finish(-rx), finish(-ry)))
+        elif name not in clear_by_name:         # a translational joint's ground guide
+            forces = guide_forces[name]
+            reactions.append((finish(sum(f[0] for f in forces)),
+                              finish(sum(f[1] for f in forces))))
         else:
             j, cj = clear_by_name[name]
             sign = -1 if cj.journal_body == GROUND else 1
@@ -405,7 +478,7 @@ def derive(linkage: Linkage) -> Derivation:
         potential += mass[b.name] * g * y
     # the gaps' rates are linear in U: d gap / dQ are their coefficients, d gap / dt at
     # fixed q the rest
-    rates = sp.Matrix([v for gap in gaps for v in gap[2:]])
+    rates = sp.Matrix([v for gap in gaps[:len(gaps_t)] for v in gap[2:]] + slider_rates)
     jac = rates.jacobian(U)
     rate = rates.xreplace({Ui: 0 for Ui in U})
     return Derivation(
@@ -415,7 +488,8 @@ def derive(linkage: Linkage) -> Derivation:
         mass_matrix=mass_matrix.applyfunc(finish), forcing=forcing.applyfunc(finish),
         reactions=reactions, drive_moment=finish(moment), kinetic=finish(kinetic),
         potential=finish(potential), closure_jacobian=jac, closure_rate=rate,
-        monitor=linkage.monitor_joint, TQ=TQ, spins=spins, TL=TL, omegas=omegas)
+        monitor=linkage.monitor_joint, TQ=TQ, spins=spins, TL=TL, omegas=omegas,
+        corners=corners, slider_closure=slider_closure)
 
 
 def _reduce_trig(expr, ideal, gens):
@@ -462,4 +536,5 @@ def specialise(d: Derivation, zeros) -> Derivation:
         closure_jacobian=d.closure_jacobian.applyfunc(sub),
         closure_rate=d.closure_rate.applyfunc(sub), monitor=d.monitor, extra=dict(d.extra),
         TQ=d.TQ, spins=[sub(e) for e in d.spins], TL=d.TL,
-        omegas=[None if e is None else tuple(sub(a) for a in e) for e in d.omegas])
+        omegas=[None if e is None else tuple(sub(a) for a in e) for e in d.omegas],
+        corners=d.corners, slider_closure=[tuple(sub(e) for e in c) for c in d.slider_closure])

@@ -14,7 +14,8 @@ from ..laws.lubrication import lubricated_force
 from ..numerics.integrator import ACTION_SIG, EVENT_SIG, KERNEL, MONITOR_SIG, RHS_SIG
 
 __all__ = ["KERNEL", "RHS_SIG", "EVENT_SIG", "ACTION_SIG", "MONITOR_SIG", "gap_state",
-           "contact_stage", "friction_stage", "lubricated_stage", "switching"]
+           "contact_stage", "friction_stage", "lubricated_stage", "switching",
+           "corner_state", "corner_stage", "corner_friction_stage"]
 
 
 @nb.njit(**KERNEL, inline="always")
@@ -83,6 +84,38 @@ def lubricated_stage(ex, ey, exd, eyd, omega_j, omega_b, clearance, mode, deltad
     power = (ffx * (exd + omega_b * ey) + ffy * (eyd - omega_b * ex)
              + tj * (omega_j - omega_b))
     return f, delta, deltadot, fx - ffx, fy - ffy, tj, tb, ffx, ffy, power
+
+
+@nb.njit(**KERNEL, inline="always")
+def corner_state(h, hd, side, clearance, half_height):
+    """(delta, deltadot) of a corner of a translational clearance joint's slider from its
+    normal offset h from the guide's mid-line and its rate: the penetration side h - (b + c)
+    into the surface on its side (side +1 the upper, -1 the lower) and its rate."""
+    return side * h - (half_height + clearance), side * hd
+
+
+@nb.njit(**KERNEL, inline="always")
+def corner_stage(h, hd, side, clearance, half_height, mode, deltadot_minus, stiffness,
+                 restitution, model):
+    """(F, delta, deltadot, fn): the contact force magnitude of the law at a corner (zero in
+    free flight, mode 0), its penetration and rate (`corner_state`), and the normal force on
+    the slider along the guide's normal, fn = -side F (the surface pushes the corner back)."""
+    delta, deltadot = corner_state(h, hd, side, clearance, half_height)
+    f = 0.0
+    if mode > 0.5:
+        f = contact_force(delta, deltadot, deltadot_minus, stiffness, restitution, int(model))
+    return f, delta, deltadot, -side * f
+
+
+@nb.njit(**KERNEL, inline="always")
+def corner_friction_stage(h, hd, vt, side, clearance, half_height, mode, deltadot_minus,
+                          stiffness, restitution, model, law, slots):
+    """`corner_stage` with friction: (F, delta, deltadot, fn, ft), ft the friction force on
+    the slider along the guide's axis (the law's force at the corner's sliding velocity vt
+    along the axis relative to the guide, and the normal force F)."""
+    f, delta, deltadot, fn = corner_stage(h, hd, side, clearance, half_height, mode,
+                                          deltadot_minus, stiffness, restitution, model)
+    return f, delta, deltadot, fn, friction_force_slots(vt, f, slots, int(law))
 
 
 @nb.njit(**KERNEL, inline="always")

@@ -80,6 +80,7 @@ class _Writer:
         self.vars = [s for _, S, C in self.moving for s in (S, C)]
         self.vars += [*d.Q, *d.U, *d.A, *d.FX, *d.FY, *(s for s in d.TQ if s is not None)]
         self.vars += [s for pair in d.TL if pair is not None for s in pair]
+        self.vars += [s for c in d.corners for s in c[3:] if s is not None]
         self.constants: dict[sp.Expr, sp.Symbol] = {}
 
     # ---- constants
@@ -223,14 +224,17 @@ def render(d: Derivation, linkage_name: str, structure: dict, zeros: tuple = ())
     the parameters `d` is specialised on (`derive.specialise`), checked to be zero."""
     w = _Writer(d)
     n, J, G = len(d.Q), len(d.joints), len(d.ground_joints)
+    # the events: the clearance joints, then the translational joints' corners
+    events = [*d.joints, *(c[0] for c in d.corners)]
+    E = len(events)
     params = list(d.parameters)
-    mem_start = params.index(f"{d.joints[0]}.mode")
+    mem_start = params.index(f"{events[0]}.mode")
     contact = [{f: params.index(f"{name}.{f}") for f in
                 ("clearance", "stiffness", "restitution", "contact_model",
                  "impact_velocity_floor")} for name in d.joints]
 
     # ---- the stages of the model evaluation
-    gap_names = [[f"ex{j}", f"ey{j}", f"exd{j}", f"eyd{j}"] for j in range(J)]
+    gap_names = [[f"ex{j}", f"ey{j}", f"exd{j}", f"eyd{j}"] for j in range(E)]
     gap_exprs = [[w.split(e) for e in gap] for gap in d.gaps]
     gaps_stage = ([e for g in gap_exprs for e in g], [nm for g in gap_names for nm in g])
     # friction (joints with a law): the rotation part of the slip velocity beside the gaps,
@@ -268,6 +272,30 @@ def render(d: Derivation, linkage_name: str, structure: dict, zeros: tuple = ())
         else:
             contact_lines.append(f"F{j}, d{j}, dd{j}, {d.FX[j]}, {d.FY[j]} = contact_stage("
                                  f"ex{j}, ey{j}, exd{j}, eyd{j}, {law})")
+    # the corners: normal offset (ey) and its rate against the surface on their side, the
+    # sliding velocity along the axis (exd) for the friction law
+    corner_indices, corner_fric = [], []
+    for k, (_, tname, side, FN, FT) in enumerate(d.corners):
+        e = J + k
+        c = {f: params.index(f"{tname}.{f}") for f in
+             ("clearance", "stiffness", "restitution", "contact_model",
+              "impact_velocity_floor", "half_height")}
+        c.update(event=e, side=repr(float(side)))
+        corner_indices.append(c)
+        law = (f"p[{c['clearance']}], p[{c['half_height']}], p[{mem_start + 2 * e}], "
+               f"p[{mem_start + 2 * e + 1}], p[{c['stiffness']}], p[{c['restitution']}], "
+               f"p[{c['contact_model']}]")
+        if FT is None:
+            contact_lines.append(f"F{e}, d{e}, dd{e}, {FN} = corner_stage(ey{e}, eyd{e}, "
+                                 f"{c['side']}, {law})")
+        else:
+            corner_fric.append(k)
+            fl = params.index(f"{tname}.friction_law")
+            contact_lines.append(
+                f"F{e}, d{e}, dd{e}, {FN}, {FT} = corner_friction_stage(ey{e}, eyd{e}, "
+                f"exd{e}, {c['side']}, {law}, p[{fl}], ("
+                + ", ".join(f"p[{params.index(f'{tname}.{f}')}]" for f in FRICTION_SLOTS)
+                + ("," if len(FRICTION_SLOTS) == 1 else "") + "))")
     M = [[w.split(d.mass_matrix[i, k]) for k in range(n)] for i in range(n)]
     f = [w.split(d.forcing[i]) for i in range(n)]
     fsyms = [sp.Symbol(f"f{i}", real=True) for i in range(n)]
@@ -291,7 +319,7 @@ def render(d: Derivation, linkage_name: str, structure: dict, zeros: tuple = ())
     outputs_stage = ([w.split(e) for r in d.reactions for e in r]
                      + [w.split(d.drive_moment)] * driven, reaction_names + moment)
     results = []
-    for j in range(J):
+    for j in range(E):
         results += [f"F{j}", f"d{j}", f"dd{j}", f"ex{j}", f"ey{j}"]
     results += reaction_names
     results += [" + ".join(f"r{g}x" for g in range(G)) or "0.0",
@@ -301,9 +329,12 @@ def render(d: Derivation, linkage_name: str, structure: dict, zeros: tuple = ())
         results += [str(d.TQ[j]), f"vt{j}", f"-{d.TQ[j]} * vt{j}"]
     for j in lub:
         results += [f"ffx{j}", f"ffy{j}", str(d.TL[j][0]), f"fpw{j}"]
+    for k in corner_fric:
+        ft = d.corners[k][4]
+        results += [str(ft), f"exd{J + k}", f"-{ft} * exd{J + k}"]
     dynamics = w.function([gaps_stage, contact_lines, *eom, outputs_stage])
 
-    gap_fns = [w.function([(gap_exprs[j], gap_names[j])]) for j in range(J)]
+    gap_fns = [w.function([(gap_exprs[j], gap_names[j])]) for j in range(E)]
     spring_lines = []
     for j, c in enumerate(contact):
         spring_lines += [
@@ -311,19 +342,29 @@ def render(d: Derivation, linkage_name: str, structure: dict, zeros: tuple = ())
             f"p[{c['clearance']}])",
             f"if p[{mem_start + 2 * j}] > 0.5 and d{j} > 0.0:",
             f"    energy += p[{c['stiffness']}] * d{j} * d{j} * math.sqrt(d{j}) / 2.5"]
+    for c in corner_indices:
+        e = c["event"]
+        spring_lines += [
+            f"d{e}, dd{e} = corner_state(ey{e}, eyd{e}, {c['side']}, p[{c['clearance']}], "
+            f"p[{c['half_height']}])",
+            f"if p[{mem_start + 2 * e}] > 0.5 and d{e} > 0.0:",
+            f"    energy += p[{c['stiffness']}] * d{e} * d{e} * math.sqrt(d{e}) / 2.5"]
     energy = w.function([gaps_stage, ([w.split(d.kinetic + d.potential)], ["energy"]),
                          spring_lines])
-    closure = w.function([([e for g in gap_exprs for e in g[:2]],
-                           [f"res[{i}]" for i in range(2 * J)])], state="q")
-    closure_jac = w.function([([w.split(d.closure_jacobian[i, k]) for i in range(2 * J)
+    # the loop closure: the clearance joints' gaps, then the sliders' offsets and tilts
+    nc = 2 * J + 2 * len(d.slider_closure)
+    closure = w.function([([e for g in gap_exprs[:J] for e in g[:2]]
+                           + [w.split(e) for c in d.slider_closure for e in c],
+                           [f"res[{i}]" for i in range(nc)])], state="q")
+    closure_jac = w.function([([w.split(d.closure_jacobian[i, k]) for i in range(nc)
                                 for k in range(n)],
-                               [f"jac[{i}, {k}]" for i in range(2 * J) for k in range(n)])],
+                               [f"jac[{i}, {k}]" for i in range(nc) for k in range(n)])],
                              state="q")
     closure_rate = w.function([([w.split(e) for e in d.closure_rate],
-                                [f"res[{i}]" for i in range(2 * J)])], state="q")
+                                [f"res[{i}]" for i in range(nc)])], state="q")
 
     out_columns = []
-    for j in d.joints:
+    for j in events:
         out_columns += [f"{j}.contact_force", f"{j}.penetration", f"{j}.penetration_rate",
                         f"{j}.ecc_x", f"{j}.ecc_y"]
     for gname in d.ground_joints:
@@ -336,18 +377,25 @@ def render(d: Derivation, linkage_name: str, structure: dict, zeros: tuple = ())
     for j in lub:
         out_columns += [f"{d.joints[j]}.{f}" for f in ("film_force_x", "film_force_y",
                                                         "film_torque", "film_power")]
+    for k in corner_fric:
+        out_columns += [f"{d.corners[k][0]}.{f}" for f in ("friction_force", "slip_velocity",
+                                                            "friction_power")]
     if d.monitor is None:
         mon = out_columns.index("shaking_x")
     else:
         mon = out_columns.index(f"{d.monitor}.reaction_x")
-    jac_ctx = jacobian_context(w, d, out_columns)
-    jac_ctx["floor0"] = params.index(f"{d.joints[0]}.impact_velocity_floor")
+    if d.corners:
+        # no exact Jacobians of the corners' contacts (DDM refuses such a linkage)
+        jac_ctx = {}
+    else:
+        jac_ctx = jacobian_context(w, d, out_columns)
+        jac_ctx["floor0"] = params.index(f"{d.joints[0]}.impact_velocity_floor")
     prepare = w.constants_body()       # after every split: all constants known
     ctx = dict(
         name=linkage_name, digest=structure_digest(structure), version=GENERATOR_VERSION,
         structure=json.dumps(structure, sort_keys=True), parameters=params,
         zeros=list(zeros), zero_index=[params.index(z) for z in zeros],
-        coordinates=list(d.coordinates), n=n, J=J, joints=list(d.joints),
+        coordinates=list(d.coordinates), n=n, J=E, joints=events,
         ground_joints=list(d.ground_joints), mem_start=mem_start,
         n_constants=len(w.constants), out_columns=out_columns, monitor=d.monitor,
         monitor_column=mon,
@@ -356,9 +404,11 @@ def render(d: Derivation, linkage_name: str, structure: dict, zeros: tuple = ())
         speed=params.index("drive.speed") if driven else -1, results=results, dynamics=dynamics,
         gap_fns=gap_fns, energy=energy, closure=closure, closure_jac=closure_jac,
         closure_rate=closure_rate, prepare=prepare, contact_indices=contact,
-        friction_joints=[d.joints[j] for j in fric],
+        friction_joints=[d.joints[j] for j in fric] + [d.corners[k][0] for k in corner_fric],
+        corner_indices=corner_indices, n_closure=nc,
         lubricated_joints=[d.joints[j] for j in lub],
-        power_columns=[out_columns.index(f"{d.joints[j]}.friction_power") for j in fric],
+        power_columns=[out_columns.index(f"{j}.friction_power") for j in
+                       [d.joints[j] for j in fric] + [d.corners[k][0] for k in corner_fric]],
         **jac_ctx,
     )
     env = jinja2.Environment(undefined=jinja2.StrictUndefined, keep_trailing_newline=True,

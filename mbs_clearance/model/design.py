@@ -127,10 +127,17 @@ def design_value(linkage: Linkage, name: str) -> float:
         return float(value)
     if name == "clearance":
         return linkage.min_clearance
-    if name.endswith(".clearance"):
+    if _revolute_clearance(linkage, name):
         joint = name[:-len(".clearance")]
         return next(j.clearance for j in linkage.clearance_joints if j.name == joint)
     return linkage.parameter_value(_dotted(name))
+
+
+def _revolute_clearance(linkage: Linkage, name: str) -> bool:
+    """Whether `name` is "<clearance joint>.clearance" of a revolute clearance joint (a
+    translational joint's clearance is a parameter of its own)."""
+    return name.endswith(".clearance") and any(
+        j.name == name[:-len(".clearance")] for j in linkage.clearance_joints)
 
 
 def linkage_with(linkage: Linkage, values: Mapping[str, float]) -> Linkage:
@@ -192,8 +199,9 @@ def direction(linkage: Linkage, name: str) -> dict[str, float]:
     DDM's own chain; an override of the stiffness itself moves it."""
     check_names(linkage, [name])
     if name == "clearance" and linkage.case is None:
-        return {f"{j.name}.journal_radius": -1.0 for j in linkage.clearance_joints}
-    if name.endswith(".clearance") and name not in _case_table(linkage):
+        return {**{f"{j.name}.journal_radius": -1.0 for j in linkage.clearance_joints},
+                **{f"{j.name}.clearance": 1.0 for j in linkage.translational_joints}}
+    if _revolute_clearance(linkage, name) and name not in _case_table(linkage):
         return {f"{name[:-len('.clearance')]}.journal_radius": -1.0}
     if name not in _case_table(linkage) and name != "clearance":
         return {_dotted(name): 1.0}
@@ -229,6 +237,9 @@ def _linkage_clearance(link: Linkage, joint: str | None, value: float) -> Linkag
             raise ValueError(f"clearance of {j} must be in (0, bearing radius {rb!r} m); "
                              f"got {value!r}")
         link = link.with_parameter(f"{j}.journal_radius", rb - value)
+    if joint is None:           # the translational joints' guides too
+        for tj in link.translational_joints:
+            link = link.with_parameter(f"{tj.name}.clearance", value)
     return link
 
 
@@ -280,7 +291,7 @@ def design_at(mech, values: dict, case: str | None = None, overrides: dict | Non
     for name, v in values.items():
         if name == "clearance":
             link = _linkage_clearance(link, None, v)
-        elif name.endswith(".clearance"):
+        elif _revolute_clearance(link, name):
             link = _linkage_clearance(link, name[:-len(".clearance")], v)
         elif name == "crank_speed":
             link = link.with_parameter("drive.speed", v)

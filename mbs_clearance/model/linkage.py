@@ -2,7 +2,9 @@
 
 A linkage is rigid bodies (mass, inertia about the centre of mass, named points in the body
 frame), ideal revolute and prismatic joints, one constant-speed drive of a revolute joint to
-the ground, gravity along -y and any number of revolute clearance joints. Every value is SI.
+the ground, gravity along -y, any number of revolute clearance joints and of translational
+(prismatic) clearance joints (`TranslationalClearance`: a rectangular slider in a guide,
+its four corners each a contact). Every value is SI.
 The clearance joints cut the kinematic loops: the ideal joints must form a forest rooted at
 the ground, so that the equations of motion are ODEs in minimal coordinates (no DAE). Bodies
 with no ideal path to the ground float (x, y, angle).
@@ -48,8 +50,9 @@ from ..laws.lubrication import BEARING_LENGTH, FADE_END, FADE_START, VISCOSITY, 
 from ..laws.lubrication import MODELS as LUBRICATION_MODELS
 from ..laws.registry import FRICTION_PARAMETER_SPECS, FRICTION_SLOTS, friction_law
 
-__all__ = ["Point", "GROUND", "Body", "Revolute", "Prismatic", "ClearanceJoint", "Drive",
-           "Initial", "Linkage", "FRICTION_DEFAULTS", "check_friction", "check_lubrication"]
+__all__ = ["Point", "GROUND", "Body", "Revolute", "Prismatic", "ClearanceJoint",
+           "TranslationalClearance", "CORNERS", "Drive", "Initial", "Linkage",
+           "FRICTION_DEFAULTS", "check_friction", "check_lubrication"]
 
 Point = tuple[float, float]
 #: reserved body name of the ground; its points are `Linkage.ground_points`
@@ -290,6 +293,93 @@ class ClearanceJoint:
                              self.poisson_ratio)
 
 
+#: the corners of a translational clearance joint's slider: name -> (sign along the axis,
+#: sign across it) in the slider's frame; the "top" corners touch the guide's upper surface
+#: (+ normal side), the "bottom" ones its lower surface
+CORNERS = {"front_top": (1.0, 1.0), "rear_top": (-1.0, 1.0),
+           "front_bottom": (1.0, -1.0), "rear_bottom": (-1.0, -1.0)}
+
+
+@dataclass(frozen=True)
+class TranslationalClearance:
+    """A prismatic joint with clearance (Flores, Ambrosio, Claro and Lankarani, J. Comput.
+    Nonlinear Dyn. 3 (2008) 011007): a rectangular slider (half-length `half_length` a along
+    its axis, half-height `half_height` b across it) whose centre is `slider_point` of
+    `slider_body`, in a guide of width 2 (b + c) whose mid-line passes through `guide_point`
+    of `guide_body` (the ground allowed) at `angle` (rad, in the guide body's frame). The
+    slider's axis is at `slider_angle` (rad) in the slider body's frame. Each of the four
+    corners (`CORNERS`) is its own contact with the surface on its side: penetration = the
+    corner's normal offset beyond b + c, normal force of the contact law (`contact_model`,
+    `restitution`, `contact_stiffness` in N/m^1.5, required: a corner on a flat surface has
+    no Eq. 9), friction along the guide axis (`friction_law` and its parameters) from the
+    corner's sliding velocity. The joint is the slider's guide: no ideal prismatic joint may
+    join the two bodies too."""
+
+    name: str
+    guide_body: str
+    guide_point: str
+    slider_body: str
+    slider_point: str
+    half_length: float
+    half_height: float
+    clearance: float
+    contact_stiffness: float
+    angle: float = 0.0
+    slider_angle: float = 0.0
+    restitution: float = 0.4
+    contact_model: str = "flores"
+    impact_velocity_floor: float = 1e-3
+    friction_law: str = "none"
+    friction_coefficient: float = 0.0
+    friction_v0: float = 1e-4
+    friction_v1: float = 1e-2
+    friction_static_coefficient: float = 0.0
+    friction_stribeck_velocity: float = 1e-3
+
+    def __post_init__(self) -> None:
+        _name("translational clearance joint name", self.name)
+        what = f"translational clearance joint {self.name!r}"
+        for f in ("guide_body", "guide_point", "slider_body", "slider_point"):
+            _name(f"{what} {f}", getattr(self, f))
+        if self.guide_body == self.slider_body:
+            raise ValueError(f"{what} has guide and slider on the same body "
+                             f"{self.guide_body!r}; they must be on different bodies")
+        if self.slider_body == GROUND:
+            raise ValueError(f"{what} slider_body must be a moving body, not {GROUND!r} "
+                             "(the ground may carry the guide)")
+        positive = lambda v: v > 0          # noqa: E731
+        for f, unit in (("half_length", "m"), ("half_height", "m"), ("clearance", "m"),
+                        ("contact_stiffness", "N/m^1.5"), ("impact_velocity_floor", "m/s")):
+            object.__setattr__(self, f, _real(f"{what} {f}", getattr(self, f),
+                                              f"a finite number > 0 ({unit})", positive))
+        for f in ("angle", "slider_angle"):
+            object.__setattr__(self, f, _real(f"{what} {f}", getattr(self, f),
+                                              "a finite number (rad)"))
+        object.__setattr__(self, "restitution", _real(
+            f"{what} restitution", self.restitution, "in the interval (0, 1]",
+            lambda v: 0.0 < v <= 1.0))
+        if self.contact_model not in CONTACT_MODELS:
+            raise ValueError(f"{what} contact_model must be one of {sorted(CONTACT_MODELS)}; "
+                             f"got {_short(self.contact_model)}")
+        check_friction(what, self.friction_law, *(getattr(self, f) for f in FRICTION_SLOTS))
+        for f in FRICTION_SLOTS:
+            object.__setattr__(self, f, float(getattr(self, f)))
+
+    @property
+    def has_friction(self) -> bool:
+        """Whether the corners carry a friction law."""
+        return self.friction_law != "none"
+
+    @property
+    def stiffness(self) -> float:
+        """Contact stiffness K of each corner in N/m^1.5."""
+        return float(self.contact_stiffness)
+
+    def corner_names(self) -> tuple[str, ...]:
+        """The dotted names of the four corner contacts ("<joint>.<corner>", `CORNERS`)."""
+        return tuple(f"{self.name}.{c}" for c in CORNERS)
+
+
 @dataclass(frozen=True)
 class Drive:
     """Constant-speed drive of a revolute joint to the ground: body_b's angle is
@@ -397,6 +487,10 @@ CLEARANCE_PARAMETERS = ("bearing_radius", "journal_radius", "youngs_modulus", "p
 FRICTION_PARAMETERS = FRICTION_SLOTS
 #: parameter fields of the lubricated clearance joints
 LUBRICATION_PARAMETERS = ("viscosity", "bearing_length", "film_fade_start", "film_fade_end")
+#: parameter fields of the translational clearance joints
+TRANSLATIONAL_PARAMETERS = ("half_length", "half_height", "clearance", "angle",
+                            "slider_angle", "restitution", "contact_stiffness",
+                            "impact_velocity_floor")
 
 
 @dataclass(frozen=True)
@@ -426,6 +520,9 @@ class Linkage:
     #: equality
     case: str | None = field(default=None, compare=False)
     overrides: Mapping[str, Any] = field(default_factory=dict, compare=False)
+    #: prismatic joints with clearance (`TranslationalClearance`), each the guide of its
+    #: slider; their four corners are contacts beside the revolute clearance joints'
+    translational_joints: tuple[TranslationalClearance, ...] = ()
 
     def __post_init__(self) -> None:
         _name("linkage name", self.name)
@@ -436,7 +533,9 @@ class Linkage:
         object.__setattr__(self, "overrides", dict(self.overrides))
         for f, cls, most in (("bodies", Body, MAX_BODIES),
                              ("joints", (Revolute, Prismatic), MAX_JOINTS),
-                             ("clearance_joints", ClearanceJoint, MAX_CLEARANCE_JOINTS)):
+                             ("clearance_joints", ClearanceJoint, MAX_CLEARANCE_JOINTS),
+                             ("translational_joints", TranslationalClearance,
+                              MAX_CLEARANCE_JOINTS)):
             value = getattr(self, f)
             if isinstance(value, (str, bytes, Mapping)) or not hasattr(value, "__iter__"):
                 raise ValueError(f"{f} must be a sequence; got {_short(value)}")
@@ -466,9 +565,10 @@ class Linkage:
                                                   "a finite number (m/s^2)"))
         if not self.bodies:
             raise ValueError("bodies must hold at least one Body")
-        if not self.clearance_joints:
-            raise ValueError("clearance_joints must hold at least one ClearanceJoint (a "
-                             "linkage without clearance has no switching function)")
+        if not self.clearance_joints and not self.translational_joints:
+            raise ValueError("clearance_joints must hold at least one ClearanceJoint, or "
+                             "translational_joints a TranslationalClearance (a linkage "
+                             "without clearance has no switching function)")
         self._check_graph()
         coords = self.coordinates()
         if not coords:
@@ -531,7 +631,7 @@ class Linkage:
                 raise ValueError(f"body name {body.name!r} is used twice")
             points[body.name] = body.points
         names = set()
-        for joint in (*self.joints, *self.clearance_joints):
+        for joint in (*self.joints, *self.clearance_joints, *self.translational_joints):
             if joint.name in names or joint.name in ("drive", "gravity"):
                 raise ValueError(f"joint name {joint.name!r} is used twice or reserved "
                                  "(joint names must be unique, not 'drive' or 'gravity')")
@@ -568,6 +668,22 @@ class Linkage:
                                  f"{joint.bearing_body}.{joint.bearing_point}; a pin has at "
                                  "most one clearance joint")
             pins[ends] = joint.name
+        guided: dict[str, str] = {}
+        for joint in self.translational_joints:
+            check_end(joint, "guide_body", "guide_point")
+            check_end(joint, "slider_body", "slider_point")
+            if joint.slider_body in guided:
+                raise ValueError(f"translational clearance joints {guided[joint.slider_body]!r}"
+                                 f" and {joint.name!r} guide the same slider "
+                                 f"{joint.slider_body!r}; a slider has at most one guide")
+            guided[joint.slider_body] = joint.name
+            pair = {joint.guide_body, joint.slider_body}
+            for ideal in self.joints:
+                if isinstance(ideal, Prismatic) and {ideal.body_a, ideal.body_b} == pair:
+                    raise ValueError(f"translational clearance joint {joint.name!r} and the "
+                                     f"ideal prismatic joint {ideal.name!r} both guide "
+                                     f"{joint.slider_body!r} on {joint.guide_body!r}; the "
+                                     "clearance joint is the guide: remove the ideal one")
         # the ideal joints must form a forest: a joint between two bodies already connected
         # closes a loop, named by its joints
         parent: dict[str, str] = {}
@@ -644,7 +760,8 @@ class Linkage:
         """Names of the joints to the ground: ideal ones, then clearance joints."""
         return tuple([j.name for j in self.joints if GROUND in (j.body_a, j.body_b)]
                      + [j.name for j in self.clearance_joints
-                        if GROUND in (j.journal_body, j.bearing_body)])
+                        if GROUND in (j.journal_body, j.bearing_body)]
+                     + [j.name for j in self.translational_joints if j.guide_body == GROUND])
 
     @property
     def period(self) -> float:
@@ -657,8 +774,10 @@ class Linkage:
     # ------------------------------------------------------------------ assembly
     def gaps(self, q: Mapping[str, float], t: float = 0.0) -> list[float]:
         """Journal centre minus bearing centre (x, y in m) of every clearance joint, in
-        order, at coordinates `q` (by name, `coordinates`) and time `t`: the loop closure,
-        zero when every journal is centred. Plain Python, the kinematics of the generated
+        order, then per translational clearance joint the slider centre's offset from the
+        guide's mid-line and half_length times the sine of its tilt (m), at coordinates `q`
+        (by name, `coordinates`) and time `t`: the loop closure, zero when every journal
+        and slider is centred. Plain Python, the kinematics of the generated
         model's ``closure`` (no model is generated or compiled)."""
         drive = self.drive
         theta = 0.0 if drive is None else drive.speed * t + drive.initial_angle
@@ -702,6 +821,14 @@ class Linkage:
             jx, jy = world(cj.journal_body, cj.journal_point)
             bx, by = world(cj.bearing_body, cj.bearing_point)
             out += [jx - bx, jy - by]
+        for tj in self.translational_joints:
+            # the slider centred: its centre on the guide's mid-line, its axis along it
+            # (a times the sine of the tilt: the corners' offset from the centre's, in m)
+            gx, gy = world(tj.guide_body, tj.guide_point)
+            sx, sy = world(tj.slider_body, tj.slider_point)
+            nx, ny = turned(angle[tj.guide_body] + tj.angle, (0.0, 1.0))
+            ax, ay = turned(angle[tj.slider_body] + tj.slider_angle, (1.0, 0.0))
+            out += [nx * (sx - gx) + ny * (sy - gy), tj.half_length * (nx * ax + ny * ay)]
         return out
 
     def assemble(self, t: float = 0.0, max_iter: int = 50) -> dict[str, float]:
@@ -789,6 +916,9 @@ class Linkage:
             start = self.start
             out["initial"] = {"coordinates": dict(start.coordinates),
                               "rates": dict(start.rates)}
+        if self.translational_joints:
+            out["translational_joints"] = [dataclasses.asdict(j)
+                                           for j in self.translational_joints]
         for j in out["clearance_joints"]:
             if j["contact_stiffness"] is None:      # TOML has no null
                 del j["contact_stiffness"]
@@ -831,6 +961,12 @@ class Linkage:
             joints.append(jc(**_fields_of(jc, f"{kind} joint", where, j)))
         clearance = tuple(ClearanceJoint(**_fields_of(ClearanceJoint, "clearance joint", where, j))
                           for where, j in items("clearance_joints", MAX_CLEARANCE_JOINTS))
+        translational = tuple(
+            TranslationalClearance(**_fields_of(TranslationalClearance,
+                                                "translational clearance joint", where, j))
+            for where, j in items("translational_joints", MAX_CLEARANCE_JOINTS))
+        if translational:
+            data["translational_joints"] = translational
         drive = data["drive"]
         if drive is not None:
             if not isinstance(drive, Mapping):
@@ -880,7 +1016,8 @@ class Linkage:
         """Dotted names of the real-valued parameters ("<body>.mass", "<body>.inertia",
         "<body>.<point>.x"/".y", "<prismatic>.angle", "<clearance joint>.<field>" for
         CLEARANCE_PARAMETERS (and FRICTION_PARAMETERS if its friction_law is not "none"),
-        "drive.speed", "drive.initial_angle", "gravity",
+        "<translational joint>.<field>" for TRANSLATIONAL_PARAMETERS (and FRICTION_PARAMETERS
+        likewise), "drive.speed", "drive.initial_angle", "gravity",
         "ground.<point>.x"/".y")."""
         names = []
         for b in self.bodies:
@@ -896,6 +1033,10 @@ class Linkage:
                 names += [f"{j.name}.{f}" for f in FRICTION_PARAMETERS]
             if j.has_lubrication:
                 names += [f"{j.name}.{f}" for f in LUBRICATION_PARAMETERS]
+        for j in self.translational_joints:
+            names += [f"{j.name}.{f}" for f in TRANSLATIONAL_PARAMETERS]
+            if j.has_friction:
+                names += [f"{j.name}.{f}" for f in FRICTION_PARAMETERS]
         drive = [] if self.drive is None else ["drive.speed", "drive.initial_angle"]
         return tuple(names + drive + ["gravity"])
 
@@ -916,7 +1057,7 @@ class Linkage:
                 if len(parts) == 2:
                     return "body", b, parts[1], None
                 return "point", b, parts[1], "xy".index(parts[2])
-        for j in (*self.joints, *self.clearance_joints):
+        for j in (*self.joints, *self.clearance_joints, *self.translational_joints):
             if j.name == parts[0]:
                 return "joint", j, parts[1], None
         raise AssertionError(name)      # parameter_names and _locate disagree
@@ -957,13 +1098,16 @@ class Linkage:
         if isinstance(obj, ClearanceJoint):
             return self.replace(clearance_joints=tuple(
                 new if j is obj else j for j in self.clearance_joints))
+        if isinstance(obj, TranslationalClearance):
+            return self.replace(translational_joints=tuple(
+                new if j is obj else j for j in self.translational_joints))
         return self.replace(joints=tuple(new if j is obj else j for j in self.joints))
 
     # ------------------------------------------------------------------ structure
     def structure(self) -> dict[str, Any]:
         """What the generated model depends on (names and topology, no numbers): two
         linkages with equal structures share one generated module."""
-        return {
+        out = {
             "bodies": [[b.name, sorted(b.points)] for b in self.bodies],
             "ground_points": sorted(self.ground_points),
             "joints": [["prismatic" if isinstance(j, Prismatic) else "revolute", j.name,
@@ -977,6 +1121,11 @@ class Linkage:
             "drive": None if self.drive is None else self.drive.joint,
             "monitor_joint": self.monitor_joint,
         }
+        if self.translational_joints:       # linkages without keep the structure of old
+            out["translational_joints"] = [
+                [j.name, j.guide_body, j.guide_point, j.slider_body, j.slider_point]
+                + (["friction"] if j.has_friction else []) for j in self.translational_joints]
+        return out
 
     @property
     def length_scale(self) -> float:
@@ -990,8 +1139,16 @@ class Linkage:
 
     @property
     def min_clearance(self) -> float:
-        """The smallest radial clearance of the clearance joints in m."""
-        return min(j.clearance for j in self.clearance_joints)
+        """The smallest clearance in m: the clearance joints' radial ones and the
+        translational joints' (guide half-width minus slider half-height)."""
+        return min(j.clearance for j in (*self.clearance_joints, *self.translational_joints))
+
+    def contacts(self) -> tuple[tuple[str, ClearanceJoint | TranslationalClearance], ...]:
+        """The contacts of the generated model, in its event order, as (name, joint): each
+        clearance joint (its name), then the four corners of each translational clearance
+        joint ("<joint>.<corner>", `CORNERS`)."""
+        return (tuple((j.name, j) for j in self.clearance_joints)
+                + tuple((c, j) for j in self.translational_joints for c in j.corner_names()))
 
 
 def _cls_names(cls) -> str:

@@ -28,12 +28,12 @@ def drive_of(mech) -> tuple[float, float]:
 
 def clearances_of(mech) -> np.ndarray:
     """Radial clearance of each clearance joint (m)."""
-    return np.array([j.clearance for j in as_linkage(mech).clearance_joints])
+    return np.array([j.clearance for _, j in as_linkage(mech).contacts()])
 
 
 def joints_of(mech) -> tuple[str, ...]:
     """Names of the clearance joints (the paper's one joint: "coupler_slider")."""
-    return tuple(j.name for j in as_linkage(mech).clearance_joints)
+    return tuple(name for name, _ in as_linkage(mech).contacts())
 
 
 class Flow:

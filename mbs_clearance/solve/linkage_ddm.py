@@ -560,6 +560,12 @@ def plain_setup(linkage: Linkage, rtol: float | None, start=None, specialise: bo
     if linkage.drive is None:
         raise ValueError(f"linkage {linkage.name!r} is free (drive=None): sensitivities (DDM) "
                          "need a driven linkage; use finite differences of its runs")
+    if linkage.translational_joints:
+        raise ValueError(
+            f"linkage {linkage.name!r} has translational clearance joints "
+            f"{[j.name for j in linkage.translational_joints]}: their generated model has no "
+            "exact Jacobians, so DDM sensitivities are not available; use finite "
+            "differences (method='fd')")
     model = load_model(linkage, specialise)
     rtol, atol = _tolerances(linkage, model, rtol, None)
     p0 = pack_parameters(linkage, model)

@@ -75,6 +75,16 @@ def parameter_values(linkage: Linkage) -> dict[str, float]:
         values[f"{j.name}.lubrication"] = float(LUBRICATION_MODELS.get(j.lubrication, -1))
         for f in LUBRICATION_PARAMETERS:
             values[f"{j.name}.{f}"] = getattr(j, f)
+    for j in linkage.translational_joints:
+        values[f"{j.name}.stiffness"] = j.stiffness
+        values[f"{j.name}.contact_model"] = float(CONTACT_MODELS[j.contact_model])
+        values[f"{j.name}.friction_law"] = float(FRICTION_LAWS[j.friction_law])
+        for f in ("clearance", "restitution", "impact_velocity_floor", "half_length",
+                  "half_height", "angle", "slider_angle", *FRICTION_SLOTS):
+            values[f"{j.name}.{f}"] = getattr(j, f)
+        for c in j.corner_names():
+            values[f"{c}.mode"] = 0.0
+            values[f"{c}.impact_velocity"] = j.impact_velocity_floor
     if linkage.drive is not None:
         values["drive.speed"] = linkage.drive.speed
         values["drive.initial_angle"] = linkage.drive.initial_angle
@@ -298,7 +308,7 @@ def default_atol(linkage: Linkage, model, rtol: float) -> np.ndarray:
     tip = w * (drive_extent(linkage) if linkage.drive is not None else length)
     pos = [1.0 if c.endswith(".angle") else length for c in model.COORDINATES]
     vel = [w if c.endswith(".angle") else tip for c in model.COORDINATES]
-    events = [event_atol(j, w, rtol) for j in linkage.clearance_joints]
+    events = [event_atol(j, w, rtol) for _, j in linkage.contacts()]
     works = [1.0] * (model.N_STATE - 2 * model.N_Q)
     return np.concatenate([rtol * np.array(pos + vel + works), *events])
 
@@ -806,7 +816,7 @@ def simulate_linkage(linkage: Linkage, revolutions: int | None = None, **options
     # a free linkage: its duration in turns at its rate scale stands for revolutions
     turns = (check_span(linkage, revolutions, None, None) if linkage.drive is not None
              else max(1, math.ceil(float(ts[-1]) / linkage.time_scale)))
-    stats.update(contact_flags([j.clearance for j in linkage.clearance_joints],
+    stats.update(contact_flags([j.clearance for _, j in linkage.contacts()],
                                linkage.rate_scale, turns, ms[:, :model.N_MEM],
                                stats.get("nevent", 0), stats["rtol"]))
     if stats["accuracy_note"]:

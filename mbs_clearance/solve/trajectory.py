@@ -243,8 +243,10 @@ def annotate(traj: Trajectory) -> Trajectory:
     m = traj.mechanism
     if traj.linkage is not None:
         # the joint with the largest penetration relative to its journal radius
-        radii = np.array([j.journal_radius for j in m.clearance_joints])
-        clear = np.array([j.clearance for j in m.clearance_joints])
+        # (a translational joint's corners: the slider's half-height in the radius's place)
+        radii = np.array([getattr(j, "journal_radius", None) or j.half_height
+                          for _, j in m.contacts()])
+        clear = np.array([j.clearance for _, j in m.contacts()])
         pens = np.maximum(np.max(traj.penetration, axis=0, initial=0.0), 0.0)
         k = int(np.argmax(pens / radii))
         pen, radius, clearance = float(pens[k]), radii[k], clear[k]
@@ -293,8 +295,11 @@ def boundary_states(traj: Trajectory) -> np.ndarray | None:
         # every joint's eccentricity in its clearances, every rate in drive speed x the
         # smallest clearance (angle rates times the linkage's length scale)
         c, w = m.min_clearance, m.drive.speed
+        # (a corner of a translational joint: its normal offset only; its position along
+        # the guide is no small quantity)
         cols = [traj.eccentricity[rows, k, i] / j.clearance
-                for k, j in enumerate(m.clearance_joints) for i in range(2)]
+                for k, (name, j) in enumerate(m.contacts()) for i in range(2)
+                if i == 1 or name == j.name]
         cols += [v[rows] * (m.length_scale if name.endswith(".angle") else 1.0) / (w * c)
                  for name, v in traj.rates.items()]
         return np.column_stack([np.interp(times, t_rows, col) for col in cols])
@@ -580,7 +585,7 @@ def _load_linkage(path: Path, meta: dict) -> Trajectory:
     except (TypeError, ValueError) as exc:
         raise _fail(path, f"bad linkage: {exc}") from exc
     cols = meta.pop("_columns")
-    joints = tuple(j.name for j in linkage.clearance_joints)
+    joints = tuple(name for name, _ in linkage.contacts())
     # the ground joints' and coordinates' names from the columns, in their stored order
     grounds = [k[len("reaction."):-len("_x[N]")] for k in cols
                if k.startswith("reaction.") and k.endswith("_x[N]")]
