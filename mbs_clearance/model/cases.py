@@ -27,16 +27,19 @@ from .linkage import (
     Body,
     ClearanceJoint,
     Drive,
+    Initial,
     Linkage,
     Prismatic,
     Revolute,
+    TranslationalClearance,
     check_friction,
 )
 from .mechanism import SliderCrank
 
 __all__ = ["as_linkage", "paper_slider_crank", "from_slider_crank", "slider_crank_two_clearances",
            "four_bar", "paper_slider_crank_lubricated", "LUBRICATED_DEFAULTS", "CASES",
-           "CASE_PARAMETERS", "CASE_SUMMARY"]
+           "CASE_PARAMETERS", "CASE_SUMMARY", "flores_translational_slider_crank",
+           "FLORES_DURATION"]
 
 
 def from_slider_crank(mech: SliderCrank) -> Linkage:
@@ -222,7 +225,36 @@ CASE_PARAMETERS: dict[str, dict[str, tuple[Any, str, str]]] = {
         "gravity": (9.81, "m/s^2", "same source"),
         **_FRICTION,
     },
+    "flores_translational_slider_crank": {
+        "crank_length": (0.153, "m", "Flores, Leine & Glocker 2010, Table 1 (l1)"),
+        "coupler_length": (0.306, "m", "same source (l2)"),
+        "half_length": (0.05, "m", "same source (slider a)"),
+        "half_height": (0.025, "m", "same source (slider b)"),
+        "clearance": (0.001, "m", "same source (c)"),
+        "crank_mass": (0.038, "kg", "same source (m1)"),
+        "coupler_mass": (0.038, "kg", "same source (m2)"),
+        "slider_mass": (0.076, "kg", "same source (m3)"),
+        "crank_inertia": (7.4e-5, "kg m^2", "same source (J1)"),
+        "coupler_inertia": (5.9e-4, "kg m^2", "same source (J2)"),
+        "slider_inertia": (2.7e-6, "kg m^2", "same source (J3)"),
+        "gravity": (9.81, "m/s^2", "same source"),
+        "restitution": (0.4, "-", "same source (normal restitution e_N)"),
+        "friction_coefficient": (0.01, "-", "same source (mu)"),
+        "crank_rate": (150.0, "rad/s", "same source (initial crank angular velocity)"),
+        "coupler_rate": (-75.0, "rad/s", "same source (initial coupler angular velocity)"),
+        "contact_stiffness": (1.0e10, "N/m^1.5", "assumed: stands in for the source's rigid "
+                              "contact; results converge as it grows (docs/cases/"
+                              "flores_translational_slider_crank.md)"),
+        "contact_model": ("flores", "-", "assumed: Flores' law, valid at low restitution"),
+        "friction_law": ("coulomb", "-", "the source's Coulomb friction (regularised by "
+                         "friction_v0, friction_v1)"),
+        **{k: v for k, v in _FRICTION.items()
+           if k not in ("friction_law", "friction_coefficient")},
+    },
 }
+
+#: the duration in s of the benchmark's run (Flores, Leine & Glocker 2010)
+FLORES_DURATION = 0.2
 
 
 def _case_values(case: str, overrides: dict[str, Any]) -> dict[str, Any]:
@@ -250,7 +282,7 @@ def _case_values(case: str, overrides: dict[str, Any]) -> dict[str, Any]:
         if values[key] is not None and not values[key] > 0.0:
             raise ValueError(f"{case}: {key} must be > 0 {table[key][1]}; "
                              f"got {values[key]!r}")
-    for key in [k for k in values if k.endswith("clearance")]:
+    for key in [k for k in values if k.endswith("clearance") and "bearing_radius" in values]:
         if not values[key] < values["bearing_radius"]:
             raise ValueError(f"{case}: {key} must be smaller than bearing_radius = "
                              f"{values['bearing_radius']!r} m; got {values[key]!r}")
@@ -424,6 +456,65 @@ def four_bar(**overrides: Any) -> Linkage:
     )
 
 
+def flores_translational_slider_crank(**overrides: Any) -> Linkage:
+    """The free slider-crank with a translational clearance joint of Flores, Leine and
+    Glocker, "Modeling and analysis of planar rigid multibody systems with translational
+    clearance joints based on the non-smooth dynamics approach", Multibody Syst. Dyn. 23
+    (2010) 165-190, Table 1: crank l1 = 0.153 m, coupler l2 = 0.306 m, slider 2a = 0.1 m by
+    2b = 0.05 m in a guide of width 2(b + c), c = 1 mm; masses 0.038, 0.038, 0.076 kg,
+    moments of inertia 7.4e-5, 5.9e-4, 2.7e-6 kg m^2; gravity 9.81 m/s^2; normal restitution
+    0.4, friction coefficient 0.01. No drive: all angles zero, the crank starting at
+    150 rad/s and the coupler at -75 rad/s (the slider's centre then moves along the
+    guide), run for `FLORES_DURATION` = 0.2 s.
+
+    The source's contacts are rigid (Moreau's time stepping, Newton's impact law); here each
+    corner is a compliant contact of Flores' law with stiffness ``contact_stiffness``
+    (1e10 N/m^1.5 by default, an assumption: the results converge as it grows, measured in
+    docs/cases/flores_translational_slider_crank.md) and Coulomb friction regularised below
+    ``friction_v1``. The centres of mass are at the crank's and coupler's midpoints and the
+    slider's centre, where the coupler's pin is. The monitored joint is the crank pivot.
+
+    Overrides: any key of `CASE_PARAMETERS["flores_translational_slider_crank"]` (SI).
+    """
+    v = _case_values("flores_translational_slider_crank", overrides)
+    L1, L2 = v["crank_length"], v["coupler_length"]
+    return Linkage(
+        name="flores_translational_slider_crank",
+        bodies=(
+            Body("crank", v["crank_mass"], v["crank_inertia"],
+                 {"pivot": (-L1 / 2, 0.0), "pin": (L1 / 2, 0.0)}),
+            Body("coupler", v["coupler_mass"], v["coupler_inertia"],
+                 {"crank_end": (-L2 / 2, 0.0), "slider_end": (L2 / 2, 0.0)}),
+            Body("slider", v["slider_mass"], v["slider_inertia"], {"centre": (0.0, 0.0)}),
+        ),
+        joints=(
+            Revolute("crank_pivot", GROUND, "crank_pivot", "crank", "pivot"),
+            Revolute("crank_coupler", "crank", "pin", "coupler", "crank_end"),
+            Revolute("coupler_slider", "coupler", "slider_end", "slider", "centre"),
+        ),
+        clearance_joints=(),
+        translational_joints=(
+            TranslationalClearance(
+                "guide", guide_body=GROUND, guide_point="guide_axis", slider_body="slider",
+                slider_point="centre", half_length=v["half_length"],
+                half_height=v["half_height"], clearance=v["clearance"],
+                contact_stiffness=v["contact_stiffness"], restitution=v["restitution"],
+                contact_model=v["contact_model"], friction_law=v["friction_law"],
+                friction_coefficient=v["friction_coefficient"],
+                **{f: v[f] for f in FRICTION_SLOTS if f != "friction_coefficient"}),
+        ),
+        drive=None,
+        initial=Initial(coordinates={"crank.angle": 0.0, "coupler.angle": 0.0,
+                                     "slider.angle": 0.0},
+                        rates={"crank.angle": v["crank_rate"],
+                               "coupler.angle": v["coupler_rate"], "slider.angle": 0.0}),
+        ground_points={"crank_pivot": (0.0, 0.0), "guide_axis": (0.0, 0.0)},
+        gravity=v["gravity"],
+        monitor_joint="crank_pivot",
+        case="flores_translational_slider_crank", overrides=dict(overrides),
+    )
+
+
 #: one line per case: what it is and where its values come from (CLI `simulate --help`)
 CASE_SUMMARY = {
     "paper_slider_crank": "slider-crank, clearance in the coupler-slider joint (Ebrahimi et "
@@ -435,6 +526,9 @@ CASE_SUMMARY = {
                                    "joints (Flores 2010's multiple-clearance study)",
     "four_bar": "Grashof crank-rocker, clearance in the coupler-rocker joint (Siconos "
                 "four-bar example, Akhadkar et al. 2016)",
+    "flores_translational_slider_crank": "free slider-crank, its slider in a guide with "
+                                         "1 mm clearance (Flores, Leine & Glocker 2010); "
+                                         "run it for 0.2 s",
 }
 
 #: the named cases, by name (CLI `simulate --case NAME`)
@@ -443,4 +537,5 @@ CASES = {
     "paper_slider_crank_lubricated": paper_slider_crank_lubricated,
     "slider_crank_two_clearances": slider_crank_two_clearances,
     "four_bar": four_bar,
+    "flores_translational_slider_crank": flores_translational_slider_crank,
 }

@@ -1,0 +1,215 @@
+"""The translational-clearance benchmark of Flores, Leine and Glocker (2010) from two schools:
+the package's compliant model (`cases.flores_translational_slider_crank`, event-located
+corner contacts) against the nonsmooth reference (`validation.moreau`, rigid contacts and
+Moreau's midpoint time stepping, the source's method).
+
+    python -m validation.flores_benchmark --out DIR [--quick]
+
+It converges each model on its own before comparing them:
+- the compliant model over its contact stiffness (the stand-in for rigid contact) and its
+  tolerance;
+- the Moreau scheme over its step, whose error it measures in the free flight before the
+  first impact (exact there) and extrapolates at the end (first order, Richardson).
+
+It writes ``flores_benchmark.json`` (the numbers of docs/cases/flores_translational_slider_
+crank.md) and three figures: the crank's revolutions over time, each corner's position
+across the guide over c, and which corners touch when.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import time
+from pathlib import Path
+
+import numpy as np
+
+from validation import moreau as mo
+
+#: the corners of the case's joint "guide", in the order of `validation.moreau.CORNERS`
+#: ((+a, +b), (-a, +b), (-a, -b), (+a, -b))
+CORNER_NAMES = ("front_top", "rear_top", "rear_bottom", "front_bottom")
+#: opposite corners (a jammed slider) and adjacent ones on one surface (flat)
+OPPOSITE = (("front_top", "rear_bottom"), ("rear_top", "front_bottom"))
+ADJACENT = (("front_top", "rear_top"), ("front_bottom", "rear_bottom"))
+
+
+def compliant_run(stiffness: float, rtol: float, duration: float):
+    """The package's model of the case at `stiffness` (N/m^1.5) and `rtol`: a dict of
+    t, q (crank, coupler, slider angles), u, the corners' offsets over c and contact
+    flags (in `CORNER_NAMES` order), and the run's wall time and counts."""
+    from mbs_clearance import simulate
+    from mbs_clearance.model.cases import flores_translational_slider_crank
+
+    lk = flores_translational_slider_crank(contact_stiffness=stiffness)
+    t0 = time.perf_counter()
+    tr = simulate(lk, duration=duration, rtol=rtol)
+    wall = time.perf_counter() - t0
+    names = ("crank.angle", "coupler.angle", "slider.angle")
+    col = {n: i for i, n in enumerate(tr.joints)}
+    idx = [col[f"guide.{c}"] for c in CORNER_NAMES]
+    c = lk.translational_joints[0].clearance
+    sy = np.array([1.0, 1.0, -1.0, -1.0])
+    # penetration = sy * (corner's y offset) - c, so the offset over c is sy (pen / c + 1)
+    offsets = sy * (tr.penetration[:, idx] / c + 1.0)
+    return {"t": tr.t, "q": np.column_stack([tr.coordinates[n] for n in names]),
+            "u": np.column_stack([tr.rates[n] for n in names]), "offsets": offsets,
+            "contact": tr.penetration[:, idx] > 0.0, "wall": wall,
+            "nfev": int(tr.stats.get("nfev", 0)), "max_penetration": float(
+                np.max(tr.penetration[:, idx]) / c)}
+
+
+def moreau_run(h: float, duration: float, sample: float = 1e-5):
+    """The Moreau reference at step h, sampled every `sample` s."""
+    d = mo.FLGData()
+    t0 = time.perf_counter()
+    r = mo.run(d, t_end=duration, h=h, every=max(1, int(round(sample / h))))
+    wall = time.perf_counter() - t0
+    return {"t": r.t, "q": r.q, "u": r.u, "offsets": r.corner_offsets(d),
+            "contact": r.impulses > 0.0, "wall": wall, "steps": r.stats["steps"]}
+
+
+def _energy(run) -> float:
+    """Kinetic plus gravitational energy (J) at the run's end: both models have the same
+    bodies and coordinates (absolute angles), so one formula serves both; the compliant
+    model's contact energy is left out (no corner touches at the end of either run)."""
+    return float(mo.energy(mo.FLGData(), run["q"][-1], run["u"][-1]))
+
+
+def first_contact(run) -> float:
+    hit = np.flatnonzero(run["contact"].any(axis=1))
+    return float(run["t"][hit[0]]) if hit.size else math.nan
+
+
+def contact_summary(run) -> dict:
+    """Per corner: its first contact time and the number of contact episodes; the time
+    shares of flat (two adjacent corners) and jammed (two opposite) contact."""
+    t, flags = run["t"], run["contact"]
+    dt = np.diff(t, prepend=t[0])
+    out = {"corners": {}}
+    for k, name in enumerate(CORNER_NAMES):
+        on = flags[:, k]
+        starts = np.flatnonzero(on[1:] & ~on[:-1]) + 1
+        episodes = int(starts.size + (1 if on[0] else 0))
+        out["corners"][name] = {
+            "first": float(t[np.argmax(on)]) if on.any() else None, "episodes": episodes}
+    k = {n: i for i, n in enumerate(CORNER_NAMES)}
+    span = float(t[-1] - t[0])
+    for label, pairs in (("flat_share", ADJACENT), ("jammed_share", OPPOSITE)):
+        both = np.zeros(len(t), dtype=bool)
+        for a, b in pairs:
+            both |= flags[:, k[a]] & flags[:, k[b]]
+        out[label] = float(np.sum(dt[both]) / span)
+    return out
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(prog="python -m validation.flores_benchmark",
+                                 description=__doc__.split("\n\n")[0])
+    ap.add_argument("--out", type=Path, required=True, help="output folder")
+    ap.add_argument("--quick", action="store_true",
+                    help="fewer stiffnesses and Moreau steps (about a minute)")
+    args = ap.parse_args(argv)
+    args.out.mkdir(parents=True, exist_ok=True)
+    from mbs_clearance.model.cases import FLORES_DURATION as T
+
+    stiffnesses = [1e9, 1e10, 1e11] if args.quick else [1e9, 1e10, 1e11, 1e12]
+    steps = [2e-5, 1e-5] if args.quick else [2e-5, 1e-5, 5e-6, 2.5e-6]
+    result = {"duration": T, "energy_start": float(mo.energy(mo.FLGData(), mo.FLGData().q0,
+                                                              mo.FLGData().u0)),
+              "compliant": {}, "moreau": {}}
+
+    runs = {}
+    for K in stiffnesses:
+        for rtol in (1e-8, 1e-10):
+            r = compliant_run(K, rtol, T)
+            runs[(K, rtol)] = r
+            result["compliant"][f"K={K:g} rtol={rtol:g}"] = {
+                "crank_angle_end": float(r["q"][-1, 0]),
+                "energy_end": _energy(r),
+                "crank_rate_end": float(r["u"][-1, 0]),
+                "slider_angle_end": float(r["q"][-1, 2]),
+                "first_contact": first_contact(r), "max_penetration_over_c":
+                    r["max_penetration"], "nfev": r["nfev"], "wall_s": r["wall"],
+                **contact_summary(r)}
+            print(f"compliant K={K:g} rtol={rtol:g}: crank {r['q'][-1, 0]:.5f} rad, "
+                  f"{r['u'][-1, 0]:.4f} rad/s ({r['wall']:.1f} s)", flush=True)
+
+    d = mo.FLGData()
+    free_end = 0.0024          # before the first contact (about 2.69 ms)
+    result["moreau_free_flight_error"] = {
+        f"h={h:g}": mo.free_flight_error(d, h, free_end) for h in steps}
+    mruns = {}
+    for h in steps:
+        r = moreau_run(h, T)
+        mruns[h] = r
+        result["moreau"][f"h={h:g}"] = {
+            "crank_angle_end": float(r["q"][-1, 0]), "crank_rate_end": float(r["u"][-1, 0]),
+            "energy_end": _energy(r),
+            "slider_angle_end": float(r["q"][-1, 2]), "first_contact": first_contact(r),
+            "wall_s": r["wall"], **contact_summary(r)}
+        print(f"Moreau h={h:g}: crank {r['q'][-1, 0]:.5f} rad, {r['u'][-1, 0]:.4f} rad/s "
+              f"({r['wall']:.1f} s)", flush=True)
+    h1, h2 = steps[-2], steps[-1]
+    ratio = h1 / h2
+    extrap = {}
+    for key in ("crank_angle_end", "crank_rate_end", "energy_end"):
+        a, b = (result["moreau"][f"h={h:g}"][key] for h in (h1, h2))
+        extrap[key] = float(b + (b - a) / (ratio - 1.0))
+        extrap[key + "_error_at_finest"] = float(abs(b - extrap[key]))
+    result["moreau_extrapolated"] = extrap
+    (args.out / "flores_benchmark.json").write_text(json.dumps(result, indent=2))
+    _figures(args.out, runs[(1e10, 1e-10)], mruns[steps[-1]], steps[-1])
+    print(f"wrote {args.out / 'flores_benchmark.json'} and the figures")
+    return 0
+
+
+def _figures(out: Path, ours, theirs, h):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(7, 3.2))
+    ax.plot(ours["t"], ours["q"][:, 0] / (2 * math.pi), label="compliant (K = 1e10 N/m^1.5)")
+    ax.plot(theirs["t"], theirs["q"][:, 0] / (2 * math.pi), "--",
+            label=f"Moreau, rigid (h = {h:g} s)")
+    ax.set_xlabel("t (s)")
+    ax.set_ylabel("crank revolutions")
+    ax.legend()
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(out / "flores_crank.png", dpi=120)
+    plt.close(fig)
+
+    fig, axes = plt.subplots(4, 1, figsize=(7, 7), sharex=True)
+    for k, (ax, name) in enumerate(zip(axes, CORNER_NAMES)):
+        ax.plot(ours["t"], ours["offsets"][:, k], lw=0.8, label="compliant")
+        ax.plot(theirs["t"], theirs["offsets"][:, k], "--", lw=0.8, label="Moreau")
+        ax.set_ylabel(name.replace("_", " ") + "\n(y - y0) / c", fontsize=8)
+        ax.set_ylim(-1.2, 1.2)
+        ax.grid(alpha=0.3)
+    axes[0].legend(loc="lower right", fontsize=8)
+    axes[-1].set_xlabel("t (s)")
+    fig.tight_layout()
+    fig.savefig(out / "flores_corners.png", dpi=120)
+    plt.close(fig)
+
+    fig, ax = plt.subplots(figsize=(7, 2.8))
+    for k in range(len(CORNER_NAMES)):
+        for run, dy, colour in ((ours, 0.15, "C0"), (theirs, -0.15, "C1")):
+            on = run["contact"][:, k]
+            ax.plot(run["t"][on], np.full(on.sum(), k + dy), "|", color=colour, ms=6)
+    ax.set_yticks(range(4), [n.replace("_", " ") for n in CORNER_NAMES])
+    ax.set_xlabel("t (s)")
+    ax.set_title("corners in contact: compliant (upper tick), Moreau (lower tick)",
+                 fontsize=9)
+    fig.tight_layout()
+    fig.savefig(out / "flores_contacts.png", dpi=120)
+    plt.close(fig)
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
