@@ -94,7 +94,8 @@ def _joint(**changes):
     return TranslationalClearance(**fields)
 
 
-@pytest.mark.parametrize("changes, message", [
+#: (changed fields, the refusal's message)
+BAD_FIELDS = [
     ({"half_length": 0.0}, "half_length must be a finite number > 0 (m)"),
     ({"half_height": -1.0}, "half_height must be a finite number > 0 (m)"),
     ({"clearance": float("nan")}, "clearance must be a finite number > 0 (m)"),
@@ -110,11 +111,7 @@ def _joint(**changes):
     ({"slider_body": GROUND, "guide_body": "coupler"}, "slider_body must be a moving body"),
     ({"guide_body": "slider"}, "guide and slider on the same body"),
     ({"name": "a.b"}, "translational clearance joint name must be an identifier"),
-])
-def test_bad_joint_fields_are_refused(changes, message):
-    with pytest.raises(ValueError, match=_re(message)) as info:
-        _joint(**changes)
-    assert str(info.value).startswith("translational clearance joint")
+]
 
 
 def _re(text):
@@ -124,9 +121,14 @@ def _re(text):
 
 
 def test_bad_linkages_are_refused():
-    """The graph's refusals: unknown bodies and points, a second guide of one slider, an
+    """Every field's refusal (naming the joint, the field and its range); the graph's
+    refusals: unknown bodies and points, a second guide of one slider, an
     ideal prismatic joint beside the guide, a name used twice, no clearance at all; the
     DDM and the exudyn backend's native sphere contact refuse the joint before any work."""
+    for changes, message in BAD_FIELDS:
+        with pytest.raises(ValueError, match=_re(message)) as info:
+            _joint(**changes)
+        assert str(info.value).startswith("translational clearance joint")
     _, lk = guided()
     bad = [
         ({"translational_joints": (_joint(guide_body="frame"),)},
