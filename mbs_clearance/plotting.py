@@ -575,7 +575,7 @@ def magnification(linkage, magnify: float | None = None) -> float:
     from ._checks import check_real
 
     rb = DRAWN_BEARING * linkage.length_scale
-    c_max = max(j.clearance for j in linkage.clearance_joints)
+    c_max = max((j.clearance for j in linkage.clearance_joints), default=linkage.min_clearance)
     if magnify is None:
         return JOURNAL_GAP * rb / c_max
     return check_real("magnify (magnification of the journals' offsets)", magnify, 0.0,

@@ -141,8 +141,15 @@ class _Shooter:
     monodromy matrix (`jacobian`), from a state x and memory (modes, impact velocities)."""
 
     def __init__(self, mech, period: int, rtol: float, method: str, t0: float = 0.0):
-        from ..solve.linkage_ddm import pack_sensitivity_parameters, sensitivity_atol
+        from ..model.cases import as_linkage
+        from ..solve.linkage_ddm import (
+            check_jacobians,
+            pack_sensitivity_parameters,
+            sensitivity_atol,
+        )
 
+        check_jacobians(as_linkage(mech), "periodic orbits (shooting with the state's "
+                                          "sensitivities) are not available")
         flow = Flow(mech, rtol=rtol, method=method)
         self.mech = mech
         self.model = model = flow.model

@@ -131,6 +131,10 @@ class TangentFlow(Flow):
         if memory not in ("reset", "carry"):
             raise ValueError(f"memory must be 'reset' or 'carry'; got {memory!r}")
         self.reset_memory = memory == "reset"
+        from .linkage_ddm import check_jacobians
+
+        check_jacobians(as_linkage(mech), "the tangent flow (Lyapunov exponents) is not "
+                                          "available")
         super().__init__(mech, settings, **options)
         from .linkage_ddm import pack_sensitivity_parameters, sensitivity_atol
 

@@ -560,12 +560,8 @@ def plain_setup(linkage: Linkage, rtol: float | None, start=None, specialise: bo
     if linkage.drive is None:
         raise ValueError(f"linkage {linkage.name!r} is free (drive=None): sensitivities (DDM) "
                          "need a driven linkage; use finite differences of its runs")
-    if linkage.translational_joints:
-        raise ValueError(
-            f"linkage {linkage.name!r} has translational clearance joints "
-            f"{[j.name for j in linkage.translational_joints]}: their generated model has no "
-            "exact Jacobians, so DDM sensitivities are not available; use finite "
-            "differences (method='fd')")
+    check_jacobians(linkage, "DDM sensitivities are not available; use finite differences "
+                             "(method='fd')")
     model = load_model(linkage, specialise)
     rtol, atol = _tolerances(linkage, model, rtol, None)
     p0 = pack_parameters(linkage, model)
@@ -573,6 +569,16 @@ def plain_setup(linkage: Linkage, rtol: float | None, start=None, specialise: bo
         return model, p0, initial_state(linkage, model, p0), rtol, atol
     return model, p0, check_start(linkage, model, p0, start, event_tolerance(linkage)), \
         rtol, atol
+
+
+def check_jacobians(linkage: Linkage, consequence: str) -> None:
+    """ValueError unless `linkage`'s generated model has exact Jacobians (a translational
+    clearance joint's corners have none); `consequence` says what is not available."""
+    if linkage.translational_joints:
+        raise ValueError(
+            f"linkage {linkage.name!r} has translational clearance joints "
+            f"{[j.name for j in linkage.translational_joints]}: their generated model has no "
+            f"exact Jacobians, so {consequence}")
 
 
 def linkage_sensitivities(linkage: Linkage, names: tuple[str, ...], revolutions: int,
