@@ -475,6 +475,13 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     from .solve.trajectory import load_trajectory
 
     linkage = linkage_from_args(args)
+    if linkage is not None and linkage.drive is None:
+        return _simulate_free(linkage, args)
+    if args.duration is not None or args.window is not None:
+        raise ValueError("--duration and --window are for a free linkage (a --description "
+                         "without a drive); a driven one runs --revolutions")
+    if args.revolutions is None:
+        args.revolutions = 4
     if linkage is not None:
         return _simulate_linkage(linkage, args)
     settled_start_of(None, args)
@@ -589,6 +596,52 @@ def _simulate_linkage(linkage, args: argparse.Namespace) -> int:
     else:
         print(f"revolutions counted from the state after {start.revolutions} revolutions "
               "(--settled)", file=sys.stderr)
+    _print_error_estimate(traj)
+    if args.out:
+        with atomic_file(args.out) as tmp:
+            traj.save(tmp)
+        wrote(args.out, "trajectory")
+    return 0
+
+
+def _simulate_free(linkage, args: argparse.Namespace) -> int:
+    """simulate --description of a free linkage: peaks of the monitored force and each
+    clearance joint's largest contact force per time window."""
+    from .solve.linkage_model import time_edges
+    from .solve.simulate import simulate
+
+    if args.revolutions is not None or args.settled is not None:
+        raise ValueError(f"linkage {linkage.name!r} is free (no drive): it runs --duration "
+                         "seconds (windows of --window), not --revolutions or --settled")
+    if args.duration is None:
+        raise ValueError(f"linkage {linkage.name!r} is free (no drive): give --duration "
+                         "(s) and optionally --window (s)")
+    if args.plot:
+        raise ValueError("--plot draws the paper's slider-crank only; leave it out with "
+                         "--case or --description")
+    if args.out:
+        check_output_file(args.out, "--out", args.force, suffixes=(".npz", ".csv"))
+    options = _simulate_options(args)
+    options.update(duration=args.duration, window=args.window)
+    _progress(f"simulating {linkage.name!r} (free) for {args.duration:g} s with backend "
+              f"{args.backend!r} ...")
+    t0 = time.perf_counter()
+    traj = simulate(linkage, backend=args.backend, **options)
+    print(f"done in {time.perf_counter() - t0:.3g} s ({len(traj.t)} samples)",
+          file=sys.stderr)
+    joints = [j.name for j in linkage.clearance_joints]
+    monitored = (f"max |{linkage.monitor_joint}|" if linkage.monitor_joint
+                 else "max |shaking|")
+    widths = [max(12, len(j) + 6) for j in joints]
+    edges = time_edges(args.duration, args.window)      # the run's windows
+    print(f"{'window [s]':>20}  {monitored:>18}  "
+          + "  ".join(f"{'max F ' + j:>{w}}" for j, w in zip(joints, widths)))
+    for k, peak in enumerate(traj.peaks):
+        a, b = edges[k], edges[k + 1]
+        mask = (traj.t >= a) & (traj.t <= b)
+        cells = "  ".join(f"{_force(traj.contact_force[mask, i].max()):>{w}}"
+                          for i, w in enumerate(widths))
+        print(f"{f'{a:.4g}-{b:.4g}':>20}  {_force(peak):>18}  {cells}")
     _print_error_estimate(traj)
     if args.out:
         with atomic_file(args.out) as tmp:
@@ -831,8 +884,15 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
                        epilog="named cases (--case NAME; --set NAME=VALUE changes a value, "
                               "docs/cases.md lists them):\n" + _case_lines())
     add_linkage_options(p)
-    p.add_argument("--revolutions", type=int_at_least(1), default=4,
-                   help="crank revolutions from the start (revolution 1: start-up transient)")
+    p.add_argument("--revolutions", type=int_at_least(1),
+                   help="crank revolutions from the start (revolution 1: start-up transient; "
+                        "default 4)")
+    p.add_argument("--duration", type=positive_float, metavar="S",
+                   help="a free linkage (a --description without a drive) only: the run's "
+                        "duration in s (default: none)")
+    p.add_argument("--window", type=positive_float, metavar="S",
+                   help="with --duration: the peaks' time windows in s (default: the whole "
+                        "run)")
     add_settled_option(p)
     add_run_options(p, methods)
     p.add_argument("--accuracy", type=positive_float,

@@ -41,6 +41,8 @@ CLI_CASES: list[tuple[str, str]] = [
     ("simulate --revolutions 0", "count below its minimum"),
     ("simulate --revolutions -1", "negative count"),
     ("simulate --revolutions 2.5", "count not an integer"),
+    ("simulate --duration 0.1", "a duration for a driven linkage"),
+    ("simulate --window -1", "a negative time window"),
     ("simulate --rtol 0", "tolerance zero"),
     ("simulate --rtol nan", "tolerance NaN"),
     ("simulate --rtol -1e-8", "tolerance negative"),

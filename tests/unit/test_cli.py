@@ -119,6 +119,7 @@ def test_parameter_list_accepts_spaces_and_runs(capsys):
                                       "'exudyn')"),
     (["simulate", "--rtol", "-1e-8"], "--rtol: must be a finite number > 0; got '-1e-8'"),
     (["simulate", "--revolutions", "0"], "--revolutions: must be an integer >= 1"),
+    (["simulate", "--duration", "0.1"], "--duration and --window are for a free linkage"),
     (["optimize", "--population", "3"], "--population: must be an integer >= 4"),
     (["optimize", "--crank-bounds", "nan", "0.06"], "--crank-bounds: must be a finite"),
     (["compare", "--h-max", "-1"], "--h-max: must be a finite number > 0"),

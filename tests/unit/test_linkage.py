@@ -14,6 +14,7 @@ from mbs_clearance.model.linkage import (
     Body,
     ClearanceJoint,
     Drive,
+    Initial,
     Linkage,
     Prismatic,
     Revolute,
@@ -148,7 +149,10 @@ def test_file_roundtrip(tmp_path, suffix):
     lk = paper_slider_crank(contact_stiffness=1e10)
     # guesses off the collinear start (there the closure's Jacobian is singular)
     four = four_bar_like(assembly={"coupler.angle": 0.5, "rocker.angle": 1.5})
-    for desc in (lk, four):
+    # a free linkage: no drive table, its start instead
+    free = lk.replace(name="free", drive=None, initial=Initial(
+        coordinates={"crank.angle": 0.3}, rates={"crank.angle": 10.0}))
+    for desc in (lk, four, free):
         path = tmp_path / f"d{suffix}"
         if suffix == ".json":
             path.write_text(json.dumps(desc.to_dict()))
