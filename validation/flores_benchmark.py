@@ -26,7 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
-from validation import moreau as mo
+from . import moreau as mo
 
 #: the corners of the case's joint "guide", in the order of `validation.moreau.CORNERS`
 #: ((+a, +b), (-a, +b), (-a, -b), (+a, -b))

@@ -373,9 +373,10 @@ def render(out: Path, numbers: dict, figs: dict) -> Path:
 def build_linkage_report(linkage, out: str | Path = "report", quick: bool = False,
                          progress: bool = True, force: bool = False,
                          revolutions: int | None = None) -> Path:
-    """Run every section on `linkage` (a `Linkage`), draw, write HTML; returns the HTML's
-    path. The folder is built beside `out` and moved into place at the end (an existing
-    `out` that is not an earlier report is replaced only with `force`)."""
+    """Run every section on `linkage` (a `Linkage`; a free one gets
+    `free_report.build_free_report`), draw, write HTML; returns the HTML's path. The
+    folder is built beside `out` and moved into place at the end (an existing `out` that
+    is not an earlier report is replaced only with `force`)."""
     from mbs_clearance._io import OutputDir, check_output_dir
     from mbs_clearance.model.linkage import Linkage
 
@@ -383,6 +384,10 @@ def build_linkage_report(linkage, out: str | Path = "report", quick: bool = Fals
 
     if not isinstance(linkage, Linkage):
         raise ValueError(f"linkage must be a Linkage; got {type(linkage).__name__}")
+    if linkage.drive is None:
+        from .free_report import build_free_report
+
+        return build_free_report(linkage, out, quick=quick, progress=progress, force=force)
     out = Path(out)
     check_output_dir(out, "--out", force)
     s = settings(quick, revolutions)

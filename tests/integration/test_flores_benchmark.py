@@ -109,3 +109,35 @@ def test_reduced_against_exudyn_on_the_benchmark():
     # measured: angle 2.0e-6, 2.3e-7 rad; rate 3.6e-2, 4.0e-3 rad/s (of 150)
     assert errors[1] < errors[0] / 4 and errors[1] < 1e-6
     assert rate_errors[1] < rate_errors[0] / 4 and rate_errors[1] < 1e-2
+
+
+def test_report_of_the_benchmark_from_the_command_line(tmp_path, capsys):
+    """`mbs-clearance report --case flores_translational_slider_crank --quick`: the free
+    linkage's report; its numbers are the library's (the window peaks of `simulate`, the
+    Moreau runs of validation.moreau and their first-order extrapolation) and the HTML
+    carries the benchmark's section with its three figures."""
+    import json
+
+    from mbs_clearance import simulate
+    from mbs_clearance.cli import main
+
+    out = tmp_path / "report"
+    assert main(["report", "--case", "flores_translational_slider_crank", "--quick",
+                 "--out", str(out)]) == 0
+    n = json.loads((out / "report.json").read_text())
+    T = n["response"]["duration"]
+    traj = simulate(flg(), duration=T, window=T / 4, rtol=1e-10)
+    assert n["response"]["peaks"] == pytest.approx(list(traj.peaks), rel=1e-12)
+    b = n["benchmark"]
+    coarse, fine = (b["moreau"][f"{h:g}"]["crank_angle"] for h in b["steps"])
+    assert b["moreau_extrapolated"]["crank_angle"] == pytest.approx(2 * fine - coarse,
+                                                                    rel=1e-12)
+    h = b["steps"][-1]
+    assert b["moreau"][f"{h:g}"]["crank_angle"] == pytest.approx(
+        mo.run(DATA, t_end=T, h=h, every=round(T / h)).q[-1, 0], rel=1e-12)
+    whole = simulate(flg(), duration=T, rtol=1e-10)       # one window, as the benchmark's
+    assert b["compliant"]["crank_angle"] == pytest.approx(
+        whole.coordinates["crank.angle"][-1], rel=1e-12)
+    html = (out / "report.html").read_text()
+    assert "Against the nonsmooth reference" in html
+    assert html.count("data:image/png;base64") == 4
