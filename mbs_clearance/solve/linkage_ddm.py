@@ -99,13 +99,22 @@ def chain(linkage: Linkage, model, names) -> list[dict[int, float]]:
     return out
 
 
-def _memory_sensitivities(model, names) -> np.ndarray:
-    """(nb, J): d(initial impact-velocity memory of joint j)/db_k (the memory starts at the
-    floor)."""
+def floor_names(linkage: Linkage) -> list[str]:
+    """Per contact of the generated model (the clearance joints, then the translational
+    joints' corners) the name of its impact-velocity floor (a corner's is its joint's)."""
+    return ([f"{j.name}.impact_velocity_floor" for j in linkage.clearance_joints]
+            + [f"{j.name}.impact_velocity_floor" for j in linkage.translational_joints
+               for _ in j.corner_names()])
+
+
+def _memory_sensitivities(linkage: Linkage, model, names) -> np.ndarray:
+    """(nb, J): d(initial impact-velocity memory of contact j)/db_k (the memory starts at
+    the floor)."""
     sig = np.zeros((len(names), model.N_EVENTS))
+    floors = floor_names(linkage)
     for k, name in enumerate(names):
-        for j, joint in enumerate(model.JOINTS):
-            if name == f"{joint}.impact_velocity_floor":
+        for j, floor in enumerate(floors):
+            if name == floor:
                 sig[k, j] = 1.0
     return sig
 
@@ -116,7 +125,7 @@ def combine(linkage: Linkage, model, directions):
     of the description's values at once: d value / d variable)."""
     names = sorted({n for d in directions for n in d})
     per_name = dict(zip(names, chain(linkage, model, names)))
-    sig_name = dict(zip(names, _memory_sensitivities(model, names)))
+    sig_name = dict(zip(names, _memory_sensitivities(linkage, model, names)))
     entries, sigma = [], np.zeros((len(directions), model.N_EVENTS))
     for k, d in enumerate(directions):
         ent: dict[int, float] = {}
@@ -131,7 +140,12 @@ def combine(linkage: Linkage, model, directions):
 def initial_sensitivities(linkage: Linkage, model, p, y0, entries, t0: float = 0.0):
     """(nb, 2 N_Q): exact derivatives of the centred start (`linkage_model.initial_state`)
     along the chains `entries`: the closure e(t0, q, p) = 0 and its rate edot(t0, q, qdot, p)
-    = 0 differentiated (least squares where the closure is not square, as the assembly)."""
+    = 0 differentiated (least squares where the closure is not square, as the assembly).
+    A free linkage holds the coordinates and rates its `Initial` gives: theirs are zero.
+    A translational joint's closure (its slider's offset and tilt) is the mean of its
+    corners' normal offsets and of their signed ones (`linkage.CORNERS`)."""
+    if linkage.translational_joints or linkage.drive is None:
+        return _held_initial_sensitivities(linkage, model, p, y0, entries, t0)
     n = model.N_Q
     jac = model.jacobian_matrix(t0, y0, p, False)
     rows = []
@@ -152,6 +166,54 @@ def initial_sensitivities(linkage: Linkage, model, p, y0, entries, t0: float = 0
     ed_b = jac[rate_rows] @ d
     dq = -np.linalg.lstsq(e_q, e_b, rcond=None)[0]
     du = -np.linalg.lstsq(ed_u, ed_q @ dq + ed_b, rcond=None)[0]
+    return np.hstack([dq.T, du.T])
+
+
+def _held_initial_sensitivities(linkage: Linkage, model, p, y0, entries, t0: float):
+    """`initial_sensitivities` with the translational joints' closure rows and the free
+    linkage's held coordinates and rates."""
+    from ..model.linkage import CORNERS
+
+    n = model.N_Q
+    jac = model.jacobian_matrix(t0, y0, p, False)
+    out, extra = model.OUT_COLUMNS.index, model.JAC_EXTRA_ROWS
+    pos, rate = [], []              # closure rows: {Jacobian row: weight}
+    for j in linkage.clearance_joints:
+        for xy in "xy":
+            pos.append({out(f"{j.name}.ecc_{xy}"): 1.0})
+            rate.append({extra[f"e{xy}d:{j.name}"]: 1.0})
+    for tj in linkage.translational_joints:
+        for signed in (False, True):
+            pos.append({out(f"{c}.ecc_y"): 0.25 * (CORNERS[c.rpartition(".")[2]][0]
+                                                    if signed else 1.0)
+                        for c in tj.corner_names()})
+            rate.append({extra[f"eyd:{c}"]: 0.25 * (CORNERS[c.rpartition(".")[2]][0]
+                                                     if signed else 1.0)
+                         for c in tj.corner_names()})
+
+    def rows(spec):
+        m = np.zeros((len(spec), jac.shape[1]))
+        for i, r in enumerate(spec):
+            for row, wgt in r.items():
+                m[i] += wgt * jac[row]
+        return m
+    e, ed = rows(pos), rows(rate)
+    d = np.zeros((jac.shape[1], len(entries)))
+    for k, ent in enumerate(entries):
+        for c, v in ent.items():
+            d[c, k] += v
+    held_q = held_u = np.zeros(n, dtype=bool)
+    if linkage.drive is None:
+        held_q = np.array([c in linkage.start.coordinates for c in model.COORDINATES])
+        held_u = np.array([c in linkage.start.rates for c in model.COORDINATES])
+    dq = np.zeros((n, len(entries)))
+    du = np.zeros((n, len(entries)))
+    if e.shape[0] and not held_q.all():
+        dq[~held_q] = -np.linalg.lstsq(e[:, 1:1 + n][:, ~held_q], e @ d, rcond=None)[0]
+    if ed.shape[0] and not held_u.all():
+        dq_full = ed[:, 1:1 + n] @ dq + ed @ d
+        du[~held_u] = -np.linalg.lstsq(ed[:, 1 + n:1 + 2 * n][:, ~held_u], dq_full,
+                                       rcond=None)[0]
     return np.hstack([dq.T, du.T])
 
 
@@ -436,8 +498,7 @@ def setup(linkage: Linkage, model, p0, y_state, directions, scale, atol_plain,
     for k, ent in enumerate(entries):
         for i, c in enumerate(cols):
             dense[i, k] = ent.get(c, 0.0)
-    floors = np.array([p0[model.PARAMETERS.index(f"{j}.impact_velocity_floor")]
-                       for j in model.JOINTS])
+    floors = np.array([p0[model.PARAMETERS.index(f)] for f in floor_names(linkage)])
     state_scale = default_atol(linkage, model, 1.0)[:n2]
     M = np.vstack([s0.T / state_scale[:, None],
                    dense / np.where(pcol > 0.0, pcol, 1.0)[:, None],
