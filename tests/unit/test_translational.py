@@ -10,6 +10,7 @@ import math
 import numpy as np
 import pytest
 
+from mbs_clearance.model import cases
 from mbs_clearance.model.linkage import (
     GROUND,
     Body,
@@ -19,7 +20,6 @@ from mbs_clearance.model.linkage import (
     Revolute,
     TranslationalClearance,
 )
-from mbs_clearance.model import cases
 from mbs_clearance.model.mechanism import SliderCrank
 
 A, B = 0.025, 0.01          # the slider's half-length and half-height (m)
