@@ -82,17 +82,19 @@ class Sensitivities:
     reference : (p,) the parameter values b0 (derived values where the field is None)
     base_force : (n, 2, p) dF12/db
     base_force_magnitude : (n, p) d|F12|/db
-    crank_moment : (n, p) dM2/db
+    crank_moment : (n, p) dM2/db (None for a free linkage: no drive)
     contact_force : (n, p) dF/db
     trajectory : the nominal Trajectory on the same time grid
     method, backend : how they were computed
-    growth : (revolutions, p) max over each revolution of the normalized state-sensitivity
-        norm; it stays bounded in periodic motion and grows without bound in chaotic motion
+    growth : (revolutions, p) max over each revolution (a free linkage: each window) of the
+        normalized state-sensitivity norm; it stays bounded in periodic motion and grows
+        without bound in chaotic motion
     stats : solver counters and settings
     outputs : for a `Linkage` (else None): every output column of its generated model
         (OUT_COLUMNS) and every coordinate, name -> (n, p) derivatives; there base_force is
         the monitored reaction (the monitor joint's, or the shaking force), crank_moment
-        the drive moment, contact_force (n, p) for one clearance joint, (n, J, p) for J
+        the drive moment, contact_force (n, p) for one contact, (n, J, p) for J (the
+        clearance joints, then the translational joints' corners)
     """
 
     t: np.ndarray
