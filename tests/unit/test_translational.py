@@ -493,3 +493,29 @@ def test_ddm_matches_finite_differences_on_the_flores_case():
         assert np.all(err <= np.maximum(3 * fd_err, 1e-5 * scale)), (c, err / scale,
                                                                      fd_err / scale)
     assert ddm.crank_moment is None
+
+
+@pytest.mark.slow
+def test_ddm_matches_finite_differences_on_a_driven_guide():
+    """DDM on the driven slider-crank in a guide with clearance along geometric parameters
+    (they move the centred start: the initial sensitivities through the slider's closure,
+    its offset and tilt as the corners' mean offsets) and the clearance: within three times
+    the central differences' own error (their change between relative steps 1e-4 and
+    3e-4), or 1e-6 of the column's largest value, over half a revolution."""
+    from mbs_clearance.analysis.sensitivity import sensitivities
+
+    _, lk = guided()
+    names = ("guide.clearance", "guide.angle", "coupler.slider_end.x")
+    t_eval = np.linspace(0.0, 0.5 * lk.period, 6)[1:]
+    ddm = sensitivities(lk, names, method="ddm", revolutions=1, t_eval=t_eval, rtol=1e-10)
+    fd = [sensitivities(lk, names, method="fd", revolutions=1, t_eval=t_eval, rtol=1e-11,
+                        fd_relative_step=h) for h in (1e-4, 3e-4)]
+    for c in lk.coordinates():
+        ref = fd[0].outputs[c]
+        scale = np.abs(ref).max(axis=0)
+        err = np.abs(ddm.outputs[c] - ref).max(axis=0)
+        fd_err = np.abs(fd[1].outputs[c] - ref).max(axis=0)
+        # (without friction the slider stays flat: its tilt's derivatives vanish, 1e-12
+        # rad per unit of the parameter is their round-off)
+        assert np.all(err <= np.maximum(3 * fd_err, 1e-6 * scale + 1e-12)), (c, err, fd_err,
+                                                                             scale)
