@@ -323,6 +323,14 @@ def _linkage_peak(linkage: Linkage, out: Output, revolution: int, options: dict)
                          revolution * linkage.period, stats["method"])
 
 
+def _check_driven(linkage: Linkage) -> None:
+    """ValueError for a free linkage: the objective is a peak over a drive revolution."""
+    if linkage.drive is None:
+        raise ValueError(f"linkage {linkage.name!r} is free (drive=None): the objective is the "
+                         "peak over a drive revolution, which it has not; for its outputs' "
+                         "derivatives use sensitivities(linkage, names, duration=...)")
+
+
 def peak_output(linkage: Linkage, output: str | None = None, revolution: int = 4,
                 **options) -> float:
     """The peak of `output` (`parse_output`; default the crank pivot's |reaction|) over drive
@@ -337,6 +345,7 @@ def peak_output(linkage: Linkage, output: str | None = None, revolution: int = 4
 
     if not isinstance(linkage, Linkage):
         raise ValueError(f"linkage must be a Linkage; got {type(linkage).__name__}")
+    _check_driven(linkage)
     out = parse_output(linkage, output)
     revolution = check_int("revolution", revolution, 1)
     allowed = set(lm.OPTION_NAMES) - {"t_eval", "start"} | {"accuracy"}
@@ -734,6 +743,7 @@ def peak_gradient(mech: Linkage | SliderCrank, parameters=None, revolution: int 
     from ..solve.simulate import BACKENDS
 
     linkage = as_linkage(mech)
+    _check_driven(linkage)
     revolution = check_int("revolution", revolution, 1)
     check_revolutions_memory(revolution, name="revolution")
     check_choice("backend", backend, BACKENDS)

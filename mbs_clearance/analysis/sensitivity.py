@@ -82,17 +82,19 @@ class Sensitivities:
     reference : (p,) the parameter values b0 (derived values where the field is None)
     base_force : (n, 2, p) dF12/db
     base_force_magnitude : (n, p) d|F12|/db
-    crank_moment : (n, p) dM2/db
+    crank_moment : (n, p) dM2/db (None for a free linkage: no drive)
     contact_force : (n, p) dF/db
     trajectory : the nominal Trajectory on the same time grid
     method, backend : how they were computed
-    growth : (revolutions, p) max over each revolution of the normalized state-sensitivity
-        norm; it stays bounded in periodic motion and grows without bound in chaotic motion
+    growth : (revolutions, p) max over each revolution (a free linkage: each window) of the
+        normalized state-sensitivity norm; it stays bounded in periodic motion and grows
+        without bound in chaotic motion
     stats : solver counters and settings
     outputs : for a `Linkage` (else None): every output column of its generated model
         (OUT_COLUMNS) and every coordinate, name -> (n, p) derivatives; there base_force is
         the monitored reaction (the monitor joint's, or the shaking force), crank_moment
-        the drive moment, contact_force (n, p) for one clearance joint, (n, J, p) for J
+        the drive moment, contact_force (n, p) for one contact, (n, J, p) for J (the
+        clearance joints, then the translational joints' corners)
     """
 
     t: np.ndarray
@@ -510,7 +512,7 @@ def _fd(mech, names, revolutions, backend, t_eval, rtol, fd_relative_step, execu
         contact_force=d_contact, trajectory=nominal, method="fd", backend=backend, stats=stats)
 
 
-def sensitivities(mech: SliderCrank, parameters=None, revolutions: int = 4,
+def sensitivities(mech: SliderCrank, parameters=None, revolutions: int | None = None,
                   method: str = "ddm", backend: str = "reduced", *,
                   t_eval: np.ndarray | None = None, rtol: float | None = None,
                   event_time_term: bool = True, fd_relative_step: float = FD_RELATIVE_STEP,
@@ -523,8 +525,9 @@ def sensitivities(mech: SliderCrank, parameters=None, revolutions: int = 4,
     mech : SliderCrank
     parameters : sequence of str, optional
         Continuous SliderCrank fields; default `DEFAULT_PARAMETERS` (the paper's set).
-    revolutions : int
-        Crank revolutions simulated from t = 0.
+    revolutions : int, optional
+        Crank revolutions simulated from t = 0 (default 4; a free linkage takes
+        ``duration=`` in s and optionally ``window=`` in s instead, see below).
     method : {"ddm", "fd"}
         Direct differentiation (reduced model only) or central finite differences (any
         backend; 2 p + 1 runs, in parallel).
@@ -556,7 +559,10 @@ def sensitivities(mech: SliderCrank, parameters=None, revolutions: int = 4,
     plain runs that land on t_eval (default 720 per revolution), reduced backend only.
     ``start=`` (a `linkage_model.Start`, e.g. `settled_start`) runs from that state instead
     of the centred start, held fixed: the sensitivities start at zero, as finite
-    differences of runs from the same start do.
+    differences of runs from the same start do. A free linkage (no drive) runs for
+    ``duration=`` s from its `Initial` (held: its given coordinates and rates do not move
+    with the parameters), its growth per window of ``window=`` s (default: the whole run);
+    it has no crank moment (``crank_moment`` None).
 
     Returns
     -------
@@ -573,7 +579,7 @@ def sensitivities(mech: SliderCrank, parameters=None, revolutions: int = 4,
                          f"{type(mech).__name__}")
     names = _check_parameters(parameters)
     check_choice("method", method, ("ddm", "fd"))
-    revolutions = check_int("revolutions", revolutions, 1)
+    revolutions = check_int("revolutions", 4 if revolutions is None else revolutions, 1)
     check_revolutions_memory(revolutions, per_revolution=_per_revolution(method, len(names)))
     fd_relative_step = check_real("fd_relative_step", fd_relative_step, 0.0, 0.1,
                                   low_open=True, high_open=True)
@@ -633,19 +639,36 @@ def _linkage_sensitivities(linkage, parameters, revolutions, method, backend, t_
                              f"parameters are {list(allowed)}")
     if len(set(names)) != len(names):
         raise ValueError(f"parameters must not repeat a name; got {list(names)}")
+    from ..solve.linkage_model import check_span, time_edges
+
     check_choice("method", method, ("ddm", "fd"))
-    revolutions = check_int("revolutions", revolutions, 1)
-    check_revolutions_memory(revolutions, per_revolution=_per_revolution(method, len(names)))
+    duration, window = options.pop("duration", None), options.pop("window", None)
+    revolutions = check_span(linkage, revolutions, duration, window)
+    windows = None
+    if linkage.drive is None:
+        if duration is None:
+            raise ValueError(f"linkage {linkage.name!r} is free (drive=None): give the "
+                             "sensitivities' duration= in s (and optionally window= in s)")
+        windows = time_edges(duration, window)
+        check_revolutions_memory(len(windows) - 1, name="windows",
+                                 per_revolution=_per_revolution(method, len(names)))
+    else:
+        check_revolutions_memory(revolutions,
+                                 per_revolution=_per_revolution(method, len(names)))
     if backend != "reduced":
         raise ValueError(f"a Linkage's sensitivities need backend='reduced'; got {backend!r}")
     start = options.pop("start", None)
     if options:
         raise ValueError(f"unknown option(s) for a Linkage: {sorted(options)} (allowed: "
-                         "start)")
+                         "start; duration, window for a free linkage)")
+    if start is not None and linkage.drive is None:
+        raise ValueError("start is for a driven linkage; a free linkage starts from its "
+                         "initial (Linkage.initial, an Initial)")
     if rtol is not None:
         rtol = check_real("rtol", rtol, 1e-14, 1e-2)
     if t_eval is not None:
-        t_eval = check_times("t_eval", t_eval, revolutions * linkage.period)
+        t_eval = check_times("t_eval", t_eval, windows[-1] if windows is not None
+                             else revolutions * linkage.period)
     event_time_term = check_bool("event_time_term", event_time_term)
     fd_relative_step = check_real("fd_relative_step", fd_relative_step, 0.0, 0.1,
                                   low_open=True, high_open=True)
@@ -654,8 +677,9 @@ def _linkage_sensitivities(linkage, parameters, revolutions, method, backend, t_
     if method == "ddm":
         fields = linkage_ddm.linkage_sensitivities(
             linkage, names, revolutions, rtol, t_eval, event_time_term,
-            integrator or linkage_ddm.DDM_INTEGRATOR, start)
+            integrator or linkage_ddm.DDM_INTEGRATOR, start, windows)
     else:
         fields = linkage_ddm.linkage_fd(linkage, names, revolutions, rtol, t_eval,
-                                        fd_relative_step, integrator or "dopri5", start)
+                                        fd_relative_step, integrator or "dopri5", start,
+                                        windows)
     return Sensitivities(**fields)

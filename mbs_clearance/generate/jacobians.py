@@ -90,6 +90,13 @@ def jacobian_context(w, d: Derivation, out_columns: list[str]) -> dict:
         for m, what in enumerate(("wj", "wb", "tb")):
             extra[(what, j)] = n_out + 4 * J + len(fric) + 3 * k + m
     n_rows = n_out + 4 * J + len(fric) + 3 * len(lub)
+    # per corner of the translational clearance joints (event e = J + k): the rates of its
+    # axial position and normal offset, the normal force on the slider
+    corners = list(d.corners)
+    for k in range(len(corners)):
+        for m, what in enumerate(("exd", "eyd", "fn")):
+            extra[(what, J + k)] = n_rows + 3 * k + m
+    n_rows += 3 * len(corners)
     params = list(d.parameters)
     pcol = {name: 1 + 2 * n + i for i, name in enumerate(params)}
 
@@ -152,8 +159,9 @@ def jacobian_context(w, d: Derivation, out_columns: list[str]) -> dict:
 
     # ---- the gaps of the clearance joints (and the spins): values and partials
     gap_items = []          # (value name or None, row, expression, gradient)
+    events = [*d.joints, *(c[0] for c in corners)]
     for j, gap in enumerate(d.gaps):
-        rows4 = [row[f"{d.joints[j]}.ecc_x"], row[f"{d.joints[j]}.ecc_y"],
+        rows4 = [row[f"{events[j]}.ecc_x"], row[f"{events[j]}.ecc_y"],
                  extra[("exd", j)], extra[("eyd", j)]]
         for c, e in enumerate(gap):
             gap_items.append((f"gv{j}_{c}", rows4[c], w.split(e), grad(e)))
@@ -231,6 +239,33 @@ def jacobian_context(w, d: Derivation, out_columns: list[str]) -> dict:
                           f"{nz}, " + args)
             tlines.append(f"{d.FX[j]}, {d.FY[j]}, {TJ}, {TB} = film_tangent(out, ts, nd, dz, "
                           f"{nz}, " + args)
+    for k, (cname, tname, side, FN, FT) in enumerate(corners):
+        e = J + k
+        rows = [row[f"{cname}.{f}"] for f in ("contact_force", "penetration",
+                                              "penetration_rate", "ecc_x", "ecc_y")]
+        rows += [extra[(what, e)] for what in ("exd", "eyd", "fn")]
+        zc = [pcol[f"{tname}.{f}"] for f in ("clearance", "half_height", "stiffness",
+                                             "restitution")] + [pcol[f"{cname}.impact_velocity"]]
+        pv = [repr(float(side))] + [f"p[{pcol[nm] - 1 - 2 * n}]" for nm in (
+            f"{tname}.clearance", f"{tname}.half_height", f"{cname}.mode",
+            f"{cname}.impact_velocity", f"{tname}.stiffness", f"{tname}.restitution",
+            f"{tname}.contact_model")]
+        args = (f"gv{e}_0, gv{e}_1, gv{e}_2, gv{e}_3, "
+                + ", ".join(str(v) for v in rows + zc + pv) + ")")
+        jlines.append(f"{FN} = corner_jacobian(jac, {stride}, {nz}, " + args)
+        tlines.append(f"{FN} = corner_tangent(out, ts, nd, dz, {nz}, " + args)
+        if FT is not None:
+            frows = [extra[("exd", e)], row[f"{cname}.contact_force"]] + [
+                row[f"{cname}.{f}"] for f in ("friction_force", "slip_velocity",
+                                              "friction_power")]
+            comma = "," if len(FRICTION_SLOTS) == 1 else ""
+            fc = ", ".join(f"{pcol[f'{tname}.{f}']}" for f in FRICTION_SLOTS) + comma
+            fv = ", ".join(f"p[{pcol[f'{tname}.{f}'] - 1 - 2 * n}]"
+                           for f in FRICTION_SLOTS) + comma
+            law = f"p[{pcol[f'{tname}.friction_law'] - 1 - 2 * n}]"
+            args = ", ".join(str(v) for v in frows) + f", ({fc}), {law}, ({fv}))"
+            jlines.append(f"{FT} = corner_friction_jacobian(jac, {stride}, {nz}, " + args)
+            tlines.append(f"{FT} = corner_friction_tangent(out, ts, nd, dz, {nz}, " + args)
     J_stages.append(jlines)
     T_stages.append(tlines)
 
@@ -262,6 +297,10 @@ def jacobian_context(w, d: Derivation, out_columns: list[str]) -> dict:
         if j in lub:
             loads.append((d.TL[j][0], row[f"{d.joints[j]}.film_torque"], "rtj", j))
             loads.append((d.TL[j][1], extra[("tb", j)], "rtb", j))
+    for k, (cname, _, _, FN, FT) in enumerate(corners):
+        loads.append((FN, extra[("fn", J + k)], "rfn", J + k))
+        if FT is not None:
+            loads.append((FT, row[f"{cname}.friction_force"], "rft", J + k))
     for i in range(n):
         g = grad(R[i])
         rgrad.append(g)
@@ -354,6 +393,19 @@ def jacobian_context(w, d: Derivation, out_columns: list[str]) -> dict:
                     tonames.append(f"o{what}_{m}_{j}")
                     terms.append(f"o{what}_{m}_{j} * jac[{frow * stride} + col]")
                     tterms.append(f"o{what}_{m}_{j} * out[{frow} * ts + d]")
+        for k, (cname, _, _, FN, FT) in enumerate(corners):
+            lds = [("fn", FN, extra[("fn", J + k)])]
+            if FT is not None:
+                lds.append(("ft", FT, row[f"{cname}.friction_force"]))
+            j = J + k
+            for what, F, frow in lds:
+                c = sp.expand(sp.diff(e, F))
+                if c != 0:
+                    oexprs.append(w.split(c))
+                    onames.append(f"o{what}_{m}_{j}")
+                    tonames.append(f"o{what}_{m}_{j}")
+                    terms.append(f"o{what}_{m}_{j} * jac[{frow * stride} + col]")
+                    tterms.append(f"o{what}_{m}_{j} * out[{frow} * ts + d]")
         if terms:
             oloop.append(f"    jac[{r * stride} + col] += " + " + ".join(terms))
         trows_full.append((f"out[{r} * ts + d]", {k: f"o{r}_{k}" for k in g}, tterms))
@@ -369,7 +421,8 @@ def jacobian_context(w, d: Derivation, out_columns: list[str]) -> dict:
                       + (" + ".join(f"out[{r} * ts + col]" for r in rs) or "0.0"))
 
     extra_syms = {*d.A, *d.FX, *d.FY, *(d.TQ[j] for j in fric),
-                  *(s for j in lub for s in d.TL[j])}
+                  *(s for j in lub for s in d.TL[j]),
+                  *(s for c in corners for s in c[3:] if s is not None)}
 
     def emit(stages, full_stage):
         temps = sp.numbered_symbols("x")
@@ -395,7 +448,7 @@ def jacobian_context(w, d: Derivation, out_columns: list[str]) -> dict:
                 n_jrows=n_rows,
                 z_names=["t", *(f"{c}" for c in d.coordinates),
                          *(f"{c}.rate" for c in d.coordinates), *params],
-                jac_extra={f"{what}:{d.joints[j]}": r for (what, j), r in extra.items()})
+                jac_extra={f"{what}:{events[j]}": r for (what, j), r in extra.items()})
 
 
 def _cholesky_lines(n: int) -> list[str]:

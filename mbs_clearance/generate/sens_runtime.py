@@ -21,10 +21,11 @@ from ..laws._dispatch import friction_force_partials_slots
 from ..laws.forces import contact_force, contact_force_partials
 from ..laws.lubrication.partials import film_direction, film_values
 from ..numerics.integrator import KERNEL, _golden_max, _step_monitor, step_workspace
-from .runtime import gap_state
+from .runtime import corner_state, gap_state
 
 __all__ = ["contact_jacobian", "friction_jacobian", "contact_tangent", "friction_tangent",
-           "film_jacobian", "film_tangent",
+           "film_jacobian", "film_tangent", "corner_jacobian", "corner_tangent",
+           "corner_friction_jacobian", "corner_friction_tangent", "sens_on_event_at",
            "sens_rhs", "seed_directions", "seed_index", "work_size", "fill_seed_work", "tangent_at",
            "step_peaks", "step_value", "step_states", "sens_on_event", "sens_monitor",
            "sens_outputs", "ddm_layout"]
@@ -237,6 +238,148 @@ def friction_tangent(out, ts, nd, dz, nz, spin, r_ex, r_ey, r_exd, r_eyd, r_spin
         out[r_fy * ts + d] += d_fy
     return _friction_write(out, ts, nd, spin, r_spin, r_fx, r_fy, r_ft, r_vt, r_pw, nx, ny, vt,
                            ft)
+
+
+@nb.njit(**KERNEL, inline="always")
+def _corner_values(h, hd, side, clearance, half_height, mode, dmin, stiffness, restitution,
+                   model):
+    """A corner's penetration and rate (`runtime.corner_state`), the contact force F of the
+    law (zero in free flight, mode 0) and its partials (d delta, d deltadot, d impact
+    velocity, d stiffness, d restitution)."""
+    delta, deltadot = corner_state(h, hd, side, clearance, half_height)
+    f = 0.0
+    f_d = 0.0
+    f_dd = 0.0
+    f_dm = 0.0
+    f_k = 0.0
+    f_e = 0.0
+    if mode > 0.5:
+        f = contact_force(delta, deltadot, dmin, stiffness, restitution, int(model))
+        if f > 0.0:
+            _, f_d, f_dd, f_dm, f_k, f_e = contact_force_partials(
+                delta, deltadot, dmin, stiffness, restitution, int(model))
+    return delta, deltadot, f, f_d, f_dd, f_dm, f_k, f_e
+
+
+@nb.njit(**KERNEL, inline="always")
+def _corner_write(jac, stride, vc, r_f, r_pen, r_rate, r_ex, r_ey, r_exd, r_eyd, r_fn, ex, h,
+                  exd, hd, delta, deltadot, f, side):
+    """The values (column vc) of one corner's rows; returns fn = -side F."""
+    jac[r_f * stride + vc] = f
+    jac[r_pen * stride + vc] = delta
+    jac[r_rate * stride + vc] = deltadot
+    jac[r_ex * stride + vc] = ex
+    jac[r_ey * stride + vc] = h
+    jac[r_exd * stride + vc] = exd
+    jac[r_eyd * stride + vc] = hd
+    jac[r_fn * stride + vc] = -side * f
+    return -side * f
+
+
+@nb.njit(**KERNEL, inline="always")
+def corner_jacobian(jac, stride, nz, ex, h, exd, hd, r_f, r_pen, r_rate, r_ex, r_ey, r_exd,
+                    r_eyd, r_fn, c_clear, c_half, c_stiff, c_rest, c_dmin, side, clearance,
+                    half_height, mode, dmin, stiffness, restitution, model):
+    """Rows of one corner of a translational clearance joint in the Jacobian, after the
+    gap stage has filled the derivatives of its position along the guide's axis (ex), its
+    normal offset h (ey) and their rates: the penetration delta = side h - (b + c), its rate
+    side hdot, the contact force F of the law and the normal force on the slider
+    fn = -side F (row r_fn), as `runtime.corner_stage`, with the parameters that enter
+    directly (columns of the clearance, half-height, stiffness, restitution and the impact
+    velocity). Returns fn."""
+    delta, deltadot, f, f_d, f_dd, f_dm, f_k, f_e = _corner_values(
+        h, hd, side, clearance, half_height, mode, dmin, stiffness, restitution, model)
+    for col in range(nz):
+        d_delta = side * jac[r_ey * stride + col]
+        if col == c_clear or col == c_half:
+            d_delta -= 1.0
+        d_rate = side * jac[r_eyd * stride + col]
+        d_f = f_d * d_delta + f_dd * d_rate
+        if col == c_dmin:
+            d_f += f_dm
+        if col == c_stiff:
+            d_f += f_k
+        if col == c_rest:
+            d_f += f_e
+        jac[r_pen * stride + col] = d_delta
+        jac[r_rate * stride + col] = d_rate
+        jac[r_f * stride + col] = d_f
+        jac[r_fn * stride + col] = -side * d_f
+    return _corner_write(jac, stride, nz, r_f, r_pen, r_rate, r_ex, r_ey, r_exd, r_eyd, r_fn,
+                         ex, h, exd, hd, delta, deltadot, f, side)
+
+
+@nb.njit(**KERNEL, inline="always")
+def corner_tangent(out, ts, nd, dz, nz, ex, h, exd, hd, r_f, r_pen, r_rate, r_ex, r_ey, r_exd,
+                   r_eyd, r_fn, c_clear, c_half, c_stiff, c_rest, c_dmin, side, clearance,
+                   half_height, mode, dmin, stiffness, restitution, model):
+    """`corner_jacobian` along nd seed directions dz (nd x nz, flat): rows of out (ts =
+    nd + 1 per row, column nd the value). Returns fn."""
+    delta, deltadot, f, f_d, f_dd, f_dm, f_k, f_e = _corner_values(
+        h, hd, side, clearance, half_height, mode, dmin, stiffness, restitution, model)
+    for d in range(nd):
+        o = d * nz
+        d_delta = side * out[r_ey * ts + d] - dz[o + c_clear] - dz[o + c_half]
+        d_rate = side * out[r_eyd * ts + d]
+        d_f = (f_d * d_delta + f_dd * d_rate + f_dm * dz[o + c_dmin] + f_k * dz[o + c_stiff]
+               + f_e * dz[o + c_rest])
+        out[r_pen * ts + d] = d_delta
+        out[r_rate * ts + d] = d_rate
+        out[r_f * ts + d] = d_f
+        out[r_fn * ts + d] = -side * d_f
+    return _corner_write(out, ts, nd, r_f, r_pen, r_rate, r_ex, r_ey, r_exd, r_eyd, r_fn, ex,
+                         h, exd, hd, delta, deltadot, f, side)
+
+
+@nb.njit(**KERNEL, inline="always")
+def _corner_friction_write(jac, stride, vc, r_ft, r_vt, r_pw, vt, ft):
+    """The values (column vc) of one corner's friction rows; returns Ft."""
+    jac[r_ft * stride + vc] = ft
+    jac[r_vt * stride + vc] = vt
+    jac[r_pw * stride + vc] = -ft * vt
+    return ft
+
+
+@nb.njit(**KERNEL, inline="always")
+def corner_friction_jacobian(jac, stride, nz, r_exd, r_f, r_ft, r_vt, r_pw, cols, law, slots):
+    """Rows of one corner's friction in the Jacobian, after `corner_jacobian`: the friction
+    force Ft of the law on the slider along the guide's axis at the sliding velocity vt
+    (the rate of the corner's axial position, row r_exd) and the normal force F (row r_f),
+    its partials (`cols` the columns of the law's `slots`), the slip velocity and the power
+    -Ft vt, as `runtime.corner_friction_stage`. Returns Ft."""
+    vt = jac[r_exd * stride + nz]
+    ft, ft_vt, ft_fn, ft_slots = friction_force_partials_slots(
+        vt, jac[r_f * stride + nz], slots, int(law))
+    for col in range(nz):
+        d_vt = jac[r_exd * stride + col]
+        d_ft = ft_vt * d_vt + ft_fn * jac[r_f * stride + col]
+        for k in range(len(cols)):
+            if col == cols[k]:
+                d_ft += ft_slots[k]
+        jac[r_vt * stride + col] = d_vt
+        jac[r_ft * stride + col] = d_ft
+        jac[r_pw * stride + col] = -(d_ft * vt + ft * d_vt)
+    return _corner_friction_write(jac, stride, nz, r_ft, r_vt, r_pw, vt, ft)
+
+
+@nb.njit(**KERNEL, inline="always")
+def corner_friction_tangent(out, ts, nd, dz, nz, r_exd, r_f, r_ft, r_vt, r_pw, cols, law,
+                            slots):
+    """`corner_friction_jacobian` along nd seed directions dz (nd x nz, flat), after
+    `corner_tangent`. Returns Ft."""
+    vt = out[r_exd * ts + nd]
+    ft, ft_vt, ft_fn, ft_slots = friction_force_partials_slots(
+        vt, out[r_f * ts + nd], slots, int(law))
+    for d in range(nd):
+        o = d * nz
+        d_vt = out[r_exd * ts + d]
+        d_ft = ft_vt * d_vt + ft_fn * out[r_f * ts + d]
+        for k in range(len(cols)):
+            d_ft += ft_slots[k] * dz[o + cols[k]]
+        out[r_vt * ts + d] = d_vt
+        out[r_ft * ts + d] = d_ft
+        out[r_pw * ts + d] = -(d_ft * vt + ft * d_vt)
+    return _corner_friction_write(out, ts, nd, r_ft, r_vt, r_pw, vt, ft)
 
 
 @nb.njit(**KERNEL)
@@ -454,7 +597,8 @@ def sens_rhs(tangent, rhs, t, y, p, dydt, n_q, n_p, nz, n_jrows, acc_row, mom_ro
         dydt[i] = y[n_q + i]
         dydt[n_q + i] = out[(acc_row + i) * ts + nb_]
     wpos = n2 * (1 + nb_)
-    dydt[wpos] = out[mom_row * ts + nb_] * p[speed]
+    # the drive's work rate (a free linkage, mom_row < 0: no drive, no work)
+    dydt[wpos] = out[mom_row * ts + nb_] * p[speed] if mom_row >= 0 else 0.0
     for k in range(nb_):
         base = n2 * (1 + k)
         sig = wpos + 1 + k * n_joints
@@ -468,11 +612,21 @@ def sens_rhs(tangent, rhs, t, y, p, dydt, n_q, n_p, nz, n_jrows, acc_row, mom_ro
 @nb.njit(**KERNEL, inline="always")
 def sens_on_event(jacobian, on_event, t, y, p, j, n_q, n_p, nz, n_jrows, mem_start, pen_row,
                   rate_row, joint_rows, acc_row, floor0, contact_stride, mem_col0, n_joints):
-    """Switch joint j's mode (the plain model's `on_event`); at a contact onset also the
+    """`sens_on_event_at` with joint j's impact-velocity floor at p[floor0 + contact_stride
+    j] (the clearance joints' contact fields, one block each)."""
+    sens_on_event_at(jacobian, on_event, t, y, p, j, n_q, n_p, nz, n_jrows, mem_start,
+                     pen_row, rate_row, joint_rows, acc_row, floor0 + contact_stride * j,
+                     mem_col0, n_joints)
+
+
+@nb.njit(**KERNEL, inline="always")
+def sens_on_event_at(jacobian, on_event, t, y, p, j, n_q, n_p, nz, n_jrows, mem_start,
+                     pen_row, rate_row, joint_rows, acc_row, floor_index, mem_col0, n_joints):
+    """Switch contact j's mode (the plain model's `on_event`); at a contact onset also the
     sensitivity of its impact-velocity memory, with the event-time term:
     sigma_k = d(deltadot)/db_k + deltadotdot dt_e/db_k, dt_e/db_k = -(d delta/db_k) / deltadot
-    (or d(floor)/db_k when the floor applies). The state sensitivities do not jump: the
-    contact force is zero at delta = 0 in both modes."""
+    (or d(floor)/db_k when the floor, p[floor_index], applies). The state sensitivities do
+    not jump: the contact force is zero at delta = 0 in both modes."""
     if p[mem_start + 2 * j] > 0.5:
         on_event(t, y, p, j)
         return
@@ -485,7 +639,7 @@ def sens_on_event(jacobian, on_event, t, y, p, j, n_q, n_p, nz, n_jrows, mem_sta
     r_rate = rate_row + joint_rows * j
     r_pen = pen_row + joint_rows * j
     rate = jac[r_rate * stride + nz]
-    floor = p[floor0 + contact_stride * j]
+    floor = p[floor_index]
     wpos = n2 * (1 + nb_)
     evterm = p[n_p + 1] > 0.5
     if rate > floor:
@@ -506,7 +660,7 @@ def sens_on_event(jacobian, on_event, t, y, p, j, n_q, n_p, nz, n_jrows, mem_sta
                 d_rate -= accel * d_pen / rate
             y[sig + j] = d_rate
     else:
-        col = 1 + n2 + floor0 + contact_stride * j
+        col = 1 + n2 + floor_index
         for k in range(nb_):
             v = 0.0
             for e in range(k * m, (k + 1) * m):

@@ -384,11 +384,12 @@ def render(d: Derivation, linkage_name: str, structure: dict, zeros: tuple = ())
         mon = out_columns.index("shaking_x")
     else:
         mon = out_columns.index(f"{d.monitor}.reaction_x")
+    jac_ctx = jacobian_context(w, d, out_columns)
     if d.corners:
-        # no exact Jacobians of the corners' contacts (DDM refuses such a linkage)
-        jac_ctx = {}
+        # each contact's impact-velocity floor: a corner reads its joint's
+        jac_ctx["floors"] = [params.index(f"{j}.impact_velocity_floor") for j in d.joints] + [
+            params.index(f"{c[1]}.impact_velocity_floor") for c in d.corners]
     else:
-        jac_ctx = jacobian_context(w, d, out_columns)
         jac_ctx["floor0"] = params.index(f"{d.joints[0]}.impact_velocity_floor")
     prepare = w.constants_body()       # after every split: all constants known
     ctx = dict(

@@ -67,6 +67,7 @@ def chain(linkage: Linkage, model, names) -> list[dict[int, float]]:
     pidx = {name: i for i, name in enumerate(model.PARAMETERS)}
     off = 1 + 2 * model.N_Q
     joints = {j.name: j for j in linkage.clearance_joints}
+    sliders = {j.name for j in linkage.translational_joints}
     out = []
     for name in names:
         head, _, field = name.rpartition(".")
@@ -93,19 +94,31 @@ def chain(linkage: Linkage, model, names) -> list[dict[int, float]]:
                     entries[k_col] = d_rj
             elif derived:
                 entries[k_col] = d_e if field == "youngs_modulus" else d_nu
+        elif head in sliders and field == "contact_stiffness":
+            # a translational joint's stiffness is its own (no Eq. 9 from radii)
+            entries[off + pidx[f"{head}.stiffness"]] = 1.0
         elif name not in pidx:
             raise AssertionError(f"no chain for parameter {name!r}")
         out.append({c: v for c, v in entries.items() if v != 0.0})
     return out
 
 
-def _memory_sensitivities(model, names) -> np.ndarray:
-    """(nb, J): d(initial impact-velocity memory of joint j)/db_k (the memory starts at the
-    floor)."""
+def floor_names(linkage: Linkage) -> list[str]:
+    """Per contact of the generated model (the clearance joints, then the translational
+    joints' corners) the name of its impact-velocity floor (a corner's is its joint's)."""
+    return ([f"{j.name}.impact_velocity_floor" for j in linkage.clearance_joints]
+            + [f"{j.name}.impact_velocity_floor" for j in linkage.translational_joints
+               for _ in j.corner_names()])
+
+
+def _memory_sensitivities(linkage: Linkage, model, names) -> np.ndarray:
+    """(nb, J): d(initial impact-velocity memory of contact j)/db_k (the memory starts at
+    the floor)."""
     sig = np.zeros((len(names), model.N_EVENTS))
+    floors = floor_names(linkage)
     for k, name in enumerate(names):
-        for j, joint in enumerate(model.JOINTS):
-            if name == f"{joint}.impact_velocity_floor":
+        for j, floor in enumerate(floors):
+            if name == floor:
                 sig[k, j] = 1.0
     return sig
 
@@ -116,7 +129,7 @@ def combine(linkage: Linkage, model, directions):
     of the description's values at once: d value / d variable)."""
     names = sorted({n for d in directions for n in d})
     per_name = dict(zip(names, chain(linkage, model, names)))
-    sig_name = dict(zip(names, _memory_sensitivities(model, names)))
+    sig_name = dict(zip(names, _memory_sensitivities(linkage, model, names)))
     entries, sigma = [], np.zeros((len(directions), model.N_EVENTS))
     for k, d in enumerate(directions):
         ent: dict[int, float] = {}
@@ -131,7 +144,12 @@ def combine(linkage: Linkage, model, directions):
 def initial_sensitivities(linkage: Linkage, model, p, y0, entries, t0: float = 0.0):
     """(nb, 2 N_Q): exact derivatives of the centred start (`linkage_model.initial_state`)
     along the chains `entries`: the closure e(t0, q, p) = 0 and its rate edot(t0, q, qdot, p)
-    = 0 differentiated (least squares where the closure is not square, as the assembly)."""
+    = 0 differentiated (least squares where the closure is not square, as the assembly).
+    A free linkage holds the coordinates and rates its `Initial` gives: theirs are zero.
+    A translational joint's closure (its slider's offset and tilt) is the mean of its
+    corners' normal offsets and of their signed ones (`linkage.CORNERS`)."""
+    if linkage.translational_joints or linkage.drive is None:
+        return _held_initial_sensitivities(linkage, model, p, y0, entries, t0)
     n = model.N_Q
     jac = model.jacobian_matrix(t0, y0, p, False)
     rows = []
@@ -152,6 +170,54 @@ def initial_sensitivities(linkage: Linkage, model, p, y0, entries, t0: float = 0
     ed_b = jac[rate_rows] @ d
     dq = -np.linalg.lstsq(e_q, e_b, rcond=None)[0]
     du = -np.linalg.lstsq(ed_u, ed_q @ dq + ed_b, rcond=None)[0]
+    return np.hstack([dq.T, du.T])
+
+
+def _held_initial_sensitivities(linkage: Linkage, model, p, y0, entries, t0: float):
+    """`initial_sensitivities` with the translational joints' closure rows and the free
+    linkage's held coordinates and rates."""
+    from ..model.linkage import CORNERS
+
+    n = model.N_Q
+    jac = model.jacobian_matrix(t0, y0, p, False)
+    out, extra = model.OUT_COLUMNS.index, model.JAC_EXTRA_ROWS
+    pos, rate = [], []              # closure rows: {Jacobian row: weight}
+    for j in linkage.clearance_joints:
+        for xy in "xy":
+            pos.append({out(f"{j.name}.ecc_{xy}"): 1.0})
+            rate.append({extra[f"e{xy}d:{j.name}"]: 1.0})
+    for tj in linkage.translational_joints:
+        for signed in (False, True):
+            pos.append({out(f"{c}.ecc_y"): 0.25 * (CORNERS[c.rpartition(".")[2]][0]
+                                                    if signed else 1.0)
+                        for c in tj.corner_names()})
+            rate.append({extra[f"eyd:{c}"]: 0.25 * (CORNERS[c.rpartition(".")[2]][0]
+                                                     if signed else 1.0)
+                         for c in tj.corner_names()})
+
+    def rows(spec):
+        m = np.zeros((len(spec), jac.shape[1]))
+        for i, r in enumerate(spec):
+            for row, wgt in r.items():
+                m[i] += wgt * jac[row]
+        return m
+    e, ed = rows(pos), rows(rate)
+    d = np.zeros((jac.shape[1], len(entries)))
+    for k, ent in enumerate(entries):
+        for c, v in ent.items():
+            d[c, k] += v
+    held_q = held_u = np.zeros(n, dtype=bool)
+    if linkage.drive is None:
+        held_q = np.array([c in linkage.start.coordinates for c in model.COORDINATES])
+        held_u = np.array([c in linkage.start.rates for c in model.COORDINATES])
+    dq = np.zeros((n, len(entries)))
+    du = np.zeros((n, len(entries)))
+    if e.shape[0] and not held_q.all():
+        dq[~held_q] = -np.linalg.lstsq(e[:, 1:1 + n][:, ~held_q], e @ d, rcond=None)[0]
+    if ed.shape[0] and not held_u.all():
+        dq_full = ed[:, 1:1 + n] @ dq + ed @ d
+        du[~held_u] = -np.linalg.lstsq(ed[:, 1 + n:1 + 2 * n][:, ~held_u], dq_full,
+                                       rcond=None)[0]
     return np.hstack([dq.T, du.T])
 
 
@@ -304,13 +370,15 @@ class DdmRun(NamedTuple):
             vals, ders = vals[rows], ders[rows]
         return vals, _combine_directions(ders, self.coeffs)
 
-    def growth(self, unit, period, revolutions) -> np.ndarray:
+    def growth(self, unit, period, revolutions, windows=None) -> np.ndarray:
         """`growth_maxima` of the requested directions over all recorded steps, without
-        forming their state sensitivities (`_window_norm_maxima`)."""
+        forming their state sensitivities (`_window_norm_maxima`); per window of the edges
+        `windows` (a free linkage's) instead of per revolution if given."""
         n2 = 2 * self.model.N_Q
         s = self.ys[:, n2:n2 * (1 + self.nb)].reshape(len(self.ys), self.nb, n2)
         weights = (self.scale[:, None] / np.asarray(unit)[None, :]) ** 2
-        lo, hi = _revolution_rows(self.ts, period, revolutions)
+        lo, hi = (_revolution_rows(self.ts, period, revolutions) if windows is None
+                  else _window_rows(self.ts, windows))
         return np.sqrt(_window_norm_maxima(s, *_sparse_columns(self.coeffs), weights, lo, hi))
 
     def output_sensitivities(self, ts, ys, ms):
@@ -436,8 +504,7 @@ def setup(linkage: Linkage, model, p0, y_state, directions, scale, atol_plain,
     for k, ent in enumerate(entries):
         for i, c in enumerate(cols):
             dense[i, k] = ent.get(c, 0.0)
-    floors = np.array([p0[model.PARAMETERS.index(f"{j}.impact_velocity_floor")]
-                       for j in model.JOINTS])
+    floors = np.array([p0[model.PARAMETERS.index(f)] for f in floor_names(linkage)])
     state_scale = default_atol(linkage, model, 1.0)[:n2]
     M = np.vstack([s0.T / state_scale[:, None],
                    dense / np.where(pcol > 0.0, pcol, 1.0)[:, None],
@@ -455,13 +522,14 @@ def setup(linkage: Linkage, model, p0, y_state, directions, scale, atol_plain,
 def ddm_run(linkage: Linkage, model, p0, y_state, directions, *, scale, rtol, atol_plain,
             revolutions: int, t_eval=None, event_time_term: bool = True,
             method: str = DDM_INTEGRATOR, record: bool = True, whole: bool = False,
-            fixed_start: bool = False, derivatives=False) -> DdmRun:
+            fixed_start: bool = False, derivatives=False, windows=None) -> DdmRun:
     """Integrate the sensitivity equations of `directions` (see `setup`) over `revolutions`
     drive revolutions (landing on the times t_eval if given, without peak refinement, and
     ending at the last unless `whole`); returns the `DdmRun`. With `derivatives` (True:
     every output; or a sequence of names in OUT_COLUMNS) and `record` the derivatives of
     those outputs are computed with every step and recorded
-    (`DdmRun.recorded_output_sensitivities`)."""
+    (`DdmRun.recorded_output_sensitivities`). A free linkage runs over the window edges
+    `windows` (s, from 0; `linkage_model.time_edges`) instead of revolutions."""
     for j in linkage.clearance_joints:
         if j.has_lubrication:
             check_partials(f"clearance joint {j.name!r}", j.lubrication)
@@ -482,7 +550,7 @@ def ddm_run(linkage: Linkage, model, p0, y_state, directions, *, scale, rtol, at
     y0, p, atol, coeffs = setup(linkage, model, p0, y_state, directions, scale,
                                 atol_plain, event_time_term, fixed_start, columns)
     nb = coeffs.shape[0]
-    edges = _edges(linkage, revolutions, t_eval, whole)
+    edges = _edges(linkage, revolutions, t_eval, whole, windows)
     t0 = time.perf_counter()
     n_out = model.N_OUT + len(columns) * nb if columns else None
     ts, ys, ms, peaks, peak_t, outs, stats = _run(
@@ -512,7 +580,7 @@ def _run(linkage, model, y0, p, edges, rtol, method, n_err, atol, record=True,
     limit = min(max_steps, max(1, (max_memory - 24 * len(edges)) // row)) if record \
         else max_steps
     settings = integrator_settings(
-        linkage, model, rtol, atol, h_max=linkage.period / 8, max_steps=limit, record=record,
+        linkage, model, rtol, atol, h_max=_h_max(linkage), max_steps=limit, record=record,
         event_tol=event_tol, refine_iters=refine, n_out=n_out, n_err=n_err)
     ts, ys, ms, peaks, peak_t, counters, outs, status = getattr(model, kernel)(
         y0, p, edges, settings, METHODS[method].arrays())
@@ -530,11 +598,18 @@ def _run(linkage, model, y0, p, edges, rtol, method, n_err, atol, record=True,
     return ts, ys, ms, peaks, peak_t, outs, stats
 
 
-def _edges(linkage, revolutions, t_eval, whole: bool = False):
-    """Window edges of a run: the revolutions, or (t_eval given) 0 and the times t_eval:
-    the run lands on each and ends at the last; with `whole` it runs the revolutions too
-    (as a SliderCrank's runs do)."""
-    edges = np.arange(revolutions + 1) * linkage.period
+def _h_max(linkage) -> float:
+    """The largest step, as the plain run's: an eighth of a revolution (a free linkage: of
+    its `time_scale`)."""
+    return (linkage.time_scale if linkage.drive is None else linkage.period) / 8
+
+
+def _edges(linkage, revolutions, t_eval, whole: bool = False, windows=None):
+    """Window edges of a run: the revolutions (a free linkage: the edges `windows`), or
+    (t_eval given) 0 and the times t_eval: the run lands on each and ends at the last; with
+    `whole` it runs the revolutions too (as a SliderCrank's runs do)."""
+    edges = np.asarray(windows, dtype=float) if windows is not None else \
+        np.arange(revolutions + 1) * linkage.period
     if t_eval is None:
         return edges
     edges = np.union1d(edges if whole else [0.0], t_eval)
@@ -555,13 +630,11 @@ def plain_setup(linkage: Linkage, rtol: float | None, start=None, specialise: bo
     (`specialise`: the one specialised on its zero-valued geometric parameters), the
     parameter vector, the centred initial state (or `start`'s, a `linkage_model.Start`,
     with its memories in p0) and the plain run's tolerances (rtol, atol with the switching
-    functions'). Returns (model, p0, y_state, rtol, atol). A free linkage is refused: its
-    model has no drive moment, the sensitivity kernels' work rate."""
-    if linkage.drive is None:
-        raise ValueError(f"linkage {linkage.name!r} is free (drive=None): sensitivities (DDM) "
-                         "need a driven linkage; use finite differences of its runs")
-    check_jacobians(linkage, "DDM sensitivities are not available; use finite differences "
-                             "(method='fd')")
+    functions'). Returns (model, p0, y_state, rtol, atol). A free linkage starts from its
+    `Initial` (no `start`)."""
+    if linkage.drive is None and start is not None:
+        raise ValueError("start is for a driven linkage; a free linkage starts from its "
+                         "initial (Linkage.initial, an Initial)")
     model = load_model(linkage, specialise)
     rtol, atol = _tolerances(linkage, model, rtol, None)
     p0 = pack_parameters(linkage, model)
@@ -572,21 +645,23 @@ def plain_setup(linkage: Linkage, rtol: float | None, start=None, specialise: bo
 
 
 def check_jacobians(linkage: Linkage, consequence: str) -> None:
-    """ValueError unless `linkage`'s generated model has exact Jacobians (a translational
-    clearance joint's corners have none); `consequence` says what is not available."""
+    """ValueError if `linkage` has translational clearance joints: the tangent flow and the
+    periodic orbits' shooting do not handle their corners (their exact Jacobians serve the
+    DDM sensitivities only); `consequence` says what is not available."""
     if linkage.translational_joints:
         raise ValueError(
             f"linkage {linkage.name!r} has translational clearance joints "
-            f"{[j.name for j in linkage.translational_joints]}: their generated model has no "
-            f"exact Jacobians, so {consequence}")
+            f"{[j.name for j in linkage.translational_joints]}: {consequence} for them "
+            "(the corners' exact Jacobians serve the DDM sensitivities only)")
 
 
-def linkage_sensitivities(linkage: Linkage, names: tuple[str, ...], revolutions: int,
+def linkage_sensitivities(linkage: Linkage, names: tuple[str, ...], revolutions: int | None,
                           rtol: float | None, t_eval, event_time_term: bool, method: str,
-                          start=None):
+                          start=None, windows=None):
     """DDM of `linkage` (see the module docstring): (Sensitivities fields as a dict). From
     `start` (a `linkage_model.Start`) the start is held fixed: the sensitivities start at
-    zero."""
+    zero. A free linkage runs over the window edges `windows` (s) instead of revolutions
+    (its growth per window, its crank_moment None: it has no drive)."""
     model, p0, y_state, rtol, atol_plain = plain_setup(linkage, rtol, start,
                                                        specialisable(linkage, names))
     ref = np.array([linkage.parameter_value(n) for n in names])
@@ -596,12 +671,13 @@ def linkage_sensitivities(linkage: Linkage, names: tuple[str, ...], revolutions:
     run = ddm_run(linkage, model, p0, y_state, [{n: 1.0} for n in names], scale=scale,
                   rtol=rtol, atol_plain=atol_plain, revolutions=revolutions, t_eval=t_eval,
                   event_time_term=event_time_term, method=method, fixed_start=start is not None,
-                  derivatives=True)
-    w, c = linkage.drive.speed, linkage.min_clearance
+                  derivatives=True, windows=windows)
+    free = linkage.drive is None
+    w, c = (1.0 / linkage.time_scale if free else linkage.drive.speed), linkage.min_clearance
     unit = np.array([1.0 if name.endswith(".angle") else c for name in model.COORDINATES])
     unit = np.concatenate([unit, unit * w])
     ts, ys, ms = run.ts, run.ys, run.ms
-    growth = run.growth(unit, linkage.period, revolutions)
+    growth = run.growth(unit, None if free else linkage.period, revolutions, windows)
     peaks, keep = run.peaks, None
     if t_eval is not None:
         keep = landed(ts, t_eval)
@@ -624,6 +700,16 @@ def growth_maxima(ts, sens, scale, unit, period, revolutions):
     weights = (np.asarray(scale)[:, None] / unit[None, :]) ** 2
     norm2 = np.einsum("nkj,kj->nk", sens * sens, weights, optimize=False)
     return _revolution_maxima(ts, norm2, period, revolutions)
+
+
+def _window_rows(ts, edges):
+    """Per window between the edges (as far as the times ts reach) the rows lo:hi of the
+    times ts in it (a step on an edge counts for both sides)."""
+    edges = np.minimum(np.asarray(edges, dtype=float), ts[-1])
+    edges = edges[:max(2, int(np.searchsorted(edges, ts[-1], side="left")) + 1)]
+    lo = np.searchsorted(ts, edges[:-1], side="left")
+    hi = np.searchsorted(ts, edges[1:], side="right")
+    return lo.astype(np.int64), hi.astype(np.int64)
 
 
 def _revolution_rows(ts, period, revolutions):
@@ -657,7 +743,9 @@ def _fields(model, ts, names, ref, ders, traj, growth, stats):
         contact = contact[:, 0, :]
     outputs = {c: ders[:, i, :].copy() for c, i in col.items()}
     return dict(t=ts, parameters=tuple(names), reference=ref, base_force=force.copy(),
-                base_force_magnitude=d_mag, crank_moment=ders[:, col["drive_moment"], :].copy(),
+                base_force_magnitude=d_mag,
+                crank_moment=(ders[:, col["drive_moment"], :].copy() if "drive_moment" in col
+                              else None),
                 contact_force=contact, trajectory=traj, method="ddm", backend="reduced",
                 growth=growth, stats=stats, outputs=outputs)
 
@@ -683,21 +771,26 @@ def _plain_at(linkage, revolutions, t_eval, rtol, method, start=None, specialise
     on t_eval (from the centred start or `start`; `specialise`: as `plain_setup`)."""
     from .linkage_model import run
 
+    if linkage.drive is None:
+        revolutions = None
     out = run(linkage, revolutions, RunSettings(rtol=rtol, method=method),
               edges=np.array([0.0, t_eval[-1]]), t_eval=t_eval, start=start,
               specialise=specialise)
     return out.ts, out.ys, out.ms, out.outs, out.p, out.stats
 
 
-def linkage_fd(linkage: Linkage, names: tuple[str, ...], revolutions: int, rtol, t_eval,
-               relative: float, method: str, start=None):
+def linkage_fd(linkage: Linkage, names: tuple[str, ...], revolutions: int | None, rtol,
+               t_eval, relative: float, method: str, start=None, windows=None):
     """Central finite differences of the outputs (and coordinates) at the times t_eval
     (default: 720 per revolution), each run landing on them (from `start` if given). Every
     run takes one model: the general one if a zero-valued geometric parameter is among
     `names` (its steps leave zero), else the one specialised on them."""
     spec = specialisable(linkage, names)
     model = load_model(linkage, spec)
-    if t_eval is None:
+    if t_eval is None and windows is not None:      # a free linkage: 720 per window
+        t_eval = np.unique(np.concatenate([np.linspace(a, b, 721) for a, b in
+                                           zip(windows[:-1], windows[1:])]))
+    elif t_eval is None:
         t_eval = np.linspace(0.0, revolutions * linkage.period, 720 * revolutions + 1)
     rtol = 1e-11 if rtol is None else rtol
     t0 = time.perf_counter()

@@ -200,3 +200,84 @@ def test_tangent_is_jacobian_times_seeds(case, mode):
             np.testing.assert_array_less(np.abs(tan[rows, :-1] - ref[rows]),
                                          1e-13 * terms[rows] + 1e-300)
             np.testing.assert_array_equal(tan[rows, -1], jac[rows, -1])
+
+
+def _corner_state(off, tilt, across=0.02):
+    """A state of the translational-clearance slider-crank with the slider's centre `off`
+    across the guide and tilted by `tilt`, the crank at 0.6 rad and turning at 150 rad/s,
+    the coupler's rate nearly cancelling the slider's motion across the guide (a slow
+    approach at `across` of the crank's speed across the guide: the contact law's force
+    stays positive) and the slider turning slowly."""
+    L1, L2 = 0.153, 0.306
+    th1 = 0.6
+    th2 = np.arcsin((off - L1 * np.sin(th1)) / L2)
+    w2 = -L1 * np.cos(th1) * 150.0 / (L2 * np.cos(th2))
+    return np.array([th1, th2, tilt, 150.0, (1.0 - across) * w2, 0.3, 0.0])
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("corners", [("front_top",), ("front_top", "rear_top"),
+                                     ("front_top", "rear_bottom")])
+def test_corner_jacobian_matches_finite_differences(corners):
+    """The translational clearance joint's corners (normal force of the contact law, Coulomb
+    friction regularised with a slope at the slip velocity's scale): every output's
+    derivative along every column of z equals central differences of the plain `outputs`,
+    with one corner in contact (tilted slider), two on one side (flat) and two opposite
+    (tilted across the guide); `tangent` equals the Jacobian times random seeds."""
+    from scipy.optimize import brentq
+
+    linkage = cases.flores_translational_slider_crank(friction_coefficient=0.3,
+                                                      friction_v0=0.5, friction_v1=1.0)
+    model = load_model(linkage)
+    p = pack_parameters(linkage, model)
+    a, b, c, pen = 0.05, 0.025, 1e-3, 2e-5
+    if corners == ("front_top", "rear_top"):
+        y = _corner_state(c + pen, 0.0)
+    else:
+        # the front top corner pen deep: a sin(tilt) + b cos(tilt) = b + c + pen (+ the
+        # centre's offset for one corner only, so the rear bottom one stays clear)
+        off = -pen / 2 if len(corners) == 1 else 0.0
+        tilt = brentq(lambda f: a * np.sin(f) + b * np.cos(f) - b - c - pen, 0.0, 0.1)
+        y = _corner_state(off, tilt, 0.02 if len(corners) == 1 else 0.0)
+    names = [f"guide.{k}" for k in corners]
+    for j, name in enumerate(model.JOINTS):
+        p[model.MEM_START + 2 * j] = 1.0 if name in names else 0.0
+        p[model.MEM_START + 2 * j + 1] = 0.5
+    t = 0.01
+    plain = _outputs(model, t, y, p)
+    col = model.OUT_COLUMNS.index
+    assert all(plain[col(f"{n}.contact_force")] > 0 for n in names)
+    assert all(plain[col(f"{n}.friction_force")] != 0 for n in names)
+    jac = model.jacobian_matrix(t, y, p, True)
+    n_out = model.N_OUT
+    np.testing.assert_allclose(jac[:n_out, -1], plain, rtol=1e-9,
+                               atol=1e-12 * np.max(np.abs(plain)))
+    z = np.concatenate([[t], y[:2 * model.N_Q], p[:model.CONST_START]])
+    pen_rows = [col(f"{j}.penetration") for j in model.JOINTS]
+    for k, name in enumerate(model.Z_NAMES):
+        if name.endswith((".mode", ".contact_model", ".friction_law")) or \
+                name in model.ZERO_PARAMETERS:
+            assert np.all(jac[:n_out, k] == 0.0), name
+            continue
+        # as the clearance joints' test: each penetration moves by at most 1 % of pen
+        slope = np.max(np.abs(jac[pen_rows, k]))
+        h = 1e-6 * max(abs(z[k]), 1e-3)
+        if slope > 0:
+            h = min(h, 1e-2 * pen / slope)
+        fd = _fd_column(model, t, y, p, k, h)
+        spread = np.abs(fd - _fd_column(model, t, y, p, k, h / 3))
+        err = np.abs(jac[:n_out, k] - fd)
+        floor = 1e-13 * np.abs(jac[:n_out, :-1]).max(axis=1)
+        bad = err > 1e-6 * np.abs(fd) + 10 * spread + floor
+        assert not bad.any(), (name, [model.OUT_COLUMNS[r] for r in np.flatnonzero(bad)],
+                               jac[:n_out, k][bad], fd[bad])
+    scale = np.where(np.abs(z) > 0, np.abs(z), 1.0)
+    dz = np.random.default_rng(5).standard_normal((4, model.N_Z)) * scale[None, :]
+    tan = model.tangent_matrix(t, y, p, np.ascontiguousarray(dz), True)
+    ref = jac[:, :-1] @ dz.T
+    terms = (np.abs(jac[:, :-1])[:, None, :] * np.abs(dz)[None, :, :]).max(axis=2)
+    # round-off: 1e-13 of the largest term |J_rk dz_dk| of any row along the direction (the
+    # accelerations and forces are sums over the corners' stiff terms)
+    bound = np.broadcast_to(1e-13 * terms.max(axis=0) + 1e-300, ref.shape)
+    np.testing.assert_array_less(np.abs(tan[:, :-1] - ref), bound)
+    np.testing.assert_array_equal(tan[:, -1], jac[:, -1])

@@ -10,6 +10,7 @@ import math
 import numpy as np
 import pytest
 
+from mbs_clearance.model import cases
 from mbs_clearance.model.linkage import (
     GROUND,
     Body,
@@ -124,8 +125,8 @@ def test_bad_linkages_are_refused():
     """Every field's refusal (naming the joint, the field and its range); the graph's
     refusals: unknown bodies and points, a second guide of one slider, an
     ideal prismatic joint beside the guide, a name used twice, no clearance at all; the
-    DDM, the tangent flow, the periodic orbits' shooting and the exudyn backend's native
-    sphere contact refuse the joint before any work."""
+    tangent flow, the periodic orbits' shooting and the exudyn backend's native sphere
+    contact refuse the joint before any work."""
     for changes, message in BAD_FIELDS:
         with pytest.raises(ValueError, match=_re(message)) as info:
             _joint(**changes)
@@ -157,13 +158,10 @@ def test_bad_linkages_are_refused():
     from mbs_clearance.analysis.periodic import _Shooter
     from mbs_clearance.backends.exudyn_linkage import _check_linkage, make_settings
     from mbs_clearance.solve.flows import TangentFlow
-    from mbs_clearance.solve.linkage_ddm import plain_setup
-
-    with pytest.raises(ValueError, match="translational clearance joints .*'guide'.* DDM"):
-        plain_setup(lk, None)
-    with pytest.raises(ValueError, match="no exact Jacobians, so the tangent flow"):
+    # (the DDM sensitivities take translational joints; these analyses do not)
+    with pytest.raises(ValueError, match="'guide'.*the tangent flow .* not available for them"):
         TangentFlow(lk)
-    with pytest.raises(ValueError, match="no exact Jacobians, so periodic orbits"):
+    with pytest.raises(ValueError, match="'guide'.*periodic orbits .* not available for them"):
         _Shooter(lk, 1, 1e-9, "dopri5")
     with pytest.raises(ValueError, match="contact='sphere' has no translational clearance"):
         _check_linkage(lk, make_settings({"contact": "sphere"}))
@@ -438,3 +436,86 @@ def test_moving_guide_conserves_energy():
                 touching += sum(out[5 * k] > 0.0 for k in range(4))
     # the corners' springs were loaded at some of the states
     assert touching >= 2
+
+
+def test_free_linkage_sensitivities_refusals():
+    """A free linkage's sensitivities take duration= (s), not revolutions, and no start;
+    the peak objective (a peak over a drive revolution) refuses a free linkage; each before
+    any model is generated."""
+    from mbs_clearance.analysis.objective import peak_gradient, peak_output
+    from mbs_clearance.analysis.sensitivity import sensitivities
+
+    lk = cases.flores_translational_slider_crank()
+    names = ["guide.clearance"]
+    with pytest.raises(ValueError, match="is free .*give the sensitivities' duration= in s"):
+        sensitivities(lk, names)
+    with pytest.raises(ValueError, match="no drive revolutions; give duration="):
+        sensitivities(lk, names, revolutions=2, duration=0.01)
+    with pytest.raises(ValueError, match="window must be a finite number"):
+        sensitivities(lk, names, duration=0.01, window=0.02)
+    with pytest.raises(ValueError, match="start is for a driven linkage"):
+        sensitivities(lk, names, duration=0.01, start=object())
+    for call in (peak_gradient, peak_output):
+        with pytest.raises(ValueError, match="is free .*peak over a drive revolution"):
+            call(lk, names) if call is peak_gradient else call(lk)
+
+
+#: DDM against finite differences on the translational-clearance benchmark: the times (s),
+#: before the slider's tilt under friction separates runs of different tolerances (0.07 s)
+FLORES_TIMES = np.array([0.01, 0.02, 0.03, 0.04, 0.05])
+
+
+@pytest.mark.slow
+def test_ddm_matches_finite_differences_on_the_flores_case():
+    """DDM sensitivities of the free translational-clearance slider-crank (Flores, Leine and
+    Glocker 2010) along the clearance, the friction coefficient and the contact stiffness
+    equal central differences of plain runs (rtol 1e-11) in every coordinate at 0.01 to
+    0.05 s, through the corners' impacts and sliding: the difference is within three times
+    the finite differences' own error, measured as their change between relative steps
+    1e-4 and 3e-4 (or 1e-5 of the column's largest value)."""
+    from mbs_clearance.analysis.sensitivity import sensitivities
+
+    lk = cases.flores_translational_slider_crank()
+    names = ("guide.clearance", "guide.friction_coefficient", "guide.contact_stiffness")
+    ddm = sensitivities(lk, names, method="ddm", duration=0.05, t_eval=FLORES_TIMES,
+                        rtol=1e-9)
+    assert ddm.stats["nevent"] > 10        # the corners' contacts start and end
+    fd = [sensitivities(lk, names, method="fd", duration=0.05, t_eval=FLORES_TIMES,
+                        rtol=1e-11, fd_relative_step=h) for h in (1e-4, 3e-4)]
+    np.testing.assert_allclose(ddm.trajectory.coordinates["crank.angle"],
+                               fd[0].trajectory.coordinates["crank.angle"], rtol=1e-6)
+    for c in lk.coordinates():
+        ref = fd[0].outputs[c]
+        scale = np.abs(ref).max(axis=0)
+        assert np.all(scale > 0), c
+        err = np.abs(ddm.outputs[c] - ref).max(axis=0)
+        fd_err = np.abs(fd[1].outputs[c] - ref).max(axis=0)
+        assert np.all(err <= np.maximum(3 * fd_err, 1e-5 * scale)), (c, err / scale,
+                                                                     fd_err / scale)
+    assert ddm.crank_moment is None
+
+
+@pytest.mark.slow
+def test_ddm_matches_finite_differences_on_a_driven_guide():
+    """DDM on the driven slider-crank in a guide with clearance along geometric parameters
+    (they move the centred start: the initial sensitivities through the slider's closure,
+    its offset and tilt as the corners' mean offsets) and the clearance: within three times
+    the central differences' own error (their change between relative steps 1e-4 and
+    3e-4), or 1e-6 of the column's largest value, over half a revolution."""
+    from mbs_clearance.analysis.sensitivity import sensitivities
+
+    _, lk = guided()
+    names = ("guide.clearance", "guide.angle", "coupler.slider_end.x")
+    t_eval = np.linspace(0.0, 0.5 * lk.period, 6)[1:]
+    ddm = sensitivities(lk, names, method="ddm", revolutions=1, t_eval=t_eval, rtol=1e-10)
+    fd = [sensitivities(lk, names, method="fd", revolutions=1, t_eval=t_eval, rtol=1e-11,
+                        fd_relative_step=h) for h in (1e-4, 3e-4)]
+    for c in lk.coordinates():
+        ref = fd[0].outputs[c]
+        scale = np.abs(ref).max(axis=0)
+        err = np.abs(ddm.outputs[c] - ref).max(axis=0)
+        fd_err = np.abs(fd[1].outputs[c] - ref).max(axis=0)
+        # (without friction the slider stays flat: its tilt's derivatives vanish, 1e-12
+        # rad per unit of the parameter is their round-off)
+        assert np.all(err <= np.maximum(3 * fd_err, 1e-6 * scale + 1e-12)), (c, err, fd_err,
+                                                                             scale)
