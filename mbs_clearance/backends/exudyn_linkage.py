@@ -662,14 +662,14 @@ def _corner_loads(joint: TranslationalClearance, sides, q, qt, dmins):
     return out, series
 
 
-def _corner_element(mbs, joint: TranslationalClearance, nodes: dict, pts: dict):
-    """(sides, element, node list): an `ObjectGenericODE2` on the slider's and the guide's
-    nodes (the ground has none) and their `_Side`s (slider first)."""
+def _generic_element(mbs, ends, nodes: dict, pts: dict):
+    """(sides, element, node list): an `ObjectGenericODE2` on the nodes of the bodies of
+    `ends` ((body, point) pairs; the ground has no node) and their `_Side`s, in that order,
+    for a force user function of both."""
     import exudyn.itemInterface as ii
 
     sides, node_list = [], []
-    for body, point in ((joint.slider_body, joint.slider_point),
-                        (joint.guide_body, joint.guide_point)):
+    for body, point in ends:
         if body == GROUND:
             sides.append(_Side(None, None, pts[GROUND][point], pts[GROUND][point]))
             continue
@@ -681,23 +681,19 @@ def _corner_element(mbs, joint: TranslationalClearance, nodes: dict, pts: dict):
     return sides, obj, node_list
 
 
-def _pair_element(mbs, joint: ClearanceJoint, nodes: dict, pts: dict):
-    """(sides, element, n): an `ObjectGenericODE2` on the nodes of a clearance joint's two
-    bodies (n coordinates) and their `_Side`s, for a force user function of both."""
-    import exudyn.itemInterface as ii
+def _corner_element(mbs, joint: TranslationalClearance, nodes: dict, pts: dict):
+    """`_generic_element` of a translational clearance joint (slider first)."""
+    return _generic_element(mbs, ((joint.slider_body, joint.slider_point),
+                                  (joint.guide_body, joint.guide_point)), nodes, pts)
 
-    sides, node_list = [], []
-    for body, point in ((joint.journal_body, joint.journal_point),
-                        (joint.bearing_body, joint.bearing_point)):
-        if body == GROUND:
-            sides.append(_Side(None, None, pts[GROUND][point], pts[GROUND][point]))
-            continue
-        ref = list(mbs.GetNodeParameter(nodes[body], "referenceCoordinates"))
-        sides.append(_Side(3 * len(node_list), ref, pts[body][point], None))
-        node_list.append(nodes[body])
-    n = 3 * len(node_list)
-    obj = mbs.AddObject(ii.ObjectGenericODE2(nodeNumbers=node_list, forceVector=[0.0] * n))
-    return sides, obj, n
+
+def _pair_element(mbs, joint: ClearanceJoint, nodes: dict, pts: dict):
+    """(sides, element, n): `_generic_element` of a clearance joint (journal first), n its
+    number of coordinates."""
+    sides, obj, node_list = _generic_element(
+        mbs, ((joint.journal_body, joint.journal_point),
+              (joint.bearing_body, joint.bearing_point)), nodes, pts)
+    return sides, obj, 3 * len(node_list)
 
 
 def _film_element(mbs, joint: ClearanceJoint, nodes: dict, pts: dict, keep_alive: list):
