@@ -198,18 +198,9 @@ two opposite corners touching (a jammed slider), compliant:
 
 def render(out: Path, numbers: dict, figs: dict) -> Path:
     """Write report.html from the numbers and the figure files (embedded)."""
-    import base64
+    from .linkage_report import render_template
 
-    import jinja2
-
-    img = {f: "data:image/png;base64," + base64.b64encode(
-        (out / "figures" / f).read_bytes()).decode() for names in figs.values() for f in names}
-    env = jinja2.Environment(autoescape=True, undefined=jinja2.StrictUndefined)
-    html = env.from_string(TEMPLATE).render(n=numbers, figs=figs, img=img, titles=TITLES,
-                                            quick=numbers["environment"]["settings"]["quick"])
-    path = out / "report.html"
-    path.write_text(html)
-    return path
+    return render_template(out, numbers, figs, TEMPLATE, TITLES)
 
 
 def build_free_report(linkage, out: str | Path = "report", quick: bool = False,

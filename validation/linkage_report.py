@@ -356,6 +356,12 @@ four-bar, needs a longer map: `mbs-clearance map --revolutions`).</p>
 
 def render(out: Path, numbers: dict, figs: dict) -> Path:
     """Write report.html from the numbers and the figure files (embedded)."""
+    return render_template(out, numbers, figs, TEMPLATE, TITLES)
+
+
+def render_template(out: Path, numbers: dict, figs: dict, template: str,
+                    titles: dict) -> Path:
+    """Write report.html of `template` from the numbers and the figure files (embedded)."""
     import base64
 
     import jinja2
@@ -363,7 +369,7 @@ def render(out: Path, numbers: dict, figs: dict) -> Path:
     img = {f: "data:image/png;base64," + base64.b64encode(
         (out / "figures" / f).read_bytes()).decode() for names in figs.values() for f in names}
     env = jinja2.Environment(autoescape=True, undefined=jinja2.StrictUndefined)
-    html = env.from_string(TEMPLATE).render(n=numbers, figs=figs, img=img, titles=TITLES,
+    html = env.from_string(template).render(n=numbers, figs=figs, img=img, titles=titles,
                                             quick=numbers["environment"]["settings"]["quick"])
     path = out / "report.html"
     path.write_text(html)
