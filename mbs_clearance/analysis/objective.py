@@ -380,7 +380,7 @@ class _Run:
     """A recorded DDM run of `linkage` along the directions of the design names `names`
     (`design.direction`: a case override moves every description value that follows from
     it), on the model its plain runs use, with the plain run's tolerances (each direction's
-    scaled by its finite-difference scale, `_linkage_fd_step`), and what is needed to
+    over the value it differentiates, 1 where that is zero), and what is needed to
     evaluate the step map inside it for the output `out`."""
 
     def __init__(self, linkage, names, out: Output, revolution, rtol, integrator):
@@ -392,7 +392,11 @@ class _Run:
         dotted = sorted({k for d in self.directions for k in d})
         model, p0, y0, rtol, atol = linkage_ddm.plain_setup(
             linkage, rtol, specialise=specialisable(linkage, dotted))
-        scale = np.array([abs(_linkage_fd_step(linkage, n, 1.0)) for n in names])
+        # CVODES-style error weights, the state's tolerances over |b_k|: the radius's
+        # direction sets the step and with it the accuracy of every direction's
+        # sensitivity (docs/sensitivity.md, "The error weights of the sensitivities")
+        values = np.abs([design.design_value(linkage, n) for n in names])
+        scale = np.where(values != 0.0, values, 1.0)
         self.run = linkage_ddm.ddm_run(linkage, model, p0, y0, self.directions, scale=scale,
                                        rtol=rtol, atol_plain=atol, revolutions=revolution,
                                        method=integrator)
