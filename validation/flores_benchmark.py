@@ -36,14 +36,20 @@ OPPOSITE = (("front_top", "rear_bottom"), ("rear_top", "front_bottom"))
 ADJACENT = (("front_top", "rear_top"), ("front_bottom", "rear_bottom"))
 
 
-def compliant_run(stiffness: float, rtol: float, duration: float):
-    """The package's model of the case at `stiffness` (N/m^1.5) and `rtol`: a dict of
-    t, q (crank, coupler, slider angles), u, the corners' offsets over c and contact
-    flags (in `CORNER_NAMES` order), and the run's wall time and counts."""
+#: the regularised Coulomb law's (friction_v0, friction_v1) in m/s: the case's default, then
+#: narrower; as v1 shrinks the law tends to the set-valued one, which can stick
+REGULARISATIONS = ((1e-4, 1e-2), (1e-5, 1e-3), (1e-6, 1e-4))
+
+
+def compliant_run(stiffness: float, rtol: float, duration: float, **overrides):
+    """The package's model of the case at `stiffness` (N/m^1.5) and `rtol` (other case
+    overrides as keywords): a dict of t, q (crank, coupler, slider angles), u, the corners'
+    offsets over c and contact flags (in `CORNER_NAMES` order), and the run's wall time and
+    counts."""
     from mbs_clearance import simulate
     from mbs_clearance.model.cases import flores_translational_slider_crank
 
-    lk = flores_translational_slider_crank(contact_stiffness=stiffness)
+    lk = flores_translational_slider_crank(contact_stiffness=stiffness, **overrides)
     t0 = time.perf_counter()
     tr = simulate(lk, duration=duration, rtol=rtol)
     wall = time.perf_counter() - t0
@@ -136,6 +142,19 @@ def main(argv=None) -> int:
                 **contact_summary(r)}
             print(f"compliant K={K:g} rtol={rtol:g}: crank {r['q'][-1, 0]:.5f} rad, "
                   f"{r['u'][-1, 0]:.4f} rad/s ({r['wall']:.1f} s)", flush=True)
+
+    # how far the regularised friction's creep (where the source's law can stick) moves
+    # the results: friction_v1 from the default down by 100, and no friction at all
+    result["regularisation"] = {}
+    for (v0, v1), mu in [*((r, None) for r in REGULARISATIONS), (REGULARISATIONS[0], 0.0)]:
+        extra = {} if mu is None else {"friction_coefficient": mu}
+        r = compliant_run(1e10, 1e-8, T, friction_v0=v0, friction_v1=v1, **extra)
+        key = f"v0={v0:g} v1={v1:g}" + ("" if mu is None else f" mu={mu:g}")
+        result["regularisation"][key] = {
+            "crank_angle_end": float(r["q"][-1, 0]), "energy_end": _energy(r),
+            "crank_rate_end": float(r["u"][-1, 0])}
+        print(f"regularisation {key}: crank {r['q'][-1, 0]:.5f} rad, energy "
+              f"{_energy(r):.5f} J", flush=True)
 
     d = mo.FLGData()
     free_end = 0.0024          # before the first contact (about 2.69 ms)
