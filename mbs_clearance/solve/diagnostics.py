@@ -41,11 +41,19 @@ def rattles(nevent: int, revolutions: int, joints: int = 1) -> bool:
 
 
 def contact_flags(clearances, speed: float, revolutions: int, ms: np.ndarray, nevent: int,
-                  rtol: float) -> dict:
+                  rtol: float, period: float | None = None) -> dict:
     """`accuracy_flags` of a run with clearance joints of `clearances` (m) at drive speed
     `speed` (rad/s), from its recorded memories `ms` (n, 2 J: per joint its contact mode and
     stored impact velocity) and its `nevent` contact switches; the onsets are counted per
-    joint and the largest count decides the settling test."""
+    joint and the largest count decides the settling test. A free linkage gives the `period`
+    (s) that stands for a revolution (its time scale; `speed` its rate scale), and its notes
+    speak of that time."""
+    if period is None:
+        span, per, rate, several = (f"{revolutions} revolutions", "revolution",
+                                    "crank speed", "several revolutions")
+    else:
+        span, per, rate, several = (f"{revolutions * period:.3g} s", f"{period:.3g} s",
+                                    "rate scale", "several time windows")
     clearances = list(clearances)
     grazing = sum(grazing_onsets_of(ms[:, 2 * j:2 * j + 2], c * speed)
                   for j, c in enumerate(clearances))
@@ -59,7 +67,7 @@ def contact_flags(clearances, speed: float, revolutions: int, ms: np.ndarray, ne
     note = ""
     if grazing and not resolved and not rattling:
         note = (f"{grazing} grazing contact onset(s) (impact velocity below "
-                f"{GRAZING_ONSET:g} x clearance x crank speed): the damping of the contact "
+                f"{GRAZING_ONSET:g} x clearance x {rate}): the damping of the contact "
                 f"that follows depends on the onset's ill-conditioned velocity, and the peaks "
                 f"after it may miss the stated accuracy (1e-5) by up to ~1e-3 at the default "
                 f"rtol; use rtol 1e-10 for 1e-5 there (stats['accuracy_ok'] is False)")
@@ -70,10 +78,10 @@ def contact_flags(clearances, speed: float, revolutions: int, ms: np.ndarray, ne
                 f"clearance 0.05 mm); use rtol 1e-10 for 1e-5 there "
                 f"(stats['accuracy_ok'] is False)")
     elif rattling and not resolved:
-        note = (f"the contact rattles ({nevent} contact switches in {revolutions} "
-                f"revolutions, more than {RATTLING} per revolution): the motion is not "
+        note = (f"the contact rattles ({nevent} contact switches in {span}, more than "
+                f"{RATTLING} per {per}): the motion is not "
                 f"periodic and its late peaks depend on every digit of the computation, at "
-                f"any rtol; compare statistics over several revolutions, not single peaks "
+                f"any rtol; compare statistics over {several}, not single peaks "
                 f"(stats['accuracy_ok'] is False)")
     ok = not ((grazing or settling or rattling) and not resolved) and rtol <= LOOSE_RTOL
     return {"grazing_onsets": grazing, "contact_onsets": onsets, "accuracy_ok": ok,

@@ -806,8 +806,6 @@ def simulate_linkage(linkage: Linkage, revolutions: int | None = None, **options
     """Simulate `linkage` with its generated model; a `Trajectory` of every accepted step
     with per-joint series (see `Trajectory`), annotated (penetration, periodicity). A free
     linkage takes ``duration`` (s) and ``window`` (s) instead of revolutions (`run`)."""
-    import math
-
     from .trajectory import annotate
 
     settings, rest = RunSettings.split(options)
@@ -815,10 +813,11 @@ def simulate_linkage(linkage: Linkage, revolutions: int | None = None, **options
                                                       record=True, **rest)
     # a free linkage: its duration in turns at its rate scale stands for revolutions
     turns = (check_span(linkage, revolutions, None, None) if linkage.drive is not None
-             else max(1, math.ceil(float(ts[-1]) / linkage.time_scale)))
+             else max(1.0, float(ts[-1]) / linkage.time_scale))
     stats.update(contact_flags([j.clearance for _, j in linkage.contacts()],
                                linkage.rate_scale, turns, ms[:, :model.N_MEM],
-                               stats.get("nevent", 0), stats["rtol"]))
+                               stats.get("nevent", 0), stats["rtol"],
+                               None if linkage.drive is not None else linkage.time_scale))
     if stats["accuracy_note"]:
         warnings.warn(stats["accuracy_note"], AccuracyWarning, stacklevel=3)
     traj = trajectory_from_run(linkage, model, ts, ys, ms, p, stats, peaks, outs)
