@@ -89,6 +89,17 @@ def first_contact(run) -> float:
     return float(run["t"][hit[0]]) if hit.size else math.nan
 
 
+def first_impact_duration(run) -> float:
+    """How long (s) the first contact lasts, from its first step in contact to the first
+    step out of it (a rigid impact lasts no time)."""
+    touching = run["contact"].any(axis=1)
+    hit = np.flatnonzero(touching)
+    if not hit.size:
+        return math.nan
+    out = np.flatnonzero(~touching[hit[0]:])
+    return float(run["t"][hit[0] + out[0]] - run["t"][hit[0]]) if out.size else math.nan
+
+
 def contact_summary(run) -> dict:
     """Per corner: its first contact time and the number of contact episodes; the time
     shares of flat (two adjacent corners) and jammed (two opposite) contact."""
@@ -137,7 +148,8 @@ def main(argv=None) -> int:
                 "energy_end": _energy(r),
                 "crank_rate_end": float(r["u"][-1, 0]),
                 "slider_angle_end": float(r["q"][-1, 2]),
-                "first_contact": first_contact(r), "max_penetration_over_c":
+                "first_contact": first_contact(r),
+                "first_impact_duration": first_impact_duration(r), "max_penetration_over_c":
                     r["max_penetration"], "nfev": r["nfev"], "wall_s": r["wall"],
                 **contact_summary(r)}
             print(f"compliant K={K:g} rtol={rtol:g}: crank {r['q'][-1, 0]:.5f} rad, "
