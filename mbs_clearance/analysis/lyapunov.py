@@ -26,6 +26,14 @@ the mechanical states for a given contact-law memory within each window (the mem
 tangent is still set at each onset from v, with the event-time term): negative on a stable
 periodic motion, and the same as "carry" where contacts start again and again (chaos).
 
+The contacts are the clearance joints and the corners of the translational clearance
+joints alike: each corner is a contact with its own memory, its onsets set its memory's
+tangent with the event-time term, and the state's tangent does not jump there either.
+
+A free linkage (no drive) has no revolutions: its exponent is the finite-time one over
+`duration` s from its `Initial` start, the tangent renormalised at the end of each window of
+`window` s (default one window, the whole duration), in 1/s and per window.
+
 The interface a flow offers (`TangentFlow`, `TextbookFlow`): `advance(t1)` integrates
 state and tangent from its time to t1 and returns the window's peak; `renormalise()` scales
 the tangent back to unit norm and returns the growth; `section()` the Poincare section

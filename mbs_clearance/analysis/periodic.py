@@ -31,6 +31,12 @@ speed). The tangent of the state does not jump at contact switches, the memory's
 each onset with the event-time term: the matrix is that of the non-smooth map (checked
 against central finite differences of the map, tests/unit/test_periodic.py).
 
+The contacts are the clearance joints and the corners of the translational clearance joints
+alike (`Linkage.contacts`): a corner's memory is a joint's as above.
+
+A free linkage (no drive) has no drive period, so no return map: it is refused
+(`check_driven`).
+
 Stability: "stable" where every multiplier lies inside the unit circle, else "unstable".
 
 The guess. A settled run can still carry a weakly damped fast vibration of the contact
