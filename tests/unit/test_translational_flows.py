@@ -158,11 +158,12 @@ def _nearby_runs(lk, v0, t1, eps, free=False):
 @pytest.mark.slow
 def test_tangent_through_corner_impacts_matches_two_nearby_runs():
     """The tangent flow of the guided slider-crank from its centred start against the
-    separation of two plain runs 1e-4 (scaled) apart along its start: after 0.01 s (the top
+    separation of two plain runs eps (scaled) apart along its start, after 0.01 s (the top
     corners' first impacts: growth 5.77) and after 0.035 s (8 corner onsets, the slider back
-    on the bottom: growth 0.034) the vectors agree within 1e-3 of their norm or 1e-4
-    (scaled), the differences' rounding: rtol 1e-11 of the scaled coupler rate (about 700)
-    over eps, 7e-5 (measured: 9e-4 at 0.01 s, 1.6e-4 of the norm; 5.7e-5 at 0.035 s)."""
+    on the bottom: growth 0.034): the separation converges to the tangent as eps falls, within
+    2e-3 of its norm at eps 3e-4 and at least three times closer than at eps 1e-3 (measured:
+    8.3e-4 and 8.8e-4 of the norm at 3e-4, 5.1e-3 and 5.5e-3 at 1e-3; at eps 1e-4 the runs'
+    rounding takes over at 0.035 s)."""
     from mbs_clearance.solve.flows import TangentFlow
     from mbs_clearance.solve.settings import RunSettings
 
@@ -172,10 +173,11 @@ def test_tangent_through_corner_impacts_matches_two_nearby_runs():
     for t1 in (0.01, 0.035):
         tf.advance(t1)
         tan = tf.tangent() / tf.scale
-        sep = _nearby_runs(lk, v0, t1, 1e-4) / tf.scale
-        print(t1, "growth", np.linalg.norm(tan), "runs", np.linalg.norm(sep),
-              "difference", np.abs(tan - sep).max() / np.linalg.norm(tan))
-        assert np.abs(tan - sep).max() <= max(1e-3 * np.linalg.norm(tan), 1e-4)
+        norm = np.linalg.norm(tan)
+        err = [np.abs(tan - _nearby_runs(lk, v0, t1, eps) / tf.scale).max() / norm
+               for eps in (1e-3, 3e-4)]
+        print(t1, "growth", norm, "differences (of the norm) at eps 1e-3, 3e-4", err)
+        assert err[1] <= 2e-3 and err[1] <= err[0] / 3.0
 
 
 @pytest.mark.slow
