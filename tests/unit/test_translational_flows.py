@@ -20,7 +20,8 @@ from test_translational import guided  # noqa: E402
 def test_free_linkage_refusals_before_any_work():
     """A free linkage has no drive period: the periodic orbits refuse it by that reason;
     its exponent takes duration= (a whole number of window=), not revolutions; a driven
-    linkage's exponent refuses duration= and window=. All before any model is loaded."""
+    linkage's exponent refuses duration= and window=; `Flow` and `TangentFlow` refuse a free
+    linkage unless given free=True. All before any model is loaded."""
     from mbs_clearance.analysis.lyapunov import lyapunov_exponent
     from mbs_clearance.analysis.periodic import continue_orbits, periodic_orbit
 
@@ -43,6 +44,12 @@ def test_free_linkage_refusals_before_any_work():
     _, driven = guided()
     with pytest.raises(ValueError, match="is driven: .*duration= and window= are for a free"):
         lyapunov_exponent(driven, duration=0.01)
+    # the flows map drive revolutions unless told the linkage is free
+    from mbs_clearance.solve.flows import Flow, TangentFlow
+
+    for kind in (Flow, TangentFlow):
+        with pytest.raises(ValueError, match="is free .*a flow maps drive revolutions"):
+            kind(lk)
 
 
 # ---------------------------------------------------------------- the driven guide (slow)
@@ -210,3 +217,18 @@ def test_free_linkage_finite_time_exponent_matches_two_nearby_runs():
     two = lyapunov_exponent(lk, duration=T, window=T / 2, rtol=1e-10)
     assert len(two.log_growth) == 2 and two.window == pytest.approx(T / 2)
     assert two.per_second == pytest.approx(two.log_growth.mean() / (T / 2), rel=1e-12)
+
+
+def test_cli_lyapunov_of_a_free_linkage_refuses_revolutions(capsys):
+    """`mbs-clearance lyapunov` of a free case takes --duration (and --window), not
+    --revolutions; a driven one refuses --duration; before any run."""
+    from mbs_clearance.cli import main
+
+    flores = ["lyapunov", "--case", "flores_translational_slider_crank"]
+    for argv, message in ((flores + ["--revolutions", "10"], "not --revolutions"),
+                          (flores, "give --duration"),
+                          (["lyapunov", "--duration", "0.1"], "for a free linkage")):
+        with pytest.raises(SystemExit) as exc:
+            main(argv)
+        assert exc.value.code == 2
+        assert message in capsys.readouterr().err
