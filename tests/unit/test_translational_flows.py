@@ -232,3 +232,32 @@ def test_cli_lyapunov_of_a_free_linkage_refuses_revolutions(capsys):
             main(argv)
         assert exc.value.code == 2
         assert message in capsys.readouterr().err
+
+
+@pytest.mark.slow
+def test_branch_over_the_guides_clearance_returns_under_plain_runs():
+    """`continue_orbits` over the guide's clearance (0.1 mm upwards, six orbits): every orbit
+    is stable with each corner starting a contact 6 times per revolution, and the last
+    orbit's state comes back within 1e-5 of the scales after one revolution of an
+    independent `simulate` run at its clearance (rtol 1e-11)."""
+    from mbs_clearance.analysis.periodic import continue_orbits, with_field
+    from mbs_clearance.generate import load_model
+    from mbs_clearance.solve.flows import _tangent_scale
+    from mbs_clearance.solve.linkage_model import Start
+    from mbs_clearance.solve.simulate import simulate
+
+    _, lk = guided()
+    br = continue_orbits(lk, "guide.clearance", 1e-4, 1.5e-4, max_points=6, settle=4)
+    assert len(br.values) == 6 and br.values[-1] > 1.05e-4 and np.all(br.stable)
+    assert np.all(br.onsets == 6)
+    design = with_field(lk, "guide.clearance", br.values[-1])
+    start = Start(y=br.states[-1], modes=br.setup["modes"],
+                  impact_velocities=br.impact_velocities[-1], revolutions=0,
+                  linkage=design.name)
+    run = simulate(design, 1, rtol=1e-11, start=start)
+    end = np.array([run.coordinates[c][-1] for c in design.coordinates()]
+                   + [run.rates[c][-1] for c in design.coordinates()])
+    scale = _tangent_scale(design, load_model(design))
+    back = np.abs(end - br.states[-1]) / scale
+    print("clearances", br.values, "return residual (scaled)", back.max())
+    assert back.max() <= 1e-5
