@@ -1435,15 +1435,24 @@ def _add_lyapunov_parser(subparsers) -> argparse.ArgumentParser:
                     "of the generated model, renormalised at the end of each crank "
                     "revolution) and print the largest Lyapunov exponent per revolution and "
                     "in 1/s, averaged over the revolutions after --transient, with what its "
-                    "sign means: negative, a stable periodic motion; positive, chaos. "
+                    "sign means: negative, a stable periodic motion; positive, chaos. A free "
+                    "linkage (a --description without a drive): the finite-time exponent "
+                    "over --duration seconds, renormalised every --window seconds. "
                     "Nothing is written.",
         epilog="named cases (--case NAME; --set NAME=VALUE changes a value):\n"
                + _case_lines())
     add_linkage_options(p)
-    p.add_argument("--revolutions", type=int_at_least(2), default=100,
-                   help="crank revolutions integrated")
+    p.add_argument("--revolutions", type=int_at_least(2),
+                   help="crank revolutions integrated (default 100)")
     p.add_argument("--transient", type=int_at_least(0),
-                   help="first revolutions not averaged (default: half of --revolutions)")
+                   help="first revolutions not averaged (default: half of --revolutions; a "
+                        "free linkage: first windows, default 0)")
+    p.add_argument("--duration", type=positive_float, metavar="S",
+                   help="a free linkage (a --description without a drive) only: the "
+                        "finite-time exponent's duration in s")
+    p.add_argument("--window", type=positive_float, metavar="S",
+                   help="with --duration: the renormalisation interval in s (default: the "
+                        "whole duration)")
     p.add_argument("--rtol", type=positive_float,
                    help="relative tolerance of the state and the tangent (default: the "
                         "model's, 1e-7)")
@@ -1461,6 +1470,13 @@ def _cmd_lyapunov(args: argparse.Namespace) -> int:
     from .units import number
 
     linkage, mech = design_from_args(args)
+    if linkage is not None and linkage.drive is None:
+        return _lyapunov_free(linkage, args)
+    if args.duration is not None or args.window is not None:
+        raise ValueError("--duration and --window are for a free linkage (a --description "
+                         "without a drive); a driven one runs --revolutions")
+    if args.revolutions is None:
+        args.revolutions = 100
     transient = args.revolutions // 2 if args.transient is None else args.transient
     if transient >= args.revolutions:
         raise ValueError(f"--transient must be between 0 and --revolutions - 1 "
@@ -1488,6 +1504,33 @@ def _cmd_lyapunov(args: argparse.Namespace) -> int:
     if res.regime:
         print(f"regime of revolutions {transient + 1}-{args.revolutions} (the regime map's "
               f"rule): {_regime_line(res)}")
+    return 0
+
+
+def _lyapunov_free(linkage, args: argparse.Namespace) -> int:
+    """lyapunov --description of a free linkage: the finite-time exponent over --duration
+    seconds, renormalised every --window seconds."""
+    from .analysis.lyapunov import lyapunov_exponent
+    from .units import number
+
+    if args.revolutions is not None:
+        raise ValueError(f"linkage {linkage.name!r} is free (no drive): its exponent runs "
+                         "--duration seconds (windows of --window), not --revolutions")
+    if args.duration is None:
+        raise ValueError(f"linkage {linkage.name!r} is free (no drive): give --duration "
+                         "(s) and optionally --window (s)")
+    _progress(f"finite-time Lyapunov exponent of {linkage.name!r} over {args.duration:g} s "
+              "...")
+    t0 = time.perf_counter()
+    res = lyapunov_exponent(linkage, duration=args.duration, window=args.window,
+                            transient=args.transient, rtol=args.rtol, memory=args.memory)
+    print(f"done in {time.perf_counter() - t0:.3g} s", file=sys.stderr)
+    n = len(res.log_growth)
+    print(f"finite-time largest Lyapunov exponent of {linkage.name} over "
+          f"{number(args.duration, 4)} s from its initial state: "
+          f"{number(res.per_second, 4)} 1/s ({number(res.per_revolution, 4)} per window of "
+          f"{number(res.window, 4)} s; the mean log-growth of windows "
+          f"{res.transient + 1}-{n} of {n})")
     return 0
 
 

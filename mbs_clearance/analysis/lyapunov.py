@@ -26,6 +26,14 @@ the mechanical states for a given contact-law memory within each window (the mem
 tangent is still set at each onset from v, with the event-time term): negative on a stable
 periodic motion, and the same as "carry" where contacts start again and again (chaos).
 
+The contacts are the clearance joints and the corners of the translational clearance
+joints alike: each corner is a contact with its own memory, its onsets set its memory's
+tangent with the event-time term, and the state's tangent does not jump there either.
+
+A free linkage (no drive) has no revolutions: its exponent is the finite-time one over
+`duration` s from its `Initial` start, the tangent renormalised at the end of each window of
+`window` s (default one window, the whole duration), in 1/s and per window.
+
 The interface a flow offers (`TangentFlow`, `TextbookFlow`): `advance(t1)` integrates
 state and tangent from its time to t1 and returns the window's peak; `renormalise()` scales
 the tangent back to unit norm and returns the growth; `section()` the Poincare section
@@ -254,7 +262,8 @@ def exponent_of_flow(flow, times, transient: int, window: float,
                           regime=regime, period=period)
 
 
-def lyapunov_exponent(mech, revolutions: int = 100, transient: int | None = None, *,
+def lyapunov_exponent(mech, revolutions: int | None = None, transient: int | None = None, *,
+                      duration: float | None = None, window: float | None = None,
                       rtol: float | None = None, method: str = "dop853",
                       direction=None, memory: str = "reset") -> LyapunovResult:
     """The largest Lyapunov exponent of `mech`'s motion (any Linkage; the paper's
@@ -263,19 +272,35 @@ def lyapunov_exponent(mech, revolutions: int = 100, transient: int | None = None
     The state and one tangent vector (initial `direction`: 2 N_Q scaled components of the
     generated model's coordinates and their rates, for the paper's case theta3, x4 and
     their rates; default all equal) are integrated over `revolutions` crank
-    revolutions, the tangent renormalised at the end of each; the log-growths of the last
-    revolutions - `transient` are averaged (default None: the first half, revolutions // 2,
-    so 50 of the default 100; any `revolutions` works with it). rtol (default 1e-7) applies
-    to the state and the unit tangent alike. The result carries the exponent's `uncertainty`
-    (half-width per revolution, `exponent_interval`) and its `verdict` ("positive",
-    "negative", "zero" or "undecided" where the interval contains zero), and the `regime`
-    and `period` of the averaged revolutions by the regime map's rule
-    (`poincare.classify_run`: a period found by recurrence of the section decides, the
+    revolutions (default 100), the tangent renormalised at the end of each; the
+    log-growths of the last revolutions - `transient` are averaged (default None: the first
+    half, revolutions // 2, so 50 of the default 100; any `revolutions` works with it).
+    rtol (default 1e-7) applies to the state and the unit tangent alike. The result carries
+    the exponent's `uncertainty` (half-width per revolution, `exponent_interval`) and its
+    `verdict` ("positive", "negative", "zero" or "undecided" where the interval contains
+    zero), and the `regime` and `period` of the averaged revolutions by the regime map's
+    rule (`poincare.classify_run`: a period found by recurrence of the section decides, the
     exponent is then averaged over whole periods). `memory`: the impact-velocity memory's
-    tangent at each renormalisation, "reset" or "carry" (module docstring).
+    tangent at each renormalisation, "reset" or "carry" (module docstring). The contacts
+    are the clearance joints and the corners of the translational clearance joints alike.
+
+    A free linkage (drive None) has no revolutions: give `duration` (s) and optionally
+    `window` (s; default the whole duration, a whole number of windows in `duration`). The
+    result is the finite-time exponent from the linkage's `Initial` start: the tangent is
+    renormalised at the end of each window, `per_second` the mean log-growth of the windows
+    after the first `transient` (default 0) per second, `per_revolution` per window (and
+    `window` its length); no Poincare section is taken (`regime` ""), and with fewer than
+    `BLOCKS` averaged windows the `uncertainty` is inf and the verdict "undecided".
     """
-    as_linkage(mech)
-    revolutions = check_int("revolutions", revolutions, 2)
+    linkage = as_linkage(mech)
+    if linkage.drive is None:
+        return _free_exponent(linkage, revolutions, transient, duration, window, rtol, method,
+                              direction, memory)
+    if duration is not None or window is not None:
+        raise ValueError(f"linkage {linkage.name!r} is driven: its exponent is averaged over "
+                         "revolutions= (windows of one drive revolution); duration= and "
+                         "window= are for a free linkage (drive=None)")
+    revolutions = check_int("revolutions", 100 if revolutions is None else revolutions, 2)
     if transient is None:
         transient = revolutions // 2
     transient = check_int("transient (revolutions not averaged)", transient, 0,
@@ -286,6 +311,40 @@ def lyapunov_exponent(mech, revolutions: int = 100, transient: int | None = None
     omega, _ = drive_of(mech)
     return exponent_of_flow(flow, section_times(mech, revolutions), transient,
                             2.0 * math.pi / omega, sections=True)
+
+
+def _free_exponent(linkage, revolutions, transient, duration, window, rtol, method,
+                   direction, memory) -> LyapunovResult:
+    """`lyapunov_exponent` of a free linkage: the finite-time exponent over `duration` s in
+    windows of `window` s."""
+    if revolutions is not None:
+        raise ValueError(f"linkage {linkage.name!r} is free (drive=None): it has no drive "
+                         f"revolutions; give duration= (s) and optionally window= (s) "
+                         f"instead of revolutions={revolutions!r}")
+    if duration is None:
+        raise ValueError(f"linkage {linkage.name!r} is free (drive=None): give the "
+                         "exponent's duration= (s) and optionally window= (s, the "
+                         "renormalisation interval; default the whole duration)")
+    duration = check_real("duration", duration, 0.0, None, low_open=True, unit="s")
+    window = duration if window is None else check_real("window", window, 0.0, duration,
+                                                        low_open=True, unit="s")
+    n = int(round(duration / window))
+    if abs(n * window - duration) > 1e-9 * duration:
+        raise ValueError(f"duration ({duration!r} s) must be a whole number of windows "
+                         f"(window {window!r} s)")
+    if n > MAX_FREE_WINDOWS:
+        raise ValueError(f"window must be at least duration / {MAX_FREE_WINDOWS} = "
+                         f"{duration / MAX_FREE_WINDOWS:.3g} s; got {window!r}")
+    transient = check_int("transient (windows not averaged)", 0 if transient is None
+                          else transient, 0, n - 1)
+    flow = TangentFlow(linkage, RunSettings(rtol=DEFAULT_RTOL if rtol is None else rtol,
+                                            method=method), direction=direction,
+                       memory=memory, free=True)
+    return exponent_of_flow(flow, window * np.arange(1, n + 1), transient, window)
+
+
+#: the most renormalisation windows of a free linkage's exponent
+MAX_FREE_WINDOWS = 100_000
 
 
 #: Lorenz's parameters and a point near its attractor

@@ -31,6 +31,12 @@ speed). The tangent of the state does not jump at contact switches, the memory's
 each onset with the event-time term: the matrix is that of the non-smooth map (checked
 against central finite differences of the map, tests/unit/test_periodic.py).
 
+The contacts are the clearance joints and the corners of the translational clearance joints
+alike (`Linkage.contacts`): a corner's memory is a joint's as above.
+
+A free linkage (no drive) has no drive period, so no return map: it is refused
+(`check_driven`).
+
 Stability: "stable" where every multiplier lies inside the unit circle, else "unstable".
 
 The guess. A settled run can still carry a weakly damped fast vibration of the contact
@@ -136,20 +142,25 @@ class PeriodicOrbit:
                      linkage=as_linkage(self.mech).name)
 
 
+def check_driven(mech) -> None:
+    """ValueError for a free linkage (drive None): a periodic orbit here is a fixed point of
+    the map over whole drive revolutions, and a free linkage has no drive period."""
+    linkage = as_linkage(mech)
+    if linkage.drive is None:
+        raise ValueError(f"linkage {linkage.name!r} is free (drive=None): periodic orbits "
+                         "are fixed points of the map over whole drive revolutions, and a "
+                         "free linkage has no drive period; its finite-time Lyapunov "
+                         "exponent: lyapunov_exponent(linkage, duration=..., window=...)")
+
+
 class _Shooter:
     """The return map of `mech` over `period` revolutions: plain (`value`) and with the
     monodromy matrix (`jacobian`), from a state x and memory (modes, impact velocities)."""
 
     def __init__(self, mech, period: int, rtol: float, method: str, t0: float = 0.0):
-        from ..model.cases import as_linkage
-        from ..solve.linkage_ddm import (
-            check_jacobians,
-            pack_sensitivity_parameters,
-            sensitivity_atol,
-        )
+        from ..solve.linkage_ddm import pack_sensitivity_parameters, sensitivity_atol
 
-        check_jacobians(as_linkage(mech), "periodic orbits (shooting with the state's "
-                                          "sensitivities) are not available")
+        check_driven(mech)
         flow = Flow(mech, rtol=rtol, method=method)
         self.mech = mech
         self.model = model = flow.model
@@ -368,6 +379,7 @@ def periodic_orbit(mech, period: int = 1, guess=None, *, rtol: float | None = No
     """
     if not isinstance(mech, (SliderCrank, Linkage)):
         raise ValueError(f"mech must be a SliderCrank or a Linkage; got {type(mech).__name__}")
+    check_driven(mech)
     period = check_int("period (drive revolutions)", period, 1, 64)
     rtol = SHOOTING_RTOL if rtol is None else check_real("rtol", rtol, 1e-14, 1e-4)
     tol = check_real("tol (Newton tolerance, scaled)", tol, 0.0, 1e-1, low_open=True)
@@ -837,6 +849,7 @@ def continue_orbits(mech, field_name: str, start: float, stop: float, *, period:
     """
     if not isinstance(mech, (SliderCrank, Linkage)):
         raise ValueError(f"mech must be a SliderCrank or a Linkage; got {type(mech).__name__}")
+    check_driven(mech)
     if not isinstance(field_name, str):
         raise ValueError(f"field must be a field name (str); got {field_name!r}")
     start = check_real("start", start)

@@ -45,16 +45,21 @@ class Flow:
 
     `settings` (a `RunSettings`; keywords change single fields): its rtol (at most 1e-4;
     default `DEFAULT_RTOL`), atol, method, max_steps, h_max (default an eighth of a drive
-    revolution) and event_tol are the runs'."""
+    revolution) and event_tol are the runs'.
+
+    A free linkage (drive None) has no drive revolutions to map: it is refused unless
+    `free` is True (its windows are then any times, h_max an eighth of its `time_scale`,
+    and `omega`, `theta0` are None)."""
 
     #: the method when the settings name none
     METHOD = "dopri5"
 
-    def __init__(self, mech, settings: RunSettings | None = None, **options):
+    def __init__(self, mech, settings: RunSettings | None = None, *, free: bool = False,
+                 **options):
         from . import linkage_model as lm
 
         linkage = self.linkage = as_linkage(mech)
-        if linkage.drive is None:
+        if linkage.drive is None and not free:
             raise ValueError(f"linkage {linkage.name!r} is free (drive=None): a flow maps "
                              "drive revolutions; run a free linkage with simulate(..., "
                              "duration=)")
@@ -66,7 +71,8 @@ class Flow:
         settings = settings.with_options(options)
         rtol = DEFAULT_RTOL if settings.rtol is None else check_real(
             "rtol", settings.rtol, 1e-14, 1e-4)
-        self.omega, self.theta0 = linkage.drive.speed, linkage.drive.initial_angle
+        self.omega, self.theta0 = ((None, None) if linkage.drive is None else
+                                   (linkage.drive.speed, linkage.drive.initial_angle))
         self.clearance = clearances_of(linkage)
         self.joints = joints_of(linkage)
         model = self.model = lm.load_model(linkage)
@@ -78,7 +84,8 @@ class Flow:
         self.kernel = model.integrate_model
         self.settings = lm.integrator_settings(
             linkage, model, rtol, atol,
-            h_max=linkage.period / 8 if settings.h_max is None else settings.h_max,
+            h_max=(linkage.time_scale if linkage.drive is None else linkage.period) / 8
+            if settings.h_max is None else settings.h_max,
             max_steps=settings.max_steps, record=True, event_tol=event_tol)
         self._gaps = [getattr(model, f"_gap_{j}") for j in range(model.N_EVENTS)]
         self.rtol = rtol
@@ -121,21 +128,19 @@ class TangentFlow(Flow):
     """A mechanism's generated model with one tangent vector: the DDM sensitivity equations
     (`linkage_ddm`) with one direction and no parameter. y = [state (2 N_Q), tangent
     (2 N_Q), W, the memories' tangents (J)]; a SliderCrank runs on the paper's model
-    (`cases.from_slider_crank`)."""
+    (`cases.from_slider_crank`). The contacts are the clearance joints and the corners of
+    the translational clearance joints alike: each corner's onset sets its memory's
+    tangent with the event-time term, as a joint's. `free`: as `Flow`."""
 
     #: the variational equations are accuracy-limited: the 8th-order pair
     METHOD = "dop853"
 
     def __init__(self, mech, settings: RunSettings | None = None, *, direction=None,
-                 memory: str = "reset", **options):
+                 memory: str = "reset", free: bool = False, **options):
         if memory not in ("reset", "carry"):
             raise ValueError(f"memory must be 'reset' or 'carry'; got {memory!r}")
         self.reset_memory = memory == "reset"
-        from .linkage_ddm import check_jacobians
-
-        check_jacobians(as_linkage(mech), "the tangent flow (Lyapunov exponents) is not "
-                                          "available")
-        super().__init__(mech, settings, **options)
+        super().__init__(mech, settings, free=free, **options)
         from .linkage_ddm import pack_sensitivity_parameters, sensitivity_atol
 
         model = self.model
@@ -174,8 +179,10 @@ class TangentFlow(Flow):
 
 def _tangent_scale(mech, model) -> np.ndarray:
     """Scales of the tangent's components: lengths the smallest clearance c, angles c over
-    the linkage's length scale, rates those times the drive speed."""
+    the linkage's length scale, rates those times the drive speed (a free linkage: over
+    its `time_scale`)."""
     linkage = as_linkage(mech)
-    c, length, w = linkage.min_clearance, linkage.length_scale, linkage.drive.speed
+    c, length = linkage.min_clearance, linkage.length_scale
+    w = 1.0 / linkage.time_scale if linkage.drive is None else linkage.drive.speed
     pos = np.array([c / length if n.endswith(".angle") else c for n in model.COORDINATES])
     return np.concatenate([pos, w * pos])

@@ -644,17 +644,6 @@ def plain_setup(linkage: Linkage, rtol: float | None, start=None, specialise: bo
         rtol, atol
 
 
-def check_jacobians(linkage: Linkage, consequence: str) -> None:
-    """ValueError if `linkage` has translational clearance joints: the tangent flow and the
-    periodic orbits' shooting do not handle their corners (their exact Jacobians serve the
-    DDM sensitivities only); `consequence` says what is not available."""
-    if linkage.translational_joints:
-        raise ValueError(
-            f"linkage {linkage.name!r} has translational clearance joints "
-            f"{[j.name for j in linkage.translational_joints]}: {consequence} for them "
-            "(the corners' exact Jacobians serve the DDM sensitivities only)")
-
-
 def linkage_sensitivities(linkage: Linkage, names: tuple[str, ...], revolutions: int | None,
                           rtol: float | None, t_eval, event_time_term: bool, method: str,
                           start=None, windows=None):

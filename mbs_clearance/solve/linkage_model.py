@@ -228,8 +228,10 @@ def check_start(linkage: Linkage, model, p, start, event_tol: float) -> np.ndarr
                          f"velocities; got {y.shape}, {modes.shape}, {dmin.shape}")
     if not (np.all(np.isfinite(y)) and np.all(np.isfinite(dmin))):
         raise ValueError("start holds a value that is not finite")
+    # a corner's floor is its translational joint's (contacts in the model's event order)
+    owners = [joint.name for _, joint in linkage.contacts()]
     for j, name in enumerate(model.JOINTS):
-        floor = p[model.PARAMETERS.index(f"{name}.impact_velocity_floor")]
+        floor = p[model.PARAMETERS.index(f"{owners[j]}.impact_velocity_floor")]
         if modes[j] not in (0.0, 1.0):
             raise ValueError(f"start: the mode of joint {name!r} must be 0 (free) or 1 "
                              f"(contact); got {modes[j]!r}")
