@@ -750,7 +750,7 @@ def _peak_gradient_linkage(linkage, args: argparse.Namespace) -> int:
     width = max([22] + [len(p) + 1 for p in pg.parameters])
     print(f"{'parameter':<{width}} {'b0':>24} {'d(peak)/db':>24} {'(b0/peak) d/db':>16}")
     for name, b0, g, n in zip(pg.parameters, pg.reference, pg.gradient, pg.normalized):
-        print(f"{name:<{width}} {b0!r:>24} {g!r:>24} {n:>16.6g}")
+        print(f"{name:<{width}} {float(b0)!r:>24} {float(g)!r:>24} {n:>16.6g}")
     if pg.message:
         print(f"note: {pg.message}", file=sys.stderr)
     if args.out:
@@ -812,6 +812,9 @@ def _cmd_sensitivity(args: argparse.Namespace) -> int:
               f"{number(row['growth_per_revolution'], 3):>10}")
     for head, text in SENSITIVITY_COLUMNS:
         print(f"  {head}: {text}")
+    if window is not None:
+        print(f"  (a free linkage: mean and max over the whole run of {args.duration:g} s, "
+              f"growth per window of {window:g} s)")
     if sens.chaotic:
         print("WARNING: the sensitivities grow from revolution to revolution: the motion is "
               "not periodic (chaotic or transient) and these derivatives are not meaningful; "

@@ -190,10 +190,11 @@ class Sensitivities:
 
     def summary(self, revolution: int | None = None) -> list[dict[str, float]]:
         """Per parameter: b0, mean and max |normalized sensitivity| over `revolution`
-        (default: the last), the growth rate per revolution over the last two and the
+        (default: the last; a free linkage, which has no revolutions: the whole run), the
+        growth rate per revolution (a free linkage: per window) over the last two and the
         growth trend (`growth_trend`)."""
         rev = revolution or self.trajectory.revolutions
-        mask = self.revolution_mask(rev)
+        mask = self.revolution_mask(rev) if rev else np.ones(len(self.t), dtype=bool)
         norm = np.abs(self.normalized[mask])
         rate = self.growth_rate
         trend = self.growth_trend

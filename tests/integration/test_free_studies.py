@@ -174,3 +174,37 @@ def test_tolerance_study_over_a_window_against_the_linear_model(tmp_path):
                  "--no-progress", "--out", str(out)]) == 0
     saved = json.loads((out / "result.json").read_text())
     np.testing.assert_array_equal(saved["sobol"]["S1"], s["S1"])
+
+
+# ------------------------------------------------------------------ CLI
+
+def test_cli_sensitivity_over_windows(tmp_path, capsys):
+    """`sensitivity --output` on the free case with --duration and --window: the peak over
+    the last window and its DDM gradient, printed and saved as `peak_gradient` gives them;
+    without --output, the sensitivities over --duration in windows of --window, saved as
+    the library's (their growth per window)."""
+    from mbs_clearance.analysis.sensitivity import load_sensitivities, sensitivities
+
+    lk = flores_translational_slider_crank()
+    case = ["--case", "flores_translational_slider_crank", "--duration", str(3 * W),
+            "--window", str(W)]
+    out = tmp_path / "grad"
+    assert main(["sensitivity", *case, "--output", "pivot_force:crank_pivot",
+                 "--parameters", ",".join(NAMES), "--out", str(out)]) == 0
+    pg = peak_gradient(lk, NAMES, 3, window=W, method="ddm")
+    printed = capsys.readouterr().out
+    assert f"over time window [0.02, 0.03] s: {pg.peak!r}" in printed
+    saved = json.loads((out / "peak_gradient.json").read_text())
+    assert saved["revolution"] == 3 and saved["window"] == W
+    assert saved["peak"] == pg.peak and saved["gradient"] == pg.as_dict()
+
+    names = ("guide.clearance", "guide.friction_coefficient")
+    out = tmp_path / "series"
+    assert main(["sensitivity", *case, "--parameters", ",".join(names), "--out",
+                 str(out)]) == 0
+    assert "growth per window of 0.01 s" in capsys.readouterr().out
+    ref = sensitivities(lk, names, duration=3 * W, window=W)
+    cli = load_sensitivities(out / "sensitivities.npz")
+    assert cli.growth.shape == (3, 2)
+    np.testing.assert_array_equal(cli.growth, ref.growth)
+    np.testing.assert_array_equal(cli.normalized, ref.normalized)
