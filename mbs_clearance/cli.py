@@ -815,7 +815,11 @@ def _cmd_sensitivity(args: argparse.Namespace) -> int:
     if window is not None:
         print(f"  (a free linkage: mean and max over the whole run of {args.duration:g} s, "
               f"growth per window of {window:g} s)")
-    if sens.chaotic:
+    if sens.chaotic and window is not None:
+        print("NOTE: the sensitivities grow from window to window (a free linkage's motion "
+              "is a transient): a derivative is meaningful while runs at other tolerances "
+              "agree (compare --rtol values)", file=sys.stderr)
+    elif sens.chaotic:
         print("WARNING: the sensitivities grow from revolution to revolution: the motion is "
               "not periodic (chaotic or transient) and these derivatives are not meaningful; "
               "reduce the clearance or the speed.", file=sys.stderr)

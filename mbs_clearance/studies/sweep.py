@@ -351,7 +351,9 @@ def regime_map(mech, sweep, revolutions: int = 100, keep: int = 50, scheduler=No
                chunk_size: int | None = None, progress: bool = False,
                retries: int = 2, write_interval: float = 5.0,
                max_memory: int | None = None, early_stop: bool = True) -> MapResult:
-    """A regime map / bifurcation diagram of `mech` over one or two swept fields.
+    """A regime map / bifurcation diagram of `mech` over one or two swept fields. A free
+    linkage (no drive) is refused: a regime is a property of the section taken once per
+    drive period (`_check_driven`).
 
     Parameters
     ----------

@@ -182,7 +182,7 @@ def test_cli_sensitivity_over_windows(tmp_path, capsys):
     """`sensitivity --output` on the free case with --duration and --window: the peak over
     the last window and its DDM gradient, printed and saved as `peak_gradient` gives them;
     without --output, the sensitivities over --duration in windows of --window, saved as
-    the library's (their growth per window)."""
+    the library's (their growth per window), with their figure over the run."""
     from mbs_clearance.analysis.sensitivity import load_sensitivities, sensitivities
 
     lk = flores_translational_slider_crank()
@@ -203,8 +203,9 @@ def test_cli_sensitivity_over_windows(tmp_path, capsys):
     assert main(["sensitivity", *case, "--parameters", ",".join(names), "--out",
                  str(out)]) == 0
     assert "growth per window of 0.01 s" in capsys.readouterr().out
+    assert (out / "sensitivities.png").is_file()
     ref = sensitivities(lk, names, duration=3 * W, window=W)
     cli = load_sensitivities(out / "sensitivities.npz")
-    assert cli.growth.shape == (3, 2)
+    assert cli.growth.shape == (3, 2) and cli.crank_moment is None
     np.testing.assert_array_equal(cli.growth, ref.growth)
     np.testing.assert_array_equal(cli.normalized, ref.normalized)
