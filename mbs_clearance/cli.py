@@ -650,6 +650,46 @@ def _simulate_free(linkage, args: argparse.Namespace) -> int:
     return 0
 
 
+def add_window_options(p: argparse.ArgumentParser, what: str) -> None:
+    """--duration S and --window S: a free linkage's run and the time window of its peak."""
+    p.add_argument("--duration", type=positive_float, metavar="S",
+                   help=f"a free linkage (no drive; e.g. --case "
+                        f"flores_translational_slider_crank) only, instead of the "
+                        f"revolution: the run's duration in s; {what} (default: none)")
+    p.add_argument("--window", type=positive_float, metavar="S",
+                   help="with --duration: the time windows in s, a whole number of them in "
+                        "--duration (default: one window, the whole run)")
+
+
+def free_window(linkage, args: argparse.Namespace, revolution: str) -> tuple[int, float | None]:
+    """(k, w) of the objective's window from --duration / --window: a free linkage's last
+    time window, [(k - 1) w, k w] with k w = --duration (w: --window, default --duration),
+    and (the --revolution given or 4, None) for a driven one; ValueError naming the option
+    that does not apply."""
+    flag = "--" + revolution
+    given = getattr(args, revolution)
+    free = linkage is not None and linkage.drive is None
+    if not free:
+        if args.duration is not None or args.window is not None:
+            raise ValueError("--duration and --window are for a free linkage (no drive, e.g. "
+                             f"--case flores_translational_slider_crank); a driven one takes "
+                             f"{flag}")
+        return (4 if given is None else given), None
+    if given is not None:
+        raise ValueError(f"linkage {linkage.name!r} is free (no drive): it has no "
+                         f"revolutions; give --duration (s) and optionally --window (s) "
+                         f"instead of {flag}")
+    if args.duration is None:
+        raise ValueError(f"linkage {linkage.name!r} is free (no drive): give --duration (s) "
+                         "and optionally --window (s); the peak is over the last window")
+    window = args.duration if args.window is None else args.window
+    k = round(args.duration / window)
+    if k < 1 or abs(k * window - args.duration) > 1e-9 * args.duration:
+        raise ValueError(f"--duration ({args.duration:g} s) must be a whole number of "
+                         f"--window ({window:g} s): the peak is over the last full window")
+    return k, window
+
+
 def figure_suffixes() -> tuple[str, ...]:
     """File name endings matplotlib can write (.png, .pdf, .svg, ...)."""
     from matplotlib.backend_bases import FigureCanvasBase
@@ -697,21 +737,25 @@ def _peak_gradient_linkage(linkage, args: argparse.Namespace) -> int:
                          "--backend, --step-size or --settled)")
     if args.out:
         check_output_dir(args.out, "--out", args.force)
-    _progress(f"peak of {args.output} of {linkage.name!r} over revolution "
-              f"{args.revolutions} and its gradient by {args.method} ...")
-    pg = peak_gradient(linkage, args.parameters, revolution=args.revolutions,
+    k, window = free_window(linkage, args, "revolutions")
+    span = (f"revolution {k}" if window is None
+            else f"time window [{(k - 1) * window:g}, {k * window:g}] s")
+    _progress(f"peak of {args.output} of {linkage.name!r} over {span} and its gradient by "
+              f"{args.method} ...")
+    pg = peak_gradient(linkage, args.parameters, revolution=k, window=window,
                        method=args.method, output=args.output, rtol=args.rtol,
                        integrator=args.integrator)
-    print(f"peak of {pg.stats['output']} over revolution {pg.revolution}: {pg.peak!r} at "
-          f"t = {pg.time!r} s ({args.method})")
+    print(f"peak of {pg.stats['output']} over {span}: {pg.peak!r} at t = {pg.time!r} s "
+          f"({args.method})")
     width = max([22] + [len(p) + 1 for p in pg.parameters])
     print(f"{'parameter':<{width}} {'b0':>24} {'d(peak)/db':>24} {'(b0/peak) d/db':>16}")
     for name, b0, g, n in zip(pg.parameters, pg.reference, pg.gradient, pg.normalized):
-        print(f"{name:<{width}} {b0!r:>24} {g!r:>24} {n:>16.6g}")
+        print(f"{name:<{width}} {float(b0)!r:>24} {float(g)!r:>24} {n:>16.6g}")
     if pg.message:
         print(f"note: {pg.message}", file=sys.stderr)
     if args.out:
-        data = {"output": pg.stats["output"], "revolution": pg.revolution, "peak": pg.peak,
+        data = {"output": pg.stats["output"], "revolution": pg.revolution,
+                **({"window": window} if window is not None else {}), "peak": pg.peak,
                 "time": pg.time, "method": pg.method,
                 "gradient": pg.as_dict(), "reference": dict(zip(pg.parameters,
                                                                  map(float, pg.reference)))}
@@ -743,10 +787,15 @@ def _cmd_sensitivity(args: argparse.Namespace) -> int:
     if start is not None:
         options["start"] = start
     what = f"{linkage.name!r}" if linkage is not None else "|F12|"
-    _progress(f"sensitivities of {what} by {args.method} ({args.backend}), "
-              f"{args.revolutions} revolutions ...")
+    k, window = free_window(linkage, args, "revolutions")
+    if window is None:
+        revolutions, span = k, f"{k} revolutions"
+    else:
+        revolutions, span = None, f"{args.duration:g} s in windows of {window:g} s"
+        options.update(duration=args.duration, window=window)
+    _progress(f"sensitivities of {what} by {args.method} ({args.backend}), {span} ...")
     t0 = time.perf_counter()
-    sens = sensitivities(mech, names, args.revolutions, method=args.method,
+    sens = sensitivities(mech, names, revolutions, method=args.method,
                          backend=args.backend, rtol=args.rtol, integrator=args.integrator,
                          **options)
     print(f"done in {time.perf_counter() - t0:.3g} s", file=sys.stderr)
@@ -763,7 +812,14 @@ def _cmd_sensitivity(args: argparse.Namespace) -> int:
               f"{number(row['growth_per_revolution'], 3):>10}")
     for head, text in SENSITIVITY_COLUMNS:
         print(f"  {head}: {text}")
-    if sens.chaotic:
+    if window is not None:
+        print(f"  (a free linkage: mean and max over the whole run of {args.duration:g} s, "
+              f"growth per window of {window:g} s)")
+    if sens.chaotic and window is not None:
+        print("NOTE: the sensitivities grow from window to window (a free linkage's motion "
+              "is a transient): a derivative is meaningful while runs at other tolerances "
+              "agree (compare --rtol values)", file=sys.stderr)
+    elif sens.chaotic:
         print("WARNING: the sensitivities grow from revolution to revolution: the motion is "
               "not periodic (chaotic or transient) and these derivatives are not meaningful; "
               "reduce the clearance or the speed.", file=sys.stderr)
@@ -933,8 +989,11 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
                         "this output over the last revolution and its gradient along "
                         "--parameters (case overrides or dotted paths): pivot_force:JOINT, "
                         "shaking_force, drive_moment or contact_force:JOINT (default: none)")
-    p.add_argument("--revolutions", type=int_at_least(1), default=4,
-                   help="crank revolutions; the sensitivities are those of the last")
+    p.add_argument("--revolutions", type=int_at_least(1),
+                   help="crank revolutions; the sensitivities are those of the last "
+                        "(default 4)")
+    add_window_options(p, "the sensitivities' windows; with --output the peak is over the "
+                          "last --window")
     add_settled_option(p)
     add_run_options(p, methods, integrator_default="dop853 for ddm, dopri5 for fd")
     p.add_argument("--out", type=Path,
@@ -979,8 +1038,9 @@ def _add_optimize_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--coupler-bounds", type=finite_float, nargs=2, metavar=("LO", "HI"),
                    default=(0.10, 0.14),
                    help="bounds of L3 in m (default 0.10 0.14: 100 to 140 mm)")
-    p.add_argument("--revolution", type=int_at_least(1), default=4,
+    p.add_argument("--revolution", type=int_at_least(1),
                    help="crank revolution whose peak is minimised (default 4)")
+    add_window_options(p, "the peak minimised is over its last --window")
     p.add_argument("--gene", type=gene_bounds, action="append", metavar="NAME=LO:HI",
                    help="a gene and its bounds (repeatable; SI): a --case's override or a "
                         "dotted path of the description, e.g. --gene coupler_length=3.6:4.4; "
@@ -1040,6 +1100,7 @@ def _cmd_optimize(args: argparse.Namespace) -> int:
     linkage = linkage_from_args(args)
     if linkage is not None:
         return _optimize_linkage(linkage, args)
+    args.revolution, _ = free_window(None, args, "revolution")
     if args.output is not None:
         raise ValueError("--output applies to --case or --description (the paper's "
                          "slider-crank minimises |F12|)")
@@ -1135,14 +1196,19 @@ def _optimize_linkage(linkage, args: argparse.Namespace) -> int:
     if args.mass_scaling != "fixed":
         raise ValueError("--mass-scaling applies to the paper's slider-crank only")
     check_output_dir(args.out, "--out", args.force)
+    k, window = free_window(linkage, args, "revolution")
     options = {} if args.rtol is None else {"rtol": args.rtol}
+    if window is not None:
+        options["window"] = window
     result = evaluate_on(args, optimize_link_lengths, linkage, genes=_genes(args),
-                         output=args.output, revolution=args.revolution, seed=args.seed,
+                         output=args.output, revolution=k, seed=args.seed,
                          population=args.population, generations=args.generations,
                          saturation=args.saturation or None, refine=not args.no_refine,
                          progress=not args.no_progress, **options)
     output = result.settings["output"]
-    print(f"linkage {linkage.name!r}: peak of {output} over revolution {args.revolution}")
+    span = (f"revolution {k}" if window is None
+            else f"time window [{(k - 1) * window:g}, {k * window:g}] s")
+    print(f"linkage {linkage.name!r}: peak of {output} over {span}")
     print(f"original: {result.original_peak_force!r}")
     print(f"best: {result.best_peak_force!r} ({result.reduction_percent:.2f} % lower)")
     for name, value in result.best_genes.items():
@@ -1178,8 +1244,9 @@ def _add_tolerance_parser(subparsers) -> argparse.ArgumentParser:
                         "--case / --description also pivot_force:JOINT, shaking_force, "
                         "drive_moment or contact_force:JOINT, its peak (default: peak, the "
                         "crank pivot's force)")
-    p.add_argument("--revolution", type=int_at_least(1), default=4,
+    p.add_argument("--revolution", type=int_at_least(1),
                    help="crank revolution of the output (default 4)")
+    add_window_options(p, "the output is its peak over the last --window")
     p.add_argument("--sobol", type=int_at_least(0), default=256,
                    help="Sobol base sample N, a power of 2 (0: none; default 256)")
     p.add_argument("--first-order-only", action="store_true",
@@ -1206,10 +1273,11 @@ def _add_tolerance_parser(subparsers) -> argparse.ArgumentParser:
 def _cmd_tolerance(args: argparse.Namespace) -> int:
     from .studies.tolerance import read_inputs, tolerance_study
 
-    _, mech = design_from_args(args)
+    linkage, mech = design_from_args(args)
     inputs = read_inputs(args.inputs)
     check_output_dir(args.out, "--out", args.force)
-    kw = dict(output=args.output, revolution=args.revolution, sobol=args.sobol,
+    k, window = free_window(linkage, args, "revolution")
+    kw = dict(output=args.output, revolution=k, window=window, sobol=args.sobol,
               second_order=not args.first_order_only, morris=args.morris, dgsm=args.dgsm,
               monte_carlo=args.monte_carlo, allowable=args.allowable, wear=args.wear,
               seed=args.seed, progress=not args.no_progress)

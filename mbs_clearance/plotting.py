@@ -116,8 +116,10 @@ def plot_sensitivities(sens, parameters: Sequence[str], title: str = "",
                        path: str | Path | None = None) -> Figure:
     """Normalized sensitivity of |F12| (Eq. 15) over one crank revolution and zoomed windows,
     like the paper's Figs. 4-6. `sens` is a `Sensitivities`; `zooms` are crank-angle windows
-    in degrees."""
+    in degrees. A free linkage (no revolutions): over the whole run, against time."""
     rev = revolution or sens.trajectory.revolutions
+    if not rev:
+        return _plot_free_sensitivities(sens, parameters, title, path)
     mask = sens.revolution_mask(rev)
     ang = np.degrees(sens.trajectory.crank_angle[mask]) - 360.0 * (rev - 1)
     fig = Figure(figsize=(11, 7), layout="constrained")
@@ -143,6 +145,21 @@ def plot_sensitivities(sens, parameters: Sequence[str], title: str = "",
                title=f"zoom {a:g}-{b:g} deg")
     for ax in [main, *zoom_axes]:
         ax.grid(alpha=0.3)
+    return save(fig, path)
+
+
+def _plot_free_sensitivities(sens, parameters, title, path) -> Figure:
+    """Normalized sensitivity of the monitored force over a free linkage's whole run."""
+    fig = Figure(figsize=(11, 4.5), layout="constrained")
+    ax = fig.add_subplot()
+    t_ms = 1e3 * np.asarray(sens.t)
+    for i, name in enumerate(parameters):
+        ax.plot(t_ms, sens.normalized[:, sens.column(name)], color=COLORS[i % len(COLORS)],
+                lw=1.0, label=name)
+    ax.set(xlabel="time (ms)", ylabel="normalized sensitivity of the monitored force (-)",
+           title=f"{title} ({sens.method}, free linkage)")
+    ax.legend(fontsize=8, ncol=len(parameters))
+    ax.grid(alpha=0.3)
     return save(fig, path)
 
 

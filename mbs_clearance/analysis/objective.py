@@ -38,7 +38,8 @@ from ..model.mechanism import CONTINUOUS_FIELDS, SliderCrank
 from ..numerics.integrator import METHODS
 from .sensitivity import DDM_INTEGRATOR, DEFAULT_PARAMETERS, FD_RELATIVE_STEP, fd_step
 
-__all__ = ["PeakGradient", "peak_gradient", "KINK_RTOL", "PEAK_GRADIENT_RTOL", "RIVAL_CANDIDATES",
+__all__ = ["PeakGradient", "peak_gradient", "objective_window", "KINK_RTOL",
+           "PEAK_GRADIENT_RTOL", "RIVAL_CANDIDATES",
            "OUTPUT_KINDS", "Output", "parse_output", "ground_joints", "peak_output"]
 
 _THIS = sys.modules[__name__]
@@ -96,7 +97,8 @@ class PeakGradient:
     message : str
         What the flags mean for this result ("" when differentiable).
     method, backend : how it was computed.
-    revolution : the crank revolution (1-based).
+    revolution : the crank revolution (1-based); a free linkage's: the time window.
+    window : a free linkage's window width in s (None for a driven one).
     stats : solver counters (nfev, naccept, ...) and settings.
     """
 
@@ -116,6 +118,7 @@ class PeakGradient:
     revolution: int = 4
     kink_tol: float = KINK_RTOL
     stats: dict[str, Any] = field(default_factory=dict)
+    window: float | None = None
 
     @property
     def normalized(self) -> np.ndarray:
@@ -185,10 +188,12 @@ class Output:
 
 def default_output(linkage: Linkage) -> str:
     """The default output: the |reaction| of the driven joint when it joins the ground (the
-    crank pivot: the paper's base force F12), else the shaking force (and of a free
-    linkage)."""
+    crank pivot: the paper's base force F12); of a free linkage its monitored force (the
+    peaks `simulate` reports per window); else the shaking force."""
     if linkage.drive is not None and linkage.drive.joint in ground_joints(linkage):
         return f"pivot_force:{linkage.drive.joint}"
+    if linkage.drive is None and linkage.monitor_joint in ground_joints(linkage):
+        return f"pivot_force:{linkage.monitor_joint}"
     return "shaking_force"
 
 
@@ -200,7 +205,9 @@ def parse_output(linkage: Linkage, output: str | None = None) -> Output:
         output = default_output(linkage)
     grounds = ground_joints(linkage)
     clearance = [j.name for j in linkage.clearance_joints]
-    allowed = ([f"pivot_force:{g}" for g in grounds] + ["shaking_force", "drive_moment"]
+    # a free linkage has no drive, no drive moment
+    allowed = ([f"pivot_force:{g}" for g in grounds] + ["shaking_force"]
+               + (["drive_moment"] if linkage.drive is not None else [])
                + [f"contact_force:{c}" for c in clearance])
     if not isinstance(output, str) or output not in allowed:
         raise ValueError(f"unknown output {output!r} of linkage {linkage.name!r}; allowed: "
@@ -298,11 +305,13 @@ def _refined_peak(model, ts, ys, ms, p, outs, out: Output, t_lo, t_hi, method):
 REFINE_OUTPUT_ITERS = 30
 
 
-def _linkage_peak(linkage: Linkage, out: Output, revolution: int, options: dict):
-    """(peak, time) of output `out` over drive revolution `revolution` of the generated
-    model's run with `options` (`linkage_model.run`'s): the monitored force's peak from a
-    run that records nothing (the integrator refines it), any other output's from a
-    recorded run (`_refined_peak`)."""
+def _linkage_peak(linkage: Linkage, out: Output, revolution: int, options: dict,
+                  window: float | None = None):
+    """(peak, time) of output `out` over drive revolution `revolution` (a free linkage:
+    time window `revolution` of `window` s, `objective_window`) of the generated model's
+    run with `options` (`linkage_model.run`'s): the monitored force's peak from a run that
+    records nothing (the integrator refines it), any other output's from a recorded run
+    (`_refined_peak`)."""
     from ..solve import linkage_model as lm
 
     if options.get("accuracy") is not None:
@@ -311,31 +320,50 @@ def _linkage_peak(linkage: Linkage, out: Output, revolution: int, options: dict)
         rest = {k: v for k, v in options.items() if k != "accuracy"}
         check_accuracy_or_rtol(options["accuracy"], rest)
         return value_to_accuracy(
-            lambda rtol: _linkage_peak(linkage, out, revolution, {**rest, "rtol": rtol}),
+            lambda rtol: _linkage_peak(linkage, out, revolution, {**rest, "rtol": rtol},
+                                       window),
             options["accuracy"])[0]
     options = {k: v for k, v in options.items() if k != "accuracy"}
+    span, t_lo, t_hi = objective_window(linkage, revolution, window)
     if out.monitored(linkage):
-        res = lm.run(linkage, revolution, record=False, **options)
+        res = lm.run(linkage, record=False, **span, **options)
         return float(res.peaks[revolution - 1]), float(res.peak_times[revolution - 1])
-    model, ts, ys, ms, _, _, stats, outs, p = lm.run(linkage, revolution, record=True,
-                                                     **options)
-    return _refined_peak(model, ts, ys, ms, p, outs, out, (revolution - 1) * linkage.period,
-                         revolution * linkage.period, stats["method"])
+    model, ts, ys, ms, _, _, stats, outs, p = lm.run(linkage, record=True, **span, **options)
+    return _refined_peak(model, ts, ys, ms, p, outs, out, t_lo, t_hi, stats["method"])
 
 
-def _check_driven(linkage: Linkage) -> None:
-    """ValueError for a free linkage: the objective is a peak over a drive revolution."""
-    if linkage.drive is None:
-        raise ValueError(f"linkage {linkage.name!r} is free (drive=None): the objective is the "
-                         "peak over a drive revolution, which it has not; for its outputs' "
-                         "derivatives use sensitivities(linkage, names, duration=...)")
+def objective_window(linkage: Linkage, revolution: int, window: float | None = None):
+    """The run and the window of the objective's peak: (keywords of `linkage_model.run`,
+    t_lo, t_hi). A driven linkage: drive revolution `revolution`, [(k - 1) T, k T] (no
+    `window`: ValueError). A free linkage: time window k of `window` s, [(k - 1) w, k w],
+    of a run of k w s in windows of w (`linkage_model.time_edges`, the windows `simulate`
+    takes); `window` is required: a free linkage has no period, and a window fixed in
+    seconds does not move with the design (its initial rates included), so the peak's
+    gradient has no term from moving window edges."""
+    if linkage.drive is not None:
+        if window is not None:
+            raise ValueError(f"linkage {linkage.name!r} is driven: its objective is the peak "
+                             f"over drive revolution {revolution}; window= (s) is for a free "
+                             f"linkage (drive=None); got window={window!r}")
+        return ({"revolutions": revolution}, (revolution - 1) * linkage.period,
+                revolution * linkage.period)
+    if window is None:
+        raise ValueError(f"linkage {linkage.name!r} is free (drive=None): its objective is "
+                         f"the peak over time window {revolution} (1-based) of window= s, "
+                         f"[(k - 1) w, k w]; give window= in s (e.g. its time scale "
+                         f"{linkage.time_scale:.3g} s, one turn at its largest initial rate)")
+    window = check_real("window", window, 0.0, None, low_open=True, unit="s")
+    return ({"duration": revolution * window, "window": window}, (revolution - 1) * window,
+            revolution * window)
 
 
-def peak_output(linkage: Linkage, output: str | None = None, revolution: int = 4,
-                **options) -> float:
+def peak_output(linkage: Linkage, output: str | None = None, revolution: int = 4, *,
+                window: float | None = None, **options) -> float:
     """The peak of `output` (`parse_output`; default the crank pivot's |reaction|) over drive
     revolution `revolution` (1-based) of `linkage`'s generated model: the objective of the
-    studies of any linkage. The monitored force (the description's `monitor_joint`, or the
+    studies of any linkage. A free linkage (drive None): over time window `revolution` of
+    `window` s, [(k - 1) w, k w] (`objective_window`; `window` required, and refused for a
+    driven linkage). The monitored force (the description's `monitor_joint`, or the
     shaking force) is refined between steps by the integrator (`simulate.peak_base_force`);
     any other output is the largest of the recorded steps' local maxima refined by golden
     section on the steps' map. `options`: those of `simulate` for the reduced backend
@@ -345,15 +373,15 @@ def peak_output(linkage: Linkage, output: str | None = None, revolution: int = 4
 
     if not isinstance(linkage, Linkage):
         raise ValueError(f"linkage must be a Linkage; got {type(linkage).__name__}")
-    _check_driven(linkage)
     out = parse_output(linkage, output)
     revolution = check_int("revolution", revolution, 1)
-    allowed = set(lm.OPTION_NAMES) - {"t_eval", "start"} | {"accuracy"}
+    objective_window(linkage, revolution, window)
+    allowed = set(lm.OPTION_NAMES) - {"t_eval", "start", "duration", "window"} | {"accuracy"}
     unknown = sorted(set(options) - allowed)
     if unknown:
         raise ValueError(f"unknown option(s) {unknown} of peak_output; allowed: "
                          f"{sorted(allowed)}")
-    return _linkage_peak(linkage, out, revolution, options)[0]
+    return _linkage_peak(linkage, out, revolution, options, window)[0]
 
 
 # ------------------------------------------------------------------ any linkage
@@ -383,10 +411,11 @@ class _Run:
     over the value it differentiates, 1 where that is zero), and what is needed to
     evaluate the step map inside it for the output `out`."""
 
-    def __init__(self, linkage, names, out: Output, revolution, rtol, integrator):
+    def __init__(self, linkage, names, out: Output, revolution, rtol, integrator,
+                 window=None):
         from ..model import design
         from ..solve import linkage_ddm
-        from ..solve.linkage_model import specialisable
+        from ..solve.linkage_model import specialisable, time_edges
 
         self.directions = [design.direction(linkage, n) for n in names]
         dotted = sorted({k for d in self.directions for k in d})
@@ -398,8 +427,10 @@ class _Run:
         values = np.abs([design.design_value(linkage, n) for n in names])
         scale = np.where(values != 0.0, values, 1.0)
         self.run = linkage_ddm.ddm_run(linkage, model, p0, y0, self.directions, scale=scale,
-                                       rtol=rtol, atol_plain=atol, revolutions=revolution,
-                                       method=integrator)
+                                       rtol=rtol, atol_plain=atol,
+                                       revolutions=revolution if window is None else None,
+                                       method=integrator, windows=None if window is None
+                                       else time_edges(revolution * window, window))
         self.out = out
         self.rtol = float(rtol)
         self.coefficients = METHODS[integrator].arrays()
@@ -558,7 +589,8 @@ def _edge_slope(run, t):
     return (run.value_at(t + d) - run.value_at(t - d)) / (2.0 * d)
 
 
-def _ddm_gradient(linkage, names, out: Output, revolution, rtol, integrator, kink_tol):
+def _ddm_gradient(linkage, names, out: Output, revolution, rtol, integrator, kink_tol,
+                  window=None):
     """The peak of `out` over drive revolution `revolution` and its DDM gradient along the
     design names `names`: one run of the sensitivity equations, the peak refined between
     its steps (the integrator's refinement for the monitored force, `_refined_peak` for
@@ -568,21 +600,21 @@ def _ddm_gradient(linkage, names, out: Output, revolution, rtol, integrator, kin
     from ..model import design
 
     t_wall = time.perf_counter()
-    run = _Run(linkage, names, out, revolution, rtol, integrator)
-    t_lo, t_hi = (revolution - 1) * linkage.period, revolution * linkage.period
+    run = _Run(linkage, names, out, revolution, rtol, integrator, window)
+    _, t_lo, t_hi = objective_window(linkage, revolution, window)
     monitored = out.monitored(linkage)
     if monitored:
         peak_int, t_int = float(run.peaks[revolution - 1]), float(run.peak_t[revolution - 1])
         lo = int(np.searchsorted(run.ts, t_lo, side="left"))
         hi = int(np.searchsorted(run.ts, t_hi, side="right"))
-        kept, eps = _local_maxima(run, lo, hi, linkage.period)
+        kept, eps = _local_maxima(run, lo, hi, t_hi - t_lo)
         # the integrator's peak among them (it replaces a candidate at the same time)
         kept = [(v, t) for v, t in kept if abs(t - t_int) > eps] + [(peak_int, t_int)]
         kept.sort(key=lambda vt: -vt[0])
     else:
         peak_int, t_int = _refined_peak(run.model, run.ts, run.run.plain_states(), run.ms,
                                         run.plain_p, run.outs, out, t_lo, t_hi, integrator)
-        kept, eps = [(peak_int, t_int)], 1e-6 * linkage.period
+        kept, eps = [(peak_int, t_int)], 1e-6 * (t_hi - t_lo)
     t_peak = kept[0][1]
     tol = max(kink_tol, KINK_PER_RTOL * run.rtol)
     at_edge = min(t_peak - t_lo, t_hi - t_peak) <= eps
@@ -627,7 +659,7 @@ def _ddm_gradient(linkage, names, out: Output, revolution, rtol, integrator, kin
         reference=np.array([design.design_value(linkage, n) for n in names]), gradient=grad,
         kink=kink, rival_time=rival_t, rival_peak=rival_v, rival_gradient=rival_g,
         at_edge=bool(at_edge), message="; ".join(messages), method="ddm",
-        backend="reduced", revolution=revolution, kink_tol=tol, stats=stats)
+        backend="reduced", revolution=revolution, kink_tol=tol, stats=stats, window=window)
 
 
 # ------------------------------------------------------------------ finite differences
@@ -636,16 +668,16 @@ def _fd_peak(args):
     """One perturbed peak (module level: picklable for process pools): (peak, time); the
     reduced model's refined peak of any output, another backend's peak of the monitored
     force (time NaN)."""
-    linkage, out, revolution, backend, options = args
+    linkage, out, revolution, backend, options, window = args
     if backend == "reduced":
-        return _linkage_peak(linkage, out, revolution, options)
+        return _linkage_peak(linkage, out, revolution, options, window)
     from ..solve.simulate import peak_base_force
 
     return float(peak_base_force(linkage, revolution, backend, **options)), math.nan
 
 
 def _fd_gradient(linkage, names, out: Output, revolution, backend, fd_relative_step,
-                 executor, options):
+                 executor, options, window=None):
     from ..model import design
 
     t_wall = time.perf_counter()
@@ -662,7 +694,7 @@ def _fd_gradient(linkage, names, out: Output, revolution, backend, fd_relative_s
             except ValueError as exc:
                 raise ValueError(f"the finite-difference step of {name} ({h:.3g}) leaves its "
                                  f"valid range: {exc}; pass a smaller fd_relative_step") from exc
-    jobs = [(d, out, revolution, backend, options) for d in designs]
+    jobs = [(d, out, revolution, backend, options, window) for d in designs]
     values = (list(executor.map(_fd_peak, jobs)) if executor is not None
               else [_fd_peak(j) for j in jobs])
     peak, t_peak = values[0]
@@ -676,7 +708,7 @@ def _fd_gradient(linkage, names, out: Output, revolution, backend, fd_relative_s
     return PeakGradient(
         peak=peak, time=t_peak, parameters=names, reference=ref,
         gradient=(plus - minus) / (2.0 * h), method="fd", backend=backend,
-        revolution=revolution,
+        revolution=revolution, window=window,
         message="central differences: no kink detection (stats['forward'] and "
                 "stats['backward'] hold the one-sided differences)", stats=stats)
 
@@ -688,7 +720,7 @@ def peak_gradient(mech: Linkage | SliderCrank, parameters=None, revolution: int 
                   output: str | None = None, rtol: float | None = None,
                   integrator: str | None = None, kink_tol: float = KINK_RTOL,
                   fd_relative_step: float = FD_RELATIVE_STEP, executor=None,
-                  **options) -> PeakGradient:
+                  window: float | None = None, **options) -> PeakGradient:
     """The peak of an output over drive revolution `revolution` (the GA's objective) and
     its gradient with respect to named design values.
 
@@ -707,7 +739,11 @@ def peak_gradient(mech: Linkage | SliderCrank, parameters=None, revolution: int 
         "contact_force:<clearance joint>" (`parse_output`); default the driven ground
         joint's |reaction| (the paper's base force F12).
     revolution : int
-        Drive revolution (1-based) whose peak is the objective (paper: 4).
+        Drive revolution (1-based) whose peak is the objective (paper: 4); a free linkage
+        (drive None): the time window [(k - 1) w, k w] of width `window`.
+    window : float, optional
+        A free linkage's window width w in s (required there, refused for a driven
+        linkage; `objective_window`).
     backend : str
         "reduced" for DDM; any backend of `simulate` for ``method="fd"`` (another
         backend's peak is that of the monitored force).
@@ -747,8 +783,8 @@ def peak_gradient(mech: Linkage | SliderCrank, parameters=None, revolution: int 
     from ..solve.simulate import BACKENDS
 
     linkage = as_linkage(mech)
-    _check_driven(linkage)
     revolution = check_int("revolution", revolution, 1)
+    objective_window(linkage, revolution, window)
     check_revolutions_memory(revolution, name="revolution")
     check_choice("backend", backend, BACKENDS)
     paper = design.slider_crank_of(linkage) is not None
@@ -782,9 +818,9 @@ def peak_gradient(mech: Linkage | SliderCrank, parameters=None, revolution: int 
             raise ValueError(f"unknown option(s) for method='ddm': {extra}")
         return _ddm_gradient(linkage, names, out, revolution,
                              PEAK_GRADIENT_RTOL if rtol is None else rtol,
-                             integrator or DDM_INTEGRATOR, kink_tol)
+                             integrator or DDM_INTEGRATOR, kink_tol, window)
     if backend == "reduced":
-        allowed = set(lm.OPTION_NAMES) - {"t_eval", "start"}
+        allowed = set(lm.OPTION_NAMES) - {"t_eval", "start", "duration", "window"}
         unknown = sorted(set(options) - allowed)
         if unknown:
             raise ValueError(f"unknown option(s) {unknown} for the reduced model's peak; "
@@ -803,4 +839,4 @@ def peak_gradient(mech: Linkage | SliderCrank, parameters=None, revolution: int 
     if integrator is not None:
         options["method"] = integrator
     return _fd_gradient(linkage, names, out, revolution, backend, fd_relative_step, executor,
-                        options)
+                        options, window)

@@ -190,10 +190,11 @@ class Sensitivities:
 
     def summary(self, revolution: int | None = None) -> list[dict[str, float]]:
         """Per parameter: b0, mean and max |normalized sensitivity| over `revolution`
-        (default: the last), the growth rate per revolution over the last two and the
+        (default: the last; a free linkage, which has no revolutions: the whole run), the
+        growth rate per revolution (a free linkage: per window) over the last two and the
         growth trend (`growth_trend`)."""
         rev = revolution or self.trajectory.revolutions
-        mask = self.revolution_mask(rev)
+        mask = self.revolution_mask(rev) if rev else np.ones(len(self.t), dtype=bool)
         norm = np.abs(self.normalized[mask])
         rate = self.growth_rate
         trend = self.growth_trend
@@ -215,8 +216,10 @@ class Sensitivities:
         np.savez_compressed(
             path, t=self.t, parameters=np.array(self.parameters), reference=self.reference,
             base_force=self.base_force, base_force_magnitude=self.base_force_magnitude,
-            crank_moment=self.crank_moment, contact_force=self.contact_force,
-            normalized=self.normalized,
+            # a free linkage has no drive moment: an empty array (npz holds no None)
+            crank_moment=(self.crank_moment if self.crank_moment is not None
+                          else np.zeros((0, len(self.parameters)))),
+            contact_force=self.contact_force, normalized=self.normalized,
             growth=self.growth if self.growth is not None else np.zeros((0, 0)),
             method=self.method, backend=self.backend,
             stats=json.dumps(self.stats, default=float))
@@ -256,8 +259,10 @@ def load_sensitivities(path: str | Path) -> Sensitivities:
         t=arrays["t"].astype(float), parameters=tuple(str(p) for p in arrays["parameters"]),
         reference=arrays["reference"].astype(float), base_force=arrays["base_force"],
         base_force_magnitude=arrays["base_force_magnitude"],
-        crank_moment=arrays["crank_moment"], contact_force=arrays["contact_force"],
-        trajectory=traj, method=str(arrays["method"]), backend=str(arrays["backend"]),
+        crank_moment=(None if traj.linkage is not None and traj.linkage.drive is None
+                      else arrays["crank_moment"]),
+        contact_force=arrays["contact_force"], trajectory=traj,
+        method=str(arrays["method"]), backend=str(arrays["backend"]),
         growth=growth if growth.size else None, stats=stats)
 
 
@@ -282,8 +287,9 @@ def _check_loaded(path: Path, a: dict, stats: Any, traj: Trajectory) -> None:
         raise fail(str(exc)) from exc
     n, p = a["t"].shape[0] if a["t"].ndim == 1 else -1, names.size
     joints = len(traj.joints) if linkage is not None and traj.joints else 1
+    free = linkage is not None and linkage.drive is None
     shapes = {"t": (n,), "reference": (p,), "base_force": (n, 2, p),
-              "base_force_magnitude": (n, p), "crank_moment": (n, p),
+              "base_force_magnitude": (n, p), "crank_moment": (0, p) if free else (n, p),
               "contact_force": (n, p) if joints == 1 else (n, joints, p)}
     for key, shape in shapes.items():
         arr = a[key]

@@ -146,13 +146,15 @@ class _Problem:
     backend: str
     options: dict
     output: str | None = None
+    window: float | None = None
 
     @property
     def eval_options(self) -> dict:
         """Options of a design's evaluation (`executor.peak_or_inf`): the backend's, and a
-        Linkage's output."""
+        Linkage's output (and a free linkage's window)."""
         if isinstance(self.base, Linkage):
-            return {**self.options, "output": self.output}
+            return {**self.options, "output": self.output,
+                    **({"window": self.window} if self.window is not None else {})}
         return self.options
 
     def physical(self, u) -> np.ndarray:
@@ -537,7 +539,7 @@ def optimize_link_lengths(mech: SliderCrank | None = None,
                           progress: bool = True, workers: int = 2,
                           saturation_rtol: float = SATURATION_RTOL,
                           dask_timeout: float = DASK_WORKER_TIMEOUT,
-                          output: str | None = None,
+                          output: str | None = None, window: float | None = None,
                           **backend_options) -> OptimizationResult:
     """Minimise max |F12| over crank revolution `revolution` with a GA (paper Eq. 18).
 
@@ -553,7 +555,11 @@ def optimize_link_lengths(mech: SliderCrank | None = None,
     crank_length, coupler_length : (float, float)
         Bounds in m of L2 and L3, the default genes (paper: [0.04, 0.06] and [0.10, 0.14]).
     revolution : int
-        Crank revolution (1-based) whose peak |F12| is minimised (paper: 4).
+        Crank revolution (1-based) whose peak |F12| is minimised (paper: 4); a free
+        Linkage's (drive None): the time window [(k - 1) w, k w] of width `window`.
+    window : float, optional
+        A free Linkage's window width w in s (required there, refused for a driven
+        linkage; `objective.objective_window`).
     backend : str
         Model, a key of `BACKENDS` ("reduced" default; "ideal" for rigid joints).
     seed : int, optional
@@ -637,12 +643,19 @@ def optimize_link_lengths(mech: SliderCrank | None = None,
     elif output is not None:
         raise ValueError("output applies to a Linkage; a SliderCrank's objective is the "
                          "peak of |F12|")
+    elif window is not None:
+        raise ValueError("window (s) is for a free Linkage (drive=None); a SliderCrank's "
+                         "objective is the peak over a crank revolution")
     if mass_scaling not in MASS_SCALINGS:
         raise ValueError(f"mass_scaling must be one of {list(MASS_SCALINGS)}; "
                          f"got {mass_scaling!r}")
     if backend not in BACKENDS:
         raise ValueError(f"backend must be one of {sorted(BACKENDS)}; got {backend!r}")
     revolution = _check_int("revolution", revolution, 1)
+    if is_linkage:
+        from ..analysis.objective import objective_window
+
+        objective_window(mech, revolution, window)
     population = _check_int("population", population, 4)
     generations = _check_int("generations", generations, 1)
     if saturation is not None:
@@ -680,12 +693,13 @@ def optimize_link_lengths(mech: SliderCrank | None = None,
     problem = _Problem(base=mech, names=names, lo=tuple(genes[n][0] for n in names),
                        hi=tuple(genes[n][1] for n in names), mass_scaling=mass_scaling,
                        revolution=revolution, backend=backend, options=dict(backend_options),
-                       output=output)
+                       output=output, window=window)
     # the original design, in this process: checks the options and warms the compiled model
     if is_linkage:
         from ..analysis.objective import peak_output
 
-        original_peak = float(peak_output(mech, output, revolution, **backend_options))
+        original_peak = float(peak_output(mech, output, revolution, window=window,
+                                          **backend_options))
     else:
         original_peak = float(peak_base_force(mech, revolution, backend, **backend_options))
 
@@ -702,6 +716,7 @@ def optimize_link_lengths(mech: SliderCrank | None = None,
         "mass_scaling": mass_scaling, "refine": refine_method or False,
         **({"output": output, "case": mech.case, "overrides": dict(mech.overrides)}
            if is_linkage else {}),
+        **({"window": window} if window is not None else {}),
         "ga": ga_settings, "pygad_version": pygad.__version__,
     }
     on_generation = _OnGeneration(run_id, saturation, float(saturation_rtol))
@@ -768,7 +783,11 @@ def optimize_link_lengths(mech: SliderCrank | None = None,
 def _periodicity(best: SliderCrank, problem: _Problem):
     """Simulate the best design once; its periodicity flag and note from the stats (None
     where the backend does not report them or the integration fails), and the accuracy note
-    of that run (its AccuracyWarning's text, kept in the result instead of warned)."""
+    of that run (its AccuracyWarning's text, kept in the result instead of warned). A
+    free linkage has none: its motion is not periodic in a drive period."""
+    if problem.window is not None:
+        return None, ("a free linkage (drive=None): no drive period, no periodicity "
+                      "check"), None
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", AccuracyWarning)
@@ -889,7 +908,8 @@ def _peak_and_gradient(problem: _Problem, u: np.ndarray):
     params = _gradient_parameters(problem)
     options = dict(problem.options)
     if isinstance(mech, Linkage):
-        kwargs = {"method": "fd", "output": problem.output, **options}
+        kwargs = {"method": "fd", "output": problem.output, "window": problem.window,
+                  **options}
     elif problem.backend == "reduced":
         kwargs = {"method": "ddm", "rtol": options.get("rtol")}
     else:

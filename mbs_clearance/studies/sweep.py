@@ -326,6 +326,23 @@ class MapResult:
                 f"computed now, {self.skipped} before); regimes: {parts}")
 
 
+def _check_driven(mech) -> None:
+    """ValueError for a free linkage (drive=None): a regime is a property of the
+    stroboscopic map of the drive period (a section once per revolution, its recurrence, a
+    periodic orbit of that map); a free linkage has no period to sample at, and without a
+    drive feeding energy in its motion decays instead of settling on an attractor."""
+    from ..model.cases import as_linkage
+
+    linkage = as_linkage(mech)
+    if linkage.drive is None:
+        raise ValueError(
+            f"linkage {linkage.name!r} is free (drive=None): a regime map classifies the "
+            "Poincare section taken once per drive period (its recurrence, a periodic orbit "
+            "of that map), which a free linkage has not, and without a drive its motion "
+            "decays rather than settling on an attractor; study its peaks per time window "
+            "instead (simulate(..., duration=, window=), the studies with window=)")
+
+
 def regime_map(mech, sweep, revolutions: int = 100, keep: int = 50, scheduler=None, *,
                case: str | None = None, overrides: dict | None = None,
                out: str | Path | None = None, lyapunov: bool = False,
@@ -334,7 +351,9 @@ def regime_map(mech, sweep, revolutions: int = 100, keep: int = 50, scheduler=No
                chunk_size: int | None = None, progress: bool = False,
                retries: int = 2, write_interval: float = 5.0,
                max_memory: int | None = None, early_stop: bool = True) -> MapResult:
-    """A regime map / bifurcation diagram of `mech` over one or two swept fields.
+    """A regime map / bifurcation diagram of `mech` over one or two swept fields. A free
+    linkage (no drive) is refused: a regime is a property of the section taken once per
+    drive period (`_check_driven`).
 
     Parameters
     ----------
@@ -407,7 +426,9 @@ def regime_map(mech, sweep, revolutions: int = 100, keep: int = 50, scheduler=No
     write_interval = check_real("write_interval", write_interval, 0.0, unit="s")
     shape = tuple(len(a.values) for a in axes)
     # the size first (the designs of a huge grid alone would not fit), from the base design
-    joints = len(joints_of(mech if case is None else design_at(None, {}, case, overrides)))
+    base0 = mech if case is None else design_at(None, {}, case, overrides)
+    _check_driven(base0)
+    joints = len(joints_of(base0))
     local_pool = scheduler is None or (isinstance(scheduler, str)
                                        and scheduler in ("threads", "processes"))
     concurrent = workers if isinstance(workers, int) and workers > 0 and local_pool else 1

@@ -310,6 +310,7 @@ class _Task:
     revolution: int
     backend: str
     options: dict
+    window: float | None = None
 
 
 def _quiet(fn, *args):
@@ -349,7 +350,7 @@ def _mechanism_output(mech: SliderCrank | Linkage, task: _Task):
         from ..analysis.objective import _linkage_peak, parse_output
 
         out = parse_output(mech, None if task.output == "peak" else task.output)
-        return _linkage_peak(mech, out, k, task.options)[0], None, False, False
+        return _linkage_peak(mech, out, k, task.options, task.window)[0], None, False, False
     if task.output == "peak" and task.options.get("accuracy") is None:
         if task.backend == "reduced":
             from ..solve.reduced import RATTLING, run
@@ -386,12 +387,15 @@ def _mechanism_output(mech: SliderCrank | Linkage, task: _Task):
     return value, chaotic, flagged, False
 
 
-def _grad_one(mech: SliderCrank | Linkage, fields: tuple[str, ...], revolution: int):
+def _grad_one(mech: SliderCrank | Linkage, fields: tuple[str, ...], revolution: int,
+              window: float | None = None):
     """(peak, gradient over `fields`, kink) of one design; NaNs where it fails."""
+    from functools import partial
+
     from ..analysis.objective import peak_gradient
 
     try:
-        g = _quiet(peak_gradient, mech, fields, revolution)
+        g = _quiet(partial(peak_gradient, window=window), mech, fields, revolution)
     except (RuntimeError, ValueError):
         return math.nan, np.full(len(fields), math.nan), False
     return float(g.peak), np.asarray(g.gradient, dtype=float), bool(g.kink)
@@ -485,8 +489,10 @@ class ToleranceResult:
         """``max |F12| over revolution 4 (N)``: what the output is, with its unit."""
         what, unit = OUTPUT_LABELS.get(self.output, (f"max {self.output}",
                                                      _linkage_unit(self.output)))
-        rev = self.settings.get("revolution")
-        return (what + (f" over revolution {rev}" if rev is not None else "")
+        rev, win = self.settings.get("revolution"), self.settings.get("window")
+        span = (f" over time window {rev} of {win:g} s" if win is not None
+                else f" over revolution {rev}" if rev is not None else "")
+        return (what + span
                 + (f" ({unit})" if unit else ""))
 
     def summary(self) -> str:
@@ -793,6 +799,7 @@ class ToleranceProblem:
     revolution: int = 4
     backend: str = "reduced"
     options: dict[str, Any] = field(default_factory=dict)
+    window: float | None = None
 
     @property
     def unit_problem(self) -> dict[str, Any]:
@@ -832,11 +839,13 @@ class Evaluation:
 
 def describe(inputs: Mapping[str, Any], mech: SliderCrank | Linkage | None = None,
              output: str | Callable = "peak", revolution: int = 4, *,
-             backend: str = "reduced", **options) -> ToleranceProblem:
+             backend: str = "reduced", window: float | None = None,
+             **options) -> ToleranceProblem:
     """The problem of a tolerance study, checked before any run: `inputs` (name ->
     `Uniform`, `Normal` or `FitClearance`), the nominal `mech` (default: the paper's
-    case), the `output` over `revolution`, the `backend` and its options (see
-    `tolerance_study` for each). ValueError naming the item on bad input."""
+    case), the `output` over `revolution` (a free linkage's: over time window `revolution`
+    of `window` s), the `backend` and its options (see `tolerance_study` for each).
+    ValueError naming the item on bad input."""
     from ..solve.simulate import BACKENDS
 
     mech = SliderCrank() if mech is None else mech
@@ -860,11 +869,35 @@ def describe(inputs: Mapping[str, Any], mech: SliderCrank | Linkage | None = Non
         raise ValueError(f"output 'peak' of a Linkage needs backend='reduced'; got {backend!r}")
     revolution = _count("revolution", revolution, 1)
     check_revolutions_memory(revolution, options.get("max_memory"), name="revolution")
+    _check_window(mech, output, revolution, window)
     if not callable(output):
         with_values(mech, {n: field_value(mech, n) for n in names})   # checks the nominal
         _check_ranges(mech, names, dists)
     return ToleranceProblem(names=names, distributions=dists, mech=mech, output=output,
-                            revolution=revolution, backend=backend, options=dict(options))
+                            revolution=revolution, backend=backend, options=dict(options),
+                            window=window)
+
+
+def _check_window(mech, output, revolution: int, window) -> None:
+    """A free linkage's study needs `window` and an output that is a peak over a window
+    (`objective.peak_output`); a driven one refuses `window`."""
+    if callable(output):
+        if window is not None:
+            raise ValueError("window applies to a free linkage's peak output; not to a "
+                             "function output")
+        return
+    if not isinstance(mech, Linkage):
+        if window is not None:
+            raise ValueError("window (s) is for a free linkage (drive=None); the paper's "
+                             "slider-crank is driven: its output is over a revolution")
+        return
+    from ..analysis.objective import objective_window
+
+    objective_window(mech, revolution, window)
+    if mech.drive is None and output in OUTPUTS[1:]:
+        raise ValueError(f"output {output!r} is taken over a drive revolution; a free "
+                         f"linkage (drive=None) takes 'peak' or an output of "
+                         f"objective.parse_output, its peak over a time window")
 
 
 def sample(problem: ToleranceProblem, method: str, n: int, *, seed: int = 0,
@@ -902,7 +935,8 @@ def sample(problem: ToleranceProblem, method: str, n: int, *, seed: int = 0,
 
 def _task(problem: ToleranceProblem) -> _Task:
     return _Task(output=problem.output, revolution=problem.revolution,
-                 backend=problem.backend, options=dict(problem.options))
+                 backend=problem.backend, options=dict(problem.options),
+                 window=problem.window)
 
 
 def evaluate(problem: ToleranceProblem, samples: ToleranceSample, *, wear: float = 0.0,
@@ -992,7 +1026,8 @@ def tolerance_study(inputs: Mapping[str, Any], mech: SliderCrank | None = None,
                     allowable: float | None = None, wear: Any = None,
                     confidence: float = 0.95, bootstrap: int = 200, seed: int = 0,
                     executor=None, workers: int = 2, progress: bool = True,
-                    backend: str = "reduced", **options) -> ToleranceResult:
+                    backend: str = "reduced", window: float | None = None,
+                    **options) -> ToleranceResult:
     """Global sensitivity and exceedance probability of a run's output over tolerances.
 
     Parameters
@@ -1013,7 +1048,11 @@ def tolerance_study(inputs: Mapping[str, Any], mech: SliderCrank | None = None,
         "contact_force:<joint>", ...; "peak" is its default, the crank pivot's |reaction|),
         its peak over the revolution (`objective.peak_output`).
     revolution : int
-        Crank revolution k (1-based) of the output (revolutions 1..k are simulated).
+        Crank revolution k (1-based) of the output (revolutions 1..k are simulated); a
+        free linkage's (drive None): time window k, [(k - 1) w, k w].
+    window : float, optional
+        A free linkage's window width w in s (required there, refused for a driven one;
+        `objective.objective_window`); its output is a peak (`objective.peak_output`).
     sobol : int
         Base sample size N of Sobol indices (a power of 2; 0: none). Runs: N (2 d + 2)
         with `second_order`, else N (d + 2).
@@ -1054,7 +1093,8 @@ def tolerance_study(inputs: Mapping[str, Any], mech: SliderCrank | None = None,
     ToleranceResult
     """
     t_start = time.perf_counter()
-    problem = describe(inputs, mech, output, revolution, backend=backend, **options)
+    problem = describe(inputs, mech, output, revolution, backend=backend, window=window,
+                       **options)
     mech, names, dists = problem.mech, problem.names, problem.distributions
     revolution = problem.revolution
     sobol = _count("sobol", sobol, 0)
@@ -1136,6 +1176,7 @@ def tolerance_study(inputs: Mapping[str, Any], mech: SliderCrank | None = None,
         monte_carlo=res.get("monte_carlo", {}), wear=res.get("wear", []),
         counts=dict(counts), notes=notes,
         settings={"revolution": revolution, "backend": backend, "options": dict(options),
+                  **({"window": window} if window is not None else {}),
                   "sobol": sobol, "second_order": second_order, "morris": morris,
                   "morris_levels": morris_levels, "dgsm": dgsm, "monte_carlo": monte_carlo,
                   "allowable": allowable, "wear": wear_levels, "confidence": confidence,
@@ -1168,7 +1209,8 @@ def _dgsm(study: _Study, n: int, seed: int, bootstrap: int, confidence: float) -
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", AccuracyWarning)
         warnings.simplefilter("ignore", PhysicsWarning)
-        res = _evaluate_all(_grad_one, mechs, (fields, study.task.revolution),
+        res = _evaluate_all(_grad_one, mechs, (fields, study.task.revolution,
+                                               study.task.window),
                        executor=study.executor, workers=study.workers, progress=study.progress,
                        desc="DGSM")
     peaks = np.array([r[0] for r in res])

@@ -433,8 +433,8 @@ def test_moving_guide_conserves_energy():
 
 def test_free_linkage_sensitivities_refusals():
     """A free linkage's sensitivities take duration= (s), not revolutions, and no start;
-    the peak objective (a peak over a drive revolution) refuses a free linkage; each before
-    any model is generated."""
+    the peak objective of a free linkage needs its time window's width (window=), which a
+    driven linkage refuses; each before any model is generated."""
     from mbs_clearance.analysis.objective import peak_gradient, peak_output
     from mbs_clearance.analysis.sensitivity import sensitivities
 
@@ -449,8 +449,18 @@ def test_free_linkage_sensitivities_refusals():
     with pytest.raises(ValueError, match="start is for a driven linkage"):
         sensitivities(lk, names, duration=0.01, start=object())
     for call in (peak_gradient, peak_output):
-        with pytest.raises(ValueError, match="is free .*peak over a drive revolution"):
-            call(lk, names) if call is peak_gradient else call(lk)
+        with pytest.raises(ValueError, match=r"is free .*peak over time window 2 .*give "
+                                             r"window= in s \(e\.g\. its time scale 0\.0419 s"):
+            call(lk, names, 2) if call is peak_gradient else call(lk, None, 2)
+        with pytest.raises(ValueError, match="window must be a finite number > 0 s"):
+            call(lk, names, window=-0.01) if call is peak_gradient else call(lk, window=-0.01)
+        with pytest.raises(ValueError, match=r"'four_bar' is driven: .*window= \(s\) is for a "
+                                             r"free linkage"):
+            call(cases.four_bar(), ["clearance"], window=0.01) if call is peak_gradient \
+                else call(cases.four_bar(), window=0.01)
+    with pytest.raises(ValueError, match=r"unknown output 'drive_moment' .*allowed: "
+                                         r"\['pivot_force:crank_pivot', .*'shaking_force'\]"):
+        peak_output(lk, "drive_moment", window=0.01)
 
 
 #: DDM against finite differences on the translational-clearance benchmark: the times (s),
@@ -512,3 +522,57 @@ def test_ddm_matches_finite_differences_on_a_driven_guide():
         # rad per unit of the parameter is their round-off)
         assert np.all(err <= np.maximum(3 * fd_err, 1e-6 * scale + 1e-12)), (c, err, fd_err,
                                                                              scale)
+
+
+def test_free_linkage_studies_refusals(tmp_path, capsys):
+    """The studies of a free linkage take its objective's window (window= s; the CLI's
+    --duration and --window), a driven one refuses it; a regime map refuses a free linkage
+    (no drive period to take its section at); each before any model is generated."""
+    from mbs_clearance.cli import main
+    from mbs_clearance.studies.optimize import optimize_link_lengths
+    from mbs_clearance.studies.sweep import regime_map
+    from mbs_clearance.studies.tolerance import Uniform, tolerance_study
+
+    lk = cases.flores_translational_slider_crank()
+    genes = {"clearance": (0.8e-3, 1.2e-3)}
+    with pytest.raises(ValueError, match=r"is free .*give window= in s"):
+        optimize_link_lengths(lk, genes=genes, progress=False)
+    with pytest.raises(ValueError, match=r"window \(s\) is for a free Linkage"):
+        optimize_link_lengths(SliderCrank(), window=0.01, progress=False)
+    with pytest.raises(ValueError, match=r"is free .*give window= in s"):
+        tolerance_study({"clearance": Uniform(0.8e-3, 1.2e-3)}, lk, sobol=0, monte_carlo=2)
+    with pytest.raises(ValueError, match=r"'four_bar' is driven: .*window= \(s\) is for"):
+        tolerance_study({"clearance": Uniform(1e-5, 2e-5)}, cases.four_bar(), sobol=0,
+                        monte_carlo=2, window=0.01)
+    with pytest.raises(ValueError, match=r"output 'rms_drive_moment' is taken over a drive "
+                                         r"revolution; a free linkage"):
+        tolerance_study({"clearance": Uniform(0.8e-3, 1.2e-3)}, lk, "rms_drive_moment",
+                        sobol=0, monte_carlo=2, window=0.01)
+    with pytest.raises(ValueError, match=r"is free \(drive=None\): a regime map classifies "
+                                         r"the Poincare section taken once per drive period"):
+        regime_map(lk, ("clearance", (1e-3, 2e-3)), revolutions=4, keep=3, max_period=1)
+    spec = tmp_path / "inputs.json"
+    spec.write_text(json.dumps({"clearance": {"uniform": [0.8e-3, 1.2e-3]}}))
+    flores = ["--case", "flores_translational_slider_crank"]
+    for argv, message in (
+            (["sensitivity", *flores, "--revolutions", "2"], "it has no revolutions; give "
+                                                              "--duration"),
+            (["sensitivity", *flores, "--output", "shaking_force", "--parameters",
+              "clearance"], "give --duration (s)"),
+            (["sensitivity", "--case", "four_bar", "--duration", "0.1"],
+             "--duration and --window are for a free linkage"),
+            (["optimize", *flores, "--gene", "clearance=8e-4:1.2e-3", "--duration", "0.03",
+              "--window", "0.02"], "--duration (0.03 s) must be a whole number of --window"),
+            (["optimize", "--duration", "0.1"], "--duration and --window are for a free"),
+            (["tolerance", str(spec), *flores, "--revolution", "2"], "give --duration (s) "
+                                                                      "and optionally"),
+            (["tolerance", str(spec), *flores, "--duration", "0.02", "--output",
+              "drive_moment"], "unknown output 'drive_moment'"),
+            (["map", *flores, "--sweep", "clearance=1e-3,2e-3", "--revolutions", "4",
+              "--keep", "3", "--max-period", "1"], "a regime map classifies the Poincare"),
+    ):
+        with pytest.raises(SystemExit) as e:
+            main(argv + ["--out", str(tmp_path / "o")])
+        assert e.value.code == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and message in err[0], (argv, err)
