@@ -441,18 +441,18 @@ def test_map_point_and_exponent_agree_on_the_same_run():
 
 
 @pytest.mark.slow
-def test_loose_joint_at_0_1_mm_over_40_revolutions_is_undecided():
-    """c = 0.1 mm, 5000 rpm, 40 revolutions (20 averaged). At the default rtol the motion is
-    chaotic for about 16 revolutions and then falls into a period-4 pattern of growths: mean
-    -0.054 per revolution over 21-40, whose interval contains zero ("undecided", not a
-    stable periodic motion). The reference that it could not be called negative: how long
-    the chaotic start lasts depends on the integration's error, and at rtol 1e-10 the same
-    revolutions are still chaotic (measured +2.65 +- 2.0 per revolution, positive).
+def test_loose_joint_at_0_1_mm_over_40_revolutions_is_not_found_stable():
+    """c = 0.1 mm, 5000 rpm, 40 revolutions (20 averaged). The motion starts chaotic, and
+    how long that lasts depends on the integration's error and the start's last digits: at
+    the default rtol the same revolutions 21-40 gave -0.054 +- 0.137 (undecided) from the
+    closed form's start and +2.34 +- 1.02 (positive) from the description's assembly, a
+    start within 1.5e-14 of it; at rtol 1e-10, +2.65 +- 2.0 and +2.50 +- 0.34. What holds
+    for every such run is what the verdict may say: not a stable motion (neither
+    "negative" nor "zero"), and chaotic where the integration is tight.
     Slow: the tangent kernels compile for minutes on a cold cache."""
     mech = SliderCrank(journal_radius=SliderCrank().bearing_radius - 1e-4)
     res = lyapunov_exponent(mech, revolutions=40, transient=20)
-    lo, hi = res.interval
-    assert lo < 0.0 < hi and res.verdict == "undecided", (res.per_revolution, res.uncertainty)
-    assert res.per_revolution < -0.02          # the mean alone read as a stable motion
+    assert res.verdict in ("undecided", "positive"), (res.per_revolution, res.uncertainty)
+    assert res.interval[1] > 0.0
     tight = lyapunov_exponent(mech, revolutions=40, transient=20, rtol=1e-10)
-    assert tight.verdict == "positive" and tight.interval[0] > hi
+    assert tight.verdict == "positive", (tight.per_revolution, tight.uncertainty)
