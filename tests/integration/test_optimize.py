@@ -444,7 +444,9 @@ def test_process_pool_without_main_guard_fails_with_one_clear_line(tmp_path):
 
 # ------------------------------------------------------------------ interrupting
 
-LONG_GA = ("import sys\n"
+LONG_GA = ("import sys, faulthandler, signal\n"
+           # a run that outlives its wait prints where its threads are (SIGUSR1)
+           "faulthandler.register(signal.SIGUSR1, all_threads=True)\n"
            "from mbs_clearance import SliderCrank\n"
            "from mbs_clearance.studies.optimize import optimize_link_lengths\n"
            "def main():\n"
@@ -485,6 +487,7 @@ def _interrupt_run(tmp_path, executor, sig, to_group, as_script):
     (exit code, seconds to exit, processes of the session before the signal, processes
     left 5 s after the exit)."""
     import os
+    import signal
     import subprocess
     import sys
     import time
@@ -513,7 +516,14 @@ def _interrupt_run(tmp_path, executor, sig, to_group, as_script):
         before = _session(proc.pid)
         t_sig = time.monotonic()
         (os.killpg if to_group else os.kill)(proc.pid, sig)
-        rc = proc.wait(30)
+        try:
+            rc = proc.wait(30)
+        except subprocess.TimeoutExpired:
+            os.kill(proc.pid, signal.SIGUSR1)
+            time.sleep(2)
+            seen += proc.stderr.read() or b""
+            raise AssertionError("no exit 30 s after the signal; its threads:\n"
+                                 + seen.decode(errors="replace")[-6000:]) from None
         t_exit = time.monotonic() - t_sig
         left = _session(proc.pid)
         t1 = time.monotonic()
