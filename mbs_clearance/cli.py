@@ -650,15 +650,18 @@ def _simulate_free(linkage, args: argparse.Namespace) -> int:
     return 0
 
 
-def add_window_options(p: argparse.ArgumentParser, what: str) -> None:
-    """--duration S and --window S: a free linkage's run and the time window of its peak."""
+def add_window_options(p: argparse.ArgumentParser, what: str,
+                       window: str = "the time windows in s, a whole number of them in "
+                                     "--duration (default: one window, the whole run)"
+                       ) -> None:
+    """--duration S and --window S: a free linkage's run (`what` it gives) and its time
+    windows (`window`: what they are)."""
     p.add_argument("--duration", type=positive_float, metavar="S",
                    help=f"a free linkage (no drive; e.g. --case "
                         f"flores_translational_slider_crank) only, instead of the "
-                        f"revolution: the run's duration in s; {what} (default: none)")
+                        f"revolutions: the run's duration in s; {what} (default: none)")
     p.add_argument("--window", type=positive_float, metavar="S",
-                   help="with --duration: the time windows in s, a whole number of them in "
-                        "--duration (default: one window, the whole run)")
+                   help=f"with --duration: {window}")
 
 
 def free_window(linkage, args: argparse.Namespace, revolution: str) -> tuple[int, float | None]:
@@ -943,12 +946,8 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     p.add_argument("--revolutions", type=int_at_least(1),
                    help="crank revolutions from the start (revolution 1: start-up transient; "
                         "default 4)")
-    p.add_argument("--duration", type=positive_float, metavar="S",
-                   help="a free linkage (a --description without a drive) only: the run's "
-                        "duration in s (default: none)")
-    p.add_argument("--window", type=positive_float, metavar="S",
-                   help="with --duration: the peaks' time windows in s (default: the whole "
-                        "run)")
+    add_window_options(p, "the peaks are per --window",
+                       "the peaks' time windows in s (default: the whole run)")
     add_settled_option(p)
     add_run_options(p, methods)
     p.add_argument("--accuracy", type=positive_float,
@@ -1515,12 +1514,8 @@ def _add_lyapunov_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--transient", type=int_at_least(0),
                    help="first revolutions not averaged (default: half of --revolutions; a "
                         "free linkage: first windows, default 0)")
-    p.add_argument("--duration", type=positive_float, metavar="S",
-                   help="a free linkage (a --description without a drive) only: the "
-                        "finite-time exponent's duration in s")
-    p.add_argument("--window", type=positive_float, metavar="S",
-                   help="with --duration: the renormalisation interval in s (default: the "
-                        "whole duration)")
+    add_window_options(p, "the finite-time exponent over it",
+                       "the renormalisation interval in s (default: the whole duration)")
     p.add_argument("--rtol", type=positive_float,
                    help="relative tolerance of the state and the tangent (default: the "
                         "model's, 1e-7)")
