@@ -447,6 +447,9 @@ def test_process_pool_without_main_guard_fails_with_one_clear_line(tmp_path):
 LONG_GA = ("import sys, faulthandler, signal\n"
            # a run that outlives its wait prints where its threads are (SIGUSR1)
            "faulthandler.register(signal.SIGUSR1, all_threads=True)\n"
+           # Ctrl-C as in a terminal: a shell without job control (CI started in the
+           # background) starts its jobs with SIGINT ignored, and Python keeps it ignored
+           "signal.signal(signal.SIGINT, signal.default_int_handler)\n"
            "from mbs_clearance import SliderCrank\n"
            "from mbs_clearance.studies.optimize import optimize_link_lengths\n"
            "def main():\n"
