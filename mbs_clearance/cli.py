@@ -477,9 +477,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     linkage = linkage_from_args(args)
     if linkage is not None and linkage.drive is None:
         return _simulate_free(linkage, args)
-    if args.duration is not None or args.window is not None:
-        raise ValueError("--duration and --window are for a free linkage (a --description "
-                         "without a drive); a driven one runs --revolutions")
+    refuse_window_options(args, "--revolutions")
     if args.revolutions is None:
         args.revolutions = 4
     if linkage is not None:
@@ -664,6 +662,15 @@ def add_window_options(p: argparse.ArgumentParser, what: str,
                    help=f"with --duration: {window}")
 
 
+def refuse_window_options(args: argparse.Namespace, flag: str) -> None:
+    """ValueError where a driven linkage was given --duration or --window (`flag`: what it
+    takes instead)."""
+    if args.duration is not None or args.window is not None:
+        raise ValueError("--duration and --window are for a free linkage (no drive, e.g. "
+                         f"--case flores_translational_slider_crank); a driven one takes "
+                         f"{flag}")
+
+
 def free_window(linkage, args: argparse.Namespace, revolution: str) -> tuple[int, float | None]:
     """(k, w) of the objective's window from --duration / --window: a free linkage's last
     time window, [(k - 1) w, k w] with k w = --duration (w: --window, default --duration),
@@ -673,10 +680,7 @@ def free_window(linkage, args: argparse.Namespace, revolution: str) -> tuple[int
     given = getattr(args, revolution)
     free = linkage is not None and linkage.drive is None
     if not free:
-        if args.duration is not None or args.window is not None:
-            raise ValueError("--duration and --window are for a free linkage (no drive, e.g. "
-                             f"--case flores_translational_slider_crank); a driven one takes "
-                             f"{flag}")
+        refuse_window_options(args, flag)
         return (4 if given is None else given), None
     if given is not None:
         raise ValueError(f"linkage {linkage.name!r} is free (no drive): it has no "
@@ -1535,9 +1539,7 @@ def _cmd_lyapunov(args: argparse.Namespace) -> int:
     linkage, mech = design_from_args(args)
     if linkage is not None and linkage.drive is None:
         return _lyapunov_free(linkage, args)
-    if args.duration is not None or args.window is not None:
-        raise ValueError("--duration and --window are for a free linkage (a --description "
-                         "without a drive); a driven one runs --revolutions")
+    refuse_window_options(args, "--revolutions")
     if args.revolutions is None:
         args.revolutions = 100
     transient = args.revolutions // 2 if args.transient is None else args.transient
