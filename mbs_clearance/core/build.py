@@ -1,0 +1,209 @@
+"""Build C sources into a shared library once, cache it under a digest, load it with cffi.
+
+A library is named by the SHA-256 of everything that makes it: its sources, the header, the
+compiler's identity and the flags. It is built with the system's C compiler (``$CC``, else
+``gcc``, else ``cc``) into the first trusted directory of ``$MBS_CLEARANCE_CACHE_DIR``,
+``$XDG_CACHE_HOME/mbs-clearance/core`` (``~/.cache/...``) and a private directory in the
+temporary directory. A library is code this process runs, so (as for generated models):
+
+- a directory is used only if the user owns it and neither group nor others can write to it;
+- a library is loaded only if its bytes match the SHA-256 recorded beside it when it was
+  built; a damaged, stale or foreign file is built again, with one `CacheWarning`;
+- a directory that cannot be written (read-only, full) is skipped with one warning naming
+  it, and the next place is tried.
+
+Loading goes through cffi's ABI mode (``ffi.dlopen``): cffi releases the GIL around every call,
+so threads run models in parallel.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import logging
+import os
+import shutil
+import stat
+import subprocess
+import tempfile
+import threading
+import time
+import warnings
+from pathlib import Path
+
+from .._warnings import CacheWarning
+
+__all__ = ["HEADER", "FLAGS", "CompilerMissing", "cdef_of", "compiler", "build", "load",
+           "cache_dirs"]
+
+_HERE = Path(__file__).resolve().parent
+#: the seam's header (its declarations are the cffi cdef of every library)
+HEADER = _HERE / "mbs_core.h"
+#: C99, optimised, IEEE semantics kept (no -ffast-math: event search and error control rely
+#: on them), position independent for a shared library
+FLAGS = ("-std=c99", "-O2", "-fPIC", "-shared", "-fno-math-errno")
+_LOG = logging.getLogger("mbs_clearance")
+_LOCK = threading.Lock()
+_LOADED: dict[str, object] = {}
+_WARNED: set[str] = set()
+
+
+class CompilerMissing(RuntimeError):
+    """No C compiler on this machine (the message names what to install)."""
+
+
+def cdef_of(header: Path = HEADER) -> str:
+    """The declarations of `header` for cffi: preprocessor lines dropped."""
+    lines = header.read_text().splitlines()
+    return "\n".join(line for line in lines if not line.lstrip().startswith("#"))
+
+
+def compiler() -> tuple[str, str]:
+    """(path, identity) of the C compiler: ``$CC``, gcc or cc; identity is its
+    ``--version`` first line (part of every library's digest)."""
+    names = [os.environ["CC"]] if os.environ.get("CC") else ["gcc", "cc"]
+    for name in names:
+        path = shutil.which(name)
+        if path:
+            try:
+                version = subprocess.run([path, "--version"], capture_output=True, text=True,
+                                         timeout=30).stdout.splitlines()[:1]
+            except (OSError, subprocess.SubprocessError):
+                continue
+            return path, (version[0] if version else path)
+    raise CompilerMissing(
+        f"no C compiler found (looked for {', '.join(names)}): mbs-clearance compiles its "
+        "core and models with one; install gcc (Debian/Ubuntu: apt-get install gcc; "
+        "Fedora: dnf install gcc; macOS: xcode-select --install)")
+
+
+def _trusted(path: Path) -> bool:
+    """Owned by this user, a real directory, writable by neither group nor others."""
+    try:
+        st = os.lstat(path)
+    except OSError:
+        return False
+    uid = getattr(os, "getuid", lambda: st.st_uid)()
+    return (stat.S_ISDIR(st.st_mode) and st.st_uid == uid
+            and not st.st_mode & (stat.S_IWGRP | stat.S_IWOTH))
+
+
+def _warn_once(key: str, message: str) -> None:
+    if key not in _WARNED:
+        _WARNED.add(key)
+        warnings.warn(message, CacheWarning, stacklevel=4)
+
+
+def cache_dirs() -> list[Path]:
+    """The candidate cache directories, in order of preference."""
+    dirs = []
+    if os.environ.get("MBS_CLEARANCE_CACHE_DIR"):
+        dirs.append(Path(os.environ["MBS_CLEARANCE_CACHE_DIR"]))
+    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    dirs.append(Path(base) / "mbs-clearance" / "core")
+    uid = getattr(os, "getuid", lambda: "user")()
+    dirs.append(Path(tempfile.gettempdir()) / f"mbs-clearance-core-{uid}")
+    return dirs
+
+
+def _usable(path: Path) -> bool:
+    """Create `path` (mode 0700) if missing; True when it is trusted and writable."""
+    try:
+        path.mkdir(mode=0o700, parents=True, exist_ok=True)
+    except OSError:
+        return False
+    if not _trusted(path):
+        _warn_once(str(path), f"the compiled-code cache directory {path} is not used: it is "
+                              "not owned by this user or others can write to it")
+        return False
+    return os.access(path, os.W_OK)
+
+
+def _digest(sources: list[tuple[str, str]], flags: tuple[str, ...], cc_id: str) -> str:
+    h = hashlib.sha256()
+    for name, text in [("mbs_core.h", HEADER.read_text()), *sources]:
+        h.update(name.encode() + b"\0" + text.encode() + b"\0")
+    h.update("\0".join(flags).encode() + b"\0" + cc_id.encode())
+    return h.hexdigest()
+
+
+def _sha_file(path: Path) -> str:
+    return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+def _valid(lib: Path) -> bool:
+    stamp = lib.with_suffix(".sha256")
+    try:
+        st = os.lstat(lib)
+        if not stat.S_ISREG(st.st_mode) or st.st_mode & (stat.S_IWGRP | stat.S_IWOTH):
+            return False
+        return stamp.read_text().strip() == _sha_file(lib)
+    except OSError:
+        return False
+
+
+def _compile(cc: str, sources: list[tuple[str, str]], flags: tuple[str, ...], lib: Path,
+             label: str) -> None:
+    """Compile into `lib` atomically (a temporary name in the same directory, then rename)."""
+    with tempfile.TemporaryDirectory(prefix="mbs-build-") as tmp:
+        paths = []
+        shutil.copy(HEADER, Path(tmp) / HEADER.name)
+        for name, text in sources:
+            path = Path(tmp) / name
+            path.write_text(text)
+            if name.endswith(".c"):
+                paths.append(str(path))
+        out = Path(tmp) / "lib.so"
+        started = time.perf_counter()
+        proc = subprocess.run([cc, *flags, "-I", tmp, "-o", str(out), *paths, "-lm"],
+                              capture_output=True, text=True)
+        if proc.returncode != 0:
+            raise RuntimeError(f"compiling {label} failed ({cc}):\n{proc.stderr.strip()}")
+        _LOG.debug("compiled %s in %.2f s", label, time.perf_counter() - started)
+        part = lib.with_name(f"{lib.name}.part-{os.getpid()}-{threading.get_ident()}")
+        shutil.copy(out, part)
+        os.chmod(part, 0o700)
+        lib.with_suffix(".sha256").write_text(_sha_file(part) + "\n")
+        os.replace(part, lib)
+
+
+def build(label: str, sources: list[tuple[str, str]], flags: tuple[str, ...] = FLAGS) -> Path:
+    """The path of the shared library built from `sources` ((file name, text) pairs, C files
+    and headers), built now if no valid cached copy exists. `label` names it in messages."""
+    cc, cc_id = compiler()
+    digest = _digest(sources, flags, cc_id)
+    name = f"{label}-{digest[:24]}.so"
+    last_error = None
+    for directory in cache_dirs():
+        if not _usable(directory):
+            continue
+        lib = directory / name
+        if _valid(lib):
+            return lib
+        if lib.exists():
+            _warn_once(str(lib), f"the compiled library {lib} does not match its recorded "
+                                 "digest (damaged or changed); it is built again")
+        try:
+            _compile(cc, sources, flags, lib, label)
+            return lib
+        except OSError as err:       # full or read-only: the next place
+            last_error = err
+            _warn_once(str(directory), f"the compiled-code cache directory {directory} "
+                                       f"cannot be written ({err.strerror}); trying the next")
+    raise RuntimeError(f"no writable place to build {label}: set MBS_CLEARANCE_CACHE_DIR to a "
+                       f"writable directory of your own ({last_error})")
+
+
+def load(label: str, sources: list[tuple[str, str]], cdef: str = "",
+         flags: tuple[str, ...] = FLAGS):
+    """(ffi, lib): the library of `sources` built (or found) and opened with cffi; `cdef`
+    adds declarations to the seam's header. One load per library and process."""
+    import cffi
+
+    with _LOCK:
+        path = build(label, sources, flags)
+        key = str(path)
+        if key not in _LOADED:
+            ffi = cffi.FFI()
+            ffi.cdef(cdef_of() + "\n" + cdef)
+            _LOADED[key] = (ffi, ffi.dlopen(key))
+        return _LOADED[key]
