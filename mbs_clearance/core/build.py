@@ -153,17 +153,42 @@ def _compile(cc: str, sources: list[tuple[str, str]], flags: tuple[str, ...], li
             if name.endswith(".c"):
                 paths.append(str(path))
         out = Path(tmp) / "lib.so"
+        estimate = _last_seconds(lib.parent, label)
+        if estimate is None or estimate > 1.0:
+            _LOG.info("compiling %s (first use only%s)", label,
+                      "" if estimate is None else f", about {estimate:.0f} s")
         started = time.perf_counter()
         proc = subprocess.run([cc, *flags, "-I", tmp, "-o", str(out), *paths, "-lm"],
                               capture_output=True, text=True)
         if proc.returncode != 0:
             raise RuntimeError(f"compiling {label} failed ({cc}):\n{proc.stderr.strip()}")
-        _LOG.debug("compiled %s in %.2f s", label, time.perf_counter() - started)
+        seconds = time.perf_counter() - started
+        _LOG.debug("compiled %s in %.2f s", label, seconds)
+        _note_seconds(lib.parent, label, seconds)
         part = lib.with_name(f"{lib.name}.part-{os.getpid()}-{threading.get_ident()}")
         shutil.copy(out, part)
         os.chmod(part, 0o700)
         lib.with_suffix(".sha256").write_text(_sha_file(part) + "\n")
         os.replace(part, lib)
+
+
+def _seconds_file(directory: Path, label: str) -> Path:
+    return directory / f"{label.split('-')[0]}.seconds"
+
+
+def _last_seconds(directory: Path, label: str) -> float | None:
+    """The last compile time of a library of this kind (the label's first word), if any."""
+    try:
+        return float(_seconds_file(directory, label).read_text())
+    except (OSError, ValueError):
+        return None
+
+
+def _note_seconds(directory: Path, label: str, seconds: float) -> None:
+    try:
+        _seconds_file(directory, label).write_text(f"{seconds:.3f}\n")
+    except OSError:
+        pass            # only an estimate for the next message
 
 
 def build(label: str, sources: list[tuple[str, str]], flags: tuple[str, ...] = FLAGS) -> Path:

@@ -20,6 +20,7 @@ from ..laws.lubrication import MODELS as LUBRICATION_MODELS
 from ..laws.registry import FRICTION_SLOTS
 from ..model.linkage import GROUND, LUBRICATION_PARAMETERS, Linkage
 from .diagnostics import contact_flags
+from .problem import ModelLayout, Problem, Span
 from .settings import DEFAULT_MAX_STEPS, DEFAULT_RTOL, MAX_SAMPLES, RunSettings  # noqa: F401
 
 __all__ = ["parameter_values", "pack_parameters", "initial_state", "Start", "settled_start"]
@@ -648,11 +649,21 @@ def check_span(linkage: Linkage, revolutions, duration, window,
 
 
 def run(linkage: Linkage, revolutions: int | None = None,
-        settings: RunSettings | None = None, *, duration: float | None = None,
-        window: float | None = None, record: bool = True, t_eval=None,
-        start: Start | None = None, edges=None, select: bool = True,
-        specialise: bool = True, model=None, **options):
-    """Integrate `linkage`'s generated model over `revolutions` drive revolutions (default
+        settings: RunSettings | None = None, **options):
+    """`solve(prepare(linkage, revolutions, settings, **options))`: integrate `linkage`'s
+    generated model (see `prepare` for the arguments); a `LinkageRun`."""
+    return solve(prepare(linkage, revolutions, settings, **options))
+
+
+def prepare(linkage: Linkage, revolutions: int | None = None,
+            settings: RunSettings | None = None, *, duration: float | None = None,
+            window: float | None = None, record: bool = True, t_eval=None,
+            start: Start | None = None, edges=None, select: bool = True,
+            specialise: bool = True, model=None, **options) -> Problem:
+    """The one door of a plain run: every argument checked, the model loaded, the span,
+    tolerances, parameters and start prepared into a `Problem` that `solve` integrates.
+
+    Integrate `linkage`'s generated model over `revolutions` drive revolutions (default
     4) from the centred start (or from `start`, a `Start`); returns a `LinkageRun` (model,
     ts, ys, ms, peaks, peak_times, stats, outs, p). The one place where a plain run meets
     the integrator (the paper's `SliderCrank` runs here too, as its description).
@@ -682,7 +693,6 @@ def run(linkage: Linkage, revolutions: int | None = None,
         format_bytes,
         revolution_bytes,
     )
-    from ..numerics.integrator import COUNTERS, METHODS, RESULTS
     from .diagnostics import LOOSE_RTOL
 
     if not isinstance(linkage, Linkage):
@@ -765,8 +775,26 @@ def run(linkage: Linkage, revolutions: int | None = None,
     kernel_settings = integrator_settings(
         linkage, model, rtol, atol_arr, h0=h0, h_max=h_max, max_steps=limit, record=record,
         event_tol=event_tol, n_samples=n_samples, refine_iters=refine, n_out=n_out)
-    ts, ys, ms, peaks, peak_t, counters, outs, status = model.integrate_model(
-        y0, p, edges, kernel_settings, METHODS[method].arrays())
+    span_record = Span(edges=edges, windows=win_edges, revolutions=revolutions,
+                       t_eval=t_eval, select=select)
+    return Problem(linkage=linkage, model=model, layout=ModelLayout.of(model),
+                   span=span_record, settings=settings, specialise=specialise, p=p, y0=y0,
+                   integrator=kernel_settings, method=method, rtol=float(rtol),
+                   max_steps=max_steps, max_memory=max_memory, extra_fev=extra_fev)
+
+
+def solve(problem: Problem) -> LinkageRun:
+    """Integrate a prepared `Problem` (its p is copied: the problem can be solved again);
+    RuntimeError naming the failure, `MemoryLimitError` where the record reached
+    max_memory."""
+    from .._checks import MemoryLimitError, format_bytes
+    from ..numerics.integrator import COUNTERS, RESULTS
+
+    linkage, model, span = problem.linkage, problem.model, problem.span
+    max_memory, max_steps = problem.max_memory, problem.max_steps
+    limit = problem.integrator.max_steps
+    p = problem.p.copy()
+    ts, ys, ms, peaks, peak_t, counters, outs, status = integrate(problem, p)
     status = RESULTS(int(status))
     if status == RESULTS.max_steps and limit < max_steps:
         raise MemoryLimitError(
@@ -776,14 +804,23 @@ def run(linkage: Linkage, revolutions: int | None = None,
     if status != RESULTS.success:
         raise RuntimeError(f"integration of linkage {linkage.name!r} failed at about t = "
                            f"{ts[-1] if len(ts) else float('nan'):.6g} s: {status.message}")
-    if t_eval is not None and select:
-        keep = landed_indices(ts, t_eval)
+    if span.t_eval is not None and span.select:
+        keep = landed_indices(ts, span.t_eval)
         ts, ys, ms, outs = ts[keep], ys[keep], ms[keep], outs[keep]
-        peaks = window_peaks(ts, outs, model.MONITOR_COLUMN, win_edges)
+        peaks = window_peaks(ts, outs, model.MONITOR_COLUMN, span.windows)
     stats = {k: int(v) for k, v in zip(COUNTERS, counters)}
-    stats["nfev"] += extra_fev
-    stats.update(method=method, rtol=float(rtol))
+    stats["nfev"] += problem.extra_fev
+    stats.update(method=problem.method, rtol=problem.rtol)
     return LinkageRun(model, ts, ys, ms, peaks, peak_t, stats, outs, p)
+
+
+def integrate(problem: Problem, p: np.ndarray):
+    """The integrator's run of `problem` with parameters and memory `p` (modified in
+    place): numba's `integrate` returns, from the model's compiled kernels."""
+    from ..numerics.integrator import METHODS
+
+    return problem.model.integrate_model(problem.y0, p, problem.span.edges,
+                                         problem.integrator, METHODS[problem.method].arrays())
 
 
 def _start_step(model, y0, p, rtol, atol, method, span):
