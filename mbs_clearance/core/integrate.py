@@ -1,0 +1,172 @@
+"""The Python binding of the compiled integrator (`integrator.c`, built once per process).
+
+`integrate` takes the same arguments as the numba integrator's
+(`mbs_clearance.numerics.integrator.integrate`) but a model as a pointer to its record
+(`mbs_model`, the seam of `mbs_core.h`) instead of four compiled functions, and returns the
+same tuple. A model library (C sources built with `build.load`) exports its record with
+``const mbs_model *mbs_model_record(void)``; `model_record` turns the ``(ffi, lib)`` of such a
+library into the pointer `integrate` takes::
+
+    ffi, lib = build.load("my_model", [("my_model.c", source)])
+    model = model_record(ffi, lib)
+    t, y, memory, peaks, peak_t, counters, outputs, status = integrate(
+        model, y0, p, edges, make_settings(...), METHODS["dopri5"].arrays())
+
+The call runs without the GIL (cffi releases it around every call of a C function), so
+threads integrate in parallel.
+"""
+
+from __future__ import annotations
+
+import threading
+from pathlib import Path
+
+import numpy as np
+
+from . import build
+
+__all__ = ["core", "model_record", "integrate", "OUT_OF_MEMORY", "BAD_ARGUMENT"]
+
+#: negative statuses of the core (the others are `integrator.RESULTS`)
+OUT_OF_MEMORY = -1
+BAD_ARGUMENT = -2
+
+_SOURCE = Path(__file__).resolve().parent / "integrator.c"
+_LOCK = threading.Lock()
+_CORE: list = []
+
+
+def core():
+    """(ffi, lib) of the compiled core, built (or found in the cache) on first use."""
+    with _LOCK:
+        if not _CORE:
+            _CORE.append(build.load("core", [("integrator.c", _SOURCE.read_text())]))
+        return _CORE[0]
+
+
+def model_record(ffi, lib):
+    """The record of a model library (its ``(ffi, lib)`` from `build.load`, exporting
+    ``mbs_model_record``) as a pointer of the core's ffi, for `integrate`. The library stays
+    loaded for the life of the process (`build.load` keeps it)."""
+    core_ffi, _ = core()
+    address = int(ffi.cast("uintptr_t", lib.mbs_model_record()))
+    if address == 0:
+        raise ValueError("the model library returned no record (mbs_model_record() is NULL)")
+    return core_ffi.cast("const mbs_model *", address)
+
+
+def _doubles(name, value, ndim=1):
+    arr = np.ascontiguousarray(value, dtype=float)
+    if arr.ndim != ndim:
+        raise ValueError(f"{name} must be a {ndim}-dimensional array of floats; got shape "
+                         f"{arr.shape}")
+    return arr
+
+
+def integrate(model, y0, p, edges, settings, coefficients):
+    """Integrate a model from edges[0] to edges[-1] with the compiled core.
+
+    Parameters
+    ----------
+    model : cffi pointer to ``mbs_model``
+        The model's record (`model_record`).
+    y0 : array of float, shape (n,)
+        Initial state (the model's units: m, rad, m/s, rad/s, ...).
+    p : ndarray of float64, shape (model.n_p,)
+        Parameters, memory and constants; the memory entries are updated in place, as by
+        the numba integrator (contiguous float64 required).
+    edges : array of float, shape (n_windows + 1,)
+        Window edges in s: edges[0] the start, edges[-1] the end; the integration lands on
+        each, and the monitor's maximum is tracked per window.
+    settings : integrator.IntegratorSettings
+        From `integrator.make_settings`; ``atol`` needs at least n entries here.
+    coefficients : tuple
+        ``Tableau.arrays()`` of the method.
+
+    Returns
+    -------
+    tuple
+        (t (m,) in s, y (m, n), memory (m, max(n_mem, 1)) of the recorded steps, the refined
+        maximum of the monitor per window and its time in s, counters (int64: nfev,
+        naccept, nreject, nevent, nrefine), outputs (m, n_out), status (an
+        `integrator.RESULTS` code)): numba's `integrate`, arrays owning their memory.
+    """
+    ffi, lib = core()
+    y0 = _doubles("y0", y0)
+    edges = _doubles("edges", edges)
+    if not (isinstance(p, np.ndarray) and p.dtype == np.float64 and p.ndim == 1
+            and p.flags.c_contiguous and p.flags.writeable):
+        raise ValueError("p must be a writable contiguous 1-dimensional float64 array (its "
+                         "memory entries are updated in place)")
+    n = y0.shape[0]
+    n_p = int(model.n_p)
+    if p.shape[0] != n_p:
+        raise ValueError(f"p must have the model's {n_p} entries; got {p.shape[0]}")
+    if n < 1 or edges.shape[0] < 2:
+        raise ValueError(f"y0 needs at least 1 entry and edges at least 2; got {n} and "
+                         f"{edges.shape[0]}")
+    atol = _doubles("atol", settings.atol)
+    if atol.shape[0] < n or not 1 <= settings.n_err <= n:
+        raise ValueError(f"atol must have at least len(y0) = {n} entries and n_err must be in "
+                         f"[1, {n}]; got {atol.shape[0]} and {settings.n_err}")
+    if settings.mem_start + settings.n_mem > n_p:
+        raise ValueError(f"the memory entries p[{settings.mem_start}:"
+                         f"{settings.mem_start + settings.n_mem}] exceed p's {n_p} entries")
+    A, B, C, E, E2, P, A_extra, C_extra, error_order, pi_alpha, pi_beta = coefficients
+    A, P, A_extra = (_doubles(name, a, 2) for name, a in
+                     (("A", A), ("P", P), ("A_extra", A_extra)))
+    B, C, E, E2, C_extra = (_doubles(name, a) for name, a in
+                            (("B", B), ("C", C), ("E", E), ("E2", E2), ("C_extra", C_extra)))
+
+    def ptr(arr):
+        return ffi.cast("double *", ffi.from_buffer(arr))
+
+    keep = (y0, edges, atol, A, B, C, E, E2, P, A_extra, C_extra)   # alive through the call
+    tb = ffi.new("mbs_tableau *")
+    tb.A, tb.a_rows, tb.a_cols = ptr(A), A.shape[0], A.shape[1]
+    tb.B, tb.n_b = ptr(B), B.shape[0]
+    tb.C, tb.n_c = ptr(C), C.shape[0]
+    tb.E, tb.n_e = ptr(E), E.shape[0]
+    tb.E2, tb.n_e2 = ptr(E2), E2.shape[0]
+    tb.P, tb.p_rows, tb.p_cols = ptr(P), P.shape[0], P.shape[1]
+    tb.A_extra, tb.x_rows, tb.x_cols = ptr(A_extra), A_extra.shape[0], A_extra.shape[1]
+    tb.C_extra, tb.n_c_extra = ptr(C_extra), C_extra.shape[0]
+    tb.error_order, tb.pi_alpha, tb.pi_beta = float(error_order), float(pi_alpha), float(pi_beta)
+    st = ffi.new("mbs_settings *")
+    st.rtol = settings.rtol
+    st.atol, st.n_atol = ptr(atol), atol.shape[0]
+    for name in ("n_err", "h0", "h_max", "max_steps", "record", "event_tol", "event_margin",
+                 "n_samples", "refine_iters", "n_out", "n_dense", "n_events", "mem_start",
+                 "n_mem", "n_crests"):
+        setattr(st, name, getattr(settings, name))
+    res = ffi.new("mbs_result *")
+    status = lib.mbs_integrate(model, ptr(y0), n, ffi.cast("double *", ffi.from_buffer(p)),
+                               ptr(edges), edges.shape[0], st, tb, res)
+    del keep
+    try:
+        if status == OUT_OF_MEMORY:
+            raise MemoryError("the compiled integrator ran out of memory for its records: "
+                              "set record=False or shorten the run")
+        if status == BAD_ARGUMENT:
+            raise ValueError("the compiled integrator refused its arguments (sizes of y0, "
+                             "p, edges, atol or the settings out of range)")
+        nrec, n_win = res.n_rec, res.n_win
+        n_m = max(settings.n_mem, 1)
+        n_out = settings.n_out
+
+        def take(cptr, count, shape):
+            data = np.frombuffer(ffi.buffer(cptr, 8 * count), dtype=np.float64)
+            return data.copy().reshape(shape)
+
+        t = take(res.t, nrec, (nrec,))
+        y = take(res.y, nrec * n, (nrec, n))
+        memory = take(res.mem, nrec * n_m, (nrec, n_m))
+        if settings.n_mem == 0:
+            memory[:] = 0.0     # no memory: the one column is not written by the core
+        outputs = take(res.out, nrec * n_out, (nrec, n_out))
+        peaks = take(res.peaks, n_win, (n_win,))
+        peak_t = take(res.peak_t, n_win, (n_win,))
+        counters = np.array(list(res.counters), dtype=np.int64)
+    finally:
+        lib.mbs_result_free(res)
+    return t, y, memory, peaks, peak_t, counters, outputs, int(status)

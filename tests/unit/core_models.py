@@ -1,0 +1,235 @@
+"""Test models of the compiled core, in C (through the seam `mbs_core.h`) and, for the ball,
+the same model in numba (the numba integrator's oracle). Shared by the core's tests and
+`benchmarks/core_speed.py`.
+
+The bouncing ball. Its state is unfolded so that an impact changes the memory only (the
+seam's on_event may not write the state): y = (X, W[, Q]) with the physical height
+h = X + alpha + beta t and velocity v = W + beta, (alpha, beta) memory. Between impacts
+X' = W, W' = -g - c v (c: linear drag), and Q' = h^2 (a component outside the dense state:
+the event functions and the monitor read y[:2]). The joints: the floor (g_0 = -h) and a
+ceiling at H (g_1 = h - H); at an impact v becomes -e v (beta changes, alpha keeps h
+continuous) and the bounce count p[COUNT] grows. The monitor is h (the window's peak: the
+apex heights) and its output v. Flags in p: NAN_AFTER (the right-hand side is NaN beyond
+that time) and CHATTER (every switching function is +1 and on_event does nothing: repeated
+zero-length events).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba as nb
+import numpy as np
+
+from mbs_clearance.numerics.integrator import (
+    ACTION_SIG,
+    EVENT_SIG,
+    MONITOR_SIG,
+    RHS_SIG,
+    make_settings,
+)
+
+# the ball's parameter vector
+GRAV, REST, CEIL, DRAG, NAN_AFTER, CHATTER, ALPHA, BETA, COUNT, HALF_G = range(10)
+BALL_MEM_START, BALL_N_MEM, BALL_N_P = ALPHA, 3, 10
+
+BALL_C = r"""
+#include <math.h>
+#include "mbs_core.h"
+
+static void height(double t, const double *y, const double *p, double *h, double *v)
+{
+    *h = y[0] + p[6] + p[7] * t;
+    *v = y[1] + p[7];
+}
+
+static void rhs(double t, const double *y, int64_t n, const double *p, double *dydt)
+{
+    double h, v;
+    height(t, y, p, &h, &v);
+    double bad = t > p[4] ? NAN : 0.0;
+    dydt[0] = y[1] + bad;
+    dydt[1] = -p[0] - p[3] * v + bad;
+    if (n > 2)
+        dydt[2] = h * h + bad;
+}
+
+static void event(double t, const double *y, const double *p, int64_t j, double *g_gd)
+{
+    double h, v;
+    if (p[5] != 0.0) {
+        g_gd[0] = 1.0;
+        g_gd[1] = 0.0;
+        return;
+    }
+    height(t, y, p, &h, &v);
+    if (j == 0) {
+        g_gd[0] = -h;
+        g_gd[1] = -v;
+    } else {
+        g_gd[0] = h - p[2];
+        g_gd[1] = v;
+    }
+}
+
+static void on_event(double t, const double *y, double *p, int64_t j)
+{
+    (void)j;
+    if (p[5] != 0.0)
+        return;
+    double v = y[1] + p[7];
+    double beta = -p[1] * v - y[1];
+    p[6] = p[6] + (p[7] - beta) * t;
+    p[7] = beta;
+    p[8] += 1.0;
+}
+
+static double monitor(double t, const double *y, int64_t n, const double *p, double *dydt,
+                      double *out, int64_t n_out, double *g, double *gd)
+{
+    double h, v, g_gd[2];
+    rhs(t, y, n, p, dydt);
+    height(t, y, p, &h, &v);
+    if (n_out >= 1)
+        out[0] = v;
+    for (int64_t j = 0; j < 2; j++) {
+        event(t, y, p, j, g_gd);
+        g[j] = g_gd[0];
+        gd[j] = g_gd[1];
+    }
+    return h;
+}
+
+static int prepare(double *p)
+{
+    p[9] = 0.5 * p[0];
+    return 0;
+}
+
+static const mbs_model RECORD = {3, 1, 2, 6, 3, 1, 9, 10, rhs, event, on_event, monitor, prepare};
+
+const mbs_model *mbs_model_record(void) { return &RECORD; }
+"""
+
+# the linear oscillator x'' = -w^2 x (p = [w]); monitor x; its switching function is -1
+OSCILLATOR_C = r"""
+#include "mbs_core.h"
+
+static void rhs(double t, const double *y, int64_t n, const double *p, double *dydt)
+{
+    (void)t; (void)n;
+    dydt[0] = y[1];
+    dydt[1] = -p[0] * p[0] * y[0];
+}
+
+static void event(double t, const double *y, const double *p, int64_t j, double *g_gd)
+{
+    (void)t; (void)y; (void)p; (void)j;
+    g_gd[0] = -1.0;
+    g_gd[1] = 0.0;
+}
+
+static void on_event(double t, const double *y, double *p, int64_t j)
+{
+    (void)t; (void)y; (void)p; (void)j;
+}
+
+static double monitor(double t, const double *y, int64_t n, const double *p, double *dydt,
+                      double *out, int64_t n_out, double *g, double *gd)
+{
+    (void)out; (void)n_out;
+    rhs(t, y, n, p, dydt);
+    g[0] = -1.0;
+    gd[0] = 0.0;
+    return y[0];
+}
+
+static int prepare(double *p) { (void)p; return 0; }
+
+static const mbs_model RECORD = {2, 1, 1, 1, 0, 0, 1, 1, rhs, event, on_event, monitor, prepare};
+
+const mbs_model *mbs_model_record(void) { return &RECORD; }
+"""
+
+
+# ---- the ball in numba (the same arithmetic)
+
+@nb.njit(RHS_SIG, cache=True, error_model="numpy")
+def ball_rhs(t, y, p, dydt):
+    h = y[0] + p[ALPHA] + p[BETA] * t
+    v = y[1] + p[BETA]
+    bad = math.nan if t > p[NAN_AFTER] else 0.0
+    dydt[0] = y[1] + bad
+    dydt[1] = -p[GRAV] - p[DRAG] * v + bad
+    if y.shape[0] > 2:
+        dydt[2] = h * h + bad
+
+
+@nb.njit(EVENT_SIG, cache=True, error_model="numpy")
+def ball_event(t, y, p, j):
+    if p[CHATTER] != 0.0:
+        return 1.0, 0.0
+    h = y[0] + p[ALPHA] + p[BETA] * t
+    v = y[1] + p[BETA]
+    if j == 0:
+        return -h, -v
+    return h - p[CEIL], v
+
+
+@nb.njit(ACTION_SIG, cache=True, error_model="numpy")
+def ball_on_event(t, y, p, j):
+    if p[CHATTER] != 0.0:
+        return
+    v = y[1] + p[BETA]
+    beta = -p[REST] * v - y[1]
+    p[ALPHA] = p[ALPHA] + (p[BETA] - beta) * t
+    p[BETA] = beta
+    p[COUNT] += 1.0
+
+
+@nb.njit(MONITOR_SIG, cache=True, error_model="numpy")
+def ball_monitor(t, y, p, dydt, out, g, gd):
+    ball_rhs(t, y, p, dydt)
+    h = y[0] + p[ALPHA] + p[BETA] * t
+    v = y[1] + p[BETA]
+    if out.shape[0] >= 1:
+        out[0] = v
+    for j in range(2):
+        g[j], gd[j] = ball_event(t, y, p, j)
+    return h
+
+
+def ball_parameters(g=9.81, e=0.8, ceiling=1e3, drag=0.0, nan_after=math.inf, chatter=False):
+    """The ball's p (memory zero: h = X, v = W at the start)."""
+    p = np.zeros(BALL_N_P)
+    p[[GRAV, REST, CEIL, DRAG, NAN_AFTER, CHATTER]] = g, e, ceiling, drag, nan_after, chatter
+    p[HALF_G] = 0.5 * g
+    return p
+
+
+def ball_settings(rtol=1e-9, *, dense=2, event_control=False, **kwargs):
+    """Settings of a ball run: all three states under error control, the first `dense`
+    read by the events and the monitor; with `event_control` the switching functions too."""
+    atol = np.full(3 + (4 if event_control else 0), 1e-10)
+    kwargs.setdefault("n_samples", 3)
+    kwargs.setdefault("event_tol", 1e-12)
+    return make_settings(rtol, atol, 3, n_dense=dense, n_events=2, mem_start=BALL_MEM_START,
+                         n_mem=BALL_N_MEM, n_out=1, **kwargs)
+
+
+def ball_numba(y0, p, edges, settings, coefficients):
+    """The numba integrator on the ball."""
+    from mbs_clearance.numerics.integrator import integrate
+
+    return integrate(ball_rhs, ball_event, ball_on_event, ball_monitor, y0, p, edges,
+                     settings, coefficients)
+
+
+def bounce_times(h0, g, e, count):
+    """Closed form: the first `count` impact times of a ball dropped from rest at h0 (no
+    drag), and the apex heights e^(2k) h0 between them."""
+    t1 = math.sqrt(2.0 * h0 / g)
+    times = [t1]
+    for k in range(1, count):
+        times.append(times[-1] + 2.0 * e ** k * t1)
+    return np.array(times)
