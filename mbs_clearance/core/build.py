@@ -191,11 +191,19 @@ def _note_seconds(directory: Path, label: str, seconds: float) -> None:
         pass            # only an estimate for the next message
 
 
-def build(label: str, sources: list[tuple[str, str]], flags: tuple[str, ...] = FLAGS) -> Path:
+def build(label: str, sources, flags: tuple[str, ...] = FLAGS, key: str | None = None) -> Path:
     """The path of the shared library built from `sources` ((file name, text) pairs, C files
-    and headers), built now if no valid cached copy exists. `label` names it in messages."""
+    and headers), built now if no valid cached copy exists. `label` names it in messages.
+
+    With `key` (a text that determines the sources, e.g. a model's structure and the
+    generator's digest) the library is found by that key, and `sources` may be a callable
+    that makes them, called only when the library must be built (a generated model's
+    derivation is skipped when its library is cached)."""
     cc, cc_id = compiler()
-    digest = _digest(sources, flags, cc_id)
+    if key is None:
+        digest = _digest(sources, flags, cc_id)
+    else:
+        digest = _digest([("key", key)], flags, cc_id)
     name = f"{label}-{digest[:24]}.so"
     last_error = None
     for directory in cache_dirs():
@@ -207,6 +215,8 @@ def build(label: str, sources: list[tuple[str, str]], flags: tuple[str, ...] = F
         if lib.exists():
             _warn_once(str(lib), f"the compiled library {lib} does not match its recorded "
                                  "digest (damaged or changed); it is built again")
+        if callable(sources):
+            sources = sources()
         try:
             _compile(cc, sources, flags, lib, label)
             return lib
@@ -218,14 +228,15 @@ def build(label: str, sources: list[tuple[str, str]], flags: tuple[str, ...] = F
                        f"writable directory of your own ({last_error})")
 
 
-def load(label: str, sources: list[tuple[str, str]], cdef: str = "",
-         flags: tuple[str, ...] = FLAGS):
+def load(label: str, sources, cdef: str = "", flags: tuple[str, ...] = FLAGS,
+         key: str | None = None):
     """(ffi, lib): the library of `sources` built (or found) and opened with cffi; `cdef`
-    adds declarations to the seam's header. One load per library and process."""
+    adds declarations to the seam's header; `key`: as for `build`. One load per library and
+    process."""
     import cffi
 
     with _LOCK:
-        path = build(label, sources, flags)
+        path = build(label, sources, flags, key)
         key = str(path)
         if key not in _LOADED:
             ffi = cffi.FFI()

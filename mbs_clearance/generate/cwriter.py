@@ -12,6 +12,7 @@ nowhere in it (the structure's digest names it).
 
 from __future__ import annotations
 
+import json
 import re
 
 import sympy as sp
@@ -188,6 +189,7 @@ def render_c(d: Derivation, linkage_name: str, structure: dict,
     E, n = pl.E, pl.n
     dynamics = c.function([pl.gaps_stage, pl.contact_lines, *pl.eom, pl.outputs_stage])
     gap_fns = [c.function([(pl.gap_exprs[j], pl.gap_names[j])]) for j in range(E)]
+    closure = _closure_functions(c, d, pl)
     prepare = c.constants()      # after the plan: every constant of the kernels known
     meta = metadata(d, linkage_name, structure, zeros, pl, len(pl.w.constants))
     N_OUT = meta["N_OUT"]
@@ -282,4 +284,39 @@ def render_c(d: Derivation, linkage_name: str, structure: dict,
             "CONST_START, N_P,", "                              rhs, event, on_event, monitor, "
             "prepare};", "",
             "const mbs_model *mbs_model_record(void) { return &MODEL; }", ""]
+    out += closure
+    out += ["/* the metadata of the model (JSON): what the numba module exposes beside its "
+            "kernels */", "const char *mbs_model_meta(void) {",
+            f"    return {_c_string(json.dumps(meta, sort_keys=True))};", "}", ""]
     return "\n".join(out), meta
+
+
+def _c_string(text: str) -> str:
+    """A C string literal of `text` (JSON: printable ASCII after json.dumps' escapes)."""
+    if not text.isascii() or not text.isprintable():
+        raise ValueError("the model's metadata is not printable ASCII")
+    return '"' + text.replace("\\", "\\\\").replace('"', '\\"') + '"'
+
+
+def _closure_functions(c: _C, d: Derivation, pl) -> list[str]:
+    """The loop closure at coordinates q (the numba module's closure, closure_jacobian and
+    closure_rate): the clearance joints' gaps, then the sliders' offsets and tilts, into
+    res[nc] (the Jacobian row-major, res[nc * N_Q])."""
+    w, n, J = pl.w, pl.n, len(d.joints)
+    nc = 2 * J + 2 * len(d.slider_closure)
+    closure = c.function([([e for g in pl.gap_exprs[:J] for e in g[:2]]
+                           + [w.split(e) for cc in d.slider_closure for e in cc],
+                           [f"c{i}" for i in range(nc)])])
+    jac = c.function([([w.split(d.closure_jacobian[i, k]) for i in range(nc)
+                        for k in range(n)], [f"c{i}_{k}" for i in range(nc) for k in range(n)])])
+    rate = c.function([([w.split(e) for e in d.closure_rate], [f"c{i}" for i in range(nc)])])
+    out = [f"int64_t mbs_closure_size(void) {{ return {nc}; }}", ""]
+    for name, body, names in (
+            ("mbs_closure", closure, [f"c{i}" for i in range(nc)]),
+            ("mbs_closure_jacobian", jac, [f"c{i}_{k}" for i in range(nc) for k in range(n)]),
+            ("mbs_closure_rate", rate, [f"c{i}" for i in range(nc)])):
+        out += [f"void {name}(double t, const double *y, const double *p, double *res) {{",
+                "    (void)t; (void)p;", *body]
+        out += [f"    res[{k}] = {nm};" for k, nm in enumerate(names)]
+        out += ["}", ""]
+    return out

@@ -11,6 +11,7 @@ import numpy as np
 from .._checks import check_real
 from ..model.cases import as_linkage
 from ..numerics.integrator import METHODS, RESULTS
+from .kernels import plain_kernel
 from .settings import DEFAULT_RTOL, RunSettings
 
 __all__ = ["Flow", "TangentFlow", "drive_of", "clearances_of", "joints_of"]
@@ -75,13 +76,13 @@ class Flow:
                                    (linkage.drive.speed, linkage.drive.initial_angle))
         self.clearance = clearances_of(linkage)
         self.joints = joints_of(linkage)
-        model = self.model = lm.load_model(linkage)
+        model = self.model = lm.load_numba_model(linkage)
         p = lm.pack_parameters(linkage, model)
         rtol, atol = lm._tolerances(linkage, model, rtol, settings.atol)
         event_tol = (lm.event_tolerance(linkage) if settings.event_tol is None
                      else settings.event_tol)
         y0 = lm.initial_state(linkage, model, p)
-        self.kernel = model.integrate_model
+        self.kernel = plain_kernel(linkage, model)
         self.settings = lm.integrator_settings(
             linkage, model, rtol, atol,
             h_max=(linkage.time_scale if linkage.drive is None else linkage.period) / 8

@@ -40,7 +40,7 @@ from .linkage_model import (
     event_tolerance,
     initial_state,
     integrator_settings,
-    load_model,
+    load_numba_model,
     pack_parameters,
     specialisable,
     trajectory_from_run,
@@ -635,7 +635,7 @@ def plain_setup(linkage: Linkage, rtol: float | None, start=None, specialise: bo
     if linkage.drive is None and start is not None:
         raise ValueError("start is for a driven linkage; a free linkage starts from its "
                          "initial (Linkage.initial, an Initial)")
-    model = load_model(linkage, specialise)
+    model = load_numba_model(linkage, specialise)
     rtol, atol = _tolerances(linkage, model, rtol, None)
     p0 = pack_parameters(linkage, model)
     if start is None:
@@ -775,7 +775,7 @@ def linkage_fd(linkage: Linkage, names: tuple[str, ...], revolutions: int | None
     run takes one model: the general one if a zero-valued geometric parameter is among
     `names` (its steps leave zero), else the one specialised on them."""
     spec = specialisable(linkage, names)
-    model = load_model(linkage, spec)
+    model = load_numba_model(linkage, spec)
     if t_eval is None and windows is not None:      # a free linkage: 720 per window
         t_eval = np.unique(np.concatenate([np.linspace(a, b, 721) for a, b in
                                            zip(windows[:-1], windows[1:])]))

@@ -27,9 +27,20 @@ __all__ = ["parameter_values", "pack_parameters", "initial_state", "Start", "set
 
 
 def load_model(linkage: Linkage, specialise: bool = True):
+    """The model of a plain run of `linkage`, specialised on its zero-valued geometric
+    parameters (or, `specialise=False`, the general one), on the chosen core
+    (`kernels.core_name`): the compiled C model (`generate.c_loader.CModel`, which answers
+    as the numba module does for plain runs), or the generated numba module."""
+    from .kernels import c_model_or_none
+
+    model = c_model_or_none(linkage, specialise)
+    return load_numba_model(linkage, specialise) if model is None else model
+
+
+def load_numba_model(linkage: Linkage, specialise: bool = True):
     """`generate.load_model` (imported on first use: the generator imports sympy, which a
-    run of a checked-in model does not need): the module specialised on `linkage`'s
-    zero-valued geometric parameters, or (`specialise=False`) the general one."""
+    run of a checked-in model does not need): the numba module, which the sensitivity and
+    tangent runs need."""
     from ..generate import load_model as load
 
     return load(linkage, specialise)
@@ -294,7 +305,8 @@ def event_atol(joint, speed: float, rtol: float) -> np.ndarray:
     the rate's atol is rtol x DAMPED_RATE_ATOL / xi x clearance x drive speed."""
     from ..laws.forces import hysteresis_factor
 
-    xi = hysteresis_factor(joint.restitution, CONTACT_MODELS[joint.contact_model])[0]
+    # the law's python source: a compiled kernel called from here would compile on first use
+    xi = hysteresis_factor.py_func(joint.restitution, CONTACT_MODELS[joint.contact_model])[0]
     rate = (rtol * DAMPED_RATE_ATOL / xi * joint.clearance * speed
             if xi > DAMPED_XI else np.inf)
     return np.array([rtol * EVENT_ATOL * joint.clearance, rate])
@@ -816,11 +828,13 @@ def solve(problem: Problem) -> LinkageRun:
 
 def integrate(problem: Problem, p: np.ndarray):
     """The integrator's run of `problem` with parameters and memory `p` (modified in
-    place): numba's `integrate` returns, from the model's compiled kernels."""
+    place) on the chosen core (`kernels.plain_kernel`): numba's `integrate` returns."""
     from ..numerics.integrator import METHODS
+    from .kernels import plain_kernel
 
-    return problem.model.integrate_model(problem.y0, p, problem.span.edges,
-                                         problem.integrator, METHODS[problem.method].arrays())
+    kernel = plain_kernel(problem.linkage, problem.model, problem.specialise)
+    return kernel(problem.y0, p, problem.span.edges, problem.integrator,
+                  METHODS[problem.method].arrays())
 
 
 def _start_step(model, y0, p, rtol, atol, method, span):

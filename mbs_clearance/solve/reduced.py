@@ -21,11 +21,9 @@ import functools
 import warnings
 from typing import NamedTuple
 
-import numba as nb
 import numpy as np
 
 from .._checks import check_real, check_revolutions_memory
-from .._generated import paper_slider_crank as MODEL
 from .._warnings import AccuracyWarning
 from ..model.mechanism import SliderCrank
 from ..numerics.integrator import COUNTERS
@@ -55,13 +53,25 @@ from .linkage_model import (  # noqa: F401 - the settings shared with every link
 from .settings import RunSettings
 from .trajectory import annotate
 
-# ---- the generated model's layout (every SliderCrank maps to its structure)
-#: the clearance joint's memory (mode, impact velocity) in the generated model's p
-MEM_START = MODEL.MEM_START
-#: columns of the outputs that a plain run records (the generated model's)
-MODEL_COLUMNS = MODEL.OUT_COLUMNS
-#: index of the clearance in the generated model's p
-P_CLEARANCE = MODEL.PARAMETERS.index(f"{MODEL.JOINTS[0]}.clearance")
+
+# ---- the generated model's layout (every SliderCrank maps to its structure): MODEL (the
+# checked-in numba module of the paper's description), MEM_START (the clearance joint's
+# memory, mode and impact velocity, in its p), MODEL_COLUMNS (the outputs a plain run
+# records) and P_CLEARANCE (the clearance's index in p), read on first use: importing the
+# numba module compiles its kernels, which a run on the C core does not need
+def __getattr__(name: str):
+    if name not in ("MODEL", "MEM_START", "MODEL_COLUMNS", "P_CLEARANCE"):
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    from .._generated import paper_slider_crank as model
+
+    return {"MODEL": model, "MEM_START": model.MEM_START, "MODEL_COLUMNS": model.OUT_COLUMNS,
+            "P_CLEARANCE": model.PARAMETERS.index(f"{model.JOINTS[0]}.clearance")}[name]
+
+
+def _numba_model():
+    from .._generated import paper_slider_crank
+
+    return paper_slider_crank
 
 N_MEM = 2          # the joint's mode and impact velocity
 N_STATE = 5        # theta3, x4, theta3dot, x4dot, W
@@ -75,7 +85,7 @@ def _model_parameters(mech: SliderCrank) -> np.ndarray:
     from ..model.cases import from_slider_crank
     from .linkage_model import pack_parameters as pack
 
-    p = pack(from_slider_crank(mech), MODEL)
+    p = pack(from_slider_crank(mech), _numba_model())
     p.flags.writeable = False
     return p
 
@@ -127,11 +137,17 @@ def linkage_of(mech: SliderCrank):
 
 
 def model_of(mech: SliderCrank):
-    """The checked-in generated module of `mech`'s description: the paper's model, or its
-    variant with the tangential force for a joint with friction (any law: a parameter).
-    Known without the generator's lookup by structure, which imports sympy."""
+    """The model of `mech`'s description for a plain run: on the C core its compiled model
+    (`linkage_model.load_model`); on numba the checked-in generated module, the paper's
+    model or its variant with the tangential force for a joint with friction (any law: a
+    parameter), known without the generator's lookup by structure, which imports sympy."""
+    from .kernels import c_model_or_none
+
+    c_model = c_model_or_none(linkage_of(mech))
+    if c_model is not None:
+        return c_model
     if mech.friction_law == "none":
-        return MODEL
+        return _numba_model()
     from .._generated import paper_slider_crank_friction
 
     return paper_slider_crank_friction
@@ -149,7 +165,7 @@ def default_atol(mech: SliderCrank, rtol: float) -> np.ndarray:
     """Absolute tolerances per state component from the mechanism's natural scales (those
     of its description, `linkage_model.default_atol`)."""
     lk = linkage_of(mech)
-    return lm.default_atol(lk, MODEL, rtol)[:N_STATE]
+    return lm.default_atol(lk, model_of(mech), rtol)[:N_STATE]
 
 
 def event_atol(mech: SliderCrank, rtol: float) -> np.ndarray:
@@ -276,48 +292,22 @@ def _series_columns(columns) -> np.ndarray:
     return np.array([names.index(a) for a in _SERIES], dtype=np.int64)
 
 
-@nb.njit(cache=True)
 def _columns(ys, ms, out, col, work):
     """The time series of a `Trajectory` from states, memories and outputs (the `_SERIES`
-    columns col of out), in one pass: base_force, crank_moment, contact_force, penetration,
+    columns col of out): base_force, crank_moment, contact_force, penetration,
     eccentricity, slider_position, slider_velocity, slider_acceleration, coupler_angle,
-    coupler_rate, contact_phase, crank_work (a copy of a strided column each, with numpy,
-    took 0.18 ms, 3 % of the paper case's simulation; this takes 0.05 ms)."""
-    m = ys.shape[0]
-    base_force = np.empty((m, 2))
-    eccentricity = np.empty((m, 2))
-    crank_moment = np.empty(m)
-    contact_force = np.empty(m)
-    penetration = np.empty(m)
-    slider_position = np.empty(m)
-    slider_velocity = np.empty(m)
-    slider_acceleration = np.empty(m)
-    coupler_angle = np.empty(m)
-    coupler_rate = np.empty(m)
-    contact_phase = np.empty(m, dtype=np.int8)
-    crank_work = np.empty(m)
-    for i in range(m):
-        base_force[i, 0] = out[i, col[0]]
-        base_force[i, 1] = out[i, col[1]]
-        eccentricity[i, 0] = out[i, col[2]]
-        eccentricity[i, 1] = out[i, col[3]]
-        crank_moment[i] = out[i, col[4]]
-        contact_force[i] = out[i, col[5]]
-        penetration[i] = out[i, col[6]]
-        slider_acceleration[i] = out[i, col[7]]
-        coupler_angle[i] = ys[i, 0]
-        slider_position[i] = ys[i, 1]
-        coupler_rate[i] = ys[i, 2]
-        slider_velocity[i] = ys[i, 3]
-        crank_work[i] = ys[i, work]
-        contact_phase[i] = 1 if ms[i, 0] > 0.5 else 0
-    return (base_force, crank_moment, contact_force, penetration, eccentricity,
-            slider_position, slider_velocity, slider_acceleration, coupler_angle, coupler_rate,
-            contact_phase, crank_work)
+    coupler_rate, contact_phase, crank_work, each a contiguous copy."""
+    def column(a, k):
+        return np.ascontiguousarray(a[:, k])
+
+    return (np.ascontiguousarray(out[:, col[:2]]), column(out, col[4]), column(out, col[5]),
+            column(out, col[6]), np.ascontiguousarray(out[:, col[2:4]]), column(ys, 1),
+            column(ys, 3), column(out, col[7]), column(ys, 0), column(ys, 2),
+            (ms[:, 0] > 0.5).astype(np.int8), column(ys, work))
 
 
 def trajectory_from_states(mech, ts, ys, ms, p, stats, peaks, outs=None,
-                           columns=MODEL.OUT_COLUMNS, model=MODEL):
+                           columns=None, model=None):
     """Build a `Trajectory` in the paper's names (and beside them the generic ones of every
     linkage's, `linkage_model.named_series`) from recorded states [theta3, x4, theta3dot,
     x4dot, W (, friction work)], memories [mode, dmin, ...] and, if recorded by the integrator, the
@@ -326,6 +316,8 @@ def trajectory_from_states(mech, ts, ys, ms, p, stats, peaks, outs=None,
     parameters p."""
     from .trajectory import Trajectory
 
+    model = _numba_model() if model is None else model
+    columns = model.OUT_COLUMNS if columns is None else columns
     ys = np.ascontiguousarray(ys)
     ms = np.ascontiguousarray(ms)
     if outs is None or outs.shape[1] == 0:
