@@ -19,6 +19,7 @@ from core_models import (  # noqa: E402
     BALL_C,
     BALL_MEM_START,
     COUNT,
+    NO_EVENTS_C,
     OSCILLATOR_C,
     ball_numba,
     ball_parameters,
@@ -168,7 +169,7 @@ def test_statuses(ball):
 def test_bad_input_is_refused_before_the_run(ball):
     y0 = np.array([1.0, 0.0, 0.0])
     tab = METHODS["dopri5"].arrays()
-    with pytest.raises(ValueError, match="p must have the model's 10 entries"):
+    with pytest.raises(ValueError, match="p must have the model's 11 entries"):
         integrate(ball, y0, np.zeros(4), np.array([0.0, 1.0]), ball_settings(), tab)
     with pytest.raises(ValueError, match="edges at least 2"):
         integrate(ball, y0, ball_parameters(), np.array([0.0]), ball_settings(), tab)
@@ -195,6 +196,11 @@ BALL_CASES = [
     ({}, dict(nan_after=1.3), (1.0, 0.0, 0.0)),
     ({}, dict(chatter=True), (1.0, 0.0, 0.0)),
     (dict(max_steps=30), dict(drag=0.3, ceiling=0.8), (0.5, 3.0, 0.0)),
+    # two joints on their surface at once (the second switched with the first)
+    ({}, dict(twin=True, e=0.9), (1.0, 0.0, 0.0)),
+    # longer than the short-state fast paths (9 > 8 states)
+    (dict(n_state=9, event_control=True), dict(drag=0.3, ceiling=0.8),
+     (0.5, 3.0, 0.0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6)),
 ]
 
 
@@ -203,8 +209,8 @@ def test_c_core_equals_the_numba_integrator_bitwise(ball, method):
     """The same ball run by the C core and by the numba integrator: every returned array,
     the status and the memory left in p equal bit for bit (the same floating-point
     operations in the same order), for each method, with the switching functions under
-    error control or not, a state wider than the dense one, records off, crests refined,
-    and each status."""
+    error control or not, a state wider than the dense one, a state longer than the
+    short-state fast paths, records off, crests refined, and each status."""
     edges = np.linspace(0.0, 4.0, 9)
     tab = METHODS[method].arrays()
     statuses = set()
@@ -221,6 +227,9 @@ def test_c_core_equals_the_numba_integrator_bitwise(ball, method):
         assert got[7] == want[7]
         assert np.array_equal(p_c, p_n)
         statuses.add(RESULTS(got[7]))
+        if pkw.get("twin"):
+            # every impact switched both joints: two events counted per bounce
+            assert got[5][3] == 2 * p_c[COUNT] > 0
         if pkw.get("ceiling", 1e3) < 1.0 and "max_steps" not in skw:
             # both surfaces hit: the highest point is the ceiling
             assert got[5][3] > 4 and abs(np.max(got[3]) - pkw["ceiling"]) < 1e-9
@@ -231,7 +240,7 @@ RENDEZVOUS_C = r"""
 #define _POSIX_C_SOURCE 199309L
 #include <time.h>
 #include "mbs_core.h"
-
+""" + NO_EVENTS_C + r"""
 /* the first monitor call of each run enters a rendezvous: it counts itself in and waits
  * (at most 20 s) until two runs are in at once; the count it saw is kept per run */
 static int inside = 0;
@@ -251,17 +260,6 @@ static void rhs(double t, const double *y, int64_t n, const double *p, double *d
     dydt[0] = -y[0];
 }
 
-static void event(double t, const double *y, const double *p, int64_t j, double *g_gd)
-{
-    (void)t; (void)y; (void)p; (void)j;
-    g_gd[0] = -1.0;
-    g_gd[1] = 0.0;
-}
-
-static void on_event(double t, const double *y, double *p, int64_t j)
-{
-    (void)t; (void)y; (void)p; (void)j;
-}
 
 static double monitor(double t, const double *y, int64_t n, const double *p, double *dydt,
                       double *out, int64_t n_out, double *g, double *gd)
@@ -281,8 +279,6 @@ static double monitor(double t, const double *y, int64_t n, const double *p, dou
     gd[0] = 0.0;
     return y[0];
 }
-
-static int prepare(double *p) { (void)p; return 0; }
 
 static const mbs_model RECORD = {1, 1, 1, 1, 0, 0, 1, 1, rhs, event, on_event, monitor, prepare};
 
