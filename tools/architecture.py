@@ -23,7 +23,7 @@ PACKAGE = "mbs_clearance"
 LAYERS = {
     "base": (("_warnings", "_checks", "_io", "units", "_cache"),
              "warnings, input checks, files, units, the kernel cache"),
-    "numerics": (("numerics",), "the compiled integrator; knows no mechanism"),
+    "numerics": (("numerics", "core"), "the compiled integrator; knows no mechanism"),
     "laws": (("laws",), "contact, friction and oil-film laws, one module each"),
     "model": (("model",), "Linkage, the SliderCrank parameter set, named cases, design fields"),
     "generate": (("generate", "_generated"), "description -> compiled model module"),
