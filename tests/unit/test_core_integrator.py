@@ -60,6 +60,8 @@ def test_oscillator_follows_its_closed_form(oscillator, method):
     assert np.max(np.abs(y[:, 0] - np.cos(t))) < 1e-7
     assert np.max(np.abs(y[:, 1] + np.sin(t))) < 1e-7
     assert memory.shape == (len(t), 1) and outputs.shape == (len(t), 0)
+    # numpy's copies (the core's buffers are freed after the call)
+    assert all(a.flags.owndata for a in (t, y, memory, peaks, peak_t, counters, outputs))
 
 
 @pytest.mark.parametrize("method", METHOD_NAMES)
