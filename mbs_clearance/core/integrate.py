@@ -156,7 +156,7 @@ def integrate(model, y0, p, edges, settings, coefficients):
 
         def take(cptr, count, shape):
             data = np.frombuffer(ffi.buffer(cptr, 8 * count), dtype=np.float64)
-            return data.copy().reshape(shape)
+            return data.reshape(shape).copy()      # owns its memory: the core's is freed
 
         t = take(res.t, nrec, (nrec,))
         y = take(res.y, nrec * n, (nrec, n))

@@ -857,6 +857,14 @@ static int clear_of_surface(const run_ctx *cx, double t, const double *y, int64_
     return 1;
 }
 
+static inline void set_bracket(double *out, double lo, double g_lo, double hi, double g_hi)
+{
+    out[0] = lo;
+    out[1] = g_lo;
+    out[2] = hi;
+    out[3] = g_hi;
+}
+
 /* _search_event: the first sign change of joint j's g inside the step; the bracket into
  * out[0..3] = (theta_lo, g_lo, theta_hi, g_hi), theta_hi = -1: none */
 static void search_event(const run_ctx *cx, int64_t j, double t, const double *y, int64_t n,
@@ -916,10 +924,7 @@ static void search_event(const run_ctx *cx, int64_t j, double t, const double *y
                 cx->m->event(t + theta_f * h, ytmp, p, j, ggd);
                 double g_f = ggd[0];
                 if (g_f > 0.0) {
-                    out[0] = theta_a;
-                    out[1] = g_a;
-                    out[2] = theta_f;
-                    out[3] = g_f;
+                    set_bracket(out, theta_a, g_a, theta_f, g_f);
                     return;
                 }
                 theta_a = theta_f;
@@ -927,20 +932,14 @@ static void search_event(const run_ctx *cx, int64_t j, double t, const double *y
             }
         }
         if (g_b > 0.0) {
-            out[0] = theta_a;
-            out[1] = g_a;
-            out[2] = theta_b;
-            out[3] = g_b;
+            set_bracket(out, theta_a, g_a, theta_b, g_b);
             return;
         }
         theta_a = theta_b;
         g_a = g_b;
         gd_a = gd_b;
     }
-    out[0] = theta_a;
-    out[1] = g_a;
-    out[2] = -1.0;
-    out[3] = 0.0;
+    set_bracket(out, theta_a, g_a, -1.0, 0.0);
 }
 
 /* _dense_root: Illinois root of joint j's g on the dense output in [a, b] */

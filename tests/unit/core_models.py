@@ -6,12 +6,15 @@ The bouncing ball. Its state is unfolded so that an impact changes the memory on
 seam's on_event may not write the state): y = (X, W[, Q]) with the physical height
 h = X + alpha + beta t and velocity v = W + beta, (alpha, beta) memory. Between impacts
 X' = W, W' = -g - c v (c: linear drag), and Q' = h^2 (a component outside the dense state:
-the event functions and the monitor read y[:2]). The joints: the floor (g_0 = -h) and a
+the event functions and the monitor read y[:2]); optional further states follow Q through a
+chain of first-order lags (y_k' = y_(k-1) - y_k), so that a run can take a state longer than
+the integrator's short-state fast path. The joints: the floor (g_0 = -h) and a
 ceiling at H (g_1 = h - H); at an impact v becomes -e v (beta changes, alpha keeps h
 continuous) and the bounce count p[COUNT] grows. The monitor is h (the window's peak: the
 apex heights) and its output v. Flags in p: NAN_AFTER (the right-hand side is NaN beyond
-that time) and CHATTER (every switching function is +1 and on_event does nothing: repeated
-zero-length events).
+that time), CHATTER (every switching function is +1 and on_event does nothing: repeated
+zero-length events) and TWIN (the second joint is the floor again, its action none: two
+joints on their surface at every impact, switched together).
 """
 
 from __future__ import annotations
@@ -30,58 +33,62 @@ from mbs_clearance.numerics.integrator import (
 )
 
 # the ball's parameter vector
-GRAV, REST, CEIL, DRAG, NAN_AFTER, CHATTER, ALPHA, BETA, COUNT, HALF_G = range(10)
-BALL_MEM_START, BALL_N_MEM, BALL_N_P = ALPHA, 3, 10
+GRAV, REST, CEIL, DRAG, NAN_AFTER, CHATTER, TWIN, ALPHA, BETA, COUNT, HALF_G = range(11)
+BALL_MEM_START, BALL_N_MEM, BALL_N_P = ALPHA, 3, 11
+_INDICES = "".join(f"#define {name} {value}\n" for name, value in dict(
+    GRAV=GRAV, REST=REST, CEIL=CEIL, DRAG=DRAG, NAN_AFTER=NAN_AFTER, CHATTER=CHATTER, TWIN=TWIN,
+    ALPHA=ALPHA, BETA=BETA, COUNT=COUNT, HALF_G=HALF_G, N_P=BALL_N_P).items())
 
 BALL_C = r"""
 #include <math.h>
 #include "mbs_core.h"
-
+""" + _INDICES + r"""
 static void height(double t, const double *y, const double *p, double *h, double *v)
 {
-    *h = y[0] + p[6] + p[7] * t;
-    *v = y[1] + p[7];
+    *h = y[0] + p[ALPHA] + p[BETA] * t;
+    *v = y[1] + p[BETA];
 }
 
 static void rhs(double t, const double *y, int64_t n, const double *p, double *dydt)
 {
     double h, v;
     height(t, y, p, &h, &v);
-    double bad = t > p[4] ? NAN : 0.0;
+    double bad = t > p[NAN_AFTER] ? NAN : 0.0;
     dydt[0] = y[1] + bad;
-    dydt[1] = -p[0] - p[3] * v + bad;
+    dydt[1] = -p[GRAV] - p[DRAG] * v + bad;
     if (n > 2)
         dydt[2] = h * h + bad;
+    for (int64_t k = 3; k < n; k++)
+        dydt[k] = y[k - 1] - y[k] + bad;
 }
 
 static void event(double t, const double *y, const double *p, int64_t j, double *g_gd)
 {
     double h, v;
-    if (p[5] != 0.0) {
+    if (p[CHATTER] != 0.0) {
         g_gd[0] = 1.0;
         g_gd[1] = 0.0;
         return;
     }
     height(t, y, p, &h, &v);
-    if (j == 0) {
+    if (j == 0 || p[TWIN] != 0.0) {
         g_gd[0] = -h;
         g_gd[1] = -v;
     } else {
-        g_gd[0] = h - p[2];
+        g_gd[0] = h - p[CEIL];
         g_gd[1] = v;
     }
 }
 
 static void on_event(double t, const double *y, double *p, int64_t j)
 {
-    (void)j;
-    if (p[5] != 0.0)
+    if (p[CHATTER] != 0.0 || (p[TWIN] != 0.0 && j == 1))
         return;
-    double v = y[1] + p[7];
-    double beta = -p[1] * v - y[1];
-    p[6] = p[6] + (p[7] - beta) * t;
-    p[7] = beta;
-    p[8] += 1.0;
+    double v = y[1] + p[BETA];
+    double beta = -p[REST] * v - y[1];
+    p[ALPHA] = p[ALPHA] + (p[BETA] - beta) * t;
+    p[BETA] = beta;
+    p[COUNT] += 1.0;
 }
 
 static double monitor(double t, const double *y, int64_t n, const double *p, double *dydt,
@@ -102,26 +109,18 @@ static double monitor(double t, const double *y, int64_t n, const double *p, dou
 
 static int prepare(double *p)
 {
-    p[9] = 0.5 * p[0];
+    p[HALF_G] = 0.5 * p[GRAV];
     return 0;
 }
 
-static const mbs_model RECORD = {3, 1, 2, 6, 3, 1, 9, 10, rhs, event, on_event, monitor, prepare};
+static const mbs_model RECORD = {3, 1, 2, ALPHA, 3, 1, HALF_G, N_P, rhs, event, on_event, monitor,
+                                 prepare};
 
 const mbs_model *mbs_model_record(void) { return &RECORD; }
 """
 
-# the linear oscillator x'' = -w^2 x (p = [w]); monitor x; its switching function is -1
-OSCILLATOR_C = r"""
-#include "mbs_core.h"
-
-static void rhs(double t, const double *y, int64_t n, const double *p, double *dydt)
-{
-    (void)t; (void)n;
-    dydt[0] = y[1];
-    dydt[1] = -p[0] * p[0] * y[0];
-}
-
+# a model without events: one switching function, always -1, and no action
+NO_EVENTS_C = r"""
 static void event(double t, const double *y, const double *p, int64_t j, double *g_gd)
 {
     (void)t; (void)y; (void)p; (void)j;
@@ -134,6 +133,21 @@ static void on_event(double t, const double *y, double *p, int64_t j)
     (void)t; (void)y; (void)p; (void)j;
 }
 
+static int prepare(double *p) { (void)p; return 0; }
+"""
+
+# the linear oscillator x'' = -w^2 x (p = [w]); monitor x
+OSCILLATOR_C = r"""
+#include "mbs_core.h"
+""" + NO_EVENTS_C + r"""
+
+static void rhs(double t, const double *y, int64_t n, const double *p, double *dydt)
+{
+    (void)t; (void)n;
+    dydt[0] = y[1];
+    dydt[1] = -p[0] * p[0] * y[0];
+}
+
 static double monitor(double t, const double *y, int64_t n, const double *p, double *dydt,
                       double *out, int64_t n_out, double *g, double *gd)
 {
@@ -143,8 +157,6 @@ static double monitor(double t, const double *y, int64_t n, const double *p, dou
     gd[0] = 0.0;
     return y[0];
 }
-
-static int prepare(double *p) { (void)p; return 0; }
 
 static const mbs_model RECORD = {2, 1, 1, 1, 0, 0, 1, 1, rhs, event, on_event, monitor, prepare};
 
@@ -163,6 +175,8 @@ def ball_rhs(t, y, p, dydt):
     dydt[1] = -p[GRAV] - p[DRAG] * v + bad
     if y.shape[0] > 2:
         dydt[2] = h * h + bad
+    for k in range(3, y.shape[0]):
+        dydt[k] = y[k - 1] - y[k] + bad
 
 
 @nb.njit(EVENT_SIG, cache=True, error_model="numpy")
@@ -171,14 +185,14 @@ def ball_event(t, y, p, j):
         return 1.0, 0.0
     h = y[0] + p[ALPHA] + p[BETA] * t
     v = y[1] + p[BETA]
-    if j == 0:
+    if j == 0 or p[TWIN] != 0.0:
         return -h, -v
     return h - p[CEIL], v
 
 
 @nb.njit(ACTION_SIG, cache=True, error_model="numpy")
 def ball_on_event(t, y, p, j):
-    if p[CHATTER] != 0.0:
+    if p[CHATTER] != 0.0 or (p[TWIN] != 0.0 and j == 1):
         return
     v = y[1] + p[BETA]
     beta = -p[REST] * v - y[1]
@@ -199,21 +213,24 @@ def ball_monitor(t, y, p, dydt, out, g, gd):
     return h
 
 
-def ball_parameters(g=9.81, e=0.8, ceiling=1e3, drag=0.0, nan_after=math.inf, chatter=False):
+def ball_parameters(g=9.81, e=0.8, ceiling=1e3, drag=0.0, nan_after=math.inf, chatter=False,
+                    twin=False):
     """The ball's p (memory zero: h = X, v = W at the start)."""
     p = np.zeros(BALL_N_P)
-    p[[GRAV, REST, CEIL, DRAG, NAN_AFTER, CHATTER]] = g, e, ceiling, drag, nan_after, chatter
+    p[[GRAV, REST, CEIL, DRAG, NAN_AFTER, CHATTER, TWIN]] = (g, e, ceiling, drag, nan_after,
+                                                             chatter, twin)
     p[HALF_G] = 0.5 * g
     return p
 
 
-def ball_settings(rtol=1e-9, *, dense=2, event_control=False, **kwargs):
-    """Settings of a ball run: all three states under error control, the first `dense`
-    read by the events and the monitor; with `event_control` the switching functions too."""
-    atol = np.full(3 + (4 if event_control else 0), 1e-10)
+def ball_settings(rtol=1e-9, *, n_state=3, dense=2, event_control=False, **kwargs):
+    """Settings of a ball run of `n_state` states: all under error control, the first
+    `dense` read by the events and the monitor; with `event_control` the switching
+    functions too."""
+    atol = np.full(n_state + (4 if event_control else 0), 1e-10)
     kwargs.setdefault("n_samples", 3)
     kwargs.setdefault("event_tol", 1e-12)
-    return make_settings(rtol, atol, 3, n_dense=dense, n_events=2, mem_start=BALL_MEM_START,
+    return make_settings(rtol, atol, n_state, n_dense=dense, n_events=2, mem_start=BALL_MEM_START,
                          n_mem=BALL_N_MEM, n_out=1, **kwargs)
 
 

@@ -1,0 +1,326 @@
+"""The compiled integrator (`mbs_clearance.core`): against closed forms (a linear
+oscillator, a bouncing ball), the observed order of each method, the refined window peaks,
+the statuses, and against the numba integrator on the same model (bitwise)."""
+
+import math
+import sys
+import threading
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from mbs_clearance.core import build
+from mbs_clearance.core.integrate import integrate, model_record
+from mbs_clearance.numerics.integrator import METHODS, RESULTS, make_settings
+
+sys.path.insert(0, str(Path(__file__).parent))
+from core_models import (  # noqa: E402
+    BALL_C,
+    BALL_MEM_START,
+    COUNT,
+    NO_EVENTS_C,
+    OSCILLATOR_C,
+    ball_numba,
+    ball_parameters,
+    ball_settings,
+    bounce_times,
+)
+
+METHOD_NAMES = sorted(METHODS)
+
+
+@pytest.fixture(scope="module")
+def ball():
+    return model_record(*build.load("test_ball", [("ball.c", BALL_C)]))
+
+
+@pytest.fixture(scope="module")
+def oscillator():
+    return model_record(*build.load("test_oscillator", [("oscillator.c", OSCILLATOR_C)]))
+
+
+def run_oscillator(model, y0, edges, rtol=1e-10, method="dopri5", **kwargs):
+    """The oscillator x'' = -x (omega = 1) under `method`; returns integrate's tuple."""
+    kwargs.setdefault("refine_iters", 24)
+    settings = make_settings(rtol, np.full(2, rtol), 2, n_dense=2, mem_start=1, n_mem=0,
+                             **kwargs)
+    return integrate(model, np.asarray(y0, float), np.array([1.0]), np.asarray(edges, float),
+                     settings, METHODS[method].arrays())
+
+
+@pytest.mark.parametrize("method", METHOD_NAMES)
+def test_oscillator_follows_its_closed_form(oscillator, method):
+    t, y, memory, peaks, peak_t, counters, outputs, status = run_oscillator(
+        oscillator, [1.0, 0.0], [0.0, 10.0], rtol=1e-10, method=method)
+    assert status == RESULTS.success
+    assert len(t) == counters[1] + 1 and t[0] == 0.0 and t[-1] == 10.0
+    assert np.all(np.diff(t) > 0.0)
+    # global error of a 10-s run at rtol = atol = 1e-10: a few hundred times the tolerance
+    assert np.max(np.abs(y[:, 0] - np.cos(t))) < 1e-7
+    assert np.max(np.abs(y[:, 1] + np.sin(t))) < 1e-7
+    assert memory.shape == (len(t), 1) and outputs.shape == (len(t), 0)
+    # numpy's copies (the core's buffers are freed after the call)
+    assert all(a.flags.owndata for a in (t, y, memory, peaks, peak_t, counters, outputs))
+
+
+@pytest.mark.parametrize("method", METHOD_NAMES)
+def test_each_method_converges_at_its_order(oscillator, method):
+    """Fixed steps (h0 = h_max = h, tolerances so loose that no step is rejected): the
+    error at t = 4 falls by 2^order per halving of h."""
+    order = METHODS[method].order
+    steps = (1.0, 0.5, 0.25) if method == "dop853" else (0.2, 0.1, 0.05)
+    errors = []
+    for h in steps:
+        t, y, *_, counters, _, status = run_oscillator(
+            oscillator, [1.0, 0.0], [0.0, 4.0], rtol=1e3, method=method, h0=h, h_max=h,
+            refine_iters=0)
+        assert status == RESULTS.success and counters[2] == 0
+        assert counters[1] == round(4.0 / h)
+        errors.append(abs(y[-1, 0] - math.cos(4.0)) + abs(y[-1, 1] + math.sin(4.0)))
+    observed = np.log2(np.array(errors[:-1]) / np.array(errors[1:]))
+    assert np.all(np.abs(observed - order) < 0.2), observed
+
+
+def test_refined_peaks_find_the_maxima_between_samples(oscillator):
+    """The monitor x(t) = cos(t - 0.5) from t = 0.5 has its maxima at 0.5 + 2 pi k; each
+    window holds one, between two steps: refined to the integration accuracy, where the
+    best sample falls short by about (omega h)^2 / 8."""
+    start = 0.5
+    edges = [start, 4.0, 9.0, 15.0]
+    sampled = run_oscillator(oscillator, [1.0, 0.0], edges, rtol=1e-11, refine_iters=0)
+    refined = run_oscillator(oscillator, [1.0, 0.0], edges, rtol=1e-11)
+    crest_t = np.array([start, start + 2.0 * math.pi, start + 4.0 * math.pi])
+    # the first window's maximum is its start (x = 1 there)
+    assert refined[3][0] == 1.0 and refined[4][0] == start
+    sample_err = np.abs(sampled[3][1:] - 1.0)
+    refined_err = np.abs(refined[3][1:] - 1.0)
+    assert np.all(refined_err < 1e-9)
+    assert np.all(sample_err > 100.0 * refined_err)
+    # the location of a quadratic maximum is known to about the square root of its value's
+    # error (1e-11 here)
+    assert np.allclose(refined[4][1:], crest_t[1:], atol=1e-5)
+    assert np.all(refined[5][4] > 0) and sampled[5][4] == 0
+
+
+def test_records_grow_beyond_their_first_allocation(oscillator):
+    """More steps than the first record block (16384 rows): every accepted step kept."""
+    t, y, *_, counters, _, status = run_oscillator(oscillator, [1.0, 0.0], [0.0, 20.0],
+                                                   h_max=1e-3, refine_iters=0)
+    assert status == RESULTS.success
+    assert len(t) == counters[1] + 1 > 16384 * 1.2
+    assert np.all(np.diff(t) > 0.0)
+    assert np.max(np.abs(y[:, 0] - np.cos(t))) < 1e-8
+
+
+@pytest.mark.parametrize("method", METHOD_NAMES)
+def test_ball_bounces_at_its_closed_form_times(ball, method):
+    """A ball dropped from 1 m (g = 9.81, restitution 0.8): its impacts, located and landed
+    on, against the closed form, and the refined peak height of each window (one apex
+    each) against e^(2k) h0."""
+    g, e, h0 = 9.81, 0.8, 1.0
+    impacts = bounce_times(h0, g, e, 5)
+    flights = np.diff(np.concatenate([[0.0], impacts]))
+    # window k + 1 from a quarter into flight k to a quarter into flight k + 1
+    edges = np.concatenate([[0.0], impacts[:4] + 0.25 * flights[1:]])
+    p = ball_parameters(g=g, e=e)
+    settings = ball_settings(1e-10)
+    t, y, memory, peaks, peak_t, counters, outputs, status = integrate(
+        ball, np.array([h0, 0.0, 0.0]), p, edges, settings, METHODS[method].arrays())
+    assert status == RESULTS.success
+    count = memory[:, COUNT - BALL_MEM_START]
+    bounced = t[1:][np.diff(count) > 0]
+    n = len(bounced)
+    assert n == 4 == counters[3] == p[COUNT]
+    assert np.allclose(bounced, impacts[:n], rtol=1e-9, atol=0)
+    # the height is h = X + alpha + beta t: zero at each landing
+    h_at = (y[1:, 0] + memory[1:, 0] + memory[1:, 1] * t[1:])[np.diff(count) > 0]
+    assert np.all(np.abs(h_at) < 1e-9)
+    # the velocity output after each bounce: -e times the one before
+    v = outputs[:, 0]
+    ups = v[1:][np.diff(count) > 0]
+    assert np.allclose(ups, e ** np.arange(1, n + 1) * g * impacts[0], rtol=1e-9)
+    apex = h0 * e ** (2.0 * np.arange(len(peaks)))
+    assert np.allclose(peaks, apex, rtol=1e-9, atol=0)
+    apex_t = np.concatenate([[0.0], impacts[:3] + 0.5 * flights[1:4]])
+    assert np.allclose(peak_t, apex_t, atol=1e-5)
+
+
+def test_statuses(ball):
+    """max_steps, step_underflow (the right-hand side NaN from t = 0.3 on: every step
+    across it is rejected and shrunk to nothing) and event chatter (a switching function
+    past its surface that no action turns: 21 zero-length events), each stopping the run
+    where it happened."""
+    y0 = np.array([1.0, 0.0, 0.0])
+    edges = np.array([0.0, 2.0])
+    tab = METHODS["dopri5"].arrays()
+    t, *_, counters, _, status = integrate(ball, y0, ball_parameters(), edges,
+                                           ball_settings(1e-8, max_steps=7), tab)
+    assert RESULTS(status) is RESULTS.max_steps
+    assert counters[1] + counters[2] == 7 and t[-1] < 2.0
+    t, *_, counters, _, status = integrate(ball, y0, ball_parameters(nan_after=0.3), edges,
+                                           ball_settings(1e-8), tab)
+    assert RESULTS(status) is RESULTS.step_underflow
+    assert 0.3 - 1e-12 < t[-1] <= 0.3 and counters[2] > 10
+    t, *_, counters, _, status = integrate(ball, y0, ball_parameters(chatter=True), edges,
+                                           ball_settings(1e-8), tab)
+    assert RESULTS(status) is RESULTS.event_chatter
+    assert counters[3] == 21 and counters[1] == 0 and list(t) == [0.0]
+
+
+def test_bad_input_is_refused_before_the_run(ball):
+    y0 = np.array([1.0, 0.0, 0.0])
+    tab = METHODS["dopri5"].arrays()
+    with pytest.raises(ValueError, match="p must have the model's 11 entries"):
+        integrate(ball, y0, np.zeros(4), np.array([0.0, 1.0]), ball_settings(), tab)
+    with pytest.raises(ValueError, match="edges at least 2"):
+        integrate(ball, y0, ball_parameters(), np.array([0.0]), ball_settings(), tab)
+    with pytest.raises(ValueError, match="writable contiguous"):
+        integrate(ball, y0, ball_parameters()[::1].tolist(), np.array([0.0, 1.0]),
+                  ball_settings(), tab)
+
+
+def test_out_of_memory_is_an_error_not_a_crash(ball):
+    """Work arrays that cannot be allocated (2^40 event samples a step: tens of TB)."""
+    with pytest.raises(MemoryError, match="ran out of memory"):
+        integrate(ball, np.array([1.0, 0.0, 0.0]), ball_parameters(), np.array([0.0, 1.0]),
+                  ball_settings(n_samples=2 ** 40), METHODS["dopri5"].arrays())
+
+
+# the numba integrator compiled for the ball (one specialisation serves every method)
+BALL_CASES = [
+    # (settings keywords, parameter keywords, y0)
+    ({}, dict(drag=0.3, ceiling=0.8, e=0.9), (0.5, 3.0, 0.0)),
+    (dict(event_control=True, event_margin=1e-4), dict(drag=0.3, ceiling=0.8, e=0.9),
+     (0.5, 3.0, 0.0)),
+    (dict(dense=3, n_samples=0, n_crests=1, refine_iters=5), dict(e=0.7), (1.0, 0.0, 0.0)),
+    (dict(record=False), dict(drag=0.1, ceiling=0.9), (0.5, 3.0, 0.0)),
+    ({}, dict(nan_after=1.3), (1.0, 0.0, 0.0)),
+    ({}, dict(chatter=True), (1.0, 0.0, 0.0)),
+    (dict(max_steps=30), dict(drag=0.3, ceiling=0.8), (0.5, 3.0, 0.0)),
+    # two joints on their surface at once (the second switched with the first)
+    ({}, dict(twin=True, e=0.9), (1.0, 0.0, 0.0)),
+    # longer than the short-state fast paths (9 > 8 states)
+    (dict(n_state=9, event_control=True), dict(drag=0.3, ceiling=0.8),
+     (0.5, 3.0, 0.0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6)),
+]
+
+
+@pytest.mark.parametrize("method", METHOD_NAMES)
+def test_c_core_equals_the_numba_integrator_bitwise(ball, method):
+    """The same ball run by the C core and by the numba integrator: every returned array,
+    the status and the memory left in p equal bit for bit (the same floating-point
+    operations in the same order), for each method, with the switching functions under
+    error control or not, a state wider than the dense one, a state longer than the
+    short-state fast paths, records off, crests refined, and each status."""
+    edges = np.linspace(0.0, 4.0, 9)
+    tab = METHODS[method].arrays()
+    statuses = set()
+    for skw, pkw, y0 in BALL_CASES:
+        settings = ball_settings(1e-7, **skw)
+        p_c = ball_parameters(**pkw)
+        p_n = p_c.copy()
+        got = integrate(ball, np.array(y0), p_c, edges, settings, tab)
+        want = ball_numba(np.array(y0), p_n, edges, settings, tab)
+        for name, a, b in zip(("t", "y", "memory", "peaks", "peak_t", "counters",
+                               "outputs"), got, want):
+            assert a.shape == b.shape and a.dtype == b.dtype, (name, skw, pkw)
+            assert np.array_equal(a, b), (name, skw, pkw)
+        assert got[7] == want[7]
+        assert np.array_equal(p_c, p_n)
+        statuses.add(RESULTS(got[7]))
+        if pkw.get("twin"):
+            # every impact switched both joints: two events counted per bounce
+            assert got[5][3] == 2 * p_c[COUNT] > 0
+        if pkw.get("ceiling", 1e3) < 1.0 and "max_steps" not in skw:
+            # both surfaces hit: the highest point is the ceiling
+            assert got[5][3] > 4 and abs(np.max(got[3]) - pkw["ceiling"]) < 1e-9
+    assert statuses == set(RESULTS)
+
+
+RENDEZVOUS_C = r"""
+#define _POSIX_C_SOURCE 199309L
+#include <time.h>
+#include "mbs_core.h"
+""" + NO_EVENTS_C + r"""
+/* the first monitor call of each run enters a rendezvous: it counts itself in and waits
+ * (at most 20 s) until two runs are in at once; the count it saw is kept per run */
+static int inside = 0;
+static int seen[2] = {0, 0};
+static int entered[2] = {0, 0};
+
+static double now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return ts.tv_sec + 1e-9 * ts.tv_nsec;
+}
+
+static void rhs(double t, const double *y, int64_t n, const double *p, double *dydt)
+{
+    (void)t; (void)n; (void)p;
+    dydt[0] = -y[0];
+}
+
+
+static double monitor(double t, const double *y, int64_t n, const double *p, double *dydt,
+                      double *out, int64_t n_out, double *g, double *gd)
+{
+    (void)out; (void)n_out;
+    int k = (int)p[0];
+    if (!__atomic_exchange_n(&entered[k], 1, __ATOMIC_SEQ_CST)) {
+        __atomic_add_fetch(&inside, 1, __ATOMIC_SEQ_CST);
+        double until = now() + 20.0;
+        while (__atomic_load_n(&inside, __ATOMIC_SEQ_CST) < 2 && now() < until)
+            ;
+        __atomic_store_n(&seen[k], __atomic_load_n(&inside, __ATOMIC_SEQ_CST),
+                         __ATOMIC_SEQ_CST);
+    }
+    rhs(t, y, n, p, dydt);
+    g[0] = -1.0;
+    gd[0] = 0.0;
+    return y[0];
+}
+
+static const mbs_model RECORD = {1, 1, 1, 1, 0, 0, 1, 1, rhs, event, on_event, monitor, prepare};
+
+const mbs_model *mbs_model_record(void) { return &RECORD; }
+
+int rendezvous_seen(int k) { return __atomic_load_n(&seen[k], __ATOMIC_SEQ_CST); }
+
+void rendezvous_reset(void)
+{
+    for (int k = 0; k < 2; k++) {
+        __atomic_store_n(&seen[k], 0, __ATOMIC_SEQ_CST);
+        __atomic_store_n(&entered[k], 0, __ATOMIC_SEQ_CST);
+    }
+    __atomic_store_n(&inside, 0, __ATOMIC_SEQ_CST);
+}
+"""
+
+
+def test_runs_in_two_threads_at_once():
+    """cffi releases the GIL around every call of a C function (its documentation: "C
+    function calls are done with the GIL released"); checked by counting: each of two
+    threads' runs waits inside the core until the other's is inside too, and records how
+    many it saw (with the GIL held the first would see only itself, after its wait)."""
+    ffi, lib = build.load("test_rendezvous", [("rendezvous.c", RENDEZVOUS_C)],
+                          cdef="int rendezvous_seen(int k); void rendezvous_reset(void);")
+    lib.rendezvous_reset()
+    model = model_record(ffi, lib)
+    settings = make_settings(1e-6, np.full(1, 1e-6), 1, n_dense=1, mem_start=1, n_mem=0)
+    results = {}
+
+    def work(k):
+        results[k] = integrate(model, np.array([1.0]), np.array([float(k)]),
+                               np.array([0.0, 1.0]), settings, METHODS["dopri5"].arrays())
+
+    threads = [threading.Thread(target=work, args=(k,)) for k in range(2)]
+    for th in threads:
+        th.start()
+    for th in threads:
+        th.join()
+    assert [lib.rendezvous_seen(k) for k in range(2)] == [2, 2]
+    for k in range(2):
+        assert results[k][7] == RESULTS.success
+        assert abs(results[k][1][-1, 0] - math.exp(-1.0)) < 1e-5
