@@ -323,7 +323,7 @@ def test_threads_release_the_gil_inside_the_compiled_model(monkeypatch):
 
     import numba
 
-    from mbs_clearance.solve import reduced
+    from mbs_clearance.solve import linkage_model
 
     def spin(n):
         s = 0.0
@@ -348,7 +348,7 @@ def test_threads_release_the_gil_inside_the_compiled_model(monkeypatch):
 
     mech = SliderCrank()
     peak_base_force(mech, 1)                    # compiled / loaded from the cache
-    kernel, state = reduced.MODEL.integrate_model, {}
+    kernel, state = linkage_model.integrate, {}
 
     def bracketed(*args):
         state["mark"]()
@@ -357,7 +357,7 @@ def test_threads_release_the_gil_inside_the_compiled_model(monkeypatch):
         finally:
             state["mark"]()
 
-    monkeypatch.setattr(reduced.MODEL, "integrate_model", bracketed)
+    monkeypatch.setattr(linkage_model, "integrate", bracketed)
 
     def call(mark):
         state["mark"] = mark

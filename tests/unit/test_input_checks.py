@@ -29,7 +29,7 @@ def no_integration(monkeypatch):
     def forbidden(*args, **kwargs):
         raise AssertionError("the integrator ran before the input was checked")
 
-    monkeypatch.setattr(reduced.MODEL, "integrate_model", forbidden)
+    monkeypatch.setattr(linkage_model, "integrate", forbidden)
 
 
 NAN = float("nan")

@@ -31,7 +31,7 @@ def test_a_bad_setting_is_refused_before_any_integration(monkeypatch):
     def forbidden(*args, **kwargs):
         raise AssertionError("the integrator ran before the settings were checked")
 
-    monkeypatch.setattr(reduced.MODEL, "integrate_model", forbidden)
+    monkeypatch.setattr(lm, "integrate", forbidden)
     with pytest.raises(ValueError, match="unknown run setting"):
         lm.run(reduced.linkage_of(SliderCrank()), 1, rtol_typo=1e-8)
     with pytest.raises(ValueError, match="settings must be a RunSettings"):
