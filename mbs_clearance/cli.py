@@ -480,6 +480,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     refuse_window_options(args, "--revolutions")
     if args.revolutions is None:
         args.revolutions = 4
+    bound_spans(linkage if linkage is not None else mechanism_from_args(args), args)
     if linkage is not None:
         return _simulate_linkage(linkage, args)
     settled_start_of(None, args)
@@ -619,6 +620,7 @@ def _simulate_free(linkage, args: argparse.Namespace) -> int:
                          "--case or --description")
     if args.out:
         check_output_file(args.out, "--out", args.force, suffixes=(".npz", ".csv"))
+    bound_spans(linkage, args)
     options = _simulate_options(args)
     options.update(duration=args.duration, window=args.window)
     _progress(f"simulating {linkage.name!r} (free) for {args.duration:g} s with backend "
@@ -697,6 +699,95 @@ def free_window(linkage, args: argparse.Namespace, revolution: str) -> tuple[int
     return k, window
 
 
+#: the most integrator steps all the runs of one command may take together (the timed
+#: repeats of a benchmark): a hundred times one run's max_steps
+MAX_COMMAND_STEPS = 100 * 5_000_000
+#: bytes of one frame of an animation held until the file is written (the figure of 10 x
+#: 4.2 in at 100 dpi, RGBA; matplotlib's GIF writer keeps every frame)
+FRAME_BYTES = 4 * 1000 * 420
+
+
+def _period(design) -> float:
+    """A revolution of `design` in s (a free linkage: its time scale); the paper's
+    SliderCrank for None."""
+    if design is None:
+        design = SliderCrank()
+    drive = getattr(design, "drive", True)
+    return design.period if drive is not None else design.time_scale
+
+
+def check_run_size(design, option: str, value, *, unit: str = "revolutions",
+                   backend: str = "reduced", step_size: float | None = None,
+                   accuracy: float | None = None, max_steps: int | None = None,
+                   step_option: str = "--step-size") -> int:
+    """Refuse, before any work, a run of `value` `unit` ("revolutions" or "s") of `design`
+    (a Linkage, a SliderCrank, None: the paper's) set by the option `option`, when its
+    steps (a lower bound: the reduced model steps at most an eighth of a revolution, the
+    Exudyn model its fixed step) exceed `max_steps` (default: a run's own limit,
+    `settings.DEFAULT_MAX_STEPS`). Also refuses a step
+    (`step_size`, the option `step_option`: the Exudyn model's fixed step, or any step
+    given with backend "exudyn") longer than a revolution: a run that takes no step in one.
+    ValueError naming the option; returns the estimated steps."""
+    from ._checks import check_steps
+    from .solve.settings import DEFAULT_MAX_STEPS
+
+    period = _period(design)
+    seconds = float(value) * period if unit == "revolutions" else float(value)
+    what = "a revolution" if unit == "revolutions" else "the run"
+    if backend == "exudyn" and step_size is not None:
+        span = min(period, seconds)
+        if step_size > span:
+            raise ValueError(f"{step_option} {step_size:g} s is longer than {what} "
+                             f"({span:.4g} s): no step would end within it; give "
+                             f"{step_option} below {span:.4g} s")
+        step, how = step_size, f"steps of {step_option} {step_size:g} s"
+    elif backend == "exudyn" and accuracy is None:
+        from .backends.exudyn_linkage import DEFAULT_STEPS_PER_REVOLUTION
+
+        step = period / DEFAULT_STEPS_PER_REVOLUTION
+        how = f"{DEFAULT_STEPS_PER_REVOLUTION} steps per revolution"
+    elif unit == "revolutions":
+        step, how = period / 8, "at least 8 steps per revolution"
+    else:
+        step, how = period / 8, f"at least 8 steps per {period:.3g} s, the time scale"
+    shown = str(value) if isinstance(value, int) else f"{value:g}"
+    advice = f"give a smaller {option}"
+    if step_size is not None and backend == "exudyn":
+        option, advice = f"{option} {shown} with {step_option}", \
+            f"give a smaller {option} or a larger {step_option}"
+        shown = f"{step_size:g} s"
+    return check_steps(f"{option} {shown}: a run of {value:.6g} {unit} ({how})",
+                       math.ceil(seconds / step),
+                       DEFAULT_MAX_STEPS if max_steps is None else max_steps, advice)
+
+
+def bound_spans(design, args: argparse.Namespace, revolution: str = "revolutions",
+                default: int = 4) -> None:
+    """`check_run_size` on the span options of a command, before any work: --duration of a
+    free linkage, else --REVOLUTION (`revolution`; `default` when not given) with the run
+    options --backend, --step-size and --accuracy, and --settled (a reduced run)."""
+    options = dict(backend=getattr(args, "backend", None) or "reduced",
+                   step_size=getattr(args, "step_size", None),
+                   accuracy=getattr(args, "accuracy", None))
+    if design is not None and getattr(design, "drive", True) is None:
+        if getattr(args, "duration", None) is not None:
+            check_run_size(design, "--duration", args.duration, unit="s", **options)
+        return
+    value = getattr(args, revolution.replace("-", "_"), None)
+    check_run_size(design, "--" + revolution, default if value is None else value, **options)
+    if getattr(args, "settled", None) is not None:
+        check_run_size(design, "--settled", args.settled)
+
+
+def check_frames(frames: int) -> None:
+    """Refuse an animation whose frames (`FRAME_BYTES` each, all held until the file is
+    written) exceed the memory limit, naming --frames."""
+    from ._checks import check_memory
+
+    check_memory(f"--frames {frames}: the animation's frames need", frames * FRAME_BYTES,
+                 None, "give fewer --frames")
+
+
 def figure_suffixes() -> tuple[str, ...]:
     """File name endings matplotlib can write (.png, .pdf, .svg, ...)."""
     from matplotlib.backend_bases import FigureCanvasBase
@@ -745,6 +836,7 @@ def _peak_gradient_linkage(linkage, args: argparse.Namespace) -> int:
     if args.out:
         check_output_dir(args.out, "--out", args.force)
     k, window = free_window(linkage, args, "revolutions")
+    bound_spans(linkage, args)
     span = (f"revolution {k}" if window is None
             else f"time window [{(k - 1) * window:g}, {k * window:g}] s")
     _progress(f"peak of {args.output} of {linkage.name!r} over {span} and its gradient by "
@@ -782,6 +874,7 @@ def _cmd_sensitivity(args: argparse.Namespace) -> int:
             raise ValueError("--output applies to --case or --description (the paper's "
                              "slider-crank's sensitivities are those of |F12|)")
         return _peak_gradient_linkage(linkage, args)
+    bound_spans(mech, args)
     names = args.parameters
     if names is None and linkage is None:
         names = DEFAULT_PARAMETERS
@@ -1104,6 +1197,7 @@ def _cmd_optimize(args: argparse.Namespace) -> int:
     if linkage is not None:
         return _optimize_linkage(linkage, args)
     args.revolution, _ = free_window(None, args, "revolution")
+    bound_spans(mechanism_from_args(args), args, "revolution")
     if args.output is not None:
         raise ValueError("--output applies to --case or --description (the paper's "
                          "slider-crank minimises |F12|)")
@@ -1200,6 +1294,7 @@ def _optimize_linkage(linkage, args: argparse.Namespace) -> int:
         raise ValueError("--mass-scaling applies to the paper's slider-crank only")
     check_output_dir(args.out, "--out", args.force)
     k, window = free_window(linkage, args, "revolution")
+    bound_spans(linkage, args, "revolution")
     options = {} if args.rtol is None else {"rtol": args.rtol}
     if window is not None:
         options["window"] = window
@@ -1280,6 +1375,7 @@ def _cmd_tolerance(args: argparse.Namespace) -> int:
     inputs = read_inputs(args.inputs)
     check_output_dir(args.out, "--out", args.force)
     k, window = free_window(linkage, args, "revolution")
+    bound_spans(mech, args, "revolution")
     kw = dict(output=args.output, revolution=k, window=window, sobol=args.sobol,
               second_order=not args.first_order_only, morris=args.morris, dgsm=args.dgsm,
               monte_carlo=args.monte_carlo, allowable=args.allowable, wear=args.wear,
@@ -1360,6 +1456,8 @@ def _cmd_map(args: argparse.Namespace) -> int:
             raise ValueError(f"--set: unknown field(s) {unknown} of the paper's case; allowed: "
                              f"{sorted(field_names())}")
     base = SliderCrank().replace(**overrides) if paper else None
+    if paper:       # a case's overrides are checked by the study (its size first)
+        check_run_size(base, "--revolutions", args.revolutions)
     kw = dict(case=None if paper else case, overrides=None if paper else overrides,
               revolutions=args.revolutions, keep=args.keep, lyapunov=args.lyapunov,
               angle=args.angle, tol=args.tol, max_period=args.max_period, rtol=args.rtol,
@@ -1452,6 +1550,8 @@ def _cmd_animate(args: argparse.Namespace) -> int:
     from .solve.simulate import simulate
 
     linkage, mech = design_from_args(args)
+    bound_spans(mech, args)
+    check_frames(args.frames)
     revolution = args.revolutions if args.revolution is None else args.revolution
     if revolution > args.revolutions:
         raise ValueError(f"--revolution must be between 1 and --revolutions "
@@ -1542,6 +1642,7 @@ def _cmd_lyapunov(args: argparse.Namespace) -> int:
     refuse_window_options(args, "--revolutions")
     if args.revolutions is None:
         args.revolutions = 100
+    bound_spans(mech, args)
     transient = args.revolutions // 2 if args.transient is None else args.transient
     if transient >= args.revolutions:
         raise ValueError(f"--transient must be between 0 and --revolutions - 1 "
@@ -1584,6 +1685,7 @@ def _lyapunov_free(linkage, args: argparse.Namespace) -> int:
     if args.duration is None:
         raise ValueError(f"linkage {linkage.name!r} is free (no drive): give --duration "
                          "(s) and optionally --window (s)")
+    bound_spans(linkage, args)
     _progress(f"finite-time Lyapunov exponent of {linkage.name!r} over {args.duration:g} s "
               "...")
     t0 = time.perf_counter()
@@ -1664,6 +1766,8 @@ def _cmd_orbits(args: argparse.Namespace) -> int:
     from .plotting import plot_branch
 
     linkage, mech = design_from_args(args)
+    check_run_size(mech, "--settle", args.settle)
+    check_run_size(mech, "--period", args.period)
     name = linkage.name if linkage is not None else "the paper's slider-crank"
     branch_args = (args.field, args.start, args.stop)
     if any(a is not None for a in branch_args) and any(a is None for a in branch_args):
