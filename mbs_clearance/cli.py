@@ -137,8 +137,12 @@ def run_command(prog: str, func, args: argparse.Namespace) -> int:
     if not debug:   # warnings as one line too: "PROG: warning: MESSAGE"
         warnings.formatwarning = lambda message, category, *rest, **kw: (
             f"{prog}: warning: {_one_line(message)}\n")
+    from .studies.executor import _sigterm_raises
+
     try:
-        return func(args)
+        # SIGTERM unwinds like Ctrl-C (exit status 143): partial outputs are removed
+        with _sigterm_raises():
+            return func(args)
     except BaseException as exc:  # noqa: BLE001 - sorted below; SystemExit passes through
         if isinstance(exc, SystemExit):
             raise
@@ -229,6 +233,23 @@ def add_evaluation_options(parser: argparse.ArgumentParser, out: str,
     parser.add_argument("--out", type=Path, default=Path(out),
                         help=f"output folder (default ./{out}, named after the command)")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+
+
+def add_keep_going_option(parser: argparse.ArgumentParser, what: str) -> None:
+    """--keep-going: exit 0 although some of the command's runs failed."""
+    parser.add_argument("--keep-going", action="store_true",
+                        help=f"exit with status 0 although some {what} failed (by default "
+                             f"a failed run makes the exit status 1, after the results of "
+                             f"the others are printed and written)")
+
+
+def refuse_failed_runs(args: argparse.Namespace, failed: int, total: int,
+                       what: str = "runs") -> None:
+    """RuntimeError (exit status 1) where `failed` of `total` runs failed, unless
+    --keep-going; called after the results are written."""
+    if failed and not getattr(args, "keep_going", False):
+        raise RuntimeError(f"{failed} of {total} {what} failed (the results above leave them "
+                           f"out); give --keep-going to accept that with exit status 0")
 
 
 def evaluate_on(args: argparse.Namespace, fn, *fn_args, **kw):
@@ -496,6 +517,8 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     traj = simulate(mech, args.revolutions, backend=args.backend, **options)
     elapsed = time.perf_counter() - t0
     print(f"done in {elapsed:.3g} s ({len(traj.t)} samples)", file=sys.stderr)
+    refuse_empty(traj)
+    warn_absurd_forces(mech, traj)
     ideal = args.backend == "ideal"     # no clearance: no contact force
     print(f"{'revolution':>10}  {'max |F12|':>12}  {'max |M2|':>12}"
           + ("" if ideal else f"  {'max contact force':>17}"))
@@ -522,6 +545,57 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
             plot_trajectory(traj, path=tmp)
         wrote(args.plot, "figure")
     return 0
+
+
+#: a peak force this many times the design's load scale (`load_scale`) is warned about:
+#: the run did not resolve its contacts (the measured cases peak below 10 times it)
+ABSURD_FORCE = 1000.0
+
+
+def load_scale(design) -> float:
+    """A force scale of `design` in N (a Linkage or a SliderCrank): over its bodies, mass
+    times (|gravity| + rate^2 x the body's extent), the rate being the drive speed (a free
+    linkage's rate scale), the extent the largest distance between the body's points (the
+    slider-crank: its crank and coupler lengths)."""
+    if hasattr(design, "bodies"):
+        rate = design.rate_scale
+        total = 0.0
+        for body in design.bodies:
+            pts = list(body.points.values())
+            extent = max((math.dist(a, b) for a in pts for b in pts), default=0.0)
+            total += body.mass * (abs(design.gravity) + rate**2 * extent)
+        return total
+    rate2 = design.crank_speed**2
+    return (design.crank_mass * (abs(design.gravity) + rate2 * design.crank_length)
+            + design.coupler_mass * (abs(design.gravity) + rate2 * design.coupler_length)
+            + design.slider_mass * abs(design.gravity))
+
+
+def warn_absurd_forces(design, traj, option: str = "--step-size or --rtol") -> None:
+    """A PhysicsWarning where the run's largest contact or monitored force exceeds
+    `ABSURD_FORCE` times the design's `load_scale` (a run that did not resolve its
+    contacts: a step or tolerance too coarse)."""
+    import numpy as np
+
+    from ._warnings import PhysicsWarning
+
+    forces = [np.asarray(traj.contact_force, dtype=float), np.asarray(traj.peaks, dtype=float)]
+    peak = max((float(np.nanmax(f)) for f in forces if f.size), default=0.0)
+    scale = load_scale(design if design is not None else SliderCrank())
+    if not math.isfinite(peak) or peak > ABSURD_FORCE * scale:
+        warnings.warn(f"the largest force of the run, {peak:.3g} N, is {peak / scale:.3g} "
+                      f"times the mechanism's load scale ({scale:.3g} N: masses times "
+                      f"gravity and drive rate squared times length): not physical; the run "
+                      f"did not resolve its contacts (a smaller {option})", PhysicsWarning,
+                      stacklevel=2)
+
+
+def refuse_empty(traj, what: str = "revolution") -> None:
+    """RuntimeError where a run returned no complete revolution or window: its table would
+    be empty."""
+    if len(traj.peaks) == 0 or len(traj.t) < 2:
+        raise RuntimeError(f"the run returned no complete {what} ({len(traj.t)} samples); "
+                           "nothing to report")
 
 
 def _print_error_estimate(traj) -> None:
@@ -578,6 +652,8 @@ def _simulate_linkage(linkage, args: argparse.Namespace) -> int:
     traj = simulate(linkage, args.revolutions, backend=args.backend, **options)
     elapsed = time.perf_counter() - t0
     print(f"done in {elapsed:.3g} s ({len(traj.t)} samples)", file=sys.stderr)
+    refuse_empty(traj)
+    warn_absurd_forces(linkage, traj)
     joints = [] if args.backend == "ideal" else [name for name, _ in linkage.contacts()]
     monitored = (f"max |{linkage.monitor_joint}|" if linkage.monitor_joint
                  else "max |shaking|")
@@ -629,6 +705,8 @@ def _simulate_free(linkage, args: argparse.Namespace) -> int:
     traj = simulate(linkage, backend=args.backend, **options)
     print(f"done in {time.perf_counter() - t0:.3g} s ({len(traj.t)} samples)",
           file=sys.stderr)
+    refuse_empty(traj, "window")
+    warn_absurd_forces(linkage, traj)
     joints = [j.name for j in linkage.clearance_joints]
     monitored = (f"max |{linkage.monitor_joint}|" if linkage.monitor_joint
                  else "max |shaking|")
@@ -1147,6 +1225,7 @@ def _add_optimize_parser(subparsers) -> argparse.ArgumentParser:
                         "pivot_force:JOINT, shaking_force, drive_moment or "
                         "contact_force:JOINT (default: the crank pivot's force)")
     add_evaluation_options(p, "optimize", accuracy=True)
+    add_keep_going_option(p, "designs' runs")
     p.add_argument("--no-refine", action="store_true", help="skip the local refinement")
     add_force_option(p)
     add_linkage_options(p)
@@ -1265,6 +1344,7 @@ def _cmd_optimize(args: argparse.Namespace) -> int:
                        ("fitness_history.png", "best peak per generation"),
                        ("force_comparison.png", "base force of the three designs")):
         wrote(args.out / name, what)
+    refuse_failed_runs(args, result.n_failed, result.n_evaluations, "designs' runs")
     return 0
 
 
@@ -1321,6 +1401,7 @@ def _optimize_linkage(linkage, args: argparse.Namespace) -> int:
         staged.commit()
     wrote(args.out / "result.json", "the optimisation's result")
     wrote(args.out / "fitness_history.png", "best peak per generation")
+    refuse_failed_runs(args, result.n_failed, result.n_evaluations, "designs' runs")
     return 0
 
 
@@ -1355,12 +1436,14 @@ def _add_tolerance_parser(subparsers) -> argparse.ArgumentParser:
                    help="DGSM gradient samples (output peak only; 0: none)")
     p.add_argument("--monte-carlo", type=int_at_least(0), default=0,
                    help="Monte Carlo samples of the output distribution (0: none)")
-    p.add_argument("--allowable", type=finite_float,
-                   help="allowable load: estimate P(output > allowable)")
+    p.add_argument("--allowable", type=positive_float,
+                   help="allowable load (> 0, the output's unit): estimate "
+                        "P(output > allowable)")
     p.add_argument("--wear", type=finite_float, nargs="+", metavar="M",
                    help="radial wear amounts in m added to the clearance (needs --monte-carlo)")
     p.add_argument("--seed", type=int_at_least(0), default=0, help="seed (default 0)")
     add_evaluation_options(p, "tolerance", accuracy=True)
+    add_keep_going_option(p, "runs")
     add_force_option(p)
     add_linkage_options(p)
     add_mechanism_options(p)
@@ -1390,6 +1473,7 @@ def _cmd_tolerance(args: argparse.Namespace) -> int:
         staged.commit()
     wrote(args.out / "result.json", "indices and samples")
     wrote(args.out / "summary.txt", "the summary printed above")
+    refuse_failed_runs(args, result.counts.get("failed", 0), result.counts.get("runs", 0))
     return 0
 
 
@@ -1430,6 +1514,7 @@ def _add_map_parser(subparsers) -> argparse.ArgumentParser:
                    help="write map.nc at most this often while points arrive (default 5; "
                         "and at the end)")
     add_evaluation_options(p, "map")
+    add_keep_going_option(p, "points' runs")
     add_force_option(p)
     p.set_defaults(func=_cmd_map)
     return p
@@ -1506,6 +1591,7 @@ def _cmd_map(args: argparse.Namespace) -> int:
     wrote(path, "regime map dataset")
     for f in figures:
         wrote(args.out / f, "figure")
+    refuse_failed_runs(args, int(ds["failed"].sum()), int(ds["failed"].size), "points' runs")
     return 0
 
 

@@ -519,12 +519,12 @@ def map_memory(shape: tuple[int, ...], revolutions: int, keep: int, max_period: 
     # a local pool runs at most one point per worker and never more workers than points;
     # each worker thread reserves its stack
     running = min(concurrent, points)
+    check_memory(f"revolutions={revolutions}: each point's run needs", run,
+                 max_memory, "run fewer revolutions")
     if running > 1:
         check_memory(f"workers={concurrent} ({running} points running at once, revolutions="
                      f"{revolutions} each): they need", running * (run + THREAD_BYTES),
                      max_memory, "use fewer workers or run fewer revolutions")
-    check_memory(f"revolutions={revolutions}: each point's run needs", run,
-                 max_memory, "run fewer revolutions")
     concurrent = running
     floats = 4 * keep * joints + keep + max_period + joints + 8
     need = points * (2 * 8 * floats + DESIGN_BYTES + 256) + concurrent * run
