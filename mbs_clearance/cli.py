@@ -848,8 +848,19 @@ def bound_spans(design, args: argparse.Namespace, revolution: str = "revolutions
                    step_size=getattr(args, "step_size", None),
                    accuracy=getattr(args, "accuracy", None))
     if design is not None and getattr(design, "drive", True) is None:
-        if getattr(args, "duration", None) is not None:
-            check_run_size(design, "--duration", args.duration, unit="s", **options)
+        duration, window = getattr(args, "duration", None), getattr(args, "window", None)
+        if duration is not None:
+            check_run_size(design, "--duration", duration, unit="s", **options)
+            if window is not None:
+                from .solve.linkage_model import MAX_WINDOWS
+
+                if not window <= duration:
+                    raise ValueError(f"--window {window:g} s is longer than --duration "
+                                     f"{duration:g} s; give at most --duration")
+                if duration / window > MAX_WINDOWS:
+                    raise ValueError(f"--window {window:g} s makes more than {MAX_WINDOWS} "
+                                     f"windows of --duration {duration:g} s; give at least "
+                                     f"{duration / MAX_WINDOWS:.3g} s")
         return
     value = getattr(args, revolution.replace("-", "_"), None)
     check_run_size(design, "--" + revolution, default if value is None else value, **options)

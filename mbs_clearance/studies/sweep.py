@@ -415,7 +415,8 @@ def regime_map(mech, sweep, revolutions: int = 100, keep: int = 50, scheduler=No
     keep = check_int("keep (revolutions kept after the transient)", keep, 1, revolutions)
     max_period = check_int("max_period", max_period, 1)
     if keep < 2 * max_period + 1:
-        raise ValueError(f"keep must be >= 2 max_period + 1 = {2 * max_period + 1}; got {keep}")
+        raise ValueError(f"keep must be >= 2 max_period + 1 = {2 * max_period + 1} (max_period="
+                         f"{max_period}); got keep={keep}: raise keep or lower max_period")
     tol = check_real("tol (recurrence tolerance)", tol, 0.0, low_open=True)
     lyapunov = check_bool("lyapunov", lyapunov)
     early_stop = check_bool("early_stop", early_stop) and not lyapunov
