@@ -618,7 +618,12 @@ def _tolerances(args: argparse.Namespace) -> dict:
         from ._checks import check_real
 
         return {"accuracy": check_real("--accuracy", args.accuracy, 1e-10, 1e-3)}
-    return {} if args.rtol is None else {"rtol": args.rtol}
+    if args.rtol is None:
+        return {}
+    from ._checks import check_real
+
+    # the runs' own range: refused here once, not as every run failing
+    return {"rtol": check_real("--rtol", args.rtol, 1e-14, 1e-2)}
 
 
 def _simulate_options(args: argparse.Namespace) -> dict:

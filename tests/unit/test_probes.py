@@ -208,11 +208,14 @@ def test_a_study_with_failed_runs_exits_1_unless_keep_going(tmp_path, monkeypatc
     assert status == 0, err
 
 
-def test_a_negative_allowable_load_is_refused(tmp_path, monkeypatch, capsys, no_runs):
+@pytest.mark.parametrize("option, value", [("--allowable", "-1"), ("--rtol", "0.5"),
+                                           ("--rtol", "1e9")])
+def test_study_options_every_run_would_fail_on_are_refused(tmp_path, monkeypatch, capsys,
+                                                          no_runs, option, value):
     monkeypatch.chdir(tmp_path)
     (tmp_path / "inputs.json").write_text(INPUTS)
-    status, err = cli(["tolerance", "inputs.json", "--allowable", "-1"], capsys)
-    assert status == 2 and "--allowable" in err
+    status, err = cli(["tolerance", "inputs.json", option, value], capsys)
+    assert status == 2 and option in err, err
 
 
 def test_a_force_far_above_the_load_scale_is_warned_about():
