@@ -264,9 +264,10 @@ def check_output_dir(path: str | Path, option: str, force: bool = False,
             damaged = [name for name in resume or {} if name in files]
             if manifest is None and damaged:
                 raise ValueError(f"{option} {str(path)!r} holds {damaged[0]!r}, which cannot "
-                                 f"be read as an unfinished run's file (damaged, e.g. by an "
-                                 f"interrupted write); remove {str(path / damaged[0])!r} to "
-                                 f"start afresh, or pass --force to replace the folder")
+                                 f"be resumed: damaged (e.g. by an interrupted write) or a "
+                                 f"file mbs-clearance did not write; remove "
+                                 f"{str(path / damaged[0])!r} to start afresh, or pass --force "
+                                 f"to replace the folder")
             if manifest is None:
                 raise ValueError(f"{option} {str(path)!r} is a non-empty folder that "
                                  f"mbs-clearance did not write (no {MANIFEST}); choose "
