@@ -40,7 +40,13 @@ from test_cache import REPO as _REPO
 from mbs_clearance import SliderCrank, _cache
 from mbs_clearance._io import atomic_file
 from mbs_clearance._warnings import PhysicsWarning
-from mbs_clearance.cli import ABSURD_FORCE, load_scale, main, warn_absurd_forces
+from mbs_clearance.cli import (
+    ABSURD_FORCE,
+    load_scale,
+    main,
+    refuse_empty,
+    warn_absurd_forces,
+)
 from mbs_clearance.model import cases
 from mbs_clearance.model.linkage import RESERVED_NAMES, Linkage
 
@@ -72,11 +78,15 @@ SIZE_OPTIONS = [
     ("compare", "--revolutions", 1),
     ("compare", "--step-size", 0.0),
     ("optimize", "--revolution", 1),
+    ("optimize --case flores_translational_slider_crank --gene crank.mass=0.03:0.05",
+     "--duration", 0.0),
     ("optimize", "--population", 2),
     ("optimize", "--generations", 1),
     ("orbits", "--settle", 0),
     ("orbits", "--period", 1),
     ("tolerance inputs.json --sobol 0 --monte-carlo 8", "--revolution", 1),
+    ("tolerance inputs.json --sobol 0 --monte-carlo 8 --case "
+     "flores_translational_slider_crank", "--duration", 0.0),
     ("tolerance inputs.json", "--sobol", 0),
     ("tolerance inputs.json --sobol 0", "--monte-carlo", 0),
 ]
@@ -218,7 +228,7 @@ def test_study_options_every_run_would_fail_on_are_refused(tmp_path, monkeypatch
     assert status == 2 and option in err, err
 
 
-def test_a_force_far_above_the_load_scale_is_warned_about():
+def test_a_force_far_above_the_load_scale_is_warned_about_and_an_empty_run_refused():
     paper = SliderCrank()
     # the load scale in closed form: masses times (g + w^2 x length)
     w2, g = paper.crank_speed**2, paper.gravity
@@ -238,6 +248,10 @@ def test_a_force_far_above_the_load_scale_is_warned_about():
     traj = dataclasses.replace(traj, peaks=np.asarray(traj.peaks) * 2 * ABSURD_FORCE)
     with pytest.warns(PhysicsWarning, match="times the mechanism's load scale"):
         warn_absurd_forces(paper, traj)
+    # a run that returned no revolution: an error, not an empty table
+    refuse_empty(traj)
+    with pytest.raises(RuntimeError, match="no complete revolution"):
+        refuse_empty(dataclasses.replace(traj, peaks=np.empty(0)))
 
 
 # ---------------------------------------------------------------- outputs
