@@ -19,6 +19,7 @@ import io
 import json
 import os
 import queue
+import re
 import shlex
 import subprocess
 import sys
@@ -444,7 +445,7 @@ def _description_namespace() -> dict:
         import json
 
         text = json.dumps(cases.four_bar().to_dict())
-        return json.loads(text.replace(f'"{name}"', f'"{new}"'))
+        return json.loads(re.sub(f'"{name}(?=[".])', f'"{new}', text))
 
     return {"Linkage": Linkage, "Body": Body, "paper_dict": paper_dict,
             "without_mass": without_mass, "renamed": renamed, "EVIL_NAME": EVIL_NAME}

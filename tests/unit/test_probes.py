@@ -164,7 +164,8 @@ def test_messages_name_the_option_not_another_one(tmp_path, monkeypatch, capsys,
 def _renamed(name: str, new: str) -> dict:
     text = json.dumps(cases.four_bar().to_dict())
     assert f'"{name}"' in text
-    return json.loads(text.replace(f'"{name}"', f'"{new}"'))
+    # the item, the references to it and the dotted keys naming it ("coupler.angle")
+    return json.loads(re.sub(f'"{name}(?=[".])', f'"{new}', text))
 
 
 @pytest.mark.parametrize("reserved", RESERVED_NAMES[1:])
