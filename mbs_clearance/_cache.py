@@ -37,6 +37,20 @@ every later run. Reading one here (`_load_index_or_empty`, `_load_data_or_none`)
 file and reads it as a cache miss: the kernel is compiled again and the entry rewritten, with
 one `CacheWarning` per process naming the file.
 
+Every compiled-kernel cache (numba's today; any other compiler's through the same
+functions) keeps the rules of the generated models' cache:
+
+- a directory is read only if it is owned by the user and not writable by group or others
+  (`untrusted`, checked from the cache's root down to the kernel's directory); another one
+  is never read, with one `CacheWarning` naming it, and the next place is tried;
+- every entry is written with the SHA-256 digest of its bytes in front (`write_entry`,
+  atomically) and read only when the digest matches (`read_entry`): a damaged entry is
+  dropped before anything unpickles it;
+- a cache that cannot be read or written (a damaged or stale entry that fails, a directory
+  where an index belongs, a full disk, a read-only directory) is dropped for the rest of
+  the process with one `CacheWarning` naming the path (`drop_cache`), and the run goes on
+  compiling in memory.
+
 When a kernel of a registered package is not in the cache (numba's "numba:compile" event
 fires on cache misses only), the logger "mbs_clearance" says so once, at INFO: "compiling
 kernels (first run only, about N s)", N being the longest compilation measured so far
@@ -50,6 +64,7 @@ import hashlib
 import importlib
 import logging
 import os
+import pickle
 import shutil
 import stat
 import sys
@@ -68,7 +83,8 @@ from numba.misc.appdirs import AppDirs
 
 from ._warnings import CacheWarning
 
-__all__ = ["register_package", "sources_digest", "PREFIX", "PRUNE_AGE"]
+__all__ = ["register_package", "sources_digest", "PREFIX", "PRUNE_AGE", "untrusted",
+           "read_entry", "write_entry", "drop_cache", "cache_dropped", "ENTRY_MAGIC"]
 
 #: name prefix of the cache directories, followed by the first 12 hex digits of the digest
 PREFIX = "nb-"
@@ -217,8 +233,190 @@ def _write_seconds(package: _Package, seconds: float) -> None:
 _LISTENER: CompileListener | None = None
 
 
+# ---------------------------------------------------------------- the rules of any cache
+
+#: first bytes of a cache entry, followed by the SHA-256 digest of the rest (32 bytes)
+ENTRY_MAGIC = b"mbs-clearance-kernel-cache-1\n"
+_DROPPED: dict[str, str] = {}      # cache directory -> why it is not used in this process
+
+
+def untrusted(path: str, root: str | None = None) -> str | None:
+    """Why the directory `path` must not be read, or None if it may: it, and every
+    directory from `root` (default: `path` alone) down to it, must be a directory owned by
+    this user and not writable by group or others (a directory others can write to could
+    hold entries made to run code when they are unpickled)."""
+    uid = getattr(os, "geteuid", lambda: None)()
+    path = os.path.abspath(path)
+    chain = [path]
+    if root is not None:
+        root = os.path.abspath(root)
+        head = path
+        while head != root and os.path.dirname(head) != head:
+            head = os.path.dirname(head)
+            chain.append(head)
+    for folder in chain:
+        try:
+            st = os.stat(folder)
+        except OSError as exc:
+            return f"{folder} cannot be inspected ({exc.strerror or exc})"
+        if not stat.S_ISDIR(st.st_mode):
+            return f"{folder} is not a directory"
+        if uid is not None and st.st_uid != uid:
+            return f"{folder} is owned by another user (uid {st.st_uid})"
+        if st.st_mode & (stat.S_IWGRP | stat.S_IWOTH):
+            return (f"{folder} is writable by group or others (mode "
+                    f"{stat.S_IMODE(st.st_mode):o})")
+    return None
+
+
+def cache_dropped(directory: str) -> bool:
+    """Whether the cache in `directory` was dropped for this process (`drop_cache`)."""
+    return os.path.abspath(directory) in _DROPPED
+
+
+def drop_cache(directory: str, path: str, exc: BaseException | str) -> None:
+    """Stop using the cache in `directory` for the rest of the process after a problem
+    with `path` (a file or the directory itself): one CacheWarning per process naming the
+    path and the reason; the kernels are then compiled in memory."""
+    reason = exc if isinstance(exc, str) else (
+        f"{type(exc).__name__}: {getattr(exc, 'strerror', None) or exc}")
+    _DROPPED[os.path.abspath(directory)] = reason
+    message = (f"the compiled-kernel cache at {path} cannot be used ({reason}); running "
+               f"without it (kernels are compiled in memory)")
+    if not _warn_once(message, "dropped"):
+        log.info(message)
+
+
+def _remove(path: str) -> None:
+    """Remove a file or a directory tree at `path` (a damaged entry); silent on failure."""
+    try:
+        if os.path.isdir(path) and not os.path.islink(path):
+            shutil.rmtree(path)
+        else:
+            os.unlink(path)
+    except OSError:
+        pass
+
+
+def read_entry(path: str) -> bytes | None:
+    """The bytes of the cache entry `path` (as given to `write_entry`), or None: missing,
+    or damaged (its digest does not match, it is not a file): then removed, with one
+    CacheWarning per process naming it."""
+    try:
+        with open(path, "rb") as f:
+            blob = f.read()
+    except FileNotFoundError:
+        return None
+    except OSError as exc:          # a directory in its place, unreadable: damaged
+        _drop_damaged(path, exc)
+        return None
+    head = len(ENTRY_MAGIC)
+    payload = blob[head + 32:]
+    if blob[:head] != ENTRY_MAGIC or hashlib.sha256(payload).digest() != blob[head:head + 32]:
+        _drop_damaged(path, "its digest does not match its contents")
+        return None
+    return payload
+
+
+def write_entry(path: str, data: bytes) -> None:
+    """Write the cache entry `path` atomically (a temporary file renamed), its digest in
+    front; OSError (a full disk, a read-only directory, a directory in its place) passes
+    to the caller, the temporary file removed."""
+    tmp = f"{path}.tmp.{uuid.uuid4().hex[:16]}"
+    try:
+        with open(tmp, "wb") as f:
+            f.write(ENTRY_MAGIC + hashlib.sha256(data).digest())
+            f.write(data)
+        if os.path.isdir(path) and not os.path.islink(path):
+            shutil.rmtree(path)         # a directory where the entry belongs
+        os.replace(tmp, path)
+    except BaseException:
+        try:
+            os.unlink(tmp)
+        except OSError:
+            pass
+        raise
+
+
+# ---------------------------------------------------------------- numba's cache files
+
 _LOAD_INDEX = caching.IndexDataCacheFile._load_index
 _LOAD_DATA = caching.IndexDataCacheFile._load_data
+_SAVE = caching.IndexDataCacheFile.save
+_LOAD = caching.IndexDataCacheFile.load
+_OURS: set[str] = set()         # the cache directories chosen by `_cache_dir`
+
+
+def _is_ours(self) -> bool:
+    return os.path.abspath(self._cache_path) in _OURS
+
+
+def _load_index_verified(self):
+    """The index of one of our directories (its digest checked before it is unpickled),
+    else numba's loader (`_load_index_or_empty`)."""
+    if not _is_ours(self):
+        return _load_index_or_empty(self)
+    payload = read_entry(self._index_path)
+    if payload is None:
+        return {}
+    try:
+        version, stamp, overloads = pickle.loads(payload)
+    except (ImportError, AttributeError):
+        return {}       # names a model generated on demand by another process: a miss
+    if version != self._version or stamp != self._source_stamp:
+        return {}
+    return overloads
+
+
+def _save_index_verified(self, overloads):
+    if not _is_ours(self):
+        return _SAVE_INDEX(self, overloads)
+    write_entry(self._index_path, self._dump((self._version, self._source_stamp, overloads)))
+
+
+def _load_data_verified(self, name):
+    if not _is_ours(self):
+        return _load_data_or_none(self, name)
+    payload = read_entry(self._data_path(name))
+    return None if payload is None else pickle.loads(payload)
+
+
+def _save_data_verified(self, name, data):
+    if not _is_ours(self):
+        return _SAVE_DATA(self, name, data)
+    write_entry(self._data_path(name), self._dump(data))
+
+
+def _save_or_drop(self, key, data):
+    """numba's save; any failure (a full disk, a read-only or damaged directory, an index
+    holding kernels that no longer exist) drops the cache directory for this process with
+    one warning naming the file, and the run goes on."""
+    if cache_dropped(self._cache_path):
+        return
+    try:
+        return _SAVE(self, key, data)
+    except Exception as exc:  # noqa: BLE001 - a cache must never stop a run
+        path = getattr(exc, "filename", None) or self._index_path
+        if not isinstance(exc, OSError):
+            _remove(self._index_path)   # an index that cannot be saved again: start afresh
+        drop_cache(self._cache_path, str(path), exc)
+
+
+def _load_or_miss(self, key):
+    """numba's load; any failure reads as a miss (the kernel compiled), the cache
+    directory dropped for this process with one warning naming the index."""
+    if cache_dropped(self._cache_path):
+        return None
+    try:
+        return _LOAD(self, key)
+    except Exception as exc:  # noqa: BLE001 - a cache must never stop a run
+        path = getattr(exc, "filename", None) or self._index_path
+        drop_cache(self._cache_path, str(path), exc)
+        return None
+
+
+_SAVE_INDEX = caching.IndexDataCacheFile._save_index
+_SAVE_DATA = caching.IndexDataCacheFile._save_data
 
 
 def _load_index_or_empty(self):
@@ -246,14 +444,11 @@ def _load_data_or_none(self, name):
         return None
 
 
-def _drop_damaged(path: str, exc: Exception) -> None:
+def _drop_damaged(path: str, exc: Exception | str) -> None:
     """Remove the damaged cache file `path` (the next compile rewrites it) and say so: one
     CacheWarning per process, later ones at INFO."""
-    try:
-        os.unlink(path)
-    except OSError:
-        pass                    # removed by another process, or read-only: a miss anyway
-    reason = f"{type(exc).__name__}: {exc}"
+    _remove(path)               # removed by another process, or read-only: a miss anyway
+    reason = exc if isinstance(exc, str) else f"{type(exc).__name__}: {exc}"
     message = (f"the compiled-kernel cache file {path} was damaged ({reason}); it was "
                f"dropped and its kernels are compiled again")
     if not _warn_once(message, "damaged"):
@@ -279,8 +474,10 @@ def register_package(name: str, depends_on: tuple[str, ...] = ()) -> str | None:
     _PACKAGES[str(root)] = _Package(name, str(root), digest, tuple(deps), files, signature)
     if DigestLocator not in CacheImpl._locator_classes:
         CacheImpl._locator_classes.insert(0, DigestLocator)
-    caching.IndexDataCacheFile._load_index = _load_index_or_empty
-    caching.IndexDataCacheFile._load_data = _load_data_or_none
+    cls = caching.IndexDataCacheFile
+    cls._load_index, cls._save_index = _load_index_verified, _save_index_verified
+    cls._load_data, cls._save_data = _load_data_verified, _save_data_verified
+    cls.save, cls.load = _save_or_drop, _load_or_miss
     global _LISTENER
     if _LISTENER is None:
         _LISTENER = CompileListener()
@@ -298,7 +495,7 @@ def _package_of(py_file: str) -> _Package | None:
 
 def _writable(path: str) -> bool:
     try:
-        os.makedirs(path, exist_ok=True)
+        os.makedirs(path, mode=0o755, exist_ok=True)
         tempfile.TemporaryFile(dir=path).close()
         return True
     except OSError:
@@ -376,12 +573,22 @@ def _cache_dir(package: _Package, py_file: str) -> str | None:
     if (source_dir, name) in _DIRS:
         return _DIRS[source_dir, name]
     subpath = _CacheLocator.get_suitable_cache_subpath(py_file)
-    candidates = [os.path.join(source_dir, "__pycache__", name),
-                  os.path.join(AppDirs(appname="numba", appauthor=False).user_cache_dir,
-                               subpath, name)]
+    user = AppDirs(appname="numba", appauthor=False).user_cache_dir
+    candidates = [(os.path.join(source_dir, "__pycache__"), name),
+                  (user, os.path.join(subpath, name))]
     if config.CACHE_DIR:
-        candidates.insert(0, os.path.join(config.CACHE_DIR, subpath, name))
-    chosen = next((path for path in candidates if _writable(path)), None)
+        candidates.insert(0, (config.CACHE_DIR, os.path.join(subpath, name)))
+    chosen = None
+    for root, rest in candidates:
+        path = os.path.join(root, rest)
+        if not _writable(path):
+            continue
+        reason = untrusted(path, root)
+        if reason is None:
+            chosen = path
+            break
+        _warn_once(f"the compiled-kernel cache directory {path} is not used: {reason} "
+                   f"(a cache others can write to is never read)", "untrusted")
     if chosen is None:
         try:
             chosen = os.path.join(_private_temp_root(), subpath, name)
@@ -396,6 +603,7 @@ def _cache_dir(package: _Package, py_file: str) -> str | None:
             chosen = None
     if chosen is not None:
         _prune(os.path.dirname(chosen), name)
+        _OURS.add(os.path.abspath(chosen))
     _DIRS[source_dir, name] = chosen
     return chosen
 

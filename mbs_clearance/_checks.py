@@ -17,7 +17,7 @@ import numpy as np
 __all__ = ["check_int", "check_real", "check_bool", "check_choice", "check_times",
            "check_max_memory", "default_max_memory", "format_bytes", "MemoryLimitError",
            "check_memory", "check_revolutions_memory", "revolution_bytes", "REVOLUTION_BYTES",
-           "DESIGN_BYTES"]
+           "DESIGN_BYTES", "check_steps"]
 
 
 class MemoryLimitError(ValueError):
@@ -172,3 +172,14 @@ def check_revolutions_memory(revolutions: int, max_memory: Any = None, per_revol
                  (REVOLUTION_BYTES + per_revolution) * (int(revolutions) + 1), max_memory,
                  "run fewer revolutions or raise max_memory")
     return revolutions
+
+
+def check_steps(what: str, steps: float, max_steps: int, advice: str = "") -> int:
+    """Refuse work of at least `steps` integrator steps (an estimate made before the run)
+    above `max_steps`: `MemoryLimitError` with one line ``WHAT takes at least N steps, more
+    than max_steps=M; ADVICE`` (`what` names the options that set the size, with their
+    values). Returns the estimate as an int."""
+    if not steps <= max_steps:         # NaN or inf: refused too
+        raise MemoryLimitError(f"{what} takes at least {steps:.3g} steps, more than "
+                               f"max_steps={max_steps}" + (f"; {advice}" if advice else ""))
+    return int(steps)

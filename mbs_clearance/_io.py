@@ -124,6 +124,26 @@ def check_can_create_in(path: Path, option: str, what: str) -> None:
                          f"{str(anchor)!r} is not writable (creating a file there fails: "
                          f"{exc.strerror or exc})") from exc
     os.rmdir(probe)
+    check_free_space(anchor, option, what, path)
+
+
+#: the least free space in bytes a folder must have for a command's output: the largest
+#: output written (figures, trajectories, a map) takes a few MiB
+MIN_FREE_BYTES = 16 * 1024**2
+
+
+def check_free_space(folder: Path, option: str, what: str, path: Path) -> None:
+    """ValueError naming `option` where the file system holding `folder` has less than
+    `MIN_FREE_BYTES` free (a full disk found before the work, not after it)."""
+    try:
+        st = os.statvfs(folder)
+    except (AttributeError, OSError):
+        return                              # not measurable here: the writes will tell
+    free = st.f_bavail * st.f_frsize
+    if free < MIN_FREE_BYTES:
+        raise ValueError(f"{option}: cannot write {what} {str(path)!r}: the disk holding "
+                         f"{str(folder)!r} has {free // 1024} KiB free, less than "
+                         f"{MIN_FREE_BYTES // 1024**2} MiB (full disk)")
 
 
 def _png_is_ours(path: Path) -> bool:
@@ -241,6 +261,13 @@ def check_output_dir(path: str | Path, option: str, force: bool = False,
             _note(f"{option}: folder {str(path)!r} holds files mbs-clearance did not write "
                   f"(e.g. {foreign[0]!r}); it will be replaced (--force)")
         elif files:
+            damaged = [name for name in resume or {} if name in files]
+            if manifest is None and damaged:
+                raise ValueError(f"{option} {str(path)!r} holds {damaged[0]!r}, which cannot "
+                                 f"be resumed: damaged (e.g. by an interrupted write) or a "
+                                 f"file mbs-clearance did not write; remove "
+                                 f"{str(path / damaged[0])!r} to start afresh, or pass --force "
+                                 f"to replace the folder")
             if manifest is None:
                 raise ValueError(f"{option} {str(path)!r} is a non-empty folder that "
                                  f"mbs-clearance did not write (no {MANIFEST}); choose "
@@ -431,9 +458,15 @@ def atomic_file(path: str | Path) -> Iterator[Path]:
     umask = os.umask(0)
     os.umask(umask)
     try:
-        yield tmp
-        os.chmod(tmp, 0o666 & ~umask)   # mkstemp makes it private; give it the usual mode
-        os.replace(tmp, path)
+        try:
+            yield tmp
+            os.chmod(tmp, 0o666 & ~umask)   # mkstemp makes it private; the usual mode
+            os.replace(tmp, path)
+        except OSError as exc:
+            if exc.strerror and exc.filename in (None, str(tmp)):
+                # a write that failed (a full disk): name the output, not the temporary
+                raise OSError(exc.errno, exc.strerror, str(path)) from exc
+            raise
     finally:
         if tmp.exists():
             tmp.unlink()

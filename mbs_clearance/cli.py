@@ -137,8 +137,12 @@ def run_command(prog: str, func, args: argparse.Namespace) -> int:
     if not debug:   # warnings as one line too: "PROG: warning: MESSAGE"
         warnings.formatwarning = lambda message, category, *rest, **kw: (
             f"{prog}: warning: {_one_line(message)}\n")
+    from .studies.executor import _sigterm_raises
+
     try:
-        return func(args)
+        # SIGTERM unwinds like Ctrl-C (exit status 143): partial outputs are removed
+        with _sigterm_raises():
+            return func(args)
     except BaseException as exc:  # noqa: BLE001 - sorted below; SystemExit passes through
         if isinstance(exc, SystemExit):
             raise
@@ -229,6 +233,23 @@ def add_evaluation_options(parser: argparse.ArgumentParser, out: str,
     parser.add_argument("--out", type=Path, default=Path(out),
                         help=f"output folder (default ./{out}, named after the command)")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+
+
+def add_keep_going_option(parser: argparse.ArgumentParser, what: str) -> None:
+    """--keep-going: exit 0 although some of the command's runs failed."""
+    parser.add_argument("--keep-going", action="store_true",
+                        help=f"exit with status 0 although some {what} failed (by default "
+                             f"a failed run makes the exit status 1, after the results of "
+                             f"the others are printed and written)")
+
+
+def refuse_failed_runs(args: argparse.Namespace, failed: int, total: int,
+                       what: str = "runs") -> None:
+    """RuntimeError (exit status 1) where `failed` of `total` runs failed, unless
+    --keep-going; called after the results are written."""
+    if failed and not getattr(args, "keep_going", False):
+        raise RuntimeError(f"{failed} of {total} {what} failed (the results above leave them "
+                           f"out); give --keep-going to accept that with exit status 0")
 
 
 def evaluate_on(args: argparse.Namespace, fn, *fn_args, **kw):
@@ -480,6 +501,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     refuse_window_options(args, "--revolutions")
     if args.revolutions is None:
         args.revolutions = 4
+    bound_spans(linkage if linkage is not None else mechanism_from_args(args), args)
     if linkage is not None:
         return _simulate_linkage(linkage, args)
     settled_start_of(None, args)
@@ -495,6 +517,8 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     traj = simulate(mech, args.revolutions, backend=args.backend, **options)
     elapsed = time.perf_counter() - t0
     print(f"done in {elapsed:.3g} s ({len(traj.t)} samples)", file=sys.stderr)
+    refuse_empty(traj)
+    warn_absurd_forces(mech, traj)
     ideal = args.backend == "ideal"     # no clearance: no contact force
     print(f"{'revolution':>10}  {'max |F12|':>12}  {'max |M2|':>12}"
           + ("" if ideal else f"  {'max contact force':>17}"))
@@ -523,6 +547,58 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     return 0
 
 
+#: a peak force this many times the design's load scale (`load_scale`) is warned about:
+#: the run did not resolve its contacts (measured: the paper's case peaks at 1.7 times it,
+#: the four-bar's start-up transient at 13 times)
+ABSURD_FORCE = 1000.0
+
+
+def load_scale(design) -> float:
+    """A force scale of `design` in N (a Linkage or a SliderCrank): over its bodies, mass
+    times (|gravity| + rate^2 x the body's extent), the rate being the drive speed (a free
+    linkage's rate scale), the extent the largest distance between the body's points (the
+    slider-crank: its crank and coupler lengths)."""
+    if hasattr(design, "bodies"):
+        rate = design.rate_scale
+        total = 0.0
+        for body in design.bodies:
+            pts = list(body.points.values())
+            extent = max((math.dist(a, b) for a in pts for b in pts), default=0.0)
+            total += body.mass * (abs(design.gravity) + rate**2 * extent)
+        return total
+    rate2 = design.crank_speed**2
+    return (design.crank_mass * (abs(design.gravity) + rate2 * design.crank_length)
+            + design.coupler_mass * (abs(design.gravity) + rate2 * design.coupler_length)
+            + design.slider_mass * abs(design.gravity))
+
+
+def warn_absurd_forces(design, traj, option: str = "--step-size or --rtol") -> None:
+    """A PhysicsWarning where the run's largest contact or monitored force exceeds
+    `ABSURD_FORCE` times the design's `load_scale` (a run that did not resolve its
+    contacts: a step or tolerance too coarse)."""
+    import numpy as np
+
+    from ._warnings import PhysicsWarning
+
+    forces = [np.asarray(traj.contact_force, dtype=float), np.asarray(traj.peaks, dtype=float)]
+    peak = max((float(np.nanmax(f)) for f in forces if f.size), default=0.0)
+    scale = load_scale(design if design is not None else SliderCrank())
+    if not math.isfinite(peak) or peak > ABSURD_FORCE * scale:
+        warnings.warn(f"the largest force of the run, {peak:.3g} N, is {peak / scale:.3g} "
+                      f"times the mechanism's load scale ({scale:.3g} N: masses times "
+                      f"gravity and drive rate squared times length): not physical; the run "
+                      f"did not resolve its contacts (a smaller {option})", PhysicsWarning,
+                      stacklevel=2)
+
+
+def refuse_empty(traj, what: str = "revolution") -> None:
+    """RuntimeError where a run returned no complete revolution or window: its table would
+    be empty."""
+    if len(traj.peaks) == 0 or len(traj.t) < 2:
+        raise RuntimeError(f"the run returned no complete {what} ({len(traj.t)} samples); "
+                           "nothing to report")
+
+
 def _print_error_estimate(traj) -> None:
     """The run's estimate of its peaks' error against the requested accuracy (runs to an
     accuracy only)."""
@@ -543,7 +619,12 @@ def _tolerances(args: argparse.Namespace) -> dict:
         from ._checks import check_real
 
         return {"accuracy": check_real("--accuracy", args.accuracy, 1e-10, 1e-3)}
-    return {} if args.rtol is None else {"rtol": args.rtol}
+    if args.rtol is None:
+        return {}
+    from ._checks import check_real
+
+    # the runs' own range: refused here once, not as every run failing
+    return {"rtol": check_real("--rtol", args.rtol, 1e-14, 1e-2)}
 
 
 def _simulate_options(args: argparse.Namespace) -> dict:
@@ -577,6 +658,8 @@ def _simulate_linkage(linkage, args: argparse.Namespace) -> int:
     traj = simulate(linkage, args.revolutions, backend=args.backend, **options)
     elapsed = time.perf_counter() - t0
     print(f"done in {elapsed:.3g} s ({len(traj.t)} samples)", file=sys.stderr)
+    refuse_empty(traj)
+    warn_absurd_forces(linkage, traj)
     joints = [] if args.backend == "ideal" else [name for name, _ in linkage.contacts()]
     monitored = (f"max |{linkage.monitor_joint}|" if linkage.monitor_joint
                  else "max |shaking|")
@@ -619,6 +702,7 @@ def _simulate_free(linkage, args: argparse.Namespace) -> int:
                          "--case or --description")
     if args.out:
         check_output_file(args.out, "--out", args.force, suffixes=(".npz", ".csv"))
+    bound_spans(linkage, args)
     options = _simulate_options(args)
     options.update(duration=args.duration, window=args.window)
     _progress(f"simulating {linkage.name!r} (free) for {args.duration:g} s with backend "
@@ -627,6 +711,8 @@ def _simulate_free(linkage, args: argparse.Namespace) -> int:
     traj = simulate(linkage, backend=args.backend, **options)
     print(f"done in {time.perf_counter() - t0:.3g} s ({len(traj.t)} samples)",
           file=sys.stderr)
+    refuse_empty(traj, "window")
+    warn_absurd_forces(linkage, traj)
     joints = [j.name for j in linkage.clearance_joints]
     monitored = (f"max |{linkage.monitor_joint}|" if linkage.monitor_joint
                  else "max |shaking|")
@@ -697,6 +783,106 @@ def free_window(linkage, args: argparse.Namespace, revolution: str) -> tuple[int
     return k, window
 
 
+#: the most integrator steps all the runs of one command may take together (the timed
+#: repeats of a benchmark): a hundred times one run's max_steps
+MAX_COMMAND_STEPS = 100 * 5_000_000
+#: bytes of one frame of an animation held until the file is written (the figure of 10 x
+#: 4.2 in at 100 dpi, RGBA; matplotlib's GIF writer keeps every frame)
+FRAME_BYTES = 4 * 1000 * 420
+
+
+def _period(design) -> float:
+    """A revolution of `design` in s (a free linkage: its time scale); the paper's
+    SliderCrank for None."""
+    if design is None:
+        design = SliderCrank()
+    drive = getattr(design, "drive", True)
+    return design.period if drive is not None else design.time_scale
+
+
+def check_run_size(design, option: str, value, *, unit: str = "revolutions",
+                   backend: str = "reduced", step_size: float | None = None,
+                   accuracy: float | None = None, max_steps: int | None = None,
+                   step_option: str = "--step-size") -> int:
+    """Refuse, before any work, a run of `value` `unit` ("revolutions" or "s") of `design`
+    (a Linkage, a SliderCrank, None: the paper's) set by the option `option`, when its
+    steps (a lower bound: the reduced model steps at most an eighth of a revolution, the
+    Exudyn model its fixed step) exceed `max_steps` (default: a run's own limit,
+    `settings.DEFAULT_MAX_STEPS`). Also refuses a step
+    (`step_size`, the option `step_option`: the Exudyn model's fixed step, or any step
+    given with backend "exudyn") longer than a revolution: a run that takes no step in one.
+    ValueError naming the option; returns the estimated steps."""
+    from ._checks import check_steps
+    from .solve.settings import DEFAULT_MAX_STEPS
+
+    period = _period(design)
+    seconds = float(value) * period if unit == "revolutions" else float(value)
+    what = "a revolution" if unit == "revolutions" else "the run"
+    if backend == "exudyn" and step_size is not None:
+        span = min(period, seconds)
+        if step_size > span:
+            raise ValueError(f"{step_option} {step_size:g} s is longer than {what} "
+                             f"({span:.4g} s): no step would end within it; give "
+                             f"{step_option} below {span:.4g} s")
+        step, how = step_size, f"steps of {step_option} {step_size:g} s"
+    elif backend == "exudyn" and accuracy is None:
+        from .backends.exudyn_linkage import DEFAULT_STEPS_PER_REVOLUTION
+
+        step = period / DEFAULT_STEPS_PER_REVOLUTION
+        how = f"{DEFAULT_STEPS_PER_REVOLUTION} steps per revolution"
+    elif unit == "revolutions":
+        step, how = period / 8, "at least 8 steps per revolution"
+    else:
+        step, how = period / 8, f"at least 8 steps per {period:.3g} s, the time scale"
+    shown = str(value) if isinstance(value, int) else f"{value:g}"
+    advice = f"give a smaller {option}"
+    if step_size is not None and backend == "exudyn":
+        option, advice = f"{option} {shown} with {step_option}", \
+            f"give a smaller {option} or a larger {step_option}"
+        shown = f"{step_size:g} s"
+    return check_steps(f"{option} {shown}: a run of {value:.6g} {unit} ({how})",
+                       math.ceil(seconds / step),
+                       DEFAULT_MAX_STEPS if max_steps is None else max_steps, advice)
+
+
+def bound_spans(design, args: argparse.Namespace, revolution: str = "revolutions",
+                default: int = 4) -> None:
+    """`check_run_size` on the span options of a command, before any work: --duration of a
+    free linkage, else --REVOLUTION (`revolution`; `default` when not given) with the run
+    options --backend, --step-size and --accuracy, and --settled (a reduced run)."""
+    options = dict(backend=getattr(args, "backend", None) or "reduced",
+                   step_size=getattr(args, "step_size", None),
+                   accuracy=getattr(args, "accuracy", None))
+    if design is not None and getattr(design, "drive", True) is None:
+        duration, window = getattr(args, "duration", None), getattr(args, "window", None)
+        if duration is not None:
+            check_run_size(design, "--duration", duration, unit="s", **options)
+            if window is not None:
+                from .solve.linkage_model import MAX_WINDOWS
+
+                if not window <= duration:
+                    raise ValueError(f"--window {window:g} s is longer than --duration "
+                                     f"{duration:g} s; give at most --duration")
+                if duration / window > MAX_WINDOWS:
+                    raise ValueError(f"--window {window:g} s makes more than {MAX_WINDOWS} "
+                                     f"windows of --duration {duration:g} s; give at least "
+                                     f"{duration / MAX_WINDOWS:.3g} s")
+        return
+    value = getattr(args, revolution.replace("-", "_"), None)
+    check_run_size(design, "--" + revolution, default if value is None else value, **options)
+    if getattr(args, "settled", None) is not None:
+        check_run_size(design, "--settled", args.settled)
+
+
+def check_frames(frames: int) -> None:
+    """Refuse an animation whose frames (`FRAME_BYTES` each, all held until the file is
+    written) exceed the memory limit, naming --frames."""
+    from ._checks import check_memory
+
+    check_memory(f"--frames {frames}: the animation's frames need", frames * FRAME_BYTES,
+                 None, "give fewer --frames")
+
+
 def figure_suffixes() -> tuple[str, ...]:
     """File name endings matplotlib can write (.png, .pdf, .svg, ...)."""
     from matplotlib.backend_bases import FigureCanvasBase
@@ -745,6 +931,7 @@ def _peak_gradient_linkage(linkage, args: argparse.Namespace) -> int:
     if args.out:
         check_output_dir(args.out, "--out", args.force)
     k, window = free_window(linkage, args, "revolutions")
+    bound_spans(linkage, args)
     span = (f"revolution {k}" if window is None
             else f"time window [{(k - 1) * window:g}, {k * window:g}] s")
     _progress(f"peak of {args.output} of {linkage.name!r} over {span} and its gradient by "
@@ -782,6 +969,7 @@ def _cmd_sensitivity(args: argparse.Namespace) -> int:
             raise ValueError("--output applies to --case or --description (the paper's "
                              "slider-crank's sensitivities are those of |F12|)")
         return _peak_gradient_linkage(linkage, args)
+    bound_spans(mech, args)
     names = args.parameters
     if names is None and linkage is None:
         names = DEFAULT_PARAMETERS
@@ -1054,6 +1242,7 @@ def _add_optimize_parser(subparsers) -> argparse.ArgumentParser:
                         "pivot_force:JOINT, shaking_force, drive_moment or "
                         "contact_force:JOINT (default: the crank pivot's force)")
     add_evaluation_options(p, "optimize", accuracy=True)
+    add_keep_going_option(p, "designs' runs")
     p.add_argument("--no-refine", action="store_true", help="skip the local refinement")
     add_force_option(p)
     add_linkage_options(p)
@@ -1104,6 +1293,7 @@ def _cmd_optimize(args: argparse.Namespace) -> int:
     if linkage is not None:
         return _optimize_linkage(linkage, args)
     args.revolution, _ = free_window(None, args, "revolution")
+    bound_spans(mechanism_from_args(args), args, "revolution")
     if args.output is not None:
         raise ValueError("--output applies to --case or --description (the paper's "
                          "slider-crank minimises |F12|)")
@@ -1171,6 +1361,7 @@ def _cmd_optimize(args: argparse.Namespace) -> int:
                        ("fitness_history.png", "best peak per generation"),
                        ("force_comparison.png", "base force of the three designs")):
         wrote(args.out / name, what)
+    refuse_failed_runs(args, result.n_failed, result.n_evaluations, "designs' runs")
     return 0
 
 
@@ -1200,6 +1391,7 @@ def _optimize_linkage(linkage, args: argparse.Namespace) -> int:
         raise ValueError("--mass-scaling applies to the paper's slider-crank only")
     check_output_dir(args.out, "--out", args.force)
     k, window = free_window(linkage, args, "revolution")
+    bound_spans(linkage, args, "revolution")
     options = {} if args.rtol is None else {"rtol": args.rtol}
     if window is not None:
         options["window"] = window
@@ -1226,6 +1418,7 @@ def _optimize_linkage(linkage, args: argparse.Namespace) -> int:
         staged.commit()
     wrote(args.out / "result.json", "the optimisation's result")
     wrote(args.out / "fitness_history.png", "best peak per generation")
+    refuse_failed_runs(args, result.n_failed, result.n_evaluations, "designs' runs")
     return 0
 
 
@@ -1260,12 +1453,14 @@ def _add_tolerance_parser(subparsers) -> argparse.ArgumentParser:
                    help="DGSM gradient samples (output peak only; 0: none)")
     p.add_argument("--monte-carlo", type=int_at_least(0), default=0,
                    help="Monte Carlo samples of the output distribution (0: none)")
-    p.add_argument("--allowable", type=finite_float,
-                   help="allowable load: estimate P(output > allowable)")
+    p.add_argument("--allowable", type=positive_float,
+                   help="allowable load (> 0, the output's unit): estimate "
+                        "P(output > allowable)")
     p.add_argument("--wear", type=finite_float, nargs="+", metavar="M",
                    help="radial wear amounts in m added to the clearance (needs --monte-carlo)")
     p.add_argument("--seed", type=int_at_least(0), default=0, help="seed (default 0)")
     add_evaluation_options(p, "tolerance", accuracy=True)
+    add_keep_going_option(p, "runs")
     add_force_option(p)
     add_linkage_options(p)
     add_mechanism_options(p)
@@ -1280,6 +1475,7 @@ def _cmd_tolerance(args: argparse.Namespace) -> int:
     inputs = read_inputs(args.inputs)
     check_output_dir(args.out, "--out", args.force)
     k, window = free_window(linkage, args, "revolution")
+    bound_spans(mech, args, "revolution")
     kw = dict(output=args.output, revolution=k, window=window, sobol=args.sobol,
               second_order=not args.first_order_only, morris=args.morris, dgsm=args.dgsm,
               monte_carlo=args.monte_carlo, allowable=args.allowable, wear=args.wear,
@@ -1294,6 +1490,7 @@ def _cmd_tolerance(args: argparse.Namespace) -> int:
         staged.commit()
     wrote(args.out / "result.json", "indices and samples")
     wrote(args.out / "summary.txt", "the summary printed above")
+    refuse_failed_runs(args, result.counts.get("failed", 0), result.counts.get("runs", 0))
     return 0
 
 
@@ -1334,6 +1531,7 @@ def _add_map_parser(subparsers) -> argparse.ArgumentParser:
                    help="write map.nc at most this often while points arrive (default 5; "
                         "and at the end)")
     add_evaluation_options(p, "map")
+    add_keep_going_option(p, "points' runs")
     add_force_option(p)
     p.set_defaults(func=_cmd_map)
     return p
@@ -1360,6 +1558,8 @@ def _cmd_map(args: argparse.Namespace) -> int:
             raise ValueError(f"--set: unknown field(s) {unknown} of the paper's case; allowed: "
                              f"{sorted(field_names())}")
     base = SliderCrank().replace(**overrides) if paper else None
+    if paper:       # a case's overrides are checked by the study (its size first)
+        check_run_size(base, "--revolutions", args.revolutions)
     kw = dict(case=None if paper else case, overrides=None if paper else overrides,
               revolutions=args.revolutions, keep=args.keep, lyapunov=args.lyapunov,
               angle=args.angle, tol=args.tol, max_period=args.max_period, rtol=args.rtol,
@@ -1408,6 +1608,7 @@ def _cmd_map(args: argparse.Namespace) -> int:
     wrote(path, "regime map dataset")
     for f in figures:
         wrote(args.out / f, "figure")
+    refuse_failed_runs(args, int(ds["failed"].sum()), int(ds["failed"].size), "points' runs")
     return 0
 
 
@@ -1452,6 +1653,8 @@ def _cmd_animate(args: argparse.Namespace) -> int:
     from .solve.simulate import simulate
 
     linkage, mech = design_from_args(args)
+    bound_spans(mech, args)
+    check_frames(args.frames)
     revolution = args.revolutions if args.revolution is None else args.revolution
     if revolution > args.revolutions:
         raise ValueError(f"--revolution must be between 1 and --revolutions "
@@ -1542,6 +1745,7 @@ def _cmd_lyapunov(args: argparse.Namespace) -> int:
     refuse_window_options(args, "--revolutions")
     if args.revolutions is None:
         args.revolutions = 100
+    bound_spans(mech, args)
     transient = args.revolutions // 2 if args.transient is None else args.transient
     if transient >= args.revolutions:
         raise ValueError(f"--transient must be between 0 and --revolutions - 1 "
@@ -1584,6 +1788,7 @@ def _lyapunov_free(linkage, args: argparse.Namespace) -> int:
     if args.duration is None:
         raise ValueError(f"linkage {linkage.name!r} is free (no drive): give --duration "
                          "(s) and optionally --window (s)")
+    bound_spans(linkage, args)
     _progress(f"finite-time Lyapunov exponent of {linkage.name!r} over {args.duration:g} s "
               "...")
     t0 = time.perf_counter()
@@ -1664,6 +1869,8 @@ def _cmd_orbits(args: argparse.Namespace) -> int:
     from .plotting import plot_branch
 
     linkage, mech = design_from_args(args)
+    check_run_size(mech, "--settle", args.settle)
+    check_run_size(mech, "--period", args.period)
     name = linkage.name if linkage is not None else "the paper's slider-crank"
     branch_args = (args.field, args.start, args.stop)
     if any(a is not None for a in branch_args) and any(a is None for a in branch_args):

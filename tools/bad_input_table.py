@@ -19,6 +19,7 @@ import io
 import json
 import os
 import queue
+import re
 import shlex
 import subprocess
 import sys
@@ -101,6 +102,21 @@ CLI_CASES: list[tuple[str, str]] = [
     ("stress --backend nope", "unknown backend"),
     ("bench --repeats 0", "count below its minimum"),
     ("bench --repeats -3", "negative count"),
+    # sizes: bounded by an estimate of the work before any
+    ("simulate --revolutions 1000000000", "a count of revolutions beyond any run's steps"),
+    ("simulate --case four_bar --revolutions 1 --settled 1000000000",
+     "a settling run beyond any run's steps"),
+    ("simulate --case flores_translational_slider_crank --duration 1e9",
+     "a free linkage's duration beyond any run's steps"),
+    ("simulate --backend exudyn --step-size 1e9", "a step longer than a revolution"),
+    ("simulate --backend exudyn --step-size 1e-12", "a step too small for the revolutions"),
+    ("lyapunov --case flores_translational_slider_crank --duration 1e9",
+     "a duration beyond any run's steps"),
+    ("animate --frames 10000000", "frames beyond the memory"),
+    ("bench --quick --no-exudyn --repeats 1000000000", "repeats beyond a command's work"),
+    ("map --sweep clearance=1e-5:1e-4:1000 --workers 1000000000",
+     "workers beyond the memory of their threads"),
+    ("compare --step-size 1e9", "a step longer than a revolution"),
     ("report --replot --out empty", "--replot without a report"),
     ("report --replot --out mixed_report", "--replot on a folder mixing two runs"),
     # output paths (checked before any computation)
@@ -398,6 +414,10 @@ LIBRARY_CASES += [
      "a linkage name holding Python that would run on import"),
     ("Body('crank arm', 1.0, 1.0)", "a body name that is not an identifier"),
     ("Linkage.from_dict(without_mass())", "a body lacking its mass"),
+    ("Linkage.from_dict(renamed('coupler', 'gravity'))",
+     "a body named after a key of the description"),
+    ("Linkage.from_dict(renamed('crank_coupler', 'drive'))",
+     "a joint named after a key of the description"),
     ("cases.paper_slider_crank().replace(clearance_joints=2 * "
      "cases.paper_slider_crank().clearance_joints)", "the same clearance joint twice"),
     ("Body('crank', 1.0, 1.0, {f'p{i}': (0.0, 0.0) for i in range(1_500_000)})",
@@ -421,8 +441,14 @@ def _description_namespace() -> dict:
         del d["bodies"][0]["mass"]
         return d
 
+    def renamed(name, new):
+        import json
+
+        text = json.dumps(cases.four_bar().to_dict())
+        return json.loads(re.sub(f'"{name}(?=[".])', f'"{new}', text))
+
     return {"Linkage": Linkage, "Body": Body, "paper_dict": paper_dict,
-            "without_mass": without_mass, "EVIL_NAME": EVIL_NAME}
+            "without_mass": without_mass, "renamed": renamed, "EVIL_NAME": EVIL_NAME}
 
 
 def _library_namespace(tmp: Path) -> dict:

@@ -581,12 +581,24 @@ def build_parser(parser: argparse.ArgumentParser | None = None) -> argparse.Argu
 def run_compare(args: argparse.Namespace) -> int:
     """Body of ``mbs-clearance compare`` for parsed arguments; returns the exit code."""
     from mbs_clearance._io import atomic_file, check_output_file
-    from mbs_clearance.cli import figure_suffixes, linkage_from_args, mechanism_from_args
+    from mbs_clearance.cli import (
+        check_run_size,
+        figure_suffixes,
+        linkage_from_args,
+        mechanism_from_args,
+    )
     from mbs_clearance.solve.simulate import simulate
 
     mech = linkage_from_args(args) or mechanism_from_args(args)
     if args.revolutions < 1:
         raise ValueError(f"--revolutions must be >= 1; got {args.revolutions}")
+    # the sizes before any work, each backend's run by its own step
+    for backend in {args.backend_a, args.backend_b}:
+        check_run_size(mech, "--revolutions", args.revolutions, backend=backend,
+                       step_size=args.step_size, accuracy=args.accuracy)
+    if args.h_max is not None:
+        check_run_size(mech, "--revolutions", args.revolutions, step_size=args.h_max,
+                       backend="exudyn", step_option="--h-max")
     if not args.no_plot:
         check_output_file(args.out, "--out", args.force, suffixes=figure_suffixes())
     pair = (args.backend_a, args.backend_b)

@@ -210,11 +210,26 @@ def markdown(rows, refs) -> str:
     return "\n".join(lines)
 
 
+def check_repeats(repeats: int, quick: bool) -> int:
+    """Refuse, before any run, --repeats whose timed runs of the reduced model alone (each
+    setting `repeats` times, at least 8 steps per revolution) exceed the work of one
+    command, `cli.MAX_COMMAND_STEPS` steps; returns that lower bound of the steps."""
+    from mbs_clearance._checks import check_steps
+    from mbs_clearance.cli import MAX_COMMAND_STEPS
+
+    settings = 2 if quick else 17             # the reduced model's rtols in `run`
+    revolutions = sum(rev for _, rev in CASES.values())
+    return check_steps(f"--repeats {repeats}: {repeats} timed runs of each of {settings} "
+                       f"settings over {revolutions} revolutions", 8 * repeats * settings
+                       * revolutions, MAX_COMMAND_STEPS, "give fewer --repeats")
+
+
 def main(args) -> int:
     from mbs_clearance._io import OutputDir, check_output_dir
 
     if args.out:
         check_output_dir(args.out, "--out", args.force)
+    check_repeats(args.repeats, args.quick)
     rows, refs = run(quick=args.quick, repeats=args.repeats, exudyn=not args.no_exudyn)
     text = f"Machine: {machine_summary()}\n" + markdown(rows, refs)
     print(text)

@@ -50,13 +50,29 @@ from ..laws.lubrication import BEARING_LENGTH, FADE_END, FADE_START, VISCOSITY, 
 from ..laws.lubrication import MODELS as LUBRICATION_MODELS
 from ..laws.registry import FRICTION_PARAMETER_SPECS, FRICTION_SLOTS, friction_law
 
-__all__ = ["Point", "GROUND", "Body", "Revolute", "Prismatic", "ClearanceJoint",
+__all__ = ["Point", "GROUND", "RESERVED_NAMES", "Body", "Revolute", "Prismatic", "ClearanceJoint",
            "TranslationalClearance", "CORNERS", "Drive", "Initial", "Linkage",
            "FRICTION_DEFAULTS", "check_friction", "check_lubrication"]
 
 Point = tuple[float, float]
 #: reserved body name of the ground; its points are `Linkage.ground_points`
 GROUND = "ground"
+#: names no body or joint may take: the keys a dotted path (`Linkage.with_parameter`, the
+#: command line's --set) resolves before the items' names ("gravity", "drive.speed",
+#: "ground.<point>.x") and the description's sections accepted in front of a path
+#: ("bodies.coupler.mass"); an item of such a name would be shadowed by the key
+RESERVED_NAMES = (GROUND, "gravity", "drive", "bodies", "joints", "clearance_joints",
+                  "translational_joints", "ground_points")
+
+
+def _check_reserved(kind: str, name: str) -> None:
+    """ValueError where an item's `name` is one of `RESERVED_NAMES`, with the reason."""
+    if name in RESERVED_NAMES:
+        raise ValueError(
+            f"{kind} name {name!r} is reserved: {name!r} is a key of the description, so a "
+            f"dotted path such as {name + '.mass'!r} (--set, Linkage.with_parameter) would "
+            f"mean the key, not the {kind}; rename the {kind} (reserved: "
+            f"{', '.join(RESERVED_NAMES)})")
 
 
 def _is_real(value: Any) -> bool:
@@ -627,14 +643,16 @@ class Linkage:
     def _check_graph(self) -> None:
         points = {GROUND: self.ground_points}
         for body in self.bodies:
+            _check_reserved("body", body.name)
             if body.name in points:
                 raise ValueError(f"body name {body.name!r} is used twice")
             points[body.name] = body.points
         names = set()
         for joint in (*self.joints, *self.clearance_joints, *self.translational_joints):
-            if joint.name in names or joint.name in ("drive", "gravity"):
-                raise ValueError(f"joint name {joint.name!r} is used twice or reserved "
-                                 "(joint names must be unique, not 'drive' or 'gravity')")
+            _check_reserved("joint", joint.name)
+            if joint.name in names:
+                raise ValueError(f"joint name {joint.name!r} is used twice (joint names must "
+                                 "be unique)")
             names.add(joint.name)
         for body in self.bodies:
             if body.name in names:

@@ -553,14 +553,11 @@ def _estimate_free(duration: float, max_steps: int, h_max: float) -> None:
     max_steps (no pilot: a free motion's first part need not be like the rest)."""
     import math
 
-    from .._checks import MemoryLimitError
+    from .._checks import check_steps
 
-    forced = math.ceil(duration / h_max)
-    if forced > max_steps:
-        raise MemoryLimitError(
-            f"a run of {duration:.6g} s with h_max = {h_max:.3g} s takes at least "
-            f"{forced:.3g} steps, more than max_steps={max_steps}; raise h_max or max_steps, "
-            "or run a shorter duration")
+    check_steps(f"a run of {duration:.6g} s with h_max = {h_max:.3g} s",
+                math.ceil(duration / h_max), max_steps,
+                "raise h_max or max_steps, or run a shorter duration")
     return None
 
 
@@ -572,14 +569,11 @@ def _estimate_driven(linkage, revolutions: float, *, max_steps: int, h_max: floa
     its run options) predicts more. None: not estimated (a short run)."""
     import math
 
-    from .._checks import MemoryLimitError
+    from .._checks import MemoryLimitError, check_steps
 
-    forced = math.ceil(revolutions * linkage.period / h_max)
-    if forced > max_steps:
-        raise MemoryLimitError(
-            f"a run of {revolutions:.6g} revolutions with h_max = {h_max:.3g} s takes at least "
-            f"{forced:.3g} steps, more than max_steps={max_steps}; raise h_max or max_steps, "
-            "or run fewer revolutions")
+    check_steps(f"a run of {revolutions:.6g} revolutions with h_max = {h_max:.3g} s",
+                math.ceil(revolutions * linkage.period / h_max), max_steps,
+                "raise h_max or max_steps, or run fewer revolutions")
     if revolutions < PILOT_MIN_REVOLUTIONS:
         return None
     try:

@@ -415,7 +415,8 @@ def regime_map(mech, sweep, revolutions: int = 100, keep: int = 50, scheduler=No
     keep = check_int("keep (revolutions kept after the transient)", keep, 1, revolutions)
     max_period = check_int("max_period", max_period, 1)
     if keep < 2 * max_period + 1:
-        raise ValueError(f"keep must be >= 2 max_period + 1 = {2 * max_period + 1}; got {keep}")
+        raise ValueError(f"keep must be >= 2 max_period + 1 = {2 * max_period + 1} (max_period="
+                         f"{max_period}); got keep={keep}: raise keep or lower max_period")
     tol = check_real("tol (recurrence tolerance)", tol, 0.0, low_open=True)
     lyapunov = check_bool("lyapunov", lyapunov)
     early_stop = check_bool("early_stop", early_stop) and not lyapunov
@@ -504,6 +505,10 @@ def regime_map(mech, sweep, revolutions: int = 100, keep: int = 50, scheduler=No
     return MapResult(ds, path, len(todo), skipped, time.perf_counter() - t0)
 
 
+#: bytes a worker thread of a local pool reserves (its stack, the platform's default)
+THREAD_BYTES = 8 * 1024**2
+
+
 def map_memory(shape: tuple[int, ...], revolutions: int, keep: int, max_period: int,
                joints: int, concurrent: int = 1, max_memory: int | None = None) -> int:
     """Estimated peak memory (bytes) of a regime map over a grid of `shape` with `joints`
@@ -512,8 +517,16 @@ def map_memory(shape: tuple[int, ...], revolutions: int, keep: int, max_period: 
     `MemoryLimitError` naming the options if either part exceeds `max_memory`."""
     points = math.prod(shape)
     run = revolution_bytes(revolutions) + 8 * 4 * keep * joints
-    check_memory(f"revolutions={revolutions}: each point's run needs", concurrent * run,
+    # a local pool runs at most one point per worker and never more workers than points;
+    # each worker thread reserves its stack
+    running = min(concurrent, points)
+    check_memory(f"revolutions={revolutions}: each point's run needs", run,
                  max_memory, "run fewer revolutions")
+    if running > 1:
+        check_memory(f"workers={concurrent} ({running} points running at once, revolutions="
+                     f"{revolutions} each): they need", running * (run + THREAD_BYTES),
+                     max_memory, "use fewer workers or run fewer revolutions")
+    concurrent = running
     floats = 4 * keep * joints + keep + max_period + joints + 8
     need = points * (2 * 8 * floats + DESIGN_BYTES + 256) + concurrent * run
     grid = " x ".join(str(n) for n in shape)

@@ -186,7 +186,8 @@ def test_debug_variable_shows_the_traceback(monkeypatch, capsys):
 
 def test_console_script_in_a_real_process_prints_one_line(tmp_path):
     """The same through the interpreter (sys.exit(main())): a run refused before it starts
-    (the step count h_max forces is estimated first) is one line with status 2."""
+    (the step count --h-max forces is estimated first, naming the options) is one line with
+    status 2."""
     import subprocess
     import sys
 
@@ -196,8 +197,9 @@ def test_console_script_in_a_real_process_prints_one_line(tmp_path):
                           env=_env())
     assert proc.returncode == 2
     assert proc.stderr.count("\n") == 1, proc.stderr
-    assert proc.stderr.startswith("mbs-clearance compare: error: a run of 1 revolutions with "
-                                  "h_max = 1e-300 s takes at least")
+    assert proc.stderr.startswith("mbs-clearance compare: error: --revolutions 1 with --h-max "
+                                  "1e-300 s: a run of 1 revolutions"), proc.stderr
+    assert "takes at least" in proc.stderr
 
 
 def _env():
@@ -341,9 +343,9 @@ def test_failed_write_leaves_the_old_file(tmp_path, monkeypatch, capsys):
     with pytest.raises(SystemExit) as exc:
         main(["simulate", "--revolutions", "1", "--out", str(out), "--restitution", "0.5"])
     assert exc.value.code == 1
-    # the run's note "done in ..." then the error, one line
+    # the run's note "done in ..." then the error, one line naming the file
     assert capsys.readouterr().err.splitlines()[-1] == ("mbs-clearance simulate: error: No "
-                                                        "space left on device")
+                                                        f"space left on device: {str(out)!r}")
     assert out.read_bytes() == old
     assert [p.name for p in tmp_path.iterdir()] == ["t.npz"]
 
