@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from types import SimpleNamespace
 
 import jinja2
 import sympy as sp
@@ -219,9 +220,10 @@ def _solve_lines(M, f, out, indent="    ") -> list[str]:
     return [indent + line for line in lines]
 
 
-def render(d: Derivation, linkage_name: str, structure: dict, zeros: tuple = ()) -> str:
-    """The python source of the model module of derivation `d` (deterministic); `zeros`:
-    the parameters `d` is specialised on (`derive.specialise`), checked to be zero."""
+def _plan(d: Derivation) -> SimpleNamespace:
+    """The stages of the model evaluation of `d` (its expressions split: the kernels'
+    constants numbered first, in this order, by every printer), and the indices into p
+    they read: the one plan the python and the C printers write out."""
     w = _Writer(d)
     n, J, G = len(d.Q), len(d.joints), len(d.ground_joints)
     # the events: the clearance joints, then the translational joints' corners
@@ -332,6 +334,46 @@ def render(d: Derivation, linkage_name: str, structure: dict, zeros: tuple = ())
     for k in corner_fric:
         ft = d.corners[k][4]
         results += [str(ft), f"exd{J + k}", f"-{ft} * exd{J + k}"]
+    return SimpleNamespace(**locals())
+
+
+def _out_columns(d: Derivation, events: list, fric: list, lub: list, corner_fric: list,
+                 driven: bool) -> tuple[list[str], int]:
+    """(the columns of the outputs, the column of the monitored value's x)."""
+    out_columns = []
+    for j in events:
+        out_columns += [f"{j}.contact_force", f"{j}.penetration", f"{j}.penetration_rate",
+                        f"{j}.ecc_x", f"{j}.ecc_y"]
+    for gname in d.ground_joints:
+        out_columns += [f"{gname}.reaction_x", f"{gname}.reaction_y"]
+    out_columns += ["shaking_x", "shaking_y", *(["drive_moment"] if driven else [])]
+    out_columns += [f"{c}.acc" for c in d.coordinates]
+    for j in fric:
+        out_columns += [f"{d.joints[j]}.{f}" for f in ("friction_force", "slip_velocity",
+                                                        "friction_power")]
+    for j in lub:
+        out_columns += [f"{d.joints[j]}.{f}" for f in ("film_force_x", "film_force_y",
+                                                        "film_torque", "film_power")]
+    for k in corner_fric:
+        out_columns += [f"{d.corners[k][0]}.{f}" for f in ("friction_force", "slip_velocity",
+                                                            "friction_power")]
+    if d.monitor is None:
+        mon = out_columns.index("shaking_x")
+    else:
+        mon = out_columns.index(f"{d.monitor}.reaction_x")
+    return out_columns, mon
+
+
+def render(d: Derivation, linkage_name: str, structure: dict, zeros: tuple = ()) -> str:
+    """The python source of the model module of derivation `d` (deterministic); `zeros`:
+    the parameters `d` is specialised on (`derive.specialise`), checked to be zero."""
+    pl = _plan(d)
+    (w, n, J, E, events, params, mem_start, contact, gap_names, gap_exprs, gaps_stage,
+     fric, lub, contact_lines, corner_indices, corner_fric, eom, outputs_stage, results,
+     driven) = (
+        pl.w, pl.n, pl.J, pl.E, pl.events, pl.params, pl.mem_start, pl.contact,
+        pl.gap_names, pl.gap_exprs, pl.gaps_stage, pl.fric, pl.lub, pl.contact_lines,
+        pl.corner_indices, pl.corner_fric, pl.eom, pl.outputs_stage, pl.results, pl.driven)
     dynamics = w.function([gaps_stage, contact_lines, *eom, outputs_stage])
 
     gap_fns = [w.function([(gap_exprs[j], gap_names[j])]) for j in range(E)]
@@ -363,27 +405,7 @@ def render(d: Derivation, linkage_name: str, structure: dict, zeros: tuple = ())
     closure_rate = w.function([([w.split(e) for e in d.closure_rate],
                                 [f"res[{i}]" for i in range(nc)])], state="q")
 
-    out_columns = []
-    for j in events:
-        out_columns += [f"{j}.contact_force", f"{j}.penetration", f"{j}.penetration_rate",
-                        f"{j}.ecc_x", f"{j}.ecc_y"]
-    for gname in d.ground_joints:
-        out_columns += [f"{gname}.reaction_x", f"{gname}.reaction_y"]
-    out_columns += ["shaking_x", "shaking_y", *(["drive_moment"] if driven else [])]
-    out_columns += [f"{c}.acc" for c in d.coordinates]
-    for j in fric:
-        out_columns += [f"{d.joints[j]}.{f}" for f in ("friction_force", "slip_velocity",
-                                                        "friction_power")]
-    for j in lub:
-        out_columns += [f"{d.joints[j]}.{f}" for f in ("film_force_x", "film_force_y",
-                                                        "film_torque", "film_power")]
-    for k in corner_fric:
-        out_columns += [f"{d.corners[k][0]}.{f}" for f in ("friction_force", "slip_velocity",
-                                                            "friction_power")]
-    if d.monitor is None:
-        mon = out_columns.index("shaking_x")
-    else:
-        mon = out_columns.index(f"{d.monitor}.reaction_x")
+    out_columns, mon = _out_columns(d, events, fric, lub, pl.corner_fric, driven)
     jac_ctx = jacobian_context(w, d, out_columns)
     if d.corners:
         # each contact's impact-velocity floor: a corner reads its joint's
