@@ -66,6 +66,13 @@ def test_dispatch_is_generated_from_the_registry():
     assert codegen.PATH.read_text() == codegen.render()
 
 
+def test_c_laws_are_generated_from_the_registry():
+    """The checked-in C header of the laws (`core/laws_generated.h`) is what the codegen
+    writes from the registry now, and `--check` says so."""
+    assert codegen.C_PATH.read_text() == codegen.render_c()
+    assert codegen.main(["--check"]) == 0
+
+
 # ------------------------------------------------------------------------------- contact
 
 @pytest.mark.parametrize("name", CONTACT_NAMES)
