@@ -29,9 +29,9 @@ _LOADED: dict[str, CModel] = {}
 
 
 def _render(linkage: Linkage, specialise: bool) -> tuple[str, dict]:
+    from .cwriter import render_c
     from .derive import derive
     from .derive import specialise as specialised
-    from .cwriter import render_c
 
     if not isinstance(linkage, Linkage):
         raise ValueError(f"linkage must be a Linkage; got {type(linkage).__name__}")

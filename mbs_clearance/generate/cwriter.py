@@ -59,6 +59,7 @@ class _CPrinter(C99CodePrinter):
 
 
 _ASSIGN = re.compile(r"^([A-Za-z_][A-Za-z0-9_]*) = (.*)$")
+_SLOTS = re.compile(r", \((p\[\d+\](?:, p\[\d+\])*),?\)")
 _CALL = re.compile(r"^([A-Za-z_][A-Za-z0-9_, ]*) = ([a-z_]+)\((.*)\)$")
 
 
@@ -144,7 +145,7 @@ def _statement(line: str) -> str:
     if call and call.group(2).endswith("_stage"):
         outs = call.group(1).split(", ")
         # a tuple of the friction slots: a C99 compound literal
-        args = call.group(3).replace(", (p[", ", (const double[]){p[").replace("])", "]}")
+        args = _SLOTS.sub(r", (const double[]){\1}", call.group(3))
         return (f"double {', '.join(outs)}; {call.group(2)}({args}, "
                 + ", ".join(f"&{o}" for o in outs) + ");")
     assign = _ASSIGN.match(line.strip())
