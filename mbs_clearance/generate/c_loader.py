@@ -4,18 +4,26 @@ the digest of the source: stale code never loads) and opened with cffi.
 
 `load_c_model(linkage)` returns a `CModel`: the cffi handles, the model record (sizes and
 function pointers of the seam ``mbs_core.h``) and the metadata the numba module exposes
-(PARAMETERS, OUT_COLUMNS, N_STATE, ...). The C source is generated on first use in a
-process (sympy derivation, a few seconds) and kept for the process.
+(PARAMETERS, OUT_COLUMNS, N_STATE, ...). The C source is generated on first use (sympy
+derivation, one to ten seconds) and kept, with its metadata, in the compiled-code cache
+beside the libraries, keyed by the structure's digest and the C printer's sources; it is
+read back under the same rules as a library (a trusted directory, a private file whose
+SHA-256 matches the one recorded when it was written; anything else is generated again).
 """
 
 from __future__ import annotations
 
+import hashlib
+import json
+import os
 import threading
 import time
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 from types import SimpleNamespace
 
+from .._warnings import CacheWarning
 from ..model.linkage import Linkage
 from .key import model_structure, structure_digest
 
@@ -24,8 +32,18 @@ __all__ = ["generate_c_module", "load_c_model", "CModel", "C_SOURCES"]
 _CORE = Path(__file__).resolve().parents[1] / "core"
 #: the headers every model is compiled with (beside the seam's, which the build adds)
 C_SOURCES = ("runtime.h", "laws_generated.h")
+_HERE = Path(__file__).resolve().parent
 _LOCK = threading.Lock()
 _LOADED: dict[str, CModel] = {}
+
+
+def _printer_version() -> str:
+    """The digest of what makes a model's C source besides its structure (whose digest
+    covers the derivation and the plan): the C printer and this loader."""
+    h = hashlib.sha256()
+    for name in ("cwriter.py", "c_loader.py"):
+        h.update((_HERE / name).read_bytes().replace(b"\r\n", b"\n") + b"\0")
+    return h.hexdigest()[:16]
 
 
 def _render(linkage: Linkage, specialise: bool) -> tuple[str, dict]:
@@ -41,6 +59,36 @@ def _render(linkage: Linkage, specialise: bool) -> tuple[str, dict]:
     zeros = tuple(structure.get("zero_parameters", ()))
     d = derive(linkage)
     return render_c(specialised(d, zeros) if zeros else d, linkage.name, structure, zeros)
+
+
+def _cached_render(linkage: Linkage, specialise: bool, digest: str) -> tuple[str, dict]:
+    """`_render`, kept in the first usable cache directory (see the module docstring)."""
+    from ..core import build
+
+    key = hashlib.sha256(f"{digest}\0{_printer_version()}".encode()).hexdigest()[:24]
+    rendered = None
+    for directory in build.cache_dirs():
+        if not build.usable(directory):
+            continue
+        path = directory / f"model-source-{key}.json"
+        if build.valid(path):
+            data = json.loads(path.read_text())
+            meta = {k: tuple(v) if isinstance(v, list) else v for k, v in data["meta"].items()}
+            return data["source"], meta
+        if path.exists():
+            warnings.warn(f"the generated model source {path} does not match its recorded "
+                          "digest (damaged or changed); it is generated again", CacheWarning,
+                          stacklevel=3)
+        rendered = rendered or _render(linkage, specialise)
+        try:
+            part = path.with_name(f"{path.name}.part-{os.getpid()}-{threading.get_ident()}")
+            part.write_text(json.dumps({"source": rendered[0], "meta": rendered[1]}))
+            os.chmod(part, 0o600)
+            build.stamp(part, path)
+            return rendered
+        except OSError:          # full or read-only: the next place
+            continue
+    return rendered or _render(linkage, specialise)
 
 
 def generate_c_module(linkage: Linkage, specialise: bool = True) -> str:
@@ -85,7 +133,7 @@ def load_c_model(linkage: Linkage, specialise: bool = True) -> CModel:
         if digest in _LOADED:
             return _LOADED[digest]
         started = time.perf_counter()
-        source, meta = _render(linkage, specialise)
+        source, meta = _cached_render(linkage, specialise, digest)
         generated = time.perf_counter()
         sources = [("model.c", source)] + [(name, (_CORE / name).read_text())
                                            for name in C_SOURCES]

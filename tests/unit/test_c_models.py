@@ -4,16 +4,18 @@ pointers of the C model's record agree with the numba kernels at random states, 
 perturbations, contact modes and laws: rhs, event, on_event's memory update, monitor (its
 value, dydt, outputs, g, gd) and prepare's constants."""
 
-import math
+import json
 
 import numpy as np
 import pytest
 
+from mbs_clearance._warnings import CacheWarning
 from mbs_clearance.generate import NAMED_VARIANTS, load_model
 from mbs_clearance.generate.c_loader import generate_c_module, load_c_model
 from mbs_clearance.laws.lubrication import MODELS as LUBRICATION_MODELS
 from mbs_clearance.laws.registry import CONTACT, FRICTION
 from mbs_clearance.model import cases
+from mbs_clearance.model.linkage import Linkage
 from mbs_clearance.solve.linkage_model import initial_state, pack_parameters
 
 #: relative agreement of every compared value (the contract is 1e-12 for a whole run; the
@@ -223,11 +225,53 @@ def test_c_prepare_refuses_a_specialised_zero_that_is_not_zero():
         mod.prepare(np.r_[p, np.zeros(mod.N_P - cm.N_P)])
 
 
-def test_c_source_holds_no_name_of_the_description():
-    """A description's names never enter the C source, not even its comments: a body and
-    a joint named like C code give the same source as plain names, up to the digest."""
+
+
+def test_c_source_is_kept_and_a_damaged_copy_is_generated_again(tmp_path, monkeypatch):
+    """A model's C source is derived once and read back from the cache by the next process
+    (counted); a damaged copy is never compiled: a CacheWarning, then the source again."""
+    from mbs_clearance.generate import c_loader
+
+    monkeypatch.setenv("MBS_CLEARANCE_CACHE_DIR", str(tmp_path))
+    monkeypatch.setattr(c_loader, "_LOADED", {})
+    calls = []
+    real = c_loader._render
+    monkeypatch.setattr(c_loader, "_render", lambda *a: calls.append(a) or real(*a))
+    lk = CASES["four_bar"]
+    first = c_loader.load_c_model(lk)
+    assert len(calls) == 1
+    c_loader._LOADED.clear()                 # as a new process
+    again = c_loader.load_c_model(lk)
+    assert len(calls) == 1 and again.source == first.source and again.meta == first.meta
+    kept = next(tmp_path.glob("model-source-*.json"))
+    kept.write_text(kept.read_text().replace("sqrt(", "cbrt("))
+    c_loader._LOADED.clear()
+    with pytest.warns(CacheWarning, match="does not match its recorded digest"):
+        third = c_loader.load_c_model(lk)
+    assert len(calls) == 2 and third.source == first.source
+    assert "cbrt(" not in third.source
+
+
+def test_c_model_of_names_that_are_c_words():
+    """Names of the description that are C keywords, library functions or the generator's
+    own names never reach the code: the model compiles and computes what the same linkage
+    with plain names computes; distinctive names appear nowhere in the source."""
     lk = CASES["paper_slider_crank"]
-    text = generate_c_module(lk)
-    for name in ("crank", "coupler", "slider", "gravity", "drive"):
-        assert name not in text
-    assert math.isfinite(len(text))
+    text = json.dumps(lk.to_dict())
+    for old, new in (("coupler_slider", "sqrt"), ("crank", "int"), ("coupler", "res"),
+                     ("slider", "P0")):
+        text = text.replace(f'"{old}', f'"{new}')
+    odd = Linkage.from_dict(json.loads(text))
+    plain, cm = load_c_model(lk), load_c_model(odd)
+    assert plain.N_P == cm.N_P and cm.PARAMETERS != plain.PARAMETERS
+    p = pack_parameters(lk, load_model(lk))[:cm.N_P].copy()
+    q = p.copy()
+    assert _Kernels(plain).prepare(p) == 0 and _Kernels(cm).prepare(q) == 0
+    assert _rel(q, p) <= RTOL
+    y = initial_state(lk, load_model(lk)) + 1e-5
+    a, b = _Kernels(plain).rhs(0.01, y, p, plain.N_STATE), _Kernels(cm).rhs(0.01, y, p,
+                                                                            cm.N_STATE)
+    assert np.array_equal(a, b)
+    source = generate_c_module(cases.paper_slider_crank())
+    for name in ("crank", "coupler", "slider", "gravity", "drive", "mass", "stiffness"):
+        assert name not in source
