@@ -26,6 +26,7 @@ from types import SimpleNamespace
 from .._warnings import CacheWarning
 from ..model.linkage import Linkage
 from .key import model_structure, structure_digest
+from .loader import check_arguments
 
 __all__ = ["generate_c_module", "load_c_model", "CModel", "C_SOURCES"]
 
@@ -51,10 +52,7 @@ def _render(linkage: Linkage, specialise: bool) -> tuple[str, dict]:
     from .derive import derive
     from .derive import specialise as specialised
 
-    if not isinstance(linkage, Linkage):
-        raise ValueError(f"linkage must be a Linkage; got {type(linkage).__name__}")
-    if not isinstance(specialise, bool):
-        raise ValueError(f"specialise must be True or False; got {specialise!r}")
+    check_arguments(linkage, specialise)
     structure = model_structure(linkage, specialise)
     zeros = tuple(structure.get("zero_parameters", ()))
     d = derive(linkage)
@@ -124,10 +122,7 @@ def load_c_model(linkage: Linkage, specialise: bool = True) -> CModel:
     (cached by the source's digest), one per structure and process."""
     from ..core import build
 
-    if not isinstance(linkage, Linkage):
-        raise ValueError(f"linkage must be a Linkage; got {type(linkage).__name__}")
-    if not isinstance(specialise, bool):
-        raise ValueError(f"specialise must be True or False; got {specialise!r}")
+    check_arguments(linkage, specialise)
     digest = structure_digest(model_structure(linkage, specialise))
     with _LOCK:
         if digest in _LOADED:

@@ -19,15 +19,16 @@ from sympy.printing.c import C99CodePrinter
 
 from .derive import Derivation
 from .key import structure_digest
-from .writer import _out_columns, _plan
+from .writer import _Numbers, _out_columns, _plan
 
 __all__ = ["render_c", "metadata"]
 
 
-class _CPrinter(C99CodePrinter):
-    """C code: integer powers as products, square roots through sqrt, numbers as
-    round-trip literals (as the python printer: same operations, same order); parameters
-    renamed through `names`."""
+class _CPrinter(_Numbers, C99CodePrinter):
+    """C code, powers and numbers as the python printer writes them (same operations, same
+    order), parameters renamed through `names`."""
+
+    SQRT = "sqrt"
 
     def __init__(self, names: dict):
         super().__init__()
@@ -37,22 +38,10 @@ class _CPrinter(C99CodePrinter):
         return self._names.get(expr, expr.name)
 
     def _print_Pow(self, expr, rational=False):
-        base, exp = expr.as_base_exp()
-        b = self._print(base)
-        if exp.is_Integer and 1 < abs(int(exp)) <= 4:
-            prod = " * ".join([f"{b}" if base.is_Symbol else f"({b})"] * abs(int(exp)))
-            return f"({prod})" if exp > 0 else f"(1.0 / ({prod}))"
-        if exp == -1:
-            return f"(1.0 / {b})" if base.is_Symbol else f"(1.0 / ({b}))"
-        if exp == sp.Rational(1, 2):
-            return f"sqrt({b})"
-        raise ValueError(f"no C form for the power {expr} in a generated model")
-
-    def _print_Rational(self, expr):
-        return repr(float(expr))
-
-    def _print_Integer(self, expr):
-        return f"{int(expr)}.0" if abs(int(expr)) < 2**53 else repr(float(expr))
+        code = self._power(expr)
+        if code is None:
+            raise ValueError(f"no C form for the power {expr} in a generated model")
+        return code
 
     def _print_Float(self, expr):
         return repr(float(expr))
