@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import logging
 import os
 import threading
 import time
@@ -34,6 +35,7 @@ _CORE = Path(__file__).resolve().parents[1] / "core"
 #: the headers every model is compiled with (beside the seam's, which the build adds)
 C_SOURCES = ("runtime.h", "laws_generated.h")
 _HERE = Path(__file__).resolve().parent
+_LOG = logging.getLogger("mbs_clearance")
 _LOCK = threading.Lock()
 _LOADED: dict[str, CModel] = {}
 
@@ -77,16 +79,25 @@ def _cached_render(linkage: Linkage, specialise: bool, digest: str) -> tuple[str
             warnings.warn(f"the generated model source {path} does not match its recorded "
                           "digest (damaged or changed); it is generated again", CacheWarning,
                           stacklevel=3)
-        rendered = rendered or _render(linkage, specialise)
+        rendered = rendered or _render_logged(linkage, specialise)
+        part = path.with_name(f"{path.name}.part-{os.getpid()}-{threading.get_ident()}")
         try:
-            part = path.with_name(f"{path.name}.part-{os.getpid()}-{threading.get_ident()}")
             part.write_text(json.dumps({"source": rendered[0], "meta": rendered[1]}))
             os.chmod(part, 0o600)
             build.stamp(part, path)
             return rendered
         except OSError:          # full or read-only: the next place
             continue
-    return rendered or _render(linkage, specialise)
+        finally:
+            part.unlink(missing_ok=True)
+    return rendered or _render_logged(linkage, specialise)
+
+
+def _render_logged(linkage: Linkage, specialise: bool) -> tuple[str, dict]:
+    """`_render`, said first (a derivation takes one to ten seconds)."""
+    _LOG.info("deriving the model of linkage %r in C (first use of its structure only)",
+              linkage.name)
+    return _render(linkage, specialise)
 
 
 def generate_c_module(linkage: Linkage, specialise: bool = True) -> str:
