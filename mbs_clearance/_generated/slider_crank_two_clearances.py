@@ -32,8 +32,8 @@ from mbs_clearance.generate.runtime import (
 
 LINKAGE = "slider_crank_two_clearances"
 STRUCTURE = "{\"bodies\": [[\"crank\", [\"pin\", \"pivot\"]], [\"coupler\", [\"crank_end\", \"slider_end\"]], [\"slider\", [\"pin\"]]], \"clearance_joints\": [[\"crank_coupler\", \"crank\", \"pin\", \"coupler\", \"crank_end\"], [\"coupler_slider\", \"coupler\", \"slider_end\", \"slider\", \"pin\"]], \"drive\": \"crank_pivot\", \"ground_points\": [\"crank_pivot\", \"slider_axis\"], \"joints\": [[\"revolute\", \"crank_pivot\", \"ground\", \"crank_pivot\", \"crank\", \"pivot\"], [\"prismatic\", \"slider_guide\", \"ground\", \"slider_axis\", \"slider\", \"pin\"]], \"monitor_joint\": \"crank_pivot\", \"zero_parameters\": [\"crank.pivot.y\", \"crank.pin.y\", \"coupler.crank_end.y\", \"coupler.slider_end.y\", \"slider.pin.x\", \"slider.pin.y\", \"ground.crank_pivot.x\", \"ground.crank_pivot.y\", \"ground.slider_axis.x\", \"ground.slider_axis.y\", \"slider_guide.angle\"]}"
-STRUCTURE_DIGEST = "b9b7fc6acccf60e754f91b5ab553149613b3151901485ce5074d85b89ac75354"
-GENERATOR_VERSION = "0545b6fbdb451070"
+STRUCTURE_DIGEST = "361bc1d154b97690e6308245465fa1081a6616d39a1fee551228e27187696d95"
+GENERATOR_VERSION = "89db7e28670f0a78"
 
 #: dotted names of the entries of p (without the constants)
 PARAMETERS = (

@@ -33,7 +33,7 @@ from pathlib import Path
 from .._warnings import CacheWarning
 
 __all__ = ["HEADER", "FLAGS", "CompilerMissing", "cdef_of", "compiler", "build", "load",
-           "cache_dirs"]
+           "cache_dirs", "usable", "valid", "stamp"]
 
 _HERE = Path(__file__).resolve().parent
 #: the seam's header (its declarations are the cffi cdef of every library)
@@ -243,3 +243,22 @@ def load(label: str, sources, cdef: str = "", flags: tuple[str, ...] = FLAGS,
             ffi.cdef(cdef_of() + "\n" + cdef)
             _LOADED[key] = (ffi, ffi.dlopen(key))
         return _LOADED[key]
+
+
+def usable(path: Path) -> bool:
+    """Whether `path` is a cache directory this process may use (created if missing: mode
+    0700, owned by this user, writable by neither group nor others, writable)."""
+    return _usable(path)
+
+
+def valid(path: Path) -> bool:
+    """Whether the file `path` is regular, writable by neither group nor others, and its
+    SHA-256 is the one recorded beside it (`stamp`)."""
+    return _valid(path)
+
+
+def stamp(part: Path, path: Path) -> None:
+    """Record the SHA-256 of the finished file `part` beside `path`, then move it there
+    (atomically: a reader sees the old file or the new one)."""
+    path.with_suffix(".sha256").write_text(_sha_file(part) + "\n")
+    os.replace(part, path)

@@ -47,9 +47,8 @@ typedef struct mbs_model {
 
 /* every model library exports this: its record (static storage) */
 const mbs_model *mbs_model_record(void);
-/* and its metadata (JSON), and its loop closure at coordinates y[:n_q] (mbs_closure_size()
- * values; the Jacobian d/dq row-major, the rate d/dt at fixed q) */
-const char *mbs_model_meta(void);
+/* and its loop closure at coordinates y[:n_q] (mbs_closure_size() values; the Jacobian
+ * d/dq row-major, the rate d/dt at fixed q) */
 int64_t mbs_closure_size(void);
 void mbs_closure(double t, const double *y, const double *p, double *res);
 void mbs_closure_jacobian(double t, const double *y, const double *p, double *res);

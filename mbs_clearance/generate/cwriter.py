@@ -12,7 +12,6 @@ nowhere in it (the structure's digest names it).
 
 from __future__ import annotations
 
-import json
 import re
 
 import sympy as sp
@@ -20,15 +19,16 @@ from sympy.printing.c import C99CodePrinter
 
 from .derive import Derivation
 from .key import structure_digest
-from .writer import _out_columns, _plan
+from .writer import _Numbers, _out_columns, _plan
 
 __all__ = ["render_c", "metadata"]
 
 
-class _CPrinter(C99CodePrinter):
-    """C code: integer powers as products, square roots through sqrt, numbers as
-    round-trip literals (as the python printer: same operations, same order); parameters
-    renamed through `names`."""
+class _CPrinter(_Numbers, C99CodePrinter):
+    """C code, powers and numbers as the python printer writes them (same operations, same
+    order), parameters renamed through `names`."""
+
+    SQRT = "sqrt"
 
     def __init__(self, names: dict):
         super().__init__()
@@ -38,28 +38,17 @@ class _CPrinter(C99CodePrinter):
         return self._names.get(expr, expr.name)
 
     def _print_Pow(self, expr, rational=False):
-        base, exp = expr.as_base_exp()
-        b = self._print(base)
-        if exp.is_Integer and 1 < abs(int(exp)) <= 4:
-            prod = " * ".join([f"{b}" if base.is_Symbol else f"({b})"] * abs(int(exp)))
-            return f"({prod})" if exp > 0 else f"(1.0 / ({prod}))"
-        if exp == -1:
-            return f"(1.0 / {b})" if base.is_Symbol else f"(1.0 / ({b}))"
-        if exp == sp.Rational(1, 2):
-            return f"sqrt({b})"
-        raise ValueError(f"no C form for the power {expr} in a generated model")
-
-    def _print_Rational(self, expr):
-        return repr(float(expr))
-
-    def _print_Integer(self, expr):
-        return f"{int(expr)}.0" if abs(int(expr)) < 2**53 else repr(float(expr))
+        code = self._power(expr)
+        if code is None:
+            raise ValueError(f"no C form for the power {expr} in a generated model")
+        return code
 
     def _print_Float(self, expr):
         return repr(float(expr))
 
 
 _ASSIGN = re.compile(r"^([A-Za-z_][A-Za-z0-9_]*) = (.*)$")
+_SLOTS = re.compile(r", \((p\[\d+\](?:, p\[\d+\])*),?\)")
 _CALL = re.compile(r"^([A-Za-z_][A-Za-z0-9_, ]*) = ([a-z_]+)\((.*)\)$")
 
 
@@ -145,7 +134,7 @@ def _statement(line: str) -> str:
     if call and call.group(2).endswith("_stage"):
         outs = call.group(1).split(", ")
         # a tuple of the friction slots: a C99 compound literal
-        args = call.group(3).replace(", (p[", ", (const double[]){p[").replace("])", "]}")
+        args = _SLOTS.sub(r", (const double[]){\1}", call.group(3))
         return (f"double {', '.join(outs)}; {call.group(2)}({args}, "
                 + ", ".join(f"&{o}" for o in outs) + ");")
     assign = _ASSIGN.match(line.strip())
@@ -285,17 +274,7 @@ def render_c(d: Derivation, linkage_name: str, structure: dict,
             "prepare};", "",
             "const mbs_model *mbs_model_record(void) { return &MODEL; }", ""]
     out += closure
-    out += ["/* the metadata of the model (JSON): what the numba module exposes beside its "
-            "kernels */", "const char *mbs_model_meta(void) {",
-            f"    return {_c_string(json.dumps(meta, sort_keys=True))};", "}", ""]
     return "\n".join(out), meta
-
-
-def _c_string(text: str) -> str:
-    """A C string literal of `text` (JSON: printable ASCII after json.dumps' escapes)."""
-    if not text.isascii() or not text.isprintable():
-        raise ValueError("the model's metadata is not printable ASCII")
-    return '"' + text.replace("\\", "\\\\").replace('"', '\\"') + '"'
 
 
 def _closure_functions(c: _C, d: Derivation, pl) -> list[str]:
@@ -304,17 +283,19 @@ def _closure_functions(c: _C, d: Derivation, pl) -> list[str]:
     res[nc] (the Jacobian row-major, res[nc * N_Q])."""
     w, n, J = pl.w, pl.n, len(d.joints)
     nc = 2 * J + 2 * len(d.slider_closure)
-    closure = c.function([([e for g in pl.gap_exprs[:J] for e in g[:2]]
-                           + [w.split(e) for cc in d.slider_closure for e in cc],
-                           [f"c{i}" for i in range(nc)])])
-    jac = c.function([([w.split(d.closure_jacobian[i, k]) for i in range(nc)
-                        for k in range(n)], [f"c{i}_{k}" for i in range(nc) for k in range(n)])])
-    rate = c.function([([w.split(e) for e in d.closure_rate], [f"c{i}" for i in range(nc)])])
+    value = [f"c{i}" for i in range(nc)]
+    jacobian = [f"c{i}_{k}" for i in range(nc) for k in range(n)]
+    bodies = (
+        ("mbs_closure", value, c.function([([e for g in pl.gap_exprs[:J] for e in g[:2]]
+                                            + [w.split(e) for cc in d.slider_closure
+                                               for e in cc], value)])),
+        ("mbs_closure_jacobian", jacobian,
+         c.function([([w.split(d.closure_jacobian[i, k]) for i in range(nc)
+                       for k in range(n)], jacobian)])),
+        ("mbs_closure_rate", value, c.function([([w.split(e) for e in d.closure_rate],
+                                                 value)])))
     out = [f"int64_t mbs_closure_size(void) {{ return {nc}; }}", ""]
-    for name, body, names in (
-            ("mbs_closure", closure, [f"c{i}" for i in range(nc)]),
-            ("mbs_closure_jacobian", jac, [f"c{i}_{k}" for i in range(nc) for k in range(n)]),
-            ("mbs_closure_rate", rate, [f"c{i}" for i in range(nc)])):
+    for name, names, body in bodies:
         out += [f"void {name}(double t, const double *y, const double *p, double *res) {{",
                 "    (void)t; (void)p;", *body]
         out += [f"    res[{k}] = {nm};" for k, nm in enumerate(names)]

@@ -216,6 +216,14 @@ def _verified_text(path: Path, digest: str) -> tuple[str | None, str]:
     return text, ""
 
 
+def check_arguments(linkage, specialise) -> None:
+    """ValueError unless `linkage` is a Linkage and `specialise` True or False."""
+    if not isinstance(linkage, Linkage):
+        raise ValueError(f"linkage must be a Linkage; got {type(linkage).__name__}")
+    if not isinstance(specialise, bool):
+        raise ValueError(f"specialise must be True or False; got {specialise!r}")
+
+
 def load_model(linkage: Linkage, specialise: bool = True) -> ModuleType:
     """The generated model module of `linkage`'s structure (specialised on its zero-valued
     geometric parameters unless `specialise` is False): a checked-in one, a cached one, or
@@ -223,10 +231,7 @@ def load_model(linkage: Linkage, specialise: bool = True) -> ModuleType:
     on first use). A cached module is executed only if it passes the checks of the module
     docstring; one that fails them is generated again (with a `CacheWarning` if its text
     does not match its digest)."""
-    if not isinstance(linkage, Linkage):
-        raise ValueError(f"linkage must be a Linkage; got {type(linkage).__name__}")
-    if not isinstance(specialise, bool):
-        raise ValueError(f"specialise must be True or False; got {specialise!r}")
+    check_arguments(linkage, specialise)
     digest = structure_digest(model_structure(linkage, specialise))
     with _LOCK:
         if digest in _LOADED:

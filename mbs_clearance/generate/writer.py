@@ -30,10 +30,15 @@ __all__ = ["render", "GENERATOR_VERSION", "structure_digest"]
 _TEMPLATE = Path(__file__).with_name("module.py.jinja")
 
 
-class _Printer(PythonCodePrinter):
-    """Python/numba code: integer powers as products, square roots through math."""
+class _Numbers:
+    """How the model printers (python and C) write powers and numbers, alike so that both
+    evaluate the same operations in the same order: integer powers as products, square
+    roots through `SQRT`, rationals and integers as round-trip float literals."""
 
-    def _print_Pow(self, expr, rational=False):
+    SQRT = "math.sqrt"
+
+    def _power(self, expr) -> str | None:
+        """`expr` (a Pow) as code, or None for a power of no such form."""
         base, exp = expr.as_base_exp()
         b = self._print(base)
         if exp.is_Integer and 1 < abs(int(exp)) <= 4:
@@ -42,14 +47,21 @@ class _Printer(PythonCodePrinter):
         if exp == -1:
             return f"(1.0 / {b})" if base.is_Symbol else f"(1.0 / ({b}))"
         if exp == sp.Rational(1, 2):
-            return f"math.sqrt({b})"
-        return super()._print_Pow(expr, rational=rational)
+            return f"{self.SQRT}({b})"
+        return None
 
     def _print_Rational(self, expr):
         return repr(float(expr))
 
     def _print_Integer(self, expr):
         return f"{int(expr)}.0" if abs(int(expr)) < 2**53 else repr(float(expr))
+
+
+class _Printer(_Numbers, PythonCodePrinter):
+    """Python/numba code: integer powers as products, square roots through math."""
+
+    def _print_Pow(self, expr, rational=False):
+        return self._power(expr) or super()._print_Pow(expr, rational=rational)
 
 
 _PRINTER = _Printer({"fully_qualified_modules": True, "standard": "python3"})

@@ -31,11 +31,13 @@ def _slot_symbol(field: str) -> str:
     return {p.name: p.symbol for p in FRICTION_PARAMETER_SPECS}[field]
 
 
-class _Printer(PythonCodePrinter):
-    """Python source numba compiles: math functions, Piecewise as conditional expressions,
-    integer powers as products (pow is several times slower)."""
+class _Numbers:
+    """How both printers write powers and numbers: integer powers as products (pow is
+    several times slower), square roots through `SQRT`, numbers as round-trip literals."""
 
-    def _print_Pow(self, expr, rational=False):
+    SQRT = "math.sqrt"
+
+    def _power(self, expr) -> str | None:
         base, exp = expr.args
         if exp.is_Float and exp == int(exp):
             exp = sp.Integer(int(exp))
@@ -43,13 +45,14 @@ class _Printer(PythonCodePrinter):
             prod = "*".join([self.parenthesize(base, 1000)] * abs(int(exp)))
             return f"({prod})" if exp > 0 else f"(1.0/({prod}))"
         if exp == sp.Rational(1, 2):
-            return f"math.sqrt({self._print(base)})"
+            return f"{self.SQRT}({self._print(base)})"
         if exp == -sp.Rational(1, 2):
-            return f"(1.0/math.sqrt({self._print(base)}))"
+            return f"(1.0/{self.SQRT}({self._print(base)}))"
         if abs(exp) == sp.Rational(3, 2):
             b = self._print(base)
-            return f"(({b})*math.sqrt({b}))" if exp > 0 else f"(1.0/(({b})*math.sqrt({b})))"
-        return super()._print_Pow(expr, rational)
+            return (f"(({b})*{self.SQRT}({b}))" if exp > 0
+                    else f"(1.0/(({b})*{self.SQRT}({b})))")
+        return None
 
     def _print_Integer(self, expr):
         return f"{float(int(expr))!r}"
@@ -61,35 +64,24 @@ class _Printer(PythonCodePrinter):
     _print_Zero = _print_One = _print_NegativeOne = _print_Integer
 
 
-class _CPrinter(C99CodePrinter):
-    """C source of the same expressions, powers and numbers as `_Printer` writes them."""
+class _Printer(_Numbers, PythonCodePrinter):
+    """Python source numba compiles: math functions, Piecewise as conditional expressions."""
 
     def _print_Pow(self, expr, rational=False):
-        base, exp = expr.args
-        if exp.is_Float and exp == int(exp):
-            exp = sp.Integer(int(exp))
-        if exp.is_Integer and 1 <= abs(int(exp)) <= 4:
-            prod = "*".join([self.parenthesize(base, 1000)] * abs(int(exp)))
-            return f"({prod})" if exp > 0 else f"(1.0/({prod}))"
-        if exp == sp.Rational(1, 2):
-            return f"sqrt({self._print(base)})"
-        if exp == -sp.Rational(1, 2):
-            return f"(1.0/sqrt({self._print(base)}))"
-        if abs(exp) == sp.Rational(3, 2):
-            b = self._print(base)
-            return f"(({b})*sqrt({b}))" if exp > 0 else f"(1.0/(({b})*sqrt({b})))"
-        return super()._print_Pow(expr)
+        return self._power(expr) or super()._print_Pow(expr, rational)
 
-    def _print_Integer(self, expr):
-        return f"{float(int(expr))!r}"
+
+class _CPrinter(_Numbers, C99CodePrinter):
+    """C source of the same expressions, powers and numbers written as `_Printer` writes
+    them."""
+
+    SQRT = "sqrt"
+
+    def _print_Pow(self, expr, rational=False):
+        return self._power(expr) or super()._print_Pow(expr)
 
     def _print_Rational(self, expr):
         return repr(float(expr))
-
-    def _print_Float(self, expr):
-        return repr(float(expr))
-
-    _print_Zero = _print_One = _print_NegativeOne = _print_Integer
 
 
 def _c_code(expr) -> str:

@@ -113,7 +113,8 @@ def pack_parameters(linkage: Linkage, model=None) -> np.ndarray:
         p[i] = values[name]
     for name in getattr(model, "ZERO_PARAMETERS", ()):
         if values[name] != 0.0:
-            raise ValueError(f"{name} = {values[name]!r}: the model module {model.__name__} "
+            raise ValueError(f"{name} = {values[name]!r}: the model "
+                             f"{getattr(model, '__name__', 'of ' + repr(linkage.name))} "
                              "is specialised on it being 0; load the general one "
                              "(mbs_clearance.generate.load_model(linkage, specialise=False))")
     model.prepare(p)
