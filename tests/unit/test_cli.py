@@ -432,7 +432,14 @@ def test_every_cli_bad_input_case_is_one_line_and_the_doc_is_current():
         prog = " ".join(["mbs-clearance", *first]) if first != ["nope"] else "mbs-clearance"
         assert err.startswith(f"{prog}: error: "), r
     doc = (Path(__file__).resolve().parents[2] / "docs" / "bad_input.md").read_text()
-    assert table.cli_section(doc) == table.cli_section(table.document(rows, []))
+    # the residual left by 50 Newton steps on a loop that cannot close wanders with the
+    # last digits of each step (0.71 to 0.79 m from one BLAS to another): it is compared as
+    # a number > 1e-9 of the length scale, the rest of the text exactly
+    residual = re.compile(r"\(residual (\S+) m after")
+    now = table.cli_section(table.document(rows, []))
+    assert residual.findall(now) and all(float(x) > 1e-8 for x in residual.findall(now))
+    assert residual.sub("(residual R m after", table.cli_section(doc)) \
+        == residual.sub("(residual R m after", now)
     # the library section lists every library case of the script
     library = doc[doc.index(table.LIBRARY_HEADING):]
     for expr, _ in table.LIBRARY_CASES:
