@@ -533,7 +533,7 @@ def test_help_lists_the_named_cases(capsys):
     from mbs_clearance.model.cases import CASES
 
     with pytest.raises(SystemExit) as exc:
-        main(["simulate", "--help"])
+        main(["simulate", "--help-all"])
     assert exc.value.code == 0
     out = capsys.readouterr().out
     epilog = out[out.index("named cases"):]
@@ -677,11 +677,11 @@ def _subcommands():
 @pytest.mark.parametrize("command", _subcommands())
 def test_help_shows_every_default_and_choice(command, capsys):
     """Every option that takes a value says its default (or that it is required) and lists
-    its choices in `COMMAND --help`."""
+    its choices in `COMMAND --help-all`."""
     import argparse
 
     with pytest.raises(SystemExit):
-        main([command, "--help"])
+        main([command, "--help-all"])
     entries = _help_entries(capsys.readouterr().out)
     from mbs_clearance.cli import build_parser
 
@@ -702,11 +702,75 @@ def test_help_shows_every_default_and_choice(command, capsys):
 
 def test_help_shows_engineering_units(capsys):
     with pytest.raises(SystemExit):
-        main(["simulate", "--help"])
+        main(["simulate", "--help-all"])
     text = " ".join(capsys.readouterr().out.split())
     for shown in ("(default 5000 rpm = 523.599)", "(default 207 GPa = 2.07e+11)",
                   "(default 9.99 mm = 0.00999)", "lankarani_nikravesh; one of"):
         assert shown in text, shown
+
+
+def _help_page(capsys, *argv) -> str:
+    with pytest.raises(SystemExit) as exc:
+        main(list(argv))
+    assert exc.value.code == 0
+    return capsys.readouterr().out
+
+
+def _options_of(page: str) -> list[str]:
+    return [e.split(" ")[0].rstrip(",") for e in _help_entries(page)]
+
+
+@pytest.mark.parametrize("command", _subcommands())
+def test_short_help_shows_the_common_options_and_help_all_every_one(command, capsys):
+    """`COMMAND --help` lists the common options and says how many more `--help-all`
+    shows; `--help-all` lists every option of the parser once, the common ones first, each
+    with a help text."""
+    import argparse
+
+    from mbs_clearance.cli import build_parser
+
+    short = _help_page(capsys, command, "--help")
+    full = _help_page(capsys, command, "--help-all")
+    parser = build_parser(command)
+    sub = next(a for a in parser._actions
+               if isinstance(a, argparse._SubParsersAction)).choices[command]
+    every = [a.option_strings[0] for a in sub._actions if a.option_strings]
+    listed = _options_of(full)
+    assert sorted(listed) == sorted(every), (listed, every)
+    common = _options_of(short)
+    assert listed[:len(common)] == common            # the common options first
+    hidden = len(listed) - len(common)
+    if hidden:
+        assert f"{hidden} more options" in " ".join(short.split())
+        assert f"mbs-clearance {command} --help-all" in " ".join(short.split())
+    for entry in _help_entries(full):                # every option says what it does
+        assert len(entry.split()) >= 3, entry
+
+
+def test_short_help_of_simulate_fits_a_screen(capsys):
+    short = _help_page(capsys, "simulate", "--help")
+    full = _help_page(capsys, "simulate", "--help-all")
+    assert len(short.splitlines()) <= 55 < len(full.splitlines())
+    assert "--crank-length" not in short and "--crank-length" in full
+
+
+@pytest.mark.parametrize("command", _subcommands())
+def test_every_mechanism_option_shows_its_unit(command, capsys):
+    """The mechanism options name their SI unit ("in kg"), or say they are dimensionless;
+    no option reads "- in -"."""
+    from mbs_clearance.model.mechanism import PARAMETER_INFO
+
+    entries = {e.split(" ")[0]: e for e in _help_entries(_help_page(capsys, command,
+                                                                    "--help-all"))}
+    assert not any(" in - " in e or "- in" in e for e in entries.values())
+    for name, (_, unit, _) in PARAMETER_INFO.items():
+        entry = entries.get("--" + name.replace("_", "-"))
+        if entry is None:
+            continue
+        if unit not in ("-", ""):
+            assert f" in {unit} (default" in entry, entry
+        elif name not in ("contact_model", "friction_law"):
+            assert "dimensionless" in entry, entry
 
 
 def _wrote(err):
