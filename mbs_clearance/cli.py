@@ -1244,11 +1244,12 @@ def _cmd_optimize(args: argparse.Namespace) -> int:
           + (f" ({result.best_periodicity_note})" if result.best_periodicity_note else ""))
     if result.best_accuracy_note:
         print(f"note: best design: {result.best_accuracy_note}")
-    if result.refinement and args.verbose:
+    if args.verbose:
         r = result.refinement
-        print(f"evaluated on {result.settings['executor']}; refinement: {r.get('method')}, "
-              f"{r.get('objective_calls', '?')} objective calls; on bounds: "
-              f"{r.get('on_bounds') or 'none'}; KKT: {r.get('kkt', 'n/a')}")
+        print(f"evaluated on {result.settings['executor']}; refinement: "
+              + (f"{r.get('method')}, {r.get('objective_calls', '?')} objective calls; on "
+                 f"bounds: {r.get('on_bounds') or 'none'}; KKT: {r.get('kkt', 'n/a')}"
+                 if r else "none"))
     if mech != type(mech)() or args.mass_scaling != "fixed" or args.revolution != 4:
         print("note: the paper's rows refer to its own case (paper mechanism, fixed masses, "
               "4th revolution)")

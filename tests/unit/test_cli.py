@@ -810,8 +810,11 @@ def test_a_named_case_is_not_said_to_be_the_papers(capsys):
 
 def test_ideal_joint_table_has_no_contact_force(capsys):
     assert main(["simulate", "--revolutions", "1", "--backend", "ideal"]) == 0
-    out = capsys.readouterr().out
+    captured = capsys.readouterr()
+    out = captured.out
     assert "contact" not in out and "max |F12|" in out
+    # no journal, no start-up transient: no footnote about the journal's start
+    assert out.splitlines()[1].split()[0] == "1" and "journal" not in captured.err
     # the ideal-joint peak printed matches the closed form's
     peak = float(out.splitlines()[1].split()[1])
     assert peak == pytest.approx(peak_base_force(SliderCrank(), 1, backend="ideal"), rel=1e-6)
@@ -1026,3 +1029,18 @@ def test_mechanism_options_are_aliases_of_set(tmp_path):
     assert desc.parameter_value("coupler.mass") == 1.5
     assert min(j.clearance for j in desc.clearance_joints) == pytest.approx(2e-4, rel=1e-12)
     assert max(j.clearance for j in desc.clearance_joints) == pytest.approx(2e-4, rel=1e-12)
+
+
+def test_optimize_prints_its_internals_only_with_verbose(tmp_path, capsys):
+    """The normal output names no executor, refinement method or KKT check; --verbose adds
+    them."""
+    argv = ["optimize", "--seed", "5", "--population", "4", "--generations", "1",
+            "--workers", "1", "--no-refine", "--no-progress", "--out"]
+    assert main(argv + [str(tmp_path / "a")]) == 0
+    normal = capsys.readouterr().out
+    assert "| optimum (ours) |" in normal
+    for internal in ("Executor", "workers)", "evaluated on", "l-bfgs-b", "KKT"):
+        assert internal not in normal, internal
+    assert main(argv + [str(tmp_path / "b"), "--verbose"]) == 0
+    verbose = capsys.readouterr().out
+    assert "evaluated on " in verbose and "; refinement: none" in verbose
