@@ -1044,3 +1044,15 @@ def test_optimize_prints_its_internals_only_with_verbose(tmp_path, capsys):
     assert main(argv + [str(tmp_path / "b"), "--verbose"]) == 0
     verbose = capsys.readouterr().out
     assert "evaluated on " in verbose and "; refinement: none" in verbose
+
+
+def test_orbit_numbers_print_with_units_and_as_modulus_and_angle():
+    from mbs_clearance.cli import _coordinate, _multiplier
+
+    assert _multiplier(0.5 + 0.5j) == "|mu| = 0.707107  angle +45.0 deg"   # sqrt(1/2), 45 deg
+    assert _multiplier(-0.9) == "|mu| = 0.9  angle +180.0 deg"
+    assert _multiplier(1.08e-14 + 6.3e-15j) == "|mu| = 1e-14 (zero to round-off)"
+    assert _coordinate("coupler.angle", 0.25) == " 0.25 rad"
+    assert _coordinate("coupler.angle_rate", -3.5) == "-3.5 rad/s"
+    assert _coordinate("slider.x", 0.16999123456) == " 0.16999123 m"
+    assert _coordinate("disc.y_rate", 1e-3) == " 0.001 m/s"
