@@ -11,6 +11,7 @@ written atomically (see `mbs_clearance._io`).
 from __future__ import annotations
 
 import argparse
+import cmath
 import dataclasses
 import json
 import logging
@@ -56,6 +57,17 @@ class HelpFormatter(argparse.RawDescriptionHelpFormatter):
                                             "  ") else "")) if line.strip() else ""
                          for line in text.splitlines())
 
+    def _get_default_metavar_for_optional(self, action):
+        # a value's kind rather than the option's name in capitals (--out OUT, --rtol RTOL)
+        kind = getattr(action.type, "__name__", "")
+        if kind.startswith("integer"):
+            return "N"
+        if kind in ("positive_float", "finite_float", "_float", "_optional_float", "float"):
+            return "X"
+        if action.type is Path or kind in ("Path", "PosixPath", "WindowsPath"):
+            return "PATH"
+        return super()._get_default_metavar_for_optional(action)
+
     def _get_help_string(self, action):
         text = action.help or ""
         if not action.option_strings or text == argparse.SUPPRESS:
@@ -75,10 +87,34 @@ class HelpFormatter(argparse.RawDescriptionHelpFormatter):
         return f"{text} (default: {str(default).replace('%', '%%')})"
 
 
+#: options that a short --help leaves to --help-all: the settings of the solvers and
+#: backends, the start, and the free linkages' time options
+ADVANCED_OPTIONS = frozenset({
+    "settled", "rtol", "step_size", "integrator", "contact", "duration", "window", "force",
+    "config", "dask_timeout", "saturation_rtol", "retries", "write_interval", "chunk_size",
+    "max_memory",
+})
+#: title of the argument groups whose options are all left to --help-all
+ADVANCED_GROUP_PREFIX = "mechanism"
+
+
+class _HelpAll(argparse.Action):
+    """--help-all: the full help page (every option, in groups) and exit."""
+
+    def __init__(self, option_strings, dest=argparse.SUPPRESS, default=argparse.SUPPRESS,
+                 help=None):
+        super().__init__(option_strings, dest=dest, default=default, nargs=0, help=help)
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        parser.print_help(full=True)
+        parser.exit()
+
+
 class Parser(argparse.ArgumentParser):
     """ArgumentParser whose usage errors are one line: ``PROG: error: MESSAGE`` (status 2),
     and that reads ``--rtol -1e-8`` as a (negative) value, not as an option. Its --help
-    shows defaults (`HelpFormatter`)."""
+    shows the common options with their defaults (`HelpFormatter`); --help-all shows every
+    option, the common ones first."""
 
     def __init__(self, *args, **kwargs):
         kwargs.setdefault("formatter_class", HelpFormatter)
@@ -86,6 +122,57 @@ class Parser(argparse.ArgumentParser):
         # argparse's own pattern misses exponents (-1e-8) and would report "expected one
         # argument"; the value then reaches the option's check and its clear message
         self._negative_number_matcher = re.compile(r"^-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$")
+        if self.add_help:
+            self.add_argument("--help-all", action=_HelpAll,
+                              help="show every option (mechanism values, solver and backend "
+                                   "settings) and exit")
+
+    def _advanced(self, action, group) -> bool:
+        if group.title and group.title.startswith(ADVANCED_GROUP_PREFIX):
+            return action.dest != "clearance"
+        return action.dest in ADVANCED_OPTIONS
+
+    def print_help(self, file=None, full: bool = False):
+        self._full_help = full
+        try:
+            super().print_help(file)
+        finally:
+            self._full_help = False
+
+    def format_help(self) -> str:
+        full = getattr(self, "_full_help", False)
+        groups = [(g, [a for a in g._group_actions if not self._advanced(a, g)],
+                   [a for a in g._group_actions if self._advanced(a, g)])
+                  for g in self._action_groups]
+        hidden = sum(len(more) for _, _, more in groups)
+        if not hidden:
+            return super().format_help()
+        formatter = self._get_formatter()
+        common = [a for g, c, _ in groups for a in c]
+        formatter.add_usage(self.usage, common, self._mutually_exclusive_groups)
+        formatter.add_text(self.description)
+        for g, c, _ in groups:
+            formatter.start_section(g.title)
+            formatter.add_text(g.description)
+            formatter.add_arguments(c)
+            formatter.end_section()
+        if full:
+            more = [a for g, _, m in groups if not g.title.startswith(ADVANCED_GROUP_PREFIX)
+                    for a in m]
+            formatter.start_section("solver, backend and output settings")
+            formatter.add_arguments(more)
+            formatter.end_section()
+            for g, _, m in groups:
+                if m and g.title.startswith(ADVANCED_GROUP_PREFIX):
+                    formatter.start_section(g.title)
+                    formatter.add_arguments(m)
+                    formatter.end_section()
+            formatter.add_text(self.epilog)
+        else:
+            formatter.add_text(f"{hidden} more options (mechanism values in SI units, solver "
+                               f"and backend settings, --force; the named cases described): "
+                               f"{self.prog} --help-all")
+        return formatter.format_help()
 
     def error(self, message: str):
         self.exit(2, f"{self.prog}: error: {_one_line(message)}\n")
@@ -338,9 +425,13 @@ def add_mechanism_options(parser: argparse.ArgumentParser) -> None:
             shown = quantity(default, unit, 6)
             if shown != f"{default:g} {unit}".strip() and unit not in ("-", ""):
                 shown += f" = {default:g}"
+        if symbol in ("-", ""):
+            what = f.name.replace("_", " ")
+        else:
+            what = symbol + (", dimensionless" if unit in ("-", "") else f" in {unit}")
         group.add_argument("--" + f.name.replace("_", "-"), dest=f.name, type=kind,
                            default=None, metavar="X",
-                           help=f"{symbol} in {unit} (default {shown}{extra})")
+                           help=f"{what} (default {shown}{extra})")
 
 
 def mechanism_from_args(args: argparse.Namespace) -> SliderCrank:
@@ -524,10 +615,12 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
           + ("" if ideal else f"  {'max contact force':>17}"))
     for k in range(1, traj.revolutions + 1):
         mask = traj.revolution_mask(k)
-        print(f"{_revolution_label(k):>10}  {_force(traj.max_base_force(k)):>12}  "
+        # ideal joints: no journal, no start-up transient to mark
+        print(f"{_revolution_label(k, not ideal):>10}  {_force(traj.max_base_force(k)):>12}  "
               f"{quantity(abs(traj.crank_moment[mask]).max(), 'N m', 6):>12}"
               + ("" if ideal else f"  {_force(traj.contact_force[mask].max()):>17}"))
-    print(START_UP_NOTE + PAPER_NOTE, file=sys.stderr)
+    if not ideal:
+        print(START_UP_NOTE + PAPER_NOTE, file=sys.stderr)
     _print_error_estimate(traj)
     floored = traj.stats.get("floored_impacts") if traj.stats else None
     if floored:
@@ -664,17 +757,19 @@ def _simulate_linkage(linkage, args: argparse.Namespace) -> int:
     monitored = (f"max |{linkage.monitor_joint}|" if linkage.monitor_joint
                  else "max |shaking|")
     widths = [max(12, len(j) + 6) for j in joints]
+    # ideal joints have no journal whose centred start makes a transient
+    transient = start is None and args.backend != "ideal"
     print(f"{'revolution':>10}  {monitored:>18}  {'max |drive|':>12}  "
           + "  ".join(f"{'max F ' + j:>{w}}" for j, w in zip(joints, widths)))
     for k in range(1, traj.revolutions + 1):
         mask = traj.revolution_mask(k)
         cells = "  ".join(f"{_force(traj.contact_force[mask, i].max()):>{w}}"
                           for i, w in enumerate(widths))
-        print(f"{_revolution_label(k, start is None):>10}  {_force(traj.peaks[k - 1]):>18}  "
+        print(f"{_revolution_label(k, transient):>10}  {_force(traj.peaks[k - 1]):>18}  "
               f"{quantity(abs(traj.crank_moment[mask]).max(), 'N m', 6):>12}  {cells}")
-    if start is None:
+    if transient:
         print(START_UP_NOTE, file=sys.stderr)
-    else:
+    elif start is not None:
         print(f"revolutions counted from the state after {start.revolutions} revolutions "
               "(--settled)", file=sys.stderr)
     _print_error_estimate(traj)
@@ -1244,6 +1339,9 @@ def _add_optimize_parser(subparsers) -> argparse.ArgumentParser:
     add_evaluation_options(p, "optimize", accuracy=True)
     add_keep_going_option(p, "designs' runs")
     p.add_argument("--no-refine", action="store_true", help="skip the local refinement")
+    p.add_argument("--verbose", action="store_true",
+                   help="also print the executor and the refinement's method, objective "
+                        "calls and optimality (KKT) check")
     add_force_option(p)
     add_linkage_options(p)
     add_mechanism_options(p)
@@ -1329,17 +1427,19 @@ def _cmd_optimize(args: argparse.Namespace) -> int:
     print(table)
     print(f"\nmasses: {args.mass_scaling}; seed {result.settings['seed']}; "
           f"{result.generations_completed} generations, {result.n_evaluations} designs "
-          f"simulated in {result.elapsed:.1f} s on {result.settings['executor']}; "
-          f"GA best before refinement {result.ga_best_peak_force:.2f} N")
+          f"simulated in {result.elapsed:.1f} s; GA best before refinement "
+          f"{result.ga_best_peak_force:.2f} N")
     periodic = {True: "periodic", False: "NOT periodic", None: "periodicity not judged"}
     print(f"best design: {periodic[result.best_periodic]}"
           + (f" ({result.best_periodicity_note})" if result.best_periodicity_note else ""))
     if result.best_accuracy_note:
         print(f"note: best design: {result.best_accuracy_note}")
-    if result.refinement:
+    if args.verbose:
         r = result.refinement
-        print(f"refinement: {r.get('method')}, {r.get('objective_calls', '?')} objective calls; "
-              f"on bounds: {r.get('on_bounds') or 'none'}; KKT: {r.get('kkt', 'n/a')}")
+        print(f"evaluated on {result.settings['executor']}; refinement: "
+              + (f"{r.get('method')}, {r.get('objective_calls', '?')} objective calls; on "
+                 f"bounds: {r.get('on_bounds') or 'none'}; KKT: {r.get('kkt', 'n/a')}"
+                 if r else "none"))
     if mech != type(mech)() or args.mass_scaling != "fixed" or args.revolution != 4:
         print("note: the paper's rows refer to its own case (paper mechanism, fixed masses, "
               "4th revolution)")
@@ -1404,14 +1504,19 @@ def _optimize_linkage(linkage, args: argparse.Namespace) -> int:
     span = (f"revolution {k}" if window is None
             else f"time window [{(k - 1) * window:g}, {k * window:g}] s")
     print(f"linkage {linkage.name!r}: peak of {output} over {span}")
-    print(f"original: {result.original_peak_force!r}")
-    print(f"best: {result.best_peak_force!r} ({result.reduction_percent:.2f} % lower)")
+    unit = "N m" if output.startswith("drive_moment") else "N"
+    print(f"original: {result.original_peak_force:.2f} {unit}")
+    print(f"best: {result.best_peak_force:.2f} {unit} ({result.reduction_percent:.2f} % lower)")
     for name, value in result.best_genes.items():
         lo, hi = result.genes[name]
-        print(f"  {name} = {value!r} (bounds {lo:g} .. {hi:g})")
+        print(f"  {name} = {value:.6g} (bounds {lo:g} .. {hi:g}, SI units)")
     print(f"seed {result.settings['seed']}; {result.generations_completed} generations, "
           f"{result.n_evaluations} designs simulated in {result.elapsed:.1f} s; GA best "
-          f"before refinement {result.ga_best_peak_force!r}")
+          f"before refinement {result.ga_best_peak_force:.2f} {unit}")
+    if args.verbose:
+        r = result.refinement or {}
+        print(f"evaluated on {result.settings['executor']}; refinement: "
+              f"{r.get('method', 'none')}, {r.get('objective_calls', 0)} objective calls")
     with OutputDir(args.out, "optimize") as staged:
         result.to_json(staged.path / "result.json")
         plot_fitness_history(result, staged.path / "fitness_history.png")
@@ -1822,6 +1927,23 @@ def _regime_line(res) -> str:
     return words
 
 
+def _coordinate(name: str, value: float) -> str:
+    """A coordinate or rate of a section state with its unit (angles in rad, positions in m:
+    8 digits resolve a clearance of 0.01 mm on a link of 0.1 m)."""
+    rate = name.endswith("_rate")
+    unit = "rad" if name.removesuffix("_rate").endswith("angle") else "m"
+    return f"{value: .8g} {unit}/s" if rate else f"{value: .8g} {unit}"
+
+
+def _multiplier(mu: complex) -> str:
+    """A Floquet multiplier as modulus and angle (below 1e-9 in modulus: zero to round-off,
+    the directions that the contact's damping contracts at once)."""
+    size = abs(mu)
+    if size < 1e-9:
+        return f"|mu| = {size:.1g} (zero to round-off)"
+    return f"|mu| = {size:.6g}  angle {math.degrees(cmath.phase(mu)):+.1f} deg"
+
+
 def _add_orbits_parser(subparsers) -> argparse.ArgumentParser:
     """The ``orbits`` subcommand: a periodic orbit and its stability, or a branch of them."""
     p = subparsers.add_parser(
@@ -1893,16 +2015,20 @@ def _cmd_orbits(args: argparse.Namespace) -> int:
         print(f"period-{orbit.period} orbit of {name}: {orbit.stability} (Newton: "
               f"{orbit.iterations} iterations, residual {orbit.residual:.2g} of the "
               f"clearance; {time.perf_counter() - t0:.3g} s)")
+        from .solve.flows import joints_of
+
+        print("state at the section:")
         coords = orbit.unknowns[:len(orbit.state)]
         for c, v in zip(coords, orbit.state):
-            print(f"  {c:<28s} {v: .10g}")
-        for j, (m, v) in enumerate(zip(orbit.modes, orbit.impact_velocities)):
-            print(f"  joint {j}: {'contact' if m else 'free flight'} at the section, stored "
-                  f"impact velocity {v:.6g} m/s, {int(orbit.onsets[j])} contact onset(s) per "
+            print(f"  {c:<28s} {_coordinate(c, v)}")
+        for name, m, v, k in zip(joints_of(orbit.mech), orbit.modes,
+                                 orbit.impact_velocities, orbit.onsets):
+            print(f"  joint {name!r}: {'contact' if m else 'free flight'} at the section, "
+                  f"stored impact velocity {v:.4g} m/s, {int(k)} contact onset(s) per "
                   "period")
-        print("Floquet multipliers (largest first; |mu| < 1 for all: stable):")
+        print("Floquet multipliers (largest modulus first; stable when every |mu| < 1):")
         for mu in orbit.multipliers:
-            print(f"  {mu.real: .6g}{mu.imag:+.3g}j  |mu| = {abs(mu):.6g}")
+            print(f"  {_multiplier(mu)}")
         return 0
     _progress(f"branch of {name} over {args.field} ...")
     branch = continue_orbits(mech, args.field, args.start, args.stop, period=args.period,

@@ -253,7 +253,9 @@ def add_arguments(p):
     p.add_argument("--quick", action="store_true", help="a few settings only")
     p.add_argument("--repeats", type=int_at_least(1), default=5,
                    help="timed runs per setting (median; >= 1, default 5)")
-    p.add_argument("--no-exudyn", action="store_true")
+    p.add_argument("--no-exudyn", action="store_true",
+                   help="leave out the Exudyn backend's settings (its runs take most of the "
+                        "time)")
     p.add_argument("--out", type=Path, help="folder for work_precision.json/.md/.png")
     add_force_option(p)
 

@@ -747,14 +747,14 @@ def peak_gradient(mech: Linkage | SliderCrank, parameters=None, revolution: int 
     backend : str
         "reduced" for DDM; any backend of `simulate` for ``method="fd"`` (another
         backend's peak is that of the monitored force).
-    method : {"ddm", "fd"}, optional
+    method : {None, "ddm", "fd"}
         "ddm": one run of the sensitivity equations along the directions of the named values
         (`design.direction`), the output's sensitivity at the refined peak time (envelope
         theorem), on the model `simulate` runs (with friction: the model generated with the
         tangential force). For the monitored force the window's other local maxima are
         refined too, and a rival within `kink_tol` is reported as a kink with both
         one-sided gradients. "fd": central differences of the refined peak, 2 p + 1 runs.
-        Default: "ddm" on the paper's case (measured against central differences to 1e-3
+        None: "ddm" on the paper's case (measured against central differences to 1e-3
         on the GA's box, docs/sensitivity.md); "fd" on other linkages (on the four-bar's
         lightly damped sliding contact the DDM does not converge with rtol,
         docs/studies_linkage.md).
@@ -763,10 +763,10 @@ def peak_gradient(mech: Linkage | SliderCrank, parameters=None, revolution: int 
         FD: default 1e-11).
     integrator : str, optional
         Method of the compiled integrator (DDM default "dop853"; FD: the plain default).
-    kink_tol : float
+    kink_tol : float, default 1e-5
         Relative gap below which a second local maximum ties with the peak (the tolerance
         used is max(kink_tol, KINK_PER_RTOL * rtol) = max(kink_tol, 10 rtol)).
-    fd_relative_step : float
+    fd_relative_step : float, default 3e-5
         FD only: relative step, see `sensitivity.fd_step`.
     executor :
         FD only: a concurrent.futures-style executor for the 2 p + 1 runs.

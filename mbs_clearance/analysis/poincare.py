@@ -308,8 +308,10 @@ def poincare_section(mech, revolutions: int = 100, keep: int = 50, *,
         revolutions - keep are the transient).
     angle : float, optional
         Crank angle of the section (rad); default the initial crank angle (revolution ends).
-    tol, max_period :
-        The recurrence criterion (`classify`).
+    tol : float, default 1e-3
+        Relative tolerance of the recurrence criterion (`classify`).
+    max_period : int, default 8
+        Longest period in crank revolutions that the recurrence criterion looks for.
     lyapunov : bool
         Also integrate one tangent vector (`lyapunov.lyapunov_exponent`'s flow) and
         classify non-periodic motion by the exponent's sign; the state is then

@@ -532,7 +532,7 @@ def sensitivities(mech: SliderCrank, parameters=None, revolutions: int | None = 
     parameters : sequence of str, optional
         Continuous SliderCrank fields; default `DEFAULT_PARAMETERS` (the paper's set).
     revolutions : int, optional
-        Crank revolutions simulated from t = 0 (default 4; a free linkage takes
+        Crank revolutions simulated from t = 0 (None: 4; a free linkage takes
         ``duration=`` in s and optionally ``window=`` in s instead, see below).
     method : {"ddm", "fd"}
         Direct differentiation (reduced model only) or central finite differences (any
@@ -546,7 +546,7 @@ def sensitivities(mech: SliderCrank, parameters=None, revolutions: int | None = 
     event_time_term : bool
         DDM only: include the event-time term of the impact-velocity sensitivity. Only for
         demonstrating that it matters; leave it True.
-    fd_relative_step : float
+    fd_relative_step : float, default 3e-5
         FD only: relative step, see `fd_step`.
     executor, n_jobs :
         FD only: a concurrent.futures-style executor for the perturbed runs, or the number
@@ -559,6 +559,12 @@ def sensitivities(mech: SliderCrank, parameters=None, revolutions: int | None = 
     **options :
         Backend options passed to `simulate` (FD), e.g. ``step_size`` for Exudyn.
 
+    Returns
+    -------
+    Sensitivities
+
+    Notes
+    -----
     A `Linkage` (mbs_clearance.model.cases, any description): parameters are its dotted names
     (`Linkage.parameter_names`, default: every one that is not a point coordinate); DDM on
     its generated model's exact Jacobians (`linkage_ddm`), FD by central differences of
@@ -569,10 +575,6 @@ def sensitivities(mech: SliderCrank, parameters=None, revolutions: int | None = 
     ``duration=`` s from its `Initial` (held: its given coordinates and rates do not move
     with the parameters), its growth per window of ``window=`` s (default: the whole run);
     it has no crank moment (``crank_moment`` None).
-
-    Returns
-    -------
-    Sensitivities
     """
     from ..model.linkage import Linkage
 

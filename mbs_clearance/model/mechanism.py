@@ -67,20 +67,32 @@ class SliderCrank:
 
     Parameters
     ----------
-    crank_length, coupler_length : float
-        L2, L3 in m (L3 > L2 so that the crank can turn fully).
-    crank_mass, coupler_mass, slider_mass : float
-        m2, m3, m4 in kg.
-    crank_inertia, coupler_inertia : float or None
-        J2, J3 about the centre of mass in kg m^2; None means a uniform thin rod m L^2/12.
+    crank_length : float
+        L2 in m.
+    coupler_length : float
+        L3 in m (L3 > L2 so that the crank can turn fully).
+    crank_mass : float
+        m2 in kg.
+    coupler_mass : float
+        m3 in kg.
+    slider_mass : float
+        m4 in kg.
+    crank_inertia : float or None
+        J2 about the centre of mass in kg m^2; None means a uniform thin rod m2 L2^2/12.
+    coupler_inertia : float or None
+        J3 about the centre of mass in kg m^2; None means a uniform thin rod m3 L3^2/12.
     crank_speed : float
-        Constant crank speed omega2 in rad/s (> 0).
+        Constant crank speed omega2 in rad/s (> 0); the default is 5000 rpm.
     initial_crank_angle : float
         theta20 in rad.
-    bearing_radius, journal_radius : float
-        R_B > R_J > 0 in m; the radial clearance is R_B - R_J.
-    youngs_modulus, poisson_ratio : float
-        E in Pa and nu in (-1, 0.5), the same for journal and bearing.
+    bearing_radius : float
+        R_B in m (> journal_radius).
+    journal_radius : float
+        R_J in m (0 < R_J < R_B); the radial clearance is R_B - R_J.
+    youngs_modulus : float
+        E in Pa, the same for journal and bearing.
+    poisson_ratio : float
+        nu in (-1, 0.5), the same for journal and bearing.
     restitution : float
         Coefficient of restitution e_r in (0, 1].
     contact_stiffness : float or None
@@ -99,13 +111,17 @@ class SliderCrank:
         (Ambrosio's modified Coulomb law between friction_v0 and friction_v1) or "stribeck"
         (from the static to the dynamic coefficient over the Stribeck velocity).
     friction_coefficient : float
-        Coefficient of friction mu >= 0 (default 0).
-    friction_v0, friction_v1 : float
-        Tangential-velocity thresholds in m/s, 0 < v0 < v1 (defaults assumed:
-        `linkage.FRICTION_DEFAULTS`).
-    friction_static_coefficient, friction_stribeck_velocity : float
-        The Stribeck law's static coefficient mu_s (>= friction_coefficient, the dynamic
-        one) and Stribeck velocity v_s > 0 in m/s.
+        Coefficient of friction mu >= 0 (the dynamic one of the Stribeck law).
+    friction_v0 : float
+        Tangential velocity v0 > 0 in m/s: the scale over which the "coulomb" and
+        "stribeck" laws smooth the sign of the sliding velocity, the lower threshold of
+        "ambrosio" (the assumed defaults and their sources: `linkage.FRICTION_DEFAULTS`).
+    friction_v1 : float
+        Tangential velocity v1 > v0 in m/s: the upper threshold of "ambrosio".
+    friction_static_coefficient : float
+        The Stribeck law's static coefficient mu_s (>= friction_coefficient).
+    friction_stribeck_velocity : float
+        The Stribeck law's Stribeck velocity v_s > 0 in m/s.
     """
 
     crank_length: float = 0.05

@@ -552,8 +552,10 @@ def optimize_link_lengths(mech: SliderCrank | None = None,
         ``{"coupler_length": (3.6, 4.4), "rocker_length": (2.2, 2.8)}`` for the four-bar);
         its objective is the peak of `output` (`objective.peak_output`), its refinement
         (``refine=True``) Nelder-Mead, its backend the generated model ("reduced").
-    crank_length, coupler_length : (float, float)
-        Bounds in m of L2 and L3, the default genes (paper: [0.04, 0.06] and [0.10, 0.14]).
+    crank_length : (float, float), default (0.04, 0.06)
+        Bounds in m of L2, a default gene (the paper's).
+    coupler_length : (float, float), default (0.1, 0.14)
+        Bounds in m of L3, a default gene (the paper's).
     revolution : int
         Crank revolution (1-based) whose peak |F12| is minimised (paper: 4); a free
         Linkage's (drive None): the time window [(k - 1) w, k w] of width `window`.
@@ -571,8 +573,10 @@ def optimize_link_lengths(mech: SliderCrank | None = None,
         (this process), "threads" or "processes" (a local pool of `workers`, created and
         shut down here), any `concurrent.futures`-style executor (``submit`` or ``map``),
         or a `dask.distributed.Client` (see `connect_dask`).
-    population, generations : int
-        Population size (>= 4) and maximum number of generations (>= 1).
+    population : int
+        Population size (>= 4).
+    generations : int
+        Maximum number of generations (>= 1).
     saturation : int or None
         Stop when the best value has moved by at most `saturation_rtol` of its value over
         the last `saturation` generations; None disables it.
@@ -593,9 +597,9 @@ def optimize_link_lengths(mech: SliderCrank | None = None,
     workers : int
         Size of the local pool (threads or processes) when `executor` is None, "threads" or
         "processes"; 1 evaluates in this process.
-    saturation_rtol : float
-        Relative tolerance of the saturation test, in [0, 1) (default 1e-9).
-    dask_timeout : float
+    saturation_rtol : float, default 1e-9
+        Relative tolerance of the saturation test, in [0, 1).
+    dask_timeout : float, default 60.0
         Seconds to wait for the first worker of a dask Client before giving up (> 0).
     output : str, optional
         Linkage only: the output whose peak is minimised (`objective.parse_output`:
@@ -610,6 +614,8 @@ def optimize_link_lengths(mech: SliderCrank | None = None,
     -------
     OptimizationResult
 
+    Notes
+    -----
     Ctrl-C (KeyboardInterrupt) and SIGTERM stop a pool the call created within about one
     design's simulation and leave no worker behind (SIGTERM then exits with code 143).
     """

@@ -361,14 +361,17 @@ def regime_map(mech, sweep, revolutions: int = 100, keep: int = 50, scheduler=No
         The base design (ignored when `case` is given).
     sweep : str, SweepAxis or (name, values), or a list of one or two of them
         The swept fields (`parse_sweep`); the first is the dataset's first dimension.
-    revolutions, keep : int
-        Crank revolutions per point and how many of the last ones give section samples
-        (keep >= 2 max_period + 1).
+    revolutions : int
+        Crank revolutions per point.
+    keep : int
+        How many of the last revolutions give section samples (keep >= 2 max_period + 1).
     scheduler : optional
         None (a local pool of `workers` threads), "serial", "threads", "processes", a
         dask scheduler address "tcp://host:port", or a dask.distributed Client.
-    case, overrides :
-        A named case (`cases.CASES`) and its fixed overrides, instead of `mech`.
+    case : str, optional
+        A named case (`cases.CASES`), instead of `mech`.
+    overrides : dict, optional
+        The named case's fixed overrides.
     out : path, optional
         netCDF file written as results arrive (at most every `write_interval` seconds, and
         at the end, also after an error or Ctrl-C); an existing one made with the same
@@ -377,7 +380,13 @@ def regime_map(mech, sweep, revolutions: int = 100, keep: int = 50, scheduler=No
     lyapunov : bool
         Also compute each point's largest Lyapunov exponent (a tangent run instead of the
         plain one; the regimes then tell quasi-periodic from chaotic).
-    angle, tol, max_period, rtol :
+    angle : float, optional
+        As in `poincare.poincare_section`.
+    tol : float, default 1e-3
+        As in `poincare.poincare_section`.
+    max_period : int, default 8
+        As in `poincare.poincare_section`.
+    rtol : float, optional
         As in `poincare.poincare_section`.
     chunk_size : int, optional
         Points per task (default: about 8 tasks per worker).
@@ -398,10 +407,13 @@ def regime_map(mech, sweep, revolutions: int = 100, keep: int = 50, scheduler=No
         running point's per-revolution arrays (`map_memory`). A map above it is refused
         with `MemoryLimitError` (a ValueError) before any design is built.
 
-    Returns a `MapResult`: the labelled dataset (dims: the swept fields, revolution, joint,
-    component, lag; variables section, peak, peak_mean, peak_max, regime, period,
-    lyapunov, lyapunov_per_second, recurrence, joint_clearance, nfev, stopped, done,
-    failed, tangent_failed).
+    Returns
+    -------
+    MapResult
+        The labelled dataset (dims: the swept fields, revolution, joint, component, lag;
+        variables section, peak, peak_mean, peak_max, regime, period, lyapunov,
+        lyapunov_per_second, recurrence, joint_clearance, nfev, stopped, done, failed,
+        tangent_failed).
     """
     from .executor import connect_dask, evaluate
 

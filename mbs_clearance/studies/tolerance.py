@@ -1079,8 +1079,10 @@ def tolerance_study(inputs: Mapping[str, Any], mech: SliderCrank | None = None,
     seed : int
         Seed of every sample and bootstrap (>= 0): the same seed gives the same result on
         every executor.
-    executor, workers :
+    executor : optional
         As in `executor.evaluate` (None: a local pool of `workers` threads).
+    workers : int
+        Size of the local pool.
     progress : bool
         tqdm bars of the runs.
     backend : str

@@ -278,13 +278,27 @@ def test_user_description_cached_by_structure(tmp_path, monkeypatch):
     lk = _pendulum_pair()
     from mbs_clearance.generate import loader, model_path, model_structure
 
-    model = load_model(lk)
+    # the process's memo of loaded modules starts empty here: another test may have loaded
+    # this structure from its own cache directory, and the memo would answer without this one
+    monkeypatch.setattr(loader, "_LOADED", {})
     digest = structure_digest(model_structure(lk))
+    model = load_model(lk)
     assert model.STRUCTURE_DIGEST == digest
-    assert model_path(lk) is not None
+    path = model_path(lk)
+    assert path is not None
     assert load_model(lk.with_parameter("crank.mass", 0.5)) is model
     assert structure_digest(model_structure(lk.replace(monitor_joint="hanger"))) != digest
-    assert loader._current(model_path(lk), digest)
+    assert loader._current(path, digest)
+    # a new process finds it in the cache: loaded from the file, not generated again
+    monkeypatch.setattr(loader, "_LOADED", {})
+
+    def no_generation(*args, **kwargs):
+        raise AssertionError("generated again")
+
+    monkeypatch.setattr(loader, "generate_module", no_generation)
+    again = load_model(lk)
+    assert again is not model and again.STRUCTURE_DIGEST == digest
+    assert again.__file__ == str(path)
 
 
 def test_models_specialised_on_zero_geometry_equal_the_general_one(tmp_path, monkeypatch):

@@ -313,6 +313,19 @@ def test_cli_orbits_prints_the_python_functions_multipliers(paper_orbit, capsys)
     assert "period-1 orbit of the paper's slider-crank: stable" in out
     printed = [float(v) for v in re.findall(r"\|mu\| = (\S+)", out)]
     np.testing.assert_allclose(printed[:2], np.abs(paper_orbit.multipliers[:2]), rtol=1e-4)
+    # magnitude and angle, not a complex number's repr; coordinates with units; the joint
+    # by its name
+    assert "j " not in out and "+0j" not in out
+    mu = paper_orbit.multipliers[0]
+    angle = float(re.search(r"angle ([-+]\d+\.\d) deg", out).group(1))
+    assert angle == pytest.approx(math.degrees(np.angle(mu)), abs=0.051)
+    state = out[out.index("state at the section:"):out.index("Floquet")].splitlines()[1:]
+    coordinates = [line for line in state if not line.strip().startswith("joint")]
+    assert len(coordinates) == len(paper_orbit.state)
+    assert all(line.split()[-1] in ("m", "rad", "m/s", "rad/s") for line in coordinates)
+    from mbs_clearance.solve.flows import joints_of
+
+    assert f"joint {joints_of(paper_orbit.mech)[0]!r}: " in out and "joint 0" not in out
 
 
 @pytest.mark.parametrize("argv, message", [
