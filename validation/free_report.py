@@ -120,7 +120,7 @@ def draw_figures(out: Path, n: dict) -> dict[str, list[str]]:
     for k, name in enumerate(traj.joints):
         ax[1].plot(traj.t, traj.contact_force[:, k], lw=0.7, label=name)
     ax[1].set(xlabel="t (s)", ylabel="contact force (N)", title="contact forces")
-    ax[1].legend(fontsize=7)
+    ax[1].legend(fontsize=7, loc="upper right")
     fig.tight_layout()
     fig.savefig(out / "figures" / "response.png", dpi=110)
     plt.close(fig)

@@ -231,7 +231,7 @@ def draw_figures(out: Path, n: dict) -> dict[str, list[str]]:
     ax[1].plot(np.cos(th), np.sin(th), "k--", lw=0.6)
     ax[1].set(aspect="equal", xlabel="x / clearance", ylabel="y / clearance",
               title="journal orbits")
-    ax[1].legend(fontsize=8)
+    ax[1].legend(fontsize=8, loc="upper right")
     ax[2].set(xlabel="drive revolutions", ylabel="contact force (N)", title="contact forces")
     fig.tight_layout()
     fig.savefig(fdir / "response.png", dpi=110)
@@ -256,7 +256,7 @@ def draw_figures(out: Path, n: dict) -> dict[str, list[str]]:
     ax.barh(y + 0.18, tol["ST"], 0.36, xerr=tol["ST_conf"], label="total ST")
     ax.set_yticks(y, tol["names"])
     ax.set(xlabel="Sobol index", title=f"uniform +-{100 * tol['spread']:.0f} %")
-    ax.legend(fontsize=8)
+    ax.legend(fontsize=8, loc="lower right")
     fig.tight_layout()
     fig.savefig(fdir / "tolerance.png", dpi=110)
     plt.close(fig)

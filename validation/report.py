@@ -896,7 +896,7 @@ def plot_differences(ref, others: dict, path: Path, revolution: int | None = Non
            title="crank moment: difference to the reduced model")
     for ax in (a1, a2):
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=8)
+        ax.legend(fontsize=8, loc="upper right")
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
@@ -941,7 +941,7 @@ def plot_tolerance(result, path: Path) -> Path:
         ax1.set_xticks(x, names, rotation=30, ha="right")
         ax1.set_ylabel("Sobol index")
         ax1.set_title(f"Sobol indices, N = {sob['N']} ({sob['runs']} runs)")
-        ax1.legend()
+        ax1.legend(loc="upper right")
     mc = result.monte_carlo
     values = mc.get("values")
     values = np.asarray(sob.get("values_A", []) if values is None else values, dtype=float)
@@ -960,7 +960,7 @@ def plot_tolerance(result, path: Path) -> Path:
                          label=f"wear +{lv['wear'] * 1e6:.3g} \N{MICRO SIGN}m")
         ax2.set_xlabel(result.output_label)
         ax2.set_ylabel("designs")
-        ax2.legend(fontsize=8)
+        ax2.legend(fontsize=8, loc="upper right")
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)

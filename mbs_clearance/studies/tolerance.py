@@ -1238,14 +1238,15 @@ def _notes(counts, res, names, output) -> list[str]:
     if counts["chaotic"]:
         notes.append(
             f"{counts['chaotic']} of {counts['runs']} runs are not periodic (a rattling "
-            "contact or stats['periodic'] False): their output is the statistic over "
-            "revolutions 2..k (max of the per-revolution peaks, RMS over those revolutions), "
-            "not revolution k alone; the indices mix the two regimes")
+            "contact, or motion that does not repeat every revolution): their output is the "
+            "statistic over revolutions 2..k (max of the per-revolution peaks, RMS over those "
+            "revolutions), not revolution k alone; the indices mix the two regimes")
     if counts["flagged"]:
         notes.append(
             f"{counts['flagged']} runs are flagged by the accuracy or physics checks "
-            "(stats['accuracy_ok'] False or penetration_meaningless; for output 'peak': a "
-            "rattling contact): their values may miss the stated accuracy")
+            "(an error estimate above the requested accuracy, or a penetration too deep for "
+            "the contact law; for the output 'peak': a rattling contact): their values may "
+            "miss the stated accuracy")
     if counts["failed"]:
         notes.append(f"{counts['failed']} runs failed (invalid design or integration "
                      "failure); indices are not computed for a method with a failed run")
