@@ -482,7 +482,14 @@ def _edges(v: np.ndarray, spacing: str | None) -> np.ndarray:
         mid = 0.5 * (lv[1:] + lv[:-1])
         return np.exp(np.concatenate([[2 * lv[0] - mid[0]], mid, [2 * lv[-1] - mid[-1]]]))
     mid = 0.5 * (v[1:] + v[:-1])
-    return np.concatenate([[2 * v[0] - mid[0]], mid, [2 * v[-1] - mid[-1]]])
+    edges = np.concatenate([[2 * v[0] - mid[0]], mid, [2 * v[-1] - mid[-1]]])
+    # a field whose samples are all positive (a speed, a clearance) has its outer cells
+    # end at zero, not below it
+    if np.all(v > 0):
+        edges[0] = max(edges[0], 0.0)
+    elif np.all(v < 0):
+        edges[-1] = min(edges[-1], 0.0)
+    return edges
 
 
 def plot_poincare(ds, points: Sequence[Mapping], path: str | Path | None = None,

@@ -31,21 +31,23 @@ from typing import Any
 
 import numpy as np
 
+from .report import numbered_titles
+
 #: relative half-width of the tolerance study's uniform ranges
 TOLERANCE_SPREAD = 0.2
 
 SECTIONS = ("description", "response", "agreement", "sensitivity", "tolerance", "regimes",
             "environment")
 
-TITLES = {
-    "description": "1. The linkage",
-    "response": "2. Response: peaks per revolution and journal orbits",
-    "agreement": "3. Both models: reduced model against Exudyn, converged",
-    "sensitivity": "4. Sensitivities of the peak",
-    "tolerance": "5. Tolerances: what the peak's spread comes from",
-    "regimes": "6. Where the motion is periodic: regime map",
-    "environment": "Appendix. Environment",
-}
+TITLES = numbered_titles(SECTIONS, {
+    "description": "The linkage",
+    "response": "Response: peaks per revolution and journal orbits",
+    "agreement": "Both models: reduced model against Exudyn, converged",
+    "sensitivity": "Sensitivities of the peak",
+    "tolerance": "Tolerances: what the peak's spread comes from",
+    "regimes": "Where the motion is periodic: regime map",
+    "environment": "Environment",
+}, ("environment",))
 
 
 def settings(quick: bool, revolutions: int | None = None) -> dict[str, Any]:

@@ -512,8 +512,8 @@ class ToleranceResult:
             else:
                 lines.append(f"  {'':<{w}}  {'S1 +- conf':>16}  {'ST +- conf':>16}")
             for i, n in enumerate(self.names if "S1" in self.sobol else ()):
-                lines.append(f"  {n:<{w}}  {self.sobol['S1'][i]:7.3f} +- "
-                             f"{self.sobol['S1_conf'][i]:.3f}  {self.sobol['ST'][i]:7.3f} +- "
+                lines.append(f"  {n:<{w}}  {_index(self.sobol['S1'][i])} +- "
+                             f"{self.sobol['S1_conf'][i]:.3f}  {_index(self.sobol['ST'][i])} +- "
                              f"{self.sobol['ST_conf'][i]:.3f}")
         if self.morris:
             lines.append(f"Morris ({self.morris['runs']} runs): mu* (output units per full "
@@ -1231,6 +1231,13 @@ def _dgsm(study: _Study, n: int, seed: int, bootstrap: int, confidence: float) -
             "poincare": C, "variance": V, "bound": C * nu / V, "runs": n,
             "failed": int(np.count_nonzero(~ok)), "kinks": kinks,
             "gradient_fields": list(fields)}
+
+
+def _index(value: float) -> str:
+    """A Sobol index to 3 decimals, 7 wide; an estimate that rounds to zero is 0.000 (a
+    small negative estimate is sampling noise around zero, not a sign)."""
+    text = f"{value:7.3f}"
+    return f"{0.0:7.3f}" if float(text) == 0.0 else text
 
 
 def _notes(counts, res, names, output) -> list[str]:
