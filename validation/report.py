@@ -159,6 +159,47 @@ def _settings(quick: bool) -> dict[str, Any]:
 
 
 # ------------------------------------------------------------------------------ sections
+#: samples per revolution kept in the saved runs of data/ (without --full-data): the
+#: figures draw a revolution against the crank angle at about 1200 px, so this is more than
+#: they resolve, and it keeps data/ under 10 MB
+SAVED_SAMPLES_PER_REVOLUTION = 2000
+
+
+def thinned(traj, per_revolution: int = SAVED_SAMPLES_PER_REVOLUTION):
+    """`traj` with about `per_revolution` evenly spaced samples per revolution, keeping the
+    first and last samples and each revolution's largest |F12| sample (so the stored peaks
+    still bound the stored series, `load_trajectory`'s check); `traj` itself if it has no
+    more samples than that."""
+    import dataclasses
+
+    n = len(traj.t)
+    revs = max(traj.revolutions, 1)
+    if n <= per_revolution * revs:
+        return traj
+    keep = [np.linspace(0, n - 1, per_revolution * revs).astype(int), [0, n - 1]]
+    mag = traj.base_force_magnitude
+    for k in range(1, traj.revolutions + 1):
+        where = np.flatnonzero(traj.revolution_mask(k))
+        if len(where):
+            keep.append([where[np.argmax(mag[where])]])
+    idx = np.unique(np.concatenate(keep))
+    changes = {}
+    for f in dataclasses.fields(traj):
+        v = getattr(traj, f.name)
+        if isinstance(v, np.ndarray) and v.ndim >= 1 and len(v) == n:
+            changes[f.name] = v[idx]
+        elif isinstance(v, dict) and v and all(isinstance(a, np.ndarray) and len(a) == n
+                                                for a in v.values()):
+            changes[f.name] = {k: a[idx] for k, a in v.items()}
+    return dataclasses.replace(traj, **changes)
+
+
+def save_run(traj, path: Path, s: dict) -> Path:
+    """Save a section's run into data/: every sample with the setting full_data
+    (--full-data), else `thinned` (what the figures and --replot need)."""
+    return (traj if s.get("full_data") else thinned(traj)).save(path)
+
+
 def section_mechanism(out: Path, s: dict) -> dict:
     mech = SliderCrank()
     derived = {"coupler_inertia": (mech.coupler_inertia_value, "uniform rod m3 L3^2/12"),
@@ -186,7 +227,7 @@ def section_response(out: Path, s: dict) -> dict:
         "ideal": simulate(mech, n, backend="ideal"),
     }
     for name, tr in trajs.items():
-        tr.save(out / "data" / f"response_{name}.npz")
+        save_run(tr, out / "data" / f"response_{name}.npz", s)
     numbers = {}
     for name, tr in trajs.items():
         mask = tr.revolution_mask(n)
@@ -347,7 +388,7 @@ def section_optimization(out: Path, s: dict) -> dict:
         for label, m in (("original", res.original), ("optimum", res.best),
                          ("paper_optimum", paper_mech)):
             traj = simulate(m, 4)
-            traj.save(out / "data" / f"optimization_{scaling}_{label}.npz")
+            save_run(traj, out / "data" / f"optimization_{scaling}_{label}.npz", s)
         results[scaling] = {
             "crank_length": res.best.crank_length, "coupler_length": res.best.coupler_length,
             "best_peak_force": res.best_peak_force,
@@ -515,7 +556,7 @@ def section_friction(out: Path, s: dict) -> dict:
     for case, runs in results.items():
         p0 = runs[0][1]["peak"]
         for mu, m, traj in runs:
-            traj.save(out / "data" / f"friction_{case}_mu{mu:g}.npz")
+            save_run(traj, out / "data" / f"friction_{case}_mu{mu:g}.npz", s)
             rows.append({"case": case, "mu": mu, "joints": list(traj.joints),
                          "peak_change_percent": 100 * (m["peak"] / p0 - 1), **m})
     sens = sensitivity_study(s["friction_sensitivity_mus"], n)
@@ -562,7 +603,7 @@ def section_lubrication(out: Path, s: dict) -> dict:
     rows, files = [], []
     for key, lk, mu in runs:
         traj = simulate(lk, n)
-        traj.save(out / "data" / f"lubrication_{key}.npz")
+        save_run(traj, out / "data" / f"lubrication_{key}.npz", s)
         files.append(f"lubrication_{key}.npz")
         rows.append(_film_row(traj, joint, "dry contact" if mu is None else "oil film", mu))
     ideal = simulate(SliderCrank(), n, backend="ideal")
@@ -1593,19 +1634,24 @@ def render(out: Path, numbers: dict, figs: dict) -> Path:
 
 def build_report(out: str | Path = "report", quick: bool = False, progress: bool = True,
                  replot: bool = False, force: bool = False,
-                 map_file: str | Path | None = None) -> Path:
+                 map_file: str | Path | None = None, full_data: bool = False) -> Path:
     """Compute every section (or reuse the saved data with `replot`), draw, write HTML.
 
     The report is built in a hidden folder beside `out` and moved into place at the end with
     a manifest (run id and SHA-256 of every file), so an interrupted run leaves `out` as it
     was. `replot` redraws from a folder whose report.json and data/ are those of one complete
     run (ValueError otherwise). An existing `out` that is not an earlier report is replaced
-    only with `force`.
+    only with `force`. data/ keeps the runs thinned to what the figures draw (under 10 MB);
+    `full_data` keeps every sample.
     """
 
     from mbs_clearance._io import OutputDir, check_output_dir, recover
 
     out = Path(out)
+    if replot and (map_file is not None or full_data):
+        raise ValueError(f"{'--map' if map_file is not None else '--full-data'} cannot be "
+                         "combined with --replot (a replot reuses the saved data); drop one "
+                         "of them")
     if replot and map_file is not None:
         raise ValueError("--map cannot be combined with --replot (a replot reuses the saved "
                          "data, including its regime map); drop one of them")
@@ -1630,6 +1676,7 @@ def build_report(out: str | Path = "report", quick: bool = False, progress: bool
 
     check_output_dir(out, "--out", force)
     s = _settings(quick)
+    s["full_data"] = bool(full_data)
     if map_file is not None:
         map_file = Path(map_file)
         if not map_file.is_file():
@@ -1655,28 +1702,37 @@ def build_report(out: str | Path = "report", quick: bool = False, progress: bool
 def write_report(staged, sections, compute, progress: bool, draw, render_html) -> None:
     """Fill the staged folder `staged` (an `_io.OutputDir`): every section's numbers
     (`run_sections`) into report.json, the figures (`draw(folder, numbers)`), the HTML
-    (`render_html(folder, numbers, figures)`), then commit it into place."""
-    numbers = run_sections(sections, compute, progress)
+    (`render_html(folder, numbers, figures)`), then commit it into place. The progress bar
+    counts the sections, then the figures and the HTML (drawing takes a while too)."""
+    from tqdm import tqdm
+
+    bar = tqdm(total=len(sections) + 2, desc="report", disable=not progress)
+    numbers = run_sections(sections, compute, bar)
     numbers["environment"]["run_id"] = staged.run_id
     numbers = _jsonable(numbers)
     (staged.path / "report.json").write_text(json.dumps(numbers, indent=1))
-    render_html(staged.path, numbers, draw(staged.path, numbers))
+    bar.set_postfix_str("drawing the figures")
+    figs = draw(staged.path, numbers)
+    bar.update()
+    bar.set_postfix_str("writing the HTML")
+    render_html(staged.path, numbers, figs)
+    bar.update()
+    bar.set_postfix_str("done")
+    bar.close()
     staged.commit()
 
 
-def run_sections(sections, compute, progress: bool) -> dict[str, Any]:
-    """{section: compute(section, the numbers so far, the seconds so far)}, in order, with a
-    progress bar naming the running section."""
-    from tqdm import tqdm
-
+def run_sections(sections, compute, bar) -> dict[str, Any]:
+    """{section: compute(section, the numbers so far, the seconds so far)}, in order,
+    advancing the progress bar `bar` (a tqdm) and naming the running section."""
     numbers: dict[str, Any] = {}
     timings: dict[str, float] = {}
-    bar = tqdm(sections, desc="report", disable=not progress)
-    for key in bar:
+    for key in sections:
         bar.set_postfix_str(key)
         t0 = time.perf_counter()
         numbers[key] = compute(key, numbers, timings)
         timings[key] = time.perf_counter() - t0
+        bar.update()
     return numbers
 
 
@@ -1726,9 +1782,10 @@ def main(args) -> int:
         raise ValueError("--set applies with --case or --description (the report of that "
                          "linkage); the paper's report runs the paper's case as published")
     if linkage is not None:
-        if args.replot or args.map is not None:
-            raise ValueError("--replot and --map belong to the paper's report; the report of "
-                             "a --case or --description computes its own regime map")
+        if args.replot or args.map is not None or args.full_data:
+            raise ValueError("--replot, --map and --full-data belong to the paper's report; "
+                             "the report of a --case or --description computes its own "
+                             "regime map and keeps its one run whole")
         from .linkage_report import build_linkage_report
 
         path = build_linkage_report(linkage, args.out, quick=args.quick, force=args.force)
@@ -1737,13 +1794,14 @@ def main(args) -> int:
         wrote(path.with_name("report.json"), "every number of the report")
         return 0
     path = build_report(args.out, quick=args.quick, replot=args.replot, force=args.force,
-                        map_file=args.map)
+                        map_file=args.map, full_data=args.full_data)
 
     print(f"report done in {time.perf_counter() - t0:.0f} s", file=sys.stderr)
     wrote(path, "the report, figures embedded")
     wrote(path.with_name("report.json"), "every number of the report")
     wrote(path.with_name("figures"), "the figures as PNG files and the animation")
-    wrote(path.with_name("data"), "what each section computed, for --replot")
+    wrote(path.with_name("data"), "what each section computed, for --replot"
+          + ("" if args.full_data else " (runs thinned; --full-data keeps every sample)"))
     return 0
 
 
@@ -1757,6 +1815,9 @@ def add_arguments(p):
                    help="smaller but complete report (coarser Exudyn step, small GA)")
     p.add_argument("--replot", action="store_true",
                    help="redraw figures and HTML from the saved data, no recomputation")
+    p.add_argument("--full-data", action="store_true",
+                   help="the paper's report: keep every sample of the saved runs in data/ "
+                        "(default: thinned to what the figures draw, under 10 MB)")
     p.add_argument("--map", type=Path, metavar="MAP.nc",
                    help="regime map of the paper's case written by `mbs-clearance map` over "
                         "clearance and crank_speed, used instead of computing one (default: "

@@ -70,7 +70,7 @@ def test_paper_report_options_are_refused_for_a_linkage(tmp_path, capsys):
     with pytest.raises(SystemExit) as exc:
         main(["report", "--case", CASE, "--replot", "--out", str(tmp_path / "r")])
     assert exc.value.code == 2
-    assert "--replot and --map belong to the paper's report" in capsys.readouterr().err
+    assert "--replot, --map and --full-data belong to the paper's report" in capsys.readouterr().err
     with pytest.raises(SystemExit) as exc:
         main(["report", "--set", "clearance=1e-4", "--out", str(tmp_path / "r")])
     assert exc.value.code == 2
