@@ -299,8 +299,10 @@ studies, for a first look.{% endif %}</p>
 {% for p in n.response.peaks %}{{ "%.6g" % p }}{% if not loop.last %}, {% endif %}{% endfor
 %}. {% if n.response.error_estimate is not none %}The run's own estimate of their relative
 error is {{ "%.2g" % n.response.error_estimate }} (requested {{ n.response.accuracy }}:
-{{ "met" if n.response.accuracy_ok else "not met" }}).{% endif %} Periodic:
-{{ n.response.periodic }}.</p>
+{{ "met" if n.response.accuracy_ok else "not met" }}).{% endif %} {% if n.response.periodic
+%}The motion is periodic.{% elif n.response.periodic is sameas false %}The motion is not
+periodic.{% else %}Whether the motion is periodic is not judged (too few revolutions).{% endif
+%}</p>
 <table><tr><th>joint</th><th>largest eccentricity / clearance</th>
 <th>largest contact force (N)</th></tr>
 {% for j, e in n.response.max_eccentricity_ratio.items() %}<tr><td>{{ j }}</td>
@@ -326,7 +328,7 @@ difference exceeds the two bars together.</p>
 
 <h2>{{ titles.sensitivity }}</h2>
 <p>The gradient of revolution {{ n.sensitivity.revolution }}'s peak,
-{{ "%.6g" % n.sensitivity.peak }} N ({{ n.sensitivity.method }}){% if n.sensitivity.kink %};
+{{ "%.6g" % n.sensitivity.peak }} N ({{ methods.get(n.sensitivity.method, n.sensitivity.method) }}){% if n.sensitivity.kink %};
 <b>{{ n.sensitivity.message }}</b>{% endif %}:</p>
 <table><tr><th>value</th><th>d peak / d value</th><th>d ln peak / d ln value</th></tr>
 {% for name in n.sensitivity.names %}<tr><td>{{ name }}</td>
@@ -370,9 +372,12 @@ def render_template(out: Path, numbers: dict, figs: dict, template: str,
 
     img = {f: "data:image/png;base64," + base64.b64encode(
         (out / "figures" / f).read_bytes()).decode() for names in figs.values() for f in names}
+    from mbs_clearance.plotting import METHOD_NAMES
+
     env = jinja2.Environment(autoescape=True, undefined=jinja2.StrictUndefined)
     html = env.from_string(template).render(n=numbers, figs=figs, img=img, titles=titles,
-                                            quick=numbers["environment"]["settings"]["quick"])
+                                            quick=numbers["environment"]["settings"]["quick"],
+                                            methods=METHOD_NAMES)
     path = out / "report.html"
     path.write_text(html)
     return path
