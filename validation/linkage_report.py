@@ -328,7 +328,8 @@ difference exceeds the two bars together.</p>
 
 <h2>{{ titles.sensitivity }}</h2>
 <p>The gradient of revolution {{ n.sensitivity.revolution }}'s peak,
-{{ "%.6g" % n.sensitivity.peak }} N ({{ methods.get(n.sensitivity.method, n.sensitivity.method) }}){% if n.sensitivity.kink %};
+{{ "%.6g" % n.sensitivity.peak }} N ({{ methods.get(n.sensitivity.method,
+n.sensitivity.method) }}){% if n.sensitivity.kink %};
 <b>{{ n.sensitivity.message }}</b>{% endif %}:</p>
 <table><tr><th>value</th><th>d peak / d value</th><th>d ln peak / d ln value</th></tr>
 {% for name in n.sensitivity.names %}<tr><td>{{ name }}</td>
