@@ -75,8 +75,8 @@ def test_regime_map_marks_the_design_and_outlines_period_1(paper_map):
     assert "period-1 region" in labels and "paper's design" in labels
 
 
-def test_report_regime_figure_draws_in_mm_and_rpm(paper_map, tmp_path, monkeypatch):
-    """The report's figure is the library's, not converted a second time."""
+def _report_regime_axes(ds, tmp_path, monkeypatch, branches=()):
+    """The Axes of the report's regime figure (`plot_regimes`) of map `ds`."""
     from mbs_clearance_validation.report import plot_regimes
 
     from mbs_clearance import plotting
@@ -89,9 +89,14 @@ def test_report_regime_figure_draws_in_mm_and_rpm(paper_map, tmp_path, monkeypat
 
     monkeypatch.setattr(plotting, "plot_regime_map", recorded)
     nc = tmp_path / "map.nc"
-    paper_map.to_netcdf(nc)
-    assert plot_regimes(nc, tmp_path / "regime_map.png").stat().st_size > 0
-    ax = figures[0].axes[0]
+    ds.to_netcdf(nc)
+    assert plot_regimes(nc, tmp_path / "regime_map.png", branches).stat().st_size > 0
+    return figures[0].axes[0]
+
+
+def test_report_regime_figure_draws_in_mm_and_rpm(paper_map, tmp_path, monkeypatch):
+    """The report's figure is the library's, not converted a second time."""
+    ax = _report_regime_axes(paper_map, tmp_path, monkeypatch)
     star = next(ln for ln in ax.lines if ln.get_marker() == "*")
     assert (star.get_xdata()[0], star.get_ydata()[0]) == (pytest.approx(0.01),
                                                           pytest.approx(5000.0))
@@ -218,21 +223,7 @@ def test_report_regime_figure_draws_the_branches_where_they_run(paper_map, tmp_p
                                                                monkeypatch):
     """The branches lie on the map: the speed branch at the design's clearance (0.01 mm),
     the clearance branch at its speed (5000 rpm), each bifurcation marked there."""
-    from mbs_clearance_validation.report import plot_regimes
-
-    from mbs_clearance import plotting
-
-    figures = []
-
-    def recorded(*args, **kwargs):
-        figures.append(plot_regime_map(*args, **kwargs))
-        return figures[-1]
-
-    monkeypatch.setattr(plotting, "plot_regime_map", recorded)
-    nc = tmp_path / "map.nc"
-    paper_map.to_netcdf(nc)
-    plot_regimes(nc, tmp_path / "regime_map.png", _branches())
-    ax = figures[0].axes[0]
+    ax = _report_regime_axes(paper_map, tmp_path, monkeypatch, _branches())
     lines = [ln for ln in ax.lines if ln.get_linewidth() == 2.5]
     assert len(lines) == 2
     over_speed, over_clearance = lines
