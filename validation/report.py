@@ -137,15 +137,15 @@ def _settings(quick: bool) -> dict[str, Any]:
         "regime_max_period": 4 if quick else 8,
         "regime_map_file": None,
         # the continuation (section "bifurcation"): per branch the field, its start and
-        # stop (SI) and the continuation's options; quick: to the first bifurcation only
-        # (docs/orbits.md: about 7 s over speed and 27 s over clearance on 2 cores)
+        # stop (SI) and the continuation's options; quick: over speed to its first
+        # bifurcation only (about 100 shooting runs; the clearance branch to its first
+        # needs 450, docs/orbits.md)
         "bifurcation_branches": (
             ("crank_speed", 5000.0 * math.pi / 30.0, 1000.0 * math.pi / 30.0,
-             {"max_step": 30.0, "max_points": 300 if quick else 600,
-              "stop_at_first": quick}),
-            ("clearance", 1e-5, 2e-5,
-             {"max_step": 30.0, "max_points": 400 if quick else 600,
-              "stop_at_first": quick})),
+             {"max_step": 30.0, "max_points": 300, "stop_at_first": True}),) if quick else (
+            ("crank_speed", 5000.0 * math.pi / 30.0, 1000.0 * math.pi / 30.0,
+             {"max_step": 30.0, "max_points": 600}),
+            ("clearance", 1e-5, 2e-5, {"max_step": 30.0, "max_points": 600})),
         # friction (beyond the paper): cases of the table and coefficients of
         # friction of the table and of the sensitivities (Ambrosio's law)
         "friction_cases": ("paper_slider_crank",) if quick
@@ -1410,8 +1410,8 @@ multipliers (the eigenvalues of its monodromy matrix) give its stability, and a 
 is located by bisection where one crosses the unit circle: a period doubling where it
 crosses at -1 (a period-2 orbit is born), a fold at +1, a Neimark-Sacker bifurcation where
 a complex pair crosses (docs/orbits.md). The branches are drawn on the regime map of
-{{ ref('regimes') }} and below{% if quick %}; --quick follows each branch to its first
-bifurcation only{% endif %}.</p>
+{{ ref('regimes') }} and below{% if quick %}; --quick follows the branch over crank speed
+to its first bifurcation only (the full report follows both branches further){% endif %}.</p>
 <ul>{% for b in n.bifurcation.branches %}<li>Over {{ b.field | replace('_', ' ') }}:
 {{ b.orbits }} orbits from {{ b['values'][0] | fieldq(b.field) }} to
 {{ b['values'][-1] | fieldq(b.field) }}, {{ b.stable_orbits }} of them stable; the branch
