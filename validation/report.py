@@ -1534,7 +1534,7 @@ to change. <b>switches</b>: contact onsets and separations in the run.</p>
 <table><tr><th>package</th><th>version</th></tr>{% for k, v in n.environment.versions.items() %}
 <tr><td>{{ k }}</td><td>{{ v }}</td></tr>{% endfor %}</table>
 <table><tr><th>section</th><th>run time (s)</th></tr>
-{% for k, v in n.environment.section_seconds.items() %}<tr><td>{{ k }}</td>
+{% for k, v in n.environment.section_seconds.items() %}<tr><td>{{ titles.get(k, k) }}</td>
 <td>{{ v | fixed(1) }}</td></tr>{% endfor %}</table></details>
 </body></html>
 """
