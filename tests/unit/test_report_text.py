@@ -1,11 +1,11 @@
-"""The report's text machinery: numbers without signed zeros, section numbers and
-cross-references generated from the section list, stress statuses that say what they
-checked."""
+"""The report's machinery: numbers without signed zeros, section numbers and
+cross-references generated from the section list, runs thinned for data/."""
 
 from __future__ import annotations
 
 import re
 
+import numpy as np
 import pytest
 from mbs_clearance_validation import report
 from mbs_clearance_validation.report import (
@@ -66,3 +66,24 @@ def test_the_paper_table_refers_to_the_optimisation_section_by_its_number():
     assert refs and set(refs) == {f"section {number}"}
     assert "optimization" in report.HEADINGS and TITLES["optimization"].endswith(
         report.HEADINGS["optimization"])
+
+
+def test_thinned_run_keeps_each_revolution_s_peak_and_loads(tmp_path):
+    """data/ keeps a run thinned: about the asked samples per revolution, each
+    revolution's largest |F12| sample kept (the stored refined peaks still bound the
+    series, the loader's check), and every series cut at the same samples."""
+    from mbs_clearance import SliderCrank, load_trajectory, simulate
+
+    traj = simulate(SliderCrank(), 2)
+    small = report.thinned(traj, per_revolution=200)
+    assert len(traj.t) > 1000 and len(small.t) <= 2 * 200 + 4
+    for k in (1, 2):
+        assert small.base_force_magnitude[small.revolution_mask(k)].max() == (
+            traj.base_force_magnitude[traj.revolution_mask(k)].max())
+    kept = np.searchsorted(traj.t, small.t)
+    assert np.array_equal(traj.t[kept], small.t)
+    assert np.array_equal(small.eccentricity, traj.eccentricity[kept])
+    assert np.array_equal(small.contact_phase, traj.contact_phase[kept])
+    back = load_trajectory(small.save(tmp_path / "run.npz"))
+    assert np.array_equal(back.peaks, traj.peaks) and len(back.t) == len(small.t)
+    assert report.thinned(small, per_revolution=200) is small       # nothing more to cut
