@@ -139,12 +139,6 @@ def test_replot_redraws_without_recomputing(report, monkeypatch):
     assert verify_run_folder(out)["run_id"] == run      # still the same run
 
 
-def test_replot_without_a_report_is_a_clear_error(tmp_path, capsys):
-    with pytest.raises(SystemExit):
-        main(["report", "--replot", "--out", str(tmp_path)])
-    assert "needs a previous report" in capsys.readouterr().err
-
-
 def _has_browser():
     from validation.render_report import has_browser
 
