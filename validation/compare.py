@@ -406,7 +406,9 @@ def plot_linkage_comparison(a: Trajectory, b: Trajectory, path=None,
         ax.grid(alpha=0.3)
     for ax in (axes[0], *axes[3:]):
         ax.legend(fontsize=8, loc="upper right")
-    fig.suptitle(f"{getattr(mech, 'name', 'slider-crank')}: {a.backend} vs {b.backend}")
+    names = {"reduced": "reduced model", "exudyn": "Exudyn", "ideal": "ideal joints"}
+    fig.suptitle(f"{getattr(mech, 'name', 'slider-crank').replace('_', ' ')}: "
+                 f"{names.get(a.backend, a.backend)} vs {names.get(b.backend, b.backend)}")
     return save(fig, path)
 
 
