@@ -159,39 +159,50 @@ def _settings(quick: bool) -> dict[str, Any]:
 
 
 # ------------------------------------------------------------------------------ sections
-#: samples per revolution kept in the saved runs of data/ (without --full-data): the
-#: figures draw a revolution against the crank angle at about 1200 px, so this is more than
-#: they resolve, and it keeps data/ under 10 MB
-SAVED_SAMPLES_PER_REVOLUTION = 2000
+#: samples per revolution kept in the saved runs of data/ (without --full-data): a
+#: revolution's figure is about 1200 px wide, the contact's vibrations about 80 a
+#: revolution, and each revolution's largest sample is kept besides; this keeps the quick
+#: report's data/ under 10 MB (measured 27 MB at 2000)
+SAVED_SAMPLES_PER_REVOLUTION = 400
 
 
-def thinned(traj, per_revolution: int = SAVED_SAMPLES_PER_REVOLUTION):
-    """`traj` with about `per_revolution` evenly spaced samples per revolution, keeping the
-    first and last samples and each revolution's largest |F12| sample (so the stored peaks
-    still bound the stored series, `load_trajectory`'s check); `traj` itself if it has no
-    more samples than that."""
-    import dataclasses
-
-    n = len(traj.t)
+def thinned(run, per_revolution: int = SAVED_SAMPLES_PER_REVOLUTION):
+    """`run` (a Trajectory, or Sensitivities with their nominal run on the same time grid)
+    with about `per_revolution` evenly spaced samples per revolution, keeping the first and
+    last samples and each revolution's largest |F12| sample (so the stored peaks still
+    bound the stored series, `load_trajectory`'s check); `run` itself if it has no more
+    samples than that."""
+    traj = getattr(run, "trajectory", None) or run
+    n = len(run.t)
     revs = max(traj.revolutions, 1)
     if n <= per_revolution * revs:
-        return traj
+        return run
     keep = [np.linspace(0, n - 1, per_revolution * revs).astype(int), [0, n - 1]]
-    mag = traj.base_force_magnitude
-    for k in range(1, traj.revolutions + 1):
-        where = np.flatnonzero(traj.revolution_mask(k))
-        if len(where):
-            keep.append([where[np.argmax(mag[where])]])
-    idx = np.unique(np.concatenate(keep))
+    if len(traj.t) == n:
+        mag = traj.base_force_magnitude
+        for k in range(1, traj.revolutions + 1):
+            where = np.flatnonzero(traj.revolution_mask(k))
+            if len(where):
+                keep.append([where[np.argmax(mag[where])]])
+    return _take(run, np.unique(np.concatenate(keep)), n)
+
+
+def _take(obj, idx, n: int):
+    """The dataclass `obj` with every array (and dict of arrays, and nested run) of `n`
+    samples cut to the samples `idx`."""
+    import dataclasses
+
     changes = {}
-    for f in dataclasses.fields(traj):
-        v = getattr(traj, f.name)
+    for f in dataclasses.fields(obj):
+        v = getattr(obj, f.name)
         if isinstance(v, np.ndarray) and v.ndim >= 1 and len(v) == n:
             changes[f.name] = v[idx]
         elif isinstance(v, dict) and v and all(isinstance(a, np.ndarray) and len(a) == n
                                                 for a in v.values()):
             changes[f.name] = {k: a[idx] for k, a in v.items()}
-    return dataclasses.replace(traj, **changes)
+        elif dataclasses.is_dataclass(v) and len(getattr(v, "t", ())) == n:
+            changes[f.name] = _take(v, idx, n)
+    return dataclasses.replace(obj, **changes)
 
 
 def save_run(traj, path: Path, s: dict) -> Path:
@@ -356,7 +367,7 @@ def section_sensitivity(out: Path, s: dict) -> dict:
     sensitivities(mech, revolutions=1, rtol=1e-9)
     sensitivities(mech, names[:1], revolutions=1, method="fd")
     ddm = sensitivities(mech, revolutions=n, t_eval=t_eval, rtol=1e-9)
-    ddm.save(out / "data" / "sensitivity_ddm.npz")
+    save_run(ddm, out / "data" / "sensitivity_ddm.npz", s)
     fd = sensitivities(mech, names, revolutions=n, method="fd", t_eval=t_eval)
     check = []
     for k, name in enumerate(names):
@@ -561,7 +572,7 @@ def section_friction(out: Path, s: dict) -> dict:
                          "peak_change_percent": 100 * (m["peak"] / p0 - 1), **m})
     sens = sensitivity_study(s["friction_sensitivity_mus"], n)
     for mu, sn in sens:
-        sn.save(out / "data" / f"friction_sensitivity_mu{mu:g}.npz")
+        save_run(sn, out / "data" / f"friction_sensitivity_mu{mu:g}.npz", s)
     return {"law": "ambrosio", "revolution": n, "rows": rows,
             "runs": {case: [f"friction_{case}_mu{mu:g}.npz" for mu, _, _ in runs]
                      for case, runs in results.items()},
@@ -1801,7 +1812,7 @@ def main(args) -> int:
     wrote(path.with_name("report.json"), "every number of the report")
     wrote(path.with_name("figures"), "the figures as PNG files and the animation")
     wrote(path.with_name("data"), "what each section computed, for --replot"
-          + ("" if args.full_data else " (runs thinned; --full-data keeps every sample)"))
+          + ("" if args.full_data else "; runs thinned, --full-data keeps every sample"))
     return 0
 
 
