@@ -28,6 +28,9 @@ __all__ = ["plot_branch", "plot_trajectory", "plot_overlay", "plot_comparison",
 
 COLORS = ["C0", "C3", "C2", "C1", "C4", "C5"]
 
+#: the sensitivity methods in words (figure titles)
+METHOD_NAMES = {"ddm": "direct differentiation", "fd": "finite differences"}
+
 
 def save(fig: Figure, path: str | Path | None, dpi: int = 120) -> Figure:
     """Save `fig` to `path` (format from the suffix) if a path is given; return `fig`."""
@@ -83,7 +86,7 @@ def plot_overlay(trajs: Sequence[Trajectory], labels: Sequence[str] | None = Non
                title="(d) journal centre orbit (all revolutions)")
     for ax in axes.ravel():
         ax.grid(alpha=0.3)
-    ax_f.legend(loc="best", fontsize=8)
+    ax_f.legend(loc="upper right", fontsize=8)
     ax_orb.legend(loc="upper right", fontsize=7)
     if title:
         fig.suptitle(title)
@@ -138,8 +141,8 @@ def plot_sensitivities(sens, parameters: Sequence[str], title: str = "",
         main.axvspan(a, b, color="0.85", zorder=0)
     main.set(xlabel="crank angle in revolution (deg)",
              ylabel="normalized sensitivity of |F12| (-)",
-             title=f"{title} ({sens.method}, revolution {rev})")
-    main.legend(fontsize=8, ncol=len(parameters))
+             title=f"{title} ({METHOD_NAMES.get(sens.method, sens.method)}, revolution {rev})")
+    main.legend(fontsize=8, ncol=len(parameters), loc="upper right")
     for ax, (a, b) in zip(zoom_axes, zooms):
         ax.set(xlabel="crank angle (deg)", ylabel="normalized sensitivity (-)",
                title=f"zoom {a:g}-{b:g} deg")
@@ -157,8 +160,8 @@ def _plot_free_sensitivities(sens, parameters, title, path) -> Figure:
         ax.plot(t_ms, sens.normalized[:, sens.column(name)], color=COLORS[i % len(COLORS)],
                 lw=1.0, label=name)
     ax.set(xlabel="time (ms)", ylabel="normalized sensitivity of the monitored force (-)",
-           title=f"{title} ({sens.method}, free linkage)")
-    ax.legend(fontsize=8, ncol=len(parameters))
+           title=f"{title} ({METHOD_NAMES.get(sens.method, sens.method)}, free linkage)")
+    ax.legend(fontsize=8, ncol=len(parameters), loc="upper right")
     ax.grid(alpha=0.3)
     return save(fig, path)
 
@@ -204,7 +207,7 @@ def plot_comparison(a: Trajectory, b: Trajectory, path: str | Path | None = None
                 title="journal centre orbit", aspect="equal")
     for ax in axes:
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=8)
+        ax.legend(fontsize=8, loc="upper right")
     fig.suptitle(f"{a.backend} vs {b.backend}: c = {c * 1e3:.4g} mm, "
                  f"{mech.crank_speed_rpm:.0f} rpm")
     return save(fig, path)
@@ -235,7 +238,7 @@ def plot_work_precision(rows: Sequence[dict], path: str | Path | None = None,
                title=case)
         ax.invert_xaxis()
         ax.grid(alpha=0.3, which="both")
-        ax.legend(fontsize=7)
+        ax.legend(fontsize=7, loc="upper left")
     return save(fig, path)
 
 
@@ -265,7 +268,7 @@ def plot_fitness_history(result, path: str | Path | None = None) -> Figure:
            title=f"GA fitness history (population {settings.get('population')}, seed "
                  f"{settings.get('seed')}, masses {settings.get('mass_scaling')})")
     ax.grid(alpha=0.3)
-    ax.legend(loc="best", fontsize=8)
+    ax.legend(loc="upper right", fontsize=8)
     return save(fig, path)
 
 
@@ -293,7 +296,7 @@ def plot_force_comparison(trajectories: Mapping[str, Trajectory],
                  f"({', '.join(sorted(backends))} model)", xlim=(0.0, 360.0))
     ax.set_xticks(np.arange(0, 361, 45))
     ax.grid(alpha=0.3)
-    ax.legend(loc="best", fontsize=8)
+    ax.legend(loc="lower right", fontsize=8)
     return save(fig, path)
 
 
@@ -372,7 +375,7 @@ def plot_bifurcation(ds, path: str | Path | None = None, joint: int = 0,
         value = quantity(float(sel[dims[1]].values), si_unit)
         title += f" at {dims[1].replace('_', ' ')} = {value}"
     ax.set_title(title)
-    ax.legend(fontsize=8, markerscale=4, loc="best")
+    ax.legend(fontsize=8, markerscale=4, loc="upper left")
     return save(fig, path)
 
 
@@ -479,7 +482,14 @@ def _edges(v: np.ndarray, spacing: str | None) -> np.ndarray:
         mid = 0.5 * (lv[1:] + lv[:-1])
         return np.exp(np.concatenate([[2 * lv[0] - mid[0]], mid, [2 * lv[-1] - mid[-1]]]))
     mid = 0.5 * (v[1:] + v[:-1])
-    return np.concatenate([[2 * v[0] - mid[0]], mid, [2 * v[-1] - mid[-1]]])
+    edges = np.concatenate([[2 * v[0] - mid[0]], mid, [2 * v[-1] - mid[-1]]])
+    # a field whose samples are all positive (a speed, a clearance) has its outer cells
+    # end at zero, not below it
+    if np.all(v > 0):
+        edges[0] = max(edges[0], 0.0)
+    elif np.all(v < 0):
+        edges[-1] = min(edges[-1], 0.0)
+    return edges
 
 
 def plot_poincare(ds, points: Sequence[Mapping], path: str | Path | None = None,
@@ -872,7 +882,7 @@ def plot_branch(branch, path=None, regime_map=None, joint: int = 0,
             yv = np.interp(xv, *_monotone(branch.values, y))
             ax.plot(xv * _axis_factor(branch.field), yv, marker, mfc="none", color="C3",
                     label=kind.replace("_", " "))
-    ax.legend(fontsize=7, loc="best")
+    ax.legend(fontsize=7, loc="upper left")
     return save(fig, path)
 
 

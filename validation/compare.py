@@ -352,6 +352,10 @@ def format_table(result: Comparison) -> str:
     return "\n".join(lines)
 
 
+#: width (in) of the comparison figures: the report's page width at 110 dpi
+COMPARISON_WIDTH = 11.0
+
+
 def plot_linkage_comparison(a: Trajectory, b: Trajectory, path=None,
                             revolution: int | None = None):
     """Overlay two trajectories of a linkage: the monitored force, the |shaking force| and
@@ -368,8 +372,14 @@ def plot_linkage_comparison(a: Trajectory, b: Trajectory, path=None,
     if not isinstance(k, (int, np.integer)) or not 1 <= k <= n:
         raise ValueError(f"revolution must be between 1 and {n}; got {revolution!r}")
     joints, c = joints_of(a), clearances(mech)
-    fig = Figure(figsize=(4.6 * (3 + len(joints)), 4.5), layout="constrained")
-    axes = fig.subplots(1, 3 + len(joints))
+    # two panels a row: each keeps about half the page width (readable ticks and labels)
+    panels = 3 + len(joints)
+    rows = (panels + 1) // 2
+    fig = Figure(figsize=(COMPARISON_WIDTH, 3.6 * rows), layout="constrained")
+    grid = fig.subplots(rows, 2, squeeze=False).ravel()
+    for ax in grid[panels:]:
+        ax.set_axis_off()
+    axes = grid[:panels]
     for tr, style in ((a, dict(color="C0", lw=1.6)), (b, dict(color="C3", lw=1.0, ls="--"))):
         m = tr.revolution_mask(k)
         angle = np.degrees(tr.crank_angle[m] - tr.crank_angle[0] - 2 * np.pi * (k - 1))
@@ -383,19 +393,22 @@ def plot_linkage_comparison(a: Trajectory, b: Trajectory, path=None,
             axes[3 + j].plot(e[mo, j, 0] / c[j], e[mo, j, 1] / c[j], label=label,
                              **{**style, "lw": 0.6})
     xlabel = f"drive angle in revolution {k} (deg)"
-    axes[0].set(xlabel=xlabel, ylabel="N", title="monitored force")
-    axes[1].set(xlabel=xlabel, ylabel="N", title="|shaking force|")
-    axes[2].set(xlabel=xlabel, ylabel="N m", title="drive moment")
+    axes[0].set(xlabel=xlabel, ylabel="monitored force (N)", title="monitored force")
+    axes[1].set(xlabel=xlabel, ylabel="|shaking force| (N)", title="|shaking force|")
+    axes[2].set(xlabel=xlabel, ylabel="drive moment (N m)", title="drive moment")
     phi = np.linspace(0.0, 2 * np.pi, 361)
     for j, name in enumerate(joints):
         ax = axes[3 + j]
         ax.plot(np.cos(phi), np.sin(phi), color="0.5", lw=0.8, label="clearance circle")
-        ax.set(xlabel="journal x / clearance", ylabel="journal y / clearance",
-               title=f"orbit {name}", aspect="equal")
+        ax.set(xlabel="journal x / clearance (-)", ylabel="journal y / clearance (-)",
+               title=f"journal orbit in {name}", aspect="equal")
     for ax in axes:
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=8)
-    fig.suptitle(f"{getattr(mech, 'name', 'slider-crank')}: {a.backend} vs {b.backend}")
+    for ax in (axes[0], *axes[3:]):
+        ax.legend(fontsize=8, loc="upper right")
+    names = {"reduced": "reduced model", "exudyn": "Exudyn", "ideal": "ideal joints"}
+    fig.suptitle(f"{getattr(mech, 'name', 'slider-crank').replace('_', ' ')}: "
+                 f"{names.get(a.backend, a.backend)} vs {names.get(b.backend, b.backend)}")
     return save(fig, path)
 
 

@@ -209,7 +209,7 @@ def _figures(out: Path, ours, theirs, h):
             label=f"Moreau, rigid (h = {h:g} s)")
     ax.set_xlabel("t (s)")
     ax.set_ylabel("crank revolutions")
-    ax.legend()
+    ax.legend(loc="upper left")
     ax.grid(alpha=0.3)
     fig.tight_layout()
     fig.savefig(out / "flores_crank.png", dpi=120)

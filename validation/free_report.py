@@ -13,15 +13,17 @@ from typing import Any
 
 import numpy as np
 
-SECTIONS = ("description", "response", "benchmark", "environment")
-TITLES = {
-    "description": "1. The linkage",
-    "response": "2. Response over time",
-    "benchmark": "3. Against the nonsmooth reference (Moreau's time stepping)",
-    "environment": "Appendix. Environment",
-}
+from .report import numbered_titles
 
-#: the benchmark case that gets section 3
+SECTIONS = ("description", "response", "benchmark", "environment")
+TITLES = numbered_titles(SECTIONS, {
+    "description": "The linkage",
+    "response": "Response over time",
+    "benchmark": "Against the nonsmooth reference (Moreau's time stepping)",
+    "environment": "Environment",
+}, ("environment",))
+
+#: the benchmark case that gets the benchmark section
 BENCHMARK_CASE = "flores_translational_slider_crank"
 
 
@@ -120,7 +122,7 @@ def draw_figures(out: Path, n: dict) -> dict[str, list[str]]:
     for k, name in enumerate(traj.joints):
         ax[1].plot(traj.t, traj.contact_force[:, k], lw=0.7, label=name)
     ax[1].set(xlabel="t (s)", ylabel="contact force (N)", title="contact forces")
-    ax[1].legend(fontsize=7)
+    ax[1].legend(fontsize=7, loc="upper right")
     fig.tight_layout()
     fig.savefig(out / "figures" / "response.png", dpi=110)
     plt.close(fig)

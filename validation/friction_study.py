@@ -213,7 +213,7 @@ def sensitivity_figure(results, path: str) -> None:
         ax.grid(alpha=0.3)
     for ax in list(axes.flat)[len(panels):]:
         ax.axis("off")
-    axes.flat[0].legend(fontsize=8)
+    axes.flat[0].legend(fontsize=8, loc="upper right")
     rev = results[0][1].trajectory.revolutions
     fig.suptitle("Sensitivities of |F12| (Eq. 15, DDM) with friction in the joint "
                  f"(Ambrosio's law), revolution {rev}", fontsize=10)

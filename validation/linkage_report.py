@@ -31,21 +31,23 @@ from typing import Any
 
 import numpy as np
 
+from .report import numbered_titles
+
 #: relative half-width of the tolerance study's uniform ranges
 TOLERANCE_SPREAD = 0.2
 
 SECTIONS = ("description", "response", "agreement", "sensitivity", "tolerance", "regimes",
             "environment")
 
-TITLES = {
-    "description": "1. The linkage",
-    "response": "2. Response: peaks per revolution and journal orbits",
-    "agreement": "3. Both models: reduced model against Exudyn, converged",
-    "sensitivity": "4. Sensitivities of the peak",
-    "tolerance": "5. Tolerances: what the peak's spread comes from",
-    "regimes": "6. Where the motion is periodic: regime map",
-    "environment": "Appendix. Environment",
-}
+TITLES = numbered_titles(SECTIONS, {
+    "description": "The linkage",
+    "response": "Response: peaks per revolution and journal orbits",
+    "agreement": "Both models: reduced model against Exudyn, converged",
+    "sensitivity": "Sensitivities of the peak",
+    "tolerance": "Tolerances: what the peak's spread comes from",
+    "regimes": "Where the motion is periodic: regime map",
+    "environment": "Environment",
+}, ("environment",))
 
 
 def settings(quick: bool, revolutions: int | None = None) -> dict[str, Any]:
@@ -231,7 +233,7 @@ def draw_figures(out: Path, n: dict) -> dict[str, list[str]]:
     ax[1].plot(np.cos(th), np.sin(th), "k--", lw=0.6)
     ax[1].set(aspect="equal", xlabel="x / clearance", ylabel="y / clearance",
               title="journal orbits")
-    ax[1].legend(fontsize=8)
+    ax[1].legend(fontsize=8, loc="upper right")
     ax[2].set(xlabel="drive revolutions", ylabel="contact force (N)", title="contact forces")
     fig.tight_layout()
     fig.savefig(fdir / "response.png", dpi=110)
@@ -256,7 +258,7 @@ def draw_figures(out: Path, n: dict) -> dict[str, list[str]]:
     ax.barh(y + 0.18, tol["ST"], 0.36, xerr=tol["ST_conf"], label="total ST")
     ax.set_yticks(y, tol["names"])
     ax.set(xlabel="Sobol index", title=f"uniform +-{100 * tol['spread']:.0f} %")
-    ax.legend(fontsize=8)
+    ax.legend(fontsize=8, loc="lower right")
     fig.tight_layout()
     fig.savefig(fdir / "tolerance.png", dpi=110)
     plt.close(fig)
@@ -297,8 +299,10 @@ studies, for a first look.{% endif %}</p>
 {% for p in n.response.peaks %}{{ "%.6g" % p }}{% if not loop.last %}, {% endif %}{% endfor
 %}. {% if n.response.error_estimate is not none %}The run's own estimate of their relative
 error is {{ "%.2g" % n.response.error_estimate }} (requested {{ n.response.accuracy }}:
-{{ "met" if n.response.accuracy_ok else "not met" }}).{% endif %} Periodic:
-{{ n.response.periodic }}.</p>
+{{ "met" if n.response.accuracy_ok else "not met" }}).{% endif %} {% if n.response.periodic
+%}The motion is periodic.{% elif n.response.periodic is sameas false %}The motion is not
+periodic.{% else %}Whether the motion is periodic is not judged (too few revolutions).{% endif
+%}</p>
 <table><tr><th>joint</th><th>largest eccentricity / clearance</th>
 <th>largest contact force (N)</th></tr>
 {% for j, e in n.response.max_eccentricity_ratio.items() %}<tr><td>{{ j }}</td>
@@ -324,7 +328,8 @@ difference exceeds the two bars together.</p>
 
 <h2>{{ titles.sensitivity }}</h2>
 <p>The gradient of revolution {{ n.sensitivity.revolution }}'s peak,
-{{ "%.6g" % n.sensitivity.peak }} N ({{ n.sensitivity.method }}){% if n.sensitivity.kink %};
+{{ "%.6g" % n.sensitivity.peak }} N ({{ methods.get(n.sensitivity.method,
+n.sensitivity.method) }}){% if n.sensitivity.kink %};
 <b>{{ n.sensitivity.message }}</b>{% endif %}:</p>
 <table><tr><th>value</th><th>d peak / d value</th><th>d ln peak / d ln value</th></tr>
 {% for name in n.sensitivity.names %}<tr><td>{{ name }}</td>
@@ -368,9 +373,12 @@ def render_template(out: Path, numbers: dict, figs: dict, template: str,
 
     img = {f: "data:image/png;base64," + base64.b64encode(
         (out / "figures" / f).read_bytes()).decode() for names in figs.values() for f in names}
+    from mbs_clearance.plotting import METHOD_NAMES
+
     env = jinja2.Environment(autoescape=True, undefined=jinja2.StrictUndefined)
     html = env.from_string(template).render(n=numbers, figs=figs, img=img, titles=titles,
-                                            quick=numbers["environment"]["settings"]["quick"])
+                                            quick=numbers["environment"]["settings"]["quick"],
+                                            methods=METHOD_NAMES)
     path = out / "report.html"
     path.write_text(html)
     return path

@@ -47,22 +47,56 @@ FOLDED_FIGURES = frozenset({"fig3_differences.png", "mechanism.gif", "fig7a_fitn
                             "friction_sensitivities.png", "work_precision_series.png"})
 
 SECTIONS = ("response", "agreement", "sensitivity", "optimization", "tolerance", "regimes",
-            "friction", "lubrication", "paper", "performance", "mechanism", "environment")
+            "bifurcation", "friction", "lubrication", "paper", "performance", "mechanism",
+            "environment")
 
-TITLES = {
-    "response": "1. Dynamic response (paper Fig. 3)",
-    "agreement": "2. Cross-model agreement: reduced model vs Exudyn",
-    "sensitivity": "3. Design sensitivities (paper Figs. 4-6)",
-    "optimization": "4. Optimisation of the link lengths (paper Fig. 7, Table 3)",
-    "tolerance": "5. Manufacturing tolerances and wear (global sensitivity)",
-    "regimes": "6. Where the motion is periodic: regime map over clearance and speed",
-    "friction": "7. Beyond the paper: friction in the clearance joints",
-    "lubrication": "8. Beyond the paper: the joint in an oil film",
-    "paper": "9. Comparison with the paper's numbers",
-    "performance": "10. Accuracy and speed",
-    "mechanism": "Appendix A. Mechanism and parameters",
-    "environment": "Appendix B. Environment",
+#: the sections' headings; their numbers (and the appendices' letters) are given by their
+#: place in SECTIONS (`numbered_titles`), and the text refers to them by key (`section_ref`)
+HEADINGS = {
+    "response": "Dynamic response (paper Fig. 3)",
+    "agreement": "Cross-model agreement: reduced model vs Exudyn",
+    "sensitivity": "Design sensitivities (paper Figs. 4-6)",
+    "optimization": "Optimisation of the link lengths (paper Fig. 7, Table 3)",
+    "tolerance": "Manufacturing tolerances and wear (global sensitivity)",
+    "regimes": "Where the motion is periodic: regime map over clearance and speed",
+    "bifurcation": "Periodic orbits and their bifurcations: continuation over crank speed "
+                   "and clearance",
+    "friction": "Beyond the paper: friction in the clearance joints",
+    "lubrication": "Beyond the paper: the joint in an oil film",
+    "paper": "Comparison with the paper's numbers",
+    "performance": "Accuracy and speed",
+    "mechanism": "Mechanism and parameters",
+    "environment": "Environment",
 }
+APPENDICES = ("mechanism", "environment")
+
+
+def section_numbers(sections, appendices=()) -> dict[str, str]:
+    """{key: "4"} for the numbered sections in their order, {key: "A"} for the appendices
+    (in their order after them)."""
+    body = [k for k in sections if k not in appendices]
+    tail = [k for k in sections if k in appendices]
+    return {**{k: str(i) for i, k in enumerate(body, 1)},
+            **{k: chr(ord("A") + i) for i, k in enumerate(tail)}}
+
+
+def numbered_titles(sections, headings, appendices=()) -> dict[str, str]:
+    """{key: "4. heading"} and {key: "Appendix A. heading"}, from `section_numbers`; a
+    single appendix is "Appendix. heading"."""
+    numbers = section_numbers(sections, appendices)
+    single = len([k for k in sections if k in appendices]) == 1
+    return {k: (f"Appendix. {headings[k]}" if single else f"Appendix {numbers[k]}. "
+                f"{headings[k]}") if k in appendices else f"{numbers[k]}. {headings[k]}"
+            for k in sections}
+
+
+def section_ref(key: str, sections=SECTIONS, appendices=APPENDICES) -> str:
+    """How the text refers to section `key`: "section 4", "appendix A"."""
+    number = section_numbers(sections, appendices)[key]
+    return f"appendix {number}" if key in appendices else f"section {number}"
+
+
+TITLES = numbered_titles(SECTIONS, HEADINGS, APPENDICES)
 
 
 def _settings(quick: bool) -> dict[str, Any]:
@@ -72,7 +106,7 @@ def _settings(quick: bool) -> dict[str, Any]:
         "exudyn_step": 4e-6 if quick else 2e-6,
         "exudyn_variants": ("symbolic", "sphere") if quick else ("symbolic", "python",
                                                                  "sphere"),
-        # the named cases in both models (section 3): which, and how many revolutions;
+        # the named cases in both models (agreement section): which, and how many revolutions;
         # cases compared on their periodic orbit, from the state after N revolutions (the
         # four-bar settles after about 100, docs/cases.md; about 70 s + one Exudyn
         # revolution, full report only)
@@ -80,7 +114,7 @@ def _settings(quick: bool) -> dict[str, Any]:
         else ("paper_slider_crank", "slider_crank_two_clearances"),
         "case_revolutions": 2 if quick else 4,
         "agreement_settled": () if quick else (("four_bar", 100),),
-        # the converged cross-check (section 2): (case, revolutions); the reduced model at
+        # the converged cross-check (agreement section): (case, revolutions); the reduced model at
         # accuracy 1e-6, Exudyn at h, h/2, h/4 extrapolated, each with its error bar
         "converged_cases": (("paper_slider_crank", 2),) if quick
         else (("paper_slider_crank", 4), ("slider_crank_two_clearances", 4)),
@@ -102,6 +136,16 @@ def _settings(quick: bool) -> dict[str, Any]:
         "regime_keep": 20 if quick else 50,
         "regime_max_period": 4 if quick else 8,
         "regime_map_file": None,
+        # the continuation (section "bifurcation"): per branch the field, its start and
+        # stop (SI) and the continuation's options; quick: over speed to its first
+        # bifurcation only (about 100 shooting runs; the clearance branch to its first
+        # needs 450, docs/orbits.md)
+        "bifurcation_branches": (
+            ("crank_speed", 5000.0 * math.pi / 30.0, 1000.0 * math.pi / 30.0,
+             {"max_step": 30.0, "max_points": 300, "stop_at_first": True}),) if quick else (
+            ("crank_speed", 5000.0 * math.pi / 30.0, 1000.0 * math.pi / 30.0,
+             {"max_step": 30.0, "max_points": 600}),
+            ("clearance", 1e-5, 2e-5, {"max_step": 30.0, "max_points": 600})),
         # friction (beyond the paper): cases of the table and coefficients of
         # friction of the table and of the sensitivities (Ambrosio's law)
         "friction_cases": ("paper_slider_crank",) if quick
@@ -115,6 +159,58 @@ def _settings(quick: bool) -> dict[str, Any]:
 
 
 # ------------------------------------------------------------------------------ sections
+#: samples per revolution kept in the saved runs of data/ (without --full-data): a
+#: revolution's figure is about 1200 px wide, the contact's vibrations about 80 a
+#: revolution, and each revolution's largest sample is kept besides; this keeps the quick
+#: report's data/ under 10 MB (measured 27 MB at 2000)
+SAVED_SAMPLES_PER_REVOLUTION = 400
+
+
+def thinned(run, per_revolution: int = SAVED_SAMPLES_PER_REVOLUTION):
+    """`run` (a Trajectory, or Sensitivities with their nominal run on the same time grid)
+    with about `per_revolution` evenly spaced samples per revolution, keeping the first and
+    last samples and each revolution's largest |F12| sample (so the stored peaks still
+    bound the stored series, `load_trajectory`'s check); `run` itself if it has no more
+    samples than that."""
+    traj = getattr(run, "trajectory", None) or run
+    n = len(run.t)
+    revs = max(traj.revolutions, 1)
+    if n <= per_revolution * revs:
+        return run
+    keep = [np.linspace(0, n - 1, per_revolution * revs).astype(int), [0, n - 1]]
+    if len(traj.t) == n:
+        mag = traj.base_force_magnitude
+        for k in range(1, traj.revolutions + 1):
+            where = np.flatnonzero(traj.revolution_mask(k))
+            if len(where):
+                keep.append([where[np.argmax(mag[where])]])
+    return _take(run, np.unique(np.concatenate(keep)), n)
+
+
+def _take(obj, idx, n: int):
+    """The dataclass `obj` with every array (and dict of arrays, and nested run) of `n`
+    samples cut to the samples `idx`."""
+    import dataclasses
+
+    changes = {}
+    for f in dataclasses.fields(obj):
+        v = getattr(obj, f.name)
+        if isinstance(v, np.ndarray) and v.ndim >= 1 and len(v) == n:
+            changes[f.name] = v[idx]
+        elif isinstance(v, dict) and v and all(isinstance(a, np.ndarray) and len(a) == n
+                                                for a in v.values()):
+            changes[f.name] = {k: a[idx] for k, a in v.items()}
+        elif dataclasses.is_dataclass(v) and len(getattr(v, "t", ())) == n:
+            changes[f.name] = _take(v, idx, n)
+    return dataclasses.replace(obj, **changes)
+
+
+def save_run(traj, path: Path, s: dict) -> Path:
+    """Save a section's run into data/: every sample with the setting full_data
+    (--full-data), else `thinned` (what the figures and --replot need)."""
+    return (traj if s.get("full_data") else thinned(traj)).save(path)
+
+
 def section_mechanism(out: Path, s: dict) -> dict:
     mech = SliderCrank()
     derived = {"coupler_inertia": (mech.coupler_inertia_value, "uniform rod m3 L3^2/12"),
@@ -142,7 +238,7 @@ def section_response(out: Path, s: dict) -> dict:
         "ideal": simulate(mech, n, backend="ideal"),
     }
     for name, tr in trajs.items():
-        tr.save(out / "data" / f"response_{name}.npz")
+        save_run(tr, out / "data" / f"response_{name}.npz", s)
     numbers = {}
     for name, tr in trajs.items():
         mask = tr.revolution_mask(n)
@@ -271,7 +367,7 @@ def section_sensitivity(out: Path, s: dict) -> dict:
     sensitivities(mech, revolutions=1, rtol=1e-9)
     sensitivities(mech, names[:1], revolutions=1, method="fd")
     ddm = sensitivities(mech, revolutions=n, t_eval=t_eval, rtol=1e-9)
-    ddm.save(out / "data" / "sensitivity_ddm.npz")
+    save_run(ddm, out / "data" / "sensitivity_ddm.npz", s)
     fd = sensitivities(mech, names, revolutions=n, method="fd", t_eval=t_eval)
     check = []
     for k, name in enumerate(names):
@@ -303,7 +399,7 @@ def section_optimization(out: Path, s: dict) -> dict:
         for label, m in (("original", res.original), ("optimum", res.best),
                          ("paper_optimum", paper_mech)):
             traj = simulate(m, 4)
-            traj.save(out / "data" / f"optimization_{scaling}_{label}.npz")
+            save_run(traj, out / "data" / f"optimization_{scaling}_{label}.npz", s)
         results[scaling] = {
             "crank_length": res.best.crank_length, "coupler_length": res.best.coupler_length,
             "best_peak_force": res.best_peak_force,
@@ -324,7 +420,7 @@ def section_tolerance(out: Path, s: dict) -> dict:
     largest, first order only), Monte Carlo with P(peak > allowable), a wear study."""
     from mbs_clearance.studies.tolerance import tolerance_study
 
-    from .tolerance_inputs import INPUTS
+    from .tolerance_inputs import DESCRIPTIONS, INPUTS
 
     inputs = dict(INPUTS)
     if s["quick"]:
@@ -336,6 +432,7 @@ def section_tolerance(out: Path, s: dict) -> dict:
                           seed=1, progress=False)
     res.to_json(out / "data" / "tolerance.json")
     return {"summary": res.summary(), "counts": res.counts, "notes": res.notes,
+            "inputs": [DESCRIPTIONS[k] for k in inputs], "second_order": not s["quick"],
             "ranking": res.ranking("sobol") if "ST" in res.sobol else [],
             "p_exceed": res.monte_carlo.get("p_exceed"),
             "p_exceed_ci": res.monte_carlo.get("p_exceed_ci"),
@@ -401,6 +498,58 @@ def section_regimes(out: Path, s: dict) -> dict:
                 "axes": {d: [float(v) for v in ds[d].values] for d in dims}}
 
 
+#: the detected points of a branch in words
+POINT_WORDS = {"fold": "fold", "period_doubling": "period doubling",
+               "neimark_sacker": "Neimark-Sacker (torus) bifurcation", "grazing": "grazing"}
+
+
+def _stopped_words(stopped: str, orbits: int) -> str:
+    """Why a branch ended, in words (`Branch.stopped` names options and point kinds)."""
+    if stopped == "max_points":
+        return f"after the set number of orbits ({orbits})"
+    if stopped.startswith("first detected point"):
+        kind = stopped[stopped.find("(") + 1:stopped.rfind(")")]
+        return f"at its first bifurcation, a {POINT_WORDS.get(kind, kind.replace('_', ' '))}"
+    if stopped.startswith("step below"):
+        return ("where the step fell below its smallest size (the corrector found no orbit: "
+                "a change of the map's smoothness, a grazing contact or a contact mode change)")
+    return {"reached stop": "at the end of the range",
+            "turned back past start": "where it turned back past its start"}.get(stopped,
+                                                                                 stopped)
+
+
+def section_bifurcation(out: Path, s: dict) -> dict:
+    """Branches of period-1 orbits of the paper's case by pseudo-arclength continuation
+    (`continue_orbits`) over each field of `bifurcation_branches`, from the paper's design:
+    per orbit the field's value, the section x of the journal (in clearances) and
+    whether it is stable, and each detected bifurcation with its located value and largest
+    multipliers (modulus and angle)."""
+    from mbs_clearance.analysis.periodic import continue_orbits
+
+    mech = SliderCrank()
+    branches = []
+    for field, start, stop, options in s["bifurcation_branches"]:
+        t0 = time.perf_counter()
+        br = continue_orbits(mech, field, start, stop, **options)
+        x = br.sections[:, 0, 0] / br.clearances[:, 0]
+        points = []
+        for p in br.points:
+            mu = np.asarray(p.multipliers)[:2]
+            points.append({"kind": p.kind, "words": POINT_WORDS.get(p.kind, p.kind),
+                           "value": float(p.value), "tolerance": float(p.tolerance),
+                           "multiplier_modulus": [float(abs(m)) for m in mu],
+                           "multiplier_angle_deg": [float(np.degrees(np.angle(m)))
+                                                    for m in mu],
+                           "multiplier_real": [float(m.real) for m in mu]})
+        branches.append({
+            "field": field, "start": start, "stop": stop, "values": br.values,
+            "section_x": x, "stable": [bool(v) for v in br.stable],
+            "orbits": len(br.values), "stable_orbits": int(np.sum(br.stable)),
+            "points": points, "stopped": _stopped_words(br.stopped, len(br.values)),
+            "seconds": time.perf_counter() - t0})
+    return {"branches": branches}
+
+
 def section_friction(out: Path, s: dict) -> dict:
     """Friction in the joints (the paper's joint is frictionless): the table of
     docs/friction.md (rev-4 peak, RMS drive moment, works, time in contact) per case and mu,
@@ -418,12 +567,12 @@ def section_friction(out: Path, s: dict) -> dict:
     for case, runs in results.items():
         p0 = runs[0][1]["peak"]
         for mu, m, traj in runs:
-            traj.save(out / "data" / f"friction_{case}_mu{mu:g}.npz")
+            save_run(traj, out / "data" / f"friction_{case}_mu{mu:g}.npz", s)
             rows.append({"case": case, "mu": mu, "joints": list(traj.joints),
                          "peak_change_percent": 100 * (m["peak"] / p0 - 1), **m})
     sens = sensitivity_study(s["friction_sensitivity_mus"], n)
     for mu, sn in sens:
-        sn.save(out / "data" / f"friction_sensitivity_mu{mu:g}.npz")
+        save_run(sn, out / "data" / f"friction_sensitivity_mu{mu:g}.npz", s)
     return {"law": "ambrosio", "revolution": n, "rows": rows,
             "runs": {case: [f"friction_{case}_mu{mu:g}.npz" for mu, _, _ in runs]
                      for case, runs in results.items()},
@@ -465,7 +614,7 @@ def section_lubrication(out: Path, s: dict) -> dict:
     rows, files = [], []
     for key, lk, mu in runs:
         traj = simulate(lk, n)
-        traj.save(out / "data" / f"lubrication_{key}.npz")
+        save_run(traj, out / "data" / f"lubrication_{key}.npz", s)
         files.append(f"lubrication_{key}.npz")
         rows.append(_film_row(traj, joint, "dry contact" if mu is None else "oil film", mu))
     ideal = simulate(SliderCrank(), n, backend="ideal")
@@ -553,14 +702,14 @@ def section_paper(out: Path, s: dict, numbers: dict) -> dict:
          "paper": PAPER["peak_optimum"], "ours": p_opt["reduced"],
          "explanation": f"Reduced and Exudyn agree ({p_opt['exudyn']:.0f} N); ideal "
                         f"joints alone give {p_opt['ideal']:.0f} N: why 4667 N is out of "
-                        "reach is explained in section 5."},
+                        f"reach is explained in {section_ref('optimization')}."},
         {"quantity": "GA optimum, fixed masses: max |F12| (N)", "paper": PAPER["peak_optimum"],
          "ours": fixed["best_peak_force"],
          "explanation": "Our GA + refinement over the paper's box."},
         {"quantity": "GA optimum, fixed masses: reduction (%)",
          "paper": PAPER["reduction_percent"], "ours": fixed["reduction_percent"],
-         "explanation": "The paper's 43.85 % follows from its 4667 N (row above, section "
-                        "5)."},
+         "explanation": "The paper's 43.85 % follows from its 4667 N (row above, "
+                        f"{section_ref('optimization')})."},
         {"quantity": "GA optimum crank length (cm)",
          "paper": 100 * PAPER["optimum_crank_length"], "ours": 100 * fixed["crank_length"],
          "explanation": "Lower bound of the box is 4 cm: the inertia forces grow with L2."},
@@ -834,9 +983,13 @@ def draw_figures(out: Path, numbers: dict) -> dict[str, list[str]]:
         plot_tolerance(ToleranceResult.from_json(data / "tolerance.json"),
                        path=fig_dir / "tolerance.png")
         figs["tolerance"].append("tolerance.png")
+    branches = numbers.get("bifurcation", {}).get("branches", [])
     if (data / "regime_map.nc").exists():
-        plot_regimes(data / "regime_map.nc", fig_dir / "regime_map.png")
+        plot_regimes(data / "regime_map.nc", fig_dir / "regime_map.png", branches)
         figs["regimes"].append("regime_map.png")
+    if branches:
+        plot_branches(numbers, fig_dir / "bifurcation.png")
+        figs["bifurcation"].append("bifurcation.png")
     if "friction" in numbers:
         from mbs_clearance.analysis.sensitivity import load_sensitivities
 
@@ -896,16 +1049,17 @@ def plot_differences(ref, others: dict, path: Path, revolution: int | None = Non
            title="crank moment: difference to the reduced model")
     for ax in (a1, a2):
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=8)
+        ax.legend(fontsize=8, loc="upper right")
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
     return path
 
 
-def plot_regimes(nc: Path, path: Path) -> Path:
-    """The regime map with the paper's design marked and the region where the design
-    sensitivities mean something (period-1 motion) outlined."""
+def plot_regimes(nc: Path, path: Path, branches=()) -> Path:
+    """The regime map with the paper's design marked, the region where the design
+    sensitivities mean something (period-1 motion) outlined, and the continuation's
+    `branches` (the bifurcation section's) drawn as lines with their bifurcations."""
     import xarray as xr
 
     from mbs_clearance.plotting import plot_regime_map
@@ -918,7 +1072,87 @@ def plot_regimes(nc: Path, path: Path) -> Path:
             if set(dims) == {"clearance", "crank_speed"} else None)
     fig = plot_regime_map(ds, None, mark=mark, outline="period_1",
                           mark_label="paper's design", title="regime map of the paper's case")
+    if mark and branches:
+        _draw_branches_on_map(fig.axes[0], dims, mark, branches)
     fig.savefig(path, dpi=110, bbox_inches="tight")
+    return path
+
+
+def _draw_branches_on_map(ax, dims, design: dict, branches) -> None:
+    """Each branch as the line it follows in the map's plane (its field varies, the other
+    stays at the design's value), its bifurcations marked; added to the legend."""
+    handles, labels = ax.get_legend_handles_labels()
+    legend = ax.get_legend()
+    if legend is not None:
+        handles = list(legend.legend_handles)
+        labels = [t.get_text() for t in legend.get_texts()]
+    limits = ax.get_xlim(), ax.get_ylim()
+    for k, br in enumerate(branches):
+        if br["field"] not in dims:
+            continue
+        coords = {d: np.full(len(br["values"]), design[d] * BRANCH_AXES[d][1]) for d in dims}
+        coords[br["field"]] = np.asarray(br["values"], dtype=float) * BRANCH_AXES[
+            br["field"]][1]
+        (line,) = ax.plot(coords[dims[0]], coords[dims[1]], color="C0", lw=2.5, alpha=0.8)
+        if k == 0:
+            handles.append(line)
+            labels.append("continuation branch")
+        for p in br["points"]:
+            at = {d: design[d] * BRANCH_AXES[d][1] for d in dims}
+            at[br["field"]] = p["value"] * BRANCH_AXES[br["field"]][1]
+            (mk,) = ax.plot([at[dims[0]]], [at[dims[1]]], POINT_MARKERS.get(p["kind"], "x"),
+                            color="C3", mfc="white", ms=8, ls="none")
+            if p["words"] not in labels:
+                handles.append(mk)
+                labels.append(p["words"])
+    ax.set_xlim(*limits[0])
+    ax.set_ylim(*limits[1])
+    ax.legend(handles, labels, fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))
+
+
+#: a field's plotted unit: (axis label, factor from SI)
+BRANCH_AXES = {"crank_speed": ("crank speed (rpm)", 30.0 / math.pi),
+               "clearance": ("radial clearance (mm)", 1e3)}
+#: the marker of each kind of bifurcation point
+POINT_MARKERS = {"fold": "o", "period_doubling": "s", "neimark_sacker": "D", "grazing": "^"}
+
+
+def plot_branches(numbers: dict, path: Path) -> Path:
+    """The bifurcation diagrams of the continuation: per branch, the journal's section x
+    (in clearances) against the field in its unit, stable orbits solid, unstable dashed,
+    the located bifurcations marked; one panel per branch, two a row."""
+    from matplotlib.figure import Figure
+
+    branches = numbers["bifurcation"]["branches"]
+    rows = (len(branches) + 1) // 2
+    fig = Figure(figsize=(11.0, 3.9 * rows), layout="constrained")
+    axes = fig.subplots(rows, 2, squeeze=False).ravel()
+    for ax in axes[len(branches):]:
+        ax.set_axis_off()
+    for ax, br in zip(axes, branches):
+        label, factor = BRANCH_AXES.get(br["field"], (br["field"], 1.0))
+        x = np.asarray(br["values"], dtype=float) * factor
+        y = np.asarray(br["section_x"], dtype=float)
+        stable = np.asarray(br["stable"], dtype=bool)
+        for flag, style, text in ((True, "-", "stable orbit"), (False, "--", "unstable orbit")):
+            if np.any(stable == flag):
+                # break the line where the stability changes (NaN where the other kind is)
+                ax.plot(x, np.where(stable == flag, y, np.nan), style, color="k", lw=1.2,
+                        label=text)
+        for kind, marker in POINT_MARKERS.items():
+            pts = [p for p in br["points"] if p["kind"] == kind]
+            if pts:
+                xv = np.array([p["value"] for p in pts]) * factor
+                order = np.argsort(x)
+                ax.plot(xv, np.interp(xv, x[order], y[order]), marker, mfc="none", ms=8,
+                        color="C3", ls="none", label=POINT_WORDS.get(kind, kind))
+        ax.set_xlabel(label)
+        ax.set_ylabel("journal section x / clearance (-)")
+        ax.set_title(f"branch over {label.split(' (')[0]}: {br['orbits']} orbits",
+                     fontsize=10)
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8, loc="lower left")
+    fig.savefig(path, dpi=110)
     return path
 
 
@@ -941,7 +1175,7 @@ def plot_tolerance(result, path: Path) -> Path:
         ax1.set_xticks(x, names, rotation=30, ha="right")
         ax1.set_ylabel("Sobol index")
         ax1.set_title(f"Sobol indices, N = {sob['N']} ({sob['runs']} runs)")
-        ax1.legend()
+        ax1.legend(loc="upper right")
     mc = result.monte_carlo
     values = mc.get("values")
     values = np.asarray(sob.get("values_A", []) if values is None else values, dtype=float)
@@ -960,7 +1194,7 @@ def plot_tolerance(result, path: Path) -> Path:
                          label=f"wear +{lv['wear'] * 1e6:.3g} \N{MICRO SIGN}m")
         ax2.set_xlabel(result.output_label)
         ax2.set_ylabel("designs")
-        ax2.legend(fontsize=8)
+        ax2.legend(fontsize=8, loc="upper right")
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
@@ -978,7 +1212,7 @@ th, td { border: 1px solid #bbb; padding: 3px 8px; text-align: left; vertical-al
 th { background: #eee; }
 img { max-width: 100%; border: 1px solid #ddd; margin: 0.5em 0; }
 .note { color: #555; font-size: 0.9em; }
-.pass { color: #060; } .fail { color: #a00; }
+.pass { color: #060; } .fail { color: #a00; } .flagged { color: #a60; }
 .verdicts li { margin: 0.3em 0; }
 .reproduced, .agree { color: #060; font-weight: bold; }
 .not-reproduced, .disagree { color: #a00; font-weight: bold; }
@@ -1052,11 +1286,11 @@ last revolution, in units of the radial clearance c.</dd></dl>
 <th>RMS F12 rev. 4 (%)</th><th>RMS M2 rev. 4 (%)</th><th>orbit RMS / c</th>
 <th>first impact &Delta;t (&micro;s)</th></tr>
 {% for r in n.agreement.rows %}<tr><td>{{ '%.4g' % r.clearance_mm }}</td><td>{{ r.variant }}</td>
-<td>{{ r.peak_diff_percent | map('round', 3) | join(', ') }}</td>
-<td>{{ '%.3f' % r.rms_base_force_percent_last }}{% if not r.periodic %} (not periodic){% endif %}</td>
-<td>{{ '%.3f' % r.rms_crank_moment_percent_last }}</td>
-<td>{{ '%.4f' % r.orbit_rms_over_c_last }}</td>
-<td>{{ '%.4f' % r.first_impact_dt_us if r.first_impact_dt_us is not none else '-' }}</td></tr>
+<td>{{ r.peak_diff_percent | map('fixed', 3) | join(', ') }}</td>
+<td>{{ r.rms_base_force_percent_last | fixed(3) }}{% if not r.periodic %} (not periodic){% endif %}</td>
+<td>{{ r.rms_crank_moment_percent_last | fixed(3) }}</td>
+<td>{{ r.orbit_rms_over_c_last | fixed(4) }}</td>
+<td>{{ r.first_impact_dt_us | fixed(4) if r.first_impact_dt_us is not none else '-' }}</td></tr>
 {% endfor %}</table>
 {% if n.agreement.converged %}
 <p><b>Converged cross-check.</b> Each model's peak per revolution with its own error bar:
@@ -1070,9 +1304,9 @@ size.</p>
 <th>Exudyn extrapolated (N)</th><th>&plusmn;</th><th>order</th><th>difference</th>
 <th>bars</th><th>verdict</th><th>time reduced / Exudyn (s)</th></tr>
 {% for r in n.agreement.converged %}<tr><td>{{ r.case }}</td><td>{{ r.revolution }}</td>
-<td>{{ '%.3f' % r.reduced }}</td><td>{{ r.reduced_error | num(2) }}</td>
-<td>{{ '%.3f' % r.exudyn }}</td><td>{{ r.exudyn_error | num(2) }}</td>
-<td>{{ '%.2f' % r.order if r.order is not none else '-' }}</td>
+<td>{{ r.reduced | fixed(3) }}</td><td>{{ r.reduced_error | num(2) }}</td>
+<td>{{ r.exudyn | fixed(3) }}</td><td>{{ r.exudyn_error | num(2) }}</td>
+<td>{{ r.order | fixed(2) if r.order is not none else '-' }}</td>
 <td>{{ r.difference | num(2) }}</td><td>{{ r.bars | num(2) }}</td><td>{{ r.verdict }}</td>
 <td>{{ '%.3g' % r.reduced_seconds }} / {{ '%.3g' % r.exudyn_seconds }}</td></tr>
 {% endfor %}</table>
@@ -1092,10 +1326,10 @@ revolution (the four-bar settles after about 100, docs/cases.md).</p>
 <th>RMS |shaking| diff. per rev. (%)</th><th>RMS moment diff. per rev. (%)</th>
 <th>first impact per joint, reduced / Exudyn (&micro;s)</th></tr>
 {% for r in n.agreement.cases %}<tr><td>{{ r.case }}</td><td>{{ '%.3g' % r.exudyn_step }}</td>
-<td>{{ r.periodic }}</td><td>{{ r.peaks_reduced | map('round', 2) | join(', ') }}</td>
-<td>{{ r.peak_diff_percent | map('round', 3) | join(', ') }}</td>
-<td>{{ r.rms_shaking_percent | map('round', 3) | join(', ') }}</td>
-<td>{{ r.rms_moment_percent | map('round', 3) | join(', ') }}</td>
+<td>{{ 'yes' if r.periodic else ('no' if r.periodic is sameas false else 'not judged') }}</td><td>{{ r.peaks_reduced | map('fixed', 2) | join(', ') }}</td>
+<td>{{ r.peak_diff_percent | map('fixed', 3) | join(', ') }}</td>
+<td>{{ r.rms_shaking_percent | map('fixed', 3) | join(', ') }}</td>
+<td>{{ r.rms_moment_percent | map('fixed', 3) | join(', ') }}</td>
 <td>{% for j, v in r.first_impact_us.items() %}{{ j }}: {% for x in v %}{{ x | num(6) if x is not none else '-' }}{% if not loop.last %} / {% endif %}{% endfor %}<br>{% endfor %}</td></tr>
 {% endfor %}</table>
 {% endif %}
@@ -1105,8 +1339,10 @@ revolution (the four-bar settles after about 100, docs/cases.md).</p>
 <p>Normalized sensitivity (Eq. 15) of |F12| over revolution 4 by direct differentiation of
 the reduced model (relative tolerance 1e-9, {{ n.sensitivity.ddm_steps }} steps,
 {{ n.sensitivity.ddm_seconds | dur }}{% if n.sensitivity.timing is defined %}, {{ n.sensitivity.timing }}{% endif %}), checked against central differences
-({{ n.sensitivity.fd_seconds | dur }}). Motion flagged as non-periodic:
-{{ n.sensitivity.chaotic }}.</p>
+({{ n.sensitivity.fd_seconds | dur }}). {% if n.sensitivity.chaotic %}The motion is
+flagged as not periodic: the derivatives grow from revolution to revolution and only their
+statistics mean something.{% else %}The motion is periodic: the derivatives repeat from
+revolution to revolution (growth/rev below).{% endif %}</p>
 <table><tr><th>parameter</th><th>b0</th><th>mean |S|</th><th>max |S|</th>
 <th>growth/rev</th></tr>
 {% for r in n.sensitivity.summary %}<tr><td>{{ r.parameter }}</td>
@@ -1139,7 +1375,7 @@ wording) or scaled with length (uniform density).</p>
 <tr><td>paper: original</td><td>5</td><td>12</td><td>8311</td><td></td></tr>
 <tr><td>paper: optimum</td><td>4.0733</td><td>13.7468</td><td>4667</td><td>43.85</td></tr>
 {% for k, r in n.optimization.results.items() %}<tr><td>ours: optimum, masses {{ k }}</td>
-<td>{{ '%.4f' % (100 * r.crank_length) }}</td><td>{{ '%.4f' % (100 * r.coupler_length) }}</td>
+<td>{{ (100 * r.crank_length) | fixed(4) }}</td><td>{{ (100 * r.coupler_length) | fixed(4) }}</td>
 <td>{{ r.best_peak_force | q('N') }} (original {{ r.original_peak_force | q('N') }})</td>
 <td>{{ r.reduction_percent | num(4) }}</td></tr>{% endfor %}
 {% for k, r in n.optimization.paper_optimum_in_our_models.items() %}<tr>
@@ -1149,11 +1385,12 @@ wording) or scaled with length (uniform density).</p>
 {{ figures('optimization') }}
 
 <h2 id="tolerance">{{ titles.tolerance }}</h2>
-<p>Peak |F12| of revolution 4 over a production batch: lengths to &plusmn;0.05 mm, masses to
-&plusmn;2 %, crank inertia to &plusmn;5 %, restitution 0.85-0.95 and the radial clearance of
-an H7/g6 fit on the 20 mm pin (ISO 286), as in docs/tolerance.md. Sobol indices (SALib,
-bootstrap intervals), Monte Carlo and the probability of exceeding the allowable load with
-its Clopper-Pearson interval, and the same as the clearance wears.</p>
+<p>Peak |F12| of revolution 4 over a production batch: {{ n.tolerance.inputs[:-1] |
+join(', ') }}{% if n.tolerance.inputs | length > 1 %} and {% endif %}{{
+n.tolerance.inputs[-1] }}, as in docs/tolerance.md{% if quick %} (--quick varies these
+{{ n.tolerance.inputs | length }} inputs only, first-order indices){% endif %}. Sobol
+indices (SALib, bootstrap intervals), Monte Carlo and the probability of exceeding the
+allowable load with its Clopper-Pearson interval, and the same as the clearance wears.</p>
 <details><summary>the study's numbers (indices, probabilities, counts)</summary>
 <pre>{{ n.tolerance.summary }}</pre></details>
 {{ figures('tolerance') }}
@@ -1163,7 +1400,7 @@ its Clopper-Pearson interval, and the same as the clearance wears.</p>
 crank revolutions of the paper's case at that clearance and speed; the journal's state once
 per revolution (the Poincare section) over the last {{ n.regimes.settings.keep | default('?') }}
 classifies the motion (period-1: the same state every revolution; chaotic: no recurrence).
-The design sensitivities of section 3 and the optimisation's peaks are meaningful where the
+The design sensitivities of {{ ref('sensitivity') }} and the optimisation's peaks are meaningful where the
 motion is period-1 (outlined): elsewhere only statistics are. Map: {{ n.regimes.source }},
 {{ n.regimes.shape | join(' x ') }} points.
 {% if n.regimes.design_nearest %}At the grid point nearest to the paper's design
@@ -1174,6 +1411,36 @@ the motion is <b>{{ n.regimes.design_nearest.regime | replace('_', ' ') }}</b>.{
 <tr><td>{{ k | replace('_', ' ') }}</td><td>{{ v }}</td></tr>{% endfor %}</table></details>
 {{ figures('regimes') }}
 
+<h2 id="bifurcation">{{ titles.bifurcation }}</h2>
+<p>The regime map samples the motion on a grid from one start; continuation follows one
+periodic orbit as a field changes and finds where it loses stability. From the paper's
+design (0.01 mm, 5000 rpm) the period-1 orbit of the journal is found by Newton shooting on
+the state once per revolution and followed by pseudo-arclength continuation over crank
+speed and over clearance, the other field held at the design's value; each orbit's Floquet
+multipliers (the eigenvalues of its monodromy matrix) give its stability, and a bifurcation
+is located by bisection where one crosses the unit circle: a period doubling where it
+crosses at -1 (a period-2 orbit is born), a fold at +1, a Neimark-Sacker bifurcation where
+a complex pair crosses (docs/orbits.md). The branches are drawn on the regime map of
+{{ ref('regimes') }} and below{% if quick %}; --quick follows the branch over crank speed
+to its first bifurcation only (the full report follows both branches further){% endif %}.</p>
+<ul>{% for b in n.bifurcation.branches %}<li>Over {{ b.field | replace('_', ' ') }}:
+{{ b.orbits }} orbits from {{ b['values'][0] | fieldq(b.field) }} to
+{{ b['values'][-1] | fieldq(b.field) }}, {{ b.stable_orbits }} of them stable; the branch
+ends {{ b.stopped }} ({{ b.seconds | dur }}).</li>{% endfor %}</ul>
+<table><tr><th>branch over</th><th>bifurcation</th><th>located at</th><th>&plusmn;</th>
+<th>largest multipliers: modulus (angle)</th></tr>
+{% for b in n.bifurcation.branches %}{% for p in b.points %}<tr>
+<td>{{ b.field | replace('_', ' ') }}</td><td>{{ p.words }}</td>
+<td>{{ p.value | fieldq(b.field) }}</td><td>{{ p.tolerance | fieldq(b.field) }}</td>
+<td>{% for m in p.multiplier_modulus %}{{ m | fixed(4) }} ({{ (p.multiplier_angle_deg[loop.index0] | abs) | fixed(0) }}&deg;){% if not loop.last %}, {% endif %}{% endfor %}</td></tr>
+{% else %}<tr><td>{{ b.field | replace('_', ' ') }}</td><td colspan="4">no bifurcation
+between {{ b['values'][0] | fieldq(b.field) }} and {{ b['values'][-1] | fieldq(b.field) }}</td></tr>
+{% endfor %}{% endfor %}</table>
+<dl class="defs"><dt>angle</dt><dd>of the multiplier in the complex plane: 180&deg; is
+-1 (period doubling), 0&deg; is +1 (fold).</dd>
+<dt>&plusmn;</dt><dd>the interval the bisection located the bifurcation to.</dd></dl>
+{{ figures('bifurcation') }}
+
 <h2 id="friction">{{ titles.friction }}</h2>
 <p>The paper's joint is frictionless and the paper claims nothing about friction: no verdict
 line. Here each clearance joint carries Ambrosio's modified Coulomb law (coefficient mu,
@@ -1183,10 +1450,10 @@ default tolerance{% if quick %}; the paper's case only (--quick){% endif %}.</p>
 <th>RMS drive moment (N m)</th><th>drive work (J)</th><th>friction work (J)</th>
 <th>in contact (fraction of the revolution)</th><th>contact onsets</th></tr>
 {% for r in n.friction.rows %}<tr><td>{{ r.case }}</td><td>{{ r.mu }}</td>
-<td>{{ r.peak | num(5) }}</td><td>{{ '%+.2f' % r.peak_change_percent }}</td>
-<td>{{ r.rms_moment | num(5) }}</td><td>{{ '%.4f' % r.drive_work }}</td>
-<td>{{ '%.4f' % r.friction_work }}</td>
-<td>{% for j in r.joints %}{{ j }} {{ '%.3f' % r.in_contact[loop.index0] }}{% if not loop.last %}, {% endif %}{% endfor %}</td>
+<td>{{ r.peak | num(5) }}</td><td>{{ r.peak_change_percent | fixed(2, True) }}</td>
+<td>{{ r.rms_moment | num(5) }}</td><td>{{ r.drive_work | fixed(4) }}</td>
+<td>{{ r.friction_work | fixed(4) }}</td>
+<td>{% for j in r.joints %}{{ j }} {{ r.in_contact[loop.index0] | fixed(3) }}{% if not loop.last %}, {% endif %}{% endfor %}</td>
 <td>{% for j in r.joints %}{{ j }} {{ r.onsets[loop.index0] }}{% if not loop.last %}, {% endif %}{% endfor %}</td></tr>{% endfor %}</table>
 <dl class="defs"><dt>peak</dt><dd>the crank pivot's largest |reaction| (the paper's base
 force) over the revolution; change against mu = 0.</dd>
@@ -1199,8 +1466,8 @@ Eq. 15), and their change against mu = 0.</p>
 mu = {{ mu }}</th>{% endfor %}{% for mu in n.friction.sensitivity[0].mu %}<th>max |dF/db|,
 mu = {{ mu }}</th>{% endfor %}</tr>
 {% for r in n.friction.sensitivity %}<tr><td>{{ r.parameter }}</td>
-{% for v in r.max_s %}<td>{{ v | num(4) }}{% if not loop.first %} ({{ '%+.1f' % (100 * r.change_s[loop.index0]) }} %){% endif %}</td>{% endfor %}
-{% for v in r.max_d %}<td>{{ v | num(4) }}{% if not loop.first %} ({{ '%+.1f' % (100 * r.change_d[loop.index0]) }} %){% endif %}</td>{% endfor %}</tr>{% endfor %}</table></details>
+{% for v in r.max_s %}<td>{{ v | num(4) }}{% if not loop.first %} ({{ (100 * r.change_s[loop.index0]) | fixed(1, True) }} %){% endif %}</td>{% endfor %}
+{% for v in r.max_d %}<td>{{ v | num(4) }}{% if not loop.first %} ({{ (100 * r.change_d[loop.index0]) | fixed(1, True) }} %){% endif %}</td>{% endfor %}</tr>{% endfor %}</table></details>
 <p class="note">{% for p in n.friction.periodic %}mu = {{ p.mu }}: {{ p.note }}. {% endfor %}</p>
 {{ figures('friction') }}
 
@@ -1215,8 +1482,8 @@ revolutions at the default accuracy.</p>
 <th>largest |e| / c</th><th>smallest film (um)</th><th>contact onsets</th></tr>
 {% for r in n.lubrication.rows %}<tr><td>{{ r.joint }}</td><td>{{ r.viscosity if r.viscosity is not none else '-' }}</td>
 {% for v in r.peaks %}<td>{{ v | num(6) }}</td>{% endfor %}
-<td>{{ '%.3f' % (r.max_eccentricity_ratio | max) }}</td>
-<td>{{ '%.2f' % (1e6 * (r.min_film_thickness | min)) }}</td><td>{{ r.onsets | sum }}</td></tr>{% endfor %}
+<td>{{ (r.max_eccentricity_ratio | max) | fixed(3) }}</td>
+<td>{{ (1e6 * (r.min_film_thickness | min)) | fixed(2) }}</td><td>{{ r.onsets | sum }}</td></tr>{% endfor %}
 <tr><td>ideal joint</td><td>-</td>{% for v in n.lubrication.ideal_peaks %}<td>{{ v | num(6) }}</td>{% endfor %}<td>0</td><td>-</td><td>-</td></tr></table>
 <dl class="defs"><dt>smallest film</dt><dd>c - |e| at the journal's largest eccentricity
 (negative: the journal pressed into the wall, the dry contact's penetration).</dd></dl>
@@ -1226,7 +1493,7 @@ revolutions at the default accuracy.</p>
 <table><tr><th>quantity</th><th>paper</th><th>ours</th><th>difference</th><th>explanation</th></tr>
 {% for r in n.paper.rows %}<tr><td>{{ r.quantity }}</td>
 <td>{{ r.paper | num(6) if r.paper is not none else '-' }}</td><td>{{ r.ours | num(4) }}</td>
-<td>{{ '%+.2f %%' % r.difference_percent if r.difference_percent is defined else '-' }}</td>
+<td>{{ (r.difference_percent | fixed(2, True)) ~ ' %' if r.difference_percent is defined else '-' }}</td>
 <td class="note">{{ r.explanation }}</td></tr>{% endfor %}</table>
 
 <h2 id="performance">{{ titles.performance }}</h2>
@@ -1248,17 +1515,20 @@ fastest setting that meets the same accuracy: 10 means ten times slower than our
 </details>
 <details><summary>stress test: {{ n.performance.stress_summary.pass }} of
 {{ n.performance.stress_summary.cases }} cases pass</summary>
-<p>{{ n.performance.stress_summary.cases }} cases: {{ n.performance.stress_summary.pass }}
-passed, {{ n.performance.stress_summary['clear error'] }} stopped with a clear error,
-{{ n.performance.stress_summary.fail }} failed. A case <b>passes</b> when the run succeeds,
-every output is finite, no free-flight sample or free-flight step enters the bearing wall
-(no missed contact) and no contact step leaves it (no missed separation), and with e = 1 the
-energy balance closes within 1e-6 of the crank work; a <b>clear error</b> is a refusal that
-says what to change. <b>switches</b>: contact onsets and separations in the run.</p>
+{% set st = n.performance.stress_summary %}
+<p>{{ st.cases }} cases: {{ st.pass }} passed, {{ st.flagged | default(0) }} flagged,
+{{ st['clear error'] }} stopped with a clear error, {{ st.fail }} failed. A case
+<b>passes</b> when the run succeeds, every output is finite, no free-flight sample or
+free-flight step enters the bearing wall (no missed contact) and no contact step leaves it
+(no missed separation), with e = 1 the energy balance closes within 1e-6 of the crank work,
+and the run meets its requested accuracy; it is <b>flagged</b> when all of that holds but
+the run's own error estimate misses the requested accuracy (its peak is not accurate to
+the request; the note says by how much); a <b>clear error</b> is a refusal that says what
+to change. <b>switches</b>: contact onsets and separations in the run.</p>
 <table><tr><th>case</th><th>status</th><th>peak |F12| last rev.</th><th>switches</th>
 <th>notes</th></tr>{% for r in n.performance.stress_rows %}<tr><td>{{ r.case }}</td>
-<td class="{{ 'pass' if r.status == 'pass' else 'fail' }}">{{ r.status }}</td>
-<td>{{ r.peak_last_revolution | q('N') if r.peak_last_revolution is defined else '' }}</td>
+<td class="{{ {'pass': 'pass', 'flagged': 'flagged'}.get(r.status, 'fail') }}">{{ r.status }}</td>
+<td>{{ r.peak_last_revolution | q('N') if r.peak_last_revolution is defined else '' }}{% if r.status == 'flagged' %} (not accurate to the request){% endif %}</td>
 <td>{{ r.contact_switches if r.contact_switches is defined else '' }}</td>
 <td class="note">{{ (r.reasons + (r.notes if r.notes is defined else [])) | join('; ') }}</td></tr>{% endfor %}</table></details>
 
@@ -1275,8 +1545,8 @@ says what to change. <b>switches</b>: contact onsets and separations in the run.
 <table><tr><th>package</th><th>version</th></tr>{% for k, v in n.environment.versions.items() %}
 <tr><td>{{ k }}</td><td>{{ v }}</td></tr>{% endfor %}</table>
 <table><tr><th>section</th><th>run time (s)</th></tr>
-{% for k, v in n.environment.section_seconds.items() %}<tr><td>{{ k }}</td>
-<td>{{ '%.1f' % v }}</td></tr>{% endfor %}</table></details>
+{% for k, v in n.environment.section_seconds.items() %}<tr><td>{{ titles.get(k, k) }}</td>
+<td>{{ v | fixed(1) }}</td></tr>{% endfor %}</table></details>
 </body></html>
 """
 
@@ -1327,6 +1597,24 @@ def _embedded_png(raw: bytes) -> bytes:
     return buf.getvalue() if buf.tell() < len(raw) else raw
 
 
+def fixed(value: float, digits: int, sign: bool = False) -> str:
+    """`value` with `digits` decimals (and its sign with `sign`); a value that rounds to
+    zero is "0.000", never "-0.000" or "+0.000"; a missing value is "-"."""
+    if value is None or not math.isfinite(value):
+        return "-"
+    text = f"{value:.{digits}f}"
+    if float(text) == 0.0:
+        return f"{0.0:.{digits}f}"
+    return f"{value:+.{digits}f}" if sign else text
+
+
+def field_quantity(value: float, field: str) -> str:
+    """A swept field's value (SI) in its plotted unit: 3790.7 rpm, 0.012110 mm."""
+    label, factor = BRANCH_AXES.get(field, (f"{field} (-)", 1.0))
+    unit = label[label.rindex("(") + 1:-1]
+    return f"{number(value * factor, 5)} {unit}".replace(" -", "")
+
+
 def render(out: Path, numbers: dict, figs: dict) -> Path:
     """Write report.html from the numbers and the figure files (embedded as data URIs)."""
     import jinja2
@@ -1342,9 +1630,11 @@ def render(out: Path, numbers: dict, figs: dict) -> Path:
 
     env = jinja2.Environment(autoescape=True, undefined=jinja2.StrictUndefined)
     env.filters.update(q=_typeset(units.quantity), num=_typeset(units.number),
-                       dur=units.duration, computed=_typeset(units.derived))
+                       dur=units.duration, computed=_typeset(units.derived),
+                       fieldq=field_quantity, fixed=fixed)
     html = env.from_string(TEMPLATE).render(
-        n=numbers, figs=figs, img=img, titles=TITLES, sections=SECTIONS, folded=FOLDED_FIGURES,
+        n=numbers, figs=figs, img=img, titles=TITLES, sections=SECTIONS, ref=section_ref,
+        folded=FOLDED_FIGURES,
         quick=numbers["environment"]["settings"]["quick"], verdicts=verdicts(numbers),
         opt_text=optimisation_paragraph(numbers),
         units={k: v[1] for k, v in PARAMETER_INFO.items()})
@@ -1355,19 +1645,24 @@ def render(out: Path, numbers: dict, figs: dict) -> Path:
 
 def build_report(out: str | Path = "report", quick: bool = False, progress: bool = True,
                  replot: bool = False, force: bool = False,
-                 map_file: str | Path | None = None) -> Path:
+                 map_file: str | Path | None = None, full_data: bool = False) -> Path:
     """Compute every section (or reuse the saved data with `replot`), draw, write HTML.
 
     The report is built in a hidden folder beside `out` and moved into place at the end with
     a manifest (run id and SHA-256 of every file), so an interrupted run leaves `out` as it
     was. `replot` redraws from a folder whose report.json and data/ are those of one complete
     run (ValueError otherwise). An existing `out` that is not an earlier report is replaced
-    only with `force`.
+    only with `force`. data/ keeps the runs thinned to what the figures draw (under 10 MB);
+    `full_data` keeps every sample.
     """
 
     from mbs_clearance._io import OutputDir, check_output_dir, recover
 
     out = Path(out)
+    if replot and (map_file is not None or full_data):
+        raise ValueError(f"{'--map' if map_file is not None else '--full-data'} cannot be "
+                         "combined with --replot (a replot reuses the saved data); drop one "
+                         "of them")
     if replot and map_file is not None:
         raise ValueError("--map cannot be combined with --replot (a replot reuses the saved "
                          "data, including its regime map); drop one of them")
@@ -1378,7 +1673,7 @@ def build_report(out: str | Path = "report", quick: bool = False, progress: bool
         with OutputDir(out, "report", run_id=manifest["run_id"]) as staged:
             shutil.copy2(out / "report.json", staged.path / "report.json")
             shutil.copytree(out / "data", staged.path / "data")
-            # the cross-model case figures are drawn while section 3 computes (from runs
+            # the cross-model case figures are drawn while the agreement section computes (from runs
             # that are not saved): keep them
             (staged.path / "figures").mkdir(exist_ok=True)
             for f in numbers.get("agreement", {}).get("case_figures", []):
@@ -1392,6 +1687,7 @@ def build_report(out: str | Path = "report", quick: bool = False, progress: bool
 
     check_output_dir(out, "--out", force)
     s = _settings(quick)
+    s["full_data"] = bool(full_data)
     if map_file is not None:
         map_file = Path(map_file)
         if not map_file.is_file():
@@ -1417,28 +1713,37 @@ def build_report(out: str | Path = "report", quick: bool = False, progress: bool
 def write_report(staged, sections, compute, progress: bool, draw, render_html) -> None:
     """Fill the staged folder `staged` (an `_io.OutputDir`): every section's numbers
     (`run_sections`) into report.json, the figures (`draw(folder, numbers)`), the HTML
-    (`render_html(folder, numbers, figures)`), then commit it into place."""
-    numbers = run_sections(sections, compute, progress)
+    (`render_html(folder, numbers, figures)`), then commit it into place. The progress bar
+    counts the sections, then the figures and the HTML (drawing takes a while too)."""
+    from tqdm import tqdm
+
+    bar = tqdm(total=len(sections) + 2, desc="report", disable=not progress)
+    numbers = run_sections(sections, compute, bar)
     numbers["environment"]["run_id"] = staged.run_id
     numbers = _jsonable(numbers)
     (staged.path / "report.json").write_text(json.dumps(numbers, indent=1))
-    render_html(staged.path, numbers, draw(staged.path, numbers))
+    bar.set_postfix_str("drawing the figures")
+    figs = draw(staged.path, numbers)
+    bar.update()
+    bar.set_postfix_str("writing the HTML")
+    render_html(staged.path, numbers, figs)
+    bar.update()
+    bar.set_postfix_str("done")
+    bar.close()
     staged.commit()
 
 
-def run_sections(sections, compute, progress: bool) -> dict[str, Any]:
-    """{section: compute(section, the numbers so far, the seconds so far)}, in order, with a
-    progress bar naming the running section."""
-    from tqdm import tqdm
-
+def run_sections(sections, compute, bar) -> dict[str, Any]:
+    """{section: compute(section, the numbers so far, the seconds so far)}, in order,
+    advancing the progress bar `bar` (a tqdm) and naming the running section."""
     numbers: dict[str, Any] = {}
     timings: dict[str, float] = {}
-    bar = tqdm(sections, desc="report", disable=not progress)
-    for key in bar:
+    for key in sections:
         bar.set_postfix_str(key)
         t0 = time.perf_counter()
         numbers[key] = compute(key, numbers, timings)
         timings[key] = time.perf_counter() - t0
+        bar.update()
     return numbers
 
 
@@ -1488,9 +1793,10 @@ def main(args) -> int:
         raise ValueError("--set applies with --case or --description (the report of that "
                          "linkage); the paper's report runs the paper's case as published")
     if linkage is not None:
-        if args.replot or args.map is not None:
-            raise ValueError("--replot and --map belong to the paper's report; the report of "
-                             "a --case or --description computes its own regime map")
+        if args.replot or args.map is not None or args.full_data:
+            raise ValueError("--replot, --map and --full-data belong to the paper's report; "
+                             "the report of a --case or --description computes its own "
+                             "regime map and keeps its one run whole")
         from .linkage_report import build_linkage_report
 
         path = build_linkage_report(linkage, args.out, quick=args.quick, force=args.force)
@@ -1499,13 +1805,14 @@ def main(args) -> int:
         wrote(path.with_name("report.json"), "every number of the report")
         return 0
     path = build_report(args.out, quick=args.quick, replot=args.replot, force=args.force,
-                        map_file=args.map)
+                        map_file=args.map, full_data=args.full_data)
 
     print(f"report done in {time.perf_counter() - t0:.0f} s", file=sys.stderr)
     wrote(path, "the report, figures embedded")
     wrote(path.with_name("report.json"), "every number of the report")
     wrote(path.with_name("figures"), "the figures as PNG files and the animation")
-    wrote(path.with_name("data"), "what each section computed, for --replot")
+    wrote(path.with_name("data"), "what each section computed, for --replot"
+          + ("" if args.full_data else "; runs thinned, --full-data keeps every sample"))
     return 0
 
 
@@ -1519,6 +1826,9 @@ def add_arguments(p):
                    help="smaller but complete report (coarser Exudyn step, small GA)")
     p.add_argument("--replot", action="store_true",
                    help="redraw figures and HTML from the saved data, no recomputation")
+    p.add_argument("--full-data", action="store_true",
+                   help="the paper's report: keep every sample of the saved runs in data/ "
+                        "(default: thinned to what the figures draw, under 10 MB)")
     p.add_argument("--map", type=Path, metavar="MAP.nc",
                    help="regime map of the paper's case written by `mbs-clearance map` over "
                         "clearance and crank_speed, used instead of computing one (default: "

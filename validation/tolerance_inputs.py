@@ -18,3 +18,15 @@ INPUTS = {
     "radial_clearance": FitClearance("H7/g6", 2 * _M.bearing_radius),
     "restitution": band(0.9, 0.05),
 }
+
+#: each input's tolerance in words (the report lists those its study varies)
+DESCRIPTIONS = {
+    "crank_length": "crank length to \u00b10.05 mm",
+    "coupler_length": "coupler length to \u00b10.05 mm",
+    "crank_mass": "crank mass to \u00b12 %",
+    "coupler_mass": "coupler mass to \u00b12 %",
+    "slider_mass": "slider mass to \u00b12 %",
+    "crank_inertia": "crank inertia to \u00b15 %",
+    "radial_clearance": "the radial clearance of an H7/g6 fit on the 20 mm pin (ISO 286)",
+    "restitution": "restitution 0.85-0.95",
+}

@@ -163,8 +163,8 @@ class Sensitivities:
     def periodicity_note(self) -> str:
         """A sentence on `periodic`: why it cannot be judged, or the largest growth."""
         if self.growth is None:
-            return ("undetermined: no growth diagnostic (finite differences); see "
-                    "trajectory.stats['periodic']")
+            return ("undetermined: finite differences give no growth diagnostic (the "
+                    "trajectory's own periodicity check still applies)")
         if len(self.growth) < MIN_JUDGED_REVOLUTIONS:
             return (f"undetermined: {len(self.growth)} revolution(s); the growth diagnostic "
                     f"needs at least {MIN_JUDGED_REVOLUTIONS} (revolution 1 is the start's "

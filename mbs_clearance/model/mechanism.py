@@ -31,10 +31,11 @@ PARAMETER_INFO: dict[str, tuple[str, str, str]] = {
     "crank_mass": ("m2", "kg", "paper Table 1"),
     "coupler_mass": ("m3", "kg", "paper Table 1"),
     "slider_mass": ("m4", "kg", "paper Table 1"),
-    "crank_inertia": ("J2", "kg m^2", "Flores & Ambrosio benchmark"),
+    "crank_inertia": ("J2", "kg m^2", "Flores & Ambrosio 2004 (Computers & Structures 82)"),
     "coupler_inertia": ("J3", "kg m^2", "uniform thin rod m3 L3^2/12 (paper)"),
-    "crank_speed": ("omega2", "rad/s", "Flores & Ambrosio benchmark, 5000 rpm"),
-    "initial_crank_angle": ("theta20", "rad", "Flores & Ambrosio benchmark"),
+    "crank_speed": ("omega2", "rad/s",
+                    "Flores & Ambrosio 2004 (Computers & Structures 82), 5000 rpm"),
+    "initial_crank_angle": ("theta20", "rad", "Flores & Ambrosio 2004 (Computers & Structures 82)"),
     "bearing_radius": ("R_B", "m", "paper Table 2"),
     "journal_radius": ("R_J", "m", "paper Table 2 (clearance 0.01 mm)"),
     "youngs_modulus": ("E", "Pa", "paper Table 2"),
@@ -43,7 +44,9 @@ PARAMETER_INFO: dict[str, tuple[str, str, str]] = {
     "contact_stiffness": ("K", "N/m^1.5", "paper Eq. 9 from radii and materials"),
     "gravity": ("g", "m/s^2", "standard gravity along -y"),
     "contact_model": ("-", "-", "paper: Lankarani-Nikravesh"),
-    "impact_velocity_floor": ("v_min", "m/s", "numerical floor for grazing onsets (docs)"),
+    "impact_velocity_floor": ("v_min", "m/s",
+                              "assumed: a numerical floor for grazing onsets, about a "
+                              "thousandth of the impact velocities (docs/derivations.md)"),
     # friction in the clearance joint (docs/friction.md)
     **{k: (sym, unit, source) for k, (sym, unit, _, source) in FRICTION_DEFAULTS.items()},
 }

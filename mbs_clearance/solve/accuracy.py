@@ -155,7 +155,7 @@ def simulate_to_accuracy(record, peaks, accuracy: float, *, rattling=None):
         + (" (the motion rattles, not periodic: its late peaks depend on every digit; the "
            f"run at rtol {rtol:g} is returned)" if rattles
            else f" at the tightest rtol tried, {rtol:g}")
-        + " (stats['accuracy_ok'] is False)")
+        + " (the run is flagged: accuracy not met)")
     traj.stats.update(accuracy=accuracy, error_estimate=estimate, error_estimate_method=how,
                       accuracy_runs=runs, accuracy_nfev=nfev, accuracy_ok=ok,
                       accuracy_note=note)

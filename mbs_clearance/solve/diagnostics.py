@@ -70,19 +70,19 @@ def contact_flags(clearances, speed: float, revolutions: int, ms: np.ndarray, ne
                 f"{GRAZING_ONSET:g} x clearance x {rate}): the damping of the contact "
                 f"that follows depends on the onset's ill-conditioned velocity, and the peaks "
                 f"after it may miss the stated accuracy (1e-5) by up to ~1e-3 at the default "
-                f"rtol; use rtol 1e-10 for 1e-5 there (stats['accuracy_ok'] is False)")
+                f"rtol; use rtol 1e-10 for 1e-5 there (the run is flagged: accuracy not met)")
     elif settling and not resolved and not rattling:
         note = (f"{onsets} contact onsets before the contact settles: the later peaks ride on "
                 f"a lightly damped contact vibration and may miss the stated accuracy (1e-5) "
                 f"by up to ~1e-3 at the default rtol (measured at 1000 and 2000 rpm and "
                 f"clearance 0.05 mm); use rtol 1e-10 for 1e-5 there "
-                f"(stats['accuracy_ok'] is False)")
+                f"(the run is flagged: accuracy not met)")
     elif rattling and not resolved:
         note = (f"the contact rattles ({nevent} contact switches in {span}, more than "
                 f"{RATTLING} per {per}): the motion is not "
                 f"periodic and its late peaks depend on every digit of the computation, at "
                 f"any rtol; compare statistics over {several}, not single peaks "
-                f"(stats['accuracy_ok'] is False)")
+                f"(the run is flagged: accuracy not met)")
     ok = not ((grazing or settling or rattling) and not resolved) and rtol <= LOOSE_RTOL
     return {"grazing_onsets": grazing, "contact_onsets": onsets, "accuracy_ok": ok,
             "accuracy_note": note, "rattling": rattling}

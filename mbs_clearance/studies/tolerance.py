@@ -512,8 +512,8 @@ class ToleranceResult:
             else:
                 lines.append(f"  {'':<{w}}  {'S1 +- conf':>16}  {'ST +- conf':>16}")
             for i, n in enumerate(self.names if "S1" in self.sobol else ()):
-                lines.append(f"  {n:<{w}}  {self.sobol['S1'][i]:7.3f} +- "
-                             f"{self.sobol['S1_conf'][i]:.3f}  {self.sobol['ST'][i]:7.3f} +- "
+                lines.append(f"  {n:<{w}}  {_index(self.sobol['S1'][i])} +- "
+                             f"{self.sobol['S1_conf'][i]:.3f}  {_index(self.sobol['ST'][i])} +- "
                              f"{self.sobol['ST_conf'][i]:.3f}")
         if self.morris:
             lines.append(f"Morris ({self.morris['runs']} runs): mu* (output units per full "
@@ -1235,19 +1235,27 @@ def _dgsm(study: _Study, n: int, seed: int, bootstrap: int, confidence: float) -
             "gradient_fields": list(fields)}
 
 
+def _index(value: float) -> str:
+    """A Sobol index to 3 decimals, 7 wide; an estimate that rounds to zero is 0.000 (a
+    small negative estimate is sampling noise around zero, not a sign)."""
+    text = f"{value:7.3f}"
+    return f"{0.0:7.3f}" if float(text) == 0.0 else text
+
+
 def _notes(counts, res, names, output) -> list[str]:
     notes = []
     if counts["chaotic"]:
         notes.append(
             f"{counts['chaotic']} of {counts['runs']} runs are not periodic (a rattling "
-            "contact or stats['periodic'] False): their output is the statistic over "
-            "revolutions 2..k (max of the per-revolution peaks, RMS over those revolutions), "
-            "not revolution k alone; the indices mix the two regimes")
+            "contact, or motion that does not repeat every revolution): their output is the "
+            "statistic over revolutions 2..k (max of the per-revolution peaks, RMS over those "
+            "revolutions), not revolution k alone; the indices mix the two regimes")
     if counts["flagged"]:
         notes.append(
             f"{counts['flagged']} runs are flagged by the accuracy or physics checks "
-            "(stats['accuracy_ok'] False or penetration_meaningless; for output 'peak': a "
-            "rattling contact): their values may miss the stated accuracy")
+            "(an error estimate above the requested accuracy, or a penetration too deep for "
+            "the contact law; for the output 'peak': a rattling contact): their values may "
+            "miss the stated accuracy")
     if counts["failed"]:
         notes.append(f"{counts['failed']} runs failed (invalid design or integration "
                      "failure); indices are not computed for a method with a failed run")

@@ -333,3 +333,31 @@ def test_bad_options_raise_before_computing(monkeypatch, options, match):
 def test_bad_revolutions_raise(revolutions):
     with pytest.raises(ValueError, match="revolution"):
         em.simulate_exudyn(SliderCrank(), revolutions)
+
+
+def test_allocation_notice_expects_exactly_the_pre_step_reads(monkeypatch):
+    """Exudyn prints "detected large amount of memory allocations" when a run allocates
+    about once per Newton step or more. Our pre-step function reads the joint's
+    displacement and velocity every step (one vector each): during our runs the notice's
+    threshold is Exudyn's default plus exactly those reads, so anything beyond them would
+    still be reported; measured here, the reads do allocate and nothing else comes near
+    the default."""
+    import exudyn
+    import exudyn.solver as exs
+
+    seen = []
+    original = exs.CheckSolverInfoStatistics
+
+    def check(name, stat, evaluations):
+        new = np.array(exudyn.special.InfoStat(False)) - np.array(stat)
+        seen.append((int(max(new[0], new[2], new[4])), exs.solverCheckMemoryAllocationsThreshold))
+        return original(name, stat, evaluations)
+
+    monkeypatch.setattr(exs, "CheckSolverInfoStatistics", check)
+    default = exs.solverCheckMemoryAllocationsThreshold
+    traj = simulate(SliderCrank(), 1, backend="exudyn", step_size=4e-6)
+    steps = traj.stats["n_steps"]
+    ((allocated, threshold),) = seen
+    assert threshold == default + 2 * steps
+    assert 2 * steps <= allocated < 2 * steps + default // 10
+    assert exs.solverCheckMemoryAllocationsThreshold == default     # restored after the run

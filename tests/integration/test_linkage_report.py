@@ -64,14 +64,3 @@ def test_both_models_agree_within_their_error_bars(report):
     for r in rows:
         assert abs(r["difference"]) <= r["bars"], r
         assert r["verdict"] == "agree"
-
-
-def test_paper_report_options_are_refused_for_a_linkage(tmp_path, capsys):
-    with pytest.raises(SystemExit) as exc:
-        main(["report", "--case", CASE, "--replot", "--out", str(tmp_path / "r")])
-    assert exc.value.code == 2
-    assert "--replot and --map belong to the paper's report" in capsys.readouterr().err
-    with pytest.raises(SystemExit) as exc:
-        main(["report", "--set", "clearance=1e-4", "--out", str(tmp_path / "r")])
-    assert exc.value.code == 2
-    assert "--set applies with --case or --description" in capsys.readouterr().err

@@ -3,6 +3,8 @@
 import json
 import re
 import shutil
+import subprocess
+import sys
 from html.parser import HTMLParser
 
 import numpy as np
@@ -22,14 +24,25 @@ FIGURES = ["fig3_response.png", "fig3_differences.png", "regime_map.png",
            "fig7a_fitness_fixed.png", "fig7b_force_fixed.png", "fig7a_fitness_uniform.png",
            "fig7b_force_uniform.png", "tolerance.png", "work_precision.png",
            "work_precision_series.png", "agreement_slider_crank_two_clearances.png",
-           "friction_orbits.png", "friction_sensitivities.png", "lubrication_orbits.png"]
+           "friction_orbits.png", "friction_sensitivities.png", "lubrication_orbits.png",
+           "bifurcation.png"]
 
 
 @pytest.fixture(scope="module")
 def report(tmp_path_factory):
+    """The quick report, run as a user runs it (a process of its own); its stdout and
+    stderr are kept beside the folder (`report_output`)."""
     out = tmp_path_factory.mktemp("report")
-    assert main(["report", "--quick", "--out", str(out)]) == 0
+    proc = subprocess.run([sys.executable, "-m", "mbs_clearance.cli", "report", "--quick",
+                           "--out", str(out)], capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    out.with_name(out.name + "_output.txt").write_text(proc.stdout + "\n" + proc.stderr)
     return out
+
+
+@pytest.fixture(scope="module")
+def report_output(report):
+    return report.with_name(report.name + "_output.txt").read_text()
 
 
 def test_files_sections_and_figures(report):
@@ -124,12 +137,6 @@ def test_replot_redraws_without_recomputing(report, monkeypatch):
         assert (out / "figures" / f).is_file(), f
     assert (out / "report.json").read_text() == before
     assert verify_run_folder(out)["run_id"] == run      # still the same run
-
-
-def test_replot_without_a_report_is_a_clear_error(tmp_path, capsys):
-    with pytest.raises(SystemExit):
-        main(["report", "--replot", "--out", str(tmp_path)])
-    assert "needs a previous report" in capsys.readouterr().err
 
 
 def _has_browser():
@@ -439,3 +446,117 @@ def test_lubrication_section(report):
     assert f"{max(oil['max_eccentricity_ratio']):.2f}" in n["summary"]
     html = (report / "report.html").read_text()
     assert n["summary"].replace("'", "&#39;") in html or n["summary"] in html
+
+
+class _Text(HTMLParser):
+    """The text a reader sees: everything outside tags, styles and scripts."""
+
+    def __init__(self):
+        super().__init__()
+        self.parts, self._skip = [], 0
+
+    def handle_starttag(self, tag, attrs):
+        self._skip += tag in ("style", "script")
+
+    def handle_endtag(self, tag):
+        self._skip -= tag in ("style", "script")
+
+    def handle_data(self, data):
+        if not self._skip:
+            self.parts.append(data)
+
+
+#: what must not reach a reader: code expressions, Python values and reprs, signed zeros
+LEAKS = {
+    "a subscript in code": r"\w\[['\"]\w+['\"]\]",
+    "a comparison in code": r"\bis (?:not )?(?:None|True|False)\b",
+    "a Python value": r"\b(?:None|True|False|nan|inf)\b",
+    "a repr": r"<\w[\w.]* object at|\barray\(|\bnp\.\w|\{'|\['|\bdtype\b",
+    "a complex number": r"\d[+-]\d+(?:\.\d*)?(?:e[+-]?\d+)?j\b",
+    "a signed zero": r"(?<![\w.])[-+\N{MINUS SIGN}]0\.0+(?![0-9])",
+    "an internal name": r"ThreadPoolExecutor|l-bfgs-b|\bddm\b|stats\[",
+}
+
+#: library notices that must not reach the terminal
+NOTICES = ["WARNING", "Warning:", "can be slow", "memory allocations", "Traceback",
+           "Deprecat"]
+
+
+def test_text_and_output_show_no_internals(report, report_output):
+    """The HTML's text and the run's stdout and stderr: no code expressions, None, Python
+    reprs, signed zeros, library warnings."""
+    parser = _Text()
+    parser.feed((report / "report.html").read_text())
+    text = " ".join(parser.parts)
+    for what, pattern in LEAKS.items():
+        found = [text[max(m.start() - 60, 0):m.end() + 60]
+                 for m in re.finditer(pattern, text)]
+        assert not found, f"{what} in the report: {found[:3]}"
+    for notice in NOTICES:
+        assert notice not in report_output, (notice, report_output[-2000:])
+    # the progress bar names what runs after the sections too
+    assert "drawing the figures" in report_output and "writing the HTML" in report_output
+
+
+def test_sensitivity_figure_names_its_method_in_words(report, tmp_path):
+    from mbs_clearance.analysis.sensitivity import load_sensitivities
+    from mbs_clearance.plotting import SENSITIVITY_FIGURES, plot_sensitivities
+
+    sens = load_sensitivities(report / "data" / "sensitivity_ddm.npz")
+    title, group = SENSITIVITY_FIGURES["fig6_journal"]
+    fig = plot_sensitivities(sens, group, title)
+    heading = fig.axes[0].get_title()
+    assert "direct differentiation" in heading and "ddm" not in heading
+
+
+def test_data_folder_is_under_10_mb(report):
+    """data/ keeps the runs thinned (every figure and --replot still work, tested above);
+    --full-data keeps every sample."""
+    size = sum(f.stat().st_size for f in (report / "data").rglob("*") if f.is_file())
+    assert 0 < size < 10e6, size
+
+
+def test_stress_pass_rows_hold_their_claims(report):
+    """A "pass" row claims the invariants and the requested accuracy: none of its notes
+    says the accuracy was missed, and its peak is that of a run at rtol 1e-11 (an
+    independent reference). A row whose note says the accuracy was missed is "flagged"."""
+    from validation.stress import stress_cases
+
+    rows = json.loads((report / "report.json").read_text())["performance"]["stress_rows"]
+    cases = {c.name: c for c in stress_cases(quick=True)}
+    passed = [r for r in rows if r["status"] == "pass"]
+    assert passed
+    for r in rows:
+        missed = any("misses the requested accuracy" in n or "accuracy not met" in n
+                     for n in r.get("notes", []))
+        assert missed == (r["status"] == "flagged") or r["status"] in ("fail", "clear error")
+    for r in passed:
+        case = cases[r["case"]]
+        ref = simulate(case.mech, case.revolutions, rtol=1e-11, **case.options)
+        # 10 x the requested 1e-5: the row's verdict rests on an error estimate (a second
+        # run), not on the error itself
+        assert r["peak_last_revolution"] == pytest.approx(
+            ref.max_base_force(case.revolutions), rel=1e-4), r["case"]
+
+
+def test_bifurcation_section(report):
+    """Each branch starts at the paper's design, stable; the quick report follows it to
+    its first bifurcation, where the orbits turn unstable and a multiplier sits on the
+    unit circle (-1 at a period doubling, +1 at a fold)."""
+    branches = json.loads((report / "report.json").read_text())["bifurcation"]["branches"]
+    mech = SliderCrank()
+    assert [b["field"] for b in branches] == ["crank_speed"]      # --quick: one branch
+    for b in branches:
+        assert b["values"][0] == pytest.approx(getattr(mech, b["field"]), rel=1e-9)
+        assert b["stable"][0]
+        assert b["points"], b["stopped"]
+        first = b["points"][0]
+        lo, hi = sorted((b["values"][0], b["values"][-1]))
+        assert lo <= first["value"] <= hi
+        mu = first["multiplier_real"][0]
+        target = {"period_doubling": -1.0, "fold": 1.0}.get(first["kind"])
+        if target is not None:
+            assert mu == pytest.approx(target, abs=0.02)
+        assert first["multiplier_modulus"][0] == pytest.approx(1.0, abs=0.02)
+    html = (report / "report.html").read_text()
+    assert 'id="bifurcation"' in html and "bifurcation.png" in html

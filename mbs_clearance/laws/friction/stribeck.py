@@ -19,8 +19,8 @@ MU_S = Parameter("friction_static_coefficient", "mu_s", "-", 0.0, 0.0,
                         "dynamic one, for the Stribeck law)")
 V_S = Parameter("friction_stribeck_velocity", "v_s", "m/s", 1e-3, 0.0, low_open=True,
                 source="assumed: an order of magnitude above the default regularisation "
-                       "velocity v0; no source read gives the paper case's; give the pair's "
-                       "value")
+                       "velocity v0; the paper's joint is frictionless and gives none; give "
+                       "the pair's value")
 
 
 def force(vt, fn, mu, v0, mu_s, v_s):
