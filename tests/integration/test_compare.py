@@ -147,7 +147,8 @@ def test_converged_cross_check_agrees_within_the_error_bars_and_within_1e_4():
     reduced model at rtol 1e-12 (the independent reference): within 1e-4 and within its own
     error bar in each revolution; the observed order of the first revolution's peak near
     generalized-alpha's 2; the cross-check (reduced at accuracy 1e-6) says "agree" and
-    reports both times. Slow: three Exudyn runs (84 000 steps)."""
+    reports both times (2 revolutions are too few for the return map: the periodicity is
+    judged on 8 revolutions of the reduced model). Slow: three Exudyn runs (84 000 steps)."""
     from validation.compare import cross_check, format_cross_check
 
     mech = SliderCrank()
@@ -158,6 +159,7 @@ def test_converged_cross_check_agrees_within_the_error_bars_and_within_1e_4():
     assert np.all(np.abs(cc.reduced - ref) <= cc.reduced_error)
     assert 1.5 < cc.exudyn_order[0] < 2.6, cc.exudyn_order
     assert not cc.model_difference.any()
+    assert cc.verdict.kind == "agree", cc.verdict.summary()
     text = format_cross_check(cc)
-    assert "agree within the error bars" in text and "model difference" not in text
+    assert "agree within their error bars" in text
     assert cc.exudyn_seconds > 0.0 and cc.reduced_seconds > 0.0
