@@ -552,7 +552,9 @@ def _exudyn_settings(options: dict, mech):
 
 
 def _exudyn_step(args, mech) -> float:
-    """The Exudyn run's fixed step in s (its default for `mech` unless given)."""
+    """The Exudyn run's fixed step in s (its default for `mech` unless given; with
+    --accuracy the step the second-order law gives for it: the reduced run's sampling
+    bound)."""
     options = {k: getattr(args, k) for k in ("step_size", "accuracy")
                if getattr(args, k, None) is not None}
     from mbs_clearance.model.cases import as_linkage
@@ -593,8 +595,10 @@ def build_parser(parser: argparse.ArgumentParser | None = None) -> argparse.Argu
     parser.add_argument("--step-size", type=positive_float,
                         help="time step in s (exudyn backend; default: its default step)")
     parser.add_argument("--accuracy", type=positive_float,
-                        help="target relative peak error (exudyn backend): chooses the step "
-                             "by the method's second order instead of --step-size")
+                        help="target relative peak error (exudyn backend): runs at steps h, "
+                             "h/2, h/4, ... until the extrapolated peaks' error estimate "
+                             "meets it (the verdict's bar for exudyn; instead of "
+                             "--step-size)")
     parser.add_argument("--contact", help="contact variant (exudyn backend): symbolic, "
                                           "python or sphere")
     parser.add_argument("--converged", action="store_true",
