@@ -51,8 +51,8 @@ def test_paper_case_agrees_and_a_stiffer_contact_in_one_model_differs(exudyn_pap
     peaks, bars = _reduced(stiff)
     v = verdict_of_peaks(peaks, bars, exudyn_paper.value, exudyn_paper.error, periodic=flag)
     assert v.kind == DIFFER, v.summary()
-    # the impact peak moves by 0.9 %, 23 times the bars
-    assert not v.items[0].agree and v.items[0].relative_difference > 0.005
+    # the stiffer model's impact peak is 0.9 % higher than Exudyn's, 22 times the bars
+    assert not v.items[0].agree and v.items[0].relative_difference < -0.005
     assert "differ beyond their error bars" in v.summary() and v.worst.quantity in v.summary()
 
 
