@@ -38,6 +38,7 @@ from pathlib import Path
 
 import numpy as np
 
+from mbs_clearance.analysis.verdict import Verdict, format_verdict, verdict_of_trajectories
 from mbs_clearance.solve.trajectory import Trajectory
 
 __all__ = ["RevolutionMetrics", "FirstImpact", "Statistics", "Comparison", "compare",
@@ -116,6 +117,9 @@ class Comparison:
     joints: tuple[str, ...] = ()
     first_impacts_a: dict = field(default_factory=dict)   # joint -> FirstImpact or None
     first_impacts_b: dict = field(default_factory=dict)
+    #: the verdict on the two runs' peaks with their own error bars
+    #: (`mbs_clearance.analysis.verdict.verdict_of_trajectories`)
+    verdict: Verdict | None = None
 
     def revolution(self, k: int) -> RevolutionMetrics:
         """Metrics of revolution `k` (1-based)."""
@@ -295,6 +299,7 @@ def compare(a: Trajectory, b: Trajectory, revolutions=None) -> Comparison:
         statistics_a=statistics(a, later), statistics_b=statistics(b, later),
         meta={"stats_a": dict(a.stats), "stats_b": dict(b.stats)},
         joints=joints, first_impacts_a=fa, first_impacts_b=fb,
+        verdict=verdict_of_trajectories(a, b, revs),
     )
 
 
@@ -349,6 +354,8 @@ def format_table(result: Comparison) -> str:
                             ("rms M (N m)", sa.rms_crank_moment, sb.rms_crank_moment),
                             ("contact fraction", sa.contact_fraction, sb.contact_fraction)):
             lines.append(f"  {label:<18} a = {x:>10.4g}   b = {y:>10.4g}   ({_pct(y / x - 1)})")
+    if result.verdict is not None:
+        lines += ["", format_verdict(result.verdict)]
     return "\n".join(lines)
 
 
@@ -417,8 +424,9 @@ def plot_linkage_comparison(a: Trajectory, b: Trajectory, path=None,
 class CrossCheck:
     """The two models' converged per-revolution peaks of the monitored force with their
     error bars (N): the reduced model run to a requested accuracy (its own estimate), Exudyn
-    extrapolated from the steps h, h/2, h/4 (`exudyn_convergence`); and the time each
-    needed (s)."""
+    extrapolated from the steps h, h/2, h/4 (`exudyn_convergence`); the time each needed
+    (s); and the `Verdict` on them (statistics over revolutions where the motion is not
+    comparable peak by peak)."""
 
     reduced: np.ndarray
     reduced_error: np.ndarray
@@ -429,6 +437,7 @@ class CrossCheck:
     reduced_seconds: float
     exudyn_seconds: float
     accuracy: float
+    verdict: Verdict | None = None
 
     @property
     def difference(self) -> np.ndarray:
@@ -448,12 +457,20 @@ class CrossCheck:
 
 def cross_check(mech, revolutions: int = 4, *, accuracy: float = 1e-6,
                 step_size: float | None = None, exudyn_accuracy: float | None = None,
-                **exudyn_options) -> CrossCheck:
-    """Converged peaks of both models (`CrossCheck`): the reduced model at `accuracy` (its
-    error bar: its estimate x peak), Exudyn from `step_size` h (default its default step), h/2,
-    h/4, Richardson-extrapolated (its bar: `exudyn_convergence.richardson`), halved further
-    while a bar exceeds `exudyn_accuracy` (relative; None: three runs)."""
+                lyapunov=None, **exudyn_options) -> CrossCheck:
+    """Converged peaks of both models (`CrossCheck`) and the verdict on them.
+
+    The reduced model runs at `accuracy` (its error bar: its estimate x peak), Exudyn from
+    `step_size` h (default its default step), h/2, h/4, Richardson-extrapolated (its bar:
+    `exudyn_convergence.richardson`), halved further while a bar exceeds `exudyn_accuracy`
+    (relative; None: three runs). The verdict (`mbs_clearance.analysis.verdict`) is taken
+    peak by peak where the reduced run is periodic (``stats["periodic"]``, judged on a
+    reduced run of 8 revolutions where the run is too short: `periodic_flag`) or the given
+    `lyapunov` result (`lyapunov_exponent`) is negative or zero; otherwise on statistics
+    over revolutions 2..n, for which Exudyn runs once more at its finest step, recorded.
+    """
     from mbs_clearance import simulate
+    from mbs_clearance.analysis.verdict import revolution_statistics, verdict_of_peaks
     from mbs_clearance.backends.exudyn_convergence import converged_peaks
     from mbs_clearance.solve.accuracy import revolution_peaks
 
@@ -463,34 +480,60 @@ def cross_check(mech, revolutions: int = 4, *, accuracy: float = 1e-6,
     peaks = revolution_peaks(red)
     conv = converged_peaks(mech, revolutions, step_size=step_size, accuracy=exudyn_accuracy,
                            **exudyn_options)
-    return CrossCheck(reduced=peaks, reduced_error=red.stats["error_estimate"] * np.abs(peaks),
+    reduced_error = red.stats["error_estimate"] * np.abs(peaks)
+    later = tuple(range(2, revolutions + 1))
+    kw = {}
+    from mbs_clearance.analysis.verdict import comparable, periodic_flag
+
+    periodic = periodic_flag(red) if lyapunov is None else None
+    if not comparable(periodic, lyapunov)[0] and later:
+        t1 = time.perf_counter()
+        fine = simulate(mech, revolutions, backend="exudyn", step_size=conv.steps[-1],
+                        **exudyn_options)
+        conv = _with_seconds(conv, time.perf_counter() - t1)
+        kw = dict(statistics_a=revolution_statistics(red, later),
+                  statistics_b=revolution_statistics(fine, later))
+    verdict = verdict_of_peaks(peaks, reduced_error, conv.value, conv.error,
+                               periodic=periodic, lyapunov=lyapunov, **kw)
+    return CrossCheck(reduced=peaks, reduced_error=reduced_error,
                       exudyn=conv.value, exudyn_error=conv.error, exudyn_order=conv.order,
                       exudyn_steps=conv.steps[-3:], reduced_seconds=reduced_seconds,
-                      exudyn_seconds=float(sum(conv.seconds)), accuracy=accuracy)
+                      exudyn_seconds=float(sum(conv.seconds)), accuracy=accuracy,
+                      verdict=verdict)
+
+
+def _with_seconds(conv, seconds: float):
+    from dataclasses import replace
+
+    return replace(conv, seconds=tuple(conv.seconds) + (seconds,))
 
 
 def format_cross_check(cc: CrossCheck) -> str:
-    """Plain-text table of a `CrossCheck`."""
+    """Plain-text table of a `CrossCheck` and its verdict."""
     h = cc.exudyn_steps
     lines = [f"converged peaks: reduced at accuracy {cc.accuracy:g} ({cc.reduced_seconds:.3g} "
              f"s); exudyn at steps {h[0]:.3g}, {h[1]:.3g}, {h[2]:.3g} s, extrapolated "
              f"({cc.exudyn_seconds:.3g} s)", ""]
     head = (f"{'rev':>3}  {'reduced (N)':>12}  {'+-':>9}  {'exudyn (N)':>12}  {'+-':>9}  "
-            f"{'order':>5}  {'difference':>10}  {'bars':>9}  verdict")
+            f"{'order':>5}  {'difference':>10}  {'bars':>9}  within bars")
     lines += [head, "-" * len(head)]
     for k in range(len(cc.reduced)):
         order = "-" if not np.isfinite(cc.exudyn_order[k]) else f"{cc.exudyn_order[k]:.2f}"
-        verdict = ("model difference" if cc.model_difference[k]
-                   else "agree within the error bars")
         lines.append(f"{k + 1:>3}  {cc.reduced[k]:>12.3f}  {cc.reduced_error[k]:>9.3g}  "
                      f"{cc.exudyn[k]:>12.3f}  {cc.exudyn_error[k]:>9.3g}  {order:>5}  "
                      f"{_pct(cc.exudyn[k] / cc.reduced[k] - 1):>10}  "
-                     f"{_pct(cc.bars[k] / cc.reduced[k]):>9}  {verdict}")
+                     f"{_pct(cc.bars[k] / cc.reduced[k]):>9}  "
+                     f"{'no' if cc.model_difference[k] else 'yes'}")
     lines += ["", "+-: each model's error estimate (reduced: its own, from a second run; "
               "exudyn: the difference of its h/2 and h/4 peaks, or the larger step difference "
               "where the observed order is outside [1, 4] and nothing is extrapolated); "
               "difference: exudyn / reduced - 1; bars: the two error bars together, "
               "relative to the reduced peak"]
+    if cc.verdict is not None:
+        if cc.verdict.kind == "not comparable peak by peak":
+            lines += ["", format_verdict(cc.verdict)]
+        else:
+            lines += ["", cc.verdict.summary()]
     return "\n".join(lines)
 
 
@@ -522,7 +565,9 @@ def _exudyn_settings(options: dict, mech):
 
 
 def _exudyn_step(args, mech) -> float:
-    """The Exudyn run's fixed step in s (its default for `mech` unless given)."""
+    """The Exudyn run's fixed step in s (its default for `mech` unless given; with
+    --accuracy the step the second-order law gives for it: the reduced run's sampling
+    bound)."""
     options = {k: getattr(args, k) for k in ("step_size", "accuracy")
                if getattr(args, k, None) is not None}
     from mbs_clearance.model.cases import as_linkage
@@ -563,8 +608,10 @@ def build_parser(parser: argparse.ArgumentParser | None = None) -> argparse.Argu
     parser.add_argument("--step-size", type=positive_float,
                         help="time step in s (exudyn backend; default: its default step)")
     parser.add_argument("--accuracy", type=positive_float,
-                        help="target relative peak error (exudyn backend): chooses the step "
-                             "by the method's second order instead of --step-size")
+                        help="target relative peak error (exudyn backend): runs at steps h, "
+                             "h/2, h/4, ... until the extrapolated peaks' error estimate "
+                             "meets it (the verdict's bar for exudyn; instead of "
+                             "--step-size)")
     parser.add_argument("--contact", help="contact variant (exudyn backend): symbolic, "
                                           "python or sphere")
     parser.add_argument("--converged", action="store_true",

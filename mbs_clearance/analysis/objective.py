@@ -368,7 +368,10 @@ def peak_output(linkage: Linkage, output: str | None = None, revolution: int = 4
     any other output is the largest of the recorded steps' local maxima refined by golden
     section on the steps' map. `options`: those of `simulate` for the reduced backend
     (e.g. ``rtol``), or ``accuracy``: the peak within that relative accuracy by runs at
-    tightening rtol until two agree (`accuracy.value_to_accuracy`)."""
+    tightening rtol until two agree (`accuracy.value_to_accuracy`, an `AccuracyWarning`
+    where they do not). The cheaper default (neither given): one run at the generated
+    model's default rtol (1e-7), without an error estimate; give ``accuracy=1e-5`` for
+    `simulate`'s default accuracy."""
     from ..solve import linkage_model as lm
 
     if not isinstance(linkage, Linkage):
@@ -760,7 +763,10 @@ def peak_gradient(mech: Linkage | SliderCrank, parameters=None, revolution: int 
         docs/studies_linkage.md).
     rtol : float, optional
         Relative tolerance of the reduced model (DDM: default `PEAK_GRADIENT_RTOL`, 1e-6;
-        FD: default 1e-11).
+        FD: default 1e-11). The cheaper default: one run at that tolerance, without an
+        error estimate of the peak (`peak` is not the error-controlled value of
+        `peak_base_force`, whose default meets 1e-5; the gradient's accuracy is measured
+        in docs/performance.md).
     integrator : str, optional
         Method of the compiled integrator (DDM default "dop853"; FD: the plain default).
     kink_tol : float, default 1e-5

@@ -32,7 +32,12 @@ import numpy as np
 from .._checks import check_int
 from ..model.cases import as_linkage
 
-__all__ = ["Convergence", "richardson", "converged_peaks", "MIN_ORDER", "MAX_ORDER"]
+__all__ = ["Convergence", "richardson", "converged_peaks", "MIN_ORDER", "MAX_ORDER",
+           "simulate_to_accuracy", "peak_to_accuracy", "first_step", "MAX_HALVINGS"]
+
+#: further halvings beyond h/4 while a bar exceeds the requested accuracy (each doubles the
+#: cost of the last run: at most 2^MAX_HALVINGS times the h/4 run)
+MAX_HALVINGS = 3
 
 #: observed orders accepted for extrapolation (generalized-alpha is second order)
 MIN_ORDER = 1.0
@@ -143,3 +148,126 @@ def order_of(a: float, b: float, c: float) -> float:
     undefined)."""
     d1, d2 = abs(a - b), abs(b - c)
     return math.log2(d1 / d2) if d1 > 0.0 and d2 > 0.0 else math.nan
+
+
+def first_step(linkage, accuracy: float, options: dict) -> float:
+    """The first step h of the sequence for a requested relative `accuracy`: the step that
+    the second-order law (`exudyn_linkage.step_for_accuracy`) gives for 4 x accuracy, so
+    that the bar of the h/2, h/4 pair (3/16 of the error at h) meets the request where the
+    law holds; at most the description's contact-period limit."""
+    from . import exudyn_linkage as xl
+
+    return xl.make_settings({**options, "accuracy": min(4.0 * accuracy, 0.1)}).step(linkage)
+
+
+def _sequence(linkage, revolutions: int, accuracy: float, options: dict, record=None,
+              max_halvings: int | None = None, only: int | None = None):
+    """Runs at h, h/2, h/4 (`first_step`), halved further while a revolution's bar exceeds
+    `accuracy` (at most `max_halvings` more): (Convergence, the last recorded run or None).
+    The runs from h/4 on are recorded by `record(h)` (a Trajectory with per-revolution
+    ``peaks``) where given, else peaks only. `only`: the index of the one revolution whose
+    bar counts (None: all)."""
+    from .._checks import check_real
+    from . import exudyn_linkage as xl
+
+    accuracy = check_real("accuracy (relative error of the peaks)", accuracy, 1e-8, 0.1)
+    max_halvings = MAX_HALVINGS if max_halvings is None else max_halvings
+    if options.get("step_size") is not None:
+        raise ValueError("give step_size or accuracy, not both (accuracy chooses the steps)")
+    options = dict(options)
+    max_memory = options.pop("max_memory", None)
+    start = options.pop("start", None)
+    xl.make_settings(dict(options))         # bad values fail before any run
+    h = first_step(linkage, accuracy, options)
+    steps, peaks, seconds, last = [], [], [], None
+
+    def run(step, recorded):
+        nonlocal last
+        t0 = time.perf_counter()
+        if recorded:
+            last = record(step)
+            peaks.append(np.asarray(last.peaks, dtype=float))
+        else:
+            settings = xl.make_settings({**options, "step_size": step})
+            peaks.append(_all_peaks(linkage, revolutions, settings, max_memory, start))
+        seconds.append(time.perf_counter() - t0)
+        steps.append(step)
+
+    for k, step in enumerate((h, h / 2.0, h / 4.0)):
+        run(step, record is not None and k == 2)
+    value, error, order = richardson(*peaks[-3:])
+    pick = slice(None) if only is None else slice(only, only + 1)
+    for _ in range(max_halvings):
+        if np.all(error[pick] <= accuracy * np.abs(value[pick])):
+            break
+        run(steps[-1] / 2.0, record is not None)
+        value, error, order = richardson(*peaks[-3:])
+    conv = Convergence(steps=tuple(steps), peaks=np.array(peaks), value=value, error=error,
+                       order=order, seconds=tuple(seconds))
+    return conv, last
+
+
+def _accuracy_stats(conv: Convergence, accuracy: float) -> dict:
+    rel = conv.relative_error
+    estimate = float(np.max(rel)) if rel.size else 0.0
+    ok = bool(estimate <= accuracy)
+    note = "" if ok else (
+        f"Exudyn's estimated error of the peaks, {estimate:.2g} (step halving down to "
+        f"{conv.steps[-1]:.3g} s, the difference of the last two steps' peaks), misses the "
+        f"requested accuracy {accuracy:g} after {len(conv.steps)} runs (stats['accuracy_ok'] "
+        "is False; the peaks are the extrapolated ones)")
+    return dict(accuracy=accuracy, error_estimate=estimate,
+                error_estimate_method="step halving", accuracy_ok=ok, accuracy_note=note,
+                accuracy_steps=list(conv.steps),
+                accuracy_peaks=[list(map(float, p)) for p in conv.peaks],
+                observed_order=[float(p) for p in conv.order],
+                peak_errors=[float(e) for e in conv.error],
+                accuracy_seconds=float(sum(conv.seconds)), peaks_extrapolated=True)
+
+
+def simulate_to_accuracy(mech, revolutions: int, accuracy: float, record, **options):
+    """Exudyn's run of `mech` (driven) with its per-revolution peaks converged in the step
+    to `accuracy` (relative): the step sequence h, h/2, h/4, ... of `_sequence`, the last
+    run recorded (``record(h)`` -> Trajectory). The returned Trajectory holds that run's
+    series and, as ``peaks``, the extrapolated peaks (`richardson`); its stats hold
+    ``error_estimate`` (largest relative bar over the revolutions), ``accuracy_ok``,
+    ``accuracy_steps``, ``accuracy_peaks`` (each run's), ``observed_order`` and
+    ``peak_errors`` (N). An `AccuracyWarning` says when the request was not met within
+    `MAX_HALVINGS` further halvings."""
+    import warnings
+
+    from .._warnings import AccuracyWarning
+
+    revolutions = check_int("revolutions", revolutions, 1)
+    conv, traj = _sequence(as_linkage(mech), revolutions, accuracy, options, record)
+    stats = _accuracy_stats(conv, accuracy)
+    traj.stats.update(stats)
+    traj = _with_peaks(traj, conv.value)
+    if stats["accuracy_note"]:
+        warnings.warn(stats["accuracy_note"], AccuracyWarning, stacklevel=3)
+    return traj
+
+
+def _with_peaks(traj, peaks):
+    from dataclasses import replace
+
+    return replace(traj, peaks=np.asarray(peaks, dtype=float))
+
+
+def peak_to_accuracy(mech, revolution: int, accuracy: float, **options) -> float:
+    """Exudyn's peak of revolution `revolution` (N) converged in the step to `accuracy`
+    (`simulate_to_accuracy` without a record: every run records the reactions only); an
+    `AccuracyWarning` when not met."""
+    import warnings
+
+    from .._warnings import AccuracyWarning
+
+    revolution = check_int("revolution", revolution, 1)
+    conv, _ = _sequence(as_linkage(mech), revolution, accuracy, options,
+                        only=revolution - 1)
+    rel = float(conv.relative_error[revolution - 1])
+    if rel > accuracy:
+        warnings.warn(f"Exudyn's estimated error of the peak, {rel:.2g} (step halving down to "
+                      f"{conv.steps[-1]:.3g} s), misses the requested accuracy {accuracy:g}",
+                      AccuracyWarning, stacklevel=3)
+    return float(conv.value[revolution - 1])

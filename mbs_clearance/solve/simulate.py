@@ -113,9 +113,17 @@ def simulate(mech: SliderCrank, revolutions: int | None = None, backend: str = "
         ``rtol`` or ``atol`` is given (an expert's fixed tolerance, run once as given); the
         run estimates its own error from a second run and tightens until the estimate is
         within the request
-        (`mbs_clearance.solve.accuracy`; ``stats["error_estimate"]``, ``stats["accuracy_ok"]``: the
-        estimate is within the request). Backend "exudyn": the fixed step chosen for it
-        (`exudyn_linkage`).
+        (`mbs_clearance.solve.accuracy`; ``stats["error_estimate"]``,
+        ``stats["accuracy_ok"]``: the estimate is within the request). Backend "exudyn"
+        (a driven mechanism): checked, not assumed: runs at the steps h, h/2, h/4, halved
+        further while a revolution's bar exceeds the request (at most
+        `exudyn_convergence.MAX_HALVINGS` more); the last run is returned with the
+        Richardson-extrapolated peaks as ``peaks`` and ``stats["error_estimate"]``
+        (largest relative bar), ``stats["accuracy_ok"]``, ``stats["peak_errors"]`` (N),
+        ``stats["accuracy_steps"]``; an `AccuracyWarning` where the request is not met
+        (`exudyn_convergence.simulate_to_accuracy`). Without it Exudyn runs once at its
+        default step, its error unestimated. A free linkage on Exudyn: the step of the
+        second-order law for the request (`exudyn_linkage.step_for_accuracy`).
     **options
         Backend settings, e.g. ``rtol``, ``atol``, ``method`` for "reduced" (or all of them
         as one record, ``settings=RunSettings(...)``); ``step_size``, ``contact`` for
@@ -137,6 +145,16 @@ def simulate(mech: SliderCrank, revolutions: int | None = None, backend: str = "
     if backend == "reduced":
         options = expand(options)
     check_accuracy_or_rtol(accuracy, options)
+    if backend == "exudyn" and accuracy is not None and _driven(mech):
+        from ..backends.exudyn_convergence import simulate_to_accuracy
+
+        revolutions = _check(mech, revolutions)
+        _call_check(backend, mech, options)
+
+        def record(h):
+            return _call(backend, "simulate", mech, revolutions, {**options, "step_size": h})
+
+        return simulate_to_accuracy(mech, revolutions, accuracy, record, **options)
     if backend != "reduced":
         if accuracy is not None:
             options["accuracy"] = accuracy
@@ -181,15 +199,23 @@ def peak_base_force(mech: SliderCrank, revolution: int | None = None, backend: s
     """Max |F12| in N over crank revolution `revolution` (1-based), the GA's objective (a
     Linkage: its monitored force).
 
-    Records no time series: only running maxima are kept, at the backend's default
-    tolerance (on the reduced model rtol 1e-7, within 1e-5 on the paper's GA box: the
-    accuracy map, docs/performance.md) or the ``rtol`` given. With `accuracy` the peak is
-    that of `simulate(mech, revolution, accuracy=accuracy)`: a run that estimates its own
-    error and tightens until the estimate is within the request (a recorded run and a check,
-    about 1.2 times a fixed run where the default meets it).
+    Backend "reduced": by default within `accuracy.DEFAULT_ACCURACY` (1e-5), as `simulate`:
+    the peak of `simulate(mech, revolution, accuracy=accuracy)`, a run that estimates its
+    own error and tightens until the estimate is within the request (a recorded run and a
+    check, about 1.2 times a fixed run) and warns (`AccuracyWarning`) where it cannot. With
+    ``rtol`` or ``atol`` (and no `accuracy`): one run at that fixed tolerance recording
+    only running maxima, without an error estimate (rtol 1e-7 is within 1e-5 on the
+    paper's GA box, the accuracy map in docs/performance.md, but 1.2e-3 off at 2000 rpm).
+    Backend "exudyn" with `accuracy`: the peak converged in the step
+    (`exudyn_convergence.peak_to_accuracy`: runs at h, h/2, h/4, ... recording the
+    reactions only, extrapolated; an `AccuracyWarning` where the estimate misses the
+    request); without it, one run at the backend's step (its error unestimated,
+    docs/exudyn.md).
     """
     if backend == "reduced":
         options = expand(options)
+        if accuracy is None and "rtol" not in options and "atol" not in options:
+            accuracy = DEFAULT_ACCURACY
     if accuracy is not None and backend == "reduced":
         from .accuracy import revolution_peaks
 
@@ -198,9 +224,32 @@ def peak_base_force(mech: SliderCrank, revolution: int | None = None, backend: s
         if revolution is None:      # a free linkage: its last window's peak
             return float(traj.peaks[-1])
         return float(revolution_peaks(traj)[revolution - 1])
+    if backend == "exudyn" and accuracy is not None and _driven(mech):
+        from ..backends.exudyn_convergence import peak_to_accuracy
+
+        revolution = _check(mech, revolution, "revolution")
+        _call_check(backend, mech, options)
+        return peak_to_accuracy(mech, revolution, accuracy, **options)
     if accuracy is not None:
         options["accuracy"] = accuracy
     return _call(backend, "peak", mech, revolution, options, "revolution")
+
+
+def _driven(mech) -> bool:
+    return not (isinstance(mech, Linkage) and mech.drive is None)
+
+
+def _call_check(backend: str, mech, options: dict) -> Model:
+    """`backend`'s Model for `mech` after checking the option names (ValueError before any
+    run)."""
+    be = _backend(backend)
+    model = be.model_for(mech, backend)
+    allowed = getattr(importlib.import_module(model.module), "OPTION_NAMES", None)
+    unknown = sorted(set(options) - set(allowed)) if allowed is not None else []
+    if unknown:
+        raise ValueError(f"unknown option(s) {unknown} for backend {backend!r}; "
+                         f"allowed: {sorted(allowed)}")
+    return model
 
 
 def _call(backend: str, attr: str, mech, revolutions, options: dict,
@@ -214,12 +263,5 @@ def _call(backend: str, attr: str, mech, revolutions, options: dict,
 
         # a backend of the paper's parameter set only takes its case as that set
         mech = slider_crank_of(mech) or mech
-    model = be.model_for(mech, backend)
-    module = importlib.import_module(model.module)
-    allowed = getattr(module, "OPTION_NAMES", None)
-    if allowed is not None:
-        unknown = sorted(set(options) - set(allowed))
-        if unknown:
-            raise ValueError(f"unknown option(s) {unknown} for backend {backend!r}; "
-                             f"allowed: {sorted(allowed)}")
+    model = _call_check(backend, mech, options)
     return model.load(attr)(mech, revolutions, **options)

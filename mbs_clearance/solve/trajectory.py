@@ -407,10 +407,14 @@ def _check_peaks(path: Path, traj: Trajectory) -> None:
     if len(traj.peaks) != traj.revolutions:
         raise _fail(path, f"{len(traj.peaks)} peaks for {traj.revolutions} revolutions")
     mag = traj.base_force_magnitude
+    # peaks extrapolated in the step (Exudyn at a requested accuracy) may lie below the
+    # stored run's samples, by at most their error estimate
+    below = (float(traj.stats.get("error_estimate", 0.0))
+             if traj.stats.get("peaks_extrapolated") else 0.0)
     for k in range(1, len(traj.peaks) + 1):
         sampled = float(mag[traj.revolution_mask(k)].max())
         peak = float(traj.peaks[k - 1])
-        if not (sampled * (1 - 1e-9) <= peak <= sampled * (1 + PEAK_EXCESS) + 1e-9):
+        if not (sampled * (1 - 1e-9 - below) <= peak <= sampled * (1 + PEAK_EXCESS) + 1e-9):
             raise _fail(path, f"stored peak of revolution {k} ({peak:.9g} N) disagrees with "
                         f"the stored series (sampled maximum {sampled:.9g} N; a refined peak "
                         f"lies within {PEAK_EXCESS:g} above it)")

@@ -133,6 +133,14 @@ def design_mechanism(base: SliderCrank, values: dict[str, float],
     return base.replace(**changes)
 
 
+#: the reduced model's tolerance for each design of the GA unless rtol, atol or accuracy is
+#: given: one run per design instead of the error-controlled run of `peak_base_force`'s
+#: default (within 1e-5 on the paper's GA box, the accuracy map in docs/performance.md);
+#: the best design is simulated again at the default accuracy, and its estimate's note
+#: kept in ``best_accuracy_note``
+GA_RTOL = 1e-7
+
+
 @dataclass(frozen=True)
 class _Problem:
     """Picklable description of the objective: design box, mapping, model settings."""
@@ -155,6 +163,10 @@ class _Problem:
         if isinstance(self.base, Linkage):
             return {**self.options, "output": self.output,
                     **({"window": self.window} if self.window is not None else {})}
+        if self.backend == "reduced" and not {"rtol", "atol", "accuracy", "settings"} \
+                & set(self.options):
+            # the GA's cheaper default: one run at GA_RTOL per design, no error estimate
+            return {"rtol": GA_RTOL, **self.options}
         return self.options
 
     def physical(self, u) -> np.ndarray:
@@ -606,7 +618,13 @@ def optimize_link_lengths(mech: SliderCrank | None = None,
         "pivot_force:<ground joint>", "shaking_force", "drive_moment",
         "contact_force:<clearance joint>"; default the crank pivot's |reaction|).
     **backend_options
-        Passed to `peak_base_force` (e.g. ``rtol``); ``max_memory`` (bytes) is also the
+        Passed to `peak_base_force` (e.g. ``rtol``, ``accuracy``). The GA's cheaper
+        default on the reduced backend: each design at rtol `GA_RTOL` (1e-7), one run
+        without an error estimate (within 1e-5 on the paper's box by the accuracy map,
+        docs/performance.md; off it, e.g. at 2000 rpm, up to about 1e-3); the best design
+        is simulated again at the default accuracy (``best_accuracy_note`` where its own
+        estimate misses it). Give ``accuracy=1e-5`` for error-controlled evaluations
+        (about 1.2 times the cost). ``max_memory`` (bytes) is also the
         limit of the GA's own estimated memory (`ga_memory`; default
         `_checks.default_max_memory`), checked before any design is simulated.
 
@@ -707,7 +725,8 @@ def optimize_link_lengths(mech: SliderCrank | None = None,
         original_peak = float(peak_output(mech, output, revolution, window=window,
                                           **backend_options))
     else:
-        original_peak = float(peak_base_force(mech, revolution, backend, **backend_options))
+        original_peak = float(peak_base_force(mech, revolution, backend,
+                                              **problem.eval_options))
 
     run_id = next(_RUN_IDS)
     objective = _Objective(problem, run_id)

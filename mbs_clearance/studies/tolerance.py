@@ -1088,7 +1088,13 @@ def tolerance_study(inputs: Mapping[str, Any], mech: SliderCrank | None = None,
     backend : str
         Model of the mechanism outputs ("reduced" default).
     **options
-        Passed to the backend (e.g. ``rtol``); the library's default accuracy otherwise.
+        Passed to the backend (e.g. ``rtol``, ``accuracy``). The cheaper default of output
+        "peak" on the reduced backend: each sample one run at rtol 1e-7 recording only
+        running maxima, without an error estimate (within 1e-5 on the paper's GA box by the
+        accuracy map, docs/performance.md; about 1e-3 off at 2000 rpm); with ``accuracy``
+        each sample is a run that estimates its own error (`simulate`), and samples whose
+        estimate misses it are counted as flagged. The other outputs: `simulate`'s default
+        accuracy (1e-5 on the peaks, estimated).
 
     Returns
     -------

@@ -59,3 +59,26 @@ def test_example_runs_and_prints_its_result(name):
     assert res.returncode == 0, res.stderr[-3000:]
     for line in CASES[name][1]:
         assert line in res.stdout, (line, res.stdout)
+    if name in PAGE_CHECKED:
+        printed = res.stdout.splitlines()
+        for line in page_output(name):
+            assert line in printed, (f"docs/examples/{name}.md shows a line the example "
+                                     f"does not print", line, res.stdout)
+
+
+#: examples whose page's "It prints:" block is checked line by line against the output
+PAGE_CHECKED = ("paper_slider_crank", "custom_linkage")
+
+
+def page_output(name: str) -> list[str]:
+    """The lines of the first ```text block after "It prints" on the example's page."""
+    lines = (ROOT / "docs" / "examples" / f"{name}.md").read_text().splitlines()
+    start = next(i for i, line in enumerate(lines) if line.startswith("It prints"))
+    first = next(i for i in range(start, len(lines)) if lines[i].startswith("```text"))
+    end = next(i for i in range(first + 1, len(lines)) if lines[i].startswith("```"))
+    return lines[first + 1:end]
+
+
+@pytest.mark.parametrize("name", PAGE_CHECKED)
+def test_page_shows_a_block_of_output(name):
+    assert len(page_output(name)) >= 3

@@ -192,9 +192,10 @@ MEMORY_PROBE = textwrap.dedent("""
             fh.write("5")
 
     m = SliderCrank()
-    simulate(m, 1); peak_base_force(m, 1)          # load the kernels
+    # the peak-only run: one run at a fixed rtol (the default is error-controlled and records)
+    simulate(m, 1); peak_base_force(m, 1, rtol=1e-7)          # load the kernels
     reset(); r0 = peak_rss()
-    peak_base_force(m, 40)
+    peak_base_force(m, 40, rtol=1e-7)
     r1 = peak_rss()
     reset(); r2 = peak_rss()
     traj = simulate(m, 40)

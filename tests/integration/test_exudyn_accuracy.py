@@ -1,0 +1,76 @@
+"""Exudyn's accuracy checked, not assumed: `simulate(..., backend="exudyn", accuracy=a)`
+runs the step sequence h, h/2, h/4 (halved further while a bar exceeds a), returns the
+extrapolated peaks with their error estimate, and warns when the request is not met."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from mbs_clearance import AccuracyWarning, SliderCrank, peak_base_force, simulate
+from mbs_clearance.backends import exudyn_convergence as xc
+
+pytestmark = pytest.mark.exudyn
+
+
+def test_the_step_sequence_and_its_record():
+    """One revolution of the paper case at 3e-3: three runs at h, h/2, h/4 (the request is
+    met by the first bar, 1.8e-3), the returned run is the h/4 one with the extrapolated
+    peak; the peak-only entry point gives the same number."""
+    mech = SliderCrank()
+    tr = simulate(mech, 1, backend="exudyn", accuracy=3e-3)
+    s = tr.stats
+    h = s["accuracy_steps"]
+    assert len(h) == 3 and h[1] == pytest.approx(h[0] / 2) and h[2] == pytest.approx(h[0] / 4)
+    # (Exudyn fits a whole number of steps into the run: the step used is within 1e-5)
+    assert s["step_size_used"] == pytest.approx(h[2], rel=1e-5)
+    assert s["accuracy_ok"] and s["error_estimate"] <= 3e-3
+    value, error, order = xc.richardson(*np.array(s["accuracy_peaks"]))
+    assert tr.peaks[0] == value[0] and s["peak_errors"][0] == error[0]
+    assert s["error_estimate"] == pytest.approx(error[0] / value[0])
+    assert peak_base_force(mech, 1, backend="exudyn", accuracy=3e-3) == tr.peaks[0]
+
+
+def test_unmet_accuracy_warns_and_is_flagged(monkeypatch):
+    """1e-3 needs a fourth run (the bar of the first three is 1.8e-3); with no further
+    halving allowed the run says so."""
+    monkeypatch.setattr(xc, "MAX_HALVINGS", 0)
+    with pytest.warns(AccuracyWarning, match="misses the requested accuracy 0.001"):
+        tr = simulate(SliderCrank(), 1, backend="exudyn", accuracy=1e-3)
+    assert tr.stats["accuracy_ok"] is False and tr.stats["error_estimate"] > 1e-3
+    assert len(tr.stats["accuracy_steps"]) == 3
+
+
+def test_bad_requests_fail_before_any_run(monkeypatch):
+    def fail(*args, **kwargs):
+        raise AssertionError("a run started despite a bad request")
+
+    monkeypatch.setattr(xc, "_all_peaks", fail)
+    with pytest.raises(ValueError, match="not both"):
+        simulate(SliderCrank(), 1, backend="exudyn", accuracy=1e-4, step_size=1e-6)
+    with pytest.raises(ValueError, match="accuracy"):
+        simulate(SliderCrank(), 1, backend="exudyn", accuracy=0.5)
+    with pytest.raises(ValueError, match="accuracy or rtol, not both"):
+        simulate(SliderCrank(), 1, backend="exudyn", accuracy=1e-4, rtol=1e-8)
+    with pytest.raises(ValueError, match="unknown option"):
+        simulate(SliderCrank(), 1, backend="exudyn", accuracy=1e-4, atol=1e-8)
+
+
+@pytest.mark.slow      # six Exudyn runs down to h = 0.17 us: about 3 minutes on a loaded machine
+def test_exudyn_at_1e_4_meets_it_at_2000_rpm():
+    """Off the point where the step law was calibrated (2000 rpm): the extrapolated peaks
+    are within 1e-4 of the reduced model at rtol 1e-12 (the independent reference); the
+    first revolution's bar covers its true error. (Measured: 6.4e-6 and 2.8e-5 off. The
+    second revolution's peaks stop changing with the step at 2.8e-5 above the reference,
+    1344.78 N against 1344.74 N from h = 1.4 us to 0.17 us, so its bar, the step
+    dependence, 4e-6, does not cover that offset: a difference of the two models at that
+    level that the step does not remove.)"""
+    mech = SliderCrank(crank_speed=2000 * 2 * math.pi / 60)
+    tr = simulate(mech, 2, backend="exudyn", accuracy=1e-4)
+    ref = simulate(mech, 2, rtol=1e-12).peaks
+    err = np.abs(tr.peaks - ref)
+    assert tr.stats["accuracy_ok"]
+    assert np.all(err / ref < 1e-4), err / ref
+    assert err[0] <= tr.stats["peak_errors"][0], (err, tr.stats["peak_errors"])

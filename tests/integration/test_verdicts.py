@@ -1,0 +1,79 @@
+"""Every kind of verdict of the reduced model against Exudyn, each from real runs: agreeing
+models (the paper case), a contact stiffness changed in one model (a model difference), a
+chaotic point (routed to statistics over revolutions)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from mbs_clearance import SliderCrank, simulate
+from mbs_clearance.analysis.verdict import (
+    AGREE,
+    DIFFER,
+    NOT_COMPARABLE,
+    judge_periodicity,
+    verdict_of_peaks,
+)
+from mbs_clearance.solve.accuracy import revolution_peaks
+
+pytestmark = pytest.mark.exudyn
+
+
+@pytest.fixture(scope="module")
+def exudyn_paper():
+    """Exudyn's converged peaks of the paper case over 2 revolutions (h = 2, 1, 0.5 us)."""
+    from mbs_clearance.backends.exudyn_convergence import converged_peaks
+
+    return converged_peaks(SliderCrank(), 2)
+
+
+def _reduced(mech):
+    tr = simulate(mech, 2, accuracy=1e-6)
+    peaks = revolution_peaks(tr)
+    return peaks, tr.stats["error_estimate"] * np.abs(peaks)
+
+
+@pytest.mark.slow      # three Exudyn runs of 2 revolutions (84 000 steps)
+def test_paper_case_agrees_and_a_stiffer_contact_in_one_model_differs(exudyn_paper):
+    """The paper case is periodic (judged on 8 revolutions: 2 are too few for the return
+    map), so its peaks are compared one by one: the converged models agree within their
+    bars. The reduced model with the contact stiffness raised by 5 % (Young's modulus x 1.05:
+    K is proportional to the effective modulus) against unchanged Exudyn: a model
+    difference, the first revolution's impact peak 0.9 % higher."""
+    paper = SliderCrank()
+    flag, note = judge_periodicity(paper)
+    assert flag is True, note
+    peaks, bars = _reduced(paper)
+    v = verdict_of_peaks(peaks, bars, exudyn_paper.value, exudyn_paper.error, periodic=flag)
+    assert v.kind == AGREE, v.summary()
+    stiff = paper.replace(youngs_modulus=1.05 * paper.youngs_modulus)
+    peaks, bars = _reduced(stiff)
+    v = verdict_of_peaks(peaks, bars, exudyn_paper.value, exudyn_paper.error, periodic=flag)
+    assert v.kind == DIFFER, v.summary()
+    # the stiffer model's impact peak is 0.9 % higher than Exudyn's, 22 times the bars
+    assert not v.items[0].agree and v.items[0].relative_difference < -0.005
+    assert "differ beyond their error bars" in v.summary() and v.worst.quantity in v.summary()
+
+
+def test_chaotic_point_is_compared_on_statistics():
+    """c = 0.5 mm (chaotic: positive Lyapunov exponent, docs/regimes.md): the runs separate
+    after a few impacts (peak differences of tens of per cent), so the comparison is
+    routed to statistics over revolutions 2-8, where both models' means lie within the
+    95 % intervals. Runs at a fixed rtol and a fixed step are given no bar; the verdict
+    says so."""
+    from validation.compare import compare, format_table
+
+    loose = SliderCrank(journal_radius=0.0095)
+    a = simulate(loose, 8, rtol=1e-9)
+    b = simulate(loose, 8, backend="exudyn")
+    res = compare(a, b)
+    v = res.verdict
+    assert v.kind == NOT_COMPARABLE, v.summary()
+    assert "not periodic" in v.reason
+    assert "no error estimate for reduced and exudyn" in v.reason     # fixed rtol and step
+    assert max(abs(i.relative_difference) for i in v.items) > 0.2
+    assert len(v.statistics_items) == 3
+    assert all(np.isfinite(i.a_error) and np.isfinite(i.b_error) for i in v.statistics_items)
+    assert v.statistics == AGREE, v.summary()
+    assert "not comparable peak by peak" in format_table(res)
