@@ -24,8 +24,9 @@ load, so a noisy machine widens its spread, not its median.
     python -m benchmarks.startup --cold integrator simulate simulate_four_bar sensitivity
 
 ``--cold`` instead runs the given commands once each, in order, in a fresh copy of the
-package (empty numba and compiled-code caches, as on a fresh install), and prints each one's wall and CPU
-time: the first answer a new user waits for. CPU time is the measure on a busy machine.
+package (empty numba and compiled-code caches, as on a fresh install), and prints each
+one's wall and CPU time: the first answer a new user waits for. CPU time is the measure
+on a busy machine.
 """
 
 from __future__ import annotations
@@ -115,8 +116,8 @@ def measure(repeats: int, other: Path | None = None, names=tuple(COMMANDS)) -> d
 
 def cold(names=tuple(COLD_COMMANDS)) -> dict:
     """Wall and CPU time (s) of each of `names`, run once and in order in a fresh copy of
-    the package (its numba and compiled-code caches empty, as on a fresh install): the first is a cold start,
-    each later one pays for what the ones before it did not compile."""
+    the package (its numba and compiled-code caches empty, as on a fresh install): the first
+    is a cold start, each later one pays for what the ones before it did not compile."""
     import resource
     import shutil
     import tempfile
