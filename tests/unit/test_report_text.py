@@ -87,3 +87,15 @@ def test_thinned_run_keeps_each_revolution_s_peak_and_loads(tmp_path):
     back = load_trajectory(small.save(tmp_path / "run.npz"))
     assert np.array_equal(back.peaks, traj.peaks) and len(back.t) == len(small.t)
     assert report.thinned(small, per_revolution=250) is small       # nothing more to cut
+
+
+def test_full_data_keeps_every_sample(tmp_path):
+    """--full-data (the setting full_data) saves the run whole; the default thins it."""
+    from mbs_clearance import SliderCrank, load_trajectory, simulate
+
+    traj = simulate(SliderCrank(), 1)
+    whole = load_trajectory(report.save_run(traj, tmp_path / "a.npz", {"full_data": True}))
+    thin = load_trajectory(report.save_run(traj, tmp_path / "b.npz", {}))
+    assert len(traj.t) > report.SAVED_SAMPLES_PER_REVOLUTION + 2
+    assert np.array_equal(whole.t, traj.t)
+    assert len(thin.t) <= report.SAVED_SAMPLES_PER_REVOLUTION + 3 < len(traj.t)
