@@ -1035,12 +1035,17 @@ def _peak_gradient_linkage(linkage, args: argparse.Namespace) -> int:
     pg = peak_gradient(linkage, args.parameters, revolution=k, window=window,
                        method=args.method, output=args.output, rtol=args.rtol,
                        integrator=args.integrator)
-    print(f"peak of {pg.stats['output']} over {span}: {pg.peak!r} at t = {pg.time!r} s "
-          f"({args.method})")
+    # six significant digits (the full values are in --out's peak_gradient.json)
+    unit = "N m" if pg.stats["output"].startswith("drive_moment") else "N"
+    print(f"peak of {pg.stats['output']} over {span}: {pg.peak:.6g} {unit} at t = "
+          f"{pg.time:.6g} s ({args.method})")
     width = max([22] + [len(p) + 1 for p in pg.parameters])
-    print(f"{'parameter':<{width}} {'b0':>24} {'d(peak)/db':>24} {'(b0/peak) d/db':>16}")
+    slope = f"d(peak)/db ({unit} per unit of b)"
+    print(f"{'parameter':<{width}} {'b0 (SI)':>12} {slope:>{len(slope) + 2}} "
+          f"{'(b0/peak) d/db':>16}")
     for name, b0, g, n in zip(pg.parameters, pg.reference, pg.gradient, pg.normalized):
-        print(f"{name:<{width}} {float(b0)!r:>24} {float(g)!r:>24} {n:>16.6g}")
+        print(f"{name:<{width}} {float(b0):>12.6g} {float(g):>{len(slope) + 2}.6g} "
+              f"{n:>16.6g}")
     if pg.message:
         print(f"note: {pg.message}", file=sys.stderr)
     if args.out:

@@ -254,8 +254,8 @@ def add_arguments(p):
     p.add_argument("--repeats", type=int_at_least(1), default=5,
                    help="timed runs per setting (median; >= 1, default 5)")
     p.add_argument("--no-exudyn", action="store_true",
-                   help="leave out the Exudyn backend's settings (its runs take most of the "
-                        "time)")
+                   help="leave out the Exudyn backend's rows (the reduced model's and scipy's "
+                        "integrators only)")
     p.add_argument("--out", type=Path, help="folder for work_precision.json/.md/.png")
     add_force_option(p)
 

@@ -180,8 +180,10 @@ def test_ddm_peak_gradient_along_case_overrides_against_central_differences(outp
                  "--parameters", ",".join(names), "--revolutions", "4",
                  "--out", str(tmp_path / "s")]) == 0
     printed = capsys.readouterr().out
-    for d in g.gradient:
-        assert f" {d!r} " in printed
+    rows = {line.split()[0]: line.split() for line in printed.splitlines()
+            if line.split() and line.split()[0] in names}
+    for name, d in zip(names, g.gradient):                 # 6 significant digits printed
+        assert float(rows[name][2]) == pytest.approx(d, rel=5e-6, abs=1e-12)
     saved = json.loads((tmp_path / "s" / "peak_gradient.json").read_text())
     assert saved["gradient"] == g.as_dict()
 
