@@ -184,10 +184,13 @@ def _sequence(linkage, revolutions: int, accuracy: float, options: dict, record=
     def run(step, recorded):
         nonlocal last
         t0 = time.perf_counter()
-        if recorded:
+        if recorded and (last is None or _fits(linkage, revolutions, step, max_memory)):
             last = record(step)
+            last.stats["series_step"] = step
             peaks.append(np.asarray(last.peaks, dtype=float))
         else:
+            # a record beyond max_memory: this run's peaks only; the series stay those of
+            # the last recorded run
             settings = xl.make_settings({**options, "step_size": step})
             peaks.append(_all_peaks(linkage, revolutions, settings, max_memory, start))
         seconds.append(time.perf_counter() - t0)
@@ -205,6 +208,19 @@ def _sequence(linkage, revolutions: int, accuracy: float, options: dict, record=
     conv = Convergence(steps=tuple(steps), peaks=np.array(peaks), value=value, error=error,
                        order=order, seconds=tuple(seconds))
     return conv, last
+
+
+def _fits(linkage, revolutions: int, step: float, max_memory) -> bool:
+    """A recorded run at `step` fits within `max_memory` (`exudyn_linkage._check_run`)."""
+    from .._checks import MemoryLimitError
+    from . import exudyn_linkage as xl
+
+    try:
+        xl._check_run(linkage, revolutions, xl.make_settings({"step_size": step}), ("all",),
+                      max_memory)
+    except MemoryLimitError:
+        return False
+    return True
 
 
 def _accuracy_stats(conv: Convergence, accuracy: float) -> dict:
@@ -233,7 +249,10 @@ def simulate_to_accuracy(mech, revolutions: int, accuracy: float, record, **opti
     ``error_estimate`` (largest relative bar over the revolutions), ``accuracy_ok``,
     ``accuracy_steps``, ``accuracy_peaks`` (each run's), ``observed_order`` and
     ``peak_errors`` (N). An `AccuracyWarning` says when the request was not met within
-    `MAX_HALVINGS` further halvings."""
+    `MAX_HALVINGS` further halvings. Where a finer run's record would exceed ``max_memory``
+    (default min(4 GiB, half the RAM)) that run records its peaks only and the series are
+    the last recorded run's (``stats["series_step"]``; ``stats["series_peak_offset"]``: the
+    relative distance of its own refined peaks from the extrapolated ones)."""
     import warnings
 
     from .._warnings import AccuracyWarning
@@ -241,6 +260,10 @@ def simulate_to_accuracy(mech, revolutions: int, accuracy: float, record, **opti
     revolutions = check_int("revolutions", revolutions, 1)
     conv, traj = _sequence(as_linkage(mech), revolutions, accuracy, options, record)
     stats = _accuracy_stats(conv, accuracy)
+    # the series may come from a coarser run than the last (a finer record would exceed
+    # max_memory): how far its own refined peaks lie from the extrapolated ones
+    own = np.asarray(traj.peaks, dtype=float)
+    stats["series_peak_offset"] = float(np.max(np.abs(own - conv.value) / np.abs(conv.value)))
     traj.stats.update(stats)
     traj = _with_peaks(traj, conv.value)
     if stats["accuracy_note"]:

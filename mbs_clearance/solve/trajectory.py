@@ -409,7 +409,8 @@ def _check_peaks(path: Path, traj: Trajectory) -> None:
     mag = traj.base_force_magnitude
     # peaks extrapolated in the step (Exudyn at a requested accuracy) may lie below the
     # stored run's samples, by at most their error estimate
-    below = (float(traj.stats.get("error_estimate", 0.0))
+    below = (max(float(traj.stats.get("error_estimate", 0.0)),
+                 float(traj.stats.get("series_peak_offset", 0.0)))
              if traj.stats.get("peaks_extrapolated") else 0.0)
     for k in range(1, len(traj.peaks) + 1):
         sampled = float(mag[traj.revolution_mask(k)].max())

@@ -74,3 +74,27 @@ def test_exudyn_at_1e_4_meets_it_at_2000_rpm():
     assert tr.stats["accuracy_ok"]
     assert np.all(err / ref < 1e-4), err / ref
     assert err[0] <= tr.stats["peak_errors"][0], (err, tr.stats["peak_errors"])
+
+
+def test_a_finer_record_beyond_max_memory_records_its_peaks_only(tmp_path):
+    """1e-3 takes a fourth run (as above); with max_memory between the h/4 and h/8 records
+    the fourth run records its peaks only: the series are the h/4 run's, the peaks the
+    same extrapolated ones as without the limit, and the saved run loads back (its peaks
+    within their stated offset of its samples)."""
+    from mbs_clearance import load_trajectory
+    from mbs_clearance.backends import exudyn_linkage as xl
+    from mbs_clearance.model.cases import as_linkage
+
+    mech = SliderCrank()
+    free = simulate(mech, 1, backend="exudyn", accuracy=1e-3)
+    h = free.stats["accuracy_steps"]
+    assert len(h) == 4
+    lk = as_linkage(mech)
+    limit = (xl.estimate_memory(lk, 1, h[2])[1] + xl.estimate_memory(lk, 1, h[3])[1]) // 2
+    tr = simulate(mech, 1, backend="exudyn", accuracy=1e-3, max_memory=limit)
+    assert tr.stats["series_step"] == h[2] and tr.stats["step_size_used"] > 1.5 * h[3]
+    assert tr.stats["accuracy_steps"] == h
+    np.testing.assert_array_equal(tr.peaks, free.peaks)
+    assert tr.stats["series_peak_offset"] > free.stats["series_peak_offset"]
+    back = load_trajectory(tr.save(tmp_path / "run.npz"))
+    np.testing.assert_array_equal(back.peaks, tr.peaks)
