@@ -263,8 +263,10 @@ def verdict_of_peaks(a, a_error, b, b_error, *, model_a: str = "reduced",
     ----------
     a, a_error, b, b_error : array_like
         Each model's per-revolution peaks and error bars, N (a the reference).
-    model_a, model_b : str
-        Names of the models, for the record.
+    model_a : str, default "reduced"
+        Name of the first model, for the record.
+    model_b : str, default "exudyn"
+        Name of the second model, for the record.
     revolutions : sequence of int or None
         The revolutions (1-based) of the peaks; None: 1..len(a).
     periodic, lyapunov

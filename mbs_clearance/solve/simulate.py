@@ -36,6 +36,8 @@ class Backend:
     description: str
     linkage: Model | None
     slider_crank: Model | None
+    #: its runs to a requested accuracy (a step sequence, extrapolated), if it has its own
+    to_accuracy: Model | None = None
 
     def model_for(self, mech, name: str) -> Model:
         """The functions for `mech`; ValueError when this backend does not take it."""
@@ -63,7 +65,9 @@ BACKENDS: dict[str, Backend] = {
         linkage=Model("mbs_clearance.backends.exudyn_linkage", "simulate_exudyn_linkage",
                       "peak_exudyn_linkage"),
         slider_crank=Model("mbs_clearance.backends.exudyn_model", "simulate_exudyn",
-                           "peak_exudyn")),
+                           "peak_exudyn"),
+        to_accuracy=Model("mbs_clearance.backends.exudyn_convergence",
+                          "simulate_to_accuracy", "peak_to_accuracy")),
     "ideal": Backend(
         "closed-form slider-crank with ideal joints (no clearance)",
         linkage=None,
@@ -145,9 +149,8 @@ def simulate(mech: SliderCrank, revolutions: int | None = None, backend: str = "
     if backend == "reduced":
         options = expand(options)
     check_accuracy_or_rtol(accuracy, options)
-    if backend == "exudyn" and accuracy is not None and _driven(mech):
-        from ..backends.exudyn_convergence import simulate_to_accuracy
-
+    if accuracy is not None and _driven(mech) and _backend(backend).to_accuracy is not None:
+        simulate_to_accuracy = _backend(backend).to_accuracy.load("simulate")
         revolutions = _check(mech, revolutions)
         _call_check(backend, mech, options)
 
@@ -224,9 +227,8 @@ def peak_base_force(mech: SliderCrank, revolution: int | None = None, backend: s
         if revolution is None:      # a free linkage: its last window's peak
             return float(traj.peaks[-1])
         return float(revolution_peaks(traj)[revolution - 1])
-    if backend == "exudyn" and accuracy is not None and _driven(mech):
-        from ..backends.exudyn_convergence import peak_to_accuracy
-
+    if accuracy is not None and _driven(mech) and _backend(backend).to_accuracy is not None:
+        peak_to_accuracy = _backend(backend).to_accuracy.load("peak")
         revolution = _check(mech, revolution, "revolution")
         _call_check(backend, mech, options)
         return peak_to_accuracy(mech, revolution, accuracy, **options)
