@@ -27,7 +27,6 @@ from types import SimpleNamespace
 from .._warnings import CacheWarning
 from ..model.linkage import Linkage
 from .key import model_structure, structure_digest
-from .loader import check_arguments
 
 __all__ = ["generate_c_module", "load_c_model", "CModel", "C_SOURCES"]
 
@@ -38,6 +37,14 @@ _HERE = Path(__file__).resolve().parent
 _LOG = logging.getLogger("mbs_clearance")
 _LOCK = threading.Lock()
 _LOADED: dict[str, CModel] = {}
+
+
+def check_arguments(linkage, specialise) -> None:
+    """ValueError unless `linkage` is a Linkage and `specialise` True or False."""
+    if not isinstance(linkage, Linkage):
+        raise ValueError(f"linkage must be a Linkage; got {type(linkage).__name__}")
+    if not isinstance(specialise, bool):
+        raise ValueError(f"specialise must be True or False; got {specialise!r}")
 
 
 def _printer_version() -> str:

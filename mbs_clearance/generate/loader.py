@@ -43,6 +43,7 @@ from types import ModuleType
 
 from .._warnings import CacheWarning
 from ..model.linkage import Linkage
+from .c_loader import check_arguments
 from .key import model_structure, structure_digest
 
 __all__ = ["generate_module", "load_model", "model_path", "model_structure"]
@@ -214,14 +215,6 @@ def _verified_text(path: Path, digest: str) -> tuple[str | None, str]:
     if f'STRUCTURE_DIGEST = "{digest}"' not in rest[:20000]:
         return None, "was generated for another structure or generator version"
     return text, ""
-
-
-def check_arguments(linkage, specialise) -> None:
-    """ValueError unless `linkage` is a Linkage and `specialise` True or False."""
-    if not isinstance(linkage, Linkage):
-        raise ValueError(f"linkage must be a Linkage; got {type(linkage).__name__}")
-    if not isinstance(specialise, bool):
-        raise ValueError(f"specialise must be True or False; got {specialise!r}")
 
 
 def load_model(linkage: Linkage, specialise: bool = True) -> ModuleType:

@@ -20,7 +20,9 @@ def test_simulate_writes_trajectory_and_figure(tmp_path, capsys):
     assert fig.stat().st_size > 10_000
     printed = capsys.readouterr().out.splitlines()
     peak2 = float(printed[2].split()[1])
-    assert peak2 == pytest.approx(peak_base_force(traj.mechanism, 2), abs=0.01)
+    with pytest.warns(AccuracyWarning, match="rattles"):   # the same run to accuracy
+        ref = peak_base_force(traj.mechanism, 2)
+    assert peak2 == pytest.approx(ref, abs=0.01)
     np.testing.assert_allclose(traj.max_base_force(2), peak2, atol=0.01)
 
 

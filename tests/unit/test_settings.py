@@ -122,15 +122,14 @@ def test_a_long_linkage_run_is_refused_by_its_pilot(monkeypatch):
     """A run of 16 revolutions or more is estimated by a one-revolution pilot: one that
     cannot fit in max_steps is refused after the pilot alone (one kernel call)."""
     lk = cases.CASES["four_bar"]()
-    model = lm.load_model(lk)
     calls = []
-    kernel = model.integrate_model
+    kernel = lm.integrate
 
     def counted(*args):
         calls.append(1)
         return kernel(*args)
 
-    monkeypatch.setattr(model, "integrate_model", counted)
+    monkeypatch.setattr(lm, "integrate", counted)
     with pytest.raises(MemoryLimitError, match="needs about .* steps .* max_steps=20000"):
         lm.run(lk, 40, record=False, max_steps=20_000)
     assert len(calls) == 1
