@@ -1667,13 +1667,12 @@ def build_report(out: str | Path = "report", quick: bool = False, progress: bool
     from mbs_clearance._io import OutputDir, check_output_dir, recover
 
     out = Path(out)
-    if replot and (map_file is not None or full_data):
-        raise ValueError(f"{'--map' if map_file is not None else '--full-data'} cannot be "
-                         "combined with --replot (a replot reuses the saved data); drop one "
-                         "of them")
     if replot and map_file is not None:
         raise ValueError("--map cannot be combined with --replot (a replot reuses the saved "
                          "data, including its regime map); drop one of them")
+    if replot and full_data:
+        raise ValueError("--full-data cannot be combined with --replot (a replot reuses the "
+                         "saved data); drop one of them")
     if replot:
         recover(out)
         manifest = _verify_for_replot(out)
