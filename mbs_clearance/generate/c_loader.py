@@ -218,7 +218,8 @@ class CModel:
         module's integrate_model's arguments and returns)."""
         from ..core.integrate import integrate, model_record
 
-        if self.record.prepare(self._ptr(self._vec(p).copy())):
+        # the zero check of prepare, without recomputing the constants on every run
+        if any(p[i] != 0.0 for i in self.ZERO_INDEX):
             raise ValueError(self.ZERO_MESSAGE)
         return integrate(model_record(self.ffi, self.lib), y0, p, edges, settings,
                          coefficients)
