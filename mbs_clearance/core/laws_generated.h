@@ -37,6 +37,27 @@ static inline double mbs_contact_force(double delta, double deltadot, double del
     return f > 0.0 ? f : 0.0;
 }
 
+/* the force and its partials d[6] = (F, dF/ddelta, dF/ddeltadot, dF/ddeltadot_minus, dF/dK,
+ * dF/de), all zero where the force is: forces.contact_force_partials */
+static inline void mbs_contact_force_partials(double delta, double deltadot, double deltadot_minus,
+                                              double K, double e, int64_t model, double *d) {
+    for (int k = 0; k < 6; k++) d[k] = 0.0;
+    if (delta <= 0.0) return;
+    double xi, dxi;
+    mbs_hysteresis_factor(e, model, &xi, &dxi);
+    double root = sqrt(delta);
+    double spring = K * delta * root;
+    double damp = 1.0 + xi * deltadot / deltadot_minus;
+    double f = spring * damp;
+    if (f <= 0.0) return;
+    d[0] = f;
+    d[1] = 1.5 * K * root * damp;   /* forces.EXPONENT */
+    d[2] = spring * xi / deltadot_minus;
+    d[3] = -spring * xi * deltadot / (deltadot_minus * deltadot_minus);
+    d[4] = delta * root * damp;
+    d[5] = spring * dxi * deltadot / deltadot_minus;
+}
+
 /* Ft of friction law id `law` at slip velocity vt, normal force fn, the law parameters
  * slots[MBS_N_FRICTION_SLOTS] (registry.FRICTION_SLOTS); an unknown id: frictionless */
 static inline double mbs_friction_force_slots(double vt, double fn, const double *slots, int64_t law) {

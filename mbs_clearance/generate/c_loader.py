@@ -32,7 +32,7 @@ __all__ = ["generate_c_module", "load_c_model", "CModel", "C_SOURCES"]
 
 _CORE = Path(__file__).resolve().parents[1] / "core"
 #: the headers every model is compiled with (beside the seam's, which the build adds)
-C_SOURCES = ("runtime.h", "laws_generated.h")
+C_SOURCES = ("runtime.h", "laws_generated.h", "jac_runtime.h")
 _HERE = Path(__file__).resolve().parent
 _LOG = logging.getLogger("mbs_clearance")
 _LOCK = threading.Lock()

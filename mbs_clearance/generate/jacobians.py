@@ -25,12 +25,14 @@ joints and the accelerations only (what the sensitivity equations need).
 
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 import sympy as sp
 
 from ..laws.registry import FRICTION_SLOTS
 from .derive import Derivation
 
-__all__ = ["jacobian_context", "z_columns"]
+__all__ = ["jacobian_context", "jacobian_plan", "emit_body", "z_columns"]
 
 
 def z_columns(d: Derivation) -> list:
@@ -63,10 +65,12 @@ def _gradient(d: Derivation, expr: sp.Expr, cols: list) -> dict[int, sp.Expr]:
     return out
 
 
-def jacobian_context(w, d: Derivation, out_columns: list[str]) -> dict:
-    """Template variables of jacobians.py.jinja: the bodies of `jacobian` (every column of
-    z) and `tangent` (the directional derivatives along given seeds dz, from the same
-    derivative expressions), and the layout."""
+def jacobian_plan(w, d: Derivation, out_columns: list[str]) -> SimpleNamespace:
+    """The stages of the kernels `jacobian` (every column of z) and `tangent` (the
+    directional derivatives along given seeds dz, from the same derivative expressions),
+    one plan printed in python (`jacobian_context`) and in C (`cjacobians`): each stage
+    (exprs, names[, post]) or a list of lines in python's syntax (assignments, `for` and
+    `if` blocks, calls of the elements' rows), and the layout."""
     n, J = len(d.Q), len(d.joints)
     if d.t not in w.vars:
         # time enters the derivatives explicitly (d angle / d speed = t): not a constant
@@ -424,31 +428,52 @@ def jacobian_context(w, d: Derivation, out_columns: list[str]) -> dict:
                   *(s for j in lub for s in d.TL[j]),
                   *(s for c in corners for s in c[3:] if s is not None)}
 
+    oloop = ([f"for col in range({nz}):"] + oloop) if oloop else []
+    return SimpleNamespace(
+        jac_stages=J_stages, tan_stages=T_stages, extra_syms=extra_syms,
+        jac_full=(oexprs, onames, lambda ls: ls + oloop + shake),
+        tan_full=(oexprs, tonames, masked(trows_full, tail=tshake)),
+        n_z=nz, jac_stride=stride, n_jrows=n_rows,
+        z_names=["t", *(f"{c}" for c in d.coordinates),
+                 *(f"{c}.rate" for c in d.coordinates), *params],
+        jac_extra={f"{what}:{events[j]}": r for (what, j), r in extra.items()})
+
+
+def emit_body(stages: list, full_stage: tuple, stage, preamble) -> tuple[list, list, list]:
+    """(preamble, body, full-only body) of a kernel from the plan's stages: each stage
+    (exprs, names[, post]) printed by `stage(exprs, names, temps)` (post: a function of its
+    lines), or a list of lines taken as they are; `preamble(used)` loads what the printed
+    expressions use (the accelerations and forces are the kernel's own)."""
+    temps = sp.numbered_symbols("x")
+    used, body = set(), []
+    for st in [*stages, full_stage]:
+        if isinstance(st, tuple):
+            u, ls = stage(*st[:2], temps)
+            used |= u
+            body.append(st[2](ls) if len(st) > 2 else ls)
+        else:
+            body.append(st)
+    return preamble(used), [ln for b in body[:-1] for ln in b], body[-1]
+
+
+def jacobian_context(w, d: Derivation, out_columns: list[str]) -> dict:
+    """Template variables of jacobians.py.jinja: the bodies of `jacobian` (every column of
+    z) and `tangent` (the directional derivatives along given seeds dz, from the same
+    derivative expressions) of `jacobian_plan`, and the layout."""
+    plan = jacobian_plan(w, d, out_columns)
+
     def emit(stages, full_stage):
-        temps = sp.numbered_symbols("x")
-        used, body = set(), []
-        for st in [*stages, full_stage]:
-            if isinstance(st, tuple):
-                u, ls = w.stage(*st[:2], temps)
-                used |= u
-                body.append(st[2](ls) if len(st) > 2 else ls)
-            else:
-                body.append(st)
-        used -= extra_syms
-        code = ["    " + ln for ln in w.preamble(used) + [ln for b in body[:-1] for ln in b]]
+        pre, body, full = emit_body(stages, full_stage, w.stage,
+                                    lambda used: w.preamble(used - plan.extra_syms))
+        code = ["    " + ln for ln in pre + body]
         code.append("    if full:")
-        code += ["        " + ln for ln in body[-1]]
+        code += ["        " + ln for ln in full]
         return code
 
-    oloop = ([f"for col in range({nz}):"] + oloop) if oloop else []
-    jac_code = emit(J_stages, (oexprs, onames, lambda ls: ls + oloop + shake))
-    full_post = masked(trows_full, tail=tshake)
-    tan_code = emit(T_stages, (oexprs, tonames, full_post))
-    return dict(jac_body=jac_code, tan_body=tan_code, n_z=nz, jac_stride=stride,
-                n_jrows=n_rows,
-                z_names=["t", *(f"{c}" for c in d.coordinates),
-                         *(f"{c}.rate" for c in d.coordinates), *params],
-                jac_extra={f"{what}:{events[j]}": r for (what, j), r in extra.items()})
+    return dict(jac_body=emit(plan.jac_stages, plan.jac_full),
+                tan_body=emit(plan.tan_stages, plan.tan_full), n_z=plan.n_z,
+                jac_stride=plan.jac_stride, n_jrows=plan.n_jrows, z_names=plan.z_names,
+                jac_extra=plan.jac_extra)
 
 
 def _cholesky_lines(n: int) -> list[str]:
