@@ -25,7 +25,8 @@ import numpy as np
 
 from . import build
 
-__all__ = ["core", "model_record", "integrate", "OUT_OF_MEMORY", "BAD_ARGUMENT"]
+__all__ = ["core", "model_record", "integrate", "step_peaks", "step_value", "step_states",
+           "with_parameter_length", "OUT_OF_MEMORY", "BAD_ARGUMENT"]
 
 #: negative statuses of the core (the others are `integrator.RESULTS`)
 OUT_OF_MEMORY = -1
@@ -61,6 +62,115 @@ def _doubles(name, value, ndim=1):
         raise ValueError(f"{name} must be a {ndim}-dimensional array of floats; got shape "
                          f"{arr.shape}")
     return arr
+
+
+def _ptr(ffi):
+    def ptr(arr):
+        return ffi.cast("double *", ffi.from_buffer(arr))
+    return ptr
+
+
+def _tableau(ffi, coefficients):
+    """(``mbs_tableau *``, the arrays it points into: keep them alive through the call) of
+    the method's coefficients (``Tableau.arrays()``)."""
+    A, B, C, E, E2, P, A_extra, C_extra, error_order, pi_alpha, pi_beta = coefficients
+    A, P, A_extra = (_doubles(name, a, 2) for name, a in
+                     (("A", A), ("P", P), ("A_extra", A_extra)))
+    B, C, E, E2, C_extra = (_doubles(name, a) for name, a in
+                            (("B", B), ("C", C), ("E", E), ("E2", E2), ("C_extra", C_extra)))
+    ptr = _ptr(ffi)
+    tb = ffi.new("mbs_tableau *")
+    tb.A, tb.a_rows, tb.a_cols = ptr(A), A.shape[0], A.shape[1]
+    tb.B, tb.n_b = ptr(B), B.shape[0]
+    tb.C, tb.n_c = ptr(C), C.shape[0]
+    tb.E, tb.n_e = ptr(E), E.shape[0]
+    tb.E2, tb.n_e2 = ptr(E2), E2.shape[0]
+    tb.P, tb.p_rows, tb.p_cols = ptr(P), P.shape[0], P.shape[1]
+    tb.A_extra, tb.x_rows, tb.x_cols = ptr(A_extra), A_extra.shape[0], A_extra.shape[1]
+    tb.C_extra, tb.n_c_extra = ptr(C_extra), C_extra.shape[0]
+    tb.error_order, tb.pi_alpha, tb.pi_beta = float(error_order), float(pi_alpha), float(pi_beta)
+    return tb, (A, B, C, E, E2, P, A_extra, C_extra)
+
+
+def with_parameter_length(model, n_p: int):
+    """A copy of the record `model` whose p has n_p entries (a sensitivity run's p: the
+    model's, then the run's header and work space, all copied with the state wherever the
+    integrator keeps one)."""
+    ffi, _ = core()
+    rec = ffi.new("mbs_model *")
+    rec[0] = model[0]
+    rec.n_p = int(n_p)
+    return rec
+
+
+def _check_status(status) -> None:
+    if status == OUT_OF_MEMORY:
+        raise MemoryError("the compiled step map ran out of memory")
+    if status != 0:
+        raise ValueError("the compiled step map refused its arguments (sizes of the "
+                         "states, memories or p out of range)")
+
+
+def step_peaks(model, t0s, y0s, mems, p, hs, coefficients, iters):
+    """The maximum of the monitored value over the step map of each recorded step k (start
+    t0s[k] in s, state y0s[k], memories mems[k], size hs[k] in s) by golden section with
+    `iters` iterations, as the integrator's peak refinement; returns (values, times in s).
+    p: the model's parameters (not changed)."""
+    ffi, lib = core()
+    t0s, hs = _doubles("t0s", t0s), _doubles("hs", hs)
+    y0s, mems = _doubles("y0s", y0s, 2), _doubles("mems", mems, 2)
+    p = _doubles("p", p)
+    n_steps = t0s.shape[0]
+    if not (y0s.shape[0] == mems.shape[0] == hs.shape[0] == n_steps) or p.shape[0] < model.n_p:
+        raise ValueError(f"t0s, y0s, mems and hs need one row per step ({n_steps}) and p the "
+                         f"model's {model.n_p} entries")
+    tb, keep = _tableau(ffi, coefficients)
+    vals, times = np.empty(n_steps), np.empty(n_steps)
+    ptr = _ptr(ffi)
+    status = lib.mbs_step_peaks(model, ptr(t0s), ptr(y0s), n_steps, y0s.shape[1], ptr(mems),
+                                mems.shape[1], ptr(p), ptr(hs), tb, int(iters), ptr(vals),
+                                ptr(times))
+    del keep
+    _check_status(status)
+    return vals, times
+
+
+def step_value(model, t0, y0, mem, p, h, coefficients):
+    """The monitored value of the step map at t0 + h (s) from the state y0 with the
+    memories mem; p: the model's parameters (not changed)."""
+    ffi, lib = core()
+    y0, mem, p = _doubles("y0", y0), _doubles("mem", mem), _doubles("p", p)
+    if p.shape[0] < model.n_p:
+        raise ValueError(f"p must have the model's {model.n_p} entries; got {p.shape[0]}")
+    tb, keep = _tableau(ffi, coefficients)
+    value = ffi.new("double *")
+    ptr = _ptr(ffi)
+    status = lib.mbs_step_value(model, float(t0), ptr(y0), y0.shape[0], ptr(mem),
+                                mem.shape[0], ptr(p), float(h), tb, value)
+    del keep
+    _check_status(status)
+    return float(value[0])
+
+
+def step_states(model, t0, y0, p, hs, coefficients, n_out):
+    """Steps of the sizes hs (s) from (t0, y0) with the memories in p (a writable float64
+    array: the model's work entries are written): the states (len(hs), n) and the
+    monitor's first n_out outputs (len(hs), n_out) at t0 + hs."""
+    ffi, lib = core()
+    y0, hs = _doubles("y0", y0), _doubles("hs", hs)
+    if not (isinstance(p, np.ndarray) and p.dtype == np.float64 and p.ndim == 1
+            and p.flags.c_contiguous and p.flags.writeable) or p.shape[0] < model.n_p:
+        raise ValueError(f"p must be a writable contiguous float64 array of at least "
+                         f"{model.n_p} entries")
+    tb, keep = _tableau(ffi, coefficients)
+    ys = np.empty((hs.shape[0], y0.shape[0]))
+    outs = np.zeros((hs.shape[0], int(n_out)))
+    ptr = _ptr(ffi)
+    status = lib.mbs_step_states(model, float(t0), ptr(y0), y0.shape[0], ptr(p), ptr(hs),
+                                 hs.shape[0], tb, int(n_out), ptr(ys), ptr(outs))
+    del keep
+    _check_status(status)
+    return ys, outs
 
 
 def integrate(model, y0, p, edges, settings, coefficients):
@@ -112,26 +222,9 @@ def integrate(model, y0, p, edges, settings, coefficients):
     if settings.mem_start + settings.n_mem > n_p:
         raise ValueError(f"the memory entries p[{settings.mem_start}:"
                          f"{settings.mem_start + settings.n_mem}] exceed p's {n_p} entries")
-    A, B, C, E, E2, P, A_extra, C_extra, error_order, pi_alpha, pi_beta = coefficients
-    A, P, A_extra = (_doubles(name, a, 2) for name, a in
-                     (("A", A), ("P", P), ("A_extra", A_extra)))
-    B, C, E, E2, C_extra = (_doubles(name, a) for name, a in
-                            (("B", B), ("C", C), ("E", E), ("E2", E2), ("C_extra", C_extra)))
-
-    def ptr(arr):
-        return ffi.cast("double *", ffi.from_buffer(arr))
-
-    keep = (y0, edges, atol, A, B, C, E, E2, P, A_extra, C_extra)   # alive through the call
-    tb = ffi.new("mbs_tableau *")
-    tb.A, tb.a_rows, tb.a_cols = ptr(A), A.shape[0], A.shape[1]
-    tb.B, tb.n_b = ptr(B), B.shape[0]
-    tb.C, tb.n_c = ptr(C), C.shape[0]
-    tb.E, tb.n_e = ptr(E), E.shape[0]
-    tb.E2, tb.n_e2 = ptr(E2), E2.shape[0]
-    tb.P, tb.p_rows, tb.p_cols = ptr(P), P.shape[0], P.shape[1]
-    tb.A_extra, tb.x_rows, tb.x_cols = ptr(A_extra), A_extra.shape[0], A_extra.shape[1]
-    tb.C_extra, tb.n_c_extra = ptr(C_extra), C_extra.shape[0]
-    tb.error_order, tb.pi_alpha, tb.pi_beta = float(error_order), float(pi_alpha), float(pi_beta)
+    tb, keep = _tableau(ffi, coefficients)
+    keep = (keep, y0, edges, atol)   # alive through the call
+    ptr = _ptr(ffi)
     st = ffi.new("mbs_settings *")
     st.rtol = settings.rtol
     st.atol, st.n_atol = ptr(atol), atol.shape[0]

@@ -1447,3 +1447,100 @@ int64_t mbs_integrate(const mbs_model *m, const double *y0, int64_t n, double *p
     res->status = status;
     return status;
 }
+
+/* ---- the step maps of recorded steps (sens_runtime.step_peaks, step_value, step_states) ---- */
+
+/* the run context and work arrays of single steps of n states: K (zeros), y_new, f_new,
+ * ytmp, f0 (n each), g, gd (the model's n_events each), as integrator.step_workspace; NULL
+ * when out of memory (free with free()) */
+static double *step_workspace(run_ctx *cx, const mbs_model *m, const mbs_tableau *tb,
+                              int64_t n, int64_t n_out)
+{
+    const int rosen = tb->a_cols > tb->a_rows;
+    cx->m = m;
+    cx->tb = tb;
+    cx->ldk = n;
+    cx->k_rows = tb->n_b + 1 + tb->x_rows + (rosen ? n + 3 : 0);
+    cx->s = tb->n_b;
+    cx->rosenbrock = rosen;
+    cx->n_out = n_out;
+    int64_t ne = m->n_events > 1 ? m->n_events : 1;
+    return calloc_d(cx->k_rows * n + 4 * n + 2 * ne);
+}
+
+int64_t mbs_step_peaks(const mbs_model *m, const double *t0s, const double *y0s,
+                       int64_t n_steps, int64_t n, const double *mems, int64_t n_mem,
+                       const double *p, const double *hs, const mbs_tableau *tb, int64_t iters,
+                       double *vals, double *times)
+{
+    if (n < 1 || n_mem < 0 || m->mem_start + n_mem > m->n_p)
+        return STATUS_BAD_ARGUMENT;
+    run_ctx cx;
+    double *w = step_workspace(&cx, m, tb, n, 0);
+    double *q = alloc_d(m->n_p);
+    if (!w || !q) {
+        free(w);
+        free(q);
+        return STATUS_OUT_OF_MEMORY;
+    }
+    double *K = w, *y_new = w + cx.k_rows * n, *f_new = y_new + n, *ytmp = f_new + n;
+    double *f0 = ytmp + n, *g = f0 + n, *gd = g + (m->n_events > 1 ? m->n_events : 1);
+    double out[1];
+    memcpy(q, p, (size_t)m->n_p * sizeof(double));
+    for (int64_t k = 0; k < n_steps; k++) {
+        for (int64_t j = 0; j < n_mem; j++)
+            q[m->mem_start + j] = mems[k * n_mem + j];
+        vals[k] = golden_max(&cx, t0s[k], y0s + k * n, n, q, hs[k], K, y_new, f_new, ytmp, f0,
+                             iters, out, g, gd, &times[k]);
+    }
+    free(w);
+    free(q);
+    return 0;
+}
+
+int64_t mbs_step_value(const mbs_model *m, double t0, const double *y0, int64_t n,
+                       const double *mem, int64_t n_mem, const double *p, double h,
+                       const mbs_tableau *tb, double *value)
+{
+    if (n < 1 || n_mem < 0 || m->mem_start + n_mem > m->n_p)
+        return STATUS_BAD_ARGUMENT;
+    run_ctx cx;
+    double *w = step_workspace(&cx, m, tb, n, 0);
+    double *q = alloc_d(m->n_p);
+    if (!w || !q) {
+        free(w);
+        free(q);
+        return STATUS_OUT_OF_MEMORY;
+    }
+    double *K = w, *y_new = w + cx.k_rows * n, *f_new = y_new + n, *ytmp = f_new + n;
+    double *f0 = ytmp + n, *g = f0 + n, *gd = g + (m->n_events > 1 ? m->n_events : 1);
+    double out[1];
+    memcpy(q, p, (size_t)m->n_p * sizeof(double));
+    for (int64_t j = 0; j < n_mem; j++)
+        q[m->mem_start + j] = mem[j];
+    m->rhs(t0, y0, n, q, f0);
+    *value = step_monitor(&cx, t0, y0, n, f0, h, K, q, y_new, f_new, ytmp, out, g, gd);
+    free(w);
+    free(q);
+    return 0;
+}
+
+int64_t mbs_step_states(const mbs_model *m, double t0, const double *y0, int64_t n, double *p,
+                        const double *hs, int64_t n_h, const mbs_tableau *tb, int64_t n_out,
+                        double *ys, double *outs)
+{
+    if (n < 1 || n_out < 0)
+        return STATUS_BAD_ARGUMENT;
+    run_ctx cx;
+    double *w = step_workspace(&cx, m, tb, n, n_out);
+    if (!w)
+        return STATUS_OUT_OF_MEMORY;
+    double *K = w, *f_new = w + cx.k_rows * n + n, *ytmp = f_new + n;
+    double *f0 = ytmp + n, *g = f0 + n, *gd = g + (m->n_events > 1 ? m->n_events : 1);
+    m->rhs(t0, y0, n, p, f0);
+    for (int64_t k = 0; k < n_h; k++)
+        step_monitor(&cx, t0, y0, n, f0, hs[k], K, p, ys + k * n, f_new, ytmp,
+                     outs + k * n_out, g, gd);
+    free(w);
+    return 0;
+}

@@ -97,4 +97,21 @@ int64_t mbs_integrate(const mbs_model *m, const double *y0, int64_t n, double *p
                       const mbs_tableau *tb, mbs_result *res);
 void mbs_result_free(mbs_result *res);
 
+/* the step maps of recorded steps (a run's records refined afterwards), each returning 0 or
+ * a negative status: the maximum of the monitored value over the step of size hs[k] from
+ * (t0s[k], y0s[k] (n_steps, n), memories mems[k] (n_steps, n_mem)) by golden section, as the
+ * integrator's peak refinement (values, times); the monitored value at t0 + h of one step
+ * (into *value); the states (n_h, n) and outputs (n_h, n_out) at t0 + hs[k] of steps from
+ * (t0, y0) with the memories in p (p's work entries are written) */
+int64_t mbs_step_peaks(const mbs_model *m, const double *t0s, const double *y0s,
+                       int64_t n_steps, int64_t n, const double *mems, int64_t n_mem,
+                       const double *p, const double *hs, const mbs_tableau *tb, int64_t iters,
+                       double *vals, double *times);
+int64_t mbs_step_value(const mbs_model *m, double t0, const double *y0, int64_t n,
+                       const double *mem, int64_t n_mem, const double *p, double h,
+                       const mbs_tableau *tb, double *value);
+int64_t mbs_step_states(const mbs_model *m, double t0, const double *y0, int64_t n, double *p,
+                        const double *hs, int64_t n_h, const mbs_tableau *tb, int64_t n_out,
+                        double *ys, double *outs);
+
 #endif

@@ -32,8 +32,19 @@ __all__ = ["generate_c_module", "load_c_model", "CModel", "C_SOURCES"]
 
 _CORE = Path(__file__).resolve().parents[1] / "core"
 #: the headers every model is compiled with (beside the seam's, which the build adds)
-C_SOURCES = ("runtime.h", "laws_generated.h", "jac_runtime.h")
+C_SOURCES = ("runtime.h", "laws_generated.h", "jac_runtime.h", "sens_runtime.h")
 _HERE = Path(__file__).resolve().parent
+#: what a model library exports beside the seam's record and closure (cffi declarations)
+C_EXPORTS = """
+void mbs_gap(double t, const double *y, const double *p, int64_t j, double *g);
+void mbs_jacobian(double t, const double *y, const double *p, double *jac, int64_t full);
+void mbs_tangent(double t, const double *y, const double *p, const double *dz, int64_t nd,
+                 const double *use, double *out, int64_t full);
+const mbs_model *mbs_sens_model_record(void);
+int64_t mbs_output_sensitivities(const double *ts, const double *ys, int64_t n, int64_t n_y,
+                                 const double *ms, int64_t n_m, const double *p, int64_t n_p,
+                                 double *vals, double *ders);
+"""
 _LOG = logging.getLogger("mbs_clearance")
 _LOCK = threading.Lock()
 _LOADED: dict[str, CModel] = {}
@@ -224,6 +235,22 @@ class CModel:
         return integrate(model_record(self.ffi, self.lib), y0, p, edges, settings,
                          coefficients)
 
+    # ---- the step maps of recorded steps (the numba module's, same arguments and returns)
+    def refine_steps(self, t0s, y0s, mems, p, hs, coefficients, iters):
+        """The maximum of the monitored value over the plain step map of each step k (start
+        t0s[k] in s, state y0s[k], memories mems[k], size hs[k] in s), by golden section;
+        returns (values, times in s)."""
+        from ..core.integrate import model_record, step_peaks
+
+        return step_peaks(model_record(self.ffi, self.lib), t0s, y0s, mems, p, hs,
+                          coefficients, iters)
+
+    def step_monitor_value(self, t0, y0, mem, p, h, coefficients):
+        """The monitored value of the plain step map at t0 + h (state y0, memories mem)."""
+        from ..core.integrate import model_record, step_value
+
+        return step_value(model_record(self.ffi, self.lib), t0, y0, mem, p, h, coefficients)
+
 
 def load_c_model(linkage: Linkage, specialise: bool = True) -> CModel:
     """The compiled C model of `linkage`'s structure (specialised on its zero-valued
@@ -241,7 +268,7 @@ def load_c_model(linkage: Linkage, specialise: bool = True) -> CModel:
         generated = time.perf_counter()
         sources = [("model.c", source)] + [(name, (_CORE / name).read_text())
                                            for name in C_SOURCES]
-        ffi, lib = build.load(f"model-{digest[:16]}", sources)
+        ffi, lib = build.load(f"model-{digest[:16]}", sources, C_EXPORTS)
         model = CModel(ffi=ffi, lib=lib, record=lib.mbs_model_record(),
                        meta=SimpleNamespace(**meta), source=source,
                        generate_seconds=generated - started,

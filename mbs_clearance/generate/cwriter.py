@@ -282,7 +282,38 @@ def render_c(d: Derivation, linkage_name: str, structure: dict,
             "const mbs_model *mbs_model_record(void) { return &MODEL; }", ""]
     out += closure
     out += jac_lines
+    out += _sens_functions(meta)
     return "\n".join(out), meta
+
+
+def _sens_functions(meta: dict) -> list[str]:
+    """After the Jacobian and tangent kernels: the monitor's values from a column of the
+    model's quantities (`observe`: the value column of a full tangent, as the numba module's
+    _observe), every switching function's gap (`mbs_gap`), and the DDM equations of
+    core/sens_runtime.h (the sensitivity run's record and its outputs' derivatives)."""
+    E = meta["N_EVENTS"]
+    out = [f"#define DDM_MOMENT_ROW {meta['MOMENT_COLUMN']}",
+           f"#define DDM_SPEED_INDEX {meta['SPEED_INDEX']}", "",
+           "/* the monitor's outputs, switching functions and monitored value from the model's "
+           "quantities",
+           " * res[k stride] (OUT_COLUMNS first), as monitor has them from dynamics */",
+           "static double observe(const double *p, const double *res, int64_t stride, "
+           "double *out,", "                      int64_t n_out, double *g, double *gd) {",
+           "    if (n_out >= N_OUT)",
+           "        for (int64_t k = 0; k < N_OUT; k++) out[k] = res[k * stride];"]
+    out += [f"    switching(p[MEM_START + {2 * j}], res[{5 * j + 1} * stride], "
+            f"res[{5 * j + 2} * stride], &g[{j}], &gd[{j}]);" for j in range(E)]
+    out += ["    double x = res[MONITOR_COLUMN * stride];",
+            "    double y_ = res[(MONITOR_COLUMN + 1) * stride];",
+            "    return sqrt(x * x + y_ * y_);", "}", "",
+            "/* the offset of switching function j's contact point (ex, ey) and its rate into "
+            "g[4] */",
+            "void mbs_gap(double t, const double *y, const double *p, int64_t j, double *g) {"]
+    out += [f"    if (j == {j}) gap_{j}(t, y, p, g);" for j in range(E)]
+    out += ["}", ""]
+    if "N_Z" in meta:           # the Jacobian and tangent kernels are there
+        out += ['#include "sens_runtime.h"', ""]
+    return out
 
 
 def _closure_functions(c: _C, d: Derivation, pl) -> list[str]:
