@@ -446,10 +446,14 @@ def slider_crank_run(mech: SliderCrank, names, rtol, *, revolutions: int, t_eval
 
 
 def _ddm(mech, names, revolutions, rtol, t_eval, event_time_term, method):
+    from ..model.cases import as_linkage
     from ..solve.linkage_ddm import landed, magnitude_derivative
+    from ..solve.linkage_model import load_model
 
-    # only the derivatives a SliderCrank's Sensitivities hold, computed with the steps
-    force = reduced.MODEL.OUT_COLUMNS[reduced.MODEL.MONITOR_COLUMN:][:2]
+    # only the derivatives a SliderCrank's Sensitivities hold, computed with the steps (the
+    # model is the one the run loads: on the chosen core)
+    plain = load_model(as_linkage(mech))
+    force = plain.OUT_COLUMNS[plain.MONITOR_COLUMN:][:2]
     run, ref = slider_crank_run(mech, names, rtol, revolutions=revolutions, t_eval=t_eval,
                                 event_time_term=event_time_term, method=method,
                                 derivatives=[*force, "drive_moment", f"{_JOINT}.contact_force"])
@@ -469,7 +473,7 @@ def _ddm(mech, names, revolutions, rtol, t_eval, event_time_term, method):
     d_mag = magnitude_derivative(vals, mon, ders, 0)
     traj = annotate(reduced.trajectory_from_states(
         mech, ts, run.plain_states(ys), ms[:, :model.N_MEM], run.p0, run.stats, peaks, vals,
-        model.OUT_COLUMNS))
+        model.OUT_COLUMNS, model))
     return Sensitivities(
         t=ts, parameters=names, reference=ref, base_force=d_force, base_force_magnitude=d_mag,
         crank_moment=ders[:, 2, :], contact_force=ders[:, 3, :], trajectory=traj,

@@ -207,6 +207,19 @@ class CModel:
                           int(j), self._ptr(out))
         return float(out[0]), float(out[1])
 
+    def gap(self, t, y, p, j):
+        """(ex, ey, exd, eyd) of switching function j's contact point: the journal centre
+        minus the bearing centre (a corner: its position along and across the guide) and its
+        rate, in m and m/s."""
+        import numpy as np
+
+        if not 0 <= int(j) < self.N_EVENTS:
+            raise ValueError(f"j must be in [0, {self.N_EVENTS - 1}]; got {j}")
+        y, p = self._vec(y), self._vec(p)
+        g = np.empty(4)
+        self.lib.mbs_gap(float(t), self._ptr(y), self._ptr(p), int(j), self._ptr(g))
+        return float(g[0]), float(g[1]), float(g[2]), float(g[3])
+
     def outputs(self, ts, ys, ms, p):
         """The outputs (n, N_OUT) at recorded steps: times ts, states ys, memories ms."""
         import numpy as np
@@ -234,6 +247,98 @@ class CModel:
             raise ValueError(self.ZERO_MESSAGE)
         return integrate(model_record(self.ffi, self.lib), y0, p, edges, settings,
                          coefficients)
+
+    # ---- the sensitivity runs (DDM, tangents): the numba module's functions, same
+    # arguments and returns
+    def _sens_record(self, n_p: int):
+        """The sensitivity run's record for a p of n_p entries (`sens_runtime.h`)."""
+        from ..core.integrate import core, with_parameter_length
+
+        core_ffi, _ = core()
+        address = int(self.ffi.cast("uintptr_t", self.lib.mbs_sens_model_record()))
+        return with_parameter_length(core_ffi.cast("const mbs_model *", address), n_p)
+
+    def _sens_p(self, p):
+        import numpy as np
+
+        if not (isinstance(p, np.ndarray) and p.dtype == np.float64 and p.ndim == 1
+                and p.flags.c_contiguous and p.flags.writeable) or p.shape[0] < self.N_P + 3:
+            raise ValueError("p must be a sensitivity run's parameter vector (a writable "
+                             "contiguous float64 array, linkage_ddm.pack_sensitivity_"
+                             "parameters)")
+        return p
+
+    def integrate_sens(self, y0, p, edges, settings, coefficients):
+        """The compiled core's run of the sensitivity equations (p: a sensitivity run's
+        parameter vector, its memories and work entries updated in place)."""
+        from ..core.integrate import integrate
+
+        p = self._sens_p(p)
+        if any(p[i] != 0.0 for i in self.ZERO_INDEX):
+            raise ValueError(self.ZERO_MESSAGE)
+        return integrate(self._sens_record(p.shape[0]), y0, p, edges, settings,
+                         coefficients)
+
+    def output_sensitivities(self, ts, ys, ms, p):
+        """Values (n, N_OUT) and derivatives (n, N_OUT, nb) of the outputs along the
+        integrated directions at recorded steps (times ts, sensitivity states ys, memories
+        ms) of a sensitivity run with parameter vector p."""
+        import numpy as np
+
+        ts, ys, ms = self._vec(ts), self._vec(ys), self._vec(ms)
+        p = self._vec(p)
+        n = ts.shape[0]
+        if ys.ndim != 2 or ms.ndim != 2 or ys.shape[0] != n or ms.shape[0] != n \
+                or ms.shape[1] > self.N_MEM:
+            raise ValueError(f"ys and ms need one row per time ({n}), ms at most N_MEM = "
+                             f"{self.N_MEM} columns")
+        nb = int(p[self.N_P])
+        vals, ders = np.empty((n, self.N_OUT)), np.empty((n, self.N_OUT, nb))
+        if self.lib.mbs_output_sensitivities(
+                self._ptr(ts), self._ptr(ys), n, ys.shape[1], self._ptr(ms), ms.shape[1],
+                self._ptr(p), p.shape[0], self._ptr(vals), self._ptr(ders)):
+            raise MemoryError("out of memory for a copy of the sensitivity parameters")
+        return vals, ders
+
+    def jacobian_matrix(self, t, y, p, full):
+        """The Jacobian (N_JROWS, JAC_STRIDE) at (t, y): values and total derivatives along
+        z (Z_NAMES) of the model's quantities in the contact modes of p."""
+        import numpy as np
+
+        y, p = self._vec(y), self._vec(p)
+        jac = np.zeros((self.N_JROWS, self.JAC_STRIDE))
+        self.lib.mbs_jacobian(float(t), self._ptr(y), self._ptr(p), self._ptr(jac),
+                              int(bool(full)))
+        return jac
+
+    def tangent_matrix(self, t, y, p, dz, full):
+        """The tangents (N_JROWS, nd + 1) at (t, y) along the seeds dz (nd, N_Z): the
+        seeds' state columns passed as state sensitivities, where `tangent` reads them."""
+        import numpy as np
+
+        from .sens_runtime import seed_index
+
+        y, p, dz = self._vec(y), self._vec(p), self._vec(dz)
+        nd, n2 = dz.shape[0], 2 * self.N_Q
+        out = np.zeros(self.N_JROWS * (nd + 1))
+        use = np.zeros(dz.shape[1] + 1 + dz.size)
+        seed_index(dz != 0.0, use)
+        ys = np.empty(n2 * (1 + nd))
+        ys[:n2] = y[:n2]
+        for d in range(nd):
+            ys[n2 * (1 + d):n2 * (2 + d)] = dz[d, 1:1 + n2]
+        self.lib.mbs_tangent(float(t), self._ptr(ys), self._ptr(p), self._ptr(dz), nd,
+                             self._ptr(use), self._ptr(out), int(bool(full)))
+        return out.reshape(self.N_JROWS, nd + 1)
+
+    def step_sens(self, t0, y0, p, hs, coefficients):
+        """Steps of the sizes hs of the sensitivity equations from (t0, y0) (memories in
+        p): states (len(hs), n) and the monitor's outputs (len(hs), N_OUT) at t0 + hs."""
+        from ..core.integrate import step_states
+
+        p = self._sens_p(p)
+        return step_states(self._sens_record(p.shape[0]), t0, y0, p, hs, coefficients,
+                           self.N_OUT)
 
     # ---- the step maps of recorded steps (the numba module's, same arguments and returns)
     def refine_steps(self, t0s, y0s, mems, p, hs, coefficients, iters):

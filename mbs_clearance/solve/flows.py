@@ -6,6 +6,8 @@ SliderCrank as its case, `cases.as_linkage`)."""
 
 from __future__ import annotations
 
+from functools import partial
+
 import numpy as np
 
 from .._checks import check_real
@@ -76,7 +78,7 @@ class Flow:
                                    (linkage.drive.speed, linkage.drive.initial_angle))
         self.clearance = clearances_of(linkage)
         self.joints = joints_of(linkage)
-        model = self.model = lm.load_numba_model(linkage)
+        model = self.model = lm.load_model(linkage)
         p = lm.pack_parameters(linkage, model)
         rtol, atol = lm._tolerances(linkage, model, rtol, settings.atol)
         event_tol = (lm.event_tolerance(linkage) if settings.event_tol is None
@@ -88,7 +90,7 @@ class Flow:
             h_max=(linkage.time_scale if linkage.drive is None else linkage.period) / 8
             if settings.h_max is None else settings.h_max,
             max_steps=settings.max_steps, record=True, event_tol=event_tol)
-        self._gaps = [getattr(model, f"_gap_{j}") for j in range(model.N_EVENTS)]
+        self._gaps = [_gap_function(model, j) for j in range(model.N_EVENTS)]
         self.rtol = rtol
         self.coefficients = METHODS[settings.method].arrays()
         self.t = 0.0
@@ -176,6 +178,16 @@ class TangentFlow(Flow):
         sig = slice(2 * n2 + 1, None)
         self.y[sig] = 0.0 if self.reset_memory else self.y[sig] / n
         return n
+
+
+def _gap_function(model, j: int):
+    """(t, y, p) -> (ex, ey, exd, eyd) of switching function j's contact point, of a C
+    model or a numba module."""
+    from ..generate.c_loader import CModel
+
+    if isinstance(model, CModel):
+        return partial(model.gap, j=j)
+    return getattr(model, f"_gap_{j}")
 
 
 def _tangent_scale(mech, model) -> np.ndarray:

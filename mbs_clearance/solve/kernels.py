@@ -1,10 +1,11 @@
-"""Which compiled integrator runs a plain run of a model: the C core or numba's.
+"""Which compiled integrator runs a model: the C core or numba's.
 
 The C core (`mbs_clearance.core`: the integrator compiled once for every model, each model's
-kernels printed in C and compiled in about a second) is the default. numba's integrator,
-specialised per model and kind of run, stays as the reference while the sensitivity and
-tangent runs are ported; ``MBS_CLEARANCE_CORE=numba`` selects it for plain runs too. Both
-give the same numbers to round-off (tests/unit/test_core_oracle.py).
+kernels, its Jacobian and tangent and its sensitivity equations printed in C and compiled in
+seconds) is the default, for plain, sensitivity (DDM) and tangent runs alike. numba's
+integrator, specialised per model and kind of run, stays as the reference;
+``MBS_CLEARANCE_CORE=numba`` selects it for every run. Both give the same numbers to
+round-off (tests/unit/test_core_oracle.py, tests/unit/test_c_sensitivities.py).
 
 Where no C compiler is found the run goes on with numba, after one warning naming what to
 install.
@@ -20,14 +21,14 @@ from .._warnings import MbsClearanceWarning
 
 __all__ = ["ENV", "CORES", "core_name", "plain_kernel"]
 
-#: the environment variable that chooses the core of plain runs
+#: the environment variable that chooses the core of every run
 ENV = "MBS_CLEARANCE_CORE"
 CORES = ("c", "numba")
 _WARNED = set()
 
 
 def core_name() -> str:
-    """The core of plain runs: ``$MBS_CLEARANCE_CORE`` ("c", the default, or "numba")."""
+    """The core of every run: ``$MBS_CLEARANCE_CORE`` ("c", the default, or "numba")."""
     name = os.environ.get(ENV, "c").strip().lower() or "c"
     if name not in CORES:
         raise ValueError(f"{ENV} must be one of {list(CORES)}; got {name!r}")

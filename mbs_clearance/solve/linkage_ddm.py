@@ -40,7 +40,7 @@ from .linkage_model import (
     event_tolerance,
     initial_state,
     integrator_settings,
-    load_numba_model,
+    load_model,
     pack_parameters,
     specialisable,
     trajectory_from_run,
@@ -536,8 +536,8 @@ def ddm_run(linkage: Linkage, model, p0, y_state, directions, *, scale, rtol, at
     zeros = set(getattr(model, "ZERO_PARAMETERS", ()))
     along = sorted({n for d in directions for n, v in d.items() if v != 0.0 and n in zeros})
     if along:
-        raise ValueError(f"directions along {along}: the model {model.__name__} is "
-                         "specialised on them being zero (no derivatives along them); use "
+        raise ValueError(f"directions along {along}: the model of linkage {linkage.name!r} "
+                         "is specialised on them being zero (no derivatives along them); use "
                          "mbs_clearance.generate.load_model(linkage, specialise=False)")
     if derivatives is True:
         derivatives = model.OUT_COLUMNS
@@ -631,11 +631,12 @@ def plain_setup(linkage: Linkage, rtol: float | None, start=None, specialise: bo
     parameter vector, the centred initial state (or `start`'s, a `linkage_model.Start`,
     with its memories in p0) and the plain run's tolerances (rtol, atol with the switching
     functions'). Returns (model, p0, y_state, rtol, atol). A free linkage starts from its
-    `Initial` (no `start`)."""
+    `Initial` (no `start`). The model is on the chosen core (`kernels.core_name`): the
+    compiled C model, or the numba module."""
     if linkage.drive is None and start is not None:
         raise ValueError("start is for a driven linkage; a free linkage starts from its "
                          "initial (Linkage.initial, an Initial)")
-    model = load_numba_model(linkage, specialise)
+    model = load_model(linkage, specialise)
     rtol, atol = _tolerances(linkage, model, rtol, None)
     p0 = pack_parameters(linkage, model)
     if start is None:
@@ -775,7 +776,7 @@ def linkage_fd(linkage: Linkage, names: tuple[str, ...], revolutions: int | None
     run takes one model: the general one if a zero-valued geometric parameter is among
     `names` (its steps leave zero), else the one specialised on them."""
     spec = specialisable(linkage, names)
-    model = load_numba_model(linkage, spec)
+    model = load_model(linkage, spec)
     if t_eval is None and windows is not None:      # a free linkage: 720 per window
         t_eval = np.unique(np.concatenate([np.linspace(a, b, 721) for a, b in
                                            zip(windows[:-1], windows[1:])]))

@@ -27,10 +27,10 @@ __all__ = ["parameter_values", "pack_parameters", "initial_state", "Start", "set
 
 
 def load_model(linkage: Linkage, specialise: bool = True):
-    """The model of a plain run of `linkage`, specialised on its zero-valued geometric
-    parameters (or, `specialise=False`, the general one), on the chosen core
-    (`kernels.core_name`): the compiled C model (`generate.c_loader.CModel`, which answers
-    as the numba module does for plain runs), or the generated numba module."""
+    """The model of a run of `linkage` (plain, DDM or tangent), specialised on its
+    zero-valued geometric parameters (or, `specialise=False`, the general one), on the
+    chosen core (`kernels.core_name`): the compiled C model (`generate.c_loader.CModel`,
+    which answers as the numba module does), or the generated numba module."""
     from .kernels import c_model_or_none
 
     model = c_model_or_none(linkage, specialise)
@@ -39,8 +39,8 @@ def load_model(linkage: Linkage, specialise: bool = True):
 
 def load_numba_model(linkage: Linkage, specialise: bool = True):
     """`generate.load_model` (imported on first use: the generator imports sympy, which a
-    run of a checked-in model does not need): the numba module, which the sensitivity and
-    tangent runs need."""
+    run of a checked-in model does not need): the numba module (the reference of the C
+    core, and the core of every run with ``MBS_CLEARANCE_CORE=numba``)."""
     from ..generate import load_model as load
 
     return load(linkage, specialise)
