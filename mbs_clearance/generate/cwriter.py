@@ -182,6 +182,9 @@ def render_c(d: Derivation, linkage_name: str, structure: dict,
     # the kernels' constants are numbered first, as in the numba module; the closure's
     # (used at the start only) after them
     n_kernel_constants = len(pl.w.constants)
+    # the energy's constants (the numba module's next ones, unused here), so that the
+    # Jacobians' are numbered and their sums ordered as the numba module's
+    pl.w.split(d.kinetic + d.potential)
     closure = _closure_functions(c, d, pl)
     jac_lines, jac_meta = jacobian_functions(c, d, pl)   # constants before prepare's
     prepare = c.constants()      # after the plan: every constant of the kernels known
