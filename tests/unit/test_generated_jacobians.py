@@ -106,7 +106,12 @@ def test_jacobian_matches_finite_differences(case, mode):
     every parameter, the impact-velocity memory) equals central finite differences of the
     plain generated `outputs`; the values equal `outputs` to round-off. (The columns of the
     parameters a module is specialised on, which must stay zero, are zero.)"""
-    linkage, model = _case(case)
+    check_against_differences(*_case(case), mode)
+
+
+def check_against_differences(linkage, model, mode):
+    """`test_jacobian_matches_finite_differences` of a loaded model (numba's or the C
+    core's: the same functions and metadata) in `mode` ("free" or "contact")."""
     p = pack_parameters(linkage, model)
     rng = np.random.default_rng(7)
     t = 0.37 * linkage.period

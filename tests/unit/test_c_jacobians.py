@@ -1,0 +1,241 @@
+"""The C core's Jacobian and tangent kernels (generate/cjacobians.py, core/jac_runtime.h):
+against the numba kernels at random states of every named case (numba run here), against
+central differences of the C plain model's outputs (no numba), and the oil film's partials
+in C against central differences of the C film and against the numba partials; the
+statement translator on the plan's forms of line."""
+
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from mbs_clearance.core import build
+from mbs_clearance.generate import load_model
+from mbs_clearance.generate.c_loader import load_c_model
+from mbs_clearance.generate.cjacobians import translate
+from mbs_clearance.laws.lubrication.partials import N_INPUTS, N_OUTPUTS, film_partials
+from mbs_clearance.model import cases
+from mbs_clearance.solve.linkage_model import initial_state, pack_parameters
+
+sys.path.insert(0, str(Path(__file__).parent))
+from test_c_models import CASES, _perturbed, _state  # noqa: E402
+from test_generated_jacobians import check_against_differences  # noqa: E402
+
+#: row by row (scaled by the row's largest entry) the C and numba kernels evaluate the same
+#: operations in the same order but for the libm calls and the film's complex arithmetic
+RTOL = 1e-13
+TRIALS = 200
+#: the lubricated model's numba Jacobian kernels compile for minutes; the film's C partials
+#: are checked in the fast set below (against differences and numba's)
+_SLOW = ("paper_slider_crank_lubricated",)
+
+
+def _row_rel(a, b) -> float:
+    """The largest |a - b| of each row over the row's largest |b| (the same NaN entries)."""
+    assert a.shape == b.shape
+    assert np.array_equal(np.isnan(a), np.isnan(b))
+    a, b = np.nan_to_num(a), np.nan_to_num(b)
+    scale = np.max(np.abs(b), axis=1, keepdims=True)
+    return float(np.max(np.abs(a - b) / np.where(scale > 0, scale, 1.0)))
+
+
+def _seeds(rng, n_q, nz, trial):
+    """Three seeds: random state parts, three random parameter columns each, time in odd
+    trials."""
+    dz = np.zeros((3, nz))
+    dz[:, 1:1 + 2 * n_q] = rng.standard_normal((3, 2 * n_q))
+    for d in range(3):
+        dz[d, rng.choice(np.arange(1 + 2 * n_q, nz), size=3, replace=False)] = (
+            rng.standard_normal(3))
+    dz[0, 0] = float(trial % 2)
+    return dz
+
+
+@pytest.mark.parametrize("case", [pytest.param(c, marks=pytest.mark.slow) if c in _SLOW
+                                  else c for c in sorted(CASES)])
+@pytest.mark.parametrize("specialise", [True, False], ids=["specialised", "general"])
+def test_c_jacobian_and_tangent_agree_with_numba(case, specialise):
+    """The layout equal to the numba module's; `jacobian_matrix` and `tangent_matrix` (with
+    and without `full`) within RTOL of numba's, row by row, at TRIALS random states and
+    parameters (random laws and contact modes)."""
+    lk = CASES[case]
+    mod = load_model(lk, specialise)
+    cm = load_c_model(lk, specialise)
+    for name in ("Z_NAMES", "N_Z", "JAC_STRIDE", "N_JROWS"):
+        assert tuple(np.atleast_1d(getattr(cm, name))) == tuple(
+            np.atleast_1d(getattr(mod, name))), name
+    assert dict(cm.JAC_EXTRA_ROWS) == dict(mod.JAC_EXTRA_ROWS)
+    assert cm.MEM_COL0 == mod._MEM_COL0
+    floors = (list(mod._FLOORS) if hasattr(mod, "_FLOORS")
+              else [mod._FLOOR0 + 5 * j for j in range(mod.N_EVENTS)])
+    assert list(cm.FLOORS) == floors
+    p0 = pack_parameters(lk, mod)
+    y0 = initial_state(lk, mod, p0)
+    clearance = min(p0[i] for i, nm in enumerate(mod.PARAMETERS) if nm.endswith(".clearance"))
+    scale = max(lk.length_scale, 1e-300)
+    rng = np.random.default_rng(20261129)
+    worst, contacts = 0.0, 0
+    for trial in range(TRIALS):
+        p = _perturbed(rng, mod, p0, set(mod.ZERO_PARAMETERS), wide=trial % 4 == 3)
+        mod.prepare(p)
+        pc = np.zeros(cm.N_P)
+        pc[:cm.CONST_START] = p[:cm.CONST_START]
+        cm.prepare(pc)
+        y = _state(rng, mod, y0, clearance, scale)
+        t = rng.uniform(0.0, 0.2)
+        full = trial % 3 != 2
+        jac = cm.jacobian_matrix(t, y, pc, full)
+        worst = max(worst, _row_rel(jac, mod.jacobian_matrix(t, y, p, full)))
+        dz = _seeds(rng, mod.N_Q, mod.N_Z, trial)
+        worst = max(worst, _row_rel(cm.tangent_matrix(t, y, pc, dz, full),
+                                    mod.tangent_matrix(t, y, p, dz, full)))
+        contacts += int(np.any(jac[0:5 * mod.N_EVENTS:5, -1] > 0.0))
+    print(case, specialise, f"{worst:.2e}")
+    assert contacts > TRIALS // 10, "too few random states in contact to compare the laws"
+    assert worst <= RTOL
+
+
+_DIFFERENCE_CASES = {
+    "paper_slider_crank": cases.paper_slider_crank(),
+    "paper_slider_crank+coulomb": cases.paper_slider_crank(
+        friction_law="coulomb", friction_coefficient=0.3, friction_v0=0.5, friction_v1=1.0),
+    "four_bar": cases.four_bar(clearance=1e-4),
+    "paper_slider_crank_lubricated+long": cases.paper_slider_crank_lubricated(
+        lubrication="long", film_fade_start=0.3, film_fade_end=0.7),
+}
+
+
+@pytest.mark.parametrize("case", sorted(_DIFFERENCE_CASES))
+@pytest.mark.parametrize("mode", ["free", "contact"])
+def test_c_jacobian_matches_central_differences_of_c_outputs(case, mode):
+    """The C Jacobian of every output along every column of z equals central differences
+    of the C plain model's outputs (test_generated_jacobians' check on the C model: no
+    numba kernel involved)."""
+    linkage = _DIFFERENCE_CASES[case]
+    check_against_differences(linkage, load_c_model(linkage), mode)
+
+
+# ---------------------------------------------------------------------------- the film
+
+_FILM_C = """
+#include "mbs_core.h"
+#include "runtime.h"
+#include "jac_runtime.h"
+
+/* the film's values and partials along each input (partials.film_partials' layout) */
+void film_partials_c(const double *x, int64_t model, double *out) {
+    jac_film_ends ends;
+    double w, dw, v[5], d[5], e[12];
+    for (int k = 0; k < 5 * 13; k++) out[k] = 0.0;
+    if (!jac_film_values(x[0], x[1], x[2], x[3], x[4], x[5], x[6], x[7], x[8], x[9], model,
+                         x[10], x[11], &ends, &w, &dw, v))
+        return;
+    for (int r = 0; r < 5; r++) out[r * 13 + 12] = v[r];
+    for (int k = 0; k < 12; k++) {
+        for (int m = 0; m < 12; m++) e[m] = m == k ? 1.0 : 0.0;
+        jac_film_direction(x[0], x[1], x[2], x[3], x[4], x[5], x[6], x[7], x[8], x[9], model,
+                           x[10], x[11], ends, w, dw, v[0], v[1], v[2], e[0], e[1], e[2],
+                           e[3], e[4], e[5], e[6], e[7], e[8], e[9], e[10], e[11], d);
+        for (int r = 0; r < 5; r++) out[r * 13 + k] = d[r];
+    }
+}
+"""
+
+
+@pytest.fixture(scope="module")
+def film_c():
+    """The C film's partials through a small library of the core's headers."""
+    core = Path(build.__file__).parent
+    sources = [("film.c", _FILM_C)] + [(h, (core / h).read_text()) for h in
+                                       ("runtime.h", "laws_generated.h", "jac_runtime.h")]
+    ffi, lib = build.load("jac-film-test", sources,
+                          cdef="void film_partials_c(const double *x, int64_t model, "
+                               "double *out);")
+
+    def partials(x, model):
+        x = np.ascontiguousarray(x, dtype=float)
+        out = np.empty((N_OUTPUTS, N_INPUTS + 1))
+        lib.film_partials_c(ffi.from_buffer("double[]", x), model,
+                            ffi.from_buffer("double[]", out))
+        return out
+    return partials
+
+
+def _film_inputs(eps, angle, fade=(0.3, 0.9)):
+    """(ex, ey, vx, vy, omega_j, omega_b, R, c, L, mu, fade start, end): the journal at eps
+    clearances towards `angle`, moving and squeezing, the bodies turning."""
+    c = 1e-4
+    return np.array([eps * c * np.cos(angle), eps * c * np.sin(angle), 0.03, -0.02, 150.0,
+                     -20.0, 0.01, c, 0.02, 0.04, *fade])
+
+
+@pytest.mark.parametrize("model", [0, 1], ids=["short", "long"])
+@pytest.mark.parametrize("eps", [0.2, 0.6, 1e-10])
+def test_c_film_partials_match_differences_and_numba(film_c, model, eps):
+    """The C film's partials along each of its inputs (inside the fade at eps 0.6, before it
+    at 0.2; at 1e-10 clearances the centre's fallback) equal central differences of its own
+    values (Richardson, away from the centre, where the frame's derivatives are smooth), and
+    the numba partials to 1e-12 of each row's largest entry (1e-7 at the centre)."""
+    x = _film_inputs(eps, 0.7)
+    got = film_c(x, model)
+    ref = film_partials(*x, model)
+    assert np.all(got[:, -1] != 0.0)
+    scale = np.max(np.abs(ref[:, :-1]), axis=1, keepdims=True)
+    # (at the centre's fallback the frame's derivatives cancel to about 1e-16 / 1e-8 of
+    # their size: the two implementations round them differently to that level)
+    rtol = 1e-12 if eps > 1e-3 else 1e-7
+    assert np.all(np.abs(got - ref) <= rtol * np.maximum(scale, np.abs(ref[:, -1:])))
+    if eps < 1e-3:
+        return
+    for k in range(N_INPUTS):
+        h = 1e-5 * max(abs(x[k]), x[7] if k < 2 else 1e-3)
+
+        def at(step, k=k):
+            xx = x.copy()
+            xx[k] += step
+            return film_c(xx, model)[:, -1]
+        d1 = (at(h) - at(-h)) / (2 * h)
+        d2 = (at(h / 2) - at(-h / 2)) / h
+        fd = (4 * d2 - d1) / 3
+        err = np.abs(got[:, k] - fd)
+        assert np.all(err <= 1e-6 * np.abs(got[:, :-1]).max(axis=1) + 1e-300), (k, got[:, k],
+                                                                                  fd)
+
+
+def test_c_film_without_partials_gives_nan_derivatives(film_c):
+    """A film law without partials (id 2): values, and NaN derivatives (as numba's)."""
+    x = _film_inputs(0.5, 1.1)
+    got = film_c(x, 2)
+    assert np.all(np.isfinite(got[:, -1])) and np.all(got[:, -1] != 0.0)
+    assert np.all(np.isnan(got[:, :-1]))
+
+
+# ------------------------------------------------------------------- the translator
+
+def test_translate_blocks_calls_and_locals():
+    """Blocks by indentation, integer loop variables and indices, a call with tuple results
+    (pointers after the arguments) and tuple arguments (compound literals), locals collected
+    for one declaration; a line with no C form refused."""
+    lines = ["a = 1.0;", "for d in range(nd):", "    yo = 4 * (d + 1)",
+             "    out[d] = a * y[yo + 0]", "if use[3] > use[2]:",
+             "    for e in range(int(use[2]), int(use[3])):", "        d = int(use[9 + e])",
+             "        b += dz[d * 8 + 2]", "x, z = f(jac, 3, (4, 5,), (p[1], p[2],))",
+             "l_0_0 = math.sqrt(m_0_0)"]
+    code, names = translate(lines)
+    assert code == ["a = 1.0;",
+                    "for (int64_t d = 0; d < nd; d++) {",
+                    "    const int64_t yo = 4 * (d + 1);",
+                    "    out[d] = a * y[yo + 0];",
+                    "}",
+                    "if (use[3] > use[2]) {",
+                    "    for (int64_t e = (int64_t)(use[2]); e < (int64_t)(use[3]); e++) {",
+                    "        const int64_t d = (int64_t)(use[9 + e]);",
+                    "        b += dz[d * 8 + 2];",
+                    "    }",
+                    "}",
+                    "f(jac, 3, (const int64_t[]){4, 5}, (const double[]){p[1], p[2]}, &x, &z);",
+                    "l_0_0 = sqrt(m_0_0);"]
+    assert names == ["a", "b", "x", "z", "l_0_0"]
+    with pytest.raises(ValueError, match="no C form"):
+        translate(["while x:"])
