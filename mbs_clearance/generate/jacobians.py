@@ -9,7 +9,7 @@ accelerations A as symbols, the equations of motion are R(z, A, F) = M A - f = 0
     dA/dz = -M^{-1} (dR/dz + dR/dFX dFX/dz + dR/dFY dFY/dz),
 
 solved in the kernel with the Cholesky factors of M, as the plain model solves for A. The
-contact forces' derivatives come from the contact law (`runtime.contact_jacobian`, one place
+contact forces' derivatives come from the contact law (`sens_runtime.contact_jacobian`, one place
 with `contact.contact_force_partials`); everything else is differentiated symbolically
 (sympy, through the sines and cosines of the base angles by the chain rule) and written with
 parameter-only constants, as the plain kernels are.
@@ -21,6 +21,9 @@ part of the slip velocity (omega_J R_J - omega_B R_B); the friction force's deri
 from `runtime.friction_jacobian` (the friction law's partials), its moments enter the
 equations of motion through the symbol TQ. `full=False` fills the rows of the clearance
 joints and the accelerations only (what the sensitivity equations need).
+
+One plan (`jacobian_plan`) is printed twice: in python for the numba module
+(`jacobian_context`, jacobians.py.jinja) and in C for the compiled core (`cjacobians`).
 """
 
 from __future__ import annotations
