@@ -14,6 +14,24 @@
 
 #include "laws_generated.h"
 
+/* the contact law's force F (zero in free flight, mode 0) and its partials law[5] (d delta,
+ * d deltadot, d impact velocity, d stiffness, d restitution; zero where F is) */
+static inline void jac_law(double delta, double deltadot, double mode, double dmin,
+                           double stiffness, double restitution, double model, double *f,
+                           double *law) {
+    *f = 0.0;
+    for (int k = 0; k < 5; k++) law[k] = 0.0;
+    if (mode > 0.5) {
+        *f = mbs_contact_force(delta, deltadot, dmin, stiffness, restitution, (int64_t)model);
+        if (*f > 0.0) {
+            double d[6];
+            mbs_contact_force_partials(delta, deltadot, dmin, stiffness, restitution,
+                                       (int64_t)model, d);
+            for (int k = 0; k < 5; k++) law[k] = d[k + 1];
+        }
+    }
+}
+
 /* ---- a clearance joint's contact */
 
 /* the gap (delta, deltadot, n), 1 / |e|, the law's force F (zero in free flight, mode 0) and
@@ -26,17 +44,7 @@ static inline void jac_contact_values(double ex, double ey, double exd, double e
     gap_state(ex, ey, exd, eyd, clearance, delta, deltadot, nx, ny);
     double r = *delta + clearance;
     *rinv = r > 1e-300 ? 1.0 / r : 0.0;
-    *f = 0.0;
-    for (int k = 0; k < 5; k++) law[k] = 0.0;
-    if (mode > 0.5) {
-        *f = mbs_contact_force(*delta, *deltadot, dmin, stiffness, restitution, (int64_t)model);
-        if (*f > 0.0) {
-            double d[6];
-            mbs_contact_force_partials(*delta, *deltadot, dmin, stiffness, restitution,
-                                       (int64_t)model, d);
-            for (int k = 0; k < 5; k++) law[k] = d[k + 1];
-        }
-    }
+    jac_law(*delta, *deltadot, mode, dmin, stiffness, restitution, model, f, law);
 }
 
 /* derivatives (delta, deltadot, F, F n_x, F n_y) along one direction into dv[5] */
@@ -249,17 +257,7 @@ static inline void jac_corner_values(double h, double hd, double side, double cl
                                      double stiffness, double restitution, double model,
                                      double *delta, double *deltadot, double *f, double *law) {
     corner_state(h, hd, side, clearance, half_height, delta, deltadot);
-    *f = 0.0;
-    for (int k = 0; k < 5; k++) law[k] = 0.0;
-    if (mode > 0.5) {
-        *f = mbs_contact_force(*delta, *deltadot, dmin, stiffness, restitution, (int64_t)model);
-        if (*f > 0.0) {
-            double d[6];
-            mbs_contact_force_partials(*delta, *deltadot, dmin, stiffness, restitution,
-                                       (int64_t)model, d);
-            for (int k = 0; k < 5; k++) law[k] = d[k + 1];
-        }
-    }
+    jac_law(*delta, *deltadot, mode, dmin, stiffness, restitution, model, f, law);
 }
 
 static inline double jac_corner_write(double *jac, int64_t stride, int64_t vc, int64_t r_f,

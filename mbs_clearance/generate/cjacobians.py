@@ -14,8 +14,6 @@ from __future__ import annotations
 
 import re
 
-import sympy as sp
-
 from .jacobians import emit_body, jacobian_plan
 
 __all__ = ["jacobian_functions", "translate"]
@@ -142,13 +140,10 @@ def jacobian_functions(c, d, pl) -> tuple[list[str], dict]:
     plan = jacobian_plan(c.w, d, out_columns)
 
     def stage(exprs, names, temps):
-        reps, reduced = sp.cse(exprs, symbols=temps, optimizations="basic", order="none")
-        used = set()
-        for e in [*(e for _, e in reps), *reduced]:
-            used |= e.free_symbols
-        lines = [f"{sym} = {c.code(e)};" for sym, e in reps]
-        lines += [f"{name} = {c.code(e)};" for name, e in zip(names, reduced)]
-        return used, lines
+        # assignments only: the locals are declared once per kernel (`translate`), and a
+        # name may be an entry of jac or out
+        used, lines = c.stage(exprs, names, temps)
+        return used, [ln.removeprefix("const double ") for ln in lines]
 
     def preamble(used):
         used = used - plan.extra_syms
