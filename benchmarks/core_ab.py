@@ -1,4 +1,4 @@
-"""Run time of plain runs on the C core against numba's integrator, in alternating pairs.
+"""Run time of plain and DDM runs on the C core against numba's, in alternating pairs.
 
     python -m benchmarks.core_ab [--pairs 15] [--case NAME ...]
 
@@ -6,8 +6,9 @@ For each case the same run (the same model, tolerances and steps: the two cores 
 same numbers, tests/unit/test_core_oracle.py) is timed on both cores, warm (each compiled
 and loaded before timing), in alternating pairs within one process; printed: the median of
 the per-pair ratios C / numba of the wall time, and their spread. Cases: the paper's
-slider-crank (recorded and peak only), the four-bar, the lubricated case (rodas4) and the
-translational-clearance benchmark (a free run of 0.05 s).
+slider-crank (recorded and peak only), the four-bar, the lubricated case (rodas4), the
+translational-clearance benchmark (a free run of 0.05 s) and the paper case's DDM
+sensitivities along 8 parameters (4 revolutions, DOP853, the output derivatives recorded).
 """
 
 from __future__ import annotations
@@ -31,14 +32,27 @@ RUNS = {
                             dict(revolutions=1, method="rodas4")),
     "translational benchmark": ("flores_translational_slider_crank",
                                 dict(duration=0.05, window=0.01)),
+    "paper DDM, 8 parameters": ("paper_slider_crank", dict(revolutions=4, ddm=(
+        "crank.pin.x", "coupler.slider_end.x", "coupler.mass", "slider.mass",
+        "coupler_slider.contact_stiffness", "coupler_slider.youngs_modulus",
+        "coupler_slider.journal_radius", "coupler_slider.restitution"))),
 }
 
 
 def _timed(core: str, linkage, options: dict) -> tuple[float, float]:
+    """(wall time in s, a result to compare: the last peak, or a DDM run's largest
+    derivative of the monitored force) of one run on `core`."""
+    from mbs_clearance.analysis.sensitivity import sensitivities
+
     os.environ[kernels.ENV] = core
+    options = dict(options)
+    names = options.pop("ddm", None)
     t0 = time.perf_counter()
-    out = lm.run(linkage, **options)
-    return time.perf_counter() - t0, float(out.peaks[-1])
+    if names is None:
+        value = float(lm.run(linkage, **options).peaks[-1])
+    else:
+        value = float(np.max(np.abs(sensitivities(linkage, names, **options).base_force)))
+    return time.perf_counter() - t0, value
 
 
 def measure(names, pairs: int) -> dict:
