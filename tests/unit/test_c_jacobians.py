@@ -14,7 +14,9 @@ from mbs_clearance.core import build
 from mbs_clearance.generate import load_model
 from mbs_clearance.generate.c_loader import load_c_model
 from mbs_clearance.generate.cjacobians import translate
+from mbs_clearance.laws.forces import contact_force_partials
 from mbs_clearance.laws.lubrication.partials import N_INPUTS, N_OUTPUTS, film_partials
+from mbs_clearance.laws.registry import CONTACT
 from mbs_clearance.model import cases
 from mbs_clearance.solve.linkage_model import initial_state, pack_parameters
 
@@ -140,18 +142,25 @@ void film_partials_c(const double *x, int64_t model, double *out) {
         for (int r = 0; r < 5; r++) out[r * 13 + k] = d[r];
     }
 }
+
+/* the contact law's force and partials at x = (delta, deltadot, deltadot_minus, K, e) */
+void contact_partials_c(const double *x, int64_t model, double *d) {
+    mbs_contact_force_partials(x[0], x[1], x[2], x[3], x[4], model, d);
+}
 """
 
 
 @pytest.fixture(scope="module")
 def film_c():
-    """The C film's partials through a small library of the core's headers."""
+    """The C film's partials through a small library of the core's headers (and, as
+    `.contact`, the contact law's)."""
     core = Path(build.__file__).parent
     sources = [("film.c", _FILM_C)] + [(h, (core / h).read_text()) for h in
                                        ("runtime.h", "laws_generated.h", "jac_runtime.h")]
-    ffi, lib = build.load("jac-film-test", sources,
+    ffi, lib = build.load("jac-elements-test", sources,
                           cdef="void film_partials_c(const double *x, int64_t model, "
-                               "double *out);")
+                               "double *out); void contact_partials_c(const double *x, "
+                               "int64_t model, double *d);")
 
     def partials(x, model):
         x = np.ascontiguousarray(x, dtype=float)
@@ -159,6 +168,14 @@ def film_c():
         lib.film_partials_c(ffi.from_buffer("double[]", x), model,
                             ffi.from_buffer("double[]", out))
         return out
+
+    def contact(x, model):
+        x = np.ascontiguousarray(x, dtype=float)
+        d = np.full(6, np.nan)
+        lib.contact_partials_c(ffi.from_buffer("double[]", x), model,
+                               ffi.from_buffer("double[]", d))
+        return d
+    partials.contact = contact
     return partials
 
 
@@ -239,3 +256,18 @@ def test_translate_blocks_calls_and_locals():
     assert names == ["a", "b", "x", "z", "l_0_0"]
     with pytest.raises(ValueError, match="no C form"):
         translate(["while x:"])
+
+
+@pytest.mark.parametrize("model", range(len(CONTACT)))
+def test_c_contact_partials_equal_numba(film_c, model):
+    """The contact law's force and partials in C (laws_generated.h, printed by the codegen)
+    equal `forces.contact_force_partials` (the same operations) in compression, restitution,
+    free flight and where the damping clamps the force at zero; every partial is also
+    checked against differences in test_laws."""
+    rng = np.random.default_rng(3)
+    for x in [(2e-6, 0.2, 0.3, 4.8e11, 0.7), (2e-6, -0.2, 0.3, 4.8e11, 0.7),
+              (-1e-6, 0.1, 0.3, 4.8e11, 0.7), (1e-6, -5.0, 0.1, 4.8e11, 0.3),
+              *((rng.uniform(1e-8, 1e-4), rng.uniform(-2, 2), rng.uniform(0.01, 2),
+                 rng.uniform(1e9, 1e12), rng.uniform(0.3, 1.0)) for _ in range(50))]:
+        got = film_c.contact(x, model)
+        assert np.array_equal(got, np.array(contact_force_partials(*x, model))), x
