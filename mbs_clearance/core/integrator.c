@@ -1450,11 +1450,15 @@ int64_t mbs_integrate(const mbs_model *m, const double *y0, int64_t n, double *p
 
 /* ---- the step maps of recorded steps (sens_runtime.step_peaks, step_value, step_states) ---- */
 
-/* the run context and work arrays of single steps of n states: K (zeros), y_new, f_new,
- * ytmp, f0 (n each), g, gd (the model's n_events each), as integrator.step_workspace; NULL
- * when out of memory (free with free()) */
-static double *step_workspace(run_ctx *cx, const mbs_model *m, const mbs_tableau *tb,
-                              int64_t n, int64_t n_out)
+/* the run context and work arrays of single steps of n states, as integrator.step_workspace
+ * (K zeros, y_new, f_new, ytmp, f0, g, gd) and, with copy_p, a copy q of p; 0 when out of
+ * memory (free w->block) */
+typedef struct {
+    double *block, *K, *y_new, *f_new, *ytmp, *f0, *g, *gd, *q;
+} step_work;
+
+static int step_workspace(run_ctx *cx, step_work *w, const mbs_model *m, const mbs_tableau *tb,
+                          int64_t n, int64_t n_out, const double *p, int copy_p)
 {
     const int rosen = tb->a_cols > tb->a_rows;
     cx->m = m;
@@ -1464,8 +1468,22 @@ static double *step_workspace(run_ctx *cx, const mbs_model *m, const mbs_tableau
     cx->s = tb->n_b;
     cx->rosenbrock = rosen;
     cx->n_out = n_out;
-    int64_t ne = m->n_events > 1 ? m->n_events : 1;
-    return calloc_d(cx->k_rows * n + 4 * n + 2 * ne);
+    const int64_t ne = m->n_events > 1 ? m->n_events : 1;
+    const int64_t n_q = copy_p ? m->n_p : 0;
+    w->block = calloc_d(cx->k_rows * n + 4 * n + 2 * ne + n_q);
+    if (!w->block)
+        return 0;
+    w->K = w->block;
+    w->y_new = w->K + cx->k_rows * n;
+    w->f_new = w->y_new + n;
+    w->ytmp = w->f_new + n;
+    w->f0 = w->ytmp + n;
+    w->g = w->f0 + n;
+    w->gd = w->g + ne;
+    w->q = w->gd + ne;
+    if (copy_p)
+        memcpy(w->q, p, (size_t)m->n_p * sizeof(double));
+    return 1;
 }
 
 int64_t mbs_step_peaks(const mbs_model *m, const double *t0s, const double *y0s,
@@ -1476,25 +1494,17 @@ int64_t mbs_step_peaks(const mbs_model *m, const double *t0s, const double *y0s,
     if (n < 1 || n_mem < 0 || m->mem_start + n_mem > m->n_p)
         return STATUS_BAD_ARGUMENT;
     run_ctx cx;
-    double *w = step_workspace(&cx, m, tb, n, 0);
-    double *q = alloc_d(m->n_p);
-    if (!w || !q) {
-        free(w);
-        free(q);
+    step_work w;
+    if (!step_workspace(&cx, &w, m, tb, n, 0, p, 1))
         return STATUS_OUT_OF_MEMORY;
-    }
-    double *K = w, *y_new = w + cx.k_rows * n, *f_new = y_new + n, *ytmp = f_new + n;
-    double *f0 = ytmp + n, *g = f0 + n, *gd = g + (m->n_events > 1 ? m->n_events : 1);
     double out[1];
-    memcpy(q, p, (size_t)m->n_p * sizeof(double));
     for (int64_t k = 0; k < n_steps; k++) {
         for (int64_t j = 0; j < n_mem; j++)
-            q[m->mem_start + j] = mems[k * n_mem + j];
-        vals[k] = golden_max(&cx, t0s[k], y0s + k * n, n, q, hs[k], K, y_new, f_new, ytmp, f0,
-                             iters, out, g, gd, &times[k]);
+            w.q[m->mem_start + j] = mems[k * n_mem + j];
+        vals[k] = golden_max(&cx, t0s[k], y0s + k * n, n, w.q, hs[k], w.K, w.y_new, w.f_new,
+                             w.ytmp, w.f0, iters, out, w.g, w.gd, &times[k]);
     }
-    free(w);
-    free(q);
+    free(w.block);
     return 0;
 }
 
@@ -1505,23 +1515,16 @@ int64_t mbs_step_value(const mbs_model *m, double t0, const double *y0, int64_t 
     if (n < 1 || n_mem < 0 || m->mem_start + n_mem > m->n_p)
         return STATUS_BAD_ARGUMENT;
     run_ctx cx;
-    double *w = step_workspace(&cx, m, tb, n, 0);
-    double *q = alloc_d(m->n_p);
-    if (!w || !q) {
-        free(w);
-        free(q);
+    step_work w;
+    if (!step_workspace(&cx, &w, m, tb, n, 0, p, 1))
         return STATUS_OUT_OF_MEMORY;
-    }
-    double *K = w, *y_new = w + cx.k_rows * n, *f_new = y_new + n, *ytmp = f_new + n;
-    double *f0 = ytmp + n, *g = f0 + n, *gd = g + (m->n_events > 1 ? m->n_events : 1);
     double out[1];
-    memcpy(q, p, (size_t)m->n_p * sizeof(double));
     for (int64_t j = 0; j < n_mem; j++)
-        q[m->mem_start + j] = mem[j];
-    m->rhs(t0, y0, n, q, f0);
-    *value = step_monitor(&cx, t0, y0, n, f0, h, K, q, y_new, f_new, ytmp, out, g, gd);
-    free(w);
-    free(q);
+        w.q[m->mem_start + j] = mem[j];
+    m->rhs(t0, y0, n, w.q, w.f0);
+    *value = step_monitor(&cx, t0, y0, n, w.f0, h, w.K, w.q, w.y_new, w.f_new, w.ytmp, out,
+                          w.g, w.gd);
+    free(w.block);
     return 0;
 }
 
@@ -1532,15 +1535,13 @@ int64_t mbs_step_states(const mbs_model *m, double t0, const double *y0, int64_t
     if (n < 1 || n_out < 0)
         return STATUS_BAD_ARGUMENT;
     run_ctx cx;
-    double *w = step_workspace(&cx, m, tb, n, n_out);
-    if (!w)
+    step_work w;
+    if (!step_workspace(&cx, &w, m, tb, n, n_out, p, 0))
         return STATUS_OUT_OF_MEMORY;
-    double *K = w, *f_new = w + cx.k_rows * n + n, *ytmp = f_new + n;
-    double *f0 = ytmp + n, *g = f0 + n, *gd = g + (m->n_events > 1 ? m->n_events : 1);
-    m->rhs(t0, y0, n, p, f0);
+    m->rhs(t0, y0, n, p, w.f0);
     for (int64_t k = 0; k < n_h; k++)
-        step_monitor(&cx, t0, y0, n, f0, hs[k], K, p, ys + k * n, f_new, ytmp,
-                     outs + k * n_out, g, gd);
-    free(w);
+        step_monitor(&cx, t0, y0, n, w.f0, hs[k], w.K, p, ys + k * n, w.f_new, w.ytmp,
+                     outs + k * n_out, w.g, w.gd);
+    free(w.block);
     return 0;
 }
