@@ -258,22 +258,35 @@ class CModel:
         address = int(self.ffi.cast("uintptr_t", self.lib.mbs_sens_model_record()))
         return with_parameter_length(core_ffi.cast("const mbs_model *", address), n_p)
 
-    def _sens_p(self, p):
+    def _sens_p(self, p, n_y=None):
+        """p checked to be a sensitivity run's parameter vector (the layout of
+        `linkage_ddm.pack_sensitivity_parameters`) and n_y (if given) its state's length;
+        returns (p, the number of directions)."""
         import numpy as np
 
+        from .sens_runtime import work_size
+
+        message = ("p must be a sensitivity run's parameter vector (a writable contiguous "
+                   "float64 array, linkage_ddm.pack_sensitivity_parameters)")
         if not (isinstance(p, np.ndarray) and p.dtype == np.float64 and p.ndim == 1
                 and p.flags.c_contiguous and p.flags.writeable) or p.shape[0] < self.N_P + 3:
-            raise ValueError("p must be a sensitivity run's parameter vector (a writable "
-                             "contiguous float64 array, linkage_ddm.pack_sensitivity_"
-                             "parameters)")
-        return p
+            raise ValueError(message)
+        nb, m = int(p[self.N_P]), int(p[self.N_P + 2])
+        if nb < 1 or m < 1 or p.shape[0] != (self.N_P + 3 + 2 * nb * m + self.N_OUT + work_size(
+                nb, self.N_Z, self.N_JROWS, self.N_Q, self.N_EVENTS)):
+            raise ValueError(message + f"; its length {p.shape[0]} does not fit its header")
+        n_state = 2 * self.N_Q * (1 + nb) + 1 + nb * self.N_EVENTS
+        if n_y is not None and n_y != n_state:
+            raise ValueError(f"the sensitivity state must have {n_state} entries for {nb} "
+                             f"directions ([q, qdot, s_1 .. s_nb, W, sigma]); got {n_y}")
+        return p, nb
 
     def integrate_sens(self, y0, p, edges, settings, coefficients):
         """The compiled core's run of the sensitivity equations (p: a sensitivity run's
         parameter vector, its memories and work entries updated in place)."""
         from ..core.integrate import integrate
 
-        p = self._sens_p(p)
+        p, _ = self._sens_p(p, len(y0))
         if any(p[i] != 0.0 for i in self.ZERO_INDEX):
             raise ValueError(self.ZERO_MESSAGE)
         return integrate(self._sens_record(p.shape[0]), y0, p, edges, settings,
@@ -286,13 +299,12 @@ class CModel:
         import numpy as np
 
         ts, ys, ms = self._vec(ts), self._vec(ys), self._vec(ms)
-        p = self._vec(p)
         n = ts.shape[0]
         if ys.ndim != 2 or ms.ndim != 2 or ys.shape[0] != n or ms.shape[0] != n \
                 or ms.shape[1] > self.N_MEM:
             raise ValueError(f"ys and ms need one row per time ({n}), ms at most N_MEM = "
                              f"{self.N_MEM} columns")
-        nb = int(p[self.N_P])
+        p, nb = self._sens_p(np.array(p, dtype=np.float64), ys.shape[1])
         vals, ders = np.empty((n, self.N_OUT)), np.empty((n, self.N_OUT, nb))
         if self.lib.mbs_output_sensitivities(
                 self._ptr(ts), self._ptr(ys), n, ys.shape[1], self._ptr(ms), ms.shape[1],
@@ -336,7 +348,7 @@ class CModel:
         p): states (len(hs), n) and the monitor's outputs (len(hs), N_OUT) at t0 + hs."""
         from ..core.integrate import step_states
 
-        p = self._sens_p(p)
+        p, _ = self._sens_p(p, len(y0))
         return step_states(self._sens_record(p.shape[0]), t0, y0, p, hs, coefficients,
                            self.N_OUT)
 

@@ -196,3 +196,23 @@ def test_ddm_run_loads_no_numba_model(monkeypatch):
     TangentFlow(cases.paper_slider_crank()).advance(0.01)
     after = {m for m in sys.modules if m.startswith("mbs_clearance._generated.")}
     assert calls == [] and after == before, (calls, after - before)
+
+
+def test_sensitivity_calls_check_their_arrays(paper):
+    """A plain p, or a state of another length than its directions need, is refused with a
+    one-line error before any computation (the C code would read past them)."""
+    linkage, model, ts, ys, ms, p = paper
+    entries, _ = linkage_ddm.combine(linkage, model, [{"coupler.mass": 1.0}])
+    sp = linkage_ddm.pack_sensitivity_parameters(model, p.copy(), entries, True)
+    n_state = 2 * model.N_Q * 2 + 1 + model.N_EVENTS
+    y = np.zeros(n_state)
+    mem = ms[:1, :model.N_MEM]
+    co = METHODS["dop853"].arrays()
+    with pytest.raises(ValueError, match="sensitivity run's parameter vector"):
+        model.output_sensitivities(ts[:1], y[None, :], mem, p)
+    with pytest.raises(ValueError, match=f"must have {n_state} entries for 1 directions"):
+        model.output_sensitivities(ts[:1], y[None, :-1], mem, sp)
+    with pytest.raises(ValueError, match=f"must have {n_state} entries"):
+        model.step_sens(ts[0], y[:-1], sp, np.array([1e-4]), co)
+    with pytest.raises(ValueError, match="does not fit its header"):
+        model.integrate_sens(y, sp[:-1].copy(), np.array([0.0, 1e-3]), None, co)
