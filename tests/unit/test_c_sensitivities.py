@@ -216,3 +216,23 @@ def test_sensitivity_calls_check_their_arrays(paper):
         model.step_sens(ts[0], y[:-1], sp, np.array([1e-4]), co)
     with pytest.raises(ValueError, match="does not fit its header"):
         model.integrate_sens(y, sp[:-1].copy(), np.array([0.0, 1e-3]), None, co)
+
+
+def test_without_a_compiler_the_ddm_runs_on_numba_after_one_warning(monkeypatch):
+    """No C compiler: a DDM run's model is the numba module, after one warning naming what
+    to install (and none for the next run)."""
+    from mbs_clearance._warnings import MbsClearanceWarning
+    from mbs_clearance.generate import c_loader
+    from mbs_clearance.solve import kernels
+
+    monkeypatch.delenv("MBS_CLEARANCE_CORE", raising=False)
+    monkeypatch.setenv("CC", "no-such-compiler-xyz")
+    monkeypatch.setattr(c_loader, "_LOADED", {})
+    monkeypatch.setattr(kernels, "_WARNED", set())
+    linkage = cases.paper_slider_crank()
+    with pytest.warns(MbsClearanceWarning, match="install gcc") as record:
+        model = linkage_ddm.plain_setup(linkage, None)[0]
+        again = linkage_ddm.plain_setup(linkage, None)[0]
+    assert len(record) == 1
+    assert not isinstance(model, CModel) and again is model
+    assert callable(model.integrate_sens)
