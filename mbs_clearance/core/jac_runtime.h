@@ -4,7 +4,7 @@
  * functions of the same names, in the same order of operations. A row r of the Jacobian
  * jac (flat) holds jac[r * stride + col], the value in column nz; a row of the tangent out
  * holds out[r * ts + d] along seed d of dz (nd x nz, flat), the value in column nd. Tuples
- * are returned through pointers after the arguments. Included after runtime.h. */
+ * are returned through pointers after the arguments. */
 #ifndef MBS_JAC_RUNTIME_H
 #define MBS_JAC_RUNTIME_H
 
@@ -13,6 +13,7 @@
 #include <stdint.h>
 
 #include "laws_generated.h"
+#include "runtime.h"
 
 /* the contact law's force F (zero in free flight, mode 0) and its partials law[5] (d delta,
  * d deltadot, d impact velocity, d stiffness, d restitution; zero where F is) */
