@@ -66,6 +66,33 @@ static inline void jac_contact_direction(double dex, double dey, double dexd, do
     dv[4] = ny * d_f + f * dny;
 }
 
+/* the values (column vc) of a contact's rows: force, penetration and rate, the offset
+ * and its rate */
+static inline void jac_gap_values(double *jac, int64_t stride, int64_t vc, int64_t r_f,
+                                  int64_t r_pen, int64_t r_rate, int64_t r_ex, int64_t r_ey,
+                                  int64_t r_exd, int64_t r_eyd, double f, double delta,
+                                  double deltadot, double ex, double ey, double exd,
+                                  double eyd) {
+    jac[r_f * stride + vc] = f;
+    jac[r_pen * stride + vc] = delta;
+    jac[r_rate * stride + vc] = deltadot;
+    jac[r_ex * stride + vc] = ex;
+    jac[r_ey * stride + vc] = ey;
+    jac[r_exd * stride + vc] = exd;
+    jac[r_eyd * stride + vc] = eyd;
+}
+
+/* one column of a joint's derivative rows (delta, deltadot, F, F n_x, F n_y) from dv */
+static inline void jac_contact_rows(double *jac, int64_t stride, int64_t col, int64_t r_pen,
+                                    int64_t r_rate, int64_t r_f, int64_t r_fx, int64_t r_fy,
+                                    const double *dv) {
+    jac[r_pen * stride + col] = dv[0];
+    jac[r_rate * stride + col] = dv[1];
+    jac[r_f * stride + col] = dv[2];
+    jac[r_fx * stride + col] = dv[3];
+    jac[r_fy * stride + col] = dv[4];
+}
+
 static inline void jac_contact_write(double *jac, int64_t stride, int64_t vc, int64_t r_f,
                                      int64_t r_pen, int64_t r_rate, int64_t r_ex, int64_t r_ey,
                                      int64_t r_exd, int64_t r_eyd, int64_t r_fx, int64_t r_fy,
@@ -74,13 +101,8 @@ static inline void jac_contact_write(double *jac, int64_t stride, int64_t vc, in
                                      double ny, double *fx, double *fy) {
     *fx = f * nx;
     *fy = f * ny;
-    jac[r_f * stride + vc] = f;
-    jac[r_pen * stride + vc] = delta;
-    jac[r_rate * stride + vc] = deltadot;
-    jac[r_ex * stride + vc] = ex;
-    jac[r_ey * stride + vc] = ey;
-    jac[r_exd * stride + vc] = exd;
-    jac[r_eyd * stride + vc] = eyd;
+    jac_gap_values(jac, stride, vc, r_f, r_pen, r_rate, r_ex, r_ey, r_exd, r_eyd, f, delta,
+                   deltadot, ex, ey, exd, eyd);
     jac[r_fx * stride + vc] = *fx;
     jac[r_fy * stride + vc] = *fy;
 }
@@ -103,11 +125,7 @@ static inline void contact_jacobian(double *jac, int64_t stride, int64_t nz, dou
                               col == c_clear ? 1.0 : 0.0, col == c_stiff ? 1.0 : 0.0,
                               col == c_rest ? 1.0 : 0.0, col == c_dmin ? 1.0 : 0.0, exd, eyd,
                               nx, ny, rinv, f, law, dv);
-        jac[r_pen * stride + col] = dv[0];
-        jac[r_rate * stride + col] = dv[1];
-        jac[r_f * stride + col] = dv[2];
-        jac[r_fx * stride + col] = dv[3];
-        jac[r_fy * stride + col] = dv[4];
+        jac_contact_rows(jac, stride, col, r_pen, r_rate, r_f, r_fx, r_fy, dv);
     }
     jac_contact_write(jac, stride, nz, r_f, r_pen, r_rate, r_ex, r_ey, r_exd, r_eyd, r_fx, r_fy,
                       ex, ey, exd, eyd, delta, deltadot, f, nx, ny, fx, fy);
@@ -131,11 +149,7 @@ static inline void contact_tangent(double *out, int64_t ts, int64_t nd, const do
                               out[r_eyd * ts + d], dz[o + c_clear], dz[o + c_stiff],
                               dz[o + c_rest], dz[o + c_dmin], exd, eyd, nx, ny, rinv, f, law,
                               dv);
-        out[r_pen * ts + d] = dv[0];
-        out[r_rate * ts + d] = dv[1];
-        out[r_f * ts + d] = dv[2];
-        out[r_fx * ts + d] = dv[3];
-        out[r_fy * ts + d] = dv[4];
+        jac_contact_rows(out, ts, d, r_pen, r_rate, r_f, r_fx, r_fy, dv);
     }
     jac_contact_write(out, ts, nd, r_f, r_pen, r_rate, r_ex, r_ey, r_exd, r_eyd, r_fx, r_fy,
                       ex, ey, exd, eyd, delta, deltadot, f, nx, ny, fx, fy);
@@ -180,6 +194,18 @@ static inline void jac_friction_direction(double dex, double dey, double dexd, d
     dv[4] = -(d_ft * nx + ft * dnx);
 }
 
+/* one column of a joint's friction rows (vt, Ft, power) from dv, its force added to the
+ * force on the bearing's (x, y) */
+static inline void jac_friction_rows(double *jac, int64_t stride, int64_t col, int64_t r_vt,
+                                     int64_t r_ft, int64_t r_pw, int64_t r_fx, int64_t r_fy,
+                                     const double *dv) {
+    jac[r_vt * stride + col] = dv[0];
+    jac[r_ft * stride + col] = dv[1];
+    jac[r_pw * stride + col] = dv[2];
+    jac[r_fx * stride + col] += dv[3];
+    jac[r_fy * stride + col] += dv[4];
+}
+
 static inline void jac_friction_write(double *jac, int64_t stride, int64_t vc, double spin,
                                       int64_t r_spin, int64_t r_fx, int64_t r_fy, int64_t r_ft,
                                       int64_t r_vt, int64_t r_pw, double nx, double ny,
@@ -214,11 +240,7 @@ static inline void friction_jacobian(double *jac, int64_t stride, int64_t nz, do
                                jac[r_exd * stride + col], jac[r_eyd * stride + col],
                                jac[r_spin * stride + col], jac[r_f * stride + col], dlaw, exd,
                                eyd, nx, ny, rinv, vt, d[0], d[1], d[2], dv);
-        jac[r_vt * stride + col] = dv[0];
-        jac[r_ft * stride + col] = dv[1];
-        jac[r_pw * stride + col] = dv[2];
-        jac[r_fx * stride + col] += dv[3];
-        jac[r_fy * stride + col] += dv[4];
+        jac_friction_rows(jac, stride, col, r_vt, r_ft, r_pw, r_fx, r_fy, dv);
     }
     jac_friction_write(jac, stride, nz, spin, r_spin, r_fx, r_fy, r_ft, r_vt, r_pw, nx, ny, vt,
                        d[0], fx, fy, ft);
@@ -241,11 +263,7 @@ static inline void friction_tangent(double *out, int64_t ts, int64_t nd, const d
         jac_friction_direction(out[r_ex * ts + dd], out[r_ey * ts + dd], out[r_exd * ts + dd],
                                out[r_eyd * ts + dd], out[r_spin * ts + dd], out[r_f * ts + dd],
                                dlaw, exd, eyd, nx, ny, rinv, vt, d[0], d[1], d[2], dv);
-        out[r_vt * ts + dd] = dv[0];
-        out[r_ft * ts + dd] = dv[1];
-        out[r_pw * ts + dd] = dv[2];
-        out[r_fx * ts + dd] += dv[3];
-        out[r_fy * ts + dd] += dv[4];
+        jac_friction_rows(out, ts, dd, r_vt, r_ft, r_pw, r_fx, r_fy, dv);
     }
     jac_friction_write(out, ts, nd, spin, r_spin, r_fx, r_fy, r_ft, r_vt, r_pw, nx, ny, vt,
                        d[0], fx, fy, ft);
@@ -266,13 +284,8 @@ static inline double jac_corner_write(double *jac, int64_t stride, int64_t vc, i
                                       int64_t r_ey, int64_t r_exd, int64_t r_eyd, int64_t r_fn,
                                       double ex, double h, double exd, double hd, double delta,
                                       double deltadot, double f, double side) {
-    jac[r_f * stride + vc] = f;
-    jac[r_pen * stride + vc] = delta;
-    jac[r_rate * stride + vc] = deltadot;
-    jac[r_ex * stride + vc] = ex;
-    jac[r_ey * stride + vc] = h;
-    jac[r_exd * stride + vc] = exd;
-    jac[r_eyd * stride + vc] = hd;
+    jac_gap_values(jac, stride, vc, r_f, r_pen, r_rate, r_ex, r_ey, r_exd, r_eyd, f, delta,
+                   deltadot, ex, h, exd, hd);
     jac[r_fn * stride + vc] = -side * f;
     return -side * f;
 }
