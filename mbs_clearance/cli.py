@@ -26,7 +26,7 @@ from pathlib import Path
 
 from ._io import OutputDir, atomic_file, check_output_dir, check_output_file, folder_lock
 from .model.mechanism import PARAMETER_INFO, SliderCrank
-from .units import number, quantity
+from .units import number, parse_quantity, quantity, unit_of_path
 
 # the subcommands import what they need when they run (start-up time): simulate, optimize,
 # sensitivity, the plotting and the validation plugins are not imported to build the parser
@@ -38,7 +38,7 @@ MASS_SCALING_NAMES = ("fixed", "uniform")
 __all__ = ["main", "build_parser", "mechanism_from_args", "linkage_from_args",
            "add_mechanism_options", "case_override",
            "format_table3", "run_command", "Parser", "int_at_least", "positive_float",
-           "finite_float", "add_force_option", "HelpFormatter", "wrote"]
+           "finite_float", "quantity_type", "add_force_option", "HelpFormatter", "wrote"]
 
 #: environment variable that makes unexpected errors show their traceback
 DEBUG_ENV = "MBS_CLEARANCE_DEBUG"
@@ -62,7 +62,8 @@ class HelpFormatter(argparse.RawDescriptionHelpFormatter):
         kind = getattr(action.type, "__name__", "")
         if kind.startswith("integer"):
             return "N"
-        if kind in ("positive_float", "finite_float", "_float", "_optional_float", "float"):
+        if kind in ("positive_float", "finite_float", "_float", "_optional_float", "float",
+                    "quantity"):
             return "X"
         if action.type is Path or kind in ("Path", "PosixPath", "WindowsPath"):
             return "PATH"
@@ -299,6 +300,37 @@ def positive_float(text: str) -> float:
     return value
 
 
+def quantity_type(unit: str | None, low: float | None = None, derived: bool = False):
+    """argparse type: a finite number in SI `unit`, or with one of the unit's suffixes
+    (`units.UNIT_SUFFIXES`: "5000rpm", "0.02mm", "90deg"); with `low`, > low; with
+    `derived`, also "none" (the field's derived value, `DERIVED`). ``type.unit`` is `unit`."""
+
+    def parse(text: str):
+        if derived and text.strip().lower() == "none":
+            return DERIVED
+        try:
+            value = parse_quantity(text, unit, "value")
+        except ValueError as exc:
+            raise argparse.ArgumentTypeError(str(exc).removeprefix("value: ")) from None
+        if not math.isfinite(value):
+            raise argparse.ArgumentTypeError(f"must be a finite number; got {text!r}")
+        if low is not None and not value > low:
+            raise argparse.ArgumentTypeError(f"must be > {low:g} {unit or ''}".rstrip()
+                                             + f"; got {text!r}")
+        return value
+
+    parse.__name__ = "quantity"
+    parse.unit = unit
+    return parse
+
+
+#: argparse types of the quantities the options take (each also with its unit's suffixes)
+length_type = quantity_type("m")
+positive_length = quantity_type("m", 0.0)
+angle_type = quantity_type("rad")
+positive_time = quantity_type("s", 0.0)
+
+
 def add_evaluation_options(parser: argparse.ArgumentParser, out: str,
                            accuracy: bool = False) -> None:
     """Options of a subcommand that evaluates many designs: --rtol (and with `accuracy`
@@ -377,30 +409,15 @@ class _Derived:
 DERIVED = _Derived()
 
 
-def _optional_float(text: str):
-    if text.strip().lower() == "none":
-        return DERIVED
-    try:
-        return float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(
-            f"must be a number or 'none' (derived value); got {text!r}") from None
-
-
-def _float(text: str) -> float:
-    try:
-        return float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"must be a number; got {text!r}") from None
-
-
 def add_mechanism_options(parser: argparse.ArgumentParser) -> None:
     """One option per SliderCrank field (--crank-length ...) plus --config FILE.json."""
-    group = parser.add_argument_group("mechanism (SI units; defaults: the paper's case)")
+    group = parser.add_argument_group(
+        "mechanism (SI units; defaults: the paper's case)",
+        "A value is SI, or carries a unit suffix: 50mm, 5000rpm, 90deg, 207GPa, 300g.")
     group.add_argument("--config", metavar="FILE.json",
                        help="JSON object of SliderCrank fields; options below override it "
                             "(default: none, the paper's values)")
-    group.add_argument("--clearance", type=_float, default=None, metavar="X",
+    group.add_argument("--clearance", type=length_type, default=None, metavar="X",
                        help="radial clearance of the clearance joint(s) in m, the same as "
                             "--set clearance=X (default: the case's; the paper's 0.01 mm)")
     defaults = SliderCrank()
@@ -408,8 +425,8 @@ def add_mechanism_options(parser: argparse.ArgumentParser) -> None:
         symbol, unit, _ = PARAMETER_INFO[f.name]
         default = getattr(defaults, f.name)
         optional = default is None or f.name.endswith("inertia")
-        kind = str if f.name in ("contact_model", "friction_law") else (
-            _optional_float if optional else _float)
+        kind = (str if f.name in ("contact_model", "friction_law")
+                else quantity_type(unit, derived=optional))
         extra = "; 'none': derived value" if optional else ""
         if f.name == "contact_model":
             from .laws.forces import CONTACT_MODELS
@@ -442,7 +459,7 @@ def mechanism_from_args(args: argparse.Namespace) -> SliderCrank:
     clearance=X) sets the journal radius to the bearing radius minus X.
     """
     base = SliderCrank.from_json(args.config) if getattr(args, "config", None) else SliderCrank()
-    changes = _mechanism_changes(args)
+    changes = _mechanism_changes(args, field_unit(None))
     clearance = changes.pop("clearance", None)
     unknown = sorted(set(changes) - {f.name for f in dataclasses.fields(SliderCrank)})
     if unknown:
@@ -458,9 +475,11 @@ def mechanism_from_args(args: argparse.Namespace) -> SliderCrank:
     return mech
 
 
-def _mechanism_changes(args: argparse.Namespace) -> dict:
+def _mechanism_changes(args: argparse.Namespace, unit_of) -> dict:
     """NAME -> value of the per-field options (--crank-length ..., --clearance) and --set,
-    one dictionary: the options are aliases of --set. ValueError for a name given twice."""
+    one dictionary: the options are aliases of --set. A --set value with a unit suffix is
+    converted to SI, its unit checked against the field's (`unit_of(NAME)`, None: unknown).
+    ValueError for a name given twice or a suffix of another unit."""
     changes: dict = {}
     for f in dataclasses.fields(SliderCrank):
         value = getattr(args, f.name, None)
@@ -475,8 +494,48 @@ def _mechanism_changes(args: argparse.Namespace) -> dict:
             raise ValueError(f"{name} given twice: {option} is --set {name}; give one")
         if name in changes:
             raise ValueError(f"--set {name} given twice")
-        changes[name] = value
+        changes[name] = si_value(f"--set {name}", value, unit_of(name))
     return changes
+
+
+class Suffixed(str):
+    """A command-line value with a unit suffix ("5000rpm"), kept as text until the unit of
+    the field it sets is known (`si_value`)."""
+
+
+def si_value(item: str, value, unit: str | None):
+    """`value` in SI: a `Suffixed` text converted by its suffix, which must be one of
+    `unit`'s (None: the suffix alone converts it); anything else as is."""
+    if isinstance(value, Suffixed):
+        return parse_quantity(str(value), unit, item)
+    return value
+
+
+def field_unit(case: str | None = None, description: bool = False):
+    """NAME -> SI unit (or None) of a value set by name: of the paper's slider-crank
+    (`case` None and not `description`: its fields), of a named case (its overrides) or of
+    a description (its dotted paths), and 'clearance' / '<joint>.clearance' (m)."""
+    from .model.mechanism import PARAMETER_INFO
+
+    def unit_of(name: str) -> str | None:
+        if name == "clearance" or name.endswith(".clearance"):
+            return "m"
+        if case is None and not description:
+            return PARAMETER_INFO[name][1] if name in PARAMETER_INFO else None
+        if case is not None:
+            from .model.cases import CASE_PARAMETERS
+
+            if name in CASE_PARAMETERS.get(case, {}):
+                return CASE_PARAMETERS[case][name][1]
+        return unit_of_path(name)
+
+    return unit_of
+
+
+def unit_of_args(args: argparse.Namespace):
+    """`field_unit` of the mechanism the options --case / --description choose."""
+    return field_unit(getattr(args, "case", None),
+                      getattr(args, "description", None) is not None)
 
 
 def _case_lines() -> str:
@@ -486,14 +545,28 @@ def _case_lines() -> str:
     return "\n".join(f"  {name}: {CASE_SUMMARY.get(name, '')}" for name in sorted(CASES))
 
 
+_SUFFIXED = re.compile(r"\s*[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?\s*[^\d\s.].*")
+
+
 def _override_value(text: str):
-    """A --set value: a number, 'none' (None: the case's derived value) or a word."""
+    """A --set value: a number, a number with a unit suffix (`Suffixed`, converted once the
+    field is known), 'none' (None: the case's derived value) or a word."""
     if text.strip().lower() == "none":
         return None
     try:
         return float(text)
     except ValueError:
-        return text
+        return Suffixed(text) if _SUFFIXED.fullmatch(text) else text
+
+
+def field_value(text: str):
+    """argparse type: a finite number (SI) or a number with a unit suffix (`Suffixed`,
+    converted by `si_value` once the field it sets is known)."""
+    value = _override_value(text)
+    if isinstance(value, Suffixed) or isinstance(value, float) and math.isfinite(value):
+        return value
+    raise argparse.ArgumentTypeError(f"must be a finite number (SI) or one with a unit "
+                                     f"suffix (e.g. 5000rpm, 0.02mm); got {text!r}")
 
 
 def case_override(text: str) -> tuple[str, object]:
@@ -506,17 +579,18 @@ def case_override(text: str) -> tuple[str, object]:
 
 
 def gene_bounds(text: str) -> tuple[str, tuple[float, float]]:
-    """argparse type: NAME=LO:HI (a GA gene and its bounds, SI)."""
+    """argparse type: NAME=LO:HI (a GA gene and its bounds, SI or with a unit suffix:
+    `Suffixed`, converted by `_genes` once the gene's unit is known)."""
     name, sep, rhs = text.partition("=")
     lo, sep2, hi = rhs.partition(":")
-    try:
-        if not (sep and sep2 and name.strip()):
-            raise ValueError
-        bounds = (finite_float(lo), finite_float(hi))
-    except (ValueError, argparse.ArgumentTypeError):
+    bounds = tuple(_override_value(v.strip()) for v in (lo, hi))
+    if not (sep and sep2 and name.strip()) or not all(
+            isinstance(b, Suffixed) or isinstance(b, float) and math.isfinite(b)
+            for b in bounds):
         raise argparse.ArgumentTypeError(f"must be NAME=LO:HI (a gene and its bounds in SI "
-                                         f"units, e.g. coupler_length=3.6:4.4); got "
-                                         f"{text!r}") from None
+                                         f"units or with a unit suffix, e.g. "
+                                         f"coupler_length=3.6:4.4 or crank_length=40mm:60mm); "
+                                         f"got {text!r}")
     return name.strip(), bounds
 
 
@@ -533,7 +607,7 @@ def linkage_from_args(args: argparse.Namespace):
     if getattr(args, "config", None):
         raise ValueError(f"--config holds SliderCrank fields, for the paper's slider-crank "
                          f"only, not for --{'case' if case else 'description'}")
-    changes = _mechanism_changes(args)
+    changes = _mechanism_changes(args, unit_of_args(args))
     if description is not None:
         from .model.linkage import Linkage
 
@@ -835,11 +909,11 @@ def add_window_options(p: argparse.ArgumentParser, what: str,
                        ) -> None:
     """--duration S and --window S: a free linkage's run (`what` it gives) and its time
     windows (`window`: what they are)."""
-    p.add_argument("--duration", type=positive_float, metavar="S",
+    p.add_argument("--duration", type=positive_time, metavar="S",
                    help=f"a free linkage (no drive; e.g. --case "
                         f"flores_translational_slider_crank) only, instead of the "
                         f"revolutions: the run's duration in s; {what} (default: none)")
-    p.add_argument("--window", type=positive_float, metavar="S",
+    p.add_argument("--window", type=positive_time, metavar="S",
                    help=f"with --duration: {window}")
 
 
@@ -1203,7 +1277,7 @@ def add_run_options(p: argparse.ArgumentParser, methods, integrator_default="dop
     p.add_argument("--rtol", type=positive_float,
                    help="relative tolerance of the reduced backend (default: the model's, "
                         "1e-7)")
-    p.add_argument("--step-size", type=positive_float,
+    p.add_argument("--step-size", type=positive_time,
                    help="time step in s of the exudyn backend (default: 6000 steps per "
                         "revolution, 2 us at 5000 rpm)")
     p.add_argument("--integrator", choices=methods,
@@ -1324,10 +1398,10 @@ def _add_optimize_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--mass-scaling", choices=MASS_SCALING_NAMES, default="fixed",
                    help="fixed: link masses fixed (paper); uniform: crank and coupler masses "
                         "proportional to their lengths")
-    p.add_argument("--crank-bounds", type=finite_float, nargs=2, metavar=("LO", "HI"),
+    p.add_argument("--crank-bounds", type=length_type, nargs=2, metavar=("LO", "HI"),
                    default=(0.04, 0.06),
                    help="bounds of L2 in m (default 0.04 0.06: 40 to 60 mm)")
-    p.add_argument("--coupler-bounds", type=finite_float, nargs=2, metavar=("LO", "HI"),
+    p.add_argument("--coupler-bounds", type=length_type, nargs=2, metavar=("LO", "HI"),
                    default=(0.10, 0.14),
                    help="bounds of L3 in m (default 0.10 0.14: 100 to 140 mm)")
     p.add_argument("--revolution", type=int_at_least(1),
@@ -1472,12 +1546,14 @@ def _cmd_optimize(args: argparse.Namespace) -> int:
 
 
 def _genes(args: argparse.Namespace) -> dict[str, tuple[float, float]]:
-    """{name: (lo, hi)} of the --gene options (a name given twice: ValueError)."""
+    """{name: (lo, hi)} of the --gene options in SI (a name given twice, a suffix of
+    another unit: ValueError)."""
     genes = {}
+    unit_of = unit_of_args(args)
     for name, bounds in args.gene or []:
         if name in genes:
             raise ValueError(f"--gene {name} given twice")
-        genes[name] = bounds
+        genes[name] = tuple(si_value(f"--gene {name}", b, unit_of(name)) for b in bounds)
     return genes
 
 
@@ -1564,10 +1640,10 @@ def _add_tolerance_parser(subparsers) -> argparse.ArgumentParser:
                    help="DGSM gradient samples (output peak only; 0: none)")
     p.add_argument("--monte-carlo", type=int_at_least(0), default=0,
                    help="Monte Carlo samples of the output distribution (0: none)")
-    p.add_argument("--allowable", type=positive_float,
+    p.add_argument("--allowable", type=quantity_type(None, 0.0),
                    help="allowable load (> 0, the output's unit): estimate "
                         "P(output > allowable)")
-    p.add_argument("--wear", type=finite_float, nargs="+", metavar="M",
+    p.add_argument("--wear", type=length_type, nargs="+", metavar="M",
                    help="radial wear amounts in m added to the clearance (needs --monte-carlo)")
     p.add_argument("--seed", type=int_at_least(0), default=0, help="seed (default 0)")
     add_evaluation_options(p, "tolerance", accuracy=True)
@@ -1615,14 +1691,13 @@ def _add_map_parser(subparsers) -> argparse.ArgumentParser:
                     "classify the motion (period-k, quasi-periodic, chaotic, ...). Writes "
                     "map.nc (an xarray dataset, netCDF; resumed if it exists with the same "
                     "settings) and figures into --out.",
-        epilog="sweeps: NAME=LO:HI:N (linear), NAME=LO:HI:log:N, NAME=V1,V2,...; speeds may "
-               "be given in rpm (crank_speed=500rpm:10000rpm:40). Fields: SliderCrank "
-               "fields and 'clearance' (default: the paper's case), or a --case's "
-               "overrides and 'clearance'.\nnamed cases:\n" + _case_lines())
-    p.add_argument("--case", metavar="NAME", choices=_case_names(),
-                   help="a named case (default: the paper's slider-crank, reduced model)")
-    p.add_argument("--set", type=case_override, action="append", metavar="NAME=VALUE",
-                   help="a fixed override of the --case (repeatable)")
+        epilog="sweeps: NAME=LO:HI:N (linear), NAME=LO:HI:log:N, NAME=V1,V2,...; values SI "
+               "or with a unit suffix (crank_speed=500rpm:10000rpm:40, "
+               "clearance=1um:0.1mm:log:30). Fields: SliderCrank fields and 'clearance' "
+               "(default: the paper's case), a --case's overrides and 'clearance', or a "
+               "--description's dotted paths, 'clearance', '<joint>.clearance' and "
+               "'crank_speed'.\nnamed cases:\n" + _case_lines())
+    add_linkage_options(p)
     p.add_argument("--sweep", action="append", required=True, metavar="SPEC",
                    help="a swept field (once or twice), e.g. clearance=1e-6:1e-3:log:60")
     p.add_argument("--revolutions", type=int_at_least(2), default=100,
@@ -1632,7 +1707,7 @@ def _add_map_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--lyapunov", action="store_true",
                    help="also compute the largest Lyapunov exponent of each point (a "
                         "tangent run instead of the plain one; any --case)")
-    p.add_argument("--angle", type=finite_float,
+    p.add_argument("--angle", type=angle_type,
                    help="crank angle of the section in rad (default: the initial angle)")
     p.add_argument("--tol", type=positive_float, default=1e-3,
                    help="recurrence tolerance, fraction of the clearance (default 1e-3)")
@@ -1644,34 +1719,34 @@ def _add_map_parser(subparsers) -> argparse.ArgumentParser:
     add_evaluation_options(p, "map")
     add_keep_going_option(p, "points' runs")
     add_force_option(p)
+    add_mechanism_options(p)
     p.set_defaults(func=_cmd_map)
     return p
 
 
 def _cmd_map(args: argparse.Namespace) -> int:
     from . import plotting
-    from .studies.sweep import regime_map
+    from .studies.sweep import parse_sweep, regime_map
 
-    overrides = {}
-    for name, value in args.set or []:
-        if name in overrides:
-            raise ValueError(f"--set {name} given twice")
-        overrides[name] = value
     if len(args.sweep) > 2:
         raise ValueError(f"--sweep: one or two fields; got {len(args.sweep)}")
     case = args.case
-    paper = case in (None, "paper_slider_crank")
+    paper = case in (None, "paper_slider_crank") and args.description is None
+    overrides = None
     if paper:
-        from .model.mechanism import field_names
-
-        unknown = sorted(set(overrides) - set(field_names()))
-        if unknown:
-            raise ValueError(f"--set: unknown field(s) {unknown} of the paper's case; allowed: "
-                             f"{sorted(field_names())}")
-    base = SliderCrank().replace(**overrides) if paper else None
-    if paper:       # a case's overrides are checked by the study (its size first)
+        if getattr(args, "config", None) is None:
+            args.case = None            # the paper's case: its SliderCrank fields
+        base = mechanism_from_args(args)
+    elif case is not None:          # the study rebuilds the case with its overrides
+        overrides = _mechanism_changes(args, unit_of_args(args))
+        base = None
+    else:
+        base = linkage_from_args(args)
+    if base is not None:      # a case's overrides are checked by the study (its size first)
         check_run_size(base, "--revolutions", args.revolutions)
-    kw = dict(case=None if paper else case, overrides=None if paper else overrides,
+    unit_of = field_unit(None) if paper else unit_of_args(args)
+    sweeps = [parse_sweep(spec, unit_of) for spec in args.sweep]
+    kw = dict(case=None if paper or case is None else case, overrides=overrides,
               revolutions=args.revolutions, keep=args.keep, lyapunov=args.lyapunov,
               angle=args.angle, tol=args.tol, max_period=args.max_period, rtol=args.rtol,
               progress=not args.no_progress, write_interval=args.write_interval)
@@ -1687,7 +1762,7 @@ def _cmd_map(args: argparse.Namespace) -> int:
         kw["workers"] = args.workers
     with folder_lock(args.out, "--out"):
         path = args.out / "map.nc"
-        result = regime_map(base, args.sweep, out=path, **kw)
+        result = regime_map(base, sweeps, out=path, **kw)
         ds = result.dataset
         print(result.summary())
         dims = list(ds["regime"].dims)
@@ -1974,8 +2049,10 @@ def _add_orbits_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--field", metavar="NAME",
                    help="continue the orbit in this field (a sweep field: clearance, "
                         "crank_speed, a case override or a dotted field; default: none)")
-    p.add_argument("--start", type=finite_float, help="first value of --field (SI; default: none)")
-    p.add_argument("--stop", type=finite_float, help="last value of --field (SI; default: none)")
+    p.add_argument("--start", type=field_value, metavar="X",
+                   help="first value of --field (SI, or with a unit suffix; default: none)")
+    p.add_argument("--stop", type=field_value, metavar="X",
+                   help="last value of --field (SI, or with a unit suffix; default: none)")
     p.add_argument("--max-points", type=int_at_least(2), default=200,
                    help="most orbits computed along the branch")
     p.add_argument("--max-step", type=positive_float, default=3.0,
@@ -2006,6 +2083,10 @@ def _cmd_orbits(args: argparse.Namespace) -> int:
                          "or none")
     if args.field is None and (args.plot or args.map):
         raise ValueError("--plot and --map draw a branch: give --field, --start and --stop")
+    if args.field is not None:
+        unit = unit_of_args(args)(args.field)
+        args.start = si_value("--start", args.start, unit)
+        args.stop = si_value("--stop", args.stop, unit)
     regime = None
     if args.map is not None:
         from .studies.sweep import load_map

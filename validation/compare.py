@@ -580,12 +580,12 @@ def build_parser(parser: argparse.ArgumentParser | None = None) -> argparse.Argu
     from mbs_clearance.cli import (
         Parser,
         add_force_option,
+        add_linkage_options,
         add_mechanism_options,
-        case_override,
         int_at_least,
         positive_float,
+        positive_time,
     )
-    from mbs_clearance.model.cases import CASES
     from mbs_clearance.solve.simulate import BACKENDS
 
     if parser is None:
@@ -602,10 +602,10 @@ def build_parser(parser: argparse.ArgumentParser | None = None) -> argparse.Argu
                         help="crank revolutions")
     parser.add_argument("--rtol", type=positive_float,
                         help="relative tolerance (reduced backend)")
-    parser.add_argument("--h-max", type=positive_float,
+    parser.add_argument("--h-max", type=positive_time,
                         help="largest step in s (reduced backend); default: the Exudyn step "
                              "size when compared with exudyn")
-    parser.add_argument("--step-size", type=positive_float,
+    parser.add_argument("--step-size", type=positive_time,
                         help="time step in s (exudyn backend; default: its default step)")
     parser.add_argument("--accuracy", type=positive_float,
                         help="target relative peak error (exudyn backend): runs at steps h, "
@@ -627,13 +627,7 @@ def build_parser(parser: argparse.ArgumentParser | None = None) -> argparse.Argu
                         help="overlay figure (PNG); default compare_overlay.png")
     parser.add_argument("--no-plot", action="store_true", help="do not write the figure")
     add_force_option(parser)
-    source = parser.add_argument_group("linkage (instead of the slider-crank options)")
-    source.add_argument("--case", metavar="NAME", choices=sorted(CASES),
-                        help="a named linkage: " + ", ".join(sorted(CASES)))
-    source.add_argument("--description", metavar="FILE",
-                        help="a linkage description file (JSON or TOML)")
-    source.add_argument("--set", type=case_override, action="append", metavar="NAME=VALUE",
-                        help="override a value of the --case (repeatable)")
+    add_linkage_options(parser)
     add_mechanism_options(parser)
     return parser
 
