@@ -311,12 +311,14 @@ def quantity_type(unit: str | None, low: float | None = None, derived: bool = Fa
         try:
             value = parse_quantity(text, unit, "value")
         except ValueError as exc:
-            raise argparse.ArgumentTypeError(str(exc).removeprefix("value: ")) from None
+            why = str(exc).removeprefix("value: ")
+            raise argparse.ArgumentTypeError(
+                why + ("; or 'none' (the derived value)" if derived else "")) from None
         if not math.isfinite(value):
             raise argparse.ArgumentTypeError(f"must be a finite number; got {text!r}")
         if low is not None and not value > low:
-            raise argparse.ArgumentTypeError(f"must be > {low:g} {unit or ''}".rstrip()
-                                             + f"; got {text!r}")
+            raise argparse.ArgumentTypeError(f"must be a finite number > {low:g}; got "
+                                             f"{text!r}")
         return value
 
     parse.__name__ = "quantity"

@@ -159,6 +159,10 @@ def parse_quantity(text, unit: str | None = None, item: str = "value") -> float:
     """
     if not isinstance(text, str):
         return float(text)
+    try:                # a plain number (also inf and nan: the caller checks the range)
+        return float(text)
+    except ValueError:
+        pass
     match = _VALUE.fullmatch(text)
     allowed = suffixes_of(unit) if unit is not None else ()
     hint = (f" (a number in {unit}, or with one of {', '.join(allowed)})" if allowed

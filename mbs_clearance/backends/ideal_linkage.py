@@ -46,7 +46,7 @@ BYTES_PER_COORDINATE_SAMPLE = 8 * 60
 
 #: samples per drive revolution (a free linkage: per time scale) of the coarse continuation
 #: whose positions start Newton's method at every sample
-CONTINUATION_STEPS = 360
+CONTINUATION_STEPS = 36
 
 
 def _turn(phi, xy):
@@ -212,12 +212,14 @@ class IdealModel:
 
     def project(self, q, qd, t, tol: float, max_iter: int = 20):
         """(q, qd) moved onto the constraints at times t: Newton (minimum-norm steps) on
-        Phi = 0 to `tol` (m), then the velocities' minimum-norm correction."""
+        Phi = 0 to `tol` (m) and one step more (quadratic convergence: to round-off), then
+        the velocities' minimum-norm correction."""
         for _ in range(max_iter):
             phi, jac, _ = self.evaluate(q, qd, t)
-            if np.max(np.abs(phi)) <= tol:
-                break
+            done = np.max(np.abs(phi)) <= tol
             q = q - _min_norm(jac[:, :, 3:], phi)
+            if done:
+                break
         else:
             raise RuntimeError(f"the ideal joints of linkage {self.linkage.name!r} cannot "
                                f"be closed (residual {np.max(np.abs(phi)):.3g} m after "
@@ -239,8 +241,15 @@ def _solve(matrix, rhs):
 
 
 def _min_norm(jac, residual):
-    """The minimum-norm x of jac x = residual per stack."""
-    return np.einsum("snm,sm->sn", np.linalg.pinv(jac), residual)
+    """The minimum-norm x of jac x = residual per stack: jac^T (jac jac^T)^-1 residual
+    (the pseudo-inverse where the rows are dependent: redundant constraints)."""
+    try:
+        if jac.shape[1] == jac.shape[2]:
+            return np.linalg.solve(jac, residual[..., None])[..., 0]
+        y = np.linalg.solve(jac @ np.transpose(jac, (0, 2, 1)), residual[..., None])
+        return (np.transpose(jac, (0, 2, 1)) @ y)[..., 0]
+    except np.linalg.LinAlgError:
+        return np.einsum("snm,sm->sn", np.linalg.pinv(jac), residual)
 
 
 def _tree_start(linkage: Linkage) -> tuple[dict, dict]:
