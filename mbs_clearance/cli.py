@@ -1715,9 +1715,9 @@ def _add_map_parser(subparsers) -> argparse.ArgumentParser:
                    help="recurrence tolerance, fraction of the clearance (default 1e-3)")
     p.add_argument("--max-period", type=int_at_least(1), default=8,
                    help="largest period looked for (default 8)")
-    p.add_argument("--write-interval", type=finite_float, default=5.0, metavar="SECONDS",
-                   help="write map.nc at most this often while points arrive (default 5; "
-                        "and at the end)")
+    p.add_argument("--write-interval", type=quantity_type("s"), default=5.0, metavar="S",
+                   help="write map.nc at most this often while points arrive, in s "
+                        "(default 5; and at the end)")
     add_evaluation_options(p, "map")
     add_keep_going_option(p, "points' runs")
     add_force_option(p)
