@@ -125,13 +125,12 @@ class Parser(argparse.ArgumentParser):
         self._negative_number_matcher = re.compile(r"^-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$")
         if self.add_help:
             self.add_argument("--help-all", action=_HelpAll,
-                              help="show every option (mechanism values, solver and backend "
-                                   "settings) and exit")
+                              help="show every option and exit")
 
     def _advanced(self, action, group) -> bool:
         if group.title and group.title.startswith(ADVANCED_GROUP_PREFIX):
             return action.dest != "clearance"
-        return action.dest in ADVANCED_OPTIONS
+        return action.dest in ADVANCED_OPTIONS or getattr(action, "advanced", False)
 
     def print_help(self, file=None, full: bool = False):
         self._full_help = full
@@ -177,6 +176,17 @@ class Parser(argparse.ArgumentParser):
 
     def error(self, message: str):
         self.exit(2, f"{self.prog}: error: {_one_line(message)}\n")
+
+
+def leave_to_help_all(parser: argparse.ArgumentParser, *dests: str) -> None:
+    """Show the options `dests` (their dest names) under --help-all only, for this parser
+    (`ADVANCED_OPTIONS` holds those of every command)."""
+    missing = sorted(set(dests) - {a.dest for a in parser._actions})
+    if missing:
+        raise ValueError(f"no option(s) {missing} to leave to --help-all")
+    for action in parser._actions:
+        if action.dest in dests:
+            action.advanced = True
 
 
 def _one_line(text: str) -> str:
@@ -414,8 +424,7 @@ DERIVED = _Derived()
 def add_mechanism_options(parser: argparse.ArgumentParser) -> None:
     """One option per SliderCrank field (--crank-length ...) plus --config FILE.json."""
     group = parser.add_argument_group(
-        "mechanism (SI units; defaults: the paper's case)",
-        "A value is SI, or carries a unit suffix: 50mm, 5000rpm, 90deg, 207GPa, 300g.")
+        "mechanism (SI, or with a unit: 50mm, 5000rpm, 90deg; defaults: the paper's case)")
     group.add_argument("--config", metavar="FILE.json",
                        help="JSON object of SliderCrank fields; options below override it "
                             "(default: none, the paper's values)")
@@ -1236,17 +1245,14 @@ def add_linkage_options(p: argparse.ArgumentParser) -> None:
     """--case NAME | --description FILE, and --set NAME=VALUE."""
     source = p.add_mutually_exclusive_group()
     source.add_argument("--case", metavar="NAME", choices=_case_names(),
-                        help="a named linkage (listed below; default: the paper's "
-                             "slider-crank with the options below): "
+                        help="a named linkage (default: the paper's slider-crank): "
                              + ", ".join(_case_names()))
     source.add_argument("--description", type=Path, metavar="FILE",
-                        help="a linkage described in FILE, .json or .toml "
-                             "(mbs_clearance.Linkage.to_dict's form; default: none)")
+                        help="a linkage described in a .json or .toml file (default: none)")
     p.add_argument("--set", type=case_override, action="append", metavar="NAME=VALUE",
-                   help="set a value (repeatable): a field of the paper's slider-crank, an "
-                        "override of the --case, or a dotted path of the --description, and "
-                        "'clearance'; e.g. --set clearance=1e-4. The mechanism options "
-                        "below are aliases of it (default: none)")
+                   help="set a value (repeatable; SI or with a unit, e.g. clearance=0.02mm): "
+                        "a field of the paper's slider-crank, a --case override or a "
+                        "--description's dotted path (default: none)")
 
 
 def add_settled_option(p: argparse.ArgumentParser) -> None:
@@ -1388,7 +1394,11 @@ def _add_optimize_parser(subparsers) -> argparse.ArgumentParser:
         description="Minimise the peak base force max |F12| over a crank revolution by "
                     "choosing L2 and L3 with a genetic algorithm (pygad), refine the GA's "
                     "best point locally, print a Table 3-like comparison with the paper and "
-                    "write result.json and two figures into --out.")
+                    "write result.json and two figures into --out. A --case or "
+                    "--description: the genes (--gene) and the output (--output) are yours.",
+        epilog="named cases (--case NAME; --set NAME=VALUE changes a value):\n"
+               + _case_lines())
+    add_linkage_options(p)
     p.add_argument("--seed", type=int_at_least(0), default=1, help="GA seed (default 1)")
     p.add_argument("--population", type=int_at_least(4), default=20,
                    help="population size (>= 4, default 20)")
@@ -1410,9 +1420,9 @@ def _add_optimize_parser(subparsers) -> argparse.ArgumentParser:
                    help="crank revolution whose peak is minimised (default 4)")
     add_window_options(p, "the peak minimised is over its last --window")
     p.add_argument("--gene", type=gene_bounds, action="append", metavar="NAME=LO:HI",
-                   help="a gene and its bounds (repeatable; SI): a --case's override or a "
-                        "dotted path of the description, e.g. --gene coupler_length=3.6:4.4; "
-                        "for the paper's slider-crank SliderCrank fields (default: the "
+                   help="a gene and its bounds (repeatable; SI or with a unit, e.g. "
+                        "crank_length=40mm:60mm): a --case override or a --description's "
+                        "dotted path; for the paper's slider-crank its fields (default: the "
                         "--crank-bounds and --coupler-bounds)")
     p.add_argument("--output", metavar="NAME",
                    help="--case / --description: the output whose peak is minimised, "
@@ -1425,8 +1435,9 @@ def _add_optimize_parser(subparsers) -> argparse.ArgumentParser:
                    help="also print the executor and the refinement's method, objective "
                         "calls and optimality (KKT) check")
     add_force_option(p)
-    add_linkage_options(p)
     add_mechanism_options(p)
+    leave_to_help_all(p, "seed", "saturation", "mass_scaling", "accuracy", "scheduler",
+                      "no_progress", "keep_going", "no_refine", "verbose")
     p.set_defaults(func=_cmd_optimize)
     return p
 
@@ -1615,15 +1626,18 @@ def _add_tolerance_parser(subparsers) -> argparse.ArgumentParser:
     """The ``tolerance`` subcommand: global sensitivity and exceedance over tolerances."""
     p = subparsers.add_parser(
         "tolerance", help="tolerances and wear: Sobol/Morris/DGSM indices, P(load exceeded)",
-        description="Global sensitivity of a run's output (peak base force, RMS drive moment, "
-                    "max contact force) to manufacturing tolerances (SALib), Monte Carlo of "
-                    "its distribution and the probability of exceeding --allowable, and a "
-                    "wear study. Inputs: a JSON object {field: {\"uniform\": [lo, hi]} | "
-                    "{\"band\": [nominal, tol]} | {\"normal\": [mean, sigma]} | "
-                    "{\"fit\": \"H7/g6\", \"diameter\": 0.02}} (field 'radial_clearance' "
-                    "for a fit), or a SALib parameter file (lines: NAME LOW HIGH, uniform). "
-                    "Prints the indices and writes result.json and summary.txt into --out.")
-    p.add_argument("inputs", type=Path, help="input distributions (JSON, or SALib text file)")
+        description="Global sensitivity of a run's output to manufacturing tolerances "
+                    "(Sobol, Morris, DGSM indices with SALib), its distribution by Monte "
+                    "Carlo with P(output > --allowable), and a wear study. Prints the "
+                    "indices and writes result.json and summary.txt into --out.",
+        epilog="INPUTS: a JSON object {field: {\"uniform\": [lo, hi]} | {\"band\": [nominal, "
+               "tol]} | {\"normal\": [mean, sigma]} | {\"fit\": \"H7/g6\", \"diameter\": "
+               "0.02}} (field 'radial_clearance' for a fit; SI values), or a SALib parameter "
+               "file (lines: NAME LOW HIGH, uniform).\nnamed cases (--case NAME; --set "
+               "NAME=VALUE changes a value):\n" + _case_lines())
+    p.add_argument("inputs", type=Path,
+                   help="input distributions: JSON or a SALib text file (formats: --help-all)")
+    add_linkage_options(p)
     p.add_argument("--output", default="peak", metavar="NAME",
                    help="output of a run: peak, rms_drive_moment or max_contact_force; with "
                         "--case / --description also pivot_force:JOINT, shaking_force, "
@@ -1651,8 +1665,9 @@ def _add_tolerance_parser(subparsers) -> argparse.ArgumentParser:
     add_evaluation_options(p, "tolerance", accuracy=True)
     add_keep_going_option(p, "runs")
     add_force_option(p)
-    add_linkage_options(p)
     add_mechanism_options(p)
+    leave_to_help_all(p, "first_order_only", "morris", "dgsm", "seed", "accuracy",
+                      "scheduler", "no_progress", "keep_going")
     p.set_defaults(func=_cmd_tolerance)
     return p
 
@@ -1722,6 +1737,7 @@ def _add_map_parser(subparsers) -> argparse.ArgumentParser:
     add_keep_going_option(p, "points' runs")
     add_force_option(p)
     add_mechanism_options(p)
+    leave_to_help_all(p, "tol", "max_period", "scheduler", "no_progress", "keep_going")
     p.set_defaults(func=_cmd_map)
     return p
 
@@ -1767,6 +1783,11 @@ def _cmd_map(args: argparse.Namespace) -> int:
         result = regime_map(base, sweeps, out=path, **kw)
         ds = result.dataset
         print(result.summary())
+        for axis in sweeps:
+            unit = unit_of(axis.name) or "-"
+            spacing = {"log": ", log-spaced", "lin": ", evenly spaced"}.get(axis.spacing, "")
+            print(f"{axis.name}: {quantity(min(axis.values), unit)} to "
+                  f"{quantity(max(axis.values), unit)}, {len(axis.values)} values{spacing}")
         dims = list(ds["regime"].dims)
         with OutputDir(args.out, "map") as staged:
             figures = ["bifurcation.png"]

@@ -312,11 +312,20 @@ def _pct(x: float) -> str:
     return f"{100.0 * x:+.3f} %" if np.isfinite(x) else "n/a"
 
 
+def _impact_time(impact: FirstImpact | None) -> str:
+    from mbs_clearance.units import quantity
+
+    return "no impact" if impact is None else f"at {quantity(impact.time, 's', 6)}"
+
+
 def format_table(result: Comparison) -> str:
     """Plain-text table of a `Comparison` (returned as a string)."""
     a, b = result.backend_a, result.backend_b
+    from mbs_clearance.units import number, quantity
+
     lines = [f"comparison: a = {a} (reference), b = {b}; smallest clearance c = "
-             f"{result.clearance:.4g} m; common grid step {result.grid_step:.3g} s", ""]
+             f"{quantity(result.clearance, 'm')}; common grid step "
+             f"{quantity(result.grid_step, 's', 3)}", ""]
     head = (f"{'rev':>3}  {'peak a (N)':>12}  {'peak b (N)':>12}  "
             f"{'b/a - 1':>10}  {'rms dF/rms':>10}  {'rms dM/rms':>10}  "
             f"{'rms |S| b/a-1':>13}  {'rms M b/a-1':>11}  {'orbit max/c':>11}  "
@@ -324,7 +333,7 @@ def format_table(result: Comparison) -> str:
     lines += [head, "-" * len(head)]
     for r in result.revolutions:
         lines.append(
-            f"{r.revolution:>3}  {r.peak_a:>12.2f}  {r.peak_b:>12.2f}  "
+            f"{r.revolution:>3}  {number(r.peak_a, 6):>12}  {number(r.peak_b, 6):>12}  "
             f"{_pct(r.peak_rel_diff):>10}  {100 * r.base_force_rel_rms:>8.3f} %  "
             f"{100 * r.crank_moment_rel_rms:>8.3f} %  {_pct(r.shaking_rms_rel_diff):>13}  "
             f"{_pct(r.moment_rms_rel_diff):>11}  {r.orbit_max_rel:>11.4f}  "
@@ -337,13 +346,13 @@ def format_table(result: Comparison) -> str:
         fb = result.first_impacts_b.get(name, result.first_impact_b)
         label = f"first impact {name}".rstrip()
         if fa is not None and fb is not None:
-            lines.append(f"{label}: t_a = {fa.time * 1e6:.3f} us, t_b = {fb.time * 1e6:.3f} "
-                         f"us; peak contact force a = {fa.peak_contact_force:.1f} N, b = "
-                         f"{fb.peak_contact_force:.1f} N "
+            lines.append(f"{label}: t_a = {quantity(fa.time, 's', 6)}, t_b = "
+                         f"{quantity(fb.time, 's', 6)}; peak contact force a = "
+                         f"{quantity(fa.peak_contact_force, 'N', 6)}, b = "
+                         f"{quantity(fb.peak_contact_force, 'N', 6)} "
                          f"({_pct(fb.peak_contact_force / fa.peak_contact_force - 1)})")
         else:
-            lines.append(f"{label}: a {'none' if fa is None else f'{fa.time:.6g} s'}, "
-                         f"b {'none' if fb is None else f'{fb.time:.6g} s'}")
+            lines.append(f"{label}: a {_impact_time(fa)}, b {_impact_time(fb)}")
     sa, sb = result.statistics_a, result.statistics_b
     if sa is not None and sb is not None:
         revs = f"{min(sa.revolutions)}-{max(sa.revolutions)}"

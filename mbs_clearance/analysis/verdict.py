@@ -361,8 +361,8 @@ def _summary(v: Verdict) -> str:
     if v.kind == DIFFER:
         w = v.worst
         return (f"verdict: {v.model_a} and {v.model_b} differ beyond their error bars: "
-                f"{w.quantity}: {w.a:.6g} +- {w.a_error:.2g} vs {w.b:.6g} +- "
-                f"{w.b_error:.2g} ({100 * w.relative_difference:+.3g} %, {w.excess:.3g} "
+                f"{w.quantity}: {w.a:.6g} N +- {w.a_error:.2g} N vs {w.b:.6g} N +- "
+                f"{w.b_error:.2g} N ({100 * w.relative_difference:+.3g} %, {w.excess:.3g} "
                 f"times the bars); {sum(not i.agree for i in v.items)} of {len(v.items)} "
                 f"quantities beyond the bars")
     if v.statistics == UNDECIDED:
@@ -372,7 +372,7 @@ def _summary(v: Verdict) -> str:
     else:
         w = v.worst
         tail = (f"the statistics differ beyond their confidence intervals: {w.quantity}: "
-                f"{w.a:.6g} +- {w.a_error:.2g} vs {w.b:.6g} +- {w.b_error:.2g} "
+                f"{w.a:.6g} N +- {w.a_error:.2g} N vs {w.b:.6g} N +- {w.b_error:.2g} N "
                 f"({100 * w.relative_difference:+.3g} %)")
     return f"verdict: not comparable peak by peak ({v.reason}); {tail}"
 
