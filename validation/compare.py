@@ -357,12 +357,15 @@ def format_table(result: Comparison) -> str:
     if sa is not None and sb is not None:
         revs = f"{min(sa.revolutions)}-{max(sa.revolutions)}"
         lines.append(f"statistics over revolutions {revs}:")
-        for label, x, y in (("mean |F| (N)", sa.mean_base_force, sb.mean_base_force),
-                            ("rms |F| (N)", sa.rms_base_force, sb.rms_base_force),
-                            ("rms |S| (N)", sa.rms_shaking_force, sb.rms_shaking_force),
-                            ("rms M (N m)", sa.rms_crank_moment, sb.rms_crank_moment),
-                            ("contact fraction", sa.contact_fraction, sb.contact_fraction)):
-            lines.append(f"  {label:<18} a = {x:>10.4g}   b = {y:>10.4g}   ({_pct(y / x - 1)})")
+        for label, x, y, unit in (
+                ("mean |F|", sa.mean_base_force, sb.mean_base_force, "N"),
+                ("rms |F|", sa.rms_base_force, sb.rms_base_force, "N"),
+                ("rms |S|", sa.rms_shaking_force, sb.rms_shaking_force, "N"),
+                ("rms M", sa.rms_crank_moment, sb.rms_crank_moment, "N m"),
+                ("contact fraction", 100 * sa.contact_fraction, 100 * sb.contact_fraction,
+                 "%")):
+            lines.append(f"  {label:<18} a = {quantity(x, unit):>12}   b = "
+                         f"{quantity(y, unit):>12}   ({_pct(y / x - 1)})")
     if result.verdict is not None:
         lines += ["", format_verdict(result.verdict)]
     return "\n".join(lines)
