@@ -845,13 +845,14 @@ def _simulate_linkage(linkage, args: argparse.Namespace) -> int:
     # ideal joints have no journal whose centred start makes a transient
     transient = start is None and args.backend != "ideal"
     print(f"{'revolution':>10}  {monitored:>18}  {'max |drive|':>12}  "
-          + "  ".join(f"{'max F ' + j:>{w}}" for j, w in zip(joints, widths)))
+          + "  ".join(f"{'max F ' + j:>{w}}" for j, w in zip(joints, widths)).rstrip())
     for k in range(1, traj.revolutions + 1):
         mask = traj.revolution_mask(k)
         cells = "  ".join(f"{_force(traj.contact_force[mask, i].max()):>{w}}"
                           for i, w in enumerate(widths))
         print(f"{_revolution_label(k, transient):>10}  {_force(traj.peaks[k - 1]):>18}  "
-              f"{quantity(abs(traj.crank_moment[mask]).max(), 'N m', 6):>12}  {cells}")
+              f"{quantity(abs(traj.crank_moment[mask]).max(), 'N m', 6):>12}  {cells}"
+              .rstrip())
     if transient:
         print(START_UP_NOTE, file=sys.stderr)
     elif start is not None:
