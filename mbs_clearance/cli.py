@@ -844,8 +844,8 @@ def _simulate_linkage(linkage, args: argparse.Namespace) -> int:
     widths = [max(12, len(j) + 6) for j in joints]
     # ideal joints have no journal whose centred start makes a transient
     transient = start is None and args.backend != "ideal"
-    print(f"{'revolution':>10}  {monitored:>18}  {'max |drive|':>12}  "
-          + "  ".join(f"{'max F ' + j:>{w}}" for j, w in zip(joints, widths)).rstrip())
+    print((f"{'revolution':>10}  {monitored:>18}  {'max |drive|':>12}  "
+           + "  ".join(f"{'max F ' + j:>{w}}" for j, w in zip(joints, widths))).rstrip())
     for k in range(1, traj.revolutions + 1):
         mask = traj.revolution_mask(k)
         cells = "  ".join(f"{_force(traj.contact_force[mask, i].max()):>{w}}"
