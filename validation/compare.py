@@ -309,7 +309,10 @@ def _earliest(impacts: dict) -> FirstImpact | None:
 
 
 def _pct(x: float) -> str:
-    return f"{100.0 * x:+.3f} %" if np.isfinite(x) else "n/a"
+    if not np.isfinite(x):
+        return "n/a"
+    text = f"{100.0 * x:+.3f} %"
+    return "0.000 %" if text in ("+0.000 %", "-0.000 %") else text   # no signed zero
 
 
 def _impact_time(impact: FirstImpact | None) -> str:

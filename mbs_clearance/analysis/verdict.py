@@ -377,6 +377,12 @@ def _summary(v: Verdict) -> str:
     return f"verdict: not comparable peak by peak ({v.reason}); {tail}"
 
 
+def _bar(error: float) -> str:
+    """An error bar in the table: two digits, "-" where there is none (one revolution's
+    statistics)."""
+    return f"{error:.2g}" if math.isfinite(error) else "-"
+
+
 def format_verdict(v: Verdict) -> str:
     """Plain-text table of a `Verdict`: every decisive quantity with both models' values
     and bars, then the summary sentence."""
@@ -394,9 +400,10 @@ def format_verdict(v: Verdict) -> str:
                   f"  {'quantity':<{width}}  {v.model_a + ' (N)':>14}  {'+-':>9}  "
                   f"{v.model_b + ' (N)':>14}  {'+-':>9}  {'b/a - 1':>10}  {'|d|/bars':>8}"]
         for i in items:
-            rel = i.relative_difference
-            lines.append(f"  {i.quantity:<{width}}  {i.a:>14.6g}  {i.a_error:>9.2g}  "
-                         f"{i.b:>14.6g}  {i.b_error:>9.2g}  "
-                         f"{100 * rel:>+8.3f} %  {i.excess:>8.3g}")
+            rel = 100 * i.relative_difference
+            rel = 0.0 if abs(rel) < 5e-4 else rel       # no signed zero ("-0.000 %")
+            lines.append(f"  {i.quantity:<{width}}  {i.a:>14.6g}  {_bar(i.a_error):>9}  "
+                         f"{i.b:>14.6g}  {_bar(i.b_error):>9}  "
+                         f"{rel:>+8.3f} %  {i.excess:>8.3g}")
     lines.append(v.summary())
     return "\n".join(lines)
