@@ -35,7 +35,8 @@ import numpy as np
 from .._checks import MemoryLimitError, check_int, check_max_memory, check_real, format_bytes
 from ..model.linkage import CORNERS, GROUND, Linkage, Prismatic, Revolute
 
-__all__ = ["simulate_ideal_linkage", "peak_ideal_linkage", "IdealModel"]
+__all__ = ["simulate_ideal_linkage", "peak_ideal_linkage", "IdealModel",
+           "coordinate_series"]
 
 #: options of `simulate(linkage, backend="ideal")`
 OPTION_NAMES = ("samples_per_revolution", "max_memory", "duration", "window", "rtol")
@@ -493,24 +494,27 @@ def _corner_forces(model: IdealModel, lam, tj) -> list[np.ndarray]:
 
 
 def _tree_series(linkage: Linkage, q, v, a):
-    """The clearance model's coordinates, rates and accelerations by name (absolute angles,
-    floating bodies' positions, a prismatic joint's s along its axis)."""
-    body = {b.name: k for k, b in enumerate(linkage.bodies)}
+    """`coordinate_series` of the absolute states (s, n) of an `IdealModel`."""
+    names = [b.name for b in linkage.bodies]
+    return coordinate_series(linkage, *({n: arr[:, 3 * k:3 * k + 3] for k, n in
+                                         enumerate(names)} for arr in (q, v, a)))
+
+
+def coordinate_series(linkage: Linkage, q: dict, v: dict, a: dict):
+    """The minimal coordinates, rates and accelerations by `Linkage.coordinates` name
+    (absolute angles, floating bodies' positions, a prismatic joint's s along its axis) of
+    the bodies' frames: `q`, `v`, `a` map each body to its (x, y, angle) series (s, 3) and
+    their rates and accelerations (m, rad, per s, per s^2)."""
     points = {GROUND: linkage.ground_points, **{b.name: b.points for b in linkage.bodies}}
-    zero = np.zeros(len(q))
+    zero = np.zeros_like(next(iter(q.values())))
+    q, v, a = ({GROUND: zero, **arr} for arr in (q, v, a))
 
-    def frame(name, arr):
-        k = body.get(name)
-        return (zero, zero, zero) if k is None else tuple(arr[:, 3 * k + i] for i in range(3))
-
-    def point(name, p):
-        """Position, velocity, acceleration (n, 2) of point `p` of body `name`."""
-        (x, y, phi), (vx, vy, w), (ax, ay, al) = frame(name, q), frame(name, v), frame(name, a)
-        r = _turn(phi, points[name][p])
-        pos = np.stack([x, y], axis=-1) + r
-        vel = np.stack([vx, vy], axis=-1) + _perp(r) * w[:, None]
-        acc = (np.stack([ax, ay], axis=-1) + _perp(r) * al[:, None] - r * (w**2)[:, None])
-        return pos, vel, acc, phi, w, al
+    def point(body, name):
+        """Position, velocity, acceleration (s, 2) of point `name` of `body`."""
+        w, al = v[body][:, 2], a[body][:, 2]
+        r = _turn(q[body][:, 2], points[body][name])
+        return (q[body][:, :2] + r, v[body][:, :2] + _perp(r) * w[:, None],
+                a[body][:, :2] + _perp(r) * al[:, None] - r * (w * w)[:, None])
 
     joints = {j.name: j for j in linkage.joints}
     coords, rates, accs = {}, {}, {}
@@ -518,17 +522,18 @@ def _tree_series(linkage: Linkage, q, v, a):
         owner, what = c.rsplit(".", 1)
         if what in ("x", "y", "angle"):
             k = ("x", "y", "angle").index(what)
-            coords[c], rates[c], accs[c] = (frame(owner, arr)[k] for arr in (q, v, a))
+            coords[c], rates[c], accs[c] = q[owner][:, k], v[owner][:, k], a[owner][:, k]
             continue
-        jt: Prismatic = joints[owner]
-        pa, va, aa, phi, w, al = point(jt.body_a, jt.point_a)
-        pb, vb, ab, _, _, _ = point(jt.body_b, jt.point_b)
-        u = _turn(phi, (math.cos(jt.angle), math.sin(jt.angle)))
-        d, dd, ddd = pb - pa, vb - va, ab - aa
-        coords[c] = np.sum(u * d, axis=1)
-        rates[c] = np.sum(_perp(u) * d, axis=1) * w + np.sum(u * dd, axis=1)
-        accs[c] = (np.sum(_perp(u) * d, axis=1) * al - np.sum(u * d, axis=1) * w**2
-                   + 2.0 * np.sum(_perp(u) * dd, axis=1) * w + np.sum(u * ddd, axis=1))
+        jt: Prismatic = joints[owner]                   # s along the axis
+        (pa, va, aa), (pb, vb, ab) = point(jt.body_a, jt.point_a), point(jt.body_b, jt.point_b)
+        w, al = v[jt.body_a][:, 2], a[jt.body_a][:, 2]
+        u = _turn(q[jt.body_a][:, 2], (math.cos(jt.angle), math.sin(jt.angle)))
+        d, dv, da = pb - pa, vb - va, ab - aa
+        along, across = np.sum(d * u, axis=1), np.sum(d * _perp(u), axis=1)
+        coords[c] = along
+        rates[c] = np.sum(dv * u, axis=1) + w * across
+        accs[c] = (np.sum(da * u, axis=1) + 2.0 * w * np.sum(dv * _perp(u), axis=1)
+                   + al * across - w * w * along)
     return coords, rates, accs
 
 
