@@ -899,14 +899,14 @@ def _simulate_free(linkage, args: argparse.Namespace) -> int:
                  else "max |shaking|")
     widths = [max(12, len(j) + 6) for j in joints]
     edges = time_edges(args.duration, args.window)      # the run's windows
-    print(f"{'window [s]':>20}  {monitored:>18}  "
-          + "  ".join(f"{'max F ' + j:>{w}}" for j, w in zip(joints, widths)))
+    print((f"{'window [s]':>20}  {monitored:>18}  "
+           + "  ".join(f"{'max F ' + j:>{w}}" for j, w in zip(joints, widths))).rstrip())
     for k, peak in enumerate(traj.peaks):
         a, b = edges[k], edges[k + 1]
         mask = (traj.t >= a) & (traj.t <= b)
         cells = "  ".join(f"{_force(traj.contact_force[mask, i].max()):>{w}}"
                           for i, w in enumerate(widths))
-        print(f"{f'{a:.4g}-{b:.4g}':>20}  {_force(peak):>18}  {cells}")
+        print(f"{f'{a:.4g}-{b:.4g}':>20}  {_force(peak):>18}  {cells}".rstrip())
     _print_error_estimate(traj)
     if args.out:
         with atomic_file(args.out) as tmp:
