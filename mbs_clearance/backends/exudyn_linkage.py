@@ -1280,7 +1280,7 @@ def _coordinates(model: ExudynModel):
             model.mbs.GetNodeParameter(model.nodes[b.name], "referenceCoordinates"))
         v[b.name] = stored(model, f"{b.name}.v")[:, 1:4]
         a[b.name] = stored(model, f"{b.name}.a")[:, 1:4]
-    from .ideal_linkage import coordinate_series
+    from .kinematics import coordinate_series
 
     return coordinate_series(linkage, q, v, a)
 

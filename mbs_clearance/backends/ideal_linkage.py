@@ -33,10 +33,10 @@ import math
 import numpy as np
 
 from .._checks import MemoryLimitError, check_int, check_max_memory, check_real, format_bytes
-from ..model.linkage import CORNERS, GROUND, Linkage, Prismatic, Revolute
+from ..model.linkage import CORNERS, GROUND, Linkage, Revolute
+from .kinematics import coordinate_series, perp, turn
 
-__all__ = ["simulate_ideal_linkage", "peak_ideal_linkage", "IdealModel",
-           "coordinate_series"]
+__all__ = ["simulate_ideal_linkage", "peak_ideal_linkage", "IdealModel"]
 
 #: options of `simulate(linkage, backend="ideal")`
 OPTION_NAMES = ("samples_per_revolution", "max_memory", "duration", "window", "rtol")
@@ -48,17 +48,6 @@ BYTES_PER_COORDINATE_SAMPLE = 8 * 60
 #: samples per drive revolution (a free linkage: per time scale) of the coarse continuation
 #: whose positions start Newton's method at every sample
 CONTINUATION_STEPS = 36
-
-
-def _turn(phi, xy):
-    """A(phi) xy for arrays of angles `phi` (n,) and a body-frame vector `xy`: (n, 2)."""
-    c, s = np.cos(phi), np.sin(phi)
-    return np.stack([c * xy[0] - s * xy[1], s * xy[0] + c * xy[1]], axis=-1)
-
-
-def _perp(v):
-    """v turned by +90 degrees (the derivative of A(phi) xy by phi is perp(A(phi) xy))."""
-    return np.stack([-v[..., 1], v[..., 0]], axis=-1)
 
 
 class IdealModel:
@@ -138,32 +127,32 @@ class IdealModel:
         for kind, _, data in self.items:
             if kind == "pin":
                 i, si, j, sj = data
-                ri, rj = _turn(pose[i][2], si), _turn(pose[j][2], sj)
+                ri, rj = turn(pose[i][2], si), turn(pose[j][2], sj)
                 wi, wj = rate[i][2], rate[j][2]
                 for k in range(2):
                     phi[:, row + k] = (pose[i][k] + ri[:, k]) - (pose[j][k] + rj[:, k])
                     jac[:, row + k, 3 * i + k] += 1.0
                     jac[:, row + k, 3 * j + k] -= 1.0
-                jac[:, row:row + 2, 3 * i + 2] += _perp(ri)
-                jac[:, row:row + 2, 3 * j + 2] -= _perp(rj)
+                jac[:, row:row + 2, 3 * i + 2] += perp(ri)
+                jac[:, row:row + 2, 3 * j + 2] -= perp(rj)
                 gamma[:, row:row + 2] = ri * (wi**2)[:, None] - rj * (wj**2)[:, None]
                 row += 2
             elif kind == "slide":
                 a, sa, n0, b, sb = data
-                ra, rb = _turn(pose[a][2], sa), _turn(pose[b][2], sb)
-                n = _turn(pose[a][2], n0)
+                ra, rb = turn(pose[a][2], sa), turn(pose[b][2], sb)
+                n = turn(pose[a][2], n0)
                 d = (np.stack([pose[b][0], pose[b][1]], axis=-1) + rb
                      - np.stack([pose[a][0], pose[a][1]], axis=-1) - ra)
                 wa, wb = rate[a][2], rate[b][2]
-                dd = (np.stack([rate[b][0], rate[b][1]], axis=-1) + _perp(rb) * wb[:, None]
-                      - np.stack([rate[a][0], rate[a][1]], axis=-1) - _perp(ra) * wa[:, None])
-                nd = _perp(n) * wa[:, None]
+                dd = (np.stack([rate[b][0], rate[b][1]], axis=-1) + perp(rb) * wb[:, None]
+                      - np.stack([rate[a][0], rate[a][1]], axis=-1) - perp(ra) * wa[:, None])
+                nd = perp(n) * wa[:, None]
                 phi[:, row] = np.sum(n * d, axis=1)
                 jac[:, row, 3 * a:3 * a + 2] -= n
                 jac[:, row, 3 * b:3 * b + 2] += n
-                jac[:, row, 3 * b + 2] += np.sum(n * _perp(rb), axis=1)
-                jac[:, row, 3 * a + 2] += (np.sum(_perp(n) * d, axis=1)
-                                           - np.sum(n * _perp(ra), axis=1))
+                jac[:, row, 3 * b + 2] += np.sum(n * perp(rb), axis=1)
+                jac[:, row, 3 * a + 2] += (np.sum(perp(n) * d, axis=1)
+                                           - np.sum(n * perp(ra), axis=1))
                 gamma[:, row] = -(-(wa**2) * np.sum(n * d, axis=1) + 2.0 * np.sum(nd * dd, axis=1)
                                   + np.sum(n * (ra * (wa**2)[:, None] - rb * (wb**2)[:, None]),
                                            axis=1))
@@ -498,43 +487,6 @@ def _tree_series(linkage: Linkage, q, v, a):
     names = [b.name for b in linkage.bodies]
     return coordinate_series(linkage, *({n: arr[:, 3 * k:3 * k + 3] for k, n in
                                          enumerate(names)} for arr in (q, v, a)))
-
-
-def coordinate_series(linkage: Linkage, q: dict, v: dict, a: dict):
-    """The minimal coordinates, rates and accelerations by `Linkage.coordinates` name
-    (absolute angles, floating bodies' positions, a prismatic joint's s along its axis) of
-    the bodies' frames: `q`, `v`, `a` map each body to its (x, y, angle) series (s, 3) and
-    their rates and accelerations (m, rad, per s, per s^2)."""
-    points = {GROUND: linkage.ground_points, **{b.name: b.points for b in linkage.bodies}}
-    zero = np.zeros_like(next(iter(q.values())))
-    q, v, a = ({GROUND: zero, **arr} for arr in (q, v, a))
-
-    def point(body, name):
-        """Position, velocity, acceleration (s, 2) of point `name` of `body`."""
-        w, al = v[body][:, 2], a[body][:, 2]
-        r = _turn(q[body][:, 2], points[body][name])
-        return (q[body][:, :2] + r, v[body][:, :2] + _perp(r) * w[:, None],
-                a[body][:, :2] + _perp(r) * al[:, None] - r * (w * w)[:, None])
-
-    joints = {j.name: j for j in linkage.joints}
-    coords, rates, accs = {}, {}, {}
-    for c in linkage.coordinates():
-        owner, what = c.rsplit(".", 1)
-        if what in ("x", "y", "angle"):
-            k = ("x", "y", "angle").index(what)
-            coords[c], rates[c], accs[c] = q[owner][:, k], v[owner][:, k], a[owner][:, k]
-            continue
-        jt: Prismatic = joints[owner]                   # s along the axis
-        (pa, va, aa), (pb, vb, ab) = point(jt.body_a, jt.point_a), point(jt.body_b, jt.point_b)
-        w, al = v[jt.body_a][:, 2], a[jt.body_a][:, 2]
-        u = _turn(q[jt.body_a][:, 2], (math.cos(jt.angle), math.sin(jt.angle)))
-        d, dv, da = pb - pa, vb - va, ab - aa
-        along, across = np.sum(d * u, axis=1), np.sum(d * _perp(u), axis=1)
-        coords[c] = along
-        rates[c] = np.sum(dv * u, axis=1) + w * across
-        accs[c] = (np.sum(da * u, axis=1) + 2.0 * w * np.sum(dv * _perp(u), axis=1)
-                   + al * across - w * w * along)
-    return coords, rates, accs
 
 
 def peak_ideal_linkage(linkage: Linkage, revolution: int | None = None, **options) -> float:
