@@ -62,8 +62,7 @@ class HelpFormatter(argparse.RawDescriptionHelpFormatter):
         kind = getattr(action.type, "__name__", "")
         if kind.startswith("integer"):
             return "N"
-        if kind in ("positive_float", "finite_float", "_float", "_optional_float", "float",
-                    "quantity"):
+        if kind in ("positive_float", "finite_float", "float", "quantity"):
             return "X"
         if action.type is Path or kind in ("Path", "PosixPath", "WindowsPath"):
             return "PATH"
@@ -338,7 +337,6 @@ def quantity_type(unit: str | None, low: float | None = None, derived: bool = Fa
 
 #: argparse types of the quantities the options take (each also with its unit's suffixes)
 length_type = quantity_type("m")
-positive_length = quantity_type("m", 0.0)
 angle_type = quantity_type("rad")
 positive_time = quantity_type("s", 0.0)
 
