@@ -1966,11 +1966,16 @@ def _cmd_lyapunov(args: argparse.Namespace) -> int:
     print(f"done in {time.perf_counter() - t0:.3g} s", file=sys.stderr)
     lam = res.per_revolution
     sign = res.verdict
-    print(f"largest Lyapunov exponent of {name}: {number(lam, 4)} +- "
-          f"{number(res.uncertainty, 2)} per revolution ({number(res.per_second, 4)} +- "
-          f"{number(res.uncertainty / res.window, 2)} 1/s), the mean over revolutions "
-          f"{transient + 1}-{args.revolutions} (+-: batch means of {BLOCKS} blocks or the "
-          f"running mean's spread, the larger)")
+    span = f"the mean over revolutions {transient + 1}-{args.revolutions}"
+    if math.isfinite(res.uncertainty):
+        print(f"largest Lyapunov exponent of {name}: {number(lam, 4)} +- "
+              f"{number(res.uncertainty, 2)} per revolution ({number(res.per_second, 4)} +- "
+              f"{number(res.uncertainty / res.window, 2)} 1/s), {span} (+-: batch means of "
+              f"{BLOCKS} blocks or the running mean's spread, the larger)")
+    else:       # too few revolutions averaged for a spread
+        print(f"largest Lyapunov exponent of {name}: {number(lam, 4)} per revolution "
+              f"({number(res.per_second, 4)} 1/s), {span}; too few revolutions for an "
+              f"uncertainty (average more: --revolutions)")
     print(f"verdict: {sign} (an interval within |lambda| <= {LYAPUNOV_ZERO:g} per revolution "
           f"counts as zero): {LYAPUNOV_MEANING[sign]}")
     trend = "" if sign in ("zero", "undecided") else (

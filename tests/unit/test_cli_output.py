@@ -12,12 +12,15 @@ from mbs_clearance.cli import main
 #: what only code prints: None/True/False, object and array reprs, complex numbers,
 #: container reprs, numpy scalars, executors
 REPRS = re.compile(r"\bNone\b|\bTrue\b|\bFalse\b|<[\w.]+ object|\barray\(|np\.\w+\(|"
-                   r"\d[jJ]\b|[{\[]'|\bnan\b|Executor|\w+\(\w+=")
+                   r"\d[jJ]\b|[{\[]'|\bnan\b|\binf\b|Executor|\w+\(\w+=")
 NUMBER = re.compile(r"(?<![\w.])[-+]?(?:\d+\.\d*|\.\d+|\d+)(?:[eE][-+]?\d+)?(?![\w.])")
 #: a unit (or a count's noun, or a percentage) right after a number
 UNIT_AFTER = re.compile(r"\s?(N m|kN|N|mm|um|µm|\N{MICRO SIGN}m|m|ms|us|s|rpm|rad/s|rad|deg|"
                         r"1/s|%|J|W|kg|GPa|MPa|kPa|Pa|per revolution|per window|"
                         r"revolutions?|clearances|times|runs|points|values|samples)(?![\w])")
+
+
+PLUS_MINUS = re.compile(r"\s*\+-\s*" + NUMBER.pattern)
 
 
 def _decimal(text: str) -> bool:
@@ -44,7 +47,9 @@ def problems(text: str) -> list[str]:
                 found.append(f"{m.group(0)} has more than 6 significant digits in: {line}")
             if table_row or not _decimal(m.group(0)) or 0 <= probability < m.start():
                 continue
-            if not UNIT_AFTER.match(line, m.end()):
+            end = m.end()
+            spread = PLUS_MINUS.match(line, end)        # "a +- b unit": the unit after b
+            if not UNIT_AFTER.match(line, spread.end() if spread else end):
                 found.append(f"{m.group(0)} without a unit in: {line}")
     return found
 
@@ -55,6 +60,8 @@ def test_the_scanner_finds_what_it_should():
     assert len(problems("KKT: True; mu 1.08e-14+6.34e-15j")) >= 2
     assert len(problems("peak 8253.229173 N")) == 1
     assert len(problems("orbit 0.004531")) == 1
+    assert problems("lambda 0.6645 +- 0.02 per revolution") == []
+    assert len(problems("lambda 0.6645 +- inf per revolution")) == 2
 
 
 def _run(capsys, *argv) -> str:
@@ -88,9 +95,12 @@ def test_map_output_has_units_and_no_internals(tmp_path, capsys):
     assert problems(text) == []
 
 
-def test_lyapunov_output_has_units_and_no_internals(capsys):
-    text = _run(capsys, "lyapunov", "--revolutions", "2", "--transient", "0")
+@pytest.mark.parametrize("revolutions, transient", [("2", "0"), ("10", "2")])
+def test_lyapunov_output_has_units_and_no_internals(revolutions, transient, capsys):
+    # 2 revolutions: too few for a spread (said so); 10: the exponent +- its spread
+    text = _run(capsys, "lyapunov", "--revolutions", revolutions, "--transient", transient)
     assert "per revolution" in text and "1/s" in text
+    assert ("+-" in text) == (revolutions == "10")
     assert problems(text) == []
 
 
