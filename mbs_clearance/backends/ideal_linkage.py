@@ -285,8 +285,8 @@ def _absolute(linkage: Linkage, q: dict, u: dict) -> tuple[np.ndarray, np.ndarra
 
 
 def _span(linkage: Linkage, revolutions, options: dict):
-    """(times, revolutions or None, window edges or None) of a run; ValueError before any
-    work for a bad count, option or size."""
+    """(times, revolutions or None, window edges or None, samples per revolution) of a run;
+    ValueError before any work for a bad count, option or size."""
     from ..solve.linkage_model import check_span, time_edges
 
     unknown = sorted(set(options) - set(OPTION_NAMES))
@@ -314,7 +314,7 @@ def _span(linkage: Linkage, revolutions, options: dict):
             f"{n} samples of the ideal-joint run need about {format_bytes(need)}, more than "
             f"max_memory={max_memory} bytes ({format_bytes(max_memory)}); use fewer "
             "samples_per_revolution or a shorter run, or raise max_memory")
-    return np.linspace(0.0, span, n), revolutions, edges
+    return np.linspace(0.0, span, n), revolutions, edges, per
 
 
 def _fixed_by_constraints(model: IdealModel, q0: np.ndarray) -> bool:
@@ -401,11 +401,11 @@ def simulate_ideal_linkage(linkage: Linkage, revolutions: int | None = None, **o
         ``stats["integrated"]`` whether the run integrated (freedom left) or solved the
         kinematics.
     """
-    from ..solve.trajectory import Trajectory
+    from ..solve.trajectory import Trajectory, annotate
     from .exudyn_linkage import refined_peaks, window_peaks
 
     options = dict(options)
-    t, revolutions, edges = _span(linkage, revolutions, options)
+    t, revolutions, edges, per = _span(linkage, revolutions, options)
     rtol = check_real("rtol", options.get("rtol", 1e-10), 1e-14, 1e-3)
     q_tree, u_tree = _tree_start(linkage)
     q0, v0 = _absolute(linkage, q_tree, u_tree)
@@ -440,15 +440,12 @@ def simulate_ideal_linkage(linkage: Linkage, revolutions: int | None = None, **o
         work = np.concatenate([[0.0], np.cumsum(0.5 * (power[1:] + power[:-1]) * np.diff(t))])
     coords, rates, accs = _tree_series(linkage, q, v, acc)
     contacts = linkage.contacts()
-    stats = {"samples_per_revolution": check_int(
-        "samples_per_revolution", options.get("samples_per_revolution", 3600), 8),
-        "integrated": integrated, "constraint_residual": float(np.max(np.abs(phi)))}
+    stats = {"samples_per_revolution": per, "integrated": integrated,
+             "constraint_residual": float(np.max(np.abs(phi)))}
     if integrated:
         stats["rtol"] = rtol
     peaks = (window_peaks(t, magnitude, edges) if edges is not None
              else refined_peaks(t, magnitude, linkage.period, revolutions))
-    from ..solve.trajectory import annotate
-
     return annotate(Trajectory(
         t=t, base_force=np.ascontiguousarray(monitored), crank_moment=moment,
         contact_force=contact, penetration=np.zeros_like(contact),
