@@ -26,7 +26,7 @@ from pathlib import Path
 
 from ._io import OutputDir, atomic_file, check_output_dir, check_output_file, folder_lock
 from .model.mechanism import PARAMETER_INFO, SliderCrank
-from .units import number, quantity
+from .units import number, parse_quantity, quantity, unit_of_path
 
 # the subcommands import what they need when they run (start-up time): simulate, optimize,
 # sensitivity, the plotting and the validation plugins are not imported to build the parser
@@ -38,7 +38,7 @@ MASS_SCALING_NAMES = ("fixed", "uniform")
 __all__ = ["main", "build_parser", "mechanism_from_args", "linkage_from_args",
            "add_mechanism_options", "case_override",
            "format_table3", "run_command", "Parser", "int_at_least", "positive_float",
-           "finite_float", "add_force_option", "HelpFormatter", "wrote"]
+           "finite_float", "quantity_type", "add_force_option", "HelpFormatter", "wrote"]
 
 #: environment variable that makes unexpected errors show their traceback
 DEBUG_ENV = "MBS_CLEARANCE_DEBUG"
@@ -62,7 +62,7 @@ class HelpFormatter(argparse.RawDescriptionHelpFormatter):
         kind = getattr(action.type, "__name__", "")
         if kind.startswith("integer"):
             return "N"
-        if kind in ("positive_float", "finite_float", "_float", "_optional_float", "float"):
+        if kind in ("positive_float", "finite_float", "float", "quantity"):
             return "X"
         if action.type is Path or kind in ("Path", "PosixPath", "WindowsPath"):
             return "PATH"
@@ -124,13 +124,12 @@ class Parser(argparse.ArgumentParser):
         self._negative_number_matcher = re.compile(r"^-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$")
         if self.add_help:
             self.add_argument("--help-all", action=_HelpAll,
-                              help="show every option (mechanism values, solver and backend "
-                                   "settings) and exit")
+                              help="show every option and exit")
 
     def _advanced(self, action, group) -> bool:
         if group.title and group.title.startswith(ADVANCED_GROUP_PREFIX):
             return action.dest != "clearance"
-        return action.dest in ADVANCED_OPTIONS
+        return action.dest in ADVANCED_OPTIONS or getattr(action, "advanced", False)
 
     def print_help(self, file=None, full: bool = False):
         self._full_help = full
@@ -176,6 +175,17 @@ class Parser(argparse.ArgumentParser):
 
     def error(self, message: str):
         self.exit(2, f"{self.prog}: error: {_one_line(message)}\n")
+
+
+def leave_to_help_all(parser: argparse.ArgumentParser, *dests: str) -> None:
+    """Show the options `dests` (their dest names) under --help-all only, for this parser
+    (`ADVANCED_OPTIONS` holds those of every command)."""
+    missing = sorted(set(dests) - {a.dest for a in parser._actions})
+    if missing:
+        raise ValueError(f"no option(s) {missing} to leave to --help-all")
+    for action in parser._actions:
+        if action.dest in dests:
+            action.advanced = True
 
 
 def _one_line(text: str) -> str:
@@ -299,6 +309,38 @@ def positive_float(text: str) -> float:
     return value
 
 
+def quantity_type(unit: str | None, low: float | None = None, derived: bool = False):
+    """argparse type: a finite number in SI `unit`, or with one of the unit's suffixes
+    (`units.UNIT_SUFFIXES`: "5000rpm", "0.02mm", "90deg"); with `low`, > low; with
+    `derived`, also "none" (the field's derived value, `DERIVED`). ``type.unit`` is `unit`."""
+
+    def parse(text: str):
+        if derived and text.strip().lower() == "none":
+            return DERIVED
+        try:
+            value = parse_quantity(text, unit, "value")
+        except ValueError as exc:
+            why = str(exc).removeprefix("value: ")
+            raise argparse.ArgumentTypeError(
+                why + ("; or 'none' (the derived value)" if derived else "")) from None
+        if not math.isfinite(value):
+            raise argparse.ArgumentTypeError(f"must be a finite number; got {text!r}")
+        if low is not None and not value > low:
+            raise argparse.ArgumentTypeError(f"must be a finite number > {low:g}; got "
+                                             f"{text!r}")
+        return value
+
+    parse.__name__ = "quantity"
+    parse.unit = unit
+    return parse
+
+
+#: argparse types of the quantities the options take (each also with its unit's suffixes)
+length_type = quantity_type("m")
+angle_type = quantity_type("rad")
+positive_time = quantity_type("s", 0.0)
+
+
 def add_evaluation_options(parser: argparse.ArgumentParser, out: str,
                            accuracy: bool = False) -> None:
     """Options of a subcommand that evaluates many designs: --rtol (and with `accuracy`
@@ -377,30 +419,14 @@ class _Derived:
 DERIVED = _Derived()
 
 
-def _optional_float(text: str):
-    if text.strip().lower() == "none":
-        return DERIVED
-    try:
-        return float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(
-            f"must be a number or 'none' (derived value); got {text!r}") from None
-
-
-def _float(text: str) -> float:
-    try:
-        return float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"must be a number; got {text!r}") from None
-
-
 def add_mechanism_options(parser: argparse.ArgumentParser) -> None:
     """One option per SliderCrank field (--crank-length ...) plus --config FILE.json."""
-    group = parser.add_argument_group("mechanism (SI units; defaults: the paper's case)")
+    group = parser.add_argument_group(
+        "mechanism (SI, or with a unit: 50mm, 5000rpm, 90deg; defaults: the paper's case)")
     group.add_argument("--config", metavar="FILE.json",
                        help="JSON object of SliderCrank fields; options below override it "
                             "(default: none, the paper's values)")
-    group.add_argument("--clearance", type=_float, default=None, metavar="X",
+    group.add_argument("--clearance", type=length_type, default=None, metavar="X",
                        help="radial clearance of the clearance joint(s) in m, the same as "
                             "--set clearance=X (default: the case's; the paper's 0.01 mm)")
     defaults = SliderCrank()
@@ -408,8 +434,8 @@ def add_mechanism_options(parser: argparse.ArgumentParser) -> None:
         symbol, unit, _ = PARAMETER_INFO[f.name]
         default = getattr(defaults, f.name)
         optional = default is None or f.name.endswith("inertia")
-        kind = str if f.name in ("contact_model", "friction_law") else (
-            _optional_float if optional else _float)
+        kind = (str if f.name in ("contact_model", "friction_law")
+                else quantity_type(unit, derived=optional))
         extra = "; 'none': derived value" if optional else ""
         if f.name == "contact_model":
             from .laws.forces import CONTACT_MODELS
@@ -442,7 +468,7 @@ def mechanism_from_args(args: argparse.Namespace) -> SliderCrank:
     clearance=X) sets the journal radius to the bearing radius minus X.
     """
     base = SliderCrank.from_json(args.config) if getattr(args, "config", None) else SliderCrank()
-    changes = _mechanism_changes(args)
+    changes = _mechanism_changes(args, field_unit(None))
     clearance = changes.pop("clearance", None)
     unknown = sorted(set(changes) - {f.name for f in dataclasses.fields(SliderCrank)})
     if unknown:
@@ -458,9 +484,11 @@ def mechanism_from_args(args: argparse.Namespace) -> SliderCrank:
     return mech
 
 
-def _mechanism_changes(args: argparse.Namespace) -> dict:
+def _mechanism_changes(args: argparse.Namespace, unit_of) -> dict:
     """NAME -> value of the per-field options (--crank-length ..., --clearance) and --set,
-    one dictionary: the options are aliases of --set. ValueError for a name given twice."""
+    one dictionary: the options are aliases of --set. A --set value with a unit suffix is
+    converted to SI, its unit checked against the field's (`unit_of(NAME)`, None: unknown).
+    ValueError for a name given twice or a suffix of another unit."""
     changes: dict = {}
     for f in dataclasses.fields(SliderCrank):
         value = getattr(args, f.name, None)
@@ -475,8 +503,48 @@ def _mechanism_changes(args: argparse.Namespace) -> dict:
             raise ValueError(f"{name} given twice: {option} is --set {name}; give one")
         if name in changes:
             raise ValueError(f"--set {name} given twice")
-        changes[name] = value
+        changes[name] = si_value(f"--set {name}", value, unit_of(name))
     return changes
+
+
+class Suffixed(str):
+    """A command-line value with a unit suffix ("5000rpm"), kept as text until the unit of
+    the field it sets is known (`si_value`)."""
+
+
+def si_value(item: str, value, unit: str | None):
+    """`value` in SI: a `Suffixed` text converted by its suffix, which must be one of
+    `unit`'s (None: the suffix alone converts it); anything else as is."""
+    if isinstance(value, Suffixed):
+        return parse_quantity(str(value), unit, item)
+    return value
+
+
+def field_unit(case: str | None = None, description: bool = False):
+    """NAME -> SI unit (or None) of a value set by name: of the paper's slider-crank
+    (`case` None and not `description`: its fields), of a named case (its overrides) or of
+    a description (its dotted paths), and 'clearance' / '<joint>.clearance' (m)."""
+    from .model.mechanism import PARAMETER_INFO
+
+    def unit_of(name: str) -> str | None:
+        if name == "clearance" or name.endswith(".clearance"):
+            return "m"
+        if case is None and not description:
+            return PARAMETER_INFO[name][1] if name in PARAMETER_INFO else None
+        if case is not None:
+            from .model.cases import CASE_PARAMETERS
+
+            if name in CASE_PARAMETERS.get(case, {}):
+                return CASE_PARAMETERS[case][name][1]
+        return unit_of_path(name)
+
+    return unit_of
+
+
+def unit_of_args(args: argparse.Namespace):
+    """`field_unit` of the mechanism the options --case / --description choose."""
+    return field_unit(getattr(args, "case", None),
+                      getattr(args, "description", None) is not None)
 
 
 def _case_lines() -> str:
@@ -486,14 +554,28 @@ def _case_lines() -> str:
     return "\n".join(f"  {name}: {CASE_SUMMARY.get(name, '')}" for name in sorted(CASES))
 
 
+_SUFFIXED = re.compile(r"\s*[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?\s*[^\d\s.].*")
+
+
 def _override_value(text: str):
-    """A --set value: a number, 'none' (None: the case's derived value) or a word."""
+    """A --set value: a number, a number with a unit suffix (`Suffixed`, converted once the
+    field is known), 'none' (None: the case's derived value) or a word."""
     if text.strip().lower() == "none":
         return None
     try:
         return float(text)
     except ValueError:
-        return text
+        return Suffixed(text) if _SUFFIXED.fullmatch(text) else text
+
+
+def field_value(text: str):
+    """argparse type: a finite number (SI) or a number with a unit suffix (`Suffixed`,
+    converted by `si_value` once the field it sets is known)."""
+    value = _override_value(text)
+    if isinstance(value, Suffixed) or isinstance(value, float) and math.isfinite(value):
+        return value
+    raise argparse.ArgumentTypeError(f"must be a finite number (SI) or one with a unit "
+                                     f"suffix (e.g. 5000rpm, 0.02mm); got {text!r}")
 
 
 def case_override(text: str) -> tuple[str, object]:
@@ -506,17 +588,18 @@ def case_override(text: str) -> tuple[str, object]:
 
 
 def gene_bounds(text: str) -> tuple[str, tuple[float, float]]:
-    """argparse type: NAME=LO:HI (a GA gene and its bounds, SI)."""
+    """argparse type: NAME=LO:HI (a GA gene and its bounds, SI or with a unit suffix:
+    `Suffixed`, converted by `_genes` once the gene's unit is known)."""
     name, sep, rhs = text.partition("=")
     lo, sep2, hi = rhs.partition(":")
-    try:
-        if not (sep and sep2 and name.strip()):
-            raise ValueError
-        bounds = (finite_float(lo), finite_float(hi))
-    except (ValueError, argparse.ArgumentTypeError):
+    bounds = tuple(_override_value(v.strip()) for v in (lo, hi))
+    if not (sep and sep2 and name.strip()) or not all(
+            isinstance(b, Suffixed) or isinstance(b, float) and math.isfinite(b)
+            for b in bounds):
         raise argparse.ArgumentTypeError(f"must be NAME=LO:HI (a gene and its bounds in SI "
-                                         f"units, e.g. coupler_length=3.6:4.4); got "
-                                         f"{text!r}") from None
+                                         f"units or with a unit suffix, e.g. "
+                                         f"coupler_length=3.6:4.4 or crank_length=40mm:60mm); "
+                                         f"got {text!r}")
     return name.strip(), bounds
 
 
@@ -533,7 +616,7 @@ def linkage_from_args(args: argparse.Namespace):
     if getattr(args, "config", None):
         raise ValueError(f"--config holds SliderCrank fields, for the paper's slider-crank "
                          f"only, not for --{'case' if case else 'description'}")
-    changes = _mechanism_changes(args)
+    changes = _mechanism_changes(args, unit_of_args(args))
     if description is not None:
         from .model.linkage import Linkage
 
@@ -759,14 +842,15 @@ def _simulate_linkage(linkage, args: argparse.Namespace) -> int:
     widths = [max(12, len(j) + 6) for j in joints]
     # ideal joints have no journal whose centred start makes a transient
     transient = start is None and args.backend != "ideal"
-    print(f"{'revolution':>10}  {monitored:>18}  {'max |drive|':>12}  "
-          + "  ".join(f"{'max F ' + j:>{w}}" for j, w in zip(joints, widths)))
+    print((f"{'revolution':>10}  {monitored:>18}  {'max |drive|':>12}  "
+           + "  ".join(f"{'max F ' + j:>{w}}" for j, w in zip(joints, widths))).rstrip())
     for k in range(1, traj.revolutions + 1):
         mask = traj.revolution_mask(k)
         cells = "  ".join(f"{_force(traj.contact_force[mask, i].max()):>{w}}"
                           for i, w in enumerate(widths))
         print(f"{_revolution_label(k, transient):>10}  {_force(traj.peaks[k - 1]):>18}  "
-              f"{quantity(abs(traj.crank_moment[mask]).max(), 'N m', 6):>12}  {cells}")
+              f"{quantity(abs(traj.crank_moment[mask]).max(), 'N m', 6):>12}  {cells}"
+              .rstrip())
     if transient:
         print(START_UP_NOTE, file=sys.stderr)
     elif start is not None:
@@ -813,14 +897,14 @@ def _simulate_free(linkage, args: argparse.Namespace) -> int:
                  else "max |shaking|")
     widths = [max(12, len(j) + 6) for j in joints]
     edges = time_edges(args.duration, args.window)      # the run's windows
-    print(f"{'window [s]':>20}  {monitored:>18}  "
-          + "  ".join(f"{'max F ' + j:>{w}}" for j, w in zip(joints, widths)))
+    print((f"{'window [s]':>20}  {monitored:>18}  "
+           + "  ".join(f"{'max F ' + j:>{w}}" for j, w in zip(joints, widths))).rstrip())
     for k, peak in enumerate(traj.peaks):
         a, b = edges[k], edges[k + 1]
         mask = (traj.t >= a) & (traj.t <= b)
         cells = "  ".join(f"{_force(traj.contact_force[mask, i].max()):>{w}}"
                           for i, w in enumerate(widths))
-        print(f"{f'{a:.4g}-{b:.4g}':>20}  {_force(peak):>18}  {cells}")
+        print(f"{f'{a:.4g}-{b:.4g}':>20}  {_force(peak):>18}  {cells}".rstrip())
     _print_error_estimate(traj)
     if args.out:
         with atomic_file(args.out) as tmp:
@@ -835,11 +919,11 @@ def add_window_options(p: argparse.ArgumentParser, what: str,
                        ) -> None:
     """--duration S and --window S: a free linkage's run (`what` it gives) and its time
     windows (`window`: what they are)."""
-    p.add_argument("--duration", type=positive_float, metavar="S",
+    p.add_argument("--duration", type=positive_time, metavar="S",
                    help=f"a free linkage (no drive; e.g. --case "
                         f"flores_translational_slider_crank) only, instead of the "
                         f"revolutions: the run's duration in s; {what} (default: none)")
-    p.add_argument("--window", type=positive_float, metavar="S",
+    p.add_argument("--window", type=positive_time, metavar="S",
                    help=f"with --duration: {window}")
 
 
@@ -1160,17 +1244,14 @@ def add_linkage_options(p: argparse.ArgumentParser) -> None:
     """--case NAME | --description FILE, and --set NAME=VALUE."""
     source = p.add_mutually_exclusive_group()
     source.add_argument("--case", metavar="NAME", choices=_case_names(),
-                        help="a named linkage (listed below; default: the paper's "
-                             "slider-crank with the options below): "
+                        help="a named linkage (default: the paper's slider-crank): "
                              + ", ".join(_case_names()))
     source.add_argument("--description", type=Path, metavar="FILE",
-                        help="a linkage described in FILE, .json or .toml "
-                             "(mbs_clearance.Linkage.to_dict's form; default: none)")
+                        help="a linkage described in a .json or .toml file (default: none)")
     p.add_argument("--set", type=case_override, action="append", metavar="NAME=VALUE",
-                   help="set a value (repeatable): a field of the paper's slider-crank, an "
-                        "override of the --case, or a dotted path of the --description, and "
-                        "'clearance'; e.g. --set clearance=1e-4. The mechanism options "
-                        "below are aliases of it (default: none)")
+                   help="set a value (repeatable; SI or with a unit, e.g. clearance=0.02mm): "
+                        "a field of the paper's slider-crank, a --case override or a "
+                        "--description's dotted path (default: none)")
 
 
 def add_settled_option(p: argparse.ArgumentParser) -> None:
@@ -1203,7 +1284,7 @@ def add_run_options(p: argparse.ArgumentParser, methods, integrator_default="dop
     p.add_argument("--rtol", type=positive_float,
                    help="relative tolerance of the reduced backend (default: the model's, "
                         "1e-7)")
-    p.add_argument("--step-size", type=positive_float,
+    p.add_argument("--step-size", type=positive_time,
                    help="time step in s of the exudyn backend (default: 6000 steps per "
                         "revolution, 2 us at 5000 rpm)")
     p.add_argument("--integrator", choices=methods,
@@ -1312,7 +1393,11 @@ def _add_optimize_parser(subparsers) -> argparse.ArgumentParser:
         description="Minimise the peak base force max |F12| over a crank revolution by "
                     "choosing L2 and L3 with a genetic algorithm (pygad), refine the GA's "
                     "best point locally, print a Table 3-like comparison with the paper and "
-                    "write result.json and two figures into --out.")
+                    "write result.json and two figures into --out. A --case or "
+                    "--description: the genes (--gene) and the output (--output) are yours.",
+        epilog="named cases (--case NAME; --set NAME=VALUE changes a value):\n"
+               + _case_lines())
+    add_linkage_options(p)
     p.add_argument("--seed", type=int_at_least(0), default=1, help="GA seed (default 1)")
     p.add_argument("--population", type=int_at_least(4), default=20,
                    help="population size (>= 4, default 20)")
@@ -1324,19 +1409,19 @@ def _add_optimize_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--mass-scaling", choices=MASS_SCALING_NAMES, default="fixed",
                    help="fixed: link masses fixed (paper); uniform: crank and coupler masses "
                         "proportional to their lengths")
-    p.add_argument("--crank-bounds", type=finite_float, nargs=2, metavar=("LO", "HI"),
+    p.add_argument("--crank-bounds", type=length_type, nargs=2, metavar=("LO", "HI"),
                    default=(0.04, 0.06),
                    help="bounds of L2 in m (default 0.04 0.06: 40 to 60 mm)")
-    p.add_argument("--coupler-bounds", type=finite_float, nargs=2, metavar=("LO", "HI"),
+    p.add_argument("--coupler-bounds", type=length_type, nargs=2, metavar=("LO", "HI"),
                    default=(0.10, 0.14),
                    help="bounds of L3 in m (default 0.10 0.14: 100 to 140 mm)")
     p.add_argument("--revolution", type=int_at_least(1),
                    help="crank revolution whose peak is minimised (default 4)")
     add_window_options(p, "the peak minimised is over its last --window")
     p.add_argument("--gene", type=gene_bounds, action="append", metavar="NAME=LO:HI",
-                   help="a gene and its bounds (repeatable; SI): a --case's override or a "
-                        "dotted path of the description, e.g. --gene coupler_length=3.6:4.4; "
-                        "for the paper's slider-crank SliderCrank fields (default: the "
+                   help="a gene and its bounds (repeatable; SI or with a unit, e.g. "
+                        "crank_length=40mm:60mm): a --case override or a --description's "
+                        "dotted path; for the paper's slider-crank its fields (default: the "
                         "--crank-bounds and --coupler-bounds)")
     p.add_argument("--output", metavar="NAME",
                    help="--case / --description: the output whose peak is minimised, "
@@ -1349,8 +1434,9 @@ def _add_optimize_parser(subparsers) -> argparse.ArgumentParser:
                    help="also print the executor and the refinement's method, objective "
                         "calls and optimality (KKT) check")
     add_force_option(p)
-    add_linkage_options(p)
     add_mechanism_options(p)
+    leave_to_help_all(p, "seed", "saturation", "mass_scaling", "accuracy", "scheduler",
+                      "no_progress", "keep_going", "no_refine", "verbose")
     p.set_defaults(func=_cmd_optimize)
     return p
 
@@ -1472,12 +1558,14 @@ def _cmd_optimize(args: argparse.Namespace) -> int:
 
 
 def _genes(args: argparse.Namespace) -> dict[str, tuple[float, float]]:
-    """{name: (lo, hi)} of the --gene options (a name given twice: ValueError)."""
+    """{name: (lo, hi)} of the --gene options in SI (a name given twice, a suffix of
+    another unit: ValueError)."""
     genes = {}
+    unit_of = unit_of_args(args)
     for name, bounds in args.gene or []:
         if name in genes:
             raise ValueError(f"--gene {name} given twice")
-        genes[name] = bounds
+        genes[name] = tuple(si_value(f"--gene {name}", b, unit_of(name)) for b in bounds)
     return genes
 
 
@@ -1537,15 +1625,18 @@ def _add_tolerance_parser(subparsers) -> argparse.ArgumentParser:
     """The ``tolerance`` subcommand: global sensitivity and exceedance over tolerances."""
     p = subparsers.add_parser(
         "tolerance", help="tolerances and wear: Sobol/Morris/DGSM indices, P(load exceeded)",
-        description="Global sensitivity of a run's output (peak base force, RMS drive moment, "
-                    "max contact force) to manufacturing tolerances (SALib), Monte Carlo of "
-                    "its distribution and the probability of exceeding --allowable, and a "
-                    "wear study. Inputs: a JSON object {field: {\"uniform\": [lo, hi]} | "
-                    "{\"band\": [nominal, tol]} | {\"normal\": [mean, sigma]} | "
-                    "{\"fit\": \"H7/g6\", \"diameter\": 0.02}} (field 'radial_clearance' "
-                    "for a fit), or a SALib parameter file (lines: NAME LOW HIGH, uniform). "
-                    "Prints the indices and writes result.json and summary.txt into --out.")
-    p.add_argument("inputs", type=Path, help="input distributions (JSON, or SALib text file)")
+        description="Global sensitivity of a run's output to manufacturing tolerances "
+                    "(Sobol, Morris, DGSM indices with SALib), its distribution by Monte "
+                    "Carlo with P(output > --allowable), and a wear study. Prints the "
+                    "indices and writes result.json and summary.txt into --out.",
+        epilog="INPUTS: a JSON object {field: {\"uniform\": [lo, hi]} | {\"band\": [nominal, "
+               "tol]} | {\"normal\": [mean, sigma]} | {\"fit\": \"H7/g6\", \"diameter\": "
+               "0.02}} (field 'radial_clearance' for a fit; SI values), or a SALib parameter "
+               "file (lines: NAME LOW HIGH, uniform).\nnamed cases (--case NAME; --set "
+               "NAME=VALUE changes a value):\n" + _case_lines())
+    p.add_argument("inputs", type=Path,
+                   help="input distributions: JSON or a SALib text file (formats: --help-all)")
+    add_linkage_options(p)
     p.add_argument("--output", default="peak", metavar="NAME",
                    help="output of a run: peak, rms_drive_moment or max_contact_force; with "
                         "--case / --description also pivot_force:JOINT, shaking_force, "
@@ -1564,17 +1655,18 @@ def _add_tolerance_parser(subparsers) -> argparse.ArgumentParser:
                    help="DGSM gradient samples (output peak only; 0: none)")
     p.add_argument("--monte-carlo", type=int_at_least(0), default=0,
                    help="Monte Carlo samples of the output distribution (0: none)")
-    p.add_argument("--allowable", type=positive_float,
+    p.add_argument("--allowable", type=quantity_type(None, 0.0),
                    help="allowable load (> 0, the output's unit): estimate "
                         "P(output > allowable)")
-    p.add_argument("--wear", type=finite_float, nargs="+", metavar="M",
+    p.add_argument("--wear", type=length_type, nargs="+", metavar="M",
                    help="radial wear amounts in m added to the clearance (needs --monte-carlo)")
     p.add_argument("--seed", type=int_at_least(0), default=0, help="seed (default 0)")
     add_evaluation_options(p, "tolerance", accuracy=True)
     add_keep_going_option(p, "runs")
     add_force_option(p)
-    add_linkage_options(p)
     add_mechanism_options(p)
+    leave_to_help_all(p, "first_order_only", "morris", "dgsm", "seed", "accuracy",
+                      "scheduler", "no_progress", "keep_going")
     p.set_defaults(func=_cmd_tolerance)
     return p
 
@@ -1615,14 +1707,13 @@ def _add_map_parser(subparsers) -> argparse.ArgumentParser:
                     "classify the motion (period-k, quasi-periodic, chaotic, ...). Writes "
                     "map.nc (an xarray dataset, netCDF; resumed if it exists with the same "
                     "settings) and figures into --out.",
-        epilog="sweeps: NAME=LO:HI:N (linear), NAME=LO:HI:log:N, NAME=V1,V2,...; speeds may "
-               "be given in rpm (crank_speed=500rpm:10000rpm:40). Fields: SliderCrank "
-               "fields and 'clearance' (default: the paper's case), or a --case's "
-               "overrides and 'clearance'.\nnamed cases:\n" + _case_lines())
-    p.add_argument("--case", metavar="NAME", choices=_case_names(),
-                   help="a named case (default: the paper's slider-crank, reduced model)")
-    p.add_argument("--set", type=case_override, action="append", metavar="NAME=VALUE",
-                   help="a fixed override of the --case (repeatable)")
+        epilog="sweeps: NAME=LO:HI:N (linear), NAME=LO:HI:log:N, NAME=V1,V2,...; values SI "
+               "or with a unit suffix (crank_speed=500rpm:10000rpm:40, "
+               "clearance=1um:0.1mm:log:30). Fields: SliderCrank fields and 'clearance' "
+               "(default: the paper's case), a --case's overrides and 'clearance', or a "
+               "--description's dotted paths, 'clearance', '<joint>.clearance' and "
+               "'crank_speed'.\nnamed cases:\n" + _case_lines())
+    add_linkage_options(p)
     p.add_argument("--sweep", action="append", required=True, metavar="SPEC",
                    help="a swept field (once or twice), e.g. clearance=1e-6:1e-3:log:60")
     p.add_argument("--revolutions", type=int_at_least(2), default=100,
@@ -1632,46 +1723,47 @@ def _add_map_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--lyapunov", action="store_true",
                    help="also compute the largest Lyapunov exponent of each point (a "
                         "tangent run instead of the plain one; any --case)")
-    p.add_argument("--angle", type=finite_float,
+    p.add_argument("--angle", type=angle_type,
                    help="crank angle of the section in rad (default: the initial angle)")
     p.add_argument("--tol", type=positive_float, default=1e-3,
                    help="recurrence tolerance, fraction of the clearance (default 1e-3)")
     p.add_argument("--max-period", type=int_at_least(1), default=8,
                    help="largest period looked for (default 8)")
-    p.add_argument("--write-interval", type=finite_float, default=5.0, metavar="SECONDS",
-                   help="write map.nc at most this often while points arrive (default 5; "
-                        "and at the end)")
+    p.add_argument("--write-interval", type=quantity_type("s"), default=5.0, metavar="S",
+                   help="write map.nc at most this often while points arrive, in s "
+                        "(default 5; and at the end)")
     add_evaluation_options(p, "map")
     add_keep_going_option(p, "points' runs")
     add_force_option(p)
+    add_mechanism_options(p)
+    leave_to_help_all(p, "tol", "max_period", "scheduler", "no_progress", "keep_going")
     p.set_defaults(func=_cmd_map)
     return p
 
 
 def _cmd_map(args: argparse.Namespace) -> int:
     from . import plotting
-    from .studies.sweep import regime_map
+    from .studies.sweep import parse_sweep, regime_map
 
-    overrides = {}
-    for name, value in args.set or []:
-        if name in overrides:
-            raise ValueError(f"--set {name} given twice")
-        overrides[name] = value
     if len(args.sweep) > 2:
         raise ValueError(f"--sweep: one or two fields; got {len(args.sweep)}")
     case = args.case
-    paper = case in (None, "paper_slider_crank")
+    paper = case in (None, "paper_slider_crank") and args.description is None
+    overrides = None
     if paper:
-        from .model.mechanism import field_names
-
-        unknown = sorted(set(overrides) - set(field_names()))
-        if unknown:
-            raise ValueError(f"--set: unknown field(s) {unknown} of the paper's case; allowed: "
-                             f"{sorted(field_names())}")
-    base = SliderCrank().replace(**overrides) if paper else None
-    if paper:       # a case's overrides are checked by the study (its size first)
+        if getattr(args, "config", None) is None:
+            args.case = None            # the paper's case: its SliderCrank fields
+        base = mechanism_from_args(args)
+    elif case is not None:          # the study rebuilds the case with its overrides
+        overrides = _mechanism_changes(args, unit_of_args(args))
+        base = None
+    else:
+        base = linkage_from_args(args)
+    if base is not None:      # a case's overrides are checked by the study (its size first)
         check_run_size(base, "--revolutions", args.revolutions)
-    kw = dict(case=None if paper else case, overrides=None if paper else overrides,
+    unit_of = field_unit(None) if paper else unit_of_args(args)
+    sweeps = [parse_sweep(spec, unit_of) for spec in args.sweep]
+    kw = dict(case=None if paper or case is None else case, overrides=overrides,
               revolutions=args.revolutions, keep=args.keep, lyapunov=args.lyapunov,
               angle=args.angle, tol=args.tol, max_period=args.max_period, rtol=args.rtol,
               progress=not args.no_progress, write_interval=args.write_interval)
@@ -1687,9 +1779,14 @@ def _cmd_map(args: argparse.Namespace) -> int:
         kw["workers"] = args.workers
     with folder_lock(args.out, "--out"):
         path = args.out / "map.nc"
-        result = regime_map(base, args.sweep, out=path, **kw)
+        result = regime_map(base, sweeps, out=path, **kw)
         ds = result.dataset
         print(result.summary())
+        for axis in sweeps:
+            unit = unit_of(axis.name) or "-"
+            spacing = {"log": ", log-spaced", "lin": ", evenly spaced"}.get(axis.spacing, "")
+            print(f"{axis.name}: {quantity(min(axis.values), unit)} to "
+                  f"{quantity(max(axis.values), unit)}, {len(axis.values)} values{spacing}")
         dims = list(ds["regime"].dims)
         with OutputDir(args.out, "map") as staged:
             figures = ["bifurcation.png"]
@@ -1869,11 +1966,16 @@ def _cmd_lyapunov(args: argparse.Namespace) -> int:
     print(f"done in {time.perf_counter() - t0:.3g} s", file=sys.stderr)
     lam = res.per_revolution
     sign = res.verdict
-    print(f"largest Lyapunov exponent of {name}: {number(lam, 4)} +- "
-          f"{number(res.uncertainty, 2)} per revolution ({number(res.per_second, 4)} +- "
-          f"{number(res.uncertainty / res.window, 2)} 1/s), the mean over revolutions "
-          f"{transient + 1}-{args.revolutions} (+-: batch means of {BLOCKS} blocks or the "
-          f"running mean's spread, the larger)")
+    span = f"the mean over revolutions {transient + 1}-{args.revolutions}"
+    if math.isfinite(res.uncertainty):
+        print(f"largest Lyapunov exponent of {name}: {number(lam, 4)} +- "
+              f"{number(res.uncertainty, 2)} per revolution ({number(res.per_second, 4)} +- "
+              f"{number(res.uncertainty / res.window, 2)} 1/s), {span} (+-: batch means of "
+              f"{BLOCKS} blocks or the running mean's spread, the larger)")
+    else:       # too few revolutions averaged for a spread
+        print(f"largest Lyapunov exponent of {name}: {number(lam, 4)} per revolution "
+              f"({number(res.per_second, 4)} 1/s), {span}; too few revolutions for an "
+              f"uncertainty (average more: --revolutions)")
     print(f"verdict: {sign} (an interval within |lambda| <= {LYAPUNOV_ZERO:g} per revolution "
           f"counts as zero): {LYAPUNOV_MEANING[sign]}")
     trend = "" if sign in ("zero", "undecided") else (
@@ -1974,8 +2076,10 @@ def _add_orbits_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--field", metavar="NAME",
                    help="continue the orbit in this field (a sweep field: clearance, "
                         "crank_speed, a case override or a dotted field; default: none)")
-    p.add_argument("--start", type=finite_float, help="first value of --field (SI; default: none)")
-    p.add_argument("--stop", type=finite_float, help="last value of --field (SI; default: none)")
+    p.add_argument("--start", type=field_value, metavar="X",
+                   help="first value of --field (SI, or with a unit suffix; default: none)")
+    p.add_argument("--stop", type=field_value, metavar="X",
+                   help="last value of --field (SI, or with a unit suffix; default: none)")
     p.add_argument("--max-points", type=int_at_least(2), default=200,
                    help="most orbits computed along the branch")
     p.add_argument("--max-step", type=positive_float, default=3.0,
@@ -2006,6 +2110,10 @@ def _cmd_orbits(args: argparse.Namespace) -> int:
                          "or none")
     if args.field is None and (args.plot or args.map):
         raise ValueError("--plot and --map draw a branch: give --field, --start and --stop")
+    if args.field is not None:
+        unit = unit_of_args(args)(args.field)
+        args.start = si_value("--start", args.start, unit)
+        args.stop = si_value("--stop", args.stop, unit)
     regime = None
     if args.map is not None:
         from .studies.sweep import load_map

@@ -309,14 +309,26 @@ def _earliest(impacts: dict) -> FirstImpact | None:
 
 
 def _pct(x: float) -> str:
-    return f"{100.0 * x:+.3f} %" if np.isfinite(x) else "n/a"
+    if not np.isfinite(x):
+        return "n/a"
+    text = f"{100.0 * x:+.3f} %"
+    return "0.000 %" if text in ("+0.000 %", "-0.000 %") else text   # no signed zero
+
+
+def _impact_time(impact: FirstImpact | None) -> str:
+    from mbs_clearance.units import quantity
+
+    return "no impact" if impact is None else f"at {quantity(impact.time, 's', 6)}"
 
 
 def format_table(result: Comparison) -> str:
     """Plain-text table of a `Comparison` (returned as a string)."""
     a, b = result.backend_a, result.backend_b
+    from mbs_clearance.units import number, quantity
+
     lines = [f"comparison: a = {a} (reference), b = {b}; smallest clearance c = "
-             f"{result.clearance:.4g} m; common grid step {result.grid_step:.3g} s", ""]
+             f"{quantity(result.clearance, 'm')}; common grid step "
+             f"{quantity(result.grid_step, 's', 3)}", ""]
     head = (f"{'rev':>3}  {'peak a (N)':>12}  {'peak b (N)':>12}  "
             f"{'b/a - 1':>10}  {'rms dF/rms':>10}  {'rms dM/rms':>10}  "
             f"{'rms |S| b/a-1':>13}  {'rms M b/a-1':>11}  {'orbit max/c':>11}  "
@@ -324,7 +336,7 @@ def format_table(result: Comparison) -> str:
     lines += [head, "-" * len(head)]
     for r in result.revolutions:
         lines.append(
-            f"{r.revolution:>3}  {r.peak_a:>12.2f}  {r.peak_b:>12.2f}  "
+            f"{r.revolution:>3}  {number(r.peak_a, 6):>12}  {number(r.peak_b, 6):>12}  "
             f"{_pct(r.peak_rel_diff):>10}  {100 * r.base_force_rel_rms:>8.3f} %  "
             f"{100 * r.crank_moment_rel_rms:>8.3f} %  {_pct(r.shaking_rms_rel_diff):>13}  "
             f"{_pct(r.moment_rms_rel_diff):>11}  {r.orbit_max_rel:>11.4f}  "
@@ -337,23 +349,26 @@ def format_table(result: Comparison) -> str:
         fb = result.first_impacts_b.get(name, result.first_impact_b)
         label = f"first impact {name}".rstrip()
         if fa is not None and fb is not None:
-            lines.append(f"{label}: t_a = {fa.time * 1e6:.3f} us, t_b = {fb.time * 1e6:.3f} "
-                         f"us; peak contact force a = {fa.peak_contact_force:.1f} N, b = "
-                         f"{fb.peak_contact_force:.1f} N "
+            lines.append(f"{label}: t_a = {quantity(fa.time, 's', 6)}, t_b = "
+                         f"{quantity(fb.time, 's', 6)}; peak contact force a = "
+                         f"{quantity(fa.peak_contact_force, 'N', 6)}, b = "
+                         f"{quantity(fb.peak_contact_force, 'N', 6)} "
                          f"({_pct(fb.peak_contact_force / fa.peak_contact_force - 1)})")
         else:
-            lines.append(f"{label}: a {'none' if fa is None else f'{fa.time:.6g} s'}, "
-                         f"b {'none' if fb is None else f'{fb.time:.6g} s'}")
+            lines.append(f"{label}: a {_impact_time(fa)}, b {_impact_time(fb)}")
     sa, sb = result.statistics_a, result.statistics_b
     if sa is not None and sb is not None:
         revs = f"{min(sa.revolutions)}-{max(sa.revolutions)}"
         lines.append(f"statistics over revolutions {revs}:")
-        for label, x, y in (("mean |F| (N)", sa.mean_base_force, sb.mean_base_force),
-                            ("rms |F| (N)", sa.rms_base_force, sb.rms_base_force),
-                            ("rms |S| (N)", sa.rms_shaking_force, sb.rms_shaking_force),
-                            ("rms M (N m)", sa.rms_crank_moment, sb.rms_crank_moment),
-                            ("contact fraction", sa.contact_fraction, sb.contact_fraction)):
-            lines.append(f"  {label:<18} a = {x:>10.4g}   b = {y:>10.4g}   ({_pct(y / x - 1)})")
+        for label, x, y, unit in (
+                ("mean |F|", sa.mean_base_force, sb.mean_base_force, "N"),
+                ("rms |F|", sa.rms_base_force, sb.rms_base_force, "N"),
+                ("rms |S|", sa.rms_shaking_force, sb.rms_shaking_force, "N"),
+                ("rms M", sa.rms_crank_moment, sb.rms_crank_moment, "N m"),
+                ("contact fraction", 100 * sa.contact_fraction, 100 * sb.contact_fraction,
+                 "%")):
+            lines.append(f"  {label:<18} a = {quantity(x, unit):>12}   b = "
+                         f"{quantity(y, unit):>12}   ({_pct(y / x - 1)})")
     if result.verdict is not None:
         lines += ["", format_verdict(result.verdict)]
     return "\n".join(lines)
@@ -580,12 +595,12 @@ def build_parser(parser: argparse.ArgumentParser | None = None) -> argparse.Argu
     from mbs_clearance.cli import (
         Parser,
         add_force_option,
+        add_linkage_options,
         add_mechanism_options,
-        case_override,
         int_at_least,
         positive_float,
+        positive_time,
     )
-    from mbs_clearance.model.cases import CASES
     from mbs_clearance.solve.simulate import BACKENDS
 
     if parser is None:
@@ -602,10 +617,10 @@ def build_parser(parser: argparse.ArgumentParser | None = None) -> argparse.Argu
                         help="crank revolutions")
     parser.add_argument("--rtol", type=positive_float,
                         help="relative tolerance (reduced backend)")
-    parser.add_argument("--h-max", type=positive_float,
+    parser.add_argument("--h-max", type=positive_time,
                         help="largest step in s (reduced backend); default: the Exudyn step "
                              "size when compared with exudyn")
-    parser.add_argument("--step-size", type=positive_float,
+    parser.add_argument("--step-size", type=positive_time,
                         help="time step in s (exudyn backend; default: its default step)")
     parser.add_argument("--accuracy", type=positive_float,
                         help="target relative peak error (exudyn backend): runs at steps h, "
@@ -627,13 +642,7 @@ def build_parser(parser: argparse.ArgumentParser | None = None) -> argparse.Argu
                         help="overlay figure (PNG); default compare_overlay.png")
     parser.add_argument("--no-plot", action="store_true", help="do not write the figure")
     add_force_option(parser)
-    source = parser.add_argument_group("linkage (instead of the slider-crank options)")
-    source.add_argument("--case", metavar="NAME", choices=sorted(CASES),
-                        help="a named linkage: " + ", ".join(sorted(CASES)))
-    source.add_argument("--description", metavar="FILE",
-                        help="a linkage description file (JSON or TOML)")
-    source.add_argument("--set", type=case_override, action="append", metavar="NAME=VALUE",
-                        help="override a value of the --case (repeatable)")
+    add_linkage_options(parser)
     add_mechanism_options(parser)
     return parser
 

@@ -361,8 +361,8 @@ def _summary(v: Verdict) -> str:
     if v.kind == DIFFER:
         w = v.worst
         return (f"verdict: {v.model_a} and {v.model_b} differ beyond their error bars: "
-                f"{w.quantity}: {w.a:.6g} +- {w.a_error:.2g} vs {w.b:.6g} +- "
-                f"{w.b_error:.2g} ({100 * w.relative_difference:+.3g} %, {w.excess:.3g} "
+                f"{w.quantity}: {w.a:.6g} N +- {w.a_error:.2g} N vs {w.b:.6g} N +- "
+                f"{w.b_error:.2g} N ({100 * w.relative_difference:+.3g} %, {w.excess:.3g} "
                 f"times the bars); {sum(not i.agree for i in v.items)} of {len(v.items)} "
                 f"quantities beyond the bars")
     if v.statistics == UNDECIDED:
@@ -372,9 +372,15 @@ def _summary(v: Verdict) -> str:
     else:
         w = v.worst
         tail = (f"the statistics differ beyond their confidence intervals: {w.quantity}: "
-                f"{w.a:.6g} +- {w.a_error:.2g} vs {w.b:.6g} +- {w.b_error:.2g} "
+                f"{w.a:.6g} N +- {w.a_error:.2g} N vs {w.b:.6g} N +- {w.b_error:.2g} N "
                 f"({100 * w.relative_difference:+.3g} %)")
     return f"verdict: not comparable peak by peak ({v.reason}); {tail}"
+
+
+def _bar(error: float) -> str:
+    """An error bar in the table: two digits, "-" where there is none (one revolution's
+    statistics)."""
+    return f"{error:.2g}" if math.isfinite(error) else "-"
 
 
 def format_verdict(v: Verdict) -> str:
@@ -394,9 +400,10 @@ def format_verdict(v: Verdict) -> str:
                   f"  {'quantity':<{width}}  {v.model_a + ' (N)':>14}  {'+-':>9}  "
                   f"{v.model_b + ' (N)':>14}  {'+-':>9}  {'b/a - 1':>10}  {'|d|/bars':>8}"]
         for i in items:
-            rel = i.relative_difference
-            lines.append(f"  {i.quantity:<{width}}  {i.a:>14.6g}  {i.a_error:>9.2g}  "
-                         f"{i.b:>14.6g}  {i.b_error:>9.2g}  "
-                         f"{100 * rel:>+8.3f} %  {i.excess:>8.3g}")
+            rel = 100 * i.relative_difference
+            rel = 0.0 if abs(rel) < 5e-4 else rel       # no signed zero ("-0.000 %")
+            lines.append(f"  {i.quantity:<{width}}  {i.a:>14.6g}  {_bar(i.a_error):>9}  "
+                         f"{i.b:>14.6g}  {_bar(i.b_error):>9}  "
+                         f"{rel:>+8.3f} %  {i.excess:>8.3g}")
     lines.append(v.summary())
     return "\n".join(lines)

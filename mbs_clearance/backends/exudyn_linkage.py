@@ -1280,43 +1280,9 @@ def _coordinates(model: ExudynModel):
             model.mbs.GetNodeParameter(model.nodes[b.name], "referenceCoordinates"))
         v[b.name] = stored(model, f"{b.name}.v")[:, 1:4]
         a[b.name] = stored(model, f"{b.name}.a")[:, 1:4]
-    pts = _points(linkage)
-    zero = np.zeros((len(next(iter(q.values()))), 3))
-    for arr in (q, v, a):
-        arr[GROUND] = zero
-    joints = {j.name: j for j in linkage.joints}
-    coords, rates, accs = {}, {}, {}
-    for c in linkage.coordinates():
-        owner, what = c.rsplit(".", 1)
-        if what in ("x", "y", "angle"):
-            k = ("x", "y", "angle").index(what)
-            coords[c], rates[c], accs[c] = q[owner][:, k], v[owner][:, k], a[owner][:, k]
-            continue
-        jt = joints[owner]                          # prismatic: s along the axis
-        A, B = jt.body_a, jt.body_b
+    from .kinematics import coordinate_series
 
-        def point(body, name):
-            phi, w, al = q[body][:, 2], v[body][:, 2], a[body][:, 2]
-            x, y = pts[body][name]
-            c_, s_ = np.cos(phi), np.sin(phi)
-            r = np.stack([c_ * x - s_ * y, s_ * x + c_ * y], axis=1)
-            rp = np.stack([-r[:, 1], r[:, 0]], axis=1)
-            pos = q[body][:, :2] + r
-            vel = v[body][:, :2] + w[:, None] * rp
-            acc = a[body][:, :2] + al[:, None] * rp - (w * w)[:, None] * r
-            return pos, vel, acc
-
-        pa, va, aa = point(A, jt.point_a)
-        pb, vb, ab = point(B, jt.point_b)
-        phi, w, al = q[A][:, 2] + jt.angle, v[A][:, 2], a[A][:, 2]
-        u = np.stack([np.cos(phi), np.sin(phi)], axis=1)
-        up = np.stack([-u[:, 1], u[:, 0]], axis=1)
-        d, dv, da = pb - pa, vb - va, ab - aa
-        coords[c] = np.einsum("ij,ij->i", d, u)
-        rates[c] = np.einsum("ij,ij->i", dv, u) + w * np.einsum("ij,ij->i", d, up)
-        accs[c] = (np.einsum("ij,ij->i", da, u) + 2 * w * np.einsum("ij,ij->i", dv, up)
-                   + al * np.einsum("ij,ij->i", d, up) - w * w * np.einsum("ij,ij->i", d, u))
-    return coords, rates, accs
+    return coordinate_series(linkage, q, v, a)
 
 
 def _friction_power(model: ExudynModel, joint: ClearanceJoint, memory: ImpactMemory):

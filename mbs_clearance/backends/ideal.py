@@ -1,5 +1,8 @@
 """Closed-form slider-crank with ideal joints: the zero-clearance limit of the models.
 
+The paper's `SliderCrank` parameter set only; any `Linkage` with its clearance joints closed
+is `ideal_linkage` (the same backend, "ideal").
+
 With the crank at constant speed the ideal mechanism has no degree of freedom left, so every
 output is an explicit function of time (kinematics differentiated twice, then Newton-Euler
 for the joint forces). Used as the reference of the ideal-joint limit tests and as the

@@ -790,25 +790,19 @@ class Linkage:
         return self.drive.period
 
     # ------------------------------------------------------------------ assembly
-    def gaps(self, q: Mapping[str, float], t: float = 0.0) -> list[float]:
-        """Journal centre minus bearing centre (x, y in m) of every clearance joint, in
-        order, then per translational clearance joint the slider centre's offset from the
-        guide's mid-line and half_length times the sine of its tilt (m), at coordinates `q`
-        (by name, `coordinates`) and time `t`: the loop closure, zero when every journal
-        and slider is centred. Plain Python, the kinematics of the generated
-        model's ``closure`` (no model is generated or compiled)."""
+    def poses(self, q: Mapping[str, float], t: float = 0.0) -> dict[str, tuple[float, float,
+                                                                             float]]:
+        """Body -> (x, y, angle) of its frame (centre of mass in m, angle in rad) at
+        coordinates `q` (by name, `coordinates`) and time `t`, the ground's (0, 0, 0)
+        included: the ideal joints' kinematics along the forest (`tree`)."""
         drive = self.drive
         theta = 0.0 if drive is None else drive.speed * t + drive.initial_angle
         points = {GROUND: self.ground_points, **{b.name: b.points for b in self.bodies}}
         angle = {GROUND: 0.0}
         pos = {GROUND: (0.0, 0.0)}
 
-        def turned(a, xy):
-            c, s = math.cos(a), math.sin(a)
-            return c * xy[0] - s * xy[1], s * xy[0] + c * xy[1]
-
         def world(body, name):
-            dx, dy = turned(angle[body], points[body][name])
+            dx, dy = _turned(angle[body], points[body][name])
             return pos[body][0] + dx, pos[body][1] + dy
 
         for body, parent, joint in self.tree():
@@ -823,17 +817,34 @@ class Linkage:
                 pp, pc = ((joint.point_a, joint.point_b) if joint.body_a == parent
                           else (joint.point_b, joint.point_a))
                 px, py = world(parent, pp)
-                dx, dy = turned(angle[body], points[body][pc])
+                dx, dy = _turned(angle[body], points[body][pc])
                 pos[body] = (px - dx, py - dy)
             else:                                       # Prismatic: s along the axis
                 s_q, sign = q[f"{joint.name}.s"], 1.0 if joint.body_a == parent else -1.0
                 pp, pc = ((joint.point_a, joint.point_b) if sign > 0
                           else (joint.point_b, joint.point_a))
                 angle[body] = angle[parent]
-                ux, uy = turned(angle[parent] + joint.angle, (1.0, 0.0))
+                ux, uy = _turned(angle[parent] + joint.angle, (1.0, 0.0))
                 px, py = world(parent, pp)
-                dx, dy = turned(angle[body], points[body][pc])
+                dx, dy = _turned(angle[body], points[body][pc])
                 pos[body] = (px + sign * s_q * ux - dx, py + sign * s_q * uy - dy)
+        return {b: (*pos[b], angle[b]) for b in pos}
+
+    def gaps(self, q: Mapping[str, float], t: float = 0.0) -> list[float]:
+        """Journal centre minus bearing centre (x, y in m) of every clearance joint, in
+        order, then per translational clearance joint the slider centre's offset from the
+        guide's mid-line and half_length times the sine of its tilt (m), at coordinates `q`
+        (by name, `coordinates`) and time `t`: the loop closure, zero when every journal
+        and slider is centred. Plain Python, the kinematics of the generated
+        model's ``closure`` (no model is generated or compiled)."""
+        frames = self.poses(q, t)
+        points = {GROUND: self.ground_points, **{b.name: b.points for b in self.bodies}}
+        angle = {b: f[2] for b, f in frames.items()}
+
+        def world(body, name):
+            dx, dy = _turned(angle[body], points[body][name])
+            return frames[body][0] + dx, frames[body][1] + dy
+
         out = []
         for cj in self.clearance_joints:
             jx, jy = world(cj.journal_body, cj.journal_point)
@@ -844,8 +855,8 @@ class Linkage:
             # (a times the sine of the tilt: the corners' offset from the centre's, in m)
             gx, gy = world(tj.guide_body, tj.guide_point)
             sx, sy = world(tj.slider_body, tj.slider_point)
-            nx, ny = turned(angle[tj.guide_body] + tj.angle, (0.0, 1.0))
-            ax, ay = turned(angle[tj.slider_body] + tj.slider_angle, (1.0, 0.0))
+            nx, ny = _turned(angle[tj.guide_body] + tj.angle, (0.0, 1.0))
+            ax, ay = _turned(angle[tj.slider_body] + tj.slider_angle, (1.0, 0.0))
             out += [nx * (sx - gx) + ny * (sy - gy), tj.half_length * (nx * ax + ny * ay)]
         return out
 
@@ -1167,6 +1178,12 @@ class Linkage:
         joint ("<joint>.<corner>", `CORNERS`)."""
         return (tuple((j.name, j) for j in self.clearance_joints)
                 + tuple((c, j) for j in self.translational_joints for c in j.corner_names()))
+
+
+def _turned(a: float, xy) -> tuple[float, float]:
+    """`xy` turned by the angle `a` (rad)."""
+    c, s = math.cos(a), math.sin(a)
+    return c * xy[0] - s * xy[1], s * xy[0] + c * xy[1]
 
 
 def _cls_names(cls) -> str:

@@ -69,8 +69,10 @@ BACKENDS: dict[str, Backend] = {
         to_accuracy=Model("mbs_clearance.backends.exudyn_convergence",
                           "simulate_to_accuracy", "peak_to_accuracy")),
     "ideal": Backend(
-        "closed-form slider-crank with ideal joints (no clearance)",
-        linkage=None,
+        "the same mechanism with ideal joints (no clearance): the paper's closed form, any "
+        "description's constraints solved",
+        linkage=Model("mbs_clearance.backends.ideal_linkage", "simulate_ideal_linkage",
+                      "peak_ideal_linkage"),
         slider_crank=Model("mbs_clearance.backends.ideal", "simulate_ideal", "peak_ideal")),
 }
 

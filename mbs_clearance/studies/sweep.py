@@ -26,7 +26,6 @@ from __future__ import annotations
 import json
 import math
 import os
-import re
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -54,6 +53,7 @@ from ..analysis.poincare import (
     poincare_section,
 )
 from ..model.design import design_at
+from ..units import parse_quantity
 
 __all__ = ["SweepAxis", "parse_sweep", "design_at", "regime_map", "MapResult", "load_map",
            "map_memory"]
@@ -80,23 +80,17 @@ class SweepAxis:
 #: bytes of one swept value held while parsed (a float64 and a Python float in a tuple)
 _VALUE_BYTES = 40
 
-_NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
+def _value(name: str, text: str, unit: str | None) -> float:
+    """A number in SI, or with a unit suffix of `unit` (`units.parse_quantity`)."""
+    return parse_quantity(text.strip(), unit, f"sweep {name}")
 
 
-def _value(name: str, text: str) -> float:
-    """A number, optionally with the unit rpm (converted to rad/s)."""
-    text = text.strip()
-    m = re.fullmatch(rf"({_NUMBER})\s*(rpm)?", text)
-    if not m:
-        raise ValueError(f"sweep {name}: {text!r} is not a number (optionally with 'rpm')")
-    v = float(m.group(1))
-    return v * RPM if m.group(2) else v
-
-
-def parse_sweep(spec) -> SweepAxis:
+def parse_sweep(spec, unit_of=None) -> SweepAxis:
     """A sweep from "NAME=LO:HI:N" (linear), "NAME=LO:HI:lin:N", "NAME=LO:HI:log:N" or
-    "NAME=V1,V2,..." (numbers, SI; a speed may be given in rpm: "500rpm"); a `SweepAxis`
-    or (name, values) is taken as is. ValueError naming the problem otherwise."""
+    "NAME=V1,V2,..." (numbers, SI or with a unit suffix: "500rpm", "0.02mm",
+    `units.UNIT_SUFFIXES`; `unit_of(NAME)` gives the field's SI unit, whose suffixes only
+    are accepted, None: any suffix converts by itself); a `SweepAxis` or (name, values) is
+    taken as is. ValueError naming the problem otherwise."""
     if isinstance(spec, SweepAxis):
         return spec
     if isinstance(spec, tuple) and len(spec) == 2:
@@ -110,6 +104,7 @@ def parse_sweep(spec) -> SweepAxis:
     name, rhs = (s.strip() for s in spec.split("=", 1))
     if not name:
         raise ValueError(f"sweep {spec!r}: no field name before '='")
+    unit = unit_of(name) if unit_of is not None else None
     if ":" in rhs:
         parts = [s.strip() for s in rhs.split(":")]
         if len(parts) == 3:
@@ -117,7 +112,7 @@ def parse_sweep(spec) -> SweepAxis:
         if len(parts) != 4 or parts[2] not in ("lin", "log"):
             raise ValueError(f"sweep {name}: range must be LO:HI:N, LO:HI:lin:N or "
                              f"LO:HI:log:N; got {rhs!r}")
-        lo, hi = _value(name, parts[0]), _value(name, parts[1])
+        lo, hi = _value(name, parts[0], unit), _value(name, parts[1], unit)
         try:
             n = int(parts[3])
         except ValueError:
@@ -134,7 +129,7 @@ def parse_sweep(spec) -> SweepAxis:
         else:
             values = np.linspace(lo, hi, n)
         return SweepAxis(name, tuple(float(v) for v in values), parts[2])
-    values = tuple(_value(name, v) for v in rhs.split(",") if v.strip())
+    values = tuple(_value(name, v, unit) for v in rhs.split(",") if v.strip())
     return SweepAxis(name, values)
 
 

@@ -516,18 +516,18 @@ class ToleranceResult:
                              f"{self.sobol['S1_conf'][i]:.3f}  {_index(self.sobol['ST'][i])} +- "
                              f"{self.sobol['ST_conf'][i]:.3f}")
         if self.morris:
-            lines.append(f"Morris ({self.morris['runs']} runs): mu* (output units per full "
-                         "range)")
+            lines.append(f"Morris ({self.morris['runs']} runs): mu*, the mean change of the "
+                         "output over each input's full range")
             if "mu_star" not in self.morris:
                 lines.append(f"  indices not computed: {self.morris.get('failed', 0)} runs "
                              "failed")
             for i, n in enumerate(self.names if "mu_star" in self.morris else ()):
-                lines.append(f"  {n:<{w}}  {self.morris['mu_star'][i]:.4g} +- "
-                             f"{self.morris['mu_star_conf'][i]:.2g}")
+                lines.append(f"  {n:<{w}}  {val(self.morris['mu_star'][i], 4)} +- "
+                             f"{val(self.morris['mu_star_conf'][i], 2)}")
         if self.dgsm:
             lines.append(f"DGSM ({self.dgsm['runs']} gradient runs): bound on S_T")
             for i, n in enumerate(self.names):
-                lines.append(f"  {n:<{w}}  {self.dgsm['bound'][i]:.4g}")
+                lines.append(f"  {n:<{w}}  {number(self.dgsm['bound'][i], 4)}")
         for label, mc in [("Monte Carlo", self.monte_carlo)] + [
                 (f"wear +{lv['wear'] * 1e6:.3g} \N{MICRO SIGN}m", lv) for lv in self.wear]:
             if not mc:

@@ -246,11 +246,12 @@ def test_simulate_refuses_other_backends_and_options_for_a_linkage():
     from mbs_clearance import simulate
     from mbs_clearance.model.cases import four_bar
 
-    # the ideal backend takes the paper's parameter set only: its case as that set, not
-    # another linkage
     with pytest.raises(ValueError,
-                       match=r"backend must be one of \['exudyn', 'reduced'\] for a Linkage"):
-        simulate(four_bar(), 2, backend="ideal")
+                       match=r"backend must be one of \['exudyn', 'ideal', 'reduced'\]"):
+        simulate(four_bar(), 2, backend="rigid")
+    with pytest.raises(ValueError, match=r"unknown option\(s\) \['step_size'\] for "
+                                         r"backend 'ideal'"):
+        simulate(four_bar(), 2, backend="ideal", step_size=1e-6)
     with pytest.raises(ValueError, match=r"unknown option\(s\) \['step_size'\]"):
         simulate(paper_slider_crank(), 4, step_size=1e-6)
     with pytest.raises(ValueError, match="mech must be a SliderCrank or a Linkage"):
