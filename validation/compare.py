@@ -371,7 +371,7 @@ def plot_linkage_comparison(a: Trajectory, b: Trajectory, path=None,
     common span. Returns the matplotlib Figure (written to `path` if given)."""
     from matplotlib.figure import Figure
 
-    from mbs_clearance.plotting import save
+    from mbs_clearance.plotting import backend_label, save
 
     mech = a.mechanism
     n = min(a.revolutions, b.revolutions)
@@ -390,7 +390,7 @@ def plot_linkage_comparison(a: Trajectory, b: Trajectory, path=None,
     for tr, style in ((a, dict(color="C0", lw=1.6)), (b, dict(color="C3", lw=1.0, ls="--"))):
         m = tr.revolution_mask(k)
         angle = np.degrees(tr.crank_angle[m] - tr.crank_angle[0] - 2 * np.pi * (k - 1))
-        label = tr.backend + (f" ({tr.stats['contact']})" if "contact" in tr.stats else "")
+        label = backend_label(tr)
         axes[0].plot(angle, tr.base_force_magnitude[m], label=label, **style)
         axes[1].plot(angle, shaking_magnitude(tr)[m], label=label, **style)
         axes[2].plot(angle, tr.crank_moment[m], label=label, **style)
@@ -413,9 +413,8 @@ def plot_linkage_comparison(a: Trajectory, b: Trajectory, path=None,
         ax.grid(alpha=0.3)
     for ax in (axes[0], *axes[3:]):
         ax.legend(fontsize=8, loc="upper right")
-    names = {"reduced": "reduced model", "exudyn": "Exudyn", "ideal": "ideal joints"}
     fig.suptitle(f"{getattr(mech, 'name', 'slider-crank').replace('_', ' ')}: "
-                 f"{names.get(a.backend, a.backend)} vs {names.get(b.backend, b.backend)}")
+                 f"{backend_label(a)} vs {backend_label(b)}")
     return save(fig, path)
 
 
