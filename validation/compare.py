@@ -312,6 +312,14 @@ def _pct(x: float) -> str:
     return f"{100.0 * x:+.3f} %" if np.isfinite(x) else "n/a"
 
 
+def _pct_of(b: float, a: float) -> str:
+    """b against a as a relative difference; n/a where a is zero (e.g. no dry contact in a
+    lubricated joint) unless b is too."""
+    if a == 0.0:
+        return _pct(0.0) if b == 0.0 else "n/a"
+    return _pct(b / a - 1.0)
+
+
 def format_table(result: Comparison) -> str:
     """Plain-text table of a `Comparison` (returned as a string)."""
     a, b = result.backend_a, result.backend_b
@@ -340,7 +348,7 @@ def format_table(result: Comparison) -> str:
             lines.append(f"{label}: t_a = {fa.time * 1e6:.3f} us, t_b = {fb.time * 1e6:.3f} "
                          f"us; peak contact force a = {fa.peak_contact_force:.1f} N, b = "
                          f"{fb.peak_contact_force:.1f} N "
-                         f"({_pct(fb.peak_contact_force / fa.peak_contact_force - 1)})")
+                         f"({_pct_of(fb.peak_contact_force, fa.peak_contact_force)})")
         else:
             lines.append(f"{label}: a {'none' if fa is None else f'{fa.time:.6g} s'}, "
                          f"b {'none' if fb is None else f'{fb.time:.6g} s'}")
@@ -353,7 +361,7 @@ def format_table(result: Comparison) -> str:
                             ("rms |S| (N)", sa.rms_shaking_force, sb.rms_shaking_force),
                             ("rms M (N m)", sa.rms_crank_moment, sb.rms_crank_moment),
                             ("contact fraction", sa.contact_fraction, sb.contact_fraction)):
-            lines.append(f"  {label:<18} a = {x:>10.4g}   b = {y:>10.4g}   ({_pct(y / x - 1)})")
+            lines.append(f"  {label:<18} a = {x:>10.4g}   b = {y:>10.4g}   ({_pct_of(y, x)})")
     if result.verdict is not None:
         lines += ["", format_verdict(result.verdict)]
     return "\n".join(lines)
