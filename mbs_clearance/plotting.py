@@ -18,7 +18,7 @@ from ._io import PNG_SOFTWARE
 from .solve.trajectory import Trajectory
 from .units import number
 
-__all__ = ["plot_branch", "plot_trajectory", "plot_overlay", "plot_comparison",
+__all__ = ["backend_label", "plot_branch", "plot_trajectory", "plot_overlay", "plot_comparison",
            "plot_sensitivities",
            "plot_work_precision", "plot_fitness_history", "plot_force_comparison",
            "SENSITIVITY_FIGURES", "save", "plot_bifurcation", "plot_regime_map",
@@ -47,6 +47,17 @@ def _crank_deg(traj: Trajectory) -> np.ndarray:
     return np.degrees(traj.crank_angle)
 
 
+#: how a backend is named in legends and titles
+BACKEND_NAMES = {"reduced": "reduced model", "exudyn": "Exudyn", "ideal": "ideal joints"}
+
+
+def backend_label(traj: Trajectory) -> str:
+    """The legend name of `traj`'s model: "reduced model", "Exudyn (symbolic contact)", ..."""
+    name = BACKEND_NAMES.get(traj.backend, traj.backend)
+    contact = traj.stats.get("contact")
+    return f"{name} ({contact} contact)" if contact else name
+
+
 def plot_overlay(trajs: Sequence[Trajectory], labels: Sequence[str] | None = None,
                  revolution: int | None = None, path: str | Path | None = None,
                  title: str | None = None) -> Figure:
@@ -56,7 +67,7 @@ def plot_overlay(trajs: Sequence[Trajectory], labels: Sequence[str] | None = Non
     full one), (c) slider acceleration versus velocity, (d) journal-centre orbit inside the
     clearance circle (in units of the clearance).
     """
-    labels = list(labels) if labels is not None else [t.backend for t in trajs]
+    labels = list(labels) if labels is not None else [backend_label(t) for t in trajs]
     fig = Figure(figsize=(11, 8), layout="constrained")
     axes = fig.subplots(2, 2)
     ax_f, ax_m, ax_ph, ax_orb = axes.ravel()
@@ -97,9 +108,10 @@ def plot_trajectory(traj: Trajectory, path: str | Path | None = None,
                     revolution: int | None = None) -> Figure:
     """The paper's Fig. 3 panels for one trajectory (see `plot_overlay`)."""
     m = traj.mechanism
-    title = (f"{traj.backend}: clearance {m.clearance * 1e3:.3g} mm, "
+    title = (f"{backend_label(traj)}: clearance {m.clearance * 1e3:.3g} mm, "
              f"{m.crank_speed_rpm:.0f} rpm, e = {m.restitution:g}")
-    return plot_overlay([traj], [traj.backend], revolution=revolution, path=path, title=title)
+    return plot_overlay([traj], [backend_label(traj)], revolution=revolution, path=path,
+                        title=title)
 
 
 #: the paper's grouping of the sensitivity figures
@@ -191,7 +203,7 @@ def plot_comparison(a: Trajectory, b: Trajectory, path: str | Path | None = None
     for tr, style in ((a, dict(color="C0", lw=1.6)), (b, dict(color="C3", lw=1.0, ls="--"))):
         m = tr.revolution_mask(k)
         angle = np.degrees(tr.crank_angle[m] - 2 * np.pi * (k - 1))
-        label = tr.backend + (f" ({tr.stats['contact']})" if "contact" in tr.stats else "")
+        label = backend_label(tr)
         axes[0].plot(angle, tr.base_force_magnitude[m], label=label, **style)
         axes[1].plot(angle, tr.crank_moment[m], label=label, **style)
         mo = tr.t <= n * mech.period * (1 + 1e-12)
@@ -208,7 +220,7 @@ def plot_comparison(a: Trajectory, b: Trajectory, path: str | Path | None = None
     for ax in axes:
         ax.grid(alpha=0.3)
         ax.legend(fontsize=8, loc="upper right")
-    fig.suptitle(f"{a.backend} vs {b.backend}: c = {c * 1e3:.4g} mm, "
+    fig.suptitle(f"{backend_label(a)} vs {backend_label(b)}: c = {c * 1e3:.4g} mm, "
                  f"{mech.crank_speed_rpm:.0f} rpm")
     return save(fig, path)
 

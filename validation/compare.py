@@ -321,6 +321,14 @@ def _impact_time(impact: FirstImpact | None) -> str:
     return "no impact" if impact is None else f"at {quantity(impact.time, 's', 6)}"
 
 
+def _pct_of(b: float, a: float) -> str:
+    """b against a as a relative difference; n/a where a is zero (e.g. no dry contact in a
+    lubricated joint) unless b is too."""
+    if a == 0.0:
+        return _pct(0.0) if b == 0.0 else "n/a"
+    return _pct(b / a - 1.0)
+
+
 def format_table(result: Comparison) -> str:
     """Plain-text table of a `Comparison` (returned as a string)."""
     a, b = result.backend_a, result.backend_b
@@ -353,7 +361,7 @@ def format_table(result: Comparison) -> str:
                          f"{quantity(fb.time, 's', 6)}; peak contact force a = "
                          f"{quantity(fa.peak_contact_force, 'N', 6)}, b = "
                          f"{quantity(fb.peak_contact_force, 'N', 6)} "
-                         f"({_pct(fb.peak_contact_force / fa.peak_contact_force - 1)})")
+                         f"({_pct_of(fb.peak_contact_force, fa.peak_contact_force)})")
         else:
             lines.append(f"{label}: a {_impact_time(fa)}, b {_impact_time(fb)}")
     sa, sb = result.statistics_a, result.statistics_b
@@ -368,7 +376,7 @@ def format_table(result: Comparison) -> str:
                 ("contact fraction", 100 * sa.contact_fraction, 100 * sb.contact_fraction,
                  "%")):
             lines.append(f"  {label:<18} a = {quantity(x, unit):>12}   b = "
-                         f"{quantity(y, unit):>12}   ({_pct(y / x - 1)})")
+                         f"{quantity(y, unit):>12}   ({_pct_of(y, x)})")
     if result.verdict is not None:
         lines += ["", format_verdict(result.verdict)]
     return "\n".join(lines)
@@ -386,7 +394,7 @@ def plot_linkage_comparison(a: Trajectory, b: Trajectory, path=None,
     common span. Returns the matplotlib Figure (written to `path` if given)."""
     from matplotlib.figure import Figure
 
-    from mbs_clearance.plotting import save
+    from mbs_clearance.plotting import backend_label, save
 
     mech = a.mechanism
     n = min(a.revolutions, b.revolutions)
@@ -405,7 +413,7 @@ def plot_linkage_comparison(a: Trajectory, b: Trajectory, path=None,
     for tr, style in ((a, dict(color="C0", lw=1.6)), (b, dict(color="C3", lw=1.0, ls="--"))):
         m = tr.revolution_mask(k)
         angle = np.degrees(tr.crank_angle[m] - tr.crank_angle[0] - 2 * np.pi * (k - 1))
-        label = tr.backend + (f" ({tr.stats['contact']})" if "contact" in tr.stats else "")
+        label = backend_label(tr)
         axes[0].plot(angle, tr.base_force_magnitude[m], label=label, **style)
         axes[1].plot(angle, shaking_magnitude(tr)[m], label=label, **style)
         axes[2].plot(angle, tr.crank_moment[m], label=label, **style)
@@ -428,9 +436,8 @@ def plot_linkage_comparison(a: Trajectory, b: Trajectory, path=None,
         ax.grid(alpha=0.3)
     for ax in (axes[0], *axes[3:]):
         ax.legend(fontsize=8, loc="upper right")
-    names = {"reduced": "reduced model", "exudyn": "Exudyn", "ideal": "ideal joints"}
     fig.suptitle(f"{getattr(mech, 'name', 'slider-crank').replace('_', ' ')}: "
-                 f"{names.get(a.backend, a.backend)} vs {names.get(b.backend, b.backend)}")
+                 f"{backend_label(a)} vs {backend_label(b)}")
     return save(fig, path)
 
 

@@ -348,10 +348,17 @@ def verdict_of_trajectories(a, b, revolutions=None, *, lyapunov=None) -> Verdict
     missing = [tr.backend for tr in (a, b) if "error_estimate" not in tr.stats]
     if missing:
         note = (f"; no error estimate for {' and '.join(missing)} (bar 0: run it with "
-                f"accuracy=)")
+                f"accuracy=, compare --accuracy X)")
         v = Verdict(v.kind, v.model_a, v.model_b, v.items, v.reason + note, v.statistics,
                     v.statistics_items)
     return v
+
+
+def _missing_bars(v: Verdict) -> str:
+    """The reason's note on a model without an error estimate (its bar 0: the difference
+    may be its own error), repeated in a differing verdict."""
+    k = v.reason.find("no error estimate for")
+    return "" if k < 0 else f"; {v.reason[k:]}, so part of the difference may be its error"
 
 
 def _summary(v: Verdict) -> str:
@@ -364,7 +371,7 @@ def _summary(v: Verdict) -> str:
                 f"{w.quantity}: {w.a:.6g} N +- {w.a_error:.2g} N vs {w.b:.6g} N +- "
                 f"{w.b_error:.2g} N ({100 * w.relative_difference:+.3g} %, {w.excess:.3g} "
                 f"times the bars); {sum(not i.agree for i in v.items)} of {len(v.items)} "
-                f"quantities beyond the bars")
+                f"quantities beyond the bars{_missing_bars(v)}")
     if v.statistics == UNDECIDED:
         tail = "the statistics decide nothing"
     elif v.statistics == AGREE:

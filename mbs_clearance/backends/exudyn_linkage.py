@@ -805,10 +805,16 @@ class ExudynModel:
     #: ImpactMemory)
     corners: list = field(default_factory=list)
     keep: np.ndarray | None = None   # rows of the stored data kept (`solve`: sliver steps)
-    #: outputs the pre-step function reads from Exudyn every step (each read allocates one
-    #: vector in Exudyn: `solve` tells Exudyn's allocation notice to expect them)
+    #: allocations per step by design: the outputs the pre-step function reads from Exudyn
+    #: (each read allocates one vector) and the oil films' Python user functions
+    #: (`FILM_ALLOCATIONS` each); `solve` tells Exudyn's allocation notice to expect them
     pre_step_reads: int = 0
 
+
+#: allocations per step of an oil film's Python user function (its force vector is made on
+#: every call, each Newton iteration: 41 per step measured on the lubricated case), by
+#: design, so counted with the pre-step reads for Exudyn's allocation notice
+FILM_ALLOCATIONS = 100
 
 #: sensor groups `build` can record
 OUTPUT_GROUPS: tuple[str, ...] = ("reactions", "drive", "contact", "bodies")
@@ -970,6 +976,7 @@ def build(linkage: Linkage, settings: ExudynSettings | None = None,
                 memory.history = []
             if cj.has_lubrication:
                 _film_element(mbs, cj, nodes, pts, keep_alive)
+                pre_step_reads += FILM_ALLOCATIONS
         contact_items.append(obj)
         if GROUND in (cj.journal_body, cj.bearing_body):
             # the force on the bearing is +f (user force) / -f (sphere: markers swapped)

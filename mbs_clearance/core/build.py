@@ -33,7 +33,7 @@ from pathlib import Path
 from .._warnings import CacheWarning
 
 __all__ = ["HEADER", "FLAGS", "CompilerMissing", "cdef_of", "compiler", "build", "load",
-           "cache_dirs", "usable", "valid", "stamp"]
+           "cache_dirs", "usable", "valid", "stamp", "compile_count", "used_files", "install"]
 
 _HERE = Path(__file__).resolve().parent
 #: the seam's header (its declarations are the cffi cdef of every library)
@@ -45,6 +45,10 @@ _LOG = logging.getLogger("mbs_clearance")
 _LOCK = threading.Lock()
 _LOADED: dict[str, object] = {}
 _WARNED: set[str] = set()
+#: libraries compiled by this process; cache files it used (name -> path), which
+#: `used_files` hands to other processes (dask workers) so that they compile nothing
+_COMPILED = [0]
+_USED: dict[str, Path] = {}
 
 
 class CompilerMissing(RuntimeError):
@@ -211,6 +215,7 @@ def build(label: str, sources, flags: tuple[str, ...] = FLAGS, key: str | None =
             continue
         lib = directory / name
         if _valid(lib):
+            _USED[name] = lib
             return lib
         if lib.exists():
             _warn_once(str(lib), f"the compiled library {lib} does not match its recorded "
@@ -219,6 +224,8 @@ def build(label: str, sources, flags: tuple[str, ...] = FLAGS, key: str | None =
             sources = sources()
         try:
             _compile(cc, sources, flags, lib, label)
+            _COMPILED[0] += 1
+            _USED[name] = lib
             return lib
         except OSError as err:       # full or read-only: the next place
             last_error = err
@@ -253,8 +260,58 @@ def usable(path: Path) -> bool:
 
 def valid(path: Path) -> bool:
     """Whether the file `path` is regular, writable by neither group nor others, and its
-    SHA-256 is the one recorded beside it (`stamp`)."""
-    return _valid(path)
+    SHA-256 is the one recorded beside it (`stamp`). A valid cache file counts as used
+    (`used_files`)."""
+    ok = _valid(path)
+    if ok:
+        _USED[path.name] = path
+    return ok
+
+
+def compile_count() -> int:
+    """Libraries this process has compiled (a count: what a worker that was handed them
+    should never do)."""
+    return _COMPILED[0]
+
+
+def used_files() -> dict[str, tuple[bytes, str]]:
+    """The cache files (libraries, generated sources) this process has used, by name, with
+    their SHA-256: what another process on a machine like this one needs to compile nothing
+    (`install`)."""
+    out = {}
+    for name, path in list(_USED.items()):
+        try:
+            data = path.read_bytes()
+        except OSError:
+            continue
+        out[name] = (data, hashlib.sha256(data).hexdigest())
+    return out
+
+
+def install(files: dict[str, tuple[bytes, str]]) -> int:
+    """Put `files` (`used_files` of another process) into this process's first usable
+    cache directory, each checked against its SHA-256 first (a file that does not match is
+    left out) and stamped as a built one is; files already there and valid are kept.
+    Returns the number written. The libraries are found by the same digest as a build here
+    (same sources, compiler and flags), so they serve processes with the same compiler."""
+    for directory in cache_dirs():
+        if not _usable(directory):
+            continue
+        written = 0
+        for name, (data, sha) in files.items():
+            target = directory / Path(name).name
+            if hashlib.sha256(data).hexdigest() != sha or _valid(target):
+                continue
+            part = target.with_name(f"{target.name}.part-{os.getpid()}-{threading.get_ident()}")
+            try:
+                part.write_bytes(data)
+                os.chmod(part, 0o700 if name.endswith(".so") else 0o600)
+                stamp(part, target)
+                written += 1
+            except OSError:
+                part.unlink(missing_ok=True)
+        return written
+    return 0
 
 
 def stamp(part: Path, path: Path) -> None:

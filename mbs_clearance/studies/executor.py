@@ -237,6 +237,40 @@ def _task_chunk_packed(packed: tuple) -> list:
     return _task_chunk(*packed)
 
 
+def _mechanism_of(item):
+    """The mechanism of an evaluated item: the item itself or a tuple's (index, design)."""
+    from ..model.linkage import Linkage
+
+    if isinstance(item, tuple):
+        item = next((x for x in item if isinstance(x, (SliderCrank, Linkage))), None)
+    return item if isinstance(item, (SliderCrank, Linkage)) else None
+
+
+def ship_compiled(client, mech=None) -> int:
+    """Hand a dask Client's workers the compiled core and models this process has built
+    (`core.build.used_files`), after building `mech`'s models here if needed (its plain
+    model, specialised and general), so that no worker compiles (a worker plugin installs
+    them into each worker's cache, also on workers that join later). Returns the number of
+    files handed over (0 on the numba core or without a C compiler)."""
+    from ..core import build
+    from ..model.cases import as_linkage
+    from ..solve.kernels import c_model_or_none
+
+    if mech is not None:
+        try:
+            linkage = as_linkage(mech)
+        except (TypeError, ValueError):
+            linkage = None
+        if linkage is not None and c_model_or_none(linkage) is not None:
+            c_model_or_none(linkage, specialise=False)
+    files = build.used_files()
+    if files:
+        from ._dask_plugin import CompiledFiles
+
+        client.register_plugin(CompiledFiles(files), name=CompiledFiles.name)
+    return len(files)
+
+
 def _is_dask_client(executor) -> bool:
     return (type(executor).__module__.startswith("distributed")
             and hasattr(executor, "gather") and hasattr(executor, "nthreads"))
@@ -464,6 +498,8 @@ def evaluate(fn: Callable, items: Sequence, args: tuple = (), *, executor=None,
         try:
             if dispatcher.is_dask:
                 _wait_for_dask_workers(pool, dask_timeout)
+                if items:
+                    ship_compiled(pool, _mechanism_of(items[0]))
             with tqdm(total=len(items), desc=desc, unit="run", disable=not progress,
                       leave=True) as bar:
                 out = dispatcher.map_tasks(fn, items, args, chunk_size, bar.update, on_result,

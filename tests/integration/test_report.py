@@ -561,3 +561,33 @@ def test_bifurcation_section(report):
         assert first["multiplier_modulus"][0] == pytest.approx(1.0, abs=0.02)
     html = (report / "report.html").read_text()
     assert 'id="bifurcation"' in html and "bifurcation.png" in html
+
+
+@pytest.mark.slow
+def test_full_report_bifurcation_settings_find_the_documented_points(tmp_path):
+    """The full report's continuation (both branches, 600 orbits each, no stop at the first
+    point): each branch starts stable at the paper's design, every located period
+    doubling has a multiplier at -1, and the doublings are those docs/orbits.md lists
+    ("Further along both lines"): over crank speed 3790.6, 3360.3, 3289.1 and 2855.7 rpm,
+    over clearance 0.0121103 ... 0.0139023 mm."""
+    from validation.report import _settings, section_bifurcation
+
+    settings = _settings(quick=False)
+    branches = {b["field"]: b for b in section_bifurcation(tmp_path, settings)["branches"]}
+    assert sorted(branches) == ["clearance", "crank_speed"]
+    documented = {"crank_speed": ([3790.6, 3360.3, 3289.1, 2855.7], np.pi / 30.0, 0.05),
+                  "clearance": ([0.0121103, 0.0121887, 0.0129318, 0.0130305, 0.0138598,
+                                 0.0139023], 1e-3, 5e-8)}
+    mech = SliderCrank()
+    for field, b in branches.items():
+        assert b["values"][0] == pytest.approx(getattr(mech, field), rel=1e-9)
+        assert b["stable"][0]
+        doublings = [p for p in b["points"] if p["kind"] == "period_doubling"]
+        for p in doublings:
+            assert p["multiplier_real"][0] == pytest.approx(-1.0, abs=0.02)
+        values, unit, rounding = documented[field]
+        assert len(doublings) == len(values), (field, [p["value"] / unit for p in doublings])
+        for p, doc in zip(doublings, values):
+            # the page's rounding plus the point's own location tolerance
+            assert abs(p["value"] / unit - doc) <= rounding + p["tolerance"] / unit, \
+                (field, p["value"] / unit, doc)

@@ -260,3 +260,20 @@ def test_agreement_figure_keeps_every_panel_readable_at_page_width():
         assert re.search(r"\w.* \((N|N m|-)\)$", ax.get_ylabel()), ax.get_ylabel()
     assert [ax.get_ylabel() for ax in shown[:3]] == [
         "monitored force (N)", "|shaking force| (N)", "drive moment (N m)"]
+
+
+def test_agreement_figure_names_the_models_in_words():
+    """Legends and the title name each model as a reader says it (no backend keys)."""
+    import dataclasses
+
+    from mbs_clearance_validation.compare import plot_linkage_comparison
+
+    from mbs_clearance import simulate
+    from mbs_clearance.model.cases import CASES
+
+    a = simulate(CASES["slider_crank_two_clearances"](), 1)
+    b = dataclasses.replace(a, backend="exudyn", stats={**a.stats, "contact": "symbolic"})
+    fig = plot_linkage_comparison(a, b)
+    labels = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
+    assert labels == ["reduced model", "Exudyn (symbolic contact)"]
+    assert fig.get_suptitle().endswith("reduced model vs Exudyn (symbolic contact)")

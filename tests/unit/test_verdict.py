@@ -101,3 +101,21 @@ def test_chaotic_motion_is_judged_on_statistics():
     v = verdict_of_peaks(pa[:2], 0.01, pc[:2], 0.01, periodic=False,
                          statistics_a=_stats(pa[:2]), statistics_b=_stats(pc[:2]))
     assert v.statistics == UNDECIDED and "run more revolutions" in v.reason
+
+
+def test_a_differing_verdict_says_when_a_bar_is_unknown():
+    """A model without an error estimate (a fixed step) has the bar 0: the summary of a
+    differing verdict says so, since part of the difference may be that model's error."""
+    import dataclasses
+
+    from mbs_clearance import SliderCrank, simulate
+    from mbs_clearance.analysis.verdict import verdict_of_trajectories
+
+    a = simulate(SliderCrank(), 2)
+    stats = {k: v for k, v in a.stats.items() if k != "error_estimate"}
+    b = dataclasses.replace(a, backend="exudyn", peaks=1.01 * np.asarray(a.peaks), stats=stats)
+    v = verdict_of_trajectories(a, b)
+    assert v.kind == DIFFER, v.summary()
+    assert "no error estimate for exudyn" in v.summary()
+    assert "may be its error" in v.summary()
+    assert "no error estimate" not in verdict_of_trajectories(a, a).summary()
