@@ -98,14 +98,17 @@ def _agree(a, b):
     return math.isclose(a, b, rel_tol=RTOL, abs_tol=0.0) or a == b
 
 
-def _run(cmd):
-    """The command's printed lines (standard output and error), run as a user runs it."""
+def _run(cmd, folder):
+    """The command's printed lines (standard output and error), run as a user runs it from
+    the repository root, in `folder` (files it writes land there) with the repository's
+    examples beside it."""
+    (folder / "examples").symlink_to(ROOT / "examples")
     argv = shlex.split(cmd)
     if argv[0] == "mbs-clearance":
         argv = [str(Path(sys.executable).with_name("mbs-clearance")), *argv[1:]]
     elif argv[0] == "python":
         argv = [sys.executable, *argv[1:]]
-    proc = subprocess.run(argv, cwd=ROOT, capture_output=True, text=True, timeout=900)
+    proc = subprocess.run(argv, cwd=folder, capture_output=True, text=True, timeout=900)
     assert proc.returncode == 0, f"{cmd} failed:\n{proc.stderr[-2000:]}"
     text = proc.stdout + proc.stderr
     return [ln for ln in text.splitlines()
@@ -157,5 +160,5 @@ BLOCKS = [b for b in output_blocks() if b[0] not in RUN_ELSEWHERE]
 
 @pytest.mark.parametrize("page, line, cmd, documented", BLOCKS,
                          ids=[f"{p}:{n}" for p, n, _, _ in BLOCKS])
-def test_documented_output_is_what_the_command_prints(page, line, cmd, documented):
-    check_block(_run(cmd), documented, cmd)
+def test_documented_output_is_what_the_command_prints(page, line, cmd, documented, tmp_path):
+    check_block(_run(cmd, tmp_path), documented, cmd)
