@@ -33,7 +33,7 @@ from __future__ import annotations
 import argparse
 import sys
 import time
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -604,6 +604,7 @@ def build_parser(parser: argparse.ArgumentParser | None = None) -> argparse.Argu
         add_force_option,
         add_linkage_options,
         add_mechanism_options,
+        add_window_options,
         int_at_least,
         positive_float,
         positive_time,
@@ -620,8 +621,8 @@ def build_parser(parser: argparse.ArgumentParser | None = None) -> argparse.Argu
                         help="reference backend (default: reduced)")
     parser.add_argument("--backend-b", choices=sorted(BACKENDS), default="exudyn",
                         help="compared backend (default: exudyn)")
-    parser.add_argument("--revolutions", type=int_at_least(1), default=4,
-                        help="crank revolutions")
+    parser.add_argument("--revolutions", type=int_at_least(1),
+                        help="crank revolutions (default: 4)")
     parser.add_argument("--rtol", type=positive_float,
                         help="relative tolerance (reduced backend)")
     parser.add_argument("--h-max", type=positive_time,
@@ -648,10 +649,39 @@ def build_parser(parser: argparse.ArgumentParser | None = None) -> argparse.Argu
     parser.add_argument("--out", type=Path, default=Path("compare_overlay.png"),
                         help="overlay figure (PNG); default compare_overlay.png")
     parser.add_argument("--no-plot", action="store_true", help="do not write the figure")
+    add_window_options(parser, "its peaks are compared per --window",
+                       "the time windows in s whose peaks are compared, a whole number of "
+                       "them in --duration (default: one window, the whole run)")
     add_force_option(parser)
     add_linkage_options(parser)
     add_mechanism_options(parser)
     return parser
+
+
+def compare_free(linkage, duration: float, window: float | None = None, *,
+                 accuracy: float = 1e-6, exudyn_accuracy: float | None = 1e-4,
+                 **exudyn_options):
+    """A free linkage (no drive) in both models over `duration` s, its peaks per time
+    `window`: (reduced Trajectory, Exudyn Trajectory, Verdict). The reduced model at
+    `accuracy`, Exudyn converged by step halving to `exudyn_accuracy` (None: one run at its
+    step, no bar), each peak with its own bar (Exudyn's per window, N); comparable peak by
+    peak (`verdict.comparable`: a transient from one initial state)."""
+    from mbs_clearance.analysis.verdict import verdict_of_peaks
+    from mbs_clearance.solve.simulate import simulate
+
+    span = {"duration": duration, "window": window}
+    a = simulate(linkage, accuracy=accuracy, **span)
+    b = simulate(linkage, backend="exudyn", accuracy=exudyn_accuracy, **span,
+                 **exudyn_options)
+    pa, pb = np.asarray(a.peaks, dtype=float), np.asarray(b.peaks, dtype=float)
+    ea = float(a.stats.get("error_estimate", 0.0)) * np.abs(pa)
+    eb = np.asarray(b.stats.get("peak_errors", np.zeros_like(pb)), dtype=float)
+    v = verdict_of_peaks(pa, ea, pb, eb, model_a="reduced", model_b="exudyn",
+                         span="window", transient=True)
+    if "peak_errors" not in b.stats:
+        v = replace(v, reason=v.reason + "; no error estimate for exudyn (bar 0: run it "
+                                         "with accuracy=, compare --accuracy X)")
+    return a, b, v
 
 
 def run_compare(args: argparse.Namespace) -> int:
@@ -662,10 +692,16 @@ def run_compare(args: argparse.Namespace) -> int:
         figure_suffixes,
         linkage_from_args,
         mechanism_from_args,
+        refuse_window_options,
     )
     from mbs_clearance.solve.simulate import simulate
 
     mech = linkage_from_args(args) or mechanism_from_args(args)
+    if getattr(mech, "drive", True) is None:
+        return _run_compare_free(mech, args)
+    refuse_window_options(args, "--revolutions")
+    if args.revolutions is None:
+        args.revolutions = 4
     if args.revolutions < 1:
         raise ValueError(f"--revolutions must be >= 1; got {args.revolutions}")
     # the sizes before any work, each backend's run by its own step
@@ -704,6 +740,35 @@ def run_compare(args: argparse.Namespace) -> int:
 
                 plot_comparison(*trajectories, path=tmp)
         print(f"figure written to {args.out}", file=sys.stderr)
+    return 0
+
+
+def _run_compare_free(linkage, args: argparse.Namespace) -> int:
+    """`run_compare` for a free linkage: `compare_free` over --duration in --window's, the
+    verdict table (a figure is not drawn: the overlay figures follow drive revolutions)."""
+    from mbs_clearance.cli import check_run_size
+
+    if args.duration is None or args.revolutions is not None:
+        raise ValueError(f"linkage {linkage.name!r} is free (no drive): give --duration S "
+                         "(and optionally --window S) instead of --revolutions")
+    window = args.duration if args.window is None else args.window
+    k = round(args.duration / window)
+    if k < 1 or abs(k * window - args.duration) > 1e-9 * args.duration:
+        raise ValueError(f"--duration ({args.duration:g} s) must be a whole number of "
+                         f"--window ({window:g} s)")
+    for backend in ("reduced", "exudyn"):
+        check_run_size(linkage, "--duration", args.duration, unit="s", backend=backend,
+                       step_size=args.step_size)
+    options = {"contact": args.contact} if args.contact is not None else {}
+    if args.step_size is not None:
+        options["step_size"] = args.step_size
+    accuracy = None if args.step_size is not None else (args.accuracy or 1e-4)
+    t0 = time.perf_counter()
+    a, b, verdict = compare_free(linkage, args.duration, args.window,
+                                 accuracy=args.converged_accuracy, exudyn_accuracy=accuracy,
+                                 **options)
+    print(f"compared in {time.perf_counter() - t0:.3g} s", file=sys.stderr, flush=True)
+    print(format_verdict(verdict))
     return 0
 
 

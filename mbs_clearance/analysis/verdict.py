@@ -160,12 +160,17 @@ def mean_interval(values) -> tuple[float, float]:
     return float(x.mean()), float(_t975(x.size - 1) * x.std(ddof=1) / math.sqrt(x.size))
 
 
-def comparable(periodic=None, lyapunov=None) -> tuple[bool, str]:
+def comparable(periodic=None, lyapunov=None, transient: bool = False) -> tuple[bool, str]:
     """Is the motion comparable peak by peak? From the periodicity flags (True, False or
     None, `trajectory.periodicity`; one per model, or one) and an optional Lyapunov
     result (its ``verdict``: "negative" or "zero" comparable, "positive" or "undecided"
     not). The Lyapunov verdict decides where given; otherwise every flag must be True.
-    Returns (comparable, the reason)."""
+    `transient`: a free linkage's motion from one initial state over a set span, always
+    comparable: each model's bar comes from refining its own steps over that span, so it
+    holds whatever the span amplifies. Returns (comparable, the reason)."""
+    if transient:
+        return True, ("a transient from one initial state: each peak against the bars of "
+                      "its own refinement")
     if lyapunov is not None:
         v = getattr(lyapunov, "verdict", lyapunov)
         ok = v in ("negative", "zero")
@@ -255,7 +260,8 @@ def _span(revs) -> str:
 def verdict_of_peaks(a, a_error, b, b_error, *, model_a: str = "reduced",
                      model_b: str = "exudyn", revolutions=None, periodic=None,
                      lyapunov=None, statistics_a: dict | None = None,
-                     statistics_b: dict | None = None) -> Verdict:
+                     statistics_b: dict | None = None, span: str = "revolution",
+                     transient: bool = False) -> Verdict:
     """The verdict on per-revolution peaks a, b (N) with their bars a_error, b_error (N,
     scalars or per revolution).
 
@@ -274,6 +280,11 @@ def verdict_of_peaks(a, a_error, b, b_error, *, model_a: str = "reduced",
     statistics_a, statistics_b : dict or None
         Per-revolution statistics of each model (`revolution_statistics`); needed where the
         motion is not comparable peak by peak (else the statistics verdict is "undecided").
+    span : str, default "revolution"
+        What a peak is taken over, in the quantities' names ("window" for a free linkage's
+        time windows).
+    transient : bool
+        A free linkage's motion over a set span (`comparable`).
 
     Returns
     -------
@@ -288,9 +299,9 @@ def verdict_of_peaks(a, a_error, b, b_error, *, model_a: str = "reduced",
     if np.any(ea < 0) or np.any(eb < 0):
         raise ValueError("error bars must be >= 0")
     revs = range(1, a.size + 1) if revolutions is None else revolutions
-    items = tuple(Item(f"peak of |F| in revolution {k}", float(x), float(ex), float(y),
+    items = tuple(Item(f"peak of |F| in {span} {k}", float(x), float(ex), float(y),
                        float(ey)) for k, x, ex, y, ey in zip(revs, a, ea, b, eb))
-    ok, reason = comparable(periodic, lyapunov)
+    ok, reason = comparable(periodic, lyapunov, transient)
     if ok:
         kind = AGREE if all(i.agree for i in items) else DIFFER
         return Verdict(kind, model_a, model_b, items, reason)

@@ -177,14 +177,18 @@ def _sequence(linkage, revolutions: int, accuracy: float, options: dict, record=
     options = dict(options)
     max_memory = options.pop("max_memory", None)
     start = options.pop("start", None)
+    for name in ("duration", "window"):     # a free linkage's span: its record's
+        options.pop(name, None)
     xl.make_settings(dict(options))         # bad values fail before any run
     h = first_step(linkage, accuracy, options)
     steps, peaks, seconds, last = [], [], [], None
+    free = revolutions is None              # a free linkage: every run recorded (windows)
 
     def run(step, recorded):
         nonlocal last
         t0 = time.perf_counter()
-        if recorded and (last is None or _fits(linkage, revolutions, step, max_memory)):
+        if free or (recorded and (last is None
+                                  or _fits(linkage, revolutions, step, max_memory))):
             last = record(step)
             last.stats["series_step"] = step
             peaks.append(np.asarray(last.peaks, dtype=float))
@@ -241,24 +245,28 @@ def _accuracy_stats(conv: Convergence, accuracy: float) -> dict:
                 accuracy_seconds=float(sum(conv.seconds)), peaks_extrapolated=True)
 
 
-def simulate_to_accuracy(mech, revolutions: int, accuracy: float, record, **options):
-    """Exudyn's run of `mech` (driven) with its per-revolution peaks converged in the step
-    to `accuracy` (relative): the step sequence h, h/2, h/4, ... of `_sequence`, the last
-    run recorded (``record(h)`` -> Trajectory). The returned Trajectory holds that run's
-    series and, as ``peaks``, the extrapolated peaks (`richardson`); its stats hold
-    ``error_estimate`` (largest relative bar over the revolutions), ``accuracy_ok``,
-    ``accuracy_steps``, ``accuracy_peaks`` (each run's), ``observed_order`` and
-    ``peak_errors`` (N). An `AccuracyWarning` says when the request was not met within
-    `MAX_HALVINGS` further halvings. Where a finer run's record would exceed ``max_memory``
-    (default min(4 GiB, half the RAM)) that run records its peaks only and the series are
-    the last recorded run's (``stats["series_step"]``; ``stats["series_peak_offset"]``: the
-    relative distance of its own refined peaks from the extrapolated ones)."""
+def simulate_to_accuracy(mech, revolutions: int | None, accuracy: float, record, **options):
+    """Exudyn's run of `mech` with its per-revolution peaks (a free linkage, revolutions None: its
+    per-window peaks, every run recorded by ``record(h)`` over its ``duration`` and
+    ``window``) converged in the step to `accuracy` (relative): the step sequence h, h/2,
+    h/4, ... of `_sequence`, the last run recorded (``record(h)`` -> Trajectory). The
+    returned Trajectory holds that run's series and, as ``peaks``, the extrapolated peaks
+    (`richardson`); its stats hold ``error_estimate`` (largest relative bar over the
+    revolutions), ``accuracy_ok``, ``accuracy_steps``, ``accuracy_peaks`` (each run's),
+    ``observed_order`` and ``peak_errors`` (N). An `AccuracyWarning` says when the request
+    was not met within `MAX_HALVINGS` further halvings. Where a finer run's record would
+    exceed ``max_memory`` (default min(4 GiB, half the RAM)) that run records its peaks
+    only and the series are the last recorded run's (``stats["series_step"]``;
+    ``stats["series_peak_offset"]``: the relative distance of its own refined peaks from
+    the extrapolated ones)."""
     import warnings
 
     from .._warnings import AccuracyWarning
 
-    revolutions = check_int("revolutions", revolutions, 1)
-    conv, traj = _sequence(as_linkage(mech), revolutions, accuracy, options, record)
+    linkage = as_linkage(mech)
+    if linkage.drive is not None or revolutions is not None:
+        revolutions = check_int("revolutions", revolutions, 1)
+    conv, traj = _sequence(linkage, revolutions, accuracy, options, record)
     stats = _accuracy_stats(conv, accuracy)
     # the series may come from a coarser run than the last (a finer record would exceed
     # max_memory): how far its own refined peaks lie from the extrapolated ones

@@ -806,15 +806,16 @@ class ExudynModel:
     corners: list = field(default_factory=list)
     keep: np.ndarray | None = None   # rows of the stored data kept (`solve`: sliver steps)
     #: allocations per step by design: the outputs the pre-step function reads from Exudyn
-    #: (each read allocates one vector) and the oil films' Python user functions
-    #: (`FILM_ALLOCATIONS` each); `solve` tells Exudyn's allocation notice to expect them
+    #: (each read allocates one vector) and the Python force user functions
+    #: (`PYTHON_FORCE_ALLOCATIONS` each); `solve` tells Exudyn's allocation notice so
     pre_step_reads: int = 0
 
 
-#: allocations per step of an oil film's Python user function (its force vector is made on
-#: every call, each Newton iteration: 41 per step measured on the lubricated case), by
-#: design, so counted with the pre-step reads for Exudyn's allocation notice
-FILM_ALLOCATIONS = 100
+#: allocations per step of a Python force user function (an oil film's, a translational
+#: joint's corners'): its force vector is made on every call, each Newton iteration (41 per
+#: step measured on the lubricated case, 24 on the translational benchmark), by design, so
+#: counted with the pre-step reads for Exudyn's allocation notice
+PYTHON_FORCE_ALLOCATIONS = 100
 
 #: sensor groups `build` can record
 OUTPUT_GROUPS: tuple[str, ...] = ("reactions", "drive", "contact", "bodies")
@@ -976,7 +977,7 @@ def build(linkage: Linkage, settings: ExudynSettings | None = None,
                 memory.history = []
             if cj.has_lubrication:
                 _film_element(mbs, cj, nodes, pts, keep_alive)
-                pre_step_reads += FILM_ALLOCATIONS
+                pre_step_reads += PYTHON_FORCE_ALLOCATIONS
         contact_items.append(obj)
         if GROUND in (cj.journal_body, cj.bearing_body):
             # the force on the bearing is +f (user force) / -f (sphere: markers swapped)
@@ -1001,8 +1002,9 @@ def build(linkage: Linkage, settings: ExudynSettings | None = None,
         def force(mbs, t, itemNumber, q, q_t, tj=tj, sides=sides, mems=mems):
             return _corner_loads(tj, sides, q, q_t, [m.dmin for m in mems])[0]
 
-        # each corner's gap reads the coordinates and rates of every node of the joint
-        pre_step_reads += len(CORNERS) * 2 * len(node_list)
+        # each corner's gap reads the coordinates and rates of every node of the joint; the
+        # corners' force is a Python user function
+        pre_step_reads += len(CORNERS) * 2 * len(node_list) + PYTHON_FORCE_ALLOCATIONS
 
         def state(mbs, node_list=node_list):
             q, qt = [], []

@@ -151,7 +151,7 @@ def simulate(mech: SliderCrank, revolutions: int | None = None, backend: str = "
     if backend == "reduced":
         options = expand(options)
     check_accuracy_or_rtol(accuracy, options)
-    if accuracy is not None and _driven(mech) and _backend(backend).to_accuracy is not None:
+    if accuracy is not None and _backend(backend).to_accuracy is not None:
         simulate_to_accuracy = _backend(backend).to_accuracy.load("simulate")
         revolutions = _check(mech, revolutions)
         _call_check(backend, mech, options)
@@ -229,7 +229,7 @@ def peak_base_force(mech: SliderCrank, revolution: int | None = None, backend: s
         if revolution is None:      # a free linkage: its last window's peak
             return float(traj.peaks[-1])
         return float(revolution_peaks(traj)[revolution - 1])
-    if accuracy is not None and _driven(mech) and _backend(backend).to_accuracy is not None:
+    if accuracy is not None and _backend(backend).to_accuracy is not None:
         peak_to_accuracy = _backend(backend).to_accuracy.load("peak")
         revolution = _check(mech, revolution, "revolution")
         _call_check(backend, mech, options)
@@ -237,10 +237,6 @@ def peak_base_force(mech: SliderCrank, revolution: int | None = None, backend: s
     if accuracy is not None:
         options["accuracy"] = accuracy
     return _call(backend, "peak", mech, revolution, options, "revolution")
-
-
-def _driven(mech) -> bool:
-    return not (isinstance(mech, Linkage) and mech.drive is None)
 
 
 def _call_check(backend: str, mech, options: dict) -> Model:

@@ -182,3 +182,34 @@ def test_converged_cross_check_agrees_within_the_error_bars_and_within_1e_4():
     text = format_cross_check(cc)
     assert "agree within their error bars" in text
     assert cc.exudyn_seconds > 0.0 and cc.reduced_seconds > 0.0
+
+
+@pytest.mark.slow      # Exudyn's step sequence over 20 ms (four runs, about 50 s)
+def test_a_free_linkage_is_compared_per_window_with_both_bars():
+    """The translational benchmark (free): both models over two 10 ms windows, Exudyn
+    converged by step halving (its own bars per window, a record every run), each peak
+    with its bars, and a verdict that says the models agree there."""
+    from mbs_clearance.model.cases import CASES
+    from validation.compare import compare_free
+
+    a, b, v = compare_free(CASES["flores_translational_slider_crank"](), 0.02, 0.01)
+    assert len(a.peaks) == len(b.peaks) == 2
+    assert b.stats["accuracy_ok"] and len(b.stats["peak_errors"]) == 2
+    assert len(b.stats["accuracy_steps"]) >= 3
+    assert [i.quantity for i in v.items] == ["peak of |F| in window 1",
+                                            "peak of |F| in window 2"]
+    assert v.kind == "agree", v.summary()
+    assert all(i.b_error > 0 for i in v.items[1:])
+
+
+@pytest.mark.parametrize("argv, needs", [
+    ([], "--duration"), (["--duration", "0.03", "--window", "0.007"], "whole number"),
+    (["--duration", "0.02", "--revolutions", "2"], "--duration")])
+def test_a_free_linkage_needs_its_span(argv, needs, capsys):
+    """compare on a free linkage: --duration (not --revolutions), a whole number of
+    --window's; refused in one line before any run."""
+    with pytest.raises(SystemExit) as exit_:
+        compare_command(["--case", "flores_translational_slider_crank", *argv])
+    assert exit_.value.code == 2
+    err = capsys.readouterr().err
+    assert needs in err and len(err.strip().splitlines()) == 1
