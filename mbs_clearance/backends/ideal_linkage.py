@@ -374,7 +374,9 @@ def _integrate(model: IdealModel, q0, v0, t, rtol, tol):
 
 def simulate_ideal_linkage(linkage: Linkage, revolutions: int | None = None, **options):
     """`linkage` with every joint ideal (module docstring): a `Trajectory` of the same form as
-    the clearance model's, sampled uniformly.
+    the clearance model's, sampled uniformly. The paper's case (a linkage of its parameter
+    set, `design.slider_crank_of`) runs its closed form, `ideal.simulate_ideal`, as the
+    `SliderCrank` does.
 
     Parameters
     ----------
@@ -401,6 +403,22 @@ def simulate_ideal_linkage(linkage: Linkage, revolutions: int | None = None, **o
         ``stats["integrated"]`` whether the run integrated (freedom left) or solved the
         kinematics.
     """
+    from ..model.design import slider_crank_of
+
+    paper = slider_crank_of(linkage)
+    if paper is not None:       # the paper's parameter set: its closed form, as before
+        from .ideal import simulate_ideal
+
+        _, revolutions, _, _ = _span(linkage, revolutions, options)     # the same checks
+        closed_form = {k: v for k, v in options.items()
+                       if k in ("samples_per_revolution", "max_memory")}   # no integration
+        return simulate_ideal(paper, revolutions, **closed_form)
+    return constrained_run(linkage, revolutions, **options)
+
+
+def constrained_run(linkage: Linkage, revolutions: int | None = None, **options):
+    """`simulate_ideal_linkage` by the constraints alone (module docstring), also for the
+    paper's case (whose backend run is its closed form)."""
     from ..solve.trajectory import Trajectory, annotate
     from .exudyn_linkage import refined_peaks, window_peaks
 
