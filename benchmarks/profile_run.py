@@ -13,6 +13,9 @@ gives. Then it runs the case `--repeats` times. Use it under perf:
 
 (``--ddm``: the DDM of the 8 default parameters, `sensitivities(mech)`, instead.)
 
+The map is for numba's kernels: run with ``MBS_CLEARANCE_CORE=numba``. On the C core (the
+default, for plain and DDM runs alike) perf names the compiled functions by itself.
+
 (the Python start-up and import are in the profile too; compare the kernels' shares
 with each other).
 """

@@ -1451,15 +1451,19 @@ int64_t mbs_integrate(const mbs_model *m, const double *y0, int64_t n, double *p
 /* ---- the step maps of recorded steps (sens_runtime.step_peaks, step_value, step_states) ---- */
 
 /* the run context and work arrays of single steps of n states, as integrator.step_workspace
- * (K zeros, y_new, f_new, ytmp, f0, g, gd) and, with copy_p, a copy q of p; 0 when out of
- * memory (free w->block) */
+ * (K zeros, y_new, f_new, ytmp, f0, g, gd) and, with copy_p, a copy q of p (whose n_mem
+ * memory entries the caller sets); 0, or a negative status (then nothing to free; else free
+ * w->block) */
 typedef struct {
     double *block, *K, *y_new, *f_new, *ytmp, *f0, *g, *gd, *q;
 } step_work;
 
-static int step_workspace(run_ctx *cx, step_work *w, const mbs_model *m, const mbs_tableau *tb,
-                          int64_t n, int64_t n_out, const double *p, int copy_p)
+static int64_t step_workspace(run_ctx *cx, step_work *w, const mbs_model *m,
+                              const mbs_tableau *tb, int64_t n, int64_t n_out, int64_t n_mem,
+                              const double *p, int copy_p)
 {
+    if (n < 1 || n_out < 0 || n_mem < 0 || m->mem_start + n_mem > m->n_p)
+        return STATUS_BAD_ARGUMENT;
     const int rosen = tb->a_cols > tb->a_rows;
     cx->m = m;
     cx->tb = tb;
@@ -1472,7 +1476,7 @@ static int step_workspace(run_ctx *cx, step_work *w, const mbs_model *m, const m
     const int64_t n_q = copy_p ? m->n_p : 0;
     w->block = calloc_d(cx->k_rows * n + 4 * n + 2 * ne + n_q);
     if (!w->block)
-        return 0;
+        return STATUS_OUT_OF_MEMORY;
     w->K = w->block;
     w->y_new = w->K + cx->k_rows * n;
     w->f_new = w->y_new + n;
@@ -1483,7 +1487,7 @@ static int step_workspace(run_ctx *cx, step_work *w, const mbs_model *m, const m
     w->q = w->gd + ne;
     if (copy_p)
         memcpy(w->q, p, (size_t)m->n_p * sizeof(double));
-    return 1;
+    return 0;
 }
 
 int64_t mbs_step_peaks(const mbs_model *m, const double *t0s, const double *y0s,
@@ -1491,12 +1495,11 @@ int64_t mbs_step_peaks(const mbs_model *m, const double *t0s, const double *y0s,
                        const double *p, const double *hs, const mbs_tableau *tb, int64_t iters,
                        double *vals, double *times)
 {
-    if (n < 1 || n_mem < 0 || m->mem_start + n_mem > m->n_p)
-        return STATUS_BAD_ARGUMENT;
     run_ctx cx;
     step_work w;
-    if (!step_workspace(&cx, &w, m, tb, n, 0, p, 1))
-        return STATUS_OUT_OF_MEMORY;
+    int64_t status = step_workspace(&cx, &w, m, tb, n, 0, n_mem, p, 1);
+    if (status)
+        return status;
     double out[1];
     for (int64_t k = 0; k < n_steps; k++) {
         for (int64_t j = 0; j < n_mem; j++)
@@ -1512,12 +1515,11 @@ int64_t mbs_step_value(const mbs_model *m, double t0, const double *y0, int64_t 
                        const double *mem, int64_t n_mem, const double *p, double h,
                        const mbs_tableau *tb, double *value)
 {
-    if (n < 1 || n_mem < 0 || m->mem_start + n_mem > m->n_p)
-        return STATUS_BAD_ARGUMENT;
     run_ctx cx;
     step_work w;
-    if (!step_workspace(&cx, &w, m, tb, n, 0, p, 1))
-        return STATUS_OUT_OF_MEMORY;
+    int64_t status = step_workspace(&cx, &w, m, tb, n, 0, n_mem, p, 1);
+    if (status)
+        return status;
     double out[1];
     for (int64_t j = 0; j < n_mem; j++)
         w.q[m->mem_start + j] = mem[j];
@@ -1532,12 +1534,11 @@ int64_t mbs_step_states(const mbs_model *m, double t0, const double *y0, int64_t
                         const double *hs, int64_t n_h, const mbs_tableau *tb, int64_t n_out,
                         double *ys, double *outs)
 {
-    if (n < 1 || n_out < 0)
-        return STATUS_BAD_ARGUMENT;
     run_ctx cx;
     step_work w;
-    if (!step_workspace(&cx, &w, m, tb, n, n_out, p, 0))
-        return STATUS_OUT_OF_MEMORY;
+    int64_t status = step_workspace(&cx, &w, m, tb, n, n_out, 0, p, 0);
+    if (status)
+        return status;
     m->rhs(t0, y0, n, p, w.f0);
     for (int64_t k = 0; k < n_h; k++)
         step_monitor(&cx, t0, y0, n, w.f0, hs[k], w.K, p, ys + k * n, w.f_new, w.ytmp,

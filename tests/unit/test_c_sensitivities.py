@@ -137,8 +137,10 @@ def _rel(a, b) -> float:
 
 
 def test_ddm_tangent_and_monodromy_equal_numba(monkeypatch):
-    """The paper case's DDM sensitivities (recorded and at given times), a tangent flow
-    and a return map's monodromy matrix on the C core equal numba's to 1e-10 relative."""
+    """The paper case's DDM sensitivities (recorded and at given times), a tangent flow,
+    a return map's monodromy matrix and the peak's gradient (steps refined and the DDM
+    state stepped to the peak) on the C core equal numba's to 1e-10 relative."""
+    from mbs_clearance.analysis.objective import peak_gradient
     from mbs_clearance.analysis.periodic import return_map
     from mbs_clearance.analysis.sensitivity import sensitivities
     from mbs_clearance.solve.flows import Flow, TangentFlow
@@ -157,7 +159,8 @@ def test_ddm_tangent_and_monodromy_equal_numba(monkeypatch):
         n2, J = 2 * f.model.N_Q, f.model.N_EVENTS
         vel = f.p[f.model.MEM_START + 1:f.model.MEM_START + 2 * J:2].copy()
         *_, M = return_map(linkage, f.y[:n2], np.zeros(J), vel, jacobian=True)
-        return s, at, tf, M
+        g = peak_gradient(linkage, names[:2], revolution=2)
+        return s, at, tf, M, g
 
     c = runs()
     assert isinstance(c[2].model, CModel)
@@ -172,6 +175,8 @@ def test_ddm_tangent_and_monodromy_equal_numba(monkeypatch):
     assert _rel(c[1].base_force, n[1].base_force) < 1e-10
     assert _rel(c[2].tangent(), n[2].tangent()) < 1e-10
     assert _rel(c[3], n[3]) < 1e-10
+    assert _rel(c[4].gradient, n[4].gradient) < 1e-10 and _rel(c[4].peak, n[4].peak) < 1e-10
+    assert c[4].time == n[4].time
 
 
 def test_ddm_run_loads_no_numba_model(monkeypatch):
