@@ -1,6 +1,7 @@
 """The largest Lyapunov exponent from the variational equations.
 
-The DDM kernels of a generated model (linkage_ddm, generate/sens_runtime.py) integrate the
+The DDM kernels of a generated model (linkage_ddm; core/sens_runtime.h in the compiled C
+model, generate/sens_runtime.py in the numba module) integrate the
 state with sensitivities s' = (df/dy) s + (df/dp) D + (df/d deltadot_minus) sigma. With no
 parameter (D = 0) and an initial sensitivity v0 (a direction in state space) the
 sensitivity is the tangent vector v(t) = Phi(t) v0 of the flow, and each clearance joint's
