@@ -211,8 +211,9 @@ class SliderCrank:
         """Contact stiffness K in N/m^1.5: `contact_stiffness` or Eq. 9 of the paper."""
         if self.contact_stiffness is not None:
             return float(self.contact_stiffness)
-        return stiffness_eq9(self.journal_radius, self.bearing_radius, self.youngs_modulus,
-                             self.poisson_ratio)
+        # the law's python source: the compiled kernel would compile on first use
+        return stiffness_eq9.py_func(self.journal_radius, self.bearing_radius,
+                                     self.youngs_modulus, self.poisson_ratio)
 
     @property
     def crank_inertia_value(self) -> float:

@@ -5,7 +5,6 @@ missed at the default tolerance)."""
 
 from __future__ import annotations
 
-import numba as nb
 import numpy as np
 
 __all__ = ["RATTLING", "START_SWITCHES", "SETTLING_ONSETS", "GRAZING_ONSET", "rattles",
@@ -102,15 +101,6 @@ def floored_impacts(ms: np.ndarray, floor: float) -> int:
     """Contact onsets whose impact velocity was raised to the floor, from the memories of all
     recorded steps: grazing onsets, whose stored velocity (and with it the damping of the
     whole contact) is ill-conditioned at loose tolerances (docs/performance.md)."""
-    return int(_floored_impacts(ms, float(floor)))
-
-
-@nb.njit(cache=True)
-def _floored_impacts(ms, floor):
-    """`floored_impacts` in one pass (five numpy passes over a strided column took 1 % of a
-    simulation)."""
-    n = 0
-    for i in range(1, ms.shape[0]):
-        if ms[i, 0] > 0.5 and not ms[i - 1, 0] > 0.5 and ms[i, 1] <= floor:
-            n += 1
-    return n
+    contact = ms[:, 0] > 0.5
+    onset = contact[1:] & ~contact[:-1]
+    return int(np.count_nonzero(onset & (ms[1:, 1] <= float(floor))))

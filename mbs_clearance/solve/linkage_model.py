@@ -304,10 +304,10 @@ def event_atol(joint, speed: float, rtol: float) -> np.ndarray:
     than it gained, docs/performance.md), except for a damping-dominated contact law
     (hysteresis factor xi > DAMPED_XI), whose force follows the rate with weight xi: there
     the rate's atol is rtol x DAMPED_RATE_ATOL / xi x clearance x drive speed."""
-    from ..laws.forces import hysteresis_factor
+    from ..laws.registry import CONTACT
 
     # the law's python source: a compiled kernel called from here would compile on first use
-    xi = hysteresis_factor.py_func(joint.restitution, CONTACT_MODELS[joint.contact_model])[0]
+    xi = CONTACT[CONTACT_MODELS[joint.contact_model]].hysteresis(joint.restitution)
     rate = (rtol * DAMPED_RATE_ATOL / xi * joint.clearance * speed
             if xi > DAMPED_XI else np.inf)
     return np.array([rtol * EVENT_ATOL * joint.clearance, rate])
