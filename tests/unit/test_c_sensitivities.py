@@ -136,6 +136,8 @@ def _rel(a, b) -> float:
     return float(np.max(np.abs(a - b)) / max(np.max(np.abs(b)), 1e-300))
 
 
+@pytest.mark.slow   # the oracle's numba DDM kernels compile for minutes and leave with numba;
+# the fast set checks the C sensitivities against differences (above) and pinned values
 def test_ddm_tangent_and_monodromy_equal_numba(monkeypatch):
     """The paper case's DDM sensitivities (recorded and at given times), a tangent flow,
     a return map's monodromy matrix and the peak's gradient (steps refined and the DDM
