@@ -32,8 +32,8 @@ from mbs_clearance.generate.runtime import (
 
 LINKAGE = "four_bar"
 STRUCTURE = "{\"bodies\": [[\"crank\", [\"pin\", \"pivot\"]], [\"coupler\", [\"crank_end\", \"rocker_end\"]], [\"rocker\", [\"pin\", \"pivot\"]]], \"clearance_joints\": [[\"coupler_rocker\", \"rocker\", \"pin\", \"coupler\", \"rocker_end\"]], \"drive\": \"crank_pivot\", \"ground_points\": [\"crank_pivot\", \"rocker_pivot\"], \"joints\": [[\"revolute\", \"crank_pivot\", \"ground\", \"crank_pivot\", \"crank\", \"pivot\"], [\"revolute\", \"crank_coupler\", \"crank\", \"pin\", \"coupler\", \"crank_end\"], [\"revolute\", \"rocker_pivot\", \"ground\", \"rocker_pivot\", \"rocker\", \"pivot\"]], \"monitor_joint\": null, \"zero_parameters\": [\"crank.pivot.y\", \"crank.pin.y\", \"coupler.crank_end.y\", \"coupler.rocker_end.y\", \"rocker.pivot.y\", \"rocker.pin.y\", \"ground.crank_pivot.x\", \"ground.crank_pivot.y\", \"ground.rocker_pivot.y\"]}"
-STRUCTURE_DIGEST = "175b0ae167e04974220a758ee51443df11b23b17670751fab8a73218997e0c96"
-GENERATOR_VERSION = "89db7e28670f0a78"
+STRUCTURE_DIGEST = "962877e8e4fa9e80844482a6f932cf23ecbee9082f552bbebc07750a48241c34"
+GENERATOR_VERSION = "cac455052c6210e4"
 
 #: dotted names of the entries of p (without the constants)
 PARAMETERS = (

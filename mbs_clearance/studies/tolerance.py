@@ -944,17 +944,20 @@ def _nominal_accuracy_note(problem: ToleranceProblem) -> list[str]:
     from ..solve.simulate import peak_base_force
 
     task = _task(problem)
-    cheap = _mechanism_output(problem.mech, task)[0]
     options = {k: v for k, v in problem.options.items() if k != "max_memory"}
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", AccuracyWarning)
-        if isinstance(problem.mech, Linkage):
-            from ..analysis.objective import peak_output
+    try:
+        cheap = _mechanism_output(problem.mech, task)[0]
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", AccuracyWarning)
+            if isinstance(problem.mech, Linkage):
+                from ..analysis.objective import peak_output
 
-            accurate = peak_output(problem.mech, None, problem.revolution,
-                                   window=problem.window, **options)
-        else:
-            accurate = peak_base_force(problem.mech, problem.revolution, **options)
+                accurate = peak_output(problem.mech, None, problem.revolution,
+                                       window=problem.window, **options)
+            else:
+                accurate = peak_base_force(problem.mech, problem.revolution, **options)
+    except RuntimeError:        # the nominal design's run fails: the counts say so
+        return []
     error = abs(cheap / accurate - 1.0)
     if error <= DEFAULT_ACCURACY:
         return []

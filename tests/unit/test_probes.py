@@ -206,6 +206,9 @@ def test_a_study_with_failed_runs_exits_1_unless_keep_going(tmp_path, monkeypatc
             task.revolution), None, False, False
 
     monkeypatch.setattr(tol, "_mechanism_output", output)
+    # the samples are the ideal joints' peaks: the check of the nominal one against the
+    # reduced model at the default accuracy is not what this test is about
+    monkeypatch.setattr(tol, "_nominal_accuracy_note", lambda problem: [])
     monkeypatch.chdir(tmp_path)
     (tmp_path / "inputs.json").write_text(INPUTS)
     argv = ["tolerance", "inputs.json", "--sobol", "0", "--monte-carlo", "16", "--workers",
