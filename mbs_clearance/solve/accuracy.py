@@ -73,19 +73,22 @@ MAX_RTOL = 1e-4
 
 def peak_difference(a, b) -> float:
     """Largest relative difference max |a - b| / |b| of two runs' per-revolution peaks (a
-    window without samples, peak 0 in both, counts as equal)."""
+    window without samples, peak 0 in both, counts as equal; a revolution that a run on
+    output times does not sample, NaN, is left out)."""
     a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
     scale = np.maximum(np.abs(b), np.finfo(float).tiny)
     d = np.where((a == 0.0) & (b == 0.0), 0.0, np.abs(a - b) / scale)
+    d = d[~np.isnan(d)]
     return float(np.max(d)) if d.size else 0.0
 
 
 def revolution_peaks(traj) -> np.ndarray:
     """A Trajectory's per-revolution peaks: its refined `peaks`, or (a run on output times)
-    the maxima over its samples."""
+    the maxima over its samples (NaN for a revolution it has no sample in)."""
     if traj.peaks is not None:
         return np.asarray(traj.peaks, dtype=float)
-    return np.array([traj.max_base_force(k) for k in range(1, traj.revolutions + 1)])
+    return np.array([traj.max_base_force(k) if np.any(traj.revolution_mask(k)) else np.nan
+                     for k in range(1, traj.revolutions + 1)])
 
 
 def _round(rtol: float) -> float:

@@ -185,6 +185,9 @@ class Trajectory:
         mask = self.revolution_mask(revolution)
         if self.peaks is not None and len(self.peaks) >= revolution:
             return float(self.peaks[revolution - 1])
+        if not np.any(mask):
+            raise ValueError(f"revolution {revolution} has no samples (the run's output times "
+                             f"t_eval cover {self.t[0]:.6g} to {self.t[-1]:.6g} s)")
         return float(self.base_force_magnitude[mask].max())
 
     # ------------------------------------------------------------------ save / load

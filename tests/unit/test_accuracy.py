@@ -298,3 +298,17 @@ def test_studies_run_to_a_requested_accuracy():
                                  coupler_length=ga.best_genes["coupler_length"])
     ref = peak_base_force(best, 2, rtol=am.REFERENCE_RTOL)
     assert abs(ga.best_peak_force / ref - 1.0) <= 1e-6
+
+
+def test_a_run_on_output_times_of_the_last_revolution_meets_the_request_there():
+    """simulate with output times over revolution 4 only: the accuracy is judged on the
+    revolution it samples (the sample maximum within 1e-5 of the same at rtol 1e-12), and
+    a revolution without samples is refused by name."""
+    mech = SliderCrank()
+    t_eval = np.linspace(3 * mech.period, 4 * mech.period, 721)
+    traj = simulate(mech, 4, t_eval=t_eval)
+    ref = simulate(mech, 4, t_eval=t_eval, rtol=am.REFERENCE_RTOL)
+    assert traj.stats["accuracy_ok"]
+    assert abs(traj.max_base_force(4) / ref.max_base_force(4) - 1.0) <= 1e-5
+    with pytest.raises(ValueError, match="revolution 2 has no samples"):
+        traj.max_base_force(2)
