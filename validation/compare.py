@@ -746,16 +746,9 @@ def run_compare(args: argparse.Namespace) -> int:
 def _run_compare_free(linkage, args: argparse.Namespace) -> int:
     """`run_compare` for a free linkage: `compare_free` over --duration in --window's, the
     verdict table (a figure is not drawn: the overlay figures follow drive revolutions)."""
-    from mbs_clearance.cli import check_run_size
+    from mbs_clearance.cli import check_run_size, free_window
 
-    if args.duration is None or args.revolutions is not None:
-        raise ValueError(f"linkage {linkage.name!r} is free (no drive): give --duration S "
-                         "(and optionally --window S) instead of --revolutions")
-    window = args.duration if args.window is None else args.window
-    k = round(args.duration / window)
-    if k < 1 or abs(k * window - args.duration) > 1e-9 * args.duration:
-        raise ValueError(f"--duration ({args.duration:g} s) must be a whole number of "
-                         f"--window ({window:g} s)")
+    free_window(linkage, args, "revolutions")     # --duration, a whole number of --window
     for backend in ("reduced", "exudyn"):
         check_run_size(linkage, "--duration", args.duration, unit="s", backend=backend,
                        step_size=args.step_size)
