@@ -38,7 +38,8 @@ import numpy as np
 __all__ = ["AGREE", "DIFFER", "NOT_COMPARABLE", "UNDECIDED", "Item", "Verdict",
            "comparable", "judge_periodicity", "periodic_flag", "mean_interval",
            "revolution_statistics", "verdict_of_peaks", "verdict_of_trajectories",
-           "format_verdict", "MIN_STATISTICS_REVOLUTIONS", "JUDGE_REVOLUTIONS"]
+           "format_verdict", "with_missing_bars", "MIN_STATISTICS_REVOLUTIONS",
+           "JUDGE_REVOLUTIONS"]
 
 AGREE = "agree"
 DIFFER = "differ"
@@ -356,13 +357,19 @@ def verdict_of_trajectories(a, b, revolutions=None, *, lyapunov=None) -> Verdict
                          lyapunov=lyapunov,
                          statistics_a=revolution_statistics(a, later) if later else None,
                          statistics_b=revolution_statistics(b, later) if later else None)
-    missing = [tr.backend for tr in (a, b) if "error_estimate" not in tr.stats]
-    if missing:
-        note = (f"; no error estimate for {' and '.join(missing)} (bar 0: run it with "
-                f"accuracy=, compare --accuracy X)")
-        v = Verdict(v.kind, v.model_a, v.model_b, v.items, v.reason + note, v.statistics,
-                    v.statistics_items)
-    return v
+    return with_missing_bars(v, [tr.backend for tr in (a, b)
+                                 if "error_estimate" not in tr.stats])
+
+
+def with_missing_bars(v: Verdict, missing) -> Verdict:
+    """`v` with the note that the models `missing` have no error estimate (bar 0), which a
+    differing verdict repeats (`_missing_bars`); `v` itself where none is missing."""
+    if not missing:
+        return v
+    note = (f"; no error estimate for {' and '.join(missing)} (bar 0: run it with "
+            f"accuracy=, compare --accuracy X)")
+    return Verdict(v.kind, v.model_a, v.model_b, v.items, v.reason + note, v.statistics,
+                   v.statistics_items)
 
 
 def _missing_bars(v: Verdict) -> str:
