@@ -49,6 +49,7 @@ from ..laws.forces import CONTACT_MODELS, FRICTION_LAWS, stiffness_eq9
 from ..laws.lubrication import BEARING_LENGTH, FADE_END, FADE_START, VISCOSITY, check_fade
 from ..laws.lubrication import MODELS as LUBRICATION_MODELS
 from ..laws.registry import FRICTION_PARAMETER_SPECS, FRICTION_SLOTS, friction_law
+from .profile import BearingProfile, check_profile
 
 __all__ = ["Point", "GROUND", "RESERVED_NAMES", "Body", "Revolute", "Prismatic", "ClearanceJoint",
            "TranslationalClearance", "CORNERS", "Drive", "Initial", "Linkage",
@@ -240,6 +241,9 @@ class ClearanceJoint:
     bearing_length: float = BEARING_LENGTH.default
     film_fade_start: float = FADE_START.default
     film_fade_end: float = FADE_END.default
+    #: a worn (or shaped) bearing: its radii (m) at N equally spaced angles in the bearing
+    #: body's frame (`profile.BearingProfile`); None is the circle of bearing_radius
+    bearing_profile: tuple[float, ...] | None = None
 
     def __post_init__(self) -> None:
         _name("clearance joint name", self.name)
@@ -282,6 +286,18 @@ class ClearanceJoint:
                              "law (friction_law must be 'none')")
         for f in LUBRICATION_PARAMETERS:
             object.__setattr__(self, f, float(getattr(self, f)))
+        if self.bearing_profile is not None:
+            object.__setattr__(self, "bearing_profile", check_profile(
+                f"{what} bearing_profile", self.bearing_profile, self.journal_radius))
+            if self.has_lubrication:
+                raise ValueError(f"{what} has a bearing_profile and lubrication "
+                                 f"{self.lubrication!r}: the oil film takes a circular bearing "
+                                 "(bearing_profile must be None)")
+
+    @property
+    def profile(self) -> BearingProfile | None:
+        """The bearing's shape (`profile.BearingProfile`), None for a circular bearing."""
+        return None if self.bearing_profile is None else BearingProfile(self.bearing_profile)
 
     @property
     def has_lubrication(self) -> bool:
@@ -952,6 +968,10 @@ class Linkage:
         for j in out["clearance_joints"]:
             if j["contact_stiffness"] is None:      # TOML has no null
                 del j["contact_stiffness"]
+            if j["bearing_profile"] is None:
+                del j["bearing_profile"]
+            else:
+                j["bearing_profile"] = list(j["bearing_profile"])
             if j["lubrication"] == "none":          # dry joints: the keys of old
                 for f in ("lubrication", *LUBRICATION_PARAMETERS):
                     del j[f]
