@@ -124,6 +124,12 @@ class Trajectory:
     #: J, work dissipated by friction in the clearance joints since t = 0 (a linkage with
     #: friction; None otherwise)
     friction_work: np.ndarray | None = None
+    #: rad, per clearance joint (n, J): the eccentricity's direction in the bearing body's
+    #: frame, in [0, 2 pi) (where a contact presses the bearing); None if not provided
+    contact_angle: np.ndarray | None = None
+    #: m/s, per clearance joint (n, J): the journal surface's tangential speed against the
+    #: bearing's at the contact (the friction law's v_t); None if not provided
+    slip_velocity: np.ndarray | None = None
 
     @property
     def linkage(self):
