@@ -49,6 +49,7 @@ from ..laws.forces import CONTACT_MODELS, FRICTION_LAWS, stiffness_eq9
 from ..laws.lubrication import BEARING_LENGTH, FADE_END, FADE_START, VISCOSITY, check_fade
 from ..laws.lubrication import MODELS as LUBRICATION_MODELS
 from ..laws.registry import FRICTION_PARAMETER_SPECS, FRICTION_SLOTS, friction_law
+from ..laws.wear.archard import WEAR_COEFFICIENT
 from .profile import BearingProfile, check_profile
 
 __all__ = ["Point", "GROUND", "RESERVED_NAMES", "Body", "Revolute", "Prismatic", "ClearanceJoint",
@@ -244,6 +245,9 @@ class ClearanceJoint:
     #: a worn (or shaped) bearing: its radii (m) at N equally spaced angles in the bearing
     #: body's frame (`profile.BearingProfile`); None is the circle of bearing_radius
     bearing_profile: tuple[float, ...] | None = None
+    #: Archard's dimensional wear coefficient k/H of the bearing (m^2/N; 0: it does not
+    #: wear), read by the wear life (`studies.wear`), not by a single run
+    wear_coefficient: float = 0.0
 
     def __post_init__(self) -> None:
         _name("clearance joint name", self.name)
@@ -286,6 +290,9 @@ class ClearanceJoint:
                              "law (friction_law must be 'none')")
         for f in LUBRICATION_PARAMETERS:
             object.__setattr__(self, f, float(getattr(self, f)))
+        object.__setattr__(self, "wear_coefficient", _real(
+            f"{what} wear_coefficient", self.wear_coefficient,
+            f"in {WEAR_COEFFICIENT.interval} (m^2/N)", WEAR_COEFFICIENT.contains))
         if self.bearing_profile is not None:
             object.__setattr__(self, "bearing_profile", check_profile(
                 f"{what} bearing_profile", self.bearing_profile, self.journal_radius))
@@ -968,6 +975,8 @@ class Linkage:
         for j in out["clearance_joints"]:
             if j["contact_stiffness"] is None:      # TOML has no null
                 del j["contact_stiffness"]
+            if j["wear_coefficient"] == 0.0:
+                del j["wear_coefficient"]
             if j["bearing_profile"] is None:
                 del j["bearing_profile"]
             else:
