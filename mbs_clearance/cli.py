@@ -1381,6 +1381,7 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     _add_animate_parser(sub)
     _add_lyapunov_parser(sub)
     _add_orbits_parser(sub)
+    _add_wear_parser(sub)
     if command not in BUILTIN:
         _add_plugins(sub, command)
     return parser
@@ -2157,6 +2158,106 @@ def _cmd_orbits(args: argparse.Namespace) -> int:
     return 0
 
 
+def _add_wear_parser(subparsers) -> argparse.ArgumentParser:
+    """The ``wear`` subcommand: a clearance joint's wear life (`studies.wear.wear_life`)."""
+    p = subparsers.add_parser(
+        "wear", help="wear life of a clearance joint: Archard wear coupled with the dynamics",
+        formatter_class=HelpFormatter,
+        description="Run the dynamics on the joint's bearing profile, wear it by Archard's law "
+                    "(k/H times the contact pressure times the sliding speed, the pressure "
+                    "spread by an elastic foundation), extrapolate the wear over an interval "
+                    "of cycles chosen by step doubling, update the profile and repeat. "
+                    "Prints the peaks, the wear depth and volume over the life and the cycle "
+                    "at which a load limit or twice the clearance is reached. Default: the "
+                    "case paper_slider_crank_wear.",
+        epilog="named cases (--case NAME; --set NAME=VALUE changes a value):\n"
+               + _case_lines())
+    add_linkage_options(p)
+    p.add_argument("--cycles", type=positive_float, default=1e6,
+                   help="length of the life in drive revolutions")
+    p.add_argument("--joint", metavar="NAME",
+                   help="the worn clearance joint (default: the one with a wear_coefficient)")
+    p.add_argument("--wear-coefficient", type=positive_float, metavar="K",
+                   help="Archard's k/H in m^2/N (default: the joint's wear_coefficient)")
+    p.add_argument("--tolerance", type=positive_float, default=0.01,
+                   help="profile error accepted per interval, a fraction of the initial "
+                        "clearance")
+    p.add_argument("--limit", type=quantity_type("N", 0.0), metavar="FORCE",
+                   help="a load limit of the monitored output: print the cycle it is first "
+                        "reached (e.g. 9kN)")
+    p.add_argument("--points", type=int_at_least(8), default=360,
+                   help="angles of the profile's grid when the joint starts circular")
+    p.add_argument("--settle", type=int_at_least(0), default=2,
+                   help="revolutions run on each profile before its wear is recorded")
+    p.add_argument("--record", type=int_at_least(1), default=1,
+                   help="revolutions whose mean wear is the rate per cycle")
+    p.add_argument("--backend", choices=("reduced", "exudyn"), default="reduced",
+                   help="the dynamics model")
+    p.add_argument("--out", type=Path, metavar="FILE",
+                   help="write the life (cycles, profiles, peaks, errors) as .json")
+    p.add_argument("--plot", type=Path, metavar="FILE",
+                   help="draw the worn profile, the depth against angle and the peaks against "
+                        "cycles (.png, .pdf, .svg, ...)")
+    add_force_option(p)
+    p.set_defaults(func=_cmd_wear)
+    return p
+
+
+def _cmd_wear(args: argparse.Namespace) -> int:
+    from .studies.wear import wear_life
+
+    if args.case is None and args.description is None:
+        args.case = "paper_slider_crank_wear"
+    linkage = linkage_from_args(args)
+    if args.out:
+        check_output_file(args.out, "--out", args.force, suffixes=(".json",))
+    if args.plot:
+        check_output_file(args.plot, "--plot", args.force, suffixes=figure_suffixes())
+    name = linkage.case or linkage.name
+    _progress(f"wear life of {name}: {number(args.cycles, 6)} cycles ...")
+    t0 = time.perf_counter()
+    res = wear_life(linkage, args.cycles, joint=args.joint,
+                    wear_coefficient=args.wear_coefficient, tolerance=args.tolerance,
+                    points=args.points, settle=args.settle, record=args.record,
+                    backend=args.backend, progress=sys.stderr.isatty())
+    print(f"done in {time.perf_counter() - t0:.3g} s ({res.evaluations} runs of "
+          f"{args.settle + args.record} revolutions)", file=sys.stderr)
+    print(f"wear of clearance joint {res.joint!r} of {name}: k/H = {res.coefficient:.3g} m^2/N, "
+          f"initial clearance {quantity(res.initial_clearance, 'm', 4)}")
+    print(f"{'cycles':>12}  {'max depth':>12}  {'volume':>12}  {'peak ' + res.output:>22}  "
+          f"{'drive RMS':>12}  regime")
+    rows = res.table()
+    step = max(1, len(rows) // 12)
+    for row in rows[::step] + ([rows[-1]] if (len(rows) - 1) % step else []):
+        print(f"{number(row['cycles'], 6):>12}  {quantity(row['max_depth_um'] * 1e-6, 'm', 4):>12}"
+              f"  {number(row['volume_mm3'], 4) + ' mm^3':>12}  {_force(row['peak_N']):>22}  "
+              f"{quantity(row['drive_rms_Nm'], 'N m', 4):>12}  {row['regime']}")
+    twice = res.cycles_to_clearance(2.0)
+    print("twice the initial clearance: " + (
+        f"after {number(twice, 4)} cycles" if twice is not None
+        else f"not reached in {number(res.cycles[-1], 6)} cycles"))
+    if args.limit is not None:
+        hit = res.cycles_to_limit(args.limit)
+        print(f"load limit {_force(args.limit)}: " + (
+            f"first reached after {number(hit, 4)} cycles" if hit is not None
+            else f"not reached in {number(res.cycles[-1], 6)} cycles"))
+    print(f"error estimate of the final profile: {quantity(res.error_estimate, 'm', 3)} "
+          f"({number(100 * res.error_estimate / res.initial_clearance, 3)} % of the initial "
+          f"clearance; {len(res.intervals)} intervals, tolerance "
+          f"{quantity(res.tolerance, 'm', 3)} each)")
+    if args.out:
+        with atomic_file(args.out) as tmp:
+            res.save(tmp)
+        wrote(args.out, "wear life")
+    if args.plot:
+        from .plotting import plot_wear
+
+        with atomic_file(args.plot) as tmp:
+            plot_wear(res, path=tmp)
+        wrote(args.plot, "figure")
+    return 0
+
+
 #: entry-point group through which other packages (this project's `validation`) add
 #: subcommands: each entry is a callable register(subparsers), optionally with attributes
 #: `help` and `description` for listing it without importing it
@@ -2166,7 +2267,7 @@ PLUGIN_GROUP = "mbs_clearance.commands"
 
 #: the subcommands defined here (the others come from plugins)
 BUILTIN = ("simulate", "sensitivity", "optimize", "tolerance", "map", "animate",
-           "lyapunov", "orbits")
+           "lyapunov", "orbits", "wear")
 
 
 def _add_plugins(sub, command: str | None = None) -> None:

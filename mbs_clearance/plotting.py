@@ -23,7 +23,7 @@ __all__ = ["backend_label", "plot_branch", "plot_trajectory", "plot_overlay", "p
            "plot_work_precision", "plot_fitness_history", "plot_force_comparison",
            "SENSITIVITY_FIGURES", "save", "plot_bifurcation", "plot_regime_map",
            "plot_poincare", "animate_mechanism", "mechanism_frames", "MechanismFrames",
-           "magnification",
+           "magnification", "plot_wear",
            "DRAWN_BEARING", "JOURNAL_GAP"]
 
 COLORS = ["C0", "C3", "C2", "C1", "C4", "C5"]
@@ -907,3 +907,50 @@ def _branch_speed(branch) -> np.ndarray:
 def _monotone(xv, yv):
     order = np.argsort(xv, kind="stable")
     return np.asarray(xv)[order], np.asarray(yv)[order]
+
+
+def plot_wear(result, path: str | Path | None = None, lives: int = 5) -> Figure:
+    """A wear life (`studies.wear.WearResult`) in three panels: the worn bearing drawn over
+    the joint (its wear depth magnified against the initial clearance), the wear depth
+    against the angle around the joint at `lives` points of the life, and the monitored
+    output's peak and the largest depth against the cycles.
+
+    Parameters
+    ----------
+    result : WearResult
+    path : str or Path, optional
+        Where to save the figure (format from the suffix).
+    lives : int
+        How many states of the life to draw (evenly spread over the accepted ones).
+    """
+    theta = result.angles
+    depth = result.depth
+    c0 = result.initial_clearance
+    picks = sorted(set(np.linspace(0, len(result.cycles) - 1, max(2, lives)).round().astype(int)))
+    fig = Figure(figsize=(13.0, 4.2), layout="constrained")
+    ax0 = fig.add_subplot(1, 3, 1, projection="polar")
+    ax1 = fig.add_subplot(1, 3, 2)
+    ax2 = fig.add_subplot(1, 3, 3)
+    closed = np.append(theta, theta[0] + 2 * np.pi)
+    for k, i in enumerate(picks):
+        d = np.append(depth[i], depth[i][0])
+        label = f"{number(result.cycles[i], 3)} cycles"
+        # radius drawn: the clearance plus the wear, in micrometres, around the joint
+        ax0.plot(closed, 1e6 * (c0 + d), color=f"C{k}", lw=1.2, label=label)
+        ax1.plot(np.degrees(closed), 1e6 * d, color=f"C{k}", lw=1.2, label=label)
+    ax0.set_title("bearing clearance around the joint (um)\n(bearing frame, 0 deg = its x axis)",
+                  fontsize=9)
+    ax0.set_rlim(0, 1e6 * (c0 + depth.max()) * 1.05)
+    ax1.set(xlabel="angle around the joint, bearing frame (deg)", ylabel="wear depth (um)",
+            title=f"wear of joint {result.joint!r}, k/H = {result.coefficient:.3g} m^2/N",
+            xlim=(0, 360))
+    ax1.grid(alpha=0.3)
+    ax1.legend(fontsize=8)
+    ax2.plot(result.cycles, result.peaks, "o-", color="C0", ms=3, lw=1.2)
+    ax2.set(xlabel="cycles", ylabel=f"peak {result.output} (N)",
+            title="peaks and largest wear depth over the life")
+    ax2.grid(alpha=0.3)
+    twin = ax2.twinx()
+    twin.plot(result.cycles, 1e6 * result.max_depth, "s--", color="C3", ms=3, lw=1.0)
+    twin.set_ylabel("largest wear depth (um)", color="C3")
+    return save(fig, path)

@@ -37,7 +37,8 @@ from .linkage import (
 from .mechanism import SliderCrank
 
 __all__ = ["as_linkage", "paper_slider_crank", "from_slider_crank", "slider_crank_two_clearances",
-           "four_bar", "paper_slider_crank_lubricated", "LUBRICATED_DEFAULTS", "CASES",
+           "four_bar", "paper_slider_crank_lubricated", "LUBRICATED_DEFAULTS",
+           "paper_slider_crank_wear", "WEAR_DEFAULTS", "CASES",
            "CASE_PARAMETERS", "CASE_SUMMARY", "flores_translational_slider_crank",
            "FLORES_DURATION"]
 
@@ -165,6 +166,39 @@ def paper_slider_crank_lubricated(**overrides: Any) -> Linkage:
     return dataclasses.replace(linkage.replace(clearance_joints=(joint,)),
                                name="paper_slider_crank_lubricated",
                                case="paper_slider_crank_lubricated",
+                               overrides=dict(overrides))
+
+
+#: the overrides of `paper_slider_crank_wear` beyond the SliderCrank fields: name ->
+#: (default, unit, source)
+WEAR_DEFAULTS: dict[str, tuple[Any, str, str]] = {
+    "friction_law": ("coulomb", "-", "Coulomb's law, regularised (friction_v0, friction_v1)"),
+    "friction_coefficient": (0.1, "-", "assumed: steel on steel, boundary-lubricated "
+                                       "(dry steel pairs run 0.3-0.6)"),
+    "wear_coefficient": (2.0e-17, "m^2/N", "assumed: Archard's K = 1e-7 over a hardened "
+                                           "steel's H = 5 GPa, inside the mild-wear range of "
+                                           "K (1e-8 to 1e-4; severe adhesive wear of dry mild "
+                                           "steel reaches 7e-3, Archard 1953); published "
+                                           "coefficients scatter widely: study per decade"),
+    "bearing_length": (0.01, "m", "assumed: half the journal diameter (L/D = 0.5), as the "
+                                  "lubricated case; the paper gives no length"),
+}
+
+
+def paper_slider_crank_wear(**overrides: Any) -> Linkage:
+    """The paper's slider-crank (`paper_slider_crank`) whose coupler-slider joint wears:
+    Coulomb friction in the joint and Archard's wear coefficient k/H (`WEAR_DEFAULTS`, each
+    with its source); the overrides are SliderCrank fields and the fields of
+    `WEAR_DEFAULTS`. Its wear life: `studies.wear.wear_life` (CLI ``mbs-clearance wear``)."""
+    import dataclasses
+
+    worn = {k: overrides[k] for k in WEAR_DEFAULTS if k in overrides}
+    rest = {k: v for k, v in overrides.items() if k not in WEAR_DEFAULTS}
+    linkage = paper_slider_crank(**rest)
+    values = {k: worn.get(k, d[0]) for k, d in WEAR_DEFAULTS.items()}
+    joint = dataclasses.replace(linkage.clearance_joints[0], **values)
+    return dataclasses.replace(linkage.replace(clearance_joints=(joint,)),
+                               name="paper_slider_crank_wear", case="paper_slider_crank_wear",
                                overrides=dict(overrides))
 
 
@@ -519,6 +553,10 @@ def flores_translational_slider_crank(**overrides: Any) -> Linkage:
 CASE_SUMMARY = {
     "paper_slider_crank": "slider-crank, clearance in the coupler-slider joint (Ebrahimi et "
                           "al. 2018; overrides: SliderCrank fields)",
+    "paper_slider_crank_wear": "the paper's slider-crank whose coupler-slider joint wears "
+                               "(Coulomb friction, Archard's k/H; overrides: SliderCrank "
+                               "fields, friction_coefficient, wear_coefficient, "
+                               "bearing_length)",
     "paper_slider_crank_lubricated": "the paper's slider-crank, its coupler-slider joint in "
                                      "SAE 30 oil (overrides: SliderCrank fields, viscosity, "
                                      "bearing_length, lubrication, film_fade_start/end)",
@@ -535,6 +573,7 @@ CASE_SUMMARY = {
 CASES = {
     "paper_slider_crank": paper_slider_crank,
     "paper_slider_crank_lubricated": paper_slider_crank_lubricated,
+    "paper_slider_crank_wear": paper_slider_crank_wear,
     "slider_crank_two_clearances": slider_crank_two_clearances,
     "four_bar": four_bar,
     "flores_translational_slider_crank": flores_translational_slider_crank,

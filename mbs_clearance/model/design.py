@@ -42,7 +42,8 @@ _SECTIONS = {"bodies": "", "joints": "", "clearance_joints": "", "ground_points"
 
 
 #: the cases whose overrides are SliderCrank fields (the lubricated one: and its film's)
-_SLIDER_CRANK_CASES = ("paper_slider_crank", "paper_slider_crank_lubricated")
+_SLIDER_CRANK_CASES = ("paper_slider_crank", "paper_slider_crank_lubricated",
+                       "paper_slider_crank_wear")
 
 
 def slider_crank_of(linkage: Linkage) -> SliderCrank | None:
@@ -62,12 +63,13 @@ def _case_table(linkage: Linkage) -> dict[str, object]:
     if linkage.case is None:
         return {}
     if linkage.case in _SLIDER_CRANK_CASES:
-        from .cases import LUBRICATED_DEFAULTS
+        from .cases import LUBRICATED_DEFAULTS, WEAR_DEFAULTS
         from .mechanism import CONTINUOUS_FIELDS
 
-        film = {k: v[0] for k, v in LUBRICATED_DEFAULTS.items() if not isinstance(v[0], str)}
+        extra = {"paper_slider_crank_lubricated": LUBRICATED_DEFAULTS,
+                 "paper_slider_crank_wear": WEAR_DEFAULTS}.get(linkage.case, {})
         return {**dict.fromkeys(CONTINUOUS_FIELDS),
-                **(film if linkage.case == "paper_slider_crank_lubricated" else {})}
+                **{k: v[0] for k, v in extra.items() if not isinstance(v[0], str)}}
     from .cases import CASE_PARAMETERS
 
     return {k: v[0] for k, v in CASE_PARAMETERS[linkage.case].items()
@@ -252,7 +254,7 @@ def design_at(mech, values: dict, case: str | None = None, overrides: dict | Non
 
         if case not in CASES:
             raise ValueError(f"case must be one of {sorted(CASES)}; got {case!r}")
-        if case == "paper_slider_crank_lubricated":
+        if case in ("paper_slider_crank_lubricated", "paper_slider_crank_wear"):
             # SliderCrank fields and the film's, "clearance" and dotted paths
             return linkage_with(CASES[case](**(overrides or {})), values)
         table = CASE_PARAMETERS.get(case)

@@ -143,6 +143,25 @@ class WearResult:
         (the wear depth reaches (factor - 1) c0); None if not within the life."""
         return self._first_crossing(self.max_depth, (factor - 1.0) * self.initial_clearance)
 
+    def to_dict(self) -> dict:
+        """The life as plain data (lists of floats; regimes as True/False/None)."""
+        return {"joint": self.joint, "wear_coefficient_m2_per_N": self.coefficient,
+                "initial_clearance_m": self.initial_clearance, "output": self.output,
+                "tolerance_m": self.tolerance, "error_estimate_m": self.error_estimate,
+                "evaluations": self.evaluations, "settings": dict(self.stats),
+                "angles_rad": self.angles.tolist(), "cycles": self.cycles.tolist(),
+                "profiles_m": self.profiles.tolist(), "wear_volume_m3": self.wear_volume.tolist(),
+                "max_depth_m": self.max_depth.tolist(), "peaks_N": self.peaks.tolist(),
+                "drive_rms_Nm": self.drive_rms.tolist(), "periodic": list(self.periodic),
+                "intervals": self.intervals.tolist(), "errors_m": self.errors.tolist()}
+
+    def save(self, path) -> None:
+        """Write `to_dict` as JSON to `path`."""
+        import json
+        from pathlib import Path
+
+        Path(path).write_text(json.dumps(self.to_dict(), indent=1) + "\n")
+
     def table(self) -> list[dict]:
         """One row per accepted state: cycles, max depth (um), volume (mm^3), peak (N),
         drive RMS (N m), regime."""
