@@ -27,12 +27,15 @@ from types import SimpleNamespace
 from .._warnings import CacheWarning
 from ..model.linkage import Linkage
 from .key import model_structure, structure_digest
+from .profiles import bearing_kinematics
 
 __all__ = ["generate_c_module", "load_c_model", "CModel", "C_SOURCES"]
 
 _CORE = Path(__file__).resolve().parents[1] / "core"
 #: the headers every model is compiled with (beside the seam's, which the build adds)
 C_SOURCES = ("runtime.h", "laws_generated.h", "jac_runtime.h", "sens_runtime.h")
+#: the header of the models with a profiled bearing
+PROFILE_SOURCE = "profile_runtime.h"
 _HERE = Path(__file__).resolve().parent
 #: what a model library exports beside the seam's record and closure (cffi declarations)
 C_EXPORTS = """
@@ -76,7 +79,10 @@ def _render(linkage: Linkage, specialise: bool) -> tuple[str, dict]:
     structure = model_structure(linkage, specialise)
     zeros = tuple(structure.get("zero_parameters", ()))
     d = derive(linkage)
-    return render_c(specialised(d, zeros) if zeros else d, linkage.name, structure, zeros)
+    d = specialised(d, zeros) if zeros else d
+    profiles = {j: (*kin, len(linkage.clearance_joints[j].bearing_profile))
+                for j, kin in bearing_kinematics(linkage, d).items()}
+    return render_c(d, linkage.name, structure, zeros, profiles)
 
 
 def _cached_render(linkage: Linkage, specialise: bool, digest: str) -> tuple[str, dict]:
@@ -383,8 +389,11 @@ def load_c_model(linkage: Linkage, specialise: bool = True) -> CModel:
         started = time.perf_counter()
         source, meta = _cached_render(linkage, specialise, digest)
         generated = time.perf_counter()
+        # the profiles' header only where a model includes it: the other models' sources,
+        # and so their libraries' keys, stay as they are
+        headers = C_SOURCES + ((PROFILE_SOURCE,) if meta.get("PROFILE_JOINTS") else ())
         sources = [("model.c", source)] + [(name, (_CORE / name).read_text())
-                                           for name in C_SOURCES]
+                                           for name in headers]
         ffi, lib = build.load(f"model-{digest[:16]}", sources, C_EXPORTS)
         model = CModel(ffi=ffi, lib=lib, record=lib.mbs_model_record(),
                        meta=SimpleNamespace(**meta), source=source,

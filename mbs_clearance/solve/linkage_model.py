@@ -117,6 +117,10 @@ def pack_parameters(linkage: Linkage, model=None) -> np.ndarray:
                              f"{getattr(model, '__name__', 'of ' + repr(linkage.name))} "
                              "is specialised on it being 0; load the general one "
                              "(mbs_clearance.generate.load_model(linkage, specialise=False))")
+    if getattr(model, "PROFILE_OFFSETS", ()):
+        from ..generate.profiles import fill_profiles
+
+        fill_profiles(linkage, model, p)
     model.prepare(p)
     return p
 
