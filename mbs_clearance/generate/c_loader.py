@@ -226,6 +226,20 @@ class CModel:
         self.lib.mbs_gap(float(t), self._ptr(y), self._ptr(p), int(j), self._ptr(g))
         return float(g[0]), float(g[1]), float(g[2]), float(g[3])
 
+    def gap_series(self, ts, ys, p, joints: int):
+        """`gap` of switching functions 0 .. joints - 1 at recorded steps (times ts, states
+        ys (n, >= 2 N_Q)): (n, joints, 4) (ex, ey, exd, eyd) in m and m/s."""
+        import numpy as np
+
+        ts, ys, p = self._vec(ts), self._vec(ys), self._vec(p)
+        out = np.empty((len(ts), joints, 4))
+        gap, width = self.lib.mbs_gap, ys.shape[1]
+        y0, pp, o0 = self._ptr(ys), self._ptr(p), self._ptr(out)
+        for i, t in enumerate(ts.tolist()):
+            for j in range(joints):
+                gap(t, y0 + i * width, pp, j, o0 + 4 * (i * joints + j))
+        return out
+
     def outputs(self, ts, ys, ms, p):
         """The outputs (n, N_OUT) at recorded steps: times ts, states ys, memories ms."""
         import numpy as np
