@@ -270,9 +270,21 @@ class CModel:
 
     # ---- the sensitivity runs (DDM, tangents): the numba module's functions, same
     # arguments and returns
+    def _no_profiles(self) -> None:
+        """ValueError for a model with a profiled bearing: its Jacobian rows take circular
+        bearings (`profiles.SENSITIVITY_RUNS`)."""
+        if getattr(self.meta, "PROFILE_JOINTS", ()):
+            from .profiles import SENSITIVITY_HINT, SENSITIVITY_RUNS
+
+            raise ValueError(f"clearance joint {self.meta.PROFILE_JOINTS[0]!r} has a "
+                             f"bearing_profile, which is not supported by {SENSITIVITY_RUNS}; "
+                             f"{SENSITIVITY_HINT}")
+
     def _sens_record(self, n_p: int):
         """The sensitivity run's record for a p of n_p entries (`sens_runtime.h`)."""
         from ..core.integrate import core, with_parameter_length
+
+        self._no_profiles()
 
         core_ffi, _ = core()
         address = int(self.ffi.cast("uintptr_t", self.lib.mbs_sens_model_record()))
@@ -286,6 +298,7 @@ class CModel:
 
         from .sens_runtime import work_size
 
+        self._no_profiles()
         message = ("p must be a sensitivity run's parameter vector (a writable contiguous "
                    "float64 array, linkage_ddm.pack_sensitivity_parameters)")
         if not (isinstance(p, np.ndarray) and p.dtype == np.float64 and p.ndim == 1
@@ -337,6 +350,7 @@ class CModel:
         z (Z_NAMES) of the model's quantities in the contact modes of p."""
         import numpy as np
 
+        self._no_profiles()
         y, p = self._vec(y), self._vec(p)
         jac = np.zeros((self.N_JROWS, self.JAC_STRIDE))
         self.lib.mbs_jacobian(float(t), self._ptr(y), self._ptr(p), self._ptr(jac),
@@ -350,6 +364,7 @@ class CModel:
 
         from .sens_runtime import seed_index
 
+        self._no_profiles()
         y, p, dz = self._vec(y), self._vec(p), self._vec(dz)
         nd, n2 = dz.shape[0], 2 * self.N_Q
         out = np.zeros(self.N_JROWS * (nd + 1))

@@ -18,7 +18,6 @@ import sympy as sp
 from sympy.printing.c import C99CodePrinter
 
 from ..laws.registry import FRICTION_SLOTS
-
 from .cjacobians import jacobian_functions
 from .derive import Derivation
 from .key import structure_digest

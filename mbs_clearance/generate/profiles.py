@@ -16,8 +16,8 @@ import numpy as np
 
 from ..model.linkage import GROUND, Linkage, Prismatic, Revolute
 
-__all__ = ["HEAD", "block_size", "profiled", "refuse_profiles", "bearing_kinematics",
-           "fill_profiles"]
+__all__ = ["HEAD", "block_size", "profiled", "refuse_profiles", "refuse_sensitivity_runs",
+           "bearing_kinematics", "body_angle_series", "fill_profiles"]
 
 #: entries of a profile's block before its spline pieces (R_J, eq9, E, nu)
 HEAD = 4
@@ -42,6 +42,20 @@ def refuse_profiles(linkage: Linkage, runs: str = "numba's integrator "
     if found:
         raise ValueError(f"clearance joint {found[0][1].name!r} has a bearing_profile, which "
                          f"is not supported by {runs}; {hint}")
+
+
+#: what runs that need the contact Jacobian say of a profiled joint
+SENSITIVITY_RUNS = ("sensitivity runs (DDM, tangent flows: periodic orbits, Lyapunov "
+                    "exponents, peak gradients), whose contact Jacobian rows take a circular "
+                    "bearing")
+SENSITIVITY_HINT = ("use finite differences (method='fd') or plain runs, or a circular "
+                    "bearing (bearing_profile=None)")
+
+
+def refuse_sensitivity_runs(linkage: Linkage) -> None:
+    """ValueError if `linkage` has a profiled clearance joint: no run with the contact
+    Jacobian takes it (`SENSITIVITY_RUNS`)."""
+    refuse_profiles(linkage, SENSITIVITY_RUNS, SENSITIVITY_HINT)
 
 
 def _body_angles(linkage: Linkage) -> dict:
