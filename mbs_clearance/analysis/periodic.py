@@ -158,9 +158,11 @@ class _Shooter:
     monodromy matrix (`jacobian`), from a state x and memory (modes, impact velocities)."""
 
     def __init__(self, mech, period: int, rtol: float, method: str, t0: float = 0.0):
+        from ..generate.profiles import refuse_sensitivity_runs
         from ..solve.linkage_ddm import pack_sensitivity_parameters, sensitivity_atol
 
         check_driven(mech)
+        refuse_sensitivity_runs(as_linkage(mech))
         flow = Flow(mech, rtol=rtol, method=method)
         self.mech = mech
         self.model = model = flow.model

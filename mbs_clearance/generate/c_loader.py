@@ -27,12 +27,15 @@ from types import SimpleNamespace
 from .._warnings import CacheWarning
 from ..model.linkage import Linkage
 from .key import model_structure, structure_digest
+from .profiles import bearing_kinematics
 
 __all__ = ["generate_c_module", "load_c_model", "CModel", "C_SOURCES"]
 
 _CORE = Path(__file__).resolve().parents[1] / "core"
 #: the headers every model is compiled with (beside the seam's, which the build adds)
 C_SOURCES = ("runtime.h", "laws_generated.h", "jac_runtime.h", "sens_runtime.h")
+#: the header of the models with a profiled bearing
+PROFILE_SOURCE = "profile_runtime.h"
 _HERE = Path(__file__).resolve().parent
 #: what a model library exports beside the seam's record and closure (cffi declarations)
 C_EXPORTS = """
@@ -76,7 +79,10 @@ def _render(linkage: Linkage, specialise: bool) -> tuple[str, dict]:
     structure = model_structure(linkage, specialise)
     zeros = tuple(structure.get("zero_parameters", ()))
     d = derive(linkage)
-    return render_c(specialised(d, zeros) if zeros else d, linkage.name, structure, zeros)
+    d = specialised(d, zeros) if zeros else d
+    profiles = {j: (*kin, len(linkage.clearance_joints[j].bearing_profile))
+                for j, kin in bearing_kinematics(linkage, d).items()}
+    return render_c(d, linkage.name, structure, zeros, profiles)
 
 
 def _cached_render(linkage: Linkage, specialise: bool, digest: str) -> tuple[str, dict]:
@@ -220,6 +226,20 @@ class CModel:
         self.lib.mbs_gap(float(t), self._ptr(y), self._ptr(p), int(j), self._ptr(g))
         return float(g[0]), float(g[1]), float(g[2]), float(g[3])
 
+    def gap_series(self, ts, ys, p, joints: int):
+        """`gap` of switching functions 0 .. joints - 1 at recorded steps (times ts, states
+        ys (n, >= 2 N_Q)): (n, joints, 4) (ex, ey, exd, eyd) in m and m/s."""
+        import numpy as np
+
+        ts, ys, p = self._vec(ts), self._vec(ys), self._vec(p)
+        out = np.empty((len(ts), joints, 4))
+        gap, width = self.lib.mbs_gap, ys.shape[1]
+        y0, pp, o0 = self._ptr(ys), self._ptr(p), self._ptr(out)
+        for i, t in enumerate(ts.tolist()):
+            for j in range(joints):
+                gap(t, y0 + i * width, pp, j, o0 + 4 * (i * joints + j))
+        return out
+
     def outputs(self, ts, ys, ms, p):
         """The outputs (n, N_OUT) at recorded steps: times ts, states ys, memories ms."""
         import numpy as np
@@ -250,9 +270,21 @@ class CModel:
 
     # ---- the sensitivity runs (DDM, tangents): the numba module's functions, same
     # arguments and returns
+    def _no_profiles(self) -> None:
+        """ValueError for a model with a profiled bearing: its Jacobian rows take circular
+        bearings (`profiles.SENSITIVITY_RUNS`)."""
+        if getattr(self.meta, "PROFILE_JOINTS", ()):
+            from .profiles import SENSITIVITY_HINT, SENSITIVITY_RUNS
+
+            raise ValueError(f"clearance joint {self.meta.PROFILE_JOINTS[0]!r} has a "
+                             f"bearing_profile, which is not supported by {SENSITIVITY_RUNS}; "
+                             f"{SENSITIVITY_HINT}")
+
     def _sens_record(self, n_p: int):
         """The sensitivity run's record for a p of n_p entries (`sens_runtime.h`)."""
         from ..core.integrate import core, with_parameter_length
+
+        self._no_profiles()
 
         core_ffi, _ = core()
         address = int(self.ffi.cast("uintptr_t", self.lib.mbs_sens_model_record()))
@@ -266,6 +298,7 @@ class CModel:
 
         from .sens_runtime import work_size
 
+        self._no_profiles()
         message = ("p must be a sensitivity run's parameter vector (a writable contiguous "
                    "float64 array, linkage_ddm.pack_sensitivity_parameters)")
         if not (isinstance(p, np.ndarray) and p.dtype == np.float64 and p.ndim == 1
@@ -317,6 +350,7 @@ class CModel:
         z (Z_NAMES) of the model's quantities in the contact modes of p."""
         import numpy as np
 
+        self._no_profiles()
         y, p = self._vec(y), self._vec(p)
         jac = np.zeros((self.N_JROWS, self.JAC_STRIDE))
         self.lib.mbs_jacobian(float(t), self._ptr(y), self._ptr(p), self._ptr(jac),
@@ -330,6 +364,7 @@ class CModel:
 
         from .sens_runtime import seed_index
 
+        self._no_profiles()
         y, p, dz = self._vec(y), self._vec(p), self._vec(dz)
         nd, n2 = dz.shape[0], 2 * self.N_Q
         out = np.zeros(self.N_JROWS * (nd + 1))
@@ -383,8 +418,11 @@ def load_c_model(linkage: Linkage, specialise: bool = True) -> CModel:
         started = time.perf_counter()
         source, meta = _cached_render(linkage, specialise, digest)
         generated = time.perf_counter()
+        # the profiles' header only where a model includes it: the other models' sources,
+        # and so their libraries' keys, stay as they are
+        headers = C_SOURCES + ((PROFILE_SOURCE,) if meta.get("PROFILE_JOINTS") else ())
         sources = [("model.c", source)] + [(name, (_CORE / name).read_text())
-                                           for name in C_SOURCES]
+                                           for name in headers]
         ffi, lib = build.load(f"model-{digest[:16]}", sources, C_EXPORTS)
         model = CModel(ffi=ffi, lib=lib, record=lib.mbs_model_record(),
                        meta=SimpleNamespace(**meta), source=source,

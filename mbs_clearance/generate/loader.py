@@ -45,6 +45,7 @@ from .._warnings import CacheWarning
 from ..model.linkage import Linkage
 from .c_loader import check_arguments
 from .key import model_structure, structure_digest
+from .profiles import refuse_profiles
 
 __all__ = ["generate_module", "load_model", "model_path", "model_structure"]
 
@@ -225,6 +226,7 @@ def load_model(linkage: Linkage, specialise: bool = True) -> ModuleType:
     docstring; one that fails them is generated again (with a `CacheWarning` if its text
     does not match its digest)."""
     check_arguments(linkage, specialise)
+    refuse_profiles(linkage)
     digest = structure_digest(model_structure(linkage, specialise))
     with _LOCK:
         if digest in _LOADED:

@@ -1176,6 +1176,10 @@ class Linkage:
             "clearance_joints": [[j.name, j.journal_body, j.journal_point, j.bearing_body,
                                   j.bearing_point] + (["friction"] if j.has_friction else [])
                                  + (["lubrication"] if j.has_lubrication else [])
+                                 # a profiled bearing: its grid's size is compiled, its
+                                 # radii are data of the parameter vector
+                                 + ([["profile", len(j.bearing_profile)]]
+                                    if j.bearing_profile is not None else [])
                                  for j in self.clearance_joints],
             "drive": None if self.drive is None else self.drive.joint,
             "monitor_joint": self.monitor_joint,

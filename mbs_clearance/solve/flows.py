@@ -140,6 +140,9 @@ class TangentFlow(Flow):
 
     def __init__(self, mech, settings: RunSettings | None = None, *, direction=None,
                  memory: str = "reset", free: bool = False, **options):
+        from ..generate.profiles import refuse_sensitivity_runs
+
+        refuse_sensitivity_runs(as_linkage(mech))
         if memory not in ("reset", "carry"):
             raise ValueError(f"memory must be 'reset' or 'carry'; got {memory!r}")
         self.reset_memory = memory == "reset"

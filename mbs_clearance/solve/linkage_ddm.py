@@ -530,6 +530,9 @@ def ddm_run(linkage: Linkage, model, p0, y_state, directions, *, scale, rtol, at
     those outputs are computed with every step and recorded
     (`DdmRun.recorded_output_sensitivities`). A free linkage runs over the window edges
     `windows` (s, from 0; `linkage_model.time_edges`) instead of revolutions."""
+    from ..generate.profiles import refuse_sensitivity_runs
+
+    refuse_sensitivity_runs(linkage)
     for j in linkage.clearance_joints:
         if j.has_lubrication:
             check_partials(f"clearance joint {j.name!r}", j.lubrication)
@@ -632,7 +635,10 @@ def plain_setup(linkage: Linkage, rtol: float | None, start=None, specialise: bo
     with its memories in p0) and the plain run's tolerances (rtol, atol with the switching
     functions'). Returns (model, p0, y_state, rtol, atol). A free linkage starts from its
     `Initial` (no `start`). The model is on the chosen core (`kernels.core_name`): the
-    compiled C model, or the numba module."""
+    compiled C model, or the numba module. A profiled bearing is refused."""
+    from ..generate.profiles import refuse_sensitivity_runs
+
+    refuse_sensitivity_runs(linkage)
     if linkage.drive is None and start is not None:
         raise ValueError("start is for a driven linkage; a free linkage starts from its "
                          "initial (Linkage.initial, an Initial)")

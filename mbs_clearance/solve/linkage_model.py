@@ -117,6 +117,10 @@ def pack_parameters(linkage: Linkage, model=None) -> np.ndarray:
                              f"{getattr(model, '__name__', 'of ' + repr(linkage.name))} "
                              "is specialised on it being 0; load the general one "
                              "(mbs_clearance.generate.load_model(linkage, specialise=False))")
+    if getattr(model, "PROFILE_OFFSETS", ()):
+        from ..generate.profiles import fill_profiles
+
+        fill_profiles(linkage, model, p)
     model.prepare(p)
     return p
 
@@ -355,6 +359,7 @@ def trajectory_from_run(linkage: Linkage, model, ts, ys, ms, p, stats, peaks, ou
                  else named["reactions"][model.MONITOR_JOINT])
     # (n, J, 2): per joint its x and y side by side
     ecc = take(*(f"{j}.ecc_{a}" for j in joints for a in "xy")).reshape(-1, J, 2)
+    contact_angle, slip_velocity = contact_series(linkage, model, ts, ys, p, ecc)
     # a free linkage has no drive: no drive moment, no drive work
     free = "drive_moment" not in col
     return Trajectory(
@@ -370,7 +375,61 @@ def trajectory_from_run(linkage: Linkage, model, ts, ys, ms, p, stats, peaks, ou
         peaks=peaks, **named,
         friction_work=(ys[:, model.FRICTION_WORK].copy() if getattr(model, "FRICTION_WORK", -1)
                        > 0 and ys.shape[1] > model.FRICTION_WORK else None),
+        contact_angle=contact_angle, slip_velocity=slip_velocity,
     )
+
+
+def eccentricity_rates(model, ts, ys, p, joints: int) -> np.ndarray:
+    """(n, joints, 2) m/s: the rate of the journal centre minus the bearing centre of the
+    first `joints` clearance joints at the recorded steps (times ts, states ys): the loop
+    closure's Jacobian times the rates plus its explicit time rate (the gaps' rates are
+    linear in the rates); a compiled C model evaluates the gaps' rates directly."""
+    if hasattr(model, "gap_series"):
+        return model.gap_series(ts, ys, p, joints)[:, :, 2:]
+    n_q = model.N_Q
+    out = np.empty((len(ts), joints, 2))
+    rows = slice(0, 2 * joints)
+    for i in range(len(ts)):
+        q, qd = ys[i, :n_q], ys[i, n_q:2 * n_q]
+        rate = model.closure_jacobian(ts[i], q, p)[rows] @ qd + model.closure_rate(
+            ts[i], q, p)[rows]
+        out[i] = rate.reshape(joints, 2)
+    return out
+
+
+def contact_series(linkage: Linkage, model, ts, ys, p, ecc) -> tuple:
+    """(contact_angle, slip_velocity), each (n, J) over the J clearance joints at the
+    recorded steps (times ts, states ys, eccentricities ecc (n, >= J, 2)): the direction of
+    the eccentricity e in the bearing body's frame in [0, 2 pi) rad, and the journal
+    surface's tangential speed against the bearing's at the contact in m/s, e_dot . t +
+    omega_J R_J - omega_B R_B with t = (-n_y, n_x), n = e / |e| (as the friction law's; R_B at
+    the contact angle for a profiled bearing). (None, None) for a linkage without clearance
+    joints."""
+    from ..generate.profiles import body_angle_series
+
+    joints = linkage.clearance_joints
+    if not joints:
+        return None, None
+    ts = np.asarray(ts)
+    edot = eccentricity_rates(model, ts, ys, p, len(joints))
+    bodies = body_angle_series(linkage, model.COORDINATES, ts, ys)
+    angle, slip = np.empty((len(ts), len(joints))), np.empty((len(ts), len(joints)))
+    for j, cj in enumerate(joints):
+        ex, ey = ecc[:, j, 0], ecc[:, j, 1]
+        phi_b, w_b = bodies[cj.bearing_body]
+        w_j = bodies[cj.journal_body][1]
+        theta = np.mod(np.arctan2(ey, ex) - phi_b, 2.0 * np.pi)
+        theta[theta >= 2.0 * np.pi] = 0.0          # a round-off below 0 wraps to 2 pi
+        r = np.hypot(ex, ey)
+        centred = r <= 1e-300                      # the model's normal there: (-1, 0)
+        safe = np.where(centred, 1.0, r)
+        nx = np.where(centred, -1.0, ex / safe)
+        ny = np.where(centred, 0.0, ey / safe)
+        rb = cj.bearing_radius if cj.profile is None else cj.profile.radius(theta)
+        angle[:, j] = theta
+        slip[:, j] = (edot[:, j, 1] * nx - edot[:, j, 0] * ny + w_j * cj.journal_radius
+                      - w_b * rb)
+    return angle, slip
 
 
 def named_series(model, ys, outs, columns) -> dict:
@@ -528,9 +587,9 @@ def record_row(model, record: bool = True) -> int:
 def trajectory_floats(model) -> int:
     """Floats per step of a `Trajectory`'s series (`trajectory_from_run`) and the times'
     copy: monitored force 2, drive moment 1, per joint contact force, penetration,
-    eccentricity 2 and phase, per ground joint its reaction 2, shaking force 2, works 2,
-    coordinates, rates and accelerations."""
-    return 1 + 2 + 1 + 5 * model.N_EVENTS + 2 * len(model.GROUND_JOINTS) + 2 + 2 \
+    eccentricity 2, phase, contact angle and slip velocity, per ground joint its reaction 2,
+    shaking force 2, works 2, coordinates, rates and accelerations."""
+    return 1 + 2 + 1 + 7 * model.N_EVENTS + 2 * len(model.GROUND_JOINTS) + 2 + 2 \
         + 3 * model.N_Q
 
 

@@ -124,7 +124,8 @@ class Trajectory:
     #: J, work dissipated by friction in the clearance joints since t = 0 (a linkage with
     #: friction; None otherwise)
     friction_work: np.ndarray | None = None
-    #: rad, per clearance joint (n, J): the eccentricity's direction in the bearing body's
+    #: rad, per clearance joint (n, J; the first J of ``joints``, which the translational
+    #: joints' corners follow): the eccentricity's direction in the bearing body's
     #: frame, in [0, 2 pi) (where a contact presses the bearing); None if not provided
     contact_angle: np.ndarray | None = None
     #: m/s, per clearance joint (n, J): the journal surface's tangential speed against the
@@ -523,6 +524,11 @@ def linkage_columns(traj: Trajectory) -> dict[str, np.ndarray]:
         cols[f"eccentricity.{j}_x[m]"] = traj.eccentricity[:, k, 0]
         cols[f"eccentricity.{j}_y[m]"] = traj.eccentricity[:, k, 1]
         cols[f"contact_phase.{j}[-]"] = traj.contact_phase[:, k]
+    # the clearance joints' (the first of `joints`) contact angle and slip velocity
+    for field_, unit in (("contact_angle", "rad"), ("slip_velocity", "m/s")):
+        series = getattr(traj, field_)
+        for k in range(0 if series is None else series.shape[1]):
+            cols[f"{field_}.{traj.joints[k]}[{unit}]"] = series[:, k]
     return {**cols, **generic_columns(traj)}
 
 
@@ -600,6 +606,7 @@ def _load_linkage(path: Path, meta: dict) -> Trajectory:
         raise _fail(path, f"bad linkage: {exc}") from exc
     cols = meta.pop("_columns")
     joints = tuple(name for name, _ in linkage.contacts())
+    clearance = tuple(j.name for j in linkage.clearance_joints)
     # the ground joints' and coordinates' names from the columns, in their stored order
     grounds = [k[len("reaction."):-len("_x[N]")] for k in cols
                if k.startswith("reaction.") and k.endswith("_x[N]")]
@@ -638,6 +645,9 @@ def _load_linkage(path: Path, meta: dict) -> Trajectory:
             rates={c: cols[f"rate.{c}"] for c in coords},
             accelerations={c: cols[f"acceleration.{c}"] for c in coords},
             friction_work=cols.get("friction_work[J]"),
+            **{field_: stack(field_, clearance, f"[{unit}]")
+               for field_, unit in (("contact_angle", "rad"), ("slip_velocity", "m/s"))
+               if clearance and f"{field_}.{clearance[0]}[{unit}]" in cols},
         )
     except KeyError as exc:
         raise _fail(path, f"missing column {exc}") from exc
