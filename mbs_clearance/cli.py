@@ -2187,7 +2187,7 @@ def _add_wear_parser(subparsers) -> argparse.ArgumentParser:
                         "reached (e.g. 9kN)")
     p.add_argument("--points", type=int_at_least(8), default=360,
                    help="angles of the profile's grid when the joint starts circular")
-    p.add_argument("--settle", type=int_at_least(0), default=2,
+    p.add_argument("--settle", type=int_at_least(0), default=3,
                    help="revolutions run on each profile before its wear is recorded")
     p.add_argument("--record", type=int_at_least(1), default=1,
                    help="revolutions whose mean wear is the rate per cycle")
@@ -2204,13 +2204,13 @@ def _add_wear_parser(subparsers) -> argparse.ArgumentParser:
 
 
 def _cmd_wear(args: argparse.Namespace) -> int:
-    from .studies.wear import wear_life
+    from .studies.wear import load_wear, wear_life
 
     if args.case is None and args.description is None:
         args.case = "paper_slider_crank_wear"
     linkage = linkage_from_args(args)
     if args.out:
-        check_output_file(args.out, "--out", args.force, suffixes=(".json",))
+        check_output_file(args.out, "--out", args.force, suffixes=(".json",), reader=load_wear)
     if args.plot:
         check_output_file(args.plot, "--plot", args.force, suffixes=figure_suffixes())
     name = linkage.case or linkage.name
@@ -2229,7 +2229,7 @@ def _cmd_wear(args: argparse.Namespace) -> int:
     rows = res.table()
     step = max(1, len(rows) // 12)
     for row in rows[::step] + ([rows[-1]] if (len(rows) - 1) % step else []):
-        print(f"{number(row['cycles'], 6):>12}  {quantity(row['max_depth_um'] * 1e-6, 'm', 4):>12}"
+        print(f"{number(row['cycles'], 6):>12}  {number(row['max_depth_um'], 4) + ' um':>12}"
               f"  {number(row['volume_mm3'], 4) + ' mm^3':>12}  {_force(row['peak_N']):>22}  "
               f"{quantity(row['drive_rms_Nm'], 'N m', 4):>12}  {row['regime']}")
     twice = res.cycles_to_clearance(2.0)
@@ -2239,7 +2239,8 @@ def _cmd_wear(args: argparse.Namespace) -> int:
     if args.limit is not None:
         hit = res.cycles_to_limit(args.limit)
         print(f"load limit {_force(args.limit)}: " + (
-            f"first reached after {number(hit, 4)} cycles" if hit is not None
+            "already exceeded at the start" if hit == 0.0
+            else f"first reached after {number(hit, 4)} cycles" if hit is not None
             else f"not reached in {number(res.cycles[-1], 6)} cycles"))
     print(f"error estimate of the final profile: {quantity(res.error_estimate, 'm', 3)} "
           f"({number(100 * res.error_estimate / res.initial_clearance, 3)} % of the initial "

@@ -35,7 +35,7 @@ from ..laws.wear.archard import wear_increment
 from ..model.linkage import Linkage
 from ..model.profile import BearingProfile
 
-__all__ = ["CycleWear", "WearResult", "wear_life", "cycle_wear", "DEFAULT_POINTS"]
+__all__ = ["CycleWear", "WearResult", "wear_life", "cycle_wear", "load_wear", "DEFAULT_POINTS"]
 
 #: grid angles of the profile when the joint has none yet (1 degree)
 DEFAULT_POINTS = 360
@@ -145,7 +145,10 @@ class WearResult:
 
     def to_dict(self) -> dict:
         """The life as plain data (lists of floats; regimes as True/False/None)."""
-        return {"joint": self.joint, "wear_coefficient_m2_per_N": self.coefficient,
+        from .._io import RUN_KEY, run_stamp
+
+        return {RUN_KEY: run_stamp("wear"), "kind": "wear life",
+                "joint": self.joint, "wear_coefficient_m2_per_N": self.coefficient,
                 "initial_clearance_m": self.initial_clearance, "output": self.output,
                 "tolerance_m": self.tolerance, "error_estimate_m": self.error_estimate,
                 "evaluations": self.evaluations, "settings": dict(self.stats),
@@ -188,7 +191,7 @@ def _joint_index(linkage: Linkage, joint: str | None) -> int:
     return names.index(joint)
 
 
-def cycle_wear(linkage: Linkage, joint: int, coefficient: float, *, settle: int = 2,
+def cycle_wear(linkage: Linkage, joint: int, coefficient: float, *, settle: int = 3,
                record: int = 1, samples: int = 2048, rtol: float = 1e-8,
                backend: str = "reduced") -> CycleWear:
     """Run `settle` + `record` revolutions of `linkage` and return the wear of clearance
@@ -240,9 +243,10 @@ def _check_positive(name: str, value, kind=float, low=0.0, closed=False) -> floa
 
 def wear_life(mech, cycles: float, *, joint: str | None = None,
               wear_coefficient: float | None = None, tolerance: float = 0.01,
-              points: int = DEFAULT_POINTS, settle: int = 2, record: int = 1,
+              points: int = DEFAULT_POINTS, settle: int = 3, record: int = 1,
               samples: int = 2048, rtol: float = 1e-8, backend: str = "reduced",
-              min_interval: float = 1.0, max_evaluations: int = 2000,
+              min_interval: float = 1.0, max_interval: float | None = None,
+              max_evaluations: int = 2000,
               progress: bool = False,
               evaluate: Callable[[Linkage, int, float], CycleWear] | None = None
               ) -> WearResult:
@@ -265,8 +269,9 @@ def wear_life(mech, cycles: float, *, joint: str | None = None,
     points : int
         Grid angles of the profile when the joint starts circular (default 360).
     settle, record : int
-        Revolutions run on each profile before the wear is recorded, and recorded (the
-        rate is their mean).
+        Revolutions run on each profile before the wear is recorded (default 3: the paper
+        case's motion is periodic from the fourth revolution), and recorded (the rate is
+        their mean).
     samples : int
         Samples per revolution of the recorded series (the wear integral's resolution).
     rtol : float
@@ -276,6 +281,9 @@ def wear_life(mech, cycles: float, *, joint: str | None = None,
     min_interval : float
         The shortest interval (cycles); an interval at it is accepted even when its error
         estimate exceeds the tolerance (with an `AccuracyWarning`).
+    max_interval : float or None
+        The longest interval (cycles); None: a twentieth of the life, so that the peaks and
+        the depth are drawn at 20 points at least.
     max_evaluations : int
         Refuse to go on after this many dynamics runs (ValueError naming how far it got).
     progress : bool
@@ -302,6 +310,11 @@ def wear_life(mech, cycles: float, *, joint: str | None = None,
     record = _check_positive("record", record, int)
     samples = _check_positive("samples", samples, int)
     min_interval = _check_positive("min_interval", min_interval)
+    max_interval = (max(min_interval, cycles / 20.0) if max_interval is None
+                    else _check_positive("max_interval", max_interval))
+    if max_interval < min_interval:
+        raise ValueError(f"max_interval ({max_interval:g}) must be at least min_interval "
+                         f"({min_interval:g}) cycles")
     max_evaluations = _check_positive("max_evaluations", max_evaluations, int)
     if samples < 64:
         raise ValueError(f"samples must be at least 64 per revolution; got {samples}")
@@ -356,7 +369,7 @@ def wear_life(mech, cycles: float, *, joint: str | None = None,
         bar = tqdm(total=float(cycles), desc=f"wear of {cj.name}", unit="cycle")
     try:
         while done < cycles * (1.0 - 1e-12):
-            dn = min(dn, cycles - done)
+            dn = min(dn, max_interval, cycles - done)
             full = radii + dn * rate.depth
             half_radii = radii + 0.5 * dn * rate.depth
             half = run(half_radii)
@@ -395,3 +408,39 @@ def wear_life(mech, cycles: float, *, joint: str | None = None,
         output=f"{linkage.monitor_joint or 'shaking'} force",
         stats={"settle": settle, "record": record, "samples": samples, "rtol": rtol,
                "backend": backend})
+
+
+def load_wear(path) -> WearResult:
+    """Read a wear life written by `WearResult.save` (JSON data; ValueError naming the file
+    and the key when it is not one)."""
+    import json
+    from pathlib import Path
+
+    path = Path(path)
+    try:
+        data = json.loads(path.read_text())
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise ValueError(f"wear life file {str(path)!r}: not readable JSON ({exc})") from None
+    if not isinstance(data, dict) or data.get("kind") != "wear life":
+        raise ValueError(f"wear life file {str(path)!r}: not a wear life written by "
+                         "mbs-clearance (no 'kind': 'wear life')")
+    try:
+        arrays = {k: np.asarray(data[k], dtype=float) for k in (
+            "cycles", "profiles_m", "wear_volume_m3", "peaks_N", "drive_rms_Nm", "intervals",
+            "errors_m")}
+        res = WearResult(
+            joint=str(data["joint"]), coefficient=float(data["wear_coefficient_m2_per_N"]),
+            cycles=arrays["cycles"], profiles=arrays["profiles_m"],
+            wear_volume=arrays["wear_volume_m3"], peaks=arrays["peaks_N"],
+            drive_rms=arrays["drive_rms_Nm"],
+            periodic=[None if g is None else bool(g) for g in data["periodic"]],
+            intervals=arrays["intervals"], errors=arrays["errors_m"],
+            tolerance=float(data["tolerance_m"]), evaluations=int(data["evaluations"]),
+            initial_clearance=float(data["initial_clearance_m"]), output=str(data["output"]),
+            stats=dict(data.get("settings", {})))
+    except (KeyError, TypeError, ValueError) as exc:
+        raise ValueError(f"wear life file {str(path)!r}: bad or missing key ({exc})") from None
+    n = len(res.cycles)
+    if res.profiles.ndim != 2 or res.profiles.shape[0] != n or len(res.peaks) != n:
+        raise ValueError(f"wear life file {str(path)!r}: its series have different lengths")
+    return res

@@ -23,8 +23,8 @@ import math
 
 import numpy as np
 
-from ..base import Parameter
 from ...model.profile import BearingProfile
+from ..base import Parameter
 
 __all__ = ["WEAR_COEFFICIENT", "pressure_weights", "wear_increment"]
 
@@ -40,10 +40,10 @@ ARC_POINTS_PER_CELL = 8
 
 
 def pressure_weights(profile: BearingProfile, journal_radius: float, angle, penetration):
-    """Where the pressure of each contact sample sits: angles (M, P) rad around the joint and
-    weights (M, P) that sum to 1 per sample (P points across the widest arc, at least
-    `ARC_POINTS_PER_CELL` per grid cell), proportional to the overlap
-    of the journal's circle with the bearing's profile (the elastic foundation).
+    """Where the pressure of each contact sample sits: indices (M, P) into the fine grid of
+    `ARC_POINTS_PER_CELL` points per cell of the profile (angle 2 pi m / (N *
+    ARC_POINTS_PER_CELL)) and weights (M, P) that sum to 1 per sample, proportional to the
+    overlap of the journal's circle with the bearing's profile (the elastic foundation).
 
     `angle` (M,) is the contact direction theta_c in the bearing's frame and `penetration`
     (M,) the penetration delta > 0 at it, so that the eccentricity is
@@ -52,23 +52,27 @@ def pressure_weights(profile: BearingProfile, journal_radius: float, angle, pene
     at most +- pi / 2."""
     angle = np.asarray(angle, dtype=float)
     delta = np.asarray(penetration, dtype=float)
+    fine = ARC_POINTS_PER_CELL * profile.points
+    step = 2.0 * np.pi / fine
+    c_fine = profile.radius(step * np.arange(fine)) - journal_radius
     c_at = profile.radius(angle) - journal_radius
     e = delta + c_at
-    c_min = float(np.min(profile.radii)) - journal_radius
-    cell = 2.0 * np.pi / profile.points
-    half = np.arccos(np.clip(np.minimum(c_min, c_at) / e, -1.0, 1.0)) + 2.0 * cell
-    half = np.minimum(half, 0.5 * np.pi)
-    arc = 2 * ARC_POINTS_PER_CELL * int(math.ceil(float(np.max(half, initial=0.0)) / cell)) + 1
-    psi = half[:, None] * np.linspace(-1.0, 1.0, arc)[None, :]
-    theta = angle[:, None] + psi
-    overlap = e[:, None] * np.cos(psi) - (profile.radius(theta) - journal_radius)
+    c_min = float(np.min(c_fine))
+    half = np.arccos(np.clip(np.minimum(c_min, c_at) / e, -1.0, 1.0))
+    half = np.minimum(half + 2.0 * ARC_POINTS_PER_CELL * step, 0.5 * np.pi)
+    width = int(math.ceil(float(np.max(half, initial=0.0)) / step))
+    centre = np.rint(angle / step).astype(np.int64)
+    offsets = np.arange(-width, width + 1)
+    index = (centre[:, None] + offsets[None, :]) % fine
+    psi = (centre[:, None] + offsets[None, :]) * step - angle[:, None]
+    overlap = e[:, None] * np.cos(psi) - c_fine[index]
     w = np.maximum(overlap, 0.0)
     total = w.sum(axis=1)
-    # an overlap narrower than the arc's spacing: the load at the contact direction
+    # an overlap narrower than the fine grid's spacing: the load at the contact direction
     point = total <= 0.0
-    w[point, arc // 2] = 1.0
+    w[point, width] = 1.0
     total[point] = 1.0
-    return theta, w / total[:, None]
+    return index, w / total[:, None]
 
 
 def wear_increment(profile: BearingProfile, journal_radius: float, bearing_length: float,
@@ -108,21 +112,22 @@ def wear_increment(profile: BearingProfile, journal_radius: float, bearing_lengt
     volume_k = rate * weight                        # m^3 worn at each sample
     n = profile.points
     cell = 2.0 * np.pi / n
-    depth = np.zeros(n)
     on = np.nonzero(volume_k > 0.0)[0]
     angle = np.asarray(angle, dtype=float)
     delta = np.maximum(np.asarray(penetration, dtype=float), 0.0)
+    fine = np.zeros(ARC_POINTS_PER_CELL * n)
     for chunk in np.array_split(on, max(1, len(on) // 256)):
         if len(chunk) == 0:
             continue
-        theta, w = pressure_weights(profile, journal_radius, angle[chunk], delta[chunk])
-        # a linear deposit: each arc point's share split between its two nearest grid angles
-        x = np.mod(theta, 2.0 * np.pi) / cell
-        i0 = np.floor(x).astype(np.int64) % n
-        f = x - np.floor(x)
-        share = volume_k[chunk][:, None] * w
-        depth += np.bincount(i0.ravel(), (share * (1.0 - f)).ravel(), minlength=n)
-        depth += np.bincount(((i0 + 1) % n).ravel(), (share * f).ravel(), minlength=n)
-    if len(on):
-        depth /= bearing_length * profile.radii * cell
+        index, w = pressure_weights(profile, journal_radius, angle[chunk], delta[chunk])
+        fine += np.bincount(index.ravel(), (volume_k[chunk][:, None] * w).ravel(),
+                            minlength=len(fine))
+    # the fine points onto the grid, linearly: point m lies a fraction f of a cell past
+    # grid angle i0
+    m = np.arange(len(fine))
+    i0 = m // ARC_POINTS_PER_CELL
+    f = (m % ARC_POINTS_PER_CELL) / ARC_POINTS_PER_CELL
+    depth = (np.bincount(i0, fine * (1.0 - f), minlength=n)
+             + np.bincount((i0 + 1) % n, fine * f, minlength=n))
+    depth /= bearing_length * profile.radii * cell
     return depth, float(volume_k.sum())
