@@ -2232,6 +2232,11 @@ def _cmd_wear(args: argparse.Namespace) -> int:
         print(f"{number(row['cycles'], 6):>12}  {number(row['max_depth_um'], 4) + ' um':>12}"
               f"  {number(row['volume_mm3'], 4) + ' mm^3':>12}  {_force(row['peak_N']):>22}  "
               f"{quantity(row['drive_rms_Nm'], 'N m', 4):>12}  {row['regime']}")
+    if res.stats.get("stopped"):
+        print(f"note: the life {res.stats['stopped']}")
+    if res.stats.get("flagged_runs"):
+        print(f"note: {res.stats['flagged_runs']} of {res.evaluations} runs were flagged by their "
+              "own accuracy check (e.g. a rattling contact: its peaks scatter from run to run)")
     twice = res.cycles_to_clearance(2.0)
     print("twice the initial clearance: " + (
         f"after {number(twice, 4)} cycles" if twice is not None

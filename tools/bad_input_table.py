@@ -177,6 +177,11 @@ CLI_CASES: list[tuple[str, str]] = [
     ("report --map user.json", "a file that is not a regime map"),
     ("report --map missing.nc", "a regime map that does not exist"),
     ("report --map bad.nc --replot", "--map with --replot"),
+    ("wear --cycles 1e13", "a wear life of 10^13 cycles"),
+    ("wear --case four_bar", "a wear life of a joint without a wear coefficient"),
+    ("wear --joint crank_pivot", "a wear life of a joint that is not a clearance joint"),
+    ("wear --tolerance 0", "a zero tolerance of the wear life's intervals"),
+    ("wear --out life.csv", "a wear life written to a file type it is not"),
 ]
 
 

@@ -30,7 +30,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .._warnings import AccuracyWarning
+from .._warnings import AccuracyWarning, PhysicsWarning
 from ..laws.wear.archard import wear_increment
 from ..model.linkage import Linkage
 from ..model.profile import BearingProfile
@@ -39,6 +39,12 @@ __all__ = ["CycleWear", "WearResult", "wear_life", "cycle_wear", "load_wear", "D
 
 #: grid angles of the profile when the joint has none yet (1 degree)
 DEFAULT_POINTS = 360
+#: the longest life (cycles) a run takes
+MAX_CYCLES = 1e12
+#: the largest wear depth, as a fraction of the bearing radius, at which a life stops: the
+#: small-wear approximation (radial normal) stops holding well before the journal could
+#: leave a groove this deep
+MAX_DEPTH_FRACTION = 0.1
 
 
 @dataclass(frozen=True)
@@ -246,7 +252,7 @@ def wear_life(mech, cycles: float, *, joint: str | None = None,
               points: int = DEFAULT_POINTS, settle: int = 3, record: int = 1,
               samples: int = 2048, rtol: float = 1e-8, backend: str = "reduced",
               min_interval: float = 1.0, max_interval: float | None = None,
-              max_evaluations: int = 2000,
+              max_evaluations: int = 1000,
               progress: bool = False,
               evaluate: Callable[[Linkage, int, float], CycleWear] | None = None
               ) -> WearResult:
@@ -285,7 +291,10 @@ def wear_life(mech, cycles: float, *, joint: str | None = None,
         The longest interval (cycles); None: a twentieth of the life, so that the peaks and
         the depth are drawn at 20 points at least.
     max_evaluations : int
-        Refuse to go on after this many dynamics runs (ValueError naming how far it got).
+        Stop after this many dynamics runs (default 1000, a minute or two for the paper
+        case): the life so far is returned with ``stats["stopped"]`` saying why and an
+        `AccuracyWarning`. A motion that is not periodic wears a scattering amount per cycle,
+        which the step doubling reads as an error: record more revolutions there.
     progress : bool
         Show a tqdm bar over the cycles.
     evaluate : callable or None
@@ -304,6 +313,9 @@ def wear_life(mech, cycles: float, *, joint: str | None = None,
         raise ValueError("wear_life needs a driven linkage (a cycle is one drive revolution); "
                          f"{linkage.name!r} is free (no drive)")
     cycles = _check_positive("cycles", cycles)
+    if cycles > MAX_CYCLES:
+        raise ValueError(f"cycles must be at most {MAX_CYCLES:g} (a machine's life); got "
+                         f"{cycles:g}")
     tolerance = _check_positive("tolerance", tolerance)
     points = _check_positive("points", points, int)
     settle = _check_positive("settle", settle, int, closed=True)
@@ -345,14 +357,22 @@ def wear_life(mech, cycles: float, *, joint: str | None = None,
         return linkage.replace(clearance_joints=tuple(joints))
 
     count = 0
+    flagged = 0          # runs whose own accuracy check warned (e.g. a rattling contact)
+    stopped = None
+
+    class _Budget(Exception):
+        pass
 
     def run(radii) -> CycleWear:
-        nonlocal count
+        nonlocal count, flagged
         if count >= max_evaluations:
-            raise ValueError(f"max_evaluations ({max_evaluations}) reached at cycle {done:.6g} "
-                             f"of {cycles:.6g}: raise it or the tolerance")
+            raise _Budget
         count += 1
-        return evaluate(with_profile(radii), index, k)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            out = evaluate(with_profile(radii), index, k)
+        flagged += any(issubclass(w.category, AccuracyWarning) for w in caught)
+        return out
 
     done = 0.0
     radii = radii0.copy()
@@ -391,7 +411,19 @@ def wear_life(mech, cycles: float, *, joint: str | None = None,
                 bar.update(dn)
             rate = run(radii)
             states.append((done, radii.copy(), volume, rate))
+            deepest = float(np.max(radii - radii0))
+            if deepest > MAX_DEPTH_FRACTION * cj.bearing_radius:
+                stopped = (f"stopped at cycle {done:.6g}: the wear depth {deepest:.3g} m "
+                           f"exceeds {MAX_DEPTH_FRACTION:g} of the bearing radius, where the "
+                           "small-wear approximation no longer holds")
+                warnings.warn(f"wear_life: {stopped}", PhysicsWarning, stacklevel=2)
+                break
             dn = dn * min(2.0, max(0.3, 0.9 * math.sqrt(tol / max(err, 1e-300))))
+    except _Budget:
+        stopped = (f"stopped at cycle {done:.6g} of {cycles:.6g}: max_evaluations "
+                   f"({max_evaluations}) reached (intervals of {dn:.3g} cycles at the end; "
+                   f"{flagged} runs flagged by their own accuracy check)")
+        warnings.warn(f"wear_life: {stopped}", AccuracyWarning, stacklevel=2)
     finally:
         if bar is not None:
             bar.close()
@@ -407,7 +439,7 @@ def wear_life(mech, cycles: float, *, joint: str | None = None,
         evaluations=count, initial_clearance=c0,
         output=f"{linkage.monitor_joint or 'shaking'} force",
         stats={"settle": settle, "record": record, "samples": samples, "rtol": rtol,
-               "backend": backend})
+               "backend": backend, "stopped": stopped, "flagged_runs": flagged})
 
 
 def load_wear(path) -> WearResult:

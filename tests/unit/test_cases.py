@@ -51,6 +51,7 @@ def test_each_case_builds_with_its_documented_defaults(name):
     assert isinstance(linkage, Linkage)
     assert linkage.name == name
     n_q = {"paper_slider_crank": 2, "paper_slider_crank_lubricated": 2,
+           "paper_slider_crank_wear": 2,
            "slider_crank_two_clearances": 4, "four_bar": 2,
            "flores_translational_slider_crank": 3}[name]
     assert len(linkage.coordinates()) == n_q
