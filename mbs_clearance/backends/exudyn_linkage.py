@@ -784,6 +784,220 @@ def _symbolic_vector_function(mbs, function, obj, n: int):
     return uf
 
 
+# ---------------------------------------------------------------------------- profile
+
+class _PythonOps:
+    """Plain-float operations of a profiled joint's geometry (`_profile_geometry`): the
+    spline's piece found by index, gates by branching."""
+
+    cos, sin, sqrt = staticmethod(math.cos), staticmethod(math.sin), staticmethod(math.sqrt)
+
+    def __init__(self, joint: ClearanceJoint):
+        profile = joint.profile
+        self.pieces = profile.coefficients().tolist()
+        self.h = 2.0 * math.pi / profile.points
+
+    def angle(self, x, y):
+        a = math.atan2(y, x)
+        return a + 2.0 * math.pi if a < 0.0 else a
+
+    def radius(self, theta):
+        """(R_B, dR_B/dtheta) at theta in [0, 2 pi)."""
+        i = min(int(theta / self.h), len(self.pieces) - 1)
+        u = theta - i * self.h
+        c0, c1, c2, c3 = self.pieces[i]
+        return c0 + u * (c1 + u * (c2 + u * c3)), c1 + u * (2.0 * c2 + 3.0 * u * c3)
+
+    @staticmethod
+    def gate(delta, value):
+        return value if delta > 0.0 else 0.0
+
+    @staticmethod
+    def divisor(r):
+        # centred journal: any finite divisor, the results are gated off (delta < 0)
+        return r if r > 0.0 else 1.0
+
+
+class _SymbolicOps:
+    """Exudyn symbolic operations of a profiled joint's geometry: the spline's piece is
+    chosen by a balanced tree of lazy IfThenElse on the piece index (the symbolic layer
+    cannot index a table by a computed integer), log2(N) comparisons per lookup."""
+
+    def __init__(self, joint: ClearanceJoint):
+        import exudyn as exu
+
+        self.esym = exu.symbolic
+        self.cos, self.sin, self.sqrt = self.esym.cos, self.esym.sin, self.esym.sqrt
+        profile = joint.profile
+        self.pieces = profile.coefficients().tolist()
+        self.h = 2.0 * math.pi / profile.points
+        self.zero = self.esym.Real(0.0)
+
+    def angle(self, x, y):
+        a = self.esym.atan2(y, x)
+        return self.esym.IfThenElse(a < 0.0, a + 2.0 * math.pi, a)
+
+    def radius(self, theta):
+        esym = self.esym
+        index = esym.floor(theta * (1.0 / self.h))
+        u = theta - index * self.h
+
+        def value(c):
+            return c[0] + u * (c[1] + u * (c[2] + u * c[3]))
+
+        def slope(c):
+            return c[1] + u * (2.0 * c[2] + 3.0 * c[3] * u)
+
+        def tree(piece, lo, hi):
+            if hi - lo == 1:        # the last piece also takes index N (theta rounded to 2 pi)
+                return piece(self.pieces[lo])
+            mid = (lo + hi) // 2
+            return esym.IfThenElse(index < mid, tree(piece, lo, mid), tree(piece, mid, hi))
+
+        n = len(self.pieces)
+        return tree(value, 0, n), tree(slope, 0, n)
+
+    def gate(self, delta, value):
+        # lazy: r > R_B - R_J > 0 inside the true branch, so no division by zero
+        return self.esym.IfThenElse(delta > 0.0, value, self.zero)
+
+    @staticmethod
+    def divisor(r):
+        return r
+
+
+def _profile_stiffness(joint: ClearanceJoint, sqrt):
+    """K(R_B) in N/m^1.5 of a profiled joint: its explicit contact_stiffness, or the
+    paper's Eq. 9 at the local bearing radius (the radius enters only through
+    sqrt(R_J R_B / (R_B - R_J)); `sqrt` the float or symbolic square root)."""
+    if joint.contact_stiffness is not None:
+        K = float(joint.contact_stiffness)
+        return lambda R: K
+    rj, rb = joint.journal_radius, joint.bearing_radius
+    factor = joint.stiffness / math.sqrt(rj * rb / (rb - rj))
+    return lambda R: factor * sqrt(rj * R / (R - rj))
+
+
+def _profile_geometry(joint: ClearanceJoint, ops, dx, dy, vx, vy, phib, wb):
+    """(r = |e|, theta_e, R_B(theta_e), delta, deltadot) of a profiled joint from the
+    eccentricity e = (dx, dy) (m), its rate (m/s), the bearing body's angle phib (rad) and
+    rate wb (rad/s): theta_e is e's direction in the bearing's frame in [0, 2 pi), delta =
+    |e| - (R_B(theta_e) - R_J), deltadot = d|e|/dt - R_B'(theta_e) dtheta_e/dt with
+    dtheta_e/dt = (ex eyd - ey exd) / |e|^2 - wb (meaningless for a centred journal, where
+    `ops.divisor` keeps it finite)."""
+    co, si = ops.cos(phib), ops.sin(phib)
+    theta = ops.angle(co * dx + si * dy, co * dy - si * dx)
+    R, slope = ops.radius(theta)
+    r = ops.sqrt(dx * dx + dy * dy)
+    delta = r - (R - joint.journal_radius)
+    d = ops.divisor(r)
+    rate = (dx * vx + dy * vy) / d - slope * ((dx * vy - dy * vx) / (d * d) - wb)
+    return r, theta, R, delta, rate
+
+
+def _profile_loads(joint, sides, q, qt, ops, normal, friction):
+    """Generalized forces of a profiled joint's contact (and friction) on its bodies'
+    coordinates: the normal force Fn n (n = e/|e|, Fn = `normal`(delta, deltadot, R_B)) on
+    the bearing at its point and -Fn n on the journal at its; with `friction` (Ft from v_t,
+    Fn; None without) Ft t on the journal plus the moment R_J Ft, the opposite force on the
+    bearing plus -R_B(theta_e) Ft, v_t = de/dt . t + omega_J R_J - omega_B R_B(theta_e),
+    t = (-n_y, n_x). Zero in free flight (`ops.gate`)."""
+    dx, dy, vx, vy, wj, wb, (axj, ayj), (axb, ayb) = _pair(sides, q, qt, ops.cos, ops.sin)
+    r, _, R, delta, rate = _profile_geometry(joint, ops, dx, dy, vx, vy, sides[1].angle(q), wb)
+    r = ops.divisor(r)
+    nx, ny = dx / r, dy / r
+    fn = normal(delta, rate, R)
+    fx, fy, ft = -fn * nx, -fn * ny, 0.0            # on the journal
+    if friction is not None:
+        vt = -vx * ny + vy * nx + wj * joint.journal_radius - wb * R
+        ft = friction(vt, fn)
+        fx, fy = fx - ft * ny, fy + ft * nx
+    out = [0.0] * (3 * sum(s.slot is not None for s in sides))
+    for side, sign, radius, (ax, ay) in ((sides[0], 1.0, joint.journal_radius, (axj, ayj)),
+                                         (sides[1], -1.0, R, (axb, ayb))):
+        if side.slot is not None:
+            i = side.slot
+            out[i] = ops.gate(delta, sign * fx)
+            out[i + 1] = ops.gate(delta, sign * fy)
+            out[i + 2] = ops.gate(delta, sign * (ax * fy - ay * fx + radius * ft))
+    return out
+
+
+def _profile_element(mbs, joint: ClearanceJoint, memory: ImpactMemory, k: int, nodes: dict,
+                     pts: dict, variant: str, keep_alive: list):
+    """Add a profiled joint's contact and friction as one `ObjectGenericODE2` on its bodies'
+    nodes (`_profile_loads`: the force needs the bearing body's angle, which a connector's
+    user function does not see); symbolic (`_SymbolicOps`, the impact velocity a named
+    symbolic variable) or Python (`_PythonOps`, contact.contact_force and friction_force).
+    Returns (element, the pre-step's (delta, deltadot) function of the joint)."""
+    import exudyn as exu
+
+    sides, obj, n = _pair_element(mbs, joint, nodes, pts)
+    _, _, xi, model = _law_constants(joint)
+    fric = friction_of(joint)
+    python = _PythonOps(joint)
+    stiffness = _profile_stiffness(joint, math.sqrt)
+    if variant == "python":
+        def normal(delta, rate, R):
+            return contact_force(delta, rate, memory.dmin, stiffness(R), joint.restitution,
+                                 model) if delta > 0.0 else 0.0
+
+        friction = (None if fric is None else
+                    lambda vt, fn: friction_force_slots(vt, fn, fric[1], fric[0]))
+
+        def force(mbs, t, itemNumber, q, q_t):
+            return _profile_loads(joint, sides, q, q_t, python, normal, friction)
+
+        mbs.SetObjectParameter(obj, "forceUserFunction", force)
+        keep_alive.append(force)
+    else:
+        esym = exu.symbolic
+        ops = _SymbolicOps(joint)
+        dmin = esym.Real(f"deltadot_minus_{k}", memory.dmin)
+        memory.symbol = dmin
+        sym_stiffness = _profile_stiffness(joint, esym.sqrt)
+
+        def normal(delta, rate, R):
+            return esym.max(sym_stiffness(R) * delta**1.5 * (1.0 + xi * rate / dmin),
+                            ops.zero)
+
+        friction = (None if fric is None else
+                    lambda vt, fn: symbolic_friction_force(vt, fn, fric[0], fric[1]))
+
+        def force(mbs, t, itemNumber, q, q_t):
+            return _profile_loads(joint, sides, q, q_t, ops, normal, friction)
+
+        uf = _symbolic_vector_function(mbs, force, obj, n)
+        mbs.SetObjectParameter(obj, "forceUserFunction", uf)
+        keep_alive += [uf, dmin]
+    node_list = [nodes[b] for b in (joint.journal_body, joint.bearing_body) if b != GROUND]
+    state = _node_state(node_list)
+
+    def gap(mbs):
+        q, qt = state(mbs)
+        dx, dy, vx, vy, _, wb, _, _ = _pair(sides, q, qt, math.cos, math.sin)
+        r, _, _, delta, rate = _profile_geometry(joint, python, dx, dy, vx, vy,
+                                                 sides[1].angle(q), wb)
+        return delta, (rate if r > 0.0 else 0.0)
+
+    return obj, gap
+
+
+def _node_state(node_list):
+    """Function of mbs: the coordinates and rates of the nodes of `node_list`, in order
+    (as a generic element on them sees its q, q_t)."""
+    import exudyn as exu
+
+    def state(mbs):
+        q, qt = [], []
+        for node in node_list:
+            q += list(mbs.GetNodeOutput(node, exu.OutputVariableType.Coordinates))
+            qt += list(mbs.GetNodeOutput(node, exu.OutputVariableType.Coordinates_t))
+        return q, qt
+
+    return state
+
+
 # ---------------------------------------------------------------------------- build
 
 @dataclass
@@ -841,6 +1055,16 @@ def _check_linkage(linkage, settings: ExudynSettings) -> None:
             raise ValueError(f"the {what.split(' of')[0]} of clearance joint {j.name!r}, which "
                              "is a ground joint, is not built in the exudyn backend (its "
                              "reaction would miss that force); use the reduced backend")
+    for j in linkage.clearance_joints:
+        if j.profile is None:
+            continue
+        if settings.contact == "sphere":
+            raise ValueError(f"contact='sphere' has no bearing profile (joint {j.name!r} has "
+                             "one); use contact='symbolic' or 'python'")
+        if GROUND in (j.journal_body, j.bearing_body):
+            raise ValueError(f"the bearing profile of clearance joint {j.name!r}, which is a "
+                             "ground joint, is not built in the exudyn backend (its reaction "
+                             "would miss the contact force); use the reduced backend")
     if settings.contact == "sphere":
         for j in linkage.clearance_joints:
             if sphere_restitution(j) <= 0.0:
@@ -957,6 +1181,20 @@ def build(linkage: Linkage, settings: ExudynSettings | None = None,
                 restitutionCoefficient=sphere_restitution(cj),
                 minimumImpactVelocity=cj.impact_velocity_floor, impactModel=1))
             memories.append(None)
+        elif cj.profile is not None:
+            memory = ImpactMemory(cj.impact_velocity_floor, cj.clearance)
+            if start_memory is not None:
+                memory.mode = int(start_memory[k][0])
+                memory.dmin = float(start_memory[k][1])
+            obj, gap = _profile_element(mbs, cj, memory, k, nodes, pts, settings.contact,
+                                        keep_alive)
+            memory.history = []         # the contact force after the run needs it
+            memories.append(memory)
+            contacts.append((gap, memory))
+            # the gap reads each node's coordinates and rates
+            pre_step_reads += 2 * sum(b != GROUND for b in (cj.journal_body, cj.bearing_body))
+            if settings.contact == "python":
+                pre_step_reads += PYTHON_FORCE_ALLOCATIONS
         else:
             memory = ImpactMemory(cj.impact_velocity_floor, cj.clearance)
             if start_memory is not None:
@@ -1006,12 +1244,7 @@ def build(linkage: Linkage, settings: ExudynSettings | None = None,
         # corners' force is a Python user function
         pre_step_reads += len(CORNERS) * 2 * len(node_list) + PYTHON_FORCE_ALLOCATIONS
 
-        def state(mbs, node_list=node_list):
-            q, qt = [], []
-            for node in node_list:
-                q += list(mbs.GetNodeOutput(node, exu.OutputVariableType.Coordinates))
-                qt += list(mbs.GetNodeOutput(node, exu.OutputVariableType.Coordinates_t))
-            return q, qt
+        state = _node_state(node_list)
 
         for k in range(len(CORNERS)):
             def gap(mbs, k=k, tj=tj, sides=sides, mems=mems, state=state):
@@ -1051,6 +1284,8 @@ def build(linkage: Linkage, settings: ExudynSettings | None = None,
         sensors["drive"] = sensor("object", drive, OVT.Force)
     if "contact" in want:
         for cj, obj in zip(linkage.clearance_joints, contact_items):
+            if cj.profile is not None:      # from the bodies' states after the run
+                continue
             sensors[f"{cj.name}.displacement"] = sensor("object", obj, OVT.Displacement)
             sensors[f"{cj.name}.force"] = sensor("object", obj, OVT.Force)
     if "bodies" in want:
@@ -1294,19 +1529,18 @@ def _coordinates(model: ExudynModel):
     return coordinate_series(linkage, q, v, a)
 
 
-def _friction_power(model: ExudynModel, joint: ClearanceJoint, memory: ImpactMemory):
-    """Power Ft vt (W, <= 0) of a joint's friction at every kept sample, from the stored
-    body states and the impact velocity in force at each step (`ImpactMemory.history`),
-    by contact.contact_force / friction_force (the Python variant's law)."""
-    law, slots = friction_of(joint)
-    K, c, _, cmodel = _law_constants(joint)
+def _pair_series(model: ExudynModel, joint: ClearanceJoint):
+    """(t, e, de/dt, omega_J, phi_B, omega_B) of a clearance joint at every kept sample
+    from the stored body states: e the journal centre minus the bearing centre (m), the
+    bodies' rates in rad/s, the bearing body's angle in rad (0 for the ground)."""
     pts = _points(model.linkage)
     t = stored(model, f"{model.linkage.bodies[0].name}.q")[:, 0]
 
     def point(body, name):
         if body == GROUND:
             p = np.asarray(pts[GROUND][name], dtype=float)
-            return np.tile(p, (len(t), 1)), np.zeros((len(t), 2)), np.zeros(len(t))
+            zero = np.zeros(len(t))
+            return np.tile(p, (len(t), 1)), np.zeros((len(t), 2)), zero, zero
         q = stored(model, f"{body}.q")[:, 1:4] + np.asarray(
             model.mbs.GetNodeParameter(model.nodes[body], "referenceCoordinates"))
         v = stored(model, f"{body}.v")[:, 1:4]
@@ -1314,24 +1548,64 @@ def _friction_power(model: ExudynModel, joint: ClearanceJoint, memory: ImpactMem
         co, si = np.cos(q[:, 2]), np.sin(q[:, 2])
         arm = np.column_stack([co * x - si * y, si * x + co * y])
         return (q[:, :2] + arm, v[:, :2] + v[:, 2:3] * np.column_stack([-arm[:, 1], arm[:, 0]]),
-                v[:, 2])
+                q[:, 2], v[:, 2])
 
-    rj, vj, wj = point(joint.journal_body, joint.journal_point)
-    rb, vb, wb = point(joint.bearing_body, joint.bearing_point)
-    e, ed = rj - rb, vj - vb
+    rj, vj, _, wj = point(joint.journal_body, joint.journal_point)
+    rb, vb, phib, wb = point(joint.bearing_body, joint.bearing_point)
+    return t, rj - rb, vj - vb, wj, phib, wb
+
+
+def _clearance_series(model: ExudynModel, joint: ClearanceJoint, memory) -> dict:
+    """The series of a clearance joint at every kept sample, from the stored body states:
+    "contact_angle" theta_e (rad, e's direction in the bearing body's frame, in
+    [0, 2 pi)) and "slip_velocity" v_t = de/dt . t + omega_J R_J - omega_B R_B(theta_e)
+    (m/s; t = (-n_y, n_x), n = e/|e|, or the direction theta_e when the journal is
+    centred). A profiled joint's also "eccentricity" e (n, 2), "penetration" |e| -
+    (R_B(theta_e) - R_J) and "force" Fn (N; `_profile_geometry`); a joint with friction
+    "friction_power" Ft v_t (W, <= 0). The forces are contact.contact_force /
+    friction_force (the Python variant's law) with the impact velocity in force at each
+    step (`ImpactMemory.history`)."""
+    t, e, ed, wj, phib, wb = _pair_series(model, joint)
     r = np.hypot(e[:, 0], e[:, 1])
-    hist = np.asarray(memory.history)
-    at = np.clip(np.searchsorted(hist[:, 0], t, side="right") - 1, 0, len(hist) - 1)
-    dmin = np.where(hist[at, 0] <= t, hist[at, 1], joint.impact_velocity_floor)
+    co, si = np.cos(phib), np.sin(phib)
+    theta = np.mod(np.arctan2(co * e[:, 1] - si * e[:, 0], co * e[:, 0] + si * e[:, 1]),
+                   2.0 * np.pi)
+    profile = joint.profile
+    R = (np.full(len(t), joint.bearing_radius) if profile is None
+         else np.asarray(profile.radius(theta)))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        n = np.where(r[:, None] > 0.0, e / r[:, None],
+                     np.column_stack([np.cos(theta + phib), np.sin(theta + phib)]))
+    vt = (ed[:, 1] * n[:, 0] - ed[:, 0] * n[:, 1]) + (wj * joint.journal_radius - wb * R)
+    out = {"contact_angle": theta, "slip_velocity": vt}
+    fric = friction_of(joint)
+    if profile is None and fric is None:
+        return out
+    _, _, _, cmodel = _law_constants(joint)
+    stiffness = _profile_stiffness(joint, math.sqrt) if profile is not None else None
+    hist = np.asarray(memory.history).reshape(-1, 2)
+    at = np.clip(np.searchsorted(hist[:, 0], t, side="right") - 1, 0, max(len(hist) - 1, 0))
+    dmin = (np.where(hist[at, 0] <= t, hist[at, 1], joint.impact_velocity_floor) if len(hist)
+            else np.full(len(t), joint.impact_velocity_floor))
+    delta = r - (R - joint.journal_radius) if profile is not None else r - joint.clearance
+    force = np.zeros(len(t))
     power = np.zeros(len(t))
-    for i in np.nonzero(r > c)[0]:
-        n = e[i] / r[i]
-        rate = float(ed[i] @ n)
-        vt = float(ed[i, 1] * n[0] - ed[i, 0] * n[1]) + (wj[i] * joint.journal_radius
-                                                         - wb[i] * joint.bearing_radius)
-        fn = contact_force(r[i] - c, rate, float(dmin[i]), K, joint.restitution, cmodel)
-        power[i] = friction_force_slots(vt, fn, slots, law) * vt
-    return power
+    slope = None if profile is None else np.asarray(profile.radius(theta, 1))
+    for i in np.nonzero(delta > 0.0)[0]:
+        rate = float(ed[i] @ n[i])
+        K = joint.stiffness
+        if profile is not None:
+            rate -= slope[i] * ((e[i, 0] * ed[i, 1] - e[i, 1] * ed[i, 0]) / (r[i] * r[i])
+                                - wb[i])
+            K = stiffness(R[i])
+        force[i] = contact_force(delta[i], rate, float(dmin[i]), K, joint.restitution, cmodel)
+        if fric is not None:
+            power[i] = friction_force_slots(vt[i], force[i], fric[1], fric[0]) * vt[i]
+    if fric is not None:
+        out["friction_power"] = power
+    if profile is not None:
+        out.update(eccentricity=e, penetration=delta, force=force)
+    return out
 
 
 def _corner_series(model: ExudynModel, joint, sides, memories) -> dict:
@@ -1433,13 +1707,20 @@ def run_linkage(linkage: Linkage, revolutions: int | None, settings: ExudynSetti
     t, reactions = _reactions(model)
     moment = None if free else -stored(model, "drive")[:, 1]
     ecc, pen, force = [], [], []
+    joint_series = [_clearance_series(model, cj, m)
+                    for cj, m in zip(linkage.clearance_joints, model.memories)]
     corners = [_corner_series(model, *item) for item in model.corners]
     for (tj, _, _), series in zip(model.corners, corners):
         if tj.guide_body == GROUND:
             reactions[tj.name] = series["ground"]
     shaking = sum(reactions[g] for g in reactions)
     monitored = shaking if linkage.monitor_joint is None else reactions[linkage.monitor_joint]
-    for cj in linkage.clearance_joints:
+    for cj, series in zip(linkage.clearance_joints, joint_series):
+        if cj.profile is not None:
+            ecc.append(series["eccentricity"])
+            pen.append(series["penetration"])
+            force.append(series["force"])
+            continue
         e = model.ecc_sign * stored(model, f"{cj.name}.displacement")[:, 1:3]
         r = np.hypot(e[:, 0], e[:, 1])
         f = stored(model, f"{cj.name}.force")[:, 1:3]
@@ -1461,9 +1742,8 @@ def run_linkage(linkage: Linkage, revolutions: int | None, settings: ExudynSetti
     stats["uniform_steps"] = bool(len(t) == stats["n_steps"] + 1 and np.allclose(
         np.diff(t), stats["step_size_used"], rtol=1e-6, atol=0.0))
     coords, rates, accs = _coordinates(model)
-    friction = [_friction_power(model, cj, m) for cj, m in
-                zip(linkage.clearance_joints, model.memories)
-                if m is not None and m.history is not None]
+    friction = [series["friction_power"] for series in joint_series
+                if "friction_power" in series]
     friction += [np.sum(series["friction"] * series["slip"], axis=1)
                  for (tj, _, _), series in zip(model.corners, corners) if tj.has_friction]
     friction_work = None
@@ -1484,7 +1764,14 @@ def run_linkage(linkage: Linkage, revolutions: int | None, settings: ExudynSetti
                                   linkage.period, revolutions)),
         joints=tuple(name for name, _ in linkage.contacts()), reactions=reactions,
         shaking_force=np.ascontiguousarray(shaking), coordinates=coords, rates=rates,
-        accelerations=accs, friction_work=friction_work)
+        accelerations=accs, friction_work=friction_work,
+        contact_angle=_columns([s["contact_angle"] for s in joint_series], len(t)),
+        slip_velocity=_columns([s["slip_velocity"] for s in joint_series], len(t)))
+
+
+def _columns(series: list, n: int) -> np.ndarray:
+    """The (n, J) array of J series of n samples ((n, 0) for none)."""
+    return np.column_stack(series) if series else np.empty((n, 0))
 
 
 def peak_exudyn_linkage(linkage: Linkage, revolution: int | None = None,
