@@ -786,199 +786,116 @@ def _symbolic_vector_function(mbs, function, obj, n: int):
 
 # ---------------------------------------------------------------------------- profile
 
-class _PythonOps:
-    """Plain-float operations of a profiled joint's geometry (`_profile_geometry`): the
-    spline's piece found by index, gates by branching."""
-
-    cos, sin, sqrt = staticmethod(math.cos), staticmethod(math.sin), staticmethod(math.sqrt)
+class _ProfileLookup:
+    """A profiled joint's bearing radius R_B(theta) and slope, the spline's piece found by
+    index (as `BearingProfile.radius`, without its per-call overhead)."""
 
     def __init__(self, joint: ClearanceJoint):
         profile = joint.profile
         self.pieces = profile.coefficients().tolist()
         self.h = 2.0 * math.pi / profile.points
 
-    def angle(self, x, y):
-        a = math.atan2(y, x)
-        return a + 2.0 * math.pi if a < 0.0 else a
-
-    def radius(self, theta):
-        """(R_B, dR_B/dtheta) at theta in [0, 2 pi)."""
+    def __call__(self, theta: float) -> tuple[float, float]:
+        """(R_B in m, dR_B/dtheta in m/rad) at theta in [0, 2 pi]."""
         i = min(int(theta / self.h), len(self.pieces) - 1)
         u = theta - i * self.h
         c0, c1, c2, c3 = self.pieces[i]
         return c0 + u * (c1 + u * (c2 + u * c3)), c1 + u * (2.0 * c2 + 3.0 * u * c3)
 
-    @staticmethod
-    def gate(delta, value):
-        return value if delta > 0.0 else 0.0
 
-    @staticmethod
-    def divisor(r):
-        # centred journal: any finite divisor, the results are gated off (delta < 0)
-        return r if r > 0.0 else 1.0
-
-
-class _SymbolicOps:
-    """Exudyn symbolic operations of a profiled joint's geometry: the spline's piece is
-    chosen by a balanced tree of lazy IfThenElse on the piece index (the symbolic layer
-    cannot index a table by a computed integer), log2(N) comparisons per lookup."""
-
-    def __init__(self, joint: ClearanceJoint):
-        import exudyn as exu
-
-        self.esym = exu.symbolic
-        self.cos, self.sin, self.sqrt = self.esym.cos, self.esym.sin, self.esym.sqrt
-        profile = joint.profile
-        self.pieces = profile.coefficients().tolist()
-        self.h = 2.0 * math.pi / profile.points
-        self.zero = self.esym.Real(0.0)
-
-    def angle(self, x, y):
-        a = self.esym.atan2(y, x)
-        return self.esym.IfThenElse(a < 0.0, a + 2.0 * math.pi, a)
-
-    def radius(self, theta):
-        esym = self.esym
-        index = esym.floor(theta * (1.0 / self.h))
-        u = theta - index * self.h
-
-        def value(c):
-            return c[0] + u * (c[1] + u * (c[2] + u * c[3]))
-
-        def slope(c):
-            return c[1] + u * (2.0 * c[2] + 3.0 * c[3] * u)
-
-        def tree(piece, lo, hi):
-            if hi - lo == 1:        # the last piece also takes index N (theta rounded to 2 pi)
-                return piece(self.pieces[lo])
-            mid = (lo + hi) // 2
-            return esym.IfThenElse(index < mid, tree(piece, lo, mid), tree(piece, mid, hi))
-
-        n = len(self.pieces)
-        return tree(value, 0, n), tree(slope, 0, n)
-
-    def gate(self, delta, value):
-        # lazy: r > R_B - R_J > 0 inside the true branch, so no division by zero
-        return self.esym.IfThenElse(delta > 0.0, value, self.zero)
-
-    @staticmethod
-    def divisor(r):
-        return r
-
-
-def _profile_stiffness(joint: ClearanceJoint, sqrt):
+def _profile_stiffness(joint: ClearanceJoint):
     """K(R_B) in N/m^1.5 of a profiled joint: its explicit contact_stiffness, or the
     paper's Eq. 9 at the local bearing radius (the radius enters only through
-    sqrt(R_J R_B / (R_B - R_J)); `sqrt` the float or symbolic square root)."""
+    sqrt(R_J R_B / (R_B - R_J)))."""
     if joint.contact_stiffness is not None:
         K = float(joint.contact_stiffness)
         return lambda R: K
     rj, rb = joint.journal_radius, joint.bearing_radius
     factor = joint.stiffness / math.sqrt(rj * rb / (rb - rj))
-    return lambda R: factor * sqrt(rj * R / (R - rj))
+    return lambda R: factor * math.sqrt(rj * R / (R - rj))
 
 
-def _profile_geometry(joint: ClearanceJoint, ops, dx, dy, vx, vy, phib, wb):
+def _profile_geometry(joint: ClearanceJoint, lookup, dx, dy, vx, vy, phib, wb):
     """(r = |e|, theta_e, R_B(theta_e), delta, deltadot) of a profiled joint from the
     eccentricity e = (dx, dy) (m), its rate (m/s), the bearing body's angle phib (rad) and
     rate wb (rad/s): theta_e is e's direction in the bearing's frame in [0, 2 pi), delta =
     |e| - (R_B(theta_e) - R_J), deltadot = d|e|/dt - R_B'(theta_e) dtheta_e/dt with
-    dtheta_e/dt = (ex eyd - ey exd) / |e|^2 - wb (meaningless for a centred journal, where
-    `ops.divisor` keeps it finite)."""
-    co, si = ops.cos(phib), ops.sin(phib)
-    theta = ops.angle(co * dx + si * dy, co * dy - si * dx)
-    R, slope = ops.radius(theta)
-    r = ops.sqrt(dx * dx + dy * dy)
+    dtheta_e/dt = (ex eyd - ey exd) / |e|^2 - wb (0 for a centred journal)."""
+    co, si = math.cos(phib), math.sin(phib)
+    theta = math.atan2(co * dy - si * dx, co * dx + si * dy)
+    if theta < 0.0:
+        theta += 2.0 * math.pi
+    R, slope = lookup(theta)
+    r = math.sqrt(dx * dx + dy * dy)
     delta = r - (R - joint.journal_radius)
-    d = ops.divisor(r)
-    rate = (dx * vx + dy * vy) / d - slope * ((dx * vy - dy * vx) / (d * d) - wb)
+    if r == 0.0:
+        return r, theta, R, delta, 0.0
+    rate = (dx * vx + dy * vy) / r - slope * ((dx * vy - dy * vx) / (r * r) - wb)
     return r, theta, R, delta, rate
 
 
-def _profile_loads(joint, sides, q, qt, ops, normal, friction):
+def _profile_loads(joint, sides, q, qt, lookup, normal, friction):
     """Generalized forces of a profiled joint's contact (and friction) on its bodies'
     coordinates: the normal force Fn n (n = e/|e|, Fn = `normal`(delta, deltadot, R_B)) on
     the bearing at its point and -Fn n on the journal at its; with `friction` (Ft from v_t,
     Fn; None without) Ft t on the journal plus the moment R_J Ft, the opposite force on the
     bearing plus -R_B(theta_e) Ft, v_t = de/dt . t + omega_J R_J - omega_B R_B(theta_e),
-    t = (-n_y, n_x). Zero in free flight (`ops.gate`)."""
-    dx, dy, vx, vy, wj, wb, (axj, ayj), (axb, ayb) = _pair(sides, q, qt, ops.cos, ops.sin)
-    r, _, R, delta, rate = _profile_geometry(joint, ops, dx, dy, vx, vy, sides[1].angle(q), wb)
-    r = ops.divisor(r)
+    t = (-n_y, n_x). Zero in free flight."""
+    out = [0.0] * (3 * sum(s.slot is not None for s in sides))
+    dx, dy, vx, vy, wj, wb, (axj, ayj), (axb, ayb) = _pair(sides, q, qt, math.cos, math.sin)
+    r, _, R, delta, rate = _profile_geometry(joint, lookup, dx, dy, vx, vy, sides[1].angle(q),
+                                             wb)
+    if delta <= 0.0:
+        return out
     nx, ny = dx / r, dy / r
     fn = normal(delta, rate, R)
     fx, fy, ft = -fn * nx, -fn * ny, 0.0            # on the journal
     if friction is not None:
-        vt = -vx * ny + vy * nx + wj * joint.journal_radius - wb * R
+        vt = (vy * nx - vx * ny) + (wj * joint.journal_radius - wb * R)
         ft = friction(vt, fn)
         fx, fy = fx - ft * ny, fy + ft * nx
-    out = [0.0] * (3 * sum(s.slot is not None for s in sides))
     for side, sign, radius, (ax, ay) in ((sides[0], 1.0, joint.journal_radius, (axj, ayj)),
                                          (sides[1], -1.0, R, (axb, ayb))):
         if side.slot is not None:
             i = side.slot
-            out[i] = ops.gate(delta, sign * fx)
-            out[i + 1] = ops.gate(delta, sign * fy)
-            out[i + 2] = ops.gate(delta, sign * (ax * fy - ay * fx + radius * ft))
+            out[i], out[i + 1] = sign * fx, sign * fy
+            out[i + 2] = sign * (ax * fy - ay * fx + radius * ft)
     return out
 
 
-def _profile_element(mbs, joint: ClearanceJoint, memory: ImpactMemory, k: int, nodes: dict,
-                     pts: dict, variant: str, keep_alive: list):
+def _profile_element(mbs, joint: ClearanceJoint, memory: ImpactMemory, nodes: dict,
+                     pts: dict, keep_alive: list):
     """Add a profiled joint's contact and friction as one `ObjectGenericODE2` on its bodies'
-    nodes (`_profile_loads`: the force needs the bearing body's angle, which a connector's
-    user function does not see); symbolic (`_SymbolicOps`, the impact velocity a named
-    symbolic variable) or Python (`_PythonOps`, contact.contact_force and friction_force).
-    Returns (element, the pre-step's (delta, deltadot) function of the joint)."""
-    import exudyn as exu
-
-    sides, obj, n = _pair_element(mbs, joint, nodes, pts)
-    _, _, xi, model = _law_constants(joint)
+    nodes whose force is `_profile_loads`, a Python user function with
+    contact.contact_force and friction_force (the force needs the bearing body's angle,
+    which a connector's user function does not see; Exudyn's symbolic layer can express the
+    spline's lookup, as a tree of IfThenElse on the piece index, but its generic-element
+    function ran 30 times slower than this one, docs/exudyn.md). Returns (element, the
+    joint's (delta, deltadot) function of mbs for the pre-step function)."""
+    sides, obj, _ = _pair_element(mbs, joint, nodes, pts)
+    _, _, _, model = _law_constants(joint)
     fric = friction_of(joint)
-    python = _PythonOps(joint)
-    stiffness = _profile_stiffness(joint, math.sqrt)
-    if variant == "python":
-        def normal(delta, rate, R):
-            return contact_force(delta, rate, memory.dmin, stiffness(R), joint.restitution,
-                                 model) if delta > 0.0 else 0.0
+    lookup = _ProfileLookup(joint)
+    stiffness = _profile_stiffness(joint)
 
-        friction = (None if fric is None else
-                    lambda vt, fn: friction_force_slots(vt, fn, fric[1], fric[0]))
+    def normal(delta, rate, R):
+        return contact_force(delta, rate, memory.dmin, stiffness(R), joint.restitution, model)
 
-        def force(mbs, t, itemNumber, q, q_t):
-            return _profile_loads(joint, sides, q, q_t, python, normal, friction)
+    friction = (None if fric is None else
+                lambda vt, fn: friction_force_slots(vt, fn, fric[1], fric[0]))
 
-        mbs.SetObjectParameter(obj, "forceUserFunction", force)
-        keep_alive.append(force)
-    else:
-        esym = exu.symbolic
-        ops = _SymbolicOps(joint)
-        dmin = esym.Real(f"deltadot_minus_{k}", memory.dmin)
-        memory.symbol = dmin
-        sym_stiffness = _profile_stiffness(joint, esym.sqrt)
+    def force(mbs, t, itemNumber, q, q_t):
+        return _profile_loads(joint, sides, q, q_t, lookup, normal, friction)
 
-        def normal(delta, rate, R):
-            return esym.max(sym_stiffness(R) * delta**1.5 * (1.0 + xi * rate / dmin),
-                            ops.zero)
-
-        friction = (None if fric is None else
-                    lambda vt, fn: symbolic_friction_force(vt, fn, fric[0], fric[1]))
-
-        def force(mbs, t, itemNumber, q, q_t):
-            return _profile_loads(joint, sides, q, q_t, ops, normal, friction)
-
-        uf = _symbolic_vector_function(mbs, force, obj, n)
-        mbs.SetObjectParameter(obj, "forceUserFunction", uf)
-        keep_alive += [uf, dmin]
-    node_list = [nodes[b] for b in (joint.journal_body, joint.bearing_body) if b != GROUND]
-    state = _node_state(node_list)
+    mbs.SetObjectParameter(obj, "forceUserFunction", force)
+    keep_alive.append(force)
+    state = _node_state([nodes[b] for b in (joint.journal_body, joint.bearing_body)
+                         if b != GROUND])
 
     def gap(mbs):
         q, qt = state(mbs)
         dx, dy, vx, vy, _, wb, _, _ = _pair(sides, q, qt, math.cos, math.sin)
-        r, _, _, delta, rate = _profile_geometry(joint, python, dx, dy, vx, vy,
-                                                 sides[1].angle(q), wb)
-        return delta, (rate if r > 0.0 else 0.0)
+        return _profile_geometry(joint, lookup, dx, dy, vx, vy, sides[1].angle(q), wb)[3:]
 
     return obj, gap
 
@@ -1186,15 +1103,13 @@ def build(linkage: Linkage, settings: ExudynSettings | None = None,
             if start_memory is not None:
                 memory.mode = int(start_memory[k][0])
                 memory.dmin = float(start_memory[k][1])
-            obj, gap = _profile_element(mbs, cj, memory, k, nodes, pts, settings.contact,
-                                        keep_alive)
+            obj, gap = _profile_element(mbs, cj, memory, nodes, pts, keep_alive)
             memory.history = []         # the contact force after the run needs it
             memories.append(memory)
             contacts.append((gap, memory))
             # the gap reads each node's coordinates and rates
-            pre_step_reads += 2 * sum(b != GROUND for b in (cj.journal_body, cj.bearing_body))
-            if settings.contact == "python":
-                pre_step_reads += PYTHON_FORCE_ALLOCATIONS
+            pre_step_reads += (2 * sum(b != GROUND for b in (cj.journal_body, cj.bearing_body))
+                               + PYTHON_FORCE_ALLOCATIONS)
         else:
             memory = ImpactMemory(cj.impact_velocity_floor, cj.clearance)
             if start_memory is not None:
@@ -1582,7 +1497,7 @@ def _clearance_series(model: ExudynModel, joint: ClearanceJoint, memory) -> dict
     if profile is None and fric is None:
         return out
     _, _, _, cmodel = _law_constants(joint)
-    stiffness = _profile_stiffness(joint, math.sqrt) if profile is not None else None
+    stiffness = _profile_stiffness(joint) if profile is not None else None
     hist = np.asarray(memory.history).reshape(-1, 2)
     at = np.clip(np.searchsorted(hist[:, 0], t, side="right") - 1, 0, max(len(hist) - 1, 0))
     dmin = (np.where(hist[at, 0] <= t, hist[at, 1], joint.impact_velocity_floor) if len(hist)
