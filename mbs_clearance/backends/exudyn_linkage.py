@@ -36,6 +36,14 @@ Model (`build`)
   omega_B R_B (`_friction_loads`); the connectors that carry moments apply equal and
   opposite ones, so a generic element is used; the friction work is computed after the
   run from the stored states (`_friction_power`).
+- a clearance joint with a `bearing_profile`: one `ObjectGenericODE2` on its two bodies'
+  nodes (for any option ``contact`` but "sphere") whose Python force function returns the
+  generalized forces of the normal force at the profiled penetration delta = |e| -
+  (R_B(theta_e) - R_J), theta_e the direction of e in the bearing body's frame, along n =
+  e/|e|, with Eq. 9's stiffness at R_B(theta_e), and of the friction with R_B(theta_e) in
+  place of R_B (`_profile_loads`; a symbolic function, the spline's lookup as a tree of
+  IfThenElse, ran 30 times slower); its series are computed after the run from the stored
+  body states (`_clearance_series`). A profiled joint to the ground is not built.
 - each `TranslationalClearance`: an `ObjectGenericODE2` on the slider's node (and the
   guide's, unless the guide is the ground) whose Python force function returns the
   generalized forces of the four corners' contacts (`_corner_loads`: the normal force of
@@ -52,7 +60,8 @@ Model (`build`)
 Outputs from Exudyn's own sensors (stored in memory every step): the force of each ground
 joint's constraint (the reaction on the ground), the drive constraint's multiplier, each
 contact element's displacement and force, and every body node's coordinates, velocities and
-accelerations (the minimal coordinates of the description are computed from those).
+accelerations (the minimal coordinates of the description are computed from those, and
+each clearance joint's contact angle and slip velocity, `_clearance_series`).
 
 The initial state is the reduced model's (`linkage_model.initial_state`: journals centred),
 carried to the bodies by the forest's kinematics (`body_states`).
@@ -139,7 +148,8 @@ class ExudynSettings:
         Target relative error of the monitored peak (1e-8 ... 0.1): the step is
         `step_for_accuracy` (second order from the default's measured error).
     contact : str
-        Clearance-joint variant, one of `CONTACT_VARIANTS`.
+        Clearance-joint variant, one of `CONTACT_VARIANTS` (a joint with a bearing profile
+        has a Python force function under "symbolic" and "python"; "sphere" takes none).
     spectral_radius : float
         Generalized-alpha spectral radius at infinity rho_inf in [0, 1]; 0.9 damps the
         spurious high-frequency oscillation of index-3 constraint forces.
@@ -1585,7 +1595,9 @@ def simulate_exudyn_linkage(linkage: Linkage, revolutions: int | None = None, **
     Every time step is recorded (t = 0, h, 2h, ...); ``peaks`` holds the monitored force's
     maximum per revolution refined between the steps (`refined_peaks`). ``contact_phase``
     is 1 where the penetration is positive; ``contact_force`` the
-    signed normal force; ``crank_work`` the trapezoidal integral of the drive's power.
+    signed normal force; ``crank_work`` the trapezoidal integral of the drive's power;
+    ``contact_angle`` (rad) and ``slip_velocity`` (m/s) per clearance joint
+    (`_clearance_series`).
     ``stats`` holds the settings, the step, Newton counters, onsets (per joint the first
     registered onset time in ``first_onsets``) and the wall time in s.
 
