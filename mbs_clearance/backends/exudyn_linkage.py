@@ -970,28 +970,21 @@ def _check_linkage(linkage, settings: ExudynSettings) -> None:
                          f"{linkage.name!r} has {[j.name for j in linkage.translational_joints]}"
                          "); use contact='symbolic' or 'python'")
     for j in linkage.clearance_joints:
-        # the friction and the film are generic elements beside the contact element
-        what = ("friction law of ours" if friction_of(j) is not None
-                else "oil film" if j.has_lubrication else None)
-        if what is None:
-            continue
-        if settings.contact == "sphere":
-            raise ValueError(f"contact='sphere' has no {what} (joint {j.name!r} has it); use "
-                             "contact='symbolic' or 'python'")
-        if GROUND in (j.journal_body, j.bearing_body):
-            raise ValueError(f"the {what.split(' of')[0]} of clearance joint {j.name!r}, which "
-                             "is a ground joint, is not built in the exudyn backend (its "
-                             "reaction would miss that force); use the reduced backend")
-    for j in linkage.clearance_joints:
-        if j.profile is None:
-            continue
-        if settings.contact == "sphere":
-            raise ValueError(f"contact='sphere' has no bearing profile (joint {j.name!r} has "
-                             "one); use contact='symbolic' or 'python'")
-        if GROUND in (j.journal_body, j.bearing_body):
-            raise ValueError(f"the bearing profile of clearance joint {j.name!r}, which is a "
-                             "ground joint, is not built in the exudyn backend (its reaction "
-                             "would miss the contact force); use the reduced backend")
+        # the friction, the film and a profiled contact are generic elements on the two
+        # bodies' nodes
+        for what, on in (("friction law of ours", friction_of(j) is not None),
+                         ("oil film", j.has_lubrication),
+                         ("bearing profile", j.profile is not None)):
+            if not on:
+                continue
+            if settings.contact == "sphere":
+                raise ValueError(f"contact='sphere' has no {what} (joint {j.name!r} has it); "
+                                 "use contact='symbolic' or 'python'")
+            if GROUND in (j.journal_body, j.bearing_body):
+                raise ValueError(f"the {what.split(' of')[0]} of clearance joint {j.name!r}, "
+                                 "which is a ground joint, is not built in the exudyn backend "
+                                 "(its reaction would miss that force); use the reduced "
+                                 "backend")
     if settings.contact == "sphere":
         for j in linkage.clearance_joints:
             if sphere_restitution(j) <= 0.0:
