@@ -19,6 +19,7 @@ import pytest
 
 from mbs_clearance import simulate
 from mbs_clearance.backends import exudyn_linkage as xl
+from mbs_clearance.laws._dispatch import friction_force_slots
 from mbs_clearance.model import cases
 from mbs_clearance.model.linkage import GROUND
 from mbs_clearance.model.profile import BearingProfile
@@ -137,16 +138,18 @@ def _recomputed(tr, joint, rows):
     return out
 
 
-@pytest.fixture(scope="module")
-def turning_bearing(paper):
+@pytest.fixture(scope="module", params=["frictionless", "ambrosio"])
+def turning_bearing(paper, request):
     """The paper case with the joint's roles swapped (the bearing on the turning coupler,
     the journal on the slider) and an oval bearing R_B + a cos(2 theta), a = 2 um: theta_e
-    is measured in a turning frame."""
+    is measured in a turning frame; frictionless, or with Ambrosio's law at mu = 0.1."""
     cj = paper.clearance_joints[0]
+    friction = ({} if request.param == "frictionless" else
+                dict(friction_law=request.param, friction_coefficient=0.1))
     lk = _profiled(paper, **{cj.name: dict(
         journal_body="slider", journal_point="pin", bearing_body="coupler",
         bearing_point="slider_end",
-        bearing_profile=tuple(cj.bearing_radius + 2e-6 * np.cos(2.0 * THETA)))})
+        bearing_profile=tuple(cj.bearing_radius + 2e-6 * np.cos(2.0 * THETA)), **friction)})
     return lk, _run(lk)
 
 
@@ -177,19 +180,31 @@ def test_series_are_the_profile_geometry_of_the_recorded_motion(turning_bearing)
 
 def test_the_applied_force_is_the_profiled_contact_force(turning_bearing):
     """Newton's second law of the slider along its frictionless guide: m4 x'' equals the
-    x component of the force the joint applies to the journal (on the slider), -Fn e/|e|,
-    with Fn the contact law at the profiled penetration and rate recorded after the run.
-    Had the element used another geometry (the circle, or theta_e in the wrong frame) the
-    forces would differ by up to K a^1.5 ~ 1 kN. Measured: 9.7e-9 of the largest contact
-    force (Newton's tolerance)."""
+    x component of the force the joint applies to the journal (on the slider), -Fn n +
+    Ft t, with Fn the contact law at the profiled penetration and rate recorded after the
+    run and Ft the friction law at the recorded slip velocity (which holds
+    omega_B R_B(theta_e) of the turning bearing). Had the element used another geometry
+    (the circle, or theta_e in the wrong frame) the normal forces would differ by up to
+    K a^1.5 ~ 1 kN. Measured: 9.7e-9 (frictionless) and 8.8e-9 (friction, whose largest
+    force is 0.1 of the largest normal force) of the largest contact force (Newton's
+    tolerance)."""
     lk, tr = turning_bearing
+    joint = lk.clearance_joints[0]
     m4 = next(b for b in lk.bodies if b.name == "slider").mass
     e = tr.eccentricity[:, 0]
     r = np.hypot(e[:, 0], e[:, 1])
-    fx = np.where(r > 0.0, -tr.contact_force[:, 0] * e[:, 0] / np.where(r > 0.0, r, 1.0), 0.0)
+    contact = tr.penetration[:, 0] > 0.0
+    safe = np.where(contact, r, 1.0)
+    nx, ny = np.where(contact, e[:, 0] / safe, 0.0), np.where(contact, e[:, 1] / safe, 0.0)
+    fn = tr.contact_force[:, 0]
+    ft = np.zeros(len(fn))
+    if xl.friction_of(joint) is not None:
+        law, slots = xl.friction_of(joint)
+        ft = np.array([friction_force_slots(v, f, slots, law) if c else 0.0 for v, f, c
+                       in zip(tr.slip_velocity[:, 0], fn, contact)])
+        assert np.max(np.abs(ft)) > 0.05 * np.max(fn)      # friction acts (measured 0.1)
     inertia = m4 * tr.accelerations["slider_guide.s"]
-    scale = np.max(np.abs(tr.contact_force))
-    assert np.max(np.abs(inertia - fx)) < 1e-7 * scale
+    assert np.max(np.abs(inertia - (-fn * nx - ft * ny))) < 1e-7 * np.max(fn)
 
 
 def test_worn_patch_raises_the_peaks(paper, circular):
