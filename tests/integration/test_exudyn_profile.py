@@ -90,6 +90,20 @@ def test_circular_profile_is_the_circular_joint(paper, circular):
     assert prof.contact_angle.shape == prof.slip_velocity.shape == (len(prof.t), 1)
 
 
+def test_circular_profile_with_friction_is_the_circular_joint():
+    """With Ambrosio's friction at mu = 0.1 too (the circular joint's symbolic friction
+    element against the profiled joint's Python force): measured base force 6.4e-8 of its
+    maximum, penetration 2.4e-15 m, slip 1.7e-10, friction work over 2 revolutions
+    (5.65 J) 3e-13."""
+    paper = cases.paper_slider_crank(friction_law="ambrosio", friction_coefficient=0.1)
+    cj = paper.clearance_joints[0]
+    circle = _run(paper)
+    prof = _run(_profiled(paper, **{cj.name: dict(bearing_profile=(cj.bearing_radius,) * 64)}))
+    _assert_same_run(circle, prof, 1e-6, 3e-13)
+    assert prof.friction_work[-1] == pytest.approx(circle.friction_work[-1], rel=1e-9)
+    assert circle.friction_work[-1] > 1.0
+
+
 def test_uniform_profile_is_the_larger_circle(paper):
     """A bearing worn uniformly by w = 2 um (all radii R_B + w) is the circular joint of
     radius R_B + w: the larger clearance and Eq. 9's stiffness at R_B + w. Newton's
