@@ -116,6 +116,12 @@ def test_uniform_profile_is_the_larger_circle(paper):
     uniform = _run(_profiled(paper, **{cj.name: dict(
         bearing_profile=(cj.bearing_radius + w,) * 32)}))
     _assert_same_run(circle, uniform, 5e-6, 5e-12)
+    # the pre-step function registers the onsets from the profiled penetration: the first
+    # at 35.16 us, where the 10 um circle's is at 32.09 us
+    assert uniform.stats["onsets"] == circle.stats["onsets"]
+    first = uniform.stats["first_onsets"][cj.name]
+    assert first == pytest.approx(circle.stats["first_onsets"][cj.name], abs=1e-12)
+    assert first > 3.4e-5
 
 
 def _world(linkage, states, body, point):
