@@ -35,7 +35,15 @@ Model (`build`)
   -R_B Ft, Ft = contact.friction_force(vt, Fn, ...) with vt = de/dt . t + omega_J R_J -
   omega_B R_B (`_friction_loads`); the connectors that carry moments apply equal and
   opposite ones, so a generic element is used; the friction work is computed after the
-  run from the stored states (`_friction_power`).
+  run from the stored states (`_clearance_series`).
+- a clearance joint with a `bearing_profile`: one `ObjectGenericODE2` on its two bodies'
+  nodes (for any option ``contact`` but "sphere") whose Python force function returns the
+  generalized forces of the normal force at the profiled penetration delta = |e| -
+  (R_B(theta_e) - R_J), theta_e the direction of e in the bearing body's frame, along n =
+  e/|e|, with Eq. 9's stiffness at R_B(theta_e), and of the friction with R_B(theta_e) in
+  place of R_B (`_profile_loads`; a symbolic function, the spline's lookup as a tree of
+  IfThenElse, ran 30 times slower); its series are computed after the run from the stored
+  body states (`_clearance_series`). A profiled joint to the ground is not built.
 - each `TranslationalClearance`: an `ObjectGenericODE2` on the slider's node (and the
   guide's, unless the guide is the ground) whose Python force function returns the
   generalized forces of the four corners' contacts (`_corner_loads`: the normal force of
@@ -52,7 +60,8 @@ Model (`build`)
 Outputs from Exudyn's own sensors (stored in memory every step): the force of each ground
 joint's constraint (the reaction on the ground), the drive constraint's multiplier, each
 contact element's displacement and force, and every body node's coordinates, velocities and
-accelerations (the minimal coordinates of the description are computed from those).
+accelerations (the minimal coordinates of the description are computed from those, and
+each clearance joint's contact angle and slip velocity, `_clearance_series`).
 
 The initial state is the reduced model's (`linkage_model.initial_state`: journals centred),
 carried to the bodies by the forest's kinematics (`body_states`).
@@ -139,7 +148,8 @@ class ExudynSettings:
         Target relative error of the monitored peak (1e-8 ... 0.1): the step is
         `step_for_accuracy` (second order from the default's measured error).
     contact : str
-        Clearance-joint variant, one of `CONTACT_VARIANTS`.
+        Clearance-joint variant, one of `CONTACT_VARIANTS` (a joint with a bearing profile
+        has a Python force function under "symbolic" and "python"; "sphere" takes none).
     spectral_radius : float
         Generalized-alpha spectral radius at infinity rho_inf in [0, 1]; 0.9 damps the
         spurious high-frequency oscillation of index-3 constraint forces.
@@ -784,6 +794,137 @@ def _symbolic_vector_function(mbs, function, obj, n: int):
     return uf
 
 
+# ---------------------------------------------------------------------------- profile
+
+class _ProfileLookup:
+    """A profiled joint's bearing radius R_B(theta) and slope, the spline's piece found by
+    index (as `BearingProfile.radius`, without its per-call overhead)."""
+
+    def __init__(self, joint: ClearanceJoint):
+        profile = joint.profile
+        self.pieces = profile.coefficients().tolist()
+        self.h = 2.0 * math.pi / profile.points
+
+    def __call__(self, theta: float) -> tuple[float, float]:
+        """(R_B in m, dR_B/dtheta in m/rad) at theta in [0, 2 pi]."""
+        i = min(int(theta / self.h), len(self.pieces) - 1)
+        u = theta - i * self.h
+        c0, c1, c2, c3 = self.pieces[i]
+        return c0 + u * (c1 + u * (c2 + u * c3)), c1 + u * (2.0 * c2 + 3.0 * u * c3)
+
+
+def _profile_stiffness(joint: ClearanceJoint):
+    """K(R_B) in N/m^1.5 of a profiled joint: its explicit contact_stiffness, or the
+    paper's Eq. 9 at the local bearing radius (the radius enters only through
+    sqrt(R_J R_B / (R_B - R_J)))."""
+    if joint.contact_stiffness is not None:
+        K = float(joint.contact_stiffness)
+        return lambda R: K
+    rj, rb = joint.journal_radius, joint.bearing_radius
+    factor = joint.stiffness / math.sqrt(rj * rb / (rb - rj))
+    return lambda R: factor * math.sqrt(rj * R / (R - rj))
+
+
+def _profile_geometry(joint: ClearanceJoint, lookup, dx, dy, vx, vy, phib, wb):
+    """(r = |e|, theta_e, R_B(theta_e), delta, deltadot) of a profiled joint from the
+    eccentricity e = (dx, dy) (m), its rate (m/s), the bearing body's angle phib (rad) and
+    rate wb (rad/s): theta_e is e's direction in the bearing's frame in [0, 2 pi), delta =
+    |e| - (R_B(theta_e) - R_J), deltadot = d|e|/dt - R_B'(theta_e) dtheta_e/dt with
+    dtheta_e/dt = (ex eyd - ey exd) / |e|^2 - wb (0 for a centred journal)."""
+    co, si = math.cos(phib), math.sin(phib)
+    theta = math.atan2(co * dy - si * dx, co * dx + si * dy)
+    if theta < 0.0:
+        theta += 2.0 * math.pi
+    R, slope = lookup(theta)
+    r = math.sqrt(dx * dx + dy * dy)
+    delta = r - (R - joint.journal_radius)
+    if r == 0.0:
+        return r, theta, R, delta, 0.0
+    rate = (dx * vx + dy * vy) / r - slope * ((dx * vy - dy * vx) / (r * r) - wb)
+    return r, theta, R, delta, rate
+
+
+def _profile_loads(joint, sides, q, qt, lookup, normal, friction):
+    """Generalized forces of a profiled joint's contact (and friction) on its bodies'
+    coordinates: the normal force Fn n (n = e/|e|, Fn = `normal`(delta, deltadot, R_B)) on
+    the bearing at its point and -Fn n on the journal at its; with `friction` (Ft from v_t,
+    Fn; None without) Ft t on the journal plus the moment R_J Ft, the opposite force on the
+    bearing plus -R_B(theta_e) Ft, v_t = de/dt . t + omega_J R_J - omega_B R_B(theta_e),
+    t = (-n_y, n_x). Zero in free flight."""
+    out = [0.0] * (3 * sum(s.slot is not None for s in sides))
+    dx, dy, vx, vy, wj, wb, (axj, ayj), (axb, ayb) = _pair(sides, q, qt, math.cos, math.sin)
+    r, _, R, delta, rate = _profile_geometry(joint, lookup, dx, dy, vx, vy, sides[1].angle(q),
+                                             wb)
+    if delta <= 0.0:
+        return out
+    nx, ny = dx / r, dy / r
+    fn = normal(delta, rate, R)
+    fx, fy, ft = -fn * nx, -fn * ny, 0.0            # on the journal
+    if friction is not None:
+        vt = (vy * nx - vx * ny) + (wj * joint.journal_radius - wb * R)
+        ft = friction(vt, fn)
+        fx, fy = fx - ft * ny, fy + ft * nx
+    for side, sign, radius, (ax, ay) in ((sides[0], 1.0, joint.journal_radius, (axj, ayj)),
+                                         (sides[1], -1.0, R, (axb, ayb))):
+        if side.slot is not None:
+            i = side.slot
+            out[i], out[i + 1] = sign * fx, sign * fy
+            out[i + 2] = sign * (ax * fy - ay * fx + radius * ft)
+    return out
+
+
+def _profile_element(mbs, joint: ClearanceJoint, memory: ImpactMemory, nodes: dict,
+                     pts: dict, keep_alive: list):
+    """Add a profiled joint's contact and friction as one `ObjectGenericODE2` on its bodies'
+    nodes whose force is `_profile_loads`, a Python user function with
+    contact.contact_force and friction_force (the force needs the bearing body's angle,
+    which a connector's user function does not see; Exudyn's symbolic layer can express the
+    spline's lookup, as a tree of IfThenElse on the piece index, but its generic-element
+    function ran 30 times slower than this one, docs/exudyn.md). Returns (element, the
+    joint's (delta, deltadot) function of mbs for the pre-step function)."""
+    sides, obj, _ = _pair_element(mbs, joint, nodes, pts)
+    _, _, _, model = _law_constants(joint)
+    fric = friction_of(joint)
+    lookup = _ProfileLookup(joint)
+    stiffness = _profile_stiffness(joint)
+
+    def normal(delta, rate, R):
+        return contact_force(delta, rate, memory.dmin, stiffness(R), joint.restitution, model)
+
+    friction = (None if fric is None else
+                lambda vt, fn: friction_force_slots(vt, fn, fric[1], fric[0]))
+
+    def force(mbs, t, itemNumber, q, q_t):
+        return _profile_loads(joint, sides, q, q_t, lookup, normal, friction)
+
+    mbs.SetObjectParameter(obj, "forceUserFunction", force)
+    keep_alive.append(force)
+    state = _node_state([nodes[b] for b in (joint.journal_body, joint.bearing_body)
+                         if b != GROUND])
+
+    def gap(mbs):
+        q, qt = state(mbs)
+        dx, dy, vx, vy, _, wb, _, _ = _pair(sides, q, qt, math.cos, math.sin)
+        return _profile_geometry(joint, lookup, dx, dy, vx, vy, sides[1].angle(q), wb)[3:]
+
+    return obj, gap
+
+
+def _node_state(node_list):
+    """Function of mbs: the coordinates and rates of the nodes of `node_list`, in order
+    (as a generic element on them sees its q, q_t)."""
+    import exudyn as exu
+
+    def state(mbs):
+        q, qt = [], []
+        for node in node_list:
+            q += list(mbs.GetNodeOutput(node, exu.OutputVariableType.Coordinates))
+            qt += list(mbs.GetNodeOutput(node, exu.OutputVariableType.Coordinates_t))
+        return q, qt
+
+    return state
+
+
 # ---------------------------------------------------------------------------- build
 
 @dataclass
@@ -829,18 +970,21 @@ def _check_linkage(linkage, settings: ExudynSettings) -> None:
                          f"{linkage.name!r} has {[j.name for j in linkage.translational_joints]}"
                          "); use contact='symbolic' or 'python'")
     for j in linkage.clearance_joints:
-        # the friction and the film are generic elements beside the contact element
-        what = ("friction law of ours" if friction_of(j) is not None
-                else "oil film" if j.has_lubrication else None)
-        if what is None:
-            continue
-        if settings.contact == "sphere":
-            raise ValueError(f"contact='sphere' has no {what} (joint {j.name!r} has it); use "
-                             "contact='symbolic' or 'python'")
-        if GROUND in (j.journal_body, j.bearing_body):
-            raise ValueError(f"the {what.split(' of')[0]} of clearance joint {j.name!r}, which "
-                             "is a ground joint, is not built in the exudyn backend (its "
-                             "reaction would miss that force); use the reduced backend")
+        # the friction, the film and a profiled contact are generic elements on the two
+        # bodies' nodes
+        for what, on in (("friction law of ours", friction_of(j) is not None),
+                         ("oil film", j.has_lubrication),
+                         ("bearing profile", j.profile is not None)):
+            if not on:
+                continue
+            if settings.contact == "sphere":
+                raise ValueError(f"contact='sphere' has no {what} (joint {j.name!r} has it); "
+                                 "use contact='symbolic' or 'python'")
+            if GROUND in (j.journal_body, j.bearing_body):
+                raise ValueError(f"the {what.split(' of')[0]} of clearance joint {j.name!r}, "
+                                 "which is a ground joint, is not built in the exudyn backend "
+                                 "(its reaction would miss that force); use the reduced "
+                                 "backend")
     if settings.contact == "sphere":
         for j in linkage.clearance_joints:
             if sphere_restitution(j) <= 0.0:
@@ -957,6 +1101,18 @@ def build(linkage: Linkage, settings: ExudynSettings | None = None,
                 restitutionCoefficient=sphere_restitution(cj),
                 minimumImpactVelocity=cj.impact_velocity_floor, impactModel=1))
             memories.append(None)
+        elif cj.profile is not None:
+            memory = ImpactMemory(cj.impact_velocity_floor, cj.clearance)
+            if start_memory is not None:
+                memory.mode = int(start_memory[k][0])
+                memory.dmin = float(start_memory[k][1])
+            obj, gap = _profile_element(mbs, cj, memory, nodes, pts, keep_alive)
+            memory.history = []         # the contact force after the run needs it
+            memories.append(memory)
+            contacts.append((gap, memory))
+            # the gap reads each node's coordinates and rates
+            pre_step_reads += (2 * sum(b != GROUND for b in (cj.journal_body, cj.bearing_body))
+                               + PYTHON_FORCE_ALLOCATIONS)
         else:
             memory = ImpactMemory(cj.impact_velocity_floor, cj.clearance)
             if start_memory is not None:
@@ -1006,12 +1162,7 @@ def build(linkage: Linkage, settings: ExudynSettings | None = None,
         # corners' force is a Python user function
         pre_step_reads += len(CORNERS) * 2 * len(node_list) + PYTHON_FORCE_ALLOCATIONS
 
-        def state(mbs, node_list=node_list):
-            q, qt = [], []
-            for node in node_list:
-                q += list(mbs.GetNodeOutput(node, exu.OutputVariableType.Coordinates))
-                qt += list(mbs.GetNodeOutput(node, exu.OutputVariableType.Coordinates_t))
-            return q, qt
+        state = _node_state(node_list)
 
         for k in range(len(CORNERS)):
             def gap(mbs, k=k, tj=tj, sides=sides, mems=mems, state=state):
@@ -1051,6 +1202,8 @@ def build(linkage: Linkage, settings: ExudynSettings | None = None,
         sensors["drive"] = sensor("object", drive, OVT.Force)
     if "contact" in want:
         for cj, obj in zip(linkage.clearance_joints, contact_items):
+            if cj.profile is not None:      # from the bodies' states after the run
+                continue
             sensors[f"{cj.name}.displacement"] = sensor("object", obj, OVT.Displacement)
             sensors[f"{cj.name}.force"] = sensor("object", obj, OVT.Force)
     if "bodies" in want:
@@ -1294,19 +1447,18 @@ def _coordinates(model: ExudynModel):
     return coordinate_series(linkage, q, v, a)
 
 
-def _friction_power(model: ExudynModel, joint: ClearanceJoint, memory: ImpactMemory):
-    """Power Ft vt (W, <= 0) of a joint's friction at every kept sample, from the stored
-    body states and the impact velocity in force at each step (`ImpactMemory.history`),
-    by contact.contact_force / friction_force (the Python variant's law)."""
-    law, slots = friction_of(joint)
-    K, c, _, cmodel = _law_constants(joint)
+def _pair_series(model: ExudynModel, joint: ClearanceJoint):
+    """(t, e, de/dt, omega_J, phi_B, omega_B) of a clearance joint at every kept sample
+    from the stored body states: e the journal centre minus the bearing centre (m), the
+    bodies' rates in rad/s, the bearing body's angle in rad (0 for the ground)."""
     pts = _points(model.linkage)
     t = stored(model, f"{model.linkage.bodies[0].name}.q")[:, 0]
 
     def point(body, name):
         if body == GROUND:
             p = np.asarray(pts[GROUND][name], dtype=float)
-            return np.tile(p, (len(t), 1)), np.zeros((len(t), 2)), np.zeros(len(t))
+            zero = np.zeros(len(t))
+            return np.tile(p, (len(t), 1)), np.zeros((len(t), 2)), zero, zero
         q = stored(model, f"{body}.q")[:, 1:4] + np.asarray(
             model.mbs.GetNodeParameter(model.nodes[body], "referenceCoordinates"))
         v = stored(model, f"{body}.v")[:, 1:4]
@@ -1314,24 +1466,64 @@ def _friction_power(model: ExudynModel, joint: ClearanceJoint, memory: ImpactMem
         co, si = np.cos(q[:, 2]), np.sin(q[:, 2])
         arm = np.column_stack([co * x - si * y, si * x + co * y])
         return (q[:, :2] + arm, v[:, :2] + v[:, 2:3] * np.column_stack([-arm[:, 1], arm[:, 0]]),
-                v[:, 2])
+                q[:, 2], v[:, 2])
 
-    rj, vj, wj = point(joint.journal_body, joint.journal_point)
-    rb, vb, wb = point(joint.bearing_body, joint.bearing_point)
-    e, ed = rj - rb, vj - vb
+    rj, vj, _, wj = point(joint.journal_body, joint.journal_point)
+    rb, vb, phib, wb = point(joint.bearing_body, joint.bearing_point)
+    return t, rj - rb, vj - vb, wj, phib, wb
+
+
+def _clearance_series(model: ExudynModel, joint: ClearanceJoint, memory) -> dict:
+    """The series of a clearance joint at every kept sample, from the stored body states:
+    "contact_angle" theta_e (rad, e's direction in the bearing body's frame, in
+    [0, 2 pi)) and "slip_velocity" v_t = de/dt . t + omega_J R_J - omega_B R_B(theta_e)
+    (m/s; t = (-n_y, n_x), n = e/|e|, or the direction theta_e when the journal is
+    centred). A profiled joint's also "eccentricity" e (n, 2), "penetration" |e| -
+    (R_B(theta_e) - R_J) and "force" Fn (N; `_profile_geometry`); a joint with friction
+    "friction_power" Ft v_t (W, <= 0). The forces are contact.contact_force /
+    friction_force (the Python variant's law) with the impact velocity in force at each
+    step (`ImpactMemory.history`)."""
+    t, e, ed, wj, phib, wb = _pair_series(model, joint)
     r = np.hypot(e[:, 0], e[:, 1])
-    hist = np.asarray(memory.history)
-    at = np.clip(np.searchsorted(hist[:, 0], t, side="right") - 1, 0, len(hist) - 1)
-    dmin = np.where(hist[at, 0] <= t, hist[at, 1], joint.impact_velocity_floor)
+    co, si = np.cos(phib), np.sin(phib)
+    theta = np.mod(np.arctan2(co * e[:, 1] - si * e[:, 0], co * e[:, 0] + si * e[:, 1]),
+                   2.0 * np.pi)
+    profile = joint.profile
+    R = (np.full(len(t), joint.bearing_radius) if profile is None
+         else np.asarray(profile.radius(theta)))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        n = np.where(r[:, None] > 0.0, e / r[:, None],
+                     np.column_stack([np.cos(theta + phib), np.sin(theta + phib)]))
+    vt = (ed[:, 1] * n[:, 0] - ed[:, 0] * n[:, 1]) + (wj * joint.journal_radius - wb * R)
+    out = {"contact_angle": theta, "slip_velocity": vt}
+    fric = friction_of(joint)
+    if profile is None and fric is None:
+        return out
+    _, _, _, cmodel = _law_constants(joint)
+    stiffness = _profile_stiffness(joint) if profile is not None else None
+    hist = np.asarray(memory.history).reshape(-1, 2)
+    at = np.clip(np.searchsorted(hist[:, 0], t, side="right") - 1, 0, max(len(hist) - 1, 0))
+    dmin = (np.where(hist[at, 0] <= t, hist[at, 1], joint.impact_velocity_floor) if len(hist)
+            else np.full(len(t), joint.impact_velocity_floor))
+    delta = r - (R - joint.journal_radius) if profile is not None else r - joint.clearance
+    force = np.zeros(len(t))
     power = np.zeros(len(t))
-    for i in np.nonzero(r > c)[0]:
-        n = e[i] / r[i]
-        rate = float(ed[i] @ n)
-        vt = float(ed[i, 1] * n[0] - ed[i, 0] * n[1]) + (wj[i] * joint.journal_radius
-                                                         - wb[i] * joint.bearing_radius)
-        fn = contact_force(r[i] - c, rate, float(dmin[i]), K, joint.restitution, cmodel)
-        power[i] = friction_force_slots(vt, fn, slots, law) * vt
-    return power
+    slope = None if profile is None else np.asarray(profile.radius(theta, 1))
+    for i in np.nonzero(delta > 0.0)[0]:
+        rate = float(ed[i] @ n[i])
+        K = joint.stiffness
+        if profile is not None:
+            rate -= slope[i] * ((e[i, 0] * ed[i, 1] - e[i, 1] * ed[i, 0]) / (r[i] * r[i])
+                                - wb[i])
+            K = stiffness(R[i])
+        force[i] = contact_force(delta[i], rate, float(dmin[i]), K, joint.restitution, cmodel)
+        if fric is not None:
+            power[i] = friction_force_slots(vt[i], force[i], fric[1], fric[0]) * vt[i]
+    if fric is not None:
+        out["friction_power"] = power
+    if profile is not None:
+        out.update(eccentricity=e, penetration=delta, force=force)
+    return out
 
 
 def _corner_series(model: ExudynModel, joint, sides, memories) -> dict:
@@ -1396,7 +1588,9 @@ def simulate_exudyn_linkage(linkage: Linkage, revolutions: int | None = None, **
     Every time step is recorded (t = 0, h, 2h, ...); ``peaks`` holds the monitored force's
     maximum per revolution refined between the steps (`refined_peaks`). ``contact_phase``
     is 1 where the penetration is positive; ``contact_force`` the
-    signed normal force; ``crank_work`` the trapezoidal integral of the drive's power.
+    signed normal force; ``crank_work`` the trapezoidal integral of the drive's power;
+    ``contact_angle`` (rad) and ``slip_velocity`` (m/s) per clearance joint
+    (`_clearance_series`).
     ``stats`` holds the settings, the step, Newton counters, onsets (per joint the first
     registered onset time in ``first_onsets``) and the wall time in s.
 
@@ -1433,13 +1627,20 @@ def run_linkage(linkage: Linkage, revolutions: int | None, settings: ExudynSetti
     t, reactions = _reactions(model)
     moment = None if free else -stored(model, "drive")[:, 1]
     ecc, pen, force = [], [], []
+    joint_series = [_clearance_series(model, cj, m)
+                    for cj, m in zip(linkage.clearance_joints, model.memories)]
     corners = [_corner_series(model, *item) for item in model.corners]
     for (tj, _, _), series in zip(model.corners, corners):
         if tj.guide_body == GROUND:
             reactions[tj.name] = series["ground"]
     shaking = sum(reactions[g] for g in reactions)
     monitored = shaking if linkage.monitor_joint is None else reactions[linkage.monitor_joint]
-    for cj in linkage.clearance_joints:
+    for cj, series in zip(linkage.clearance_joints, joint_series):
+        if cj.profile is not None:
+            ecc.append(series["eccentricity"])
+            pen.append(series["penetration"])
+            force.append(series["force"])
+            continue
         e = model.ecc_sign * stored(model, f"{cj.name}.displacement")[:, 1:3]
         r = np.hypot(e[:, 0], e[:, 1])
         f = stored(model, f"{cj.name}.force")[:, 1:3]
@@ -1461,9 +1662,8 @@ def run_linkage(linkage: Linkage, revolutions: int | None, settings: ExudynSetti
     stats["uniform_steps"] = bool(len(t) == stats["n_steps"] + 1 and np.allclose(
         np.diff(t), stats["step_size_used"], rtol=1e-6, atol=0.0))
     coords, rates, accs = _coordinates(model)
-    friction = [_friction_power(model, cj, m) for cj, m in
-                zip(linkage.clearance_joints, model.memories)
-                if m is not None and m.history is not None]
+    friction = [series["friction_power"] for series in joint_series
+                if "friction_power" in series]
     friction += [np.sum(series["friction"] * series["slip"], axis=1)
                  for (tj, _, _), series in zip(model.corners, corners) if tj.has_friction]
     friction_work = None
@@ -1484,7 +1684,14 @@ def run_linkage(linkage: Linkage, revolutions: int | None, settings: ExudynSetti
                                   linkage.period, revolutions)),
         joints=tuple(name for name, _ in linkage.contacts()), reactions=reactions,
         shaking_force=np.ascontiguousarray(shaking), coordinates=coords, rates=rates,
-        accelerations=accs, friction_work=friction_work)
+        accelerations=accs, friction_work=friction_work,
+        contact_angle=_columns([s["contact_angle"] for s in joint_series], len(t)),
+        slip_velocity=_columns([s["slip_velocity"] for s in joint_series], len(t)))
+
+
+def _columns(series: list, n: int) -> np.ndarray:
+    """The (n, J) array of J series of n samples ((n, 0) for none)."""
+    return np.column_stack(series) if series else np.empty((n, 0))
 
 
 def peak_exudyn_linkage(linkage: Linkage, revolution: int | None = None,
