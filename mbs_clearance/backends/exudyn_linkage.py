@@ -1131,6 +1131,8 @@ def build(linkage: Linkage, settings: ExudynSettings | None = None,
             if friction_of(cj) is not None:
                 _friction_element(mbs, cj, memory, nodes, pts, settings.contact, keep_alive)
                 memory.history = []
+                # its force function (symbolic vector or Python) makes its vector each call
+                pre_step_reads += PYTHON_FORCE_ALLOCATIONS
             if cj.has_lubrication:
                 _film_element(mbs, cj, nodes, pts, keep_alive)
                 pre_step_reads += PYTHON_FORCE_ALLOCATIONS

@@ -208,13 +208,15 @@ def cycle_wear(linkage: Linkage, joint: int, coefficient: float, *, settle: int 
 
     revs = settle + record
     period = 2.0 * math.pi / abs(linkage.drive.speed)
-    t_eval = np.linspace(0.0, revs * period, revs * samples + 1)
-    options = {"rtol": rtol} if backend == "reduced" else {}
-    tr = simulate(linkage, revs, backend=backend, t_eval=t_eval, **options)
+    # Exudyn's series are its steps' (its default step samples a revolution thousands of
+    # times); the reduced model's, `samples` per revolution from its dense output
+    options = ({"rtol": rtol, "t_eval": np.linspace(0.0, revs * period, revs * samples + 1)}
+               if backend == "reduced" else {})
+    tr = simulate(linkage, revs, backend=backend, **options)
     if tr.contact_angle is None or tr.slip_velocity is None:
         raise ValueError(f"the {backend!r} backend does not record the contact angle and "
                          "slip velocity that the wear law needs")
-    keep = tr.t >= settle * period - 0.25 * period / samples
+    keep = tr.t >= settle * period * (1.0 - 1e-9)
     cj = linkage.clearance_joints[joint]
     profile = cj.profile or BearingProfile.circular(cj.bearing_radius, DEFAULT_POINTS)
     depth, volume = wear_increment(
