@@ -47,8 +47,8 @@ FOLDED_FIGURES = frozenset({"fig3_differences.png", "mechanism.gif", "fig7a_fitn
                             "friction_sensitivities.png", "work_precision_series.png"})
 
 SECTIONS = ("response", "agreement", "sensitivity", "optimization", "tolerance", "regimes",
-            "bifurcation", "friction", "lubrication", "paper", "performance", "mechanism",
-            "environment")
+            "bifurcation", "friction", "lubrication", "wear", "paper", "performance",
+            "mechanism", "environment")
 
 #: the sections' headings; their numbers (and the appendices' letters) are given by their
 #: place in SECTIONS (`numbered_titles`), and the text refers to them by key (`section_ref`)
@@ -63,6 +63,7 @@ HEADINGS = {
                    "and clearance",
     "friction": "Beyond the paper: friction in the clearance joints",
     "lubrication": "Beyond the paper: the joint in an oil film",
+    "wear": "Beyond the paper: the joint wears (Archard wear over a life)",
     "paper": "Comparison with the paper's numbers",
     "performance": "Accuracy and speed",
     "mechanism": "Mechanism and parameters",
@@ -155,6 +156,15 @@ def _settings(quick: bool) -> dict[str, Any]:
         # the lubricated joint (beyond the paper): the oil's viscosities (Pa s) beside the
         # dry joint and the ideal one; the SAE 30 oil at 100 C (the case's) is the last
         "lubrication_viscosities": (9e-3,) if quick else (1e-5, 1e-3, 9e-3),
+        # the wear life of paper_slider_crank_wear: its cycles, the tolerance of its
+        # intervals (and a quarter of it, the convergence check), and the decades of k/H
+        # beside the case's (published coefficients scatter by tens of per cent)
+        "wear_cycles": 1e6,
+        "wear_tolerance": 0.01,
+        "wear_decades": (0.1, 10.0) if not quick else (),
+        # the convergence check's life: a quarter of the tolerance, its longest interval
+        # the life over this many
+        "wear_finer_intervals": 40 if quick else 80,
     }
 
 
@@ -647,6 +657,53 @@ def section_lubrication(out: Path, s: dict) -> dict:
                      for k in ("film_fade_start", "film_fade_end")]}
 
 
+def section_wear(out: Path, s: dict) -> dict:
+    """The wear life of `cases.paper_slider_crank_wear` over `wear_cycles` (its k/H and a
+    decade either side), each life saved (data/wear_*.json); the life again at a quarter of
+    the interval tolerance, and how far its final profile moves (against the estimate); the
+    volume the profile gained against the volume worn."""
+    from mbs_clearance.model import cases
+    from mbs_clearance.model.profile import BearingProfile
+    from mbs_clearance.studies.wear import wear_life
+
+    case = cases.paper_slider_crank_wear()
+    cj = case.clearance_joints[0]
+    n, tol = s["wear_cycles"], s["wear_tolerance"]
+    life = wear_life(case, n, tolerance=tol)
+    life.save(out / "data" / "wear_life.json")
+    finer = wear_life(case, n, tolerance=tol / 4, max_interval=n / s["wear_finer_intervals"])
+    moved = float(np.max(np.abs(finer.profiles[-1] - life.profiles[-1])))
+    theta = np.linspace(0.0, 2.0 * np.pi, 8192, endpoint=False)
+    area = [float(np.mean(BearingProfile(r).radius(theta) ** 2) * np.pi)
+            for r in (life.profiles[0], life.profiles[-1])]
+    gained = cj.bearing_length * (area[1] - area[0])
+    rows = [{"cycles": r["cycles"], "max_depth_um": r["max_depth_um"],
+             "volume_mm3": r["volume_mm3"], "peak_N": r["peak_N"],
+             "drive_rms_Nm": r["drive_rms_Nm"], "regime": r["regime"]}
+            for r in life.table()[::5]]
+    decades = []
+    for factor in s["wear_decades"]:
+        k = factor * cj.wear_coefficient
+        other = wear_life(case, n, wear_coefficient=k, tolerance=tol)
+        other.save(out / "data" / f"wear_life_k{factor:g}.json")
+        decades.append({"wear_coefficient": k, "max_depth_um": 1e6 * float(other.max_depth[-1]),
+                        "volume_mm3": 1e9 * float(other.wear_volume[-1]),
+                        "peak_change_percent": 100 * float(other.peaks[-1] / other.peaks[0] - 1),
+                        "twice_clearance": other.cycles_to_clearance(2.0),
+                        "stopped": other.stats.get("stopped")})
+    angle = float(np.degrees(life.angles[int(np.argmax(life.depth[-1]))]))
+    return {"cycles": n, "wear_coefficient": life.coefficient, "friction": cj.friction_coefficient,
+            "bearing_length": cj.bearing_length, "clearance": life.initial_clearance,
+            "rows": rows, "final_depth_um": 1e6 * float(life.max_depth[-1]),
+            "final_volume_mm3": 1e9 * float(life.wear_volume[-1]),
+            "deepest_angle_deg": angle, "intervals": len(life.intervals),
+            "evaluations": life.evaluations, "error_estimate": life.error_estimate,
+            "finer_moved": moved, "finer_intervals": len(finer.intervals),
+            "volume_gained_mm3": 1e9 * gained, "decades": decades,
+            "peak_change_percent": 100 * float(life.peaks[-1] / life.peaks[0] - 1),
+            "file": "wear_life.json"}
+
+
 def plot_film_orbits(numbers: dict, data: Path, path: Path) -> Path:
     """The journal centre's orbit (e / c) of each run of the lubrication section over all
     revolutions, with the bearing wall (|e| = c) and the film's fade (its start and end)."""
@@ -877,6 +934,21 @@ def verdicts(numbers: dict) -> list[dict]:
             "#agreement",
             status="agree" if worst < AGREEMENT_PERCENT else "disagree"))
 
+    wear = numbers.get("wear")
+    if wear:
+        kept = abs(wear["volume_gained_mm3"] / wear["final_volume_mm3"] - 1.0)
+        ok = wear["finer_moved"] <= wear["error_estimate"] and kept < 1e-2
+        out.append(_verdict(
+            "wear", "Wear life: the interval control's estimate covers the profile's error, "
+            "and the profile keeps the worn volume", ok,
+            f"a quarter of the tolerance moves the final profile by "
+            f"{quantity(wear['finer_moved'], 'm', 2)} (estimate "
+            f"{quantity(wear['error_estimate'], 'm', 2)}); the profile gained "
+            f"{number(wear['volume_gained_mm3'], 4)} mm^3 of the "
+            f"{number(wear['final_volume_mm3'], 4)} mm^3 worn ({percent(100 * kept, 2)} apart: "
+            "the small-wear approximation).", "#wear",
+            status="agree" if ok else "disagree"))
+
     ratios = numbers["performance"]["ratios"]
     case = next(iter(ratios), None)
     rows = ratios.get(case, {}).get("0.001", []) if case else []
@@ -1019,6 +1091,12 @@ def draw_figures(out: Path, numbers: dict) -> dict[str, list[str]]:
     if "lubrication" in numbers:
         plot_film_orbits(numbers, data, fig_dir / "lubrication_orbits.png")
         figs["lubrication"].append("lubrication_orbits.png")
+    if "wear" in numbers:
+        from mbs_clearance.plotting import plot_wear
+        from mbs_clearance.studies.wear import load_wear
+
+        plot_wear(load_wear(data / numbers["wear"]["file"]), path=fig_dir / "wear.png")
+        figs["wear"].append("wear.png")
     if "agreement" in numbers:
         figs["agreement"] += [f for f in numbers["agreement"].get("case_figures", [])
                               if (fig_dir / f).exists()]
@@ -1496,6 +1574,39 @@ revolutions at the default accuracy.</p>
 <dl class="defs"><dt>smallest film</dt><dd>c - |e| at the journal's largest eccentricity
 (negative: the journal pressed into the wall, the dry contact's penetration).</dd></dl>
 {{ figures('lubrication') }}
+
+<h2 id="wear">{{ titles.wear }}</h2>
+<p>The paper's joint keeps its clearance. Here its coupler-slider joint wears by Archard's
+law (wear depth rate = k/H x contact pressure x sliding speed; the pressure spread around the
+joint by an elastic foundation on the worn profile; docs/wear.md), with Coulomb friction
+mu = {{ n.wear.friction }} and k/H = {{ n.wear.wear_coefficient | num(3) }} m^2/N (an assumed
+mild-wear value: published coefficients scatter widely, so a decade either side is shown
+too), bearing length {{ (1e3 * n.wear.bearing_length) | fixed(0) }} mm, initial clearance
+{{ (1e6 * n.wear.clearance) | fixed(0) }} um. The dynamics run on each profile, the wear per
+cycle is extrapolated over intervals chosen by step doubling, and the profile updated.</p>
+<p><b>After {{ n.wear.cycles | num(3) }} cycles the deepest wear is
+{{ n.wear.final_depth_um | num(4) }} um (at {{ n.wear.deepest_angle_deg | fixed(0) }} deg in the
+slider's frame, along its guide), the worn volume {{ n.wear.final_volume_mm3 | num(4) }} mm^3,
+and the peak base force changed by {{ n.wear.peak_change_percent | fixed(2, True) }} %
+({{ n.wear.intervals }} intervals, {{ n.wear.evaluations }} runs of the dynamics).</b>
+The life at a quarter of the interval tolerance with shorter intervals
+({{ n.wear.finer_intervals }} intervals) moves
+the final profile by {{ (1e6 * n.wear.finer_moved) | num(2) }} um, within the first life's
+error estimate of {{ (1e6 * n.wear.error_estimate) | num(2) }} um; the volume the profile
+gained (the area between the profiles times the bearing length) is
+{{ n.wear.volume_gained_mm3 | num(4) }} mm^3 against the {{ n.wear.final_volume_mm3 | num(4) }} mm^3
+Archard's law wore.</p>
+<table><tr><th>cycles</th><th>deepest wear (um)</th><th>volume (mm^3)</th><th>peak base force (N)</th>
+<th>drive moment RMS (N m)</th><th>regime</th></tr>
+{% for r in n.wear.rows %}<tr><td>{{ r.cycles | num(3) }}</td><td>{{ r.max_depth_um | num(4) }}</td>
+<td>{{ r.volume_mm3 | num(4) }}</td><td>{{ r.peak_N | num(6) }}</td><td>{{ r.drive_rms_Nm | num(4) }}</td>
+<td>{{ r.regime }}</td></tr>{% endfor %}</table>
+{% if n.wear.decades %}<table><tr><th>k/H (m^2/N)</th><th>deepest wear (um)</th><th>volume (mm^3)</th>
+<th>peak change (%)</th><th>twice the clearance after (cycles)</th></tr>
+{% for r in n.wear.decades %}<tr><td>{{ r.wear_coefficient | num(3) }}</td><td>{{ r.max_depth_um | num(4) }}</td>
+<td>{{ r.volume_mm3 | num(4) }}</td><td>{{ r.peak_change_percent | fixed(2, True) }}</td>
+<td>{{ r.twice_clearance | num(3) if r.twice_clearance is not none else 'not reached' }}{% if r.stopped %} ({{ r.stopped }}){% endif %}</td></tr>{% endfor %}</table>{% endif %}
+{{ figures('wear') }}
 
 <h2 id="paper">{{ titles.paper }}</h2>
 <table><tr><th>quantity</th><th>paper</th><th>ours</th><th>difference</th><th>explanation</th></tr>
