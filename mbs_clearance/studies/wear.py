@@ -35,7 +35,8 @@ from ..laws.wear.archard import wear_increment
 from ..model.linkage import Linkage
 from ..model.profile import BearingProfile
 
-__all__ = ["CycleWear", "WearResult", "wear_life", "cycle_wear", "load_wear", "DEFAULT_POINTS"]
+__all__ = ["CycleWear", "WearResult", "WearLife", "wear_life", "cycle_wear", "load_wear",
+           "DEFAULT_POINTS"]
 
 #: grid angles of the profile when the joint has none yet (1 degree)
 DEFAULT_POINTS = 360
@@ -254,7 +255,7 @@ def wear_life(mech, cycles: float, *, joint: str | None = None,
               points: int = DEFAULT_POINTS, settle: int = 3, record: int = 1,
               samples: int = 2048, rtol: float = 1e-8, backend: str = "reduced",
               min_interval: float = 1.0, max_interval: float | None = None,
-              max_evaluations: int = 1000,
+              max_evaluations: int = 1000, stop_at_depth: float | None = None,
               progress: bool = False,
               evaluate: Callable[[Linkage, int, float], CycleWear] | None = None
               ) -> WearResult:
@@ -297,6 +298,9 @@ def wear_life(mech, cycles: float, *, joint: str | None = None,
         case): the life so far is returned with ``stats["stopped"]`` saying why and an
         `AccuracyWarning`. A motion that is not periodic wears a scattering amount per cycle,
         which the step doubling reads as an error: record more revolutions there.
+    stop_at_depth : float or None
+        Stop the life at the first state whose largest wear depth reaches this (m), e.g.
+        the initial clearance to find when the clearance has doubled.
     progress : bool
         Show a tqdm bar over the cycles.
     evaluate : callable or None
@@ -414,6 +418,10 @@ def wear_life(mech, cycles: float, *, joint: str | None = None,
             rate = run(radii)
             states.append((done, radii.copy(), volume, rate))
             deepest = float(np.max(radii - radii0))
+            if stop_at_depth is not None and deepest >= stop_at_depth:
+                stopped = (f"stopped at cycle {done:.6g}: the wear depth {deepest:.3g} m "
+                           f"reached stop_at_depth ({stop_at_depth:.3g} m)")
+                break
             if deepest > MAX_DEPTH_FRACTION * cj.bearing_radius:
                 stopped = (f"stopped at cycle {done:.6g}: the wear depth {deepest:.3g} m "
                            f"exceeds {MAX_DEPTH_FRACTION:g} of the bearing radius, where the "
@@ -478,3 +486,43 @@ def load_wear(path) -> WearResult:
     if res.profiles.ndim != 2 or res.profiles.shape[0] != n or len(res.peaks) != n:
         raise ValueError(f"wear life file {str(path)!r}: its series have different lengths")
     return res
+
+
+@dataclass(frozen=True)
+class WearLife:
+    """The wear life of a named case's design as a study's output: ``WearLife(...)(values)``
+    builds ``CASES[case](**overrides, **values)`` and returns the cycles until its largest
+    clearance reaches `factor` times the initial one, within a life of `cycles` (a design
+    that does not get there returns `cycles`: a lower bound, counted by `censored`).
+
+    Pass it as a tolerance study's ``output`` (`tolerance.tolerance_study(inputs,
+    output=WearLife(...))`; the inputs are the case's override names, e.g.
+    ``wear_coefficient``, ``crank_speed``, ``journal_radius``). It is plain data, so process
+    pools and dask workers take it."""
+
+    case: str = "paper_slider_crank_wear"
+    overrides: tuple = ()
+    cycles: float = 1e7
+    factor: float = 2.0
+    tolerance: float = 0.02
+
+    def design(self, values: dict) -> Linkage:
+        """The case's linkage at `values` (its override names)."""
+        from ..model.cases import CASES
+
+        if self.case not in CASES:
+            raise ValueError(f"case must be one of {sorted(CASES)}; got {self.case!r}")
+        return CASES[self.case](**dict(self.overrides), **values)
+
+    def __call__(self, values: dict) -> float:
+        design = self.design(values)
+        c0 = min(j.clearance for j in design.clearance_joints if j.wear_coefficient > 0.0)
+        res = wear_life(design, self.cycles, tolerance=self.tolerance,
+                        stop_at_depth=(self.factor - 1.0) * c0)
+        hit = res.cycles_to_clearance(self.factor)
+        return float(self.cycles if hit is None else hit)
+
+    def censored(self, y) -> int:
+        """How many outputs `y` are the life's length (the clearance did not reach the
+        factor): their true life is longer."""
+        return int(np.sum(np.asarray(y, dtype=float) >= self.cycles))

@@ -10,7 +10,7 @@ import pytest
 from mbs_clearance import cli
 from mbs_clearance.model.cases import paper_slider_crank_wear
 from mbs_clearance.solve.simulate import simulate
-from mbs_clearance.studies.wear import cycle_wear, load_wear, wear_life
+from mbs_clearance.studies.wear import WearLife, cycle_wear, load_wear, wear_life
 
 
 @pytest.fixture(scope="module")
@@ -95,3 +95,30 @@ def test_the_wear_command_refuses_bad_input_in_one_line(argv, message, capsys):
     assert code == 2
     err = capsys.readouterr().err
     assert message in err and err.count("\n") == 1
+
+
+_CALLS = []
+
+
+class _Recorded(WearLife):
+    def __call__(self, values):
+        y = super().__call__(values)
+        _CALLS.append((dict(values), y))
+        return y
+
+
+def test_a_tolerance_study_takes_the_wear_life_as_its_output():
+    from mbs_clearance.studies.tolerance import Uniform, tolerance_study
+
+    _CALLS.clear()
+    out = _Recorded(cycles=2e6, tolerance=0.05)
+    res = tolerance_study({"wear_coefficient": Uniform(1e-16, 4e-16)}, output=out, sobol=0,
+                          monte_carlo=3, seed=1, progress=False, executor="serial")
+    y = np.asarray(res.monte_carlo["values"])
+    assert len(y) == 3 and out.censored(y) == 0
+    assert sorted(y) == sorted(v for _, v in _CALLS)
+    # Archard: the depth grows as k/H times the cycles while the dynamics barely change, so
+    # the cycles to twice the clearance scale as 1 / (k/H) (within the peaks' change, ~1 %)
+    for values, life in _CALLS:
+        assert life * values["wear_coefficient"] == pytest.approx(
+            _CALLS[0][1] * _CALLS[0][0]["wear_coefficient"], rel=0.03)
