@@ -26,7 +26,7 @@ FIGURES = ["fig3_response.png", "fig3_differences.png", "regime_map.png",
            "fig7b_force_uniform.png", "tolerance.png", "work_precision.png",
            "work_precision_series.png", "agreement_slider_crank_two_clearances.png",
            "friction_orbits.png", "friction_sensitivities.png", "lubrication_orbits.png",
-           "bifurcation.png"]
+           "bifurcation.png", "wear.png"]
 
 
 @pytest.fixture(scope="module")
@@ -481,6 +481,29 @@ LEAKS = {
 #: library notices that must not reach the terminal
 NOTICES = ["WARNING", "Warning:", "can be slow", "memory allocations", "Traceback",
            "Deprecat"]
+
+
+def test_wear_section(report):
+    """The wear section's numbers are its saved life's (data/wear_life.json, read by
+    `load_wear`) and the same life run again through the Python API: the final depth and
+    volume to 1e-12; the finer life moved the profile within the estimate; the verdict
+    line says so; the figure is in the section."""
+    from mbs_clearance.model import cases
+    from mbs_clearance.studies.wear import load_wear, wear_life
+
+    numbers = json.loads((report / "report.json").read_text())
+    n = numbers["wear"]
+    saved = load_wear(report / "data" / n["file"])
+    assert n["final_depth_um"] == pytest.approx(1e6 * saved.max_depth[-1], rel=1e-12)
+    again = wear_life(cases.paper_slider_crank_wear(), n["cycles"])
+    assert again.max_depth[-1] == pytest.approx(saved.max_depth[-1], rel=1e-12)
+    assert again.wear_volume[-1] == pytest.approx(1e-9 * n["final_volume_mm3"], rel=1e-12)
+    assert n["finer_moved"] <= n["error_estimate"]
+    assert n["volume_gained_mm3"] == pytest.approx(n["final_volume_mm3"], rel=1e-3)
+    html = (report / "report.html").read_text()
+    section = html[html.index('<h2 id="wear">'):html.index('<h2 id="paper">')]
+    assert 'alt="wear.png"' in section
+    assert "Wear life: the interval control's estimate covers" in html
 
 
 def test_text_and_output_show_no_internals(report, report_output):
