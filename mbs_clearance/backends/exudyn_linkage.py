@@ -831,10 +831,7 @@ def _profile_geometry(joint: ClearanceJoint, lookup, dx, dy, vx, vy, phib, wb):
     rate wb (rad/s): theta_e is e's direction in the bearing's frame in [0, 2 pi), delta =
     |e| - (R_B(theta_e) - R_J), deltadot = d|e|/dt - R_B'(theta_e) dtheta_e/dt with
     dtheta_e/dt = (ex eyd - ey exd) / |e|^2 - wb (0 for a centred journal)."""
-    co, si = math.cos(phib), math.sin(phib)
-    theta = math.atan2(co * dy - si * dx, co * dx + si * dy)
-    if theta < 0.0:
-        theta += 2.0 * math.pi
+    theta = _profile_geometry_angle(dx, dy, phib)
     R, slope = lookup(theta)
     r = math.sqrt(dx * dx + dy * dy)
     delta = r - (R - joint.journal_radius)
@@ -844,28 +841,42 @@ def _profile_geometry(joint: ClearanceJoint, lookup, dx, dy, vx, vy, phib, wb):
     return r, theta, R, delta, rate
 
 
+def _profile_geometry_angle(dx: float, dy: float, phib: float) -> float:
+    """theta_e of the eccentricity (dx, dy) in the frame of a bearing body at angle phib,
+    in [0, 2 pi)."""
+    co, si = math.cos(phib), math.sin(phib)
+    theta = math.atan2(co * dy - si * dx, co * dx + si * dy)
+    return theta + 2.0 * math.pi if theta < 0.0 else theta
+
+
 def _profile_loads(joint, sides, q, qt, lookup, normal, friction):
     """Generalized forces of a profiled joint's contact (and friction) on its bodies'
-    coordinates: the normal force Fn n (n = e/|e|, Fn = `normal`(delta, deltadot, R_B)) on
-    the bearing at its point and -Fn n on the journal at its; with `friction` (Ft from v_t,
-    Fn; None without) Ft t on the journal plus the moment R_J Ft, the opposite force on the
-    bearing plus -R_B(theta_e) Ft, v_t = de/dt . t + omega_J R_J - omega_B R_B(theta_e),
-    t = (-n_y, n_x). Zero in free flight."""
+    coordinates: the normal force Fn g (g = n - (R_B'(theta_e) / |e|) t, the gap's gradient,
+    n = e/|e|, Fn = `normal`(delta, deltadot, R_B)) on the bearing at its point and -Fn g on
+    the journal at its; with `friction` (Ft from v_t, Fn; None without) Ft t on the journal
+    plus the moment R_J Ft, the opposite force on the bearing plus -bearing_radius Ft,
+    v_t = de/dt . t + omega_J R_J - omega_B R_B(theta_e), t = (-n_y, n_x). Zero in free
+    flight."""
     out = [0.0] * (3 * sum(s.slot is not None for s in sides))
     dx, dy, vx, vy, wj, wb, (axj, ayj), (axb, ayb) = _pair(sides, q, qt, math.cos, math.sin)
-    r, _, R, delta, rate = _profile_geometry(joint, lookup, dx, dy, vx, vy, sides[1].angle(q),
-                                             wb)
+    r, theta, R, delta, rate = _profile_geometry(joint, lookup, dx, dy, vx, vy,
+                                                 sides[1].angle(q), wb)
     if delta <= 0.0:
         return out
     nx, ny = dx / r, dy / r
     fn = normal(delta, rate, R)
-    fx, fy, ft = -fn * nx, -fn * ny, 0.0            # on the journal
+    # along the gap's gradient n - (R_B' / |e|) t, as the reduced model
+    # (core/profile_runtime.h): a radial force on a non-round boundary does work round a
+    # closed path
+    k = lookup(theta)[1] / r
+    fx, fy, ft = -fn * (nx + k * ny), -fn * (ny - k * nx), 0.0      # on the journal
     if friction is not None:
         vt = (vy * nx - vx * ny) + (wj * joint.journal_radius - wb * R)
         ft = friction(vt, fn)
         fx, fy = fx - ft * ny, fy + ft * nx
+    # friction's moment on the bearing with the arm bearing_radius, as the reduced model
     for side, sign, radius, (ax, ay) in ((sides[0], 1.0, joint.journal_radius, (axj, ayj)),
-                                         (sides[1], -1.0, R, (axb, ayb))):
+                                         (sides[1], -1.0, joint.bearing_radius, (axb, ayb))):
         if side.slot is not None:
             i = side.slot
             out[i], out[i + 1] = sign * fx, sign * fy
