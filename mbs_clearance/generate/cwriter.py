@@ -284,7 +284,8 @@ def render_c(d: Derivation, linkage_name: str, structure: dict,
         out += [f"    if (j == {e}) {{ gap_{e}(t, y, p, g); corner_state(g[1], g[3], "
                 f"{ci['side']}, p[{ci['clearance']}], p[{ci['half_height']}], &dd[0], "
                 "&dd[1]); return; }"]
-    out += ["    (void)nx; (void)ny;", *(["    (void)rb; (void)slope;"] if profiles else []), "}", "",
+    out += ["    (void)nx; (void)ny;", *(["    (void)rb; (void)slope;"] if profiles else []),
+            "}", "",
             "static void event(double t, const double *y, const double *p, int64_t j, "
             "double *g_gd) {", "    double dd[2];", "    penetration(t, y, p, j, dd);",
             "    switching(p[MEM_START + 2 * j], dd[0], dd[1], &g_gd[0], &g_gd[1]);", "}", "",

@@ -4,11 +4,11 @@ A profiled joint's model reads its bearing's shape as data: per profiled joint a
 the parameter vector after the constants, ``[R_J, eq9, E, nu, R_ref, rho0, rho1, c_0 ..
 c_(4N-1)]`` (journal radius in m; 1.0 when the stiffness is Eq. 9's from the radius at the
 contact, else 0.0 and the joint's constant stiffness parameter is used; Young's modulus in
-Pa, Poisson's ratio; the circle (the smallest radius, m) the profile fades into near the centre
-between |e| = rho0 and rho1 (m, `FADE` of the smallest clearance: no contact reaches there);
-the periodic cubic spline's N pieces, `BearingProfile.coefficients`, row by row). The number of
-grid points N is part of the model's structure (a new N compiles a new model); the radii are
-not (a new profile of the same N reuses the compiled model). The C side is
+Pa, Poisson's ratio; the circle (the smallest radius, m) the profile fades into near the
+centre between |e| = rho0 and rho1 (m, `FADE` of the smallest clearance: no contact reaches
+there); the periodic cubic spline's N pieces, `BearingProfile.coefficients`, row by row).
+The number of grid points N is part of the model's structure (a new N compiles a new model);
+the radii are not (a new profile of the same N reuses the compiled model). The C side is
 core/profile_runtime.h.
 """
 
@@ -18,8 +18,9 @@ import numpy as np
 
 from ..model.linkage import GROUND, Linkage, Prismatic, Revolute
 
-__all__ = ["HEAD", "FADE", "fade", "effective_radius", "block_size", "profiled", "refuse_profiles", "refuse_sensitivity_runs",
-           "bearing_kinematics", "body_angle_series", "fill_profiles"]
+__all__ = ["HEAD", "FADE", "fade", "effective_radius", "block_size", "profiled",
+           "refuse_profiles", "refuse_sensitivity_runs", "bearing_kinematics",
+           "body_angle_series", "fill_profiles"]
 
 #: entries of a profile's block before its spline pieces (R_J, eq9, E, nu, R_ref, rho0, rho1)
 HEAD = 7
