@@ -90,35 +90,51 @@ static inline double mbs_profile_stiffness(const double *prof, double rb, double
     return prof[1] > 0.5 ? mbs_stiffness_eq9(prof[0], rb, prof[2], prof[3]) : stiffness;
 }
 
-/* contact_stage of a profiled joint: (F, delta, deltadot, fx, fy); the force along the gap's
- * gradient n - slope t (F n + F slope (ny, -nx)), not along n: the journal centre's boundary
- * |e| = R_B(theta) - R_J leans from the circle by R_B' / |e|, comparable to 1 when the
- * profile's slope (m/rad) is comparable to the clearance, and a radial force on it does work
- * around a closed path (a journal orbiting in a non-round bearing gains energy without bound).
- * Its moment about the bearing centre, -F R_B' (the profile's torque on the bearing), a
- * turning bearing body misses (the model applies the forces at the centres) */
+/* the normal force of a profiled joint: (F, delta, deltadot, nx, ny, gx, gy, R_B) with
+ * (gx, gy) = n - slope t, the direction of the force F on the bearing (F n + F slope
+ * (ny, -nx)), not n: the journal centre's boundary |e| = R_B(theta) - R_J leans from the
+ * circle by R_B' / |e|, comparable to 1 when the profile's slope (m/rad) is comparable to the
+ * clearance, and a radial force on it does work around a closed path (a journal orbiting in
+ * a non-round bearing gains energy without bound). Its moment about the bearing centre,
+ * -F R_B' (the profile's torque on the bearing), a turning bearing body misses (the model
+ * applies the forces at the centres) */
+static inline void mbs_profile_normal(double ex, double ey, double exd, double eyd,
+                                      double phi, double omega, double mode,
+                                      double deltadot_minus, double stiffness,
+                                      double restitution, double model, const double *prof,
+                                      int64_t n, double *F, double *delta, double *deltadot,
+                                      double *nx, double *ny, double *gx, double *gy,
+                                      double *rb) {
+    double k;
+    mbs_profile_gap(ex, ey, exd, eyd, phi, omega, prof, n, delta, deltadot, nx, ny, rb, &k);
+    *F = 0.0;
+    if (mode > 0.5)
+        *F = mbs_contact_force(*delta, *deltadot, deltadot_minus,
+                               mbs_profile_stiffness(prof, *rb, stiffness), restitution,
+                               (int64_t)model);
+    *gx = *nx + k * *ny;
+    *gy = *ny - k * *nx;
+}
+
+/* contact_stage of a profiled joint: (F, delta, deltadot, fx, fy) */
 static inline void profile_contact_stage(double ex, double ey, double exd, double eyd,
                                          double phi, double omega, double mode,
                                          double deltadot_minus, double stiffness,
                                          double restitution, double model, const double *prof,
                                          int64_t n, double *F, double *delta, double *deltadot,
                                          double *fx, double *fy) {
-    double nx, ny, rb, k;
-    mbs_profile_gap(ex, ey, exd, eyd, phi, omega, prof, n, delta, deltadot, &nx, &ny, &rb, &k);
-    double f = 0.0;
-    if (mode > 0.5)
-        f = mbs_contact_force(*delta, *deltadot, deltadot_minus,
-                              mbs_profile_stiffness(prof, rb, stiffness), restitution,
-                              (int64_t)model);
-    *F = f;
-    *fx = f * (nx + k * ny);
-    *fy = f * (ny - k * nx);
+    double nx, ny, gx, gy, rb;
+    mbs_profile_normal(ex, ey, exd, eyd, phi, omega, mode, deltadot_minus, stiffness,
+                       restitution, model, prof, n, F, delta, deltadot, &nx, &ny, &gx, &gy,
+                       &rb);
+    *fx = *F * gx;
+    *fy = *F * gy;
 }
 
 /* friction_stage of a profiled joint: (F, delta, deltadot, fx, fy, ft, vt); spin is
  * omega_J R_J - omega_B bearing_radius, corrected here to the radius at the contact (the
  * moment of friction on the bearing keeps the arm bearing_radius: a difference of the wear
- * depth) */
+ * depth); the friction acts along t */
 static inline void profile_friction_stage(double ex, double ey, double exd, double eyd,
                                           double spin, double phi, double omega,
                                           double bearing_radius, double mode,
@@ -127,18 +143,14 @@ static inline void profile_friction_stage(double ex, double ey, double exd, doub
                                           const double *slots, const double *prof, int64_t n,
                                           double *F, double *delta, double *deltadot,
                                           double *fx, double *fy, double *ft, double *vt) {
-    double nx, ny, rb, k;
-    mbs_profile_gap(ex, ey, exd, eyd, phi, omega, prof, n, delta, deltadot, &nx, &ny, &rb, &k);
-    double fn = 0.0;
-    if (mode > 0.5)
-        fn = mbs_contact_force(*delta, *deltadot, deltadot_minus,
-                               mbs_profile_stiffness(prof, rb, stiffness), restitution,
-                               (int64_t)model);
+    double nx, ny, gx, gy, rb;
+    mbs_profile_normal(ex, ey, exd, eyd, phi, omega, mode, deltadot_minus, stiffness,
+                       restitution, model, prof, n, F, delta, deltadot, &nx, &ny, &gx, &gy,
+                       &rb);
     double v = eyd * nx - exd * ny + spin + omega * (bearing_radius - rb);
-    double f = mbs_friction_force_slots(v, fn, slots, (int64_t)law);
-    *F = fn;
-    *fx = fn * (nx + k * ny) + f * ny;
-    *fy = fn * (ny - k * nx) - f * nx;
+    double f = mbs_friction_force_slots(v, *F, slots, (int64_t)law);
+    *fx = *F * gx + f * ny;
+    *fy = *F * gy - f * nx;
     *ft = f;
     *vt = v;
 }
