@@ -288,3 +288,25 @@ def test_a_free_linkage_keeps_its_energy_on_a_profiled_bearing(amplitude):
     energy = _energy(lp, run.ys, run.model, 1e10 * delta ** 2.5 / 2.5)
     drift = np.max(np.abs(energy - energy[0])) / energy[0]
     assert drift < 2e-6, drift
+
+
+def test_the_closure_gives_the_eccentricity_rates_the_gaps_give():
+    # a numba module has no gap_series: its rates come from the loop closure's Jacobian and
+    # explicit time rate; both against each other on the compiled model's recorded steps
+    lk = cases.slider_crank_two_clearances()
+    run = lm.run(lk, 1)
+
+    class ClosureOnly:
+        N_Q = run.model.N_Q
+
+        def closure_jacobian(self, t, q, p):
+            return run.model.closure_jacobian(t, q, p)
+
+        def closure_rate(self, t, q, p):
+            return run.model.closure_rate(t, q, p)
+
+    rows = slice(0, len(run.ts), 50)
+    ts, ys = run.ts[rows], np.ascontiguousarray(run.ys[rows])
+    got = lm.eccentricity_rates(ClosureOnly(), ts, ys, run.p, 2)
+    want = lm.eccentricity_rates(run.model, ts, ys, run.p, 2)
+    np.testing.assert_allclose(got, want, rtol=0, atol=1e-12 * np.max(np.abs(want)))
