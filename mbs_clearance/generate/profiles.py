@@ -74,8 +74,8 @@ def refuse_profiles(linkage: Linkage, runs: str = "numba's integrator "
 SENSITIVITY_RUNS = ("sensitivity runs (DDM, tangent flows: periodic orbits, Lyapunov "
                     "exponents, peak gradients), whose contact Jacobian rows take a circular "
                     "bearing")
-SENSITIVITY_HINT = ("use finite differences (method='fd') or plain runs, or a circular "
-                    "bearing (bearing_profile=None)")
+SENSITIVITY_HINT = ("use finite differences (method 'fd', --method fd) or plain runs, or a "
+                    "circular bearing (bearing_profile=None)")
 
 
 def refuse_sensitivity_runs(linkage: Linkage) -> None:
