@@ -63,9 +63,10 @@ def check_arguments(linkage, specialise) -> None:
 
 def _printer_version() -> str:
     """The digest of what makes a model's C source besides its structure (whose digest
-    covers the derivation and the plan): the C printer and this loader."""
+    covers the derivation and the plan): the C printer, this loader and the profiles'
+    layout."""
     h = hashlib.sha256()
-    for name in ("cwriter.py", "c_loader.py"):
+    for name in ("cwriter.py", "c_loader.py", "profiles.py"):
         h.update((_HERE / name).read_bytes().replace(b"\r\n", b"\n") + b"\0")
     return h.hexdigest()[:16]
 
@@ -232,12 +233,17 @@ class CModel:
         import numpy as np
 
         ts, ys, p = self._vec(ts), self._vec(ys), self._vec(p)
+        if ys.ndim != 2 or ys.shape[0] != ts.shape[0] or ys.shape[1] < 2 * self.N_Q \
+                or p.shape[0] < self.N_P or not 0 <= joints <= self.N_EVENTS:
+            raise ValueError(f"gap_series needs one state of >= {2 * self.N_Q} entries per "
+                             f"time, p of {self.N_P} and 0 to {self.N_EVENTS} joints")
         out = np.empty((len(ts), joints, 4))
-        gap, width = self.lib.mbs_gap, ys.shape[1]
-        y0, pp, o0 = self._ptr(ys), self._ptr(p), self._ptr(out)
-        for i, t in enumerate(ts.tolist()):
-            for j in range(joints):
-                gap(t, y0 + i * width, pp, j, o0 + 4 * (i * joints + j))
+        ffi, lib = _series()
+        gap = int(self.ffi.cast("uintptr_t", self.ffi.addressof(self.lib, "mbs_gap")))
+        ptr = ffi.from_buffer
+        lib.mbs_gap_series(gap, ffi.cast("double *", ptr(ts)), ffi.cast("double *", ptr(ys)),
+                           len(ts), ys.shape[1], ffi.cast("double *", ptr(p)), joints,
+                           ffi.cast("double *", ptr(out)))
         return out
 
     def outputs(self, ts, ys, ms, p):
@@ -402,6 +408,27 @@ class CModel:
         from ..core.integrate import model_record, step_value
 
         return step_value(model_record(self.ffi, self.lib), t0, y0, mem, p, h, coefficients)
+
+
+#: the series library's declarations (core/series.c)
+SERIES_EXPORTS = """
+void mbs_gap_series(uintptr_t gap, const double *ts, const double *ys, int64_t n,
+                    int64_t width, const double *p, int64_t joints, double *out);
+"""
+
+
+_SERIES: list = []
+
+
+def _series():
+    """(ffi, lib) of core/series.c, built (or found in the cache) on first use."""
+    from ..core import build
+
+    with _LOCK:
+        if not _SERIES:
+            _SERIES.append(build.load("series", [("series.c", (_CORE / "series.c").read_text())],
+                                      SERIES_EXPORTS))
+        return _SERIES[0]
 
 
 def load_c_model(linkage: Linkage, specialise: bool = True) -> CModel:

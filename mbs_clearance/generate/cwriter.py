@@ -269,13 +269,13 @@ def render_c(d: Derivation, linkage_name: str, structure: dict,
             "int64_t j, double *dd) {", "    double g[4], nx, ny;",
             "    dd[0] = 0.0; dd[1] = 0.0;"]
     if profiles:
-        out += ["    double b[2], rb;"]
+        out += ["    double b[2], rb, slope;"]
     for j, ci in enumerate(pl.contact):
         if j in profiles:
             out += [f"    if (j == {j}) {{ gap_{j}(t, y, p, g); bearing_{j}(t, y, p, b); "
                     "mbs_profile_gap(g[0], g[1], g[2], g[3], b[0], b[1], "
                     f"p + PROFILE_START + {offsets[j]}, {profiles[j][2]}, &dd[0], &dd[1], "
-                    "&nx, &ny, &rb); return; }"]
+                    "&nx, &ny, &rb, &slope); return; }"]
             continue
         out += [f"    if (j == {j}) {{ gap_{j}(t, y, p, g); gap_state(g[0], g[1], g[2], g[3], "
                 f"p[{ci['clearance']}], &dd[0], &dd[1], &nx, &ny); return; }}"]
@@ -284,7 +284,8 @@ def render_c(d: Derivation, linkage_name: str, structure: dict,
         out += [f"    if (j == {e}) {{ gap_{e}(t, y, p, g); corner_state(g[1], g[3], "
                 f"{ci['side']}, p[{ci['clearance']}], p[{ci['half_height']}], &dd[0], "
                 "&dd[1]); return; }"]
-    out += ["    (void)nx; (void)ny;", *(["    (void)rb;"] if profiles else []), "}", "",
+    out += ["    (void)nx; (void)ny;", *(["    (void)rb; (void)slope;"] if profiles else []),
+            "}", "",
             "static void event(double t, const double *y, const double *p, int64_t j, "
             "double *g_gd) {", "    double dd[2];", "    penetration(t, y, p, j, dd);",
             "    switching(p[MEM_START + 2 * j], dd[0], dd[1], &g_gd[0], &g_gd[1]);", "}", "",

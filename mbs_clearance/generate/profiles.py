@@ -1,12 +1,14 @@
 """Profiled bearings (`ClearanceJoint.bearing_profile`) in a compiled C model.
 
 A profiled joint's model reads its bearing's shape as data: per profiled joint a block of
-the parameter vector after the constants, ``[R_J, eq9, E, nu, c_0 .. c_(4N-1)]`` (journal
-radius in m; 1.0 when the stiffness is Eq. 9's from the radius at the contact, else 0.0 and
-the joint's constant stiffness parameter is used; Young's modulus in Pa, Poisson's ratio; the
-periodic cubic spline's N pieces, `BearingProfile.coefficients`, row by row). The number of
-grid points N is part of the model's structure (a new N compiles a new model); the radii are
-not (a new profile of the same N reuses the compiled model). The C side is
+the parameter vector after the constants, ``[R_J, eq9, E, nu, R_ref, rho0, rho1, c_0 ..
+c_(4N-1)]`` (journal radius in m; 1.0 when the stiffness is Eq. 9's from the radius at the
+contact, else 0.0 and the joint's constant stiffness parameter is used; Young's modulus in
+Pa, Poisson's ratio; the circle (the smallest radius, m) the profile fades into near the
+centre between |e| = rho0 and rho1 (m, `FADE` of the smallest clearance: no contact reaches
+there); the periodic cubic spline's N pieces, `BearingProfile.coefficients`, row by row).
+The number of grid points N is part of the model's structure (a new N compiles a new model);
+the radii are not (a new profile of the same N reuses the compiled model). The C side is
 core/profile_runtime.h.
 """
 
@@ -16,11 +18,35 @@ import numpy as np
 
 from ..model.linkage import GROUND, Linkage, Prismatic, Revolute
 
-__all__ = ["HEAD", "block_size", "profiled", "refuse_profiles", "refuse_sensitivity_runs",
-           "bearing_kinematics", "body_angle_series", "fill_profiles"]
+__all__ = ["HEAD", "FADE", "fade", "effective_radius", "block_size", "profiled",
+           "refuse_profiles", "refuse_sensitivity_runs", "bearing_kinematics",
+           "body_angle_series", "fill_profiles"]
 
-#: entries of a profile's block before its spline pieces (R_J, eq9, E, nu)
-HEAD = 4
+#: entries of a profile's block before its spline pieces (R_J, eq9, E, nu, R_ref, rho0, rho1)
+HEAD = 7
+#: where the profile fades into its mean circle near the centre: from rho0 to rho1, these
+#: fractions of the smallest clearance (core/profile_runtime.h, mbs_profile_gap)
+FADE = (0.25, 0.5)
+
+
+def fade(radii, journal_radius: float) -> tuple[float, float, float]:
+    """(R_ref, rho0, rho1) in m of a profile of `radii` (`FADE`)."""
+    r_min = float(np.min(radii))
+    c_min = r_min - journal_radius
+    return r_min, FADE[0] * c_min, FADE[1] * c_min
+
+
+def effective_radius(radii, journal_radius: float, theta, r) -> np.ndarray:
+    """The bearing radius (m) the compiled model takes at contact angle `theta` (rad) and
+    eccentricity magnitude `r` (m): the profile's where |e| >= rho1 (every contact), faded
+    into R_ref below (`fade`; the quintic step of core/profile_runtime.h)."""
+    from ..model.profile import BearingProfile
+
+    r_ref, rho0, rho1 = fade(radii, journal_radius)
+    s = np.clip((np.asarray(r) - rho0) / (rho1 - rho0), 0.0, 1.0)
+    w = s * s * s * (10.0 - 15.0 * s + 6.0 * s * s)
+    R = BearingProfile(radii).radius(theta)
+    return np.where(s >= 1.0, R, r_ref + w * (R - r_ref))
 
 
 def block_size(points: int) -> int:
@@ -48,8 +74,8 @@ def refuse_profiles(linkage: Linkage, runs: str = "numba's integrator "
 SENSITIVITY_RUNS = ("sensitivity runs (DDM, tangent flows: periodic orbits, Lyapunov "
                     "exponents, peak gradients), whose contact Jacobian rows take a circular "
                     "bearing")
-SENSITIVITY_HINT = ("use finite differences (method='fd') or plain runs, or a circular "
-                    "bearing (bearing_profile=None)")
+SENSITIVITY_HINT = ("use finite differences (method 'fd', --method fd) or plain runs, or a "
+                    "circular bearing (bearing_profile=None)")
 
 
 def refuse_sensitivity_runs(linkage: Linkage) -> None:
@@ -133,5 +159,5 @@ def fill_profiles(linkage: Linkage, model, p: np.ndarray) -> None:
                              f"{points}")
         eq9 = cj.contact_stiffness is None
         p[off:off + HEAD] = (cj.journal_radius, 1.0 if eq9 else 0.0, cj.youngs_modulus,
-                             cj.poisson_ratio)
+                             cj.poisson_ratio, *fade(cj.bearing_profile, cj.journal_radius))
         p[off + HEAD:off + block_size(points)] = cj.profile.coefficients().ravel()

@@ -320,7 +320,10 @@ class ClearanceJoint:
 
     @property
     def clearance(self) -> float:
-        """Radial clearance R_B - R_J in m."""
+        """Radial clearance R_B - R_J in m; of a profiled bearing the smallest over its grid
+        (the scale of the gap's tolerances, which grows with wear)."""
+        if self.bearing_profile is not None:
+            return min(self.bearing_profile) - self.journal_radius
         return self.bearing_radius - self.journal_radius
 
     @property

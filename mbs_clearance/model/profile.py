@@ -8,11 +8,13 @@ the contact force stay smooth for the integrator). A profile whose radii are all
 the circular bearing of that radius.
 
 Small-wear approximation: the contact is located along the eccentricity direction theta_e
-(journal centre minus bearing centre, in the bearing's frame), the penetration is
-``|e| - (R_B(theta_e) - R_J)`` and the contact normal stays radial. The error of that choice
-grows with the profile's slope: the true normal leans from the radial one by
-``atan(R_B'(theta) / R_B(theta))``, which is below 1e-3 rad while the wear depth changes by
-less than 1e-3 R_B per radian.
+(journal centre minus bearing centre, in the bearing's frame) and the penetration is
+``|e| - (R_B(theta_e) - R_J)``. What sets its error is the profile's slope against the
+clearance, not against the radius: the journal centre's boundary ``|e| = R_B(theta) - R_J``
+leans from a circle by ``R_B'(theta) / |e|`` (|e| about the clearance), and the true
+boundary differs from it at second order in that lean. The contact force therefore acts
+along that gap's gradient, ``n - (R_B' / |e|) t`` (n = e / |e|, t = (-n_y, n_x)), not along
+n: a radial force on a leaning boundary does work around a closed path.
 """
 
 from __future__ import annotations

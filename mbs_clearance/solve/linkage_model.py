@@ -403,9 +403,9 @@ def contact_series(linkage: Linkage, model, ts, ys, p, ecc) -> tuple:
     the eccentricity e in the bearing body's frame in [0, 2 pi) rad, and the journal
     surface's tangential speed against the bearing's at the contact in m/s, e_dot . t +
     omega_J R_J - omega_B R_B with t = (-n_y, n_x), n = e / |e| (as the friction law's; R_B at
-    the contact angle for a profiled bearing). (None, None) for a linkage without clearance
-    joints."""
-    from ..generate.profiles import body_angle_series
+    the contact angle for a profiled bearing, as the compiled model takes it:
+    `profiles.effective_radius`). (None, None) for a linkage without clearance joints."""
+    from ..generate.profiles import body_angle_series, effective_radius
 
     joints = linkage.clearance_joints
     if not joints:
@@ -425,7 +425,8 @@ def contact_series(linkage: Linkage, model, ts, ys, p, ecc) -> tuple:
         safe = np.where(centred, 1.0, r)
         nx = np.where(centred, -1.0, ex / safe)
         ny = np.where(centred, 0.0, ey / safe)
-        rb = cj.bearing_radius if cj.profile is None else cj.profile.radius(theta)
+        rb = (cj.bearing_radius if cj.bearing_profile is None else
+              effective_radius(cj.bearing_profile, cj.journal_radius, theta, r))
         angle[:, j] = theta
         slip[:, j] = (edot[:, j, 1] * nx - edot[:, j, 0] * ny + w_j * cj.journal_radius
                       - w_b * rb)
