@@ -216,8 +216,8 @@ def test_series_are_the_profile_geometry_of_the_recorded_motion(turning_bearing)
 
 def test_the_applied_force_is_the_profiled_contact_force(turning_bearing):
     """Newton's second law of the slider along its frictionless guide: m4 x'' equals the
-    x component of the force the joint applies to the journal (on the slider), -Fn n +
-    Ft t, with Fn the contact law at the profiled penetration and rate recorded after the
+    x component of the force the joint applies to the journal (on the slider),
+    -Fn (n - (R_B'(theta_e) / |e|) t) + Ft t (the gap's gradient), with Fn the contact law at the profiled penetration and rate recorded after the
     run and Ft the friction law at the recorded slip velocity (which holds
     omega_B R_B(theta_e) of the turning bearing). Had the element used another geometry
     (the circle, or theta_e in the wrong frame) the normal forces would differ by up to
@@ -239,21 +239,28 @@ def test_the_applied_force_is_the_profiled_contact_force(turning_bearing):
         ft = np.array([friction_force_slots(v, f, slots, law) if c else 0.0 for v, f, c
                        in zip(tr.slip_velocity[:, 0], fn, contact)])
         assert np.max(np.abs(ft)) > 0.05 * np.max(fn)      # friction acts (measured 0.1)
+    # the normal force along the gap's gradient n - (R_B' / |e|) t, t = (-ny, nx)
+    k = np.where(contact, joint.profile.radius(tr.contact_angle[:, 0], 1) / safe, 0.0)
     inertia = m4 * tr.accelerations["slider_guide.s"]
-    assert np.max(np.abs(inertia - (-fn * nx - ft * ny))) < 1e-7 * np.max(fn)
+    assert np.max(np.abs(inertia - (-fn * (nx + k * ny) - ft * ny))) < 1e-7 * np.max(fn)
 
 
 def test_worn_patch_raises_the_peaks(paper, circular):
     """A worn patch 2 um deep where the journal hits (theta_e = 180 degrees, +-30) raises
-    the peaks: the journal flies 2 um further before it hits there, onto a softer contact
-    (Eq. 9 at the local radius). Measured at 4 us: +3.5 % in the first revolution, +1.1 %
-    in the second, against a step error of 0.5 % that both runs share."""
+    the first revolution's peak: the journal flies 2 um further before it hits there, onto
+    a softer contact (Eq. 9 at the local radius), by as much as in the reduced model.
+    Measured: +3.53 % (Exudyn at 4 us; +3.50 % at 2 us) against the reduced model's +3.51 %
+    at accuracy 1e-6. The second revolution's change (-0.14 % in the reduced model) is
+    within Exudyn's step error at 4 us (+0.21 % at 4 us, -0.001 % at 2 us): not asserted."""
     cj = paper.clearance_joints[0]
-    worn = _run(_profiled(paper, **{cj.name: dict(
-        bearing_profile=_worn_patch(cj.bearing_radius, 2e-6))}))
+    profiled = _profiled(paper, **{cj.name: dict(
+        bearing_profile=_worn_patch(cj.bearing_radius, 2e-6))})
+    worn = _run(profiled)
     change = worn.peaks / circular.peaks - 1.0
+    reduced = simulate(profiled, 2, accuracy=1e-6).peaks / simulate(paper, 2,
+                                                                     accuracy=1e-6).peaks - 1
     assert 0.02 < change[0] < 0.05, change
-    assert 0.005 < change[1] < 0.02, change
+    assert abs(change[0] - reduced[0]) < 1e-3, (change, reduced)
 
 
 def test_profile_refused_where_not_built(paper):
