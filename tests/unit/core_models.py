@@ -1,6 +1,5 @@
-"""Test models of the compiled core, in C (through the seam `mbs_core.h`) and, for the ball,
-the same model in numba (the numba integrator's oracle). Shared by the core's tests and
-`benchmarks/core_speed.py`.
+"""Test models of the compiled core, in C (through the seam `mbs_core.h`). Shared by the
+core's tests.
 
 The bouncing ball. Its state is unfolded so that an impact changes the memory only (the
 seam's on_event may not write the state): y = (X, W[, Q]) with the physical height
@@ -21,16 +20,9 @@ from __future__ import annotations
 
 import math
 
-import numba as nb
 import numpy as np
 
-from mbs_clearance.numerics.integrator import (
-    ACTION_SIG,
-    EVENT_SIG,
-    MONITOR_SIG,
-    RHS_SIG,
-    make_settings,
-)
+from mbs_clearance.numerics.integrator import make_settings
 
 # the ball's parameter vector
 GRAV, REST, CEIL, DRAG, NAN_AFTER, CHATTER, TWIN, ALPHA, BETA, COUNT, HALF_G = range(11)
@@ -164,55 +156,6 @@ const mbs_model *mbs_model_record(void) { return &RECORD; }
 """
 
 
-# ---- the ball in numba (the same arithmetic)
-
-@nb.njit(RHS_SIG, cache=True, error_model="numpy")
-def ball_rhs(t, y, p, dydt):
-    h = y[0] + p[ALPHA] + p[BETA] * t
-    v = y[1] + p[BETA]
-    bad = math.nan if t > p[NAN_AFTER] else 0.0
-    dydt[0] = y[1] + bad
-    dydt[1] = -p[GRAV] - p[DRAG] * v + bad
-    if y.shape[0] > 2:
-        dydt[2] = h * h + bad
-    for k in range(3, y.shape[0]):
-        dydt[k] = y[k - 1] - y[k] + bad
-
-
-@nb.njit(EVENT_SIG, cache=True, error_model="numpy")
-def ball_event(t, y, p, j):
-    if p[CHATTER] != 0.0:
-        return 1.0, 0.0
-    h = y[0] + p[ALPHA] + p[BETA] * t
-    v = y[1] + p[BETA]
-    if j == 0 or p[TWIN] != 0.0:
-        return -h, -v
-    return h - p[CEIL], v
-
-
-@nb.njit(ACTION_SIG, cache=True, error_model="numpy")
-def ball_on_event(t, y, p, j):
-    if p[CHATTER] != 0.0 or (p[TWIN] != 0.0 and j == 1):
-        return
-    v = y[1] + p[BETA]
-    beta = -p[REST] * v - y[1]
-    p[ALPHA] = p[ALPHA] + (p[BETA] - beta) * t
-    p[BETA] = beta
-    p[COUNT] += 1.0
-
-
-@nb.njit(MONITOR_SIG, cache=True, error_model="numpy")
-def ball_monitor(t, y, p, dydt, out, g, gd):
-    ball_rhs(t, y, p, dydt)
-    h = y[0] + p[ALPHA] + p[BETA] * t
-    v = y[1] + p[BETA]
-    if out.shape[0] >= 1:
-        out[0] = v
-    for j in range(2):
-        g[j], gd[j] = ball_event(t, y, p, j)
-    return h
-
-
 def ball_parameters(g=9.81, e=0.8, ceiling=1e3, drag=0.0, nan_after=math.inf, chatter=False,
                     twin=False):
     """The ball's p (memory zero: h = X, v = W at the start)."""
@@ -232,14 +175,6 @@ def ball_settings(rtol=1e-9, *, n_state=3, dense=2, event_control=False, **kwarg
     kwargs.setdefault("event_tol", 1e-12)
     return make_settings(rtol, atol, n_state, n_dense=dense, n_events=2, mem_start=BALL_MEM_START,
                          n_mem=BALL_N_MEM, n_out=1, **kwargs)
-
-
-def ball_numba(y0, p, edges, settings, coefficients):
-    """The numba integrator on the ball."""
-    from mbs_clearance.numerics.integrator import integrate
-
-    return integrate(ball_rhs, ball_event, ball_on_event, ball_monitor, y0, p, edges,
-                     settings, coefficients)
 
 
 def bounce_times(h0, g, e, count):

@@ -265,7 +265,7 @@ def test_compiled_laws_are_their_python_source():
         model = MODELS[law.name]
         for s in ((0.3 * C, -0.2 * C, 1e-3, 4e-4, 300.0, -20.0),
                   (-0.9 * C, 0.1 * C, -2e-3, 0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)):
-            ref = law.force.py_func(*s, R, C, 0.01, MU)
+            ref = law.force(*s, R, C, 0.01, MU)
             assert np.allclose(film_force(*s, R, C, 0.01, MU, model), ref, rtol=1e-12, atol=0)
 
 
