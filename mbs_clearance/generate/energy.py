@@ -12,8 +12,8 @@ are read; the constants after them are not). The expressions come from `derive.d
 
 from __future__ import annotations
 
-import functools
 import math
+import threading
 
 from ..model.linkage import Linkage
 from .key import model_structure, structure_digest
@@ -26,11 +26,18 @@ def mechanical_energy(linkage: Linkage):
     and p 1-d float arrays (the compiled model's state and parameter vector)."""
     if not isinstance(linkage, Linkage):
         raise ValueError(f"linkage must be a Linkage; got {type(linkage).__name__}")
-    return _energy(structure_digest(model_structure(linkage, False)), linkage)
+    digest = structure_digest(model_structure(linkage, False))
+    with _LOCK:
+        if digest not in _ENERGIES:
+            _ENERGIES[digest] = _energy(linkage)
+        return _ENERGIES[digest]
 
 
-@functools.lru_cache(maxsize=32)
-def _energy(digest: str, linkage: Linkage):
+_LOCK = threading.Lock()
+_ENERGIES: dict = {}
+
+
+def _energy(linkage: Linkage):
     import sympy as sp
 
     from .derive import derive

@@ -185,3 +185,83 @@ def bounce_times(h0, g, e, count):
     for k in range(1, count):
         times.append(times[-1] + 2.0 * e ** k * t1)
     return np.array(times)
+
+
+class RecordKernels:
+    """A compiled model's monitor and on_event through its record's function pointers, with
+    numpy arrays written in place (the arrays must be contiguous float64)."""
+
+    def __init__(self, model):
+        self.ffi, self.rec = model.ffi, model.record
+
+    def _ptr(self, a):
+        return self.ffi.from_buffer("double[]", a)
+
+    def monitor(self, t, y, p, dydt, out, g, gd):
+        """The monitored value; dydt, out (its length: the outputs written), g, gd filled."""
+        return self.rec.monitor(float(t), self._ptr(y), y.shape[0], self._ptr(p),
+                                self._ptr(dydt), self._ptr(out), out.shape[0], self._ptr(g),
+                                self._ptr(gd))
+
+    def on_event(self, t, y, p, j):
+        """The event action of switching function j: the memory in p updated in place."""
+        self.rec.on_event(float(t), self._ptr(y), self._ptr(p), int(j))
+
+
+# the clearance joints' stages of core/runtime.h, exported for the tests (tuples as arrays)
+_STAGES_C = r"""
+#include "mbs_core.h"
+#include "runtime.h"
+
+void contact_stage_c(const double *x, double *out) {
+    contact_stage(x[0], x[1], x[2], x[3], x[4], x[5], x[6], x[7], x[8], x[9],
+                  &out[0], &out[1], &out[2], &out[3], &out[4]);
+}
+
+void friction_stage_c(const double *x, const double *slots, double *out) {
+    friction_stage(x[0], x[1], x[2], x[3], x[4], x[5], x[6], x[7], x[8], x[9], x[10], x[11],
+                   slots, &out[0], &out[1], &out[2], &out[3], &out[4], &out[5], &out[6]);
+}
+
+void lubricated_stage_c(const double *x, double *out) {
+    lubricated_stage(x[0], x[1], x[2], x[3], x[4], x[5], x[6], x[7], x[8], x[9], x[10],
+                     x[11], x[12], x[13], x[14], x[15], x[16], x[17], &out[0], &out[1],
+                     &out[2], &out[3], &out[4], &out[5], &out[6], &out[7], &out[8], &out[9]);
+}
+"""
+
+
+def runtime_stages():
+    """(contact_stage, friction_stage, lubricated_stage) of core/runtime.h as Python
+    functions of the C arguments (friction_stage: the slots as a sequence), returning the
+    C function's outputs as a tuple, in its order."""
+    from pathlib import Path
+
+    from mbs_clearance.core import build
+
+    core = Path(build.__file__).parent
+    sources = [("stages.c", _STAGES_C)] + [(h, (core / h).read_text()) for h in
+                                           ("runtime.h", "laws_generated.h")]
+    ffi, lib = build.load("runtime-stages-test", sources, cdef=(
+        "void contact_stage_c(const double *x, double *out);"
+        "void friction_stage_c(const double *x, const double *slots, double *out);"
+        "void lubricated_stage_c(const double *x, double *out);"))
+
+    def call(fn, n_out, *args, slots=None):
+        x = np.ascontiguousarray(args, dtype=float)
+        out = np.full(n_out, np.nan)
+        extra = () if slots is None else (ffi.from_buffer(
+            "double[]", np.ascontiguousarray(slots, dtype=float)),)
+        fn(ffi.from_buffer("double[]", x), *extra, ffi.from_buffer("double[]", out))
+        return tuple(float(v) for v in out)
+
+    def contact(*args):
+        return call(lib.contact_stage_c, 5, *args)
+
+    def friction(*args):
+        return call(lib.friction_stage_c, 7, *args[:-1], slots=args[-1])
+
+    def lubricated(*args):
+        return call(lib.lubricated_stage_c, 10, *args)
+
+    return contact, friction, lubricated

@@ -186,9 +186,9 @@ def test_translate_blocks_calls_and_locals():
 @pytest.mark.parametrize("model", range(len(CONTACT)))
 def test_c_contact_partials_equal_python(film_c, model):
     """The contact law's force and partials in C (laws_generated.h, printed by the codegen)
-    equal `forces.contact_force_partials` (the formula evaluated in Python) in compression, restitution,
-    free flight and where the damping clamps the force at zero; every partial is also
-    checked against differences in test_laws."""
+    equal `forces.contact_force_partials` (the formula evaluated in Python) in compression,
+    restitution, free flight and where the damping clamps the force at zero; every partial
+    is also checked against differences in test_laws."""
     rng = np.random.default_rng(3)
     for x in [(2e-6, 0.2, 0.3, 4.8e11, 0.7), (2e-6, -0.2, 0.3, 4.8e11, 0.7),
               (-1e-6, 0.1, 0.3, 4.8e11, 0.7), (1e-6, -5.0, 0.1, 4.8e11, 0.3),
