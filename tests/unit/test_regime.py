@@ -71,7 +71,7 @@ def test_section_kinematics_match_the_generated_model():
         t = rng.uniform(0, PAPER.period)
         y = reduced.initial_state(PAPER)[:4] + rng.normal(0, 1e-4, 4) * [1, 1e-2, 1e3, 10]
         y = np.append(y, 0.0)
-        np.testing.assert_allclose(_paper_gap(PAPER, t, y), model._gap_0(t, y, p),
+        np.testing.assert_allclose(_paper_gap(PAPER, t, y), model.gap(t, y, p, 0),
                                    rtol=1e-9, atol=1e-12)
 
 
