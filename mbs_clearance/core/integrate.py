@@ -26,7 +26,7 @@ import numpy as np
 from . import build
 
 __all__ = ["core", "model_record", "integrate", "step_peaks", "step_value", "step_states",
-           "with_parameter_length", "OUT_OF_MEMORY", "BAD_ARGUMENT"]
+           "with_parameter_length", "RecordKernels", "OUT_OF_MEMORY", "BAD_ARGUMENT"]
 
 #: negative statuses of the core (the others are `integrator.RESULTS`)
 OUT_OF_MEMORY = -1
@@ -267,3 +267,29 @@ def integrate(model, y0, p, edges, settings, coefficients):
     finally:
         lib.mbs_result_free(res)
     return t, y, memory, peaks, peak_t, counters, outputs, int(status)
+
+
+class RecordKernels:
+    """The monitor and the event action of a compiled model (a `generate.c_loader.CModel`)
+    called through its record's function pointers from Python, numpy arrays written in
+    place (p and the outputs: contiguous float64): what a Python integrator (validation's scipy reference) or
+    a test calls besides the model's rhs and event."""
+
+    def __init__(self, model):
+        self.ffi, self.rec = model.ffi, model.record
+
+    def _ptr(self, a):
+        return self.ffi.from_buffer("double[]", a)
+
+    def monitor(self, t, y, p, dydt, out, g, gd) -> float:
+        """The monitored value at (t in s, y); dydt, out (its length: the outputs written),
+        g and gd (one entry per switching function) filled."""
+        y = np.ascontiguousarray(y, dtype=float)
+        return self.rec.monitor(float(t), self._ptr(y), y.shape[0], self._ptr(p),
+                                self._ptr(dydt), self._ptr(out), out.shape[0], self._ptr(g),
+                                self._ptr(gd))
+
+    def on_event(self, t, y, p, j) -> None:
+        """The action of switching function j at (t in s, y): its memory in p updated."""
+        y = np.ascontiguousarray(y, dtype=float)
+        self.rec.on_event(float(t), self._ptr(y), self._ptr(p), int(j))

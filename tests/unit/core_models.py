@@ -187,26 +187,6 @@ def bounce_times(h0, g, e, count):
     return np.array(times)
 
 
-class RecordKernels:
-    """A compiled model's monitor and on_event through its record's function pointers, with
-    numpy arrays written in place (the arrays must be contiguous float64)."""
-
-    def __init__(self, model):
-        self.ffi, self.rec = model.ffi, model.record
-
-    def _ptr(self, a):
-        return self.ffi.from_buffer("double[]", a)
-
-    def monitor(self, t, y, p, dydt, out, g, gd):
-        """The monitored value; dydt, out (its length: the outputs written), g, gd filled."""
-        return self.rec.monitor(float(t), self._ptr(y), y.shape[0], self._ptr(p),
-                                self._ptr(dydt), self._ptr(out), out.shape[0], self._ptr(g),
-                                self._ptr(gd))
-
-    def on_event(self, t, y, p, j):
-        """The event action of switching function j: the memory in p updated in place."""
-        self.rec.on_event(float(t), self._ptr(y), self._ptr(p), int(j))
-
 
 # the clearance joints' stages of core/runtime.h, exported for the tests (tuples as arrays)
 _STAGES_C = r"""

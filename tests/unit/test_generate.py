@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from mbs_clearance.core.integrate import RecordKernels
 from mbs_clearance.generate import (
     generate_module,
     load_model,
@@ -24,8 +25,6 @@ from mbs_clearance.solve.linkage_model import initial_state, pack_parameters
 from validation import paper_closed_form as closed
 
 ROOT = Path(__file__).resolve().parents[2]
-sys.path.insert(0, str(Path(__file__).parent))
-from core_models import RecordKernels  # noqa: E402
 
 
 def _random_states(mech, rng, n, spread):
