@@ -1,9 +1,9 @@
 """The Python binding of the compiled integrator (`integrator.c`, built once per process).
 
-`integrate` takes the same arguments as the numba integrator's
-(`mbs_clearance.numerics.integrator.integrate`) but a model as a pointer to its record
-(`mbs_model`, the seam of `mbs_core.h`) instead of four compiled functions, and returns the
-same tuple. A model library (C sources built with `build.load`) exports its record with
+`integrate` takes a model as a pointer to its record (`mbs_model`, the seam of
+`mbs_core.h`), the initial state, parameters, window edges, settings
+(`numerics.integrator.make_settings`) and a method's coefficients, and returns the recorded
+run. A model library (C sources built with `build.load`) exports its record with
 ``const mbs_model *mbs_model_record(void)``; `model_record` turns the ``(ffi, lib)`` of such a
 library into the pointer `integrate` takes::
 
@@ -187,8 +187,8 @@ def integrate(model, y0, p, edges, settings, coefficients):
     y0 : array of float, shape (n,)
         Initial state (the model's units: m, rad, m/s, rad/s, ...).
     p : ndarray of float64, shape (model.n_p,)
-        Parameters, memory and constants; the memory entries are updated in place, as by
-        the numba integrator (contiguous float64 required).
+        Parameters, memory and constants; the memory entries are updated in place
+        (contiguous float64 required).
     edges : array of float, shape (n_windows + 1,)
         Window edges in s: edges[0] the start, edges[-1] the end; the integration lands on
         each, and the monitor's maximum is tracked per window.
@@ -203,7 +203,7 @@ def integrate(model, y0, p, edges, settings, coefficients):
         (t (m,) in s, y (m, n), memory (m, max(n_mem, 1)) of the recorded steps, the refined
         maximum of the monitor per window and its time in s, counters (int64: nfev,
         naccept, nreject, nevent, nrefine), outputs (m, n_out), status (an
-        `integrator.RESULTS` code)): numba's `integrate`, arrays owning their memory.
+        `integrator.RESULTS` code)), arrays owning their memory.
     """
     ffi, lib = core()
     y0 = _doubles("y0", y0)
@@ -272,8 +272,8 @@ def integrate(model, y0, p, edges, settings, coefficients):
 class RecordKernels:
     """The monitor and the event action of a compiled model (a `generate.c_loader.CModel`)
     called through its record's function pointers from Python, numpy arrays written in
-    place (p and the outputs: contiguous float64): what a Python integrator (validation's scipy reference) or
-    a test calls besides the model's rhs and event."""
+    place (p and the outputs: contiguous float64): what a Python integrator (validation's
+    scipy reference) or a test calls besides the model's rhs and event."""
 
     def __init__(self, model):
         self.ffi, self.rec = model.ffi, model.record

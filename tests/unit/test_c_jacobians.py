@@ -36,8 +36,7 @@ _DIFFERENCE_CASES = {
 @pytest.mark.parametrize("mode", ["free", "contact"])
 def test_c_jacobian_matches_central_differences_of_c_outputs(case, mode):
     """The C Jacobian of every output along every column of z equals central differences
-    of the C plain model's outputs (test_generated_jacobians' check on the C model: no
-    numba kernel involved)."""
+    of the C plain model's outputs (test_generated_jacobians' check)."""
     linkage = _DIFFERENCE_CASES[case]
     check_against_differences(linkage, load_c_model(linkage), mode)
 

@@ -258,7 +258,7 @@ def test_generation_is_deterministic_across_processes():
     assert texts[0] == texts[1]
 
 
-def test_models_specialised_on_zero_geometry_equal_the_general_one(tmp_path, monkeypatch):
+def test_models_specialised_on_zero_geometry_equal_the_general_one():
     """The paper case's model is specialised on its zero-valued geometric parameters (points
     on the links' axes, the guide through the origin): its right-hand side and outputs
     equal the general model's at the states of a run, to round-off; a nonzero offset takes
@@ -270,7 +270,6 @@ def test_models_specialised_on_zero_geometry_equal_the_general_one(tmp_path, mon
     from mbs_clearance.numerics.integrator import METHODS, make_settings
     from mbs_clearance.solve import linkage_ddm
 
-    monkeypatch.setenv("MBS_CLEARANCE_MODEL_DIR", str(tmp_path))
     lk = cases.paper_slider_crank()
     spec, gen = load_model(lk), load_model(lk, specialise=False)
     assert spec.ZERO_PARAMETERS == geometric_zeros(lk) and "slider.pin.y" in spec.ZERO_PARAMETERS
