@@ -62,6 +62,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .._checks import check_int, check_real, check_revolutions_memory
+from ..core.integrate import NO_EVENTS_C
 from ..model.cases import as_linkage
 from ..numerics.integrator import METHODS, make_settings
 from ..solve.flows import Flow, TangentFlow, drive_of
@@ -164,18 +165,7 @@ static void rhs(double t, const double *y, int64_t n, const double *p, double *d
     }
 }
 
-static void event(double t, const double *y, const double *p, int64_t j, double *g_gd)
-{
-    (void)t; (void)y; (void)p; (void)j;
-    g_gd[0] = -1.0;
-    g_gd[1] = 0.0;
-}
-
-static void on_event(double t, const double *y, double *p, int64_t j)
-{
-    (void)t; (void)y; (void)p; (void)j;
-}
-
+""" + NO_EVENTS_C + r"""
 static double monitor(double t, const double *y, int64_t n, const double *p, double *dydt,
                       double *out, int64_t n_out, double *g, double *gd)
 {
@@ -185,8 +175,6 @@ static double monitor(double t, const double *y, int64_t n, const double *p, dou
     gd[0] = 0.0;
     return sqrt(y[0] * y[0] + y[1] * y[1] + y[2] * y[2]);
 }
-
-static int prepare(double *p) { (void)p; return 0; }
 
 static const mbs_model RECORD = {6, 3, 1, 10, 0, 0, 10, 10, rhs, event, on_event, monitor,
                                  prepare};

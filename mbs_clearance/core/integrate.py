@@ -26,11 +26,30 @@ import numpy as np
 from . import build
 
 __all__ = ["core", "model_record", "integrate", "step_peaks", "step_value", "step_states",
-           "with_parameter_length", "RecordKernels", "OUT_OF_MEMORY", "BAD_ARGUMENT"]
+           "with_parameter_length", "RecordKernels", "NO_EVENTS_C", "OUT_OF_MEMORY",
+           "BAD_ARGUMENT"]
 
 #: negative statuses of the core (the others are `integrator.RESULTS`)
 OUT_OF_MEMORY = -1
 BAD_ARGUMENT = -2
+
+#: the C of a model without switching (for hand-written models through the seam): its one
+#: switching function always -1, no action, no constants
+NO_EVENTS_C = r"""
+static void event(double t, const double *y, const double *p, int64_t j, double *g_gd)
+{
+    (void)t; (void)y; (void)p; (void)j;
+    g_gd[0] = -1.0;
+    g_gd[1] = 0.0;
+}
+
+static void on_event(double t, const double *y, double *p, int64_t j)
+{
+    (void)t; (void)y; (void)p; (void)j;
+}
+
+static int prepare(double *p) { (void)p; return 0; }
+"""
 
 _SOURCE = Path(__file__).resolve().parent / "integrator.c"
 #: the core (compiled once, not per model) at -O3: its loops over the state (the stages'

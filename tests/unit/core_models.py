@@ -22,6 +22,7 @@ import math
 
 import numpy as np
 
+from mbs_clearance.core.integrate import NO_EVENTS_C
 from mbs_clearance.numerics.integrator import make_settings
 
 # the ball's parameter vector
@@ -109,23 +110,6 @@ static const mbs_model RECORD = {3, 1, 2, ALPHA, 3, 1, HALF_G, N_P, rhs, event, 
                                  prepare};
 
 const mbs_model *mbs_model_record(void) { return &RECORD; }
-"""
-
-# a model without events: one switching function, always -1, and no action
-NO_EVENTS_C = r"""
-static void event(double t, const double *y, const double *p, int64_t j, double *g_gd)
-{
-    (void)t; (void)y; (void)p; (void)j;
-    g_gd[0] = -1.0;
-    g_gd[1] = 0.0;
-}
-
-static void on_event(double t, const double *y, double *p, int64_t j)
-{
-    (void)t; (void)y; (void)p; (void)j;
-}
-
-static int prepare(double *p) { (void)p; return 0; }
 """
 
 # the linear oscillator x'' = -w^2 x (p = [w]); monitor x
