@@ -62,7 +62,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .._checks import check_int, check_real, check_revolutions_memory
-from ..core.integrate import NO_EVENTS_C
+from ..core.integrate import no_events_source
 from ..model.cases import as_linkage
 from ..numerics.integrator import METHODS, make_settings
 from ..solve.flows import Flow, TangentFlow, drive_of
@@ -131,13 +131,7 @@ LINEAR, LORENZ = 0, 1
 #: and, for the full state, tangent (3) derivatives of the system p[0]: LINEAR (x' = A x, A
 #: row-major in p[1:10]) or LORENZ (sigma, rho, beta in p[1:4]); no switching (the one
 #: switching function stays negative); the monitored value is |x|
-_TEXTBOOK_C = r"""
-#include <math.h>
-#include "mbs_core.h"
-
-static void rhs(double t, const double *y, int64_t n, const double *p, double *dydt)
-{
-    (void)t;
+_TEXTBOOK_C = no_events_source("""
     int tangent = n >= 6;
     if (p[0] < 0.5) {
         for (int i = 0; i < 3; i++) {
@@ -162,25 +156,7 @@ static void rhs(double t, const double *y, int64_t n, const double *p, double *d
         dydt[3] = s * (v - u);
         dydt[4] = (r - z) * u - v - x * w;
         dydt[5] = yy * u + x * v - b * w;
-    }
-}
-
-""" + NO_EVENTS_C + r"""
-static double monitor(double t, const double *y, int64_t n, const double *p, double *dydt,
-                      double *out, int64_t n_out, double *g, double *gd)
-{
-    (void)out; (void)n_out;
-    rhs(t, y, n, p, dydt);
-    g[0] = -1.0;
-    gd[0] = 0.0;
-    return sqrt(y[0] * y[0] + y[1] * y[1] + y[2] * y[2]);
-}
-
-static const mbs_model RECORD = {6, 3, 1, 10, 0, 0, 10, 10, rhs, event, on_event, monitor,
-                                 prepare};
-
-const mbs_model *mbs_model_record(void) { return &RECORD; }
-"""
+    }""", "sqrt(y[0] * y[0] + y[1] * y[1] + y[2] * y[2])", 6, 3, 10)
 
 
 @functools.lru_cache(maxsize=1)

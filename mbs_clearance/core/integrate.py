@@ -26,7 +26,8 @@ import numpy as np
 from . import build
 
 __all__ = ["core", "model_record", "integrate", "step_peaks", "step_value", "step_states",
-           "with_parameter_length", "RecordKernels", "NO_EVENTS_C", "OUT_OF_MEMORY",
+           "with_parameter_length", "RecordKernels", "NO_EVENTS_C", "no_events_source",
+           "OUT_OF_MEMORY",
            "BAD_ARGUMENT"]
 
 #: negative statuses of the core (the others are `integrator.RESULTS`)
@@ -50,6 +51,38 @@ static void on_event(double t, const double *y, double *p, int64_t j)
 
 static int prepare(double *p) { (void)p; return 0; }
 """
+
+
+
+def no_events_source(rhs_body: str, value: str, n_state: int, n_q: int, n_p: int) -> str:
+    """The C source of a hand-written model without switching, through the seam
+    (`mbs_core.h`): `rhs_body` the statements of ``rhs(t, y, n, p, dydt)`` (n: the length of
+    y, which may be the dense part only), `value` the C expression of the monitored value
+    (of t, y, p), `n_state` states (`n_q` coordinates), p of `n_p` entries without memory or
+    constants; `NO_EVENTS_C` for its switching function, action and prepare."""
+    return ('#include <math.h>\n#include "mbs_core.h"\n' + NO_EVENTS_C + f"""
+static void rhs(double t, const double *y, int64_t n, const double *p, double *dydt)
+{{
+    (void)t; (void)y; (void)n; (void)p;
+{rhs_body}
+}}
+
+static double monitor(double t, const double *y, int64_t n, const double *p, double *dydt,
+                      double *out, int64_t n_out, double *g, double *gd)
+{{
+    (void)out; (void)n_out;
+    rhs(t, y, n, p, dydt);
+    g[0] = -1.0;
+    gd[0] = 0.0;
+    return {value};
+}}
+
+static const mbs_model RECORD = {{{n_state}, {n_q}, 1, {n_p}, 0, 0, {n_p}, {n_p}, rhs, event,
+                                 on_event, monitor, prepare}};
+
+const mbs_model *mbs_model_record(void) {{ return &RECORD; }}
+""")
+
 
 _SOURCE = Path(__file__).resolve().parent / "integrator.c"
 #: the core (compiled once, not per model) at -O3: its loops over the state (the stages'

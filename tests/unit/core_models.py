@@ -22,7 +22,7 @@ import math
 
 import numpy as np
 
-from mbs_clearance.core.integrate import NO_EVENTS_C
+from mbs_clearance.core.integrate import no_events_source
 from mbs_clearance.numerics.integrator import make_settings
 
 # the ball's parameter vector
@@ -113,31 +113,9 @@ const mbs_model *mbs_model_record(void) { return &RECORD; }
 """
 
 # the linear oscillator x'' = -w^2 x (p = [w]); monitor x
-OSCILLATOR_C = r"""
-#include "mbs_core.h"
-""" + NO_EVENTS_C + r"""
-
-static void rhs(double t, const double *y, int64_t n, const double *p, double *dydt)
-{
-    (void)t; (void)n;
+OSCILLATOR_C = no_events_source("""
     dydt[0] = y[1];
-    dydt[1] = -p[0] * p[0] * y[0];
-}
-
-static double monitor(double t, const double *y, int64_t n, const double *p, double *dydt,
-                      double *out, int64_t n_out, double *g, double *gd)
-{
-    (void)out; (void)n_out;
-    rhs(t, y, n, p, dydt);
-    g[0] = -1.0;
-    gd[0] = 0.0;
-    return y[0];
-}
-
-static const mbs_model RECORD = {2, 1, 1, 1, 0, 0, 1, 1, rhs, event, on_event, monitor, prepare};
-
-const mbs_model *mbs_model_record(void) { return &RECORD; }
-"""
+    dydt[1] = -p[0] * p[0] * y[0];""", "y[0]", 2, 1, 1)
 
 
 def ball_parameters(g=9.81, e=0.8, ceiling=1e3, drag=0.0, nan_after=math.inf, chatter=False,

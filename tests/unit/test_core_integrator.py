@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from mbs_clearance.core import build
-from mbs_clearance.core.integrate import integrate, model_record
+from mbs_clearance.core.integrate import NO_EVENTS_C, integrate, model_record, no_events_source
 from mbs_clearance.numerics.integrator import METHODS, RESULTS, make_settings
 
 sys.path.insert(0, str(Path(__file__).parent))
@@ -20,7 +20,6 @@ from core_models import (  # noqa: E402
     BALL_C,
     BALL_MEM_START,
     COUNT,
-    NO_EVENTS_C,
     OSCILLATOR_C,
     ball_parameters,
     ball_settings,
@@ -404,32 +403,9 @@ def test_interior_samples_catch_a_crossing_and_return_inside_one_step(method):
 
 # y0' = -y0 + y1 + sin t, y1' = lambda y1 (p = [lambda]): a fast mode and a time-dependent
 # forcing (df/dt enters a Rosenbrock method's stages)
-STIFF_C = r"""
-#include <math.h>
-#include "mbs_core.h"
-""" + NO_EVENTS_C + r"""
-
-static void rhs(double t, const double *y, int64_t n, const double *p, double *dydt)
-{
-    (void)n;
+STIFF_C = no_events_source("""
     dydt[0] = -y[0] + y[1] + sin(t);
-    dydt[1] = p[0] * y[1];
-}
-
-static double monitor(double t, const double *y, int64_t n, const double *p, double *dydt,
-                      double *out, int64_t n_out, double *g, double *gd)
-{
-    (void)out; (void)n_out;
-    rhs(t, y, n, p, dydt);
-    g[0] = -1.0;
-    gd[0] = 0.0;
-    return y[0];
-}
-
-static const mbs_model RECORD = {2, 1, 1, 1, 0, 0, 1, 1, rhs, event, on_event, monitor, prepare};
-
-const mbs_model *mbs_model_record(void) { return &RECORD; }
-"""
+    dydt[1] = p[0] * y[1];""", "y[0]", 2, 1, 1)
 
 
 def _stiff_exact(t, y0, lam):
