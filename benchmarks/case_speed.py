@@ -21,8 +21,8 @@ centred start:
 - why: the ratio of function evaluations (scipy / ours at the rows bracketing our error)
   and the time per function evaluation of each (per-call overhead: scipy calls the
   compiled right-hand side from Python at every stage);
-- the ceiling: one call of the compiled right-hand side alone (`rhs_call_ns`: a compiled
-  loop over the recorded states of our run, in their contact modes, median of 5), and
+- the ceiling: one call of the compiled right-hand side alone (`rhs_call_ns`: a C loop
+  over the recorded states of our run, in their contact modes, median of 5), and
   scipy's time per evaluation over it: the speed-up an integrator that cost nothing but
   its right-hand side would reach at scipy's number of evaluations.
 
@@ -36,7 +36,6 @@ from __future__ import annotations
 import argparse
 import json
 
-import numba as nb
 import numpy as np
 
 from mbs_clearance import peak_base_force, simulate
@@ -51,18 +50,93 @@ SCIPY_RTOLS = (1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11)
 REVOLUTION = 4
 
 
-@nb.njit(cache=True)
-def _rhs_loop(rhs, ts, ys, ms, p, mem_start, reps):
-    """reps passes of rhs over the states ys (memories ms) at the times ts."""
-    d = np.empty(ys.shape[1])
-    acc = 0.0
-    for _ in range(reps):
-        for i in range(ts.shape[0]):
-            for k in range(ms.shape[1]):
-                p[mem_start + k] = ms[i, k]
-            rhs(ts[i], ys[i], p, d)
-            acc += d[0]
-    return acc
+#: compiled loops over a model's kernels (through its record, mbs_core.h): reps passes over
+#: the states ys (n rows of n_y) at the times ts with the memories ms (n rows of n_m) copied
+#: into p before each call
+_LOOPS_C = r"""
+#include "mbs_core.h"
+
+static void set_memory(double *p, const double *ms, int64_t i, int64_t n_m,
+                       int64_t mem_start) {
+    for (int64_t k = 0; k < n_m; k++)
+        p[mem_start + k] = ms[i * n_m + k];
+}
+
+double rhs_loop(const mbs_model *m, const double *ts, const double *ys, int64_t n,
+                int64_t n_y, const double *ms, int64_t n_m, double *p, int64_t mem_start,
+                double *d, int64_t reps) {
+    double acc = 0.0;
+    for (int64_t r = 0; r < reps; r++)
+        for (int64_t i = 0; i < n; i++) {
+            set_memory(p, ms, i, n_m, mem_start);
+            m->rhs(ts[i], ys + i * n_y, n_y, p, d);
+            acc += d[0];
+        }
+    return acc;
+}
+
+double monitor_loop(const mbs_model *m, const double *ts, const double *ys, int64_t n,
+                    int64_t n_y, const double *ms, int64_t n_m, double *p, int64_t mem_start,
+                    double *d, double *out, int64_t n_out, double *g, double *gd,
+                    int64_t reps) {
+    double acc = 0.0;
+    for (int64_t r = 0; r < reps; r++)
+        for (int64_t i = 0; i < n; i++) {
+            set_memory(p, ms, i, n_m, mem_start);
+            acc += m->monitor(ts[i], ys + i * n_y, n_y, p, d, out, n_out, g, gd);
+        }
+    return acc;
+}
+
+double event_loop(const mbs_model *m, const double *ts, const double *ys, int64_t n,
+                  int64_t n_y, const double *ms, int64_t n_m, double *p, int64_t mem_start,
+                  int64_t reps) {
+    double acc = 0.0, g_gd[2];
+    for (int64_t r = 0; r < reps; r++)
+        for (int64_t i = 0; i < n; i++) {
+            set_memory(p, ms, i, n_m, mem_start);
+            m->event(ts[i], ys + i * n_y, p, 0, g_gd);
+            acc += g_gd[0];
+        }
+    return acc;
+}
+"""
+_LOOPS_CDEF = """
+double rhs_loop(const mbs_model *m, const double *ts, const double *ys, int64_t n,
+                int64_t n_y, const double *ms, int64_t n_m, double *p, int64_t mem_start,
+                double *d, int64_t reps);
+double monitor_loop(const mbs_model *m, const double *ts, const double *ys, int64_t n,
+                    int64_t n_y, const double *ms, int64_t n_m, double *p, int64_t mem_start,
+                    double *d, double *out, int64_t n_out, double *g, double *gd,
+                    int64_t reps);
+double event_loop(const mbs_model *m, const double *ts, const double *ys, int64_t n,
+                  int64_t n_y, const double *ms, int64_t n_m, double *p, int64_t mem_start,
+                  int64_t reps);
+"""
+
+
+def _loops(model, ts, ys, ms, p):
+    """The three loops bound to `model` and the states: callables of reps."""
+    from mbs_clearance.core import build
+
+    ffi, lib = build.load("kernel-loops", [("loops.c", _LOOPS_C)], cdef=_LOOPS_CDEF)
+    ts = np.ascontiguousarray(ts, dtype=float)
+    ys = np.ascontiguousarray(ys, dtype=float)
+    ms = np.ascontiguousarray(ms[:, :model.N_MEM], dtype=float)
+    p = np.ascontiguousarray(p, dtype=float).copy()
+    n, n_y, n_m, J = ys.shape[0], ys.shape[1], ms.shape[1], model.N_EVENTS
+    d, out = np.empty(n_y), np.empty(max(model.N_OUT, 1))
+    g, gd = np.empty(J), np.empty(J)
+    rec = ffi.cast("const mbs_model *", int(model.ffi.cast("uintptr_t", model.record)))
+
+    def ptr(a):
+        return ffi.cast("double *", ffi.from_buffer(a))
+
+    common = (rec, ptr(ts), ptr(ys), n, n_y, ptr(ms), n_m, ptr(p), model.MEM_START)
+    return {"rhs": lambda reps: lib.rhs_loop(*common, ptr(d), reps),
+            "monitor": lambda reps: lib.monitor_loop(*common, ptr(d), ptr(out), model.N_OUT,
+                                                     ptr(g), ptr(gd), reps),
+            "event": lambda reps: lib.event_loop(*common, reps)}
 
 
 def rhs_call_ns(linkage, **options) -> float:
@@ -74,54 +148,17 @@ def rhs_call_ns(linkage, **options) -> float:
     return model_rhs_ns(model, ts, ys, ms, p)
 
 
-@nb.njit(cache=True)
-def _monitor_loop(monitor, ts, ys, ms, p, mem_start, n_out, reps):
-    """reps passes of monitor (with n_out outputs) over the states ys (memories ms)."""
-    d = np.empty(ys.shape[1])
-    out = np.empty(n_out)
-    g = np.empty(ms.shape[1] // 2)
-    gd = np.empty(ms.shape[1] // 2)
-    acc = 0.0
-    for _ in range(reps):
-        for i in range(ts.shape[0]):
-            for k in range(ms.shape[1]):
-                p[mem_start + k] = ms[i, k]
-            acc += monitor(ts[i], ys[i], p, d, out, g, gd)
-    return acc
-
-
-@nb.njit(cache=True)
-def _event_loop(event, ts, ys, ms, p, mem_start, reps):
-    """reps passes of joint 0's event over the states ys (memories ms)."""
-    acc = 0.0
-    for _ in range(reps):
-        for i in range(ts.shape[0]):
-            for k in range(ms.shape[1]):
-                p[mem_start + k] = ms[i, k]
-            acc += event(ts[i], ys[i], p, 0)[0]
-    return acc
-
-
-def _loop_args(model, ts, ys, ms, p):
-    return (np.ascontiguousarray(ts), np.ascontiguousarray(ys),
-            np.ascontiguousarray(ms[:, :model.N_MEM]), p.copy(), model.MEM_START)
-
-
 def model_rhs_ns(model, ts, ys, ms, p) -> float:
-    """ns per call of `model.rhs` over the states ys (memories ms) at the times ts, with the
-    parameters p (not changed), median of 5 timings."""
-    args = _loop_args(model, ts, ys, ms, p)
-    return ns_per_call(lambda reps: _rhs_loop(model.rhs, *args, reps), len(ts))
+    """ns per call of `model`'s compiled rhs over the states ys (memories ms) at the times
+    ts, with the parameters p (not changed), median of 5 timings."""
+    return ns_per_call(_loops(model, ts, ys, ms, p)["rhs"], len(ts))
 
 
 def model_kernel_ns(model, ts, ys, ms, p) -> dict[str, float]:
     """ns per call of `model`'s rhs, monitor (with its outputs) and event (joint 0) over the
     states ys (memories ms) at the times ts, medians of 5 timings each."""
-    args = _loop_args(model, ts, ys, ms, p)
-    return {"rhs": ns_per_call(lambda reps: _rhs_loop(model.rhs, *args, reps), len(ts)),
-            "monitor": ns_per_call(
-                lambda reps: _monitor_loop(model.monitor, *args, model.N_OUT, reps), len(ts)),
-            "event": ns_per_call(lambda reps: _event_loop(model.event, *args, reps), len(ts))}
+    loops = _loops(model, ts, ys, ms, p)
+    return {name: ns_per_call(loop, len(ts)) for name, loop in loops.items()}
 
 
 def case_speed(name: str, repeats: int, check_reference: bool = False,

@@ -1,6 +1,6 @@
 """The paper case as a `SliderCrank` against the same case as a `Linkage` description.
 
-Both run on the same generated kernels (mbs_clearance/_generated/paper_slider_crank.py):
+Both run on the same compiled model (the paper case's):
 the SliderCrank through reduced.py's orchestration (closed-form centred start, its
 Trajectory), the Linkage through linkage_model's glue (Newton on the loop closure, the
 per-joint Trajectory). A/B in one process, alternating (SliderCrank, Linkage, ...): the

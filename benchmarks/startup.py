@@ -7,10 +7,11 @@ shadows an installed one):
 - ``help``: ``python -m mbs_clearance.cli --help``;
 - ``simulate_help``: ``python -m mbs_clearance.cli simulate --help``;
 - ``simulate``: ``python -m mbs_clearance.cli simulate`` (the paper's case, 4 revolutions,
-  warm: the kernels load from the numba cache, which the untimed warm-up run fills).
+  warm: the core and the model load from the compiled-code cache, which the untimed warm-up
+  run fills).
 
-One untimed warm-up run of each command first (per checkout: it fills the bytecode and numba
-caches), then `--repeats` rounds, each running the commands in rotation (import, help,
+One untimed warm-up run of each command first (per checkout: it fills the bytecode and
+compiled-code caches), then `--repeats` rounds, each running the commands in rotation (import, help,
 simulate_help, simulate, import, ...), so that a change of the machine's load hits every
 command alike; the median wall time of each command is printed.
 
@@ -24,7 +25,7 @@ load, so a noisy machine widens its spread, not its median.
     python -m benchmarks.startup --cold integrator simulate simulate_four_bar sensitivity
 
 ``--cold`` instead runs the given commands once each, in order, in a fresh copy of the
-package (empty numba and compiled-code caches, as on a fresh install), and prints each
+package (an empty compiled-code cache, as on a fresh install), and prints each
 one's wall and CPU time: the first answer a new user waits for. CPU time is the measure
 on a busy machine.
 """
@@ -116,7 +117,7 @@ def measure(repeats: int, other: Path | None = None, names=tuple(COMMANDS)) -> d
 
 def cold(names=tuple(COLD_COMMANDS)) -> dict:
     """Wall and CPU time (s) of each of `names`, run once and in order in a fresh copy of
-    the package (its numba and compiled-code caches empty, as on a fresh install): the first
+    the package (its compiled-code cache empty, as on a fresh install): the first
     is a cold start, each later one pays for what the ones before it did not compile."""
     import resource
     import shutil
@@ -127,7 +128,7 @@ def cold(names=tuple(COLD_COMMANDS)) -> dict:
         shutil.copytree(ROOT / "mbs_clearance", Path(tmp) / "mbs_clearance",
                         ignore=shutil.ignore_patterns("__pycache__"))
         env = {k: v for k, v in os.environ.items()
-               if k not in ("PYTHONPATH", "NUMBA_CACHE_DIR", "MBS_CLEARANCE_DEBUG")}
+               if k not in ("PYTHONPATH", "MBS_CLEARANCE_DEBUG")}
         env["PYTHONPATH"] = tmp
         # the compiled core's and the models' libraries: an empty cache too
         env["MBS_CLEARANCE_CACHE_DIR"] = str(Path(tmp) / "compiled")
@@ -150,7 +151,7 @@ def cold(names=tuple(COLD_COMMANDS)) -> dict:
 
 
 def report_cold(result: dict) -> str:
-    lines = [f"first runs in a fresh copy of the package, numba cache empty "
+    lines = [f"first runs in a fresh copy of the package, compiled-code cache empty "
              f"({result['machine']})", f"{'command':<18} {'wall (s)':>9} {'CPU (s)':>9}"]
     for n, r in result["cold"].items():
         lines.append(f"{n:<18} {r['wall_s']:>9.1f} {r['cpu_s']:>9.1f}")
@@ -184,7 +185,7 @@ def main(argv: list[str] | None = None) -> int:
                         help="commands timed (default: all)")
     parser.add_argument("--cold", nargs="+", choices=list(COLD_COMMANDS), metavar="COMMAND",
                         help="instead: run these once, in order, in a fresh copy of the "
-                             "package with an empty numba cache (choices: "
+                             "package with an empty compiled-code cache (choices: "
                              f"{', '.join(COLD_COMMANDS)})")
     parser.add_argument("--json", action="store_true", help="print the result as JSON")
     args = parser.parse_args(argv)

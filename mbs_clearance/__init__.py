@@ -10,7 +10,6 @@ Public API::
 
 import logging
 
-from ._cache import register_package
 from ._warnings import (  # noqa: F401 - public warning classes, users filter by them
     AccuracyWarning,
     CacheWarning,
@@ -18,11 +17,7 @@ from ._warnings import (  # noqa: F401 - public warning classes, users filter by
     PhysicsWarning,
 )
 
-# before any kernel is defined: cache the kernels under a digest of all the package's sources
-# as imported (numba alone does not notice edits of the files a kernel calls into; _cache.py)
-register_package(__name__)
-
-# messages (e.g. "compiling kernels ...") go to the logger "mbs_clearance" at INFO; they are
+# messages (e.g. "compiling core ...") go to the logger "mbs_clearance" at INFO; they are
 # shown only where the application configures logging (the CLI does)
 logging.getLogger(__name__).addHandler(logging.NullHandler())
 

@@ -4,10 +4,10 @@
   grazing contact the integrator cannot resolve, a peak with a rival within the error).
 - `PhysicsWarning`: the result is computed as asked but is physically meaningless (penetration
   far beyond the clearance, motion whose periodicity cannot be judged).
-- `CacheWarning`: the compiled-kernel cache cannot be used (read-only install); the package
-  works without it, caching in a private temporary directory. Also: a damaged cache file was
-  dropped (its kernels compile again), or a generated model's text did not match its
-  recorded digest (it is generated again, never executed).
+- `CacheWarning`: a directory of the compiled-code cache cannot be used (not private, or
+  not writable); the next one is tried, down to a private temporary directory. Also: a
+  damaged library was dropped (it is built again), or a generated model's source did not
+  match its recorded digest (it is generated again, never compiled).
 """
 
 from __future__ import annotations
@@ -28,6 +28,6 @@ class PhysicsWarning(MbsClearanceWarning):
 
 
 class CacheWarning(MbsClearanceWarning):
-    """The compiled-kernel cache is unavailable (kernels are cached in a private temporary
-    directory instead, see the user guide), or a damaged cache entry or generated model was
-    dropped and is made again."""
+    """A directory of the compiled-code cache is unusable (the next one is used, see the
+    user guide), or a damaged library or generated model source was dropped and is made
+    again."""

@@ -21,13 +21,13 @@ PACKAGE = "mbs_clearance"
 
 #: the layers from the bottom up: name -> (the modules or sub-packages in it, one line)
 LAYERS = {
-    "base": (("_warnings", "_checks", "_io", "units", "_cache"),
-             "warnings, input checks, files, units, the kernel cache"),
+    "base": (("_warnings", "_checks", "_io", "units"),
+             "warnings, input checks, files, units"),
     "numerics": (("numerics", "core"),
-                 "the integrators (numba; the C core and its build); know no mechanism"),
+                 "the compiled integrator, its methods and its build; know no mechanism"),
     "laws": (("laws",), "contact, friction and oil-film laws, one module each"),
     "model": (("model",), "Linkage, the SliderCrank parameter set, named cases, design fields"),
-    "generate": (("generate", "_generated"), "description -> compiled model module"),
+    "generate": (("generate",), "description -> compiled model"),
     "solve": (("solve",), "runs, DDM, accuracy, Trajectory, the backend registry"),
     "backends": (("backends",), "Exudyn and the ideal joint"),
     "analysis": (("analysis",), "sensitivities, objectives, sections, Lyapunov, periodic orbits"),

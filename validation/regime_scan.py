@@ -1,4 +1,4 @@
-"""Peak per revolution of a named case by a fixed-step RK4 on its generated kernels.
+"""Peak per revolution of a named case by a fixed-step RK4 on its compiled kernels.
 
     python -m validation.regime_scan four_bar 8 600000 crank_speed=1.0471975511965976
 
@@ -25,7 +25,6 @@ from __future__ import annotations
 import sys
 import time
 
-import numba as nb
 import numpy as np
 
 from mbs_clearance.generate import load_model
@@ -34,59 +33,65 @@ from mbs_clearance.solve.linkage_model import initial_state, pack_parameters
 
 
 def make_runner(model):
-    """A compiled fixed-step RK4 with event bisection bound to the model's kernels."""
-    rhs, event, on_event, monitor = model.rhs, model.event, model.on_event, model.monitor
+    """A fixed-step RK4 with event bisection on the compiled model's kernels (its record's
+    rhs, event, on_event and monitor, called from Python: a slow loop, a few microseconds
+    per call)."""
+    rec, ffi = model.record, model.ffi
     J, n_out = model.N_EVENTS, model.N_OUT
 
-    @nb.njit
-    def step(t, y, h, p, k1, k2, k3, k4, tmp):
+    def ptr(a):
+        return ffi.cast("double *", ffi.from_buffer(a))
+
+    def rhs(t, y, p, dydt):
+        rec.rhs(t, ptr(y), y.shape[0], ptr(p), ptr(dydt))
+
+    g_gd = np.empty(2)
+
+    def event(t, y, p, j):
+        rec.event(t, ptr(y), ptr(p), j, ptr(g_gd))
+        return g_gd[0]
+
+    def step(t, y, h, p, k1, k2, k3, k4):
         rhs(t, y, p, k1)
-        tmp[:] = y + 0.5 * h * k1
-        rhs(t + 0.5 * h, tmp, p, k2)
-        tmp[:] = y + 0.5 * h * k2
-        rhs(t + 0.5 * h, tmp, p, k3)
-        tmp[:] = y + h * k3
-        rhs(t + h, tmp, p, k4)
+        rhs(t + 0.5 * h, y + 0.5 * h * k1, p, k2)
+        rhs(t + 0.5 * h, y + 0.5 * h * k2, p, k3)
+        rhs(t + h, y + h * k3, p, k4)
         return y + h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
 
-    @nb.njit
     def run(y0, p, h, period, n_rev):
         n = y0.shape[0]
-        k1, k2, k3, k4, tmp = (np.empty(n), np.empty(n), np.empty(n), np.empty(n),
-                               np.empty(n))
-        out, g, gd, dy = np.empty(n_out), np.empty(J), np.empty(J), np.empty(n)
+        k1, k2, k3, k4 = (np.empty(n) for _ in range(4))
+        out, g, gd, dy = np.empty(max(n_out, 1)), np.empty(J), np.empty(J), np.empty(n)
         peaks = np.zeros(n_rev)
         events = np.zeros(n_rev, dtype=np.int64)
         t_end = n_rev * period
-        t, y = 0.0, y0.copy()
-        g_old = np.empty(J)
-        for j in range(J):
-            g_old[j] = event(t, y, p, j)[0]
+        t, y = 0.0, np.array(y0, dtype=float)
+        g_old = np.array([event(t, y, p, j) for j in range(J)])
         while t < t_end * (1.0 - 1e-14):
             hh = min(h, t_end - t)
-            y_new = step(t, y, hh, p, k1, k2, k3, k4, tmp)
+            y_new = step(t, y, hh, p, k1, k2, k3, k4)
             hit = -1
             for j in range(J):
-                if g_old[j] != 0.0 and (g_old[j] < 0.0) != (event(t + hh, y_new, p, j)[0] < 0.0):
+                if g_old[j] != 0.0 and (g_old[j] < 0.0) != (event(t + hh, y_new, p, j) < 0.0):
                     hit = j
             if hit >= 0:              # land on the crossing: bisection of the step
                 lo, hi = 0.0, hh
                 for _ in range(60):
                     mid = 0.5 * (lo + hi)
-                    y_mid = step(t, y, mid, p, k1, k2, k3, k4, tmp)
-                    if (event(t + mid, y_mid, p, hit)[0] < 0.0) == (g_old[hit] < 0.0):
+                    y_mid = step(t, y, mid, p, k1, k2, k3, k4)
+                    if (event(t + mid, y_mid, p, hit) < 0.0) == (g_old[hit] < 0.0):
                         lo = mid
                     else:
                         hi = mid
                 hh = hi
-                y_new = step(t, y, hh, p, k1, k2, k3, k4, tmp)
-                on_event(t + hh, y_new, p, hit)
+                y_new = step(t, y, hh, p, k1, k2, k3, k4)
+                rec.on_event(t + hh, ptr(y_new), ptr(p), hit)
                 events[min(int((t + hh) / period), n_rev - 1)] += 1
             t += hh
             y = y_new
             for j in range(J):
-                g_old[j] = event(t, y, p, j)[0]
-            value = monitor(t, y, p, dy, out, g, gd)
+                g_old[j] = event(t, y, p, j)
+            value = rec.monitor(t, ptr(y), n, ptr(p), ptr(dy), ptr(out), n_out, ptr(g), ptr(gd))
             k = min(int(t / period), n_rev - 1)
             peaks[k] = max(peaks[k], value)
         return peaks, events

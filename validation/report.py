@@ -804,7 +804,7 @@ def section_environment(out: Path, s: dict, timings: dict) -> dict:
     from .timing import machine_summary
 
     versions = {}
-    for pkg in ("mbs-clearance", "numpy", "scipy", "numba", "exudyn", "pygad", "matplotlib",
+    for pkg in ("mbs-clearance", "numpy", "scipy", "exudyn", "pygad", "matplotlib",
                 "jinja2", "dask"):
         try:
             versions[pkg] = metadata.version(pkg)

@@ -17,6 +17,7 @@ import numpy as np
 from scipy.integrate import solve_ivp
 from scipy.optimize import minimize_scalar
 
+from mbs_clearance.core.integrate import RecordKernels
 from mbs_clearance.model.mechanism import SliderCrank
 from mbs_clearance.numerics.integrator import N_CRESTS
 from mbs_clearance.solve import reduced
@@ -61,7 +62,7 @@ def solve_scipy(mech: SliderCrank, edges: np.ndarray | None = None, revolutions:
     # a separation: the journal flew through the wall)
     offset = max(1e-12 * mech.clearance,
                  8 * np.finfo(float).eps * (mech.crank_length + mech.coupler_length))
-    return _solve(model.rhs, model.event, model.on_event, _monitored(model),
+    return _solve(model.rhs, model.event, RecordKernels(model).on_event, _monitored(model),
                   reduced.initial_state(mech), p, edges, 1, offset, method, rtol, atol)
 
 
@@ -69,9 +70,10 @@ def _monitored(model):
     """monitored(t, y, p): the model's monitored force (its monitor's value)."""
     dydt = np.empty(model.N_STATE)
     out, g, gd = np.empty(0), np.empty(model.N_EVENTS), np.empty(model.N_EVENTS)
+    kernels = RecordKernels(model)
 
     def monitored(tt, yy, pp):
-        return model.monitor(tt, yy, pp, dydt, out, g, gd)
+        return kernels.monitor(tt, yy, pp, dydt, out, g, gd)
 
     return monitored
 
@@ -96,8 +98,8 @@ def solve_scipy_linkage(linkage, revolutions: int = 4, method: str = "DOP853",
         atol[2 * model.N_Q:] = np.inf          # the drive's work: a quadrature, no control
     edges = np.arange(revolutions + 1) * linkage.period
     offset = max(1e-12 * linkage.min_clearance, 8 * np.finfo(float).eps * linkage.length_scale)
-    return _solve(model.rhs, model.event, model.on_event, _monitored(model), y0, p, edges,
-                  model.N_EVENTS, offset, method, rtol, atol)
+    return _solve(model.rhs, model.event, RecordKernels(model).on_event, _monitored(model),
+                  y0, p, edges, model.N_EVENTS, offset, method, rtol, atol)
 
 
 def _solve(rhs, event, on_event, monitored, y0, p, edges, n_events, offset, method, rtol,

@@ -30,12 +30,12 @@ import warnings
 from dataclasses import dataclass, field
 from typing import Any
 
-import numba as nb
 import numpy as np
 
 from mbs_clearance import SliderCrank, simulate
 from mbs_clearance._warnings import AccuracyWarning
-from mbs_clearance.numerics.integrator import METHODS, rk_step
+from mbs_clearance.generate.energy import mechanical_energy
+from mbs_clearance.numerics.integrator import METHODS
 from mbs_clearance.solve import reduced
 
 RPM = 2 * math.pi / 60
@@ -100,42 +100,37 @@ def _energy_error(case: StressCase) -> float:
     ts, ys, ms, *_, p = reduced.run(case.mech, case.revolutions, rtol=1e-10, **case.options)
     q = p.copy()
     energy = np.empty(len(ts))
+    energy_of = mechanical_energy(reduced.linkage_of(case.mech))
     for i in range(len(ts)):
         q[reduced.MEM_START:reduced.MEM_START + 2] = ms[i]
-        energy[i] = reduced.MODEL.mechanical_energy(ts[i], ys[i], q)
+        energy[i] = energy_of(ts[i], ys[i], q)
     work = ys[:, -1]
     return float(np.max(np.abs(work - (energy - energy[0]))) / max(np.max(np.abs(work)), 1e-12))
 
 
-@nb.njit(cache=True)
-def _step_excursion(ts, ys, ms, p, A, B, C, n_sub, mode):
+def _step_excursion(ts, ys, ms, p, coefficients, n_sub, mode):
     """Re-taken steps of one contact mode (0: free flight, 1: contact) at n_sub - 1 interior
     times: the largest excursion to the wrong side of the wall, in clearances (delta / c in
     free flight, -delta / c in contact; > 0 means a missed contact or separation), with the
-    generated model's kernels (p: its parameters, as reduced.run returns them)."""
-    n = ys.shape[1]
-    K = np.zeros((B.shape[0] + 1, n))
-    f = np.empty(n)
-    y_new = np.empty(n)
-    f_new = np.empty(n)
-    tmp = np.empty(n)
+    compiled model's step map (p: its parameters, as reduced.run returns them)."""
+    from mbs_clearance.core.integrate import model_record, step_states
+
+    model = reduced.MODEL
+    record = model_record(model.ffi, model.lib)
     q = p.copy()
     worst = -np.inf
+    fractions = np.arange(1, n_sub) / n_sub
     for k in range(ts.shape[0] - 1):
         if (ms[k, 0] > 0.5) != (mode == 1):
             continue
         q[reduced.MEM_START] = ms[k, 0]
         q[reduced.MEM_START + 1] = ms[k, 1]
-        y0 = ys[k].copy()
-        reduced.MODEL.rhs(ts[k], y0, q, f)
-        h = ts[k + 1] - ts[k]
-        for j in range(1, n_sub):
-            rk_step(reduced.MODEL.rhs, ts[k], y0, f, h * j / n_sub, A, B, C, K, q, y_new, f_new,
-                    tmp)
+        hs = (ts[k + 1] - ts[k]) * fractions
+        states, _ = step_states(record, ts[k], ys[k], q, hs, coefficients, 0)
+        for h, y_new in zip(hs, states):
             # the switching function: delta in free flight, -delta in contact
-            d = reduced.MODEL.event(ts[k] + h * j / n_sub, y_new, q, 0)[0] / q[reduced.P_CLEARANCE]
-            if d > worst:
-                worst = d
+            d = model.event(ts[k] + h, y_new, q, 0)[0] / q[reduced.P_CLEARANCE]
+            worst = max(worst, d)
     return worst
 
 
@@ -145,7 +140,7 @@ def step_excursions(case: StressCase, n_sub: int = 20) -> tuple[float, float]:
     leaves and comes back within one step, keeping a stale impact velocity)."""
     ts, ys, ms, *_, p = reduced.run(case.mech, case.revolutions, **case.options)
     tab = METHODS[case.options.get("method", "dopri5")]   # re-take with the run's method
-    return tuple(float(_step_excursion(ts, ys, ms, p, tab.A, tab.B, tab.C, n_sub, mode))
+    return tuple(float(_step_excursion(ts, ys, ms, p, tab.arrays(), n_sub, mode))
                  for mode in (0, 1))
 
 

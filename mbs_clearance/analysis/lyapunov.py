@@ -1,12 +1,12 @@
 """The largest Lyapunov exponent from the variational equations.
 
 The DDM kernels of a generated model (linkage_ddm; core/sens_runtime.h in the compiled C
-model, generate/sens_runtime.py in the numba module) integrate the
+model) integrate the
 state with sensitivities s' = (df/dy) s + (df/dp) D + (df/d deltadot_minus) sigma. With no
 parameter (D = 0) and an initial sensitivity v0 (a direction in state space) the
 sensitivity is the tangent vector v(t) = Phi(t) v0 of the flow, and each clearance joint's
 impact-velocity memory sensitivity sigma_j carries the tangent of that hidden state, set at
-each of its contact onsets with the event-time term (sens_runtime.sens_on_event) exactly as for
+each of its contact onsets with the event-time term (core/sens_runtime.h) exactly as for
 parameters: the state's tangent does not jump at the switches (the contact force is zero on
 both sides of delta = 0), the memory's does.
 
@@ -54,25 +54,17 @@ estimate over the last half of the averaged windows. The verdict (`exponent_verd
 
 from __future__ import annotations
 
+import functools
 import math
 import sys
 from dataclasses import dataclass, field
 
-import numba as nb
 import numpy as np
 
 from .._checks import check_int, check_real, check_revolutions_memory
+from ..core.integrate import no_events_source
 from ..model.cases import as_linkage
-from ..numerics.integrator import (
-    ACTION_SIG,
-    EVENT_SIG,
-    KERNEL,
-    METHODS,
-    MONITOR_SIG,
-    RHS_SIG,
-    integrate,
-    make_settings,
-)
+from ..numerics.integrator import METHODS, make_settings
 from ..solve.flows import Flow, TangentFlow, drive_of
 from ..solve.settings import RunSettings
 from .poincare import (  # noqa: F401 - the exponent statistics, public here too
@@ -135,67 +127,52 @@ class LyapunovResult:
 LINEAR, LORENZ = 0, 1
 
 
-@nb.njit(RHS_SIG, **KERNEL)
-def _tb_rhs(t, y, p, dydt):
-    """State (3) and, for the full state, tangent (3) derivatives of the reference system
-    p[0]: LINEAR (x' = A x, A row-major in p[1:10]) or LORENZ (sigma, rho, beta in p[1:4])."""
-    tangent = y.shape[0] >= 6
-    if p[0] < 0.5:
-        for i in range(3):
-            a = 0.0
-            b = 0.0
-            for j in range(3):
-                a += p[1 + 3 * i + j] * y[j]
-                if tangent:
-                    b += p[1 + 3 * i + j] * y[3 + j]
-            dydt[i] = a
-            if tangent:
-                dydt[3 + i] = b
-        return
-    s = p[1]
-    r = p[2]
-    b = p[3]
-    x = y[0]
-    yy = y[1]
-    z = y[2]
-    dydt[0] = s * (yy - x)
-    dydt[1] = x * (r - z) - yy
-    dydt[2] = x * yy - b * z
-    if tangent:
-        u = y[3]
-        v = y[4]
-        w = y[5]
-        dydt[3] = s * (v - u)
-        dydt[4] = (r - z) * u - v - x * w
-        dydt[5] = yy * u + x * v - b * w
+#: the reference systems in C, through the compiled core's seam (mbs_core.h): state (3)
+#: and, for the full state, tangent (3) derivatives of the system p[0]: LINEAR (x' = A x, A
+#: row-major in p[1:10]) or LORENZ (sigma, rho, beta in p[1:4]); no switching (the one
+#: switching function stays negative); the monitored value is |x|
+_TEXTBOOK_C = no_events_source("""
+    int tangent = n >= 6;
+    if (p[0] < 0.5) {
+        for (int i = 0; i < 3; i++) {
+            double a = 0.0, b = 0.0;
+            for (int j = 0; j < 3; j++) {
+                a += p[1 + 3 * i + j] * y[j];
+                if (tangent)
+                    b += p[1 + 3 * i + j] * y[3 + j];
+            }
+            dydt[i] = a;
+            if (tangent)
+                dydt[3 + i] = b;
+        }
+        return;
+    }
+    double s = p[1], r = p[2], b = p[3], x = y[0], yy = y[1], z = y[2];
+    dydt[0] = s * (yy - x);
+    dydt[1] = x * (r - z) - yy;
+    dydt[2] = x * yy - b * z;
+    if (tangent) {
+        double u = y[3], v = y[4], w = y[5];
+        dydt[3] = s * (v - u);
+        dydt[4] = (r - z) * u - v - x * w;
+        dydt[5] = yy * u + x * v - b * w;
+    }""", "sqrt(y[0] * y[0] + y[1] * y[1] + y[2] * y[2])", 6, 3, 10)
 
 
-@nb.njit(EVENT_SIG, **KERNEL)
-def _tb_event(t, y, p, j):
-    """No switching: the function stays negative."""
-    return -1.0, 0.0
+@functools.lru_cache(maxsize=1)
+def _textbook_record():
+    from ..core import build
+    from ..core.integrate import model_record
+
+    return model_record(*build.load("textbook", [("textbook.c", _TEXTBOOK_C)]))
 
 
-@nb.njit(ACTION_SIG, **KERNEL)
-def _tb_on_event(t, y, p, j):
-    """Never called (no switching)."""
-    return
-
-
-@nb.njit(MONITOR_SIG, **KERNEL)
-def _tb_monitor(t, y, p, dydt, out, g, gd):
-    """The right-hand side; the monitored value is |x|."""
-    _tb_rhs(t, y, p, dydt)
-    g[0] = -1.0
-    gd[0] = 0.0
-    return math.sqrt(y[0] * y[0] + y[1] * y[1] + y[2] * y[2])
-
-
-@nb.njit(cache=True, error_model="numpy", nogil=True)
 def integrate_textbook(y0, p, edges, settings, coefficients):
-    """`integrate` bound to the reference systems' kernels (compiled once, cached)."""
-    return integrate(_THIS._tb_rhs, _THIS._tb_event, _THIS._tb_on_event, _THIS._tb_monitor,
-                     y0, p, edges, settings, coefficients)
+    """The compiled core's run of the reference systems (`_TEXTBOOK_C`, built once and
+    cached), with the arguments and returns of a model's ``integrate_model``."""
+    from ..core.integrate import integrate
+
+    return integrate(_textbook_record(), y0, p, edges, settings, coefficients)
 
 
 class TextbookFlow(Flow):

@@ -1,9 +1,9 @@
 """The Python binding of the compiled integrator (`integrator.c`, built once per process).
 
-`integrate` takes the same arguments as the numba integrator's
-(`mbs_clearance.numerics.integrator.integrate`) but a model as a pointer to its record
-(`mbs_model`, the seam of `mbs_core.h`) instead of four compiled functions, and returns the
-same tuple. A model library (C sources built with `build.load`) exports its record with
+`integrate` takes a model as a pointer to its record (`mbs_model`, the seam of
+`mbs_core.h`), the initial state, parameters, window edges, settings
+(`numerics.integrator.make_settings`) and a method's coefficients, and returns the recorded
+run. A model library (C sources built with `build.load`) exports its record with
 ``const mbs_model *mbs_model_record(void)``; `model_record` turns the ``(ffi, lib)`` of such a
 library into the pointer `integrate` takes::
 
@@ -26,11 +26,63 @@ import numpy as np
 from . import build
 
 __all__ = ["core", "model_record", "integrate", "step_peaks", "step_value", "step_states",
-           "with_parameter_length", "OUT_OF_MEMORY", "BAD_ARGUMENT"]
+           "with_parameter_length", "RecordKernels", "NO_EVENTS_C", "no_events_source",
+           "OUT_OF_MEMORY",
+           "BAD_ARGUMENT"]
 
 #: negative statuses of the core (the others are `integrator.RESULTS`)
 OUT_OF_MEMORY = -1
 BAD_ARGUMENT = -2
+
+#: the C of a model without switching (for hand-written models through the seam): its one
+#: switching function always -1, no action, no constants
+NO_EVENTS_C = r"""
+static void event(double t, const double *y, const double *p, int64_t j, double *g_gd)
+{
+    (void)t; (void)y; (void)p; (void)j;
+    g_gd[0] = -1.0;
+    g_gd[1] = 0.0;
+}
+
+static void on_event(double t, const double *y, double *p, int64_t j)
+{
+    (void)t; (void)y; (void)p; (void)j;
+}
+
+static int prepare(double *p) { (void)p; return 0; }
+"""
+
+
+
+def no_events_source(rhs_body: str, value: str, n_state: int, n_q: int, n_p: int) -> str:
+    """The C source of a hand-written model without switching, through the seam
+    (`mbs_core.h`): `rhs_body` the statements of ``rhs(t, y, n, p, dydt)`` (n: the length of
+    y, which may be the dense part only), `value` the C expression of the monitored value
+    (of t, y, p), `n_state` states (`n_q` coordinates), p of `n_p` entries without memory or
+    constants; `NO_EVENTS_C` for its switching function, action and prepare."""
+    return ('#include <math.h>\n#include "mbs_core.h"\n' + NO_EVENTS_C + f"""
+static void rhs(double t, const double *y, int64_t n, const double *p, double *dydt)
+{{
+    (void)t; (void)y; (void)n; (void)p;
+{rhs_body}
+}}
+
+static double monitor(double t, const double *y, int64_t n, const double *p, double *dydt,
+                      double *out, int64_t n_out, double *g, double *gd)
+{{
+    (void)out; (void)n_out;
+    rhs(t, y, n, p, dydt);
+    g[0] = -1.0;
+    gd[0] = 0.0;
+    return {value};
+}}
+
+static const mbs_model RECORD = {{{n_state}, {n_q}, 1, {n_p}, 0, 0, {n_p}, {n_p}, rhs, event,
+                                 on_event, monitor, prepare}};
+
+const mbs_model *mbs_model_record(void) {{ return &RECORD; }}
+""")
+
 
 _SOURCE = Path(__file__).resolve().parent / "integrator.c"
 #: the core (compiled once, not per model) at -O3: its loops over the state (the stages'
@@ -187,8 +239,8 @@ def integrate(model, y0, p, edges, settings, coefficients):
     y0 : array of float, shape (n,)
         Initial state (the model's units: m, rad, m/s, rad/s, ...).
     p : ndarray of float64, shape (model.n_p,)
-        Parameters, memory and constants; the memory entries are updated in place, as by
-        the numba integrator (contiguous float64 required).
+        Parameters, memory and constants; the memory entries are updated in place
+        (contiguous float64 required).
     edges : array of float, shape (n_windows + 1,)
         Window edges in s: edges[0] the start, edges[-1] the end; the integration lands on
         each, and the monitor's maximum is tracked per window.
@@ -203,7 +255,7 @@ def integrate(model, y0, p, edges, settings, coefficients):
         (t (m,) in s, y (m, n), memory (m, max(n_mem, 1)) of the recorded steps, the refined
         maximum of the monitor per window and its time in s, counters (int64: nfev,
         naccept, nreject, nevent, nrefine), outputs (m, n_out), status (an
-        `integrator.RESULTS` code)): numba's `integrate`, arrays owning their memory.
+        `integrator.RESULTS` code)), arrays owning their memory.
     """
     ffi, lib = core()
     y0 = _doubles("y0", y0)
@@ -267,3 +319,29 @@ def integrate(model, y0, p, edges, settings, coefficients):
     finally:
         lib.mbs_result_free(res)
     return t, y, memory, peaks, peak_t, counters, outputs, int(status)
+
+
+class RecordKernels:
+    """The monitor and the event action of a compiled model (a `generate.c_loader.CModel`)
+    called through its record's function pointers from Python, numpy arrays written in
+    place (p and the outputs: contiguous float64): what a Python integrator (validation's
+    scipy reference) or a test calls besides the model's rhs and event."""
+
+    def __init__(self, model):
+        self.ffi, self.rec = model.ffi, model.record
+
+    def _ptr(self, a):
+        return self.ffi.from_buffer("double[]", a)
+
+    def monitor(self, t, y, p, dydt, out, g, gd) -> float:
+        """The monitored value at (t in s, y); dydt, out (its length: the outputs written),
+        g and gd (one entry per switching function) filled."""
+        y = np.ascontiguousarray(y, dtype=float)
+        return self.rec.monitor(float(t), self._ptr(y), y.shape[0], self._ptr(p),
+                                self._ptr(dydt), self._ptr(out), out.shape[0], self._ptr(g),
+                                self._ptr(gd))
+
+    def on_event(self, t, y, p, j) -> None:
+        """The action of switching function j at (t in s, y): its memory in p updated."""
+        y = np.ascontiguousarray(y, dtype=float)
+        self.rec.on_event(float(t), self._ptr(y), self._ptr(p), int(j))

@@ -1,11 +1,10 @@
 """C code of the Jacobian and tangent kernels of a `Derivation`: the one plan of
-`jacobians.jacobian_plan` (the numba module's), its expressions printed by the C model's
+`jacobians.jacobian_plan`, its expressions printed by the C model's
 printer (`cwriter._C`) and its literal lines (python syntax: assignments, `for` and `if`
 blocks by indentation, calls of the elements' rows with tuple results and tuple arguments)
-translated statement by statement (`translate`). The elements' rows are core/jac_runtime.h,
-the C twins of generate/sens_runtime.py's.
+translated statement by statement (`translate`). The elements' rows are core/jac_runtime.h.
 
-The kernels have the numba kernels' arguments and semantics:
+The kernels' arguments:
 ``jacobian(t, y, p, jac, full)`` and ``tangent(t, y, p, dz, nd, use, out, full)``, exported
 as ``mbs_jacobian`` and ``mbs_tangent``.
 """

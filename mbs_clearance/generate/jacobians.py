@@ -9,8 +9,9 @@ accelerations A as symbols, the equations of motion are R(z, A, F) = M A - f = 0
     dA/dz = -M^{-1} (dR/dz + dR/dFX dFX/dz + dR/dFY dFY/dz),
 
 solved in the kernel with the Cholesky factors of M, as the plain model solves for A. The
-contact forces' derivatives come from the contact law (`sens_runtime.contact_jacobian`, one place
-with `contact.contact_force_partials`); everything else is differentiated symbolically
+contact forces' derivatives come from the contact law (`contact_jacobian` of
+core/jac_runtime.h, one place with `forces.contact_force_partials`); everything else is
+differentiated symbolically
 (sympy, through the sines and cosines of the base angles by the chain rule) and written with
 parameter-only constants, as the plain kernels are.
 
@@ -18,12 +19,11 @@ Rows of jac (flat, stride N_Z + 1; column N_Z holds the value): OUT_COLUMNS, the
 clearance joint the journal centre's velocity relative to the bearing (x, y) and the contact
 force components (x, y) on the bearing's side, then per joint with friction the rotation
 part of the slip velocity (omega_J R_J - omega_B R_B); the friction force's derivatives come
-from `runtime.friction_jacobian` (the friction law's partials), its moments enter the
+from `friction_jacobian` of core/jac_runtime.h (the friction law's partials), its moments enter the
 equations of motion through the symbol TQ. `full=False` fills the rows of the clearance
 joints and the accelerations only (what the sensitivity equations need).
 
-One plan (`jacobian_plan`) is printed twice: in python for the numba module
-(`jacobian_context`, jacobians.py.jinja) and in C for the compiled core (`cjacobians`).
+The plan (`jacobian_plan`) is printed in C for the compiled core (`cjacobians`).
 """
 
 from __future__ import annotations
@@ -35,7 +35,7 @@ import sympy as sp
 from ..laws.registry import FRICTION_SLOTS
 from .derive import Derivation
 
-__all__ = ["jacobian_context", "jacobian_plan", "emit_body", "z_columns"]
+__all__ = ["jacobian_plan", "emit_body", "z_columns"]
 
 
 def z_columns(d: Derivation) -> list:
@@ -457,26 +457,6 @@ def emit_body(stages: list, full_stage: tuple, stage, preamble) -> tuple[list, l
         else:
             body.append(st)
     return preamble(used), [ln for b in body[:-1] for ln in b], body[-1]
-
-
-def jacobian_context(w, d: Derivation, out_columns: list[str]) -> dict:
-    """Template variables of jacobians.py.jinja: the bodies of `jacobian` (every column of
-    z) and `tangent` (the directional derivatives along given seeds dz, from the same
-    derivative expressions) of `jacobian_plan`, and the layout."""
-    plan = jacobian_plan(w, d, out_columns)
-
-    def emit(stages, full_stage):
-        pre, body, full = emit_body(stages, full_stage, w.stage,
-                                    lambda used: w.preamble(used - plan.extra_syms))
-        code = ["    " + ln for ln in pre + body]
-        code.append("    if full:")
-        code += ["        " + ln for ln in full]
-        return code
-
-    return dict(jac_body=emit(plan.jac_stages, plan.jac_full),
-                tan_body=emit(plan.tan_stages, plan.tan_full), n_z=plan.n_z,
-                jac_stride=plan.jac_stride, n_jrows=plan.n_jrows, z_names=plan.z_names,
-                jac_extra=plan.jac_extra)
 
 
 def _cholesky_lines(n: int) -> list[str]:

@@ -14,8 +14,7 @@ __all__ = ["GENERATOR_VERSION", "structure_digest", "geometric_zeros", "model_st
 
 _HERE = Path(__file__).parent
 #: the generator's sources: any edit of them changes the key of every generated module
-_SOURCES = ("derive.py", "writer.py", "module.py.jinja", "jacobians.py", "jacobians.py.jinja",
-            "key.py")
+_SOURCES = ("derive.py", "writer.py", "jacobians.py", "key.py")
 
 
 def _generator_version() -> str:

@@ -60,8 +60,7 @@ def profiled(linkage: Linkage) -> list[tuple[int, object]]:
             if cj.bearing_profile is not None]
 
 
-def refuse_profiles(linkage: Linkage, runs: str = "numba's integrator "
-                    "(MBS_CLEARANCE_CORE=numba)", hint: str = "run it on the C core") -> None:
+def refuse_profiles(linkage: Linkage, runs: str, hint: str) -> None:
     """ValueError naming the first profiled clearance joint of `linkage`, which `runs` do
     not support (`hint`: what to do instead)."""
     found = profiled(linkage)

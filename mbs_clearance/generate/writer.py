@@ -1,6 +1,6 @@
-"""Numba code of a `Derivation`: expressions split into parameter-only constants and state
-polynomials, common subexpressions (sympy.cse), the mass matrix solved in the kernel, all
-filled into the module template (module.py.jinja).
+"""The plan of a `Derivation`'s compiled model, which the C printer (`cwriter`) writes out:
+expressions split into parameter-only constants and state polynomials, the stages of a
+model evaluation, the mass matrix solved in the kernel, the output columns.
 
 Every expression of the model is a polynomial in the state-dependent symbols (sines and
 cosines of the angles, coordinates, rates, accelerations, contact force components) whose
@@ -12,28 +12,21 @@ monomials, as a hand-written model with its lengths and masses combined would.
 
 from __future__ import annotations
 
-import json
-from pathlib import Path
 from types import SimpleNamespace
 
-import jinja2
 import sympy as sp
-from sympy.printing.pycode import PythonCodePrinter
 
 from ..laws.registry import FRICTION_SLOTS
 from .derive import FRICTION_FIELDS, LUBRICATION_FIELDS, Derivation
-from .jacobians import jacobian_context
-from .key import GENERATOR_VERSION, structure_digest  # noqa: F401  (public here too)
 
-__all__ = ["render", "GENERATOR_VERSION", "structure_digest"]
-
-_TEMPLATE = Path(__file__).with_name("module.py.jinja")
+__all__ = ["Derivation"]
 
 
 class _Numbers:
-    """How the model printers (python and C) write powers and numbers, alike so that both
-    evaluate the same operations in the same order: integer powers as products, square
-    roots through `SQRT`, rationals and integers as round-trip float literals."""
+    """How the model printers write powers and numbers, alike so that the C model and the
+    plan's literal lines evaluate the same operations in the same order: integer powers as
+    products, square roots through `SQRT`, rationals and integers as round-trip float
+    literals."""
 
     SQRT = "math.sqrt"
 
@@ -57,28 +50,8 @@ class _Numbers:
         return f"{int(expr)}.0" if abs(int(expr)) < 2**53 else repr(float(expr))
 
 
-class _Printer(_Numbers, PythonCodePrinter):
-    """Python/numba code: integer powers as products, square roots through math."""
-
-    def _print_Pow(self, expr, rational=False):
-        return self._power(expr) or super()._print_Pow(expr, rational=rational)
-
-
-_PRINTER = _Printer({"fully_qualified_modules": True, "standard": "python3"})
-
-
-def _literal(text: str) -> str:
-    """`text` as a Python string literal (JSON, ASCII only): the one form in which a name of
-    the description enters the generated source, in code, docstrings and comments alike."""
-    return json.dumps(text)
-
-
-def _code(expr) -> str:
-    return _PRINTER.doprint(expr).replace("math.math.", "math.")
-
-
 class _Writer:
-    """Splits expressions into constants and state polynomials; emits function bodies."""
+    """Splits expressions into constants and state polynomials."""
 
     def __init__(self, d: Derivation):
         self.d = d
@@ -123,86 +96,6 @@ class _Writer:
         return out
 
     # ---- function bodies
-    def stage(self, exprs: list[sp.Expr], names: list[str], temps) -> tuple[set, list[str]]:
-        """(symbols used, lines) computing `exprs` into the local variables `names` through
-        common subexpressions (named from the iterator `temps`, shared by a function's
-        stages so that the names stay unique)."""
-        reps, reduced = sp.cse(exprs, symbols=temps, optimizations="basic", order="none")
-        used = set()
-        for e in [*(e for _, e in reps), *reduced]:
-            used |= e.free_symbols
-        lines = [f"{sym} = {_code(e)}" for sym, e in reps]
-        lines += [f"{name} = {_code(e)}" for name, e in zip(names, reduced)]
-        return used, lines
-
-    def preamble(self, used: set, state: str = "y") -> list[str]:
-        """Lines loading the parameters, constants and state components in `used`, and the
-        sines and cosines of the moving angles in it (one `sincos` per angle)."""
-        angles_used = [(a, S, C) for a, S, C in self.moving if S in used or C in used]
-        need = set(used)
-        for a, _, _ in angles_used:
-            need |= a.free_symbols
-        lines = self._loads(need, state)
-        lines += [f"{S}, {C} = sincos({_code(a)})" for a, S, C in angles_used]
-        return lines
-
-    def function(self, stages: list, state: str = "y") -> list[str]:
-        """The indented body of a function: a preamble, then the stages (each either
-        (exprs, names) or a list of literal lines)."""
-        temps = sp.numbered_symbols("x")
-        used, lines = set(), []
-        for st in stages:
-            if isinstance(st, tuple):
-                u, ls = self.stage(*st, temps)
-                used |= u
-                lines += ls
-            else:
-                lines += st
-        return ["    " + line for line in self.preamble(used, state) + lines]
-
-    def _loads(self, need, state) -> list[str]:
-        d = self.d
-        lines = []
-        for sym in sorted(need & set(self.pindex), key=lambda s: self.pindex[s]):
-            lines.append(f"{sym} = p[{self.pindex[sym]}]  # {_literal(self.pname[sym])}")
-        consts = {v: k for k, v in self.constants.items()}
-        for sym in sorted((s for s in need if s in consts), key=lambda s: int(s.name[1:])):
-            lines.append(f"{sym} = p[CONST_START + {sym.name[1:]}]")
-        n = len(d.Q)
-        for i in range(n):
-            if d.Q[i] in need:
-                lines.append(f"{d.Q[i]} = {state}[{i}]")
-        if state == "y":
-            for i in range(n):
-                if d.U[i] in need:
-                    lines.append(f"{d.U[i]} = y[{n + i}]")
-        return lines
-
-    def constants_body(self) -> list[str]:
-        """Lines of `prepare(p)`: every constant into p[CONST_START + k]."""
-        items = list(self.constants.items())
-        exprs = [e for e, _ in items]
-        reps, reduced = sp.cse(exprs, symbols=sp.numbered_symbols("x"), optimizations="basic",
-                               order="none")
-        used = set()
-        for e in [*(e for _, e in reps), *reduced]:
-            used |= e.free_symbols
-        lines = []
-        fixed = [(a, S, C) for a, S, C in self.fixed if S in used or C in used]
-        need = set(used)
-        for a, _, _ in fixed:
-            need |= a.free_symbols
-        lines += self._loads(need, "y")
-        for a, S, C in fixed:
-            lines.append(f"{S} = math.sin({_code(a)})")
-            lines.append(f"{C} = math.cos({_code(a)})")
-        for sym, e in reps:
-            lines.append(f"{sym} = {_code(e)}")
-        for (_, sym), e in zip(items, reduced):
-            lines.append(f"p[CONST_START + {sym.name[1:]}] = {_code(e)}")
-        return ["    " + line for line in lines]
-
-
 def _solve_lines(M, f, out, indent="    ") -> list[str]:
     """Lines solving M x = f (M symmetric positive definite, entries given as code strings,
     f as names) into the names `out`: by division for a diagonal M, else by an unrolled
@@ -374,79 +267,3 @@ def _out_columns(d: Derivation, events: list, fric: list, lub: list, corner_fric
     else:
         mon = out_columns.index(f"{d.monitor}.reaction_x")
     return out_columns, mon
-
-
-def render(d: Derivation, linkage_name: str, structure: dict, zeros: tuple = ()) -> str:
-    """The python source of the model module of derivation `d` (deterministic); `zeros`:
-    the parameters `d` is specialised on (`derive.specialise`), checked to be zero."""
-    pl = _plan(d)
-    (w, n, J, E, events, params, mem_start, contact, gap_names, gap_exprs, gaps_stage,
-     fric, lub, contact_lines, corner_indices, corner_fric, eom, outputs_stage, results,
-     driven) = (
-        pl.w, pl.n, pl.J, pl.E, pl.events, pl.params, pl.mem_start, pl.contact,
-        pl.gap_names, pl.gap_exprs, pl.gaps_stage, pl.fric, pl.lub, pl.contact_lines,
-        pl.corner_indices, pl.corner_fric, pl.eom, pl.outputs_stage, pl.results, pl.driven)
-    dynamics = w.function([gaps_stage, contact_lines, *eom, outputs_stage])
-
-    gap_fns = [w.function([(gap_exprs[j], gap_names[j])]) for j in range(E)]
-    spring_lines = []
-    for j, c in enumerate(contact):
-        spring_lines += [
-            f"d{j}, dd{j}, nx{j}, ny{j} = gap_state(ex{j}, ey{j}, exd{j}, eyd{j}, "
-            f"p[{c['clearance']}])",
-            f"if p[{mem_start + 2 * j}] > 0.5 and d{j} > 0.0:",
-            f"    energy += p[{c['stiffness']}] * d{j} * d{j} * math.sqrt(d{j}) / 2.5"]
-    for c in corner_indices:
-        e = c["event"]
-        spring_lines += [
-            f"d{e}, dd{e} = corner_state(ey{e}, eyd{e}, {c['side']}, p[{c['clearance']}], "
-            f"p[{c['half_height']}])",
-            f"if p[{mem_start + 2 * e}] > 0.5 and d{e} > 0.0:",
-            f"    energy += p[{c['stiffness']}] * d{e} * d{e} * math.sqrt(d{e}) / 2.5"]
-    energy = w.function([gaps_stage, ([w.split(d.kinetic + d.potential)], ["energy"]),
-                         spring_lines])
-    # the loop closure: the clearance joints' gaps, then the sliders' offsets and tilts
-    nc = 2 * J + 2 * len(d.slider_closure)
-    closure = w.function([([e for g in gap_exprs[:J] for e in g[:2]]
-                           + [w.split(e) for c in d.slider_closure for e in c],
-                           [f"res[{i}]" for i in range(nc)])], state="q")
-    closure_jac = w.function([([w.split(d.closure_jacobian[i, k]) for i in range(nc)
-                                for k in range(n)],
-                               [f"jac[{i}, {k}]" for i in range(nc) for k in range(n)])],
-                             state="q")
-    closure_rate = w.function([([w.split(e) for e in d.closure_rate],
-                                [f"res[{i}]" for i in range(nc)])], state="q")
-
-    out_columns, mon = _out_columns(d, events, fric, lub, pl.corner_fric, driven)
-    jac_ctx = jacobian_context(w, d, out_columns)
-    if d.corners:
-        # each contact's impact-velocity floor: a corner reads its joint's
-        jac_ctx["floors"] = [params.index(f"{j}.impact_velocity_floor") for j in d.joints] + [
-            params.index(f"{c[1]}.impact_velocity_floor") for c in d.corners]
-    else:
-        jac_ctx["floor0"] = params.index(f"{d.joints[0]}.impact_velocity_floor")
-    prepare = w.constants_body()       # after every split: all constants known
-    ctx = dict(
-        name=linkage_name, digest=structure_digest(structure), version=GENERATOR_VERSION,
-        structure=json.dumps(structure, sort_keys=True), parameters=params,
-        zeros=list(zeros), zero_index=[params.index(z) for z in zeros],
-        coordinates=list(d.coordinates), n=n, J=E, joints=events,
-        ground_joints=list(d.ground_joints), mem_start=mem_start,
-        n_constants=len(w.constants), out_columns=out_columns, monitor=d.monitor,
-        monitor_column=mon,
-        moment_column=out_columns.index("drive_moment") if driven else -1,
-        acc_column=out_columns.index(f"{d.coordinates[0]}.acc"),
-        speed=params.index("drive.speed") if driven else -1, results=results, dynamics=dynamics,
-        gap_fns=gap_fns, energy=energy, closure=closure, closure_jac=closure_jac,
-        closure_rate=closure_rate, prepare=prepare, contact_indices=contact,
-        friction_joints=[d.joints[j] for j in fric] + [d.corners[k][0] for k in corner_fric],
-        corner_indices=corner_indices, n_closure=nc,
-        lubricated_joints=[d.joints[j] for j in lub],
-        power_columns=[out_columns.index(f"{j}.friction_power") for j in
-                       [d.joints[j] for j in fric] + [d.corners[k][0] for k in corner_fric]],
-        **jac_ctx,
-    )
-    env = jinja2.Environment(undefined=jinja2.StrictUndefined, keep_trailing_newline=True,
-                             loader=jinja2.FileSystemLoader(str(_TEMPLATE.parent)),
-                             trim_blocks=True, lstrip_blocks=True)
-    return env.from_string(_TEMPLATE.read_text()).render(**ctx)

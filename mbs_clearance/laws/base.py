@@ -47,10 +47,10 @@ class Parameter:
 @dataclass(frozen=True)
 class ContactLaw:
     """A Hertzian contact law F = K delta^1.5 (1 + xi(e) deltadot / deltadot_minus), clamped
-    at zero. `hysteresis` is xi(e), plain arithmetic (see `ops`): compiled by numba for the
-    kernels, differentiated by sympy for the partials, evaluated on Exudyn symbolic Reals
-    for the Exudyn model. `restitution` gives the allowed e of the law; `lossless` whether
-    xi(1) = 0 (the law conserves energy at e = 1)."""
+    at zero. `hysteresis` is xi(e), plain arithmetic (see `ops`): evaluated in Python,
+    printed in C for the compiled models, differentiated by sympy for the partials,
+    evaluated on Exudyn symbolic Reals for the Exudyn model. `restitution` gives the allowed
+    e of the law; `lossless` whether xi(1) = 0 (the law conserves energy at e = 1)."""
 
     name: str
     hysteresis: Callable

@@ -1,4 +1,5 @@
-"""The clearance joint's contact and friction laws as the kernels call them: the Hertzian
+"""The clearance joint's contact and friction laws in Python (the compiled models print the same
+formulas in C: core/laws_generated.h, core/runtime.h): the Hertzian
 normal force with hysteresis damping,
 
     F = K * delta**n * (1 + xi(e) * deltadot / deltadot_minus),     n = 3/2,
@@ -19,9 +20,6 @@ from __future__ import annotations
 
 import math
 
-import numba as nb
-
-from ..numerics._kernel import KERNEL
 from ._dispatch import friction_force, friction_force_partials, hysteresis_factor
 from .registry import CONTACT_MODELS, FRICTION_LAWS
 
@@ -35,7 +33,6 @@ __all__ = [
 EXPONENT = 1.5
 
 
-@nb.njit(**KERNEL, inline="always")
 def contact_force(delta, deltadot, deltadot_minus, K, e, model):
     """Normal contact force in N (>= 0; zero for delta <= 0)."""
     if delta <= 0.0:
@@ -46,7 +43,6 @@ def contact_force(delta, deltadot, deltadot_minus, K, e, model):
     return f if f > 0.0 else 0.0
 
 
-@nb.njit(**KERNEL)
 def contact_force_partials(delta, deltadot, deltadot_minus, K, e, model):
     """Force and its partial derivatives.
 
@@ -72,7 +68,6 @@ def contact_force_partials(delta, deltadot, deltadot_minus, K, e, model):
     return f, d_delta, d_rate, d_rate_minus, d_k, d_e
 
 
-@nb.njit(**KERNEL)
 def stiffness_eq9(journal_radius, bearing_radius, youngs_modulus, poisson_ratio):
     """Generalized contact stiffness K of the paper's Eq. 9 in N/m^1.5.
 
@@ -84,7 +79,6 @@ def stiffness_eq9(journal_radius, bearing_radius, youngs_modulus, poisson_ratio)
         journal_radius * bearing_radius / (bearing_radius - journal_radius))
 
 
-@nb.njit(**KERNEL)
 def stiffness_eq9_partials(journal_radius, bearing_radius, youngs_modulus, poisson_ratio):
     """Return (K, dK/dR_J, dK/dR_B, dK/dE, dK/dnu) of Eq. 9."""
     k = stiffness_eq9(journal_radius, bearing_radius, youngs_modulus, poisson_ratio)
@@ -98,7 +92,6 @@ def stiffness_eq9_partials(journal_radius, bearing_radius, youngs_modulus, poiss
     return k, d_rj, d_rb, d_e, d_nu
 
 
-@nb.njit(**KERNEL)
 def friction_factor(vt, v0, v1, law):
     """Return (phi, dphi/dvt, dphi/dv0, dphi/dv1) of friction law id `law` at the relative
     tangential velocity `vt` (m/s) with the law's velocity parameters v0, v1 (m/s), for the

@@ -1,18 +1,17 @@
 """The few functions a law's formula may call besides + - * / and comparisons, each working
-on floats (also inside numba kernels, through overloads), on sympy expressions (from which
-the partial derivatives are generated), on Exudyn symbolic Reals (the Exudyn model's user
-functions) and on `CExpr` (C source of the formula in its own order of operations, from
-which the compiled core's law values are generated): a law's formula is written once and
-evaluated by all four.
+on floats (the laws' values in Python: the Exudyn model's friction, the tests), on sympy
+expressions (from which the partial derivatives are generated), on Exudyn symbolic Reals
+(the Exudyn model's user functions) and on `CExpr` (C source of the formula in its own
+order of operations, from which the compiled core's law values are generated): a law's
+formula is written once and evaluated by all four.
 
-Branches are `where(condition, a, b)`: numba evaluates both sides (the laws keep both
-finite), sympy makes a Piecewise, Exudyn an IfThenElse (lazy)."""
+Branches are `where(condition, a, b)`: the laws keep both sides finite (a formula may be
+evaluated on both), sympy makes a Piecewise, Exudyn an IfThenElse (lazy), C a conditional
+expression."""
 
 from __future__ import annotations
 
 import math
-
-from numba.extending import overload
 
 __all__ = ["sqrt", "fabs", "exp", "sign", "where", "CExpr"]
 
@@ -20,7 +19,7 @@ __all__ = ["sqrt", "fabs", "exp", "sign", "where", "CExpr"]
 class CExpr:
     """A C expression recorded by evaluating a formula on it: every operation parenthesised
     in the order Python evaluates it, numbers as round-trip decimal literals, so that the C
-    code rounds exactly as the formula compiled by numba does."""
+    code rounds exactly as the formula evaluated in Python does."""
 
     def __init__(self, text: str):
         self.text = text
@@ -142,7 +141,6 @@ def where(condition, a, b):
     """a where `condition` holds, else b."""
     kind = _kind(condition, a, b)
     if kind == "c":
-        # numba evaluates both sides (finite by the laws' rule), C the chosen one: same value
         return CExpr(f"({CExpr.of(condition)} ? {CExpr.of(a)} : {CExpr.of(b)})")
     if kind == "esym":
         esym = _esym()
@@ -153,28 +151,3 @@ def where(condition, a, b):
 
         return sympy.Piecewise((a, condition), (b, True))
     return a if condition else b
-
-
-@overload(sqrt)
-def _sqrt(x):
-    return lambda x: math.sqrt(x)
-
-
-@overload(exp)
-def _exp(x):
-    return lambda x: math.exp(x)
-
-
-@overload(fabs)
-def _fabs(x):
-    return lambda x: abs(x)
-
-
-@overload(sign)
-def _sign(x):
-    return lambda x: 1.0 if x > 0.0 else -1.0
-
-
-@overload(where)
-def _where(condition, a, b):
-    return lambda condition, a, b: a if condition else b

@@ -212,7 +212,7 @@ class SliderCrank:
         if self.contact_stiffness is not None:
             return float(self.contact_stiffness)
         # the law's python source: the compiled kernel would compile on first use
-        return stiffness_eq9.py_func(self.journal_radius, self.bearing_radius,
+        return stiffness_eq9(self.journal_radius, self.bearing_radius,
                                      self.youngs_modulus, self.poisson_ratio)
 
     @property

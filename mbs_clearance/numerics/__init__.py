@@ -1,3 +1,3 @@
-"""The numerical engine, which knows nothing of mechanisms: the compiled adaptive
-Runge-Kutta integrator with event location (`integrator`), the numba options of
-every kernel (`_kernel`) and a fused sine-cosine (`_trig`)."""
+"""The numerical engine's Python side, which knows nothing of mechanisms: the integration
+methods and run settings of the compiled integrator (`integrator`) and a fused sine-cosine
+(`_trig`)."""

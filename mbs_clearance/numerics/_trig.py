@@ -1,9 +1,10 @@
-"""sin and cos of one angle together, inlined into the model kernels.
+"""sin and cos of one angle together: the Python twin of the compiled models' `mbs_sincos`
+(core/runtime.h), the same operations in the same order, for Python code that must agree
+with the compiled model to the last bit (validation/paper_closed_form.py).
 
-glibc's ``sincos`` was 30 % of a simulation's time (perf, paper case: 16 calls per step, two
-angles per model evaluation), and a call also makes the compiled model spill its registers.
-This is the textbook method, written out so that numba inlines it and both angles of a model
-evaluation are computed side by side: reduction by pi/2 in two parts (Cody & Waite; the
+A call of glibc's ``sincos`` per angle was a large share of a model evaluation; this is the
+textbook method, written out so that both angles of a model evaluation are computed side by
+side: reduction by pi/2 in two parts (Cody & Waite; the
 high part has 33 significant bits, so k * hi is exact for |k| < 2^20), then the Taylor series
 of sin and cos on |r| <= pi/4, whose truncation (r^19/19!, r^20/20!) is below 1e-19 there.
 Tested against ``math.sin``/``math.cos`` to an absolute 2.3e-16 (tests/unit/test_trig.py) for
@@ -16,10 +17,7 @@ from __future__ import annotations
 
 from fractions import Fraction
 
-import numba as nb
 import numpy as np
-
-from .integrator import KERNEL
 
 __all__ = ["sincos"]
 
@@ -43,7 +41,6 @@ _C2, _C4, _C6, _C8, _C10, _C12, _C14, _C16, _C18 = (
      (7, 87178291200), (8, 20922789888000), (9, 6402373705728000)))
 
 
-@nb.njit(**KERNEL, inline="always")
 def sincos(x):
     """(sin x, cos x) to about 1e-16 absolute for |x| < 1e5 (see the module docstring)."""
     # np.rint keeps k a float (the value of round(), which returns an int): the reduction

@@ -185,12 +185,8 @@ class TangentFlow(Flow):
 
 def _gap_function(model, j: int):
     """(t, y, p) -> (ex, ey, exd, eyd) of switching function j's contact point, of a C
-    model or a numba module."""
-    from ..generate.c_loader import CModel
-
-    if isinstance(model, CModel):
-        return partial(model.gap, j=j)
-    return getattr(model, f"_gap_{j}")
+    model."""
+    return partial(model.gap, j=j)
 
 
 def _tangent_scale(mech, model) -> np.ndarray:

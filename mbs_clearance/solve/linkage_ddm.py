@@ -10,7 +10,7 @@ The sensitivity equations use the generated model's exact Jacobian (the module's
 where p are the generated model's parameters, D_k = dp/db_k the chain of the description's
 values into them (`chain`: radii into clearance and Eq. 9 stiffness, ...) and sigma_jk the
 sensitivity of joint j's impact-velocity memory v_j, set at each contact onset with the
-event-time term (generate/sens_runtime.py). The state sensitivities do not jump at the
+event-time term (core/sens_runtime.h). The state sensitivities do not jump at the
 events: each contact force is zero at zero penetration in both modes. The initial
 sensitivities are exact: the derivative of the assembly (journals centred: the closure
 e(t0, q, p) = 0 and its rate) by the implicit function theorem with the generated Jacobian's
@@ -24,7 +24,6 @@ import sys
 import time
 from typing import Any, NamedTuple
 
-import numba as nb
 import numpy as np
 
 from ..generate.sens_runtime import fill_seed_work, work_size
@@ -261,9 +260,10 @@ def independent_directions(M: np.ndarray, tol: float = DIRECTION_TOL):
 
 def pack_sensitivity_parameters(model, p, entries, event_time_term: bool = True,
                                 record_columns=()):
-    """The parameter vector of a sensitivity run (layout: generate/sens_runtime.py); after
-    the work space N_OUT slots of which the first hold `record_columns`, the outputs whose
-    derivatives a run with a longer record stores (`sens_runtime.sens_monitor`)."""
+    """The parameter vector of a sensitivity run (layout: generate/sens_runtime.py, read by
+    core/sens_runtime.h); after the work space N_OUT slots of which the first hold
+    `record_columns`, the outputs whose derivatives a run with a longer record stores
+    (core/sens_runtime.h)."""
     nb = len(entries)
     m = max([1] + [len(e) for e in entries])
     cols = np.ones((nb, m))          # padding: column 1 (the first coordinate), value 0
@@ -411,75 +411,52 @@ def _sparse_columns(coeffs):
     return np.array(ptr, dtype=np.int64), np.array(rows, dtype=np.int64), np.array(vals)
 
 
-@nb.njit(cache=True, error_model="numpy")
 def _combine_rows(a, ptr, rows, vals):
     """a (n, m, nb) @ coeffs (nb, npar, by `_sparse_columns`), any strides of a: (n, m,
-    npar) in one pass (numpy copies a strided a first), the zero coefficients skipped."""
+    npar), the zero coefficients skipped (each column's sum in the order of its entries)."""
     n, m, _ = a.shape
     npar = ptr.shape[0] - 1
     out = np.empty((n, m, npar))
-    for i in range(n):
-        for r in range(m):
-            for k in range(npar):
-                acc = 0.0
-                for e in range(ptr[k], ptr[k + 1]):
-                    acc += a[i, r, rows[e]] * vals[e]
-                out[i, r, k] = acc
+    for k in range(npar):
+        acc = np.zeros((n, m))
+        for e in range(ptr[k], ptr[k + 1]):
+            acc += a[:, :, rows[e]] * vals[e]
+        out[:, :, k] = acc
     return out
 
 
-@nb.njit(cache=True, error_model="numpy")
 def _window_norm_maxima(s, ptr, rows, vals, weights, lo, hi):
     """Per window w (rows lo[w]:hi[w]) the maximum over its rows i of
-    sum_j weights[k, j] (sum_b s[i, b, j] coeffs[b, k])^2 (nw, npar): the squared weighted
-    norms of the combined state sensitivities (coeffs by `_sparse_columns`), from those of
-    the integrated directions s (n, nb, 2 N_Q) without forming the combined ones. A column
-    with one coefficient (a direction integrated as it is) takes a loop without the inner
-    sum (the same values)."""
+    sum_j weights[k, j] (sum_b s[i, b, j] coeffs[b, k])^2 (nw, npar), at least 0: the
+    squared weighted norms of the combined state sensitivities (coeffs by
+    `_sparse_columns`), from those of the integrated directions s (n, nb, 2 N_Q)."""
     n2 = s.shape[2]
     npar = ptr.shape[0] - 1
     out = np.zeros((lo.shape[0], npar))
-    best = np.zeros(npar)
-    for w in range(lo.shape[0]):
-        for k in range(npar):
-            best[k] = 0.0
-        for i in range(lo[w], hi[w]):
-            for k in range(npar):
-                e0 = ptr[k]
-                e1 = ptr[k + 1]
-                acc2 = 0.0
-                if e1 - e0 == 1:
-                    b = rows[e0]
-                    v = vals[e0]
-                    for j in range(n2):
-                        x = s[i, b, j] * v
-                        acc2 += weights[k, j] * x * x
-                else:
-                    for j in range(n2):
-                        acc = 0.0
-                        for e in range(e0, e1):
-                            acc += s[i, rows[e], j] * vals[e]
-                        acc2 += weights[k, j] * acc * acc
-                if acc2 > best[k]:
-                    best[k] = acc2
-        for k in range(npar):
-            out[w, k] = best[k]
+    for k in range(npar):
+        e0, e1 = ptr[k], ptr[k + 1]
+        if e1 - e0 == 1:            # a direction integrated as it is
+            comb = s[:, rows[e0], :] * vals[e0]
+        else:
+            comb = np.zeros((s.shape[0], n2))
+            for e in range(e0, e1):
+                comb += s[:, rows[e], :] * vals[e]
+        acc2 = np.zeros(s.shape[0])
+        for j in range(n2):
+            acc2 += weights[k, j] * comb[:, j] * comb[:, j]
+        for w in range(lo.shape[0]):
+            if hi[w] > lo[w]:
+                out[w, k] = max(0.0, float(acc2[lo[w]:hi[w]].max()))
     return out
 
 
-@nb.njit(cache=True, error_model="numpy")
 def magnitude_derivative(vals, col, ders, row):
     """d|F|/db (n, npar) of the force F = (vals[:, col], vals[:, col + 1]) from its
     components' derivatives ders[:, row], ders[:, row + 1] (n, ., npar): (F . dF) / |F|
     (|F| floored at 1e-300)."""
-    n, npar = ders.shape[0], ders.shape[2]
-    out = np.empty((n, npar))
-    for i in range(n):
-        fx, fy = vals[i, col], vals[i, col + 1]
-        inv = 1.0 / max(math.hypot(fx, fy), 1e-300)
-        for k in range(npar):
-            out[i, k] = (fx * ders[i, row, k] + fy * ders[i, row + 1, k]) * inv
-    return out
+    fx, fy = vals[:, col], vals[:, col + 1]
+    inv = 1.0 / np.maximum(np.hypot(fx, fy), 1e-300)
+    return (fx[:, None] * ders[:, row, :] + fy[:, None] * ders[:, row + 1, :]) * inv[:, None]
 
 
 def setup(linkage: Linkage, model, p0, y_state, directions, scale, atol_plain,
@@ -634,8 +611,8 @@ def plain_setup(linkage: Linkage, rtol: float | None, start=None, specialise: bo
     parameter vector, the centred initial state (or `start`'s, a `linkage_model.Start`,
     with its memories in p0) and the plain run's tolerances (rtol, atol with the switching
     functions'). Returns (model, p0, y_state, rtol, atol). A free linkage starts from its
-    `Initial` (no `start`). The model is on the chosen core (`kernels.core_name`): the
-    compiled C model, or the numba module. A profiled bearing is refused."""
+    `Initial` (no `start`). The model is the compiled C model. A profiled bearing is
+    refused."""
     from ..generate.profiles import refuse_sensitivity_runs
 
     refuse_sensitivity_runs(linkage)

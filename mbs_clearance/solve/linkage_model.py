@@ -28,22 +28,11 @@ __all__ = ["parameter_values", "pack_parameters", "initial_state", "Start", "set
 
 def load_model(linkage: Linkage, specialise: bool = True):
     """The model of a run of `linkage` (plain, DDM or tangent), specialised on its
-    zero-valued geometric parameters (or, `specialise=False`, the general one), on the
-    chosen core (`kernels.core_name`): the compiled C model (`generate.c_loader.CModel`,
-    which answers as the numba module does), or the generated numba module."""
-    from .kernels import c_model_or_none
+    zero-valued geometric parameters (or, `specialise=False`, the general one): the
+    compiled C model (`generate.c_loader.CModel`)."""
+    from .kernels import c_model
 
-    model = c_model_or_none(linkage, specialise)
-    return load_numba_model(linkage, specialise) if model is None else model
-
-
-def load_numba_model(linkage: Linkage, specialise: bool = True):
-    """`generate.load_model` (imported on first use: the generator imports sympy, which a
-    run of a checked-in model does not need): the numba module (the reference of the C
-    core, and the core of every run with ``MBS_CLEARANCE_CORE=numba``)."""
-    from ..generate import load_model as load
-
-    return load(linkage, specialise)
+    return c_model(linkage, specialise)
 
 
 def specialisable(linkage: Linkage, names) -> bool:
@@ -883,7 +872,7 @@ def solve(problem: Problem) -> LinkageRun:
 
 def integrate(problem: Problem, p: np.ndarray):
     """The integrator's run of `problem` with parameters and memory `p` (modified in
-    place) on the chosen core (`kernels.plain_kernel`): numba's `integrate` returns."""
+    place) on the compiled core (`kernels.plain_kernel`): the core's `integrate` returns."""
     from ..numerics.integrator import METHODS
     from .kernels import plain_kernel
 
@@ -903,9 +892,7 @@ def _start_step(model, y0, p, rtol, atol, method, span):
     y = np.ascontiguousarray(y0[:n])
     f = np.empty(n)
     model.rhs(0.0, y, p, f)
-    # the kernel's Python source, calling the compiled rhs: the compiled initial_step would
-    # be specialised for this rhs in every process (a function argument is not cached)
-    return initial_step.py_func(model.rhs, 0.0, y, f, p, rtol, np.ascontiguousarray(atol[:n]),
+    return initial_step(model.rhs, 0.0, y, f, p, rtol, np.ascontiguousarray(atol[:n]),
                                 METHODS[method].error_order + 1, span, np.empty(n),
                                 np.empty(n))
 

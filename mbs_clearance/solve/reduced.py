@@ -2,9 +2,9 @@
 run as its description, and its `Trajectory` in the paper's names.
 
 A `SliderCrank` is the paper's parameter set of one linkage: its runs integrate its
-description (`cases.from_slider_crank`, whose generated model is the checked-in module
-`MODEL` = mbs_clearance._generated.paper_slider_crank, or the one with the tangential force
-for a joint with friction) through `linkage_model.run`, the one plain run of every linkage.
+description (`cases.from_slider_crank`, whose compiled model is `MODEL` for the paper's
+parameter set, or the one with the tangential force for a joint with friction) through
+`linkage_model.run`, the one plain run of every linkage.
 This module adds only what is the paper's own: the closed-form centred start (and the
 stress tests' offset start), and the Trajectory's slider-crank series (slider position,
 coupler angle, F12 as `base_force`). Generalized coordinates theta3 (coupler angle) and x4
@@ -54,24 +54,22 @@ from .settings import RunSettings
 from .trajectory import annotate
 
 
-# ---- the generated model's layout (every SliderCrank maps to its structure): MODEL (the
-# checked-in numba module of the paper's description), MEM_START (the clearance joint's
-# memory, mode and impact velocity, in its p), MODEL_COLUMNS (the outputs a plain run
-# records) and P_CLEARANCE (the clearance's index in p), read on first use: importing the
-# numba module compiles its kernels, which a run on the C core does not need
+# ---- the compiled model's layout (every SliderCrank without friction maps to its
+# structure): MODEL (the compiled model of the paper's description), MEM_START (the clearance
+# joint's memory, mode and impact velocity, in its p), MODEL_COLUMNS (the outputs a plain run
+# records) and P_CLEARANCE (the clearance's index in p), read on first use (the model is
+# built or found in the compiled-code cache then)
 def __getattr__(name: str):
     if name not in ("MODEL", "MEM_START", "MODEL_COLUMNS", "P_CLEARANCE"):
         raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    from .._generated import paper_slider_crank as model
-
+    model = _paper_model()
     return {"MODEL": model, "MEM_START": model.MEM_START, "MODEL_COLUMNS": model.OUT_COLUMNS,
             "P_CLEARANCE": model.PARAMETERS.index(f"{model.JOINTS[0]}.clearance")}[name]
 
 
-def _numba_model():
-    from .._generated import paper_slider_crank
+def _paper_model():
+    return lm.load_model(linkage_of(SliderCrank()))
 
-    return paper_slider_crank
 
 N_MEM = 2          # the joint's mode and impact velocity
 N_STATE = 5        # theta3, x4, theta3dot, x4dot, W
@@ -85,7 +83,7 @@ def _model_parameters(mech: SliderCrank) -> np.ndarray:
     from ..model.cases import from_slider_crank
     from .linkage_model import pack_parameters as pack
 
-    p = pack(from_slider_crank(mech), _numba_model())
+    p = pack(from_slider_crank(mech), _paper_model())
     p.flags.writeable = False
     return p
 
@@ -137,20 +135,10 @@ def linkage_of(mech: SliderCrank):
 
 
 def model_of(mech: SliderCrank):
-    """The model of `mech`'s description for a plain run: on the C core its compiled model
-    (`linkage_model.load_model`); on numba the checked-in generated module, the paper's
-    model or its variant with the tangential force for a joint with friction (any law: a
-    parameter), known without the generator's lookup by structure, which imports sympy."""
-    from .kernels import c_model_or_none
-
-    c_model = c_model_or_none(linkage_of(mech))
-    if c_model is not None:
-        return c_model
-    if mech.friction_law == "none":
-        return _numba_model()
-    from .._generated import paper_slider_crank_friction
-
-    return paper_slider_crank_friction
+    """The compiled model of `mech`'s description for a plain run (`linkage_model.load_model`):
+    the paper's model, or its variant with the tangential force for a joint with friction
+    (any law: a parameter)."""
+    return lm.load_model(linkage_of(mech))
 
 
 def centred_start(mech: SliderCrank, offset: float = 0.0) -> Start:
@@ -316,7 +304,7 @@ def trajectory_from_states(mech, ts, ys, ms, p, stats, peaks, outs=None,
     parameters p."""
     from .trajectory import Trajectory
 
-    model = _numba_model() if model is None else model
+    model = _paper_model() if model is None else model
     columns = model.OUT_COLUMNS if columns is None else columns
     ys = np.ascontiguousarray(ys)
     ms = np.ascontiguousarray(ms)

@@ -55,8 +55,7 @@ class Backend:
 #: Exudyn only then)
 BACKENDS: dict[str, Backend] = {
     "reduced": Backend(
-        "the model generated from the description (the paper's: its checked-in module), "
-        "compiled (numba)",
+        "the model generated from the description, compiled in C",
         linkage=Model("mbs_clearance.solve.linkage_model", "simulate_linkage",
                       "peak_linkage"),
         slider_crank=Model("mbs_clearance.solve.reduced", "simulate_reduced", "peak_reduced")),

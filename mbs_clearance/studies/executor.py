@@ -85,15 +85,14 @@ def _peak_chunk_packed(args: tuple) -> list[float]:
 def _init_worker() -> None:
     """Process-pool initializer: one thread per worker process, SIGINT left to the parent.
 
-    The numba kernels are serial (no parallel=True), so numba never starts its thread pool;
-    these variables keep any OpenMP/BLAS library loaded later from starting one thread per
-    core in each of the worker processes. Ctrl-C at a terminal reaches the whole process
-    group: the workers ignore it and the parent, which gets it too, terminates them (a
-    KeyboardInterrupt inside a worker would break the pool while it shuts down).
+    The compiled core is serial; these variables keep any OpenMP/BLAS library loaded later
+    from starting one thread per core in each of the worker processes. Ctrl-C at a terminal
+    reaches the whole process group: the workers ignore it and the parent, which gets it
+    too, terminates them (a KeyboardInterrupt inside a worker would break the pool while it
+    shuts down).
     """
     signal.signal(signal.SIGINT, signal.SIG_IGN)
-    for name in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS",
-                 "NUMBA_NUM_THREADS"):
+    for name in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
         os.environ.setdefault(name, "1")
 
 
@@ -251,18 +250,19 @@ def ship_compiled(client, mech=None) -> int:
     (`core.build.used_files`), after building `mech`'s models here if needed (its plain
     model, specialised and general), so that no worker compiles (a worker plugin installs
     them into each worker's cache, also on workers that join later). Returns the number of
-    files handed over (0 on the numba core or without a C compiler)."""
+    files handed over."""
     from ..core import build
     from ..model.cases import as_linkage
-    from ..solve.kernels import c_model_or_none
+    from ..solve.kernels import c_model
 
     if mech is not None:
         try:
             linkage = as_linkage(mech)
         except (TypeError, ValueError):
             linkage = None
-        if linkage is not None and c_model_or_none(linkage) is not None:
-            c_model_or_none(linkage, specialise=False)
+        if linkage is not None:
+            c_model(linkage)
+            c_model(linkage, specialise=False)
     files = build.used_files()
     if files:
         from ._dask_plugin import CompiledFiles

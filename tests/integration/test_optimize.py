@@ -323,23 +323,24 @@ def _main_thread_progress_during(call) -> int:
 
 def test_threads_release_the_gil_inside_the_compiled_model(monkeypatch):
     """While a worker thread is inside the compiled reduced model, the main thread keeps
-    running Python: the kernel releases the GIL (nogil=True), so a thread pool runs designs
-    in parallel. Counted, not timed; the same count for a compiled loop without nogil is the
-    control that shows the count can tell the two apart."""
-    import math
+    running Python: the compiled core runs without the GIL (cffi releases it), so a thread
+    pool runs designs in parallel. Counted, not timed; the same count for a compiled loop
+    called with the GIL held is the control that shows the count can tell the two apart."""
+    import ctypes
 
-    import numba
-
+    from mbs_clearance.core import build
     from mbs_clearance.solve import linkage_model
 
-    def spin(n):
-        s = 0.0
-        for i in range(n):
-            s += math.sin(i * 1e-3)
-        return s
-
-    held, released = numba.njit(spin), numba.njit(nogil=True)(spin)
-    held(10), released(10)                          # compile outside the measurement
+    # the control: one C loop called through ctypes with the GIL held (PyDLL) and released
+    # (CDLL)
+    path = build.build("spin", [("spin.c", "#include <math.h>\ndouble spin(long n) {\n"
+                                           "    double s = 0.0;\n"
+                                           "    for (long i = 0; i < n; i++)\n"
+                                           "        s += sin(i * 1e-3);\n"
+                                           "    return s;\n}\n")])
+    held, released = ctypes.PyDLL(str(path)).spin, ctypes.CDLL(str(path)).spin
+    for f in (held, released):
+        f.argtypes, f.restype = [ctypes.c_long], ctypes.c_double
 
     def bracket(f, *args):
         def call(mark):

@@ -1,6 +1,5 @@
-"""Test models of the compiled core, in C (through the seam `mbs_core.h`) and, for the ball,
-the same model in numba (the numba integrator's oracle). Shared by the core's tests and
-`benchmarks/core_speed.py`.
+"""Test models of the compiled core, in C (through the seam `mbs_core.h`). Shared by the
+core's tests.
 
 The bouncing ball. Its state is unfolded so that an impact changes the memory only (the
 seam's on_event may not write the state): y = (X, W[, Q]) with the physical height
@@ -21,16 +20,10 @@ from __future__ import annotations
 
 import math
 
-import numba as nb
 import numpy as np
 
-from mbs_clearance.numerics.integrator import (
-    ACTION_SIG,
-    EVENT_SIG,
-    MONITOR_SIG,
-    RHS_SIG,
-    make_settings,
-)
+from mbs_clearance.core.integrate import no_events_source
+from mbs_clearance.numerics.integrator import make_settings
 
 # the ball's parameter vector
 GRAV, REST, CEIL, DRAG, NAN_AFTER, CHATTER, TWIN, ALPHA, BETA, COUNT, HALF_G = range(11)
@@ -119,98 +112,10 @@ static const mbs_model RECORD = {3, 1, 2, ALPHA, 3, 1, HALF_G, N_P, rhs, event, 
 const mbs_model *mbs_model_record(void) { return &RECORD; }
 """
 
-# a model without events: one switching function, always -1, and no action
-NO_EVENTS_C = r"""
-static void event(double t, const double *y, const double *p, int64_t j, double *g_gd)
-{
-    (void)t; (void)y; (void)p; (void)j;
-    g_gd[0] = -1.0;
-    g_gd[1] = 0.0;
-}
-
-static void on_event(double t, const double *y, double *p, int64_t j)
-{
-    (void)t; (void)y; (void)p; (void)j;
-}
-
-static int prepare(double *p) { (void)p; return 0; }
-"""
-
 # the linear oscillator x'' = -w^2 x (p = [w]); monitor x
-OSCILLATOR_C = r"""
-#include "mbs_core.h"
-""" + NO_EVENTS_C + r"""
-
-static void rhs(double t, const double *y, int64_t n, const double *p, double *dydt)
-{
-    (void)t; (void)n;
+OSCILLATOR_C = no_events_source("""
     dydt[0] = y[1];
-    dydt[1] = -p[0] * p[0] * y[0];
-}
-
-static double monitor(double t, const double *y, int64_t n, const double *p, double *dydt,
-                      double *out, int64_t n_out, double *g, double *gd)
-{
-    (void)out; (void)n_out;
-    rhs(t, y, n, p, dydt);
-    g[0] = -1.0;
-    gd[0] = 0.0;
-    return y[0];
-}
-
-static const mbs_model RECORD = {2, 1, 1, 1, 0, 0, 1, 1, rhs, event, on_event, monitor, prepare};
-
-const mbs_model *mbs_model_record(void) { return &RECORD; }
-"""
-
-
-# ---- the ball in numba (the same arithmetic)
-
-@nb.njit(RHS_SIG, cache=True, error_model="numpy")
-def ball_rhs(t, y, p, dydt):
-    h = y[0] + p[ALPHA] + p[BETA] * t
-    v = y[1] + p[BETA]
-    bad = math.nan if t > p[NAN_AFTER] else 0.0
-    dydt[0] = y[1] + bad
-    dydt[1] = -p[GRAV] - p[DRAG] * v + bad
-    if y.shape[0] > 2:
-        dydt[2] = h * h + bad
-    for k in range(3, y.shape[0]):
-        dydt[k] = y[k - 1] - y[k] + bad
-
-
-@nb.njit(EVENT_SIG, cache=True, error_model="numpy")
-def ball_event(t, y, p, j):
-    if p[CHATTER] != 0.0:
-        return 1.0, 0.0
-    h = y[0] + p[ALPHA] + p[BETA] * t
-    v = y[1] + p[BETA]
-    if j == 0 or p[TWIN] != 0.0:
-        return -h, -v
-    return h - p[CEIL], v
-
-
-@nb.njit(ACTION_SIG, cache=True, error_model="numpy")
-def ball_on_event(t, y, p, j):
-    if p[CHATTER] != 0.0 or (p[TWIN] != 0.0 and j == 1):
-        return
-    v = y[1] + p[BETA]
-    beta = -p[REST] * v - y[1]
-    p[ALPHA] = p[ALPHA] + (p[BETA] - beta) * t
-    p[BETA] = beta
-    p[COUNT] += 1.0
-
-
-@nb.njit(MONITOR_SIG, cache=True, error_model="numpy")
-def ball_monitor(t, y, p, dydt, out, g, gd):
-    ball_rhs(t, y, p, dydt)
-    h = y[0] + p[ALPHA] + p[BETA] * t
-    v = y[1] + p[BETA]
-    if out.shape[0] >= 1:
-        out[0] = v
-    for j in range(2):
-        g[j], gd[j] = ball_event(t, y, p, j)
-    return h
+    dydt[1] = -p[0] * p[0] * y[0];""", "y[0]", 2, 1, 1)
 
 
 def ball_parameters(g=9.81, e=0.8, ceiling=1e3, drag=0.0, nan_after=math.inf, chatter=False,
@@ -234,14 +139,6 @@ def ball_settings(rtol=1e-9, *, n_state=3, dense=2, event_control=False, **kwarg
                          n_mem=BALL_N_MEM, n_out=1, **kwargs)
 
 
-def ball_numba(y0, p, edges, settings, coefficients):
-    """The numba integrator on the ball."""
-    from mbs_clearance.numerics.integrator import integrate
-
-    return integrate(ball_rhs, ball_event, ball_on_event, ball_monitor, y0, p, edges,
-                     settings, coefficients)
-
-
 def bounce_times(h0, g, e, count):
     """Closed form: the first `count` impact times of a ball dropped from rest at h0 (no
     drag), and the apex heights e^(2k) h0 between them."""
@@ -250,3 +147,63 @@ def bounce_times(h0, g, e, count):
     for k in range(1, count):
         times.append(times[-1] + 2.0 * e ** k * t1)
     return np.array(times)
+
+
+
+# the clearance joints' stages of core/runtime.h, exported for the tests (tuples as arrays)
+_STAGES_C = r"""
+#include "mbs_core.h"
+#include "runtime.h"
+
+void contact_stage_c(const double *x, double *out) {
+    contact_stage(x[0], x[1], x[2], x[3], x[4], x[5], x[6], x[7], x[8], x[9],
+                  &out[0], &out[1], &out[2], &out[3], &out[4]);
+}
+
+void friction_stage_c(const double *x, const double *slots, double *out) {
+    friction_stage(x[0], x[1], x[2], x[3], x[4], x[5], x[6], x[7], x[8], x[9], x[10], x[11],
+                   slots, &out[0], &out[1], &out[2], &out[3], &out[4], &out[5], &out[6]);
+}
+
+void lubricated_stage_c(const double *x, double *out) {
+    lubricated_stage(x[0], x[1], x[2], x[3], x[4], x[5], x[6], x[7], x[8], x[9], x[10],
+                     x[11], x[12], x[13], x[14], x[15], x[16], x[17], &out[0], &out[1],
+                     &out[2], &out[3], &out[4], &out[5], &out[6], &out[7], &out[8], &out[9]);
+}
+"""
+
+
+def runtime_stages():
+    """(contact_stage, friction_stage, lubricated_stage) of core/runtime.h as Python
+    functions of the C arguments (friction_stage: the slots as a sequence), returning the
+    C function's outputs as a tuple, in its order."""
+    from pathlib import Path
+
+    from mbs_clearance.core import build
+
+    core = Path(build.__file__).parent
+    sources = [("stages.c", _STAGES_C)] + [(h, (core / h).read_text()) for h in
+                                           ("runtime.h", "laws_generated.h")]
+    ffi, lib = build.load("runtime-stages-test", sources, cdef=(
+        "void contact_stage_c(const double *x, double *out);"
+        "void friction_stage_c(const double *x, const double *slots, double *out);"
+        "void lubricated_stage_c(const double *x, double *out);"))
+
+    def call(fn, n_out, *args, slots=None):
+        x = np.ascontiguousarray(args, dtype=float)
+        out = np.full(n_out, np.nan)
+        extra = () if slots is None else (ffi.from_buffer(
+            "double[]", np.ascontiguousarray(slots, dtype=float)),)
+        fn(ffi.from_buffer("double[]", x), *extra, ffi.from_buffer("double[]", out))
+        return tuple(float(v) for v in out)
+
+    def contact(*args):
+        return call(lib.contact_stage_c, 5, *args)
+
+    def friction(*args):
+        return call(lib.friction_stage_c, 7, *args[:-1], slots=args[-1])
+
+    def lubricated(*args):
+        return call(lib.lubricated_stage_c, 10, *args)
+
+    return contact, friction, lubricated

@@ -865,7 +865,7 @@ def test_import_loads_only_what_is_needed():
     out = subprocess.run([sys.executable, "-c", code], cwd=root, capture_output=True,
                          text=True, check=True).stdout
     after_import, after_parser = eval(out.strip().splitlines()[-1])  # noqa: S307 - own output
-    heavy = ("scipy.integrate", "matplotlib", "exudyn", "mbs_clearance._generated",
+    heavy = ("scipy.integrate", "matplotlib", "exudyn", "mbs_clearance.generate.c_loader",
              "mbs_clearance.solve.reduced", "mbs_clearance.ddm", "mbs_clearance_validation",
              "sympy", "pygad", "xarray")
     for modules in (after_import, after_parser):
@@ -892,40 +892,33 @@ def test_import_loads_only_what_is_needed():
     assert set(mbs_clearance.__all__) <= set(dir(mbs_clearance))
 
 
-def test_library_messages_go_through_logging(caplog, capsys):
+def test_library_messages_go_through_logging(caplog, capsys, tmp_path, monkeypatch):
     """The library's messages are records of the logger "mbs_clearance" (silenced like any
     logger); the CLI prints them as `PROG: MESSAGE` while a command runs."""
     import logging
-    import types
 
-    from mbs_clearance import _cache
     from mbs_clearance.cli import run_command
+    from mbs_clearance.core import build
 
-    listener = _cache.CompileListener()
-    kernel = types.SimpleNamespace(py_func=_cache.register_package, __name__="kernel")
-    event = types.SimpleNamespace(data={"dispatcher": kernel})
+    monkeypatch.setenv("MBS_CLEARANCE_CACHE_DIR", str(tmp_path))
+    source = "int mbs_log_probe(void) { return %d; }"
+    # a first build announces itself (INFO), with the compiler's estimate once one is on record
     with caplog.at_level(logging.INFO, logger="mbs_clearance"):
-        listener.on_start(event)
-        listener.on_end(event)
+        build.build("log-probe", [("probe.c", source % 1)])
     (record,) = caplog.records
     assert record.name == "mbs_clearance" and record.levelno == logging.INFO
-    # with a compilation time on record "about N s", on a fresh install "a minute or more"
-    assert re.match(r"compiling kernels \(first run only, (about \d+ s|a minute or more); "
-                    r"later runs load them from the cache\)$", record.getMessage())
+    assert re.match(r"compiling log-probe \(first use only(, about \d+ s)?\)$",
+                    record.getMessage())
     caplog.clear()
     logging.getLogger("mbs_clearance").setLevel(logging.WARNING)       # a user silences it
     try:
+        # a cache without an estimate on record: the build would announce itself
+        monkeypatch.setenv("MBS_CLEARANCE_CACHE_DIR", str(tmp_path / "other"))
         with caplog.at_level(logging.WARNING, logger="mbs_clearance"):
-            _cache.CompileListener().on_start(event)
+            build.build("log-probe", [("probe.c", source % 2)])
         assert not caplog.records
     finally:
         logging.getLogger("mbs_clearance").setLevel(logging.NOTSET)
-    # a kernel of another package is not ours to announce
-    other = types.SimpleNamespace(data={"dispatcher": types.SimpleNamespace(
-        py_func=pytest.approx)})
-    with caplog.at_level(logging.INFO, logger="mbs_clearance"):
-        _cache.CompileListener().on_start(other)
-    assert not caplog.records
 
     def command(args):
         logging.getLogger("mbs_clearance.analysis.sensitivity").warning("coarse result")

@@ -1,6 +1,7 @@
 """The compiled integrator (`mbs_clearance.core`): against closed forms (a linear
 oscillator, a bouncing ball), the observed order of each method, the refined window peaks,
-the statuses, and against the numba integrator on the same model (bitwise)."""
+the statuses, every branch of the core on the ball, a crossing and return inside one step,
+rodas4's order on a stiff problem, and two runs in two threads at once."""
 
 import math
 import sys
@@ -11,7 +12,7 @@ import numpy as np
 import pytest
 
 from mbs_clearance.core import build
-from mbs_clearance.core.integrate import integrate, model_record
+from mbs_clearance.core.integrate import NO_EVENTS_C, integrate, model_record, no_events_source
 from mbs_clearance.numerics.integrator import METHODS, RESULTS, make_settings
 
 sys.path.insert(0, str(Path(__file__).parent))
@@ -19,9 +20,7 @@ from core_models import (  # noqa: E402
     BALL_C,
     BALL_MEM_START,
     COUNT,
-    NO_EVENTS_C,
     OSCILLATOR_C,
-    ball_numba,
     ball_parameters,
     ball_settings,
     bounce_times,
@@ -187,9 +186,8 @@ def test_out_of_memory_is_an_error_not_a_crash(ball):
                   ball_settings(n_samples=2 ** 40), METHODS["dopri5"].arrays())
 
 
-# the numba integrator compiled for the ball (one specialisation serves every method)
+# ball runs through every branch of the core: (settings keywords, parameter keywords, y0)
 BALL_CASES = [
-    # (settings keywords, parameter keywords, y0)
     ({}, dict(drag=0.3, ceiling=0.8, e=0.9), (0.5, 3.0, 0.0)),
     (dict(event_control=True, event_margin=1e-4), dict(drag=0.3, ceiling=0.8, e=0.9),
      (0.5, 3.0, 0.0)),
@@ -207,34 +205,36 @@ BALL_CASES = [
 
 
 @pytest.mark.parametrize("method", METHOD_NAMES)
-def test_c_core_equals_the_numba_integrator_bitwise(ball, method):
-    """The same ball run by the C core and by the numba integrator: every returned array,
-    the status and the memory left in p equal bit for bit (the same floating-point
-    operations in the same order), for each method, with the switching functions under
-    error control or not, a state wider than the dense one, a state longer than the
-    short-state fast paths, records off, crests refined, and each status."""
+def test_ball_cases_reach_every_status_and_count_their_impacts(ball, method):
+    """The ball through every branch of the core, for each method (the switching functions
+    under error control or not, a state wider than the dense one, a state longer than the
+    short-state fast paths, records off, crests refined): every status is reached; each
+    located event is one action (the bounce count in p) or, for two joints on their
+    surface at once, two events per action; where both surfaces are hit the highest point
+    is the ceiling; a run without its record has the recorded run's peaks and counters bit
+    for bit (recording changes nothing of the integration)."""
     edges = np.linspace(0.0, 4.0, 9)
     tab = METHODS[method].arrays()
     statuses = set()
     for skw, pkw, y0 in BALL_CASES:
-        settings = ball_settings(1e-7, **skw)
-        p_c = ball_parameters(**pkw)
-        p_n = p_c.copy()
-        got = integrate(ball, np.array(y0), p_c, edges, settings, tab)
-        want = ball_numba(np.array(y0), p_n, edges, settings, tab)
-        for name, a, b in zip(("t", "y", "memory", "peaks", "peak_t", "counters",
-                               "outputs"), got, want):
-            assert a.shape == b.shape and a.dtype == b.dtype, (name, skw, pkw)
-            assert np.array_equal(a, b), (name, skw, pkw)
-        assert got[7] == want[7]
-        assert np.array_equal(p_c, p_n)
-        statuses.add(RESULTS(got[7]))
+        p = ball_parameters(**pkw)
+        got = integrate(ball, np.array(y0), p, edges, ball_settings(1e-7, **skw), tab)
+        status = RESULTS(got[7])
+        statuses.add(status)
         if pkw.get("twin"):
-            # every impact switched both joints: two events counted per bounce
-            assert got[5][3] == 2 * p_c[COUNT] > 0
+            assert got[5][3] == 2 * p[COUNT] > 0
+        elif status == RESULTS.success:
+            assert got[5][3] == p[COUNT] > 0
         if pkw.get("ceiling", 1e3) < 1.0 and "max_steps" not in skw:
-            # both surfaces hit: the highest point is the ceiling
             assert got[5][3] > 4 and abs(np.max(got[3]) - pkw["ceiling"]) < 1e-9
+        if skw.get("record") is False:
+            p_rec = ball_parameters(**pkw)
+            rec = integrate(ball, np.array(y0), p_rec, edges,
+                            ball_settings(1e-7, **{**skw, "record": True}), tab)
+            assert len(got[0]) <= 1 < len(rec[0])
+            for a, b in zip(got[3:6], rec[3:6]):
+                assert np.array_equal(a, b)
+            assert np.array_equal(p, p_rec)
     assert statuses == set(RESULTS)
 
 
@@ -324,3 +324,115 @@ def test_runs_in_two_threads_at_once():
     for k in range(2):
         assert results[k][7] == RESULTS.success
         assert abs(results[k][1][-1, 0] - math.exp(-1.0)) < 1e-5
+
+
+# a state at rest and one switching function positive only for |t - 1| < 0.01 (p[0] = 0):
+# an excursion much shorter than the steps taken; its action sets p[0] = 1 (the memory).
+# With p[1] = 1 the model reports no rate of the switching function: only samples find it
+BUMP_C = r"""
+#include "mbs_core.h"
+
+static void rhs(double t, const double *y, int64_t n, const double *p, double *dydt)
+{
+    (void)t; (void)y; (void)n; (void)p;
+    dydt[0] = 0.0;
+}
+
+static void event(double t, const double *y, const double *p, int64_t j, double *g_gd)
+{
+    (void)y; (void)j;
+    if (p[0] < 0.5) {
+        g_gd[0] = 1e-4 - (t - 1.0) * (t - 1.0);
+        g_gd[1] = p[1] > 0.5 ? 0.0 : -2.0 * (t - 1.0);
+    } else {
+        g_gd[0] = -1.0;
+        g_gd[1] = 0.0;
+    }
+}
+
+static void on_event(double t, const double *y, double *p, int64_t j)
+{
+    (void)t; (void)y; (void)j;
+    p[0] = 1.0;
+}
+
+static double monitor(double t, const double *y, int64_t n, const double *p, double *dydt,
+                      double *out, int64_t n_out, double *g, double *gd)
+{
+    double g_gd[2];
+    (void)out; (void)n_out;
+    rhs(t, y, n, p, dydt);
+    event(t, y, p, 0, g_gd);
+    g[0] = g_gd[0];
+    gd[0] = g_gd[1];
+    return -y[0];
+}
+
+static int prepare(double *p) { (void)p; return 0; }
+
+static const mbs_model RECORD = {1, 1, 1, 0, 1, 0, 2, 2, rhs, event, on_event, monitor, prepare};
+
+const mbs_model *mbs_model_record(void) { return &RECORD; }
+"""
+
+
+@pytest.mark.parametrize("method", ["dopri5", "dop853"])
+def test_interior_samples_catch_a_crossing_and_return_inside_one_step(method):
+    """With no dynamics the step grows to h_max = 0.4 and the step ends never see the
+    switching function's excursion above zero (0.02 s wide): missed without interior
+    samples and without its rate (this is what they are for), found with 39 samples; with
+    no samples but the rate at the step ends, the cubic Hermite look rises to the surface
+    and the step is searched finer."""
+    model = model_record(*build.load("test_bump", [("bump.c", BUMP_C)]))
+
+    def events(n_samples, rate, margin=0.0):
+        p = np.array([0.0, 0.0 if rate else 1.0])
+        settings = make_settings(1e-8, np.full(1, 1e-8), 1, h_max=0.4, event_tol=1e-14,
+                                 event_margin=margin, n_samples=n_samples, n_dense=1,
+                                 n_events=1, mem_start=0, n_mem=1)
+        out = integrate(model, np.array([0.0]), p, np.array([0.0, 3.0]), settings,
+                        METHODS[method].arrays())
+        assert RESULTS(out[7]) == RESULTS.success
+        assert out[5][3] == p[0]          # each located event ran the action once
+        return out[5][3]
+
+    assert events(0, rate=False) == 0
+    assert events(39, rate=False) == 1
+    assert events(0, rate=True, margin=1e-3) == 1
+
+
+# y0' = -y0 + y1 + sin t, y1' = lambda y1 (p = [lambda]): a fast mode and a time-dependent
+# forcing (df/dt enters a Rosenbrock method's stages)
+STIFF_C = no_events_source("""
+    dydt[0] = -y[0] + y[1] + sin(t);
+    dydt[1] = p[0] * y[1];""", "y[0]", 2, 1, 1)
+
+
+def _stiff_exact(t, y0, lam):
+    """Closed form of y0' = -y0 + y1 + sin t, y1' = lam y1."""
+    c_exp = y0[1] / (lam + 1.0)
+
+    def part(s):
+        return c_exp * math.exp(lam * s) + (math.sin(s) - math.cos(s)) / 2.0
+    return np.array([(y0[0] - part(0.0)) * math.exp(-t) + part(t), y0[1] * math.exp(lam * t)])
+
+
+def test_rodas4_converges_at_order_4_on_a_stiff_linear_problem():
+    """rodas4's step map (`step_states`) with fixed steps h = 1/N on a linear problem with a
+    fast mode (lambda = -1e4, h |lambda| from 1000 to 125: far outside every explicit
+    method's stability region) against the closed form at t = 1: the error falls about
+    2^4-fold per halving, and the fast mode is damped, not amplified."""
+    from mbs_clearance.core.integrate import step_states
+
+    model = model_record(*build.load("test_stiff", [("stiff.c", STIFF_C)]))
+    p, y0, lam = np.array([-1.0e4]), np.array([1.0, 1.0]), -1.0e4
+    co = METHODS["rodas4"].arrays()
+    errors = []
+    for n_steps in (10, 20, 40, 80):
+        h, y = 1.0 / n_steps, y0.copy()
+        for k in range(n_steps):
+            y = step_states(model, k * h, y, p, np.array([h]), co, 0)[0][0]
+        errors.append(np.max(np.abs(y - _stiff_exact(1.0, y0, lam))))
+    ratios = np.array(errors[:-1]) / np.array(errors[1:])
+    assert np.all(ratios > 2.0 ** 4 * 0.8) and np.all(ratios < 2.0 ** 4 * 1.5), ratios
+    assert errors[-1] < 1e-10

@@ -59,11 +59,16 @@ def test_friction_overrides_reach_every_joint():
 @pytest.mark.parametrize("law, phi", [("coulomb", 0.2 / np.hypot(0.2, 0.05)),
                                       ("ambrosio", 1.0), ("none", 0.0)])
 def test_friction_stage_of_a_journal_on_a_turning_bearing(law, phi):
-    """The kernels' friction stage (runtime.friction_stage) at a journal pressed on the
+    """The compiled models' friction stage (core/runtime.h) at a journal pressed on the
     bottom of a bearing that turns at omega (n = (0, -1), t = (1, 0), slip velocity
     edot . t - omega R_B = -0.2 m/s): the friction force on the journal mu Fn phi along t
     (dragged along by the wall), and the force on the bearing Fn n - Ft t."""
-    from mbs_clearance.generate.runtime import friction_stage
+    import sys
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).parent))
+    from core_models import runtime_stages
+
     from mbs_clearance.laws import FRICTION_PARAMETER_SPECS
     from mbs_clearance.laws.forces import CONTACT_MODELS, contact_force
 
@@ -75,6 +80,7 @@ def test_friction_stage_of_a_journal_on_a_turning_bearing(law, phi):
     # the law's parameters (the registry's slots; further ones at their defaults)
     given = {"friction_coefficient": mu, "friction_v0": v0, "friction_v1": v1}
     slots = tuple(given.get(p.name, p.default) for p in FRICTION_PARAMETER_SPECS)
+    friction_stage = runtime_stages()[1]
     f, delta, _, fx, fy, ft, vt = friction_stage(0.0, ey, exd, eyd, spin, c, 1.0, 0.01, k,
                                                  0.9, model, FRICTION_LAWS[law], slots)
     fn = contact_force(pen, 1e-4, 0.01, k, 0.9, model)

@@ -1,6 +1,7 @@
 """The generated models: the paper case against its closed form written by hand
 (validation/paper_closed_form.py: two independent derivations), energy balance, loop
-closure, checked-in modules not stale."""
+closure, the specialised models against the general ones, deterministic generation. (Names
+of the description never reach the C source: tests/unit/test_c_models.py.)"""
 
 import os
 import subprocess
@@ -10,13 +11,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from mbs_clearance.core.integrate import RecordKernels
 from mbs_clearance.generate import (
     generate_module,
     load_model,
-    named_cases,
-    registry_source,
-    structure_digest,
 )
+from mbs_clearance.generate.energy import mechanical_energy
 from mbs_clearance.model.cases import paper_slider_crank
 from mbs_clearance.model.linkage import GROUND, Body, ClearanceJoint, Drive, Linkage, Revolute
 from mbs_clearance.model.mechanism import SliderCrank
@@ -71,7 +71,7 @@ def test_paper_model_matches_reduced(mech):
             out = np.empty(model.N_OUT)
             dydt = np.empty(model.N_STATE)
             g, gd = np.empty(1), np.empty(1)
-            m = model.monitor(t, y, p, dydt, out, g, gd)
+            m = RecordKernels(model).monitor(t, y, p, dydt, out, g, gd)
             n_contact += F > 0
             # scales: the largest term of each quantity (inertial ~ m L w^2, contact F)
             acc_scale = (abs(th3dd) + 300.0 / mech.coupler_inertia_value * mech.coupler_length
@@ -116,7 +116,7 @@ def test_on_event_matches_the_closed_form():
     for t, y in _random_states(mech, rng, 5, 1.5):
         for mode in (0.0, 1.0):
             p[model.MEM_START] = mode
-            model.on_event(t, y, p, 0)
+            RecordKernels(model).on_event(t, y, p, 0)
             assert p[model.MEM_START] == 1.0 - mode
             if mode == 0.0:     # an onset stores the impact velocity
                 assert p[model.MEM_START + 1] == pytest.approx(
@@ -130,6 +130,7 @@ def _energy_rate_check(lk, mode, rng, n=5):
     of the equations gives errors of order one."""
     model = load_model(lk)
     p = pack_parameters(lk, model)
+    energy_of = mechanical_energy(lk)
     y0 = initial_state(lk, model, p)
     errs = []
     for _ in range(n):
@@ -144,12 +145,12 @@ def _energy_rate_check(lk, mode, rng, n=5):
         power = f[-1]
         rates = []
         for h in (1e-6 * lk.period, 0.5e-6 * lk.period):
-            fwd = model.mechanical_energy(t + h, y + h * f, p)
-            bwd = model.mechanical_energy(t - h, y - h * f, p)
+            fwd = energy_of(t + h, y + h * f, p)
+            bwd = energy_of(t - h, y - h * f, p)
             # the state moves along the tangent, not the solution: second-order terms cancel
             # in the central difference up to O(h^2)
             rates.append((fwd - bwd) / (2 * h))
-        scale = abs(power) + 1e-3 * abs(model.mechanical_energy(t, y, p)) / lk.period
+        scale = abs(power) + 1e-3 * abs(energy_of(t, y, p)) / lk.period
         errs.append((abs(rates[0] - power) / scale, abs(rates[1] - power) / scale))
     del y0
     return errs
@@ -234,7 +235,7 @@ def test_shaking_force_is_newton_on_the_whole_mechanism():
         p[model.MEM_START::2][:2] = mode
         out = np.empty(model.N_OUT)
         f = np.empty(model.N_STATE)
-        model.monitor(0.05, y, p, f, out, np.empty(2), np.empty(2))
+        RecordKernels(model).monitor(0.05, y, p, f, out, np.empty(2), np.empty(2))
         # crank: rotation about the origin at the drive speed, centre of mass at its middle
         th = 20.0 * 0.05 + 0.3
         a_crank = -0.02 * 20.0**2 * np.array([np.cos(th), np.sin(th)])
@@ -242,20 +243,6 @@ def test_shaking_force_is_newton_on_the_whole_mechanism():
                  + np.array([0.0, (0.2 + 0.1 + 0.3) * 9.81]))
         shaking = out[[col["shaking_x"], col["shaking_y"]]]
         assert shaking == pytest.approx(-total, rel=1e-12, abs=1e-12 * np.abs(total).max())
-
-
-def test_generated_modules_not_stale():
-    """The checked-in modules equal what the generator writes now (else run
-    tools/generate_models.py), and the registry lists each named case."""
-    cases = named_cases()
-    assert "paper_slider_crank" in cases
-    folder = ROOT / "mbs_clearance" / "_generated"
-    assert (folder / "__init__.py").read_text() == registry_source(cases), (
-        "run python tools/generate_models.py")
-    for name, lk in cases.items():
-        path = folder / f"{name}.py"
-        assert path.is_file() and path.read_text() == generate_module(lk), (
-            f"{path} is stale: run python tools/generate_models.py")
 
 
 def test_generation_is_deterministic_across_processes():
@@ -271,41 +258,11 @@ def test_generation_is_deterministic_across_processes():
     assert texts[0] == texts[1]
 
 
-def test_user_description_cached_by_structure(tmp_path, monkeypatch):
-    """A description not among the named cases is generated once into the cache and found
-    there again; changing a number keeps the module, changing the structure does not."""
-    monkeypatch.setenv("MBS_CLEARANCE_MODEL_DIR", str(tmp_path))
-    lk = _pendulum_pair()
-    from mbs_clearance.generate import loader, model_path, model_structure
-
-    # the process's memo of loaded modules starts empty here: another test may have loaded
-    # this structure from its own cache directory, and the memo would answer without this one
-    monkeypatch.setattr(loader, "_LOADED", {})
-    digest = structure_digest(model_structure(lk))
-    model = load_model(lk)
-    assert model.STRUCTURE_DIGEST == digest
-    path = model_path(lk)
-    assert path is not None
-    assert load_model(lk.with_parameter("crank.mass", 0.5)) is model
-    assert structure_digest(model_structure(lk.replace(monitor_joint="hanger"))) != digest
-    assert loader._current(path, digest)
-    # a new process finds it in the cache: loaded from the file, not generated again
-    monkeypatch.setattr(loader, "_LOADED", {})
-
-    def no_generation(*args, **kwargs):
-        raise AssertionError("generated again")
-
-    monkeypatch.setattr(loader, "generate_module", no_generation)
-    again = load_model(lk)
-    assert again is not model and again.STRUCTURE_DIGEST == digest
-    assert again.__file__ == str(path)
-
-
-def test_models_specialised_on_zero_geometry_equal_the_general_one(tmp_path, monkeypatch):
-    """The paper case's checked-in module is specialised on its zero-valued geometric
-    parameters (points on the links' axes, the guide through the origin): its quantities
-    equal the general module's (no specialisation, generated here) at the states of a run,
-    to round-off; a nonzero offset takes another module; the specialised module refuses a
+def test_models_specialised_on_zero_geometry_equal_the_general_one():
+    """The paper case's model is specialised on its zero-valued geometric parameters (points
+    on the links' axes, the guide through the origin): its right-hand side and outputs
+    equal the general model's at the states of a run, to round-off; a nonzero offset takes
+    another model; the specialised model refuses a
     nonzero entry in its zero set (pack_parameters naming it; integrate_model; a DDM
     direction along it). (Sensitivities along such parameters: test_linkage_ddm.)"""
     from mbs_clearance.generate.key import geometric_zeros
@@ -313,7 +270,6 @@ def test_models_specialised_on_zero_geometry_equal_the_general_one(tmp_path, mon
     from mbs_clearance.numerics.integrator import METHODS, make_settings
     from mbs_clearance.solve import linkage_ddm
 
-    monkeypatch.setenv("MBS_CLEARANCE_MODEL_DIR", str(tmp_path))
     lk = cases.paper_slider_crank()
     spec, gen = load_model(lk), load_model(lk, specialise=False)
     assert spec.ZERO_PARAMETERS == geometric_zeros(lk) and "slider.pin.y" in spec.ZERO_PARAMETERS
@@ -328,8 +284,11 @@ def test_models_specialised_on_zero_geometry_equal_the_general_one(tmp_path, mon
     for i in rng.choice(len(ts), 300, replace=False):
         for q, m in ((p, spec), (pg, gen)):
             q[m.MEM_START:m.MEM_START + m.N_MEM] = ms[i]
-        a = np.array(spec.dynamics(ts[i], ys[i], p))
-        b = np.array(gen.dynamics(ts[i], ys[i], pg))
+        a, b = np.empty(spec.N_STATE), np.empty(gen.N_STATE)
+        spec.rhs(ts[i], ys[i], p, a)
+        gen.rhs(ts[i], ys[i], pg, b)
+        a = np.r_[a, spec.outputs(ts[i:i + 1], ys[i:i + 1], ms[i:i + 1], p)[0]]
+        b = np.r_[b, gen.outputs(ts[i:i + 1], ys[i:i + 1], ms[i:i + 1], pg)[0]]
         scale = np.maximum(np.abs(b), 1e-9 * np.max(np.abs(b)))
         assert np.max(np.abs(a - b) / scale) < 1e-9, i
     # an offset of the slider's pin: no longer in the zero set, another module
@@ -368,7 +327,7 @@ def test_coupled_mass_matrix_chain():
         assembly={"l1.angle": 0.8, "l2.angle": -0.5},
     )
     source = generate_module(lk)
-    assert "math.sqrt(m_0_0" in source      # the Cholesky path
+    assert "sqrt(m_0_0" in source      # the Cholesky path
     model = load_model(lk)
     p = pack_parameters(lk, model)
     y0 = initial_state(lk, model, p)
@@ -453,6 +412,7 @@ def test_two_joints_energy_balance_over_a_run():
     lk = _pendulum_pair()
     model = load_model(lk)
     p = pack_parameters(lk, model)
+    energy_of = mechanical_energy(lk)
     errors = []
     for rtol in (1e-10, 1e-11):
         traj = simulate(lk, 2, rtol=rtol)
@@ -464,7 +424,7 @@ def test_two_joints_energy_balance_over_a_run():
         energy = np.empty(len(traj.t))
         for i, t in enumerate(traj.t):
             p[model.MEM_START::2][:2] = traj.contact_phase[i]
-            energy[i] = model.mechanical_energy(t, ys[i], p)
+            energy[i] = energy_of(t, ys[i], p)
         change = energy - energy[0]
         scale = np.abs(traj.crank_work).max() + np.abs(change).max()
         errors.append(np.abs(traj.crank_work - change).max() / scale)
@@ -473,118 +433,3 @@ def test_two_joints_energy_balance_over_a_run():
 
 
 # ---------------------------------------------------------------- hostile names, cached modules
-
-#: Python that writes the file MARK, behind a quote that would close a pasted docstring
-PAYLOAD = 'x"""\nimport pathlib; pathlib.Path(MARK).write_text("pwned")\n"""'
-
-
-def test_names_reach_the_generated_code_only_as_literals(tmp_path):
-    """Even names that bypass the description's checks (set on the frozen objects) are
-    inert in the generated source: it parses, the payload is nowhere its code, only inside
-    string constants, and LINKAGE / JOINTS hold it verbatim."""
-    import ast
-    import dataclasses
-
-    payload = PAYLOAD.replace("MARK", repr(str(tmp_path / "pwned")))
-    lk = _pendulum_pair()
-    cj = dataclasses.replace(lk.clearance_joints[1])
-    object.__setattr__(cj, "name", payload)
-    object.__setattr__(lk, "clearance_joints", (lk.clearance_joints[0], cj))
-    object.__setattr__(lk, "name", payload)
-    source = generate_module(lk)
-    tree = ast.parse(source)
-    calls = [n for n in ast.walk(tree) if isinstance(n, ast.Attribute) and n.attr == "write_text"]
-    assert not calls
-    imported = {a.name for n in ast.walk(tree) if isinstance(n, (ast.Import, ast.ImportFrom))
-                for a in n.names}
-    assert "pathlib" not in imported
-    values = {n.targets[0].id: n.value for n in tree.body if isinstance(n, ast.Assign)
-              and isinstance(n.targets[0], ast.Name)}
-    assert ast.literal_eval(values["LINKAGE"]) == payload
-    assert ast.literal_eval(values["JOINTS"]) == ("disc_pin", payload)
-    assert payload not in ast.get_docstring(tree)
-    strings = [n.value for n in ast.walk(tree) if isinstance(n, ast.Constant)
-               and isinstance(n.value, str) and "write_text" in n.value]
-    assert strings                                    # it is there, as data only
-    assert not (tmp_path / "pwned").exists()
-
-
-@pytest.fixture
-def planted(tmp_path, monkeypatch):
-    """(linkage, digest, directories, mark): two candidate directories for generated
-    modules (the loader's list replaced), the generator replaced by a stub (no derivation,
-    no compilation), and the file a planted module would write."""
-    from mbs_clearance.generate import loader, model_structure
-
-    lk = _pendulum_pair()
-    digest = structure_digest(model_structure(lk))
-    dirs = [tmp_path / "first", tmp_path / "second"]
-    monkeypatch.setattr(loader, "_cache_dirs", lambda d: list(dirs))
-    monkeypatch.setattr(loader, "generate_module", lambda *a, **k: (
-        f'STRUCTURE_DIGEST = "{digest}"\nREGENERATED = True\n'))
-    monkeypatch.setattr(loader, "_LOADED", {})
-    return lk, digest, dirs, tmp_path / "ran"
-
-
-def _plant(directory: Path, digest: str, mark: Path, mode: int = 0o700) -> Path:
-    from mbs_clearance.generate import loader
-
-    directory.mkdir(mode=0o700)
-    path = directory / f"model_{digest[:16]}.py"
-    text = (f'STRUCTURE_DIGEST = "{digest}"\nimport pathlib\n'
-            f'pathlib.Path({str(mark)!r}).write_text("ran")\n')
-    path.write_text(loader.with_digest(text))
-    path.chmod(0o600)
-    directory.chmod(mode)
-    return path
-
-
-def test_a_cached_module_runs_only_when_its_text_matches_its_digest(planted):
-    """The control: a planted module with a matching digest line in a private directory is
-    executed (it writes the mark). Changed after it was written (one line added), it is not
-    executed: a CacheWarning, the module generated again in its place."""
-    from mbs_clearance.generate import loader
-    from mbs_clearance.generate.loader import CacheWarning
-
-    lk, digest, dirs, mark = planted
-    path = _plant(dirs[0], digest, mark)
-    assert not hasattr(load_model(lk), "REGENERATED") and mark.read_text() == "ran"
-    mark.unlink()
-    loader._LOADED.clear()
-    path.write_text(path.read_text() + f'pathlib.Path({str(mark)!r}).write_text("tampered")\n')
-    with pytest.warns(CacheWarning, match="does not match its recorded digest"):
-        module = load_model(lk)
-    assert module.REGENERATED and not mark.exists()
-    assert loader._current(path, digest) and "REGENERATED" in path.read_text()
-    assert oct(path.stat().st_mode & 0o777) == oct(0o600)
-
-
-@pytest.mark.parametrize("unsafe", ["group-writable directory", "other-writable file",
-                                    "directory of another user", "symbolic link"])
-def test_a_module_others_could_have_written_is_never_executed(planted, unsafe):
-    """A planted module with a matching digest line (it would write the mark) is skipped
-    where others could have written it; the module is generated into the first private
-    directory instead (the next one, or the same if only the file was unsafe)."""
-    from mbs_clearance.generate import loader
-
-    lk, digest, dirs, mark = planted
-    if unsafe == "group-writable directory":
-        _plant(dirs[0], digest, mark, mode=0o770)
-    elif unsafe == "other-writable file":
-        _plant(dirs[0], digest, mark).chmod(0o602)
-    elif unsafe == "directory of another user":
-        if os.geteuid() != 0:
-            pytest.skip("needs root to give a directory to another user")
-        _plant(dirs[0], digest, mark)
-        os.chown(dirs[0], 12345, -1)
-    else:
-        real = dirs[0].parent / "elsewhere"
-        _plant(real, digest, mark)
-        dirs[0].symlink_to(real, target_is_directory=True)
-    # the file's directory is private: the module generated again replaces the file there
-    place = dirs[0] if unsafe == "other-writable file" else dirs[1]
-    assert loader.private_dir(dirs[0]) == (unsafe == "other-writable file")
-    module = load_model(lk)
-    assert module.REGENERATED and not mark.exists()
-    assert Path(module.__file__).parent == place
-    assert loader.model_path(lk) == place / f"model_{digest[:16]}.py"

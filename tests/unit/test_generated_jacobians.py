@@ -110,8 +110,8 @@ def test_jacobian_matches_finite_differences(case, mode):
 
 
 def check_against_differences(linkage, model, mode):
-    """`test_jacobian_matches_finite_differences` of a loaded model (numba's or the C
-    core's: the same functions and metadata) in `mode` ("free" or "contact")."""
+    """`test_jacobian_matches_finite_differences` of a loaded (compiled) model in `mode`
+    ("free" or "contact")."""
     p = pack_parameters(linkage, model)
     rng = np.random.default_rng(7)
     t = 0.37 * linkage.period

@@ -511,7 +511,7 @@ def test_a_four_bar_that_cannot_close_is_refused_on_loading(tmp_path):
             f"try:\n    Linkage.from_file({str(path)!r})\nexcept ValueError as e:\n"
             "    print(e)\n"
             "print(sorted(m for m in sys.modules if m.startswith(('sympy', "
-            "'mbs_clearance._generated', 'mbs_clearance_model'))))\n")
+            "'mbs_clearance.generate.c_loader', 'mbs_clearance_model'))))\n")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          timeout=120, check=True).stdout.splitlines()
     assert "short.json': the loop closure of linkage 'four_bar' cannot be solved" in out[0]

@@ -4,18 +4,12 @@
   refused (exit status 2) by a message naming the option, before any run starts (the
   runs are replaced by a function that fails the test);
 - hostile names: a body or joint named after a key of the description is refused at load;
-- the kernel cache: a directory others can write to or owned by another user is never
-  read; damaged entries of every kind (garbage data, an index cut short, a directory where
-  the index belongs), a full disk and an index that cannot be saved again drop the cache
-  with one warning naming the path, and the run computes; two processes writing the same
-  cache end with one consistent cache;
 - failed and empty runs: a study with failed runs exits 1 unless --keep-going; a force far
   above the mechanism's load scale is warned about;
 - outputs: a full disk under --out is found before the work, a failed write names the
   file, a damaged map.nc is named, SIGTERM leaves no partial folder.
 
-The cache probes use two small registered packages (tests/unit/test_cache.py) whose kernels
-compile in about a second.
+(The compiled-code cache's probes: tests/unit/test_core_build.py.)
 """
 
 from __future__ import annotations
@@ -33,11 +27,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from test_cache import KERNEL_RUN, cache_warnings, clean_env, first_path, run, write_package
-from test_cache import KPKG as _KPKG
-from test_cache import REPO as _REPO
 
-from mbs_clearance import SliderCrank, _cache
+from mbs_clearance import SliderCrank
 from mbs_clearance._io import atomic_file
 from mbs_clearance._warnings import PhysicsWarning
 from mbs_clearance.cli import (
@@ -331,143 +322,3 @@ def test_sigterm_during_report_leaves_no_partial_folder(tmp_path):
     assert proc.returncode == 143, err
     assert "Traceback" not in err
     assert sorted(p.name for p in tmp_path.iterdir()) == []
-
-
-# ---------------------------------------------------------------- the kernel cache
-
-
-@pytest.fixture
-def kpkg(tmp_path):
-    """The small registered package in tmp_path/src and the environment of its runs, its
-    cache under tmp_path/cache (NUMBA_CACHE_DIR, mode 0700)."""
-    src = tmp_path / "src"
-    write_package(src, "kpkg", _KPKG)
-    cache = tmp_path / "cache"
-    cache.mkdir(mode=0o700)
-    # the package's own __pycache__ read-only: the cache goes to NUMBA_CACHE_DIR only
-    return src, cache, clean_env([src, _REPO], NUMBA_CACHE_DIR=str(cache))
-
-
-CODE = "import json, kpkg\n" + KERNEL_RUN
-
-
-def _planted_index(index: Path, marker: Path) -> None:
-    """Replace `index` by a valid entry (digest and all) whose unpickling creates
-    `marker`: what someone who can write the directory could plant."""
-    import pickle
-
-    class Plant:
-        def __reduce__(self):
-            return (os.system, (f"touch {marker}",))
-
-    payload = pickle.dumps(Plant())
-    import hashlib
-
-    index.write_bytes(_cache.ENTRY_MAGIC + hashlib.sha256(payload).digest() + payload)
-
-
-@pytest.mark.parametrize("how", ["others-write", "other-owner"])
-def test_a_cache_directory_others_control_is_never_read(kpkg, tmp_path, how):
-    src, cache, env = kpkg
-    first, err = run(CODE, env)
-    assert first["misses"] == 1 and Path(first["path"]).is_relative_to(cache)
-    index = next(Path(first["path"]).glob("kern.kernel-*.nbi"))
-    marker = tmp_path / "planted-code-ran"
-    _planted_index(index, marker)
-    # the control: in a trusted directory the planted entry is read (and its code runs)
-    subprocess.run([sys.executable, "-c", CODE], env=env, cwd=first_path(env),
-                   capture_output=True, timeout=600)
-    assert marker.exists()
-    marker.unlink()
-    _planted_index(index, marker)
-    if how == "others-write":
-        cache.chmod(0o777)
-    else:
-        if os.geteuid() != 0:
-            pytest.skip("giving a directory to another user needs root")
-        os.chown(cache, 65534, 65534)
-    second, err = run(CODE, env)
-    assert second["value"] == 3.0 and not marker.exists()
-    warned = cache_warnings(err)
-    assert len(warned) == 1 and str(cache) in warned[0], err
-    assert ("writable by group or others" if how == "others-write"
-            else "owned by another user") in warned[0]
-
-
-def _garbage(path: Path) -> None:
-    path.write_bytes(os.urandom(path.stat().st_size))
-
-
-def _directory(path: Path) -> None:
-    path.unlink()
-    path.mkdir()
-    (path / "x").write_text("")
-
-
-# (an entry cut short: tests/unit/test_cache.py)
-@pytest.mark.parametrize("which, damage", [("nbc", _garbage), ("nbi", _garbage),
-                                           ("nbi", _directory)])
-def test_a_damaged_cache_entry_is_dropped_and_the_run_computes(kpkg, which, damage):
-    src, cache, env = kpkg
-    first, _ = run(CODE, env)
-    damaged = next(Path(first["path"]).glob(f"kern.kernel-*.{which}"))
-    damage(damaged)
-    second, err = run(CODE, env)
-    assert second["value"] == 3.0 and second["misses"] == 1
-    assert "SystemError" not in err and "Traceback" not in err, err
-    warned = cache_warnings(err)
-    assert len(warned) == 1 and str(damaged) in warned[0], err
-    third, err = run(CODE, env)                     # rewritten: read from the cache again
-    assert third["value"] == 3.0 and third["hits"] == 1 and not cache_warnings(err), err
-
-
-ENOSPC_WRITE = """
-import errno
-from mbs_clearance import _cache
-def full(path, data):
-    raise OSError(errno.ENOSPC, "No space left on device", path)
-_cache.write_entry = full
-"""
-STALE_SAVE = """
-from numba.core import caching
-def vanished(self, obj):
-    raise ReferenceError("underlying object has vanished")
-caching.IndexDataCacheFile._dump = vanished
-"""
-
-
-@pytest.mark.parametrize("failure, reason", [(ENOSPC_WRITE, "No space left on device"),
-                                             (STALE_SAVE, "underlying object has vanished")])
-def test_a_cache_that_cannot_be_written_is_dropped_and_the_run_computes(kpkg, failure,
-                                                                        reason):
-    src, cache, env = kpkg
-    out, err = run("import json, kpkg\n" + failure + KERNEL_RUN, env)
-    assert out["value"] == 3.0 and out["misses"] == 1
-    warned = cache_warnings(err)
-    assert len(warned) == 1 and reason in warned[0] and str(cache) in warned[0], err
-    assert "running without it" in warned[0]
-
-
-def test_a_full_disk_under_the_cache_is_dropped_and_the_run_computes(tmp_path, tmpfs):
-    src = tmp_path / "src"
-    write_package(src, "kpkg", _KPKG)
-    full = tmpfs("size=4k,mode=0700")
-    env = clean_env([src, _REPO], NUMBA_CACHE_DIR=str(full))
-    out, err = run(CODE, env)
-    assert out["value"] == 3.0
-    warned = cache_warnings(err)
-    assert len(warned) == 1 and "No space left on device" in warned[0], err
-    assert str(full) in warned[0]
-
-
-def test_two_writers_of_one_cache_end_with_one_consistent_cache(kpkg):
-    src, cache, env = kpkg
-    procs = [subprocess.Popen([sys.executable, "-c", CODE], env=env, cwd=first_path(env),
-                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-             for _ in range(2)]
-    for proc in procs:
-        out, err = proc.communicate(timeout=600)
-        assert proc.returncode == 0 and json.loads(out.splitlines()[-1])["value"] == 3.0, err
-        assert not cache_warnings(err), err
-    after, err = run(CODE, env)
-    assert after["hits"] == 1 and after["misses"] == 0 and not cache_warnings(err)

@@ -188,15 +188,6 @@ def test_sensitivity_runs_refuse_a_profiled_bearing():
                               False)
 
 
-def test_numbas_integrator_refuses_a_profiled_bearing(monkeypatch):
-    lk = cases.paper_slider_crank()
-    lp = profiled(lk, [lk.clearance_joints[0].bearing_radius] * N)
-    monkeypatch.setenv("MBS_CLEARANCE_CORE", "numba")
-    with pytest.raises(ValueError, match=r"'coupler_slider' has a bearing_profile, which is "
-                       r"not supported by numba's integrator"):
-        lm.run(lp, 1, record=False)
-
-
 @pytest.mark.parametrize("suffix", [".npz", ".csv"])
 def test_contact_angle_and_slip_velocity_are_saved_and_loaded(tmp_path, suffix):
     from mbs_clearance.solve.trajectory import load_trajectory

@@ -14,9 +14,6 @@ set per joint."""
 
 from __future__ import annotations
 
-import numba as nb
-
-from ...numerics._kernel import KERNEL
 from ..base import Parameter
 from .journal_bearing import film_force
 
@@ -32,7 +29,6 @@ FADE_END = Parameter(
            "order of ground surfaces' combined roughness")
 
 
-@nb.njit(**KERNEL)
 def fade(eps, start, end):
     """(w, dw/deps): the film's weight, 1 for eps <= start, 0 for eps >= end, the quintic
     smooth step 1 - (10 s^3 - 15 s^4 + 6 s^5), s = (eps - start) / (end - start), between."""
@@ -46,7 +42,6 @@ def fade(eps, start, end):
             -30.0 * s * s * (1.0 - s) * (1.0 - s) / width)
 
 
-@nb.njit(**KERNEL)
 def lubricated_force(ex, ey, vx, vy, omega_j, omega_b, R, c, L, mu, model, start, end):
     """(Fx, Fy, T, w): the faded film's force on the journal centre and torque on the
     journal, and the weight w (the dry contact is the joint's own, added by the caller)."""

@@ -46,17 +46,14 @@ pressure-gradient (Poiseuille) shear, (R/2) int int p dh/dtheta = -(e/2) F_t. Wi
 the film's total power F . (de/dt - omega_B k x e) + T (omega_J - omega_B) is never
 positive (equal to minus an integral of squares).
 
-The functions use only `math` and are compiled by numba (the kernels' options); each
-compiled function's Python source is its `py_func`."""
+The functions use only `math`; core/runtime.h holds their C twins, in the same order of
+operations."""
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
 
-import numba as nb
-
-from ...numerics._kernel import KERNEL
 from ..base import Parameter
 
 __all__ = ["LubricationLaw", "VISCOSITY", "BEARING_LENGTH", "LAWS", "MODELS",
@@ -86,7 +83,6 @@ class LubricationLaw:
     source: str
 
 
-@nb.njit(**KERNEL)
 def sommerfeld_angle(theta, eps):
     """psi(theta): the continuous, increasing Sommerfeld variable, cos psi =
     (eps + cos theta) / (1 + eps cos theta), psi(theta + 2 pi) = psi(theta) + 2 pi, psi = 0
@@ -95,7 +91,6 @@ def sommerfeld_angle(theta, eps):
     return theta - 2.0 * math.atan2(beta * math.sin(theta), 1.0 + beta * math.cos(theta))
 
 
-@nb.njit(**KERNEL)
 def _frame(ex, ey, vx, vy, c):
     """(e, eps, ur_x, ur_y, eps_dot, the tangential rate v . u_t / c)."""
     e = math.sqrt(ex * ex + ey * ey)
@@ -106,7 +101,6 @@ def _frame(ex, ey, vx, vy, c):
     return e, e / c, ux, uy, (ux * vx + uy * vy) / c, (-uy * vx + ux * vy) / c
 
 
-@nb.njit(**KERNEL)
 def _torque(e, eps, ft, omega_j, omega_b, R, c, L, mu):
     """Couette shear of the full film plus the pressure-gradient shear, -(e/2) F_t."""
     couette = -2.0 * math.pi * mu * R * R * R * L * (omega_j - omega_b) / (
@@ -114,7 +108,6 @@ def _torque(e, eps, ft, omega_j, omega_b, R, c, L, mu):
     return couette - 0.5 * e * ft
 
 
-@nb.njit(**KERNEL)
 def short_bearing(ex, ey, vx, vy, omega_j, omega_b, R, c, L, mu):
     """(Fx, Fy, T) of the short (Ocvirk) film with the half-Sommerfeld condition at its
     exact boundaries (valid for eps < 1)."""
@@ -141,7 +134,6 @@ def short_bearing(ex, ey, vx, vy, omega_j, omega_b, R, c, L, mu):
             _torque(e, eps, ft, omega_j, omega_b, R, c, L, mu))
 
 
-@nb.njit(**KERNEL)
 def _long_pressure(psi, eps, a1, b1):
     """The long film's full pressure (over 6 mu R^2 / c^2) at Sommerfeld angle psi, and its
     derivative in psi: the wedge a1 sin psi (2 - eps^2 - eps cos psi) plus the squeeze
@@ -155,7 +147,6 @@ def _long_pressure(psi, eps, a1, b1):
     return g, dg
 
 
-@nb.njit(**KERNEL)
 def _zero(lo, hi, eps, a1, b1):
     """The zero of the long film's pressure between lo and hi (a sign change): Newton
     steps kept inside the bracket, bisection where they leave it."""
@@ -183,7 +174,6 @@ def _zero(lo, hi, eps, a1, b1):
 _SAMPLES = 96
 
 
-@nb.njit(**KERNEL)
 def _long_integrals(p1, p2, eps):
     """(int sin psi (eps + 2 cos psi), int sin^2 psi, int (cos psi - eps)(eps + 2 cos psi),
     int sin psi (cos psi - eps)) over (p1, p2)."""
@@ -195,7 +185,6 @@ def _long_integrals(p1, p2, eps):
     return i1, i2, i3, i4
 
 
-@nb.njit(**KERNEL)
 def long_lobes(eps, a1, b1):
     """The positive region of the long film's full pressure (`_long_pressure`) as its
     lobes in Sommerfeld's variable: (n, u1, d1, u2, d2), n lobes (u_k, d_k) from an
@@ -240,7 +229,6 @@ def long_lobes(eps, a1, b1):
     return n, u1, d1, u2, d2
 
 
-@nb.njit(**KERNEL)
 def long_bearing(ex, ey, vx, vy, omega_j, omega_b, R, c, L, mu):
     """(Fx, Fy, T) of the long (Sommerfeld) film with the half-Sommerfeld condition over
     the exact positive region of the full-film pressure (valid for eps < 1)."""
@@ -286,7 +274,6 @@ LAWS: tuple[LubricationLaw, ...] = (SHORT, LONG)
 MODELS: dict[str, int] = {law.name: i for i, law in enumerate(LAWS)}
 
 
-@nb.njit(**KERNEL)
 def film_force(ex, ey, vx, vy, omega_j, omega_b, R, c, L, mu, model):
     """(Fx, Fy, T) of film law id `model` (0 short, 1 long)."""
     if model == 1:

@@ -20,10 +20,8 @@ from __future__ import annotations
 import cmath
 import math
 
-import numba as nb
 import numpy as np
 
-from ...numerics._kernel import KERNEL
 from .hybrid import fade, lubricated_force
 from .journal_bearing import MODELS, _long_pressure, long_lobes, sommerfeld_angle
 
@@ -43,7 +41,6 @@ _H = 1e-20
 _CENTRE = 1e-8
 
 
-@nb.njit(**KERNEL)
 def _short_core(ex, ey, vx, vy, omega_j, omega_b, R, c, L, mu, p1, p2):
     """(Fx, Fy, T, eps) of the short film over the fixed Sommerfeld angles (p1, p2), in
     arithmetic that takes complex inputs (`journal_bearing.short_bearing` otherwise)."""
@@ -78,7 +75,6 @@ def _short_core(ex, ey, vx, vy, omega_j, omega_b, R, c, L, mu, p1, p2):
     return fr * ux - ft * uy, fr * uy + ft * ux, couette - 0.5 * e * ft, eps
 
 
-@nb.njit(**KERNEL)
 def _short_ends(ex, ey, vx, vy, omega_j, omega_b, c):
     """The Sommerfeld angles of the ends of the short film's positive region."""
     e = math.sqrt(ex * ex + ey * ey)
@@ -90,7 +86,6 @@ def _short_ends(ex, ey, vx, vy, omega_j, omega_b, c):
     return sommerfeld_angle(alpha, eps), sommerfeld_angle(alpha + math.pi, eps)
 
 
-@nb.njit(**KERNEL)
 def _long_state(ex, ey, vx, vy, omega_j, omega_b, c):
     """(eps, a1, b1) of the long film's full pressure (`journal_bearing.long_bearing`)."""
     e = math.sqrt(ex * ex + ey * ey)
@@ -102,13 +97,11 @@ def _long_state(ex, ey, vx, vy, omega_j, omega_b, c):
             (ux * vx + uy * vy) / c / ((2.0 + 3.0 * eps * eps) * q * q))
 
 
-@nb.njit(**KERNEL)
 def _long_ends(ex, ey, vx, vy, omega_j, omega_b, c):
     """The long film's positive lobes (`journal_bearing.long_lobes`)."""
     return long_lobes(*_long_state(ex, ey, vx, vy, omega_j, omega_b, c))
 
 
-@nb.njit(**KERNEL)
 def _moved(z, eps, a1, b1):
     """The end z of a lobe moved with the complex step of the pressure's parameters: the
     zero of g(psi) = _long_pressure to first order, z - i Im g(z) / g_psi(z)."""
@@ -117,7 +110,6 @@ def _moved(z, eps, a1, b1):
     return z - 1j * g.imag / dg
 
 
-@nb.njit(**KERNEL)
 def _long_integrals_c(p1, p2, eps):
     """`journal_bearing._long_integrals` of complex ends."""
     s1, c1, s2, c2 = cmath.sin(p1), cmath.cos(p1), cmath.sin(p2), cmath.cos(p2)
@@ -128,7 +120,6 @@ def _long_integrals_c(p1, p2, eps):
     return i1, i2, i3, i4
 
 
-@nb.njit(**KERNEL)
 def _long_core(ex, ey, vx, vy, omega_j, omega_b, R, c, L, mu, n, u1, d1, u2, d2):
     """(Fx, Fy, T, eps) of the long film over its n lobes (u_k, d_k) (`long_lobes`), each
     end moved as a zero of the pressure (`_moved`), in arithmetic that takes complex
@@ -166,7 +157,6 @@ def _long_core(ex, ey, vx, vy, omega_j, omega_b, R, c, L, mu, n, u1, d1, u2, d2)
     return fr * ux - ft * uy, fr * uy + ft * ux, couette - 0.5 * e * ft, eps
 
 
-@nb.njit(**KERNEL)
 def film_values(ex, ey, vx, vy, omega_j, omega_b, R, c, L, mu, model, start, end):
     """(active, ends, w, dw/deps, Fx, Fy, T_J, T_B, power) of the faded film of law id
     `model`: the ends of its positive region, (n, u1, d1, u2, d2) in Sommerfeld's variable
@@ -193,7 +183,6 @@ def film_values(ex, ey, vx, vy, omega_j, omega_b, R, c, L, mu, model, start, end
     return True, ends, w, dw, fx, fy, tj, tb, power
 
 
-@nb.njit(**KERNEL)
 def film_direction(ex, ey, vx, vy, omega_j, omega_b, R, c, L, mu, model, start, end, ends, w,
                    dw, fx, fy, tj, dex, dey, dvx, dvy, dwj, dwb, dR, dc, dL, dmu, dstart,
                    dend):
@@ -255,7 +244,6 @@ def film_direction(ex, ey, vx, vy, omega_j, omega_b, R, c, L, mu, model, start, 
     return dfx, dfy, dtj, dtb, dpw
 
 
-@nb.njit(error_model="numpy")
 def film_partials(ex, ey, vx, vy, omega_j, omega_b, R, c, L, mu, start, end, model=0):
     """(N_OUTPUTS, N_INPUTS + 1): the faded film's (Fx, Fy, T_J, T_B, power) (rows)
     and their partial derivatives along each input (columns, in `N_INPUTS` order), the
