@@ -2,6 +2,7 @@
 integrator's own friction work, the volume the profile gained against the volume worn, the
 life's convergence as its intervals shrink, and the command line."""
 
+import dataclasses
 import json
 
 import numpy as np
@@ -122,3 +123,17 @@ def test_a_tolerance_study_takes_the_wear_life_as_its_output():
     for values, life in _CALLS:
         assert life * values["wear_coefficient"] == pytest.approx(
             _CALLS[0][1] * _CALLS[0][0]["wear_coefficient"], rel=0.03)
+
+
+def test_a_circular_profile_gives_the_papers_pinned_peak():
+    # the paper case's default run (4 revolutions, rtol 1e-7) on a bearing_profile of 360
+    # equal radii: the pinned 8291.958273534865 N of the circular joint (test_perf_counts)
+    from mbs_clearance.model.cases import paper_slider_crank
+    from mbs_clearance.solve import linkage_model as lm
+
+    link = paper_slider_crank()
+    cj = link.clearance_joints[0]
+    circle = link.replace(clearance_joints=(
+        dataclasses.replace(cj, bearing_profile=(cj.bearing_radius,) * 360),))
+    traj = lm.simulate_linkage(circle, 4, rtol=1e-7)
+    assert traj.peaks[-1] == pytest.approx(8291.958273534865, rel=1e-12)

@@ -23,7 +23,6 @@ import math
 
 import numpy as np
 
-from ...model.profile import BearingProfile
 from ..base import Parameter
 
 __all__ = ["WEAR_COEFFICIENT", "pressure_weights", "wear_increment"]
@@ -39,8 +38,9 @@ WEAR_COEFFICIENT = Parameter(
 ARC_POINTS_PER_CELL = 8
 
 
-def pressure_weights(profile: BearingProfile, journal_radius: float, angle, penetration):
-    """Where the pressure of each contact sample sits: indices (M, P) into the fine grid of
+def pressure_weights(profile, journal_radius: float, angle, penetration):
+    """Where the pressure of each contact sample sits, on the bearing's `profile` (a
+    `model.profile.BearingProfile`): indices (M, P) into the fine grid of
     `ARC_POINTS_PER_CELL` points per cell of the profile (angle 2 pi m / (N *
     ARC_POINTS_PER_CELL)) and weights (M, P) that sum to 1 per sample, proportional to the
     overlap of the journal's circle with the bearing's profile (the elastic foundation).
@@ -75,7 +75,7 @@ def pressure_weights(profile: BearingProfile, journal_radius: float, angle, pene
     return index, w / total[:, None]
 
 
-def wear_increment(profile: BearingProfile, journal_radius: float, bearing_length: float,
+def wear_increment(profile, journal_radius: float, bearing_length: float,
                    coefficient: float, t, force, penetration, angle, slip):
     """The wear depth (m) at the profile's grid angles accumulated over the samples, and the
     worn volume (m^3).
