@@ -2,13 +2,12 @@
  * bs3) and a linearly implicit Rosenbrock method (rodas4), with dense output, event location
  * and landing, and the refinement of each window's peak of the monitored scalar.
  *
- * The floating-point operations are those of the numba integrator
- * (mbs_clearance/numerics/integrator.py), in the same order, so that both give the same
- * numbers: every function here is named after the function it ports, and its comments say
- * only where C differs in form. Built without -ffast-math: the event search and the error
+ * The floating-point operations keep one fixed order (the integrator was ported from a
+ * Python implementation and checked bitwise against it; the functions keep its names), so
+ * that a run's numbers do not depend on the compiler's choices. Built without -ffast-math: the event search and the error
  * control rely on IEEE semantics (NaN tests, no reassociation, no contraction to FMA).
  *
- * min and max are Python's (and numba's) builtins: max(a, b) is b if b > a else a, so a NaN
+ * min and max are Python's builtins: max(a, b) is b if b > a else a, so a NaN
  * in the second place is dropped and in the first place kept (`nb_max`, `nb_min`).
  *
  * Arrays: K is (K_rows, n) row-major with row stride ldk = n (the full state); a function
@@ -30,7 +29,7 @@
 static inline double nb_max(double a, double b) { return b > a ? b : a; }
 static inline double nb_min(double a, double b) { return b < a ? b : a; }
 
-/* numba's float ** int (exponentiation by squaring, 1 / r for a negative exponent) */
+/* float ** int (exponentiation by squaring, 1 / r for a negative exponent) */
 static double int_power(double a, int64_t b)
 {
     double r = 1.0;
@@ -235,7 +234,7 @@ static void rk_step(const run_ctx *cx, double t, const double *y, int64_t n, con
 }
 
 /* _step_monitor: rk_step with the monitor as its last stage. f_new has the full length
- * (ldk) in every caller, and all of it is copied into the FSAL row, as numba does. */
+ * (ldk) in every caller, and all of it is copied into the FSAL row. */
 static double step_monitor(const run_ctx *cx, double t, const double *y, int64_t n,
                            const double *f, double h, double *K, double *p, double *y_new,
                            double *f_new, double *ytmp, double *out, double *g, double *gd)

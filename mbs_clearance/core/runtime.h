@@ -1,10 +1,9 @@
 /* What every generated C model includes: sin and cos of one angle together, the clearance
  * joints' contact stages (penetration, its rate, the force of the law, friction, the oil
- * film) and the switching function. Each function is the C twin of the numba kernel of the
- * same name (numerics/_trig.py, generate/runtime.py, laws/lubrication), written in the same
- * order of operations so that both round alike; the laws themselves come from
- * laws_generated.h, printed from their one definition. Tuples are returned through
- * pointers, in the numba kernel's order. */
+ * film) and the switching function. The film's functions keep the order of operations of
+ * their Python twins (laws/lubrication), so that both round alike; the laws themselves come
+ * from laws_generated.h, printed from their one definition. Tuples are returned through
+ * pointers. */
 #ifndef MBS_RUNTIME_H
 #define MBS_RUNTIME_H
 

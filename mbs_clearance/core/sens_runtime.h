@@ -13,7 +13,7 @@
  * p = the model's p (N_P entries), the header [nb, event-time term flag, m], the sparse
  * chain (nb m columns of z, nb m values), then the work space (`ddm_work`). The work space
  * lives in p, so these functions write p's work entries (and the memories' sensitivities
- * in y at an onset) through the seam's const pointers, as the numba kernels do: every p
+ * in y at an onset) through the seam's const pointers: every p
  * and y the integrator passes is writable.
  */
 #ifndef MBS_SENS_RUNTIME_H

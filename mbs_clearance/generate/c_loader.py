@@ -3,7 +3,7 @@ compiled with the system's C compiler into the compiled-code cache (`core.build`
 the digest of the source: stale code never loads) and opened with cffi.
 
 `load_c_model(linkage)` returns a `CModel`: the cffi handles, the model record (sizes and
-function pointers of the seam ``mbs_core.h``) and the metadata the numba module exposes
+function pointers of the seam ``mbs_core.h``) and the model's metadata
 (PARAMETERS, OUT_COLUMNS, N_STATE, ...). The C source is generated on first use (sympy
 derivation, one to ten seconds) and kept, with its metadata, in the compiled-code cache
 beside the libraries, keyed by the structure's digest and the C printer's sources; it is
@@ -134,7 +134,7 @@ def generate_c_module(linkage: Linkage, specialise: bool = True) -> str:
 @dataclass(frozen=True)
 class CModel:
     """A compiled C model: `ffi`, `lib` (cffi), `record` (``const mbs_model *``), `meta`
-    (the numba module's metadata, also as attributes: ``model.N_STATE``), the C `source`,
+    (the model's metadata, also as attributes: ``model.N_STATE``), the C `source`,
     and the seconds its generation and its build (or cache look-up) took."""
 
     ffi: object
@@ -151,7 +151,7 @@ class CModel:
         except AttributeError:
             raise AttributeError(f"CModel has no attribute {name!r}") from None
 
-    # ---- the numba module's functions of a plain run, each a call into the compiled code
+    # ---- the functions of a plain run, each a call into the compiled code
     ZERO_MESSAGE = ("a parameter of ZERO_PARAMETERS is not zero: this model is specialised "
                     "on them; load the general one "
                     "(mbs_clearance.generate.load_model(linkage, specialise=False))")
@@ -264,8 +264,7 @@ class CModel:
         return out
 
     def integrate_model(self, y0, p, edges, settings, coefficients):
-        """The compiled core's run of this model (`core.integrate.integrate`; the numba
-        module's integrate_model's arguments and returns)."""
+        """The compiled core's run of this model (`core.integrate.integrate`)."""
         from ..core.integrate import integrate, model_record
 
         # the zero check of prepare, without recomputing the constants on every run
@@ -274,7 +273,7 @@ class CModel:
         return integrate(model_record(self.ffi, self.lib), y0, p, edges, settings,
                          coefficients)
 
-    # ---- the sensitivity runs (DDM, tangents): the numba module's functions, same
+    # ---- the sensitivity runs (DDM, tangents): the functions, same
     # arguments and returns
     def _no_profiles(self) -> None:
         """ValueError for a model with a profiled bearing: its Jacobian rows take circular
@@ -393,7 +392,7 @@ class CModel:
         return step_states(self._sens_record(p.shape[0]), t0, y0, p, hs, coefficients,
                            self.N_OUT)
 
-    # ---- the step maps of recorded steps (the numba module's, same arguments and returns)
+    # ---- the step maps of recorded steps
     def refine_steps(self, t0s, y0s, mems, p, hs, coefficients, iters):
         """The maximum of the monitored value over the plain step map of each step k (start
         t0s[k] in s, state y0s[k], memories mems[k], size hs[k] in s), by golden section;

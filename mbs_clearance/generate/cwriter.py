@@ -1,7 +1,7 @@
-"""C code of a `Derivation`: the same plan as the numba module (`writer._plan`: the split
-expressions, the same common subexpressions, the same constants in the same order) printed
-with sympy's C99 printer, its powers and numbers written as the python printer writes them,
-so that every kernel evaluates its expressions in the numba kernel's order of operations.
+"""C code of a `Derivation`: the plan of `writer._plan` (the split expressions, their common
+subexpressions, the constants in a fixed order) printed with sympy's C99 printer, its powers
+and numbers written as the python printer writes them, so that every kernel evaluates its
+expressions in one fixed order of operations.
 
 The model is a C99 translation unit that includes the seam (mbs_core.h) and the runtime
 (core/runtime.h: sincos, the contact stages, the laws) and exports `mbs_model_record()`.
@@ -149,7 +149,7 @@ def _statement(line: str) -> str:
 
 def metadata(d: Derivation, linkage_name: str, structure: dict, zeros: tuple, pl,
              n_constants: int) -> dict:
-    """What the numba module exposes beside its kernels, for the C model's callers."""
+    """What a model exposes beside its kernels, for the C model's callers."""
     params = pl.params
     out_columns, mon = _out_columns(d, pl.events, pl.fric, pl.lub, pl.corner_fric, pl.driven)
     friction = ([d.joints[j] for j in pl.fric] + [d.corners[k][0] for k in pl.corner_fric])
@@ -188,11 +188,11 @@ def render_c(d: Derivation, linkage_name: str, structure: dict,
     gap_fns = [c.function([(pl.gap_exprs[j], pl.gap_names[j])]) for j in range(E)]
     bearing_fns = {j: c.function([([sp.sympify(e) for e in profiles[j][:2]],
                                    [f"pa{j}", f"pw{j}"])]) for j in profiles}
-    # the kernels' constants are numbered first, as in the numba module; the closure's
+    # the kernels' constants are numbered first; the closure's
     # (used at the start only) after them
     n_kernel_constants = len(pl.w.constants)
-    # the energy's constants (the numba module's next ones, unused here), so that the
-    # Jacobians' are numbered and their sums ordered as the numba module's
+    # the energy's constants (unused here), so that the Jacobians' keep their numbers and
+    # their sums' order
     pl.w.split(d.kinetic + d.potential)
     closure = _closure_functions(c, d, pl)
     jac_lines, jac_meta = jacobian_functions(c, d, pl)   # constants before prepare's
@@ -233,7 +233,7 @@ def render_c(d: Derivation, linkage_name: str, structure: dict,
             "is", " * specialised on is not zero */",
             "static int prepare(double *p) {", "    if (!zeros_hold(p)) return 1;",
             *prepare, "    return 0;", "}", "",
-            "/* every output (the numba module's OUT_COLUMNS order) into res[N_OUT] */",
+            "/* every output (in the OUT_COLUMNS order) into res[N_OUT] */",
             "static inline void dynamics(double t, const double *y, const double *p, "
             "double *res) {", "    (void)t;", *dynamics]
     out += [f"    res[{k}] = {r};" for k, r in enumerate(pl.results)]
@@ -353,9 +353,9 @@ def _profiled_stages(pl, profiles: dict) -> dict:
 
 def _sens_functions(meta: dict) -> list[str]:
     """After the Jacobian and tangent kernels: the monitor's values from a column of the
-    model's quantities (`observe`: the value column of a full tangent, as the numba module's
-    _observe), every switching function's gap (`mbs_gap`), and the DDM equations of
-    core/sens_runtime.h (the sensitivity run's record and its outputs' derivatives)."""
+    model's quantities (`observe`: the value column of a full tangent), every switching
+    function's gap (`mbs_gap`), and the DDM equations of core/sens_runtime.h (the
+    sensitivity run's record and its outputs' derivatives)."""
     E = meta["N_EVENTS"]
     out = [f"#define DDM_MOMENT_ROW {meta['MOMENT_COLUMN']}",
            f"#define DDM_SPEED_INDEX {meta['SPEED_INDEX']}", "",
@@ -382,9 +382,9 @@ def _sens_functions(meta: dict) -> list[str]:
 
 
 def _closure_functions(c: _C, d: Derivation, pl) -> list[str]:
-    """The loop closure at coordinates q (the numba module's closure, closure_jacobian and
-    closure_rate): the clearance joints' gaps, then the sliders' offsets and tilts, into
-    res[nc] (the Jacobian row-major, res[nc * N_Q])."""
+    """The loop closure at coordinates q (closure, closure_jacobian and closure_rate): the
+    clearance joints' gaps, then the sliders' offsets and tilts, into res[nc] (the Jacobian
+    row-major, res[nc * N_Q])."""
     w, n, J = pl.w, pl.n, len(d.joints)
     nc = 2 * J + 2 * len(d.slider_closure)
     value = [f"c{i}" for i in range(nc)]

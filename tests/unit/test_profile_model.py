@@ -282,8 +282,8 @@ def test_a_free_linkage_keeps_its_energy_on_a_profiled_bearing(amplitude):
 
 
 def test_the_closure_gives_the_eccentricity_rates_the_gaps_give():
-    # a numba module has no gap_series: its rates come from the loop closure's Jacobian and
-    # explicit time rate; both against each other on the compiled model's recorded steps
+    # the loop closure's Jacobian and explicit time rate against the compiled model's gap
+    # series, on its recorded steps
     lk = cases.slider_crank_two_clearances()
     run = lm.run(lk, 1)
 
