@@ -35,8 +35,8 @@ from ..laws.wear.archard import wear_increment
 from ..model.linkage import Linkage
 from ..model.profile import BearingProfile
 
-__all__ = ["CycleWear", "WearResult", "WearLife", "wear_life", "cycle_wear", "load_wear",
-           "DEFAULT_POINTS"]
+__all__ = ["CycleWear", "WearResult", "WearLife", "WearOptimum", "wear_life", "cycle_wear",
+           "load_wear", "optimize_wear_life", "DEFAULT_POINTS"]
 
 #: grid angles of the profile when the joint has none yet (1 degree)
 DEFAULT_POINTS = 360
@@ -526,3 +526,85 @@ class WearLife:
         """How many outputs `y` are the life's length (the clearance did not reach the
         factor): their true life is longer."""
         return int(np.sum(np.asarray(y, dtype=float) >= self.cycles))
+
+
+@dataclass
+class WearOptimum:
+    """The longest-lived design a GA found (`optimize_wear_life`): the genes' values, their
+    life (cycles until the clearance reaches `factor` times the initial one; the life's
+    length when not reached, a lower bound), the best life per generation and the number
+    of wear lives run."""
+
+    best: dict
+    life: float
+    censored: bool
+    history: list
+    evaluations: int
+    settings: dict
+
+
+def optimize_wear_life(genes: dict, *, case: str = "paper_slider_crank_wear",
+                       overrides: dict | None = None, cycles: float = 1e7,
+                       factor: float = 2.0, tolerance: float = 0.02, population: int = 8,
+                       generations: int = 5, seed: int = 0, progress: bool = False
+                       ) -> WearOptimum:
+    """A genetic algorithm (pygad, the operators of `optimize.optimize_link_lengths`) that
+    maximises the wear life of a named case's design: ``genes`` {override name: (low,
+    high)} in SI (e.g. ``{"bearing_length": (0.005, 0.02), "crank_speed": (300, 600)}``),
+    each design's life a `WearLife` (`cycles`, `factor`, `tolerance`). Runs population x
+    (generations + 1) wear lives at most, in this process. Bad input raises ValueError
+    before any run."""
+    import pygad
+
+    from ..model.cases import CASES
+    from .optimize import _GA_OPERATORS, _pygad_logger
+
+    if case not in CASES:
+        raise ValueError(f"case must be one of {sorted(CASES)}; got {case!r}")
+    if not isinstance(genes, dict) or not genes:
+        raise ValueError("genes must be a non-empty {name: (low, high)} of the case's "
+                         "overrides")
+    for name, bounds in genes.items():
+        ok = (isinstance(bounds, (tuple, list)) and len(bounds) == 2
+              and all(isinstance(v, (int, float)) and math.isfinite(v) for v in bounds)
+              and bounds[0] < bounds[1])
+        if not ok:
+            raise ValueError(f"genes[{name!r}] must be (low, high) with low < high; got "
+                             f"{bounds!r}")
+    population = _check_positive("population", population, int)
+    generations = _check_positive("generations", generations, int)
+    if population < 4:
+        raise ValueError(f"population must be at least 4; got {population}")
+    names = tuple(genes)
+    lo = np.array([genes[n][0] for n in names], dtype=float)
+    hi = np.array([genes[n][1] for n in names], dtype=float)
+    life = WearLife(case=case, overrides=tuple((overrides or {}).items()), cycles=cycles,
+                    factor=factor, tolerance=tolerance)
+    life.design({n: float(v) for n, v in zip(names, lo)})      # the names, checked now
+    seen: dict[tuple, float] = {}
+
+    def fitness(ga, solution, index):
+        key = tuple(float(v) for v in lo + np.asarray(solution) * (hi - lo))
+        if key not in seen:
+            seen[key] = life(dict(zip(names, key)))
+        return seen[key]
+
+    history: list[float] = []
+    ga = pygad.GA(num_generations=generations, fitness_func=fitness, sol_per_pop=population,
+                  num_genes=len(names), gene_type=float, init_range_low=0.0,
+                  init_range_high=1.0, gene_space=[{"low": 0.0, "high": 1.0}] * len(names),
+                  random_seed=seed, logger=_pygad_logger(),
+                  on_generation=lambda g: history.append(float(np.max(g.last_generation_fitness))),
+                  num_parents_mating=max(2, population // 2),
+                  keep_elitism=max(1, population // 10),
+                  mutation_probability=1.0 / len(names), **_GA_OPERATORS)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", AccuracyWarning)
+        ga.run()
+    key = max(seen, key=seen.get)
+    return WearOptimum(best=dict(zip(names, key)), life=seen[key],
+                       censored=seen[key] >= cycles, history=history, evaluations=len(seen),
+                       settings={"case": case, "overrides": dict(overrides or {}),
+                                 "cycles": cycles, "factor": factor, "tolerance": tolerance,
+                                 "population": population, "generations": generations,
+                                 "seed": seed})

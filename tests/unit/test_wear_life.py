@@ -137,3 +137,21 @@ def test_a_circular_profile_gives_the_papers_pinned_peak():
         dataclasses.replace(cj, bearing_profile=(cj.bearing_radius,) * 360),))
     traj = lm.simulate_linkage(circle, 4, rtol=1e-7)
     assert traj.peaks[-1] == pytest.approx(8291.958273534865, rel=1e-12)
+
+
+def test_a_ga_lengthens_the_life_as_archard_says_it_should():
+    # the bearing's length does not enter the dry joint's dynamics; it only spreads the worn
+    # volume: the depth scales as 1 / L, so the life to twice the clearance as L (closed form)
+    from mbs_clearance.studies.wear import optimize_wear_life
+
+    worn = {"wear_coefficient": 2e-16}
+    life = WearLife(overrides=tuple(worn.items()), cycles=3e6)
+    short, long_ = (life({"bearing_length": v}) for v in (0.01, 0.02))
+    assert long_ / short == pytest.approx(2.0, rel=0.01)
+    opt = optimize_wear_life({"bearing_length": (0.005, 0.02)}, overrides=worn, cycles=3e6,
+                             population=4, generations=2, seed=1)
+    assert opt.life == pytest.approx(life(opt.best), rel=1e-12)
+    assert not opt.censored and opt.best["bearing_length"] > 0.0125
+    assert opt.history == sorted(opt.history)        # the elite is kept
+    with pytest.raises(ValueError, match=r"genes\['bearing_length'\] must be \(low, high\)"):
+        optimize_wear_life({"bearing_length": (0.02, 0.01)})
