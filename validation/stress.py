@@ -101,8 +101,9 @@ def _energy_error(case: StressCase) -> float:
     q = p.copy()
     energy = np.empty(len(ts))
     energy_of = mechanical_energy(reduced.linkage_of(case.mech))
+    mem = reduced.MEM_START
     for i in range(len(ts)):
-        q[reduced.MEM_START:reduced.MEM_START + 2] = ms[i]
+        q[mem:mem + 2] = ms[i]
         energy[i] = energy_of(ts[i], ys[i], q)
     work = ys[:, -1]
     return float(np.max(np.abs(work - (energy - energy[0]))) / max(np.max(np.abs(work)), 1e-12))
@@ -115,7 +116,8 @@ def _step_excursion(ts, ys, ms, p, coefficients, n_sub, mode):
     compiled model's step map (p: its parameters, as reduced.run returns them)."""
     from mbs_clearance.core.integrate import model_record, step_states
 
-    model = reduced.MODEL
+    # the layout read once: each module attribute looks the model up again
+    model, mem, clearance = reduced.MODEL, reduced.MEM_START, reduced.P_CLEARANCE
     record = model_record(model.ffi, model.lib)
     q = p.copy()
     worst = -np.inf
@@ -123,13 +125,13 @@ def _step_excursion(ts, ys, ms, p, coefficients, n_sub, mode):
     for k in range(ts.shape[0] - 1):
         if (ms[k, 0] > 0.5) != (mode == 1):
             continue
-        q[reduced.MEM_START] = ms[k, 0]
-        q[reduced.MEM_START + 1] = ms[k, 1]
+        q[mem] = ms[k, 0]
+        q[mem + 1] = ms[k, 1]
         hs = (ts[k + 1] - ts[k]) * fractions
         states, _ = step_states(record, ts[k], ys[k], q, hs, coefficients, 0)
         for h, y_new in zip(hs, states):
             # the switching function: delta in free flight, -delta in contact
-            d = model.event(ts[k] + h, y_new, q, 0)[0] / q[reduced.P_CLEARANCE]
+            d = model.event(ts[k] + h, y_new, q, 0)[0] / q[clearance]
             worst = max(worst, d)
     return worst
 

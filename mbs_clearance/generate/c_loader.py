@@ -86,11 +86,31 @@ def _render(linkage: Linkage, specialise: bool) -> tuple[str, dict]:
     return render_c(d, linkage.name, structure, zeros, profiles)
 
 
+#: the named cases' model sources, shipped with the package (`tools/ship_models.py`): a
+#: first run of a named case compiles without deriving; a structure or printer changed since
+#: has another key and is derived as any description
+SHIPPED = _HERE / "shipped"
+
+
+def source_key(digest: str) -> str:
+    """The key of a model's source: its structure's digest and the printer's version."""
+    return hashlib.sha256(f"{digest}\0{_printer_version()}".encode()).hexdigest()[:24]
+
+
+def _meta(data: dict) -> dict:
+    return {k: tuple(v) if isinstance(v, list) else v for k, v in data["meta"].items()}
+
+
 def _cached_render(linkage: Linkage, specialise: bool, digest: str) -> tuple[str, dict]:
-    """`_render`, kept in the first usable cache directory (see the module docstring)."""
+    """`_render`, shipped with the package for the named cases (`SHIPPED`) or kept in the
+    first usable cache directory (see the module docstring)."""
     from ..core import build
 
-    key = hashlib.sha256(f"{digest}\0{_printer_version()}".encode()).hexdigest()[:24]
+    key = source_key(digest)
+    shipped = SHIPPED / f"model-source-{key}.json"
+    if shipped.is_file():
+        data = json.loads(shipped.read_text())
+        return data["source"], _meta(data)
     rendered = None
     for directory in build.cache_dirs():
         if not build.usable(directory):
@@ -98,8 +118,7 @@ def _cached_render(linkage: Linkage, specialise: bool, digest: str) -> tuple[str
         path = directory / f"model-source-{key}.json"
         if build.valid(path):
             data = json.loads(path.read_text())
-            meta = {k: tuple(v) if isinstance(v, list) else v for k, v in data["meta"].items()}
-            return data["source"], meta
+            return data["source"], _meta(data)
         if path.exists():
             warnings.warn(f"the generated model source {path} does not match its recorded "
                           "digest (damaged or changed); it is generated again", CacheWarning,

@@ -67,7 +67,9 @@ def __getattr__(name: str):
             "P_CLEARANCE": model.PARAMETERS.index(f"{model.JOINTS[0]}.clearance")}[name]
 
 
+@functools.lru_cache(maxsize=1)
 def _paper_model():
+    # one look-up per process: building the description to find its model costs ~0.2 ms
     return lm.load_model(linkage_of(SliderCrank()))
 
 
