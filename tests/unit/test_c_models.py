@@ -231,6 +231,8 @@ def test_c_source_is_kept_and_a_damaged_copy_is_generated_again(tmp_path, monkey
 
     monkeypatch.setenv("MBS_CLEARANCE_CACHE_DIR", str(tmp_path))
     monkeypatch.setattr(c_loader, "_LOADED", {})
+    # the cache alone: the four-bar's shipped source set aside
+    monkeypatch.setattr(c_loader, "SHIPPED", tmp_path / "none")
     calls = []
     real = c_loader._render
     monkeypatch.setattr(c_loader, "_render", lambda *a: calls.append(a) or real(*a))

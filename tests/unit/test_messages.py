@@ -64,8 +64,17 @@ def test_compile_message_shows_on_a_terminal(tmp_path):
                XDG_CACHE_HOME=str(tmp_path / "xdg"), COLUMNS="100")
     env.pop("MBS_CLEARANCE_DEBUG", None)
     master, slave = os.openpty()
+    # the four-bar with friction in its joint: a structure whose source is not shipped
+    import json
+
+    from mbs_clearance.model.cases import four_bar
+
+    data = four_bar().to_dict()
+    data["clearance_joints"][0].update(friction_law="coulomb", friction_coefficient=0.05)
+    description = tmp_path / "four_bar_friction.json"
+    description.write_text(json.dumps(data))
     proc = subprocess.Popen([sys.executable, "-m", "mbs_clearance.cli", "simulate",
-                             "--case", "four_bar", "--revolutions", "1"],
+                             "--description", str(description), "--revolutions", "1"],
                             stdin=slave, stdout=slave, stderr=slave, cwd=root, env=env,
                             start_new_session=True)
     os.close(slave)
