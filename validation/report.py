@@ -1596,6 +1596,7 @@ error estimate of {{ (1e6 * n.wear.error_estimate) | num(2) }} um; the volume th
 gained (the area between the profiles times the bearing length) is
 {{ n.wear.volume_gained_mm3 | num(4) }} mm^3 against the {{ n.wear.final_volume_mm3 | num(4) }} mm^3
 Archard's law wore.</p>
+<details><summary>The life, state by state{% if n.wear.decades %}, and at a decade of k/H either side{% endif %}</summary>
 <table><tr><th>cycles</th><th>deepest wear (um)</th><th>volume (mm^3)</th><th>peak base force (N)</th>
 <th>drive moment RMS (N m)</th><th>regime</th></tr>
 {% for r in n.wear.rows %}<tr><td>{{ r.cycles | num(3) }}</td><td>{{ r.max_depth_um | num(4) }}</td>
@@ -1606,6 +1607,7 @@ Archard's law wore.</p>
 {% for r in n.wear.decades %}<tr><td>{{ r.wear_coefficient | num(3) }}</td><td>{{ r.max_depth_um | num(4) }}</td>
 <td>{{ r.volume_mm3 | num(4) }}</td><td>{{ r.peak_change_percent | fixed(2, True) }}</td>
 <td>{{ r.twice_clearance | num(3) if r.twice_clearance is not none else 'not reached' }}{% if r.stopped %} ({{ r.stopped }}){% endif %}</td></tr>{% endfor %}</table>{% endif %}
+</details>
 {{ figures('wear') }}
 
 <h2 id="paper">{{ titles.paper }}</h2>
