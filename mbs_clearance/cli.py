@@ -197,6 +197,14 @@ def wrote(path, what: str) -> None:
     print(f"wrote {path} ({what})", file=sys.stderr, flush=True)
 
 
+def write_file(path, write, what: str) -> None:
+    """`write`(a temporary path beside `path`), moved into place when it succeeds, then said
+    (`wrote`)."""
+    with atomic_file(path) as tmp:
+        write(tmp)
+    wrote(path, what)
+
+
 class _CliLogHandler(logging.Handler):
     """The library's messages (logger "mbs_clearance") on stderr, one line each, while a
     command runs: ``PROG: MESSAGE``. Notes (INFO: "compiling kernels ...") on an interactive
@@ -711,15 +719,11 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
               f"damping they set is sensitive to the tolerance: compare with a tighter --rtol",
               file=sys.stderr)
     if args.out:
-        with atomic_file(args.out) as tmp:
-            traj.save(tmp)
-        wrote(args.out, "trajectory")
+        write_file(args.out, traj.save, "trajectory")
     if args.plot:
         from .plotting import plot_trajectory
 
-        with atomic_file(args.plot) as tmp:
-            plot_trajectory(traj, path=tmp)
-        wrote(args.plot, "figure")
+        write_file(args.plot, lambda tmp: plot_trajectory(traj, path=tmp), "figure")
     return 0
 
 
@@ -2252,15 +2256,11 @@ def _cmd_wear(args: argparse.Namespace) -> int:
           f"clearance; {len(res.intervals)} intervals, tolerance "
           f"{quantity(res.tolerance, 'm', 3)} each)")
     if args.out:
-        with atomic_file(args.out) as tmp:
-            res.save(tmp)
-        wrote(args.out, "wear life")
+        write_file(args.out, res.save, "wear life")
     if args.plot:
         from .plotting import plot_wear
 
-        with atomic_file(args.plot) as tmp:
-            plot_wear(res, path=tmp)
-        wrote(args.plot, "figure")
+        write_file(args.plot, lambda tmp: plot_wear(res, path=tmp), "figure")
     return 0
 
 

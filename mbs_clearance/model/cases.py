@@ -156,17 +156,20 @@ def paper_slider_crank_lubricated(**overrides: Any) -> Linkage:
     oil film (`laws.lubrication`): the overrides are SliderCrank fields and the lubrication
     fields of `LUBRICATED_DEFAULTS` (film model, viscosity, bearing length, the fade's
     ends), each a design name of the studies (``viscosity``, ``crank_speed``, ...)."""
+    return _paper_joint_case("paper_slider_crank_lubricated", LUBRICATED_DEFAULTS, overrides)
+
+
+def _paper_joint_case(name: str, defaults: dict, overrides: dict) -> Linkage:
+    """The paper's slider-crank whose coupler-slider joint takes the fields of `defaults`
+    ({field: (default, unit, source)}), each overridden by `overrides`, the rest of which
+    are SliderCrank fields; named and cased `name`."""
     import dataclasses
 
-    lubricated = {k: overrides[k] for k in LUBRICATED_DEFAULTS if k in overrides}
-    rest = {k: v for k, v in overrides.items() if k not in LUBRICATED_DEFAULTS}
-    linkage = paper_slider_crank(**rest)
-    values = {k: lubricated.get(k, d[0]) for k, d in LUBRICATED_DEFAULTS.items()}
-    joint = dataclasses.replace(linkage.clearance_joints[0], **values)
-    return dataclasses.replace(linkage.replace(clearance_joints=(joint,)),
-                               name="paper_slider_crank_lubricated",
-                               case="paper_slider_crank_lubricated",
-                               overrides=dict(overrides))
+    joint_values = {k: overrides.get(k, d[0]) for k, d in defaults.items()}
+    linkage = paper_slider_crank(**{k: v for k, v in overrides.items() if k not in defaults})
+    joint = dataclasses.replace(linkage.clearance_joints[0], **joint_values)
+    return dataclasses.replace(linkage.replace(clearance_joints=(joint,)), name=name,
+                               case=name, overrides=dict(overrides))
 
 
 #: the overrides of `paper_slider_crank_wear` beyond the SliderCrank fields: name ->
@@ -190,16 +193,7 @@ def paper_slider_crank_wear(**overrides: Any) -> Linkage:
     Coulomb friction in the joint and Archard's wear coefficient k/H (`WEAR_DEFAULTS`, each
     with its source); the overrides are SliderCrank fields and the fields of
     `WEAR_DEFAULTS`. Its wear life: `studies.wear.wear_life` (CLI ``mbs-clearance wear``)."""
-    import dataclasses
-
-    worn = {k: overrides[k] for k in WEAR_DEFAULTS if k in overrides}
-    rest = {k: v for k, v in overrides.items() if k not in WEAR_DEFAULTS}
-    linkage = paper_slider_crank(**rest)
-    values = {k: worn.get(k, d[0]) for k, d in WEAR_DEFAULTS.items()}
-    joint = dataclasses.replace(linkage.clearance_joints[0], **values)
-    return dataclasses.replace(linkage.replace(clearance_joints=(joint,)),
-                               name="paper_slider_crank_wear", case="paper_slider_crank_wear",
-                               overrides=dict(overrides))
+    return _paper_joint_case("paper_slider_crank_wear", WEAR_DEFAULTS, overrides)
 
 
 # ---------------------------------------------------------------------------------------
