@@ -30,6 +30,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .._checks import check_int, check_real
 from .._warnings import AccuracyWarning, PhysicsWarning
 from ..laws.wear.archard import wear_increment
 from ..model.linkage import Linkage
@@ -240,16 +241,6 @@ def _trapezoid(y: np.ndarray, t: np.ndarray) -> float:
     return float(np.sum(0.5 * (y[1:] + y[:-1]) * np.diff(t)))
 
 
-def _check_positive(name: str, value, kind=float, low=0.0, closed=False) -> float:
-    ok = isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
-    if not ok or (value < low if closed else value <= low):
-        rel = ">=" if closed else ">"
-        raise ValueError(f"{name} must be a finite number {rel} {low:g}; got {value!r}")
-    if kind is int and int(value) != value:
-        raise ValueError(f"{name} must be a whole number; got {value!r}")
-    return kind(value)
-
-
 def wear_life(mech, cycles: float, *, joint: str | None = None,
               wear_coefficient: float | None = None, tolerance: float = 0.01,
               points: int = DEFAULT_POINTS, settle: int = 3, record: int = 1,
@@ -311,29 +302,28 @@ def wear_life(mech, cycles: float, *, joint: str | None = None,
     -------
     WearResult
     """
-    from .. import model as _model  # noqa: F401  (cases register as_linkage)
     from ..model.cases import as_linkage
 
     linkage = as_linkage(mech)
     if linkage.drive is None:
         raise ValueError("wear_life needs a driven linkage (a cycle is one drive revolution); "
                          f"{linkage.name!r} is free (no drive)")
-    cycles = _check_positive("cycles", cycles)
+    cycles = check_real("cycles", cycles, 0.0, low_open=True)
     if cycles > MAX_CYCLES:
         raise ValueError(f"cycles must be at most {MAX_CYCLES:g} (a machine's life); got "
                          f"{cycles:g}")
-    tolerance = _check_positive("tolerance", tolerance)
-    points = _check_positive("points", points, int)
-    settle = _check_positive("settle", settle, int, closed=True)
-    record = _check_positive("record", record, int)
-    samples = _check_positive("samples", samples, int)
-    min_interval = _check_positive("min_interval", min_interval)
+    tolerance = check_real("tolerance", tolerance, 0.0, low_open=True)
+    points = check_int("points", points, 1)
+    settle = check_int("settle", settle, 0)
+    record = check_int("record", record, 1)
+    samples = check_int("samples", samples, 1)
+    min_interval = check_real("min_interval", min_interval, 0.0, low_open=True)
     max_interval = (max(min_interval, cycles / 20.0) if max_interval is None
-                    else _check_positive("max_interval", max_interval))
+                    else check_real("max_interval", max_interval, 0.0, low_open=True))
     if max_interval < min_interval:
         raise ValueError(f"max_interval ({max_interval:g}) must be at least min_interval "
                          f"({min_interval:g}) cycles")
-    max_evaluations = _check_positive("max_evaluations", max_evaluations, int)
+    max_evaluations = check_int("max_evaluations", max_evaluations, 1)
     if samples < 64:
         raise ValueError(f"samples must be at least 64 per revolution; got {samples}")
     if points < 8:
@@ -571,10 +561,8 @@ def optimize_wear_life(genes: dict, *, case: str = "paper_slider_crank_wear",
         if not ok:
             raise ValueError(f"genes[{name!r}] must be (low, high) with low < high; got "
                              f"{bounds!r}")
-    population = _check_positive("population", population, int)
-    generations = _check_positive("generations", generations, int)
-    if population < 4:
-        raise ValueError(f"population must be at least 4; got {population}")
+    population = check_int("population", population, 4)
+    generations = check_int("generations", generations, 1)
     names = tuple(genes)
     lo = np.array([genes[n][0] for n in names], dtype=float)
     hi = np.array([genes[n][1] for n in names], dtype=float)
