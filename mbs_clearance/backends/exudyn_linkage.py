@@ -1413,13 +1413,17 @@ def refine_peak(t: np.ndarray, magnitude: np.ndarray, i: int) -> float:
     that the refined peaks converge at the method's order as h is halved; a parabola
     through three samples leaves an O(h^3) error whose sign follows where the peak falls
     between the samples, which breaks the extrapolation on short impacts). Near the ends
-    of the record the parabola through three samples (`_parabola`); a sample that is no
-    local maximum (at a revolution's edge) is kept."""
+    of the record, or where the five samples do not rise then fall, the parabola through
+    three samples (`_parabola`); a sample that is no local maximum (at a revolution's edge)
+    is kept."""
     n = len(magnitude)
     f0 = float(magnitude[i])
     if not 0 < i < n - 1 or magnitude[i - 1] > f0 or magnitude[i + 1] > f0:
         return f0
-    if i < 2 or i > n - 3:
+    # the quartic only where the five samples rise then fall (a resolved smooth peak); a
+    # zig-zag (generalized-alpha's start-up ringing) makes it overshoot by ~1 %
+    if (i < 2 or i > n - 3 or magnitude[i - 2] > magnitude[i - 1]
+            or magnitude[i + 2] > magnitude[i + 1]):
         return _parabola(magnitude, i)
     h = t[i + 1] - t[i]
     s = (t[i - 2:i + 3] - t[i]) / h

@@ -105,7 +105,9 @@ def test_ga_on_the_lubricated_case_against_direct_runs(tmp_path, capsys):
     for name, (lo, hi) in genes.items():
         argv += ["--gene", f"{name}={lo}:{hi}"]
     assert main(argv) == 0
-    assert f"best: {res.best_peak_force!r}" in capsys.readouterr().out
+    assert f"best: {res.best_peak_force:.2f} N" in capsys.readouterr().out
+    saved = json.loads((tmp_path / "opt" / "result.json").read_text())
+    assert saved["best_peak_force"] == res.best_peak_force
 
 
 def test_regime_maps_over_clearance_and_speed_beside_the_dry_joint(tmp_path):
@@ -149,11 +151,12 @@ def test_sensitivities_along_the_film_from_the_command_line(capsys):
     (`sensitivities` on the case, whose DDM is checked against differences in
     test_lubricated_case.py): per parameter its value and the mean of |S| (Eq. 15) to the
     printed digits; the viscosity and the bearing length move the base force."""
-    from mbs_clearance.analysis.sensitivity import sensitivities
+    from mbs_clearance.analysis.sensitivity import summary_sensitivities
 
     lk = cases.paper_slider_crank_lubricated()
     names = ("coupler_slider.viscosity", "coupler_slider.bearing_length")
-    ref = sensitivities(lk, names, revolutions=1, rtol=1e-8)
+    # the command prints the reported summary (its sampling and accuracy), as the report does
+    ref = summary_sensitivities(lk, names, revolutions=1, rtol=1e-8)
     capsys.readouterr()
     assert main(["sensitivity", "--case", "paper_slider_crank_lubricated", "--parameters",
                  ",".join(names), "--revolutions", "1", "--rtol", "1e-8"]) == 0
