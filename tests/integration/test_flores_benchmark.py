@@ -2,7 +2,8 @@
 that share nothing with the generated model: the nonsmooth Moreau scheme of
 validation.moreau (rigid contacts), the energy balance written from the mechanism's own
 kinematics (validation.moreau's mass matrix, itself checked against differences of the
-bodies' velocities), and Exudyn. Every test compiles the case's kernels: all are slow."""
+bodies' velocities), and Exudyn. The comparisons with the
+non-smooth reference, Exudyn and the report compute for 10 s to a minute: slow."""
 
 from __future__ import annotations
 
@@ -15,7 +16,7 @@ from mbs_clearance.model.cases import flores_translational_slider_crank as flg
 from mbs_clearance.solve import linkage_model as lm
 from validation import moreau as mo
 
-pytestmark = [pytest.mark.slow,
+pytestmark = [
               # the rattling corners draw the accuracy note (its advice is about peaks)
               pytest.mark.filterwarnings("ignore::mbs_clearance.AccuracyWarning")]
 
@@ -27,6 +28,7 @@ def _end(run):
     return run.ys[-1, :3], run.ys[-1, 3:6]
 
 
+@pytest.mark.slow
 def test_the_compliant_model_agrees_with_the_nonsmooth_reference():
     """At 0.05 s (after the first flat impacts on both surfaces) the crank's angle and the
     energy of the compliant model (K = 1e10 N/m^1.5) lie within the Moreau scheme's own
@@ -83,6 +85,7 @@ def test_energy_is_conserved_at_restitution_one_without_friction():
     assert drift[1e-9] < 3e-6
 
 
+@pytest.mark.slow
 @pytest.mark.exudyn
 def test_reduced_against_exudyn_on_the_benchmark():
     """The same description in Exudyn (absolute coordinates, ideal joints as constraints,
@@ -111,6 +114,7 @@ def test_reduced_against_exudyn_on_the_benchmark():
     assert rate_errors[1] < rate_errors[0] / 4 and rate_errors[1] < 1e-2
 
 
+@pytest.mark.slow
 def test_report_of_the_benchmark_from_the_command_line(tmp_path, capsys):
     """`mbs-clearance report --case flores_translational_slider_crank --quick`: the free
     linkage's report; its numbers are the library's (the window peaks of `simulate`, the

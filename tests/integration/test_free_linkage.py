@@ -6,8 +6,7 @@ inertias 7.4e-5, 5.9e-4, 2.7e-6 kg m^2, gravity 9.81, the crank started at 150 r
 coupler at -75 rad/s with every angle zero), with a revolute clearance joint at the
 coupler-slider pin. References: the energy balance (written here from the closed-form
 kinematics, not from the generated model), the ideal slider-crank's one-degree-of-freedom
-Lagrange equation integrated by scipy, and Exudyn. Every test compiles the free model's
-kernels (a minute or two): all are slow.
+Lagrange equation integrated by scipy, and Exudyn. 
 """
 
 from __future__ import annotations
@@ -75,7 +74,6 @@ def closed_form_energy(ys: np.ndarray, joint: ClearanceJoint) -> np.ndarray:
     return kinetic + potential + joint.stiffness * delta ** 2.5 / 2.5
 
 
-@pytest.mark.slow
 # (the short run's contact onsets draw the settling note, whose advice is about peaks)
 @pytest.mark.filterwarnings("ignore::mbs_clearance.AccuracyWarning")
 def test_initial_state_holds_the_given_start_and_solves_the_rest():
@@ -91,7 +89,6 @@ def test_initial_state_holds_the_given_start_and_solves_the_rest():
     assert traj.rates["crank.angle"][0] == 150.0
 
 
-@pytest.mark.slow
 def test_energy_is_conserved_at_restitution_one_and_its_error_falls_with_rtol():
     # Lankarani-Nikravesh at e = 1 has no hysteresis damping (xi = 3 (1 - e^2) / 4 = 0),
     # no friction: kinetic + potential + contact energy is constant. Measured largest
@@ -142,7 +139,6 @@ def _ideal_crank_angle(duration: float):
     return lambda t: sol.sol(t)[0]
 
 
-@pytest.mark.slow
 def test_tiny_clearance_approaches_the_ideal_slider_crank():
     # measured largest crank-angle difference over 0.05 s (1.2 turns, rtol 1e-8,
     # restitution 0.9): 1.5e-3 rad at clearance 1e-5 m (K 1e12), 2.0e-4 at 1e-6 m
@@ -158,7 +154,6 @@ def test_tiny_clearance_approaches_the_ideal_slider_crank():
     assert errors[1] < errors[0] / 4 and errors[2] < errors[1] / 4
 
 
-@pytest.mark.slow
 @pytest.mark.exudyn
 def test_reduced_against_exudyn_on_a_free_linkage():
     # measured over 0.02 s (restitution 0.9, about 60 contact switches; Exudyn's default

@@ -6,7 +6,7 @@ separates runs of different tolerances (its case page). Each against an independ
 reference: `simulate`'s peaks per window, central differences computed here, a grid of the
 same objective, the linear model of a narrow box; and the same from the CLI.
 
-Every test here compiles the free model's kernels (plain and DDM) on a first run: slow."""
+The tolerance study computes for several seconds: slow; the others are quick."""
 
 from __future__ import annotations
 
@@ -24,7 +24,6 @@ from mbs_clearance.solve.simulate import simulate
 from mbs_clearance.studies.optimize import optimize_link_lengths
 from mbs_clearance.studies.tolerance import Uniform, tolerance_study
 
-pytestmark = pytest.mark.slow
 
 #: the objective's window width, s
 W = 0.01
@@ -143,6 +142,7 @@ def test_ga_over_a_window_against_a_grid(tmp_path, capsys):
 
 # ------------------------------------------------------------------ tolerance study
 
+@pytest.mark.slow   # 7 s of runs
 def test_tolerance_study_over_a_window_against_the_linear_model(tmp_path):
     """Sobol indices of window 3's peak over narrow uniform bands of the clearance and the
     friction coefficient: over them the peak is nearly linear (the grid above: slopes

@@ -29,7 +29,6 @@ from mbs_clearance.model.linkage import (
 FRICTION = {"friction_law": "ambrosio", "friction_coefficient": 0.1}
 
 
-@pytest.mark.slow   # compiles the friction model's kernels of its own (40 s from a cold cache)
 def test_zero_coefficient_reproduces_the_frictionless_run():
     """mu = 0 with a law on runs the friction model (its own generated module, with the
     friction work in the state) and gives the frictionless run's steps and peaks bit for
@@ -45,7 +44,6 @@ def test_zero_coefficient_reproduces_the_frictionless_run():
     assert np.all(zero.friction_work == 0.0)
 
 
-@pytest.mark.slow
 def test_friction_changes_the_peak_at_pinned_cost():
     """mu = 0.1 (Ambrosio's law) moves the paper case's rev-4 peak of the monitored force by
     more than 10 times its integration error (rtol 1e-7 against 1e-9; measured: 0.44 % moved,
@@ -87,7 +85,7 @@ def _energy(lk, traj):
     return out
 
 
-@pytest.mark.slow
+@pytest.mark.slow   # two energy balances at tight rtol, 5 s
 @pytest.mark.parametrize("case, revolutions", [
     (lambda: cases.paper_slider_crank(restitution=1.0, **FRICTION), 2),
     (lambda: cases.slider_crank_two_clearances(restitution=1.0, **FRICTION), 2),
@@ -126,7 +124,6 @@ def _rotating_bearing(law, mu, v0=1e-4, v1=1e-2, speed=20.0):
         monitor_joint="spin")
 
 
-@pytest.mark.slow
 @pytest.mark.parametrize("law", ["ambrosio", "coulomb"])
 def test_journal_on_a_rotating_bearing(law):
     """Closed form of the tangential law: the journal rests on the bottom of a bearing that
@@ -160,7 +157,6 @@ def _compare(a, b, what, rel):
     assert np.all(err <= rel), (what, err.max(axis=0))
 
 
-@pytest.mark.slow
 @pytest.mark.parametrize("overrides, names", [
     ({"friction_law": "coulomb", "friction_coefficient": 0.1, "friction_v0": 0.2,
       "friction_v1": 1.0},

@@ -17,7 +17,6 @@ from mbs_clearance.generate.energy import mechanical_energy
 from mbs_clearance.model import cases
 from mbs_clearance.solve.linkage_model import pack_parameters
 
-pytestmark = pytest.mark.slow
 
 
 def _max_eps(traj, linkage):
@@ -45,6 +44,7 @@ def test_vanishing_viscosity_approaches_the_dry_joint():
     assert diffs[1e-7] < diffs[1e-5]
 
 
+@pytest.mark.slow   # 5 s of runs
 def test_viscous_film_keeps_the_journal_off_the_wall():
     """With the SAE 30 oil at 100 C (9 mPa s) and a five times more viscous one the journal
     never reaches the wall (no contact; largest eccentricity ratio measured 0.76 and 0.41,
@@ -62,6 +62,7 @@ def test_viscous_film_keeps_the_journal_off_the_wall():
     assert eps[0] < 0.9 and eps[1] < eps[0]
 
 
+@pytest.mark.slow   # 6 s of runs
 def test_film_power_is_never_positive_along_a_run():
     """The film's total power (force on the journal centre times the eccentricity rate
     relative to the bearing, plus torque times the relative spin; the model's film_power
@@ -88,6 +89,7 @@ def test_film_power_is_never_positive_along_a_run():
     assert power.min() < -1e-3 * scale
 
 
+@pytest.mark.slow   # 9 s of runs
 def test_energy_balance_closes_with_the_film_dissipation():
     """Along two revolutions in SAE 30 oil (no contact), the mechanical energy's change
     equals the drive's work plus the film's power integrated over the recorded steps
@@ -147,6 +149,7 @@ def test_ddm_along_the_film_matches_finite_differences():
         assert np.all(np.max(np.abs(b), axis=0) > 0.0)
 
 
+@pytest.mark.slow   # 7 s of DDM and differences
 def test_ddm_along_the_long_film_matches_finite_differences():
     """The same comparison in the long film (its partial derivatives with the ends of its
     positive region moving as zeros of the pressure), along the viscosity and the bearing
@@ -201,6 +204,7 @@ def _orbit_rms(t, ecc, t0, t1, clearance):
     return float(np.sqrt(np.trapezoid(r2, t[keep]) / (t[keep][-1] - t[keep][0])))
 
 
+@pytest.mark.slow   # three Exudyn runs, 18 s
 @pytest.mark.exudyn
 def test_exudyn_film_matches_the_reduced_model():
     """The same lubricated case (SAE 30 oil) in Exudyn (its film a Python user function on
@@ -236,6 +240,7 @@ def test_exudyn_film_matches_the_reduced_model():
     assert np.all(error <= 2e-3 * np.abs(ref_vals))
 
 
+@pytest.mark.slow   # 3 s of runs
 def test_rodas4_run_matches_the_explicit_run():
     """The linearly implicit method (rodas4, its step not limited by the film's stability)
     against dopri5 on the lubricated case: revolution 2-4 peaks within 1e-5 (measured 3.6e-6

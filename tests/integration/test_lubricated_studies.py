@@ -20,7 +20,6 @@ from mbs_clearance.solve.simulate import simulate
 from mbs_clearance.studies.optimize import optimize_link_lengths
 from mbs_clearance.studies.tolerance import Uniform, tolerance_study
 
-pytestmark = pytest.mark.slow
 
 RPM = 2.0 * np.pi / 60.0
 
@@ -78,6 +77,7 @@ def test_tolerance_study_with_the_viscosity_uncertain_against_direct_runs(tmp_pa
     np.testing.assert_allclose(saved["monte_carlo"]["values"], direct, rtol=1e-10)
 
 
+@pytest.mark.slow   # two GAs and direct runs, 8 s
 def test_ga_on_the_lubricated_case_against_direct_runs(tmp_path, capsys):
     """The GA over the crank and coupler lengths on the lubricated case (revolution-2 peak
     base force): its best design is lubricated and in the box, its reported value is a
@@ -110,6 +110,7 @@ def test_ga_on_the_lubricated_case_against_direct_runs(tmp_path, capsys):
     assert saved["best_peak_force"] == res.best_peak_force
 
 
+@pytest.mark.slow   # two maps and a CLI map, 6 s
 def test_regime_maps_over_clearance_and_speed_beside_the_dry_joint(tmp_path):
     """Regime maps of the lubricated and the dry case over clearance (10, 40 um) and crank
     speed (3000, 5000 rpm), 4 revolutions, 3 kept: each lubricated point's peaks are a direct

@@ -656,8 +656,6 @@ def test_best_design_periodicity_is_reported_and_saved(tmp_path):
 
 # ------------------------------------------------------------------ gradient refinement
 
-# slow: it compiles the refinement's DDM variant (126 s of a cold fast suite of 15 min)
-@pytest.mark.slow
 def test_gene_gradient_matches_central_differences_under_uniform_scaling():
     """The unit-box gradient the refinement uses (DDM, chained through the uniform mass
     scaling, explicit crank inertia) against central differences of the peak of the

@@ -26,11 +26,8 @@ def runs():
     return _Runs()
 
 
-#: every named case with a drive (an animation shows drive revolutions); the lubricated one
-#: is slow (its own kernels compile for about two minutes on a CI machine) and draws the
-#: paper's geometry
-CASE_NAMES = [pytest.param(n, marks=pytest.mark.slow) if n == "paper_slider_crank_lubricated"
-              else n for n in sorted(cases.CASES) if cases.CASES[n]().drive is not None]
+#: every named case with a drive (an animation shows drive revolutions)
+CASE_NAMES = [n for n in sorted(cases.CASES) if cases.CASES[n]().drive is not None]
 
 
 def _world(lk, fr, body, point, k):

@@ -10,7 +10,6 @@ from mbs_clearance.analysis.sensitivity import sensitivities
 from mbs_clearance.model import cases
 
 
-@pytest.mark.slow   # compiles the four-bar's DOP853 sensitivity kernels: minutes cold
 def test_four_bar_ddm_passes_a_landing_before_the_surface():
     """DOP853 (the DDM's integrator) runs past the landing that made it chatter, and its
     sensitivities agree with DOPRI5's (an independent step sequence, which never met the
@@ -33,7 +32,7 @@ def test_four_bar_ddm_passes_a_landing_before_the_surface():
 TOL = 1e-4
 
 
-@pytest.mark.slow   # the four-bar's DOP853 sensitivity kernels: minutes cold
+@pytest.mark.slow   # a revolution of the four-bar's DDM: 8 s
 def test_four_bar_ddm_runs_through_the_first_revolution():
     """The DDM of the three parameters of docs/exudyn.md's finite-difference table runs
     through the four-bar's first revolution, where the centred start's 325 impacts settle

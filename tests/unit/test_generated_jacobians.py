@@ -9,14 +9,12 @@ from mbs_clearance.generate import load_model
 from mbs_clearance.model import cases
 from mbs_clearance.solve.linkage_model import initial_state, pack_parameters
 
-#: the lubricated model's Jacobian kernels compile for about a minute on a CI machine: its
-#: cases are slow (the film's partials are checked in the fast suite by test_lubrication)
 _LUBRICATED = ("paper_slider_crank_lubricated", "paper_slider_crank_lubricated+fade",
                "paper_slider_crank_lubricated+long")
 CASES = ("paper_slider_crank", "slider_crank_two_clearances", "four_bar",
          "paper_slider_crank+coulomb", "paper_slider_crank+ambrosio",
          "paper_slider_crank+stribeck", "paper_slider_crank+general",
-         *(pytest.param(c, marks=pytest.mark.slow) for c in _LUBRICATED))
+         *_LUBRICATED)
 # the four-bar at the 0.1 mm clearance where this test was measured (the case's default is
 # 0.01 mm, where the free-flight difference quotients of the point coordinates, 1.2e-6
 # relative off, were not re-examined)
@@ -220,7 +218,6 @@ def _corner_state(off, tilt, across=0.02):
     return np.array([th1, th2, tilt, 150.0, (1.0 - across) * w2, 0.3, 0.0])
 
 
-@pytest.mark.slow
 @pytest.mark.parametrize("corners", [("front_top",), ("front_top", "rear_top"),
                                      ("front_top", "rear_bottom")])
 def test_corner_jacobian_matches_finite_differences(corners):

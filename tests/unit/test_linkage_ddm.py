@@ -30,13 +30,10 @@ def _compare(a, b, what, rel):
     assert np.all(err <= rel), (what, err.max(axis=0))
 
 
-# (the two-joint case and the four-bar compile their own sensitivity kernels (about a
-# minute each, cold): slow, to keep CI's fast suite within its budget; the paper case covers
-# the DDM in the fast suite, test_generated_jacobians every case's Jacobians)
 @pytest.mark.parametrize("case", [
     "paper_slider_crank",
-    pytest.param("slider_crank_two_clearances", marks=pytest.mark.slow),
-    pytest.param("four_bar", marks=pytest.mark.slow),
+    "slider_crank_two_clearances",
+    "four_bar",
 ])
 def test_ddm_matches_finite_differences(case):
     """d(coordinates)/db and d(monitored reaction)/db of DDM (rtol 1e-10) equal central
@@ -68,8 +65,6 @@ def test_ddm_matches_finite_differences(case):
     _compare(ddm.base_force[:, 1], fd.base_force[:, 1], "reaction y", 2e-3)
 
 
-# slow: compiles the general (unspecialised) model and its DDM kernels, over 2 minutes
-@pytest.mark.slow
 def test_ddm_along_zero_valued_geometry_runs_on_the_general_model():
     """Along parameters that are exactly zero in the description (a pin on the coupler's
     axis, the guide raised or turned), on which the checked-in module is

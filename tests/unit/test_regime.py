@@ -351,10 +351,9 @@ def test_a_failed_tangent_run_falls_back_to_the_plain_section(monkeypatch):
     assert res["regime"] == plain["regime"] == 2
 
 
-@pytest.mark.slow
 def test_two_joint_slider_crank_exponent_agrees_with_two_nearby_runs():
-    """A non-paper case (the two-joint slider-crank, its own generated sensitivity kernels:
-    slow, cold): at 0.2 mm in both joints the exponent is positive and two plain runs 1e-9
+    """A non-paper case (the two-joint slider-crank, its own generated sensitivity
+    kernels): at 0.2 mm in both joints the exponent is positive and two plain runs 1e-9
     apart (scaled units, along the tangent's start) separate e-fold more than 10 times in
     the first revolution (measured: exponent 6.8 per revolution, separation 1e-9 -> 2.9);
     at the default 0.01 mm it is negative and the runs do not separate after the start's
@@ -446,7 +445,7 @@ def test_loose_joint_at_0_1_mm_over_40_revolutions_is_not_found_stable():
     start within 1.5e-14 of it; at rtol 1e-10, +2.65 +- 2.0 and +2.50 +- 0.34. What holds
     for every such run is what the verdict may say: not a stable motion (neither
     "negative" nor "zero"), and chaotic where the integration is tight.
-    Slow: the tangent kernels compile for minutes on a cold cache."""
+    Slow: 80 revolutions of tangent runs."""
     mech = SliderCrank(journal_radius=SliderCrank().bearing_radius - 1e-4)
     res = lyapunov_exponent(mech, revolutions=40, transient=20)
     assert res.verdict in ("undecided", "positive"), (res.per_revolution, res.uncertainty)
