@@ -118,6 +118,56 @@ OSCILLATOR_C = no_events_source("""
     dydt[1] = -p[0] * p[0] * y[0];""", "y[0]", 2, 1, 1)
 
 
+# x'' = -w^2 x with the switching function g = x - level (rate x'): the oscillator's position
+# rising above a level (p = [w, level]); monitor x
+OSC_ABOVE_C = r"""
+#include <math.h>
+#include "mbs_core.h"
+
+static void rhs(double t, const double *y, int64_t n, const double *p, double *dydt)
+{
+    (void)t; (void)n;
+    dydt[0] = y[1];
+    dydt[1] = -p[0] * p[0] * y[0];
+}
+
+static void event(double t, const double *y, const double *p, int64_t j, double *g_gd)
+{
+    (void)t; (void)j;
+    g_gd[0] = y[0] - p[1];
+    g_gd[1] = y[1];
+}
+
+static void on_event(double t, const double *y, double *p, int64_t j)
+{
+    (void)t; (void)y; (void)p; (void)j;
+}
+
+static double monitor(double t, const double *y, int64_t n, const double *p, double *dydt,
+                      double *out, int64_t n_out, double *g, double *gd)
+{
+    double g_gd[2];
+    (void)out; (void)n_out;
+    rhs(t, y, n, p, dydt);
+    event(t, y, p, 0, g_gd);
+    g[0] = g_gd[0];
+    gd[0] = g_gd[1];
+    return y[0];
+}
+
+static int prepare(double *p) { (void)p; return 0; }
+
+static const mbs_model RECORD = {2, 1, 1, 2, 0, 0, 2, 2, rhs, event, on_event, monitor, prepare};
+
+const mbs_model *mbs_model_record(void) { return &RECORD; }
+"""
+
+# a nonlinear, time-dependent pair: y0' = y1 cos t, y1' = -y0^2 + sin 3t; monitor y0
+NONLINEAR_C = no_events_source("""
+    dydt[0] = y[1] * cos(t);
+    dydt[1] = -y[0] * y[0] + sin(3.0 * t);""", "y[0]", 2, 1, 1)
+
+
 def ball_parameters(g=9.81, e=0.8, ceiling=1e3, drag=0.0, nan_after=math.inf, chatter=False,
                     twin=False):
     """The ball's p (memory zero: h = X, v = W at the start)."""
@@ -207,3 +257,126 @@ def runtime_stages():
         return call(lib.lubricated_stage_c, 10, *args)
 
     return contact, friction, lubricated
+
+
+# ---- the core's own step, continuous extension and cubic look, for the tests that check
+# them alone: integrator.c is included whole (its functions are static) next to wrappers
+_PROBE_C = r"""
+#include <stdlib.h>
+#include "integrator_core.h"
+
+/* one step of size h from (t, y) of model m: its end into y1 (n,), the continuous
+ * extension at each thetas[k] into dense (n_theta, n) */
+int64_t probe_step_dense(const mbs_model *m, const mbs_tableau *tb, double t, const double *y,
+                         int64_t n, double *p, double h, const double *thetas, int64_t n_theta,
+                         double *y1, double *dense)
+{
+    run_ctx cx;
+    step_work w;
+    int64_t status = step_workspace(&cx, &w, m, tb, n, 0, 0, p, 0);
+    if (status)
+        return status;
+    double *wts = alloc_d(tb->p_rows);
+    if (!wts) {
+        free(w.block);
+        return STATUS_OUT_OF_MEMORY;
+    }
+    m->rhs(t, y, n, p, w.f0);
+    rk_step(&cx, t, y, n, w.f0, h, w.K, p, y1, w.f_new, w.ytmp);
+    extra_stages(&cx, t, y, n, h, w.K, p, w.ytmp);
+    for (int64_t k = 0; k < n_theta; k++)
+        dense_eval(&cx, y, n, h, w.K, thetas[k], dense + k * n, wts);
+    free(wts);
+    free(w.block);
+    return 0;
+}
+
+/* one step of size h from (t, y) of model m (at most 8 switching functions), then the
+ * cubic look at it, as the event search takes it: 1 (clear) or 0 into *clear */
+int64_t probe_clear_of_surface(const mbs_model *m, const mbs_tableau *tb, double t,
+                               const double *y, int64_t n, double *p, double h,
+                               int64_t n_samples, double event_tol, double event_margin,
+                               int64_t *clear)
+{
+    run_ctx cx;
+    step_work w;
+    const int64_t n_ev = m->n_events;
+    if (n_ev > 8)
+        return STATUS_BAD_ARGUMENT;
+    int64_t status = step_workspace(&cx, &w, m, tb, n, 0, 0, p, 0);
+    if (status)
+        return status;
+    double g0[8], gd0[8], g1[8], gd1[8], ga[8], gda[8], ggd[2];
+    m->rhs(t, y, n, p, w.f0);
+    rk_step(&cx, t, y, n, w.f0, h, w.K, p, w.y_new, w.f_new, w.ytmp);
+    for (int64_t j = 0; j < n_ev; j++) {
+        m->event(t, y, p, j, ggd);
+        g0[j] = ggd[0];
+        gd0[j] = ggd[1];
+        m->event(t + h, w.y_new, p, j, ggd);
+        g1[j] = ggd[0];
+        gd1[j] = ggd[1];
+    }
+    *clear = clear_of_surface(&cx, t, y, n, w.y_new, w.K, w.K + cx.s * n, h, p, g0, gd0, g1,
+                              gd1, n_ev, n_samples, event_tol, event_margin, w.ytmp, ga, gda);
+    free(w.block);
+    return 0;
+}
+"""
+
+
+def core_probe():
+    """(step_dense, clear_of_surface): the core's own functions on one step of a model's
+    record (`integrate.model_record`) with a method's coefficients (``Tableau.arrays()``).
+
+    ``step_dense(model, coefficients, t, y, p, h, thetas)``: (the step's end (n,), its
+    continuous extension at each theta (len(thetas), n)). ``clear_of_surface(model,
+    coefficients, t, y, p, h, n_samples, event_tol, event_margin)``: whether the cubic
+    Hermite look declares the step clear of every switching surface."""
+    from pathlib import Path
+
+    from mbs_clearance.core import build
+    from mbs_clearance.core.integrate import _tableau
+
+    source = (Path(build.__file__).parent / "integrator.c").read_text()
+    ffi, lib = build.load("core-probe-test", [("probe.c", _PROBE_C),
+                                              ("integrator_core.h", source)], cdef=(
+        "int64_t probe_step_dense(const mbs_model *m, const mbs_tableau *tb, double t, "
+        "const double *y, int64_t n, double *p, double h, const double *thetas, "
+        "int64_t n_theta, double *y1, double *dense);"
+        "int64_t probe_clear_of_surface(const mbs_model *m, const mbs_tableau *tb, double t, "
+        "const double *y, int64_t n, double *p, double h, int64_t n_samples, "
+        "double event_tol, double event_margin, int64_t *clear);"))
+
+    def arrays(model, coefficients, y, p):
+        # the record and tableau in this library's ffi; y and p as C doubles
+        rec = ffi.cast("const mbs_model *", int(ffi.cast("uintptr_t", model)))
+        tb, keep = _tableau(ffi, coefficients)
+        y = np.ascontiguousarray(y, dtype=float)
+        p = np.array(p, dtype=float)
+        return rec, tb, keep, y, p
+
+    def ptr(a):
+        return ffi.cast("double *", ffi.from_buffer(a))
+
+    def step_dense(model, coefficients, t, y, p, h, thetas):
+        rec, tb, keep, y, p = arrays(model, coefficients, y, p)
+        thetas = np.ascontiguousarray(thetas, dtype=float)
+        y1, dense = np.empty(y.shape[0]), np.empty((thetas.shape[0], y.shape[0]))
+        status = lib.probe_step_dense(rec, tb, float(t), ptr(y), y.shape[0], ptr(p), float(h),
+                                      ptr(thetas), thetas.shape[0], ptr(y1), ptr(dense))
+        del keep
+        assert status == 0, status
+        return y1, dense
+
+    def clear_of_surface(model, coefficients, t, y, p, h, n_samples, event_tol, event_margin):
+        rec, tb, keep, y, p = arrays(model, coefficients, y, p)
+        clear = ffi.new("int64_t *")
+        status = lib.probe_clear_of_surface(rec, tb, float(t), ptr(y), y.shape[0], ptr(p),
+                                            float(h), int(n_samples), float(event_tol),
+                                            float(event_margin), clear)
+        del keep
+        assert status == 0, status
+        return bool(clear[0])
+
+    return step_dense, clear_of_surface

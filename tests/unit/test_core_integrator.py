@@ -20,10 +20,13 @@ from core_models import (  # noqa: E402
     BALL_C,
     BALL_MEM_START,
     COUNT,
+    NONLINEAR_C,
+    OSC_ABOVE_C,
     OSCILLATOR_C,
     ball_parameters,
     ball_settings,
     bounce_times,
+    core_probe,
 )
 
 METHOD_NAMES = sorted(METHODS)
@@ -436,3 +439,67 @@ def test_rodas4_converges_at_order_4_on_a_stiff_linear_problem():
     ratios = np.array(errors[:-1]) / np.array(errors[1:])
     assert np.all(ratios > 2.0 ** 4 * 0.8) and np.all(ratios < 2.0 ** 4 * 1.5), ratios
     assert errors[-1] < 1e-10
+
+
+# ---------------------------------------------------------------- one step, alone
+@pytest.fixture(scope="module")
+def probe():
+    return core_probe()
+
+
+def _model(label, source):
+    return model_record(*build.load(label, [(label + ".c", source)]))
+
+
+@pytest.mark.parametrize("method", METHOD_NAMES)
+def test_dense_output_interpolates_to_its_order(oscillator, probe, method):
+    """One step of the oscillator x'' = -x from (1, 0): the continuous extension ends at the
+    step (to rounding) and its error at theta = 0.37 against cos(0.37 h) falls as
+    h^(q + 1), q the order of the continuous extension (P's columns)."""
+    step_dense, _ = probe
+    co = METHODS[method].arrays()
+    q = METHODS[method].P.shape[1]
+    errs = []
+    for h in (0.4, 0.2) if method == "dop853" else (0.1, 0.05):
+        y1, dense = step_dense(oscillator, co, 0.0, [1.0, 0.0], [1.0], h, [1.0, 0.37])
+        # DOP853's monomial coefficients reach ~500, so its sums round at ~1e-13
+        assert np.allclose(dense[0], y1, rtol=0, atol=1e-13 if method == "dop853" else 1e-15)
+        errs.append(abs(dense[1, 0] - math.cos(0.37 * h)))
+    assert errs[0] / errs[1] > 2 ** (q + 1) * 0.6, errs
+
+
+def test_dop853_step_and_dense_output_match_scipy(probe):
+    """One DOP853 step of the core against scipy's DOP853 (the same tableau, independent
+    code) on a nonlinear, time-dependent pair: the same step end and the same continuous
+    extension."""
+    from scipy.integrate import DOP853
+
+    step_dense, _ = probe
+    model = _model("test_nonlinear", NONLINEAR_C)
+    y0, h = np.array([0.7, -0.3]), 0.3
+
+    def fun(t, y):
+        return np.array([y[1] * math.cos(t), -y[0] ** 2 + math.sin(3.0 * t)])
+
+    ref = DOP853(fun, 0.0, y0, 1.0, first_step=h, rtol=1e-3, atol=1e-3)
+    ref.step()
+    assert ref.t == pytest.approx(h, rel=1e-15)
+    thetas = np.array([0.1, 0.5, 0.83])
+    y1, dense = step_dense(model, METHODS["dop853"].arrays(), 0.0, y0, [0.0], h, thetas)
+    np.testing.assert_allclose(y1, ref.y, rtol=1e-14, atol=1e-15)
+    np.testing.assert_allclose(dense, ref.dense_output()(thetas * h).T, rtol=1e-13, atol=1e-14)
+
+
+def test_cubic_look_declares_a_step_clear_only_far_from_the_surface(probe):
+    """The cubic look (`clear_of_surface`, one interior sample) on one resolved DOP853 step
+    of the oscillator (omega h = 0.2, from its maximum 1 down to cos 0.2) against the
+    switching function g = x - level: clear when the level is far above the motion; not
+    clear when the motion comes within twice the margin of it, nor when the step starts on
+    it."""
+    _, clear_of_surface = probe
+    model = _model("test_osc_above", OSC_ABOVE_C)
+    co = METHODS["dop853"].arrays()
+    margin = 1e-3
+    for level, clear in ((2.0, True), (1.0 + 1.5 * margin, False), (1.0, False)):
+        got = clear_of_surface(model, co, 0.0, [1.0, 0.0], [1.0, level], 0.2, 1, 1e-14, margin)
+        assert got == clear, level
