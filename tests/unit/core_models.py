@@ -168,6 +168,170 @@ NONLINEAR_C = no_events_source("""
     dydt[1] = -y[0] * y[0] + sin(3.0 * t);""", "y[0]", 2, 1, 1)
 
 
+# Two independent bodies, x_j'' = -omega_j^2 x_j - a_j, each with a wall at w_j on the side
+# s_j (g_j = s_j (x_j - w_j)): omega = 0 is a ball under gravity a (exactly integrated: the
+# motion is quadratic), a = 0 an oscillator. An impact reverses the velocity with
+# restitution e_j. As for the ball, the seam's on_event may not write the state: the
+# physical motion is the state plus a free motion of the memory's coefficients (c1_j, c2_j)
+# on the basis phi1 = cos(omega t), phi2 = sin(omega t) / omega (1 and t for omega = 0),
+# whose Wronskian is 1: an impact at t with velocity v changes (c1, c2) by -dv (phi2, -phi1),
+# dv = -(1 + e) v, leaving x continuous. Joint j's memory p[TWO_MEM + 4 j:]: its impact
+# count, its last impact velocity, c1_j, c2_j. p = [omega0, omega1, a0, a1, w0, w1, s0, s1,
+# e0, e1, memory (8)]; monitor x_0.
+TWO_MEM, TWO_N_MEM = 10, 8
+TWO_C = r"""
+#include <math.h>
+#include "mbs_core.h"
+#define MEM 10
+
+/* phi1, phi2 and their rates at t for the angular frequency w */
+static void basis(double w, double t, double *b)
+{
+    if (w == 0.0) {
+        b[0] = 1.0; b[1] = t; b[2] = 0.0; b[3] = 1.0;
+    } else {
+        double c = cos(w * t), s = sin(w * t);
+        b[0] = c; b[1] = s / w; b[2] = -w * s; b[3] = c;
+    }
+}
+
+static void physical(double t, const double *y, const double *p, int64_t j, double *x,
+                     double *v)
+{
+    double b[4];
+    const double *c = p + MEM + 4 * j + 2;
+    basis(p[j], t, b);
+    *x = y[2 * j] + c[0] * b[0] + c[1] * b[1];
+    *v = y[2 * j + 1] + c[0] * b[2] + c[1] * b[3];
+}
+
+static void rhs(double t, const double *y, int64_t n, const double *p, double *dydt)
+{
+    (void)t; (void)n;
+    for (int64_t j = 0; j < 2; j++) {
+        dydt[2 * j] = y[2 * j + 1];
+        dydt[2 * j + 1] = -p[j] * p[j] * y[2 * j] - p[2 + j];
+    }
+}
+
+static void event(double t, const double *y, const double *p, int64_t j, double *g_gd)
+{
+    double x, v;
+    physical(t, y, p, j, &x, &v);
+    g_gd[0] = p[6 + j] * (x - p[4 + j]);
+    g_gd[1] = p[6 + j] * v;
+}
+
+static void on_event(double t, const double *y, double *p, int64_t j)
+{
+    double x, v, b[4];
+    physical(t, y, p, j, &x, &v);
+    double dv = -(1.0 + p[8 + j]) * v;
+    double *mem = p + MEM + 4 * j;
+    basis(p[j], t, b);
+    mem[0] += 1.0;
+    mem[1] = v;
+    mem[2] -= dv * b[1];
+    mem[3] += dv * b[0];
+}
+
+static double monitor(double t, const double *y, int64_t n, const double *p, double *dydt,
+                      double *out, int64_t n_out, double *g, double *gd)
+{
+    double g_gd[2], x, v;
+    (void)out; (void)n_out;
+    rhs(t, y, n, p, dydt);
+    for (int64_t j = 0; j < 2; j++) {
+        event(t, y, p, j, g_gd);
+        g[j] = g_gd[0];
+        gd[j] = g_gd[1];
+    }
+    physical(t, y, p, 0, &x, &v);
+    return x;
+}
+
+static int prepare(double *p) { (void)p; return 0; }
+
+static const mbs_model RECORD = {4, 2, 2, MEM, 8, 0, 18, 18, rhs, event, on_event, monitor,
+                                 prepare};
+
+const mbs_model *mbs_model_record(void) { return &RECORD; }
+"""
+
+
+def two_physical(t, y, memory, p):
+    """The two bodies' physical positions and velocities, each (len(t), 2), from a run's
+    records (t, y, memory) of `TWO_C` with the parameters p."""
+    x, v = np.empty((len(t), 2)), np.empty((len(t), 2))
+    for j in range(2):
+        w = p[j]
+        c1, c2 = memory[:, 4 * j + 2], memory[:, 4 * j + 3]
+        if w == 0.0:
+            b = (np.ones_like(t), t, np.zeros_like(t), np.ones_like(t))
+        else:
+            b = (np.cos(w * t), np.sin(w * t) / w, -w * np.sin(w * t), np.cos(w * t))
+        x[:, j] = y[:, 2 * j] + c1 * b[0] + c2 * b[1]
+        v[:, j] = y[:, 2 * j + 1] + c1 * b[2] + c2 * b[3]
+    return x, v
+
+
+# One state at rest and two switching functions: joint 0 touches its surface at t = 1.5
+# without crossing it (g = -(t - 1.5)^2); joint 1 crosses to positive for |t - 1| < 0.01
+# only, with no rate (only samples can find it), until its action. The action of joint j
+# sets the flag p[1 + 2 j] and stores the time in p[2 + 2 j] (memory p[1:5]).
+GRAZE_C = r"""
+#include "mbs_core.h"
+
+static void rhs(double t, const double *y, int64_t n, const double *p, double *dydt)
+{
+    (void)t; (void)y; (void)n; (void)p;
+    dydt[0] = 0.0;
+}
+
+static void event(double t, const double *y, const double *p, int64_t j, double *g_gd)
+{
+    (void)y;
+    if (j == 0) {
+        g_gd[0] = -(t - 1.5) * (t - 1.5);
+        g_gd[1] = -2.0 * (t - 1.5);
+    } else if (p[1 + 2 * j] < 0.5) {
+        g_gd[0] = 1e-4 - (t - 1.0) * (t - 1.0);
+        g_gd[1] = 0.0;
+    } else {
+        g_gd[0] = -1.0;
+        g_gd[1] = 0.0;
+    }
+}
+
+static void on_event(double t, const double *y, double *p, int64_t j)
+{
+    (void)y;
+    p[1 + 2 * j] = 1.0;
+    p[2 + 2 * j] = t;
+}
+
+static double monitor(double t, const double *y, int64_t n, const double *p, double *dydt,
+                      double *out, int64_t n_out, double *g, double *gd)
+{
+    double g_gd[2];
+    (void)out; (void)n_out;
+    rhs(t, y, n, p, dydt);
+    for (int64_t j = 0; j < 2; j++) {
+        event(t, y, p, j, g_gd);
+        g[j] = g_gd[0];
+        gd[j] = g_gd[1];
+    }
+    return 0.0;
+}
+
+static int prepare(double *p) { (void)p; return 0; }
+
+static const mbs_model RECORD = {1, 1, 2, 1, 4, 0, 5, 5, rhs, event, on_event, monitor, prepare};
+
+const mbs_model *mbs_model_record(void) { return &RECORD; }
+"""
+
+
 def ball_parameters(g=9.81, e=0.8, ceiling=1e3, drag=0.0, nan_after=math.inf, chatter=False,
                     twin=False):
     """The ball's p (memory zero: h = X, v = W at the start)."""
