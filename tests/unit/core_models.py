@@ -1,5 +1,5 @@
-"""Test models of the compiled core, in C (through the seam `mbs_core.h`). Shared by the
-core's tests.
+"""Test models of the compiled core, in C (through the seam `mbs_core.h`), and the core's
+own step functions built for the tests (`core_probe`). Shared by the core's tests.
 
 The bouncing ball. Its state is unfolded so that an impact changes the memory only (the
 seam's on_event may not write the state): y = (X, W[, Q]) with the physical height
@@ -118,9 +118,37 @@ OSCILLATOR_C = no_events_source("""
     dydt[1] = -p[0] * p[0] * y[0];""", "y[0]", 2, 1, 1)
 
 
+def switching_model(body: str, value: str, n_events: int, sizes: str) -> str:
+    """The C source of a test model through the seam from `body` (its includes, ``rhs``,
+    ``event`` and ``on_event``): a monitor that fills rhs's derivatives and every switching
+    function and returns `value` (a C expression of t, y, p), no constants, and the record
+    of `sizes` (n_state, n_q, n_events, mem_start, n_mem, n_out, const_start, n_p)."""
+    return body + f"""
+static double monitor(double t, const double *y, int64_t n, const double *p, double *dydt,
+                      double *out, int64_t n_out, double *g, double *gd)
+{{
+    double g_gd[2];
+    (void)out; (void)n_out;
+    rhs(t, y, n, p, dydt);
+    for (int64_t j = 0; j < {n_events}; j++) {{
+        event(t, y, p, j, g_gd);
+        g[j] = g_gd[0];
+        gd[j] = g_gd[1];
+    }}
+    return {value};
+}}
+
+static int prepare(double *p) {{ (void)p; return 0; }}
+
+static const mbs_model RECORD = {{{sizes}, rhs, event, on_event, monitor, prepare}};
+
+const mbs_model *mbs_model_record(void) {{ return &RECORD; }}
+"""
+
+
 # x'' = -w^2 x with the switching function g = x - level (rate x'): the oscillator's position
 # rising above a level (p = [w, level]); monitor x
-OSC_ABOVE_C = r"""
+OSC_ABOVE_C = switching_model(r"""
 #include <math.h>
 #include "mbs_core.h"
 
@@ -142,25 +170,7 @@ static void on_event(double t, const double *y, double *p, int64_t j)
 {
     (void)t; (void)y; (void)p; (void)j;
 }
-
-static double monitor(double t, const double *y, int64_t n, const double *p, double *dydt,
-                      double *out, int64_t n_out, double *g, double *gd)
-{
-    double g_gd[2];
-    (void)out; (void)n_out;
-    rhs(t, y, n, p, dydt);
-    event(t, y, p, 0, g_gd);
-    g[0] = g_gd[0];
-    gd[0] = g_gd[1];
-    return y[0];
-}
-
-static int prepare(double *p) { (void)p; return 0; }
-
-static const mbs_model RECORD = {2, 1, 1, 2, 0, 0, 2, 2, rhs, event, on_event, monitor, prepare};
-
-const mbs_model *mbs_model_record(void) { return &RECORD; }
-"""
+""", "y[0]", 1, "2, 1, 1, 2, 0, 0, 2, 2")
 
 # a nonlinear, time-dependent pair: y0' = y1 cos t, y1' = -y0^2 + sin 3t; monitor y0
 NONLINEAR_C = no_events_source("""
@@ -179,10 +189,9 @@ NONLINEAR_C = no_events_source("""
 # count, its last impact velocity, c1_j, c2_j. p = [omega0, omega1, a0, a1, w0, w1, s0, s1,
 # e0, e1, memory (8)]; monitor x_0.
 TWO_MEM, TWO_N_MEM = 10, 8
-TWO_C = r"""
+TWO_C = switching_model(f"#define MEM {TWO_MEM}\n" + r"""
 #include <math.h>
 #include "mbs_core.h"
-#define MEM 10
 
 /* phi1, phi2 and their rates at t for the angular frequency w */
 static void basis(double w, double t, double *b)
@@ -235,28 +244,14 @@ static void on_event(double t, const double *y, double *p, int64_t j)
     mem[3] += dv * b[0];
 }
 
-static double monitor(double t, const double *y, int64_t n, const double *p, double *dydt,
-                      double *out, int64_t n_out, double *g, double *gd)
+static double position0(double t, const double *y, const double *p)
 {
-    double g_gd[2], x, v;
-    (void)out; (void)n_out;
-    rhs(t, y, n, p, dydt);
-    for (int64_t j = 0; j < 2; j++) {
-        event(t, y, p, j, g_gd);
-        g[j] = g_gd[0];
-        gd[j] = g_gd[1];
-    }
+    double x, v;
     physical(t, y, p, 0, &x, &v);
     return x;
 }
-
-static int prepare(double *p) { (void)p; return 0; }
-
-static const mbs_model RECORD = {4, 2, 2, MEM, 8, 0, 18, 18, rhs, event, on_event, monitor,
-                                 prepare};
-
-const mbs_model *mbs_model_record(void) { return &RECORD; }
-"""
+""", "position0(t, y, p)", 2, f"4, 2, 2, MEM, {TWO_N_MEM}, 0, {TWO_MEM + TWO_N_MEM}, "
+   f"{TWO_MEM + TWO_N_MEM}")
 
 
 def two_physical(t, y, memory, p):
@@ -279,7 +274,7 @@ def two_physical(t, y, memory, p):
 # without crossing it (g = -(t - 1.5)^2); joint 1 crosses to positive for |t - 1| < 0.01
 # only, with no rate (only samples can find it), until its action. The action of joint j
 # sets the flag p[1 + 2 j] and stores the time in p[2 + 2 j] (memory p[1:5]).
-GRAZE_C = r"""
+GRAZE_C = switching_model(r"""
 #include "mbs_core.h"
 
 static void rhs(double t, const double *y, int64_t n, const double *p, double *dydt)
@@ -310,26 +305,7 @@ static void on_event(double t, const double *y, double *p, int64_t j)
     p[2 + 2 * j] = t;
 }
 
-static double monitor(double t, const double *y, int64_t n, const double *p, double *dydt,
-                      double *out, int64_t n_out, double *g, double *gd)
-{
-    double g_gd[2];
-    (void)out; (void)n_out;
-    rhs(t, y, n, p, dydt);
-    for (int64_t j = 0; j < 2; j++) {
-        event(t, y, p, j, g_gd);
-        g[j] = g_gd[0];
-        gd[j] = g_gd[1];
-    }
-    return 0.0;
-}
-
-static int prepare(double *p) { (void)p; return 0; }
-
-static const mbs_model RECORD = {1, 1, 2, 1, 4, 0, 5, 5, rhs, event, on_event, monitor, prepare};
-
-const mbs_model *mbs_model_record(void) { return &RECORD; }
-"""
+""", "0.0", 2, "1, 1, 2, 1, 4, 0, 5, 5")
 
 
 def ball_parameters(g=9.81, e=0.8, ceiling=1e3, drag=0.0, nan_after=math.inf, chatter=False,
@@ -503,7 +479,7 @@ def core_probe():
     from mbs_clearance.core.integrate import _tableau
 
     source = (Path(build.__file__).parent / "integrator.c").read_text()
-    ffi, lib = build.load("core-probe-test", [("probe.c", _PROBE_C),
+    ffi, lib = build.load("test_core_probe", [("probe.c", _PROBE_C),
                                               ("integrator_core.h", source)], cdef=(
         "int64_t probe_step_dense(const mbs_model *m, const mbs_tableau *tb, double t, "
         "const double *y, int64_t n, double *p, double h, const double *thetas, "

@@ -1,7 +1,11 @@
 """The compiled integrator (`mbs_clearance.core`): against closed forms (a linear
 oscillator, a bouncing ball), the observed order of each method, the refined window peaks,
 the statuses, every branch of the core on the ball, a crossing and return inside one step,
-rodas4's order on a stiff problem, and two runs in two threads at once."""
+rodas4's order on a stiff problem, two runs in two threads at once; one step alone (the
+dense output's order, DOP853 against scipy's, the cubic look); peaks inside a window's
+first step and the higher of two near-tied crests (also on the slider-crank); two switching
+functions (each with its own memory, two in one step, simultaneous, a grazing touch, the
+impact times' order)."""
 
 import math
 import sys
@@ -31,6 +35,7 @@ from core_models import (  # noqa: E402
     ball_settings,
     bounce_times,
     core_probe,
+    switching_model,
     two_physical,
 )
 
@@ -337,7 +342,7 @@ def test_runs_in_two_threads_at_once():
 # a state at rest and one switching function positive only for |t - 1| < 0.01 (p[0] = 0):
 # an excursion much shorter than the steps taken; its action sets p[0] = 1 (the memory).
 # With p[1] = 1 the model reports no rate of the switching function: only samples find it
-BUMP_C = r"""
+BUMP_C = switching_model(r"""
 #include "mbs_core.h"
 
 static void rhs(double t, const double *y, int64_t n, const double *p, double *dydt)
@@ -363,25 +368,7 @@ static void on_event(double t, const double *y, double *p, int64_t j)
     (void)t; (void)y; (void)j;
     p[0] = 1.0;
 }
-
-static double monitor(double t, const double *y, int64_t n, const double *p, double *dydt,
-                      double *out, int64_t n_out, double *g, double *gd)
-{
-    double g_gd[2];
-    (void)out; (void)n_out;
-    rhs(t, y, n, p, dydt);
-    event(t, y, p, 0, g_gd);
-    g[0] = g_gd[0];
-    gd[0] = g_gd[1];
-    return -y[0];
-}
-
-static int prepare(double *p) { (void)p; return 0; }
-
-static const mbs_model RECORD = {1, 1, 1, 0, 1, 0, 2, 2, rhs, event, on_event, monitor, prepare};
-
-const mbs_model *mbs_model_record(void) { return &RECORD; }
-"""
+""", "-y[0]", 1, "1, 1, 1, 0, 1, 0, 2, 2")
 
 
 @pytest.mark.parametrize("method", ["dopri5", "dop853"])
