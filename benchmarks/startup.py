@@ -23,11 +23,14 @@ load, so a noisy machine widens its spread, not its median.
 
     python -m benchmarks.startup [--repeats 11] [--vs PATH] [--json]
     python -m benchmarks.startup --cold integrator simulate simulate_four_bar sensitivity
+    python -m benchmarks.startup --cold simulate new_description lyapunov orbits map --again
 
 ``--cold`` instead runs the given commands once each, in order, in a fresh copy of the
 package (an empty compiled-code cache, as on a fresh install), and prints each
 one's wall and CPU time: the first answer a new user waits for. CPU time is the measure
-on a busy machine.
+on a busy machine. ``--again`` then runs each once more, warm, and prints what the first
+run cost beyond it. ``new_description`` is a description of a structure no model ships
+for (the documented four-bar with its crank-coupler joint loose too), written as data.
 """
 
 from __future__ import annotations
@@ -61,7 +64,38 @@ COLD_COMMANDS = {
     "simulate": ["-m", "mbs_clearance.cli", "simulate"],
     "simulate_four_bar": ["-m", "mbs_clearance.cli", "simulate", "--case", "four_bar"],
     "sensitivity": ["-m", "mbs_clearance.cli", "sensitivity"],
+    # a description of a structure no model ships for (the documented four-bar with a second
+    # clearance joint), written as data: generated and compiled on its first run
+    "new_description": ["-m", "mbs_clearance.cli", "simulate", "--description",
+                        "new_structure.json", "--revolutions", "3"],
+    "custom_linkage": ["EXAMPLE", "custom_linkage.py"],
+    "lyapunov": ["-m", "mbs_clearance.cli", "lyapunov", "--revolutions", "20"],
+    "orbits": ["-m", "mbs_clearance.cli", "orbits"],
+    "map": ["-m", "mbs_clearance.cli", "map"],
+    "animate": ["-m", "mbs_clearance.cli", "animate", "--out", "animation.gif"],
 }
+
+
+def _new_structure(folder: Path) -> None:
+    """Write new_structure.json into `folder`: examples/my_four_bar.json with its
+    crank-coupler joint loose too (a structure of its own)."""
+    lk = json.loads((ROOT / "examples" / "my_four_bar.json").read_text())
+    joint = next(j for j in lk["joints"] if j["name"] == "crank_coupler")
+    lk["joints"].remove(joint)
+    lk["clearance_joints"].append({
+        "name": "crank_coupler", "journal_body": joint["body_a"],
+        "journal_point": joint["point_a"], "bearing_body": joint["body_b"],
+        "bearing_point": joint["point_b"], "bearing_radius": 0.01,
+        "journal_radius": 0.0099, "restitution": 0.8})
+    lk["name"] = "new_structure"
+    (folder / "new_structure.json").write_text(json.dumps(lk, indent=1))
+
+
+def _argv(name: str) -> list[str]:
+    cmd = COLD_COMMANDS[name]
+    if cmd[0] == "EXAMPLE":
+        return [sys.executable, str(ROOT / "examples" / cmd[1])]
+    return [sys.executable, *cmd]
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -115,10 +149,12 @@ def measure(repeats: int, other: Path | None = None, names=tuple(COMMANDS)) -> d
     return out
 
 
-def cold(names=tuple(COLD_COMMANDS)) -> dict:
+def cold(names=tuple(COLD_COMMANDS), again: bool = False) -> dict:
     """Wall and CPU time (s) of each of `names`, run once and in order in a fresh copy of
     the package (its compiled-code cache empty, as on a fresh install): the first
-    is a cold start, each later one pays for what the ones before it did not compile."""
+    is a cold start, each later one pays for what the ones before it did not compile.
+    With `again`, each is then run a second time (warm: everything built), and both
+    times are kept."""
     import resource
     import shutil
     import tempfile
@@ -133,28 +169,37 @@ def cold(names=tuple(COLD_COMMANDS)) -> dict:
         # the compiled core's and the models' libraries: an empty cache too
         env["MBS_CLEARANCE_CACHE_DIR"] = str(Path(tmp) / "compiled")
         env["XDG_CACHE_HOME"] = str(Path(tmp) / "xdg")
-        for name in names:
-            before = resource.getrusage(resource.RUSAGE_CHILDREN)
-            t0 = time.perf_counter()
-            proc = subprocess.run([sys.executable, *COLD_COMMANDS[name]], cwd=tmp, env=env,
-                                  stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
-                                  text=True)
-            wall = time.perf_counter() - t0
-            after = resource.getrusage(resource.RUSAGE_CHILDREN)
-            if proc.returncode != 0:
-                raise RuntimeError(f"{name} failed (status {proc.returncode}): "
-                                   f"{proc.stderr.strip().splitlines()[-1:] or ''}")
-            rows[name] = {"wall_s": wall,
-                          "cpu_s": (after.ru_utime - before.ru_utime
-                                    + after.ru_stime - before.ru_stime)}
+        _new_structure(Path(tmp))
+        for rounds, key in ((names, ""), (names if again else (), "warm_")):
+            for name in rounds:
+                before = resource.getrusage(resource.RUSAGE_CHILDREN)
+                t0 = time.perf_counter()
+                proc = subprocess.run(_argv(name), cwd=tmp, env=env,
+                                      stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                                      text=True)
+                wall = time.perf_counter() - t0
+                after = resource.getrusage(resource.RUSAGE_CHILDREN)
+                if proc.returncode != 0:
+                    raise RuntimeError(f"{name} failed (status {proc.returncode}): "
+                                       f"{proc.stderr.strip().splitlines()[-1:] or ''}")
+                rows.setdefault(name, {}).update({
+                    f"{key}wall_s": wall,
+                    f"{key}cpu_s": (after.ru_utime - before.ru_utime
+                                    + after.ru_stime - before.ru_stime)})
     return {"machine": machine_summary(), "cold": rows}
 
 
 def report_cold(result: dict) -> str:
+    again = all("warm_wall_s" in r for r in result["cold"].values())
     lines = [f"first runs in a fresh copy of the package, compiled-code cache empty "
-             f"({result['machine']})", f"{'command':<18} {'wall (s)':>9} {'CPU (s)':>9}"]
+             f"({result['machine']})", f"{'command':<18} {'wall (s)':>9} {'CPU (s)':>9}"
+             + (f" {'warm wall':>10} {'warm CPU':>9} {'first - warm':>13}" if again else "")]
     for n, r in result["cold"].items():
-        lines.append(f"{n:<18} {r['wall_s']:>9.1f} {r['cpu_s']:>9.1f}")
+        line = f"{n:<18} {r['wall_s']:>9.1f} {r['cpu_s']:>9.1f}"
+        if again:
+            line += (f" {r['warm_wall_s']:>10.1f} {r['warm_cpu_s']:>9.1f} "
+                     f"{r['wall_s'] - r['warm_wall_s']:>+13.1f}")
+        lines.append(line)
     return "\n".join(lines)
 
 
@@ -187,10 +232,13 @@ def main(argv: list[str] | None = None) -> int:
                         help="instead: run these once, in order, in a fresh copy of the "
                              "package with an empty compiled-code cache (choices: "
                              f"{', '.join(COLD_COMMANDS)})")
+    parser.add_argument("--again", action="store_true",
+                        help="with --cold: then run each command once more, warm, and print "
+                             "the first run's extra time")
     parser.add_argument("--json", action="store_true", help="print the result as JSON")
     args = parser.parse_args(argv)
     if args.cold:
-        result = cold(tuple(args.cold))
+        result = cold(tuple(args.cold), args.again)
         print(json.dumps(result, indent=2) if args.json else report_cold(result))
         return 0
     if args.repeats < 1:
