@@ -71,7 +71,8 @@ COLD_COMMANDS = {
     "custom_linkage": ["EXAMPLE", "custom_linkage.py"],
     "lyapunov": ["-m", "mbs_clearance.cli", "lyapunov", "--revolutions", "20"],
     "orbits": ["-m", "mbs_clearance.cli", "orbits"],
-    "map": ["-m", "mbs_clearance.cli", "map"],
+    "map": ["-m", "mbs_clearance.cli", "map", "--sweep", "clearance=1e-5:1e-4:3",
+            "--revolutions", "20", "--keep", "17"],
     "animate": ["-m", "mbs_clearance.cli", "animate", "--out", "animation.gif"],
 }
 

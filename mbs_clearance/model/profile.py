@@ -23,7 +23,6 @@ import math
 from functools import cached_property
 
 import numpy as np
-from scipy.interpolate import CubicSpline
 
 __all__ = ["BearingProfile", "MIN_POINTS", "MAX_POINTS", "check_profile"]
 
@@ -82,9 +81,12 @@ class BearingProfile:
         return 2.0 * np.pi * np.arange(self.points) / self.points
 
     @cached_property
-    def spline(self) -> CubicSpline:
+    def spline(self):
         """The periodic cubic spline through the radii (closed at 2 pi)."""
         theta = 2.0 * np.pi * np.arange(self.points + 1) / self.points
+        # imported here: scipy.interpolate costs ~0.3 s at import, and only a profile needs it
+        from scipy.interpolate import CubicSpline
+
         return CubicSpline(theta, np.append(self.radii, self.radii[0]), bc_type="periodic")
 
     def radius(self, theta, derivative: int = 0) -> np.ndarray:
