@@ -1067,6 +1067,12 @@ static int64_t switch_events(const run_ctx *cx, double t, const double *y, doubl
 
 /* ---- integrate ---- */
 
+/* free one of a result's arrays handed to Python (numpy arrays own them then) */
+void mbs_free(void *data)
+{
+    free(data);
+}
+
 void mbs_result_free(mbs_result *res)
 {
     if (res == NULL)

@@ -6,7 +6,7 @@ inertias 7.4e-5, 5.9e-4, 2.7e-6 kg m^2, gravity 9.81, the crank started at 150 r
 coupler at -75 rad/s with every angle zero), with a revolute clearance joint at the
 coupler-slider pin. References: the energy balance (written here from the closed-form
 kinematics, not from the generated model), the ideal slider-crank's one-degree-of-freedom
-Lagrange equation integrated by scipy, and Exudyn. 
+Lagrange equation integrated by scipy, and Exudyn.
 """
 
 from __future__ import annotations

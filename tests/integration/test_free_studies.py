@@ -24,7 +24,6 @@ from mbs_clearance.solve.simulate import simulate
 from mbs_clearance.studies.optimize import optimize_link_lengths
 from mbs_clearance.studies.tolerance import Uniform, tolerance_study
 
-
 #: the objective's window width, s
 W = 0.01
 

@@ -18,7 +18,6 @@ from mbs_clearance.model import cases
 from mbs_clearance.solve.linkage_model import pack_parameters
 
 
-
 def _max_eps(traj, linkage):
     e = np.hypot(traj.eccentricity[:, 0, 0], traj.eccentricity[:, 0, 1])
     return float(e.max() / linkage.clearance_joints[0].clearance)

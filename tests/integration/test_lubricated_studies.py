@@ -20,7 +20,6 @@ from mbs_clearance.solve.simulate import simulate
 from mbs_clearance.studies.optimize import optimize_link_lengths
 from mbs_clearance.studies.tolerance import Uniform, tolerance_study
 
-
 RPM = 2.0 * np.pi / 60.0
 
 

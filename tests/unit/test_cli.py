@@ -852,8 +852,9 @@ def test_sensitivity_of_a_named_case(capsys):
 
 def test_import_loads_only_what_is_needed():
     """`import mbs_clearance` and building the CLI's parser for a built-in command load no
-    compiled model, no scipy.integrate or scipy.interpolate, no exudyn, no matplotlib, no validation plugin; the
-    top-level --help lists the plugins without importing their modules."""
+    compiled model, no scipy.integrate or scipy.interpolate, no exudyn, no matplotlib, no
+    validation plugin; the top-level --help lists the plugins without importing their
+    modules."""
     import subprocess
     import sys
     from pathlib import Path
@@ -865,8 +866,8 @@ def test_import_loads_only_what_is_needed():
     out = subprocess.run([sys.executable, "-c", code], cwd=root, capture_output=True,
                          text=True, check=True).stdout
     after_import, after_parser = eval(out.strip().splitlines()[-1])  # noqa: S307 - own output
-    heavy = ("scipy.integrate", "scipy.interpolate", "matplotlib", "exudyn", "mbs_clearance.generate.c_loader",
-             "mbs_clearance.solve.reduced", "mbs_clearance.ddm", "mbs_clearance_validation",
+    heavy = ("scipy.integrate", "scipy.interpolate", "matplotlib", "exudyn",
+             "mbs_clearance.generate.c_loader", "mbs_clearance.solve.reduced", "mbs_clearance.ddm", "mbs_clearance_validation",
              "sympy", "pygad", "xarray")
     for modules in (after_import, after_parser):
         assert not [m for m in modules if m.startswith(heavy)]
