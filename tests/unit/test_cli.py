@@ -867,8 +867,8 @@ def test_import_loads_only_what_is_needed():
                          text=True, check=True).stdout
     after_import, after_parser = eval(out.strip().splitlines()[-1])  # noqa: S307 - own output
     heavy = ("scipy.integrate", "scipy.interpolate", "matplotlib", "exudyn",
-             "mbs_clearance.generate.c_loader", "mbs_clearance.solve.reduced", "mbs_clearance.ddm", "mbs_clearance_validation",
-             "sympy", "pygad", "xarray")
+             "mbs_clearance.generate.c_loader", "mbs_clearance.solve.reduced",
+             "mbs_clearance.ddm", "mbs_clearance_validation", "sympy", "pygad", "xarray")
     for modules in (after_import, after_parser):
         assert not [m for m in modules if m.startswith(heavy)]
     # the top-level --help lists the plugin subcommands from their light declarations
