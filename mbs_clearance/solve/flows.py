@@ -16,6 +16,10 @@ from ..numerics.integrator import METHODS, RESULTS
 from .kernels import plain_kernel
 from .settings import DEFAULT_RTOL, RunSettings
 
+#: times a window is run again, each with a first step 0.3 times smaller, when its events
+#: chattered (a grazing contact at machine precision: the step sequence, not the motion)
+CHATTER_RETRIES = 3
+
 __all__ = ["Flow", "TangentFlow", "drive_of", "clearances_of", "joints_of"]
 
 
@@ -99,14 +103,28 @@ class Flow:
         self.counters = np.zeros(5, dtype=np.int64)
         #: the most steps recorded in one window (the run's record never holds more)
         self.max_recorded = 0
+        #: windows run again after events chattered at a grazing contact (`CHATTER_RETRIES`)
+        self.chatter_retries = 0
 
     def _run(self, kernel, y, p, t1, settings):
         """One window [t, t1] of `kernel` from (y, p): the end state (landed on t1), the
         window's peak; the next window starts with the last full step's size."""
         edges = np.array([self.t, t1])
-        ts, ys, ms, peaks, _, counters, _, status = kernel(y, p, edges, settings,
-                                                            self.coefficients)
-        status = RESULTS(int(status))
+        p_start = p.copy()
+        for retry in range(CHATTER_RETRIES + 1):
+            ts, ys, ms, peaks, _, counters, _, status = kernel(y, p, edges, settings,
+                                                                self.coefficients)
+            status = RESULTS(int(status))
+            if status is not RESULTS.event_chatter or retry == CHATTER_RETRIES:
+                break
+            # a grazing contact met at machine precision by this step sequence: the window
+            # again from its start (state and memories) with a smaller first step, which
+            # changes the sequence; the run stays within its tolerances
+            self.counters += counters          # the failed attempt's work counts
+            p[:] = p_start
+            h0 = settings.h0 if settings.h0 > 0.0 else 1e-4 * (t1 - self.t)   # 0: automatic
+            settings = settings._replace(h0=0.3 * h0)
+            self.chatter_retries += 1
         if status is not RESULTS.success:
             raise RuntimeError(f"{self.linkage.name}: integration failed at about t = "
                                f"{ts[-1] if len(ts) else self.t:.6g} s: {status.message}")
