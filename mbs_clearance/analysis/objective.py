@@ -2,7 +2,8 @@
 
 `peak_gradient(linkage, parameters)` returns d(peak)/db for named design values of any
 linkage (`design`; the paper's SliderCrank is its case, its fields the names). The peak is
-max_t F(t, b) of the output F (by default the crank pivot's |reaction|, the paper's |F12|)
+max_t F(t, b) of the output F (by default the linkage's monitored output,
+`Linkage.default_output`: the paper's |F12|, the four-bar's shaking force)
 over the revolution's window; where its maximum is an interior, isolated local maximum,
 dF/dt = 0 there and the envelope theorem gives
 
@@ -187,14 +188,10 @@ class Output:
 
 
 def default_output(linkage: Linkage) -> str:
-    """The default output: the |reaction| of the driven joint when it joins the ground (the
-    crank pivot: the paper's base force F12); of a free linkage its monitored force (the
-    peaks `simulate` reports per window); else the shaking force."""
-    if linkage.drive is not None and linkage.drive.joint in ground_joints(linkage):
-        return f"pivot_force:{linkage.drive.joint}"
-    if linkage.drive is None and linkage.monitor_joint in ground_joints(linkage):
-        return f"pivot_force:{linkage.monitor_joint}"
-    return "shaking_force"
+    """The default output: the linkage's monitored output (`Linkage.default_output`: the
+    |reaction| of its `monitor_joint`, else the shaking force), whose peaks `simulate`
+    reports."""
+    return linkage.default_output
 
 
 def parse_output(linkage: Linkage, output: str | None = None) -> Output:
@@ -359,7 +356,7 @@ def objective_window(linkage: Linkage, revolution: int, window: float | None = N
 
 def peak_output(linkage: Linkage, output: str | None = None, revolution: int = 4, *,
                 window: float | None = None, **options) -> float:
-    """The peak of `output` (`parse_output`; default the crank pivot's |reaction|) over drive
+    """The peak of `output` (`parse_output`; default `Linkage.default_output`) over drive
     revolution `revolution` (1-based) of `linkage`'s generated model: the objective of the
     studies of any linkage. A free linkage (drive None): over time window `revolution` of
     `window` s, [(k - 1) w, k w] (`objective_window`; `window` required, and refused for a
@@ -743,8 +740,9 @@ def peak_gradient(mech: Linkage | SliderCrank, parameters=None, revolution: int 
         `sensitivity.DEFAULT_PARAMETERS`; required otherwise.
     output : str, optional
         "pivot_force:<ground joint>", "shaking_force", "drive_moment" or
-        "contact_force:<clearance joint>" (`parse_output`); default the driven ground
-        joint's |reaction| (the paper's base force F12).
+        "contact_force:<clearance joint>" (`parse_output`); default the linkage's
+        monitored output (`Linkage.default_output`: the paper's base force F12, the
+        four-bar's shaking force), the one `simulate`'s peaks are.
     revolution : int
         Drive revolution (1-based) whose peak is the objective (paper: 4); a free linkage
         (drive None): the time window [(k - 1) w, k w] of width `window`.
