@@ -1762,9 +1762,10 @@ def _add_animate_parser(subparsers) -> argparse.ArgumentParser:
         "animate", help="animation of the mechanism over a revolution (GIF/MP4)",
         description="Simulate the slider-crank (or a named case, or a linkage described in "
                     "a file) and write an animation of one crank revolution into --out "
-                    "(GIF; MP4 with --format mp4 where ffmpeg is installed). A case or "
-                    "description is drawn from its description: bodies as polylines through "
-                    "their named points, ground pivots, sliders' guides, each clearance "
+                    "(GIF; MP4 with --format mp4 where ffmpeg is installed). Any mechanism "
+                    "is drawn from its description (the paper's from its case's): bodies "
+                    "as polylines through their named points, ground pivots, sliders' "
+                    "guides, each clearance "
                     "joint's bearing circle and its journal with the journal's offset "
                     "magnified (the factor is in the title), beside the orbits in units of "
                     "the clearance.",
@@ -1782,9 +1783,8 @@ def _add_animate_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--format", choices=("gif", "mp4"), default="gif",
                    help="file format (mp4 needs ffmpeg)")
     p.add_argument("--magnify", type=positive_float,
-                   help="magnification of the journals' offsets in their bearings (--case / "
-                        "--description; default: the largest clearance drawn as 40 %% of the "
-                        "drawn bearing radius)")
+                   help="magnification of the journals' offsets in their bearings (default: "
+                        "the largest clearance drawn as 40 %% of the drawn bearing radius)")
     p.add_argument("--out", type=Path, default=Path("animate"),
                    help="output folder (default ./animate, named after the command)")
     add_force_option(p)
@@ -1803,12 +1803,11 @@ def _cmd_animate(args: argparse.Namespace) -> int:
     if revolution > args.revolutions:
         raise ValueError(f"--revolution must be between 1 and --revolutions "
                          f"({args.revolutions}); got {revolution}")
-    if linkage is None and args.magnify is not None:
-        raise ValueError("--magnify applies to --case or --description (the slider-crank's "
-                         "orbit is drawn in units of the clearance beside it)")
+    from .model.cases import as_linkage
     from .plotting import animate_mechanism, magnification
 
-    magnify = None if linkage is None else magnification(linkage, args.magnify)
+    # any mechanism is drawn from its description (the paper's from its case's)
+    magnify = magnification(as_linkage(mech), args.magnify)
     check_output_dir(args.out, "--out", args.force)
     if args.format == "mp4":
         from matplotlib.animation import FFMpegWriter
@@ -1824,9 +1823,8 @@ def _cmd_animate(args: argparse.Namespace) -> int:
         animate_mechanism(traj, staged.path / file, revolution=revolution, frames=args.frames,
                           fps=args.fps, magnify=magnify)
         staged.commit()
-    what = f"animation of {name}, revolution {revolution}"
-    if magnify is not None:
-        what += f", journal offsets drawn {number(magnify, 3)} times their size"
+    what = (f"animation of {name}, revolution {revolution}, journal offsets drawn "
+            f"{number(magnify, 3)} times their size")
     wrote(args.out / file, what)
     return 0
 

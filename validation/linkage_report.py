@@ -332,8 +332,8 @@ difference exceeds the two bars together.</p>
 
 <h2>{{ titles.sensitivity }}</h2>
 <p>The gradient of revolution {{ n.sensitivity.revolution }}'s peak of
-{{ n.sensitivity.output }}, {{ "%.6g" % n.sensitivity.peak }} N ({{ methods.get(n.sensitivity.method,
-n.sensitivity.method) }}){% if n.sensitivity.kink %};
+{{ n.sensitivity.output }}, {{ "%.6g" % n.sensitivity.peak }} N
+({{ methods.get(n.sensitivity.method, n.sensitivity.method) }}){% if n.sensitivity.kink %};
 <b>{{ n.sensitivity.message }}</b>{% endif %}:</p>
 <table><tr><th>value</th><th>d peak / d value</th><th>d ln peak / d ln value</th></tr>
 {% for name in n.sensitivity.names %}<tr><td>{{ name }}</td>
@@ -342,8 +342,8 @@ n.sensitivity.method) }}){% if n.sensitivity.kink %};
 {% for f in figs.sensitivity %}<img src="{{ img[f] }}" alt="{{ f }}">{% endfor %}
 
 <h2>{{ titles.tolerance }}</h2>
-<p>Sobol indices of the peak of {{ n.tolerance.output }}, every input uniform within +-{{ "%.0f" % (100 *
-n.tolerance.spread) }} % of its value ({{ n.tolerance.runs }} runs).</p>
+<p>Sobol indices of the peak of {{ n.tolerance.output }}, every input uniform within
++-{{ "%.0f" % (100 * n.tolerance.spread) }} % of its value ({{ n.tolerance.runs }} runs).</p>
 {% for f in figs.tolerance %}<img src="{{ img[f] }}" alt="{{ f }}">{% endfor %}
 
 <h2>{{ titles.regimes }}</h2>
