@@ -323,7 +323,7 @@ class MapResult:
         if np.isfinite(peak).any():
             output = ds["peak"].attrs.get("output", "the monitored force")
             text += (f"\npeak of {output} over the kept revolutions: "
-                     f"{number(float(np.nanmin(peak)), 6)} to "
+                     f"{number(float(np.nanmin(peak)), 6)} N to "
                      f"{number(float(np.nanmax(peak)), 6)} N over the points")
         return text
 
