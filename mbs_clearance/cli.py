@@ -1305,10 +1305,11 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     p = sub.add_parser("sensitivity", help="design sensitivities of the base force (Figs. 4-6)",
                        epilog="named cases (--case NAME; --set NAME=VALUE changes a value):\n"
                               + _case_lines(),
-                       description="Sensitivities of |F12| (a named case: its monitored "
-                                   "force) by direct differentiation (reduced model) or "
-                                   "finite differences; prints b0 and the mean and max "
-                                   "normalized sensitivity (Eq. 15) over the last revolution. "
+                       description="Sensitivities of the default output (|F12|; a named "
+                                   "case: its monitored force) by direct differentiation "
+                                   "(reduced model) or finite differences; prints b0 and "
+                                   "the mean and max normalized sensitivity (Eq. 15) over "
+                                   "the last revolution. "
                                    "With --out, writes sensitivities.npz and Fig. 4-6-like "
                                    "plots into that folder (nothing is written without it).")
     add_linkage_options(p)
@@ -1320,10 +1321,10 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
                    help="ddm: direct differentiation (reduced model); fd: central finite "
                         "differences (any backend)")
     p.add_argument("--output", metavar="NAME",
-                   help="--case / --description: instead of the time series, the peak of "
-                        "this output over the last revolution and its gradient along "
-                        "--parameters (case overrides or dotted paths): pivot_force:JOINT, "
-                        "shaking_force, drive_moment or contact_force:JOINT (default: none)")
+                   help="instead of the time series, the peak of this output over the last "
+                        "revolution and its gradient along --parameters (case overrides or "
+                        "dotted paths): pivot_force:JOINT, shaking_force, drive_moment or "
+                        "contact_force:JOINT (default: none)")
     p.add_argument("--revolutions", type=int_at_least(1),
                    help="crank revolutions; the sensitivities are those of the last "
                         "(default 4)")
@@ -1389,7 +1390,8 @@ def _add_optimize_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--output", metavar="NAME",
                    help="--case / --description: the output whose peak is minimised, "
                         "pivot_force:JOINT, shaking_force, drive_moment or "
-                        "contact_force:JOINT (default: the crank pivot's force)")
+                        "contact_force:JOINT (default: the linkage's default output, its "
+                        "monitored joint's force or else the shaking force)")
     add_evaluation_options(p, "optimize", accuracy=True)
     add_keep_going_option(p, "designs' runs")
     p.add_argument("--no-refine", action="store_true", help="skip the local refinement")
@@ -1576,8 +1578,9 @@ def _add_tolerance_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--output", default="peak", metavar="NAME",
                    help="output of a run: peak, rms_drive_moment or max_contact_force; with "
                         "--case / --description also pivot_force:JOINT, shaking_force, "
-                        "drive_moment or contact_force:JOINT, its peak (default: peak, the "
-                        "crank pivot's force)")
+                        "drive_moment or contact_force:JOINT, its peak (default: peak, of the "
+                        "default output: the monitored joint's force or else the shaking "
+                        "force)")
     p.add_argument("--revolution", type=int_at_least(1),
                    help="crank revolution of the output (default 4)")
     add_window_options(p, "the output is its peak over the last --window")
