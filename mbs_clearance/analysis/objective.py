@@ -73,12 +73,13 @@ _REFINE_ITERS = 18
 
 @dataclass(frozen=True)
 class PeakGradient:
-    """The peak of |F12| over a crank revolution and its gradient.
+    """The peak of an output (``stats["output"]``; by default the linkage's
+    `default_output`, the paper's |F12|) over a crank revolution and its gradient.
 
     Attributes
     ----------
     peak : float
-        max |F12| over the revolution, N.
+        Its maximum over the revolution, N (N m for the drive moment).
     time : float
         Where it is, s (NaN for backends that do not report it).
     parameters : tuple of str
@@ -91,7 +92,7 @@ class PeakGradient:
         and `rival_gradient` are then the two one-sided values (the objective is the
         maximum of the two smooth branches).
     rival_time, rival_peak : float
-        The largest other local maximum of |F12| in the window (s, N); NaN if none.
+        The largest other local maximum of the output in the window (s, N); NaN if none.
     rival_gradient : (p,) its gradient (N per unit), NaN if none.
     at_edge : bool
         The peak sits at the window's edge.
@@ -175,10 +176,8 @@ class Output:
 
     def monitored(self, linkage: Linkage) -> bool:
         """Whether this is the linkage's monitored force (its peak is refined between steps
-        by the integrator itself, and its DDM gradient is available)."""
-        if linkage.monitor_joint is None:
-            return self.name == "shaking_force"
-        return self.name == f"pivot_force:{linkage.monitor_joint}"
+        by the integrator itself, and its DDM gradient is available): its default output."""
+        return self.name == linkage.default_output
 
     def values(self, outs: np.ndarray, columns: dict[str, int]) -> np.ndarray:
         """The output at the rows of a model's outputs `outs` (columns by name)."""
