@@ -34,7 +34,7 @@ from typing import Any
 import numpy as np
 
 from .._checks import check_choice, check_int, check_real, check_revolutions_memory
-from ..model.linkage import GROUND, Linkage
+from ..model.linkage import Linkage
 from ..model.mechanism import CONTINUOUS_FIELDS, SliderCrank
 from ..numerics.integrator import METHODS
 from .sensitivity import DDM_INTEGRATOR, DEFAULT_PARAMETERS, FD_RELATIVE_STEP, fd_step
@@ -158,10 +158,9 @@ OUTPUT_KINDS = {
 
 
 def ground_joints(linkage: Linkage) -> list[str]:
-    """Names of the joints (ideal, then clearance) that join a body to the ground."""
-    out = [j.name for j in linkage.joints if GROUND in (j.body_a, j.body_b)]
-    return out + [j.name for j in linkage.clearance_joints
-                  if GROUND in (j.journal_body, j.bearing_body)]
+    """Names of the joints (ideal, clearance, then translational clearance) that join a
+    body to the ground: each has a reaction output, and each may be the monitored joint."""
+    return list(linkage.ground_joints())
 
 
 @dataclass(frozen=True)

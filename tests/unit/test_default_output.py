@@ -93,3 +93,23 @@ def test_ddm_peak_is_the_default_output(case):
     pg = peak_gradient(linkage, ["crank_length"], revolution=1, method="ddm", rtol=RTOL)
     assert pg.stats["output"] == linkage.default_output
     assert abs(pg.peak / ref - 1.0) < DDM_AGREE
+
+
+def test_a_translational_guide_may_be_the_monitored_joint():
+    """A description monitoring its translational clearance guide (a joint to the ground
+    with a reaction): that reaction is its default output, a name every study accepts, and
+    its peak is `simulate`'s."""
+    import dataclasses
+
+    linkage = dataclasses.replace(CASES["flores_translational_slider_crank"](),
+                                  monitor_joint="guide")
+    assert linkage.default_output == "pivot_force:guide"
+    traj = simulate(linkage, duration=WINDOW, window=WINDOW, rtol=RTOL)
+    ref = float(traj.peaks[0])
+    # the guide's recorded reaction: its largest sample, refined between steps to the peak
+    sampled = float(np.hypot(*traj.reactions["guide"].T).max())
+    assert sampled <= ref * (1 + 1e-12) and sampled > 0.99 * ref
+    # not the crank pivot's: the guide's own reaction
+    other = peak_output(linkage, "pivot_force:crank_pivot", 1, window=WINDOW, rtol=RTOL)
+    assert abs(ref / other - 1.0) > 1e-3
+    assert peak_output(linkage, None, 1, window=WINDOW, rtol=RTOL) == ref
