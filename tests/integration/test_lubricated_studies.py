@@ -105,7 +105,8 @@ def test_ga_on_the_lubricated_case_against_direct_runs(tmp_path, capsys):
     for name, (lo, hi) in genes.items():
         argv += ["--gene", f"{name}={lo}:{hi}"]
     assert main(argv) == 0
-    assert f"best: {res.best_peak_force!r}" in capsys.readouterr().out
+    printed = capsys.readouterr().out
+    assert f"best: {res.best_peak_force:.2f} N of pivot_force:crank_pivot (" in printed
 
 
 def test_regime_maps_over_clearance_and_speed_beside_the_dry_joint(tmp_path):
