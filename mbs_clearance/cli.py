@@ -673,45 +673,112 @@ def _force(value: float) -> str:
     return quantity(value, "N", 6)
 
 
+def run_span(design, args: argparse.Namespace, option: str = "revolutions",
+             default: int = 4, what: str = "it runs") -> dict:
+    """The span of a command's run as `simulate`'s keywords: the revolutions of a driven
+    design (--OPTION, `default` when not given; --duration / --window refused), or a free
+    linkage's --duration and --window (--OPTION and --settled refused). Sets
+    ``args.OPTION`` to the revolutions (None for a free linkage). ValueError naming the
+    option that does not apply."""
+    flag = "--" + option
+    attr = option.replace("-", "_")
+    if getattr(design, "drive", True) is not None:
+        refuse_window_options(args, flag)
+        if getattr(args, attr) is None:
+            setattr(args, attr, default)
+        return {"revolutions": getattr(args, attr)}
+    settled = " or --settled" if hasattr(args, "settled") else ""
+    if getattr(args, attr) is not None or getattr(args, "settled", None) is not None:
+        raise ValueError(f"linkage {design.name!r} is free (no drive): {what} --duration "
+                         f"seconds (windows of --window), not {flag}{settled}")
+    if args.duration is None:
+        raise ValueError(f"linkage {design.name!r} is free (no drive): give --duration "
+                         "(s) and optionally --window (s)")
+    return {"duration": args.duration, "window": args.window}
+
+
+def _span_rows(traj, span: dict):
+    """(label heading, [(label, sample mask, peak of the default output)]) of a run's
+    revolutions (the first marked as the start-up transient by the caller) or a free
+    linkage's time windows."""
+
+    if "revolutions" in span:
+        return "revolution", [(k, traj.revolution_mask(k), traj.max_base_force(k))
+                              for k in range(1, traj.revolutions + 1)]
+    from .solve.linkage_model import time_edges
+
+    edges = time_edges(span["duration"], span["window"])      # the run's windows
+    rows = []
+    for k, peak in enumerate(traj.peaks):
+        a, b = edges[k], edges[k + 1]
+        rows.append((f"{a:.4g}-{b:.4g}", (traj.t >= a) & (traj.t <= b), float(peak)))
+    return "window [s]", rows
+
+
 def _cmd_simulate(args: argparse.Namespace) -> int:
+    """simulate: the peaks per revolution (a free linkage: per time window) of the
+    mechanism's default output, the drive moment and each contact's force, each column
+    headed by its output's name."""
+    import numpy as np
+
     from .solve.simulate import simulate
     from .solve.trajectory import load_trajectory
 
-    linkage = linkage_from_args(args)
-    if linkage is not None and linkage.drive is None:
-        return _simulate_free(linkage, args)
-    refuse_window_options(args, "--revolutions")
-    if args.revolutions is None:
-        args.revolutions = 4
-    bound_spans(linkage if linkage is not None else mechanism_from_args(args), args)
-    if linkage is not None:
-        return _simulate_linkage(linkage, args)
-    settled_start_of(None, args)
-    mech = mechanism_from_args(args)
+    linkage, design = design_from_args(args)
+    span = run_span(design, args)
+    bound_spans(design, args)
     if args.out:
         check_output_file(args.out, "--out", args.force, suffixes=(".npz", ".csv"),
                           reader=load_trajectory)
     if args.plot:
+        if linkage is not None:
+            raise ValueError("--plot draws the paper's slider-crank only; leave it out with "
+                             "--case or --description")
         check_output_file(args.plot, "--plot", args.force, suffixes=figure_suffixes())
+    if args.backend == "ideal" and args.settled:
+        raise ValueError("--settled needs the reduced or exudyn backend")
     options = _simulate_options(args)
-    _progress(f"simulating {args.revolutions} revolutions with backend {args.backend!r} ...")
+    start = settled_start_of(linkage, args)
+    if start is not None:
+        options["start"] = start
+    name = "the paper's slider-crank" if linkage is None else repr(linkage.name)
+    how = (f"{args.revolutions} revolutions" if "revolutions" in span
+           else f"(free) for {args.duration:g} s")
+    _progress(f"simulating {name}, {how} with backend {args.backend!r} ...")
     t0 = time.perf_counter()
-    traj = simulate(mech, args.revolutions, backend=args.backend, **options)
-    elapsed = time.perf_counter() - t0
-    print(f"done in {elapsed:.3g} s ({len(traj.t)} samples)", file=sys.stderr)
-    refuse_empty(traj)
-    warn_absurd_forces(mech, traj)
+    traj = simulate(design, backend=args.backend, **span, **options)
+    print(f"done in {time.perf_counter() - t0:.3g} s ({len(traj.t)} samples)",
+          file=sys.stderr)
+    refuse_empty(traj, "revolution" if "revolutions" in span else "window")
+    warn_absurd_forces(design, traj)
     ideal = args.backend == "ideal"     # no clearance: no contact force
-    print(f"{'revolution':>10}  {'max |F12|':>12}  {'max |M2|':>12}"
-          + ("" if ideal else f"  {'max contact force':>17}"))
-    for k in range(1, traj.revolutions + 1):
-        mask = traj.revolution_mask(k)
-        # ideal joints: no journal, no start-up transient to mark
-        print(f"{_revolution_label(k, not ideal):>10}  {_force(traj.max_base_force(k)):>12}  "
-              f"{quantity(abs(traj.crank_moment[mask]).max(), 'N m', 6):>12}"
-              + ("" if ideal else f"  {_force(traj.contact_force[mask].max()):>17}"))
-    if not ideal:
-        print(START_UP_NOTE + PAPER_NOTE, file=sys.stderr)
+    driven = "revolutions" in span
+    contact = np.asarray(traj.contact_force, dtype=float)
+    contact = contact[:, None] if contact.ndim == 1 else contact
+    joints = [] if ideal else list(traj.joints or ("contact",))[:contact.shape[1]]
+    # every column is headed by the name of the output whose peak it shows
+    heads = ([f"max {traj.output}"] + (["max drive_moment"] if driven else [])
+             + [f"max contact_force:{j}" for j in joints])
+    widths = [max(12, len(h)) for h in heads]
+    # ideal joints have no journal whose centred start makes a transient
+    transient = driven and start is None and not ideal
+    label, rows = _span_rows(traj, span)
+    lw = 20 if not driven else 10
+    print((f"{label:>{lw}}  " + "  ".join(f"{h:>{w}}" for h, w in zip(heads, widths)))
+          .rstrip())
+    for k, mask, peak in rows:
+        cells = [_force(peak)]
+        if driven:
+            cells.append(quantity(abs(traj.crank_moment[mask]).max(), "N m", 6))
+        cells += [_force(contact[mask, i].max()) for i in range(len(joints))]
+        first = _revolution_label(k, transient) if driven else k
+        print((f"{first:>{lw}}  " + "  ".join(f"{c:>{w}}" for c, w in zip(cells, widths)))
+              .rstrip())
+    if transient:
+        print(START_UP_NOTE + (PAPER_NOTE if linkage is None else ""), file=sys.stderr)
+    elif start is not None:
+        print(f"revolutions counted from the state after {start.revolutions} revolutions "
+              "(--settled)", file=sys.stderr)
     _print_error_estimate(traj)
     floored = traj.stats.get("floored_impacts") if traj.stats else None
     if floored:
@@ -816,107 +883,6 @@ def _simulate_options(args: argparse.Namespace) -> dict:
     return options
 
 
-def _simulate_linkage(linkage, args: argparse.Namespace) -> int:
-    """simulate --case / --description: peaks per revolution of the monitored force, the
-    drive moment and each clearance joint's contact force."""
-    from .solve.simulate import simulate
-
-    if args.out:
-        check_output_file(args.out, "--out", args.force, suffixes=(".npz", ".csv"))
-    if args.plot:
-        raise ValueError("--plot draws the paper's slider-crank only; leave it out with "
-                         "--case or --description")
-    options = _simulate_options(args)
-    if args.backend == "ideal" and args.settled:
-        raise ValueError("--settled needs the reduced or exudyn backend")
-    start = settled_start_of(linkage, args)
-    if start is not None:
-        options["start"] = start
-    _progress(f"simulating {linkage.name!r}, {args.revolutions} revolutions with backend "
-              f"{args.backend!r} ...")
-    t0 = time.perf_counter()
-    traj = simulate(linkage, args.revolutions, backend=args.backend, **options)
-    elapsed = time.perf_counter() - t0
-    print(f"done in {elapsed:.3g} s ({len(traj.t)} samples)", file=sys.stderr)
-    refuse_empty(traj)
-    warn_absurd_forces(linkage, traj)
-    joints = [] if args.backend == "ideal" else [name for name, _ in linkage.contacts()]
-    monitored = (f"max |{linkage.monitor_joint}|" if linkage.monitor_joint
-                 else "max |shaking|")
-    widths = [max(12, len(j) + 6) for j in joints]
-    # ideal joints have no journal whose centred start makes a transient
-    transient = start is None and args.backend != "ideal"
-    print((f"{'revolution':>10}  {monitored:>18}  {'max |drive|':>12}  "
-           + "  ".join(f"{'max F ' + j:>{w}}" for j, w in zip(joints, widths))).rstrip())
-    for k in range(1, traj.revolutions + 1):
-        mask = traj.revolution_mask(k)
-        cells = "  ".join(f"{_force(traj.contact_force[mask, i].max()):>{w}}"
-                          for i, w in enumerate(widths))
-        print(f"{_revolution_label(k, transient):>10}  {_force(traj.peaks[k - 1]):>18}  "
-              f"{quantity(abs(traj.crank_moment[mask]).max(), 'N m', 6):>12}  {cells}"
-              .rstrip())
-    if transient:
-        print(START_UP_NOTE, file=sys.stderr)
-    elif start is not None:
-        print(f"revolutions counted from the state after {start.revolutions} revolutions "
-              "(--settled)", file=sys.stderr)
-    _print_error_estimate(traj)
-    if args.out:
-        with atomic_file(args.out) as tmp:
-            traj.save(tmp)
-        wrote(args.out, "trajectory")
-    return 0
-
-
-def _simulate_free(linkage, args: argparse.Namespace) -> int:
-    """simulate --description of a free linkage: peaks of the monitored force and each
-    clearance joint's largest contact force per time window."""
-    from .solve.linkage_model import time_edges
-    from .solve.simulate import simulate
-
-    if args.revolutions is not None or args.settled is not None:
-        raise ValueError(f"linkage {linkage.name!r} is free (no drive): it runs --duration "
-                         "seconds (windows of --window), not --revolutions or --settled")
-    if args.duration is None:
-        raise ValueError(f"linkage {linkage.name!r} is free (no drive): give --duration "
-                         "(s) and optionally --window (s)")
-    if args.plot:
-        raise ValueError("--plot draws the paper's slider-crank only; leave it out with "
-                         "--case or --description")
-    if args.out:
-        check_output_file(args.out, "--out", args.force, suffixes=(".npz", ".csv"))
-    bound_spans(linkage, args)
-    options = _simulate_options(args)
-    options.update(duration=args.duration, window=args.window)
-    _progress(f"simulating {linkage.name!r} (free) for {args.duration:g} s with backend "
-              f"{args.backend!r} ...")
-    t0 = time.perf_counter()
-    traj = simulate(linkage, backend=args.backend, **options)
-    print(f"done in {time.perf_counter() - t0:.3g} s ({len(traj.t)} samples)",
-          file=sys.stderr)
-    refuse_empty(traj, "window")
-    warn_absurd_forces(linkage, traj)
-    joints = [j.name for j in linkage.clearance_joints]
-    monitored = (f"max |{linkage.monitor_joint}|" if linkage.monitor_joint
-                 else "max |shaking|")
-    widths = [max(12, len(j) + 6) for j in joints]
-    edges = time_edges(args.duration, args.window)      # the run's windows
-    print((f"{'window [s]':>20}  {monitored:>18}  "
-           + "  ".join(f"{'max F ' + j:>{w}}" for j, w in zip(joints, widths))).rstrip())
-    for k, peak in enumerate(traj.peaks):
-        a, b = edges[k], edges[k + 1]
-        mask = (traj.t >= a) & (traj.t <= b)
-        cells = "  ".join(f"{_force(traj.contact_force[mask, i].max()):>{w}}"
-                          for i, w in enumerate(widths))
-        print(f"{f'{a:.4g}-{b:.4g}':>20}  {_force(peak):>18}  {cells}".rstrip())
-    _print_error_estimate(traj)
-    if args.out:
-        with atomic_file(args.out) as tmp:
-            traj.save(tmp)
-        wrote(args.out, "trajectory")
-    return 0
-
-
 def add_window_options(p: argparse.ArgumentParser, what: str,
                        window: str = "the time windows in s, a whole number of them in "
                                      "--duration (default: one window, the whole run)"
@@ -947,7 +913,7 @@ def free_window(linkage, args: argparse.Namespace, revolution: str) -> tuple[int
     that does not apply."""
     flag = "--" + revolution
     given = getattr(args, revolution)
-    free = linkage is not None and linkage.drive is None
+    free = getattr(linkage, "drive", True) is None
     if not free:
         refuse_window_options(args, flag)
         return (4 if given is None else given), None
@@ -1099,94 +1065,86 @@ SENSITIVITY_COLUMNS = (
 )
 
 
-def _peak_gradient_linkage(linkage, args: argparse.Namespace) -> int:
-    """sensitivity --output NAME (--case / --description): the peak of the output over the
-    last revolution and its gradient along --parameters (`objective.peak_gradient`)."""
-    from .analysis.objective import peak_gradient
-
-    if args.parameters is None:
-        from .model.design import design_names
-
-        raise ValueError(f"--output needs --parameters (comma-separated) of "
-                         f"{design_names(linkage)}")
-    if args.backend != "reduced" or args.step_size is not None or args.settled:
-        raise ValueError("--output takes the reduced backend from the centred start (no "
-                         "--backend, --step-size or --settled)")
-    if args.out:
-        check_output_dir(args.out, "--out", args.force)
-    k, window = free_window(linkage, args, "revolutions")
-    bound_spans(linkage, args)
-    span = (f"revolution {k}" if window is None
-            else f"time window [{(k - 1) * window:g}, {k * window:g}] s")
-    _progress(f"peak of {args.output} of {linkage.name!r} over {span} and its gradient by "
-              f"{args.method} ...")
-    pg = peak_gradient(linkage, args.parameters, revolution=k, window=window,
-                       method=args.method, output=args.output, rtol=args.rtol,
-                       integrator=args.integrator)
-    # six significant digits (the full values are in --out's peak_gradient.json)
-    unit = "N m" if pg.stats["output"].startswith("drive_moment") else "N"
-    print(f"peak of {pg.stats['output']} over {span}: {pg.peak:.6g} {unit} at t = "
-          f"{pg.time:.6g} s ({args.method})")
-    width = max([22] + [len(p) + 1 for p in pg.parameters])
-    slope = f"d(peak)/db ({unit} per unit of b)"
-    print(f"{'parameter':<{width}} {'b0 (SI)':>12} {slope:>{len(slope) + 2}} "
-          f"{'(b0/peak) d/db':>16}")
-    for name, b0, g, n in zip(pg.parameters, pg.reference, pg.gradient, pg.normalized):
-        print(f"{name:<{width}} {float(b0):>12.6g} {float(g):>{len(slope) + 2}.6g} "
-              f"{n:>16.6g}")
-    if pg.message:
-        print(f"note: {pg.message}", file=sys.stderr)
-    if args.out:
-        data = {"output": pg.stats["output"], "revolution": pg.revolution,
-                **({"window": window} if window is not None else {}), "peak": pg.peak,
-                "time": pg.time, "method": pg.method,
-                "gradient": pg.as_dict(), "reference": dict(zip(pg.parameters,
-                                                                 map(float, pg.reference)))}
-        with OutputDir(args.out, "sensitivity") as staged:
-            (staged.path / "peak_gradient.json").write_text(json.dumps(data, indent=2))
-            staged.commit()
-        wrote(args.out / "peak_gradient.json", "the peak and its gradient")
-    return 0
-
-
 def _cmd_sensitivity(args: argparse.Namespace) -> int:
+    """sensitivity: the normalised sensitivities of the default output's time series, or
+    with --output the peak of that output over the last revolution (a free linkage: the
+    last window) and its gradient along --parameters (`objective.peak_gradient`)."""
     from .analysis.sensitivity import DEFAULT_PARAMETERS, summary_sensitivities
+    from .units import number
 
     linkage, mech = design_from_args(args)
     if args.output is not None:
-        if linkage is None:
-            raise ValueError("--output applies to --case or --description (the paper's "
-                             "slider-crank's sensitivities are those of |F12|)")
-        return _peak_gradient_linkage(linkage, args)
+        if args.parameters is None and linkage is not None:
+            from .model.design import design_names, slider_crank_of
+
+            if slider_crank_of(linkage) is None:
+                raise ValueError(f"--output needs --parameters (comma-separated) of "
+                                 f"{design_names(linkage)}")
+        if args.backend != "reduced" or args.step_size is not None or args.settled:
+            raise ValueError("--output takes the reduced backend from the centred start (no "
+                             "--backend, --step-size or --settled)")
+    if args.out:
+        check_output_dir(args.out, "--out", args.force)
+    k, window = free_window(mech, args, "revolutions")
     bound_spans(mech, args)
+    if args.output is not None:
+        from .analysis.objective import peak_gradient
+
+        span = (f"revolution {k}" if window is None
+                else f"time window [{(k - 1) * window:g}, {k * window:g}] s")
+        _progress(f"peak of {args.output} over {span} and its gradient by {args.method} ...")
+        pg = peak_gradient(mech, args.parameters, revolution=k, window=window,
+                           method=args.method, output=args.output, rtol=args.rtol,
+                           integrator=args.integrator)
+        output = pg.stats["output"]
+        # six significant digits (the full values are in --out's peak_gradient.json)
+        unit = "N m" if output.startswith("drive_moment") else "N"
+        print(f"peak of {output} over {span}: {pg.peak:.6g} {unit} at t = {pg.time:.6g} s "
+              f"({args.method})")
+        width = max([22] + [len(p) + 1 for p in pg.parameters])
+        slope = f"d(peak of {output})/db ({unit} per unit of b)"
+        print(f"{'parameter':<{width}} {'b0 (SI)':>12} {slope:>{len(slope) + 2}} "
+              f"{'(b0/peak) d/db':>16}")
+        for name, b0, g, n in zip(pg.parameters, pg.reference, pg.gradient, pg.normalized):
+            print(f"{name:<{width}} {float(b0):>12.6g} {float(g):>{len(slope) + 2}.6g} "
+                  f"{n:>16.6g}")
+        if pg.message:
+            print(f"note: {pg.message}", file=sys.stderr)
+        if args.out:
+            data = {"output": output, "revolution": pg.revolution,
+                    **({"window": window} if window is not None else {}), "peak": pg.peak,
+                    "time": pg.time, "method": pg.method, "gradient": pg.as_dict(),
+                    "reference": dict(zip(pg.parameters, map(float, pg.reference)))}
+            with OutputDir(args.out, "sensitivity") as staged:
+                (staged.path / "peak_gradient.json").write_text(json.dumps(data, indent=2))
+                staged.commit()
+            wrote(args.out / "peak_gradient.json", "the peak and its gradient")
+        return 0
     names = args.parameters
     if names is None and linkage is None:
         names = DEFAULT_PARAMETERS
-    if args.out:
-        check_output_dir(args.out, "--out", args.force)
     options = {}
     if args.step_size is not None:
         options["step_size"] = args.step_size
     start = settled_start_of(linkage, args)
     if start is not None:
         options["start"] = start
-    what = f"{linkage.name!r}" if linkage is not None else "|F12|"
-    k, window = free_window(linkage, args, "revolutions")
     if window is None:
         revolutions, span = k, f"{k} revolutions"
     else:
         revolutions, span = None, f"{args.duration:g} s in windows of {window:g} s"
         options.update(duration=args.duration, window=window)
-    _progress(f"sensitivities of {what} by {args.method} ({args.backend}), {span} ...")
+    output = mech.default_output
+    _progress(f"sensitivities of {output} by {args.method} ({args.backend}), {span} ...")
     t0 = time.perf_counter()
     sens = summary_sensitivities(mech, names, revolutions, method=args.method,
                                  backend=args.backend, rtol=args.rtol,
                                  integrator=args.integrator, **options)
     print(f"done in {time.perf_counter() - t0:.3g} s", file=sys.stderr)
+    print(f"sensitivities of {output} (S = (b0 / F) dF/db, F its magnitude), {span}:")
     width = max([22] + [len(p) + 1 for p in sens.parameters])
     print(f"{'parameter':<{width}} {'b0':>14} {'mean |S|':>10} {'max |S|':>10} "
           f"{'growth/rev':>10}")
-    from .units import number
 
     for row in sens.summary():
         unit = PARAMETER_INFO[row["parameter"]][1] if row["parameter"] in PARAMETER_INFO \
@@ -1347,10 +1305,11 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     p = sub.add_parser("sensitivity", help="design sensitivities of the base force (Figs. 4-6)",
                        epilog="named cases (--case NAME; --set NAME=VALUE changes a value):\n"
                               + _case_lines(),
-                       description="Sensitivities of |F12| (a named case: its monitored "
-                                   "force) by direct differentiation (reduced model) or "
-                                   "finite differences; prints b0 and the mean and max "
-                                   "normalized sensitivity (Eq. 15) over the last revolution. "
+                       description="Sensitivities of the default output (|F12|; a named "
+                                   "case: its monitored force) by direct differentiation "
+                                   "(reduced model) or finite differences; prints b0 and "
+                                   "the mean and max normalized sensitivity (Eq. 15) over "
+                                   "the last revolution. "
                                    "With --out, writes sensitivities.npz and Fig. 4-6-like "
                                    "plots into that folder (nothing is written without it).")
     add_linkage_options(p)
@@ -1362,10 +1321,10 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
                    help="ddm: direct differentiation (reduced model); fd: central finite "
                         "differences (any backend)")
     p.add_argument("--output", metavar="NAME",
-                   help="--case / --description: instead of the time series, the peak of "
-                        "this output over the last revolution and its gradient along "
-                        "--parameters (case overrides or dotted paths): pivot_force:JOINT, "
-                        "shaking_force, drive_moment or contact_force:JOINT (default: none)")
+                   help="instead of the time series, the peak of this output over the last "
+                        "revolution and its gradient along --parameters (case overrides or "
+                        "dotted paths): pivot_force:JOINT, shaking_force, drive_moment or "
+                        "contact_force:JOINT (default: none)")
     p.add_argument("--revolutions", type=int_at_least(1),
                    help="crank revolutions; the sensitivities are those of the last "
                         "(default 4)")
@@ -1431,7 +1390,8 @@ def _add_optimize_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--output", metavar="NAME",
                    help="--case / --description: the output whose peak is minimised, "
                         "pivot_force:JOINT, shaking_force, drive_moment or "
-                        "contact_force:JOINT (default: the crank pivot's force)")
+                        "contact_force:JOINT (default: the linkage's default output, its "
+                        "monitored joint's force or else the shaking force)")
     add_evaluation_options(p, "optimize", accuracy=True)
     add_keep_going_option(p, "designs' runs")
     p.add_argument("--no-refine", action="store_true", help="skip the local refinement")
@@ -1481,83 +1441,108 @@ def format_table3(result, paper_in_model: float, ideal: dict[str, float]) -> str
 
 
 def _cmd_optimize(args: argparse.Namespace) -> int:
+    """optimize: the GA over the genes (the paper's slider-crank: --crank-bounds and
+    --coupler-bounds, or --gene), minimising the peak of the default output (or --output)
+    over --revolution (a free linkage: its last --window); prints the original and best
+    peaks with the output's name (the paper's case also Table 3 beside the paper's) and
+    writes result.json and figures into --out."""
+    from .plotting import plot_fitness_history
     from .solve.simulate import peak_base_force, simulate
     from .studies.optimize import PAPER_TABLE3, design_mechanism, optimize_link_lengths
 
-    linkage = linkage_from_args(args)
-    if linkage is not None:
-        return _optimize_linkage(linkage, args)
-    args.revolution, _ = free_window(None, args, "revolution")
-    bound_spans(mechanism_from_args(args), args, "revolution")
-    if args.output is not None:
+    linkage, mech = design_from_args(args)
+    paper = linkage is None
+    k, window = free_window(mech, args, "revolution")
+    args.revolution = k
+    bound_spans(mech, args, "revolution")
+    if paper and args.output is not None:
         raise ValueError("--output applies to --case or --description (the paper's "
-                         "slider-crank minimises |F12|)")
-    mech = mechanism_from_args(args)
+                         "slider-crank minimises |F12|, pivot_force:crank_pivot)")
+    if not paper and not args.gene:
+        from .model.design import design_names
+
+        raise ValueError(f"--case / --description needs --gene NAME=LO:HI (one or more) of "
+                         f"{design_names(linkage)}")
+    if not paper and args.mass_scaling != "fixed":
+        raise ValueError("--mass-scaling applies to the paper's slider-crank only")
     check_output_dir(args.out, "--out", args.force)
     options = _tolerances(args)
     if args.gene:
         if tuple(args.crank_bounds) != (0.04, 0.06) or tuple(args.coupler_bounds) != (0.10,
                                                                                        0.14):
             raise ValueError("give --gene or --crank-bounds/--coupler-bounds, not both")
-        options["genes"] = _genes(args)
+        genes = {"genes": _genes(args)}
     else:
-        options.update(crank_length=tuple(args.crank_bounds),
-                       coupler_length=tuple(args.coupler_bounds))
-    common = dict(revolution=args.revolution, seed=args.seed, population=args.population,
-                  generations=args.generations, saturation=args.saturation or None,
-                  mass_scaling=args.mass_scaling, refine=not args.no_refine,
-                  progress=not args.no_progress, **options)
-    options.pop("genes", None)
-    options.pop("crank_length", None)
-    options.pop("coupler_length", None)
-    result = evaluate_on(args, optimize_link_lengths, mech, **common)
-
-    pp = PAPER_TABLE3["optimum"]
-    paper_mech = design_mechanism(mech, {"crank_length": pp["crank_length"],
-                                         "coupler_length": pp["coupler_length"]},
-                                  args.mass_scaling)
-    paper_in_model = peak_base_force(paper_mech, args.revolution, **options)
-    ideal = {k: peak_base_force(m, args.revolution, backend="ideal")
-             for k, m in (("original", mech), ("optimum", result.best),
-                          ("paper optimum", paper_mech))}
-    table = format_table3(result, paper_in_model, ideal)
-    print(table)
-    print(f"\nmasses: {args.mass_scaling}; seed {result.settings['seed']}; "
-          f"{result.generations_completed} generations, {result.n_evaluations} designs "
-          f"simulated in {result.elapsed:.1f} s; GA best before refinement "
-          f"{result.ga_best_peak_force:.2f} N")
-    periodic = {True: "periodic", False: "NOT periodic", None: "periodicity not judged"}
-    print(f"best design: {periodic[result.best_periodic]}"
-          + (f" ({result.best_periodicity_note})" if result.best_periodicity_note else ""))
-    if result.best_accuracy_note:
-        print(f"note: best design: {result.best_accuracy_note}")
+        genes = dict(crank_length=tuple(args.crank_bounds),
+                     coupler_length=tuple(args.coupler_bounds))
+    kind = ({"mass_scaling": args.mass_scaling} if paper else
+            {"output": args.output, **({"window": window} if window is not None else {})})
+    result = evaluate_on(args, optimize_link_lengths, mech, revolution=k, seed=args.seed,
+                         population=args.population, generations=args.generations,
+                         saturation=args.saturation or None, refine=not args.no_refine,
+                         progress=not args.no_progress, **genes, **kind, **options)
+    output = result.settings.get("output", mech.default_output)
+    unit = "N m" if output.startswith("drive_moment") else "N"
+    span = (f"revolution {k}" if window is None
+            else f"time window [{(k - 1) * window:g}, {k * window:g}] s")
+    name = "the paper's slider-crank" if paper else f"linkage {linkage.name!r}"
+    print(f"{name}: peak of {output} over {span}")
+    print(f"original: {result.original_peak_force:.2f} {unit} of {output}")
+    print(f"best: {result.best_peak_force:.2f} {unit} of {output} "
+          f"({result.reduction_percent:.2f} % lower)")
+    for gene, value in result.best_genes.items():
+        lo, hi = result.genes[gene]
+        print(f"  {gene} = {value:.6g} (bounds {lo:g} .. {hi:g}, SI units)")
+    if paper:       # the paper's Table 3 beside ours
+        pp = PAPER_TABLE3["optimum"]
+        paper_mech = design_mechanism(mech, {"crank_length": pp["crank_length"],
+                                             "coupler_length": pp["coupler_length"]},
+                                      args.mass_scaling)
+        paper_in_model = peak_base_force(paper_mech, k, **options)
+        ideal = {key: peak_base_force(m, k, backend="ideal")
+                 for key, m in (("original", mech), ("optimum", result.best),
+                                ("paper optimum", paper_mech))}
+        table = format_table3(result, paper_in_model, ideal)
+        print(table)
+        print(f"\nmasses: {args.mass_scaling}")
+    print(f"seed {result.settings['seed']}; {result.generations_completed} generations, "
+          f"{result.n_evaluations} designs simulated in {result.elapsed:.1f} s; GA best "
+          f"before refinement {result.ga_best_peak_force:.2f} {unit} of {output}")
+    if paper:
+        periodic = {True: "periodic", False: "NOT periodic", None: "periodicity not judged"}
+        print(f"best design: {periodic[result.best_periodic]}"
+              + (f" ({result.best_periodicity_note})" if result.best_periodicity_note
+                 else ""))
+        if result.best_accuracy_note:
+            print(f"note: best design: {result.best_accuracy_note}")
     if args.verbose:
         r = result.refinement
         print(f"evaluated on {result.settings['executor']}; refinement: "
               + (f"{r.get('method')}, {r.get('objective_calls', '?')} objective calls; on "
                  f"bounds: {r.get('on_bounds') or 'none'}; KKT: {r.get('kkt', 'n/a')}"
                  if r else "none"))
-    if mech != type(mech)() or args.mass_scaling != "fixed" or args.revolution != 4:
+    if paper and (mech != type(mech)() or args.mass_scaling != "fixed" or k != 4):
         print("note: the paper's rows refer to its own case (paper mechanism, fixed masses, "
               "4th revolution)")
+    files = [("result.json", "the optimisation's result"),
+             ("fitness_history.png", "best peak per generation")]
+    if paper:
+        from .plotting import plot_force_comparison
 
-    from .plotting import plot_fitness_history, plot_force_comparison
-
-    designs = {"original": mech, "optimum": result.best, "paper's optimum": paper_mech}
-    trajectories = {k: simulate(m, args.revolution, **options) for k, m in designs.items()}
+        designs = {"original": mech, "optimum": result.best, "paper's optimum": paper_mech}
+        trajectories = {key: simulate(m, k, **options) for key, m in designs.items()}
+        files += [("table3.md", "Table 3 beside the paper's"),
+                  ("force_comparison.png", "base force of the three designs")]
     with OutputDir(args.out, "optimize") as staged:
-        out = staged.path
-        result.to_json(out / "result.json")
-        (out / "table3.md").write_text(table + "\n")
-        plot_fitness_history(result, out / "fitness_history.png")
-        plot_force_comparison(trajectories, out / "force_comparison.png",
-                              revolution=args.revolution)
+        result.to_json(staged.path / "result.json")
+        plot_fitness_history(result, staged.path / "fitness_history.png")
+        if paper:
+            (staged.path / "table3.md").write_text(table + "\n")
+            plot_force_comparison(trajectories, staged.path / "force_comparison.png",
+                                  revolution=k)
         staged.commit()
-    for name, what in (("result.json", "the optimisation's result"),
-                       ("table3.md", "Table 3 beside the paper's"),
-                       ("fitness_history.png", "best peak per generation"),
-                       ("force_comparison.png", "base force of the three designs")):
-        wrote(args.out / name, what)
+    for file, what in files:
+        wrote(args.out / file, what)
     refuse_failed_runs(args, result.n_failed, result.n_evaluations, "designs' runs")
     return 0
 
@@ -1572,58 +1557,6 @@ def _genes(args: argparse.Namespace) -> dict[str, tuple[float, float]]:
             raise ValueError(f"--gene {name} given twice")
         genes[name] = tuple(si_value(f"--gene {name}", b, unit_of(name)) for b in bounds)
     return genes
-
-
-def _optimize_linkage(linkage, args: argparse.Namespace) -> int:
-    """optimize --case / --description: the GA over the --gene bounds, minimising the
-    --output's peak; prints the original and best designs' peaks and genes, writes
-    result.json and the fitness history into --out."""
-    from .plotting import plot_fitness_history
-    from .studies.optimize import optimize_link_lengths
-
-    if not args.gene:
-        from .model.design import design_names
-
-        raise ValueError(f"--case / --description needs --gene NAME=LO:HI (one or more) of "
-                         f"{design_names(linkage)}")
-    if args.mass_scaling != "fixed":
-        raise ValueError("--mass-scaling applies to the paper's slider-crank only")
-    check_output_dir(args.out, "--out", args.force)
-    k, window = free_window(linkage, args, "revolution")
-    bound_spans(linkage, args, "revolution")
-    options = {} if args.rtol is None else {"rtol": args.rtol}
-    if window is not None:
-        options["window"] = window
-    result = evaluate_on(args, optimize_link_lengths, linkage, genes=_genes(args),
-                         output=args.output, revolution=k, seed=args.seed,
-                         population=args.population, generations=args.generations,
-                         saturation=args.saturation or None, refine=not args.no_refine,
-                         progress=not args.no_progress, **options)
-    output = result.settings["output"]
-    span = (f"revolution {k}" if window is None
-            else f"time window [{(k - 1) * window:g}, {k * window:g}] s")
-    print(f"linkage {linkage.name!r}: peak of {output} over {span}")
-    unit = "N m" if output.startswith("drive_moment") else "N"
-    print(f"original: {result.original_peak_force:.2f} {unit}")
-    print(f"best: {result.best_peak_force:.2f} {unit} ({result.reduction_percent:.2f} % lower)")
-    for name, value in result.best_genes.items():
-        lo, hi = result.genes[name]
-        print(f"  {name} = {value:.6g} (bounds {lo:g} .. {hi:g}, SI units)")
-    print(f"seed {result.settings['seed']}; {result.generations_completed} generations, "
-          f"{result.n_evaluations} designs simulated in {result.elapsed:.1f} s; GA best "
-          f"before refinement {result.ga_best_peak_force:.2f} {unit}")
-    if args.verbose:
-        r = result.refinement or {}
-        print(f"evaluated on {result.settings['executor']}; refinement: "
-              f"{r.get('method', 'none')}, {r.get('objective_calls', 0)} objective calls")
-    with OutputDir(args.out, "optimize") as staged:
-        result.to_json(staged.path / "result.json")
-        plot_fitness_history(result, staged.path / "fitness_history.png")
-        staged.commit()
-    wrote(args.out / "result.json", "the optimisation's result")
-    wrote(args.out / "fitness_history.png", "best peak per generation")
-    refuse_failed_runs(args, result.n_failed, result.n_evaluations, "designs' runs")
-    return 0
 
 
 def _add_tolerance_parser(subparsers) -> argparse.ArgumentParser:
@@ -1645,8 +1578,9 @@ def _add_tolerance_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--output", default="peak", metavar="NAME",
                    help="output of a run: peak, rms_drive_moment or max_contact_force; with "
                         "--case / --description also pivot_force:JOINT, shaking_force, "
-                        "drive_moment or contact_force:JOINT, its peak (default: peak, the "
-                        "crank pivot's force)")
+                        "drive_moment or contact_force:JOINT, its peak (default: peak, of the "
+                        "default output: the monitored joint's force or else the shaking "
+                        "force)")
     p.add_argument("--revolution", type=int_at_least(1),
                    help="crank revolution of the output (default 4)")
     add_window_options(p, "the output is its peak over the last --window")
@@ -1831,9 +1765,10 @@ def _add_animate_parser(subparsers) -> argparse.ArgumentParser:
         "animate", help="animation of the mechanism over a revolution (GIF/MP4)",
         description="Simulate the slider-crank (or a named case, or a linkage described in "
                     "a file) and write an animation of one crank revolution into --out "
-                    "(GIF; MP4 with --format mp4 where ffmpeg is installed). A case or "
-                    "description is drawn from its description: bodies as polylines through "
-                    "their named points, ground pivots, sliders' guides, each clearance "
+                    "(GIF; MP4 with --format mp4 where ffmpeg is installed). Any mechanism "
+                    "is drawn from its description (the paper's from its case's): bodies "
+                    "as polylines through their named points, ground pivots, sliders' "
+                    "guides, each clearance "
                     "joint's bearing circle and its journal with the journal's offset "
                     "magnified (the factor is in the title), beside the orbits in units of "
                     "the clearance.",
@@ -1851,9 +1786,8 @@ def _add_animate_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--format", choices=("gif", "mp4"), default="gif",
                    help="file format (mp4 needs ffmpeg)")
     p.add_argument("--magnify", type=positive_float,
-                   help="magnification of the journals' offsets in their bearings (--case / "
-                        "--description; default: the largest clearance drawn as 40 %% of the "
-                        "drawn bearing radius)")
+                   help="magnification of the journals' offsets in their bearings (default: "
+                        "the largest clearance drawn as 40 %% of the drawn bearing radius)")
     p.add_argument("--out", type=Path, default=Path("animate"),
                    help="output folder (default ./animate, named after the command)")
     add_force_option(p)
@@ -1872,12 +1806,11 @@ def _cmd_animate(args: argparse.Namespace) -> int:
     if revolution > args.revolutions:
         raise ValueError(f"--revolution must be between 1 and --revolutions "
                          f"({args.revolutions}); got {revolution}")
-    if linkage is None and args.magnify is not None:
-        raise ValueError("--magnify applies to --case or --description (the slider-crank's "
-                         "orbit is drawn in units of the clearance beside it)")
+    from .model.cases import as_linkage
     from .plotting import animate_mechanism, magnification
 
-    magnify = None if linkage is None else magnification(linkage, args.magnify)
+    # any mechanism is drawn from its description (the paper's from its case's)
+    magnify = magnification(as_linkage(mech), args.magnify)
     check_output_dir(args.out, "--out", args.force)
     if args.format == "mp4":
         from matplotlib.animation import FFMpegWriter
@@ -1893,9 +1826,8 @@ def _cmd_animate(args: argparse.Namespace) -> int:
         animate_mechanism(traj, staged.path / file, revolution=revolution, frames=args.frames,
                           fps=args.fps, magnify=magnify)
         staged.commit()
-    what = f"animation of {name}, revolution {revolution}"
-    if magnify is not None:
-        what += f", journal offsets drawn {number(magnify, 3)} times their size"
+    what = (f"animation of {name}, revolution {revolution}, journal offsets drawn "
+            f"{number(magnify, 3)} times their size")
     wrote(args.out / file, what)
     return 0
 
@@ -1953,12 +1885,22 @@ def _cmd_lyapunov(args: argparse.Namespace) -> int:
     from .units import number
 
     linkage, mech = design_from_args(args)
-    if linkage is not None and linkage.drive is None:
-        return _lyapunov_free(linkage, args)
-    refuse_window_options(args, "--revolutions")
-    if args.revolutions is None:
-        args.revolutions = 100
+    span = run_span(mech, args, default=100, what="its exponent runs")
     bound_spans(mech, args)
+    if "duration" in span:      # a free linkage: the finite-time exponent over its windows
+        _progress(f"finite-time Lyapunov exponent of {linkage.name!r} over "
+                  f"{args.duration:g} s ...")
+        t0 = time.perf_counter()
+        res = lyapunov_exponent(linkage, **span, transient=args.transient, rtol=args.rtol,
+                                memory=args.memory)
+        print(f"done in {time.perf_counter() - t0:.3g} s", file=sys.stderr)
+        n = len(res.log_growth)
+        print(f"finite-time largest Lyapunov exponent of {linkage.name} over "
+              f"{number(args.duration, 4)} s from its initial state: "
+              f"{number(res.per_second, 4)} 1/s ({number(res.per_revolution, 4)} per window "
+              f"of {number(res.window, 4)} s; the mean log-growth of windows "
+              f"{res.transient + 1}-{n} of {n})")
+        return 0
     transient = args.revolutions // 2 if args.transient is None else args.transient
     if transient >= args.revolutions:
         raise ValueError(f"--transient must be between 0 and --revolutions - 1 "
@@ -1991,34 +1933,6 @@ def _cmd_lyapunov(args: argparse.Namespace) -> int:
     if res.regime:
         print(f"regime of revolutions {transient + 1}-{args.revolutions} (the regime map's "
               f"rule): {_regime_line(res)}")
-    return 0
-
-
-def _lyapunov_free(linkage, args: argparse.Namespace) -> int:
-    """lyapunov --description of a free linkage: the finite-time exponent over --duration
-    seconds, renormalised every --window seconds."""
-    from .analysis.lyapunov import lyapunov_exponent
-    from .units import number
-
-    if args.revolutions is not None:
-        raise ValueError(f"linkage {linkage.name!r} is free (no drive): its exponent runs "
-                         "--duration seconds (windows of --window), not --revolutions")
-    if args.duration is None:
-        raise ValueError(f"linkage {linkage.name!r} is free (no drive): give --duration "
-                         "(s) and optionally --window (s)")
-    bound_spans(linkage, args)
-    _progress(f"finite-time Lyapunov exponent of {linkage.name!r} over {args.duration:g} s "
-              "...")
-    t0 = time.perf_counter()
-    res = lyapunov_exponent(linkage, duration=args.duration, window=args.window,
-                            transient=args.transient, rtol=args.rtol, memory=args.memory)
-    print(f"done in {time.perf_counter() - t0:.3g} s", file=sys.stderr)
-    n = len(res.log_growth)
-    print(f"finite-time largest Lyapunov exponent of {linkage.name} over "
-          f"{number(args.duration, 4)} s from its initial state: "
-          f"{number(res.per_second, 4)} 1/s ({number(res.per_revolution, 4)} per window of "
-          f"{number(res.window, 4)} s; the mean log-growth of windows "
-          f"{res.transient + 1}-{n} of {n})")
     return 0
 
 

@@ -533,24 +533,19 @@ def animate_mechanism(traj: Trajectory, path: str | Path, revolution: int | None
     """Animation of the mechanism over one crank revolution (default: the last): GIF
     (Pillow) or, for a .mp4 `path`, MP4 when ffmpeg is installed. Returns the path.
 
-    A trajectory of a `Linkage` (any named case or description) is drawn from its
-    description (`mechanism_frames`): bodies as polylines through their named points,
-    ground pivots, sliders' guides, each clearance joint's bearing circle and its journal
-    with the journal's offset magnified `magnify` times (default: the bearing's drawn
-    clearance, `JOURNAL_GAP` of the drawn bearing radius, shows the largest clearance), the
-    orbit of the revolution beside it in units of the clearance. A SliderCrank's trajectory
-    is drawn as the paper's slider-crank.
+    Any trajectory is drawn from its mechanism's description (`mechanism_frames`; the
+    paper's `SliderCrank` from its case's `Linkage`): bodies as polylines through their
+    named points, ground pivots, sliders' guides (the paper's slider a block on its guide),
+    each clearance joint's bearing circle and its journal with the journal's offset
+    magnified `magnify` times (default: the bearing's drawn clearance, `JOURNAL_GAP` of the
+    drawn bearing radius, shows the largest clearance), the orbit of the revolution beside
+    it in units of the clearance.
     """
     path = Path(path)
     if path.suffix.lower() not in (".gif", ".mp4"):
         raise ValueError(f"animation file must end in .gif or .mp4; got {str(path)!r}")
     frames = _check_frames(frames, fps)
-    if traj.linkage is not None:
-        return _animate_linkage(traj, path, revolution, frames, fps, magnify)
-    if magnify is not None:
-        raise ValueError("magnify applies to a Linkage's trajectory (the slider-crank's "
-                         "orbit is drawn in units of the clearance beside it)")
-    return _animate_slider_crank(traj, path, revolution, frames, fps)
+    return _animate(traj, path, revolution, frames, fps, magnify)
 
 
 def _check_frames(frames, fps) -> int:
@@ -621,6 +616,22 @@ def magnification(linkage, magnify: float | None = None) -> float:
                       0.9 * rb / c_max, low_open=True)
 
 
+def drawn_linkage(traj: Trajectory):
+    """The `Linkage` a trajectory is drawn from: its own, or the paper's `SliderCrank`'s
+    case (`cases.as_linkage`: the same coordinates and clearance joint)."""
+    if traj.linkage is not None:
+        return traj.linkage
+    from .model.cases import as_linkage
+
+    return as_linkage(traj.mechanism)
+
+
+def _eccentricity(traj: Trajectory) -> np.ndarray:
+    """(n, J, 2) journal offsets in m (the paper's SliderCrank's one joint is (n, 2))."""
+    e = np.asarray(traj.eccentricity)
+    return e[:, None, :] if e.ndim == 2 else e
+
+
 def _world(pose, xy) -> np.ndarray:
     x, y, phi = pose[:3]
     c, s = np.cos(phi), np.sin(phi)
@@ -629,21 +640,21 @@ def _world(pose, xy) -> np.ndarray:
 
 def mechanism_frames(traj: Trajectory, revolution: int | None = None, frames: int = 72,
                      magnify: float | None = None) -> MechanismFrames:
-    """The drawn geometry of a Linkage's trajectory at `frames` times of revolution
+    """The drawn geometry of a trajectory (`drawn_linkage`) at `frames` times of revolution
     `revolution` (default: the last): the bodies' poses from the description's forest
     kinematics (`exudyn_linkage.body_states`, the generated model's kinematics written once
     for the description) at the recorded coordinates. ValueError for a trajectory without
-    a Linkage or coordinates, a revolution outside the trajectory, or a `magnify` that
+    coordinates, a revolution outside the trajectory, or a `magnify` that
     would draw a journal larger than its bearing allows (> 0 and <= 0.9 drawn bearing
     radius / largest clearance)."""
     from .backends.exudyn_linkage import body_states
     from .model.linkage import GROUND, Prismatic
 
-    linkage = traj.linkage
-    if linkage is None or traj.coordinates is None:
-        raise ValueError("mechanism_frames draws a Linkage's trajectory (with its minimal "
-                         "coordinates); this one is of a "
-                         f"{type(traj.mechanism).__name__}")
+    linkage = drawn_linkage(traj)
+    if traj.coordinates is None:
+        raise ValueError(f"mechanism_frames draws a trajectory with its minimal coordinates "
+                         f"(backend 'reduced' or 'exudyn'); this one of backend "
+                         f"{traj.backend!r} has none")
     frames = _check_frames(frames, 1)
     rev = traj.revolutions if revolution is None else revolution
     t_a, t_b = traj.revolution_window(rev)       # ValueError for a revolution not covered
@@ -697,14 +708,15 @@ def mechanism_frames(traj: Trajectory, revolution: int | None = None, frames: in
                            revolution=rev)
 
 
-def _animate_linkage(traj: Trajectory, path: Path, revolution, frames: int, fps: int,
-                     magnify) -> Path:
+def _animate(traj: Trajectory, path: Path, revolution, frames: int, fps: int,
+             magnify) -> Path:
     from matplotlib.animation import FuncAnimation
     from matplotlib.patches import Circle
 
     fr = mechanism_frames(traj, revolution, frames, magnify)
     writer = _writer(path, fps)
-    linkage = traj.linkage
+    linkage = drawn_linkage(traj)
+    ecc = _eccentricity(traj)
     rb = fr.bearing_radius
     every = np.concatenate([v.reshape(-1, 2) for v in
                             (*fr.bodies.values(), *fr.guides.values(),
@@ -752,7 +764,7 @@ def _animate_linkage(traj: Trajectory, path: Path, revolution, frames: int, fps:
     dots = {}
     lim = 1.2
     for j, cj in enumerate(linkage.clearance_joints):
-        e = traj.eccentricity[:, j] / cj.clearance
+        e = ecc[:, j] / cj.clearance
         col = COLORS[(j + 1) % len(COLORS)]
         o_ax.plot(e[mask, 0], e[mask, 1], color=col, lw=0.7, alpha=0.6,
                   label=f"{cj.name} (c = {cj.clearance * 1e3:.3g} mm)")
@@ -777,68 +789,10 @@ def _animate_linkage(traj: Trajectory, path: Path, revolution, frames: int, fps:
             orbit_lines[name].set_data(trail[:, 0], trail[:, 1])
             i = fr.index[k]
             c = linkage.clearance_joints[rows[name]].clearance
-            dots[name].set_data([traj.eccentricity[i, rows[name], 0] / c],
-                                [traj.eccentricity[i, rows[name], 1] / c])
+            dots[name].set_data([ecc[i, rows[name], 0] / c], [ecc[i, rows[name], 1] / c])
         return ()
 
     anim = FuncAnimation(fig, draw, frames=frames, blit=False)
-    anim.save(str(path), writer=writer, dpi=80)
-    return path
-
-
-def _animate_slider_crank(traj: Trajectory, path: Path, revolution, frames: int,
-                          fps: int) -> Path:
-    """The paper's slider-crank (a SliderCrank's trajectory) beside the journal-centre orbit
-    in units of the clearance."""
-    from matplotlib.animation import FuncAnimation
-
-    mech = traj.mechanism
-    if traj.coupler_angle is None or traj.slider_position is None or \
-            not hasattr(mech, "crank_length"):
-        raise ValueError("animate draws the paper's slider-crank (a trajectory with coupler "
-                         "angle and slider position) or a Linkage; this trajectory has none")
-    writer = _writer(path, fps)
-    rev = revolution or traj.revolutions
-    mask = np.flatnonzero(traj.revolution_mask(rev))
-    picks = mask[np.linspace(0, len(mask) - 1, frames).round().astype(int)]
-    th2 = traj.crank_angle
-    L2, L3, c = mech.crank_length, mech.coupler_length, mech.clearance
-    ax_ = L2 * np.cos(th2)
-    ay_ = L2 * np.sin(th2)
-    bx = ax_ + L3 * np.cos(traj.coupler_angle)
-    by = ay_ + L3 * np.sin(traj.coupler_angle)
-    e = traj.eccentricity / c
-
-    fig = Figure(figsize=(10, 4), layout="constrained")
-    m_ax, o_ax = fig.subplots(1, 2, width_ratios=(2.2, 1))
-    m_ax.set_xlim(-1.3 * L2, L2 + L3 + 0.3 * L2)
-    m_ax.set_ylim(-1.4 * L2, 1.4 * L2)
-    m_ax.set_aspect("equal")
-    m_ax.axhline(0, color="0.8", lw=0.8)
-    m_ax.set_title(f"slider-crank, revolution {rev} (lengths in m)")
-    crank, = m_ax.plot([], [], "-o", lw=3, color="C0")
-    coupler, = m_ax.plot([], [], "-o", lw=3, color="C1")
-    slider, = m_ax.plot([], [], "s", ms=18, color="0.5")
-    theta = np.linspace(0, 2 * np.pi, 100)
-    o_ax.plot(np.cos(theta), np.sin(theta), "k-", lw=1, label="wall (e = c)")
-    o_ax.plot(e[mask, 0], e[mask, 1], color="0.7", lw=0.8, label="orbit")
-    dot, = o_ax.plot([], [], "o", color="C3")
-    lim = max(1.2, float(np.abs(e[mask]).max()) * 1.1)
-    o_ax.set_xlim(-lim, lim)
-    o_ax.set_ylim(-lim, lim)
-    o_ax.set_aspect("equal")
-    o_ax.set_title(f"journal centre / c (c = {c * 1e3:.3g} mm)")
-    o_ax.legend(fontsize=7, loc="lower right")
-
-    def draw(k):
-        i = picks[k]
-        crank.set_data([0, ax_[i]], [0, ay_[i]])
-        coupler.set_data([ax_[i], bx[i]], [ay_[i], by[i]])
-        slider.set_data([traj.slider_position[i]], [0])
-        dot.set_data([e[i, 0]], [e[i, 1]])
-        return crank, coupler, slider, dot
-
-    anim = FuncAnimation(fig, draw, frames=len(picks), blit=False)
     anim.save(str(path), writer=writer, dpi=80)
     return path
 

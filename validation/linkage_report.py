@@ -105,6 +105,7 @@ def section_response(linkage, out: Path, s: dict) -> dict:
     traj.save(out / "data" / "response.npz")
     st = traj.stats
     return {
+        "output": traj.output,
         "peaks": [float(v) for v in revolution_peaks(traj)],
         "error_estimate": st.get("error_estimate"), "accuracy": st.get("accuracy"),
         "accuracy_ok": st.get("accuracy_ok"), "rtol": st.get("rtol"),
@@ -154,7 +155,8 @@ def section_sensitivity(linkage, out: Path, s: dict) -> dict:
     names = [*_joint_fields(linkage), "drive.speed"]
     g = peak_gradient(linkage, names, revolution=s["revolutions"])
     normalized = np.asarray(g.gradient) * np.asarray(g.reference) / g.peak
-    return {"names": names, "peak": float(g.peak), "gradient": [float(v) for v in g.gradient],
+    return {"names": names, "output": g.stats["output"], "peak": float(g.peak),
+            "gradient": [float(v) for v in g.gradient],
             "normalized": [float(v) for v in normalized], "method": g.method,
             "kink": bool(g.kink), "message": g.message, "revolution": s["revolutions"]}
 
@@ -172,7 +174,7 @@ def section_tolerance(linkage, out: Path, s: dict) -> dict:
     res = tolerance_study(inputs, linkage, revolution=s["revolutions"],
                           sobol=s["tolerance_sobol"], second_order=False, progress=False)
     sob = res.sobol
-    return {"names": names, "spread": TOLERANCE_SPREAD,
+    return {"names": names, "output": linkage.default_output, "spread": TOLERANCE_SPREAD,
             "S1": [float(v) for v in sob["S1"]], "ST": [float(v) for v in sob["ST"]],
             "S1_conf": [float(v) for v in sob["S1_conf"]],
             "ST_conf": [float(v) for v in sob["ST_conf"]], "runs": int(sob["runs"])}
@@ -295,7 +297,7 @@ studies, for a first look.{% endif %}</p>
 <td>{{ j.lubrication }}</td></tr>{% endfor %}</table>
 
 <h2>{{ titles.response }}</h2>
-<p>Peaks of the monitored force per revolution (N):
+<p>Peaks of the monitored output, {{ n.response.output }}, per revolution (N):
 {% for p in n.response.peaks %}{{ "%.6g" % p }}{% if not loop.last %}, {% endif %}{% endfor
 %}. {% if n.response.error_estimate is not none %}The run's own estimate of their relative
 error is {{ "%.2g" % n.response.error_estimate }} (requested {{ n.response.accuracy }}:
@@ -311,11 +313,13 @@ periodic.{% else %}Whether the motion is periodic is not judged (too few revolut
 {% for f in figs.response %}<img src="{{ img[f] }}" alt="{{ f }}">{% endfor %}
 
 <h2>{{ titles.agreement }}</h2>
-<p>Per revolution the reduced model's peak (accuracy 1e-6) and Exudyn's extrapolated from
+<p>Per revolution the reduced model's peak of {{ n.response.output }} (accuracy 1e-6) and
+Exudyn's extrapolated from
 the steps {% for h in n.agreement.exudyn_steps %}{{ "%.3g" % h }}{% if not loop.last %},
 {% endif %}{% endfor %} s, each with its error bar; "model difference" where the
 difference exceeds the two bars together.</p>
-<table><tr><th>revolution</th><th>reduced (N)</th><th>+-</th><th>Exudyn (N)</th><th>+-</th>
+<table><tr><th>revolution</th><th>reduced: peak of {{ n.response.output }} (N)</th><th>+-</th>
+<th>Exudyn: peak of {{ n.response.output }} (N)</th><th>+-</th>
 <th>difference</th><th>bars</th><th>verdict</th></tr>
 {% for r in n.agreement.rows %}<tr><td>{{ r.revolution }}</td><td>{{ "%.7g" % r.reduced }}</td>
 <td>{{ "%.2g" % r.reduced_error }}</td><td>{{ "%.7g" % r.exudyn }}</td>
@@ -327,9 +331,9 @@ difference exceeds the two bars together.</p>
 {% for f in figs.agreement %}<img src="{{ img[f] }}" alt="{{ f }}">{% endfor %}
 
 <h2>{{ titles.sensitivity }}</h2>
-<p>The gradient of revolution {{ n.sensitivity.revolution }}'s peak,
-{{ "%.6g" % n.sensitivity.peak }} N ({{ methods.get(n.sensitivity.method,
-n.sensitivity.method) }}){% if n.sensitivity.kink %};
+<p>The gradient of revolution {{ n.sensitivity.revolution }}'s peak of
+{{ n.sensitivity.output }}, {{ "%.6g" % n.sensitivity.peak }} N
+({{ methods.get(n.sensitivity.method, n.sensitivity.method) }}){% if n.sensitivity.kink %};
 <b>{{ n.sensitivity.message }}</b>{% endif %}:</p>
 <table><tr><th>value</th><th>d peak / d value</th><th>d ln peak / d ln value</th></tr>
 {% for name in n.sensitivity.names %}<tr><td>{{ name }}</td>
@@ -338,8 +342,8 @@ n.sensitivity.method) }}){% if n.sensitivity.kink %};
 {% for f in figs.sensitivity %}<img src="{{ img[f] }}" alt="{{ f }}">{% endfor %}
 
 <h2>{{ titles.tolerance }}</h2>
-<p>Sobol indices of the peak, every input uniform within +-{{ "%.0f" % (100 *
-n.tolerance.spread) }} % of its value ({{ n.tolerance.runs }} runs).</p>
+<p>Sobol indices of the peak of {{ n.tolerance.output }}, every input uniform within
++-{{ "%.0f" % (100 * n.tolerance.spread) }} % of its value ({{ n.tolerance.runs }} runs).</p>
 {% for f in figs.tolerance %}<img src="{{ img[f] }}" alt="{{ f }}">{% endfor %}
 
 <h2>{{ titles.regimes }}</h2>

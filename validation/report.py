@@ -1345,7 +1345,8 @@ journal's orbit, the clearance magnified.</p>
 {{ figures('response') }}
 <details><summary>peaks per revolution, both models and the ideal joint</summary>
 <table><tr><th>model</th>{% for k in range(n.response.reduced.peak_base_force | length) %}
-<th>max |F12|, rev. {{ k + 1 }}{% if k == 0 %} (start-up transient){% endif %}</th>{% endfor %}
+<th>max |F12| (pivot_force:crank_pivot), rev. {{ k + 1 }}{% if k == 0 %} (start-up
+transient){% endif %}</th>{% endfor %}
 <th>max |M2|, last rev.</th><th>max slider acc., last rev.</th>
 <th>max eccentricity / c</th></tr>
 {% for name, r in n.response.items() %}<tr><td>{{ name }}</td>
@@ -1456,8 +1457,8 @@ the largest DDM value</th></tr>
 4, then a bounded local refinement. Two design assumptions: link masses fixed (the paper's
 wording) or scaled with length (uniform density).</p>
 <p id="why-4667">{{ opt_text }}</p>
-<table><tr><th></th><th>L2 (cm)</th><th>L3 (cm)</th><th>max |F12| (N)</th>
-<th>reduction (%)</th></tr>
+<table><tr><th></th><th>L2 (cm)</th><th>L3 (cm)</th>
+<th>max |F12| (pivot_force:crank_pivot, N)</th><th>reduction (%)</th></tr>
 <tr><td>paper: original</td><td>5</td><td>12</td><td>8311</td><td></td></tr>
 <tr><td>paper: optimum</td><td>4.0733</td><td>13.7468</td><td>4667</td><td>43.85</td></tr>
 {% for k, r in n.optimization.results.items() %}<tr><td>ours: optimum, masses {{ k }}</td>

@@ -2,7 +2,8 @@
 
 `peak_gradient(linkage, parameters)` returns d(peak)/db for named design values of any
 linkage (`design`; the paper's SliderCrank is its case, its fields the names). The peak is
-max_t F(t, b) of the output F (by default the crank pivot's |reaction|, the paper's |F12|)
+max_t F(t, b) of the output F (by default the linkage's monitored output,
+`Linkage.default_output`: the paper's |F12|, the four-bar's shaking force)
 over the revolution's window; where its maximum is an interior, isolated local maximum,
 dF/dt = 0 there and the envelope theorem gives
 
@@ -33,7 +34,7 @@ from typing import Any
 import numpy as np
 
 from .._checks import check_choice, check_int, check_real, check_revolutions_memory
-from ..model.linkage import GROUND, Linkage
+from ..model.linkage import Linkage
 from ..model.mechanism import CONTINUOUS_FIELDS, SliderCrank
 from ..numerics.integrator import METHODS
 from .sensitivity import DDM_INTEGRATOR, DEFAULT_PARAMETERS, FD_RELATIVE_STEP, fd_step
@@ -72,12 +73,13 @@ _REFINE_ITERS = 18
 
 @dataclass(frozen=True)
 class PeakGradient:
-    """The peak of |F12| over a crank revolution and its gradient.
+    """The peak of an output (``stats["output"]``; by default the linkage's
+    `default_output`, the paper's |F12|) over a crank revolution and its gradient.
 
     Attributes
     ----------
     peak : float
-        max |F12| over the revolution, N.
+        Its maximum over the revolution, N (N m for the drive moment).
     time : float
         Where it is, s (NaN for backends that do not report it).
     parameters : tuple of str
@@ -90,7 +92,7 @@ class PeakGradient:
         and `rival_gradient` are then the two one-sided values (the objective is the
         maximum of the two smooth branches).
     rival_time, rival_peak : float
-        The largest other local maximum of |F12| in the window (s, N); NaN if none.
+        The largest other local maximum of the output in the window (s, N); NaN if none.
     rival_gradient : (p,) its gradient (N per unit), NaN if none.
     at_edge : bool
         The peak sits at the window's edge.
@@ -156,10 +158,9 @@ OUTPUT_KINDS = {
 
 
 def ground_joints(linkage: Linkage) -> list[str]:
-    """Names of the joints (ideal, then clearance) that join a body to the ground."""
-    out = [j.name for j in linkage.joints if GROUND in (j.body_a, j.body_b)]
-    return out + [j.name for j in linkage.clearance_joints
-                  if GROUND in (j.journal_body, j.bearing_body)]
+    """Names of the joints (ideal, clearance, then translational clearance) that join a
+    body to the ground: each has a reaction output, and each may be the monitored joint."""
+    return list(linkage.ground_joints())
 
 
 @dataclass(frozen=True)
@@ -174,10 +175,8 @@ class Output:
 
     def monitored(self, linkage: Linkage) -> bool:
         """Whether this is the linkage's monitored force (its peak is refined between steps
-        by the integrator itself, and its DDM gradient is available)."""
-        if linkage.monitor_joint is None:
-            return self.name == "shaking_force"
-        return self.name == f"pivot_force:{linkage.monitor_joint}"
+        by the integrator itself, and its DDM gradient is available): its default output."""
+        return self.name == linkage.default_output
 
     def values(self, outs: np.ndarray, columns: dict[str, int]) -> np.ndarray:
         """The output at the rows of a model's outputs `outs` (columns by name)."""
@@ -187,14 +186,10 @@ class Output:
 
 
 def default_output(linkage: Linkage) -> str:
-    """The default output: the |reaction| of the driven joint when it joins the ground (the
-    crank pivot: the paper's base force F12); of a free linkage its monitored force (the
-    peaks `simulate` reports per window); else the shaking force."""
-    if linkage.drive is not None and linkage.drive.joint in ground_joints(linkage):
-        return f"pivot_force:{linkage.drive.joint}"
-    if linkage.drive is None and linkage.monitor_joint in ground_joints(linkage):
-        return f"pivot_force:{linkage.monitor_joint}"
-    return "shaking_force"
+    """The default output: the linkage's monitored output (`Linkage.default_output`: the
+    |reaction| of its `monitor_joint`, else the shaking force), whose peaks `simulate`
+    reports."""
+    return linkage.default_output
 
 
 def parse_output(linkage: Linkage, output: str | None = None) -> Output:
@@ -359,7 +354,7 @@ def objective_window(linkage: Linkage, revolution: int, window: float | None = N
 
 def peak_output(linkage: Linkage, output: str | None = None, revolution: int = 4, *,
                 window: float | None = None, **options) -> float:
-    """The peak of `output` (`parse_output`; default the crank pivot's |reaction|) over drive
+    """The peak of `output` (`parse_output`; default `Linkage.default_output`) over drive
     revolution `revolution` (1-based) of `linkage`'s generated model: the objective of the
     studies of any linkage. A free linkage (drive None): over time window `revolution` of
     `window` s, [(k - 1) w, k w] (`objective_window`; `window` required, and refused for a
@@ -743,8 +738,9 @@ def peak_gradient(mech: Linkage | SliderCrank, parameters=None, revolution: int 
         `sensitivity.DEFAULT_PARAMETERS`; required otherwise.
     output : str, optional
         "pivot_force:<ground joint>", "shaking_force", "drive_moment" or
-        "contact_force:<clearance joint>" (`parse_output`); default the driven ground
-        joint's |reaction| (the paper's base force F12).
+        "contact_force:<clearance joint>" (`parse_output`); default the linkage's
+        monitored output (`Linkage.default_output`: the paper's base force F12, the
+        four-bar's shaking force), the one `simulate`'s peaks are.
     revolution : int
         Drive revolution (1-based) whose peak is the objective (paper: 4); a free linkage
         (drive None): the time window [(k - 1) w, k w] of width `window`.

@@ -809,6 +809,17 @@ class Linkage:
                      + [j.name for j in self.translational_joints if j.guide_body == GROUND])
 
     @property
+    def default_output(self) -> str:
+        """The linkage's one default monitored output: the |reaction| of `monitor_joint`
+        ("pivot_force:<joint>"; the paper's base force F12 is the crank pivot's), or without
+        one the |shaking force| ("shaking_force", the four-bar's). `simulate`'s peaks are
+        its peaks, and every study (`peak_base_force`, `peak_output`, `peak_gradient`, the
+        GA, the tolerance study, the regime map) measures it unless told otherwise."""
+        if self.monitor_joint is not None:
+            return f"pivot_force:{self.monitor_joint}"
+        return "shaking_force"
+
+    @property
     def period(self) -> float:
         """Duration of one drive revolution in s (ValueError for a free linkage)."""
         if self.drive is None:

@@ -230,6 +230,12 @@ class SliderCrank:
         return self.coupler_mass * self.coupler_length**2 / 12.0
 
     @property
+    def default_output(self) -> str:
+        """The monitored output, "pivot_force:crank_pivot": |F12|, the crank pivot's
+        reaction (the paper's base force), as of the case's `Linkage`."""
+        return "pivot_force:crank_pivot"
+
+    @property
     def period(self) -> float:
         """Duration of one crank revolution in s."""
         return 2.0 * math.pi / self.crank_speed

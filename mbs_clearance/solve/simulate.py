@@ -200,8 +200,11 @@ def _to_accuracy(mech, revolutions, accuracy, options: dict) -> Trajectory:
 
 def peak_base_force(mech: SliderCrank, revolution: int | None = None, backend: str = "reduced",
                     accuracy: float | None = None, **options) -> float:
-    """Max |F12| in N over crank revolution `revolution` (1-based), the GA's objective (a
-    Linkage: its monitored force).
+    """The peak in N of the mechanism's default output (`Linkage.default_output`: its
+    monitored joint's |reaction|, the paper's |F12|, or the shaking force without one) over
+    crank revolution `revolution` (1-based): the peak of the same output that `simulate`'s
+    peaks, `objective.peak_output`, `peak_gradient`, the GA and the tolerance study take
+    by default. A free linkage: over its last time window (``duration``, ``window``).
 
     Backend "reduced": by default within `accuracy.DEFAULT_ACCURACY` (1e-5), as `simulate`:
     the peak of `simulate(mech, revolution, accuracy=accuracy)`, a run that estimates its

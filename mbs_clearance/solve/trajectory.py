@@ -137,6 +137,13 @@ class Trajectory:
         """The simulated `Linkage`, or None for a `SliderCrank`."""
         return None if isinstance(self.mechanism, SliderCrank) else self.mechanism
 
+    @property
+    def output(self) -> str:
+        """The name of the output whose peaks are ``peaks`` and `max_base_force`: the
+        mechanism's `default_output` ("pivot_force:crank_pivot" for the paper's |F12|,
+        "shaking_force" for a linkage without a monitored joint)."""
+        return self.mechanism.default_output
+
     def _drive(self) -> tuple[float, float]:
         m = self.mechanism
         if isinstance(m, SliderCrank):
@@ -183,7 +190,8 @@ class Trajectory:
         return (self.t >= t_a - tol) & (self.t <= t_b + tol)
 
     def max_base_force(self, revolution: int = 4) -> float:
-        """Maximum of |F12| in N over revolution `revolution` (1-based).
+        """Maximum of the monitored output (`output`: |F12| of the paper's case) in N over
+        revolution `revolution` (1-based).
 
         Uses the peak refined between samples where the backend provides it (reduced model),
         otherwise the maximum over the samples.

@@ -616,7 +616,8 @@ def optimize_link_lengths(mech: SliderCrank | None = None,
     output : str, optional
         Linkage only: the output whose peak is minimised (`objective.parse_output`:
         "pivot_force:<ground joint>", "shaking_force", "drive_moment",
-        "contact_force:<clearance joint>"; default the crank pivot's |reaction|).
+        "contact_force:<clearance joint>"; default `Linkage.default_output`, the peak
+        `simulate` reports).
     **backend_options
         Passed to `peak_base_force` (e.g. ``rtol``, ``accuracy``). The GA's cheaper
         default on the reduced backend: each design of a `SliderCrank` at rtol `GA_RTOL`

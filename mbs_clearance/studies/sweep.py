@@ -53,7 +53,7 @@ from ..analysis.poincare import (
     poincare_section,
 )
 from ..model.design import design_at
-from ..units import parse_quantity
+from ..units import number, parse_quantity
 
 __all__ = ["SweepAxis", "parse_sweep", "design_at", "regime_map", "MapResult", "load_map",
            "map_memory"]
@@ -317,8 +317,15 @@ class MapResult:
         ds = self.dataset
         codes, counts = np.unique(ds["regime"].values, return_counts=True)
         parts = ", ".join(f"{REGIMES[int(c)]}: {n}" for c, n in zip(codes, counts))
-        return (f"{int(ds['done'].sum())} of {ds['done'].size} points done ({self.computed} "
+        text = (f"{int(ds['done'].sum())} of {ds['done'].size} points done ({self.computed} "
                 f"computed now, {self.skipped} before); regimes: {parts}")
+        peak = ds["peak_max"].values
+        if np.isfinite(peak).any():
+            output = ds["peak"].attrs.get("output", "the monitored force")
+            text += (f"\npeak of {output} over the kept revolutions: "
+                     f"{number(float(np.nanmin(peak)), 6)} N to "
+                     f"{number(float(np.nanmax(peak)), 6)} N over the points")
+        return text
 
 
 def _check_driven(mech) -> None:
@@ -463,6 +470,8 @@ def regime_map(mech, sweep, revolutions: int = 100, keep: int = 50, scheduler=No
              "regime_criterion": "poincare.classify: recurrence within tol (of the "
                                  "clearance) over the kept samples, then the exponent's sign"}
     ds = _empty_dataset(axes, J, joints_of(base), keep, revolutions, max_period, attrs)
+    # the peaks are the description's default output's (`Linkage.default_output`)
+    ds["peak"].attrs["output"] = base.default_output
     ds["joint_clearance"].values[...] = np.array(
         [clearances_of(d) for d in designs]).reshape(shape + (J,))
     path = None if out is None else Path(out)

@@ -64,7 +64,8 @@ __all__ = ["tolerance_study", "ToleranceResult", "Uniform", "Normal", "FitCleara
            "ToleranceProblem", "ToleranceSample", "Evaluation", "describe", "sample",
            "evaluate", "analyse", "SAMPLERS"]
 
-#: built-in outputs of a run: the rev-k peak of |F12| (peak-only run), the RMS of the drive
+#: built-in outputs of a run: the rev-k peak of the mechanism's default output
+#: (`Linkage.default_output`, the paper's |F12|; peak-only run), the RMS of the drive
 #: moment over revolution k, the max contact force over revolution k (recorded runs)
 OUTPUTS = ("peak", "rms_drive_moment", "max_contact_force")
 #: what each named output is, and its unit
@@ -486,9 +487,12 @@ class ToleranceResult:
 
     @property
     def output_label(self) -> str:
-        """``max |F12| over revolution 4 (N)``: what the output is, with its unit."""
-        what, unit = OUTPUT_LABELS.get(self.output, (f"max {self.output}",
+        """``peak of pivot_force:crank_pivot over revolution 4 (N)``: what the output is,
+        by name (the built-in "peak": the mechanism's default output), with its unit."""
+        what, unit = OUTPUT_LABELS.get(self.output, (f"peak of {self.output}",
                                                      _linkage_unit(self.output)))
+        if self.output == "peak" and self.settings.get("default_output"):
+            what = f"peak of {self.settings['default_output']}"
         rev, win = self.settings.get("revolution"), self.settings.get("window")
         span = (f" over time window {rev} of {win:g} s" if win is not None
                 else f" over revolution {rev}" if rev is not None else "")
@@ -1076,11 +1080,13 @@ def tolerance_study(inputs: Mapping[str, Any], mech: SliderCrank | None = None,
     mech : SliderCrank or Linkage, optional
         Nominal design; the inputs replace its fields (default: the paper's case).
     output : str or callable
-        "peak" (max |F12| over revolution `revolution`, peak-only run), "rms_drive_moment"
+        "peak" (max |F12|, the mechanism's default output, over revolution `revolution`,
+        peak-only run), "rms_drive_moment"
         (N m) or "max_contact_force" (N) over that revolution (recorded runs); or a
         module-level function of a dict {name: value} returning a float. For a Linkage
         also any output of `objective.parse_output` ("shaking_force",
-        "contact_force:<joint>", ...; "peak" is its default, the crank pivot's |reaction|),
+        "contact_force:<joint>", ...; "peak" is its default output,
+        `Linkage.default_output`: the four-bar's shaking force),
         its peak over the revolution (`objective.peak_output`).
     revolution : int
         Crank revolution k (1-based) of the output (revolutions 1..k are simulated); a
@@ -1222,6 +1228,7 @@ def tolerance_study(inputs: Mapping[str, Any], mech: SliderCrank | None = None,
         monte_carlo=res.get("monte_carlo", {}), wear=res.get("wear", []),
         counts=dict(counts), notes=notes,
         settings={"revolution": revolution, "backend": backend, "options": dict(options),
+                  **({"default_output": mech.default_output} if output == "peak" else {}),
                   **({"window": window} if window is not None else {}),
                   "sobol": sobol, "second_order": second_order, "morris": morris,
                   "morris_levels": morris_levels, "dgsm": dgsm, "monte_carlo": monte_carlo,

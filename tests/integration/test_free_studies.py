@@ -133,7 +133,7 @@ def test_ga_over_a_window_against_a_grid(tmp_path, capsys):
     assert main(argv) == 0
     printed = capsys.readouterr().out
     assert "over time window [0.02, 0.03] s" in printed
-    assert f"best: {res.best_peak_force:.2f} N" in printed
+    assert f"best: {res.best_peak_force:.2f} N of pivot_force:crank_pivot (" in printed
     saved = json.loads((out / "result.json").read_text())
     assert saved["best_peak_force"] == res.best_peak_force
     assert saved["best_genes"] == best

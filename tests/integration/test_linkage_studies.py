@@ -259,7 +259,7 @@ def test_ga_on_the_four_bars_lengths_against_a_grid(tmp_path, capsys):
         argv += ["--gene", f"{name}={lo}:{hi}"]
     assert main(argv) == 0
     printed = capsys.readouterr().out
-    assert f"best: {res.best_peak_force!r}" in printed
+    assert f"best: {res.best_peak_force:.2f} N of shaking_force (" in printed
     saved = json.loads((out / "result.json").read_text())
     assert saved["best_peak_force"] == res.best_peak_force
     assert saved["best_genes"] == best

@@ -116,12 +116,30 @@ def test_each_named_case_animates(name, runs, tmp_path):
 
 
 def test_cli_animates_the_paper_slider_crank(tmp_path, capsys):
-    """Without --case: the paper's SliderCrank, drawn as before."""
+    """Without --case: the paper's SliderCrank, drawn from its case's description (the same
+    drawing and magnification as --case paper_slider_crank)."""
     out = tmp_path / "anim"
     assert main(["animate", "--revolutions", "1", "--frames", "4", "--out", str(out)]) == 0
     err = capsys.readouterr().err
-    assert f"wrote {out / 'mechanism.gif'} (animation of slider-crank, revolution 1)" in err
+    shown = number(magnification(cases.paper_slider_crank()), 3)
+    assert (f"wrote {out / 'mechanism.gif'} (animation of slider-crank, revolution 1, journal "
+            f"offsets drawn {shown} times their size)") in err
     _moving_gif(out / "mechanism.gif", 4)
+
+
+def test_a_slider_crank_trajectory_is_drawn_as_its_case(tmp_path):
+    """The paper's SliderCrank's trajectory and its case's give the same frames: the same
+    coordinates through the same description (the slider a block on its guide)."""
+    from mbs_clearance import SliderCrank
+
+    a = mechanism_frames(simulate(SliderCrank(), 1, rtol=1e-8), frames=4)
+    b = mechanism_frames(simulate(cases.paper_slider_crank(), 1, rtol=1e-8), frames=4)
+    assert set(a.bodies) == set(b.bodies) == {"crank", "coupler", "slider"}
+    assert set(a.guides) == {"slider_guide"}
+    for name in a.bodies:
+        np.testing.assert_allclose(a.bodies[name], b.bodies[name], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(a.journals["coupler_slider"], b.journals["coupler_slider"],
+                               rtol=0, atol=1e-12)
 
 
 def test_bad_input_is_a_clear_error(runs, tmp_path):
@@ -144,7 +162,7 @@ def test_bad_input_is_a_clear_error(runs, tmp_path):
     (["--revolution", "0"], "argument --revolution: must be an integer >= 1; got 0"),
     (["--case", "four_bar", "--magnify", "1e9"], "magnify (magnification of the journals' "
                                                  "offsets) must be"),
-    (["--magnify", "100"], "--magnify applies to --case or --description"),
+    (["--magnify", "1e9"], "magnify (magnification of the journals' offsets) must be"),
     (["--case", "four_bar", "--set", "nope=1"], "nope"),
 ])
 def test_cli_bad_input_is_one_line_before_any_run(argv, message, tmp_path, capsys,

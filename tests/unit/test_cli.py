@@ -102,7 +102,9 @@ def test_parameter_list_accepts_spaces_and_runs(capsys):
     assert main(["sensitivity", "--parameters", "crank_length, slider_mass ",
                  "--revolutions", "1"]) == 0
     out = capsys.readouterr().out.splitlines()
-    rows = out[1:3]
+    # the table's title names the output whose sensitivities it holds
+    assert out[0].startswith("sensitivities of pivot_force:crank_pivot ")
+    rows = out[2:4]
     # the summary's one definition (rtol 1e-9 on the uniform summary grid)
     ref = summary_sensitivities(SliderCrank(), ("crank_length", "slider_mass"), 1)
     assert [r.split()[0] for r in rows] == ["crank_length", "slider_mass"]
@@ -111,7 +113,7 @@ def test_parameter_list_accepts_spaces_and_runs(capsys):
         assert float(row.split()[-3]) == pytest.approx(r["mean_abs_normalized"], rel=1e-3)
     # every column is defined under the table
     for head in ("b0", "mean |S|", "max |S|", "growth/rev"):
-        assert any(line.startswith(f"  {head}: ") for line in out[3:]), head
+        assert any(line.startswith(f"  {head}: ") for line in out[4:]), head
 
 
 @pytest.mark.parametrize("argv,message", [
@@ -817,7 +819,7 @@ def test_ideal_joint_table_has_no_contact_force(capsys):
     assert main(["simulate", "--revolutions", "1", "--backend", "ideal"]) == 0
     captured = capsys.readouterr()
     out = captured.out
-    assert "contact" not in out and "max |F12|" in out
+    assert "contact" not in out and "max pivot_force:crank_pivot" in out
     # no journal, no start-up transient: no footnote about the journal's start
     assert out.splitlines()[1].split()[0] == "1" and "journal" not in captured.err
     # the ideal-joint peak printed matches the closed form's
@@ -843,7 +845,7 @@ def test_sensitivity_of_a_named_case(capsys):
 
     assert main(["sensitivity", "--case", "paper_slider_crank", "--parameters",
                  "slider.mass,coupler_slider.restitution", "--revolutions", "2"]) == 0
-    rows = capsys.readouterr().out.splitlines()[1:3]
+    rows = capsys.readouterr().out.splitlines()[2:4]
     assert [r.split()[0] for r in rows] == ["slider.mass", "coupler_slider.restitution"]
     ref = summary_sensitivities(SliderCrank(), ("slider_mass", "restitution"), 2).summary()
     for row, r in zip(rows, ref):

@@ -238,7 +238,7 @@ def test_cli_tolerance_reads_a_salib_parameter_file_and_writes_the_result(tmp_pa
     np.testing.assert_allclose(res.monte_carlo["values"], ref.monte_carlo["values"],
                                rtol=0, atol=0)
     assert (out / "summary.txt").read_text().startswith(
-        "output: max |F12| over revolution 1 (N)")
+        "output: peak of pivot_force:crank_pivot over revolution 1 (N)")
     # --accuracy: each run to the requested accuracy, as the library's `accuracy=`
     acc = tmp_path / "acc"
     assert main(["tolerance", str(params), "--sobol", "0", "--monte-carlo", "3",
