@@ -106,8 +106,8 @@ def test_ga_on_the_lubricated_case_against_direct_runs(tmp_path, capsys):
     assert main(argv) == 0
     printed = capsys.readouterr().out
     assert f"best: {res.best_peak_force:.2f} N of pivot_force:crank_pivot (" in printed
-    saved = json.loads((tmp_path / \"opt\" / \"result.json\").read_text())
-    assert saved[\"best_peak_force\"] == res.best_peak_force
+    saved = json.loads((tmp_path / "opt" / "result.json").read_text())
+    assert saved["best_peak_force"] == res.best_peak_force
 
 
 @pytest.mark.slow   # two maps and a CLI map, 6 s
