@@ -281,6 +281,53 @@ class Translational(Element):
             out.append((first + k, lds))
         return out
 
+    # ---- the reduced model's parameters and sensitivities (solve.linkage_model,
+    # solve.linkage_ddm)
+    def parameter_values(self, linkage) -> dict[str, float]:
+        """The values of the kind's entries of p (`parameter_names`, `memory_names`): the
+        joints' fields, the laws' ids, each corner's memory started free at the floor."""
+        values = {}
+        for j in self.joints(linkage):
+            values[f"{j.name}.stiffness"] = j.stiffness
+            values[f"{j.name}.contact_model"] = float(CONTACT_MODELS[j.contact_model])
+            values[f"{j.name}.friction_law"] = float(FRICTION_LAWS[j.friction_law])
+            for f in ("clearance", "restitution", "impact_velocity_floor", "half_length",
+                      "half_height", "angle", "slider_angle", *FRICTION_SLOTS):
+                values[f"{j.name}.{f}"] = getattr(j, f)
+            for c in j.corner_names():
+                values[f"{c}.mode"] = 0.0
+                values[f"{c}.impact_velocity"] = j.impact_velocity_floor
+        return values
+
+    def floor_names(self, linkage) -> list[str]:
+        """Per contact the name of its impact-velocity floor (a corner's is its joint's)."""
+        return [f"{j.name}.impact_velocity_floor" for j in self.joints(linkage)
+                for _ in j.corner_names()]
+
+    def chain(self, linkage, head: str, field: str) -> dict[str, float]:
+        """{entry of p: d entry / d value} of the description's value `field` of joint
+        `head` when it reaches p under another name (empty otherwise): a joint's
+        contact_stiffness is its stiffness (no Eq. 9 from radii)."""
+        if field == "contact_stiffness" and head in {j.name for j in self.joints(linkage)}:
+            return {f"{head}.stiffness": 1.0}
+        return {}
+
+    def closure_rows(self, linkage, out, extra) -> tuple[list[dict], list[dict]]:
+        """The loop closure of the joints at the start as rows of the model's Jacobian
+        ({row: weight}: `out`(column name) an output row, `extra`[name] an extra row), and
+        their rates: the slider's offset and tilt, the mean of its corners' normal offsets
+        and of their signed ones (`CORNERS`)."""
+        pos, rate = [], []
+        for tj in self.joints(linkage):
+            for signed in (False, True):
+                pos.append({out(f"{c}.ecc_y"): 0.25 * (CORNERS[c.rpartition(".")[2]][0]
+                                                        if signed else 1.0)
+                            for c in tj.corner_names()})
+                rate.append({extra[f"eyd:{c}"]: 0.25 * (CORNERS[c.rpartition(".")[2]][0]
+                                                         if signed else 1.0)
+                             for c in tj.corner_names()})
+        return pos, rate
+
     # ---- energy (generate.energy)
     def contact_energy(self, part, params: list, first: int, offset_y: list):
         """A function (a, p, mem_start) -> the corners' contact potential in J, where `a`
