@@ -328,6 +328,32 @@ class Translational(Element):
                              for c in tj.corner_names()})
         return pos, rate
 
+    # ---- the ideal-joint backend (backends.ideal_linkage)
+    def ideal_slides(self, linkage, angles: dict) -> list[tuple]:
+        """Each joint closed as an ideal prismatic joint: (name, guide body, guide point,
+        axis angle in rad, slider body, slider point, the bodies' angle difference to keep
+        in rad) from the bodies' assembled `angles`."""
+        return [(tj.name, tj.guide_body, tj.guide_point, tj.angle, tj.slider_body,
+                 tj.slider_point,
+                 angles.get(tj.slider_body, 0.0) - angles.get(tj.guide_body, 0.0))
+                for tj in self.joints(linkage)]
+
+    def ideal_contact_forces(self, linkage, multipliers) -> list:
+        """The corners' normal forces (N, (s,) each, `CORNERS` order per joint) of the
+        ideal joints whose multipliers are lambda (offset) and mu (angle)
+        (`multipliers`(name) -> (s, 2)): the slider receives -lambda along the guide's
+        normal at its centre and the moment -mu, so its end e (+-1, at e a along the axis)
+        is pushed by F_e = -(lambda + e mu / a) / 2 along the normal, by the corner on the
+        side opposite to F_e's direction; the other corner carries nothing."""
+        out = []
+        for tj in self.joints(linkage):
+            lam = multipliers(tj.name)
+            lam_n, mu = lam[:, 0], lam[:, 1]
+            for along, side in CORNERS.values():
+                push = -0.5 * (lam_n + along * mu / tj.half_length)
+                out.append(np.where(np.sign(push) == -side, np.abs(push), 0.0))
+        return out
+
     # ---- energy (generate.energy)
     def contact_energy(self, part, params: list, first: int, offset_y: list):
         """A function (a, p, mem_start) -> the corners' contact potential in J, where `a`
