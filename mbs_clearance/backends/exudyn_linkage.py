@@ -44,7 +44,7 @@ Model (`build`)
   place of R_B (`_profile_loads`; a symbolic function, the spline's lookup as a tree of
   IfThenElse, ran 30 times slower); its series are computed after the run from the stored
   body states (`_clearance_series`). A profiled joint to the ground is not built.
-- each joint of an element kind (`elements.registry`, e.g. a `TranslationalClearance`):
+- each joint of an element kind (`elements.registry`, e.g. a translational clearance joint):
   what its element module builds (`Element.exudyn_build`: for the translational joint an
   `ObjectGenericODE2` on the slider's node and the guide's whose Python force function
   returns the four corners' generalized forces), every contact with its own

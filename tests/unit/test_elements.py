@@ -94,3 +94,24 @@ def test_corner_loads_of_a_slider_pressed_into_the_top_surface_are_hertz():
     assert out[0] == pytest.approx(0.0, abs=1e-9 * K * delta ** 1.5)
     assert out[1] == pytest.approx(-2 * K * delta ** 1.5, rel=1e-9)
     assert out[2] == pytest.approx(0.0, abs=1e-9 * K * delta ** 1.5 * joint.half_length)
+
+
+#: the modules that iterate over the registry instead of naming a kind
+ITERATING = ("generate/derive.py", "generate/writer.py", "generate/cwriter.py",
+             "generate/jacobians.py", "generate/cjacobians.py", "generate/energy.py",
+             "solve/linkage_model.py", "solve/linkage_ddm.py",
+             "backends/exudyn_linkage.py", "backends/ideal_linkage.py")
+
+
+@pytest.mark.parametrize("module", ITERATING)
+def test_the_generator_and_the_backends_name_no_element_kind(module):
+    """Read from the sources: no module that iterates over the registry reaches for an
+    element's joints, corners or description class itself."""
+    from pathlib import Path
+
+    import mbs_clearance
+
+    text = (Path(mbs_clearance.__file__).parent / module).read_text()
+    names = [n for el in ELEMENTS for n in (el.attribute, el.description.__name__)]
+    names += ["corner_names", "CORNERS"]        # the translational joint's corners
+    assert [n for n in names if n in text] == []
