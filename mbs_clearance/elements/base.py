@@ -1,6 +1,8 @@
 """What an element module brings: the pieces of one joint kind that the generator
-(`generate.derive`, `writer`, `cwriter`, `jacobians`, `cjacobians`) and the Exudyn backend
-(`backends.exudyn_linkage`) ask of every registered element, in the registry's order.
+(`generate.derive`, `writer`, `cwriter`, `jacobians`, `cjacobians`, `energy`), the reduced
+model (`solve.linkage_model`, `solve.linkage_ddm`), the Exudyn backend
+(`backends.exudyn_linkage`) and the ideal-joint backend (`backends.ideal_linkage`) ask of
+every registered element, in the registry's order.
 
 An element owns the joints of one field of the description (`Element.attribute` of a
 `Linkage`, e.g. ``translational_joints``) and their *contacts* (the events of the compiled
@@ -29,6 +31,7 @@ def friction_arguments(items: list[str]) -> str:
     tuple keeps its comma)."""
     return ", ".join(items) + ("," if len(FRICTION_SLOTS) == 1 else "")
 
+
 #: the hooks every element defines, by the layer that calls them (the registry test checks
 #: each registered element; `Element.joints` comes from the base, read from `attribute`)
 PIECES: dict[str, tuple[str, ...]] = {
@@ -50,8 +53,9 @@ PIECES: dict[str, tuple[str, ...]] = {
 
 class Element:
     """A joint kind: the class of its description, the `Linkage` field that holds its
-    joints and the hooks of `PIECES`. Subclasses implement every hook; the defaults here
-    raise, so that a missing piece fails loudly where it is first needed."""
+    joints and the hooks of `PIECES`. Subclasses implement every hook; the base's raise
+    NotImplementedError naming the element and the hook, so that a missing piece fails
+    loudly where it is first needed."""
 
     #: the kind's name (the registry's key)
     kind: str = ""
@@ -64,14 +68,19 @@ class Element:
         """The joints of this kind in `linkage`."""
         return tuple(getattr(linkage, self.attribute))
 
-    def contact_names(self, linkage) -> list[str]:
-        """The names of the contacts (events) of the kind's joints, in order."""
-        raise NotImplementedError(self._missing("contact_names"))
-
-    def _missing(self, hook: str) -> str:
-        return f"element {self.kind!r} has no {hook!r}"
-
     @staticmethod
     def part(**fields) -> SimpleNamespace:
         """A record of the element's share of a derivation or a plan."""
         return SimpleNamespace(**fields)
+
+
+def _absent(hook: str):
+    def missing(self, *args, **kwargs):
+        raise NotImplementedError(f"element {self.kind!r} has no {hook!r}")
+
+    missing.__name__ = hook
+    return missing
+
+
+for _hook in (h for hooks in PIECES.values() for h in hooks):
+    setattr(Element, _hook, _absent(_hook))

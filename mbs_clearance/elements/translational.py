@@ -29,7 +29,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-import sympy as sp
 
 from ..laws._dispatch import friction_force_slots
 from ..laws.forces import CONTACT_MODELS, FRICTION_LAWS, contact_force
@@ -93,6 +92,9 @@ class Translational(Element):
         kinematics (psyms, world, local, rot, frames, mech_point) and its load lists
         (loads, contact_loads, torque_loads), appended to. Returns the state `finish`
         reads."""
+        # the generator's only: a run imports no sympy
+        import sympy as sp
+
         psyms, world, local, rot = ctx.psyms, ctx.world, ctx.local, ctx.rot
         corners, gaps_t, closure_t, guide_forces = [], [], [], {}
         for tj in self.joints(linkage):
