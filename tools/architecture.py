@@ -27,6 +27,7 @@ LAYERS = {
                  "the compiled integrator, its methods and its build; know no mechanism"),
     "laws": (("laws",), "contact, friction and oil-film laws, one module each"),
     "model": (("model",), "Linkage, the SliderCrank parameter set, named cases, design fields"),
+    "elements": (("elements",), "joint kinds, one module each"),
     "generate": (("generate",), "description -> compiled model"),
     "solve": (("solve",), "runs, DDM, accuracy, Trajectory, the backend registry"),
     "backends": (("backends",), "Exudyn and the ideal joint"),
@@ -43,17 +44,18 @@ MAY_IMPORT = {
     "numerics": {"base"},
     "laws": {"base", "numerics"},
     "model": {"base", "numerics", "laws"},
-    "generate": {"base", "numerics", "laws", "model"},
-    "solve": {"base", "numerics", "laws", "model", "generate"},
-    "backends": {"base", "numerics", "laws", "model", "generate", "solve"},
+    "elements": {"base", "numerics", "laws", "model"},
+    "generate": {"base", "numerics", "laws", "model", "elements"},
+    "solve": {"base", "numerics", "laws", "model", "elements", "generate"},
+    "backends": {"base", "numerics", "laws", "model", "elements", "generate", "solve"},
     # analysis works on runs of the reduced model; a cross-check with Exudyn is a study
-    "analysis": {"base", "numerics", "laws", "model", "generate", "solve"},
-    "studies": {"base", "numerics", "laws", "model", "generate", "solve", "backends",
-                "analysis"},
-    "plotting": {"base", "numerics", "laws", "model", "generate", "solve", "backends",
-                 "analysis"},
-    "cli": {"base", "numerics", "laws", "model", "generate", "solve", "backends", "analysis",
-            "studies", "plotting"},
+    "analysis": {"base", "numerics", "laws", "model", "elements", "generate", "solve"},
+    "studies": {"base", "numerics", "laws", "model", "elements", "generate", "solve",
+                "backends", "analysis"},
+    "plotting": {"base", "numerics", "laws", "model", "elements", "generate", "solve",
+                 "backends", "analysis"},
+    "cli": {"base", "numerics", "laws", "model", "elements", "generate", "solve", "backends",
+            "analysis", "studies", "plotting"},
 }
 
 
@@ -220,9 +222,10 @@ def figure(path: Path) -> None:
     names = list(LAYERS)
     # two columns where two layers sit on one floor (neither imports the other)
     pos = {"base": (0.5, 0), "numerics": (0.5, 1), "laws": (0.5, 2), "model": (0.5, 3),
-           "generate": (0.5, 4), "solve": (0.5, 5), "backends": (0.25, 6),
-           "analysis": (0.75, 6), "studies": (0.5, 7), "plotting": (0.25, 8), "cli": (0.5, 9)}
-    fig, ax = plt.subplots(figsize=(8.5, 10))
+           "elements": (0.5, 4), "generate": (0.5, 5), "solve": (0.5, 6),
+           "backends": (0.25, 7), "analysis": (0.75, 7), "studies": (0.5, 8),
+           "plotting": (0.25, 9), "cli": (0.5, 10)}
+    fig, ax = plt.subplots(figsize=(8.5, 11))
     w, h = 0.34, 0.5
     for n in names:
         x, y = pos[n]
@@ -244,7 +247,7 @@ def figure(path: Path) -> None:
                                      lw=0.6 + 0.25 * k, color="#555555",
                                      connectionstyle=f"arc3,rad={-0.5 if skip else 0.0}"))
     ax.set_xlim(-0.05, 1.05)
-    ax.set_ylim(-0.6, 9.6)
+    ax.set_ylim(-0.6, 10.6)
     ax.axis("off")
     ax.set_title("mbs_clearance: layers (an arrow: imports; width: importing modules;\n"
                  "arrows past more than one layer in between not drawn)", fontsize=10)

@@ -44,14 +44,13 @@ Model (`build`)
   place of R_B (`_profile_loads`; a symbolic function, the spline's lookup as a tree of
   IfThenElse, ran 30 times slower); its series are computed after the run from the stored
   body states (`_clearance_series`). A profiled joint to the ground is not built.
-- each `TranslationalClearance`: an `ObjectGenericODE2` on the slider's node (and the
-  guide's, unless the guide is the ground) whose Python force function returns the
-  generalized forces of the four corners' contacts (`_corner_loads`: the normal force of
-  the contact law at each corner's penetration beyond b + c, friction along the guide's
-  axis from its sliding velocity, the opposite forces on the guide at the same place),
-  every corner with its own impact-velocity memory; the guide's reaction on the ground and
-  the corners' series are computed after the run from the stored body states and each
-  corner's impact velocity in force at each step (`_corner_series`).
+- each joint of an element kind (`elements.registry`, e.g. a translational clearance joint):
+  what its element module builds (`Element.exudyn_build`: for the translational joint an
+  `ObjectGenericODE2` on the slider's node and the guide's whose Python force function
+  returns the four corners' generalized forces), every contact with its own
+  impact-velocity memory; its series and its reaction on the ground are computed after the
+  run from the stored body states and each contact's impact velocity in force at each step
+  (`Element.exudyn_series`).
 - Each user-force joint has its own impact-velocity memory (`ImpactMemory`): a pre-step
   function (one Python call per time step for all joints, never inside Newton) registers
   the onsets (penetration crossing zero upward) and sets the joint's named symbolic
@@ -79,6 +78,7 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import asdict, dataclass, field
+from types import SimpleNamespace
 
 import numpy as np
 
@@ -91,6 +91,7 @@ from .._checks import (
     check_real,
     format_bytes,
 )
+from ..elements.registry import ELEMENTS
 from ..laws._dispatch import friction_force_slots
 from ..laws.forces import (
     CONTACT_MODELS,
@@ -100,15 +101,7 @@ from ..laws.forces import (
 )
 from ..laws.lubrication import MODELS, lubricated_force
 from ..laws.registry import FRICTION, FRICTION_PARAMETER_SPECS, FRICTION_SLOTS
-from ..model.linkage import (
-    CORNERS,
-    GROUND,
-    ClearanceJoint,
-    Linkage,
-    Prismatic,
-    Revolute,
-    TranslationalClearance,
-)
+from ..model.linkage import GROUND, ClearanceJoint, Linkage, Prismatic, Revolute
 
 __all__ = ["ExudynSettings", "make_settings", "build", "solve", "simulate_exudyn_linkage",
            "peak_exudyn_linkage", "run_linkage", "peak_run", "body_states",
@@ -232,11 +225,9 @@ def contact_scales(linkage: Linkage) -> tuple[float, float]:
         m = min(masses.get(cj.journal_body, math.inf), masses.get(cj.bearing_body, math.inf))
         period = min(period, 2.0 * math.pi * math.sqrt(m / k))
         floor = max(floor, 1.5 * float(np.finfo(float).eps) * size / delta)
-    for tj in linkage.translational_joints:
-        delta = (load / tj.stiffness) ** (2.0 / 3.0)
-        k = 1.5 * tj.stiffness * math.sqrt(delta)
-        period = min(period, 2.0 * math.pi * math.sqrt(masses[tj.slider_body] / k))
-        floor = max(floor, 1.5 * float(np.finfo(float).eps) * size / delta)
+    for el in ELEMENTS:
+        el_period, el_floor = el.exudyn_contact_scale(linkage, load, masses, size)
+        period, floor = min(period, el_period), max(floor, el_floor)
     return period, floor
 
 
@@ -432,7 +423,7 @@ def _pre_step(contacts: list, h: float, predict: bool):
 
     def pre_step(mbs, t):
         for obj, memory in contacts:
-            if callable(obj):       # a corner of a translational joint: (delta, rate)
+            if callable(obj):       # an element's contact: (delta, rate)
                 delta, rate = obj(mbs)
                 _update_memory(memory, t, h, delta, rate, predict)
                 if memory.history is not None:
@@ -625,53 +616,6 @@ def _friction_loads(joint, sides, q, qt, normal, friction, cos, sin, gate):
     return out
 
 
-def _corner_loads(joint: TranslationalClearance, sides, q, qt, dmins):
-    """(generalized forces on the element's coordinates, per corner (F, delta, position
-    along the guide's axis, normal offset, friction force, sliding velocity, penetration
-    rate)) of the four
-    corners of a translational clearance joint (`sides`: the slider's and the guide's
-    `_Side`, each with its angle's reference; `dmins`: the corners' impact velocities):
-    each corner's normal force of the contact law at its penetration beyond b + c along
-    the guide's normal (zero in free flight), friction along the axis from its velocity
-    relative to the guide's material point there, the opposite force on the guide."""
-    slider, guide = sides
-    (sx, sy), (svx, svy), (sax, say), sw = slider.kinematics(q, qt, math.cos, math.sin)
-    (gx, gy), (gvx, gvy), (gax, gay), gw = guide.kinematics(q, qt, math.cos, math.sin)
-    ga = guide.angle(q) + joint.angle
-    ux, uy = math.cos(ga), math.sin(ga)
-    nx, ny = -uy, ux
-    sa_ = slider.angle(q) + joint.slider_angle
-    ax, ay = math.cos(sa_), math.sin(sa_)
-    K, c, b = joint.stiffness, joint.clearance, joint.half_height
-    model = CONTACT_MODELS[joint.contact_model]
-    law = FRICTION_LAWS[joint.friction_law]
-    slots = tuple(getattr(joint, f) for f in FRICTION_SLOTS)
-    out = [0.0] * (3 * sum(sd.slot is not None for sd in sides))
-    series = []
-    for (ka, kb), dmin in zip(CORNERS.values(), dmins):
-        # the corner's arm from the slider's point, its position from the guide's point
-        cx = ka * joint.half_length * ax - kb * b * ay
-        cy = ka * joint.half_length * ay + kb * b * ax
-        rx, ry = sx + cx - gx, sy + cy - gy
-        vx = svx - sw * cy - (gvx - gw * ry)
-        vy = svy + sw * cx - (gvy + gw * rx)
-        h, hd = nx * rx + ny * ry, nx * vx + ny * vy
-        along, vt = ux * rx + uy * ry, ux * vx + uy * vy
-        delta, rate = kb * h - (b + c), kb * hd
-        f = contact_force(delta, rate, dmin, K, joint.restitution, model) if delta > 0 else 0.0
-        ft = friction_force_slots(vt, f, slots, law) if law else 0.0
-        fx, fy = -kb * f * nx + ft * ux, -kb * f * ny + ft * uy
-        series.append((f, delta, along, h, ft, vt, rate))
-        for side, sign, (px, py) in ((slider, 1.0, (sax + cx, say + cy)),
-                                     (guide, -1.0, (gax + rx, gay + ry))):
-            if side.slot is not None:
-                i = side.slot
-                out[i] += sign * fx
-                out[i + 1] += sign * fy
-                out[i + 2] += sign * (px * fy - py * fx)
-    return out, series
-
-
 def _generic_element(mbs, ends, nodes: dict, pts: dict):
     """(sides, element, node list): an `ObjectGenericODE2` on the nodes of the bodies of
     `ends` ((body, point) pairs; the ground has no node) and their `_Side`s, in that order,
@@ -689,12 +633,6 @@ def _generic_element(mbs, ends, nodes: dict, pts: dict):
     obj = mbs.AddObject(ii.ObjectGenericODE2(nodeNumbers=node_list,
                                              forceVector=[0.0] * (3 * len(node_list))))
     return sides, obj, node_list
-
-
-def _corner_element(mbs, joint: TranslationalClearance, nodes: dict, pts: dict):
-    """`_generic_element` of a translational clearance joint (slider first)."""
-    return _generic_element(mbs, ((joint.slider_body, joint.slider_point),
-                                  (joint.guide_body, joint.guide_point)), nodes, pts)
 
 
 def _pair_element(mbs, joint: ClearanceJoint, nodes: dict, pts: dict):
@@ -953,9 +891,9 @@ class ExudynModel:
     ecc_sign: float        # contact Displacement -> journal minus bearing
     memories: list         # ImpactMemory per clearance joint (None for "sphere")
     keep_alive: list = field(default_factory=list)
-    #: per translational clearance joint: (joint, its element's `_Side`s, the corners'
-    #: ImpactMemory)
-    corners: list = field(default_factory=list)
+    #: per element kind (`elements.registry`) what its `exudyn_build` returned (per
+    #: joint: the joint, its generic element's `_Side`s, its contacts' ImpactMemory)
+    elements: dict = field(default_factory=dict)
     keep: np.ndarray | None = None   # rows of the stored data kept (`solve`: sliver steps)
     #: allocations per step by design: the outputs the pre-step function reads from Exudyn
     #: (each read allocates one vector) and the Python force user functions
@@ -976,10 +914,8 @@ OUTPUT_GROUPS: tuple[str, ...] = ("reactions", "drive", "contact", "bodies")
 def _check_linkage(linkage, settings: ExudynSettings) -> None:
     if not isinstance(linkage, Linkage):
         raise ValueError(f"linkage must be a Linkage; got {type(linkage).__name__}")
-    if linkage.translational_joints and settings.contact == "sphere":
-        raise ValueError(f"contact='sphere' has no translational clearance joint (linkage "
-                         f"{linkage.name!r} has {[j.name for j in linkage.translational_joints]}"
-                         "); use contact='symbolic' or 'python'")
+    for el in ELEMENTS:
+        el.exudyn_check(linkage, settings)
     for j in linkage.clearance_joints:
         # the friction, the film and a profiled contact are generic elements on the two
         # bodies' nodes
@@ -1153,39 +1089,20 @@ def build(linkage: Linkage, settings: ExudynSettings | None = None,
             on_bearing = 1.0 if settings.contact != "sphere" else -1.0
             ground_items[cj.name] = obj
             ground_signs[cj.name] = on_bearing * (1.0 if cj.bearing_body == GROUND else -1.0)
-    corner_items = []
-    k0 = len(linkage.clearance_joints)
-    for tj in linkage.translational_joints:
-        sides, obj, node_list = _corner_element(mbs, tj, nodes, pts)
-        mems = []
-        for _ in CORNERS:
-            memory = ImpactMemory(tj.impact_velocity_floor, tj.clearance)
-            if start_memory is not None:
-                memory.mode = int(start_memory[k0 + len(memories)][0])
-                memory.dmin = float(start_memory[k0 + len(memories)][1])
-            memory.history = []
-            mems.append(memory)
-            memories.append(memory)
-        corner_items.append((tj, sides, mems))
+    def new_memory(floor, clearance, event):
+        memory = ImpactMemory(floor, clearance)
+        if start_memory is not None:
+            memory.mode = int(start_memory[event][0])
+            memory.dmin = float(start_memory[event][1])
+        return memory
 
-        def force(mbs, t, itemNumber, q, q_t, tj=tj, sides=sides, mems=mems):
-            return _corner_loads(tj, sides, q, q_t, [m.dmin for m in mems])[0]
-
-        # each corner's gap reads the coordinates and rates of every node of the joint; the
-        # corners' force is a Python user function
-        pre_step_reads += len(CORNERS) * 2 * len(node_list) + PYTHON_FORCE_ALLOCATIONS
-
-        state = _node_state(node_list)
-
-        for k in range(len(CORNERS)):
-            def gap(mbs, k=k, tj=tj, sides=sides, mems=mems, state=state):
-                # the corner's penetration and its rate
-                row = _corner_loads(tj, sides, *state(mbs), [m.dmin for m in mems])[1][k]
-                return row[1], row[6]
-
-            contacts.append((gap, mems[k]))
-        mbs.SetObjectParameter(obj, "forceUserFunction", force)
-        keep_alive += [force]
+    ctx = SimpleNamespace(mbs=mbs, nodes=nodes, pts=pts, generic_element=_generic_element,
+                          node_state=_node_state, new_memory=new_memory,
+                          python_force=PYTHON_FORCE_ALLOCATIONS, memories=memories,
+                          contacts=contacts, keep_alive=keep_alive,
+                          pre_step_reads=pre_step_reads)
+    element_items = {el.kind: el.exudyn_build(linkage, ctx) for el in ELEMENTS}
+    pre_step_reads = ctx.pre_step_reads
     if contacts:
         mbs.SetPreStepUserFunction(_pre_step(contacts, step, settings.onset == "predict"))
     ecc_sign = -1.0 if settings.contact == "sphere" else 1.0
@@ -1201,9 +1118,9 @@ def build(linkage: Linkage, settings: ExudynSettings | None = None,
     sensors: dict = {}
     if "reactions" in want:
         prismatic = {j.name: j for j in linkage.joints if isinstance(j, Prismatic)}
-        guides = {j.name for j in linkage.translational_joints}
+        after = {n for el in ELEMENTS for n in el.exudyn_ground_joints(linkage)}
         for name in linkage.ground_joints():
-            if name in guides:          # from the corners' forces after the run
+            if name in after:           # from an element's series after the run
                 continue
             # a prismatic joint outputs its force in marker 0's (body_a's) frame
             var = OVT.ForceLocal if name in prismatic else OVT.Force
@@ -1228,7 +1145,7 @@ def build(linkage: Linkage, settings: ExudynSettings | None = None,
     return ExudynModel(SC=SC, mbs=mbs, linkage=linkage, settings=settings, step=step,
                        nodes=nodes, sensors=sensors, ground_signs=ground_signs,
                        ecc_sign=ecc_sign, memories=memories, keep_alive=keep_alive,
-                       corners=corner_items, pre_step_reads=pre_step_reads)
+                       elements=element_items, pre_step_reads=pre_step_reads)
 
 
 # ---------------------------------------------------------------------------- solve
@@ -1543,42 +1460,32 @@ def _clearance_series(model: ExudynModel, joint: ClearanceJoint, memory) -> dict
     return out
 
 
-def _corner_series(model: ExudynModel, joint, sides, memories) -> dict:
-    """The series of a translational joint's corners at every kept sample, from the
-    stored body states and each corner's impact velocity in force at each step
-    (`ImpactMemory.history`): (n, 4) arrays "force", "penetration", "along", "offset",
-    "friction", "slip" (`_corner_loads`) and the corners' force on the ground (n, 2)
-    "ground"."""
+def _element_series(model: ExudynModel) -> list:
+    """Every element's series of the run (`Element.exudyn_series`, registry order), from
+    the stored body states and each contact's impact velocity in force at each step
+    (`ImpactMemory.history`)."""
     t = stored(model, f"{model.linkage.bodies[0].name}.q")[:, 0]
-    bodies = [b for b in (joint.slider_body, joint.guide_body) if b != GROUND]
-    q = np.hstack([stored(model, f"{b}.q")[:, 1:4] for b in bodies])
-    qt = np.hstack([stored(model, f"{b}.v")[:, 1:4] for b in bodies])
-    dmins = []
-    for memory in memories:
+
+    def states(bodies):
+        return (np.hstack([stored(model, f"{b}.q")[:, 1:4] for b in bodies]),
+                np.hstack([stored(model, f"{b}.v")[:, 1:4] for b in bodies]))
+
+    def impact_velocity(memory):
         hist = np.asarray(memory.history).reshape(-1, 2)
-        if len(hist):
-            at = np.clip(np.searchsorted(hist[:, 0], t, side="right") - 1, 0, len(hist) - 1)
-            dmins.append(np.where(hist[at, 0] <= t, hist[at, 1], memory.floor))
-        else:
-            dmins.append(np.full(len(t), memory.floor))
-    rows = np.empty((len(t), 4, 7))
-    ground = np.zeros((len(t), 2))
-    for i in range(len(t)):
-        loads, series = _corner_loads(joint, sides, q[i], qt[i], [d[i] for d in dmins])
-        rows[i] = series
-        if joint.guide_body == GROUND:     # the slider's loads, reversed
-            ground[i] = -np.asarray(loads[:2])
-    names = ("force", "penetration", "along", "offset", "friction", "slip")
-    out = {k: rows[:, :, j].copy() for j, k in enumerate(names)}
-    out["ground"] = ground
-    return out
+        if not len(hist):
+            return np.full(len(t), memory.floor)
+        at = np.clip(np.searchsorted(hist[:, 0], t, side="right") - 1, 0, len(hist) - 1)
+        return np.where(hist[at, 0] <= t, hist[at, 1], memory.floor)
+
+    return [el.exudyn_series(model.elements[el.kind], t, states, impact_velocity)
+            for el in ELEMENTS]
 
 
 def _reactions(model: ExudynModel) -> tuple[np.ndarray, dict]:
     t = None
     reactions = {}
     for name in model.linkage.ground_joints():
-        if f"{name}.force" not in model.sensors:    # a translational joint's guide
+        if f"{name}.force" not in model.sensors:    # an element's (`_element_series`)
             continue
         F = stored(model, f"{name}.force")
         t = F[:, 0].copy() if t is None else t
@@ -1646,10 +1553,9 @@ def run_linkage(linkage: Linkage, revolutions: int | None, settings: ExudynSetti
     ecc, pen, force = [], [], []
     joint_series = [_clearance_series(model, cj, m)
                     for cj, m in zip(linkage.clearance_joints, model.memories)]
-    corners = [_corner_series(model, *item) for item in model.corners]
-    for (tj, _, _), series in zip(model.corners, corners):
-        if tj.guide_body == GROUND:
-            reactions[tj.name] = series["ground"]
+    elements = _element_series(model)
+    for series in elements:
+        reactions.update(series.reactions)
     shaking = sum(reactions[g] for g in reactions)
     monitored = shaking if linkage.monitor_joint is None else reactions[linkage.monitor_joint]
     for cj, series in zip(linkage.clearance_joints, joint_series):
@@ -1666,11 +1572,10 @@ def run_linkage(linkage: Linkage, revolutions: int | None, settings: ExudynSetti
         ecc.append(e)
         pen.append(r - cj.clearance)
         force.append(np.where(r > 0.0, fn, 0.0))
-    for series in corners:
-        for k in range(len(CORNERS)):
-            ecc.append(np.column_stack([series["along"][:, k], series["offset"][:, k]]))
-            pen.append(series["penetration"][:, k])
-            force.append(series["force"][:, k])
+    for series in elements:
+        ecc += series.eccentricity
+        pen += series.penetration
+        force += series.force
     penetration = np.column_stack(pen)
     work = None
     if not free:
@@ -1681,8 +1586,7 @@ def run_linkage(linkage: Linkage, revolutions: int | None, settings: ExudynSetti
     coords, rates, accs = _coordinates(model)
     friction = [series["friction_power"] for series in joint_series
                 if "friction_power" in series]
-    friction += [np.sum(series["friction"] * series["slip"], axis=1)
-                 for (tj, _, _), series in zip(model.corners, corners) if tj.has_friction]
+    friction += [power for series in elements for power in series.friction_power]
     friction_work = None
     if friction:
         power = sum(friction)

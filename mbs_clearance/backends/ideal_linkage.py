@@ -33,7 +33,8 @@ import math
 import numpy as np
 
 from .._checks import MemoryLimitError, check_int, check_max_memory, check_real, format_bytes
-from ..model.linkage import CORNERS, GROUND, Linkage, Revolute
+from ..elements.registry import ELEMENTS
+from ..model.linkage import GROUND, Linkage, Revolute
 from .kinematics import coordinate_series, perp, turn
 
 __all__ = ["simulate_ideal_linkage", "peak_ideal_linkage", "IdealModel"]
@@ -56,8 +57,8 @@ class IdealModel:
     Body k (0 is the ground, then the description's bodies in order) has the coordinates
     3 (k - 1) ... 3 (k - 1) + 2 of a state (x, y, angle). Rows, in order: each ideal joint
     (a revolute: 2, a prismatic: the offset across its axis and the angle between the
-    bodies), each revolute clearance joint as a pin (2), each translational clearance joint
-    as a prismatic (2), the drive (1).
+    bodies), each revolute clearance joint as a pin (2), each element's joint as its ideal
+    prismatic (2, `Element.ideal_slides`: a translational clearance joint's), the drive (1).
     """
 
     def __init__(self, linkage: Linkage, angles: dict[str, float]):
@@ -93,10 +94,9 @@ class IdealModel:
                       angles.get(j.body_b, 0.0) - angles.get(j.body_a, 0.0))
         for cj in linkage.clearance_joints:
             pin(cj.name, cj.journal_body, cj.journal_point, cj.bearing_body, cj.bearing_point)
-        for tj in linkage.translational_joints:
-            slide(tj.name, tj.guide_body, tj.guide_point, tj.angle, tj.slider_body,
-                  tj.slider_point,
-                  angles.get(tj.slider_body, 0.0) - angles.get(tj.guide_body, 0.0))
+        for el in ELEMENTS:
+            for args in el.ideal_slides(linkage, angles):
+                slide(*args)
         self.drive_row = None
         if linkage.drive is not None:
             crank = next(j.body_b for j in linkage.joints if j.name == linkage.drive.joint)
@@ -448,8 +448,8 @@ def constrained_run(linkage: Linkage, revolutions: int | None = None, **options)
     monitored = shaking if linkage.monitor_joint is None else reactions[linkage.monitor_joint]
     magnitude = np.hypot(monitored[:, 0], monitored[:, 1])
     contact = [_pin_force(model, jac, lam, cj.name) for cj in linkage.clearance_joints]
-    for tj in linkage.translational_joints:
-        contact += _corner_forces(model, lam, tj)
+    for el in ELEMENTS:
+        contact += el.ideal_contact_forces(linkage, lambda name: lam[:, model.rows[name]])
     contact = np.column_stack(contact)
     moment = work = None
     if linkage.drive is not None:
@@ -481,20 +481,6 @@ def _pin_force(model: IdealModel, jac, lam, joint: str) -> np.ndarray:
     """|force| (N) an ideal pin transmits: its two multipliers' magnitude."""
     rows = model.rows[joint]
     return np.hypot(lam[:, rows[0]], lam[:, rows[1]])
-
-
-def _corner_forces(model: IdealModel, lam, tj) -> list[np.ndarray]:
-    """The four corners' normal forces (N, `CORNERS` order) of an ideal translational joint
-    whose multipliers are lambda (offset) and mu (angle): the slider receives -lambda along
-    the guide's normal at its centre and the moment -mu, so its end e (+-1, at e a along
-    the axis) is pushed by F_e = -(lambda + e mu / a) / 2 along the normal, by the corner on
-    the side opposite to F_e's direction; the other corner carries nothing."""
-    lam_n, mu = lam[:, model.rows[tj.name][0]], lam[:, model.rows[tj.name][1]]
-    out = []
-    for along, side in CORNERS.values():
-        push = -0.5 * (lam_n + along * mu / tj.half_length)
-        out.append(np.where(np.sign(push) == -side, np.abs(push), 0.0))
-    return out
 
 
 def _tree_series(linkage: Linkage, q, v, a):

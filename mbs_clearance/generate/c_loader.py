@@ -63,10 +63,10 @@ def check_arguments(linkage, specialise) -> None:
 
 def _printer_version() -> str:
     """The digest of what makes a model's C source besides its structure (whose digest
-    covers the derivation and the plan): the C printer, this loader and the profiles'
+    covers the derivation and the plan): the C printers, this loader and the profiles'
     layout."""
     h = hashlib.sha256()
-    for name in ("cwriter.py", "c_loader.py", "profiles.py"):
+    for name in ("cwriter.py", "cjacobians.py", "c_loader.py", "profiles.py"):
         h.update((_HERE / name).read_bytes().replace(b"\r\n", b"\n") + b"\0")
     return h.hexdigest()[:16]
 

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import re
 
+from ..elements.registry import ELEMENTS
 from .jacobians import emit_body, jacobian_plan
 
 __all__ = ["jacobian_functions", "translate"]
@@ -135,7 +136,7 @@ def jacobian_functions(c, d, pl) -> tuple[list[str], dict]:
     constants are numbered after the kernels'."""
     from .writer import _out_columns
 
-    out_columns, _ = _out_columns(d, pl.events, pl.fric, pl.lub, pl.corner_fric, pl.driven)
+    out_columns, _ = _out_columns(d, pl.events, pl.fric, pl.lub, pl.parts, pl.driven)
     plan = jacobian_plan(c.w, d, out_columns)
 
     def stage(exprs, names, temps):
@@ -163,7 +164,7 @@ def jacobian_functions(c, d, pl) -> tuple[list[str], dict]:
                 + ["    if (full) {"] + ["        " + ln for ln in full] + ["    }"])
 
     floors = [ci["impact_velocity_floor"] for ci in pl.contact]
-    floors += [ci["impact_velocity_floor"] for ci in pl.corner_indices]
+    floors += [f for el in ELEMENTS for _, f in pl.parts[el.kind].floors]
     n_z = plan.n_z
     lines = [
         "/* ---- the Jacobian and tangent kernels (generate/cjacobians.py): rows of jac",

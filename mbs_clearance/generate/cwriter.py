@@ -17,6 +17,7 @@ import re
 import sympy as sp
 from sympy.printing.c import C99CodePrinter
 
+from ..elements.registry import ELEMENTS
 from ..laws.registry import FRICTION_SLOTS
 from .cjacobians import jacobian_functions
 from .derive import Derivation
@@ -151,8 +152,10 @@ def metadata(d: Derivation, linkage_name: str, structure: dict, zeros: tuple, pl
              n_constants: int) -> dict:
     """What a model exposes beside its kernels, for the C model's callers."""
     params = pl.params
-    out_columns, mon = _out_columns(d, pl.events, pl.fric, pl.lub, pl.corner_fric, pl.driven)
-    friction = ([d.joints[j] for j in pl.fric] + [d.corners[k][0] for k in pl.corner_fric])
+    out_columns, mon = _out_columns(d, pl.events, pl.fric, pl.lub, pl.parts, pl.driven)
+    friction = [d.joints[j] for j in pl.fric]
+    for el in ELEMENTS:
+        friction += el.friction_contacts(d.parts[el.kind], pl.parts[el.kind])
     n = pl.n
     return dict(
         LINKAGE=linkage_name, STRUCTURE_DIGEST=structure_digest(structure),
@@ -279,11 +282,8 @@ def render_c(d: Derivation, linkage_name: str, structure: dict,
             continue
         out += [f"    if (j == {j}) {{ gap_{j}(t, y, p, g); gap_state(g[0], g[1], g[2], g[3], "
                 f"p[{ci['clearance']}], &dd[0], &dd[1], &nx, &ny); return; }}"]
-    for ci in pl.corner_indices:
-        e = ci["event"]
-        out += [f"    if (j == {e}) {{ gap_{e}(t, y, p, g); corner_state(g[1], g[3], "
-                f"{ci['side']}, p[{ci['clearance']}], p[{ci['half_height']}], &dd[0], "
-                "&dd[1]); return; }"]
+    for el in ELEMENTS:
+        out += el.penetration_lines(pl.parts[el.kind])
     out += ["    (void)nx; (void)ny;", *(["    (void)rb; (void)slope;"] if profiles else []),
             "}", "",
             "static void event(double t, const double *y, const double *p, int64_t j, "
@@ -296,7 +296,7 @@ def render_c(d: Derivation, linkage_name: str, structure: dict,
             "    double dd[2];", "    penetration(t, y, p, j, dd);", "    p[k] = 1.0;",
             "    double floor_ = 0.0;"]
     floors = [(j, ci["impact_velocity_floor"]) for j, ci in enumerate(pl.contact)]
-    floors += [(ci["event"], ci["impact_velocity_floor"]) for ci in pl.corner_indices]
+    floors += [f for el in ELEMENTS for f in pl.parts[el.kind].floors]
     out += [f"    if (j == {j}) floor_ = p[{fl}];" for j, fl in floors]
     out += ["    if (j >= 0 && j < N_EVENTS)",
             "        p[k + 1] = floor_ > dd[1] ? floor_ : dd[1];   /* python's max */",
@@ -383,16 +383,16 @@ def _sens_functions(meta: dict) -> list[str]:
 
 def _closure_functions(c: _C, d: Derivation, pl) -> list[str]:
     """The loop closure at coordinates q (closure, closure_jacobian and closure_rate): the
-    clearance joints' gaps, then the sliders' offsets and tilts, into res[nc] (the Jacobian
-    row-major, res[nc * N_Q])."""
+    clearance joints' gaps, then the elements' closures (`Element.closure`), into res[nc]
+    (the Jacobian row-major, res[nc * N_Q])."""
     w, n, J = pl.w, pl.n, len(d.joints)
-    nc = 2 * J + 2 * len(d.slider_closure)
+    closing = [e for el in ELEMENTS for e in el.closure(d.parts[el.kind])]
+    nc = 2 * J + len(closing)
     value = [f"c{i}" for i in range(nc)]
     jacobian = [f"c{i}_{k}" for i in range(nc) for k in range(n)]
     bodies = (
         ("mbs_closure", value, c.function([([e for g in pl.gap_exprs[:J] for e in g[:2]]
-                                            + [w.split(e) for cc in d.slider_closure
-                                               for e in cc], value)])),
+                                            + [w.split(e) for e in closing], value)])),
         ("mbs_closure_jacobian", jacobian,
          c.function([([w.split(d.closure_jacobian[i, k]) for i in range(nc)
                        for k in range(n)], jacobian)])),

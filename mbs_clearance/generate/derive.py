@@ -20,15 +20,18 @@ from __future__ import annotations
 import keyword
 import re
 from dataclasses import dataclass, field
+from types import SimpleNamespace
 
 import sympy as sp
 import sympy.physics.mechanics as me
 
+from ..elements.base import CONTACT_FIELDS
+from ..elements.registry import ELEMENTS
 from ..laws.registry import FRICTION_SLOTS
-from ..model.linkage import CORNERS, GROUND, Linkage, Prismatic, Revolute
+from ..model.linkage import GROUND, Linkage, Prismatic, Revolute
 
 __all__ = ["Derivation", "derive", "parameter_layout", "identifier",
-           "specialise", "LUBRICATION_FIELDS", "TRANSLATIONAL_FIELDS"]
+           "specialise", "LUBRICATION_FIELDS"]
 
 
 def identifier(name: str, taken: set[str]) -> str:
@@ -49,10 +52,10 @@ def parameter_layout(linkage: Linkage) -> tuple[str, ...]:
     (mass, inertia, points), ground points, prismatic axis angles, per clearance joint
     (clearance, stiffness, restitution, contact_model id, impact_velocity_floor), per
     clearance joint with friction (friction_law id, coefficient, v0, v1, journal and bearing
-    radius), per translational clearance joint (its contact fields, half-length,
-    half-height, the guide's and the slider's axis angles; with friction the law's), the
-    drive, gravity, then the memory (mode, impact velocity) of each clearance joint, then of
-    each corner of the translational joints."""
+    radius), per lubricated clearance joint its film's fields, then each element's
+    (`elements.registry`, e.g. a translational clearance joint's contact fields and
+    geometry), the drive, gravity, then the memory (mode, impact velocity) of each
+    clearance joint, then of each element's contacts."""
     names = []
     for b in linkage.bodies:
         names += [f"{b.name}.mass", f"{b.name}.inertia"]
@@ -69,33 +72,21 @@ def parameter_layout(linkage: Linkage) -> tuple[str, ...]:
     for j in linkage.clearance_joints:
         if j.has_lubrication:
             names += [f"{j.name}.{f}" for f in LUBRICATION_FIELDS]
-    for j in linkage.translational_joints:
-        names += [f"{j.name}.{f}" for f in TRANSLATIONAL_FIELDS]
-        if j.has_friction:
-            names += [f"{j.name}.{f}" for f in ("friction_law", *FRICTION_SLOTS)]
+    for el in ELEMENTS:
+        names += el.parameter_names(linkage)
     if linkage.drive is not None:       # a free linkage has no drive parameters
         names += ["drive.speed", "drive.initial_angle"]
     names += ["gravity"]
     for j in linkage.clearance_joints:
         names += [f"{j.name}.mode", f"{j.name}.impact_velocity"]
-    for j in linkage.translational_joints:
-        for c in j.corner_names():
-            names += [f"{c}.mode", f"{c}.impact_velocity"]
+    for el in ELEMENTS:
+        names += el.memory_names(linkage)
     return tuple(names)
 
-
-#: per clearance joint, the entries of p read by the contact law
-CONTACT_FIELDS = ("clearance", "stiffness", "restitution", "contact_model",
-                  "impact_velocity_floor")
 
 #: per clearance joint with friction, the entries of p read by the friction law and the
 #: tangential slip (the radii put the contact point on each body's surface)
 FRICTION_FIELDS = ("friction_law", *FRICTION_SLOTS, "journal_radius", "bearing_radius")
-
-#: per translational clearance joint, the entries of p read by its corners' contacts
-#: (CONTACT_FIELDS first, as a clearance joint's) and its geometry
-TRANSLATIONAL_FIELDS = (*CONTACT_FIELDS, "half_length", "half_height", "angle",
-                        "slider_angle")
 
 #: per lubricated clearance joint, the entries of p read by the film (`laws.lubrication`)
 LUBRICATION_FIELDS = ("lubrication", "viscosity", "bearing_length", "journal_radius",
@@ -144,15 +135,20 @@ class Derivation:
     #: velocities (omega_J, omega_B) (None: not lubricated)
     TL: list = field(default_factory=list)
     omegas: list = field(default_factory=list)
-    #: per corner of the translational clearance joints (events after the clearance
-    #: joints'): (contact name, joint name, side +1 top / -1 bottom, symbol of the normal
-    #: force on the slider along the guide's normal, symbol of the friction force on it along
-    #: the guide's axis or None); their gaps (position along the axis, normal offset, their
-    #: rates) follow the clearance joints' in `gaps`
-    corners: list = field(default_factory=list)
-    #: per translational clearance joint: the slider centre's normal offset and half_length
-    #: times the sine of its tilt (the loop closure beside the clearance joints' gaps)
-    slider_closure: list = field(default_factory=list)
+    #: per element kind (`elements.registry`, in its order) the element's share
+    #: (`Element.finish`): its contacts (events after the clearance joints'), their gaps
+    #: (which follow the clearance joints' in `gaps`), its loop closure and load symbols
+    parts: dict = field(default_factory=dict)
+
+    @property
+    def events(self) -> list[str]:
+        """The contacts with a memory: the clearance joints, then the elements'."""
+        return [*self.joints, *(c for part in self.parts.values() for c in part.contacts)]
+
+    @property
+    def load_symbols(self) -> list:
+        """The elements' force symbols (state-dependent, as FX, FY)."""
+        return [s for part in self.parts.values() for s in part.symbols]
 
 
 def _rot(c, s, x, y):
@@ -316,45 +312,11 @@ def derive(linkage: Linkage) -> Derivation:
             torque_loads.append((body, tau))
             if body != GROUND:
                 loads.append((frames[body], tau * N.z))
-    # translational clearance joints: each corner's normal force FN (along the guide's
-    # normal n) and friction FT (along its axis u) act on the slider at the corner; on the
-    # guide the opposite force acts at the same place: moved to the guide point, with its
-    # moment about it (a load at the corner's expression would move with the slider)
-    corners, corner_gaps_t, closure_t, guide_forces = [], [], [], {}
-    for tj in linkage.translational_joints:
-        gx, gy = world(tj.guide_body, local(tj.guide_body, tj.guide_point))
-        sx, sy = world(tj.slider_body, local(tj.slider_body, tj.slider_point))
-        alpha = psyms[f"{tj.name}.angle"]
-        beta = psyms[f"{tj.name}.slider_angle"]
-        ux, uy = _rot(*rot[tj.guide_body], sp.cos(alpha), sp.sin(alpha))
-        nx, ny = -uy, ux
-        ax, ay = _rot(*rot[tj.slider_body], sp.cos(beta), sp.sin(beta))
-        a, b = psyms[f"{tj.name}.half_length"], psyms[f"{tj.name}.half_height"]
-        closure_t.append((nx * (sx - gx) + ny * (sy - gy), a * (nx * ax + ny * ay)))
-        for cname, (sa, sb) in zip(tj.corner_names(), CORNERS.values()):
-            k = len(corners)
-            FN = sp.Symbol(f"FN{k}", real=True)
-            FT = sp.Symbol(f"FT{k}", real=True) if tj.has_friction else None
-            corners.append((cname, tj.name, sb, FN, FT))
-            cx = sx + sa * a * ax - sb * b * ay
-            cy = sy + sa * a * ay + sb * b * ax
-            rx, ry = cx - gx, cy - gy
-            corner_gaps_t.append((ux * rx + uy * ry, nx * rx + ny * ry))
-            fx, fy = FN * nx, FN * ny
-            if FT is not None:
-                fx, fy = fx + FT * ux, fy + FT * uy
-            contact_loads.append((tj.slider_body, (cx, cy), fx, fy))
-            contact_loads.append((tj.guide_body, (gx, gy), -fx, -fy))
-            guide_forces.setdefault(tj.name, []).append((-fx, -fy))
-            tau = -(rx * fy - ry * fx)
-            torque_loads.append((tj.guide_body, tau))
-            if tj.slider_body != GROUND:
-                loads.append((mech_point(f"K_{k}_{tj.slider_body}", (cx, cy)),
-                              fx * N.x + fy * N.y))
-            if tj.guide_body != GROUND:
-                loads.append((mech_point(f"KG_{k}_{tj.guide_body}", (gx, gy)),
-                              -fx * N.x - fy * N.y))
-                loads.append((frames[tj.guide_body], tau * N.z))
+    # the elements' loads (and their gaps, kept in their states)
+    ctx = SimpleNamespace(psyms=psyms, world=world, local=local, rot=rot, frames=frames,
+                          mech_point=mech_point, N=N, loads=loads,
+                          contact_loads=contact_loads, torque_loads=torque_loads)
+    states = {el.kind: el.add_loads(linkage, ctx) for el in ELEMENTS}
     kane = me.KanesMethod(N, q_ind=q, u_ind=u,
                           kd_eqs=[q[i].diff(t) - u[i] for i in range(n)])
     kane.kanes_equations(bodies, loads)
@@ -386,8 +348,8 @@ def derive(linkage: Linkage) -> Derivation:
     for jt in linkage.joints:
         if isinstance(jt, Prismatic):
             base.append(psyms[f"{jt.name}.angle"])
-    for tj in linkage.translational_joints:
-        base += [psyms[f"{tj.name}.angle"], psyms[f"{tj.name}.slider_angle"]]
+    for el in ELEMENTS:
+        base += el.base_angles(linkage, psyms)
     angles = [(a, sp.Symbol(f"S{k}", real=True), sp.Symbol(f"C{k}", real=True))
               for k, a in enumerate(base)]
     trig = {}
@@ -414,10 +376,9 @@ def derive(linkage: Linkage) -> Derivation:
     gaps = []
     for ex, ey in gaps_t:
         gaps.append(tuple(finish(v) for v in (ex, ey, dt(ex), dt(ey))))
-    for sx_, h in corner_gaps_t:
-        gaps.append(tuple(finish(v) for v in (sx_, h, dt(sx_), dt(h))))
-    slider_closure = [tuple(finish(v) for v in pair) for pair in closure_t]
-    slider_rates = [finish(dt(v)) for pair in closure_t for v in pair]
+    parts = {el.kind: el.finish(states[el.kind], finish, dt) for el in ELEMENTS}
+    for part in parts.values():
+        gaps += part.gaps
     # the slip velocity's rotation part: d/dt of (angle_J R_J - angle_B R_B)
     spins = [None if e is None else finish(dt(e)) for e in spin_t]
     omegas = [None if e is None else tuple(finish(dt(a)) for a in e) for e in omega_t]
@@ -445,14 +406,13 @@ def derive(linkage: Linkage) -> Derivation:
                     rx -= fx
                     ry -= fy
             reactions.append((finish(-rx), finish(-ry)))
-        elif name not in clear_by_name:         # a translational joint's ground guide
-            forces = guide_forces[name]
-            reactions.append((finish(sum(f[0] for f in forces)),
-                              finish(sum(f[1] for f in forces))))
-        else:
+        elif name in clear_by_name:
             j, cj = clear_by_name[name]
             sign = -1 if cj.journal_body == GROUND else 1
             reactions.append((sign * FX[j], sign * FY[j]))
+        else:                                   # an element's joint to the ground
+            reactions.append(next(r for r in (el.ground_reaction(states[el.kind], name, finish)
+                                              for el in ELEMENTS) if r is not None))
     # the drive moment: the generalized force of the prescribed drive angle (Kane's form
     # of the paper's Eq. 8; with the other equations of motion it equals the moment balance
     # of the driven subtree about its pivot): sum over bodies of (m a + m g ey) . dr/dtheta
@@ -478,7 +438,8 @@ def derive(linkage: Linkage) -> Derivation:
         potential += mass[b.name] * g * y
     # the gaps' rates are linear in U: d gap / dQ are their coefficients, d gap / dt at
     # fixed q the rest
-    rates = sp.Matrix([v for gap in gaps[:len(gaps_t)] for v in gap[2:]] + slider_rates)
+    rates = sp.Matrix([v for gap in gaps[:len(gaps_t)] for v in gap[2:]]
+                      + [v for part in parts.values() for v in part.closure_rates])
     jac = rates.jacobian(U)
     rate = rates.xreplace({Ui: 0 for Ui in U})
     return Derivation(
@@ -489,7 +450,7 @@ def derive(linkage: Linkage) -> Derivation:
         reactions=reactions, drive_moment=finish(moment), kinetic=finish(kinetic),
         potential=finish(potential), closure_jacobian=jac, closure_rate=rate,
         monitor=linkage.monitor_joint, TQ=TQ, spins=spins, TL=TL, omegas=omegas,
-        corners=corners, slider_closure=slider_closure)
+        parts=parts)
 
 
 def _reduce_trig(expr, ideal, gens):
@@ -537,4 +498,5 @@ def specialise(d: Derivation, zeros) -> Derivation:
         closure_rate=d.closure_rate.applyfunc(sub), monitor=d.monitor, extra=dict(d.extra),
         TQ=d.TQ, spins=[sub(e) for e in d.spins], TL=d.TL,
         omegas=[None if e is None else tuple(sub(a) for a in e) for e in d.omegas],
-        corners=d.corners, slider_closure=[tuple(sub(e) for e in c) for c in d.slider_closure])
+        parts={el.kind: el.specialise(d.parts[el.kind], sub) for el in ELEMENTS
+               if el.kind in d.parts})

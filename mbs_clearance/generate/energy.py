@@ -15,6 +15,7 @@ from __future__ import annotations
 import math
 import threading
 
+from ..elements.registry import ELEMENTS
 from ..model.linkage import Linkage
 from .key import model_structure, structure_digest
 
@@ -53,16 +54,16 @@ def _energy(linkage: Linkage):
         return sp.lambdify(args, sp.sympify(expr).xreplace(angles), modules="math")
 
     body = numeric(d.kinetic + d.potential)
-    # per clearance joint the journal's offset (x, y); per corner its normal offset (y)
+    # per clearance joint the journal's offset (x, y); per element contact its offsets
     offset_x = [numeric(g[0]) for g in d.gaps[:J]]
     offset_y = [numeric(g[1]) for g in d.gaps]
-    events = [*d.joints, *(c[0] for c in d.corners)]
-    mem_start = params.index(f"{events[0]}.mode")
+    mem_start = params.index(f"{d.events[0]}.mode")
     joints = [(params.index(f"{name}.clearance"), params.index(f"{name}.stiffness"))
               for name in d.joints]
-    corners = [(float(side), params.index(f"{tname}.clearance"),
-                params.index(f"{tname}.half_height"), params.index(f"{tname}.stiffness"))
-               for _, tname, side, _, _ in d.corners]
+    elements, first = [], J
+    for el in ELEMENTS:
+        elements.append(el.contact_energy(d.parts[el.kind], params, first, offset_y))
+        first += len(d.parts[el.kind].contacts)
 
     def energy(t, y, p):
         a = [float(t), *(float(v) for v in y[:2 * n]), *(float(v) for v in p[:len(params)])]
@@ -72,12 +73,8 @@ def _energy(linkage: Linkage):
                 delta = math.hypot(offset_x[j](*a), offset_y[j](*a)) - p[ic]
                 if delta > 0.0:
                     e += p[ik] * delta * delta * math.sqrt(delta) / 2.5
-        for k, (side, ic, ih, ik) in enumerate(corners):
-            ev = J + k
-            if p[mem_start + 2 * ev] > 0.5:
-                delta = side * offset_y[ev](*a) - (p[ih] + p[ic])
-                if delta > 0.0:
-                    e += p[ik] * delta * delta * math.sqrt(delta) / 2.5
+        for contact_energy in elements:
+            e += contact_energy(a, p, mem_start)
         return e
 
     return energy

@@ -32,6 +32,7 @@ from types import SimpleNamespace
 
 import sympy as sp
 
+from ..elements.registry import ELEMENTS
 from ..laws.registry import FRICTION_SLOTS
 from .derive import Derivation
 
@@ -97,13 +98,13 @@ def jacobian_plan(w, d: Derivation, out_columns: list[str]) -> SimpleNamespace:
         for m, what in enumerate(("wj", "wb", "tb")):
             extra[(what, j)] = n_out + 4 * J + len(fric) + 3 * k + m
     n_rows = n_out + 4 * J + len(fric) + 3 * len(lub)
-    # per corner of the translational clearance joints (event e = J + k): the rates of its
-    # axial position and normal offset, the normal force on the slider
-    corners = list(d.corners)
-    for k in range(len(corners)):
-        for m, what in enumerate(("exd", "eyd", "fn")):
-            extra[(what, J + k)] = n_rows + 3 * k + m
-    n_rows += 3 * len(corners)
+    # the elements' rows after the clearance joints' (their contacts numbered from J)
+    first = {}
+    for el in ELEMENTS:
+        first[el.kind] = J + sum(len(d.parts[k].contacts) for k in first)
+        rows = el.jacobian_rows(d.parts[el.kind], first[el.kind], n_rows)
+        extra.update(rows)
+        n_rows += len(rows)
     params = list(d.parameters)
     pcol = {name: 1 + 2 * n + i for i, name in enumerate(params)}
 
@@ -166,7 +167,7 @@ def jacobian_plan(w, d: Derivation, out_columns: list[str]) -> SimpleNamespace:
 
     # ---- the gaps of the clearance joints (and the spins): values and partials
     gap_items = []          # (value name or None, row, expression, gradient)
-    events = [*d.joints, *(c[0] for c in corners)]
+    events = d.events
     for j, gap in enumerate(d.gaps):
         rows4 = [row[f"{events[j]}.ecc_x"], row[f"{events[j]}.ecc_y"],
                  extra[("exd", j)], extra[("eyd", j)]]
@@ -246,33 +247,11 @@ def jacobian_plan(w, d: Derivation, out_columns: list[str]) -> SimpleNamespace:
                           f"{nz}, " + args)
             tlines.append(f"{d.FX[j]}, {d.FY[j]}, {TJ}, {TB} = film_tangent(out, ts, nd, dz, "
                           f"{nz}, " + args)
-    for k, (cname, tname, side, FN, FT) in enumerate(corners):
-        e = J + k
-        rows = [row[f"{cname}.{f}"] for f in ("contact_force", "penetration",
-                                              "penetration_rate", "ecc_x", "ecc_y")]
-        rows += [extra[(what, e)] for what in ("exd", "eyd", "fn")]
-        zc = [pcol[f"{tname}.{f}"] for f in ("clearance", "half_height", "stiffness",
-                                             "restitution")] + [pcol[f"{cname}.impact_velocity"]]
-        pv = [repr(float(side))] + [f"p[{pcol[nm] - 1 - 2 * n}]" for nm in (
-            f"{tname}.clearance", f"{tname}.half_height", f"{cname}.mode",
-            f"{cname}.impact_velocity", f"{tname}.stiffness", f"{tname}.restitution",
-            f"{tname}.contact_model")]
-        args = (f"gv{e}_0, gv{e}_1, gv{e}_2, gv{e}_3, "
-                + ", ".join(str(v) for v in rows + zc + pv) + ")")
-        jlines.append(f"{FN} = corner_jacobian(jac, {stride}, {nz}, " + args)
-        tlines.append(f"{FN} = corner_tangent(out, ts, nd, dz, {nz}, " + args)
-        if FT is not None:
-            frows = [extra[("exd", e)], row[f"{cname}.contact_force"]] + [
-                row[f"{cname}.{f}"] for f in ("friction_force", "slip_velocity",
-                                              "friction_power")]
-            comma = "," if len(FRICTION_SLOTS) == 1 else ""
-            fc = ", ".join(f"{pcol[f'{tname}.{f}']}" for f in FRICTION_SLOTS) + comma
-            fv = ", ".join(f"p[{pcol[f'{tname}.{f}'] - 1 - 2 * n}]"
-                           for f in FRICTION_SLOTS) + comma
-            law = f"p[{pcol[f'{tname}.friction_law'] - 1 - 2 * n}]"
-            args = ", ".join(str(v) for v in frows) + f", ({fc}), {law}, ({fv}))"
-            jlines.append(f"{FT} = corner_friction_jacobian(jac, {stride}, {nz}, " + args)
-            tlines.append(f"{FT} = corner_friction_tangent(out, ts, nd, dz, {nz}, " + args)
+    ctx = SimpleNamespace(row=row, extra=extra, pcol=pcol, n=n, stride=stride, nz=nz)
+    for el in ELEMENTS:
+        jl, tl = el.jacobian_lines(d.parts[el.kind], first[el.kind], ctx)
+        jlines += jl
+        tlines += tl
     J_stages.append(jlines)
     T_stages.append(tlines)
 
@@ -304,10 +283,8 @@ def jacobian_plan(w, d: Derivation, out_columns: list[str]) -> SimpleNamespace:
         if j in lub:
             loads.append((d.TL[j][0], row[f"{d.joints[j]}.film_torque"], "rtj", j))
             loads.append((d.TL[j][1], extra[("tb", j)], "rtb", j))
-    for k, (cname, _, _, FN, FT) in enumerate(corners):
-        loads.append((FN, extra[("fn", J + k)], "rfn", J + k))
-        if FT is not None:
-            loads.append((FT, row[f"{cname}.friction_force"], "rft", J + k))
+    for el in ELEMENTS:
+        loads += el.force_loads(d.parts[el.kind], first[el.kind], row, extra)
     for i in range(n):
         g = grad(R[i])
         rgrad.append(g)
@@ -400,11 +377,8 @@ def jacobian_plan(w, d: Derivation, out_columns: list[str]) -> SimpleNamespace:
                     tonames.append(f"o{what}_{m}_{j}")
                     terms.append(f"o{what}_{m}_{j} * jac[{frow * stride} + col]")
                     tterms.append(f"o{what}_{m}_{j} * out[{frow} * ts + d]")
-        for k, (cname, _, _, FN, FT) in enumerate(corners):
-            lds = [("fn", FN, extra[("fn", J + k)])]
-            if FT is not None:
-                lds.append(("ft", FT, row[f"{cname}.friction_force"]))
-            j = J + k
+        for j, lds in (item for el in ELEMENTS for item in el.output_loads(
+                d.parts[el.kind], first[el.kind], row, extra)):
             for what, F, frow in lds:
                 c = sp.expand(sp.diff(e, F))
                 if c != 0:
@@ -429,7 +403,7 @@ def jacobian_plan(w, d: Derivation, out_columns: list[str]) -> SimpleNamespace:
 
     extra_syms = {*d.A, *d.FX, *d.FY, *(d.TQ[j] for j in fric),
                   *(s for j in lub for s in d.TL[j]),
-                  *(s for c in corners for s in c[3:] if s is not None)}
+                  *d.load_symbols}
 
     oloop = ([f"for col in range({nz}):"] + oloop) if oloop else []
     return SimpleNamespace(

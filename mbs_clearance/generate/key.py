@@ -13,14 +13,17 @@ from ..model.linkage import GROUND, Linkage, Prismatic
 __all__ = ["GENERATOR_VERSION", "structure_digest", "geometric_zeros", "model_structure"]
 
 _HERE = Path(__file__).parent
-#: the generator's sources: any edit of them changes the key of every generated module
+#: the generator's sources: any edit of them (or of an element module, which brings its
+#: joint kind's share of the derivation and the plan) changes the key of every generated
+#: module
 _SOURCES = ("derive.py", "writer.py", "jacobians.py", "key.py")
 
 
 def _generator_version() -> str:
     h = hashlib.sha256()
-    for name in _SOURCES:
-        h.update((_HERE / name).read_bytes().replace(b"\r\n", b"\n") + b"\0")
+    elements = sorted((_HERE.parent / "elements").glob("*.py"))
+    for path in [*(_HERE / name for name in _SOURCES), *elements]:
+        h.update(path.read_bytes().replace(b"\r\n", b"\n") + b"\0")
     return h.hexdigest()[:16]
 
 

@@ -16,6 +16,7 @@ from types import SimpleNamespace
 
 import sympy as sp
 
+from ..elements.registry import ELEMENTS
 from ..laws.registry import FRICTION_SLOTS
 from .derive import FRICTION_FIELDS, LUBRICATION_FIELDS, Derivation
 
@@ -66,7 +67,7 @@ class _Writer:
         self.vars = [s for _, S, C in self.moving for s in (S, C)]
         self.vars += [*d.Q, *d.U, *d.A, *d.FX, *d.FY, *(s for s in d.TQ if s is not None)]
         self.vars += [s for pair in d.TL if pair is not None for s in pair]
-        self.vars += [s for c in d.corners for s in c[3:] if s is not None]
+        self.vars += d.load_symbols
         self.constants: dict[sp.Expr, sp.Symbol] = {}
 
     # ---- constants
@@ -131,8 +132,8 @@ def _plan(d: Derivation) -> SimpleNamespace:
     they read: the one plan the python and the C printers write out."""
     w = _Writer(d)
     n, J, G = len(d.Q), len(d.joints), len(d.ground_joints)
-    # the events: the clearance joints, then the translational joints' corners
-    events = [*d.joints, *(c[0] for c in d.corners)]
+    # the events: the clearance joints, then the elements' contacts
+    events = d.events
     E = len(events)
     params = list(d.parameters)
     mem_start = params.index(f"{events[0]}.mode")
@@ -179,30 +180,12 @@ def _plan(d: Derivation) -> SimpleNamespace:
         else:
             contact_lines.append(f"F{j}, d{j}, dd{j}, {d.FX[j]}, {d.FY[j]} = contact_stage("
                                  f"ex{j}, ey{j}, exd{j}, eyd{j}, {law})")
-    # the corners: normal offset (ey) and its rate against the surface on their side, the
-    # sliding velocity along the axis (exd) for the friction law
-    corner_indices, corner_fric = [], []
-    for k, (_, tname, side, FN, FT) in enumerate(d.corners):
-        e = J + k
-        c = {f: params.index(f"{tname}.{f}") for f in
-             ("clearance", "stiffness", "restitution", "contact_model",
-              "impact_velocity_floor", "half_height")}
-        c.update(event=e, side=repr(float(side)))
-        corner_indices.append(c)
-        law = (f"p[{c['clearance']}], p[{c['half_height']}], p[{mem_start + 2 * e}], "
-               f"p[{mem_start + 2 * e + 1}], p[{c['stiffness']}], p[{c['restitution']}], "
-               f"p[{c['contact_model']}]")
-        if FT is None:
-            contact_lines.append(f"F{e}, d{e}, dd{e}, {FN} = corner_stage(ey{e}, eyd{e}, "
-                                 f"{c['side']}, {law})")
-        else:
-            corner_fric.append(k)
-            fl = params.index(f"{tname}.friction_law")
-            contact_lines.append(
-                f"F{e}, d{e}, dd{e}, {FN}, {FT} = corner_friction_stage(ey{e}, eyd{e}, "
-                f"exd{e}, {c['side']}, {law}, p[{fl}], ("
-                + ", ".join(f"p[{params.index(f'{tname}.{f}')}]" for f in FRICTION_SLOTS)
-                + ("," if len(FRICTION_SLOTS) == 1 else "") + "))")
+    # the elements' contact stages, each element's contacts numbered from `first`
+    parts, first = {}, J
+    for el in ELEMENTS:
+        parts[el.kind] = el.plan(d.parts[el.kind], params, mem_start, first)
+        contact_lines += parts[el.kind].lines
+        first += len(d.parts[el.kind].contacts)
     M = [[w.split(d.mass_matrix[i, k]) for k in range(n)] for i in range(n)]
     f = [w.split(d.forcing[i]) for i in range(n)]
     fsyms = [sp.Symbol(f"f{i}", real=True) for i in range(n)]
@@ -236,13 +219,12 @@ def _plan(d: Derivation) -> SimpleNamespace:
         results += [str(d.TQ[j]), f"vt{j}", f"-{d.TQ[j]} * vt{j}"]
     for j in lub:
         results += [f"ffx{j}", f"ffy{j}", str(d.TL[j][0]), f"fpw{j}"]
-    for k in corner_fric:
-        ft = d.corners[k][4]
-        results += [str(ft), f"exd{J + k}", f"-{ft} * exd{J + k}"]
+    for el in ELEMENTS:
+        results += parts[el.kind].results
     return SimpleNamespace(**locals())
 
 
-def _out_columns(d: Derivation, events: list, fric: list, lub: list, corner_fric: list,
+def _out_columns(d: Derivation, events: list, fric: list, lub: list, parts: dict,
                  driven: bool) -> tuple[list[str], int]:
     """(the columns of the outputs, the column of the monitored value's x)."""
     out_columns = []
@@ -259,9 +241,8 @@ def _out_columns(d: Derivation, events: list, fric: list, lub: list, corner_fric
     for j in lub:
         out_columns += [f"{d.joints[j]}.{f}" for f in ("film_force_x", "film_force_y",
                                                         "film_torque", "film_power")]
-    for k in corner_fric:
-        out_columns += [f"{d.corners[k][0]}.{f}" for f in ("friction_force", "slip_velocity",
-                                                            "friction_power")]
+    for el in ELEMENTS:
+        out_columns += el.out_columns(d.parts[el.kind], parts[el.kind])
     if d.monitor is None:
         mon = out_columns.index("shaking_x")
     else:

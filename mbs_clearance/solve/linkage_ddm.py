@@ -26,6 +26,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from ..elements.registry import ELEMENTS
 from ..generate.sens_runtime import fill_seed_work, work_size
 from ..laws.forces import stiffness_eq9_partials
 from ..laws.lubrication.partials import check_partials
@@ -66,7 +67,6 @@ def chain(linkage: Linkage, model, names) -> list[dict[int, float]]:
     pidx = {name: i for i, name in enumerate(model.PARAMETERS)}
     off = 1 + 2 * model.N_Q
     joints = {j.name: j for j in linkage.clearance_joints}
-    sliders = {j.name for j in linkage.translational_joints}
     out = []
     for name in names:
         head, _, field = name.rpartition(".")
@@ -93,9 +93,9 @@ def chain(linkage: Linkage, model, names) -> list[dict[int, float]]:
                     entries[k_col] = d_rj
             elif derived:
                 entries[k_col] = d_e if field == "youngs_modulus" else d_nu
-        elif head in sliders and field == "contact_stiffness":
-            # a translational joint's stiffness is its own (no Eq. 9 from radii)
-            entries[off + pidx[f"{head}.stiffness"]] = 1.0
+        elif via := {n: v for el in ELEMENTS for n, v in el.chain(linkage, head, field).items()}:
+            # a field of an element's joint that reaches p under another name
+            entries.update({off + pidx[n]: v for n, v in via.items()})
         elif name not in pidx:
             raise AssertionError(f"no chain for parameter {name!r}")
         out.append({c: v for c, v in entries.items() if v != 0.0})
@@ -103,11 +103,11 @@ def chain(linkage: Linkage, model, names) -> list[dict[int, float]]:
 
 
 def floor_names(linkage: Linkage) -> list[str]:
-    """Per contact of the generated model (the clearance joints, then the translational
-    joints' corners) the name of its impact-velocity floor (a corner's is its joint's)."""
+    """Per contact of the generated model (the clearance joints, then the elements'
+    contacts) the name of its impact-velocity floor (an element's contact's is its
+    joint's)."""
     return ([f"{j.name}.impact_velocity_floor" for j in linkage.clearance_joints]
-            + [f"{j.name}.impact_velocity_floor" for j in linkage.translational_joints
-               for _ in j.corner_names()])
+            + [f for el in ELEMENTS for f in el.floor_names(linkage)])
 
 
 def _memory_sensitivities(linkage: Linkage, model, names) -> np.ndarray:
@@ -145,9 +145,9 @@ def initial_sensitivities(linkage: Linkage, model, p, y0, entries, t0: float = 0
     along the chains `entries`: the closure e(t0, q, p) = 0 and its rate edot(t0, q, qdot, p)
     = 0 differentiated (least squares where the closure is not square, as the assembly).
     A free linkage holds the coordinates and rates its `Initial` gives: theirs are zero.
-    A translational joint's closure (its slider's offset and tilt) is the mean of its
-    corners' normal offsets and of their signed ones (`linkage.CORNERS`)."""
-    if linkage.translational_joints or linkage.drive is None:
+    An element's joint closes through its own rows (`Element.closure_rows`: a
+    translational joint's slider offset and tilt)."""
+    if any(el.joints(linkage) for el in ELEMENTS) or linkage.drive is None:
         return _held_initial_sensitivities(linkage, model, p, y0, entries, t0)
     n = model.N_Q
     jac = model.jacobian_matrix(t0, y0, p, False)
@@ -173,10 +173,8 @@ def initial_sensitivities(linkage: Linkage, model, p, y0, entries, t0: float = 0
 
 
 def _held_initial_sensitivities(linkage: Linkage, model, p, y0, entries, t0: float):
-    """`initial_sensitivities` with the translational joints' closure rows and the free
-    linkage's held coordinates and rates."""
-    from ..model.linkage import CORNERS
-
+    """`initial_sensitivities` with the elements' closure rows and the free linkage's held
+    coordinates and rates."""
     n = model.N_Q
     jac = model.jacobian_matrix(t0, y0, p, False)
     out, extra = model.OUT_COLUMNS.index, model.JAC_EXTRA_ROWS
@@ -185,14 +183,10 @@ def _held_initial_sensitivities(linkage: Linkage, model, p, y0, entries, t0: flo
         for xy in "xy":
             pos.append({out(f"{j.name}.ecc_{xy}"): 1.0})
             rate.append({extra[f"e{xy}d:{j.name}"]: 1.0})
-    for tj in linkage.translational_joints:
-        for signed in (False, True):
-            pos.append({out(f"{c}.ecc_y"): 0.25 * (CORNERS[c.rpartition(".")[2]][0]
-                                                    if signed else 1.0)
-                        for c in tj.corner_names()})
-            rate.append({extra[f"eyd:{c}"]: 0.25 * (CORNERS[c.rpartition(".")[2]][0]
-                                                     if signed else 1.0)
-                         for c in tj.corner_names()})
+    for el in ELEMENTS:
+        el_pos, el_rate = el.closure_rows(linkage, out, extra)
+        pos += el_pos
+        rate += el_rate
 
     def rows(spec):
         m = np.zeros((len(spec), jac.shape[1]))

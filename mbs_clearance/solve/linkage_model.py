@@ -15,6 +15,7 @@ from typing import NamedTuple
 import numpy as np
 
 from .._warnings import AccuracyWarning
+from ..elements.registry import ELEMENTS
 from ..laws.forces import CONTACT_MODELS, FRICTION_LAWS
 from ..laws.lubrication import MODELS as LUBRICATION_MODELS
 from ..laws.registry import FRICTION_SLOTS
@@ -76,16 +77,8 @@ def parameter_values(linkage: Linkage) -> dict[str, float]:
         values[f"{j.name}.lubrication"] = float(LUBRICATION_MODELS.get(j.lubrication, -1))
         for f in LUBRICATION_PARAMETERS:
             values[f"{j.name}.{f}"] = getattr(j, f)
-    for j in linkage.translational_joints:
-        values[f"{j.name}.stiffness"] = j.stiffness
-        values[f"{j.name}.contact_model"] = float(CONTACT_MODELS[j.contact_model])
-        values[f"{j.name}.friction_law"] = float(FRICTION_LAWS[j.friction_law])
-        for f in ("clearance", "restitution", "impact_velocity_floor", "half_length",
-                  "half_height", "angle", "slider_angle", *FRICTION_SLOTS):
-            values[f"{j.name}.{f}"] = getattr(j, f)
-        for c in j.corner_names():
-            values[f"{c}.mode"] = 0.0
-            values[f"{c}.impact_velocity"] = j.impact_velocity_floor
+    for el in ELEMENTS:
+        values.update(el.parameter_values(linkage))
     if linkage.drive is not None:
         values["drive.speed"] = linkage.drive.speed
         values["drive.initial_angle"] = linkage.drive.initial_angle
@@ -234,7 +227,7 @@ def check_start(linkage: Linkage, model, p, start, event_tol: float) -> np.ndarr
                          f"velocities; got {y.shape}, {modes.shape}, {dmin.shape}")
     if not (np.all(np.isfinite(y)) and np.all(np.isfinite(dmin))):
         raise ValueError("start holds a value that is not finite")
-    # a corner's floor is its translational joint's (contacts in the model's event order)
+    # an element's contact's floor is its joint's (contacts in the model's event order)
     owners = [joint.name for _, joint in linkage.contacts()]
     for j, name in enumerate(model.JOINTS):
         floor = p[model.PARAMETERS.index(f"{owners[j]}.impact_velocity_floor")]
