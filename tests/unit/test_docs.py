@@ -122,9 +122,9 @@ def test_readme_is_short_and_its_test_command_is_what_ci_runs():
     readme = (ROOT / "README.md").read_text()
     assert len(readme.splitlines()) <= 125
     ci = (ROOT / ".ci" / "run").read_text()
-    command = 'pip install -e ".[test,dask]" && python -m pytest -m "not slow"'
+    command = 'pip install -e ".[test,dask]" && python -m pytest -m "not slow" -n auto'
     assert command in readme
-    assert 'python -m pytest -m "not slow"' in ci and '".[test,dask' in ci
+    assert 'python -m pytest -m "not slow" -n auto' in ci and '".[test,dask' in ci
 
 
 def test_every_example_is_in_the_site_and_run_by_a_test():
