@@ -194,12 +194,18 @@ def default_output(linkage: Linkage) -> str:
 
 def parse_output(linkage: Linkage, output: str | None = None) -> Output:
     """The `Output` named by `output` ("pivot_force:<ground joint>", "shaking_force",
-    "drive_moment", "contact_force:<clearance joint>"; None: `default_output`);
+    "drive_moment", "contact_force:<clearance joint or translational joint's corner>"; None:
+    `default_output`);
     ValueError naming it and the allowed names otherwise."""
     if output is None:
         output = default_output(linkage)
+    from ..elements.registry import ELEMENTS
+
     grounds = ground_joints(linkage)
-    clearance = [j.name for j in linkage.clearance_joints]
+    # every contact's force: the revolute clearance joints', then the elements' (a
+    # translational joint's corners), as the trajectory's contact_force columns
+    clearance = [j.name for j in linkage.clearance_joints] + [
+        name for el in ELEMENTS for name in el.contact_names(linkage)]
     # a free linkage has no drive, no drive moment
     allowed = ([f"pivot_force:{g}" for g in grounds] + ["shaking_force"]
                + (["drive_moment"] if linkage.drive is not None else [])

@@ -580,3 +580,27 @@ def test_free_linkage_studies_refusals(tmp_path, capsys):
         assert e.value.code == 2
         err = capsys.readouterr().err.strip().splitlines()
         assert len(err) == 1 and message in err[0], (argv, err)
+
+
+def test_each_corner_is_an_output_named_as_its_trajectory_column():
+    """A translational joint's corners are outputs ("contact_force:<joint>.<corner>", as
+    simulate prints them): each one's peak over a window is its refined maximum, at least
+    the largest recorded sample of that corner's force and within 1 % of it; a name that is
+    not a corner is refused naming the allowed ones."""
+    from mbs_clearance.analysis.objective import parse_output, peak_output
+    from mbs_clearance.solve.simulate import simulate
+
+    lk = cases.flores_translational_slider_crank()
+    w = 0.01
+    tr = simulate(lk, duration=3 * w, window=w, rtol=1e-9)
+    keep = tr.t >= 2 * w - 1e-12
+    touched = 0
+    for k, corner in enumerate(lk.translational_joints[0].corner_names()):
+        peak = peak_output(lk, f"contact_force:{corner}", 3, window=w, rtol=1e-9)
+        sample = float(tr.contact_force[keep, k].max())
+        assert sample <= peak <= 1.01 * sample + 1e-9, (corner, peak, sample)
+        touched += peak > 0.0
+    assert touched >= 1                      # the window has contact: the check has teeth
+    with pytest.raises(ValueError, match=r"unknown output 'contact_force:guide.top'.*"
+                                         r"contact_force:guide.front_top"):
+        parse_output(lk, "contact_force:guide.top")
