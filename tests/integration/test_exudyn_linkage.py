@@ -508,3 +508,18 @@ def test_four_bar_ideal_joint_limit_separates_the_sliding_mode():
     scale = np.abs(ref["shaking"][later, 0]).max()
     assert d[later & (t < 0.75 * P)].max() > 1e-2 * scale
     assert d[t >= 0.75 * P].max() < 1e-2 * scale
+
+
+def test_peak_only_run_counts_a_ground_guides_reaction_in_the_shaking_force():
+    """The translational benchmark monitoring its shaking force (no monitor joint): the
+    peak-only Exudyn run's peak is the full run's (the ground guide's reaction, from its
+    corners' loads, included), and it is not the crank pivot's alone, which is six times
+    smaller here."""
+    lk = cases.flores_translational_slider_crank().replace(monitor_joint=None)
+    peak = xl.peak_exudyn_linkage(lk, duration=0.01, window=0.005)
+    tr = xl.simulate_exudyn_linkage(lk, duration=0.01, window=0.005)
+    assert peak == tr.peaks[-1]
+    last = tr.t >= 0.005 - 1e-12
+    pivot = float(np.hypot(*tr.reactions["crank_pivot"][last].T).max())
+    assert peak > 2.0 * pivot
+    assert peak >= float(np.hypot(*tr.shaking_force[last].T).max())
