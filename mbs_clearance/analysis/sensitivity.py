@@ -3,7 +3,7 @@
 `sensitivities(mech, parameters, method="ddm")` integrates the direct-differentiation
 equations of the reduced model, generated with its exact Jacobians (`linkage_ddm`; a
 SliderCrank's fields are directions in its description's parameters,
-`slider_crank_directions`); ``method="fd"`` takes central finite
+`mechanism.field_directions`); ``method="fd"`` takes central finite
 differences through any backend, with the runs in parallel.
 """
 
@@ -27,11 +27,12 @@ from .._checks import (
     check_revolutions_memory,
     check_times,
 )
-from ..laws.registry import FRICTION_SLOTS
 from ..model.mechanism import (  # noqa: F401 - reference_value public here too
     CONTINUOUS_FIELDS,
+    PAPER_JOINT,
     SliderCrank,
     check_field_names,
+    field_directions,
     reference_value,
 )
 from ..numerics.integrator import METHODS
@@ -40,7 +41,7 @@ from ..solve.linkage_ddm import independent_directions  # noqa: F401  (public he
 from ..solve.trajectory import Trajectory, annotate, load_trajectory
 
 __all__ = ["Sensitivities", "sensitivities", "load_sensitivities", "DEFAULT_PARAMETERS",
-           "slider_crank_directions", "reference_value", "fd_step", "summary_sensitivities",
+           "reference_value", "fd_step", "summary_sensitivities",
            "summary_times", "time_average", "SUMMARY_RTOL", "SUMMARY_SAMPLES_PER_REVOLUTION"]
 
 #: the sensitivity summary (mean |S| over the last revolution: `Sensitivities.summary`) is
@@ -370,55 +371,6 @@ def _check_parameters(parameters) -> tuple[str, ...]:
     return names
 
 
-#: the SliderCrank's fields as the description's parameters (`cases.from_slider_crank`):
-#: field -> the description parameters it sets, with the derivative of each (a number, or a
-#: function of the mechanism for the derived values); the inertias derived from a uniform
-#: rod (field None) move with the lengths and masses too (`_derived_inertia`)
-_JOINT = "coupler_slider"
-_FIELD_MAP = {
-    "crank_length": {"crank.pivot.x": -0.5, "crank.pin.x": 0.5},
-    "coupler_length": {"coupler.crank_end.x": -0.5, "coupler.slider_end.x": 0.5},
-    "crank_mass": {"crank.mass": 1.0},
-    "coupler_mass": {"coupler.mass": 1.0},
-    "slider_mass": {"slider.mass": 1.0, "slider.inertia": 0.01**2 / 6.0},
-    "crank_inertia": {"crank.inertia": 1.0},
-    "coupler_inertia": {"coupler.inertia": 1.0},
-    "crank_speed": {"drive.speed": 1.0},
-    "initial_crank_angle": {"drive.initial_angle": 1.0},
-    "gravity": {"gravity": 1.0},
-    **{f: {f"{_JOINT}.{f}": 1.0} for f in (
-        "bearing_radius", "journal_radius", "youngs_modulus", "poisson_ratio", "restitution",
-        "contact_stiffness", "impact_velocity_floor")},
-}
-#: the friction fields: description parameters only where the joint has a friction law
-_FRICTION_FIELDS = FRICTION_SLOTS
-
-
-def _derived_inertia(mech: SliderCrank, name: str) -> dict[str, float]:
-    """d(inertia)/d(field) of the uniform-rod inertias m L^2 / 12 where they are derived."""
-    out = {}
-    if mech.crank_inertia is None:
-        m, L = mech.crank_mass, mech.crank_length
-        out.update({"crank_length": ("crank.inertia", m * L / 6.0),
-                    "crank_mass": ("crank.inertia", L * L / 12.0)})
-    if mech.coupler_inertia is None:
-        m, L = mech.coupler_mass, mech.coupler_length
-        out.update({"coupler_length": ("coupler.inertia", m * L / 6.0),
-                    "coupler_mass": ("coupler.inertia", L * L / 12.0)})
-    return dict([out[name]]) if name in out else {}
-
-
-def slider_crank_directions(mech: SliderCrank, names) -> list[dict[str, float]]:
-    """Per SliderCrank field, its direction in the description's parameters
-    ({dotted name: d value / d field}, exact: the mapping `cases.from_slider_crank` is
-    linear in every field but the derived inertias, differentiated here); the description's
-    own chain (`linkage_ddm.chain`) takes the radii and the material into the clearance and
-    the Eq. 9 stiffness."""
-    return [({f"{_JOINT}.{n}": 1.0} if mech.friction_law != "none" else {})
-            if n in _FRICTION_FIELDS else {**_FIELD_MAP[n], **_derived_inertia(mech, n)}
-            for n in names]
-
-
 #: default method of the compiled integrator for the sensitivity equations
 DDM_INTEGRATOR = "dop853"
 
@@ -439,7 +391,7 @@ def slider_crank_run(mech: SliderCrank, names, rtol, *, revolutions: int, t_eval
     model, p0, y0, rtol, atol = linkage_ddm.plain_setup(linkage, rtol)
     run = linkage_ddm.ddm_run(
         linkage, model, p0, y0,
-        slider_crank_directions(mech, names), scale=scale, rtol=rtol, atol_plain=atol,
+        field_directions(mech, names), scale=scale, rtol=rtol, atol_plain=atol,
         revolutions=revolutions, t_eval=t_eval, event_time_term=event_time_term,
         method=method, record=record, whole=True, derivatives=derivatives)
     return run, ref
@@ -456,7 +408,8 @@ def _ddm(mech, names, revolutions, rtol, t_eval, event_time_term, method):
     force = plain.OUT_COLUMNS[plain.MONITOR_COLUMN:][:2]
     run, ref = slider_crank_run(mech, names, rtol, revolutions=revolutions, t_eval=t_eval,
                                 event_time_term=event_time_term, method=method,
-                                derivatives=[*force, "drive_moment", f"{_JOINT}.contact_force"])
+                                derivatives=[*force, "drive_moment",
+                                             f"{PAPER_JOINT}.contact_force"])
     model = run.model
     mon = model.MONITOR_COLUMN
     # growth diagnostic on all steps: normalized state sensitivities per revolution

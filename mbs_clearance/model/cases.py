@@ -34,7 +34,7 @@ from .linkage import (
     TranslationalClearance,
     check_friction,
 )
-from .mechanism import SliderCrank
+from .mechanism import PAPER_JOINT, SliderCrank, description_values
 
 __all__ = ["as_linkage", "paper_slider_crank", "from_slider_crank", "slider_crank_two_clearances",
            "four_bar", "paper_slider_crank_lubricated", "LUBRICATED_DEFAULTS",
@@ -55,18 +55,26 @@ def from_slider_crank(mech: SliderCrank) -> Linkage:
         raise ValueError(f"mech must be a SliderCrank; got {type(mech).__name__}")
     import numpy as np
 
+    v = description_values(mech)        # every value through the one table, FIELD_PATHS
     L2, L3 = mech.crank_length, mech.coupler_length
     th2 = mech.initial_crank_angle
     th3 = float(np.arcsin(-L2 * np.sin(th2) / L3))
     x4 = float(L2 * np.cos(th2) + L3 * np.cos(th3))
+
+    def point(path):
+        return (v[f"{path}.x"], 0.0)
+
+    joint = {path.partition(".")[2]: value for path, value in v.items()
+             if path.startswith(f"{PAPER_JOINT}.")}
     return Linkage(
         name="paper_slider_crank",
         bodies=(
-            Body("crank", mech.crank_mass, mech.crank_inertia_value,
-                 {"pivot": (-L2 / 2, 0.0), "pin": (L2 / 2, 0.0)}),
-            Body("coupler", mech.coupler_mass, mech.coupler_inertia_value,
-                 {"crank_end": (-L3 / 2, 0.0), "slider_end": (L3 / 2, 0.0)}),
-            Body("slider", mech.slider_mass, _slider_inertia(mech), {"pin": (0.0, 0.0)}),
+            Body("crank", v["crank.mass"], v["crank.inertia"],
+                 {"pivot": point("crank.pivot"), "pin": point("crank.pin")}),
+            Body("coupler", v["coupler.mass"], v["coupler.inertia"],
+                 {"crank_end": point("coupler.crank_end"),
+                  "slider_end": point("coupler.slider_end")}),
+            Body("slider", v["slider.mass"], v["slider.inertia"], {"pin": (0.0, 0.0)}),
         ),
         joints=(
             Revolute("crank_pivot", GROUND, "crank_pivot", "crank", "pivot"),
@@ -74,20 +82,12 @@ def from_slider_crank(mech: SliderCrank) -> Linkage:
             Prismatic("slider_guide", GROUND, "slider_axis", "slider", "pin", angle=0.0),
         ),
         clearance_joints=(
-            ClearanceJoint(
-                "coupler_slider", journal_body="coupler", journal_point="slider_end",
-                bearing_body="slider", bearing_point="pin",
-                bearing_radius=mech.bearing_radius, journal_radius=mech.journal_radius,
-                youngs_modulus=mech.youngs_modulus, poisson_ratio=mech.poisson_ratio,
-                restitution=mech.restitution, contact_stiffness=mech.contact_stiffness,
-                contact_model=mech.contact_model,
-                impact_velocity_floor=mech.impact_velocity_floor,
-                friction_law=mech.friction_law,
-                **{f: getattr(mech, f) for f in FRICTION_SLOTS}),
+            ClearanceJoint(PAPER_JOINT, journal_body="coupler", journal_point="slider_end",
+                           bearing_body="slider", bearing_point="pin", **joint),
         ),
-        drive=Drive("crank_pivot", mech.crank_speed, mech.initial_crank_angle),
+        drive=Drive("crank_pivot", v["drive.speed"], v["drive.initial_angle"]),
         ground_points={"crank_pivot": (0.0, 0.0), "slider_axis": (0.0, 0.0)},
-        gravity=mech.gravity,
+        gravity=v["gravity"],
         monitor_joint="crank_pivot",
         assembly={"coupler.angle": th3, "slider_guide.s": x4},
     )
@@ -114,13 +114,6 @@ def as_linkage(mech: SliderCrank | Linkage) -> Linkage:
         return _paper_case_of(mech)
     raise ValueError(f"mech must be a Linkage (or the paper's SliderCrank); got "
                      f"{type(mech).__name__}")
-
-
-def _slider_inertia(mech: SliderCrank) -> float:
-    """The slider's inertia (kg m^2): it does not turn (prismatic joint), so the value never
-    enters the motion; the paper gives none. A 1 cm uniform square block of the slider's
-    mass is taken so that the description is complete (m a^2 / 6, a = 0.01 m)."""
-    return mech.slider_mass * 0.01**2 / 6.0
 
 
 def paper_slider_crank(**overrides: Any) -> Linkage:

@@ -48,14 +48,13 @@ _SLIDER_CRANK_CASES = ("paper_slider_crank", "paper_slider_crank_lubricated",
 
 def slider_crank_of(linkage: Linkage) -> SliderCrank | None:
     """The `SliderCrank` of a linkage built by a case whose overrides are its fields (its
-    overrides that are fields), else None."""
+    overrides that are fields of the one table, `mechanism.FIELD_PATHS`), else None."""
     if linkage.case not in _SLIDER_CRANK_CASES:
         return None
-    from .mechanism import CONTINUOUS_FIELDS
+    from .mechanism import FIELD_PATHS
 
-    fields = {k: v for k, v in linkage.overrides.items()
-              if k in CONTINUOUS_FIELDS or k in SliderCrank.__dataclass_fields__}
-    return SliderCrank().replace(**fields)
+    return SliderCrank().replace(**{k: v for k, v in linkage.overrides.items()
+                                    if k in FIELD_PATHS})
 
 
 def _case_table(linkage: Linkage) -> dict[str, object]:
