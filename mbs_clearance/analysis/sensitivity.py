@@ -37,7 +37,10 @@ from ..model.mechanism import (  # noqa: F401 - reference_value public here too
 )
 from ..numerics.integrator import METHODS
 from ..solve import reduced
-from ..solve.linkage_ddm import independent_directions  # noqa: F401  (public here too)
+from ..solve.linkage_ddm import (
+    fd_step,  # noqa: F401  (public here too)
+    independent_directions,  # noqa: F401  (public here too)
+)
 from ..solve.trajectory import Trajectory, annotate, load_trajectory
 
 __all__ = ["Sensitivities", "sensitivities", "load_sensitivities", "DEFAULT_PARAMETERS",
@@ -359,6 +362,14 @@ def _check_loaded(path: Path, a: dict, stats: Any, traj: Trajectory) -> None:
                    f"({len(traj.t)} samples)")
 
 
+def _field_names(parameters) -> bool:
+    """Whether `parameters` (None: `DEFAULT_PARAMETERS`) name fields of the paper's table
+    rather than dotted paths of a description."""
+    names = DEFAULT_PARAMETERS if parameters is None else parameters
+    names = (names,) if isinstance(names, str) else tuple(names)
+    return not any(isinstance(n, str) and "." in n for n in names)
+
+
 def _check_parameters(parameters) -> tuple[str, ...]:
     names = tuple(DEFAULT_PARAMETERS if parameters is None else parameters)
     if isinstance(parameters, str):
@@ -433,21 +444,6 @@ def _ddm(mech, names, revolutions, rtol, t_eval, event_time_term, method):
         method="ddm", backend="reduced", growth=growth, stats=run.stats)
 
 
-def fd_step(mech: SliderCrank, name: str, relative: float = FD_RELATIVE_STEP) -> float:
-    """Central-difference step for parameter `name`.
-
-    `relative` times the parameter value, except for the radii, whose step is relative to
-    the clearance (they enter through R_B - R_J), and for zero-valued angles (1 rad scale)
-    and gravity (9.81 m/s^2 scale).
-    """
-    if name in ("journal_radius", "bearing_radius"):
-        return relative * mech.clearance
-    value = abs(reference_value(mech, name))
-    if value == 0.0:
-        return relative * (9.81 if name == "gravity" else 1.0)
-    return relative * value
-
-
 def _fd_run(args):
     """One perturbed simulation (module level: picklable for process pools)."""
     from ..solve.simulate import simulate
@@ -459,6 +455,7 @@ def _fd_run(args):
 
 def _fd(mech, names, revolutions, backend, t_eval, rtol, fd_relative_step, executor, n_jobs,
         options):
+    from ..model.cases import as_linkage
     from ..solve.simulate import simulate
 
     options = dict(options)
@@ -476,7 +473,8 @@ def _fd(mech, names, revolutions, backend, t_eval, rtol, fd_relative_step, execu
             f"finite differences through Exudyn at step {options.get('step_size', 2e-6):g} s "
             "are coarse (the paper's case at the default 2e-6 s: 15-19 % RMS off the DDM "
             "sensitivities); step_size=5e-7 gives about 1 % (4 times the run time)")
-    steps = [fd_step(mech, n, fd_relative_step) for n in names]
+    linkage = as_linkage(mech)
+    steps = [fd_step(linkage, n, fd_relative_step) for n in names]
     jobs = []
     for name, h in zip(names, steps):
         b0 = reference_value(mech, name)
@@ -579,15 +577,17 @@ def sensitivities(mech: SliderCrank, parameters=None, revolutions: int | None = 
     with the parameters), its growth per window of ``window=`` s (default: the whole run);
     it has no crank moment (``crank_moment`` None).
     """
-    from ..model.linkage import Linkage
+    from ..model.cases import as_linkage
+    from ..model.design import slider_crank_of
 
-    if isinstance(mech, Linkage):
-        return _linkage_sensitivities(mech, parameters, revolutions, method, backend, t_eval,
-                                      rtol, event_time_term, fd_relative_step, integrator,
-                                      options)
-    if not isinstance(mech, SliderCrank):
-        raise ValueError(f"mech must be a SliderCrank or a Linkage; got "
-                         f"{type(mech).__name__}")
+    linkage = as_linkage(mech)
+    # the paper's case differentiates its fields (the one table, `FIELD_PATHS`); its
+    # description's dotted paths are any linkage's
+    mech = slider_crank_of(linkage)
+    if mech is None or not _field_names(parameters):
+        return _linkage_sensitivities(linkage, parameters, revolutions, method, backend,
+                                      t_eval, rtol, event_time_term, fd_relative_step,
+                                      integrator, options)
     names = _check_parameters(parameters)
     check_choice("method", method, ("ddm", "fd"))
     revolutions = check_int("revolutions", 4 if revolutions is None else revolutions, 1)

@@ -726,12 +726,21 @@ def _fields(model, ts, names, ref, ders, traj, growth, stats):
 def fd_step(linkage: Linkage, name: str, relative: float) -> float:
     """Central-difference step of parameter `name`: `relative` times its value; the radii
     relative to the clearance, zero-valued coordinates relative to the length scale, a zero
-    angle relative to 1 rad, zero gravity relative to 9.81 m/s^2."""
+    angle relative to 1 rad, zero gravity relative to 9.81 m/s^2. On the paper's case a
+    field of its table (`mechanism.FIELD_PATHS`) is valued as the field (its derived value
+    where None)."""
+    from ..model.design import slider_crank_of
+    from ..model.mechanism import FIELD_PATHS, reference_value
+
     field = name.rpartition(".")[2]
+    paper = slider_crank_of(linkage) if name in FIELD_PATHS else None
     if field in ("bearing_radius", "journal_radius"):
-        cj = next(j for j in linkage.clearance_joints if name.startswith(j.name + "."))
+        # a bare field: the paper's one clearance joint
+        cj = next((j for j in linkage.clearance_joints if name.startswith(j.name + ".")),
+                  linkage.clearance_joints[0])
         return relative * cj.clearance
-    value = abs(linkage.parameter_value(name))
+    value = abs(reference_value(paper, name) if paper is not None
+                else linkage.parameter_value(name))
     if value != 0.0:
         return relative * value
     if field in ("x", "y"):
