@@ -577,13 +577,12 @@ def sensitivities(mech: SliderCrank, parameters=None, revolutions: int | None = 
     with the parameters), its growth per window of ``window=`` s (default: the whole run);
     it has no crank moment (``crank_moment`` None).
     """
-    from ..model.cases import as_linkage
-    from ..model.design import slider_crank_of
+    from ..model.cases import door
 
-    linkage = as_linkage(mech)
+    entry = door(mech)
+    linkage, mech = entry.linkage, entry.paper
     # the paper's case differentiates its fields (the one table, `FIELD_PATHS`); its
     # description's dotted paths are any linkage's
-    mech = slider_crank_of(linkage)
     if mech is None or not _field_names(parameters):
         return _linkage_sensitivities(linkage, parameters, revolutions, method, backend,
                                       t_eval, rtol, event_time_term, fd_relative_step,

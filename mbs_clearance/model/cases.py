@@ -36,7 +36,8 @@ from .linkage import (
 )
 from .mechanism import PAPER_JOINT, SliderCrank, description_values
 
-__all__ = ["as_linkage", "paper_slider_crank", "from_slider_crank", "slider_crank_two_clearances",
+__all__ = ["as_linkage", "door", "Door", "paper_slider_crank", "from_slider_crank",
+           "slider_crank_two_clearances",
            "four_bar", "paper_slider_crank_lubricated", "LUBRICATED_DEFAULTS",
            "paper_slider_crank_wear", "WEAR_DEFAULTS", "CASES",
            "CASE_PARAMETERS", "CASE_SUMMARY", "flores_translational_slider_crank",
@@ -51,7 +52,7 @@ def from_slider_crank(mech: SliderCrank) -> Linkage:
     slider. The drive turns the crank pivot; the monitored joint is the crank pivot (its
     reaction is the paper's base force F12). Assembly guesses: the ideal joints' closed-form
     positions at the initial crank angle (the branch with the slider at x > 0)."""
-    if not isinstance(mech, SliderCrank):
+    if not _is_paper_set(mech):
         raise ValueError(f"mech must be a SliderCrank; got {type(mech).__name__}")
     import numpy as np
 
@@ -103,17 +104,55 @@ def _paper_case_of(mech: SliderCrank) -> Linkage:
 _PAPER_DEFAULTS = SliderCrank()
 
 
-def as_linkage(mech: SliderCrank | Linkage) -> Linkage:
-    """The description a study runs: a `Linkage` as it is; the paper's `SliderCrank` (a
-    named parameter set) as the case "paper_slider_crank" with its changed fields as the
-    case's overrides, so its field names are design names of every study (`design`).
-    ValueError for anything else."""
+@dataclasses.dataclass(frozen=True)
+class Door:
+    """A mechanism as the studies take it (`door`): `linkage` the description every layer
+    runs; `paper` the paper's parameter set where the description is its case
+    "paper_slider_crank" (its overrides the fields of `mechanism.FIELD_PATHS`), else None;
+    `given_as_paper` whether the user gave that set (`SliderCrank`), so that a result
+    names its designs as given (`back`)."""
+
+    linkage: Linkage
+    paper: SliderCrank | None
+    given_as_paper: bool
+
+    def back(self, linkage: Linkage) -> SliderCrank | Linkage:
+        """A design of the study (a description of the same case) as the user gave the
+        mechanism: a `SliderCrank` of the case's fields, or the description itself."""
+        if self.given_as_paper:
+            from .design import slider_crank_of
+
+            return slider_crank_of(linkage)
+        return linkage
+
+
+def _is_paper_set(mech) -> bool:
+    # the package's one type test of the paper's parameter set: `door` and its converter
+    return isinstance(mech, SliderCrank)
+
+
+def door(mech: SliderCrank | Linkage) -> Door:
+    """The one door of every study: the mechanism as its description (`Door`). A `Linkage`
+    as it is; the paper's `SliderCrank` (a named parameter set) as the case
+    "paper_slider_crank" with its changed fields as the case's overrides, so that its field
+    names are design names of every study (`design`). The only place that tells the two
+    apart. ValueError for anything else."""
+    from .design import slider_crank_of
+
+    if _is_paper_set(mech):
+        return Door(_paper_case_of(mech), mech, True)
     if isinstance(mech, Linkage):
-        return mech
-    if isinstance(mech, SliderCrank):
-        return _paper_case_of(mech)
-    raise ValueError(f"mech must be a Linkage (or the paper's SliderCrank); got "
-                     f"{type(mech).__name__}")
+        # the paper's case itself (a lubricated or wearing joint is more than its fields)
+        return Door(mech, slider_crank_of(mech) if mech.case == "paper_slider_crank" else None,
+                    False)
+    raise ValueError(f"mech must be a SliderCrank or a Linkage (the paper's parameter set "
+                     f"or any description); got {type(mech).__name__}")
+
+
+def as_linkage(mech: SliderCrank | Linkage) -> Linkage:
+    """The description a study runs (`door`): a `Linkage` as it is, the paper's
+    `SliderCrank` as its case. ValueError for anything else."""
+    return door(mech).linkage
 
 
 def paper_slider_crank(**overrides: Any) -> Linkage:

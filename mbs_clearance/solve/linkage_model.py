@@ -19,7 +19,7 @@ from ..laws.forces import CONTACT_MODELS, FRICTION_LAWS
 from ..laws.lubrication import MODELS as LUBRICATION_MODELS
 from ..laws.registry import FRICTION_SLOTS
 from ..model.linkage import GROUND, LUBRICATION_PARAMETERS, Linkage
-from .diagnostics import contact_flags
+from .diagnostics import contact_flags, floored_impacts
 from .problem import ModelLayout, Problem, Span
 from .settings import DEFAULT_MAX_STEPS, DEFAULT_RTOL, MAX_SAMPLES, RunSettings  # noqa: F401
 
@@ -915,6 +915,12 @@ def simulate_linkage(linkage: Linkage, revolutions: int | None = None, **options
                                None if linkage.drive is not None else linkage.time_scale))
     if stats["accuracy_note"]:
         warnings.warn(stats["accuracy_note"], AccuracyWarning, stacklevel=3)
+    if options.get("t_eval") is None:
+        # onsets raised to a contact's impact-velocity floor, each contact's memory (mode,
+        # impact velocity) in turn
+        stats["floored_impacts"] = sum(
+            floored_impacts(ms[:, 2 * k:2 * k + 2], j.impact_velocity_floor)
+            for k, (_, j) in enumerate(linkage.contacts()))
     traj = trajectory_from_run(linkage, model, ts, ys, ms, p, stats, peaks, outs)
     start = options.get("start")
     if start is not None:

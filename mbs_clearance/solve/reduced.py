@@ -195,7 +195,9 @@ def run(mech: SliderCrank, revolutions: int = 4, *, initial_offset: float = 0.0,
     `initial_offset` in [-1, 1], with the slider moved so that the journal centre starts at
     initial_offset x clearance along x from the bearing centre (+-1: on the wall, a grazing
     start). Returns a `RunOutput` (ts, ys, ms, peaks, peak_times, counters, outs, p)."""
-    if not isinstance(mech, SliderCrank):
+    from ..model.cases import door
+
+    if not door(mech).given_as_paper:
         raise ValueError(f"mech must be a SliderCrank; got {type(mech).__name__}")
     if "start" in options:
         raise ValueError("start is not an option of a SliderCrank's run; use its "
@@ -342,6 +344,41 @@ def trajectory_from_states(mech, ts, ys, ms, p, stats, peaks, outs=None,
         friction_work=(ys[:, friction].copy() if 0 < friction < ys.shape[1] else None),
         **generic,
     )
+
+
+def paper_series(traj, mech: SliderCrank, sampled: bool = False):
+    """`traj`, a run of `mech`'s description (`cases.door`), in the paper's names: its
+    clearance joint's series as (n,) arrays, the slider's position, velocity and
+    acceleration and the coupler's angle and rate looked up by name in the description's
+    coordinates, `mech` as its mechanism (its closed-form start: no `start_revolutions`;
+    `sampled`, a run on given output times: no peaks). The reduced model's keeps the
+    description's per-joint series beside them (`joints`, `reactions`, `coordinates`,
+    ...); Exudyn's gives the paper's alone."""
+    import dataclasses
+
+    def first(a):
+        return None if a is None else np.ascontiguousarray(a[:, 0]) if a.ndim > 1 else a
+
+    generic = traj.backend == "reduced"
+    series = dict(
+        contact_force=first(traj.contact_force), penetration=first(traj.penetration),
+        eccentricity=(np.ascontiguousarray(traj.eccentricity[:, 0])
+                      if traj.eccentricity.ndim == 3 else traj.eccentricity),
+        contact_phase=first(traj.contact_phase),
+        slider_position=traj.coordinates["slider_guide.s"],
+        slider_velocity=traj.rates["slider_guide.s"],
+        slider_acceleration=traj.accelerations["slider_guide.s"],
+        coupler_angle=traj.coordinates["coupler.angle"],
+        coupler_rate=traj.rates["coupler.angle"],
+        friction_work=first(traj.friction_work) if generic else None,
+        contact_angle=None, slip_velocity=None, mechanism=mech,
+        peaks=None if sampled else traj.peaks,
+        stats={k: v for k, v in traj.stats.items()
+               if not (k == "start_revolutions" and v == 0)})
+    if not generic:
+        series.update(dict.fromkeys(("joints", "reactions", "shaking_force", "coordinates",
+                                     "rates", "accelerations")))
+    return dataclasses.replace(traj, **series)
 
 
 def peak_reduced(mech: SliderCrank, revolution: int = 4, **options) -> float:

@@ -43,6 +43,7 @@ import numpy as np
 from .._checks import DESIGN_BYTES, check_memory
 from .._io import read_json_object, write_json_object
 from .._warnings import AccuracyWarning
+from ..model.cases import as_linkage
 from ..model.linkage import Linkage
 from ..model.mechanism import CONTINUOUS_FIELDS, SliderCrank
 from ..solve.simulate import BACKENDS, peak_base_force, simulate
@@ -648,8 +649,7 @@ def optimize_link_lengths(mech: SliderCrank | None = None,
         raise SystemExit(_MAIN_GUARD_ADVICE)
     t_start = time.perf_counter()
     mech = SliderCrank() if mech is None else mech
-    if not isinstance(mech, (SliderCrank, Linkage)):
-        raise ValueError(f"mech must be a SliderCrank or a Linkage; got {type(mech).__name__}")
+    as_linkage(mech)                    # ValueError for anything else
     is_linkage = isinstance(mech, Linkage)
     if is_linkage:
         from ..analysis.objective import parse_output

@@ -52,6 +52,7 @@ import numpy as np
 
 from .._checks import DESIGN_BYTES, check_memory, check_revolutions_memory
 from .._warnings import AccuracyWarning, PhysicsWarning
+from ..model.cases import as_linkage
 from ..model.design import value_at
 from ..model.fits import iso_fit
 from ..model.linkage import Linkage
@@ -849,8 +850,7 @@ def describe(inputs: Mapping[str, Any], mech: SliderCrank | Linkage | None = Non
     from ..solve.simulate import BACKENDS
 
     mech = SliderCrank() if mech is None else mech
-    if not isinstance(mech, (SliderCrank, Linkage)):
-        raise ValueError(f"mech must be a SliderCrank or a Linkage; got {type(mech).__name__}")
+    as_linkage(mech)                    # ValueError for anything else
     if isinstance(mech, Linkage) and not callable(output) and output not in OUTPUTS:
         from ..analysis.objective import parse_output
 
