@@ -116,14 +116,11 @@ class Door:
     paper: SliderCrank | None
     given_as_paper: bool
 
-    def back(self, linkage: Linkage) -> SliderCrank | Linkage:
-        """A design of the study (a description of the same case) as the user gave the
-        mechanism: a `SliderCrank` of the case's fields, or the description itself."""
-        if self.given_as_paper:
-            from .design import slider_crank_of
-
-            return slider_crank_of(linkage)
-        return linkage
+    def back(self, design: SliderCrank | Linkage) -> SliderCrank | Linkage:
+        """A design of the study (the paper's set or a description of the same case) as
+        the user gave the mechanism: the paper's `SliderCrank`, or the description."""
+        entry = door(design)
+        return entry.paper if self.given_as_paper else entry.linkage
 
 
 def _is_paper_set(mech) -> bool:
