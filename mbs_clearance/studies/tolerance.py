@@ -885,9 +885,16 @@ def _studied(mech, inputs, output, window) -> SliderCrank | Linkage:
     entry = door(SliderCrank() if mech is None else mech)
     fields = callable(output) or not isinstance(inputs, Mapping) or all(
         n in (*CONTINUOUS_FIELDS, CLEARANCE) for n in inputs)
-    if entry.paper is not None and fields and window is None \
-            and (callable(output) or output in OUTPUTS):
+    if entry.paper is None or not fields or window is not None:
+        return entry.linkage
+    if callable(output) or output in OUTPUTS:
         return entry.paper
+    from ..analysis.objective import parse_output
+
+    try:
+        parse_output(entry.linkage, output)
+    except ValueError:
+        return entry.paper              # the paper's message: OUTPUTS
     return entry.linkage
 
 
