@@ -270,11 +270,15 @@ def design_at(mech, values: dict, case: str | None = None, overrides: dict | Non
             else:
                 changes[name] = v
         return CASES[case](**changes)
-    if not isinstance(mech, (SliderCrank, Linkage)):
-        raise ValueError(f"mech must be a SliderCrank or a Linkage; got {type(mech).__name__}")
-    if isinstance(mech, SliderCrank):
-        from .mechanism import field_names
+    from .cases import door
+    from .mechanism import field_names
 
+    entry = door(mech)                  # ValueError for anything else
+    if entry.paper is not None and (entry.given_as_paper or all(
+            n == "clearance" or n in field_names() for n in values)):
+        # the paper's case: its fields and "clearance" (R_B - R_J), a design of its case
+        # named as the user gave the mechanism
+        mech = entry.paper
         changes = {}
         for name, v in values.items():
             if name == "clearance":
@@ -287,8 +291,8 @@ def design_at(mech, values: dict, case: str | None = None, overrides: dict | Non
             else:
                 raise ValueError(f"unknown sweep field {name!r} of a SliderCrank; allowed: "
                                  f"{sorted(field_names()) + ['clearance']}")
-        return mech.replace(**changes)
-    link = mech
+        return entry.back(mech.replace(**changes))
+    link = entry.linkage
     for name, v in values.items():
         if name == "clearance":
             link = _linkage_clearance(link, None, v)
@@ -309,7 +313,10 @@ def value_at(mech, name: str) -> float:
     """The value (SI) of `design_at`'s field `name` on `mech`: a `SliderCrank` field or
     "clearance" (R_B - R_J); on a `Linkage` its design names (`design_value`) and
     "crank_speed" (the drive's speed). ValueError for an unknown name."""
-    if isinstance(mech, SliderCrank):
+    from .cases import door
+
+    entry = door(mech)                  # ValueError for anything else
+    if entry.given_as_paper:            # the paper's set: its fields by name
         from .mechanism import field_names
 
         if name == "clearance":
@@ -318,8 +325,7 @@ def value_at(mech, name: str) -> float:
             raise ValueError(f"unknown field {name!r} of a SliderCrank; allowed: "
                              f"{sorted(field_names()) + ['clearance']}")
         return float(getattr(mech, name))
-    if not isinstance(mech, Linkage):
-        raise ValueError(f"mech must be a SliderCrank or a Linkage; got {type(mech).__name__}")
+    mech = entry.linkage
     if name == "crank_speed" and "crank_speed" not in _case_table(mech):
         return float(mech.drive.speed)
     return float(design_value(mech, name))
