@@ -386,62 +386,39 @@ def _check_parameters(parameters) -> tuple[str, ...]:
 DDM_INTEGRATOR = "dop853"
 
 
+def field_directions_of(mech: SliderCrank, names):
+    """The paper's fields `names` as design directions of its description
+    (`linkage_ddm.Directions`): their directions through the one table
+    (`mechanism.field_directions`), their values, each direction's tolerance scaled by its
+    field's value (1 where zero), and the state's units in the growth diagnostic (coupler
+    angle rad, slider position the clearance, rates at the crank speed; the slider's
+    over L2)."""
+    from ..solve.linkage_ddm import Directions
+
+    ref = np.array([reference_value(mech, n) for n in names])
+    w, c = mech.crank_speed, mech.clearance
+    return Directions(field_directions(mech, names), ref,
+                      np.where(ref != 0.0, np.abs(ref), 1.0),
+                      np.array([1.0, c, w, w * c / mech.crank_length]))
+
+
 def slider_crank_run(mech: SliderCrank, names, rtol, *, revolutions: int, t_eval=None,
                      event_time_term: bool = True, method: str = DDM_INTEGRATOR,
                      record: bool = True, derivatives=False):
-    """The DDM run (`linkage_ddm.ddm_run`) of the SliderCrank fields `names` on its case's
-    model, from its start, with its plain run's tolerances (`linkage_ddm.plain_setup`);
-    each direction's tolerance scaled by its field's value; with `derivatives`
-    (`linkage_ddm.ddm_run`) outputs' derivatives recorded with the steps."""
-    from ..model.cases import as_linkage
+    """The DDM run (`linkage_ddm.design_run`) of the paper's fields `names` on its case's
+    description (`cases.door`), their directions through the one table
+    (`field_directions_of`); with `derivatives` (`linkage_ddm.ddm_run`) outputs'
+    derivatives recorded with the steps. Returns (run, the fields' values)."""
+    from ..model.cases import door
     from ..solve import linkage_ddm
 
-    linkage = as_linkage(mech)
-    ref = np.array([reference_value(mech, n) for n in names])
-    scale = np.where(ref != 0.0, np.abs(ref), 1.0)
-    model, p0, y0, rtol, atol = linkage_ddm.plain_setup(linkage, rtol)
-    run = linkage_ddm.ddm_run(
-        linkage, model, p0, y0,
-        field_directions(mech, names), scale=scale, rtol=rtol, atol_plain=atol,
-        revolutions=revolutions, t_eval=t_eval, event_time_term=event_time_term,
-        method=method, record=record, whole=True, derivatives=derivatives)
-    return run, ref
-
-
-def _ddm(mech, names, revolutions, rtol, t_eval, event_time_term, method):
-    from ..model.cases import as_linkage
-    from ..solve.linkage_ddm import landed, magnitude_derivative
-    from ..solve.linkage_model import load_model
-
-    # only the derivatives a SliderCrank's Sensitivities hold, computed with the steps (the
-    # model is the one the run loads: on the chosen core)
-    plain = load_model(as_linkage(mech))
-    force = plain.OUT_COLUMNS[plain.MONITOR_COLUMN:][:2]
-    run, ref = slider_crank_run(mech, names, rtol, revolutions=revolutions, t_eval=t_eval,
-                                event_time_term=event_time_term, method=method,
-                                derivatives=[*force, "drive_moment",
-                                             f"{PAPER_JOINT}.contact_force"])
-    model = run.model
-    mon = model.MONITOR_COLUMN
-    # growth diagnostic on all steps: normalized state sensitivities per revolution
-    unit = np.array([1.0, mech.clearance, mech.crank_speed,
-                     mech.crank_speed * mech.clearance / mech.crank_length])
-    growth = run.growth(unit, mech.period, revolutions)
-    ts, ys, ms, peaks, keep = run.ts, run.ys, run.ms, run.peaks, None
-    if t_eval is not None:
-        keep = landed(ts, t_eval)
-        ts, ys, ms, peaks = ts[keep], ys[keep], ms[keep], None
-    vals, ders = run.recorded_output_sensitivities(keep)
-    # (the fields are views of ders, one array (n, 4, npar) in the order asked above)
-    d_force = ders[:, 0:2, :]
-    d_mag = magnitude_derivative(vals, mon, ders, 0)
-    traj = annotate(reduced.trajectory_from_states(
-        mech, ts, run.plain_states(ys), ms[:, :model.N_MEM], run.p0, run.stats, peaks, vals,
-        model.OUT_COLUMNS, model))
-    return Sensitivities(
-        t=ts, parameters=names, reference=ref, base_force=d_force, base_force_magnitude=d_mag,
-        crank_moment=ders[:, 2, :], contact_force=ders[:, 3, :], trajectory=traj,
-        method="ddm", backend="reduced", growth=growth, stats=run.stats)
+    entry = door(mech)
+    along = field_directions_of(entry.paper, names)
+    run = linkage_ddm.design_run(entry.linkage, tuple(names), rtol, revolutions=revolutions,
+                                 t_eval=t_eval, event_time_term=event_time_term,
+                                 method=method, record=record, derivatives=derivatives,
+                                 directions=along)
+    return run, along.reference
 
 
 def _fd_run(args):
@@ -613,8 +590,12 @@ def sensitivities(mech: SliderCrank, parameters=None, revolutions: int | None = 
                              "method='fd' for other backends")
         if options:
             raise ValueError(f"unknown option(s) for method='ddm': {sorted(options)}")
-        return _ddm(mech, names, revolutions, rtol, t_eval, event_time_term,
-                    integrator or DDM_INTEGRATOR)
+        from ..solve import linkage_ddm
+
+        fields = linkage_ddm.linkage_sensitivities(
+            linkage, names, revolutions, rtol, t_eval, event_time_term,
+            integrator or DDM_INTEGRATOR, directions=field_directions_of(mech, names))
+        return _as_given(Sensitivities(**fields), entry)
     if integrator is not None:
         if backend != "reduced":
             raise ValueError(f"integrator applies to the reduced backend only; got "
@@ -623,6 +604,19 @@ def sensitivities(mech: SliderCrank, parameters=None, revolutions: int | None = 
     return _fd(mech, names, revolutions, backend, t_eval, rtol, fd_relative_step, executor,
                n_jobs, options)
 
+
+
+def _as_given(sens: Sensitivities, entry) -> Sensitivities:
+    """Sensitivities as the user gave the mechanism (`cases.door`): a `SliderCrank`'s
+    trajectory in the paper's names (`reduced.paper_series`), without the description's
+    per-output derivatives; a linkage's as they are."""
+    if not entry.given_as_paper:
+        return sens
+    import dataclasses
+
+    traj = annotate(reduced.paper_series(sens.trajectory, entry.paper))
+    # one record of the run's counters and the trajectory's notes, as the run's own
+    return dataclasses.replace(sens, trajectory=traj, outputs=None, stats=traj.stats)
 
 
 def _per_revolution(method: str, p: int) -> int:
