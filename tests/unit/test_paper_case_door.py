@@ -4,7 +4,9 @@ through the one table `mechanism.FIELD_PATHS`) give the same numbers, to the las
 every study. Each study turns a SliderCrank into its description at the door
 (`cases.as_linkage`); the reference here is the description run directly."""
 
+import ast
 import dataclasses
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -90,6 +92,9 @@ def test_sensitivities(pair, method):
     assert a.parameters == b.parameters == tuple(names)
     assert _arrays_equal(a, b) >= 6
     assert _arrays_equal(a.trajectory, b.trajectory) >= 4
+    # the SliderCrank's trajectory in the paper's names, the case's in the description's
+    np.testing.assert_array_equal(a.trajectory.slider_position,
+                                  b.trajectory.coordinates["slider_guide.s"])
     # the derivatives are not zero (the comparison tests something)
     assert np.max(np.abs(a.base_force_magnitude)) > 0.0
 
@@ -110,6 +115,10 @@ def test_a_one_generation_ga():
     b = optimize_link_lengths(paper_slider_crank(), **kw)
     assert a.best_genes == b.best_genes
     assert a.best_peak_force == b.best_peak_force
+    np.testing.assert_array_equal(a.history, b.history)
+    # each names its designs as it was given: the parameter set, the named case
+    assert isinstance(a.best, SliderCrank) and a.original == SliderCrank()
+    assert b.best == as_linkage(a.best) and b.best.case == "paper_slider_crank"
 
 
 def test_a_small_tolerance_study():
@@ -144,3 +153,18 @@ def test_a_two_point_regime_map():
     assert a["regime"].size == 2
     for name in a.data_vars:
         np.testing.assert_array_equal(np.asarray(a[name]), np.asarray(b[name]), name)
+
+
+def test_the_package_tells_a_slider_crank_apart_only_at_its_door():
+    """Below the public entry points every layer takes the description: the only
+    isinstance test naming SliderCrank in the package is the door's (`cases.door`)."""
+    import mbs_clearance
+
+    found = []
+    root = Path(mbs_clearance.__file__).parent
+    for path in sorted(q for q in root.rglob("*.py") if "_generated" not in q.parts):
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if (isinstance(node, ast.Call) and getattr(node.func, "id", None) == "isinstance"
+                    and len(node.args) == 2 and "SliderCrank" in ast.unparse(node.args[1])):
+                found.append(f"{path.parent.name}/{path.name}")
+    assert found == ["model/cases.py"]
