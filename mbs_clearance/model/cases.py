@@ -36,7 +36,8 @@ from .linkage import (
 )
 from .mechanism import PAPER_JOINT, SliderCrank, description_values
 
-__all__ = ["as_linkage", "door", "Door", "paper_slider_crank", "from_slider_crank",
+__all__ = ["as_linkage", "door", "Door", "slider_crank_of", "SLIDER_CRANK_CASES",
+           "paper_slider_crank", "from_slider_crank",
            "slider_crank_two_clearances",
            "four_bar", "paper_slider_crank_lubricated", "LUBRICATED_DEFAULTS",
            "paper_slider_crank_wear", "WEAR_DEFAULTS", "CASES",
@@ -104,6 +105,23 @@ def _paper_case_of(mech: SliderCrank) -> Linkage:
 _PAPER_DEFAULTS = SliderCrank()
 
 
+#: the cases whose overrides are SliderCrank fields (the lubricated and wearing ones: and
+#: their joint's)
+SLIDER_CRANK_CASES = ("paper_slider_crank", "paper_slider_crank_lubricated",
+                      "paper_slider_crank_wear")
+
+
+def slider_crank_of(linkage: Linkage) -> SliderCrank | None:
+    """The `SliderCrank` of a linkage built by a case whose overrides are its fields (its
+    overrides that are fields of the one table, `mechanism.FIELD_PATHS`), else None."""
+    if linkage.case not in SLIDER_CRANK_CASES:
+        return None
+    from .mechanism import FIELD_PATHS
+
+    return SliderCrank().replace(**{k: v for k, v in linkage.overrides.items()
+                                    if k in FIELD_PATHS})
+
+
 @dataclasses.dataclass(frozen=True)
 class Door:
     """A mechanism as the studies take it (`door`): `linkage` the description every layer
@@ -134,8 +152,6 @@ def door(mech: SliderCrank | Linkage) -> Door:
     "paper_slider_crank" with its changed fields as the case's overrides, so that its field
     names are design names of every study (`design`). The only place that tells the two
     apart. ValueError for anything else."""
-    from .design import slider_crank_of
-
     if _is_paper_set(mech):
         return Door(_paper_case_of(mech), mech, True)
     if isinstance(mech, Linkage):

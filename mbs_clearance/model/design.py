@@ -31,6 +31,8 @@ import math
 import numbers
 from collections.abc import Iterable, Mapping
 
+from .cases import SLIDER_CRANK_CASES as _SLIDER_CRANK_CASES
+from .cases import slider_crank_of
 from .linkage import GROUND, Linkage
 from .mechanism import SliderCrank, reference_value
 
@@ -39,22 +41,6 @@ __all__ = ["design_names", "check_names", "design_value", "linkage_with", "direc
 
 #: the description's sections accepted in front of a dotted path, and what they become
 _SECTIONS = {"bodies": "", "joints": "", "clearance_joints": "", "ground_points": f"{GROUND}."}
-
-
-#: the cases whose overrides are SliderCrank fields (the lubricated one: and its film's)
-_SLIDER_CRANK_CASES = ("paper_slider_crank", "paper_slider_crank_lubricated",
-                       "paper_slider_crank_wear")
-
-
-def slider_crank_of(linkage: Linkage) -> SliderCrank | None:
-    """The `SliderCrank` of a linkage built by a case whose overrides are its fields (its
-    overrides that are fields of the one table, `mechanism.FIELD_PATHS`), else None."""
-    if linkage.case not in _SLIDER_CRANK_CASES:
-        return None
-    from .mechanism import FIELD_PATHS
-
-    return SliderCrank().replace(**{k: v for k, v in linkage.overrides.items()
-                                    if k in FIELD_PATHS})
 
 
 def _case_table(linkage: Linkage) -> dict[str, object]:

@@ -130,6 +130,9 @@ def simulate(mech: SliderCrank, revolutions: int | None = None, backend: str = "
         ``periodicity_note``; see `trajectory.annotate`.
     """
     entry = door(mech)
+    if entry.given_as_paper and "start" in options:
+        raise ValueError("start is not an option of a SliderCrank's run; use its description "
+                         "(cases.paper_slider_crank, the same case) with start=")
     if backend == "reduced":
         options = _paper_start(entry, expand(options))
     return paper_view(_simulate(entry.linkage, revolutions, backend, accuracy, options,

@@ -655,8 +655,8 @@ def optimize_link_lengths(mech: SliderCrank | None = None,
     # output, and any other linkage, on its description
     fields = genes is None or (isinstance(genes, dict)
                                and all(n in CONTINUOUS_FIELDS for n in genes))
-    mech = entry.paper if entry.paper is not None and output is None and fields \
-        else entry.linkage
+    mech = entry.paper if entry.paper is not None and output is None \
+        and (fields or entry.given_as_paper) else entry.linkage
     is_linkage = mech is entry.linkage
     if is_linkage:
         from ..analysis.objective import parse_output
