@@ -199,9 +199,12 @@ def settled_start(linkage: Linkage, revolutions: int, *, rtol: float | None = No
     start's impacts and the weakly damped sliding mode of a frictionless joint have settled
     (the four-bar's default needs about 100, docs/cases.md). The revolutions run one at a
     time, each from the previous one's end, so the memory holds one revolution's record.
-    `progress`: a callable called with the number of revolutions done."""
+    `progress`: a callable called with the number of revolutions done. The paper's
+    `SliderCrank` settles as its description (`cases.door`)."""
     from .._checks import check_int
+    from ..model.cases import as_linkage
 
+    linkage = as_linkage(linkage)
     revolutions = check_int("revolutions", revolutions, 1)
     start = None
     for k in range(revolutions):

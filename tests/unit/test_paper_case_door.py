@@ -19,8 +19,10 @@ from mbs_clearance import (
     peak_base_force,
     peak_gradient,
     periodic_orbit,
+    poincare_section,
     regime_map,
     sensitivities,
+    settled_start,
     simulate,
     tolerance_study,
 )
@@ -144,6 +146,19 @@ def test_periodic_orbit():
     b = periodic_orbit(paper_slider_crank(), settle=3, trajectory=False)
     np.testing.assert_array_equal(a.state, b.state)
     np.testing.assert_array_equal(a.multipliers, b.multipliers)
+
+
+def test_settled_start_and_poincare_section():
+    a, b = settled_start(SliderCrank(), 2), settled_start(paper_slider_crank(), 2)
+    np.testing.assert_array_equal(a.y, b.y)
+    np.testing.assert_array_equal(a.impact_velocities, b.impact_velocities)
+    assert a.revolutions == b.revolutions == 2
+    # a settled SliderCrank's start runs its named case
+    assert simulate(paper_slider_crank(), 1, start=a, rtol=1e-8).peaks[0] > 0.0
+    c = poincare_section(SliderCrank(), 8, keep=5, max_period=2)
+    d = poincare_section(paper_slider_crank(), 8, keep=5, max_period=2)
+    assert c.regime == d.regime
+    np.testing.assert_array_equal(c.samples, d.samples)
 
 
 def test_a_two_point_regime_map():
