@@ -250,6 +250,25 @@ def test_richardson_recovers_the_limit_and_order_of_a_second_order_sequence():
     assert np.isnan(order) and value == 9.5 and error == 1.0
 
 
+def test_a_sequence_that_turned_before_its_last_three_values_keeps_a_wide_bar():
+    """Four or more halvings: a sequence whose last three differences share their sign
+    (a converging one, here y = L + C h^2 + D h^3 at four steps) keeps the bar of its last
+    three; one that turned before them (Exudyn's revolution-2 peaks of the crank-coupler
+    slider-crank at 2, 1, 0.5, 0.26 us: 2005, 2111, 1920, 1903 N) is not in the asymptotic
+    range: its bar is the largest of those differences, which covers the converged 2033 N
+    (the reduced model at rtol 1e-12) where the last three alone gave 17 N."""
+    from mbs_clearance.backends.exudyn_convergence import extrapolate, richardson
+
+    L, C, D, h = 1000.0, 5.0, 40.0, 0.1
+    y = [L + C * x**2 + D * x**3 for x in (h, h / 2, h / 4, h / 8)]
+    assert [float(v) for v in extrapolate(y)[:2]] == [float(v) for v in richardson(*y[1:])[:2]]
+    seq = [2005.1376703947715, 2110.5466782100652, 1920.4465409164975, 1903.4078589044652]
+    assert float(richardson(*seq[1:])[1]) < 20.0                # what the last three say
+    value, error, order = extrapolate(seq)
+    assert np.isnan(order) and float(error) == pytest.approx(190.1, abs=0.1)
+    assert abs(2032.72 - float(value)) <= float(error)
+
+
 def test_rattling_motion_is_returned_flagged_with_its_estimate():
     """c = 0.1 mm (rattling, not periodic): no tolerance makes its late peaks accurate, so
     the run at the default rtol is returned (the peaks of `simulate(..., rtol=1e-7)`),
