@@ -152,6 +152,9 @@ def _all_peaks(linkage, revolutions, settings, max_memory, start) -> np.ndarray:
     """Refined per-revolution peaks of one Exudyn run recording the reactions only."""
     from . import exudyn_linkage as xl
 
+    if xl.monitors_element_reaction(linkage):
+        return np.asarray(xl.run_linkage(linkage, revolutions, settings, max_memory,
+                                         start).peaks, dtype=float)
     revolutions = xl._check_run(linkage, revolutions, settings, ("reactions",), max_memory)
     model = xl.build(linkage, settings, outputs=("reactions",), start=start)
     xl.solve(model, revolutions * linkage.period)

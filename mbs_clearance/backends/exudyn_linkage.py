@@ -1629,15 +1629,19 @@ def peak_exudyn_linkage(linkage: Linkage, revolution: int | None = None,
                     duration=duration, window=window)
 
 
+def monitors_element_reaction(linkage: Linkage) -> bool:
+    """Whether the monitored force may hold an element's ground reaction (a ground guide's:
+    its corners' loads), which is computed from the bodies' stored states that a
+    reactions-only run does not keep (its peaks then come from a full run)."""
+    ideal = {j.name for j in linkage.joints}
+    return any(el.contact_names(linkage) for el in ELEMENTS) and (
+        linkage.monitor_joint is None or linkage.monitor_joint not in ideal)
+
+
 def peak_run(linkage: Linkage, revolution: int | None, settings: ExudynSettings,
              max_memory=None, start=None, *, duration=None, window=None) -> float:
     """`peak_exudyn_linkage` for validated `settings` (from `start` if given)."""
-    ideal = {j.name for j in linkage.joints}
-    if any(el.contact_names(linkage) for el in ELEMENTS) and (
-            linkage.monitor_joint is None or linkage.monitor_joint not in ideal):
-        # an element's ground reaction (a ground guide's: its corners' loads) is computed
-        # from the bodies' stored states, which a reactions-only run does not keep: the
-        # full run's peaks
+    if monitors_element_reaction(linkage):
         traj = run_linkage(linkage, revolution, settings, max_memory, start,
                            duration=duration, window=window)
         return float(traj.peaks[-1])
