@@ -18,7 +18,7 @@ def test_map_local_pool_and_dask_local_cluster_identical(tmp_path):
     local = regime_map(SliderCrank(), SWEEP, workers=2, chunk_size=1,
                        out=tmp_path / "local.nc", **SMALL)
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                                  dashboard_address=None) as cluster, \
+                                  dashboard_address=":0") as cluster, \
             distributed.Client(cluster) as client:
         remote = regime_map(SliderCrank(), SWEEP, scheduler=client, chunk_size=2,
                             out=tmp_path / "dask.nc", **SMALL)
@@ -76,7 +76,7 @@ def test_a_lost_worker_chunk_is_rescheduled_and_the_map_is_unchanged(tmp_path):
     serial = regime_map(SliderCrank(), sweep, scheduler="serial", **kw).dataset
     path = tmp_path / "lost.nc"
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                                  dashboard_address=None) as cluster, \
+                                  dashboard_address=":0") as cluster, \
             distributed.Client(cluster) as client:
         result = {}
         run = threading.Thread(target=lambda: result.update(res=regime_map(
@@ -117,7 +117,7 @@ def test_workers_with_empty_caches_compile_nothing(tmp_path):
     env = {"MBS_CLEARANCE_CACHE_DIR": str(cache), "XDG_CACHE_HOME": str(tmp_path / "xdg")}
     local = regime_map(SliderCrank(), SWEEP, workers=1, out=tmp_path / "local.nc", **SMALL)
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                                  dashboard_address=None, env=env) as cluster, \
+                                  dashboard_address=":0", env=env) as cluster, \
             distributed.Client(cluster) as client:
         assert not cache.exists() or not any(cache.iterdir())
         remote = regime_map(SliderCrank(), SWEEP, scheduler=client, chunk_size=1,

@@ -170,7 +170,7 @@ def test_dask_cluster_gives_the_same_result_as_local_processes():
     local = optimize_link_lengths(PAPER, **kw)          # default: local thread pool
     assert local.settings["executor"] == "ThreadPoolExecutor(2 workers)"
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                                  dashboard_address=None) as cluster, \
+                                  dashboard_address=":0") as cluster, \
             distributed.Client(cluster) as client:
         remote = optimize_link_lengths(PAPER, executor=client, **kw)
     assert remote.settings["executor"].startswith("dask.distributed.Client(")
@@ -286,7 +286,7 @@ def test_cli_scheduler_option_runs_on_a_dask_cluster(tmp_path, capsys):
             "--no-refine", "--no-progress"]
     assert main(args + ["--workers", "1", "--out", str(tmp_path / "local")]) == 0
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                                  dashboard_address=None) as cluster:
+                                  dashboard_address=":0") as cluster:
         assert main(args + ["--scheduler", cluster.scheduler_address,
                             "--out", str(tmp_path / "dask")]) == 0
     assert "evaluating on the dask cluster" in capsys.readouterr().err

@@ -19,7 +19,7 @@ def test_same_seed_same_indices_locally_and_on_a_dask_local_cluster():
               seed=17, progress=False)
     local = tolerance_study(inputs, **kw)
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                                  dashboard_address=None) as cluster, \
+                                  dashboard_address=":0") as cluster, \
             distributed.Client(cluster) as client:
         remote = tolerance_study(inputs, executor=client, **kw)
     assert remote.settings["executor"].startswith("dask.distributed.Client(")

@@ -388,7 +388,7 @@ def test_a_real_scheduler_passes_the_probe():
     from mbs_clearance.studies.executor import connect_dask
 
     with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=False,
-                                  dashboard_address=None) as cluster:
+                                  dashboard_address=":0") as cluster:
         t0 = time.perf_counter()
         client = connect_dask(cluster.scheduler_address, timeout=10.0)
         try:
