@@ -33,11 +33,14 @@ import math
 import numpy as np
 
 from .._checks import MemoryLimitError, check_int, check_max_memory, check_real, format_bytes
-from ..elements.registry import ELEMENTS
+from ..elements.registry import elements_with
 from ..model.linkage import GROUND, Linkage, Revolute
 from .kinematics import coordinate_series, perp, turn
 
 __all__ = ["simulate_ideal_linkage", "peak_ideal_linkage", "IdealModel"]
+
+#: the elements whose ideal joint this backend builds (`elements.registry`)
+_ELEMENTS = elements_with("ideal joint")
 
 #: options of `simulate(linkage, backend="ideal")`
 OPTION_NAMES = ("samples_per_revolution", "max_memory", "duration", "window", "rtol")
@@ -94,7 +97,7 @@ class IdealModel:
                       angles.get(j.body_b, 0.0) - angles.get(j.body_a, 0.0))
         for cj in linkage.clearance_joints:
             pin(cj.name, cj.journal_body, cj.journal_point, cj.bearing_body, cj.bearing_point)
-        for el in ELEMENTS:
+        for el in _ELEMENTS:
             for args in el.ideal_slides(linkage, angles):
                 slide(*args)
         self.drive_row = None
@@ -448,7 +451,7 @@ def constrained_run(linkage: Linkage, revolutions: int | None = None, **options)
     monitored = shaking if linkage.monitor_joint is None else reactions[linkage.monitor_joint]
     magnitude = np.hypot(monitored[:, 0], monitored[:, 1])
     contact = [_pin_force(model, jac, lam, cj.name) for cj in linkage.clearance_joints]
-    for el in ELEMENTS:
+    for el in _ELEMENTS:
         contact += el.ideal_contact_forces(linkage, lambda name: lam[:, model.rows[name]])
     contact = np.column_stack(contact)
     moment = work = None

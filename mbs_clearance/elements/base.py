@@ -38,14 +38,16 @@ PIECES: dict[str, tuple[str, ...]] = {
     "description": ("contact_names",),
     "gap function and loads": ("parameter_names", "memory_names", "base_angles",
                                "add_loads", "ground_reaction", "finish", "specialise"),
-    "C printer": ("plan", "out_columns", "friction_contacts", "penetration_lines",
-                  "closure"),
+    "C printer": ("plan", "out_columns", "friction_contacts", "profiled_stages",
+                  "penetration_lines", "closure"),
     "Jacobian rows and tangent terms": ("jacobian_rows", "jacobian_lines", "force_loads",
                                         "output_loads"),
     "energy": ("contact_energy",),
     "ideal joint": ("ideal_slides", "ideal_contact_forces"),
     "reduced model's parameters and sensitivities": ("parameter_values", "floor_names",
-                                                     "chain", "closure_rows"),
+                                                     "chain", "closure_rows",
+                                                     "sensitivity_check", "fd_scale",
+                                                     "trajectory_series"),
     "Exudyn element": ("exudyn_check", "exudyn_contact_scale", "exudyn_build",
                        "exudyn_ground_joints", "exudyn_series"),
 }
@@ -63,6 +65,9 @@ class Element:
     description: type | None = None
     #: the `Linkage` field holding the joints of this kind
     attribute: str = ""
+    #: the pieces of `PIECES` the element brings (every one unless a layer still writes
+    #: the kind itself; that layer then iterates over `registry.elements_with(piece)`)
+    pieces: tuple[str, ...] = tuple(PIECES)
 
     def joints(self, linkage) -> tuple:
         """The joints of this kind in `linkage`."""
