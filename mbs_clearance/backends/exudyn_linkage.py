@@ -1635,7 +1635,8 @@ def peak_exudyn_linkage(linkage: Linkage, revolution: int | None = None,
 def peak_run(linkage: Linkage, revolution: int | None, settings: ExudynSettings,
              max_memory=None, start=None, *, duration=None, window=None) -> float:
     """`peak_exudyn_linkage` for validated `settings` (from `start` if given)."""
-    guides = {tj.name for tj in linkage.translational_joints if tj.guide_body == GROUND}
+    # the ground joints whose reaction an element computes after the run (a ground guide)
+    guides = {n for el in _ELEMENTS for n in el.exudyn_ground_joints(linkage)}
     if guides and (linkage.monitor_joint is None or linkage.monitor_joint in guides):
         # a ground guide's reaction is its corners' loads, computed from the bodies' stored
         # states, which a reactions-only run does not keep: the full run's peaks

@@ -522,27 +522,24 @@ class RevoluteClearance(Element):
                     return j.clearance
         return None
 
-    def trajectory_series(self, linkage, model, ts, ys, p, ecc) -> dict:
+    def trajectory_series(self, linkage, ecc, ctx) -> dict:
         """The run's series of the joints: ``contact_angle`` and ``slip_velocity``, each
-        (n, J) over the J joints at the recorded steps (times ts, states ys, the contacts'
-        eccentricities ecc (n, >= J, 2)): the direction of the eccentricity e in the bearing
-        body's frame in [0, 2 pi) rad, and the journal surface's tangential speed against
-        the bearing's at the contact in m/s, e_dot . t + omega_J R_J - omega_B R_B with
-        t = (-n_y, n_x), n = e / |e| (as the friction law's; R_B at the contact angle for a
-        profiled bearing, as the compiled model takes it: `profiles.effective_radius`).
-        Both None for a linkage without these joints."""
+        (n, J) over the J joints at the recorded steps (the contacts' eccentricities ecc
+        (n, >= J, 2)): the direction of the eccentricity e in the bearing body's frame in
+        [0, 2 pi) rad, and the journal surface's tangential speed against the bearing's at
+        the contact in m/s, e_dot . t + omega_J R_J - omega_B R_B with t = (-n_y, n_x),
+        n = e / |e| (as the friction law's; R_B at the contact angle for a profiled bearing,
+        as the compiled model takes it). `ctx`: ``edot``(J) the rates (n, J, 2) of the first
+        J contacts' eccentricities, ``bodies`` {body: (angle, rate)} series,
+        ``effective_radius`` (`generate.profiles.effective_radius`). Both None for a linkage
+        without these joints."""
         import numpy as np
-
-        from ..generate.profiles import body_angle_series, effective_radius
-        from ..solve.linkage_model import eccentricity_rates
 
         joints = self.joints(linkage)
         if not joints:
             return {"contact_angle": None, "slip_velocity": None}
-        ts = np.asarray(ts)
-        edot = eccentricity_rates(model, ts, ys, p, len(joints))
-        bodies = body_angle_series(linkage, model.COORDINATES, ts, ys)
-        angle, slip = np.empty((len(ts), len(joints))), np.empty((len(ts), len(joints)))
+        edot, bodies = ctx.edot(len(joints)), ctx.bodies
+        angle, slip = np.empty((len(ecc), len(joints))), np.empty((len(ecc), len(joints)))
         for j, cj in enumerate(joints):
             ex, ey = ecc[:, j, 0], ecc[:, j, 1]
             phi_b, w_b = bodies[cj.bearing_body]
@@ -555,7 +552,7 @@ class RevoluteClearance(Element):
             nx = np.where(centred, -1.0, ex / safe)
             ny = np.where(centred, 0.0, ey / safe)
             rb = (cj.bearing_radius if cj.bearing_profile is None else
-                  effective_radius(cj.bearing_profile, cj.journal_radius, theta, r))
+                  ctx.effective_radius(cj.bearing_profile, cj.journal_radius, theta, r))
             angle[:, j] = theta
             slip[:, j] = (edot[:, j, 1] * nx - edot[:, j, 0] * ny + w_j * cj.journal_radius
                           - w_b * rb)

@@ -343,7 +343,7 @@ class Translational(Element):
         """None: a joint's values step by their own size."""
         return None
 
-    def trajectory_series(self, linkage, model, ts, ys, p, ecc) -> dict:
+    def trajectory_series(self, linkage, ecc, ctx) -> dict:
         """None beside the outputs: the corners' series are output columns."""
         return {}
 

@@ -324,7 +324,8 @@ def trajectory_from_run(linkage: Linkage, model, ts, ys, ms, p, stats, peaks, ou
     ecc = take(*(f"{j}.ecc_{a}" for j in joints for a in "xy")).reshape(-1, J, 2)
     series = {}
     for el in ELEMENTS:
-        series.update(el.trajectory_series(linkage, model, ts, ys, p, ecc))
+        series.update(el.trajectory_series(linkage, ecc, _SeriesContext(linkage, model, ts,
+                                                                        ys, p)))
     contact_angle, slip_velocity = series["contact_angle"], series["slip_velocity"]
     # a free linkage has no drive: no drive moment, no drive work
     free = "drive_moment" not in col
@@ -361,6 +362,32 @@ def eccentricity_rates(model, ts, ys, p, joints: int) -> np.ndarray:
             ts[i], q, p)[rows]
         out[i] = rate.reshape(joints, 2)
     return out
+
+
+class _SeriesContext:
+    """What an element's run series read (`Element.trajectory_series`), computed when first
+    asked: ``edot``(J) the first J contacts' eccentricity rates (n, J, 2), ``bodies`` the
+    bodies' angle and rate series, ``effective_radius`` of a profiled bearing."""
+
+    def __init__(self, linkage: Linkage, model, ts, ys, p):
+        self._args = (linkage, model, np.asarray(ts), ys, p)
+
+    def edot(self, joints: int) -> np.ndarray:
+        _, model, ts, ys, p = self._args
+        return eccentricity_rates(model, ts, ys, p, joints)
+
+    @property
+    def bodies(self) -> dict:
+        from ..generate.profiles import body_angle_series
+
+        linkage, model, ts, ys, _ = self._args
+        return body_angle_series(linkage, model.COORDINATES, ts, ys)
+
+    @staticmethod
+    def effective_radius(*args):
+        from ..generate.profiles import effective_radius
+
+        return effective_radius(*args)
 
 
 def named_series(model, ys, outs, columns) -> dict:

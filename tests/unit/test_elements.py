@@ -163,17 +163,15 @@ def test_the_revolute_contact_force_at_a_given_penetration_is_the_closed_form(re
                                                                           rel=1e-5)
 
 
-def test_a_linkage_without_the_kind_gets_nothing_from_its_element():
-    link = CASES["paper_slider_crank"]()
-    el = element("translational")
+@pytest.mark.parametrize("case, kind", [("paper_slider_crank", "translational"),
+                                        ("flores_translational_slider_crank", "revolute")])
+def test_a_linkage_without_the_kind_gets_nothing_from_its_element(case, kind):
+    link = CASES[case]()
+    el = element(kind)
     assert el.joints(link) == () and el.contact_names(link) == []
     assert el.parameter_names(link) == [] and el.memory_names(link) == []
-    free = Linkage(name="two_bodies", bodies=link.bodies, joints=link.joints,
-                   clearance_joints=(), translational_joints=(), drive=link.drive,
-                   ground_points=link.ground_points, monitor_joint=link.monitor_joint)
-    for el in ELEMENTS:
-        assert el.joints(free) == () and el.contact_names(free) == []
-        assert el.parameter_names(free) == [] and el.memory_names(free) == []
+    assert el.parameter_values(link) == {} and el.floor_names(link) == []
+    assert el.closure_rows(link, None, None) == ([], [])
 
 
 def test_corner_loads_of_a_slider_pressed_into_the_top_surface_are_hertz():
