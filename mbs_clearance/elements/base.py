@@ -43,7 +43,7 @@ PIECES: dict[str, tuple[str, ...]] = {
     "Jacobian rows and tangent terms": ("jacobian_rows", "jacobian_lines", "force_loads",
                                         "output_loads"),
     "energy": ("contact_energy",),
-    "ideal joint": ("ideal_slides", "ideal_contact_forces"),
+    "ideal joint": ("ideal_joints", "ideal_contact_forces"),
     "reduced model's parameters and sensitivities": ("parameter_values", "floor_names",
                                                      "chain", "closure_rows",
                                                      "sensitivity_check", "fd_scale",

@@ -26,6 +26,8 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from ..laws.forces import CONTACT_MODELS, FRICTION_LAWS, stiffness_eq9_partials
 from ..laws.lubrication import MODELS as LUBRICATION_MODELS
 from ..laws.registry import FRICTION_SLOTS
@@ -58,9 +60,9 @@ class RevoluteClearance(Element):
     kind = "revolute"
     description = ClearanceJoint
     attribute = "clearance_joints"
-    #: the ideal-joint and Exudyn backends still build the revolute clearance joint
-    #: themselves (its contact, friction, film, profile and sphere-contact variants)
-    pieces = tuple(p for p in PIECES if p not in ("ideal joint", "Exudyn element"))
+    #: the Exudyn backend still builds the revolute clearance joint itself (its contact,
+    #: friction, film, profile and sphere-contact variants)
+    pieces = tuple(p for p in PIECES if p != "Exudyn element")
 
     # ---- description
     def contact_names(self, linkage) -> list[str]:
@@ -533,8 +535,6 @@ class RevoluteClearance(Element):
         J contacts' eccentricities, ``bodies`` {body: (angle, rate)} series,
         ``effective_radius`` (`generate.profiles.effective_radius`). Both None for a linkage
         without these joints."""
-        import numpy as np
-
         joints = self.joints(linkage)
         if not joints:
             return {"contact_angle": None, "slip_velocity": None}
@@ -557,6 +557,22 @@ class RevoluteClearance(Element):
             slip[:, j] = (edot[:, j, 1] * nx - edot[:, j, 0] * ny + w_j * cj.journal_radius
                           - w_b * rb)
         return {"contact_angle": angle, "slip_velocity": slip}
+
+    # ---- the ideal-joint backend (backends.ideal_linkage)
+    def ideal_joints(self, linkage, angles: dict) -> list[tuple]:
+        """Each joint closed as an ideal pin: ("pin", (name, journal body, journal point,
+        bearing body, bearing point))."""
+        return [("pin", (j.name, j.journal_body, j.journal_point, j.bearing_body,
+                         j.bearing_point)) for j in self.joints(linkage)]
+
+    def ideal_contact_forces(self, linkage, multipliers) -> list:
+        """Per joint the magnitude of the force its ideal pin transmits (N, (s,)): its two
+        multipliers' (`multipliers`(name) -> (s, 2))."""
+        out = []
+        for j in self.joints(linkage):
+            lam = multipliers(j.name)
+            out.append(np.hypot(lam[:, 0], lam[:, 1]))
+        return out
 
 
 #: the element of the registry

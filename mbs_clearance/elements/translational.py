@@ -348,13 +348,13 @@ class Translational(Element):
         return {}
 
     # ---- the ideal-joint backend (backends.ideal_linkage)
-    def ideal_slides(self, linkage, angles: dict) -> list[tuple]:
-        """Each joint closed as an ideal prismatic joint: (name, guide body, guide point,
-        axis angle in rad, slider body, slider point, the bodies' angle difference to keep
-        in rad) from the bodies' assembled `angles`."""
-        return [(tj.name, tj.guide_body, tj.guide_point, tj.angle, tj.slider_body,
-                 tj.slider_point,
-                 angles.get(tj.slider_body, 0.0) - angles.get(tj.guide_body, 0.0))
+    def ideal_joints(self, linkage, angles: dict) -> list[tuple]:
+        """Each joint closed as an ideal prismatic joint: ("slide", (name, guide body, guide
+        point, axis angle in rad, slider body, slider point, the bodies' angle difference to
+        keep in rad)) from the bodies' assembled `angles`."""
+        return [("slide", (tj.name, tj.guide_body, tj.guide_point, tj.angle, tj.slider_body,
+                           tj.slider_point,
+                           angles.get(tj.slider_body, 0.0) - angles.get(tj.guide_body, 0.0)))
                 for tj in self.joints(linkage)]
 
     def ideal_contact_forces(self, linkage, multipliers) -> list:

@@ -36,11 +36,11 @@ def test_every_registered_kind_brings_every_piece(el):
         assert (el in elements_with(piece)) == (piece in el.pieces)
 
 
-def test_the_revolute_element_comes_first_and_lacks_only_the_backends_pieces():
-    """The clearance joints' contacts come first in every layout; the ideal-joint and
-    Exudyn backends still build the revolute clearance joint themselves."""
+def test_the_revolute_element_comes_first_and_lacks_only_the_exudyn_element():
+    """The clearance joints' contacts come first in every layout; the Exudyn backend still
+    builds the revolute clearance joint itself."""
     assert ELEMENTS[0] is element("revolute")
-    assert set(PIECES) - set(element("revolute").pieces) == {"ideal joint", "Exudyn element"}
+    assert set(PIECES) - set(element("revolute").pieces) == {"Exudyn element"}
     assert element("translational").pieces == tuple(PIECES)
     with pytest.raises(ValueError, match="unknown piece 'gap'; allowed: "):
         elements_with("gap")
