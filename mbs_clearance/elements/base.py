@@ -2,15 +2,16 @@
 (`generate.derive`, `writer`, `cwriter`, `jacobians`, `cjacobians`, `energy`), the reduced
 model (`solve.linkage_model`, `solve.linkage_ddm`), the Exudyn backend
 (`backends.exudyn_linkage`) and the ideal-joint backend (`backends.ideal_linkage`) ask of
-every registered element, in the registry's order.
+every registered element that brings their piece (`Element.pieces`), in the registry's
+order.
 
 An element owns the joints of one field of the description (`Element.attribute` of a
-`Linkage`, e.g. ``translational_joints``) and their *contacts* (the events of the compiled
-model, each with its own mode and impact-velocity memory), which follow the revolute
-clearance joints' in every layout. Every hook takes all the element's joints of one linkage
-at once, so that its entries stay together in the parameter vector, the rows and the
-outputs; a linkage without joints of the kind gets empty contributions and the model is
-printed as if the element did not exist.
+`Linkage`, e.g. ``clearance_joints``, ``translational_joints``) and their *contacts* (the
+events of the compiled model, each with its own mode and impact-velocity memory), which
+follow the earlier elements' in every layout. Every hook takes all the element's joints of
+one linkage at once, so that its entries stay together in the parameter vector, the rows
+and the outputs; a linkage without joints of the kind gets empty contributions and the
+model is printed as if the element did not exist.
 """
 
 from __future__ import annotations

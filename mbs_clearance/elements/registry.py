@@ -1,7 +1,8 @@
 """The registry of the joint kinds that are elements: which element modules exist, in the
-order their joints' contacts follow the revolute clearance joints' in every layout of the
-compiled model (parameters, events, rows, outputs). Adding a joint kind: its element module
-(`base.Element`: every hook of `base.PIECES`), one line here, and its tests."""
+order of their joints' contacts in every layout of the compiled model (parameters, events,
+rows, outputs): the revolute clearance joints' first. Adding a joint kind: its element
+module (`base.Element`: every hook of the pieces of `base.PIECES` it brings), one line here,
+and its tests."""
 
 from __future__ import annotations
 
