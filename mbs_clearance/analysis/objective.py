@@ -37,7 +37,7 @@ from .._checks import check_choice, check_int, check_real, check_revolutions_mem
 from ..model.linkage import Linkage
 from ..model.mechanism import CONTINUOUS_FIELDS, SliderCrank
 from ..numerics.integrator import METHODS
-from .sensitivity import DDM_INTEGRATOR, DEFAULT_PARAMETERS, FD_RELATIVE_STEP, fd_step
+from .sensitivity import DDM_INTEGRATOR, DEFAULT_PARAMETERS, FD_RELATIVE_STEP
 
 __all__ = ["PeakGradient", "peak_gradient", "objective_window", "KINK_RTOL",
            "PEAK_GRADIENT_RTOL", "RIVAL_CANDIDATES",
@@ -403,7 +403,7 @@ def _linkage_fd_step(linkage: Linkage, name: str, relative: float) -> float:
     if name.endswith("clearance"):
         return relative * design.design_value(linkage, name)
     if design.slider_crank_of(linkage) is not None and name in CONTINUOUS_FIELDS:
-        return fd_step(design.slider_crank_of(linkage), name, relative)
+        return linkage_ddm.fd_step(linkage, name, relative)
     if name in design.design_names(linkage)[:len(design._case_table(linkage))]:
         value = abs(design.design_value(linkage, name))
         return relative * (value if value != 0.0 else 1.0)
@@ -781,7 +781,7 @@ def peak_gradient(mech: Linkage | SliderCrank, parameters=None, revolution: int 
         Relative gap below which a second local maximum ties with the peak (the tolerance
         used is max(kink_tol, KINK_PER_RTOL * rtol) = max(kink_tol, 10 rtol)).
     fd_relative_step : float, default 3e-5
-        FD only: relative step, see `sensitivity.fd_step`.
+        FD only: relative step, see `linkage_ddm.fd_step`.
     executor :
         FD only: a concurrent.futures-style executor for the 2 p + 1 runs.
     **options :

@@ -59,8 +59,6 @@ import numpy as np
 from .._checks import check_int, check_real
 from ..model.cases import as_linkage
 from ..model.design import design_at, value_at
-from ..model.linkage import Linkage
-from ..model.mechanism import SliderCrank
 from ..numerics.integrator import RESULTS
 from ..solve.flows import Flow, _tangent_scale, clearances_of, drive_of, joints_of
 
@@ -379,8 +377,7 @@ def periodic_orbit(mech, period: int = 1, guess=None, *, rtol: float | None = No
     Raises ValueError for bad input before any computation, RuntimeError where Newton does
     not converge within `max_iterations` (with what to try).
     """
-    if not isinstance(mech, (SliderCrank, Linkage)):
-        raise ValueError(f"mech must be a SliderCrank or a Linkage; got {type(mech).__name__}")
+    as_linkage(mech)                    # ValueError for anything else
     check_driven(mech)
     period = check_int("period (drive revolutions)", period, 1, 64)
     rtol = SHOOTING_RTOL if rtol is None else check_real("rtol", rtol, 1e-14, 1e-4)
@@ -849,8 +846,7 @@ def continue_orbits(mech, field_name: str, start: float, stop: float, *, period:
     `stop`, after `max_points`, where the step falls below `min_step`, or (with
     `stop_at_first`) at the first detected point.
     """
-    if not isinstance(mech, (SliderCrank, Linkage)):
-        raise ValueError(f"mech must be a SliderCrank or a Linkage; got {type(mech).__name__}")
+    as_linkage(mech)                    # ValueError for anything else
     check_driven(mech)
     if not isinstance(field_name, str):
         raise ValueError(f"field must be a field name (str); got {field_name!r}")

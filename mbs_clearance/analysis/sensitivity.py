@@ -3,7 +3,7 @@
 `sensitivities(mech, parameters, method="ddm")` integrates the direct-differentiation
 equations of the reduced model, generated with its exact Jacobians (`linkage_ddm`; a
 SliderCrank's fields are directions in its description's parameters,
-`slider_crank_directions`); ``method="fd"`` takes central finite
+`mechanism.field_directions`); ``method="fd"`` takes central finite
 differences through any backend, with the runs in parallel.
 """
 
@@ -27,20 +27,24 @@ from .._checks import (
     check_revolutions_memory,
     check_times,
 )
-from ..laws.registry import FRICTION_SLOTS
 from ..model.mechanism import (  # noqa: F401 - reference_value public here too
     CONTINUOUS_FIELDS,
+    PAPER_JOINT,
     SliderCrank,
     check_field_names,
+    field_directions,
     reference_value,
 )
 from ..numerics.integrator import METHODS
 from ..solve import reduced
-from ..solve.linkage_ddm import independent_directions  # noqa: F401  (public here too)
+from ..solve.linkage_ddm import (
+    fd_step,  # noqa: F401  (public here too)
+    independent_directions,  # noqa: F401  (public here too)
+)
 from ..solve.trajectory import Trajectory, annotate, load_trajectory
 
 __all__ = ["Sensitivities", "sensitivities", "load_sensitivities", "DEFAULT_PARAMETERS",
-           "slider_crank_directions", "reference_value", "fd_step", "summary_sensitivities",
+           "reference_value", "fd_step", "summary_sensitivities",
            "summary_times", "time_average", "SUMMARY_RTOL", "SUMMARY_SAMPLES_PER_REVOLUTION"]
 
 #: the sensitivity summary (mean |S| over the last revolution: `Sensitivities.summary`) is
@@ -358,6 +362,14 @@ def _check_loaded(path: Path, a: dict, stats: Any, traj: Trajectory) -> None:
                    f"({len(traj.t)} samples)")
 
 
+def _field_names(parameters) -> bool:
+    """Whether `parameters` (None: `DEFAULT_PARAMETERS`) name fields of the paper's table
+    rather than dotted paths of a description."""
+    names = DEFAULT_PARAMETERS if parameters is None else parameters
+    names = (names,) if isinstance(names, str) else tuple(names)
+    return not any(isinstance(n, str) and "." in n for n in names)
+
+
 def _check_parameters(parameters) -> tuple[str, ...]:
     names = tuple(DEFAULT_PARAMETERS if parameters is None else parameters)
     if isinstance(parameters, str):
@@ -370,129 +382,43 @@ def _check_parameters(parameters) -> tuple[str, ...]:
     return names
 
 
-#: the SliderCrank's fields as the description's parameters (`cases.from_slider_crank`):
-#: field -> the description parameters it sets, with the derivative of each (a number, or a
-#: function of the mechanism for the derived values); the inertias derived from a uniform
-#: rod (field None) move with the lengths and masses too (`_derived_inertia`)
-_JOINT = "coupler_slider"
-_FIELD_MAP = {
-    "crank_length": {"crank.pivot.x": -0.5, "crank.pin.x": 0.5},
-    "coupler_length": {"coupler.crank_end.x": -0.5, "coupler.slider_end.x": 0.5},
-    "crank_mass": {"crank.mass": 1.0},
-    "coupler_mass": {"coupler.mass": 1.0},
-    "slider_mass": {"slider.mass": 1.0, "slider.inertia": 0.01**2 / 6.0},
-    "crank_inertia": {"crank.inertia": 1.0},
-    "coupler_inertia": {"coupler.inertia": 1.0},
-    "crank_speed": {"drive.speed": 1.0},
-    "initial_crank_angle": {"drive.initial_angle": 1.0},
-    "gravity": {"gravity": 1.0},
-    **{f: {f"{_JOINT}.{f}": 1.0} for f in (
-        "bearing_radius", "journal_radius", "youngs_modulus", "poisson_ratio", "restitution",
-        "contact_stiffness", "impact_velocity_floor")},
-}
-#: the friction fields: description parameters only where the joint has a friction law
-_FRICTION_FIELDS = FRICTION_SLOTS
-
-
-def _derived_inertia(mech: SliderCrank, name: str) -> dict[str, float]:
-    """d(inertia)/d(field) of the uniform-rod inertias m L^2 / 12 where they are derived."""
-    out = {}
-    if mech.crank_inertia is None:
-        m, L = mech.crank_mass, mech.crank_length
-        out.update({"crank_length": ("crank.inertia", m * L / 6.0),
-                    "crank_mass": ("crank.inertia", L * L / 12.0)})
-    if mech.coupler_inertia is None:
-        m, L = mech.coupler_mass, mech.coupler_length
-        out.update({"coupler_length": ("coupler.inertia", m * L / 6.0),
-                    "coupler_mass": ("coupler.inertia", L * L / 12.0)})
-    return dict([out[name]]) if name in out else {}
-
-
-def slider_crank_directions(mech: SliderCrank, names) -> list[dict[str, float]]:
-    """Per SliderCrank field, its direction in the description's parameters
-    ({dotted name: d value / d field}, exact: the mapping `cases.from_slider_crank` is
-    linear in every field but the derived inertias, differentiated here); the description's
-    own chain (`linkage_ddm.chain`) takes the radii and the material into the clearance and
-    the Eq. 9 stiffness."""
-    return [({f"{_JOINT}.{n}": 1.0} if mech.friction_law != "none" else {})
-            if n in _FRICTION_FIELDS else {**_FIELD_MAP[n], **_derived_inertia(mech, n)}
-            for n in names]
-
-
 #: default method of the compiled integrator for the sensitivity equations
 DDM_INTEGRATOR = "dop853"
+
+
+def field_directions_of(mech: SliderCrank, names):
+    """The paper's fields `names` as design directions of its description
+    (`linkage_ddm.Directions`): their directions through the one table
+    (`mechanism.field_directions`), their values, each direction's tolerance scaled by its
+    field's value (1 where zero), and the state's units in the growth diagnostic (coupler
+    angle rad, slider position the clearance, rates at the crank speed; the slider's
+    over L2)."""
+    from ..solve.linkage_ddm import Directions
+
+    ref = np.array([reference_value(mech, n) for n in names])
+    w, c = mech.crank_speed, mech.clearance
+    return Directions(field_directions(mech, names), ref,
+                      np.where(ref != 0.0, np.abs(ref), 1.0),
+                      np.array([1.0, c, w, w * c / mech.crank_length]))
 
 
 def slider_crank_run(mech: SliderCrank, names, rtol, *, revolutions: int, t_eval=None,
                      event_time_term: bool = True, method: str = DDM_INTEGRATOR,
                      record: bool = True, derivatives=False):
-    """The DDM run (`linkage_ddm.ddm_run`) of the SliderCrank fields `names` on its case's
-    model, from its start, with its plain run's tolerances (`linkage_ddm.plain_setup`);
-    each direction's tolerance scaled by its field's value; with `derivatives`
-    (`linkage_ddm.ddm_run`) outputs' derivatives recorded with the steps."""
-    from ..model.cases import as_linkage
+    """The DDM run (`linkage_ddm.design_run`) of the paper's fields `names` on its case's
+    description (`cases.door`), their directions through the one table
+    (`field_directions_of`); with `derivatives` (`linkage_ddm.ddm_run`) outputs'
+    derivatives recorded with the steps. Returns (run, the fields' values)."""
+    from ..model.cases import door
     from ..solve import linkage_ddm
 
-    linkage = as_linkage(mech)
-    ref = np.array([reference_value(mech, n) for n in names])
-    scale = np.where(ref != 0.0, np.abs(ref), 1.0)
-    model, p0, y0, rtol, atol = linkage_ddm.plain_setup(linkage, rtol)
-    run = linkage_ddm.ddm_run(
-        linkage, model, p0, y0,
-        slider_crank_directions(mech, names), scale=scale, rtol=rtol, atol_plain=atol,
-        revolutions=revolutions, t_eval=t_eval, event_time_term=event_time_term,
-        method=method, record=record, whole=True, derivatives=derivatives)
-    return run, ref
-
-
-def _ddm(mech, names, revolutions, rtol, t_eval, event_time_term, method):
-    from ..model.cases import as_linkage
-    from ..solve.linkage_ddm import landed, magnitude_derivative
-    from ..solve.linkage_model import load_model
-
-    # only the derivatives a SliderCrank's Sensitivities hold, computed with the steps (the
-    # model is the one the run loads: on the chosen core)
-    plain = load_model(as_linkage(mech))
-    force = plain.OUT_COLUMNS[plain.MONITOR_COLUMN:][:2]
-    run, ref = slider_crank_run(mech, names, rtol, revolutions=revolutions, t_eval=t_eval,
-                                event_time_term=event_time_term, method=method,
-                                derivatives=[*force, "drive_moment", f"{_JOINT}.contact_force"])
-    model = run.model
-    mon = model.MONITOR_COLUMN
-    # growth diagnostic on all steps: normalized state sensitivities per revolution
-    unit = np.array([1.0, mech.clearance, mech.crank_speed,
-                     mech.crank_speed * mech.clearance / mech.crank_length])
-    growth = run.growth(unit, mech.period, revolutions)
-    ts, ys, ms, peaks, keep = run.ts, run.ys, run.ms, run.peaks, None
-    if t_eval is not None:
-        keep = landed(ts, t_eval)
-        ts, ys, ms, peaks = ts[keep], ys[keep], ms[keep], None
-    vals, ders = run.recorded_output_sensitivities(keep)
-    # (the fields are views of ders, one array (n, 4, npar) in the order asked above)
-    d_force = ders[:, 0:2, :]
-    d_mag = magnitude_derivative(vals, mon, ders, 0)
-    traj = annotate(reduced.trajectory_from_states(
-        mech, ts, run.plain_states(ys), ms[:, :model.N_MEM], run.p0, run.stats, peaks, vals,
-        model.OUT_COLUMNS, model))
-    return Sensitivities(
-        t=ts, parameters=names, reference=ref, base_force=d_force, base_force_magnitude=d_mag,
-        crank_moment=ders[:, 2, :], contact_force=ders[:, 3, :], trajectory=traj,
-        method="ddm", backend="reduced", growth=growth, stats=run.stats)
-
-
-def fd_step(mech: SliderCrank, name: str, relative: float = FD_RELATIVE_STEP) -> float:
-    """Central-difference step for parameter `name`.
-
-    `relative` times the parameter value, except for the radii, whose step is relative to
-    the clearance (they enter through R_B - R_J), and for zero-valued angles (1 rad scale)
-    and gravity (9.81 m/s^2 scale).
-    """
-    if name in ("journal_radius", "bearing_radius"):
-        return relative * mech.clearance
-    value = abs(reference_value(mech, name))
-    if value == 0.0:
-        return relative * (9.81 if name == "gravity" else 1.0)
-    return relative * value
+    entry = door(mech)
+    along = field_directions_of(entry.paper, names)
+    run = linkage_ddm.design_run(entry.linkage, tuple(names), rtol, revolutions=revolutions,
+                                 t_eval=t_eval, event_time_term=event_time_term,
+                                 method=method, record=record, derivatives=derivatives,
+                                 directions=along)
+    return run, along.reference
 
 
 def _fd_run(args):
@@ -506,6 +432,7 @@ def _fd_run(args):
 
 def _fd(mech, names, revolutions, backend, t_eval, rtol, fd_relative_step, executor, n_jobs,
         options):
+    from ..model.cases import as_linkage
     from ..solve.simulate import simulate
 
     options = dict(options)
@@ -523,7 +450,8 @@ def _fd(mech, names, revolutions, backend, t_eval, rtol, fd_relative_step, execu
             f"finite differences through Exudyn at step {options.get('step_size', 2e-6):g} s "
             "are coarse (the paper's case at the default 2e-6 s: 15-19 % RMS off the DDM "
             "sensitivities); step_size=5e-7 gives about 1 % (4 times the run time)")
-    steps = [fd_step(mech, n, fd_relative_step) for n in names]
+    linkage = as_linkage(mech)
+    steps = [fd_step(linkage, n, fd_relative_step) for n in names]
     jobs = []
     for name, h in zip(names, steps):
         b0 = reference_value(mech, name)
@@ -626,15 +554,16 @@ def sensitivities(mech: SliderCrank, parameters=None, revolutions: int | None = 
     with the parameters), its growth per window of ``window=`` s (default: the whole run);
     it has no crank moment (``crank_moment`` None).
     """
-    from ..model.linkage import Linkage
+    from ..model.cases import door
 
-    if isinstance(mech, Linkage):
-        return _linkage_sensitivities(mech, parameters, revolutions, method, backend, t_eval,
-                                      rtol, event_time_term, fd_relative_step, integrator,
-                                      options)
-    if not isinstance(mech, SliderCrank):
-        raise ValueError(f"mech must be a SliderCrank or a Linkage; got "
-                         f"{type(mech).__name__}")
+    entry = door(mech)
+    linkage, mech = entry.linkage, entry.paper
+    # the paper's case differentiates its fields (the one table, `FIELD_PATHS`); its
+    # description's dotted paths are any linkage's
+    if mech is None or not _field_names(parameters):
+        return _linkage_sensitivities(linkage, parameters, revolutions, method, backend,
+                                      t_eval, rtol, event_time_term, fd_relative_step,
+                                      integrator, options)
     names = _check_parameters(parameters)
     check_choice("method", method, ("ddm", "fd"))
     revolutions = check_int("revolutions", 4 if revolutions is None else revolutions, 1)
@@ -661,8 +590,12 @@ def sensitivities(mech: SliderCrank, parameters=None, revolutions: int | None = 
                              "method='fd' for other backends")
         if options:
             raise ValueError(f"unknown option(s) for method='ddm': {sorted(options)}")
-        return _ddm(mech, names, revolutions, rtol, t_eval, event_time_term,
-                    integrator or DDM_INTEGRATOR)
+        from ..solve import linkage_ddm
+
+        fields = linkage_ddm.linkage_sensitivities(
+            linkage, names, revolutions, rtol, t_eval, event_time_term,
+            integrator or DDM_INTEGRATOR, directions=field_directions_of(mech, names))
+        return _as_given(Sensitivities(**fields), entry)
     if integrator is not None:
         if backend != "reduced":
             raise ValueError(f"integrator applies to the reduced backend only; got "
@@ -671,6 +604,19 @@ def sensitivities(mech: SliderCrank, parameters=None, revolutions: int | None = 
     return _fd(mech, names, revolutions, backend, t_eval, rtol, fd_relative_step, executor,
                n_jobs, options)
 
+
+
+def _as_given(sens: Sensitivities, entry) -> Sensitivities:
+    """Sensitivities as the user gave the mechanism (`cases.door`): a `SliderCrank`'s
+    trajectory in the paper's names (`reduced.paper_series`), without the description's
+    per-output derivatives; a linkage's as they are."""
+    if not entry.given_as_paper:
+        return sens
+    import dataclasses
+
+    traj = annotate(reduced.paper_series(sens.trajectory, entry.paper))
+    # one record of the run's counters and the trajectory's notes, as the run's own
+    return dataclasses.replace(sens, trajectory=traj, outputs=None, stats=traj.stats)
 
 
 def _per_revolution(method: str, p: int) -> int:

@@ -34,9 +34,11 @@ from .linkage import (
     TranslationalClearance,
     check_friction,
 )
-from .mechanism import SliderCrank
+from .mechanism import PAPER_JOINT, SliderCrank, description_values
 
-__all__ = ["as_linkage", "paper_slider_crank", "from_slider_crank", "slider_crank_two_clearances",
+__all__ = ["as_linkage", "door", "Door", "slider_crank_of", "SLIDER_CRANK_CASES",
+           "paper_slider_crank", "from_slider_crank",
+           "slider_crank_two_clearances",
            "four_bar", "paper_slider_crank_lubricated", "LUBRICATED_DEFAULTS",
            "paper_slider_crank_wear", "WEAR_DEFAULTS", "CASES",
            "CASE_PARAMETERS", "CASE_SUMMARY", "flores_translational_slider_crank",
@@ -51,22 +53,30 @@ def from_slider_crank(mech: SliderCrank) -> Linkage:
     slider. The drive turns the crank pivot; the monitored joint is the crank pivot (its
     reaction is the paper's base force F12). Assembly guesses: the ideal joints' closed-form
     positions at the initial crank angle (the branch with the slider at x > 0)."""
-    if not isinstance(mech, SliderCrank):
+    if not _is_paper_set(mech):
         raise ValueError(f"mech must be a SliderCrank; got {type(mech).__name__}")
     import numpy as np
 
+    v = description_values(mech)        # every value through the one table, FIELD_PATHS
     L2, L3 = mech.crank_length, mech.coupler_length
     th2 = mech.initial_crank_angle
     th3 = float(np.arcsin(-L2 * np.sin(th2) / L3))
     x4 = float(L2 * np.cos(th2) + L3 * np.cos(th3))
+
+    def point(path):
+        return (v[f"{path}.x"], 0.0)
+
+    joint = {path.partition(".")[2]: value for path, value in v.items()
+             if path.startswith(f"{PAPER_JOINT}.")}
     return Linkage(
         name="paper_slider_crank",
         bodies=(
-            Body("crank", mech.crank_mass, mech.crank_inertia_value,
-                 {"pivot": (-L2 / 2, 0.0), "pin": (L2 / 2, 0.0)}),
-            Body("coupler", mech.coupler_mass, mech.coupler_inertia_value,
-                 {"crank_end": (-L3 / 2, 0.0), "slider_end": (L3 / 2, 0.0)}),
-            Body("slider", mech.slider_mass, _slider_inertia(mech), {"pin": (0.0, 0.0)}),
+            Body("crank", v["crank.mass"], v["crank.inertia"],
+                 {"pivot": point("crank.pivot"), "pin": point("crank.pin")}),
+            Body("coupler", v["coupler.mass"], v["coupler.inertia"],
+                 {"crank_end": point("coupler.crank_end"),
+                  "slider_end": point("coupler.slider_end")}),
+            Body("slider", v["slider.mass"], v["slider.inertia"], {"pin": (0.0, 0.0)}),
         ),
         joints=(
             Revolute("crank_pivot", GROUND, "crank_pivot", "crank", "pivot"),
@@ -74,20 +84,12 @@ def from_slider_crank(mech: SliderCrank) -> Linkage:
             Prismatic("slider_guide", GROUND, "slider_axis", "slider", "pin", angle=0.0),
         ),
         clearance_joints=(
-            ClearanceJoint(
-                "coupler_slider", journal_body="coupler", journal_point="slider_end",
-                bearing_body="slider", bearing_point="pin",
-                bearing_radius=mech.bearing_radius, journal_radius=mech.journal_radius,
-                youngs_modulus=mech.youngs_modulus, poisson_ratio=mech.poisson_ratio,
-                restitution=mech.restitution, contact_stiffness=mech.contact_stiffness,
-                contact_model=mech.contact_model,
-                impact_velocity_floor=mech.impact_velocity_floor,
-                friction_law=mech.friction_law,
-                **{f: getattr(mech, f) for f in FRICTION_SLOTS}),
+            ClearanceJoint(PAPER_JOINT, journal_body="coupler", journal_point="slider_end",
+                           bearing_body="slider", bearing_point="pin", **joint),
         ),
-        drive=Drive("crank_pivot", mech.crank_speed, mech.initial_crank_angle),
+        drive=Drive("crank_pivot", v["drive.speed"], v["drive.initial_angle"]),
         ground_points={"crank_pivot": (0.0, 0.0), "slider_axis": (0.0, 0.0)},
-        gravity=mech.gravity,
+        gravity=v["gravity"],
         monitor_joint="crank_pivot",
         assembly={"coupler.angle": th3, "slider_guide.s": x4},
     )
@@ -103,24 +105,67 @@ def _paper_case_of(mech: SliderCrank) -> Linkage:
 _PAPER_DEFAULTS = SliderCrank()
 
 
-def as_linkage(mech: SliderCrank | Linkage) -> Linkage:
-    """The description a study runs: a `Linkage` as it is; the paper's `SliderCrank` (a
-    named parameter set) as the case "paper_slider_crank" with its changed fields as the
-    case's overrides, so its field names are design names of every study (`design`).
-    ValueError for anything else."""
+#: the cases whose overrides are SliderCrank fields (the lubricated and wearing ones: and
+#: their joint's)
+SLIDER_CRANK_CASES = ("paper_slider_crank", "paper_slider_crank_lubricated",
+                      "paper_slider_crank_wear")
+
+
+def slider_crank_of(linkage: Linkage) -> SliderCrank | None:
+    """The `SliderCrank` of a linkage built by a case whose overrides are its fields (its
+    overrides that are fields of the one table, `mechanism.FIELD_PATHS`), else None."""
+    if linkage.case not in SLIDER_CRANK_CASES:
+        return None
+    from .mechanism import FIELD_PATHS
+
+    return SliderCrank().replace(**{k: v for k, v in linkage.overrides.items()
+                                    if k in FIELD_PATHS})
+
+
+@dataclasses.dataclass(frozen=True)
+class Door:
+    """A mechanism as the studies take it (`door`): `linkage` the description every layer
+    runs; `paper` the paper's parameter set where the description is its case
+    "paper_slider_crank" (its overrides the fields of `mechanism.FIELD_PATHS`), else None;
+    `given_as_paper` whether the user gave that set (`SliderCrank`), so that a result
+    names its designs as given (`back`)."""
+
+    linkage: Linkage
+    paper: SliderCrank | None
+    given_as_paper: bool
+
+    def back(self, design: SliderCrank | Linkage) -> SliderCrank | Linkage:
+        """A design of the study (the paper's set or a description of the same case) as
+        the user gave the mechanism: the paper's `SliderCrank`, or the description."""
+        entry = door(design)
+        return entry.paper if self.given_as_paper else entry.linkage
+
+
+def _is_paper_set(mech) -> bool:
+    # the package's one type test of the paper's parameter set: `door` and its converter
+    return isinstance(mech, SliderCrank)
+
+
+def door(mech: SliderCrank | Linkage) -> Door:
+    """The one door of every study: the mechanism as its description (`Door`). A `Linkage`
+    as it is; the paper's `SliderCrank` (a named parameter set) as the case
+    "paper_slider_crank" with its changed fields as the case's overrides, so that its field
+    names are design names of every study (`design`). The only place that tells the two
+    apart. ValueError for anything else."""
+    if _is_paper_set(mech):
+        return Door(_paper_case_of(mech), mech, True)
     if isinstance(mech, Linkage):
-        return mech
-    if isinstance(mech, SliderCrank):
-        return _paper_case_of(mech)
-    raise ValueError(f"mech must be a Linkage (or the paper's SliderCrank); got "
-                     f"{type(mech).__name__}")
+        # the paper's case itself (a lubricated or wearing joint is more than its fields)
+        return Door(mech, slider_crank_of(mech) if mech.case == "paper_slider_crank" else None,
+                    False)
+    raise ValueError(f"mech must be a SliderCrank or a Linkage (the paper's parameter set "
+                     f"or any description); got {type(mech).__name__}")
 
 
-def _slider_inertia(mech: SliderCrank) -> float:
-    """The slider's inertia (kg m^2): it does not turn (prismatic joint), so the value never
-    enters the motion; the paper gives none. A 1 cm uniform square block of the slider's
-    mass is taken so that the description is complete (m a^2 / 6, a = 0.01 m)."""
-    return mech.slider_mass * 0.01**2 / 6.0
+def as_linkage(mech: SliderCrank | Linkage) -> Linkage:
+    """The description a study runs (`door`): a `Linkage` as it is, the paper's
+    `SliderCrank` as its case. ValueError for anything else."""
+    return door(mech).linkage
 
 
 def paper_slider_crank(**overrides: Any) -> Linkage:

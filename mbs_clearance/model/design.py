@@ -31,6 +31,8 @@ import math
 import numbers
 from collections.abc import Iterable, Mapping
 
+from .cases import SLIDER_CRANK_CASES as _SLIDER_CRANK_CASES
+from .cases import slider_crank_of
 from .linkage import GROUND, Linkage
 from .mechanism import SliderCrank, reference_value
 
@@ -39,23 +41,6 @@ __all__ = ["design_names", "check_names", "design_value", "linkage_with", "direc
 
 #: the description's sections accepted in front of a dotted path, and what they become
 _SECTIONS = {"bodies": "", "joints": "", "clearance_joints": "", "ground_points": f"{GROUND}."}
-
-
-#: the cases whose overrides are SliderCrank fields (the lubricated one: and its film's)
-_SLIDER_CRANK_CASES = ("paper_slider_crank", "paper_slider_crank_lubricated",
-                       "paper_slider_crank_wear")
-
-
-def slider_crank_of(linkage: Linkage) -> SliderCrank | None:
-    """The `SliderCrank` of a linkage built by a case whose overrides are its fields (its
-    overrides that are fields), else None."""
-    if linkage.case not in _SLIDER_CRANK_CASES:
-        return None
-    from .mechanism import CONTINUOUS_FIELDS
-
-    fields = {k: v for k, v in linkage.overrides.items()
-              if k in CONTINUOUS_FIELDS or k in SliderCrank.__dataclass_fields__}
-    return SliderCrank().replace(**fields)
 
 
 def _case_table(linkage: Linkage) -> dict[str, object]:
@@ -271,11 +256,15 @@ def design_at(mech, values: dict, case: str | None = None, overrides: dict | Non
             else:
                 changes[name] = v
         return CASES[case](**changes)
-    if not isinstance(mech, (SliderCrank, Linkage)):
-        raise ValueError(f"mech must be a SliderCrank or a Linkage; got {type(mech).__name__}")
-    if isinstance(mech, SliderCrank):
-        from .mechanism import field_names
+    from .cases import door
+    from .mechanism import field_names
 
+    entry = door(mech)                  # ValueError for anything else
+    if entry.paper is not None and (entry.given_as_paper or all(
+            n == "clearance" or n in field_names() for n in values)):
+        # the paper's case: its fields and "clearance" (R_B - R_J), a design of its case
+        # named as the user gave the mechanism
+        mech = entry.paper
         changes = {}
         for name, v in values.items():
             if name == "clearance":
@@ -288,8 +277,8 @@ def design_at(mech, values: dict, case: str | None = None, overrides: dict | Non
             else:
                 raise ValueError(f"unknown sweep field {name!r} of a SliderCrank; allowed: "
                                  f"{sorted(field_names()) + ['clearance']}")
-        return mech.replace(**changes)
-    link = mech
+        return entry.back(mech.replace(**changes))
+    link = entry.linkage
     for name, v in values.items():
         if name == "clearance":
             link = _linkage_clearance(link, None, v)
@@ -310,7 +299,10 @@ def value_at(mech, name: str) -> float:
     """The value (SI) of `design_at`'s field `name` on `mech`: a `SliderCrank` field or
     "clearance" (R_B - R_J); on a `Linkage` its design names (`design_value`) and
     "crank_speed" (the drive's speed). ValueError for an unknown name."""
-    if isinstance(mech, SliderCrank):
+    from .cases import door
+
+    entry = door(mech)                  # ValueError for anything else
+    if entry.given_as_paper:            # the paper's set: its fields by name
         from .mechanism import field_names
 
         if name == "clearance":
@@ -319,8 +311,7 @@ def value_at(mech, name: str) -> float:
             raise ValueError(f"unknown field {name!r} of a SliderCrank; allowed: "
                              f"{sorted(field_names()) + ['clearance']}")
         return float(getattr(mech, name))
-    if not isinstance(mech, Linkage):
-        raise ValueError(f"mech must be a SliderCrank or a Linkage; got {type(mech).__name__}")
+    mech = entry.linkage
     if name == "crank_speed" and "crank_speed" not in _case_table(mech):
         return float(mech.drive.speed)
     return float(design_value(mech, name))

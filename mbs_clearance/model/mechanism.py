@@ -20,36 +20,81 @@ from ..laws.forces import CONTACT_MODELS, stiffness_eq9
 from ..laws.registry import FRICTION_SLOTS
 from .linkage import FRICTION_DEFAULTS, check_friction
 
-__all__ = ["SliderCrank", "PARAMETER_INFO", "CONTINUOUS_FIELDS"]
+__all__ = ["SliderCrank", "PARAMETER_INFO", "CONTINUOUS_FIELDS", "FIELD_PATHS",
+           "FieldPath", "description_values", "field_directions", "PAPER_JOINT"]
 
 RPM = 2.0 * math.pi / 60.0
 
-#: field -> (paper symbol, unit, source of the default value)
-PARAMETER_INFO: dict[str, tuple[str, str, str]] = {
-    "crank_length": ("L2", "m", "paper Table 1"),
-    "coupler_length": ("L3", "m", "paper Table 1"),
-    "crank_mass": ("m2", "kg", "paper Table 1"),
-    "coupler_mass": ("m3", "kg", "paper Table 1"),
-    "slider_mass": ("m4", "kg", "paper Table 1"),
-    "crank_inertia": ("J2", "kg m^2", "Flores & Ambrosio 2004 (Computers & Structures 82)"),
-    "coupler_inertia": ("J3", "kg m^2", "uniform thin rod m3 L3^2/12 (paper)"),
-    "crank_speed": ("omega2", "rad/s",
-                    "Flores & Ambrosio 2004 (Computers & Structures 82), 5000 rpm"),
-    "initial_crank_angle": ("theta20", "rad", "Flores & Ambrosio 2004 (Computers & Structures 82)"),
-    "bearing_radius": ("R_B", "m", "paper Table 2"),
-    "journal_radius": ("R_J", "m", "paper Table 2 (clearance 0.01 mm)"),
-    "youngs_modulus": ("E", "Pa", "paper Table 2"),
-    "poisson_ratio": ("nu", "-", "paper Table 2"),
-    "restitution": ("e_r", "-", "paper Table 2"),
-    "contact_stiffness": ("K", "N/m^1.5", "paper Eq. 9 from radii and materials"),
-    "gravity": ("g", "m/s^2", "standard gravity along -y"),
-    "contact_model": ("-", "-", "paper: Lankarani-Nikravesh"),
-    "impact_velocity_floor": ("v_min", "m/s",
-                              "assumed: a numerical floor for grazing onsets, about a "
-                              "thousandth of the impact velocities (docs/derivations.md)"),
+#: the clearance joint of the paper's description (`cases.from_slider_crank`)
+PAPER_JOINT = "coupler_slider"
+
+#: the slider's inertia per unit mass (m^2): it does not turn (prismatic joint), so the
+#: value never enters the motion; the paper gives none. A 1 cm uniform square block
+#: (a^2 / 6, a = 0.01 m) makes the description complete
+SLIDER_INERTIA_PER_MASS = 0.01**2 / 6.0
+
+
+@dataclass(frozen=True)
+class FieldPath:
+    """One `SliderCrank` field: its paper symbol, unit, the source of its default, and the
+    description's parameters it sets (``{dotted path: d value / d field}``; a text field,
+    e.g. the contact model, sets its path to its value)."""
+
+    symbol: str
+    unit: str
+    source: str
+    paths: dict[str, float]
+
+
+def _joint_field(symbol: str, unit: str, source: str, name: str) -> FieldPath:
+    return FieldPath(symbol, unit, source, {f"{PAPER_JOINT}.{name}": 1.0})
+
+
+_TABLE_1 = "paper Table 1"
+_TABLE_2 = "paper Table 2"
+_FLORES = "Flores & Ambrosio 2004 (Computers & Structures 82)"
+
+#: the one table of the paper's fields: field -> `FieldPath` (symbol, unit, source, and the
+#: dotted paths of its description `cases.from_slider_crank` with their coefficients). The
+#: description, the fields' directions in it (`field_directions`, the sensitivities' and
+#: the gradient's) and the way back from a case's overrides (`design.slider_crank_of`) are
+#: all read from it. The inertias None (uniform rods) are derived: `field_directions`
+#: adds their dependence on the lengths and masses
+FIELD_PATHS: dict[str, FieldPath] = {
+    "crank_length": FieldPath("L2", "m", _TABLE_1, {"crank.pivot.x": -0.5, "crank.pin.x": 0.5}),
+    "coupler_length": FieldPath("L3", "m", _TABLE_1, {"coupler.crank_end.x": -0.5,
+                                                      "coupler.slider_end.x": 0.5}),
+    "crank_mass": FieldPath("m2", "kg", _TABLE_1, {"crank.mass": 1.0}),
+    "coupler_mass": FieldPath("m3", "kg", _TABLE_1, {"coupler.mass": 1.0}),
+    "slider_mass": FieldPath("m4", "kg", _TABLE_1, {"slider.mass": 1.0,
+                                                    "slider.inertia": SLIDER_INERTIA_PER_MASS}),
+    "crank_inertia": FieldPath("J2", "kg m^2", _FLORES, {"crank.inertia": 1.0}),
+    "coupler_inertia": FieldPath("J3", "kg m^2", "uniform thin rod m3 L3^2/12 (paper)",
+                                 {"coupler.inertia": 1.0}),
+    "crank_speed": FieldPath("omega2", "rad/s", f"{_FLORES}, 5000 rpm", {"drive.speed": 1.0}),
+    "initial_crank_angle": FieldPath("theta20", "rad", _FLORES, {"drive.initial_angle": 1.0}),
+    "bearing_radius": _joint_field("R_B", "m", _TABLE_2, "bearing_radius"),
+    "journal_radius": _joint_field("R_J", "m", f"{_TABLE_2} (clearance 0.01 mm)",
+                                   "journal_radius"),
+    "youngs_modulus": _joint_field("E", "Pa", _TABLE_2, "youngs_modulus"),
+    "poisson_ratio": _joint_field("nu", "-", _TABLE_2, "poisson_ratio"),
+    "restitution": _joint_field("e_r", "-", _TABLE_2, "restitution"),
+    "contact_stiffness": _joint_field("K", "N/m^1.5", "paper Eq. 9 from radii and materials",
+                                      "contact_stiffness"),
+    "gravity": FieldPath("g", "m/s^2", "standard gravity along -y", {"gravity": 1.0}),
+    "contact_model": _joint_field("-", "-", "paper: Lankarani-Nikravesh", "contact_model"),
+    "impact_velocity_floor": _joint_field(
+        "v_min", "m/s", "assumed: a numerical floor for grazing onsets, about a thousandth "
+                        "of the impact velocities (docs/derivations.md)",
+        "impact_velocity_floor"),
     # friction in the clearance joint (docs/friction.md)
-    **{k: (sym, unit, source) for k, (sym, unit, _, source) in FRICTION_DEFAULTS.items()},
+    **{k: _joint_field(sym, unit, source, k)
+       for k, (sym, unit, _, source) in FRICTION_DEFAULTS.items()},
 }
+
+#: field -> (paper symbol, unit, source of the default value), read from `FIELD_PATHS`
+PARAMETER_INFO: dict[str, tuple[str, str, str]] = {
+    k: (v.symbol, v.unit, v.source) for k, v in FIELD_PATHS.items()}
 
 #: fields that are real numbers and can be design variables (sensitivities, GA genes)
 CONTINUOUS_FIELDS: tuple[str, ...] = tuple(
@@ -292,3 +337,50 @@ def reference_value(mech: SliderCrank, name: str) -> float:
     if name in derived:
         return float(derived[name])
     return float(getattr(mech, name))
+
+
+def description_values(mech: SliderCrank) -> dict[str, Any]:
+    """The values of `mech`'s description (`cases.from_slider_crank`) by dotted path, read
+    through `FIELD_PATHS`: each path its coefficient times its field's value in use (an
+    inertia None: the uniform rod's; the contact stiffness None stays None: Eq. 9 in the
+    description)."""
+    out: dict[str, Any] = {}
+    for name, spec in FIELD_PATHS.items():
+        value = getattr(mech, name)
+        if name in ("crank_inertia", "coupler_inertia"):
+            value = getattr(mech, f"{name}_value")
+        for path, coef in spec.paths.items():
+            out[path] = value if coef == 1.0 else coef * value
+    # m a^2 / 6 in this order, the description's value to the last bit
+    out["slider.inertia"] = mech.slider_mass * 0.01**2 / 6.0
+    return out
+
+
+def field_directions(mech: SliderCrank, names) -> list[dict[str, float]]:
+    """Per field of `names`, its direction in the description's parameters ({dotted path:
+    d value / d field}, exact: the description is linear in every field (`FIELD_PATHS`)
+    but the derived uniform-rod inertias m L^2 / 12, differentiated here). A friction field
+    is a parameter only where the joint has a friction law (else no direction). The
+    description's own chain takes the radii and the material into the clearance and the
+    Eq. 9 stiffness."""
+    out = []
+    for name in names:
+        if name in FRICTION_SLOTS:
+            out.append(dict(FIELD_PATHS[name].paths) if mech.friction_law != "none" else {})
+        else:
+            out.append({**FIELD_PATHS[name].paths, **_derived_inertia(mech, name)})
+    return out
+
+
+def _derived_inertia(mech: SliderCrank, name: str) -> dict[str, float]:
+    """d(inertia)/d(field) of the uniform-rod inertias m L^2 / 12 where they are derived."""
+    out = {}
+    if mech.crank_inertia is None:
+        m, L = mech.crank_mass, mech.crank_length
+        out.update({"crank_length": ("crank.inertia", m * L / 6.0),
+                    "crank_mass": ("crank.inertia", L * L / 12.0)})
+    if mech.coupler_inertia is None:
+        m, L = mech.coupler_mass, mech.coupler_length
+        out.update({"coupler_length": ("coupler.inertia", m * L / 6.0),
+                    "coupler_mass": ("coupler.inertia", L * L / 12.0)})
+    return dict([out[name]]) if name in out else {}

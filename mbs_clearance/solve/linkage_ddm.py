@@ -22,6 +22,7 @@ from __future__ import annotations
 import math
 import sys
 import time
+from dataclasses import dataclass
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -46,7 +47,8 @@ from .linkage_model import (
 from .settings import RunSettings
 
 __all__ = ["chain", "combine", "initial_sensitivities", "independent_directions", "setup",
-           "ddm_run", "DdmRun", "linkage_sensitivities", "fd_step", "DDM_INTEGRATOR"]
+           "ddm_run", "DdmRun", "linkage_sensitivities", "design_run", "Directions", "fd_step",
+           "DDM_INTEGRATOR"]
 
 _THIS = sys.modules[__name__]
 
@@ -563,27 +565,65 @@ def plain_setup(linkage: Linkage, rtol: float | None, start=None, specialise: bo
         rtol, atol
 
 
+@dataclass(frozen=True)
+class Directions:
+    """Design names that are not the description's parameters (the paper's fields,
+    `mechanism.field_directions`): each name's direction in the parameters ({dotted path:
+    coefficient}), its value (`reference`), the scale of its sensitivities' tolerances and
+    the units of the state in the growth diagnostic (None: the description's)."""
+
+    directions: list
+    reference: np.ndarray
+    scale: np.ndarray
+    unit: np.ndarray | None = None
+
+
+def design_run(linkage: Linkage, names: tuple[str, ...], rtol: float | None, *,
+               revolutions: int | None, t_eval=None, event_time_term: bool = True,
+               method: str = DDM_INTEGRATOR, start=None, windows=None, record: bool = True,
+               derivatives=True, directions: Directions | None = None) -> DdmRun:
+    """The DDM run of `linkage` along the design names `names` from its plain run's start
+    (or `start`, held fixed) with its plain run's tolerances (`plain_setup`): the
+    description's parameters themselves, or `directions` (their names' directions, then
+    the run covers the revolutions too, `ddm_run`'s ``whole``). Each direction's
+    tolerance is scaled by its parameter's natural scale (as the finite differences'
+    steps: a radius enters through the clearance; `directions`' own scale)."""
+    paths = names if directions is None else sorted(
+        {k for d in directions.directions for k in d})
+    model, p0, y_state, rtol, atol_plain = plain_setup(linkage, rtol, start,
+                                                       specialisable(linkage, paths))
+    if directions is None:
+        scale = np.array([fd_step(linkage, n, 1.0) for n in names])
+        along = [{n: 1.0} for n in names]
+    else:
+        scale, along = directions.scale, directions.directions
+    return ddm_run(linkage, model, p0, y_state, along, scale=scale, rtol=rtol,
+                   atol_plain=atol_plain, revolutions=revolutions, t_eval=t_eval,
+                   event_time_term=event_time_term, method=method,
+                   fixed_start=start is not None, record=record,
+                   whole=directions is not None, derivatives=derivatives, windows=windows)
+
+
 def linkage_sensitivities(linkage: Linkage, names: tuple[str, ...], revolutions: int | None,
                           rtol: float | None, t_eval, event_time_term: bool, method: str,
-                          start=None, windows=None):
+                          start=None, windows=None, directions: Directions | None = None):
     """DDM of `linkage` (see the module docstring): (Sensitivities fields as a dict). From
     `start` (a `linkage_model.Start`) the start is held fixed: the sensitivities start at
     zero. A free linkage runs over the window edges `windows` (s) instead of revolutions
-    (its growth per window, its crank_moment None: it has no drive)."""
-    model, p0, y_state, rtol, atol_plain = plain_setup(linkage, rtol, start,
-                                                       specialisable(linkage, names))
-    ref = np.array([linkage.parameter_value(n) for n in names])
-    # each parameter's natural scale (as the finite differences' steps: a radius enters
-    # through the clearance): the sensitivities' absolute tolerances are the state's / it
-    scale = np.array([fd_step(linkage, n, 1.0) for n in names])
-    run = ddm_run(linkage, model, p0, y_state, [{n: 1.0} for n in names], scale=scale,
-                  rtol=rtol, atol_plain=atol_plain, revolutions=revolutions, t_eval=t_eval,
-                  event_time_term=event_time_term, method=method, fixed_start=start is not None,
-                  derivatives=True, windows=windows)
+    (its growth per window, its crank_moment None: it has no drive). `directions`: names
+    that are not parameters of the description (`design_run`)."""
+    run = design_run(linkage, names, rtol, revolutions=revolutions, t_eval=t_eval,
+                     event_time_term=event_time_term, method=method, start=start,
+                     windows=windows, directions=directions)
+    model, p0 = run.model, run.p0
     free = linkage.drive is None
     w, c = (1.0 / linkage.time_scale if free else linkage.drive.speed), linkage.min_clearance
-    unit = np.array([1.0 if name.endswith(".angle") else c for name in model.COORDINATES])
-    unit = np.concatenate([unit, unit * w])
+    if directions is not None and directions.unit is not None:
+        unit = directions.unit
+    else:
+        unit = np.array([1.0 if name.endswith(".angle") else c
+                         for name in model.COORDINATES])
+        unit = np.concatenate([unit, unit * w])
     ts, ys, ms = run.ts, run.ys, run.ms
     growth = run.growth(unit, None if free else linkage.period, revolutions, windows)
     peaks, keep = run.peaks, None
@@ -594,7 +634,8 @@ def linkage_sensitivities(linkage: Linkage, names: tuple[str, ...], revolutions:
     vals, ders = run.recorded_output_sensitivities(keep)
     traj = trajectory_from_run(linkage, model, ts, run.plain_states(ys), ms, p0, run.stats,
                                peaks, vals)
-    ref = np.array([linkage.parameter_value(n) for n in names])
+    ref = (np.array([linkage.parameter_value(n) for n in names]) if directions is None
+           else directions.reference)
     fields = _fields(model, ts, names, ref, ders, traj, growth, run.stats)
     sens = run.state_sensitivities(ys)
     for i, cname in enumerate(model.COORDINATES):
@@ -661,13 +702,21 @@ def _fields(model, ts, names, ref, ders, traj, growth, stats):
 def fd_step(linkage: Linkage, name: str, relative: float) -> float:
     """Central-difference step of parameter `name`: `relative` times its value; the radii
     relative to the clearance, zero-valued coordinates relative to the length scale, a zero
-    angle relative to 1 rad, zero gravity relative to 9.81 m/s^2."""
+    angle relative to 1 rad, zero gravity relative to 9.81 m/s^2. On the paper's case a
+    field of its table (`mechanism.FIELD_PATHS`) is valued as the field (its derived value
+    where None), a radius of its one clearance joint."""
+    from ..model.design import slider_crank_of
+    from ..model.mechanism import FIELD_PATHS, PAPER_JOINT, reference_value
+
     head, _, field = name.rpartition(".")
+    paper = slider_crank_of(linkage) if name in FIELD_PATHS else None
     for el in ELEMENTS:
-        scale = el.fd_scale(linkage, head, field)
+        # a bare field: the paper's one clearance joint's
+        scale = el.fd_scale(linkage, head or PAPER_JOINT, field)
         if scale is not None:
             return relative * scale
-    value = abs(linkage.parameter_value(name))
+    value = abs(reference_value(paper, name) if paper is not None
+                else linkage.parameter_value(name))
     if value != 0.0:
         return relative * value
     if field in ("x", "y"):

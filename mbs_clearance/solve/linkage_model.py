@@ -18,7 +18,7 @@ from .._warnings import AccuracyWarning
 from ..elements.registry import ELEMENTS
 from ..laws.forces import CONTACT_MODELS
 from ..model.linkage import GROUND, Linkage
-from .diagnostics import contact_flags
+from .diagnostics import contact_flags, floored_impacts
 from .problem import ModelLayout, Problem, Span
 from .settings import DEFAULT_MAX_STEPS, DEFAULT_RTOL, MAX_SAMPLES, RunSettings  # noqa: F401
 
@@ -173,9 +173,12 @@ def settled_start(linkage: Linkage, revolutions: int, *, rtol: float | None = No
     start's impacts and the weakly damped sliding mode of a frictionless joint have settled
     (the four-bar's default needs about 100, docs/cases.md). The revolutions run one at a
     time, each from the previous one's end, so the memory holds one revolution's record.
-    `progress`: a callable called with the number of revolutions done."""
+    `progress`: a callable called with the number of revolutions done. The paper's
+    `SliderCrank` settles as its description (`cases.door`)."""
     from .._checks import check_int
+    from ..model.cases import as_linkage
 
+    linkage = as_linkage(linkage)
     revolutions = check_int("revolutions", revolutions, 1)
     start = None
     for k in range(revolutions):
@@ -883,6 +886,12 @@ def simulate_linkage(linkage: Linkage, revolutions: int | None = None, **options
                                None if linkage.drive is not None else linkage.time_scale))
     if stats["accuracy_note"]:
         warnings.warn(stats["accuracy_note"], AccuracyWarning, stacklevel=3)
+    if options.get("t_eval") is None:
+        # onsets raised to a contact's impact-velocity floor, each contact's memory (mode,
+        # impact velocity) in turn
+        stats["floored_impacts"] = sum(
+            floored_impacts(ms[:, 2 * k:2 * k + 2], j.impact_velocity_floor)
+            for k, (_, j) in enumerate(linkage.contacts()))
     traj = trajectory_from_run(linkage, model, ts, ys, ms, p, stats, peaks, outs)
     start = options.get("start")
     if start is not None:

@@ -18,13 +18,11 @@ model's parameter vector (`model_parameters`).
 from __future__ import annotations
 
 import functools
-import warnings
 from typing import NamedTuple
 
 import numpy as np
 
 from .._checks import check_real, check_revolutions_memory
-from .._warnings import AccuracyWarning
 from ..model.mechanism import SliderCrank
 from ..numerics.integrator import COUNTERS
 from . import linkage_model as lm
@@ -50,8 +48,6 @@ from .linkage_model import (  # noqa: F401 - the settings shared with every link
     Start,
     event_margin,
 )
-from .settings import RunSettings
-from .trajectory import annotate
 
 
 # ---- the compiled model's layout (every SliderCrank without friction maps to its
@@ -195,7 +191,9 @@ def run(mech: SliderCrank, revolutions: int = 4, *, initial_offset: float = 0.0,
     `initial_offset` in [-1, 1], with the slider moved so that the journal centre starts at
     initial_offset x clearance along x from the bearing centre (+-1: on the wall, a grazing
     start). Returns a `RunOutput` (ts, ys, ms, peaks, peak_times, counters, outs, p)."""
-    if not isinstance(mech, SliderCrank):
+    from ..model.cases import door
+
+    if not door(mech).given_as_paper:
         raise ValueError(f"mech must be a SliderCrank; got {type(mech).__name__}")
     if "start" in options:
         raise ValueError("start is not an option of a SliderCrank's run; use its "
@@ -212,51 +210,6 @@ def run(mech: SliderCrank, revolutions: int = 4, *, initial_offset: float = 0.0,
 def counters_dict(counters) -> dict:
     """Solver counters (`integrator.COUNTERS`) as a dict."""
     return {k: int(v) for k, v in zip(COUNTERS, counters)}
-
-
-#: options of `simulate(..., backend="reduced")` (keywords of `run` meant for users)
-OPTION_NAMES = (*(n for n in lm.OPTION_NAMES if n not in ("start", "duration", "window")),
-                "initial_offset")
-
-
-def simulate_reduced(mech: SliderCrank, revolutions: int = 4, **options):
-    """Simulate with the reduced model and return a `Trajectory` (all accepted steps, or the
-    times `t_eval` if given), in the paper's names."""
-    unknown = sorted(set(options) - set(OPTION_NAMES))
-    if unknown:
-        raise ValueError(f"unknown option(s) {unknown}; allowed: {sorted(OPTION_NAMES)}")
-    settings, rest = RunSettings.split(options)
-    offset = check_real("initial_offset (fraction of the clearance)",
-                        rest.get("initial_offset", 0.0), -1.0, 1.0)
-    out = lm.run(linkage_of(mech), revolutions, settings, record=True,
-                 start=centred_start(mech, offset), t_eval=rest.get("t_eval"),
-                 model=model_of(mech))
-    model, ms = out.model, out.ms
-    stats = dict(out.stats)
-    if options.get("t_eval") is None:
-        stats["floored_impacts"] = floored_impacts(ms, mech.impact_velocity_floor)
-    stats.update(accuracy_flags(mech, revolutions, ms, stats["nevent"], stats["rtol"]))
-    if stats["accuracy_note"]:
-        warnings.warn(stats["accuracy_note"], AccuracyWarning, stacklevel=3)
-    traj = trajectory_from_states(mech, out.ts, out.ys, ms, out.p, stats,
-                                  None if options.get("t_eval") is not None else out.peaks,
-                                  out.outs, model.OUT_COLUMNS, model)
-    return annotate(traj)
-
-
-def accuracy_flags(mech: SliderCrank, revolutions: int, ms: np.ndarray, nevent: int,
-                   rtol: float) -> dict:
-    """Whether a run is where the accuracy map (docs/performance.md) found the stated
-    accuracy (1e-5 on every per-revolution peak at the default rtol) missed: grazing onsets,
-    or a slow settling (SETTLING_ONSETS or more impacts before a lasting contact, whose late
-    peaks ride on a lightly damped contact vibration), or a loose rtol. Returns the stats
-    entries grazing_onsets, accuracy_ok and accuracy_note (the warning's text, "" for none).
-
-    A rattling run (`rattles`) is not periodic: its late peaks depend on every digit and no
-    tolerance makes them accurate; it is flagged (accuracy_ok False) with a note saying so.
-    Every run flagged has a note, except one at an rtol looser than LOOSE_RTOL, which `run`
-    has warned about already."""
-    return contact_flags([mech.clearance], mech.crank_speed, revolutions, ms, nevent, rtol)
 
 
 def grazing_onsets(mech: SliderCrank, ms: np.ndarray) -> int:
@@ -344,9 +297,36 @@ def trajectory_from_states(mech, ts, ys, ms, p, stats, peaks, outs=None,
     )
 
 
-def peak_reduced(mech: SliderCrank, revolution: int = 4, **options) -> float:
-    """Max |F12| in N over revolution `revolution`, recording nothing but running maxima."""
-    unknown = sorted(set(options) - set(OPTION_NAMES))
-    if unknown:
-        raise ValueError(f"unknown option(s) {unknown}; allowed: {sorted(OPTION_NAMES)}")
-    return float(run(mech, revolution, record=False, **options).peaks[revolution - 1])
+def paper_series(traj, mech: SliderCrank, sampled: bool = False):
+    """`traj`, a run of `mech`'s description (`cases.door`), in the paper's names: its
+    clearance joint's series as (n,) arrays, the slider's position, velocity and
+    acceleration and the coupler's angle and rate looked up by name in the description's
+    coordinates, `mech` as its mechanism (its closed-form start: no `start_revolutions`;
+    `sampled`, a run on given output times: no peaks). The reduced model's keeps the
+    description's per-joint series beside them (`joints`, `reactions`, `coordinates`,
+    ...); Exudyn's gives the paper's alone."""
+    import dataclasses
+
+    def first(a):
+        return None if a is None else np.ascontiguousarray(a[:, 0]) if a.ndim > 1 else a
+
+    generic = traj.backend == "reduced"
+    series = dict(
+        contact_force=first(traj.contact_force), penetration=first(traj.penetration),
+        eccentricity=(np.ascontiguousarray(traj.eccentricity[:, 0])
+                      if traj.eccentricity.ndim == 3 else traj.eccentricity),
+        contact_phase=first(traj.contact_phase),
+        slider_position=traj.coordinates["slider_guide.s"],
+        slider_velocity=traj.rates["slider_guide.s"],
+        slider_acceleration=traj.accelerations["slider_guide.s"],
+        coupler_angle=traj.coordinates["coupler.angle"],
+        coupler_rate=traj.rates["coupler.angle"],
+        friction_work=first(traj.friction_work) if generic else None,
+        contact_angle=None, slip_velocity=None, mechanism=mech,
+        peaks=None if sampled else traj.peaks,
+        stats={k: v for k, v in traj.stats.items()
+               if not (k == "start_revolutions" and v == 0)})
+    if not generic:
+        series.update(dict.fromkeys(("joints", "reactions", "shaking_force", "coordinates",
+                                     "rates", "accelerations")))
+    return dataclasses.replace(traj, **series)

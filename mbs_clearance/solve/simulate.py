@@ -6,6 +6,7 @@ import importlib
 from dataclasses import dataclass
 
 from .._checks import check_int
+from ..model.cases import door
 from ..model.linkage import Linkage
 from ..model.mechanism import SliderCrank
 from .accuracy import DEFAULT_ACCURACY, check_accuracy_or_rtol
@@ -30,25 +31,13 @@ class Model:
 
 @dataclass(frozen=True)
 class Backend:
-    """A model of a mechanism: what it is, and its functions for a `Linkage` and for the
-    paper's `SliderCrank` parameter set (None: it does not take that input)."""
+    """A model of a mechanism: what it is, and its functions for a `Linkage` (a
+    `SliderCrank` runs as its description, `cases.door`)."""
 
     description: str
-    linkage: Model | None
-    slider_crank: Model | None
+    model: Model
     #: its runs to a requested accuracy (a step sequence, extrapolated), if it has its own
     to_accuracy: Model | None = None
-
-    def model_for(self, mech, name: str) -> Model:
-        """The functions for `mech`; ValueError when this backend does not take it."""
-        model = self.linkage if isinstance(mech, Linkage) else self.slider_crank
-        if model is None:
-            takes = sorted(n for n, b in BACKENDS.items()
-                           if (b.linkage if isinstance(mech, Linkage) else b.slider_crank))
-            kind = "a Linkage" if isinstance(mech, Linkage) else "a SliderCrank"
-            raise ValueError(f"backend must be one of {takes} for {kind} (the {name!r} "
-                             f"backend does not take it); got {name!r}")
-        return model
 
 
 #: name -> Backend: the one registry of models (each module imported when first asked for,
@@ -56,23 +45,18 @@ class Backend:
 BACKENDS: dict[str, Backend] = {
     "reduced": Backend(
         "the model generated from the description, compiled in C",
-        linkage=Model("mbs_clearance.solve.linkage_model", "simulate_linkage",
-                      "peak_linkage"),
-        slider_crank=Model("mbs_clearance.solve.reduced", "simulate_reduced", "peak_reduced")),
+        Model("mbs_clearance.solve.linkage_model", "simulate_linkage", "peak_linkage")),
     "exudyn": Backend(
         "the same mechanism built in the multibody engine Exudyn",
-        linkage=Model("mbs_clearance.backends.exudyn_linkage", "simulate_exudyn_linkage",
-                      "peak_exudyn_linkage"),
-        slider_crank=Model("mbs_clearance.backends.exudyn_model", "simulate_exudyn",
-                           "peak_exudyn"),
+        Model("mbs_clearance.backends.exudyn_linkage", "simulate_exudyn_linkage",
+              "peak_exudyn_linkage"),
         to_accuracy=Model("mbs_clearance.backends.exudyn_convergence",
                           "simulate_to_accuracy", "peak_to_accuracy")),
     "ideal": Backend(
         "the same mechanism with ideal joints (no clearance): the paper's closed form, any "
         "description's constraints solved",
-        linkage=Model("mbs_clearance.backends.ideal_linkage", "simulate_ideal_linkage",
-                      "peak_ideal_linkage"),
-        slider_crank=Model("mbs_clearance.backends.ideal", "simulate_ideal", "peak_ideal")),
+        Model("mbs_clearance.backends.ideal_linkage", "simulate_ideal_linkage",
+              "peak_ideal_linkage")),
 }
 
 
@@ -82,12 +66,10 @@ def _backend(name: str) -> Backend:
     return BACKENDS[name]
 
 
-def _check(mech, revolutions, name="revolutions") -> int | None:
-    """The revolutions (default 4) of a driven mechanism; None for a free linkage (it runs
+def _check(mech: Linkage, revolutions, name="revolutions") -> int | None:
+    """The revolutions (default 4) of a driven linkage; None for a free linkage (it runs
     for the option ``duration``), which refuses revolutions."""
-    if not isinstance(mech, (SliderCrank, Linkage)):
-        raise ValueError(f"mech must be a SliderCrank or a Linkage; got {type(mech).__name__}")
-    if isinstance(mech, Linkage) and mech.drive is None:
+    if mech.drive is None:
         if revolutions is not None:
             raise ValueError(f"linkage {mech.name!r} is free (drive=None): it has no drive "
                              f"revolutions; give duration= (s) and optionally window= (s) "
@@ -147,8 +129,18 @@ def simulate(mech: SliderCrank, revolutions: int | None = None, backend: str = "
         emitted when True) and ``periodic`` (True, False or None) with
         ``periodicity_note``; see `trajectory.annotate`.
     """
+    entry = door(mech)
+    if entry.given_as_paper and "start" in options:
+        raise ValueError("start is not an option of a SliderCrank's run; use its description "
+                         "(cases.paper_slider_crank, the same case) with start=")
     if backend == "reduced":
-        options = expand(options)
+        options = _paper_start(entry, expand(options))
+    return paper_view(_simulate(entry.linkage, revolutions, backend, accuracy, options,
+                                rattling=entry.paper is not None), entry,
+                      sampled=options.get("t_eval") is not None)
+
+
+def _simulate(mech: Linkage, revolutions, backend, accuracy, options, rattling):
     check_accuracy_or_rtol(accuracy, options)
     if accuracy is not None and _backend(backend).to_accuracy is not None:
         simulate_to_accuracy = _backend(backend).to_accuracy.load("simulate")
@@ -166,36 +158,58 @@ def simulate(mech: SliderCrank, revolutions: int | None = None, backend: str = "
     if accuracy is None and ("rtol" in options or "atol" in options):
         return _call(backend, "simulate", mech, revolutions, options)
     return _to_accuracy(mech, revolutions, DEFAULT_ACCURACY if accuracy is None else accuracy,
-                        options)
+                        options, rattling)
 
 
-def _to_accuracy(mech, revolutions, accuracy, options: dict) -> Trajectory:
+def _to_accuracy(mech: Linkage, revolutions, accuracy, options: dict,
+                 rattling: bool = False) -> Trajectory:
     """The reduced model's run within `accuracy` (`accuracy.simulate_to_accuracy`): recorded
-    runs through `_call`, the peaks-only check through the backend's `run`."""
-    from . import reduced
+    runs through `_call`, the peaks-only check through `linkage_model.run`. `rattling`: a
+    rattling run stops tightening (the paper's case, whose rattling peaks no tolerance
+    makes accurate); elsewhere not: the four-bar's slow drive switches its contact hundreds
+    of times per revolution, yet its peaks converge as rtol falls (docs/performance.md)."""
+    from . import linkage_model as lm
     from .accuracy import simulate_to_accuracy
 
     def record(rtol):
         return _call("reduced", "simulate", mech, revolutions, {**options, "rtol": rtol})
 
-    if isinstance(mech, SliderCrank):
-        def peaks(rtol):
-            out = reduced.run(mech, revolutions, record=False, rtol=rtol, **options)
-            return out.peaks, int(out.counters[0])
+    def peaks(rtol):
+        out = lm.run(mech, revolutions, record=False, rtol=rtol, **options)
+        return out.peaks, out.stats["nfev"]
 
-        def rattling(traj):
-            return bool(traj.stats.get("rattling"))
-    else:
-        from . import linkage_model as lm
+    def rattles(traj):
+        return bool(traj.stats.get("rattling"))
 
-        def peaks(rtol):
-            out = lm.run(mech, revolutions, record=False, rtol=rtol, **options)
-            return out.peaks, out.stats["nfev"]
+    return simulate_to_accuracy(record, peaks, accuracy, rattling=rattles if rattling else None)
 
-        # no rattling shortcut: the four-bar's slow drive switches its contact hundreds of
-        # times per revolution, yet its peaks converge as rtol falls (docs/performance.md)
-        rattling = None
-    return simulate_to_accuracy(record, peaks, accuracy, rattling=rattling)
+
+def _paper_start(entry, options: dict) -> dict:
+    """The reduced model's options for the paper's case (`cases.door`): unless a start is
+    given, its closed-form centred start (`reduced.centred_start`), offset by the option
+    ``initial_offset`` (a fraction of the clearance in [-1, 1], the stress tests'); other
+    linkages as given."""
+    if entry.paper is None or "start" in options:
+        return options
+    from .._checks import check_real
+    from .reduced import centred_start
+
+    options = dict(options)
+    offset = check_real("initial_offset (fraction of the clearance)",
+                        options.pop("initial_offset", 0.0), -1.0, 1.0)
+    options["start"] = centred_start(entry.paper, offset)
+    return options
+
+
+def paper_view(traj: Trajectory, entry, sampled: bool = False) -> Trajectory:
+    """The trajectory as the user gave the mechanism (`cases.door`): a `SliderCrank`'s in
+    the paper's names (`reduced.paper_series`; `sampled`: on given output times, where
+    it has no peaks), a `Linkage`'s as it is."""
+    if not entry.given_as_paper or traj.linkage is None:
+        return traj
+    from .reduced import paper_series
+
+    return paper_series(traj, entry.paper, sampled)
 
 
 def peak_base_force(mech: SliderCrank, revolution: int | None = None, backend: str = "reduced",
@@ -219,8 +233,10 @@ def peak_base_force(mech: SliderCrank, revolution: int | None = None, backend: s
     request); without it, one run at the backend's step (its error unestimated,
     docs/exudyn.md).
     """
+    entry = door(mech)
+    mech = entry.linkage
     if backend == "reduced":
-        options = expand(options)
+        options = _paper_start(entry, expand(options))
         if accuracy is None and "rtol" not in options and "atol" not in options:
             accuracy = DEFAULT_ACCURACY
     if accuracy is not None and backend == "reduced":
@@ -244,8 +260,7 @@ def peak_base_force(mech: SliderCrank, revolution: int | None = None, backend: s
 def _call_check(backend: str, mech, options: dict) -> Model:
     """`backend`'s Model for `mech` after checking the option names (ValueError before any
     run)."""
-    be = _backend(backend)
-    model = be.model_for(mech, backend)
+    model = _backend(backend).model
     allowed = getattr(importlib.import_module(model.module), "OPTION_NAMES", None)
     unknown = sorted(set(options) - set(allowed)) if allowed is not None else []
     if unknown:
@@ -258,12 +273,6 @@ def _call(backend: str, attr: str, mech, revolutions, options: dict,
           name: str = "revolutions"):
     """Validate backend, mechanism, count and option names, then call the backend (which
     validates the options' values)."""
-    be = _backend(backend)
     revolutions = _check(mech, revolutions, name)
-    if isinstance(mech, Linkage) and be.linkage is None:
-        from ..model.design import slider_crank_of
-
-        # a backend of the paper's parameter set only takes its case as that set
-        mech = slider_crank_of(mech) or mech
     model = _call_check(backend, mech, options)
     return model.load(attr)(mech, revolutions, **options)

@@ -135,7 +135,9 @@ class Trajectory:
     @property
     def linkage(self):
         """The simulated `Linkage`, or None for a `SliderCrank`."""
-        return None if isinstance(self.mechanism, SliderCrank) else self.mechanism
+        from ..model.cases import door
+
+        return None if door(self.mechanism).given_as_paper else self.mechanism
 
     @property
     def output(self) -> str:
@@ -145,9 +147,9 @@ class Trajectory:
         return self.mechanism.default_output
 
     def _drive(self) -> tuple[float, float]:
-        m = self.mechanism
-        if isinstance(m, SliderCrank):
-            return m.crank_speed, m.initial_crank_angle
+        from ..model.cases import as_linkage
+
+        m = as_linkage(self.mechanism)     # the paper's crank: its description's drive
         if m.drive is None:
             raise ValueError(f"linkage {m.name!r} is free (drive=None): it has no crank angle; "
                              "its angles are in coordinates")

@@ -238,11 +238,18 @@ def _task_chunk_packed(packed: tuple) -> list:
 
 def _mechanism_of(item):
     """The mechanism of an evaluated item: the item itself or a tuple's (index, design)."""
-    from ..model.linkage import Linkage
+    from ..model.cases import door
+
+    def mechanism(x) -> bool:
+        try:
+            door(x)
+        except (ValueError, TypeError):
+            return False
+        return True
 
     if isinstance(item, tuple):
-        item = next((x for x in item if isinstance(x, (SliderCrank, Linkage))), None)
-    return item if isinstance(item, (SliderCrank, Linkage)) else None
+        item = next((x for x in item if mechanism(x)), None)
+    return item if item is not None and mechanism(item) else None
 
 
 def ship_compiled(client, mech=None) -> int:

@@ -43,6 +43,7 @@ import numpy as np
 from .._checks import DESIGN_BYTES, check_memory
 from .._io import read_json_object, write_json_object
 from .._warnings import AccuracyWarning
+from ..model.cases import door
 from ..model.linkage import Linkage
 from ..model.mechanism import CONTINUOUS_FIELDS, SliderCrank
 from ..solve.simulate import BACKENDS, peak_base_force, simulate
@@ -648,10 +649,16 @@ def optimize_link_lengths(mech: SliderCrank | None = None,
         # with one line (the parent reports the same advice) instead of a recursive GA
         raise SystemExit(_MAIN_GUARD_ADVICE)
     t_start = time.perf_counter()
-    mech = SliderCrank() if mech is None else mech
-    if not isinstance(mech, (SliderCrank, Linkage)):
-        raise ValueError(f"mech must be a SliderCrank or a Linkage; got {type(mech).__name__}")
-    is_linkage = isinstance(mech, Linkage)
+    given = SliderCrank() if mech is None else mech
+    entry = door(given)
+    # the paper's case (given as its parameter set or as its named case) runs as that set:
+    # its fields the genes, its mass scaling, every backend; a named case asked for another
+    # output, and any other linkage, on its description
+    fields = genes is None or (isinstance(genes, dict)
+                               and all(n in CONTINUOUS_FIELDS for n in genes))
+    mech = entry.paper if entry.paper is not None and output is None \
+        and (fields or entry.given_as_paper) else entry.linkage
+    is_linkage = mech is entry.linkage
     if is_linkage:
         from ..analysis.objective import parse_output
 
@@ -742,8 +749,9 @@ def optimize_link_lengths(mech: SliderCrank | None = None,
         "seed": seed, "population": population, "generations": generations,
         "saturation": saturation, "saturation_rtol": float(saturation_rtol),
         "mass_scaling": mass_scaling, "refine": refine_method or False,
-        **({"output": output, "case": mech.case, "overrides": dict(mech.overrides)}
-           if is_linkage else {}),
+        **({"output": output} if is_linkage else {}),
+        **({"case": entry.linkage.case, "overrides": dict(entry.linkage.overrides)}
+           if not entry.given_as_paper else {}),
         **({"window": window} if window is not None else {}),
         "ga": ga_settings, "pygad_version": pygad.__version__,
     }
@@ -797,9 +805,9 @@ def optimize_link_lengths(mech: SliderCrank | None = None,
         periodic, note, accuracy_note = _periodicity(best, problem)
     n_failed = sum(1 for p in objective.cache.values() if not math.isfinite(p))
     return OptimizationResult(
-        best=best, best_peak_force=float(best_peak), original=mech,
+        best=entry.back(best), best_peak_force=float(best_peak), original=given,
         original_peak_force=original_peak, history=history, genes=genes, settings=settings,
-        n_evaluations=len(objective.cache) + 1, ga_best=problem.mechanism(u_ga),
+        n_evaluations=len(objective.cache) + 1, ga_best=entry.back(problem.mechanism(u_ga)),
         ga_best_peak_force=ga_peak, generations_completed=int(ga.generations_completed),
         n_failed=n_failed, elapsed=time.perf_counter() - t_start,
         best_periodic=periodic, best_periodicity_note=note,

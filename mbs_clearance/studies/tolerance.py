@@ -52,6 +52,7 @@ import numpy as np
 
 from .._checks import DESIGN_BYTES, check_memory, check_revolutions_memory
 from .._warnings import AccuracyWarning, PhysicsWarning
+from ..model.cases import door
 from ..model.design import value_at
 from ..model.fits import iso_fit
 from ..model.linkage import Linkage
@@ -852,9 +853,7 @@ def describe(inputs: Mapping[str, Any], mech: SliderCrank | Linkage | None = Non
     ValueError naming the item on bad input."""
     from ..solve.simulate import BACKENDS
 
-    mech = SliderCrank() if mech is None else mech
-    if not isinstance(mech, (SliderCrank, Linkage)):
-        raise ValueError(f"mech must be a SliderCrank or a Linkage; got {type(mech).__name__}")
+    mech = _studied(mech, inputs, output, window)
     if isinstance(mech, Linkage) and not callable(output) and output not in OUTPUTS:
         from ..analysis.objective import parse_output
 
@@ -880,6 +879,27 @@ def describe(inputs: Mapping[str, Any], mech: SliderCrank | Linkage | None = Non
     return ToleranceProblem(names=names, distributions=dists, mech=mech, output=output,
                             revolution=revolution, backend=backend, options=dict(options),
                             window=window)
+
+
+def _studied(mech, inputs, output, window) -> SliderCrank | Linkage:
+    """What a study varies (`cases.door`; None: the paper's case): the paper's case, given
+    as its parameter set or as its named case, as that set (its fields the inputs, its
+    outputs `OUTPUTS`), unless an input is not one of its fields or the output or a window
+    is a description's; any other linkage as it is."""
+    entry = door(SliderCrank() if mech is None else mech)
+    fields = callable(output) or not isinstance(inputs, Mapping) or all(
+        n in (*CONTINUOUS_FIELDS, CLEARANCE) for n in inputs)
+    if entry.paper is None or not fields or window is not None:
+        return entry.linkage
+    if callable(output) or output in OUTPUTS:
+        return entry.paper
+    from ..analysis.objective import parse_output
+
+    try:
+        parse_output(entry.linkage, output)
+    except ValueError:
+        return entry.paper              # the paper's message: OUTPUTS
+    return entry.linkage
 
 
 def _check_window(mech, output, revolution: int, window) -> None:
@@ -1145,9 +1165,11 @@ def tolerance_study(inputs: Mapping[str, Any], mech: SliderCrank | None = None,
     ToleranceResult
     """
     t_start = time.perf_counter()
-    problem = describe(inputs, mech, output, revolution, backend=backend, window=window,
+    given = SliderCrank() if mech is None else mech
+    problem = describe(inputs, given, output, revolution, backend=backend, window=window,
                        **options)
     mech, names, dists = problem.mech, problem.names, problem.distributions
+    shown = door(given).back(mech)      # in the result's settings as the user gave it
     revolution = problem.revolution
     sobol = _count("sobol", sobol, 0)
     if sobol and sobol & (sobol - 1):
@@ -1233,9 +1255,9 @@ def tolerance_study(inputs: Mapping[str, Any], mech: SliderCrank | None = None,
                   "sobol": sobol, "second_order": second_order, "morris": morris,
                   "morris_levels": morris_levels, "dgsm": dgsm, "monte_carlo": monte_carlo,
                   "allowable": allowable, "wear": wear_levels, "confidence": confidence,
-                  "bootstrap": bootstrap, "seed": seed, "mechanism": mech.to_dict(),
-                  **({"case": mech.case, "overrides": dict(mech.overrides)}
-                     if isinstance(mech, Linkage) and mech.case is not None else {}),
+                  "bootstrap": bootstrap, "seed": seed, "mechanism": shown.to_dict(),
+                  **({"case": shown.case, "overrides": dict(shown.overrides)}
+                     if isinstance(shown, Linkage) and shown.case is not None else {}),
                   "executor": _executor_name(executor, workers)},
         elapsed=time.perf_counter() - t_start)
 

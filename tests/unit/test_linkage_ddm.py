@@ -95,20 +95,23 @@ def test_ddm_along_zero_valued_geometry_runs_on_the_general_model():
                                   SliderCrank(friction_law="ambrosio",
                                               friction_coefficient=0.05)],
                          ids=["paper", "derived_inertias", "friction"])
-def test_slider_crank_directions_are_the_derivatives_of_its_description(mech):
+def test_field_directions_are_the_derivatives_of_its_description(mech):
     """A SliderCrank's DDM runs on its description's parameters: the direction of each
-    field (`slider_crank_directions`, exact) equals central differences of the mapping
+    field (`mechanism.field_directions`, exact) equals central differences of the mapping
     `cases.from_slider_crank` for every parameter of the description (the mapping is at most
     quadratic in a field: central differences are exact to round-off), the description's
     own chain (radii and material into the stiffness) excepted: a derived stiffness is the
     description's, not the field map's."""
-    from mbs_clearance.analysis.sensitivity import reference_value, slider_crank_directions
     from mbs_clearance.model.cases import from_slider_crank
-    from mbs_clearance.model.mechanism import CONTINUOUS_FIELDS
+    from mbs_clearance.model.mechanism import (
+        CONTINUOUS_FIELDS,
+        field_directions,
+        reference_value,
+    )
 
     base = from_slider_crank(mech)
     names = base.parameter_names()
-    dirs = slider_crank_directions(mech, CONTINUOUS_FIELDS)
+    dirs = field_directions(mech, CONTINUOUS_FIELDS)
     for field, direction in zip(CONTINUOUS_FIELDS, dirs):
         b0 = reference_value(mech, field)
         h = 1e-4 * (b0 if b0 != 0.0 else 1.0)

@@ -231,5 +231,5 @@ def test_a_slider_crank_is_its_case_in_the_gradient(paper):
     assert as_linkage(mech).overrides == {"crank_length": 0.045}
     assert peak_base_force(as_linkage(mech), backend="ideal") == peak_base_force(
         mech, backend="ideal")
-    with pytest.raises(ValueError, match="mech must be a Linkage"):
+    with pytest.raises(ValueError, match="mech must be a SliderCrank or a Linkage"):
         peak_gradient(object())
