@@ -1635,11 +1635,12 @@ def peak_exudyn_linkage(linkage: Linkage, revolution: int | None = None,
 def peak_run(linkage: Linkage, revolution: int | None, settings: ExudynSettings,
              max_memory=None, start=None, *, duration=None, window=None) -> float:
     """`peak_exudyn_linkage` for validated `settings` (from `start` if given)."""
-    # the ground joints whose reaction an element computes after the run (a ground guide)
-    guides = {n for el in _ELEMENTS for n in el.exudyn_ground_joints(linkage)}
-    if guides and (linkage.monitor_joint is None or linkage.monitor_joint in guides):
-        # a ground guide's reaction is its corners' loads, computed from the bodies' stored
-        # states, which a reactions-only run does not keep: the full run's peaks
+    ideal = {j.name for j in linkage.joints}
+    if any(el.contact_names(linkage) for el in _ELEMENTS) and (
+            linkage.monitor_joint is None or linkage.monitor_joint not in ideal):
+        # an element's ground reaction (a ground guide's: its corners' loads) is computed
+        # from the bodies' stored states, which a reactions-only run does not keep: the
+        # full run's peaks
         traj = run_linkage(linkage, revolution, settings, max_memory, start,
                            duration=duration, window=window)
         return float(traj.peaks[-1])

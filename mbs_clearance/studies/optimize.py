@@ -749,7 +749,8 @@ def optimize_link_lengths(mech: SliderCrank | None = None,
         "seed": seed, "population": population, "generations": generations,
         "saturation": saturation, "saturation_rtol": float(saturation_rtol),
         "mass_scaling": mass_scaling, "refine": refine_method or False,
-        **({"output": output} if is_linkage else {}),
+        # the output the peaks are of (the paper's set: its default, |F12|)
+        "output": output if is_linkage else entry.linkage.default_output,
         **({"case": entry.linkage.case, "overrides": dict(entry.linkage.overrides)}
            if not entry.given_as_paper else {}),
         **({"window": window} if window is not None else {}),

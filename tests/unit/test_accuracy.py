@@ -312,3 +312,25 @@ def test_a_run_on_output_times_of_the_last_revolution_meets_the_request_there():
     assert abs(traj.max_base_force(4) / ref.max_base_force(4) - 1.0) <= 1e-5
     with pytest.raises(ValueError, match="revolution 2 has no samples"):
         traj.max_base_force(2)
+
+
+def test_a_step_bound_that_sets_the_steps_does_not_fool_the_estimate():
+    """With a step bound small enough to set the steps (h_max 1.92 us on the slider-crank
+    whose crank-coupler joint is loose: 0.05 mm, 3000 rpm), runs at rtol 1e-7 and 1e-8 take
+    the same steps and agree within 1e-6 while both are 1e-3 off: their agreement is no
+    estimate, and the run tightens on until the work grows with the tolerance. The peaks
+    then meet the default accuracy against the run at rtol 1e-12 without the bound."""
+    from pathlib import Path
+
+    from mbs_clearance.model.linkage import Linkage
+
+    lk = Linkage.from_file(Path(__file__).parents[1] / "data" / "docs_slider_crank.json")
+    h = 1.92e-6
+    with pytest.warns(AccuracyWarning):          # fixed rtols: its contact onsets flag them
+        a, b = (simulate(lk, 2, rtol=r, h_max=h) for r in (1e-7, 1e-8))
+    shared = abs(b.peaks[1] / a.peaks[1] - 1.0)
+    reference = simulate(lk, 2, rtol=1e-12).peaks
+    assert shared < 1e-6 < 1e-4 < abs(b.peaks[1] / reference[1] - 1.0)   # the trap is real
+    run = simulate(lk, 2, h_max=h)
+    assert run.stats["accuracy_ok"] and min(run.stats["accuracy_runs"]) <= 1e-10
+    assert np.max(np.abs(run.peaks / reference - 1.0)) <= 1e-5

@@ -463,7 +463,8 @@ def test_free_linkage_sensitivities_refusals():
             call(cases.four_bar(), ["clearance"], window=0.01) if call is peak_gradient \
                 else call(cases.four_bar(), window=0.01)
     with pytest.raises(ValueError, match=r"unknown output 'drive_moment' .*allowed: "
-                                         r"\['pivot_force:crank_pivot', .*'shaking_force'\]"):
+                                         r"\['pivot_force:crank_pivot', .*'shaking_force', "
+                                         r"'contact_force:guide.front_top'"):
         peak_output(lk, "drive_moment", window=0.01)
 
 
