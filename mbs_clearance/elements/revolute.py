@@ -209,8 +209,8 @@ class RevoluteClearance(Element):
                     for f in LUBRICATION_FIELDS} for e in lub}
         gap_extras = [(f"sp{e}", f"gv{e}_4", ("spin", e), part.spins[e - first]) for e in fric]
         for e in lub:
-            for m, (name, what) in enumerate((("wj", "wj"), ("wb", "wb"))):
-                gap_extras.append((f"{name}{e}", f"gv{e}_{5 + m}", (what, e),
+            for m, what in enumerate(("wj", "wb")):
+                gap_extras.append((f"{what}{e}", f"gv{e}_{5 + m}", (what, e),
                                    part.omegas[e - first][m]))
         lines = []
         for e, c in zip(events, contact):
@@ -538,6 +538,7 @@ class RevoluteClearance(Element):
         joints = self.joints(linkage)
         if not joints:
             return {"contact_angle": None, "slip_velocity": None}
+        # the joints' contacts are the first (the registry's first element)
         edot, bodies = ctx.edot(len(joints)), ctx.bodies
         angle, slip = np.empty((len(ecc), len(joints))), np.empty((len(ecc), len(joints)))
         for j, cj in enumerate(joints):

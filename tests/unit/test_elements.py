@@ -80,14 +80,24 @@ def test_contacts_and_layout_of_the_translational_element_match_the_description(
     assert memory == [f"{c}.{f}" for c in names for f in ("mode", "impact_velocity")]
 
 
-@pytest.mark.parametrize("case", ["paper_slider_crank_lubricated",
-                                  "slider_crank_two_clearances"])
-def test_contacts_and_layout_of_the_revolute_element_match_the_description(case):
-    """The revolute element's contacts are the clearance joints, first among the contacts;
-    its parameters one block of the parameter vector after the bodies', ground points' and
-    prismatic axes' (contact fields, then the friction's, then the film's), its memory the
-    first memory entries."""
-    link = CASES[case]()
+def _second_joint_lubricated():
+    link = CASES["slider_crank_two_clearances"]()
+    first, second = link.clearance_joints
+    return link.replace(clearance_joints=(first, dataclasses.replace(
+        second, lubrication="short", friction_law="none")))
+
+
+@pytest.mark.parametrize("make", [CASES["paper_slider_crank_lubricated"],
+                                  CASES["slider_crank_two_clearances"],
+                                  _second_joint_lubricated],
+                         ids=["lubricated", "two_clearances", "second_lubricated"])
+def test_contacts_and_layout_of_the_revolute_element_match_the_description(make):
+    """The revolute element's contacts are the clearance joints, first among the contacts
+    and in their order whichever is lubricated (the film is a variant of the joint's
+    contact); its parameters one block of the parameter vector after the bodies', ground
+    points' and prismatic axes' (contact fields, then the friction's, then the film's), its
+    memory the first memory entries."""
+    link = make()
     el = element("revolute")
     names = [j.name for j in link.clearance_joints]
     assert el.contact_names(link) == names == [n for n, _ in link.contacts()][:len(names)]
