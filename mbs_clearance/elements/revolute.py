@@ -53,6 +53,14 @@ _FRICTION_COLUMNS = ("friction_force", "slip_velocity", "friction_power")
 _FILM_COLUMNS = ("film_force_x", "film_force_y", "film_torque", "film_power")
 
 
+def _moments(ctx, moments) -> None:
+    """Each (body, moment about its centre) of `moments` into the derivation's loads."""
+    for body, tau in moments:
+        ctx.torque_loads.append((body, tau))
+        if body != GROUND:
+            ctx.loads.append((ctx.frames[body], tau * ctx.N.z))
+
+
 class RevoluteClearance(Element):
     """The revolute clearance joint: a journal in a bearing, one contact each, with its
     friction, oil film and bearing-profile variants."""
@@ -127,10 +135,7 @@ class RevoluteClearance(Element):
             TQ.append(sp.Symbol(f"TQ{j}", real=True))
             rj, rb = psyms[f"{cj.name}.journal_radius"], psyms[f"{cj.name}.bearing_radius"]
             spin_t.append(angle[cj.journal_body] * rj - angle[cj.bearing_body] * rb)
-            for body, tau in ((cj.journal_body, rj * TQ[j]), (cj.bearing_body, -rb * TQ[j])):
-                ctx.torque_loads.append((body, tau))
-                if body != GROUND:
-                    ctx.loads.append((ctx.frames[body], tau * ctx.N.z))
+            _moments(ctx, ((cj.journal_body, rj * TQ[j]), (cj.bearing_body, -rb * TQ[j])))
         # lubrication: the film's force on the journal is in FX, FY (moved to the bearing's
         # centre on the bearing's side); its torques on the two bodies, the bearing's
         # including that move, are TJ and TB
@@ -142,10 +147,7 @@ class RevoluteClearance(Element):
                 continue
             TL.append((sp.Symbol(f"TJ{j}", real=True), sp.Symbol(f"TB{j}", real=True)))
             omega_t.append((angle[cj.journal_body], angle[cj.bearing_body]))
-            for body, tau in ((cj.journal_body, TL[j][0]), (cj.bearing_body, TL[j][1])):
-                ctx.torque_loads.append((body, tau))
-                if body != GROUND:
-                    ctx.loads.append((ctx.frames[body], tau * ctx.N.z))
+            _moments(ctx, ((cj.journal_body, TL[j][0]), (cj.bearing_body, TL[j][1])))
         return self.part(joints=joints, FX=FX, FY=FY, gaps_t=gaps_t, TQ=TQ, spin_t=spin_t,
                          TL=TL, omega_t=omega_t)
 
