@@ -91,7 +91,7 @@ from .._checks import (
     check_real,
     format_bytes,
 )
-from ..elements.registry import ELEMENTS
+from ..elements.registry import elements_with
 from ..laws._dispatch import friction_force_slots
 from ..laws.forces import (
     CONTACT_MODELS,
@@ -110,6 +110,9 @@ __all__ = ["ExudynSettings", "make_settings", "build", "solve", "simulate_exudyn
            "ACCURACY_AT_DEFAULT", "ExudynModel", "contact_scales", "friction_of",
            "symbolic_friction_factor", "symbolic_friction_force", "NEWTON_TOLERANCE",
            "ROUNDOFF_MARGIN", "STEPS_PER_CONTACT_PERIOD"]
+
+#: the elements whose Exudyn element this backend builds (`elements.registry`)
+_ELEMENTS = elements_with("Exudyn element")
 
 #: clearance-joint implementations (option ``contact``)
 CONTACT_VARIANTS: tuple[str, ...] = ("symbolic", "python", "sphere")
@@ -225,7 +228,7 @@ def contact_scales(linkage: Linkage) -> tuple[float, float]:
         m = min(masses.get(cj.journal_body, math.inf), masses.get(cj.bearing_body, math.inf))
         period = min(period, 2.0 * math.pi * math.sqrt(m / k))
         floor = max(floor, 1.5 * float(np.finfo(float).eps) * size / delta)
-    for el in ELEMENTS:
+    for el in _ELEMENTS:
         el_period, el_floor = el.exudyn_contact_scale(linkage, load, masses, size)
         period, floor = min(period, el_period), max(floor, el_floor)
     return period, floor
@@ -914,7 +917,7 @@ OUTPUT_GROUPS: tuple[str, ...] = ("reactions", "drive", "contact", "bodies")
 def _check_linkage(linkage, settings: ExudynSettings) -> None:
     if not isinstance(linkage, Linkage):
         raise ValueError(f"linkage must be a Linkage; got {type(linkage).__name__}")
-    for el in ELEMENTS:
+    for el in _ELEMENTS:
         el.exudyn_check(linkage, settings)
     for j in linkage.clearance_joints:
         # the friction, the film and a profiled contact are generic elements on the two
@@ -1101,7 +1104,7 @@ def build(linkage: Linkage, settings: ExudynSettings | None = None,
                           python_force=PYTHON_FORCE_ALLOCATIONS, memories=memories,
                           contacts=contacts, keep_alive=keep_alive,
                           pre_step_reads=pre_step_reads)
-    element_items = {el.kind: el.exudyn_build(linkage, ctx) for el in ELEMENTS}
+    element_items = {el.kind: el.exudyn_build(linkage, ctx) for el in _ELEMENTS}
     pre_step_reads = ctx.pre_step_reads
     if contacts:
         mbs.SetPreStepUserFunction(_pre_step(contacts, step, settings.onset == "predict"))
@@ -1118,7 +1121,7 @@ def build(linkage: Linkage, settings: ExudynSettings | None = None,
     sensors: dict = {}
     if "reactions" in want:
         prismatic = {j.name: j for j in linkage.joints if isinstance(j, Prismatic)}
-        after = {n for el in ELEMENTS for n in el.exudyn_ground_joints(linkage)}
+        after = {n for el in _ELEMENTS for n in el.exudyn_ground_joints(linkage)}
         for name in linkage.ground_joints():
             if name in after:           # from an element's series after the run
                 continue
@@ -1478,7 +1481,7 @@ def _element_series(model: ExudynModel) -> list:
         return np.where(hist[at, 0] <= t, hist[at, 1], memory.floor)
 
     return [el.exudyn_series(model.elements[el.kind], t, states, impact_velocity)
-            for el in ELEMENTS]
+            for el in _ELEMENTS]
 
 
 def _reactions(model: ExudynModel) -> tuple[np.ndarray, dict]:
@@ -1634,7 +1637,7 @@ def monitors_element_reaction(linkage: Linkage) -> bool:
     its corners' loads), which is computed from the bodies' stored states that a
     reactions-only run does not keep (its peaks then come from a full run)."""
     ideal = {j.name for j in linkage.joints}
-    return any(el.contact_names(linkage) for el in ELEMENTS) and (
+    return any(el.contact_names(linkage) for el in _ELEMENTS) and (
         linkage.monitor_joint is None or linkage.monitor_joint not in ideal)
 
 

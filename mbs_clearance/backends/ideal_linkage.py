@@ -33,11 +33,14 @@ import math
 import numpy as np
 
 from .._checks import MemoryLimitError, check_int, check_max_memory, check_real, format_bytes
-from ..elements.registry import ELEMENTS
+from ..elements.registry import elements_with
 from ..model.linkage import GROUND, Linkage, Revolute
 from .kinematics import coordinate_series, perp, turn
 
 __all__ = ["simulate_ideal_linkage", "peak_ideal_linkage", "IdealModel"]
+
+#: the elements whose ideal joint this backend builds (`elements.registry`)
+_ELEMENTS = elements_with("ideal joint")
 
 #: options of `simulate(linkage, backend="ideal")`
 OPTION_NAMES = ("samples_per_revolution", "max_memory", "duration", "window", "rtol")
@@ -57,8 +60,8 @@ class IdealModel:
     Body k (0 is the ground, then the description's bodies in order) has the coordinates
     3 (k - 1) ... 3 (k - 1) + 2 of a state (x, y, angle). Rows, in order: each ideal joint
     (a revolute: 2, a prismatic: the offset across its axis and the angle between the
-    bodies), each revolute clearance joint as a pin (2), each element's joint as its ideal
-    prismatic (2, `Element.ideal_slides`: a translational clearance joint's), the drive (1).
+    bodies), each element's joint as its ideal joint (`Element.ideal_joints`: a revolute
+    clearance joint's pin, 2; a translational clearance joint's prismatic, 2), the drive (1).
     """
 
     def __init__(self, linkage: Linkage, angles: dict[str, float]):
@@ -92,11 +95,10 @@ class IdealModel:
             else:
                 slide(j.name, j.body_a, j.point_a, j.angle, j.body_b, j.point_b,
                       angles.get(j.body_b, 0.0) - angles.get(j.body_a, 0.0))
-        for cj in linkage.clearance_joints:
-            pin(cj.name, cj.journal_body, cj.journal_point, cj.bearing_body, cj.bearing_point)
-        for el in ELEMENTS:
-            for args in el.ideal_slides(linkage, angles):
-                slide(*args)
+        closers = {"pin": pin, "slide": slide}
+        for el in _ELEMENTS:
+            for kind, args in el.ideal_joints(linkage, angles):
+                closers[kind](*args)
         self.drive_row = None
         if linkage.drive is not None:
             crank = next(j.body_b for j in linkage.joints if j.name == linkage.drive.joint)
@@ -447,8 +449,8 @@ def constrained_run(linkage: Linkage, revolutions: int | None = None, **options)
     shaking = sum(reactions.values())
     monitored = shaking if linkage.monitor_joint is None else reactions[linkage.monitor_joint]
     magnitude = np.hypot(monitored[:, 0], monitored[:, 1])
-    contact = [_pin_force(model, jac, lam, cj.name) for cj in linkage.clearance_joints]
-    for el in ELEMENTS:
+    contact = []
+    for el in _ELEMENTS:
         contact += el.ideal_contact_forces(linkage, lambda name: lam[:, model.rows[name]])
     contact = np.column_stack(contact)
     moment = work = None
@@ -475,12 +477,6 @@ def constrained_run(linkage: Linkage, revolutions: int | None = None, **options)
         joints=tuple(name for name, _ in contacts), reactions=reactions,
         shaking_force=np.ascontiguousarray(shaking), coordinates=coords, rates=rates,
         accelerations=accs))
-
-
-def _pin_force(model: IdealModel, jac, lam, joint: str) -> np.ndarray:
-    """|force| (N) an ideal pin transmits: its two multipliers' magnitude."""
-    rows = model.rows[joint]
-    return np.hypot(lam[:, rows[0]], lam[:, rows[1]])
 
 
 def _tree_series(linkage: Linkage, q, v, a):

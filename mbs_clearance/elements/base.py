@@ -2,15 +2,16 @@
 (`generate.derive`, `writer`, `cwriter`, `jacobians`, `cjacobians`, `energy`), the reduced
 model (`solve.linkage_model`, `solve.linkage_ddm`), the Exudyn backend
 (`backends.exudyn_linkage`) and the ideal-joint backend (`backends.ideal_linkage`) ask of
-every registered element, in the registry's order.
+every registered element that brings their piece (`Element.pieces`), in the registry's
+order.
 
 An element owns the joints of one field of the description (`Element.attribute` of a
-`Linkage`, e.g. ``translational_joints``) and their *contacts* (the events of the compiled
-model, each with its own mode and impact-velocity memory), which follow the revolute
-clearance joints' in every layout. Every hook takes all the element's joints of one linkage
-at once, so that its entries stay together in the parameter vector, the rows and the
-outputs; a linkage without joints of the kind gets empty contributions and the model is
-printed as if the element did not exist.
+`Linkage`, e.g. ``clearance_joints``, ``translational_joints``) and their *contacts* (the
+events of the compiled model, each with its own mode and impact-velocity memory), which
+follow the earlier elements' in every layout. Every hook takes all the element's joints of
+one linkage at once, so that its entries stay together in the parameter vector, the rows
+and the outputs; a linkage without joints of the kind gets empty contributions and the
+model is printed as if the element did not exist.
 """
 
 from __future__ import annotations
@@ -38,14 +39,16 @@ PIECES: dict[str, tuple[str, ...]] = {
     "description": ("contact_names",),
     "gap function and loads": ("parameter_names", "memory_names", "base_angles",
                                "add_loads", "ground_reaction", "finish", "specialise"),
-    "C printer": ("plan", "out_columns", "friction_contacts", "penetration_lines",
-                  "closure"),
+    "C printer": ("plan", "out_columns", "friction_contacts", "profiled_stages",
+                  "penetration_lines", "closure"),
     "Jacobian rows and tangent terms": ("jacobian_rows", "jacobian_lines", "force_loads",
                                         "output_loads"),
     "energy": ("contact_energy",),
-    "ideal joint": ("ideal_slides", "ideal_contact_forces"),
+    "ideal joint": ("ideal_joints", "ideal_contact_forces"),
     "reduced model's parameters and sensitivities": ("parameter_values", "floor_names",
-                                                     "chain", "closure_rows"),
+                                                     "chain", "closure_rows",
+                                                     "sensitivity_check", "fd_scale",
+                                                     "trajectory_series"),
     "Exudyn element": ("exudyn_check", "exudyn_contact_scale", "exudyn_build",
                        "exudyn_ground_joints", "exudyn_series"),
 }
@@ -63,6 +66,9 @@ class Element:
     description: type | None = None
     #: the `Linkage` field holding the joints of this kind
     attribute: str = ""
+    #: the pieces of `PIECES` the element brings (every one unless a layer still writes
+    #: the kind itself; that layer then iterates over `registry.elements_with(piece)`)
+    pieces: tuple[str, ...] = tuple(PIECES)
 
     def joints(self, linkage) -> tuple:
         """The joints of this kind in `linkage`."""

@@ -170,7 +170,8 @@ class Translational(Element):
         its side, the sliding velocity along the axis (exd) for the friction law. Returns
         (``lines`` of the contact stage, ``indices`` per corner: its p indices, event and
         side; ``friction``: the corners with a law; ``results``: their output values;
-        ``floors``: (event, p index of its impact-velocity floor))."""
+        ``floors``: (event, p index of its impact-velocity floor); ``gap_extras`` and
+        ``lubricated``: none, computed beside the gaps or in oil))."""
         lines, indices, friction, results = [], [], [], []
         for k, (_, tname, side, FN, FT) in enumerate(part.corners):
             e = first + k
@@ -197,7 +198,8 @@ class Translational(Element):
             ft = part.corners[k][4]
             results += [str(ft), f"exd{first + k}", f"-{ft} * exd{first + k}"]
         return self.part(lines=lines, indices=indices, friction=friction, results=results,
-                         floors=[(c["event"], c["impact_velocity_floor"]) for c in indices])
+                         floors=[(c["event"], c["impact_velocity_floor"]) for c in indices],
+                         gap_extras=[], lubricated=[])
 
     def out_columns(self, part, plan) -> list[str]:
         """The friction columns of the corners with a law (after the clearance joints')."""
@@ -206,6 +208,10 @@ class Translational(Element):
     def friction_contacts(self, part, plan) -> list[str]:
         """The corners with a friction law (their friction power enters the work)."""
         return [part.corners[k][0] for k in plan.friction]
+
+    def profiled_stages(self, part, plan, profiles: dict, gaps_stage, block_size) -> dict:
+        """None: a guide has no bearing profile (`profiles` holds no corner)."""
+        return {}
 
     def penetration_lines(self, plan) -> list[str]:
         """The C lines of `penetration` for the corners: (delta, deltadot) of the corner
@@ -330,14 +336,25 @@ class Translational(Element):
                              for c in tj.corner_names()})
         return pos, rate
 
+    def sensitivity_check(self, linkage) -> None:
+        """None: the corners' contact and friction laws have their partial derivatives."""
+
+    def fd_scale(self, linkage, head: str, field: str) -> None:
+        """None: a joint's values step by their own size."""
+        return None
+
+    def trajectory_series(self, linkage, ecc, ctx) -> dict:
+        """None beside the outputs: the corners' series are output columns."""
+        return {}
+
     # ---- the ideal-joint backend (backends.ideal_linkage)
-    def ideal_slides(self, linkage, angles: dict) -> list[tuple]:
-        """Each joint closed as an ideal prismatic joint: (name, guide body, guide point,
-        axis angle in rad, slider body, slider point, the bodies' angle difference to keep
-        in rad) from the bodies' assembled `angles`."""
-        return [(tj.name, tj.guide_body, tj.guide_point, tj.angle, tj.slider_body,
-                 tj.slider_point,
-                 angles.get(tj.slider_body, 0.0) - angles.get(tj.guide_body, 0.0))
+    def ideal_joints(self, linkage, angles: dict) -> list[tuple]:
+        """Each joint closed as an ideal prismatic joint: ("slide", (name, guide body, guide
+        point, axis angle in rad, slider body, slider point, the bodies' angle difference to
+        keep in rad)) from the bodies' assembled `angles`."""
+        return [("slide", (tj.name, tj.guide_body, tj.guide_point, tj.angle, tj.slider_body,
+                           tj.slider_point,
+                           angles.get(tj.slider_body, 0.0) - angles.get(tj.guide_body, 0.0)))
                 for tj in self.joints(linkage)]
 
     def ideal_contact_forces(self, linkage, multipliers) -> list:
@@ -357,10 +374,12 @@ class Translational(Element):
         return out
 
     # ---- energy (generate.energy)
-    def contact_energy(self, part, params: list, first: int, offset_y: list):
+    def contact_energy(self, part, params: list, first: int, offsets: tuple):
         """A function (a, p, mem_start) -> the corners' contact potential in J, where `a`
-        are the arguments of the derivation's numeric functions and `offset_y` the numeric
-        normal offsets of the contacts: K delta^2.5 / 2.5 of each corner in contact."""
+        are the arguments of the derivation's numeric functions and `offsets` the numeric
+        offsets of the contacts (x, y lists; a corner's y is its normal offset): K
+        delta^2.5 / 2.5 of each corner in contact."""
+        offset_y = offsets[1]
         corners = [(float(side), params.index(f"{tname}.clearance"),
                     params.index(f"{tname}.half_height"), params.index(f"{tname}.stiffness"))
                    for _, tname, side, _, _ in part.corners]

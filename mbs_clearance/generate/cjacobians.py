@@ -136,8 +136,8 @@ def jacobian_functions(c, d, pl) -> tuple[list[str], dict]:
     constants are numbered after the kernels'."""
     from .writer import _out_columns
 
-    out_columns, _ = _out_columns(d, pl.events, pl.fric, pl.lub, pl.parts, pl.driven)
-    plan = jacobian_plan(c.w, d, out_columns)
+    out_columns, _ = _out_columns(d, pl.parts, pl.driven)
+    plan = jacobian_plan(c.w, d, out_columns, pl.parts)
 
     def stage(exprs, names, temps):
         # assignments only: the locals are declared once per kernel (`translate`), and a
@@ -163,8 +163,7 @@ def jacobian_functions(c, d, pl) -> tuple[list[str], dict]:
         return (["    (void)t;"] + ["    " + ln for ln in head + pre + decl + body]
                 + ["    if (full) {"] + ["        " + ln for ln in full] + ["    }"])
 
-    floors = [ci["impact_velocity_floor"] for ci in pl.contact]
-    floors += [f for el in ELEMENTS for _, f in pl.parts[el.kind].floors]
+    floors = [f for el in ELEMENTS for _, f in pl.parts[el.kind].floors]
     n_z = plan.n_z
     lines = [
         "/* ---- the Jacobian and tangent kernels (generate/cjacobians.py): rows of jac",

@@ -18,7 +18,6 @@ import sympy as sp
 from sympy.printing.c import C99CodePrinter
 
 from ..elements.registry import ELEMENTS
-from ..laws.registry import FRICTION_SLOTS
 from .cjacobians import jacobian_functions
 from .derive import Derivation
 from .key import structure_digest
@@ -152,10 +151,9 @@ def metadata(d: Derivation, linkage_name: str, structure: dict, zeros: tuple, pl
              n_constants: int) -> dict:
     """What a model exposes beside its kernels, for the C model's callers."""
     params = pl.params
-    out_columns, mon = _out_columns(d, pl.events, pl.fric, pl.lub, pl.parts, pl.driven)
-    friction = [d.joints[j] for j in pl.fric]
-    for el in ELEMENTS:
-        friction += el.friction_contacts(d.parts[el.kind], pl.parts[el.kind])
+    out_columns, mon = _out_columns(d, pl.parts, pl.driven)
+    friction = [c for el in ELEMENTS
+                for c in el.friction_contacts(d.parts[el.kind], pl.parts[el.kind])]
     n = pl.n
     return dict(
         LINKAGE=linkage_name, STRUCTURE_DIGEST=structure_digest(structure),
@@ -170,7 +168,7 @@ def metadata(d: Derivation, linkage_name: str, structure: dict, zeros: tuple, pl
         OUT_COLUMNS=tuple(out_columns), N_OUT=len(out_columns), MONITOR_COLUMN=mon,
         MOMENT_COLUMN=out_columns.index("drive_moment") if pl.driven else -1,
         ACC_COLUMN=out_columns.index(f"{d.coordinates[0]}.acc"),
-        LUBRICATED_JOINTS=tuple(d.joints[j] for j in pl.lub),
+        LUBRICATED_JOINTS=tuple(c for el in ELEMENTS for c in pl.parts[el.kind].lubricated),
         SPEED_INDEX=params.index("drive.speed") if pl.driven else -1,
         POWER_COLUMNS=tuple(out_columns.index(f"{j}.friction_power") for j in friction))
 
@@ -186,7 +184,11 @@ def render_c(d: Derivation, linkage_name: str, structure: dict,
     c = _C(pl.w)
     E, n = pl.E, pl.n
     profiles = profiles or {}
-    offsets = _profiled_stages(pl, profiles)
+    offsets = {}
+    for el in ELEMENTS:
+        offsets.update(el.profiled_stages(d.parts[el.kind], pl.parts[el.kind], profiles,
+                                          pl.gaps_stage, block_size))
+    pl.contact_lines = [ln for el in ELEMENTS for ln in pl.parts[el.kind].lines]
     dynamics = c.function([pl.gaps_stage, pl.contact_lines, *pl.eom, pl.outputs_stage])
     gap_fns = [c.function([(pl.gap_exprs[j], pl.gap_names[j])]) for j in range(E)]
     bearing_fns = {j: c.function([([sp.sympify(e) for e in profiles[j][:2]],
@@ -206,7 +208,7 @@ def render_c(d: Derivation, linkage_name: str, structure: dict,
     if profiles:
         # the profiles' blocks after the constants (generate/profiles.py)
         start = meta["N_P"]
-        meta.update(PROFILE_JOINTS=tuple(d.joints[j] for j in sorted(profiles)),
+        meta.update(PROFILE_JOINTS=tuple(pl.events[j] for j in sorted(profiles)),
                     PROFILE_POINTS=tuple(profiles[j][2] for j in sorted(profiles)),
                     PROFILE_OFFSETS=tuple(start + offsets[j] for j in sorted(profiles)),
                     N_P=start + sum(block_size(profiles[j][2]) for j in profiles))
@@ -273,15 +275,6 @@ def render_c(d: Derivation, linkage_name: str, structure: dict,
             "    dd[0] = 0.0; dd[1] = 0.0;"]
     if profiles:
         out += ["    double b[2], rb, slope;"]
-    for j, ci in enumerate(pl.contact):
-        if j in profiles:
-            out += [f"    if (j == {j}) {{ gap_{j}(t, y, p, g); bearing_{j}(t, y, p, b); "
-                    "mbs_profile_gap(g[0], g[1], g[2], g[3], b[0], b[1], "
-                    f"p + PROFILE_START + {offsets[j]}, {profiles[j][2]}, &dd[0], &dd[1], "
-                    "&nx, &ny, &rb, &slope); return; }"]
-            continue
-        out += [f"    if (j == {j}) {{ gap_{j}(t, y, p, g); gap_state(g[0], g[1], g[2], g[3], "
-                f"p[{ci['clearance']}], &dd[0], &dd[1], &nx, &ny); return; }}"]
     for el in ELEMENTS:
         out += el.penetration_lines(pl.parts[el.kind])
     out += ["    (void)nx; (void)ny;", *(["    (void)rb; (void)slope;"] if profiles else []),
@@ -295,8 +288,7 @@ def render_c(d: Derivation, linkage_name: str, structure: dict,
             "    if (p[k] > 0.5) { p[k] = 0.0; return; }",
             "    double dd[2];", "    penetration(t, y, p, j, dd);", "    p[k] = 1.0;",
             "    double floor_ = 0.0;"]
-    floors = [(j, ci["impact_velocity_floor"]) for j, ci in enumerate(pl.contact)]
-    floors += [f for el in ELEMENTS for f in pl.parts[el.kind].floors]
+    floors = [f for el in ELEMENTS for f in pl.parts[el.kind].floors]
     out += [f"    if (j == {j}) floor_ = p[{fl}];" for j, fl in floors]
     out += ["    if (j >= 0 && j < N_EVENTS)",
             "        p[k + 1] = floor_ > dd[1] ? floor_ : dd[1];   /* python's max */",
@@ -319,36 +311,6 @@ def render_c(d: Derivation, linkage_name: str, structure: dict,
     out += jac_lines
     out += _sens_functions(meta)
     return "\n".join(out), meta
-
-
-def _profiled_stages(pl, profiles: dict) -> dict:
-    """The plan `pl` with its profiled joints' contact stages (core/profile_runtime.h) in
-    place of the circular ones, the bearing body's angle and rate (pa<j>, pw<j>) computed
-    beside the gaps; returns per profiled joint the offset of its block from PROFILE_START."""
-    offsets, at = {}, 0
-    for j in sorted(profiles):
-        angle, rate, points = profiles[j]
-        offsets[j] = at
-        at += block_size(points)
-        pl.gaps_stage[0].extend([sp.sympify(angle), sp.sympify(rate)])
-        pl.gaps_stage[1].extend([f"pa{j}", f"pw{j}"])
-        c, mem, d = pl.contact[j], pl.mem_start + 2 * j, pl.d
-        law = (f"p[{mem}], p[{mem + 1}], p[{c['stiffness']}], p[{c['restitution']}], "
-               f"p[{c['contact_model']}]")
-        block = f"p + PROFILE_START + {offsets[j]}, {points}"
-        if j in pl.fric:
-            fp = pl.fpar[j]
-            pl.contact_lines[j] = (
-                f"F{j}, d{j}, dd{j}, {d.FX[j]}, {d.FY[j]}, {d.TQ[j]}, vt{j} = "
-                f"profile_friction_stage(ex{j}, ey{j}, exd{j}, eyd{j}, sp{j}, pa{j}, pw{j}, "
-                f"p[{fp['bearing_radius']}], {law}, p[{fp['friction_law']}], ("
-                + ", ".join(f"p[{fp[f]}]" for f in FRICTION_SLOTS)
-                + ("," if len(FRICTION_SLOTS) == 1 else "") + f"), {block})")
-        else:
-            pl.contact_lines[j] = (
-                f"F{j}, d{j}, dd{j}, {d.FX[j]}, {d.FY[j]} = profile_contact_stage(ex{j}, "
-                f"ey{j}, exd{j}, eyd{j}, pa{j}, pw{j}, {law}, {block})")
-    return offsets
 
 
 def _sens_functions(meta: dict) -> list[str]:
@@ -383,16 +345,15 @@ def _sens_functions(meta: dict) -> list[str]:
 
 def _closure_functions(c: _C, d: Derivation, pl) -> list[str]:
     """The loop closure at coordinates q (closure, closure_jacobian and closure_rate): the
-    clearance joints' gaps, then the elements' closures (`Element.closure`), into res[nc]
-    (the Jacobian row-major, res[nc * N_Q])."""
-    w, n, J = pl.w, pl.n, len(d.joints)
+    elements' closures (`Element.closure`), into res[nc] (the Jacobian row-major,
+    res[nc * N_Q])."""
+    w, n = pl.w, pl.n
     closing = [e for el in ELEMENTS for e in el.closure(d.parts[el.kind])]
-    nc = 2 * J + len(closing)
+    nc = len(closing)
     value = [f"c{i}" for i in range(nc)]
     jacobian = [f"c{i}_{k}" for i in range(nc) for k in range(n)]
     bodies = (
-        ("mbs_closure", value, c.function([([e for g in pl.gap_exprs[:J] for e in g[:2]]
-                                            + [w.split(e) for e in closing], value)])),
+        ("mbs_closure", value, c.function([([w.split(e) for e in closing], value)])),
         ("mbs_closure_jacobian", jacobian,
          c.function([([w.split(d.closure_jacobian[i, k]) for i in range(nc)
                        for k in range(n)], jacobian)])),

@@ -3,11 +3,11 @@
 Every number of the description stays a symbol (a parameter of the vector p), so that one
 derivation serves every linkage of the same structure (`Linkage.structure`). The kinematics
 follow the forest of ideal joints from the ground (`Linkage.tree`); the equations of motion
-come from Kane's method (`KanesMethod`, one `RigidBody` per body, gravity and the contact
-forces of the clearance joints as point forces); the outputs (ground reactions by Newton on
-the subtree below each ground joint, the drive moment as the generalized force of the
-prescribed drive angle, the mechanical energy, the loop-closure residuals of the clearance
-joints) from the same kinematics.
+come from Kane's method (`KanesMethod`, one `RigidBody` per body, gravity and the loads of
+the joint kinds' elements as point forces and moments); the outputs (ground reactions by
+Newton on the subtree below each ground joint, the drive moment as the generalized force of
+the prescribed drive angle, the mechanical energy, the elements' loop-closure residuals)
+from the same kinematics.
 
 Trigonometry: every rotation is written with the sine and cosine of a *base angle* (an angle
 coordinate, the drive angle speed t + initial_angle, a prismatic axis angle); after the
@@ -25,13 +25,10 @@ from types import SimpleNamespace
 import sympy as sp
 import sympy.physics.mechanics as me
 
-from ..elements.base import CONTACT_FIELDS
 from ..elements.registry import ELEMENTS
-from ..laws.registry import FRICTION_SLOTS
 from ..model.linkage import GROUND, Linkage, Prismatic, Revolute
 
-__all__ = ["Derivation", "derive", "parameter_layout", "identifier",
-           "specialise", "LUBRICATION_FIELDS"]
+__all__ = ["Derivation", "derive", "parameter_layout", "identifier", "specialise"]
 
 
 def identifier(name: str, taken: set[str]) -> str:
@@ -49,13 +46,10 @@ def identifier(name: str, taken: set[str]) -> str:
 
 def parameter_layout(linkage: Linkage) -> tuple[str, ...]:
     """Dotted names of the entries of the kernels' parameter vector p, in order: bodies
-    (mass, inertia, points), ground points, prismatic axis angles, per clearance joint
-    (clearance, stiffness, restitution, contact_model id, impact_velocity_floor), per
-    clearance joint with friction (friction_law id, coefficient, v0, v1, journal and bearing
-    radius), per lubricated clearance joint its film's fields, then each element's
-    (`elements.registry`, e.g. a translational clearance joint's contact fields and
-    geometry), the drive, gravity, then the memory (mode, impact velocity) of each
-    clearance joint, then of each element's contacts."""
+    (mass, inertia, points), ground points, prismatic axis angles, then each element's
+    (`elements.registry`, in its order: the revolute clearance joints' contact, friction and
+    film fields, a translational clearance joint's contact fields and geometry), the drive,
+    gravity, then the memory (mode, impact velocity) of each element's contacts."""
     names = []
     for b in linkage.bodies:
         names += [f"{b.name}.mass", f"{b.name}.inertia"]
@@ -64,39 +58,20 @@ def parameter_layout(linkage: Linkage) -> tuple[str, ...]:
     for pt in linkage.ground_points:
         names += [f"{GROUND}.{pt}.x", f"{GROUND}.{pt}.y"]
     names += [f"{j.name}.angle" for j in linkage.joints if isinstance(j, Prismatic)]
-    for j in linkage.clearance_joints:
-        names += [f"{j.name}.{f}" for f in CONTACT_FIELDS]
-    for j in linkage.clearance_joints:
-        if j.has_friction:
-            names += [f"{j.name}.{f}" for f in FRICTION_FIELDS]
-    for j in linkage.clearance_joints:
-        if j.has_lubrication:
-            names += [f"{j.name}.{f}" for f in LUBRICATION_FIELDS]
     for el in ELEMENTS:
         names += el.parameter_names(linkage)
     if linkage.drive is not None:       # a free linkage has no drive parameters
         names += ["drive.speed", "drive.initial_angle"]
     names += ["gravity"]
-    for j in linkage.clearance_joints:
-        names += [f"{j.name}.mode", f"{j.name}.impact_velocity"]
     for el in ELEMENTS:
         names += el.memory_names(linkage)
     return tuple(names)
 
 
-#: per clearance joint with friction, the entries of p read by the friction law and the
-#: tangential slip (the radii put the contact point on each body's surface)
-FRICTION_FIELDS = ("friction_law", *FRICTION_SLOTS, "journal_radius", "bearing_radius")
-
-#: per lubricated clearance joint, the entries of p read by the film (`laws.lubrication`)
-LUBRICATION_FIELDS = ("lubrication", "viscosity", "bearing_length", "journal_radius",
-                      "film_fade_start", "film_fade_end")
-
-
 @dataclass
 class Derivation:
-    """The symbolic model (expressions in t, Q, U, A, the parameter symbols and the contact
-    force components FX, FY; the sines and cosines of the base angles as symbols S, C)."""
+    """The symbolic model (expressions in t, Q, U, A, the parameter symbols and the elements'
+    load symbols; the sines and cosines of the base angles as symbols S, C)."""
 
     parameters: tuple[str, ...]             # dotted names, p order
     psyms: dict[str, sp.Symbol]             # dotted name -> symbol
@@ -105,13 +80,10 @@ class Derivation:
     Q: list[sp.Symbol]
     U: list[sp.Symbol]
     A: list[sp.Symbol]
-    FX: list[sp.Symbol]
-    FY: list[sp.Symbol]
     #: base angles: (expression of the angle, S symbol, C symbol)
     angles: list[tuple[sp.Expr, sp.Symbol, sp.Symbol]]
-    joints: tuple[str, ...]                 # clearance joints
     ground_joints: tuple[str, ...]
-    #: per clearance joint: journal centre minus bearing centre and its rate
+    #: per contact (`events`): its offsets and their rates (`Element.finish`)
     gaps: list[tuple[sp.Expr, sp.Expr, sp.Expr, sp.Expr]]
     mass_matrix: sp.Matrix
     forcing: sp.Matrix
@@ -120,34 +92,25 @@ class Derivation:
     drive_moment: sp.Expr
     kinetic: sp.Expr
     potential: sp.Expr
-    #: d gap / dQ (2J x N_Q) and d gap / dt at fixed Q (2J,)
+    #: the loop closure's rates (the elements' `closure_rates`): d / dQ and d / dt at
+    #: fixed Q
     closure_jacobian: sp.Matrix
     closure_rate: sp.Matrix
     monitor: str | None
     extra: dict = field(default_factory=dict)
-    #: per clearance joint: the symbol of its friction force Ft on the journal along the
-    #: tangent t = (-n_y, n_x) (None: no friction), and the part of the slip velocity
-    #: from the bodies' rotations, omega_J R_J - omega_B R_B (None: no friction)
-    TQ: list = field(default_factory=list)
-    spins: list = field(default_factory=list)
-    #: per clearance joint: the symbols (TJ, TB) of the film's torques on the journal and
-    #: on the bearing about their centres (None: not lubricated), and the bodies' angular
-    #: velocities (omega_J, omega_B) (None: not lubricated)
-    TL: list = field(default_factory=list)
-    omegas: list = field(default_factory=list)
     #: per element kind (`elements.registry`, in its order) the element's share
-    #: (`Element.finish`): its contacts (events after the clearance joints'), their gaps
-    #: (which follow the clearance joints' in `gaps`), its loop closure and load symbols
+    #: (`Element.finish`): its contacts (the model's events, in the registry's order),
+    #: their gaps (in `gaps`), its loop closure and load symbols
     parts: dict = field(default_factory=dict)
 
     @property
     def events(self) -> list[str]:
-        """The contacts with a memory: the clearance joints, then the elements'."""
-        return [*self.joints, *(c for part in self.parts.values() for c in part.contacts)]
+        """The contacts with a memory: every element's, in the registry's order."""
+        return [c for part in self.parts.values() for c in part.contacts]
 
     @property
     def load_symbols(self) -> list:
-        """The elements' force symbols (state-dependent, as FX, FY)."""
+        """The elements' load symbols (state-dependent, each a force or a moment)."""
         return [s for part in self.parts.values() for s in part.symbols]
 
 
@@ -166,9 +129,6 @@ def derive(linkage: Linkage) -> Derivation:
     q = [me.dynamicsymbols(f"q{i}") for i in range(n)]
     u = [me.dynamicsymbols(f"u{i}") for i in range(n)]
     index = {c: i for i, c in enumerate(coords)}
-    J = len(linkage.clearance_joints)
-    FX = [sp.Symbol(f"FX{j}", real=True) for j in range(J)]
-    FY = [sp.Symbol(f"FY{j}", real=True) for j in range(J)]
     g = psyms["gravity"]
 
     # the drive angle: a plain symbol THETA in the positions (for the partial derivatives
@@ -270,51 +230,11 @@ def derive(linkage: Linkage) -> Derivation:
         bodies.append(me.RigidBody(f"body_{len(bodies)}", P, frame, mass[b.name],
                                    (me.inertia(frame, 0, 0, inertia[b.name]), P)))
         loads.append((P, -mass[b.name] * g * N.y))
-    gaps_t = []
     contact_loads = []       # (body, world position of the point, fx, fy)
-    for j, cj in enumerate(linkage.clearance_joints):
-        jr = world(cj.journal_body, local(cj.journal_body, cj.journal_point))
-        br = world(cj.bearing_body, local(cj.bearing_body, cj.bearing_point))
-        gaps_t.append((jr[0] - br[0], jr[1] - br[1]))
-        for body, xy, sign in ((cj.journal_body, jr, -1), (cj.bearing_body, br, 1)):
-            contact_loads.append((body, xy, sign * FX[j], sign * FY[j]))
-            if body != GROUND:
-                loads.append((mech_point(f"C_{j}_{body}", xy),
-                              sign * (FX[j] * N.x + FY[j] * N.y)))
-    # friction: Ft t on the journal at its contact point, -Ft t on the bearing at its; with
-    # the forces (FX, FY = Fn n - Ft t on the bearing) moved to the centres, the moments
-    # R_J Ft on the journal and -R_B Ft on the bearing about their centres remain
-    TQ, spin_t, torque_loads = [], [], []     # torque_loads: (body, moment about its centre)
-    for j, cj in enumerate(linkage.clearance_joints):
-        if not cj.has_friction:
-            TQ.append(None)
-            spin_t.append(None)
-            continue
-        TQ.append(sp.Symbol(f"TQ{j}", real=True))
-        rj, rb = psyms[f"{cj.name}.journal_radius"], psyms[f"{cj.name}.bearing_radius"]
-        spin_t.append(angle[cj.journal_body] * rj - angle[cj.bearing_body] * rb)
-        for body, tau in ((cj.journal_body, rj * TQ[j]), (cj.bearing_body, -rb * TQ[j])):
-            torque_loads.append((body, tau))
-            if body != GROUND:
-                loads.append((frames[body], tau * N.z))
-    # lubrication: the film's force on the journal is in FX, FY (moved to the bearing's
-    # centre on the bearing's side); its torques on the two bodies, the bearing's including
-    # that move, are TJ and TB
-    TL, omega_t = [], []
-    for j, cj in enumerate(linkage.clearance_joints):
-        if not cj.has_lubrication:
-            TL.append(None)
-            omega_t.append(None)
-            continue
-        TL.append((sp.Symbol(f"TJ{j}", real=True), sp.Symbol(f"TB{j}", real=True)))
-        omega_t.append((angle[cj.journal_body], angle[cj.bearing_body]))
-        for body, tau in ((cj.journal_body, TL[j][0]), (cj.bearing_body, TL[j][1])):
-            torque_loads.append((body, tau))
-            if body != GROUND:
-                loads.append((frames[body], tau * N.z))
+    torque_loads = []        # (body, moment about its centre)
     # the elements' loads (and their gaps, kept in their states)
-    ctx = SimpleNamespace(psyms=psyms, world=world, local=local, rot=rot, frames=frames,
-                          mech_point=mech_point, N=N, loads=loads,
+    ctx = SimpleNamespace(psyms=psyms, world=world, local=local, rot=rot, angle=angle,
+                          frames=frames, mech_point=mech_point, N=N, loads=loads,
                           contact_loads=contact_loads, torque_loads=torque_loads)
     states = {el.kind: el.add_loads(linkage, ctx) for el in ELEMENTS}
     kane = me.KanesMethod(N, q_ind=q, u_ind=u,
@@ -373,15 +293,8 @@ def derive(linkage: Linkage) -> Derivation:
     def dt(expr):
         return sp.diff(timed(expr), t)
 
-    gaps = []
-    for ex, ey in gaps_t:
-        gaps.append(tuple(finish(v) for v in (ex, ey, dt(ex), dt(ey))))
     parts = {el.kind: el.finish(states[el.kind], finish, dt) for el in ELEMENTS}
-    for part in parts.values():
-        gaps += part.gaps
-    # the slip velocity's rotation part: d/dt of (angle_J R_J - angle_B R_B)
-    spins = [None if e is None else finish(dt(e)) for e in spin_t]
-    omegas = [None if e is None else tuple(finish(dt(a)) for a in e) for e in omega_t]
+    gaps = [gap for part in parts.values() for gap in part.gaps]
 
     # ---- outputs: Newton on the subtree below each ground joint
     acc = {}
@@ -390,7 +303,6 @@ def derive(linkage: Linkage) -> Derivation:
         acc[b.name] = (dt(dt(x)), dt(dt(y)))
     ground_joints = linkage.ground_joints()
     ideal_by_name = {jt.name: jt for jt in linkage.joints}
-    clear_by_name = {cj.name: (j, cj) for j, cj in enumerate(linkage.clearance_joints)}
     reactions = []
     for name in ground_joints:
         if name in ideal_by_name:
@@ -406,10 +318,6 @@ def derive(linkage: Linkage) -> Derivation:
                     rx -= fx
                     ry -= fy
             reactions.append((finish(-rx), finish(-ry)))
-        elif name in clear_by_name:
-            j, cj = clear_by_name[name]
-            sign = -1 if cj.journal_body == GROUND else 1
-            reactions.append((sign * FX[j], sign * FY[j]))
         else:                                   # an element's joint to the ground
             reactions.append(next(r for r in (el.ground_reaction(states[el.kind], name, finish)
                                               for el in ELEMENTS) if r is not None))
@@ -438,19 +346,16 @@ def derive(linkage: Linkage) -> Derivation:
         potential += mass[b.name] * g * y
     # the gaps' rates are linear in U: d gap / dQ are their coefficients, d gap / dt at
     # fixed q the rest
-    rates = sp.Matrix([v for gap in gaps[:len(gaps_t)] for v in gap[2:]]
-                      + [v for part in parts.values() for v in part.closure_rates])
+    rates = sp.Matrix([v for part in parts.values() for v in part.closure_rates])
     jac = rates.jacobian(U)
     rate = rates.xreplace({Ui: 0 for Ui in U})
     return Derivation(
-        parameters=names, psyms=psyms, coordinates=coords, t=t, Q=Q, U=U, A=A, FX=FX, FY=FY,
-        angles=angles, joints=tuple(cj.name for cj in linkage.clearance_joints),
-        ground_joints=ground_joints, gaps=gaps,
+        parameters=names, psyms=psyms, coordinates=coords, t=t, Q=Q, U=U, A=A,
+        angles=angles, ground_joints=ground_joints, gaps=gaps,
         mass_matrix=mass_matrix.applyfunc(finish), forcing=forcing.applyfunc(finish),
         reactions=reactions, drive_moment=finish(moment), kinetic=finish(kinetic),
         potential=finish(potential), closure_jacobian=jac, closure_rate=rate,
-        monitor=linkage.monitor_joint, TQ=TQ, spins=spins, TL=TL, omegas=omegas,
-        parts=parts)
+        monitor=linkage.monitor_joint, parts=parts)
 
 
 def _reduce_trig(expr, ideal, gens):
@@ -488,15 +393,13 @@ def specialise(d: Derivation, zeros) -> Derivation:
 
     return Derivation(
         parameters=d.parameters, psyms=d.psyms, coordinates=d.coordinates, t=d.t, Q=d.Q,
-        U=d.U, A=d.A, FX=d.FX, FY=d.FY, angles=[(sub(a), S, C) for a, S, C in angles],
-        joints=d.joints, ground_joints=d.ground_joints,
+        U=d.U, A=d.A, angles=[(sub(a), S, C) for a, S, C in angles],
+        ground_joints=d.ground_joints,
         gaps=[tuple(sub(e) for e in g) for g in d.gaps],
         mass_matrix=d.mass_matrix.applyfunc(sub), forcing=d.forcing.applyfunc(sub),
         reactions=[tuple(sub(e) for e in r) for r in d.reactions],
         drive_moment=sub(d.drive_moment), kinetic=sub(d.kinetic), potential=sub(d.potential),
         closure_jacobian=d.closure_jacobian.applyfunc(sub),
         closure_rate=d.closure_rate.applyfunc(sub), monitor=d.monitor, extra=dict(d.extra),
-        TQ=d.TQ, spins=[sub(e) for e in d.spins], TL=d.TL,
-        omegas=[None if e is None else tuple(sub(a) for a in e) for e in d.omegas],
         parts={el.kind: el.specialise(d.parts[el.kind], sub) for el in ELEMENTS
                if el.kind in d.parts})

@@ -12,7 +12,6 @@ are read; the constants after them are not). The expressions come from `derive.d
 
 from __future__ import annotations
 
-import math
 import threading
 
 from ..elements.registry import ELEMENTS
@@ -45,7 +44,7 @@ def _energy(linkage: Linkage):
 
     d = derive(linkage)
     params = list(d.parameters)
-    n, J = len(d.Q), len(d.joints)
+    n = len(d.Q)
     psyms = [d.psyms[name] for name in params]
     angles = {S: sp.sin(a) for a, S, _ in d.angles} | {C: sp.cos(a) for a, _, C in d.angles}
     args = [d.t, *d.Q, *d.U, *psyms]
@@ -54,25 +53,17 @@ def _energy(linkage: Linkage):
         return sp.lambdify(args, sp.sympify(expr).xreplace(angles), modules="math")
 
     body = numeric(d.kinetic + d.potential)
-    # per clearance joint the journal's offset (x, y); per element contact its offsets
-    offset_x = [numeric(g[0]) for g in d.gaps[:J]]
-    offset_y = [numeric(g[1]) for g in d.gaps]
+    # per contact its offsets (x, y)
+    offsets = ([numeric(g[0]) for g in d.gaps], [numeric(g[1]) for g in d.gaps])
     mem_start = params.index(f"{d.events[0]}.mode")
-    joints = [(params.index(f"{name}.clearance"), params.index(f"{name}.stiffness"))
-              for name in d.joints]
-    elements, first = [], J
+    elements, first = [], 0
     for el in ELEMENTS:
-        elements.append(el.contact_energy(d.parts[el.kind], params, first, offset_y))
+        elements.append(el.contact_energy(d.parts[el.kind], params, first, offsets))
         first += len(d.parts[el.kind].contacts)
 
     def energy(t, y, p):
         a = [float(t), *(float(v) for v in y[:2 * n]), *(float(v) for v in p[:len(params)])]
         e = body(*a)
-        for j, (ic, ik) in enumerate(joints):
-            if p[mem_start + 2 * j] > 0.5:
-                delta = math.hypot(offset_x[j](*a), offset_y[j](*a)) - p[ic]
-                if delta > 0.0:
-                    e += p[ik] * delta * delta * math.sqrt(delta) / 2.5
         for contact_energy in elements:
             e += contact_energy(a, p, mem_start)
         return e

@@ -33,7 +33,6 @@ from types import SimpleNamespace
 import sympy as sp
 
 from ..elements.registry import ELEMENTS
-from ..laws.registry import FRICTION_SLOTS
 from .derive import Derivation
 
 __all__ = ["jacobian_plan", "emit_body", "z_columns"]
@@ -69,13 +68,14 @@ def _gradient(d: Derivation, expr: sp.Expr, cols: list) -> dict[int, sp.Expr]:
     return out
 
 
-def jacobian_plan(w, d: Derivation, out_columns: list[str]) -> SimpleNamespace:
+def jacobian_plan(w, d: Derivation, out_columns: list[str], parts: dict) -> SimpleNamespace:
     """The stages of the kernels `jacobian` (every column of z) and `tangent` (the
     directional derivatives along given seeds dz, from the same derivative expressions),
     one plan printed in python (`jacobian_context`) and in C (`cjacobians`): each stage
     (exprs, names[, post]) or a list of lines in python's syntax (assignments, `for` and
-    `if` blocks, calls of the elements' rows), and the layout."""
-    n, J = len(d.Q), len(d.joints)
+    `if` blocks, calls of the elements' rows), and the layout. `parts`: the elements' plans
+    of the model evaluation (`Element.plan`)."""
+    n = len(d.Q)
     if d.t not in w.vars:
         # time enters the derivatives explicitly (d angle / d speed = t): not a constant
         w.vars.append(d.t)
@@ -85,23 +85,11 @@ def jacobian_plan(w, d: Derivation, out_columns: list[str]) -> SimpleNamespace:
     n_out = len(out_columns)
     row = {c: i for i, c in enumerate(out_columns)}
     extra = {}
-    for j in range(J):
-        for k, what in enumerate(("exd", "eyd", "fx", "fy")):
-            extra[(what, j)] = n_out + 4 * j + k
-    fric = [j for j in range(J) if d.TQ[j] is not None]
-    for k, j in enumerate(fric):
-        extra[("spin", j)] = n_out + 4 * J + k
-    # per lubricated joint: the bodies' angular velocities and the film's torque on the
-    # bearing (its force and its torque on the journal are output rows)
-    lub = [j for j in range(J) if d.TL and d.TL[j] is not None]
-    for k, j in enumerate(lub):
-        for m, what in enumerate(("wj", "wb", "tb")):
-            extra[(what, j)] = n_out + 4 * J + len(fric) + 3 * k + m
-    n_rows = n_out + 4 * J + len(fric) + 3 * len(lub)
-    # the elements' rows after the clearance joints' (their contacts numbered from J)
+    n_rows = n_out
+    # the elements' rows after the outputs (each element's contacts numbered from `first`)
     first = {}
     for el in ELEMENTS:
-        first[el.kind] = J + sum(len(d.parts[k].contacts) for k in first)
+        first[el.kind] = sum(len(d.parts[k].contacts) for k in first)
         rows = el.jacobian_rows(d.parts[el.kind], first[el.kind], n_rows)
         extra.update(rows)
         n_rows += len(rows)
@@ -165,7 +153,8 @@ def jacobian_plan(w, d: Derivation, out_columns: list[str]) -> SimpleNamespace:
             return out + (tail or [])
         return post
 
-    # ---- the gaps of the clearance joints (and the spins): values and partials
+    # ---- the contacts' gaps (and what the elements compute beside them): values and
+    # partials
     gap_items = []          # (value name or None, row, expression, gradient)
     events = d.events
     for j, gap in enumerate(d.gaps):
@@ -173,13 +162,9 @@ def jacobian_plan(w, d: Derivation, out_columns: list[str]) -> SimpleNamespace:
                  extra[("exd", j)], extra[("eyd", j)]]
         for c, e in enumerate(gap):
             gap_items.append((f"gv{j}_{c}", rows4[c], w.split(e), grad(e)))
-    for j in fric:
-        gap_items.append((f"gv{j}_4", extra[("spin", j)], w.split(d.spins[j]),
-                          grad(d.spins[j])))
-    for j in lub:
-        for m, what in enumerate(("wj", "wb")):
-            gap_items.append((f"gv{j}_{5 + m}", extra[(what, j)], w.split(d.omegas[j][m]),
-                              grad(d.omegas[j][m])))
+    for el in ELEMENTS:
+        for _, name, key, e in parts[el.kind].gap_extras:
+            gap_items.append((name, extra[key], w.split(e), grad(e)))
     J_stages, T_stages = [], []
     gx, gn, tx, tn, trows = [], [], [], [], []
     for name, r, e, g in gap_items:
@@ -198,55 +183,6 @@ def jacobian_plan(w, d: Derivation, out_columns: list[str]) -> SimpleNamespace:
 
     # ---- the contact (and friction) forces: one place each, sens_runtime
     jlines, tlines = [], []
-    for j, name in enumerate(d.joints):
-        rows = [row[f"{name}.{f}"] for f in ("contact_force", "penetration",
-                                             "penetration_rate", "ecc_x", "ecc_y")]
-        rows += [extra[(what, j)] for what in ("exd", "eyd", "fx", "fy")]
-        zc = [pcol[f"{name}.{f}"] for f in ("clearance", "stiffness", "restitution",
-                                            "impact_velocity")]
-        pv = [f"p[{pcol[f'{name}.{f}'] - 1 - 2 * n}]" for f in (
-            "clearance", "mode", "impact_velocity", "stiffness", "restitution",
-            "contact_model")]
-        args = (f"gv{j}_0, gv{j}_1, gv{j}_2, gv{j}_3, "
-                + ", ".join(str(v) for v in rows + zc) + ", " + ", ".join(pv) + ")")
-        jlines.append(f"{d.FX[j]}, {d.FY[j]} = contact_jacobian(jac, {stride}, {nz}, "
-                      + args)
-        tlines.append(f"{d.FX[j]}, {d.FY[j]} = contact_tangent(out, ts, nd, dz, {nz}, "
-                      + args)
-        if j in fric:
-            frows = [row[f"{name}.{f}"] for f in ("ecc_x", "ecc_y")] + [
-                extra[(what, j)] for what in ("exd", "eyd", "spin")] + [
-                row[f"{name}.contact_force"], extra[("fx", j)], extra[("fy", j)]] + [
-                row[f"{name}.{f}"] for f in ("friction_force", "slip_velocity",
-                                             "friction_power")]
-            comma = "," if len(FRICTION_SLOTS) == 1 else ""
-            fc = ", ".join(f"{pcol[f'{name}.{f}']}" for f in FRICTION_SLOTS) + comma
-            fv = ", ".join(f"p[{pcol[f'{name}.{f}'] - 1 - 2 * n}]"
-                           for f in FRICTION_SLOTS) + comma
-            law = f"p[{pcol[f'{name}.friction_law'] - 1 - 2 * n}]"
-            args = (f"gv{j}_4, " + ", ".join(str(v) for v in frows)
-                    + f", ({fc}), {law}, ({fv}))")
-            jlines.append(f"{d.FX[j]}, {d.FY[j]}, {d.TQ[j]} = friction_jacobian(jac, "
-                          f"{stride}, {nz}, " + args)
-            tlines.append(f"{d.FX[j]}, {d.FY[j]}, {d.TQ[j]} = friction_tangent(out, ts, nd, "
-                          f"dz, {nz}, " + args)
-        if j in lub:
-            lrows = [row[f"{name}.{f}"] for f in ("ecc_x", "ecc_y")] + [
-                extra[(what, j)] for what in ("exd", "eyd", "wj", "wb", "fx", "fy")] + [
-                row[f"{name}.{f}"] for f in ("film_force_x", "film_force_y", "film_torque")] + [
-                extra[("tb", j)], row[f"{name}.film_power"]]
-            fields = ("journal_radius", "clearance", "bearing_length", "viscosity",
-                      "film_fade_start", "film_fade_end")
-            lcols = [pcol[f"{name}.{f}"] for f in fields]
-            lvals = [f"p[{pcol[f'{name}.{f}'] - 1 - 2 * n}]" for f in (
-                *fields[:4], "lubrication", *fields[4:])]
-            args = ", ".join([f"gv{j}_5", f"gv{j}_6"] + [str(v) for v in lrows + lcols
-                                                            + lvals]) + ")"
-            TJ, TB = d.TL[j]
-            jlines.append(f"{d.FX[j]}, {d.FY[j]}, {TJ}, {TB} = film_jacobian(jac, {stride}, "
-                          f"{nz}, " + args)
-            tlines.append(f"{d.FX[j]}, {d.FY[j]}, {TJ}, {TB} = film_tangent(out, ts, nd, dz, "
-                          f"{nz}, " + args)
     ctx = SimpleNamespace(row=row, extra=extra, pcol=pcol, n=n, stride=stride, nz=nz)
     for el in ELEMENTS:
         jl, tl = el.jacobian_lines(d.parts[el.kind], first[el.kind], ctx)
@@ -274,15 +210,7 @@ def jacobian_plan(w, d: Derivation, out_columns: list[str]) -> SimpleNamespace:
     acc_rows = [row[f"{c}.acc"] for c in d.coordinates]
     rx, rn, trn = [], [], []
     rgrad = []
-    loads = []              # (symbol, its row, coefficient name stem, joint)
-    for j in range(J):
-        loads.append((d.FX[j], extra[("fx", j)], "rfx", j))
-        loads.append((d.FY[j], extra[("fy", j)], "rfy", j))
-        if j in fric:
-            loads.append((d.TQ[j], row[f"{d.joints[j]}.friction_force"], "rtq", j))
-        if j in lub:
-            loads.append((d.TL[j][0], row[f"{d.joints[j]}.film_torque"], "rtj", j))
-            loads.append((d.TL[j][1], extra[("tb", j)], "rtb", j))
+    loads = []              # (symbol, its row, coefficient name stem, contact)
     for el in ELEMENTS:
         loads += el.force_loads(d.parts[el.kind], first[el.kind], row, extra)
     for i in range(n):
@@ -362,21 +290,6 @@ def jacobian_plan(w, d: Derivation, out_columns: list[str]) -> SimpleNamespace:
                 tonames.append(f"oa_{m}_{i}")
                 terms.append(f"oa_{m}_{i} * jac[{acc_rows[i] * stride} + col]")
                 tterms.append(f"oa_{m}_{i} * out[{acc_rows[i]} * ts + d]")
-        for j in range(J):
-            lds = [("fx", d.FX[j], extra[("fx", j)]), ("fy", d.FY[j], extra[("fy", j)])]
-            if j in fric:
-                lds.append(("tq", d.TQ[j], row[f"{d.joints[j]}.friction_force"]))
-            if j in lub:
-                lds.append(("tj", d.TL[j][0], row[f"{d.joints[j]}.film_torque"]))
-                lds.append(("tb", d.TL[j][1], extra[("tb", j)]))
-            for what, F, frow in lds:
-                c = sp.expand(sp.diff(e, F))
-                if c != 0:
-                    oexprs.append(w.split(c))
-                    onames.append(f"o{what}_{m}_{j}")
-                    tonames.append(f"o{what}_{m}_{j}")
-                    terms.append(f"o{what}_{m}_{j} * jac[{frow * stride} + col]")
-                    tterms.append(f"o{what}_{m}_{j} * out[{frow} * ts + d]")
         for j, lds in (item for el in ELEMENTS for item in el.output_loads(
                 d.parts[el.kind], first[el.kind], row, extra)):
             for what, F, frow in lds:
@@ -401,9 +314,7 @@ def jacobian_plan(w, d: Derivation, out_columns: list[str]) -> SimpleNamespace:
         tshake.append(f"    out[{tgt} * ts + col] = "
                       + (" + ".join(f"out[{r} * ts + col]" for r in rs) or "0.0"))
 
-    extra_syms = {*d.A, *d.FX, *d.FY, *(d.TQ[j] for j in fric),
-                  *(s for j in lub for s in d.TL[j]),
-                  *d.load_symbols}
+    extra_syms = {*d.A, *d.load_symbols}
 
     oloop = ([f"for col in range({nz}):"] + oloop) if oloop else []
     return SimpleNamespace(

@@ -17,8 +17,7 @@ from types import SimpleNamespace
 import sympy as sp
 
 from ..elements.registry import ELEMENTS
-from ..laws.registry import FRICTION_SLOTS
-from .derive import FRICTION_FIELDS, LUBRICATION_FIELDS, Derivation
+from .derive import Derivation
 
 __all__ = ["Derivation"]
 
@@ -65,9 +64,7 @@ class _Writer:
             (self.moving if a.free_symbols - set(self.pindex) else self.fixed).append(
                 (a, S, C))
         self.vars = [s for _, S, C in self.moving for s in (S, C)]
-        self.vars += [*d.Q, *d.U, *d.A, *d.FX, *d.FY, *(s for s in d.TQ if s is not None)]
-        self.vars += [s for pair in d.TL if pair is not None for s in pair]
-        self.vars += d.load_symbols
+        self.vars += [*d.Q, *d.U, *d.A, *d.load_symbols]
         self.constants: dict[sp.Expr, sp.Symbol] = {}
 
     # ---- constants
@@ -131,61 +128,28 @@ def _plan(d: Derivation) -> SimpleNamespace:
     constants numbered first, in this order, by every printer), and the indices into p
     they read: the one plan the python and the C printers write out."""
     w = _Writer(d)
-    n, J, G = len(d.Q), len(d.joints), len(d.ground_joints)
-    # the events: the clearance joints, then the elements' contacts
+    n, G = len(d.Q), len(d.ground_joints)
+    # the events: every element's contacts, in the registry's order
     events = d.events
     E = len(events)
     params = list(d.parameters)
     mem_start = params.index(f"{events[0]}.mode")
-    contact = [{f: params.index(f"{name}.{f}") for f in
-                ("clearance", "stiffness", "restitution", "contact_model",
-                 "impact_velocity_floor")} for name in d.joints]
 
     # ---- the stages of the model evaluation
     gap_names = [[f"ex{j}", f"ey{j}", f"exd{j}", f"eyd{j}"] for j in range(E)]
     gap_exprs = [[w.split(e) for e in gap] for gap in d.gaps]
     gaps_stage = ([e for g in gap_exprs for e in g], [nm for g in gap_names for nm in g])
-    # friction (joints with a law): the rotation part of the slip velocity beside the gaps,
-    # the friction stage in place of the contact stage
-    fric = [j for j in range(J) if d.TQ[j] is not None]
-    fpar = {j: {f: params.index(f"{d.joints[j]}.{f}") for f in FRICTION_FIELDS} for j in fric}
-    gaps_stage[0].extend(w.split(d.spins[j]) for j in fric)
-    gaps_stage[1].extend(f"sp{j}" for j in fric)
-    # lubrication (joints with a film): the bodies' angular velocities beside the gaps, the
-    # lubricated stage (dry contact plus the faded film) in place of the contact stage
-    lub = [j for j in range(J) if d.TL and d.TL[j] is not None]
-    lpar = {j: {f: params.index(f"{d.joints[j]}.{f}") for f in LUBRICATION_FIELDS}
-            for j in lub}
-    for j in lub:
-        gaps_stage[0].extend(w.split(e) for e in d.omegas[j])
-        gaps_stage[1].extend([f"wj{j}", f"wb{j}"])
-    contact_lines = []
-    for j, c in enumerate(contact):
-        law = (f"p[{c['clearance']}], p[{mem_start + 2 * j}], p[{mem_start + 2 * j + 1}], "
-               f"p[{c['stiffness']}], p[{c['restitution']}], p[{c['contact_model']}]")
-        if j in lub:
-            lp = lpar[j]
-            contact_lines.append(
-                f"F{j}, d{j}, dd{j}, {d.FX[j]}, {d.FY[j]}, {d.TL[j][0]}, {d.TL[j][1]}, "
-                f"ffx{j}, ffy{j}, fpw{j} = lubricated_stage(ex{j}, ey{j}, exd{j}, eyd{j}, "
-                f"wj{j}, wb{j}, {law}, "
-                + ", ".join(f"p[{lp[f]}]" for f in LUBRICATION_FIELDS) + ")")
-        elif j in fric:
-            fp = fpar[j]
-            contact_lines.append(
-                f"F{j}, d{j}, dd{j}, {d.FX[j]}, {d.FY[j]}, {d.TQ[j]}, vt{j} = friction_stage("
-                f"ex{j}, ey{j}, exd{j}, eyd{j}, sp{j}, {law}, p[{fp['friction_law']}], ("
-                + ", ".join(f"p[{fp[f]}]" for f in FRICTION_SLOTS)
-                + ("," if len(FRICTION_SLOTS) == 1 else "") + "))")
-        else:
-            contact_lines.append(f"F{j}, d{j}, dd{j}, {d.FX[j]}, {d.FY[j]} = contact_stage("
-                                 f"ex{j}, ey{j}, exd{j}, eyd{j}, {law})")
-    # the elements' contact stages, each element's contacts numbered from `first`
-    parts, first = {}, J
+    # the elements' contact stages, each element's contacts numbered from `first`, and what
+    # they compute beside the gaps (a revolute joint's slip and angular velocities)
+    parts, first, contact_lines = {}, 0, []
     for el in ELEMENTS:
         parts[el.kind] = el.plan(d.parts[el.kind], params, mem_start, first)
         contact_lines += parts[el.kind].lines
         first += len(d.parts[el.kind].contacts)
+    for el in ELEMENTS:
+        for name, _, _, e in parts[el.kind].gap_extras:
+            gaps_stage[0].append(w.split(e))
+            gaps_stage[1].append(name)
     M = [[w.split(d.mass_matrix[i, k]) for k in range(n)] for i in range(n)]
     f = [w.split(d.forcing[i]) for i in range(n)]
     fsyms = [sp.Symbol(f"f{i}", real=True) for i in range(n)]
@@ -215,32 +179,22 @@ def _plan(d: Derivation) -> SimpleNamespace:
     results += [" + ".join(f"r{g}x" for g in range(G)) or "0.0",
                 " + ".join(f"r{g}y" for g in range(G)) or "0.0", *moment]
     results += [f"A{i}" for i in range(n)]
-    for j in fric:
-        results += [str(d.TQ[j]), f"vt{j}", f"-{d.TQ[j]} * vt{j}"]
-    for j in lub:
-        results += [f"ffx{j}", f"ffy{j}", str(d.TL[j][0]), f"fpw{j}"]
     for el in ELEMENTS:
         results += parts[el.kind].results
     return SimpleNamespace(**locals())
 
 
-def _out_columns(d: Derivation, events: list, fric: list, lub: list, parts: dict,
-                 driven: bool) -> tuple[list[str], int]:
-    """(the columns of the outputs, the column of the monitored value's x)."""
+def _out_columns(d: Derivation, parts: dict, driven: bool) -> tuple[list[str], int]:
+    """(the columns of the outputs, the column of the monitored value's x); `parts`: the
+    elements' plans."""
     out_columns = []
-    for j in events:
+    for j in d.events:
         out_columns += [f"{j}.contact_force", f"{j}.penetration", f"{j}.penetration_rate",
                         f"{j}.ecc_x", f"{j}.ecc_y"]
     for gname in d.ground_joints:
         out_columns += [f"{gname}.reaction_x", f"{gname}.reaction_y"]
     out_columns += ["shaking_x", "shaking_y", *(["drive_moment"] if driven else [])]
     out_columns += [f"{c}.acc" for c in d.coordinates]
-    for j in fric:
-        out_columns += [f"{d.joints[j]}.{f}" for f in ("friction_force", "slip_velocity",
-                                                        "friction_power")]
-    for j in lub:
-        out_columns += [f"{d.joints[j]}.{f}" for f in ("film_force_x", "film_force_y",
-                                                        "film_torque", "film_power")]
     for el in ELEMENTS:
         out_columns += el.out_columns(d.parts[el.kind], parts[el.kind])
     if d.monitor is None:

@@ -29,8 +29,6 @@ import numpy as np
 
 from ..elements.registry import ELEMENTS
 from ..generate.sens_runtime import fill_seed_work, work_size
-from ..laws.forces import stiffness_eq9_partials
-from ..laws.lubrication.partials import check_partials
 from ..model.linkage import Linkage
 from .linkage_model import (
     DEFAULT_MAX_STEPS,
@@ -57,9 +55,6 @@ _THIS = sys.modules[__name__]
 #: method of the compiled integrator for the sensitivity equations (as the paper case's)
 DDM_INTEGRATOR = "dop853"
 
-_STIFFNESS_FIELDS = ("bearing_radius", "journal_radius", "youngs_modulus", "poisson_ratio",
-                     "contact_stiffness")
-
 
 def chain(linkage: Linkage, model, names) -> list[dict[int, float]]:
     """Per parameter name, the nonzero entries {z column: d p / d b} of the chain from the
@@ -68,7 +63,6 @@ def chain(linkage: Linkage, model, names) -> list[dict[int, float]]:
     `initial_sensitivities`)."""
     pidx = {name: i for i, name in enumerate(model.PARAMETERS)}
     off = 1 + 2 * model.N_Q
-    joints = {j.name: j for j in linkage.clearance_joints}
     out = []
     for name in names:
         head, _, field = name.rpartition(".")
@@ -76,27 +70,9 @@ def chain(linkage: Linkage, model, names) -> list[dict[int, float]]:
         if name in pidx:
             # a p entry of its own (with friction the radii are too: the contact points)
             entries[off + pidx[name]] = 1.0
-        if head in joints and field in _STIFFNESS_FIELDS:
-            cj = joints[head]
-            _, d_rj, d_rb, d_e, d_nu = stiffness_eq9_partials(
-                cj.journal_radius, cj.bearing_radius, cj.youngs_modulus, cj.poisson_ratio)
-            derived = cj.contact_stiffness is None
-            k_col = off + pidx[f"{head}.stiffness"]
-            c_col = off + pidx[f"{head}.clearance"]
-            if field == "contact_stiffness":
-                entries[k_col] = 1.0
-            elif field == "bearing_radius":
-                entries[c_col] = 1.0
-                if derived:
-                    entries[k_col] = d_rb
-            elif field == "journal_radius":
-                entries[c_col] = -1.0
-                if derived:
-                    entries[k_col] = d_rj
-            elif derived:
-                entries[k_col] = d_e if field == "youngs_modulus" else d_nu
-        elif via := {n: v for el in ELEMENTS for n, v in el.chain(linkage, head, field).items()}:
-            # a field of an element's joint that reaches p under another name
+        if via := {n: v for el in ELEMENTS for n, v in el.chain(linkage, head, field).items()}:
+            # a field of an element's joint that reaches p under another name (a clearance
+            # joint's radii: its clearance and the Eq. 9 stiffness)
             entries.update({off + pidx[n]: v for n, v in via.items()})
         elif name not in pidx:
             raise AssertionError(f"no chain for parameter {name!r}")
@@ -105,11 +81,9 @@ def chain(linkage: Linkage, model, names) -> list[dict[int, float]]:
 
 
 def floor_names(linkage: Linkage) -> list[str]:
-    """Per contact of the generated model (the clearance joints, then the elements'
-    contacts) the name of its impact-velocity floor (an element's contact's is its
-    joint's)."""
-    return ([f"{j.name}.impact_velocity_floor" for j in linkage.clearance_joints]
-            + [f for el in ELEMENTS for f in el.floor_names(linkage)])
+    """Per contact of the generated model (the elements' contacts, in the registry's
+    order) the name of its impact-velocity floor (a contact's is its joint's)."""
+    return [f for el in ELEMENTS for f in el.floor_names(linkage)]
 
 
 def _memory_sensitivities(linkage: Linkage, model, names) -> np.ndarray:
@@ -147,44 +121,12 @@ def initial_sensitivities(linkage: Linkage, model, p, y0, entries, t0: float = 0
     along the chains `entries`: the closure e(t0, q, p) = 0 and its rate edot(t0, q, qdot, p)
     = 0 differentiated (least squares where the closure is not square, as the assembly).
     A free linkage holds the coordinates and rates its `Initial` gives: theirs are zero.
-    An element's joint closes through its own rows (`Element.closure_rows`: a
-    translational joint's slider offset and tilt)."""
-    if any(el.joints(linkage) for el in ELEMENTS) or linkage.drive is None:
-        return _held_initial_sensitivities(linkage, model, p, y0, entries, t0)
-    n = model.N_Q
-    jac = model.jacobian_matrix(t0, y0, p, False)
-    rows = []
-    for j in model.JOINTS:
-        rows += [model.OUT_COLUMNS.index(f"{j}.ecc_x"), model.OUT_COLUMNS.index(f"{j}.ecc_y")]
-    rate_rows = []
-    for j in model.JOINTS:
-        rate_rows += [model.JAC_EXTRA_ROWS[f"exd:{j}"], model.JAC_EXTRA_ROWS[f"eyd:{j}"]]
-    e_q = jac[rows, 1:1 + n]
-    ed_q = jac[rate_rows, 1:1 + n]
-    ed_u = jac[rate_rows, 1 + n:1 + 2 * n]
-    # the chains as columns (every direction at once: one least-squares solve per level)
-    d = np.zeros((jac.shape[1], len(entries)))
-    for k, ent in enumerate(entries):
-        for c, v in ent.items():
-            d[c, k] += v
-    e_b = jac[rows] @ d
-    ed_b = jac[rate_rows] @ d
-    dq = -np.linalg.lstsq(e_q, e_b, rcond=None)[0]
-    du = -np.linalg.lstsq(ed_u, ed_q @ dq + ed_b, rcond=None)[0]
-    return np.hstack([dq.T, du.T])
-
-
-def _held_initial_sensitivities(linkage: Linkage, model, p, y0, entries, t0: float):
-    """`initial_sensitivities` with the elements' closure rows and the free linkage's held
-    coordinates and rates."""
+    Each joint closes through its element's rows (`Element.closure_rows`: a clearance
+    joint's journal centred, a translational joint's slider offset and tilt)."""
     n = model.N_Q
     jac = model.jacobian_matrix(t0, y0, p, False)
     out, extra = model.OUT_COLUMNS.index, model.JAC_EXTRA_ROWS
     pos, rate = [], []              # closure rows: {Jacobian row: weight}
-    for j in linkage.clearance_joints:
-        for xy in "xy":
-            pos.append({out(f"{j.name}.ecc_{xy}"): 1.0})
-            rate.append({extra[f"e{xy}d:{j.name}"]: 1.0})
     for el in ELEMENTS:
         el_pos, el_rate = el.closure_rows(linkage, out, extra)
         pos += el_pos
@@ -506,9 +448,8 @@ def ddm_run(linkage: Linkage, model, p0, y_state, directions, *, scale, rtol, at
     from ..generate.profiles import refuse_sensitivity_runs
 
     refuse_sensitivity_runs(linkage)
-    for j in linkage.clearance_joints:
-        if j.has_lubrication:
-            check_partials(f"clearance joint {j.name!r}", j.lubrication)
+    for el in ELEMENTS:
+        el.sensitivity_check(linkage)
     zeros = set(getattr(model, "ZERO_PARAMETERS", ()))
     along = sorted({n for d in directions for n, v in d.items() if v != 0.0 and n in zeros})
     if along:
@@ -763,17 +704,17 @@ def fd_step(linkage: Linkage, name: str, relative: float) -> float:
     relative to the clearance, zero-valued coordinates relative to the length scale, a zero
     angle relative to 1 rad, zero gravity relative to 9.81 m/s^2. On the paper's case a
     field of its table (`mechanism.FIELD_PATHS`) is valued as the field (its derived value
-    where None)."""
+    where None), a radius of its one clearance joint."""
     from ..model.design import slider_crank_of
-    from ..model.mechanism import FIELD_PATHS, reference_value
+    from ..model.mechanism import FIELD_PATHS, PAPER_JOINT, reference_value
 
-    field = name.rpartition(".")[2]
+    head, _, field = name.rpartition(".")
     paper = slider_crank_of(linkage) if name in FIELD_PATHS else None
-    if field in ("bearing_radius", "journal_radius"):
-        # a bare field: the paper's one clearance joint
-        cj = next((j for j in linkage.clearance_joints if name.startswith(j.name + ".")),
-                  linkage.clearance_joints[0])
-        return relative * cj.clearance
+    for el in ELEMENTS:
+        # a bare field: the paper's one clearance joint's
+        scale = el.fd_scale(linkage, head or PAPER_JOINT, field)
+        if scale is not None:
+            return relative * scale
     value = abs(reference_value(paper, name) if paper is not None
                 else linkage.parameter_value(name))
     if value != 0.0:

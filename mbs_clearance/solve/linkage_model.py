@@ -16,10 +16,8 @@ import numpy as np
 
 from .._warnings import AccuracyWarning
 from ..elements.registry import ELEMENTS
-from ..laws.forces import CONTACT_MODELS, FRICTION_LAWS
-from ..laws.lubrication import MODELS as LUBRICATION_MODELS
-from ..laws.registry import FRICTION_SLOTS
-from ..model.linkage import GROUND, LUBRICATION_PARAMETERS, Linkage
+from ..laws.forces import CONTACT_MODELS
+from ..model.linkage import GROUND, Linkage
 from .diagnostics import contact_flags, floored_impacts
 from .problem import ModelLayout, Problem, Span
 from .settings import DEFAULT_MAX_STEPS, DEFAULT_RTOL, MAX_SAMPLES, RunSettings  # noqa: F401
@@ -60,23 +58,6 @@ def parameter_values(linkage: Linkage) -> dict[str, float]:
     for j in linkage.joints:
         if hasattr(j, "angle"):
             values[f"{j.name}.angle"] = j.angle
-    for j in linkage.clearance_joints:
-        values[f"{j.name}.clearance"] = j.clearance
-        values[f"{j.name}.stiffness"] = j.stiffness
-        values[f"{j.name}.restitution"] = j.restitution
-        values[f"{j.name}.contact_model"] = float(CONTACT_MODELS[j.contact_model])
-        values[f"{j.name}.impact_velocity_floor"] = j.impact_velocity_floor
-        values[f"{j.name}.mode"] = 0.0
-        values[f"{j.name}.impact_velocity"] = j.impact_velocity_floor
-        values[f"{j.name}.friction_law"] = float(FRICTION_LAWS[j.friction_law])
-        for f in FRICTION_SLOTS:
-            values[f"{j.name}.{f}"] = getattr(j, f)
-        values[f"{j.name}.journal_radius"] = j.journal_radius
-        values[f"{j.name}.bearing_radius"] = j.bearing_radius
-        # the film's model id (-1: dry, never read: a dry joint's model has no film)
-        values[f"{j.name}.lubrication"] = float(LUBRICATION_MODELS.get(j.lubrication, -1))
-        for f in LUBRICATION_PARAMETERS:
-            values[f"{j.name}.{f}"] = getattr(j, f)
     for el in ELEMENTS:
         values.update(el.parameter_values(linkage))
     if linkage.drive is not None:
@@ -344,7 +325,11 @@ def trajectory_from_run(linkage: Linkage, model, ts, ys, ms, p, stats, peaks, ou
                  else named["reactions"][model.MONITOR_JOINT])
     # (n, J, 2): per joint its x and y side by side
     ecc = take(*(f"{j}.ecc_{a}" for j in joints for a in "xy")).reshape(-1, J, 2)
-    contact_angle, slip_velocity = contact_series(linkage, model, ts, ys, p, ecc)
+    series = {}
+    for el in ELEMENTS:
+        series.update(el.trajectory_series(linkage, ecc, _SeriesContext(linkage, model, ts,
+                                                                        ys, p)))
+    contact_angle, slip_velocity = series["contact_angle"], series["slip_velocity"]
     # a free linkage has no drive: no drive moment, no drive work
     free = "drive_moment" not in col
     return Trajectory(
@@ -382,40 +367,30 @@ def eccentricity_rates(model, ts, ys, p, joints: int) -> np.ndarray:
     return out
 
 
-def contact_series(linkage: Linkage, model, ts, ys, p, ecc) -> tuple:
-    """(contact_angle, slip_velocity), each (n, J) over the J clearance joints at the
-    recorded steps (times ts, states ys, eccentricities ecc (n, >= J, 2)): the direction of
-    the eccentricity e in the bearing body's frame in [0, 2 pi) rad, and the journal
-    surface's tangential speed against the bearing's at the contact in m/s, e_dot . t +
-    omega_J R_J - omega_B R_B with t = (-n_y, n_x), n = e / |e| (as the friction law's; R_B at
-    the contact angle for a profiled bearing, as the compiled model takes it:
-    `profiles.effective_radius`). (None, None) for a linkage without clearance joints."""
-    from ..generate.profiles import body_angle_series, effective_radius
+class _SeriesContext:
+    """What an element's run series read (`Element.trajectory_series`), computed when first
+    asked: ``edot``(J) the first J contacts' eccentricity rates (n, J, 2), ``bodies`` the
+    bodies' angle and rate series, ``effective_radius`` of a profiled bearing."""
 
-    joints = linkage.clearance_joints
-    if not joints:
-        return None, None
-    ts = np.asarray(ts)
-    edot = eccentricity_rates(model, ts, ys, p, len(joints))
-    bodies = body_angle_series(linkage, model.COORDINATES, ts, ys)
-    angle, slip = np.empty((len(ts), len(joints))), np.empty((len(ts), len(joints)))
-    for j, cj in enumerate(joints):
-        ex, ey = ecc[:, j, 0], ecc[:, j, 1]
-        phi_b, w_b = bodies[cj.bearing_body]
-        w_j = bodies[cj.journal_body][1]
-        theta = np.mod(np.arctan2(ey, ex) - phi_b, 2.0 * np.pi)
-        theta[theta >= 2.0 * np.pi] = 0.0          # a round-off below 0 wraps to 2 pi
-        r = np.hypot(ex, ey)
-        centred = r <= 1e-300                      # the model's normal there: (-1, 0)
-        safe = np.where(centred, 1.0, r)
-        nx = np.where(centred, -1.0, ex / safe)
-        ny = np.where(centred, 0.0, ey / safe)
-        rb = (cj.bearing_radius if cj.bearing_profile is None else
-              effective_radius(cj.bearing_profile, cj.journal_radius, theta, r))
-        angle[:, j] = theta
-        slip[:, j] = (edot[:, j, 1] * nx - edot[:, j, 0] * ny + w_j * cj.journal_radius
-                      - w_b * rb)
-    return angle, slip
+    def __init__(self, linkage: Linkage, model, ts, ys, p):
+        self._args = (linkage, model, np.asarray(ts), ys, p)
+
+    def edot(self, joints: int) -> np.ndarray:
+        _, model, ts, ys, p = self._args
+        return eccentricity_rates(model, ts, ys, p, joints)
+
+    @property
+    def bodies(self) -> dict:
+        from ..generate.profiles import body_angle_series
+
+        linkage, model, ts, ys, _ = self._args
+        return body_angle_series(linkage, model.COORDINATES, ts, ys)
+
+    @staticmethod
+    def effective_radius(*args):
+        from ..generate.profiles import effective_radius
+
+        return effective_radius(*args)
 
 
 def named_series(model, ys, outs, columns) -> dict:

@@ -145,9 +145,7 @@ def derivation(case):
 
     d = derive(CASES[case])
     angles = {S: sp.sin(a) for a, S, _ in d.angles} | {C: sp.cos(a) for a, _, C in d.angles}
-    forces = [*d.FX, *d.FY, *(s for s in d.TQ if s is not None),
-              *(s for pair in d.TL if pair is not None for s in pair),
-              *d.load_symbols]
+    forces = d.load_symbols
     free = angles | dict.fromkeys(forces, 0.0)
     args = [d.t, *d.Q, *d.U, *(d.psyms[name] for name in d.parameters)]
 

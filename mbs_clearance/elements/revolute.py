@@ -1,0 +1,582 @@
+"""The revolute clearance joint (`model.linkage.ClearanceJoint`) as an element: a journal in
+a bearing with radial clearance, one contact per joint, with its variants per joint:
+
+- dry contact: the normal force of the contact law (`laws.forces.CONTACT_MODELS`) along the
+  line of centres at the penetration |e| - c (the stages ``contact_stage`` of
+  core/runtime.h, ``contact_jacobian`` / ``contact_tangent`` of core/jac_runtime.h);
+- friction (``friction_law``): the tangential force Ft at the contact point from the slip
+  velocity, its moments R_J Ft and -R_B Ft about the centres (``friction_stage``,
+  ``friction_jacobian`` / ``friction_tangent``);
+- oil film (``lubrication``): the film's force and its torques on the two bodies, faded out
+  near the wall where the dry contact takes over (``lubricated_stage``, ``film_jacobian`` /
+  ``film_tangent``). The film is a variant of this element, not an element of its own: it
+  replaces the joint's contact stage in place (its contact, memory and event stay the
+  joint's), so that a linkage whose joints are lubricated one by one keeps every joint's
+  contact at its place in the layout;
+- bearing profile (``bearing_profile``, a worn or shaped bearing): the profiled contact
+  stages of core/profile_runtime.h in place of the circular ones (C printer only).
+
+Its contacts come first in every layout (the registry's first element): per joint its
+contact fields, then the friction fields of the joints with a law, then the film's fields of
+the lubricated joints; the load symbols FX, FY (the force on the bearing, moved to its
+centre), TQ (friction) and TJ, TB (the film's torques).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..laws.forces import CONTACT_MODELS, FRICTION_LAWS, stiffness_eq9_partials
+from ..laws.lubrication import MODELS as LUBRICATION_MODELS
+from ..laws.registry import FRICTION_SLOTS
+from ..model.linkage import GROUND, LUBRICATION_PARAMETERS, ClearanceJoint
+from .base import CONTACT_FIELDS, PIECES, Element, friction_arguments
+
+__all__ = ["ELEMENT", "FRICTION_FIELDS", "LUBRICATION_FIELDS"]
+
+#: per clearance joint with friction, the entries of p read by the friction law and the
+#: tangential slip (the radii put the contact point on each body's surface)
+FRICTION_FIELDS = ("friction_law", *FRICTION_SLOTS, "journal_radius", "bearing_radius")
+
+#: per lubricated clearance joint, the entries of p read by the film (`laws.lubrication`)
+LUBRICATION_FIELDS = ("lubrication", "viscosity", "bearing_length", "journal_radius",
+                      "film_fade_start", "film_fade_end")
+
+#: the description's values that reach the stiffness (Eq. 9) or the clearance
+_STIFFNESS_FIELDS = ("bearing_radius", "journal_radius", "youngs_modulus", "poisson_ratio",
+                     "contact_stiffness")
+
+#: the output columns of a joint's friction and of its film
+_FRICTION_COLUMNS = ("friction_force", "slip_velocity", "friction_power")
+_FILM_COLUMNS = ("film_force_x", "film_force_y", "film_torque", "film_power")
+
+
+def _moments(ctx, moments) -> None:
+    """Each (body, moment about its centre) of `moments` into the derivation's loads."""
+    for body, tau in moments:
+        ctx.torque_loads.append((body, tau))
+        if body != GROUND:
+            ctx.loads.append((ctx.frames[body], tau * ctx.N.z))
+
+
+class RevoluteClearance(Element):
+    """The revolute clearance joint: a journal in a bearing, one contact each, with its
+    friction, oil film and bearing-profile variants."""
+
+    kind = "revolute"
+    description = ClearanceJoint
+    attribute = "clearance_joints"
+    #: the Exudyn backend still builds the revolute clearance joint itself (its contact,
+    #: friction, film, profile and sphere-contact variants)
+    pieces = tuple(p for p in PIECES if p != "Exudyn element")
+
+    # ---- description
+    def contact_names(self, linkage) -> list[str]:
+        """The joints themselves (one contact each)."""
+        return [j.name for j in self.joints(linkage)]
+
+    # ---- gap function and loads (generate.derive)
+    def parameter_names(self, linkage) -> list[str]:
+        """Per joint its contact fields, then per joint with friction `FRICTION_FIELDS`,
+        then per lubricated joint `LUBRICATION_FIELDS`."""
+        joints = self.joints(linkage)
+        names = [f"{j.name}.{f}" for j in joints for f in CONTACT_FIELDS]
+        names += [f"{j.name}.{f}" for j in joints if j.has_friction for f in FRICTION_FIELDS]
+        names += [f"{j.name}.{f}" for j in joints if j.has_lubrication
+                  for f in LUBRICATION_FIELDS]
+        return names
+
+    def memory_names(self, linkage) -> list[str]:
+        """Per joint its contact mode and impact velocity."""
+        return [f"{j.name}.{f}" for j in self.joints(linkage)
+                for f in ("mode", "impact_velocity")]
+
+    def base_angles(self, linkage, psyms) -> list:
+        """None: the joint's kinematics use the bodies' angles only."""
+        return []
+
+    def add_loads(self, linkage, ctx):
+        """The force (FX, FY) on the bearing at its centre, the opposite on the journal at
+        its centre; with friction the moments R_J Ft and -R_B Ft about the centres (Ft on the
+        journal along the tangent at the contact point, moved to the centres); with a film
+        its torques TJ, TB on the two bodies (its force is in FX, FY). `ctx`: the
+        derivation's kinematics (psyms, world, local, angle, frames, mech_point, N) and its
+        load lists (loads, contact_loads, torque_loads), appended to. Returns the state
+        `finish` reads."""
+        # the generator's only: a run imports no sympy
+        import sympy as sp
+
+        psyms, world, local, angle = ctx.psyms, ctx.world, ctx.local, ctx.angle
+        joints = self.joints(linkage)
+        J = len(joints)
+        FX = [sp.Symbol(f"FX{j}", real=True) for j in range(J)]
+        FY = [sp.Symbol(f"FY{j}", real=True) for j in range(J)]
+        gaps_t = []
+        for j, cj in enumerate(joints):
+            jr = world(cj.journal_body, local(cj.journal_body, cj.journal_point))
+            br = world(cj.bearing_body, local(cj.bearing_body, cj.bearing_point))
+            gaps_t.append((jr[0] - br[0], jr[1] - br[1]))
+            for body, xy, sign in ((cj.journal_body, jr, -1), (cj.bearing_body, br, 1)):
+                ctx.contact_loads.append((body, xy, sign * FX[j], sign * FY[j]))
+                if body != GROUND:
+                    ctx.loads.append((ctx.mech_point(f"C_{j}_{body}", xy),
+                                      sign * (FX[j] * ctx.N.x + FY[j] * ctx.N.y)))
+        # friction: Ft t on the journal at its contact point, -Ft t on the bearing at its;
+        # with the forces (FX, FY = Fn n - Ft t on the bearing) moved to the centres, the
+        # moments R_J Ft on the journal and -R_B Ft on the bearing about their centres remain
+        TQ, spin_t = [], []
+        for j, cj in enumerate(joints):
+            if not cj.has_friction:
+                TQ.append(None)
+                spin_t.append(None)
+                continue
+            TQ.append(sp.Symbol(f"TQ{j}", real=True))
+            rj, rb = psyms[f"{cj.name}.journal_radius"], psyms[f"{cj.name}.bearing_radius"]
+            spin_t.append(angle[cj.journal_body] * rj - angle[cj.bearing_body] * rb)
+            _moments(ctx, ((cj.journal_body, rj * TQ[j]), (cj.bearing_body, -rb * TQ[j])))
+        # lubrication: the film's force on the journal is in FX, FY (moved to the bearing's
+        # centre on the bearing's side); its torques on the two bodies, the bearing's
+        # including that move, are TJ and TB
+        TL, omega_t = [], []
+        for j, cj in enumerate(joints):
+            if not cj.has_lubrication:
+                TL.append(None)
+                omega_t.append(None)
+                continue
+            TL.append((sp.Symbol(f"TJ{j}", real=True), sp.Symbol(f"TB{j}", real=True)))
+            omega_t.append((angle[cj.journal_body], angle[cj.bearing_body]))
+            _moments(ctx, ((cj.journal_body, TL[j][0]), (cj.bearing_body, TL[j][1])))
+        return self.part(joints=joints, FX=FX, FY=FY, gaps_t=gaps_t, TQ=TQ, spin_t=spin_t,
+                         TL=TL, omega_t=omega_t)
+
+    def ground_reaction(self, state, name: str, finish):
+        """The force on the ground of a joint whose journal or bearing is the ground (the
+        force on the bearing, reversed on the journal's side), or None when `name` is no
+        such joint."""
+        for j, cj in enumerate(state.joints):
+            if cj.name == name:
+                sign = -1 if cj.journal_body == GROUND else 1
+                return (sign * state.FX[j], sign * state.FY[j])
+        return None
+
+    def finish(self, state, finish, dt):
+        """The element's share of the `Derivation`: the contacts (the joints), per joint its
+        gap (journal centre minus bearing centre and its rate, ``gaps``), the loop closure's
+        rates (the gaps' rates), the load symbols (FX, FY, TQ, TJ and TB, ``symbols``) and
+        per joint ``FX``, ``FY``, ``TQ`` (None: no friction), ``spins`` (the slip velocity's
+        rotation part omega_J R_J - omega_B R_B; None: no friction), ``TL`` ((TJ, TB); None:
+        not lubricated) and ``omegas`` ((omega_J, omega_B); None: not lubricated)."""
+        gaps = [tuple(finish(v) for v in (ex, ey, dt(ex), dt(ey))) for ex, ey in state.gaps_t]
+        return self._part(
+            [cj.name for cj in state.joints], gaps, state.FX, state.FY, state.TQ,
+            [None if e is None else finish(dt(e)) for e in state.spin_t], state.TL,
+            [None if e is None else tuple(finish(dt(a)) for a in e) for e in state.omega_t])
+
+    def _part(self, contacts, gaps, FX, FY, TQ, spins, TL, omegas):
+        return self.part(
+            contacts=contacts, gaps=gaps, FX=FX, FY=FY, TQ=TQ, spins=spins, TL=TL,
+            omegas=omegas, closure_rates=[v for gap in gaps for v in gap[2:]],
+            symbols=[*FX, *FY, *(s for s in TQ if s is not None),
+                     *(s for pair in TL if pair is not None for s in pair)])
+
+    def specialise(self, part, sub):
+        """`part` with `sub` applied to its expressions."""
+        return self._part(
+            part.contacts, [tuple(sub(e) for e in g) for g in part.gaps], part.FX, part.FY,
+            part.TQ, [sub(e) for e in part.spins], part.TL,
+            [None if e is None else tuple(sub(a) for a in e) for e in part.omegas])
+
+    # ---- C printer (generate.writer, generate.cwriter)
+    def plan(self, part, params: list, mem_start: int, first: int):
+        """The joints' stages of the model evaluation (`first`: the event index of the first
+        joint): the contact stage, the friction stage in its place for a joint with a law
+        (the slip's rotation part ``sp<j>`` beside the gaps), the lubricated stage (dry
+        contact plus the faded film, the bodies' angular velocities ``wj<j>``, ``wb<j>``
+        beside the gaps) for a joint in oil. Returns ``lines``, ``contact`` (per joint its
+        contact fields' p indices), ``fric``, ``fpar``, ``lub`` (the events with friction,
+        their friction fields' p indices, the lubricated events), ``gap_extras`` ((name in
+        the model, name in the Jacobians, its extra row's key, expression) computed beside
+        the gaps), ``results`` (the friction's and the films' output values), ``floors``,
+        ``friction`` and ``lubricated`` (the contacts with a law, in oil)."""
+        contact = [{f: params.index(f"{name}.{f}") for f in CONTACT_FIELDS}
+                   for name in part.contacts]
+        events = range(first, first + len(part.contacts))
+        fric = [e for e, k in zip(events, part.TQ) if k is not None]
+        lub = [e for e, k in zip(events, part.TL) if k is not None]
+        fpar = {e: {f: params.index(f"{part.contacts[e - first]}.{f}") for f in FRICTION_FIELDS}
+                for e in fric}
+        lpar = {e: {f: params.index(f"{part.contacts[e - first]}.{f}")
+                    for f in LUBRICATION_FIELDS} for e in lub}
+        gap_extras = [(f"sp{e}", f"gv{e}_4", ("spin", e), part.spins[e - first]) for e in fric]
+        for e in lub:
+            for m, what in enumerate(("wj", "wb")):
+                gap_extras.append((f"{what}{e}", f"gv{e}_{5 + m}", (what, e),
+                                   part.omegas[e - first][m]))
+        lines = []
+        for e, c in zip(events, contact):
+            k = e - first
+            FX, FY = part.FX[k], part.FY[k]
+            law = (f"p[{c['clearance']}], p[{mem_start + 2 * e}], p[{mem_start + 2 * e + 1}], "
+                   f"p[{c['stiffness']}], p[{c['restitution']}], p[{c['contact_model']}]")
+            if e in lpar:
+                TJ, TB = part.TL[k]
+                lines.append(
+                    f"F{e}, d{e}, dd{e}, {FX}, {FY}, {TJ}, {TB}, ffx{e}, ffy{e}, fpw{e} = "
+                    f"lubricated_stage(ex{e}, ey{e}, exd{e}, eyd{e}, wj{e}, wb{e}, {law}, "
+                    + ", ".join(f"p[{lpar[e][f]}]" for f in LUBRICATION_FIELDS) + ")")
+            elif e in fpar:
+                lines.append(
+                    f"F{e}, d{e}, dd{e}, {FX}, {FY}, {part.TQ[k]}, vt{e} = friction_stage("
+                    f"ex{e}, ey{e}, exd{e}, eyd{e}, sp{e}, {law}, p[{fpar[e]['friction_law']}], "
+                    "(" + friction_arguments([f"p[{fpar[e][f]}]" for f in FRICTION_SLOTS])
+                    + "))")
+            else:
+                lines.append(f"F{e}, d{e}, dd{e}, {FX}, {FY} = contact_stage("
+                             f"ex{e}, ey{e}, exd{e}, eyd{e}, {law})")
+        results = []
+        for e in fric:
+            tq = part.TQ[e - first]
+            results += [str(tq), f"vt{e}", f"-{tq} * vt{e}"]
+        for e in lub:
+            results += [f"ffx{e}", f"ffy{e}", str(part.TL[e - first][0]), f"fpw{e}"]
+        return self.part(
+            lines=lines, contact=contact, fric=fric, fpar=fpar, lub=lub, first=first,
+            mem_start=mem_start, gap_extras=gap_extras, results=results,
+            floors=[(e, c["impact_velocity_floor"]) for e, c in zip(events, contact)],
+            friction=[part.contacts[e - first] for e in fric],
+            lubricated=[part.contacts[e - first] for e in lub], profiles={}, offsets={})
+
+    def out_columns(self, part, plan) -> list[str]:
+        """The friction columns of the joints with a law, then the film's of the lubricated
+        ones."""
+        return ([f"{name}.{f}" for name in plan.friction for f in _FRICTION_COLUMNS]
+                + [f"{name}.{f}" for name in plan.lubricated for f in _FILM_COLUMNS])
+
+    def friction_contacts(self, part, plan) -> list[str]:
+        """The joints with a friction law (their friction power enters the work)."""
+        return list(plan.friction)
+
+    def profiled_stages(self, part, plan, profiles: dict, gaps_stage, block_size) -> dict:
+        """The profiled joints' contact stages (core/profile_runtime.h) in place of the
+        circular ones in `plan`'s lines, the bearing body's angle and rate (pa<j>, pw<j>)
+        computed beside the gaps (appended to `gaps_stage`); `profiles`: per profiled event
+        (bearing angle, its rate, grid size); returns per profiled event the offset of its
+        block (`block_size`(points) entries each) from PROFILE_START."""
+        import sympy as sp
+
+        offsets, at = {}, 0
+        for e in sorted(profiles):
+            angle, rate, points = profiles[e]
+            offsets[e] = at
+            at += block_size(points)
+            gaps_stage[0].extend([sp.sympify(angle), sp.sympify(rate)])
+            gaps_stage[1].extend([f"pa{e}", f"pw{e}"])
+            k = e - plan.first
+            c, mem = plan.contact[k], plan.mem_start + 2 * e
+            FX, FY = part.FX[k], part.FY[k]
+            law = (f"p[{mem}], p[{mem + 1}], p[{c['stiffness']}], p[{c['restitution']}], "
+                   f"p[{c['contact_model']}]")
+            block = f"p + PROFILE_START + {offsets[e]}, {points}"
+            if e in plan.fpar:
+                fp = plan.fpar[e]
+                plan.lines[k] = (
+                    f"F{e}, d{e}, dd{e}, {FX}, {FY}, {part.TQ[k]}, vt{e} = "
+                    f"profile_friction_stage(ex{e}, ey{e}, exd{e}, eyd{e}, sp{e}, pa{e}, "
+                    f"pw{e}, p[{fp['bearing_radius']}], {law}, p[{fp['friction_law']}], ("
+                    + friction_arguments([f"p[{fp[f]}]" for f in FRICTION_SLOTS])
+                    + f"), {block})")
+            else:
+                plan.lines[k] = (
+                    f"F{e}, d{e}, dd{e}, {FX}, {FY} = profile_contact_stage(ex{e}, "
+                    f"ey{e}, exd{e}, eyd{e}, pa{e}, pw{e}, {law}, {block})")
+        plan.profiles, plan.offsets = dict(profiles), offsets
+        return offsets
+
+    def penetration_lines(self, plan) -> list[str]:
+        """The C lines of `penetration` for the joints: (delta, deltadot) of the journal in
+        its bearing (core/runtime.h's ``gap_state``; a profiled bearing's
+        ``mbs_profile_gap``)."""
+        out = []
+        for k, ci in enumerate(plan.contact):
+            e = plan.first + k
+            if e in plan.profiles:
+                out.append(
+                    f"    if (j == {e}) {{ gap_{e}(t, y, p, g); bearing_{e}(t, y, p, b); "
+                    "mbs_profile_gap(g[0], g[1], g[2], g[3], b[0], b[1], "
+                    f"p + PROFILE_START + {plan.offsets[e]}, {plan.profiles[e][2]}, &dd[0], "
+                    "&dd[1], &nx, &ny, &rb, &slope); return; }")
+            else:
+                out.append(f"    if (j == {e}) {{ gap_{e}(t, y, p, g); gap_state(g[0], g[1], "
+                           f"g[2], g[3], p[{ci['clearance']}], &dd[0], &dd[1], &nx, &ny); "
+                           "return; }")
+        return out
+
+    def closure(self, part) -> list:
+        """The loop closure: each journal centred in its bearing (the gaps' offsets)."""
+        return [e for g in part.gaps for e in g[:2]]
+
+    # ---- Jacobian rows and tangent terms (generate.jacobians)
+    @staticmethod
+    def _variants(part, first: int) -> tuple[list[int], list[int]]:
+        """(the events with friction, the lubricated events)."""
+        return ([first + k for k, s in enumerate(part.TQ) if s is not None],
+                [first + k for k, s in enumerate(part.TL) if s is not None])
+
+    def jacobian_rows(self, part, first: int, start: int) -> dict:
+        """{(what, event): row} of the joints' extra rows from row `start`: per joint the
+        rates of its offsets and its force (exd, eyd, fx, fy), then per joint with friction
+        its slip's rotation part (spin), then per lubricated joint its bodies' angular
+        velocities and the film's torque on the bearing (wj, wb, tb)."""
+        J = len(part.contacts)
+        fric, lub = self._variants(part, first)
+        rows = {}
+        for k in range(J):
+            for m, what in enumerate(("exd", "eyd", "fx", "fy")):
+                rows[(what, first + k)] = start + 4 * k + m
+        for k, e in enumerate(fric):
+            rows[("spin", e)] = start + 4 * J + k
+        for k, e in enumerate(lub):
+            for m, what in enumerate(("wj", "wb", "tb")):
+                rows[(what, e)] = start + 4 * J + len(fric) + 3 * k + m
+        return rows
+
+    def jacobian_lines(self, part, first: int, ctx) -> tuple[list[str], list[str]]:
+        """(the `jacobian` lines, the `tangent` lines) of the joints' forces: per joint the
+        contact law's rows (``contact_jacobian``), the friction law's (``friction_jacobian``)
+        and the film's (``film_jacobian``) of core/jac_runtime.h, and their tangents. `ctx`:
+        the plan's row (output rows), extra (extra rows), pcol (z columns of p), n (N_Q),
+        stride, nz."""
+        row, extra, pcol, n = ctx.row, ctx.extra, ctx.pcol, ctx.n
+        stride, nz = ctx.stride, ctx.nz
+        fric, lub = self._variants(part, first)
+        jlines, tlines = [], []
+        for k, name in enumerate(part.contacts):
+            j = first + k
+            FX, FY = part.FX[k], part.FY[k]
+            rows = [row[f"{name}.{f}"] for f in ("contact_force", "penetration",
+                                                 "penetration_rate", "ecc_x", "ecc_y")]
+            rows += [extra[(what, j)] for what in ("exd", "eyd", "fx", "fy")]
+            zc = [pcol[f"{name}.{f}"] for f in ("clearance", "stiffness", "restitution",
+                                                "impact_velocity")]
+            pv = [f"p[{pcol[f'{name}.{f}'] - 1 - 2 * n}]" for f in (
+                "clearance", "mode", "impact_velocity", "stiffness", "restitution",
+                "contact_model")]
+            args = (f"gv{j}_0, gv{j}_1, gv{j}_2, gv{j}_3, "
+                    + ", ".join(str(v) for v in rows + zc) + ", " + ", ".join(pv) + ")")
+            jlines.append(f"{FX}, {FY} = contact_jacobian(jac, {stride}, {nz}, " + args)
+            tlines.append(f"{FX}, {FY} = contact_tangent(out, ts, nd, dz, {nz}, " + args)
+            if j in fric:
+                frows = [row[f"{name}.{f}"] for f in ("ecc_x", "ecc_y")] + [
+                    extra[(what, j)] for what in ("exd", "eyd", "spin")] + [
+                    row[f"{name}.contact_force"], extra[("fx", j)], extra[("fy", j)]] + [
+                    row[f"{name}.{f}"] for f in _FRICTION_COLUMNS]
+                fc = friction_arguments([f"{pcol[f'{name}.{f}']}" for f in FRICTION_SLOTS])
+                fv = friction_arguments([f"p[{pcol[f'{name}.{f}'] - 1 - 2 * n}]"
+                                         for f in FRICTION_SLOTS])
+                law = f"p[{pcol[f'{name}.friction_law'] - 1 - 2 * n}]"
+                args = (f"gv{j}_4, " + ", ".join(str(v) for v in frows)
+                        + f", ({fc}), {law}, ({fv}))")
+                TQ = part.TQ[k]
+                jlines.append(f"{FX}, {FY}, {TQ} = friction_jacobian(jac, {stride}, {nz}, "
+                              + args)
+                tlines.append(f"{FX}, {FY}, {TQ} = friction_tangent(out, ts, nd, dz, {nz}, "
+                              + args)
+            if j in lub:
+                lrows = [row[f"{name}.{f}"] for f in ("ecc_x", "ecc_y")] + [
+                    extra[(what, j)] for what in ("exd", "eyd", "wj", "wb", "fx", "fy")] + [
+                    row[f"{name}.{f}"] for f in _FILM_COLUMNS[:3]] + [
+                    extra[("tb", j)], row[f"{name}.film_power"]]
+                fields = ("journal_radius", "clearance", "bearing_length", "viscosity",
+                          "film_fade_start", "film_fade_end")
+                lcols = [pcol[f"{name}.{f}"] for f in fields]
+                lvals = [f"p[{pcol[f'{name}.{f}'] - 1 - 2 * n}]" for f in (
+                    *fields[:4], "lubrication", *fields[4:])]
+                args = ", ".join([f"gv{j}_5", f"gv{j}_6"] + [str(v) for v in lrows + lcols
+                                                                + lvals]) + ")"
+                TJ, TB = part.TL[k]
+                jlines.append(f"{FX}, {FY}, {TJ}, {TB} = film_jacobian(jac, {stride}, "
+                              f"{nz}, " + args)
+                tlines.append(f"{FX}, {FY}, {TJ}, {TB} = film_tangent(out, ts, nd, dz, "
+                              f"{nz}, " + args)
+        return jlines, tlines
+
+    def force_loads(self, part, first: int, row: dict, extra: dict) -> list[tuple]:
+        """The joints' load symbols in the equations of motion: (symbol, its row,
+        coefficient name stem, event)."""
+        return [(F, frow, "r" + stem, j) for j, lds in self.output_loads(part, first, row, extra)
+                for stem, F, frow in lds]
+
+    def output_loads(self, part, first: int, row: dict, extra: dict) -> list[tuple]:
+        """Per joint (event, [(stem, load symbol, its row)]) for the outputs' chain rule
+        through the joints' loads: FX, FY, with friction TQ, in oil TJ and TB."""
+        out = []
+        for k, name in enumerate(part.contacts):
+            j = first + k
+            lds = [("fx", part.FX[k], extra[("fx", j)]), ("fy", part.FY[k], extra[("fy", j)])]
+            if part.TQ[k] is not None:
+                lds.append(("tq", part.TQ[k], row[f"{name}.friction_force"]))
+            if part.TL[k] is not None:
+                lds.append(("tj", part.TL[k][0], row[f"{name}.film_torque"]))
+                lds.append(("tb", part.TL[k][1], extra[("tb", j)]))
+            out.append((j, lds))
+        return out
+
+    # ---- energy (generate.energy)
+    def contact_energy(self, part, params: list, first: int, offsets: tuple):
+        """A function (a, p, mem_start) -> the joints' contact potential in J, where `a` are
+        the arguments of the derivation's numeric functions and `offsets` the numeric
+        offsets (x, y lists) of the contacts: K delta^2.5 / 2.5 of each joint in contact,
+        delta = |e| - c (a film stores no energy)."""
+        offset_x, offset_y = offsets
+        joints = [(params.index(f"{name}.clearance"), params.index(f"{name}.stiffness"))
+                  for name in part.contacts]
+
+        def energy(a, p, mem_start):
+            e = 0.0
+            for k, (ic, ik) in enumerate(joints):
+                j = first + k
+                if p[mem_start + 2 * j] > 0.5:
+                    delta = math.hypot(offset_x[j](*a), offset_y[j](*a)) - p[ic]
+                    if delta > 0.0:
+                        e += p[ik] * delta * delta * math.sqrt(delta) / 2.5
+            return e
+
+        return energy
+
+    # ---- the reduced model's parameters and sensitivities (solve.linkage_model,
+    # solve.linkage_ddm)
+    def parameter_values(self, linkage) -> dict[str, float]:
+        """The values of the kind's entries of p (`parameter_names`, `memory_names`): the
+        joints' fields (the stiffness `ClearanceJoint.stiffness`), the laws' ids, each
+        joint's memory started free at the floor."""
+        values = {}
+        for j in self.joints(linkage):
+            values[f"{j.name}.clearance"] = j.clearance
+            values[f"{j.name}.stiffness"] = j.stiffness
+            values[f"{j.name}.restitution"] = j.restitution
+            values[f"{j.name}.contact_model"] = float(CONTACT_MODELS[j.contact_model])
+            values[f"{j.name}.impact_velocity_floor"] = j.impact_velocity_floor
+            values[f"{j.name}.mode"] = 0.0
+            values[f"{j.name}.impact_velocity"] = j.impact_velocity_floor
+            values[f"{j.name}.friction_law"] = float(FRICTION_LAWS[j.friction_law])
+            for f in FRICTION_SLOTS:
+                values[f"{j.name}.{f}"] = getattr(j, f)
+            values[f"{j.name}.journal_radius"] = j.journal_radius
+            values[f"{j.name}.bearing_radius"] = j.bearing_radius
+            # the film's model id (-1: dry, never read: a dry joint's model has no film)
+            values[f"{j.name}.lubrication"] = float(LUBRICATION_MODELS.get(j.lubrication, -1))
+            for f in LUBRICATION_PARAMETERS:
+                values[f"{j.name}.{f}"] = getattr(j, f)
+        return values
+
+    def floor_names(self, linkage) -> list[str]:
+        """Per contact (joint) the name of its impact-velocity floor."""
+        return [f"{j.name}.impact_velocity_floor" for j in self.joints(linkage)]
+
+    def chain(self, linkage, head: str, field: str) -> dict[str, float]:
+        """{entry of p: d entry / d value} of the description's value `field` of joint
+        `head` when it reaches p under another name (empty otherwise): the radii reach the
+        clearance, and with the paper's Eq. 9 (no contact_stiffness given) the radii, the
+        Young's modulus and the Poisson ratio reach the stiffness (d 0 when it is given);
+        contact_stiffness is the stiffness."""
+        joint = next((j for j in self.joints(linkage) if j.name == head), None)
+        if joint is None or field not in _STIFFNESS_FIELDS:
+            return {}
+        _, d_rj, d_rb, d_e, d_nu = stiffness_eq9_partials(
+            joint.journal_radius, joint.bearing_radius, joint.youngs_modulus,
+            joint.poisson_ratio)
+        derived = joint.contact_stiffness is None
+        k, c = f"{head}.stiffness", f"{head}.clearance"
+        if field == "contact_stiffness":
+            return {k: 1.0}
+        if field == "bearing_radius":
+            return {c: 1.0, k: d_rb if derived else 0.0}
+        if field == "journal_radius":
+            return {c: -1.0, k: d_rj if derived else 0.0}
+        return {k: (d_e if field == "youngs_modulus" else d_nu) if derived else 0.0}
+
+    def closure_rows(self, linkage, out, extra) -> tuple[list[dict], list[dict]]:
+        """The loop closure of the joints at the start as rows of the model's Jacobian
+        ({row: weight}: `out`(column name) an output row, `extra`[name] an extra row), and
+        their rates: each journal centred (its offsets x, y)."""
+        pos, rate = [], []
+        for j in self.joints(linkage):
+            for xy in "xy":
+                pos.append({out(f"{j.name}.ecc_{xy}"): 1.0})
+                rate.append({extra[f"e{xy}d:{j.name}"]: 1.0})
+        return pos, rate
+
+    def sensitivity_check(self, linkage) -> None:
+        """ValueError unless the sensitivity runs have the partial derivatives of every
+        joint's laws (a film model without them is refused by name)."""
+        from ..laws.lubrication.partials import check_partials
+
+        for j in self.joints(linkage):
+            if j.has_lubrication:
+                check_partials(f"clearance joint {j.name!r}", j.lubrication)
+
+    def fd_scale(self, linkage, head: str, field: str) -> float | None:
+        """The scale of a central-difference step of the value `field` of joint `head`:
+        the clearance for its radii (None otherwise: the value's own)."""
+        if field in ("bearing_radius", "journal_radius"):
+            for j in self.joints(linkage):
+                if j.name == head:
+                    return j.clearance
+        return None
+
+    def trajectory_series(self, linkage, ecc, ctx) -> dict:
+        """The run's series of the joints: ``contact_angle`` and ``slip_velocity``, each
+        (n, J) over the J joints at the recorded steps (the contacts' eccentricities ecc
+        (n, >= J, 2)): the direction of the eccentricity e in the bearing body's frame in
+        [0, 2 pi) rad, and the journal surface's tangential speed against the bearing's at
+        the contact in m/s, e_dot . t + omega_J R_J - omega_B R_B with t = (-n_y, n_x),
+        n = e / |e| (as the friction law's; R_B at the contact angle for a profiled bearing,
+        as the compiled model takes it). `ctx`: ``edot``(J) the rates (n, J, 2) of the first
+        J contacts' eccentricities, ``bodies`` {body: (angle, rate)} series,
+        ``effective_radius`` (`generate.profiles.effective_radius`). Both None for a linkage
+        without these joints."""
+        joints = self.joints(linkage)
+        if not joints:
+            return {"contact_angle": None, "slip_velocity": None}
+        # the joints' contacts are the first (the registry's first element)
+        edot, bodies = ctx.edot(len(joints)), ctx.bodies
+        angle, slip = np.empty((len(ecc), len(joints))), np.empty((len(ecc), len(joints)))
+        for j, cj in enumerate(joints):
+            ex, ey = ecc[:, j, 0], ecc[:, j, 1]
+            phi_b, w_b = bodies[cj.bearing_body]
+            w_j = bodies[cj.journal_body][1]
+            theta = np.mod(np.arctan2(ey, ex) - phi_b, 2.0 * np.pi)
+            theta[theta >= 2.0 * np.pi] = 0.0          # a round-off below 0 wraps to 2 pi
+            r = np.hypot(ex, ey)
+            centred = r <= 1e-300                      # the model's normal there: (-1, 0)
+            safe = np.where(centred, 1.0, r)
+            nx = np.where(centred, -1.0, ex / safe)
+            ny = np.where(centred, 0.0, ey / safe)
+            rb = (cj.bearing_radius if cj.bearing_profile is None else
+                  ctx.effective_radius(cj.bearing_profile, cj.journal_radius, theta, r))
+            angle[:, j] = theta
+            slip[:, j] = (edot[:, j, 1] * nx - edot[:, j, 0] * ny + w_j * cj.journal_radius
+                          - w_b * rb)
+        return {"contact_angle": angle, "slip_velocity": slip}
+
+    # ---- the ideal-joint backend (backends.ideal_linkage)
+    def ideal_joints(self, linkage, angles: dict) -> list[tuple]:
+        """Each joint closed as an ideal pin: ("pin", (name, journal body, journal point,
+        bearing body, bearing point))."""
+        return [("pin", (j.name, j.journal_body, j.journal_point, j.bearing_body,
+                         j.bearing_point)) for j in self.joints(linkage)]
+
+    def ideal_contact_forces(self, linkage, multipliers) -> list:
+        """Per joint the magnitude of the force its ideal pin transmits (N, (s,)): its two
+        multipliers' (`multipliers`(name) -> (s, 2))."""
+        out = []
+        for j in self.joints(linkage):
+            lam = multipliers(j.name)
+            out.append(np.hypot(lam[:, 0], lam[:, 1]))
+        return out
+
+
+#: the element of the registry
+ELEMENT = RevoluteClearance()
