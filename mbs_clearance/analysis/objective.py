@@ -202,10 +202,9 @@ def parse_output(linkage: Linkage, output: str | None = None) -> Output:
     from ..elements.registry import ELEMENTS
 
     grounds = ground_joints(linkage)
-    # every contact's force: the revolute clearance joints', then the elements' (a
-    # translational joint's corners), as the trajectory's contact_force columns
-    clearance = [j.name for j in linkage.clearance_joints] + [
-        name for el in ELEMENTS for name in el.contact_names(linkage)]
+    # every contact's force, the elements' contacts in registry order (the revolute
+    # clearance joints, a translational joint's corners): the trajectory's contact_force
+    clearance = [name for el in ELEMENTS for name in el.contact_names(linkage)]
     # a free linkage has no drive, no drive moment
     allowed = ([f"pivot_force:{g}" for g in grounds] + ["shaking_force"]
                + (["drive_moment"] if linkage.drive is not None else [])

@@ -113,3 +113,17 @@ def test_a_translational_guide_may_be_the_monitored_joint():
     other = peak_output(linkage, "pivot_force:crank_pivot", 1, window=WINDOW, rtol=RTOL)
     assert abs(ref / other - 1.0) > 1e-3
     assert peak_output(linkage, None, 1, window=WINDOW, rtol=RTOL) == ref
+
+
+def test_every_output_name_is_allowed_once():
+    """The allowed outputs of every named case are distinct (each contact once, whichever
+    element brings it) and hold every contact's force."""
+    for name in CASES:
+        lk = CASES[name]()
+        with pytest.raises(ValueError) as err:
+            parse_output(lk, "no such output")
+        allowed = eval(str(err.value).split("allowed: ", 1)[1])  # noqa: S307 - our list
+        assert len(allowed) == len(set(allowed)), (name, allowed)
+        contacts = [n for n, _ in lk.contacts()]
+        assert [a for a in allowed if a.startswith("contact_force:")] == [
+            f"contact_force:{c}" for c in contacts], name
