@@ -335,11 +335,21 @@ def _relative_error(traj) -> float:
     return float(e) if isinstance(e, (int, float)) and math.isfinite(e) else 0.0
 
 
+def _bars(traj, peaks: np.ndarray) -> np.ndarray:
+    """Each revolution's bar (N): its own (``stats["peak_errors"]``, Exudyn's step
+    sequence per revolution) where the run has them, else the run's relative estimate x
+    the peak (one erratic revolution's bar would otherwise widen every other's)."""
+    own = traj.stats.get("peak_errors")
+    if own is not None and len(own) == len(peaks):
+        return np.abs(np.asarray(own, dtype=float))
+    return _relative_error(traj) * np.abs(peaks)
+
+
 def verdict_of_trajectories(a, b, revolutions=None, *, lyapunov=None) -> Verdict:
     """The verdict on two Trajectories of the same mechanism (a the reference): their
-    per-revolution peaks, each with its own bar ``stats["error_estimate"]`` x peak (0
-    where a run has no estimate: a run at a fixed tolerance or step, whose error is
-    unknown), comparable peak by peak where both runs are periodic (``stats
+    per-revolution peaks, each with its own bar (`_bars`: a run's per-revolution
+    ``stats["peak_errors"]``, else ``stats["error_estimate"]`` x peak; 0 where a run has
+    no estimate: a run at a fixed tolerance or step, whose error is unknown), comparable peak by peak where both runs are periodic (``stats
     ["periodic"]``) or the given Lyapunov result says so; else on the statistics of
     revolutions 2..n."""
     from ..solve.accuracy import revolution_peaks
@@ -347,11 +357,12 @@ def verdict_of_trajectories(a, b, revolutions=None, *, lyapunov=None) -> Verdict
     n = min(a.revolutions, b.revolutions)
     revs = tuple(range(1, n + 1)) if revolutions is None else tuple(revolutions)
     pa, pb = revolution_peaks(a), revolution_peaks(b)
-    ra, rb = _relative_error(a), _relative_error(b)
+    ea, eb = _bars(a, pa), _bars(b, pb)
     x = np.array([pa[k - 1] for k in revs])
     y = np.array([pb[k - 1] for k in revs])
     later = tuple(range(2, n + 1))
-    v = verdict_of_peaks(x, ra * np.abs(x), y, rb * np.abs(y), model_a=a.backend,
+    v = verdict_of_peaks(x, np.array([ea[k - 1] for k in revs]), y,
+                         np.array([eb[k - 1] for k in revs]), model_a=a.backend,
                          model_b=b.backend, revolutions=revs,
                          periodic=_flags(a, b),
                          lyapunov=lyapunov,
