@@ -349,9 +349,9 @@ def verdict_of_trajectories(a, b, revolutions=None, *, lyapunov=None) -> Verdict
     """The verdict on two Trajectories of the same mechanism (a the reference): their
     per-revolution peaks, each with its own bar (`_bars`: a run's per-revolution
     ``stats["peak_errors"]``, else ``stats["error_estimate"]`` x peak; 0 where a run has
-    no estimate: a run at a fixed tolerance or step, whose error is unknown), comparable peak by peak where both runs are periodic (``stats
-    ["periodic"]``) or the given Lyapunov result says so; else on the statistics of
-    revolutions 2..n."""
+    no estimate: a run at a fixed tolerance or step, whose error is unknown), comparable
+    peak by peak where both runs are periodic (``stats["periodic"]``) or the given
+    Lyapunov result says so; else on the statistics of revolutions 2..n."""
     from ..solve.accuracy import revolution_peaks
 
     n = min(a.revolutions, b.revolutions)
