@@ -242,7 +242,8 @@ def _accuracy_stats(conv: Convergence, accuracy: float) -> dict:
                 accuracy_peaks=[list(map(float, p)) for p in conv.peaks],
                 observed_order=[float(p) for p in conv.order],
                 peak_errors=[float(e) for e in conv.error],
-                accuracy_seconds=float(sum(conv.seconds)), peaks_extrapolated=True)
+                accuracy_seconds=float(sum(conv.seconds)),
+                accuracy_run_seconds=[float(x) for x in conv.seconds], peaks_extrapolated=True)
 
 
 def simulate_to_accuracy(mech, revolutions: int | None, accuracy: float, record, **options):
