@@ -200,8 +200,14 @@ def _sequence(linkage, revolutions: int, accuracy: float, options: dict, record=
         seconds.append(time.perf_counter() - t0)
         steps.append(step)
 
+    # the series are recorded at h/4, or at the finest of h/2, h whose record fits within
+    # max_memory (a long run: the four-bar's 4 revolutions need 6 GiB at h/4)
+    at = 2
+    while record is not None and not free and at > 0 and not _fits(
+            linkage, revolutions, h / 2.0 ** at, max_memory):
+        at -= 1
     for k, step in enumerate((h, h / 2.0, h / 4.0)):
-        run(step, record is not None and k == 2)
+        run(step, record is not None and k == at)
     value, error, order = richardson(*peaks[-3:])
     pick = slice(None) if only is None else slice(only, only + 1)
     for _ in range(max_halvings):
