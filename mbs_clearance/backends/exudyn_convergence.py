@@ -261,9 +261,10 @@ def simulate_to_accuracy(mech, revolutions: int | None, accuracy: float, record,
     (`richardson`); its stats hold ``error_estimate`` (largest relative bar over the
     revolutions), ``accuracy_ok``, ``accuracy_steps``, ``accuracy_peaks`` (each run's),
     ``observed_order`` and ``peak_errors`` (N). An `AccuracyWarning` says when the request
-    was not met within `MAX_HALVINGS` further halvings. Where a finer run's record would
-    exceed ``max_memory`` (default min(4 GiB, half the RAM)) that run records its peaks
-    only and the series are the last recorded run's (``stats["series_step"]``;
+    was not met within `MAX_HALVINGS` further halvings. The series are recorded at h/4, or
+    at the finest of h/2 and h whose record fits ``max_memory`` (default min(4 GiB, half the
+    RAM)); a finer run whose record would exceed it records its peaks only and the series
+    are the last recorded run's (``stats["series_step"]``;
     ``stats["series_peak_offset"]``: the relative distance of its own refined peaks from
     the extrapolated ones)."""
     import warnings
