@@ -76,6 +76,8 @@ class Convergence:
     order: np.ndarray
     #: wall time of each run in s
     seconds: tuple
+    #: why the halving stopped short of the request ("": met, or MAX_HALVINGS reached)
+    stopped: str = ""
 
     @property
     def relative_error(self) -> np.ndarray:
@@ -210,23 +212,32 @@ def _sequence(linkage, revolutions: int, accuracy: float, options: dict, record=
         run(step, record is not None and k == at)
     value, error, order = richardson(*peaks[-3:])
     pick = slice(None) if only is None else slice(only, only + 1)
+    stopped = ""
     for _ in range(max_halvings):
         if np.all(error[pick] <= accuracy * np.abs(value[pick])):
+            break
+        if not free and not _fits(linkage, revolutions, steps[-1] / 2.0, max_memory,
+                                  ("reactions",)):
+            # even its peaks (the reactions at every step) exceed max_memory: stop here,
+            # unmet (e.g. a motion that does not repeat, whose later peaks never converge)
+            stopped = (f"; the next run (step {steps[-1] / 2.0:.3g} s) would exceed "
+                       "max_memory even for its peaks")
             break
         run(steps[-1] / 2.0, record is not None)
         value, error, order = richardson(*peaks[-3:])
     conv = Convergence(steps=tuple(steps), peaks=np.array(peaks), value=value, error=error,
-                       order=order, seconds=tuple(seconds))
+                       order=order, seconds=tuple(seconds), stopped=stopped)
     return conv, last
 
 
-def _fits(linkage, revolutions: int, step: float, max_memory) -> bool:
-    """A recorded run at `step` fits within `max_memory` (`exudyn_linkage._check_run`)."""
+def _fits(linkage, revolutions: int, step: float, max_memory, outputs=("all",)) -> bool:
+    """A run at `step` recording `outputs` fits within `max_memory`
+    (`exudyn_linkage._check_run`)."""
     from .._checks import MemoryLimitError
     from . import exudyn_linkage as xl
 
     try:
-        xl._check_run(linkage, revolutions, xl.make_settings({"step_size": step}), ("all",),
+        xl._check_run(linkage, revolutions, xl.make_settings({"step_size": step}), outputs,
                       max_memory)
     except MemoryLimitError:
         return False
@@ -240,8 +251,8 @@ def _accuracy_stats(conv: Convergence, accuracy: float) -> dict:
     note = "" if ok else (
         f"Exudyn's estimated error of the peaks, {estimate:.2g} (step halving down to "
         f"{conv.steps[-1]:.3g} s, the difference of the last two steps' peaks), misses the "
-        f"requested accuracy {accuracy:g} after {len(conv.steps)} runs (stats['accuracy_ok'] "
-        "is False; the peaks are the extrapolated ones)")
+        f"requested accuracy {accuracy:g} after {len(conv.steps)} runs{conv.stopped} "
+        "(stats['accuracy_ok'] is False; the peaks are the extrapolated ones)")
     return dict(accuracy=accuracy, error_estimate=estimate,
                 error_estimate_method="step halving", accuracy_ok=ok, accuracy_note=note,
                 accuracy_steps=list(conv.steps),
@@ -307,6 +318,6 @@ def peak_to_accuracy(mech, revolution: int, accuracy: float, **options) -> float
     rel = float(conv.relative_error[revolution - 1])
     if rel > accuracy:
         warnings.warn(f"Exudyn's estimated error of the peak, {rel:.2g} (step halving down to "
-                      f"{conv.steps[-1]:.3g} s), misses the requested accuracy {accuracy:g}",
-                      AccuracyWarning, stacklevel=3)
+                      f"{conv.steps[-1]:.3g} s), misses the requested accuracy {accuracy:g}"
+                      f"{conv.stopped}", AccuracyWarning, stacklevel=3)
     return float(conv.value[revolution - 1])

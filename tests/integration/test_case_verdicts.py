@@ -93,12 +93,20 @@ def test_the_translational_benchmark_ends_in_a_verdict_with_both_bars(capsys):
     assert kind == "agree", summary
 
 
-@pytest.mark.slow      # Exudyn's sequence over four 6 s revolutions: about 7 minutes
+@pytest.mark.slow      # Exudyn's sequence over four 6 s revolutions: 20 minutes and more
 def test_four_bar_over_four_revolutions_is_judged_on_its_statistics(capsys):
     """The four-bar's motion does not repeat (8 reduced revolutions): over 4 revolutions
-    the verdict is taken on the statistics of revolutions 2-4, each with its interval."""
-    code = compare_command(["--case", "four_bar", "--revolutions", "4", "--accuracy",
-                            str(LOOSE), "--no-plot"])
+    the verdict is taken on the statistics of revolutions 2-4, each with its interval.
+    Exudyn's later peaks of such a motion do not converge in the step, so its request may
+    stay unmet (the sequence stops where a finer run would exceed max_memory, and warns)."""
+    import warnings
+
+    from mbs_clearance import AccuracyWarning
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", AccuracyWarning)
+        code = compare_command(["--case", "four_bar", "--revolutions", "4", "--accuracy",
+                                str(LOOSE), "--no-plot"])
     assert code == 0
     text = capsys.readouterr().out
     kind, summary = _check(text, 4)
