@@ -508,7 +508,11 @@ def cross_check(mech, revolutions: int = 4, *, accuracy: float = 1e-6,
     from mbs_clearance.analysis.verdict import comparable, periodic_flag
 
     periodic = periodic_flag(red) if lyapunov is None else None
-    if not comparable(periodic, lyapunov)[0] and later:
+    if not comparable(periodic, lyapunov)[0] and not later:
+        # one revolution: no statistics over revolutions 2..n, which the verdict says
+        kw = dict(statistics_a=revolution_statistics(red, later),
+                  statistics_b=revolution_statistics(red, later))
+    elif not comparable(periodic, lyapunov)[0]:
         t1 = time.perf_counter()
         fine = simulate(mech, revolutions, backend="exudyn", step_size=conv.steps[-1],
                         **exudyn_options)

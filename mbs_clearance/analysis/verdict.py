@@ -309,12 +309,13 @@ def verdict_of_peaks(a, a_error, b, b_error, *, model_a: str = "reduced",
     stats, sitems = UNDECIDED, ()
     if statistics_a is not None and statistics_b is not None:
         n = min(len(statistics_a["peak"]), len(statistics_b["peak"]))
-        sitems = _statistics_items(statistics_a, statistics_b)
+        sitems = _statistics_items(statistics_a, statistics_b) if n else ()
         if n >= MIN_STATISTICS_REVOLUTIONS:
             stats = AGREE if all(i.agree for i in sitems) else DIFFER
         else:
-            reason += (f"; statistics over {n} revolution(s) decide nothing (at least "
-                       f"{MIN_STATISTICS_REVOLUTIONS} after the first: run more revolutions)")
+            reason += (f"; statistics over {n} revolution(s) after the first decide nothing "
+                       f"(at least {MIN_STATISTICS_REVOLUTIONS}: run at least "
+                       f"{MIN_STATISTICS_REVOLUTIONS + 1} revolutions)")
     else:
         reason += "; no per-revolution statistics given"
     return Verdict(NOT_COMPARABLE, model_a, model_b, items, reason, stats, sitems)
@@ -366,8 +367,8 @@ def verdict_of_trajectories(a, b, revolutions=None, *, lyapunov=None) -> Verdict
                          model_b=b.backend, revolutions=revs,
                          periodic=_flags(a, b),
                          lyapunov=lyapunov,
-                         statistics_a=revolution_statistics(a, later) if later else None,
-                         statistics_b=revolution_statistics(b, later) if later else None)
+                         statistics_a=revolution_statistics(a, later),
+                         statistics_b=revolution_statistics(b, later))
     return with_missing_bars(v, [tr.backend for tr in (a, b)
                                  if "error_estimate" not in tr.stats])
 

@@ -94,6 +94,8 @@ class Convergence:
     order: np.ndarray
     #: wall time of each run in s
     seconds: tuple
+    #: why the halving stopped short of the request ("": met, or MAX_HALVINGS reached)
+    stopped: str = ""
 
     @property
     def relative_error(self) -> np.ndarray:
@@ -221,27 +223,42 @@ def _sequence(linkage, revolutions: int, accuracy: float, options: dict, record=
         seconds.append(time.perf_counter() - t0)
         steps.append(step)
 
+    # the series are recorded at h/4, or at the finest of h/2, h whose record fits within
+    # max_memory (a long run: the four-bar's 4 revolutions need 6 GiB at h/4)
+    at = 2
+    while record is not None and not free and at > 0 and not _fits(
+            linkage, revolutions, h / 2.0 ** at, max_memory):
+        at -= 1
     for k, step in enumerate((h, h / 2.0, h / 4.0)):
-        run(step, record is not None and k == 2)
+        run(step, record is not None and k == at)
     value, error, order = richardson(*peaks[-3:])
     pick = slice(None) if only is None else slice(only, only + 1)
+    stopped = ""
     for _ in range(max_halvings):
         if np.all(error[pick] <= accuracy * np.abs(value[pick])):
+            break
+        if not free and not _fits(linkage, revolutions, steps[-1] / 2.0, max_memory,
+                                  ("reactions",)):
+            # even its peaks (the reactions at every step) exceed max_memory: stop here,
+            # unmet (e.g. a motion that does not repeat, whose later peaks never converge)
+            stopped = (f"; the next run (step {steps[-1] / 2.0:.3g} s) would exceed "
+                       "max_memory even for its peaks")
             break
         run(steps[-1] / 2.0, record is not None)
         value, error, order = extrapolate(peaks)
     conv = Convergence(steps=tuple(steps), peaks=np.array(peaks), value=value, error=error,
-                       order=order, seconds=tuple(seconds))
+                       order=order, seconds=tuple(seconds), stopped=stopped)
     return conv, last
 
 
-def _fits(linkage, revolutions: int, step: float, max_memory) -> bool:
-    """A recorded run at `step` fits within `max_memory` (`exudyn_linkage._check_run`)."""
+def _fits(linkage, revolutions: int, step: float, max_memory, outputs=("all",)) -> bool:
+    """A run at `step` recording `outputs` fits within `max_memory`
+    (`exudyn_linkage._check_run`)."""
     from .._checks import MemoryLimitError
     from . import exudyn_linkage as xl
 
     try:
-        xl._check_run(linkage, revolutions, xl.make_settings({"step_size": step}), ("all",),
+        xl._check_run(linkage, revolutions, xl.make_settings({"step_size": step}), outputs,
                       max_memory)
     except MemoryLimitError:
         return False
@@ -255,15 +272,16 @@ def _accuracy_stats(conv: Convergence, accuracy: float) -> dict:
     note = "" if ok else (
         f"Exudyn's estimated error of the peaks, {estimate:.2g} (step halving down to "
         f"{conv.steps[-1]:.3g} s, the difference of the last two steps' peaks), misses the "
-        f"requested accuracy {accuracy:g} after {len(conv.steps)} runs (stats['accuracy_ok'] "
-        "is False; the peaks are the extrapolated ones)")
+        f"requested accuracy {accuracy:g} after {len(conv.steps)} runs{conv.stopped} "
+        "(stats['accuracy_ok'] is False; the peaks are the extrapolated ones)")
     return dict(accuracy=accuracy, error_estimate=estimate,
                 error_estimate_method="step halving", accuracy_ok=ok, accuracy_note=note,
                 accuracy_steps=list(conv.steps),
                 accuracy_peaks=[list(map(float, p)) for p in conv.peaks],
                 observed_order=[float(p) for p in conv.order],
                 peak_errors=[float(e) for e in conv.error],
-                accuracy_seconds=float(sum(conv.seconds)), peaks_extrapolated=True)
+                accuracy_seconds=float(sum(conv.seconds)),
+                accuracy_run_seconds=[float(x) for x in conv.seconds], peaks_extrapolated=True)
 
 
 def simulate_to_accuracy(mech, revolutions: int | None, accuracy: float, record, **options):
@@ -275,9 +293,10 @@ def simulate_to_accuracy(mech, revolutions: int | None, accuracy: float, record,
     (`richardson`); its stats hold ``error_estimate`` (largest relative bar over the
     revolutions), ``accuracy_ok``, ``accuracy_steps``, ``accuracy_peaks`` (each run's),
     ``observed_order`` and ``peak_errors`` (N). An `AccuracyWarning` says when the request
-    was not met within `MAX_HALVINGS` further halvings. Where a finer run's record would
-    exceed ``max_memory`` (default min(4 GiB, half the RAM)) that run records its peaks
-    only and the series are the last recorded run's (``stats["series_step"]``;
+    was not met within `MAX_HALVINGS` further halvings. The series are recorded at h/4, or
+    at the finest of h/2 and h whose record fits ``max_memory`` (default min(4 GiB, half the
+    RAM)); a finer run whose record would exceed it records its peaks only and the series
+    are the last recorded run's (``stats["series_step"]``;
     ``stats["series_peak_offset"]``: the relative distance of its own refined peaks from
     the extrapolated ones)."""
     import warnings
@@ -320,6 +339,6 @@ def peak_to_accuracy(mech, revolution: int, accuracy: float, **options) -> float
     rel = float(conv.relative_error[revolution - 1])
     if rel > accuracy:
         warnings.warn(f"Exudyn's estimated error of the peak, {rel:.2g} (step halving down to "
-                      f"{conv.steps[-1]:.3g} s), misses the requested accuracy {accuracy:g}",
-                      AccuracyWarning, stacklevel=3)
+                      f"{conv.steps[-1]:.3g} s), misses the requested accuracy {accuracy:g}"
+                      f"{conv.stopped}", AccuracyWarning, stacklevel=3)
     return float(conv.value[revolution - 1])

@@ -98,3 +98,44 @@ def test_a_finer_record_beyond_max_memory_records_its_peaks_only(tmp_path):
     assert tr.stats["series_peak_offset"] > free.stats["series_peak_offset"]
     back = load_trajectory(tr.save(tmp_path / "run.npz"))
     np.testing.assert_array_equal(back.peaks, tr.peaks)
+
+
+def test_an_h4_record_beyond_max_memory_records_the_h2_run():
+    """With max_memory between the h/2 and h/4 records the series come from the h/2 run
+    (recorded before h/4 is run), every finer run records its peaks only, and the peaks are
+    the same extrapolated ones as without the limit (1e-3: four runs, as above)."""
+    from mbs_clearance.backends import exudyn_linkage as xl
+    from mbs_clearance.model.cases import as_linkage
+
+    mech = SliderCrank()
+    free = simulate(mech, 1, backend="exudyn", accuracy=1e-3)
+    h = free.stats["accuracy_steps"]
+    lk = as_linkage(mech)
+    limit = (xl.estimate_memory(lk, 1, h[1])[1] + xl.estimate_memory(lk, 1, h[2])[1]) // 2
+    tr = simulate(mech, 1, backend="exudyn", accuracy=1e-3, max_memory=limit)
+    assert tr.stats["series_step"] == h[1]
+    assert tr.stats["accuracy_steps"] == h
+    np.testing.assert_array_equal(tr.peaks, free.peaks)
+    # the series' own peaks are the h/2 run's: farther from the extrapolated ones
+    assert tr.stats["series_peak_offset"] > free.stats["series_peak_offset"]
+
+
+def test_a_halving_beyond_max_memory_stops_the_sequence_unmet():
+    """1e-3 takes a fourth run (as above); with max_memory below even that run's peaks
+    (the reactions at every step) the sequence stops after three runs with the request
+    unmet, warns and says why, instead of refusing the whole run."""
+    from mbs_clearance.backends import exudyn_linkage as xl
+    from mbs_clearance.model.cases import as_linkage
+
+    mech = SliderCrank()
+    free = simulate(mech, 1, backend="exudyn", accuracy=1e-3)
+    h = free.stats["accuracy_steps"]
+    assert len(h) == 4
+    lk = as_linkage(mech)
+    need = [xl.estimate_memory(lk, 1, step, ("reactions",))[1] for step in h]
+    limit = (need[2] + need[3]) // 2
+    with pytest.warns(AccuracyWarning, match="misses the requested accuracy"):
+        peak = xc.peak_to_accuracy(mech, 1, 1e-3, max_memory=limit)
+    conv, _ = xc._sequence(lk, 1, 1e-3, {"max_memory": limit})
+    assert conv.steps == tuple(h[:3]) and "exceed max_memory even for its peaks" in conv.stopped
+    assert peak == conv.value[0] and conv.relative_error[0] > 1e-3

@@ -13,6 +13,7 @@ tests/unit/test_own_mechanism.py); every other output block is run here.
 from __future__ import annotations
 
 import math
+import os
 import re
 import shlex
 import subprocess
@@ -108,7 +109,11 @@ def _run(cmd, folder):
         argv = [str(Path(sys.executable).with_name("mbs-clearance")), *argv[1:]]
     elif argv[0] == "python":
         argv = [sys.executable, *argv[1:]]
-    proc = subprocess.run(argv, cwd=folder, capture_output=True, text=True, timeout=900)
+    # `python -m benchmarks.X` / `validation.X` as from the repository root
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(
+        [str(ROOT), *filter(None, [os.environ.get("PYTHONPATH")])])}
+    proc = subprocess.run(argv, cwd=folder, capture_output=True, text=True, timeout=1800,
+                          env=env)
     assert proc.returncode == 0, f"{cmd} failed:\n{proc.stderr[-2000:]}"
     text = proc.stdout + proc.stderr
     return [ln for ln in text.splitlines()

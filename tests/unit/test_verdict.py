@@ -100,7 +100,7 @@ def test_chaotic_motion_is_judged_on_statistics():
     # two revolutions decide nothing
     v = verdict_of_peaks(pa[:2], 0.01, pc[:2], 0.01, periodic=False,
                          statistics_a=_stats(pa[:2]), statistics_b=_stats(pc[:2]))
-    assert v.statistics == UNDECIDED and "run more revolutions" in v.reason
+    assert v.statistics == UNDECIDED and "run at least 4 revolutions" in v.reason
 
 
 def test_a_differing_verdict_says_when_a_bar_is_unknown():
@@ -119,3 +119,16 @@ def test_a_differing_verdict_says_when_a_bar_is_unknown():
     assert "no error estimate for exudyn" in v.summary()
     assert "may be its error" in v.summary()
     assert "no error estimate" not in verdict_of_trajectories(a, a).summary()
+
+
+def test_one_revolution_of_a_motion_that_does_not_repeat_says_to_run_more():
+    """One revolution has no revolutions after the first to take statistics on: the
+    verdict is undecided and says how many revolutions would decide."""
+    a = np.array([100.0])
+    empty = _stats(np.array([]))
+    v = verdict_of_peaks(a, 0.1, a + 5.0, 0.1, periodic=False, statistics_a=empty,
+                         statistics_b=empty)
+    assert v.kind == NOT_COMPARABLE and v.statistics == UNDECIDED
+    assert v.statistics_items == ()
+    assert "over 0 revolution(s)" in v.reason and "run at least 4 revolutions" in v.reason
+    assert "statistics over revolutions" not in format_verdict(v)

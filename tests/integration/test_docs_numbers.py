@@ -1,0 +1,119 @@
+"""Every number of README.md and docs/ listed in tests/docs_numbers.toml is what the command
+beside it prints: the page holds the number and the command within `REACH` lines, and the
+command, run as a user runs it (from a fresh folder), prints the same number to half a unit
+of its last documented digit (or the entry's stated tolerance). Each command runs once."""
+
+from __future__ import annotations
+
+import math
+import re
+import sys
+from decimal import Decimal
+from pathlib import Path
+
+import pytest
+
+# the registry is TOML (readable patterns); Python 3.10 has no reader in its library
+tomllib = pytest.importorskip("tomllib", reason="the registry needs tomllib (Python >= 3.11)")
+
+ROOT = Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(ROOT / "tests" / "unit"))
+from test_documented_outputs import NUMBER, _run  # noqa: E402  (its runner, one way)
+
+sys.path.pop(0)
+
+REGISTRY = ROOT / "tests" / "docs_numbers.toml"
+#: lines between a number and its command on the page (a table row holds both; a table
+#: follows its indented command)
+REACH = 12
+
+
+def _entries():
+    data = tomllib.loads(REGISTRY.read_text())
+    out = []
+    for kind in ("number", "lines"):
+        for k, e in enumerate(data.get(kind, [])):
+            e = {**e, "kind": kind}
+            marks = [pytest.mark.slow] if e.get("slow") else []
+            label = e["number"] if kind == "number" else f"{len(e['lines'])} lines"
+            out.append(pytest.param(e, marks=marks, id=f"{e['page']}:{label}:{k}"))
+    return out
+
+
+ENTRIES = _entries()
+
+
+def half_unit(documented: str) -> float:
+    """Half a unit of the last digit of a documented number ("8290.32": 0.005)."""
+    return 0.5 * 10.0 ** Decimal(documented.lstrip("+-")).as_tuple().exponent
+
+
+def _tolerance(entry: dict, documented: str) -> float:
+    if "rtol" in entry:
+        assert entry.get("reason"), f"{entry}: a stated tolerance needs its reason"
+        return float(entry["rtol"]) * abs(float(documented))
+    return half_unit(documented)
+
+
+def _where(lines: list[str], text: str) -> list[int]:
+    return [i for i, ln in enumerate(lines) if text in ln]
+
+
+def _beside(page: str, entry: dict) -> None:
+    """The page holds the documented text and the command within REACH lines of it."""
+    lines = (ROOT / page).read_text().splitlines()
+    cmd = entry["command"]
+    near = [i for i in range(len(lines))
+            if cmd in " ".join(lines[i].replace("`", " ").split())]
+    assert near, f"{page} does not show the command `{cmd}`"
+    texts = [entry["text"]] if entry["kind"] == "number" else entry["lines"]
+    for text in texts:
+        at = _where(lines, text)
+        assert at, f"{page} does not hold the documented text\n  {text}"
+        assert any(abs(i - j) <= REACH for i in at for j in near), (
+            f"{page}: `{cmd}` is not within {REACH} lines of\n  {text}")
+
+
+_OUTPUT: dict[str, list[str]] = {}
+
+
+def _output(cmd: str, tmp_path_factory) -> list[str]:
+    if cmd not in _OUTPUT:
+        _OUTPUT[cmd] = _run(cmd, tmp_path_factory.mktemp("docs-number"))
+    return _OUTPUT[cmd]
+
+
+def _agree(doc: str, printed: str, tol: float) -> bool:
+    return math.isclose(float(doc), float(printed), rel_tol=0.0, abs_tol=tol * (1 + 1e-9))
+
+
+def test_half_unit_and_the_registry_are_read():
+    assert half_unit("8290.32") == pytest.approx(0.005)
+    assert half_unit("548") == 0.5 and half_unit("-0.23") == pytest.approx(0.005)
+    assert len(ENTRIES) >= 20
+
+
+@pytest.mark.parametrize("entry", ENTRIES)
+def test_the_documented_number_is_what_its_command_prints(entry, tmp_path_factory):
+    _beside(entry["page"], entry)
+    printed = _output(entry["command"], tmp_path_factory)
+    if entry["kind"] == "number":
+        assert entry["number"] in entry["text"]
+        pattern = re.compile(entry["printed"])
+        found = [m.group(1) for ln in printed if (m := pattern.search(ln))]
+        assert found, (f"`{entry['command']}` prints nothing matching {entry['printed']}:\n  "
+                       + "\n  ".join(printed))
+        tol = _tolerance(entry, entry["number"])
+        assert _agree(entry["number"], found[0], tol), (
+            f"{entry['page']} says {entry['number']}; `{entry['command']}` prints "
+            f"{found[0]} (tolerance {tol:g})")
+        return
+    for doc in entry["lines"]:
+        words = NUMBER.sub("#", doc).split()
+        match = [ln for ln in printed if NUMBER.sub("#", ln).split() == words]
+        assert match, f"`{entry['command']}` prints no line like\n  {doc}"
+        nums = NUMBER.findall(doc)
+        ok = [ln for ln in match
+              if all(_agree(a, b, _tolerance(entry, a))
+                     for a, b in zip(nums, NUMBER.findall(ln)))]
+        assert ok, f"{entry['page']} says\n  {doc}\n`{entry['command']}` prints\n  {match[0]}"
