@@ -16,6 +16,9 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#ifdef __GLIBC__
+#include <malloc.h>
+#endif
 
 #include "mbs_core.h"
 
@@ -1066,6 +1069,22 @@ static int64_t switch_events(const run_ctx *cx, double t, const double *y, doubl
 }
 
 /* ---- integrate ---- */
+
+/* glibc's allocator: blocks below mmap_threshold bytes from the heap, and the heap kept
+ * mapped up to trim_threshold bytes of free memory (1: set; 0: not glibc or refused). Its
+ * defaults hand each run's records fresh pages that the kernel zeroes: a quarter of a DDM
+ * run of the paper case went into those page faults. */
+int64_t mbs_tune_allocator(int64_t mmap_threshold, int64_t trim_threshold)
+{
+#ifdef __GLIBC__
+    return mallopt(M_MMAP_THRESHOLD, (int)mmap_threshold) == 1
+        && mallopt(M_TRIM_THRESHOLD, (int)trim_threshold) == 1;
+#else
+    (void)mmap_threshold;
+    (void)trim_threshold;
+    return 0;
+#endif
+}
 
 /* free one of a result's arrays handed to Python (numpy arrays own them then) */
 void mbs_free(void *data)

@@ -723,3 +723,34 @@ def test_two_joints_with_impacts_converge_at_the_method_order():
     slope = -np.log(errors[2] / errors[0]) / np.log(nfevs[2] / nfevs[0])
     order = METHODS["dopri5"].order
     assert order - 1.5 < slope < order + 1.0, (errors, nfevs)
+
+
+def test_the_core_sets_the_allocator_unless_told_not_to(monkeypatch):
+    """On glibc the core keeps blocks below 32 MiB on the heap and up to 128 MiB of it
+    mapped (`integrate.ALLOCATOR`: a run's records reuse the last run's pages); with
+    MBS_CLEARANCE_MALLOC=default, or the user's own glibc tuning in the environment, it
+    leaves the allocator alone."""
+    import platform
+
+    from mbs_clearance.core import integrate as ci
+
+    for name in ("MBS_CLEARANCE_MALLOC", "MALLOC_MMAP_THRESHOLD_", "MALLOC_TRIM_THRESHOLD_"):
+        monkeypatch.delenv(name, raising=False)
+    calls = []
+
+    class Lib:
+        def mbs_tune_allocator(self, *args):
+            calls.append(args)
+            return 1
+
+    ci._tune_allocator(Lib())
+    assert calls == [ci.ALLOCATOR]
+    for name, value in (("MBS_CLEARANCE_MALLOC", "default"),
+                        ("MALLOC_TRIM_THRESHOLD_", "1000000")):
+        with monkeypatch.context() as m:
+            m.setenv(name, value)
+            ci._tune_allocator(Lib())
+        assert len(calls) == 1, name
+    _, lib = ci.core()
+    glibc = platform.libc_ver()[0] == "glibc"
+    assert lib.mbs_tune_allocator(*ci.ALLOCATOR) == (1 if glibc else 0)
