@@ -115,6 +115,9 @@ def _compared(name, rtol=None):
 
 
 @pytest.mark.slow
+# the four-bar's journal at 1e-7 m rattles: the run's note is about single peaks, and this
+# compares window averages
+@pytest.mark.filterwarnings("ignore::mbs_clearance.AccuracyWarning")
 @pytest.mark.parametrize("name", ["four_bar", "slider_crank_two_clearances"])
 def test_ideal_limit_window_averages(name):
     """Window averages (10 degrees of crank angle) of every ground reaction, the shaking
