@@ -384,8 +384,8 @@ def test_friction_section(report):
     """Friction in the joints (beyond the paper, no verdict line): the quick report's table
     holds the paper case only, each row's peak is the plain run's of the same description
     (independent call), the frictionless row dissipates nothing by friction and the rows
-    with friction do; the sensitivity table's numbers are those of the saved DDM runs, the
-    first of them frictionless and equal to an independent DDM run; both figures are in the
+    with friction do; the sensitivity table's numbers bound the saved (thinned) DDM runs'
+    maxima, the first of them frictionless and equal to an independent DDM run; both figures are in the
     HTML and decode."""
     from mbs_clearance.analysis.sensitivity import load_sensitivities
     from mbs_clearance.model import cases
@@ -404,12 +404,18 @@ def test_friction_section(report):
     mus = fr["sensitivity"][0]["mu"]
     assert mus[0] == 0.0 and 0.1 in mus
     for mu, f in zip(mus, fr["sensitivity_files"]):
+        # the saved runs are thinned to the figures' samples (the report's default; its
+        # --full-data keeps every one): their maxima are at most the table's, which are over
+        # every sample (checked against an independent DDM run below), and a sharp peak of S
+        # between the kept samples is missed by up to ~11 % (8.05 against 9.00 measured):
+        # half is the bound that still catches a table of other runs
         sens = load_sensitivities(report / "data" / f)
         mask = sens.revolution_mask(4)
         for k, row in enumerate(fr["sensitivity"]):
             assert row["parameter"] == sens.parameters[k]
-            assert row["max_s"][mus.index(mu)] == pytest.approx(
-                float(np.abs(sens.normalized[mask, k]).max()), rel=1e-12)
+            saved = float(np.abs(sens.normalized[mask, k]).max())
+            assert 0.5 * row["max_s"][mus.index(mu)] <= saved
+            assert saved <= row["max_s"][mus.index(mu)] * (1.0 + 1e-12)
     ref = sensitivities(SliderCrank(), revolutions=4)       # the paper's set, DDM
     for k, row in enumerate(fr["sensitivity"]):
         assert row["max_s"][0] == pytest.approx(
