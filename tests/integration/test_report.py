@@ -385,8 +385,8 @@ def test_friction_section(report):
     holds the paper case only, each row's peak is the plain run's of the same description
     (independent call), the frictionless row dissipates nothing by friction and the rows
     with friction do; the sensitivity table's numbers bound the saved (thinned) DDM runs'
-    maxima, the first of them frictionless and equal to an independent DDM run; both figures are in the
-    HTML and decode."""
+    maxima, the first of them frictionless and equal to an independent DDM run; both
+    figures are in the HTML and decode."""
     from mbs_clearance.analysis.sensitivity import load_sensitivities
     from mbs_clearance.model import cases
 
