@@ -151,19 +151,10 @@ def converged_peaks(mech, revolutions: int = 4, *, step_size: float | None = Non
 
 
 def _all_peaks(linkage, revolutions, settings, max_memory, start) -> np.ndarray:
-    """Refined per-revolution peaks of one Exudyn run recording the reactions only."""
+    """Refined per-revolution peaks of one Exudyn run (`exudyn_linkage.run_peaks`)."""
     from . import exudyn_linkage as xl
 
-    if xl.monitors_element_reaction(linkage):
-        return np.asarray(xl.run_linkage(linkage, revolutions, settings, max_memory,
-                                         start).peaks, dtype=float)
-    revolutions = xl._check_run(linkage, revolutions, settings, ("reactions",), max_memory)
-    model = xl.build(linkage, settings, outputs=("reactions",), start=start)
-    xl.solve(model, revolutions * linkage.period)
-    t, reactions = xl._reactions(model)
-    F = (sum(reactions.values()) if linkage.monitor_joint is None
-         else reactions[linkage.monitor_joint])
-    return xl.refined_peaks(t, np.hypot(F[:, 0], F[:, 1]), linkage.period, revolutions)
+    return xl.run_peaks(linkage, revolutions, settings, max_memory, start)
 
 
 def order_of(a: float, b: float, c: float) -> float:

@@ -1644,12 +1644,23 @@ def monitors_element_reaction(linkage: Linkage) -> bool:
 def peak_run(linkage: Linkage, revolution: int | None, settings: ExudynSettings,
              max_memory=None, start=None, *, duration=None, window=None) -> float:
     """`peak_exudyn_linkage` for validated `settings` (from `start` if given)."""
+    return float(run_peaks(linkage, revolution, settings, max_memory, start,
+                           duration=duration, window=window, name="revolution")[-1])
+
+
+def run_peaks(linkage: Linkage, revolutions: int | None, settings: ExudynSettings,
+              max_memory=None, start=None, *, duration=None, window=None,
+              name: str = "revolutions") -> np.ndarray:
+    """The refined peaks of the monitored force (N) of each of `revolutions` drive
+    revolutions, or of each time window of a free linkage's run of `duration` s, from one
+    run recording the reactions only (a full run where the monitored force holds an
+    element's ground reaction, `monitors_element_reaction`). `name`: the span's option, as
+    its errors say it."""
     if monitors_element_reaction(linkage):
-        traj = run_linkage(linkage, revolution, settings, max_memory, start,
-                           duration=duration, window=window)
-        return float(traj.peaks[-1])
-    span = _check_run(linkage, revolution, settings, ("reactions",), max_memory,
-                      "revolution", duration=duration, window=window)
+        return np.asarray(run_linkage(linkage, revolutions, settings, max_memory, start,
+                                      duration=duration, window=window).peaks, dtype=float)
+    span = _check_run(linkage, revolutions, settings, ("reactions",), max_memory, name,
+                      duration=duration, window=window)
     free = linkage.drive is None
     if free and start is not None:
         raise ValueError("start is for a driven linkage; a free linkage starts from its "
@@ -1659,8 +1670,7 @@ def peak_run(linkage: Linkage, revolution: int | None, settings: ExudynSettings,
     t, reactions = _reactions(model)
     F = (sum(reactions.values()) if linkage.monitor_joint is None
          else reactions[linkage.monitor_joint])
+    magnitude = np.hypot(F[:, 0], F[:, 1])
     if free:
-        return float(window_peaks(t, np.hypot(F[:, 0], F[:, 1]), span)[-1])
-    revolution = span
-    return float(refined_peaks(t, np.hypot(F[:, 0], F[:, 1]), linkage.period,
-                               revolution)[revolution - 1])
+        return window_peaks(t, magnitude, span)
+    return refined_peaks(t, magnitude, linkage.period, span)
