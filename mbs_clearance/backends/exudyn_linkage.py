@@ -77,7 +77,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from types import SimpleNamespace
 
 import numpy as np
@@ -1174,10 +1174,50 @@ def _simulation_settings(settings: ExudynSettings, step: float, end_time: float,
     return ss, n_steps
 
 
+class SolverFailure(RuntimeError):
+    """Exudyn's time integration stopped (its Newton iteration did not converge)."""
+
+
+#: a run whose Newton iteration fails at the automatic tolerance runs again with the
+#: tolerance this factor looser, at most `NEWTON_RETRIES` times: a step's initial residual
+#: shrinks with the step while the contact force's roundoff does not, so the relative
+#: floor that `ExudynSettings.tolerance` estimates rises at small steps (the four-bar at
+#: 30 rpm: 3.6e-8 fails at a step of 3.0e-6 s and 5e-8 converges)
+NEWTON_RETRY_FACTOR = 4.0
+NEWTON_RETRIES = 2
+
+
+def build_and_solve(linkage: Linkage, settings: ExudynSettings, end_time: float,
+                    **build_options) -> tuple[ExudynModel, dict]:
+    """`build` and `solve` to `end_time` (s): (model, stats). Where the Newton tolerance is
+    automatic (``newton_tolerance=None``) and the solver fails, the model is built again
+    and run with the tolerance `NEWTON_RETRY_FACTOR` times looser, at most `NEWTON_RETRIES`
+    times (``stats["newton_retries"]``; ``stats["newton_tolerance"]`` is the one used)."""
+    tolerance = settings.tolerance(linkage)
+    for attempt in range(NEWTON_RETRIES + 1):
+        run_settings = (settings if attempt == 0
+                        else replace(settings, newton_tolerance=tolerance))
+        model = build(linkage, run_settings, **build_options)
+        try:
+            stats = solve(model, end_time)
+        except SolverFailure as exc:
+            if settings.newton_tolerance is not None or attempt == NEWTON_RETRIES:
+                if attempt:
+                    raise SolverFailure(f"{exc} (also with Newton's tolerance loosened "
+                                        f"to {tolerance:.3g})") from exc
+                raise
+            tolerance *= NEWTON_RETRY_FACTOR
+            continue
+        stats["newton_retries"] = attempt
+        return model, stats
+    raise AssertionError("unreachable")
+
+
 def solve(model: ExudynModel, end_time: float) -> dict:
     """Run the time integration to `end_time` (s); returns solver statistics.
 
-    Raises RuntimeError with advice if Exudyn's solver fails.
+    Raises `SolverFailure` (a RuntimeError) with advice if Exudyn's solver fails, and a
+    RuntimeError if a user function does.
     """
     import exudyn as exu
     import exudyn.solver as exs
@@ -1196,12 +1236,12 @@ def solve(model: ExudynModel, end_time: float) -> dict:
     except Exception as exc:  # Exudyn raises its own error types from C++
         if "USER FUNCTION" in str(exc):      # a bug in our pre-step or force function
             raise RuntimeError(f"Exudyn user function failed: {exc}") from exc
-        raise RuntimeError(_failure_message(model, f"{type(exc).__name__}: {exc}")) from exc
+        raise SolverFailure(_failure_message(model, f"{type(exc).__name__}: {exc}")) from exc
     finally:
         exs.solverCheckMemoryAllocationsThreshold = threshold
     wall = time.perf_counter() - wall
     if not ok:
-        raise RuntimeError(_failure_message(model, "the solver reported failure"))
+        raise SolverFailure(_failure_message(model, "the solver reported failure"))
     stats = dict(step_size=model.step, step_size_used=end_time / n_steps, n_steps=n_steps,
                  wall_time=wall,
                  **{k: v for k, v in asdict(model.settings).items() if k != "step_size"})
@@ -1548,8 +1588,9 @@ def run_linkage(linkage: Linkage, revolutions: int | None, settings: ExudynSetti
         raise ValueError("start is for a driven linkage; a free linkage starts from its "
                          "initial (Linkage.initial, an Initial)")
     revolutions = None if free else span
-    model = build(linkage, settings, start=start)
-    stats = solve(model, float(span[-1]) if free else revolutions * linkage.period)
+    model, stats = build_and_solve(linkage, settings,
+                                   float(span[-1]) if free else revolutions * linkage.period,
+                                   start=start)
 
     t, reactions = _reactions(model)
     moment = None if free else -stored(model, "drive")[:, 1]
@@ -1665,8 +1706,9 @@ def run_peaks(linkage: Linkage, revolutions: int | None, settings: ExudynSetting
     if free and start is not None:
         raise ValueError("start is for a driven linkage; a free linkage starts from its "
                          "initial (Linkage.initial, an Initial)")
-    model = build(linkage, settings, outputs=("reactions",), start=start)
-    solve(model, float(span[-1]) if free else span * linkage.period)
+    model, _ = build_and_solve(linkage, settings,
+                               float(span[-1]) if free else span * linkage.period,
+                               outputs=("reactions",), start=start)
     t, reactions = _reactions(model)
     F = (sum(reactions.values()) if linkage.monitor_joint is None
          else reactions[linkage.monitor_joint])
