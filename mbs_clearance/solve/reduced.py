@@ -1,13 +1,15 @@
 """The paper's slider-crank (`SliderCrank`) on the reduced model: its named parameter set
-run as its description, and its `Trajectory` in the paper's names.
+run as its description, and its `Trajectory` as the paper's case (`paper_series`).
 
 A `SliderCrank` is the paper's parameter set of one linkage: its runs integrate its
 description (`cases.from_slider_crank`, whose compiled model is `MODEL` for the paper's
 parameter set, or the one with the tangential force for a joint with friction) through
 `linkage_model.run`, the one plain run of every linkage.
 This module adds only what is the paper's own: the closed-form centred start (and the
-stress tests' offset start), and the Trajectory's slider-crank series (slider position,
-coupler angle, F12 as `base_force`). Generalized coordinates theta3 (coupler angle) and x4
+stress tests' offset start), and the Trajectory's series of its one clearance joint as
+(n,) arrays (F12 is `base_force`; the slider position and coupler angle are the
+description's coordinates, read by their paper names through `trajectory.PAPER_SERIES`).
+Generalized coordinates theta3 (coupler angle) and x4
 (slider position); the crank angle is prescribed, theta2 = omega2 t + theta20. State y =
 [theta3, x4, theta3dot, x4dot, W] where W is the work done by the crank drive (a quadrature,
 kept out of error control). The clearance joint's memory (contact mode, impact velocity
