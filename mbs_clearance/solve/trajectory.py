@@ -629,8 +629,8 @@ def _generic_series(path: Path, cols: dict[str, np.ndarray], n: int) -> dict[str
                                                     cols["shaking_force_y[N]"]])
     except KeyError as exc:
         raise _fail(path, f"missing column {exc}") from exc
-    # each kind as stored (a file of a run without the coupler's acceleration, an ideal-joint
-    # or Exudyn run saved by an earlier release, lacks that column)
+    # each kind as stored: a file written again from one of an earlier version (whose
+    # ideal-joint or Exudyn run stored no coupler acceleration) lacks that column
     for kind, prefix in (("coordinates", "coordinate."), ("rates", "rate."),
                          ("accelerations", "acceleration.")):
         named = {k[len(prefix):]: v for k, v in cols.items() if k.startswith(prefix)}
