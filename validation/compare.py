@@ -173,8 +173,8 @@ def eccentricities(tr: Trajectory) -> np.ndarray:
 
 
 def shaking_magnitude(tr: Trajectory) -> np.ndarray:
-    """|shaking force| (n,) in N: |sum of the ground reactions| of a linkage; the
-    slider-crank's trajectory records only F12, so its |F12|."""
+    """|shaking force| (n,) in N: |sum of the ground reactions|; a run without them (the
+    paper's closed form with ideal joints records only F12): its |F12|."""
     f = tr.shaking_force if tr.shaking_force is not None else tr.base_force
     return np.hypot(f[:, 0], f[:, 1])
 

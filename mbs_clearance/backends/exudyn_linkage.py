@@ -1640,8 +1640,6 @@ def run_linkage(linkage: Linkage, revolutions: int | None, settings: ExudynSetti
         t=t, base_force=np.ascontiguousarray(monitored), crank_moment=moment,
         contact_force=np.column_stack(force), penetration=penetration,
         eccentricity=np.stack(ecc, axis=1),
-        slider_position=None, slider_velocity=None, slider_acceleration=None,
-        coupler_angle=None, coupler_rate=None,
         contact_phase=(penetration > 0.0).astype(np.int8), crank_work=work,
         mechanism=linkage, backend="exudyn", stats=stats,
         peaks=(window_peaks(t, np.hypot(monitored[:, 0], monitored[:, 1]), span) if free

@@ -166,12 +166,10 @@ def simulate_exudyn(mech: SliderCrank, revolutions: int = 4, **options) -> Traje
         t=lt.t, base_force=lt.base_force, crank_moment=lt.crank_moment,
         contact_force=lt.contact_force[:, 0].copy(), penetration=lt.penetration[:, 0].copy(),
         eccentricity=lt.eccentricity[:, 0].copy(),
-        slider_position=lt.coordinates["slider_guide.s"],
-        slider_velocity=lt.rates["slider_guide.s"],
-        slider_acceleration=lt.accelerations["slider_guide.s"],
-        coupler_angle=lt.coordinates["coupler.angle"], coupler_rate=lt.rates["coupler.angle"],
         contact_phase=lt.contact_phase[:, 0].copy(), crank_work=lt.crank_work,
-        mechanism=mech, backend="exudyn", stats=lt.stats, peaks=lt.peaks))
+        mechanism=mech, backend="exudyn", stats=lt.stats, peaks=lt.peaks, joints=lt.joints,
+        reactions=lt.reactions, shaking_force=lt.shaking_force, coordinates=lt.coordinates,
+        rates=lt.rates, accelerations=lt.accelerations))
 
 
 def peak_exudyn(mech: SliderCrank, revolution: int = 4, **options) -> float:

@@ -14,8 +14,8 @@ from __future__ import annotations
 import numpy as np
 
 from .._checks import MemoryLimitError, check_int, check_max_memory, format_bytes
-from ..model.mechanism import SliderCrank
-from ..solve.trajectory import Trajectory, annotate
+from ..model.mechanism import PAPER_JOINT, SliderCrank
+from ..solve.trajectory import COUPLER_ANGLE, SLIDER_S, Trajectory, annotate
 
 __all__ = ["ideal_outputs", "simulate_ideal", "peak_ideal"]
 
@@ -97,11 +97,14 @@ def simulate_ideal(mech: SliderCrank, revolutions: int = 4, *,
         t=t, base_force=o["base_force"], crank_moment=o["crank_moment"],
         contact_force=np.hypot(o["joint_force"][:, 0], o["joint_force"][:, 1]),
         penetration=zeros.copy(), eccentricity=np.zeros((n, 2)),
-        slider_position=o["x4"], slider_velocity=o["x4d"], slider_acceleration=o["x4dd"],
-        coupler_angle=o["theta3"], coupler_rate=o["theta3d"],
         contact_phase=np.ones(n, dtype=np.int8), crank_work=work,
         mechanism=mech, backend="ideal",
         stats={"samples_per_revolution": samples_per_revolution}, peaks=peaks,
+        joints=(PAPER_JOINT,),
+        # by the description's names (`trajectory.PAPER_SERIES` reads the paper's from them)
+        coordinates={COUPLER_ANGLE: o["theta3"], SLIDER_S: o["x4"]},
+        rates={COUPLER_ANGLE: o["theta3d"], SLIDER_S: o["x4d"]},
+        accelerations={COUPLER_ANGLE: o["theta3dd"], SLIDER_S: o["x4dd"]},
     ))
 
 

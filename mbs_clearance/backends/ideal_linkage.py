@@ -470,8 +470,6 @@ def constrained_run(linkage: Linkage, revolutions: int | None = None, **options)
         t=t, base_force=np.ascontiguousarray(monitored), crank_moment=moment,
         contact_force=contact, penetration=np.zeros_like(contact),
         eccentricity=np.zeros((len(t), len(contacts), 2)),
-        slider_position=None, slider_velocity=None, slider_acceleration=None,
-        coupler_angle=None, coupler_rate=None,
         contact_phase=np.ones(contact.shape, dtype=np.int8), crank_work=work,
         mechanism=linkage, backend="ideal", stats=stats, peaks=peaks,
         joints=tuple(name for name, _ in contacts), reactions=reactions,

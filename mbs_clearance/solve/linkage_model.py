@@ -337,8 +337,6 @@ def trajectory_from_run(linkage: Linkage, model, ts, ys, ms, p, stats, peaks, ou
         crank_moment=None if free else outs[:, col["drive_moment"]].copy(),
         contact_force=per_joint("contact_force"), penetration=per_joint("penetration"),
         eccentricity=ecc,
-        slider_position=None, slider_velocity=None, slider_acceleration=None,
-        coupler_angle=None, coupler_rate=None,
         contact_phase=(ms[:, 0:2 * J:2] > 0.5).astype(np.int8),
         crank_work=None if free else ys[:, 2 * n].copy(), mechanism=linkage,
         backend="reduced", stats=stats,

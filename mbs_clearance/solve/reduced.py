@@ -1,13 +1,15 @@
 """The paper's slider-crank (`SliderCrank`) on the reduced model: its named parameter set
-run as its description, and its `Trajectory` in the paper's names.
+run as its description, and its `Trajectory` as the paper's case (`paper_series`).
 
 A `SliderCrank` is the paper's parameter set of one linkage: its runs integrate its
 description (`cases.from_slider_crank`, whose compiled model is `MODEL` for the paper's
 parameter set, or the one with the tangential force for a joint with friction) through
 `linkage_model.run`, the one plain run of every linkage.
 This module adds only what is the paper's own: the closed-form centred start (and the
-stress tests' offset start), and the Trajectory's slider-crank series (slider position,
-coupler angle, F12 as `base_force`). Generalized coordinates theta3 (coupler angle) and x4
+stress tests' offset start), and the Trajectory's series of its one clearance joint as
+(n,) arrays (F12 is `base_force`; the slider position and coupler angle are the
+description's coordinates, read by their paper names through `trajectory.PAPER_SERIES`).
+Generalized coordinates theta3 (coupler angle) and x4
 (slider position); the crank angle is prescribed, theta2 = omega2 t + theta20. State y =
 [theta3, x4, theta3dot, x4dot, W] where W is the work done by the crank drive (a quadrature,
 kept out of error control). The clearance joint's memory (contact mode, impact velocity
@@ -222,11 +224,10 @@ def grazing_onsets(mech: SliderCrank, ms: np.ndarray) -> int:
 
 
 #: the output columns of a Trajectory's series (base force x, y, eccentricity x, y, crank
-#: moment, contact force, penetration, slider acceleration), by name in the generated
-#: model's outputs
+#: moment, contact force, penetration), by name in the generated model's outputs
 _SERIES = ("crank_pivot.reaction_x", "crank_pivot.reaction_y", "coupler_slider.ecc_x",
            "coupler_slider.ecc_y", "drive_moment", "coupler_slider.contact_force",
-           "coupler_slider.penetration", "slider_guide.s.acc")
+           "coupler_slider.penetration")
 
 
 def _series_columns(columns) -> np.ndarray:
@@ -236,23 +237,23 @@ def _series_columns(columns) -> np.ndarray:
 
 
 def _columns(ys, ms, out, col, work):
-    """The time series of a `Trajectory` from states, memories and outputs (the `_SERIES`
-    columns col of out): base_force, crank_moment, contact_force, penetration,
-    eccentricity, slider_position, slider_velocity, slider_acceleration, coupler_angle,
-    coupler_rate, contact_phase, crank_work, each a contiguous copy."""
+    """The paper's clearance joint's and drive's series of a `Trajectory` from states,
+    memories and outputs (the `_SERIES` columns col of out): base_force, crank_moment,
+    contact_force, penetration, eccentricity, contact_phase, crank_work, each a contiguous
+    copy (the coordinates are the generic series, `linkage_model.named_series`)."""
     def column(a, k):
         return np.ascontiguousarray(a[:, k])
 
     return (np.ascontiguousarray(out[:, col[:2]]), column(out, col[4]), column(out, col[5]),
-            column(out, col[6]), np.ascontiguousarray(out[:, col[2:4]]), column(ys, 1),
-            column(ys, 3), column(out, col[7]), column(ys, 0), column(ys, 2),
+            column(out, col[6]), np.ascontiguousarray(out[:, col[2:4]]),
             (ms[:, 0] > 0.5).astype(np.int8), column(ys, work))
 
 
 def trajectory_from_states(mech, ts, ys, ms, p, stats, peaks, outs=None,
                            columns=None, model=None):
-    """Build a `Trajectory` in the paper's names (and beside them the generic ones of every
-    linkage's, `linkage_model.named_series`) from recorded states [theta3, x4, theta3dot,
+    """Build a `Trajectory` of the paper's case (its clearance joint's series as (n,)
+    arrays, the coordinates and reactions by the description's names,
+    `linkage_model.named_series`) from recorded states [theta3, x4, theta3dot,
     x4dot, W (, friction work)], memories [mode, dmin, ...] and, if recorded by the integrator, the
     outputs of `model` named `columns` (read in place, with any strides: a DDM run's are
     columns of its record); without outputs they are evaluated here from the model's
@@ -269,8 +270,7 @@ def trajectory_from_states(mech, ts, ys, ms, p, stats, peaks, outs=None,
         columns = model.OUT_COLUMNS
     else:
         out = outs
-    (base_force, crank_moment, contact_force, penetration, eccentricity, slider_position,
-     slider_velocity, slider_acceleration, coupler_angle, coupler_rate, contact_phase,
+    (base_force, crank_moment, contact_force, penetration, eccentricity, contact_phase,
      crank_work) = _columns(ys, ms, out, _series_columns(columns), 2 * model.N_Q)
     friction = getattr(model, "FRICTION_WORK", -1)
     generic = lm.named_series(model, ys, out, columns)
@@ -281,11 +281,6 @@ def trajectory_from_states(mech, ts, ys, ms, p, stats, peaks, outs=None,
         contact_force=contact_force,
         penetration=penetration,
         eccentricity=eccentricity,
-        slider_position=slider_position,
-        slider_velocity=slider_velocity,
-        slider_acceleration=slider_acceleration,
-        coupler_angle=coupler_angle,
-        coupler_rate=coupler_rate,
         contact_phase=contact_phase,
         crank_work=crank_work,
         mechanism=mech,
@@ -298,35 +293,24 @@ def trajectory_from_states(mech, ts, ys, ms, p, stats, peaks, outs=None,
 
 
 def paper_series(traj, mech: SliderCrank, sampled: bool = False):
-    """`traj`, a run of `mech`'s description (`cases.door`), in the paper's names: its
-    clearance joint's series as (n,) arrays, the slider's position, velocity and
-    acceleration and the coupler's angle and rate looked up by name in the description's
-    coordinates, `mech` as its mechanism (its closed-form start: no `start_revolutions`;
-    `sampled`, a run on given output times: no peaks). The reduced model's keeps the
-    description's per-joint series beside them (`joints`, `reactions`, `coordinates`,
-    ...); Exudyn's gives the paper's alone."""
+    """`traj`, a run of `mech`'s description (`cases.door`), as a run of `mech`: its
+    clearance joint's series as (n,) arrays, `mech` as its mechanism (its closed-form
+    start: no `start_revolutions`; `sampled`, a run on given output times: no peaks). The
+    description's generic series (`joints`, `reactions`, `coordinates`, ...) stay: the
+    paper's names (slider_position, ...) are read from them (`trajectory.PAPER_SERIES`)."""
     import dataclasses
 
     def first(a):
         return None if a is None else np.ascontiguousarray(a[:, 0]) if a.ndim > 1 else a
 
-    generic = traj.backend == "reduced"
     series = dict(
         contact_force=first(traj.contact_force), penetration=first(traj.penetration),
         eccentricity=(np.ascontiguousarray(traj.eccentricity[:, 0])
                       if traj.eccentricity.ndim == 3 else traj.eccentricity),
         contact_phase=first(traj.contact_phase),
-        slider_position=traj.coordinates["slider_guide.s"],
-        slider_velocity=traj.rates["slider_guide.s"],
-        slider_acceleration=traj.accelerations["slider_guide.s"],
-        coupler_angle=traj.coordinates["coupler.angle"],
-        coupler_rate=traj.rates["coupler.angle"],
-        friction_work=first(traj.friction_work) if generic else None,
+        friction_work=first(traj.friction_work) if traj.backend == "reduced" else None,
         contact_angle=None, slip_velocity=None, mechanism=mech,
         peaks=None if sampled else traj.peaks,
         stats={k: v for k, v in traj.stats.items()
                if not (k == "start_revolutions" and v == 0)})
-    if not generic:
-        series.update(dict.fromkeys(("joints", "reactions", "shaking_force", "coordinates",
-                                     "rates", "accelerations")))
     return dataclasses.replace(traj, **series)

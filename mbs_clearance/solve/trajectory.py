@@ -15,7 +15,7 @@ from .._warnings import PhysicsWarning
 from ..model.mechanism import SliderCrank
 
 __all__ = ["Trajectory", "load_trajectory", "annotate", "periodicity", "PENETRATION_LIMIT",
-           "PERIODIC_TOL"]
+           "PERIODIC_TOL", "PAPER_SERIES"]
 
 #: largest physically meaningful penetration, as a fraction of the journal radius. The
 #: contact laws (K delta^1.5, Hertz-type) assume a contact zone small against the radii; a
@@ -41,7 +41,25 @@ MAX_PERIOD = 4
 #: periodicity is then undetermined (rtol above about 3e-6 in the paper case)
 NOISE_LIMIT = 0.5
 
-#: name -> (unit, number of columns); the time series every backend fills
+#: the paper slider-crank's coordinates by their description's names
+#: (`cases.from_slider_crank`): the coupler's angle, the slider's position s along its guide
+COUPLER_ANGLE = "coupler.angle"
+SLIDER_S = "slider_guide.s"
+
+#: the paper's names of the slider-crank's series -> (unit, the generic series, coordinate):
+#: the one table the read-only `Trajectory` properties (slider_position, ...) and the
+#: columns of a saved SliderCrank trajectory are read from; any linkage whose description
+#: has these coordinates has these series
+PAPER_SERIES: dict[str, tuple[str, str, str]] = {
+    "coupler_angle": ("rad", "coordinates", COUPLER_ANGLE),
+    "coupler_rate": ("rad/s", "rates", COUPLER_ANGLE),
+    "slider_position": ("m", "coordinates", SLIDER_S),
+    "slider_velocity": ("m/s", "rates", SLIDER_S),
+    "slider_acceleration": ("m/s^2", "accelerations", SLIDER_S),
+}
+
+#: name -> (unit, number of columns); the columns of a saved SliderCrank trajectory (the
+#: paper's series among them, `PAPER_SERIES`)
 SERIES: dict[str, tuple[str, int]] = {
     "t": ("s", 1),
     "base_force": ("N", 2),
@@ -59,6 +77,14 @@ SERIES: dict[str, tuple[str, int]] = {
 }
 
 
+def _paper_property(name: str) -> property:
+    """The read-only `Trajectory` property of the paper's name `name` (`PAPER_SERIES`)."""
+    unit, kind, coordinate = PAPER_SERIES[name]
+    return property(lambda self: self._by_paper_name(name),
+                    doc=f"(n,) {unit}, ``{kind}[{coordinate!r}]`` (`PAPER_SERIES`); "
+                        "AttributeError where the description has no such coordinate.")
+
+
 @dataclass(frozen=True)
 class Trajectory:
     """Time series of one simulation of a `SliderCrank` or a `Linkage`.
@@ -69,15 +95,20 @@ class Trajectory:
     reaction (the shaking force when the description monitors none), crank_moment the drive
     moment, crank_work the drive's work; ``reactions`` holds every ground joint's force on
     the ground by joint name, ``shaking_force`` their sum, ``coordinates``, ``rates`` and
-    ``accelerations`` the minimal coordinates by name. The slider-crank series
-    (slider_position ... coupler_rate) are None there.
+    ``accelerations`` the minimal coordinates by name.
 
-    A `SliderCrank`'s run on the reduced model (the paper's parameter set of one linkage)
-    has the paper's series as above and, beside them, the same generic ones as its
-    description's: ``joints`` ("coupler_slider",), ``reactions`` ("crank_pivot" is
-    base_force, F12; "slider_guide"), ``shaking_force``, ``coordinates`` ("coupler.angle",
-    "slider_guide.s"), ``rates`` and ``accelerations`` (not stored by `save`: a saved
-    SliderCrank trajectory keeps the paper's series).
+    A `SliderCrank`'s run (the paper's parameter set of one linkage) has the per-joint
+    series of its one clearance joint as (n,) arrays and the same generic series as its
+    description's: ``joints`` ("coupler_slider",), ``coordinates`` ("coupler.angle",
+    "slider_guide.s"), ``rates``, ``accelerations`` and, from the reduced model and Exudyn,
+    ``reactions`` ("crank_pivot" is base_force, F12; "slider_guide") and ``shaking_force``.
+
+    The paper's names of the slider-crank's series are read-only properties looked up in
+    the generic series (`PAPER_SERIES`), on any trajectory whose description has the
+    coordinates "slider_guide.s" (slider_position, slider_velocity, slider_acceleration)
+    and "coupler.angle" (coupler_angle, coupler_rate); elsewhere they raise AttributeError
+    naming the linkage and its coordinates. A saved SliderCrank trajectory keeps them as
+    columns of the file.
 
     Attributes
     ----------
@@ -87,8 +118,6 @@ class Trajectory:
     contact_force : (n,) N, normal force in the clearance joint
     penetration : (n,) m, delta = |eccentricity| - clearance (negative in free flight)
     eccentricity : (n, 2) m, journal centre relative to bearing centre
-    slider_position, slider_velocity, slider_acceleration : (n,) m, m/s, m/s^2
-    coupler_angle, coupler_rate : (n,) rad, rad/s
     contact_phase : (n,) int, 1 while in contact, 0 in free flight
     crank_work : (n,) J, work done by the crank drive since t = 0 (NaN-free; zeros if the
         backend does not integrate it)
@@ -104,11 +133,6 @@ class Trajectory:
     contact_force: np.ndarray
     penetration: np.ndarray
     eccentricity: np.ndarray
-    slider_position: np.ndarray | None
-    slider_velocity: np.ndarray | None
-    slider_acceleration: np.ndarray | None
-    coupler_angle: np.ndarray | None
-    coupler_rate: np.ndarray | None
     contact_phase: np.ndarray
     crank_work: np.ndarray
     mechanism: Any
@@ -131,6 +155,29 @@ class Trajectory:
     #: m/s, per clearance joint (n, J): the journal surface's tangential speed against the
     #: bearing's at the contact (the friction law's v_t); None if not provided
     slip_velocity: np.ndarray | None = None
+
+    # the paper's names, read from the generic series
+    coupler_angle = _paper_property("coupler_angle")
+    coupler_rate = _paper_property("coupler_rate")
+    slider_position = _paper_property("slider_position")
+    slider_velocity = _paper_property("slider_velocity")
+    slider_acceleration = _paper_property("slider_acceleration")
+
+    def _by_paper_name(self, name: str) -> np.ndarray:
+        """The generic series that the paper's name `name` (`PAPER_SERIES`) stands for (no
+        copy); AttributeError naming the linkage and its coordinates where its description
+        has no such coordinate."""
+        _, kind, coordinate = PAPER_SERIES[name]
+        series = getattr(self, kind)
+        if series is not None and coordinate in series:
+            return series[coordinate]
+        from ..model.cases import as_linkage
+
+        has = ", ".join(repr(c) for c in series or ()) or "none"
+        raise AttributeError(
+            f"{name} is the series of the paper slider-crank's coordinate {coordinate!r}, "
+            f"which linkage {as_linkage(self.mechanism).name!r} does not have (its {kind}: "
+            f"{has}); read its series in traj.{kind}")
 
     @property
     def linkage(self):
@@ -507,10 +554,10 @@ def load_trajectory(path: str | Path) -> Trajectory:
     except (TypeError, ValueError) as exc:
         raise _fail(path, f"bad mechanism: {exc}") from exc
     generic = _generic_series(path, rest, len(series["t"]))
-    if generic:
-        from ..model.cases import as_linkage
+    _add_paper_columns(path, generic, {name: series.pop(name) for name in PAPER_SERIES})
+    from ..model.cases import as_linkage
 
-        generic["joints"] = tuple(j.name for j in as_linkage(mech).clearance_joints)
+    generic["joints"] = tuple(j.name for j in as_linkage(mech).clearance_joints)
     traj = Trajectory(**series, mechanism=mech, backend=meta["backend"],
                       stats=meta.get("stats", {}), peaks=peaks, **generic)
     _check_peaks(path, traj)
@@ -545,8 +592,8 @@ def linkage_columns(traj: Trajectory) -> dict[str, np.ndarray]:
 def generic_columns(traj: Trajectory) -> dict[str, np.ndarray]:
     """The series every linkage's run has besides the per-joint ones (the ground joints'
     reactions, the shaking force, the coordinates, their rates and accelerations, the
-    friction work) as named 1-D columns; empty for a trajectory without them (an Exudyn or
-    ideal run of the paper's parameter set)."""
+    friction work) as named 1-D columns; those a trajectory has (an ideal-joint run of the
+    paper's parameter set: the coordinates, their rates and accelerations)."""
     cols: dict[str, np.ndarray] = {}
     if traj.shaking_force is not None and traj.linkage is None:
         cols["shaking_force_x[N]"] = traj.shaking_force[:, 0]
@@ -571,7 +618,6 @@ def _generic_series(path: Path, cols: dict[str, np.ndarray], n: int) -> dict[str
             raise _fail(path, f"column {name!r} has shape {v.shape} or non-finite values")
     grounds = [k[len("reaction."):-len("_x[N]")] for k in cols
                if k.startswith("reaction.") and k.endswith("_x[N]")]
-    coords = [k[len("coordinate."):] for k in cols if k.startswith("coordinate.")]
     out: dict[str, Any] = {}
     try:
         if grounds:
@@ -581,15 +627,32 @@ def _generic_series(path: Path, cols: dict[str, np.ndarray], n: int) -> dict[str
         if "shaking_force_x[N]" in cols:
             out["shaking_force"] = np.column_stack([cols["shaking_force_x[N]"],
                                                     cols["shaking_force_y[N]"]])
-        if coords:
-            out["coordinates"] = {c: cols[f"coordinate.{c}"] for c in coords}
-            out["rates"] = {c: cols[f"rate.{c}"] for c in coords}
-            out["accelerations"] = {c: cols[f"acceleration.{c}"] for c in coords}
     except KeyError as exc:
         raise _fail(path, f"missing column {exc}") from exc
+    # each kind as stored: a file written again from one of an earlier version (whose
+    # ideal-joint or Exudyn run stored no coupler acceleration) lacks that column
+    for kind, prefix in (("coordinates", "coordinate."), ("rates", "rate."),
+                         ("accelerations", "acceleration.")):
+        named = {k[len(prefix):]: v for k, v in cols.items() if k.startswith(prefix)}
+        if named:
+            out[kind] = named
     if "friction_work[J]" in cols:
         out["friction_work"] = cols["friction_work[J]"]
     return out
+
+
+def _add_paper_columns(path: Path, generic: dict[str, Any], paper: dict[str, np.ndarray]
+                       ) -> None:
+    """Put a SliderCrank file's columns of the paper's names (`PAPER_SERIES`) into the
+    generic series `generic` (in place); where the file holds a series under both names
+    (the reduced model's files) the two must be equal."""
+    for name, (_, kind, coordinate) in PAPER_SERIES.items():
+        named = generic.setdefault(kind, {})
+        if coordinate not in named:
+            named[coordinate] = paper[name]
+        elif not np.array_equal(named[coordinate], paper[name]):
+            raise _fail(path, f"column {name!r} differs from the {kind} column of "
+                              f"{coordinate!r}, the same series")
 
 
 def _save_linkage(traj: Trajectory, path: Path, meta: dict) -> Path:
@@ -639,8 +702,6 @@ def _load_linkage(path: Path, meta: dict) -> Trajectory:
             penetration=stack("penetration", joints, "[m]"),
             eccentricity=np.stack([stack("eccentricity", joints, "_x[m]"),
                                    stack("eccentricity", joints, "_y[m]")], axis=2),
-            slider_position=None, slider_velocity=None, slider_acceleration=None,
-            coupler_angle=None, coupler_rate=None,
             contact_phase=stack("contact_phase", joints, "[-]").astype(np.int8),
             crank_work=cols.get("crank_work[J]"), mechanism=linkage, backend=meta["backend"],
             stats=meta.get("stats", {}),
