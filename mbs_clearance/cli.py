@@ -852,9 +852,14 @@ def _print_error_estimate(traj) -> None:
     st = traj.stats or {}
     if st.get("error_estimate") is None:
         return
+    if "accuracy_steps" in st:      # Exudyn: a step sequence
+        how = (f"step halving, {len(st['accuracy_steps'])} runs down to "
+               f"{st['accuracy_steps'][-1]:.3g} s")
+    else:
+        how = f"rtol {st['rtol']:g}, {len(st['accuracy_runs'])} runs"
     print(f"estimated relative error of the peaks: {st['error_estimate']:.2g} (requested "
-          f"{st['accuracy']:g}, {'met' if st['accuracy_ok'] else 'NOT met'}; rtol "
-          f"{st['rtol']:g}, {len(st['accuracy_runs'])} runs)", file=sys.stderr)
+          f"{st['accuracy']:g}, {'met' if st['accuracy_ok'] else 'NOT met'}; {how})",
+          file=sys.stderr)
 
 
 def _tolerances(args: argparse.Namespace) -> dict:

@@ -33,6 +33,21 @@ def test_the_step_sequence_and_its_record():
     assert peak_base_force(mech, 1, backend="exudyn", accuracy=3e-3) == tr.peaks[0]
 
 
+def test_the_cli_prints_the_sequence_and_its_estimate(capsys):
+    """`simulate --backend exudyn --accuracy` prints the extrapolated peak and the
+    sequence's own estimate, the same as the Python call's."""
+    from mbs_clearance.cli import main
+
+    tr = simulate(SliderCrank(), 1, backend="exudyn", accuracy=3e-3)
+    assert main(["simulate", "--backend", "exudyn", "--accuracy", "3e-3",
+                 "--revolutions", "1"]) == 0
+    out, err = capsys.readouterr()
+    assert f"{tr.peaks[0]:.6g} N" in out
+    s = tr.stats
+    assert (f"estimated relative error of the peaks: {s['error_estimate']:.2g} (requested "
+            f"0.003, met; step halving, 3 runs down to {s['accuracy_steps'][-1]:.3g} s)") in err
+
+
 def test_unmet_accuracy_warns_and_is_flagged(monkeypatch):
     """1e-3 needs a fourth run (the bar of the first three is 1.8e-3); with no further
     halving allowed the run says so."""
