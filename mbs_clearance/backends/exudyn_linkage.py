@@ -388,7 +388,7 @@ def _pre_step(contacts: list, h: float, predict: bool):
     return pre_step
 
 
-# ---------------------------------------------------------------------------- generic elements
+# ---------------------------------------------------------------------- generic elements
 
 class _Side:
     """One body of a generic element (`_generic_element`): its node's slice of the
@@ -521,7 +521,7 @@ def build(linkage: Linkage, settings: ExudynSettings | None = None,
           outputs: tuple[str, ...] = ("all",), y0=None, start=None) -> ExudynModel:
     """Create the Exudyn system of `linkage` (not yet solved), started from the reduced
     model's centred state (or `y0`, a state [q, qdot, W] of the generated model, or
-    `start`, a `linkage_model.Start`: its state and each joint's mode and impact velocity).
+    `start`, a `linkage_model.Start`: its state and each contact's mode and impact velocity).
 
     `outputs` selects the sensors: "reactions", "drive", "contact", "bodies" or "all".
     The symbolic user functions are built here, in the calling process.

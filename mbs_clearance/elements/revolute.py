@@ -14,7 +14,39 @@ a bearing with radial clearance, one contact per joint, with its variants per jo
   joint's), so that a linkage whose joints are lubricated one by one keeps every joint's
   contact at its place in the layout;
 - bearing profile (``bearing_profile``, a worn or shaped bearing): the profiled contact
-  stages of core/profile_runtime.h in place of the circular ones (C printer only).
+  stages of core/profile_runtime.h in place of the circular ones.
+
+Its Exudyn element (`exudyn_build`, one of three variants by the backend's option
+``contact``): ``"symbolic"`` (default) an ``ObjectConnectorCartesianSpringDamper`` between
+``MarkerBodyRigid`` markers at the bearing and journal points with an Exudyn symbolic
+(C++-evaluated) spring force: with d the journal centre relative to the bearing centre,
+delta = |d| - c, deltadot = d.d'/|d|, F = max(K delta^1.5 (1 + xi(e) deltadot /
+deltadot_minus), 0) for delta > 0, returned as F d/|d| (Exudyn applies it to the bearing and
+its opposite to the journal; `_symbolic_force`); ``"python"`` the same connector with a
+Python force calling `laws.forces.contact_force`; ``"sphere"`` Exudyn's native
+``ObjectContactSphereSphere``, the bearing as hollow sphere, restitution e' = 1 - xi(e)/1.5
+(`sphere_restitution`), only for laws it represents. Beside the connector:
+
+- friction (law not "none", mu > 0): an ``ObjectGenericODE2`` on the two bodies' nodes whose
+  (symbolic, or Python) force returns the generalized forces of the tangential force Ft t at
+  the joint's points and the moments R_J Ft / -R_B Ft, Ft = friction_force(vt, Fn, ...) with
+  vt = de/dt . t + omega_J R_J - omega_B R_B (`_friction_loads`; a connector would apply
+  equal and opposite moments);
+- the oil film: an ``ObjectGenericODE2`` whose Python force is the compiled film law
+  (`_film_loads`);
+- a bearing profile: one ``ObjectGenericODE2`` in place of the connector (any ``contact``
+  but "sphere") whose Python force is the normal force at the profiled penetration
+  |e| - (R_B(theta_e) - R_J) with Eq. 9's stiffness at R_B(theta_e), and the friction with
+  R_B(theta_e) (`_profile_loads`; a symbolic spline lookup ran 30 times slower). A profiled,
+  rubbing or lubricated joint to the ground is not built (its reaction would miss that
+  force).
+
+Each joint but a "sphere" one has its impact-velocity memory, read by the backend's pre-step
+function from the joint's gap function (`_connector_gap`, a profiled joint's own). After the
+run (`exudyn_series`) the eccentricity, penetration and force come from the connector's
+recorded displacement and force (a profiled joint's from the stored body states), the
+contact angle, slip velocity and friction power from the stored body states
+(`_clearance_series`).
 
 Its contacts come first in every layout (the registry's first element): per joint its
 contact fields, then the friction fields of the joints with a law, then the film's fields of
