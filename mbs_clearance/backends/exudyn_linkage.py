@@ -19,48 +19,27 @@ Model (`build`)
 - the `Drive`: a velocity-level `CoordinateConstraint` on the driven body's rotation
   coordinate (dphi/dt = speed); its Lagrange multiplier lambda gives the drive moment
   -lambda (Exudyn adds C_q^T lambda on the left-hand side);
-- each `ClearanceJoint`: one contact element between `MarkerBodyRigid` markers at the
-  bearing and journal points, one of three variants (option ``contact``):
-  ``"symbolic"`` (default) `ObjectConnectorCartesianSpringDamper` with an Exudyn symbolic
-  (C++-evaluated) spring force user function: with d the journal centre relative to the
-  bearing centre, delta = |d| - c, deltadot = d.d'/|d|, F = max(K delta^1.5 (1 + xi(e)
-  deltadot / deltadot_minus), 0) for delta > 0, returned as F d/|d| (Exudyn applies it to
-  the bearing and its opposite to the journal); ``"python"`` the same connector with a
-  Python user function calling `contact.contact_force` (for debugging); ``"sphere"``
-  Exudyn's native `ObjectContactSphereSphere`, the bearing as hollow sphere, restitution
-  e' = 1 - xi(e)/1.5 (`sphere_restitution`), only for laws it represents.
-- a clearance joint with friction (law not "none", mu > 0): an `ObjectGenericODE2` on its
-  two bodies' nodes whose (symbolic, or Python) force function returns the generalized
-  forces of the tangential force Ft t at the joint's points and the moments R_J Ft /
-  -R_B Ft, Ft = contact.friction_force(vt, Fn, ...) with vt = de/dt . t + omega_J R_J -
-  omega_B R_B (`_friction_loads`); the connectors that carry moments apply equal and
-  opposite ones, so a generic element is used; the friction work is computed after the
-  run from the stored states (`_clearance_series`).
-- a clearance joint with a `bearing_profile`: one `ObjectGenericODE2` on its two bodies'
-  nodes (for any option ``contact`` but "sphere") whose Python force function returns the
-  generalized forces of the normal force at the profiled penetration delta = |e| -
-  (R_B(theta_e) - R_J), theta_e the direction of e in the bearing body's frame, along n =
-  e/|e|, with Eq. 9's stiffness at R_B(theta_e), and of the friction with R_B(theta_e) in
-  place of R_B (`_profile_loads`; a symbolic function, the spline's lookup as a tree of
-  IfThenElse, ran 30 times slower); its series are computed after the run from the stored
-  body states (`_clearance_series`). A profiled joint to the ground is not built.
-- each joint of an element kind (`elements.registry`, e.g. a translational clearance joint):
-  what its element module builds (`Element.exudyn_build`: for the translational joint an
-  `ObjectGenericODE2` on the slider's node and the guide's whose Python force function
-  returns the four corners' generalized forces), every contact with its own
-  impact-velocity memory; its series and its reaction on the ground are computed after the
-  run from the stored body states and each contact's impact velocity in force at each step
-  (`Element.exudyn_series`).
-- Each user-force joint has its own impact-velocity memory (`ImpactMemory`): a pre-step
-  function (one Python call per time step for all joints, never inside Newton) registers
-  the onsets (penetration crossing zero upward) and sets the joint's named symbolic
-  variable deltadot_minus, second-order accurate (`_pre_step`, option ``onset``).
+- each joint of an element kind (`elements.registry`: the revolute clearance joint, the
+  translational clearance joint): what its element module builds (`Element.exudyn_build`:
+  a revolute clearance joint's contact connector with our contact law, its friction and
+  oil film as generic elements, see `elements.revolute`; a translational joint's corners
+  as one generic element, see `elements.translational`), in the registry's order. The
+  generic elements are `ObjectGenericODE2`s on the bodies' nodes (`_generic_element`,
+  `_Side`) whose force function is the element's, symbolic (`_symbolic_vector_function`)
+  or Python;
+- every contact with a user force has its own impact-velocity memory (`ImpactMemory`): a
+  pre-step function (one Python call per time step for all contacts, never inside Newton)
+  reads each contact's penetration and rate from its element's gap function, registers
+  the onsets (penetration crossing zero upward) and sets the contact's named symbolic
+  variable deltadot_minus where it has one, second-order accurate (`_pre_step`, option
+  ``onset``).
 
 Outputs from Exudyn's own sensors (stored in memory every step): the force of each ground
-joint's constraint (the reaction on the ground), the drive constraint's multiplier, each
-contact element's displacement and force, and every body node's coordinates, velocities and
-accelerations (the minimal coordinates of the description are computed from those, and
-each clearance joint's contact angle and slip velocity, `_clearance_series`).
+joint's constraint or contact (the reaction on the ground), the drive constraint's
+multiplier, the displacement and force of the contacts an element asks for, and every body
+node's coordinates, velocities and accelerations (the minimal coordinates of the
+description are computed from those, and the elements' series and remaining ground
+reactions, `Element.exudyn_series`).
 
 The initial state is the reduced model's (`linkage_model.initial_state`: journals centred),
 carried to the bodies by the forest's kinematics (`body_states`).
@@ -92,23 +71,13 @@ from .._checks import (
     format_bytes,
 )
 from ..elements.registry import elements_with
-from ..laws._dispatch import friction_force_slots
-from ..laws.forces import (
-    CONTACT_MODELS,
-    FRICTION_LAWS,
-    contact_force,
-    hysteresis_factor,
-)
-from ..laws.lubrication import MODELS, lubricated_force
-from ..laws.registry import FRICTION, FRICTION_PARAMETER_SPECS, FRICTION_SLOTS
-from ..model.linkage import GROUND, ClearanceJoint, Linkage, Prismatic, Revolute
+from ..model.linkage import GROUND, Linkage, Prismatic, Revolute
 
 __all__ = ["ExudynSettings", "make_settings", "build", "solve", "simulate_exudyn_linkage",
            "peak_exudyn_linkage", "run_linkage", "peak_run", "body_states",
-           "sphere_restitution", "step_for_accuracy", "refined_peaks", "refine_peak",
-           "CONTACT_VARIANTS", "ONSET_MODES", "OPTION_NAMES", "DEFAULT_STEPS_PER_REVOLUTION",
-           "ACCURACY_AT_DEFAULT", "ExudynModel", "contact_scales", "friction_of",
-           "symbolic_friction_factor", "symbolic_friction_force", "NEWTON_TOLERANCE",
+           "step_for_accuracy", "refined_peaks", "refine_peak", "CONTACT_VARIANTS",
+           "ONSET_MODES", "OPTION_NAMES", "DEFAULT_STEPS_PER_REVOLUTION",
+           "ACCURACY_AT_DEFAULT", "ExudynModel", "contact_scales", "NEWTON_TOLERANCE",
            "ROUNDOFF_MARGIN", "STEPS_PER_CONTACT_PERIOD"]
 
 #: the elements whose Exudyn element this backend builds (`elements.registry`)
@@ -222,12 +191,6 @@ def contact_scales(linkage: Linkage) -> tuple[float, float]:
                 for b in linkage.bodies)
     load = sum(masses.values()) * (linkage.gravity + linkage.rate_scale ** 2 * size)
     period, floor = math.inf, 0.0
-    for cj in linkage.clearance_joints:
-        delta = (load / cj.stiffness) ** (2.0 / 3.0)
-        k = 1.5 * cj.stiffness * math.sqrt(delta)
-        m = min(masses.get(cj.journal_body, math.inf), masses.get(cj.bearing_body, math.inf))
-        period = min(period, 2.0 * math.pi * math.sqrt(m / k))
-        floor = max(floor, 1.5 * float(np.finfo(float).eps) * size / delta)
     for el in _ELEMENTS:
         el_period, el_floor = el.exudyn_contact_scale(linkage, load, masses, size)
         period, floor = min(period, el_period), max(floor, el_floor)
@@ -270,14 +233,6 @@ def make_settings(options: dict) -> ExudynSettings:
         onset=check_choice("onset", s.onset, ONSET_MODES),
         newton_tolerance=None if s.newton_tolerance is None else check_real(
             "newton_tolerance", s.newton_tolerance, 0.0, low_open=True))
-
-
-def sphere_restitution(joint: ClearanceJoint) -> float:
-    """Restitution e' for Exudyn's Hunt-Crossley sphere contact that reproduces our law:
-    Exudyn's impactModel 1 damps with 1.5 (1 - e'), so e' = 1 - xi(e)/1.5 ((1 + e^2)/2 for
-    Lankarani-Nikravesh, e for Hunt-Crossley)."""
-    xi, _ = hysteresis_factor(joint.restitution, CONTACT_MODELS[joint.contact_model])
-    return 1.0 - xi / 1.5
 
 
 # ---------------------------------------------------------------------------- kinematics
@@ -353,19 +308,20 @@ def body_states(linkage: Linkage, t: float, q, qd) -> dict[str, tuple]:
 # ---------------------------------------------------------------------------- memory
 
 class ImpactMemory:
-    """Impact velocity deltadot_minus and contact mode of one clearance joint, updated once
-    per step by the pre-step function."""
+    """Impact velocity deltadot_minus and contact mode of one contact (`name`, e.g. a
+    clearance joint or a corner of a translational one), updated once per step by the
+    pre-step function."""
 
-    def __init__(self, floor: float, clearance: float):
+    def __init__(self, name: str, floor: float):
+        self.name = name
         self.floor = floor
-        self.clearance = clearance
         self.dmin = floor          # as the reduced model: the floor until the first onset
         self.mode = 0              # 1 from a registered onset until separation
         self.onsets = 0
         self.first_onset = None    # time of the first registered onset, s
         self.symbol = None         # named symbolic Real mirrored for the compiled force
         self.previous = None       # (t, delta, deltadot) of the previous step's state
-        self.history = None        # [(t, deltadot_minus)] per step if recorded (friction)
+        self.history = None        # [(t, deltadot_minus)] per step if recorded
 
     def set(self, value: float, t: float, new_onset: bool = True) -> None:
         self.dmin = max(value, self.floor)
@@ -379,7 +335,7 @@ class ImpactMemory:
 
 def _update_memory(memory: ImpactMemory, t: float, h: float, delta: float, rate: float,
                    predict: bool) -> None:
-    """Register an onset of one joint from the converged state at the step's start (see
+    """Register an onset of one contact from the converged state at the step's start (see
     `_pre_step`)."""
     prev = memory.previous
     if prev is not None and t <= prev[0]:
@@ -409,7 +365,9 @@ def _update_memory(memory: ImpactMemory, t: float, h: float, delta: float, rate:
 
 
 def _pre_step(contacts: list, h: float, predict: bool):
-    """Pre-step function: register contact onsets and impact velocities of every joint.
+    """Pre-step function: register contact onsets and impact velocities of every contact
+    (`contacts`: (gap function of mbs -> (delta, deltadot), its `ImpactMemory`), from the
+    elements' `exudyn_build`).
 
     Exudyn calls it at the start of each step with the new time t_n+1 and the converged
     state of t_n. With two consecutive states the penetration acceleration is known by a
@@ -419,24 +377,10 @@ def _pre_step(contacts: list, h: float, predict: bool):
     found after the crossing step (delta_n-1 <= 0 < delta_n) interpolates deltadot
     linearly in delta between the bracketing states (this also refines a prediction).
     """
-    import exudyn as exu
-
-    disp = exu.OutputVariableType.Displacement
-    vel = exu.OutputVariableType.Velocity
-
     def pre_step(mbs, t):
-        for obj, memory in contacts:
-            if callable(obj):       # an element's contact: (delta, rate)
-                delta, rate = obj(mbs)
-                _update_memory(memory, t, h, delta, rate, predict)
-                if memory.history is not None:
-                    memory.history.append((t, memory.dmin))
-                continue
-            d = mbs.GetObjectOutput(obj, disp)
-            v = mbs.GetObjectOutput(obj, vel)
-            r = math.sqrt(d[0] * d[0] + d[1] * d[1])
-            rate = (d[0] * v[0] + d[1] * v[1]) / r if r > 0.0 else 0.0
-            _update_memory(memory, t, h, r - memory.clearance, rate, predict)
+        for gap, memory in contacts:
+            delta, rate = gap(mbs)
+            _update_memory(memory, t, h, delta, rate, predict)
             if memory.history is not None:
                 memory.history.append((t, memory.dmin))
         return True
@@ -444,100 +388,10 @@ def _pre_step(contacts: list, h: float, predict: bool):
     return pre_step
 
 
-def _law_constants(joint: ClearanceJoint):
-    model = CONTACT_MODELS[joint.contact_model]
-    xi, _ = hysteresis_factor(joint.restitution, model)
-    return joint.stiffness, joint.clearance, float(xi), model
-
-
-def _python_force(joint: ClearanceJoint, memory: ImpactMemory):
-    """Plain Python user function: the reduced model's compiled contact law."""
-    K, c, _, model = _law_constants(joint)
-    e = joint.restitution
-
-    def force(mbs, t, itemNumber, displacement, velocity, stiffness, damping, offset):
-        dx, dy = displacement[0], displacement[1]
-        r = math.sqrt(dx * dx + dy * dy)
-        delta = r - c
-        if delta <= 0.0:
-            return [0.0, 0.0, 0.0]
-        rate = (dx * velocity[0] + dy * velocity[1]) / r
-        f = contact_force(delta, rate, memory.dmin, K, e, model) / r
-        return [f * dx, f * dy, 0.0]
-
-    return force
-
-
-def _symbolic_normal(K, c, xi, dmin, dx, dy, vx, vy):
-    """Symbolic normal force of the contact law from the journal centre's position (dx, dy)
-    and velocity (vx, vy) relative to the bearing centre: (r, magnitude or 0 when free);
-    the same formula as contact.contact_force (clamped at zero, zero for delta <= 0)."""
-    import exudyn as exu
-
-    esym = exu.symbolic
-    zero = esym.Real(0.0)
-    r = esym.sqrt(dx * dx + dy * dy)
-    delta = r - c
-    rate = (dx * vx + dy * vy) / r
-    magnitude = esym.max(K * delta**1.5 * (1.0 + xi * rate / dmin), zero)
-    # lazy: r > c > 0 inside the true branch, so no division by zero when centred
-    return r, esym.IfThenElse(delta > 0.0, magnitude, zero)
-
-
-def _symbolic_force(mbs, obj, joint: ClearanceJoint, memory: ImpactMemory, k: int):
-    """Compiled (symbolic) user function; the impact velocity is a named symbolic variable
-    (one per joint)."""
-    import exudyn as exu
-    from exudyn.advancedUtilities import CreateSymbolicUserFunction
-
-    esym = exu.symbolic
-    K, c, xi, _ = _law_constants(joint)
-    dmin = esym.Real(f"deltadot_minus_{k}", memory.dmin)
-    memory.symbol = dmin
-    zero = esym.Real(0.0)
-
-    def force(mbs, t, itemNumber, displacement, velocity, stiffness, damping, offset):
-        dx, dy = displacement[0], displacement[1]
-        r, magnitude = _symbolic_normal(K, c, xi, dmin, dx, dy, velocity[0], velocity[1])
-        factor = esym.IfThenElse(r - c > 0.0, magnitude / r, zero)
-        return [factor * dx, factor * dy, zero]
-
-    return CreateSymbolicUserFunction(mbs, force, "springForceUserFunction", obj)
-
-
-# ---------------------------------------------------------------------------- friction
-
-def friction_of(joint: ClearanceJoint):
-    """(law id, the values of the friction slots `laws.FRICTION_SLOTS`) of a clearance joint
-    whose friction is on (law not "none" and mu > 0), else None: a joint without friction
-    gets no friction element, so its results are the frictionless ones bit for bit."""
-    if not joint.has_friction or joint.friction_coefficient == 0.0:
-        return None
-    return (FRICTION_LAWS[joint.friction_law],
-            tuple(getattr(joint, f) for f in FRICTION_SLOTS))
-
-
-def symbolic_friction_force(vt, fn, law: int, slots: tuple):
-    """Ft(vt, Fn) of friction law id `law` as an Exudyn symbolic expression: the law
-    module's own formula (`laws.friction.<name>.force`) evaluated on symbolic Reals, with
-    the law's parameters from `slots` (the values of `laws.FRICTION_SLOTS`)."""
-    spec = FRICTION[law]
-    values = dict(zip(FRICTION_SLOTS, slots))
-    ft = spec.force(vt, fn, *(values[a] for a in spec.arguments))
-    return ft if hasattr(ft, "Evaluate") else 0.0 * vt + ft
-
-
-def symbolic_friction_factor(vt, v0: float, v1: float, law: int):
-    """phi(vt) of `contact.friction_factor` as an Exudyn symbolic expression (Ft at mu = 1,
-    Fn = -1, `symbolic_friction_force`); tested against contact.friction_factor point by
-    point; further slots at their defaults."""
-    given = {"friction_coefficient": 1.0, "friction_v0": v0, "friction_v1": v1}
-    return symbolic_friction_force(vt, -1.0, law, tuple(
-        given.get(p.name, p.default) for p in FRICTION_PARAMETER_SPECS))
-
+# ---------------------------------------------------------------------- generic elements
 
 class _Side:
-    """One body of a contact pair inside the friction element: its node's slice of the
+    """One body of a generic element (`_generic_element`): its node's slice of the
     element's coordinates (None for the ground), reference pose and the joint's point."""
 
     def __init__(self, slot, reference, point, fixed):
@@ -562,63 +416,6 @@ class _Side:
                 (qt[i] - w * ay, qt[i + 1] + w * ax), (ax, ay), w)
 
 
-def _pair(sides, q, qt, cos, sin):
-    """(e, de/dt (x, y each), omega_J, omega_B, the two points' arms from their centres of
-    mass) of a journal-bearing pair of `_Side`s."""
-    (xj, yj), (vxj, vyj), arm_j, wj = sides[0].kinematics(q, qt, cos, sin)
-    (xb, yb), (vxb, vyb), arm_b, wb = sides[1].kinematics(q, qt, cos, sin)
-    return xj - xb, yj - yb, vxj - vxb, vyj - vyb, wj, wb, arm_j, arm_b
-
-
-def _film_loads(joint, sides, q, qt):
-    """Generalized forces of the oil film of one lubricated joint on its bodies'
-    coordinates: the film's force F on the journal centre and its torque T_J on the
-    journal (`laws.lubrication.lubricated_force`, faded out near the wall), -F at the
-    bearing's point and the bearing's torque -T_J - e x F (as the reduced model's
-    `lubricated_stage`)."""
-    dx, dy, vx, vy, wj, wb, (axj, ayj), (axb, ayb) = _pair(sides, q, qt, math.cos, math.sin)
-    fx, fy, tj, _ = lubricated_force(
-        dx, dy, vx, vy, wj, wb, joint.journal_radius, joint.clearance,
-        joint.bearing_length, joint.viscosity, MODELS[joint.lubrication],
-        joint.film_fade_start, joint.film_fade_end)
-    tb = -tj - (dx * fy - dy * fx)
-    out = [0.0] * (3 * sum(s.slot is not None for s in sides))
-    for side, sign, (ax, ay), torque in ((sides[0], 1.0, (axj, ayj), tj),
-                                         (sides[1], -1.0, (axb, ayb), tb)):
-        if side.slot is not None:
-            i = side.slot
-            out[i], out[i + 1] = sign * fx, sign * fy
-            out[i + 2] = sign * (ax * fy - ay * fx) + torque
-    return out
-
-
-def _friction_loads(joint, sides, q, qt, normal, friction, cos, sin, gate):
-    """Generalized forces of the friction of one joint on its bodies' coordinates (the
-    friction element's force vector): the tangential force Ft t on the journal at its
-    point plus the moment R_J Ft, the opposite force on the bearing plus -R_B Ft, with
-    vt = de/dt . t + omega_J R_J - omega_B R_B and Ft = friction_force(vt, Fn, ...)
-    (`normal` gives |e| and Fn from e, de/dt; `friction` Ft from vt, Fn; `gate`(delta,
-    value) is the value in contact and zero in free flight, where t is undefined when
-    the journal is centred)."""
-    journal, bearing = sides
-    dx, dy, vx, vy, wj, wb, (axj, ayj), (axb, ayb) = _pair(sides, q, qt, cos, sin)
-    r, fn = normal(dx, dy, vx, vy)
-    tx, ty = -dy / r, dx / r
-    vt = vx * tx + vy * ty + wj * joint.journal_radius - wb * joint.bearing_radius
-    ft = friction(vt, fn)
-    fx, fy = ft * tx, ft * ty
-    out = [None] * (3 * sum(s.slot is not None for s in sides))
-    delta = r - joint.clearance
-    for side, sign, radius, (ax, ay) in ((journal, 1.0, joint.journal_radius, (axj, ayj)),
-                                         (bearing, -1.0, joint.bearing_radius, (axb, ayb))):
-        if side.slot is not None:
-            i = side.slot
-            out[i] = gate(delta, sign * fx)
-            out[i + 1] = gate(delta, sign * fy)
-            out[i + 2] = gate(delta, sign * (ax * fy - ay * fx + radius * ft))
-    return out
-
-
 def _generic_element(mbs, ends, nodes: dict, pts: dict):
     """(sides, element, node list): an `ObjectGenericODE2` on the nodes of the bodies of
     `ends` ((body, point) pairs; the ground has no node) and their `_Side`s, in that order,
@@ -636,80 +433,6 @@ def _generic_element(mbs, ends, nodes: dict, pts: dict):
     obj = mbs.AddObject(ii.ObjectGenericODE2(nodeNumbers=node_list,
                                              forceVector=[0.0] * (3 * len(node_list))))
     return sides, obj, node_list
-
-
-def _pair_element(mbs, joint: ClearanceJoint, nodes: dict, pts: dict):
-    """(sides, element, n): `_generic_element` of a clearance joint (journal first), n its
-    number of coordinates."""
-    sides, obj, node_list = _generic_element(
-        mbs, ((joint.journal_body, joint.journal_point),
-              (joint.bearing_body, joint.bearing_point)), nodes, pts)
-    return sides, obj, 3 * len(node_list)
-
-
-def _film_element(mbs, joint: ClearanceJoint, nodes: dict, pts: dict, keep_alive: list):
-    """Add the oil film of the lubricated `joint` as an `ObjectGenericODE2` on its bodies'
-    nodes whose force is `_film_loads`, a Python user function calling the compiled law
-    (not a symbolic one: the law's one formula is the compiled kernel, whose film ends are
-    found by `atan2` (short) or by a search for the pressure's zeros (long), and an Exudyn
-    expression of it would be a second formula of the same law)."""
-    sides, obj, _ = _pair_element(mbs, joint, nodes, pts)
-
-    def force(mbs, t, itemNumber, q, q_t):
-        return _film_loads(joint, sides, q, q_t)
-
-    mbs.SetObjectParameter(obj, "forceUserFunction", force)
-    keep_alive.append(force)
-    return obj
-
-
-def _friction_element(mbs, joint: ClearanceJoint, memory: ImpactMemory, nodes: dict,
-                      pts: dict, variant: str, keep_alive: list):
-    """Add the friction of `joint` (friction on) as an `ObjectGenericODE2` on the two
-    bodies' nodes whose force user function returns the generalized forces of
-    `_friction_loads` (symbolic, or Python with contact.contact_force/friction_force)."""
-    import exudyn as exu
-
-    law, slots = friction_of(joint)
-    K, c, xi, model = _law_constants(joint)
-    sides, obj, n = _pair_element(mbs, joint, nodes, pts)
-    if variant == "python":
-        def normal(dx, dy, vx, vy):
-            r = math.sqrt(dx * dx + dy * dy)
-            if r <= c:
-                return max(r, 1e-300), 0.0     # free flight (gated to 0); finite at centre
-            rate = (dx * vx + dy * vy) / r
-            return r, contact_force(r - c, rate, memory.dmin, K, joint.restitution, model)
-
-        def force(mbs, t, itemNumber, q, q_t):
-            return _friction_loads(joint, sides, q, q_t, normal,
-                                   lambda vt, fn: friction_force_slots(vt, fn, slots, law),
-                                   math.cos, math.sin,
-                                   lambda delta, v: v if delta > 0.0 else 0.0)
-
-        mbs.SetObjectParameter(obj, "forceUserFunction", force)
-        keep_alive.append(force)
-        return obj
-    esym = exu.symbolic
-    dmin = memory.symbol
-
-    def normal(dx, dy, vx, vy):
-        return _symbolic_normal(K, c, xi, dmin, dx, dy, vx, vy)
-
-    def friction(vt, fn):
-        return symbolic_friction_force(vt, fn, law, slots)
-
-    zero = esym.Real(0.0)
-
-    def force(mbs, t, itemNumber, q, q_t):
-        # lazy gates: r > c > 0 inside the true branch (t = perp(e) / |e| is defined)
-        return _friction_loads(joint, sides, q, q_t, normal, friction, esym.cos, esym.sin,
-                               lambda delta, v: esym.IfThenElse(delta > 0.0, v, zero))
-
-    uf = _symbolic_vector_function(mbs, force, obj, n)
-    mbs.SetObjectParameter(obj, "forceUserFunction", uf)
-    keep_alive.append(uf)
-    return obj
 
 
 def _symbolic_vector_function(mbs, function, obj, n: int):
@@ -733,133 +456,6 @@ def _symbolic_vector_function(mbs, function, obj, n: int):
     uf = esym.UserFunction()
     uf.SetUserFunctionFromDict(mbs, spec, "forceUserFunction", obj, "None")
     return uf
-
-
-# ---------------------------------------------------------------------------- profile
-
-class _ProfileLookup:
-    """A profiled joint's bearing radius R_B(theta) and slope, the spline's piece found by
-    index (as `BearingProfile.radius`, without its per-call overhead)."""
-
-    def __init__(self, joint: ClearanceJoint):
-        profile = joint.profile
-        self.pieces = profile.coefficients().tolist()
-        self.h = 2.0 * math.pi / profile.points
-
-    def __call__(self, theta: float) -> tuple[float, float]:
-        """(R_B in m, dR_B/dtheta in m/rad) at theta in [0, 2 pi]."""
-        i = min(int(theta / self.h), len(self.pieces) - 1)
-        u = theta - i * self.h
-        c0, c1, c2, c3 = self.pieces[i]
-        return c0 + u * (c1 + u * (c2 + u * c3)), c1 + u * (2.0 * c2 + 3.0 * u * c3)
-
-
-def _profile_stiffness(joint: ClearanceJoint):
-    """K(R_B) in N/m^1.5 of a profiled joint: its explicit contact_stiffness, or the
-    paper's Eq. 9 at the local bearing radius (the radius enters only through
-    sqrt(R_J R_B / (R_B - R_J)))."""
-    if joint.contact_stiffness is not None:
-        K = float(joint.contact_stiffness)
-        return lambda R: K
-    rj, rb = joint.journal_radius, joint.bearing_radius
-    factor = joint.stiffness / math.sqrt(rj * rb / (rb - rj))
-    return lambda R: factor * math.sqrt(rj * R / (R - rj))
-
-
-def _profile_geometry(joint: ClearanceJoint, lookup, dx, dy, vx, vy, phib, wb):
-    """(r = |e|, theta_e, R_B(theta_e), delta, deltadot) of a profiled joint from the
-    eccentricity e = (dx, dy) (m), its rate (m/s), the bearing body's angle phib (rad) and
-    rate wb (rad/s): theta_e is e's direction in the bearing's frame in [0, 2 pi), delta =
-    |e| - (R_B(theta_e) - R_J), deltadot = d|e|/dt - R_B'(theta_e) dtheta_e/dt with
-    dtheta_e/dt = (ex eyd - ey exd) / |e|^2 - wb (0 for a centred journal)."""
-    theta = _profile_geometry_angle(dx, dy, phib)
-    R, slope = lookup(theta)
-    r = math.sqrt(dx * dx + dy * dy)
-    delta = r - (R - joint.journal_radius)
-    if r == 0.0:
-        return r, theta, R, delta, 0.0
-    rate = (dx * vx + dy * vy) / r - slope * ((dx * vy - dy * vx) / (r * r) - wb)
-    return r, theta, R, delta, rate
-
-
-def _profile_geometry_angle(dx: float, dy: float, phib: float) -> float:
-    """theta_e of the eccentricity (dx, dy) in the frame of a bearing body at angle phib,
-    in [0, 2 pi)."""
-    co, si = math.cos(phib), math.sin(phib)
-    theta = math.atan2(co * dy - si * dx, co * dx + si * dy)
-    return theta + 2.0 * math.pi if theta < 0.0 else theta
-
-
-def _profile_loads(joint, sides, q, qt, lookup, normal, friction):
-    """Generalized forces of a profiled joint's contact (and friction) on its bodies'
-    coordinates: the normal force Fn g (g = n - (R_B'(theta_e) / |e|) t, the gap's gradient,
-    n = e/|e|, Fn = `normal`(delta, deltadot, R_B)) on the bearing at its point and -Fn g on
-    the journal at its; with `friction` (Ft from v_t, Fn; None without) Ft t on the journal
-    plus the moment R_J Ft, the opposite force on the bearing plus -bearing_radius Ft,
-    v_t = de/dt . t + omega_J R_J - omega_B R_B(theta_e), t = (-n_y, n_x). Zero in free
-    flight."""
-    out = [0.0] * (3 * sum(s.slot is not None for s in sides))
-    dx, dy, vx, vy, wj, wb, (axj, ayj), (axb, ayb) = _pair(sides, q, qt, math.cos, math.sin)
-    r, theta, R, delta, rate = _profile_geometry(joint, lookup, dx, dy, vx, vy,
-                                                 sides[1].angle(q), wb)
-    if delta <= 0.0:
-        return out
-    nx, ny = dx / r, dy / r
-    fn = normal(delta, rate, R)
-    # along the gap's gradient n - (R_B' / |e|) t, as the reduced model
-    # (core/profile_runtime.h): a radial force on a non-round boundary does work round a
-    # closed path
-    k = lookup(theta)[1] / r
-    fx, fy, ft = -fn * (nx + k * ny), -fn * (ny - k * nx), 0.0      # on the journal
-    if friction is not None:
-        vt = (vy * nx - vx * ny) + (wj * joint.journal_radius - wb * R)
-        ft = friction(vt, fn)
-        fx, fy = fx - ft * ny, fy + ft * nx
-    # friction's moment on the bearing with the arm bearing_radius, as the reduced model
-    for side, sign, radius, (ax, ay) in ((sides[0], 1.0, joint.journal_radius, (axj, ayj)),
-                                         (sides[1], -1.0, joint.bearing_radius, (axb, ayb))):
-        if side.slot is not None:
-            i = side.slot
-            out[i], out[i + 1] = sign * fx, sign * fy
-            out[i + 2] = sign * (ax * fy - ay * fx + radius * ft)
-    return out
-
-
-def _profile_element(mbs, joint: ClearanceJoint, memory: ImpactMemory, nodes: dict,
-                     pts: dict, keep_alive: list):
-    """Add a profiled joint's contact and friction as one `ObjectGenericODE2` on its bodies'
-    nodes whose force is `_profile_loads`, a Python user function with
-    contact.contact_force and friction_force (the force needs the bearing body's angle,
-    which a connector's user function does not see; Exudyn's symbolic layer can express the
-    spline's lookup, as a tree of IfThenElse on the piece index, but its generic-element
-    function ran 30 times slower than this one, docs/exudyn.md). Returns (element, the
-    joint's (delta, deltadot) function of mbs for the pre-step function)."""
-    sides, obj, _ = _pair_element(mbs, joint, nodes, pts)
-    _, _, _, model = _law_constants(joint)
-    fric = friction_of(joint)
-    lookup = _ProfileLookup(joint)
-    stiffness = _profile_stiffness(joint)
-
-    def normal(delta, rate, R):
-        return contact_force(delta, rate, memory.dmin, stiffness(R), joint.restitution, model)
-
-    friction = (None if fric is None else
-                lambda vt, fn: friction_force_slots(vt, fn, fric[1], fric[0]))
-
-    def force(mbs, t, itemNumber, q, q_t):
-        return _profile_loads(joint, sides, q, q_t, lookup, normal, friction)
-
-    mbs.SetObjectParameter(obj, "forceUserFunction", force)
-    keep_alive.append(force)
-    state = _node_state([nodes[b] for b in (joint.journal_body, joint.bearing_body)
-                         if b != GROUND])
-
-    def gap(mbs):
-        q, qt = state(mbs)
-        dx, dy, vx, vy, _, wb, _, _ = _pair(sides, q, qt, math.cos, math.sin)
-        return _profile_geometry(joint, lookup, dx, dy, vx, vy, sides[1].angle(q), wb)[3:]
-
-    return obj, gap
 
 
 def _node_state(node_list):
@@ -891,11 +487,10 @@ class ExudynModel:
     nodes: dict            # body -> node index
     sensors: dict          # name -> sensor index
     ground_signs: dict     # ground joint -> sign turning the sensor force into the reaction
-    ecc_sign: float        # contact Displacement -> journal minus bearing
-    memories: list         # ImpactMemory per clearance joint (None for "sphere")
+    memories: list         # ImpactMemory per contact, layout order (None: no memory)
     keep_alive: list = field(default_factory=list)
-    #: per element kind (`elements.registry`) what its `exudyn_build` returned (per
-    #: joint: the joint, its generic element's `_Side`s, its contacts' ImpactMemory)
+    #: per element kind (`elements.registry`) what its `exudyn_build` returned (per joint
+    #: what its `exudyn_series` reads after the run)
     elements: dict = field(default_factory=dict)
     keep: np.ndarray | None = None   # rows of the stored data kept (`solve`: sliver steps)
     #: allocations per step by design: the outputs the pre-step function reads from Exudyn
@@ -904,10 +499,11 @@ class ExudynModel:
     pre_step_reads: int = 0
 
 
-#: allocations per step of a Python force user function (an oil film's, a translational
-#: joint's corners'): its force vector is made on every call, each Newton iteration (41 per
-#: step measured on the lubricated case, 24 on the translational benchmark), by design, so
-#: counted with the pre-step reads for Exudyn's allocation notice
+#: allocations per step of a force user function of a generic element (a friction's, an oil
+#: film's, a profiled contact's, a translational joint's corners'): its force vector is made
+#: on every call, each Newton iteration (41 per step measured on the lubricated case, 24 on
+#: the translational benchmark), by design, so counted with the pre-step reads for Exudyn's
+#: allocation notice
 PYTHON_FORCE_ALLOCATIONS = 100
 
 #: sensor groups `build` can record
@@ -919,37 +515,13 @@ def _check_linkage(linkage, settings: ExudynSettings) -> None:
         raise ValueError(f"linkage must be a Linkage; got {type(linkage).__name__}")
     for el in _ELEMENTS:
         el.exudyn_check(linkage, settings)
-    for j in linkage.clearance_joints:
-        # the friction, the film and a profiled contact are generic elements on the two
-        # bodies' nodes
-        for what, on in (("friction law of ours", friction_of(j) is not None),
-                         ("oil film", j.has_lubrication),
-                         ("bearing profile", j.profile is not None)):
-            if not on:
-                continue
-            if settings.contact == "sphere":
-                raise ValueError(f"contact='sphere' has no {what} (joint {j.name!r} has it); "
-                                 "use contact='symbolic' or 'python'")
-            if GROUND in (j.journal_body, j.bearing_body):
-                raise ValueError(f"the {what.split(' of')[0]} of clearance joint {j.name!r}, "
-                                 "which is a ground joint, is not built in the exudyn backend "
-                                 "(its reaction would miss that force); use the reduced "
-                                 "backend")
-    if settings.contact == "sphere":
-        for j in linkage.clearance_joints:
-            if sphere_restitution(j) <= 0.0:
-                raise ValueError(
-                    f"contact='sphere' cannot represent joint {j.name!r}'s contact_model="
-                    f"{j.contact_model!r} with restitution {j.restitution!r}: Exudyn's "
-                    f"restitution 1 - xi/1.5 = {sphere_restitution(j):.3g} must be > 0; use "
-                    "contact='symbolic'")
 
 
 def build(linkage: Linkage, settings: ExudynSettings | None = None,
           outputs: tuple[str, ...] = ("all",), y0=None, start=None) -> ExudynModel:
     """Create the Exudyn system of `linkage` (not yet solved), started from the reduced
     model's centred state (or `y0`, a state [q, qdot, W] of the generated model, or
-    `start`, a `linkage_model.Start`: its state and each joint's mode and impact velocity).
+    `start`, a `linkage_model.Start`: its state and each contact's mode and impact velocity).
 
     `outputs` selects the sensors: "reactions", "drive", "contact", "bodies" or "all".
     The symbolic user functions are built here, in the calling process.
@@ -1033,82 +605,27 @@ def build(linkage: Linkage, settings: ExudynSettings | None = None,
                                                       offset=linkage.drive.speed,
                                                       velocityLevel=True))
 
-    keep_alive: list = []
     memories: list = []
-    contacts, contact_items = [], []
-    pre_step_reads = 0
-    for k, cj in enumerate(linkage.clearance_joints):
-        m_journal = marker(cj.journal_body, cj.journal_point, rigid=True)
-        m_bearing = marker(cj.bearing_body, cj.bearing_point, rigid=True)
-        if settings.contact == "sphere":
-            n_data = mbs.AddNode(ii.NodeGenericData(numberOfDataCoordinates=4,
-                                                    initialCoordinates=[cj.clearance, 0, 0, 0]))
-            obj = mbs.AddObject(ii.ObjectContactSphereSphere(
-                markerNumbers=[m_journal, m_bearing], nodeNumber=n_data,
-                spheresRadii=[cj.journal_radius, cj.bearing_radius], isHollowSphere1=True,
-                contactStiffness=cj.stiffness, contactStiffnessExponent=1.5,
-                contactDamping=0.0, dynamicFriction=0.0,
-                restitutionCoefficient=sphere_restitution(cj),
-                minimumImpactVelocity=cj.impact_velocity_floor, impactModel=1))
-            memories.append(None)
-        elif cj.profile is not None:
-            memory = ImpactMemory(cj.impact_velocity_floor, cj.clearance)
-            if start_memory is not None:
-                memory.mode = int(start_memory[k][0])
-                memory.dmin = float(start_memory[k][1])
-            obj, gap = _profile_element(mbs, cj, memory, nodes, pts, keep_alive)
-            memory.history = []         # the contact force after the run needs it
-            memories.append(memory)
-            contacts.append((gap, memory))
-            # the gap reads each node's coordinates and rates
-            pre_step_reads += (2 * sum(b != GROUND for b in (cj.journal_body, cj.bearing_body))
-                               + PYTHON_FORCE_ALLOCATIONS)
-        else:
-            memory = ImpactMemory(cj.impact_velocity_floor, cj.clearance)
-            if start_memory is not None:
-                memory.mode = int(start_memory[k][0])
-                memory.dmin = float(start_memory[k][1])
-            obj = mbs.AddObject(ii.CartesianSpringDamper(markerNumbers=[m_bearing, m_journal]))
-            if settings.contact == "symbolic":
-                uf = _symbolic_force(mbs, obj, cj, memory, k)
-                keep_alive += [uf, memory.symbol]   # the expression tree must outlive the run
-            else:
-                uf = _python_force(cj, memory)
-            mbs.SetObjectParameter(obj, "springForceUserFunction", uf)
-            memories.append(memory)
-            contacts.append((obj, memory))
-            pre_step_reads += 2          # the joint's displacement and velocity
-            if friction_of(cj) is not None:
-                _friction_element(mbs, cj, memory, nodes, pts, settings.contact, keep_alive)
-                memory.history = []
-                # its force function (symbolic vector or Python) makes its vector each call
-                pre_step_reads += PYTHON_FORCE_ALLOCATIONS
-            if cj.has_lubrication:
-                _film_element(mbs, cj, nodes, pts, keep_alive)
-                pre_step_reads += PYTHON_FORCE_ALLOCATIONS
-        contact_items.append(obj)
-        if GROUND in (cj.journal_body, cj.bearing_body):
-            # the force on the bearing is +f (user force) / -f (sphere: markers swapped)
-            on_bearing = 1.0 if settings.contact != "sphere" else -1.0
-            ground_items[cj.name] = obj
-            ground_signs[cj.name] = on_bearing * (1.0 if cj.bearing_body == GROUND else -1.0)
-    def new_memory(floor, clearance, event):
-        memory = ImpactMemory(floor, clearance)
+
+    def new_memory(name, floor):
+        # the next contact's memory, at its place in the layout (the start's modes)
+        memory = ImpactMemory(name, floor)
         if start_memory is not None:
-            memory.mode = int(start_memory[event][0])
-            memory.dmin = float(start_memory[event][1])
+            memory.mode = int(start_memory[len(memories)][0])
+            memory.dmin = float(start_memory[len(memories)][1])
+        memories.append(memory)
         return memory
 
-    ctx = SimpleNamespace(mbs=mbs, nodes=nodes, pts=pts, generic_element=_generic_element,
-                          node_state=_node_state, new_memory=new_memory,
-                          python_force=PYTHON_FORCE_ALLOCATIONS, memories=memories,
-                          contacts=contacts, keep_alive=keep_alive,
-                          pre_step_reads=pre_step_reads)
+    ctx = SimpleNamespace(mbs=mbs, settings=settings, nodes=nodes, pts=pts, marker=marker,
+                          generic_element=_generic_element, node_state=_node_state,
+                          symbolic_vector_function=_symbolic_vector_function,
+                          new_memory=new_memory, python_force=PYTHON_FORCE_ALLOCATIONS,
+                          memories=memories, contacts=[], keep_alive=[], pre_step_reads=0,
+                          ground_items=ground_items, ground_signs=ground_signs,
+                          contact_sensors=[])
     element_items = {el.kind: el.exudyn_build(linkage, ctx) for el in _ELEMENTS}
-    pre_step_reads = ctx.pre_step_reads
-    if contacts:
-        mbs.SetPreStepUserFunction(_pre_step(contacts, step, settings.onset == "predict"))
-    ecc_sign = -1.0 if settings.contact == "sphere" else 1.0
+    if ctx.contacts:
+        mbs.SetPreStepUserFunction(_pre_step(ctx.contacts, step, settings.onset == "predict"))
 
     OVT = exu.OutputVariableType
 
@@ -1134,11 +651,9 @@ def build(linkage: Linkage, settings: ExudynSettings | None = None,
     if "drive" in want and drive is not None:
         sensors["drive"] = sensor("object", drive, OVT.Force)
     if "contact" in want:
-        for cj, obj in zip(linkage.clearance_joints, contact_items):
-            if cj.profile is not None:      # from the bodies' states after the run
-                continue
-            sensors[f"{cj.name}.displacement"] = sensor("object", obj, OVT.Displacement)
-            sensors[f"{cj.name}.force"] = sensor("object", obj, OVT.Force)
+        for name, obj in ctx.contact_sensors:
+            sensors[f"{name}.displacement"] = sensor("object", obj, OVT.Displacement)
+            sensors[f"{name}.force"] = sensor("object", obj, OVT.Force)
     if "bodies" in want:
         for b in linkage.bodies:
             for var, suffix in ((OVT.Coordinates, "q"), (OVT.Coordinates_t, "v"),
@@ -1147,8 +662,8 @@ def build(linkage: Linkage, settings: ExudynSettings | None = None,
     mbs.Assemble()
     return ExudynModel(SC=SC, mbs=mbs, linkage=linkage, settings=settings, step=step,
                        nodes=nodes, sensors=sensors, ground_signs=ground_signs,
-                       ecc_sign=ecc_sign, memories=memories, keep_alive=keep_alive,
-                       elements=element_items, pre_step_reads=pre_step_reads)
+                       memories=memories, keep_alive=ctx.keep_alive, elements=element_items,
+                       pre_step_reads=ctx.pre_step_reads)
 
 
 # ---------------------------------------------------------------------------- solve
@@ -1258,9 +773,7 @@ def solve(model: ExudynModel, end_time: float) -> dict:
     mems = [m for m in model.memories if m is not None]
     if mems:
         stats["onsets"] = sum(m.onsets for m in mems)
-        stats["first_onsets"] = {cj.name: m.first_onset for cj, m in
-                                 zip(model.linkage.clearance_joints, model.memories)
-                                 if m is not None}
+        stats["first_onsets"] = {m.name: m.first_onset for m in mems}
     return stats
 
 
@@ -1294,13 +807,14 @@ def _sliver_rows(t: np.ndarray, step: float) -> np.ndarray:
     return keep
 
 
-#: floats Exudyn stores per step: per ground joint 4, drive 2, per clearance joint 8, per
-#: body 12 (time + 3 components per sensor)
+#: floats Exudyn stores per step: per ground joint 4, drive 2, per contact 8, per body 12
+#: (time + 3 components per sensor)
 def estimate_memory(linkage: Linkage, revolutions: int, step: float,
                     outputs: tuple[str, ...] = ("all",)) -> tuple[int, int]:
     """(time steps, peak bytes) of a run: every step of every sensor stored by Exudyn,
     copied once, and the Trajectory's per-step arrays."""
-    J, B = len(linkage.clearance_joints), len(linkage.bodies)
+    J = sum(len(el.contact_names(linkage)) for el in _ELEMENTS)
+    B = len(linkage.bodies)
     G = len(linkage.ground_joints())
     full = "all" in outputs
     floats = 4 * G + (2 + 8 * J + 12 * B if full else 0)
@@ -1424,90 +938,17 @@ def _coordinates(model: ExudynModel):
     return coordinate_series(linkage, q, v, a)
 
 
-def _pair_series(model: ExudynModel, joint: ClearanceJoint):
-    """(t, e, de/dt, omega_J, phi_B, omega_B) of a clearance joint at every kept sample
-    from the stored body states: e the journal centre minus the bearing centre (m), the
-    bodies' rates in rad/s, the bearing body's angle in rad (0 for the ground)."""
-    pts = _points(model.linkage)
-    t = stored(model, f"{model.linkage.bodies[0].name}.q")[:, 0]
-
-    def point(body, name):
-        if body == GROUND:
-            p = np.asarray(pts[GROUND][name], dtype=float)
-            zero = np.zeros(len(t))
-            return np.tile(p, (len(t), 1)), np.zeros((len(t), 2)), zero, zero
-        q = stored(model, f"{body}.q")[:, 1:4] + np.asarray(
-            model.mbs.GetNodeParameter(model.nodes[body], "referenceCoordinates"))
-        v = stored(model, f"{body}.v")[:, 1:4]
-        x, y = pts[body][name]
-        co, si = np.cos(q[:, 2]), np.sin(q[:, 2])
-        arm = np.column_stack([co * x - si * y, si * x + co * y])
-        return (q[:, :2] + arm, v[:, :2] + v[:, 2:3] * np.column_stack([-arm[:, 1], arm[:, 0]]),
-                q[:, 2], v[:, 2])
-
-    rj, vj, _, wj = point(joint.journal_body, joint.journal_point)
-    rb, vb, phib, wb = point(joint.bearing_body, joint.bearing_point)
-    return t, rj - rb, vj - vb, wj, phib, wb
-
-
-def _clearance_series(model: ExudynModel, joint: ClearanceJoint, memory) -> dict:
-    """The series of a clearance joint at every kept sample, from the stored body states:
-    "contact_angle" theta_e (rad, e's direction in the bearing body's frame, in
-    [0, 2 pi)) and "slip_velocity" v_t = de/dt . t + omega_J R_J - omega_B R_B(theta_e)
-    (m/s; t = (-n_y, n_x), n = e/|e|, or the direction theta_e when the journal is
-    centred). A profiled joint's also "eccentricity" e (n, 2), "penetration" |e| -
-    (R_B(theta_e) - R_J) and "force" Fn (N; `_profile_geometry`); a joint with friction
-    "friction_power" Ft v_t (W, <= 0). The forces are contact.contact_force /
-    friction_force (the Python variant's law) with the impact velocity in force at each
-    step (`ImpactMemory.history`)."""
-    t, e, ed, wj, phib, wb = _pair_series(model, joint)
-    r = np.hypot(e[:, 0], e[:, 1])
-    co, si = np.cos(phib), np.sin(phib)
-    theta = np.mod(np.arctan2(co * e[:, 1] - si * e[:, 0], co * e[:, 0] + si * e[:, 1]),
-                   2.0 * np.pi)
-    profile = joint.profile
-    R = (np.full(len(t), joint.bearing_radius) if profile is None
-         else np.asarray(profile.radius(theta)))
-    with np.errstate(invalid="ignore", divide="ignore"):
-        n = np.where(r[:, None] > 0.0, e / r[:, None],
-                     np.column_stack([np.cos(theta + phib), np.sin(theta + phib)]))
-    vt = (ed[:, 1] * n[:, 0] - ed[:, 0] * n[:, 1]) + (wj * joint.journal_radius - wb * R)
-    out = {"contact_angle": theta, "slip_velocity": vt}
-    fric = friction_of(joint)
-    if profile is None and fric is None:
-        return out
-    _, _, _, cmodel = _law_constants(joint)
-    stiffness = _profile_stiffness(joint) if profile is not None else None
-    hist = np.asarray(memory.history).reshape(-1, 2)
-    at = np.clip(np.searchsorted(hist[:, 0], t, side="right") - 1, 0, max(len(hist) - 1, 0))
-    dmin = (np.where(hist[at, 0] <= t, hist[at, 1], joint.impact_velocity_floor) if len(hist)
-            else np.full(len(t), joint.impact_velocity_floor))
-    delta = r - (R - joint.journal_radius) if profile is not None else r - joint.clearance
-    force = np.zeros(len(t))
-    power = np.zeros(len(t))
-    slope = None if profile is None else np.asarray(profile.radius(theta, 1))
-    for i in np.nonzero(delta > 0.0)[0]:
-        rate = float(ed[i] @ n[i])
-        K = joint.stiffness
-        if profile is not None:
-            rate -= slope[i] * ((e[i, 0] * ed[i, 1] - e[i, 1] * ed[i, 0]) / (r[i] * r[i])
-                                - wb[i])
-            K = stiffness(R[i])
-        force[i] = contact_force(delta[i], rate, float(dmin[i]), K, joint.restitution, cmodel)
-        if fric is not None:
-            power[i] = friction_force_slots(vt[i], force[i], fric[1], fric[0]) * vt[i]
-    if fric is not None:
-        out["friction_power"] = power
-    if profile is not None:
-        out.update(eccentricity=e, penetration=delta, force=force)
-    return out
-
-
 def _element_series(model: ExudynModel) -> list:
     """Every element's series of the run (`Element.exudyn_series`, registry order), from
-    the stored body states and each contact's impact velocity in force at each step
-    (`ImpactMemory.history`)."""
+    the stored sensors and body states and each contact's impact velocity in force at each
+    step (`ImpactMemory.history`)."""
     t = stored(model, f"{model.linkage.bodies[0].name}.q")[:, 0]
+
+    def motion(body):
+        # the body's absolute coordinates and their rates at the samples
+        return (stored(model, f"{body}.q")[:, 1:4] + np.asarray(
+            model.mbs.GetNodeParameter(model.nodes[body], "referenceCoordinates")),
+            stored(model, f"{body}.v")[:, 1:4])
 
     def states(bodies):
         return (np.hstack([stored(model, f"{b}.q")[:, 1:4] for b in bodies]),
@@ -1520,8 +961,10 @@ def _element_series(model: ExudynModel) -> list:
         at = np.clip(np.searchsorted(hist[:, 0], t, side="right") - 1, 0, len(hist) - 1)
         return np.where(hist[at, 0] <= t, hist[at, 1], memory.floor)
 
-    return [el.exudyn_series(model.elements[el.kind], t, states, impact_velocity)
-            for el in _ELEMENTS]
+    ctx = SimpleNamespace(t=t, stored=lambda name: stored(model, name), motion=motion,
+                          states=states, points=_points(model.linkage),
+                          impact_velocity=impact_velocity)
+    return [el.exudyn_series(model.elements[el.kind], ctx) for el in _ELEMENTS]
 
 
 def _reactions(model: ExudynModel) -> tuple[np.ndarray, dict]:
@@ -1556,9 +999,9 @@ def simulate_exudyn_linkage(linkage: Linkage, revolutions: int | None = None, **
     maximum per revolution refined between the steps (`refined_peaks`). ``contact_phase``
     is 1 where the penetration is positive; ``contact_force`` the
     signed normal force; ``crank_work`` the trapezoidal integral of the drive's power;
-    ``contact_angle`` (rad) and ``slip_velocity`` (m/s) per clearance joint
-    (`_clearance_series`).
-    ``stats`` holds the settings, the step, Newton counters, onsets (per joint the first
+    ``contact_angle`` (rad) and ``slip_velocity`` (m/s) per clearance joint (its element's
+    `exudyn_series`).
+    ``stats`` holds the settings, the step, Newton counters, onsets (per contact the first
     registered onset time in ``first_onsets``) and the wall time in s.
 
     A free linkage (drive None) takes ``duration`` (s) and ``window`` (s) instead of
@@ -1595,31 +1038,14 @@ def run_linkage(linkage: Linkage, revolutions: int | None, settings: ExudynSetti
     t, reactions = _reactions(model)
     moment = None if free else -stored(model, "drive")[:, 1]
     ecc, pen, force = [], [], []
-    joint_series = [_clearance_series(model, cj, m)
-                    for cj, m in zip(linkage.clearance_joints, model.memories)]
     elements = _element_series(model)
     for series in elements:
         reactions.update(series.reactions)
-    shaking = sum(reactions[g] for g in reactions)
-    monitored = shaking if linkage.monitor_joint is None else reactions[linkage.monitor_joint]
-    for cj, series in zip(linkage.clearance_joints, joint_series):
-        if cj.profile is not None:
-            ecc.append(series["eccentricity"])
-            pen.append(series["penetration"])
-            force.append(series["force"])
-            continue
-        e = model.ecc_sign * stored(model, f"{cj.name}.displacement")[:, 1:3]
-        r = np.hypot(e[:, 0], e[:, 1])
-        f = stored(model, f"{cj.name}.force")[:, 1:3]
-        with np.errstate(invalid="ignore", divide="ignore"):
-            fn = model.ecc_sign * (f[:, 0] * e[:, 0] + f[:, 1] * e[:, 1]) / r
-        ecc.append(e)
-        pen.append(r - cj.clearance)
-        force.append(np.where(r > 0.0, fn, 0.0))
-    for series in elements:
         ecc += series.eccentricity
         pen += series.penetration
         force += series.force
+    shaking = sum(reactions[g] for g in reactions)
+    monitored = shaking if linkage.monitor_joint is None else reactions[linkage.monitor_joint]
     penetration = np.column_stack(pen)
     work = None
     if not free:
@@ -1628,9 +1054,7 @@ def run_linkage(linkage: Linkage, revolutions: int | None, settings: ExudynSetti
     stats["uniform_steps"] = bool(len(t) == stats["n_steps"] + 1 and np.allclose(
         np.diff(t), stats["step_size_used"], rtol=1e-6, atol=0.0))
     coords, rates, accs = _coordinates(model)
-    friction = [series["friction_power"] for series in joint_series
-                if "friction_power" in series]
-    friction += [power for series in elements for power in series.friction_power]
+    friction = [power for series in elements for power in series.friction_power]
     friction_work = None
     if friction:
         power = sum(friction)
@@ -1648,12 +1072,14 @@ def run_linkage(linkage: Linkage, revolutions: int | None, settings: ExudynSetti
         joints=tuple(name for name, _ in linkage.contacts()), reactions=reactions,
         shaking_force=np.ascontiguousarray(shaking), coordinates=coords, rates=rates,
         accelerations=accs, friction_work=friction_work,
-        contact_angle=_columns([s["contact_angle"] for s in joint_series], len(t)),
-        slip_velocity=_columns([s["slip_velocity"] for s in joint_series], len(t)))
+        contact_angle=_element_columns(elements, "contact_angle", len(t)),
+        slip_velocity=_element_columns(elements, "slip_velocity", len(t)))
 
 
-def _columns(series: list, n: int) -> np.ndarray:
-    """The (n, J) array of J series of n samples ((n, 0) for none)."""
+def _element_columns(elements: list, name: str, n: int) -> np.ndarray:
+    """The (n, J) array of the J columns `name` of the elements' series of n samples
+    (``columns``; (n, 0) for none)."""
+    series = [c for part in elements for c in part.columns.get(name, [])]
     return np.column_stack(series) if series else np.empty((n, 0))
 
 
@@ -1675,9 +1101,8 @@ def monitors_element_reaction(linkage: Linkage) -> bool:
     """Whether the monitored force may hold an element's ground reaction (a ground guide's:
     its corners' loads), which is computed from the bodies' stored states that a
     reactions-only run does not keep (its peaks then come from a full run)."""
-    ideal = {j.name for j in linkage.joints}
-    return any(el.contact_names(linkage) for el in _ELEMENTS) and (
-        linkage.monitor_joint is None or linkage.monitor_joint not in ideal)
+    after = {n for el in _ELEMENTS for n in el.exudyn_ground_joints(linkage)}
+    return bool(after) and (linkage.monitor_joint is None or linkage.monitor_joint in after)
 
 
 def peak_run(linkage: Linkage, revolution: int | None, settings: ExudynSettings,

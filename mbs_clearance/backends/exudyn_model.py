@@ -75,6 +75,7 @@ force), slider node position/velocity/acceleration, coupler node angle and rate.
 from __future__ import annotations
 
 from .._checks import check_int
+from ..elements import revolute
 from ..model.mechanism import SliderCrank
 from ..solve.trajectory import Trajectory, annotate
 from . import exudyn_linkage as xl
@@ -106,8 +107,8 @@ def make_settings(options: dict) -> ExudynSettings:
 
 def sphere_restitution(mech: SliderCrank) -> float:
     """Restitution e' for Exudyn's Hunt-Crossley sphere contact that reproduces our law
-    (`exudyn_linkage.sphere_restitution` of the mechanism's clearance joint)."""
-    return xl.sphere_restitution(_linkage(mech).clearance_joints[0])
+    (`elements.revolute.sphere_restitution` of the mechanism's clearance joint)."""
+    return revolute.sphere_restitution(_linkage(mech).clearance_joints[0])
 
 
 def _linkage(mech: SliderCrank):

@@ -14,7 +14,39 @@ a bearing with radial clearance, one contact per joint, with its variants per jo
   joint's), so that a linkage whose joints are lubricated one by one keeps every joint's
   contact at its place in the layout;
 - bearing profile (``bearing_profile``, a worn or shaped bearing): the profiled contact
-  stages of core/profile_runtime.h in place of the circular ones (C printer only).
+  stages of core/profile_runtime.h in place of the circular ones.
+
+Its Exudyn element (`exudyn_build`, one of three variants by the backend's option
+``contact``): ``"symbolic"`` (default) an ``ObjectConnectorCartesianSpringDamper`` between
+``MarkerBodyRigid`` markers at the bearing and journal points with an Exudyn symbolic
+(C++-evaluated) spring force: with d the journal centre relative to the bearing centre,
+delta = |d| - c, deltadot = d.d'/|d|, F = max(K delta^1.5 (1 + xi(e) deltadot /
+deltadot_minus), 0) for delta > 0, returned as F d/|d| (Exudyn applies it to the bearing and
+its opposite to the journal; `_symbolic_force`); ``"python"`` the same connector with a
+Python force calling `laws.forces.contact_force`; ``"sphere"`` Exudyn's native
+``ObjectContactSphereSphere``, the bearing as hollow sphere, restitution e' = 1 - xi(e)/1.5
+(`sphere_restitution`), only for laws it represents. Beside the connector:
+
+- friction (law not "none", mu > 0): an ``ObjectGenericODE2`` on the two bodies' nodes whose
+  (symbolic, or Python) force returns the generalized forces of the tangential force Ft t at
+  the joint's points and the moments R_J Ft / -R_B Ft, Ft = friction_force(vt, Fn, ...) with
+  vt = de/dt . t + omega_J R_J - omega_B R_B (`_friction_loads`; a connector would apply
+  equal and opposite moments);
+- the oil film: an ``ObjectGenericODE2`` whose Python force is the compiled film law
+  (`_film_loads`);
+- a bearing profile: one ``ObjectGenericODE2`` in place of the connector (any ``contact``
+  but "sphere") whose Python force is the normal force at the profiled penetration
+  |e| - (R_B(theta_e) - R_J) with Eq. 9's stiffness at R_B(theta_e), and the friction with
+  R_B(theta_e) (`_profile_loads`; a symbolic spline lookup ran 30 times slower). A profiled,
+  rubbing or lubricated joint to the ground is not built (its reaction would miss that
+  force).
+
+Each joint but a "sphere" one has its impact-velocity memory, read by the backend's pre-step
+function from the joint's gap function (`_connector_gap`, a profiled joint's own). After the
+run (`exudyn_series`) the eccentricity, penetration and force come from the connector's
+recorded displacement and force (a profiled joint's from the stored body states), the
+contact angle, slip velocity and friction power from the stored body states
+(`_clearance_series`).
 
 Its contacts come first in every layout (the registry's first element): per joint its
 contact fields, then the friction fields of the joints with a law, then the film's fields of
@@ -28,13 +60,22 @@ import math
 
 import numpy as np
 
-from ..laws.forces import CONTACT_MODELS, FRICTION_LAWS, stiffness_eq9_partials
+from ..laws._dispatch import friction_force_slots
+from ..laws.forces import (
+    CONTACT_MODELS,
+    FRICTION_LAWS,
+    contact_force,
+    hysteresis_factor,
+    stiffness_eq9_partials,
+)
 from ..laws.lubrication import MODELS as LUBRICATION_MODELS
-from ..laws.registry import FRICTION_SLOTS
+from ..laws.lubrication import lubricated_force
+from ..laws.registry import FRICTION, FRICTION_PARAMETER_SPECS, FRICTION_SLOTS
 from ..model.linkage import GROUND, LUBRICATION_PARAMETERS, ClearanceJoint
-from .base import CONTACT_FIELDS, PIECES, Element, friction_arguments
+from .base import CONTACT_FIELDS, Element, friction_arguments
 
-__all__ = ["ELEMENT", "FRICTION_FIELDS", "LUBRICATION_FIELDS"]
+__all__ = ["ELEMENT", "FRICTION_FIELDS", "LUBRICATION_FIELDS", "friction_of",
+           "sphere_restitution", "symbolic_friction_force", "symbolic_friction_factor"]
 
 #: per clearance joint with friction, the entries of p read by the friction law and the
 #: tangential slip (the radii put the contact point on each body's surface)
@@ -68,9 +109,6 @@ class RevoluteClearance(Element):
     kind = "revolute"
     description = ClearanceJoint
     attribute = "clearance_joints"
-    #: the Exudyn backend still builds the revolute clearance joint itself (its contact,
-    #: friction, film, profile and sphere-contact variants)
-    pieces = tuple(p for p in PIECES if p != "Exudyn element")
 
     # ---- description
     def contact_names(self, linkage) -> list[str]:
@@ -576,6 +614,608 @@ class RevoluteClearance(Element):
             lam = multipliers(j.name)
             out.append(np.hypot(lam[:, 0], lam[:, 1]))
         return out
+
+    # ---- Exudyn element (backends.exudyn_linkage)
+    def exudyn_check(self, linkage, settings) -> None:
+        """ValueError unless the Exudyn backend's `settings` build the joints: the friction,
+        the film and a profiled contact are generic elements on the two bodies' nodes (no
+        "sphere" contact, no ground joint: its reaction would miss that force); a "sphere"
+        contact needs Exudyn's restitution 1 - xi/1.5 > 0."""
+        joints = self.joints(linkage)
+        for j in joints:
+            for what, on in (("friction law of ours", friction_of(j) is not None),
+                             ("oil film", j.has_lubrication),
+                             ("bearing profile", j.profile is not None)):
+                if not on:
+                    continue
+                if settings.contact == "sphere":
+                    raise ValueError(f"contact='sphere' has no {what} (joint {j.name!r} has "
+                                     "it); use contact='symbolic' or 'python'")
+                if GROUND in (j.journal_body, j.bearing_body):
+                    raise ValueError(f"the {what.split(' of')[0]} of clearance joint "
+                                     f"{j.name!r}, which is a ground joint, is not built in the "
+                                     "exudyn backend (its reaction would miss that force); use "
+                                     "the reduced backend")
+        if settings.contact == "sphere":
+            for j in joints:
+                if sphere_restitution(j) <= 0.0:
+                    raise ValueError(
+                        f"contact='sphere' cannot represent joint {j.name!r}'s contact_model="
+                        f"{j.contact_model!r} with restitution {j.restitution!r}: Exudyn's "
+                        f"restitution 1 - xi/1.5 = {sphere_restitution(j):.3g} must be > 0; "
+                        "use contact='symbolic'")
+
+    def exudyn_contact_scale(self, linkage, load: float, masses: dict, size: float):
+        """(shortest linearised contact period in s, largest relative roundoff floor) of the
+        joints at the load scale `load` (N): a joint penetrates delta = (F / K)^(2/3) with the
+        linearised stiffness 1.5 K delta^(1/2) against the lighter of its bodies."""
+        period, floor = math.inf, 0.0
+        for cj in self.joints(linkage):
+            delta = (load / cj.stiffness) ** (2.0 / 3.0)
+            k = 1.5 * cj.stiffness * math.sqrt(delta)
+            m = min(masses.get(cj.journal_body, math.inf), masses.get(cj.bearing_body, math.inf))
+            period = min(period, 2.0 * math.pi * math.sqrt(m / k))
+            floor = max(floor, 1.5 * float(np.finfo(float).eps) * size / delta)
+        return period, floor
+
+    def exudyn_build(self, linkage, ctx) -> list:
+        """Add each joint's contact (option ``contact`` of ``ctx.settings``): a
+        ``CartesianSpringDamper`` with the symbolic or Python contact force, or Exudyn's
+        ``ObjectContactSphereSphere``; a profiled joint's `ObjectGenericODE2`; with friction
+        and in oil their `ObjectGenericODE2`s. Every joint but a "sphere" one has its
+        impact-velocity memory and gap function for the pre-step function. `ctx`: the system
+        (mbs), settings, nodes, points (pts), the backend's helpers (marker, generic_element,
+        node_state, symbolic_vector_function, new_memory(name, floor)), the Python force's
+        allocation count (python_force), and what it fills: memories, contacts ((gap
+        function, memory)), keep_alive, pre_step_reads, ground_items and ground_signs (a
+        ground joint's item whose Force sensor, times the sign, is the reaction on the
+        ground), contact_sensors ((joint, item) whose Displacement and Force Exudyn
+        records). Returns per joint (joint, memory or None, the sign turning the recorded
+        Displacement into journal minus bearing)."""
+        import exudyn.itemInterface as ii
+
+        mbs, variant, items = ctx.mbs, ctx.settings.contact, []
+        for k, cj in enumerate(self.joints(linkage)):
+            memory = None
+            if variant == "sphere":
+                m_journal = ctx.marker(cj.journal_body, cj.journal_point, rigid=True)
+                m_bearing = ctx.marker(cj.bearing_body, cj.bearing_point, rigid=True)
+                n_data = mbs.AddNode(ii.NodeGenericData(
+                    numberOfDataCoordinates=4, initialCoordinates=[cj.clearance, 0, 0, 0]))
+                obj = mbs.AddObject(ii.ObjectContactSphereSphere(
+                    markerNumbers=[m_journal, m_bearing], nodeNumber=n_data,
+                    spheresRadii=[cj.journal_radius, cj.bearing_radius], isHollowSphere1=True,
+                    contactStiffness=cj.stiffness, contactStiffnessExponent=1.5,
+                    contactDamping=0.0, dynamicFriction=0.0,
+                    restitutionCoefficient=sphere_restitution(cj),
+                    minimumImpactVelocity=cj.impact_velocity_floor, impactModel=1))
+                ctx.memories.append(None)
+            elif cj.profile is not None:
+                memory = ctx.new_memory(cj.name, cj.impact_velocity_floor)
+                obj, gap = _profile_element(ctx, cj, memory)
+                memory.history = []         # the contact force after the run needs it
+                ctx.contacts.append((gap, memory))
+                # the gap reads each node's coordinates and rates
+                ctx.pre_step_reads += (2 * sum(b != GROUND for b in (cj.journal_body,
+                                                                     cj.bearing_body))
+                                       + ctx.python_force)
+            else:
+                m_journal = ctx.marker(cj.journal_body, cj.journal_point, rigid=True)
+                m_bearing = ctx.marker(cj.bearing_body, cj.bearing_point, rigid=True)
+                memory = ctx.new_memory(cj.name, cj.impact_velocity_floor)
+                obj = mbs.AddObject(ii.CartesianSpringDamper(markerNumbers=[m_bearing,
+                                                                            m_journal]))
+                if variant == "symbolic":
+                    uf = _symbolic_force(mbs, obj, cj, memory, k)
+                    ctx.keep_alive += [uf, memory.symbol]   # the tree must outlive the run
+                else:
+                    uf = _python_force(cj, memory)
+                mbs.SetObjectParameter(obj, "springForceUserFunction", uf)
+                ctx.contacts.append((_connector_gap(obj, cj.clearance), memory))
+                ctx.pre_step_reads += 2          # the joint's displacement and velocity
+                if friction_of(cj) is not None:
+                    _friction_element(ctx, cj, memory)
+                    memory.history = []
+                    # its force function (symbolic vector or Python) makes its vector each call
+                    ctx.pre_step_reads += ctx.python_force
+                if cj.has_lubrication:
+                    _film_element(ctx, cj)
+                    ctx.pre_step_reads += ctx.python_force
+            if cj.profile is None:              # a profiled one's from the bodies' states
+                ctx.contact_sensors.append((cj.name, obj))
+            if GROUND in (cj.journal_body, cj.bearing_body):
+                # the force on the bearing is +f (user force) / -f (sphere: markers swapped)
+                on_bearing = 1.0 if variant != "sphere" else -1.0
+                ctx.ground_items[cj.name] = obj
+                ctx.ground_signs[cj.name] = on_bearing * (1.0 if cj.bearing_body == GROUND
+                                                          else -1.0)
+            items.append((cj, memory, -1.0 if variant == "sphere" else 1.0))
+        return items
+
+    def exudyn_ground_joints(self, linkage) -> set[str]:
+        """None: a joint to the ground has its reaction from the Force sensor of its contact
+        (`exudyn_build`'s ground_items)."""
+        return set()
+
+    def exudyn_series(self, items, ctx):
+        """The joints' series of a run (`items`: per joint (joint, memory, sign) of
+        `exudyn_build`): per contact ``eccentricity`` (n, 2), ``penetration`` and
+        ``force`` (from the recorded Displacement and Force of its contact, a profiled
+        one's from the bodies' states, `_clearance_series`), the ``friction_power`` of the
+        joints with friction and the ``columns`` contact_angle and slip_velocity per joint.
+        `ctx`: the samples t, stored(sensor name), motion(body) -> (coordinates (n, 3),
+        rates (n, 3)), the points, impact_velocity(memory) -> (n,) at the samples. No
+        ground reaction (a ground joint's is a sensor's)."""
+        ecc, pen, force, power, angle, slip = [], [], [], [], [], []
+        for cj, memory, sign in items:
+            series = _clearance_series(ctx, cj, memory)
+            angle.append(series["contact_angle"])
+            slip.append(series["slip_velocity"])
+            if "friction_power" in series:
+                power.append(series["friction_power"])
+            if cj.profile is not None:
+                ecc.append(series["eccentricity"])
+                pen.append(series["penetration"])
+                force.append(series["force"])
+                continue
+            e = sign * ctx.stored(f"{cj.name}.displacement")[:, 1:3]
+            r = np.hypot(e[:, 0], e[:, 1])
+            f = ctx.stored(f"{cj.name}.force")[:, 1:3]
+            with np.errstate(invalid="ignore", divide="ignore"):
+                fn = sign * (f[:, 0] * e[:, 0] + f[:, 1] * e[:, 1]) / r
+            ecc.append(e)
+            pen.append(r - cj.clearance)
+            force.append(np.where(r > 0.0, fn, 0.0))
+        return self.part(reactions={}, eccentricity=ecc, penetration=pen, force=force,
+                         friction_power=power,
+                         columns={"contact_angle": angle, "slip_velocity": slip})
+
+
+# ---------------------------------------------------------------------------- Exudyn
+
+def sphere_restitution(joint: ClearanceJoint) -> float:
+    """Restitution e' for Exudyn's Hunt-Crossley sphere contact that reproduces our law:
+    Exudyn's impactModel 1 damps with 1.5 (1 - e'), so e' = 1 - xi(e)/1.5 ((1 + e^2)/2 for
+    Lankarani-Nikravesh, e for Hunt-Crossley)."""
+    xi, _ = hysteresis_factor(joint.restitution, CONTACT_MODELS[joint.contact_model])
+    return 1.0 - xi / 1.5
+
+
+def _law_constants(joint: ClearanceJoint):
+    model = CONTACT_MODELS[joint.contact_model]
+    xi, _ = hysteresis_factor(joint.restitution, model)
+    return joint.stiffness, joint.clearance, float(xi), model
+
+
+def _python_force(joint: ClearanceJoint, memory):
+    """Plain Python user function: the reduced model's compiled contact law."""
+    K, c, _, model = _law_constants(joint)
+    e = joint.restitution
+
+    def force(mbs, t, itemNumber, displacement, velocity, stiffness, damping, offset):
+        dx, dy = displacement[0], displacement[1]
+        r = math.sqrt(dx * dx + dy * dy)
+        delta = r - c
+        if delta <= 0.0:
+            return [0.0, 0.0, 0.0]
+        rate = (dx * velocity[0] + dy * velocity[1]) / r
+        f = contact_force(delta, rate, memory.dmin, K, e, model) / r
+        return [f * dx, f * dy, 0.0]
+
+    return force
+
+
+def _symbolic_normal(K, c, xi, dmin, dx, dy, vx, vy):
+    """Symbolic normal force of the contact law from the journal centre's position (dx, dy)
+    and velocity (vx, vy) relative to the bearing centre: (r, magnitude or 0 when free);
+    the same formula as contact.contact_force (clamped at zero, zero for delta <= 0)."""
+    import exudyn as exu
+
+    esym = exu.symbolic
+    zero = esym.Real(0.0)
+    r = esym.sqrt(dx * dx + dy * dy)
+    delta = r - c
+    rate = (dx * vx + dy * vy) / r
+    magnitude = esym.max(K * delta**1.5 * (1.0 + xi * rate / dmin), zero)
+    # lazy: r > c > 0 inside the true branch, so no division by zero when centred
+    return r, esym.IfThenElse(delta > 0.0, magnitude, zero)
+
+
+def _symbolic_force(mbs, obj, joint: ClearanceJoint, memory, k: int):
+    """Compiled (symbolic) user function; the impact velocity is a named symbolic variable
+    (one per joint)."""
+    import exudyn as exu
+    from exudyn.advancedUtilities import CreateSymbolicUserFunction
+
+    esym = exu.symbolic
+    K, c, xi, _ = _law_constants(joint)
+    dmin = esym.Real(f"deltadot_minus_{k}", memory.dmin)
+    memory.symbol = dmin
+    zero = esym.Real(0.0)
+
+    def force(mbs, t, itemNumber, displacement, velocity, stiffness, damping, offset):
+        dx, dy = displacement[0], displacement[1]
+        r, magnitude = _symbolic_normal(K, c, xi, dmin, dx, dy, velocity[0], velocity[1])
+        factor = esym.IfThenElse(r - c > 0.0, magnitude / r, zero)
+        return [factor * dx, factor * dy, zero]
+
+    return CreateSymbolicUserFunction(mbs, force, "springForceUserFunction", obj)
+
+
+def friction_of(joint: ClearanceJoint):
+    """(law id, the values of the friction slots `laws.FRICTION_SLOTS`) of a clearance joint
+    whose friction is on (law not "none" and mu > 0), else None: a joint without friction
+    gets no friction element, so its results are the frictionless ones bit for bit."""
+    if not joint.has_friction or joint.friction_coefficient == 0.0:
+        return None
+    return (FRICTION_LAWS[joint.friction_law],
+            tuple(getattr(joint, f) for f in FRICTION_SLOTS))
+
+
+def symbolic_friction_force(vt, fn, law: int, slots: tuple):
+    """Ft(vt, Fn) of friction law id `law` as an Exudyn symbolic expression: the law
+    module's own formula (`laws.friction.<name>.force`) evaluated on symbolic Reals, with
+    the law's parameters from `slots` (the values of `laws.FRICTION_SLOTS`)."""
+    spec = FRICTION[law]
+    values = dict(zip(FRICTION_SLOTS, slots))
+    ft = spec.force(vt, fn, *(values[a] for a in spec.arguments))
+    return ft if hasattr(ft, "Evaluate") else 0.0 * vt + ft
+
+
+def symbolic_friction_factor(vt, v0: float, v1: float, law: int):
+    """phi(vt) of `contact.friction_factor` as an Exudyn symbolic expression (Ft at mu = 1,
+    Fn = -1, `symbolic_friction_force`); tested against contact.friction_factor point by
+    point; further slots at their defaults."""
+    given = {"friction_coefficient": 1.0, "friction_v0": v0, "friction_v1": v1}
+    return symbolic_friction_force(vt, -1.0, law, tuple(
+        given.get(p.name, p.default) for p in FRICTION_PARAMETER_SPECS))
+
+
+def _pair(sides, q, qt, cos, sin):
+    """(e, de/dt (x, y each), omega_J, omega_B, the two points' arms from their centres of
+    mass) of a journal-bearing pair of `_Side`s."""
+    (xj, yj), (vxj, vyj), arm_j, wj = sides[0].kinematics(q, qt, cos, sin)
+    (xb, yb), (vxb, vyb), arm_b, wb = sides[1].kinematics(q, qt, cos, sin)
+    return xj - xb, yj - yb, vxj - vxb, vyj - vyb, wj, wb, arm_j, arm_b
+
+
+def _film_loads(joint, sides, q, qt):
+    """Generalized forces of the oil film of one lubricated joint on its bodies'
+    coordinates: the film's force F on the journal centre and its torque T_J on the
+    journal (`laws.lubrication.lubricated_force`, faded out near the wall), -F at the
+    bearing's point and the bearing's torque -T_J - e x F (as the reduced model's
+    `lubricated_stage`)."""
+    dx, dy, vx, vy, wj, wb, (axj, ayj), (axb, ayb) = _pair(sides, q, qt, math.cos, math.sin)
+    fx, fy, tj, _ = lubricated_force(
+        dx, dy, vx, vy, wj, wb, joint.journal_radius, joint.clearance,
+        joint.bearing_length, joint.viscosity, LUBRICATION_MODELS[joint.lubrication],
+        joint.film_fade_start, joint.film_fade_end)
+    tb = -tj - (dx * fy - dy * fx)
+    out = [0.0] * (3 * sum(s.slot is not None for s in sides))
+    for side, sign, (ax, ay), torque in ((sides[0], 1.0, (axj, ayj), tj),
+                                         (sides[1], -1.0, (axb, ayb), tb)):
+        if side.slot is not None:
+            i = side.slot
+            out[i], out[i + 1] = sign * fx, sign * fy
+            out[i + 2] = sign * (ax * fy - ay * fx) + torque
+    return out
+
+
+def _friction_loads(joint, sides, q, qt, normal, friction, cos, sin, gate):
+    """Generalized forces of the friction of one joint on its bodies' coordinates (the
+    friction element's force vector): the tangential force Ft t on the journal at its
+    point plus the moment R_J Ft, the opposite force on the bearing plus -R_B Ft, with
+    vt = de/dt . t + omega_J R_J - omega_B R_B and Ft = friction_force(vt, Fn, ...)
+    (`normal` gives |e| and Fn from e, de/dt; `friction` Ft from vt, Fn; `gate`(delta,
+    value) is the value in contact and zero in free flight, where t is undefined when
+    the journal is centred)."""
+    journal, bearing = sides
+    dx, dy, vx, vy, wj, wb, (axj, ayj), (axb, ayb) = _pair(sides, q, qt, cos, sin)
+    r, fn = normal(dx, dy, vx, vy)
+    tx, ty = -dy / r, dx / r
+    vt = vx * tx + vy * ty + wj * joint.journal_radius - wb * joint.bearing_radius
+    ft = friction(vt, fn)
+    fx, fy = ft * tx, ft * ty
+    out = [None] * (3 * sum(s.slot is not None for s in sides))
+    delta = r - joint.clearance
+    for side, sign, radius, (ax, ay) in ((journal, 1.0, joint.journal_radius, (axj, ayj)),
+                                         (bearing, -1.0, joint.bearing_radius, (axb, ayb))):
+        if side.slot is not None:
+            i = side.slot
+            out[i] = gate(delta, sign * fx)
+            out[i + 1] = gate(delta, sign * fy)
+            out[i + 2] = gate(delta, sign * (ax * fy - ay * fx + radius * ft))
+    return out
+
+
+def _pair_element(ctx, joint: ClearanceJoint):
+    """(sides, element, n): the backend's generic element (``ctx.generic_element``) on the
+    joint's bodies (journal first), n its number of coordinates."""
+    sides, obj, node_list = ctx.generic_element(
+        ctx.mbs, ((joint.journal_body, joint.journal_point),
+                  (joint.bearing_body, joint.bearing_point)), ctx.nodes, ctx.pts)
+    return sides, obj, 3 * len(node_list)
+
+
+def _film_element(ctx, joint: ClearanceJoint):
+    """Add the oil film of the lubricated `joint` as an `ObjectGenericODE2` on its bodies'
+    nodes whose force is `_film_loads`, a Python user function calling the compiled law
+    (not a symbolic one: the law's one formula is the compiled kernel, whose film ends are
+    found by `atan2` (short) or by a search for the pressure's zeros (long), and an Exudyn
+    expression of it would be a second formula of the same law)."""
+    sides, obj, _ = _pair_element(ctx, joint)
+
+    def force(mbs, t, itemNumber, q, q_t):
+        return _film_loads(joint, sides, q, q_t)
+
+    ctx.mbs.SetObjectParameter(obj, "forceUserFunction", force)
+    ctx.keep_alive.append(force)
+    return obj
+
+
+def _friction_element(ctx, joint: ClearanceJoint, memory):
+    """Add the friction of `joint` (friction on) as an `ObjectGenericODE2` on the two
+    bodies' nodes whose force user function returns the generalized forces of
+    `_friction_loads` (symbolic, or Python with contact.contact_force/friction_force)."""
+    import exudyn as exu
+
+    law, slots = friction_of(joint)
+    K, c, xi, model = _law_constants(joint)
+    sides, obj, n = _pair_element(ctx, joint)
+    if ctx.settings.contact == "python":
+        def normal(dx, dy, vx, vy):
+            r = math.sqrt(dx * dx + dy * dy)
+            if r <= c:
+                return max(r, 1e-300), 0.0     # free flight (gated to 0); finite at centre
+            rate = (dx * vx + dy * vy) / r
+            return r, contact_force(r - c, rate, memory.dmin, K, joint.restitution, model)
+
+        def force(mbs, t, itemNumber, q, q_t):
+            return _friction_loads(joint, sides, q, q_t, normal,
+                                   lambda vt, fn: friction_force_slots(vt, fn, slots, law),
+                                   math.cos, math.sin,
+                                   lambda delta, v: v if delta > 0.0 else 0.0)
+
+        ctx.mbs.SetObjectParameter(obj, "forceUserFunction", force)
+        ctx.keep_alive.append(force)
+        return obj
+    esym = exu.symbolic
+    dmin = memory.symbol
+
+    def normal(dx, dy, vx, vy):
+        return _symbolic_normal(K, c, xi, dmin, dx, dy, vx, vy)
+
+    def friction(vt, fn):
+        return symbolic_friction_force(vt, fn, law, slots)
+
+    zero = esym.Real(0.0)
+
+    def force(mbs, t, itemNumber, q, q_t):
+        # lazy gates: r > c > 0 inside the true branch (t = perp(e) / |e| is defined)
+        return _friction_loads(joint, sides, q, q_t, normal, friction, esym.cos, esym.sin,
+                               lambda delta, v: esym.IfThenElse(delta > 0.0, v, zero))
+
+    uf = ctx.symbolic_vector_function(ctx.mbs, force, obj, n)
+    ctx.mbs.SetObjectParameter(obj, "forceUserFunction", uf)
+    ctx.keep_alive.append(uf)
+    return obj
+
+
+class _ProfileLookup:
+    """A profiled joint's bearing radius R_B(theta) and slope, the spline's piece found by
+    index (as `BearingProfile.radius`, without its per-call overhead)."""
+
+    def __init__(self, joint: ClearanceJoint):
+        profile = joint.profile
+        self.pieces = profile.coefficients().tolist()
+        self.h = 2.0 * math.pi / profile.points
+
+    def __call__(self, theta: float) -> tuple[float, float]:
+        """(R_B in m, dR_B/dtheta in m/rad) at theta in [0, 2 pi]."""
+        i = min(int(theta / self.h), len(self.pieces) - 1)
+        u = theta - i * self.h
+        c0, c1, c2, c3 = self.pieces[i]
+        return c0 + u * (c1 + u * (c2 + u * c3)), c1 + u * (2.0 * c2 + 3.0 * u * c3)
+
+
+def _profile_stiffness(joint: ClearanceJoint):
+    """K(R_B) in N/m^1.5 of a profiled joint: its explicit contact_stiffness, or the
+    paper's Eq. 9 at the local bearing radius (the radius enters only through
+    sqrt(R_J R_B / (R_B - R_J)))."""
+    if joint.contact_stiffness is not None:
+        K = float(joint.contact_stiffness)
+        return lambda R: K
+    rj, rb = joint.journal_radius, joint.bearing_radius
+    factor = joint.stiffness / math.sqrt(rj * rb / (rb - rj))
+    return lambda R: factor * math.sqrt(rj * R / (R - rj))
+
+
+def _profile_geometry(joint: ClearanceJoint, lookup, dx, dy, vx, vy, phib, wb):
+    """(r = |e|, theta_e, R_B(theta_e), delta, deltadot) of a profiled joint from the
+    eccentricity e = (dx, dy) (m), its rate (m/s), the bearing body's angle phib (rad) and
+    rate wb (rad/s): theta_e is e's direction in the bearing's frame in [0, 2 pi), delta =
+    |e| - (R_B(theta_e) - R_J), deltadot = d|e|/dt - R_B'(theta_e) dtheta_e/dt with
+    dtheta_e/dt = (ex eyd - ey exd) / |e|^2 - wb (0 for a centred journal)."""
+    theta = _profile_geometry_angle(dx, dy, phib)
+    R, slope = lookup(theta)
+    r = math.sqrt(dx * dx + dy * dy)
+    delta = r - (R - joint.journal_radius)
+    if r == 0.0:
+        return r, theta, R, delta, 0.0
+    rate = (dx * vx + dy * vy) / r - slope * ((dx * vy - dy * vx) / (r * r) - wb)
+    return r, theta, R, delta, rate
+
+
+def _profile_geometry_angle(dx: float, dy: float, phib: float) -> float:
+    """theta_e of the eccentricity (dx, dy) in the frame of a bearing body at angle phib,
+    in [0, 2 pi)."""
+    co, si = math.cos(phib), math.sin(phib)
+    theta = math.atan2(co * dy - si * dx, co * dx + si * dy)
+    return theta + 2.0 * math.pi if theta < 0.0 else theta
+
+
+def _profile_loads(joint, sides, q, qt, lookup, normal, friction):
+    """Generalized forces of a profiled joint's contact (and friction) on its bodies'
+    coordinates: the normal force Fn g (g = n - (R_B'(theta_e) / |e|) t, the gap's gradient,
+    n = e/|e|, Fn = `normal`(delta, deltadot, R_B)) on the bearing at its point and -Fn g on
+    the journal at its; with `friction` (Ft from v_t, Fn; None without) Ft t on the journal
+    plus the moment R_J Ft, the opposite force on the bearing plus -bearing_radius Ft,
+    v_t = de/dt . t + omega_J R_J - omega_B R_B(theta_e), t = (-n_y, n_x). Zero in free
+    flight."""
+    out = [0.0] * (3 * sum(s.slot is not None for s in sides))
+    dx, dy, vx, vy, wj, wb, (axj, ayj), (axb, ayb) = _pair(sides, q, qt, math.cos, math.sin)
+    r, theta, R, delta, rate = _profile_geometry(joint, lookup, dx, dy, vx, vy,
+                                                 sides[1].angle(q), wb)
+    if delta <= 0.0:
+        return out
+    nx, ny = dx / r, dy / r
+    fn = normal(delta, rate, R)
+    # along the gap's gradient n - (R_B' / |e|) t, as the reduced model
+    # (core/profile_runtime.h): a radial force on a non-round boundary does work round a
+    # closed path
+    k = lookup(theta)[1] / r
+    fx, fy, ft = -fn * (nx + k * ny), -fn * (ny - k * nx), 0.0      # on the journal
+    if friction is not None:
+        vt = (vy * nx - vx * ny) + (wj * joint.journal_radius - wb * R)
+        ft = friction(vt, fn)
+        fx, fy = fx - ft * ny, fy + ft * nx
+    # friction's moment on the bearing with the arm bearing_radius, as the reduced model
+    for side, sign, radius, (ax, ay) in ((sides[0], 1.0, joint.journal_radius, (axj, ayj)),
+                                         (sides[1], -1.0, joint.bearing_radius, (axb, ayb))):
+        if side.slot is not None:
+            i = side.slot
+            out[i], out[i + 1] = sign * fx, sign * fy
+            out[i + 2] = sign * (ax * fy - ay * fx + radius * ft)
+    return out
+
+
+def _profile_element(ctx, joint: ClearanceJoint, memory):
+    """Add a profiled joint's contact and friction as one `ObjectGenericODE2` on its bodies'
+    nodes whose force is `_profile_loads`, a Python user function with
+    contact.contact_force and friction_force (the force needs the bearing body's angle,
+    which a connector's user function does not see; Exudyn's symbolic layer can express the
+    spline's lookup, as a tree of IfThenElse on the piece index, but its generic-element
+    function ran 30 times slower than this one, docs/exudyn.md). Returns (element, the
+    joint's (delta, deltadot) function of mbs for the pre-step function)."""
+    sides, obj, _ = _pair_element(ctx, joint)
+    _, _, _, model = _law_constants(joint)
+    fric = friction_of(joint)
+    lookup = _ProfileLookup(joint)
+    stiffness = _profile_stiffness(joint)
+
+    def normal(delta, rate, R):
+        return contact_force(delta, rate, memory.dmin, stiffness(R), joint.restitution, model)
+
+    friction = (None if fric is None else
+                lambda vt, fn: friction_force_slots(vt, fn, fric[1], fric[0]))
+
+    def force(mbs, t, itemNumber, q, q_t):
+        return _profile_loads(joint, sides, q, q_t, lookup, normal, friction)
+
+    ctx.mbs.SetObjectParameter(obj, "forceUserFunction", force)
+    ctx.keep_alive.append(force)
+    state = ctx.node_state([ctx.nodes[b] for b in (joint.journal_body, joint.bearing_body)
+                            if b != GROUND])
+
+    def gap(mbs):
+        q, qt = state(mbs)
+        dx, dy, vx, vy, _, wb, _, _ = _pair(sides, q, qt, math.cos, math.sin)
+        return _profile_geometry(joint, lookup, dx, dy, vx, vy, sides[1].angle(q), wb)[3:]
+
+    return obj, gap
+
+
+def _pair_series(ctx, joint: ClearanceJoint):
+    """(e, de/dt, omega_J, phi_B, omega_B) of a clearance joint at every sample ``ctx.t``
+    from the stored body states (``ctx.motion``): e the journal centre minus the bearing
+    centre (m), the bodies' rates in rad/s, the bearing body's angle in rad (0 for the
+    ground)."""
+    pts, t = ctx.points, ctx.t
+
+    def point(body, name):
+        if body == GROUND:
+            p = np.asarray(pts[GROUND][name], dtype=float)
+            zero = np.zeros(len(t))
+            return np.tile(p, (len(t), 1)), np.zeros((len(t), 2)), zero, zero
+        q, v = ctx.motion(body)
+        x, y = pts[body][name]
+        co, si = np.cos(q[:, 2]), np.sin(q[:, 2])
+        arm = np.column_stack([co * x - si * y, si * x + co * y])
+        return (q[:, :2] + arm, v[:, :2] + v[:, 2:3] * np.column_stack([-arm[:, 1], arm[:, 0]]),
+                q[:, 2], v[:, 2])
+
+    rj, vj, _, wj = point(joint.journal_body, joint.journal_point)
+    rb, vb, phib, wb = point(joint.bearing_body, joint.bearing_point)
+    return rj - rb, vj - vb, wj, phib, wb
+
+
+def _clearance_series(ctx, joint: ClearanceJoint, memory) -> dict:
+    """The series of a clearance joint at every kept sample, from the stored body states:
+    "contact_angle" theta_e (rad, e's direction in the bearing body's frame, in
+    [0, 2 pi)) and "slip_velocity" v_t = de/dt . t + omega_J R_J - omega_B R_B(theta_e)
+    (m/s; t = (-n_y, n_x), n = e/|e|, or the direction theta_e when the journal is
+    centred). A profiled joint's also "eccentricity" e (n, 2), "penetration" |e| -
+    (R_B(theta_e) - R_J) and "force" Fn (N; `_profile_geometry`); a joint with friction
+    "friction_power" Ft v_t (W, <= 0). The forces are contact.contact_force /
+    friction_force (the Python variant's law) with the impact velocity in force at each
+    step (``ctx.impact_velocity``)."""
+    t = ctx.t
+    e, ed, wj, phib, wb = _pair_series(ctx, joint)
+    r = np.hypot(e[:, 0], e[:, 1])
+    co, si = np.cos(phib), np.sin(phib)
+    theta = np.mod(np.arctan2(co * e[:, 1] - si * e[:, 0], co * e[:, 0] + si * e[:, 1]),
+                   2.0 * np.pi)
+    profile = joint.profile
+    R = (np.full(len(t), joint.bearing_radius) if profile is None
+         else np.asarray(profile.radius(theta)))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        n = np.where(r[:, None] > 0.0, e / r[:, None],
+                     np.column_stack([np.cos(theta + phib), np.sin(theta + phib)]))
+    vt = (ed[:, 1] * n[:, 0] - ed[:, 0] * n[:, 1]) + (wj * joint.journal_radius - wb * R)
+    out = {"contact_angle": theta, "slip_velocity": vt}
+    fric = friction_of(joint)
+    if profile is None and fric is None:
+        return out
+    _, _, _, cmodel = _law_constants(joint)
+    stiffness = _profile_stiffness(joint) if profile is not None else None
+    dmin = ctx.impact_velocity(memory)
+    delta = r - (R - joint.journal_radius) if profile is not None else r - joint.clearance
+    force = np.zeros(len(t))
+    power = np.zeros(len(t))
+    slope = None if profile is None else np.asarray(profile.radius(theta, 1))
+    for i in np.nonzero(delta > 0.0)[0]:
+        rate = float(ed[i] @ n[i])
+        K = joint.stiffness
+        if profile is not None:
+            rate -= slope[i] * ((e[i, 0] * ed[i, 1] - e[i, 1] * ed[i, 0]) / (r[i] * r[i])
+                                - wb[i])
+            K = stiffness(R[i])
+        force[i] = contact_force(delta[i], rate, float(dmin[i]), K, joint.restitution, cmodel)
+        if fric is not None:
+            power[i] = friction_force_slots(vt[i], force[i], fric[1], fric[0]) * vt[i]
+    if fric is not None:
+        out["friction_power"] = power
+    if profile is not None:
+        out.update(eccentricity=e, penetration=delta, force=force)
+    return out
+
+
+def _connector_gap(obj, clearance: float):
+    """Function of mbs: (delta, deltadot) of a joint's contact connector `obj` from its
+    Displacement d and Velocity v (journal relative to bearing): |d| - c, d.v/|d| (0 when
+    centred)."""
+    import exudyn as exu
+
+    disp = exu.OutputVariableType.Displacement
+    vel = exu.OutputVariableType.Velocity
+
+    def gap(mbs):
+        d = mbs.GetObjectOutput(obj, disp)
+        v = mbs.GetObjectOutput(obj, vel)
+        r = math.sqrt(d[0] * d[0] + d[1] * d[1])
+        return r - clearance, ((d[0] * v[0] + d[1] * v[1]) / r if r > 0.0 else 0.0)
+
+    return gap
 
 
 #: the element of the registry

@@ -421,22 +421,21 @@ class Translational(Element):
         """Add each joint's `ObjectGenericODE2` (the slider's node first, then the guide's
         unless it is the ground) with the corners' force function, every corner with its
         own impact-velocity memory. `ctx`: the system (mbs), nodes, points (pts), the
-        backend's helpers (generic_element, node_state, new_memory(floor, clearance,
-        event)), the Python force's allocation count, and the lists it appends to
-        (memories, contacts: (gap function, memory), keep_alive); returns per joint (joint,
-        sides, memories) and adds the pre-step reads to ctx.pre_step_reads."""
+        backend's helpers (generic_element, node_state, new_memory(name, floor): the next
+        contact's memory, appended to ctx.memories), the Python force's allocation count
+        (python_force), and the lists it appends to (contacts: (gap function, memory),
+        keep_alive); returns per joint (joint, sides, memories) and adds the pre-step reads
+        to ctx.pre_step_reads."""
         items = []
         for tj in self.joints(linkage):
             sides, obj, node_list = ctx.generic_element(
                 ctx.mbs, ((tj.slider_body, tj.slider_point), (tj.guide_body, tj.guide_point)),
                 ctx.nodes, ctx.pts)
             mems = []
-            for _ in CORNERS:
-                memory = ctx.new_memory(tj.impact_velocity_floor, tj.clearance,
-                                        len(ctx.memories))
+            for name in tj.corner_names():
+                memory = ctx.new_memory(name, tj.impact_velocity_floor)
                 memory.history = []
                 mems.append(memory)
-                ctx.memories.append(memory)
             items.append((tj, sides, mems))
 
             def force(mbs, t, itemNumber, q, q_t, tj=tj, sides=sides, mems=mems):
@@ -463,19 +462,20 @@ class Translational(Element):
         """The ground joints whose reaction `exudyn_series` gives (no Exudyn sensor)."""
         return {j.name for j in self.joints(linkage) if j.guide_body == GROUND}
 
-    def exudyn_series(self, items, t, states, stored_memory):
+    def exudyn_series(self, items, ctx):
         """The corners' series of a run: per joint of `items` (joint, sides, memories) its
         corners' (n, 4) arrays "force", "penetration", "along", "offset", "friction", "slip"
-        (`corner_loads`) at the samples `t`, from `states`(bodies) -> (q, qt) of the stored
-        body states and each corner's impact velocity in force (`stored_memory`(memory)
-        -> (n,) array). Returns the record the backend merges: ``reactions`` of the ground
-        guides, per contact ``eccentricity`` (n, 2), ``penetration``, ``force``, and the
-        ``friction_power`` of the joints with a law."""
-        reactions, ecc, pen, force, power = {}, [], [], [], []
+        (`corner_loads`) at the samples ``ctx.t``, from ``ctx.states``(bodies) -> (q, qt)
+        of the stored body states and each corner's impact velocity in force
+        (``ctx.impact_velocity``(memory) -> (n,) array). Returns the record the backend
+        merges: ``reactions`` of the ground guides, per contact ``eccentricity`` (n, 2),
+        ``penetration``, ``force``, the ``friction_power`` of the joints with a law, no
+        further ``columns``."""
+        t, reactions, ecc, pen, force, power = ctx.t, {}, [], [], [], []
         for joint, sides, memories in items:
             bodies = [b for b in (joint.slider_body, joint.guide_body) if b != GROUND]
-            q, qt = states(bodies)
-            dmins = [stored_memory(m) for m in memories]
+            q, qt = ctx.states(bodies)
+            dmins = [ctx.impact_velocity(m) for m in memories]
             rows = np.empty((len(t), 4, 7))
             ground = np.zeros((len(t), 2))
             for i in range(len(t)):
@@ -493,7 +493,7 @@ class Translational(Element):
             if joint.has_friction:
                 power.append(np.sum(rows[:, :, 4] * rows[:, :, 5], axis=1))
         return self.part(reactions=reactions, eccentricity=ecc, penetration=pen, force=force,
-                         friction_power=power)
+                         friction_power=power, columns={})
 
 
 def corner_loads(joint: TranslationalClearance, sides, q, qt, dmins):

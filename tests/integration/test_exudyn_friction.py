@@ -18,6 +18,7 @@ import pytest
 
 from mbs_clearance import simulate
 from mbs_clearance.backends import exudyn_linkage as xl
+from mbs_clearance.elements import revolute
 from mbs_clearance.laws.forces import FRICTION_LAWS, friction_factor, friction_force
 from mbs_clearance.model import cases
 
@@ -44,7 +45,7 @@ def test_symbolic_friction_factor_is_the_contact_law(law):
     esym.SetRecording(True)
     try:
         vt = esym.Real("vt", 0.0)
-        expr = xl.symbolic_friction_factor(vt, v0, v1, FRICTION_LAWS[law])
+        expr = revolute.symbolic_friction_factor(vt, v0, v1, FRICTION_LAWS[law])
         for v in (-0.5, -v1, -3e-3, -v0, -5e-5, 0.0, 2e-5, v0, 1.5e-4, 5e-3, v1, 0.2):
             vt.SetValue(v)
             assert expr.Evaluate() == pytest.approx(friction_factor(v, v0, v1,
@@ -76,7 +77,7 @@ def test_friction_loads_dissipate_the_friction_power():
         rb = sides[1].kinematics(q, qt, math.cos, math.sin)[0]
         n = np.array([math.cos(th), math.sin(th)])
         q[:2] = np.array(rb) + (cj.clearance + 1e-7) * n - np.array(rj)
-        out = xl._friction_loads(
+        out = revolute._friction_loads(
             cj, sides, q, qt, lambda dx, dy, vx, vy: (math.hypot(dx, dy), FN),
             lambda vt, f: friction_force(vt, f, 0.1, cj.friction_v0, cj.friction_v1, 1),
             math.cos, math.sin, lambda d, v: v if d > 0 else 0.0)

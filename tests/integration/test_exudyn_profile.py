@@ -19,6 +19,7 @@ import pytest
 
 from mbs_clearance import simulate
 from mbs_clearance.backends import exudyn_linkage as xl
+from mbs_clearance.elements import revolute
 from mbs_clearance.laws._dispatch import friction_force_slots
 from mbs_clearance.model import cases
 from mbs_clearance.model.linkage import GROUND
@@ -59,7 +60,7 @@ def test_lookup_is_the_profile_spline():
     radii = 0.01 + 3e-6 * np.cos(2.0 * THETA) + 1e-6 * np.sin(5.0 * THETA)
     joint = dataclasses.replace(cases.paper_slider_crank().clearance_joints[0],
                                 bearing_profile=tuple(radii))
-    lookup = xl._ProfileLookup(joint)
+    lookup = revolute._ProfileLookup(joint)
     profile = BearingProfile(radii)
     rng = np.random.default_rng(3)
     for theta in np.concatenate([rng.uniform(0.0, 2 * np.pi, 200), THETA, [2 * np.pi]]):
@@ -234,8 +235,8 @@ def test_the_applied_force_is_the_profiled_contact_force(turning_bearing):
     nx, ny = np.where(contact, e[:, 0] / safe, 0.0), np.where(contact, e[:, 1] / safe, 0.0)
     fn = tr.contact_force[:, 0]
     ft = np.zeros(len(fn))
-    if xl.friction_of(joint) is not None:
-        law, slots = xl.friction_of(joint)
+    if revolute.friction_of(joint) is not None:
+        law, slots = revolute.friction_of(joint)
         ft = np.array([friction_force_slots(v, f, slots, law) if c else 0.0 for v, f, c
                        in zip(tr.slip_velocity[:, 0], fn, contact)])
         assert np.max(np.abs(ft)) > 0.05 * np.max(fn)      # friction acts (measured 0.1)

@@ -36,12 +36,14 @@ def test_every_registered_kind_brings_every_piece(el):
         assert (el in elements_with(piece)) == (piece in el.pieces)
 
 
-def test_the_revolute_element_comes_first_and_lacks_only_the_exudyn_element():
-    """The clearance joints' contacts come first in every layout; the Exudyn backend still
-    builds the revolute clearance joint itself."""
+def test_the_revolute_element_comes_first_and_every_element_brings_every_piece():
+    """The clearance joints' contacts come first in every layout; every registered
+    clearance element brings every piece, its Exudyn element included (the backend builds
+    no kind itself)."""
     assert ELEMENTS[0] is element("revolute")
-    assert set(PIECES) - set(element("revolute").pieces) == {"Exudyn element"}
-    assert element("translational").pieces == tuple(PIECES)
+    for el in ELEMENTS:
+        assert el.pieces == tuple(PIECES)
+    assert elements_with("Exudyn element") == ELEMENTS
     with pytest.raises(ValueError, match="unknown piece 'gap'; allowed: "):
         elements_with("gap")
 
@@ -236,4 +238,53 @@ def test_the_generator_and_the_backends_name_no_element_kind(module):
     names = [n for el in elements_with(ITERATING[module])
              for n in (el.attribute, el.description.__name__)]
     names += ["corner_names", "CORNERS"]        # the translational joint's corners
+    # the revolute joint's bodies and variants
+    names += ["journal_body", "bearing_body", "has_lubrication", "profile is"]
     assert [n for n in names if n in text] == []
+
+
+@pytest.mark.exudyn
+def test_the_exudyn_backend_builds_both_kinds_through_their_elements():
+    """A linkage with a revolute clearance joint (with friction) and a translational one,
+    built by the Exudyn backend from a state where the journal penetrates its bearing by
+    1e-7 m and the slider's top corners the guide by 1e-6 m: every contact has its own
+    impact-velocity memory in the description's contact order, the first step's pre-step
+    function registers contact for exactly the penetrating contacts, and the elements'
+    series give back the penetrations set up by plane geometry."""
+    pytest.importorskip("exudyn")
+    from mbs_clearance.backends import exudyn_linkage as xl
+
+    flores = CASES["flores_translational_slider_crank"]()
+    cj = dataclasses.replace(CASES["paper_slider_crank"]().clearance_joints[0],
+                             name="crank_coupler", journal_body="coupler",
+                             journal_point="crank_end", bearing_body="crank",
+                             bearing_point="pin", friction_law="coulomb",
+                             friction_coefficient=0.1)
+    link = flores.replace(joints=tuple(j for j in flores.joints if j.name != "crank_coupler"),
+                          clearance_joints=(cj,))
+    guide = link.translational_joints[0]
+    bodies = {b.name: b for b in link.bodies}
+    l1 = 2.0 * bodies["crank"].points["pin"][0]
+    l2 = 2.0 * bodies["coupler"].points["slider_end"][0]
+    d_joint, d_guide = 1e-7, 1e-6
+    # slider centre (on the coupler's end) lifted by c + d_guide, the crank pin below the
+    # coupler's end by the joint's clearance + d_joint
+    lift = guide.clearance + d_guide
+    theta = math.asin((lift - cj.clearance - d_joint) / l1)
+    q = {"crank.angle": theta, "slider.angle": 0.0, "coupler.x": l1 * math.cos(theta) + l2 / 2,
+         "coupler.y": lift, "coupler.angle": 0.0}
+    names = link.coordinates()
+    y0 = np.zeros(2 * len(names) + 1)
+    y0[:len(names)] = [q[n] for n in names]
+    model = xl.build(link, xl.ExudynSettings(step_size=1e-7), y0=y0)
+    contacts = [n for n, _ in link.contacts()]
+    assert set(model.elements) == {el.kind for el in ELEMENTS}
+    assert [m.name for m in model.memories] == contacts
+    xl.solve(model, 2e-7)
+    touching = {"crank_coupler", "guide.front_top", "guide.rear_top"}
+    assert {m.name for m in model.memories if m.mode == 1} == touching
+    series = xl._element_series(model)
+    penetration = [p[0] for part in series for p in part.penetration]
+    expected = [d_joint if n == "crank_coupler" else d_guide if n in touching
+                else -(2 * guide.clearance + d_guide) for n in contacts]
+    assert penetration == pytest.approx(expected, rel=1e-6, abs=1e-12)

@@ -176,7 +176,7 @@ def test_contact_symbolic_is_the_compiled_law(name):
     """The law's xi(e) evaluated as an Exudyn symbolic expression and the Exudyn model's
     symbolic normal force (with that xi) equal the compiled ones (to rounding)."""
     exu = pytest.importorskip("exudyn")
-    from mbs_clearance.backends import exudyn_linkage as xl
+    from mbs_clearance.elements import revolute
 
     esym = exu.symbolic
     model = CONTACT_MODELS[name]
@@ -192,7 +192,7 @@ def test_contact_symbolic_is_the_compiled_law(name):
         K, c, dmin, e = 4.8e11, 1e-4, 0.3, 0.7
         xi = hysteresis_factor(e, model)[0]
         dx, dy, vx, vy = (esym.Real(s, 0.0) for s in ("dx", "dy", "vx", "vy"))
-        _, force = xl._symbolic_normal(K, c, xi, dmin, dx, dy, vx, vy)
+        _, force = revolute._symbolic_normal(K, c, xi, dmin, dx, dy, vx, vy)
         for th, pen, rate in ((0.3, 2e-6, 0.2), (2.0, 2e-6, -0.2), (-1.0, 1e-6, -50.0),
                               (1.0, -1e-7, 0.1)):
             r = c + pen
@@ -256,7 +256,7 @@ def test_friction_symbolic_is_the_compiled_law(name):
     friction element computes) equals the compiled force at slip velocities on both sides
     of every threshold, at them, and at zero."""
     exu = pytest.importorskip("exudyn")
-    from mbs_clearance.backends import exudyn_linkage as xl
+    from mbs_clearance.elements import revolute
 
     esym = exu.symbolic
     law, fn = FRICTION_LAWS[name], 77.0
@@ -264,7 +264,7 @@ def test_friction_symbolic_is_the_compiled_law(name):
     esym.SetRecording(True)
     try:
         vt = esym.Real("vt", 0.0)
-        expr = xl.symbolic_friction_force(vt, fn, law, SLOTS)
+        expr = revolute.symbolic_friction_force(vt, fn, law, SLOTS)
         for v in (*SLIPS, 0.0, V0, -V0, V1, -V1):
             vt.SetValue(v)
             assert expr.Evaluate() == pytest.approx(friction_force_slots(v, fn, SLOTS, law),
