@@ -686,7 +686,8 @@ def prepare(linkage: Linkage, revolutions: int | None = None,
             settings: RunSettings | None = None, *, duration: float | None = None,
             window: float | None = None, record: bool = True, t_eval=None,
             start: Start | None = None, edges=None, select: bool = True,
-            specialise: bool = True, model=None, **options) -> Problem:
+            whole: bool = True, specialise: bool = True, model=None,
+            **options) -> Problem:
     """The one door of a plain run: every argument checked, the model loaded, the span,
     tolerances, parameters and start prepared into a `Problem` that `solve` integrates.
 
@@ -704,12 +705,13 @@ def prepare(linkage: Linkage, revolutions: int | None = None,
     `edges` (increasing times from 0) replaces the revolution windows over which the peaks
     are taken. With `t_eval` the integrator also lands exactly on those times and only
     they are returned (the peaks then are the maxima over them per window; ``select=False``
-    returns every step, which include them). `specialise`: the model specialised on the
-    linkage's zero-valued geometric parameters (False: the general one, for differences in
-    one of them). `model`: the generated module, where the caller knows it (the paper's
-    checked-in one: the lookup by structure imports the generator). Every option is checked
-    first (ValueError naming it and its range); a
-    run of `PILOT_MIN_REVOLUTIONS` or more is estimated by a one-revolution pilot and
+    returns every step, which include them); ``whole=False`` lands on 0 and `t_eval` only
+    and ends at the last of them (the windows stay the span's). `specialise`: the model
+    specialised on the linkage's zero-valued geometric parameters (False: the general one,
+    for differences in one of them). `model`: the generated module, where the caller knows
+    it (the paper's checked-in one: the lookup by structure imports the generator). Every
+    option is checked first (ValueError naming it and its range); a run of
+    `PILOT_MIN_REVOLUTIONS` or more is estimated by a one-revolution pilot and
     refused with `MemoryLimitError` (a ValueError) if it cannot fit in max_steps or
     max_memory bytes; a recording run stops there and says so."""
     from .._checks import (
@@ -743,6 +745,7 @@ def prepare(linkage: Linkage, revolutions: int | None = None,
                          "initial (Linkage.initial, an Initial)")
     record = check_bool("record", record)
     select = check_bool("select", select)
+    whole = check_bool("whole", whole)
     method, max_steps, n_samples, h0 = (settings.method, settings.max_steps,
                                         settings.n_samples, settings.h0)
     max_memory = check_max_memory(settings.max_memory)
@@ -777,6 +780,8 @@ def prepare(linkage: Linkage, revolutions: int | None = None,
     refine = REFINE_ITERS
     if t_eval is not None:
         t_eval, edges = landing_edges(edges, t_eval)
+        if not whole:
+            edges = landing_edges(np.array([0.0, t_eval[-1]]), t_eval)[1]
         record, refine = True, 0
     span = float(edges[-1]) if free else float(edges[-1]) / linkage.period
     steps = _estimate_steps(linkage, span, max_steps=max_steps,

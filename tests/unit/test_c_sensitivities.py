@@ -169,5 +169,5 @@ def test_without_a_compiler_a_ddm_run_stops_with_one_line_naming_what_to_install
     monkeypatch.setattr(c_loader, "_LOADED", {})
     linkage = cases.paper_slider_crank()
     with pytest.raises(CompilerMissing, match="no-such-compiler-xyz.*install gcc") as err:
-        linkage_ddm.plain_setup(linkage, None)
+        linkage_ddm.prepare_sensitivity(linkage, ("crank.mass",), 1)
     assert "\n" not in str(err.value)

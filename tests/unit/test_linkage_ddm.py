@@ -71,13 +71,15 @@ def test_ddm_along_zero_valued_geometry_runs_on_the_general_model():
     specialised, DDM and the finite differences run on the general module and agree as in
     the test above (same tolerances); a run along other parameters keeps the specialised
     one."""
-    from mbs_clearance.solve.linkage_ddm import plain_setup
+    from mbs_clearance.solve.linkage_ddm import prepare_sensitivity
     from mbs_clearance.solve.linkage_model import specialisable
 
     linkage = cases.paper_slider_crank()
     names = ("coupler.slider_end.y", "ground.slider_axis.y", "slider_guide.angle", "crank.pin.x")
     assert not specialisable(linkage, names) and specialisable(linkage, names[3:])
-    assert plain_setup(linkage, None)[0].ZERO_PARAMETERS
+    assert prepare_sensitivity(linkage, names[3:], 1).problem.model.ZERO_PARAMETERS
+    assert not getattr(prepare_sensitivity(linkage, names, 1).problem.model,
+                       "ZERO_PARAMETERS", ())
     t_eval = np.linspace(0.0, 0.25 * linkage.period, 13)[1:]
     ddm = sensitivities(linkage, names, revolutions=1, t_eval=t_eval, rtol=1e-10)
     fd = sensitivities(linkage, names, revolutions=1, method="fd", t_eval=t_eval,
