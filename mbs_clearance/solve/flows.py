@@ -45,11 +45,11 @@ def joints_of(mech) -> tuple[str, ...]:
 
 
 def prepare_flow(mech, settings: RunSettings | None = None, *, free: bool = False,
-                 method: str = "dopri5", **options) -> Problem:
+                 default_method: str = "dopri5", **options) -> Problem:
     """The `Problem` of a flow of `mech` (`linkage_model.prepare`): its span one window, a
     drive revolution (a free linkage, refused unless `free`: its `time_scale`), the state,
     parameters and tolerances the flow starts from. `settings` (a `RunSettings`; keywords
-    change single fields; `method` where neither names one): its rtol at most 1e-4
+    change single fields; `default_method` where neither names one): its rtol at most 1e-4
     (default `DEFAULT_RTOL`)."""
     from .linkage_model import prepare
 
@@ -60,7 +60,7 @@ def prepare_flow(mech, settings: RunSettings | None = None, *, free: bool = Fals
                          "drive revolutions; run a free linkage with simulate(..., "
                          "duration=)")
     if settings is None:
-        settings = RunSettings(method=options.pop("method", None) or method)
+        settings = RunSettings(method=options.pop("method", None) or default_method)
     if not isinstance(settings, RunSettings):
         raise ValueError(f"settings must be a RunSettings; got {type(settings).__name__}")
     settings = settings.with_options(options)
@@ -99,7 +99,8 @@ class Flow:
                                  "prepare_flow (or linkage_model.prepare), not to the flow")
             problem = mech
         else:
-            problem = prepare_flow(mech, settings, free=free, method=self.METHOD, **options)
+            problem = prepare_flow(mech, settings, free=free, default_method=self.METHOD,
+                                   **options)
         self.problem = problem
         linkage = self.linkage = problem.linkage
         self.mech = problem.linkage if isinstance(mech, Problem) else mech
