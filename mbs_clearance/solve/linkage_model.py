@@ -561,9 +561,9 @@ def bytes_per_step(model) -> int:
     return 8 * (3 * record_row(model) + trajectory_floats(model))
 
 
-def _estimate_steps(linkage, revolutions: float, *, max_steps: int, h_max: float,
+def _estimate_steps(linkage, revolutions: float, free: bool, *, max_steps: int, h_max: float,
                     pilot: dict) -> int | None:
-    if linkage.drive is None:       # a free linkage: `revolutions` are seconds, no pilot
+    if free:                        # a free linkage: `revolutions` are seconds, no pilot
         return _estimate_free(revolutions, max_steps, h_max)
     return _estimate_driven(linkage, revolutions, max_steps=max_steps, h_max=h_max,
                             pilot=pilot)
@@ -784,7 +784,7 @@ def prepare(linkage: Linkage, revolutions: int | None = None,
             edges = landing_edges(np.array([0.0, t_eval[-1]]), t_eval)[1]
         record, refine = True, 0
     span = float(edges[-1]) if free else float(edges[-1]) / linkage.period
-    steps = _estimate_steps(linkage, span, max_steps=max_steps,
+    steps = _estimate_steps(linkage, span, free, max_steps=max_steps,
                             h_max=h_max, pilot=dict(settings=settings, start=start,
                                                     specialise=specialise, model=model))
     window_bytes = revolution_bytes(len(edges) - 1)
@@ -880,15 +880,17 @@ def simulate_linkage(linkage: Linkage, revolutions: int | None = None, **options
     from .trajectory import annotate
 
     settings, rest = RunSettings.split(options)
-    model, ts, ys, ms, peaks, _, stats, outs, p = run(linkage, revolutions, settings,
-                                                      record=True, **rest)
-    # a free linkage: its duration in turns at its rate scale stands for revolutions
-    turns = (check_span(linkage, revolutions, None, None) if linkage.drive is not None
-             else max(1.0, float(ts[-1]) / linkage.time_scale))
+    problem = prepare(linkage, revolutions, settings, record=True, **rest)
+    model, ts, ys, ms, peaks, _, stats, outs, p = solve(problem)
+    # a free linkage (a span without revolutions): its duration in turns at its rate scale
+    # stands for revolutions
+    free = problem.span.revolutions is None
+    turns = (max(1.0, float(ts[-1]) / linkage.time_scale) if free
+             else problem.span.revolutions)
     stats.update(contact_flags([j.clearance for _, j in linkage.contacts()],
                                linkage.rate_scale, turns, ms[:, :model.N_MEM],
                                stats.get("nevent", 0), stats["rtol"],
-                               None if linkage.drive is not None else linkage.time_scale))
+                               linkage.time_scale if free else None))
     if stats["accuracy_note"]:
         warnings.warn(stats["accuracy_note"], AccuracyWarning, stacklevel=3)
     if options.get("t_eval") is None:
@@ -909,9 +911,8 @@ def peak_linkage(linkage: Linkage, revolution: int | None = None, **options) -> 
     default 4; the monitored ground joint's |reaction|, or |shaking force|), recording
     nothing. A free linkage: over the last window of a run of ``duration`` s (windows of
     ``window`` s; default the whole run), `revolution` not given."""
-    if linkage.drive is None:
-        check_span(linkage, revolution, None, None, "revolution")
-        return float(run(linkage, record=False, **options).peaks[-1])
     revolution = check_span(linkage, revolution, None, None, "revolution")
+    if revolution is None:          # a free linkage: its last window
+        return float(run(linkage, record=False, **options).peaks[-1])
     peaks = run(linkage, revolution, record=False, **options).peaks
     return float(peaks[revolution - 1])
