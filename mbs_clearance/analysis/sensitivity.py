@@ -421,13 +421,13 @@ def slider_crank_run(mech: SliderCrank, names, rtol, *, revolutions: int, t_eval
     return run, along.reference
 
 
-def _fd_grid(period: float, revolutions: int | None, windows=None) -> np.ndarray:
-    """The finite differences' default output times: 720 per revolution (a free linkage:
-    per window of the edges `windows`)."""
+def _fd_grid(linkage, revolutions: int | None, windows=None) -> np.ndarray:
+    """The finite differences' default output times: 720 per drive revolution of
+    `linkage` (a free linkage: per window of the edges `windows`)."""
     if windows is not None:
         return np.unique(np.concatenate([np.linspace(a, b, 721) for a, b in
                                          zip(windows[:-1], windows[1:])]))
-    return np.linspace(0.0, revolutions * period, 720 * revolutions + 1)
+    return np.linspace(0.0, revolutions * linkage.period, 720 * revolutions + 1)
 
 
 def sensitivities(mech: SliderCrank, parameters=None, revolutions: int | None = None,
@@ -545,7 +545,7 @@ def sensitivities(mech: SliderCrank, parameters=None, revolutions: int | None = 
         sp = linkage_ddm.prepare_sensitivity(
             linkage, names, revolutions, RunSettings(
                 rtol=1e-11 if rtol is None else rtol, method=integrator or "dopri5"),
-            directions=along, whole=False, t_eval=_fd_grid(linkage.period, revolutions)
+            directions=along, whole=False, t_eval=_fd_grid(linkage, revolutions)
             if t_eval is None else t_eval, **options)
         return _as_given(Sensitivities(**linkage_ddm.finite_differences(
             sp, fd_relative_step, executor=executor)), entry)
@@ -639,7 +639,7 @@ def _linkage_sensitivities(linkage, parameters, revolutions, method, backend, t_
         settings = RunSettings(rtol=1e-11 if rtol is None else rtol,
                                method=integrator or "dopri5")
         if t_eval is None:
-            t_eval = _fd_grid(linkage.period, revolutions, windows)
+            t_eval = _fd_grid(linkage, revolutions, windows)
     sp = linkage_ddm.prepare_sensitivity(linkage, names, revolutions, settings,
                                          duration=duration, window=window, t_eval=t_eval,
                                          start=start)
