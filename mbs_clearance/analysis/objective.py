@@ -676,9 +676,10 @@ def _fd_gradient(linkage, names, out: Output, revolution, backend, fd_relative_s
     if backend == "reduced":
         options.setdefault("rtol", 1e-11)
     ref = np.array([design.design_value(linkage, n) for n in names])
-    h, (peak, t_peak), plus, minus = central_differences(
-        linkage, names, fd_relative_step, _fd_peak,
-        (out, revolution, backend, options, window), executor=executor)
+    args = (out, revolution, backend, options, window)
+    h, plus, minus = central_differences(linkage, names, fd_relative_step, _fd_peak, args,
+                                         executor=executor)
+    peak, t_peak = _fd_peak((linkage, *args))
     plus = np.array([v[0] for v in plus])
     minus = np.array([v[0] for v in minus])
     stats = {"fd_steps": h.tolist(), "runs": 2 * len(names) + 1, "forward": (plus - peak) / h,

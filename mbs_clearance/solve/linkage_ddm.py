@@ -709,13 +709,13 @@ def fd_step(linkage: Linkage, name: str, relative: float) -> float:
 
 
 def central_differences(linkage: Linkage, names, relative: float, evaluate, args=(), *,
-                        nominal=None, executor=None, processes: int | None = None):
-    """The runs of central differences along the design names `names` (`model.design`):
-    the steps h_k (`fd_step`), evaluate((design, *args)) of `linkage` (unless `nominal` is
-    its value) and of it with each value at b0 + h_k and b0 - h_k (`design.linkage_with`);
-    the perturbed ones through `executor.map`, else `processes` worker processes, else
-    here (`evaluate` module level: picklable). Returns (steps (p,), nominal, plus (p),
-    minus (p)). ValueError where a step leaves a value's valid range."""
+                        executor=None, processes: int | None = None):
+    """The perturbed runs of central differences along the design names `names`
+    (`model.design`): the steps h_k (`fd_step`) and evaluate((design, *args)) of `linkage`
+    with each value at b0 + h_k and b0 - h_k (`design.linkage_with`), through
+    `executor.map`, else in `processes` worker processes, else here (`evaluate` module
+    level: picklable). Returns (steps (p,), plus (p), minus (p)). ValueError where a step
+    leaves a value's valid range, before any run."""
     from concurrent.futures import ProcessPoolExecutor
 
     from ..model import design
@@ -731,8 +731,6 @@ def central_differences(linkage: Linkage, names, relative: float, evaluate, args
                 raise ValueError(f"the finite-difference step of {name} ({h:.3g}) leaves its "
                                  f"valid range: {exc}; pass a smaller fd_relative_step"
                                  ) from exc
-    if nominal is None:
-        nominal = evaluate((linkage, *args))
     if executor is not None:
         values = list(executor.map(evaluate, jobs))
     elif processes:
@@ -740,7 +738,7 @@ def central_differences(linkage: Linkage, names, relative: float, evaluate, args
             values = list(pool.map(evaluate, jobs))
     else:
         values = [evaluate(j) for j in jobs]
-    return steps, nominal, values[0::2], values[1::2]
+    return steps, values[0::2], values[1::2]
 
 
 def _reduced_at(job):
@@ -783,10 +781,8 @@ def finite_differences(sp: SensitivityProblem, relative: float, *, backend: str 
     if backend == "reduced":
         nominal = solve(problem)
         args = (span.revolutions, span.t_eval, problem.settings, sp.start, problem.specialise)
-        steps, _, plus, minus = central_differences(
-            linkage, names, relative, _reduced_at, args,
-            nominal=(nominal.outs[:, :model.N_OUT], nominal.ys[:, :model.N_Q]),
-            executor=executor)
+        steps, plus, minus = central_differences(linkage, names, relative, _reduced_at, args,
+                                                 executor=executor)
         ders = np.stack([(a[0] - b[0]) / (2 * h) for a, b, h in zip(plus, minus, steps)], -1)
         coords = np.stack([(a[1] - b[1]) / (2 * h) for a, b, h in zip(plus, minus, steps)],
                           -1)
@@ -801,10 +797,11 @@ def finite_differences(sp: SensitivityProblem, relative: float, *, backend: str 
             fields["outputs"][c] = coords[:, i, :]
         fields["method"] = "fd"
         return fields
-    steps, nominal, plus, minus = central_differences(
-        linkage, names, relative, _backend_at,
-        (as_paper, span.revolutions, backend, dict(options or {})), executor=executor,
+    args = (as_paper, span.revolutions, backend, dict(options or {}))
+    steps, plus, minus = central_differences(
+        linkage, names, relative, _backend_at, args, executor=executor,
         processes=None if executor is not None or n_jobs == 1 else (n_jobs or 2))
+    nominal = _backend_at((linkage, *args))
     n = len(nominal.t)
     for run in (*plus, *minus):
         if len(run.t) != n or not np.allclose(run.t, nominal.t, rtol=0, atol=1e-12):
