@@ -3,8 +3,9 @@
 For a named case and parameters (dotted `Linkage` names): central differences of Exudyn
 runs (fixed step h, the parameter moved by `linkage_ddm.fd_step`: +-rel b0 for the
 masses, inertias and gravity) of the monitored force's magnitude |F|(t) and of its RMS
-over the last revolution, against DDM on the generated model's exact Jacobians (`sensitivities(linkage, names, method="ddm")`, rtol 1e-10) on Exudyn's own grid
-thinned to `SAMPLES_PER_REVOLUTION` points. Two measures per parameter:
+over the last revolution, against DDM on the generated model's exact Jacobians
+(`sensitivities(linkage, names, method="ddm")`, rtol 1e-10) on Exudyn's own grid thinned
+to `SAMPLES_PER_REVOLUTION` points. Two measures per parameter:
 
 - ``series``: relative RMS difference of d|F|/db over the revolution (a derivative
   magnifies Exudyn's phase error at the contact frequency, so this converges at the
