@@ -32,10 +32,10 @@ def main(argv=None) -> None:
     original = linkage_ddm._run
     state_only = {"on": False}
 
-    def run(linkage, model, y0, p, edges, rtol, method, n_err, atol, **kw):
+    def run(problem, y0, p, n_err, atol, **kw):
         if state_only["on"]:
-            n_err = 2 * model.N_Q
-        return original(linkage, model, y0, p, edges, rtol, method, n_err, atol, **kw)
+            n_err = 2 * problem.model.N_Q
+        return original(problem, y0, p, n_err, atol, **kw)
 
     linkage_ddm._run = run
     mech = SliderCrank()

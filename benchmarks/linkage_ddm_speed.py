@@ -13,10 +13,9 @@ from __future__ import annotations
 import argparse
 
 from mbs_clearance.analysis.sensitivity import sensitivities
-from mbs_clearance.generate import load_model
 from mbs_clearance.model import cases
-from mbs_clearance.solve.linkage_ddm import setup, tangent_work
-from mbs_clearance.solve.linkage_model import default_atol, initial_state, pack_parameters, run
+from mbs_clearance.solve.linkage_ddm import prepare_sensitivity, setup, tangent_work
+from mbs_clearance.solve.linkage_model import run
 from validation.timing import machine_summary, paired
 
 PARAMETERS = {
@@ -49,11 +48,9 @@ def main(argv=None):
         res = paired(lambda lk=linkage, r=revs: run(lk, r),
                      lambda lk=linkage, nm=names, r=revs, i=integrator: sensitivities(
                          lk, nm, revolutions=r, integrator=i), args.pairs)
-        model = load_model(linkage)
-        y0, p, _, _ = setup(linkage, model, pack_parameters(linkage, model),
-                            initial_state(linkage, model), [{n: 1.0} for n in names],
-                            [1.0] * len(names), default_atol(linkage, model, 1e-7))
-        work = tangent_work(model, p)
+        sp = prepare_sensitivity(linkage, names, revs, rtol=1e-7)
+        y0, p, _, _ = setup(sp.problem, sp.directions.directions, [1.0] * len(names))
+        work = tangent_work(sp.problem.model, p)
         print(f"{case}: plain nfev {plain['nfev']}, DDM ({len(names)} parameters, "
               f"{work['directions']} directions) nfev {ddm.stats['nfev']}; per right-hand "
               f"side {work['state_columns']} state columns x {work['directions']} + "

@@ -1,10 +1,11 @@
 """Finite-difference sensitivities through Exudyn against the reduced model's DDM.
 
 For a named case and parameters (dotted `Linkage` names): central differences of Exudyn
-runs (fixed step h, the parameter moved by +-rel b0) of the monitored force's magnitude
-|F|(t) and of its RMS over the last revolution, against DDM on the generated model's exact
-Jacobians (`sensitivities(linkage, names, method="ddm")`, rtol 1e-10) on Exudyn's own grid
-thinned to `SAMPLES_PER_REVOLUTION` points. Two measures per parameter:
+runs (fixed step h, the parameter moved by `linkage_ddm.fd_step`: +-rel b0 for the
+masses, inertias and gravity) of the monitored force's magnitude |F|(t) and of its RMS
+over the last revolution, against DDM on the generated model's exact Jacobians
+(`sensitivities(linkage, names, method="ddm")`, rtol 1e-10) on Exudyn's own grid thinned
+to `SAMPLES_PER_REVOLUTION` points. Two measures per parameter:
 
 - ``series``: relative RMS difference of d|F|/db over the revolution (a derivative
   magnifies Exudyn's phase error at the contact frequency, so this converges at the
@@ -52,34 +53,41 @@ def _rms(t, y) -> float:
 
 
 def exudyn_fd(linkage, names, revolutions: int, step: float, rel: float, start=None):
-    """(t of the last revolution, d|F|/db (n, p), d RMS/db (p,)) by central differences of
-    Exudyn runs at fixed step `step` with relative parameter step `rel` (from `start`)."""
-    from mbs_clearance import simulate
+    """(t of the last revolution, d|F|/db (n, p), d RMS/db (p,)) by central differences
+    (`linkage_ddm.central_differences`, steps `fd_step`: rel b0 for the masses, inertias
+    and gravity) of Exudyn runs at fixed step `step` (from `start`)."""
+    from mbs_clearance.solve.linkage_ddm import central_differences
 
-    series, rms, t_out = [], [], None
-    for name in names:
-        b0 = _value(linkage, name)
-        d = rel * abs(b0)
-        out = []
-        for b in (b0 + d, b0 - d):
-            tr = simulate(linkage.with_parameter(name, b), revolutions, backend="exudyn",
-                          step_size=step, start=start)
-            m = tr.revolution_mask(revolutions)
-            t, f = tr.t[m], _magnitude(tr)[m]
-            out.append((t, f, _rms(t, f)))
-        # one grid for every parameter: Exudyn's grids may differ by a few steps (the
-        # four-bar's 2nd revolution: 385184 and 385189 samples; its adaptiveStep, on by
-        # default, cuts a step whose Newton iteration fails)
-        t_out = out[0][0] if t_out is None else t_out
-        series.append((np.interp(t_out, out[0][0], out[0][1])
-                       - np.interp(t_out, out[1][0], out[1][1])) / (2 * d))
-        rms.append((out[0][2] - out[1][2]) / (2 * d))
+    steps, plus, minus = central_differences(linkage, names, rel, _exudyn_last_revolution,
+                                             (revolutions, step, start))
+    # one grid for every parameter: Exudyn's grids may differ by a few steps (the
+    # four-bar's 2nd revolution: 385184 and 385189 samples; its adaptiveStep, on by
+    # default, cuts a step whose Newton iteration fails)
+    t_out = plus[0][0]
+    series = [(np.interp(t_out, p[0], p[1]) - np.interp(t_out, m[0], m[1])) / (2 * d)
+              for p, m, d in zip(plus, minus, steps)]
+    rms = [(p[2] - m[2]) / (2 * d) for p, m, d in zip(plus, minus, steps)]
     return t_out, np.column_stack(series), np.array(rms)
 
 
-def _value(linkage, name: str) -> float:
-    """Current value of a dotted parameter (`Linkage.parameter_value`)."""
-    return float(linkage.parameter_value(name))
+def _exudyn_last_revolution(job):
+    """(t, |F|, its RMS) over the last revolution of an Exudyn run of the design."""
+    from mbs_clearance import simulate
+
+    design, revolutions, step, start = job
+    tr = simulate(design, revolutions, backend="exudyn", step_size=step, start=start)
+    m = tr.revolution_mask(revolutions)
+    t, f = tr.t[m], _magnitude(tr)[m]
+    return t, f, _rms(t, f)
+
+
+def _reduced_window_rms(job):
+    """The RMS of |F| over the window (lo, hi) of a reduced run's own steps."""
+    from mbs_clearance import simulate
+
+    design, revolutions, rtol, start, lo, hi = job
+    tr = simulate(design, revolutions, rtol=rtol, start=start)
+    return _rms(*_on_window(tr.t, lo, hi, _magnitude(tr)))
 
 
 def ddm(linkage, names, revolutions: int, t: np.ndarray, rtol: float = 1e-10, start=None,
@@ -104,18 +112,11 @@ def ddm(linkage, names, revolutions: int, t: np.ndarray, rtol: float = 1e-10, st
         return d, _rms_derivative(*_on_window(full.t, lo, hi, _magnitude(full.trajectory),
                                               full.base_force_magnitude))
     # method "fd": d RMS/db by central differences of the RMS over each run's own steps
-    from mbs_clearance import simulate
+    from mbs_clearance.solve.linkage_ddm import central_differences
 
-    rms = []
-    for name in names:
-        b0 = _value(linkage, name)
-        h = rel * abs(b0)
-        r = []
-        for b in (b0 + h, b0 - h):
-            tr = simulate(linkage.with_parameter(name, b), revolutions, rtol=rtol, start=start)
-            r.append(_rms(*_on_window(tr.t, lo, hi, _magnitude(tr))))
-        rms.append((r[0] - r[1]) / (2 * h))
-    return d, np.array(rms)
+    steps, plus, minus = central_differences(linkage, names, rel, _reduced_window_rms,
+                                             (revolutions, rtol, start, lo, hi))
+    return d, (np.array(plus) - np.array(minus)) / (2 * steps)
 
 
 def _on_window(t, lo, hi, *series):

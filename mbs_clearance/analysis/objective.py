@@ -35,7 +35,7 @@ import numpy as np
 
 from .._checks import check_choice, check_int, check_real, check_revolutions_memory
 from ..model.linkage import Linkage
-from ..model.mechanism import CONTINUOUS_FIELDS, SliderCrank
+from ..model.mechanism import SliderCrank
 from ..numerics.integrator import METHODS
 from .sensitivity import DDM_INTEGRATOR, DEFAULT_PARAMETERS, FD_RELATIVE_STEP
 
@@ -393,22 +393,6 @@ def peak_output(linkage: Linkage, output: str | None = None, revolution: int = 4
 
 # ------------------------------------------------------------------ any linkage
 
-def _linkage_fd_step(linkage: Linkage, name: str, relative: float) -> float:
-    """Central-difference step of design name `name` (`design`): a radius or clearance
-    relative to the clearance, a value relative to itself (1 of its unit where zero)."""
-    from ..model import design
-    from ..solve import linkage_ddm
-
-    if name.endswith("clearance"):
-        return relative * design.design_value(linkage, name)
-    if design.slider_crank_of(linkage) is not None and name in CONTINUOUS_FIELDS:
-        return linkage_ddm.fd_step(linkage, name, relative)
-    if name in design.design_names(linkage)[:len(design._case_table(linkage))]:
-        value = abs(design.design_value(linkage, name))
-        return relative * (value if value != 0.0 else 1.0)
-    return linkage_ddm.fd_step(linkage, design._dotted(name), relative)
-
-
 # ------------------------------------------------------------------ DDM at the peak
 
 class _Run:
@@ -422,22 +406,21 @@ class _Run:
                  window=None):
         from ..model import design
         from ..solve import linkage_ddm
-        from ..solve.linkage_model import specialisable, time_edges
+        from ..solve.settings import RunSettings
 
         self.directions = [design.direction(linkage, n) for n in names]
-        dotted = sorted({k for d in self.directions for k in d})
-        model, p0, y0, rtol, atol = linkage_ddm.plain_setup(
-            linkage, rtol, specialise=specialisable(linkage, dotted))
         # CVODES-style error weights, the state's tolerances over |b_k|: the radius's
         # direction sets the step and with it the accuracy of every direction's
         # sensitivity (docs/sensitivity.md, "The error weights of the sensitivities")
         values = np.abs([design.design_value(linkage, n) for n in names])
         scale = np.where(values != 0.0, values, 1.0)
-        self.run = linkage_ddm.ddm_run(linkage, model, p0, y0, self.directions, scale=scale,
-                                       rtol=rtol, atol_plain=atol,
-                                       revolutions=revolution if window is None else None,
-                                       method=integrator, windows=None if window is None
-                                       else time_edges(revolution * window, window))
+        sp = linkage_ddm.prepare_sensitivity(
+            linkage, names, revolution if window is None else None,
+            RunSettings(rtol=rtol, method=integrator),
+            directions=linkage_ddm.Directions(self.directions, values, scale),
+            duration=None if window is None else revolution * window, window=window)
+        self.run = linkage_ddm.ddm_run(sp)
+        model, rtol = sp.problem.model, sp.problem.rtol
         self.out = out
         self.rtol = float(rtol)
         self.coefficients = METHODS[integrator].arrays()
@@ -686,29 +669,20 @@ def _fd_peak(args):
 def _fd_gradient(linkage, names, out: Output, revolution, backend, fd_relative_step,
                  executor, options, window=None):
     from ..model import design
+    from ..solve.linkage_ddm import central_differences
 
     t_wall = time.perf_counter()
     options = dict(options)
     if backend == "reduced":
         options.setdefault("rtol", 1e-11)
-    steps = [_linkage_fd_step(linkage, n, fd_relative_step) for n in names]
     ref = np.array([design.design_value(linkage, n) for n in names])
-    designs = [linkage]
-    for name, b0, h in zip(names, ref, steps):
-        for sign in (1.0, -1.0):
-            try:
-                designs.append(design.linkage_with(linkage, {name: b0 + sign * h}))
-            except ValueError as exc:
-                raise ValueError(f"the finite-difference step of {name} ({h:.3g}) leaves its "
-                                 f"valid range: {exc}; pass a smaller fd_relative_step") from exc
-    jobs = [(d, out, revolution, backend, options, window) for d in designs]
-    values = (list(executor.map(_fd_peak, jobs)) if executor is not None
-              else [_fd_peak(j) for j in jobs])
-    peak, t_peak = values[0]
-    plus = np.array([v[0] for v in values[1::2]])
-    minus = np.array([v[0] for v in values[2::2]])
-    h = np.array(steps)
-    stats = {"fd_steps": steps, "runs": len(designs), "forward": (plus - peak) / h,
+    args = (out, revolution, backend, options, window)
+    h, plus, minus = central_differences(linkage, names, fd_relative_step, _fd_peak, args,
+                                         executor=executor)
+    peak, t_peak = _fd_peak((linkage, *args))
+    plus = np.array([v[0] for v in plus])
+    minus = np.array([v[0] for v in minus])
+    stats = {"fd_steps": h.tolist(), "runs": 2 * len(names) + 1, "forward": (plus - peak) / h,
              "backward": (peak - minus) / h, "wall_time": time.perf_counter() - t_wall,
              "output": out.name, **{k: v for k, v in options.items()
                                     if k in ("rtol", "method")}}

@@ -177,7 +177,7 @@ class _Shooter:
         # the drive repeats every revolution: a map from any section time t0
         self.edges = t0 + np.arange(period + 1) * 2.0 * math.pi / self.omega
         self.counters = np.zeros(5, dtype=np.int64)
-        self.scale = np.concatenate([_tangent_scale(mech, model),
+        self.scale = np.concatenate([_tangent_scale(flow.problem),
                                      clearances_of(mech) * self.omega])
         self.joints = joints_of(mech)
         nb = n2 + J

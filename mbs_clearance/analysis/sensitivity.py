@@ -11,8 +11,7 @@ from __future__ import annotations
 
 import json
 import logging
-import time
-from concurrent.futures import Executor, ProcessPoolExecutor
+from concurrent.futures import Executor
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -41,6 +40,7 @@ from ..solve.linkage_ddm import (
     fd_step,  # noqa: F401  (public here too)
     independent_directions,  # noqa: F401  (public here too)
 )
+from ..solve.settings import RunSettings
 from ..solve.trajectory import Trajectory, annotate, load_trajectory
 
 __all__ = ["Sensitivities", "sensitivities", "load_sensitivities", "DEFAULT_PARAMETERS",
@@ -405,95 +405,29 @@ def field_directions_of(mech: SliderCrank, names):
 def slider_crank_run(mech: SliderCrank, names, rtol, *, revolutions: int, t_eval=None,
                      event_time_term: bool = True, method: str = DDM_INTEGRATOR,
                      record: bool = True, derivatives=False):
-    """The DDM run (`linkage_ddm.design_run`) of the paper's fields `names` on its case's
+    """The DDM run (`linkage_ddm.ddm_run`) of the paper's fields `names` on its case's
     description (`cases.door`), their directions through the one table
-    (`field_directions_of`); with `derivatives` (`linkage_ddm.ddm_run`) outputs'
-    derivatives recorded with the steps. Returns (run, the fields' values)."""
+    (`field_directions_of`); with `derivatives` outputs' derivatives recorded with the
+    steps. Returns (run, the fields' values)."""
     from ..model.cases import door
     from ..solve import linkage_ddm
 
     entry = door(mech)
     along = field_directions_of(entry.paper, names)
-    run = linkage_ddm.design_run(entry.linkage, tuple(names), rtol, revolutions=revolutions,
-                                 t_eval=t_eval, event_time_term=event_time_term,
-                                 method=method, record=record, derivatives=derivatives,
-                                 directions=along)
+    sp = linkage_ddm.prepare_sensitivity(entry.linkage, names, revolutions,
+                                         RunSettings(rtol=rtol, method=method),
+                                         directions=along, t_eval=t_eval, record=record)
+    run = linkage_ddm.ddm_run(sp, event_time_term=event_time_term, derivatives=derivatives)
     return run, along.reference
 
 
-def _fd_run(args):
-    """One perturbed simulation (module level: picklable for process pools)."""
-    from ..solve.simulate import simulate
-
-    mech, revolutions, backend, options = args
-    traj = simulate(mech, revolutions, backend=backend, **options)
-    return (traj.t, traj.base_force, traj.crank_moment, traj.contact_force)
-
-
-def _fd(mech, names, revolutions, backend, t_eval, rtol, fd_relative_step, executor, n_jobs,
-        options):
-    from ..model.cases import as_linkage
-    from ..solve.simulate import simulate
-
-    options = dict(options)
-    if backend == "reduced":
-        options["rtol"] = 1e-11 if rtol is None else rtol
-        if t_eval is None:
-            t_eval = np.linspace(0.0, revolutions * mech.period, 720 * revolutions + 1)
-        options["t_eval"] = t_eval
-    elif t_eval is not None:
-        raise ValueError("t_eval is only supported by the reduced backend; the exudyn "
-                         "backend reports its own fixed time steps")
-    if backend == "exudyn" and options.get("step_size", 2e-6) > 7.5e-7:
-        # measured: docs/sensitivity.md "DDM against finite differences of the Exudyn model"
-        logging.getLogger("mbs_clearance").warning(
-            f"finite differences through Exudyn at step {options.get('step_size', 2e-6):g} s "
-            "are coarse (the paper's case at the default 2e-6 s: 15-19 % RMS off the DDM "
-            "sensitivities); step_size=5e-7 gives about 1 % (4 times the run time)")
-    linkage = as_linkage(mech)
-    steps = [fd_step(linkage, n, fd_relative_step) for n in names]
-    jobs = []
-    for name, h in zip(names, steps):
-        b0 = reference_value(mech, name)
-        for sign in (1.0, -1.0):
-            try:
-                jobs.append((mech.replace(**{name: b0 + sign * h}), revolutions, backend,
-                             options))
-            except ValueError as exc:
-                raise ValueError(f"the finite-difference step of {name} ({h:.3g}) leaves its "
-                                 f"valid range: {exc}; pass a smaller fd_relative_step") from exc
-    t0 = time.perf_counter()
-    nominal = simulate(mech, revolutions, backend=backend, **options)
-    if executor is not None:
-        results = list(executor.map(_fd_run, jobs))
-    elif n_jobs == 1 or backend == "reduced":
-        results = [_fd_run(j) for j in jobs]
-    else:
-        with ProcessPoolExecutor(max_workers=n_jobs or 2) as pool:
-            results = list(pool.map(_fd_run, jobs))
-    n = len(nominal.t)
-    d_force = np.empty((n, 2, len(names)))
-    d_mag = np.empty((n, len(names)))
-    d_moment = np.empty((n, len(names)))
-    d_contact = np.empty((n, len(names)))
-    for k, h in enumerate(steps):
-        (t_p, f_p, m_p, c_p), (t_m, f_m, m_m, c_m) = results[2 * k], results[2 * k + 1]
-        if len(t_p) != n or len(t_m) != n or not (np.allclose(t_p, nominal.t, rtol=0,
-                                                              atol=1e-12)
-                                                  and np.allclose(t_m, nominal.t, rtol=0,
-                                                                  atol=1e-12)):
-            raise RuntimeError("perturbed runs returned different time grids")
-        d_force[:, :, k] = (f_p - f_m) / (2 * h)
-        d_mag[:, k] = (np.hypot(*f_p.T) - np.hypot(*f_m.T)) / (2 * h)
-        d_moment[:, k] = (m_p - m_m) / (2 * h)
-        d_contact[:, k] = (c_p - c_m) / (2 * h)
-    stats = {"fd_steps": steps, "runs": 2 * len(names) + 1,
-             "wall_time": time.perf_counter() - t0}
-    return Sensitivities(
-        t=nominal.t, parameters=names,
-        reference=np.array([reference_value(mech, n) for n in names]),
-        base_force=d_force, base_force_magnitude=d_mag, crank_moment=d_moment,
-        contact_force=d_contact, trajectory=nominal, method="fd", backend=backend, stats=stats)
+def _fd_grid(linkage, revolutions: int | None, windows=None) -> np.ndarray:
+    """The finite differences' default output times: 720 per drive revolution of
+    `linkage` (a free linkage: per window of the edges `windows`)."""
+    if windows is not None:
+        return np.unique(np.concatenate([np.linspace(a, b, 721) for a, b in
+                                         zip(windows[:-1], windows[1:])]))
+    return np.linspace(0.0, revolutions * linkage.period, 720 * revolutions + 1)
 
 
 def sensitivities(mech: SliderCrank, parameters=None, revolutions: int | None = None,
@@ -592,18 +526,42 @@ def sensitivities(mech: SliderCrank, parameters=None, revolutions: int | None = 
             raise ValueError(f"unknown option(s) for method='ddm': {sorted(options)}")
         from ..solve import linkage_ddm
 
-        fields = linkage_ddm.linkage_sensitivities(
-            linkage, names, revolutions, rtol, t_eval, event_time_term,
-            integrator or DDM_INTEGRATOR, directions=field_directions_of(mech, names))
-        return _as_given(Sensitivities(**fields), entry)
-    if integrator is not None:
-        if backend != "reduced":
-            raise ValueError(f"integrator applies to the reduced backend only; got "
-                             f"backend={backend!r}")
-        options["method"] = integrator
-    return _fd(mech, names, revolutions, backend, t_eval, rtol, fd_relative_step, executor,
-               n_jobs, options)
+        sp = linkage_ddm.prepare_sensitivity(
+            linkage, names, revolutions, RunSettings(rtol=rtol,
+                                                     method=integrator or DDM_INTEGRATOR),
+            directions=field_directions_of(mech, names), t_eval=t_eval)
+        return _as_given(Sensitivities(**linkage_ddm.linkage_sensitivities(
+            sp, event_time_term)), entry)
+    from ..solve import linkage_ddm
 
+    if integrator is not None and backend != "reduced":
+        raise ValueError(f"integrator applies to the reduced backend only; got "
+                         f"backend={backend!r}")
+    if "start" in options:
+        raise ValueError("start is for a description: give the paper's case "
+                         "(cases.paper_slider_crank, the same case) with start=")
+    along = field_directions_of(mech, names)
+    if backend == "reduced":
+        sp = linkage_ddm.prepare_sensitivity(
+            linkage, names, revolutions, RunSettings(
+                rtol=1e-11 if rtol is None else rtol, method=integrator or "dopri5"),
+            directions=along, whole=False, t_eval=_fd_grid(linkage, revolutions)
+            if t_eval is None else t_eval, **options)
+        return _as_given(Sensitivities(**linkage_ddm.finite_differences(
+            sp, fd_relative_step, executor=executor)), entry)
+    if t_eval is not None:
+        raise ValueError("t_eval is only supported by the reduced backend; the exudyn "
+                         "backend reports its own fixed time steps")
+    if backend == "exudyn" and options.get("step_size", 2e-6) > 7.5e-7:
+        # measured: docs/sensitivity.md "DDM against finite differences of the Exudyn model"
+        logging.getLogger("mbs_clearance").warning(
+            f"finite differences through Exudyn at step {options.get('step_size', 2e-6):g} s "
+            "are coarse (the paper's case at the default 2e-6 s: 15-19 % RMS off the DDM "
+            "sensitivities); step_size=5e-7 gives about 1 % (4 times the run time)")
+    sp = linkage_ddm.prepare_sensitivity(linkage, names, revolutions, directions=along)
+    return Sensitivities(**linkage_ddm.finite_differences(
+        sp, fd_relative_step, backend=backend, as_paper=True, executor=executor,
+        n_jobs=n_jobs, options=options))
 
 
 def _as_given(sens: Sensitivities, entry) -> Sensitivities:
@@ -649,7 +607,7 @@ def _linkage_sensitivities(linkage, parameters, revolutions, method, backend, t_
     duration, window = options.pop("duration", None), options.pop("window", None)
     revolutions = check_span(linkage, revolutions, duration, window)
     windows = None
-    if linkage.drive is None:
+    if revolutions is None:         # a free linkage: time windows
         if duration is None:
             raise ValueError(f"linkage {linkage.name!r} is free (drive=None): give the "
                              "sensitivities' duration= in s (and optionally window= in s)")
@@ -665,9 +623,6 @@ def _linkage_sensitivities(linkage, parameters, revolutions, method, backend, t_
     if options:
         raise ValueError(f"unknown option(s) for a Linkage: {sorted(options)} (allowed: "
                          "start; duration, window for a free linkage)")
-    if start is not None and linkage.drive is None:
-        raise ValueError("start is for a driven linkage; a free linkage starts from its "
-                         "initial (Linkage.initial, an Initial)")
     if rtol is not None:
         rtol = check_real("rtol", rtol, 1e-14, 1e-2)
     if t_eval is not None:
@@ -679,11 +634,15 @@ def _linkage_sensitivities(linkage, parameters, revolutions, method, backend, t_
     if integrator is not None and integrator not in METHODS:
         raise ValueError(f"integrator must be one of {sorted(METHODS)}; got {integrator!r}")
     if method == "ddm":
-        fields = linkage_ddm.linkage_sensitivities(
-            linkage, names, revolutions, rtol, t_eval, event_time_term,
-            integrator or linkage_ddm.DDM_INTEGRATOR, start, windows)
+        settings = RunSettings(rtol=rtol, method=integrator or linkage_ddm.DDM_INTEGRATOR)
     else:
-        fields = linkage_ddm.linkage_fd(linkage, names, revolutions, rtol, t_eval,
-                                        fd_relative_step, integrator or "dopri5", start,
-                                        windows)
-    return Sensitivities(**fields)
+        settings = RunSettings(rtol=1e-11 if rtol is None else rtol,
+                               method=integrator or "dopri5")
+        if t_eval is None:
+            t_eval = _fd_grid(linkage, revolutions, windows)
+    sp = linkage_ddm.prepare_sensitivity(linkage, names, revolutions, settings,
+                                         duration=duration, window=window, t_eval=t_eval,
+                                         start=start)
+    if method == "ddm":
+        return Sensitivities(**linkage_ddm.linkage_sensitivities(sp, event_time_term))
+    return Sensitivities(**linkage_ddm.finite_differences(sp, fd_relative_step))

@@ -14,13 +14,14 @@ from .._checks import check_real
 from ..model.cases import as_linkage
 from ..numerics.integrator import METHODS, RESULTS
 from .kernels import plain_kernel
-from .settings import DEFAULT_RTOL, RunSettings
+from .problem import Problem
+from .settings import RunSettings
 
 #: times a window is run again, each with a first step 0.3 times smaller, when its events
 #: chattered (a grazing contact at machine precision: the step sequence, not the motion)
 CHATTER_RETRIES = 3
 
-__all__ = ["Flow", "TangentFlow", "drive_of", "clearances_of", "joints_of"]
+__all__ = ["Flow", "TangentFlow", "prepare_flow", "drive_of", "clearances_of", "joints_of"]
 
 
 def _check_mech(mech) -> None:
@@ -43,6 +44,32 @@ def joints_of(mech) -> tuple[str, ...]:
     return tuple(name for name, _ in as_linkage(mech).contacts())
 
 
+def prepare_flow(mech, settings: RunSettings | None = None, *, free: bool = False,
+                 default_method: str = "dopri5", **options) -> Problem:
+    """The `Problem` of a flow of `mech` (`linkage_model.prepare`): its span one window, a
+    drive revolution (a free linkage, refused unless `free`: its `time_scale`), the state,
+    parameters and tolerances the flow starts from. `settings` (a `RunSettings`; keywords
+    change single fields; `default_method` where neither names one): its rtol at most 1e-4
+    (default `DEFAULT_RTOL`)."""
+    from .linkage_model import prepare
+
+    linkage = as_linkage(mech)
+    free_linkage = linkage.drive is None
+    if free_linkage and not free:
+        raise ValueError(f"linkage {linkage.name!r} is free (drive=None): a flow maps "
+                         "drive revolutions; run a free linkage with simulate(..., "
+                         "duration=)")
+    if settings is None:
+        settings = RunSettings(method=options.pop("method", None) or default_method)
+    if not isinstance(settings, RunSettings):
+        raise ValueError(f"settings must be a RunSettings; got {type(settings).__name__}")
+    settings = settings.with_options(options)
+    if settings.rtol is not None:
+        check_real("rtol", settings.rtol, 1e-14, 1e-4)
+    return prepare(linkage, None if free_linkage else 1, settings,
+                   duration=linkage.time_scale if free_linkage else None)
+
+
 class Flow:
     """A linkage's state advanced window by window on its generated model's integrator,
     holding one window's record at a time. `t`, `y`, `p` are the current time, state and
@@ -50,9 +77,10 @@ class Flow:
     maximum of the monitored force (the linkage's monitored reaction, or the shaking
     force).
 
-    `settings` (a `RunSettings`; keywords change single fields): its rtol (at most 1e-4;
-    default `DEFAULT_RTOL`), atol, method, max_steps, h_max (default an eighth of a drive
-    revolution) and event_tol are the runs'.
+    `mech` is a mechanism (its `Problem` prepared here, `prepare_flow`) or a prepared
+    `Problem`. `settings` (a `RunSettings`; keywords change single fields): its rtol (at
+    most 1e-4; default `DEFAULT_RTOL`), atol, method, max_steps, h_max (default an eighth
+    of a drive revolution) and event_tol are the runs'.
 
     A free linkage (drive None) has no drive revolutions to map: it is refused unless
     `free` is True (its windows are then any times, h_max an eighth of its `time_scale`,
@@ -65,41 +93,34 @@ class Flow:
                  **options):
         from . import linkage_model as lm
 
-        linkage = self.linkage = as_linkage(mech)
-        if linkage.drive is None and not free:
-            raise ValueError(f"linkage {linkage.name!r} is free (drive=None): a flow maps "
-                             "drive revolutions; run a free linkage with simulate(..., "
-                             "duration=)")
-        self.mech = mech
-        if settings is None:
-            settings = RunSettings(method=options.pop("method", None) or self.METHOD)
-        if not isinstance(settings, RunSettings):
-            raise ValueError(f"settings must be a RunSettings; got {type(settings).__name__}")
-        settings = settings.with_options(options)
-        rtol = DEFAULT_RTOL if settings.rtol is None else check_real(
-            "rtol", settings.rtol, 1e-14, 1e-4)
-        self.omega, self.theta0 = ((None, None) if linkage.drive is None else
+        if isinstance(mech, Problem):
+            if settings is not None or options:
+                raise ValueError("a prepared Problem carries its settings: give them to "
+                                 "prepare_flow (or linkage_model.prepare), not to the flow")
+            problem = mech
+        else:
+            problem = prepare_flow(mech, settings, free=free, default_method=self.METHOD,
+                                   **options)
+        self.problem = problem
+        linkage = self.linkage = problem.linkage
+        self.mech = problem.linkage if isinstance(mech, Problem) else mech
+        self.omega, self.theta0 = ((None, None) if problem.span.revolutions is None else
                                    (linkage.drive.speed, linkage.drive.initial_angle))
         self.clearance = clearances_of(linkage)
         self.joints = joints_of(linkage)
-        model = self.model = lm.load_model(linkage)
-        p = lm.pack_parameters(linkage, model)
-        rtol, atol = lm._tolerances(linkage, model, rtol, settings.atol)
-        event_tol = (lm.event_tolerance(linkage) if settings.event_tol is None
-                     else settings.event_tol)
-        y0 = lm.initial_state(linkage, model, p)
-        self.kernel = plain_kernel(linkage, model)
+        model = self.model = problem.model
+        plain = problem.integrator
+        self.kernel = plain_kernel(linkage, model, problem.specialise)
+        # the flow's own record: every step of one window, no outputs
         self.settings = lm.integrator_settings(
-            linkage, model, rtol, atol,
-            h_max=(linkage.time_scale if linkage.drive is None else linkage.period) / 8
-            if settings.h_max is None else settings.h_max,
-            max_steps=settings.max_steps, record=True, event_tol=event_tol)
+            linkage, model, problem.rtol, plain.atol, h_max=plain.h_max,
+            max_steps=problem.max_steps, record=True, event_tol=plain.event_tol)
         self._gaps = [_gap_function(model, j) for j in range(model.N_EVENTS)]
-        self.rtol = rtol
-        self.coefficients = METHODS[settings.method].arrays()
+        self.rtol = problem.rtol
+        self.coefficients = METHODS[problem.method].arrays()
         self.t = 0.0
-        self.y = np.ascontiguousarray(y0, dtype=float)
-        self.p = p
+        self.y = np.ascontiguousarray(problem.y0, dtype=float).copy()
+        self.p = problem.p.copy()
         self.counters = np.zeros(5, dtype=np.int64)
         #: the most steps recorded in one window (the run's record never holds more)
         self.max_recorded = 0
@@ -160,7 +181,7 @@ class TangentFlow(Flow):
                  memory: str = "reset", free: bool = False, **options):
         from ..generate.profiles import refuse_sensitivity_runs
 
-        refuse_sensitivity_runs(as_linkage(mech))
+        refuse_sensitivity_runs(mech.linkage if isinstance(mech, Problem) else as_linkage(mech))
         if memory not in ("reset", "carry"):
             raise ValueError(f"memory must be 'reset' or 'carry'; got {memory!r}")
         self.reset_memory = memory == "reset"
@@ -170,7 +191,7 @@ class TangentFlow(Flow):
         model = self.model
         n2 = 2 * model.N_Q
         #: scales of the tangent's components: the journal moves within the clearance
-        self.scale = _tangent_scale(self.linkage, model)
+        self.scale = _tangent_scale(self.problem)
         v = np.full(n2, 0.5) if direction is None else np.asarray(direction, dtype=float)
         if v.shape != (n2,) or not np.all(np.isfinite(v)) or not np.any(v != 0.0):
             raise ValueError(f"direction must be {n2} finite numbers, not all zero (scaled "
@@ -207,12 +228,12 @@ def _gap_function(model, j: int):
     return partial(model.gap, j=j)
 
 
-def _tangent_scale(mech, model) -> np.ndarray:
-    """Scales of the tangent's components: lengths the smallest clearance c, angles c over
-    the linkage's length scale, rates those times the drive speed (a free linkage: over
-    its `time_scale`)."""
-    linkage = as_linkage(mech)
+def _tangent_scale(problem: Problem) -> np.ndarray:
+    """Scales of the tangent's components of a flow's `problem`: lengths the smallest
+    clearance c, angles c over the linkage's length scale, rates those times the drive
+    speed (a free linkage's span, without revolutions: over its `time_scale`)."""
+    linkage, model = problem.linkage, problem.model
     c, length = linkage.min_clearance, linkage.length_scale
-    w = 1.0 / linkage.time_scale if linkage.drive is None else linkage.drive.speed
+    w = 1.0 / linkage.time_scale if problem.span.revolutions is None else linkage.drive.speed
     pos = np.array([c / length if n.endswith(".angle") else c for n in model.COORDINATES])
     return np.concatenate([pos, w * pos])

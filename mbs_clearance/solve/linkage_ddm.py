@@ -31,23 +31,19 @@ from ..elements.registry import ELEMENTS
 from ..generate.sens_runtime import fill_seed_work, work_size
 from ..model.linkage import Linkage
 from .linkage_model import (
-    DEFAULT_MAX_STEPS,
-    REFINE_ITERS,
-    _tolerances,
-    check_start,
     default_atol,
-    event_tolerance,
-    initial_state,
     integrator_settings,
-    load_model,
-    pack_parameters,
+    prepare,
+    solve,
     specialisable,
     trajectory_from_run,
 )
+from .problem import Problem
 from .settings import RunSettings
 
 __all__ = ["chain", "combine", "initial_sensitivities", "independent_directions", "setup",
-           "ddm_run", "DdmRun", "linkage_sensitivities", "design_run", "Directions", "fd_step",
+           "ddm_run", "DdmRun", "linkage_sensitivities", "Directions", "SensitivityProblem",
+           "prepare_sensitivity", "fd_step", "central_differences", "finite_differences",
            "DDM_INTEGRATOR"]
 
 _THIS = sys.modules[__name__]
@@ -116,11 +112,13 @@ def combine(linkage: Linkage, model, directions):
     return entries, sigma
 
 
-def initial_sensitivities(linkage: Linkage, model, p, y0, entries, t0: float = 0.0):
+def initial_sensitivities(linkage: Linkage, model, p, y0, entries, t0: float = 0.0, *,
+                          free: bool = False):
     """(nb, 2 N_Q): exact derivatives of the centred start (`linkage_model.initial_state`)
     along the chains `entries`: the closure e(t0, q, p) = 0 and its rate edot(t0, q, qdot, p)
     = 0 differentiated (least squares where the closure is not square, as the assembly).
-    A free linkage holds the coordinates and rates its `Initial` gives: theirs are zero.
+    A free linkage's run (`free`: its span has no revolutions) holds the coordinates and
+    rates its `Initial` gives: theirs are zero.
     Each joint closes through its element's rows (`Element.closure_rows`: a clearance
     joint's journal centred, a translational joint's slider offset and tilt)."""
     n = model.N_Q
@@ -144,7 +142,7 @@ def initial_sensitivities(linkage: Linkage, model, p, y0, entries, t0: float = 0
         for c, v in ent.items():
             d[c, k] += v
     held_q = held_u = np.zeros(n, dtype=bool)
-    if linkage.drive is None:
+    if free:
         held_q = np.array([c in linkage.start.coordinates for c in model.COORDINATES])
         held_u = np.array([c in linkage.start.rates for c in model.COORDINATES])
     dq = np.zeros((n, len(entries)))
@@ -385,21 +383,24 @@ def magnitude_derivative(vals, col, ders, row):
     return (fx[:, None] * ders[:, row, :] + fy[:, None] * ders[:, row + 1, :]) * inv[:, None]
 
 
-def setup(linkage: Linkage, model, p0, y_state, directions, scale, atol_plain,
-          event_time_term: bool = True, fixed_start: bool = False, record_columns=()):
-    """The sensitivity system of `directions` (see `combine`): one integrated direction per
-    independent one (`independent_directions` on the directions made dimensionless: the
-    initial sensitivities by the state's tolerance scales, the chains by the parameters'
-    values, the memories by the floors, and each direction by its `scale`). Returns (y0, p,
-    atol, coefficients (nb, npar)). With `fixed_start` the initial state and memories do not
-    move with the parameters (a `linkage_model.Start`): the sensitivities start at zero.
-    record_columns: see `pack_sensitivity_parameters`."""
+def setup(problem: Problem, directions, scale, event_time_term: bool = True,
+          fixed_start: bool = False, record_columns=()):
+    """The sensitivity system of `directions` (see `combine`) about the plain run
+    `problem`: one integrated direction per independent one (`independent_directions` on
+    the directions made dimensionless: the initial sensitivities by the state's tolerance
+    scales, the chains by the parameters' values, the memories by the floors, and each
+    direction by its `scale`). Returns (y0, p, atol, coefficients (nb, npar)). With
+    `fixed_start` the initial state and memories do not move with the parameters (a
+    `linkage_model.Start`): the sensitivities start at zero. record_columns: see
+    `pack_sensitivity_parameters`."""
+    linkage, model, p0 = problem.linkage, problem.model, problem.p
     entries, sigma = combine(linkage, model, directions)
     if fixed_start:
         s0 = np.zeros((len(entries), 2 * model.N_Q))
         sigma = np.zeros_like(sigma)
     else:
-        s0 = initial_sensitivities(linkage, model, p0, y_state, entries)
+        s0 = initial_sensitivities(linkage, model, p0, problem.y0, entries,
+                                   free=problem.span.revolutions is None)
     n2, off = 2 * model.N_Q, 1 + 2 * model.N_Q
     cols = sorted({c for e in entries for c in e})
     pcol = np.abs(p0[[c - off for c in cols]])
@@ -417,140 +418,9 @@ def setup(linkage: Linkage, model, p0, y_state, directions, scale, atol_plain,
     coeffs[:, basis] = np.eye(len(basis))     # exactly (no least-squares round-off)
     p = pack_sensitivity_parameters(model, p0, [entries[b] for b in basis], event_time_term,
                                     record_columns)
-    y0 = sensitivity_state(y_state, s0[basis], sigma[basis])
-    atol = sensitivity_atol(model, atol_plain, np.asarray(scale)[basis])
+    y0 = sensitivity_state(problem.y0, s0[basis], sigma[basis])
+    atol = sensitivity_atol(model, problem.integrator.atol, np.asarray(scale)[basis])
     return y0, p, atol, coeffs
-
-
-def ddm_run(linkage: Linkage, model, p0, y_state, directions, *, scale, rtol, atol_plain,
-            revolutions: int, t_eval=None, event_time_term: bool = True,
-            method: str = DDM_INTEGRATOR, record: bool = True, whole: bool = False,
-            fixed_start: bool = False, derivatives=False, windows=None) -> DdmRun:
-    """Integrate the sensitivity equations of `directions` (see `setup`) over `revolutions`
-    drive revolutions (landing on the times t_eval if given, without peak refinement, and
-    ending at the last unless `whole`); returns the `DdmRun`. With `derivatives` (True:
-    every output; or a sequence of names in OUT_COLUMNS) and `record` the derivatives of
-    those outputs are computed with every step and recorded
-    (`DdmRun.recorded_output_sensitivities`). A free linkage runs over the window edges
-    `windows` (s, from 0; `linkage_model.time_edges`) instead of revolutions."""
-    from ..generate.profiles import refuse_sensitivity_runs
-
-    refuse_sensitivity_runs(linkage)
-    for el in ELEMENTS:
-        el.sensitivity_check(linkage)
-    zeros = set(getattr(model, "ZERO_PARAMETERS", ()))
-    along = sorted({n for d in directions for n, v in d.items() if v != 0.0 and n in zeros})
-    if along:
-        raise ValueError(f"directions along {along}: the model of linkage {linkage.name!r} "
-                         "is specialised on them being zero (no derivatives along them); use "
-                         "mbs_clearance.generate.load_model(linkage, specialise=False)")
-    if derivatives is True:
-        derivatives = model.OUT_COLUMNS
-    unknown = [c for c in derivatives or () if c not in model.OUT_COLUMNS]
-    if unknown:
-        raise ValueError(f"derivatives: unknown output(s) {unknown}; the outputs of linkage "
-                         f"{linkage.name!r} are {list(model.OUT_COLUMNS)}")
-    columns = tuple(model.OUT_COLUMNS.index(c) for c in derivatives) \
-        if derivatives and record else ()
-    y0, p, atol, coeffs = setup(linkage, model, p0, y_state, directions, scale,
-                                atol_plain, event_time_term, fixed_start, columns)
-    nb = coeffs.shape[0]
-    edges = _edges(linkage, revolutions, t_eval, whole, windows)
-    t0 = time.perf_counter()
-    n_out = model.N_OUT + len(columns) * nb if columns else None
-    ts, ys, ms, peaks, peak_t, outs, stats = _run(
-        linkage, model, y0, p, edges, rtol, method, 2 * model.N_Q * (1 + nb), atol,
-        record=record, refine=REFINE_ITERS if t_eval is None else 0, n_out=n_out)
-    stats.update(wall_time=time.perf_counter() - t0, event_time_term=event_time_term,
-                 directions=nb)
-    out_ders = None
-    if columns:
-        out_ders = outs[:, model.N_OUT:].reshape(len(ts), len(columns), nb)
-        outs = outs[:, :model.N_OUT]
-    return DdmRun(model, p0, p, ts, ys, ms, peaks, peak_t, outs, stats, coeffs,
-                  np.asarray(scale, dtype=float), out_ders, columns)
-
-
-def _run(linkage, model, y0, p, edges, rtol, method, n_err, atol, record=True,
-         max_steps=DEFAULT_MAX_STEPS, kernel="integrate_sens", refine=REFINE_ITERS,
-         n_out=None):
-    from .._checks import MemoryLimitError, default_max_memory, format_bytes
-    from ..numerics.integrator import COUNTERS, METHODS, RESULTS
-
-    event_tol = event_tolerance(linkage)
-    # the record never outgrows the default memory limit: a run that would stops there
-    max_memory = default_max_memory()
-    n_out = (model.N_OUT if n_out is None else n_out) if record else 0
-    row = 8 * (1 + len(y0) + model.N_MEM + n_out)
-    limit = min(max_steps, max(1, (max_memory - 24 * len(edges)) // row)) if record \
-        else max_steps
-    settings = integrator_settings(
-        linkage, model, rtol, atol, h_max=_h_max(linkage), max_steps=limit, record=record,
-        event_tol=event_tol, refine_iters=refine, n_out=n_out, n_err=n_err)
-    ts, ys, ms, peaks, peak_t, counters, outs, status = getattr(model, kernel)(
-        y0, p, edges, settings, METHODS[method].arrays())
-    status = RESULTS(int(status))
-    if status == RESULTS.max_steps and limit < max_steps:
-        raise MemoryLimitError(
-            f"the record of linkage {linkage.name!r} reached {format_bytes(max_memory)} (the "
-            f"default memory limit) at t = {ts[-1]:.6g} s, after {limit} steps; run fewer "
-            "revolutions")
-    if status != RESULTS.success:
-        raise RuntimeError(f"integration of linkage {linkage.name!r} failed at about t = "
-                           f"{ts[-1] if len(ts) else float('nan'):.6g} s: {status.message}")
-    stats = {k: int(v) for k, v in zip(COUNTERS, counters)}
-    stats.update(method=method, rtol=float(rtol))
-    return ts, ys, ms, peaks, peak_t, outs, stats
-
-
-def _h_max(linkage) -> float:
-    """The largest step, as the plain run's: an eighth of a revolution (a free linkage: of
-    its `time_scale`)."""
-    return (linkage.time_scale if linkage.drive is None else linkage.period) / 8
-
-
-def _edges(linkage, revolutions, t_eval, whole: bool = False, windows=None):
-    """Window edges of a run: the revolutions (a free linkage: the edges `windows`), or
-    (t_eval given) 0 and the times t_eval: the run lands on each and ends at the last; with
-    `whole` it runs the revolutions too (as a SliderCrank's runs do)."""
-    edges = np.asarray(windows, dtype=float) if windows is not None else \
-        np.arange(revolutions + 1) * linkage.period
-    if t_eval is None:
-        return edges
-    edges = np.union1d(edges if whole else [0.0], t_eval)
-    return edges[np.concatenate([[True], np.diff(edges) > 1e-12 * edges[-1]])]
-
-
-def landed(ts, t_eval):
-    """Indices of the recorded steps at the times t_eval (the integrator lands on each
-    window edge; the last record at that time holds the memory the next step uses)."""
-    idx = np.searchsorted(ts, t_eval, side="right") - 1
-    if np.any(np.abs(ts[idx] - t_eval) > 1e-12 * max(1.0, float(np.max(np.abs(t_eval))))):
-        raise RuntimeError("the run did not land on every requested time")
-    return idx
-
-
-def plain_setup(linkage: Linkage, rtol: float | None, start=None, specialise: bool = True):
-    """What a DDM run of `linkage` starts from, as its plain run: the generated model
-    (`specialise`: the one specialised on its zero-valued geometric parameters), the
-    parameter vector, the centred initial state (or `start`'s, a `linkage_model.Start`,
-    with its memories in p0) and the plain run's tolerances (rtol, atol with the switching
-    functions'). Returns (model, p0, y_state, rtol, atol). A free linkage starts from its
-    `Initial` (no `start`). The model is the compiled C model. A profiled bearing is
-    refused."""
-    from ..generate.profiles import refuse_sensitivity_runs
-
-    refuse_sensitivity_runs(linkage)
-    if linkage.drive is None and start is not None:
-        raise ValueError("start is for a driven linkage; a free linkage starts from its "
-                         "initial (Linkage.initial, an Initial)")
-    model = load_model(linkage, specialise)
-    rtol, atol = _tolerances(linkage, model, rtol, None)
-    p0 = pack_parameters(linkage, model)
-    if start is None:
-        return model, p0, initial_state(linkage, model, p0), rtol, atol
-    return model, p0, check_start(linkage, model, p0, start, event_tolerance(linkage)), \
-        rtol, atol
 
 
 @dataclass(frozen=True)
@@ -566,65 +436,183 @@ class Directions:
     unit: np.ndarray | None = None
 
 
-def design_run(linkage: Linkage, names: tuple[str, ...], rtol: float | None, *,
-               revolutions: int | None, t_eval=None, event_time_term: bool = True,
-               method: str = DDM_INTEGRATOR, start=None, windows=None, record: bool = True,
-               derivatives=True, directions: Directions | None = None) -> DdmRun:
-    """The DDM run of `linkage` along the design names `names` from its plain run's start
-    (or `start`, held fixed) with its plain run's tolerances (`plain_setup`): the
-    description's parameters themselves, or `directions` (their names' directions, then
-    the run covers the revolutions too, `ddm_run`'s ``whole``). Each direction's
-    tolerance is scaled by its parameter's natural scale (as the finite differences'
-    steps: a radius enters through the clearance; `directions`' own scale)."""
+@dataclass(frozen=True, eq=False)
+class SensitivityProblem:
+    """A DDM run (or finite differences) prepared: the plain run's `Problem` (the model,
+    specialised unless a direction moves one of its zero-valued geometric parameters; the
+    span, tolerances, parameter vector and start) and the design `names` with their
+    `Directions`; `start`: the `linkage_model.Start` it runs from (held fixed), if any."""
+
+    problem: Problem
+    names: tuple[str, ...]
+    directions: Directions
+    start: object = None
+
+    @property
+    def fixed_start(self) -> bool:
+        """Whether the run starts from a `Start`: its sensitivities start at zero."""
+        return self.start is not None
+
+
+def prepare_sensitivity(linkage: Linkage, names, revolutions: int | None = None,
+                        settings: RunSettings | None = None, *,
+                        directions: Directions | None = None, duration: float | None = None,
+                        window: float | None = None, t_eval=None, start=None,
+                        whole: bool | None = None, record: bool = True,
+                        specialise: bool | None = None, **options) -> SensitivityProblem:
+    """The one door of a DDM run (and of finite differences): the plain run's `Problem`
+    (`linkage_model.prepare`: every argument checked, the span of `revolutions`, or of a
+    free linkage's `duration` s in windows of `window` s, the tolerances, the parameter
+    vector and the centred start or `start`) and the directions of the design names
+    `names`: the description's parameters themselves, each direction's tolerance scaled
+    by its parameter's natural scale (as the finite differences' steps: a radius enters
+    through the clearance), or `directions` (names that are not the description's
+    parameters). With `t_eval` the run lands on those times and (`whole` False; None: unless
+    `directions` are given) ends at the last of them. `specialise` (None: as the directions
+    allow, `specialisable`) picks the model. A profiled bearing is refused."""
+    from ..generate.profiles import refuse_sensitivity_runs
+
+    refuse_sensitivity_runs(linkage)
+    names = tuple(names)
     paths = names if directions is None else sorted(
         {k for d in directions.directions for k in d})
-    model, p0, y_state, rtol, atol_plain = plain_setup(linkage, rtol, start,
-                                                       specialisable(linkage, paths))
+    if specialise is None:
+        specialise = specialisable(linkage, paths)
+    problem = prepare(linkage, revolutions, settings, duration=duration, window=window,
+                      t_eval=t_eval, whole=directions is not None if whole is None else whole,
+                      start=start,
+                      record=record, specialise=specialise, **options)
     if directions is None:
-        scale = np.array([fd_step(linkage, n, 1.0) for n in names])
-        along = [{n: 1.0} for n in names]
-    else:
-        scale, along = directions.scale, directions.directions
-    return ddm_run(linkage, model, p0, y_state, along, scale=scale, rtol=rtol,
-                   atol_plain=atol_plain, revolutions=revolutions, t_eval=t_eval,
-                   event_time_term=event_time_term, method=method,
-                   fixed_start=start is not None, record=record,
-                   whole=directions is not None, derivatives=derivatives, windows=windows)
+        directions = Directions([{n: 1.0} for n in names],
+                                np.array([linkage.parameter_value(n) for n in names]),
+                                np.array([fd_step(linkage, n, 1.0) for n in names]))
+    return SensitivityProblem(problem, names, directions, start)
 
 
-def linkage_sensitivities(linkage: Linkage, names: tuple[str, ...], revolutions: int | None,
-                          rtol: float | None, t_eval, event_time_term: bool, method: str,
-                          start=None, windows=None, directions: Directions | None = None):
-    """DDM of `linkage` (see the module docstring): (Sensitivities fields as a dict). From
-    `start` (a `linkage_model.Start`) the start is held fixed: the sensitivities start at
-    zero. A free linkage runs over the window edges `windows` (s) instead of revolutions
-    (its growth per window, its crank_moment None: it has no drive). `directions`: names
-    that are not parameters of the description (`design_run`)."""
-    run = design_run(linkage, names, rtol, revolutions=revolutions, t_eval=t_eval,
-                     event_time_term=event_time_term, method=method, start=start,
-                     windows=windows, directions=directions)
-    model, p0 = run.model, run.p0
-    free = linkage.drive is None
-    w, c = (1.0 / linkage.time_scale if free else linkage.drive.speed), linkage.min_clearance
-    if directions is not None and directions.unit is not None:
-        unit = directions.unit
-    else:
-        unit = np.array([1.0 if name.endswith(".angle") else c
-                         for name in model.COORDINATES])
-        unit = np.concatenate([unit, unit * w])
+def ddm_run(sp: SensitivityProblem, *, event_time_term: bool = True, derivatives=False
+            ) -> DdmRun:
+    """Integrate the sensitivity equations of the prepared `sp` (see `setup`) over its span
+    (landing on its t_eval if given, without peak refinement); returns the `DdmRun`. With
+    `derivatives` (True: every output; or a sequence of names in OUT_COLUMNS) and a
+    recording problem the derivatives of those outputs are computed with every step and
+    recorded (`DdmRun.recorded_output_sensitivities`)."""
+    problem = sp.problem
+    linkage, model = problem.linkage, problem.model
+    record = problem.integrator.record
+    for el in ELEMENTS:
+        el.sensitivity_check(linkage)
+    zeros = set(getattr(model, "ZERO_PARAMETERS", ()))
+    along = sorted({n for d in sp.directions.directions for n, v in d.items()
+                    if v != 0.0 and n in zeros})
+    if along:
+        raise ValueError(f"directions along {along}: the model of linkage {linkage.name!r} "
+                         "is specialised on them being zero (no derivatives along them); use "
+                         "mbs_clearance.generate.load_model(linkage, specialise=False)")
+    if derivatives is True:
+        derivatives = model.OUT_COLUMNS
+    unknown = [c for c in derivatives or () if c not in model.OUT_COLUMNS]
+    if unknown:
+        raise ValueError(f"derivatives: unknown output(s) {unknown}; the outputs of linkage "
+                         f"{linkage.name!r} are {list(model.OUT_COLUMNS)}")
+    columns = tuple(model.OUT_COLUMNS.index(c) for c in derivatives) \
+        if derivatives and record else ()
+    scale = np.asarray(sp.directions.scale, dtype=float)
+    y0, p, atol, coeffs = setup(problem, sp.directions.directions, scale, event_time_term,
+                                sp.fixed_start, columns)
+    nb = coeffs.shape[0]
+    t0 = time.perf_counter()
+    n_out = model.N_OUT + len(columns) * nb if columns else None
+    ts, ys, ms, peaks, peak_t, outs, stats = _run(problem, y0, p, 2 * model.N_Q * (1 + nb),
+                                                  atol, n_out=n_out)
+    stats.update(wall_time=time.perf_counter() - t0, event_time_term=event_time_term,
+                 directions=nb)
+    out_ders = None
+    if columns:
+        out_ders = outs[:, model.N_OUT:].reshape(len(ts), len(columns), nb)
+        outs = outs[:, :model.N_OUT]
+    return DdmRun(model, problem.p.copy(), p, ts, ys, ms, peaks, peak_t, outs, stats, coeffs,
+                  scale, out_ders, columns)
+
+
+def _run(problem: Problem, y0, p, n_err, atol, kernel="integrate_sens", n_out=None):
+    """The compiled integrator's run of the sensitivity state y0 with p over `problem`'s
+    span, with its settings (tolerances `atol` on the leading `n_err` components, recording
+    `n_out` outputs per step, default N_OUT): (ts, ys, ms, peaks, peak_t, outs, stats)."""
+    from .._checks import MemoryLimitError, format_bytes
+    from ..numerics.integrator import COUNTERS, METHODS, RESULTS
+
+    linkage, model, edges = problem.linkage, problem.model, problem.span.edges
+    plain = problem.integrator
+    max_steps, max_memory, record = problem.max_steps, problem.max_memory, plain.record
+    # the record never outgrows the memory limit: a run that would stops there
+    n_out = (model.N_OUT if n_out is None else n_out) if record else 0
+    row = 8 * (1 + len(y0) + model.N_MEM + n_out)
+    limit = min(max_steps, max(1, (max_memory - 24 * len(edges)) // row)) if record \
+        else max_steps
+    settings = integrator_settings(
+        linkage, model, problem.rtol, atol, h_max=plain.h_max, max_steps=limit,
+        record=record, event_tol=plain.event_tol, n_samples=plain.n_samples,
+        refine_iters=plain.refine_iters, n_out=n_out, n_err=n_err)
+    ts, ys, ms, peaks, peak_t, counters, outs, status = getattr(model, kernel)(
+        y0, p, edges, settings, METHODS[problem.method].arrays())
+    status = RESULTS(int(status))
+    if status == RESULTS.max_steps and limit < max_steps:
+        raise MemoryLimitError(
+            f"the record of linkage {linkage.name!r} reached {format_bytes(max_memory)} (the "
+            f"memory limit, max_memory) at t = {ts[-1]:.6g} s, after {limit} steps; run fewer "
+            "revolutions")
+    if status != RESULTS.success:
+        raise RuntimeError(f"integration of linkage {linkage.name!r} failed at about t = "
+                           f"{ts[-1] if len(ts) else float('nan'):.6g} s: {status.message}")
+    stats = {k: int(v) for k, v in zip(COUNTERS, counters)}
+    stats.update(method=problem.method, rtol=problem.rtol)
+    return ts, ys, ms, peaks, peak_t, outs, stats
+
+
+def landed(ts, t_eval):
+    """Indices of the recorded steps at the times t_eval (the integrator lands on each
+    window edge; the last record at that time holds the memory the next step uses)."""
+    idx = np.searchsorted(ts, t_eval, side="right") - 1
+    if np.any(np.abs(ts[idx] - t_eval) > 1e-12 * max(1.0, float(np.max(np.abs(t_eval))))):
+        raise RuntimeError("the run did not land on every requested time")
+    return idx
+
+
+def _unit(sp: SensitivityProblem) -> np.ndarray:
+    """The state's units in the growth diagnostic: the directions' own, else angles 1 rad
+    and lengths the smallest clearance, rates those at the drive speed (a free linkage:
+    over its `time_scale`)."""
+    if sp.directions.unit is not None:
+        return sp.directions.unit
+    linkage, model = sp.problem.linkage, sp.problem.model
+    w = 1.0 / linkage.time_scale if sp.problem.span.revolutions is None \
+        else linkage.drive.speed
+    unit = np.array([1.0 if name.endswith(".angle") else linkage.min_clearance
+                     for name in model.COORDINATES])
+    return np.concatenate([unit, unit * w])
+
+
+def linkage_sensitivities(sp: SensitivityProblem, event_time_term: bool = True):
+    """DDM of the prepared `sp` (see the module docstring): (Sensitivities fields as a
+    dict). From a `start` the start is held fixed: the sensitivities start at zero. A free
+    linkage runs over its span's time windows instead of revolutions (its growth per
+    window, its crank_moment None: it has no drive)."""
+    run = ddm_run(sp, event_time_term=event_time_term, derivatives=True)
+    problem = sp.problem
+    linkage, model, p0, span = problem.linkage, run.model, run.p0, problem.span
     ts, ys, ms = run.ts, run.ys, run.ms
-    growth = run.growth(unit, None if free else linkage.period, revolutions, windows)
+    growth = (run.growth(_unit(sp), None, None, span.windows) if span.revolutions is None
+              else run.growth(_unit(sp), linkage.period, span.revolutions))
     peaks, keep = run.peaks, None
-    if t_eval is not None:
-        keep = landed(ts, t_eval)
+    if span.t_eval is not None:
+        keep = landed(ts, span.t_eval)
         ts, ys, ms = ts[keep], ys[keep], ms[keep]
         peaks = None
     vals, ders = run.recorded_output_sensitivities(keep)
     traj = trajectory_from_run(linkage, model, ts, run.plain_states(ys), ms, p0, run.stats,
                                peaks, vals)
-    ref = (np.array([linkage.parameter_value(n) for n in names]) if directions is None
-           else directions.reference)
-    fields = _fields(model, ts, names, ref, ders, traj, growth, run.stats)
+    fields = _fields(model, ts, sp.names, sp.directions.reference, ders, traj, growth,
+                     run.stats)
     sens = run.state_sensitivities(ys)
     for i, cname in enumerate(model.COORDINATES):
         fields["outputs"][cname] = sens[:, :, i]
@@ -688,16 +676,24 @@ def _fields(model, ts, names, ref, ders, traj, growth, stats):
 
 
 def fd_step(linkage: Linkage, name: str, relative: float) -> float:
-    """Central-difference step of parameter `name`: `relative` times its value; the radii
-    relative to the clearance, zero-valued coordinates relative to the length scale, a zero
-    angle relative to 1 rad, zero gravity relative to 9.81 m/s^2. On the paper's case a
-    field of its table (`mechanism.FIELD_PATHS`) is valued as the field (its derived value
-    where None), a radius of its one clearance joint."""
-    from ..model.design import slider_crank_of
+    """Central-difference step of the design name `name` (`model.design`; the one step
+    rule of every finite difference): `relative` times its value; a clearance relative to
+    itself, the radii relative to the clearance, a case's override relative to its value
+    (1 of its unit where zero), zero-valued coordinates relative to the length scale, a
+    zero angle relative to 1 rad, zero gravity relative to 9.81 m/s^2. On the paper's case
+    a field of its table (`mechanism.FIELD_PATHS`) is valued as the field (its derived
+    value where None), a radius of its one clearance joint."""
+    from ..model import design
     from ..model.mechanism import FIELD_PATHS, PAPER_JOINT, reference_value
 
+    if name.endswith("clearance"):
+        return relative * design.design_value(linkage, name)
+    paper = design.slider_crank_of(linkage) if name in FIELD_PATHS else None
+    if paper is None and name in design._case_table(linkage):
+        value = abs(design.design_value(linkage, name))
+        return relative * (value if value != 0.0 else 1.0)
+    name = design._dotted(name)
     head, _, field = name.rpartition(".")
-    paper = slider_crank_of(linkage) if name in FIELD_PATHS else None
     for el in ELEMENTS:
         # a bare field: the paper's one clearance joint's
         scale = el.fd_scale(linkage, head or PAPER_JOINT, field)
@@ -712,58 +708,113 @@ def fd_step(linkage: Linkage, name: str, relative: float) -> float:
     return relative * (9.81 if name == "gravity" else 1.0)
 
 
-def _plain_at(linkage, revolutions, t_eval, rtol, method, start=None, specialise=True):
-    """Outputs (len(t_eval), N_OUT) and states of a plain run (`linkage_model.run`) landing
-    on t_eval (from the centred start or `start`; `specialise`: as `plain_setup`)."""
-    from .linkage_model import run
+def central_differences(linkage: Linkage, names, relative: float, evaluate, args=(), *,
+                        executor=None, processes: int | None = None):
+    """The perturbed runs of central differences along the design names `names`
+    (`model.design`): the steps h_k (`fd_step`) and evaluate((design, *args)) of `linkage`
+    with each value at b0 + h_k and b0 - h_k (`design.linkage_with`), through
+    `executor.map`, else in `processes` worker processes, else here (`evaluate` module
+    level: picklable). Returns (steps (p,), plus (p), minus (p)). ValueError where a step
+    leaves a value's valid range, before any run."""
+    from concurrent.futures import ProcessPoolExecutor
 
-    if linkage.drive is None:
-        revolutions = None
-    out = run(linkage, revolutions, RunSettings(rtol=rtol, method=method),
-              edges=np.array([0.0, t_eval[-1]]), t_eval=t_eval, start=start,
-              specialise=specialise)
-    return out.ts, out.ys, out.ms, out.outs, out.p, out.stats
+    from ..model import design
 
-
-def linkage_fd(linkage: Linkage, names: tuple[str, ...], revolutions: int | None, rtol,
-               t_eval, relative: float, method: str, start=None, windows=None):
-    """Central finite differences of the outputs (and coordinates) at the times t_eval
-    (default: 720 per revolution), each run landing on them (from `start` if given). Every
-    run takes one model: the general one if a zero-valued geometric parameter is among
-    `names` (its steps leave zero), else the one specialised on them."""
-    spec = specialisable(linkage, names)
-    model = load_model(linkage, spec)
-    if t_eval is None and windows is not None:      # a free linkage: 720 per window
-        t_eval = np.unique(np.concatenate([np.linspace(a, b, 721) for a, b in
-                                           zip(windows[:-1], windows[1:])]))
-    elif t_eval is None:
-        t_eval = np.linspace(0.0, revolutions * linkage.period, 720 * revolutions + 1)
-    rtol = 1e-11 if rtol is None else rtol
-    t0 = time.perf_counter()
-    ts, ys, ms, outs, p, stats = _plain_at(linkage, revolutions, t_eval, rtol, method, start,
-                                           spec)
-    steps = [fd_step(linkage, n, relative) for n in names]
-    ders = np.empty((len(ts), model.N_OUT, len(names)))
-    coords = np.empty((len(ts), model.N_Q, len(names)))
-    for k, (name, h) in enumerate(zip(names, steps)):
-        b0 = linkage.parameter_value(name)
-        runs = []
+    steps = np.array([fd_step(linkage, n, relative) for n in names])
+    jobs = []
+    for name, h in zip(names, steps):
+        b0 = design.design_value(linkage, name)
         for sign in (1.0, -1.0):
             try:
-                lk = linkage.with_parameter(name, b0 + sign * h)
+                jobs.append((design.linkage_with(linkage, {name: b0 + sign * h}), *args))
             except ValueError as exc:
                 raise ValueError(f"the finite-difference step of {name} ({h:.3g}) leaves its "
                                  f"valid range: {exc}; pass a smaller fd_relative_step"
                                  ) from exc
-            runs.append(_plain_at(lk, revolutions, t_eval, rtol, method, start, spec))
-        ders[:, :, k] = (runs[0][3][:, :model.N_OUT] - runs[1][3][:, :model.N_OUT]) / (2 * h)
-        coords[:, :, k] = (runs[0][1][:, :model.N_Q] - runs[1][1][:, :model.N_Q]) / (2 * h)
-    stats.update(fd_steps=steps, runs=2 * len(names) + 1,
-                 wall_time=time.perf_counter() - t0)
-    traj = trajectory_from_run(linkage, model, ts, ys, ms, p, stats, None, outs)
-    ref = np.array([linkage.parameter_value(n) for n in names])
-    fields = _fields(model, ts, names, ref, ders, traj, None, stats)
-    for i, c in enumerate(model.COORDINATES):
-        fields["outputs"][c] = coords[:, i, :]
-    fields["method"] = "fd"
-    return fields
+    if executor is not None:
+        values = list(executor.map(evaluate, jobs))
+    elif processes:
+        with ProcessPoolExecutor(max_workers=processes) as pool:
+            values = list(pool.map(evaluate, jobs))
+    else:
+        values = [evaluate(j) for j in jobs]
+    return steps, values[0::2], values[1::2]
+
+
+def _reduced_at(job):
+    """One run of the finite differences on the reduced model (module level: picklable):
+    the plain run of the design landing on t_eval (`linkage_model.run`, ending at the last
+    of them, from `start` if given), its outputs (n, N_OUT) and coordinates (n, N_Q)."""
+    from .linkage_model import run
+
+    design, revolutions, t_eval, settings, start, specialise = job
+    out = run(design, revolutions, settings, edges=np.array([0.0, t_eval[-1]]),
+              t_eval=t_eval, start=start, specialise=specialise)
+    return out.outs[:, :out.model.N_OUT], out.ys[:, :out.model.N_Q]
+
+
+def _backend_at(job):
+    """One run of the finite differences through another backend (module level:
+    picklable): the design's `simulate` (as the paper's `SliderCrank` where it was given
+    so) over `revolutions`; its Trajectory."""
+    from ..model.cases import slider_crank_of
+    from .simulate import simulate
+
+    design, as_paper, revolutions, backend, options = job
+    return simulate(slider_crank_of(design) if as_paper else design, revolutions,
+                    backend=backend, **options)
+
+
+def finite_differences(sp: SensitivityProblem, relative: float, *, backend: str = "reduced",
+                       as_paper: bool = False, executor=None, n_jobs: int | None = None,
+                       options=None) -> dict:
+    """Central finite differences (`central_differences`, steps `relative` by `fd_step`)
+    of the prepared `sp`: (Sensitivities fields as a dict). The reduced model: every run
+    lands on sp's t_eval (from its start if it has one, on its model: the general one if a
+    zero-valued geometric parameter is among the names), the derivatives of every output
+    and coordinate. Another `backend`: its `simulate` runs over sp's revolutions (with
+    `options`; the paper's `SliderCrank` where `as_paper`), in `n_jobs` processes (default
+    2) or through `executor`: the monitored force, drive moment and contact force."""
+    problem = sp.problem
+    linkage, model, span, names = problem.linkage, problem.model, problem.span, sp.names
+    t0 = time.perf_counter()
+    if backend == "reduced":
+        nominal = solve(problem)
+        args = (span.revolutions, span.t_eval, problem.settings, sp.start, problem.specialise)
+        steps, plus, minus = central_differences(linkage, names, relative, _reduced_at, args,
+                                                 executor=executor)
+        ders = np.stack([(a[0] - b[0]) / (2 * h) for a, b, h in zip(plus, minus, steps)], -1)
+        coords = np.stack([(a[1] - b[1]) / (2 * h) for a, b, h in zip(plus, minus, steps)],
+                          -1)
+        stats = nominal.stats
+        stats.update(fd_steps=steps.tolist(), runs=2 * len(names) + 1,
+                     wall_time=time.perf_counter() - t0)
+        traj = trajectory_from_run(linkage, model, nominal.ts, nominal.ys, nominal.ms,
+                                   nominal.p, stats, None, nominal.outs)
+        fields = _fields(model, nominal.ts, names, sp.directions.reference, ders, traj,
+                         None, stats)
+        for i, c in enumerate(model.COORDINATES):
+            fields["outputs"][c] = coords[:, i, :]
+        fields["method"] = "fd"
+        return fields
+    args = (as_paper, span.revolutions, backend, dict(options or {}))
+    steps, plus, minus = central_differences(
+        linkage, names, relative, _backend_at, args, executor=executor,
+        processes=None if executor is not None or n_jobs == 1 else (n_jobs or 2))
+    nominal = _backend_at((linkage, *args))
+    n = len(nominal.t)
+    for run in (*plus, *minus):
+        if len(run.t) != n or not np.allclose(run.t, nominal.t, rtol=0, atol=1e-12):
+            raise RuntimeError("perturbed runs returned different time grids")
+
+    def diff(series):
+        return np.stack([(series(a) - series(b)) / (2 * h)
+                         for a, b, h in zip(plus, minus, steps)], -1)
+    stats = {"fd_steps": steps.tolist(), "runs": 2 * len(names) + 1,
+             "wall_time": time.perf_counter() - t0}
+    return dict(t=nominal.t, parameters=names, reference=sp.directions.reference,
+                base_force=diff(lambda r: r.base_force),
+                base_force_magnitude=diff(lambda r: np.hypot(*r.base_force.T)),
+                crank_moment=diff(lambda r: r.crank_moment),
+                contact_force=diff(lambda r: r.contact_force), trajectory=nominal,
+                method="fd", backend=backend, stats=stats)

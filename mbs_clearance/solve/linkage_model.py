@@ -559,9 +559,9 @@ def bytes_per_step(model) -> int:
     return 8 * (3 * record_row(model) + trajectory_floats(model))
 
 
-def _estimate_steps(linkage, revolutions: float, *, max_steps: int, h_max: float,
+def _estimate_steps(linkage, revolutions: float, free: bool, *, max_steps: int, h_max: float,
                     pilot: dict) -> int | None:
-    if linkage.drive is None:       # a free linkage: `revolutions` are seconds, no pilot
+    if free:                        # a free linkage: `revolutions` are seconds, no pilot
         return _estimate_free(revolutions, max_steps, h_max)
     return _estimate_driven(linkage, revolutions, max_steps=max_steps, h_max=h_max,
                             pilot=pilot)
@@ -684,7 +684,8 @@ def prepare(linkage: Linkage, revolutions: int | None = None,
             settings: RunSettings | None = None, *, duration: float | None = None,
             window: float | None = None, record: bool = True, t_eval=None,
             start: Start | None = None, edges=None, select: bool = True,
-            specialise: bool = True, model=None, **options) -> Problem:
+            whole: bool = True, specialise: bool = True, model=None,
+            **options) -> Problem:
     """The one door of a plain run: every argument checked, the model loaded, the span,
     tolerances, parameters and start prepared into a `Problem` that `solve` integrates.
 
@@ -702,12 +703,13 @@ def prepare(linkage: Linkage, revolutions: int | None = None,
     `edges` (increasing times from 0) replaces the revolution windows over which the peaks
     are taken. With `t_eval` the integrator also lands exactly on those times and only
     they are returned (the peaks then are the maxima over them per window; ``select=False``
-    returns every step, which include them). `specialise`: the model specialised on the
-    linkage's zero-valued geometric parameters (False: the general one, for differences in
-    one of them). `model`: the generated module, where the caller knows it (the paper's
-    checked-in one: the lookup by structure imports the generator). Every option is checked
-    first (ValueError naming it and its range); a
-    run of `PILOT_MIN_REVOLUTIONS` or more is estimated by a one-revolution pilot and
+    returns every step, which include them); ``whole=False`` lands on 0 and `t_eval` only
+    and ends at the last of them (the windows stay the span's). `specialise`: the model
+    specialised on the linkage's zero-valued geometric parameters (False: the general one,
+    for differences in one of them). `model`: the generated module, where the caller knows
+    it (the paper's checked-in one: the lookup by structure imports the generator). Every
+    option is checked first (ValueError naming it and its range); a run of
+    `PILOT_MIN_REVOLUTIONS` or more is estimated by a one-revolution pilot and
     refused with `MemoryLimitError` (a ValueError) if it cannot fit in max_steps or
     max_memory bytes; a recording run stops there and says so."""
     from .._checks import (
@@ -741,6 +743,7 @@ def prepare(linkage: Linkage, revolutions: int | None = None,
                          "initial (Linkage.initial, an Initial)")
     record = check_bool("record", record)
     select = check_bool("select", select)
+    whole = check_bool("whole", whole)
     method, max_steps, n_samples, h0 = (settings.method, settings.max_steps,
                                         settings.n_samples, settings.h0)
     max_memory = check_max_memory(settings.max_memory)
@@ -775,9 +778,11 @@ def prepare(linkage: Linkage, revolutions: int | None = None,
     refine = REFINE_ITERS
     if t_eval is not None:
         t_eval, edges = landing_edges(edges, t_eval)
+        if not whole:
+            edges = landing_edges(np.array([0.0, t_eval[-1]]), t_eval)[1]
         record, refine = True, 0
     span = float(edges[-1]) if free else float(edges[-1]) / linkage.period
-    steps = _estimate_steps(linkage, span, max_steps=max_steps,
+    steps = _estimate_steps(linkage, span, free, max_steps=max_steps,
                             h_max=h_max, pilot=dict(settings=settings, start=start,
                                                     specialise=specialise, model=model))
     window_bytes = revolution_bytes(len(edges) - 1)
@@ -873,15 +878,17 @@ def simulate_linkage(linkage: Linkage, revolutions: int | None = None, **options
     from .trajectory import annotate
 
     settings, rest = RunSettings.split(options)
-    model, ts, ys, ms, peaks, _, stats, outs, p = run(linkage, revolutions, settings,
-                                                      record=True, **rest)
-    # a free linkage: its duration in turns at its rate scale stands for revolutions
-    turns = (check_span(linkage, revolutions, None, None) if linkage.drive is not None
-             else max(1.0, float(ts[-1]) / linkage.time_scale))
+    problem = prepare(linkage, revolutions, settings, record=True, **rest)
+    model, ts, ys, ms, peaks, _, stats, outs, p = solve(problem)
+    # a free linkage (a span without revolutions): its duration in turns at its rate scale
+    # stands for revolutions
+    free = problem.span.revolutions is None
+    turns = (max(1.0, float(ts[-1]) / linkage.time_scale) if free
+             else problem.span.revolutions)
     stats.update(contact_flags([j.clearance for _, j in linkage.contacts()],
                                linkage.rate_scale, turns, ms[:, :model.N_MEM],
                                stats.get("nevent", 0), stats["rtol"],
-                               None if linkage.drive is not None else linkage.time_scale))
+                               linkage.time_scale if free else None))
     if stats["accuracy_note"]:
         warnings.warn(stats["accuracy_note"], AccuracyWarning, stacklevel=3)
     if options.get("t_eval") is None:
@@ -902,9 +909,8 @@ def peak_linkage(linkage: Linkage, revolution: int | None = None, **options) -> 
     default 4; the monitored ground joint's |reaction|, or |shaking force|), recording
     nothing. A free linkage: over the last window of a run of ``duration`` s (windows of
     ``window`` s; default the whole run), `revolution` not given."""
-    if linkage.drive is None:
-        check_span(linkage, revolution, None, None, "revolution")
-        return float(run(linkage, record=False, **options).peaks[-1])
     revolution = check_span(linkage, revolution, None, None, "revolution")
+    if revolution is None:          # a free linkage: its last window
+        return float(run(linkage, record=False, **options).peaks[-1])
     peaks = run(linkage, revolution, record=False, **options).peaks
     return float(peaks[revolution - 1])

@@ -15,7 +15,7 @@ from mbs_clearance.model import cases
 from mbs_clearance.numerics.integrator import METHODS
 from mbs_clearance.solve import linkage_ddm
 from mbs_clearance.solve import linkage_model as lm
-from mbs_clearance.solve.flows import _tangent_scale
+from mbs_clearance.solve.flows import _tangent_scale, prepare_flow
 
 NAMES = ("coupler.mass", "coupler_slider.journal_radius", "coupler_slider.restitution",
          "crank.pin.x", "coupler_slider.impact_velocity_floor")
@@ -64,7 +64,7 @@ def test_sensitivity_rhs_and_outputs_match_differences_of_the_plain_model(paper)
     # every component of a direction at the scale of its quantity's motion in the joint (the
     # journal moves within the clearance): a difference step of 1e-7 of it stays far inside
     # the penetration's range
-    unit = _tangent_scale(linkage, model)
+    unit = _tangent_scale(prepare_flow(linkage))
     for name in NAMES:
         step = linkage_ddm.fd_step(linkage, name, 1.0)
         entries, _ = linkage_ddm.combine(linkage, model, [{name: step}])
@@ -169,5 +169,5 @@ def test_without_a_compiler_a_ddm_run_stops_with_one_line_naming_what_to_install
     monkeypatch.setattr(c_loader, "_LOADED", {})
     linkage = cases.paper_slider_crank()
     with pytest.raises(CompilerMissing, match="no-such-compiler-xyz.*install gcc") as err:
-        linkage_ddm.plain_setup(linkage, None)
+        linkage_ddm.prepare_sensitivity(linkage, ("crank.mass",), 1)
     assert "\n" not in str(err.value)

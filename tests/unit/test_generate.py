@@ -304,8 +304,8 @@ def test_models_specialised_on_zero_geometry_equal_the_general_one():
         spec.integrate_model(initial_state(lk, spec, p), q, np.array([0.0, 1e-3]), settings,
                              METHODS["dopri5"].arrays())
     with pytest.raises(ValueError, match=r"directions along \['slider\.pin\.y'\]"):
-        linkage_ddm.ddm_run(lk, spec, p, initial_state(lk, spec, p), [{"slider.pin.y": 1.0}],
-                            scale=[1.0], rtol=1e-7, atol_plain=np.ones(5), revolutions=1)
+        linkage_ddm.ddm_run(linkage_ddm.prepare_sensitivity(lk, ("slider.pin.y",), 1,
+                                                            specialise=True))
 
 
 def test_coupled_mass_matrix_chain():

@@ -257,8 +257,7 @@ def test_branch_over_the_guides_clearance_returns_under_plain_runs():
     orbit's state comes back within 1e-5 of the scales after one revolution of an
     independent `simulate` run at its clearance (rtol 1e-11)."""
     from mbs_clearance.analysis.periodic import continue_orbits, with_field
-    from mbs_clearance.generate import load_model
-    from mbs_clearance.solve.flows import _tangent_scale
+    from mbs_clearance.solve.flows import _tangent_scale, prepare_flow
     from mbs_clearance.solve.linkage_model import Start
     from mbs_clearance.solve.simulate import simulate
 
@@ -273,7 +272,7 @@ def test_branch_over_the_guides_clearance_returns_under_plain_runs():
     run = simulate(design, 1, rtol=1e-11, start=start)
     end = np.array([run.coordinates[c][-1] for c in design.coordinates()]
                    + [run.rates[c][-1] for c in design.coordinates()])
-    scale = _tangent_scale(design, load_model(design))
+    scale = _tangent_scale(prepare_flow(design))
     back = np.abs(end - br.states[-1]) / scale
     print("clearances", br.values, "return residual (scaled)", back.max())
     assert back.max() <= 1e-5
