@@ -21,6 +21,7 @@ import threading
 import time
 import warnings
 from dataclasses import dataclass
+from functools import cached_property
 from pathlib import Path
 from types import SimpleNamespace
 
@@ -36,6 +37,10 @@ _CORE = Path(__file__).resolve().parents[1] / "core"
 C_SOURCES = ("runtime.h", "laws_generated.h", "jac_runtime.h", "sens_runtime.h")
 #: the header of the models with a profiled bearing
 PROFILE_SOURCE = "profile_runtime.h"
+#: the model's own copy of the integrator (core/model_core.h, which includes integrator.c
+#: under the name integrator_core.h: the build compiles the model's file only), appended to
+#: its C at build time: (name in the build, file in core/)
+MODEL_CORE = (("model_core.h", "model_core.h"), ("integrator_core.h", "integrator.c"))
 _HERE = Path(__file__).resolve().parent
 #: what a model library exports beside the seam's record and closure (cffi declarations)
 C_EXPORTS = """
@@ -44,6 +49,9 @@ void mbs_jacobian(double t, const double *y, const double *p, double *jac, int64
 void mbs_tangent(double t, const double *y, const double *p, const double *dz, int64_t nd,
                  const double *use, double *out, int64_t full);
 const mbs_model *mbs_sens_model_record(void);
+int64_t mbs_model_integrate(const mbs_model *m, const double *y0, int64_t n, double *p,
+                            const double *edges, int64_t n_edges, const mbs_settings *st,
+                            const mbs_tableau *tb, mbs_result *res);
 int64_t mbs_output_sensitivities(const double *ts, const double *ys, int64_t n, int64_t n_y,
                                  const double *ms, int64_t n_m, const double *p, int64_t n_p,
                                  double *vals, double *ders);
@@ -164,6 +172,12 @@ class CModel:
     generate_seconds: float
     build_seconds: float
 
+    def __post_init__(self):
+        # the metadata as plain attributes: read on every run (a lookup through __getattr__
+        # costs a Python call each); the class's own names keep precedence
+        cls = type(self)
+        self.__dict__.update({k: v for k, v in vars(self.meta).items() if not hasattr(cls, k)})
+
     def __getattr__(self, name):
         try:
             return getattr(object.__getattribute__(self, "meta"), name)
@@ -176,7 +190,9 @@ class CModel:
                     "(mbs_clearance.generate.load_model(linkage, specialise=False))")
 
     def _ptr(self, a):
-        return self.ffi.cast("double *", a.ctypes.data)
+        """A contiguous float64 array's data for the C functions (no copy; ValueError for a
+        non-contiguous one)."""
+        return self.ffi.from_buffer("double[]", a)
 
     @staticmethod
     def _vec(a):
@@ -282,15 +298,30 @@ class CModel:
                     gp, gdp)
         return out
 
+    @cached_property
+    def core_record(self):
+        """The model's record as a pointer of the core's ffi (`core.integrate.model_record`)."""
+        from ..core.integrate import model_record
+
+        return model_record(self.ffi, self.lib)
+
+    @cached_property
+    def core_entry(self):
+        """The library's own copy of the integrator (`core.integrate.model_entry`)."""
+        from ..core.integrate import model_entry
+
+        return model_entry(self.ffi, self.lib)
+
     def integrate_model(self, y0, p, edges, settings, coefficients):
-        """The compiled core's run of this model (`core.integrate.integrate`)."""
-        from ..core.integrate import integrate, model_record
+        """The compiled run of this model (`core.integrate.integrate`) by the integrator
+        compiled into its library (`core/model_core.h`: the same numbers as the core's)."""
+        from ..core.integrate import integrate
 
         # the zero check of prepare, without recomputing the constants on every run
         if any(p[i] != 0.0 for i in self.ZERO_INDEX):
             raise ValueError(self.ZERO_MESSAGE)
-        return integrate(model_record(self.ffi, self.lib), y0, p, edges, settings,
-                         coefficients)
+        return integrate(self.core_record, y0, p, edges, settings, coefficients,
+                         entry=self.core_entry)
 
     # ---- the sensitivity runs (DDM, tangents): the functions, same
     # arguments and returns
@@ -416,16 +447,15 @@ class CModel:
         """The maximum of the monitored value over the plain step map of each step k (start
         t0s[k] in s, state y0s[k], memories mems[k], size hs[k] in s), by golden section;
         returns (values, times in s)."""
-        from ..core.integrate import model_record, step_peaks
+        from ..core.integrate import step_peaks
 
-        return step_peaks(model_record(self.ffi, self.lib), t0s, y0s, mems, p, hs,
-                          coefficients, iters)
+        return step_peaks(self.core_record, t0s, y0s, mems, p, hs, coefficients, iters)
 
     def step_monitor_value(self, t0, y0, mem, p, h, coefficients):
         """The monitored value of the plain step map at t0 + h (state y0, memories mem)."""
-        from ..core.integrate import model_record, step_value
+        from ..core.integrate import step_value
 
-        return step_value(model_record(self.ffi, self.lib), t0, y0, mem, p, h, coefficients)
+        return step_value(self.core_record, t0, y0, mem, p, h, coefficients)
 
 
 #: the series library's declarations (core/series.c)
@@ -449,6 +479,12 @@ def _series():
         return _SERIES[0]
 
 
+def library_source(source: str) -> str:
+    """The C file of a model's library: the model's `source` with the integrator's copy that
+    calls its functions directly (`MODEL_CORE`) after it."""
+    return f'#define MBS_MODEL_CORE\n{source}\n#include "model_core.h"\n'
+
+
 def load_c_model(linkage: Linkage, specialise: bool = True) -> CModel:
     """The compiled C model of `linkage`'s structure (specialised on its zero-valued
     geometric parameters unless `specialise` is False): generated and compiled on first use
@@ -466,8 +502,9 @@ def load_c_model(linkage: Linkage, specialise: bool = True) -> CModel:
         # the profiles' header only where a model includes it: the other models' sources,
         # and so their libraries' keys, stay as they are
         headers = C_SOURCES + ((PROFILE_SOURCE,) if meta.get("PROFILE_JOINTS") else ())
-        sources = [("model.c", source)] + [(name, (_CORE / name).read_text())
-                                           for name in headers]
+        sources = ([("model.c", library_source(source))]
+                   + [(name, (_CORE / name).read_text()) for name in headers]
+                   + [(name, (_CORE / file).read_text()) for name, file in MODEL_CORE])
         ffi, lib = build.load(f"model-{digest[:16]}", sources, C_EXPORTS)
         model = CModel(ffi=ffi, lib=lib, record=lib.mbs_model_record(),
                        meta=SimpleNamespace(**meta), source=source,
