@@ -462,6 +462,10 @@ class CModel:
 SERIES_EXPORTS = """
 void mbs_gap_series(uintptr_t gap, const double *ts, const double *ys, int64_t n,
                     int64_t width, const double *p, int64_t joints, double *out);
+void mbs_window_norm_maxima(const double *s, int64_t ld, int64_t n2, const int64_t *ptr,
+                            int64_t npar, const int64_t *rows, const double *vals,
+                            const double *weights, const int64_t *lo, const int64_t *hi,
+                            int64_t nw, double *out);
 """
 
 
@@ -477,6 +481,42 @@ def _series():
             _SERIES.append(build.load("series", [("series.c", (_CORE / "series.c").read_text())],
                                       SERIES_EXPORTS))
         return _SERIES[0]
+
+
+def window_norm_maxima(s, ptr, rows, vals, weights, lo, hi):
+    """`linkage_ddm._window_norm_maxima` in one call of core/series.c (the same operations in
+    the same order as its numpy formula): s (n, nb, n2) a view whose rows may be strided
+    (a sensitivity run's states), (ptr, rows, vals) the coefficients by columns
+    (`linkage_ddm._sparse_columns`), weights (npar, n2), windows lo, hi (nw,) of rows;
+    returns (nw, npar)."""
+    import numpy as np
+
+    if s.ndim != 3 or s.strides[2] != 8 or s.strides[1] != 8 * s.shape[2] or s.strides[0] % 8:
+        s = np.ascontiguousarray(s, dtype=np.float64)
+    ptr, rows, lo, hi = (np.ascontiguousarray(a, dtype=np.int64) for a in (ptr, rows, lo, hi))
+    vals = np.ascontiguousarray(vals, dtype=np.float64)
+    weights = np.ascontiguousarray(weights, dtype=np.float64)
+    n, nb, n2 = s.shape
+    npar = ptr.shape[0] - 1
+    if (weights.shape != (npar, n2) or lo.shape != hi.shape or np.any(lo < 0) or np.any(hi > n)
+            or (rows.size and (rows.min() < 0 or rows.max() >= nb))
+            or ptr[0] != 0 or ptr[-1] != rows.shape[0] or vals.shape != rows.shape):
+        raise ValueError("window_norm_maxima: the shapes of s, the coefficients, the weights "
+                         "and the windows do not fit")
+    out = np.zeros((lo.shape[0], npar))
+    if n == 0 or npar == 0:
+        return out
+    ffi, lib = _series()
+    # the first element of s, whatever the base array (s may be a view into a wider one)
+    base = ffi.cast("double *", s.__array_interface__["data"][0])
+    lib.mbs_window_norm_maxima(base, s.strides[0] // 8, n2, ffi.from_buffer("int64_t[]", ptr),
+                               npar, ffi.from_buffer("int64_t[]", rows),
+                               ffi.from_buffer("double[]", vals),
+                               ffi.from_buffer("double[]", weights),
+                               ffi.from_buffer("int64_t[]", lo),
+                               ffi.from_buffer("int64_t[]", hi), lo.shape[0],
+                               ffi.from_buffer("double[]", out))
+    return out
 
 
 def library_source(source: str) -> str:
