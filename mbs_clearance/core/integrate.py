@@ -336,7 +336,9 @@ def integrate(model, y0, p, edges, settings, coefficients, entry=None):
                               "set record=False or shorten the run")
         if status == BAD_ARGUMENT:
             raise ValueError("the compiled integrator refused its arguments (sizes of y0, "
-                             "p, edges, atol or the settings out of range)")
+                             "p, edges, atol or the settings out of range"
+                             + ("" if entry is None else ", or the record of another model "
+                                "than the library's own") + ")")
         nrec, n_win = res.n_rec, res.n_win
         n_m = max(settings.n_mem, 1)
         n_out = settings.n_out
