@@ -1,5 +1,6 @@
 """The worker of `benchmarks.core_ab`: reads a run's name per line from stdin, runs it on
-the mbs-clearance its interpreter imports, and writes "seconds value" per line. Uses only
+the mbs-clearance its interpreter imports, and writes "seconds cpu_seconds value" per line
+(wall time, and the CPU time of its thread: what other processes' load leaves out). Uses only
 interfaces that earlier releases have too (named cases, `linkage_model.run`,
 `sensitivities`)."""
 
@@ -25,8 +26,9 @@ RUNS = {
 }
 
 
-def run(name: str) -> tuple[float, float]:
-    """(wall time in s, the run's last peak or its DDM's largest |derivative|)."""
+def run(name: str) -> tuple[float, float, float]:
+    """(wall time in s, CPU time in s, the run's last peak or its DDM's largest
+    |derivative|)."""
     import numpy as np
 
     from mbs_clearance.analysis.sensitivity import sensitivities
@@ -37,19 +39,19 @@ def run(name: str) -> tuple[float, float]:
     linkage = cases.CASES[case]()
     options = dict(options)
     names = options.pop("ddm", None)
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.thread_time()
     if names is None:
         value = float(lm.run(linkage, **options).peaks[-1])
     else:
         value = float(np.max(np.abs(sensitivities(linkage, names, **options).base_force)))
-    return time.perf_counter() - t0, value
+    return time.perf_counter() - t0, time.thread_time() - c0, value
 
 
 def main() -> None:
     warnings.simplefilter("ignore")      # the runs' accuracy notes are not measured here
     for line in sys.stdin:
-        seconds, value = run(line.strip())
-        print(f"{seconds!r} {value!r}", flush=True)
+        seconds, cpu, value = run(line.strip())
+        print(f"{seconds!r} {cpu!r} {value!r}", flush=True)
 
 
 if __name__ == "__main__":

@@ -12,6 +12,15 @@
 
 #include "laws_generated.h"
 
+/* a model's dynamics, inlined into its rhs and monitor whatever the optimisation level: the
+ * integrator compiled into the model's library (model_core.h) then calls one function per
+ * stage (the paper's case: 8 % less time than with the call left at -O2) */
+#if defined(__GNUC__)
+#define MBS_ALWAYS_INLINE static inline __attribute__((always_inline))
+#else
+#define MBS_ALWAYS_INLINE static inline
+#endif
+
 /* ---- sin and cos (numerics/_trig.py): reduction by pi/2 in two parts (Cody & Waite), the
  * Taylor series on |r| <= pi/4 by Estrin's scheme; about 1e-16 absolute for |x| < 1e5 */
 #define MBS_PIO2_HI 0x1.921fb54400000p+0

@@ -21,6 +21,7 @@ import threading
 import time
 import warnings
 from dataclasses import dataclass
+from functools import cached_property
 from pathlib import Path
 from types import SimpleNamespace
 
@@ -36,6 +37,10 @@ _CORE = Path(__file__).resolve().parents[1] / "core"
 C_SOURCES = ("runtime.h", "laws_generated.h", "jac_runtime.h", "sens_runtime.h")
 #: the header of the models with a profiled bearing
 PROFILE_SOURCE = "profile_runtime.h"
+#: the model's own copy of the integrator (core/model_core.h, which includes integrator.c
+#: under the name integrator_core.h: the build compiles the model's file only), appended to
+#: its C at build time: (name in the build, file in core/)
+MODEL_CORE = (("model_core.h", "model_core.h"), ("integrator_core.h", "integrator.c"))
 _HERE = Path(__file__).resolve().parent
 #: what a model library exports beside the seam's record and closure (cffi declarations)
 C_EXPORTS = """
@@ -44,6 +49,9 @@ void mbs_jacobian(double t, const double *y, const double *p, double *jac, int64
 void mbs_tangent(double t, const double *y, const double *p, const double *dz, int64_t nd,
                  const double *use, double *out, int64_t full);
 const mbs_model *mbs_sens_model_record(void);
+int64_t mbs_model_integrate(const mbs_model *m, const double *y0, int64_t n, double *p,
+                            const double *edges, int64_t n_edges, const mbs_settings *st,
+                            const mbs_tableau *tb, mbs_result *res);
 int64_t mbs_output_sensitivities(const double *ts, const double *ys, int64_t n, int64_t n_y,
                                  const double *ms, int64_t n_m, const double *p, int64_t n_p,
                                  double *vals, double *ders);
@@ -164,6 +172,12 @@ class CModel:
     generate_seconds: float
     build_seconds: float
 
+    def __post_init__(self):
+        # the metadata as plain attributes: read on every run (a lookup through __getattr__
+        # costs a Python call each); the class's own names keep precedence
+        cls = type(self)
+        self.__dict__.update({k: v for k, v in vars(self.meta).items() if not hasattr(cls, k)})
+
     def __getattr__(self, name):
         try:
             return getattr(object.__getattribute__(self, "meta"), name)
@@ -176,7 +190,9 @@ class CModel:
                     "(mbs_clearance.generate.load_model(linkage, specialise=False))")
 
     def _ptr(self, a):
-        return self.ffi.cast("double *", a.ctypes.data)
+        """A contiguous float64 array's data for the C functions (no copy; ValueError for a
+        non-contiguous one)."""
+        return self.ffi.from_buffer("double[]", a)
 
     @staticmethod
     def _vec(a):
@@ -282,15 +298,30 @@ class CModel:
                     gp, gdp)
         return out
 
+    @cached_property
+    def core_record(self):
+        """The model's record as a pointer of the core's ffi (`core.integrate.model_record`)."""
+        from ..core.integrate import model_record
+
+        return model_record(self.ffi, self.lib)
+
+    @cached_property
+    def core_entry(self):
+        """The library's own copy of the integrator (`core.integrate.model_entry`)."""
+        from ..core.integrate import model_entry
+
+        return model_entry(self.ffi, self.lib)
+
     def integrate_model(self, y0, p, edges, settings, coefficients):
-        """The compiled core's run of this model (`core.integrate.integrate`)."""
-        from ..core.integrate import integrate, model_record
+        """The compiled run of this model (`core.integrate.integrate`) by the integrator
+        compiled into its library (`core/model_core.h`: the same numbers as the core's)."""
+        from ..core.integrate import integrate
 
         # the zero check of prepare, without recomputing the constants on every run
         if any(p[i] != 0.0 for i in self.ZERO_INDEX):
             raise ValueError(self.ZERO_MESSAGE)
-        return integrate(model_record(self.ffi, self.lib), y0, p, edges, settings,
-                         coefficients)
+        return integrate(self.core_record, y0, p, edges, settings, coefficients,
+                         entry=self.core_entry)
 
     # ---- the sensitivity runs (DDM, tangents): the functions, same
     # arguments and returns
@@ -416,22 +447,25 @@ class CModel:
         """The maximum of the monitored value over the plain step map of each step k (start
         t0s[k] in s, state y0s[k], memories mems[k], size hs[k] in s), by golden section;
         returns (values, times in s)."""
-        from ..core.integrate import model_record, step_peaks
+        from ..core.integrate import step_peaks
 
-        return step_peaks(model_record(self.ffi, self.lib), t0s, y0s, mems, p, hs,
-                          coefficients, iters)
+        return step_peaks(self.core_record, t0s, y0s, mems, p, hs, coefficients, iters)
 
     def step_monitor_value(self, t0, y0, mem, p, h, coefficients):
         """The monitored value of the plain step map at t0 + h (state y0, memories mem)."""
-        from ..core.integrate import model_record, step_value
+        from ..core.integrate import step_value
 
-        return step_value(model_record(self.ffi, self.lib), t0, y0, mem, p, h, coefficients)
+        return step_value(self.core_record, t0, y0, mem, p, h, coefficients)
 
 
 #: the series library's declarations (core/series.c)
 SERIES_EXPORTS = """
 void mbs_gap_series(uintptr_t gap, const double *ts, const double *ys, int64_t n,
                     int64_t width, const double *p, int64_t joints, double *out);
+void mbs_window_norm_maxima(const double *s, int64_t ld, int64_t n2, const int64_t *ptr,
+                            int64_t npar, const int64_t *rows, const double *vals,
+                            const double *weights, const int64_t *lo, const int64_t *hi,
+                            int64_t nw, double *out);
 """
 
 
@@ -447,6 +481,48 @@ def _series():
             _SERIES.append(build.load("series", [("series.c", (_CORE / "series.c").read_text())],
                                       SERIES_EXPORTS))
         return _SERIES[0]
+
+
+def window_norm_maxima(s, ptr, rows, vals, weights, lo, hi):
+    """`linkage_ddm._window_norm_maxima` in one call of core/series.c (the same operations in
+    the same order as its numpy formula): s (n, nb, n2) a view whose rows may be strided
+    (a sensitivity run's states), (ptr, rows, vals) the coefficients by columns
+    (`linkage_ddm._sparse_columns`), weights (npar, n2), windows lo, hi (nw,) of rows;
+    returns (nw, npar)."""
+    import numpy as np
+
+    if s.ndim != 3 or s.strides[2] != 8 or s.strides[1] != 8 * s.shape[2] or s.strides[0] % 8:
+        s = np.ascontiguousarray(s, dtype=np.float64)
+    ptr, rows, lo, hi = (np.ascontiguousarray(a, dtype=np.int64) for a in (ptr, rows, lo, hi))
+    vals = np.ascontiguousarray(vals, dtype=np.float64)
+    weights = np.ascontiguousarray(weights, dtype=np.float64)
+    n, nb, n2 = s.shape
+    npar = ptr.shape[0] - 1
+    if (weights.shape != (npar, n2) or lo.shape != hi.shape or np.any(lo < 0) or np.any(hi > n)
+            or (rows.size and (rows.min() < 0 or rows.max() >= nb))
+            or ptr[0] != 0 or ptr[-1] != rows.shape[0] or vals.shape != rows.shape):
+        raise ValueError("window_norm_maxima: the shapes of s, the coefficients, the weights "
+                         "and the windows do not fit")
+    out = np.zeros((lo.shape[0], npar))
+    if n == 0 or npar == 0:
+        return out
+    ffi, lib = _series()
+    # the first element of s, whatever the base array (s may be a view into a wider one)
+    base = ffi.cast("double *", s.__array_interface__["data"][0])
+    lib.mbs_window_norm_maxima(base, s.strides[0] // 8, n2, ffi.from_buffer("int64_t[]", ptr),
+                               npar, ffi.from_buffer("int64_t[]", rows),
+                               ffi.from_buffer("double[]", vals),
+                               ffi.from_buffer("double[]", weights),
+                               ffi.from_buffer("int64_t[]", lo),
+                               ffi.from_buffer("int64_t[]", hi), lo.shape[0],
+                               ffi.from_buffer("double[]", out))
+    return out
+
+
+def library_source(source: str) -> str:
+    """The C file of a model's library: the model's `source` with the integrator's copy that
+    calls its functions directly (`MODEL_CORE`) after it."""
+    return f'#define MBS_MODEL_CORE\n{source}\n#include "model_core.h"\n'
 
 
 def load_c_model(linkage: Linkage, specialise: bool = True) -> CModel:
@@ -466,8 +542,9 @@ def load_c_model(linkage: Linkage, specialise: bool = True) -> CModel:
         # the profiles' header only where a model includes it: the other models' sources,
         # and so their libraries' keys, stay as they are
         headers = C_SOURCES + ((PROFILE_SOURCE,) if meta.get("PROFILE_JOINTS") else ())
-        sources = [("model.c", source)] + [(name, (_CORE / name).read_text())
-                                           for name in headers]
+        sources = ([("model.c", library_source(source))]
+                   + [(name, (_CORE / name).read_text()) for name in headers]
+                   + [(name, (_CORE / file).read_text()) for name, file in MODEL_CORE])
         ffi, lib = build.load(f"model-{digest[:16]}", sources, C_EXPORTS)
         model = CModel(ffi=ffi, lib=lib, record=lib.mbs_model_record(),
                        meta=SimpleNamespace(**meta), source=source,

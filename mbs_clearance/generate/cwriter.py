@@ -239,7 +239,7 @@ def render_c(d: Derivation, linkage_name: str, structure: dict,
             "static int prepare(double *p) {", "    if (!zeros_hold(p)) return 1;",
             *prepare, "    return 0;", "}", "",
             "/* every output (in the OUT_COLUMNS order) into res[N_OUT] */",
-            "static inline void dynamics(double t, const double *y, const double *p, "
+            "MBS_ALWAYS_INLINE void dynamics(double t, const double *y, const double *p, "
             "double *res) {", "    (void)t;", *dynamics]
     out += [f"    res[{k}] = {r};" for k, r in enumerate(pl.results)]
     out += ["}", "",

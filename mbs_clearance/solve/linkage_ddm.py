@@ -353,25 +353,11 @@ def _window_norm_maxima(s, ptr, rows, vals, weights, lo, hi):
     """Per window w (rows lo[w]:hi[w]) the maximum over its rows i of
     sum_j weights[k, j] (sum_b s[i, b, j] coeffs[b, k])^2 (nw, npar), at least 0: the
     squared weighted norms of the combined state sensitivities (coeffs by
-    `_sparse_columns`), from those of the integrated directions s (n, nb, 2 N_Q)."""
-    n2 = s.shape[2]
-    npar = ptr.shape[0] - 1
-    out = np.zeros((lo.shape[0], npar))
-    for k in range(npar):
-        e0, e1 = ptr[k], ptr[k + 1]
-        if e1 - e0 == 1:            # a direction integrated as it is
-            comb = s[:, rows[e0], :] * vals[e0]
-        else:
-            comb = np.zeros((s.shape[0], n2))
-            for e in range(e0, e1):
-                comb += s[:, rows[e], :] * vals[e]
-        acc2 = np.zeros(s.shape[0])
-        for j in range(n2):
-            acc2 += weights[k, j] * comb[:, j] * comb[:, j]
-        for w in range(lo.shape[0]):
-            if hi[w] > lo[w]:
-                out[w, k] = max(0.0, float(acc2[lo[w]:hi[w]].max()))
-    return out
+    `_sparse_columns`), from those of the integrated directions s (n, nb, 2 N_Q). One pass
+    in C over the rows (`c_loader.window_norm_maxima`, the numpy formula's operations)."""
+    from ..generate.c_loader import window_norm_maxima
+
+    return window_norm_maxima(s, ptr, rows, vals, weights, lo, hi)
 
 
 def magnitude_derivative(vals, col, ders, row):

@@ -272,3 +272,45 @@ def test_c_model_of_names_that_are_c_words():
     source = generate_c_module(cases.paper_slider_crank())
     for name in ("crank", "coupler", "slider", "gravity", "drive", "mass", "stiffness"):
         assert name not in source
+
+
+# a run of each case: its own method, and the paper case's other pairs (the general stages
+# and error norms instead of dopri5's written-out step) and rodas4 (the Rosenbrock stages)
+OWN_RUNS = [(name, None) for name in CASES] + [("paper_slider_crank", "dop853"),
+                                                ("paper_slider_crank", "bs3"),
+                                                ("paper_slider_crank_lubricated", "rodas4")]
+
+
+@pytest.mark.parametrize("case, method", OWN_RUNS)
+def test_the_model_librarys_integrator_gives_the_cores_run_bit_for_bit(case, method):
+    """A model library's own copy of the integrator (core/model_core.h, the model's functions
+    called directly) against the core's, which calls them through the record's pointers:
+    every recorded time, state, memory and output, the peaks and the counters identical."""
+    from mbs_clearance.core.integrate import integrate
+    from mbs_clearance.numerics.integrator import METHODS
+    from mbs_clearance.solve import linkage_model as lm
+
+    linkage = CASES[case]
+    span = dict(duration=0.01) if linkage.drive is None else dict(revolutions=1)
+    problem = lm.prepare(linkage, **span, **({} if method is None else {"method": method}))
+    model, coefficients = problem.model, METHODS[problem.method].arrays()
+    args = (problem.y0, problem.span.edges, problem.integrator, coefficients)
+    own = model.integrate_model(problem.y0, problem.p.copy(), *args[1:])
+    core = integrate(model.core_record, problem.y0, problem.p.copy(), *args[1:])
+    assert own[-1] == core[-1] == 0 and len(own[0]) > 10
+    for a, b in zip(own[:-1], core[:-1]):
+        assert np.array_equal(a, b)
+
+
+def test_a_model_librarys_integrator_refuses_another_record():
+    """The copy calls its own model's functions: another model's record is refused before
+    any step (one line naming the arguments), not integrated with the wrong functions."""
+    from mbs_clearance.core.integrate import integrate
+    from mbs_clearance.numerics.integrator import METHODS
+    from mbs_clearance.solve import linkage_model as lm
+
+    problem = lm.prepare(CASES["paper_slider_crank"], 1)
+    other = lm.load_model(CASES["slider_crank_two_clearances"])
+    with pytest.raises(ValueError, match="refused its arguments.*another model"):
+        integrate(problem.model.core_record, problem.y0, problem.p.copy(), problem.span.edges,
+                  problem.integrator, METHODS[problem.method].arrays(), entry=other.core_entry)
