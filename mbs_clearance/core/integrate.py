@@ -26,9 +26,9 @@ import numpy as np
 
 from . import build
 
-__all__ = ["core", "model_record", "model_entry", "integrate", "step_peaks", "step_value",
-           "step_states", "with_parameter_length", "RecordKernels", "NO_EVENTS_C",
-           "no_events_source", "OUT_OF_MEMORY", "BAD_ARGUMENT"]
+__all__ = ["core", "model_record", "integrate", "step_peaks", "step_value", "step_states",
+           "with_parameter_length", "RecordKernels", "NO_EVENTS_C", "no_events_source",
+           "OUT_OF_MEMORY", "BAD_ARGUMENT"]
 
 #: negative statuses of the core (the others are `integrator.RESULTS`)
 OUT_OF_MEMORY = -1
@@ -128,22 +128,6 @@ def model_record(ffi, lib):
     if address == 0:
         raise ValueError("the model library returned no record (mbs_model_record() is NULL)")
     return core_ffi.cast("const mbs_model *", address)
-
-
-#: the C type of `mbs_integrate` (and of a model library's own `mbs_model_integrate`)
-_INTEGRATE_FN = ("int64_t (*)(const mbs_model *, const double *, int64_t, double *, "
-                 "const double *, int64_t, const mbs_settings *, const mbs_tableau *, "
-                 "mbs_result *)")
-
-
-def model_entry(ffi, lib):
-    """The run of a model library that carries its own copy of the integrator
-    (``mbs_model_integrate``, `core/model_core.h`: the model's functions called directly) as
-    a function of the core's ffi, for `integrate`'s `entry`. It runs the library's own record
-    (`model_record`) only."""
-    core_ffi, _ = core()
-    address = int(ffi.cast("uintptr_t", ffi.addressof(lib, "mbs_model_integrate")))
-    return core_ffi.cast(_INTEGRATE_FN, address)
 
 
 def _doubles(name, value, ndim=1):
@@ -263,7 +247,7 @@ def step_states(model, t0, y0, p, hs, coefficients, n_out):
     return ys, outs
 
 
-def integrate(model, y0, p, edges, settings, coefficients, entry=None):
+def integrate(model, y0, p, edges, settings, coefficients):
     """Integrate a model from edges[0] to edges[-1] with the compiled core.
 
     Parameters
@@ -282,9 +266,6 @@ def integrate(model, y0, p, edges, settings, coefficients, entry=None):
         From `integrator.make_settings`; ``atol`` needs at least n entries here.
     coefficients : tuple
         ``Tableau.arrays()`` of the method.
-    entry : cffi function pointer, optional
-        The model library's own copy of the integrator (`model_entry`) for its own record;
-        None: the core's.
 
     Returns
     -------
@@ -326,9 +307,8 @@ def integrate(model, y0, p, edges, settings, coefficients, entry=None):
                  "n_mem", "n_crests"):
         setattr(st, name, getattr(settings, name))
     res = ffi.new("mbs_result *")
-    run = lib.mbs_integrate if entry is None else entry
-    status = run(model, ptr(y0), n, ffi.cast("double *", ffi.from_buffer(p)), ptr(edges),
-                 edges.shape[0], st, tb, res)
+    status = lib.mbs_integrate(model, ptr(y0), n, ffi.cast("double *", ffi.from_buffer(p)),
+                               ptr(edges), edges.shape[0], st, tb, res)
     del keep
     try:
         if status == OUT_OF_MEMORY:
@@ -336,9 +316,7 @@ def integrate(model, y0, p, edges, settings, coefficients, entry=None):
                               "set record=False or shorten the run")
         if status == BAD_ARGUMENT:
             raise ValueError("the compiled integrator refused its arguments (sizes of y0, "
-                             "p, edges, atol or the settings out of range"
-                             + ("" if entry is None else ", or the record of another model "
-                                "than the library's own") + ")")
+                             "p, edges, atol or the settings out of range)")
         nrec, n_win = res.n_rec, res.n_win
         n_m = max(settings.n_mem, 1)
         n_out = settings.n_out

@@ -40,19 +40,6 @@
 #define MBS_VECTOR_CLONES
 #endif
 
-/* the model's functions: through its record, or (a model library that compiles its own copy
- * of the integrator, core/model_core.h) the library's own functions, called directly */
-#ifndef MBS_RHS
-#define MBS_RHS(m) ((m)->rhs)
-#define MBS_EVENT(m) ((m)->event)
-#define MBS_ON_EVENT(m) ((m)->on_event)
-#define MBS_MONITOR(m) ((m)->monitor)
-#endif
-/* the linkage of the entry points (static in a model library's copy) */
-#ifndef MBS_CORE_API
-#define MBS_CORE_API
-#endif
-
 static inline double nb_max(double a, double b) { return b > a ? b : a; }
 static inline double nb_min(double a, double b) { return b < a ? b : a; }
 
@@ -172,7 +159,7 @@ static void ros_stages(const run_ctx *cx, double t, const double *y, int64_t n, 
                        double h, double *K, double *p, double *y_new, double *ytmp)
 {
     const mbs_tableau *tb = cx->tb;
-    const mbs_rhs_fn rhs_fn = MBS_RHS(cx->m);
+    const mbs_rhs_fn rhs_fn = cx->m->rhs;
     const int64_t ldk = cx->ldk;
     const int64_t s1 = tb->n_b;
     const int64_t w0 = s1 + 1;
@@ -246,7 +233,7 @@ static void rk_stages(const run_ctx *cx, double t, const double *y, int64_t n, c
         K[k] = f[k];
     for (int64_t i = 1; i < s; i++) {
         combine(y, n, h, K, ldk, tb->A + i * tb->a_cols, i, ytmp);
-        MBS_RHS(cx->m)(t + tb->C[i] * h, ytmp, n, p, K + i * ldk);
+        cx->m->rhs(t + tb->C[i] * h, ytmp, n, p, K + i * ldk);
     }
     combine(y, n, h, K, ldk, tb->B, s, y_new);
 }
@@ -257,7 +244,7 @@ static void rk_step(const run_ctx *cx, double t, const double *y, int64_t n, con
                     double *ytmp)
 {
     rk_stages(cx, t, y, n, f, h, K, p, y_new, ytmp);
-    MBS_RHS(cx->m)(t + h, y_new, n, p, f_new);
+    cx->m->rhs(t + h, y_new, n, p, f_new);
     memcpy(K + cx->s * cx->ldk, f_new, (size_t)n * sizeof(double));
 }
 
@@ -268,7 +255,7 @@ static double step_monitor(const run_ctx *cx, double t, const double *y, int64_t
                            double *f_new, double *ytmp, double *out, double *g, double *gd)
 {
     rk_stages(cx, t, y, n, f, h, K, p, y_new, ytmp);
-    double mval = MBS_MONITOR(cx->m)(t + h, y_new, n, p, f_new, out, cx->n_out, g, gd);
+    double mval = cx->m->monitor(t + h, y_new, n, p, f_new, out, cx->n_out, g, gd);
     memcpy(K + cx->s * cx->ldk, f_new, (size_t)cx->ldk * sizeof(double));
     return mval;
 }
@@ -314,7 +301,7 @@ static double dp5_step_monitor(const run_ctx *cx, double t, const double *y, int
                                const double *f, double h, double *K, double *p, double *y_new,
                                double *f_new, double *ytmp, double *out, double *g, double *gd)
 {
-    const mbs_rhs_fn rhs_fn = MBS_RHS(cx->m);
+    const mbs_rhs_fn rhs_fn = cx->m->rhs;
     const int64_t ldk = cx->ldk;
     double *K0 = K, *K1 = K + ldk, *K2 = K + 2 * ldk, *K3 = K + 3 * ldk, *K4 = K + 4 * ldk,
            *K5 = K + 5 * ldk, *K6 = K + 6 * ldk;
@@ -357,7 +344,7 @@ static double dp5_step_monitor(const run_ctx *cx, double t, const double *y, int
     double c6 = h * B6;
     for (int64_t k = 0; k < n; k++)
         y_new[k] = y[k] + c1 * K0[k] + c3 * K2[k] + c4 * K3[k] + c5 * K4[k] + c6 * K5[k];
-    double mval = MBS_MONITOR(cx->m)(t + h, y_new, n, p, f_new, out, cx->n_out, g, gd);
+    double mval = cx->m->monitor(t + h, y_new, n, p, f_new, out, cx->n_out, g, gd);
     for (int64_t k = 0; k < n; k++)
         K6[k] = f_new[k];
     return mval;
@@ -393,7 +380,7 @@ static double event_error_sq(const run_ctx *cx, double t, double h, const double
     double acc = 0.0;
     double ggd[2];
     for (int64_t j = 0; j < n_ev; j++) {
-        MBS_EVENT(cx->m)(t, yhat, p, j, ggd);
+        cx->m->event(t, yhat, p, j, ggd);
         double eg = (g[j] - ggd[0]) / (atol[n + 2 * j] + rtol * fabs(g[j]));
         double egd = (gd[j] - ggd[1]) / (atol[n + 2 * j + 1] + rtol * fabs(gd[j]));
         acc += eg * eg + egd * egd;
@@ -486,7 +473,7 @@ static void extra_stages(const run_ctx *cx, double t, const double *y, int64_t n
     const int64_t first = cx->k_rows - tb->x_rows;
     for (int64_t r = 0; r < tb->x_rows; r++) {
         combine(y, n, h, K, cx->ldk, tb->A_extra + r * tb->x_cols, first + r, ytmp);
-        MBS_RHS(cx->m)(t + tb->C_extra[r] * h, ytmp, n, p, K + (first + r) * cx->ldk);
+        cx->m->rhs(t + tb->C_extra[r] * h, ytmp, n, p, K + (first + r) * cx->ldk);
     }
 }
 
@@ -540,7 +527,7 @@ static double initial_step(const run_ctx *cx, double t, const double *y, int64_t
     h0 = nb_min(h0, direction_span);
     for (int64_t k = 0; k < n; k++)
         ytmp[k] = y[k] + h0 * f[k];
-    MBS_RHS(cx->m)(t + h0, ytmp, n, p, ftmp);
+    cx->m->rhs(t + h0, ytmp, n, p, ftmp);
     double d2 = 0.0;
     for (int64_t k = 0; k < n; k++) {
         double sc = atol[k] + rtol * fabs(y[k]);
@@ -563,7 +550,7 @@ static double golden_max(const run_ctx *cx, double t0, const double *y0, int64_t
                          double *f0, int64_t iters, double *out, double *g, double *gd,
                          double *t_at)
 {
-    MBS_RHS(cx->m)(t0, y0, n, p, f0);
+    cx->m->rhs(t0, y0, n, p, f0);
     const double invphi = 0.6180339887498949;
     double a = 0.0, b = h_max;
     double c = b - invphi * (b - a);
@@ -865,7 +852,7 @@ static int clear_of_surface(const run_ctx *cx, double t, const double *y, int64_
                 g_b = g_end[j];
                 gd_b = gd_end[j];
             } else {
-                MBS_EVENT(cx->m)(t + theta_b * h, ytmp, p, j, ggd);
+                cx->m->event(t + theta_b * h, ytmp, p, j, ggd);
                 g_b = ggd[0];
                 gd_b = ggd[1];
                 double g_h = (h00 * g_start[j] + h10 * gd_start[j] + h01 * g_end[j]
@@ -918,7 +905,7 @@ static void search_event(const run_ctx *cx, int64_t j, double t, const double *y
                 dense_eval(cx, y, n, h, K, theta_b, ytmp, wts);
             else
                 dense_combine(cx, y, n, h, K, sample_polys + (i - 1) * prows, ytmp, wts);
-            MBS_EVENT(cx->m)(t + theta_b * h, ytmp, p, j, ggd);
+            cx->m->event(t + theta_b * h, ytmp, p, j, ggd);
             g_b = ggd[0];
             gd_b = ggd[1];
         }
@@ -948,7 +935,7 @@ static void search_event(const run_ctx *cx, int64_t j, double t, const double *y
             for (int64_t q = 0; q < n_fine; q++) {
                 double theta_f = base + fine[q] * span_theta;
                 dense_eval(cx, y, n, h, K, theta_f, ytmp, wts);
-                MBS_EVENT(cx->m)(t + theta_f * h, ytmp, p, j, ggd);
+                cx->m->event(t + theta_f * h, ytmp, p, j, ggd);
                 double g_f = ggd[0];
                 if (g_f > 0.0) {
                     set_bracket(out, theta_a, g_a, theta_f, g_f);
@@ -980,7 +967,7 @@ static double dense_root(const run_ctx *cx, int64_t j, double t, const double *y
     for (int it = 0; it < 60; it++) {
         double c = (a * gb - b * ga) / (gb - ga);
         dense_eval(cx, y, n, h, K, c, ytmp, wts);
-        MBS_EVENT(cx->m)(t + c * h, ytmp, p, j, ggd);
+        cx->m->event(t + c * h, ytmp, p, j, ggd);
         double gc = ggd[0];
         theta = c;
         if (fabs(gc) <= event_tol || (b - a) < 1e-15)
@@ -1055,7 +1042,7 @@ static double land_event(const run_ctx *cx, int64_t j, double t, const double *y
     double ggd[2];
     rk_step(cx, t, y, n, f, h_ev, K, p, y_new, f_new, ytmp);
     *nfev = evals;
-    MBS_EVENT(cx->m)(t + h_ev, y_new, p, j, ggd);
+    cx->m->event(t + h_ev, y_new, p, j, ggd);
     double g_ev = ggd[0];
     int side = 0;
     for (int it = 0; it < 16; it++) {
@@ -1068,7 +1055,7 @@ static double land_event(const run_ctx *cx, int64_t j, double t, const double *y
         h_ev = h_c;
         rk_step(cx, t, y, n, f, h_ev, K, p, y_new, f_new, ytmp);
         *nfev += evals;
-        MBS_EVENT(cx->m)(t + h_ev, y_new, p, j, ggd);
+        cx->m->event(t + h_ev, y_new, p, j, ggd);
         g_ev = ggd[0];
     }
     return h_ev;
@@ -1083,13 +1070,13 @@ static int64_t switch_events(const run_ctx *cx, double t, const double *y, doubl
     for (int64_t k = 0; k < n_ev; k++) {
         if (k == j)
             continue;
-        MBS_EVENT(cx->m)(t, y, p, k, ggd);
+        cx->m->event(t, y, p, k, ggd);
         if (fabs(ggd[0]) <= event_tol) {
-            MBS_ON_EVENT(cx->m)(t, y, p, k);
+            cx->m->on_event(t, y, p, k);
             n_sw += 1;
         }
     }
-    MBS_ON_EVENT(cx->m)(t, y, p, j);
+    cx->m->on_event(t, y, p, j);
     return n_sw;
 }
 
@@ -1099,7 +1086,6 @@ static int64_t switch_events(const run_ctx *cx, double t, const double *y, doubl
  * mapped up to trim_threshold bytes of free memory (1: set; 0: not glibc or refused). Its
  * defaults hand each run's records fresh pages that the kernel zeroes: a quarter of a DDM
  * run of the paper case went into those page faults. */
-MBS_CORE_API
 int64_t mbs_tune_allocator(int64_t mmap_threshold, int64_t trim_threshold)
 {
 #ifdef __GLIBC__
@@ -1113,13 +1099,11 @@ int64_t mbs_tune_allocator(int64_t mmap_threshold, int64_t trim_threshold)
 }
 
 /* free one of a result's arrays handed to Python (numpy arrays own them then) */
-MBS_CORE_API
 void mbs_free(void *data)
 {
     free(data);
 }
 
-MBS_CORE_API
 void mbs_result_free(mbs_result *res)
 {
     if (res == NULL)
@@ -1166,7 +1150,6 @@ static int grow_records(mbs_result *res, int64_t cap, int64_t n, int64_t n_m, in
     return 1;
 }
 
-MBS_CORE_API
 int64_t mbs_integrate(const mbs_model *m, const double *y0, int64_t n, double *p,
                       const double *edges, int64_t n_edges, const mbs_settings *st,
                       const mbs_tableau *tb, mbs_result *res)
@@ -1285,7 +1268,7 @@ int64_t mbs_integrate(const mbs_model *m, const double *y0, int64_t n, double *p
 
     double t = edges[0];
     const double t_end = edges[n_edges - 1];
-    double m0 = MBS_MONITOR(m)(t, y, n, p, f, obuf, n_out, g_start, gd_start);
+    double m0 = m->monitor(t, y, n, p, f, obuf, n_out, g_start, gd_start);
     counters[0] += 1;
     double h;
     if (st->h0 <= 0.0) {
@@ -1395,8 +1378,8 @@ int64_t mbs_integrate(const mbs_model *m, const double *y0, int64_t n, double *p
                     status = STATUS_EVENT_CHATTER;
                     break;
                 }
-                MBS_ON_EVENT(m)(t, y, p, ev.j);
-                MBS_MONITOR(m)(t, y, n, p, f, obuf, n_out, g_start, gd_start);
+                m->on_event(t, y, p, ev.j);
+                m->monitor(t, y, n, p, f, obuf, n_out, g_start, gd_start);
                 counters[0] += 1;
                 if (record && nrec > 0 && res->t[nrec - 1] == t) {
                     for (int64_t k = 0; k < n_mem; k++)
@@ -1420,7 +1403,7 @@ int64_t mbs_integrate(const mbs_model *m, const double *y0, int64_t n, double *p
             memcpy(ftmp, y, (size_t)n * sizeof(double));
             memcpy(y, y_new, (size_t)n * sizeof(double));
             counters[3] += switch_events(&cx, t, y, p, ev.j, n_ev, event_tol) - 1;
-            mval = MBS_MONITOR(m)(t, y, n, p, f, obuf, n_out, g_start, gd_start);
+            mval = m->monitor(t, y, n, p, f, obuf, n_out, g_start, gd_start);
             counters[0] += 1;
             h = h_next;
         } else {
@@ -1543,7 +1526,6 @@ static int64_t step_workspace(run_ctx *cx, step_work *w, const mbs_model *m,
     return 0;
 }
 
-MBS_CORE_API
 int64_t mbs_step_peaks(const mbs_model *m, const double *t0s, const double *y0s,
                        int64_t n_steps, int64_t n, const double *mems, int64_t n_mem,
                        const double *p, const double *hs, const mbs_tableau *tb, int64_t iters,
@@ -1565,7 +1547,6 @@ int64_t mbs_step_peaks(const mbs_model *m, const double *t0s, const double *y0s,
     return 0;
 }
 
-MBS_CORE_API
 int64_t mbs_step_value(const mbs_model *m, double t0, const double *y0, int64_t n,
                        const double *mem, int64_t n_mem, const double *p, double h,
                        const mbs_tableau *tb, double *value)
@@ -1578,14 +1559,13 @@ int64_t mbs_step_value(const mbs_model *m, double t0, const double *y0, int64_t 
     double out[1];
     for (int64_t j = 0; j < n_mem; j++)
         w.q[m->mem_start + j] = mem[j];
-    MBS_RHS(m)(t0, y0, n, w.q, w.f0);
+    m->rhs(t0, y0, n, w.q, w.f0);
     *value = step_monitor(&cx, t0, y0, n, w.f0, h, w.K, w.q, w.y_new, w.f_new, w.ytmp, out,
                           w.g, w.gd);
     free(w.block);
     return 0;
 }
 
-MBS_CORE_API
 int64_t mbs_step_states(const mbs_model *m, double t0, const double *y0, int64_t n, double *p,
                         const double *hs, int64_t n_h, const mbs_tableau *tb, int64_t n_out,
                         double *ys, double *outs)
@@ -1595,7 +1575,7 @@ int64_t mbs_step_states(const mbs_model *m, double t0, const double *y0, int64_t
     int64_t status = step_workspace(&cx, &w, m, tb, n, n_out, 0, p, 0);
     if (status)
         return status;
-    MBS_RHS(m)(t0, y0, n, p, w.f0);
+    m->rhs(t0, y0, n, p, w.f0);
     for (int64_t k = 0; k < n_h; k++)
         step_monitor(&cx, t0, y0, n, w.f0, hs[k], w.K, p, ys + k * n, w.f_new, w.ytmp,
                      outs + k * n_out, w.g, w.gd);

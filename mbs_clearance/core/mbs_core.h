@@ -92,9 +92,6 @@ typedef struct mbs_result {
     int64_t status;                /* integrator.RESULTS; negative: out of memory */
 } mbs_result;
 
-/* the core's entry points (a model library's own copy of the integrator keeps them static:
- * core/model_core.h) */
-#ifndef MBS_MODEL_CORE
 int64_t mbs_integrate(const mbs_model *m, const double *y0, int64_t n, double *p,
                       const double *edges, int64_t n_edges, const mbs_settings *s,
                       const mbs_tableau *tb, mbs_result *res);
@@ -116,6 +113,5 @@ int64_t mbs_step_value(const mbs_model *m, double t0, const double *y0, int64_t 
 int64_t mbs_step_states(const mbs_model *m, double t0, const double *y0, int64_t n, double *p,
                         const double *hs, int64_t n_h, const mbs_tableau *tb, int64_t n_out,
                         double *ys, double *outs);
-#endif
 
 #endif

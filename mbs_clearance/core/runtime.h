@@ -13,8 +13,8 @@
 #include "laws_generated.h"
 
 /* a model's dynamics, inlined into its rhs and monitor whatever the optimisation level: the
- * integrator compiled into the model's library (model_core.h) then calls one function per
- * stage (the paper's case: 8 % less time than with the call left at -O2) */
+ * integrator then calls one function per stage (the paper's case: 8 % less time than with
+ * the call left at -O2) */
 #if defined(__GNUC__)
 #define MBS_ALWAYS_INLINE static inline __attribute__((always_inline))
 #else

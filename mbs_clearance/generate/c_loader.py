@@ -37,10 +37,6 @@ _CORE = Path(__file__).resolve().parents[1] / "core"
 C_SOURCES = ("runtime.h", "laws_generated.h", "jac_runtime.h", "sens_runtime.h")
 #: the header of the models with a profiled bearing
 PROFILE_SOURCE = "profile_runtime.h"
-#: the model's own copy of the integrator (core/model_core.h, which includes integrator.c
-#: under the name integrator_core.h: the build compiles the model's file only), appended to
-#: its C at build time: (name in the build, file in core/)
-MODEL_CORE = (("model_core.h", "model_core.h"), ("integrator_core.h", "integrator.c"))
 _HERE = Path(__file__).resolve().parent
 #: what a model library exports beside the seam's record and closure (cffi declarations)
 C_EXPORTS = """
@@ -49,9 +45,6 @@ void mbs_jacobian(double t, const double *y, const double *p, double *jac, int64
 void mbs_tangent(double t, const double *y, const double *p, const double *dz, int64_t nd,
                  const double *use, double *out, int64_t full);
 const mbs_model *mbs_sens_model_record(void);
-int64_t mbs_model_integrate(const mbs_model *m, const double *y0, int64_t n, double *p,
-                            const double *edges, int64_t n_edges, const mbs_settings *st,
-                            const mbs_tableau *tb, mbs_result *res);
 int64_t mbs_output_sensitivities(const double *ts, const double *ys, int64_t n, int64_t n_y,
                                  const double *ms, int64_t n_m, const double *p, int64_t n_p,
                                  double *vals, double *ders);
@@ -305,23 +298,14 @@ class CModel:
 
         return model_record(self.ffi, self.lib)
 
-    @cached_property
-    def core_entry(self):
-        """The library's own copy of the integrator (`core.integrate.model_entry`)."""
-        from ..core.integrate import model_entry
-
-        return model_entry(self.ffi, self.lib)
-
     def integrate_model(self, y0, p, edges, settings, coefficients):
-        """The compiled run of this model (`core.integrate.integrate`) by the integrator
-        compiled into its library (`core/model_core.h`: the same numbers as the core's)."""
+        """The compiled core's run of this model (`core.integrate.integrate`)."""
         from ..core.integrate import integrate
 
         # the zero check of prepare, without recomputing the constants on every run
         if any(p[i] != 0.0 for i in self.ZERO_INDEX):
             raise ValueError(self.ZERO_MESSAGE)
-        return integrate(self.core_record, y0, p, edges, settings, coefficients,
-                         entry=self.core_entry)
+        return integrate(self.core_record, y0, p, edges, settings, coefficients)
 
     # ---- the sensitivity runs (DDM, tangents): the functions, same
     # arguments and returns
@@ -519,12 +503,6 @@ def window_norm_maxima(s, ptr, rows, vals, weights, lo, hi):
     return out
 
 
-def library_source(source: str) -> str:
-    """The C file of a model's library: the model's `source` with the integrator's copy that
-    calls its functions directly (`MODEL_CORE`) after it."""
-    return f'#define MBS_MODEL_CORE\n{source}\n#include "model_core.h"\n'
-
-
 def load_c_model(linkage: Linkage, specialise: bool = True) -> CModel:
     """The compiled C model of `linkage`'s structure (specialised on its zero-valued
     geometric parameters unless `specialise` is False): generated and compiled on first use
@@ -542,9 +520,8 @@ def load_c_model(linkage: Linkage, specialise: bool = True) -> CModel:
         # the profiles' header only where a model includes it: the other models' sources,
         # and so their libraries' keys, stay as they are
         headers = C_SOURCES + ((PROFILE_SOURCE,) if meta.get("PROFILE_JOINTS") else ())
-        sources = ([("model.c", library_source(source))]
-                   + [(name, (_CORE / name).read_text()) for name in headers]
-                   + [(name, (_CORE / file).read_text()) for name, file in MODEL_CORE])
+        sources = [("model.c", source)] + [(name, (_CORE / name).read_text())
+                                           for name in headers]
         ffi, lib = build.load(f"model-{digest[:16]}", sources, C_EXPORTS)
         model = CModel(ffi=ffi, lib=lib, record=lib.mbs_model_record(),
                        meta=SimpleNamespace(**meta), source=source,

@@ -1,7 +1,7 @@
 """The compiled model of a run: the C core (`mbs_clearance.core`: the integrator compiled
 once for every model, each model's kernels, its Jacobian and tangent and its sensitivity
-equations printed in C and compiled in seconds, with a copy of the integrator that runs its
-plain runs), for plain, sensitivity (DDM) and tangent runs alike.
+equations printed in C and compiled in seconds), for plain, sensitivity (DDM) and tangent
+runs alike.
 
 Where no C compiler is found the first run stops with one line naming what to install
 (`core.build.CompilerMissing`).
