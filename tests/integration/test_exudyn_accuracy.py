@@ -77,11 +77,14 @@ def test_exudyn_at_1e_4_meets_it_at_2000_rpm():
     assert err[0] <= tr.stats["peak_errors"][0], (err, tr.stats["peak_errors"])
 
 
-def test_a_finer_record_beyond_max_memory_records_its_peaks_only(tmp_path):
+def test_a_finer_record_beyond_max_memory_records_its_peaks_only(tmp_path, monkeypatch):
     """1e-3 takes a fourth run (as above); with max_memory between the h/4 and h/8 records
     the fourth run records its peaks only: the series are the h/4 run's, the peaks the
     same extrapolated ones as without the limit, and the saved run loads back (its peaks
-    within their stated offset of its samples)."""
+    within their stated offset of its samples). (The finer runs run full revolutions
+    here: without that, the fourth would stop early after the peak and record its peaks
+    only anyway, `_stop_time`.)"""
+    monkeypatch.setattr(xc, "STOP_FRACTION", 0.0)
     from mbs_clearance import load_trajectory
     from mbs_clearance.backends import exudyn_linkage as xl
     from mbs_clearance.model.cases import as_linkage
@@ -121,10 +124,12 @@ def test_an_h4_record_beyond_max_memory_records_the_h2_run():
     assert tr.stats["series_peak_offset"] > free.stats["series_peak_offset"]
 
 
-def test_a_halving_beyond_max_memory_stops_the_sequence_unmet():
+def test_a_halving_beyond_max_memory_stops_the_sequence_unmet(monkeypatch):
     """1e-3 takes a fourth run (as above); with max_memory below even that run's peaks
-    (the reactions at every step) the sequence stops after three runs with the request
-    unmet, warns and says why, instead of refusing the whole run."""
+    (the reactions at every step of a full revolution: the early stop is off here, as
+    above) the sequence stops after three runs with the request unmet, warns and says why,
+    instead of refusing the whole run."""
+    monkeypatch.setattr(xc, "STOP_FRACTION", 0.0)
     from mbs_clearance.backends import exudyn_linkage as xl
     from mbs_clearance.model.cases import as_linkage
 
@@ -175,3 +180,22 @@ def test_the_four_bar_at_restitution_0_5_meets_1e_4():
     err = abs(tr.peaks[0] / ref - 1.0)
     assert s["accuracy_ok"] and err < 1e-4 and err * ref <= s["peak_errors"][0], (err, s)
     assert 1.7 < s["observed_order"][0] < 2.5
+
+
+def test_a_finer_run_that_stops_early_needs_only_its_part_of_the_memory():
+    """The paper case's peak lies early in its revolution, so the fourth run of the 1e-3
+    sequence stops after it (`_stop_time`): with max_memory below that run's reactions
+    over a whole revolution (the limit of the test above) it still runs and meets the
+    request, with the same peaks as without the limit."""
+    from mbs_clearance.backends import exudyn_linkage as xl
+    from mbs_clearance.model.cases import as_linkage
+
+    mech = SliderCrank()
+    lk = as_linkage(mech)
+    free, _ = xc._sequence(lk, 1, 1e-3, {})
+    assert len(free.steps) == 4
+    need = [xl.estimate_memory(lk, 1, step, ("reactions",))[1] for step in free.steps]
+    conv, _ = xc._sequence(lk, 1, 1e-3, {"max_memory": (need[2] + need[3]) // 2})
+    assert conv.steps == free.steps and conv.stopped == ""
+    np.testing.assert_array_equal(conv.peaks, free.peaks)
+    assert conv.relative_error[0] <= 1e-3
