@@ -309,12 +309,7 @@ def _sequence_peaks(t, force, period: float, revolutions: int):
     t = np.asarray(t, dtype=float)
     f = smoothed(force)
     mag = np.hypot(f[:, 0], f[:, 1])
-    tol = 1e-12 * max(1.0, revolutions * period)
-    peaks = np.empty(revolutions)
-    for k in range(revolutions):
-        idx = np.nonzero((t >= k * period - tol) & (t <= (k + 1) * period + tol))[0]
-        peaks[k] = xl.refine_peak(t, mag, int(idx[np.argmax(mag[idx])]))
-    return peaks, mag
+    return xl.refined_peaks(t, mag, period, revolutions), mag
 
 
 def _stop_time(t, mag, period: float, revolutions: int):
