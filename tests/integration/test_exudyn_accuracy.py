@@ -63,10 +63,10 @@ def test_bad_requests_fail_before_any_run(monkeypatch):
 def test_exudyn_at_1e_4_meets_it_at_2000_rpm():
     """Off the point where the step law was calibrated (2000 rpm): the extrapolated peaks
     are within 1e-4 of the reduced model at rtol 1e-12 (the independent reference); the
-    first revolution's bar covers its true error. (Measured: 6.4e-6 and 2.8e-5 off. The
-    second revolution's peaks stop changing with the step at 2.8e-5 above the reference,
-    1344.78 N against 1344.74 N from h = 1.4 us to 0.17 us, so its bar, the step
-    dependence, 4e-6, does not cover that offset: a difference of the two models at that
+    first revolution's bar covers its true error. (Measured: 1.2e-6 and 2.0e-5 off. The
+    second revolution's peaks stop changing with the step at 2e-5 to 3e-5 above the
+    reference, 1344.77 N against 1344.74 N from h = 0.7 us to 0.17 us, so its bar, the step
+    dependence, 9e-6, does not cover that offset: a difference of the two models at that
     level that the step does not remove.)"""
     mech = SliderCrank(crank_speed=2000 * 2 * math.pi / 60)
     tr = simulate(mech, 2, backend="exudyn", accuracy=1e-4)
