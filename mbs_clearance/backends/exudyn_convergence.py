@@ -19,6 +19,12 @@ Where the two differences do not shrink in the same direction at an order within
 value is y_h/4 and its bar the larger of the two differences.
 
 MIN_ORDER is 1 so that the bar's argument holds.
+
+The step sequences of `simulate_to_accuracy` and `peak_to_accuracy` read each run's peaks
+from the monitored force smoothed against the step-alternating roundoff oscillation of
+Exudyn's reactions (`SMOOTHING`), and run the halvings beyond h/4 only to shortly after the
+last value near each revolution's peak where that saves at least half of a run
+(`_stop_time`).
 """
 
 from __future__ import annotations
@@ -36,8 +42,27 @@ __all__ = ["Convergence", "richardson", "converged_peaks", "MIN_ORDER", "MAX_ORD
            "simulate_to_accuracy", "peak_to_accuracy", "first_step", "MAX_HALVINGS"]
 
 #: further halvings beyond h/4 while a bar exceeds the requested accuracy (each doubles the
-#: cost of the last run: at most 2^MAX_HALVINGS times the h/4 run)
-MAX_HALVINGS = 3
+#: cost of the last run: at most 2^MAX_HALVINGS times the h/4 run, a small fraction of it
+#: where the finer runs stop early, `_stop_time`)
+MAX_HALVINGS = 4
+
+#: weights of the smoothing of the monitored force's components before a step sequence
+#: reads its peaks (`smoothed`): a zero of second order at the step-alternating frequency
+#: 1/(2h), exact on cubics (a smooth signal changes by -h^4 f^(4) / 16, beyond
+#: generalized-alpha's O(h^2)). Exudyn's reactions (index-3 multipliers) carry a
+#: step-alternating oscillation from the positions' roundoff, growing as 1 / h^2 and
+#: independent of Newton's tolerance: read raw, it breaks the sequences' order below ~1 us
+#: in the four-bar (docs/exudyn.md, "Roundoff in the reactions at small steps").
+SMOOTHING = np.array([-1.0, 4.0, 10.0, 4.0, -1.0]) / 16.0
+
+#: the finer runs of a sequence (beyond h/4) stop STOP_WINDOW periods after the last sample
+#: of the h/4 run within PEAK_MARGIN of its revolution's peak, where that saves at least
+#: STOP_FRACTION of the run (`_stop_time`): nothing later in the revolution can become its
+#: peak unless the finer steps move a value by PEAK_MARGIN, ten times and more the h/4
+#: run's step error at the accuracies the sequence is for
+PEAK_MARGIN = 0.05
+STOP_WINDOW = 0.01
+STOP_FRACTION = 0.5
 
 #: observed orders accepted for extrapolation (generalized-alpha is second order)
 MIN_ORDER = 1.0
@@ -179,7 +204,9 @@ def _sequence(linkage, revolutions: int, accuracy: float, options: dict, record=
     """Runs at h, h/2, h/4 (`first_step`), halved further while a revolution's bar exceeds
     `accuracy` (at most `max_halvings` more): (Convergence, the last recorded run or None).
     The runs from h/4 on are recorded by `record(h)` (a Trajectory with per-revolution
-    ``peaks``) where given, else peaks only. `only`: the index of the one revolution whose
+    ``peaks``) where given, else peaks only; where `_stop_time` allows, the runs beyond h/4
+    stop early and record peaks only. The peaks of a driven linkage's runs are read from the
+    smoothed monitored force (`smoothed`). `only`: the index of the one revolution whose
     bar counts (None: all)."""
     from .._checks import check_real
     from . import exudyn_linkage as xl
@@ -198,19 +225,36 @@ def _sequence(linkage, revolutions: int, accuracy: float, options: dict, record=
     steps, peaks, seconds, last = [], [], [], None
     free = revolutions is None              # a free linkage: every run recorded (windows)
 
+    series = None        # (t, smoothed |monitored force|) of the last full-length run
+    stop = None          # the finer runs' end time in s (`_stop_time`), None: full runs
+
     def run(step, recorded):
-        nonlocal last
+        nonlocal last, series
         t0 = time.perf_counter()
-        if free or (recorded and (last is None
-                                  or _fits(linkage, revolutions, step, max_memory))):
+        settings = xl.make_settings({**options, "step_size": step})
+        if free:
             last = record(step)
             last.stats["series_step"] = step
             peaks.append(np.asarray(last.peaks, dtype=float))
+        elif stop is not None:
+            t, force = _series_run(linkage, revolutions, settings, max_memory, start, stop)
+            row, mag = _sequence_peaks(t, force, linkage.period, revolutions)
+            if _moved_to_the_cut(t, mag, linkage.period, revolutions, stop):
+                t, force = _series_run(linkage, revolutions, settings, max_memory, start)
+                row, mag = _sequence_peaks(t, force, linkage.period, revolutions)
+            peaks.append(row)
         else:
-            # a record beyond max_memory: this run's peaks only; the series stay those of
-            # the last recorded run
-            settings = xl.make_settings({**options, "step_size": step})
-            peaks.append(_all_peaks(linkage, revolutions, settings, max_memory, start))
+            if recorded and (last is None or _fits(linkage, revolutions, step, max_memory)):
+                last = record(step)
+                last.stats["series_step"] = step
+                t, force = last.t, last.base_force
+            else:
+                # a record beyond max_memory: this run's peaks only; the series stay those
+                # of the last recorded run
+                t, force = _series_run(linkage, revolutions, settings, max_memory, start)
+            row, mag = _sequence_peaks(t, force, linkage.period, revolutions)
+            peaks.append(row)
+            series = (t, mag)
         seconds.append(time.perf_counter() - t0)
         steps.append(step)
 
@@ -222,24 +266,94 @@ def _sequence(linkage, revolutions: int, accuracy: float, options: dict, record=
         at -= 1
     for k, step in enumerate((h, h / 2.0, h / 4.0)):
         run(step, record is not None and k == at)
+    if not free:
+        stop = _stop_time(*series, linkage.period, revolutions)
+    fraction = 1.0 if stop is None else stop / (revolutions * linkage.period)
     value, error, order = richardson(*peaks[-3:])
     pick = slice(None) if only is None else slice(only, only + 1)
     stopped = ""
     for _ in range(max_halvings):
         if np.all(error[pick] <= accuracy * np.abs(value[pick])):
             break
-        if not free and not _fits(linkage, revolutions, steps[-1] / 2.0, max_memory,
-                                  ("reactions",)):
+        # a run of a fraction f of the span at step s stores as much as a full one at s / f
+        if not free and not _fits(linkage, revolutions, steps[-1] / 2.0 / fraction,
+                                  max_memory, ("reactions",)):
             # even its peaks (the reactions at every step) exceed max_memory: stop here,
             # unmet (e.g. a motion that does not repeat, whose later peaks never converge)
             stopped = (f"; the next run (step {steps[-1] / 2.0:.3g} s) would exceed "
                        "max_memory even for its peaks")
             break
-        run(steps[-1] / 2.0, record is not None)
+        run(steps[-1] / 2.0, record is not None and stop is None)
         value, error, order = extrapolate(peaks)
     conv = Convergence(steps=tuple(steps), peaks=np.array(peaks), value=value, error=error,
                        order=order, seconds=tuple(seconds), stopped=stopped)
     return conv, last
+
+
+def smoothed(force) -> np.ndarray:
+    """The (n, 2) force components smoothed with `SMOOTHING` (the first and last two samples
+    unchanged)."""
+    force = np.array(force, dtype=float)
+    if len(force) >= len(SMOOTHING):
+        for c in range(force.shape[1]):
+            force[2:-2, c] = np.convolve(force[:, c], SMOOTHING, mode="valid")
+    return force
+
+
+def _sequence_peaks(t, force, period: float, revolutions: int):
+    """(per-revolution refined peaks of the smoothed force's magnitude in N, that magnitude)
+    of a run recorded to its end or stopped early (`_stop_time`: every revolution's peak
+    lies before the stop)."""
+    from . import exudyn_linkage as xl
+
+    t = np.asarray(t, dtype=float)
+    f = smoothed(force)
+    mag = np.hypot(f[:, 0], f[:, 1])
+    return xl.refined_peaks(t, mag, period, revolutions), mag
+
+
+def _stop_time(t, mag, period: float, revolutions: int):
+    """End time in s of the finer runs (`PEAK_MARGIN`, `STOP_WINDOW`), or None where the
+    stop would not save `STOP_FRACTION` of the run: the last sample within PEAK_MARGIN of
+    its revolution's peak, over the revolutions, plus STOP_WINDOW periods."""
+    tol = 1e-12 * max(1.0, revolutions * period)
+    stop = 0.0
+    for k in range(revolutions):
+        inside = (t >= k * period - tol) & (t <= (k + 1) * period + tol)
+        tk, mk = t[inside], mag[inside]
+        stop = max(stop, float(tk[mk >= (1.0 - PEAK_MARGIN) * mk.max()][-1]))
+    stop += STOP_WINDOW * period
+    return stop if stop <= STOP_FRACTION * revolutions * period else None
+
+
+def _moved_to_the_cut(t, mag, period: float, revolutions: int, stop: float) -> bool:
+    """Whether a stopped run's largest value in the last revolution it reaches lies in the
+    last half window before the stop (its peak may then lie beyond: run it in full)."""
+    k = min(int(stop // period), revolutions - 1)
+    inside = t >= k * period
+    return bool(t[inside][np.argmax(mag[inside])] > stop - 0.5 * STOP_WINDOW * period)
+
+
+def _series_run(linkage, revolutions: int, settings, max_memory, start, until=None):
+    """(t in s, monitored force (n, 2) in N) of one Exudyn run recording the reactions only
+    (a full run where the monitored force holds an element's reaction), to its end or to
+    the first step at or after `until` s (on the full run's steps)."""
+    from . import exudyn_linkage as xl
+
+    if xl.monitors_element_reaction(linkage):
+        traj = xl.run_linkage(linkage, revolutions, settings, max_memory, start)
+        return traj.t, traj.base_force
+    end = revolutions * linkage.period
+    if until is None:
+        xl._check_run(linkage, revolutions, settings, ("reactions",), max_memory)
+    else:       # (the caller checked its memory, `_fits`)
+        h = end / max(1, round(end / settings.step(linkage)))
+        end = min(end, math.ceil(until / h) * h)
+    model, _ = xl.build_and_solve(linkage, settings, end, outputs=("reactions",), start=start)
+    t, reactions = xl._reactions(model)
+    force = (sum(reactions.values()) if linkage.monitor_joint is None
+             else reactions[linkage.monitor_joint])
+    return t, force
 
 
 def _fits(linkage, revolutions: int, step: float, max_memory, outputs=("all",)) -> bool:
@@ -286,8 +400,9 @@ def simulate_to_accuracy(mech, revolutions: int | None, accuracy: float, record,
     ``observed_order`` and ``peak_errors`` (N). An `AccuracyWarning` says when the request
     was not met within `MAX_HALVINGS` further halvings. The series are recorded at h/4, or
     at the finest of h/2 and h whose record fits ``max_memory`` (default min(4 GiB, half the
-    RAM)); a finer run whose record would exceed it records its peaks only and the series
-    are the last recorded run's (``stats["series_step"]``;
+    RAM)); a finer run whose record would exceed it, or that stops early after the peaks
+    (`_stop_time`), records its peaks only and the series are the last recorded run's
+    (``stats["series_step"]``;
     ``stats["series_peak_offset"]``: the relative distance of its own refined peaks from
     the extrapolated ones)."""
     import warnings

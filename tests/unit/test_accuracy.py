@@ -353,3 +353,40 @@ def test_a_step_bound_that_sets_the_steps_does_not_fool_the_estimate():
     run = simulate(lk, 2, h_max=h)
     assert run.stats["accuracy_ok"] and min(run.stats["accuracy_runs"]) <= 1e-10
     assert np.max(np.abs(run.peaks / reference - 1.0)) <= 1e-5
+
+
+def test_the_sequences_smoothing_removes_the_step_alternating_mode_and_keeps_cubics():
+    """`smoothed` (weights -1, 4, 10, 4, -1 over 16): a cubic in the sample index is kept
+    exactly (closed form: the weights' moments 1, 0, 0, 0), the step-alternating sequences
+    (-1)^n and n (-1)^n (the spurious mode of generalized-alpha, and one growing linearly)
+    are removed from every sample but the two at each end, and a quartic changes by
+    -f^(4)/16 = -24/16 at a unit step."""
+    from mbs_clearance.backends.exudyn_convergence import smoothed
+
+    n = np.arange(40, dtype=float)
+    cubic = 3.0 - 2.0 * n + 0.5 * n**2 - 0.01 * n**3
+    alternating = (-1.0) ** n * (1.0 + 0.3 * n)
+    out = smoothed(np.column_stack([cubic + alternating, 2.0 * cubic]))
+    np.testing.assert_allclose(out[2:-2, 0], cubic[2:-2], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(out[2:-2, 1], 2.0 * cubic[2:-2], rtol=0, atol=1e-12)
+    np.testing.assert_array_equal(out[:2, 0], (cubic + alternating)[:2])
+    quartic = smoothed(np.column_stack([n**4, n**4]))
+    np.testing.assert_allclose(quartic[2:-2, 0] - n[2:-2] ** 4, -1.5, atol=1e-9)
+
+
+def test_the_finer_runs_stop_after_the_last_value_near_the_peak():
+    """`_stop_time` on a revolution with its peak early and a second maximum 3 % below it
+    later: the stop is STOP_WINDOW periods after that second maximum (it could overtake
+    the peak); with the second maximum at 0.6 of the revolution nothing is saved: None."""
+    from mbs_clearance.backends import exudyn_convergence as xc
+
+    period = 1.0
+    t = np.linspace(0.0, period, 10001)
+
+    def bumps(t2):
+        return (100.0 * np.exp(-((t - 0.01) / 1e-3) ** 2)
+                + 97.0 * np.exp(-((t - t2) / 1e-3) ** 2) + 10.0)
+
+    stop = xc._stop_time(t, bumps(0.05), period, 1)
+    assert stop == pytest.approx(0.05 + xc.STOP_WINDOW * period, abs=2e-4)
+    assert xc._stop_time(t, bumps(0.6), period, 1) is None
