@@ -31,6 +31,7 @@ import numpy as np
 
 from .._checks import check_int
 from ..model.cases import as_linkage
+from ..solve.linkage_model import prepare_span
 
 __all__ = ["Convergence", "richardson", "converged_peaks", "MIN_ORDER", "MAX_ORDER",
            "simulate_to_accuracy", "peak_to_accuracy", "first_step", "MAX_HALVINGS"]
@@ -122,6 +123,7 @@ def converged_peaks(mech, revolutions: int = 4, *, step_size: float | None = Non
     linkage = as_linkage(mech)
     max_memory = options.pop("max_memory", None)
     start = options.pop("start", None)
+    span = prepare_span(linkage, revolutions, max_memory=max_memory)
     if step_size is None:
         step_size = xl.make_settings(dict(options)).step(linkage)
     if accuracy is not None:
@@ -134,7 +136,7 @@ def converged_peaks(mech, revolutions: int = 4, *, step_size: float | None = Non
     def run(h):
         settings = xl.make_settings({**options, "step_size": h})
         t0 = time.perf_counter()
-        peaks.append(_all_peaks(linkage, revolutions, settings, max_memory, start))
+        peaks.append(_all_peaks(linkage, span, settings, max_memory, start))
         seconds.append(time.perf_counter() - t0)
         steps.append(h)
 
@@ -150,11 +152,11 @@ def converged_peaks(mech, revolutions: int = 4, *, step_size: float | None = Non
                        order=order, seconds=tuple(seconds))
 
 
-def _all_peaks(linkage, revolutions, settings, max_memory, start) -> np.ndarray:
-    """Refined per-revolution peaks of one Exudyn run (`exudyn_linkage.run_peaks`)."""
+def _all_peaks(linkage, span, settings, max_memory, start) -> np.ndarray:
+    """Refined peaks per window of `span` of one Exudyn run (`exudyn_linkage.run_peaks`)."""
     from . import exudyn_linkage as xl
 
-    return xl.run_peaks(linkage, revolutions, settings, max_memory, start)
+    return xl.run_peaks(linkage, span, settings, max_memory, start)
 
 
 def order_of(a: float, b: float, c: float) -> float:
@@ -174,10 +176,11 @@ def first_step(linkage, accuracy: float, options: dict) -> float:
     return xl.make_settings({**options, "accuracy": min(4.0 * accuracy, 0.1)}).step(linkage)
 
 
-def _sequence(linkage, revolutions: int, accuracy: float, options: dict, record=None,
+def _sequence(linkage, span, accuracy: float, options: dict, record=None,
               max_halvings: int | None = None, only: int | None = None):
-    """Runs at h, h/2, h/4 (`first_step`), halved further while a revolution's bar exceeds
-    `accuracy` (at most `max_halvings` more): (Convergence, the last recorded run or None).
+    """Runs over `span` (a `Span`, `linkage_model.prepare_span`) at h, h/2, h/4
+    (`first_step`), halved further while a revolution's bar exceeds `accuracy` (at most
+    `max_halvings` more): (Convergence, the last recorded run or None).
     The runs from h/4 on are recorded by `record(h)` (a Trajectory with per-revolution
     ``peaks``) where given, else peaks only. `only`: the index of the one revolution whose
     bar counts (None: all)."""
@@ -196,13 +199,13 @@ def _sequence(linkage, revolutions: int, accuracy: float, options: dict, record=
     xl.make_settings(dict(options))         # bad values fail before any run
     h = first_step(linkage, accuracy, options)
     steps, peaks, seconds, last = [], [], [], None
-    free = revolutions is None              # a free linkage: every run recorded (windows)
+    free = span.revolutions is None         # a free linkage: every run recorded (windows)
 
     def run(step, recorded):
         nonlocal last
         t0 = time.perf_counter()
         if free or (recorded and (last is None
-                                  or _fits(linkage, revolutions, step, max_memory))):
+                                  or _fits(linkage, span, step, max_memory))):
             last = record(step)
             last.stats["series_step"] = step
             peaks.append(np.asarray(last.peaks, dtype=float))
@@ -210,7 +213,7 @@ def _sequence(linkage, revolutions: int, accuracy: float, options: dict, record=
             # a record beyond max_memory: this run's peaks only; the series stay those of
             # the last recorded run
             settings = xl.make_settings({**options, "step_size": step})
-            peaks.append(_all_peaks(linkage, revolutions, settings, max_memory, start))
+            peaks.append(_all_peaks(linkage, span, settings, max_memory, start))
         seconds.append(time.perf_counter() - t0)
         steps.append(step)
 
@@ -218,7 +221,7 @@ def _sequence(linkage, revolutions: int, accuracy: float, options: dict, record=
     # max_memory (a long run: the four-bar's 4 revolutions need 6 GiB at h/4)
     at = 2
     while record is not None and not free and at > 0 and not _fits(
-            linkage, revolutions, h / 2.0 ** at, max_memory):
+            linkage, span, h / 2.0 ** at, max_memory):
         at -= 1
     for k, step in enumerate((h, h / 2.0, h / 4.0)):
         run(step, record is not None and k == at)
@@ -228,7 +231,7 @@ def _sequence(linkage, revolutions: int, accuracy: float, options: dict, record=
     for _ in range(max_halvings):
         if np.all(error[pick] <= accuracy * np.abs(value[pick])):
             break
-        if not free and not _fits(linkage, revolutions, steps[-1] / 2.0, max_memory,
+        if not free and not _fits(linkage, span, steps[-1] / 2.0, max_memory,
                                   ("reactions",)):
             # even its peaks (the reactions at every step) exceed max_memory: stop here,
             # unmet (e.g. a motion that does not repeat, whose later peaks never converge)
@@ -242,14 +245,14 @@ def _sequence(linkage, revolutions: int, accuracy: float, options: dict, record=
     return conv, last
 
 
-def _fits(linkage, revolutions: int, step: float, max_memory, outputs=("all",)) -> bool:
-    """A run at `step` recording `outputs` fits within `max_memory`
+def _fits(linkage, span, step: float, max_memory, outputs=("all",)) -> bool:
+    """A run over `span` at `step` recording `outputs` fits within `max_memory`
     (`exudyn_linkage._check_run`)."""
     from .._checks import MemoryLimitError
     from . import exudyn_linkage as xl
 
     try:
-        xl._check_run(linkage, revolutions, xl.make_settings({"step_size": step}), outputs,
+        xl._check_run(linkage, span, xl.make_settings({"step_size": step}), outputs,
                       max_memory)
     except MemoryLimitError:
         return False
@@ -295,9 +298,9 @@ def simulate_to_accuracy(mech, revolutions: int | None, accuracy: float, record,
     from .._warnings import AccuracyWarning
 
     linkage = as_linkage(mech)
-    if linkage.drive is not None or revolutions is not None:
-        revolutions = check_int("revolutions", revolutions, 1)
-    conv, traj = _sequence(linkage, revolutions, accuracy, options, record)
+    span = prepare_span(linkage, revolutions, duration=options.get("duration"),
+                        window=options.get("window"), max_memory=options.get("max_memory"))
+    conv, traj = _sequence(linkage, span, accuracy, options, record)
     stats = _accuracy_stats(conv, accuracy)
     # the series may come from a coarser run than the last (a finer record would exceed
     # max_memory): how far its own refined peaks lie from the extrapolated ones
@@ -325,8 +328,10 @@ def peak_to_accuracy(mech, revolution: int, accuracy: float, **options) -> float
     from .._warnings import AccuracyWarning
 
     revolution = check_int("revolution", revolution, 1)
-    conv, _ = _sequence(as_linkage(mech), revolution, accuracy, options,
-                        only=revolution - 1)
+    linkage = as_linkage(mech)
+    span = prepare_span(linkage, revolution, max_memory=options.get("max_memory"),
+                        name="revolution")
+    conv, _ = _sequence(linkage, span, accuracy, options, only=revolution - 1)
     rel = float(conv.relative_error[revolution - 1])
     if rel > accuracy:
         warnings.warn(f"Exudyn's estimated error of the peak, {rel:.2g} (step halving down to "

@@ -11,6 +11,7 @@ import pytest
 
 from mbs_clearance import AccuracyWarning, SliderCrank, peak_base_force, simulate
 from mbs_clearance.backends import exudyn_convergence as xc
+from mbs_clearance.solve.linkage_model import prepare_span
 
 pytestmark = pytest.mark.exudyn
 
@@ -151,6 +152,6 @@ def test_a_halving_beyond_max_memory_stops_the_sequence_unmet():
     limit = (need[2] + need[3]) // 2
     with pytest.warns(AccuracyWarning, match="misses the requested accuracy"):
         peak = xc.peak_to_accuracy(mech, 1, 1e-3, max_memory=limit)
-    conv, _ = xc._sequence(lk, 1, 1e-3, {"max_memory": limit})
+    conv, _ = xc._sequence(lk, prepare_span(lk, 1), 1e-3, {"max_memory": limit})
     assert conv.steps == tuple(h[:3]) and "exceed max_memory even for its peaks" in conv.stopped
     assert peak == conv.value[0] and conv.relative_error[0] > 1e-3
