@@ -686,9 +686,10 @@ def prepare_span(linkage: Linkage, revolutions=None, *, duration=None, window=No
     and peak-only runs (`prepare`), the Exudyn and the ideal backends."""
     from .._checks import check_max_memory, check_revolutions_memory
 
-    if linkage.drive is None and edges is not None and revolutions is None and duration is None:
+    free = linkage.drive is None        # the runs below read the span, not the drive
+    if free and edges is not None and revolutions is None and duration is None:
         pass            # the caller's windows
-    elif linkage.drive is None:
+    elif free:
         check_span(linkage, revolutions, duration, window, name)
         if duration is None:
             raise ValueError(f"linkage {linkage.name!r} is free (drive=None): give its run's "
