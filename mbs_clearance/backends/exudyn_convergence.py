@@ -37,6 +37,7 @@ import numpy as np
 
 from .._checks import check_int
 from ..model.cases import as_linkage
+from ..solve.linkage_model import prepare_span
 
 __all__ = ["Convergence", "richardson", "converged_peaks", "MIN_ORDER", "MAX_ORDER",
            "simulate_to_accuracy", "peak_to_accuracy", "first_step", "MAX_HALVINGS"]
@@ -147,6 +148,7 @@ def converged_peaks(mech, revolutions: int = 4, *, step_size: float | None = Non
     linkage = as_linkage(mech)
     max_memory = options.pop("max_memory", None)
     start = options.pop("start", None)
+    span = prepare_span(linkage, revolutions, max_memory=max_memory)
     if step_size is None:
         step_size = xl.make_settings(dict(options)).step(linkage)
     if accuracy is not None:
@@ -159,7 +161,7 @@ def converged_peaks(mech, revolutions: int = 4, *, step_size: float | None = Non
     def run(h):
         settings = xl.make_settings({**options, "step_size": h})
         t0 = time.perf_counter()
-        peaks.append(_all_peaks(linkage, revolutions, settings, max_memory, start))
+        peaks.append(_all_peaks(linkage, span, settings, max_memory, start))
         seconds.append(time.perf_counter() - t0)
         steps.append(h)
 
@@ -175,11 +177,11 @@ def converged_peaks(mech, revolutions: int = 4, *, step_size: float | None = Non
                        order=order, seconds=tuple(seconds))
 
 
-def _all_peaks(linkage, revolutions, settings, max_memory, start) -> np.ndarray:
-    """Refined per-revolution peaks of one Exudyn run (`exudyn_linkage.run_peaks`)."""
+def _all_peaks(linkage, span, settings, max_memory, start) -> np.ndarray:
+    """Refined peaks per window of `span` of one Exudyn run (`exudyn_linkage.run_peaks`)."""
     from . import exudyn_linkage as xl
 
-    return xl.run_peaks(linkage, revolutions, settings, max_memory, start)
+    return xl.run_peaks(linkage, span, settings, max_memory, start)
 
 
 def order_of(a: float, b: float, c: float) -> float:
@@ -199,10 +201,11 @@ def first_step(linkage, accuracy: float, options: dict) -> float:
     return xl.make_settings({**options, "accuracy": min(4.0 * accuracy, 0.1)}).step(linkage)
 
 
-def _sequence(linkage, revolutions: int, accuracy: float, options: dict, record=None,
+def _sequence(linkage, span, accuracy: float, options: dict, record=None,
               max_halvings: int | None = None, only: int | None = None):
-    """Runs at h, h/2, h/4 (`first_step`), halved further while a revolution's bar exceeds
-    `accuracy` (at most `max_halvings` more): (Convergence, the last recorded run or None).
+    """Runs over `span` (a `Span`, `linkage_model.prepare_span`) at h, h/2, h/4
+    (`first_step`), halved further while a revolution's bar exceeds `accuracy` (at most
+    `max_halvings` more): (Convergence, the last recorded run or None).
     The runs from h/4 on are recorded by `record(h)` (a Trajectory with per-revolution
     ``peaks``) where given, else peaks only; where `_stop_time` allows, the runs beyond h/4
     stop early and record peaks only. The peaks of a driven linkage's runs are read from the
@@ -223,6 +226,7 @@ def _sequence(linkage, revolutions: int, accuracy: float, options: dict, record=
     xl.make_settings(dict(options))         # bad values fail before any run
     h = first_step(linkage, accuracy, options)
     steps, peaks, seconds, last = [], [], [], None
+    revolutions = span.revolutions
     free = revolutions is None              # a free linkage: every run recorded (windows)
 
     series = None        # (t, smoothed |monitored force|) of the last full-length run
@@ -237,21 +241,21 @@ def _sequence(linkage, revolutions: int, accuracy: float, options: dict, record=
             last.stats["series_step"] = step
             peaks.append(np.asarray(last.peaks, dtype=float))
         elif stop is not None:
-            t, force = _series_run(linkage, revolutions, settings, max_memory, start, stop)
+            t, force = _series_run(linkage, span, settings, max_memory, start, stop)
             row, mag = _sequence_peaks(t, force, linkage.period, revolutions)
             if _moved_to_the_cut(t, mag, linkage.period, revolutions, stop):
-                t, force = _series_run(linkage, revolutions, settings, max_memory, start)
+                t, force = _series_run(linkage, span, settings, max_memory, start)
                 row, mag = _sequence_peaks(t, force, linkage.period, revolutions)
             peaks.append(row)
         else:
-            if recorded and (last is None or _fits(linkage, revolutions, step, max_memory)):
+            if recorded and (last is None or _fits(linkage, span, step, max_memory)):
                 last = record(step)
                 last.stats["series_step"] = step
                 t, force = last.t, last.base_force
             else:
                 # a record beyond max_memory: this run's peaks only; the series stay those
                 # of the last recorded run
-                t, force = _series_run(linkage, revolutions, settings, max_memory, start)
+                t, force = _series_run(linkage, span, settings, max_memory, start)
             row, mag = _sequence_peaks(t, force, linkage.period, revolutions)
             peaks.append(row)
             series = (t, mag)
@@ -262,7 +266,7 @@ def _sequence(linkage, revolutions: int, accuracy: float, options: dict, record=
     # max_memory (a long run: the four-bar's 4 revolutions need 6 GiB at h/4)
     at = 2
     while record is not None and not free and at > 0 and not _fits(
-            linkage, revolutions, h / 2.0 ** at, max_memory):
+            linkage, span, h / 2.0 ** at, max_memory):
         at -= 1
     for k, step in enumerate((h, h / 2.0, h / 4.0)):
         run(step, record is not None and k == at)
@@ -276,7 +280,7 @@ def _sequence(linkage, revolutions: int, accuracy: float, options: dict, record=
         if np.all(error[pick] <= accuracy * np.abs(value[pick])):
             break
         # a run of a fraction f of the span at step s stores as much as a full one at s / f
-        if not free and not _fits(linkage, revolutions, steps[-1] / 2.0 / fraction,
+        if not free and not _fits(linkage, span, steps[-1] / 2.0 / fraction,
                                   max_memory, ("reactions",)):
             # even its peaks (the reactions at every step) exceed max_memory: stop here,
             # unmet (e.g. a motion that does not repeat, whose later peaks never converge)
@@ -334,18 +338,18 @@ def _moved_to_the_cut(t, mag, period: float, revolutions: int, stop: float) -> b
     return bool(t[inside][np.argmax(mag[inside])] > stop - 0.5 * STOP_WINDOW * period)
 
 
-def _series_run(linkage, revolutions: int, settings, max_memory, start, until=None):
+def _series_run(linkage, span, settings, max_memory, start, until=None):
     """(t in s, monitored force (n, 2) in N) of one Exudyn run recording the reactions only
     (a full run where the monitored force holds an element's reaction), to its end or to
     the first step at or after `until` s (on the full run's steps)."""
     from . import exudyn_linkage as xl
 
     if xl.monitors_element_reaction(linkage):
-        traj = xl.run_linkage(linkage, revolutions, settings, max_memory, start)
+        traj = xl.run_linkage(linkage, span, settings, max_memory, start)
         return traj.t, traj.base_force
-    end = revolutions * linkage.period
+    end = float(span.edges[-1])
     if until is None:
-        xl._check_run(linkage, revolutions, settings, ("reactions",), max_memory)
+        xl._check_run(linkage, span, settings, ("reactions",), max_memory)
     else:       # (the caller checked its memory, `_fits`)
         h = end / max(1, round(end / settings.step(linkage)))
         end = min(end, math.ceil(until / h) * h)
@@ -356,14 +360,14 @@ def _series_run(linkage, revolutions: int, settings, max_memory, start, until=No
     return t, force
 
 
-def _fits(linkage, revolutions: int, step: float, max_memory, outputs=("all",)) -> bool:
-    """A run at `step` recording `outputs` fits within `max_memory`
+def _fits(linkage, span, step: float, max_memory, outputs=("all",)) -> bool:
+    """A run over `span` at `step` recording `outputs` fits within `max_memory`
     (`exudyn_linkage._check_run`)."""
     from .._checks import MemoryLimitError
     from . import exudyn_linkage as xl
 
     try:
-        xl._check_run(linkage, revolutions, xl.make_settings({"step_size": step}), outputs,
+        xl._check_run(linkage, span, xl.make_settings({"step_size": step}), outputs,
                       max_memory)
     except MemoryLimitError:
         return False
@@ -410,9 +414,9 @@ def simulate_to_accuracy(mech, revolutions: int | None, accuracy: float, record,
     from .._warnings import AccuracyWarning
 
     linkage = as_linkage(mech)
-    if linkage.drive is not None or revolutions is not None:
-        revolutions = check_int("revolutions", revolutions, 1)
-    conv, traj = _sequence(linkage, revolutions, accuracy, options, record)
+    span = prepare_span(linkage, revolutions, duration=options.get("duration"),
+                        window=options.get("window"), max_memory=options.get("max_memory"))
+    conv, traj = _sequence(linkage, span, accuracy, options, record)
     stats = _accuracy_stats(conv, accuracy)
     # the series may come from a coarser run than the last (a finer record would exceed
     # max_memory): how far its own refined peaks lie from the extrapolated ones
@@ -440,8 +444,10 @@ def peak_to_accuracy(mech, revolution: int, accuracy: float, **options) -> float
     from .._warnings import AccuracyWarning
 
     revolution = check_int("revolution", revolution, 1)
-    conv, _ = _sequence(as_linkage(mech), revolution, accuracy, options,
-                        only=revolution - 1)
+    linkage = as_linkage(mech)
+    span = prepare_span(linkage, revolution, max_memory=options.get("max_memory"),
+                        name="revolution")
+    conv, _ = _sequence(linkage, span, accuracy, options, only=revolution - 1)
     rel = float(conv.relative_error[revolution - 1])
     if rel > accuracy:
         warnings.warn(f"Exudyn's estimated error of the peak, {rel:.2g} (step halving down to "

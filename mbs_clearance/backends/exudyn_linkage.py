@@ -72,6 +72,7 @@ from .._checks import (
 )
 from ..elements.registry import elements_with
 from ..model.linkage import GROUND, Linkage, Prismatic, Revolute
+from ..solve.problem import Span
 
 __all__ = ["ExudynSettings", "make_settings", "build", "solve", "simulate_exudyn_linkage",
            "peak_exudyn_linkage", "run_linkage", "peak_run", "body_states",
@@ -809,57 +810,50 @@ def _sliver_rows(t: np.ndarray, step: float) -> np.ndarray:
 
 #: floats Exudyn stores per step: per ground joint 4, drive 2, per contact 8, per body 12
 #: (time + 3 components per sensor)
-def estimate_memory(linkage: Linkage, revolutions: int, step: float,
-                    outputs: tuple[str, ...] = ("all",)) -> tuple[int, int]:
-    """(time steps, peak bytes) of a run: every step of every sensor stored by Exudyn,
-    copied once, and the Trajectory's per-step arrays."""
+def estimate_memory(linkage: Linkage, revolutions: int | None, step: float,
+                    outputs: tuple[str, ...] = ("all",), *,
+                    duration: float | None = None) -> tuple[int, int]:
+    """(time steps, peak bytes) of a run of `revolutions` drive revolutions, or of
+    `duration` s (a free linkage's run, or any span's length: then `revolutions` is not
+    read): every step of every sensor stored by Exudyn, copied once, and the Trajectory's
+    per-step arrays."""
     J = sum(len(el.contact_names(linkage)) for el in _ELEMENTS)
     B = len(linkage.bodies)
     G = len(linkage.ground_joints())
     full = "all" in outputs
     floats = 4 * G + (2 + 8 * J + 12 * B if full else 0)
-    # (a free linkage: `revolutions` is its duration in s)
-    span = revolutions if linkage.drive is None else revolutions * linkage.period
-    steps = max(1, int(round(span / step)))
+    length = revolutions * linkage.period if duration is None else duration
+    steps = max(1, int(round(length / step)))
     per_step = 8 * (2 * floats + ((6 + 6 * J + 2 * G + 3 * len(linkage.coordinates()))
                                   if full else 0))
     return steps, (steps + 1) * per_step
 
 
-def _check_run(linkage, revolutions, settings, outputs, max_memory, name="revolutions",
-               duration=None, window=None):
-    """The run's revolutions, or a free linkage's window edges in s (`time_edges`)."""
-    from ..solve.linkage_model import check_span, time_edges
-
+def _check_run(linkage, span: Span, settings, outputs, max_memory) -> None:
+    """Refuse a run over `span` (a `Span`, `linkage_model.prepare_span`) whose records of
+    `outputs` at the settings' step exceed `max_memory` (`MemoryLimitError`), or whose
+    linkage the settings cannot build (ValueError)."""
     _check_linkage(linkage, settings)
-    edges = None
-    if linkage.drive is None:
-        check_span(linkage, revolutions, duration, window, name)
-        if duration is None:
-            raise ValueError(f"linkage {linkage.name!r} is free (drive=None): give its run's "
-                             "duration= in s")
-        edges = time_edges(duration, window)
-        revolutions = float(edges[-1])
-    else:
-        revolutions = check_span(linkage, revolutions, duration, window, name)
-    unit = "s" if edges is not None else "revolutions"
+    size, unit = ((span.duration, "s") if span.revolutions is None
+                  else (span.revolutions, "revolutions"))
     max_memory = check_max_memory(max_memory)
     step = settings.step(linkage)
-    steps, need = estimate_memory(linkage, revolutions, step, outputs)
+    steps, need = estimate_memory(linkage, span.revolutions, step, outputs,
+                                  duration=span.duration)
     if need > max_memory:
         raise MemoryLimitError(
-            f"the Exudyn run of {revolutions} {unit} takes {steps:.3g} fixed steps of "
+            f"the Exudyn run of {size} {unit} takes {steps:.3g} fixed steps of "
             f"{step:g} s and needs about {format_bytes(need)} for its records, more than "
             f"max_memory={max_memory} bytes ({format_bytes(max_memory)}); raise step_size "
             "or max_memory, or run fewer revolutions")
-    return edges if edges is not None else revolutions
 
 
 # ---------------------------------------------------------------------------- results
 
 def window_peaks(t: np.ndarray, magnitude: np.ndarray, edges: np.ndarray) -> np.ndarray:
-    """`refined_peaks` over the windows [edges[k], edges[k + 1]] (s) of a free linkage's
-    run."""
+    """The maximum of `magnitude` over each window [edges[k], edges[k + 1]] (s; a span's
+    windows: revolutions, or a free linkage's time windows), refined between the samples
+    (`refine_peak`)."""
     peaks = np.empty(len(edges) - 1)
     tol = 1e-12 * max(1.0, float(edges[-1]))
     for k in range(len(peaks)):
@@ -915,12 +909,7 @@ def refined_peaks(t: np.ndarray, magnitude: np.ndarray, period: float,
     (`refine_peak`: the quartic through the largest sample and two neighbours on each side;
     the sampled maximum misses a sharp peak by up to its curvature times (h/2)^2 / 2,
     which would not converge at second order as h is halved; the refined value does)."""
-    peaks = np.empty(revolutions)
-    tol = 1e-12 * max(1.0, revolutions * period)
-    for k in range(revolutions):
-        idx = np.nonzero((t >= k * period - tol) & (t <= (k + 1) * period + tol))[0]
-        peaks[k] = refine_peak(t, magnitude, int(idx[np.argmax(magnitude[idx])]))
-    return peaks
+    return window_peaks(t, magnitude, np.arange(revolutions + 1) * period)
 
 
 def _coordinates(model: ExudynModel):
@@ -1010,30 +999,40 @@ def simulate_exudyn_linkage(linkage: Linkage, revolutions: int | None = None, **
     """
     from ..solve.trajectory import annotate
 
+    settings, span, max_memory, start = _prepare(linkage, revolutions, options)
+    return annotate(run_linkage(linkage, span, settings, max_memory, start))
+
+
+def _prepare(linkage, revolutions, options: dict, name: str = "revolutions"):
+    """(settings, span, max_memory, start) of a run from the public options (ValueError
+    naming a bad one before any work): `make_settings`, the span of `revolutions` or of
+    the options ``duration`` and ``window`` (`linkage_model.prepare_span`; `name`: the
+    count's option, as its errors say it)."""
+    from ..solve.linkage_model import prepare_span
+
     max_memory = options.pop("max_memory", None)
     start = options.pop("start", None)
     duration, window = options.pop("duration", None), options.pop("window", None)
-    return annotate(run_linkage(linkage, revolutions, make_settings(options), max_memory,
-                                start, duration=duration, window=window))
+    settings = make_settings(options)
+    _check_linkage(linkage, settings)
+    span = prepare_span(linkage, revolutions, duration=duration, window=window,
+                        max_memory=max_memory, name=name)
+    return settings, span, max_memory, start
 
 
-def run_linkage(linkage: Linkage, revolutions: int | None, settings: ExudynSettings,
-                max_memory=None, start=None, *, duration=None, window=None):
-    """The (not annotated) `Trajectory` of `simulate_exudyn_linkage` for validated
-    `settings` (from `start`, a `linkage_model.Start`, if given); the run and the record
-    size are checked first. A free linkage runs for `duration` s (windows of `window`)."""
+def run_linkage(linkage: Linkage, span: Span, settings: ExudynSettings, max_memory=None,
+                start=None):
+    """The (not annotated) `Trajectory` of `simulate_exudyn_linkage` over `span` (a
+    `Span`, `linkage_model.prepare_span`: drive revolutions, or a free linkage's time
+    windows) for validated `settings` (from `start`, a `linkage_model.Start`, if given);
+    the run and the record size are checked first."""
+    from ..solve.linkage_model import check_span_start
     from ..solve.trajectory import Trajectory
 
-    span = _check_run(linkage, revolutions, settings, ("all",), max_memory,
-                      duration=duration, window=window)
-    free = linkage.drive is None
-    if free and start is not None:
-        raise ValueError("start is for a driven linkage; a free linkage starts from its "
-                         "initial (Linkage.initial, an Initial)")
-    revolutions = None if free else span
-    model, stats = build_and_solve(linkage, settings,
-                                   float(span[-1]) if free else revolutions * linkage.period,
-                                   start=start)
+    _check_run(linkage, span, settings, ("all",), max_memory)
+    check_span_start(span, start)
+    free = span.revolutions is None
+    model, stats = build_and_solve(linkage, settings, float(span.edges[-1]), start=start)
 
     t, reactions = _reactions(model)
     moment = None if free else -stored(model, "drive")[:, 1]
@@ -1066,9 +1065,7 @@ def run_linkage(linkage: Linkage, revolutions: int | None, settings: ExudynSetti
         eccentricity=np.stack(ecc, axis=1),
         contact_phase=(penetration > 0.0).astype(np.int8), crank_work=work,
         mechanism=linkage, backend="exudyn", stats=stats,
-        peaks=(window_peaks(t, np.hypot(monitored[:, 0], monitored[:, 1]), span) if free
-               else refined_peaks(t, np.hypot(monitored[:, 0], monitored[:, 1]),
-                                  linkage.period, revolutions)),
+        peaks=window_peaks(t, np.hypot(monitored[:, 0], monitored[:, 1]), span.windows),
         joints=tuple(name for name, _ in linkage.contacts()), reactions=reactions,
         shaking_force=np.ascontiguousarray(shaking), coordinates=coords, rates=rates,
         accelerations=accs, friction_work=friction_work,
@@ -1090,11 +1087,8 @@ def peak_exudyn_linkage(linkage: Linkage, revolution: int | None = None,
     the time steps (`refined_peaks`); integrates only to the end of that revolution and
     records only the reactions. A free linkage: over the last window of a run of
     ``duration`` s (windows of ``window`` s)."""
-    max_memory = options.pop("max_memory", None)
-    start = options.pop("start", None)
-    duration, window = options.pop("duration", None), options.pop("window", None)
-    return peak_run(linkage, revolution, make_settings(options), max_memory, start,
-                    duration=duration, window=window)
+    settings, span, max_memory, start = _prepare(linkage, revolution, options, "revolution")
+    return peak_run(linkage, span, settings, max_memory, start)
 
 
 def monitors_element_reaction(linkage: Linkage) -> bool:
@@ -1105,37 +1099,29 @@ def monitors_element_reaction(linkage: Linkage) -> bool:
     return bool(after) and (linkage.monitor_joint is None or linkage.monitor_joint in after)
 
 
-def peak_run(linkage: Linkage, revolution: int | None, settings: ExudynSettings,
-             max_memory=None, start=None, *, duration=None, window=None) -> float:
-    """`peak_exudyn_linkage` for validated `settings` (from `start` if given)."""
-    return float(run_peaks(linkage, revolution, settings, max_memory, start,
-                           duration=duration, window=window, name="revolution")[-1])
+def peak_run(linkage: Linkage, span: Span, settings: ExudynSettings, max_memory=None,
+             start=None) -> float:
+    """`peak_exudyn_linkage` over `span` (a `Span`; its last window's peak) for validated
+    `settings` (from `start` if given)."""
+    return float(run_peaks(linkage, span, settings, max_memory, start)[-1])
 
 
-def run_peaks(linkage: Linkage, revolutions: int | None, settings: ExudynSettings,
-              max_memory=None, start=None, *, duration=None, window=None,
-              name: str = "revolutions") -> np.ndarray:
-    """The refined peaks of the monitored force (N) of each of `revolutions` drive
-    revolutions, or of each time window of a free linkage's run of `duration` s, from one
-    run recording the reactions only (a full run where the monitored force holds an
-    element's ground reaction, `monitors_element_reaction`). `name`: the span's option, as
-    its errors say it."""
+def run_peaks(linkage: Linkage, span: Span, settings: ExudynSettings, max_memory=None,
+              start=None) -> np.ndarray:
+    """The refined peaks of the monitored force (N) over each window of `span` (a `Span`,
+    `linkage_model.prepare_span`: drive revolutions, or a free linkage's time windows),
+    from one run recording the reactions only (a full run where the monitored force holds
+    an element's ground reaction, `monitors_element_reaction`)."""
+    from ..solve.linkage_model import check_span_start
+
     if monitors_element_reaction(linkage):
-        return np.asarray(run_linkage(linkage, revolutions, settings, max_memory, start,
-                                      duration=duration, window=window).peaks, dtype=float)
-    span = _check_run(linkage, revolutions, settings, ("reactions",), max_memory, name,
-                      duration=duration, window=window)
-    free = linkage.drive is None
-    if free and start is not None:
-        raise ValueError("start is for a driven linkage; a free linkage starts from its "
-                         "initial (Linkage.initial, an Initial)")
-    model, _ = build_and_solve(linkage, settings,
-                               float(span[-1]) if free else span * linkage.period,
+        return np.asarray(run_linkage(linkage, span, settings, max_memory, start).peaks,
+                          dtype=float)
+    _check_run(linkage, span, settings, ("reactions",), max_memory)
+    check_span_start(span, start)
+    model, _ = build_and_solve(linkage, settings, float(span.edges[-1]),
                                outputs=("reactions",), start=start)
     t, reactions = _reactions(model)
     F = (sum(reactions.values()) if linkage.monitor_joint is None
          else reactions[linkage.monitor_joint])
-    magnitude = np.hypot(F[:, 0], F[:, 1])
-    if free:
-        return window_peaks(t, magnitude, span)
-    return refined_peaks(t, magnitude, linkage.period, span)
+    return window_peaks(t, np.hypot(F[:, 0], F[:, 1]), span.windows)

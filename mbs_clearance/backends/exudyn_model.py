@@ -125,11 +125,13 @@ def build_model(mech: SliderCrank, settings: ExudynSettings | None = None,
 
 
 def _options(mech, revolutions, options, name):
+    from ..solve.linkage_model import prepare_span
+
     max_memory = options.pop("max_memory", None)
     settings = make_settings(options)
     linkage = _linkage(mech)
-    revolutions = check_int(name, revolutions, 1)
-    return linkage, settings, revolutions, max_memory
+    span = prepare_span(linkage, check_int(name, revolutions, 1), max_memory=max_memory)
+    return linkage, settings, span, max_memory
 
 
 def simulate_exudyn(mech: SliderCrank, revolutions: int = 4, **options) -> Trajectory:
@@ -160,9 +162,8 @@ def simulate_exudyn(mech: SliderCrank, revolutions: int = 4, **options) -> Traje
         (``step_size_used`` = end time / number of steps), whether every step kept that
         size (``uniform_steps``), Newton counters and the wall time in s.
     """
-    linkage, settings, revolutions, max_memory = _options(mech, revolutions, options,
-                                                          "revolutions")
-    lt = xl.run_linkage(linkage, revolutions, settings, max_memory)
+    linkage, settings, span, max_memory = _options(mech, revolutions, options, "revolutions")
+    lt = xl.run_linkage(linkage, span, settings, max_memory)
     return annotate(Trajectory(
         t=lt.t, base_force=lt.base_force, crank_moment=lt.crank_moment,
         contact_force=lt.contact_force[:, 0].copy(), penetration=lt.penetration[:, 0].copy(),
@@ -180,6 +181,5 @@ def peak_exudyn(mech: SliderCrank, revolution: int = 4, **options) -> float:
     Integrates only up to the end of that revolution and records only the base force.
     Options as `simulate_exudyn`.
     """
-    linkage, settings, revolution, max_memory = _options(mech, revolution, options,
-                                                         "revolution")
-    return xl.peak_run(linkage, revolution, settings, max_memory)
+    linkage, settings, span, max_memory = _options(mech, revolution, options, "revolution")
+    return xl.peak_run(linkage, span, settings, max_memory)

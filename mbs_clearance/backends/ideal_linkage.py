@@ -287,9 +287,10 @@ def _absolute(linkage: Linkage, q: dict, u: dict) -> tuple[np.ndarray, np.ndarra
 
 
 def _span(linkage: Linkage, revolutions, options: dict):
-    """(times, revolutions or None, window edges or None, samples per revolution) of a run;
-    ValueError before any work for a bad count, option or size."""
-    from ..solve.linkage_model import check_span, time_edges
+    """(times, the `Span`, samples per revolution) of a run (`linkage_model.prepare_span`:
+    drive revolutions, or a free linkage's time windows); ValueError before any work for a
+    bad count, option or size."""
+    from ..solve.linkage_model import prepare_span
 
     unknown = sorted(set(options) - set(OPTION_NAMES))
     if unknown:
@@ -298,25 +299,19 @@ def _span(linkage: Linkage, revolutions, options: dict):
     duration, window = options.get("duration"), options.get("window")
     per = check_int("samples_per_revolution", options.get("samples_per_revolution", 3600), 8)
     max_memory = check_max_memory(options.get("max_memory"))
-    if linkage.drive is None:
-        check_span(linkage, revolutions, duration, window)
-        if duration is None:
-            raise ValueError(f"linkage {linkage.name!r} is free (drive=None): give its run's "
-                             "duration= in s")
-        edges = time_edges(duration, window)
-        span, revolutions = float(edges[-1]), None
-        n = max(int(math.ceil(span / linkage.time_scale * per)), 8) + 1
+    span = prepare_span(linkage, revolutions, duration=duration, window=window,
+                        max_memory=max_memory)
+    if span.revolutions is None:
+        n = max(int(math.ceil(span.duration / linkage.time_scale * per)), 8) + 1
     else:
-        revolutions = check_span(linkage, revolutions, duration, window)
-        edges, span = None, revolutions * linkage.period
-        n = revolutions * per + 1
+        n = span.revolutions * per + 1
     need = n * (3 * len(linkage.bodies) + 3) * BYTES_PER_COORDINATE_SAMPLE
     if need > max_memory:
         raise MemoryLimitError(
             f"{n} samples of the ideal-joint run need about {format_bytes(need)}, more than "
             f"max_memory={max_memory} bytes ({format_bytes(max_memory)}); use fewer "
             "samples_per_revolution or a shorter run, or raise max_memory")
-    return np.linspace(0.0, span, n), revolutions, edges, per
+    return np.linspace(0.0, float(span.edges[-1]), n), span, per
 
 
 def _fixed_by_constraints(model: IdealModel, q0: np.ndarray) -> bool:
@@ -411,10 +406,10 @@ def simulate_ideal_linkage(linkage: Linkage, revolutions: int | None = None, **o
     if paper is not None:       # the paper's parameter set: its closed form, as before
         from .ideal import simulate_ideal
 
-        _, revolutions, _, _ = _span(linkage, revolutions, options)     # the same checks
+        _, span, _ = _span(linkage, revolutions, options)     # the same checks
         closed_form = {k: v for k, v in options.items()
                        if k in ("samples_per_revolution", "max_memory")}   # no integration
-        return simulate_ideal(paper, revolutions, **closed_form)
+        return simulate_ideal(paper, span.revolutions, **closed_form)
     return constrained_run(linkage, revolutions, **options)
 
 
@@ -422,10 +417,10 @@ def constrained_run(linkage: Linkage, revolutions: int | None = None, **options)
     """`simulate_ideal_linkage` by the constraints alone (module docstring), also for the
     paper's case (whose backend run is its closed form)."""
     from ..solve.trajectory import Trajectory, annotate
-    from .exudyn_linkage import refined_peaks, window_peaks
+    from .exudyn_linkage import window_peaks
 
     options = dict(options)
-    t, revolutions, edges, per = _span(linkage, revolutions, options)
+    t, span, per = _span(linkage, revolutions, options)
     rtol = check_real("rtol", options.get("rtol", 1e-10), 1e-14, 1e-3)
     q_tree, u_tree = _tree_start(linkage)
     q0, v0 = _absolute(linkage, q_tree, u_tree)
@@ -454,7 +449,7 @@ def constrained_run(linkage: Linkage, revolutions: int | None = None, **options)
         contact += el.ideal_contact_forces(linkage, lambda name: lam[:, model.rows[name]])
     contact = np.column_stack(contact)
     moment = work = None
-    if linkage.drive is not None:
+    if span.revolutions is not None:
         moment = -lam[:, model.drive_row]
         power = moment * linkage.drive.speed
         work = np.concatenate([[0.0], np.cumsum(0.5 * (power[1:] + power[:-1]) * np.diff(t))])
@@ -464,8 +459,7 @@ def constrained_run(linkage: Linkage, revolutions: int | None = None, **options)
              "constraint_residual": float(np.max(np.abs(phi)))}
     if integrated:
         stats["rtol"] = rtol
-    peaks = (window_peaks(t, magnitude, edges) if edges is not None
-             else refined_peaks(t, magnitude, linkage.period, revolutions))
+    peaks = window_peaks(t, magnitude, span.windows)
     return annotate(Trajectory(
         t=t, base_force=np.ascontiguousarray(monitored), crank_moment=moment,
         contact_force=contact, penetration=np.zeros_like(contact),

@@ -10,6 +10,7 @@ velocity constraints.
 from __future__ import annotations
 
 import warnings
+from dataclasses import replace
 from typing import NamedTuple
 
 import numpy as np
@@ -673,6 +674,50 @@ def check_span(linkage: Linkage, revolutions, duration, window,
     return check_int(name, 4 if revolutions is None else revolutions, 1)
 
 
+def prepare_span(linkage: Linkage, revolutions=None, *, duration=None, window=None,
+                 edges=None, max_memory=None, name: str = "revolutions") -> Span:
+    """The span of a run of `linkage`, checked (ValueError naming the option and its
+    range, before any work): a driven linkage's `revolutions` (None: 4; `name`: the option
+    as its errors say it), windows of one revolution; a free linkage's `duration` in s,
+    windows of `window` s (`time_edges`), and no revolutions. `edges` (increasing times in
+    s from 0) replaces the windows (a free linkage: then without a duration). The
+    per-window arrays are refused with `MemoryLimitError` above `max_memory` bytes (None:
+    the default) before they are allocated. Every run takes its span from here: the plain
+    and peak-only runs (`prepare`), the Exudyn and the ideal backends."""
+    from .._checks import check_max_memory, check_revolutions_memory
+
+    free = linkage.drive is None        # the runs below read the span, not the drive
+    if free and edges is not None and revolutions is None and duration is None:
+        pass            # the caller's windows
+    elif free:
+        check_span(linkage, revolutions, duration, window, name)
+        if duration is None:
+            raise ValueError(f"linkage {linkage.name!r} is free (drive=None): give its run's "
+                             "duration= in s")
+        edges = time_edges(duration, window)
+    else:
+        revolutions = check_span(linkage, revolutions, duration, window, name)
+    max_memory = check_max_memory(max_memory)
+    if edges is None:
+        check_revolutions_memory(revolutions, max_memory)
+        edges = np.arange(revolutions + 1) * linkage.period
+    else:
+        edges = np.ascontiguousarray(edges, dtype=float)
+        if (edges.ndim != 1 or len(edges) < 2 or edges[0] != 0.0
+                or not np.all(np.isfinite(edges)) or np.any(np.diff(edges) <= 0)):
+            raise ValueError("edges must be increasing finite times starting at 0.0")
+        check_revolutions_memory(len(edges) - 1, max_memory, name="windows")
+    return Span(edges=edges, windows=edges, revolutions=revolutions)
+
+
+def check_span_start(span: Span, start) -> None:
+    """ValueError for a `start` (a `Start`) of a free linkage's run (`span` without
+    revolutions), which starts from its description's `Initial`."""
+    if span.revolutions is None and start is not None:
+        raise ValueError("start is for a driven linkage; a free linkage starts from its "
+                         "initial (Linkage.initial, an Initial)")
+
+
 def run(linkage: Linkage, revolutions: int | None = None,
         settings: RunSettings | None = None, **options):
     """`solve(prepare(linkage, revolutions, settings, **options))`: integrate `linkage`'s
@@ -716,7 +761,6 @@ def prepare(linkage: Linkage, revolutions: int | None = None,
         MemoryLimitError,
         check_bool,
         check_max_memory,
-        check_revolutions_memory,
         format_bytes,
         revolution_bytes,
     )
@@ -727,20 +771,10 @@ def prepare(linkage: Linkage, revolutions: int | None = None,
     if settings is not None and not isinstance(settings, RunSettings):
         raise ValueError(f"settings must be a RunSettings; got {type(settings).__name__}")
     settings = (settings or RunSettings()).with_options(options)
-    free = linkage.drive is None
-    if free and edges is not None and revolutions is None and duration is None:
-        pass            # the caller's windows
-    elif free:
-        check_span(linkage, revolutions, duration, window)
-        if duration is None:
-            raise ValueError(f"linkage {linkage.name!r} is free (drive=None): give its run's "
-                             "duration= in s")
-        edges = time_edges(duration, window)
-    else:
-        revolutions = check_span(linkage, revolutions, duration, window)
-    if free and start is not None:
-        raise ValueError("start is for a driven linkage; a free linkage starts from its "
-                         "initial (Linkage.initial, an Initial)")
+    span = prepare_span(linkage, revolutions, duration=duration, window=window, edges=edges,
+                        max_memory=settings.max_memory)
+    check_span_start(span, start)
+    free = span.revolutions is None
     record = check_bool("record", record)
     select = check_bool("select", select)
     whole = check_bool("whole", whole)
@@ -750,15 +784,7 @@ def prepare(linkage: Linkage, revolutions: int | None = None,
     h_max = ((linkage.time_scale if free else linkage.period) / 8
              if settings.h_max is None else settings.h_max)
     event_tol = event_tolerance(linkage) if settings.event_tol is None else settings.event_tol
-    if edges is None:
-        check_revolutions_memory(revolutions, max_memory)
-        edges = np.arange(revolutions + 1) * linkage.period
-    else:
-        edges = np.ascontiguousarray(edges, dtype=float)
-        if (edges.ndim != 1 or len(edges) < 2 or edges[0] != 0.0
-                or not np.all(np.isfinite(edges)) or np.any(np.diff(edges) <= 0)):
-            raise ValueError("edges must be increasing finite times starting at 0.0")
-        check_revolutions_memory(len(edges) - 1, max_memory, name="windows")
+    edges = span.edges
     if model is None:
         model = load_model(linkage, specialise)
     rtol, atol_arr = _tolerances(linkage, model, settings.rtol, settings.atol)
@@ -774,15 +800,14 @@ def prepare(linkage: Linkage, revolutions: int | None = None,
         y0 = initial_state(linkage, model, p)
     else:
         y0 = check_start(linkage, model, p, start, event_tol)
-    win_edges = edges
     refine = REFINE_ITERS
     if t_eval is not None:
         t_eval, edges = landing_edges(edges, t_eval)
         if not whole:
             edges = landing_edges(np.array([0.0, t_eval[-1]]), t_eval)[1]
         record, refine = True, 0
-    span = float(edges[-1]) if free else float(edges[-1]) / linkage.period
-    steps = _estimate_steps(linkage, span, free, max_steps=max_steps,
+    length = float(edges[-1]) if free else float(edges[-1]) / linkage.period
+    steps = _estimate_steps(linkage, length, free, max_steps=max_steps,
                             h_max=h_max, pilot=dict(settings=settings, start=start,
                                                     specialise=specialise, model=model))
     window_bytes = revolution_bytes(len(edges) - 1)
@@ -790,7 +815,7 @@ def prepare(linkage: Linkage, revolutions: int | None = None,
     if record and steps is not None and window_bytes + steps * per_step > max_memory:
         need = window_bytes + steps * per_step
         raise MemoryLimitError(
-            f"a run of {span:.6g} {'s' if free else 'revolutions'} needs about "
+            f"a run of {length:.6g} {'s' if free else 'revolutions'} needs about "
             f"{format_bytes(need)} ({steps:.3g} recorded steps of {per_step} bytes), more "
             f"than max_memory={max_memory} bytes ({format_bytes(max_memory)}); raise "
             "max_memory, run fewer revolutions, or ask for the peaks only (record=False)")
@@ -805,10 +830,9 @@ def prepare(linkage: Linkage, revolutions: int | None = None,
     kernel_settings = integrator_settings(
         linkage, model, rtol, atol_arr, h0=h0, h_max=h_max, max_steps=limit, record=record,
         event_tol=event_tol, n_samples=n_samples, refine_iters=refine, n_out=n_out)
-    span_record = Span(edges=edges, windows=win_edges, revolutions=revolutions,
-                       t_eval=t_eval, select=select)
+    span = replace(span, edges=edges, t_eval=t_eval, select=select)
     return Problem(linkage=linkage, model=model, layout=ModelLayout.of(model),
-                   span=span_record, settings=settings, specialise=specialise, p=p, y0=y0,
+                   span=span, settings=settings, specialise=specialise, p=p, y0=y0,
                    integrator=kernel_settings, method=method, rtol=float(rtol),
                    max_steps=max_steps, max_memory=max_memory, extra_fev=extra_fev)
 

@@ -5,7 +5,6 @@ from __future__ import annotations
 import importlib
 from dataclasses import dataclass
 
-from .._checks import check_int
 from ..model.cases import door
 from ..model.linkage import Linkage
 from ..model.mechanism import SliderCrank
@@ -68,14 +67,10 @@ def _backend(name: str) -> Backend:
 
 def _check(mech: Linkage, revolutions, name="revolutions") -> int | None:
     """The revolutions (default 4) of a driven linkage; None for a free linkage (it runs
-    for the option ``duration``), which refuses revolutions."""
-    if mech.drive is None:
-        if revolutions is not None:
-            raise ValueError(f"linkage {mech.name!r} is free (drive=None): it has no drive "
-                             f"revolutions; give duration= (s) and optionally window= (s) "
-                             f"instead of {name}={revolutions!r}")
-        return None
-    return check_int(name, 4 if revolutions is None else revolutions, 1)
+    for the option ``duration``), which refuses revolutions (`linkage_model.check_span`)."""
+    from .linkage_model import check_span
+
+    return check_span(mech, revolutions, None, None, name)
 
 
 def simulate(mech: SliderCrank, revolutions: int | None = None, backend: str = "reduced",

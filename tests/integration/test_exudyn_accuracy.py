@@ -11,6 +11,7 @@ import pytest
 
 from mbs_clearance import AccuracyWarning, SliderCrank, peak_base_force, simulate
 from mbs_clearance.backends import exudyn_convergence as xc
+from mbs_clearance.solve.linkage_model import prepare_span
 
 pytestmark = pytest.mark.exudyn
 
@@ -157,7 +158,7 @@ def test_a_halving_beyond_max_memory_stops_the_sequence_unmet(monkeypatch):
     limit = (need[2] + need[3]) // 2
     with pytest.warns(AccuracyWarning, match="misses the requested accuracy"):
         peak = xc.peak_to_accuracy(mech, 1, 1e-3, max_memory=limit)
-    conv, _ = xc._sequence(lk, 1, 1e-3, {"max_memory": limit})
+    conv, _ = xc._sequence(lk, prepare_span(lk, 1), 1e-3, {"max_memory": limit})
     assert conv.steps == tuple(h[:3]) and "exceed max_memory even for its peaks" in conv.stopped
     assert peak == conv.value[0] and conv.relative_error[0] > 1e-3
 
@@ -170,9 +171,9 @@ def test_a_stopped_run_is_the_beginning_of_the_full_run():
 
     lk = as_linkage(SliderCrank())
     settings = xl.make_settings({"step_size": lk.period / 3000})
-    t, force = xc._series_run(lk, 1, settings, None, None)
+    t, force = xc._series_run(lk, prepare_span(lk, 1), settings, None, None)
     until = 0.3 * lk.period
-    ts, fs = xc._series_run(lk, 1, settings, None, None, until=until)
+    ts, fs = xc._series_run(lk, prepare_span(lk, 1), settings, None, None, until=until)
     h = t[1] - t[0]
     assert until <= ts[-1] < until + 1.01 * h and len(ts) < 0.31 * len(t)
     np.testing.assert_allclose(ts, t[:len(ts)], rtol=1e-12, atol=0.0)
@@ -207,10 +208,10 @@ def test_a_finer_run_that_stops_early_needs_only_its_part_of_the_memory():
 
     mech = SliderCrank()
     lk = as_linkage(mech)
-    free, _ = xc._sequence(lk, 1, 1e-3, {})
+    free, _ = xc._sequence(lk, prepare_span(lk, 1), 1e-3, {})
     assert len(free.steps) == 4
     need = [xl.estimate_memory(lk, 1, step, ("reactions",))[1] for step in free.steps]
-    conv, _ = xc._sequence(lk, 1, 1e-3, {"max_memory": (need[2] + need[3]) // 2})
+    conv, _ = xc._sequence(lk, prepare_span(lk, 1), 1e-3, {"max_memory": (need[2] + need[3]) // 2})
     assert conv.steps == free.steps and conv.stopped == ""
     np.testing.assert_array_equal(conv.peaks, free.peaks)
     assert conv.relative_error[0] <= 1e-3

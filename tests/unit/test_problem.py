@@ -68,3 +68,37 @@ def test_a_flow_from_its_prepared_problem_is_the_flow_of_the_mechanism():
         Flow(problem, rtol=1e-8)
     free = Flow(_free(), free=True)
     assert free.omega is None and free.problem.span.revolutions is None
+
+
+def test_one_span_preparation_for_every_backend():
+    """`prepare_span`: a driven linkage's windows are its revolutions (edges k T, T = 2 pi /
+    drive speed), a free linkage's the time windows of its duration, without revolutions;
+    the reduced model, Exudyn and the ideal-joint backend refuse a bad span with its one
+    message, before any run."""
+    from mbs_clearance.backends import exudyn_linkage as xl
+    from mbs_clearance.backends.ideal_linkage import constrained_run
+    from mbs_clearance.solve.linkage_model import prepare_span
+
+    driven = cases.paper_slider_crank()
+    span = prepare_span(driven, 3)
+    np.testing.assert_allclose(span.edges, np.arange(4) * 2 * np.pi / driven.drive.speed,
+                               rtol=1e-15)
+    assert span.revolutions == 3 and span.windows is span.edges
+    free = prepare_span(_free(), duration=0.01, window=0.004)
+    np.testing.assert_allclose(free.edges, [0.0, 0.004, 0.008, 0.01], rtol=1e-15)
+    assert free.revolutions is None and free.duration == 0.01
+    runs = {"reduced": prepare, "exudyn": xl.simulate_exudyn_linkage,
+            "exudyn peak": xl.peak_exudyn_linkage, "ideal": constrained_run}
+    for linkage, kwargs in ((_free(), {}), (_free(), {"window": 0.01}),
+                            (driven, {"duration": 0.01}), (driven, {"edges": [0.0, -1.0]})):
+        with pytest.raises(ValueError) as expected:
+            prepare_span(linkage, **kwargs)
+        for name, run in runs.items():
+            if "edges" in kwargs and name != "reduced":     # the reduced model's option
+                continue
+            with pytest.raises(ValueError) as got:
+                run(linkage, **kwargs)
+            assert str(got.value) == str(expected.value), name
+    for run in runs.values():
+        with pytest.raises(ValueError, match=r"free \(drive=None\).*instead of revolution"):
+            run(_free(), 2, duration=0.01)
