@@ -223,7 +223,8 @@ def statistics(tr: Trajectory, revolutions: tuple[int, ...]) -> Statistics:
     )
 
 
-def compare(a: Trajectory, b: Trajectory, revolutions=None) -> Comparison:
+def compare(a: Trajectory, b: Trajectory, revolutions=None, *, step_bars: bool = True,
+            start=None) -> Comparison:
     """Compare trajectory `b` against the reference `a` revolution by revolution.
 
     Parameters
@@ -233,6 +234,14 @@ def compare(a: Trajectory, b: Trajectory, revolutions=None) -> Comparison:
     revolutions : int, sequence of int or None
         Revolutions (1-based) to compare; an int n means 1..n; None: every full revolution
         both trajectories cover.
+    step_bars : bool, default True
+        For the verdict, give an Exudyn run at a fixed step its error bars from two more
+        runs at h/2 and h/4 (`mbs_clearance.analysis.verdict.step_bars`; about 6 times
+        that run's time, only where the motion is comparable peak by peak). False: no
+        further runs, and a difference beyond the bars where a run has none is "not
+        decided: no error bar".
+    start
+        The runs' start (`simulate(..., start=)`), for those further runs.
 
     Returns
     -------
@@ -299,7 +308,7 @@ def compare(a: Trajectory, b: Trajectory, revolutions=None) -> Comparison:
         statistics_a=statistics(a, later), statistics_b=statistics(b, later),
         meta={"stats_a": dict(a.stats), "stats_b": dict(b.stats)},
         joints=joints, first_impacts_a=fa, first_impacts_b=fb,
-        verdict=verdict_of_trajectories(a, b, revs),
+        verdict=verdict_of_trajectories(a, b, revs, step_bars=step_bars, start=start),
     )
 
 
@@ -639,6 +648,12 @@ def build_parser(parser: argparse.ArgumentParser | None = None) -> argparse.Argu
                              "h/2, h/4, ... until the extrapolated peaks' error estimate "
                              "meets it (the verdict's bar for exudyn; instead of "
                              "--step-size)")
+    parser.add_argument("--no-step-bars", action="store_true",
+                        help="without --accuracy, Exudyn's run at its step gets its error "
+                             "bars from two more runs at half and a quarter of that step "
+                             "(about 6 times its time; only where the motion is comparable "
+                             "peak by peak); this skips them, and a difference beyond the "
+                             "bars is then 'not decided: no error bar'")
     parser.add_argument("--contact", help="contact variant (exudyn backend): symbolic, "
                                           "python or sphere")
     parser.add_argument("--converged", action="store_true",
@@ -722,7 +737,7 @@ def run_compare(args: argparse.Namespace) -> int:
         t0 = time.perf_counter()
         trajectories.append(simulate(mech, args.revolutions, backend=backend, **options))
         print(f"{backend}: {time.perf_counter() - t0:.3g} s", file=sys.stderr, flush=True)
-    result = compare(*trajectories)
+    result = compare(*trajectories, step_bars=not args.no_step_bars)
     print(format_table(result))
     if args.converged:
         if set(pair) != {"reduced", "exudyn"}:

@@ -277,7 +277,7 @@ def section_agreement(out: Path, s: dict) -> dict:
                 continue
             ex = simulate(mech, n, backend="exudyn", step_size=s["exudyn_step"],
                           contact=variant)
-            res = compare(ref, ex)
+            res = compare(ref, ex, step_bars=False)
             per = res.revolutions
             fa, fb = res.first_impact_a, res.first_impact_b
             rows.append({
@@ -345,7 +345,7 @@ def agreement_cases(out: Path, revolutions: int, names, settled=()) -> dict:
         start = settled_start(linkage, n_settled, rtol=1e-10) if n_settled else None
         ref = simulate(linkage, revs, rtol=1e-10, h_max=step, start=start)
         ex = simulate(linkage, revs, backend="exudyn", start=start)
-        res = compare(ref, ex)
+        res = compare(ref, ex, step_bars=False)
         fig = f"agreement_{name}{f'_settled_{n_settled}' if n_settled else ''}.png"
         plot_linkage_comparison(ref, ex, path=out / "figures" / fig)
         figures.append(fig)

@@ -9,6 +9,7 @@ from scipy import stats
 from mbs_clearance.analysis.verdict import (
     AGREE,
     DIFFER,
+    NO_BAR,
     NOT_COMPARABLE,
     UNDECIDED,
     Item,
@@ -103,9 +104,10 @@ def test_chaotic_motion_is_judged_on_statistics():
     assert v.statistics == UNDECIDED and "run at least 4 revolutions" in v.reason
 
 
-def test_a_differing_verdict_says_when_a_bar_is_unknown():
-    """A model without an error estimate (a fixed step) has the bar 0: the summary of a
-    differing verdict says so, since part of the difference may be that model's error."""
+def test_a_difference_without_a_bar_is_not_decided():
+    """A model without an error estimate (a fixed step) has the bar 0: a difference beyond
+    the bars then decides nothing (part of it may be that model's error), a verdict of its
+    own kind that says why, not "differ"."""
     import dataclasses
 
     from mbs_clearance import SliderCrank, simulate
@@ -115,9 +117,13 @@ def test_a_differing_verdict_says_when_a_bar_is_unknown():
     stats = {k: v for k, v in a.stats.items() if k != "error_estimate"}
     b = dataclasses.replace(a, backend="exudyn", peaks=1.01 * np.asarray(a.peaks), stats=stats)
     v = verdict_of_trajectories(a, b)
-    assert v.kind == DIFFER, v.summary()
+    assert v.kind == NO_BAR and not v.agree, v.summary()
     assert "no error estimate for exudyn" in v.summary()
-    assert "may be its error" in v.summary()
+    assert "not decided" in v.summary() and "differ beyond" not in v.summary()
+    assert "may be its own error" in v.summary()
+    # with a bar on b the same difference is a difference
+    barred = dataclasses.replace(b, stats={**stats, "error_estimate": 1e-6})
+    assert verdict_of_trajectories(a, barred).kind == DIFFER
     assert "no error estimate" not in verdict_of_trajectories(a, a).summary()
 
 
