@@ -35,7 +35,7 @@ Python API (`verdict_of_peaks`, `verdict_of_trajectories`) build the same `Verdi
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass, replace
+from dataclasses import asdict, dataclass, fields, replace
 
 import numpy as np
 
@@ -434,8 +434,9 @@ def step_bars(traj, start=None):
         step"), ``observed_order``, ``accuracy_steps``, ``accuracy_peaks`` and
         ``step_bars_seconds`` (s, the two runs' wall time).
     """
-    import dataclasses
     import time
+
+    from .._checks import MemoryLimitError
 
     if (traj.backend != "exudyn" or _has_bars(traj) or traj.peaks is None
             or "step_size" not in traj.stats or getattr(traj.mechanism, "drive", True) is None):
@@ -445,15 +446,17 @@ def step_bars(traj, start=None):
     from ..model.cases import as_linkage
 
     linkage = as_linkage(traj.mechanism)
-    names = {f.name for f in dataclasses.fields(xl.ExudynSettings)} - {"step_size",
-                                                                       "accuracy"}
+    names = {f.name for f in fields(xl.ExudynSettings)} - {"step_size", "accuracy"}
     options = {k: v for k, v in traj.stats.items() if k in names}
     h = float(traj.stats["step_size"])
     y_h = np.asarray(traj.peaks, dtype=float)
     n = len(y_h)
     t0 = time.perf_counter()
-    finer = [xl.run_peaks(linkage, n, xl.make_settings({**options, "step_size": step}),
-                          start=start) for step in (h / 2.0, h / 4.0)]
+    try:
+        finer = [xl.run_peaks(linkage, n, xl.make_settings({**options, "step_size": step}),
+                              start=start) for step in (h / 2.0, h / 4.0)]
+    except MemoryLimitError:
+        return traj     # even the reactions at h/4 exceed max_memory: no bar (it says so)
     seconds = time.perf_counter() - t0
     value, error, order = richardson(y_h, *finer)
     bars = np.abs(y_h - value) + error
@@ -469,6 +472,7 @@ def step_bars(traj, start=None):
 
 
 def _with_step_bars(traj, start):
+    # verdict_of_trajectories' flag of the same name hides the function there
     return step_bars(traj, start=start)
 
 
