@@ -6,8 +6,8 @@ of its last documented digit (or the entry's stated tolerance). Each command run
 Kinds: ``number`` (one number, group 1 of the first printed line matching ``printed``);
 ``lines`` (printed lines of the same words); ``numbers`` (several numbers of one table
 cell or row, in the page's text in that order: the groups of the first printed lines
-matching ``printed``, line after line, e.g. one line per revolution; a documented "-" is
-printed as "-")."""
+matching ``printed``, line after line (groups that match nothing skipped), e.g. one line
+per revolution; a documented "-" is printed as "-")."""
 
 from __future__ import annotations
 
@@ -139,7 +139,8 @@ def _check_cell(entry: dict, printed: list[str]) -> None:
         assert at >= 0, f"{entry['text']} does not hold {docs} in that order"
         at += len(doc)
     pattern = re.compile(entry["printed"])
-    found = [g for ln in printed if (m := pattern.search(ln)) for g in m.groups()][:len(docs)]
+    found = [g for ln in printed if (m := pattern.search(ln))
+             for g in m.groups() if g is not None][:len(docs)]
     assert len(found) == len(docs), (f"`{entry['command']}` prints {len(found)} values "
                                      f"matching {entry['printed']}, not {len(docs)}")
     for doc, got in zip(docs, found):
