@@ -10,8 +10,8 @@ reduced model at its requested accuracy (`simulate(..., accuracy=)`, ``stats
   by how much);
 - ``"not decided: no error bar"``: a difference beyond the bars where a model has no error
   estimate (a run at a fixed step or tolerance, its bar 0): part of the difference may be
-  that model's own error, so it decides nothing (`step_bars` gives an Exudyn run at a fixed
-  step its bar: two more runs at h/2 and h/4);
+  that model's own error, so it decides nothing (`validation.compare.step_bars` gives an
+  Exudyn run at a fixed step its bar: two more runs at h/2 and h/4);
 - ``"not comparable peak by peak"``: the motion is chaotic or has not settled (a Lyapunov
   exponent that is positive or undecided, or the return map of the revolution boundaries
   finds no period: ``stats["periodic"]`` False or None; a run too short for the return
@@ -35,14 +35,14 @@ Python API (`verdict_of_peaks`, `verdict_of_trajectories`) build the same `Verdi
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass, fields, replace
+from dataclasses import asdict, dataclass, replace
 
 import numpy as np
 
 __all__ = ["AGREE", "DIFFER", "NO_BAR", "NOT_COMPARABLE", "UNDECIDED", "Item", "Verdict",
-           "step_bars", "comparable", "judge_periodicity", "periodic_flag", "mean_interval",
+           "comparable", "judge_periodicity", "periodic_flag", "mean_interval",
            "revolution_statistics", "verdict_of_peaks", "verdict_of_trajectories",
-           "format_verdict", "with_missing_bars", "MIN_STATISTICS_REVOLUTIONS",
+           "format_verdict", "with_missing_bars", "has_bars", "MIN_STATISTICS_REVOLUTIONS",
            "JUDGE_REVOLUTIONS"]
 
 AGREE = "agree"
@@ -352,7 +352,7 @@ def _bars(traj, peaks: np.ndarray) -> np.ndarray:
 
 
 def verdict_of_trajectories(a, b, revolutions=None, *, lyapunov=None,
-                            step_bars: bool = False, start=None) -> Verdict:
+                            bars=None) -> Verdict:
     """The verdict on two Trajectories of the same mechanism (a the reference).
 
     Their per-revolution peaks, each with its own bar (`_bars`: a run's per-revolution
@@ -369,13 +369,11 @@ def verdict_of_trajectories(a, b, revolutions=None, *, lyapunov=None,
         The revolutions (1-based) compared; None: every one both cover.
     lyapunov
         An optional Lyapunov result (`comparable`).
-    step_bars : bool, default False
-        Give an Exudyn run at a fixed step without an estimate its bars first
-        (`step_bars`: two more runs at h/2 and h/4), where the motion is comparable peak
-        by peak (elsewhere the statistics' intervals are the bars and the runs would
-        change nothing).
-    start
-        The runs' start (`simulate(..., start=)`), for `step_bars`' runs.
+    bars : callable or None
+        Trajectory -> Trajectory: gives a run without an estimate its bars first (e.g.
+        `validation.compare.step_bars`: an Exudyn run at a fixed step, from two more runs at
+        h/2 and h/4), called on each run only where the motion is comparable peak by peak
+        (elsewhere the statistics' intervals are the bars and it would change nothing).
 
     Returns
     -------
@@ -388,8 +386,8 @@ def verdict_of_trajectories(a, b, revolutions=None, *, lyapunov=None,
     n = min(a.revolutions, b.revolutions)
     revs = tuple(range(1, n + 1)) if revolutions is None else tuple(revolutions)
     flags = _flags(a, b)
-    if step_bars and comparable(flags, lyapunov)[0]:
-        a, b = (_with_step_bars(tr, start) for tr in (a, b))
+    if bars is not None and comparable(flags, lyapunov)[0]:
+        a, b = bars(a), bars(b)
     pa, pb = revolution_peaks(a), revolution_peaks(b)
     ea, eb = _bars(a, pa), _bars(b, pb)
     x = np.array([pa[k - 1] for k in revs])
@@ -402,78 +400,14 @@ def verdict_of_trajectories(a, b, revolutions=None, *, lyapunov=None,
                          lyapunov=lyapunov,
                          statistics_a=revolution_statistics(a, later),
                          statistics_b=revolution_statistics(b, later))
-    v = with_missing_bars(v, [tr.backend for tr in (a, b) if not _has_bars(tr)])
+    v = with_missing_bars(v, [tr.backend for tr in (a, b) if not has_bars(tr)])
     return _with_step_note(v, [tr for tr in (a, b) if "step_bars_seconds" in tr.stats])
 
 
-def _has_bars(traj) -> bool:
+def has_bars(traj) -> bool:
+    """The run carries an error estimate (``stats["error_estimate"]`` or per-revolution
+    ``stats["peak_errors"]``)."""
     return "error_estimate" in traj.stats or "peak_errors" in traj.stats
-
-
-def step_bars(traj, start=None):
-    """An Exudyn run at a fixed step h without an error estimate, with a bar on each of its
-    per-revolution peaks: two more runs at h/2 and h/4 (the reactions only) and
-    `exudyn_convergence.richardson` on the three. The bar of the run's own peak y_h is its
-    distance from the extrapolated value plus that value's bar, |y_h - y*| + |y_h/2 -
-    y_h/4|, which bounds y_h's error wherever the extrapolated value's bar holds
-    (docs/exudyn.md measures it against the reduced model at rtol 1e-12). Any other run
-    (another backend, or a run with an estimate already) is returned as it is.
-
-    Parameters
-    ----------
-    traj : Trajectory
-        An Exudyn run of a driven mechanism (``stats["step_size"]``, its settings).
-    start
-        The run's start (`simulate(..., start=)`), None: the default.
-
-    Returns
-    -------
-    Trajectory
-        `traj` with ``stats["peak_errors"]`` (N per revolution), ``error_estimate``
-        (largest relative bar), ``error_estimate_method`` ("step halving at the run's
-        step"), ``observed_order``, ``accuracy_steps``, ``accuracy_peaks`` and
-        ``step_bars_seconds`` (s, the two runs' wall time).
-    """
-    import time
-
-    from .._checks import MemoryLimitError
-
-    if (traj.backend != "exudyn" or _has_bars(traj) or traj.peaks is None
-            or "step_size" not in traj.stats or getattr(traj.mechanism, "drive", True) is None):
-        return traj
-    from ..backends import exudyn_linkage as xl
-    from ..backends.exudyn_convergence import richardson
-    from ..model.cases import as_linkage
-
-    linkage = as_linkage(traj.mechanism)
-    names = {f.name for f in fields(xl.ExudynSettings)} - {"step_size", "accuracy"}
-    options = {k: v for k, v in traj.stats.items() if k in names}
-    h = float(traj.stats["step_size"])
-    y_h = np.asarray(traj.peaks, dtype=float)
-    n = len(y_h)
-    t0 = time.perf_counter()
-    try:
-        finer = [xl.run_peaks(linkage, n, xl.make_settings({**options, "step_size": step}),
-                              start=start) for step in (h / 2.0, h / 4.0)]
-    except MemoryLimitError:
-        return traj     # even the reactions at h/4 exceed max_memory: no bar (it says so)
-    seconds = time.perf_counter() - t0
-    value, error, order = richardson(y_h, *finer)
-    bars = np.abs(y_h - value) + error
-    stats = dict(traj.stats)
-    stats.update(peak_errors=[float(e) for e in bars],
-                 error_estimate=float(np.max(bars / np.abs(y_h))),
-                 error_estimate_method="step halving at the run's step (h, h/2, h/4)",
-                 observed_order=[float(p) for p in order],
-                 accuracy_steps=[h, h / 2.0, h / 4.0],
-                 accuracy_peaks=[list(map(float, p)) for p in (y_h, *finer)],
-                 step_bars_seconds=seconds)
-    return replace(traj, stats=stats)
-
-
-def _with_step_bars(traj, start):
-    # verdict_of_trajectories' flag of the same name hides the function there
-    return step_bars(traj, start=start)
 
 
 def _with_step_note(v: Verdict, barred) -> Verdict:
@@ -495,7 +429,7 @@ def with_missing_bars(v: Verdict, missing) -> Verdict:
     if not missing:
         return v
     note = (f"; no error estimate for {' and '.join(missing)} (bar 0: give it one with "
-            f"accuracy=, step_bars=True or compare --accuracy X)")
+            f"accuracy=, compare(a, b, step_bars=True) or compare --accuracy X)")
     kind = NO_BAR if v.kind == DIFFER else v.kind
     return Verdict(kind, v.model_a, v.model_b, v.items, v.reason + note, v.statistics,
                    v.statistics_items)

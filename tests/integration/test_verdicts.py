@@ -86,8 +86,8 @@ def test_a_run_at_a_fixed_step_gets_bars_that_hold_the_reference():
     from the reduced model at rtol 1e-12 (an independent reference, converged far beyond
     these bars) without being vacuous (at most 3 times that distance). With the bars the
     comparison agrees; without them the same difference decides nothing."""
-    from mbs_clearance.analysis.verdict import NO_BAR, step_bars
-    from validation.compare import compare
+    from mbs_clearance.analysis.verdict import NO_BAR
+    from validation.compare import compare, step_bars
 
     paper = SliderCrank()
     ref = simulate(paper, 2, rtol=1e-12)
