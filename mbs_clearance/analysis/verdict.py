@@ -429,7 +429,7 @@ def with_missing_bars(v: Verdict, missing) -> Verdict:
     if not missing:
         return v
     note = (f"; no error estimate for {' and '.join(missing)} (bar 0: give it one with "
-            f"accuracy=, compare(a, b, step_bars=True) or compare --accuracy X)")
+            f"accuracy=, compare's step bars or compare --accuracy X)")
     kind = NO_BAR if v.kind == DIFFER else v.kind
     return Verdict(kind, v.model_a, v.model_b, v.items, v.reason + note, v.statistics,
                    v.statistics_items)
