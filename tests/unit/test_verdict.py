@@ -138,3 +138,30 @@ def test_one_revolution_of_a_motion_that_does_not_repeat_says_to_run_more():
     assert v.statistics_items == ()
     assert "over 0 revolution(s)" in v.reason and "run at least 4 revolutions" in v.reason
     assert "statistics over revolutions" not in format_verdict(v)
+
+
+def test_bars_are_asked_for_only_where_peaks_are_compared():
+    """`verdict_of_trajectories(..., bars=f)` gives the runs their bars (e.g. Exudyn's by
+    step halving, further runs) only where the motion is comparable peak by peak: where it
+    is not, the statistics' intervals are the bars and the runs would change nothing."""
+    import dataclasses
+
+    from mbs_clearance import SliderCrank, simulate
+    from mbs_clearance.analysis.verdict import verdict_of_trajectories
+
+    a = simulate(SliderCrank(), 2)
+    asked = []
+
+    def bars(tr):
+        asked.append(tr.backend)
+        return dataclasses.replace(tr, stats={**tr.stats, "error_estimate": 0.02})
+
+    b = dataclasses.replace(a, backend="exudyn", peaks=1.01 * np.asarray(a.peaks),
+                            stats={k: v for k, v in a.stats.items() if k != "error_estimate"})
+    # periodic (judged on 8 revolutions): both runs asked; the 1 % lies within 2 % bars
+    assert verdict_of_trajectories(a, b, bars=bars).kind == AGREE
+    assert asked == ["reduced", "exudyn"]
+    asked.clear()
+    flagged = [dataclasses.replace(tr, stats={**tr.stats, "periodic": False}) for tr in (a, b)]
+    assert verdict_of_trajectories(*flagged, bars=bars).kind == NOT_COMPARABLE
+    assert asked == []
