@@ -76,7 +76,7 @@ def main(argv=None):
         simulate(mech, rev, backend=backend, **options)          # warm-up
         t, traj = timed(lambda b=backend, o=options: simulate(mech, rev, backend=b, **o),
                               repeats)
-        m = compare(ref, traj, revolutions=(rev,)).revolution(rev)
+        m = compare(ref, traj, revolutions=(rev,), step_bars=False).revolution(rev)
         rows.append(dict(backend=backend, setting=label, time=t, repeats=repeats,
                          peak=traj.max_base_force(rev), peak_error=abs(m.peak_rel_diff),
                          rms_f12=m.base_force_rel_rms, rms_m2=m.crank_moment_rel_rms,
@@ -152,7 +152,7 @@ def cases_main(args) -> None:
             except RuntimeError as exc:          # Exudyn's Newton failed at this step
                 print(f"  {name} exudyn h = {h:.3g} s: failed ({exc})", flush=True)
                 continue
-            m = compare(ref, tr, revolutions=(rev,)).revolution(rev)
+            m = compare(ref, tr, revolutions=(rev,), step_bars=False).revolution(rev)
             rows.append(dict(step=h, time=t, peak_error=abs(m.peak_rel_diff),
                              rms_shaking=abs(m.shaking_rms_rel_diff),
                              rms_moment=abs(m.moment_rms_rel_diff)))

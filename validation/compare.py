@@ -41,7 +41,7 @@ import numpy as np
 from mbs_clearance.analysis.verdict import Verdict, format_verdict, verdict_of_trajectories
 from mbs_clearance.solve.trajectory import Trajectory
 
-__all__ = ["RevolutionMetrics", "FirstImpact", "Statistics", "Comparison", "compare",
+__all__ = ["RevolutionMetrics", "FirstImpact", "Statistics", "Comparison", "compare", "step_bars",
            "common_grid", "first_impact", "statistics", "format_table", "compare_command",
            "plot_linkage_comparison", "shaking_magnitude", "eccentricities", "clearances",
            "joints_of", "CrossCheck", "cross_check", "format_cross_check"]
@@ -223,7 +223,8 @@ def statistics(tr: Trajectory, revolutions: tuple[int, ...]) -> Statistics:
     )
 
 
-def compare(a: Trajectory, b: Trajectory, revolutions=None) -> Comparison:
+def compare(a: Trajectory, b: Trajectory, revolutions=None, *, step_bars: bool = True,
+            start=None) -> Comparison:
     """Compare trajectory `b` against the reference `a` revolution by revolution.
 
     Parameters
@@ -233,6 +234,13 @@ def compare(a: Trajectory, b: Trajectory, revolutions=None) -> Comparison:
     revolutions : int, sequence of int or None
         Revolutions (1-based) to compare; an int n means 1..n; None: every full revolution
         both trajectories cover.
+    step_bars : bool, default True
+        For the verdict, give an Exudyn run at a fixed step its error bars from two more
+        runs at h/2 and h/4 (`step_bars`; about 6 times that run's time, only where the
+        motion is comparable peak by peak). False: no further runs, and a difference
+        beyond the bars where a run has none is "not decided: no error bar".
+    start
+        The runs' start (`simulate(..., start=)`), for those further runs.
 
     Returns
     -------
@@ -299,8 +307,80 @@ def compare(a: Trajectory, b: Trajectory, revolutions=None) -> Comparison:
         statistics_a=statistics(a, later), statistics_b=statistics(b, later),
         meta={"stats_a": dict(a.stats), "stats_b": dict(b.stats)},
         joints=joints, first_impacts_a=fa, first_impacts_b=fb,
-        verdict=verdict_of_trajectories(a, b, revs),
+        verdict=verdict_of_trajectories(a, b, revs,
+                                        bars=_step_bars_from(start) if step_bars else None),
     )
+
+
+def step_bars(traj, start=None):
+    """An Exudyn run at a fixed step h without an error estimate, with a bar on each of its
+    per-revolution peaks: two more runs at h/2 and h/4 (the reactions only) and
+    `exudyn_convergence.richardson` on the three. The bar of the run's own peak y_h is its
+    distance from the extrapolated value plus that value's bar, |y_h - y*| + |y_h/2 -
+    y_h/4|, which bounds y_h's error wherever the extrapolated value's bar holds
+    (docs/exudyn.md measures it against the reduced model at rtol 1e-12). Any other run
+    (another backend, or a run with an estimate already) is returned as it is.
+
+    Parameters
+    ----------
+    traj : Trajectory
+        An Exudyn run of a driven mechanism (``stats["step_size"]``, its settings).
+    start
+        The run's start (`simulate(..., start=)`), None: the default.
+
+    Returns
+    -------
+    Trajectory
+        `traj` with ``stats["peak_errors"]`` (N per revolution), ``error_estimate``
+        (largest relative bar), ``error_estimate_method`` ("step halving at the run's
+        step"), ``observed_order``, ``accuracy_steps``, ``accuracy_peaks`` and
+        ``step_bars_seconds`` (s, the two runs' wall time).
+    """
+    from dataclasses import fields, replace
+
+    from mbs_clearance._checks import MemoryLimitError
+    from mbs_clearance.analysis.verdict import has_bars
+    from mbs_clearance.backends import exudyn_linkage as xl
+    from mbs_clearance.backends.exudyn_convergence import richardson
+    from mbs_clearance.model.cases import as_linkage
+    from mbs_clearance.solve.linkage_model import prepare_span
+
+    if (traj.backend != "exudyn" or has_bars(traj) or traj.peaks is None
+            or "step_size" not in traj.stats or getattr(traj.mechanism, "drive", True) is None):
+        return traj
+    linkage = as_linkage(traj.mechanism)
+    # (the finer runs choose their own Newton tolerance: its roundoff floor rises as the
+    # step shrinks, `exudyn_linkage.build_and_solve`)
+    names = {f.name for f in fields(xl.ExudynSettings)} - {"step_size", "accuracy",
+                                                          "newton_tolerance"}
+    options = {k: v for k, v in traj.stats.items() if k in names}
+    h = float(traj.stats["step_size"])
+    y_h = np.asarray(traj.peaks, dtype=float)
+    n = len(y_h)
+    t0 = time.perf_counter()
+    try:
+        span = prepare_span(linkage, n)
+        finer = [xl.run_peaks(linkage, span, xl.make_settings({**options, "step_size": step}),
+                              start=start) for step in (h / 2.0, h / 4.0)]
+    except MemoryLimitError:
+        return traj     # even the reactions at h/4 exceed max_memory: no bar (it says so)
+    seconds = time.perf_counter() - t0
+    value, error, order = richardson(y_h, *finer)
+    bars = np.abs(y_h - value) + error
+    stats = dict(traj.stats)
+    stats.update(peak_errors=[float(e) for e in bars],
+                 error_estimate=float(np.max(bars / np.abs(y_h))),
+                 error_estimate_method="step halving at the run's step (h, h/2, h/4)",
+                 observed_order=[float(p) for p in order],
+                 accuracy_steps=[h, h / 2.0, h / 4.0],
+                 accuracy_peaks=[list(map(float, p)) for p in (y_h, *finer)],
+                 step_bars_seconds=seconds)
+    return replace(traj, stats=stats)
+
+
+def _step_bars_from(start):
+    # `compare`'s flag of the same name hides the function there
+    return lambda traj: step_bars(traj, start)
 
 
 def _earliest(impacts: dict) -> FirstImpact | None:
@@ -639,6 +719,12 @@ def build_parser(parser: argparse.ArgumentParser | None = None) -> argparse.Argu
                              "h/2, h/4, ... until the extrapolated peaks' error estimate "
                              "meets it (the verdict's bar for exudyn; instead of "
                              "--step-size)")
+    parser.add_argument("--no-step-bars", action="store_true",
+                        help="without --accuracy, Exudyn's run at its step gets its error "
+                             "bars from two more runs at half and a quarter of that step "
+                             "(about 6 times its time; only where the motion is comparable "
+                             "peak by peak); this skips them, and a difference beyond the "
+                             "bars is then 'not decided: no error bar'")
     parser.add_argument("--contact", help="contact variant (exudyn backend): symbolic, "
                                           "python or sphere")
     parser.add_argument("--converged", action="store_true",
@@ -722,7 +808,7 @@ def run_compare(args: argparse.Namespace) -> int:
         t0 = time.perf_counter()
         trajectories.append(simulate(mech, args.revolutions, backend=backend, **options))
         print(f"{backend}: {time.perf_counter() - t0:.3g} s", file=sys.stderr, flush=True)
-    result = compare(*trajectories)
+    result = compare(*trajectories, step_bars=not args.no_step_bars)
     print(format_table(result))
     if args.converged:
         if set(pair) != {"reduced", "exudyn"}:

@@ -153,7 +153,9 @@ def main(argv=None) -> int:
                     r["max_penetration"], "nfev": r["nfev"], "wall_s": r["wall"],
                 **contact_summary(r)}
             print(f"compliant K={K:g} rtol={rtol:g}: crank {r['q'][-1, 0]:.5f} rad, "
-                  f"{r['u'][-1, 0]:.4f} rad/s ({r['wall']:.1f} s)", flush=True)
+                  f"{r['u'][-1, 0]:.4f} rad/s, energy {_energy(r):.5f} J, largest "
+                  f"penetration / c {r['max_penetration']:.3g} ({r['wall']:.1f} s)",
+                  flush=True)
 
     # how far the regularised friction's creep (where the source's law can stick) moves
     # the results: friction_v1 from the default down by 100, and no friction at all
@@ -181,8 +183,10 @@ def main(argv=None) -> int:
             "energy_end": _energy(r),
             "slider_angle_end": float(r["q"][-1, 2]), "first_contact": first_contact(r),
             "wall_s": r["wall"], **contact_summary(r)}
-        print(f"Moreau h={h:g}: crank {r['q'][-1, 0]:.5f} rad, {r['u'][-1, 0]:.4f} rad/s "
-              f"({r['wall']:.1f} s)", flush=True)
+        print(f"Moreau h={h:g}: crank {r['q'][-1, 0]:.5f} rad, {r['u'][-1, 0]:.4f} rad/s, "
+              f"energy {_energy(r):.5f} J; largest free-flight angle error "
+              f"{result['moreau_free_flight_error'][f'h={h:g}']:.2g} rad ({r['wall']:.1f} s)",
+              flush=True)
     h1, h2 = steps[-2], steps[-1]
     ratio = h1 / h2
     extrap = {}
@@ -191,6 +195,11 @@ def main(argv=None) -> int:
         extrap[key] = float(b + (b - a) / (ratio - 1.0))
         extrap[key + "_error_at_finest"] = float(abs(b - extrap[key]))
     result["moreau_extrapolated"] = extrap
+    print("Moreau extrapolated from h={:g} and {:g}: crank {:.5f} rad (+-{:.3f}), {:.4f} "
+          "rad/s (+-{:.2f}), energy {:.5f} J (+-{:.3f})".format(
+              h1, h2, *(extrap[k + e] for k in ("crank_angle_end", "crank_rate_end",
+                                                 "energy_end")
+                        for e in ("", "_error_at_finest"))), flush=True)
     (args.out / "flores_benchmark.json").write_text(json.dumps(result, indent=2))
     _figures(args.out, runs[(1e10, 1e-10)], mruns[steps[-1]], steps[-1])
     print(f"wrote {args.out / 'flores_benchmark.json'} and the figures")

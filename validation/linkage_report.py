@@ -141,7 +141,7 @@ def section_agreement(linkage, out: Path, s: dict) -> dict:
     step = make_settings({}).step(linkage)
     ref = simulate(linkage, revs, rtol=1e-10, h_max=step)
     ex = simulate(linkage, revs, backend="exudyn")
-    res = compare(ref, ex)
+    res = compare(ref, ex, step_bars=False)
     plot_linkage_comparison(ref, ex, path=out / "figures" / "agreement.png")
     return {"rows": rows, "exudyn_steps": [float(h) for h in cc.exudyn_steps],
             "exudyn_step": step,

@@ -100,8 +100,9 @@ def make_runner(model):
 
 
 #: step attempts allowed to an adaptive run (the four-bar's sliding mode at rtol 1e-11 takes
-#: about a million steps per revolution)
-MAX_STEPS = 100_000_000
+#: about a million steps per revolution; its 200 revolutions at rtol 1e-10, about 90 million
+#: steps, are estimated before the run at 1.1e8 from the first revolution's impacts)
+MAX_STEPS = 1_000_000_000
 
 
 def adaptive_peaks(linkage, revolutions: int, rtol: float) -> dict:

@@ -683,8 +683,13 @@ class _Continuation:
         if key not in self.cache:
             if len(self.cache) > 8:
                 self.cache.clear()
-            self.cache[key] = _Shooter(with_field(self.mech0, self.name, self.value_of(uu)),
-                                       self.period, self.rtol, self.method)
+            try:
+                mech = with_field(self.mech0, self.name, self.value_of(uu))
+            except (ValueError, OverflowError) as exc:
+                # a corrector's iterate that left the field's range: a failed step (the
+                # corrector halves it), not a failed continuation
+                raise RuntimeError(f"iterate outside the range of {self.name}: {exc}") from exc
+            self.cache[key] = _Shooter(mech, self.period, self.rtol, self.method)
         return self.cache[key]
 
     def residual(self, w, modes, held, jac=True):

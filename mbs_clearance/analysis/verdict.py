@@ -8,6 +8,10 @@ reduced model at its requested accuracy (`simulate(..., accuracy=)`, ``stats
 - ``"agree"``: every compared quantity's difference is within the two bars together;
 - ``"differ"``: at least one difference exceeds them (`Verdict.worst` says which quantity and
   by how much);
+- ``"not decided: no error bar"``: a difference beyond the bars where a model has no error
+  estimate (a run at a fixed step or tolerance, its bar 0): part of the difference may be
+  that model's own error, so it decides nothing (`validation.compare.step_bars` gives an
+  Exudyn run at a fixed step its bar: two more runs at h/2 and h/4);
 - ``"not comparable peak by peak"``: the motion is chaotic or has not settled (a Lyapunov
   exponent that is positive or undecided, or the return map of the revolution boundaries
   finds no period: ``stats["periodic"]`` False or None; a run too short for the return
@@ -31,18 +35,19 @@ Python API (`verdict_of_peaks`, `verdict_of_trajectories`) build the same `Verdi
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 
 import numpy as np
 
-__all__ = ["AGREE", "DIFFER", "NOT_COMPARABLE", "UNDECIDED", "Item", "Verdict",
+__all__ = ["AGREE", "DIFFER", "NO_BAR", "NOT_COMPARABLE", "UNDECIDED", "Item", "Verdict",
            "comparable", "judge_periodicity", "periodic_flag", "mean_interval",
            "revolution_statistics", "verdict_of_peaks", "verdict_of_trajectories",
-           "format_verdict", "with_missing_bars", "MIN_STATISTICS_REVOLUTIONS",
+           "format_verdict", "with_missing_bars", "has_bars", "MIN_STATISTICS_REVOLUTIONS",
            "JUDGE_REVOLUTIONS"]
 
 AGREE = "agree"
 DIFFER = "differ"
+NO_BAR = "not decided: no error bar"
 NOT_COMPARABLE = "not comparable peak by peak"
 UNDECIDED = "undecided"
 
@@ -110,7 +115,7 @@ class Item:
 class Verdict:
     """The verdict of a comparison of models a (reference) and b (module docstring)."""
 
-    #: "agree", "differ" or "not comparable peak by peak"
+    #: "agree", "differ", "not decided: no error bar" or "not comparable peak by peak"
     kind: str
     model_a: str
     model_b: str
@@ -346,17 +351,43 @@ def _bars(traj, peaks: np.ndarray) -> np.ndarray:
     return _relative_error(traj) * np.abs(peaks)
 
 
-def verdict_of_trajectories(a, b, revolutions=None, *, lyapunov=None) -> Verdict:
-    """The verdict on two Trajectories of the same mechanism (a the reference): their
-    per-revolution peaks, each with its own bar (`_bars`: a run's per-revolution
+def verdict_of_trajectories(a, b, revolutions=None, *, lyapunov=None,
+                            bars=None) -> Verdict:
+    """The verdict on two Trajectories of the same mechanism (a the reference).
+
+    Their per-revolution peaks, each with its own bar (`_bars`: a run's per-revolution
     ``stats["peak_errors"]``, else ``stats["error_estimate"]`` x peak; 0 where a run has
     no estimate: a run at a fixed tolerance or step, whose error is unknown), comparable
     peak by peak where both runs are periodic (``stats["periodic"]``) or the given
-    Lyapunov result says so; else on the statistics of revolutions 2..n."""
+    Lyapunov result says so; else on the statistics of revolutions 2..n.
+
+    Parameters
+    ----------
+    a, b : Trajectory
+        The two runs, a the reference.
+    revolutions : sequence of int or None
+        The revolutions (1-based) compared; None: every one both cover.
+    lyapunov
+        An optional Lyapunov result (`comparable`).
+    bars : callable or None
+        Trajectory -> Trajectory: gives a run without an estimate its bars first (e.g.
+        `validation.compare.step_bars`: an Exudyn run at a fixed step, from two more runs at
+        h/2 and h/4), called on each run only where the motion is comparable peak by peak
+        (elsewhere the statistics' intervals are the bars and it would change nothing).
+
+    Returns
+    -------
+    Verdict
+        A difference beyond the bars where a model still has no estimate is
+        "not decided: no error bar" (`NO_BAR`), not "differ".
+    """
     from ..solve.accuracy import revolution_peaks
 
     n = min(a.revolutions, b.revolutions)
     revs = tuple(range(1, n + 1)) if revolutions is None else tuple(revolutions)
+    flags = _flags(a, b)
+    if bars is not None and comparable(flags, lyapunov)[0]:
+        a, b = bars(a), bars(b)
     pa, pb = revolution_peaks(a), revolution_peaks(b)
     ea, eb = _bars(a, pa), _bars(b, pb)
     x = np.array([pa[k - 1] for k in revs])
@@ -365,43 +396,61 @@ def verdict_of_trajectories(a, b, revolutions=None, *, lyapunov=None) -> Verdict
     v = verdict_of_peaks(x, np.array([ea[k - 1] for k in revs]), y,
                          np.array([eb[k - 1] for k in revs]), model_a=a.backend,
                          model_b=b.backend, revolutions=revs,
-                         periodic=_flags(a, b),
+                         periodic=flags,
                          lyapunov=lyapunov,
                          statistics_a=revolution_statistics(a, later),
                          statistics_b=revolution_statistics(b, later))
-    return with_missing_bars(v, [tr.backend for tr in (a, b)
-                                 if "error_estimate" not in tr.stats])
+    v = with_missing_bars(v, [tr.backend for tr in (a, b) if not has_bars(tr)])
+    return _with_step_note(v, [tr for tr in (a, b) if "step_bars_seconds" in tr.stats])
+
+
+def has_bars(traj) -> bool:
+    """The run carries an error estimate (``stats["error_estimate"]`` or per-revolution
+    ``stats["peak_errors"]``)."""
+    return "error_estimate" in traj.stats or "peak_errors" in traj.stats
+
+
+def _with_step_note(v: Verdict, barred) -> Verdict:
+    """`v` with the note of the step-halving runs that gave a run its bars."""
+    if not barred:
+        return v
+    tr = barred[0]
+    h = tr.stats["accuracy_steps"][0]
+    note = (f"; {tr.backend}'s bars from runs at its step {h:.3g} s halved twice, "
+            f"{tr.stats['step_bars_seconds']:.3g} s")
+    return replace(v, reason=v.reason + note)
 
 
 def with_missing_bars(v: Verdict, missing) -> Verdict:
-    """`v` with the note that the models `missing` have no error estimate (bar 0), which a
-    differing verdict repeats (`_missing_bars`); `v` itself where none is missing."""
+    """`v` with the note that the models `missing` have no error estimate (bar 0); a
+    difference beyond the bars then decides nothing (part of it may be that model's error):
+    a differing `v` becomes "not decided: no error bar" (`NO_BAR`). `v` itself where none
+    is missing."""
     if not missing:
         return v
-    note = (f"; no error estimate for {' and '.join(missing)} (bar 0: run it with "
-            f"accuracy=, compare --accuracy X)")
-    return Verdict(v.kind, v.model_a, v.model_b, v.items, v.reason + note, v.statistics,
+    note = (f"; no error estimate for {' and '.join(missing)} (bar 0: give it one with "
+            f"accuracy=, compare's step bars or compare --accuracy X)")
+    kind = NO_BAR if v.kind == DIFFER else v.kind
+    return Verdict(kind, v.model_a, v.model_b, v.items, v.reason + note, v.statistics,
                    v.statistics_items)
-
-
-def _missing_bars(v: Verdict) -> str:
-    """The reason's note on a model without an error estimate (its bar 0: the difference
-    may be its own error), repeated in a differing verdict."""
-    k = v.reason.find("no error estimate for")
-    return "" if k < 0 else f"; {v.reason[k:]}, so part of the difference may be its error"
 
 
 def _summary(v: Verdict) -> str:
     if v.kind == AGREE:
         return (f"verdict: {v.model_a} and {v.model_b} agree within their error bars "
                 f"({len(v.items)} quantities; {v.reason})")
-    if v.kind == DIFFER:
+    if v.kind in (DIFFER, NO_BAR):
         w = v.worst
-        return (f"verdict: {v.model_a} and {v.model_b} differ beyond their error bars: "
-                f"{w.quantity}: {w.a:.6g} N +- {w.a_error:.2g} N vs {w.b:.6g} N +- "
-                f"{w.b_error:.2g} N ({100 * w.relative_difference:+.3g} %, {w.excess:.3g} "
-                f"times the bars); {sum(not i.agree for i in v.items)} of {len(v.items)} "
-                f"quantities beyond the bars{_missing_bars(v)}")
+        where = (f"{w.quantity}: {w.a:.6g} N +- {w.a_error:.2g} N vs {w.b:.6g} N +- "
+                 f"{w.b_error:.2g} N ({100 * w.relative_difference:+.3g} %, {w.excess:.3g} "
+                 f"times the bars); {sum(not i.agree for i in v.items)} of {len(v.items)} "
+                 f"quantities beyond the bars")
+        if v.kind == DIFFER:
+            return (f"verdict: {v.model_a} and {v.model_b} differ beyond their error bars: "
+                    f"{where}")
+        k = v.reason.find("no error estimate for")
+        return (f"verdict: not decided, a model has no error bar: {where}; "
+                f"{v.reason[k:]}, so part of the difference may be its own error")
     if v.statistics == UNDECIDED:
         tail = "the statistics decide nothing"
     elif v.statistics == AGREE:

@@ -37,10 +37,11 @@ def test_known_differences_are_measured(reduced_paper):
 
 def test_the_verdict_is_the_python_apis(reduced_paper):
     """`compare` carries the record `verdict_of_trajectories` returns: identical runs agree;
-    a copy with its force 1 % higher differs, by 1 % in each revolution (neither run has an
-    error estimate at a fixed rtol, so the bars are 0, which the verdict says); the paper's
+    a copy with its force 1 % higher differs by 1 % in each revolution, which decides
+    nothing: neither run has an error estimate at a fixed rtol (bars 0), so the difference
+    may be their own errors, which the verdict says; with a bar on each it differs; the paper's
     motion is periodic (judged on 8 revolutions: 2 are too few), so peak by peak."""
-    from mbs_clearance.analysis.verdict import AGREE, DIFFER, verdict_of_trajectories
+    from mbs_clearance.analysis.verdict import AGREE, DIFFER, NO_BAR, verdict_of_trajectories
 
     same = compare(reduced_paper, reduced_paper)
     assert same.verdict == verdict_of_trajectories(reduced_paper, reduced_paper)
@@ -49,8 +50,13 @@ def test_the_verdict_is_the_python_apis(reduced_paper):
     scaled = dataclasses.replace(reduced_paper, base_force=1.01 * reduced_paper.base_force,
                                  peaks=1.01 * reduced_paper.peaks)
     res = compare(reduced_paper, scaled)
-    assert res.verdict.kind == DIFFER
+    assert res.verdict.kind == NO_BAR
     assert [i.relative_difference for i in res.verdict.items] == pytest.approx([0.01, 0.01])
+    assert "verdict: not decided, a model has no error bar" in format_table(res)
+    barred = [dataclasses.replace(tr, stats={**tr.stats, "error_estimate": 1e-6})
+              for tr in (reduced_paper, scaled)]
+    res = compare(*barred)
+    assert res.verdict.kind == DIFFER
     assert "verdict: reduced and reduced differ beyond their error bars" in format_table(res)
 
 

@@ -1,7 +1,13 @@
 """Every number of README.md and docs/ listed in tests/docs_numbers.toml is what the command
 beside it prints: the page holds the number and the command within `REACH` lines, and the
 command, run as a user runs it (from a fresh folder), prints the same number to half a unit
-of its last documented digit (or the entry's stated tolerance). Each command runs once."""
+of its last documented digit (or the entry's stated tolerance). Each command runs once.
+
+Kinds: ``number`` (one number, group 1 of the first printed line matching ``printed``);
+``lines`` (printed lines of the same words); ``numbers`` (several numbers of one table
+cell or row, in the page's text in that order: the groups of the first printed lines
+matching ``printed``, line after line (groups that match nothing skipped), e.g. one line
+per revolution; a documented "-" is printed as "-")."""
 
 from __future__ import annotations
 
@@ -31,11 +37,12 @@ REACH = 12
 def _entries():
     data = tomllib.loads(REGISTRY.read_text())
     out = []
-    for kind in ("number", "lines"):
+    for kind in ("number", "lines", "numbers"):
         for k, e in enumerate(data.get(kind, [])):
             e = {**e, "kind": kind}
             marks = [pytest.mark.slow] if e.get("slow") else []
-            label = e["number"] if kind == "number" else f"{len(e['lines'])} lines"
+            label = (e["number"] if kind == "number" else f"{len(e['lines'])} lines"
+                     if kind == "lines" else ",".join(e["numbers"]))
             out.append(pytest.param(e, marks=marks, id=f"{e['page']}:{label}:{k}"))
     return out
 
@@ -66,7 +73,7 @@ def _beside(page: str, entry: dict) -> None:
     near = [i for i in range(len(lines))
             if cmd in " ".join(lines[i].replace("`", " ").split())]
     assert near, f"{page} does not show the command `{cmd}`"
-    texts = [entry["text"]] if entry["kind"] == "number" else entry["lines"]
+    texts = entry["lines"] if entry["kind"] == "lines" else [entry["text"]]
     for text in texts:
         at = _where(lines, text)
         assert at, f"{page} does not hold the documented text\n  {text}"
@@ -97,6 +104,9 @@ def test_half_unit_and_the_registry_are_read():
 def test_the_documented_number_is_what_its_command_prints(entry, tmp_path_factory):
     _beside(entry["page"], entry)
     printed = _output(entry["command"], tmp_path_factory)
+    if entry["kind"] == "numbers":
+        _check_cell(entry, printed)
+        return
     if entry["kind"] == "number":
         assert entry["number"] in entry["text"]
         pattern = re.compile(entry["printed"])
@@ -117,3 +127,25 @@ def test_the_documented_number_is_what_its_command_prints(entry, tmp_path_factor
               if all(_agree(a, b, _tolerance(entry, a))
                      for a, b in zip(nums, NUMBER.findall(ln)))]
         assert ok, f"{entry['page']} says\n  {doc}\n`{entry['command']}` prints\n  {match[0]}"
+
+
+def _check_cell(entry: dict, printed: list[str]) -> None:
+    """A ``numbers`` entry: its numbers, in the page's text in that order, against the
+    groups of the first printed lines that match ``printed``, line after line."""
+    docs = entry["numbers"]
+    at = 0
+    for doc in docs:
+        at = entry["text"].find(doc, at)
+        assert at >= 0, f"{entry['text']} does not hold {docs} in that order"
+        at += len(doc)
+    pattern = re.compile(entry["printed"])
+    found = [g for ln in printed if (m := pattern.search(ln))
+             for g in m.groups() if g is not None][:len(docs)]
+    assert len(found) == len(docs), (f"`{entry['command']}` prints {len(found)} values "
+                                     f"matching {entry['printed']}, not {len(docs)}")
+    for doc, got in zip(docs, found):
+        if doc == "-" or got == "-":
+            assert doc == got, f"{entry['page']} says {docs}; `{entry['command']}` prints {found}"
+            continue
+        assert _agree(doc, got, _tolerance(entry, doc)), (
+            f"{entry['page']} says {docs}; `{entry['command']}` prints {found}")

@@ -53,7 +53,7 @@ def exudyn_run(c: float, revolutions: int = 4, contact: str = "symbolic",
 # ------------------------------------------------------------------ periodic regimes
 def test_paper_case_agrees_with_reduced_model():
     """c = 0.01 mm: the journal stays in contact after three impacts; periodic response."""
-    res = compare(reduced_ref(1e-5), exudyn_run(1e-5))
+    res = compare(reduced_ref(1e-5), exudyn_run(1e-5), step_bars=False)
     for k in (2, 3, 4):
         # measured |peak diff| <= 2.7e-4; the error is the O(h^2) time discretisation
         # (test_error_decreases_with_step_size). 1e-3 meets the required 1 % with margin and
@@ -71,7 +71,7 @@ def test_paper_case_agrees_with_reduced_model():
 
 
 def test_paper_case_first_impact():
-    res = compare(reduced_ref(1e-5), exudyn_run(1e-5))
+    res = compare(reduced_ref(1e-5), exudyn_run(1e-5), step_bars=False)
     a, b = res.first_impact_a, res.first_impact_b
     # free flight before the impact is smooth and resolved by both far below one step;
     # measured |dt| = 2 ns = 1e-3 STEP; bound 0.05 STEP
@@ -84,7 +84,7 @@ def test_ideal_joint_limit_agrees_with_reduced_and_closed_form():
     """c = 0.1 um: after the first impact the joint behaves as an ideal revolute joint."""
     c = 1e-7
     exu = exudyn_run(c)
-    res = compare(reduced_ref(c), exu)
+    res = compare(reduced_ref(c), exu, step_bars=False)
     for k in (2, 3, 4):
         r = res.revolution(k)
         # measured 5e-7 (peak), 3e-7 (F12), 4e-7 (M2): the journal hardly moves relative to
@@ -96,7 +96,7 @@ def test_ideal_joint_limit_agrees_with_reduced_and_closed_form():
     # (drive moment on the crank): the closed-form ideal mechanism. Measured 2.6e-5 (F12),
     # 8.8e-5 (M2): the contact compliance (0.5 um deflection) and the 0.1 um clearance;
     # bound 1e-3. A sign error would give a relative difference near 2.
-    ideal = compare(simulate_ideal(exu.mechanism, 4), exu).revolution(4)
+    ideal = compare(simulate_ideal(exu.mechanism, 4), exu, step_bars=False).revolution(4)
     assert ideal.base_force_rel_rms < 1e-3, ideal
     assert ideal.crank_moment_rel_rms < 1e-3, ideal
     assert abs(ideal.peak_rel_diff) < 1e-4, ideal
@@ -142,7 +142,7 @@ def test_sensitive_regimes_first_impact_and_statistics(c):
 # ------------------------------------------------------------------ contact variants
 def test_python_and_symbolic_user_functions_agree():
     """Same law, same memory update: they differ only by floating-point evaluation order."""
-    res = compare(exudyn_run(1e-5, 2, "symbolic"), exudyn_run(1e-5, 2, "python"))
+    res = compare(exudyn_run(1e-5, 2, "symbolic"), exudyn_run(1e-5, 2, "python"), step_bars=False)
     for r in res.revolutions:
         # measured ~1e-8 (Newton stops at relative residual 1e-8); bound 1e-6
         assert abs(r.peak_rel_diff) < 1e-6, r
@@ -152,7 +152,7 @@ def test_python_and_symbolic_user_functions_agree():
 
 def test_native_sphere_contact_agrees_with_user_function():
     """Exudyn's ObjectContactSphereSphere (hollow bearing, e' = (1 + e^2)/2)."""
-    res = compare(exudyn_run(1e-5, 4, "symbolic"), exudyn_run(1e-5, 4, "sphere"))
+    res = compare(exudyn_run(1e-5, 4, "symbolic"), exudyn_run(1e-5, 4, "sphere"), step_bars=False)
     # the sphere's impact velocity is sampled at the end of the first contact step (O(h),
     # see the slow convergence test) and its force is not clamped at zero; measured
     # |peak diff| <= 0.14 % (revs 2-4) and rev-4 RMS 0.18 % (F12), 0.40 % (M2)
@@ -173,7 +173,7 @@ def test_other_contact_laws_agree_with_reduced_model(model, e):
     """
     mech = SliderCrank(contact_model=model, restitution=e)
     ref = simulate(mech, 2, backend="reduced", rtol=1e-11, h_max=STEP)
-    res = compare(ref, simulate(mech, 2, backend="exudyn", step_size=STEP))
+    res = compare(ref, simulate(mech, 2, backend="exudyn", step_size=STEP), step_bars=False)
     rev2 = res.revolution(2)
     # measured: peak 2.2e-4 / 3.4e-4, F12 1.9e-3 / 2.9e-3, M2 5.9e-3 / 6.6e-3 (O(h^2));
     # bounds below the differences a wrong law would make (docstring)
@@ -204,7 +204,8 @@ def test_sphere_restitution_maps_to_lankarani_nikravesh():
 def test_error_decreases_with_step_size():
     """Second order: halving h divides the rev-2 F12 error by ~4 (measured 3.45, 3.85)."""
     ref = reduced_ref(1e-5, 2)
-    errors = [compare(ref, exudyn_run(1e-5, 2, "symbolic", h)).revolution(2).base_force_rel_rms
+    errors = [compare(ref, exudyn_run(1e-5, 2, "symbolic", h), step_bars=False)
+              .revolution(2).base_force_rel_rms
               for h in (4e-6, 2e-6, 1e-6)]
     ratios = [errors[i] / errors[i + 1] for i in range(2)]
     # 2.8 = order 1.5: generalized-alpha is second order and so are both impact-velocity
@@ -219,7 +220,8 @@ def test_error_decreases_with_step_size_four_revolutions(contact, min_ratio):
     (measured ratios 1.7, 1.7, 2.4, 3.7 on rev 2) because of its impact velocity sampling."""
     ref = reduced_ref(1e-5, 4)
     steps = (4e-6, 2e-6, 1e-6, 5e-7)
-    errors = [compare(ref, exudyn_run(1e-5, 4, contact, h)).revolution(4).base_force_rel_rms
+    errors = [compare(ref, exudyn_run(1e-5, 4, contact, h), step_bars=False)
+              .revolution(4).base_force_rel_rms
               for h in steps]
     ratios = [errors[i] / errors[i + 1] for i in range(len(steps) - 1)]
     assert all(r > min_ratio for r in ratios), (errors, ratios)
@@ -228,7 +230,7 @@ def test_error_decreases_with_step_size_four_revolutions(contact, min_ratio):
 @pytest.mark.slow
 def test_paper_case_tighter_at_small_step():
     # at h = 0.5 us: measured peak diff 1.5e-5, rev-4 RMS 1.1e-4 (F12), 2.6e-4 (M2)
-    res = compare(reduced_ref(1e-5), exudyn_run(1e-5, 4, "symbolic", 5e-7))
+    res = compare(reduced_ref(1e-5), exudyn_run(1e-5, 4, "symbolic", 5e-7), step_bars=False)
     r = res.revolution(4)
     assert abs(r.peak_rel_diff) < 1e-4 and r.base_force_rel_rms < 5e-4
     assert r.crank_moment_rel_rms < 1e-3

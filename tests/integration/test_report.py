@@ -93,6 +93,18 @@ def test_json_numbers_agree_with_the_python_api(report):
     table = {r["quantity"]: r for r in n["paper"]["rows"]}
     row = table["max |F12|, 4th revolution, original design (N)"]
     assert row["difference_percent"] == pytest.approx(100 * (row["ours"] / 8311 - 1))
+    # the comparison's verdict is the Python API's (`compare`, Exudyn given its bars by step
+    # halving where the motion is comparable peak by peak), as `mbs-clearance compare` gives it
+    from validation.compare import compare
+
+    row = next(r for r in n["agreement"]["rows"]
+               if r["variant"] == "symbolic" and r["clearance_mm"] == pytest.approx(0.01))
+    step, revs = n["agreement"]["exudyn_step"], len(row["peak_diff_percent"])
+    loose = SliderCrank(journal_radius=0.01 - 1e-5)
+    v = compare(simulate(loose, revs, rtol=1e-10, h_max=step),
+                simulate(loose, revs, backend="exudyn", step_size=step)).verdict
+    assert row["verdict"] == v.kind, (row, v.summary())
+    assert row["verdict_summary"].split(";")[0] == v.summary().split(";")[0]
 
 
 def test_converged_cross_check_rows_follow_their_bars(report):

@@ -499,6 +499,21 @@ def test_four_bar_monodromy_matches_central_differences_of_the_return_map(four_b
                                np.sort_complex(orbit.multipliers))
 
 
+def test_a_corrector_iterate_outside_the_fields_range_is_a_failed_step():
+    """A Newton iterate of the continuation's corrector can leave the field's range (from
+    0.001 mm a step's iterate once asked for a clearance of 2e27 m): that is a step that
+    did not converge (RuntimeError, which the corrector turns into a halved step), not an
+    error that ends the continuation."""
+    from mbs_clearance.analysis.periodic import _Continuation
+
+    u0 = math.log(1e-5)
+    con = _Continuation(PAPER, "clearance", 1, 1e-10, "dop853", True, math.log(10.0), u0)
+    assert con.shooter(0.0) is con.shooter(0.0)             # the start: within range
+    for uu in (30.0, 1e6):                  # 1e-5 x 10^30 m; exp overflows
+        with pytest.raises(RuntimeError, match="outside the range of clearance"):
+            con.shooter(uu)
+
+
 @pytest.mark.slow
 def test_branch_from_a_micrometre_passes_the_sharp_turn_without_a_fold():
     """From 0.001 mm the branch's section rate winds with the clearance (a helix in the

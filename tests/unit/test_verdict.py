@@ -9,6 +9,7 @@ from scipy import stats
 from mbs_clearance.analysis.verdict import (
     AGREE,
     DIFFER,
+    NO_BAR,
     NOT_COMPARABLE,
     UNDECIDED,
     Item,
@@ -103,9 +104,10 @@ def test_chaotic_motion_is_judged_on_statistics():
     assert v.statistics == UNDECIDED and "run at least 4 revolutions" in v.reason
 
 
-def test_a_differing_verdict_says_when_a_bar_is_unknown():
-    """A model without an error estimate (a fixed step) has the bar 0: the summary of a
-    differing verdict says so, since part of the difference may be that model's error."""
+def test_a_difference_without_a_bar_is_not_decided():
+    """A model without an error estimate (a fixed step) has the bar 0: a difference beyond
+    the bars then decides nothing (part of it may be that model's error), a verdict of its
+    own kind that says why, not "differ"."""
     import dataclasses
 
     from mbs_clearance import SliderCrank, simulate
@@ -115,9 +117,13 @@ def test_a_differing_verdict_says_when_a_bar_is_unknown():
     stats = {k: v for k, v in a.stats.items() if k != "error_estimate"}
     b = dataclasses.replace(a, backend="exudyn", peaks=1.01 * np.asarray(a.peaks), stats=stats)
     v = verdict_of_trajectories(a, b)
-    assert v.kind == DIFFER, v.summary()
+    assert v.kind == NO_BAR and not v.agree, v.summary()
     assert "no error estimate for exudyn" in v.summary()
-    assert "may be its error" in v.summary()
+    assert "not decided" in v.summary() and "differ beyond" not in v.summary()
+    assert "may be its own error" in v.summary()
+    # with a bar on b the same difference is a difference
+    barred = dataclasses.replace(b, stats={**stats, "error_estimate": 1e-6})
+    assert verdict_of_trajectories(a, barred).kind == DIFFER
     assert "no error estimate" not in verdict_of_trajectories(a, a).summary()
 
 
@@ -132,3 +138,30 @@ def test_one_revolution_of_a_motion_that_does_not_repeat_says_to_run_more():
     assert v.statistics_items == ()
     assert "over 0 revolution(s)" in v.reason and "run at least 4 revolutions" in v.reason
     assert "statistics over revolutions" not in format_verdict(v)
+
+
+def test_bars_are_asked_for_only_where_peaks_are_compared():
+    """`verdict_of_trajectories(..., bars=f)` gives the runs their bars (e.g. Exudyn's by
+    step halving, further runs) only where the motion is comparable peak by peak: where it
+    is not, the statistics' intervals are the bars and the runs would change nothing."""
+    import dataclasses
+
+    from mbs_clearance import SliderCrank, simulate
+    from mbs_clearance.analysis.verdict import verdict_of_trajectories
+
+    a = simulate(SliderCrank(), 2)
+    asked = []
+
+    def bars(tr):
+        asked.append(tr.backend)
+        return dataclasses.replace(tr, stats={**tr.stats, "error_estimate": 0.02})
+
+    b = dataclasses.replace(a, backend="exudyn", peaks=1.01 * np.asarray(a.peaks),
+                            stats={k: v for k, v in a.stats.items() if k != "error_estimate"})
+    # periodic (judged on 8 revolutions): both runs asked; the 1 % lies within 2 % bars
+    assert verdict_of_trajectories(a, b, bars=bars).kind == AGREE
+    assert asked == ["reduced", "exudyn"]
+    asked.clear()
+    flagged = [dataclasses.replace(tr, stats={**tr.stats, "periodic": False}) for tr in (a, b)]
+    assert verdict_of_trajectories(*flagged, bars=bars).kind == NOT_COMPARABLE
+    assert asked == []
