@@ -43,13 +43,19 @@ def error(s, ref):
 
 def headline(mech, pairs):
     """DDM of the default parameters / plain simulation: paired time ratio, nfev, work."""
-    from mbs_clearance.analysis.sensitivity import DEFAULT_PARAMETERS, slider_crank_run
+    from mbs_clearance.analysis.sensitivity import DEFAULT_PARAMETERS, field_directions_of
+    from mbs_clearance.model.cases import door
+    from mbs_clearance.solve import linkage_ddm
     from mbs_clearance.solve.linkage_ddm import tangent_work
+    from mbs_clearance.solve.settings import RunSettings
 
     plain = simulate(mech, 4)
     ddm = sensitivities(mech)
     res = paired(lambda: simulate(mech, 4), lambda: sensitivities(mech), pairs)
-    run, _ = slider_crank_run(mech, DEFAULT_PARAMETERS, None, revolutions=1)
+    entry = door(mech)
+    run = linkage_ddm.ddm_run(linkage_ddm.prepare_sensitivity(
+        entry.linkage, DEFAULT_PARAMETERS, 1, RunSettings(method=linkage_ddm.DDM_INTEGRATOR),
+        directions=field_directions_of(entry.paper, DEFAULT_PARAMETERS)))
     work = tangent_work(run.model, run.p)
     print(f"Machine: {machine_summary()}\n")
     print(f"DDM of the {len(DEFAULT_PARAMETERS)} default parameters "

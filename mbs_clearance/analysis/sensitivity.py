@@ -402,25 +402,6 @@ def field_directions_of(mech: SliderCrank, names):
                       np.array([1.0, c, w, w * c / mech.crank_length]))
 
 
-def slider_crank_run(mech: SliderCrank, names, rtol, *, revolutions: int, t_eval=None,
-                     event_time_term: bool = True, method: str = DDM_INTEGRATOR,
-                     record: bool = True, derivatives=False):
-    """The DDM run (`linkage_ddm.ddm_run`) of the paper's fields `names` on its case's
-    description (`cases.door`), their directions through the one table
-    (`field_directions_of`); with `derivatives` outputs' derivatives recorded with the
-    steps. Returns (run, the fields' values)."""
-    from ..model.cases import door
-    from ..solve import linkage_ddm
-
-    entry = door(mech)
-    along = field_directions_of(entry.paper, names)
-    sp = linkage_ddm.prepare_sensitivity(entry.linkage, names, revolutions,
-                                         RunSettings(rtol=rtol, method=method),
-                                         directions=along, t_eval=t_eval, record=record)
-    run = linkage_ddm.ddm_run(sp, event_time_term=event_time_term, derivatives=derivatives)
-    return run, along.reference
-
-
 def _fd_grid(linkage, revolutions: int | None, windows=None) -> np.ndarray:
     """The finite differences' default output times: 720 per drive revolution of
     `linkage` (a free linkage: per window of the edges `windows`)."""

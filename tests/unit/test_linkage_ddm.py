@@ -9,6 +9,20 @@ from mbs_clearance.analysis.sensitivity import sensitivities
 from mbs_clearance.model import cases
 from mbs_clearance.model.mechanism import SliderCrank
 
+
+def _paper_ddm(mech, names, *, revolutions, derivatives=False):
+    """The DDM run of the paper's fields `names` through the one path: the case's door, the
+    fields' directions, the prepared sensitivity problem."""
+    from mbs_clearance.analysis.sensitivity import field_directions_of
+    from mbs_clearance.solve import linkage_ddm
+    from mbs_clearance.solve.settings import RunSettings
+
+    entry = cases.door(mech)
+    settings = RunSettings(method=linkage_ddm.DDM_INTEGRATOR)
+    sp = linkage_ddm.prepare_sensitivity(entry.linkage, names, revolutions, settings,
+                                         directions=field_directions_of(entry.paper, names))
+    return linkage_ddm.ddm_run(sp, derivatives=derivatives)
+
 #: per case: parameters (at least 4, of bodies, joints and the drive) and the end of the run
 #: as a fraction of a revolution (the four-bar: its first impacts, the journal falling
 #: through its clearance under gravity at 10 rpm; the run ends between two impacts)
@@ -164,10 +178,10 @@ def test_tangent_work_per_call_pinned():
     the N_Z columns of the full Jacobian) and, of the parameter columns, only the
     (direction, column) pairs of the chains plus each direction's memory column (counted
     here from the chains' sparse form in p, independently of the kernel's index)."""
-    from mbs_clearance.analysis.sensitivity import DEFAULT_PARAMETERS, slider_crank_run
+    from mbs_clearance.analysis.sensitivity import DEFAULT_PARAMETERS
     from mbs_clearance.solve.linkage_ddm import tangent_work
 
-    run, _ = slider_crank_run(SliderCrank(), DEFAULT_PARAMETERS, None, revolutions=1)
+    run = _paper_ddm(SliderCrank(), DEFAULT_PARAMETERS, revolutions=1)
     model, p = run.model, run.p
     work = tangent_work(model, p)
     nb = work["directions"]
@@ -194,12 +208,12 @@ def test_recorded_derivatives_equal_a_second_pass_and_the_growth_its_loop():
     `growth_maxima` of the combined state sensitivities, and those equal an einsum of the
     integrated ones with the coefficients. Paper case, the 8 default fields (7 integrated
     directions: one is combined)."""
-    from mbs_clearance.analysis.sensitivity import DEFAULT_PARAMETERS, slider_crank_run
+    from mbs_clearance.analysis.sensitivity import DEFAULT_PARAMETERS
     from mbs_clearance.solve.linkage_ddm import growth_maxima
 
     mech = SliderCrank()
     cols = ("crank_pivot.reaction_y", "coupler_slider.contact_force", "drive_moment")
-    run, _ = slider_crank_run(mech, DEFAULT_PARAMETERS, None, revolutions=1,
+    run = _paper_ddm(mech, DEFAULT_PARAMETERS, revolutions=1,
                               derivatives=cols)
     assert run.nb < len(DEFAULT_PARAMETERS) and run.stats["nevent"] >= 2
     vals, ders = run.recorded_output_sensitivities()
@@ -224,11 +238,11 @@ def test_recorded_derivatives_equal_a_second_pass_and_the_growth_its_loop():
     np.testing.assert_allclose(run.growth(unit, mech.period, 1),
                                growth_maxima(run.ts, sens, run.scale, unit, mech.period, 1),
                                rtol=1e-12)
-    plain, _ = slider_crank_run(mech, DEFAULT_PARAMETERS, None, revolutions=1)
+    plain = _paper_ddm(mech, DEFAULT_PARAMETERS, revolutions=1)
     with pytest.raises(ValueError, match="derivatives=True"):
         plain.recorded_output_sensitivities()
     with pytest.raises(ValueError, match=r"unknown output\(s\) \['crank_pivot.torque'\]"):
-        slider_crank_run(mech, DEFAULT_PARAMETERS, None, revolutions=1,
+        _paper_ddm(mech, DEFAULT_PARAMETERS, revolutions=1,
                          derivatives=["crank_pivot.torque"])
 
 
