@@ -208,8 +208,8 @@ def _sequence(linkage, span, accuracy: float, options: dict, record=None,
     `max_halvings` more): (Convergence, the last recorded run or None).
     The runs from h/4 on are recorded by `record(h)` (a Trajectory with per-revolution
     ``peaks``) where given, else peaks only; where `_stop_time` allows, the runs beyond h/4
-    stop early and record peaks only. The peaks of a driven linkage's runs are read from the
-    smoothed monitored force (`smoothed`). `only`: the index of the one revolution whose
+    stop early and record peaks only. Every run's peaks (a driven linkage's per revolution, a
+    free one's per window) are read from the smoothed monitored force (`smoothed`). `only`: the index of the one revolution whose
     bar counts (None: all)."""
     from .._checks import check_real
     from . import exudyn_linkage as xl
@@ -239,7 +239,9 @@ def _sequence(linkage, span, accuracy: float, options: dict, record=None,
         if free:
             last = record(step)
             last.stats["series_step"] = step
-            peaks.append(np.asarray(last.peaks, dtype=float))
+            force = smoothed(last.base_force)
+            peaks.append(xl.window_peaks(last.t, np.hypot(force[:, 0], force[:, 1]),
+                                         span.windows))
         elif stop is not None:
             t, force = _series_run(linkage, span, settings, max_memory, start, stop)
             row, mag = _sequence_peaks(t, force, linkage.period, revolutions)
