@@ -209,8 +209,8 @@ def _sequence(linkage, span, accuracy: float, options: dict, record=None,
     The runs from h/4 on are recorded by `record(h)` (a Trajectory with per-revolution
     ``peaks``) where given, else peaks only; where `_stop_time` allows, the runs beyond h/4
     stop early and record peaks only. Every run's peaks (a driven linkage's per revolution, a
-    free one's per window) are read from the smoothed monitored force (`smoothed`). `only`: the index of the one revolution whose
-    bar counts (None: all)."""
+    free one's per window) are read from the smoothed monitored force (`smoothed`).
+    `only`: the index of the one revolution whose bar counts (None: all)."""
     from .._checks import check_real
     from . import exudyn_linkage as xl
 
