@@ -215,3 +215,29 @@ def test_a_finer_run_that_stops_early_needs_only_its_part_of_the_memory():
     assert conv.steps == free.steps and conv.stopped == ""
     np.testing.assert_array_equal(conv.peaks, free.peaks)
     assert conv.relative_error[0] <= 1e-3
+
+
+def test_converged_peaks_reads_the_runs_as_the_sequence_does():
+    """The cross-check's `converged_peaks` from the sequence's first step: the same steps
+    and peaks as `_sequence` at 1e-3 (four runs, the fourth stopped after the peak); each
+    run's peaks are those of the smoothed reactions of the full run at that step
+    (`smoothed`), not the raw ones."""
+    from mbs_clearance.backends import exudyn_linkage as xl
+    from mbs_clearance.model.cases import as_linkage
+
+    lk = as_linkage(SliderCrank())
+    span = prepare_span(lk, 1)
+    seq, _ = xc._sequence(lk, span, 1e-3, {})
+    assert len(seq.steps) == 4
+    conv = xc.converged_peaks(SliderCrank(), 1, step_size=seq.steps[0], accuracy=1e-3)
+    assert conv.steps == seq.steps
+    np.testing.assert_array_equal(conv.peaks, seq.peaks)
+    np.testing.assert_array_equal(conv.value, seq.value)
+    for k in (0, 3):        # a full run, and the one stopped after the peak
+        settings = xl.make_settings({"step_size": seq.steps[k]})
+        t, force = xc._series_run(lk, span, settings, None, None)
+        f = xc.smoothed(force)
+        own = xl.refined_peaks(t, np.hypot(f[:, 0], f[:, 1]), lk.period, 1)
+        raw = xl.run_peaks(lk, span, settings)
+        np.testing.assert_allclose(conv.peaks[k], own, rtol=1e-12)
+        assert abs(raw[0] - own[0]) > 1e-12 * own[0]
