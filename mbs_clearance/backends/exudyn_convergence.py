@@ -20,11 +20,11 @@ value is y_h/4 and its bar the larger of the two differences.
 
 MIN_ORDER is 1 so that the bar's argument holds.
 
-The step sequences of `simulate_to_accuracy` and `peak_to_accuracy` read each run's peaks
-from the monitored force smoothed against the step-alternating roundoff oscillation of
-Exudyn's reactions (`SMOOTHING`), and run the halvings beyond h/4 only to shortly after the
-last value near each revolution's peak where that saves at least half of a run
-(`_stop_time`).
+The step sequences of `simulate_to_accuracy`, `peak_to_accuracy` and `converged_peaks` read
+each run of a driven linkage (`_run_peaks`) from the monitored force smoothed against the
+step-alternating roundoff oscillation of Exudyn's reactions (`SMOOTHING`), and run the
+halvings beyond h/4 only to shortly after the last value near each revolution's peak where
+that saves at least half of a run (`_stop_time`).
 """
 
 from __future__ import annotations
