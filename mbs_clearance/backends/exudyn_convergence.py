@@ -20,11 +20,11 @@ value is y_h/4 and its bar the larger of the two differences.
 
 MIN_ORDER is 1 so that the bar's argument holds.
 
-The step sequences of `simulate_to_accuracy` and `peak_to_accuracy` read each run's peaks
-from the monitored force smoothed against the step-alternating roundoff oscillation of
-Exudyn's reactions (`SMOOTHING`), and run the halvings beyond h/4 only to shortly after the
-last value near each revolution's peak where that saves at least half of a run
-(`_stop_time`).
+The step sequences of `simulate_to_accuracy`, `peak_to_accuracy` and `converged_peaks` read
+each run of a driven linkage (`_run_peaks`) from the monitored force smoothed against the
+step-alternating roundoff oscillation of Exudyn's reactions (`SMOOTHING`), and run the
+halvings beyond h/4 only to shortly after the last value near each revolution's peak where
+that saves at least half of a run (`_stop_time`).
 """
 
 from __future__ import annotations
@@ -138,7 +138,10 @@ def converged_peaks(mech, revolutions: int = 4, *, step_size: float | None = Non
     exceeds it, one more run at half the last step (at most `max_halvings` more), the
     extrapolation from the last three. Other `options`: the backend's (`ExudynSettings`
     fields but step_size and accuracy, ``max_memory``, ``start``); `steps` and `peaks` of
-    the result hold every run, `value`, `error`, `order` come from the last three."""
+    the result hold every run, `value`, `error`, `order` come from the last three.
+    A driven linkage's runs are read as the step sequences of `simulate_to_accuracy` read
+    them (`_run_peaks`: the smoothed monitored force, the runs beyond h/4 stopped shortly
+    after the peaks where `_stop_time` allows); a free linkage's from its raw reactions."""
     from . import exudyn_linkage as xl
 
     revolutions = check_int("revolutions", revolutions, 1)
@@ -156,18 +159,37 @@ def converged_peaks(mech, revolutions: int = 4, *, step_size: float | None = Non
 
         accuracy = check_real("accuracy (relative error of the peaks)", accuracy, 1e-10, 0.1)
     max_halvings = check_int("max_halvings", max_halvings, 0)
+    free = span.revolutions is None
     steps, peaks, seconds = [], [], []
+    series, stop = None, None
 
     def run(h):
+        nonlocal series
         settings = xl.make_settings({**options, "step_size": h})
         t0 = time.perf_counter()
-        peaks.append(_all_peaks(linkage, span, settings, max_memory, start))
+        if free:
+            peaks.append(_all_peaks(linkage, span, settings, max_memory, start))
+        else:
+            # a run stopped at a fraction f of the span stores as much as a full one at h / f
+            if stop is not None and not _fits(linkage, span, h * float(span.edges[-1]) / stop,
+                                              max_memory, ("reactions",)):
+                from .._checks import MemoryLimitError, check_max_memory
+
+                raise MemoryLimitError(
+                    f"the Exudyn run at step {h:g} s to {stop:.3g} s needs more than "
+                    f"max_memory={check_max_memory(max_memory)} bytes for its reactions; "
+                    "raise step_size, max_memory or accuracy")
+            row, t, mag = _run_peaks(linkage, span, settings, max_memory, start, stop)
+            peaks.append(row)
+            series = (t, mag)
         seconds.append(time.perf_counter() - t0)
         steps.append(h)
 
     for h in (step_size, step_size / 2.0, step_size / 4.0):
         run(h)
     value, error, order = richardson(*peaks[-3:])
+    if not free:
+        stop = _stop_time(*series, linkage.period, revolutions)
     for _ in range(max_halvings if accuracy is not None else 0):
         if np.all(error <= accuracy * np.abs(value)):
             break
@@ -182,6 +204,21 @@ def _all_peaks(linkage, span, settings, max_memory, start) -> np.ndarray:
     from . import exudyn_linkage as xl
 
     return xl.run_peaks(linkage, span, settings, max_memory, start)
+
+
+def _run_peaks(linkage, span, settings, max_memory, start, stop=None):
+    """The peaks of one driven linkage's Exudyn run at the settings' step as the step
+    sequences read them: (per-revolution refined peaks of the smoothed monitored force in N,
+    t in s, that force's magnitude in N) of a run recording the reactions only, to its end
+    or stopped at `stop` s (`_stop_time`; run in full where its largest value moved to the
+    cut, `_moved_to_the_cut`; the caller checked the stopped run's memory)."""
+    revolutions = span.revolutions
+    t, force = _series_run(linkage, span, settings, max_memory, start, stop)
+    row, mag = _sequence_peaks(t, force, linkage.period, revolutions)
+    if stop is not None and _moved_to_the_cut(t, mag, linkage.period, revolutions, stop):
+        t, force = _series_run(linkage, span, settings, max_memory, start)
+        row, mag = _sequence_peaks(t, force, linkage.period, revolutions)
+    return row, t, mag
 
 
 def order_of(a: float, b: float, c: float) -> float:
@@ -243,22 +280,17 @@ def _sequence(linkage, span, accuracy: float, options: dict, record=None,
             peaks.append(xl.window_peaks(last.t, np.hypot(force[:, 0], force[:, 1]),
                                          span.windows))
         elif stop is not None:
-            t, force = _series_run(linkage, span, settings, max_memory, start, stop)
-            row, mag = _sequence_peaks(t, force, linkage.period, revolutions)
-            if _moved_to_the_cut(t, mag, linkage.period, revolutions, stop):
-                t, force = _series_run(linkage, span, settings, max_memory, start)
-                row, mag = _sequence_peaks(t, force, linkage.period, revolutions)
-            peaks.append(row)
+            peaks.append(_run_peaks(linkage, span, settings, max_memory, start, stop)[0])
         else:
             if recorded and (last is None or _fits(linkage, span, step, max_memory)):
                 last = record(step)
                 last.stats["series_step"] = step
-                t, force = last.t, last.base_force
+                t = last.t
+                row, mag = _sequence_peaks(t, last.base_force, linkage.period, revolutions)
             else:
                 # a record beyond max_memory: this run's peaks only; the series stay those
                 # of the last recorded run
-                t, force = _series_run(linkage, span, settings, max_memory, start)
-            row, mag = _sequence_peaks(t, force, linkage.period, revolutions)
+                row, t, mag = _run_peaks(linkage, span, settings, max_memory, start)
             peaks.append(row)
             series = (t, mag)
         seconds.append(time.perf_counter() - t0)

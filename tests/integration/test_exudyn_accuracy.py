@@ -215,3 +215,56 @@ def test_a_finer_run_that_stops_early_needs_only_its_part_of_the_memory():
     assert conv.steps == free.steps and conv.stopped == ""
     np.testing.assert_array_equal(conv.peaks, free.peaks)
     assert conv.relative_error[0] <= 1e-3
+
+
+def test_converged_peaks_reads_the_runs_as_the_sequence_does():
+    """The cross-check's `converged_peaks` from the sequence's first step: the same steps
+    and peaks as `_sequence` at 1e-3 (four runs, the fourth stopped after the peak); each
+    run's peaks are those of the smoothed reactions of the full run at that step
+    (`smoothed`), not the raw ones."""
+    from mbs_clearance.backends import exudyn_linkage as xl
+    from mbs_clearance.model.cases import as_linkage
+
+    lk = as_linkage(SliderCrank())
+    span = prepare_span(lk, 1)
+    seq, _ = xc._sequence(lk, span, 1e-3, {})
+    assert len(seq.steps) == 4
+    conv = xc.converged_peaks(SliderCrank(), 1, step_size=seq.steps[0], accuracy=1e-3)
+    assert conv.steps == seq.steps
+    np.testing.assert_array_equal(conv.peaks, seq.peaks)
+    np.testing.assert_array_equal(conv.value, seq.value)
+    for k in (0, 3):        # a full run, and the one stopped after the peak
+        settings = xl.make_settings({"step_size": seq.steps[k]})
+        t, force = xc._series_run(lk, span, settings, None, None)
+        f = xc.smoothed(force)
+        own = xl.refined_peaks(t, np.hypot(f[:, 0], f[:, 1]), lk.period, 1)
+        raw = xl.run_peaks(lk, span, settings)
+        np.testing.assert_allclose(conv.peaks[k], own, rtol=1e-12)
+        assert abs(raw[0] - own[0]) > 1e-12 * own[0]
+
+
+def test_converged_peaks_stopped_run_needs_only_its_part_of_the_memory(monkeypatch):
+    """With max_memory between the reactions of a full revolution at h/4 and at h/8, the
+    cross-check's fourth run (h/8, stopped after the peak) runs and gives the peaks it gives
+    without the limit; a stopped run whose part exceeds the limit, or with the early stop
+    off the full h/8 run, is refused."""
+    from mbs_clearance._checks import MemoryLimitError
+    from mbs_clearance.backends import exudyn_linkage as xl
+    from mbs_clearance.model.cases import as_linkage
+
+    lk = as_linkage(SliderCrank())
+    h = xc.first_step(lk, 1e-3, {})
+    free = xc.converged_peaks(SliderCrank(), 1, step_size=h, accuracy=1e-3)
+    assert len(free.steps) == 4
+    need = [xl.estimate_memory(lk, 1, step, ("reactions",))[1] for step in free.steps]
+    limit = (need[2] + need[3]) // 2
+    conv = xc.converged_peaks(SliderCrank(), 1, step_size=h, accuracy=1e-3, max_memory=limit)
+    np.testing.assert_array_equal(conv.peaks, free.peaks)
+    # a stopped run beyond the limit is refused too: stopped at about 0.4 of the revolution,
+    # the h/16 run needs 1.6 times the full h/4 run (1e-5 takes six runs without a limit)
+    monkeypatch.setattr(xc, "STOP_WINDOW", 0.4)
+    with pytest.raises(MemoryLimitError, match=r"at step \S+ s to \S+ s needs more than"):
+        xc.converged_peaks(SliderCrank(), 1, step_size=h, accuracy=1e-5, max_memory=need[2])
+    monkeypatch.setattr(xc, "STOP_FRACTION", 0.0)
+    with pytest.raises(MemoryLimitError, match="max_memory"):
+        xc.converged_peaks(SliderCrank(), 1, step_size=h, accuracy=1e-3, max_memory=limit)
