@@ -212,11 +212,13 @@ def _run_peaks(linkage, span, settings, max_memory, start, stop=None):
     t in s, that force's magnitude in N) of a run recording the reactions only, to its end
     or stopped at `stop` s (`_stop_time`; run in full where its largest value moved to the
     cut, `_moved_to_the_cut`; the caller checked the stopped run's memory)."""
+    from . import exudyn_linkage as xl
+
     revolutions = span.revolutions
-    t, force = _series_run(linkage, span, settings, max_memory, start, stop)
+    t, force = xl.monitored_force(linkage, span, settings, max_memory, start, stop)
     row, mag = _sequence_peaks(t, force, linkage.period, revolutions)
     if stop is not None and _moved_to_the_cut(t, mag, linkage.period, revolutions, stop):
-        t, force = _series_run(linkage, span, settings, max_memory, start)
+        t, force = xl.monitored_force(linkage, span, settings, max_memory, start)
         row, mag = _sequence_peaks(t, force, linkage.period, revolutions)
     return row, t, mag
 
@@ -370,28 +372,6 @@ def _moved_to_the_cut(t, mag, period: float, revolutions: int, stop: float) -> b
     k = min(int(stop // period), revolutions - 1)
     inside = t >= k * period
     return bool(t[inside][np.argmax(mag[inside])] > stop - 0.5 * STOP_WINDOW * period)
-
-
-def _series_run(linkage, span, settings, max_memory, start, until=None):
-    """(t in s, monitored force (n, 2) in N) of one Exudyn run recording the reactions only
-    (a full run where the monitored force holds an element's reaction), to its end or to
-    the first step at or after `until` s (on the full run's steps)."""
-    from . import exudyn_linkage as xl
-
-    if xl.monitors_element_reaction(linkage):
-        traj = xl.run_linkage(linkage, span, settings, max_memory, start)
-        return traj.t, traj.base_force
-    end = float(span.edges[-1])
-    if until is None:
-        xl._check_run(linkage, span, settings, ("reactions",), max_memory)
-    else:       # (the caller checked its memory, `_fits`)
-        h = end / max(1, round(end / settings.step(linkage)))
-        end = min(end, math.ceil(until / h) * h)
-    model, _ = xl.build_and_solve(linkage, settings, end, outputs=("reactions",), start=start)
-    t, reactions = xl._reactions(model)
-    force = (sum(reactions.values()) if linkage.monitor_joint is None
-             else reactions[linkage.monitor_joint])
-    return t, force
 
 
 def _fits(linkage, span, step: float, max_memory, outputs=("all",)) -> bool:

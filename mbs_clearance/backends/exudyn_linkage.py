@@ -1112,16 +1112,33 @@ def run_peaks(linkage: Linkage, span: Span, settings: ExudynSettings, max_memory
     `linkage_model.prepare_span`: drive revolutions, or a free linkage's time windows),
     from one run recording the reactions only (a full run where the monitored force holds
     an element's ground reaction, `monitors_element_reaction`)."""
-    from ..solve.linkage_model import check_span_start
-
     if monitors_element_reaction(linkage):
         return np.asarray(run_linkage(linkage, span, settings, max_memory, start).peaks,
                           dtype=float)
-    _check_run(linkage, span, settings, ("reactions",), max_memory)
+    t, F = monitored_force(linkage, span, settings, max_memory, start)
+    return window_peaks(t, np.hypot(F[:, 0], F[:, 1]), span.windows)
+
+
+def monitored_force(linkage: Linkage, span: Span, settings: ExudynSettings, max_memory=None,
+                    start=None, until: float | None = None):
+    """(t in s, monitored force (n, 2) in N) of one run over `span` recording the reactions
+    only (a full run where the monitored force holds an element's ground reaction,
+    `monitors_element_reaction`), to its end or to the first step at or after `until` s
+    (on the full run's steps; the caller checks such a run's memory)."""
+    from ..solve.linkage_model import check_span_start
+
+    if monitors_element_reaction(linkage):
+        traj = run_linkage(linkage, span, settings, max_memory, start)
+        return traj.t, traj.base_force
+    end = float(span.edges[-1])
+    if until is None:
+        _check_run(linkage, span, settings, ("reactions",), max_memory)
+    else:
+        h = end / max(1, round(end / settings.step(linkage)))
+        end = min(end, math.ceil(until / h) * h)
     check_span_start(span, start)
-    model, _ = build_and_solve(linkage, settings, float(span.edges[-1]),
-                               outputs=("reactions",), start=start)
+    model, _ = build_and_solve(linkage, settings, end, outputs=("reactions",), start=start)
     t, reactions = _reactions(model)
     F = (sum(reactions.values()) if linkage.monitor_joint is None
          else reactions[linkage.monitor_joint])
-    return window_peaks(t, np.hypot(F[:, 0], F[:, 1]), span.windows)
+    return t, F

@@ -11,6 +11,7 @@ import pytest
 
 from mbs_clearance import AccuracyWarning, SliderCrank, peak_base_force, simulate
 from mbs_clearance.backends import exudyn_convergence as xc
+from mbs_clearance.backends import exudyn_linkage as xl
 from mbs_clearance.solve.linkage_model import prepare_span
 
 pytestmark = pytest.mark.exudyn
@@ -64,7 +65,7 @@ def test_bad_requests_fail_before_any_run(monkeypatch):
         raise AssertionError("a run started despite a bad request")
 
     monkeypatch.setattr(xc, "_all_peaks", fail)
-    monkeypatch.setattr(xc, "_series_run", fail)
+    monkeypatch.setattr(xl, "monitored_force", fail)
     with pytest.raises(ValueError, match="not both"):
         simulate(SliderCrank(), 1, backend="exudyn", accuracy=1e-4, step_size=1e-6)
     with pytest.raises(ValueError, match="accuracy"):
@@ -93,6 +94,12 @@ def test_exudyn_at_1e_4_meets_it_at_2000_rpm():
     assert err[0] <= tr.stats["peak_errors"][0], (err, tr.stats["peak_errors"])
 
 
+def _between(lk, step_a, step_b, outputs=("all",)) -> int:
+    """A max_memory between what one revolution of `lk` needs at two steps."""
+    return (xl.estimate_memory(lk, 1, step_a, outputs)[1]
+            + xl.estimate_memory(lk, 1, step_b, outputs)[1]) // 2
+
+
 def test_a_finer_record_beyond_max_memory_records_its_peaks_only(tmp_path, monkeypatch):
     """1e-3 takes a fourth run (as above); with max_memory between the h/4 and h/8 records
     the fourth run records its peaks only: the series are the h/4 run's, the peaks the
@@ -102,7 +109,6 @@ def test_a_finer_record_beyond_max_memory_records_its_peaks_only(tmp_path, monke
     only anyway, `_stop_time`.)"""
     monkeypatch.setattr(xc, "STOP_FRACTION", 0.0)
     from mbs_clearance import load_trajectory
-    from mbs_clearance.backends import exudyn_linkage as xl
     from mbs_clearance.model.cases import as_linkage
 
     mech = SliderCrank()
@@ -110,7 +116,7 @@ def test_a_finer_record_beyond_max_memory_records_its_peaks_only(tmp_path, monke
     h = free.stats["accuracy_steps"]
     assert len(h) == 4
     lk = as_linkage(mech)
-    limit = (xl.estimate_memory(lk, 1, h[2])[1] + xl.estimate_memory(lk, 1, h[3])[1]) // 2
+    limit = _between(lk, h[2], h[3])
     tr = simulate(mech, 1, backend="exudyn", accuracy=1e-3, max_memory=limit)
     assert tr.stats["series_step"] == h[2] and tr.stats["step_size_used"] > 1.5 * h[3]
     assert tr.stats["accuracy_steps"] == h
@@ -124,14 +130,13 @@ def test_an_h4_record_beyond_max_memory_records_the_h2_run():
     """With max_memory between the h/2 and h/4 records the series come from the h/2 run
     (recorded before h/4 is run), every finer run records its peaks only, and the peaks are
     the same extrapolated ones as without the limit (1e-3: four runs, as above)."""
-    from mbs_clearance.backends import exudyn_linkage as xl
     from mbs_clearance.model.cases import as_linkage
 
     mech = SliderCrank()
     free = simulate(mech, 1, backend="exudyn", accuracy=1e-3)
     h = free.stats["accuracy_steps"]
     lk = as_linkage(mech)
-    limit = (xl.estimate_memory(lk, 1, h[1])[1] + xl.estimate_memory(lk, 1, h[2])[1]) // 2
+    limit = _between(lk, h[1], h[2])
     tr = simulate(mech, 1, backend="exudyn", accuracy=1e-3, max_memory=limit)
     assert tr.stats["series_step"] == h[1]
     assert tr.stats["accuracy_steps"] == h
@@ -146,7 +151,6 @@ def test_a_halving_beyond_max_memory_stops_the_sequence_unmet(monkeypatch):
     above) the sequence stops after three runs with the request unmet, warns and says why,
     instead of refusing the whole run."""
     monkeypatch.setattr(xc, "STOP_FRACTION", 0.0)
-    from mbs_clearance.backends import exudyn_linkage as xl
     from mbs_clearance.model.cases import as_linkage
 
     mech = SliderCrank()
@@ -154,8 +158,7 @@ def test_a_halving_beyond_max_memory_stops_the_sequence_unmet(monkeypatch):
     h = free.stats["accuracy_steps"]
     assert len(h) == 4
     lk = as_linkage(mech)
-    need = [xl.estimate_memory(lk, 1, step, ("reactions",))[1] for step in h]
-    limit = (need[2] + need[3]) // 2
+    limit = _between(lk, h[2], h[3], ("reactions",))
     with pytest.warns(AccuracyWarning, match="misses the requested accuracy"):
         peak = xc.peak_to_accuracy(mech, 1, 1e-3, max_memory=limit)
     conv, _ = xc._sequence(lk, prepare_span(lk, 1), 1e-3, {"max_memory": limit})
@@ -164,16 +167,16 @@ def test_a_halving_beyond_max_memory_stops_the_sequence_unmet(monkeypatch):
 
 
 def test_a_stopped_run_is_the_beginning_of_the_full_run():
-    """`_series_run` to `until`: the same steps and reactions as the full run up to the first
-    step at or after `until` (the finer runs of a sequence stop there, `_stop_time`)."""
-    from mbs_clearance.backends import exudyn_linkage as xl
+    """`exudyn_linkage.monitored_force` to `until`: the same steps and reactions as the full
+    run up to the first step at or after `until` (the finer runs of a sequence stop there,
+    `_stop_time`)."""
     from mbs_clearance.model.cases import as_linkage
 
     lk = as_linkage(SliderCrank())
     settings = xl.make_settings({"step_size": lk.period / 3000})
-    t, force = xc._series_run(lk, prepare_span(lk, 1), settings, None, None)
+    t, force = xl.monitored_force(lk, prepare_span(lk, 1), settings, None, None)
     until = 0.3 * lk.period
-    ts, fs = xc._series_run(lk, prepare_span(lk, 1), settings, None, None, until=until)
+    ts, fs = xl.monitored_force(lk, prepare_span(lk, 1), settings, None, None, until=until)
     h = t[1] - t[0]
     assert until <= ts[-1] < until + 1.01 * h and len(ts) < 0.31 * len(t)
     np.testing.assert_allclose(ts, t[:len(ts)], rtol=1e-12, atol=0.0)
@@ -203,15 +206,14 @@ def test_a_finer_run_that_stops_early_needs_only_its_part_of_the_memory():
     sequence stops after it (`_stop_time`): with max_memory below that run's reactions
     over a whole revolution (the limit of the test above) it still runs and meets the
     request, with the same peaks as without the limit."""
-    from mbs_clearance.backends import exudyn_linkage as xl
     from mbs_clearance.model.cases import as_linkage
 
     mech = SliderCrank()
     lk = as_linkage(mech)
     free, _ = xc._sequence(lk, prepare_span(lk, 1), 1e-3, {})
     assert len(free.steps) == 4
-    need = [xl.estimate_memory(lk, 1, step, ("reactions",))[1] for step in free.steps]
-    conv, _ = xc._sequence(lk, prepare_span(lk, 1), 1e-3, {"max_memory": (need[2] + need[3]) // 2})
+    limit = _between(lk, free.steps[2], free.steps[3], ("reactions",))
+    conv, _ = xc._sequence(lk, prepare_span(lk, 1), 1e-3, {"max_memory": limit})
     assert conv.steps == free.steps and conv.stopped == ""
     np.testing.assert_array_equal(conv.peaks, free.peaks)
     assert conv.relative_error[0] <= 1e-3
@@ -222,7 +224,6 @@ def test_converged_peaks_reads_the_runs_as_the_sequence_does():
     and peaks as `_sequence` at 1e-3 (four runs, the fourth stopped after the peak); each
     run's peaks are those of the smoothed reactions of the full run at that step
     (`smoothed`), not the raw ones."""
-    from mbs_clearance.backends import exudyn_linkage as xl
     from mbs_clearance.model.cases import as_linkage
 
     lk = as_linkage(SliderCrank())
@@ -235,7 +236,7 @@ def test_converged_peaks_reads_the_runs_as_the_sequence_does():
     np.testing.assert_array_equal(conv.value, seq.value)
     for k in (0, 3):        # a full run, and the one stopped after the peak
         settings = xl.make_settings({"step_size": seq.steps[k]})
-        t, force = xc._series_run(lk, span, settings, None, None)
+        t, force = xl.monitored_force(lk, span, settings, None, None)
         f = xc.smoothed(force)
         own = xl.refined_peaks(t, np.hypot(f[:, 0], f[:, 1]), lk.period, 1)
         raw = xl.run_peaks(lk, span, settings)
@@ -249,7 +250,6 @@ def test_converged_peaks_stopped_run_needs_only_its_part_of_the_memory(monkeypat
     without the limit; a stopped run whose part exceeds the limit, or with the early stop
     off the full h/8 run, is refused."""
     from mbs_clearance._checks import MemoryLimitError
-    from mbs_clearance.backends import exudyn_linkage as xl
     from mbs_clearance.model.cases import as_linkage
 
     lk = as_linkage(SliderCrank())
@@ -257,7 +257,7 @@ def test_converged_peaks_stopped_run_needs_only_its_part_of_the_memory(monkeypat
     free = xc.converged_peaks(SliderCrank(), 1, step_size=h, accuracy=1e-3)
     assert len(free.steps) == 4
     need = [xl.estimate_memory(lk, 1, step, ("reactions",))[1] for step in free.steps]
-    limit = (need[2] + need[3]) // 2
+    limit = _between(lk, free.steps[2], free.steps[3], ("reactions",))
     conv = xc.converged_peaks(SliderCrank(), 1, step_size=h, accuracy=1e-3, max_memory=limit)
     np.testing.assert_array_equal(conv.peaks, free.peaks)
     # a stopped run beyond the limit is refused too: stopped at about 0.4 of the revolution,
