@@ -314,12 +314,19 @@ def compare(a: Trajectory, b: Trajectory, revolutions=None, *, step_bars: bool =
 
 def step_bars(traj, start=None):
     """An Exudyn run at a fixed step h without an error estimate, with a bar on each of its
-    per-revolution peaks: two more runs at h/2 and h/4 (the reactions only) and
-    `exudyn_convergence.richardson` on the three. The bar of the run's own peak y_h is its
-    distance from the extrapolated value plus that value's bar, |y_h - y*| + |y_h/2 -
-    y_h/4|, which bounds y_h's error wherever the extrapolated value's bar holds
-    (docs/exudyn.md measures it against the reduced model at rtol 1e-12). Any other run
-    (another backend, or a run with an estimate already) is returned as it is.
+    per-revolution peaks from two more runs at h/2 and h/4 (the reactions only).
+
+    The three runs are read as the step sequences read theirs (`exudyn_convergence.
+    _sequence_peaks`, `_run_peaks`: the peaks of the monitored force smoothed against the
+    step-alternating roundoff oscillation of Exudyn's reactions, `smoothed`), and
+    `exudyn_convergence.richardson` on those three readings gives the extrapolated value y*
+    and its bar |y_h/2 - y_h/4|. The value shown stays the run's own peak y_h (its
+    ``peaks``, read from the raw force like every fixed-step run's); its bar is
+    |y_h - y*| + |y_h/2 - y_h/4|, with y_h that raw peak: it bounds y_h's error wherever
+    the extrapolated value's bar holds, and it holds the run's own oscillation too, as
+    |y_h - y*| measures it (docs/exudyn.md measures the bars against the reduced model at
+    rtol 1e-12). Any other run (another backend, a free linkage, or a run with an estimate
+    already) is returned as it is.
 
     Parameters
     ----------
@@ -333,15 +340,21 @@ def step_bars(traj, start=None):
     Trajectory
         `traj` with ``stats["peak_errors"]`` (N per revolution), ``error_estimate``
         (largest relative bar), ``error_estimate_method`` ("step halving at the run's
-        step"), ``observed_order``, ``accuracy_steps``, ``accuracy_peaks`` and
-        ``step_bars_seconds`` (s, the two runs' wall time).
+        step"), ``observed_order``, ``accuracy_steps``, ``accuracy_peaks`` (N, the smoothed
+        readings of the three runs that the extrapolation used; the first row is the run's
+        own smoothed, not its ``peaks``) and ``step_bars_seconds`` (s, the two runs' wall
+        time).
     """
     from dataclasses import fields, replace
 
     from mbs_clearance._checks import MemoryLimitError
     from mbs_clearance.analysis.verdict import has_bars
     from mbs_clearance.backends import exudyn_linkage as xl
-    from mbs_clearance.backends.exudyn_convergence import richardson
+    from mbs_clearance.backends.exudyn_convergence import (
+        _run_peaks,
+        _sequence_peaks,
+        richardson,
+    )
     from mbs_clearance.model.cases import as_linkage
     from mbs_clearance.solve.linkage_model import prepare_span
 
@@ -357,15 +370,16 @@ def step_bars(traj, start=None):
     h = float(traj.stats["step_size"])
     y_h = np.asarray(traj.peaks, dtype=float)
     n = len(y_h)
+    own = _sequence_peaks(traj.t, traj.base_force, linkage.period, n)[0]
     t0 = time.perf_counter()
     try:
         span = prepare_span(linkage, n)
-        finer = [xl.run_peaks(linkage, span, xl.make_settings({**options, "step_size": step}),
-                              start=start) for step in (h / 2.0, h / 4.0)]
+        finer = [_run_peaks(linkage, span, xl.make_settings({**options, "step_size": step}),
+                            None, start)[0] for step in (h / 2.0, h / 4.0)]
     except MemoryLimitError:
         return traj     # even the reactions at h/4 exceed max_memory: no bar (it says so)
     seconds = time.perf_counter() - t0
-    value, error, order = richardson(y_h, *finer)
+    value, error, order = richardson(own, *finer)
     bars = np.abs(y_h - value) + error
     stats = dict(traj.stats)
     stats.update(peak_errors=[float(e) for e in bars],
@@ -373,7 +387,7 @@ def step_bars(traj, start=None):
                  error_estimate_method="step halving at the run's step (h, h/2, h/4)",
                  observed_order=[float(p) for p in order],
                  accuracy_steps=[h, h / 2.0, h / 4.0],
-                 accuracy_peaks=[list(map(float, p)) for p in (y_h, *finer)],
+                 accuracy_peaks=[list(map(float, p)) for p in (own, *finer)],
                  step_bars_seconds=seconds)
     return replace(traj, stats=stats)
 
