@@ -84,9 +84,16 @@ def test_a_run_at_a_fixed_step_gets_bars_that_hold_the_reference():
     """Exudyn at a fixed step (4 us, 2 revolutions) has no error estimate; `step_bars` gives
     each of its peaks a bar from runs at 2 and 1 us. Each bar covers the run's distance
     from the reduced model at rtol 1e-12 (an independent reference, converged far beyond
-    these bars) without being vacuous (at most 3 times that distance). With the bars the
-    comparison agrees; without them the same difference decides nothing."""
+    these bars) without being vacuous (at most 3 times that distance). The three runs are
+    read as the step sequences read theirs (the smoothed monitored force, `smoothed`, not
+    the raw one) and the bar is the run's own (raw) peak's distance from their
+    extrapolation plus its bar. With the bars the comparison agrees; without them the same
+    difference decides nothing."""
     from mbs_clearance.analysis.verdict import NO_BAR
+    from mbs_clearance.backends import exudyn_convergence as xc
+    from mbs_clearance.backends import exudyn_linkage as xl
+    from mbs_clearance.model.cases import as_linkage
+    from mbs_clearance.solve.linkage_model import prepare_span
     from validation.compare import compare, step_bars
 
     paper = SliderCrank()
@@ -101,6 +108,21 @@ def test_a_run_at_a_fixed_step_gets_bars_that_hold_the_reference():
     # second order, not yet exactly so at these steps)
     assert np.all(np.isfinite(barred.stats["observed_order"]))
     assert step_bars(barred) is barred and step_bars(ref) is ref     # nothing to add
+    lk = as_linkage(paper)
+    rows = np.asarray(barred.stats["accuracy_peaks"])
+    for row, traj in ((0, run), (2, None)):
+        if traj is None:
+            settings = xl.make_settings({"step_size": 1e-6})
+            t, force = xl.monitored_force(lk, prepare_span(lk, 2), settings)
+        else:
+            t, force = traj.t, traj.base_force
+        f = xc.smoothed(force)
+        smooth = xl.refined_peaks(t, np.hypot(f[:, 0], f[:, 1]), lk.period, 2)
+        raw = xl.refined_peaks(t, np.hypot(force[:, 0], force[:, 1]), lk.period, 2)
+        np.testing.assert_allclose(rows[row], smooth, rtol=1e-12)
+        assert np.all(np.abs(raw - smooth) > 1e-12 * smooth)
+    value, error, _ = xc.richardson(*rows)
+    np.testing.assert_allclose(bars, np.abs(revolution_peaks(run) - value) + error, rtol=1e-12)
     assert compare(ref, run, step_bars=False).verdict.kind == NO_BAR
     v = compare(ref, run).verdict
     assert v.kind == AGREE, v.summary()
