@@ -356,22 +356,41 @@ def test_a_step_bound_that_sets_the_steps_does_not_fool_the_estimate():
 
 
 def test_the_sequences_smoothing_removes_the_step_alternating_mode_and_keeps_cubics():
-    """`smoothed` (weights -1, 4, 10, 4, -1 over 16): a cubic in the sample index is kept
-    exactly (closed form: the weights' moments 1, 0, 0, 0), the step-alternating sequences
-    (-1)^n and n (-1)^n (the spurious mode of generalized-alpha, and one growing linearly)
-    are removed from every sample but the two at each end, and a quartic changes by
-    -f^(4)/16 = -24/16 at a unit step."""
-    from mbs_clearance.backends.exudyn_convergence import smoothed
+    """`smoothed` (weights -1, 4, 10, 4, -1 over 16 inside): a cubic in the sample index is
+    kept exactly (closed form: the weights' moments 1, 0, 0, 0), the step-alternating
+    sequences (-1)^n and n (-1)^n (the spurious mode of generalized-alpha, and one growing
+    linearly) are removed from every sample but the two at each end, and a quartic changes
+    by -f^(4)/16 = -24/16 at a unit step. The two samples at each end (one-sided weights
+    on the five end samples) keep the cubic and remove (-1)^n too; the interior is the
+    convolution with the symmetric weights, whatever the ends."""
+    from mbs_clearance.backends.exudyn_convergence import END_SMOOTHING, smoothed
 
     n = np.arange(40, dtype=float)
     cubic = 3.0 - 2.0 * n + 0.5 * n**2 - 0.01 * n**3
     alternating = (-1.0) ** n * (1.0 + 0.3 * n)
     out = smoothed(np.column_stack([cubic + alternating, 2.0 * cubic]))
     np.testing.assert_allclose(out[2:-2, 0], cubic[2:-2], rtol=0, atol=1e-12)
-    np.testing.assert_allclose(out[2:-2, 1], 2.0 * cubic[2:-2], rtol=0, atol=1e-12)
-    np.testing.assert_array_equal(out[:2, 0], (cubic + alternating)[:2])
+    np.testing.assert_allclose(out[:, 1], 2.0 * cubic, rtol=0, atol=1e-12)
     quartic = smoothed(np.column_stack([n**4, n**4]))
     np.testing.assert_allclose(quartic[2:-2, 0] - n[2:-2] ** 4, -1.5, atol=1e-9)
+    # the ends: a cubic (any, here with a large cubic term) plus c (-1)^n, at every sample
+    other = 7.0 + 0.25 * n - 1.5 * n**2 + 0.2 * n**3
+    zigzag = 2.5 * (-1.0) ** n
+    ends = smoothed(np.column_stack([other + zigzag, zigzag]))
+    np.testing.assert_allclose(ends[:, 0], other, rtol=0, atol=1e-12 * np.abs(other).max())
+    np.testing.assert_allclose(ends[:, 1], 0.0, rtol=0, atol=1e-12)
+    # the one-sided weights in closed form: (15, 4, -6, 4, -1) / 16, (1, 12, 6, -4, 1) / 16
+    np.testing.assert_allclose(END_SMOOTHING * 16.0, [[15, 4, -6, 4, -1], [1, 12, 6, -4, 1]],
+                               rtol=0, atol=1e-12)
+    # the interior: the symmetric weights' convolution, unchanged by the ends' weights
+    rng = np.random.default_rng(0)
+    noise = rng.standard_normal((40, 2))
+    inner = [np.convolve(noise[:, c], np.array([-1, 4, 10, 4, -1]) / 16.0, mode="valid")
+             for c in range(2)]
+    np.testing.assert_allclose(smoothed(noise)[2:-2], np.column_stack(inner), rtol=0,
+                               atol=1e-14)
+    # fewer samples than the weights: returned unchanged
+    np.testing.assert_array_equal(smoothed(noise[:4]), noise[:4])
 
 
 def test_the_finer_runs_stop_after_the_last_value_near_the_peak():
