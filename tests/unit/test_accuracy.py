@@ -360,9 +360,10 @@ def test_the_sequences_smoothing_removes_the_step_alternating_mode_and_keeps_cub
     kept exactly (closed form: the weights' moments 1, 0, 0, 0), the step-alternating
     sequences (-1)^n and n (-1)^n (the spurious mode of generalized-alpha, and one growing
     linearly) are removed from every sample but the two at each end, and a quartic changes
-    by -f^(4)/16 = -24/16 at a unit step. The two samples at each end (one-sided weights
-    on the five end samples) keep the cubic and remove (-1)^n too; the interior is the
-    convolution with the symmetric weights, whatever the ends."""
+    by -f^(4)/16 = -24/16 at a unit step. The last two samples (one-sided weights on the
+    last five) keep the cubic and remove (-1)^n too; the first two are left as they are
+    (the initial state's force); the interior is the convolution with the symmetric
+    weights, whatever the ends."""
     from mbs_clearance.backends.exudyn_convergence import END_SMOOTHING, smoothed
 
     n = np.arange(40, dtype=float)
@@ -371,14 +372,16 @@ def test_the_sequences_smoothing_removes_the_step_alternating_mode_and_keeps_cub
     out = smoothed(np.column_stack([cubic + alternating, 2.0 * cubic]))
     np.testing.assert_allclose(out[2:-2, 0], cubic[2:-2], rtol=0, atol=1e-12)
     np.testing.assert_allclose(out[:, 1], 2.0 * cubic, rtol=0, atol=1e-12)
+    np.testing.assert_array_equal(out[:2, 0], (cubic + alternating)[:2])
     quartic = smoothed(np.column_stack([n**4, n**4]))
     np.testing.assert_allclose(quartic[2:-2, 0] - n[2:-2] ** 4, -1.5, atol=1e-9)
-    # the ends: a cubic (any, here with a large cubic term) plus c (-1)^n, at every sample
+    # the end: a cubic (any, here with a large cubic term) plus c (-1)^n, from sample 2 on
     other = 7.0 + 0.25 * n - 1.5 * n**2 + 0.2 * n**3
     zigzag = 2.5 * (-1.0) ** n
     ends = smoothed(np.column_stack([other + zigzag, zigzag]))
-    np.testing.assert_allclose(ends[:, 0], other, rtol=0, atol=1e-12 * np.abs(other).max())
-    np.testing.assert_allclose(ends[:, 1], 0.0, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(ends[2:, 0], other[2:], rtol=0,
+                               atol=1e-12 * np.abs(other).max())
+    np.testing.assert_allclose(ends[2:, 1], 0.0, rtol=0, atol=1e-12)
     # the one-sided weights in closed form: (15, 4, -6, 4, -1) / 16, (1, 12, 6, -4, 1) / 16
     np.testing.assert_allclose(END_SMOOTHING * 16.0, [[15, 4, -6, 4, -1], [1, 12, 6, -4, 1]],
                                rtol=0, atol=1e-12)
