@@ -151,7 +151,7 @@ def settled_summary(runs: list[dict], first: int) -> dict:
     max, N), their relative change between consecutive revolutions of that span (from
     revolution `first` to `first` + 1 on) and their difference between the rtols (min,
     median, max; None for one rtol), and each rtol's contact events per revolution (min,
-    max; where counted)."""
+    max, and their sum over the span; where counted)."""
     per = periodicity(runs)
     k = slice(first - 1, None)
     tight = runs[int(np.argmin([r["rtol"] for r in runs]))]["peaks"][k]
@@ -162,7 +162,8 @@ def settled_summary(runs: list[dict], first: int) -> dict:
     return {"peak": (float(np.median(tight)), float(tight.min()), float(tight.max())),
             "change": spread(per["rev_to_rev"][first:]),
             "between": spread(per["between_rtols"][k]) if len(runs) > 1 else None,
-            "events": [(int(r["per_revolution"][k].min()), int(r["per_revolution"][k].max()))
+            "events": [(int(r["per_revolution"][k].min()), int(r["per_revolution"][k].max()),
+                        int(r["per_revolution"][k].sum()))
                        if "per_revolution" in r else None for r in runs]}
 
 
@@ -210,7 +211,8 @@ def main_adaptive(name: str, revolutions: int, rtols: list[float], overrides: di
              f"(median {s['between'][1]:.2e})"))
     for rtol, ev in zip(rtols, s["events"]):
         if ev is not None:
-            print(f"{span}: contact events per revolution {ev[0]}-{ev[1]} at rtol {rtol:g}")
+            print(f"{span}: contact events per revolution {ev[0]}-{ev[1]}, {ev[2]} in all, at "
+                  f"rtol {rtol:g}")
 
 
 def _override(text: str) -> tuple[str, float]:
