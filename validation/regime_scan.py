@@ -33,6 +33,7 @@ step in memory, so for short runs) and their range over the summary's revolution
 
 from __future__ import annotations
 
+import argparse
 import math
 import sys
 import time
@@ -181,10 +182,11 @@ def periodicity(runs: list[dict]) -> dict:
 
 
 def main_adaptive(name: str, revolutions: int, rtols: list[float], overrides: dict,
-                  first: int = 2, events: bool = False) -> None:
+                  first: int = 2, events: bool = False, linkage=None) -> None:
     """Print `adaptive_peaks` at each rtol, their `periodicity` and the `settled_summary`
-    from revolution `first` (the command line)."""
-    linkage = cases.CASES[name](**overrides)
+    from revolution `first` (the command line); `linkage`: the case with `overrides`,
+    where the caller has built it."""
+    linkage = linkage or cases.CASES[name](**overrides)
     runs = []
     for rtol in rtols:
         t0 = time.perf_counter()
@@ -219,40 +221,63 @@ def _override(text: str) -> tuple[str, float]:
     """NAME=VALUE of the command line; a crank speed may be in rpm (``crank_speed=20rpm``)."""
     key, sep, value = text.partition("=")
     if not sep:
-        raise SystemExit(f"regime_scan: an override is NAME=VALUE; got {text!r}")
-    if key == "crank_speed" and value.endswith("rpm"):
-        return key, float(value[:-3]) * math.pi / 30.0
-    return key, float(value)
+        raise ValueError(f"an override is NAME=VALUE; got {text!r}")
+    try:
+        if key == "crank_speed" and value.endswith("rpm"):
+            return key, float(value[:-3]) * math.pi / 30.0
+        return key, float(value)
+    except ValueError:
+        raise ValueError(f"override {key}: the value must be a number; got {value!r}") from None
 
 
 def main(argv=None) -> int:
-    argv = sys.argv[1:] if argv is None else argv
-    events = "--events" in argv
-    argv = [a for a in argv if a != "--events"]
-    first = 2
-    if "--from" in argv:
-        at = argv.index("--from")
-        first = int(argv[at + 1])
-        del argv[at:at + 2]
-    if argv[2] == "adaptive":
-        revolutions = int(argv[1])
-        if not 2 <= first < revolutions:
-            raise SystemExit(f"regime_scan: --from must be in [2, {revolutions - 1}]; got "
-                             f"{first}")
-        overrides = dict(_override(a) for a in argv[4:])
-        main_adaptive(argv[0], revolutions, [float(r) for r in argv[3].split(",")],
-                      overrides, first, events)
+    ap = argparse.ArgumentParser(prog="python -m validation.regime_scan",
+                                 description=__doc__.splitlines()[0])
+    ap.add_argument("case", choices=sorted(cases.CASES))
+    ap.add_argument("revolutions", type=int)
+    ap.add_argument("steps", help="steps per revolution, or 'adaptive'")
+    ap.add_argument("rest", nargs="*", metavar="RTOLS NAME=VALUE",
+                    help="with 'adaptive' first the rtols (comma-separated); then overrides")
+    ap.add_argument("--from", dest="first", type=int, default=2,
+                    help="the summary's first revolution (adaptive; default 2)")
+    ap.add_argument("--events", action="store_true",
+                    help="contact events per revolution, from a recording run (adaptive)")
+    args = ap.parse_intermixed_args(argv)
+    adaptive = args.steps == "adaptive"
+    if args.revolutions < (2 if adaptive else 1):
+        ap.error(f"revolutions must be >= {2 if adaptive else 1}; got {args.revolutions}")
+    try:
+        if adaptive:
+            if not args.rest:
+                raise ValueError("'adaptive' needs the rtols (e.g. 1e-10,1e-11)")
+            rtols = [float(r) for r in args.rest[0].split(",")]
+            if not all(0 < r < 1 for r in rtols):
+                raise ValueError(f"the rtols must be in (0, 1); got {args.rest[0]}")
+            if not 2 <= args.first < args.revolutions:
+                raise ValueError(f"--from must be in [2, {args.revolutions - 1}]; got "
+                                 f"{args.first}")
+            overrides = dict(_override(a) for a in args.rest[1:])
+        else:
+            steps = int(args.steps) if args.steps.isdigit() else 0
+            if steps < 1 or args.events or args.first != 2:
+                raise ValueError("steps must be 'adaptive' or a whole number >= 1 (--from "
+                                 f"and --events go with 'adaptive'); got {args.steps!r}")
+            overrides = dict(_override(a) for a in args.rest)
+        linkage = cases.CASES[args.case](**overrides)
+        period = linkage.period     # a free linkage has none: its error says so
+    except ValueError as exc:
+        ap.error(str(exc))
+    if adaptive:
+        main_adaptive(args.case, args.revolutions, rtols, overrides, args.first, args.events,
+                      linkage)
         return 0
-    name, revolutions, steps = argv[0], int(argv[1]), int(argv[2])
-    overrides = dict(_override(a) for a in argv[3:])
-    linkage = cases.CASES[name](**overrides)
     model = load_model(linkage)
     p = pack_parameters(linkage, model)
     y0 = initial_state(linkage, model, p)
     run = make_runner(model)
     t0 = time.perf_counter()
-    peaks, events = run(y0, p, linkage.period / steps, linkage.period, revolutions)
-    print(f"{name} {overrides} h = {linkage.period / steps:.3g} s "
+    peaks, events = run(y0, p, period / steps, period, args.revolutions)
+    print(f"{args.case} {overrides} h = {period / steps:.3g} s "
           f"({time.perf_counter() - t0:.1f} s wall)")
     for k, (peak, nev) in enumerate(zip(peaks, events), 1):
         print(f"revolution {k}: peak {peak:.6f} N, {nev} contact events")

@@ -4,6 +4,7 @@ recorded run, the summary of a span of revolutions, and its command-line input."
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -62,10 +63,24 @@ def test_override_input():
     assert regime_scan._override("crank_speed=20rpm") == ("crank_speed",
                                                           pytest.approx(20 * 2 * math.pi / 60))
     assert regime_scan._override("clearance=1e-4") == ("clearance", 1e-4)
-    with pytest.raises(SystemExit, match="NAME=VALUE"):
+    with pytest.raises(ValueError, match="NAME=VALUE"):
         regime_scan._override("clearance")
+    with pytest.raises(ValueError, match="override clearance: the value must be a number"):
+        regime_scan._override("clearance=0.1mm")
 
 
-def test_from_outside_the_run_is_refused_before_running():
-    with pytest.raises(SystemExit, match=r"--from must be in \[2, 7\]; got 8"):
-        regime_scan.main(["four_bar", "8", "adaptive", "1e-9", "--from", "8"])
+@pytest.mark.parametrize("argv, message", [
+    (["four_bar", "8", "adaptive", "1e-9", "--from", "8"], r"--from must be in \[2, 7\]; got 8"),
+    (["four_bar", "8", "adaptive"], "'adaptive' needs the rtols"),
+    (["four_bar", "8", "adaptive", "2"], r"the rtols must be in \(0, 1\)"),
+    (["four_bar", "8", "adaptive", "1e-9", "foo=1"], r"unknown override\(s\) \['foo'\]"),
+    (["four_bar", "8", "100", "--events"], "--events go with 'adaptive'"),
+    (["flores_translational_slider_crank", "8", "adaptive", "1e-9"], "is free"),
+])
+def test_bad_input_is_refused_in_one_line_before_running(argv, message, capsys):
+    with pytest.raises(SystemExit) as stop:
+        regime_scan.main(argv)
+    assert stop.value.code == 2
+    err = capsys.readouterr().err.strip().splitlines()[-1]
+    assert err.startswith("python -m validation.regime_scan: error: ")
+    assert re.search(message, err), err
