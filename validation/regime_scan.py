@@ -26,9 +26,9 @@ may be given in rpm (``crank_speed=20rpm``).
 Then a summary of revolutions K to the last (``--from K``, default 2): the peaks' median
 and range at the tightest rtol, the range and median of their change between consecutive
 revolutions of that span (from revolution K + 1 on), and of their difference between the
-rtols. ``--events``: the contact events of
-each revolution at each rtol, counted from a recording run (the same steps; it holds every
-step in memory, so for short runs) and their range over the summary's revolutions.
+rtols. ``--events``: the contact events of each revolution at each rtol, counted from a
+recording run (the same steps; it holds every step in memory, so for short runs), and
+their range and sum over the summary's revolutions.
 """
 
 from __future__ import annotations
