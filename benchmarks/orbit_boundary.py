@@ -11,6 +11,11 @@ brute-force boundary (the last period-1 value and the next) from each.
 
     python -m benchmarks.orbit_boundary [--points 9] [--width 2e-8]
     python -m benchmarks.orbit_boundary --field crank_speed [--points 9] [--width 2]
+    python -m benchmarks.orbit_boundary --field crank_speed --max-step 3 --max-points 200
+
+--max-step and --max-points are the continuation's (default: 30 rad/s and 1500 orbits over
+crank speed, `continue_orbits`' own over clearance); a branch that ends before a doubling
+is printed with the value it reached, and nothing is run around it.
 """
 
 from __future__ import annotations
@@ -52,22 +57,41 @@ def main(argv=None) -> int:
     ap.add_argument("--width", type=float, default=None,
                     help="values within +- width of the doubling (default 2e-8 m of "
                          "clearance, 2 rad/s of crank speed)")
+    ap.add_argument("--max-step", type=float, default=None,
+                    help="the continuation's largest step (default 30 rad/s over crank "
+                         "speed, continue_orbits' default over clearance)")
+    ap.add_argument("--max-points", type=int, default=None,
+                    help="orbits of the continuation at most (default 1500 over crank "
+                         "speed, 400 over clearance)")
     args = ap.parse_args(argv)
+    if args.max_step is not None and not args.max_step > 0:
+        ap.error(f"--max-step must be > 0; got {args.max_step}")
+    if args.max_points is not None and args.max_points < 2:
+        ap.error(f"--max-points must be >= 2; got {args.max_points}")
     print(machine_summary())
     paper = SliderCrank()
     t0 = time.perf_counter()
     if args.field == "clearance":
         width = 2e-8 if args.width is None else args.width
-        branch = continue_orbits(paper, "clearance", 1e-5, 2e-5, max_points=400,
-                                 stop_at_first=True)
+        step = {} if args.max_step is None else {"max_step": args.max_step}
+        branch = continue_orbits(paper, "clearance", 1e-5, 2e-5,
+                                 max_points=args.max_points or 400, stop_at_first=True,
+                                 **step)
     else:
         width = 2.0 if args.width is None else args.width
         branch = continue_orbits(paper, "crank_speed", paper.crank_speed,
-                                 1000 * math.pi / 30, max_points=1500, max_step=30.0,
-                                 stop_at_first=True)
+                                 1000 * math.pi / 30, max_points=args.max_points or 1500,
+                                 max_step=args.max_step or 30.0, stop_at_first=True)
     print(f"{branch.summary()}\n({time.perf_counter() - t0:.1f} s, "
           f"{branch.counters['shooting_runs']} variational and "
           f"{branch.counters['plain_runs']} plain runs)")
+    if not branch.points:
+        last = branch.values[-1]
+        print("no period doubling on the branch; it reaches "
+              + (f"{last:.6g} m" if args.field == "clearance" else
+                 f"{last * 30 / math.pi:.0f} rpm ({last:.6g} rad/s)")
+              + f" after {len(branch.values)} orbits")
+        return 0
     pd = branch.points[0]
     # the branch's side of the doubling (it starts at the paper's design)
     below = (branch.values < pd.value) == (branch.values[0] < pd.value)

@@ -27,6 +27,7 @@ with the coefficients overlaid, one panel per parameter:
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
 
 import numpy as np
 
@@ -237,6 +238,8 @@ def main(argv=None) -> None:
     args = parser.parse_args(argv)
     mu_text = args.mu or ("0,0.01,0.1" if args.sensitivities else "0,0.01,0.05,0.1")
     mus = [float(v) for v in mu_text.split(",")]
+    if args.figure:            # its folder, before the runs (the documented docs/figures/...)
+        Path(args.figure).parent.mkdir(parents=True, exist_ok=True)
     if args.sensitivities:
         if mus[0] != 0.0:
             parser.error("--sensitivities compares against the frictionless run: the first "

@@ -17,11 +17,24 @@ adaptive integrator (`simulate`'s peak-only run) at each rtol: the refined peak 
 revolution, the contact events in total and in the first revolution, and the largest
 relative difference of the peaks between the rtols from each revolution on (the
 periodicity check of docs/cases.md: a periodic regime's peaks agree between rtols and
-repeat from revolution to revolution; a chaotic one's differ between rtols).
+repeat from revolution to revolution; a chaotic one's differ between rtols). A crank speed
+may be given in rpm (``crank_speed=20rpm``).
+
+    python -m validation.regime_scan four_bar 200 adaptive 1e-9,1e-10 --from 150
+    python -m validation.regime_scan four_bar 8 adaptive 1e-9 crank_speed=20rpm --events
+
+Then a summary of revolutions K to the last (``--from K``, default 2): the peaks' median
+and range at the tightest rtol, the range and median of their change between consecutive
+revolutions of that span (from revolution K + 1 on), and of their difference between the
+rtols. ``--events``: the contact events of each revolution at each rtol, counted from a
+recording run (the same steps; it holds every step in memory, so for short runs), and
+their range and sum over the summary's revolutions.
 """
 
 from __future__ import annotations
 
+import argparse
+import math
 import sys
 import time
 
@@ -105,15 +118,54 @@ def make_runner(model):
 MAX_STEPS = 1_000_000_000
 
 
-def adaptive_peaks(linkage, revolutions: int, rtol: float) -> dict:
+def adaptive_peaks(linkage, revolutions: int, rtol: float, per_revolution: bool = False
+                   ) -> dict:
     """Peaks per revolution (refined, N) and contact events (total, first revolution) of
-    `linkage` through the adaptive integrator at `rtol`, recording nothing."""
+    `linkage` through the adaptive integrator at `rtol`, recording nothing; with
+    `per_revolution` the run records its steps (the same steps) and `per_revolution`
+    holds the contact events of each revolution: the steps where a joint's mode switches."""
     from mbs_clearance.solve.linkage_model import run
 
     first = run(linkage, 1, rtol=rtol, record=False, max_steps=MAX_STEPS).stats["nevent"]
-    out = run(linkage, revolutions, rtol=rtol, record=False, max_steps=MAX_STEPS)
-    return {"rtol": rtol, "peaks": np.asarray(out[4]), "events": out[6]["nevent"],
-            "events_first": first, "nfev": out[6]["nfev"]}
+    out = run(linkage, revolutions, rtol=rtol, record=per_revolution, max_steps=MAX_STEPS)
+    res = {"rtol": rtol, "peaks": np.asarray(out.peaks), "events": out.stats["nevent"],
+           "events_first": first, "nfev": out.stats["nfev"]}
+    if per_revolution:
+        res["per_revolution"] = switches_per_revolution(out.ts, out.ms, linkage.period,
+                                                        revolutions)
+    return res
+
+
+def switches_per_revolution(ts, ms, period: float, revolutions: int) -> np.ndarray:
+    """Contact switches per revolution of a recorded run: the steps (times `ts`, s) where a
+    joint's mode (the even columns of the memories `ms`) differs from the step before,
+    counted in the revolution (`period`, s) that holds the step."""
+    modes = np.asarray(ms)[:, 0::2]
+    switched = np.any(np.diff(modes, axis=0) != 0, axis=1)
+    rev = np.minimum((np.asarray(ts)[1:][switched] / period).astype(int), revolutions - 1)
+    return np.bincount(rev, minlength=revolutions)
+
+
+def settled_summary(runs: list[dict], first: int) -> dict:
+    """From `adaptive_peaks` of one case at several rtols and their `periodicity`: over
+    revolutions `first` to the last (1-based), the peaks at the tightest rtol (median, min,
+    max, N), their relative change between consecutive revolutions of that span (from
+    revolution `first` to `first` + 1 on) and their difference between the rtols (min,
+    median, max; None for one rtol), and each rtol's contact events per revolution (min,
+    max, and their sum over the span; where counted)."""
+    per = periodicity(runs)
+    k = slice(first - 1, None)
+    tight = runs[int(np.argmin([r["rtol"] for r in runs]))]["peaks"][k]
+
+    def spread(x):
+        return float(np.min(x)), float(np.median(x)), float(np.max(x))
+
+    return {"peak": (float(np.median(tight)), float(tight.min()), float(tight.max())),
+            "change": spread(per["rev_to_rev"][first:]),
+            "between": spread(per["between_rtols"][k]) if len(runs) > 1 else None,
+            "events": [(int(r["per_revolution"][k].min()), int(r["per_revolution"][k].max()),
+                        int(r["per_revolution"][k].sum()))
+                       if "per_revolution" in r else None for r in runs]}
 
 
 def periodicity(runs: list[dict]) -> dict:
@@ -129,41 +181,103 @@ def periodicity(runs: list[dict]) -> dict:
             "later_events": [r["events"] - r["events_first"] for r in runs]}
 
 
-def main_adaptive(name: str, revolutions: int, rtols: list[float], overrides: dict) -> None:
-    """Print `adaptive_peaks` at each rtol and their `periodicity` (the command line)."""
-    linkage = cases.CASES[name](**overrides)
+def main_adaptive(name: str, revolutions: int, rtols: list[float], overrides: dict,
+                  first: int = 2, events: bool = False, linkage=None) -> None:
+    """Print `adaptive_peaks` at each rtol, their `periodicity` and the `settled_summary`
+    from revolution `first` (the command line); `linkage`: the case with `overrides`,
+    where the caller has built it."""
+    linkage = linkage or cases.CASES[name](**overrides)
     runs = []
     for rtol in rtols:
         t0 = time.perf_counter()
-        r = adaptive_peaks(linkage, revolutions, rtol)
+        r = adaptive_peaks(linkage, revolutions, rtol, per_revolution=events)
         runs.append(r)
         print(f"{name} {overrides} rtol {rtol:g}: nfev {r['nfev']}, contact events "
               f"{r['events']} ({r['events_first']} in revolution 1) "
               f"({time.perf_counter() - t0:.1f} s wall)", flush=True)
+        if events:
+            print(f"rtol {rtol:g}: contact events per revolution "
+                  + " ".join(str(n) for n in r["per_revolution"]))
     per = periodicity(runs)
     for k in range(revolutions):
         print(f"revolution {k + 1}: peaks " + " ".join(f"{r['peaks'][k]:.10g}" for r in runs)
               + f" N; between rtols {per['between_rtols'][k]:.2e}, change from the "
               f"previous revolution {per['rev_to_rev'][k]:.2e}")
+    s = settled_summary(runs, first)
+    span = f"revolutions {first}-{revolutions}"
+    print(f"{span}: peak median {s['peak'][0]:.10g} N ({s['peak'][1]:.10g} to "
+          f"{s['peak'][2]:.10g}) at rtol {min(rtols):g}; change between consecutive ones "
+          f"{s['change'][0]:.2e} to {s['change'][2]:.2e} (median {s['change'][1]:.2e})"
+          + ("" if s["between"] is None else
+             f"; between rtols {s['between'][0]:.2e} to {s['between'][2]:.2e} "
+             f"(median {s['between'][1]:.2e})"))
+    for rtol, ev in zip(rtols, s["events"]):
+        if ev is not None:
+            print(f"{span}: contact events per revolution {ev[0]}-{ev[1]}, {ev[2]} in all, at "
+                  f"rtol {rtol:g}")
+
+
+def _override(text: str) -> tuple[str, float]:
+    """NAME=VALUE of the command line; a crank speed may be in rpm (``crank_speed=20rpm``)."""
+    key, sep, value = text.partition("=")
+    if not sep:
+        raise ValueError(f"an override is NAME=VALUE; got {text!r}")
+    try:
+        if key == "crank_speed" and value.endswith("rpm"):
+            return key, float(value[:-3]) * math.pi / 30.0
+        return key, float(value)
+    except ValueError:
+        raise ValueError(f"override {key}: the value must be a number; got {value!r}") from None
 
 
 def main(argv=None) -> int:
-    argv = sys.argv[1:] if argv is None else argv
-    if argv[2] == "adaptive":
-        overrides = {k: float(v) for k, v in (a.split("=") for a in argv[4:])}
-        main_adaptive(argv[0], int(argv[1]), [float(r) for r in argv[3].split(",")],
-                      overrides)
+    ap = argparse.ArgumentParser(prog="python -m validation.regime_scan",
+                                 description=__doc__.splitlines()[0])
+    ap.add_argument("case", choices=sorted(cases.CASES))
+    ap.add_argument("revolutions", type=int)
+    ap.add_argument("steps", help="steps per revolution, or 'adaptive'")
+    ap.add_argument("rest", nargs="*", metavar="RTOLS NAME=VALUE",
+                    help="with 'adaptive' first the rtols (comma-separated); then overrides")
+    ap.add_argument("--from", dest="first", type=int, default=2,
+                    help="the summary's first revolution (adaptive; default 2)")
+    ap.add_argument("--events", action="store_true",
+                    help="contact events per revolution, from a recording run (adaptive)")
+    args = ap.parse_intermixed_args(argv)
+    adaptive = args.steps == "adaptive"
+    if args.revolutions < (2 if adaptive else 1):
+        ap.error(f"revolutions must be >= {2 if adaptive else 1}; got {args.revolutions}")
+    try:
+        if adaptive:
+            if not args.rest:
+                raise ValueError("'adaptive' needs the rtols (e.g. 1e-10,1e-11)")
+            rtols = [float(r) for r in args.rest[0].split(",")]
+            if not all(0 < r < 1 for r in rtols):
+                raise ValueError(f"the rtols must be in (0, 1); got {args.rest[0]}")
+            if not 2 <= args.first < args.revolutions:
+                raise ValueError(f"--from must be in [2, {args.revolutions - 1}]; got "
+                                 f"{args.first}")
+            overrides = dict(_override(a) for a in args.rest[1:])
+        else:
+            steps = int(args.steps) if args.steps.isdigit() else 0
+            if steps < 1 or args.events or args.first != 2:
+                raise ValueError("steps must be 'adaptive' or a whole number >= 1 (--from "
+                                 f"and --events go with 'adaptive'); got {args.steps!r}")
+            overrides = dict(_override(a) for a in args.rest)
+        linkage = cases.CASES[args.case](**overrides)
+        period = linkage.period     # a free linkage has none: its error says so
+    except ValueError as exc:
+        ap.error(str(exc))
+    if adaptive:
+        main_adaptive(args.case, args.revolutions, rtols, overrides, args.first, args.events,
+                      linkage)
         return 0
-    name, revolutions, steps = argv[0], int(argv[1]), int(argv[2])
-    overrides = {k: float(v) for k, v in (a.split("=") for a in argv[3:])}
-    linkage = cases.CASES[name](**overrides)
     model = load_model(linkage)
     p = pack_parameters(linkage, model)
     y0 = initial_state(linkage, model, p)
     run = make_runner(model)
     t0 = time.perf_counter()
-    peaks, events = run(y0, p, linkage.period / steps, linkage.period, revolutions)
-    print(f"{name} {overrides} h = {linkage.period / steps:.3g} s "
+    peaks, events = run(y0, p, period / steps, period, args.revolutions)
+    print(f"{args.case} {overrides} h = {period / steps:.3g} s "
           f"({time.perf_counter() - t0:.1f} s wall)")
     for k, (peak, nev) in enumerate(zip(peaks, events), 1):
         print(f"revolution {k}: peak {peak:.6f} N, {nev} contact events")

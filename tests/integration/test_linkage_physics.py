@@ -396,7 +396,7 @@ def test_four_bar_default_regime():
     revolution, the change shrinking (measured 1.2e-2, 5.5e-3 at revolutions 3, 4): the
     frictionless joint's sliding mode, excited by the start, decays slowly: the motion
     approaches a periodic orbit without reaching it (docs/cases.md). At the old default
-    0.1 mm the same peaks differ by 1.2e-4 ... 2.1e-4 between these rtols."""
+    0.1 mm the same peaks differ by 1.5e-4 ... 2.6e-4 between these rtols."""
     from validation.regime_scan import periodicity
 
     runs = [four_bar_peaks(rtol) for rtol in (1e-10, 1e-11)]

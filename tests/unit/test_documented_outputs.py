@@ -5,9 +5,12 @@ the number printed at the same place.
 A block is an output block when it is a ``console`` block (``$ command`` lines, then what
 they print) or a ``text`` block whose nearest command within the lines above it (an
 indented or fenced code line, or inline code) is an ``mbs-clearance`` or
-``python examples/`` command. The examples' pages and the walk-through "Describe your own
-mechanism" are run by their own tests (tests/integration/test_examples.py,
-tests/unit/test_own_mechanism.py); every other output block is run here.
+``python examples/`` command. A Python snippet (a plain fenced block holding
+``python - <<'EOF'`` ... ``EOF`` or ``python -c "..."``) followed at once by a plain
+fenced block: the snippet is run and the second block is its output. The examples' pages
+and the walk-through "Describe your own mechanism" are run by their own tests
+(tests/integration/test_examples.py, tests/unit/test_own_mechanism.py); every other output
+block is run here.
 """
 
 from __future__ import annotations
@@ -32,6 +35,8 @@ RUN_ELSEWHERE = {"docs/own_mechanism.md": "tests/unit/test_own_mechanism.py",
 TIMING = re.compile(r"^(done in|took) ")
 NUMBER = re.compile(r"[-+]?(?:\d+\.\d*|\.\d+|\d+)(?:[eE][-+]?\d+)?")
 COMMAND = re.compile(r"(mbs-clearance [^`]+|python examples/\S+)")
+#: the first line of a Python snippet: a script on standard input or after -c
+SNIPPET = re.compile(r"""^python (- <<'EOF'$|-c ")""")
 #: numbers printed with 6 significant digits agree to half a unit of the last one
 RTOL = 1e-5
 
@@ -41,23 +46,34 @@ def output_blocks():
     found = []
     for page in PAGES:
         lines = page.read_text().splitlines()
+        rel = str(page.relative_to(ROOT))
         i = 0
         while i < len(lines):
             fence = lines[i].strip()
-            if fence in ("```text", "```console"):
-                end = next(k for k in range(i + 1, len(lines)) if lines[k].strip() == "```")
-                body = lines[i + 1:end]
-                rel = str(page.relative_to(ROOT))
-                if fence == "```console":
-                    cmd, out = _console(body)
-                    found.append((rel, i + 1, cmd, out))
-                else:
-                    cmd = _command_above(lines, i)
-                    if cmd is not None:
-                        found.append((rel, i + 1, cmd, body))
-                i = end
-            i += 1
+            if not fence.startswith("```"):
+                i += 1
+                continue
+            end = _closing(lines, i)
+            body = lines[i + 1:end]
+            if fence == "```console":
+                found.append((rel, i + 1, *_console(body)))
+            elif fence == "```text":
+                cmd = _command_above(lines, i)
+                if cmd is not None:
+                    found.append((rel, i + 1, cmd, body))
+            elif fence == "```" and body and SNIPPET.match(body[0]) \
+                    and end + 1 < len(lines) and lines[end + 1].strip() == "```":
+                # a Python snippet and, in the plain block right below it, its output
+                out_end = _closing(lines, end + 1)
+                found.append((rel, i + 1, "\n".join(body), lines[end + 2:out_end]))
+                end = out_end
+            i = end + 1
     return found
+
+
+def _closing(lines, i):
+    """The line closing the fenced block that opens at line i."""
+    return next(k for k in range(i + 1, len(lines)) if lines[k].strip() == "```")
 
 
 def _console(body):
@@ -104,6 +120,10 @@ def _run(cmd, folder):
     the repository root, in `folder` (files it writes land there) with the repository's
     examples beside it."""
     (folder / "examples").symlink_to(ROOT / "examples")
+    script = None
+    if cmd.startswith("python - <<'EOF'\n"):      # a snippet: the script on standard input
+        script = cmd.split("\n", 1)[1].rsplit("\nEOF", 1)[0] + "\n"
+        cmd = "python -"
     argv = shlex.split(cmd)
     if argv[0] == "mbs-clearance":
         argv = [str(Path(sys.executable).with_name("mbs-clearance")), *argv[1:]]
@@ -113,7 +133,7 @@ def _run(cmd, folder):
     env = {**os.environ, "PYTHONPATH": os.pathsep.join(
         [str(ROOT), *filter(None, [os.environ.get("PYTHONPATH")])])}
     proc = subprocess.run(argv, cwd=folder, capture_output=True, text=True, timeout=1800,
-                          env=env)
+                          env=env, input=script)
     assert proc.returncode == 0, f"{cmd} failed:\n{proc.stderr[-2000:]}"
     text = proc.stdout + proc.stderr
     return [ln for ln in text.splitlines()
@@ -149,6 +169,10 @@ def test_output_blocks_are_found():
     assert ("docs/getting_started.md", "mbs-clearance simulate") in blocks
     assert ("README.md", "mbs-clearance simulate") in blocks
     assert not any(c.startswith("ValueError") for _, c in blocks)
+    # the optimisation page's Python snippets, on standard input and after -c
+    snippets = [c for p, c in blocks if p == "docs/optimization.md"]
+    assert any(c.startswith("python - <<'EOF'\n") and c.endswith("\nEOF") for c in snippets)
+    assert any(c.startswith('python -c "') for c in snippets)
 
 
 def test_check_block_detects_a_changed_digit():
