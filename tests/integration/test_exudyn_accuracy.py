@@ -12,6 +12,7 @@ import pytest
 from mbs_clearance import AccuracyWarning, SliderCrank, peak_base_force, simulate
 from mbs_clearance.backends import exudyn_convergence as xc
 from mbs_clearance.backends import exudyn_linkage as xl
+from mbs_clearance.model.cases import as_linkage
 from mbs_clearance.solve.linkage_model import prepare_span
 
 pytestmark = pytest.mark.exudyn
@@ -268,3 +269,30 @@ def test_converged_peaks_stopped_run_needs_only_its_part_of_the_memory(monkeypat
     monkeypatch.setattr(xc, "STOP_FRACTION", 0.0)
     with pytest.raises(MemoryLimitError, match="max_memory"):
         xc.converged_peaks(SliderCrank(), 1, step_size=h, accuracy=1e-3, max_memory=limit)
+
+
+def test_a_run_whose_impact_velocities_are_shifted_by_nothing_is_the_same_run():
+    """The onsets' share of a bar (`exudyn_convergence.onset_term`) redoes a run with its
+    impact velocities shifted: shifted by zero it is the same run to the bit, and shifted by
+    1 % the registered values move by exactly that at the same onset times."""
+    linkage = as_linkage(SliderCrank())
+    span = prepare_span(linkage, 1)
+    settings = xl.make_settings({})
+    with xl.capturing_onsets() as capture:
+        t, force = xl.monitored_force(linkage, span, settings)
+    log = capture.registered[0]
+    assert len(log) >= 2
+    with xl.capturing_onsets({0: [0.0] * len(log)}) as again:
+        _, force2 = xl.monitored_force(linkage, span, settings)
+    np.testing.assert_array_equal(force2, force)
+    assert again.registered == capture.registered
+    shift = [0.01 * v for _, v in log[:1]]
+    with xl.capturing_onsets({0: shift}) as changed:
+        _, force3 = xl.monitored_force(linkage, span, settings)
+    (t0, v0), (t1, v1) = log[0], changed.registered[0][0]
+    # the crossing step's force took the shifted prediction: the refinement sees a state
+    # moved by that, so the onset lands within a step and the shift to 1e-3 of itself
+    print(t1 - t0, (v1 - v0) / shift[0] - 1.0)
+    assert abs(t1 - t0) < settings.step(linkage)
+    assert abs((v1 - v0) / shift[0] - 1.0) < 1e-3
+    assert np.max(np.abs(force3 - force)) > 0.0
