@@ -20,6 +20,11 @@ value is y_h/4 and its bar the larger of the two differences.
 
 MIN_ORDER is 1 so that the bar's argument holds.
 
+The bar also holds the onsets' share (`onset_term`): Exudyn registers each contact's impact
+velocity from the steps around its onset, with an error that is not smooth in the step and
+that the differences above can cancel; one more run at the last step but one, its impact
+velocities shifted onto the last run's, measures it.
+
 The step sequences of `simulate_to_accuracy`, `peak_to_accuracy` and `converged_peaks` read
 each run of a driven linkage (`_run_peaks`) from the monitored force smoothed against the
 step-alternating roundoff oscillation of Exudyn's reactions (`SMOOTHING`), and run the
@@ -122,7 +127,8 @@ class Convergence:
     seconds: tuple
     #: why the halving stopped short of the request ("": met, or MAX_HALVINGS reached)
     stopped: str = ""
-    #: (revolutions,) the onsets' share of `error`, N (`onset_term`); None: not estimated
+    #: (revolutions,) the onsets' share of `error`, N (`onset_term` times `_onset_weight`);
+    #: None: not estimated
     onset: np.ndarray | None = None
     #: why the onsets' share was not estimated ("": it was, or the runs register no onset)
     onset_note: str = ""
@@ -147,7 +153,9 @@ def converged_peaks(mech, revolutions: int = 4, *, step_size: float | None = Non
     the result hold every run, `value`, `error`, `order` come from the last three.
     A driven linkage's runs are read as the step sequences of `simulate_to_accuracy` read
     them (`_run_peaks`: the smoothed monitored force, the runs beyond h/4 stopped shortly
-    after the peaks where `_stop_time` allows); a free linkage's from its raw reactions."""
+    after the peaks where `_stop_time` allows); a free linkage's from its raw reactions.
+    The halvings are chosen on the step differences; the returned bars then hold the
+    onsets' share too (`onset_term`: one more run at the last step but one)."""
     from . import exudyn_linkage as xl
 
     revolutions = check_int("revolutions", revolutions, 1)
@@ -166,28 +174,34 @@ def converged_peaks(mech, revolutions: int = 4, *, step_size: float | None = Non
         accuracy = check_real("accuracy (relative error of the peaks)", accuracy, 1e-10, 0.1)
     max_halvings = check_int("max_halvings", max_halvings, 0)
     free = span.revolutions is None
-    steps, peaks, seconds = [], [], []
+    steps, peaks, seconds, onsets = [], [], [], []
     series, stop = None, None
 
     def run(h):
         nonlocal series
         settings = xl.make_settings({**options, "step_size": h})
         t0 = time.perf_counter()
-        if free:
-            peaks.append(_all_peaks(linkage, span, settings, max_memory, start))
-        else:
-            # a run stopped at a fraction f of the span stores as much as a full one at h / f
-            if stop is not None and not _fits(linkage, span, h * float(span.edges[-1]) / stop,
-                                              max_memory, ("reactions",)):
-                from .._checks import MemoryLimitError, check_max_memory
+        with xl.capturing_onsets() as capture:
+            if free:
+                peaks.append(_all_peaks(linkage, span, settings, max_memory, start))
+                end = float(span.edges[-1])
+            else:
+                # a run stopped at a fraction f of the span stores as much as a full one at
+                # h / f
+                if stop is not None and not _fits(linkage, span,
+                                                  h * float(span.edges[-1]) / stop,
+                                                  max_memory, ("reactions",)):
+                    from .._checks import MemoryLimitError, check_max_memory
 
-                raise MemoryLimitError(
-                    f"the Exudyn run at step {h:g} s to {stop:.3g} s needs more than "
-                    f"max_memory={check_max_memory(max_memory)} bytes for its reactions; "
-                    "raise step_size, max_memory or accuracy")
-            row, t, mag = _run_peaks(linkage, span, settings, max_memory, start, stop)
-            peaks.append(row)
-            series = (t, mag)
+                    raise MemoryLimitError(
+                        f"the Exudyn run at step {h:g} s to {stop:.3g} s needs more than "
+                        f"max_memory={check_max_memory(max_memory)} bytes for its "
+                        "reactions; raise step_size, max_memory or accuracy")
+                row, t, mag = _run_peaks(linkage, span, settings, max_memory, start, stop)
+                peaks.append(row)
+                series = (t, mag)
+                end = float(t[-1])
+        onsets.append((end, capture.registered))
         seconds.append(time.perf_counter() - t0)
         steps.append(h)
 
@@ -201,8 +215,15 @@ def converged_peaks(mech, revolutions: int = 4, *, step_size: float | None = Non
             break
         run(steps[-1] / 2.0)
         value, error, order = extrapolate(peaks)
+    t0 = time.perf_counter()
+    term, note = onset_term(linkage, span, options, steps, peaks, onsets, stop, max_memory,
+                            start)
+    if term is not None:
+        term = _onset_weight(order) * term
+        error = error + term
     return Convergence(steps=tuple(steps), peaks=np.array(peaks), value=value, error=error,
-                       order=order, seconds=tuple(seconds))
+                       order=order, seconds=tuple(seconds), onset=term, onset_note=note,
+                       onset_seconds=time.perf_counter() - t0)
 
 
 def _all_peaks(linkage, span, settings, max_memory, start) -> np.ndarray:
@@ -322,7 +343,8 @@ def _sequence(linkage, span, accuracy: float, options: dict, record=None,
         onset_seconds[0] += time.perf_counter() - t0
         if term is None:
             return error, None, note
-        return error + _onset_weight(order) * term, term, note
+        share = _onset_weight(order) * term
+        return error + share, share, note
 
     # the series are recorded at h/4, or at the finest of h/2, h whose record fits within
     # max_memory (a long run: the four-bar's 4 revolutions need 6 GiB at h/4)
@@ -360,7 +382,8 @@ def _sequence(linkage, span, accuracy: float, options: dict, record=None,
                                 max_memory, start)
         onset_seconds[0] += time.perf_counter() - t0
         if term is not None:
-            total = error + _onset_weight(order) * term
+            term = _onset_weight(order) * term
+            total = error + term
     conv = Convergence(steps=tuple(steps), peaks=np.array(peaks), value=value, error=total,
                        order=order, seconds=tuple(seconds), stopped=stopped, onset=term,
                        onset_note=note, onset_seconds=onset_seconds[0])
@@ -502,7 +525,9 @@ def simulate_to_accuracy(mech, revolutions: int | None, accuracy: float, record,
     returned Trajectory holds that run's series and, as ``peaks``, the extrapolated peaks
     (`richardson`); its stats hold ``error_estimate`` (largest relative bar over the
     revolutions), ``accuracy_ok``, ``accuracy_steps``, ``accuracy_peaks`` (each run's),
-    ``observed_order`` and ``peak_errors`` (N). An `AccuracyWarning` says when the request
+    ``observed_order`` and ``peak_errors`` (N; they hold the onsets' share, ``onset_errors``
+    in N per revolution, `onset_term`, or None with ``onset_note`` saying why it was not
+    estimated; ``onset_seconds`` its run's time). An `AccuracyWarning` says when the request
     was not met within `MAX_HALVINGS` further halvings. The series are recorded at h/4, or
     at the finest of h/2 and h whose record fits ``max_memory`` (default min(4 GiB, half the
     RAM)); a finer run whose record would exceed it, or that stops early after the peaks
