@@ -153,7 +153,8 @@ def converged_peaks(mech, revolutions: int = 4, *, step_size: float | None = Non
     the result hold every run, `value`, `error`, `order` come from the last three.
     A driven linkage's runs are read as the step sequences of `simulate_to_accuracy` read
     them (`_run_peaks`: the smoothed monitored force, the runs beyond h/4 stopped shortly
-    after the peaks where `_stop_time` allows); a free linkage's from its raw reactions.
+    after the peaks where `_stop_time` allows); a free linkage's windows from the smoothed
+    monitored force as well (`_all_peaks`).
     The halvings are chosen on the step differences; the returned bars then hold the
     onsets' share too (`onset_term`: one more run at the last step but one)."""
     from . import exudyn_linkage as xl
@@ -227,10 +228,14 @@ def converged_peaks(mech, revolutions: int = 4, *, step_size: float | None = Non
 
 
 def _all_peaks(linkage, span, settings, max_memory, start) -> np.ndarray:
-    """Refined peaks per window of `span` of one Exudyn run (`exudyn_linkage.run_peaks`)."""
+    """A free linkage's refined peaks per window of `span` (N) of one Exudyn run recording
+    the reactions only, read as the step sequences read their recorded runs (the smoothed
+    monitored force)."""
     from . import exudyn_linkage as xl
 
-    return xl.run_peaks(linkage, span, settings, max_memory, start)
+    t, force = xl.monitored_force(linkage, span, settings, max_memory, start)
+    force = smoothed(force)
+    return xl.window_peaks(t, np.hypot(force[:, 0], force[:, 1]), span.windows)
 
 
 def _run_peaks(linkage, span, settings, max_memory, start, stop=None):
@@ -414,11 +419,10 @@ def onset_term(linkage, span, options: dict, steps, peaks, onsets, stop, max_mem
     Taking |R_last| to be at most that change (the registrations' error falls with the
     step; measured at 2000 rpm: 1.7e-3, 3.7e-4, 1.9e-5, 1.5e-5 of the impact velocity from
     0.7 us to 0.0875 us), the value's share is at most (1 + 1 / (2^p - 1)) times it
-    (`_onset_weight`). A free linkage's runs are recorded ones and are not redone."""
+    (`_onset_weight`). A free linkage's run is redone over its whole span, recording the
+    reactions only (`_all_peaks`)."""
     from . import exudyn_linkage as xl
 
-    if span.revolutions is None:
-        return None, "not estimated for a free linkage's windows"
     (end, fine), (_, coarse) = onsets[-1], onsets[-2]
     shift = {}
     for index, log in fine.items():
@@ -432,7 +436,10 @@ def onset_term(linkage, span, options: dict, steps, peaks, onsets, stop, max_mem
         return np.zeros_like(np.asarray(peaks[-1], dtype=float)), ""
     settings = xl.make_settings({**options, "step_size": steps[-2]})
     with xl.capturing_onsets(shift):
-        row = _run_peaks(linkage, span, settings, max_memory, start, stop)[0]
+        if span.revolutions is None:
+            row = _all_peaks(linkage, span, settings, max_memory, start)
+        else:
+            row = _run_peaks(linkage, span, settings, max_memory, start, stop)[0]
     return np.abs(np.asarray(row) - np.asarray(peaks[-2])), ""
 
 
