@@ -220,7 +220,7 @@ def converged_peaks(mech, revolutions: int = 4, *, step_size: float | None = Non
     term, note = onset_term(linkage, span, options, steps, peaks, onsets, stop, max_memory,
                             start)
     if term is not None:
-        term = _onset_weight(order) * term
+        term = _onset_weight(value, peaks) * term
         error = error + term
     return Convergence(steps=tuple(steps), peaks=np.array(peaks), value=value, error=error,
                        order=order, seconds=tuple(seconds), onset=term, onset_note=note,
@@ -348,7 +348,7 @@ def _sequence(linkage, span, accuracy: float, options: dict, record=None,
         onset_seconds[0] += time.perf_counter() - t0
         if term is None:
             return error, None, note
-        share = _onset_weight(order) * term
+        share = _onset_weight(value, peaks) * term
         return error + share, share, note
 
     # the series are recorded at h/4, or at the finest of h/2, h whose record fits within
@@ -387,7 +387,7 @@ def _sequence(linkage, span, accuracy: float, options: dict, record=None,
                                 max_memory, start)
         onset_seconds[0] += time.perf_counter() - t0
         if term is not None:
-            term = _onset_weight(order) * term
+            term = _onset_weight(value, peaks) * term
             total = error + term
     conv = Convergence(steps=tuple(steps), peaks=np.array(peaks), value=value, error=total,
                        order=order, seconds=tuple(seconds), stopped=stopped, onset=term,
@@ -395,13 +395,15 @@ def _sequence(linkage, span, accuracy: float, options: dict, record=None,
     return conv, last
 
 
-def _onset_weight(order) -> np.ndarray:
-    """How much of the last run's onset error the value carries, per revolution: 1 + 1 /
-    (2^p - 1) where it was extrapolated at order p (the extrapolation adds that share of the
-    last difference), else 1."""
-    order = np.asarray(order, dtype=float)
-    with np.errstate(invalid="ignore", over="ignore"):
-        return np.where(np.isfinite(order), 1.0 + 1.0 / (2.0 ** order - 1.0), 1.0)
+def _onset_weight(value, peaks) -> np.ndarray:
+    """How much of the last run's onset error the value carries, per revolution: 1 + c
+    where value = y_last + c (y_last - y_prev) (c = 1 / (2^p - 1) where extrapolated at
+    order p, 0 where the value is the last run's)."""
+    y_prev, y_last = (np.asarray(r, dtype=float) for r in peaks[-2:])
+    d = np.abs(y_last - y_prev)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        c = np.where(d > 0.0, np.abs(np.asarray(value, dtype=float) - y_last) / d, 0.0)
+    return 1.0 + c
 
 
 def onset_term(linkage, span, options: dict, steps, peaks, onsets, stop, max_memory, start):

@@ -8,7 +8,7 @@ import math
 
 import numpy as np
 
-from mbs_clearance.backends.exudyn_convergence import _onset_weight
+from mbs_clearance.backends.exudyn_convergence import _onset_weight, richardson
 from mbs_clearance.backends.exudyn_linkage import ImpactMemory, OnsetCapture, _update_memory
 
 H = 1e-6
@@ -81,15 +81,22 @@ def test_without_a_capture_nothing_is_logged_or_replaced():
 def test_the_onset_weight_is_the_extrapolations_share_of_the_last_difference():
     """Value y4 + (y4 - y2) / (2^p - 1) with registration errors R4, R2 carries
     R4 + (R4 - R2) / (2^p - 1): at most (1 + 1 / (2^p - 1)) |R4 - R2| where |R4| <= |R4 - R2|;
-    unextrapolated (p NaN), the value is y4 and carries R4."""
-    w = _onset_weight([2.0, 1.0, np.nan])
-    np.testing.assert_allclose(w, [4.0 / 3.0, 2.0, 1.0], rtol=1e-15)
-    # the bound against the worst case R4 = -(R4 - R2) ... = R4 with R2 = 2 R4
+    unextrapolated, the value is y4 and carries R4. The weight is read from the value
+    `richardson` returns (second order: 4/3; first: 2; not extrapolated: 1)."""
+    # per revolution (column): differences 12, 3 (order 2); 2, 1 (order 1); -2, 1 (turned)
+    rows = np.array([[16.0, 4.0, 1.0], [4.0, 2.0, 3.0], [1.0, 1.0, 2.0]]) + 100.0
+    value, _, order = richardson(*rows)
+    np.testing.assert_allclose(order[:2], [2.0, 1.0], rtol=1e-14)
+    assert np.isnan(order[2])
+    np.testing.assert_allclose(_onset_weight(value, rows), [4.0 / 3.0, 2.0, 1.0],
+                               rtol=1e-12)
     rng = np.random.default_rng(1)
     for _ in range(100):
         p = rng.uniform(1.0, 4.0)
         r2, r4 = rng.normal(size=2)
         if abs(r4) > abs(r4 - r2):
             continue
+        y = np.array([[1.0 + 2.0 ** p], [2.0], [1.0]])        # differences falling at p
+        w = _onset_weight(richardson(*y)[0], y)[0]
         carried = r4 + (r4 - r2) / (2.0 ** p - 1.0)
-        assert abs(carried) <= _onset_weight([p])[0] * abs(r4 - r2) * (1 + 1e-12)
+        assert abs(carried) <= w * abs(r4 - r2) * (1 + 1e-12)
