@@ -96,7 +96,7 @@ def test_the_onset_weight_is_the_extrapolations_share_of_the_last_difference():
         r2, r4 = rng.normal(size=2)
         if abs(r4) > abs(r4 - r2):
             continue
-        y = np.array([[1.0 + 2.0 ** p], [2.0], [1.0]])        # differences falling at p
+        y = np.array([[2.0 + 2.0 ** p], [2.0], [1.0]])        # differences falling at p
         w = _onset_weight(richardson(*y)[0], y)[0]
         carried = r4 + (r4 - r2) / (2.0 ** p - 1.0)
         assert abs(carried) <= w * abs(r4 - r2) * (1 + 1e-12)
