@@ -155,8 +155,8 @@ def converged_peaks(mech, revolutions: int = 4, *, step_size: float | None = Non
     them (`_run_peaks`: the smoothed monitored force, the runs beyond h/4 stopped shortly
     after the peaks where `_stop_time` allows); a free linkage's windows from the smoothed
     monitored force as well (`_all_peaks`).
-    The halvings are chosen on the step differences; the returned bars then hold the
-    onsets' share too (`onset_term`: one more run at the last step but one)."""
+    The bars hold the onsets' share too (`_OnsetBars`: one more run at the last step but
+    one, made once the step differences meet `accuracy`, and for the last pair)."""
     from . import exudyn_linkage as xl
 
     revolutions = check_int("revolutions", revolutions, 1)
@@ -211,20 +211,18 @@ def converged_peaks(mech, revolutions: int = 4, *, step_size: float | None = Non
     value, error, order = richardson(*peaks[-3:])
     if not free:
         stop = _stop_time(*series, linkage.period, revolutions)
+    onset = _OnsetBars(linkage, span, options, max_memory, start, steps, peaks, onsets)
+    total = onset.bars(value, error, stop, accuracy)
     for _ in range(max_halvings if accuracy is not None else 0):
-        if np.all(error <= accuracy * np.abs(value)):
+        if np.all(total <= accuracy * np.abs(value)):
             break
         run(steps[-1] / 2.0)
         value, error, order = extrapolate(peaks)
-    t0 = time.perf_counter()
-    term, note = onset_term(linkage, span, options, steps, peaks, onsets, stop, max_memory,
-                            start)
-    if term is not None:
-        term = _onset_weight(value, peaks) * term
-        error = error + term
-    return Convergence(steps=tuple(steps), peaks=np.array(peaks), value=value, error=error,
-                       order=order, seconds=tuple(seconds), onset=term, onset_note=note,
-                       onset_seconds=time.perf_counter() - t0)
+        total = onset.bars(value, error, stop, accuracy)
+    total = onset.bars(value, error, stop)
+    return Convergence(steps=tuple(steps), peaks=np.array(peaks), value=value, error=total,
+                       order=order, seconds=tuple(seconds), onset=onset.share,
+                       onset_note=onset.note, onset_seconds=onset.seconds)
 
 
 def _all_peaks(linkage, span, settings, max_memory, start) -> np.ndarray:
@@ -303,7 +301,6 @@ def _sequence(linkage, span, accuracy: float, options: dict, record=None,
     series = None        # (t, smoothed |monitored force|) of the last full-length run
     stop = None          # the finer runs' end time in s (`_stop_time`), None: full runs
     onsets = []          # per run (its end in s, its registered onsets, `capturing_onsets`)
-    onset_seconds = [0.0]
 
     def run(step, recorded):
         nonlocal last, series
@@ -337,20 +334,6 @@ def _sequence(linkage, span, accuracy: float, options: dict, record=None,
         seconds.append(time.perf_counter() - t0)
         steps.append(step)
 
-    def bars(value, error, order):
-        """The bars with the onsets' share (`onset_term`; one more run at the last step
-        but one, made only where the bars without it meet the request)."""
-        if not np.all(error[pick] <= accuracy * np.abs(value[pick])):
-            return error, None, ""
-        t0 = time.perf_counter()
-        term, note = onset_term(linkage, span, options, steps, peaks, onsets, stop,
-                                max_memory, start)
-        onset_seconds[0] += time.perf_counter() - t0
-        if term is None:
-            return error, None, note
-        share = _onset_weight(value, peaks) * term
-        return error + share, share, note
-
     # the series are recorded at h/4, or at the finest of h/2, h whose record fits within
     # max_memory (a long run: the four-bar's 4 revolutions need 6 GiB at h/4)
     at = 2
@@ -365,7 +348,8 @@ def _sequence(linkage, span, accuracy: float, options: dict, record=None,
     value, error, order = richardson(*peaks[-3:])
     pick = slice(None) if only is None else slice(only, only + 1)
     stopped = ""
-    total, term, note = bars(value, error, order)
+    onset = _OnsetBars(linkage, span, options, max_memory, start, steps, peaks, onsets)
+    total = onset.bars(value, error, stop, accuracy, pick)
     for _ in range(max_halvings):
         if np.all(total[pick] <= accuracy * np.abs(value[pick])):
             break
@@ -379,20 +363,41 @@ def _sequence(linkage, span, accuracy: float, options: dict, record=None,
             break
         run(steps[-1] / 2.0, record is not None and stop is None)
         value, error, order = extrapolate(peaks)
-        total, term, note = bars(value, error, order)
-    if term is None and not note:
-        # unmet: the onsets' share still belongs in the bars the caller reports
-        t0 = time.perf_counter()
-        term, note = onset_term(linkage, span, options, steps, peaks, onsets, stop,
-                                max_memory, start)
-        onset_seconds[0] += time.perf_counter() - t0
-        if term is not None:
-            term = _onset_weight(value, peaks) * term
-            total = error + term
+        total = onset.bars(value, error, stop, accuracy, pick)
+    total = onset.bars(value, error, stop)      # unmet too: the share belongs in the bars
     conv = Convergence(steps=tuple(steps), peaks=np.array(peaks), value=value, error=total,
-                       order=order, seconds=tuple(seconds), stopped=stopped, onset=term,
-                       onset_note=note, onset_seconds=onset_seconds[0])
+                       order=order, seconds=tuple(seconds), stopped=stopped,
+                       onset=onset.share, onset_note=onset.note,
+                       onset_seconds=onset.seconds)
     return conv, last
+
+
+class _OnsetBars:
+    """A step sequence's bars with the onsets' share (`onset_term` times `_onset_weight`),
+    estimated once per last pair of runs, where the step differences alone meet the
+    request (an unmet pair is halved anyway) or, without a request, when asked for."""
+
+    def __init__(self, linkage, span, options, max_memory, start, steps, peaks, onsets):
+        self.args = (linkage, span, options)
+        self.memory = (max_memory, start)
+        self.steps, self.peaks, self.onsets = steps, peaks, onsets
+        self.share, self.note, self.seconds = None, "", 0.0
+        self.pair = None        # len(steps) when the share was estimated
+
+    def bars(self, value, error, stop, accuracy=None, pick=slice(None)):
+        """`error` plus the share of the current last pair (N per revolution), estimated
+        now where `accuracy` is None or `error` meets it; `error` alone otherwise."""
+        if self.pair != len(self.steps):
+            if accuracy is not None and not np.all(
+                    error[pick] <= accuracy * np.abs(value[pick])):
+                return error
+            t0 = time.perf_counter()
+            term, self.note = onset_term(*self.args, self.steps, self.peaks, self.onsets,
+                                         stop, *self.memory)
+            self.seconds += time.perf_counter() - t0
+            self.share = None if term is None else _onset_weight(value, self.peaks) * term
+            self.pair = len(self.steps)
+        return error if self.share is None else error + self.share
 
 
 def _onset_weight(value, peaks) -> np.ndarray:
