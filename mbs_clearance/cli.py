@@ -855,6 +855,11 @@ def _print_error_estimate(traj) -> None:
     if "accuracy_steps" in st:      # Exudyn: a step sequence
         how = (f"step halving, {len(st['accuracy_steps'])} runs down to "
                f"{st['accuracy_steps'][-1]:.3g} s")
+        if st.get("onset_errors") is not None:
+            share = max(e / abs(float(p)) for e, p in zip(st["onset_errors"], traj.peaks))
+            how += f", the onsets' registration {share:.2g} of it"
+        elif st.get("onset_note"):
+            how += f"; the onsets' registration {st['onset_note']}"
     else:
         how = f"rtol {st['rtol']:g}, {len(st['accuracy_runs'])} runs"
     print(f"estimated relative error of the peaks: {st['error_estimate']:.2g} (requested "

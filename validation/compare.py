@@ -578,12 +578,13 @@ def cross_check(mech, revolutions: int = 4, *, accuracy: float = 1e-6,
 
     The reduced model runs at `accuracy` (its error bar: its estimate x peak), Exudyn from
     `step_size` h (default its default step), h/2, h/4, Richardson-extrapolated (its bar:
-    `exudyn_convergence.richardson`), halved further while a bar exceeds `exudyn_accuracy`
-    (relative; None: three runs). The verdict (`mbs_clearance.analysis.verdict`) is taken
-    peak by peak where the reduced run is periodic (``stats["periodic"]``, judged on a
-    reduced run of 8 revolutions where the run is too short: `periodic_flag`) or the given
-    `lyapunov` result (`lyapunov_exponent`) is negative or zero; otherwise on statistics
-    over revolutions 2..n, for which Exudyn runs once more at its finest step, recorded.
+    `exudyn_convergence.richardson` and the onsets' share, `onset_term`), halved further
+    while a bar exceeds `exudyn_accuracy` (relative; None: three runs). The verdict
+    (`mbs_clearance.analysis.verdict`) is taken peak by peak where the reduced run is
+    periodic (``stats["periodic"]``, judged on a reduced run of 8 revolutions where the run
+    is too short: `periodic_flag`) or the given `lyapunov` result (`lyapunov_exponent`) is
+    negative or zero; otherwise on statistics over revolutions 2..n, for which Exudyn runs
+    once more at its finest step, recorded.
     """
     from mbs_clearance import simulate
     from mbs_clearance.analysis.verdict import revolution_statistics, verdict_of_peaks
@@ -618,7 +619,8 @@ def cross_check(mech, revolutions: int = 4, *, accuracy: float = 1e-6,
     return CrossCheck(reduced=peaks, reduced_error=reduced_error,
                       exudyn=conv.value, exudyn_error=conv.error, exudyn_order=conv.order,
                       exudyn_steps=conv.steps[-3:], reduced_seconds=reduced_seconds,
-                      exudyn_seconds=float(sum(conv.seconds)), accuracy=accuracy,
+                      exudyn_seconds=float(sum(conv.seconds) + conv.onset_seconds),
+                      accuracy=accuracy,
                       verdict=verdict)
 
 

@@ -20,6 +20,11 @@ value is y_h/4 and its bar the larger of the two differences.
 
 MIN_ORDER is 1 so that the bar's argument holds.
 
+The bar also holds the onsets' share (`onset_term`): Exudyn registers each contact's impact
+velocity from the steps around its onset, with an error that is not smooth in the step and
+that the differences above can cancel; one more run at the last step but one, its impact
+velocities shifted onto the last run's, measures it.
+
 The step sequences of `simulate_to_accuracy`, `peak_to_accuracy` and `converged_peaks` read
 each run of a driven linkage (`_run_peaks`) from the monitored force smoothed against the
 step-alternating roundoff oscillation of Exudyn's reactions (`SMOOTHING`), and run the
@@ -145,6 +150,13 @@ class Convergence:
     seconds: tuple
     #: why the halving stopped short of the request ("": met, or MAX_HALVINGS reached)
     stopped: str = ""
+    #: (revolutions,) the onsets' share of `error`, N (`onset_term` times `_onset_weight`);
+    #: None: not estimated
+    onset: np.ndarray | None = None
+    #: why the onsets' share was not estimated ("": it was, or the runs register no onset)
+    onset_note: str = ""
+    #: wall time of the runs that estimated the onsets' share, s
+    onset_seconds: float = 0.0
 
     @property
     def relative_error(self) -> np.ndarray:
@@ -164,7 +176,10 @@ def converged_peaks(mech, revolutions: int = 4, *, step_size: float | None = Non
     the result hold every run, `value`, `error`, `order` come from the last three.
     A driven linkage's runs are read as the step sequences of `simulate_to_accuracy` read
     them (`_run_peaks`: the smoothed monitored force, the runs beyond h/4 stopped shortly
-    after the peaks where `_stop_time` allows); a free linkage's from its raw reactions."""
+    after the peaks where `_stop_time` allows); a free linkage's windows from the smoothed
+    monitored force as well (`_all_peaks`).
+    The bars hold the onsets' share too (`_OnsetBars`: one more run at the last step but
+    one, made once the step differences meet `accuracy`, and for the last pair)."""
     from . import exudyn_linkage as xl
 
     revolutions = check_int("revolutions", revolutions, 1)
@@ -183,28 +198,34 @@ def converged_peaks(mech, revolutions: int = 4, *, step_size: float | None = Non
         accuracy = check_real("accuracy (relative error of the peaks)", accuracy, 1e-10, 0.1)
     max_halvings = check_int("max_halvings", max_halvings, 0)
     free = span.revolutions is None
-    steps, peaks, seconds = [], [], []
+    steps, peaks, seconds, onsets = [], [], [], []
     series, stop = None, None
 
     def run(h):
         nonlocal series
         settings = xl.make_settings({**options, "step_size": h})
         t0 = time.perf_counter()
-        if free:
-            peaks.append(_all_peaks(linkage, span, settings, max_memory, start))
-        else:
-            # a run stopped at a fraction f of the span stores as much as a full one at h / f
-            if stop is not None and not _fits(linkage, span, h * float(span.edges[-1]) / stop,
-                                              max_memory, ("reactions",)):
-                from .._checks import MemoryLimitError, check_max_memory
+        with xl.capturing_onsets() as capture:
+            if free:
+                peaks.append(_all_peaks(linkage, span, settings, max_memory, start))
+                end = float(span.edges[-1])
+            else:
+                # a run stopped at a fraction f of the span stores as much as a full one at
+                # h / f
+                if stop is not None and not _fits(linkage, span,
+                                                  h * float(span.edges[-1]) / stop,
+                                                  max_memory, ("reactions",)):
+                    from .._checks import MemoryLimitError, check_max_memory
 
-                raise MemoryLimitError(
-                    f"the Exudyn run at step {h:g} s to {stop:.3g} s needs more than "
-                    f"max_memory={check_max_memory(max_memory)} bytes for its reactions; "
-                    "raise step_size, max_memory or accuracy")
-            row, t, mag = _run_peaks(linkage, span, settings, max_memory, start, stop)
-            peaks.append(row)
-            series = (t, mag)
+                    raise MemoryLimitError(
+                        f"the Exudyn run at step {h:g} s to {stop:.3g} s needs more than "
+                        f"max_memory={check_max_memory(max_memory)} bytes for its "
+                        "reactions; raise step_size, max_memory or accuracy")
+                row, t, mag = _run_peaks(linkage, span, settings, max_memory, start, stop)
+                peaks.append(row)
+                series = (t, mag)
+                end = float(t[-1])
+        onsets.append((end, capture.registered))
         seconds.append(time.perf_counter() - t0)
         steps.append(h)
 
@@ -213,20 +234,29 @@ def converged_peaks(mech, revolutions: int = 4, *, step_size: float | None = Non
     value, error, order = richardson(*peaks[-3:])
     if not free:
         stop = _stop_time(*series, linkage.period, revolutions)
+    onset = _OnsetBars(linkage, span, options, max_memory, start, steps, peaks, onsets)
+    total = onset.bars(value, error, stop, accuracy)
     for _ in range(max_halvings if accuracy is not None else 0):
-        if np.all(error <= accuracy * np.abs(value)):
+        if np.all(total <= accuracy * np.abs(value)):
             break
         run(steps[-1] / 2.0)
         value, error, order = extrapolate(peaks)
-    return Convergence(steps=tuple(steps), peaks=np.array(peaks), value=value, error=error,
-                       order=order, seconds=tuple(seconds))
+        total = onset.bars(value, error, stop, accuracy)
+    total = onset.bars(value, error, stop)
+    return Convergence(steps=tuple(steps), peaks=np.array(peaks), value=value, error=total,
+                       order=order, seconds=tuple(seconds), onset=onset.share,
+                       onset_note=onset.note, onset_seconds=onset.seconds)
 
 
 def _all_peaks(linkage, span, settings, max_memory, start) -> np.ndarray:
-    """Refined peaks per window of `span` of one Exudyn run (`exudyn_linkage.run_peaks`)."""
+    """A free linkage's refined peaks per window of `span` (N) of one Exudyn run recording
+    the reactions only, read as the step sequences read their recorded runs (the smoothed
+    monitored force)."""
     from . import exudyn_linkage as xl
 
-    return xl.run_peaks(linkage, span, settings, max_memory, start)
+    t, force = xl.monitored_force(linkage, span, settings, max_memory, start)
+    force = smoothed(force)
+    return xl.window_peaks(t, np.hypot(force[:, 0], force[:, 1]), span.windows)
 
 
 def _run_peaks(linkage, span, settings, max_memory, start, stop=None):
@@ -293,31 +323,37 @@ def _sequence(linkage, span, accuracy: float, options: dict, record=None,
 
     series = None        # (t, smoothed |monitored force|) of the last full-length run
     stop = None          # the finer runs' end time in s (`_stop_time`), None: full runs
+    onsets = []          # per run (its end in s, its registered onsets, `capturing_onsets`)
 
     def run(step, recorded):
         nonlocal last, series
         t0 = time.perf_counter()
         settings = xl.make_settings({**options, "step_size": step})
-        if free:
-            last = record(step)
-            last.stats["series_step"] = step
-            force = smoothed(last.base_force)
-            peaks.append(xl.window_peaks(last.t, np.hypot(force[:, 0], force[:, 1]),
-                                         span.windows))
-        elif stop is not None:
-            peaks.append(_run_peaks(linkage, span, settings, max_memory, start, stop)[0])
-        else:
-            if recorded and (last is None or _fits(linkage, span, step, max_memory)):
+        with xl.capturing_onsets() as capture:
+            if free:
                 last = record(step)
                 last.stats["series_step"] = step
+                force = smoothed(last.base_force)
+                peaks.append(xl.window_peaks(last.t, np.hypot(force[:, 0], force[:, 1]),
+                                             span.windows))
                 t = last.t
-                row, mag = _sequence_peaks(t, last.base_force, linkage.period, revolutions)
+            elif stop is not None:
+                row, t, _ = _run_peaks(linkage, span, settings, max_memory, start, stop)
+                peaks.append(row)
             else:
-                # a record beyond max_memory: this run's peaks only; the series stay those
-                # of the last recorded run
-                row, t, mag = _run_peaks(linkage, span, settings, max_memory, start)
-            peaks.append(row)
-            series = (t, mag)
+                if recorded and (last is None or _fits(linkage, span, step, max_memory)):
+                    last = record(step)
+                    last.stats["series_step"] = step
+                    t = last.t
+                    row, mag = _sequence_peaks(t, last.base_force, linkage.period,
+                                               revolutions)
+                else:
+                    # a record beyond max_memory: this run's peaks only; the series stay
+                    # those of the last recorded run
+                    row, t, mag = _run_peaks(linkage, span, settings, max_memory, start)
+                peaks.append(row)
+                series = (t, mag)
+        onsets.append((float(t[-1]), capture.registered))
         seconds.append(time.perf_counter() - t0)
         steps.append(step)
 
@@ -335,8 +371,10 @@ def _sequence(linkage, span, accuracy: float, options: dict, record=None,
     value, error, order = richardson(*peaks[-3:])
     pick = slice(None) if only is None else slice(only, only + 1)
     stopped = ""
+    onset = _OnsetBars(linkage, span, options, max_memory, start, steps, peaks, onsets)
+    total = onset.bars(value, error, stop, accuracy, pick)
     for _ in range(max_halvings):
-        if np.all(error[pick] <= accuracy * np.abs(value[pick])):
+        if np.all(total[pick] <= accuracy * np.abs(value[pick])):
             break
         # a run of a fraction f of the span at step s stores as much as a full one at s / f
         if not free and not _fits(linkage, span, steps[-1] / 2.0 / fraction,
@@ -348,9 +386,91 @@ def _sequence(linkage, span, accuracy: float, options: dict, record=None,
             break
         run(steps[-1] / 2.0, record is not None and stop is None)
         value, error, order = extrapolate(peaks)
-    conv = Convergence(steps=tuple(steps), peaks=np.array(peaks), value=value, error=error,
-                       order=order, seconds=tuple(seconds), stopped=stopped)
+        total = onset.bars(value, error, stop, accuracy, pick)
+    total = onset.bars(value, error, stop)      # unmet too: the share belongs in the bars
+    conv = Convergence(steps=tuple(steps), peaks=np.array(peaks), value=value, error=total,
+                       order=order, seconds=tuple(seconds), stopped=stopped,
+                       onset=onset.share, onset_note=onset.note,
+                       onset_seconds=onset.seconds)
     return conv, last
+
+
+class _OnsetBars:
+    """A step sequence's bars with the onsets' share (`onset_term` times `_onset_weight`),
+    estimated once per last pair of runs, where the step differences alone meet the
+    request (an unmet pair is halved anyway) or, without a request, when asked for."""
+
+    def __init__(self, linkage, span, options, max_memory, start, steps, peaks, onsets):
+        self.args = (linkage, span, options)
+        self.memory = (max_memory, start)
+        self.steps, self.peaks, self.onsets = steps, peaks, onsets
+        self.share, self.note, self.seconds = None, "", 0.0
+        self.pair = None        # len(steps) when the share was estimated
+
+    def bars(self, value, error, stop, accuracy=None, pick=slice(None)):
+        """`error` plus the share of the current last pair (N per revolution), estimated
+        now where `accuracy` is None or `error` meets it; `error` alone otherwise."""
+        if self.pair != len(self.steps):
+            if accuracy is not None and not np.all(
+                    error[pick] <= accuracy * np.abs(value[pick])):
+                return error
+            t0 = time.perf_counter()
+            term, self.note = onset_term(*self.args, self.steps, self.peaks, self.onsets,
+                                         stop, *self.memory)
+            self.seconds += time.perf_counter() - t0
+            self.share = None if term is None else _onset_weight(value, self.peaks) * term
+            self.pair = len(self.steps)
+        return error if self.share is None else error + self.share
+
+
+def _onset_weight(value, peaks) -> np.ndarray:
+    """How much of the last run's onset error the value carries, per revolution: 1 + c
+    where value = y_last + c (y_last - y_prev) (c = 1 / (2^p - 1) where extrapolated at
+    order p, 0 where the value is the last run's)."""
+    y_prev, y_last = (np.asarray(r, dtype=float) for r in peaks[-2:])
+    d = np.abs(y_last - y_prev)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        c = np.where(d > 0.0, np.abs(np.asarray(value, dtype=float) - y_last) / d, 0.0)
+    return 1.0 + c
+
+
+def onset_term(linkage, span, options: dict, steps, peaks, onsets, stop, max_memory, start):
+    """The onsets' share of a step sequence's bar: (per revolution, N; or None and why).
+
+    Exudyn registers each contact's impact velocity at its onset from the states of the
+    steps around the crossing (`exudyn_linkage._pre_step`); the registration's error
+    depends on where the crossing falls within the step and is not a smooth function of
+    the step, so the differences between the runs, where the smooth step error is read,
+    can cancel it (docs/exudyn.md, "The 2000 rpm difference in revolution 2"). The run at
+    the last step but one is made again with each contact's first n impact velocities
+    shifted onto the last run's (n: the onsets the last run registered; the same number
+    must lie within the same time in the run being redone): the change of its peaks is
+    the effect of the registrations' change between the two steps, R_last - R_prev.
+    Taking |R_last| to be at most that change (the registrations' error falls with the
+    step; measured at 2000 rpm: 1.7e-3, 3.7e-4, 1.9e-5, 1.5e-5 of the impact velocity from
+    0.7 us to 0.0875 us), the value's share is at most (1 + 1 / (2^p - 1)) times it
+    (`_onset_weight`). A free linkage's run is redone over its whole span, recording the
+    reactions only (`_all_peaks`)."""
+    from . import exudyn_linkage as xl
+
+    (end, fine), (_, coarse) = onsets[-1], onsets[-2]
+    shift = {}
+    for index, log in fine.items():
+        before = [v for t, v in coarse.get(index, []) if t <= end]
+        if len(before) != len(log):
+            return None, (f"not estimated: the last two runs register {len(before)} and "
+                          f"{len(log)} onsets of contact {index + 1} (a grazing contact "
+                          "one step finds and the other does not)")
+        shift[index] = [v - u for (_, v), u in zip(log, before)]
+    if not any(shift.values()):
+        return np.zeros_like(np.asarray(peaks[-1], dtype=float)), ""
+    settings = xl.make_settings({**options, "step_size": steps[-2]})
+    with xl.capturing_onsets(shift):
+        if span.revolutions is None:
+            row = _all_peaks(linkage, span, settings, max_memory, start)
+        else:
+            row = _run_peaks(linkage, span, settings, max_memory, start, stop)[0]
+    return np.abs(np.asarray(row) - np.asarray(peaks[-2])), ""
 
 
 def smoothed(force) -> np.ndarray:
@@ -420,11 +540,15 @@ def _accuracy_stats(conv: Convergence, accuracy: float) -> dict:
     ok = bool(estimate <= accuracy)
     note = "" if ok else (
         f"Exudyn's estimated error of the peaks, {estimate:.2g} (step halving down to "
-        f"{conv.steps[-1]:.3g} s, the difference of the last two steps' peaks), misses the "
-        f"requested accuracy {accuracy:g} after {len(conv.steps)} runs{conv.stopped} "
-        "(stats['accuracy_ok'] is False; the peaks are the extrapolated ones)")
+        f"{conv.steps[-1]:.3g} s: the difference of the last two steps' peaks and the "
+        f"onsets' share), misses the requested accuracy {accuracy:g} after "
+        f"{len(conv.steps)} runs{conv.stopped} (stats['accuracy_ok'] is False; the peaks "
+        "are the extrapolated ones)")
+    onset = None if conv.onset is None else [float(e) for e in conv.onset]
     return dict(accuracy=accuracy, error_estimate=estimate,
                 error_estimate_method="step halving", accuracy_ok=ok, accuracy_note=note,
+                onset_errors=onset, onset_note=conv.onset_note,
+                onset_seconds=float(conv.onset_seconds),
                 accuracy_steps=list(conv.steps),
                 accuracy_peaks=[list(map(float, p)) for p in conv.peaks],
                 observed_order=[float(p) for p in conv.order],
@@ -441,7 +565,9 @@ def simulate_to_accuracy(mech, revolutions: int | None, accuracy: float, record,
     returned Trajectory holds that run's series and, as ``peaks``, the extrapolated peaks
     (`richardson`); its stats hold ``error_estimate`` (largest relative bar over the
     revolutions), ``accuracy_ok``, ``accuracy_steps``, ``accuracy_peaks`` (each run's),
-    ``observed_order`` and ``peak_errors`` (N). An `AccuracyWarning` says when the request
+    ``observed_order`` and ``peak_errors`` (N; they hold the onsets' share, ``onset_errors``
+    in N per revolution, `onset_term`, or None with ``onset_note`` saying why it was not
+    estimated; ``onset_seconds`` its run's time). An `AccuracyWarning` says when the request
     was not met within `MAX_HALVINGS` further halvings. The series are recorded at h/4, or
     at the finest of h/2 and h whose record fits ``max_memory`` (default min(4 GiB, half the
     RAM)); a finer run whose record would exceed it, or that stops early after the peaks

@@ -54,6 +54,8 @@ force's roundoff floor where that is higher (`contact_scales`; docs/exudyn.md).
 
 from __future__ import annotations
 
+import contextlib
+import contextvars
 import math
 import time
 from dataclasses import asdict, dataclass, field, replace
@@ -323,15 +325,56 @@ class ImpactMemory:
         self.symbol = None         # named symbolic Real mirrored for the compiled force
         self.previous = None       # (t, delta, deltadot) of the previous step's state
         self.history = None        # [(t, deltadot_minus)] per step if recorded
+        self.log = None            # [[t, deltadot_minus]] per onset if captured
+        self.shift = None          # added to the registered impact velocity, per onset
 
     def set(self, value: float, t: float, new_onset: bool = True) -> None:
-        self.dmin = max(value, self.floor)
         if new_onset:
             self.onsets += 1
             if self.first_onset is None:
                 self.first_onset = t
+        if self.shift is not None and 0 < self.onsets <= len(self.shift):
+            value += self.shift[self.onsets - 1]
+        self.dmin = max(value, self.floor)
+        if self.log is not None and self.onsets:
+            if new_onset or not self.log:
+                self.log.append([t, self.dmin])
+            else:                  # the same onset registered again (a refined prediction)
+                self.log[-1] = [t, self.dmin]
         if self.symbol is not None:
             self.symbol.SetValue(self.dmin)
+
+
+class OnsetCapture:
+    """The impact velocities the runs inside `capturing_onsets` register: ``registered``,
+    per contact (its index in the layout) the list of [t in s, deltadot_minus in m/s] per
+    onset (the last build's, after a Newton retry); ``shift``: per contact what to add to
+    the impact velocities of its first onsets (m/s, every registration of the onset: a
+    prediction and its refinement; later onsets keep their own)."""
+
+    def __init__(self, shift: dict | None = None):
+        self.shift = dict(shift or {})
+        self.registered: dict[int, list] = {}
+
+    def attach(self, index: int, memory: ImpactMemory) -> None:
+        memory.log = self.registered[index] = []
+        memory.shift = self.shift.get(index)
+
+
+_CAPTURE: contextvars.ContextVar = contextvars.ContextVar("onset_capture", default=None)
+
+
+@contextlib.contextmanager
+def capturing_onsets(shift: dict | None = None):
+    """Capture the impact velocities registered by the Exudyn runs made inside (an
+    `OnsetCapture`), optionally shifted by `shift` (a step sequence's estimate of its
+    onsets' error, `exudyn_convergence.onset_term`)."""
+    capture = OnsetCapture(shift)
+    token = _CAPTURE.set(capture)
+    try:
+        yield capture
+    finally:
+        _CAPTURE.reset(token)
 
 
 def _update_memory(memory: ImpactMemory, t: float, h: float, delta: float, rate: float,
@@ -614,6 +657,8 @@ def build(linkage: Linkage, settings: ExudynSettings | None = None,
         if start_memory is not None:
             memory.mode = int(start_memory[len(memories)][0])
             memory.dmin = float(start_memory[len(memories)][1])
+        if _CAPTURE.get() is not None:
+            _CAPTURE.get().attach(len(memories), memory)
         memories.append(memory)
         return memory
 
