@@ -380,32 +380,33 @@ def capturing_onsets(shift: dict | None = None):
 def _update_memory(memory: ImpactMemory, t: float, h: float, delta: float, rate: float,
                    predict: bool) -> None:
     """Register an onset of one contact from the converged state at the step's start (see
-    `_pre_step`)."""
+    `_pre_step`: called at t_n+1 = `t` with the state of t_n = t - h)."""
+    ts = t - h                 # the time of the state (delta, rate)
     prev = memory.previous
-    if prev is not None and t <= prev[0]:
+    if prev is not None and ts <= prev[0]:
         prev = None        # step repeated after a failed Newton: no new information
     if delta <= 0.0:
         if predict and delta + h * rate > 0.0:
-            accel = (rate - prev[2]) / (t - prev[0]) if prev is not None else 0.0
+            accel = (rate - prev[2]) / (ts - prev[0]) if prev is not None else 0.0
             s = -delta / rate                      # time to the crossing, then one
             qv = rate + accel * s                  # Newton step on the quadratic
             if qv > 0.0:
                 s -= (delta + rate * s + 0.5 * accel * s * s) / qv
             s = min(max(s, 0.0), h)
-            memory.set(rate + accel * s, t - h + s, new_onset=memory.mode == 0)
+            memory.set(rate + accel * s, ts + s, new_onset=memory.mode == 0)
             memory.mode = 1
         else:
             memory.mode = 0
     elif prev is not None and prev[1] <= 0.0:
         # crossed during the last step: interpolate deltadot at delta = 0
         theta = prev[1] / (prev[1] - delta)
-        memory.set(prev[2] + theta * (rate - prev[2]), prev[0] + theta * (t - prev[0]),
+        memory.set(prev[2] + theta * (rate - prev[2]), prev[0] + theta * (ts - prev[0]),
                    new_onset=memory.mode == 0)
         memory.mode = 1
     elif memory.mode == 0:
-        memory.set(rate, t)    # in contact without a registered onset (e.g. the first step)
+        memory.set(rate, ts)   # in contact without a registered onset (e.g. the first step)
         memory.mode = 1
-    memory.previous = (t, delta, rate)
+    memory.previous = (ts, delta, rate)
 
 
 def _pre_step(contacts: list, h: float, predict: bool):

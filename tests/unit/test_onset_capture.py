@@ -15,11 +15,11 @@ H = 1e-6
 
 
 def _approach(memory, rate, t0, steps=4, delta0=-2.5e-6):
-    """A contact closing at a constant `rate` (m/s) from `delta0` (m), one pre-step call per
-    step h from t0: (the crossing time, s)."""
+    """A contact closing at a constant `rate` (m/s) from `delta0` (m) at t0 (s), one
+    pre-step call per step h (at t_n+1 with the state of t_n): (the crossing time, s)."""
     for k in range(steps):
         t = t0 + k * H
-        _update_memory(memory, t, H, delta0 + rate * (t - t0), rate, predict=False)
+        _update_memory(memory, t + H, H, delta0 + rate * (t - t0), rate, predict=False)
     return t0 - delta0 / rate
 
 
@@ -60,7 +60,7 @@ def test_a_refined_prediction_is_the_same_onset_and_both_registrations_are_shift
     for memory, seen in ((plain, []), (shifted, [])):
         delta = -2.5e-6
         for k, rate in enumerate(rates):
-            _update_memory(memory, k * H, H, delta, rate, predict=True)
+            _update_memory(memory, (k + 1) * H, H, delta, rate, predict=True)
             seen.append(memory.dmin)
             delta += rate * H
         memory.seen = seen
