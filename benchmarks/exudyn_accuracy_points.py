@@ -70,7 +70,7 @@ def measure(label: str, accuracy: float, revolutions: int) -> dict:
             "bar": np.asarray(st["peak_errors"]) / np.abs(value),
             "onset": (np.full(revs, np.nan) if st["onset_errors"] is None
                       else np.asarray(st["onset_errors"]) / np.abs(value)),
-            "onset_seconds": st["onset_seconds"],
+            "onset_seconds": st["onset_seconds"], "onset_note": st["onset_note"],
             "error": value / ref - 1.0, "order": np.asarray(st["observed_order"]),
             "steps": st["accuracy_steps"], "run_seconds": st.get("accuracy_run_seconds", []),
             "peaks": np.asarray(st["accuracy_peaks"]), "ok": st["accuracy_ok"],
@@ -85,7 +85,8 @@ def report(r: dict, accuracy: float) -> str:
              + ", ".join(f"{s:.0f}" for s in r["run_seconds"])
              + f" s, the onsets' share {r['onset_seconds']:.0f} s; reference "
              f"{r['reference_seconds']:.1f} s; accuracy_ok {r['ok']}; grazing onsets "
-             f"{r['grazing']}"]
+             f"{r['grazing']}" + (f"; the onsets' share {r['onset_note']}"
+                                  if r["onset_note"] else "")]
     for k in range(r["revolutions"]):
         err, bar = r["error"][k], r["bar"][k]
         order = "-" if not np.isfinite(r["order"][k]) else f"{r['order'][k]:.2f}"
@@ -93,11 +94,15 @@ def report(r: dict, accuracy: float) -> str:
                      f"{r['reference'][k]:.4f} | {err:+.2e} | {bar:.2e} | "
                      f"{'yes' if abs(err) <= bar else 'no'} | "
                      f"{'yes' if abs(err) <= accuracy else 'no'} | {order} | "
-                     f"{r['onset'][k]:.2e} |")
+                     f"{_cell(r['onset'][k])} |")
         rel = r["peaks"][:, k] / r["reference"][k] - 1.0
         lines.append("  each run's peak against the reference: "
                      + ", ".join(f"{x:+.2e}" for x in rel))
     return "\n".join(lines)
+
+
+def _cell(share: float) -> str:
+    return f"{share:.2e}" if np.isfinite(share) else "-"
 
 
 HEAD = ("| point | revolution | Exudyn (N) | reference (N) | true error | bar | bar covers it "
