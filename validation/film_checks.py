@@ -107,13 +107,20 @@ def long_limit() -> list[str]:
             "(120 around)"]
 
 
-def full_film() -> str:
-    eps, rate = 0.5, 1e-3
+def full_film_squeeze(eps=0.5, rate=1e-3) -> tuple[float, float]:
+    """The radial force (N) of a pure squeeze without cavitation in the numerical long limit
+    (what lengthening L = 20 R to 40 R adds), and Sommerfeld's full-film
+    F_r = -12 pi mu R^3 L eps_dot / (c^2 (1 - eps^2)^1.5) at L = 20 R."""
     s = state(eps, radial_rate=rate)
     a = solve(*s, R, C, 20 * R, MU, n_theta=120, n_z=50, cavitation="full")
     b = solve(*s, R, C, 40 * R, MU, n_theta=120, n_z=100, cavitation="full")
     fr = (b.fx - a.fx) * math.cos(DIRECTION) + (b.fy - a.fy) * math.sin(DIRECTION)
     ref = -12 * math.pi * MU * R**3 * (20 * R) * (rate / C) / (C**2 * (1 - eps**2) ** 1.5)
+    return fr, ref
+
+
+def full_film() -> str:
+    fr, ref = full_film_squeeze()
     return f"full film, pure squeeze: Sommerfeld's F_r within {100 * abs(fr / ref - 1):.2g} %"
 
 
@@ -132,7 +139,7 @@ def where_each_applies() -> list[str]:
     return rows
 
 
-def _classical_short(eps, eps_dot, omega_bar, L):
+def classical_short(eps, eps_dot, omega_bar, L):
     """The classical short-bearing forms (both terms over (0, pi); Flores et al. 2006),
     (F_r, F_t) in the line-of-centres frame."""
     k = MU * R * L**3 / (2 * C**2)
@@ -143,7 +150,7 @@ def _classical_short(eps, eps_dot, omega_bar, L):
     return fr, ft
 
 
-def _frame(f):
+def frame(f):
     ux, uy = math.cos(DIRECTION), math.sin(DIRECTION)
     return f[0] * ux + f[1] * uy, -f[0] * uy + f[1] * ux
 
@@ -155,9 +162,9 @@ def classical() -> list[str]:
     for eps in (0.2, 0.5, 0.8):
         for rate, motion in ((1e-3, "approaching"), (-1e-3, "separating")):
             s = state(eps, radial_rate=rate)
-            num = _frame(_force(solve(*s, R, C, L, MU, n_theta=240, n_z=40)))
-            law = _frame(short_bearing(*s, R, C, L, MU))
-            fr, ft = _classical_short(eps, rate / C, 0.0, L)
+            num = frame(_force(solve(*s, R, C, L, MU, n_theta=240, n_z=40)))
+            law = frame(short_bearing(*s, R, C, L, MU))
+            fr, ft = classical_short(eps, rate / C, 0.0, L)
             rows.append(f"| {eps} | {motion} | {num[0]:.3g} | {law[0]:.3g} | {fr:.3g} "
                         f"({100 * (fr / num[0] - 1):+.0f} %) | {100 * abs(ft / num[0]):.0f} % |")
     return rows
@@ -170,7 +177,7 @@ def combined_long_film() -> str:
     fx, fy, _ = _long_gain(s, 20, 240, per_diameter=10)
     law = long_bearing(*s, R, C, 20 * 2 * R, MU)
     return (f"long film, eps 0.6, separating, whirling and turning, L = 0.4 m: radial force "
-            f"{_frame((fx, fy))[0] / 1e3:.1f} kN numerical, {_frame(law)[0] / 1e3:.1f} kN law")
+            f"{frame((fx, fy))[0] / 1e3:.1f} kN numerical, {frame(law)[0] / 1e3:.1f} kN law")
 
 
 def main() -> None:
