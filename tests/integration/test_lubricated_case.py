@@ -46,7 +46,7 @@ def test_vanishing_viscosity_approaches_the_dry_joint():
 @pytest.mark.slow   # 5 s of runs
 def test_viscous_film_keeps_the_journal_off_the_wall():
     """With the SAE 30 oil at 100 C (9 mPa s) and a five times more viscous one the journal
-    never reaches the wall (no contact; largest eccentricity ratio measured 0.76 and 0.41,
+    never reaches the wall (no contact; largest eccentricity ratio measured 0.76 and 0.44,
     falling with the viscosity), and the revolution-4 peak of the base force is the ideal
     joint's closed form within 0.1 % (measured 8253.3 N against 8253.2 N; the dry joint's
     is 8292.0 N)."""

@@ -28,39 +28,14 @@ from mbs_clearance.laws.lubrication import (
     short_bearing,
 )
 from mbs_clearance.model import cases
+from validation.film_checks import MOTIONS, MU, C, R, full_film_squeeze
+from validation.film_checks import classical_short as _classical_short
+from validation.film_checks import frame as _frame
+from validation.film_checks import rel as _rel
+from validation.film_checks import state as _state
 from validation.reynolds import solve
 
-#: the paper case's joint: journal radius (m), radial clearance (m); an oil of 10 mPa s
-R, C, MU = 0.01, 1e-5, 0.01
-#: the direction of the eccentricity in the checks (any: the laws are frame-free)
-DIRECTION = 0.7
 EPS = (0.2, 0.5, 0.8)
-
-
-def _state(eps, radial_rate=0.0, tangential_rate=0.0, omega_j=0.0, omega_b=0.0):
-    """(ex, ey, vx, vy, omega_j, omega_b) with e at DIRECTION, its rate given along u_r and
-    u_t (m/s)."""
-    ux, uy = math.cos(DIRECTION), math.sin(DIRECTION)
-    return (eps * C * ux, eps * C * uy,
-            radial_rate * ux - tangential_rate * uy, radial_rate * uy + tangential_rate * ux,
-            omega_j, omega_b)
-
-
-#: the motions checked: the wedge alone (the journal turning, the bearing turning, both),
-#: the squeeze alone (approaching, separating), and combined (with whirl)
-MOTIONS = {
-    "wedge": dict(omega_j=300.0),
-    "wedge_bearing": dict(omega_j=100.0, omega_b=-200.0),
-    "squeeze_in": dict(radial_rate=1e-3),
-    "squeeze_out": dict(radial_rate=-1e-3),
-    "combined_in": dict(radial_rate=1e-3, tangential_rate=2e-4, omega_j=300.0, omega_b=50.0),
-    "combined_out": dict(radial_rate=-1e-3, tangential_rate=-3e-4, omega_j=300.0),
-}
-
-
-def _rel(num, ref):
-    """|num - ref| / |ref| of the force vectors."""
-    return math.hypot(num[0] - ref[0], num[1] - ref[1]) / math.hypot(ref[0], ref[1])
 
 
 @pytest.mark.parametrize("eps", EPS)
@@ -150,29 +125,8 @@ def test_full_film_long_bearing_matches_sommerfeld_squeeze():
     """Without cavitation the squeeze film of the long limit is Sommerfeld's full-film
     F_r = -12 pi mu R^3 L eps_dot / (c^2 (1 - eps^2)^1.5) (its pressure's constant drops
     out of the full-circle integral): a check of the solver independent of the laws."""
-    eps, rate = 0.5, 1e-3
-    state = _state(eps, radial_rate=rate)
-    a = solve(*state, R, C, 20 * R, MU, n_theta=120, n_z=50, cavitation="full")
-    b = solve(*state, R, C, 40 * R, MU, n_theta=120, n_z=100, cavitation="full")
-    fr = (b.fx - a.fx) * math.cos(DIRECTION) + (b.fy - a.fy) * math.sin(DIRECTION)
-    ref = -12 * math.pi * MU * R**3 * (20 * R) * (rate / C) / (C**2 * (1 - eps**2) ** 1.5)
+    fr, ref = full_film_squeeze(0.5, 1e-3)
     assert fr == pytest.approx(ref, rel=2e-3)
-
-
-def _classical_short(eps, eps_dot, omega_bar, L):
-    """The classical short-bearing forms (both terms integrated over (0, pi); Flores et al.
-    2006), (F_r, F_t) in the line-of-centres frame."""
-    k = MU * R * L**3 / (2 * C**2)
-    fr = -k * (2 * eps**2 * omega_bar / (1 - eps**2) ** 2
-               + math.pi * (1 + 2 * eps**2) * eps_dot / (1 - eps**2) ** 2.5)
-    ft = k * (math.pi * eps * omega_bar / (2 * (1 - eps**2) ** 1.5)
-              + 4 * eps * eps_dot / (1 - eps**2) ** 2)
-    return fr, ft
-
-
-def _frame(f):
-    ux, uy = math.cos(DIRECTION), math.sin(DIRECTION)
-    return f[0] * ux + f[1] * uy, -f[0] * uy + f[1] * ux
 
 
 @pytest.mark.parametrize("eps", EPS)
