@@ -254,7 +254,15 @@ def _all_peaks(linkage, span, settings, max_memory, start) -> np.ndarray:
     monitored force)."""
     from . import exudyn_linkage as xl
 
-    t, force = xl.monitored_force(linkage, span, settings, max_memory, start)
+    return _window_peaks(*xl.monitored_force(linkage, span, settings, max_memory, start),
+                         span)
+
+
+def _window_peaks(t, force, span) -> np.ndarray:
+    """Refined peaks per window of `span` (N) of a free linkage's monitored force (n, 2) at
+    times t, smoothed as the step sequences read it."""
+    from . import exudyn_linkage as xl
+
     force = smoothed(force)
     return xl.window_peaks(t, np.hypot(force[:, 0], force[:, 1]), span.windows)
 
@@ -333,10 +341,8 @@ def _sequence(linkage, span, accuracy: float, options: dict, record=None,
             if free:
                 last = record(step)
                 last.stats["series_step"] = step
-                force = smoothed(last.base_force)
-                peaks.append(xl.window_peaks(last.t, np.hypot(force[:, 0], force[:, 1]),
-                                             span.windows))
                 t = last.t
+                peaks.append(_window_peaks(t, last.base_force, span))
             elif stop is not None:
                 row, t, _ = _run_peaks(linkage, span, settings, max_memory, start, stop)
                 peaks.append(row)
