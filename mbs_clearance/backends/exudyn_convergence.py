@@ -623,6 +623,7 @@ def peak_to_accuracy(mech, revolution: int, accuracy: float, **options) -> float
     rel = float(conv.relative_error[revolution - 1])
     if rel > accuracy:
         warnings.warn(f"Exudyn's estimated error of the peak, {rel:.2g} (step halving down to "
-                      f"{conv.steps[-1]:.3g} s), misses the requested accuracy {accuracy:g}"
+                      f"{conv.steps[-1]:.3g} s: the difference of the last two steps' peaks "
+                      f"and the onsets' share), misses the requested accuracy {accuracy:g}"
                       f"{conv.stopped}", AccuracyWarning, stacklevel=3)
     return float(conv.value[revolution - 1])

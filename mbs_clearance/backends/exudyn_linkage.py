@@ -658,8 +658,9 @@ def build(linkage: Linkage, settings: ExudynSettings | None = None,
         if start_memory is not None:
             memory.mode = int(start_memory[len(memories)][0])
             memory.dmin = float(start_memory[len(memories)][1])
-        if _CAPTURE.get() is not None:
-            _CAPTURE.get().attach(len(memories), memory)
+        capture = _CAPTURE.get()
+        if capture is not None:
+            capture.attach(len(memories), memory)
         memories.append(memory)
         return memory
 
