@@ -7,10 +7,17 @@ Kinds: ``number`` (one number, group 1 of the first printed line matching ``prin
 ``lines`` (printed lines of the same words); ``numbers`` (several numbers of one table
 cell or row, in the page's text in that order: the groups of the first printed lines
 matching ``printed``, line after line (groups that match nothing skipped), e.g. one line
-per revolution; a documented "-" is printed as "-")."""
+per revolution; a documented "-" is printed as "-"); ``table`` (the body rows of the table whose
+line holds ``header``, row k against the k-th printed line matching ``printed``: the numbers
+of the cells ``columns`` (1-based), in order, against its groups). A table is one block: the
+command may stand within REACH lines of any of its rows.
+
+Every number that stands beside a command (tools/docs_numbers.py says which) is checked by
+an entry here or exempt, with its reason, in tests/docs_exempt.toml."""
 
 from __future__ import annotations
 
+import functools
 import math
 import re
 import sys
@@ -24,25 +31,26 @@ tomllib = pytest.importorskip("tomllib", reason="the registry needs tomllib (Pyt
 
 ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT / "tests" / "unit"))
+sys.path.insert(0, str(ROOT / "tools"))
+import docs_numbers  # noqa: E402  (the scan of the pages, one way)
 from test_documented_outputs import NUMBER, _run  # noqa: E402  (its runner, one way)
 
-sys.path.pop(0)
+del sys.path[:2]
 
 REGISTRY = ROOT / "tests" / "docs_numbers.toml"
-#: lines between a number and its command on the page (a table row holds both; a table
-#: follows its indented command)
-REACH = 12
+REACH = docs_numbers.REACH
 
 
 def _entries():
     data = tomllib.loads(REGISTRY.read_text())
     out = []
-    for kind in ("number", "lines", "numbers"):
+    for kind in ("number", "lines", "numbers", "table"):
         for k, e in enumerate(data.get(kind, [])):
             e = {**e, "kind": kind}
             marks = [pytest.mark.slow] if e.get("slow") else []
             label = (e["number"] if kind == "number" else f"{len(e['lines'])} lines"
-                     if kind == "lines" else ",".join(e["numbers"]))
+                     if kind == "lines" else ",".join(e["numbers"]) if kind == "numbers"
+                     else f"table {e['header'][:30]}")
             out.append(pytest.param(e, marks=marks, id=f"{e['page']}:{label}:{k}"))
     return out
 
@@ -67,17 +75,18 @@ def _where(lines: list[str], text: str) -> list[int]:
 
 
 def _beside(page: str, entry: dict) -> None:
-    """The page holds the documented text and the command within REACH lines of it."""
-    lines = (ROOT / page).read_text().splitlines()
+    """The page holds the documented text and the command within REACH lines of it (of
+    its table, for a table row)."""
+    doc = docs_numbers.Page.read(page, ROOT)
     cmd = entry["command"]
-    near = [i for i in range(len(lines))
-            if cmd in " ".join(lines[i].replace("`", " ").split())]
+    near = doc.commands(cmd)
     assert near, f"{page} does not show the command `{cmd}`"
-    texts = entry["lines"] if entry["kind"] == "lines" else [entry["text"]]
+    texts = (entry["lines"] if entry["kind"] == "lines" else [entry["header"]]
+             if entry["kind"] == "table" else [entry["text"]])
     for text in texts:
-        at = _where(lines, text)
+        at = _where(doc.lines, text)
         assert at, f"{page} does not hold the documented text\n  {text}"
-        assert any(abs(i - j) <= REACH for i in at for j in near), (
+        assert any(doc.near(i, j) for i in at for j in near), (
             f"{page}: `{cmd}` is not within {REACH} lines of\n  {text}")
 
 
@@ -104,6 +113,9 @@ def test_half_unit_and_the_registry_are_read():
 def test_the_documented_number_is_what_its_command_prints(entry, tmp_path_factory):
     _beside(entry["page"], entry)
     printed = _output(entry["command"], tmp_path_factory)
+    if entry["kind"] == "table":
+        _check_table(entry, printed)
+        return
     if entry["kind"] == "numbers":
         _check_cell(entry, printed)
         return
@@ -149,3 +161,61 @@ def _check_cell(entry: dict, printed: list[str]) -> None:
             continue
         assert _agree(doc, got, _tolerance(entry, doc)), (
             f"{entry['page']} says {docs}; `{entry['command']}` prints {found}")
+
+
+def _check_table(entry: dict, printed: list[str]) -> None:
+    """A ``table`` entry: body row k's cells ``columns`` against the groups of the k-th
+    printed line matching ``printed``."""
+    doc = docs_numbers.Page.read(entry["page"], ROOT)
+    rows = docs_numbers.table_rows(doc, entry)
+    assert rows, f"{entry['page']} has no table with a line holding {entry['header']}"
+    pattern = re.compile(entry["printed"])
+    found = [[g for g in m.groups() if g is not None]
+             for ln in printed if (m := pattern.search(ln))]
+    assert len(found) >= len(rows), (f"`{entry['command']}` prints {len(found)} lines "
+                                     f"matching {entry['printed']}, the table has {len(rows)}")
+    for row, got in zip(rows, found):
+        cells = doc.cells(row)
+        docs = [n for c in entry["columns"] for n in
+                (["-"] if cells[c - 1] == "-" else NUMBER.findall(cells[c - 1]))]
+        assert len(docs) == len(got), (f"{entry['page']}: row {cells} holds {docs}; "
+                                       f"`{entry['command']}` prints {got}")
+        for d, g in zip(docs, got):
+            ok = d == g if "-" in (d, g) else _agree(d, g, _tolerance(entry, d))
+            assert ok, (f"{entry['page']}: row {cells} says {docs}; "
+                        f"`{entry['command']}` prints {got}")
+
+
+@functools.cache
+def _scan(page: str):
+    doc = docs_numbers.Page.read(page, ROOT)
+    return doc, docs_numbers.beside(doc)
+
+
+EXEMPT = tomllib.loads(docs_numbers.EXEMPT.read_text()) if docs_numbers.EXEMPT.exists() else {}
+
+
+def test_every_number_beside_a_command_is_checked_or_exempt():
+    left = docs_numbers.unchecked(ROOT)
+    assert not left, (f"{sum(len(n) for _, _, n, _ in left)} numbers stand beside a "
+                      "command, and no entry of tests/docs_numbers.toml checks them nor "
+                      "does tests/docs_exempt.toml exempt them (python tools/docs_numbers.py "
+                      "--list):\n" + "\n".join(f"  {p}:{i}: {' '.join(n)}" for p, i, n, _
+                                                   in left[:40]))
+
+
+@pytest.mark.parametrize("entry", EXEMPT.get("exempt", []),
+                         ids=lambda e: f"{e['page']}:{e['text'][:30]}")
+def test_an_exemption_names_its_reason_and_a_line_it_covers(entry):
+    assert entry["why"] in docs_numbers.REASONS, (
+        f"why = {entry['why']!r}; allowed: {sorted(docs_numbers.REASONS)}")
+    doc, beside = _scan(entry["page"])
+    at = _where(doc.lines, entry["text"])
+    assert at, f"{entry['page']} no longer holds\n  {entry['text']}"
+    lines = sorted({k for i in at for k in (doc.body(i) if entry.get("table") else [i])})
+    assert any(k in beside for k in lines), (
+        f"{entry['page']}: nothing beside a command to exempt at\n  {entry['text']}")
+    if entry["why"] == "test":
+        name = entry["test"]
+        assert any(f"def {name}(" in p.read_text() for p in (ROOT / "tests").rglob("*.py")), (
+            f"no test named {name}")
