@@ -36,6 +36,8 @@ EXEMPT = ROOT / "tests" / "docs_exempt.toml"
 #: lines between a number and its command on the page (a table counts as one block)
 REACH = 12
 NUMBER = re.compile(r"[-+]?(?:\d+\.\d*|\.\d+|\d+)(?:[eE][-+]?\d+)?")
+#: a version (Python 3.11.7) is not a number
+VERSION = re.compile(r"\b\d+\.\d+\.\d+\b")
 COMMAND = re.compile(r"mbs-clearance [a-z]|python -m (?:benchmarks|validation)\.|"
                      r"python examples/")
 #: why a number beside a command is not compared with the command's output
@@ -117,6 +119,22 @@ def _is_row(line: str) -> bool:
     return s.startswith("|") and s.endswith("|") and len(s) > 1
 
 
+def numbers(text: str) -> list[str]:
+    """The numbers of a text: not the digits of a name (DOP853, F12) or of a version, and
+    the "-" of a range (0.3-0.9) is not a sign."""
+    text = VERSION.sub(" ", text)
+    out = []
+    for m in NUMBER.finditer(text):
+        before = text[m.start() - 1] if m.start() else " "
+        n = m.group()
+        if n[0] not in "+-" and (before.isalnum() or before in "_."):
+            continue
+        if n[0] in "+-" and (before.isalnum() or before in ")_"):
+            n = n[1:]
+        out.append(n)
+    return out
+
+
 def pages(root: Path = ROOT) -> list[str]:
     return ["README.md", *sorted(str(p.relative_to(root)) for p in (root / "docs").rglob("*.md"))]
 
@@ -142,9 +160,9 @@ def beside(page: Page) -> dict[int, list[str]]:
         near = [j for j in cmds if page.near(i, j)]
         if not near:
             continue
-        inputs = {n.lstrip("+") for j in near for n in NUMBER.findall(page.lines[j])
+        inputs = {n.lstrip("+") for j in near for n in numbers(page.lines[j])
                   if j != i or not _is_row(ln)}
-        nums = [n for n in NUMBER.findall(_plain(ln))
+        nums = [n for n in numbers(_plain(ln))
                 if _counted(n) and n.lstrip("+") not in inputs]
         if nums:
             found[i] = nums
@@ -167,7 +185,7 @@ def checked(page: Page, registry: dict) -> dict[int, set[str]]:
             texts = e["lines"] if kind == "lines" else [e["text"]]
             for text in texts:
                 nums = ({e["number"]} if kind == "number" else set(e["numbers"])
-                        if kind == "numbers" else set(NUMBER.findall(text)))
+                        if kind == "numbers" else set(numbers(text)))
                 for i, ln in enumerate(page.lines):
                     if text in ln:
                         out.setdefault(i, set()).update(nums)
@@ -177,7 +195,7 @@ def checked(page: Page, registry: dict) -> dict[int, set[str]]:
         for i in table_rows(page, e):
             cells = page.cells(i)
             out.setdefault(i, set()).update(
-                n for c in e["columns"] if c <= len(cells) for n in NUMBER.findall(cells[c - 1]))
+                n for c in e["columns"] if c <= len(cells) for n in numbers(cells[c - 1]))
     return out
 
 
@@ -200,7 +218,7 @@ def exempt(page: Page, exemptions: dict) -> dict[int, dict[str, str]]:
             if "columns" in e:
                 cells = page.cells(i)
                 nums = [n for c in e["columns"] if c <= len(cells)
-                        for n in NUMBER.findall(cells[c - 1])]
+                        for n in numbers(cells[c - 1])]
             else:
                 nums = e.get("numbers", ["*"])
             out.setdefault(i, {}).update({n: e["why"] for n in nums})

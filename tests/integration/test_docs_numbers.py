@@ -177,7 +177,7 @@ def _check_table(entry: dict, printed: list[str]) -> None:
     for row, got in zip(rows, found):
         cells = doc.cells(row)
         docs = [n for c in entry["columns"] for n in
-                (["-"] if cells[c - 1] == "-" else NUMBER.findall(cells[c - 1]))]
+                (["-"] if cells[c - 1] == "-" else docs_numbers.numbers(cells[c - 1]))]
         assert len(docs) == len(got), (f"{entry['page']}: row {cells} holds {docs}; "
                                        f"`{entry['command']}` prints {got}")
         for d, g in zip(docs, got):
