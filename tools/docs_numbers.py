@@ -120,8 +120,8 @@ def _is_row(line: str) -> bool:
 
 
 def numbers(text: str) -> list[str]:
-    """The numbers of a text: not the digits of a name (DOP853, F12) or of a version, and
-    the "-" of a range (0.3-0.9) is not a sign."""
+    """The numbers of a text: not the digits of a name (DOP853, F12) or of a version, the
+    "-" of a range (0.3-0.9) is not a sign, and a full stop is not a decimal point."""
     text = VERSION.sub(" ", text)
     out = []
     for m in NUMBER.finditer(text):
@@ -131,7 +131,7 @@ def numbers(text: str) -> list[str]:
             continue
         if n[0] in "+-" and (before.isalnum() or before in ")_"):
             n = n[1:]
-        out.append(n)
+        out.append(n[:-1] if n.endswith(".") else n)   # "30." ends a sentence
     return out
 
 
@@ -144,6 +144,13 @@ def _counted(number: str) -> bool:
     if re.fullmatch(r"1(?:[eE][-+]?\d+)?", bare):
         return False
     return not re.fullmatch(r"\d{1,2}", bare)
+
+
+def _command_text(line: str) -> str:
+    """The commands of a command line: its code spans that hold one, or the whole line
+    (an indented or fenced command)."""
+    spans = [c for c in re.findall(r"`([^`]*)`", line) if COMMAND.search(c)]
+    return " ".join(spans) if spans else line
 
 
 def _plain(line: str) -> str:
@@ -160,8 +167,7 @@ def beside(page: Page) -> dict[int, list[str]]:
         near = [j for j in cmds if page.near(i, j)]
         if not near:
             continue
-        inputs = {n.lstrip("+") for j in near for n in numbers(page.lines[j])
-                  if j != i or not _is_row(ln)}
+        inputs = {n.lstrip("+") for j in near for n in numbers(_command_text(page.lines[j]))}
         nums = [n for n in numbers(_plain(ln))
                 if _counted(n) and n.lstrip("+") not in inputs]
         if nums:

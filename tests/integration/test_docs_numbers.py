@@ -215,6 +215,9 @@ def test_an_exemption_names_its_reason_and_a_line_it_covers(entry):
     lines = sorted({k for i in at for k in (doc.body(i) if entry.get("table") else [i])})
     assert any(k in beside for k in lines), (
         f"{entry['page']}: nothing beside a command to exempt at\n  {entry['text']}")
+    counted = {n for k in lines for n in beside.get(k, [])}
+    stale = [n for n in entry.get("numbers", []) if n not in counted]
+    assert not stale, f"{entry['page']}: {stale} are not counted numbers of\n  {entry['text']}"
     if entry["why"] == "test":
         name = entry["test"]
         assert any(f"def {name}(" in p.read_text() for p in (ROOT / "tests").rglob("*.py")), (
