@@ -7,7 +7,8 @@ centred start:
   rtol 1e-12 (and, with --check-reference, by scipy DOP853 at rtol 1e-12: their relative
   difference is printed);
 - ours: `simulate` (every step recorded) and the peak-only run at the default settings
-  (dopri5, rtol 1e-7), or at the method and rtol given by ``--ours METHOD:RTOL`` (e.g.
+  (the accuracy request 1e-5: dopri5 at rtol 1e-7 with its error check, tighter runs where
+  the diagnostics flag the run), or at the method and rtol given by ``--ours METHOD:RTOL`` (e.g.
   ``--ours dop853:1e-4``: the same DOP853 pair as scipy's), and the peak's relative error
   against the reference;
 - scipy: `solve_ivp(method="DOP853")` on the generated model's compiled right-hand side,
@@ -40,6 +41,7 @@ import numpy as np
 
 from mbs_clearance import peak_base_force, simulate
 from mbs_clearance.model.cases import CASES
+from mbs_clearance.solve.accuracy import DEFAULT_ACCURACY
 from mbs_clearance.solve.linkage_model import DEFAULT_RTOL
 from validation.scipy_reference import solve_scipy_linkage
 from validation.timing import machine_summary, ns_per_call, paired
@@ -236,7 +238,8 @@ def main(argv=None) -> None:
     ap.add_argument("--check-reference", action="store_true",
                     help="also compare the reference peak with scipy DOP853 at rtol 1e-12")
     ap.add_argument("--ours", type=ours_setting, metavar="METHOD:RTOL",
-                    help="our integrator and rtol (default: the defaults, dopri5 at 1e-7)")
+                    help="our integrator and rtol (default: the accuracy request 1e-5, dopri5 at "
+                         "rtol 1e-7 checked)")
     ap.add_argument("--json", help="also write the results to this JSON file")
     args = ap.parse_args(argv)
     names = args.case or list(CASES)
@@ -246,7 +249,8 @@ def main(argv=None) -> None:
     print()
     print(f"Machine: {machine_summary()}")
     setting = (f"{args.ours['method']} at rtol {args.ours['rtol']:g}" if args.ours
-               else f"the defaults (dopri5 at rtol {DEFAULT_RTOL:g})")
+               else f"the defaults (accuracy {DEFAULT_ACCURACY:g}: dopri5 at rtol "
+                    f"{DEFAULT_RTOL:g}, checked, tightened if flagged)")
     print(f"ours: {setting}; revolution {REVOLUTION}'s peak; "
           f"{args.repeats} alternating pairs per scipy row")
     print()

@@ -180,7 +180,8 @@ def main(argv=None) -> None:
           f"eigenvalue is {s['re_median']:.4g} +/- {s['im_median']:.4g} i 1/s (medians), "
           f"h |lambda| = {q10:.2f} / {q50:.2f} / {q90:.2f} (10 / 50 / 90 %): "
           f"{2 * np.pi / q50:.1f} steps per period of the vibration at "
-          f"{s['im_median'] / (2 * np.pi):.4g} Hz")
+          f"{s['im_median'] / (2e3 * np.pi):.3g} kHz, "
+          f"{s['duration'] * s['im_median'] / (2 * np.pi):.3g} periods in the run")
     zeta = -np.cos(s["angle_median"])
     print(f"damping ratio {zeta:.3g}; stability bound of h |lambda| along that direction: "
           + ", ".join(f"{m} {stability_radius(m, s['angle_median']):.2f}"

@@ -134,8 +134,8 @@ def test_paper_case_error_and_cost_pinned_by_function_evaluations():
 
 
 def test_a_tolerance_too_loose_to_resolve_the_contacts_warns():
-    """rtol 1e-2 gives a 1.7 MN peak and 751 contact events in the paper case (5 at the
-    default): never silently."""
+    """rtol 1e-2 gives a 0.88 MN peak and 747 contact events in the paper case (5 at the
+    default; `python -m validation.accuracy_flags`): never silently."""
     with pytest.warns(AccuracyWarning, match="too loose to resolve the contacts"):
         peak = peak_base_force(SliderCrank(), rtol=1e-2)
     assert peak > 2 * am.reference_peaks(SliderCrank())[3]     # the warning was deserved
@@ -146,7 +146,7 @@ def test_a_tolerance_too_loose_to_resolve_the_contacts_warns():
 
 
 def test_error_falls_monotonically_with_rtol_in_the_paper_case():
-    """The peak's error falls with rtol: measured 4.0e-4, 5.4e-5, 1.4e-5, 3.0e-6 (without
+    """The peak's error falls with rtol: measured 4.0e-4, 5.1e-5, 1.4e-5, 3.0e-6 (without
     the switching function's error control 3e-6 gave 1.0e-4, worse than 1e-5's 2.8e-5)."""
     errs = [am.peak_errors(SliderCrank(), rtol=r)[0].max() for r in (1e-4, 1e-5, 1e-6, 1e-7)]
     assert np.all(np.diff(errs) < 0), errs
