@@ -96,7 +96,7 @@ def report(r: dict, accuracy: float) -> str:
                      f"{'yes' if abs(err) <= accuracy else 'no'} | {order} | "
                      f"{_cell(r['onset'][k])} |")
         rel = r["peaks"][:, k] / r["reference"][k] - 1.0
-        lines.append("  each run's peak against the reference: "
+        lines.append(f"  {r['point']}, revolution {k + 1}, each run's peak against the reference: "
                      + ", ".join(f"{x:+.2e}" for x in rel))
     return "\n".join(lines)
 

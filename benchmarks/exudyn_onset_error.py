@@ -5,7 +5,9 @@ the reduced model's n-th; a test run, not a backend option).
 
 Per step: the last onset's registered impact velocity against the reduced model's, and
 revolution 2's peak (smoothed reactions, as the accuracy runs read it) against the reduced
-model's at rtol 1e-12, as is and with the exact impact velocities.
+model's at rtol 1e-12, as is and with the exact impact velocities; the difference of the
+two (the registrations' effect) and that per relative impact-velocity error. Then the
+exact-velocity peaks' successive differences' factors and their extrapolation.
 
     python -m benchmarks.exudyn_onset_error [--steps 0.7 0.35 0.175]   (us)
 """
@@ -67,13 +69,33 @@ def main(argv=None) -> int:
     print(f"reduced model: {len(exact)} onsets, the last's impact velocity {exact[-1]:.7g} "
           f"m/s; revolution 2's peak {ref:.4f} N")
     print("| step (us) | last impact velocity | peak 2, as is | peak 2, exact impact "
-          "velocities |")
+          "velocities | the onsets' effect | per impact-velocity error |")
+    exact_peaks = []
     for h in args.steps:
         v, peak = exudyn_run(linkage, h * 1e-6)
         _, peak_exact = exudyn_run(linkage, h * 1e-6, exact)
-        print(f"| {h:g} | {v / exact[-1] - 1:+.2e} | {peak / ref - 1:+.2e} | "
-              f"{peak_exact / ref - 1:+.2e} |", flush=True)
+        dv, dp, dx = v / exact[-1] - 1, peak / ref - 1, peak_exact / ref - 1
+        # the registrations' effect on the peak, and per relative impact-velocity error
+        print(f"| {h:g} | {dv:+.2e} | {dp:+.2e} | {dx:+.2e} | {dp - dx:+.2e} | "
+              f"{(dp - dx) / dv:.3f} |", flush=True)
+        exact_peaks.append(dx)
+    print(convergence(exact_peaks))
     return 0
+
+
+def convergence(peaks) -> str:
+    """The exact-velocity peaks' successive differences' factors (second order: 4 per
+    halving) and the Richardson extrapolation from the last three (relative errors)."""
+    d = -np.diff(np.asarray(peaks, dtype=float))
+    if len(d) < 2:
+        return "exact impact velocities: too few steps for the differences' factors"
+    factors = d[:-1] / d[1:]
+    text = ("exact impact velocities: successive differences falling by "
+            + ", ".join(f"{f:.2f}" for f in factors))
+    if not factors[-1] > 1.0:          # not converging monotonically: no extrapolation
+        return text + "; not extrapolated"
+    limit = peaks[-1] - d[-1] / (factors[-1] - 1.0)     # 2^p = the last factor
+    return text + f"; extrapolated from the last three {limit:+.1e}"
 
 
 if __name__ == "__main__":
