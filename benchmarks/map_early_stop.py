@@ -58,7 +58,8 @@ def main(argv=None) -> int:
           f"{statistics.median(times[True]):.1f} s; ratio old / new per pair "
           f"{', '.join(f'{r:.2f}' for r in ratios)}")
     print(f"right-hand side evaluations old {int(old['nfev'].sum()):.4g}, new "
-          f"{int(new['nfev'].sum()):.4g}")
+          f"{int(new['nfev'].sum()):.4g} "
+          f"({int(old['nfev'].sum()) / int(new['nfev'].sum()):.2g} x fewer)")
     stopped = new["stopped"].values > 0
     print(f"stopped early: {int(stopped.sum())} points, after "
           f"{np.median(new['stopped'].values[stopped]) if stopped.any() else 0:.0f} "

@@ -6,8 +6,9 @@ clearances around it, from two starts: the centred start of the regime map, and 
 branch's orbit nearest below (a matched start: its state and held impact velocity, the
 journal's memory the branch follows).
 
-Prints the located doubling, then per clearance the regime from each start, and the
-brute-force boundary (the last period-1 value and the next) from each.
+Prints the located doubling (also in mm or rpm, with the memory the branch holds), then
+per clearance the regime from each start, and the brute-force boundary (the last period-1
+value and the next) from each.
 
     python -m benchmarks.orbit_boundary [--points 9] [--width 2e-8]
     python -m benchmarks.orbit_boundary --field crank_speed [--points 9] [--width 2]
@@ -93,6 +94,10 @@ def main(argv=None) -> int:
               + f" after {len(branch.values)} orbits")
         return 0
     pd = branch.points[0]
+    at = (f"{pd.value * 1e3:.6g} mm" if args.field == "clearance"
+          else f"{pd.value * 30 / math.pi:.5g} rpm")
+    print(f"first period doubling at {at}; the memory held at "
+          f"{branch.impact_velocities[0, 0]:.4g} m/s (the design's settled value)")
     # the branch's side of the doubling (it starts at the paper's design)
     below = (branch.values < pd.value) == (branch.values[0] < pd.value)
     for c in np.linspace(pd.value - width, pd.value + width, args.points):

@@ -46,6 +46,7 @@ def main(argv=None) -> int:
     print(branch.summary())
     print(f"continuation: {n} orbits, {branch.counters['shooting_runs']} shooting runs, "
           f"{t_branch:.3g} s")
+    print(f"continuation from {args.start * 1e3:.3g} mm to {hi * 1e3:.3g} mm")
     codes, counts = np.unique(res.dataset["regime"].values, return_counts=True)
     regimes = ", ".join(f"{REGIMES[int(c)]} {k}" for c, k in zip(codes, counts))
     print(f"brute-force line: {n} points over {args.start:.3g} - {hi:.3g} m, {t_map:.3g} s "
