@@ -572,7 +572,10 @@ def run_library_case(expr: str, namespace: dict) -> dict:
                 n = len(value.t)
                 text = f"a {type(value).__name__} ({n} sample{'' if n == 1 else 's'})"
             else:
-                text = repr(value)
+                import numpy as np
+
+                # a numpy scalar as the number it holds (numpy 2 writes np.float64(...))
+                text = repr(value.item() if isinstance(value, np.generic) else value)
             outcome = {"returns": text if len(text) <= 60 else text[:57] + "..."}
     outcome["warnings"] = sorted({f"{w.category.__name__}: {_first_line(w.message)}"
                                   for w in caught})
@@ -603,8 +606,14 @@ def run_library_cases(timeout: float = LIBRARY_TIMEOUT) -> list[dict]:
         p = subprocess.Popen([sys.executable, __file__, "--worker"], stdin=subprocess.PIPE,
                              stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True,
                              cwd=ROOT, env={**os.environ, "PYTHONPATH": str(ROOT)})
-        threading.Thread(target=lambda: [answers.put(ln) for ln in p.stdout] + [answers.put(None)],
-                         daemon=True).start()
+
+        def read(p=p, answers=answers):
+            with p.stdout:          # closed at the worker's end (no unclosed pipe left)
+                for ln in p.stdout:
+                    answers.put(ln)
+            answers.put(None)
+
+        threading.Thread(target=read, daemon=True).start()
         return p
 
     try:
@@ -621,6 +630,7 @@ def run_library_cases(timeout: float = LIBRARY_TIMEOUT) -> list[dict]:
             if line is None or line == "timeout":
                 proc.kill()
                 proc.wait()
+                proc.stdin.close()
                 proc = None
                 outcome = ({"raises": "(no answer)",
                             "message": f"still running after {timeout:g} s: stopped",

@@ -787,6 +787,25 @@ def compare_free(linkage, duration: float, window: float | None = None, *,
     return a, b, with_missing_bars(v, [] if "peak_errors" in b.stats else ["exudyn"])
 
 
+def paper_peak_line(mech, result: Comparison) -> str | None:
+    """The paper's peak of |F12| over revolution 4 (its Table 3) beside both models' peaks,
+    for the paper's case at its original design or at its published optimum (the lengths
+    changed, the masses fixed); None for any other mechanism or fewer than 4 revolutions."""
+    from mbs_clearance.model.mechanism import SliderCrank
+    from mbs_clearance.studies.optimize import PAPER_TABLE3
+
+    rev4 = [r for r in result.revolutions if r.revolution == 4]
+    for design in ("original", "optimum"):
+        row = PAPER_TABLE3[design]
+        if rev4 and mech == SliderCrank(crank_length=row["crank_length"],
+                                        coupler_length=row["coupler_length"]):
+            paper = row["peak_force"]
+            return (f"the paper's peak in revolution 4 ({design} design): {paper:g} N; "
+                    f"a against it {_pct_of(rev4[0].peak_a, paper)}, b against it "
+                    f"{_pct_of(rev4[0].peak_b, paper)}")
+    return None
+
+
 def run_compare(args: argparse.Namespace) -> int:
     """Body of ``mbs-clearance compare`` for parsed arguments; returns the exit code."""
     from mbs_clearance._io import atomic_file, check_output_file
@@ -826,6 +845,9 @@ def run_compare(args: argparse.Namespace) -> int:
         print(f"{backend}: {time.perf_counter() - t0:.3g} s", file=sys.stderr, flush=True)
     result = compare(*trajectories, step_bars=not args.no_step_bars)
     print(format_table(result))
+    paper = paper_peak_line(mech, result)
+    if paper:
+        print(paper)
     if args.converged:
         if set(pair) != {"reduced", "exudyn"}:
             raise ValueError("--converged compares the reduced and exudyn backends")

@@ -137,6 +137,7 @@ def main(argv=None) -> int:
     result = {"duration": T, "energy_start": float(mo.energy(mo.FLGData(), mo.FLGData().q0,
                                                               mo.FLGData().u0)),
               "compliant": {}, "moreau": {}}
+    print(f"energy at the start {result['energy_start']:.4f} J", flush=True)
 
     runs = {}
     for K in stiffnesses:
@@ -156,6 +157,8 @@ def main(argv=None) -> int:
                   f"{r['u'][-1, 0]:.4f} rad/s, energy {_energy(r):.5f} J, largest "
                   f"penetration / c {r['max_penetration']:.3g} ({r['wall']:.1f} s)",
                   flush=True)
+            print(f"compliant K={K:g} rtol={rtol:g}: " + _contacts_line(
+                result["compliant"][f"K={K:g} rtol={rtol:g}"]), flush=True)
 
     # how far the regularised friction's creep (where the source's law can stick) moves
     # the results: friction_v1 from the default down by 100, and no friction at all
@@ -169,6 +172,14 @@ def main(argv=None) -> int:
             "crank_rate_end": float(r["u"][-1, 0])}
         print(f"regularisation {key}: crank {r['q'][-1, 0]:.5f} rad, energy "
               f"{_energy(r):.5f} J", flush=True)
+    reg = list(result["regularisation"].values())
+    case, narrower, frictionless = reg[0], reg[1:len(REGULARISATIONS)], reg[-1]
+    print("regularisation: the narrower laws move the crank angle by at most {:.1g} rad and "
+          "the energy by {:.2g} J; friction as a whole (mu = 0) by {:.3f} rad and {:.3f} J".format(
+              max(abs(n["crank_angle_end"] - case["crank_angle_end"]) for n in narrower),
+              max(abs(n["energy_end"] - case["energy_end"]) for n in narrower),
+              abs(frictionless["crank_angle_end"] - case["crank_angle_end"]),
+              abs(frictionless["energy_end"] - case["energy_end"])), flush=True)
 
     d = mo.FLGData()
     free_end = 0.0024          # before the first contact (about 2.69 ms)
@@ -187,6 +198,7 @@ def main(argv=None) -> int:
               f"energy {_energy(r):.5f} J; largest free-flight angle error "
               f"{result['moreau_free_flight_error'][f'h={h:g}']:.2g} rad ({r['wall']:.1f} s)",
               flush=True)
+        print(f"Moreau h={h:g}: " + _contacts_line(result["moreau"][f"h={h:g}"]), flush=True)
     h1, h2 = steps[-2], steps[-1]
     ratio = h1 / h2
     extrap = {}
@@ -200,10 +212,49 @@ def main(argv=None) -> int:
               h1, h2, *(extrap[k + e] for k in ("crank_angle_end", "crank_rate_end",
                                                  "energy_end")
                         for e in ("", "_error_at_finest"))), flush=True)
+    _print_agreement(result, T)
     (args.out / "flores_benchmark.json").write_text(json.dumps(result, indent=2))
     _figures(args.out, runs[(1e10, 1e-10)], mruns[steps[-1]], steps[-1])
     print(f"wrote {args.out / 'flores_benchmark.json'} and the figures")
     return 0
+
+
+def _contacts_line(summary: dict) -> str:
+    """A run's first corner contact (ms, the corners touching then), the bottom pair's
+    first contact and, for a compliant run, how long its first impact lasts (us)."""
+    firsts = {n: c["first"] for n, c in summary["corners"].items() if c["first"] is not None}
+    if not firsts:
+        return "no corner contact"
+    t1 = min(firsts.values())
+    at_once = [n for n, t in firsts.items() if t == t1]
+    bottom = [firsts[n] for n in ("rear_bottom", "front_bottom") if n in firsts]
+    text = f"first contact {1e3 * t1:.2f} ms ({', '.join(at_once)})"
+    if bottom:
+        text += f", bottom pair first at {1e3 * min(bottom):.1f} ms"
+    if "first_impact_duration" in summary:
+        text += f", first impact lasts {1e6 * summary['first_impact_duration']:.0f} us"
+    return text
+
+
+def _print_agreement(result: dict, duration: float) -> None:
+    """The energy both models lose over the run and how far each compliant run lies from
+    the Moreau scheme's extrapolation, and each Moreau step's distance to it."""
+    e0, ex = result["energy_start"], result["moreau_extrapolated"]
+    for key, m in result["moreau"].items():
+        d_q = m["crank_angle_end"] - ex["crank_angle_end"]
+        d_u = m["crank_rate_end"] - ex["crank_rate_end"]
+        print(f"Moreau {key} against the extrapolation: crank {d_q:+.3f} rad, {d_u:+.2f} "
+              f"rad/s ({100 * d_u / ex['crank_rate_end']:+.1f} %)")
+    lost = [e0 - c["energy_end"] for c in result["compliant"].values()]
+    print(f"energy lost over {duration:g} s: Moreau extrapolated {e0 - ex['energy_end']:.2f} J "
+          f"({100 * (e0 - ex['energy_end']) / e0:.1f} %), compliant runs {min(lost):.3f} to "
+          f"{max(lost):.3f} J")
+    d_q = max(abs(c["crank_angle_end"] - ex["crank_angle_end"])
+              for c in result["compliant"].values())
+    d_e = max(abs(c["energy_end"] - ex["energy_end"]) for c in result["compliant"].values())
+    print(f"compliant runs against the Moreau extrapolation: crank angle within {d_q:.3f} rad "
+          f"({100 * d_q / abs(ex['crank_angle_end']):.2f} %), energy within "
+          f"{100 * d_e / ex['energy_end']:.1f} %")
 
 
 def _figures(out: Path, ours, theirs, h):

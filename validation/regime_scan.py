@@ -215,6 +215,16 @@ def main_adaptive(name: str, revolutions: int, rtols: list[float], overrides: di
         if ev is not None:
             print(f"{span}: contact events per revolution {ev[0]}-{ev[1]}, {ev[2]} in all, at "
                   f"rtol {rtol:g}")
+    # how the motion approaches its orbit: the ratio of consecutive changes (geometric:
+    # about constant) and each revolution's peak against the last one's, at the tightest rtol
+    rev = per["rev_to_rev"][first:]
+    ratios = rev[1:] / rev[:-1]
+    if ratios.size and np.all(np.isfinite(ratios)):
+        print(f"{span}: ratio of consecutive changes median {np.median(ratios):.2f} "
+              f"({ratios.min():.2f} to {ratios.max():.2f}) from revolution {first + 2} on")
+    tight = np.asarray(runs[int(np.argmin([r["rtol"] for r in runs]))]["peaks"])
+    print(f"against revolution {revolutions}'s peak at rtol {min(rtols):g}: " + ", ".join(
+        f"revolution {k + 1} {tight[k] / tight[-1] - 1:+.1e}" for k in range(revolutions - 1)))
 
 
 def _override(text: str) -> tuple[str, float]:
@@ -281,6 +291,11 @@ def main(argv=None) -> int:
           f"({time.perf_counter() - t0:.1f} s wall)")
     for k, (peak, nev) in enumerate(zip(peaks, events), 1):
         print(f"revolution {k}: peak {peak:.6f} N, {nev} contact events")
+    peaks = np.asarray(peaks, dtype=float)
+    if peaks.size > 1:
+        change = np.abs(np.diff(peaks)) / np.abs(peaks[1:])
+        print("change from the previous revolution: " + ", ".join(
+            f"revolution {k} {c:.1e}" for k, c in enumerate(change, 2)))
     return 0
 
 

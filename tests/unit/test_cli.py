@@ -453,6 +453,29 @@ def test_every_cli_bad_input_case_is_one_line_and_the_doc_is_current():
         assert f"`{table._cell(expr)}`" in library, expr
 
 
+@pytest.mark.slow
+def test_the_library_bad_input_table_is_what_each_case_gives():
+    """tools/bad_input_table.py's library cases run afresh: docs/bad_input.md's Python API
+    table holds, row by row, the exception and its message (or the value returned) and the
+    warnings of each, word for word; numbers to 1e-6 relative, as the digits of a run's
+    result (a peak, a penetration) move with the compiler's and the CPU's rounding
+    (regenerate with `python tools/bad_input_table.py`)."""
+    from pathlib import Path
+
+    table = _table()
+    doc = (Path(__file__).resolve().parents[2] / "docs" / "bad_input.md").read_text()
+    documented = [ln for ln in doc[doc.index(table.LIBRARY_HEADING):].splitlines()
+                  if ln.startswith("| `")]
+    now = [ln for ln in table.library_table(table.run_library_cases()).splitlines()
+           if ln.startswith("| `")]
+    assert len(documented) == len(now) == len(table.LIBRARY_CASES)
+    number = re.compile(r"(?<![\w.])[-+]?\d+(?:\.\d+)?(?:[eE][-+]?\d+)?")
+    for d, g in zip(documented, now):
+        assert number.sub("#", d) == number.sub("#", g), f"\n  doc: {d}\n  now: {g}"
+        for a, b in zip(number.findall(d), number.findall(g)):
+            assert float(a) == pytest.approx(float(b), rel=1e-6), f"\n  doc: {d}\n  now: {g}"
+
+
 def test_kill_between_the_two_renames_is_recovered(tmp_path):
     """A run killed after moving the previous folder aside and before moving its own into
     place: the next check puts the previous folder back; leftovers of dead runs go."""
