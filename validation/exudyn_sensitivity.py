@@ -100,15 +100,17 @@ def ddm(linkage, names, revolutions: int, t: np.ndarray, rtol: float = 1e-10, st
     from mbs_clearance.analysis.sensitivity import sensitivities
 
     extra = {} if rel is None else {"fd_relative_step": rel}
+    # (the paper's field names take no start: pass one only when given)
+    begin = {} if start is None else {"start": start}
     s = sensitivities(linkage, list(names), revolutions=revolutions, method=method, t_eval=t,
-                      rtol=rtol, start=start, **extra)
+                      rtol=rtol, **begin, **extra)
     d = s.base_force_magnitude
     if method == "ddm":
         # d RMS/db over the DDM's own steps (error-controlled through the contacts), not
         # over the comparison grid t: a trapezoid over its samples of the contacts' spikes
         # depends on where they fall (the four-bar: 1e-3 between two Exudyn grids)
         full = sensitivities(linkage, list(names), revolutions=revolutions, rtol=rtol,
-                             start=start)
+                             **begin)
         return d, _rms_derivative(*_on_window(full.t, lo, hi, _magnitude(full.trajectory),
                                               full.base_force_magnitude))
     # method "fd": d RMS/db by central differences of the RMS over each run's own steps

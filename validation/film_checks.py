@@ -180,6 +180,18 @@ def combined_long_film() -> str:
             f"{frame((fx, fy))[0] / 1e3:.1f} kN numerical, {frame(law)[0] / 1e3:.1f} kN law")
 
 
+def superposed_long_film() -> str:
+    """The same state with the long film's wedge and squeeze terms each integrated over its
+    own positive region (the law of each motion alone, summed: exact for each alone), the
+    superposition the law does not use."""
+    kw = dict(tangential_rate=2e-4, omega_j=300.0)
+    wedge = long_bearing(*state(0.6, **kw), R, C, 20 * 2 * R, MU)
+    squeeze = long_bearing(*state(0.6, radial_rate=-1e-3), R, C, 20 * 2 * R, MU)
+    fr = frame((wedge[0] + squeeze[0], wedge[1] + squeeze[1]))[0]
+    return (f"long film, the same state, the wedge's and the squeeze's terms each over its "
+            f"own positive region: radial force {fr / 1e3:.1f} kN")
+
+
 def main() -> None:
     print(grid())
     print("\n".join(short_limit()))
@@ -188,6 +200,7 @@ def main() -> None:
     print("\n".join(where_each_applies()))
     print("\n".join(classical()))
     print(combined_long_film())
+    print(superposed_long_film())
 
 
 if __name__ == "__main__":

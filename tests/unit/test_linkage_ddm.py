@@ -158,8 +158,8 @@ def test_linkage_parameters_checked():
 def test_ddm_cost_pinned():
     """The paper case's DDM for 8 parameters (4 revolutions, DOP853) takes at most 1.4 times
     the right-hand side evaluations of the plain run (DOPRI5) at the same rtol (measured
-    76576 against 59911: 1.28); the cost per evaluation is the lead's benchmark
-    (benchmarks/linkage_ddm_speed.py)."""
+    75706 against 59959: 1.26); the cost per evaluation is measured by
+    benchmarks/linkage_ddm_speed.py."""
     from mbs_clearance.solve.linkage_model import run
 
     linkage = cases.paper_slider_crank()
