@@ -10,7 +10,8 @@ code, headings, integers below 100, requests written as a power of ten (1e-4), a
 that the nearby command itself holds (its inputs).
 
 Each counted number must be checked by an entry of tests/docs_numbers.toml (the command
-prints it) or be exempt in tests/docs_exempt.toml with one of the reasons of `REASONS`.
+prints it), be quoted from an output block within REACH lines that a test runs and compares
+(tests/unit/test_documented_outputs.py), or be exempt in tests/docs_exempt.toml with one of the reasons of `REASONS`.
 tests/integration/test_docs_numbers.py asserts that; this script lists what is neither::
 
     python tools/docs_numbers.py                 # counts per page
@@ -205,6 +206,34 @@ def checked(page: Page, registry: dict) -> dict[int, set[str]]:
     return out
 
 
+def output_blocks(root: Path = ROOT) -> dict[str, list[tuple[int, int, set[str]]]]:
+    """{page: [(first line, last line, numbers)]} of the output blocks that
+    tests/unit/test_documented_outputs.py (or the test it names) runs and compares."""
+    sys.path.insert(0, str(root / "tests" / "unit"))
+    try:
+        import test_documented_outputs as tdo
+    finally:
+        sys.path.pop(0)
+    out: dict[str, list[tuple[int, int, set[str]]]] = {}
+    for page, line, cmd, body in tdo.output_blocks():
+        first = line - 1                        # the fence (or the snippet) opening it
+        last = first + cmd.count("\n") + len(body) + 4
+        out.setdefault(page, []).append(
+            (first, last, {n for ln in body for n in numbers(ln)}))
+    return out
+
+
+def quoted(page: Page, blocks: dict) -> dict[int, set[str]]:
+    """{line: numbers} a line quotes from a checked output block within REACH of it."""
+    out: dict[int, set[str]] = {}
+    for first, last, nums in blocks.get(page.path, []):
+        for i in range(len(page.lines)):
+            a, b = page.block(i)
+            if max(a - last, first - b, 0) <= REACH:
+                out.setdefault(i, set()).update(nums)
+    return out
+
+
 def table_rows(page: Page, entry: dict) -> list[int]:
     """The body rows of the table whose line holds entry['header']."""
     at = [i for i, ln in enumerate(page.lines) if entry["header"] in ln and page.table[i]]
@@ -231,6 +260,17 @@ def exempt(page: Page, exemptions: dict) -> dict[int, dict[str, str]]:
     return out
 
 
+def uncovered(page: Page, registry: dict, blocks: dict) -> dict[int, list[str]]:
+    """{line: numbers} beside a command that no registry entry checks and that are not
+    quoted from a checked output block: what an exemption may cover."""
+    ok = checked(page, registry)
+    for i, nums in quoted(page, blocks).items():
+        ok.setdefault(i, set()).update(nums)
+    out = {i: [n for n in nums if n not in ok.get(i, set())]
+           for i, nums in beside(page).items()}
+    return {i: nums for i, nums in out.items() if nums}
+
+
 def unchecked(root: Path = ROOT, only: str | None = None,
               keep: tuple[str, ...] = ()) -> list[tuple[str, int, list[str], str]]:
     """(page, line number, numbers, line) of the numbers beside a command that no entry
@@ -238,16 +278,16 @@ def unchecked(root: Path = ROOT, only: str | None = None,
     covering (e.g. keep=("unchecked",) lists the residual)."""
     registry, exemptions = _load(root / "tests" / "docs_numbers.toml"), _load(
         root / "tests" / "docs_exempt.toml")
+    blocks = output_blocks(root) if root == ROOT else {}
     out = []
     for path in pages(root):
         if only and path != only:
             continue
         page = Page.read(path, root)
-        ok, free = checked(page, registry), exempt(page, exemptions)
-        for i, nums in beside(page).items():
+        free = exempt(page, exemptions)
+        for i, nums in uncovered(page, registry, blocks).items():
             why = free.get(i, {})
-            left = [n for n in nums if n not in ok.get(i, set())
-                    and (why.get(n, why.get("*")) in (None, *keep))]
+            left = [n for n in nums if why.get(n, why.get("*")) in (None, *keep)]
             if left:
                 out.append((path, i + 1, left, page.lines[i]))
     return out

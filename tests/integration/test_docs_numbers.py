@@ -17,6 +17,7 @@ an entry here or exempt, with its reason, in tests/docs_exempt.toml."""
 
 from __future__ import annotations
 
+import ast
 import functools
 import math
 import re
@@ -188,11 +189,14 @@ def _check_table(entry: dict, printed: list[str]) -> None:
 
 @functools.cache
 def _scan(page: str):
+    """The page and its numbers beside a command that only an exemption can cover."""
     doc = docs_numbers.Page.read(page, ROOT)
-    return doc, docs_numbers.beside(doc)
+    return doc, docs_numbers.uncovered(doc, _REGISTRY, _BLOCKS)
 
 
 EXEMPT = tomllib.loads(docs_numbers.EXEMPT.read_text()) if docs_numbers.EXEMPT.exists() else {}
+_REGISTRY = tomllib.loads(REGISTRY.read_text())
+_BLOCKS = docs_numbers.output_blocks(ROOT)
 
 
 def test_every_number_beside_a_command_is_checked_or_exempt():
@@ -217,8 +221,28 @@ def test_an_exemption_names_its_reason_and_a_line_it_covers(entry):
         f"{entry['page']}: nothing beside a command to exempt at\n  {entry['text']}")
     counted = {n for k in lines for n in beside.get(k, [])}
     stale = [n for n in entry.get("numbers", []) if n not in counted]
-    assert not stale, f"{entry['page']}: {stale} are not counted numbers of\n  {entry['text']}"
+    assert not stale, (f"{entry['page']}: {stale} are checked, or not counted, numbers "
+                       f"of\n  {entry['text']}")
     if entry["why"] == "test":
-        name = entry["test"]
-        assert any(f"def {name}(" in p.read_text() for p in (ROOT / "tests").rglob("*.py")), (
-            f"no test named {name}")
+        # the test asserts the number: a literal of its code (not only of its docstring),
+        # or it reads the page and compares it with what it computes
+        literals, names = _test_code(entry["test"])
+        if Path(entry["page"]).name not in names:
+            missing = [n for n in entry.get("numbers", sorted(counted)) if not any(
+                math.isclose(abs(float(n)), v, rel_tol=1e-9) for v in literals)]
+            assert not missing, (f"{entry['page']}: {entry['test']} holds no literal "
+                                 f"{missing}, so it does not assert them:\n  {entry['text']}")
+
+
+def _test_code(name: str) -> tuple[list[float], str]:
+    """The numeric literals of the test function `name` and its strings (not its docstring)."""
+    for path in sorted((ROOT / "tests").rglob("test_*.py")):
+        tree = ast.parse(path.read_text())
+        for node in ast.walk(tree):
+            if isinstance(node, ast.FunctionDef) and node.name == name:
+                body = node.body[1:] if ast.get_docstring(node) else node.body
+                consts = [c.value for stmt in body for c in ast.walk(stmt)
+                          if isinstance(c, ast.Constant)]
+                return ([abs(float(v)) for v in consts if type(v) in (int, float)],
+                        " ".join(v for v in consts if isinstance(v, str)))
+    raise AssertionError(f"no test named {name}")
