@@ -106,7 +106,8 @@ class Page:
 
     def cells(self, i: int) -> list[str]:
         """The cells of table row i (1-based: cells(i)[0] is the first cell)."""
-        return [c.strip() for c in self.lines[i].strip().strip("|").split(" | ")]
+        row = self.lines[i].strip()[1:-1]           # the outer pipes
+        return [c.strip() for c in re.split(r"(?<!\\)\|", row)]   # not an escaped \|
 
     def body(self, i: int) -> list[int]:
         """The body rows (after the header and its rule) of the table holding line i."""

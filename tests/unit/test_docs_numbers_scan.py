@@ -117,3 +117,10 @@ why = "paper"
     _root(root2, registry, exempt.replace('"paper"', '"unchecked"'))
     assert ["8311"] in [n for _, _, n, _ in dn.unchecked(root2, keep=("unchecked",))]
     assert ["8311"] not in [n for _, _, n, _ in dn.unchecked(root2)]
+
+
+def test_cells_of_a_row_with_empty_and_escaped_cells(tmp_path):
+    (tmp_path / "p.md").write_text("| a | b | c |\n|---|---|---|\n| | | 0.5 |\n| \\|F\\| | 2 | |\n")
+    page = dn.Page.read("p.md", tmp_path)
+    assert page.cells(2) == ["", "", "0.5"]
+    assert page.cells(3) == ["\\|F\\|", "2", ""]
