@@ -1,0 +1,84 @@
+"""How Exudyn's window peaks of the translational benchmark's crank pivot force converge
+with its step, read raw and smoothed, against the reduced model at rtol 1e-12
+(docs/cases/flores_translational_slider_crank.md, "The reduced model against Exudyn"):
+
+    python -m validation.flores_exudyn_readings
+
+Two spans, each in windows of 10 ms, and Exudyn runs at the fixed steps of the step
+sequence that a request of its accuracy starts (`exudyn_convergence.first_step`, halved):
+
+- 0.03 s (the `compare` run, accuracy 1e-4): window 3's peak (the bottom corners' first
+  impact) at h/2 ... h/32, read raw (`exudyn_linkage.window_peaks` of the force) and
+  smoothed (`exudyn_convergence.smoothed`), and each reading's last three steps
+  extrapolated (`exudyn_convergence.richardson`);
+- 0.02 s (accuracy 1e-5): window 2's peak, the force at the run's last instant, read raw
+  and with the one-sided end weights, at h ... h/16; the smoothed readings of h/2, h/4,
+  h/8 extrapolated; and the run to accuracy 1e-5 (`simulate(..., accuracy=1e-5)`) against
+  the reduced model and its own bar.
+
+Relative differences to the reduced model's peak of the same window.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def _readings(linkage, span, step: float):
+    """(raw, smoothed) window peaks (N) of one Exudyn run at `step` s over `span`."""
+    from mbs_clearance.backends import exudyn_convergence as xc
+    from mbs_clearance.backends import exudyn_linkage as xl
+
+    t, force = xl.monitored_force(linkage, span, xl.make_settings({"step_size": step}))
+    raw = xl.window_peaks(t, np.hypot(force[:, 0], force[:, 1]), span.windows)
+    return raw, xc._window_peaks(t, force, span)
+
+
+def _extrapolated(values, reference: float) -> str:
+    """The last three readings extrapolated: relative value and bar against `reference`."""
+    from mbs_clearance.backends.exudyn_convergence import richardson
+
+    value, error, _ = (float(x) for x in richardson(*values[-3:]))
+    return (f"{value:.6g} +- {error:.2g} N ({value / reference - 1:+.1e}, bar "
+            f"{error / reference:.1e}; {abs(value - reference) / error:.2g} times the bar from "
+            "the reduced model)")
+
+
+def main() -> int:
+    from mbs_clearance import simulate
+    from mbs_clearance.backends.exudyn_convergence import first_step
+    from mbs_clearance.model.cases import flores_translational_slider_crank
+    from mbs_clearance.solve.linkage_model import prepare_span
+
+    lk = flores_translational_slider_crank()
+    for duration, accuracy, window, halvings in ((0.03, 1e-4, 3, range(1, 6)),
+                                                 (0.02, 1e-5, 2, range(0, 5))):
+        span = prepare_span(lk, duration=duration, window=0.01)
+        ref = float(simulate(lk, duration=duration, window=0.01, rtol=1e-12).peaks[window - 1])
+        h0 = first_step(lk, accuracy, {})
+        print(f"span {duration:g} s, window {window}: reduced model (rtol 1e-12) {ref:.6g} N; "
+              f"steps {1e6 * h0:.3g} us / 2^k (the sequence of accuracy {accuracy:g})")
+        raws, smooths = [], []
+        for k in halvings:
+            raw, smooth = _readings(lk, span, h0 / 2**k)
+            raws.append(raw[window - 1])
+            smooths.append(smooth[window - 1])
+            print(f"  step {1e6 * h0 / 2**k:.3g} us: raw {raws[-1] / ref - 1:+.1e}, smoothed "
+                  f"{smooths[-1] / ref - 1:+.1e}", flush=True)
+        if duration == 0.03:
+            print(f"  raw, the last three steps extrapolated: {_extrapolated(raws, ref)}")
+            print(f"  smoothed, the last three steps extrapolated: {_extrapolated(smooths, ref)}")
+        else:
+            print(f"  smoothed at {1e6 * h0 / 2:.3g}, {1e6 * h0 / 4:.3g} and {1e6 * h0 / 8:.3g} "
+                  f"us extrapolated: {_extrapolated(smooths[1:4], ref)}")
+            run = simulate(lk, backend="exudyn", accuracy=accuracy, duration=duration,
+                           window=0.01)
+            peak, bar = float(run.peaks[window - 1]), float(run.stats["peak_errors"][window - 1])
+            print(f"  the run to accuracy {accuracy:g}: {peak:.6g} N +- {bar:.2g} N, "
+                  f"{peak / ref - 1:+.1e} from the reduced model, {abs(peak - ref) / bar:.2g} "
+                  "times its bar")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
