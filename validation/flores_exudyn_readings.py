@@ -54,20 +54,27 @@ def main() -> int:
     for duration, accuracy, window, halvings in ((0.03, 1e-4, 3, range(1, 6)),
                                                  (0.02, 1e-5, 2, range(0, 5))):
         span = prepare_span(lk, duration=duration, window=0.01)
-        ref = float(simulate(lk, duration=duration, window=0.01, rtol=1e-12).peaks[window - 1])
+        reduced = simulate(lk, duration=duration, window=0.01, rtol=1e-12)
+        ref = float(reduced.peaks[window - 1])
+        inside = (reduced.t >= 0.01 * (window - 1)) & (reduced.t <= 0.01 * window)
+        at = reduced.t[inside][np.argmax(np.hypot(*reduced.base_force[inside].T))]
         h0 = first_step(lk, accuracy, {})
-        print(f"span {duration:g} s, window {window}: reduced model (rtol 1e-12) {ref:.6g} N; "
-              f"steps {1e6 * h0:.3g} us / 2^k (the sequence of accuracy {accuracy:g})")
+        print(f"span {duration:g} s, window {window}: reduced model (rtol 1e-12) {ref:.6g} N "
+              f"at {1e3 * at:.2f} ms; steps {1e6 * h0:.3g} us / 2^k (the sequence of accuracy "
+              f"{accuracy:g})")
         raws, smooths = [], []
         for k in halvings:
             raw, smooth = _readings(lk, span, h0 / 2**k)
             raws.append(raw[window - 1])
             smooths.append(smooth[window - 1])
-            print(f"  step {1e6 * h0 / 2**k:.3g} us: raw {raws[-1] / ref - 1:+.1e}, smoothed "
-                  f"{smooths[-1] / ref - 1:+.1e}", flush=True)
+            print(f"  step {1e6 * h0 / 2**k:.3g} us: raw {raws[-1] / ref - 1:+.2e}, smoothed "
+                  f"{smooths[-1] / ref - 1:+.2e}", flush=True)
         if duration == 0.03:
             print(f"  raw, the last three steps extrapolated: {_extrapolated(raws, ref)}")
             print(f"  smoothed, the last three steps extrapolated: {_extrapolated(smooths, ref)}")
+            err = np.abs(np.array(smooths) / ref - 1.0)
+            print("  smoothed, the error's ratio from one step to the next: "
+                  + ", ".join(f"{a / b:.2g}" for a, b in zip(err[:-1], err[1:])))
         else:
             print(f"  smoothed at {1e6 * h0 / 2:.3g}, {1e6 * h0 / 4:.3g} and {1e6 * h0 / 8:.3g} "
                   f"us extrapolated: {_extrapolated(smooths[1:4], ref)}")
