@@ -1940,7 +1940,9 @@ def main(args) -> int:
     wrote(path, "the report, figures embedded")
     wrote(path.with_name("report.json"), "every number of the report")
     wrote(path.with_name("figures"), "the figures as PNG files and the animation")
-    wrote(path.with_name("data"), "what each section computed, for --replot"
+    data = path.with_name("data")
+    size = sum(f.stat().st_size for f in data.rglob("*") if f.is_file())
+    wrote(data, f"what each section computed, {size / 1e6:.1f} MB, for --replot"
           + ("" if args.full_data else "; runs thinned, --full-data keeps every sample"))
     return 0
 

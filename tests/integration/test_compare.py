@@ -8,7 +8,14 @@ import numpy as np
 import pytest
 
 from mbs_clearance import AccuracyWarning, SliderCrank, simulate
-from validation.compare import common_grid, compare, compare_command, first_impact, format_table
+from validation.compare import (
+    common_grid,
+    compare,
+    compare_command,
+    first_impact,
+    format_table,
+    paper_peak_line,
+)
 
 
 @pytest.fixture(scope="module")
@@ -102,6 +109,25 @@ def test_command_prints_table_and_writes_figure(tmp_path, capsys):
     text = capsys.readouterr().out
     assert "peak a (N)" in text and "statistics over revolutions 2-2" in text
     assert out.stat().st_size > 10_000
+
+
+def test_the_paper_s_peak_beside_both_models_only_for_its_two_designs():
+    """The paper's revolution-4 peak (Table 3: 8311 N at 5 / 12 cm, 4667 N at its optimum)
+    beside each model's, as b/a - 1 of the printed peaks; nothing for another mechanism or
+    a run shorter than 4 revolutions."""
+    original = simulate(SliderCrank(), 4, backend="reduced")
+    ideal = simulate(SliderCrank(), 4, backend="ideal")
+    line = paper_peak_line(SliderCrank(), compare(original, ideal))
+    a, b = original.max_base_force(4), ideal.max_base_force(4)
+    assert line == (f"the paper's peak in revolution 4 (original design): 8311 N; a against it "
+                    f"{100 * (a / 8311 - 1):+.3f} %, b against it {100 * (b / 8311 - 1):+.3f} %")
+    optimum = SliderCrank(crank_length=0.040733, coupler_length=0.137468)
+    line = paper_peak_line(optimum, compare(*(simulate(optimum, 4, backend=be)
+                                              for be in ("reduced", "ideal"))))
+    assert line.startswith("the paper's peak in revolution 4 (optimum design): 4667 N; a ")
+    assert paper_peak_line(SliderCrank(restitution=0.5), compare(original, ideal)) is None
+    short = simulate(SliderCrank(), 2, backend="ideal")
+    assert paper_peak_line(SliderCrank(), compare(short, short)) is None
 
 
 def test_command_rejects_bad_values_before_simulating(capsys):

@@ -84,3 +84,22 @@ def test_bad_input_is_refused_in_one_line_before_running(argv, message, capsys):
     err = capsys.readouterr().err.strip().splitlines()[-1]
     assert err.startswith("python -m validation.regime_scan: error: ")
     assert re.search(message, err), err
+
+
+def test_the_approach_to_the_orbit_is_what_the_revolutions_print(capsys):
+    """The summary of how a run approaches its orbit, from the per-revolution lines it
+    prints: the ratio of consecutive changes from revolution 4 on, and each revolution's
+    peak against the last one's."""
+    regime_scan.main_adaptive("paper_slider_crank", 6, [1e-10], {})
+    out = capsys.readouterr().out
+    peaks = [float(m) for m in re.findall(r"^revolution \d: peaks (\S+) N", out, re.M)]
+    changes = [float(m) for m in re.findall(r"previous revolution (\S+)$", out, re.M)][2:]
+    ratios = np.array(changes[1:]) / np.array(changes[:-1])
+    m = re.search(r"^revolutions 2-6: ratio of consecutive changes median (\S+) \((\S+) to "
+                  r"(\S+)\) from revolution 4 on$", out, re.M)
+    # the printed changes carry 3 digits: their ratios to 1e-2
+    assert [float(g) for g in m.groups()] == pytest.approx(
+        [np.median(ratios), ratios.min(), ratios.max()], abs=1e-2)
+    against = re.search(r"^against revolution 6's peak at rtol 1e-10: (.*)$", out, re.M)[1]
+    got = [float(x.split()[-1]) for x in against.split(", ")]
+    assert got == pytest.approx([p / peaks[-1] - 1 for p in peaks[:-1]], rel=0.05, abs=1e-12)
