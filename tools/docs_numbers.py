@@ -11,7 +11,8 @@ that the nearby command itself holds (its inputs).
 
 Each counted number must be checked by an entry of tests/docs_numbers.toml (the command
 prints it), be quoted from an output block within REACH lines that a test runs and compares
-(tests/unit/test_documented_outputs.py), or be exempt in tests/docs_exempt.toml with one of the reasons of `REASONS`.
+(tests/unit/test_documented_outputs.py), or be exempt in tests/docs_exempt.toml with one of
+the reasons of `REASONS`.
 tests/integration/test_docs_numbers.py asserts that; this script lists what is neither::
 
     python tools/docs_numbers.py                 # counts per page
@@ -37,6 +38,8 @@ EXEMPT = ROOT / "tests" / "docs_exempt.toml"
 #: lines between a number and its command on the page (a table counts as one block)
 REACH = 12
 NUMBER = re.compile(r"[-+]?(?:\d+\.\d*|\.\d+|\d+)(?:[eE][-+]?\d+)?")
+#: the number of a standard or a method (ISO 286, PEP 562, SHA-256) is a name
+NAMED = re.compile(r"\b[A-Z]{2,}[- ]$")
 #: a version (Python 3.11.7) is not a number
 VERSION = re.compile(r"\b\d+\.\d+\.\d+\b")
 COMMAND = re.compile(r"mbs-clearance [a-z]|python -m (?:benchmarks|validation)\.|"
@@ -122,7 +125,7 @@ def _is_row(line: str) -> bool:
 
 
 def numbers(text: str) -> list[str]:
-    """The numbers of a text: not the digits of a name (DOP853, F12) or of a version, the
+    """The numbers of a text: not the digits of a name (DOP853, F12, ISO 286) or of a version, the
     "-" of a range (0.3-0.9) is not a sign, and a full stop is not a decimal point."""
     text = VERSION.sub(" ", text)
     out = []
@@ -130,6 +133,8 @@ def numbers(text: str) -> list[str]:
         before = text[m.start() - 1] if m.start() else " "
         n = m.group()
         if n[0] not in "+-" and (before.isalnum() or before in "_."):
+            continue
+        if re.fullmatch(r"-?\d+", n) and NAMED.search(text, 0, m.start() + (n[0] == "-")):
             continue
         if n[0] in "+-" and (before.isalnum() or before in ")_"):
             n = n[1:]

@@ -46,6 +46,7 @@ def _root(tmp_path: Path, registry: str = "", exempt: str = "") -> Path:
 def test_numbers_skip_names_versions_and_read_a_range_dash_as_a_dash():
     assert dn.numbers("DOP853 F12 Python 3.11.7 0.3-0.9 -0.23 % +2.2e-4 of 30.") == [
         "0.3", "0.9", "-0.23", "+2.2e-4", "30"]
+    assert dn.numbers("ISO 286, PEP 562 and SHA-256 of RMS 0.16 at 5000 rpm") == ["0.16", "5000"]
 
 
 def test_what_stands_beside_a_command(tmp_path):
