@@ -10,7 +10,8 @@ code, headings, integers below 100, requests written as a power of ten (1e-4), a
 that the nearby command itself holds (its inputs).
 
 Each counted number must be checked by an entry of tests/docs_numbers.toml (the command
-prints it), be quoted from an output block within REACH lines that a test runs and compares
+prints it) or be repeated within REACH lines of the line an entry checks, be quoted from an
+output block within REACH lines that a test runs and compares
 (tests/unit/test_documented_outputs.py), or be exempt in tests/docs_exempt.toml with one of
 the reasons of `REASONS`.
 tests/integration/test_docs_numbers.py asserts that; this script lists what is neither::
@@ -270,6 +271,11 @@ def uncovered(page: Page, registry: dict, blocks: dict) -> dict[int, list[str]]:
     """{line: numbers} beside a command that no registry entry checks and that are not
     quoted from a checked output block: what an exemption may cover."""
     ok = checked(page, registry)
+    # a number repeated within REACH of the line (or table) that checks it is checked too
+    near = {i: {n for j, nums in ok.items() if page.near(i, j) for n in nums}
+            for i in range(len(page.lines))}
+    for i, nums in near.items():
+        ok.setdefault(i, set()).update(nums)
     for i, nums in quoted(page, blocks).items():
         ok.setdefault(i, set()).update(nums)
     out = {i: [n for n in nums if n not in ok.get(i, set())]

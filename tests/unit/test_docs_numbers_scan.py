@@ -21,6 +21,7 @@ The paper's case peaks at 8291.96 N in revolution 4 (paper: 8311 N).
     mbs-clearance simulate --rpm 5000
 
 It runs 5000 rpm for 12 revolutions; `mbs-clearance compare` prints 8290.32 too.
+Once more: 8291.96 N.
 
 | rpm | peak | paper |
 |---|---|---|
@@ -57,6 +58,7 @@ def test_what_stands_beside_a_command(tmp_path):
     assert found == {
         "It runs 5000 rpm for 12 revolutions; `mbs-clearance compare` prints 8290.32 too.":
             ["8290.32"],
+        "Once more: 8291.96 N.": ["8291.96"],
         "The paper's case peaks at 8291.96 N in revolution 4 (paper: 8311 N).":
             ["8291.96", "8311"],
         "| 2000 | 1234.5 N | 1300 |": ["2000", "1234.5", "1300"],
@@ -109,7 +111,7 @@ why = "paper"
 '''
     root = _root(tmp_path, registry, exempt)
     # the paper column (3) and the number beside the inline command are neither checked
-    # nor exempt
+    # nor exempt; "Once more: 8291.96" repeats a checked number within REACH of its line
     assert [(n, t[:12]) for _, _, n, t in dn.unchecked(root)] == [
         (["8290.32"], "It runs 5000"), (["1300"], "| 2000 | 123"), (["2400"], "| 3000 | 234")]
     # an exemption "unchecked" counts as not covering when the residual is asked for
