@@ -611,9 +611,11 @@ def test_bifurcation_section(report):
 def test_full_report_bifurcation_settings_find_the_documented_points(tmp_path):
     """The full report's continuation (both branches, 600 orbits each, no stop at the first
     point): each branch starts stable at the paper's design, every located period
-    doubling has a multiplier at -1, and the doublings are those docs/orbits.md lists
-    ("Further along both lines"): over crank speed 3790.6, 3360.3, 3289.1 and 2855.7 rpm,
-    over clearance 0.0121103 ... 0.0139023 mm."""
+    doubling has a multiplier at -1, and the doublings, folds, ends and stable orbits are
+    those docs/orbits.md lists ("Further along both lines"): over crank speed doublings at
+    3790.6, 3360.3, 3289.1 and 2855.7 rpm, folds at 3530.5, 3265.3 and 2816.3 rpm, down to
+    2837 rpm, 176 orbits stable; over clearance doublings at 0.0121103 ... 0.0139023 mm,
+    folds at 0.0139887 and 0.0139888 mm, up to 0.01557 mm, 585 orbits stable."""
     from validation.report import _settings, section_bifurcation
 
     settings = _settings(quick=False)
@@ -622,6 +624,9 @@ def test_full_report_bifurcation_settings_find_the_documented_points(tmp_path):
     documented = {"crank_speed": ([3790.6, 3360.3, 3289.1, 2855.7], np.pi / 30.0, 0.05),
                   "clearance": ([0.0121103, 0.0121887, 0.0129318, 0.0130305, 0.0138598,
                                  0.0139023], 1e-3, 5e-8)}
+    # folds, the last orbit's value (to the page's digits) and the stable orbits
+    documented_folds = {"crank_speed": ([2816.3, 3265.3, 3530.5], 2837.0, 0.5, 176),
+                        "clearance": ([0.0139887, 0.0139888], 0.01557, 5e-6, 585)}
     mech = SliderCrank()
     for field, b in branches.items():
         assert b["values"][0] == pytest.approx(getattr(mech, field), rel=1e-9)
@@ -635,3 +640,12 @@ def test_full_report_bifurcation_settings_find_the_documented_points(tmp_path):
             # the page's rounding plus the point's own location tolerance
             assert abs(p["value"] / unit - doc) <= rounding + p["tolerance"] / unit, \
                 (field, p["value"] / unit, doc)
+        folds = sorted((p for p in b["points"] if p["kind"] == "fold"),
+                       key=lambda p: p["value"])
+        fold_values, end, end_rounding, stable = documented_folds[field]
+        assert len(folds) == len(fold_values), (field, [p["value"] / unit for p in folds])
+        for p, doc in zip(folds, fold_values):
+            assert abs(p["value"] / unit - doc) <= rounding + p["tolerance"] / unit, \
+                (field, p["value"] / unit, doc)
+        assert abs(b["values"][-1] / unit - end) <= end_rounding, (field, b["values"][-1])
+        assert b["stable_orbits"] == stable
