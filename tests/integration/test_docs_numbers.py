@@ -237,14 +237,15 @@ def test_an_exemption_names_its_reason_and_a_line_it_covers(entry):
 
 
 def _test_code(name: str) -> tuple[list[float], str]:
-    """The numeric literals of the test function `name` and its strings (not its docstring)."""
+    """The numeric literals and strings of the test function `name` and its decorators (not
+    its docstring)."""
     for path in sorted((ROOT / "tests").rglob("test_*.py")):
         tree = ast.parse(path.read_text())
         for node in ast.walk(tree):
             if isinstance(node, ast.FunctionDef) and node.name == name:
                 body = node.body[1:] if ast.get_docstring(node) else node.body
-                consts = [c.value for stmt in body for c in ast.walk(stmt)
-                          if isinstance(c, ast.Constant)]
+                consts = [c.value for stmt in [*node.decorator_list, *body]    # parametrize
+                          for c in ast.walk(stmt) if isinstance(c, ast.Constant)]
                 return ([abs(float(v)) for v in consts if type(v) in (int, float)],
                         " ".join(v for v in consts if isinstance(v, str)))
     raise AssertionError(f"no test named {name}")
