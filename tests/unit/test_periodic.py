@@ -13,6 +13,7 @@ import pytest
 from mbs_clearance import SliderCrank, continue_orbits, lyapunov_exponent, periodic_orbit
 from mbs_clearance.analysis.periodic import return_map
 from mbs_clearance.analysis.poincare import Flow, poincare_section
+from validation.four_bar_orbit_checks import central_differences, flow_sections
 
 PAPER = SliderCrank()                                       # 0.01 mm, 5000 rpm
 #: 0.15 mm at 5000 rpm: the regime map's run is aperiodic there (no recurrence within 1e-3
@@ -450,22 +451,15 @@ def test_four_bar_orbit_is_where_a_long_run_settles(four_bar_orbit):
     vibration of the joint) and two near 0. The regime map's flow (dopri5, rtol 1e-10,
     from the centred start) settles on it: the mean of its sections over revolutions
     101-150 lies within 2e-3 of the scales of the orbit in position and 0.5 in rate (the
-    run's sections still scatter about it, measured std 1e-4 - 4e-4 and 0.16 - 0.75 over
-    revolutions 161-200, the mean there 4e-5 and 0.17 from the orbit)."""
+    run's sections still scatter about it; `python -m validation.four_bar_orbit_checks`
+    prints the measured differences and scatter, also over revolutions 161-200)."""
     from mbs_clearance.model import cases
 
     orbit = four_bar_orbit
     assert orbit.stability == "stable" and orbit.residual <= FOUR_BAR_TOL
     assert orbit.onsets.tolist() == [0] and orbit.iterations <= 6
     assert orbit.spectral_radius == pytest.approx(0.976, abs=0.01)
-    mech = cases.four_bar()
-    flow = Flow(mech, rtol=1e-10)
-    period = 2.0 * math.pi / flow.omega
-    sections = []
-    for k in range(150):
-        flow.advance((k + 1) * period)
-        if k >= 100:
-            sections.append(flow.y[:4].copy())
+    sections = flow_sections(cases.four_bar(), 150, 4)[100:]
     diff = (np.mean(sections, axis=0) - orbit.state) / orbit.scale[:4]
     assert np.max(np.abs(diff[:2])) < 2e-3, diff
     assert np.max(np.abs(diff[2:])) < 0.5, diff
@@ -474,24 +468,15 @@ def test_four_bar_orbit_is_where_a_long_run_settles(four_bar_orbit):
 @pytest.mark.slow
 def test_four_bar_monodromy_matches_central_differences_of_the_return_map(four_bar_orbit):
     """The four-bar orbit's monodromy matrix (variational run, scaled) against central
-    differences of the plain map, steps 3e-4 of the scales: measured within 1.4e-3 of its
-    largest entry (200). Steps of 1e-3 and more leave the map's near-linear region (1.4e-2,
-    1.4 and 7 of it at 1e-3, 1e-2, 1e-1: the vibration's phase after a revolution depends on
+    differences of the plain map, steps 3e-4 of the scales (measured within about 2e-3 of
+    its largest entry: `python -m validation.four_bar_orbit_checks`). Steps of 1e-3 and more
+    leave the map's near-linear region (the vibration's phase after a revolution depends on
     its amplitude), steps of 1e-4 and less meet the map's error (about 1e-4 of the scales).
-    The matrix is far from normal (rates rows about -235 times the positions rows), so its
-    eigenvalues move by O(0.1) under such entry errors: the entries are compared, and the
-    multipliers are the eigenvalues of the matrix checked here."""
+    The matrix is far from normal (rates rows a few hundred times the positions rows), so
+    its eigenvalues move by O(0.1) under such entry errors: the entries are compared, and
+    the multipliers are the eigenvalues of the matrix checked here."""
     orbit = four_bar_orbit
-    S, h = orbit.scale, 3e-4
-    F = np.empty((4, 4))
-    for k in range(4):
-        ends = []
-        for sign in (1.0, -1.0):
-            x = orbit.state.copy()
-            x[k] += sign * h * S[k]
-            xe, _, _, _ = return_map(orbit.mech, x, orbit.modes, orbit.impact_velocities)
-            ends.append(xe / S)
-        F[:, k] = (ends[0] - ends[1]) / (2 * h)
+    F = central_differences(orbit, 3e-4)
     A = orbit.monodromy
     assert A.shape == (4, 4)            # permanent contact: the memory's held, not a column
     np.testing.assert_allclose(A, F, atol=3e-3 * np.max(np.abs(A)))
