@@ -1737,13 +1737,15 @@ def _cmd_map(args: argparse.Namespace) -> int:
             print(f"{axis.name}: {quantity(min(axis.values), unit)} to "
                   f"{quantity(max(axis.values), unit)}, {len(axis.values)} values{spacing}")
         dims = list(ds["regime"].dims)
+        mark = None
+        if paper and len(dims) == 2 and set(dims) == {"clearance", "crank_speed"}:
+            mark = {"clearance": base.clearance, "crank_speed": base.crank_speed}
+        for line in _map_counts(ds, unit_of, args.rtol, mark):
+            print(line)
         with OutputDir(args.out, "map") as staged:
             figures = ["bifurcation.png"]
             plotting.plot_bifurcation(ds, staged.path / "bifurcation.png")
             if len(dims) == 2:
-                mark = None
-                if paper and set(dims) == {"clearance", "crank_speed"}:
-                    mark = {"clearance": base.clearance, "crank_speed": base.crank_speed}
                 plotting.plot_regime_map(ds, staged.path / "regime_map.png", mark=mark)
                 figures.append("regime_map.png")
             shape = ds["regime"].shape
@@ -1767,6 +1769,70 @@ def _cmd_map(args: argparse.Namespace) -> int:
         wrote(args.out / f, "figure")
     refuse_failed_runs(args, int(ds["failed"].sum()), int(ds["failed"].size), "points' runs")
     return 0
+
+
+def _sci(value: float) -> str:
+    """A count with 3 significant digits in exponent form (4.73e8)."""
+    mantissa, exponent = f"{value:.2e}".split("e")
+    return f"{mantissa.rstrip('0').rstrip('.')}e{int(exponent)}"
+
+
+def _map_counts(ds, unit_of, rtol: float | None, mark: dict | None) -> list[str]:
+    """What a map cost and where its verdicts needed the re-check, read from its dataset:
+    the right-hand side evaluations (in all; per point at each end of each field), the
+    points re-checked at a tighter rtol (how many, over which values, their regimes), and
+    with a marked design the first cell that is not period-1 in the row nearest its
+    second field."""
+    import numpy as np
+
+    from .analysis.poincare import MIN_RTOL, REGIME_CODES, REGIMES, RESOLVE_FACTOR
+    from .solve.settings import DEFAULT_RTOL
+
+    dims = list(ds["regime"].dims)
+    computed = (ds["done"].values == 1) & (ds["failed"].values == 0)
+    nfev = ds["nfev"].values.astype(float)
+    if not computed.any():
+        return []
+
+    def at(dim, value):
+        return quantity(float(value), unit_of(dim) or "-")
+
+    lines = [f"right-hand side evaluations: {_sci(nfev[computed].sum())} in all, "
+             f"{_sci(nfev[computed].min())} to {_sci(nfev[computed].max())} per point"]
+    if len(dims) == 2:
+        for axis, dim in enumerate(dims):
+            for end in (0, -1):
+                cells = np.take(nfev, end, axis=axis)[np.take(computed, end, axis=axis)]
+                if cells.size:
+                    lines.append(f"  at {dim} {at(dim, ds[dim].values[end])}: "
+                                 f"{_sci(cells.min())} to {_sci(cells.max())} per point")
+    base = DEFAULT_RTOL if rtol is None else rtol
+    rechecked = computed & (ds["rtol"].values < base)
+    if rechecked.any():
+        where = ", ".join(
+            f"{dim} {at(dim, ds[dim].values[idx].min())} to {at(dim, ds[dim].values[idx].max())}"
+            for dim, idx in zip(dims, (np.unique(i) for i in np.nonzero(rechecked))))
+        codes, counts = np.unique(ds["regime"].values[rechecked], return_counts=True)
+        regimes = ", ".join(f"{REGIMES[int(c)]}: {n}" for c, n in zip(codes, counts))
+        tighter = max(base / RESOLVE_FACTOR, MIN_RTOL)
+        lines.append(f"re-checked near the recurrence tolerance at rtol {number(tighter, 3)}: "
+                     f"{int(rechecked.sum())} points, {where}; regimes: {regimes}")
+    else:
+        lines.append("re-checked near the recurrence tolerance: no point")
+    if mark is not None:
+        first, second = dims
+        j = int(np.argmin(np.abs(ds[second].values - mark[second])))
+        row = ds["regime"].values                   # (first, second)
+        off = np.nonzero(row[:, j] != REGIME_CODES["period_1"])[0]
+        text = f"row nearest the marked design's {second} ({at(second, ds[second].values[j])}): "
+        if off.size:
+            i = int(off[0])
+            text += (f"first {first} that is not period-1: {at(first, ds[first].values[i])} "
+                     f"({REGIMES[int(row[i, j])]})")
+        else:
+            text += "period-1 in every cell"
+        lines.append(text)
+    return lines
 
 
 def _add_animate_parser(subparsers) -> argparse.ArgumentParser:

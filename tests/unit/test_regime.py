@@ -11,7 +11,13 @@ import pytest
 
 from mbs_clearance import SliderCrank, lyapunov_exponent, poincare_section, regime_map
 from mbs_clearance.analysis.lyapunov import TangentFlow, textbook_exponent
-from mbs_clearance.analysis.poincare import Flow, classify, near_tolerance, section_times
+from mbs_clearance.analysis.poincare import (
+    REGIMES,
+    Flow,
+    classify,
+    near_tolerance,
+    section_times,
+)
 from mbs_clearance.studies import sweep as sweep_mod
 from mbs_clearance.studies.sweep import design_at, parse_sweep
 
@@ -314,6 +320,43 @@ def test_cli_map_writes_dataset_and_figures_and_resumes(tmp_path, capsys):
     with pytest.raises(SystemExit):
         main(["map", "--sweep", "foo=1,2", "--out", str(tmp_path / "x")])
     assert "unknown sweep field 'foo'" in capsys.readouterr().err
+
+
+def test_map_counts_read_the_cost_the_rechecks_and_the_boundary_from_the_dataset():
+    # a hand-made 3 x 2 dataset: what the map command prints after the regimes, against the
+    # values written into it
+    import xarray as xr
+
+    from mbs_clearance.cli import _map_counts, field_unit
+
+    rpm = np.pi / 30
+    code = {name: c for c, name in REGIMES.items()}
+    dims = ("clearance", "crank_speed")
+    regime = np.array([[code["period_1"], code["period_1"]],
+                       [code["period_1"], code["period_k"]],
+                       [code["chaotic"], code["failed"]]], dtype=np.int8)
+    ds = xr.Dataset(
+        {"regime": (dims, regime),
+         "nfev": (dims, np.array([[100, 20], [300, 40], [500, 0]], dtype=np.int32)),
+         "rtol": (dims, np.array([[1e-7, 1e-9], [1e-7, 1e-9], [1e-7, np.nan]])),
+         "done": (dims, np.ones((3, 2), dtype=np.int8)),
+         "failed": (dims, np.array([[0, 0], [0, 0], [0, 1]], dtype=np.int8))},
+        coords={"clearance": [1e-6, 1e-5, 1e-4], "crank_speed": [500 * rpm, 5000 * rpm]})
+    lines = _map_counts(ds, field_unit(None), None, {"clearance": 1e-5,
+                                                     "crank_speed": 4000 * rpm})
+    assert lines == [
+        "right-hand side evaluations: 9.6e2 in all, 2e1 to 5e2 per point",
+        "  at clearance 0.001 mm: 2e1 to 1e2 per point",
+        "  at clearance 0.1 mm: 5e2 to 5e2 per point",          # its failed run left out
+        "  at crank_speed 500 rpm: 1e2 to 5e2 per point",
+        "  at crank_speed 5000 rpm: 2e1 to 4e1 per point",
+        "re-checked near the recurrence tolerance at rtol 1e-9: 2 points, clearance 0.001 mm "
+        "to 0.01 mm, crank_speed 5000 rpm to 5000 rpm; regimes: period_1: 1, period_k: 1",
+        "row nearest the marked design's crank_speed (5000 rpm): first clearance that is "
+        "not period-1: 0.01 mm (period_k)"]
+    # a run at rtol 1e-9 throughout re-checks nothing at 1e-9
+    assert _map_counts(ds, field_unit(None), 1e-9, None)[-1] == (
+        "re-checked near the recurrence tolerance: no point")
 
 
 def test_linkage_section_matches_the_hand_written_model():
