@@ -104,9 +104,17 @@ class Page:
 
     def near(self, i: int, j: int) -> bool:
         """Line i's block lies within REACH lines of line j's block."""
+        return self.within(i, *self.block(j))
+
+    def within(self, i: int, first: int, last: int) -> bool:
+        """Line i's block lies within REACH lines of the lines first ... last."""
         a, b = self.block(i)
-        c, d = self.block(j)
-        return max(a - d, c - b, 0) <= REACH
+        return max(a - last, first - b, 0) <= REACH
+
+    def cell_numbers(self, i: int, columns: list[int]) -> list[str]:
+        """The numbers of table row i's cells `columns` (1-based), in order."""
+        cells = self.cells(i)
+        return [n for c in columns if c <= len(cells) for n in numbers(cells[c - 1])]
 
     def cells(self, i: int) -> list[str]:
         """The cells of table row i (1-based: cells(i)[0] is the first cell)."""
@@ -207,9 +215,7 @@ def checked(page: Page, registry: dict) -> dict[int, set[str]]:
         if e["page"] != page.path:
             continue
         for i in table_rows(page, e):
-            cells = page.cells(i)
-            out.setdefault(i, set()).update(
-                n for c in e["columns"] if c <= len(cells) for n in numbers(cells[c - 1]))
+            out.setdefault(i, set()).update(page.cell_numbers(i, e["columns"]))
     return out
 
 
@@ -235,8 +241,7 @@ def quoted(page: Page, blocks: dict) -> dict[int, set[str]]:
     out: dict[int, set[str]] = {}
     for first, last, nums in blocks.get(page.path, []):
         for i in range(len(page.lines)):
-            a, b = page.block(i)
-            if max(a - last, first - b, 0) <= REACH:
+            if page.within(i, first, last):
                 out.setdefault(i, set()).update(nums)
     return out
 
@@ -258,9 +263,7 @@ def exempt(page: Page, exemptions: dict) -> dict[int, dict[str, str]]:
             hits = sorted({k for i in hits if page.table[i] for k in page.body(i)})
         for i in hits:
             if "columns" in e:
-                cells = page.cells(i)
-                nums = [n for c in e["columns"] if c <= len(cells)
-                        for n in numbers(cells[c - 1])]
+                nums = page.cell_numbers(i, e["columns"])
             else:
                 nums = e.get("numbers", ["*"])
             out.setdefault(i, {}).update({n: e["why"] for n in nums})
