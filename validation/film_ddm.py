@@ -32,9 +32,11 @@ def _largest(a: dict, b: dict, coordinates) -> float:
                             / np.max(np.abs(b[c]), axis=0))) for c in coordinates)
 
 
-def film_errors(film: str) -> tuple[float, float]:
-    """(DDM against central differences at step 1e-5, the differences at steps 1e-5
-    against 1e-4), each the largest over the series, for film law `film`."""
+def film_sensitivities(film: str, steps=(1e-5,)):
+    """The lubricated paper case with film law `film`, its DDM sensitivities (rtol 1e-10)
+    along NAMES[film] at 12 times of the first fifth of a revolution, and central
+    differences of plain runs (rtol 1e-12) at each relative step of `steps`:
+    (linkage, ddm, {step: differences})."""
     from mbs_clearance import sensitivities
     from mbs_clearance.model import cases
 
@@ -43,7 +45,14 @@ def film_errors(film: str) -> tuple[float, float]:
     t_eval = np.linspace(0.0, 0.2 * lk.period, 13)[1:]
     ddm = sensitivities(lk, names, revolutions=1, t_eval=t_eval, rtol=1e-10)
     fd = {step: sensitivities(lk, names, revolutions=1, method="fd", t_eval=t_eval,
-                              rtol=1e-12, fd_relative_step=step) for step in (1e-5, 1e-4)}
+                              rtol=1e-12, fd_relative_step=step) for step in steps}
+    return lk, ddm, fd
+
+
+def film_errors(film: str) -> tuple[float, float]:
+    """(DDM against central differences at step 1e-5, the differences at steps 1e-5
+    against 1e-4), each the largest over the series, for film law `film`."""
+    lk, ddm, fd = film_sensitivities(film, (1e-5, 1e-4))
     coordinates = lk.coordinates()
     return (_largest(ddm.outputs, fd[1e-5].outputs, coordinates),
             _largest(fd[1e-4].outputs, fd[1e-5].outputs, coordinates))

@@ -16,6 +16,7 @@ from mbs_clearance.generate import load_model
 from mbs_clearance.generate.energy import mechanical_energy
 from mbs_clearance.model import cases
 from mbs_clearance.solve.linkage_model import pack_parameters
+from validation.film_ddm import film_sensitivities
 
 
 def _max_eps(traj, linkage):
@@ -133,15 +134,9 @@ def test_ddm_along_the_film_matches_finite_differences():
     derivatives, from the same state sensitivities through the Jacobian that
     tests/unit/test_generated_jacobians.py checks, are not compared here: the stiff film
     makes its differences noisy, 1e-2 between the two steps.) About 4 minutes warm."""
-    lk = cases.paper_slider_crank_lubricated()
-    names = ("coupler_slider.viscosity", "coupler_slider.bearing_length",
-             "coupler_slider.journal_radius", "slider.mass")
-    t_eval = np.linspace(0.0, 0.2 * lk.period, 13)[1:]
-    ddm = sensitivities(lk, names, revolutions=1, t_eval=t_eval, rtol=1e-10)
-    fd = sensitivities(lk, names, revolutions=1, method="fd", t_eval=t_eval, rtol=1e-12,
-                       fd_relative_step=1e-5)
+    lk, ddm, fd = film_sensitivities("short")
     for c in lk.coordinates():
-        a, b = ddm.outputs[c], fd.outputs[c]
+        a, b = ddm.outputs[c], fd[1e-5].outputs[c]
         err = np.max(np.abs(a - b), axis=0) / np.max(np.abs(b), axis=0)
         assert np.all(err < 2e-4), (c, err)
         # the film's parameters move the state: the comparison has teeth
@@ -155,14 +150,9 @@ def test_ddm_along_the_long_film_matches_finite_differences():
     length: DDM of the coordinates at 12 times of the first fifth of a revolution against
     central differences of plain runs (rtol 1e-12, relative step 1e-5), within 2e-4 of
     each series' largest magnitude (the differences' own spread, as in the short film)."""
-    lk = cases.paper_slider_crank_lubricated(lubrication="long")
-    names = ("coupler_slider.viscosity", "coupler_slider.bearing_length")
-    t_eval = np.linspace(0.0, 0.2 * lk.period, 13)[1:]
-    ddm = sensitivities(lk, names, revolutions=1, t_eval=t_eval, rtol=1e-10)
-    fd = sensitivities(lk, names, revolutions=1, method="fd", t_eval=t_eval, rtol=1e-12,
-                       fd_relative_step=1e-5)
+    lk, ddm, fd = film_sensitivities("long")
     for c in lk.coordinates():
-        a, b = ddm.outputs[c], fd.outputs[c]
+        a, b = ddm.outputs[c], fd[1e-5].outputs[c]
         err = np.max(np.abs(a - b), axis=0) / np.max(np.abs(b), axis=0)
         assert np.all(err < 2e-4), (c, err)
         assert np.all(np.max(np.abs(b), axis=0) > 0.0)
