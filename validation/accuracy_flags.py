@@ -24,6 +24,7 @@ import numpy as np
 from mbs_clearance import SliderCrank
 from mbs_clearance._warnings import AccuracyWarning
 from mbs_clearance.solve import reduced
+from mbs_clearance.solve.diagnostics import onset_velocities
 
 from .accuracy_map import TARGET, grid_designs, grid_mechanism, peak_errors, reference_peaks
 
@@ -34,11 +35,8 @@ GRAZING = ((0.045, 0.125), (0.0425, 0.135))
 
 def onset_speeds(mech: SliderCrank, revolutions: int = 4, **options) -> np.ndarray:
     """Impact velocities (m/s) of the contact onsets of the default run, in order (a
-    contact present at the start counts as an onset, as in `reduced.grazing_onsets`)."""
-    ms = reduced.run(mech, revolutions, **options).ms
-    mode = ms[:, 0] > 0.5
-    onset = np.nonzero(np.concatenate([mode[:1], mode[1:] & ~mode[:-1]]))[0]
-    return ms[onset, 1]
+    contact present at the start counts as an onset)."""
+    return onset_velocities(reduced.run(mech, revolutions, **options).ms)
 
 
 def worst(mech: SliderCrank, revolutions: int = 4, **settings) -> float:

@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = ["RATTLING", "START_SWITCHES", "SETTLING_ONSETS", "GRAZING_ONSET", "rattles",
-           "contact_flags", "grazing_onsets_of", "floored_impacts"]
+           "contact_flags", "grazing_onsets_of", "onset_velocities", "floored_impacts"]
 
 #: rtol above which a run warns (AccuracyWarning): the contacts are not resolved (measured,
 #: paper case: peak error 0.5 % at rtol 1e-3, spurious events and a 1e12 N peak at 1e-2)
@@ -87,14 +87,21 @@ def contact_flags(clearances, speed: float, revolutions: int, ms: np.ndarray, ne
             "accuracy_note": note, "rattling": rattling}
 
 
+def onset_velocities(ms: np.ndarray) -> np.ndarray:
+    """The stored impact velocities (m/s) of one joint's contact onsets, in order, from its
+    memories (n, 2: mode, impact velocity); a contact present at the start counts as an
+    onset."""
+    if len(ms) < 1:
+        return np.empty(0)
+    mode = ms[:, 0] > 0.5
+    onset = np.nonzero(np.concatenate([mode[:1], mode[1:] & ~mode[:-1]]))[0]
+    return ms[onset, 1]
+
+
 def grazing_onsets_of(ms: np.ndarray, scale: float) -> int:
     """`grazing_onsets` of one joint's memories (n, 2: mode, impact velocity), the joint's
     clearance x drive speed `scale` (m/s)."""
-    if len(ms) < 1:
-        return 0
-    mode = ms[:, 0] > 0.5
-    onset = np.nonzero(np.concatenate([mode[:1], mode[1:] & ~mode[:-1]]))[0]
-    return int(np.count_nonzero(ms[onset, 1] < GRAZING_ONSET * scale))
+    return int(np.count_nonzero(onset_velocities(ms) < GRAZING_ONSET * scale))
 
 
 def floored_impacts(ms: np.ndarray, floor: float) -> int:
